@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# Installs odotune's build dependencies from Debian 12 packages.
+# Noninteractive and idempotent: packages already present are skipped, and
+# apt-get is not touched at all when nothing is missing.
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake git pkg-config
+  libeigen3-dev          # fixed-size linear algebra for the filters
+  libnlopt-cxx-dev       # derivative-free solvers (tuner/nlopt_adapter)
+  libceres-dev           # robust least squares (diagnose/, batch calibration)
+  libfmt-dev             # formatting of tables and messages
+  libgtest-dev libgmock-dev
+  libbenchmark-dev       # bench/
+  libcli11-dev           # the odotune command line
+  libyaml-cpp-dev        # scenarios, experiment and config files
+  nlohmann-json3-dev     # --json outputs
+  libsqlite3-dev         # results store
+  gnuplot-nox            # figures
+)
+if [[ "${ODOTUNE_WITH_MPI:-0}" == "1" ]]; then
+  PACKAGES+=(libopenmpi-dev openmpi-bin)
+fi
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if ((${#missing[@]} == 0)); then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+SUDO=""
+if [[ "$(id -u)" != "0" ]]; then SUDO="sudo"; fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install-deps: done"

@@ -1,0 +1,33 @@
+#include <exception>
+#include <iostream>
+
+#include "cli/commands.h"
+#include "cli/failure.h"
+
+namespace odotune::cli {
+
+int run(int argc, char** argv) {
+  CLI::App app{"odotune: tune and calibrate the localisation filters of wheeled robots "
+               "from recorded tracks"};
+  app.set_version_flag("--version", std::string("odotune ") + ODOTUNE_VERSION);
+  app.require_subcommand(1);
+  register_simulate(app);
+  register_import(app);
+  register_tune(app);
+  register_eval(app);
+  register_demo(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const Failure& e) {
+    std::cerr << "odotune: " << e.what() << "\n";
+    return e.exit_code;
+  } catch (const std::exception& e) {
+    std::cerr << "odotune: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace odotune::cli

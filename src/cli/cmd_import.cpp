@@ -1,0 +1,13 @@
+#include "cli/commands.h"
+#include "cli/failure.h"
+
+namespace odotune::cli {
+
+// Not built yet: the command exists so that --help lists it, and says so plainly.
+void register_import(CLI::App& app) {
+  auto* sub = app.add_subcommand("import", "(not built yet)");
+  sub->allow_extras();
+  sub->callback([] { throw Failure("'import' is not built yet", 2); });
+}
+
+}  // namespace odotune::cli
