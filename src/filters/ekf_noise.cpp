@@ -1,0 +1,44 @@
+#include "filters/ekf_noise.h"
+
+#include <cmath>
+#include <string>
+
+namespace odotune::filters {
+
+std::string_view to_string(NoiseModel m) {
+  switch (m) {
+    case NoiseModel::rq: return "rq";
+    case NoiseModel::alpha: return "alpha";
+    case NoiseModel::gyro: return "gyro";
+  }
+  return "?";
+}
+
+bool parse_noise_model(std::string_view text, NoiseModel* out) {
+  for (NoiseModel m : {NoiseModel::rq, NoiseModel::alpha, NoiseModel::gyro}) {
+    if (text == to_string(m)) {
+      *out = m;
+      return true;
+    }
+  }
+  return false;
+}
+
+bool NoiseParams::IsValid(std::string* why) const {
+  auto fail = [&](const char* name, double v, const char* expected) {
+    if (why) *why = std::string(name) + " = " + std::to_string(v) + ": expected " + expected;
+    return false;
+  };
+  const struct { const char* name; double v; } nonneg[] = {
+      {"r_x_m2", r_x_m2}, {"r_y_m2", r_y_m2}, {"r_theta_rad2", r_theta_rad2},
+      {"a1", a1}, {"a2", a2}, {"b1", b1}, {"b2", b2}};
+  for (const auto& f : nonneg)
+    if (!std::isfinite(f.v) || f.v < 0.0) return fail(f.name, f.v, "a finite value >= 0");
+  if (!std::isfinite(q_x_m2) || q_x_m2 <= 0.0) return fail("q_x_m2", q_x_m2, "a finite value > 0");
+  if (!std::isfinite(q_y_m2) || q_y_m2 <= 0.0) return fail("q_y_m2", q_y_m2, "a finite value > 0");
+  if (model == NoiseModel::alpha && (b1 != 0.0 || b2 != 0.0))
+    return fail(b1 != 0.0 ? "b1" : "b2", b1 != 0.0 ? b1 : b2, "0 for the alpha model (use gyro)");
+  return true;
+}
+
+}  // namespace odotune::filters

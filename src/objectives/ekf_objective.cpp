@@ -1,0 +1,39 @@
+#include "objectives/ekf_objective.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace odotune {
+
+EkfObjective::EkfObjective(std::vector<const FastReplay*> tracks, filters::NoiseModel model,
+                           int mode)
+    : tracks_(std::move(tracks)), space_(ParamSpace::for_model(model)), mode_(mode) {
+  if (tracks_.empty()) throw std::invalid_argument("EkfObjective: no tracks");
+  if (!valid_fitness_mode(mode)) throw std::invalid_argument("EkfObjective: mode must be 1..7");
+}
+
+double EkfObjective::fitness(std::span<const double> x) const {
+  counters_->evaluations.fetch_add(1, std::memory_order_relaxed);
+  const filters::NoiseParams noise = space_.to_noise(space_.to_physical(x));
+  double total = 0.0;
+  for (const FastReplay* track : tracks_) {
+    const ReplayOutcome out = track->evaluate(noise);
+    double f = fitness_of(out.metrics, mode_);
+    if (out.divergence == filters::Divergence::covariance_not_pd) {
+      counters_->covariance_not_pd.fetch_add(1, std::memory_order_relaxed);
+      return kDivergencePenalty;
+    }
+    if (out.divergence == filters::Divergence::non_finite || !std::isfinite(f)) {
+      counters_->non_finite.fetch_add(1, std::memory_order_relaxed);
+      return kDivergencePenalty;
+    }
+    total += f;
+  }
+  return total / static_cast<double>(tracks_.size());
+}
+
+DivergenceCounts EkfObjective::divergences() const {
+  return {counters_->non_finite.load(), counters_->covariance_not_pd.load()};
+}
+
+}  // namespace odotune

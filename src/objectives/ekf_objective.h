@@ -1,0 +1,57 @@
+// The tuning objective: noise model × one or more tracks × fitness mode → a
+// scalar to minimise, over the model's parameter space. A plain struct in the
+// pagmo2 sense: `fitness(x) const` and `bounds()`; the optimiser sees only the
+// box and never the filter.
+//
+// Several tracks: the fitness is the mean of the per-track fitness values, so
+// every track weighs the same whatever its length.
+// Divergence: a replay that diverges (non-finite state, covariance not
+// positive definite) scores kDivergencePenalty and is counted by reason;
+// nothing is thrown (an exception must never cross an optimiser).
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <span>
+#include <utility>
+#include <vector>
+
+#include "objectives/param_space.h"
+#include "objectives/replay.h"
+
+namespace odotune {
+
+inline constexpr double kDivergencePenalty = 1e6;  // [m], far above any real error
+
+struct DivergenceCounts {
+  long non_finite = 0;
+  long covariance_not_pd = 0;
+  long total() const { return non_finite + covariance_not_pd; }
+};
+
+class EkfObjective {
+ public:
+  // `tracks` must outlive the objective. `mode` in 1..7.
+  EkfObjective(std::vector<const FastReplay*> tracks, filters::NoiseModel model, int mode);
+
+  double fitness(std::span<const double> x) const;
+  std::pair<std::vector<double>, std::vector<double>> bounds() const { return space_.box(); }
+
+  const ParamSpace& space() const { return space_; }
+  int mode() const { return mode_; }
+  long evaluations() const { return counters_->evaluations.load(); }
+  DivergenceCounts divergences() const;
+
+ private:
+  struct Counters {
+    std::atomic<long> evaluations{0};
+    std::atomic<long> non_finite{0};
+    std::atomic<long> covariance_not_pd{0};
+  };
+  std::vector<const FastReplay*> tracks_;
+  ParamSpace space_;
+  int mode_;
+  std::shared_ptr<Counters> counters_ = std::make_shared<Counters>();
+};
+
+}  // namespace odotune

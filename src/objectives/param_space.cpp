@@ -1,0 +1,118 @@
+#include "objectives/param_space.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace odotune {
+
+using filters::NoiseModel;
+using filters::NoiseParams;
+
+namespace {
+constexpr double kMm2ToM2 = 1e-6;
+constexpr double kApsSigmaM = 0.060;  // the study's fix noise, σ = 60 mm (§2.1)
+}  // namespace
+
+ParamSpace ParamSpace::for_model(NoiseModel model) {
+  ParamSpace s;
+  s.model_ = model;
+  switch (model) {
+    case NoiseModel::rq:  // §2.3.1
+      s.params_ = {
+          {"r1_mm2", "mm²", 1.0, 1e5, true, "process noise of x per prediction step"},
+          {"r2_mm2", "mm²", 1.0, 1e5, true, "process noise of y per prediction step"},
+          {"r3_rad2", "rad²", 1e-6, 1.0, true, "process noise of θ per prediction step"},
+          {"q1_mm2", "mm²", 10.0, 1e4, true, "measurement noise of a fix's x"},
+          {"q2_mm2", "mm²", 10.0, 1e4, true, "measurement noise of a fix's y"}};
+      break;
+    case NoiseModel::alpha:  // §2.3.2
+      s.params_ = {{"alpha1", "-", 0.0, 1.0, false, "wheel noise per unit of own travel"},
+                   {"alpha2", "-", 0.0, 1.0, false, "wheel noise per unit of travel difference"}};
+      break;
+    case NoiseModel::gyro:  // §2.3.3
+      s.params_ = {{"a1", "-", 0.0, 1.0, false, "base of α1"},
+                   {"a2", "-", 0.0, 1.0, false, "base of α2"},
+                   {"b1", "s/rad", 0.0, 5.0, false, "growth of α1 with |ω_z|"},
+                   {"b2", "s/rad", 0.0, 5.0, false, "growth of α2 with |ω_z|"}};
+      break;
+  }
+  return s;
+}
+
+std::pair<std::vector<double>, std::vector<double>> ParamSpace::box() const {
+  std::vector<double> lo, hi;
+  for (const auto& p : params_) {
+    lo.push_back(p.log_scale ? std::log10(p.lower) : p.lower);
+    hi.push_back(p.log_scale ? std::log10(p.upper) : p.upper);
+  }
+  return {lo, hi};
+}
+
+std::vector<double> ParamSpace::to_physical(std::span<const double> box_x) const {
+  if (box_x.size() != params_.size()) throw std::invalid_argument("ParamSpace: wrong dimension");
+  const auto [lo, hi] = box();
+  std::vector<double> out(params_.size());
+  for (std::size_t i = 0; i < params_.size(); ++i) {
+    const double b = std::clamp(box_x[i], lo[i], hi[i]);
+    out[i] = params_[i].log_scale ? std::pow(10.0, b) : b;
+  }
+  return out;
+}
+
+std::vector<double> ParamSpace::to_box(std::span<const double> physical) const {
+  if (physical.size() != params_.size()) throw std::invalid_argument("ParamSpace: wrong dimension");
+  std::vector<double> out(params_.size());
+  for (std::size_t i = 0; i < params_.size(); ++i)
+    out[i] = params_[i].log_scale ? std::log10(physical[i]) : physical[i];
+  return out;
+}
+
+NoiseParams ParamSpace::to_noise(std::span<const double> v) const {
+  if (v.size() != params_.size()) throw std::invalid_argument("ParamSpace: wrong dimension");
+  NoiseParams n;
+  n.model = model_;
+  n.q_x_m2 = n.q_y_m2 = kApsSigmaM * kApsSigmaM;
+  switch (model_) {
+    case NoiseModel::rq:
+      n.r_x_m2 = v[0] * kMm2ToM2;
+      n.r_y_m2 = v[1] * kMm2ToM2;
+      n.r_theta_rad2 = v[2];
+      n.q_x_m2 = v[3] * kMm2ToM2;
+      n.q_y_m2 = v[4] * kMm2ToM2;
+      break;
+    case NoiseModel::alpha:
+      n.a1 = v[0];
+      n.a2 = v[1];
+      break;
+    case NoiseModel::gyro:
+      n.a1 = v[0];
+      n.a2 = v[1];
+      n.b1 = v[2];
+      n.b2 = v[3];
+      break;
+  }
+  return n;
+}
+
+std::vector<double> ParamSpace::from_noise(const NoiseParams& n) const {
+  switch (model_) {
+    case NoiseModel::rq:
+      return {n.r_x_m2 / kMm2ToM2, n.r_y_m2 / kMm2ToM2, n.r_theta_rad2, n.q_x_m2 / kMm2ToM2,
+              n.q_y_m2 / kMm2ToM2};
+    case NoiseModel::alpha: return {n.a1, n.a2};
+    case NoiseModel::gyro: return {n.a1, n.a2, n.b1, n.b2};
+  }
+  return {};
+}
+
+NoiseParams baseline_noise() {
+  NoiseParams n;
+  n.model = NoiseModel::alpha;
+  n.a1 = 0.05;
+  n.a2 = 0.05;
+  n.q_x_m2 = n.q_y_m2 = kApsSigmaM * kApsSigmaM;
+  return n;
+}
+
+}  // namespace odotune

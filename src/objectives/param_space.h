@@ -1,0 +1,59 @@
+// Named, bounded parameter spaces of the three EKF noise models (Kovacs et al.
+// §2.3.1–2.3.3), and their mapping to the box an optimiser sees.
+//
+// Bounds are the study's, in the study's units where it states them in mm
+// (r1, r2, q1, q2 in mm²); SI inside (NoiseParams). A parameter whose bounds
+// span two or more decades is searched in log10 space, so the optimiser's box
+// coordinate is log10(value); others are searched linearly.
+#pragma once
+
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "filters/ekf_noise.h"
+
+namespace odotune {
+
+struct ParamSpec {
+  std::string name;         // e.g. "r1_mm2"
+  std::string unit;         // e.g. "mm²"
+  double lower, upper;      // physical bounds, in `unit`
+  bool log_scale;           // searched as log10(value)
+  std::string meaning;
+};
+
+class ParamSpace {
+ public:
+  static ParamSpace for_model(filters::NoiseModel model);
+
+  filters::NoiseModel model() const { return model_; }
+  const std::vector<ParamSpec>& params() const { return params_; }
+  std::size_t dim() const { return params_.size(); }
+
+  // The optimiser's box (log10 of the bounds for log-scaled parameters).
+  std::pair<std::vector<double>, std::vector<double>> box() const;
+  // Box coordinates ↔ physical values (in each ParamSpec's unit). Box
+  // coordinates are clamped into the box first.
+  std::vector<double> to_physical(std::span<const double> box_x) const;
+  std::vector<double> to_box(std::span<const double> physical) const;
+  // Physical values → filter noise (SI). Values outside the bounds are
+  // accepted (an exported configuration may be edited by hand) as long as
+  // NoiseParams::IsValid holds.
+  filters::NoiseParams to_noise(std::span<const double> physical) const;
+  // Filter noise → physical values (inverse of to_noise for this model).
+  std::vector<double> from_noise(const filters::NoiseParams& noise) const;
+
+ private:
+  filters::NoiseModel model_ = filters::NoiseModel::alpha;
+  std::vector<ParamSpec> params_;
+};
+
+// The untuned configuration a user would write (README, "Baseline"): position
+// fixes trusted at their specified σ = 60 mm, and wheel odometry trusted to a
+// rule of thumb of 5 % of each wheel's travel plus 5 % of the travel
+// difference (α1 = α2 = 0.05). The same for all three models.
+filters::NoiseParams baseline_noise();
+
+}  // namespace odotune
