@@ -1,0 +1,187 @@
+#include "tuner/pso.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <sstream>
+#include <utility>
+#include <vector>
+
+#include "tuner/counter_rng.h"
+
+namespace odotune::tuner {
+namespace {
+
+// Streams of the counter-based generator (the last key word).
+enum Stream : std::uint64_t { kInitPosition = 0, kInitVelocity = 1, kR1 = 2, kR2 = 3 };
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::string str(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+// Non-finite values become +inf so that a plain `<` never prefers them and
+// NaN never poisons a comparison.
+double sanitize(double f) { return std::isfinite(f) ? f : kInf; }
+
+std::string what_of(std::exception_ptr e) {
+  try {
+    std::rethrow_exception(std::move(e));
+  } catch (const std::exception& ex) {
+    return ex.what();
+  } catch (...) {
+    return "unknown exception";
+  }
+}
+
+}  // namespace
+
+bool PsoOptions::IsValid(std::string* why) const {
+  auto fail = [why](const std::string& message) {
+    if (why != nullptr) *why = "pso: " + message;
+    return false;
+  };
+  if (particles < 1) return fail("particles = " + std::to_string(particles) + ", expected >= 1");
+  if (iterations < 0)
+    return fail("iterations = " + std::to_string(iterations) + ", expected >= 0");
+  if (!(std::isfinite(inertia) && inertia >= 0 && inertia < 1))
+    return fail("inertia = " + str(inertia) + ", expected a value in [0, 1)");
+  if (!(std::isfinite(cognitive) && cognitive >= 0))
+    return fail("cognitive = " + str(cognitive) + ", expected a finite value >= 0");
+  if (!(std::isfinite(social) && social >= 0))
+    return fail("social = " + str(social) + ", expected a finite value >= 0");
+  if (!(initial_velocity_fraction >= 0 && initial_velocity_fraction <= 1))
+    return fail("initial_velocity_fraction = " + str(initial_velocity_fraction) +
+                ", expected a value in [0, 1]");
+  if (!(max_velocity_fraction > 0 && max_velocity_fraction <= 1))
+    return fail("max_velocity_fraction = " + str(max_velocity_fraction) +
+                ", expected a value in (0, 1]");
+  return true;
+}
+
+Summary pso_minimize(ProblemRef problem, const PsoOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Summary summary;
+  summary.best_fitness = kInf;
+  auto finish = [&](std::string termination) {
+    summary.termination = std::move(termination);
+    summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return summary;
+  };
+
+  std::string why;
+  if (!options.IsValid(&why)) return finish("failure: " + why);
+  Bounds box;
+  try {
+    box = problem.bounds();
+  } catch (...) {
+    return finish("failure: bounds() threw: " + what_of(std::current_exception()));
+  }
+  if (!box.IsValid(&why)) return finish("failure: " + why);
+
+  const int n = options.particles;
+  const std::size_t dim = box.dimension();
+  const std::uint64_t seed = options.seed;
+  const long total = options.evaluation_budget();
+  std::vector<double> width(dim), vmax(dim);
+  for (std::size_t d = 0; d < dim; ++d) {
+    width[d] = box.upper[d] - box.lower[d];
+    vmax[d] = options.max_velocity_fraction * width[d];
+  }
+
+  // Swarm state, row-major [particle][dimension].
+  const std::size_t cells = static_cast<std::size_t>(n) * dim;
+  std::vector<double> x(cells), v(cells), pbest_x(cells);
+  std::vector<double> fit(static_cast<std::size_t>(n)), pbest_f(static_cast<std::size_t>(n), kInf);
+  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(n));
+  std::vector<double> gbest_x(dim);
+  double gbest_f = kInf;
+
+  auto uniform = [seed](int iteration, int particle, std::size_t d, Stream stream) {
+    return counter_uniform01(seed, static_cast<std::uint64_t>(iteration),
+                             static_cast<std::uint64_t>(particle), d, stream);
+  };
+
+  // Moves particle i for iteration t (t >= 1) and evaluates it; or, for
+  // t == 0, initialises and evaluates it. Runs inside the parallel loop: it
+  // touches only particle i's rows and reads gbest_x, which is not written
+  // during the loop.
+  auto step_particle = [&](int t, int i) {
+    double* xi = &x[static_cast<std::size_t>(i) * dim];
+    double* vi = &v[static_cast<std::size_t>(i) * dim];
+    const double* pi = &pbest_x[static_cast<std::size_t>(i) * dim];
+    for (std::size_t d = 0; d < dim; ++d) {
+      if (t == 0) {
+        xi[d] = box.lower[d] + uniform(0, i, d, kInitPosition) * width[d];
+        xi[d] = std::min(xi[d], box.upper[d]);
+        vi[d] = (2 * uniform(0, i, d, kInitVelocity) - 1) * options.initial_velocity_fraction *
+                width[d];
+        continue;
+      }
+      const double r1 = uniform(t, i, d, kR1);
+      const double r2 = uniform(t, i, d, kR2);
+      double vel = options.inertia * vi[d] + options.cognitive * r1 * (pi[d] - xi[d]) +
+                   options.social * r2 * (gbest_x[d] - xi[d]);
+      vel = std::clamp(vel, -vmax[d], vmax[d]);
+      double pos = xi[d] + vel;
+      if (pos < box.lower[d]) {
+        pos = box.lower[d];
+        vel = 0;
+      } else if (pos > box.upper[d]) {
+        pos = box.upper[d];
+        vel = 0;
+      }
+      xi[d] = pos;
+      vi[d] = vel;
+    }
+    try {
+      fit[static_cast<std::size_t>(i)] = sanitize(problem.fitness(std::span<const double>(xi, dim)));
+    } catch (...) {
+      fit[static_cast<std::size_t>(i)] = kInf;
+      errors[static_cast<std::size_t>(i)] = std::current_exception();
+    }
+  };
+
+  for (int t = 0; t <= options.iterations; ++t) {
+    if (t > 0 && options.stop != nullptr && options.stop->load()) return finish("stopped");
+
+#pragma omp parallel for schedule(dynamic)
+    for (int i = 0; i < n; ++i) step_particle(t, i);
+
+    summary.evaluations += n;
+    summary.iterations = t;
+    // Sequential best update in particle index order; strict `<` keeps the
+    // earlier (lower-index / older) record on ties.
+    for (int i = 0; i < n; ++i) {
+      const std::size_t ui = static_cast<std::size_t>(i);
+      if (errors[ui]) return finish("failure: " + what_of(errors[ui]));
+      const double* xi = &x[ui * dim];
+      if (t == 0 || fit[ui] < pbest_f[ui]) {
+        pbest_f[ui] = fit[ui];
+        std::copy(xi, xi + dim, pbest_x.begin() + static_cast<std::ptrdiff_t>(ui * dim));
+      }
+      if ((t == 0 && i == 0) || fit[ui] < gbest_f) {
+        gbest_f = fit[ui];
+        std::copy(xi, xi + dim, gbest_x.begin());
+      }
+    }
+    summary.best_x = gbest_x;
+    summary.best_fitness = gbest_f;
+    summary.log.push_back({t, summary.evaluations, gbest_f});
+    if (options.progress) {
+      try {
+        options.progress(summary.evaluations, total);
+      } catch (...) {
+        return finish("failure: progress callback threw: " + what_of(std::current_exception()));
+      }
+    }
+  }
+  return finish("max_iterations");
+}
+
+}  // namespace odotune::tuner
