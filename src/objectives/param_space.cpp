@@ -109,8 +109,8 @@ std::vector<double> ParamSpace::from_noise(const NoiseParams& n) const {
 NoiseParams baseline_noise() {
   NoiseParams n;
   n.model = NoiseModel::alpha;
-  n.a1 = 0.05;
-  n.a2 = 0.05;
+  n.a1 = 0.01;
+  n.a2 = 0.01;
   n.q_x_m2 = n.q_y_m2 = kApsSigmaM * kApsSigmaM;
   return n;
 }

@@ -51,9 +51,10 @@ class ParamSpace {
 };
 
 // The untuned configuration a user would write (README, "Baseline"): position
-// fixes trusted at their specified σ = 60 mm, and wheel odometry trusted to a
-// rule of thumb of 5 % of each wheel's travel plus 5 % of the travel
-// difference (α1 = α2 = 0.05). The same for all three models.
+// fixes trusted at their specified σ = 60 mm, and wheel odometry trusted to
+// the common rule of thumb "odometry is good to about 1 % of the distance
+// travelled": σ of each wheel's travel = 1 % of that travel, plus 1 % of the
+// travel difference in turns (α1 = α2 = 0.01). The same for all three models.
 filters::NoiseParams baseline_noise();
 
 }  // namespace odotune

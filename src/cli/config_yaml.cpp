@@ -1,0 +1,121 @@
+#include "cli/config_yaml.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include "cli/failure.h"
+#include "objectives/param_space.h"
+
+namespace odotune::cli {
+
+namespace {
+constexpr const char* kFormat = "odotune-ekf-config/1";
+
+[[noreturn]] void fail_at(const std::filesystem::path& path, const YAML::Node& node,
+                          const std::string& what) {
+  const auto mark = node.Mark();
+  if (mark.is_null()) throw Failure(fmt::format("{}: {}", path.string(), what));
+  throw Failure(fmt::format("{}:{}: {}", path.string(), mark.line + 1, what));
+}
+}  // namespace
+
+void write_file_atomically(const std::filesystem::path& path, const std::string& text) {
+  const std::filesystem::path tmp = path.string() + ".tmp-" + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw Failure(fmt::format("{}: cannot write (does the directory exist?)", path.string()));
+    out << text;
+    out.flush();
+    if (!out) {
+      std::error_code ec;
+      std::filesystem::remove(tmp, ec);
+      throw Failure(fmt::format("{}: write failed", path.string()));
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw Failure(fmt::format("{}: cannot rename into place: {}", path.string(), ec.message()));
+  }
+}
+
+EkfConfig read_ekf_config(const std::filesystem::path& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path.string());
+  } catch (const YAML::BadFile&) {
+    throw Failure(fmt::format("{}: cannot open the configuration file", path.string()));
+  } catch (const YAML::ParserException& e) {
+    throw Failure(fmt::format("{}:{}: {}", path.string(), e.mark.line + 1, e.msg));
+  }
+  if (!root.IsMap()) fail_at(path, root, "expected a mapping with format, model and params");
+  if (!root["format"] || root["format"].as<std::string>("") != kFormat)
+    fail_at(path, root["format"] ? root["format"] : root,
+            fmt::format("missing or unknown format, expected 'format: {}'", kFormat));
+  for (const auto& kv : root) {
+    const auto key = kv.first.as<std::string>("");
+    if (key != "format" && key != "model" && key != "params")
+      fail_at(path, kv.first, fmt::format("unknown key '{}', expected format, model or params", key));
+  }
+  EkfConfig cfg;
+  const YAML::Node model = root["model"];
+  if (!model || !filters::parse_noise_model(model.as<std::string>(""), &cfg.model))
+    fail_at(path, model ? model : root, "model must be rq, alpha or gyro");
+  const ParamSpace space = ParamSpace::for_model(cfg.model);
+  const YAML::Node params = root["params"];
+  if (!params || !params.IsMap()) fail_at(path, params ? params : root, "expected a 'params' mapping");
+  std::vector<double> values(space.dim());
+  std::set<std::string> seen;
+  for (const auto& kv : params) {
+    const auto name = kv.first.as<std::string>("");
+    std::size_t i = 0;
+    while (i < space.dim() && space.params()[i].name != name) ++i;
+    if (i == space.dim()) {
+      std::string names;
+      for (const auto& p : space.params()) names += (names.empty() ? "" : ", ") + p.name;
+      fail_at(path, kv.first, fmt::format("unknown parameter '{}' for model {}, expected {}", name,
+                                          filters::to_string(cfg.model), names));
+    }
+    try {
+      values[i] = kv.second.as<double>();
+    } catch (const YAML::Exception&) {
+      fail_at(path, kv.second, fmt::format("parameter '{}' must be a number", name));
+    }
+    seen.insert(name);
+  }
+  for (const auto& p : space.params())
+    if (!seen.count(p.name)) fail_at(path, params, fmt::format("parameter '{}' is missing", p.name));
+  cfg.noise = space.to_noise(values);
+  std::string why;
+  if (!cfg.noise.IsValid(&why)) fail_at(path, params, "invalid parameters: " + why);
+  return cfg;
+}
+
+void write_ekf_config(const EkfConfig& config, const std::filesystem::path& path) {
+  const ParamSpace space = ParamSpace::for_model(config.model);
+  const std::vector<double> values = space.from_noise(config.noise);
+  std::ostringstream out;
+  if (!config.comment.empty()) {
+    std::istringstream lines(config.comment);
+    for (std::string line; std::getline(lines, line);) out << "# " << line << "\n";
+  }
+  out << "format: " << kFormat << "\n";
+  out << "model: " << filters::to_string(config.model) << "\n";
+  out << "params:\n";
+  for (std::size_t i = 0; i < space.dim(); ++i) {
+    const auto& p = space.params()[i];
+    out << fmt::format("  {}: {}  # [{}] {}, bounds {}..{}\n", p.name, values[i], p.unit, p.meaning,
+                       p.lower, p.upper);
+  }
+  write_file_atomically(path, out.str());
+}
+
+}  // namespace odotune::cli

@@ -1,0 +1,131 @@
+#include "cli/tune_job.h"
+
+#include <stdexcept>
+
+#include "tuner/nlopt_solver.h"
+#include "tuner/problem.h"
+#include "tuner/pso.h"
+
+namespace odotune::cli {
+
+namespace {
+
+// The objective as the tuner sees it: a box and a function (objectives/ does
+// not depend on tuner/, so the adapter lives here).
+struct BoxProblem {
+  const EkfObjective* objective;
+  double fitness(std::span<const double> x) const { return objective->fitness(x); }
+  tuner::Bounds bounds() const {
+    auto [lo, hi] = objective->bounds();
+    return {lo, hi};
+  }
+};
+
+}  // namespace
+
+PreparedTrack prepare_track(const Track& track) {
+  PreparedTrack p;
+  p.name = track.name();
+  p.input = build_replay_input(track);
+  p.fast = std::make_unique<FastReplay>(p.input);
+  return p;
+}
+
+bool TuneRequest::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  if (!valid_fitness_mode(mode)) return fail("mode = " + std::to_string(mode) + ": expected 1..7");
+  if (solver != "pso" && solver.rfind("nlopt:", 0) != 0)
+    return fail("solver '" + solver + "': expected pso or nlopt:NAME");
+  if (solver == "pso") {
+    tuner::PsoOptions o;
+    o.particles = particles;
+    o.iterations = iterations;
+    return o.IsValid(why);
+  }
+  tuner::NloptOptions o;
+  o.algorithm = solver.substr(6);
+  o.max_evaluations = evaluations > 0 ? evaluations : 1;
+  return o.IsValid(why);
+}
+
+ErrorMetrics mean_metrics(const std::vector<ErrorMetrics>& per_track) {
+  ErrorMetrics m;
+  for (const auto& t : per_track) {
+    m.rmse_m += t.rmse_m;
+    m.mae_m += t.mae_m;
+    m.maxe_m += t.maxe_m;
+    m.samples += t.samples;
+  }
+  const double n = per_track.empty() ? 1.0 : static_cast<double>(per_track.size());
+  m.rmse_m /= n;
+  m.mae_m /= n;
+  m.maxe_m /= n;
+  return m;
+}
+
+TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const TuneRequest& request) {
+  std::string why;
+  if (!request.IsValid(&why)) throw std::invalid_argument(why);
+  if (tracks.empty()) throw std::invalid_argument("no tracks to tune on");
+  std::vector<const FastReplay*> fast;
+  for (const auto* t : tracks) fast.push_back(t->fast.get());
+  const EkfObjective objective(fast, request.model, request.mode);
+  const BoxProblem problem{&objective};
+
+  TuneOutcome out;
+  out.request = request;
+  if (request.solver == "pso") {
+    tuner::PsoOptions o;
+    o.particles = request.particles;
+    o.iterations = request.iterations;
+    o.seed = request.seed;
+    o.progress = request.progress;
+    o.stop = request.stop;
+    out.summary = tuner::pso_minimize(problem, o);
+  } else {
+    tuner::NloptOptions o;
+    o.algorithm = request.solver.substr(6);
+    o.max_evaluations = request.evaluations > 0
+                            ? request.evaluations
+                            : static_cast<long>(request.particles) * (request.iterations + 1);
+    o.seed = request.seed;
+    o.progress = request.progress;
+    o.stop = request.stop;
+    out.summary = tuner::nlopt_minimize(problem, o);
+  }
+  if (!out.summary.ok() || out.summary.best_x.empty())
+    throw std::runtime_error("solver " + request.solver + ": " + out.summary.termination);
+
+  const ParamSpace& space = objective.space();
+  for (const auto& p : space.params()) {
+    out.param_names.push_back(p.name);
+    out.param_units.push_back(p.unit);
+  }
+  out.params = space.to_physical(out.summary.best_x);
+  out.noise = space.to_noise(out.params);
+  out.divergences = objective.divergences();
+
+  // Scores from the reference replay, independent of the fast path.
+  std::vector<ErrorMetrics> base, tuned;
+  for (const auto* t : tracks) {
+    TrackScore s;
+    s.track = t->name;
+    s.baseline = replay_ekf(t->input, baseline_noise()).outcome.metrics;
+    s.tuned = replay_ekf(t->input, out.noise).outcome.metrics;
+    base.push_back(s.baseline);
+    tuned.push_back(s.tuned);
+    out.tracks.push_back(s);
+  }
+  out.baseline_mean = mean_metrics(base);
+  out.tuned_mean = mean_metrics(tuned);
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    out.baseline_fitness += fitness_of(base[i], request.mode) / static_cast<double>(tracks.size());
+    out.tuned_fitness += fitness_of(tuned[i], request.mode) / static_cast<double>(tracks.size());
+  }
+  return out;
+}
+
+}  // namespace odotune::cli

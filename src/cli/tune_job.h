@@ -1,0 +1,71 @@
+// One tuning run: noise model × tracks × fitness mode × solver × seed →
+// tuned parameters, with baseline and tuned metrics from the reference replay.
+// Computation only: no parsing, no printing (the commands do those), so the
+// experiment grid can run many of these side by side.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "filters/ekf_noise.h"
+#include "objectives/ekf_objective.h"
+#include "objectives/metrics.h"
+#include "objectives/replay.h"
+#include "tracks/track.h"
+#include "tuner/summary.h"
+
+namespace odotune::cli {
+
+// A track prepared for replay: the reference input and its fast form.
+struct PreparedTrack {
+  std::string name;
+  ReplayInput input;
+  std::unique_ptr<FastReplay> fast;
+};
+// Throws std::invalid_argument (one line naming the track) when it cannot be replayed.
+PreparedTrack prepare_track(const Track& track);
+
+struct TuneRequest {
+  filters::NoiseModel model = filters::NoiseModel::rq;
+  int mode = 7;                    // fitness mode 1..7
+  std::string solver = "pso";      // "pso" or "nlopt:NAME"
+  std::uint64_t seed = 1;
+  int particles = 50;              // PSO
+  int iterations = 150;            // PSO
+  long evaluations = 0;            // NLopt budget; 0 = particles × (iterations + 1)
+  std::function<void(long, long)> progress;
+  const std::atomic<bool>* stop = nullptr;
+
+  bool IsValid(std::string* why) const;
+};
+
+struct TrackScore {
+  std::string track;
+  ErrorMetrics baseline, tuned;
+};
+
+struct TuneOutcome {
+  TuneRequest request;
+  std::vector<std::string> param_names;
+  std::vector<std::string> param_units;
+  std::vector<double> params;             // physical values, in param_units
+  filters::NoiseParams noise;             // the same, as filter noise (SI)
+  std::vector<TrackScore> tracks;
+  ErrorMetrics baseline_mean, tuned_mean; // means over tracks
+  double baseline_fitness = 0, tuned_fitness = 0;
+  DivergenceCounts divergences;
+  tuner::Summary summary;                 // evaluations, seconds, termination, log
+};
+
+// Runs the solver; throws std::invalid_argument for an invalid request and
+// std::runtime_error when the solver fails.
+TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const TuneRequest& request);
+
+// Mean of per-track metrics (each track weighs the same).
+ErrorMetrics mean_metrics(const std::vector<ErrorMetrics>& per_track);
+
+}  // namespace odotune::cli
