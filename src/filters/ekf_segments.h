@@ -63,5 +63,9 @@ StateCov predict_segment_cov(const NoiseParams& noise, const SegmentMoments& m, 
 // problem found (the state is then unusable).
 Divergence advance_segment(const NoiseParams& noise, const SegmentMoments& m, const Position& z,
                            Pose* pose, StateCov* P);
+// The same on the unique entries of P, with cos/sin of the pose's heading
+// supplied by a caller that already has them (the tuner's inner loop).
+Divergence advance_segment(const NoiseParams& noise, const SegmentMoments& m, const Position& z,
+                           double cos_theta, double sin_theta, Pose* pose, Sym3* P);
 
 }  // namespace odotune::filters

@@ -126,17 +126,19 @@ void accumulate_errors(const double* __restrict ox, const double* __restrict oy,
 
 ReplayOutcome FastReplay::evaluate(const filters::NoiseParams& noise) const {
   Pose x = initial_pose_;
-  StateCov P = initial_cov_;
+  filters::Sym3 P = {initial_cov_(0, 0), initial_cov_(0, 1), initial_cov_(0, 2),
+                     initial_cov_(1, 1), initial_cov_(1, 2), initial_cov_(2, 2)};
   ErrorAccumulator acc;
   ReplayOutcome out;
   for (const Segment& seg : segments_) {
+    const double c = std::cos(x(2)), s = std::sin(x(2));
     const int n = seg.eval_end - seg.eval_begin;
     if (n > 0)
       accumulate_errors(ox_.data() + seg.eval_begin, oy_.data() + seg.eval_begin,
                         gx_.data() + seg.eval_begin, gy_.data() + seg.eval_begin, n, x(0), x(1),
-                        std::cos(x(2)), std::sin(x(2)), &acc);
+                        c, s, &acc);
     if (seg.has_fix) {
-      out.divergence = filters::advance_segment(noise, seg.moments, seg.fix, &x, &P);
+      out.divergence = filters::advance_segment(noise, seg.moments, seg.fix, c, s, &x, &P);
       if (out.divergence != Divergence::none) break;
     }
   }

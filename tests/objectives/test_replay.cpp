@@ -128,8 +128,10 @@ TEST(Replay, FixesBoundTheErrorThatDeadReckoningAccumulates) {
   const ReplayInput in = build_replay_input(track);
   NoiseParams trust_odometry = baseline_noise();
   trust_odometry.a1 = trust_odometry.a2 = 0.0;  // R = 0: the fixes can never pull the pose
+  NoiseParams fuse = baseline_noise();
+  fuse.a1 = fuse.a2 = 0.05;  // odometry trusted to 5 %: the fixes pull the pose
   const ReplayResult dr = replay_ekf(in, trust_odometry);
-  const ReplayResult fused = replay_ekf(in, baseline_noise(), true);
+  const ReplayResult fused = replay_ekf(in, fuse, true);
   EXPECT_GT(dr.outcome.metrics.maxe_m, 0.3);  // 1 % radius error over ~24 m
   EXPECT_LT(fused.outcome.metrics.rmse_m, 0.5 * dr.outcome.metrics.rmse_m);
   EXPECT_EQ(fused.trajectory.size(), in.gt.size() + 1);

@@ -1,0 +1,129 @@
+// `odotune import ...` end to end: runs the built binary on the real datasets
+// and on a missing file, and reads back what it wrote.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include "tracks/track_io.h"
+
+namespace odotune {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kReal = fs::path(ODOTUNE_SHARED_DIR) / "data" / "real";
+
+struct ProcResult {
+  int exit_code;
+  std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class ImportCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / fmt::format("odotune-cli-import-{}", ::getpid());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  // Runs odotune with `args` (already shell-quoted where needed).
+  ProcResult odotune(const std::string& args) const {
+    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+    const std::string cmd = fmt::format("'{}' {} >'{}' 2>'{}'", ODOTUNE_BINARY, args, out.string(), err.string());
+    const int status = std::system(cmd.c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+  }
+  static std::string q(const fs::path& p) { return fmt::format("'{}'", p.string()); }
+  fs::path dir_;
+};
+
+bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+std::size_t count_lines(const std::string& s) {
+  std::size_t n = 0;
+  for (char c : s) n += c == '\n' ? 1u : 0u;
+  return n;
+}
+
+TEST_F(ImportCli, OptiOdomRunWritesTrackAndSummary) {
+  const fs::path track = dir_ / "run01.csv";
+  const auto r = odotune(fmt::format("import optiodom {} -o {}",
+                                     q(kReal / "optiodom_diff/circular/231220200146/231220200146_run-01.csv"), q(track)));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(count_lines(r.out), 1u) << r.out;
+  // SOURCE.md: 2066 samples, 103.25 s.
+  EXPECT_TRUE(contains(r.out, "2066 rows")) << r.out;
+  EXPECT_TRUE(contains(r.out, "103.250 s")) << r.out;
+  EXPECT_TRUE(contains(r.out, "ticks_l")) << r.out;
+  const Track tr = read_track(track);
+  EXPECT_EQ(tr.size(), 2066u);
+  EXPECT_TRUE(tr.has_ticks());
+  EXPECT_TRUE(tr.has_cmd());
+  EXPECT_TRUE(tr.meta().get("citation").has_value());
+}
+
+TEST_F(ImportCli, MrclamAndLitw) {
+  const fs::path m = dir_ / "m1.csv";
+  auto r = odotune(fmt::format("import mrclam {} --robot 1 -o {}", q(kReal / "mrclam7"), q(m)));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Track tm = read_track(m);
+  EXPECT_TRUE(contains(r.out, fmt::format("{} rows", tm.size()))) << r.out;
+  EXPECT_TRUE(contains(r.out, "v_cmd")) << r.out;
+  EXPECT_EQ(tm.meta().get("source.t0_unix"), "1248446182.116");
+
+  const fs::path l = dir_ / "litw.csv";
+  r = odotune(fmt::format("import litw {} -o {}", q(kReal / "utias_lost_in_the_woods/derived/litw_series.csv"), q(l)));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // SOURCE.md: 12 609 samples over 1260.8 s.
+  EXPECT_TRUE(contains(r.out, "12609 rows")) << r.out;
+  EXPECT_TRUE(contains(r.out, "1260.800 s")) << r.out;
+  EXPECT_EQ(read_track(l).size(), 12609u);
+}
+
+TEST_F(ImportCli, MissingInputIsOneLineAndNoOutput) {
+  const fs::path track = dir_ / "never.csv";
+  const fs::path missing = dir_ / "nothing_run-01.csv";
+  auto r = odotune(fmt::format("import optiodom {} -o {}", q(missing), q(track)));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(count_lines(r.err), 1u) << r.err;
+  EXPECT_TRUE(contains(r.err, missing.string())) << r.err;
+  EXPECT_FALSE(fs::exists(track));
+
+  r = odotune(fmt::format("import mrclam {} --robot 1 -o {}", q(dir_ / "no-folder"), q(track)));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_TRUE(contains(r.err, "no-folder")) << r.err;
+  EXPECT_FALSE(fs::exists(track));
+
+  r = odotune(fmt::format("import litw {}", q(kReal / "utias_lost_in_the_woods/derived/litw_series.csv")));  // no -o
+  EXPECT_NE(r.exit_code, 0);
+}
+
+TEST_F(ImportCli, HelpHasAnExample) {
+  for (const char* sub : {"mrclam", "optiodom", "litw"}) {
+    const auto r = odotune(fmt::format("import {} --help", sub));
+    EXPECT_EQ(r.exit_code, 0) << sub;
+    EXPECT_TRUE(contains(r.out, "Example")) << sub << ": " << r.out;
+    EXPECT_TRUE(contains(r.out, "-o,--output")) << sub;
+  }
+}
+
+}  // namespace
+}  // namespace odotune
