@@ -1,13 +1,152 @@
+// `odotune simulate`: scenario YAML -> simulated track file.
+//
+//   odotune simulate SCENARIO.yaml -o TRACK.csv [--seed N]
+//                    [--effect NAME:param=value,...]... [--no-effects]
+//   odotune simulate --list-effects
+//
+// Effects given with --effect are applied after the file's effects: a new
+// effect is switched on (unset optional parameters take their defaults), an
+// effect the file already has keeps its parameters except those given.
+// --no-effects drops the file's effects first (so --no-effects with --effect
+// gives exactly the command-line effects).
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
 #include "cli/commands.h"
 #include "cli/failure.h"
+#include "cli/scenario_yaml.h"
+#include "tracks/effects.h"
+#include "tracks/simulator.h"
+#include "tracks/track_io.h"
 
 namespace odotune::cli {
 
-// Not built yet: the command exists so that --help lists it, and says so plainly.
+namespace {
+
+struct SimulateOptions {
+  std::string scenario;
+  std::string output;
+  std::string seed;  // parsed here: CLI11 would wrap "-1" around to 2^64-1
+  std::vector<std::string> effects;
+  bool no_effects = false;
+  bool list_effects = false;
+};
+
+void print_effect_table(std::ostream& out) {
+  out << "Effects (../shared/specs/physics-effects.md); use --effect NAME:param=value,...\n";
+  for (const auto& e : sim::effect_table()) {
+    out << fmt::format("  {}: {}\n", e.name, e.meaning);
+    for (const auto& p : e.params)
+      out << fmt::format("      {:<8} [{}] {}, range {}{}, {}]{}\n", p.name, p.unit, p.meaning,
+                         p.min_exclusive ? "(" : "[", p.min, p.max,
+                         p.required ? ", required" : fmt::format(", default {}", p.default_value));
+  }
+}
+
+// Path length [m] along the ground truth, for the summary line.
+double path_length_m(const Track& track) {
+  if (!track.has_gt()) return 0.0;
+  const auto& x = track.col(Col::gt_x);
+  const auto& y = track.col(Col::gt_y);
+  double len = 0.0, px = 0.0, py = 0.0;
+  bool have = false;
+  for (std::size_t i = 0; i < track.size(); ++i) {
+    if (std::isnan(x[i]) || std::isnan(y[i])) continue;
+    if (have) len += std::hypot(x[i] - px, y[i] - py);
+    px = x[i], py = y[i], have = true;
+  }
+  return len;
+}
+
+void run_simulate(const SimulateOptions& o) {
+  if (o.list_effects) {
+    print_effect_table(std::cout);
+    return;
+  }
+  if (o.scenario.empty())
+    throw Failure("simulate: missing SCENARIO.yaml; expected: odotune simulate SCENARIO.yaml -o TRACK.csv");
+  if (o.output.empty())
+    throw Failure("simulate: missing -o TRACK.csv; expected: odotune simulate SCENARIO.yaml -o TRACK.csv");
+
+  sim::Scenario sc;
+  try {
+    sc = load_scenario(o.scenario);
+  } catch (const ScenarioError& e) {
+    throw Failure(e.what());
+  }
+  {
+    std::error_code ec;
+    if (std::filesystem::exists(o.output, ec) && std::filesystem::equivalent(o.output, o.scenario, ec))
+      throw Failure(fmt::format("simulate: -o {} is the scenario file itself; expected a track file name",
+                                o.output));
+  }
+  if (!o.seed.empty()) {
+    std::uint64_t seed = 0;
+    const char* end = o.seed.data() + o.seed.size();
+    const auto [p, ec] = std::from_chars(o.seed.data(), end, seed);
+    if (ec != std::errc() || p != end)
+      throw Failure(fmt::format("--seed {}: expected a non-negative integer below 2^64", o.seed));
+    sc.seed = seed;
+  }
+  if (o.no_effects) sc.effects = sim::Effects{};
+  for (const auto& text : o.effects) {
+    sim::EffectSpec spec;
+    try {
+      spec = sim::parse_effect_spec(text);
+    } catch (const std::invalid_argument& e) {
+      throw Failure(fmt::format("--{}", e.what()));  // "--effect 'TEXT': ..."
+    }
+    try {
+      sim::apply_effect(sc.effects, spec);
+    } catch (const std::invalid_argument& e) {
+      throw Failure(fmt::format("--effect '{}': {}", text, e.what()));
+    }
+  }
+
+  Track track = [&] {
+    try {
+      return sim::simulate(sc);
+    } catch (const std::invalid_argument& e) {
+      throw Failure(fmt::format("{}: {}", o.scenario, e.what()));
+    }
+  }();
+  try {
+    write_track(track, o.output);
+  } catch (const std::exception& e) {
+    throw Failure(e.what());
+  }
+  std::cout << fmt::format("wrote {}: track '{}', {} rows over {:.1f} s, path {:.1f} m, seed {}, effects: {}\n",
+                           o.output, track.name(), track.size(), track.duration_s(), path_length_m(track),
+                           sc.seed, sim::format_effects(sc.effects));
+}
+
+}  // namespace
+
 void register_simulate(CLI::App& app) {
-  auto* sub = app.add_subcommand("simulate", "(not built yet)");
-  sub->allow_extras();
-  sub->callback([] { throw Failure("'simulate' is not built yet", 2); });
+  auto opts = std::make_shared<SimulateOptions>();
+  auto* sub = app.add_subcommand(
+      "simulate",
+      "Simulate a differential-drive robot from a YAML scenario and write a track (odotune-track/1).\n"
+      "Example: odotune simulate scenarios/track1.yaml -o track1.csv --seed 7 "
+      "--effect lateral_skid:k=0.02 --effect radius_error:scale_l=0.995,scale_r=1.004");
+  sub->add_option("scenario", opts->scenario, "scenario YAML file (see scenarios/README.md)");
+  sub->add_option("-o,--output", opts->output, "track file to write (CSV, odotune-track/1)");
+  sub->add_option("--seed", opts->seed, "noise seed (integer); overrides the scenario's seed");
+  sub->add_option("--effect", opts->effects,
+                  "NAME:param=value,... switches on a physics effect or overrides its parameters "
+                  "(repeatable; see --list-effects)")
+      ->allow_extra_args(false);
+  sub->add_flag("--no-effects", opts->no_effects, "ignore the effects of the scenario file");
+  sub->add_flag("--list-effects", opts->list_effects, "print the effects, their parameters and ranges, and exit");
+  sub->callback([opts] { run_simulate(*opts); });
 }
 
 }  // namespace odotune::cli

@@ -1,0 +1,92 @@
+// The differential-drive robot simulator: Scenario (scenario.h) -> Track.
+//
+// Deterministic: the same scenario and seed give a bit-identical Track (and so
+// a byte-identical file) on the same build. All noise comes from
+// std::mt19937_64 (whose output the C++ standard fixes) through our own
+// Box-Muller transform, because std::normal_distribution is
+// implementation-defined and differs between standard libraries. Each sensor
+// has its own stream (seeded from the scenario seed with SplitMix64), so
+// switching one sensor or effect on or off never changes another sensor's noise.
+//
+// World model, integrated with a fixed step h = Scenario::step_s (1 ms):
+//
+//  1. Commands: v_cmd(t), w_cmd(t) from the segments (motion_profile.h).
+//  2. Wheel controller: the controller believes the NOMINAL robot; its wheel
+//     rate references are the inverse kinematics of track-format.md with the
+//     nominal radii R_l, R_r and base D:
+//         omega_ref_l = (v_cmd - w_cmd*D/2)/R_l,  omega_ref_r = (v_cmd + w_cmd*D/2)/R_r.
+//     The wheels follow the references ideally, or with effect actuator_lag
+//     through d(omega)/dt = (omega_ref - omega)/tau, discretised exactly for
+//     a reference linear over the step (first-order hold). As the kinematics
+//     are linear in the wheel rates, the true body velocities then follow
+//     v_cmd, w_cmd through the same lag (physics-effects.md).
+//  3. True wheel radii: R_true = R_nom * radius_error.scale * (radius_step.scale
+//     from radius_step.t on); with speed_radius the effective radius is
+//     R_true*(1 + c*u^2), u = R_true*omega. Rim speed u_rim = R_eff*omega.
+//  4. Ground speed of each wheel over a step: mean rim speed * (1 - s_long) *
+//     (1 - s_zone), where s_long = min(0.5, k*|du_rim/dt|) (longitudinal_slip)
+//     and s_zone = slip_zone.s_l / s_r while the pose at the start of the step
+//     is inside the box. (Both slips multiply when both are on.)
+//  5. Body: v = (g_r + g_l)/2, w = (g_r - g_l)/D_true with D_true =
+//     D*wheel_base_error.scale; lateral_skid adds v_y = -k*v*w (body frame,
+//     +y = left). The pose integrates exactly for velocities constant over the
+//     step (arc update with sinc), using the step means of the wheel rates:
+//     second order in h, like RK2.
+//  6. Wheel rotation angle phi integrates omega (trapezoid; exact for omega
+//     linear over the step). Encoders count the ROTATION, so slip and radius
+//     errors never change the ticks: ticks = floor(phi/(2 pi)*ticks_per_rev).
+//
+// Sensors (rows at the union of the sample instants k/rate_hz):
+//  * ticks_l/r (+ omega_l/r), v_cmd, w_cmd: the odometry columns. With effect
+//    time_offset the row stamped t holds what was measured at t - dt (linear
+//    interpolation of the internal 1 ms states; the first value is held
+//    before t = 0 and the last after the end).
+//  * gyro_z = gyro_scale.s * w + gyro_bias.b + N(0, sigma^2).
+//  * v_ext, w_ext = true body v, w + N(0, sigma^2); v_ext_var, w_ext_var = sigma^2.
+//  * aps_x, aps_y = true position + N(0, sigma^2) per axis.
+//  * gt_x, gt_y, gt_theta (unwrapped) = true pose (+ optional noise, default off).
+//  * power_l, power_r: motor power (below) + N(0, sigma^2).
+//  Every value is then rounded to its sensor's resolution (scenario.h).
+//
+// Motor power, per wheel (standard brushed/permanent-magnet DC motor model,
+// quantities referred to the wheel side of the gearbox):
+//    tau = J_w*domega/dt + b_v*omega + tau_c*tanh(omega/omega_eps)
+//          + (m*a/2 -+ I_z*alpha/D_true) * R_eff        (- left, + right)
+//    P   = tau*omega + (tau/k_t)^2 * R_coil             [W]
+// i.e. wheel + rotor inertia, viscous and (smoothed) Coulomb friction, and each
+// wheel's share of accelerating the body (mass m, linear acceleration a) and
+// of turning it (yaw inertia I_z, angular acceleration alpha), then mechanical
+// power plus copper loss (current i = tau/k_t). P < 0 is regenerative braking.
+// a and alpha are the true body accelerations, so under slip power and wheel
+// speed decorrelate (the relation Farina et al., Sensors 2023, 23, 961 use to
+// detect slip: ../shared/papers/002_*.txt).
+//
+// Sources: kinematics and every effect model: ../shared/specs/track-format.md
+// and physics-effects.md (taken literally, with their units); motor model: the
+// textbook DC-motor equations (torque = k_t*i, copper loss i^2*R; e.g. Hughes
+// & Drury, "Electric Motors and Drives"); noise: Box & Muller (1958), SplitMix64
+// (Steele, Lea & Flood 2014); sensor defaults (1 Hz position fixes, sigma
+// 60 mm): Kovacs et al., ../shared/papers/001_*.txt.
+#pragma once
+
+#include <string>
+
+#include "tracks/scenario.h"
+#include "tracks/track.h"
+
+namespace odotune::sim {
+
+// Checks every field (ranges, sample periods being whole numbers of steps, the
+// motion profile, a bound on the size of the result). On failure `why` is one
+// line naming the field, its value and what was expected.
+bool validate_scenario(const Scenario& scenario, std::string* why);
+
+// Runs the simulation. Throws std::invalid_argument with validate_scenario's
+// message for an invalid scenario.
+Track simulate(const Scenario& scenario);
+
+// Upper bounds enforced by validate_scenario (no unbounded allocation).
+inline constexpr double kMaxSimSteps = 2e8;
+inline constexpr double kMaxSimRows = 1e7;
+
+}  // namespace odotune::sim
