@@ -1,5 +1,5 @@
-// Line-oriented reading of third-party text files, shared by the dataset
-// importers (importers.h). Not a track parser: it only knows lines, fields and
+// Line-oriented reading of text files, shared by the dataset importers
+// (importers.h); trim() and quote() also serve the track reader. Not a track parser: it only knows lines, fields and
 // numbers, and turns every problem into a TrackError(file, line, reason).
 //
 // Contract: a LineReader never allocates more than kMaxLineBytes per line, so

@@ -26,6 +26,7 @@
 #include <fmt/format.h>
 
 #include "tracks/track_io.h"
+#include "tracks/import_text.h"
 
 namespace odotune {
 
@@ -38,29 +39,8 @@ TrackError::TrackError(std::string file, std::size_t line, std::string reason)
 
 namespace {
 
-// s without surrounding spaces and tabs.
-std::string_view trim(std::string_view s) {
-  const auto first = s.find_first_not_of(" \t");
-  if (first == std::string_view::npos) return {};
-  const auto last = s.find_last_not_of(" \t");
-  return s.substr(first, last - first + 1);
-}
-
-// s quoted for an error message: at most 40 bytes, control, quote and
-// non-ASCII bytes as \xHH, so that the message stays one printable line.
-std::string quote(std::string_view s) {
-  constexpr std::size_t kMax = 40;
-  std::string out = "'";
-  for (std::size_t i = 0; i < s.size() && i < kMax; ++i) {
-    const auto c = static_cast<unsigned char>(s[i]);
-    if (c < 0x20 || c >= 0x7f || c == '\'' || c == '\\')
-      out += fmt::format("\\x{:02x}", c);
-    else
-      out += static_cast<char>(c);
-  }
-  out += s.size() > kMax ? "'..." : "'";
-  return out;
-}
+using import_text::quote;
+using import_text::trim;
 
 enum class NumParse { kOk, kBad, kNonFinite, kOutOfRange };
 

@@ -1,4 +1,5 @@
 #include "tuner/nlopt_solver.h"
+#include "tuner/solver_run.h"
 
 // The C API is used on purpose: the adapter needs full control over what
 // crosses NLopt's C frames (its callback is noexcept and catches everything)
@@ -19,7 +20,10 @@
 namespace odotune::tuner {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using detail::kInf;
+using detail::str;
+using detail::what_of;
+
 
 struct AlgorithmInfo {
   const char* name;
@@ -58,21 +62,7 @@ const AlgorithmInfo* find_algorithm(std::string_view name) {
   return nullptr;
 }
 
-std::string str(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 
-std::string what_of(std::exception_ptr e) {
-  try {
-    std::rethrow_exception(std::move(e));
-  } catch (const std::exception& ex) {
-    return ex.what();
-  } catch (...) {
-    return "unknown exception";
-  }
-}
 
 std::string result_name(nlopt_result r) {
   const char* s = nlopt_result_to_string(r);
@@ -190,24 +180,14 @@ bool NloptOptions::IsValid(std::string* why) const {
 }
 
 Summary nlopt_minimize(ProblemRef problem, const NloptOptions& options) {
-  const auto t0 = std::chrono::steady_clock::now();
-  Summary summary;
-  summary.best_fitness = kInf;
-  auto finish = [&](std::string termination) {
-    summary.termination = std::move(termination);
-    summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return summary;
+  detail::SolverRun solver_run;
+  Summary& summary = solver_run.summary;
+  auto finish = [&solver_run](std::string termination) {
+    return solver_run.finish(std::move(termination));
   };
-
-  std::string why;
-  if (!options.IsValid(&why)) return finish("failure: " + why);
   Bounds box;
-  try {
-    box = problem.bounds();
-  } catch (...) {
-    return finish("failure: bounds() threw: " + what_of(std::current_exception()));
-  }
-  if (!box.IsValid(&why)) return finish("failure: " + why);
+  if (auto failure = solver_run.start(options, problem, &box)) return finish(*failure);
+  std::string why;
   const std::size_t dim = box.dimension();
 
   std::vector<double> x(dim);

@@ -10,34 +10,24 @@
 #include <vector>
 
 #include "tuner/counter_rng.h"
+#include "tuner/solver_run.h"
 
 namespace odotune::tuner {
 namespace {
 
+using detail::kInf;
+using detail::str;
+using detail::what_of;
+
 // Streams of the counter-based generator (the last key word).
 enum Stream : std::uint64_t { kInitPosition = 0, kInitVelocity = 1, kR1 = 2, kR2 = 3 };
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
-std::string str(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 
 // Non-finite values become +inf so that a plain `<` never prefers them and
 // NaN never poisons a comparison.
 double sanitize(double f) { return std::isfinite(f) ? f : kInf; }
 
-std::string what_of(std::exception_ptr e) {
-  try {
-    std::rethrow_exception(std::move(e));
-  } catch (const std::exception& ex) {
-    return ex.what();
-  } catch (...) {
-    return "unknown exception";
-  }
-}
 
 }  // namespace
 
@@ -65,24 +55,13 @@ bool PsoOptions::IsValid(std::string* why) const {
 }
 
 Summary pso_minimize(ProblemRef problem, const PsoOptions& options) {
-  const auto t0 = std::chrono::steady_clock::now();
-  Summary summary;
-  summary.best_fitness = kInf;
-  auto finish = [&](std::string termination) {
-    summary.termination = std::move(termination);
-    summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return summary;
+  detail::SolverRun solver_run;
+  Summary& summary = solver_run.summary;
+  auto finish = [&solver_run](std::string termination) {
+    return solver_run.finish(std::move(termination));
   };
-
-  std::string why;
-  if (!options.IsValid(&why)) return finish("failure: " + why);
   Bounds box;
-  try {
-    box = problem.bounds();
-  } catch (...) {
-    return finish("failure: bounds() threw: " + what_of(std::current_exception()));
-  }
-  if (!box.IsValid(&why)) return finish("failure: " + why);
+  if (auto failure = solver_run.start(options, problem, &box)) return finish(*failure);
 
   const int n = options.particles;
   const std::size_t dim = box.dimension();
