@@ -16,6 +16,7 @@ int run(int argc, char** argv) {
   register_tune(app);
   register_eval(app);
   register_demo(app);
+  register_fixes(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -27,6 +27,11 @@ PreparedTrack prepare_track(const Track& track) {
   PreparedTrack p;
   p.name = track.name();
   p.input = build_replay_input(track);
+  if (p.input.fixes.empty())
+    throw std::invalid_argument(
+        "track '" + track.name() +
+        "': no position fixes (aps_x, aps_y), so the EKF has nothing to correct with and its "
+        "noise cannot matter; add fixes made from ground truth with `odotune fixes`");
   p.fast = std::make_unique<FastReplay>(p.input);
   return p;
 }

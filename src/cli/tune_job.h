@@ -26,7 +26,8 @@ struct PreparedTrack {
   ReplayInput input;
   std::unique_ptr<FastReplay> fast;
 };
-// Throws std::invalid_argument (one line naming the track) when it cannot be replayed.
+// Throws std::invalid_argument (one line naming the track) when it cannot be
+// replayed or has no position fixes (nothing to tune).
 PreparedTrack prepare_track(const Track& track);
 
 struct TuneRequest {

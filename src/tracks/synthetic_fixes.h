@@ -1,0 +1,30 @@
+// Absolute position fixes made from a track's ground truth, as in Kovacs et
+// al. §2.1: "selection" at a fixed frequency from the ground-truth path, then
+// "perturbation" with zero-mean Gaussian noise (σ = 60 mm in the study). This
+// is how recordings without a positioning system (OptiOdom, MRCLAM, Lost in
+// the Woods) become tunable.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "tracks/track.h"
+
+namespace odotune {
+
+struct SyntheticFixOptions {
+  double rate_hz = 1.0;     // fix frequency
+  double sigma_m = 0.060;   // noise σ per axis [m]
+  std::uint64_t seed = 1;   // explicit seed of the noise
+
+  bool IsValid(std::string* why) const;
+};
+
+// A copy of `track` whose aps_x/aps_y columns (replaced if present) hold a
+// fix at the first ground-truth row at or after each multiple of 1/rate_hz
+// from the first ground-truth time (the first fix one period after it). The
+// metadata records how the fixes were made. Throws std::invalid_argument when
+// the options are invalid or the track has no ground truth.
+Track with_synthetic_fixes(const Track& track, const SyntheticFixOptions& options);
+
+}  // namespace odotune
