@@ -1,0 +1,48 @@
+// One finished tuning run of an experiment grid: the row the results store
+// keeps and the report and export read. Plain data, SI units (metres).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace odotune::results {
+
+struct Metrics {
+  double rmse_m = 0.0, mae_m = 0.0, maxe_m = 0.0;
+};
+
+struct ConvergencePoint {
+  long evaluations = 0;
+  double best_fitness = 0.0;
+};
+
+struct RunRecord {
+  // The cell: model × track × mode × seed (× held-out track for leave-one-out).
+  std::string model;            // "rq" | "alpha" | "gyro"
+  std::string track;            // track name (tuned on; "all-but-X" for leave-one-out)
+  std::string heldout_track;    // empty unless leave-one-track-out
+  int mode = 7;                 // fitness mode 1..7
+  std::uint64_t seed = 0;
+  std::string solver = "pso";
+  // The result.
+  std::vector<std::string> param_names;
+  std::vector<double> params;   // physical values (units as in ParamSpace)
+  double best_fitness = 0.0;
+  Metrics baseline, tuned;      // on `track` (or on the held-out track)
+  long evaluations = 0;
+  double seconds = 0.0;
+  long diverged = 0;            // evaluations that diverged
+  std::string termination;
+  std::vector<ConvergencePoint> convergence;
+
+  // Improvement of tuned over baseline in % (positive = better).
+  double improvement_rmse_pct() const { return pct(baseline.rmse_m, tuned.rmse_m); }
+  double improvement_mae_pct() const { return pct(baseline.mae_m, tuned.mae_m); }
+  double improvement_maxe_pct() const { return pct(baseline.maxe_m, tuned.maxe_m); }
+
+ private:
+  static double pct(double b, double t) { return b > 0.0 ? 100.0 * (b - t) / b : 0.0; }
+};
+
+}  // namespace odotune::results
