@@ -17,6 +17,7 @@ int run(int argc, char** argv) {
   register_eval(app);
   register_demo(app);
   register_fixes(app);
+  register_grid(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

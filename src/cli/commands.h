@@ -16,6 +16,7 @@ void register_tune(CLI::App& app);
 void register_eval(CLI::App& app);
 void register_demo(CLI::App& app);
 void register_fixes(CLI::App& app);
+void register_grid(CLI::App& app);
 
 // Runs the CLI; returns the process exit code.
 int run(int argc, char** argv);

@@ -1,0 +1,140 @@
+#include "cli/experiment_yaml.h"
+
+#include <glob.h>
+
+#include <algorithm>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include "cli/failure.h"
+#include "objectives/metrics.h"
+
+namespace odotune::cli {
+
+namespace {
+
+constexpr const char* kFormat = "odotune-experiment/1";
+
+[[noreturn]] void fail_at(const std::filesystem::path& path, const YAML::Node& node,
+                          const std::string& what) {
+  const auto mark = node.Mark();
+  if (mark.is_null()) throw Failure(fmt::format("{}: {}", path.string(), what));
+  throw Failure(fmt::format("{}:{}: {}", path.string(), mark.line + 1, what));
+}
+
+template <typename T>
+T scalar(const std::filesystem::path& path, const YAML::Node& node, const char* what) {
+  try {
+    return node.as<T>();
+  } catch (const YAML::Exception&) {
+    fail_at(path, node, fmt::format("{} has a bad value, expected {}", what,
+                                    std::is_same_v<T, std::string> ? "text" : "a number"));
+  }
+}
+
+std::vector<YAML::Node> list(const std::filesystem::path& path, const YAML::Node& root,
+                             const char* key) {
+  const YAML::Node n = root[key];
+  if (!n) fail_at(path, root, fmt::format("missing '{}'", key));
+  if (!n.IsSequence() || n.size() == 0) fail_at(path, n, fmt::format("'{}' must be a non-empty list", key));
+  return {n.begin(), n.end()};
+}
+
+std::vector<std::string> expand(const std::filesystem::path& path, const YAML::Node& node,
+                                const std::filesystem::path& base) {
+  const std::string pattern = scalar<std::string>(path, node, "a track");
+  const std::filesystem::path full = std::filesystem::path(pattern).is_absolute() ? std::filesystem::path(pattern) : base / pattern;
+  glob_t g{};
+  const int rc = ::glob(full.c_str(), 0, nullptr, &g);
+  std::vector<std::string> out;
+  if (rc == 0)
+    for (std::size_t i = 0; i < g.gl_pathc; ++i) out.emplace_back(g.gl_pathv[i]);
+  globfree(&g);
+  if (out.empty()) fail_at(path, node, fmt::format("no track file matches '{}'", full.string()));
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace
+
+Experiment read_experiment(const std::filesystem::path& path) {
+  Experiment e;
+  e.file = path;
+  {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Failure(fmt::format("{}: cannot open the experiment file", path.string()));
+    std::stringstream ss;
+    ss << in.rdbuf();
+    e.text = ss.str();
+  }
+  YAML::Node root;
+  try {
+    root = YAML::Load(e.text);
+  } catch (const YAML::ParserException& ex) {
+    throw Failure(fmt::format("{}:{}: {}", path.string(), ex.mark.line + 1, ex.msg));
+  }
+  if (!root.IsMap()) fail_at(path, root, "expected a mapping (see experiments/smoke.yaml)");
+  static const std::set<std::string> known = {"format", "name",   "models",   "tracks",
+                                              "modes",  "seeds",  "solver",   "budget",
+                                              "leave_one_out", "store"};
+  for (const auto& kv : root) {
+    const auto key = kv.first.as<std::string>("");
+    if (!known.count(key))
+      fail_at(path, kv.first, fmt::format("unknown key '{}', expected one of format, name, models, "
+                                          "tracks, modes, seeds, solver, budget, leave_one_out, store",
+                                          key));
+  }
+  if (!root["format"] || root["format"].as<std::string>("") != kFormat)
+    fail_at(path, root["format"] ? root["format"] : root,
+            fmt::format("missing or unknown format, expected 'format: {}'", kFormat));
+  const std::filesystem::path base = path.parent_path().empty() ? "." : path.parent_path();
+  e.name = root["name"] ? scalar<std::string>(path, root["name"], "name") : path.stem().string();
+
+  for (const auto& n : list(path, root, "models")) {
+    filters::NoiseModel m;
+    if (!filters::parse_noise_model(scalar<std::string>(path, n, "a model"), &m))
+      fail_at(path, n, "unknown model, expected rq, alpha or gyro");
+    e.models.push_back(m);
+  }
+  for (const auto& n : list(path, root, "tracks"))
+    for (auto& t : expand(path, n, base)) e.tracks.push_back(std::move(t));
+  for (const auto& n : list(path, root, "modes")) {
+    const int m = scalar<int>(path, n, "a mode");
+    if (!valid_fitness_mode(m)) fail_at(path, n, fmt::format("mode {} is out of range, expected 1..7", m));
+    e.modes.push_back(m);
+  }
+  const YAML::Node seeds = root["seeds"];
+  if (!seeds) fail_at(path, root, "missing 'seeds'");
+  if (seeds.IsMap()) {
+    const auto first = scalar<std::uint64_t>(path, seeds["first"], "seeds.first");
+    const auto count = scalar<int>(path, seeds["count"], "seeds.count");
+    if (count < 1 || count > 100000) fail_at(path, seeds, "seeds.count must be 1..100000");
+    for (int i = 0; i < count; ++i) e.seeds.push_back(first + static_cast<std::uint64_t>(i));
+  } else {
+    for (const auto& n : list(path, root, "seeds"))
+      e.seeds.push_back(scalar<std::uint64_t>(path, n, "a seed"));
+  }
+  if (root["solver"]) e.solver = scalar<std::string>(path, root["solver"], "solver");
+  if (const YAML::Node b = root["budget"]) {
+    if (!b.IsMap()) fail_at(path, b, "budget must be a mapping {particles, iterations} or {evaluations}");
+    for (const auto& kv : b) {
+      const auto key = kv.first.as<std::string>("");
+      if (key == "particles") e.particles = scalar<int>(path, kv.second, "budget.particles");
+      else if (key == "iterations") e.iterations = scalar<int>(path, kv.second, "budget.iterations");
+      else if (key == "evaluations") e.evaluations = scalar<long>(path, kv.second, "budget.evaluations");
+      else fail_at(path, kv.first, fmt::format("unknown budget key '{}', expected particles, iterations or evaluations", key));
+    }
+  }
+  if (root["leave_one_out"]) e.leave_one_out = scalar<bool>(path, root["leave_one_out"], "leave_one_out");
+  if (e.leave_one_out && e.tracks.size() < 2)
+    fail_at(path, root["leave_one_out"], "leave_one_out needs at least two tracks");
+  e.store = root["store"] ? base / scalar<std::string>(path, root["store"], "store")
+                          : base / (e.name + ".sqlite");
+  return e;
+}
+
+}  // namespace odotune::cli

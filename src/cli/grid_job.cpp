@@ -1,0 +1,130 @@
+#include "cli/grid_job.h"
+
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "cli/failure.h"
+#include "cli/output.h"
+#include "cli/tune_job.h"
+
+namespace odotune::cli {
+
+std::vector<GridCell> grid_cells(const Experiment& e) {
+  std::vector<GridCell> cells;
+  for (auto model : e.models) {
+    for (std::size_t t = 0; t < e.tracks.size(); ++t)
+      for (int mode : e.modes)
+        for (auto seed : e.seeds) cells.push_back({model, {t}, t, false, mode, seed});
+    if (!e.leave_one_out) continue;
+    for (std::size_t h = 0; h < e.tracks.size(); ++h) {
+      std::vector<std::size_t> others;
+      for (std::size_t t = 0; t < e.tracks.size(); ++t)
+        if (t != h) others.push_back(t);
+      for (int mode : e.modes)
+        for (auto seed : e.seeds) cells.push_back({model, others, h, true, mode, seed});
+    }
+  }
+  return cells;
+}
+
+namespace {
+
+results::Metrics to_metrics(const ErrorMetrics& m) { return {m.rmse_m, m.mae_m, m.maxe_m}; }
+
+// The record of a cell, without its results: what identifies it in the store.
+results::RunRecord cell_record(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                               const GridCell& c) {
+  results::RunRecord r;
+  r.model = std::string(filters::to_string(c.model));
+  r.track = c.heldout ? "all-but-" + tracks[c.score_on].name : tracks[c.score_on].name;
+  r.heldout_track = c.heldout ? tracks[c.score_on].name : "";
+  r.mode = c.mode;
+  r.seed = c.seed;
+  r.solver = e.solver;
+  return r;
+}
+
+}  // namespace
+
+GridOutcome run_grid(const Experiment& e, results::Store& store, const std::atomic<bool>* stop,
+                     const std::function<void(long, long)>& progress) {
+  std::vector<PreparedTrack> tracks;
+  for (const auto& t : load_tracks(e.tracks)) {
+    try {
+      tracks.push_back(prepare_track(t));
+    } catch (const std::invalid_argument& ex) {
+      throw Failure(ex.what());
+    }
+  }
+  const std::vector<GridCell> cells = grid_cells(e);
+  const std::set<std::string> finished = store.finished_keys();
+  std::vector<std::size_t> pending;
+  GridOutcome out;
+  out.total = static_cast<long>(cells.size());
+  for (std::size_t i = 0; i < cells.size(); ++i)
+    if (!finished.count(results::run_key(cell_record(e, tracks, cells[i])))) pending.push_back(i);
+  out.skipped = out.total - static_cast<long>(pending.size());
+  if (progress) progress(out.skipped, out.total);
+
+  std::string failure;
+  long done = out.skipped;
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::size_t k = 0; k < pending.size(); ++k) {
+    bool skip = false;
+#pragma omp critical(odotune_grid)
+    skip = !failure.empty() || (stop && stop->load());
+    if (skip) continue;
+    const GridCell& c = cells[pending[k]];
+    results::RunRecord r = cell_record(e, tracks, c);
+    TuneRequest req;
+    req.model = c.model;
+    req.mode = c.mode;
+    req.solver = e.solver;
+    req.seed = c.seed;
+    req.particles = e.particles;
+    req.iterations = e.iterations;
+    req.evaluations = e.evaluations;
+    req.stop = stop;
+    std::vector<const PreparedTrack*> tune_on;
+    for (auto t : c.tune_on) tune_on.push_back(&tracks[t]);
+    try {
+      const TuneOutcome o = run_tune(tune_on, req);
+      if (o.summary.termination == "stopped") {
+#pragma omp critical(odotune_grid)
+        ++out.abandoned;
+        continue;
+      }
+      r.param_names = o.param_names;
+      r.params = o.params;
+      r.best_fitness = o.summary.best_fitness;
+      r.evaluations = o.summary.evaluations;
+      r.seconds = o.summary.seconds;
+      r.diverged = o.divergences.total();
+      r.termination = o.summary.termination;
+      for (const auto& rec : o.summary.log) r.convergence.push_back({rec.evaluations, rec.best_fitness});
+      // Scores on the cell's track: the tuned track itself, or the held-out one.
+      const auto& score = tracks[c.score_on].input;
+      r.baseline = to_metrics(replay_ekf(score, baseline_noise()).outcome.metrics);
+      r.tuned = to_metrics(replay_ekf(score, o.noise).outcome.metrics);
+#pragma omp critical(odotune_grid)
+      {
+        try {
+          store.add(r);
+          ++out.ran;
+          ++done;
+          if (progress) progress(done, out.total);
+        } catch (const std::exception& ex) {
+          if (failure.empty()) failure = ex.what();
+        }
+      }
+    } catch (const std::exception& ex) {
+#pragma omp critical(odotune_grid)
+      if (failure.empty()) failure = fmt::format("run {}: {}", results::run_key(r), ex.what());
+    }
+  }
+  if (!failure.empty()) throw Failure(failure);
+  return out;
+}
+
+}  // namespace odotune::cli
