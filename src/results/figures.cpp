@@ -1,0 +1,358 @@
+#include "results/figures.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "results/gnuplot.h"
+
+namespace odotune::results {
+namespace fs = std::filesystem;
+
+namespace {
+
+// Colour-blind-safe series colours (Okabe & Ito 2008), yellow left out.
+const char* const kSeriesColours[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
+                                      "#E69F00", "#56B4E9", "#000000"};
+constexpr std::size_t kNumSeriesColours = sizeof(kSeriesColours) / sizeof(kSeriesColours[0]);
+
+const char* series_colour(std::size_t i) { return kSeriesColours[i % kNumSeriesColours]; }
+
+std::string num(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
+// One decimal, without a "-0.0".
+std::string one_decimal(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.1f", v);
+  std::string s = buf;
+  if (s == "-0.0") s = "0.0";
+  return s;
+}
+
+std::string q(const std::string& s) { return gnuplot_quote(s); }
+
+// Renders `body` (settings + one plot command) to STEM.png and STEM.svg.
+void render(const fs::path& stem, std::vector<std::pair<std::string, std::string>> data_files,
+            const std::string& body, int width_px, int height_px) {
+  if (stem.filename().empty()) {
+    throw std::invalid_argument("figure output stem '" + stem.string() + "' has no file name");
+  }
+  const std::string size = std::to_string(width_px) + "," + std::to_string(height_px);
+  std::string script = "set encoding utf8\n";
+  script += "set terminal pngcairo size " + size +
+            " noenhanced font 'DejaVu Sans,11' background rgb 'white'\n";
+  script += "set output 'figure.png'\n" + body + "\n";
+  script += "set terminal svg size " + size +
+            " noenhanced font 'DejaVu Sans,12' background rgb 'white'\n";
+  script += "set output 'figure.svg'\n" + body + "\nunset output\n";
+
+  fs::path png = stem, svg = stem;
+  png += ".png";
+  svg += ".svg";
+  GnuplotJob job;
+  job.data_files = std::move(data_files);
+  job.script = std::move(script);
+  job.outputs = {{"figure.png", png}, {"figure.svg", svg}};
+  run_gnuplot(job);
+}
+
+// `set xtics (...)`/`set ytics (...)` list for categorical positions 0..n-1
+// (or `first`, `first+1`, …).
+std::string category_tics(const std::vector<std::string>& names, int first) {
+  std::string s = "(";
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (i > 0) s += ", ";
+    s += q(names[i]) + " " + std::to_string(first + static_cast<int>(i));
+  }
+  return s + ")";
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- heatmap
+
+std::string heatmap_mode_label(int mode) {
+  static const char* const names[] = {"RMSE",      "MAE",      "MAXE",         "RMSE+MAE",
+                                      "RMSE+MAXE", "MAE+MAXE", "RMSE+MAE+MAXE"};
+  if (mode < 1 || mode > 7) throw std::invalid_argument("fitness mode must be 1..7");
+  return std::to_string(mode) + " " + names[mode - 1];
+}
+
+void heatmap(const fs::path& stem, const std::string& title,
+             const std::vector<std::string>& columns,
+             const std::vector<std::vector<double>>& values) {
+  constexpr int kModes = 7;
+  if (columns.empty()) throw std::invalid_argument("heatmap: no columns (tracks)");
+  if (values.size() != kModes) {
+    throw std::invalid_argument("heatmap: expected 7 rows (fitness modes 1..7), got " +
+                                std::to_string(values.size()));
+  }
+  double max_abs = 0.0;
+  for (std::size_t r = 0; r < values.size(); ++r) {
+    if (values[r].size() != columns.size()) {
+      throw std::invalid_argument("heatmap: row " + std::to_string(r + 1) + " has " +
+                                  std::to_string(values[r].size()) + " values, expected " +
+                                  std::to_string(columns.size()) + " (one per column)");
+    }
+    for (double v : values[r]) {
+      if (std::isfinite(v)) max_abs = std::max(max_abs, std::abs(v));
+    }
+  }
+  // Symmetric colour range, at least ±1 %, rounded up to a whole percent.
+  const double range = std::max(1.0, std::ceil(max_abs));
+
+  // cells: x y value; labels: x y "text" (dark or light text by background).
+  std::string cells, missing, dark_labels, light_labels;
+  for (int r = 0; r < kModes; ++r) {
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      const double v = values[r][c];
+      const std::string xy = std::to_string(c) + " " + std::to_string(r);
+      if (!std::isfinite(v)) {
+        missing += xy + " \"n/a\"\n";
+        continue;
+      }
+      cells += xy + " " + num(v) + "\n";
+      (std::abs(v) > 0.6 * range ? light_labels : dark_labels) +=
+          xy + " \"" + one_decimal(v) + "\"\n";
+    }
+  }
+
+  std::vector<std::string> mode_names;
+  for (int m = 1; m <= kModes; ++m) mode_names.push_back(heatmap_mode_label(m));
+  std::size_t longest = 0;
+  for (const auto& c : columns) longest = std::max(longest, c.size());
+  const int ncols = static_cast<int>(columns.size());
+
+  std::string body;
+  body += "set title " + q(title) + " font ',13'\n";
+  body += "set xlabel 'track'\nset ylabel 'fitness mode'\n";
+  body += "set cblabel 'improvement [%]'\n";
+  body += "set xrange [-0.5:" + num(ncols - 0.5) + "]\nset yrange [6.5:-0.5]\n";
+  body += "set xtics " + category_tics(columns, 0) + " scale 0" +
+          (longest > 8 ? " rotate by 30 right" : "") + "\n";
+  body += "set ytics " + category_tics(mode_names, 0) + " scale 0\n";
+  body += "set palette defined (-1 '#b2182b', -0.5 '#ef8a62', 0 '#f7f7f7', 0.5 '#67a9cf', "
+          "1 '#2166ac')\n";
+  body += "set cbrange [" + num(-range) + ":" + num(range) + "]\nset colorbox\n";
+  body += "unset key\nset border 0\nset style fill solid 1.0 noborder\n";
+  std::string plot = "plot ";
+  auto add = [&plot](const std::string& clause) {
+    if (plot != "plot ") plot += ", \\\n     ";
+    plot += clause;
+  };
+  // A palette clause is always present so the colour box is drawn even when
+  // every cell is missing.
+  add(cells.empty() ? "NaN with points lc palette notitle"
+                    : "'cells.dat' using 1:2:(0.5):(0.5):3 with boxxyerror fc palette notitle");
+  if (!missing.empty()) {
+    add("'missing.dat' using 1:2:(0.5):(0.5) with boxxyerror fc rgb '#c8c8c8' notitle");
+    add("'missing.dat' using 1:2:3 with labels tc rgb '#505050' notitle");
+  }
+  if (!dark_labels.empty()) add("'dark.dat' using 1:2:3 with labels tc rgb 'black' notitle");
+  if (!light_labels.empty()) add("'light.dat' using 1:2:3 with labels tc rgb 'white' notitle");
+  body += plot + "\n";
+
+  const int width = std::max(700, 260 + 95 * ncols);
+  const int height = 560 + (longest > 8 ? static_cast<int>(std::min<std::size_t>(longest, 40)) * 5 : 0);
+  render(stem,
+         {{"cells.dat", cells}, {"missing.dat", missing}, {"dark.dat", dark_labels},
+          {"light.dat", light_labels}},
+         body, width, height);
+}
+
+// ---------------------------------------------------------------- boxplots
+
+void boxplots(const fs::path& stem, const std::string& title,
+              const std::map<std::string, std::map<std::string, std::vector<double>>>& data) {
+  // Metric order: RMSE, MAE, MAXE, then any other in alphabetical order.
+  std::vector<std::string> metrics = {"RMSE", "MAE", "MAXE"};
+  for (const auto& [model, by_metric] : data) {
+    for (const auto& [metric, vals] : by_metric) {
+      if (std::find(metrics.begin(), metrics.end(), metric) == metrics.end()) {
+        metrics.push_back(metric);
+      }
+    }
+  }
+  std::sort(metrics.begin() + 3, metrics.end());
+  const char* const metric_colours[] = {"#0072B2", "#E69F00", "#009E73"};
+
+  std::vector<std::string> models;
+  for (const auto& [model, by_metric] : data) models.push_back(model);
+  if (models.empty()) throw std::invalid_argument("boxplots: no models");
+
+  const double slot = 0.8 / static_cast<double>(metrics.size());  // x width per metric
+  std::vector<std::pair<std::string, std::string>> files;
+  std::vector<bool> metric_in_legend(metrics.size(), false);
+  std::string plot = "plot 0 with lines dt 2 lc rgb 'gray40' notitle";
+  for (std::size_t g = 0; g < models.size(); ++g) {
+    const auto& by_metric = data.at(models[g]);
+    for (std::size_t m = 0; m < metrics.size(); ++m) {
+      auto it = by_metric.find(metrics[m]);
+      if (it == by_metric.end()) continue;
+      std::string content;
+      for (double v : it->second) {
+        if (std::isfinite(v)) content += num(v) + "\n";
+      }
+      if (content.empty()) continue;
+      const std::string file = "box_" + std::to_string(g) + "_" + std::to_string(m) + ".dat";
+      files.emplace_back(file, content);
+      const double x = static_cast<double>(g + 1) - 0.4 + slot * (static_cast<double>(m) + 0.5);
+      const std::string colour = m < 3 ? metric_colours[m] : series_colour(m);
+      plot += ", \\\n     '" + file + "' using (" + num(x) + "):1:(" + num(slot * 0.8) +
+              ") with boxplot lc rgb '" + colour + "' fc rgb '" + colour + "' " +
+              (metric_in_legend[m] ? std::string("notitle") : "title " + q(metrics[m]));
+      metric_in_legend[m] = true;
+    }
+  }
+  if (files.empty()) throw std::invalid_argument("boxplots: no finite values to plot");
+
+  std::string body;
+  body += "set title " + q(title) + " font ',13'\n";
+  body += "set xlabel 'model'\nset ylabel 'improvement [%]'\n";
+  body += "set xrange [0.5:" + num(static_cast<double>(models.size()) + 0.5) + "]\n";
+  body += "set xtics " + category_tics(models, 1) + " scale 0\n";
+  body += "set grid ytics lc rgb '#e0e0e0'\n";
+  body += "set style fill solid 0.35 border\n";
+  body += "set style boxplot outliers pointtype 7\nset pointsize 0.5\n";
+  body += "set key outside right top box Left reverse width 1\n";
+  body += plot + "\n";
+  const int width = std::max(800, 300 + 180 * static_cast<int>(models.size()));
+  render(stem, std::move(files), body, width, 600);
+}
+
+// ---------------------------------------------------------------- convergence
+
+ConvergenceBand resample_convergence(const std::vector<std::vector<ConvergencePoint>>& runs) {
+  std::vector<std::vector<ConvergencePoint>> sorted;
+  std::vector<long> grid;
+  for (const auto& run : runs) {
+    if (run.empty()) continue;
+    auto r = run;
+    std::stable_sort(r.begin(), r.end(), [](const ConvergencePoint& a, const ConvergencePoint& b) {
+      return a.evaluations < b.evaluations;
+    });
+    for (const auto& p : r) grid.push_back(p.evaluations);
+    sorted.push_back(std::move(r));
+  }
+  std::sort(grid.begin(), grid.end());
+  grid.erase(std::unique(grid.begin(), grid.end()), grid.end());
+
+  ConvergenceBand band;
+  std::vector<std::size_t> cursor(sorted.size(), 0);  // next point index per run
+  std::vector<double> at;
+  for (long e : grid) {
+    at.clear();
+    for (std::size_t i = 0; i < sorted.size(); ++i) {
+      const auto& r = sorted[i];
+      while (cursor[i] < r.size() && r[cursor[i]].evaluations <= e) ++cursor[i];
+      if (cursor[i] > 0) at.push_back(r[cursor[i] - 1].best_fitness);
+    }
+    if (at.empty()) continue;
+    std::sort(at.begin(), at.end());
+    const std::size_t n = at.size();
+    band.evaluations.push_back(e);
+    band.median_m.push_back(n % 2 == 1 ? at[n / 2] : 0.5 * (at[n / 2 - 1] + at[n / 2]));
+    band.min_m.push_back(at.front());
+    band.max_m.push_back(at.back());
+    band.runs.push_back(static_cast<int>(n));
+  }
+  return band;
+}
+
+void convergence(const fs::path& stem, const std::string& title,
+                 const std::map<std::string, std::vector<std::vector<ConvergencePoint>>>& series) {
+  std::vector<std::pair<std::string, std::string>> files;
+  std::string plot = "plot ";
+  std::size_t k = 0;
+  for (const auto& [name, runs] : series) {
+    const ConvergenceBand band = resample_convergence(runs);
+    if (band.evaluations.empty()) continue;
+    // Step-wise rows: at each new grid point first the previous values, then
+    // the new ones, so straight segments draw the steps. Columns: e med min max.
+    std::string content;
+    for (std::size_t i = 0; i < band.evaluations.size(); ++i) {
+      const std::string e = std::to_string(band.evaluations[i]) + " ";
+      if (i > 0) {
+        content += e + num(band.median_m[i - 1]) + " " + num(band.min_m[i - 1]) + " " +
+                   num(band.max_m[i - 1]) + "\n";
+      }
+      content += e + num(band.median_m[i]) + " " + num(band.min_m[i]) + " " +
+                 num(band.max_m[i]) + "\n";
+    }
+    std::size_t nruns = 0;
+    for (const auto& r : runs) nruns += r.empty() ? 0 : 1;
+    const std::string file = "series_" + std::to_string(k) + ".dat";
+    files.emplace_back(file, content);
+    const std::string colour = series_colour(k);
+    if (k > 0) plot += ", \\\n     ";
+    plot += "'" + file + "' using 1:3:4 with filledcurves lc rgb '" + colour + "' title " +
+            q(name + " min–max (" + std::to_string(nruns) + (nruns == 1 ? " run)" : " runs)")) +
+            ", \\\n     '" + file + "' using 1:2 with lines lw 2 lc rgb '" + colour +
+            "' title " + q(name + " median");
+    ++k;
+  }
+  if (files.empty()) throw std::invalid_argument("convergence: no series has a point");
+
+  std::string body;
+  body += "set title " + q(title) + " font ',13'\n";
+  body += "set xlabel 'evaluations'\nset ylabel 'best fitness [m]'\n";
+  body += "set grid lc rgb '#e0e0e0'\n";
+  body += "set style fill transparent solid 0.25 noborder\n";
+  body += "set key top right box opaque\n";
+  body += plot + "\n";
+  render(stem, std::move(files), body, 900, 600);
+}
+
+// ---------------------------------------------------------------- trajectories
+
+void trajectories(const fs::path& stem, const std::string& title,
+                  const std::vector<TrajectoryPath>& paths) {
+  if (paths.empty()) throw std::invalid_argument("trajectories: no paths");
+  std::vector<std::pair<std::string, std::string>> files;
+  std::string plot = "plot ";
+  bool any_point = false;
+  for (std::size_t i = 0; i < paths.size(); ++i) {
+    const auto& p = paths[i];
+    if (p.xs_m.size() != p.ys_m.size()) {
+      throw std::invalid_argument("trajectories: path '" + p.name + "' has " +
+                                  std::to_string(p.xs_m.size()) + " x values but " +
+                                  std::to_string(p.ys_m.size()) + " y values");
+    }
+    std::string content;
+    bool gap = false;
+    for (std::size_t j = 0; j < p.xs_m.size(); ++j) {
+      if (!std::isfinite(p.xs_m[j]) || !std::isfinite(p.ys_m[j])) {
+        if (!gap && !content.empty()) content += "\n";  // a blank line breaks the line
+        gap = true;
+        continue;
+      }
+      gap = false;
+      content += num(p.xs_m[j]) + " " + num(p.ys_m[j]) + "\n";
+    }
+    if (content.empty()) continue;
+    any_point = true;
+    const std::string file = "path_" + std::to_string(i) + ".dat";
+    files.emplace_back(file, content);
+    const std::string colour = i == 0 ? "#000000" : series_colour(i - 1);
+    if (plot != "plot ") plot += ", \\\n     ";
+    plot += "'" + file + "' using 1:2 with lines lw " + (i == 0 ? "2.5" : "1.5") + " lc rgb '" +
+            colour + "' title " + q(p.name);
+  }
+  if (!any_point) throw std::invalid_argument("trajectories: no finite point in any path");
+
+  std::string body;
+  body += "set title " + q(title) + " font ',13'\n";
+  body += "set xlabel 'x [m]'\nset ylabel 'y [m]'\n";
+  body += "set size ratio -1\n";
+  body += "set grid lc rgb '#e0e0e0'\n";
+  body += "set key outside right top box Left reverse width 1\n";
+  body += plot + "\n";
+  render(stem, std::move(files), body, 1000, 750);
+}
+
+}  // namespace odotune::results

@@ -1,0 +1,49 @@
+// Runs one gnuplot script in isolation and moves its outputs into place.
+//
+// Contract of run_gnuplot():
+//  - Creates a fresh private temp dir, writes the job's data files and the
+//    script there, and runs `gnuplot script.gp` (found on PATH, started with
+//    posix_spawnp, no shell) with that dir as the script's only workspace.
+//  - gnuplot runs with the temp dir as working directory, so the script
+//    refers to data files and outputs by their plain file names.
+//  - On success each output is copied next to its destination as DEST.tmp
+//    and then renamed over DEST (atomic per file). Either all destinations
+//    are written or none is: on any error every DEST.tmp is removed and the
+//    temp dir is deleted.
+//  - Throws std::runtime_error with one clear line when gnuplot is not
+//    installed, when a destination directory does not exist, when gnuplot
+//    fails (its exit status and first error line are quoted) or when an
+//    output was not produced.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace odotune::results {
+
+struct GnuplotJob {
+  // Data files to write into the temp dir: {file name, content}. Names are
+  // plain file names (no directory part).
+  std::vector<std::pair<std::string, std::string>> data_files;
+  // The gnuplot script; file names are relative to the temp dir, e.g.
+  // "set output 'out.png'".
+  std::string script;
+  // Outputs the script writes: {file name in the temp dir, destination}.
+  std::vector<std::pair<std::string, std::filesystem::path>> outputs;
+};
+
+// Runs the job as described above. Throws std::runtime_error on failure.
+void run_gnuplot(const GnuplotJob& job);
+
+// True when a `gnuplot` executable is found on PATH.
+bool gnuplot_available();
+
+// `text` as a gnuplot single-quoted string literal (quotes doubled, newlines
+// and other control characters replaced by spaces; backslashes stay literal
+// in single quotes). Use with `noenhanced` so `_` and `^` are not markup.
+std::string gnuplot_quote(std::string_view text);
+
+}  // namespace odotune::results
