@@ -39,10 +39,14 @@ void register_grid(CLI::App& app) {
     const std::filesystem::path store_path = args->store.empty() ? e.store : std::filesystem::path(args->store);
     std::unique_ptr<results::Store> store;
     try {
+      if (store_path.has_parent_path()) std::filesystem::create_directories(store_path.parent_path());
       store = std::make_unique<results::Store>(
           store_path,
           results::ExperimentInfo{e.name, e.text, results::experiment_hash(e.text), ODOTUNE_VERSION},
           args->allow_other);
+    } catch (const std::filesystem::filesystem_error& ex) {
+      throw Failure(fmt::format("{}: cannot create the store's folder: {}", store_path.string(),
+                                ex.code().message()));
     } catch (const std::runtime_error& ex) {
       throw Failure(ex.what());
     }

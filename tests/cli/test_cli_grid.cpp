@@ -78,6 +78,15 @@ TEST(CliGrid, RefusesAStoreFromAnotherExperiment) {
   EXPECT_EQ(run_cli("grid " + (dir / "b.yaml").string() + " --allow-other-experiment").exit_code, 0);
 }
 
+TEST(CliGrid, CreatesTheStoresFolder) {
+  TempDir dir;
+  std::ofstream(dir / "e.yaml") << experiment_text(1);
+  const auto r = run_cli("grid " + (dir / "e.yaml").string() + " --store " +
+                         (dir / "new/sub/s.sqlite").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(results::Store(dir / "new/sub/s.sqlite").runs().size(), 48u);
+}
+
 TEST(CliGrid, BadExperimentFileNamesFileAndLine) {
   TempDir dir;
   std::ofstream(dir / "bad.yaml") << "format: odotune-experiment/1\nmodels: [rq]\ntracks: ["
