@@ -1,9 +1,7 @@
 #include "cli/config_yaml.h"
 
-#include <unistd.h>
 
 #include <cstdio>
-#include <fstream>
 #include <set>
 #include <sstream>
 
@@ -11,6 +9,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "cli/failure.h"
+#include "tracks/atomic_file.h"
 #include "objectives/param_space.h"
 
 namespace odotune::cli {
@@ -27,23 +26,10 @@ constexpr const char* kFormat = "odotune-ekf-config/1";
 }  // namespace
 
 void write_file_atomically(const std::filesystem::path& path, const std::string& text) {
-  const std::filesystem::path tmp = path.string() + ".tmp-" + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw Failure(fmt::format("{}: cannot write (does the directory exist?)", path.string()));
-    out << text;
-    out.flush();
-    if (!out) {
-      std::error_code ec;
-      std::filesystem::remove(tmp, ec);
-      throw Failure(fmt::format("{}: write failed", path.string()));
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw Failure(fmt::format("{}: cannot rename into place: {}", path.string(), ec.message()));
+  try {
+    write_atomically(path, "file", text);
+  } catch (const std::runtime_error& e) {
+    throw Failure(e.what());
   }
 }
 

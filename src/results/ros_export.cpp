@@ -1,13 +1,11 @@
 #include "results/ros_export.h"
+#include "tracks/atomic_file.h"
 
 #include <fmt/format.h>
-#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <fstream>
 #include <stdexcept>
 #include <system_error>
 
@@ -269,35 +267,8 @@ RosExportParsed parse_robot_localization_yaml(const std::string& text, const std
 }
 
 void write_robot_localization_yaml(const RosExportInput& in, const std::filesystem::path& path) {
-  namespace fs = std::filesystem;
-  const std::string text = robot_localization_yaml(in);  // throws before touching the disk
-
-  static std::atomic<unsigned> counter{0};
-  fs::path tmp = path;
-  tmp += fmt::format(".tmp.{}.{}", static_cast<long>(::getpid()), counter.fetch_add(1));
-  auto discard = [&tmp] {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-  };
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) {
-      discard();
-      throw std::runtime_error(fmt::format("{}: cannot create file (does the directory exist?)", path.string()));
-    }
-    f.write(text.data(), static_cast<std::streamsize>(text.size()));
-    f.close();
-    if (!f) {
-      discard();
-      throw std::runtime_error(fmt::format("{}: write failed", path.string()));
-    }
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    discard();
-    throw std::runtime_error(fmt::format("{}: cannot rename temporary file into place: {}", path.string(), ec.message()));
-  }
+  // Builds (and validates) the text before touching the disk.
+  write_atomically(path, "robot_localization parameters", robot_localization_yaml(in));
 }
 
 }  // namespace odotune::results

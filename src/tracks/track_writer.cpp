@@ -12,7 +12,6 @@
 #include <cerrno>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <iterator>
 #include <ostream>
 #include <stdexcept>
@@ -21,11 +20,11 @@
 #include <system_error>
 #include <vector>
 
-#include <unistd.h>
 
 #include <fmt/format.h>
 
 #include "tracks/track_io.h"
+#include "tracks/atomic_file.h"
 
 namespace odotune {
 
@@ -128,28 +127,7 @@ void format_track(const Track& track, std::ostream& out) {
 }
 
 void write_track(const Track& track, const std::filesystem::path& path) {
-  namespace fs = std::filesystem;
-  const fs::path tmp = fs::path(path.string() + ".tmp-" + std::to_string(::getpid()));
-  const auto fail = [&](const std::string& why) {
-    std::error_code ignored;
-    fs::remove(tmp, ignored);
-    throw std::runtime_error(fmt::format("cannot write track '{}': {}", path.string(), why));
-  };
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) fail(fmt::format("cannot create '{}': {}", tmp.string(), std::generic_category().message(errno)));
-    try {
-      format_track(track, out);
-      out.close();
-    } catch (const std::exception& e) {
-      out.close();
-      fail(e.what());
-    }
-    if (out.fail()) fail(fmt::format("error writing '{}'", tmp.string()));
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) fail(fmt::format("cannot rename '{}' to it: {}", tmp.string(), ec.message()));
+  write_atomically(path, "track", [&track](std::ostream& out) { format_track(track, out); });
 }
 
 }  // namespace odotune
