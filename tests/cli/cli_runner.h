@@ -10,6 +10,8 @@
 #include <sstream>
 #include <string>
 
+#include "support/temp_dir.h"
+
 namespace odotune::testing_support {
 
 struct CliResult {
@@ -41,17 +43,6 @@ inline CliResult run_cli(const std::string& args) {
   return r;
 }
 
-// A fresh temporary directory, removed by the destructor.
-struct TempDir {
-  std::filesystem::path path;
-  TempDir() {
-    path = std::filesystem::temp_directory_path() /
-           ("odotune_test_" + std::to_string(::getpid()) + "_" + std::to_string(std::rand()));
-    std::filesystem::create_directories(path);
-  }
-  ~TempDir() { std::filesystem::remove_all(path); }
-  std::filesystem::path operator/(const std::string& name) const { return path / name; }
-};
 
 inline std::string reference_track(int i) {
   return std::string(ODOTUNE_SOURCE_DIR) + "/data/tracks/track" + std::to_string(i) + ".csv";

@@ -262,7 +262,7 @@ TEST(SimulateCommand, BadInputIsOneLineAndWritesNothing) {
   EXPECT_TRUE(one_line(r.err)) << r.err;
   EXPECT_THAT(r.err, AllOf(HasSubstr(bad + ":4:"), HasSubstr("did you mean 'rate_deg_s'")));
   EXPECT_FALSE(fs::exists(out));
-  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path), fs::directory_iterator()), 1);  // only bad.yaml
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 1);  // only bad.yaml
 }
 
 TEST(SimulateCommand, ListsTheEffects) {

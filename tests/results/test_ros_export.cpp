@@ -15,8 +15,12 @@
 #include <stdexcept>
 #include <string>
 
+#include "support/temp_dir.h"
+
 namespace odotune::results {
 namespace {
+
+using testing_support::TempDir;
 
 namespace fs = std::filesystem;
 
@@ -289,23 +293,6 @@ TEST(RosExportErrors, InvalidYamlAndWrongTypesGiveLineNumbers) {
   EXPECT_THROW(parse_robot_localization_yaml(""), std::runtime_error);
 }
 
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() / fmt::format("odotune-rosexport-{}-{}", info->name(), ::getpid());
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 std::string slurp(const fs::path& p) {
   std::ifstream f(p, std::ios::binary);

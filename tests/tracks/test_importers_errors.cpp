@@ -16,8 +16,12 @@
 #include "tracks/importers.h"
 #include "tracks/track_io.h"
 
+#include "support/temp_dir.h"
+
 namespace odotune {
 namespace {
+
+using testing_support::TempDir;
 
 namespace fs = std::filesystem;
 
@@ -27,22 +31,6 @@ const fs::path kCircular = kReal / "optiodom_diff" / "circular" / "231220200146"
 const fs::path kLitwDir = kReal / "utias_lost_in_the_woods" / "derived";
 
 // A fresh temporary folder, removed at the end of the test.
-class TempDir {
- public:
-  explicit TempDir(const std::string& tag)
-      : path_(fs::temp_directory_path() / ("odotune-import-" + tag + "-" + std::to_string(::getpid()))) {
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 std::vector<std::string> read_lines(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);

@@ -21,8 +21,12 @@
 
 #include "tracks/track_io.h"
 
+#include "support/temp_dir.h"
+
 namespace odotune {
 namespace {
+
+using testing_support::TempDir;
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
@@ -421,24 +425,6 @@ TEST(TrackIoWrite, LayoutFollowsTheSpecOrder) {
             "t,ticks_l,ticks_r,gyro_z,gt_x\n0,0,1,,1.5\n0.25,,-2,-0.125,2\n");
 }
 
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() / fmt::format("odotune-io-{}-{}", info->name(), ::getpid());
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-  std::size_t entries() const { return static_cast<std::size_t>(std::distance(fs::directory_iterator(path_), {})); }
-
- private:
-  fs::path path_;
-};
 
 TEST(TrackIoWrite, WritesAtomicallyAndLeavesNoTempFile) {
   TempDir dir;
