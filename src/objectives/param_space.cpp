@@ -37,24 +37,18 @@ ParamSpace ParamSpace::for_model(NoiseModel model) {
                    {"b2", "s/rad", 0.0, 5.0, false, "growth of α2 with |ω_z|"}};
       break;
   }
-  return s;
-}
-
-std::pair<std::vector<double>, std::vector<double>> ParamSpace::box() const {
-  std::vector<double> lo, hi;
-  for (const auto& p : params_) {
-    lo.push_back(p.log_scale ? std::log10(p.lower) : p.lower);
-    hi.push_back(p.log_scale ? std::log10(p.upper) : p.upper);
+  for (const auto& p : s.params_) {
+    s.box_lo_.push_back(p.log_scale ? std::log10(p.lower) : p.lower);
+    s.box_hi_.push_back(p.log_scale ? std::log10(p.upper) : p.upper);
   }
-  return {lo, hi};
+  return s;
 }
 
 std::vector<double> ParamSpace::to_physical(std::span<const double> box_x) const {
   if (box_x.size() != params_.size()) throw std::invalid_argument("ParamSpace: wrong dimension");
-  const auto [lo, hi] = box();
   std::vector<double> out(params_.size());
   for (std::size_t i = 0; i < params_.size(); ++i) {
-    const double b = std::clamp(box_x[i], lo[i], hi[i]);
+    const double b = std::clamp(box_x[i], box_lo_[i], box_hi_[i]);
     out[i] = params_[i].log_scale ? std::pow(10.0, b) : b;
   }
   return out;

@@ -33,7 +33,7 @@ class ParamSpace {
   std::size_t dim() const { return params_.size(); }
 
   // The optimiser's box (log10 of the bounds for log-scaled parameters).
-  std::pair<std::vector<double>, std::vector<double>> box() const;
+  std::pair<std::vector<double>, std::vector<double>> box() const { return {box_lo_, box_hi_}; }
   // Box coordinates ↔ physical values (in each ParamSpec's unit). Box
   // coordinates are clamped into the box first.
   std::vector<double> to_physical(std::span<const double> box_x) const;
@@ -48,6 +48,7 @@ class ParamSpace {
  private:
   filters::NoiseModel model_ = filters::NoiseModel::alpha;
   std::vector<ParamSpec> params_;
+  std::vector<double> box_lo_, box_hi_;  // computed once: to_physical runs per evaluation
 };
 
 // The untuned configuration a user would write (README, "Baseline"): position
