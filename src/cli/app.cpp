@@ -18,6 +18,8 @@ int run(int argc, char** argv) {
   register_demo(app);
   register_fixes(app);
   register_grid(app);
+  register_report(app);
+  register_export(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

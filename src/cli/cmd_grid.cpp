@@ -42,7 +42,8 @@ void register_grid(CLI::App& app) {
       if (store_path.has_parent_path()) std::filesystem::create_directories(store_path.parent_path());
       store = std::make_unique<results::Store>(
           store_path,
-          results::ExperimentInfo{e.name, e.text, results::experiment_hash(e.text), ODOTUNE_VERSION},
+          results::ExperimentInfo{e.name, e.text, results::experiment_hash(e.text), ODOTUNE_VERSION,
+                                  std::filesystem::absolute(e.file).lexically_normal().string()},
           args->allow_other);
     } catch (const std::filesystem::filesystem_error& ex) {
       throw Failure(fmt::format("{}: cannot create the store's folder: {}", store_path.string(),

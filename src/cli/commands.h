@@ -17,6 +17,8 @@ void register_eval(CLI::App& app);
 void register_demo(CLI::App& app);
 void register_fixes(CLI::App& app);
 void register_grid(CLI::App& app);
+void register_report(CLI::App& app);
+void register_export(CLI::App& app);
 
 // Runs the CLI; returns the process exit code.
 int run(int argc, char** argv);

@@ -62,15 +62,17 @@ std::vector<std::string> expand(const std::filesystem::path& path, const YAML::N
 }  // namespace
 
 Experiment read_experiment(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Failure(fmt::format("{}: cannot open the experiment file", path.string()));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_experiment(ss.str(), path);
+}
+
+Experiment parse_experiment(const std::string& text, const std::filesystem::path& path) {
   Experiment e;
   e.file = path;
-  {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Failure(fmt::format("{}: cannot open the experiment file", path.string()));
-    std::stringstream ss;
-    ss << in.rdbuf();
-    e.text = ss.str();
-  }
+  e.text = text;
   YAML::Node root;
   try {
     root = YAML::Load(e.text);

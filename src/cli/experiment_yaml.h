@@ -40,5 +40,9 @@ struct Experiment {
 
 // Throws odotune::cli::Failure.
 Experiment read_experiment(const std::filesystem::path& path);
+// The same for an experiment's text as if read from `path` (relative paths
+// in it resolve against path's folder), e.g. the text kept in a results
+// store. Throws odotune::cli::Failure.
+Experiment parse_experiment(const std::string& text, const std::filesystem::path& path);
 
 }  // namespace odotune::cli

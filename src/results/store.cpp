@@ -108,7 +108,8 @@ Store::Store(const std::filesystem::path& path, const ExperimentInfo& info,
       for (const auto& [k, v] : {std::pair<std::string, std::string>{"name", info.name},
                                  {"text", info.text},
                                  {"hash", info.hash},
-                                 {"code_version", info.code_version}}) {
+                                 {"code_version", info.code_version},
+                                 {"file", info.file}}) {
         s.text(1, k);
         s.text(2, v);
         s.step();
@@ -151,6 +152,7 @@ ExperimentInfo Store::experiment() const {
     if (k == "text") info.text = s.col_text(1);
     if (k == "hash") info.hash = s.col_text(1);
     if (k == "code_version") info.code_version = s.col_text(1);
+    if (k == "file") info.file = s.col_text(1);
   }
   return info;
 }

@@ -29,6 +29,10 @@ struct ExperimentInfo {
   std::string text;          // the experiment file, verbatim
   std::string hash;          // of `text` (see experiment_hash)
   std::string code_version;  // odotune version that made the runs
+  // Absolute path of the experiment file when the store was made, so report
+  // and export can find the experiment's tracks again (its relative track
+  // paths resolve against this file's folder). Empty if unknown.
+  std::string file;
 };
 
 // FNV-1a 64 of the text, as 16 hex digits: identifies an experiment file.

@@ -17,7 +17,7 @@ struct TempPath {
 };
 
 ExperimentInfo info(const std::string& text) {
-  return {"study", text, experiment_hash(text), "0.1.0"};
+  return {"study", text, experiment_hash(text), "0.1.0", "/experiments/study.yaml"};
 }
 
 RunRecord record(const std::string& model, int mode, std::uint64_t seed) {
@@ -63,6 +63,7 @@ TEST(ResultsStore, RunsRoundTripBitForBitAcrossReopen) {
   EXPECT_EQ(runs[1].model, "gyro");
   EXPECT_EQ(s.experiment().text, "models: [rq]");
   EXPECT_EQ(s.experiment().code_version, "0.1.0");
+  EXPECT_EQ(s.experiment().file, "/experiments/study.yaml");
 }
 
 TEST(ResultsStore, RefusesAnotherExperimentUnlessAllowed) {

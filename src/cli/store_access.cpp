@@ -1,0 +1,62 @@
+#include "cli/store_access.h"
+
+#include <fmt/format.h>
+
+#include "cli/experiment_yaml.h"
+#include "cli/failure.h"
+#include "cli/output.h"
+#include "objectives/param_space.h"
+
+namespace odotune::cli {
+
+std::unique_ptr<results::Store> open_store_for_reading(const std::filesystem::path& path) {
+  try {
+    auto store = std::make_unique<results::Store>(path);
+    if (store->experiment().hash.empty())
+      throw Failure(fmt::format("{}: not a results store of odotune grid (no experiment recorded)",
+                                path.string()));
+    return store;
+  } catch (const std::runtime_error& ex) {
+    if (dynamic_cast<const Failure*>(&ex)) throw;
+    throw Failure(ex.what());
+  }
+}
+
+std::map<std::string, Track> experiment_tracks(const results::ExperimentInfo& info,
+                                               const std::vector<std::string>& extra_files) {
+  std::vector<std::string> files;
+  if (!info.file.empty()) {
+    try {
+      files = parse_experiment(info.text, info.file).tracks;
+    } catch (const Failure&) {
+      // The tracks moved since the grid ran: only --track files are used.
+    }
+  }
+  std::map<std::string, Track> out;
+  for (auto& t : load_tracks(files)) out.insert_or_assign(t.name(), std::move(t));
+  for (auto& t : load_tracks(extra_files)) out.insert_or_assign(t.name(), std::move(t));
+  return out;
+}
+
+filters::NoiseParams run_noise(const results::RunRecord& run) {
+  filters::NoiseModel model;
+  if (!filters::parse_noise_model(run.model, &model))
+    throw Failure(fmt::format("run {}: unknown model '{}'", results::run_key(run), run.model));
+  const ParamSpace space = ParamSpace::for_model(model);
+  std::vector<double> physical(space.dim());
+  for (std::size_t i = 0; i < space.dim(); ++i) {
+    const std::string& name = space.params()[i].name;
+    std::size_t j = 0;
+    while (j < run.param_names.size() && run.param_names[j] != name) ++j;
+    if (j == run.param_names.size() || j >= run.params.size())
+      throw Failure(fmt::format("run {}: parameter {} is missing", results::run_key(run), name));
+    physical[i] = run.params[j];
+  }
+  filters::NoiseParams noise = space.to_noise(physical);
+  std::string why;
+  if (!noise.IsValid(&why))
+    throw Failure(fmt::format("run {}: invalid parameters: {}", results::run_key(run), why));
+  return noise;
+}
+
+}  // namespace odotune::cli

@@ -1,0 +1,37 @@
+// Reading a finished (or running) grid's results store from the commands
+// that come after it (report, export): opening it read-only with one-line
+// errors, finding its experiment's track files again, and turning a stored
+// run back into filter noise.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "filters/ekf_noise.h"
+#include "results/run_record.h"
+#include "results/store.h"
+#include "tracks/track.h"
+
+namespace odotune::cli {
+
+// Opens `path` read-only; throws odotune::cli::Failure (one line) when it
+// does not exist or is not a results store.
+std::unique_ptr<results::Store> open_store_for_reading(const std::filesystem::path& path);
+
+// The experiment's tracks by name, loaded from the files its stored text
+// names (resolved against the experiment file recorded in the store), then
+// from `extra_files` (--track), which take precedence for the same name.
+// A track file that no longer exists is skipped; a file that exists but is
+// bad is a Failure line. Returns an empty map when nothing can be found.
+std::map<std::string, Track> experiment_tracks(const results::ExperimentInfo& info,
+                                               const std::vector<std::string>& extra_files);
+
+// The filter noise of a stored run (its model and physical parameters, by
+// name). Throws odotune::cli::Failure naming the run when the model or a
+// parameter is unknown or the values are invalid.
+filters::NoiseParams run_noise(const results::RunRecord& run);
+
+}  // namespace odotune::cli
