@@ -135,25 +135,37 @@ std::string robot_localization_yaml(const RosExportInput& in) {
   line("# (merge the keys below into your existing ekf parameter file: inputs such as");
   line("# odom0 / pose0 and their *_config vectors are not set here).");
   line("#");
-  line("# Mapping from odotune's rq model (Kovacs et al. eq. 1, 2) to robot_localization:");
-  line("#   odotune adds process noise r1 (x, mm²), r2 (y, mm²), r3 (yaw, rad²) once per");
-  line("#   prediction step, i.e. once per odometry sample. robot_localization adds");
-  line("#   delta_sec * process_noise_covariance per prediction (cra-ros-pkg/robot_localization");
-  line("#   src/ekf.cpp, Ekf::predict: 'estimate_error_covariance_ += delta_sec * Q'), so its");
-  line("#   Q is a variance per second. Equal variance growth per second gives:");
-  line("#     Q[x][x]     [m²/s]   = r1 [mm²/step] × odometry rate [steps/s] × 1e-6 [m²/mm²]");
-  line("#     Q[y][y]     [m²/s]   = r2 [mm²/step] × odometry rate [steps/s] × 1e-6 [m²/mm²]");
-  line("#     Q[yaw][yaw] [rad²/s] = r3 [rad²/step] × odometry rate [steps/s]");
-  line("#   (This conversion assumes robot_localization scales Q by Δt as above; it holds");
-  line("#   whatever `frequency` the node runs at.)");
+  if (in.mapping_note.empty()) {
+    line("# Mapping from odotune's rq model (Kovacs et al. eq. 1, 2) to robot_localization:");
+    line("#   odotune adds process noise r1 (x, mm²), r2 (y, mm²), r3 (yaw, rad²) once per");
+    line("#   prediction step, i.e. once per odometry sample. robot_localization adds");
+    line("#   delta_sec * process_noise_covariance per prediction (cra-ros-pkg/robot_localization");
+    line("#   src/ekf.cpp, Ekf::predict: 'estimate_error_covariance_ += delta_sec * Q'), so its");
+    line("#   Q is a variance per second. Equal variance growth per second gives:");
+    line("#     Q[x][x]     [m²/s]   = r1 [mm²/step] × odometry rate [steps/s] × 1e-6 [m²/mm²]");
+    line("#     Q[y][y]     [m²/s]   = r2 [mm²/step] × odometry rate [steps/s] × 1e-6 [m²/mm²]");
+    line("#     Q[yaw][yaw] [rad²/s] = r3 [rad²/step] × odometry rate [steps/s]");
+    line("#   (This conversion assumes robot_localization scales Q by Δt as above; it holds");
+    line("#   whatever `frequency` the node runs at.)");
+  } else {
+    // Caller's explanation, one comment line per line of the note.
+    std::size_t begin = 0;
+    while (begin <= in.mapping_note.size()) {
+      const std::size_t end = std::min(in.mapping_note.find('\n', begin), in.mapping_note.size());
+      line("# " + one_line(in.mapping_note.substr(begin, end - begin)));
+      begin = end + 1;
+    }
+  }
   line(fmt::format("#   Values here: Q[x][x] = {} m²/s, Q[y][y] = {} m²/s, Q[yaw][yaw] = {} rad²/s.",
                    double_literal(in.process_var_x_m2_per_s), double_literal(in.process_var_y_m2_per_s),
                    double_literal(in.process_var_yaw_rad2_per_s)));
   line("#   The other 12 diagonal entries are robot_localization's own defaults");
   line("#   (src/filter_base.cpp FilterBase::reset(), params/ekf.yaml); with two_d_mode");
   line("#   z, roll, pitch, vz, vroll, vpitch and az are ignored anyway. Off-diagonals are 0.");
-  line("#   odotune's alpha/gyro models (wheel-travel noise) have no entry in this matrix;");
-  line("#   they belong in the wheel odometry message's twist covariance instead.");
+  if (in.mapping_note.empty()) {
+    line("#   odotune's alpha/gyro models (wheel-travel noise) have no constant entry in this");
+    line("#   matrix: `odotune export` writes their time average over the tuning tracks instead.");
+  }
   line("#");
   line("# Measurement noise of the absolute position fixes (odotune q1, q2):");
   line("#   robot_localization takes measurement covariance from each input message, not");

@@ -65,6 +65,12 @@ struct RosExportInput {
   // The parameters as tuned (name, value in the name's unit), echoed in
   // comments so the file says where its numbers came from.
   std::vector<std::pair<std::string, double>> tuned_params;
+  // How the x, y, yaw process noise was obtained from the tuned model, written
+  // as comment lines (one per '\n'-separated line) in place of the rq
+  // mapping explanation; empty = the rq explanation (ros_input_from_rq). Used
+  // for the alpha/gyro models, whose process noise is not constant (see
+  // objectives/process_noise_rate.h).
+  std::string mapping_note;
 
   // False (with the offending field in *why) on a bad value as described
   // above.

@@ -201,6 +201,27 @@ TEST(RosExport, NewlinesInCommentsCannotInjectKeys) {
   EXPECT_FALSE(root["evil2"]);
 }
 
+TEST(RosExport, MappingNoteReplacesTheRqExplanationLineByLine) {
+  RosExportInput in = awkward_input();
+  const std::string rq_text = robot_localization_yaml(in);
+  EXPECT_NE(rq_text.find("Mapping from odotune's rq model"), std::string::npos);
+
+  in.mapping_note = "Mapping from the alpha model:\n  Q = mean R x rate\r\nevil: 3\nlast";
+  const std::string text = robot_localization_yaml(in);
+  EXPECT_EQ(text.find("Mapping from odotune's rq model"), std::string::npos) << text;
+  EXPECT_EQ(text.find("r1 [mm²/step]"), std::string::npos) << text;
+  for (const char* needle : {"\n# Mapping from the alpha model:\n", "\n#   Q = mean R x rate \n", "\n# evil: 3\n",
+                             "\n# last\n", "Values here: Q[x][x]", "filter_base.cpp"})
+    EXPECT_NE(text.find(needle), std::string::npos) << "missing: " << needle << "\n" << text;
+  // Every line of the note is a comment: the YAML is unchanged.
+  const YAML::Node root = YAML::Load(text);
+  EXPECT_EQ(root.size(), 1u);
+  EXPECT_FALSE(root["evil"]);
+  const RosExportParsed a = parse_robot_localization_yaml(text), b = parse_robot_localization_yaml(rq_text);
+  EXPECT_EQ(a.process_noise_covariance, b.process_noise_covariance);
+  EXPECT_EQ(a.frequency_hz, b.frequency_hz);
+}
+
 TEST(RosExport, InvalidInputIsRejected) {
   const RosExportInput good = awkward_input();
   std::string why;
