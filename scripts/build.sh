@@ -2,8 +2,12 @@
 # Installs the dependencies (if missing), configures and builds odotune into
 # build/ (Release; the CLI is build/odotune). Extra arguments go to CMake's
 # configure step, e.g. `bash scripts/build.sh -DODOTUNE_NATIVE=ON`.
+# ODOTUNE_WITH_MPI=1 also installs Open MPI and builds with MPI (README, "MPI");
+# without it build/ is configured without MPI.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
+mpi=OFF
+if [[ "${ODOTUNE_WITH_MPI:-0}" == "1" ]]; then mpi=ON; fi
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DODOTUNE_WITH_MPI="$mpi" "$@" >/dev/null
 cmake --build build -j"$(nproc)"

@@ -29,10 +29,21 @@ std::vector<GridCell> grid_cells(const Experiment& e) {
 }
 
 namespace {
-
 results::Metrics to_metrics(const ErrorMetrics& m) { return {m.rmse_m, m.mae_m, m.maxe_m}; }
+}  // namespace
 
-// The record of a cell, without its results: what identifies it in the store.
+std::vector<PreparedTrack> prepare_grid_tracks(const Experiment& e) {
+  std::vector<PreparedTrack> tracks;
+  for (const auto& t : load_tracks(e.tracks)) {
+    try {
+      tracks.push_back(prepare_track(t));
+    } catch (const std::invalid_argument& ex) {
+      throw Failure(ex.what());
+    }
+  }
+  return tracks;
+}
+
 results::RunRecord cell_record(const Experiment& e, const std::vector<PreparedTrack>& tracks,
                                const GridCell& c) {
   results::RunRecord r;
@@ -45,85 +56,125 @@ results::RunRecord cell_record(const Experiment& e, const std::vector<PreparedTr
   return r;
 }
 
-}  // namespace
-
-GridOutcome run_grid(const Experiment& e, results::Store& store, const std::atomic<bool>* stop,
-                     const std::function<void(long, long)>& progress) {
-  std::vector<PreparedTrack> tracks;
-  for (const auto& t : load_tracks(e.tracks)) {
-    try {
-      tracks.push_back(prepare_track(t));
-    } catch (const std::invalid_argument& ex) {
-      throw Failure(ex.what());
-    }
-  }
-  const std::vector<GridCell> cells = grid_cells(e);
+std::vector<std::size_t> pending_cells(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                                       const std::vector<GridCell>& cells, const results::Store& store) {
   const std::set<std::string> finished = store.finished_keys();
   std::vector<std::size_t> pending;
-  GridOutcome out;
-  out.total = static_cast<long>(cells.size());
   for (std::size_t i = 0; i < cells.size(); ++i)
     if (!finished.count(results::run_key(cell_record(e, tracks, cells[i])))) pending.push_back(i);
-  out.skipped = out.total - static_cast<long>(pending.size());
-  if (progress) progress(out.skipped, out.total);
+  return pending;
+}
 
-  std::string failure;
-  long done = out.skipped;
-#pragma omp parallel for schedule(dynamic, 1)
-  for (std::size_t k = 0; k < pending.size(); ++k) {
-    bool skip = false;
-#pragma omp critical(odotune_grid)
-    skip = !failure.empty() || (stop && stop->load());
-    if (skip) continue;
-    const GridCell& c = cells[pending[k]];
-    results::RunRecord r = cell_record(e, tracks, c);
-    TuneRequest req;
-    req.model = c.model;
-    req.mode = c.mode;
-    req.solver = e.solver;
-    req.seed = c.seed;
-    req.particles = e.particles;
-    req.iterations = e.iterations;
-    req.evaluations = e.evaluations;
-    req.stop = stop;
-    std::vector<const PreparedTrack*> tune_on;
-    for (auto t : c.tune_on) tune_on.push_back(&tracks[t]);
-    try {
-      const TuneOutcome o = run_tune(tune_on, req);
-      if (o.summary.termination == "stopped") {
-#pragma omp critical(odotune_grid)
-        ++out.abandoned;
-        continue;
+std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                                           const GridCell& c, const std::atomic<bool>* stop) {
+  results::RunRecord r = cell_record(e, tracks, c);
+  TuneRequest req;
+  req.model = c.model;
+  req.mode = c.mode;
+  req.solver = e.solver;
+  req.seed = c.seed;
+  req.particles = e.particles;
+  req.iterations = e.iterations;
+  req.evaluations = e.evaluations;
+  req.stop = stop;
+  std::vector<const PreparedTrack*> tune_on;
+  for (auto t : c.tune_on) tune_on.push_back(&tracks[t]);
+  const TuneOutcome o = run_tune(tune_on, req);
+  if (o.summary.termination == "stopped") return std::nullopt;
+  r.param_names = o.param_names;
+  r.params = o.params;
+  r.best_fitness = o.summary.best_fitness;
+  r.evaluations = o.summary.evaluations;
+  r.seconds = o.summary.seconds;
+  r.diverged = o.divergences.total();
+  r.termination = o.summary.termination;
+  for (const auto& rec : o.summary.log) r.convergence.push_back({rec.evaluations, rec.best_fitness});
+  // Scores on the cell's track: the tuned track itself, or the held-out one.
+  const auto& score = tracks[c.score_on].input;
+  r.baseline = to_metrics(replay_ekf(score, baseline_noise()).outcome.metrics);
+  r.tuned = to_metrics(replay_ekf(score, o.noise).outcome.metrics);
+  return r;
+}
+
+WorkResult work_cells(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                      const std::vector<GridCell>& cells, const CellSource& source,
+                      const std::atomic<bool>* stop) {
+  WorkResult out;
+  // Called under the lock: keeps the first failure and tells the source.
+  const auto fail = [&](const std::string& line) {
+    if (!out.failure.empty()) return;
+    out.failure = line;
+    if (source.failed) {
+      try {
+        source.failed(line);
+      } catch (const std::exception&) {  // the failure is returned all the same
       }
-      r.param_names = o.param_names;
-      r.params = o.params;
-      r.best_fitness = o.summary.best_fitness;
-      r.evaluations = o.summary.evaluations;
-      r.seconds = o.summary.seconds;
-      r.diverged = o.divergences.total();
-      r.termination = o.summary.termination;
-      for (const auto& rec : o.summary.log) r.convergence.push_back({rec.evaluations, rec.best_fitness});
-      // Scores on the cell's track: the tuned track itself, or the held-out one.
-      const auto& score = tracks[c.score_on].input;
-      r.baseline = to_metrics(replay_ekf(score, baseline_noise()).outcome.metrics);
-      r.tuned = to_metrics(replay_ekf(score, o.noise).outcome.metrics);
+    }
+  };
+#pragma omp parallel
+  {
+    while (true) {
+      std::optional<std::size_t> k;
 #pragma omp critical(odotune_grid)
       {
         try {
-          store.add(r);
-          ++out.ran;
-          ++done;
-          if (progress) progress(done, out.total);
+          if (out.failure.empty() && !(stop && stop->load())) k = source.next();
         } catch (const std::exception& ex) {
-          if (failure.empty()) failure = ex.what();
+          fail(ex.what());
         }
       }
-    } catch (const std::exception& ex) {
+      if (!k) break;
+      const GridCell& c = cells[*k];
+      try {
+        std::optional<results::RunRecord> r = run_cell(e, tracks, c, stop);
 #pragma omp critical(odotune_grid)
-      if (failure.empty()) failure = fmt::format("run {}: {}", results::run_key(r), ex.what());
+        {
+          if (!r) {
+            ++out.abandoned;
+          } else {
+            try {
+              source.finished(std::move(*r));
+              ++out.ran;
+            } catch (const std::exception& ex) {
+              fail(ex.what());
+            }
+          }
+        }
+      } catch (const std::exception& ex) {
+#pragma omp critical(odotune_grid)
+        fail(fmt::format("run {}: {}", results::run_key(cell_record(e, tracks, c)), ex.what()));
+      }
     }
   }
-  if (!failure.empty()) throw Failure(failure);
+  return out;
+}
+
+GridOutcome run_grid(const Experiment& e, results::Store& store, const std::atomic<bool>* stop,
+                     const std::function<void(long, long)>& progress) {
+  const std::vector<PreparedTrack> tracks = prepare_grid_tracks(e);
+  const std::vector<GridCell> cells = grid_cells(e);
+  const std::vector<std::size_t> pending = pending_cells(e, tracks, cells, store);
+  GridOutcome out;
+  out.total = static_cast<long>(cells.size());
+  out.skipped = out.total - static_cast<long>(pending.size());
+  if (progress) progress(out.skipped, out.total);
+
+  std::size_t next = 0;
+  long done = out.skipped;
+  CellSource source;
+  source.next = [&]() -> std::optional<std::size_t> {
+    if (next == pending.size()) return std::nullopt;
+    return pending[next++];
+  };
+  source.finished = [&](results::RunRecord&& r) {
+    store.add(r);
+    ++done;
+    if (progress) progress(done, out.total);
+  };
+  const WorkResult w = work_cells(e, tracks, cells, source, stop);
+  if (!w.failure.empty()) throw Failure(w.failure);
+  out.ran = w.ran;
+  out.abandoned = w.abandoned;
   return out;
 }
 

@@ -11,12 +11,14 @@
 
 #include "cli_runner.h"
 #include "results/store.h"
+#include "store_rows.h"
 
 namespace odotune {
 namespace {
 
 using testing_support::reference_track;
 using testing_support::run_cli;
+using testing_support::store_rows;
 using testing_support::TempDir;
 
 std::string experiment_text(int iterations) {
@@ -27,26 +29,12 @@ std::string experiment_text(int iterations) {
       reference_track(2), reference_track(4), iterations);
 }
 
-// Rows keyed by run, everything but the wall time.
-std::map<std::string, std::string> rows(const std::filesystem::path& store) {
-  std::map<std::string, std::string> out;
-  for (const auto& r : results::Store(store).runs()) {
-    std::string v = fmt::format("{:a} {:a} {:a} {:a} {} {} {}", r.best_fitness, r.tuned.rmse_m,
-                                r.tuned.maxe_m, r.baseline.mae_m, r.evaluations, r.diverged,
-                                r.termination);
-    for (double p : r.params) v += fmt::format(" {:a}", p);
-    for (const auto& c : r.convergence) v += fmt::format(" {}:{:a}", c.evaluations, c.best_fitness);
-    EXPECT_TRUE(out.emplace(results::run_key(r), v).second) << "duplicate run " << results::run_key(r);
-  }
-  return out;
-}
-
 TEST(CliGrid, ResumesAfterSigkillToTheSameRowsAsAnUninterruptedRun) {
   TempDir ref_dir, kill_dir;
   for (const auto* d : {&ref_dir, &kill_dir}) std::ofstream(*d / "e.yaml") << experiment_text(25);
   const auto ref = run_cli("grid " + (ref_dir / "e.yaml").string() + " --threads 2");
   ASSERT_EQ(ref.exit_code, 0) << ref.err;
-  const auto expected = rows(ref_dir / "s.sqlite");
+  const auto expected = store_rows(ref_dir / "s.sqlite");
   ASSERT_EQ(expected.size(), 2u * 2u * 2u * 3u * 2u);  // per-track + leave-one-out cells
 
   // Kill at seeded random moments until a restart finishes the job.
@@ -64,7 +52,7 @@ TEST(CliGrid, ResumesAfterSigkillToTheSameRowsAsAnUninterruptedRun) {
   EXPECT_GT(kills, 0) << "the job was never killed; the test proves nothing";
   const auto finish = run_cli("grid " + (kill_dir / "e.yaml").string());
   ASSERT_EQ(finish.exit_code, 0) << finish.err;
-  EXPECT_EQ(rows(kill_dir / "s.sqlite"), expected);
+  EXPECT_EQ(store_rows(kill_dir / "s.sqlite"), expected);
 }
 
 TEST(CliGrid, RefusesAStoreFromAnotherExperiment) {
