@@ -31,7 +31,8 @@ struct DiagInput {
   OdometryKind odometry = OdometryKind::wheel_angles;
   std::vector<double> odo_t_s;
   std::vector<double> phi_l_rad, phi_r_rad;  // wheel_angles: rotation since the first sample
-  std::vector<double> v_mps, w_radps;        // body_velocity: value held from its stamp to the next
+  std::vector<double> v_mps, w_radps;        // body_velocity: samples of v, w (the model
+                                             // takes them linear between stamps, see effect_model.h)
 
   // Commanded body velocities when the track has them alongside wheel odometry
   // (for actuator_lag), same times as odo_t_s; empty otherwise.
@@ -47,10 +48,33 @@ struct DiagInput {
   // Standard deviation of one reference position sample [m]: from the track's
   // metadata when it states one (sim.*), else estimated (see build).
   double ref_sigma_m = 0.0;
+  // Standard deviation of one reference heading sample [rad] (ref_theta_rad
+  // non-empty only; NaN otherwise): metadata sim.gt_sigma_rad, else estimated.
+  double ref_sigma_rad = 0.0;
+
+  bool has_ref_heading() const { return !ref_theta_rad.empty(); }
 };
 
 // Throws std::invalid_argument (one line naming the track and what is
 // missing) when the track has no usable odometry or reference.
+//
+// Odometry: ticks_l/r when present (rotation = ticks*2*pi/ticks_per_rev since
+// the first row holding both), else omega_l/r integrated by the trapezoid rule,
+// else v_cmd/w_cmd as body_velocity. With wheel odometry and v_cmd/w_cmd,
+// cmd_* holds the commands linearly interpolated at odo_t_s (first/last value
+// held outside their span). Wheel odometry needs the nominal radii and base.
+// Reference: gt_x/gt_y rows (with gt_theta, unwrapped, when every such row has
+// it), else aps_x/aps_y rows; only samples within the odometry's time span.
+// ref_sigma_m: metadata sim.gt_sigma_m / sim.aps_sigma_m, else a robust
+// estimate: consecutive reference samples against the nominal dead-reckoned
+// chord between them, sigma = 1.4826*MAD(|d_ref| - |d_odo|)/sqrt(2) over the
+// intervals where the odometry moved (where it moved more than 3 sigma, once
+// 10 such intervals exist); stated or estimated, it is floored at 1 mm.
+// ref_sigma_rad likewise from sim.gt_sigma_rad, else
+// 1.4826*MAD(d_theta_ref - d_theta_odo)/sqrt(2), floored at 1 mrad. The
+// estimates include the odometry's own error over one reference interval, so
+// they are upper bounds of the reference noise.
+// sim.effects is never read: the diagnosis must find effects from the data.
 DiagInput build_diag_input(const Track& track);
 
 }  // namespace odotune::diagnose

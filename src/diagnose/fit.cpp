@@ -1,0 +1,343 @@
+#include "diagnose/fit.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <set>
+#include <stdexcept>
+
+#include <Eigen/Dense>
+#include <ceres/ceres.h>
+#include <fmt/format.h>
+
+namespace odotune::diagnose {
+
+namespace {
+
+// Smallest eigenvalue of the unit-diagonal J'J, relative to the largest, for
+// which the parameters count as determined (singular values 1e-5 apart).
+constexpr double kMinEigenRatio = 1e-10;
+
+// What every window's cost shares.
+struct CostShared {
+  const EffectModel* model = nullptr;
+  const DiagInput* in = nullptr;
+  std::vector<double> all;     // the flat parameter vector (fixed values live here)
+  std::vector<int> free_pos;   // where block 0's entries go in `all`
+  bool free_anchor = false;
+  bool heading = false;        // heading residuals
+  double inv_sigma_m = 1.0, inv_sigma_rad = 1.0;
+  RobustLoss loss = RobustLoss::none;
+  double c = 1.0;              // loss scale [sigmas]
+};
+
+// r -> sign(r)*sqrt(rho(r^2)) for the chosen loss, smooth through 0.
+template <typename T>
+T robustify(const T& r, RobustLoss loss, double c) {
+  using std::log;
+  using std::sqrt;
+  const double a = std::abs(scalar(r));
+  if (loss == RobustLoss::huber) {
+    if (a <= c) return r;
+    const T m = sqrt(2.0 * c * (a == scalar(r) ? r : -r) - c * c);
+    return scalar(r) >= 0.0 ? m : -m;
+  }
+  if (loss == RobustLoss::cauchy) {
+    if (a < 1e-3 * c) return r * (1.0 - r * r / (4.0 * c * c));
+    const T m = c * sqrt(log(1.0 + r * r / (c * c)));
+    return scalar(r) >= 0.0 ? m : -m;
+  }
+  return r;
+}
+
+class WindowCost {
+ public:
+  WindowCost(const CostShared* s, const Window& w, const Pose<double>& anchor)
+      : s_(s), w_(w), anchor_(anchor) {}
+
+  int num_residuals() const {
+    return static_cast<int>((w_.ref_end - w_.ref_begin) * (s_->heading ? 3 : 2));
+  }
+
+  template <typename T>
+  bool operator()(T const* const* blocks, T* res) const {
+    std::vector<T> p(s_->all.size());
+    for (std::size_t i = 0; i < p.size(); ++i) p[i] = T(s_->all[i]);
+    for (std::size_t j = 0; j < s_->free_pos.size(); ++j)
+      p[static_cast<std::size_t>(s_->free_pos[j])] = blocks[0][j];
+    const Pose<T> a = s_->free_anchor ? Pose<T>{blocks[1][0], blocks[1][1], blocks[1][2]}
+                                      : Pose<T>{T(anchor_.x), T(anchor_.y), T(anchor_.th)};
+    std::vector<Pose<T>> pred(w_.ref_end - w_.ref_begin);
+    replay_window(*s_->model, p.data(), w_, a, s_->in->ref_t_s, pred.data());
+    const DiagInput& in = *s_->in;
+    T* r = res;
+    for (std::size_t i = 0; i < pred.size(); ++i) {
+      const std::size_t g = w_.ref_begin + i;
+      *r++ = robustify(T((pred[i].x - in.ref_x_m[g]) * s_->inv_sigma_m), s_->loss, s_->c);
+      *r++ = robustify(T((pred[i].y - in.ref_y_m[g]) * s_->inv_sigma_m), s_->loss, s_->c);
+      if (s_->heading)
+        *r++ = robustify(T((pred[i].th - in.ref_theta_rad[g]) * s_->inv_sigma_rad), s_->loss, s_->c);
+    }
+    return true;
+  }
+
+ private:
+  const CostShared* s_;
+  Window w_;
+  Pose<double> anchor_;
+};
+
+template <int Stride>
+ceres::CostFunction* make_cost(const CostShared* s, const Window& w, const Pose<double>& a) {
+  auto* f = new ceres::DynamicAutoDiffCostFunction<WindowCost, Stride>(new WindowCost(s, w, a));
+  f->AddParameterBlock(static_cast<int>(s->free_pos.size()));
+  if (s->free_anchor) f->AddParameterBlock(3);
+  f->SetNumResiduals(WindowCost(s, w, a).num_residuals());
+  return f;
+}
+
+ceres::CostFunction* make_cost(int active, const CostShared* s, const Window& w,
+                               const Pose<double>& a) {
+  if (active <= 2) return make_cost<2>(s, w, a);
+  if (active <= 4) return make_cost<4>(s, w, a);
+  if (active <= 6) return make_cost<6>(s, w, a);
+  return make_cost<8>(s, w, a);
+}
+
+SetScore score(const ReplayResult& before, const ReplayResult& after) {
+  SetScore s;
+  const double nan = std::nan("");
+  for (std::size_t i = 0; i < before.windows.size(); ++i)
+    s.windows.push_back({before.windows[i].window, before.windows[i].pos_rmse_m,
+                         after.windows[i].pos_rmse_m, before.windows[i].heading_rmse_rad,
+                         after.windows[i].heading_rmse_rad});
+  const bool any = !before.windows.empty();
+  s.before_pos_rmse_m = any ? before.pos_rmse_m : nan;
+  s.after_pos_rmse_m = any ? after.pos_rmse_m : nan;
+  s.before_heading_rmse_rad = any ? before.heading_rmse_rad : nan;
+  s.after_heading_rmse_rad = any ? after.heading_rmse_rad : nan;
+  return s;
+}
+
+// RMS distance of the predicted positions of one window from their centroid.
+double spread(const ReplayResult& r, const Window& w) {
+  double mx = 0, my = 0;
+  const auto n = static_cast<double>(w.ref_end - w.ref_begin);
+  for (std::size_t g = w.ref_begin; g < w.ref_end; ++g) mx += r.pred_x_m[g], my += r.pred_y_m[g];
+  mx /= n, my /= n;
+  double s = 0;
+  for (std::size_t g = w.ref_begin; g < w.ref_end; ++g)
+    s += (r.pred_x_m[g] - mx) * (r.pred_x_m[g] - mx) + (r.pred_y_m[g] - my) * (r.pred_y_m[g] - my);
+  return std::sqrt(s / n);
+}
+
+// Whether the Jacobian at the current parameters has full column rank, judged
+// on J'J scaled to a unit diagonal (so that units do not matter). Checked
+// before ceres::Covariance, which would log an error on a singular problem.
+bool full_rank(ceres::Problem& problem) {
+  ceres::CRSMatrix j;
+  if (!problem.Evaluate(ceres::Problem::EvaluateOptions(), nullptr, nullptr, nullptr, &j))
+    return false;
+  Eigen::MatrixXd jtj = Eigen::MatrixXd::Zero(j.num_cols, j.num_cols);
+  for (int r = 0; r < j.num_rows; ++r)
+    for (int a = j.rows[static_cast<std::size_t>(r)]; a < j.rows[static_cast<std::size_t>(r) + 1]; ++a)
+      for (int b = j.rows[static_cast<std::size_t>(r)]; b < j.rows[static_cast<std::size_t>(r) + 1]; ++b)
+        jtj(j.cols[static_cast<std::size_t>(a)], j.cols[static_cast<std::size_t>(b)]) +=
+            j.values[static_cast<std::size_t>(a)] * j.values[static_cast<std::size_t>(b)];
+  const Eigen::VectorXd d = jtj.diagonal();
+  if (!(d.array() > 0.0).all() || !d.allFinite()) return false;
+  const Eigen::VectorXd inv = d.array().rsqrt();
+  const Eigen::MatrixXd scaled = inv.asDiagonal() * jtj * inv.asDiagonal();
+  const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(scaled).eigenvalues();
+  return ev.minCoeff() > kMinEigenRatio * ev.maxCoeff();
+}
+
+}  // namespace
+
+bool FitOptions::IsValid(std::string* why) const {
+  auto fail = [why](std::string msg) {
+    if (why) *why = std::move(msg);
+    return false;
+  };
+  if (!(std::isfinite(window_s) && window_s >= 0.0))
+    return fail(fmt::format("window_s = {}; expected a number >= 0 s (0 = one window)", window_s));
+  if (!(std::isfinite(loss_scale) && loss_scale > 0.0))
+    return fail(fmt::format("loss_scale = {}; expected a number > 0 (reference sigmas)", loss_scale));
+  if (max_iterations < 1 || max_iterations > 100000)
+    return fail(fmt::format("max_iterations = {}; expected 1 to 100000", max_iterations));
+  if (!(std::isfinite(min_spread_sigmas) && min_spread_sigmas >= 0.0))
+    return fail(fmt::format("min_spread_sigmas = {}; expected a number >= 0", min_spread_sigmas));
+  std::string w;
+  if (!model.IsValid(&w)) return fail("model: " + w);
+  return true;
+}
+
+FitSummary fit_effects(const DiagInput& in, const EffectSet& which,
+                       const std::vector<int>& train_windows,
+                       const std::vector<int>& heldout_windows, const FitOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("fit options: " + why);
+  const auto t_start = std::chrono::steady_clock::now();
+  const std::vector<Window> windows = make_windows(in, options.window_s);
+  const int n_win = static_cast<int>(windows.size());
+  std::set<int> held;
+  for (int w : heldout_windows) {
+    if (w < 0 || w >= n_win)
+      throw std::invalid_argument(fmt::format("held-out window {} does not exist (the track has {} "
+                                              "windows of {} s)", w, n_win, options.window_s));
+    held.insert(w);
+  }
+  std::vector<int> train;
+  for (int w : train_windows) {
+    if (w < 0 || w >= n_win)
+      throw std::invalid_argument(fmt::format("training window {} does not exist (the track has {} "
+                                              "windows of {} s)", w, n_win, options.window_s));
+    if (held.count(w))
+      throw std::invalid_argument(fmt::format("window {} is both a training and a held-out window", w));
+    train.push_back(w);
+  }
+  if (train_windows.empty())
+    for (int w = 0; w < n_win; ++w)
+      if (!held.count(w)) train.push_back(w);
+  if (train.empty()) throw std::invalid_argument("fit: no training window");
+
+  const EffectModel model(in, which, options.model);
+  const auto& layout = model.layout();
+  std::vector<double> init = pack(which);
+  CostShared sh;
+  sh.model = &model;
+  sh.in = &in;
+  for (std::size_t i = 0; i < layout.size(); ++i)
+    if (layout[i].fitted) {
+      init[i] = std::clamp(init[i], layout[i].lower, layout[i].upper);
+      sh.free_pos.push_back(static_cast<int>(i));
+    }
+  if (sh.free_pos.empty())
+    throw std::invalid_argument(fmt::format("fit: effects '{}' have no parameter that dead "
+                                            "reckoning can fit", which.to_string()));
+  sh.all = init;
+  sh.free_anchor = !anchored_on_reference(in);
+  sh.heading = in.has_ref_heading() && options.use_heading;
+  sh.inv_sigma_m = 1.0 / in.ref_sigma_m;
+  sh.inv_sigma_rad = sh.heading ? 1.0 / in.ref_sigma_rad : 1.0;
+  sh.loss = options.loss;
+  sh.c = options.loss_scale;
+
+  FitSummary out;
+  const ReplayResult train_before = replay(model, init, in, windows, train);
+  std::vector<double> free_values;
+  for (int p : sh.free_pos) free_values.push_back(init[static_cast<std::size_t>(p)]);
+  std::vector<std::array<double, 3>> anchors;
+
+  ceres::Problem problem;
+  const int active = static_cast<int>(sh.free_pos.size()) + (sh.free_anchor ? 3 : 0);
+  for (std::size_t i = 0; i < train.size(); ++i) {
+    const Window& w = windows[static_cast<std::size_t>(train[i])];
+    if (sh.free_anchor &&
+        spread(train_before, w) < options.min_spread_sigmas * in.ref_sigma_m) {
+      out.skipped_windows.push_back(w.index);
+      continue;
+    }
+    out.fitted_windows.push_back(w.index);
+    const Pose<double>& a = train_before.anchors[i];
+    anchors.push_back({a.x, a.y, a.th});
+  }
+  if (out.fitted_windows.empty())
+    throw std::invalid_argument("fit: every training window is too short a motion to fit");
+  for (std::size_t i = 0; i < out.fitted_windows.size(); ++i) {
+    const Window& w = windows[static_cast<std::size_t>(out.fitted_windows[i])];
+    const Pose<double> a = sh.free_anchor
+                               ? Pose<double>{anchors[i][0], anchors[i][1], anchors[i][2]}
+                               : reference_pose_at(in, w.t_begin_s);
+    ceres::CostFunction* cost = make_cost(active, &sh, w, a);
+    if (sh.free_anchor)
+      problem.AddResidualBlock(cost, nullptr, free_values.data(), anchors[i].data());
+    else
+      problem.AddResidualBlock(cost, nullptr, free_values.data());
+    out.num_residuals += static_cast<std::size_t>(cost->num_residuals());
+  }
+  for (std::size_t j = 0; j < sh.free_pos.size(); ++j) {
+    const ParamSlot& s = layout[static_cast<std::size_t>(sh.free_pos[j])];
+    problem.SetParameterLowerBound(free_values.data(), static_cast<int>(j), s.lower);
+    problem.SetParameterUpperBound(free_values.data(), static_cast<int>(j), s.upper);
+  }
+
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = options.max_iterations;
+  so.num_threads = 1;
+  so.logging_type = ceres::SILENT;
+  so.minimizer_progress_to_stdout = false;
+  so.function_tolerance = 1e-10;
+  so.gradient_tolerance = 1e-12;
+  so.parameter_tolerance = 1e-10;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  out.converged = summary.termination_type == ceres::CONVERGENCE;
+  out.termination = summary.BriefReport();
+  out.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  out.initial_cost = summary.initial_cost;
+  out.final_cost = summary.final_cost;
+  const double dof = static_cast<double>(out.num_residuals) -
+                     static_cast<double>(free_values.size() + 3 * (sh.free_anchor ? anchors.size() : 0));
+  const double s2 = dof > 0.0 ? 2.0 * summary.final_cost / dof : std::nan("");
+  out.residual_scale = std::sqrt(s2);
+
+  // Standard errors.
+  std::vector<double> var(free_values.size(), std::nan(""));
+  {
+    ceres::Covariance::Options co;
+    co.algorithm_type = ceres::DENSE_SVD;
+    co.num_threads = 1;
+    ceres::Covariance cov(co);
+    std::vector<std::pair<const double*, const double*>> blocks = {
+        {free_values.data(), free_values.data()}};
+    std::vector<double> c(free_values.size() * free_values.size());
+    if (full_rank(problem) && cov.Compute(blocks, &problem) &&
+        cov.GetCovarianceBlock(free_values.data(), free_values.data(), c.data())) {
+      for (std::size_t j = 0; j < var.size(); ++j) var[j] = c[j * var.size() + j] * s2;
+    } else {
+      out.rank_deficient = true;
+    }
+  }
+
+  std::vector<double> fitted = init;
+  for (std::size_t j = 0; j < sh.free_pos.size(); ++j)
+    fitted[static_cast<std::size_t>(sh.free_pos[j])] = free_values[j];
+  out.effects = unpack(which, fitted);
+  const std::vector<double> orig = pack(which);
+  for (std::size_t i = 0, j = 0; i < layout.size(); ++i) {
+    FitParam p;
+    p.name = layout[i].name;
+    p.fitted = layout[i].fitted;
+    p.initial = p.fitted ? init[i] : orig[i];
+    p.value = fitted[i];
+    p.std_error = std::nan("");
+    if (p.fitted) {
+      if (std::isfinite(var[j]) && var[j] >= 0.0) p.std_error = std::sqrt(var[j]);
+      const double tol = 1e-9 * (layout[i].upper - layout[i].lower);
+      p.at_bound = p.value <= layout[i].lower + tol || p.value >= layout[i].upper - tol;
+      ++j;
+    }
+    out.params.push_back(p);
+  }
+  if (!out.rank_deficient)
+    for (const FitParam& p : out.params)
+      if (p.fitted && !std::isfinite(p.std_error)) out.rank_deficient = true;
+  if (sh.free_anchor)
+    for (const auto& a : anchors) out.anchors.push_back({a[0], a[1], a[2]});
+
+  out.train = score(train_before, replay(model, fitted, in, windows, train));
+  std::vector<int> ho(held.begin(), held.end());
+  if (!ho.empty())
+    out.heldout = score(replay(model, init, in, windows, ho), replay(model, fitted, in, windows, ho));
+  else
+    out.heldout = score(ReplayResult{}, ReplayResult{});
+  out.solve_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  return out;
+}
+
+}  // namespace odotune::diagnose

@@ -1,0 +1,185 @@
+#include "diagnose/window_replay.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace odotune::diagnose {
+
+namespace {
+
+constexpr double kTimeEps = 1e-9;  // [s] tolerance of window boundaries
+constexpr double kMaxWindows = 1e6;
+
+double interp(const std::vector<double>& t, const std::vector<double>& v, double x) {
+  if (x <= t.front()) return v.front();
+  if (x >= t.back()) return v.back();
+  const auto j = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), x) - t.begin());
+  const double f = (x - t[j - 1]) / (t[j] - t[j - 1]);
+  return v[j - 1] + f * (v[j] - v[j - 1]);
+}
+
+// The anchor composed with the rigid motion that best maps `pred` onto the
+// reference positions of w (least squares, rotation about the origin first).
+Pose<double> align(const Pose<double>& a, const std::vector<Pose<double>>& pred,
+                   const DiagInput& in, const Window& w) {
+  const std::size_t n = pred.size();
+  double px = 0, py = 0, qx = 0, qy = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    px += pred[i].x, py += pred[i].y;
+    qx += in.ref_x_m[w.ref_begin + i], qy += in.ref_y_m[w.ref_begin + i];
+  }
+  px /= static_cast<double>(n), py /= static_cast<double>(n);
+  qx /= static_cast<double>(n), qy /= static_cast<double>(n);
+  double c = 0, s = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ax = pred[i].x - px, ay = pred[i].y - py;
+    const double bx = in.ref_x_m[w.ref_begin + i] - qx, by = in.ref_y_m[w.ref_begin + i] - qy;
+    c += ax * bx + ay * by;
+    s += ax * by - ay * bx;
+  }
+  const double phi = (c == 0.0 && s == 0.0) ? 0.0 : std::atan2(s, c);
+  const double cp = std::cos(phi), sp = std::sin(phi);
+  const double tx = qx - (cp * px - sp * py), ty = qy - (sp * px + cp * py);
+  return {cp * a.x - sp * a.y + tx, sp * a.x + cp * a.y + ty, a.th + phi};
+}
+
+}  // namespace
+
+std::vector<Window> make_windows(const DiagInput& in, double window_s) {
+  if (!(std::isfinite(window_s) && window_s >= 0.0))
+    throw std::invalid_argument(fmt::format("window_s = {}; expected a number >= 0 s (0 = one window)",
+                                            window_s));
+  const auto& ot = in.odo_t_s;
+  const auto& rt = in.ref_t_s;
+  if (ot.size() < 2 || rt.empty())
+    throw std::invalid_argument(fmt::format("track '{}': no odometry or no reference to window",
+                                            in.track_name));
+  const double t0 = std::max(ot.front(), rt.front()), t_last = rt.back();
+  const bool heading = in.has_ref_heading();
+  const std::size_t min_ref = heading ? 1 : 3;
+  double count = 1.0;
+  if (window_s > 0.0) count = std::max(1.0, std::ceil((t_last - t0) / window_s - 1e-9));
+  if (count > kMaxWindows)
+    throw std::invalid_argument(fmt::format("window_s = {} s cuts {:.0f} s into {:.3g} windows; "
+                                            "expected at most {:.0g}",
+                                            window_s, t_last - t0, count, kMaxWindows));
+  const auto n_win = static_cast<std::size_t>(count);
+  std::vector<Window> out;
+  for (std::size_t j = 0; j < n_win; ++j) {
+    const double s = t0 + static_cast<double>(j) * window_s;
+    const bool last = j + 1 == n_win;
+    const double e = last ? std::numeric_limits<double>::infinity()
+                          : t0 + static_cast<double>(j + 1) * window_s;
+    Window w;
+    w.node_begin = static_cast<std::size_t>(std::lower_bound(ot.begin(), ot.end(), s - kTimeEps) -
+                                            ot.begin());
+    if (w.node_begin + 1 >= ot.size()) continue;
+    w.t_begin_s = ot[w.node_begin];
+    w.t_end_s = std::min(e, t_last);
+    w.ref_begin = static_cast<std::size_t>(
+        (heading ? std::upper_bound(rt.begin(), rt.end(), w.t_begin_s + kTimeEps)
+                 : std::lower_bound(rt.begin(), rt.end(), w.t_begin_s - kTimeEps)) -
+        rt.begin());
+    w.ref_end = last ? rt.size()
+                     : static_cast<std::size_t>(
+                           std::lower_bound(rt.begin(), rt.end(), e - kTimeEps) - rt.begin());
+    if (w.ref_end <= w.ref_begin || w.ref_end - w.ref_begin < min_ref) continue;
+    w.node_end = static_cast<std::size_t>(
+        std::lower_bound(ot.begin(), ot.end(), rt[w.ref_end - 1] - kTimeEps) - ot.begin());
+    w.node_end = std::clamp(w.node_end, w.node_begin, ot.size() - 1);
+    w.index = static_cast<int>(out.size());
+    out.push_back(w);
+  }
+  if (out.empty())
+    throw std::invalid_argument(fmt::format(
+        "track '{}': no window of {} s holds {} reference sample(s) to score", in.track_name,
+        window_s, min_ref));
+  return out;
+}
+
+Pose<double> reference_pose_at(const DiagInput& in, double t_s) {
+  if (!in.has_ref_heading())
+    throw std::invalid_argument(fmt::format("track '{}': the reference has no heading",
+                                            in.track_name));
+  return {interp(in.ref_t_s, in.ref_x_m, t_s), interp(in.ref_t_s, in.ref_y_m, t_s),
+          interp(in.ref_t_s, in.ref_theta_rad, t_s)};
+}
+
+ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
+                    const DiagInput& in, const std::vector<Window>& windows,
+                    const std::vector<int>& which, const std::vector<Pose<double>>* anchors) {
+  if (params.size() != model.layout().size())
+    throw std::invalid_argument(fmt::format("replay: {} parameters for a model of {}",
+                                            params.size(), model.layout().size()));
+  if (model.num_nodes() != in.odo_t_s.size())
+    throw std::invalid_argument("replay: the model was built for another track");
+  std::vector<int> list = which;
+  if (list.empty())
+    for (const Window& w : windows) list.push_back(w.index);
+  const bool heading = in.has_ref_heading();
+  if (anchors && !heading && anchors->size() != list.size())
+    throw std::invalid_argument(fmt::format("replay: {} anchors for {} windows", anchors->size(),
+                                            list.size()));
+  const double nan = std::nan("");
+  ReplayResult res;
+  res.pred_x_m.assign(in.ref_t_s.size(), nan);
+  res.pred_y_m.assign(in.ref_t_s.size(), nan);
+  res.pred_theta_rad.assign(in.ref_t_s.size(), nan);
+  double sum_p = 0.0, sum_h = 0.0;
+  std::size_t n_all = 0;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    if (list[i] < 0 || static_cast<std::size_t>(list[i]) >= windows.size())
+      throw std::invalid_argument(fmt::format("replay: window {} does not exist (the track has {})",
+                                              list[i], windows.size()));
+    const Window& w = windows[static_cast<std::size_t>(list[i])];
+    std::vector<Pose<double>> pred(w.ref_end - w.ref_begin);
+    Pose<double> a;
+    if (heading) {
+      a = reference_pose_at(in, w.t_begin_s);
+    } else if (anchors) {
+      a = (*anchors)[i];
+    } else {
+      a = {in.ref_x_m[w.ref_begin], in.ref_y_m[w.ref_begin], 0.0};
+      const int rounds = model.structure().on(Effect::slip_zone) ? 3 : 1;
+      for (int it = 0; it < rounds; ++it) {
+        replay_window(model, params.data(), w, a, in.ref_t_s, pred.data());
+        a = align(a, pred, in, w);
+      }
+    }
+    replay_window(model, params.data(), w, a, in.ref_t_s, pred.data());
+    res.anchors.push_back(a);
+    WindowError e{w.index, w.t_begin_s, w.t_end_s, pred.size(), 0.0, heading ? 0.0 : nan};
+    double sp = 0.0, sh = 0.0;
+    for (std::size_t r = 0; r < pred.size(); ++r) {
+      const std::size_t g = w.ref_begin + r;
+      const double dx = pred[r].x - in.ref_x_m[g], dy = pred[r].y - in.ref_y_m[g];
+      sp += dx * dx + dy * dy;
+      res.pred_x_m[g] = pred[r].x, res.pred_y_m[g] = pred[r].y, res.pred_theta_rad[g] = pred[r].th;
+      if (heading) {
+        const double dh = pred[r].th - in.ref_theta_rad[g];
+        sh += dh * dh;
+      }
+    }
+    const auto n = static_cast<double>(pred.size());
+    e.pos_rmse_m = std::sqrt(sp / n);
+    if (heading) e.heading_rmse_rad = std::sqrt(sh / n);
+    sum_p += sp, sum_h += sh, n_all += pred.size();
+    res.windows.push_back(e);
+  }
+  const auto nd = static_cast<double>(std::max<std::size_t>(n_all, 1));
+  res.pos_rmse_m = std::sqrt(sum_p / nd);
+  res.heading_rmse_rad = heading ? std::sqrt(sum_h / nd) : nan;
+  return res;
+}
+
+ReplayResult replay(const DiagInput& in, const EffectSet& set, double window_s,
+                    const std::vector<int>& which, const ModelOptions& opt) {
+  const EffectModel model(in, set, opt);
+  return replay(model, pack(set), in, make_windows(in, window_s), which);
+}
+
+}  // namespace odotune::diagnose

@@ -1,0 +1,111 @@
+// Windowed dead reckoning of an effect model against the reference
+// (docs/diagnosis-design.md step 3; errors as ../shared/specs/diagnosis-output.md):
+// the track is cut into windows of window_s seconds, each replayed from an
+// anchor pose at its start and scored on the reference samples inside it.
+//
+// Windows. t0 = the first instant with both odometry and reference; window j
+// nominally covers [t0 + j*W, t0 + (j+1)*W) (W = window_s; 0 = one window up
+// to the last reference sample, which the last window always includes). It
+// starts at the first odometry node at or after its nominal start
+// (t_begin_s), the anchor time. Scored samples: reference samples in the
+// nominal span at or after t_begin_s, strictly after it when the reference has
+// heading (that sample is the anchor itself). Windows without a scored sample
+// (with a free anchor: fewer than 3) are dropped; the rest are numbered 0, 1,
+// ... in time order, which is the number train/held-out lists use.
+//
+// Anchors. With a reference heading (ground truth with gt_theta) the anchor is
+// the reference pose interpolated linearly (x, y, unwrapped theta) at
+// t_begin_s. Otherwise (position fixes, or ground truth without heading) the
+// anchor is free: a fit makes it a nuisance parameter, and replay() chooses it
+// in closed form, the rigid 2D motion that maps the dead-reckoned positions onto
+// the window's fixes in least squares (Kabsch/Umeyama without scale), applied
+// to a replay started at the window's first fix with heading 0 (three times
+// with slip_zone, whose effect depends on where the robot is).
+//
+// Prediction at a reference time between two odometry nodes: linear
+// interpolation of the node poses (x, y, theta).
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "diagnose/diag_input.h"
+#include "diagnose/effect_model.h"
+
+namespace odotune::diagnose {
+
+struct Window {
+  int index = 0;
+  double t_begin_s = 0.0;  // anchor time (an odometry node)
+  double t_end_s = 0.0;    // nominal end (the next window's nominal start, or the last sample)
+  std::size_t node_begin = 0, node_end = 0;  // odometry nodes replayed, [node_begin, node_end]
+  std::size_t ref_begin = 0, ref_end = 0;    // reference samples scored, [ref_begin, ref_end)
+};
+
+// Throws std::invalid_argument for window_s < 0 or not finite.
+std::vector<Window> make_windows(const DiagInput& in, double window_s);
+
+// True when windows are anchored on the reference pose (reference with heading).
+inline bool anchored_on_reference(const DiagInput& in) { return in.has_ref_heading(); }
+
+// Reference pose interpolated at time t (requires a reference heading).
+Pose<double> reference_pose_at(const DiagInput& in, double t_s);
+
+// Dead reckoning of window w from `anchor` (the pose at w.node_begin) with the
+// model's flat parameters; out[i] = predicted pose at reference sample
+// w.ref_begin + i. `ref_t` is DiagInput::ref_t_s.
+template <typename T>
+void replay_window(const EffectModel& model, const T* params, const Window& w,
+                   const Pose<T>& anchor, const std::vector<double>& ref_t, Pose<T>* out) {
+  const auto& t = model.series().t_s;
+  Stepper<T> stepper(model, params);
+  stepper.start(w.node_begin);
+  Pose<T> p = anchor;
+  std::size_t r = w.ref_begin;
+  while (r < w.ref_end && ref_t[r] <= t[w.node_begin]) out[r++ - w.ref_begin] = p;
+  for (std::size_t k = w.node_begin; k < w.node_end && r < w.ref_end; ++k) {
+    const Pose<T> prev = p;
+    advance(p, stepper.step(k, prev));
+    const double h = t[k + 1] - t[k];
+    while (r < w.ref_end && ref_t[r] <= t[k + 1]) {
+      const double f = (ref_t[r] - t[k]) / h;
+      out[r++ - w.ref_begin] = Pose<T>{prev.x + f * (p.x - prev.x), prev.y + f * (p.y - prev.y),
+                                       prev.th + f * (p.th - prev.th)};
+    }
+  }
+  while (r < w.ref_end) out[r++ - w.ref_begin] = p;
+}
+
+struct WindowError {
+  int window = 0;
+  double t_begin_s = 0.0, t_end_s = 0.0;
+  std::size_t n_ref = 0;          // scored reference samples
+  double pos_rmse_m = 0.0;        // sqrt(mean(dx^2 + dy^2))
+  double heading_rmse_rad = 0.0;  // sqrt(mean(dtheta^2)); NaN without reference heading
+};
+
+struct ReplayResult {
+  std::vector<WindowError> windows;  // in the order asked
+  double pos_rmse_m = 0.0;           // pooled over every scored sample of those windows
+  double heading_rmse_rad = 0.0;     // pooled; NaN without reference heading
+  std::vector<Pose<double>> anchors;  // anchor of each replayed window
+  // Predicted pose per reference sample (DiagInput::ref_t_s); NaN where no
+  // replayed window scores the sample.
+  std::vector<double> pred_x_m, pred_y_m, pred_theta_rad;
+};
+
+// Replays windows `which` (indices into `windows`; empty = all) with the flat
+// parameters `params` (layout order of model.layout()). `anchors`, when given,
+// holds one anchor per entry of `which` for free-anchor windows (ignored when
+// the reference has heading); otherwise they are chosen in closed form.
+// Throws std::invalid_argument for a bad window index or parameter count.
+ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
+                    const DiagInput& in, const std::vector<Window>& windows,
+                    const std::vector<int>& which = {},
+                    const std::vector<Pose<double>>* anchors = nullptr);
+
+// Convenience: builds the model of `set` and the windows of window_s.
+ReplayResult replay(const DiagInput& in, const EffectSet& set, double window_s,
+                    const std::vector<int>& which = {}, const ModelOptions& opt = {});
+
+}  // namespace odotune::diagnose
