@@ -1,4 +1,5 @@
 #include "diagnose/locate.h"
+#include "diagnose/robust_stats.h"
 
 #include <algorithm>
 #include <array>
@@ -14,25 +15,6 @@ namespace odotune::diagnose {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-double median(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  const std::size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m), v.end());
-  double med = v[m];
-  if (v.size() % 2 == 0) {
-    med = 0.5 * (med + *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m)));
-  }
-  return med;
-}
-
-double robust_sigma(const std::vector<double>& v) {
-  if (v.empty()) return kNaN;
-  const double med = median(v);
-  std::vector<double> dev(v.size());
-  for (std::size_t i = 0; i < v.size(); ++i) dev[i] = std::abs(v[i] - med);
-  return 1.4826 * median(std::move(dev));
-}
 
 // Average ranks (ties share their mean rank).
 std::vector<double> ranks(const std::vector<double>& v) {

@@ -1,4 +1,5 @@
 #include "diagnose/sensor_checks.h"
+#include "diagnose/robust_stats.h"
 
 #include <algorithm>
 #include <cmath>
@@ -18,24 +19,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr int kMinBins = 10;  // fewer bins: a check is not attempted
 
 bool finite_positive(double x) { return std::isfinite(x) && x > 0.0; }
-
-// The upper median (for an even count the larger middle value; ample for
-// the robust scales here).
-double median(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
-// 1.4826·MAD about the median: σ of a normal sample, robust to outliers.
-double robust_sigma(const std::vector<double>& v) {
-  if (v.empty()) return kNaN;
-  const double med = median(v);
-  std::vector<double> dev(v.size());
-  for (std::size_t i = 0; i < v.size(); ++i) dev[i] = std::abs(v[i] - med);
-  return 1.4826 * median(std::move(dev));
-}
 
 double median_step(const std::vector<double>& t) {
   if (t.size() < 2) return kNaN;
@@ -189,6 +172,10 @@ struct RobustFit {
 };
 
 // Huber IRLS of yw = a·xw (+ b·uw) on whitened columns already in f.
+// Written out rather than through Ceres (which the fits use): a one- or
+// two-column weighted least squares is a 2 × 2 solve per iteration, and the
+// block bootstrap repeats it a few hundred times per check, where setting up
+// a ceres::Problem each time would cost more than the whole regression.
 void huber_irls(RobustFit& f, const SensorCheckOptions& o) {
   const std::size_t n = f.xw.size();
   const bool two = !f.uw.empty();
