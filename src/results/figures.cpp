@@ -167,6 +167,36 @@ void heatmap(const fs::path& stem, const std::string& title,
 
 // ---------------------------------------------------------------- boxplots
 
+// Outliers of a box as "x y" lines, one per distinct value (to 1e-6),
+// beyond 1.5 × IQR from the quartiles (linear interpolation between order
+// statistics, as gnuplot's boxplot); empty when there is none.
+namespace {
+std::string boxplot_outliers(const std::vector<double>& values, double x) {
+  std::vector<double> v;
+  for (double d : values)
+    if (std::isfinite(d)) v.push_back(d);
+  if (v.size() < 4) return "";
+  std::sort(v.begin(), v.end());
+  const auto quantile = [&v](double p) {
+    const double pos = p * static_cast<double>(v.size() - 1);
+    const auto i = static_cast<std::size_t>(pos);
+    const double f = pos - static_cast<double>(i);
+    return i + 1 < v.size() ? v[i] + f * (v[i + 1] - v[i]) : v[i];
+  };
+  const double q1 = quantile(0.25), q3 = quantile(0.75), iqr = q3 - q1;
+  std::string out;
+  double last = std::numeric_limits<double>::quiet_NaN();
+  for (double d : v) {
+    if (d >= q1 - 1.5 * iqr && d <= q3 + 1.5 * iqr) continue;
+    if (std::abs(d - last) <= 1e-6) continue;
+    out += num(x) + " " + num(d) + "\n";
+    last = d;
+  }
+  return out;
+}
+
+}  // namespace
+
 void boxplots(const fs::path& stem, const std::string& title,
               const std::map<std::string, std::map<std::string, std::vector<double>>>& data) {
   // Metric order: RMSE, MAE, MAXE, then any other in alphabetical order.
@@ -207,6 +237,16 @@ void boxplots(const fs::path& stem, const std::string& title,
               ") with boxplot lc rgb '" + colour + "' fc rgb '" + colour + "' " +
               (metric_in_legend[m] ? std::string("notitle") : "title " + q(metrics[m]));
       metric_in_legend[m] = true;
+      // Outliers (beyond 1.5 IQR of the quartiles) drawn here, one point per
+      // distinct value: gnuplot's own outliers spread many equal values
+      // sideways across neighbouring boxes (many seeds reach the same optimum).
+      const std::string outliers = boxplot_outliers(it->second, x);
+      if (!outliers.empty()) {
+        const std::string ofile = "out_" + std::to_string(g) + "_" + std::to_string(m) + ".dat";
+        files.emplace_back(ofile, outliers);
+        plot += ", \\\n     '" + ofile + "' using 1:2 with points pt 7 ps 0.5 lc rgb '" + colour +
+                "' notitle";
+      }
     }
   }
   if (files.empty()) throw std::invalid_argument("boxplots: no finite values to plot");
@@ -218,7 +258,7 @@ void boxplots(const fs::path& stem, const std::string& title,
   body += "set xtics " + category_tics(models, 1) + " scale 0\n";
   body += "set grid ytics lc rgb '#e0e0e0'\n";
   body += "set style fill solid 0.35 border\n";
-  body += "set style boxplot outliers pointtype 7\nset pointsize 0.5\n";
+  body += "set style boxplot nooutliers\n";
   body += "set key outside right top box Left reverse width 1\n";
   body += plot + "\n";
   const int width = std::max(800, 300 + 180 * static_cast<int>(models.size()));
