@@ -138,26 +138,13 @@ Selection select_run(const std::vector<results::RunRecord>& all, const std::vect
   return s;
 }
 
-std::string scored_track(const results::RunRecord& r) {
-  return r.heldout_track.empty() ? r.track : r.heldout_track;
-}
-
-double param(const results::RunRecord& r, const std::string& name) {
-  for (std::size_t i = 0; i < r.param_names.size() && i < r.params.size(); ++i)
-    if (r.param_names[i] == name) return r.params[i];
-  throw Failure(fmt::format("run {}: parameter {} is missing", results::run_key(r), name));
-}
-
 // The names of the tracks the run was tuned on: its track, or for a
 // leave-one-out run every track of the store's experiment but the held-out one.
 std::vector<std::string> tuning_track_names(const results::RunRecord& run,
                                             const std::vector<results::RunRecord>& all) {
   if (run.heldout_track.empty()) return {run.track};
   std::set<std::string> names;
-  for (const auto& r : all) {
-    if (r.heldout_track.empty()) names.insert(r.track);
-    else names.insert(r.heldout_track);
-  }
+  for (const auto& r : all) names.insert(r.scored_track());
   names.erase(run.heldout_track);
   return {names.begin(), names.end()};
 }
@@ -226,9 +213,9 @@ results::RosExportInput ros_input(const results::Store& store, const results::Ru
   try {
     if (noise.model == filters::NoiseModel::rq) {
       const double rate = odometry_rate_hz(inputs);
-      in = results::ros_input_from_rq(param(run, "r1_mm2"), param(run, "r2_mm2"),
-                                      param(run, "r3_rad2"), param(run, "q1_mm2"),
-                                      param(run, "q2_mm2"), rate);
+      in = results::ros_input_from_rq(run_param(run, "r1_mm2"), run_param(run, "r2_mm2"),
+                                      run_param(run, "r3_rad2"), run_param(run, "q1_mm2"),
+                                      run_param(run, "q2_mm2"), rate);
       in.provenance = fmt::format("odometry rate {:.6g} Hz measured on {}", rate, join_names(inputs));
     } else {
       const ProcessNoiseRate q = equivalent_process_noise_rate(noise, inputs);
@@ -259,7 +246,7 @@ void run_export(const ExportArgs& args) {
   const std::string key = results::run_key(run);
   const std::string scores =
       fmt::format("tuned RMSE {:.2f} mm vs baseline {:.2f} mm on {}", run.tuned.rmse_m * 1e3,
-                  run.baseline.rmse_m * 1e3, scored_track(run));
+                  run.baseline.rmse_m * 1e3, run.scored_track());
   const std::string origin = fmt::format("odotune export from {} (experiment {}, {}): run {}",
                                          args.store, store->experiment().name,
                                          store->experiment().hash, key);

@@ -96,7 +96,7 @@ const RunRecord* best_run(const std::vector<RunRecord>& runs, const std::string&
                           const std::string& track, int mode) {
   const RunRecord* best = nullptr;
   for (const auto& r : runs)
-    if (!results::is_heldout(r) && r.model == model && r.track == track && r.mode == mode &&
+    if (!r.is_heldout() && r.model == model && r.track == track && r.mode == mode &&
         (!best || r.tuned.rmse_m < best->tuned.rmse_m))
       best = &r;
   return best;
@@ -143,7 +143,7 @@ ReportOutcome write_report(const ReportRequest& req) {
   ReportOutcome out;
   out.experiment = info.name;
   std::vector<RunRecord> own, held;
-  for (const auto& r : runs) (results::is_heldout(r) ? held : own).push_back(r);
+  for (const auto& r : runs) (r.is_heldout() ? held : own).push_back(r);
   out.runs = static_cast<long>(runs.size());
   out.heldout_runs = static_cast<long>(held.size());
 

@@ -38,20 +38,19 @@ std::map<std::string, Track> experiment_tracks(const results::ExperimentInfo& in
   return out;
 }
 
+double run_param(const results::RunRecord& run, const std::string& name) {
+  for (std::size_t i = 0; i < run.param_names.size() && i < run.params.size(); ++i)
+    if (run.param_names[i] == name) return run.params[i];
+  throw Failure(fmt::format("run {}: parameter {} is missing", results::run_key(run), name));
+}
+
 filters::NoiseParams run_noise(const results::RunRecord& run) {
   filters::NoiseModel model;
   if (!filters::parse_noise_model(run.model, &model))
     throw Failure(fmt::format("run {}: unknown model '{}'", results::run_key(run), run.model));
   const ParamSpace space = ParamSpace::for_model(model);
   std::vector<double> physical(space.dim());
-  for (std::size_t i = 0; i < space.dim(); ++i) {
-    const std::string& name = space.params()[i].name;
-    std::size_t j = 0;
-    while (j < run.param_names.size() && run.param_names[j] != name) ++j;
-    if (j == run.param_names.size() || j >= run.params.size())
-      throw Failure(fmt::format("run {}: parameter {} is missing", results::run_key(run), name));
-    physical[i] = run.params[j];
-  }
+  for (std::size_t i = 0; i < space.dim(); ++i) physical[i] = run_param(run, space.params()[i].name);
   filters::NoiseParams noise = space.to_noise(physical);
   std::string why;
   if (!noise.IsValid(&why))

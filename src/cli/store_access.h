@@ -29,6 +29,10 @@ std::unique_ptr<results::Store> open_store_for_reading(const std::filesystem::pa
 std::map<std::string, Track> experiment_tracks(const results::ExperimentInfo& info,
                                                const std::vector<std::string>& extra_files);
 
+// A stored run's physical parameter `name` (e.g. "r1_mm2"). Throws
+// odotune::cli::Failure naming the run when it has no such parameter.
+double run_param(const results::RunRecord& run, const std::string& name);
+
 // The filter noise of a stored run (its model and physical parameters, by
 // name). Throws odotune::cli::Failure naming the run when the model or a
 // parameter is unknown or the values are invalid.

@@ -1,4 +1,5 @@
 #include "diagnose/locate.h"
+#include "diagnose/option_rules.h"
 #include "diagnose/robust_stats.h"
 
 #include <algorithm>
@@ -375,40 +376,25 @@ bool ResidualSeries::IsValid(std::string* why) const {
 }
 
 bool LocateOptions::IsValid(std::string* why) const {
-  const auto pos = [](double v) { return std::isfinite(v) && v > 0; };
-  const auto nonneg = [](double v) { return std::isfinite(v) && v >= 0; };
-  const auto unit = [&](double v) { return nonneg(v) && v <= 1; };
-  struct Rule {
-    bool ok;
-    const char* name;
-    double value;
-    const char* expected;
-  };
-  const Rule rules[] = {
-      {pos(growth_span_s), "growth_span_s", growth_span_s, "> 0"},
+  return check_option_rules({
+      {is_positive(growth_span_s), "growth_span_s", growth_span_s, "> 0"},
       {min_span_samples >= 2, "min_span_samples", static_cast<double>(min_span_samples), ">= 2"},
-      {pos(threshold_sigma), "threshold_sigma", threshold_sigma, "> 0"},
-      {pos(min_sigma_m), "min_sigma_m", min_sigma_m, "> 0"},
-      {pos(min_sigma_rad), "min_sigma_rad", min_sigma_rad, "> 0"},
-      {nonneg(merge_gap_s), "merge_gap_s", merge_gap_s, ">= 0"},
-      {nonneg(min_segment_s), "min_segment_s", min_segment_s, ">= 0"},
+      {is_positive(threshold_sigma), "threshold_sigma", threshold_sigma, "> 0"},
+      {is_positive(min_sigma_m), "min_sigma_m", min_sigma_m, "> 0"},
+      {is_positive(min_sigma_rad), "min_sigma_rad", min_sigma_rad, "> 0"},
+      {is_non_negative(merge_gap_s), "merge_gap_s", merge_gap_s, ">= 0"},
+      {is_non_negative(min_segment_s), "min_segment_s", min_segment_s, ">= 0"},
       {min_segment_samples >= 1, "min_segment_samples", static_cast<double>(min_segment_samples), ">= 1"},
-      {pos(cell_m), "cell_m", cell_m, "> 0"},
+      {is_positive(cell_m), "cell_m", cell_m, "> 0"},
       {max_cells_per_axis >= 1 && max_cells_per_axis <= 2000, "max_cells_per_axis",
        static_cast<double>(max_cells_per_axis), "in [1, 2000]"},
       {min_cell_samples >= 1, "min_cell_samples", static_cast<double>(min_cell_samples), ">= 1"},
-      {unit(cell_min_flagged_fraction), "cell_min_flagged_fraction", cell_min_flagged_fraction, "in [0, 1]"},
-      {nonneg(cell_enrichment), "cell_enrichment", cell_enrichment, ">= 0"},
-      {unit(region_max_cover), "region_max_cover", region_max_cover, "in [0, 1]"},
-      {unit(min_rank_correlation), "min_rank_correlation", min_rank_correlation, "in [0, 1]"},
-      {unit(min_youden_j), "min_youden_j", min_youden_j, "in [0, 1]"},
-  };
-  for (const Rule& r : rules) {
-    if (r.ok) continue;
-    if (why) *why = fmt::format("{} = {} must be {}", r.name, r.value, r.expected);
-    return false;
-  }
-  return true;
+      {is_fraction(cell_min_flagged_fraction), "cell_min_flagged_fraction", cell_min_flagged_fraction, "in [0, 1]"},
+      {is_non_negative(cell_enrichment), "cell_enrichment", cell_enrichment, ">= 0"},
+      {is_fraction(region_max_cover), "region_max_cover", region_max_cover, "in [0, 1]"},
+      {is_fraction(min_rank_correlation), "min_rank_correlation", min_rank_correlation, "in [0, 1]"},
+      {is_fraction(min_youden_j), "min_youden_j", min_youden_j, "in [0, 1]"},
+  }, why);
 }
 
 Location locate(const ResidualSeries& s, double sigma_m, const LocateOptions& o) {

@@ -1,4 +1,5 @@
 #include "diagnose/sensor_checks.h"
+#include "diagnose/option_rules.h"
 #include "diagnose/robust_stats.h"
 
 #include <algorithm>
@@ -521,39 +522,25 @@ OdometryCheck check_odometry(const DiagInput& in, const ReferenceBins& rb, const
 }  // namespace
 
 bool SensorCheckOptions::IsValid(std::string* why) const {
-  const auto pos = [](double v) { return std::isfinite(v) && v > 0; };
-  const auto nonneg = [](double v) { return std::isfinite(v) && v >= 0; };
-  struct Rule {
-    bool ok;
-    const char* name;
-    double value;
-    const char* expected;
-  };
-  const Rule rules[] = {
-      {pos(bin_s), "bin_s", bin_s, "> 0"},
-      {nonneg(aps_min_bin_s), "aps_min_bin_s", aps_min_bin_s, ">= 0"},
-      {pos(huber_k), "huber_k", huber_k, "> 0"},
+  return check_option_rules({
+      {is_positive(bin_s), "bin_s", bin_s, "> 0"},
+      {is_non_negative(aps_min_bin_s), "aps_min_bin_s", aps_min_bin_s, ">= 0"},
+      {is_positive(huber_k), "huber_k", huber_k, "> 0"},
       {max_irls_iterations >= 1 && max_irls_iterations <= 10000, "max_irls_iterations",
        static_cast<double>(max_irls_iterations), "in [1, 10000]"},
       {bootstrap_replicates >= 2 && bootstrap_replicates <= 100000, "bootstrap_replicates",
        static_cast<double>(bootstrap_replicates), "in [2, 100000]"},
-      {pos(bootstrap_block_s), "bootstrap_block_s", bootstrap_block_s, "> 0"},
-      {pos(z_threshold), "z_threshold", z_threshold, "> 0"},
-      {pos(relevance_window_s), "relevance_window_s", relevance_window_s, "> 0"},
-      {nonneg(relevance_factor), "relevance_factor", relevance_factor, ">= 0"},
-      {nonneg(min_drift_rad), "min_drift_rad", min_drift_rad, ">= 0"},
-      {nonneg(min_drift_m), "min_drift_m", min_drift_m, ">= 0"},
-      {nonneg(max_lag_s) && max_lag_s <= 10, "max_lag_s", max_lag_s, "in [0, 10]"},
-      {nonneg(lag_step_s), "lag_step_s", lag_step_s, ">= 0 (0 = auto)"},
+      {is_positive(bootstrap_block_s), "bootstrap_block_s", bootstrap_block_s, "> 0"},
+      {is_positive(z_threshold), "z_threshold", z_threshold, "> 0"},
+      {is_positive(relevance_window_s), "relevance_window_s", relevance_window_s, "> 0"},
+      {is_non_negative(relevance_factor), "relevance_factor", relevance_factor, ">= 0"},
+      {is_non_negative(min_drift_rad), "min_drift_rad", min_drift_rad, ">= 0"},
+      {is_non_negative(min_drift_m), "min_drift_m", min_drift_m, ">= 0"},
+      {is_non_negative(max_lag_s) && max_lag_s <= 10, "max_lag_s", max_lag_s, "in [0, 10]"},
+      {is_non_negative(lag_step_s), "lag_step_s", lag_step_s, ">= 0 (0 = auto)"},
       {!(lag_step_s > 0 && max_lag_s / lag_step_s > 5000), "lag_step_s", lag_step_s,
        ">= max_lag_s / 5000 (at most 10001 lags)"},
-  };
-  for (const Rule& r : rules) {
-    if (r.ok) continue;
-    if (why) *why = fmt::format("{} = {} must be {}", r.name, r.value, r.expected);
-    return false;
-  }
-  return true;
+  }, why);
 }
 
 ReferenceBins reference_bins(const DiagInput& in, const SensorCheckOptions& o, double t_begin_s,

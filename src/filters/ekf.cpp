@@ -47,11 +47,12 @@ Ekf::Ekf(const EkfParams& params)
   if (!params.IsValid(&why)) throw std::invalid_argument("EkfParams: " + why);
 }
 
-void Ekf::predict(WheelTravel u, double abs_yaw_rate_rad_s) {
+StateCov Ekf::predict(WheelTravel u, double abs_yaw_rate_rad_s) {
   const MotionStep step = diff_drive_step(x_, u, wheel_base_m_);
   const StateCov R = process_noise(noise_, u, abs_yaw_rate_rad_s, step.V);
   x_ = step.next;
   P_ = step.F * P_ * step.F.transpose() + R;
+  return R;
 }
 
 void Ekf::update(const Position& z) {

@@ -42,8 +42,9 @@ class Ekf {
  public:
   explicit Ekf(const EkfParams& params);
 
-  // Prediction: x ← f(x, u), P ← F·P·Fᵀ + R(u, |ω_z|).
-  void predict(WheelTravel u, double abs_yaw_rate_rad_s);
+  // Prediction: x ← f(x, u), P ← F·P·Fᵀ + R(u, |ω_z|). Returns the process
+  // noise R it added (for reports such as objectives/process_noise_rate.h).
+  StateCov predict(WheelTravel u, double abs_yaw_rate_rad_s);
   // Correction by a position fix z = (x, y) [m]:
   //   S = H·P·Hᵀ + Q, K = P·Hᵀ·S⁻¹, x ← x + K·(z − H·x), P ← P − K·S·Kᵀ.
   void update(const Position& z);

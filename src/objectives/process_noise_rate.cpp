@@ -5,7 +5,6 @@
 
 #include <fmt/format.h>
 
-#include "filters/diff_drive.h"
 #include "filters/ekf.h"
 #include "objectives/replay.h"
 
@@ -65,19 +64,15 @@ ProcessNoiseRate equivalent_process_noise_rate(const filters::NoiseParams& noise
     out.steps += span.steps - 1;
     out.duration_s += span.t_last_s - span.t_first_s;
 
-    // The replay of replay_ekf, with R_k taken where Ekf::predict takes it.
+    // The replay of replay_ekf, summing the R_k that Ekf::predict adds.
     filters::Ekf ekf(ekf_params_for(in, noise));
     bool first_step = true;
     for (const ReplayRow& row : in.rows) {
       if (row.step >= 0) {
-        const filters::WheelTravel u = in.steps[static_cast<std::size_t>(row.step)];
-        const double abs_w = in.abs_yaw_rate_rad_s[static_cast<std::size_t>(row.step)];
-        if (!first_step) {
-          const filters::MotionStep m = filters::diff_drive_step(ekf.pose(), u, in.wheel_base_m);
-          sum += filters::process_noise(noise, u, abs_w, m.V).diagonal();
-        }
+        const auto k = static_cast<std::size_t>(row.step);
+        const filters::StateCov R = ekf.predict(in.steps[k], in.abs_yaw_rate_rad_s[k]);
+        if (!first_step) sum += R.diagonal();
         first_step = false;
-        ekf.predict(u, abs_w);
       }
       if (row.fix >= 0) ekf.update(in.fixes[static_cast<std::size_t>(row.fix)]);
       if ((row.step >= 0 || row.fix >= 0) && ekf.check() != filters::Divergence::none)

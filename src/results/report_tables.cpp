@@ -63,8 +63,8 @@ std::vector<std::string> report_models(const std::vector<RunRecord>& runs) {
 std::vector<std::string> report_tracks(const std::vector<RunRecord>& runs) {
   std::vector<std::string> out;
   for (const auto& r : runs)
-    if (std::find(out.begin(), out.end(), scored_track(r)) == out.end())
-      out.push_back(scored_track(r));
+    if (std::find(out.begin(), out.end(), r.scored_track()) == out.end())
+      out.push_back(r.scored_track());
   return out;
 }
 
@@ -88,8 +88,8 @@ ImprovementGrid improvement_grid(const std::vector<RunRecord>& runs, const std::
                                  const std::vector<std::string>& tracks) {
   std::vector<std::vector<Mean>> acc(kModes, std::vector<Mean>(tracks.size()));
   for (const auto& r : runs) {
-    if (r.model != model || is_heldout(r) != heldout || r.mode < 1 || r.mode > kModes) continue;
-    const auto it = std::find(tracks.begin(), tracks.end(), scored_track(r));
+    if (r.model != model || r.is_heldout() != heldout || r.mode < 1 || r.mode > kModes) continue;
+    const auto it = std::find(tracks.begin(), tracks.end(), r.scored_track());
     if (it == tracks.end()) continue;
     acc[static_cast<std::size_t>(r.mode - 1)][static_cast<std::size_t>(it - tracks.begin())].add(
         improvement_pct(r, metric));
@@ -113,7 +113,7 @@ RmseTable rmse_table(const std::vector<RunRecord>& runs) {
   // (track, mode) → original mean, per-model tuned means.
   std::map<std::pair<std::string, int>, std::pair<Mean, std::vector<Mean>>> acc;
   for (const auto& r : runs) {
-    if (is_heldout(r)) continue;
+    if (r.is_heldout()) continue;
     auto& cell = acc[{r.track, r.mode}];
     cell.second.resize(t.models.size());
     cell.first.add(r.baseline.rmse_m);
@@ -184,8 +184,8 @@ std::vector<GeneralisationRow> generalisation(const std::vector<RunRecord>& runs
     for (const auto& track : tracks) {
       Mean own, held;
       for (const auto& r : runs) {
-        if (r.model != model || scored_track(r) != track) continue;
-        (is_heldout(r) ? held : own).add(improvement_pct(r, metric));
+        if (r.model != model || r.scored_track() != track) continue;
+        (r.is_heldout() ? held : own).add(improvement_pct(r, metric));
       }
       if (own.n && held.n) out.push_back({model, track, own.value(), held.value(), own.n, held.n});
     }

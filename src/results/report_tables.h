@@ -24,11 +24,6 @@ inline constexpr ReportMetric kReportMetrics[] = {ReportMetric::rmse, ReportMetr
 std::string_view metric_name(ReportMetric m);  // "RMSE", "MAE", "MAXE"
 double improvement_pct(const RunRecord& r, ReportMetric m);
 
-inline bool is_heldout(const RunRecord& r) { return !r.heldout_track.empty(); }
-// Track a run is scored on: its own track, or the held-out one.
-inline const std::string& scored_track(const RunRecord& r) {
-  return is_heldout(r) ? r.heldout_track : r.track;
-}
 
 // Models present, in the order rq, alpha, gyro, then any other by name.
 std::vector<std::string> report_models(const std::vector<RunRecord>& runs);

@@ -36,6 +36,11 @@ struct RunRecord {
   std::string termination;
   std::vector<ConvergencePoint> convergence;
 
+  // A leave-one-track-out run (tuned on the other tracks, scored on heldout_track).
+  bool is_heldout() const { return !heldout_track.empty(); }
+  // The track the run's scores are for: its own track, or the held-out one.
+  const std::string& scored_track() const { return is_heldout() ? heldout_track : track; }
+
   // Improvement of tuned over baseline in % (positive = better).
   double improvement_rmse_pct() const { return pct(baseline.rmse_m, tuned.rmse_m); }
   double improvement_mae_pct() const { return pct(baseline.mae_m, tuned.mae_m); }
