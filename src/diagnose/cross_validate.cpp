@@ -1,0 +1,299 @@
+#include "diagnose/cross_validate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <stdexcept>
+#include <utility>
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+
+#include "diagnose/paired_test.h"
+
+namespace odotune::diagnose {
+
+namespace {
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInformativeDelta2 = 4.0;  // see compare()
+
+// Local quadratic least-squares fit of (t, v) over [lo, hi) evaluated at tc,
+// and its noise factor sqrt(e0' (X'X)^-1 e0) for white noise; the value at
+// `self` and factor 1 with fewer than 5 samples.
+std::pair<double, double> local_quadratic(const std::vector<double>& t,
+                                          const std::vector<double>& v, std::size_t lo,
+                                          std::size_t hi, std::size_t self) {
+  if (hi - lo < 5) return {v[self], 1.0};
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (std::size_t j = lo; j < hi; ++j) {
+    const double x = t[j] - t[self];
+    const Eigen::Vector3d phi(1.0, x, x * x);
+    a += phi * phi.transpose();
+    b += phi * (v[j] - v[self]);
+  }
+  const Eigen::Matrix3d inv = a.inverse();
+  const double c = (inv * b)(0);
+  if (!std::isfinite(c) || !(inv(0, 0) > 0.0)) return {v[self], 1.0};
+  return {v[self] + c, std::sqrt(inv(0, 0))};
+}
+
+}  // namespace
+
+int denoised_reference(const DiagInput& in, double rate_hz, double half_s, double heading_half_s,
+                       const ModelOptions& model, DiagInput& out, double& correlated) {
+  correlated = 1.0;
+  if (!(rate_hz > 0.0) || in.ref_t_s.size() < 3) return 1;
+  const auto& t = in.ref_t_s;
+  std::vector<double> dt;
+  for (std::size_t i = 1; i < t.size(); ++i) dt.push_back(t[i] - t[i - 1]);
+  std::nth_element(dt.begin(), dt.begin() + static_cast<long>(dt.size() / 2), dt.end());
+  const double period = dt[dt.size() / 2];
+  const int stride = static_cast<int>(std::floor(1.0 / period / rate_hz + 1e-9));
+  if (stride <= 1) return 1;
+  const bool heading = in.has_ref_heading();
+  correlated =
+      std::max(1.0, 2.0 * std::max(half_s, heading ? heading_half_s : 0.0) / (stride * period));
+  // Heading residual against a trend that turns with the robot: the
+  // integrated gyro (on time whatever the odometry does), else the nominal
+  // odometry heading (S_r - S_l)/D. Linear interpolation at the reference times.
+  std::vector<double> dth;
+  if (heading) {
+    std::vector<double> tt, th;
+    if (in.gyro_t_s.size() >= 2) {
+      tt = in.gyro_t_s;
+      th.assign(tt.size(), 0.0);
+      for (std::size_t i = 1; i < tt.size(); ++i)
+        th[i] =
+            th[i - 1] + 0.5 * (tt[i] - tt[i - 1]) * (in.gyro_z_radps[i] + in.gyro_z_radps[i - 1]);
+    } else {
+      const EffectModel nominal(in, EffectSet(), model);
+      const OdoSeries& d = nominal.series();
+      tt = d.t_s;
+      for (std::size_t i = 0; i < tt.size(); ++i)
+        th.push_back((d.s_r_m[i] - d.s_l_m[i]) / d.wheel_base_m);
+    }
+    std::size_t j = 0;
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      while (j + 2 < tt.size() && tt[j + 1] <= t[i]) ++j;
+      const double f = std::clamp((t[i] - tt[j]) / (tt[j + 1] - tt[j]), 0.0, 1.0);
+      dth.push_back(in.ref_theta_rad[i] - (th[j] + f * (th[j + 1] - th[j])));
+    }
+  }
+  out = in;
+  out.ref_t_s.clear(), out.ref_x_m.clear(), out.ref_y_m.clear(), out.ref_theta_rad.clear();
+  std::vector<double> fp, fh;
+  std::size_t lo = 0, hi = 0, hlo = 0, hhi = 0;
+  for (std::size_t k = 0; k < t.size(); k += static_cast<std::size_t>(stride)) {
+    while (lo < t.size() && t[lo] < t[k] - half_s) ++lo;
+    while (hi < t.size() && t[hi] <= t[k] + half_s) ++hi;
+    const auto x = local_quadratic(t, in.ref_x_m, lo, hi, k);
+    out.ref_t_s.push_back(t[k]);
+    out.ref_x_m.push_back(x.first);
+    out.ref_y_m.push_back(local_quadratic(t, in.ref_y_m, lo, hi, k).first);
+    fp.push_back(x.second);
+    if (!heading) continue;
+    while (hlo < t.size() && t[hlo] < t[k] - heading_half_s) ++hlo;
+    while (hhi < t.size() && t[hhi] <= t[k] + heading_half_s) ++hhi;
+    const auto h = local_quadratic(t, dth, hlo, hhi, k);
+    out.ref_theta_rad.push_back(in.ref_theta_rad[k] - dth[k] + h.first);
+    fh.push_back(h.second);
+  }
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  out.ref_sigma_m = std::max(in.ref_sigma_m * median(fp), 1e-3);
+  if (heading) out.ref_sigma_rad = std::max(in.ref_sigma_rad * median(fh), 1e-3);
+  return stride;
+}
+
+EffectSet start_from(const EffectSet& structure, const EffectSet& warm) {
+  std::vector<double> v = pack(structure);
+  const auto layout = param_layout(structure);
+  for (std::size_t j = 0; j < layout.size(); ++j)
+    if (layout[j].fitted && warm.on(layout[j].effect))
+      v[j] = warm.params(layout[j].effect)[static_cast<std::size_t>(layout[j].index)];
+  return unpack(structure, v);
+}
+
+CrossValidator::CrossValidator(const DiagInput& in, const FitOptions& fit, int folds,
+                               double correlated_samples)
+    : in_(&in), fit_(fit), corr_(correlated_samples) {
+  if (!(corr_ >= 1.0 && std::isfinite(corr_)))
+    throw std::invalid_argument(
+        fmt::format("correlated_samples = {}; expected >= 1", correlated_samples));
+  std::string why;
+  if (!fit.IsValid(&why)) throw std::invalid_argument("fit options: " + why);
+  if (folds < 2) throw std::invalid_argument(fmt::format("folds = {}; expected >= 2", folds));
+  windows_ = make_windows(in, fit.window_s);
+  const int n = static_cast<int>(windows_.size());
+  const int k = std::min(folds, n);
+  train_.resize(static_cast<std::size_t>(k));
+  test_.resize(static_cast<std::size_t>(k));
+  for (int w = 0; w < n; ++w) {
+    const auto f = static_cast<int>(static_cast<long>(w) * k / n);
+    for (int g = 0; g < k; ++g) (g == f ? test_ : train_)[static_cast<std::size_t>(g)].push_back(w);
+  }
+  heading_ = in.has_ref_heading() && fit.use_heading;
+  comps_ = heading_ ? 3 : 2;
+  ism_ = 1.0 / in.ref_sigma_m;
+  ish_ = heading_ ? 1.0 / in.ref_sigma_rad : 0.0;
+  for (const Window& w : windows_) n_samples_ += w.ref_end - w.ref_begin;
+}
+
+FitSummary CrossValidator::fit(const EffectSet& start, const std::vector<int>& train,
+                               int max_iterations) {
+  FitOptions o = fit_;
+  o.max_iterations = max_iterations;
+  ++fits_;
+  return fit_effects(*in_, start, train, {}, o);
+}
+
+SamplePred CrossValidator::empty_pred() const {
+  const std::size_t n = in_->ref_t_s.size();
+  return {std::vector<double>(n, kNaN), std::vector<double>(n, kNaN), std::vector<double>(n, kNaN)};
+}
+
+void CrossValidator::predict(const EffectSet& set, const std::vector<int>& which, SamplePred& p) {
+  std::string key;
+  for (int e = 0; e < kNumEffects; ++e) key += set.on(static_cast<Effect>(e)) ? '1' : '0';
+  auto& model = models_[key];
+  if (!model) model = std::make_unique<EffectModel>(*in_, set, fit_.model);
+  const ReplayResult r = replay(*model, pack(set), *in_, windows_, which);
+  for (int wi : which) {
+    const Window& w = windows_[static_cast<std::size_t>(wi)];
+    for (std::size_t g = w.ref_begin; g < w.ref_end; ++g)
+      p.x_m[g] = r.pred_x_m[g], p.y_m[g] = r.pred_y_m[g], p.theta_rad[g] = r.pred_theta_rad[g];
+  }
+}
+
+void CrossValidator::finish(SetEval& e) const {
+  const DiagInput& in = *in_;
+  e.window_sse.assign(windows_.size(), 0.0);
+  double sp = 0.0, sh = 0.0, all = 0.0;
+  for (std::size_t w = 0; w < windows_.size(); ++w)
+    for (std::size_t g = windows_[w].ref_begin; g < windows_[w].ref_end; ++g) {
+      const double dx = e.pred.x_m[g] - in.ref_x_m[g], dy = e.pred.y_m[g] - in.ref_y_m[g];
+      const double dh = heading_ ? e.pred.theta_rad[g] - in.ref_theta_rad[g] : 0.0;
+      e.window_sse[w] += (dx * dx + dy * dy) * ism_ * ism_ + dh * dh * ish_ * ish_;
+      sp += dx * dx + dy * dy, sh += dh * dh;
+    }
+  for (double s : e.window_sse) all += s;
+  const auto n = static_cast<double>(n_samples_);
+  e.score = all / n;
+  e.pos_rmse_m = std::sqrt(sp / n);
+  e.heading_rmse_rad = heading_ ? std::sqrt(sh / n) : kNaN;
+  e.ok = std::isfinite(e.score);
+  if (!e.ok) e.error = "non-finite prediction";
+}
+
+SetEval CrossValidator::cross_validate(const EffectSet& structure,
+                                       const std::vector<EffectSet>& warm, int max_iterations) {
+  SetEval e;
+  e.pred = empty_pred();
+  e.folds.resize(test_.size());
+  try {
+    for (std::size_t f = 0; f < test_.size(); ++f) {
+      if (structure.empty()) {
+        e.folds[f] = structure;
+      } else {
+        const EffectSet start =
+            warm.size() == test_.size() ? start_from(structure, warm[f]) : structure;
+        e.folds[f] = fit(start, train_[f], max_iterations).effects;
+      }
+      predict(e.folds[f], test_[f], e.pred);
+    }
+  } catch (const std::exception& ex) {
+    e.error = ex.what();
+    return e;
+  }
+  finish(e);
+  return e;
+}
+
+SetEval CrossValidator::fit_all(const EffectSet& structure, const EffectSet& warm,
+                                int max_iterations) {
+  SetEval e;
+  e.pred = empty_pred();
+  e.cost = kNaN;
+  std::vector<int> all(windows_.size());
+  for (std::size_t w = 0; w < all.size(); ++w) all[w] = static_cast<int>(w);
+  try {
+    e.fitted = structure;
+    if (!structure.empty()) {
+      const FitSummary s = fit(start_from(structure, warm), {}, max_iterations);
+      e.fitted = s.effects;
+      e.cost = s.final_cost;
+    }
+    predict(e.fitted, all, e.pred);
+  } catch (const std::exception& ex) {
+    e.error = ex.what();
+    return e;
+  }
+  finish(e);
+  int p = (structure.on(Effect::radius_step) ? 1 : 0) + (structure.on(Effect::slip_zone) ? 4 : 0) +
+          (in_->has_ref_heading() ? 0 : 3 * static_cast<int>(all.size()));
+  for (const ParamSlot& s : param_layout(structure)) p += s.fitted ? 1 : 0;
+  const auto n = static_cast<double>(n_samples_);
+  e.bic = n * std::log(std::max(e.score, 1e-300)) + static_cast<double>(p) * std::log(n);
+  return e;
+}
+
+SetEval CrossValidator::own_noop(const SetEval& cv, Effect e) {
+  SetEval out;
+  out.pred = empty_pred();
+  try {
+    for (std::size_t f = 0; f < test_.size() && f < cv.folds.size(); ++f) {
+      std::vector<double> v = pack(cv.folds[f]);
+      const auto layout = param_layout(cv.folds[f]);
+      for (std::size_t j = 0; j < layout.size(); ++j)
+        if (layout[j].effect == e && layout[j].fitted) v[j] = layout[j].noop;
+      predict(unpack(cv.folds[f], v), test_[f], out.pred);
+    }
+  } catch (const std::exception& ex) {
+    out.error = ex.what();
+    return out;
+  }
+  finish(out);
+  return out;
+}
+
+PairedComparison CrossValidator::compare(const SetEval& ref, const SetEval& alt,
+                                         double alpha) const {
+  PairedComparison out;
+  out.gain = ref.score - alt.score;
+  out.rel = out.gain / ref.score;
+  std::vector<double> d, z, lr;
+  double zsum = 0.0;
+  for (std::size_t w = 0; w < windows_.size(); ++w) {
+    const Window& win = windows_[w];
+    double delta2 = 0.0;
+    for (std::size_t g = win.ref_begin; g < win.ref_end; ++g) {
+      const double dx = alt.pred.x_m[g] - ref.pred.x_m[g], dy = alt.pred.y_m[g] - ref.pred.y_m[g];
+      const double dh = heading_ ? alt.pred.theta_rad[g] - ref.pred.theta_rad[g] : 0.0;
+      delta2 += (dx * dx + dy * dy) * ism_ * ism_ + dh * dh * ish_ * ish_;
+    }
+    if (!(delta2 >= kInformativeDelta2 * corr_)) continue;
+    const auto n = static_cast<double>(win.ref_end - win.ref_begin);
+    const double dw = ref.window_sse[w] - alt.window_sse[w];
+    d.push_back(dw);
+    ++out.changed;
+    if (dw > 0.0) ++out.improved;
+    const double s2 = std::max(1.0, alt.window_sse[w] / (n * comps_));
+    z.push_back(dw / (2.0 * std::sqrt(s2 * corr_ * delta2)));
+    lr.push_back(
+        std::log(std::max(ref.window_sse[w], 1e-300) / std::max(alt.window_sse[w], 1e-300)));
+    zsum += z.back();
+  }
+  out.p_rank = wilcoxon_greater(d);
+  out.p_t = std::min(t_test_greater(z), t_test_greater(lr));  // NaN-safe: min(NaN, NaN) = NaN
+  out.p_param = out.changed >= 2 && out.improved == out.changed
+                    ? normal_upper_tail(zsum / std::sqrt(static_cast<double>(out.changed)))
+                    : kNaN;
+  out.significant = out.p_rank < alpha || out.p_t < 0.5 * alpha || out.p_param < alpha;
+  return out;
+}
+
+}  // namespace odotune::diagnose

@@ -1,0 +1,156 @@
+// Time-block cross-validation of effect sets, the machinery of the model
+// selection (select.h; docs/diagnosis-design.md step 7).
+//
+// Windows: make_windows(in, fit.window_s). Folds: K = min(folds, #windows)
+// contiguous blocks of windows (window w in fold floor(w*K/#windows)).
+//
+// Errors are NORMALISED: per reference sample
+//   (dx^2 + dy^2)/sigma_m^2 (+ dtheta^2/sigma_rad^2 with a reference heading
+//   and fit.use_heading), sigma = DiagInput::ref_sigma_*,
+// so reference noise alone scores about 2 (3 with heading) per sample.
+//
+// Fits are fit_effects() calls (counted in fits()); replays reuse one
+// EffectModel per combination of active effects (building a model costs far
+// more than replaying it, and a model replays any parameter values).
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "diagnose/diag_input.h"
+#include "diagnose/effect_model.h"
+#include "diagnose/fit.h"
+#include "diagnose/window_replay.h"
+
+namespace odotune::diagnose {
+
+// Predictions per reference sample (NaN where not predicted).
+struct SamplePred {
+  std::vector<double> x_m, y_m, theta_rad;
+};
+
+// An effect set evaluated on every window: held-out predictions
+// (cross_validate) or in-sample ones (fit_all).
+struct SetEval {
+  bool ok = false;
+  std::string error;                 // why not ok (a fit threw, non-finite errors)
+  SamplePred pred;
+  std::vector<double> window_sse;    // normalised SSE per window
+  double score = 0.0;                // pooled normalised MSE per sample
+  double pos_rmse_m = 0.0, heading_rmse_rad = 0.0;  // pooled (heading NaN without)
+  std::vector<EffectSet> folds;      // cross_validate: the fitted set of each fold
+  EffectSet fitted;                  // fit_all: the fitted set
+  double cost = 0.0;                 // fit_all: fit_effects' final cost (NaN for the empty set)
+  double bic = 0.0;                  // fit_all (see fit_all)
+};
+
+// Paired comparison of two evaluations over the windows (see compare()).
+struct PairedComparison {
+  double rel = 0.0, gain = 0.0;      // (ref - alt)/ref and ref - alt of the pooled scores
+  int changed = 0, improved = 0;     // informative windows, and those alt improved
+  double p_rank = 1.0;               // Wilcoxon signed-rank, one-sided
+  double p_t = 0.0;                  // min of the t-tests on z and l (NaN with < 3 windows)
+  double p_param = 0.0;              // Stouffer (NaN unless every informative window improved)
+  bool significant = false;
+};
+
+// A thinned, denoised copy of a reference for cross-validation: every
+// stride-th reference sample (stride = floor(reference rate / rate_hz);
+// returns 1 and leaves `out` untouched when that is 1, rate_hz is 0 or the
+// reference has fewer than 3 samples), each kept position replaced by a
+// local quadratic least-squares fit of the reference over +-half_s (its bias
+// at a step change of acceleration a is at most ~0.011 a h^2: 0.3 mm for
+// 0.5 m/s^2 and h = 0.25 s), each kept heading by a trend that turns with
+// the robot (the integrated gyro; without a gyro the nominal odometry heading
+// (S_r - S_l)/D of `model`) plus a local quadratic fit of (reference -
+// trend) over +-heading_half_s (the difference is smooth where the turns are
+// not: smoothing the heading itself over 1 s would err by up to
+// 0.011 alpha h^2 = 25 mrad at a 2.5 rad/s^2 turn-rate ramp; the odometry
+// trend is itself late under time_offset, the gyro is not), and the
+// reference sigmas scaled by the median noise factor sqrt(e0'(X'X)^-1 e0) of
+// those fits (floored like build_diag_input's: 1 mm, 1 mrad). Returns the
+// stride; `correlated` = kept samples per (the longer) smoothing span, >= 1:
+// the correlated_samples to give a CrossValidator on `out`.
+int denoised_reference(const DiagInput& in, double rate_hz, double half_s, double heading_half_s,
+                       const ModelOptions& model, DiagInput& out, double& correlated);
+
+// `structure` with the fitted parameters of the effects `warm` has on taken
+// from `warm` (discrete parameters and the other effects from `structure`).
+EffectSet start_from(const EffectSet& structure, const EffectSet& warm);
+
+class CrossValidator {
+ public:
+  // `in` must outlive the validator. Throws std::invalid_argument for
+  // invalid fit options, folds < 2, or an input make_windows rejects.
+  // correlated_samples (>= 1): how many consecutive reference samples share
+  // their noise (a smoothed reference); the white-noise law of compare()
+  // counts that many samples as one.
+  CrossValidator(const DiagInput& in, const FitOptions& fit, int folds,
+                 double correlated_samples = 1.0);
+
+  const DiagInput& input() const { return *in_; }
+  const std::vector<Window>& windows() const { return windows_; }
+  int num_folds() const { return static_cast<int>(test_.size()); }
+  std::size_t num_samples() const { return n_samples_; }
+  int fits() const { return fits_; }
+
+  // fit_effects on `train` (empty = all windows) with max_iterations.
+  FitSummary fit(const EffectSet& start, const std::vector<int>& train, int max_iterations);
+
+  // Each fold fitted on the other folds (warm-started from warm[f], the same
+  // fold's fit of a smaller set, when warm is not empty; the empty set is
+  // replayed as it is) and replayed on its own windows. Fit errors are
+  // caught: ok = false with the message.
+  SetEval cross_validate(const EffectSet& structure, const std::vector<EffectSet>& warm,
+                         int max_iterations);
+
+  // Fitted on all windows from start_from(structure, warm), replayed on all.
+  // bic = n ln(RSS/n) + p ln(n): n scored samples, RSS the normalised SSE,
+  // p = fitted parameters + discrete ones (radius_step.t 1, slip_zone box 4)
+  // + 3 per window without a reference heading (free anchors).
+  SetEval fit_all(const EffectSet& structure, const EffectSet& warm, int max_iterations);
+
+  // `cv` replayed with effect e's fitted parameters at their no-op values in
+  // every fold (no refit): what the effect itself adds to its set.
+  SetEval own_noop(const SetEval& cv, Effect e);
+
+  // `alt` against `ref`, window by window. A window is informative when alt
+  // moves its normalised predictions by sum |delta|^2 >= 4 L (below, the
+  // window's gain cannot stand out of the reference noise; L =
+  // correlated_samples). Over informative windows: d_w = SSE_ref(w) -
+  // SSE_alt(w), z_w = d_w / (2 s_w sqrt(L sum |delta|^2)) with s_w^2 =
+  // max(1, alt's mean squared normalised error per component) (the
+  // white-noise law of d_w, inflated when the residual exceeds the noise),
+  // and l_w = ln(SSE_ref(w)/SSE_alt(w)). significant when any of
+  //  - the Wilcoxon signed-rank p on d < alpha (window signs and ranks; it
+  //    cannot go below 2^-n with n windows),
+  //  - the smaller of the t-test p's on z and on l < alpha/2 (consistent
+  //    standardised gains, or consistent relative gains when windows differ
+  //    in how much the effect shows; Bonferroni over the two),
+  //  - every informative window improved (at least 2) and Stouffer's p of z
+  //    < alpha (an effect acting in a few windows only).
+  // The three address different regimes; their union has a nominal level of
+  // at most 3 alpha (select.h adds practical-size and BIC conditions).
+  PairedComparison compare(const SetEval& ref, const SetEval& alt, double alpha) const;
+
+ private:
+  void predict(const EffectSet& set, const std::vector<int>& which, SamplePred& p);
+  SamplePred empty_pred() const;
+  void finish(SetEval& e) const;
+
+  const DiagInput* in_;
+  FitOptions fit_;
+  double corr_ = 1.0;
+  std::vector<Window> windows_;
+  std::vector<std::vector<int>> train_, test_;  // per fold
+  bool heading_ = false;
+  double ism_ = 1.0, ish_ = 0.0;  // inverse reference sigmas
+  int comps_ = 2;                 // error components per sample
+  std::size_t n_samples_ = 0;
+  int fits_ = 0;
+  std::map<std::string, std::unique_ptr<EffectModel>> models_;
+};
+
+}  // namespace odotune::diagnose

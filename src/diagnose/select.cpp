@@ -1,0 +1,547 @@
+#include "diagnose/select.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <map>
+#include <stdexcept>
+#include <utility>
+
+#include <fmt/format.h>
+
+#include "diagnose/cross_validate.h"
+#include "diagnose/window_replay.h"
+#include "diagnose/zone_boxes.h"
+
+namespace odotune::diagnose {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// A found box whose fitted slips both stay below this is not refined (a box
+// from noise is not worth the fits).
+constexpr double kMinZoneSlip = 0.01;
+
+double since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+EffectSet with_effect(const EffectSet& s, Effect e) {
+  EffectSet out = s;
+  out.enable(e);
+  return out;
+}
+
+// Rules (a)-(c) of select.h for `alt` to beat `ref`; "" when they hold.
+std::string verdict(const PairedComparison& p, double delta_bic, const SelectOptions& o) {
+  if (!(p.rel >= o.min_rel_improvement))
+    return fmt::format("relative CV improvement {:.2f} % < {:.2f} %", 100.0 * p.rel,
+                       100.0 * o.min_rel_improvement);
+  if (!(p.gain >= o.min_gain))
+    return fmt::format("CV gain {:.3g} < {:.3g} (normalised units)", p.gain, o.min_gain);
+  if (!p.significant)
+    return fmt::format(
+        "not significant: Wilcoxon p = {:.3g}, t p = {:.3g} (level halved), Stouffer "
+        "p = {:.3g} ({} of {} informative windows improved), level {:.3g}",
+        p.p_rank, p.p_t, p.p_param, p.improved, p.changed, o.alpha);
+  if (!(delta_bic < 0.0)) return fmt::format("BIC did not decrease (change {:.4g})", delta_bic);
+  return "";
+}
+
+void fill(SearchRecord& r, const SetEval& e) {
+  r.cv_score = e.ok ? e.score : kNaN;
+  r.cv_pos_rmse_m = e.ok ? e.pos_rmse_m : kNaN;
+  r.cv_heading_rmse_rad = e.ok ? e.heading_rmse_rad : kNaN;
+}
+void fill(SearchRecord& r, const PairedComparison& p) {
+  r.rel_improvement = p.rel, r.gain = p.gain;
+  r.windows_changed = p.changed, r.windows_improved = p.improved;
+  r.p_rank = p.p_rank, r.p_t = p.p_t, r.p_param = p.p_param, r.significant = p.significant;
+}
+
+// radius_step.t by profile search of the all-window fit cost (select.h).
+double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet& s_fitted,
+                         double prev_t, const SelectOptions& o) {
+  const double coarse = o.step_coarse_s > 0.0 ? o.step_coarse_s : 0.5 * o.fit.window_s;
+  const double lo = cv.windows().front().t_end_s;  // earlier, a step is a radius_error
+  const double hi = cv.windows().back().t_end_s - 0.5 * coarse;
+  if (!(hi > lo)) return kNaN;
+  std::map<double, std::pair<double, EffectSet>> seen;  // t -> (cost, fitted)
+  EffectSet warm = s_fitted;
+  auto cost = [&](double t) {
+    t = std::clamp(t, lo, hi);
+    if (seen.count(t)) return;
+    EffectSet st = with_effect(s, Effect::radius_step);
+    st.set(Effect::radius_step, "t", t);
+    double v = kInf;
+    try {
+      const FitSummary f = cv.fit(start_from(st, warm), {}, o.profile_max_iterations);
+      if (std::isfinite(f.final_cost)) v = f.final_cost, warm = f.effects;
+    } catch (const std::exception&) {
+    }
+    seen[t] = {v, warm};
+  };
+  auto best_t = [&]() {
+    double bt = kNaN, bc = kInf;
+    for (const auto& [t, v] : seen)
+      if (v.first < bc) bc = v.first, bt = t;
+    return bt;
+  };
+  if (std::isfinite(prev_t)) {
+    cost(prev_t);
+  } else {
+    for (double t = lo; t <= hi + 1e-9; t += coarse) cost(t);
+  }
+  const double refine[2][2] = {{coarse / 5.0, std::isfinite(prev_t) ? 0.4 * coarse : 0.6 * coarse},
+                               {o.step_fine_s, coarse / 5.0}};  // {step, reach}
+  for (const auto& r : refine) {
+    const double centre = best_t();
+    if (!std::isfinite(centre)) return kNaN;
+    warm = seen[centre].second;
+    const int k = static_cast<int>(std::floor(r[1] / r[0] + 1e-9));
+    for (int i = -k; i <= k; ++i) cost(centre + i * r[0]);
+  }
+  return best_t();
+}
+
+// The slip_zone structure with the best box (select.h), or an empty set.
+EffectSet choose_zone(CrossValidator& cv, const EffectSet& s, const SetEval& cur_full,
+                      const SelectOptions& o) {
+  std::vector<ZoneBox> boxes =
+      zone_candidates(cv.input(), cv.windows(), cur_full.pred.x_m, cur_full.pred.y_m,
+                      cur_full.pred.theta_rad, o.zone_cell_m, o.zone_max_boxes, o.zone_min_score);
+  boxes.insert(boxes.end(), o.zone_boxes.begin(), o.zone_boxes.end());
+  EffectSet warm = cur_full.fitted;
+  auto try_box = [&](const ZoneBox& b, double& cost, EffectSet& fitted) {
+    EffectSet st = with_effect(s, Effect::slip_zone);
+    st.set(Effect::slip_zone, "x0", b.x0_m).set(Effect::slip_zone, "x1", b.x1_m);
+    st.set(Effect::slip_zone, "y0", b.y0_m).set(Effect::slip_zone, "y1", b.y1_m);
+    cost = kInf;
+    try {
+      const FitSummary f = cv.fit(start_from(st, warm), {}, o.profile_max_iterations);
+      if (std::isfinite(f.final_cost)) cost = f.final_cost, fitted = f.effects;
+    } catch (const std::exception&) {
+    }
+    return st;
+  };
+  EffectSet best, best_fit;
+  ZoneBox bb;
+  double best_cost = kInf;
+  for (const ZoneBox& b : boxes) {
+    double cost;
+    EffectSet fitted;
+    const EffectSet st = try_box(b, cost, fitted);
+    if (cost < best_cost) best_cost = cost, best = st, best_fit = fitted, bb = b;
+  }
+  if (best.empty() || std::max(best_fit.get(Effect::slip_zone, "s_l"),
+                               best_fit.get(Effect::slip_zone, "s_r")) < kMinZoneSlip)
+    return best;
+  warm = best_fit;
+  for (double step : {0.5 * o.zone_cell_m, 0.25 * o.zone_cell_m})
+    for (int round = 0, moved = 1; moved && round < 4; ++round) {
+      moved = 0;
+      for (int edge = 0; edge < 4; ++edge)
+        for (double sign : {-1.0, 1.0}) {
+          ZoneBox q = bb;
+          double* v[4] = {&q.x0_m, &q.x1_m, &q.y0_m, &q.y1_m};
+          *v[edge] += sign * step;
+          if (!(q.x0_m < q.x1_m && q.y0_m < q.y1_m)) continue;
+          double cost;
+          EffectSet fitted;
+          const EffectSet st = try_box(q, cost, fitted);
+          if (cost < best_cost * (1.0 - 1e-6))
+            best_cost = cost, best = st, bb = q, warm = fitted, moved = 1;
+        }
+    }
+  return best;
+}
+
+std::vector<Effect> candidate_list(const DiagInput& in, const SelectOptions& o) {
+  std::vector<Effect> list = o.candidates;
+  if (list.empty())
+    list = {Effect::radius_error, Effect::wheel_base_error, Effect::radius_step,
+            Effect::speed_radius, Effect::lateral_skid,     Effect::longitudinal_slip,
+            Effect::slip_zone,    Effect::time_offset,      Effect::actuator_lag};
+  const bool commands = in.odometry == OdometryKind::body_velocity ||
+                        (!in.cmd_v_mps.empty() && in.cmd_v_mps.size() == in.odo_t_s.size());
+  std::erase_if(list, [&](Effect e) { return e == Effect::actuator_lag && !commands; });
+  return list;
+}
+
+// Normalised SSE of a FitSummary's window scores (before or after).
+double summary_sse(const SetScore& s, const std::vector<Window>& w, bool heading, double ism,
+                   double ish, bool after) {
+  double sse = 0.0;
+  for (const WindowScore& ws : s.windows) {
+    const Window& win = w[static_cast<std::size_t>(ws.window)];
+    const auto n = static_cast<double>(win.ref_end - win.ref_begin);
+    const double p = after ? ws.after_pos_rmse_m : ws.before_pos_rmse_m;
+    const double h = after ? ws.after_heading_rmse_rad : ws.before_heading_rmse_rad;
+    sse += n * (p * p * ism * ism + (heading ? h * h * ish * ish : 0.0));
+  }
+  return sse;
+}
+
+// State of the search.
+struct Search {
+  CrossValidator& cv;
+  const SelectOptions& o;
+  Selection& sel;
+  EffectSet s;                 // selected structure (no-op fitted values, discrete set)
+  std::vector<Effect> chosen;  // in the order accepted
+  SetEval cur_cv, cur_full;    // of s
+  double step_t = kNaN;        // last radius_step.t found
+};
+
+// One forward step; true when a candidate was accepted.
+bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
+  struct Cand {
+    Effect e;
+    EffectSet st;
+    SetEval cv;
+    SearchRecord rec;
+  };
+  std::vector<Cand> tried;
+  for (Effect e : cands) {
+    if (std::count(z.chosen.begin(), z.chosen.end(), e)) continue;
+    const auto t0 = Clock::now();
+    Cand cd{e, with_effect(z.s, e), {}, {}};
+    cd.rec.step = step, cd.rec.phase = "forward", cd.rec.candidate = effect_name(e);
+    cd.rec.set = cd.st.to_string();
+    if (e == Effect::radius_step) {
+      z.step_t = profile_step_time(z.cv, z.s, z.cur_full.fitted, z.step_t, z.o);
+      if (std::isfinite(z.step_t))
+        cd.st.set(Effect::radius_step, "t", z.step_t);
+      else
+        cd.rec.reason = "no step time to try (track too short)";
+    } else if (e == Effect::slip_zone) {
+      cd.st = choose_zone(z.cv, z.s, z.cur_full, z.o);
+      if (cd.st.empty()) cd.rec.reason = "no candidate box";
+    }
+    if (e == Effect::radius_step || e == Effect::slip_zone) z.sel.timing.discrete_s += since(t0);
+    if (cd.rec.reason.empty()) {
+      cd.rec.set = cd.st.to_string();
+      cd.cv = z.cv.cross_validate(cd.st, z.cur_cv.folds, z.o.cv_max_iterations);
+      if (cd.cv.ok)
+        fill(cd.rec, z.cv.compare(z.cur_cv, cd.cv, z.o.alpha));
+      else
+        cd.rec.reason = "fit failed: " + cd.cv.error;
+    }
+    fill(cd.rec, cd.cv);
+    cd.rec.time_s = since(t0);
+    tried.push_back(std::move(cd));
+  }
+  Cand* best = nullptr;
+  for (Cand& cd : tried)
+    if (cd.cv.ok && (!best || cd.cv.score < best->cv.score)) best = &cd;
+  bool accepted = false;
+  if (best) {
+    for (Cand& cd : tried)
+      if (cd.cv.ok && &cd != best)
+        cd.rec.reason = fmt::format("not the best of step {} (CV {:.4g} vs {:.4g})", step,
+                                    cd.cv.score, best->cv.score);
+    const auto t0 = Clock::now();
+    SetEval full = z.cv.fit_all(best->st, z.cur_full.fitted, z.o.cv_max_iterations);
+    best->rec.bic = full.ok ? full.bic : kNaN;
+    best->rec.delta_bic = full.ok ? full.bic - z.cur_full.bic : kNaN;
+    std::string no =
+        full.ok ? verdict(z.cv.compare(z.cur_cv, best->cv, z.o.alpha), best->rec.delta_bic, z.o)
+                : "fit on all windows failed: " + full.error;
+    if (no.empty()) {  // the new effect itself must matter (actuator_lag's no-op is another source)
+      const SetEval own = z.cv.own_noop(best->cv, best->e);
+      const std::string why =
+          own.ok ? verdict(z.cv.compare(own, best->cv, z.o.alpha), -1.0, z.o) : own.error;
+      if (!why.empty()) no = "its own parameters at their no-op values do as well: " + why;
+    }
+    best->rec.time_s += since(t0);
+    if (no.empty()) {
+      accepted = best->rec.accepted = true;
+      best->rec.reason = "best candidate; improves CV significantly and BIC agrees";
+      // Confounded alternatives: candidates the winner does not beat by (a)-(b).
+      for (Cand& cd : tried)
+        if (cd.cv.ok && &cd != best &&
+            !verdict(z.cv.compare(cd.cv, best->cv, z.o.alpha), -1.0, z.o).empty())
+          best->rec.rivals.push_back(std::string(effect_name(cd.e)));
+      z.s = best->st;
+      z.chosen.push_back(best->e);
+      z.cur_cv = std::move(best->cv);
+      z.cur_full = std::move(full);
+    } else {
+      best->rec.reason = "best candidate rejected: " + no;
+    }
+  }
+  for (Cand& cd : tried) z.sel.records.push_back(std::move(cd.rec));
+  return accepted;
+}
+
+// One backward round; true when an effect was removed.
+bool backward_round(Search& z, int round) {
+  struct Drop {
+    Effect e;
+    EffectSet st;
+    SetEval cv, full;
+    SearchRecord rec;
+    bool removable = false;
+  };
+  std::vector<Drop> drops;
+  for (Effect e : z.chosen) {
+    const auto t0 = Clock::now();
+    Drop d{e, z.s, {}, {}, {}, false};
+    d.st.disable(e);
+    d.rec.step = round, d.rec.phase = "backward", d.rec.candidate = effect_name(e);
+    d.rec.set = d.st.to_string();
+    d.cv = z.cv.cross_validate(d.st, z.cur_cv.folds, z.o.cv_max_iterations);
+    if (d.cv.ok) d.full = z.cv.fit_all(d.st, z.cur_full.fitted, z.o.cv_max_iterations);
+    fill(d.rec, d.cv);
+    if (d.cv.ok && d.full.ok) {
+      const PairedComparison p =
+          z.cv.compare(d.cv, z.cur_cv, z.o.alpha);  // keeping e vs dropping it
+      fill(d.rec, p);
+      d.rec.bic = d.full.bic;
+      d.rec.delta_bic = z.cur_full.bic - d.full.bic;
+      // Redundancy by rule (a) only: once another effect changes every
+      // window, an intermittent effect's paired test has little power left.
+      d.removable = !(p.rel >= z.o.min_rel_improvement && p.gain >= z.o.min_gain);
+      d.rec.reason = d.removable ? fmt::format("removable: without it CV is only {:.2f} % worse",
+                                               100.0 * p.rel)
+                                 : "kept: it is needed";
+    } else {
+      d.rec.reason = "fit without it failed: " + d.cv.error + d.full.error;
+    }
+    d.rec.time_s = since(t0);
+    drops.push_back(std::move(d));
+  }
+  Drop* out = nullptr;
+  for (Drop& d : drops)
+    if (d.removable && (!out || d.rec.rel_improvement < out->rec.rel_improvement)) out = &d;
+  if (out) {
+    out->rec.accepted = true;
+    out->rec.reason = "removed (" + out->rec.reason + ")";
+    z.s = out->st;
+    std::erase(z.chosen, out->e);
+    z.cur_cv = std::move(out->cv);
+    z.cur_full = std::move(out->full);
+  }
+  for (Drop& d : drops) z.sel.records.push_back(std::move(d.rec));
+  return out != nullptr;
+}
+
+// Whether `train` holds at least half of the windows where each intermittent
+// effect of s acts (after radius_step.t; entering the slip_zone box).
+bool covers(const DiagInput& in, const std::vector<Window>& windows, const EffectSet& s,
+            const std::vector<int>& train) {
+  for (Effect e : {Effect::radius_step, Effect::slip_zone}) {
+    if (!s.on(e)) continue;
+    int all = 0, seen = 0;
+    for (const Window& w : windows) {
+      bool acts = e == Effect::radius_step && w.t_end_s > s.get(e, "t");
+      for (std::size_t g = w.ref_begin; e == Effect::slip_zone && g < w.ref_end && !acts; ++g)
+        acts = in.ref_x_m[g] >= s.get(e, "x0") && in.ref_x_m[g] <= s.get(e, "x1") &&
+               in.ref_y_m[g] >= s.get(e, "y0") && in.ref_y_m[g] <= s.get(e, "y1");
+      all += acts ? 1 : 0;
+      seen += acts && std::count(train.begin(), train.end(), w.index) ? 1 : 0;
+    }
+    if (2 * seen < all) return false;
+  }
+  return true;
+}
+
+// The final model (select.h) on the selection input `fit_in` (same windows
+// as `raw`, which decides the split).
+void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vector<Window>& windows,
+                 const SelectOptions& o, const std::vector<Effect>& chosen, Selection& sel) {
+  const EffectSet& s = sel.structure;
+  const int n = static_cast<int>(windows.size());
+  const int n_held = std::clamp(static_cast<int>(std::lround(o.heldout_fraction * n)), 1, n - 1);
+  auto split = [&](bool interleaved, std::vector<int>& train, std::vector<int>& held) {
+    train.clear(), held.clear();
+    for (int w = 0; w < n; ++w) {
+      const bool h = interleaved
+                         ? static_cast<long>(w + 1) * n_held / n > static_cast<long>(w) * n_held / n
+                         : w >= n - n_held;
+      (h ? held : train).push_back(w);
+    }
+  };
+  split(false, sel.train_windows, sel.heldout_windows);
+  sel.split = "last";
+  bool alt_split = !covers(raw, windows, s, sel.train_windows);
+  if (!alt_split) {
+    ++sel.timing.fits;
+    sel.final_fit = fit_effects(fit_in, s, sel.train_windows, sel.heldout_windows, o.fit);
+    alt_split = sel.final_fit.rank_deficient;
+  }
+  if (alt_split) {
+    std::vector<int> tr, ho;
+    split(true, tr, ho);
+    ++sel.timing.fits;
+    FitSummary f = fit_effects(fit_in, s, tr, ho, o.fit);
+    if (!f.rank_deficient || sel.final_fit.params.empty()) {
+      sel.final_fit = std::move(f);
+      sel.train_windows = tr, sel.heldout_windows = ho, sel.split = "interleaved";
+    }
+  }
+  sel.fitted = true;
+  const std::vector<Window> fw = make_windows(fit_in, o.fit.window_s);
+  const bool heading = fit_in.has_ref_heading() && o.fit.use_heading;
+  const double ism = 1.0 / fit_in.ref_sigma_m, ish = heading ? 1.0 / fit_in.ref_sigma_rad : 0.0;
+  const double base = summary_sse(sel.final_fit.train, fw, heading, ism, ish, false);
+  const double with_all = summary_sse(sel.final_fit.train, fw, heading, ism, ish, true);
+  for (Effect e : chosen) {
+    EffectSet without = s;
+    without.disable(e);
+    double sse = base;
+    if (!without.empty()) {
+      ++sel.timing.fits;
+      sse = summary_sse(fit_effects(fit_in, without, sel.train_windows, {}, o.fit).train, fw,
+                        heading, ism, ish, true);
+    }
+    sel.effects.push_back(
+        {e, base > 0.0 ? std::clamp((sse - with_all) / base, 0.0, 1.0) : 0.0, {}});
+  }
+  std::stable_sort(
+      sel.effects.begin(), sel.effects.end(),
+      [](const SelectedEffect& a, const SelectedEffect& b) { return a.explains > b.explains; });
+}
+
+}  // namespace
+
+bool SelectOptions::IsValid(std::string* why) const {
+  auto fail = [why](std::string msg) {
+    if (why) *why = std::move(msg);
+    return false;
+  };
+  std::string w;
+  if (!fit.IsValid(&w)) return fail("fit: " + w);
+  if (!(fit.window_s > 0.0))
+    return fail(
+        fmt::format("fit.window_s = {}; selection needs windows: expected > 0 s", fit.window_s));
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const Effect e = candidates[i];
+    if (static_cast<int>(e) < 0 || static_cast<int>(e) >= kNumEffects)
+      return fail(fmt::format("candidates[{}] is not an effect", i));
+    if (e == Effect::gyro_bias || e == Effect::gyro_scale)
+      return fail(
+          fmt::format("candidate {} acts on the gyro, not on dead reckoning", effect_name(e)));
+    if (std::count(candidates.begin(), candidates.end(), e) > 1)
+      return fail(fmt::format("candidate {} listed twice", effect_name(e)));
+  }
+  const double coarse = step_coarse_s > 0.0 ? step_coarse_s : 0.5 * fit.window_s;
+  // name, value, lower, upper, lower/upper included
+  const struct {
+    const char* name;
+    double v, lo, hi;
+    bool lo_in, hi_in;
+  } ranges[] = {{"folds", double(folds), 2, 100, true, true},
+                {"max_effects", double(max_effects), 0, kNumEffects, true, true},
+                {"alpha", alpha, 0, 0.5, false, false},
+                {"min_rel_improvement", min_rel_improvement, 0, 1, true, false},
+                {"min_gain", min_gain, 0, 1e300, true, true},
+                {"heldout_fraction", heldout_fraction, 0, 0.9, false, true},
+                {"cv_max_iterations", double(cv_max_iterations), 1, 100000, true, true},
+                {"profile_max_iterations", double(profile_max_iterations), 1, 100000, true, true},
+                {"select_ref_rate_hz", select_ref_rate_hz, 0, 1e300, true, true},
+                {"smooth_half_s", smooth_half_s, 0, 10, true, true},
+                {"smooth_heading_half_s", smooth_heading_half_s, 0, 10, true, true},
+                {"step_coarse_s", step_coarse_s, 0, 1e300, true, true},
+                {"step_fine_s (at most a fifth of the coarse step)", step_fine_s, 0, coarse / 5.0,
+                 false, true},
+                {"zone_cell_m", zone_cell_m, 0, 1e300, false, true},
+                {"zone_max_boxes", double(zone_max_boxes), 0, 100, true, true},
+                {"zone_min_score", zone_min_score, 0, 1e300, true, true}};
+  for (const auto& r : ranges) {
+    const bool ok = std::isfinite(r.v) && (r.lo_in ? r.v >= r.lo : r.v > r.lo) &&
+                    (r.hi_in ? r.v <= r.hi : r.v < r.hi);
+    if (!ok)
+      return fail(fmt::format(
+          "{} = {}; expected a number in {}{}, {}{}", r.name, r.v, r.lo_in ? "[" : "(", r.lo,
+          r.hi >= 1e300 ? "inf" : fmt::format("{}", r.hi), r.hi_in && r.hi < 1e300 ? "]" : ")"));
+  }
+  for (std::size_t i = 0; i < zone_boxes.size(); ++i) {
+    const ZoneBox& b = zone_boxes[i];
+    if (!(std::isfinite(b.x0_m) && std::isfinite(b.x1_m) && std::isfinite(b.y0_m) &&
+          std::isfinite(b.y1_m) && b.x0_m < b.x1_m && b.y0_m < b.y1_m))
+      return fail(
+          fmt::format("zone_boxes[{}] = [{}, {}] x [{}, {}]; expected finite x0 < x1, y0 < y1", i,
+                      b.x0_m, b.x1_m, b.y0_m, b.y1_m));
+  }
+  return true;
+}
+
+Selection select_effects(const DiagInput& in_full, const SelectOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw std::invalid_argument("select options: " + why);
+  const auto t_start = Clock::now();
+  Selection sel;
+  sel.window_s = o.fit.window_s;
+  const std::vector<Window> windows_full = make_windows(in_full, o.fit.window_s);
+  const int n_win = static_cast<int>(windows_full.size());
+  sel.num_windows = n_win;
+  const ReplayResult base = replay(in_full, EffectSet(), o.fit.window_s, {}, o.fit.model);
+  sel.baseline_pos_rmse_m = base.pos_rmse_m;
+  sel.baseline_heading_rmse_rad = base.heading_rmse_rad;
+  if (n_win < 3) {
+    sel.note = fmt::format("{} window(s) of {} s: too few to cross-validate (need 3)", n_win,
+                           o.fit.window_s);
+    sel.timing.total_s = since(t_start);
+    return sel;
+  }
+
+  // Selection input: the reference thinned and smoothed when that keeps the windows.
+  DiagInput thin;
+  const DiagInput* in = &in_full;
+  double correlated = 1.0;
+  const int stride = denoised_reference(in_full, o.select_ref_rate_hz, o.smooth_half_s,
+                                        o.smooth_heading_half_s, o.fit.model, thin, correlated);
+  if (stride > 1) {
+    const std::vector<Window> wt = make_windows(thin, o.fit.window_s);
+    bool same = wt.size() == windows_full.size();
+    for (std::size_t i = 0; same && i < wt.size(); ++i)
+      same = std::abs(wt[i].t_begin_s - windows_full[i].t_begin_s) < 1e-9;
+    if (same) in = &thin, sel.ref_stride = stride;
+    if (!same) correlated = 1.0;
+  }
+  CrossValidator cv(*in, o.fit, o.folds, correlated);
+  sel.folds = cv.num_folds();
+  Search z{cv, o, sel, EffectSet(), {}, {}, {}, kNaN};
+
+  auto t0 = Clock::now();
+  z.cur_cv = cv.cross_validate(EffectSet(), {}, o.cv_max_iterations);
+  z.cur_full = cv.fit_all(EffectSet(), EffectSet(), o.cv_max_iterations);
+  if (!z.cur_cv.ok || !z.cur_full.ok)
+    throw std::invalid_argument(fmt::format("track '{}': nominal replay failed: {}",
+                                            in_full.track_name, z.cur_cv.error + z.cur_full.error));
+  sel.baseline_cv_score = z.cur_cv.score;
+  SearchRecord rb;
+  rb.phase = "baseline", rb.set = "none", rb.bic = z.cur_full.bic, rb.accepted = true;
+  rb.reason = "nominal model";
+  fill(rb, z.cur_cv);
+  rb.time_s = since(t0);
+  sel.records.push_back(rb);
+
+  const std::vector<Effect> cands = candidate_list(in_full, o);
+  for (int step = 1; step <= o.max_effects && forward_step(z, step, cands); ++step) {
+  }
+  for (int round = 1; z.chosen.size() >= 2 && backward_round(z, round); ++round) {
+  }
+  sel.final_cv_score = z.cur_cv.score;
+  sel.structure = z.s;
+  sel.timing.search_s = since(t_start);
+  sel.timing.fits = cv.fits();
+  if (!z.chosen.empty()) {
+    t0 = Clock::now();
+    final_model(in_full, *in, windows_full, o, z.chosen, sel);
+    sel.timing.final_s = since(t0);
+  }
+  for (SelectedEffect& e : sel.effects)
+    for (const SearchRecord& r : sel.records)
+      if (r.phase == "forward" && r.accepted && r.candidate == effect_name(e.effect))
+        for (const std::string& name : r.rivals) e.rivals.push_back(effect_from_name(name));
+  sel.timing.total_s = since(t_start);
+  return sel;
+}
+
+}  // namespace odotune::diagnose

@@ -1,0 +1,201 @@
+// Model selection of the diagnosis (docs/diagnosis-design.md, step 7): which
+// of the wheel-odometry effects of ../shared/specs/physics-effects.md a track
+// needs, by greedy forward selection with time-block cross-validation
+// (cross_validate.h), a backward pass, and a final fit whose held-out scores
+// prove the gain.
+//
+// Candidates: radius_error, wheel_base_error, radius_step, speed_radius,
+// lateral_skid, longitudinal_slip, slip_zone, time_offset and (only when the
+// track has commands or is body_velocity) actuator_lag. gyro_bias/gyro_scale
+// do not act on dead reckoning (sensor_checks.h judges them).
+//
+// Data. The windows of make_windows(in, fit.window_s). The search and the
+// final fit run on the "selection input": the reference thinned to about
+// select_ref_rate_hz and denoised by local quadratic fits over
+// +-smooth_half_s (positions) and +-smooth_heading_half_s (heading, around a
+// gyro or odometry trend), see denoised_reference() in cross_validate.h;
+// dead reckoning still steps every odometry node. That denoises the window
+// anchors, which are single reference poses: with 10 mm / 5 mrad ground
+// truth a raw anchor's heading error alone moves a 20 s window's end by
+// several sigma, in every model alike, and drowns the paired tests.
+// (Without the thinning, when it would change the windows, the raw input.)
+// Errors are normalised by the reference sigmas (cross_validate.h):
+// reference noise alone scores about 2 per sample (3 with a heading).
+//
+// Cross-validation: K = min(folds, #windows) contiguous folds of windows; a
+// set is fitted on K-1 folds (cv_max_iterations) and replayed on the other,
+// so every window gets a held-out prediction; CV score = pooled held-out
+// normalised mean squared error per sample. Fold fits are warm-started from
+// the same fold's fit of the current set (never from a fit that saw the
+// held-out fold); a new effect starts at its no-op values.
+//
+// Forward step: every remaining candidate is added to the current set S and
+// cross-validated; the one with the lowest CV score, c, is accepted only if
+//  (a) the relative CV improvement is >= min_rel_improvement and the
+//      absolute one >= min_gain (a mismatch far below the reference noise is
+//      not physics one can see; sensor quantisation and discretisation leave
+//      such consistent but tiny mismatches);
+//  (b) the paired test of CrossValidator::compare over held-out windows is
+//      significant at alpha: the exact Wilcoxon signed-rank test on the
+//      per-window gains, or t-tests on their z-scores and log ratios, or
+//      (when every informative window improved) Stouffer's combination of
+//      the z-scores. A rank test over n windows cannot go below 2^-n
+//      (p < 1e-3 needs 10 windows, all improved), and an effect that acts in
+//      a few windows only (a slip zone crossed twice, a late radius step) or
+//      shows little in some windows (lateral_skid needs turns) needs the
+//      magnitude-aware branches;
+//  (c) BIC of a fit on all windows (CrossValidator::fit_all) decreases;
+//  (d) c's own parameters matter: the CV predictions with c's fitted
+//      parameters reset to their no-op values must be worse by (a) and (b).
+//      This rejects actuator_lag on wheel odometry when tau ~ 0: its no-op
+//      replays the commands instead of the encoders, which can beat the
+//      encoders for reasons other than a lag.
+// Forward selection stops when the best candidate fails or after
+// max_effects steps. Backward pass: while |S| >= 2, each effect e is removed
+// in turn (CV and fit_all of S without e) and, among those whose removal
+// makes the CV score worse by less than rule (a) asks, the one whose
+// removal costs least is dropped (significance is not asked again: once
+// another effect changes every window, the paired test of an intermittent
+// effect has little power, and a needed effect must not be dropped for it). Confounded pairs (speed_radius vs radius_error,
+// longitudinal_slip vs radius_error, time_offset vs actuator_lag) are decided
+// by the CV score: the best candidate of a step is the one that predicts
+// held-out windows best; a proxy accepted early is dropped by the backward
+// pass once the true effect explains its share. Candidates the winner does
+// not beat by (a) and (b) are logged as its rivals: the data cannot tell
+// them apart, and the diagnosis should say so.
+//
+// Discrete parameters, chosen on all windows before cross-validation (so
+// the held-out fold saw the choice of one or four numbers; BIC counts them):
+//  * radius_step.t: profile search of the robust fit cost (fit_effects'
+//    final cost, profile_max_iterations, warm-started along the search) over
+//    [end of the first window, end of the last - coarse/2] (earlier, a step
+//    is a radius_error): a grid of coarse = step_coarse_s (window_s/2 by
+//    default), then +-0.6 coarse in steps of coarse/5, then +-coarse/5 in
+//    steps of step_fine_s. After the first search, later forward steps
+//    start from the previous time and refine +-0.4 coarse, then finely.
+//  * slip_zone box: zone_candidates (zone_boxes.h) on the all-window
+//    residuals of the current set, plus SelectOptions::zone_boxes (e.g. from
+//    locate.h); each box is fitted (s_l, s_r with S) on all windows, the
+//    lowest cost wins, and its edges are refined by coordinate search on the
+//    fit cost in steps of zone_cell_m/2 then /4 (up to 4 rounds each),
+//    unless its fitted slips are both below 0.01 (a box from noise). Edges
+//    across which the robot never drives are not determined by the data:
+//    they stay at cell edges next to the visited cells.
+//
+// Final model: the selected structure fitted (fit.max_iterations, from the
+// no-op values) on the training windows of the selection input, and scored
+// there before/after on training and held-out windows (FitSummary::train,
+// ::heldout): against the denoised reference, whose anchors do not add
+// several sigma of heading noise to every window (on the raw reference a
+// correct model can score worse on a few held-out windows by that noise
+// alone). baseline_pos_rmse_m is the raw one. Training windows: the first
+// (1 - heldout_fraction) of the windows, the rest held out ("last"); the
+// held-out windows are spread evenly instead ("interleaved") when the
+// "last" training part holds fewer than half the windows where radius_step
+// (after t) or slip_zone (box entered) acts, or its fit is rank deficient.
+// `explains` of an effect = (training SSE without it - training SSE with
+// all) / baseline training SSE (normalised; the set without it refitted on
+// the same training windows).
+//
+// Deterministic (no randomness). Logs are data: Selection::records.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "diagnose/diag_input.h"
+#include "diagnose/effect_model.h"
+#include "diagnose/fit.h"
+#include "diagnose/zone_boxes.h"
+
+namespace odotune::diagnose {
+
+struct SelectOptions {
+  FitOptions fit;                    // window_s (> 0 here), loss, model; max_iterations: final fits
+  std::vector<Effect> candidates;    // empty = every wheel-odometry effect (header comment)
+  int folds = 5;                     // K contiguous folds of windows (fewer with fewer windows)
+  int max_effects = 3;               // forward steps at most
+  double alpha = 1e-3;               // one-sided level of the paired test
+  double min_rel_improvement = 0.05; // relative CV improvement needed
+  double min_gain = 0.05;            // absolute CV improvement needed [normalised units/sample]
+  double heldout_fraction = 0.3;     // final model: share of windows held out
+  int cv_max_iterations = 50;        // Levenberg-Marquardt iterations of a CV fold fit
+  int profile_max_iterations = 20;   // of a fit of the radius_step / slip_zone searches
+  double select_ref_rate_hz = 10.0;  // reference thinned to about this rate for selection; 0 = all
+  double smooth_half_s = 0.25;       // half span of the thinned reference's position fits [s]
+  double smooth_heading_half_s = 1.0;  // of its heading fits (around a gyro/odometry trend) [s]
+  double step_coarse_s = 0.0;        // radius_step.t coarse grid [s]; 0 = window_s/2
+  double step_fine_s = 0.5;          // radius_step.t final resolution [s]
+  double zone_cell_m = 0.25;         // slip_zone grid cell [m]
+  int zone_max_boxes = 3;            // boxes found from the residual growth
+  double zone_min_score = 16.0;      // score a found box needs (zone_boxes.h)
+  std::vector<ZoneBox> zone_boxes;   // extra candidate boxes (e.g. from locate.h)
+
+  bool IsValid(std::string* why) const;
+};
+
+// One evaluation of the search, in the order made.
+struct SearchRecord {
+  int step = 0;            // forward step (1, 2, ...), backward round, 0 for the baseline
+  std::string phase;       // "baseline", "forward", "backward"
+  std::string candidate;   // effect added (forward) or removed (backward); "" for the baseline
+  std::string set;         // the evaluated set (structure; discrete parameters shown)
+  double cv_score = 0.0;   // pooled held-out normalised MSE per sample (NaN: failed)
+  double cv_pos_rmse_m = 0.0, cv_heading_rmse_rad = 0.0;  // pooled held-out (heading NaN without)
+  double rel_improvement = 0.0;  // forward: (cur - cand)/cur; backward: (without - with)/without
+  double gain = 0.0;             // the same difference, absolute
+  int windows_changed = 0, windows_improved = 0;  // informative windows (cross_validate.h)
+  double p_rank = 1.0;     // one-sided Wilcoxon signed-rank p
+  double p_t = 0.0;        // smaller one-sided t-test p (window z's, log ratios; NaN: < 3 windows)
+  double p_param = 0.0;    // one-sided Stouffer p (NaN unless every informative window improved)
+  bool significant = false;
+  // BIC of the evaluated set and its change against the set it competes with
+  // (forward: new - current; backward: with - without, so < 0 favours keeping);
+  // 0 when not fitted on all windows (forward candidates other than the best).
+  double bic = 0.0, delta_bic = 0.0;
+  bool accepted = false;   // forward: added; backward: removed
+  std::string reason;      // why accepted or rejected
+  // Accepted forward step: the other candidates of the step that the winner
+  // does not beat by (a) and (b), i.e. confounded alternatives.
+  std::vector<std::string> rivals;
+  double time_s = 0.0;
+};
+
+struct SelectedEffect {
+  Effect effect = Effect::radius_error;
+  double explains = 0.0;      // share of the baseline training SSE it removes (header comment)
+  std::vector<Effect> rivals;  // confounded alternatives when it was accepted (SearchRecord)
+};
+
+struct SelectTiming {
+  double total_s = 0.0;     // select_effects
+  double search_s = 0.0;    // forward and backward search (includes discrete_s)
+  double discrete_s = 0.0;  // radius_step.t and slip_zone box searches
+  double final_s = 0.0;     // final fit and explains
+  int fits = 0;             // fit_effects calls
+};
+
+struct Selection {
+  std::vector<SelectedEffect> effects;  // most explaining first; empty = nominal is enough
+  EffectSet structure;       // the selected effects with their discrete parameters, else no-op
+  bool fitted = false;       // final_fit is set (effects non-empty)
+  FitSummary final_fit;      // on train_windows of the selection input, scored on heldout_windows
+  std::vector<int> train_windows, heldout_windows;
+  std::string split;         // "last" or "interleaved" ("" when nothing was fitted)
+  double window_s = 0.0;
+  int num_windows = 0, folds = 0;
+  int ref_stride = 1;        // thinning of the reference during selection
+  double baseline_cv_score = 0.0, final_cv_score = 0.0;  // nominal and selected set (CV)
+  // Nominal model, all windows, full raw input.
+  double baseline_pos_rmse_m = 0.0, baseline_heading_rmse_rad = 0.0;
+  std::vector<SearchRecord> records;
+  SelectTiming timing;       // wall-clock seconds
+  std::string note;          // e.g. why selection could not run
+};
+
+// Throws std::invalid_argument (one line) for invalid options or an input
+// fit_effects cannot use. A track with fewer than 3 windows yields no
+// effects and a note.
+Selection select_effects(const DiagInput& in, const SelectOptions& options = {});
+
+}  // namespace odotune::diagnose

@@ -1,0 +1,149 @@
+#include "diagnose/zone_boxes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include <fmt/format.h>
+
+namespace odotune::diagnose {
+
+std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Window>& windows,
+                                     const std::vector<double>& pred_x_m,
+                                     const std::vector<double>& pred_y_m,
+                                     const std::vector<double>& pred_theta_rad, double cell_m,
+                                     int max_boxes, double min_score) {
+  if (pred_x_m.size() != in.ref_t_s.size() || pred_y_m.size() != in.ref_t_s.size())
+    throw std::invalid_argument(
+        fmt::format("zone_candidates: {} and {} predictions for {} reference "
+                    "samples",
+                    pred_x_m.size(), pred_y_m.size(), in.ref_t_s.size()));
+  const bool heading = in.has_ref_heading() && pred_theta_rad.size() == in.ref_t_s.size();
+  const double sm2 = in.ref_sigma_m * in.ref_sigma_m;
+  const double sh2 = heading ? in.ref_sigma_rad * in.ref_sigma_rad : 1.0;
+  struct Inc {
+    double x, y, a, h, len;
+    bool cont;  // continues the previous increment's run of samples
+    int cx = 0, cy = 0;
+  };
+  std::vector<Inc> inc;
+  std::size_t last_g = 0;  // sample the previous increment ended at
+  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+  for (const Window& w : windows)
+    for (std::size_t g = w.ref_begin + 1; g < w.ref_end; ++g) {
+      const std::size_t p = g - 1;
+      if (!(std::isfinite(pred_x_m[g]) && std::isfinite(pred_x_m[p]) &&
+            std::isfinite(pred_y_m[g]) && std::isfinite(pred_y_m[p])))
+        continue;
+      // Direction and length of travel from the prediction: dead reckoning
+      // is smooth, the reference's noise would bias a (long noisy steps point
+      // along their own noise).
+      const double ux = pred_x_m[g] - pred_x_m[p], uy = pred_y_m[g] - pred_y_m[p];
+      const double len = std::hypot(ux, uy);
+      const double gx = (pred_x_m[g] - in.ref_x_m[g]) - (pred_x_m[p] - in.ref_x_m[p]);
+      const double gy = (pred_y_m[g] - in.ref_y_m[g]) - (pred_y_m[p] - in.ref_y_m[p]);
+      // Steps shorter than the reference noise (turning on the spot) have no
+      // steady direction: summed over a pass their noise would not telescope.
+      const bool moving = len >= in.ref_sigma_m;
+      Inc k{0.5 * (in.ref_x_m[g] + in.ref_x_m[p]),
+            0.5 * (in.ref_y_m[g] + in.ref_y_m[p]),
+            moving ? (gx * ux + gy * uy) / len : 0.0,
+            0.0,
+            moving ? len : 0.0,
+            !inc.empty() && last_g == p};
+      if (heading && std::isfinite(pred_theta_rad[g]) && std::isfinite(pred_theta_rad[p]))
+        k.h = (pred_theta_rad[g] - in.ref_theta_rad[g]) - (pred_theta_rad[p] - in.ref_theta_rad[p]);
+      xmin = std::min(xmin, k.x), xmax = std::max(xmax, k.x);
+      ymin = std::min(ymin, k.y), ymax = std::max(ymax, k.y);
+      inc.push_back(k);
+      last_g = g;
+    }
+  if (inc.empty() || max_boxes <= 0) return {};
+  const double cell = std::max({cell_m, (xmax - xmin) / 400.0, (ymax - ymin) / 400.0});
+  const int nx = static_cast<int>((xmax - xmin) / cell) + 1,
+            ny = static_cast<int>((ymax - ymin) / cell) + 1;
+  for (Inc& k : inc) {
+    k.cx = std::min(nx - 1, static_cast<int>((k.x - xmin) / cell));
+    k.cy = std::min(ny - 1, static_cast<int>((k.y - ymin) / cell));
+  }
+  // Background growth per metre: median over cells with some travel.
+  std::vector<double> ca(static_cast<std::size_t>(nx * ny), 0.0), ch(ca), cl(ca);
+  for (const Inc& k : inc) {
+    const auto i = static_cast<std::size_t>(k.cy * nx + k.cx);
+    ca[i] += k.a, ch[i] += k.h, cl[i] += k.len;
+  }
+  std::vector<double> ra, rh;
+  for (std::size_t i = 0; i < cl.size(); ++i)
+    if (cl[i] > cell) ra.push_back(ca[i] / cl[i]), rh.push_back(ch[i] / cl[i]);
+  auto median = [](std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  const double bg_a = median(ra), bg_h = median(rh);
+  struct Rect {
+    int x0, x1, y0, y1;  // inclusive cell ranges
+  };
+  auto score = [&](const Rect& r) {
+    double a = 0.0, h = 0.0;
+    int passes = 0;
+    bool prev_in = false;
+    for (const Inc& k : inc) {
+      const bool in_r = k.cx >= r.x0 && k.cx <= r.x1 && k.cy >= r.y0 && k.cy <= r.y1;
+      if (in_r) {
+        a += k.a - bg_a * k.len, h += k.h - bg_h * k.len;
+        if (!(prev_in && k.cont)) ++passes;
+      }
+      prev_in = in_r;
+    }
+    if (passes == 0) return 0.0;
+    const double p2 = 2.0 * passes;
+    return std::max(a, 0.0) * std::max(a, 0.0) / (p2 * sm2) + (heading ? h * h / (p2 * sh2) : 0.0);
+  };
+  std::vector<std::pair<double, int>> seeds;
+  for (int i = 0; i < nx * ny; ++i)
+    if (cl[static_cast<std::size_t>(i)] > 0.0 || ch[static_cast<std::size_t>(i)] != 0.0)
+      seeds.push_back({score({i % nx, i % nx, i / nx, i / nx}), i});
+  std::sort(seeds.begin(), seeds.end(), [](const auto& a, const auto& b) {
+    return a.first > b.first || (a.first == b.first && a.second < b.second);
+  });
+  std::vector<Rect> found;
+  std::vector<ZoneBox> out;
+  for (std::size_t si = 0; si < seeds.size() && static_cast<int>(out.size()) < max_boxes &&
+                           si < static_cast<std::size_t>(10 * max_boxes);
+       ++si) {
+    const int cx = seeds[si].second % nx, cy = seeds[si].second / nx;
+    const bool covered = std::any_of(found.begin(), found.end(), [&](const Rect& r) {
+      return cx >= r.x0 && cx <= r.x1 && cy >= r.y0 && cy <= r.y1;
+    });
+    if (covered || seeds[si].first < 0.25 * min_score) continue;
+    Rect r{cx, cx, cy, cy};
+    double sc = seeds[si].first;
+    for (;;) {
+      const Rect tries[4] = {{r.x0 - 1, r.x1, r.y0, r.y1},
+                             {r.x0, r.x1 + 1, r.y0, r.y1},
+                             {r.x0, r.x1, r.y0 - 1, r.y1},
+                             {r.x0, r.x1, r.y0, r.y1 + 1}};
+      double bs = sc;
+      int bi = -1;
+      for (int t = 0; t < 4; ++t) {
+        const Rect& q = tries[t];
+        if (q.x0 < 0 || q.y0 < 0 || q.x1 >= nx || q.y1 >= ny) continue;
+        const double v = score(q);
+        if (v > bs) bs = v, bi = t;
+      }
+      // Grow only by at least one noise unit of sqrt(score) (a cell without
+      // slip moves the sum by reference noise alone).
+      if (bi < 0 || std::sqrt(bs) < std::sqrt(sc) + 1.0) break;
+      r = tries[bi], sc = bs;
+    }
+    found.push_back(r);
+    if (sc < min_score) continue;
+    out.push_back({xmin + r.x0 * cell, xmin + (r.x1 + 1) * cell, ymin + r.y0 * cell,
+                   ymin + (r.y1 + 1) * cell, sc});
+  }
+  return out;
+}
+
+}  // namespace odotune::diagnose
