@@ -20,6 +20,7 @@ int run(int argc, char** argv) {
   register_grid(app);
   register_report(app);
   register_export(app);
+  register_diagnose(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -19,6 +19,7 @@ void register_fixes(CLI::App& app);
 void register_grid(CLI::App& app);
 void register_report(CLI::App& app);
 void register_export(CLI::App& app);
+void register_diagnose(CLI::App& app);
 
 // Runs the CLI; returns the process exit code.
 int run(int argc, char** argv);

@@ -1,0 +1,312 @@
+#include "diagnose/diagnosis.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "diagnose/option_rules.h"
+#include "diagnose/residual_series.h"
+#include "diagnose/window_replay.h"
+
+namespace odotune::diagnose {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// The effect's physical description, used as `conditions` when the residuals
+// do not single out a condition (the effect acts everywhere, a little).
+std::string description(Effect e) {
+  switch (e) {
+    case Effect::radius_error: return "everywhere the wheels roll: travel off by a constant ratio per wheel";
+    case Effect::wheel_base_error: return "whenever the robot turns: heading change off by a constant ratio";
+    case Effect::radius_step: return "after the step time: a wheel's effective radius changed";
+    case Effect::speed_radius: return "growing with wheel speed: faster wheels travel further per turn";
+    case Effect::lateral_skid: return "in turns taken at speed: the body slides outward, growing with |v*w|";
+    case Effect::longitudinal_slip: return "while accelerating or braking: the wheels slip";
+    case Effect::slip_zone: return "inside one region of the floor: the wheels slip there";
+    case Effect::gyro_bias: return "at all times, also at rest: the gyro's heading drifts at a constant rate";
+    case Effect::gyro_scale: return "while turning: the gyro's heading error grows with the turn rate";
+    case Effect::actuator_lag: return "when the commands change: the body follows them late";
+    case Effect::time_offset: return "when the velocities change: the odometry's time stamps are shifted";
+  }
+  return "";
+}
+
+double sq(double v) { return v * v; }
+
+BeforeAfter scores(const DiagInput& in, const EffectSet& before, const EffectSet& after,
+                   double window_s, const std::vector<int>& which) {
+  if (which.empty()) return {};
+  return {replay(in, before, window_s, which).pos_rmse_m,
+          replay(in, after, window_s, which).pos_rmse_m};
+}
+
+// Segments = maximal runs of consecutive windows (in time) whose position
+// RMSE the effect reduces by at least half the largest reduction.
+std::vector<TimeSegment> helped_windows(const ReplayResult& without, const ReplayResult& with) {
+  std::vector<double> gain(with.windows.size());
+  double best = 0.0;
+  for (std::size_t i = 0; i < gain.size(); ++i) {
+    gain[i] = without.windows[i].pos_rmse_m - with.windows[i].pos_rmse_m;
+    best = std::max(best, gain[i]);
+  }
+  std::vector<TimeSegment> out;
+  if (best <= 0.0) return out;
+  for (std::size_t i = 0; i < gain.size(); ++i) {
+    if (gain[i] < 0.5 * best) continue;
+    const WindowError& w = with.windows[i];
+    if (!out.empty() && i > 0 && gain[i - 1] >= 0.5 * best) {
+      out.back().t1_s = w.t_end_s;
+    } else {
+      out.push_back({w.t_begin_s, w.t_end_s, 0.0, 0});
+    }
+  }
+  return out;
+}
+
+// The input with its odometry replaced by body velocities: speed from the
+// nominal wheel travel, yaw rate from the gyro corrected by (bias, scale).
+// Replaying it with the nominal model is dead reckoning with the wheels'
+// travel and the gyro's heading.
+DiagInput gyro_heading_input(const DiagInput& in, double bias_radps, double scale) {
+  DiagInput g = in;
+  const std::vector<double>& t = in.odo_t_s;
+  std::vector<double> s(t.size(), 0.0);
+  if (in.odometry == OdometryKind::wheel_angles) {
+    for (std::size_t i = 0; i < t.size(); ++i)
+      s[i] = 0.5 * (in.radius_l_m * in.phi_l_rad[i] + in.radius_r_m * in.phi_r_rad[i]);
+  }
+  g.odometry = OdometryKind::body_velocity;
+  g.v_mps.assign(t.size(), 0.0);
+  g.w_radps.assign(t.size(), 0.0);
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    if (in.odometry == OdometryKind::wheel_angles) {
+      const std::size_t a = i == 0 ? 0 : i - 1, b = std::min(i + 1, t.size() - 1);
+      g.v_mps[i] = t[b] > t[a] ? (s[b] - s[a]) / (t[b] - t[a]) : 0.0;
+    } else {
+      g.v_mps[i] = in.v_mps[i];
+    }
+    // Gyro at the node, linear between its samples (held outside).
+    const auto& gt = in.gyro_t_s;
+    double gz = 0.0;
+    if (t[i] <= gt.front()) {
+      gz = in.gyro_z_radps.front();
+    } else if (t[i] >= gt.back()) {
+      gz = in.gyro_z_radps.back();
+    } else {
+      const auto j = static_cast<std::size_t>(std::upper_bound(gt.begin(), gt.end(), t[i]) - gt.begin());
+      const double f = (t[i] - gt[j - 1]) / (gt[j] - gt[j - 1]);
+      gz = in.gyro_z_radps[j - 1] + f * (in.gyro_z_radps[j] - in.gyro_z_radps[j - 1]);
+    }
+    g.w_radps[i] = corrected_gyro_rate(gz, bias_radps, scale);
+  }
+  g.cmd_v_mps.clear(), g.cmd_w_radps.clear();
+  return g;
+}
+
+std::string param_short_name(const std::string& slot_name) {
+  return slot_name.substr(slot_name.find('.') + 1);
+}
+
+// Share of the series' squared position error inside the segments, and the
+// RMSE there.
+struct Inside {
+  double share = 0.0, rmse_m = 0.0;
+};
+Inside inside_segments(const ResidualSeries& s, const std::vector<TimeSegment>& segs) {
+  double in_seg = 0.0, all = 0.0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < s.t_s.size(); ++i) {
+    const double e = sq(s.ex_m[i]) + sq(s.ey_m[i]);
+    all += e;
+    for (const TimeSegment& g : segs)
+      if (s.t_s[i] >= g.t0_s && s.t_s[i] <= g.t1_s) {
+        in_seg += e;
+        ++n;
+        break;
+      }
+  }
+  return {all > 0.0 ? in_seg / all : 0.0, n > 0 ? std::sqrt(in_seg / static_cast<double>(n)) : 0.0};
+}
+
+}  // namespace
+
+bool DiagnoseOptions::IsValid(std::string* why) const {
+  std::string w;
+  auto part = [&](bool ok, const char* name) {
+    if (!ok && why) *why = std::string(name) + ": " + w;
+    return ok;
+  };
+  if (!part(select.IsValid(&w), "select") || !part(sensors.IsValid(&w), "sensors") ||
+      !part(locate.IsValid(&w), "locate"))
+    return false;
+  return check_option_rules(
+      {{is_fraction(unexplained_min_share), "unexplained_min_share", unexplained_min_share,
+        "in [0, 1]"},
+       {is_non_negative(unexplained_min_sigmas), "unexplained_min_sigmas", unexplained_min_sigmas,
+        ">= 0"}},
+      why);
+}
+
+double Finding::param(std::string_view name) const {
+  for (const NamedValue& p : params)
+    if (p.name == name) return p.value;
+  return std::nan("");
+}
+
+std::string Finding::spec() const {
+  if (effect == "unexplained") return "";
+  std::string s = effect;
+  for (std::size_t i = 0; i < params.size(); ++i)
+    s += fmt::format("{}{}={}", i == 0 ? ':' : ',', params[i].name, params[i].value);
+  return s;
+}
+
+Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw std::invalid_argument("diagnose: " + why);
+  const auto t_all = Clock::now();
+  Diagnosis d;
+  d.track = in.track_name;
+  d.reference = in.reference;
+  const double ws = o.select.fit.window_s;
+  d.window_s = ws;
+  const std::vector<Window> windows = make_windows(in, ws);
+
+  auto t0 = Clock::now();
+  d.sensors = check_sensors(in, o.sensors);
+  d.timing.sensors_s = seconds_since(t0);
+
+  t0 = Clock::now();
+  d.selection = select_effects(in, o.select);
+  d.timing.select_s = seconds_since(t0);
+  const Selection& sel = d.selection;
+  d.note = sel.note;
+  const EffectSet nominal;
+  const EffectSet wheel = sel.fitted ? sel.final_fit.effects : nominal;
+
+  // Train / held-out split: the selection's, else its rule (last 30 %).
+  d.train_windows = sel.train_windows, d.heldout_windows = sel.heldout_windows;
+  if (!sel.fitted) {
+    d.train_windows.clear(), d.heldout_windows.clear();
+    const auto n = static_cast<int>(windows.size());
+    const int n_train = n - static_cast<int>(std::round(o.select.heldout_fraction * n));
+    for (int i = 0; i < n; ++i) (i < n_train ? d.train_windows : d.heldout_windows).push_back(i);
+  }
+
+  t0 = Clock::now();
+  const ReplayResult base = replay(in, nominal, ws), fin = replay(in, wheel, ws);
+  d.baseline_pos_rmse_m = base.pos_rmse_m, d.baseline_heading_rmse_rad = base.heading_rmse_rad;
+  d.final_pos_rmse_m = fin.pos_rmse_m, d.final_heading_rmse_rad = fin.heading_rmse_rad;
+  d.train = scores(in, nominal, wheel, ws, d.train_windows);
+  d.heldout = scores(in, nominal, wheel, ws, d.heldout_windows);
+  d.before = residual_series(in, windows, base);
+  d.after = residual_series(in, windows, fin);
+  d.located_before = locate(d.before, in.ref_sigma_m, o.locate);
+  d.located_after = locate(d.after, in.ref_sigma_m, o.locate);
+
+  // Wheel-odometry findings.
+  const std::vector<ParamSlot> layout = param_layout(wheel);
+  for (const SelectedEffect& se : sel.effects) {
+    Finding f;
+    f.effect = std::string(effect_name(se.effect));
+    for (std::size_t k = 0; k < layout.size(); ++k) {
+      const ParamSlot& slot = layout[k];
+      if (slot.effect != se.effect) continue;
+      const std::string name = param_short_name(slot.name);
+      f.params.push_back({name, wheel.params(se.effect)[static_cast<std::size_t>(slot.index)]});
+      double se_value = std::nan("");
+      if (slot.fitted) {
+        for (const FitParam& fp : sel.final_fit.params)
+          if (fp.name == slot.name) se_value = fp.std_error;
+      } else {
+        f.discrete.push_back(name);
+        se_value = se.effect == Effect::radius_step ? o.select.step_fine_s : o.select.zone_cell_m / 4.0;
+      }
+      f.stderrs.push_back({name, se_value});
+    }
+    EffectSet without = wheel;
+    without.disable(se.effect);
+    f.train = scores(in, without, wheel, ws, d.train_windows);
+    f.heldout = scores(in, without, wheel, ws, d.heldout_windows);
+    f.explains = se.explains;
+    for (Effect r : se.rivals) f.rivals.emplace_back(effect_name(r));
+    f.evidence = "model selection: cross-validated over time blocks, fitted with Ceres";
+    const ReplayResult wo = replay(in, without, ws);
+    const Location loc = locate(residual_series(in, windows, wo), in.ref_sigma_m, o.locate);
+    f.segments = loc.segments, f.regions = loc.regions, f.conditions = loc.phrase;
+    if (f.segments.empty()) f.segments = helped_windows(wo, fin);
+    if (f.conditions.empty()) f.conditions = description(se.effect);
+    d.findings.push_back(std::move(f));
+  }
+  d.model = wheel;
+
+  // Gyro findings: the sensor check against the reference heading.
+  const GyroCheck& gc = d.sensors.gyro;
+  if (gc.available && (gc.bias.departs() || gc.scale.departs())) {
+    const double b = gc.bias.departs() ? gc.bias.value : 0.0;
+    const double s = gc.scale.departs() ? gc.scale.value : 1.0;
+    const DiagInput corrected = gyro_heading_input(in, b, s);
+    const std::pair<Effect, const Verdict*> checks[] = {{Effect::gyro_bias, &gc.bias},
+                                                       {Effect::gyro_scale, &gc.scale}};
+    for (const auto& [effect, v] : checks) {
+      if (!v->departs()) continue;
+      Finding f;
+      f.effect = std::string(effect_name(effect));
+      const std::string name = effect == Effect::gyro_bias ? "b" : "s";
+      f.params.push_back({name, v->value});
+      f.stderrs.push_back({name, v->std_error});
+      const DiagInput without = effect == Effect::gyro_bias ? gyro_heading_input(in, 0.0, s)
+                                                            : gyro_heading_input(in, b, 1.0);
+      f.train = scores(without, nominal, nominal, ws, d.train_windows);
+      f.train.after_pos_rmse_m = replay(corrected, nominal, ws, d.train_windows).pos_rmse_m;
+      f.heldout = scores(without, nominal, nominal, ws, d.heldout_windows);
+      f.heldout.after_pos_rmse_m = replay(corrected, nominal, ws, d.heldout_windows).pos_rmse_m;
+      f.explains = f.train.before_pos_rmse_m > 0.0
+                       ? std::max(0.0, 1.0 - sq(f.train.after_pos_rmse_m / f.train.before_pos_rmse_m))
+                       : 0.0;
+      f.evidence = fmt::format(
+          "gyro against the reference yaw rate: robust regression over {} bins, {:.1f} standard "
+          "errors from the no-op value",
+          gc.bins, std::abs(v->z));
+      f.segments.push_back({in.ref_t_s.front(), in.ref_t_s.back(), 0.0, 0});
+      f.conditions = description(effect);
+      d.model.enable(effect).set(effect, name, v->value);
+      d.findings.push_back(std::move(f));
+    }
+  }
+
+  // What the chosen model leaves: located growth carrying a real share of
+  // its squared error.
+  const Location& la = d.located_after;
+  if (!la.segments.empty()) {
+    const Inside ins = inside_segments(d.after, la.segments);
+    const double share = ins.share;
+    if (share >= o.unexplained_min_share && ins.rmse_m >= o.unexplained_min_sigmas * in.ref_sigma_m) {
+      Finding f;
+      f.effect = "unexplained";
+      f.segments = la.segments, f.regions = la.regions, f.conditions = la.phrase;
+      // Share of the baseline's squared error that remains inside the segments.
+      f.explains = base.pos_rmse_m > 0.0 ? share * sq(fin.pos_rmse_m / base.pos_rmse_m) : 0.0;
+      f.train = d.train, f.heldout = d.heldout;
+      f.evidence = fmt::format(
+          "the chosen model's residuals still grow faster than noise there ({:.0f} % of its "
+          "squared error)",
+          100.0 * share);
+      d.findings.push_back(std::move(f));
+    }
+  }
+  std::stable_sort(d.findings.begin(), d.findings.end(),
+                   [](const Finding& a, const Finding& b) { return a.explains > b.explains; });
+  d.timing.locate_s = seconds_since(t0);
+  d.timing.total_s = seconds_since(t_all);
+  return d;
+}
+
+}  // namespace odotune::diagnose

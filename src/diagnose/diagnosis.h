@@ -1,0 +1,119 @@
+// The sim-to-real diagnosis of one track (docs/diagnosis-design.md step 8):
+// sensor checks, model selection, location, and the findings of
+// ../shared/specs/diagnosis-output.md as a value. No I/O: the CLI
+// (cli/cmd_diagnose.cpp) prints, writes the JSON, the figures and the
+// scenario.
+//
+// Findings, in order of importance (`explains`, largest first):
+//  * wheel-odometry effects chosen by select_effects (select.h), fitted on
+//    the training windows (the first 70 % of the track, or interleaved, see
+//    select.h); params/stderr from the fit (Ceres covariance; discrete
+//    parameters found by a profile search, radius_step.t and the slip_zone
+//    box, carry the search resolution as their stderr and are listed in
+//    `discrete`);
+//  * gyro effects (gyro_bias, gyro_scale) whose sensor check departs from the
+//    no-op value (sensor_checks.h Verdict::departs: significant AND relevant),
+//    judged against the reference heading (ground truth);
+//  * `unexplained`: where the residual growth of the chosen model still
+//    exceeds what noise explains (locate.h on the final model's residuals) in
+//    segments that carry at least `unexplained_min_share` of its squared
+//    error, where its position RMSE is at least `unexplained_min_sigmas`
+//    reference sigmas (a growth far above a tiny noise floor can still be a
+//    sub-millimetre mismatch: not physics one can act on); params empty.
+//
+// Numbers of a finding (diagnosis-output.md), all position RMSEs of the
+// windowed replay against the RAW reference:
+//  * wheel effect e: before = the chosen model without e (the other effects
+//    keep their fitted values), after = the chosen model; on the training and
+//    the held-out windows. With one effect, before is the nominal model.
+//    explains = select.h's share of the baseline training SSE.
+//  * gyro effect: dead reckoning with the chosen wheel model's travel and the
+//    gyro's heading (gyro_heading_replay), before = raw gyro, after =
+//    corrected by the finding's parameters; explains = the share of that
+//    replay's training SSE the correction removes.
+//  * where: segments = time spans in which the residuals of `before` grow
+//    faster than noise (locate.h); when none stand out (an effect that acts
+//    everywhere, a little), the windows where the effect reduces the error
+//    most (at least half the largest reduction); conditions = locate's
+//    phrase, else the effect's physical description.
+//
+// Deterministic: same input and options, same numbers.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "diagnose/diag_input.h"
+#include "diagnose/effect_model.h"
+#include "diagnose/locate.h"
+#include "diagnose/select.h"
+#include "diagnose/sensor_checks.h"
+
+namespace odotune::diagnose {
+
+struct DiagnoseOptions {
+  SelectOptions select;          // select.fit.window_s is the replay window of the output
+  SensorCheckOptions sensors;
+  LocateOptions locate;
+  double unexplained_min_share = 0.2;  // of the final model's SSE inside the located segments
+  double unexplained_min_sigmas = 3.0; // its RMSE there, in reference sigmas (DiagInput::ref_sigma_m)
+
+  bool IsValid(std::string* why) const;
+};
+
+struct NamedValue {
+  std::string name;
+  double value = std::numeric_limits<double>::quiet_NaN();
+};
+
+struct BeforeAfter {
+  double before_pos_rmse_m = std::numeric_limits<double>::quiet_NaN();
+  double after_pos_rmse_m = std::numeric_limits<double>::quiet_NaN();
+};
+
+struct Finding {
+  std::string effect;                 // physics-effects.md name, or "unexplained"
+  std::vector<NamedValue> params;     // the spec's parameter names, table order
+  std::vector<NamedValue> stderrs;    // same names
+  std::vector<std::string> discrete;  // parameters found by a profile search
+  std::vector<TimeSegment> segments;  // where.segments
+  std::vector<MapRegion> regions;     // where it is a matter of place
+  std::string conditions;             // where.conditions
+  double explains = 0.0;
+  BeforeAfter train, heldout;
+  std::vector<std::string> rivals;    // confounded alternatives the data could not rule out
+  std::string evidence;               // how it was found, one phrase
+
+  double param(std::string_view name) const;  // NaN when absent
+  // The simulator's command-line form, "lateral_skid:k=0.021" ("" for unexplained).
+  std::string spec() const;
+};
+
+struct DiagnosisTiming {
+  double total_s = 0.0, sensors_s = 0.0, select_s = 0.0, locate_s = 0.0;
+};
+
+struct Diagnosis {
+  std::string track;
+  ReferenceKind reference = ReferenceKind::gt;
+  double window_s = 0.0;
+  double baseline_pos_rmse_m = 0.0, baseline_heading_rmse_rad = 0.0;  // nominal, all windows
+  double final_pos_rmse_m = 0.0, final_heading_rmse_rad = 0.0;        // chosen model, all windows
+  BeforeAfter train, heldout;          // nominal vs chosen model on the selection's split
+  std::vector<Finding> findings;       // by importance; empty = nothing beyond noise
+  EffectSet model;                     // chosen wheel effects and gyro effects, fitted values
+  std::vector<int> train_windows, heldout_windows;
+  Selection selection;
+  SensorCheck sensors;
+  ResidualSeries before, after;        // nominal and chosen model, all windows
+  Location located_before, located_after;
+  DiagnosisTiming timing;
+  std::string note;                    // e.g. why selection could not run
+};
+
+// Throws std::invalid_argument (one line) for invalid options or an input the
+// steps cannot use.
+Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& options = {});
+
+}  // namespace odotune::diagnose
