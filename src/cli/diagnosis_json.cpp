@@ -125,7 +125,10 @@ json diagnosis_json(const Diagnosis& d) {
             {"heading_rmse_rad", number(d.final_heading_rmse_rad)}}},
           {"train", before_after(d.train)},
           {"heldout", before_after(d.heldout)},
-          {"split", {{"train_windows", d.train_windows}, {"heldout_windows", d.heldout_windows}}},
+          {"split", {{"train_windows", d.train_windows},
+                     {"heldout_windows", d.heldout_windows},
+                     {"scored_against", d.scored_on_denoised_reference ? "denoised reference"
+                                                                       : "reference"}}},
           {"model", model},
           {"located", {{"segments", segments(d.located_before.segments)},
                        {"regions", regions(d.located_before.regions)},

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "diagnose/cross_validate.h"
 #include "diagnose/option_rules.h"
 #include "diagnose/residual_series.h"
 #include "diagnose/window_replay.h"
@@ -204,8 +205,18 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   const ReplayResult base = replay(in, nominal, ws), fin = replay(in, wheel, ws);
   d.baseline_pos_rmse_m = base.pos_rmse_m, d.baseline_heading_rmse_rad = base.heading_rmse_rad;
   d.final_pos_rmse_m = fin.pos_rmse_m, d.final_heading_rmse_rad = fin.heading_rmse_rad;
-  d.train = scores(in, nominal, wheel, ws, d.train_windows);
-  d.heldout = scores(in, nominal, wheel, ws, d.heldout_windows);
+  // Before/after scores against the selection's denoised reference (select.h).
+  DiagInput denoised;
+  double correlated = 1.0;
+  const SelectOptions& so = o.select;
+  const bool use_denoised =
+      denoised_reference(in, so.select_ref_rate_hz, so.smooth_half_s, so.smooth_heading_half_s,
+                         so.fit.model, denoised, correlated) > 1 &&
+      make_windows(denoised, ws).size() == windows.size();
+  const DiagInput& scoring = use_denoised ? denoised : in;
+  d.scored_on_denoised_reference = use_denoised;
+  d.train = scores(scoring, nominal, wheel, ws, d.train_windows);
+  d.heldout = scores(scoring, nominal, wheel, ws, d.heldout_windows);
   d.before = residual_series(in, windows, base);
   d.after = residual_series(in, windows, fin);
   d.located_before = locate(d.before, in.ref_sigma_m, o.locate);
@@ -233,8 +244,8 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
     }
     EffectSet without = wheel;
     without.disable(se.effect);
-    f.train = scores(in, without, wheel, ws, d.train_windows);
-    f.heldout = scores(in, without, wheel, ws, d.heldout_windows);
+    f.train = scores(scoring, without, wheel, ws, d.train_windows);
+    f.heldout = scores(scoring, without, wheel, ws, d.heldout_windows);
     f.explains = se.explains;
     for (Effect r : se.rivals) f.rivals.emplace_back(effect_name(r));
     f.evidence = "model selection: cross-validated over time blocks, fitted with Ceres";
@@ -252,7 +263,7 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   if (gc.available && (gc.bias.departs() || gc.scale.departs())) {
     const double b = gc.bias.departs() ? gc.bias.value : 0.0;
     const double s = gc.scale.departs() ? gc.scale.value : 1.0;
-    const DiagInput corrected = gyro_heading_input(in, b, s);
+    const DiagInput corrected = gyro_heading_input(scoring, b, s);
     const std::pair<Effect, const Verdict*> checks[] = {{Effect::gyro_bias, &gc.bias},
                                                        {Effect::gyro_scale, &gc.scale}};
     for (const auto& [effect, v] : checks) {
@@ -262,8 +273,8 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
       const std::string name = effect == Effect::gyro_bias ? "b" : "s";
       f.params.push_back({name, v->value});
       f.stderrs.push_back({name, v->std_error});
-      const DiagInput without = effect == Effect::gyro_bias ? gyro_heading_input(in, 0.0, s)
-                                                            : gyro_heading_input(in, b, 1.0);
+      const DiagInput without = effect == Effect::gyro_bias ? gyro_heading_input(scoring, 0.0, s)
+                                                            : gyro_heading_input(scoring, b, 1.0);
       f.train = scores(without, nominal, nominal, ws, d.train_windows);
       f.train.after_pos_rmse_m = replay(corrected, nominal, ws, d.train_windows).pos_rmse_m;
       f.heldout = scores(without, nominal, nominal, ws, d.heldout_windows);

@@ -22,7 +22,14 @@
 //    sub-millimetre mismatch: not physics one can act on); params empty.
 //
 // Numbers of a finding (diagnosis-output.md), all position RMSEs of the
-// windowed replay against the RAW reference:
+// windowed replay. baseline/final: against the raw reference. train/heldout
+// before/after: against the selection's denoised reference (select.h,
+// cross_validate.h denoised_reference: thinned to ~10 Hz, local fits), as the
+// selection's own final fit, because a window is anchored on ONE reference
+// pose, and with e.g. 10 mrad heading noise that anchor alone moves a 20 s
+// window's end by decimetres, in every model alike, which would drown a
+// held-out comparison over a handful of windows (fixes below ~10 Hz are used
+// as they are):
 //  * wheel effect e: before = the chosen model without e (the other effects
 //    keep their fitted values), after = the chosen model; on the training and
 //    the held-out windows. With one effect, before is the nominal model.
@@ -101,6 +108,7 @@ struct Diagnosis {
   double baseline_pos_rmse_m = 0.0, baseline_heading_rmse_rad = 0.0;  // nominal, all windows
   double final_pos_rmse_m = 0.0, final_heading_rmse_rad = 0.0;        // chosen model, all windows
   BeforeAfter train, heldout;          // nominal vs chosen model on the selection's split
+  bool scored_on_denoised_reference = false;  // train/heldout numbers (file comment)
   std::vector<Finding> findings;       // by importance; empty = nothing beyond noise
   EffectSet model;                     // chosen wheel effects and gyro effects, fitted values
   std::vector<int> train_windows, heldout_windows;
