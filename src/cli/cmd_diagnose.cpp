@@ -6,12 +6,14 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
+#include "cli/diagnosis_figure_data.h"
 #include "cli/diagnosis_json.h"
 #include "cli/diagnosis_summary.h"
 #include "cli/failure.h"
 #include "cli/output.h"
 #include "diagnose/diag_input.h"
 #include "diagnose/diagnosis.h"
+#include "results/diagnosis_report.h"
 #include "tracks/atomic_file.h"
 
 namespace odotune::cli {
@@ -43,9 +45,19 @@ void run_diagnose(const DiagnoseArgs& a) {
   }
   const std::vector<std::string> lines = diagnosis_summary(d);
   const std::string json_text = diagnosis_json(d).dump(2) + "\n";
+  if (!a.report.empty()) {
+    std::string finding;  // the effects' names (the titles have room for no more)
+    for (const diagnose::Finding& f : d.findings) finding += (finding.empty() ? "" : ", ") + f.effect;
+    try {
+      results::write_diagnosis_report(a.report, diagnosis_figure_data(in, d, finding), lines, json_text);
+    } catch (const std::exception& e) {
+      throw Failure(fmt::format("{}: report: {}", a.report, e.what()));
+    }
+  }
   if (!a.json.empty()) write_atomically(a.json, "diagnosis JSON", json_text);
   for (const std::string& l : lines) fmt::print("{}\n", l);
   if (!a.json.empty()) fmt::print("json: {}\n", a.json);
+  if (!a.report.empty()) fmt::print("report: {}\n", (std::filesystem::path(a.report) / "index.html").string());
 }
 
 }  // namespace
@@ -62,6 +74,8 @@ void register_diagnose(CLI::App& app) {
       "the held-out improvement. The JSON follows ../shared/specs/diagnosis-output.md.");
   sub->add_option("track", args->track, "track file (track-format.md)")->required();
   sub->add_option("--json", args->json, "write the diagnosis as JSON (diagnosis-output.md)");
+  sub->add_option("--report", args->report,
+                  "folder for the figures (residual vs time and condition, map, overlay) and index.html");
   sub->add_option("--window", args->window_s, "replay window [s]; the odometry is re-anchored on the reference at each")
       ->default_val(20.0)
       ->check(CLI::PositiveNumber);
