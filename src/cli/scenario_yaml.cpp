@@ -22,6 +22,7 @@ namespace {
 
 constexpr std::uintmax_t kMaxFileBytes = 16u << 20;  // a scenario is a few kB
 constexpr std::size_t kMaxSegments = 1'000'000;      // after expanding repeats
+constexpr std::size_t kMaxKnots = 1'000'000;         // motion.knots entries
 constexpr long kMaxRepeat = 100'000;
 
 std::size_t line_of(const YAML::Node& n) {
@@ -55,7 +56,7 @@ class Parser {
       throw ScenarioError(file_, line, fmt::format("YAML syntax error: {}", e.msg));
     }
     if (!root.IsMap())
-      fail(root, fmt::format("expected a scenario (a map with at least motion.segments), got {}",
+      fail(root, fmt::format("expected a scenario (a map with at least motion.segments or motion.knots), got {}",
                              kind_of(root)));
     sim::Scenario sc;
     sc.name = std::filesystem::path(file_).stem().string();
@@ -84,7 +85,8 @@ class Parser {
                    }
                  });
     if (!have_motion)
-      fail(root, "missing 'motion'; expected motion: {segments: [...]} describing what the robot does");
+      fail(root, "missing 'motion'; expected motion: {segments: [...]} or motion: {knots: [...]} describing "
+                 "what the robot does");
     check(sc);
     return sc;
   }
@@ -233,9 +235,11 @@ class Parser {
   }
 
   void read_motion(const YAML::Node& n, const YAML::Node& key, sim::MotionParams& m) {
-    if (!n.IsMap()) fail(value_or_key(n, key), fmt::format("motion: expected a map with segments, got {}", kind_of(n)));
-    bool have_segments = false;
-    for_each_key(n, "motion", {"max_accel_m_s2", "max_angular_accel_rad_s2", "segments"},
+    if (!n.IsMap())
+      fail(value_or_key(n, key), fmt::format("motion: expected a map with segments or knots, got {}", kind_of(n)));
+    bool have_segments = false, have_knots = false;
+    YAML::Node knots_key;
+    for_each_key(n, "motion", {"max_accel_m_s2", "max_angular_accel_rad_s2", "segments", "knots"},
                  [&](const std::string& k, const YAML::Node& kn, const YAML::Node& v) {
                    if (k == "max_accel_m_s2") m.max_accel_m_s2 = read_double(v, kn, "motion." + k);
                    if (k == "max_angular_accel_rad_s2")
@@ -244,9 +248,49 @@ class Parser {
                      read_segments(v, kn, "motion.segments", m.segments);
                      have_segments = true;
                    }
+                   if (k == "knots") {
+                     read_knots(v, kn, m.knots);
+                     knots_key.reset(kn);
+                     have_knots = true;
+                   }
                  });
+    if (have_segments && have_knots)
+      fail(knots_key, "motion: segments and knots both given; expected one of them (segments: planned "
+                      "motion, knots: an explicit velocity profile)");
+    if (have_knots) {
+      if (m.knots.empty())
+        fail(knots_key, "motion.knots: no knots; expected knots: [[t_s, v_m_s, w_rad_s], ...] starting at t_s = 0");
+      return;
+    }
     if (!have_segments || m.segments.empty())
-      fail(value_or_key(n, key), "motion: no segments; expected segments: [- straight: {...}, ...]");
+      fail(value_or_key(n, key), "motion: no segments or knots; expected segments: [- straight: {...}, ...] "
+                                 "or knots: [[t_s, v_m_s, w_rad_s], ...]");
+  }
+
+  // motion.knots: a list of [t_s, v_m_s, w_rad_s] triples. Their order and
+  // values are checked by MotionProfile (in check()), at the knot's line.
+  void read_knots(const YAML::Node& n, const YAML::Node& key, std::vector<sim::VelocityKnot>& out) {
+    if (!n.IsSequence())
+      fail(value_or_key(n, key), fmt::format("motion.knots: expected a list of [t_s, v_m_s, w_rad_s] "
+                                             "triples, got {}", kind_of(n)));
+    if (n.size() > kMaxKnots)
+      fail(key, fmt::format("motion.knots: {} knots; expected at most {}", n.size(), kMaxKnots));
+    out.reserve(n.size());
+    knot_lines_.reserve(n.size());
+    for (std::size_t i = 0; i < n.size(); ++i) {
+      const YAML::Node item = n[i];
+      const std::string ip = fmt::format("motion.knots[{}]", i + 1);
+      if (!item.IsSequence() || item.size() != 3)
+        fail(value_or_key(item, key),
+             fmt::format("{}: expected a list [t_s, v_m_s, w_rad_s] of 3 numbers, got {}", ip,
+                         item.IsSequence() ? fmt::format("{} items", item.size()) : kind_of(item)));
+      sim::VelocityKnot k;
+      k.t_s = read_double(item[0], item, ip + ".t_s");
+      k.v_m_s = read_double(item[1], item, ip + ".v_m_s");
+      k.w_rad_s = read_double(item[2], item, ip + ".w_rad_s");
+      out.push_back(k);
+      knot_lines_.push_back(line_of(item));
+    }
   }
 
   void read_segments(const YAML::Node& n, const YAML::Node& key, const std::string& path,
@@ -372,6 +416,8 @@ class Parser {
       std::size_t line = line_for("motion." + what.substr(0, what.find(' ')));  // e.g. max_accel_m_s2
       if (e.segment() < sc.motion.segments.size() && sc.motion.segments[e.segment()].line > 0)
         line = static_cast<std::size_t>(sc.motion.segments[e.segment()].line);
+      if (sc.motion.segments.empty() && e.segment() < knot_lines_.size() && knot_lines_[e.segment()] > 0)
+        line = knot_lines_[e.segment()];
       throw ScenarioError(file_, line, fmt::format("motion: {}", e.what()));
     }
     std::string why;
@@ -394,6 +440,7 @@ class Parser {
 
   std::string file_;
   std::map<std::string, std::size_t> lines_;
+  std::vector<std::size_t> knot_lines_;  // line of each motion.knots entry
 };
 
 }  // namespace

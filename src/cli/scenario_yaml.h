@@ -1,4 +1,5 @@
-// Reading a simulation scenario (src/tracks/scenario.h) from YAML.
+// Reading a simulation scenario (src/tracks/scenario.h) from YAML, and writing
+// one (scenario_to_yaml, in scenario_yaml_write.cpp).
 //
 // Schema (every key optional unless marked; see scenarios/README.md and the
 // commented scenarios/track*.yaml for a full example):
@@ -10,15 +11,20 @@
 //              mass_kg, yaw_inertia_kg_m2, wheel_inertia_kg_m2, viscous_friction_nm_s,
 //              coulomb_friction_nm, coulomb_smoothing_rad_s, torque_constant_nm_per_a,
 //              coil_resistance_ohm }
-//   motion:                       # REQUIRED
+//   motion:                       # REQUIRED, with segments OR knots (not both)
 //     max_accel_m_s2: 0.5
 //     max_angular_accel_rad_s2: 2.0
-//     segments:                   # REQUIRED, a list of one-key maps:
+//     segments:                   # a non-empty list of one-key maps:
 //       - straight: {distance_m: 4, speed_m_s: 0.5}
 //       - arc:      {radius_m: 0.6, angle_deg: 90, speed_m_s: 0.35}
 //       - spin:     {angle_deg: -180, rate_deg_s: 90}
 //       - stop:     {duration_s: 2}
 //       - repeat:   {count: 3, segments: [ ... ]}      # expanded in place
+//     knots:                      # OR an explicit velocity profile: a non-empty
+//       - [0.0, 0.0, 0.0]         # list of [t_s, v_m_s, w_rad_s] triples, first
+//       - [0.5, 0.25, 0.0]        # t_s = 0, t_s strictly increasing; commands
+//       - [4.0, 0.25, 0.1]        # linear between knots, taken as given (the
+//                                 # acceleration limits are not applied)
 //   sensors: { encoders | commands | gyro | power | ext_velocity | aps | ground_truth:
 //              {enabled, rate_hz, <sigma_* / resolution_* of scenario.h>} }
 //   effects: { <effect>: {<param>: value, ...}, ... }  # physics-effects.md names
@@ -55,5 +61,18 @@ sim::Scenario load_scenario(const std::filesystem::path& file);
 
 // Parses scenario text; `filename` is used in messages and as the source.
 sim::Scenario parse_scenario(std::string_view yaml_text, const std::string& filename);
+
+// The scenario as YAML in the schema above, which parse_scenario reads back
+// to the same scenario field by field (every field the reader reads: name,
+// seed, step_s, all robot fields, motion with its segments (flat, one line
+// each, only the fields of the segment's kind) or knots (one [t_s, v_m_s,
+// w_rad_s] line each), every field of every sensor, the active effects with
+// all their parameters; numbers in shortest round-trip form, so they parse
+// back bit for bit). Not written: Scenario::source (the reader sets it from
+// the file name) and Segment::line. `header_comment` goes first, each of its
+// lines prefixed "# " (nothing for ""). Throws std::invalid_argument for a
+// scenario the reader would reject: invalid (validate_scenario's message),
+// no segments and no knots, an empty or multi-line name, a non-finite number.
+std::string scenario_to_yaml(const sim::Scenario& scenario, const std::string& header_comment);
 
 }  // namespace odotune::cli

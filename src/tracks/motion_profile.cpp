@@ -39,6 +39,26 @@ void need_nonzero(const Segment& s, std::size_t i, const char* field, double val
   if (!(std::isfinite(value) && value != 0.0)) bad_field(s, i, field, value, "a non-zero number");
 }
 
+// The knots path (file comment of motion_profile.h): checked, copied as given.
+std::vector<MotionProfile::Knot> checked_knots(const std::vector<VelocityKnot>& in) {
+  std::vector<MotionProfile::Knot> out;
+  out.reserve(in.size());
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    const VelocityKnot& k = in[i];
+    auto bad = [&](const char* field, double value, const std::string& expected) {
+      throw ProfileError(i, fmt::format("knot {}: {} = {}; expected {}", i + 1, field, value, expected));
+    };
+    if (!std::isfinite(k.t_s)) bad("t_s", k.t_s, "a finite number");
+    if (!std::isfinite(k.v_m_s)) bad("v_m_s", k.v_m_s, "a finite number");
+    if (!std::isfinite(k.w_rad_s)) bad("w_rad_s", k.w_rad_s, "a finite number");
+    if (i == 0 && k.t_s != 0.0) bad("t_s", k.t_s, "0 for the first knot");
+    if (i > 0 && !(k.t_s > in[i - 1].t_s))
+      bad("t_s", k.t_s, fmt::format("a time > {} (the previous knot's; strictly increasing)", in[i - 1].t_s));
+    out.push_back({k.t_s, k.v_m_s, k.w_rad_s});
+  }
+  return out;
+}
+
 double ramp_s(const Command& a, const Command& b, double max_acc, double max_ang_acc) {
   return std::max(std::abs(a.v_m_s - b.v_m_s) / max_acc, std::abs(a.w_rad_s - b.w_rad_s) / max_ang_acc);
 }
@@ -80,6 +100,14 @@ MotionProfile::MotionProfile(const MotionParams& motion) {
   if (!(std::isfinite(ang) && ang > 0.0))
     throw ProfileError(ProfileError::npos,
                        fmt::format("max_angular_accel_rad_s2 = {}; expected a number > 0", ang));
+  if (!motion.knots.empty()) {
+    if (!motion.segments.empty())
+      throw ProfileError(ProfileError::npos,
+                         "segments and knots both given; expected one of them (segments: planned "
+                         "motion, knots: an explicit velocity profile)");
+    knots_ = checked_knots(motion.knots);
+    return;
+  }
   const auto& segs = motion.segments;
   const std::size_t n = segs.size();
   if (n == 0) return;

@@ -1,5 +1,6 @@
 // Commanded body velocities v_cmd(t) [m/s], w_cmd(t) [rad/s] from a list of
-// motion segments (scenario.h) under acceleration limits.
+// motion segments (scenario.h) under acceleration limits, or from explicit
+// velocity knots (end of this comment).
 //
 // How segments become a profile:
 //  * Each segment has a cruise command (v_i, w_i): straight (+-speed, 0),
@@ -24,6 +25,17 @@
 //    still met exactly. If no speed fits (never in practice), ProfileError.
 //
 // The result is piecewise linear in t and stored as knots.
+//
+// Explicit knots (a non-empty MotionParams::knots, e.g. the velocities along a
+// recorded track) are used AS GIVEN: the profile is linear between them and
+// holds the first / last knot's command outside [0, duration]. They are only
+// checked: every value finite, the first t_s = 0, t_s strictly increasing
+// (ProfileError naming the 1-based knot; its segment() is the 0-based knot
+// index). The
+// acceleration limits are NOT applied to knots (a recording may accelerate
+// harder than a planner would; the limits must still be valid numbers and are
+// written to the track's metadata). A MotionParams with both segments and
+// knots is a ProfileError; plan() is empty for a knots profile.
 #pragma once
 
 #include <cstddef>
@@ -36,7 +48,8 @@
 namespace odotune::sim {
 
 // A profile that cannot be built; `segment` is the 0-based index into
-// MotionParams::segments (or npos for the whole list).
+// MotionParams::segments, or into MotionParams::knots for a knots profile
+// (or npos for the whole list).
 class ProfileError : public std::invalid_argument {
  public:
   ProfileError(std::size_t segment, const std::string& what)
@@ -76,11 +89,12 @@ class MotionProfile {
     double v_m_s, w_rad_s, speed_scale, begin_s, end_s;
   };
 
-  // Throws ProfileError (see file comment). An empty segment list gives a
-  // profile of zero duration.
+  // Throws ProfileError (see file comment). An empty segment list (and no
+  // knots) gives a profile of zero duration.
   explicit MotionProfile(const MotionParams& motion);
 
-  // Command at time t [s]; (0, 0) outside [0, duration_s()].
+  // Command at time t [s]; outside [0, duration_s()] the first / last knot's
+  // command ((0, 0) for segments, which start and end at rest).
   Command at(double t_s) const;
   double duration_s() const { return knots_.empty() ? 0.0 : knots_.back().t_s; }
   const std::vector<Knot>& knots() const { return knots_; }

@@ -60,10 +60,22 @@ struct Segment {
   int line = 0;  // line in the scenario file, for error messages (0 = unknown)
 };
 
+// One point of an explicit velocity profile: the commanded body velocities at
+// time t_s. Between knots the command is linear in t (motion_profile.h).
+struct VelocityKnot {
+  double t_s = 0.0;       // [s]; the first knot at 0, strictly increasing
+  double v_m_s = 0.0;     // v_cmd [m/s]
+  double w_rad_s = 0.0;   // w_cmd [rad/s]
+};
+
+// The commanded motion: EITHER segments (planned under the acceleration
+// limits) OR knots (an explicit profile, taken as given: the limits are not
+// applied to it). Giving both is an error (motion_profile.h).
 struct MotionParams {
   double max_accel_m_s2 = 0.5;              // |dv_cmd/dt| limit [m/s^2]
   double max_angular_accel_rad_s2 = 2.0;    // |dw_cmd/dt| limit [rad/s^2]
   std::vector<Segment> segments;            // flat; repeats already expanded
+  std::vector<VelocityKnot> knots;          // explicit profile (e.g. from a recorded track)
 };
 
 // Sensors. Every sensor samples at t = k / rate_hz (k = 0, 1, ...); a row of
