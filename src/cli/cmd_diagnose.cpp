@@ -13,7 +13,9 @@
 #include "cli/output.h"
 #include "diagnose/diag_input.h"
 #include "diagnose/diagnosis.h"
+#include "cli/scenario_yaml.h"
 #include "results/diagnosis_report.h"
+#include "tracks/scenario_from_track.h"
 #include "tracks/atomic_file.h"
 
 namespace odotune::cli {
@@ -54,9 +56,30 @@ void run_diagnose(const DiagnoseArgs& a) {
       throw Failure(fmt::format("{}: report: {}", a.report, e.what()));
     }
   }
+  if (!a.scenario_out.empty()) {
+    std::vector<std::string> specs;
+    std::string names;
+    for (const diagnose::Finding& f : d.findings)
+      if (!f.spec().empty()) specs.push_back(f.spec()), names += (names.empty() ? "" : ", ") + f.effect;
+    std::string yaml;
+    try {
+      const sim::Scenario sc = sim::scenario_from_track(track, specs);
+      yaml = scenario_to_yaml(
+          sc, fmt::format("The robot of track '{}' ({}) with the physics `odotune diagnose` found:\n"
+                          "  {}\n"
+                          "driven along the recording's reference path (motion.knots: its body\n"
+                          "velocities, smoothed; simulated time 0 = the first reference sample).\n"
+                          "Reproduce the corrected model:  odotune simulate THIS_FILE -o corrected.csv",
+                          d.track, a.track, names.empty() ? "none (the nominal model explains it)" : names));
+    } catch (const std::exception& e) {
+      throw Failure(fmt::format("{}: cannot build the corrected scenario: {}", a.track, e.what()));
+    }
+    write_atomically(a.scenario_out, "scenario", yaml);
+  }
   if (!a.json.empty()) write_atomically(a.json, "diagnosis JSON", json_text);
   for (const std::string& l : lines) fmt::print("{}\n", l);
   if (!a.json.empty()) fmt::print("json: {}\n", a.json);
+  if (!a.scenario_out.empty()) fmt::print("scenario: {} (odotune simulate {} -o corrected.csv)\n", a.scenario_out, a.scenario_out);
   if (!a.report.empty()) fmt::print("report: {}\n", (std::filesystem::path(a.report) / "index.html").string());
 }
 
@@ -76,6 +99,8 @@ void register_diagnose(CLI::App& app) {
   sub->add_option("--json", args->json, "write the diagnosis as JSON (diagnosis-output.md)");
   sub->add_option("--report", args->report,
                   "folder for the figures (residual vs time and condition, map, overlay) and index.html");
+  sub->add_option("--scenario-out", args->scenario_out,
+                  "write the robot with the fitted effects as a simulator scenario (odotune simulate reads it)");
   sub->add_option("--window", args->window_s, "replay window [s]; the odometry is re-anchored on the reference at each")
       ->default_val(20.0)
       ->check(CLI::PositiveNumber);

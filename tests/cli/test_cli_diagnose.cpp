@@ -99,6 +99,40 @@ TEST(CliDiagnose, NamesLateralSkidInTheFirstLineAndWritesTheSpecJson) {
   EXPECT_THAT(j.at("model")[0].get<std::string>(), StartsWith("lateral_skid:k="));
 }
 
+// The corrected model travels: --scenario-out, simulate it, diagnose the
+// simulated track: the same effect comes back, at the same size. --report
+// writes the figures and the page.
+TEST(CliDiagnose, ScenarioOutReproducesTheFittedEffectAndReportHasTheFigures) {
+  testing_support::TempDir dir;
+  const std::string track = simulate(dir, "slip", "--effect longitudinal_slip:k=0.08");
+  const std::string yaml = (dir.path() / "corrected.yaml").string();
+  const std::string report = (dir.path() / "report").string();
+  const std::string first = (dir.path() / "first.json").string();
+  auto r = run_cli("diagnose " + track + " --scenario-out " + yaml + " --report " + report +
+                   " --json " + first);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json a = json::parse(slurp(first));
+  ASSERT_EQ(a.at("findings").size(), 1u) << a.at("findings").dump();
+  EXPECT_EQ(a.at("findings")[0].at("effect"), "longitudinal_slip");
+  for (const char* f : {"index.html", "residual_time.svg", "residual_time.png", "map.svg",
+                        "overlay.svg", "residual_condition.svg"})
+    EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(report) / f)) << f;
+  EXPECT_THAT(slurp(std::filesystem::path(report) / "index.html"), HasSubstr("longitudinal_slip"));
+
+  const std::string resim = (dir.path() / "resim.csv").string();
+  r = run_cli("simulate " + yaml + " -o " + resim);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string second = (dir.path() / "second.json").string();
+  r = run_cli("diagnose " + resim + " --json " + second);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json b = json::parse(slurp(second));
+  ASSERT_EQ(b.at("findings").size(), 1u) << b.at("findings").dump();
+  EXPECT_EQ(b.at("findings")[0].at("effect"), "longitudinal_slip");
+  const double k1 = a.at("findings")[0].at("params").at("k"), k2 = b.at("findings")[0].at("params").at("k");
+  EXPECT_NEAR(k2, k1, 0.1 * k1);
+  EXPECT_NEAR(k1, 0.08, 0.25 * 0.08);
+}
+
 TEST(CliDiagnose, IdealRobotGivesNoFindingAndSaysSo) {
   testing_support::TempDir dir;
   const std::string track = simulate(dir, "ideal", "");
