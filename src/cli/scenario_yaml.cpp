@@ -239,8 +239,11 @@ class Parser {
       fail(value_or_key(n, key), fmt::format("motion: expected a map with segments or knots, got {}", kind_of(n)));
     bool have_segments = false, have_knots = false;
     YAML::Node knots_key;
-    for_each_key(n, "motion", {"max_accel_m_s2", "max_angular_accel_rad_s2", "segments", "knots"},
+    for_each_key(n, "motion", {"start", "max_accel_m_s2", "max_angular_accel_rad_s2", "segments", "knots"},
                  [&](const std::string& k, const YAML::Node& kn, const YAML::Node& v) {
+                   if (k == "start")
+                     read_fields(v, "motion.start",
+                                 {{"x_m", &m.start_x_m}, {"y_m", &m.start_y_m}, {"theta_rad", &m.start_theta_rad}});
                    if (k == "max_accel_m_s2") m.max_accel_m_s2 = read_double(v, kn, "motion." + k);
                    if (k == "max_angular_accel_rad_s2")
                      m.max_angular_accel_rad_s2 = read_double(v, kn, "motion." + k);

@@ -12,6 +12,8 @@
 //              coulomb_friction_nm, coulomb_smoothing_rad_s, torque_constant_nm_per_a,
 //              coil_resistance_ohm }
 //   motion:                       # REQUIRED, with segments OR knots (not both)
+//     start: {x_m: 0, y_m: 0, theta_rad: 0}   # initial pose [m, m, rad], each
+//                                 # optional (default 0), finite; scenario.h
 //     max_accel_m_s2: 0.5
 //     max_angular_accel_rad_s2: 2.0
 //     segments:                   # a non-empty list of one-key maps:
@@ -64,9 +66,12 @@ sim::Scenario parse_scenario(std::string_view yaml_text, const std::string& file
 
 // The scenario as YAML in the schema above, which parse_scenario reads back
 // to the same scenario field by field (every field the reader reads: name,
-// seed, step_s, all robot fields, motion with its segments (flat, one line
-// each, only the fields of the segment's kind) or knots (one [t_s, v_m_s,
-// w_rad_s] line each), every field of every sensor, the active effects with
+// seed, step_s, all robot fields, motion with its start pose (all three
+// fields, written only when one of them is non-zero, so a scenario starting
+// at the origin is written as before; -0 counts as zero and reads back as 0)
+// and its segments (flat, one line each, only the fields of the segment's
+// kind) or knots (one [t_s, v_m_s, w_rad_s] line each), every field of every
+// sensor, the active effects with
 // all their parameters; numbers in shortest round-trip form, so they parse
 // back bit for bit). Not written: Scenario::source (the reader sets it from
 // the file name) and Segment::line. `header_comment` goes first, each of its

@@ -115,6 +115,10 @@ std::string segment_line(const sim::Segment& s, std::size_t i) {
 
 void write_motion(std::string& out, const sim::MotionParams& m) {
   out += "motion:\n";
+  if (m.start_x_m != 0.0 || m.start_y_m != 0.0 || m.start_theta_rad != 0.0)
+    out += fmt::format("  start: {}\n", flow_map({{"x_m", num("motion.start.x_m", m.start_x_m)},
+                                                  {"y_m", num("motion.start.y_m", m.start_y_m)},
+                                                  {"theta_rad", num("motion.start.theta_rad", m.start_theta_rad)}}));
   out += fmt::format("  max_accel_m_s2: {}\n", num("motion.max_accel_m_s2", m.max_accel_m_s2));
   out += fmt::format("  max_angular_accel_rad_s2: {}\n",
                      num("motion.max_angular_accel_rad_s2", m.max_angular_accel_rad_s2));

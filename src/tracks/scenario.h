@@ -71,7 +71,16 @@ struct VelocityKnot {
 // The commanded motion: EITHER segments (planned under the acceleration
 // limits) OR knots (an explicit profile, taken as given: the limits are not
 // applied to it). Giving both is an error (motion_profile.h).
+//
+// The start pose is where the robot stands at t = 0, in the frame of the
+// track's gt_*/aps_* columns (and of the slip_zone box): the ground truth's
+// first row is exactly (start_x_m, start_y_m, start_theta_rad), theta
+// unwrapped from there. It moves the world path rigidly and changes nothing
+// the robot itself senses (ticks, commands, gyro, power, ext_velocity), except
+// through slip_zone, whose box is fixed in that frame. Finite numbers;
+// default: the origin, heading along +x.
 struct MotionParams {
+  double start_x_m = 0, start_y_m = 0, start_theta_rad = 0;  // initial pose [m, m, rad]
   double max_accel_m_s2 = 0.5;              // |dv_cmd/dt| limit [m/s^2]
   double max_angular_accel_rad_s2 = 2.0;    // |dw_cmd/dt| limit [rad/s^2]
   std::vector<Segment> segments;            // flat; repeats already expanded

@@ -139,7 +139,28 @@ struct Motion {
   std::vector<double> t;        // knot times, shifted to start at 0 [s]
   std::vector<double> x, y, th;  // pose [m, m, rad] (th unwrapped)
   std::vector<double> v, w;      // body velocities [m/s, rad/s]
+  double start_th = 0;           // heading of the scenario's start pose [rad] (header: Frames)
 };
+
+// Without gt_theta: the initial heading th0 that agrees best with the trusted
+// path directions given the turning the knots command, i.e. th0 + H_k ~ th_k
+// with H_k the trapezoid integral of w up to knot k (what the simulator turns
+// between knots): the circular mean of th_k - H_k over the trusted knots,
+// weighted by their speed (the direction of a faster fit is surer), unwrapped
+// next to th_0. Unlike th_0 alone it is not thrown off by one spurious
+// trusted heading while the robot stands, nor by a turn lost in an untrusted
+// stretch (it then splits the loss, like a rigid best fit).
+double consensus_start_heading(const Motion& m, const std::vector<bool>& known, const std::vector<double>& speed) {
+  double sum_s = 0.0, sum_c = 0.0, turned = 0.0;
+  for (std::size_t k = 0; k < m.t.size(); ++k) {
+    if (k > 0) turned += 0.5 * (m.w[k - 1] + m.w[k]) * (m.t[k] - m.t[k - 1]);
+    if (!known[k]) continue;
+    sum_s += speed[k] * std::sin(m.th[k] - turned);
+    sum_c += speed[k] * std::cos(m.th[k] - turned);
+  }
+  if (!(sum_s != 0.0 || sum_c != 0.0)) return m.th.front();
+  return m.th.front() + wrap_pi(std::atan2(sum_s, sum_c) - m.th.front());
+}
 
 Motion reference_motion(const Reference& ref, const ScenarioFromTrackOptions& o) {
   Motion m;
@@ -153,7 +174,7 @@ Motion reference_motion(const Reference& ref, const ScenarioFromTrackOptions& o)
   std::vector<const std::vector<double>*> series = {&ref.x, &ref.y};
   if (have_th) series.push_back(&ref.th);
   std::vector<bool> heading_known(n, have_th);
-  std::vector<double> vx(n), vy(n);
+  std::vector<double> vx(n), vy(n), speed(n, 0.0);
   const double half = ref.fixes ? o.fixes_half_window_s : o.half_window_s;
   for (std::size_t k = 0; k < n; ++k) {
     const double tc = t0 + m.t[k];
@@ -171,6 +192,7 @@ Motion reference_motion(const Reference& ref, const ScenarioFromTrackOptions& o)
     if (sp2 > 0.0 && std::sqrt(sp2) >= std::max(o.min_speed_m_s, 3.0 * se)) {
       heading_known[k] = true;
       m.th[k] = std::atan2(vy[k], vx[k]);
+      speed[k] = std::sqrt(sp2);
     }
   }
   if (!have_th) {  // hold the heading while slow; before the first known one, use it
@@ -188,6 +210,7 @@ Motion reference_motion(const Reference& ref, const ScenarioFromTrackOptions& o)
       m.w[k] = b > a && heading_known[a] && heading_known[b] ? (m.th[b] - m.th[a]) / (m.t[b] - m.t[a]) : 0.0;
     }
   }
+  m.start_th = have_th ? m.th.front() : consensus_start_heading(m, heading_known, speed);
   for (std::size_t k = 0; k < n; ++k) m.v[k] = vx[k] * std::cos(m.th[k]) + vy[k] * std::sin(m.th[k]);
   return m;
 }
@@ -223,14 +246,11 @@ std::vector<VelocityKnot> invert_effects(const Motion& m, const RobotParams& r, 
   const double D = r.wheel_base_m, D_true = D * (fx.wheel_base_error ? fx.wheel_base_error->scale : 1.0);
   std::array<std::vector<double>, 2> g;  // [0] left, [1] right: ground -> rim speed -> wheel rate
   g[0].resize(n), g[1].resize(n);
-  const double c0 = std::cos(m.th.front()), s0 = std::sin(m.th.front());
   for (std::size_t k = 0; k < n; ++k) {
     g[0][k] = m.v[k] - m.w[k] * D_true / 2.0;
     g[1][k] = m.v[k] + m.w[k] * D_true / 2.0;
-    if (const auto& z = fx.slip_zone) {
-      const double dx = m.x[k] - m.x.front(), dy = m.y[k] - m.y.front();
-      const double xs = c0 * dx + s0 * dy, ys = -s0 * dx + c0 * dy;  // simulator frame
-      if (xs >= z->x0 && xs <= z->x1 && ys >= z->y0 && ys <= z->y1) {
+    if (const auto& z = fx.slip_zone) {  // the box is in the recording's frame, as m.x, m.y
+      if (m.x[k] >= z->x0 && m.x[k] <= z->x1 && m.y[k] >= z->y0 && m.y[k] <= z->y1) {
         g[0][k] /= 1.0 - z->s_l;
         g[1][k] /= 1.0 - z->s_r;
       }
@@ -449,7 +469,11 @@ Scenario scenario_from_track(const Track& track, const std::vector<std::string>&
     sc.motion.max_angular_accel_rad_s2 = *a;
   sc.sensors = SensorBuilder(track, options.step_s).build();
   sc.effects = fx;
-  sc.motion.knots = invert_effects(reference_motion(ref, options), sc.robot, fx);
+  const Motion m = reference_motion(ref, options);
+  sc.motion.start_x_m = m.x.front();
+  sc.motion.start_y_m = m.y.front();
+  sc.motion.start_theta_rad = m.start_th;
+  sc.motion.knots = invert_effects(m, sc.robot, fx);
 
   if (!validate_scenario(sc, &why))
     throw std::invalid_argument(fmt::format("track '{}': the corrected scenario is not valid: {}", track.name(), why));

@@ -38,8 +38,8 @@
 // the simulated GROUND path follows the reference while the encoders see what
 // the corrected robot would count:
 //   ground speeds g_r,l = v +- w*D_true/2 (D_true = D*wheel_base_error.scale);
-//   slip_zone: g /= (1 - s) while the reference pose (in the simulator's frame,
-//     see below) is inside the box;
+//   slip_zone: g /= (1 - s) while the fitted reference position is inside
+//     the box (the box in the recording's frame, see below);
 //   longitudinal_slip (approximate): rim speed u = g / (1 - min(0.5, k*|dg/dt|)),
 //     dg/dt by central differences over the knots;
 //   speed_radius: u = z*(1 + c*z^2) solved for z = R_true*omega (Newton);
@@ -52,16 +52,21 @@
 // do not change v, w or only change sensor readings). Without effects the
 // knots are the reference's (v, w).
 //
-// Frames: the Scenario has no initial pose, and the simulator starts at the
-// origin with heading 0; the simulated track is the reference path moved
-// rigidly so that its first fitted pose is there (identical frames when the
-// reference starts at the origin, as a simulated track does; for position
-// fixes the first trusted heading sets the rotation, so the two frames differ
-// by that estimate's error too). Effect parameters are
-// taken in the recording's frame of time (radius_step.t is shifted by the
-// first reference time like the knots) but slip_zone's box is used as given,
-// i.e. in the simulator's frame: it is in the right place only when the
-// reference starts at the origin with heading 0.
+// Frames: the scenario's start pose (MotionParams::start_*) is the
+// reference's first pose, fitted at the first knot: x, y from the fit; theta
+// from gt_theta's fit when the reference has it, else from the path direction:
+// the start heading th0 with which the knots' turning (th0 + integral of w)
+// agrees best with the trusted directions of travel (their circular mean,
+// weighted by speed): about the first trusted direction when the directions
+// are trusted throughout, but not thrown off by a direction "trusted" while
+// the robot stands (e.g. a settling fix) nor by a turn lost in an untrusted
+// stretch. The simulated track therefore lies in the recording's frame: its
+// gt_x, gt_y, gt_theta (theta continuing the recording's unwrapped gt_theta)
+// are comparable with the recording's reference without any alignment, up to
+// the smoothing and, for position fixes, the error of the estimated start
+// pose. Effect parameters are taken in the recording's frame too: slip_zone's
+// box in its map coordinates (as a diagnosis fits it), radius_step.t in its
+// clock (shifted by the first reference time like the knots).
 //
 // Name "<track name>-corrected"; seed and step_s from the options; source ""
 // (the YAML reader sets it from the file name).

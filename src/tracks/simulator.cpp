@@ -161,6 +161,11 @@ bool validate_scenario(const Scenario& sc, std::string* why) {
   for (const auto& [name, v] : nn2)
     if (!nonneg(v)) return fail(fmt::format("sensors.{} = {}; expected a number >= 0", name, v));
 
+  const std::array<std::pair<const char*, double>, 3> start = {{
+      {"x_m", sc.motion.start_x_m}, {"y_m", sc.motion.start_y_m}, {"theta_rad", sc.motion.start_theta_rad}}};
+  for (const auto& [name, v] : start)
+    if (!std::isfinite(v)) return fail(fmt::format("motion.start.{} = {}; expected a finite number", name, v));
+
   std::string ewhy;
   if (!validate_effects(sc.effects, &ewhy)) return fail("effects: " + ewhy);
 
@@ -286,8 +291,9 @@ Track simulate(const Scenario& sc) {
   std::size_t next_row = 0, next_q = 0;
   WheelState w0;
   double ref0_l = 0.0, ref0_r = 0.0;
-  double x = 0.0, y = 0.0, th = 0.0, v_prev = 0.0, w_prev = 0.0;
-  if (n_rows > 0 && row_k[0] == 0) truth[next_row++] = Truth{};
+  const MotionParams& mo = sc.motion;
+  double x = mo.start_x_m, y = mo.start_y_m, th = mo.start_theta_rad, v_prev = 0.0, w_prev = 0.0;
+  if (n_rows > 0 && row_k[0] == 0) truth[next_row++] = Truth{x, y, th, 0.0, 0.0, 0.0, 0.0};
   while (next_q < n_rows && q[next_q] <= 0.0) odo[next_q++] = w0;
 
   for (std::int64_t k = 0; k < n_steps; ++k) {

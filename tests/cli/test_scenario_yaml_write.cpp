@@ -25,6 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::AllOf;
 using ::testing::HasSubstr;
+using ::testing::Not;
 using ::testing::StartsWith;
 
 fs::path source_dir() { return fs::path(ODOTUNE_SOURCE_DIR); }
@@ -56,6 +57,9 @@ void expect_same(const sim::Scenario& a, const sim::Scenario& b) {
   EXPECT_EQ(ra.torque_constant_nm_per_a, rb.torque_constant_nm_per_a);
   EXPECT_EQ(ra.coil_resistance_ohm, rb.coil_resistance_ohm);
   const auto &ma = a.motion, &mb = b.motion;
+  EXPECT_EQ(ma.start_x_m, mb.start_x_m);
+  EXPECT_EQ(ma.start_y_m, mb.start_y_m);
+  EXPECT_EQ(ma.start_theta_rad, mb.start_theta_rad);
   EXPECT_EQ(ma.max_accel_m_s2, mb.max_accel_m_s2);
   EXPECT_EQ(ma.max_angular_accel_rad_s2, mb.max_angular_accel_rad_s2);
   ASSERT_EQ(ma.segments.size(), mb.segments.size());
@@ -129,6 +133,7 @@ TEST(ScenarioYamlWrite, ReferenceScenariosRoundTripAndSimulateIdentically) {
     const sim::Scenario sc = load_scenario(scenario_file(i));
     const std::string yaml = scenario_to_yaml(sc, "written back by the test\nsecond line");
     EXPECT_THAT(yaml, StartsWith("# written back by the test\n# second line\n\nname: \"track"));
+    EXPECT_THAT(yaml, Not(HasSubstr("start")));  // at the origin: written as before the start pose existed
     const sim::Scenario back = parse_scenario(yaml, sc.source);
     expect_same(sc, back);
     EXPECT_EQ(back.source, sc.source);
@@ -148,6 +153,9 @@ sim::Scenario knots_scenario() {
   sc.robot.ticks_per_rev = 1e6;
   sc.robot.mass_kg = 1e-7;
   sc.motion.max_accel_m_s2 = 123456.789e-3;
+  sc.motion.start_x_m = 0.1 + 0.2;
+  sc.motion.start_y_m = -1e-3;
+  sc.motion.start_theta_rad = -2.0 / 3.0;
   sc.motion.knots = {{0, -0.0, 0},         {0.1, 0.1 + 0.2, 1.0 / 3.0}, {0.7, 0.45, -2.0 / 7.0},
                      {2.5, 0.5, 1e-300},   {4, -0.25, 0.1},             {5.000000000000001, 0, 0}};
   auto& s = sc.sensors;
@@ -180,9 +188,17 @@ TEST(ScenarioYamlWrite, KnotsScenarioWithAllEffectsRoundTripsExactly) {
   EXPECT_THAT(yaml, StartsWith("name: "));  // no header
   EXPECT_THAT(yaml, HasSubstr("\n    - [0.1, 0.30000000000000004, 0.3333333333333333]\n"));
   EXPECT_THAT(yaml, HasSubstr("\n    - [0, -0, 0]\n"));
+  EXPECT_THAT(yaml, HasSubstr("\nmotion:\n  start: {x_m: 0.30000000000000004, y_m: -0.001, "
+                              "theta_rad: -0.6666666666666666}\n"));
   const sim::Scenario back = parse_scenario(yaml, "knots.yaml");
   expect_same(sc, back);
   EXPECT_TRUE(track_text(back) == track_text(sc)) << "re-simulated track differs";
+  // One non-zero coordinate is enough for all three to be written.
+  sim::Scenario only_theta = sc;
+  only_theta.motion.start_x_m = only_theta.motion.start_y_m = 0;
+  const std::string yaml2 = scenario_to_yaml(only_theta, "");
+  EXPECT_THAT(yaml2, HasSubstr("\n  start: {x_m: 0, y_m: 0, theta_rad: -0.6666666666666666}\n"));
+  expect_same(only_theta, parse_scenario(yaml2, "knots.yaml"));
 }
 
 TEST(ScenarioYamlWrite, TheCorrectedScenarioOfATrackRoundTrips) {
@@ -195,6 +211,11 @@ TEST(ScenarioYamlWrite, TheCorrectedScenarioOfATrackRoundTrips) {
   const sim::Scenario back = parse_scenario(yaml, "track2-corrected.yaml");
   expect_same(sc, back);
   EXPECT_TRUE(track_text(back) == track_text(sc)) << "re-simulated track differs";
+  // Its start is the recording's first ground-truth pose (track2 starts at
+  // the origin; the fit reproduces it to the columns' 1e-5 m / 1e-6 rad).
+  EXPECT_NEAR(back.motion.start_x_m, tr.col(Col::gt_x).front(), 1e-4);
+  EXPECT_NEAR(back.motion.start_y_m, tr.col(Col::gt_y).front(), 1e-4);
+  EXPECT_NEAR(back.motion.start_theta_rad, tr.col(Col::gt_theta).front(), 1e-4);
 }
 
 TEST(ScenarioYamlWrite, RefusesWhatTheReaderWouldReject) {
@@ -273,6 +294,47 @@ TEST(ScenarioYamlKnots, ErrorsNameFileLineAndKnot) {
               AllOf(StartsWith("s.yaml:2:"), HasSubstr("expected a list of [t_s, v_m_s, w_rad_s] triples")));
   EXPECT_THAT(error_of("motion:\n  max_accel_m_s2: 1\n"), AllOf(StartsWith("s.yaml:2:"), HasSubstr("no segments or knots")));
   EXPECT_THAT(error_of("motion:\n  knot: []\n"), HasSubstr("did you mean 'knots'"));
+}
+
+// --- motion.start in the reader ------------------------------------------------------
+
+TEST(ScenarioYamlStart, ParsesTheStartPoseEachKeyOptional) {
+  const std::string seg = "  segments:\n    - stop: {duration_s: 1}\n";
+  sim::Scenario sc = parse_scenario("motion:\n  start: {x_m: 1.5, y_m: -2, theta_rad: 0.7}\n" + seg, "a.yaml");
+  EXPECT_EQ(sc.motion.start_x_m, 1.5);
+  EXPECT_EQ(sc.motion.start_y_m, -2.0);
+  EXPECT_EQ(sc.motion.start_theta_rad, 0.7);
+  sc = parse_scenario("motion:\n  start:\n    theta_rad: -3\n" + seg, "a.yaml");
+  EXPECT_EQ(sc.motion.start_x_m, 0.0);
+  EXPECT_EQ(sc.motion.start_y_m, 0.0);
+  EXPECT_EQ(sc.motion.start_theta_rad, -3.0);
+  sc = parse_scenario("motion:\n  start: {}\n" + seg, "a.yaml");
+  EXPECT_EQ(sc.motion.start_x_m, 0.0);
+  sc = parse_scenario("motion:\n" + seg, "a.yaml");
+  EXPECT_EQ(sc.motion.start_theta_rad, 0.0);
+  // ... and the simulated ground truth starts there.
+  sc = parse_scenario("motion:\n  start: {x_m: 1.5, y_m: -2, theta_rad: 0.7}\n" + seg, "a.yaml");
+  const Track tr = sim::simulate(sc);
+  EXPECT_EQ(tr.col(Col::gt_x).front(), 1.5);
+  EXPECT_EQ(tr.col(Col::gt_y).front(), -2.0);
+  EXPECT_EQ(tr.col(Col::gt_theta).front(), 0.7);
+}
+
+TEST(ScenarioYamlStart, ErrorsNameFileLineAndKey) {
+  const std::string seg = "  segments:\n    - stop: {duration_s: 1}\n";
+  EXPECT_THAT(error_of("motion:\n" + seg + "  start:\n    x_m: .nan\n"),
+              AllOf(StartsWith("s.yaml:5: motion.start.x_m: expected a finite number"), HasSubstr("'.nan'")));
+  EXPECT_THAT(error_of("motion:\n  start: {y_m: 1e999}\n" + seg),
+              StartsWith("s.yaml:2: motion.start.y_m: expected a finite number, got '1e999'"));
+  EXPECT_THAT(error_of("motion:\n  start: {theta_rad: north}\n" + seg),
+              StartsWith("s.yaml:2: motion.start.theta_rad: expected a finite number, got 'north'"));
+  EXPECT_THAT(error_of("motion:\n  start: {x: 1}\n" + seg),
+              AllOf(StartsWith("s.yaml:2: unknown key 'x' in motion.start"), HasSubstr("valid keys: x_m, y_m, theta_rad")));
+  EXPECT_THAT(error_of("motion:\n  start: {theta_deg: 90}\n" + seg), HasSubstr("did you mean 'theta_rad'"));
+  EXPECT_THAT(error_of("motion:\n  start: [1, 2, 0]\n" + seg),
+              AllOf(StartsWith("s.yaml:2: motion.start: expected a map"), HasSubstr("got a list")));
+  EXPECT_THAT(error_of("motion:\n  start: {x_m: 1, x_m: 2}\n" + seg), HasSubstr("duplicate key 'motion.start.x_m'"));
+  EXPECT_THAT(error_of("motion:\n  starts: {x_m: 1}\n" + seg), HasSubstr("did you mean 'start'"));
 }
 
 }  // namespace

@@ -452,6 +452,41 @@ TEST(Simulator, PowerFollowsTheMotorModel) {
   EXPECT_LT(tr.col(Col::power_l)[brake], tr.col(Col::power_l)[i]);
 }
 
+TEST(Simulator, StartPoseMovesTheWorldPathRigidlyAndNothingElse) {
+  const Scenario origin = quiet({stop(0.5), straight(2, 0.5), arc(0.6, 150, 0.4), spin(-200, 90), straight(-1, 0.3)});
+  Scenario moved = origin;
+  moved.motion.start_x_m = 1, moved.motion.start_y_m = -2, moved.motion.start_theta_rad = 0.7;
+  const Track a = simulate(origin), b = simulate(moved);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(b.col(Col::gt_x)[0], 1.0);
+  EXPECT_EQ(b.col(Col::gt_y)[0], -2.0);
+  EXPECT_EQ(b.col(Col::gt_theta)[0], 0.7);
+  const double c = std::cos(0.7), s = std::sin(0.7);
+  double max_pos = 0, max_th = 0, max_aps = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const double x = a.col(Col::gt_x)[i], y = a.col(Col::gt_y)[i];
+    max_pos = std::max(max_pos, std::hypot(b.col(Col::gt_x)[i] - (1 + c * x - s * y),
+                                           b.col(Col::gt_y)[i] - (-2 + s * x + c * y)));
+    max_th = std::max(max_th, std::abs(b.col(Col::gt_theta)[i] - (a.col(Col::gt_theta)[i] + 0.7)));
+    if (a.at(Col::aps_x, i))  // the same fix noise, added to the moved truth
+      max_aps = std::max(max_aps, std::abs((b.col(Col::aps_x)[i] - b.col(Col::gt_x)[i]) -
+                                           (a.col(Col::aps_x)[i] - a.col(Col::gt_x)[i])));
+  }
+  EXPECT_GT(std::abs(a.col(Col::gt_theta).back()), 0.5);  // the path turns, so the rotation matters
+  EXPECT_LT(max_pos, 1e-9);
+  EXPECT_LT(max_th, 1e-10);
+  EXPECT_LT(max_aps, 1e-9);
+  EXPECT_EQ(a.ticks_l(), b.ticks_l());
+  EXPECT_EQ(a.ticks_r(), b.ticks_r());
+  for (Col col : {Col::omega_l, Col::omega_r, Col::v_cmd, Col::w_cmd, Col::gyro_z, Col::power_l, Col::power_r,
+                  Col::v_ext, Col::w_ext})
+    EXPECT_EQ(a.col(col), b.col(col)) << static_cast<int>(col);
+  moved.motion.start_theta_rad = std::nan("");
+  std::string why;
+  EXPECT_FALSE(validate_scenario(moved, &why));
+  EXPECT_THAT(why, HasSubstr("motion.start.theta_rad = nan"));
+}
+
 TEST(Simulator, LastRowIsCompleteAndAtRest) {
   Scenario sc;
   sc.motion.segments = {straight(1.234, 0.5)};
