@@ -15,19 +15,6 @@ std::vector<double> error_norm(const ResidualSeries& s) {
   return e;
 }
 
-double condition_value(const ResidualSeries& s, Condition c, std::size_t i) {
-  switch (c) {
-    case Condition::speed: return s.v_mps[i];
-    case Condition::turn_rate: return std::abs(s.w_radps[i]);
-    case Condition::turn_speed: return std::abs(s.v_mps[i] * s.w_radps[i]);
-    case Condition::acceleration: return std::abs(s.accel_mps2[i]);
-    case Condition::x: return s.x_m[i];
-    case Condition::y: return s.y_m[i];
-    case Condition::time: return s.t_since_start_s[i];
-  }
-  return std::nan("");
-}
-
 std::string condition_label(Condition c) {
   switch (c) {
     case Condition::speed: return "speed v [m/s]";

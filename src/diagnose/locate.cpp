@@ -46,18 +46,6 @@ double spearman(const std::vector<double>& a, const std::vector<double>& b) {
   return (saa > 0 && sbb > 0) ? sab / std::sqrt(saa * sbb) : 0.0;
 }
 
-double condition_value(const ResidualSeries& s, Condition c, std::size_t i) {
-  switch (c) {
-    case Condition::speed: return s.v_mps[i];
-    case Condition::turn_rate: return std::abs(s.w_radps[i]);
-    case Condition::turn_speed: return std::abs(s.v_mps[i] * s.w_radps[i]);
-    case Condition::acceleration: return std::abs(s.accel_mps2[i]);
-    case Condition::x: return s.x_m[i];
-    case Condition::y: return s.y_m[i];
-    case Condition::time: return s.t_since_start_s[i];
-  }
-  return kNaN;
-}
 
 struct Youden {
   double threshold = kNaN, j = 0.0;
@@ -325,6 +313,19 @@ void rank_conditions(const ResidualSeries& s, Location& loc, const LocateOptions
 }
 
 }  // namespace
+
+double condition_value(const ResidualSeries& s, Condition c, std::size_t i) {
+  switch (c) {
+    case Condition::speed: return s.v_mps[i];
+    case Condition::turn_rate: return std::abs(s.w_radps[i]);
+    case Condition::turn_speed: return std::abs(s.v_mps[i] * s.w_radps[i]);
+    case Condition::acceleration: return std::abs(s.accel_mps2[i]);
+    case Condition::x: return s.x_m[i];
+    case Condition::y: return s.y_m[i];
+    case Condition::time: return s.t_since_start_s[i];
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
 
 std::string_view condition_name(Condition c) {
   switch (c) {

@@ -108,6 +108,8 @@ enum class Condition { speed, turn_rate, turn_speed, acceleration, x, y, time };
 inline constexpr int kNumConditions = 7;
 // "v", "|w|", "|v*w|", "|a|", "x", "y", "t".
 std::string_view condition_name(Condition c);
+// The condition's value at row i of the series (|w|, |v*w|, |a| as magnitudes).
+double condition_value(const ResidualSeries& s, Condition c, std::size_t i);
 
 struct TimeSegment {
   double t0_s = 0.0, t1_s = 0.0;  // first and last flagged row

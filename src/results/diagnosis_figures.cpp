@@ -110,27 +110,6 @@ void validate(const DiagnosisFigureData& d) {
   if (!any) bad("no overlay path has a finite point");
 }
 
-// Renders `body` (settings + one plot command) to STEM.png and STEM.svg, as
-// results/figures.cpp does for the study's figures.
-void render(const fs::path& stem, std::vector<std::pair<std::string, std::string>> data_files,
-            const std::string& body, int width_px, int height_px) {
-  const std::string size = std::to_string(width_px) + "," + std::to_string(height_px);
-  std::string script = "set encoding utf8\n";
-  script += "set terminal pngcairo size " + size +
-            " noenhanced font 'DejaVu Sans,11' background rgb 'white'\n";
-  script += "set output 'figure.png'\n" + body + "\n";
-  script += "set terminal svg size " + size +
-            " noenhanced font 'DejaVu Sans,12' background rgb 'white'\n";
-  script += "set output 'figure.svg'\n" + body + "\nunset output\n";
-  fs::path png = stem, svg = stem;
-  png += ".png";
-  svg += ".svg";
-  GnuplotJob job;
-  job.data_files = std::move(data_files);
-  job.script = std::move(script);
-  job.outputs = {{"figure.png", png}, {"figure.svg", svg}};
-  run_gnuplot(job);
-}
 
 // "x y" rows of the finite pairs; a blank line where a pair is not finite
 // (breaks a line plot).
@@ -234,7 +213,7 @@ void residual_time(const fs::path& stem, const DiagnosisFigureData& d) {
     plot += ", \\\n     keyentry with lines lw 0.7 dt 3 lc rgb '" + std::string(kWindow) +
             "' title 'window start (replay re-anchored)'";
   body += key_below(entries) + plot + "\n";
-  render(stem, std::move(files), body, 1100, 560 + 18 * entries);
+  render_png_svg(stem, std::move(files), body, 1100, 560 + 18 * entries);
 }
 
 // ---------------------------------------------------------------- figure 2
@@ -313,7 +292,7 @@ void residual_condition(const fs::path& stem, const DiagnosisFigureData& d) {
   const int entries = static_cast<int>(files.size());  // points + median per series
   body += key_below(entries);
   body += "plot 0 with lines dt 2 lc rgb 'gray40' notitle" + points + medians + "\n";
-  render(stem, std::move(files), body, 1000, 640 + 18 * entries);
+  render_png_svg(stem, std::move(files), body, 1000, 640 + 18 * entries);
 }
 
 // ---------------------------------------------------------------- figure 3
@@ -368,7 +347,7 @@ void map_figure(const fs::path& stem, const DiagnosisFigureData& d) {
     plot += ", \\\n     keyentry with lines lw 2 lc rgb '" + std::string(kRegion) +
             "' title 'located region'";
   body += plot + "\n";
-  render(stem, std::move(files), body, 1000, 750);
+  render_png_svg(stem, std::move(files), body, 1000, 750);
 }
 
 }  // namespace

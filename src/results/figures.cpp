@@ -36,30 +36,6 @@ std::string one_decimal(double v) {
 
 std::string q(const std::string& s) { return gnuplot_quote(s); }
 
-// Renders `body` (settings + one plot command) to STEM.png and STEM.svg.
-void render(const fs::path& stem, std::vector<std::pair<std::string, std::string>> data_files,
-            const std::string& body, int width_px, int height_px) {
-  if (stem.filename().empty()) {
-    throw std::invalid_argument("figure output stem '" + stem.string() + "' has no file name");
-  }
-  const std::string size = std::to_string(width_px) + "," + std::to_string(height_px);
-  std::string script = "set encoding utf8\n";
-  script += "set terminal pngcairo size " + size +
-            " noenhanced font 'DejaVu Sans,11' background rgb 'white'\n";
-  script += "set output 'figure.png'\n" + body + "\n";
-  script += "set terminal svg size " + size +
-            " noenhanced font 'DejaVu Sans,12' background rgb 'white'\n";
-  script += "set output 'figure.svg'\n" + body + "\nunset output\n";
-
-  fs::path png = stem, svg = stem;
-  png += ".png";
-  svg += ".svg";
-  GnuplotJob job;
-  job.data_files = std::move(data_files);
-  job.script = std::move(script);
-  job.outputs = {{"figure.png", png}, {"figure.svg", svg}};
-  run_gnuplot(job);
-}
 
 // `set xtics (...)`/`set ytics (...)` list for categorical positions 0..n-1
 // (or `first`, `first+1`, …).
@@ -159,7 +135,7 @@ void heatmap(const fs::path& stem, const std::string& title,
 
   const int width = std::max(700, 260 + 95 * ncols);
   const int height = 560 + (longest > 8 ? static_cast<int>(std::min<std::size_t>(longest, 40)) * 5 : 0);
-  render(stem,
+  render_png_svg(stem,
          {{"cells.dat", cells}, {"missing.dat", missing}, {"dark.dat", dark_labels},
           {"light.dat", light_labels}},
          body, width, height);
@@ -262,7 +238,7 @@ void boxplots(const fs::path& stem, const std::string& title,
   body += "set key outside right top box Left reverse width 1\n";
   body += plot + "\n";
   const int width = std::max(800, 300 + 180 * static_cast<int>(models.size()));
-  render(stem, std::move(files), body, width, 600);
+  render_png_svg(stem, std::move(files), body, width, 600);
 }
 
 // ---------------------------------------------------------------- convergence
@@ -345,7 +321,7 @@ void convergence(const fs::path& stem, const std::string& title,
   body += "set style fill transparent solid 0.25 noborder\n";
   body += "set key top right box opaque\n";
   body += plot + "\n";
-  render(stem, std::move(files), body, 900, 600);
+  render_png_svg(stem, std::move(files), body, 900, 600);
 }
 
 // ---------------------------------------------------------------- trajectories
@@ -392,7 +368,7 @@ void trajectories(const fs::path& stem, const std::string& title,
   body += "set grid lc rgb '#e0e0e0'\n";
   body += "set key outside right top box Left reverse width 1\n";
   body += plot + "\n";
-  render(stem, std::move(files), body, 1000, 750);
+  render_png_svg(stem, std::move(files), body, 1000, 750);
 }
 
 }  // namespace odotune::results

@@ -215,4 +215,28 @@ void run_gnuplot(const GnuplotJob& job) {
   }
 }
 
+void render_png_svg(const std::filesystem::path& stem, std::vector<std::pair<std::string, std::string>> data_files,
+            const std::string& body, int width_px, int height_px) {
+  if (stem.filename().empty()) {
+    throw std::invalid_argument("figure output stem '" + stem.string() + "' has no file name");
+  }
+  const std::string size = std::to_string(width_px) + "," + std::to_string(height_px);
+  std::string script = "set encoding utf8\n";
+  script += "set terminal pngcairo size " + size +
+            " noenhanced font 'DejaVu Sans,11' background rgb 'white'\n";
+  script += "set output 'figure.png'\n" + body + "\n";
+  script += "set terminal svg size " + size +
+            " noenhanced font 'DejaVu Sans,12' background rgb 'white'\n";
+  script += "set output 'figure.svg'\n" + body + "\nunset output\n";
+
+  std::filesystem::path png = stem, svg = stem;
+  png += ".png";
+  svg += ".svg";
+  GnuplotJob job;
+  job.data_files = std::move(data_files);
+  job.script = std::move(script);
+  job.outputs = {{"figure.png", png}, {"figure.svg", svg}};
+  run_gnuplot(job);
+}
+
 }  // namespace odotune::results

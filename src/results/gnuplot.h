@@ -38,6 +38,14 @@ struct GnuplotJob {
 // Runs the job as described above. Throws std::runtime_error on failure.
 void run_gnuplot(const GnuplotJob& job);
 
+// Renders `body` (gnuplot settings + one plot command, reading `data_files`
+// by their names) to STEM.png (pngcairo) and STEM.svg, both or neither, at
+// width_px x height_px, texts verbatim (noenhanced). Throws
+// std::invalid_argument for a stem without a file name, else as run_gnuplot.
+void render_png_svg(const std::filesystem::path& stem,
+                    std::vector<std::pair<std::string, std::string>> data_files,
+                    const std::string& body, int width_px, int height_px);
+
 // True when a `gnuplot` executable is found on PATH.
 bool gnuplot_available();
 
