@@ -70,6 +70,32 @@ json sensor_checks(const SensorCheck& s) {
   return {{"gyro", gyro}, {"odometry", odo}};
 }
 
+json heldout_comparison(const HeldoutComparison& h) {
+  return {{"windows", h.windows}, {"informative", h.informative}, {"improved", h.improved},
+          {"before_pos_rmse_m", number(h.ref_pos_rmse_m)}, {"after_pos_rmse_m", number(h.alt_pos_rmse_m)},
+          {"z", number(h.z)}, {"p", number(h.p)}, {"passed", h.passed}};
+}
+
+// gyro_fixes_check.h: the gyro judged by dead reckoning against the fixes.
+json gyro_vs_fixes(const GyroFixesCheck& g) {
+  json o = {{"available", g.gyro.available}};
+  if (!g.gyro.available) {
+    o["reason"] = g.gyro.unavailable_reason;
+    return o;
+  }
+  o["window_s"] = g.window_s;
+  o["used_windows"] = g.used_windows;
+  o["heldout_windows"] = g.heldout_windows;
+  o["gyro_scale.s"] = verdict(g.gyro.scale);
+  o["gyro_bias.b"] = verdict(g.gyro.bias);
+  o["distance_scale"] = number(g.distance_scale);
+  o["standstill_s"] = g.standstill_s;
+  o["heldout"] = {{"joint", heldout_comparison(g.joint)},
+                  {"gyro_scale.s", heldout_comparison(g.scale_own)},
+                  {"gyro_bias.b", heldout_comparison(g.bias_own)}};
+  return o;
+}
+
 json search_log(const Selection& s) {
   json a = json::array();
   for (const SearchRecord& r : s.records)
@@ -133,7 +159,12 @@ json diagnosis_json(const Diagnosis& d) {
           {"located", {{"segments", segments(d.located_before.segments)},
                        {"regions", regions(d.located_before.regions)},
                        {"conditions", d.located_before.phrase}}},
-          {"sensor_checks", sensor_checks(d.sensors)},
+          {"sensor_checks", d.has_gyro_fixes ? [&] {
+             json j = sensor_checks(d.sensors);
+             j["gyro_vs_fixes"] = gyro_vs_fixes(d.gyro_fixes);
+             return j;
+           }()
+                                             : sensor_checks(d.sensors)},
           {"selection", search_log(d.selection)},
           {"timing_s",
            {{"total", d.timing.total_s}, {"sensors", d.timing.sensors_s},

@@ -145,7 +145,7 @@ bool DiagnoseOptions::IsValid(std::string* why) const {
     return ok;
   };
   if (!part(select.IsValid(&w), "select") || !part(sensors.IsValid(&w), "sensors") ||
-      !part(locate.IsValid(&w), "locate"))
+      !part(gyro_fixes.IsValid(&w), "gyro_fixes") || !part(locate.IsValid(&w), "locate"))
     return false;
   return check_option_rules(
       {{is_fraction(unexplained_min_share), "unexplained_min_share", unexplained_min_share,
@@ -258,8 +258,14 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   }
   d.model = wheel;
 
-  // Gyro findings: the sensor check against the reference heading.
-  const GyroCheck& gc = d.sensors.gyro;
+  // Gyro findings: the sensor check against the reference heading, or with
+  // position fixes only, gyro-heading dead reckoning against the fixes.
+  const bool via_fixes = !in.has_ref_heading() && !in.gyro_t_s.empty();
+  if (via_fixes) {
+    d.gyro_fixes = check_gyro_with_fixes(in, o.gyro_fixes);
+    d.has_gyro_fixes = true;
+  }
+  const GyroCheck& gc = via_fixes ? d.gyro_fixes.gyro : d.sensors.gyro;
   if (gc.available && (gc.bias.departs() || gc.scale.departs())) {
     const double b = gc.bias.departs() ? gc.bias.value : 0.0;
     const double s = gc.scale.departs() ? gc.scale.value : 1.0;
@@ -273,19 +279,32 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
       const std::string name = effect == Effect::gyro_bias ? "b" : "s";
       f.params.push_back({name, v->value});
       f.stderrs.push_back({name, v->std_error});
-      const DiagInput without = effect == Effect::gyro_bias ? gyro_heading_input(scoring, 0.0, s)
-                                                            : gyro_heading_input(scoring, b, 1.0);
-      f.train = scores(without, nominal, nominal, ws, d.train_windows);
-      f.train.after_pos_rmse_m = replay(corrected, nominal, ws, d.train_windows).pos_rmse_m;
-      f.heldout = scores(without, nominal, nominal, ws, d.heldout_windows);
-      f.heldout.after_pos_rmse_m = replay(corrected, nominal, ws, d.heldout_windows).pos_rmse_m;
+      if (via_fixes) {
+        // The check's own split and windows (gyro_fixes_check.h): held out =
+        // its test of this parameter, train = its in-sample fit.
+        const GyroFixesCheck& g = d.gyro_fixes;
+        const HeldoutComparison& h = effect == Effect::gyro_bias ? g.bias_own : g.scale_own;
+        f.train = {g.nominal_pos_rmse_m, g.fitted_pos_rmse_m};
+        f.heldout = {h.ref_pos_rmse_m, h.alt_pos_rmse_m};
+        f.evidence = fmt::format(
+            "gyro-heading dead reckoning against the fixes over {} windows of {:g} s, {:.1f} "
+            "standard errors from the no-op value, held-out p = {:.1g}",
+            g.used_windows.size(), g.window_s, std::abs(v->z), h.p);
+      } else {
+        const DiagInput without = effect == Effect::gyro_bias ? gyro_heading_input(scoring, 0.0, s)
+                                                              : gyro_heading_input(scoring, b, 1.0);
+        f.train = scores(without, nominal, nominal, ws, d.train_windows);
+        f.train.after_pos_rmse_m = replay(corrected, nominal, ws, d.train_windows).pos_rmse_m;
+        f.heldout = scores(without, nominal, nominal, ws, d.heldout_windows);
+        f.heldout.after_pos_rmse_m = replay(corrected, nominal, ws, d.heldout_windows).pos_rmse_m;
+        f.evidence = fmt::format(
+            "gyro against the reference yaw rate: robust regression over {} bins, {:.1f} standard "
+            "errors from the no-op value",
+            gc.bins, std::abs(v->z));
+      }
       f.explains = f.train.before_pos_rmse_m > 0.0
                        ? std::max(0.0, 1.0 - sq(f.train.after_pos_rmse_m / f.train.before_pos_rmse_m))
                        : 0.0;
-      f.evidence = fmt::format(
-          "gyro against the reference yaw rate: robust regression over {} bins, {:.1f} standard "
-          "errors from the no-op value",
-          gc.bins, std::abs(v->z));
       f.segments.push_back({in.ref_t_s.front(), in.ref_t_s.back(), 0.0, 0});
       f.conditions = description(effect);
       d.model.enable(effect).set(effect, name, v->value);

@@ -13,7 +13,9 @@
 //    `discrete`);
 //  * gyro effects (gyro_bias, gyro_scale) whose sensor check departs from the
 //    no-op value (sensor_checks.h Verdict::departs: significant AND relevant),
-//    judged against the reference heading (ground truth);
+//    judged against the reference heading (ground truth), or with position
+//    fixes only by gyro-heading dead reckoning against the fixes
+//    (gyro_fixes_check.h, its own 40 s windows, split and held-out test);
 //  * `unexplained`: where the residual growth of the chosen model still
 //    exceeds what noise explains (locate.h on the final model's residuals) in
 //    segments that carry at least `unexplained_min_share` of its squared
@@ -53,6 +55,7 @@
 
 #include "diagnose/diag_input.h"
 #include "diagnose/effect_model.h"
+#include "diagnose/gyro_fixes_check.h"
 #include "diagnose/locate.h"
 #include "diagnose/select.h"
 #include "diagnose/sensor_checks.h"
@@ -62,6 +65,7 @@ namespace odotune::diagnose {
 struct DiagnoseOptions {
   SelectOptions select;          // select.fit.window_s is the replay window of the output
   SensorCheckOptions sensors;
+  GyroFixesOptions gyro_fixes;   // gyro effects with position fixes only
   LocateOptions locate;
   double unexplained_min_share = 0.2;  // of the final model's SSE inside the located segments
   double unexplained_min_sigmas = 3.0; // its RMSE there, in reference sigmas (DiagInput::ref_sigma_m)
@@ -114,6 +118,8 @@ struct Diagnosis {
   std::vector<int> train_windows, heldout_windows;
   Selection selection;
   SensorCheck sensors;
+  bool has_gyro_fixes = false;         // gyro_fixes is set (fixes-only reference with a gyro)
+  GyroFixesCheck gyro_fixes;
   ResidualSeries before, after;        // nominal and chosen model, all windows
   Location located_before, located_after;
   DiagnosisTiming timing;
