@@ -27,6 +27,7 @@ struct DiagnoseArgs {
   std::string report;
   std::string scenario_out;
   double window_s = 20.0;
+  double from_s = -1e300, to_s = 1e300;
 };
 
 void run_diagnose(const DiagnoseArgs& a) {
@@ -34,6 +35,7 @@ void run_diagnose(const DiagnoseArgs& a) {
   diagnose::DiagInput in;
   try {
     in = diagnose::build_diag_input(track);
+    if (a.from_s > -1e300 || a.to_s < 1e300) in = diagnose::crop(in, a.from_s, a.to_s);
   } catch (const std::invalid_argument& e) {
     throw Failure(fmt::format("{}: {}", a.track, e.what()));
   }
@@ -101,6 +103,8 @@ void register_diagnose(CLI::App& app) {
                   "folder for the figures (residual vs time and condition, map, overlay) and index.html");
   sub->add_option("--scenario-out", args->scenario_out,
                   "write the robot with the fitted effects as a simulator scenario (odotune simulate reads it)");
+  sub->add_option("--from", args->from_s, "diagnose only the samples from this track time on [s]");
+  sub->add_option("--to", args->to_s, "diagnose only the samples up to this track time [s]");
   sub->add_option("--window", args->window_s, "replay window [s]; the odometry is re-anchored on the reference at each")
       ->default_val(20.0)
       ->check(CLI::PositiveNumber);

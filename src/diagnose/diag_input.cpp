@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <initializer_list>
 #include <cmath>
 #include <numbers>
 #include <optional>
@@ -276,6 +277,43 @@ DiagInput build_diag_input(const Track& track) {
   in.ref_sigma_rad = gt ? meta_number(track, "sim.gt_sigma_rad").value_or(nan) : nan;
   estimate_sigmas(in);
   return in;
+}
+
+namespace {
+// Keeps the entries i of each array in `cols` for which keep(t[i]).
+void keep_between(std::vector<double>& t, std::initializer_list<std::vector<double>*> cols,
+                  double t0, double t1) {
+  std::size_t out = 0;
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    if (t[i] < t0 || t[i] > t1) continue;
+    for (std::vector<double>* c : cols)
+      if (!c->empty()) (*c)[out] = (*c)[i];
+    t[out++] = t[i];
+  }
+  t.resize(out);
+  for (std::vector<double>* c : cols)
+    if (!c->empty()) c->resize(out);
+}
+}  // namespace
+
+DiagInput crop(const DiagInput& in, double t0_s, double t1_s) {
+  if (!(t0_s < t1_s))
+    throw std::invalid_argument(fmt::format("{}: empty time range [{}, {}] s", in.track_name, t0_s, t1_s));
+  DiagInput c = in;
+  keep_between(c.odo_t_s, {&c.phi_l_rad, &c.phi_r_rad, &c.v_mps, &c.w_radps, &c.cmd_v_mps, &c.cmd_w_radps},
+               t0_s, t1_s);
+  keep_between(c.gyro_t_s, {&c.gyro_z_radps}, t0_s, t1_s);
+  keep_between(c.ref_t_s, {&c.ref_x_m, &c.ref_y_m, &c.ref_theta_rad}, t0_s, t1_s);
+  if (c.odo_t_s.size() < 2 || c.ref_t_s.size() < 2)
+    throw std::invalid_argument(fmt::format(
+        "{}: the range [{}, {}] s holds {} odometry and {} reference samples; expected at least 2 of each",
+        in.track_name, t0_s, t1_s, c.odo_t_s.size(), c.ref_t_s.size()));
+  if (!c.phi_l_rad.empty()) {
+    const double l0 = c.phi_l_rad.front(), r0 = c.phi_r_rad.front();
+    for (double& v : c.phi_l_rad) v -= l0;
+    for (double& v : c.phi_r_rad) v -= r0;
+  }
+  return c;
 }
 
 }  // namespace odotune::diagnose

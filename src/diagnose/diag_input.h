@@ -77,4 +77,11 @@ struct DiagInput {
 // sim.effects is never read: the diagnosis must find effects from the data.
 DiagInput build_diag_input(const Track& track);
 
+// The samples of `in` with t_s in [t0_s, t1_s] (odometry, commands, gyro,
+// reference); wheel angles re-zeroed at the first kept odometry sample;
+// sigmas and the nominal robot kept. Throws std::invalid_argument (one line)
+// when the interval is empty or leaves fewer than 2 odometry or reference
+// samples.
+DiagInput crop(const DiagInput& in, double t0_s, double t1_s);
+
 }  // namespace odotune::diagnose

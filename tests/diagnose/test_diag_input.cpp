@@ -1,6 +1,7 @@
 // build_diag_input (src/diagnose/diag_input.h): odometry from ticks, wheel
 // rates or commands; gyro; ground truth or fixes as reference; the reference
 // sigma from metadata or estimated; never sim.effects; one-line errors.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
@@ -237,6 +238,32 @@ TEST(DiagInput, RealMrclamTrack) {
   EXPECT_LT(in.ref_sigma_rad, 0.05);
   for (std::size_t i = 1; i < in.ref_theta_rad.size(); ++i)
     ASSERT_LT(std::abs(in.ref_theta_rad[i] - in.ref_theta_rad[i - 1]), 1.0) << "not unwrapped at " << i;
+}
+
+TEST(DiagInputCrop, KeepsTheRangeAndReZeroesTheWheels) {
+  testing_support::SimTrackOptions o;
+  o.duration_s = 40.0;
+  o.seed = 91;
+  const DiagInput in = build_diag_input(testing_support::simulate_track(o));
+  const DiagInput c = crop(in, 10.0, 20.0);
+  ASSERT_GE(c.odo_t_s.size(), 2u);
+  EXPECT_GE(c.odo_t_s.front(), 10.0);
+  EXPECT_LE(c.odo_t_s.back(), 20.0);
+  EXPECT_GE(c.ref_t_s.front(), 10.0);
+  EXPECT_LE(c.ref_t_s.back(), 20.0);
+  EXPECT_EQ(c.ref_x_m.size(), c.ref_t_s.size());
+  EXPECT_EQ(c.ref_theta_rad.size(), c.ref_t_s.size());
+  EXPECT_EQ(c.gyro_z_radps.size(), c.gyro_t_s.size());
+  EXPECT_EQ(c.phi_l_rad.size(), c.odo_t_s.size());
+  EXPECT_EQ(c.phi_l_rad.front(), 0.0);
+  EXPECT_EQ(c.phi_r_rad.front(), 0.0);
+  // Increments are the original's.
+  const auto k = static_cast<std::size_t>(std::find(in.odo_t_s.begin(), in.odo_t_s.end(), c.odo_t_s[5]) -
+                                          in.odo_t_s.begin());
+  ASSERT_LT(k, in.odo_t_s.size());
+  EXPECT_NEAR(c.phi_l_rad[6] - c.phi_l_rad[5], in.phi_l_rad[k + 1] - in.phi_l_rad[k], 1e-12);
+  EXPECT_THROW(crop(in, 20.0, 10.0), std::invalid_argument);
+  EXPECT_THROW(crop(in, 1000.0, 2000.0), std::invalid_argument);
 }
 
 }  // namespace
