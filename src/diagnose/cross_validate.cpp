@@ -148,7 +148,15 @@ FitSummary CrossValidator::fit(const EffectSet& start, const std::vector<int>& t
   FitOptions o = fit_;
   o.max_iterations = max_iterations;
   ++fits_;
-  return fit_effects(*in_, start, train, {}, o);
+  return fit_effects(model_for(start), *in_, start, train, {}, o);
+}
+
+const EffectModel& CrossValidator::model_for(const EffectSet& set) {
+  std::string key;
+  for (int e = 0; e < kNumEffects; ++e) key += set.on(static_cast<Effect>(e)) ? '1' : '0';
+  auto& model = models_[key];
+  if (!model) model = std::make_unique<EffectModel>(*in_, set, fit_.model);
+  return *model;
 }
 
 SamplePred CrossValidator::empty_pred() const {
@@ -157,11 +165,8 @@ SamplePred CrossValidator::empty_pred() const {
 }
 
 void CrossValidator::predict(const EffectSet& set, const std::vector<int>& which, SamplePred& p) {
-  std::string key;
-  for (int e = 0; e < kNumEffects; ++e) key += set.on(static_cast<Effect>(e)) ? '1' : '0';
-  auto& model = models_[key];
-  if (!model) model = std::make_unique<EffectModel>(*in_, set, fit_.model);
-  const ReplayResult r = replay(*model, pack(set), *in_, windows_, which);
+  const ReplayResult r = replay(model_for(set), pack(set), *in_, windows_, which, nullptr,
+                                fit_anchoring(*in_, fit_));
   for (int wi : which) {
     const Window& w = windows_[static_cast<std::size_t>(wi)];
     for (std::size_t g = w.ref_begin; g < w.ref_end; ++g)
@@ -234,7 +239,7 @@ SetEval CrossValidator::fit_all(const EffectSet& structure, const EffectSet& war
   }
   finish(e);
   int p = (structure.on(Effect::radius_step) ? 1 : 0) + (structure.on(Effect::slip_zone) ? 4 : 0) +
-          (in_->has_ref_heading() ? 0 : 3 * static_cast<int>(all.size()));
+          (fit_anchoring(*in_, fit_) == Anchoring::free ? 3 * static_cast<int>(all.size()) : 0);
   for (const ParamSlot& s : param_layout(structure)) p += s.fitted ? 1 : 0;
   const auto n = static_cast<double>(n_samples_);
   e.bic = n * std::log(std::max(e.score, 1e-300)) + static_cast<double>(p) * std::log(n);

@@ -9,9 +9,10 @@
 //   and fit.use_heading), sigma = DiagInput::ref_sigma_*,
 // so reference noise alone scores about 2 (3 with heading) per sample.
 //
-// Fits are fit_effects() calls (counted in fits()); replays reuse one
-// EffectModel per combination of active effects (building a model costs far
-// more than replaying it, and a model replays any parameter values).
+// Fits are fit_effects() calls (counted in fits()); fits and replays reuse
+// one EffectModel per combination of active effects (building a model costs
+// far more than replaying it, and a model replays any parameter values).
+// Windows are anchored as fit_anchoring(in, fit) says (window_replay.h).
 #pragma once
 
 #include <map>
@@ -99,6 +100,9 @@ class CrossValidator {
   // fit_effects on `train` (empty = all windows) with max_iterations.
   FitSummary fit(const EffectSet& start, const std::vector<int>& train, int max_iterations);
 
+  // The cached model of `set`'s active effects (built on first use).
+  const EffectModel& model_for(const EffectSet& set);
+
   // Each fold fitted on the other folds (warm-started from warm[f], the same
   // fold's fit of a smaller set, when warm is not empty; the empty set is
   // replayed as it is) and replayed on its own windows. Fit errors are
@@ -109,7 +113,7 @@ class CrossValidator {
   // Fitted on all windows from start_from(structure, warm), replayed on all.
   // bic = n ln(RSS/n) + p ln(n): n scored samples, RSS the normalised SSE,
   // p = fitted parameters + discrete ones (radius_step.t 1, slip_zone box 4)
-  // + 3 per window without a reference heading (free anchors).
+  // + 3 per window with free anchors (fit_anchoring).
   SetEval fit_all(const EffectSet& structure, const EffectSet& warm, int max_iterations);
 
   // `cv` replayed with effect e's fitted parameters at their no-op values in

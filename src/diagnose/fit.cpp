@@ -89,6 +89,79 @@ class WindowCost {
   Pose<double> anchor_;
 };
 
+// A free-anchor window with the anchor composed analytically: the window is
+// dead-reckoned once in a local frame (origin at the anchor) with jets of
+// the N effect parameters only, and each predicted pose is the anchor (+)
+// the local pose, whose derivatives by the anchor (x0, y0, theta0) are those
+// of a rigid motion. The same residuals as WindowCost with a free anchor,
+// but the replay, which dominates, carries N instead of N + 3 derivatives.
+template <int N>
+class AnchorComposedCost : public ceres::CostFunction {
+ public:
+  AnchorComposedCost(const CostShared* s, const Window& w) : s_(s), w_(w) {
+    set_num_residuals(static_cast<int>((w.ref_end - w.ref_begin) * (s->heading ? 3 : 2)));
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(s->free_pos.size()));
+    mutable_parameter_block_sizes()->push_back(3);
+  }
+
+  bool Evaluate(double const* const* blocks, double* res, double** jac) const override {
+    const std::size_t k = s_->free_pos.size(), n = w_.ref_end - w_.ref_begin;
+    const Pose<double> a{blocks[1][0], blocks[1][1], blocks[1][2]};
+    const bool want_p = jac && jac[0], want_a = jac && jac[1];
+    using J = ceres::Jet<double, N>;
+    std::vector<Pose<J>> local(n);
+    {
+      std::vector<J> p(s_->all.size());
+      for (std::size_t i = 0; i < p.size(); ++i) p[i] = J(s_->all[i]);
+      for (std::size_t j = 0; j < k; ++j) {
+        p[static_cast<std::size_t>(s_->free_pos[j])] = J(blocks[0][j]);
+        if (want_p) p[static_cast<std::size_t>(s_->free_pos[j])].v[static_cast<int>(j)] = 1.0;
+      }
+      replay_window(*s_->model, p.data(), w_, Pose<J>{J(0.0), J(0.0), J(0.0)},
+                    s_->in->ref_t_s, local.data(), &a);
+    }
+    const double c = std::cos(a.th), sn = std::sin(a.th);
+    const DiagInput& in = *s_->in;
+    const int comps = s_->heading ? 3 : 2;
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t g = w_.ref_begin + i;
+      const J& lx = local[i].x;
+      const J& ly = local[i].y;
+      // Value and derivatives (by the effect parameters, by the anchor) of each component.
+      const double val[3] = {a.x + c * lx.a - sn * ly.a, a.y + sn * lx.a + c * ly.a,
+                             a.th + local[i].th.a};
+      const double ref[3] = {in.ref_x_m[g], in.ref_y_m[g],
+                             s_->heading ? in.ref_theta_rad[g] : 0.0};
+      const double inv[3] = {s_->inv_sigma_m, s_->inv_sigma_m, s_->inv_sigma_rad};
+      const double da[3][3] = {{1.0, 0.0, -sn * lx.a - c * ly.a},
+                               {0.0, 1.0, c * lx.a - sn * ly.a},
+                               {0.0, 0.0, 1.0}};
+      for (int m = 0; m < comps; ++m) {
+        ceres::Jet<double, 1> u((val[m] - ref[m]) * inv[m], 0);
+        const ceres::Jet<double, 1> r = robustify(u, s_->loss, s_->c);
+        const std::size_t row = i * static_cast<std::size_t>(comps) + static_cast<std::size_t>(m);
+        res[row] = r.a;
+        const double scale = r.v[0] * inv[m];  // d r / d value
+        if (want_p)
+          for (std::size_t j = 0; j < k; ++j) {
+            const int jj = static_cast<int>(j);
+            const double d = m == 0   ? c * lx.v[jj] - sn * ly.v[jj]
+                             : m == 1 ? sn * lx.v[jj] + c * ly.v[jj]
+                                      : local[i].th.v[jj];
+            jac[0][row * k + j] = scale * d;
+          }
+        if (want_a)
+          for (std::size_t q = 0; q < 3; ++q) jac[1][row * 3 + q] = scale * da[m][q];
+      }
+    }
+    return true;
+  }
+
+ private:
+  const CostShared* s_;
+  Window w_;
+};
+
 template <int Stride>
 ceres::CostFunction* make_cost(const CostShared* s, const Window& w, const Pose<double>& a) {
   auto* f = new ceres::DynamicAutoDiffCostFunction<WindowCost, Stride>(new WindowCost(s, w, a));
@@ -100,6 +173,12 @@ ceres::CostFunction* make_cost(const CostShared* s, const Window& w, const Pose<
 
 ceres::CostFunction* make_cost(int active, const CostShared* s, const Window& w,
                                const Pose<double>& a) {
+  const std::size_t k = s->free_pos.size();
+  if (s->free_anchor && k <= 8) {
+    if (k <= 2) return new AnchorComposedCost<2>(s, w);
+    if (k <= 4) return new AnchorComposedCost<4>(s, w);
+    return new AnchorComposedCost<8>(s, w);
+  }
   if (active <= 2) return make_cost<2>(s, w, a);
   if (active <= 4) return make_cost<4>(s, w, a);
   if (active <= 6) return make_cost<6>(s, w, a);
@@ -179,6 +258,21 @@ FitSummary fit_effects(const DiagInput& in, const EffectSet& which,
                        const std::vector<int>& heldout_windows, const FitOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("fit options: " + why);
+  const EffectModel model(in, which, options.model);
+  return fit_effects(model, in, which, train_windows, heldout_windows, options);
+}
+
+FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const EffectSet& which,
+                       const std::vector<int>& train_windows,
+                       const std::vector<int>& heldout_windows, const FitOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("fit options: " + why);
+  for (int e = 0; e < kNumEffects; ++e)
+    if (model.structure().on(static_cast<Effect>(e)) != which.on(static_cast<Effect>(e)))
+      throw std::invalid_argument(fmt::format("fit: the model holds '{}', the set to fit '{}'",
+                                              model.structure().to_string(), which.to_string()));
+  if (model.num_nodes() != in.odo_t_s.size())
+    throw std::invalid_argument("fit: the model was built for another track");
   const auto t_start = std::chrono::steady_clock::now();
   const std::vector<Window> windows = make_windows(in, options.window_s);
   const int n_win = static_cast<int>(windows.size());
@@ -203,7 +297,6 @@ FitSummary fit_effects(const DiagInput& in, const EffectSet& which,
       if (!held.count(w)) train.push_back(w);
   if (train.empty()) throw std::invalid_argument("fit: no training window");
 
-  const EffectModel model(in, which, options.model);
   const auto& layout = model.layout();
   std::vector<double> init = pack(which);
   CostShared sh;
@@ -218,7 +311,8 @@ FitSummary fit_effects(const DiagInput& in, const EffectSet& which,
     throw std::invalid_argument(fmt::format("fit: effects '{}' have no parameter that dead "
                                             "reckoning can fit", which.to_string()));
   sh.all = init;
-  sh.free_anchor = !anchored_on_reference(in);
+  const Anchoring mode = fit_anchoring(in, options);
+  sh.free_anchor = mode == Anchoring::free;
   sh.heading = in.has_ref_heading() && options.use_heading;
   sh.inv_sigma_m = 1.0 / in.ref_sigma_m;
   sh.inv_sigma_rad = sh.heading ? 1.0 / in.ref_sigma_rad : 1.0;
@@ -226,7 +320,7 @@ FitSummary fit_effects(const DiagInput& in, const EffectSet& which,
   sh.c = options.loss_scale;
 
   FitSummary out;
-  const ReplayResult train_before = replay(model, init, in, windows, train);
+  const ReplayResult train_before = replay(model, init, in, windows, train, nullptr, mode);
   std::vector<double> free_values;
   for (int p : sh.free_pos) free_values.push_back(init[static_cast<std::size_t>(p)]);
   std::vector<std::array<double, 3>> anchors;
@@ -235,7 +329,7 @@ FitSummary fit_effects(const DiagInput& in, const EffectSet& which,
   const int active = static_cast<int>(sh.free_pos.size()) + (sh.free_anchor ? 3 : 0);
   for (std::size_t i = 0; i < train.size(); ++i) {
     const Window& w = windows[static_cast<std::size_t>(train[i])];
-    if (sh.free_anchor &&
+    if (sh.free_anchor && !in.has_ref_heading() &&
         spread(train_before, w) < options.min_spread_sigmas * in.ref_sigma_m) {
       out.skipped_windows.push_back(w.index);
       continue;
@@ -266,6 +360,16 @@ FitSummary fit_effects(const DiagInput& in, const EffectSet& which,
 
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
+  if (sh.free_anchor && anchors.size() > 1) {
+    // Each window's anchor meets only its own residuals: eliminate them
+    // (Schur complement) and solve densely for the effect parameters; a
+    // dense QR of the whole Jacobian costs O(rows * (3 windows)^2).
+    so.linear_solver_type = ceres::DENSE_SCHUR;
+    auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+    for (auto& a : anchors) ordering->AddElementToGroup(a.data(), 0);
+    ordering->AddElementToGroup(free_values.data(), 1);
+    so.linear_solver_ordering = ordering;
+  }
   so.max_num_iterations = options.max_iterations;
   so.num_threads = 1;
   so.logging_type = ceres::SILENT;
@@ -329,10 +433,11 @@ FitSummary fit_effects(const DiagInput& in, const EffectSet& which,
   if (sh.free_anchor)
     for (const auto& a : anchors) out.anchors.push_back({a[0], a[1], a[2]});
 
-  out.train = score(train_before, replay(model, fitted, in, windows, train));
+  out.train = score(train_before, replay(model, fitted, in, windows, train, nullptr, mode));
   std::vector<int> ho(held.begin(), held.end());
   if (!ho.empty())
-    out.heldout = score(replay(model, init, in, windows, ho), replay(model, fitted, in, windows, ho));
+    out.heldout = score(replay(model, init, in, windows, ho, nullptr, mode),
+                        replay(model, fitted, in, windows, ho, nullptr, mode));
   else
     out.heldout = score(ReplayResult{}, ReplayResult{});
   out.solve_time_s =

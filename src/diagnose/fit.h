@@ -7,10 +7,11 @@
 // reference has heading and use_heading is on. Free parameters: the `fitted`
 // slots of param_layout(which) (radius_step.t, the slip_zone box and gyro
 // parameters stay at the values `which` holds), bounded by the effect table's
-// ranges; with a free-anchor reference (fixes, or ground truth without
-// heading) also one anchor pose (x0, y0, theta0) per window, started at the
-// closed-form alignment of window_replay.h. Training windows of a free-anchor
-// reference whose nominal positions spread (RMS distance from their centroid)
+// ranges; with free anchors (window_replay.h: fixes, ground truth without
+// heading, or any reference with free_anchor_with_heading) also one anchor
+// pose (x0, y0, theta0) per window, started at the closed-form alignment of
+// window_replay.h. Training windows of a free-anchor reference without
+// heading whose nominal positions spread (RMS distance from their centroid)
 // less than min_spread_sigmas*ref_sigma_m are left out: their anchor heading
 // is unobservable (listed in FitSummary::skipped_windows).
 //
@@ -29,8 +30,17 @@
 //
 // Scores. Before = the model with `which`'s starting values (normally the
 // no-op values, i.e. nominal kinematics); after = the fitted model; both
-// replayed with replay() (closed-form anchors for a free-anchor reference), on
-// the training windows and on the held-out windows.
+// replayed with replay() (closed-form anchors for free anchors), on the
+// training windows and on the held-out windows.
+//
+// Speed. Building the EffectModel (the nominal rim travel and accelerations
+// of every odometry node) costs more than a short fit; callers that fit one
+// structure many times (cross_validate.h) pass a prebuilt model. With free
+// anchors, a window is dead-reckoned in a local frame with derivatives by
+// the effect parameters only and composed with its anchor analytically
+// (a rigid motion), and the anchors, each meeting only its own window's
+// residuals, are eliminated by a Schur complement (DENSE_SCHUR): a dense QR
+// of the whole Jacobian would cost rows x (3 windows)^2.
 #pragma once
 
 #include <cstddef>
@@ -52,6 +62,10 @@ struct FitOptions {
   bool use_heading = true;         // heading residuals when the reference has heading
   int max_iterations = 100;        // Levenberg-Marquardt iterations
   double min_spread_sigmas = 2.0;  // free-anchor windows that move less are not fitted
+  // Fit each window's anchor also when the reference has heading (ground
+  // truth): the anchor is then a nuisance pose, not one noisy sample
+  // (window_replay.h). Off by default here; the model selection turns it on.
+  bool free_anchor_with_heading = false;
   ModelOptions model;
   bool IsValid(std::string* why) const;
 };
@@ -102,5 +116,17 @@ struct FitSummary {
 FitSummary fit_effects(const DiagInput& in, const EffectSet& which,
                        const std::vector<int>& train_windows,
                        const std::vector<int>& heldout_windows, const FitOptions& options = {});
+
+// The same with a prebuilt model: `model` must have been built for `in` with
+// options.model and the same active effects as `which` (its parameter
+// values do not matter); throws std::invalid_argument otherwise.
+FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const EffectSet& which,
+                       const std::vector<int>& train_windows,
+                       const std::vector<int>& heldout_windows, const FitOptions& options = {});
+
+// The windows' anchoring a fit with `options` uses on `in` (window_replay.h).
+inline Anchoring fit_anchoring(const DiagInput& in, const FitOptions& options) {
+  return anchoring(in, options.free_anchor_with_heading);
+}
 
 }  // namespace odotune::diagnose

@@ -22,9 +22,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// A found box whose fitted slips both stay below this is not refined (a box
-// from noise is not worth the fits).
-constexpr double kMinZoneSlip = 0.01;
 
 double since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
@@ -108,58 +105,6 @@ double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet
   return best_t();
 }
 
-// The slip_zone structure with the best box (select.h), or an empty set.
-EffectSet choose_zone(CrossValidator& cv, const EffectSet& s, const SetEval& cur_full,
-                      const SelectOptions& o) {
-  std::vector<ZoneBox> boxes =
-      zone_candidates(cv.input(), cv.windows(), cur_full.pred.x_m, cur_full.pred.y_m,
-                      cur_full.pred.theta_rad, o.zone_cell_m, o.zone_max_boxes, o.zone_min_score);
-  boxes.insert(boxes.end(), o.zone_boxes.begin(), o.zone_boxes.end());
-  EffectSet warm = cur_full.fitted;
-  auto try_box = [&](const ZoneBox& b, double& cost, EffectSet& fitted) {
-    EffectSet st = with_effect(s, Effect::slip_zone);
-    st.set(Effect::slip_zone, "x0", b.x0_m).set(Effect::slip_zone, "x1", b.x1_m);
-    st.set(Effect::slip_zone, "y0", b.y0_m).set(Effect::slip_zone, "y1", b.y1_m);
-    cost = kInf;
-    try {
-      const FitSummary f = cv.fit(start_from(st, warm), {}, o.profile_max_iterations);
-      if (std::isfinite(f.final_cost)) cost = f.final_cost, fitted = f.effects;
-    } catch (const std::exception&) {
-    }
-    return st;
-  };
-  EffectSet best, best_fit;
-  ZoneBox bb;
-  double best_cost = kInf;
-  for (const ZoneBox& b : boxes) {
-    double cost;
-    EffectSet fitted;
-    const EffectSet st = try_box(b, cost, fitted);
-    if (cost < best_cost) best_cost = cost, best = st, best_fit = fitted, bb = b;
-  }
-  if (best.empty() || std::max(best_fit.get(Effect::slip_zone, "s_l"),
-                               best_fit.get(Effect::slip_zone, "s_r")) < kMinZoneSlip)
-    return best;
-  warm = best_fit;
-  for (double step : {0.5 * o.zone_cell_m, 0.25 * o.zone_cell_m})
-    for (int round = 0, moved = 1; moved && round < 4; ++round) {
-      moved = 0;
-      for (int edge = 0; edge < 4; ++edge)
-        for (double sign : {-1.0, 1.0}) {
-          ZoneBox q = bb;
-          double* v[4] = {&q.x0_m, &q.x1_m, &q.y0_m, &q.y1_m};
-          *v[edge] += sign * step;
-          if (!(q.x0_m < q.x1_m && q.y0_m < q.y1_m)) continue;
-          double cost;
-          EffectSet fitted;
-          const EffectSet st = try_box(q, cost, fitted);
-          if (cost < best_cost * (1.0 - 1e-6))
-            best_cost = cost, best = st, bb = q, warm = fitted, moved = 1;
-        }
-    }
-  return best;
-}
-
 std::vector<Effect> candidate_list(const DiagInput& in, const SelectOptions& o) {
   std::vector<Effect> list = o.candidates;
   if (list.empty())
@@ -219,7 +164,9 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
       else
         cd.rec.reason = "no step time to try (track too short)";
     } else if (e == Effect::slip_zone) {
-      cd.st = choose_zone(z.cv, z.s, z.cur_full, z.o);
+      cd.st = choose_zone_box(z.cv, z.s, z.cur_full,
+                              {z.o.zone_cell_m, z.o.zone_max_boxes, z.o.zone_min_score,
+                               z.o.zone_boxes, z.o.profile_max_iterations});
       if (cd.st.empty()) cd.rec.reason = "no candidate box";
     }
     if (e == Effect::radius_step || e == Effect::slip_zone) z.sel.timing.discrete_s += since(t0);
@@ -330,22 +277,41 @@ bool backward_round(Search& z, int round) {
   return out != nullptr;
 }
 
-// Whether `train` holds at least half of the windows where each intermittent
-// effect of s acts (after radius_step.t; entering the slip_zone box).
-bool covers(const DiagInput& in, const std::vector<Window>& windows, const EffectSet& s,
-            const std::vector<int>& train) {
+// Per window, the scored reference samples where an intermittent effect of
+// s acts (after radius_step.t; inside the slip_zone box), one row per such
+// effect.
+std::vector<std::vector<double>> acting_samples(const DiagInput& in,
+                                                const std::vector<Window>& windows,
+                                                const EffectSet& s) {
+  std::vector<std::vector<double>> out;
   for (Effect e : {Effect::radius_step, Effect::slip_zone}) {
     if (!s.on(e)) continue;
-    int all = 0, seen = 0;
+    std::vector<double> row;
     for (const Window& w : windows) {
-      bool acts = e == Effect::radius_step && w.t_end_s > s.get(e, "t");
-      for (std::size_t g = w.ref_begin; e == Effect::slip_zone && g < w.ref_end && !acts; ++g)
-        acts = in.ref_x_m[g] >= s.get(e, "x0") && in.ref_x_m[g] <= s.get(e, "x1") &&
-               in.ref_y_m[g] >= s.get(e, "y0") && in.ref_y_m[g] <= s.get(e, "y1");
-      all += acts ? 1 : 0;
-      seen += acts && std::count(train.begin(), train.end(), w.index) ? 1 : 0;
+      double n = 0.0;
+      for (std::size_t g = w.ref_begin; g < w.ref_end; ++g)
+        n += (e == Effect::radius_step
+                  ? in.ref_t_s[g] > s.get(e, "t")
+                  : in.ref_x_m[g] >= s.get(e, "x0") && in.ref_x_m[g] <= s.get(e, "x1") &&
+                        in.ref_y_m[g] >= s.get(e, "y0") && in.ref_y_m[g] <= s.get(e, "y1"))
+                 ? 1.0
+                 : 0.0;
+      row.push_back(n);
     }
-    if (2 * seen < all) return false;
+    out.push_back(std::move(row));
+  }
+  return out;
+}
+
+// Whether the training windows hold at least half of the samples where each
+// intermittent effect acts, and the held-out ones some of them.
+bool covers(const std::vector<std::vector<double>>& acting, const std::vector<int>& train,
+            const std::vector<int>& held) {
+  for (const auto& row : acting) {
+    double tr = 0.0, ho = 0.0;
+    for (int w : train) tr += row[static_cast<std::size_t>(w)];
+    for (int w : held) ho += row[static_cast<std::size_t>(w)];
+    if (!(2.0 * tr >= tr + ho && ho > 0.0)) return false;
   }
   return true;
 }
@@ -357,18 +323,20 @@ void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vecto
   const EffectSet& s = sel.structure;
   const int n = static_cast<int>(windows.size());
   const int n_held = std::clamp(static_cast<int>(std::lround(o.heldout_fraction * n)), 1, n - 1);
-  auto split = [&](bool interleaved, std::vector<int>& train, std::vector<int>& held) {
+  // phase < 0: the last n_held windows; else n_held windows spread evenly,
+  // the pattern rotated by `phase` windows.
+  auto split = [&](int phase, std::vector<int>& train, std::vector<int>& held) {
     train.clear(), held.clear();
     for (int w = 0; w < n; ++w) {
-      const bool h = interleaved
-                         ? static_cast<long>(w + 1) * n_held / n > static_cast<long>(w) * n_held / n
-                         : w >= n - n_held;
+      const long r = (w + std::max(phase, 0)) % n;
+      const bool h = phase < 0 ? w >= n - n_held : (r + 1) * n_held / n > r * n_held / n;
       (h ? held : train).push_back(w);
     }
   };
-  split(false, sel.train_windows, sel.heldout_windows);
+  const auto acting = acting_samples(raw, windows, s);
+  split(-1, sel.train_windows, sel.heldout_windows);
   sel.split = "last";
-  bool alt_split = !covers(raw, windows, s, sel.train_windows);
+  bool alt_split = !covers(acting, sel.train_windows, sel.heldout_windows);
   if (!alt_split) {
     ++sel.timing.fits;
     sel.final_fit = fit_effects(fit_in, s, sel.train_windows, sel.heldout_windows, o.fit);
@@ -376,7 +344,15 @@ void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vecto
   }
   if (alt_split) {
     std::vector<int> tr, ho;
-    split(true, tr, ho);
+    int phase = 0;  // the first rotation that covers, else none
+    for (int p = 0; p < n; ++p) {
+      split(p, tr, ho);
+      if (covers(acting, tr, ho)) {
+        phase = p;
+        break;
+      }
+    }
+    split(phase, tr, ho);
     ++sel.timing.fits;
     FitSummary f = fit_effects(fit_in, s, tr, ho, o.fit);
     if (!f.rank_deficient || sel.final_fit.params.empty()) {
@@ -443,6 +419,7 @@ bool SelectOptions::IsValid(std::string* why) const {
                 {"heldout_fraction", heldout_fraction, 0, 0.9, false, true},
                 {"cv_max_iterations", double(cv_max_iterations), 1, 100000, true, true},
                 {"profile_max_iterations", double(profile_max_iterations), 1, 100000, true, true},
+                {"min_window_samples", min_window_samples, 0, 1e6, true, true},
                 {"select_ref_rate_hz", select_ref_rate_hz, 0, 1e300, true, true},
                 {"smooth_half_s", smooth_half_s, 0, 10, true, true},
                 {"smooth_heading_half_s", smooth_heading_half_s, 0, 10, true, true},
@@ -471,10 +448,26 @@ bool SelectOptions::IsValid(std::string* why) const {
   return true;
 }
 
-Selection select_effects(const DiagInput& in_full, const SelectOptions& o) {
+double selection_window_s(const DiagInput& in, const SelectOptions& o) {
+  if (in.has_ref_heading() || o.min_window_samples <= 0 || in.ref_t_s.size() < 3 ||
+      in.odo_t_s.empty())
+    return o.fit.window_s;
+  std::vector<double> dt;
+  for (std::size_t i = 1; i < in.ref_t_s.size(); ++i)
+    dt.push_back(in.ref_t_s[i] - in.ref_t_s[i - 1]);
+  std::nth_element(dt.begin(), dt.begin() + static_cast<long>(dt.size() / 2), dt.end());
+  const double period = dt[dt.size() / 2];
+  const double span = in.ref_t_s.back() - std::max(in.ref_t_s.front(), in.odo_t_s.front());
+  const double want = o.min_window_samples * period;
+  return std::max(o.fit.window_s, std::min(want, span / 3.0));
+}
+
+Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
   std::string why;
-  if (!o.IsValid(&why)) throw std::invalid_argument("select options: " + why);
+  if (!o_in.IsValid(&why)) throw std::invalid_argument("select options: " + why);
   const auto t_start = Clock::now();
+  SelectOptions o = o_in;
+  o.fit.window_s = selection_window_s(in_full, o_in);
   Selection sel;
   sel.window_s = o.fit.window_s;
   const std::vector<Window> windows_full = make_windows(in_full, o.fit.window_s);

@@ -9,15 +9,31 @@
 // track has commands or is body_velocity) actuator_lag. gyro_bias/gyro_scale
 // do not act on dead reckoning (sensor_checks.h judges them).
 //
-// Data. The windows of make_windows(in, fit.window_s). The search and the
+// Windows. make_windows(in, W) with W = selection_window_s(in, options)
+// (Selection::window_s): fit.window_s, except for a reference without
+// heading (position fixes), where W = max(fit.window_s, min_window_samples
+// reference periods) but at most a third of the track (so at least three
+// windows). Why: each fixes window costs a free anchor (3 parameters) that
+// absorbs the rigid part of whatever an effect does in it; what is left, the
+// non-rigid part, grows about as n^3 in chi-square with n fixes per window
+// (n samples of a drift growing with n), so 20 fixes at 1 Hz show a 0.5 %
+// radius error by ~0.1 sigma^2 per sample, 60 fixes by ~2.5. With 60 fixes
+// the 3 anchor parameters take 2.5 % of a window's 2n residuals.
+//
+// Anchors. Every window's anchor is a nuisance pose (fit.free_anchor_with_
+// heading, on by default here: default_select_fit()), ground truth
+// included: an anchor on one reference pose carries that sample's noise
+// into the whole window and a fit turns it into effects (window_replay.h).
+//
+// Data. The search and the
 // final fit run on the "selection input": the reference thinned to about
 // select_ref_rate_hz and denoised by local quadratic fits over
 // +-smooth_half_s (positions) and +-smooth_heading_half_s (heading, around a
 // gyro or odometry trend), see denoised_reference() in cross_validate.h;
-// dead reckoning still steps every odometry node. That denoises the window
-// anchors, which are single reference poses: with 10 mm / 5 mrad ground
-// truth a raw anchor's heading error alone moves a 20 s window's end by
-// several sigma, in every model alike, and drowns the paired tests.
+// dead reckoning still steps every odometry node. Ten times fewer residuals
+// make every fit faster; the smoothing lowers the reference noise the
+// paired tests see (and the thinned samples' correlation is accounted for,
+// see CrossValidator).
 // (Without the thinning, when it would change the windows, the raw input.)
 // Errors are normalised by the reference sigmas (cross_validate.h):
 // reference noise alone scores about 2 per sample (3 with a heading).
@@ -56,8 +72,8 @@
 // makes the CV score worse by less than rule (a) asks, the one whose
 // removal costs least is dropped (significance is not asked again: once
 // another effect changes every window, the paired test of an intermittent
-// effect has little power, and a needed effect must not be dropped for it). Confounded pairs (speed_radius vs radius_error,
-// longitudinal_slip vs radius_error, time_offset vs actuator_lag) are decided
+// effect has little power, and a needed effect must not be dropped for it).
+// Confounded pairs (speed_radius vs radius_error, longitudinal_slip vs radius_error, time_offset vs actuator_lag) are decided
 // by the CV score: the best candidate of a step is the one that predicts
 // held-out windows best; a proxy accepted early is dropped by the backward
 // pass once the true effect explains its share. Candidates the winner does
@@ -73,26 +89,38 @@
 //    default), then +-0.6 coarse in steps of coarse/5, then +-coarse/5 in
 //    steps of step_fine_s. After the first search, later forward steps
 //    start from the previous time and refine +-0.4 coarse, then finely.
-//  * slip_zone box: zone_candidates (zone_boxes.h) on the all-window
+//  * slip_zone box (choose_zone_box, zone_boxes.h): zone_candidates on the all-window
 //    residuals of the current set, plus SelectOptions::zone_boxes (e.g. from
 //    locate.h); each box is fitted (s_l, s_r with S) on all windows, the
 //    lowest cost wins, and its edges are refined by coordinate search on the
 //    fit cost in steps of zone_cell_m/2 then /4 (up to 4 rounds each),
 //    unless its fitted slips are both below 0.01 (a box from noise). Edges
-//    across which the robot never drives are not determined by the data:
-//    they stay at cell edges next to the visited cells.
+//    across which the robot never drives are not determined by the data
+//    (typically the two sides of a path that runs through the patch): each
+//    edge in turn is moved out to the "isotropic patch" (the square centred
+//    on the span of the reference samples inside the box, with the box's
+//    larger extent as its side), or if that costs, half or a quarter of the
+//    way, and kept where the fit cost rises by less than 1.92 (half the 95 %
+//    point of chi-square with 1 degree of freedom), i.e. where the data
+//    cannot tell. Without that convention such an edge would sit wherever
+//    the refinement stopped, hugging the path; with it, a patch crossed
+//    lengthwise is reported as wide as it is long. An edge that the data
+//    does determine (samples outside it show no slip) does not move.
 //
 // Final model: the selected structure fitted (fit.max_iterations, from the
 // no-op values) on the training windows of the selection input, and scored
 // there before/after on training and held-out windows (FitSummary::train,
-// ::heldout): against the denoised reference, whose anchors do not add
-// several sigma of heading noise to every window (on the raw reference a
-// correct model can score worse on a few held-out windows by that noise
-// alone). baseline_pos_rmse_m is the raw one. Training windows: the first
+// ::heldout): against the denoised reference (less noise, so the held-out
+// before/after difference stands out of it; the anchors are free as in the
+// search). baseline_pos_rmse_m is the raw one. Training windows: the first
 // (1 - heldout_fraction) of the windows, the rest held out ("last"); the
 // held-out windows are spread evenly instead ("interleaved") when the
-// "last" training part holds fewer than half the windows where radius_step
-// (after t) or slip_zone (box entered) acts, or its fit is rank deficient.
+// "last" training part holds less than half of the reference samples where
+// radius_step (after t) or slip_zone (inside the box) acts, or the held-out
+// part none of them, or its fit is rank deficient. The evenly spread
+// pattern is rotated by the fewest windows that meets the same rule (e.g.
+// with 4 windows of 60 s and a step at 165 s, holding out the window that
+// contains the step keeps the 40 s after it for training).
 // `explains` of an effect = (training SSE without it - training SSE with
 // all) / baseline training SSE (normalised; the set without it refitted on
 // the same training windows).
@@ -110,17 +138,29 @@
 
 namespace odotune::diagnose {
 
+// FitOptions of the selection: free anchors also with ground truth (header comment).
+inline FitOptions default_select_fit() {
+  FitOptions f;
+  f.free_anchor_with_heading = true;
+  return f;
+}
+
 struct SelectOptions {
-  FitOptions fit;                    // window_s (> 0 here), loss, model; max_iterations: final fits
+  // window_s (> 0 here), loss, model, anchoring; max_iterations: final fits
+  FitOptions fit = default_select_fit();
   std::vector<Effect> candidates;    // empty = every wheel-odometry effect (header comment)
   int folds = 5;                     // K contiguous folds of windows (fewer with fewer windows)
   int max_effects = 3;               // forward steps at most
-  double alpha = 1e-3;               // one-sided level of the paired test
+  double alpha = 1e-3;               // one-sided level of the paired test (rule (b))
   double min_rel_improvement = 0.05; // relative CV improvement needed
   double min_gain = 0.05;            // absolute CV improvement needed [normalised units/sample]
   double heldout_fraction = 0.3;     // final model: share of windows held out
   int cv_max_iterations = 50;        // Levenberg-Marquardt iterations of a CV fold fit
   int profile_max_iterations = 20;   // of a fit of the radius_step / slip_zone searches
+  // Windows of a reference without heading (fixes; free anchors) are
+  // lengthened to hold at least this many reference samples, but to no more
+  // than a third of the track (header comment, "Windows"); 0 = fit.window_s.
+  double min_window_samples = 60.0;
   double select_ref_rate_hz = 10.0;  // reference thinned to about this rate for selection; 0 = all
   double smooth_half_s = 0.25;       // half span of the thinned reference's position fits [s]
   double smooth_heading_half_s = 1.0;  // of its heading fits (around a gyro/odometry trend) [s]
@@ -195,7 +235,12 @@ struct Selection {
 
 // Throws std::invalid_argument (one line) for invalid options or an input
 // fit_effects cannot use. A track with fewer than 3 windows yields no
-// effects and a note.
+// effects and a note. Its windows are make_windows(in, selection_window_s(in,
+// options)) (= Selection::window_s): callers that index them (train_windows,
+// heldout_windows) must use that length, not options.fit.window_s.
 Selection select_effects(const DiagInput& in, const SelectOptions& options = {});
+
+// The window length select_effects uses on `in` (header comment, "Windows").
+double selection_window_s(const DiagInput& in, const SelectOptions& options);
 
 }  // namespace odotune::diagnose

@@ -22,10 +22,20 @@ double interp(const std::vector<double>& t, const std::vector<double>& v, double
   return v[j - 1] + f * (v[j] - v[j - 1]);
 }
 
-// The anchor composed with the rigid motion that best maps `pred` onto the
-// reference positions of w (least squares, rotation about the origin first).
-Pose<double> align(const Pose<double>& a, const std::vector<Pose<double>>& pred,
-                   const DiagInput& in, const Window& w) {
+// A rigid 2D motion: rotation about the origin, then translation.
+struct Rigid {
+  double phi = 0.0, tx = 0.0, ty = 0.0;  // p -> R(phi) p + t
+  Pose<double> apply(const Pose<double>& p) const {
+    const double c = std::cos(phi), s = std::sin(phi);
+    return {c * p.x - s * p.y + tx, s * p.x + c * p.y + ty, p.th + phi};
+  }
+};
+
+// The rigid motion that best maps `pred` onto the reference of w in least
+// squares: positions only, or positions and headings weighted by the
+// reference sigmas (file comment of window_replay.h).
+Rigid align(const std::vector<Pose<double>>& pred, const DiagInput& in, const Window& w,
+            bool heading) {
   const std::size_t n = pred.size();
   double px = 0, py = 0, qx = 0, qy = 0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -41,10 +51,30 @@ Pose<double> align(const Pose<double>& a, const std::vector<Pose<double>>& pred,
     c += ax * bx + ay * by;
     s += ax * by - ay * bx;
   }
-  const double phi = (c == 0.0 && s == 0.0) ? 0.0 : std::atan2(s, c);
+  double phi = (c == 0.0 && s == 0.0) ? 0.0 : std::atan2(s, c);
+  if (heading) {
+    // f(phi) = -2 (c cos phi + s sin phi)/sm2 + sum (phi - m_i)^2/sh2 (+ const),
+    // m_i = thref_i - th_i: Newton steps from the position-only solution
+    // (f is convex near it: f'' = 2 (c cos + s sin)/sm2 + 2 n/sh2 > 0 there).
+    double m = 0.0;
+    for (std::size_t i = 0; i < n; ++i) m += in.ref_theta_rad[w.ref_begin + i] - pred[i].th;
+    m /= static_cast<double>(n);
+    const double wm = 1.0 / (in.ref_sigma_m * in.ref_sigma_m);
+    const double wh = static_cast<double>(n) / (in.ref_sigma_rad * in.ref_sigma_rad);
+    if (c == 0.0 && s == 0.0) phi = m;
+    for (int it = 0; it < 20; ++it) {
+      const double cs = std::cos(phi), sn = std::sin(phi);
+      const double g = wm * (c * sn - s * cs) + wh * (phi - m);
+      const double h = wm * (c * cs + s * sn) + wh;
+      if (!(h > 0.0)) break;
+      const double step = g / h;
+      phi -= step;
+      if (std::abs(step) < 1e-12) break;
+    }
+    if (!std::isfinite(phi)) phi = m;
+  }
   const double cp = std::cos(phi), sp = std::sin(phi);
-  const double tx = qx - (cp * px - sp * py), ty = qy - (sp * px + cp * py);
-  return {cp * a.x - sp * a.y + tx, sp * a.x + cp * a.y + ty, a.th + phi};
+  return {phi, qx - (cp * px - sp * py), qy - (sp * px + cp * py)};
 }
 
 }  // namespace
@@ -112,6 +142,13 @@ Pose<double> reference_pose_at(const DiagInput& in, double t_s) {
 ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
                     const DiagInput& in, const std::vector<Window>& windows,
                     const std::vector<int>& which, const std::vector<Pose<double>>* anchors) {
+  return replay(model, params, in, windows, which, anchors, anchoring(in));
+}
+
+ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
+                    const DiagInput& in, const std::vector<Window>& windows,
+                    const std::vector<int>& which, const std::vector<Pose<double>>* anchors,
+                    Anchoring mode) {
   if (params.size() != model.layout().size())
     throw std::invalid_argument(fmt::format("replay: {} parameters for a model of {}",
                                             params.size(), model.layout().size()));
@@ -121,7 +158,11 @@ ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
   if (list.empty())
     for (const Window& w : windows) list.push_back(w.index);
   const bool heading = in.has_ref_heading();
-  if (anchors && !heading && anchors->size() != list.size())
+  const bool free_anchor = mode == Anchoring::free;
+  if (!free_anchor && !heading)
+    throw std::invalid_argument(fmt::format(
+        "replay: track '{}' has no reference heading to anchor windows on", in.track_name));
+  if (anchors && free_anchor && anchors->size() != list.size())
     throw std::invalid_argument(fmt::format("replay: {} anchors for {} windows", anchors->size(),
                                             list.size()));
   const double nan = std::nan("");
@@ -138,19 +179,28 @@ ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
     const Window& w = windows[static_cast<std::size_t>(list[i])];
     std::vector<Pose<double>> pred(w.ref_end - w.ref_begin);
     Pose<double> a;
-    if (heading) {
+    if (!free_anchor) {
       a = reference_pose_at(in, w.t_begin_s);
     } else if (anchors) {
       a = (*anchors)[i];
     } else {
-      a = {in.ref_x_m[w.ref_begin], in.ref_y_m[w.ref_begin], 0.0};
-      const int rounds = model.structure().on(Effect::slip_zone) ? 3 : 1;
-      for (int it = 0; it < rounds; ++it) {
-        replay_window(model, params.data(), w, a, in.ref_t_s, pred.data());
-        a = align(a, pred, in, w);
+      a = heading ? reference_pose_at(in, w.t_begin_s)
+                  : Pose<double>{in.ref_x_m[w.ref_begin], in.ref_y_m[w.ref_begin], 0.0};
+      // Dead reckoning commutes with a rigid motion of its start, except
+      // slip_zone's inside test: moved poses are exact without slip_zone,
+      // and with it the replay is redone from the moved anchor (3 rounds).
+      const bool zone = model.structure().on(Effect::slip_zone);
+      replay_window(model, params.data(), w, a, in.ref_t_s, pred.data());
+      for (int it = 0; it < (zone ? 3 : 1); ++it) {
+        const Rigid m = align(pred, in, w, heading);
+        a = m.apply(a);
+        if (zone)
+          replay_window(model, params.data(), w, a, in.ref_t_s, pred.data());
+        else
+          for (Pose<double>& q : pred) q = m.apply(q);
       }
     }
-    replay_window(model, params.data(), w, a, in.ref_t_s, pred.data());
+    if (!free_anchor || anchors) replay_window(model, params.data(), w, a, in.ref_t_s, pred.data());
     res.anchors.push_back(a);
     WindowError e{w.index, w.t_begin_s, w.t_end_s, pred.size(), 0.0, heading ? 0.0 : nan};
     double sp = 0.0, sh = 0.0;

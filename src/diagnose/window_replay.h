@@ -13,19 +13,33 @@
 // (with a free anchor: fewer than 3) are dropped; the rest are numbered 0, 1,
 // ... in time order, which is the number train/held-out lists use.
 //
-// Anchors. With a reference heading (ground truth with gt_theta) the anchor is
-// the reference pose interpolated linearly (x, y, unwrapped theta) at
-// t_begin_s. Otherwise (position fixes, or ground truth without heading) the
-// anchor is free: a fit makes it a nuisance parameter, and replay() chooses it
-// in closed form, the rigid 2D motion that maps the dead-reckoned positions onto
-// the window's fixes in least squares (Kabsch/Umeyama without scale), applied
-// to a replay started at the window's first fix with heading 0 (three times
-// with slip_zone, whose effect depends on where the robot is).
+// Anchors (Anchoring). `reference` (the default with a reference heading,
+// ground truth with gt_theta): the anchor is the reference pose interpolated
+// linearly (x, y, unwrapped theta) at t_begin_s. `free` (the default without
+// a reference heading: position fixes, or ground truth without heading; and
+// on request with one, see below): the anchor is a nuisance parameter, which
+// a fit fits and replay() chooses in closed form: the rigid 2D motion that
+// maps the dead-reckoned positions onto the window's reference positions in
+// least squares (Kabsch/Umeyama without scale), applied to a replay started
+// at the window's first reference position with heading 0 (three times with
+// slip_zone, whose effect depends on where the robot is). With a reference
+// heading the rotation phi minimises the weighted sum
+//   sum |R(phi) p_i + t - q_i|^2 / sigma_m^2 + sum (th_i + phi - thref_i)^2 / sigma_rad^2
+// (t in closed form for each phi; phi by Newton steps from the position-only
+// solution), the replay starting at the reference pose at t_begin_s.
+// Why free anchors with ground truth: an anchor on ONE reference pose carries
+// that sample's noise into every prediction of the window (a heading error
+// d swings the window's end by d*L, a position error shifts it), and a fit
+// absorbs that noise into whatever effect grows along the window: on a
+// 180 s track with 10 mm / 5 mrad ground truth the two radius scales came out
+// ~2e-4 off (more than the whole of a 0.06 % radius error). A free anchor is
+// determined by all of the window's samples.
 //
 // Prediction at a reference time between two odometry nodes: linear
 // interpolation of the node poses (x, y, theta).
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -48,24 +62,46 @@ std::vector<Window> make_windows(const DiagInput& in, double window_s);
 // True when windows are anchored on the reference pose (reference with heading).
 inline bool anchored_on_reference(const DiagInput& in) { return in.has_ref_heading(); }
 
+// How a window's anchor pose is chosen (see the file comment).
+enum class Anchoring {
+  reference,  // the reference pose at t_begin_s (needs a reference heading)
+  free,       // a nuisance pose: closed-form alignment in replay(), fitted by fit_effects
+};
+// `free` when asked (free_with_heading) or when the reference has no heading.
+inline Anchoring anchoring(const DiagInput& in, bool free_with_heading = false) {
+  return anchored_on_reference(in) && !free_with_heading ? Anchoring::reference : Anchoring::free;
+}
+
 // Reference pose interpolated at time t (requires a reference heading).
 Pose<double> reference_pose_at(const DiagInput& in, double t_s);
 
 // Dead reckoning of window w from `anchor` (the pose at w.node_begin) with the
 // model's flat parameters; out[i] = predicted pose at reference sample
-// w.ref_begin + i. `ref_t` is DiagInput::ref_t_s.
+// w.ref_begin + i. `ref_t` is DiagInput::ref_t_s. With `frame`, the poses are
+// in a local frame whose origin is the world pose *frame (used by the fit's
+// anchor composition): only slip_zone's inside test looks at the world pose,
+// and it gets frame (+) pose.
 template <typename T>
 void replay_window(const EffectModel& model, const T* params, const Window& w,
-                   const Pose<T>& anchor, const std::vector<double>& ref_t, Pose<T>* out) {
+                   const Pose<T>& anchor, const std::vector<double>& ref_t, Pose<T>* out,
+                   const Pose<double>* frame = nullptr) {
   const auto& t = model.series().t_s;
   Stepper<T> stepper(model, params);
   stepper.start(w.node_begin);
   Pose<T> p = anchor;
+  const bool world = frame && model.structure().on(Effect::slip_zone);
+  const double fc = frame ? std::cos(frame->th) : 1.0, fs = frame ? std::sin(frame->th) : 0.0;
   std::size_t r = w.ref_begin;
   while (r < w.ref_end && ref_t[r] <= t[w.node_begin]) out[r++ - w.ref_begin] = p;
   for (std::size_t k = w.node_begin; k < w.node_end && r < w.ref_end; ++k) {
     const Pose<T> prev = p;
-    advance(p, stepper.step(k, prev));
+    if (world) {
+      const double lx = scalar(prev.x), ly = scalar(prev.y);
+      advance(p, stepper.step(k, Pose<T>{T(frame->x + fc * lx - fs * ly),
+                                         T(frame->y + fs * lx + fc * ly), prev.th}));
+    } else {
+      advance(p, stepper.step(k, prev));
+    }
     const double h = t[k + 1] - t[k];
     while (r < w.ref_end && ref_t[r] <= t[k + 1]) {
       const double f = (ref_t[r] - t[k]) / h;
@@ -96,13 +132,19 @@ struct ReplayResult {
 
 // Replays windows `which` (indices into `windows`; empty = all) with the flat
 // parameters `params` (layout order of model.layout()). `anchors`, when given,
-// holds one anchor per entry of `which` for free-anchor windows (ignored when
-// the reference has heading); otherwise they are chosen in closed form.
-// Throws std::invalid_argument for a bad window index or parameter count.
+// holds one anchor per entry of `which` for free-anchor windows (ignored with
+// Anchoring::reference); otherwise they are chosen in closed form. The first
+// form anchors as anchoring(in). Throws std::invalid_argument for a bad
+// window index or parameter count, or Anchoring::reference without a
+// reference heading.
 ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
                     const DiagInput& in, const std::vector<Window>& windows,
                     const std::vector<int>& which = {},
                     const std::vector<Pose<double>>* anchors = nullptr);
+ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
+                    const DiagInput& in, const std::vector<Window>& windows,
+                    const std::vector<int>& which, const std::vector<Pose<double>>* anchors,
+                    Anchoring mode);
 
 // Convenience: builds the model of `set` and the windows of window_s.
 ReplayResult replay(const DiagInput& in, const EffectSet& set, double window_s,

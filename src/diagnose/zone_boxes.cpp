@@ -2,12 +2,29 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
 #include <fmt/format.h>
 
 namespace odotune::diagnose {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// A found box whose fitted slips both stay below this is not refined (a box
+// from noise is not worth the fits).
+constexpr double kMinZoneSlip = 0.01;
+// A slip-zone edge whose outward move raises the fit cost (1/2 chi-square)
+// by less than this is not determined by the data: half the 95 % point of a
+// chi-square with one degree of freedom (3.84).
+constexpr double kFlatCost = 1.92;
+
+}  // namespace
+
 
 std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Window>& windows,
                                      const std::vector<double>& pred_x_m,
@@ -144,6 +161,103 @@ std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Wind
                    ymin + (r.y1 + 1) * cell, sc});
   }
   return out;
+}
+
+
+namespace {
+
+// Centre of the scored reference samples inside box b along x (axis 0) or
+// y (axis 1); NaN when none is inside.
+double inside_centre(const DiagInput& in, const std::vector<Window>& windows, const ZoneBox& b,
+                     int axis) {
+  double lo = kInf, hi = -kInf;
+  for (const Window& w : windows)
+    for (std::size_t g = w.ref_begin; g < w.ref_end; ++g)
+      if (in.ref_x_m[g] >= b.x0_m && in.ref_x_m[g] <= b.x1_m && in.ref_y_m[g] >= b.y0_m &&
+          in.ref_y_m[g] <= b.y1_m) {
+        const double u = axis == 0 ? in.ref_x_m[g] : in.ref_y_m[g];
+        lo = std::min(lo, u), hi = std::max(hi, u);
+      }
+  return lo <= hi ? 0.5 * (lo + hi) : kNaN;
+}
+
+}  // namespace
+
+EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval& cur_full,
+                          const ZoneSearchOptions& o) {
+  std::vector<ZoneBox> boxes =
+      zone_candidates(cv.input(), cv.windows(), cur_full.pred.x_m, cur_full.pred.y_m,
+                      cur_full.pred.theta_rad, o.cell_m, o.max_boxes, o.min_score);
+  boxes.insert(boxes.end(), o.extra_boxes.begin(), o.extra_boxes.end());
+  EffectSet warm = cur_full.fitted;
+  auto try_box = [&](const ZoneBox& b, double& cost, EffectSet& fitted) {
+    EffectSet st = s;
+    st.enable(Effect::slip_zone);
+    st.set(Effect::slip_zone, "x0", b.x0_m).set(Effect::slip_zone, "x1", b.x1_m);
+    st.set(Effect::slip_zone, "y0", b.y0_m).set(Effect::slip_zone, "y1", b.y1_m);
+    cost = kInf;
+    try {
+      const FitSummary f = cv.fit(start_from(st, warm), {}, o.max_iterations);
+      if (std::isfinite(f.final_cost)) cost = f.final_cost, fitted = f.effects;
+    } catch (const std::exception&) {
+    }
+    return st;
+  };
+  EffectSet best, best_fit;
+  ZoneBox bb;
+  double best_cost = kInf;
+  for (const ZoneBox& b : boxes) {
+    double cost;
+    EffectSet fitted;
+    const EffectSet st = try_box(b, cost, fitted);
+    if (cost < best_cost) best_cost = cost, best = st, best_fit = fitted, bb = b;
+  }
+  if (best.empty() || std::max(best_fit.get(Effect::slip_zone, "s_l"),
+                               best_fit.get(Effect::slip_zone, "s_r")) < kMinZoneSlip)
+    return best;
+  warm = best_fit;
+  for (double step : {0.5 * o.cell_m, 0.25 * o.cell_m})
+    for (int round = 0, moved = 1; moved && round < 4; ++round) {
+      moved = 0;
+      for (int edge = 0; edge < 4; ++edge)
+        for (double sign : {-1.0, 1.0}) {
+          ZoneBox q = bb;
+          double* v[4] = {&q.x0_m, &q.x1_m, &q.y0_m, &q.y1_m};
+          *v[edge] += sign * step;
+          if (!(q.x0_m < q.x1_m && q.y0_m < q.y1_m)) continue;
+          double cost;
+          EffectSet fitted;
+          const EffectSet st = try_box(q, cost, fitted);
+          if (cost < best_cost * (1.0 - 1e-6))
+            best_cost = cost, best = st, bb = q, warm = fitted, moved = 1;
+        }
+    }
+  // Undetermined edges (select.h): each edge in turn is moved out to the
+  // isotropic patch, by the whole way, else half or a quarter of it, kept
+  // when the fit cost rises by less than kFlatCost.
+  const double side = std::max(bb.x1_m - bb.x0_m, bb.y1_m - bb.y0_m);
+  const double ref_cost = best_cost;
+  for (int edge = 0; edge < 4; ++edge) {
+    const double c = inside_centre(cv.input(), cv.windows(), bb, edge / 2);
+    if (!std::isfinite(c)) break;
+    double* v[4] = {&bb.x0_m, &bb.x1_m, &bb.y0_m, &bb.y1_m};
+    const double target = edge % 2 == 0 ? std::min(*v[edge], c - 0.5 * side)
+                                        : std::max(*v[edge], c + 0.5 * side);
+    for (double frac : {1.0, 0.5, 0.25}) {
+      if (!(std::abs(target - *v[edge]) > 0.25 * o.cell_m)) break;
+      ZoneBox q = bb;
+      double* qv[4] = {&q.x0_m, &q.x1_m, &q.y0_m, &q.y1_m};
+      *qv[edge] += frac * (target - *v[edge]);
+      double cost;
+      EffectSet fitted;
+      const EffectSet st = try_box(q, cost, fitted);
+      if (cost <= ref_cost + kFlatCost) {
+        best = st, bb = q;
+        break;
+      }
+    }
+  }
+  return best;
 }
 
 }  // namespace odotune::diagnose

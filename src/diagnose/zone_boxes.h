@@ -1,12 +1,15 @@
-// Candidate slip-zone boxes (physics-effects.md, slip_zone) from where a
-// model's dead-reckoning residual GROWS on the map, for the model selection
-// (select.h). A simple stand-in for the regions of locate.h, whose boxes the
-// selection also accepts (SelectOptions::zone_boxes).
+// Slip-zone boxes (physics-effects.md, slip_zone) for the model selection
+// (select.h): candidate boxes from where a model's dead-reckoning residual
+// GROWS on the map (a simple stand-in for the regions of locate.h, whose
+// boxes the selection also accepts, SelectOptions::zone_boxes), and the
+// choice and refinement of the box by fit cost (choose_zone_box).
 #pragma once
 
 #include <vector>
 
+#include "diagnose/cross_validate.h"
 #include "diagnose/diag_input.h"
+#include "diagnose/effect_model.h"
 #include "diagnose/window_replay.h"
 
 namespace odotune::diagnose {
@@ -51,5 +54,29 @@ std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Wind
                                      const std::vector<double>& pred_y_m,
                                      const std::vector<double>& pred_theta_rad, double cell_m,
                                      int max_boxes, double min_score);
+
+struct ZoneSearchOptions {
+  double cell_m = 0.25;             // zone_candidates' cell, and the refinement's unit [m]
+  int max_boxes = 3;                // boxes from zone_candidates
+  double min_score = 16.0;          // their score threshold
+  std::vector<ZoneBox> extra_boxes; // more candidates (e.g. from locate.h)
+  int max_iterations = 20;          // of each fit
+};
+
+// The structure s plus slip_zone with the best box, or an empty set when
+// there is no candidate. Candidates: zone_candidates on cur_full's
+// predictions (cv.fit_all of s) plus extra_boxes; each is fitted (s_l, s_r
+// with s, warm-started from cur_full.fitted) on all of cv's windows and the
+// lowest fit cost wins. Unless its slips both stay below 0.01 (a box from
+// noise), its edges are then refined by coordinate search on the fit cost
+// in steps of cell_m/2 then cell_m/4 (up to 4 rounds each), and the edges
+// the data does not determine are set by the isotropic-patch convention of
+// select.h (moved out to the square centred on the inside samples whose
+// side is the box's larger extent, or half or a quarter of the way, where
+// the fit cost rises by less than 1.92 = half the 95 % point of chi-square
+// with 1 degree of freedom). The returned set holds no-op slips (fitted
+// values are the caller's business).
+EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval& cur_full,
+                          const ZoneSearchOptions& options);
 
 }  // namespace odotune::diagnose

@@ -2,7 +2,10 @@
 // sees, a track simulated WITH that effect (ground truth, 120 s, fixed seed)
 // gives back the simulated parameters within 10 % of their size, finite
 // standard errors, and a lower error on held-out windows; with 1 Hz fixes only
-// (sigma 5 cm) radius_error comes back within 25 %. Plus option checks, rank
+// (sigma 5 cm) radius_error comes back within 25 %. Free anchors with ground
+// truth: a corrupted anchor sample biases a reference-anchored fit and not a
+// free-anchored one, and the closed-form alignment uses the heading. The
+// prebuilt-model overload gives the same fit. Plus option checks, rank
 // deficiency and speed.
 #include <algorithm>
 #include <chrono>
@@ -193,6 +196,91 @@ TEST(Fit, RobustLossResistsReferenceOutliers) {
   EXPECT_GT(plain, 2.0 * std::max(huber, cauchy));
   std::cout << "[ outliers ] relative error huber " << huber << ", cauchy " << cauchy << ", none "
             << plain << "\n";
+}
+
+// Ground truth whose sample at every window start is off by 20 mm to the
+// side and 20 mrad (one bad sample per window, as a noisy anchor is): the
+// reference-anchored fit carries that into the radius scales; with free
+// anchors (the selection's setting) every sample of the window decides the
+// anchor, and the scales come back as simulated.
+TEST(Fit, FreeAnchorsWithHeadingIgnoreABadAnchorSample) {
+  SimTrackOptions o;
+  o.duration_s = 100.0;
+  o.seed = 7;
+  o.effects = {"radius_error:scale_l=0.997,scale_r=1.002"};
+  const Track clean = simulate_track(o);
+  const DiagInput good = build_diag_input(clean);
+  const auto windows = make_windows(good, 20.0);
+  TrackData d = clean.data();
+  for (const Window& w : windows)
+    for (std::size_t i = 0; i < d.t.size(); ++i)
+      if (std::abs(d.t[i] - w.t_begin_s) < 1e-9 && !std::isnan(d.col(Col::gt_x)[i])) {
+        const double th = d.col(Col::gt_theta)[i];
+        d.col(Col::gt_x)[i] -= 0.02 * std::sin(th);
+        d.col(Col::gt_y)[i] += 0.02 * std::cos(th);
+        d.col(Col::gt_theta)[i] += 0.02;
+      }
+  const DiagInput in = build_diag_input(Track(std::move(d)));
+  ASSERT_EQ(make_windows(in, 20.0).size(), windows.size());
+  auto error = [&](bool free_anchor) {
+    FitOptions opt;
+    opt.free_anchor_with_heading = free_anchor;
+    EXPECT_EQ(fit_anchoring(in, opt), free_anchor ? Anchoring::free : Anchoring::reference);
+    const FitSummary s = fit_effects(in, EffectSet::parse({"radius_error"}), {}, {}, opt);
+    EXPECT_EQ(s.anchors.size(), free_anchor ? s.fitted_windows.size() : 0u);
+    return std::max(std::abs(param(s, "radius_error.scale_l").value - 0.997),
+                    std::abs(param(s, "radius_error.scale_r").value - 1.002));
+  };
+  const double fixed = error(false), free = error(true);
+  std::cout << "[ anchors ] largest scale error: on the reference sample " << fixed
+            << ", free " << free << "\n";
+  EXPECT_LT(free, 0.1 * 0.003);    // a tenth of the smaller departure
+  EXPECT_GT(fixed, 5.0 * free);
+  // With the simulated parameters, the closed-form alignment with heading
+  // puts the free anchor back on the true pose (noise-free ground truth
+  // elsewhere), closer to the reference than a replay from the bad sample.
+  const EffectSet truth = EffectSet::parse({"radius_error:scale_l=0.997,scale_r=1.002"});
+  const EffectModel model(in, truth);
+  const ReplayResult r = replay(model, pack(truth), in, windows, {}, nullptr, Anchoring::free);
+  const ReplayResult on_sample =
+      replay(model, pack(truth), in, windows, {}, nullptr, Anchoring::reference);
+  ASSERT_EQ(r.anchors.size(), windows.size());
+  for (std::size_t i = 0; i < windows.size(); ++i) {
+    const Pose<double> ideal = reference_pose_at(good, windows[i].t_begin_s);
+    EXPECT_NEAR(r.anchors[i].th, ideal.th, 0.002) << i;  // the bad sample is off by 0.02
+    EXPECT_NEAR(std::hypot(r.anchors[i].x - ideal.x, r.anchors[i].y - ideal.y), 0.0, 0.005) << i;
+  }
+  EXPECT_LT(r.pos_rmse_m, on_sample.pos_rmse_m);
+  // Anchoring on the reference needs a reference heading.
+  SimTrackOptions f;
+  f.duration_s = 45.0, f.gt_rate_hz = 0.0, f.aps_rate_hz = 1.0;
+  const DiagInput fixes = build_diag_input(simulate_track(f));
+  EXPECT_THROW(replay(EffectModel(fixes, EffectSet()), {}, fixes, make_windows(fixes, 20.0), {},
+                      nullptr, Anchoring::reference),
+               std::invalid_argument);
+}
+
+// A prebuilt model (what the cross-validation reuses) gives the very same
+// fit; a model of other effects or of another track is refused.
+TEST(Fit, PrebuiltModelGivesTheSameFit) {
+  SimTrackOptions o;
+  o.duration_s = 60.0;
+  o.seed = 9;
+  o.effects = {"lateral_skid:k=0.03"};
+  const DiagInput in = build_diag_input(simulate_track(o));
+  const EffectSet skid = EffectSet::parse({"lateral_skid"});
+  const FitSummary a = fit_effects(in, skid, {0, 1}, {2});
+  const EffectModel model(in, EffectSet::parse({"lateral_skid:k=0.01"}));  // values do not matter
+  const FitSummary b = fit_effects(model, in, skid, {0, 1}, {2});
+  EXPECT_EQ(a.effects.to_string(), b.effects.to_string());
+  EXPECT_EQ(a.final_cost, b.final_cost);
+  EXPECT_EQ(a.heldout.after_pos_rmse_m, b.heldout.after_pos_rmse_m);
+  EXPECT_THROW(fit_effects(EffectModel(in, EffectSet::parse({"radius_error"})), in, skid, {}, {}),
+               std::invalid_argument);
+  o.duration_s = 100.0;  // three laps, not two
+  const DiagInput other = build_diag_input(simulate_track(o));
+  ASSERT_NE(other.odo_t_s.size(), in.odo_t_s.size());
+  EXPECT_THROW(fit_effects(EffectModel(other, skid), in, skid, {}, {}), std::invalid_argument);
 }
 
 TEST(Fit, ZoneNeverEnteredIsRankDeficientNotACrash) {

@@ -192,6 +192,28 @@ TEST(SelectOptions, DefaultsAreValidAndBadValuesAreNamed) {
   EXPECT_THROW(select_effects(simulated(sim_options(43, 30.0, {})), o), std::invalid_argument);
 }
 
+// Windows of sparse fixes are lengthened to hold min_window_samples fixes
+// (60 s at 1 Hz, 30 s at 2 Hz), never beyond a third of the track; ground
+// truth keeps fit.window_s.
+TEST(SelectOptions, FixesWindowsHoldEnoughSamples) {
+  SimTrackOptions o = sim_options(44, 200.0, {});
+  const SelectOptions so;
+  EXPECT_DOUBLE_EQ(selection_window_s(simulated(o), so), 20.0);
+  o.gt_rate_hz = 0.0, o.aps_rate_hz = 1.0;
+  EXPECT_NEAR(selection_window_s(simulated(o), so), 60.0, 1e-9);
+  o.aps_rate_hz = 2.0;
+  EXPECT_NEAR(selection_window_s(simulated(o), so), 30.0, 1e-9);
+  o.aps_rate_hz = 10.0;  // 60 fixes take 6 s: the 20 s windows stay
+  EXPECT_DOUBLE_EQ(selection_window_s(simulated(o), so), 20.0);
+  o.aps_rate_hz = 1.0, o.duration_s = 90.0;
+  const DiagInput short_track = simulated(o);
+  const double span = short_track.ref_t_s.back() - short_track.ref_t_s.front();
+  EXPECT_NEAR(selection_window_s(short_track, so), span / 3.0, 1.0);
+  SelectOptions plain;
+  plain.min_window_samples = 0.0;
+  EXPECT_DOUBLE_EQ(selection_window_s(short_track, plain), 20.0);
+}
+
 // ---- selection --------------------------------------------------------------
 
 TEST(Select, NoEffectGivesNoFindingOverSeeds) {
