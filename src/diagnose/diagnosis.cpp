@@ -176,7 +176,8 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   Diagnosis d;
   d.track = in.track_name;
   d.reference = in.reference;
-  const double ws = o.select.fit.window_s;
+  // The selection's window (longer than fit.window_s for sparse fixes, select.h).
+  const double ws = selection_window_s(in, o.select);
   d.window_s = ws;
   const std::vector<Window> windows = make_windows(in, ws);
 
@@ -270,6 +271,13 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
     const double b = gc.bias.departs() ? gc.bias.value : 0.0;
     const double s = gc.scale.departs() ? gc.scale.value : 1.0;
     const DiagInput corrected = gyro_heading_input(scoring, b, s);
+    // The chosen lateral_skid acts on the gyro-heading replay too (v_y =
+    // -k v w with the gyro's w); the other wheel effects change travel or
+    // wheel heading, which this replay takes from the nominal wheels and
+    // the gyro.
+    EffectSet body;
+    if (wheel.on(Effect::lateral_skid))
+      body.enable(Effect::lateral_skid).set(Effect::lateral_skid, "k", wheel.get(Effect::lateral_skid, "k"));
     const std::pair<Effect, const Verdict*> checks[] = {{Effect::gyro_bias, &gc.bias},
                                                        {Effect::gyro_scale, &gc.scale}};
     for (const auto& [effect, v] : checks) {
@@ -293,10 +301,10 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
       } else {
         const DiagInput without = effect == Effect::gyro_bias ? gyro_heading_input(scoring, 0.0, s)
                                                               : gyro_heading_input(scoring, b, 1.0);
-        f.train = scores(without, nominal, nominal, ws, d.train_windows);
-        f.train.after_pos_rmse_m = replay(corrected, nominal, ws, d.train_windows).pos_rmse_m;
-        f.heldout = scores(without, nominal, nominal, ws, d.heldout_windows);
-        f.heldout.after_pos_rmse_m = replay(corrected, nominal, ws, d.heldout_windows).pos_rmse_m;
+        f.train = scores(without, body, body, ws, d.train_windows);
+        f.train.after_pos_rmse_m = replay(corrected, body, ws, d.train_windows).pos_rmse_m;
+        f.heldout = scores(without, body, body, ws, d.heldout_windows);
+        f.heldout.after_pos_rmse_m = replay(corrected, body, ws, d.heldout_windows).pos_rmse_m;
         f.evidence = fmt::format(
             "gyro against the reference yaw rate: robust regression over {} bins, {:.1f} standard "
             "errors from the no-op value",

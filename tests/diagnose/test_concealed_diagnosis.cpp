@@ -1,0 +1,120 @@
+// The concealed-effect suite (issue 4, item 7; cases in concealed_cases.h):
+// every case is simulated and diagnosed end to end (diagnose(): sensor
+// checks, model selection, location). Pass rule of the design note: exactly
+// the expected effects named (no other finding, `unexplained` included), each
+// parameter within expected_tolerance() of the truth (±25 % of the departure,
+// ±5 s for a step time), and the held-out error of every finding improved.
+// No-effect cases must give no finding at all.
+//
+// kKnownMisses lists the cases the diagnosis does not pass yet, each with why;
+// for those the test asserts what does hold (no wrong effect named) and
+// prints what was found, so the list stays honest: a case that starts to
+// pass fails the test until it is taken off the list.
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <map>
+#include <set>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "concealed_cases.h"
+#include "diagnose/diag_input.h"
+#include "diagnose/diagnosis.h"
+#include "tracks/simulator.h"
+
+namespace odotune::diagnose {
+namespace {
+
+using concealed::ConcealedCase;
+
+// Case name -> why the diagnosis misses it today.
+const std::map<std::string, std::string>& known_misses() {
+  static const std::map<std::string, std::string> m = {};
+  return m;
+}
+
+struct Verdict {
+  bool named_right = true, params_right = true, heldout_improved = true;
+  std::set<std::string> found, expected;
+  std::string detail;
+  bool pass() const { return named_right && params_right && heldout_improved; }
+};
+
+Verdict judge(const ConcealedCase& c, const Diagnosis& d) {
+  Verdict v;
+  for (const Finding& f : d.findings) v.found.insert(f.effect);
+  for (const concealed::ExpectedFinding& e : c.expected) v.expected.insert(std::string(e.effect));
+  v.named_right = v.found == v.expected;
+  for (const concealed::ExpectedFinding& e : c.expected) {
+    const Finding* f = nullptr;
+    for (const Finding& g : d.findings)
+      if (g.effect == e.effect) f = &g;
+    if (!f) continue;
+    for (const concealed::ExpectedParam& p : e.params) {
+      const double got = f->param(p.name), tol = concealed::expected_tolerance(e, p);
+      const bool ok = std::isfinite(got) && std::abs(got - p.value) <= tol;
+      v.params_right = v.params_right && ok;
+      v.detail += std::string(e.effect) + "." + std::string(p.name) + " = " + std::to_string(got) +
+                  " (truth " + std::to_string(p.value) + " ± " + std::to_string(tol) + ")" +
+                  (ok ? "" : " OUT") + "; ";
+    }
+    const bool better = f->heldout.after_pos_rmse_m < f->heldout.before_pos_rmse_m;
+    v.heldout_improved = v.heldout_improved && better;
+    v.detail += "held-out " + std::to_string(f->heldout.before_pos_rmse_m) + " -> " +
+                std::to_string(f->heldout.after_pos_rmse_m) + " m; ";
+  }
+  return v;
+}
+
+std::string set_text(const std::set<std::string>& s) {
+  std::string out;
+  for (const std::string& e : s) out += (out.empty() ? "" : ", ") + e;
+  return out.empty() ? "none" : out;
+}
+
+class ConcealedDiagnosis : public ::testing::TestWithParam<std::size_t> {};
+
+TEST_P(ConcealedDiagnosis, NamesTheEffectsWithinToleranceAndProvesThemHeldOut) {
+  const ConcealedCase& c = concealed::concealed_cases().at(GetParam());
+  const auto t0 = std::chrono::steady_clock::now();
+  const DiagInput in = build_diag_input(sim::simulate(concealed::base_scenario(c)));
+  const Diagnosis d = diagnose(in);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const Verdict v = judge(c, d);
+  std::cout << "[ concealed ] " << c.name << ": found {" << set_text(v.found) << "} expected {"
+            << set_text(v.expected) << "} " << v.detail << secs << " s\n";
+  SCOPED_TRACE(std::string(c.name) + ": " + std::string(c.why_hard));
+  const auto miss = known_misses().find(std::string(c.name));
+  if (miss == known_misses().end()) {
+    EXPECT_TRUE(v.named_right) << "found {" << set_text(v.found) << "}, expected {"
+                               << set_text(v.expected) << "}";
+    EXPECT_TRUE(v.params_right) << v.detail;
+    EXPECT_TRUE(v.heldout_improved) << v.detail;
+    return;
+  }
+  // A known miss: nothing wrong is named, and it still misses (else take it off the list).
+  for (const std::string& e : v.found)
+    EXPECT_TRUE(v.expected.count(e)) << "named " << e << ", which the case does not have";
+  EXPECT_FALSE(v.pass()) << c.name << " passes now: remove it from known_misses()";
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Suite, ConcealedDiagnosis, ::testing::Range<std::size_t>(0, concealed::concealed_cases().size()),
+    [](const ::testing::TestParamInfo<std::size_t>& p) {
+      return std::string(concealed::concealed_cases().at(p.param).name);
+    });
+
+TEST(ConcealedDiagnosis, KnownMissesNameRealCasesAndLeaveMostPassing) {
+  std::set<std::string> names;
+  for (const ConcealedCase& c : concealed::concealed_cases()) names.insert(std::string(c.name));
+  for (const auto& [name, why] : known_misses()) {
+    EXPECT_TRUE(names.count(name)) << name;
+    EXPECT_FALSE(why.empty()) << name;
+  }
+  EXPECT_LE(known_misses().size() * 4, names.size()) << "more than a quarter of the suite missed";
+}
+
+}  // namespace
+}  // namespace odotune::diagnose
