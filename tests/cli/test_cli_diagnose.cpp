@@ -185,3 +185,32 @@ TEST(CliDiagnose, BadInputIsOneLineAndNoFile) {
 
 }  // namespace
 }  // namespace odotune
+
+namespace odotune {
+namespace {
+
+// A real recording (OptiOdom free run 030120210001 run-01, Sousa et al., JINT
+// 2022; ../shared/data/real/optiodom_diff/SOURCE.md): the diagnosis names a
+// wheel-base error of about 1 % (docs/diagnosis/README.md) and the held-out
+// last 30 % of the run confirms it.
+TEST(CliDiagnose, RealOptiOdomRunNamesTheWheelBaseAndImprovesHeldOut) {
+  testing_support::TempDir dir;
+  const std::string run = std::string(ODOTUNE_SHARED_DIR) +
+                          "/data/real/optiodom_diff/free/030120210001/030120210001_run-01.csv";
+  const std::string track = (dir.path() / "oo.csv").string();
+  ASSERT_EQ(run_cli("import optiodom " + run + " -o " + track).exit_code, 0);
+  const std::string out = (dir.path() / "d.json").string();
+  const auto r = run_cli("diagnose " + track + " --json " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = json::parse(slurp(out));
+  expect_spec_document(j);
+  ASSERT_FALSE(j.at("findings").empty());
+  const json& f = j.at("findings")[0];
+  EXPECT_EQ(f.at("effect"), "wheel_base_error") << r.out;
+  EXPECT_NEAR(f.at("params").at("scale").get<double>(), 1.01, 0.005);
+  EXPECT_LT(j.at("heldout").at("after_pos_rmse_m").get<double>(),
+            0.8 * j.at("heldout").at("before_pos_rmse_m").get<double>());
+}
+
+}  // namespace
+}  // namespace odotune
