@@ -64,7 +64,7 @@ class Writer {
     }
     files.push_back(stem.string() + ".png");
     files.push_back(stem.string() + ".svg");
-    return {caption, slurp(stem.string() + ".svg"), name + ".png"};
+    return {caption, slurp(stem.string() + ".svg"), name + ".png", ""};
   }
 
   void text(const std::string& name, const std::string& what, const std::string& content) {

@@ -1,5 +1,7 @@
 #include "diagnose/diag_input.h"
 
+#include "diagnose/series_interp.h"
+
 #include <algorithm>
 #include <charconv>
 #include <initializer_list>
@@ -36,14 +38,6 @@ std::optional<double> meta_number(const Track& track, std::string_view key) {
   return v;
 }
 
-// Linear interpolation of samples (t, v) at time x; ends held.
-double interp(const std::vector<double>& t, const std::vector<double>& v, double x) {
-  if (x <= t.front()) return v.front();
-  if (x >= t.back()) return v.back();
-  const auto j = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), x) - t.begin());
-  const double f = (x - t[j - 1]) / (t[j] - t[j - 1]);
-  return v[j - 1] + f * (v[j] - v[j - 1]);
-}
 
 double median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
@@ -130,8 +124,8 @@ void fill_odometry(const Track& track, DiagInput& in) {
       in.cmd_v_mps.reserve(in.odo_t_s.size());
       in.cmd_w_radps.reserve(in.odo_t_s.size());
       for (double x : in.odo_t_s) {
-        in.cmd_v_mps.push_back(interp(ct, cv, x));
-        in.cmd_w_radps.push_back(interp(ct, cw, x));
+        in.cmd_v_mps.push_back(interp_held(ct, cv, x));
+        in.cmd_w_radps.push_back(interp_held(ct, cw, x));
       }
     }
   }
@@ -219,9 +213,9 @@ void estimate_sigmas(DiagInput& in) {
   const std::size_t m = in.ref_t_s.size();
   std::vector<double> ox(m), oy(m), oth(m);
   for (std::size_t i = 0; i < m; ++i) {
-    ox[i] = interp(in.odo_t_s, p.x, in.ref_t_s[i]);
-    oy[i] = interp(in.odo_t_s, p.y, in.ref_t_s[i]);
-    oth[i] = interp(in.odo_t_s, p.th, in.ref_t_s[i]);
+    ox[i] = interp_held(in.odo_t_s, p.x, in.ref_t_s[i]);
+    oy[i] = interp_held(in.odo_t_s, p.y, in.ref_t_s[i]);
+    oth[i] = interp_held(in.odo_t_s, p.th, in.ref_t_s[i]);
   }
   if (std::isnan(in.ref_sigma_m)) {
     std::vector<double> chord(m - 1), diff(m - 1);

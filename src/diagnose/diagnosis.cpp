@@ -7,9 +7,9 @@
 
 #include <fmt/format.h>
 
-#include "diagnose/cross_validate.h"
 #include "diagnose/option_rules.h"
 #include "diagnose/residual_series.h"
+#include "diagnose/series_interp.h"
 #include "diagnose/window_replay.h"
 
 namespace odotune::diagnose {
@@ -41,11 +41,23 @@ std::string description(Effect e) {
 
 double sq(double v) { return v * v; }
 
-BeforeAfter scores(const DiagInput& in, const EffectSet& before, const EffectSet& after,
-                   double window_s, const std::vector<int>& which) {
+// Pooled position RMSE of the windows `which`, from a replay of all windows
+// (windows replay independently, so this equals replaying only `which`);
+// NaN for no window.
+double pooled_pos_rmse(const ReplayResult& r, const std::vector<int>& which) {
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (const WindowError& w : r.windows)
+    if (std::find(which.begin(), which.end(), w.window) != which.end()) {
+      sum += static_cast<double>(w.n_ref) * w.pos_rmse_m * w.pos_rmse_m;
+      n += w.n_ref;
+    }
+  return n > 0 ? std::sqrt(sum / static_cast<double>(n)) : std::nan("");
+}
+
+BeforeAfter scores(const ReplayResult& before, const ReplayResult& after, const std::vector<int>& which) {
   if (which.empty()) return {};
-  return {replay(in, before, window_s, which).pos_rmse_m,
-          replay(in, after, window_s, which).pos_rmse_m};
+  return {pooled_pos_rmse(before, which), pooled_pos_rmse(after, which)};
 }
 
 // Segments = maximal runs of consecutive windows (in time) whose position
@@ -93,18 +105,7 @@ DiagInput gyro_heading_input(const DiagInput& in, double bias_radps, double scal
     } else {
       g.v_mps[i] = in.v_mps[i];
     }
-    // Gyro at the node, linear between its samples (held outside).
-    const auto& gt = in.gyro_t_s;
-    double gz = 0.0;
-    if (t[i] <= gt.front()) {
-      gz = in.gyro_z_radps.front();
-    } else if (t[i] >= gt.back()) {
-      gz = in.gyro_z_radps.back();
-    } else {
-      const auto j = static_cast<std::size_t>(std::upper_bound(gt.begin(), gt.end(), t[i]) - gt.begin());
-      const double f = (t[i] - gt[j - 1]) / (gt[j] - gt[j - 1]);
-      gz = in.gyro_z_radps[j - 1] + f * (in.gyro_z_radps[j] - in.gyro_z_radps[j - 1]);
-    }
+    const double gz = interp_held(in.gyro_t_s, in.gyro_z_radps, t[i]);  // held outside
     g.w_radps[i] = corrected_gyro_rate(gz, bias_radps, scale);
   }
   g.cmd_v_mps.clear(), g.cmd_w_radps.clear();
@@ -207,17 +208,14 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   d.baseline_pos_rmse_m = base.pos_rmse_m, d.baseline_heading_rmse_rad = base.heading_rmse_rad;
   d.final_pos_rmse_m = fin.pos_rmse_m, d.final_heading_rmse_rad = fin.heading_rmse_rad;
   // Before/after scores against the selection's denoised reference (select.h).
-  DiagInput denoised;
-  double correlated = 1.0;
-  const SelectOptions& so = o.select;
-  const bool use_denoised =
-      denoised_reference(in, so.select_ref_rate_hz, so.smooth_half_s, so.smooth_heading_half_s,
-                         so.fit.model, denoised, correlated) > 1 &&
-      make_windows(denoised, ws).size() == windows.size();
-  const DiagInput& scoring = use_denoised ? denoised : in;
+  const SelectionInput si = selection_input(in, o.select);
+  const bool use_denoised = si.stride > 1;
+  const DiagInput& scoring = use_denoised ? si.input : in;
   d.scored_on_denoised_reference = use_denoised;
-  d.train = scores(scoring, nominal, wheel, ws, d.train_windows);
-  d.heldout = scores(scoring, nominal, wheel, ws, d.heldout_windows);
+  const ReplayResult base_s = use_denoised ? replay(scoring, nominal, ws) : base;
+  const ReplayResult fin_s = use_denoised ? replay(scoring, wheel, ws) : fin;
+  d.train = scores(base_s, fin_s, d.train_windows);
+  d.heldout = scores(base_s, fin_s, d.heldout_windows);
   d.before = residual_series(in, windows, base);
   d.after = residual_series(in, windows, fin);
   d.located_before = locate(d.before, in.ref_sigma_m, o.locate);
@@ -245,8 +243,9 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
     }
     EffectSet without = wheel;
     without.disable(se.effect);
-    f.train = scores(scoring, without, wheel, ws, d.train_windows);
-    f.heldout = scores(scoring, without, wheel, ws, d.heldout_windows);
+    const ReplayResult wo_s = replay(scoring, without, ws);
+    f.train = scores(wo_s, fin_s, d.train_windows);
+    f.heldout = scores(wo_s, fin_s, d.heldout_windows);
     f.explains = se.explains;
     for (Effect r : se.rivals) f.rivals.emplace_back(effect_name(r));
     f.evidence = "model selection: cross-validated over time blocks, fitted with Ceres";
@@ -270,7 +269,6 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   if (gc.available && (gc.bias.departs() || gc.scale.departs())) {
     const double b = gc.bias.departs() ? gc.bias.value : 0.0;
     const double s = gc.scale.departs() ? gc.scale.value : 1.0;
-    const DiagInput corrected = gyro_heading_input(scoring, b, s);
     // The chosen lateral_skid acts on the gyro-heading replay too (v_y =
     // -k v w with the gyro's w); the other wheel effects change travel or
     // wheel heading, which this replay takes from the nominal wheels and
@@ -278,6 +276,9 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
     EffectSet body;
     if (wheel.on(Effect::lateral_skid))
       body.enable(Effect::lateral_skid).set(Effect::lateral_skid, "k", wheel.get(Effect::lateral_skid, "k"));
+    // Corrected by every gyro finding: the "after" of each (replayed once).
+    const ReplayResult after_gyro =
+        via_fixes ? ReplayResult{} : replay(gyro_heading_input(scoring, b, s), body, ws);
     const std::pair<Effect, const Verdict*> checks[] = {{Effect::gyro_bias, &gc.bias},
                                                        {Effect::gyro_scale, &gc.scale}};
     for (const auto& [effect, v] : checks) {
@@ -301,10 +302,9 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
       } else {
         const DiagInput without = effect == Effect::gyro_bias ? gyro_heading_input(scoring, 0.0, s)
                                                               : gyro_heading_input(scoring, b, 1.0);
-        f.train = scores(without, body, body, ws, d.train_windows);
-        f.train.after_pos_rmse_m = replay(corrected, body, ws, d.train_windows).pos_rmse_m;
-        f.heldout = scores(without, body, body, ws, d.heldout_windows);
-        f.heldout.after_pos_rmse_m = replay(corrected, body, ws, d.heldout_windows).pos_rmse_m;
+        const ReplayResult before = replay(without, body, ws);
+        f.train = scores(before, after_gyro, d.train_windows);
+        f.heldout = scores(before, after_gyro, d.heldout_windows);
         f.evidence = fmt::format(
             "gyro against the reference yaw rate: robust regression over {} bins, {:.1f} standard "
             "errors from the no-op value",

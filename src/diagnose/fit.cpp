@@ -1,5 +1,7 @@
 #include "diagnose/fit.h"
 
+#include "diagnose/solver_options.h"
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -358,8 +360,7 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
     problem.SetParameterUpperBound(free_values.data(), static_cast<int>(j), s.upper);
   }
 
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
+  ceres::Solver::Options so = diagnosis_solver_options(options.max_iterations);
   if (sh.free_anchor && anchors.size() > 1) {
     // Each window's anchor meets only its own residuals: eliminate them
     // (Schur complement) and solve densely for the effect parameters; a
@@ -370,13 +371,6 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
     ordering->AddElementToGroup(free_values.data(), 1);
     so.linear_solver_ordering = ordering;
   }
-  so.max_num_iterations = options.max_iterations;
-  so.num_threads = 1;
-  so.logging_type = ceres::SILENT;
-  so.minimizer_progress_to_stdout = false;
-  so.function_tolerance = 1e-10;
-  so.gradient_tolerance = 1e-12;
-  so.parameter_tolerance = 1e-10;
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
   out.converged = summary.termination_type == ceres::CONVERGENCE;

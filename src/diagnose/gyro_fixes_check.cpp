@@ -20,6 +20,8 @@
 #include "diagnose/option_rules.h"
 #include "diagnose/paired_test.h"
 #include "diagnose/robust_stats.h"
+#include "diagnose/series_interp.h"
+#include "diagnose/solver_options.h"
 #include "diagnose/window_replay.h"
 
 namespace odotune::diagnose {
@@ -212,15 +214,7 @@ Solution solve(const Context& c, const std::vector<int>& which, const Solution& 
     g[2] = 1.0;
     problem.SetManifold(g, new ceres::SubsetManifold(3, {2}));
   }
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = o.max_iterations;
-  so.num_threads = 1;
-  so.logging_type = ceres::SILENT;
-  so.minimizer_progress_to_stdout = false;
-  so.function_tolerance = 1e-10;
-  so.gradient_tolerance = 1e-12;
-  so.parameter_tolerance = 1e-10;
+  const ceres::Solver::Options so = diagnosis_solver_options(o.max_iterations);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
   sol.converged = summary.termination_type == ceres::CONVERGENCE;
@@ -231,27 +225,6 @@ Solution solve(const Context& c, const std::vector<int>& which, const Solution& 
   }
   return sol;
 }
-
-// Cumulative integral G(t) of the gyro samples' linear interpolant [rad];
-// NaN outside the gyro's span.
-class GyroIntegral {
- public:
-  explicit GyroIntegral(const DiagInput& in) : t_(in.gyro_t_s), r_(in.gyro_z_radps), c_(t_.size(), 0.0) {
-    for (std::size_t i = 1; i < t_.size(); ++i) c_[i] = c_[i - 1] + 0.5 * (r_[i] + r_[i - 1]) * (t_[i] - t_[i - 1]);
-  }
-  double at(double t) const {
-    if (!(t >= t_.front() && t <= t_.back())) return kNaN;
-    std::size_t j = static_cast<std::size_t>(std::upper_bound(t_.begin(), t_.end(), t) - t_.begin());
-    j = std::min(j, t_.size() - 1) - 1;
-    const double h = t_[j + 1] - t_[j], u = t - t_[j];
-    return c_[j] + r_[j] * u + 0.5 * (r_[j + 1] - r_[j]) / h * u * u;
-  }
-
- private:
-  const std::vector<double>& t_;
-  const std::vector<double>& r_;
-  std::vector<double> c_;
-};
 
 // Times finite and strictly increasing, each column one finite value per time.
 void check_times(std::string_view track, std::string_view what, const std::vector<double>& t,
@@ -376,9 +349,9 @@ std::string prepare(const DiagInput& in, const GyroFixesOptions& o, Context& c,
   } catch (const std::invalid_argument& e) {
     return std::string("no wheel distance: ") + e.what();
   }
-  const GyroIntegral gi(in);
+  const Cumulative gi = Cumulative::of_rates(in.gyro_t_s, in.gyro_z_radps);
   c.series.g.resize(c.series.t.size());
-  for (std::size_t k = 0; k < c.series.t.size(); ++k) c.series.g[k] = gi.at(c.series.t[k]);
+  for (std::size_t k = 0; k < c.series.t.size(); ++k) c.series.g[k] = gi.within(c.series.t[k]);
   c.windows = make_windows(in, o.window_s);
   if (c.windows.size() >= 2) {  // a short last window joins the one before (header comment)
     const Window last = c.windows.back();
@@ -423,7 +396,7 @@ std::vector<Standstill> standstill_runs(const Context& c, const GyroFixesOptions
                                         const std::vector<bool>& still_interval, const std::vector<int>& used,
                                         double gyro_sigma_radps, double dt_gyro_s) {
   std::vector<Standstill> runs;
-  const GyroIntegral gi(*c.in);
+  const Cumulative gi = Cumulative::of_rates(c.in->gyro_t_s, c.in->gyro_z_radps);
   const auto& t = c.series.t;
   for (std::size_t k = 0; k < still_interval.size();) {
     if (!still_interval[k]) {
@@ -435,7 +408,7 @@ std::vector<Standstill> standstill_runs(const Context& c, const GyroFixesOptions
     Standstill r;
     r.t0_s = t[k] + o.standstill_trim_s, r.t1_s = t[e] - o.standstill_trim_s;
     k = e;
-    const double dur = r.t1_s - r.t0_s, g0 = gi.at(r.t0_s), g1 = gi.at(r.t1_s);
+    const double dur = r.t1_s - r.t0_s, g0 = gi.within(r.t0_s), g1 = gi.within(r.t1_s);
     if (!(dur >= o.min_standstill_s) || !std::isfinite(g0) || !std::isfinite(g1)) continue;
     r.mean_radps = (g1 - g0) / dur;
     r.sigma_radps = std::max(gyro_sigma_radps, kMinGyroSigmaRadps) * std::sqrt(dt_gyro_s / dur);

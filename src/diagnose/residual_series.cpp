@@ -1,5 +1,7 @@
 #include "diagnose/residual_series.h"
 
+#include "diagnose/series_interp.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -8,21 +10,12 @@
 namespace odotune::diagnose {
 namespace {
 
-// Linear interpolation of (t, y) at tq, held outside the span; t increasing.
-double interp(const std::vector<double>& t, const std::vector<double>& y, double tq) {
-  if (tq <= t.front()) return y.front();
-  if (tq >= t.back()) return y.back();
-  const auto it = std::upper_bound(t.begin(), t.end(), tq);
-  const std::size_t k = static_cast<std::size_t>(it - t.begin());
-  const double f = (tq - t[k - 1]) / (t[k] - t[k - 1]);
-  return y[k - 1] + f * (y[k] - y[k - 1]);
-}
 
 // Central difference of y over [tq − h, tq + h] clipped to t's span.
 double rate(const std::vector<double>& t, const std::vector<double>& y, double tq, double h) {
   const double a = std::max(t.front(), tq - h), b = std::min(t.back(), tq + h);
   if (b - a <= 0.0) return 0.0;
-  return (interp(t, y, b) - interp(t, y, a)) / (b - a);
+  return (interp_held(t, y, b) - interp_held(t, y, a)) / (b - a);
 }
 
 double wrap(double a) {

@@ -462,6 +462,26 @@ double selection_window_s(const DiagInput& in, const SelectOptions& o) {
   return std::max(o.fit.window_s, std::min(want, span / 3.0));
 }
 
+SelectionInput selection_input(const DiagInput& in, const SelectOptions& o) {
+  const double window_s = selection_window_s(in, o);
+  SelectionInput si;
+  double correlated = 1.0;
+  const int stride = denoised_reference(in, o.select_ref_rate_hz, o.smooth_half_s,
+                                        o.smooth_heading_half_s, o.fit.model, si.input, correlated);
+  if (stride > 1) {
+    const std::vector<Window> wf = make_windows(in, window_s), wt = make_windows(si.input, window_s);
+    bool same = wt.size() == wf.size();
+    for (std::size_t i = 0; same && i < wt.size(); ++i)
+      same = std::abs(wt[i].t_begin_s - wf[i].t_begin_s) < 1e-9;
+    if (same) {
+      si.stride = stride, si.correlated = correlated;
+      return si;
+    }
+  }
+  si.input = in;
+  return si;
+}
+
 Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
   std::string why;
   if (!o_in.IsValid(&why)) throw std::invalid_argument("select options: " + why);
@@ -483,21 +503,10 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
     return sel;
   }
 
-  // Selection input: the reference thinned and smoothed when that keeps the windows.
-  DiagInput thin;
-  const DiagInput* in = &in_full;
-  double correlated = 1.0;
-  const int stride = denoised_reference(in_full, o.select_ref_rate_hz, o.smooth_half_s,
-                                        o.smooth_heading_half_s, o.fit.model, thin, correlated);
-  if (stride > 1) {
-    const std::vector<Window> wt = make_windows(thin, o.fit.window_s);
-    bool same = wt.size() == windows_full.size();
-    for (std::size_t i = 0; same && i < wt.size(); ++i)
-      same = std::abs(wt[i].t_begin_s - windows_full[i].t_begin_s) < 1e-9;
-    if (same) in = &thin, sel.ref_stride = stride;
-    if (!same) correlated = 1.0;
-  }
-  CrossValidator cv(*in, o.fit, o.folds, correlated);
+  const SelectionInput si = selection_input(in_full, o_in);
+  const DiagInput* in = &si.input;
+  sel.ref_stride = si.stride;
+  CrossValidator cv(*in, o.fit, o.folds, si.correlated);
   sel.folds = cv.num_folds();
   Search z{cv, o, sel, EffectSet(), {}, {}, {}, kNaN};
 

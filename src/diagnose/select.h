@@ -240,6 +240,17 @@ struct Selection {
 // heldout_windows) must use that length, not options.fit.window_s.
 Selection select_effects(const DiagInput& in, const SelectOptions& options = {});
 
+// The input the selection searches and scores on ("Data" above): `in` with
+// its reference thinned to about select_ref_rate_hz and denoised
+// (cross_validate.h denoised_reference) when that keeps the windows of
+// selection_window_s(in, options); else a copy of `in` (stride 1).
+struct SelectionInput {
+  DiagInput input;
+  int stride = 1;           // reference thinning; 1 = the raw reference
+  double correlated = 1.0;  // kept samples per smoothing span (CrossValidator)
+};
+SelectionInput selection_input(const DiagInput& in, const SelectOptions& options);
+
 // The window length select_effects uses on `in` (header comment, "Windows").
 double selection_window_s(const DiagInput& in, const SelectOptions& options);
 

@@ -1,4 +1,6 @@
 #include "diagnose/sensor_checks.h"
+
+#include "diagnose/series_interp.h"
 #include "diagnose/option_rules.h"
 #include "diagnose/robust_stats.h"
 
@@ -72,45 +74,6 @@ void check_input(const DiagInput& in) {
                 {"w_radps", &in.w_radps}, {"cmd_v_mps", &in.cmd_v_mps}, {"cmd_w_radps", &in.cmd_w_radps}}, 0);
   check_series(in.track_name, "gyro", in.gyro_t_s, {{"gyro_z_radps", &in.gyro_z_radps}}, 1);
 }
-
-// A cumulative quantity C(t) on sample times: either given directly (wheel
-// angles; linear interpolation between samples) or the exact integral of the
-// linear interpolant of a rate signal. Clamped to the span outside it.
-class Cumulative {
- public:
-  Cumulative() = default;
-  Cumulative(const std::vector<double>* t, const std::vector<double>* r, std::vector<double> c)
-      : t_(t), r_(r), c_(std::move(c)) {}
-  // `t` (and `r` below) must outlive the Cumulative; `c` is copied.
-  static Cumulative of_values(const std::vector<double>& t, std::vector<double> c) {
-    return Cumulative(&t, nullptr, std::move(c));
-  }
-  static Cumulative of_rates(const std::vector<double>& t, const std::vector<double>& r) {
-    std::vector<double> c(t.size(), 0.0);
-    for (std::size_t i = 1; i < t.size(); ++i) c[i] = c[i - 1] + 0.5 * (r[i] + r[i - 1]) * (t[i] - t[i - 1]);
-    return Cumulative(&t, &r, std::move(c));
-  }
-  double front_t() const { return t_->front(); }
-  double back_t() const { return t_->back(); }
-  const std::vector<double>& times() const { return *t_; }
-
-  double at(double t) const {
-    const std::vector<double>& tt = *t_;
-    if (t <= tt.front()) return c_.front();
-    if (t >= tt.back()) return c_.back();
-    const std::size_t i =
-        static_cast<std::size_t>(std::upper_bound(tt.begin(), tt.end(), t) - tt.begin()) - 1;
-    const double h = tt[i + 1] - tt[i], u = t - tt[i];
-    if (r_ == nullptr) return c_[i] + (c_[i + 1] - c_[i]) * (u / h);
-    const double slope = ((*r_)[i + 1] - (*r_)[i]) / h;
-    return c_[i] + (*r_)[i] * u + 0.5 * slope * u * u;
-  }
-
- private:
-  const std::vector<double>* t_ = nullptr;
-  const std::vector<double>* r_ = nullptr;  // rates when integrated
-  std::vector<double> c_;
-};
 
 // Odometry (or commands) as cumulative distance S(t) [m] and heading Ψ(t) [rad].
 struct OdoSignal {

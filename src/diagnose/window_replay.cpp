@@ -1,5 +1,7 @@
 #include "diagnose/window_replay.h"
 
+#include "diagnose/series_interp.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -14,13 +16,6 @@ namespace {
 constexpr double kTimeEps = 1e-9;  // [s] tolerance of window boundaries
 constexpr double kMaxWindows = 1e6;
 
-double interp(const std::vector<double>& t, const std::vector<double>& v, double x) {
-  if (x <= t.front()) return v.front();
-  if (x >= t.back()) return v.back();
-  const auto j = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), x) - t.begin());
-  const double f = (x - t[j - 1]) / (t[j] - t[j - 1]);
-  return v[j - 1] + f * (v[j] - v[j - 1]);
-}
 
 // A rigid 2D motion: rotation about the origin, then translation.
 struct Rigid {
@@ -135,8 +130,8 @@ Pose<double> reference_pose_at(const DiagInput& in, double t_s) {
   if (!in.has_ref_heading())
     throw std::invalid_argument(fmt::format("track '{}': the reference has no heading",
                                             in.track_name));
-  return {interp(in.ref_t_s, in.ref_x_m, t_s), interp(in.ref_t_s, in.ref_y_m, t_s),
-          interp(in.ref_t_s, in.ref_theta_rad, t_s)};
+  return {interp_held(in.ref_t_s, in.ref_x_m, t_s), interp_held(in.ref_t_s, in.ref_y_m, t_s),
+          interp_held(in.ref_t_s, in.ref_theta_rad, t_s)};
 }
 
 ReplayResult replay(const EffectModel& model, const std::vector<double>& params,

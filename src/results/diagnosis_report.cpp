@@ -107,37 +107,24 @@ struct PageFigure {
 
 std::string page_html(const DiagnosisFigureData& d, const std::vector<std::string>& summary,
                       const std::vector<PageFigure>& figures, const std::string& json_text) {
-  const std::string title = html_escape("odotune diagnose: " + d.track);
-  std::string body;
-  body += "<h2>Summary</h2>\n";
+  HtmlPage page("odotune diagnose: " + d.track);
+  page.heading("Summary");
   if (summary.empty()) {
-    body += "<p>(no summary)</p>\n";
+    page.paragraph("(no summary)");
   } else {
-    body += "<ul>\n";
-    for (const auto& line : summary) body += "<li>" + html_escape(line) + "</li>\n";
-    body += "</ul>\n";
+    page.list(summary);
   }
   std::vector<std::string> files;
   for (const auto& f : figures) {
-    body += fmt::format("<h2>{}</h2>\n<figure>\n{}\n<figcaption>{}</figcaption>\n</figure>\n",
-                        heading(f.stem), inline_svg(f.svg, f.stem + "-"),
-                        html_escape(caption(f.stem, d)));
+    page.heading(heading(f.stem));
+    page.figures({{caption(f.stem, d), f.svg, "", f.stem + "-"}});
     files.push_back(f.stem + ".png");
     files.push_back(f.stem + ".svg");
   }
-  body += "<h2>Result (JSON)</h2>\n<pre>" + html_escape(json_text) + "</pre>\n";
-  body += "<p class=\"note\">The figures are also in this folder as files: " +
-          html_escape(fmt::format("{}", fmt::join(files, ", "))) + ".</p>\n";
-  return fmt::format(
-      "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-      "<title>{0}</title>\n<style>\n"
-      "body {{ font-family: sans-serif; margin: 2em; color: #222; max-width: 75em; }}\n"
-      "figure {{ margin: 0 0 1.5em 0; }} figure svg {{ max-width: 100%; height: auto; }}\n"
-      "figcaption {{ font-size: 0.9em; color: #555; max-width: 55em; }}\n"
-      "pre {{ background: #f6f6f6; border: 1px solid #ddd; padding: 0.8em; overflow-x: auto; }}\n"
-      ".note {{ font-size: 0.85em; color: #666; }}\n"
-      "</style>\n</head>\n<body>\n<h1>{0}</h1>\n{1}</body>\n</html>\n",
-      title, body);
+  page.heading("Result (JSON)");
+  page.preformatted(json_text);
+  page.paragraph(fmt::format("The figures are also in this folder as files: {}.", fmt::join(files, ", ")));
+  return page.html();
 }
 
 }  // namespace

@@ -60,7 +60,8 @@ void HtmlPage::paragraph(const std::string& text) {
 void HtmlPage::figures(const std::vector<HtmlFigure>& figs) {
   body_ += "<div class=\"row\">\n";
   for (const auto& f : figs) {
-    const std::string prefix = fmt::format("f{}-", next_figure_++);
+    const std::string prefix = f.id_prefix.empty() ? fmt::format("f{}-", next_figure_) : f.id_prefix;
+    ++next_figure_;
     body_ += "<figure>\n" + inline_svg(f.svg_text, prefix) + "\n<figcaption>" +
              html_escape(f.caption);
     if (!f.png_href.empty())
@@ -87,6 +88,16 @@ void HtmlPage::table(const TextTable& t) {
   body_ += "</tbody>\n</table>\n";
 }
 
+void HtmlPage::list(const std::vector<std::string>& items) {
+  body_ += "<ul>\n";
+  for (const auto& item : items) body_ += "<li>" + html_escape(item) + "</li>\n";
+  body_ += "</ul>\n";
+}
+
+void HtmlPage::preformatted(const std::string& text) {
+  body_ += "<pre>" + html_escape(text) + "</pre>\n";
+}
+
 std::string HtmlPage::html() const {
   return fmt::format(
       "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
@@ -98,6 +109,7 @@ std::string HtmlPage::html() const {
       "table {{ border-collapse: collapse; margin: 1em 0; }}\n"
       "th, td {{ border: 1px solid #ccc; padding: 0.25em 0.6em; }}\n"
       "th {{ background: #f2f2f2; }} td.num, th.num {{ text-align: right; }}\n"
+      "pre {{ background: #f6f6f6; border: 1px solid #ddd; padding: 0.8em; overflow-x: auto; }}\n"
       "</style>\n</head>\n<body>\n<h1>{0}</h1>\n{1}</body>\n</html>\n",
       html_escape(title_), body_);
 }

@@ -24,6 +24,7 @@ struct HtmlFigure {
   std::string caption;
   std::string svg_text;  // the figure's SVG file, verbatim
   std::string png_href;  // relative link to the PNG version (may be empty)
+  std::string id_prefix; // prefix of the figure's SVG ids ("" = "f<n>-", n counting figures)
 };
 
 class HtmlPage {
@@ -34,6 +35,8 @@ class HtmlPage {
   // Figures side by side (wrapping on narrow screens), each with its caption.
   void figures(const std::vector<HtmlFigure>& figs);
   void table(const TextTable& t);
+  void list(const std::vector<std::string>& items);  // a bulleted list, escaped
+  void preformatted(const std::string& text);        // a <pre> block, escaped
   // The complete document.
   std::string html() const;
 

@@ -120,8 +120,8 @@ TEST(ReportHtml, InlinedSvgDropsThePrologAndPrefixesEveryId) {
 TEST(ReportHtml, PageEscapesTextAndKeepsTablesAndFigures) {
   HtmlPage page("a <b> & c");
   page.paragraph("x < y **bold**");
-  page.figures({{"cap \"1\"", "<svg><path id='p'/></svg>", "f.png"},
-                {"cap 2", "<svg><path id='p'/></svg>", ""}});
+  page.figures({{"cap \"1\"", "<svg><path id='p'/></svg>", "f.png", ""},
+                {"cap 2", "<svg><path id='p'/></svg>", "", ""}});
   page.table(text_table(rmse_table(sample_runs())));
   const std::string html = page.html();
   EXPECT_NE(html.find("<title>a &lt;b&gt; &amp; c</title>"), std::string::npos);
