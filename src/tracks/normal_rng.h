@@ -7,15 +7,12 @@
 #include <numbers>
 #include <random>
 
+#include "core/counter_rng.h"
+
 namespace odotune {
 
 // SplitMix64 (Steele, Lea, Flood 2014): decorrelates the per-stream seeds.
-inline std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31);
-}
+inline std::uint64_t splitmix64(std::uint64_t x) { return splitmix64_mix(x); }
 
 // Standard normal deviates: std::mt19937_64 (output fixed by the standard)
 // and the Box-Muller transform written out here, because

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "tuner/counter_rng.h"
+#include "core/counter_rng.h"
 #include "tuner/solver_run.h"
 
 namespace odotune::tuner {

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "benchmark_functions.h"
-#include "tuner/counter_rng.h"
+#include "core/counter_rng.h"
 #include "tuner/nlopt_solver.h"
 #include "tuner/pso.h"
 

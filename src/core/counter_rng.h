@@ -8,12 +8,16 @@
 // splittable pseudorandom number generators", OOPSLA 2014; constants as in
 // S. Vigna's public-domain splitmix64.c), feeding one key word at a time. This is the "Random123" idea (Salmon et al., "Parallel random numbers:
 // as easy as 1, 2, 3", SC 2011) with a cheaper, non-cryptographic mixer, which
-// is ample for PSO's r1/r2 draws.
+// is ample for PSO's r1/r2 draws and the particle filter's perturbations.
+//
+// Lives in core/ (header-only, below every layer) because both the tuner (PSO)
+// and the filters (particle-filter calibrator) draw from it, and the tracks
+// layer's seeded normals (tracks/normal_rng.h) use its mixer.
 #pragma once
 
 #include <cstdint>
 
-namespace odotune::tuner {
+namespace odotune {
 
 // SplitMix64 output function: a bijective 64-bit mixer.
 constexpr std::uint64_t splitmix64_mix(std::uint64_t z) {
@@ -42,4 +46,4 @@ constexpr double counter_uniform01(std::uint64_t seed, std::uint64_t iteration,
   return static_cast<double>(bits >> 11) * 0x1.0p-53;
 }
 
-}  // namespace odotune::tuner
+}  // namespace odotune
