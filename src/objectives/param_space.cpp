@@ -15,11 +15,10 @@ constexpr double kApsSigmaM = 0.060;  // the study's fix noise, σ = 60 mm (§2.
 }  // namespace
 
 ParamSpace ParamSpace::for_model(NoiseModel model) {
-  ParamSpace s;
-  s.model_ = model;
+  std::vector<ParamSpec> params;
   switch (model) {
     case NoiseModel::rq:  // §2.3.1
-      s.params_ = {
+      params = {
           {"r1_mm2", "mm²", 1.0, 1e5, true, "process noise of x per prediction step"},
           {"r2_mm2", "mm²", 1.0, 1e5, true, "process noise of y per prediction step"},
           {"r3_rad2", "rad²", 1e-6, 1.0, true, "process noise of θ per prediction step"},
@@ -27,43 +26,21 @@ ParamSpace ParamSpace::for_model(NoiseModel model) {
           {"q2_mm2", "mm²", 10.0, 1e4, true, "measurement noise of a fix's y"}};
       break;
     case NoiseModel::alpha:  // §2.3.2
-      s.params_ = {{"alpha1", "-", 0.0, 1.0, false, "wheel noise per unit of own travel"},
+      params = {{"alpha1", "-", 0.0, 1.0, false, "wheel noise per unit of own travel"},
                    {"alpha2", "-", 0.0, 1.0, false, "wheel noise per unit of travel difference"}};
       break;
     case NoiseModel::gyro:  // §2.3.3
-      s.params_ = {{"a1", "-", 0.0, 1.0, false, "base of α1"},
+      params = {{"a1", "-", 0.0, 1.0, false, "base of α1"},
                    {"a2", "-", 0.0, 1.0, false, "base of α2"},
                    {"b1", "s/rad", 0.0, 5.0, false, "growth of α1 with |ω_z|"},
                    {"b2", "s/rad", 0.0, 5.0, false, "growth of α2 with |ω_z|"}};
       break;
   }
-  for (const auto& p : s.params_) {
-    s.box_lo_.push_back(p.log_scale ? std::log10(p.lower) : p.lower);
-    s.box_hi_.push_back(p.log_scale ? std::log10(p.upper) : p.upper);
-  }
-  return s;
-}
-
-std::vector<double> ParamSpace::to_physical(std::span<const double> box_x) const {
-  if (box_x.size() != params_.size()) throw std::invalid_argument("ParamSpace: wrong dimension");
-  std::vector<double> out(params_.size());
-  for (std::size_t i = 0; i < params_.size(); ++i) {
-    const double b = std::clamp(box_x[i], box_lo_[i], box_hi_[i]);
-    out[i] = params_[i].log_scale ? std::pow(10.0, b) : b;
-  }
-  return out;
-}
-
-std::vector<double> ParamSpace::to_box(std::span<const double> physical) const {
-  if (physical.size() != params_.size()) throw std::invalid_argument("ParamSpace: wrong dimension");
-  std::vector<double> out(params_.size());
-  for (std::size_t i = 0; i < params_.size(); ++i)
-    out[i] = params_[i].log_scale ? std::log10(physical[i]) : physical[i];
-  return out;
+  return ParamSpace(model, std::move(params));
 }
 
 NoiseParams ParamSpace::to_noise(std::span<const double> v) const {
-  if (v.size() != params_.size()) throw std::invalid_argument("ParamSpace: wrong dimension");
+  if (v.size() != dim()) throw std::invalid_argument("ParamSpace: wrong dimension");
   NoiseParams n;
   n.model = model_;
   n.q_x_m2 = n.q_y_m2 = kApsSigmaM * kApsSigmaM;

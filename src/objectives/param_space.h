@@ -13,31 +13,18 @@
 #include <vector>
 
 #include "filters/ekf_noise.h"
+#include "objectives/box_space.h"
 
 namespace odotune {
 
-struct ParamSpec {
-  std::string name;         // e.g. "r1_mm2"
-  std::string unit;         // e.g. "mm²"
-  double lower, upper;      // physical bounds, in `unit`
-  bool log_scale;           // searched as log10(value)
-  std::string meaning;
-};
-
-class ParamSpace {
+// The box mapping (params, box, to_physical, to_box) is BoxSpace's.
+class ParamSpace : public BoxSpace {
  public:
+  ParamSpace() = default;
   static ParamSpace for_model(filters::NoiseModel model);
 
   filters::NoiseModel model() const { return model_; }
-  const std::vector<ParamSpec>& params() const { return params_; }
-  std::size_t dim() const { return params_.size(); }
 
-  // The optimiser's box (log10 of the bounds for log-scaled parameters).
-  std::pair<std::vector<double>, std::vector<double>> box() const { return {box_lo_, box_hi_}; }
-  // Box coordinates ↔ physical values (in each ParamSpec's unit). Box
-  // coordinates are clamped into the box first.
-  std::vector<double> to_physical(std::span<const double> box_x) const;
-  std::vector<double> to_box(std::span<const double> physical) const;
   // Physical values → filter noise (SI). Values outside the bounds are
   // accepted (an exported configuration may be edited by hand) as long as
   // NoiseParams::IsValid holds.
@@ -47,8 +34,8 @@ class ParamSpace {
 
  private:
   filters::NoiseModel model_ = filters::NoiseModel::alpha;
-  std::vector<ParamSpec> params_;
-  std::vector<double> box_lo_, box_hi_;  // computed once: to_physical runs per evaluation
+  ParamSpace(filters::NoiseModel model, std::vector<ParamSpec> params)
+      : BoxSpace(std::move(params)), model_(model) {}
 };
 
 // The untuned configuration a user would write (README, "Baseline"): position
