@@ -21,6 +21,8 @@ int run(int argc, char** argv) {
   register_report(app);
   register_export(app);
   register_diagnose(app);
+  register_calibrate(app);
+  register_study(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

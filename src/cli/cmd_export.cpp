@@ -5,7 +5,9 @@
 //
 // Selection: --select key=value filters (model, track, mode, seed, heldout)
 // must leave runs of exactly one model; of those the run with the lowest tuned
-// RMSE on its scored track is exported (ties: the first stored).
+// RMSE on its scored track is exported (ties: the first stored). A run of a
+// calibrator model (pf-calib, adaptive-pf-calib) is refused with one line:
+// it holds PF settings, not EKF noise (tune --config-out writes those).
 #include <algorithm>
 #include <array>
 #include <charconv>
@@ -19,6 +21,7 @@
 #include "cli/config_yaml.h"
 #include "cli/failure.h"
 #include "cli/store_access.h"
+#include "cli/tuned_model.h"
 #include "objectives/param_space.h"
 #include "objectives/process_noise_rate.h"
 #include "objectives/replay_input.h"
@@ -244,6 +247,12 @@ void run_export(const ExportArgs& args) {
   const Selection sel = select_run(all, filters, args.store);
   const results::RunRecord& run = *sel.run;
   const std::string key = results::run_key(run);
+  if (is_calibrator_model_name(run.model))
+    throw Failure(fmt::format(
+        "run {} tuned the {} calibrator's settings, not EKF noise: export writes EKF "
+        "configurations only; write a calibrator's settings with `odotune tune --model {} ... "
+        "--config-out FILE` (odotune-pf-config/1)",
+        key, run.model, run.model));
   const std::string scores =
       fmt::format("tuned RMSE {:.2f} mm vs baseline {:.2f} mm on {}", run.tuned.rmse_m * 1e3,
                   run.baseline.rmse_m * 1e3, run.scored_track());

@@ -1,16 +1,21 @@
-// odotune tune: tune one noise model on one or more tracks.
+// odotune tune: tune one EKF noise model, or one particle-filter calibrator's
+// settings (issue 5, item 7), on one or more tracks.
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 
 #include <fmt/format.h>
 
+#include "cli/calibration_tune_job.h"
+#include "cli/calibration_tune_output.h"
 #include "cli/commands.h"
 #include "cli/config_yaml.h"
 #include "cli/failure.h"
 #include "cli/output.h"
+#include "cli/pf_config_yaml.h"
 #include "cli/progress.h"
 #include "cli/tune_job.h"
+#include "cli/tuned_model.h"
 #include "tuner/nlopt_solver.h"
 
 namespace odotune::cli {
@@ -27,7 +32,17 @@ struct TuneArgs {
   long evals = 0;
   std::string json_out, config_out;
   int threads = 0;
+  // Calibrator models only (the fixed parts of the calibrator).
+  std::string resampler = "systematic", policy = "neff";
+  int pf_particles = 0;
+  std::uint64_t pf_seed = 1;
+  double ext_from_gt_hz = 0.0;
 };
+
+// Options that belong to one kind of model only.
+const std::vector<std::string> kEkfOnly = {"--mode"};
+const std::vector<std::string> kCalibratorOnly = {"--resampler", "--policy", "--pf-particles",
+                                                  "--pf-seed", "--ext-from-gt"};
 
 void print_outcome(const TuneOutcome& o) {
   std::string names;
@@ -49,23 +64,155 @@ void print_outcome(const TuneOutcome& o) {
              o.divergences.total());
 }
 
+void run_ekf_tune(const TuneArgs& args, filters::NoiseModel model) {
+  TuneRequest req;
+  req.model = model;
+  req.mode = args.mode;
+  req.solver = args.solver;
+  req.seed = args.seed;
+  req.particles = args.particles;
+  req.iterations = args.iterations;
+  req.evaluations = args.evals;
+  std::string why;
+  if (!req.IsValid(&why)) throw Failure(why);
+
+  const std::vector<Track> tracks = load_tracks(args.tracks);
+  std::vector<PreparedTrack> prepared;
+  for (const auto& t : tracks) {
+    try {
+      prepared.push_back(prepare_track(t));
+    } catch (const std::invalid_argument& e) {
+      throw Failure(e.what());
+    }
+  }
+  std::vector<const PreparedTrack*> ptrs;
+  for (const auto& p : prepared) ptrs.push_back(&p);
+
+  InterruptGuard interrupt;
+  Progress progress("tune", "evaluations");
+  req.progress = [&progress](long done, long total) { progress.update(done, total); };
+  req.stop = interrupt.flag();
+  TuneOutcome out;
+  try {
+    out = run_tune(ptrs, req);
+  } catch (const std::exception& e) {
+    throw Failure(e.what());
+  }
+  progress.finish();
+  if (interrupt.raised()) std::fprintf(stderr, "odotune: interrupted; reporting the best so far\n");
+  print_outcome(out);
+  if (!args.json_out.empty())
+    write_file_atomically(args.json_out, tune_json(out).dump(2) + "\n");
+  if (!args.config_out.empty()) {
+    EkfConfig cfg;
+    cfg.model = req.model;
+    cfg.noise = out.noise;
+    cfg.comment = fmt::format("tuned by odotune tune: model {}, mode {}, solver {}, seed {}",
+                              args.model, req.mode, req.solver, req.seed);
+    write_ekf_config(cfg, args.config_out);
+  }
+  if (interrupt.raised()) throw Failure("interrupted", 130);
+}
+
+void run_calibration_tune_command(const TuneArgs& args, CalibratorModel model) {
+  CalibrationTuneRequest req;
+  req.model = model;
+  if (!filters::parse_resampler(args.resampler, &req.resampler))
+    throw Failure(fmt::format("--resampler '{}': expected multinomial, stratified, systematic or residual",
+                              args.resampler));
+  if (!filters::parse_resample_policy(args.policy, &req.policy))
+    throw Failure(fmt::format("--policy '{}': expected every, neff or max", args.policy));
+  req.pf_particles = args.pf_particles;
+  req.pf_seed = args.pf_seed;
+  req.solver = args.solver;
+  req.seed = args.seed;
+  req.particles = args.particles;
+  req.iterations = args.iterations;
+  req.evaluations = args.evals;
+  std::string why;
+  if (!req.IsValid(&why)) throw Failure(why);
+  CalibrationInputOptions input_options;
+  input_options.ext_from_gt_rate_hz = args.ext_from_gt_hz;
+  if (!input_options.IsValid(&why)) throw Failure("--ext-from-gt: " + why);
+
+  const std::vector<Track> tracks = load_tracks(args.tracks);
+  std::vector<CalibrationInput> inputs;
+  for (const auto& t : tracks) {
+    try {
+      inputs.push_back(build_calibration_input(t, input_options));
+    } catch (const std::invalid_argument& e) {
+      throw Failure(e.what());
+    }
+    if (!inputs.back().has_gt)
+      throw Failure(fmt::format("track '{}': no ground truth (gt_x, gt_y, gt_theta): a calibrator's "
+                                "settings are scored by its calibrated odometry against it",
+                                t.name()));
+  }
+  std::vector<const CalibrationInput*> ptrs;
+  for (const auto& in : inputs) ptrs.push_back(&in);
+
+  InterruptGuard interrupt;
+  Progress progress("tune", "evaluations");
+  req.progress = [&progress](long done, long total) { progress.update(done, total); };
+  req.stop = interrupt.flag();
+  CalibrationTuneOutcome out;
+  try {
+    out = run_calibration_tune(ptrs, req);
+  } catch (const std::exception& e) {
+    throw Failure(e.what());
+  }
+  progress.finish();
+  if (interrupt.raised()) std::fprintf(stderr, "odotune: interrupted; reporting the best so far\n");
+  print_calibration_outcome(out);
+  if (!args.json_out.empty())
+    write_file_atomically(args.json_out,
+                          calibration_tune_json(out, {args.ext_from_gt_hz}).dump(2) + "\n");
+  if (!args.config_out.empty()) {
+    PfConfig cfg;
+    CalibrationOptions effective;
+    effective.method = calibration_method(model);
+    effective.pf = out.tuned_pf;
+    const filters::PfCalibratorParams run_with = effective_pf_params(effective);
+    cfg.method = effective.method;
+    cfg.resampler = run_with.resampler;
+    cfg.policy = run_with.policy;
+    cfg.particles = run_with.particles;
+    cfg.params = out.params;
+    cfg.comment = fmt::format(
+        "tuned by odotune tune: model {}, solver {}, seed {}, calibrator seed {}; score {:.6g} "
+        "(paper's defaults {:.6g})",
+        args.model, req.solver, req.seed, req.pf_seed, out.tuned_score, out.baseline_score);
+    write_pf_config(cfg, args.config_out);
+  }
+  if (interrupt.raised()) throw Failure("interrupted", 130);
+}
+
 }  // namespace
 
 void register_tune(CLI::App& app) {
   auto args = std::make_shared<TuneArgs>();
-  auto* sub = app.add_subcommand("tune", "Tune the EKF noise of one model on one or more tracks");
+  auto* sub = app.add_subcommand(
+      "tune", "Tune the EKF noise of one model, or a particle-filter calibrator's settings, on tracks");
   sub->footer(
       "Example:\n"
       "  odotune tune --track data/tracks/track1.csv --model rq --mode 7 --seed 1 --json out.json\n"
       "  odotune tune --track a.csv --track b.csv --model gyro --solver nlopt:DIRECT_L --evals 3000\n"
-      "Prints baseline and tuned RMSE/MAE/MAXE with the improvement in %. The baseline is the\n"
-      "untuned configuration described in the README (alpha model, α1 = α2 = 0.01, σ_fix 60 mm).");
+      "  odotune tune --track wheelchair.csv --model adaptive-pf-calib --particles 16 --iterations 10 \\\n"
+      "      --config-out pf.yaml\n"
+      "EKF models: prints baseline and tuned RMSE/MAE/MAXE with the improvement in %. The baseline\n"
+      "is the untuned configuration described in the README (alpha model, α1 = α2 = 0.01, σ_fix 60 mm).\n"
+      "Calibrators (pf-calib, adaptive-pf-calib): tunes N_eff fraction, max-weight ratio, α,\n"
+      "dispersion per particle and random-walk σ; the score weighs the final radius error,\n"
+      "convergence time, the calibrated odometry's pose RMSE and the particle count\n"
+      "(src/objectives/calibration_objective.h). The baseline is the paper's default settings;\n"
+      "if they score better than the solver's best they are kept. Tracks need external velocities\n"
+      "(v_ext, w_ext, or --ext-from-gt HZ) and ground truth, all of one robot. --config-out writes\n"
+      "an odotune-pf-config/1 file (src/cli/pf_config_yaml.h).");
   sub->add_option("--track", args->tracks, "track file (repeat for several; fitness = mean over tracks)")
       ->required();
-  sub->add_option("--model", args->model, "noise model: rq | alpha | gyro")
-      ->check(CLI::IsMember({"rq", "alpha", "gyro"}));
+  sub->add_option("--model", args->model, "rq | alpha | gyro | pf-calib | adaptive-pf-calib");
   sub->add_option("--mode", args->mode,
-                  "fitness mode: 1 RMSE, 2 MAE, 3 MAXE, 4 RMSE+MAE, 5 RMSE+MAXE, 6 MAE+MAXE, "
+                  "EKF fitness mode: 1 RMSE, 2 MAE, 3 MAXE, 4 RMSE+MAE, 5 RMSE+MAXE, 6 MAE+MAXE, "
                   "7 RMSE+MAE+MAXE")
       ->check(CLI::Range(1, 7));
   std::string algos;
@@ -79,58 +226,36 @@ void register_tune(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--json", args->json_out, "write the result as JSON to this file");
   sub->add_option("--config-out", args->config_out,
-                  "write the tuned configuration (YAML, read by eval --config)");
+                  "write the tuned configuration (YAML: EKF models for eval --config, calibrators "
+                  "odotune-pf-config/1)");
+  sub->add_option("--resampler", args->resampler,
+                  "calibrators: multinomial | stratified | systematic | residual (default systematic)");
+  sub->add_option("--policy", args->policy, "calibrators: resampling policy every | neff | max (default neff)");
+  sub->add_option("--pf-particles", args->pf_particles,
+                  "calibrators: N (pf-calib) or initial N (adaptive-pf-calib); default the paper's "
+                  "5000 / 8000")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--pf-seed", args->pf_seed, "calibrators: the particle filter's own seed (default 1)");
+  sub->add_option("--ext-from-gt", args->ext_from_gt_hz,
+                  "calibrators: derive the external velocities from the ground truth at this rate [Hz] "
+                  "instead of the tracks' v_ext/w_ext")
+      ->check(CLI::PositiveNumber);
   add_threads_option(sub, &args->threads);
 
-  sub->callback([args] {
+  sub->callback([args, sub] {
     apply_threads(args->threads);
-    TuneRequest req;
-    filters::parse_noise_model(args->model, &req.model);
-    req.mode = args->mode;
-    req.solver = args->solver;
-    req.seed = args->seed;
-    req.particles = args->particles;
-    req.iterations = args->iterations;
-    req.evaluations = args->evals;
-    std::string why;
-    if (!req.IsValid(&why)) throw Failure(why);
-
-    const std::vector<Track> tracks = load_tracks(args->tracks);
-    std::vector<PreparedTrack> prepared;
-    for (const auto& t : tracks) {
-      try {
-        prepared.push_back(prepare_track(t));
-      } catch (const std::invalid_argument& e) {
-        throw Failure(e.what());
-      }
-    }
-    std::vector<const PreparedTrack*> ptrs;
-    for (const auto& p : prepared) ptrs.push_back(&p);
-
-    InterruptGuard interrupt;
-    Progress progress("tune", "evaluations");
-    req.progress = [&progress](long done, long total) { progress.update(done, total); };
-    req.stop = interrupt.flag();
-    TuneOutcome out;
-    try {
-      out = run_tune(ptrs, req);
-    } catch (const std::exception& e) {
-      throw Failure(e.what());
-    }
-    progress.finish();
-    if (interrupt.raised()) std::fprintf(stderr, "odotune: interrupted; reporting the best so far\n");
-    print_outcome(out);
-    if (!args->json_out.empty())
-      write_file_atomically(args->json_out, tune_json(out).dump(2) + "\n");
-    if (!args->config_out.empty()) {
-      EkfConfig cfg;
-      cfg.model = req.model;
-      cfg.noise = out.noise;
-      cfg.comment = fmt::format("tuned by odotune tune: model {}, mode {}, solver {}, seed {}",
-                                args->model, req.mode, req.solver, req.seed);
-      write_ekf_config(cfg, args->config_out);
-    }
-    if (interrupt.raised()) throw Failure("interrupted", 130);
+    TunedModel model;
+    if (!parse_tuned_model(args->model, &model))
+      throw Failure(fmt::format("--model '{}': unknown model, expected {}", args->model, tuned_model_names()));
+    for (const std::string& opt : model.calibrator ? kEkfOnly : kCalibratorOnly)
+      if (sub->count(opt) > 0)
+        throw Failure(fmt::format("{} applies to {} models only, not to --model {}", opt,
+                                  model.calibrator ? "the EKF (rq, alpha, gyro)" : "the calibrator",
+                                  args->model));
+    if (model.calibrator)
+      run_calibration_tune_command(*args, model.calib);
+    else
+      run_ekf_tune(*args, model.noise);
   });
 }
 

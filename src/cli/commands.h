@@ -20,6 +20,8 @@ void register_grid(CLI::App& app);
 void register_report(CLI::App& app);
 void register_export(CLI::App& app);
 void register_diagnose(CLI::App& app);
+void register_calibrate(CLI::App& app);
+void register_study(CLI::App& app);
 
 // Runs the CLI; returns the process exit code.
 int run(int argc, char** argv);

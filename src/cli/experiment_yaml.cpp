@@ -59,7 +59,46 @@ std::vector<std::string> expand(const std::filesystem::path& path, const YAML::N
   return out;
 }
 
+void read_calibration(const std::filesystem::path& path, const YAML::Node& c, ExperimentCalibration* out) {
+  if (!c.IsMap())
+    fail_at(path, c, "calibration must be a mapping {resampler, policy, particles, seed, ext_from_gt_hz}");
+  for (const auto& kv : c) {
+    const auto key = kv.first.as<std::string>("");
+    if (key == "resampler") {
+      if (!filters::parse_resampler(scalar<std::string>(path, kv.second, "calibration.resampler"),
+                                    &out->resampler))
+        fail_at(path, kv.second, "calibration.resampler must be multinomial, stratified, systematic or residual");
+    } else if (key == "policy") {
+      if (!filters::parse_resample_policy(scalar<std::string>(path, kv.second, "calibration.policy"),
+                                          &out->policy))
+        fail_at(path, kv.second, "calibration.policy must be every, neff or max");
+    } else if (key == "particles") {
+      out->particles = scalar<int>(path, kv.second, "calibration.particles");
+      if (out->particles < 0)
+        fail_at(path, kv.second, "calibration.particles must be ≥ 1 (or 0 for the paper's count)");
+    } else if (key == "seed") {
+      out->seed = scalar<std::uint64_t>(path, kv.second, "calibration.seed");
+    } else if (key == "ext_from_gt_hz") {
+      out->ext_from_gt_hz = scalar<double>(path, kv.second, "calibration.ext_from_gt_hz");
+      if (!(out->ext_from_gt_hz >= 0.0 && out->ext_from_gt_hz <= 1000.0))
+        fail_at(path, kv.second, "calibration.ext_from_gt_hz must be 0 (off) or a rate in (0, 1000] Hz");
+    } else {
+      fail_at(path, kv.first,
+              fmt::format("unknown calibration key '{}', expected resampler, policy, particles, seed "
+                          "or ext_from_gt_hz",
+                          key));
+    }
+  }
+}
+
 }  // namespace
+
+bool Experiment::has_ekf_models() const {
+  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return !m.calibrator; });
+}
+bool Experiment::has_calibrator_models() const {
+  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.calibrator; });
+}
 
 Experiment read_experiment(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -82,12 +121,13 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
   if (!root.IsMap()) fail_at(path, root, "expected a mapping (see experiments/smoke.yaml)");
   static const std::set<std::string> known = {"format", "name",   "models",   "tracks",
                                               "modes",  "seeds",  "solver",   "budget",
-                                              "leave_one_out", "store"};
+                                              "leave_one_out", "store", "calibration"};
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>("");
     if (!known.count(key))
       fail_at(path, kv.first, fmt::format("unknown key '{}', expected one of format, name, models, "
-                                          "tracks, modes, seeds, solver, budget, leave_one_out, store",
+                                          "tracks, modes, seeds, solver, budget, leave_one_out, store, "
+                                          "calibration",
                                           key));
   }
   if (!root["format"] || root["format"].as<std::string>("") != kFormat)
@@ -97,9 +137,9 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
   e.name = root["name"] ? scalar<std::string>(path, root["name"], "name") : path.stem().string();
 
   for (const auto& n : list(path, root, "models")) {
-    filters::NoiseModel m;
-    if (!filters::parse_noise_model(scalar<std::string>(path, n, "a model"), &m))
-      fail_at(path, n, "unknown model, expected rq, alpha or gyro");
+    TunedModel m;
+    if (!parse_tuned_model(scalar<std::string>(path, n, "a model"), &m))
+      fail_at(path, n, fmt::format("unknown model, expected {}", tuned_model_names()));
     e.models.push_back(m);
   }
   for (const auto& n : list(path, root, "tracks"))
@@ -134,6 +174,7 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
   if (root["leave_one_out"]) e.leave_one_out = scalar<bool>(path, root["leave_one_out"], "leave_one_out");
   if (e.leave_one_out && e.tracks.size() < 2)
     fail_at(path, root["leave_one_out"], "leave_one_out needs at least two tracks");
+  if (const YAML::Node c = root["calibration"]) read_calibration(path, c, &e.calibration);
   e.store = root["store"] ? base / scalar<std::string>(path, root["store"], "store")
                           : base / (e.name + ".sqlite");
   return e;

@@ -2,7 +2,7 @@
 //
 //   format: odotune-experiment/1
 //   name: study
-//   models: [rq, alpha, gyro]
+//   models: [rq, alpha, gyro]            # also pf-calib, adaptive-pf-calib (cli/tuned_model.h)
 //   tracks: [../data/tracks/track*.csv]   # paths or globs, relative to this file
 //   modes: [1, 2, 3, 4, 5, 6, 7]
 //   seeds: {first: 1, count: 20}         # or a list: [1, 2, 3]
@@ -10,7 +10,16 @@
 //   budget: {particles: 50, iterations: 150}   # nlopt: {evaluations: 7550}
 //   leave_one_out: false                 # also tune on all tracks but one, score on it
 //   store: ../results/study.sqlite       # relative to this file
+//   calibration:                         # optional; the calibrator models' fixed parts
+//     resampler: systematic              # multinomial | stratified | systematic | residual
+//     policy: neff                       # every | neff | max
+//     particles: 0                       # N / initial N; 0 = the paper's 5000 / 8000
+//     seed: 1                            # the particle filter's own seed
+//     ext_from_gt_hz: 0                  # > 0: external velocities from the ground truth
 //
+// A calibrator model (pf-calib, adaptive-pf-calib) has no fitness mode: its
+// cells are made for the first listed mode only (the run records that mode),
+// so a calibrator run is not repeated per mode.
 // Errors are one line: "FILE:LINE: what is wrong, what was expected".
 #pragma once
 
@@ -19,15 +28,25 @@
 #include <string>
 #include <vector>
 
-#include "filters/ekf_noise.h"
+#include "cli/tuned_model.h"
+#include "filters/resampling.h"
 
 namespace odotune::cli {
+
+// The fixed parts of the calibrator models (not tuned; calibration_tune_job.h).
+struct ExperimentCalibration {
+  filters::Resampler resampler = filters::Resampler::systematic;
+  filters::ResamplePolicy policy = filters::ResamplePolicy::neff;
+  int particles = 0;               // 0 = the paper's count
+  std::uint64_t seed = 1;
+  double ext_from_gt_hz = 0.0;     // 0: the tracks' v_ext/w_ext
+};
 
 struct Experiment {
   std::filesystem::path file;
   std::string text;  // the file verbatim (hashed into the store)
   std::string name;
-  std::vector<filters::NoiseModel> models;
+  std::vector<TunedModel> models;
   std::vector<std::string> tracks;  // resolved paths, sorted within each glob
   std::vector<int> modes;
   std::vector<std::uint64_t> seeds;
@@ -36,6 +55,10 @@ struct Experiment {
   long evaluations = 0;
   bool leave_one_out = false;
   std::filesystem::path store;
+  ExperimentCalibration calibration;
+
+  bool has_ekf_models() const;
+  bool has_calibrator_models() const;
 };
 
 // Throws odotune::cli::Failure.

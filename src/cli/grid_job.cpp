@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include "cli/calibration_tune_job.h"
 #include "cli/failure.h"
 #include "cli/output.h"
 #include "cli/tune_job.h"
@@ -13,15 +14,18 @@ namespace odotune::cli {
 std::vector<GridCell> grid_cells(const Experiment& e) {
   std::vector<GridCell> cells;
   for (auto model : e.models) {
+    // A calibrator has no fitness mode: the first listed stands for all.
+    const std::vector<int> modes =
+        model.calibrator ? std::vector<int>{e.modes.front()} : e.modes;
     for (std::size_t t = 0; t < e.tracks.size(); ++t)
-      for (int mode : e.modes)
+      for (int mode : modes)
         for (auto seed : e.seeds) cells.push_back({model, {t}, t, false, mode, seed});
     if (!e.leave_one_out) continue;
     for (std::size_t h = 0; h < e.tracks.size(); ++h) {
       std::vector<std::size_t> others;
       for (std::size_t t = 0; t < e.tracks.size(); ++t)
         if (t != h) others.push_back(t);
-      for (int mode : e.modes)
+      for (int mode : modes)
         for (auto seed : e.seeds) cells.push_back({model, others, h, true, mode, seed});
     }
   }
@@ -34,12 +38,31 @@ results::Metrics to_metrics(const ErrorMetrics& m) { return {m.rmse_m, m.mae_m, 
 
 std::vector<PreparedTrack> prepare_grid_tracks(const Experiment& e) {
   std::vector<PreparedTrack> tracks;
+  CalibrationInputOptions calibration_options;
+  calibration_options.ext_from_gt_rate_hz = e.calibration.ext_from_gt_hz;
   for (const auto& t : load_tracks(e.tracks)) {
-    try {
-      tracks.push_back(prepare_track(t));
-    } catch (const std::invalid_argument& ex) {
-      throw Failure(ex.what());
+    PreparedTrack p;
+    p.name = t.name();
+    if (e.has_ekf_models()) {
+      try {
+        p = prepare_track(t);
+      } catch (const std::invalid_argument& ex) {
+        throw Failure(ex.what());
+      }
     }
+    if (e.has_calibrator_models()) {
+      try {
+        p.calibration = build_calibration_input(t, calibration_options);
+      } catch (const std::invalid_argument& ex) {
+        throw Failure(fmt::format("{} (needed by the experiment's calibrator models)", ex.what()));
+      }
+      if (!p.calibration->has_gt)
+        throw Failure(fmt::format(
+            "track '{}': no ground truth (gt_x, gt_y, gt_theta), needed by the experiment's "
+            "calibrator models to score the calibrated odometry",
+            t.name()));
+    }
+    tracks.push_back(std::move(p));
   }
   return tracks;
 }
@@ -47,7 +70,7 @@ std::vector<PreparedTrack> prepare_grid_tracks(const Experiment& e) {
 results::RunRecord cell_record(const Experiment& e, const std::vector<PreparedTrack>& tracks,
                                const GridCell& c) {
   results::RunRecord r;
-  r.model = std::string(filters::to_string(c.model));
+  r.model = to_string(c.model);
   r.track = c.heldout ? "all-but-" + tracks[c.score_on].name : tracks[c.score_on].name;
   r.heldout_track = c.heldout ? tracks[c.score_on].name : "";
   r.mode = c.mode;
@@ -65,11 +88,60 @@ std::vector<std::size_t> pending_cells(const Experiment& e, const std::vector<Pr
   return pending;
 }
 
+namespace {
+
+std::optional<results::RunRecord> run_calibration_cell(const Experiment& e,
+                                                       const std::vector<PreparedTrack>& tracks,
+                                                       const GridCell& c, const std::atomic<bool>* stop) {
+  results::RunRecord r = cell_record(e, tracks, c);
+  CalibrationTuneRequest req;
+  req.model = c.model.calib;
+  req.resampler = e.calibration.resampler;
+  req.policy = e.calibration.policy;
+  req.pf_particles = e.calibration.particles;
+  req.pf_seed = e.calibration.seed;
+  req.solver = e.solver;
+  req.seed = c.seed;
+  req.particles = e.particles;
+  req.iterations = e.iterations;
+  req.evaluations = e.evaluations;
+  req.stop = stop;
+  std::vector<const CalibrationInput*> tune_on;
+  for (auto t : c.tune_on) tune_on.push_back(&*tracks[t].calibration);
+  const CalibrationTuneOutcome o = run_calibration_tune(tune_on, req);
+  if (o.summary.termination == "stopped") return std::nullopt;
+  r.param_names = o.param_names;
+  r.params = o.params;
+  r.best_fitness = o.tuned_score;
+  r.evaluations = o.summary.evaluations;
+  r.seconds = o.summary.seconds;
+  r.diverged = o.failures;
+  r.termination = o.summary.termination;
+  for (const auto& rec : o.summary.log) r.convergence.push_back({rec.evaluations, rec.best_fitness});
+  if (!c.heldout) {
+    // Tuned on the scored track alone: its scores are the outcome's.
+    r.baseline = to_metrics(o.baseline.tracks.at(0).errors);
+    r.tuned = to_metrics(o.tuned.tracks.at(0).errors);
+  } else {
+    // The held-out track, calibrated from scratch with either setting (its
+    // robot's default calibrator, the tuned settings applied to it).
+    const CalibrationInput& held = *tracks[c.score_on].calibration;
+    const filters::PfCalibratorParams base = default_calibrator(req, held.nominal);
+    r.baseline = to_metrics(evaluate_calibrator({&held}, req.model, base).tracks.at(0).errors);
+    r.tuned = to_metrics(
+        evaluate_calibrator({&held}, req.model, apply_calibration_params(base, o.params)).tracks.at(0).errors);
+  }
+  return r;
+}
+
+}  // namespace
+
 std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vector<PreparedTrack>& tracks,
                                            const GridCell& c, const std::atomic<bool>* stop) {
+  if (c.model.calibrator) return run_calibration_cell(e, tracks, c, stop);
   results::RunRecord r = cell_record(e, tracks, c);
   TuneRequest req;
-  req.model = c.model;
+  req.model = c.model.noise;
   req.mode = c.mode;
   req.solver = e.solver;
   req.seed = c.seed;

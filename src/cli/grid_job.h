@@ -1,5 +1,7 @@
 // The experiment grid: every cell (model × track × mode × seed, and the
-// leave-one-track-out cells) tuned and written to the results store.
+// leave-one-track-out cells) tuned and written to the results store. A
+// calibrator model (pf-calib, adaptive-pf-calib) has cells for the first
+// listed mode only (it has no fitness mode; experiment_yaml.h).
 // Computation only (the grid command prints). Cells run in parallel with
 // OpenMP (each tune then runs its swarm on one thread); results do not depend
 // on the thread count, so a resumed grid ends identical to an uninterrupted one.
@@ -21,7 +23,7 @@
 namespace odotune::cli {
 
 struct GridCell {
-  filters::NoiseModel model;
+  TunedModel model;
   std::vector<std::size_t> tune_on;  // indices into the experiment's tracks
   std::size_t score_on;              // index of the track the scores are for
   bool heldout = false;              // leave-one-track-out cell
@@ -39,8 +41,11 @@ struct GridOutcome {
   long abandoned = 0; // in flight when stopped, not written
 };
 
-// The experiment's tracks, read and prepared for replay. Throws
-// odotune::cli::Failure (one line naming the track).
+// The experiment's tracks, read and prepared for the listed models: for
+// replay when an EKF model is listed, as calibration input (with the
+// experiment's calibration.ext_from_gt_hz) when a calibrator model is.
+// Throws odotune::cli::Failure (one line naming the track) when a track is
+// unusable for a listed model.
 std::vector<PreparedTrack> prepare_grid_tracks(const Experiment& e);
 
 // The record of a cell without its results: what identifies it in the store
@@ -53,7 +58,12 @@ results::RunRecord cell_record(const Experiment& e, const std::vector<PreparedTr
 std::vector<std::size_t> pending_cells(const Experiment& e, const std::vector<PreparedTrack>& tracks,
                                        const std::vector<GridCell>& cells, const results::Store& store);
 
-// Tunes one cell and scores it. The result depends only on the experiment,
+// Tunes one cell and scores it. An EKF cell's scores are the reference
+// replay's position errors with the baseline and the tuned noise; a
+// calibrator cell's (calibration_tune_job.h) are the dead-reckoning position
+// errors of the calibrated odometry with the paper's default and the tuned
+// settings on the scored track, its params the tuned settings and its
+// best_fitness the tuned score. The result depends only on the experiment,
 // the tracks and the cell (not on the thread, process or machine that runs it).
 // Returns nothing when `stop` ended the run early (there is nothing to keep).
 // Throws std::exception when the solver fails.

@@ -11,6 +11,7 @@
 
 #include "cli/failure.h"
 #include "cli/store_access.h"
+#include "cli/tuned_model.h"
 #include "objectives/metrics.h"
 #include "objectives/param_space.h"
 #include "objectives/replay.h"
@@ -144,6 +145,20 @@ ReportOutcome write_report(const ReportRequest& req) {
   out.experiment = info.name;
   std::vector<RunRecord> own, held;
   for (const auto& r : runs) (r.is_heldout() ? held : own).push_back(r);
+  // Calibrator runs (pf-calib, adaptive-pf-calib; cli/tuned_model.h) enter
+  // the generic heatmaps, boxplots and tables; their baseline is the paper's
+  // default PF settings and their metrics the calibrated odometry's dead
+  // reckoning, so Table 1 and the convergence curves keep them apart from
+  // the EKF models', and the EKF trajectory replay leaves them out.
+  std::vector<std::string> ekf_models, calibrator_models;
+  for (const auto& m : models) (is_calibrator_model_name(m) ? calibrator_models : ekf_models).push_back(m);
+  const auto runs_of = [](const std::vector<RunRecord>& from, bool calibrator, const std::string& model) {
+    std::vector<RunRecord> out_runs;
+    for (const auto& r : from)
+      if (is_calibrator_model_name(r.model) == calibrator && (model.empty() || r.model == model))
+        out_runs.push_back(r);
+    return out_runs;
+  };
   out.runs = static_cast<long>(runs.size());
   out.heldout_runs = static_cast<long>(held.size());
 
@@ -155,6 +170,13 @@ ReportOutcome write_report(const ReportRequest& req) {
       "better; the baseline is odotune's untuned configuration (README, \"Baseline\").",
       info.name, info.hash, info.code_version, runs.size(), held.size(), fmt::join(models, ", "),
       fmt::join(tracks, ", ")));
+  if (!calibrator_models.empty())
+    page.paragraph(fmt::format(
+        "Calibrator models ({}) tune the particle-filter calibrator's settings instead of EKF "
+        "noise: their baseline is the paper's default settings, their metrics the dead-reckoning "
+        "position errors of the calibrated odometry against ground truth, and they have runs for "
+        "one fitness mode only (the experiment's first; a calibrator has none).",
+        fmt::join(calibrator_models, ", ")));
 
   // Headline: mean RMSE improvement per model over all per-track runs.
   {
@@ -221,7 +243,7 @@ ReportOutcome write_report(const ReportRequest& req) {
   }
 
   // (c) Table 1 and the generalisation table.
-  const results::RmseTable t1 = results::rmse_table(runs);
+  const results::RmseTable t1 = results::rmse_table(runs_of(runs, false, ""));
   if (!t1.rows.empty()) {
     const results::TextTable tt = results::text_table(t1);
     w.text("table1.csv", "report table", results::to_csv(t1));
@@ -231,6 +253,22 @@ ReportOutcome write_report(const ReportRequest& req) {
         "Original = the baseline configuration; each model's column is the mean tuned RMSE over "
         "seeds, the row's best in bold ({}). Also as table1.csv and table1.md.",
         seeds_phrase(own)));
+    page.table(tt);
+  }
+  // One table per calibrator model: each has its own baseline (its kind's
+  // default settings), so they do not share an "original" column.
+  for (const auto& model : calibrator_models) {
+    const results::RmseTable tc = results::rmse_table(runs_of(runs, true, model));
+    if (tc.rows.empty()) continue;
+    const results::TextTable tt = results::text_table(tc);
+    const std::string stem = "table1_" + file_safe(model);
+    w.text(stem + ".csv", "report table", results::to_csv(tc));
+    w.text(stem + ".md", "report table", results::to_markdown(tt));
+    page.heading(fmt::format("Calibrated odometry RMSE per track, {}", model));
+    page.paragraph(fmt::format(
+        "Dead-reckoning position RMSE of the odometry calibrated online by {}: original = the "
+        "paper's default settings, {} = the tuned settings ({}). Also as {}.csv and {}.md.",
+        model, model, seeds_phrase(runs_of(own, true, model)), stem, stem));
     page.table(tt);
   }
   {
@@ -267,8 +305,15 @@ ReportOutcome write_report(const ReportRequest& req) {
     mode = modes.back();
   }
   page.heading(fmt::format("Trajectories (Figure 5), fitness mode {}", mode));
-  const auto track_data = experiment_tracks(info, req.track_files);
-  {
+  if (!calibrator_models.empty())
+    out.notes.push_back(fmt::format(
+        "trajectory overlays replay the EKF: the calibrator models ({}) are left out of them",
+        fmt::join(calibrator_models, ", ")));
+  const auto track_data = ekf_models.empty() ? std::map<std::string, Track>{}
+                                             : experiment_tracks(info, req.track_files);
+  if (ekf_models.empty()) {
+    page.paragraph("No EKF runs in this store: no trajectory overlays.");
+  } else {
     std::vector<results::HtmlFigure> row;
     for (const auto& name : overlay_tracks) {
       const auto it = track_data.find(name);
@@ -294,7 +339,7 @@ ReportOutcome write_report(const ReportRequest& req) {
       const ReplayResult base = replay_ekf(in, baseline_noise(), true);
       paths.push_back(path_of(fmt::format("baseline EKF (RMSE {:.1f} mm)", base.outcome.metrics.rmse_m * 1e3),
                               base.trajectory));
-      for (const auto& model : models) {
+      for (const auto& model : ekf_models) {
         const RunRecord* r = best_run(runs, model, name, mode);
         if (!r) continue;
         const ReplayResult got = replay_ekf(in, run_noise(*r), true);
@@ -312,22 +357,28 @@ ReportOutcome write_report(const ReportRequest& req) {
     page.figures(row);
   }
 
-  // (e) Convergence curves.
+  // (e) Convergence curves: the EKF models' fitness (metres) and the
+  // calibrators' score (dimensionless) in separate figures.
   page.heading(fmt::format("Convergence, fitness mode {}", mode));
   page.paragraph("Best fitness so far against evaluations: median over seeds as a line, min–max as a band.");
-  {
+  for (bool calibrator : {false, true}) {
     std::vector<results::HtmlFigure> row;
     for (const auto& name : tracks) {
       std::map<std::string, std::vector<std::vector<results::ConvergencePoint>>> series;
       for (const auto& r : own)
-        if (r.track == name && r.mode == mode && !r.convergence.empty())
+        if (is_calibrator_model_name(r.model) == calibrator && r.track == name &&
+            (calibrator || r.mode == mode) && !r.convergence.empty())
           series[r.model].push_back(r.convergence);
       if (series.empty()) continue;
-      const std::string title = fmt::format("{}: best fitness (mode {}) vs evaluations", name, mode);
-      row.push_back(w.figure("convergence_" + file_safe(name), title, [&](const fs::path& stem) {
-        results::convergence(stem, title, series);
-      }));
+      const std::string title =
+          calibrator ? fmt::format("{}: best calibration score vs evaluations", name)
+                     : fmt::format("{}: best fitness (mode {}) vs evaluations", name, mode);
+      const std::string stem = (calibrator ? "convergence_calibration_" : "convergence_") + file_safe(name);
+      row.push_back(w.figure(stem, title, [&](const fs::path& p) { results::convergence(p, title, series); }));
     }
+    if (calibrator && !row.empty())
+      page.paragraph("Calibrator models: best calibration score (objectives/calibration_objective.h, "
+                     "lower is better) against evaluations, whatever the fitness mode.");
     page.figures(row);
   }
 

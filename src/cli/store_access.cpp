@@ -5,6 +5,7 @@
 #include "cli/experiment_yaml.h"
 #include "cli/failure.h"
 #include "cli/output.h"
+#include "cli/tuned_model.h"
 #include "objectives/param_space.h"
 
 namespace odotune::cli {
@@ -46,6 +47,9 @@ double run_param(const results::RunRecord& run, const std::string& name) {
 
 filters::NoiseParams run_noise(const results::RunRecord& run) {
   filters::NoiseModel model;
+  if (is_calibrator_model_name(run.model))
+    throw Failure(fmt::format("run {}: model {} tuned a calibrator's settings, not EKF noise",
+                              results::run_key(run), run.model));
   if (!filters::parse_noise_model(run.model, &model))
     throw Failure(fmt::format("run {}: unknown model '{}'", results::run_key(run), run.model));
   const ParamSpace space = ParamSpace::for_model(model);

@@ -35,7 +35,8 @@ double run_param(const results::RunRecord& run, const std::string& name);
 
 // The filter noise of a stored run (its model and physical parameters, by
 // name). Throws odotune::cli::Failure naming the run when the model or a
-// parameter is unknown or the values are invalid.
+// parameter is unknown, the run is a calibrator's (pf-calib,
+// adaptive-pf-calib: no EKF noise) or the values are invalid.
 filters::NoiseParams run_noise(const results::RunRecord& run);
 
 }  // namespace odotune::cli

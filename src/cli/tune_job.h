@@ -8,10 +8,12 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "filters/ekf_noise.h"
+#include "objectives/calibration_input.h"
 #include "objectives/ekf_objective.h"
 #include "objectives/metrics.h"
 #include "objectives/replay.h"
@@ -20,11 +22,15 @@
 
 namespace odotune::cli {
 
-// A track prepared for replay: the reference input and its fast form.
+// A track prepared for replay: the reference input and its fast form; and,
+// when a calibrator model is tuned on it (grid), its calibration input. Each
+// part is built only when a model needs it: `fast` is null for a track
+// prepared for calibrators only.
 struct PreparedTrack {
   std::string name;
   ReplayInput input;
   std::unique_ptr<FastReplay> fast;
+  std::optional<CalibrationInput> calibration;
 };
 // Throws std::invalid_argument (one line naming the track) when it cannot be
 // replayed or has no position fixes (nothing to tune).

@@ -1,0 +1,178 @@
+#include "cli/calibration_tune_job.h"
+
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "cli/tune_job.h"
+#include "objectives/calibrated_odometry_errors.h"
+#include "tuner/nlopt_solver.h"
+#include "tuner/problem.h"
+#include "tuner/pso.h"
+
+namespace odotune::cli {
+
+namespace {
+
+// The objective as the tuner sees it: a box and a function (objectives/ does
+// not depend on tuner/, so the adapter lives here, as in tune_job.cpp).
+struct CalibrationBoxProblem {
+  const CalibrationObjective* objective;
+  double fitness(std::span<const double> x) const { return objective->fitness(x); }
+  tuner::Bounds bounds() const {
+    auto [lo, hi] = objective->bounds();
+    return {lo, hi};
+  }
+};
+
+// Initial ranges as fractions of the nominal value: `odotune calibrate`'s
+// defaults (src/cli/cmd_calibrate.cpp), so tuned settings carry over to it;
+// for the paper's wheelchair (R = 0.32 m, D = 0.65 m) they are its
+// [0.305, 0.335] m and [0.55, 0.75] m (§III) to within 2.5 mm.
+constexpr double kRadiusRangeFraction = 0.05;
+constexpr double kWheelBaseRangeFraction = 0.15;
+
+filters::PfCalibratorParams::Range around(double nominal, double fraction) {
+  return {nominal * (1.0 - fraction), nominal * (1.0 + fraction)};
+}
+
+bool same_robot(const filters::OdometryParams& a, const filters::OdometryParams& b) {
+  return a.wheel_radius_left_m == b.wheel_radius_left_m &&
+         a.wheel_radius_right_m == b.wheel_radius_right_m && a.wheel_base_m == b.wheel_base_m;
+}
+
+ErrorMetrics mean_errors(const CalibrationEvaluation& e) {
+  std::vector<ErrorMetrics> all;
+  for (const auto& t : e.tracks) all.push_back(t.errors);
+  return mean_metrics(all);
+}
+
+}  // namespace
+
+CalibrationMethod calibration_method(CalibratorModel model) {
+  return model == CalibratorModel::pf ? CalibrationMethod::pf : CalibrationMethod::adaptive_pf;
+}
+
+bool CalibrationTuneRequest::IsValid(std::string* why) const {
+  // The solver settings are checked exactly as for the EKF models.
+  TuneRequest solver_part;
+  solver_part.solver = solver;
+  solver_part.particles = particles;
+  solver_part.iterations = iterations;
+  solver_part.evaluations = evaluations;
+  if (!solver_part.IsValid(why)) return false;
+  if (pf_particles < 0) {
+    if (why) *why = fmt::format("pf particles = {} must be ≥ 1 (or 0 for the paper's count)", pf_particles);
+    return false;
+  }
+  return weights.IsValid(why);
+}
+
+filters::PfCalibratorParams default_calibrator(const CalibrationTuneRequest& r,
+                                               const filters::OdometryParams& nominal) {
+  filters::PfCalibratorParams p = r.model == CalibratorModel::adaptive_pf
+                                      ? filters::PfCalibratorParams::adaptive_defaults()
+                                      : filters::PfCalibratorParams{};
+  p.wheel_radius_left_m = around(nominal.wheel_radius_left_m, kRadiusRangeFraction);
+  p.wheel_radius_right_m = around(nominal.wheel_radius_right_m, kRadiusRangeFraction);
+  p.wheel_base_m = around(nominal.wheel_base_m, kWheelBaseRangeFraction);
+  p.resampler = r.resampler;
+  p.policy = r.policy;
+  if (r.pf_particles > 0) p.particles = r.pf_particles;
+  p.seed = r.pf_seed;
+  p.adaptive = r.model == CalibratorModel::adaptive_pf;
+  p.threads = 1;  // results do not depend on it; a grid runs cells side by side
+  return p;
+}
+
+CalibrationEvaluation evaluate_calibrator(const std::vector<const CalibrationInput*>& inputs,
+                                          CalibratorModel model, const filters::PfCalibratorParams& pf) {
+  CalibrationOptions o;
+  o.method = calibration_method(model);
+  o.pf = pf;
+  const CalibrationResult r = run_calibration(inputs, o);
+  CalibrationEvaluation e;
+  e.mean_particles = r.mean_particles;
+  e.iterations = r.iterations;
+  // Before the first estimate the filter's initial one is in force; on later
+  // tracks the previous track's last (calibrated_odometry_errors.h).
+  filters::OdometryParams before = filters::PfCalibrator(effective_pf_params(o)).estimate().params;
+  for (std::size_t k = 0; k < inputs.size(); ++k) {
+    CalibrationTrackScore s;
+    s.track = inputs[k]->track_name;
+    s.calibration = r.tracks.at(k);
+    s.errors = calibrated_odometry_errors(*inputs[k], r.trace, static_cast<int>(k), before);
+    before = s.calibration.final_params;
+    e.tracks.push_back(std::move(s));
+  }
+  return e;
+}
+
+CalibrationTuneOutcome run_calibration_tune(const std::vector<const CalibrationInput*>& inputs,
+                                            const CalibrationTuneRequest& request) {
+  std::string why;
+  if (!request.IsValid(&why)) throw std::invalid_argument(why);
+  if (inputs.empty()) throw std::invalid_argument("no tracks to tune on");
+  for (const auto* in : inputs)
+    if (!same_robot(in->nominal, inputs.front()->nominal))
+      throw std::invalid_argument(fmt::format(
+          "tracks '{}' and '{}' have different nominal wheel radii or base: a calibrator runs its "
+          "tracks one after another with one filter, so they must be recordings of one robot",
+          inputs.front()->track_name, in->track_name));
+
+  CalibrationTuneOutcome out;
+  out.request = request;
+  out.default_pf = default_calibrator(request, inputs.front()->nominal);
+  if (!out.default_pf.IsValid(&why)) throw std::invalid_argument("calibrator: " + why);
+  const CalibrationObjective objective(inputs, out.default_pf,
+                                       request.model == CalibratorModel::adaptive_pf, request.weights);
+  const CalibrationBoxProblem problem{&objective};
+  const BoxSpace& space = objective.space();
+  for (const auto& p : space.params()) {
+    out.param_names.push_back(p.name);
+    out.param_units.push_back(p.unit);
+  }
+  out.default_params = calibration_params_of(out.default_pf);
+  const std::vector<double> default_x = space.to_box(out.default_params);
+
+  if (request.solver == "pso") {
+    tuner::PsoOptions o;
+    o.particles = request.particles;
+    o.iterations = request.iterations;
+    o.seed = request.seed;
+    o.progress = request.progress;
+    o.stop = request.stop;
+    out.summary = tuner::pso_minimize(problem, o);
+  } else {
+    tuner::NloptOptions o;
+    o.algorithm = request.solver.substr(6);
+    o.max_evaluations = request.evaluations > 0
+                            ? request.evaluations
+                            : static_cast<long>(request.particles) * (request.iterations + 1);
+    o.seed = request.seed;
+    o.x0 = default_x;
+    o.progress = request.progress;
+    o.stop = request.stop;
+    out.summary = tuner::nlopt_minimize(problem, o);
+  }
+  if (!out.summary.ok() || out.summary.best_x.empty())
+    throw std::runtime_error("solver " + request.solver + ": " + out.summary.termination);
+
+  // The baseline's score, by the same objective (its evaluation is counted
+  // in failures() like any other, but not in the solver's evaluations).
+  out.baseline_score = objective.fitness(default_x);
+  out.default_kept = out.baseline_score < out.summary.best_fitness;
+  out.tuned_score = out.default_kept ? out.baseline_score : out.summary.best_fitness;
+  out.params = out.default_kept ? out.default_params : space.to_physical(out.summary.best_x);
+  // Kept defaults run exactly as the baseline (mm ↔ m may round the last bit).
+  out.tuned_pf = out.default_kept ? out.default_pf : apply_calibration_params(out.default_pf, out.params);
+  out.failures = objective.failures();
+
+  out.baseline = evaluate_calibrator(inputs, request.model, out.default_pf);
+  out.tuned = evaluate_calibrator(inputs, request.model, out.tuned_pf);
+  out.baseline_mean = mean_errors(out.baseline);
+  out.tuned_mean = mean_errors(out.tuned);
+  return out;
+}
+
+}  // namespace odotune::cli

@@ -1,0 +1,190 @@
+// odotune study resampling|calibration: the Monte-Carlo studies of Tables I
+// and II of Fariña, Toledo & Acosta (RA-L 2026) on simulated wheelchair
+// tracks. The computation is cli/calibration_study.h, the files
+// cli/study_outputs.h; this command reads the flags and scenarios, shows
+// progress and prints the table.
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "cli/calibration_study.h"
+#include "cli/commands.h"
+#include "cli/failure.h"
+#include "cli/progress.h"
+#include "cli/scenario_yaml.h"
+#include "cli/study_outputs.h"
+#include "cli/study_tables.h"
+#include "results/gnuplot.h"
+
+namespace odotune::cli {
+
+namespace {
+namespace fs = std::filesystem;
+
+struct StudyArgs {
+  std::string out, scenario, step_scenario;
+  StudyOptions options;
+};
+
+std::string default_scenario(const char* file) {
+  return (fs::path(ODOTUNE_SOURCE_DIR) / "scenarios" / file).string();
+}
+
+sim::Scenario read_scenario(const std::string& path) {
+  try {
+    return load_scenario(path);
+  } catch (const ScenarioError& e) {
+    throw Failure(e.what());
+  }
+}
+
+// Checks the options, that the figures can be drawn and that the output
+// folder exists or can be made, before the long computation.
+void prepare(const StudyArgs& a) {
+  std::string why;
+  if (!a.options.IsValid(&why)) throw Failure("study: " + why);
+  if (!results::gnuplot_available())
+    throw Failure("study: gnuplot not found on PATH (needed for the figures); install it (apt-get install gnuplot)");
+  const fs::path out(a.out);
+  std::error_code ec;
+  if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+    throw Failure(fmt::format("{}: --out exists and is not a folder", a.out));
+  fs::create_directories(out, ec);
+  if (ec) throw Failure(fmt::format("{}: cannot create the output folder: {}", a.out, ec.message()));
+}
+
+// The command line that regenerates the outputs (defaults left out).
+std::string command_line(const std::string& which, const StudyArgs& a, const StudyOptions& defaults) {
+  std::string c = "odotune study " + which + " --out " + a.out;
+  if (a.options.runs != defaults.runs) c += fmt::format(" --runs {}", a.options.runs);
+  if (a.options.seed != defaults.seed) c += fmt::format(" --seed {}", a.options.seed);
+  if (which == "resampling" && a.options.pf_particles != defaults.pf_particles)
+    c += fmt::format(" --particles {}", a.options.pf_particles);
+  if (which == "calibration" && a.options.adaptive_initial_particles != 0)
+    c += fmt::format(" --particles {}", a.options.adaptive_initial_particles);
+  if (a.scenario != default_scenario("wheelchair.yaml")) c += " --scenario " + a.scenario;
+  if (which == "calibration" && a.step_scenario != default_scenario("wheelchair_step.yaml"))
+    c += " --step-scenario " + a.step_scenario;
+  return c;
+}
+
+// A path inside the source tree relative to it ("scenarios/wheelchair.yaml"),
+// any other as given.
+std::string display_path(const std::string& path) {
+  std::error_code ec;
+  const fs::path source = fs::weakly_canonical(ODOTUNE_SOURCE_DIR, ec);
+  const fs::path p = fs::weakly_canonical(path, ec);
+  if (ec) return path;
+  const fs::path rel = p.lexically_relative(source);
+  return !rel.empty() && *rel.begin() != ".." ? rel.string() : path;
+}
+
+StudyContext context(const std::string& which, const StudyArgs& a, const StudyOptions& defaults) {
+  StudyContext c;
+  c.command = command_line(which, a, defaults);
+  c.scenario_file = display_path(a.scenario);
+  c.step_scenario_file = display_path(a.step_scenario);
+  c.hardware_threads = std::thread::hardware_concurrency();
+  return c;
+}
+
+void print_files(const std::vector<fs::path>& files, const std::string& dir, double wall_s) {
+  std::string names;
+  for (const auto& f : files) names += (names.empty() ? "" : ", ") + f.filename().string();
+  fmt::print("\nwrote {} files to {} ({}); the study took {:.1f} s\n", files.size(), dir, names, wall_s);
+}
+
+// Adds the options both studies share.
+CLI::App* add_study(CLI::App* study, const std::string& name, const std::string& help, StudyArgs* a) {
+  auto* sub = study->add_subcommand(name, help);
+  sub->add_option("--out", a->out, "folder for the tables (Markdown, CSV) and figures (PNG, SVG)")->required();
+  sub->add_option("--runs", a->options.runs, "Monte-Carlo runs (run r: seed + r)")->default_val(a->options.runs);
+  sub->add_option("--seed", a->options.seed, "base seed")->default_val(a->options.seed);
+  sub->add_option("--threads", a->options.threads,
+                  "OpenMP threads over runs × cells (0 = all cores); results do not depend on it, "
+                  "except timing")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--scenario", a->scenario, "scenario of the track (constant conditions)")
+      ->default_val(default_scenario("wheelchair.yaml"));
+  return sub;
+}
+
+template <class Run>
+auto run_with_progress(const std::string& label, const Run& run) {
+  Progress progress(label, "tasks");
+  auto out = run([&progress](long done, long total) { progress.update(done, total); });
+  progress.finish();
+  return out;
+}
+
+}  // namespace
+
+void register_study(CLI::App& app) {
+  auto* study = app.add_subcommand(
+      "study", "Monte-Carlo studies of online odometry calibration (Tables I and II of Fariña et al.)");
+  study->require_subcommand(1);
+  study->footer(
+      "Example:\n"
+      "  odotune study resampling --out docs/calibration/resampling\n"
+      "  odotune study calibration --out docs/calibration/calibration --runs 40 --seed 7\n"
+      "Each run simulates the wheelchair scenario with its own seed and random true radii.");
+
+  auto resampling = std::make_shared<StudyArgs>();
+  auto* rs = add_study(study, "resampling",
+                       "Table I: 4 resamplers × 3 resampling policies of the plain PF (final radius "
+                       "errors, V/W RMSE, ms per iteration)",
+                       resampling.get());
+  rs->add_option("--particles", resampling->options.pf_particles, "N of the plain PF (the paper's 5000)")
+      ->default_val(resampling->options.pf_particles);
+  rs->callback([resampling] {
+    const StudyArgs& a = *resampling;
+    const sim::Scenario scenario = read_scenario(a.scenario);
+    prepare(a);
+    ResamplingStudy s;
+    try {
+      s = run_with_progress("study resampling", [&](const StudyProgress& p) {
+        return run_resampling_study(scenario, a.options, p);
+      });
+    } catch (const std::invalid_argument& e) {
+      throw Failure(e.what());
+    }
+    const StudyContext c = context("resampling", a, StudyOptions{});
+    fmt::print("{}", results::to_markdown(table1_text(s)));
+    print_files(write_resampling_outputs(s, c, a.out), a.out, s.wall_s);
+  });
+
+  auto calibration = std::make_shared<StudyArgs>();
+  auto* cs = add_study(study, "calibration",
+                       "Table II: adaptive PF vs DKF vs batch vs none, constant and changing "
+                       "conditions (radius errors, pose RMSE, convergence)",
+                       calibration.get());
+  cs->add_option("--step-scenario", calibration->step_scenario,
+                 "scenario of the changing-conditions track (radius_step)")
+      ->default_val(default_scenario("wheelchair_step.yaml"));
+  cs->add_option("--particles", calibration->options.adaptive_initial_particles,
+                 "initial N of the adaptive PF (0 = the paper's 8000)")
+      ->check(CLI::NonNegativeNumber);
+  cs->callback([calibration] {
+    const StudyArgs& a = *calibration;
+    const sim::Scenario constant = read_scenario(a.scenario);
+    const sim::Scenario step = read_scenario(a.step_scenario);
+    prepare(a);
+    CalibrationStudy s;
+    try {
+      s = run_with_progress("study calibration", [&](const StudyProgress& p) {
+        return run_calibration_study(constant, step, a.options, p);
+      });
+    } catch (const std::invalid_argument& e) {
+      throw Failure(e.what());
+    }
+    const StudyContext c = context("calibration", a, StudyOptions{});
+    fmt::print("{}", results::to_markdown(table2_text(s)));
+    print_files(write_calibration_outputs(s, c, a.out), a.out, s.wall_s);
+  });
+}
+
+}  // namespace odotune::cli

@@ -1,0 +1,143 @@
+#include "cli/pf_config_yaml.h"
+
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include "cli/config_yaml.h"
+#include "cli/failure.h"
+#include "objectives/calibration_objective.h"
+
+namespace odotune::cli {
+
+namespace {
+
+constexpr const char* kFormat = "odotune-pf-config/1";
+
+[[noreturn]] void fail_at(const std::filesystem::path& path, const YAML::Node& node,
+                          const std::string& what) {
+  const auto mark = node.Mark();
+  if (mark.is_null()) throw Failure(fmt::format("{}: {}", path.string(), what));
+  throw Failure(fmt::format("{}:{}: {}", path.string(), mark.line + 1, what));
+}
+
+std::string text_of(const std::filesystem::path& path, const YAML::Node& node, const char* key) {
+  if (!node.IsScalar()) fail_at(path, node, fmt::format("'{}' must be a single word", key));
+  return node.as<std::string>();
+}
+
+}  // namespace
+
+filters::PfCalibratorParams apply_pf_config(const PfConfig& c, const filters::PfCalibratorParams& base) {
+  filters::PfCalibratorParams p = apply_calibration_params(base, c.params);
+  p.resampler = c.resampler;
+  p.policy = c.policy;
+  p.particles = c.particles;
+  p.adaptive = c.method == CalibrationMethod::adaptive_pf;
+  return p;
+}
+
+PfConfig read_pf_config(const std::filesystem::path& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path.string());
+  } catch (const YAML::BadFile&) {
+    throw Failure(fmt::format("{}: cannot open the PF configuration file", path.string()));
+  } catch (const YAML::ParserException& e) {
+    throw Failure(fmt::format("{}:{}: {}", path.string(), e.mark.line + 1, e.msg));
+  }
+  if (!root.IsMap())
+    fail_at(path, root, "expected a mapping with format, method, resampler, policy, particles and params");
+  if (!root["format"] || root["format"].as<std::string>("") != kFormat)
+    fail_at(path, root["format"] ? root["format"] : root,
+            fmt::format("missing or unknown format, expected 'format: {}'", kFormat));
+  static const std::set<std::string> known = {"format", "method", "resampler", "policy", "particles", "params"};
+  for (const auto& kv : root) {
+    const auto key = kv.first.as<std::string>("");
+    if (!known.count(key))
+      fail_at(path, kv.first,
+              fmt::format("unknown key '{}', expected format, method, resampler, policy, particles or params", key));
+  }
+  for (const char* key : {"method", "resampler", "policy", "particles", "params"})
+    if (!root[key]) fail_at(path, root, fmt::format("'{}' is missing", key));
+
+  PfConfig cfg;
+  const YAML::Node method = root["method"];
+  if (!parse_calibration_method(text_of(path, method, "method"), &cfg.method) ||
+      (cfg.method != CalibrationMethod::pf && cfg.method != CalibrationMethod::adaptive_pf))
+    fail_at(path, method, "method must be pf or adaptive-pf");
+  const YAML::Node resampler = root["resampler"];
+  if (!filters::parse_resampler(text_of(path, resampler, "resampler"), &cfg.resampler))
+    fail_at(path, resampler, "resampler must be multinomial, stratified, systematic or residual");
+  const YAML::Node policy = root["policy"];
+  if (!filters::parse_resample_policy(text_of(path, policy, "policy"), &cfg.policy))
+    fail_at(path, policy, "policy must be every, neff or max");
+  const YAML::Node particles = root["particles"];
+  try {
+    cfg.particles = particles.as<int>();
+  } catch (const YAML::Exception&) {
+    fail_at(path, particles, "particles must be a whole number ≥ 1");
+  }
+  if (cfg.particles < 1) fail_at(path, particles, "particles must be a whole number ≥ 1");
+
+  const BoxSpace space = calibration_space();
+  const YAML::Node params = root["params"];
+  if (!params.IsMap()) fail_at(path, params, "expected a 'params' mapping");
+  cfg.params.assign(space.dim(), 0.0);
+  std::set<std::string> seen;
+  for (const auto& kv : params) {
+    const auto name = kv.first.as<std::string>("");
+    std::size_t i = 0;
+    while (i < space.dim() && space.params()[i].name != name) ++i;
+    if (i == space.dim()) {
+      std::string names;
+      for (const auto& p : space.params()) names += (names.empty() ? "" : ", ") + p.name;
+      fail_at(path, kv.first, fmt::format("unknown parameter '{}', expected {}", name, names));
+    }
+    if (!seen.insert(name).second) fail_at(path, kv.first, fmt::format("parameter '{}' is given twice", name));
+    try {
+      cfg.params[i] = kv.second.as<double>();
+    } catch (const YAML::Exception&) {
+      fail_at(path, kv.second, fmt::format("parameter '{}' must be a number", name));
+    }
+    if (!std::isfinite(cfg.params[i]) || cfg.params[i] <= 0.0)
+      fail_at(path, kv.second, fmt::format("parameter '{}' must be a finite number > 0", name));
+  }
+  for (const auto& p : space.params())
+    if (!seen.count(p.name)) fail_at(path, params, fmt::format("parameter '{}' is missing", p.name));
+  std::string why;
+  if (!apply_pf_config(cfg, filters::PfCalibratorParams{}).IsValid(&why))
+    fail_at(path, params, "invalid settings: " + why);
+  return cfg;
+}
+
+void write_pf_config(const PfConfig& config, const std::filesystem::path& path) {
+  const BoxSpace space = calibration_space();
+  if (config.params.size() != space.dim())
+    throw Failure(fmt::format("{}: {} PF settings given, expected {}", path.string(), config.params.size(),
+                              space.dim()));
+  std::ostringstream out;
+  if (!config.comment.empty()) {
+    std::istringstream lines(config.comment);
+    for (std::string line; std::getline(lines, line);) out << "# " << line << "\n";
+  }
+  out << "format: " << kFormat << "\n";
+  out << "method: " << to_string(config.method) << "  # pf | adaptive-pf\n";
+  out << "resampler: " << filters::to_string(config.resampler)
+      << "  # multinomial | stratified | systematic | residual\n";
+  out << "policy: " << filters::to_string(config.policy) << "  # every | neff | max\n";
+  out << "particles: " << config.particles << "  # N (pf) or initial N (adaptive-pf)\n";
+  out << "params:\n";
+  for (std::size_t i = 0; i < space.dim(); ++i) {
+    const auto& p = space.params()[i];
+    // {:.17g}: the value reads back bit for bit.
+    out << fmt::format("  {}: {:.17g}  # [{}] {}, bounds {}..{}\n", p.name, config.params[i], p.unit,
+                       p.meaning, p.lower, p.upper);
+  }
+  write_file_atomically(path, out.str());
+}
+
+}  // namespace odotune::cli
