@@ -10,7 +10,7 @@
 // the paper's 0.305–0.335 m and 0.55–0.75 m to within a millimetre. The DKF
 // starts at the range's centre with sd = width/√12 (the uniform's sd). The
 // calibrators' length-valued tuning constants (PF random walk σ, adaptive α
-// and particles per dispersion, DKF random walks) are the paper's wheelchair
+// and its σ floor, particles per dispersion, DKF random walks) are the paper's wheelchair
 // values scaled by R_nom/0.32 m (and D_nom/0.65 m for the DKF's wheel-base
 // walk), so a robot with 5 cm wheels gets the same relative noise.
 #include <algorithm>
@@ -64,6 +64,8 @@ struct CalibrateArgs {
   int particles = 0;
   int threads = 0;
   double ext_from_gt_hz = 0.0;
+  double ext_sigma_v = 0.0;   // [m/s]; 0: the track's v_ext_var, else 0.02
+  double ext_sigma_w = 0.0;   // [rad/s]; 0: the track's w_ext_var, else 0.02
   std::string init_radius_range, init_wheel_base_range;
   double tolerance_pct = 0.5;
   std::string json, csv, figure, config_out, apply;
@@ -106,12 +108,14 @@ void check_output_dir(const std::string& flag, const std::string& path) {
 }
 
 std::vector<CalibrationInput> build_inputs(const std::vector<std::string>& files, double ext_from_gt_hz,
-                                           bool apply) {
+                                           bool apply, double ext_sigma_v_m_s, double ext_sigma_w_rad_s) {
   const std::vector<Track> tracks = load_tracks(files);
   std::vector<CalibrationInput> inputs;
   for (std::size_t k = 0; k < tracks.size(); ++k) {
     CalibrationInputOptions o;
     o.ext_from_gt_rate_hz = ext_from_gt_hz;
+    if (ext_sigma_v_m_s > 0.0) o.default_v_var = ext_sigma_v_m_s * ext_sigma_v_m_s;
+    if (ext_sigma_w_rad_s > 0.0) o.default_w_var = ext_sigma_w_rad_s * ext_sigma_w_rad_s;
     const Track& tr = tracks[k];
     const bool has_ext = tr.has(Col::v_ext) && tr.has(Col::w_ext);
     if (apply && o.ext_from_gt_rate_hz <= 0.0 && !has_ext && tr.has_gt()) o.ext_from_gt_rate_hz = kApplyExtRateHz;
@@ -184,6 +188,7 @@ CalibrationRunInfo make_options(const CalibrateArgs& a, const std::vector<Calibr
   o.pf.random_walk_sigma_m *= r_scale;
   o.pf.alpha *= r_scale;
   o.pf.dispersion_per_particle_m *= r_scale;
+  o.pf.min_random_walk_sigma_m *= r_scale;
   if (!a.resampler.empty() && !filters::parse_resampler(a.resampler, &o.pf.resampler))
     throw Failure(fmt::format("--resampler '{}': expected multinomial, stratified, systematic or residual",
                               a.resampler));
@@ -325,7 +330,7 @@ void run_calibrate(const CalibrateArgs& a) {
   for (const auto& [flag, path] : {std::pair{"--json", &a.json}, std::pair{"--csv", &a.csv},
                                    std::pair{"--figure", &a.figure}, std::pair{"--config-out", &a.config_out}})
     check_output_dir(flag, *path);
-  std::vector<CalibrationInput> inputs = build_inputs(a.tracks, a.ext_from_gt_hz, false);
+  std::vector<CalibrationInput> inputs = build_inputs(a.tracks, a.ext_from_gt_hz, false, a.ext_sigma_v, a.ext_sigma_w);
   check_same_robot(inputs, a.tracks);
   const CalibrationRunInfo info = make_options(a, inputs);
   apply_threads(a.threads);
@@ -393,7 +398,7 @@ void run_apply(const CalibrateArgs& a) {
     if (!path->empty()) throw Failure(fmt::format("{} does not combine with --apply (which replays a calibration file)", flag));
   check_output_dir("--json", a.json);
   const CalibrationFile cal = read_calibration_file(a.apply);
-  const std::vector<CalibrationInput> inputs = build_inputs(a.tracks, a.ext_from_gt_hz, true);
+  const std::vector<CalibrationInput> inputs = build_inputs(a.tracks, a.ext_from_gt_hz, true, a.ext_sigma_v, a.ext_sigma_w);
   std::vector<AppliedTrack> applied;
   for (std::size_t k = 0; k < inputs.size(); ++k) {
     AppliedTrack t;
@@ -452,6 +457,14 @@ void register_calibrate(CLI::App& app) {
   sub->add_option("--ext-from-gt", args->ext_from_gt_hz,
                   "derive the external velocities from the ground truth at this rate [Hz] (for tracks "
                   "without v_ext/w_ext, e.g. OptiOdom)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--ext-sigma-v", args->ext_sigma_v,
+                  "σ of the external speed [m/s] where the track gives no v_ext_var (and for --ext-from-gt); "
+                  "default 0.02")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--ext-sigma-w", args->ext_sigma_w,
+                  "σ of the external yaw rate [rad/s] where the track gives no w_ext_var (and for "
+                  "--ext-from-gt); default 0.02")
       ->check(CLI::PositiveNumber);
   args->radius_opt = sub->add_option("--init-radius-range", args->init_radius_range,
                                      "LO,HI: initial range of both radii [m] (default nominal ±5 %)");
