@@ -135,28 +135,10 @@ CalibrationTuneOutcome run_calibration_tune(const std::vector<const CalibrationI
   out.default_params = calibration_params_of(out.default_pf);
   const std::vector<double> default_x = space.to_box(out.default_params);
 
-  if (request.solver == "pso") {
-    tuner::PsoOptions o;
-    o.particles = request.particles;
-    o.iterations = request.iterations;
-    o.seed = request.seed;
-    o.progress = request.progress;
-    o.stop = request.stop;
-    out.summary = tuner::pso_minimize(problem, o);
-  } else {
-    tuner::NloptOptions o;
-    o.algorithm = request.solver.substr(6);
-    o.max_evaluations = request.evaluations > 0
-                            ? request.evaluations
-                            : static_cast<long>(request.particles) * (request.iterations + 1);
-    o.seed = request.seed;
-    o.x0 = default_x;
-    o.progress = request.progress;
-    o.stop = request.stop;
-    out.summary = tuner::nlopt_minimize(problem, o);
-  }
-  if (!out.summary.ok() || out.summary.best_x.empty())
-    throw std::runtime_error("solver " + request.solver + ": " + out.summary.termination);
+  out.summary = run_solver(problem,
+                           {request.solver, request.seed, request.particles, request.iterations,
+                            request.evaluations, request.progress, request.stop},
+                           default_x);
 
   // The baseline's score, by the same objective (its evaluation is counted
   // in failures() like any other, but not in the solver's evaluations).

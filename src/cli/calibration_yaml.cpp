@@ -9,6 +9,7 @@
 
 #include "cli/config_yaml.h"
 #include "cli/failure.h"
+#include "cli/yaml_error.h"
 
 namespace odotune::cli {
 
@@ -27,13 +28,6 @@ const Key kKeys[] = {
     {"wheel_base_m", &filters::OdometryParams::wheel_base_m,
      "D [m], between the wheel contact points"},
 };
-
-[[noreturn]] void fail_at(const std::filesystem::path& path, const YAML::Node& node,
-                          const std::string& what) {
-  const auto mark = node.Mark();
-  if (mark.is_null()) throw Failure(fmt::format("{}: {}", path.string(), what));
-  throw Failure(fmt::format("{}:{}: {}", path.string(), mark.line + 1, what));
-}
 
 std::string expected_keys() {
   std::string s = "format";

@@ -9,6 +9,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "cli/failure.h"
+#include "cli/yaml_error.h"
 #include "tracks/atomic_file.h"
 #include "objectives/param_space.h"
 
@@ -17,12 +18,6 @@ namespace odotune::cli {
 namespace {
 constexpr const char* kFormat = "odotune-ekf-config/1";
 
-[[noreturn]] void fail_at(const std::filesystem::path& path, const YAML::Node& node,
-                          const std::string& what) {
-  const auto mark = node.Mark();
-  if (mark.is_null()) throw Failure(fmt::format("{}: {}", path.string(), what));
-  throw Failure(fmt::format("{}:{}: {}", path.string(), mark.line + 1, what));
-}
 }  // namespace
 
 void write_file_atomically(const std::filesystem::path& path, const std::string& text) {

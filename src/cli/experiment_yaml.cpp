@@ -11,6 +11,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "cli/failure.h"
+#include "cli/yaml_error.h"
 #include "objectives/metrics.h"
 
 namespace odotune::cli {
@@ -18,13 +19,6 @@ namespace odotune::cli {
 namespace {
 
 constexpr const char* kFormat = "odotune-experiment/1";
-
-[[noreturn]] void fail_at(const std::filesystem::path& path, const YAML::Node& node,
-                          const std::string& what) {
-  const auto mark = node.Mark();
-  if (mark.is_null()) throw Failure(fmt::format("{}: {}", path.string(), what));
-  throw Failure(fmt::format("{}:{}: {}", path.string(), mark.line + 1, what));
-}
 
 template <typename T>
 T scalar(const std::filesystem::path& path, const YAML::Node& node, const char* what) {

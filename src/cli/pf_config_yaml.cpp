@@ -9,6 +9,7 @@
 
 #include "cli/config_yaml.h"
 #include "cli/failure.h"
+#include "cli/yaml_error.h"
 #include "objectives/calibration_objective.h"
 
 namespace odotune::cli {
@@ -16,13 +17,6 @@ namespace odotune::cli {
 namespace {
 
 constexpr const char* kFormat = "odotune-pf-config/1";
-
-[[noreturn]] void fail_at(const std::filesystem::path& path, const YAML::Node& node,
-                          const std::string& what) {
-  const auto mark = node.Mark();
-  if (mark.is_null()) throw Failure(fmt::format("{}: {}", path.string(), what));
-  throw Failure(fmt::format("{}:{}: {}", path.string(), mark.line + 1, what));
-}
 
 std::string text_of(const std::filesystem::path& path, const YAML::Node& node, const char* key) {
   if (!node.IsScalar()) fail_at(path, node, fmt::format("'{}' must be a single word", key));

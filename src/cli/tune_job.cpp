@@ -71,6 +71,32 @@ ErrorMetrics mean_metrics(const std::vector<ErrorMetrics>& per_track) {
   return m;
 }
 
+tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s, std::vector<double> x0) {
+  tuner::Summary summary;
+  if (s.solver == "pso") {
+    tuner::PsoOptions o;
+    o.particles = s.particles;
+    o.iterations = s.iterations;
+    o.seed = s.seed;
+    o.progress = s.progress;
+    o.stop = s.stop;
+    summary = tuner::pso_minimize(problem, o);
+  } else {
+    tuner::NloptOptions o;
+    o.algorithm = s.solver.substr(6);
+    o.max_evaluations =
+        s.evaluations > 0 ? s.evaluations : static_cast<long>(s.particles) * (s.iterations + 1);
+    o.seed = s.seed;
+    if (!x0.empty()) o.x0 = std::move(x0);
+    o.progress = s.progress;
+    o.stop = s.stop;
+    summary = tuner::nlopt_minimize(problem, o);
+  }
+  if (!summary.ok() || summary.best_x.empty())
+    throw std::runtime_error("solver " + s.solver + ": " + summary.termination);
+  return summary;
+}
+
 TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const TuneRequest& request) {
   std::string why;
   if (!request.IsValid(&why)) throw std::invalid_argument(why);
@@ -82,27 +108,8 @@ TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const Tune
 
   TuneOutcome out;
   out.request = request;
-  if (request.solver == "pso") {
-    tuner::PsoOptions o;
-    o.particles = request.particles;
-    o.iterations = request.iterations;
-    o.seed = request.seed;
-    o.progress = request.progress;
-    o.stop = request.stop;
-    out.summary = tuner::pso_minimize(problem, o);
-  } else {
-    tuner::NloptOptions o;
-    o.algorithm = request.solver.substr(6);
-    o.max_evaluations = request.evaluations > 0
-                            ? request.evaluations
-                            : static_cast<long>(request.particles) * (request.iterations + 1);
-    o.seed = request.seed;
-    o.progress = request.progress;
-    o.stop = request.stop;
-    out.summary = tuner::nlopt_minimize(problem, o);
-  }
-  if (!out.summary.ok() || out.summary.best_x.empty())
-    throw std::runtime_error("solver " + request.solver + ": " + out.summary.termination);
+  out.summary = run_solver(problem, {request.solver, request.seed, request.particles, request.iterations,
+                                     request.evaluations, request.progress, request.stop});
 
   const ParamSpace& space = objective.space();
   for (const auto& p : space.params()) {

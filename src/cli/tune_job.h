@@ -18,6 +18,7 @@
 #include "objectives/metrics.h"
 #include "objectives/replay.h"
 #include "tracks/track.h"
+#include "tuner/problem.h"
 #include "tuner/summary.h"
 
 namespace odotune::cli {
@@ -67,6 +68,22 @@ struct TuneOutcome {
   DivergenceCounts divergences;
   tuner::Summary summary;                 // evaluations, seconds, termination, log
 };
+
+// The solver part of a tuning request, shared by the EKF and the calibrator
+// tunes (calibration_tune_job.h).
+struct SolverSettings {
+  std::string solver = "pso";      // "pso" or "nlopt:NAME"
+  std::uint64_t seed = 1;
+  int particles = 50;              // PSO
+  int iterations = 150;            // PSO
+  long evaluations = 0;            // NLopt budget; 0 = particles × (iterations + 1)
+  std::function<void(long, long)> progress;
+  const std::atomic<bool>* stop = nullptr;
+};
+// Minimises `problem` with PSO or NLopt as `s` says (NLopt from x0 when given,
+// else its default start). Throws std::runtime_error when the solver fails.
+tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s,
+                          std::vector<double> x0 = {});
 
 // Runs the solver; throws std::invalid_argument for an invalid request and
 // std::runtime_error when the solver fails.
