@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include "cli/calibration_ranges.h"
 #include "cli/tune_job.h"
 #include "objectives/calibrated_odometry_errors.h"
 #include "tuner/nlopt_solver.h"
@@ -25,17 +26,6 @@ struct CalibrationBoxProblem {
   }
 };
 
-// Initial ranges as fractions of the nominal value: `odotune calibrate`'s
-// defaults (src/cli/cmd_calibrate.cpp), so tuned settings carry over to it;
-// for the paper's wheelchair (R = 0.32 m, D = 0.65 m) they are its
-// [0.305, 0.335] m and [0.55, 0.75] m (§III) to within 2.5 mm.
-constexpr double kRadiusRangeFraction = 0.05;
-constexpr double kWheelBaseRangeFraction = 0.15;
-
-filters::PfCalibratorParams::Range around(double nominal, double fraction) {
-  return {nominal * (1.0 - fraction), nominal * (1.0 + fraction)};
-}
-
 bool same_robot(const filters::OdometryParams& a, const filters::OdometryParams& b) {
   return a.wheel_radius_left_m == b.wheel_radius_left_m &&
          a.wheel_radius_right_m == b.wheel_radius_right_m && a.wheel_base_m == b.wheel_base_m;
@@ -54,13 +44,7 @@ CalibrationMethod calibration_method(CalibratorModel model) {
 }
 
 bool CalibrationTuneRequest::IsValid(std::string* why) const {
-  // The solver settings are checked exactly as for the EKF models.
-  TuneRequest solver_part;
-  solver_part.solver = solver;
-  solver_part.particles = particles;
-  solver_part.iterations = iterations;
-  solver_part.evaluations = evaluations;
-  if (!solver_part.IsValid(why)) return false;
+  if (!SolverSettings::IsValid(why)) return false;
   if (pf_particles < 0) {
     if (why) *why = fmt::format("pf particles = {} must be ≥ 1 (or 0 for the paper's count)", pf_particles);
     return false;
@@ -73,9 +57,10 @@ filters::PfCalibratorParams default_calibrator(const CalibrationTuneRequest& r,
   filters::PfCalibratorParams p = r.model == CalibratorModel::adaptive_pf
                                       ? filters::PfCalibratorParams::adaptive_defaults()
                                       : filters::PfCalibratorParams{};
-  p.wheel_radius_left_m = around(nominal.wheel_radius_left_m, kRadiusRangeFraction);
-  p.wheel_radius_right_m = around(nominal.wheel_radius_right_m, kRadiusRangeFraction);
-  p.wheel_base_m = around(nominal.wheel_base_m, kWheelBaseRangeFraction);
+  const CalibrationRanges ranges = default_calibration_ranges(nominal);  // as `odotune calibrate`
+  p.wheel_radius_left_m = ranges.wheel_radius_left_m;
+  p.wheel_radius_right_m = ranges.wheel_radius_right_m;
+  p.wheel_base_m = ranges.wheel_base_m;
   p.resampler = r.resampler;
   p.policy = r.policy;
   if (r.pf_particles > 0) p.particles = r.pf_particles;
@@ -135,10 +120,7 @@ CalibrationTuneOutcome run_calibration_tune(const std::vector<const CalibrationI
   out.default_params = calibration_params_of(out.default_pf);
   const std::vector<double> default_x = space.to_box(out.default_params);
 
-  out.summary = run_solver(problem,
-                           {request.solver, request.seed, request.particles, request.iterations,
-                            request.evaluations, request.progress, request.stop},
-                           default_x);
+  out.summary = run_solver(problem, request, default_x);
 
   // The baseline's score, by the same objective (its evaluation is counted
   // in failures() like any other, but not in the solver's evaluations).

@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/tune_job.h"
 #include "cli/tuned_model.h"
 #include "filters/pf_calibrator.h"
 #include "objectives/calibration_input.h"
@@ -38,7 +39,8 @@
 
 namespace odotune::cli {
 
-struct CalibrationTuneRequest {
+// The solver settings (SolverSettings, tune_job.h) and the calibrator's fixed parts.
+struct CalibrationTuneRequest : SolverSettings {
   CalibratorModel model = CalibratorModel::adaptive_pf;
   // Fixed parts of the calibrator (not tuned).
   filters::Resampler resampler = filters::Resampler::systematic;
@@ -46,14 +48,6 @@ struct CalibrationTuneRequest {
   int pf_particles = 0;            // N (plain) / initial N (adaptive); 0 = the paper's 5000 / 8000
   std::uint64_t pf_seed = 1;       // the calibrator's own seed (same for every evaluation)
   CalibrationScoreWeights weights;
-  // The solver, as TuneRequest.
-  std::string solver = "pso";      // "pso" or "nlopt:NAME"
-  std::uint64_t seed = 1;
-  int particles = 50;              // PSO
-  int iterations = 150;            // PSO
-  long evaluations = 0;            // NLopt budget; 0 = particles × (iterations + 1)
-  std::function<void(long, long)> progress;
-  const std::atomic<bool>* stop = nullptr;
 
   bool IsValid(std::string* why) const;
 };

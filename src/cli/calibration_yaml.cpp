@@ -38,20 +38,8 @@ std::string expected_keys() {
 }  // namespace
 
 CalibrationFile read_calibration_file(const std::filesystem::path& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path.string());
-  } catch (const YAML::BadFile&) {
-    throw Failure(fmt::format("{}: cannot open the calibration file", path.string()));
-  } catch (const YAML::ParserException& e) {
-    throw Failure(fmt::format("{}:{}: {}", path.string(), e.mark.line + 1, e.msg));
-  }
-  if (!root.IsMap())
-    fail_at(path, root, fmt::format("expected a mapping with {}", expected_keys()));
-  const YAML::Node format = root["format"];
-  if (!format || !format.IsScalar() || format.Scalar() != kFormat)
-    fail_at(path, format ? format : root,
-            fmt::format("missing or unknown format, expected 'format: {}'", kFormat));
+  const YAML::Node root =
+      load_format_file(path, "calibration file", kFormat, fmt::format("a mapping with {}", expected_keys()));
   bool seen[std::size(kKeys)] = {};
   CalibrationFile file;
   for (const auto& kv : root) {

@@ -7,7 +7,7 @@
 // each radius uniformly from its track's nominal ±5 % and the wheel base
 // from nominal ±15 %, so any robot size works; for the paper's wheelchair
 // (R = 0.32 m, D = 0.65 m) these are 0.304–0.336 m and 0.5525–0.7475 m,
-// the paper's 0.305–0.335 m and 0.55–0.75 m to within a millimetre. The DKF
+// the paper's 0.305–0.335 m and 0.55–0.75 m to within 2.5 mm. The DKF
 // starts at the range's centre with sd = width/√12 (the uniform's sd). The
 // calibrators' length-valued tuning constants (PF random walk σ, adaptive α
 // and its σ floor, particles per dispersion, DKF random walks) are the paper's wheelchair
@@ -27,6 +27,7 @@
 
 #include "cli/calibration_figure_data.h"
 #include "cli/calibration_json.h"
+#include "cli/calibration_ranges.h"
 #include "cli/calibration_trace.h"
 #include "cli/calibration_yaml.h"
 #include "cli/commands.h"
@@ -49,9 +50,6 @@ using Range = filters::PfCalibratorParams::Range;
 // The wheelchair the PF/DKF defaults were tuned for (PfCalibratorParams).
 constexpr double kPaperRadiusM = 0.32;
 constexpr double kPaperWheelBaseM = 0.65;
-// Default initial ranges, as fractions of the nominal value.
-constexpr double kRadiusRangeFraction = 0.05;
-constexpr double kWheelBaseRangeFraction = 0.15;
 // External velocities for --apply on tracks without v_ext (unused by the
 // dead reckoning it scores, but build_calibration_input wants some).
 constexpr double kApplyExtRateHz = 10.0;
@@ -96,7 +94,6 @@ Range parse_range(const std::string& flag, const std::string& text) {
   return r;
 }
 
-Range around(double nominal, double fraction) { return {nominal * (1.0 - fraction), nominal * (1.0 + fraction)}; }
 
 // Each output's directory must exist before the (long) calibration runs.
 void check_output_dir(const std::string& flag, const std::string& path) {
@@ -172,9 +169,10 @@ CalibrationRunInfo make_options(const CalibrateArgs& a, const std::vector<Calibr
   const double r_nom = 0.5 * (nom.wheel_radius_left_m + nom.wheel_radius_right_m);
   const double r_scale = r_nom / kPaperRadiusM, d_scale = nom.wheel_base_m / kPaperWheelBaseM;
 
-  Range r_left = around(nom.wheel_radius_left_m, kRadiusRangeFraction);
-  Range r_right = around(nom.wheel_radius_right_m, kRadiusRangeFraction);
-  Range base = around(nom.wheel_base_m, kWheelBaseRangeFraction);
+  const CalibrationRanges ranges = default_calibration_ranges(nom);
+  Range r_left = ranges.wheel_radius_left_m;
+  Range r_right = ranges.wheel_radius_right_m;
+  Range base = ranges.wheel_base_m;
   if (!a.init_radius_range.empty()) r_left = r_right = parse_range("--init-radius-range", a.init_radius_range);
   if (!a.init_wheel_base_range.empty()) base = parse_range("--init-wheel-base-range", a.init_wheel_base_range);
   info.init_radius_m = {std::min(r_left.lo, r_right.lo), std::max(r_left.hi, r_right.hi)};

@@ -64,15 +64,40 @@ void print_outcome(const TuneOutcome& o) {
              o.divergences.total());
 }
 
+SolverSettings solver_of(const TuneArgs& a) {
+  SolverSettings s;
+  s.solver = a.solver;
+  s.seed = a.seed;
+  s.particles = a.particles;
+  s.iterations = a.iterations;
+  s.evaluations = a.evals;
+  return s;
+}
+
+// Runs `run(req)` with the terminal progress line and Ctrl-C wired into the
+// request (the caller keeps `interrupt` to exit 130 after writing results);
+// failures become one-line Failures.
+template <class Request, class Run>
+auto run_with_progress(Request& req, const InterruptGuard& interrupt, Run run) {
+  Progress progress("tune", "evaluations");
+  req.progress = [&progress](long done, long total) { progress.update(done, total); };
+  req.stop = interrupt.flag();
+  decltype(run(req)) out;
+  try {
+    out = run(req);
+  } catch (const std::exception& e) {
+    throw Failure(e.what());
+  }
+  progress.finish();
+  if (interrupt.raised()) std::fprintf(stderr, "odotune: interrupted; reporting the best so far\n");
+  return out;
+}
+
 void run_ekf_tune(const TuneArgs& args, filters::NoiseModel model) {
   TuneRequest req;
+  static_cast<SolverSettings&>(req) = solver_of(args);
   req.model = model;
   req.mode = args.mode;
-  req.solver = args.solver;
-  req.seed = args.seed;
-  req.particles = args.particles;
-  req.iterations = args.iterations;
-  req.evaluations = args.evals;
   std::string why;
   if (!req.IsValid(&why)) throw Failure(why);
 
@@ -89,17 +114,8 @@ void run_ekf_tune(const TuneArgs& args, filters::NoiseModel model) {
   for (const auto& p : prepared) ptrs.push_back(&p);
 
   InterruptGuard interrupt;
-  Progress progress("tune", "evaluations");
-  req.progress = [&progress](long done, long total) { progress.update(done, total); };
-  req.stop = interrupt.flag();
-  TuneOutcome out;
-  try {
-    out = run_tune(ptrs, req);
-  } catch (const std::exception& e) {
-    throw Failure(e.what());
-  }
-  progress.finish();
-  if (interrupt.raised()) std::fprintf(stderr, "odotune: interrupted; reporting the best so far\n");
+  const TuneOutcome out =
+      run_with_progress(req, interrupt, [&](const TuneRequest& r) { return run_tune(ptrs, r); });
   print_outcome(out);
   if (!args.json_out.empty())
     write_file_atomically(args.json_out, tune_json(out).dump(2) + "\n");
@@ -124,11 +140,7 @@ void run_calibration_tune_command(const TuneArgs& args, CalibratorModel model) {
     throw Failure(fmt::format("--policy '{}': expected every, neff or max", args.policy));
   req.pf_particles = args.pf_particles;
   req.pf_seed = args.pf_seed;
-  req.solver = args.solver;
-  req.seed = args.seed;
-  req.particles = args.particles;
-  req.iterations = args.iterations;
-  req.evaluations = args.evals;
+  static_cast<SolverSettings&>(req) = solver_of(args);
   std::string why;
   if (!req.IsValid(&why)) throw Failure(why);
   CalibrationInputOptions input_options;
@@ -152,17 +164,8 @@ void run_calibration_tune_command(const TuneArgs& args, CalibratorModel model) {
   for (const auto& in : inputs) ptrs.push_back(&in);
 
   InterruptGuard interrupt;
-  Progress progress("tune", "evaluations");
-  req.progress = [&progress](long done, long total) { progress.update(done, total); };
-  req.stop = interrupt.flag();
-  CalibrationTuneOutcome out;
-  try {
-    out = run_calibration_tune(ptrs, req);
-  } catch (const std::exception& e) {
-    throw Failure(e.what());
-  }
-  progress.finish();
-  if (interrupt.raised()) std::fprintf(stderr, "odotune: interrupted; reporting the best so far\n");
+  const CalibrationTuneOutcome out = run_with_progress(
+      req, interrupt, [&](const CalibrationTuneRequest& r) { return run_calibration_tune(ptrs, r); });
   print_calibration_outcome(out);
   if (!args.json_out.empty())
     write_file_atomically(args.json_out,

@@ -29,18 +29,8 @@ void write_file_atomically(const std::filesystem::path& path, const std::string&
 }
 
 EkfConfig read_ekf_config(const std::filesystem::path& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path.string());
-  } catch (const YAML::BadFile&) {
-    throw Failure(fmt::format("{}: cannot open the configuration file", path.string()));
-  } catch (const YAML::ParserException& e) {
-    throw Failure(fmt::format("{}:{}: {}", path.string(), e.mark.line + 1, e.msg));
-  }
-  if (!root.IsMap()) fail_at(path, root, "expected a mapping with format, model and params");
-  if (!root["format"] || root["format"].as<std::string>("") != kFormat)
-    fail_at(path, root["format"] ? root["format"] : root,
-            fmt::format("missing or unknown format, expected 'format: {}'", kFormat));
+  const YAML::Node root =
+      load_format_file(path, "configuration file", kFormat, "a mapping with format, model and params");
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>("");
     if (key != "format" && key != "model" && key != "params")
@@ -57,13 +47,10 @@ EkfConfig read_ekf_config(const std::filesystem::path& path) {
   std::set<std::string> seen;
   for (const auto& kv : params) {
     const auto name = kv.first.as<std::string>("");
-    std::size_t i = 0;
-    while (i < space.dim() && space.params()[i].name != name) ++i;
+    const std::size_t i = space.index_of(name);
     if (i == space.dim()) {
-      std::string names;
-      for (const auto& p : space.params()) names += (names.empty() ? "" : ", ") + p.name;
       fail_at(path, kv.first, fmt::format("unknown parameter '{}' for model {}, expected {}", name,
-                                          filters::to_string(cfg.model), names));
+                                          filters::to_string(cfg.model), space.names()));
     }
     try {
       values[i] = kv.second.as<double>();

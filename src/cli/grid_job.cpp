@@ -90,6 +90,18 @@ std::vector<std::size_t> pending_cells(const Experiment& e, const std::vector<Pr
 
 namespace {
 
+// The experiment's solver for a cell (its seed), shared by EKF and calibrator cells.
+SolverSettings cell_solver(const Experiment& e, const GridCell& c, const std::atomic<bool>* stop) {
+  SolverSettings s;
+  s.solver = e.solver;
+  s.seed = c.seed;
+  s.particles = e.particles;
+  s.iterations = e.iterations;
+  s.evaluations = e.evaluations;
+  s.stop = stop;
+  return s;
+}
+
 std::optional<results::RunRecord> run_calibration_cell(const Experiment& e,
                                                        const std::vector<PreparedTrack>& tracks,
                                                        const GridCell& c, const std::atomic<bool>* stop) {
@@ -100,12 +112,7 @@ std::optional<results::RunRecord> run_calibration_cell(const Experiment& e,
   req.policy = e.calibration.policy;
   req.pf_particles = e.calibration.particles;
   req.pf_seed = e.calibration.seed;
-  req.solver = e.solver;
-  req.seed = c.seed;
-  req.particles = e.particles;
-  req.iterations = e.iterations;
-  req.evaluations = e.evaluations;
-  req.stop = stop;
+  static_cast<SolverSettings&>(req) = cell_solver(e, c, stop);
   std::vector<const CalibrationInput*> tune_on;
   for (auto t : c.tune_on) tune_on.push_back(&*tracks[t].calibration);
   const CalibrationTuneOutcome o = run_calibration_tune(tune_on, req);
@@ -143,12 +150,7 @@ std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vecto
   TuneRequest req;
   req.model = c.model.noise;
   req.mode = c.mode;
-  req.solver = e.solver;
-  req.seed = c.seed;
-  req.particles = e.particles;
-  req.iterations = e.iterations;
-  req.evaluations = e.evaluations;
-  req.stop = stop;
+  static_cast<SolverSettings&>(req) = cell_solver(e, c, stop);
   std::vector<const PreparedTrack*> tune_on;
   for (auto t : c.tune_on) tune_on.push_back(&tracks[t]);
   const TuneOutcome o = run_tune(tune_on, req);

@@ -35,19 +35,9 @@ filters::PfCalibratorParams apply_pf_config(const PfConfig& c, const filters::Pf
 }
 
 PfConfig read_pf_config(const std::filesystem::path& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path.string());
-  } catch (const YAML::BadFile&) {
-    throw Failure(fmt::format("{}: cannot open the PF configuration file", path.string()));
-  } catch (const YAML::ParserException& e) {
-    throw Failure(fmt::format("{}:{}: {}", path.string(), e.mark.line + 1, e.msg));
-  }
-  if (!root.IsMap())
-    fail_at(path, root, "expected a mapping with format, method, resampler, policy, particles and params");
-  if (!root["format"] || root["format"].as<std::string>("") != kFormat)
-    fail_at(path, root["format"] ? root["format"] : root,
-            fmt::format("missing or unknown format, expected 'format: {}'", kFormat));
+  const YAML::Node root =
+      load_format_file(path, "PF configuration file", kFormat,
+                       "a mapping with format, method, resampler, policy, particles and params");
   static const std::set<std::string> known = {"format", "method", "resampler", "policy", "particles", "params"};
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>("");
@@ -84,12 +74,9 @@ PfConfig read_pf_config(const std::filesystem::path& path) {
   std::set<std::string> seen;
   for (const auto& kv : params) {
     const auto name = kv.first.as<std::string>("");
-    std::size_t i = 0;
-    while (i < space.dim() && space.params()[i].name != name) ++i;
+    const std::size_t i = space.index_of(name);
     if (i == space.dim()) {
-      std::string names;
-      for (const auto& p : space.params()) names += (names.empty() ? "" : ", ") + p.name;
-      fail_at(path, kv.first, fmt::format("unknown parameter '{}', expected {}", name, names));
+      fail_at(path, kv.first, fmt::format("unknown parameter '{}', expected {}", name, space.names()));
     }
     if (!seen.insert(name).second) fail_at(path, kv.first, fmt::format("parameter '{}' is given twice", name));
     try {

@@ -36,14 +36,11 @@ PreparedTrack prepare_track(const Track& track) {
   return p;
 }
 
-bool TuneRequest::IsValid(std::string* why) const {
-  auto fail = [&](const std::string& m) {
-    if (why) *why = m;
+bool SolverSettings::IsValid(std::string* why) const {
+  if (solver != "pso" && solver.rfind("nlopt:", 0) != 0) {
+    if (why) *why = "solver '" + solver + "': expected pso or nlopt:NAME";
     return false;
-  };
-  if (!valid_fitness_mode(mode)) return fail("mode = " + std::to_string(mode) + ": expected 1..7");
-  if (solver != "pso" && solver.rfind("nlopt:", 0) != 0)
-    return fail("solver '" + solver + "': expected pso or nlopt:NAME");
+  }
   if (solver == "pso") {
     tuner::PsoOptions o;
     o.particles = particles;
@@ -54,6 +51,14 @@ bool TuneRequest::IsValid(std::string* why) const {
   o.algorithm = solver.substr(6);
   o.max_evaluations = evaluations > 0 ? evaluations : 1;
   return o.IsValid(why);
+}
+
+bool TuneRequest::IsValid(std::string* why) const {
+  if (!valid_fitness_mode(mode)) {
+    if (why) *why = "mode = " + std::to_string(mode) + ": expected 1..7";
+    return false;
+  }
+  return SolverSettings::IsValid(why);
 }
 
 ErrorMetrics mean_metrics(const std::vector<ErrorMetrics>& per_track) {
@@ -108,8 +113,7 @@ TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const Tune
 
   TuneOutcome out;
   out.request = request;
-  out.summary = run_solver(problem, {request.solver, request.seed, request.particles, request.iterations,
-                                     request.evaluations, request.progress, request.stop});
+  out.summary = run_solver(problem, request);
 
   const ParamSpace& space = objective.space();
   for (const auto& p : space.params()) {

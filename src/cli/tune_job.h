@@ -37,9 +37,9 @@ struct PreparedTrack {
 // replayed or has no position fixes (nothing to tune).
 PreparedTrack prepare_track(const Track& track);
 
-struct TuneRequest {
-  filters::NoiseModel model = filters::NoiseModel::rq;
-  int mode = 7;                    // fitness mode 1..7
+// The solver part of a tuning request, shared by the EKF (TuneRequest) and
+// the calibrator tunes (calibration_tune_job.h), which both extend it.
+struct SolverSettings {
   std::string solver = "pso";      // "pso" or "nlopt:NAME"
   std::uint64_t seed = 1;
   int particles = 50;              // PSO
@@ -47,6 +47,14 @@ struct TuneRequest {
   long evaluations = 0;            // NLopt budget; 0 = particles × (iterations + 1)
   std::function<void(long, long)> progress;
   const std::atomic<bool>* stop = nullptr;
+
+  // The solver's name and budget, checked as the solver itself would.
+  bool IsValid(std::string* why) const;
+};
+
+struct TuneRequest : SolverSettings {
+  filters::NoiseModel model = filters::NoiseModel::rq;
+  int mode = 7;                    // fitness mode 1..7
 
   bool IsValid(std::string* why) const;
 };
@@ -69,17 +77,6 @@ struct TuneOutcome {
   tuner::Summary summary;                 // evaluations, seconds, termination, log
 };
 
-// The solver part of a tuning request, shared by the EKF and the calibrator
-// tunes (calibration_tune_job.h).
-struct SolverSettings {
-  std::string solver = "pso";      // "pso" or "nlopt:NAME"
-  std::uint64_t seed = 1;
-  int particles = 50;              // PSO
-  int iterations = 150;            // PSO
-  long evaluations = 0;            // NLopt budget; 0 = particles × (iterations + 1)
-  std::function<void(long, long)> progress;
-  const std::atomic<bool>* stop = nullptr;
-};
 // Minimises `problem` with PSO or NLopt as `s` says (NLopt from x0 when given,
 // else its default start). Throws std::runtime_error when the solver fails.
 tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s,

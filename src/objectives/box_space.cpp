@@ -18,6 +18,18 @@ BoxSpace::BoxSpace(std::vector<ParamSpec> params) : params_(std::move(params)) {
   }
 }
 
+std::size_t BoxSpace::index_of(std::string_view name) const {
+  std::size_t i = 0;
+  while (i < params_.size() && params_[i].name != name) ++i;
+  return i;
+}
+
+std::string BoxSpace::names() const {
+  std::string out;
+  for (const auto& p : params_) out += (out.empty() ? "" : ", ") + p.name;
+  return out;
+}
+
 std::vector<double> BoxSpace::to_physical(std::span<const double> box_x) const {
   if (box_x.size() != params_.size()) throw std::invalid_argument("BoxSpace: wrong dimension");
   std::vector<double> out(params_.size());

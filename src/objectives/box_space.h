@@ -7,6 +7,7 @@
 
 #include <span>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -28,6 +29,10 @@ class BoxSpace {
 
   const std::vector<ParamSpec>& params() const { return params_; }
   std::size_t dim() const { return params_.size(); }
+  // Index of the parameter called `name` (dim() when there is none).
+  std::size_t index_of(std::string_view name) const;
+  // The names, comma-separated, for "expected …" messages.
+  std::string names() const;
 
   // The optimiser's box (log10 of the bounds for log-scaled parameters).
   std::pair<std::vector<double>, std::vector<double>> box() const { return {box_lo_, box_hi_}; }

@@ -84,11 +84,10 @@ bool CalibrationScoreWeights::IsValid(std::string* why) const {
 }
 
 double calibration_score(const CalibrationResult& result,
-                         const std::vector<TrackCalibrationScore>& nominal,
                          const std::vector<const CalibrationInput*>& inputs,
                          const CalibrationScoreWeights& w) {
-  if (result.tracks.size() != inputs.size() || nominal.size() != inputs.size())
-    throw std::invalid_argument("calibration_score: tracks, nominal scores and inputs differ in number");
+  if (result.tracks.size() != inputs.size())
+    throw std::invalid_argument("calibration_score: the result's tracks and the inputs differ in number");
   double total = 0.0;
   const double cost = result.mean_particles / kReferenceParticles;
   for (std::size_t k = 0; k < inputs.size(); ++k) {
@@ -128,7 +127,6 @@ CalibrationObjective::CalibrationObjective(std::vector<const CalibrationInput*> 
   base_.threads = 1;
   base_.adaptive = adaptive_;
   if (!base_.IsValid(&why)) throw std::invalid_argument(why);
-  for (const auto* in : inputs_) nominal_.push_back(score_fixed_params(*in, in->nominal));
 }
 
 CalibrationResult CalibrationObjective::run(std::span<const double> x) const {
@@ -142,7 +140,7 @@ double CalibrationObjective::fitness(std::span<const double> x) const {
   counters_->evaluations.fetch_add(1, std::memory_order_relaxed);
   try {
     const CalibrationResult r = run(x);
-    const double f = calibration_score(r, nominal_, inputs_, weights_);
+    const double f = calibration_score(r, inputs_, weights_);
     if (std::isfinite(f)) return f;
   } catch (const std::exception&) {
     // An invalid setting or a failed run is a penalty, never an exception

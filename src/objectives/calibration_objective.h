@@ -53,10 +53,8 @@ struct CalibrationScoreWeights {
   bool IsValid(std::string* why) const;
 };
 
-// The score of one finished calibration (see the file comment); `nominal`
-// holds the nominal-parameter scores of the same tracks, in order.
+// The score of one finished calibration of `inputs` (see the file comment).
 double calibration_score(const CalibrationResult& result,
-                         const std::vector<TrackCalibrationScore>& nominal,
                          const std::vector<const CalibrationInput*>& inputs,
                          const CalibrationScoreWeights& weights);
 
@@ -76,7 +74,6 @@ class CalibrationObjective {
   const BoxSpace& space() const { return space_; }
   // The full calibration run at box point x (what fitness() scores).
   CalibrationResult run(std::span<const double> x) const;
-  const std::vector<TrackCalibrationScore>& nominal() const { return nominal_; }
   long evaluations() const { return counters_->evaluations.load(); }
   long failures() const { return counters_->failures.load(); }
 
@@ -90,7 +87,6 @@ class CalibrationObjective {
   bool adaptive_;
   CalibrationScoreWeights weights_;
   BoxSpace space_;
-  std::vector<TrackCalibrationScore> nominal_;
   std::shared_ptr<Counters> counters_ = std::make_shared<Counters>();
 };
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 #include <utility>
 
@@ -28,11 +27,7 @@ constexpr std::size_t kMaxScatterPoints = 5000;
 // Quantile bins of the median trend (figure 2).
 constexpr int kMedianBins = 15;
 
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.10g", v);
-  return buf;
-}
+std::string num(double v) { return gnuplot_number(v); }
 
 std::string q(const std::string& s) { return gnuplot_quote(s); }
 

@@ -19,11 +19,7 @@ constexpr std::size_t kNumSeriesColours = sizeof(kSeriesColours) / sizeof(kSerie
 
 const char* series_colour(std::size_t i) { return kSeriesColours[i % kNumSeriesColours]; }
 
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.10g", v);
-  return buf;
-}
+std::string num(double v) { return gnuplot_number(v); }
 
 // One decimal, without a "-0.0".
 std::string one_decimal(double v) {

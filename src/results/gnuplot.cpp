@@ -1,5 +1,7 @@
 #include "results/gnuplot.h"
 
+#include <cstdio>
+
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/stat.h>
@@ -133,6 +135,12 @@ bool gnuplot_available() {
     }
   }
   return false;
+}
+
+std::string gnuplot_number(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
 }
 
 std::string gnuplot_quote(std::string_view text) {

@@ -54,4 +54,7 @@ bool gnuplot_available();
 // in single quotes). Use with `noenhanced` so `_` and `^` are not markup.
 std::string gnuplot_quote(std::string_view text);
 
+// A number as written into gnuplot data and commands (10 significant digits).
+std::string gnuplot_number(double v);
+
 }  // namespace odotune::results

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 #include <utility>
 
@@ -22,11 +21,7 @@ constexpr int kPaletteSize = static_cast<int>(sizeof(kPalette) / sizeof(kPalette
 
 const char* colour(int i) { return kPalette[((i % kPaletteSize) + kPaletteSize) % kPaletteSize]; }
 
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.10g", v);
-  return buf;
-}
+std::string num(double v) { return gnuplot_number(v); }
 
 std::string q(const std::string& s) { return gnuplot_quote(s); }
 

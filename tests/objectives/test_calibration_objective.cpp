@@ -167,57 +167,50 @@ TrackCalibrationScore perfect_track() {
   return s;
 }
 
-TrackCalibrationScore nominal_scores(double pose_rmse_m) {
-  TrackCalibrationScore s;
-  s.pose_rmse_m = pose_rmse_m;
-  return s;
-}
-
 TEST(CalibrationScore, PerfectCalibrationScoresOnlyTheCostTerm) {
   const CalibrationInput in = input_lasting(100.0);
   CalibrationResult r;
   r.tracks = {perfect_track()};
   r.mean_particles = 2000.0;
   CalibrationScoreWeights w;  // radius 1, convergence 1, pose 1, cost 0.25
-  EXPECT_DOUBLE_EQ(calibration_score(r, {nominal_scores(0.5)}, {&in}, w), 0.25 * 2000.0 / 8000.0);
+  EXPECT_DOUBLE_EQ(calibration_score(r, {&in}, w), 0.25 * 2000.0 / 8000.0);
   w.cost = 0.0;
-  EXPECT_DOUBLE_EQ(calibration_score(r, {nominal_scores(0.5)}, {&in}, w), 0.0);
+  EXPECT_DOUBLE_EQ(calibration_score(r, {&in}, w), 0.0);
 }
 
 TEST(CalibrationScore, EachTermAsDocumented) {
   const CalibrationInput in = input_lasting(100.0);
   CalibrationScoreWeights w;
   w.cost = 0.0;
-  const std::vector<TrackCalibrationScore> nominal = {nominal_scores(0.4)};
 
   // Radius: mean relative error of both radii over the 0.5 % band.
   CalibrationResult r;
   r.tracks = {perfect_track()};
   r.tracks[0].final_params.wheel_radius_left_m = truth().wheel_radius_left_m * 1.005;  // 0.5 %
-  EXPECT_NEAR(calibration_score(r, nominal, {&in}, w), 0.5, 1e-12);  // mean of 1 and 0
+  EXPECT_NEAR(calibration_score(r, {&in}, w), 0.5, 1e-12);  // mean of 1 and 0
   r.tracks[0].final_params.wheel_radius_right_m = truth().wheel_radius_right_m * (1 - 0.01);
-  EXPECT_NEAR(calibration_score(r, nominal, {&in}, w), 0.5 * (1.0 + 2.0), 1e-12);
+  EXPECT_NEAR(calibration_score(r, {&in}, w), 0.5 * (1.0 + 2.0), 1e-12);
   w.radius = 2.0;
-  EXPECT_NEAR(calibration_score(r, nominal, {&in}, w), 3.0, 1e-12);
+  EXPECT_NEAR(calibration_score(r, {&in}, w), 3.0, 1e-12);
   w.radius = 1.0;
 
   // Convergence: time over the track's duration.
   r.tracks = {perfect_track()};
   r.tracks[0].convergence_time_s = 25.0;
-  EXPECT_NEAR(calibration_score(r, nominal, {&in}, w), 0.25, 1e-12);
+  EXPECT_NEAR(calibration_score(r, {&in}, w), 0.25, 1e-12);
   // Never converged adds w.convergence.
   r.tracks[0].convergence_time_s.reset();
   w.convergence = 3.0;
-  EXPECT_NEAR(calibration_score(r, nominal, {&in}, w), 3.0, 1e-12);
+  EXPECT_NEAR(calibration_score(r, {&in}, w), 3.0, 1e-12);
   w.convergence = 1.0;
 
   // Pose: calibrated RMSE over 0.5 % of the 40 m path (0.2 m).
   r.tracks = {perfect_track()};
   r.tracks[0].pose_rmse_m = 0.1;
-  EXPECT_NEAR(calibration_score(r, nominal, {&in}, w), 0.5, 1e-12);
+  EXPECT_NEAR(calibration_score(r, {&in}, w), 0.5, 1e-12);
   // A non-finite pose RMSE (no ground truth) adds nothing.
   r.tracks[0].pose_rmse_m = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_NEAR(calibration_score(r, nominal, {&in}, w), 0.0, 1e-12);
+  EXPECT_NEAR(calibration_score(r, {&in}, w), 0.0, 1e-12);
 }
 
 TEST(CalibrationScore, TrackWithoutTruthScoresOnlyPoseAndCost) {
@@ -229,7 +222,7 @@ TEST(CalibrationScore, TrackWithoutTruthScoresOnlyPoseAndCost) {
   r.tracks = {s};
   r.mean_particles = 4000.0;
   const CalibrationScoreWeights w;
-  EXPECT_NEAR(calibration_score(r, {nominal_scores(0.6)}, {&in}, w), 0.3 / 0.2 + 0.25 * 0.5, 1e-12);
+  EXPECT_NEAR(calibration_score(r, {&in}, w), 0.3 / 0.2 + 0.25 * 0.5, 1e-12);
 }
 
 TEST(CalibrationScore, IsTheMeanOverTracksAndChecksSizes) {
@@ -239,9 +232,8 @@ TEST(CalibrationScore, IsTheMeanOverTracksAndChecksSizes) {
   r.tracks[1].convergence_time_s = 25.0;  // half of b's 50 s
   CalibrationScoreWeights w;
   w.cost = 0.0;
-  EXPECT_NEAR(calibration_score(r, {nominal_scores(1), nominal_scores(1)}, {&a, &b}, w), 0.25, 1e-12);
-  EXPECT_THROW(calibration_score(r, {nominal_scores(1)}, {&a, &b}, w), std::invalid_argument);
-  EXPECT_THROW(calibration_score(r, {nominal_scores(1), nominal_scores(1)}, {&a}, w), std::invalid_argument);
+  EXPECT_NEAR(calibration_score(r, {&a, &b}, w), 0.25, 1e-12);
+  EXPECT_THROW(calibration_score(r, {&a}, w), std::invalid_argument);
 }
 
 TEST(CalibrationScoreWeights, RejectsNegativeAndNonFiniteWeightsByName) {
@@ -329,7 +321,7 @@ TEST(CalibrationObjective, FitnessIsDeterministicAcrossCallsAndThreads) {
   EXPECT_GE(obj.evaluations(), 3);
   // The run behind the score is the one run_calibration gives.
   const CalibrationResult r = obj.run(x);
-  EXPECT_EQ(calibration_score(r, obj.nominal(), {&wheelchair_input()}, {}), f1);
+  EXPECT_EQ(calibration_score(r, {&wheelchair_input()}, {}), f1);
 }
 
 TEST(CalibrationObjective, ThePapersSettingsScoreBetterThanAnAbsurdRandomWalk) {
