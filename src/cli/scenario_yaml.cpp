@@ -15,6 +15,7 @@
 #include "tracks/effects.h"
 #include "tracks/motion_profile.h"
 #include "tracks/simulator.h"
+#include "tracks/slip_episodes.h"
 
 namespace odotune::cli {
 
@@ -62,7 +63,7 @@ class Parser {
     sc.name = std::filesystem::path(file_).stem().string();
     sc.source = std::filesystem::path(file_).filename().string();
     bool have_motion = false;
-    for_each_key(root, "", {"name", "seed", "step_s", "robot", "motion", "sensors", "effects"},
+    for_each_key(root, "", {"name", "seed", "step_s", "robot", "motion", "sensors", "effects", "slip_episodes"},
                  [&](const std::string& key, const YAML::Node& k, const YAML::Node& v) {
                    if (key == "name") {
                      if (!v.IsScalar() || v.Scalar().empty() ||
@@ -82,6 +83,8 @@ class Parser {
                      read_sensors(v, sc.sensors);
                    } else if (key == "effects") {
                      read_effects(v, sc.effects);
+                   } else if (key == "slip_episodes") {
+                     read_slip_episodes(v, k, sc.slip_episodes);
                    }
                  });
     if (!have_motion)
@@ -408,6 +411,69 @@ class Parser {
         fail(kn, e.what());
       }
     });
+  }
+
+  // One of `choices` (e.g. kind: spin|hold), suggesting the closest on a typo.
+  std::string read_choice(const YAML::Node& v, const YAML::Node& k, const std::string& what,
+                          const std::vector<std::string_view>& choices) const {
+    std::string valid;
+    for (auto c : choices) valid += (valid.empty() ? "" : " or ") + std::string(c);
+    if (!v.IsScalar()) fail(value_or_key(v, k), fmt::format("{}: expected {}, got {}", what, valid, kind_of(v)));
+    for (auto c : choices)
+      if (v.Scalar() == c) return v.Scalar();
+    const std::string guess = sim::closest_name(v.Scalar(), choices);
+    fail(v, fmt::format("{} = '{}'{}; expected {}", what, v.Scalar(),
+                        guess.empty() ? "" : fmt::format(" (did you mean '{}'?)", guess), valid));
+  }
+
+  // slip_episodes: a list of {kind, wheel, t0_s, t1_s, s[, ramp_s][, brake_nm]}
+  // maps. Each episode's fields are checked here (at the bad field's line);
+  // overlaps on one wheel by validate_scenario in check().
+  void read_slip_episodes(const YAML::Node& n, const YAML::Node& key, std::vector<sim::SlipEpisode>& out) {
+    if (n.IsNull()) return;
+    if (!n.IsSequence())
+      fail(value_or_key(n, key), fmt::format("slip_episodes: expected a list of {{kind: spin|hold, wheel: "
+                                             "left|right, t0_s, t1_s, s, ramp_s, brake_nm}} maps, got {}",
+                                             kind_of(n)));
+    if (n.size() > sim::kMaxSlipEpisodes)
+      fail(key, fmt::format("slip_episodes: {} episodes; expected at most {}", n.size(), sim::kMaxSlipEpisodes));
+    for (std::size_t i = 0; i < n.size(); ++i) {
+      const YAML::Node item = n[i];
+      const std::string ip = fmt::format("slip_episodes[{}]", i + 1);
+      if (!item.IsMap())
+        fail(value_or_key(item, key), fmt::format("{}: expected a map such as {{kind: spin, wheel: left, t0_s: "
+                                                  "40, t1_s: 44, s: 0.6}}, got {}",
+                                                  ip, kind_of(item)));
+      sim::SlipEpisode e;
+      e.line = static_cast<int>(line_of(item));
+      lines_[ip] = line_of(item);
+      std::map<std::string, YAML::Node> at;  // field -> its value's node, for messages
+      for_each_key(item, ip, {"kind", "wheel", "t0_s", "t1_s", "s", "ramp_s", "brake_nm"},
+                   [&](const std::string& f, const YAML::Node& k, const YAML::Node& v) {
+                     at[f].reset(value_or_key(v, k));
+                     const std::string what = ip + "." + f;
+                     if (f == "kind")
+                       e.kind = read_choice(v, k, what, {"spin", "hold"}) == "spin" ? sim::SlipEpisode::Kind::spin
+                                                                                  : sim::SlipEpisode::Kind::hold;
+                     else if (f == "wheel")
+                       e.wheel = read_choice(v, k, what, {"left", "right"}) == "left"
+                                     ? sim::SlipEpisode::Wheel::left
+                                     : sim::SlipEpisode::Wheel::right;
+                     else if (f == "t0_s") e.t0_s = read_double(v, k, what);
+                     else if (f == "t1_s") e.t1_s = read_double(v, k, what);
+                     else if (f == "s") e.s = read_double(v, k, what);
+                     else if (f == "ramp_s") e.ramp_s = read_double(v, k, what);
+                     else e.brake_nm = read_double(v, k, what);
+                   });
+      for (const char* required : {"kind", "wheel", "t0_s", "t1_s", "s"})
+        if (!at.count(required))
+          fail(item, fmt::format("{}: missing '{}'; an episode needs kind, wheel, t0_s, t1_s and s (ramp_s, "
+                                 "brake_nm optional)",
+                                 ip, required));
+      std::string field, why;
+      if (!sim::check_slip_episode(e, &field, &why)) fail(at.count(field) ? at[field] : item, ip + "." + why);
+      out.push_back(e);
+    }
   }
 
   // Whole-scenario checks, reported at the line of the offending key.

@@ -30,6 +30,14 @@
 //   sensors: { encoders | commands | gyro | power | ext_velocity | aps | ground_truth:
 //              {enabled, rate_hz, <sigma_* / resolution_* of scenario.h>} }
 //   effects: { <effect>: {<param>: value, ...}, ... }  # physics-effects.md names
+//   slip_episodes:                # transient slips of one wheel (scenario.h SlipEpisode,
+//     - {kind: spin, wheel: left, t0_s: 40, t1_s: 44, s: 0.6, ramp_s: 0.2}   # physics:
+//     - {kind: hold, wheel: right, t0_s: 70, t1_s: 73, s: 0.5, brake_nm: 6} # simulator.h)
+//                                 # kind spin|hold, wheel left|right, t0_s, t1_s, s
+//                                 # required; ramp_s (default 0.2), brake_nm (hold
+//                                 # only; default 0 = 2*coulomb_friction_nm) optional;
+//                                 # 0 < s <= 0.9, 2*ramp_s <= t1_s - t0_s, no overlap
+//                                 # on one wheel, t0_s before the motion's end
 //
 // Errors: ScenarioError whose what() is one line "FILE:LINE: what is wrong;
 // what was expected" (line 1-based, from YAML::Mark). Unknown keys are errors
@@ -72,7 +80,8 @@ sim::Scenario parse_scenario(std::string_view yaml_text, const std::string& file
 // and its segments (flat, one line each, only the fields of the segment's
 // kind) or knots (one [t_s, v_m_s, w_rad_s] line each), every field of every
 // sensor, the active effects with
-// all their parameters; numbers in shortest round-trip form, so they parse
+// all their parameters, the slip episodes (all fields but line; brake_nm for
+// hold only; the key omitted when there are none); numbers in shortest round-trip form, so they parse
 // back bit for bit). Not written: Scenario::source (the reader sets it from
 // the file name) and Segment::line. `header_comment` goes first, each of its
 // lines prefixed "# " (nothing for ""). Throws std::invalid_argument for a

@@ -19,6 +19,7 @@
 #include "cli/scenario_yaml.h"
 #include "tracks/effects.h"
 #include "tracks/simulator.h"
+#include "tracks/slip_episodes.h"
 
 namespace odotune::cli {
 
@@ -186,6 +187,23 @@ void write_effects(std::string& out, const sim::Effects& fx) {
   }
 }
 
+void write_slip_episodes(std::string& out, const std::vector<sim::SlipEpisode>& episodes) {
+  if (episodes.empty()) return;
+  out += "slip_episodes:\n";
+  for (std::size_t i = 0; i < episodes.size(); ++i) {
+    const sim::SlipEpisode& e = episodes[i];
+    const std::string p = fmt::format("slip_episodes[{}].", i + 1);
+    std::vector<Entry> entries = {{"kind", std::string(sim::kind_name(e.kind))},
+                                  {"wheel", std::string(sim::wheel_name(e.wheel))},
+                                  {"t0_s", num(p + "t0_s", e.t0_s)},
+                                  {"t1_s", num(p + "t1_s", e.t1_s)},
+                                  {"s", num(p + "s", e.s)},
+                                  {"ramp_s", num(p + "ramp_s", e.ramp_s)}};
+    if (e.kind == sim::SlipEpisode::Kind::hold) entries.emplace_back("brake_nm", num(p + "brake_nm", e.brake_nm));
+    out += fmt::format("  - {}\n", flow_map(entries));
+  }
+}
+
 }  // namespace
 
 std::string scenario_to_yaml(const sim::Scenario& sc, const std::string& header_comment) {
@@ -206,6 +224,7 @@ std::string scenario_to_yaml(const sim::Scenario& sc, const std::string& header_
   write_motion(out, sc.motion);
   write_sensors(out, sc.sensors);
   write_effects(out, sc.effects);
+  write_slip_episodes(out, sc.slip_episodes);
   return out;
 }
 

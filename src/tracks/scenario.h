@@ -1,5 +1,5 @@
 // A simulation scenario: everything the simulator needs to produce one track
-// (robot, commanded motion, sensors, physics effects, seed). Plain data only;
+// (robot, commanded motion, sensors, physics effects, slip episodes, seed). Plain data only;
 // reading it from YAML is the CLI layer's job (src/cli/scenario_yaml.h),
 // checking it is validate_scenario() in simulator.h, and the effect vocabulary
 // (names, parameter ranges, command-line specs) is effects.h.
@@ -168,6 +168,37 @@ struct Effects {
   std::optional<TimeOffset> time_offset;
 };
 
+// A slip episode: a transient, timed loss of the rolling contact of ONE
+// wheel (Farina et al., Sensors 2023, 23, 961, §3.2/§4.1/§5: "other wheels
+// with greater wear to generate slipping ... applying pressure on one side,
+// preventing the rotation of a wheel while allowing the other to turn
+// freely"), during which that wheel's motor power and encoder rate
+// decorrelate. Not one of the spec's effects (physics-effects.md is left as
+// it is): a list of its own (Scenario::slip_episodes), written to a track as
+// sim.slip_episodes; formatting, parsing, validation and the strength
+// profile are slip_episodes.h, the physics simulator.h ("Slip episodes").
+//
+// Strength: 0 before t0_s, rising linearly to `s` over [t0_s, t0_s + ramp_s],
+// `s` until t1_s - ramp_s, falling linearly to 0 at t1_s.
+// Valid: t0_s >= 0, t1_s > t0_s, 0 < s <= 0.9, ramp_s > 0 with 2*ramp_s <=
+// t1_s - t0_s, brake_nm >= 0 (hold) or 0 (spin); episodes on the same wheel
+// must not overlap in time (they may touch: t1_s of one = t0_s of the next).
+struct SlipEpisode {
+  enum class Kind {
+    spin,  // a worn wheel losing grip: turns as commanded, the ground moves less
+    hold,  // a wheel held back: turns slower, its contact is dragged along
+  };
+  enum class Wheel { left, right };
+  Kind kind = Kind::spin;
+  Wheel wheel = Wheel::left;
+  double t0_s = 0.0;       // start [s] (simulation time)
+  double t1_s = 0.0;       // end [s]
+  double s = 0.0;          // peak strength [-]: the lost fraction of ground speed (spin) or rotation (hold)
+  double ramp_s = 0.2;     // duration of each linear ramp [s]
+  double brake_nm = 0.0;   // hold: braking torque at full strength [N*m]; 0 = 2*robot.coulomb_friction_nm
+  int line = 0;            // line in the scenario file, for error messages (0 = unknown)
+};
+
 struct Scenario {
   std::string name = "simulated";   // track name (metadata `name`)
   std::string source;               // scenario file name, written as sim.scenario ("" = none)
@@ -177,6 +208,7 @@ struct Scenario {
   MotionParams motion;
   SensorParams sensors;
   Effects effects;
+  std::vector<SlipEpisode> slip_episodes;  // transient slips, any order (see SlipEpisode)
 };
 
 }  // namespace odotune::sim

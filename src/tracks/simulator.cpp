@@ -16,6 +16,7 @@
 
 #include "tracks/effects.h"
 #include "tracks/motion_profile.h"
+#include "tracks/slip_episodes.h"
 
 namespace odotune::sim {
 
@@ -82,10 +83,19 @@ double tidy_variance(double sigma) {
   return std::stod(s);
 }
 
-// Wheel-level state at one instant.
+// Wheel-level state at one instant: the ROTATION the encoders count (slowed
+// by a hold episode, else the controller's rate).
 struct WheelState {
   double phi_l = 0, phi_r = 0;  // rotation angle [rad]
   double om_l = 0, om_r = 0;    // rate [rad/s]
+};
+
+// What the slip episodes do to one wheel at one instant (simulator.h, "Slip
+// episodes"); all zero outside episodes.
+struct WheelSlip {
+  double spin = 0.0;      // spin strength: lost fraction of ground speed and contact force
+  double hold = 0.0;      // hold strength: lost fraction of the rotation
+  double brake_nm = 0.0;  // hold's braking torque now [N*m] (ramps with the strength)
 };
 
 // True state recorded at a row.
@@ -168,6 +178,7 @@ bool validate_scenario(const Scenario& sc, std::string* why) {
 
   std::string ewhy;
   if (!validate_effects(sc.effects, &ewhy)) return fail("effects: " + ewhy);
+  if (!validate_slip_episodes(sc.slip_episodes, &ewhy)) return fail(ewhy);
 
   double duration = 0.0;
   double max_rim_m_s = 0.0;  // fastest nominal rim speed |v| + |w|*D/2
@@ -179,6 +190,11 @@ bool validate_scenario(const Scenario& sc, std::string* why) {
   } catch (const ProfileError& e) {
     return fail(fmt::format("motion: {}", e.what()));
   }
+  for (std::size_t i = 0; i < sc.slip_episodes.size(); ++i)
+    if (!(sc.slip_episodes[i].t0_s < duration))
+      return fail(fmt::format("slip_episodes[{}]: t0_s = {} is not before the end of the motion at {} s; "
+                              "expected an episode that starts during the drive",
+                              i + 1, sc.slip_episodes[i].t0_s, duration));
   if (sc.effects.speed_radius) {
     // Radius scales are at most 1.5 each (effects.h), so u < 2.25 * max_rim.
     const double u = 2.25 * max_rim_m_s, c = sc.effects.speed_radius->c;
@@ -278,10 +294,30 @@ Track simulate(const Scenario& sc) {
     const auto& z = fx.slip_zone;
     return z && x >= z->x0 && x <= z->x1 && y >= z->y0 && y <= z->y1;
   };
-  auto motor_power = [&](double om, double dom, double load_force, double R_eff) {
-    const double torque = rb.wheel_inertia_kg_m2 * dom + rb.viscous_friction_nm_s * om +
-                          rb.coulomb_friction_nm * std::tanh(om / rb.coulomb_smoothing_rad_s) +
-                          load_force * R_eff;
+  const SlipSchedule slips(sc.slip_episodes);
+  auto wheel_slip = [&](double t, SlipEpisode::Wheel wheel) {
+    WheelSlip ws;
+    const SlipSchedule::Active a = slips.at(t, wheel);
+    if (!a.episode) return ws;
+    if (a.episode->kind == SlipEpisode::Kind::spin) {
+      ws.spin = a.strength;
+    } else {
+      ws.hold = a.strength;
+      const double full = a.episode->brake_nm > 0.0 ? a.episode->brake_nm : 2.0 * rb.coulomb_friction_nm;
+      ws.brake_nm = full * a.strength / a.episode->s;
+    }
+    return ws;
+  };
+  // om, dom: the wheel's rotation rate and its derivative; om_ctrl: the
+  // controller's rate (the braking torque's sign). Outside episodes grip = 1
+  // and brake_nm = 0, which leave every floating-point operation unchanged.
+  auto motor_power = [&](double om, double dom, double load_force, double R_eff, const WheelSlip& ws,
+                         double om_ctrl) {
+    const double grip = 1.0 - ws.spin;
+    double torque = rb.wheel_inertia_kg_m2 * dom + rb.viscous_friction_nm_s * om +
+                    rb.coulomb_friction_nm * std::tanh(om / rb.coulomb_smoothing_rad_s) * grip +
+                    load_force * R_eff * grip;
+    if (ws.brake_nm != 0.0) torque += ws.brake_nm * std::tanh(om_ctrl / rb.coulomb_smoothing_rad_s);
     const double current = torque / rb.torque_constant_nm_per_a;
     return torque * om + current * current * rb.coil_resistance_ohm;
   };
@@ -289,7 +325,9 @@ Track simulate(const Scenario& sc) {
   std::vector<Truth> truth(n_rows);
   std::vector<WheelState> odo(n_rows);
   std::size_t next_row = 0, next_q = 0;
-  WheelState w0;
+  WheelState w0;                          // rotation
+  double c0_l = 0.0, c0_r = 0.0;          // controller rates omega_ctrl [rad/s]
+  WheelSlip sl0_l, sl0_r;                 // no episode acts at t = 0 (strength 0 at t0_s)
   double ref0_l = 0.0, ref0_r = 0.0;
   const MotionParams& mo = sc.motion;
   double x = mo.start_x_m, y = mo.start_y_m, th = mo.start_theta_rad, v_prev = 0.0, w_prev = 0.0;
@@ -301,22 +339,30 @@ Track simulate(const Scenario& sc) {
     const Command cmd = profile.at(t1);
     const double ref1_l = (cmd.v_m_s - cmd.w_rad_s * D / 2.0) / R_l;
     const double ref1_r = (cmd.v_m_s + cmd.w_rad_s * D / 2.0) / R_r;
+    const double c1_l = lag_e * c0_l + one_minus_e * ref0_l + (ref1_l - ref0_l) * lag_ramp;
+    const double c1_r = lag_e * c0_r + one_minus_e * ref0_r + (ref1_r - ref0_r) * lag_ramp;
+    const WheelSlip sl1_l = wheel_slip(t1, SlipEpisode::Wheel::left);
+    const WheelSlip sl1_r = wheel_slip(t1, SlipEpisode::Wheel::right);
     WheelState w1;
-    w1.om_l = lag_e * w0.om_l + one_minus_e * ref0_l + (ref1_l - ref0_l) * lag_ramp;
-    w1.om_r = lag_e * w0.om_r + one_minus_e * ref0_r + (ref1_r - ref0_r) * lag_ramp;
+    w1.om_l = c1_l * (1.0 - sl1_l.hold);
+    w1.om_r = c1_r * (1.0 - sl1_r.hold);
     w1.phi_l = w0.phi_l + 0.5 * (w0.om_l + w1.om_l) * h;
     w1.phi_r = w0.phi_r + 0.5 * (w0.om_r + w1.om_r) * h;
 
+    // Rim speeds of the unbraked rotation: a held wheel's contact is dragged
+    // along at them.
     const double Rb_l = base_radius(t1, false), Rb_r = base_radius(t1, true);
-    const double u0_l = eff_radius(w0.om_l, Rb_l) * w0.om_l, u1_l = eff_radius(w1.om_l, Rb_l) * w1.om_l;
-    const double u0_r = eff_radius(w0.om_r, Rb_r) * w0.om_r, u1_r = eff_radius(w1.om_r, Rb_r) * w1.om_r;
+    const double u0_l = eff_radius(c0_l, Rb_l) * c0_l, u1_l = eff_radius(c1_l, Rb_l) * c1_l;
+    const double u0_r = eff_radius(c0_r, Rb_r) * c0_r, u1_r = eff_radius(c1_r, Rb_r) * c1_r;
     const double s_long_l = std::min(0.5, k_slip * std::abs(u1_l - u0_l) / h);
     const double s_long_r = std::min(0.5, k_slip * std::abs(u1_r - u0_r) / h);
     const bool zone = in_zone(x, y);
     const double s_zone_l = zone ? fx.slip_zone->s_l : 0.0;
     const double s_zone_r = zone ? fx.slip_zone->s_r : 0.0;
-    const double g_l = 0.5 * (u0_l + u1_l) * (1.0 - s_long_l) * (1.0 - s_zone_l);
-    const double g_r = 0.5 * (u0_r + u1_r) * (1.0 - s_long_r) * (1.0 - s_zone_r);
+    const double g_l =
+        0.5 * (u0_l + u1_l) * (1.0 - s_long_l) * (1.0 - s_zone_l) * (1.0 - 0.5 * (sl0_l.spin + sl1_l.spin));
+    const double g_r =
+        0.5 * (u0_r + u1_r) * (1.0 - s_long_r) * (1.0 - s_zone_r) * (1.0 - 0.5 * (sl0_r.spin + sl1_r.spin));
 
     const double v = 0.5 * (g_r + g_l);
     const double w = (g_r - g_l) / D_true;
@@ -334,8 +380,8 @@ Track simulate(const Scenario& sc) {
       const double f_rot = rb.yaw_inertia_kg_m2 * alpha / D_true;  // [N], + right
       Truth& tr = truth[next_row++];
       tr = {x, y, th, v, w,
-            motor_power(w1.om_l, (w1.om_l - w0.om_l) / h, f_lin - f_rot, eff_radius(w1.om_l, Rb_l)),
-            motor_power(w1.om_r, (w1.om_r - w0.om_r) / h, f_lin + f_rot, eff_radius(w1.om_r, Rb_r))};
+            motor_power(w1.om_l, (w1.om_l - w0.om_l) / h, f_lin - f_rot, eff_radius(w1.om_l, Rb_l), sl1_l, c1_l),
+            motor_power(w1.om_r, (w1.om_r - w0.om_r) / h, f_lin + f_rot, eff_radius(w1.om_r, Rb_r), sl1_r, c1_r)};
     }
     const double kd1 = static_cast<double>(k + 1);
     while (next_q < n_rows && q[next_q] <= kd1) {
@@ -347,6 +393,10 @@ Track simulate(const Scenario& sc) {
       o.om_r = w0.om_r + a * (w1.om_r - w0.om_r);
     }
     w0 = w1;
+    c0_l = c1_l;
+    c0_r = c1_r;
+    sl0_l = sl1_l;
+    sl0_r = sl1_r;
     ref0_l = ref1_l;
     ref0_r = ref1_r;
     v_prev = v;
@@ -457,6 +507,8 @@ Track simulate(const Scenario& sc) {
   ex.emplace_back("sim.seed", fmt::format("{}", sc.seed));
   if (!sc.source.empty()) ex.emplace_back("sim.scenario", sc.source);
   ex.emplace_back("sim.effects", format_effects(fx));
+  // Only with episodes, so tracks without any keep their earlier bytes.
+  if (!sc.slip_episodes.empty()) ex.emplace_back("sim.slip_episodes", format_slip_episodes(sc.slip_episodes));
   put("sim.step_s", sc.step_s);
   put("sim.max_accel_m_s2", sc.motion.max_accel_m_s2);
   put("sim.max_angular_accel_rad_s2", sc.motion.max_angular_accel_rad_s2);

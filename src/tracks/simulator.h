@@ -26,7 +26,8 @@
 //  4. Ground speed of each wheel over a step: mean rim speed * (1 - s_long) *
 //     (1 - s_zone), where s_long = min(0.5, k*|du_rim/dt|) (longitudinal_slip)
 //     and s_zone = slip_zone.s_l / s_r while the pose at the start of the step
-//     is inside the box. (Both slips multiply when both are on.)
+//     is inside the box. (Both slips multiply when both are on, and with a
+//     spin episode's 1 - s, below.)
 //  5. Body: v = (g_r + g_l)/2, w = (g_r - g_l)/D_true with D_true =
 //     D*wheel_base_error.scale; lateral_skid adds v_y = -k*v*w (body frame,
 //     +y = left). The pose integrates exactly for velocities constant over the
@@ -60,6 +61,42 @@
 // a and alpha are the true body accelerations, so under slip power and wheel
 // speed decorrelate (the relation Farina et al., Sensors 2023, 23, 961 use to
 // detect slip: ../shared/papers/002_*.txt).
+//
+// Slip episodes (Scenario::slip_episodes, scenario.h; strength s(t) of the
+// episode acting on a wheel, ramped, 0 outside episodes). Transient losses of
+// one wheel's rolling contact, modelled on the slips Farina et al. (Sensors
+// 2023, 23, 961, §3.2, §5) provoked on their robot to train an LSTM slip
+// detector on motor power + encoder increments: worn wheels that slip, and
+// "applying pressure on one side, preventing the rotation of a wheel while
+// allowing the other to turn freely". In both, power and wheel speed
+// decorrelate, which the kinematic model and the nominal power both miss.
+//  * spin (a worn wheel losing grip): the wheel turns as the controller
+//    commands (omega = omega_ctrl, so the encoders count as usual) but its
+//    ground speed is multiplied by 1 - s (step 4; s averaged over the step's
+//    ends), and the contact transmits only the fraction 1 - s of the force:
+//    in the motor model the Coulomb/rolling term and the body-load term are
+//    both multiplied by (1 - s). Power drops, wheel speed does not.
+//  * hold (a wheel held back, e.g. pressed on by a hand or an obstacle): the
+//    wheel's rotation is slowed to omega = (1 - s)*omega_ctrl (omega_ctrl =
+//    what the controller / actuator_lag gives; the controller's own state is
+//    unchanged, as if it did not know), and the encoders count the slowed
+//    rotation (step 6), while the contact is dragged along at the ground
+//    speed of the unbraked wheel (R_eff(omega_ctrl)*omega_ctrl, with the
+//    other slips as usual): the encoders under-read the motion and the true
+//    path is that of the run without the episode. The motor model uses the
+//    slowed rotation's rate and derivative and adds a braking torque
+//        tau_brake = brake_nm * (s(t)/s) * tanh(omega_ctrl/omega_eps)
+//    (ramping with the episode; the smoothed sign of the Coulomb term, so it
+//    vanishes at standstill). brake_nm = 0 in the scenario means 2*tau_c (the
+//    wheel's own Coulomb torque: a firm hand on the tyre). Power rises when
+//    (tau + tau_brake)*(1 - s) exceeds tau, i.e. for a brake that is large
+//    against the wheel's load at strong s (a hold at s = 0.8 needs
+//    tau_brake > 4*tau); with a weaker brake power falls with the speed.
+// Outside episodes every operation is the one without episodes, so a track is
+// bit-identical to the run without them up to the first episode (and, for
+// spin, its ticks throughout). Several episodes may act at once only on
+// different wheels (validate_scenario). Where the episodes were is written to
+// the track as sim.slip_episodes (slip_episodes.h).
 //
 // Sources: kinematics and every effect model: ../shared/specs/track-format.md
 // and physics-effects.md (taken literally, with their units); motor model: the
