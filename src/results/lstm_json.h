@@ -1,0 +1,49 @@
+// JSON form of the LSTM nets (filters/lstm.h): weights, standardisation and
+// shape, so that a net trained offline (objectives/lstm_training.h) is saved
+// and loaded on the robot (issue 6: "Weights saved and loaded as JSON").
+//
+//   {
+//     "format": "odotune-lstm/1",
+//     "inputs": I, "hidden": H,           // must match the LstmNet<I, H> read into
+//     "activation": "linear" | "relu",
+//     "window": 20,                        // samples per window, 1..LstmNet::kMaxWindow
+//     "input_mean": [I numbers], "input_sd": [I numbers > 0],
+//     "output_mean": number, "output_sd": number > 0,
+//     "weights": [LstmLayout<I, H>::kCount numbers]   // layout: filters/lstm.h (Keras order)
+//   }
+//
+// Doubles are written in nlohmann's shortest round-trip form, so weights read
+// back are bit-identical. Reading validates every field and throws
+// std::invalid_argument with one line naming the JSON field and what was
+// expected (missing, wrong type, wrong shape or count, non-finite, sd ≤ 0,
+// wrong format tag).
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "filters/lstm.h"
+
+namespace odotune {
+
+inline constexpr const char* kLstmJsonFormat = "odotune-lstm/1";
+
+// Throws std::invalid_argument when !net.IsValid() (a non-finite value would
+// otherwise be written as null).
+template <int I, int H>
+nlohmann::json lstm_to_json(const filters::LstmNet<I, H>& net);
+
+template <int I, int H>
+filters::LstmNet<I, H> lstm_from_json(const nlohmann::json& j);
+
+}  // namespace odotune
+
+namespace odotune::filters {
+
+// nlohmann's ADL hooks (`nlohmann::json j = net;`, `j.get<VelocityNet>()`),
+// forwarding to the functions above. Instantiated for <3, 5> and <5, 10>.
+template <int I, int H>
+void to_json(nlohmann::json& j, const LstmNet<I, H>& net);
+template <int I, int H>
+void from_json(const nlohmann::json& j, LstmNet<I, H>& net);
+
+}  // namespace odotune::filters
