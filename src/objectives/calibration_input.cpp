@@ -10,16 +10,13 @@
 #include <fmt/format.h>
 
 #include "objectives/pose_series.h"
+#include "objectives/track_samples.h"
 #include "tracks/effects.h"
 
 namespace odotune {
 
 namespace {
 
-// Longest ground-truth gap interpolated across for the poses at odometry rows
-// [s]: long enough for any motion-capture jitter or a missed frame, short
-// enough not to invent a pose across a real dropout.
-constexpr double kMaxGtGapS = 0.5;
 // Upper bound of ext_from_gt_rate_hz [Hz] (beyond any ground-truth rate; keeps
 // the sample count bounded).
 constexpr double kMaxExtFromGtRateHz = 1000.0;
@@ -36,31 +33,6 @@ std::string_view trim(std::string_view s) {
   if (b == std::string_view::npos) return {};
   const auto e = s.find_last_not_of(" \t\r\n");
   return s.substr(b, e - b + 1);
-}
-
-// Ground-truth rows with x, y and theta, theta unwrapped (each step taken as
-// the wrapped difference, so an already unwrapped series is unchanged).
-PoseSeries ground_truth_series(const Track& track) {
-  PoseSeries s;
-  if (!track.has_gt() || !track.has(Col::gt_theta)) return s;
-  const auto& gx = track.col(Col::gt_x);
-  const auto& gy = track.col(Col::gt_y);
-  const auto& gth = track.col(Col::gt_theta);
-  double last_raw = 0.0, last_unwrapped = 0.0;
-  for (std::size_t i = 0; i < track.size(); ++i) {
-    if (std::isnan(gx[i]) || std::isnan(gy[i]) || std::isnan(gth[i])) continue;
-    const double th = s.size() == 0 ? gth[i] : last_unwrapped + wrap_angle(gth[i] - last_raw);
-    last_raw = gth[i];
-    last_unwrapped = th;
-    s.push_back(track.t()[i], PlanarPose{gx[i], gy[i], th});
-  }
-  return s;
-}
-
-double positive_or(const std::vector<double>& col, std::size_t row, double fallback) {
-  if (col.empty()) return fallback;
-  const double v = col[row];
-  return std::isfinite(v) && v > 0.0 ? v : fallback;
 }
 
 }  // namespace
