@@ -7,7 +7,11 @@
 // must leave runs of exactly one model; of those the run with the lowest tuned
 // RMSE on its scored track is exported (ties: the first stored). A run of a
 // calibrator model (pf-calib, adaptive-pf-calib) is refused with one line:
-// it holds PF settings, not EKF noise (tune --config-out writes those).
+// it holds PF settings, not EKF noise (tune --config-out writes those). A run
+// of the fusion UKF (ukf) exports as odotune's own format only (an
+// odotune-ukf-config/1 file, cli/ukf_config_yaml.h); robot_localization has
+// no mapping for it (its filters estimate the pose, not a (V, W) fusion of
+// this form), which is refused with one line.
 #include <algorithm>
 #include <array>
 #include <charconv>
@@ -22,6 +26,7 @@
 #include "cli/failure.h"
 #include "cli/store_access.h"
 #include "cli/tuned_model.h"
+#include "cli/ukf_config_yaml.h"
 #include "objectives/param_space.h"
 #include "objectives/process_noise_rate.h"
 #include "objectives/replay_input.h"
@@ -253,6 +258,11 @@ void run_export(const ExportArgs& args) {
         "configurations only; write a calibrator's settings with `odotune tune --model {} ... "
         "--config-out FILE` (odotune-pf-config/1)",
         key, run.model, run.model));
+  if (is_ukf_model_name(run.model) && args.format != "odotune")
+    throw Failure(fmt::format(
+        "run {} tuned the velocity-fusion UKF (model ukf): {} has no mapping for this model; "
+        "export it with --format odotune (odotune-ukf-config/1)",
+        key, args.format));
   const std::string scores =
       fmt::format("tuned RMSE {:.2f} mm vs baseline {:.2f} mm on {}", run.tuned.rmse_m * 1e3,
                   run.baseline.rmse_m * 1e3, run.scored_track());
@@ -260,7 +270,11 @@ void run_export(const ExportArgs& args) {
                                          args.store, store->experiment().name,
                                          store->experiment().hash, key);
 
-  if (args.format == "odotune") {
+  if (is_ukf_model_name(run.model)) {
+    UkfConfig cfg = run_ukf_config(run);
+    cfg.comment = origin + "\n" + scores + " (the fused pose; baseline: the default UKF noise)";
+    write_ukf_config(cfg, args.out);
+  } else if (args.format == "odotune") {
     EkfConfig cfg;
     cfg.noise = run_noise(run);
     cfg.model = cfg.noise.model;

@@ -1,5 +1,6 @@
-// odotune tune: tune one EKF noise model, or one particle-filter calibrator's
-// settings (issue 5, item 7), on one or more tracks.
+// odotune tune: tune one EKF noise model, one particle-filter calibrator's
+// settings (issue 5, item 7), or the velocity-fusion UKF's noise (issue 6,
+// item 1), on one or more tracks.
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -16,6 +17,9 @@
 #include "cli/progress.h"
 #include "cli/tune_job.h"
 #include "cli/tuned_model.h"
+#include "cli/ukf_config_yaml.h"
+#include "cli/ukf_tune_job.h"
+#include "cli/ukf_tune_output.h"
 #include "tuner/nlopt_solver.h"
 
 namespace odotune::cli {
@@ -190,12 +194,53 @@ void run_calibration_tune_command(const TuneArgs& args, CalibratorModel model) {
   if (interrupt.raised()) throw Failure("interrupted", 130);
 }
 
+void run_ukf_tune_command(const TuneArgs& args) {
+  UkfTuneRequest req;
+  static_cast<SolverSettings&>(req) = solver_of(args);
+  req.mode = args.mode;
+  std::string why;
+  if (!req.IsValid(&why)) throw Failure(why);
+
+  const std::vector<Track> tracks = load_tracks(args.tracks);
+  std::vector<FusionInput> inputs;
+  for (const auto& t : tracks) {
+    try {
+      inputs.push_back(ukf_fusion_input(t));
+    } catch (const std::invalid_argument& e) {
+      throw Failure(e.what());
+    }
+  }
+  std::vector<const FusionInput*> ptrs;
+  for (const auto& in : inputs) ptrs.push_back(&in);
+
+  InterruptGuard interrupt;
+  const UkfTuneOutcome out =
+      run_with_progress(req, interrupt, [&](const UkfTuneRequest& r) { return run_ukf_tune(ptrs, r); });
+  print_ukf_outcome(out);
+  const double rate_hz = 1.0 / inputs.front().dt_s;
+  if (!args.json_out.empty()) write_file_atomically(args.json_out, ukf_tune_json(out, rate_hz).dump(2) + "\n");
+  if (!args.config_out.empty()) {
+    UkfConfig cfg;
+    cfg.rate_hz = rate_hz;
+    cfg.params = out.params;
+    cfg.comment = fmt::format(
+        "tuned by odotune tune: model ukf, mode {} ({}), solver {}, seed {}\n"
+        "fused pose RMSE {:.2f} mm tuned vs {:.2f} mm with the defaults (mean over {} track{})",
+        req.mode, fitness_mode_name(req.mode), req.solver, req.seed, out.tuned_mean.rmse_m * 1e3,
+        out.baseline_mean.rmse_m * 1e3, inputs.size(), inputs.size() == 1 ? "" : "s");
+    write_ukf_config(cfg, args.config_out);
+  }
+  if (interrupt.raised()) throw Failure("interrupted", 130);
+}
+
 }  // namespace
 
 void register_tune(CLI::App& app) {
   auto args = std::make_shared<TuneArgs>();
   auto* sub = app.add_subcommand(
-      "tune", "Tune the EKF noise of one model, or a particle-filter calibrator's settings, on tracks");
+      "tune",
+      "Tune the EKF noise of one model, a particle-filter calibrator's settings, or the fusion UKF's "
+      "noise, on tracks");
   sub->footer(
       "Example:\n"
       "  odotune tune --track data/tracks/track1.csv --model rq --mode 7 --seed 1 --json out.json\n"
@@ -210,12 +255,16 @@ void register_tune(CLI::App& app) {
       "(src/objectives/calibration_objective.h). The baseline is the paper's default settings;\n"
       "if they score better than the solver's best they are kept. Tracks need external velocities\n"
       "(v_ext, w_ext, or --ext-from-gt HZ) and ground truth, all of one robot. --config-out writes\n"
-      "an odotune-pf-config/1 file (src/cli/pf_config_yaml.h).");
+      "an odotune-pf-config/1 file (src/cli/pf_config_yaml.h).\n"
+      "UKF (ukf): tunes the (V, W) fusion filter's process noise, static odometry variances, gyro\n"
+      "variance and external-variance scale (src/objectives/ukf_objective.h) for --mode's error of\n"
+      "the fused pose against ground truth (tracks need it); the baseline is the default noise.\n"
+      "--config-out writes an odotune-ukf-config/1 file (src/cli/ukf_config_yaml.h).");
   sub->add_option("--track", args->tracks, "track file (repeat for several; fitness = mean over tracks)")
       ->required();
-  sub->add_option("--model", args->model, "rq | alpha | gyro | pf-calib | adaptive-pf-calib");
+  sub->add_option("--model", args->model, "rq | alpha | gyro | pf-calib | adaptive-pf-calib | ukf");
   sub->add_option("--mode", args->mode,
-                  "EKF fitness mode: 1 RMSE, 2 MAE, 3 MAXE, 4 RMSE+MAE, 5 RMSE+MAXE, 6 MAE+MAXE, "
+                  "EKF/UKF fitness mode: 1 RMSE, 2 MAE, 3 MAXE, 4 RMSE+MAE, 5 RMSE+MAXE, 6 MAE+MAXE, "
                   "7 RMSE+MAE+MAXE")
       ->check(CLI::Range(1, 7));
   std::string algos;
@@ -230,7 +279,7 @@ void register_tune(CLI::App& app) {
   sub->add_option("--json", args->json_out, "write the result as JSON to this file");
   sub->add_option("--config-out", args->config_out,
                   "write the tuned configuration (YAML: EKF models for eval --config, calibrators "
-                  "odotune-pf-config/1)");
+                  "odotune-pf-config/1, ukf odotune-ukf-config/1)");
   sub->add_option("--resampler", args->resampler,
                   "calibrators: multinomial | stratified | systematic | residual (default systematic)");
   sub->add_option("--policy", args->policy, "calibrators: resampling policy every | neff | max (default neff)");
@@ -253,10 +302,12 @@ void register_tune(CLI::App& app) {
     for (const std::string& opt : model.calibrator ? kEkfOnly : kCalibratorOnly)
       if (sub->count(opt) > 0)
         throw Failure(fmt::format("{} applies to {} models only, not to --model {}", opt,
-                                  model.calibrator ? "the EKF (rq, alpha, gyro)" : "the calibrator",
+                                  model.calibrator ? "the EKF and UKF (rq, alpha, gyro, ukf)" : "the calibrator",
                                   args->model));
     if (model.calibrator)
       run_calibration_tune_command(*args, model.calib);
+    else if (model.ukf)
+      run_ukf_tune_command(*args);
     else
       run_ekf_tune(*args, model.noise);
   });

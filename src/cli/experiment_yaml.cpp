@@ -88,10 +88,13 @@ void read_calibration(const std::filesystem::path& path, const YAML::Node& c, Ex
 }  // namespace
 
 bool Experiment::has_ekf_models() const {
-  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return !m.calibrator; });
+  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.is_ekf(); });
 }
 bool Experiment::has_calibrator_models() const {
   return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.calibrator; });
+}
+bool Experiment::has_ukf_models() const {
+  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.ukf; });
 }
 
 Experiment read_experiment(const std::filesystem::path& path) {

@@ -2,7 +2,7 @@
 //
 //   format: odotune-experiment/1
 //   name: study
-//   models: [rq, alpha, gyro]            # also pf-calib, adaptive-pf-calib (cli/tuned_model.h)
+//   models: [rq, alpha, gyro]            # also pf-calib, adaptive-pf-calib, ukf (cli/tuned_model.h)
 //   tracks: [../data/tracks/track*.csv]   # paths or globs, relative to this file
 //   modes: [1, 2, 3, 4, 5, 6, 7]
 //   seeds: {first: 1, count: 20}         # or a list: [1, 2, 3]
@@ -19,7 +19,8 @@
 //
 // A calibrator model (pf-calib, adaptive-pf-calib) has no fitness mode: its
 // cells are made for the first listed mode only (the run records that mode),
-// so a calibrator run is not repeated per mode.
+// so a calibrator run is not repeated per mode. The fusion UKF (ukf) has
+// fitness modes like the EKF models; its tracks need ground truth.
 // Errors are one line: "FILE:LINE: what is wrong, what was expected".
 #pragma once
 
@@ -57,8 +58,9 @@ struct Experiment {
   std::filesystem::path store;
   ExperimentCalibration calibration;
 
-  bool has_ekf_models() const;
-  bool has_calibrator_models() const;
+  bool has_ekf_models() const;         // rq, alpha, gyro
+  bool has_calibrator_models() const;  // pf-calib, adaptive-pf-calib
+  bool has_ukf_models() const;         // ukf
 };
 
 // Throws odotune::cli::Failure.

@@ -8,6 +8,7 @@
 #include "cli/failure.h"
 #include "cli/output.h"
 #include "cli/tune_job.h"
+#include "cli/ukf_tune_job.h"
 
 namespace odotune::cli {
 
@@ -61,6 +62,13 @@ std::vector<PreparedTrack> prepare_grid_tracks(const Experiment& e) {
             "track '{}': no ground truth (gt_x, gt_y, gt_theta), needed by the experiment's "
             "calibrator models to score the calibrated odometry",
             t.name()));
+    }
+    if (e.has_ukf_models()) {
+      try {
+        p.fusion = ukf_fusion_input(t);
+      } catch (const std::invalid_argument& ex) {
+        throw Failure(fmt::format("{} (needed by the experiment's ukf model)", ex.what()));
+      }
     }
     tracks.push_back(std::move(p));
   }
@@ -141,11 +149,38 @@ std::optional<results::RunRecord> run_calibration_cell(const Experiment& e,
   return r;
 }
 
+std::optional<results::RunRecord> run_ukf_cell(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                                               const GridCell& c, const std::atomic<bool>* stop) {
+  results::RunRecord r = cell_record(e, tracks, c);
+  UkfTuneRequest req;
+  req.mode = c.mode;
+  static_cast<SolverSettings&>(req) = cell_solver(e, c, stop);
+  std::vector<const FusionInput*> tune_on;
+  for (auto t : c.tune_on) tune_on.push_back(&*tracks[t].fusion);
+  const UkfTuneOutcome o = run_ukf_tune(tune_on, req);
+  if (o.summary.termination == "stopped") return std::nullopt;
+  r.param_names = o.param_names;
+  r.params = o.params;
+  r.best_fitness = o.tuned_fitness;
+  r.evaluations = o.summary.evaluations;
+  r.seconds = o.summary.seconds;
+  r.diverged = o.failures;
+  r.termination = o.summary.termination;
+  for (const auto& rec : o.summary.log) r.convergence.push_back({rec.evaluations, rec.best_fitness});
+  // Scores on the cell's track (the tuned track itself, or the held-out
+  // one): the fused pose's errors with the default and the tuned noise.
+  const FusionInput* score = &*tracks[c.score_on].fusion;
+  r.baseline = to_metrics(ukf_track_errors({score}, o.default_settings).at(0));
+  r.tuned = to_metrics(ukf_track_errors({score}, o.tuned_settings).at(0));
+  return r;
+}
+
 }  // namespace
 
 std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vector<PreparedTrack>& tracks,
                                            const GridCell& c, const std::atomic<bool>* stop) {
   if (c.model.calibrator) return run_calibration_cell(e, tracks, c, stop);
+  if (c.model.ukf) return run_ukf_cell(e, tracks, c, stop);
   results::RunRecord r = cell_record(e, tracks, c);
   TuneRequest req;
   req.model = c.model.noise;

@@ -43,7 +43,8 @@ struct GridOutcome {
 
 // The experiment's tracks, read and prepared for the listed models: for
 // replay when an EKF model is listed, as calibration input (with the
-// experiment's calibration.ext_from_gt_hz) when a calibrator model is.
+// experiment's calibration.ext_from_gt_hz) when a calibrator model is, as
+// fusion input (ukf_tune_job.h) when the ukf model is.
 // Throws odotune::cli::Failure (one line naming the track) when a track is
 // unusable for a listed model.
 std::vector<PreparedTrack> prepare_grid_tracks(const Experiment& e);
@@ -63,7 +64,8 @@ std::vector<std::size_t> pending_cells(const Experiment& e, const std::vector<Pr
 // calibrator cell's (calibration_tune_job.h) are the dead-reckoning position
 // errors of the calibrated odometry with the paper's default and the tuned
 // settings on the scored track, its params the tuned settings and its
-// best_fitness the tuned score. The result depends only on the experiment,
+// best_fitness the tuned score; a ukf cell's (ukf_tune_job.h) are the fused
+// pose's position errors with the default and the tuned UKF noise. The result depends only on the experiment,
 // the tracks and the cell (not on the thread, process or machine that runs it).
 // Returns nothing when `stop` ended the run early (there is nothing to keep).
 // Throws std::exception when the solver fails.

@@ -150,12 +150,21 @@ ReportOutcome write_report(const ReportRequest& req) {
   // default PF settings and their metrics the calibrated odometry's dead
   // reckoning, so Table 1 and the convergence curves keep them apart from
   // the EKF models', and the EKF trajectory replay leaves them out.
-  std::vector<std::string> ekf_models, calibrator_models;
-  for (const auto& m : models) (is_calibrator_model_name(m) ? calibrator_models : ekf_models).push_back(m);
-  const auto runs_of = [](const std::vector<RunRecord>& from, bool calibrator, const std::string& model) {
+  // The fusion UKF's runs (ukf) likewise have their own baseline (the
+  // default UKF noise) and metrics (the fused pose's errors): their own
+  // table, and no EKF trajectory replay.
+  std::vector<std::string> ekf_models, calibrator_models, ukf_models;
+  for (const auto& m : models)
+    (is_calibrator_model_name(m) ? calibrator_models : is_ukf_model_name(m) ? ukf_models : ekf_models)
+        .push_back(m);
+  // Runs of one kind: EKF models (calibrator false, ukf false), the
+  // calibrators (calibrator true) or the UKF (ukf true); `model` narrows to one.
+  const auto runs_of = [](const std::vector<RunRecord>& from, bool calibrator, const std::string& model,
+                          bool ukf = false) {
     std::vector<RunRecord> out_runs;
     for (const auto& r : from)
-      if (is_calibrator_model_name(r.model) == calibrator && (model.empty() || r.model == model))
+      if (is_calibrator_model_name(r.model) == calibrator && is_ukf_model_name(r.model) == ukf &&
+          (model.empty() || r.model == model))
         out_runs.push_back(r);
     return out_runs;
   };
@@ -177,6 +186,12 @@ ReportOutcome write_report(const ReportRequest& req) {
         "position errors of the calibrated odometry against ground truth, and they have runs for "
         "one fitness mode only (the experiment's first; a calibrator has none).",
         fmt::join(calibrator_models, ", ")));
+  if (!ukf_models.empty())
+    page.paragraph(
+        "The ukf model tunes the noise of the velocity-fusion UKF (Fariña et al., Sensors 2023, "
+        "23, 961, §1: odometry, external velocities and gyro fused on (V, W), the pose integrated "
+        "by eq. 3) instead of EKF noise: its baseline is the default UKF noise and its metrics "
+        "the fused pose's position errors against ground truth.");
 
   // Headline: mean RMSE improvement per model over all per-track runs.
   {
@@ -271,6 +286,21 @@ ReportOutcome write_report(const ReportRequest& req) {
         model, model, seeds_phrase(runs_of(own, true, model)), stem, stem));
     page.table(tt);
   }
+  // The UKF's table: its own baseline (the default UKF noise).
+  for (const auto& model : ukf_models) {
+    const results::RmseTable tu = results::rmse_table(runs_of(runs, false, model, true));
+    if (tu.rows.empty()) continue;
+    const results::TextTable tt = results::text_table(tu);
+    const std::string stem = "table1_" + file_safe(model);
+    w.text(stem + ".csv", "report table", results::to_csv(tu));
+    w.text(stem + ".md", "report table", results::to_markdown(tt));
+    page.heading(fmt::format("Fused pose RMSE per track and fitness mode, {}", model));
+    page.paragraph(fmt::format(
+        "Position RMSE of the pose integrated from the fusion UKF's (V, W): original = the default "
+        "UKF noise, {} = the tuned noise ({}). Also as {}.csv and {}.md.",
+        model, seeds_phrase(runs_of(own, false, model, true)), stem, stem));
+    page.table(tt);
+  }
   {
     page.heading("Generalisation: tuned on the track vs held out");
     std::string md;
@@ -309,6 +339,10 @@ ReportOutcome write_report(const ReportRequest& req) {
     out.notes.push_back(fmt::format(
         "trajectory overlays replay the EKF: the calibrator models ({}) are left out of them",
         fmt::join(calibrator_models, ", ")));
+  if (!ukf_models.empty())
+    out.notes.push_back(fmt::format(
+        "trajectory overlays replay the EKF: the fusion UKF runs ({}) are left out of them",
+        fmt::join(ukf_models, ", ")));
   const auto track_data = ekf_models.empty() ? std::map<std::string, Track>{}
                                              : experiment_tracks(info, req.track_files);
   if (ekf_models.empty()) {

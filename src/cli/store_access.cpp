@@ -50,6 +50,9 @@ filters::NoiseParams run_noise(const results::RunRecord& run) {
   if (is_calibrator_model_name(run.model))
     throw Failure(fmt::format("run {}: model {} tuned a calibrator's settings, not EKF noise",
                               results::run_key(run), run.model));
+  if (is_ukf_model_name(run.model))
+    throw Failure(fmt::format("run {}: model {} tuned the velocity-fusion UKF's noise, not EKF noise",
+                              results::run_key(run), run.model));
   if (!filters::parse_noise_model(run.model, &model))
     throw Failure(fmt::format("run {}: unknown model '{}'", results::run_key(run), run.model));
   const ParamSpace space = ParamSpace::for_model(model);
@@ -60,6 +63,19 @@ filters::NoiseParams run_noise(const results::RunRecord& run) {
   if (!noise.IsValid(&why))
     throw Failure(fmt::format("run {}: invalid parameters: {}", results::run_key(run), why));
   return noise;
+}
+
+UkfConfig run_ukf_config(const results::RunRecord& run) {
+  if (!is_ukf_model_name(run.model))
+    throw Failure(fmt::format("run {}: model {} is not the fusion UKF", results::run_key(run), run.model));
+  const BoxSpace space = ukf_space();
+  UkfConfig cfg;
+  cfg.rate_hz = FusionInputOptions{}.rate_hz;  // what ukf_fusion_input (grid) fuses at
+  for (const auto& p : space.params()) cfg.params.push_back(run_param(run, p.name));
+  std::string why;
+  if (!apply_ukf_config(cfg).IsValid(&why))
+    throw Failure(fmt::format("run {}: invalid parameters: {}", results::run_key(run), why));
+  return cfg;
 }
 
 }  // namespace odotune::cli

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/ukf_config_yaml.h"
 #include "filters/ekf_noise.h"
 #include "results/run_record.h"
 #include "results/store.h"
@@ -36,7 +37,12 @@ double run_param(const results::RunRecord& run, const std::string& name);
 // The filter noise of a stored run (its model and physical parameters, by
 // name). Throws odotune::cli::Failure naming the run when the model or a
 // parameter is unknown, the run is a calibrator's (pf-calib,
-// adaptive-pf-calib: no EKF noise) or the values are invalid.
+// adaptive-pf-calib: no EKF noise) or the UKF's, or the values are invalid.
 filters::NoiseParams run_noise(const results::RunRecord& run);
+
+// The tuned UKF noise of a stored ukf run (ukf_space() values by name, at the
+// grid's fusion rate, 10 Hz). Throws odotune::cli::Failure naming the run
+// when it is not a ukf run, a parameter is missing or the values are invalid.
+UkfConfig run_ukf_config(const results::RunRecord& run);
 
 }  // namespace odotune::cli

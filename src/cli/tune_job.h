@@ -15,6 +15,7 @@
 #include "filters/ekf_noise.h"
 #include "objectives/calibration_input.h"
 #include "objectives/ekf_objective.h"
+#include "objectives/fusion_input.h"
 #include "objectives/metrics.h"
 #include "objectives/replay.h"
 #include "tracks/track.h"
@@ -24,14 +25,16 @@
 namespace odotune::cli {
 
 // A track prepared for replay: the reference input and its fast form; and,
-// when a calibrator model is tuned on it (grid), its calibration input. Each
-// part is built only when a model needs it: `fast` is null for a track
-// prepared for calibrators only.
+// when a calibrator model is tuned on it (grid), its calibration input; when
+// the fusion UKF is (grid), its fusion input. Each part is built only when a
+// model needs it: `fast` is null for a track prepared for calibrators or the
+// UKF only.
 struct PreparedTrack {
   std::string name;
   ReplayInput input;
   std::unique_ptr<FastReplay> fast;
   std::optional<CalibrationInput> calibration;
+  std::optional<FusionInput> fusion;
 };
 // Throws std::invalid_argument (one line naming the track) when it cannot be
 // replayed or has no position fixes (nothing to tune).

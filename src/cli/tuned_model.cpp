@@ -5,14 +5,20 @@ namespace odotune::cli {
 namespace {
 constexpr std::string_view kPf = "pf-calib";
 constexpr std::string_view kAdaptivePf = "adaptive-pf-calib";
+constexpr std::string_view kUkf = "ukf";
 }  // namespace
 
 std::string to_string(const TunedModel& m) {
+  if (m.ukf) return std::string(kUkf);
   if (!m.calibrator) return std::string(filters::to_string(m.noise));
   return std::string(m.calib == CalibratorModel::pf ? kPf : kAdaptivePf);
 }
 
 bool parse_tuned_model(std::string_view text, TunedModel* out) {
+  if (text == kUkf) {
+    *out = TunedModel::fusion_ukf();
+    return true;
+  }
   if (text == kPf) {
     *out = TunedModel::calibration(CalibratorModel::pf);
     return true;
@@ -29,6 +35,8 @@ bool parse_tuned_model(std::string_view text, TunedModel* out) {
 
 bool is_calibrator_model_name(std::string_view text) { return text == kPf || text == kAdaptivePf; }
 
-const char* tuned_model_names() { return "rq, alpha, gyro, pf-calib or adaptive-pf-calib"; }
+bool is_ukf_model_name(std::string_view text) { return text == kUkf; }
+
+const char* tuned_model_names() { return "rq, alpha, gyro, pf-calib, adaptive-pf-calib or ukf"; }
 
 }  // namespace odotune::cli

@@ -1,0 +1,93 @@
+#include "cli/ukf_tune_job.h"
+
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "objectives/ekf_objective.h"  // kDivergencePenalty
+#include "tuner/problem.h"
+
+namespace odotune::cli {
+
+namespace {
+
+// The objective as the tuner sees it: a box and a function (objectives/ does
+// not depend on tuner/, so the adapter lives here, as in tune_job.cpp).
+struct UkfBoxProblem {
+  const UkfObjective* objective;
+  double fitness(std::span<const double> x) const { return objective->fitness(x); }
+  tuner::Bounds bounds() const {
+    auto [lo, hi] = objective->bounds();
+    return {lo, hi};
+  }
+};
+
+}  // namespace
+
+bool UkfTuneRequest::IsValid(std::string* why) const {
+  if (!SolverSettings::IsValid(why)) return false;
+  if (!valid_fitness_mode(mode)) {
+    if (why) *why = fmt::format("mode = {} must be 1..7", mode);
+    return false;
+  }
+  return true;
+}
+
+FusionInput ukf_fusion_input(const Track& track) {
+  FusionInput in = build_fusion_input(track);
+  if (!in.has_gt)
+    throw std::invalid_argument(fmt::format(
+        "track '{}': no ground truth (gt_x, gt_y, gt_theta): the UKF's fused pose is scored against it",
+        track.name()));
+  return in;
+}
+
+std::vector<ErrorMetrics> ukf_track_errors(const std::vector<const FusionInput*>& inputs,
+                                           const UkfSettings& settings) {
+  std::vector<ErrorMetrics> out;
+  for (const FusionInput* in : inputs) {
+    bool healthy = true;
+    ErrorMetrics m = ukf_pose_errors(*in, settings, &healthy);
+    if (!healthy) m.rmse_m = m.mae_m = m.maxe_m = kDivergencePenalty;
+    out.push_back(m);
+  }
+  return out;
+}
+
+UkfTuneOutcome run_ukf_tune(const std::vector<const FusionInput*>& inputs, const UkfTuneRequest& request) {
+  std::string why;
+  if (!request.IsValid(&why)) throw std::invalid_argument(why);
+  if (inputs.empty()) throw std::invalid_argument("no tracks to tune on");
+
+  UkfTuneOutcome out;
+  out.request = request;
+  const UkfObjective objective(inputs, request.mode, out.default_settings);
+  const UkfBoxProblem problem{&objective};
+  const BoxSpace& space = objective.space();
+  for (const auto& p : space.params()) {
+    out.param_names.push_back(p.name);
+    out.param_units.push_back(p.unit);
+  }
+  out.default_params = ukf_params_of(out.default_settings);
+  const std::vector<double> default_x = space.to_box(out.default_params);
+
+  out.summary = run_solver(problem, request, default_x);
+
+  out.baseline_fitness = objective.fitness(default_x);
+  out.default_kept = out.baseline_fitness < out.summary.best_fitness;
+  out.tuned_fitness = out.default_kept ? out.baseline_fitness : out.summary.best_fitness;
+  out.params = out.default_kept ? out.default_params : space.to_physical(out.summary.best_x);
+  out.tuned_settings = out.default_kept ? out.default_settings
+                                        : apply_ukf_params(out.default_settings, out.params);
+  out.failures = objective.failures();
+
+  const std::vector<ErrorMetrics> base = ukf_track_errors(inputs, out.default_settings);
+  const std::vector<ErrorMetrics> tuned = ukf_track_errors(inputs, out.tuned_settings);
+  for (std::size_t i = 0; i < inputs.size(); ++i)
+    out.tracks.push_back({inputs[i]->track_name, base[i], tuned[i]});
+  out.baseline_mean = mean_metrics(base);
+  out.tuned_mean = mean_metrics(tuned);
+  return out;
+}
+
+}  // namespace odotune::cli
