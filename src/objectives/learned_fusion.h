@@ -1,0 +1,77 @@
+// The whole localisation system of Fariña et al., Sensors 2023, 23, 961
+// (Figs. 1, 6, 7): odometry (learned or kinematic) with a variance (the slip
+// detector's, or static), fused with the external (lidar) and gyro
+// velocities by the (V, W) UKF (objectives/ukf_fusion.h), with optional
+// online retraining of the velocity nets (§4.2):
+//
+//   a step's window and the UKF's filtered (V, W) are kept as a retraining
+//   sample when the filter's variances are below `max_filter_var_*` and the
+//   odometry's below `max_odometry_var_*` ("the robot is well localised");
+//   every `samples_per_retrain` (300) such samples both nets are refitted
+//   from their current weights and the samples are dropped.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "filters/velocity_ukf.h"
+#include "objectives/learned_odometry.h"
+#include "objectives/slip_detector.h"
+#include "objectives/ukf_fusion.h"
+
+namespace odotune {
+
+// The refit's solver settings: a few LM iterations at the final MAE scale
+// from the current weights. (No coarse-to-fine continuation of the loss
+// scale: the warm start is already near an optimum, and the coarse stages
+// of a fresh training pull it away — measured: with the continuation, the
+// nets drifted further from the truth after each refit.)
+inline LstmTrainingOptions default_retrain_training() {
+  LstmTrainingOptions o;
+  o.max_iterations = 10;
+  o.mae_scale_start = o.mae_scale;
+  return o;
+}
+
+struct RetrainOptions {
+  bool enabled = false;
+  int samples_per_retrain = 300;           // paper §4.2
+  double max_filter_var_v = 4e-4, max_filter_var_w = 4e-4;      // [(m/s)², (rad/s)²]
+  double max_odometry_var_v = 5e-3, max_odometry_var_w = 5e-3;  // [(m/s)², (rad/s)²]
+  LstmTrainingOptions training = default_retrain_training();
+  bool IsValid(std::string* why) const;
+};
+
+struct LearnedFusionOptions {
+  enum class Odometry { kinematic, learned } odometry = Odometry::learned;
+  // Variable covariance from the slip detector when it is given; else the
+  // static variances below.
+  const SlipDetectorModel* detector = nullptr;
+  double static_var_v = 1e-3, static_var_w = 1e-3;   // [(m/s)², (rad/s)²]
+  filters::UkfParams ukf;
+  UkfSensorNoise noise;
+  RetrainOptions retrain;
+  bool IsValid(std::string* why) const;
+};
+
+struct RetrainEvent {
+  std::size_t step = 0;        // the step after which the nets were refitted
+  double t_s = 0.0;
+  double seconds = 0.0;        // wall time of both refits
+  LstmTrainingSummary v, w;
+};
+
+struct LearnedFusionResult {
+  OdometrySeries odometry;                 // the odometry fed to the UKF, per step
+  std::vector<double> odo_var_v, odo_var_w;
+  FusionTrace filter;                      // UKF state, covariance and integrated pose
+  std::vector<RetrainEvent> retrains;
+  std::optional<LearnedOdometryModel> final_model;   // after retraining (learned odometry only)
+};
+
+// `model` is needed (non-null) for learned odometry; it is copied, never
+// modified. Throws std::invalid_argument on invalid options.
+LearnedFusionResult run_learned_fusion(const FusionInput& in, const LearnedOdometryModel* model,
+                                       const LearnedFusionOptions& options);
+
+}  // namespace odotune
