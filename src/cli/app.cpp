@@ -23,6 +23,7 @@ int run(int argc, char** argv) {
   register_diagnose(app);
   register_calibrate(app);
   register_study(app);
+  register_learn(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

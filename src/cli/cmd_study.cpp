@@ -14,6 +14,8 @@
 #include "cli/calibration_study.h"
 #include "cli/commands.h"
 #include "cli/failure.h"
+#include "cli/learned_study.h"
+#include "cli/learned_study_outputs.h"
 #include "cli/progress.h"
 #include "cli/scenario_yaml.h"
 #include "cli/study_outputs.h"
@@ -121,6 +123,114 @@ auto run_with_progress(const std::string& label, const Run& run) {
   return out;
 }
 
+// ---------------------------------------------------------------- study learned
+
+struct LearnedArgs {
+  std::string out;
+  // kLearnedScenarioRoles order.
+  std::string scenarios[5];
+  LearnedStudyOptions options;
+};
+
+const char* const kLearnedScenarioFiles[5] = {"wheelchair_learn.yaml", "wheelchair_learn_eval.yaml",
+                                              "wheelchair_learn_step.yaml", "wheelchair_slip.yaml",
+                                              "wheelchair_slip_eval.yaml"};
+const char* const kLearnedScenarioFlags[5] = {"--learn-scenario", "--eval-scenario", "--step-scenario",
+                                              "--slip-scenario", "--slip-eval-scenario"};
+
+std::string learned_command(const LearnedArgs& a) {
+  const LearnedStudyOptions d;
+  std::string c = "odotune study learned --out " + a.out;
+  if (a.options.seed != d.seed) c += fmt::format(" --seed {}", a.options.seed);
+  if (a.options.iterations != d.iterations) c += fmt::format(" --iterations {}", a.options.iterations);
+  if (a.options.retrain_iterations != d.retrain_iterations)
+    c += fmt::format(" --retrain-iterations {}", a.options.retrain_iterations);
+  if (a.options.samples_per_retrain != d.samples_per_retrain)
+    c += fmt::format(" --every {}", a.options.samples_per_retrain);
+  for (int i = 0; i < 5; ++i)
+    if (a.scenarios[i] != default_scenario(kLearnedScenarioFiles[i]))
+      c += std::string(" ") + kLearnedScenarioFlags[i] + " " + a.scenarios[i];
+  return c;
+}
+
+void register_learned_study(CLI::App* study) {
+  auto a = std::make_shared<LearnedArgs>();
+  auto* sub = study->add_subcommand(
+      "learned",
+      "Tables 1-3 of Fariña et al. (Sensors 2023): LSTM vs traditional odometry, online retraining after a "
+      "radius change, UKF with variable vs static odometry covariance under slip");
+  sub->add_option("--out", a->out, "folder for the tables (Markdown, CSV), results.json, model.json and figures")
+      ->required();
+  sub->add_option("--seed", a->options.seed, "base seed (scenario i: seed + i; initial weights)")
+      ->default_val(a->options.seed);
+  sub->add_option("--iterations", a->options.iterations, "Ceres iterations of each initial training")
+      ->default_val(a->options.iterations);
+  sub->add_option("--retrain-iterations", a->options.retrain_iterations, "Ceres iterations of each online retrain")
+      ->default_val(a->options.retrain_iterations);
+  sub->add_option("--every", a->options.samples_per_retrain, "retrain every N well-localised samples (paper: 300)")
+      ->default_val(a->options.samples_per_retrain);
+  sub->add_option("--threads", a->options.threads, "threads evaluating the training windows (results do not depend "
+                                                   "on it)")
+      ->check(CLI::PositiveNumber);
+  const char* const helps[5] = {"scenario the velocity nets are trained on",
+                                "held-out scenario of Table 1",
+                                "scenario with a radius change (radius_step) of Table 2",
+                                "scenario with slip episodes the detector is trained on",
+                                "held-out scenario with slip episodes of Table 3"};
+  for (int i = 0; i < 5; ++i)
+    sub->add_option(kLearnedScenarioFlags[i], a->scenarios[i], helps[i])
+        ->default_val(default_scenario(kLearnedScenarioFiles[i]));
+  sub->callback([a] {
+    LearnedStudyScenarios sc{read_scenario(a->scenarios[0]), read_scenario(a->scenarios[1]),
+                             read_scenario(a->scenarios[2]), read_scenario(a->scenarios[3]),
+                             read_scenario(a->scenarios[4])};
+    std::string why;
+    if (!a->options.IsValid(&why)) throw Failure("study learned: " + why);
+    try {
+      check_learned_scenarios(sc);
+    } catch (const std::invalid_argument& e) {
+      throw Failure("study learned: " + std::string(e.what()));
+    }
+    if (!results::gnuplot_available())
+      throw Failure("study: gnuplot not found on PATH (needed for the figures); install it (apt-get install gnuplot)");
+    const fs::path out(a->out);
+    std::error_code ec;
+    if (fs::exists(out, ec) && !fs::is_directory(out, ec))
+      throw Failure(fmt::format("{}: --out exists and is not a folder", a->out));
+    fs::create_directories(out, ec);
+    if (ec) throw Failure(fmt::format("{}: cannot create the output folder: {}", a->out, ec.message()));
+
+    LearnedStudy s;
+    {
+      Progress progress("study learned", "stages");
+      try {
+        s = run_learned_study(sc, a->options, [&progress](long done, long total, const std::string& stage) {
+          progress.set_label("study learned: " + stage);
+          progress.update(done, total);
+        });
+      } catch (const std::invalid_argument& e) {
+        throw Failure(e.what());
+      }
+      progress.finish();
+    }
+    LearnedStudyContext c;
+    c.command = learned_command(*a);
+    for (const auto& f : a->scenarios) c.scenario_files.push_back(display_path(f));
+    fmt::print("Table 1 ({}):\n{}\n", s.table1.track, results::to_markdown(learned_table1_text(s)));
+    fmt::print("Table 2 ({}), after the radius change at {:g} s:\n{}\n", s.table2.track, s.table2.change_t_s,
+               results::to_markdown(learned_table2_text(s, true)));
+    fmt::print("{}\n", results::to_markdown(learned_table2_cost_text(s)));
+    fmt::print("Table 3 ({}):\n{}", s.table3.track, results::to_markdown(learned_table3_text(s)));
+    std::vector<fs::path> files;
+    try {
+      files = write_learned_outputs(s, c, out);
+    } catch (const std::exception& e) {
+      throw Failure(fmt::format("{}: {}", a->out, e.what()));
+    }
+    print_files(files, a->out, s.wall_s);
+  });
+}
+
 }  // namespace
 
 void register_study(CLI::App& app) {
@@ -131,6 +241,7 @@ void register_study(CLI::App& app) {
       "Example:\n"
       "  odotune study resampling --out docs/calibration/resampling\n"
       "  odotune study calibration --out docs/calibration/calibration --runs 40 --seed 7\n"
+      "  odotune study learned --out docs/learned\n"
       "Each run simulates the wheelchair scenario with its own seed and random true radii.");
 
   auto resampling = std::make_shared<StudyArgs>();
@@ -185,6 +296,8 @@ void register_study(CLI::App& app) {
     fmt::print("{}", results::to_markdown(table2_text(s)));
     print_files(write_calibration_outputs(s, c, a.out), a.out, s.wall_s);
   });
+
+  register_learned_study(study);
 }
 
 }  // namespace odotune::cli

@@ -22,6 +22,7 @@ void register_export(CLI::App& app);
 void register_diagnose(CLI::App& app);
 void register_calibrate(CLI::App& app);
 void register_study(CLI::App& app);
+void register_learn(CLI::App& app);
 
 // Runs the CLI; returns the process exit code.
 int run(int argc, char** argv);

@@ -1,0 +1,200 @@
+#include "results/learned_figures.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include "results/gnuplot.h"
+
+namespace odotune::results {
+namespace fs = std::filesystem;
+
+namespace {
+
+// The palette of study_figures.cpp (Tableau 10), so that the study's figures
+// share colours.
+const char* const kPalette[] = {"#4E79A7", "#F28E2B", "#59A14F", "#E15759", "#B07AA1",
+                                "#76B7B2", "#EDC948", "#FF9DA7", "#9C755F", "#BAB0AC"};
+constexpr int kPaletteSize = static_cast<int>(sizeof(kPalette) / sizeof(kPalette[0]));
+constexpr const char* kShadeColour = "#d9d9d9";
+
+std::string colour(int i) {
+  if (i < 0) return "#000000";
+  return kPalette[i % kPaletteSize];
+}
+
+std::string num(double v) { return gnuplot_number(v); }
+std::string q(const std::string& s) { return gnuplot_quote(s); }
+
+[[noreturn]] void bad(const std::string& what) { throw std::invalid_argument("learned figure: " + what); }
+
+bool plottable(double y, bool log_y) { return std::isfinite(y) && (!log_y || y > 0.0); }
+
+// Screen margins of panel p of n stacked between y = 0.10 and 0.90.
+std::pair<double, double> panel_span(std::size_t p, std::size_t n) {
+  constexpr double kTop = 0.90, kBottom = 0.10, kGap = 0.07;
+  const double h = (kTop - kBottom - kGap * static_cast<double>(n - 1)) / static_cast<double>(n);
+  const double top = kTop - static_cast<double>(p) * (h + kGap);
+  return {top, top - h};
+}
+
+// "x y" rows, a blank line where a point is not plottable (gnuplot breaks the line).
+std::string rows_of(const std::vector<double>& x, const std::vector<double>& y, bool log_y) {
+  std::string rows;
+  bool gap = false;
+  for (std::size_t j = 0; j < x.size(); ++j) {
+    if (!std::isfinite(x[j]) || !plottable(y[j], log_y)) {
+      if (!gap && !rows.empty()) rows += "\n";
+      gap = true;
+      continue;
+    }
+    gap = false;
+    rows += num(x[j]) + " " + num(y[j]) + "\n";
+  }
+  return rows;
+}
+
+}  // namespace
+
+void shaded_time_panels(const fs::path& stem, const std::string& title, const std::vector<ShadedPanel>& panels,
+                        const std::vector<TimeShade>& shades, const std::string& shade_label,
+                        const std::vector<TimeMarker>& markers) {
+  if (panels.empty()) bad("time panels: no panel");
+  double t_min = INFINITY, t_max = -INFINITY;
+  for (const ShadedPanel& p : panels) {
+    bool any = false;
+    for (const PanelLine& l : p.lines) {
+      if (l.t_s.size() != l.y.size())
+        bad("panel '" + p.ylabel + "', line '" + l.name + "' has " + std::to_string(l.t_s.size()) +
+            " times but " + std::to_string(l.y.size()) + " values");
+      for (std::size_t i = 0; i < l.t_s.size(); ++i)
+        if (std::isfinite(l.t_s[i]) && plottable(l.y[i], p.log_y)) {
+          any = true;
+          t_min = std::min(t_min, l.t_s[i]);
+          t_max = std::max(t_max, l.t_s[i]);
+        }
+    }
+    if (!any) bad("panel '" + p.ylabel + "' has no plottable point");
+  }
+  for (const TimeShade& s : shades)
+    if (!std::isfinite(s.t0_s) || !std::isfinite(s.t1_s) || !(s.t1_s > s.t0_s))
+      bad("a shaded interval [" + num(s.t0_s) + ", " + num(s.t1_s) + "] is not finite with t1 > t0");
+  for (const TimeMarker& m : markers)
+    if (!std::isfinite(m.t_s)) bad("a marker time is not finite");
+  if (t_max <= t_min) t_min -= 0.5, t_max += 0.5;
+
+  std::vector<std::pair<std::string, std::string>> files;
+  std::string body = "reset\nset multiplot title " + q(title) + " font ',13'\n";
+  body += "set grid lc rgb '#e0e0e0'\n";
+  body += "set xrange [" + num(t_min) + ":" + num(t_max) + "]\n";
+  body += "set key outside right top Left reverse\n";
+  body += "set lmargin at screen 0.10\nset rmargin at screen 0.74\n";
+  int object = 1;
+  for (const TimeShade& s : shades)
+    body += "set object " + std::to_string(object++) + " rect from first " + num(s.t0_s) + ", graph 0 to first " +
+            num(s.t1_s) + ", graph 1 behind fc rgb '" + kShadeColour + "' fs solid 1.0 noborder\n";
+  for (const TimeMarker& m : markers)
+    body += "set arrow from first " + num(m.t_s) + ", graph 0 to first " + num(m.t_s) +
+            ", graph 1 nohead back lw 1 dt 3 lc rgb '#606060'\n";
+  for (std::size_t p = 0; p < panels.size(); ++p) {
+    const ShadedPanel& panel = panels[p];
+    const auto [top, bottom] = panel_span(p, panels.size());
+    body += "set tmargin at screen " + num(top) + "\nset bmargin at screen " + num(bottom) + "\n";
+    body += "set ylabel " + q(panel.ylabel) + "\n";
+    body += panel.log_y ? "set logscale y\nset format y '%.0e'\n"
+                        : "unset logscale y\nset format y '%.3g'\n";
+    body += std::isfinite(panel.y_min) && (!panel.log_y || panel.y_min > 0.0)
+                ? "set yrange [" + num(panel.y_min) + ":*]\n"
+                : "set yrange [*:*]\n";
+    if (p + 1 == panels.size())
+      body += "set format x '%g'\nset xlabel 'time [s]'\n";
+    else
+      body += "set format x ''\nunset xlabel\n";
+    body += "unset label\n";
+    if (p == 0) {
+      int tag = 1;
+      for (const TimeMarker& m : markers)
+        if (!m.label.empty())
+          body += "set label " + std::to_string(tag++) + " " + q(m.label) + " at first " + num(m.t_s) +
+                  ", graph 1 left offset 0.4,-1 front tc rgb '#404040' font ',9'\n";
+    }
+    std::string plot;
+    for (std::size_t i = 0; i < panel.lines.size(); ++i) {
+      const PanelLine& l = panel.lines[i];
+      std::string rows = rows_of(l.t_s, l.y, panel.log_y);
+      if (rows.empty()) continue;
+      const std::string file = "p" + std::to_string(p) + "l" + std::to_string(i) + ".dat";
+      files.emplace_back(file, std::move(rows));
+      plot += (plot.empty() ? "plot " : ", \\\n     ") +
+              ("'" + file + "' using 1:2 with " + (l.dashed ? "steps dt 2" : "lines") + " lw " +
+               (l.thin ? "1" : "1.8") + " lc rgb '" + colour(l.colour) + "' title " + q(l.name));
+    }
+    if (p == 0 && !shades.empty() && !shade_label.empty())
+      plot += ", \\\n     keyentry with boxes fs solid 1.0 noborder fc rgb '" + std::string(kShadeColour) +
+              "' title " + q(shade_label);
+    body += plot + "\n";
+  }
+  body += "unset multiplot\n";
+  render_png_svg(stem, std::move(files), body, 1150, 300 + 280 * static_cast<int>(panels.size()));
+}
+
+void path_panels(const fs::path& stem, const std::string& title, const std::vector<PathPanel>& panels) {
+  if (panels.empty()) bad("path panels: no panel");
+  for (const PathPanel& p : panels) {
+    bool any = false;
+    for (const PathLine& l : p.lines) {
+      if (l.x_m.size() != l.y_m.size())
+        bad("path panel '" + p.title + "', line '" + l.name + "' has " + std::to_string(l.x_m.size()) +
+            " x values but " + std::to_string(l.y_m.size()) + " y values");
+      for (std::size_t i = 0; i < l.x_m.size(); ++i) any = any || (std::isfinite(l.x_m[i]) && std::isfinite(l.y_m[i]));
+    }
+    if (!any) bad("path panel '" + p.title + "' has no finite point");
+  }
+
+  const std::size_t n = panels.size();
+  std::vector<std::pair<std::string, std::string>> files;
+  std::string body = "reset\nset multiplot title " + q(title) + " font ',13'\n";
+  body += "set grid lc rgb '#e0e0e0'\n";
+  body += "set size ratio -1\n";  // equal scales on x and y
+  body += "set key below Left reverse\n";
+  body += "set xlabel 'x [m]'\nset ylabel 'y [m]'\nset format x '%g'\nset format y '%g'\n";
+  constexpr double kLeft = 0.04, kRight = 0.98, kGap = 0.05;
+  const double w = (kRight - kLeft - kGap * static_cast<double>(n - 1)) / static_cast<double>(n);
+  for (std::size_t p = 0; p < n; ++p) {
+    const PathPanel& panel = panels[p];
+    const double left = kLeft + static_cast<double>(p) * (w + kGap);
+    body += "set lmargin at screen " + num(left + 0.04) + "\nset rmargin at screen " + num(left + w) + "\n";
+    body += "set tmargin at screen 0.88\nset bmargin at screen 0.22\n";
+    body += "set title " + q(panel.title) + "\n";
+    std::string plot;
+    for (std::size_t i = 0; i < panel.lines.size(); ++i) {
+      const PathLine& l = panel.lines[i];
+      std::string rows = rows_of(l.x_m, l.y_m, false);
+      if (rows.empty()) continue;
+      const std::string file = "p" + std::to_string(p) + "l" + std::to_string(i) + ".dat";
+      files.emplace_back(file, std::move(rows));
+      plot += (plot.empty() ? "plot " : ", \\\n     ") +
+              ("'" + file + "' using 1:2 with lines lw 1.6 " + (l.dashed ? "dt 2 " : "") + "lc rgb '" +
+               colour(l.colour) + "' title " + q(l.name));
+    }
+    // The start: the first finite point of the first line.
+    for (const PathLine& l : panel.lines) {
+      bool found = false;
+      for (std::size_t i = 0; i < l.x_m.size(); ++i)
+        if (std::isfinite(l.x_m[i]) && std::isfinite(l.y_m[i])) {
+          const std::string file = "p" + std::to_string(p) + "start.dat";
+          files.emplace_back(file, num(l.x_m[i]) + " " + num(l.y_m[i]) + "\n");
+          plot += ", \\\n     '" + file + "' using 1:2 with points pt 7 ps 1.2 lc rgb '#000000' title 'start'";
+          found = true;
+          break;
+        }
+      if (found) break;
+    }
+    body += plot + "\n";
+  }
+  body += "unset multiplot\n";
+  render_png_svg(stem, std::move(files), body, 700 * static_cast<int>(n), 720);
+}
+
+}  // namespace odotune::results
