@@ -4,7 +4,8 @@
 //       on N windows of 20 steps, 100 LM iterations at most, BPTT or
 //       autodiff Jacobians (arg 1: 0 = BPTT, 1 = Ceres autodiff).
 //   BM_RetrainVelocityNet: one online refit (paper §4.2): 300 windows,
-//       warm start from a trained net, 10 iterations at most.
+//       warm start from a trained net, the refit's settings
+//       (default_retrain_training: 10 iterations at the final loss scale).
 //   BM_TrainSlipNet: one training run of a detector net (10 units, 651
 //       weights) on N windows, 30 iterations at most.
 //   BM_PredictVelocityNet / BM_PredictSlipNet: one inference step (one
@@ -22,6 +23,7 @@
 
 #include "filters/lstm.h"
 #include "filters/velocity_ukf.h"
+#include "objectives/learned_fusion.h"
 #include "objectives/learned_odometry.h"
 #include "objectives/lstm_training.h"
 
@@ -78,8 +80,7 @@ void BM_RetrainVelocityNet(benchmark::State& state) {
   odotune::train_lstm(trained, train, SequenceSet{}, LstmTrainingOptions{});
   SequenceSet fresh = velocity_windows(300);
   for (double& y : fresh.y) y *= 0.97;  // a tyre change
-  LstmTrainingOptions o;
-  o.max_iterations = 10;
+  LstmTrainingOptions o = odotune::default_retrain_training();  // what the online refit runs
   o.jacobian = state.range(0) == 0 ? LstmTrainingOptions::Jacobian::bptt
                                    : LstmTrainingOptions::Jacobian::autodiff;
   for (auto _ : state) {

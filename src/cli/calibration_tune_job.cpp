@@ -15,17 +15,6 @@ namespace odotune::cli {
 
 namespace {
 
-// The objective as the tuner sees it: a box and a function (objectives/ does
-// not depend on tuner/, so the adapter lives here, as in tune_job.cpp).
-struct CalibrationBoxProblem {
-  const CalibrationObjective* objective;
-  double fitness(std::span<const double> x) const { return objective->fitness(x); }
-  tuner::Bounds bounds() const {
-    auto [lo, hi] = objective->bounds();
-    return {lo, hi};
-  }
-};
-
 bool same_robot(const filters::OdometryParams& a, const filters::OdometryParams& b) {
   return a.wheel_radius_left_m == b.wheel_radius_left_m &&
          a.wheel_radius_right_m == b.wheel_radius_right_m && a.wheel_base_m == b.wheel_base_m;
@@ -111,23 +100,16 @@ CalibrationTuneOutcome run_calibration_tune(const std::vector<const CalibrationI
   if (!out.default_pf.IsValid(&why)) throw std::invalid_argument("calibrator: " + why);
   const CalibrationObjective objective(inputs, out.default_pf,
                                        request.model == CalibratorModel::adaptive_pf, request.weights);
-  const CalibrationBoxProblem problem{&objective};
-  const BoxSpace& space = objective.space();
-  for (const auto& p : space.params()) {
-    out.param_names.push_back(p.name);
-    out.param_units.push_back(p.unit);
-  }
+  const BoxProblem<CalibrationObjective> problem{&objective};
   out.default_params = calibration_params_of(out.default_pf);
-  const std::vector<double> default_x = space.to_box(out.default_params);
-
-  out.summary = run_solver(problem, request, default_x);
-
-  // The baseline's score, by the same objective (its evaluation is counted
-  // in failures() like any other, but not in the solver's evaluations).
-  out.baseline_score = objective.fitness(default_x);
-  out.default_kept = out.baseline_score < out.summary.best_fitness;
-  out.tuned_score = out.default_kept ? out.baseline_score : out.summary.best_fitness;
-  out.params = out.default_kept ? out.default_params : space.to_physical(out.summary.best_x);
+  DefaultsTune t = run_solver_from_defaults(problem, request, objective.space(), out.default_params);
+  out.param_names = std::move(t.param_names);
+  out.param_units = std::move(t.param_units);
+  out.summary = std::move(t.summary);
+  out.baseline_score = t.baseline_fitness;
+  out.default_kept = t.default_kept;
+  out.tuned_score = t.tuned_fitness;
+  out.params = std::move(t.params);
   // Kept defaults run exactly as the baseline (mm ↔ m may round the last bit).
   out.tuned_pf = out.default_kept ? out.default_pf : apply_calibration_params(out.default_pf, out.params);
   out.failures = objective.failures();

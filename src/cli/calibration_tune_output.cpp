@@ -87,9 +87,7 @@ nlohmann::json calibration_tune_json(const CalibrationTuneOutcome& o, const Cali
   j["tuned_fitness"] = o.tuned_score;
   j["baseline"] = metrics_json(o.baseline_mean);
   j["tuned"] = metrics_json(o.tuned_mean);
-  j["improvement_pct"] = {{"rmse", improvement_pct(o.baseline_mean.rmse_m, o.tuned_mean.rmse_m)},
-                          {"mae", improvement_pct(o.baseline_mean.mae_m, o.tuned_mean.mae_m)},
-                          {"maxe", improvement_pct(o.baseline_mean.maxe_m, o.tuned_mean.maxe_m)}};
+  j["improvement_pct"] = improvement_json(o.baseline_mean, o.tuned_mean);
   j["evaluations"] = o.summary.evaluations;
   j["seconds"] = o.summary.seconds;
   j["termination"] = o.summary.termination;
@@ -100,11 +98,7 @@ nlohmann::json calibration_tune_json(const CalibrationTuneOutcome& o, const Cali
                       {"baseline", side_json(o.baseline.tracks[k], o.baseline.mean_particles)},
                       {"tuned", side_json(o.tuned.tracks[k], o.tuned.mean_particles)}});
   j["tracks"] = tracks;
-  nlohmann::json log = nlohmann::json::array();
-  for (const auto& rec : o.summary.log)
-    log.push_back({{"iteration", rec.iteration}, {"evaluations", rec.evaluations},
-                   {"best_fitness", rec.best_fitness}});
-  j["convergence"] = log;
+  j["convergence"] = convergence_json(o.summary);
   return j;
 }
 

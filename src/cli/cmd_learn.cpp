@@ -93,8 +93,10 @@ std::vector<const FusionInput*> pointers(const std::vector<FusionInput>& v) {
   return p;
 }
 
-LstmTrainingOptions training_options(std::uint64_t seed, int iterations, int threads) {
-  LstmTrainingOptions t;
+// `base`: a fresh training's defaults, or default_retrain_training() for refits.
+LstmTrainingOptions training_options(std::uint64_t seed, int iterations, int threads,
+                                     LstmTrainingOptions base = {}) {
+  LstmTrainingOptions t = base;
   t.seed = seed;
   t.max_iterations = iterations;
   t.num_threads = threads;
@@ -283,9 +285,8 @@ void run_retrain(const LearnArgs& a, const std::string& command) {
   o.static_var_v = std::max(1e-8, m.odometry.v_validation_mae * m.odometry.v_validation_mae * std::numbers::pi / 2);
   o.static_var_w = std::max(1e-8, m.odometry.w_validation_mae * m.odometry.w_validation_mae * std::numbers::pi / 2);
   o.retrain.samples_per_retrain = a.every;
-  o.retrain.training = training_options(m.provenance.seed, a.retrain_iterations, a.threads);
-  // A refit starts at the final loss scale (default_retrain_training, learned_fusion.h).
-  o.retrain.training.mae_scale_start = o.retrain.training.mae_scale;
+  o.retrain.training =
+      training_options(m.provenance.seed, a.retrain_iterations, a.threads, default_retrain_training());
 
   Progress progress("learn retrain", "runs");
   progress.update(0, 2);

@@ -54,18 +54,8 @@ void print_outcome(const TuneOutcome& o) {
   fmt::print("tuned {} noise on {} for mode {} ({}) with {} (seed {})\n",
              filters::to_string(o.request.model), names, o.request.mode,
              fitness_mode_name(o.request.mode), o.request.solver, o.request.seed);
-  fmt::print("  RMSE {}\n", metric_change(o.baseline_mean.rmse_m, o.tuned_mean.rmse_m));
-  fmt::print("  MAE  {}\n", metric_change(o.baseline_mean.mae_m, o.tuned_mean.mae_m));
-  fmt::print("  MAXE {}\n", metric_change(o.baseline_mean.maxe_m, o.tuned_mean.maxe_m));
-  if (o.tracks.size() > 1)
-    for (const auto& t : o.tracks)
-      fmt::print("    {}: RMSE {}\n", t.track, metric_change(t.baseline.rmse_m, t.tuned.rmse_m));
-  fmt::print("  params:");
-  for (std::size_t i = 0; i < o.params.size(); ++i)
-    fmt::print(" {}={:.6g}", o.param_names[i], o.params[i]);
-  fmt::print("\n  {} evaluations in {:.2f} s ({}); diverged evaluations: {}\n",
-             o.summary.evaluations, o.summary.seconds, o.summary.termination,
-             o.divergences.total());
+  print_tune_result(o.baseline_mean, o.tuned_mean, o.tracks, o.param_names, o.params, o.summary,
+                    o.divergences.total());
 }
 
 SolverSettings solver_of(const TuneArgs& a) {

@@ -110,6 +110,20 @@ SolverSettings cell_solver(const Experiment& e, const GridCell& c, const std::at
   return s;
 }
 
+// The solver's part of a cell's record, the same for every model.
+void set_solver_fields(results::RunRecord& r, const std::vector<std::string>& param_names,
+                       const std::vector<double>& params, double best_fitness,
+                       const tuner::Summary& summary, long diverged) {
+  r.param_names = param_names;
+  r.params = params;
+  r.best_fitness = best_fitness;
+  r.evaluations = summary.evaluations;
+  r.seconds = summary.seconds;
+  r.diverged = diverged;
+  r.termination = summary.termination;
+  for (const auto& rec : summary.log) r.convergence.push_back({rec.evaluations, rec.best_fitness});
+}
+
 std::optional<results::RunRecord> run_calibration_cell(const Experiment& e,
                                                        const std::vector<PreparedTrack>& tracks,
                                                        const GridCell& c, const std::atomic<bool>* stop) {
@@ -125,14 +139,7 @@ std::optional<results::RunRecord> run_calibration_cell(const Experiment& e,
   for (auto t : c.tune_on) tune_on.push_back(&*tracks[t].calibration);
   const CalibrationTuneOutcome o = run_calibration_tune(tune_on, req);
   if (o.summary.termination == "stopped") return std::nullopt;
-  r.param_names = o.param_names;
-  r.params = o.params;
-  r.best_fitness = o.tuned_score;
-  r.evaluations = o.summary.evaluations;
-  r.seconds = o.summary.seconds;
-  r.diverged = o.failures;
-  r.termination = o.summary.termination;
-  for (const auto& rec : o.summary.log) r.convergence.push_back({rec.evaluations, rec.best_fitness});
+  set_solver_fields(r, o.param_names, o.params, o.tuned_score, o.summary, o.failures);
   if (!c.heldout) {
     // Tuned on the scored track alone: its scores are the outcome's.
     r.baseline = to_metrics(o.baseline.tracks.at(0).errors);
@@ -159,14 +166,7 @@ std::optional<results::RunRecord> run_ukf_cell(const Experiment& e, const std::v
   for (auto t : c.tune_on) tune_on.push_back(&*tracks[t].fusion);
   const UkfTuneOutcome o = run_ukf_tune(tune_on, req);
   if (o.summary.termination == "stopped") return std::nullopt;
-  r.param_names = o.param_names;
-  r.params = o.params;
-  r.best_fitness = o.tuned_fitness;
-  r.evaluations = o.summary.evaluations;
-  r.seconds = o.summary.seconds;
-  r.diverged = o.failures;
-  r.termination = o.summary.termination;
-  for (const auto& rec : o.summary.log) r.convergence.push_back({rec.evaluations, rec.best_fitness});
+  set_solver_fields(r, o.param_names, o.params, o.tuned_fitness, o.summary, o.failures);
   // Scores on the cell's track (the tuned track itself, or the held-out
   // one): the fused pose's errors with the default and the tuned noise.
   const FusionInput* score = &*tracks[c.score_on].fusion;
@@ -190,14 +190,7 @@ std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vecto
   for (auto t : c.tune_on) tune_on.push_back(&tracks[t]);
   const TuneOutcome o = run_tune(tune_on, req);
   if (o.summary.termination == "stopped") return std::nullopt;
-  r.param_names = o.param_names;
-  r.params = o.params;
-  r.best_fitness = o.summary.best_fitness;
-  r.evaluations = o.summary.evaluations;
-  r.seconds = o.summary.seconds;
-  r.diverged = o.divergences.total();
-  r.termination = o.summary.termination;
-  for (const auto& rec : o.summary.log) r.convergence.push_back({rec.evaluations, rec.best_fitness});
+  set_solver_fields(r, o.param_names, o.params, o.summary.best_fitness, o.summary, o.divergences.total());
   // Scores on the cell's track: the tuned track itself, or the held-out one.
   const auto& score = tracks[c.score_on].input;
   r.baseline = to_metrics(replay_ekf(score, baseline_noise()).outcome.metrics);

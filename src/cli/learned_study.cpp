@@ -36,8 +36,10 @@ struct Stage {
 PathSeries path_of(const PoseTrack& p) { return {p.x, p.y, p.theta}; }
 PathSeries truth_path(const FusionInput& in) { return {in.gt_x, in.gt_y, in.gt_theta}; }
 
-LstmTrainingOptions training_options(const LearnedStudyOptions& o, int iterations) {
-  LstmTrainingOptions t;
+// `base`: a fresh training's defaults, or default_retrain_training() for refits.
+LstmTrainingOptions training_options(const LearnedStudyOptions& o, int iterations,
+                                     LstmTrainingOptions base = {}) {
+  LstmTrainingOptions t = base;
   t.max_iterations = iterations;
   t.seed = o.seed;
   t.num_threads = o.threads;
@@ -55,9 +57,7 @@ LearnedFusionOptions fusion_options(const LearnedStudyOptions& o, LearnedFusionO
   f.static_var_w = static_var_w;
   f.retrain.enabled = retrain;
   f.retrain.samples_per_retrain = o.samples_per_retrain;
-  f.retrain.training = training_options(o, o.retrain_iterations);
-  // A refit starts at the final loss scale (default_retrain_training, learned_fusion.h).
-  f.retrain.training.mae_scale_start = f.retrain.training.mae_scale;
+  f.retrain.training = training_options(o, o.retrain_iterations, default_retrain_training());
   return f;
 }
 

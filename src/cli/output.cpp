@@ -35,10 +35,7 @@ nlohmann::json tune_json(const TuneOutcome& o) {
   j["param_units"] = units;
   j["baseline"] = metrics_json(o.baseline_mean);
   j["tuned"] = metrics_json(o.tuned_mean);
-  j["improvement_pct"] = {
-      {"rmse", improvement_pct(o.baseline_mean.rmse_m, o.tuned_mean.rmse_m)},
-      {"mae", improvement_pct(o.baseline_mean.mae_m, o.tuned_mean.mae_m)},
-      {"maxe", improvement_pct(o.baseline_mean.maxe_m, o.tuned_mean.maxe_m)}};
+  j["improvement_pct"] = improvement_json(o.baseline_mean, o.tuned_mean);
   j["baseline_fitness"] = o.baseline_fitness;
   j["tuned_fitness"] = o.tuned_fitness;
   j["evaluations"] = o.summary.evaluations;
@@ -46,17 +43,48 @@ nlohmann::json tune_json(const TuneOutcome& o) {
   j["termination"] = o.summary.termination;
   j["divergences"] = {{"non_finite", o.divergences.non_finite},
                       {"covariance_not_pd", o.divergences.covariance_not_pd}};
-  nlohmann::json tracks = nlohmann::json::array();
-  for (const auto& t : o.tracks)
-    tracks.push_back({{"track", t.track}, {"baseline", metrics_json(t.baseline)},
-                      {"tuned", metrics_json(t.tuned)}});
-  j["tracks"] = tracks;
+  j["tracks"] = track_scores_json(o.tracks);
+  j["convergence"] = convergence_json(o.summary);
+  return j;
+}
+
+nlohmann::json improvement_json(const ErrorMetrics& baseline, const ErrorMetrics& tuned) {
+  return {{"rmse", improvement_pct(baseline.rmse_m, tuned.rmse_m)},
+          {"mae", improvement_pct(baseline.mae_m, tuned.mae_m)},
+          {"maxe", improvement_pct(baseline.maxe_m, tuned.maxe_m)}};
+}
+
+nlohmann::json track_scores_json(const std::vector<TrackScore>& tracks) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& t : tracks)
+    out.push_back({{"track", t.track}, {"baseline", metrics_json(t.baseline)},
+                   {"tuned", metrics_json(t.tuned)}});
+  return out;
+}
+
+nlohmann::json convergence_json(const tuner::Summary& summary) {
   nlohmann::json log = nlohmann::json::array();
-  for (const auto& r : o.summary.log)
+  for (const auto& r : summary.log)
     log.push_back({{"iteration", r.iteration}, {"evaluations", r.evaluations},
                    {"best_fitness", r.best_fitness}});
-  j["convergence"] = log;
-  return j;
+  return log;
+}
+
+void print_tune_result(const ErrorMetrics& baseline_mean, const ErrorMetrics& tuned_mean,
+                       const std::vector<TrackScore>& tracks,
+                       const std::vector<std::string>& param_names,
+                       const std::vector<double>& params, const tuner::Summary& summary,
+                       long diverged) {
+  fmt::print("  RMSE {}\n", metric_change(baseline_mean.rmse_m, tuned_mean.rmse_m));
+  fmt::print("  MAE  {}\n", metric_change(baseline_mean.mae_m, tuned_mean.mae_m));
+  fmt::print("  MAXE {}\n", metric_change(baseline_mean.maxe_m, tuned_mean.maxe_m));
+  if (tracks.size() > 1)
+    for (const auto& t : tracks)
+      fmt::print("    {}: RMSE {}\n", t.track, metric_change(t.baseline.rmse_m, t.tuned.rmse_m));
+  fmt::print("  params:");
+  for (std::size_t i = 0; i < params.size(); ++i) fmt::print(" {}={:.6g}", param_names[i], params[i]);
+  fmt::print("\n  {} evaluations in {:.2f} s ({}); diverged evaluations: {}\n", summary.evaluations,
+             summary.seconds, summary.termination, diverged);
 }
 
 std::string metric_change(double baseline_m, double tuned_m) {

@@ -22,6 +22,22 @@ nlohmann::json tune_json(const TuneOutcome& o);
 // "  47.88 →  29.31 mm  (+38.8 %)"
 std::string metric_change(double baseline_m, double tuned_m);
 
+// The pieces every tune's --json shares (tune, the calibrator and UKF tunes):
+// {"rmse", "mae", "maxe"} improvement in %, the per-track baseline/tuned
+// metrics, and the solver's convergence log.
+nlohmann::json improvement_json(const ErrorMetrics& baseline, const ErrorMetrics& tuned);
+nlohmann::json track_scores_json(const std::vector<TrackScore>& tracks);
+nlohmann::json convergence_json(const tuner::Summary& summary);
+
+// The lines `tune` prints under its heading for a noise model (EKF or UKF):
+// RMSE/MAE/MAXE change, per track when several, the tuned parameters and the
+// solver's evaluations, time, termination and diverged evaluations.
+void print_tune_result(const ErrorMetrics& baseline_mean, const ErrorMetrics& tuned_mean,
+                       const std::vector<TrackScore>& tracks,
+                       const std::vector<std::string>& param_names,
+                       const std::vector<double>& params, const tuner::Summary& summary,
+                       long diverged);
+
 // Reads track files; a bad file becomes one Failure line (file:line: reason).
 std::vector<Track> load_tracks(const std::vector<std::string>& paths);
 

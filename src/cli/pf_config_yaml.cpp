@@ -9,6 +9,7 @@
 
 #include "cli/config_yaml.h"
 #include "cli/failure.h"
+#include "cli/params_yaml.h"
 #include "cli/yaml_error.h"
 #include "objectives/calibration_objective.h"
 
@@ -67,28 +68,8 @@ PfConfig read_pf_config(const std::filesystem::path& path) {
   }
   if (cfg.particles < 1) fail_at(path, particles, "particles must be a whole number ≥ 1");
 
-  const BoxSpace space = calibration_space();
   const YAML::Node params = root["params"];
-  if (!params.IsMap()) fail_at(path, params, "expected a 'params' mapping");
-  cfg.params.assign(space.dim(), 0.0);
-  std::set<std::string> seen;
-  for (const auto& kv : params) {
-    const auto name = kv.first.as<std::string>("");
-    const std::size_t i = space.index_of(name);
-    if (i == space.dim()) {
-      fail_at(path, kv.first, fmt::format("unknown parameter '{}', expected {}", name, space.names()));
-    }
-    if (!seen.insert(name).second) fail_at(path, kv.first, fmt::format("parameter '{}' is given twice", name));
-    try {
-      cfg.params[i] = kv.second.as<double>();
-    } catch (const YAML::Exception&) {
-      fail_at(path, kv.second, fmt::format("parameter '{}' must be a number", name));
-    }
-    if (!std::isfinite(cfg.params[i]) || cfg.params[i] <= 0.0)
-      fail_at(path, kv.second, fmt::format("parameter '{}' must be a finite number > 0", name));
-  }
-  for (const auto& p : space.params())
-    if (!seen.count(p.name)) fail_at(path, params, fmt::format("parameter '{}' is missing", p.name));
+  cfg.params = read_params_block(path, params, calibration_space());
   std::string why;
   if (!apply_pf_config(cfg, filters::PfCalibratorParams{}).IsValid(&why))
     fail_at(path, params, "invalid settings: " + why);
@@ -102,8 +83,7 @@ void write_pf_config(const PfConfig& config, const std::filesystem::path& path) 
                               space.dim()));
   std::ostringstream out;
   if (!config.comment.empty()) {
-    std::istringstream lines(config.comment);
-    for (std::string line; std::getline(lines, line);) out << "# " << line << "\n";
+    write_comment_lines(out, config.comment);
   }
   out << "format: " << kFormat << "\n";
   out << "method: " << to_string(config.method) << "  # pf | adaptive-pf\n";
@@ -111,13 +91,7 @@ void write_pf_config(const PfConfig& config, const std::filesystem::path& path) 
       << "  # multinomial | stratified | systematic | residual\n";
   out << "policy: " << filters::to_string(config.policy) << "  # every | neff | max\n";
   out << "particles: " << config.particles << "  # N (pf) or initial N (adaptive-pf)\n";
-  out << "params:\n";
-  for (std::size_t i = 0; i < space.dim(); ++i) {
-    const auto& p = space.params()[i];
-    // {:.17g}: the value reads back bit for bit.
-    out << fmt::format("  {}: {:.17g}  # [{}] {}, bounds {}..{}\n", p.name, config.params[i], p.unit,
-                       p.meaning, p.lower, p.upper);
-  }
+  write_params_block(out, space, config.params);
   write_file_atomically(path, out.str());
 }
 

@@ -8,21 +8,6 @@
 
 namespace odotune::cli {
 
-namespace {
-
-// The objective as the tuner sees it: a box and a function (objectives/ does
-// not depend on tuner/, so the adapter lives here).
-struct BoxProblem {
-  const EkfObjective* objective;
-  double fitness(std::span<const double> x) const { return objective->fitness(x); }
-  tuner::Bounds bounds() const {
-    auto [lo, hi] = objective->bounds();
-    return {lo, hi};
-  }
-};
-
-}  // namespace
-
 PreparedTrack prepare_track(const Track& track) {
   PreparedTrack p;
   p.name = track.name();
@@ -102,6 +87,24 @@ tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s, st
   return summary;
 }
 
+DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSettings& s,
+                                      const BoxSpace& space, const std::vector<double>& default_params) {
+  DefaultsTune t;
+  for (const auto& p : space.params()) {
+    t.param_names.push_back(p.name);
+    t.param_units.push_back(p.unit);
+  }
+  const std::vector<double> default_x = space.to_box(default_params);
+  t.summary = run_solver(problem, s, default_x);
+  // The baseline's fitness by the same problem (an objective counts this
+  // evaluation like any other, but the solver's summary does not).
+  t.baseline_fitness = problem.fitness(default_x);
+  t.default_kept = t.baseline_fitness < t.summary.best_fitness;
+  t.tuned_fitness = t.default_kept ? t.baseline_fitness : t.summary.best_fitness;
+  t.params = t.default_kept ? default_params : space.to_physical(t.summary.best_x);
+  return t;
+}
+
 TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const TuneRequest& request) {
   std::string why;
   if (!request.IsValid(&why)) throw std::invalid_argument(why);
@@ -109,7 +112,7 @@ TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const Tune
   std::vector<const FastReplay*> fast;
   for (const auto* t : tracks) fast.push_back(t->fast.get());
   const EkfObjective objective(fast, request.model, request.mode);
-  const BoxProblem problem{&objective};
+  const BoxProblem<EkfObjective> problem{&objective};
 
   TuneOutcome out;
   out.request = request;

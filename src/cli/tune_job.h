@@ -9,10 +9,12 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "filters/ekf_noise.h"
+#include "objectives/box_space.h"
 #include "objectives/calibration_input.h"
 #include "objectives/ekf_objective.h"
 #include "objectives/fusion_input.h"
@@ -80,10 +82,38 @@ struct TuneOutcome {
   tuner::Summary summary;                 // evaluations, seconds, termination, log
 };
 
+// An objective as the tuner sees it: a box and a function (objectives/ does
+// not depend on tuner/, so the adapter lives here). `Objective` has
+// fitness(x) const and bounds() → (lower, upper); it must outlive this.
+template <typename Objective>
+struct BoxProblem {
+  const Objective* objective;
+  double fitness(std::span<const double> x) const { return objective->fitness(x); }
+  tuner::Bounds bounds() const {
+    auto [lo, hi] = objective->bounds();
+    return {lo, hi};
+  }
+};
+
 // Minimises `problem` with PSO or NLopt as `s` says (NLopt from x0 when given,
 // else its default start). Throws std::runtime_error when the solver fails.
 tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s,
                           std::vector<double> x0 = {});
+
+// A tune that starts from known defaults (the calibrator and UKF tunes): the
+// solver from the defaults' box point, the defaults' own fitness by the same
+// problem, and the tuned physical values — the defaults themselves when they
+// score better than anything the solver found (so a tune never worsens the
+// fitness on its tracks).
+struct DefaultsTune {
+  tuner::Summary summary;
+  double baseline_fitness = 0.0, tuned_fitness = 0.0;
+  bool default_kept = false;
+  std::vector<double> params;          // tuned physical values (or the defaults)
+  std::vector<std::string> param_names, param_units;  // the space's
+};
+DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSettings& s,
+                                      const BoxSpace& space, const std::vector<double>& default_params);
 
 // Runs the solver; throws std::invalid_argument for an invalid request and
 // std::runtime_error when the solver fails.

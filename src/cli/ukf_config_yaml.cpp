@@ -9,6 +9,7 @@
 
 #include "cli/config_yaml.h"
 #include "cli/failure.h"
+#include "cli/params_yaml.h"
 #include "cli/yaml_error.h"
 
 namespace odotune::cli {
@@ -44,11 +45,6 @@ double number_of(const std::filesystem::path& path, const YAML::Node& node, cons
   return v;
 }
 
-void comment_lines(std::ostringstream& out, const std::string& text) {
-  std::istringstream lines(text);
-  for (std::string line; std::getline(lines, line);) out << "# " << line << "\n";
-}
-
 }  // namespace
 
 UkfSettings apply_ukf_config(const UkfConfig& config, const UkfSettings& base) {
@@ -76,19 +72,7 @@ UkfConfig read_ukf_config(const std::filesystem::path& path) {
 
   const BoxSpace space = ukf_space();
   const YAML::Node params = root["params"];
-  if (!params.IsMap()) fail_at(path, params, "expected a 'params' mapping");
-  cfg.params.assign(space.dim(), 0.0);
-  std::set<std::string> seen;
-  for (const auto& kv : params) {
-    const auto name = kv.first.as<std::string>("");
-    const std::size_t i = space.index_of(name);
-    if (i == space.dim())
-      fail_at(path, kv.first, fmt::format("unknown parameter '{}', expected {}", name, space.names()));
-    if (!seen.insert(name).second) fail_at(path, kv.first, fmt::format("parameter '{}' is given twice", name));
-    cfg.params[i] = number_of(path, kv.second, fmt::format("parameter '{}'", name));
-  }
-  for (const auto& p : space.params())
-    if (!seen.count(p.name)) fail_at(path, params, fmt::format("parameter '{}' is missing", p.name));
+  cfg.params = read_params_block(path, params, ukf_space());
   if (!apply_ukf_config(cfg).IsValid(&why)) fail_at(path, params, "invalid settings: " + why);
   return cfg;
 }
@@ -100,20 +84,14 @@ void write_ukf_config(const UkfConfig& config, const std::filesystem::path& path
                               space.dim()));
   std::ostringstream out;
   if (!config.comment.empty()) {
-    comment_lines(out, config.comment);
+    write_comment_lines(out, config.comment);
     out << "#\n";
   }
-  comment_lines(out, kExplanation);
+  write_comment_lines(out, kExplanation);
   out << "format: " << kFormat << "\n";
   out << fmt::format("rate_hz: {:.17g}  # fusion rate [Hz]; the variances below are per step at it\n",
                      config.rate_hz);
-  out << "params:\n";
-  for (std::size_t i = 0; i < space.dim(); ++i) {
-    const auto& p = space.params()[i];
-    // {:.17g}: the value reads back bit for bit.
-    out << fmt::format("  {}: {:.17g}  # [{}] {}; tuning bounds {}..{}\n", p.name, config.params[i], p.unit,
-                       p.meaning, p.lower, p.upper);
-  }
+  write_params_block(out, space, config.params);
   write_file_atomically(path, out.str());
 }
 

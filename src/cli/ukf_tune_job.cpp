@@ -9,21 +9,6 @@
 
 namespace odotune::cli {
 
-namespace {
-
-// The objective as the tuner sees it: a box and a function (objectives/ does
-// not depend on tuner/, so the adapter lives here, as in tune_job.cpp).
-struct UkfBoxProblem {
-  const UkfObjective* objective;
-  double fitness(std::span<const double> x) const { return objective->fitness(x); }
-  tuner::Bounds bounds() const {
-    auto [lo, hi] = objective->bounds();
-    return {lo, hi};
-  }
-};
-
-}  // namespace
-
 bool UkfTuneRequest::IsValid(std::string* why) const {
   if (!SolverSettings::IsValid(why)) return false;
   if (!valid_fitness_mode(mode)) {
@@ -62,21 +47,16 @@ UkfTuneOutcome run_ukf_tune(const std::vector<const FusionInput*>& inputs, const
   UkfTuneOutcome out;
   out.request = request;
   const UkfObjective objective(inputs, request.mode, out.default_settings);
-  const UkfBoxProblem problem{&objective};
-  const BoxSpace& space = objective.space();
-  for (const auto& p : space.params()) {
-    out.param_names.push_back(p.name);
-    out.param_units.push_back(p.unit);
-  }
+  const BoxProblem<UkfObjective> problem{&objective};
   out.default_params = ukf_params_of(out.default_settings);
-  const std::vector<double> default_x = space.to_box(out.default_params);
-
-  out.summary = run_solver(problem, request, default_x);
-
-  out.baseline_fitness = objective.fitness(default_x);
-  out.default_kept = out.baseline_fitness < out.summary.best_fitness;
-  out.tuned_fitness = out.default_kept ? out.baseline_fitness : out.summary.best_fitness;
-  out.params = out.default_kept ? out.default_params : space.to_physical(out.summary.best_x);
+  DefaultsTune t = run_solver_from_defaults(problem, request, objective.space(), out.default_params);
+  out.param_names = std::move(t.param_names);
+  out.param_units = std::move(t.param_units);
+  out.summary = std::move(t.summary);
+  out.baseline_fitness = t.baseline_fitness;
+  out.default_kept = t.default_kept;
+  out.tuned_fitness = t.tuned_fitness;
+  out.params = std::move(t.params);
   out.tuned_settings = out.default_kept ? out.default_settings
                                         : apply_ukf_params(out.default_settings, out.params);
   out.failures = objective.failures();

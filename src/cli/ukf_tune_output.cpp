@@ -32,24 +32,15 @@ nlohmann::json ukf_tune_json(const UkfTuneOutcome& o, double fusion_rate_hz) {
   j["default_kept"] = o.default_kept;
   j["baseline"] = metrics_json(o.baseline_mean);
   j["tuned"] = metrics_json(o.tuned_mean);
-  j["improvement_pct"] = {{"rmse", improvement_pct(o.baseline_mean.rmse_m, o.tuned_mean.rmse_m)},
-                          {"mae", improvement_pct(o.baseline_mean.mae_m, o.tuned_mean.mae_m)},
-                          {"maxe", improvement_pct(o.baseline_mean.maxe_m, o.tuned_mean.maxe_m)}};
+  j["improvement_pct"] = improvement_json(o.baseline_mean, o.tuned_mean);
   j["baseline_fitness"] = o.baseline_fitness;
   j["tuned_fitness"] = o.tuned_fitness;
   j["evaluations"] = o.summary.evaluations;
   j["seconds"] = o.summary.seconds;
   j["termination"] = o.summary.termination;
   j["failures"] = o.failures;
-  nlohmann::json tracks = nlohmann::json::array();
-  for (const auto& t : o.tracks)
-    tracks.push_back({{"track", t.track}, {"baseline", metrics_json(t.baseline)}, {"tuned", metrics_json(t.tuned)}});
-  j["tracks"] = tracks;
-  nlohmann::json log = nlohmann::json::array();
-  for (const auto& rec : o.summary.log)
-    log.push_back({{"iteration", rec.iteration}, {"evaluations", rec.evaluations},
-                   {"best_fitness", rec.best_fitness}});
-  j["convergence"] = log;
+  j["tracks"] = track_scores_json(o.tracks);
+  j["convergence"] = convergence_json(o.summary);
   return j;
 }
 
@@ -61,16 +52,8 @@ void print_ukf_outcome(const UkfTuneOutcome& o) {
              fitness_mode_name(r.mode), r.solver, r.seed);
   fmt::print("  fused pose vs ground truth, defaults → tuned{}\n",
              o.default_kept ? " (the defaults scored best and are kept)" : "");
-  fmt::print("  RMSE {}\n", metric_change(o.baseline_mean.rmse_m, o.tuned_mean.rmse_m));
-  fmt::print("  MAE  {}\n", metric_change(o.baseline_mean.mae_m, o.tuned_mean.mae_m));
-  fmt::print("  MAXE {}\n", metric_change(o.baseline_mean.maxe_m, o.tuned_mean.maxe_m));
-  if (o.tracks.size() > 1)
-    for (const auto& t : o.tracks)
-      fmt::print("    {}: RMSE {}\n", t.track, metric_change(t.baseline.rmse_m, t.tuned.rmse_m));
-  fmt::print("  params:");
-  for (std::size_t i = 0; i < o.params.size(); ++i) fmt::print(" {}={:.6g}", o.param_names[i], o.params[i]);
-  fmt::print("\n  {} evaluations in {:.2f} s ({}); diverged evaluations: {}\n", o.summary.evaluations,
-             o.summary.seconds, o.summary.termination, o.failures);
+  print_tune_result(o.baseline_mean, o.tuned_mean, o.tracks, o.param_names, o.params, o.summary,
+                    o.failures);
 }
 
 }  // namespace odotune::cli

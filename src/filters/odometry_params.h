@@ -24,6 +24,15 @@ struct OdometryParams {
   bool IsValid(std::string* why) const;
 };
 
+// A planar pose [m, m, rad] (theta unwrapped unless a caller says otherwise):
+// ground-truth samples (objectives/pose_series.h) and poses integrated from
+// body velocities (velocity_ukf.h's integrate_pose).
+struct PlanarPose {
+  double x_m = 0.0;
+  double y_m = 0.0;
+  double theta_rad = 0.0;
+};
+
 struct BodyVelocity {
   double v_m_s = 0.0;     // V [m/s]
   double w_rad_s = 0.0;   // W [rad/s]

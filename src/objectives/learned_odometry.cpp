@@ -129,14 +129,10 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
           in.track_name, v_all.size(), window));
     auto [vt, vv] = split_sequences(v_all, options.train_fraction);
     auto [wt, wv] = split_sequences(w_all, options.train_fraction);
-    auto append = [](SequenceSet& to, const SequenceSet& from) {
-      to.x.insert(to.x.end(), from.x.begin(), from.x.end());
-      to.y.insert(to.y.end(), from.y.begin(), from.y.end());
-    };
-    append(v_train, vt);
-    append(v_val, vv);
-    append(w_train, wt);
-    append(w_val, wv);
+    v_train.append(vt);
+    v_val.append(vv);
+    w_train.append(wt);
+    w_val.append(wv);
   }
   const auto start = std::chrono::steady_clock::now();
   LearnedTrainingSummary s;

@@ -57,6 +57,11 @@ struct SequenceSet {
     x.insert(x.end(), window_rows, window_rows + static_cast<std::size_t>(window) * static_cast<std::size_t>(inputs));
     y.push_back(target);
   }
+  // Appends every window of `other` (same window and inputs).
+  void append(const SequenceSet& other) {
+    x.insert(x.end(), other.x.begin(), other.x.end());
+    y.insert(y.end(), other.y.begin(), other.y.end());
+  }
   // Pointer to window n's first value.
   const double* window_data(std::size_t n) const {
     return x.data() + n * static_cast<std::size_t>(window) * static_cast<std::size_t>(inputs);

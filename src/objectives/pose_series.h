@@ -11,11 +11,7 @@
 
 namespace odotune {
 
-struct PlanarPose {
-  double x_m = 0.0;
-  double y_m = 0.0;
-  double theta_rad = 0.0;
-};
+using PlanarPose = filters::PlanarPose;  // one pose type for filters and objectives
 
 // Contract: t strictly increasing [s]; x, y [m] and theta [rad, unwrapped]
 // finite and as long as t.

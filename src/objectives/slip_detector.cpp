@@ -193,10 +193,8 @@ SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tra
               "track '{}': only {} usable windows for the slip detector: expected at least 10",
               in.track_name, all.size()));
         auto [t, v] = split_sequences(all, options.train_fraction);
-        (*train)[d].x.insert((*train)[d].x.end(), t.x.begin(), t.x.end());
-        (*train)[d].y.insert((*train)[d].y.end(), t.y.begin(), t.y.end());
-        (*val)[d].x.insert((*val)[d].x.end(), v.x.begin(), v.x.end());
-        (*val)[d].y.insert((*val)[d].y.end(), v.y.begin(), v.y.end());
+        (*train)[d].append(t);
+        (*val)[d].append(v);
       }
     }
   };

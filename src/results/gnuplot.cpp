@@ -247,4 +247,19 @@ void render_png_svg(const std::filesystem::path& stem, std::vector<std::pair<std
   run_gnuplot(job);
 }
 
+std::string series_colour(int i) {
+  static const char* const kPalette[] = {"#4E79A7", "#F28E2B", "#59A14F", "#E15759", "#B07AA1",
+                                         "#76B7B2", "#EDC948", "#FF9DA7", "#9C755F", "#BAB0AC"};
+  constexpr int kSize = static_cast<int>(sizeof(kPalette) / sizeof(kPalette[0]));
+  if (i < 0) return "#000000";
+  return kPalette[i % kSize];
+}
+
+std::pair<double, double> stacked_panel_span(std::size_t p, std::size_t n) {
+  constexpr double kTop = 0.90, kBottom = 0.10, kGap = 0.07;
+  const double h = (kTop - kBottom - kGap * static_cast<double>(n - 1)) / static_cast<double>(n);
+  const double top = kTop - static_cast<double>(p) * (h + kGap);
+  return {top, top - h};
+}
+
 }  // namespace odotune::results

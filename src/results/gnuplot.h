@@ -57,4 +57,12 @@ std::string gnuplot_quote(std::string_view text);
 // A number as written into gnuplot data and commands (10 significant digits).
 std::string gnuplot_number(double v);
 
+// Colour of series i: ten distinguishable colours (Tableau 10), i modulo 10;
+// a negative i is black (a reference line: ground truth, a truth value).
+std::string series_colour(int i);
+
+// Screen margins (top, bottom) of panel p of n panels stacked between
+// y = 0.10 and 0.90 of the canvas, 0.07 apart (multiplot layouts).
+std::pair<double, double> stacked_panel_span(std::size_t p, std::size_t n);
+
 }  // namespace odotune::results

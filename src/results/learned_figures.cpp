@@ -12,17 +12,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The palette of study_figures.cpp (Tableau 10), so that the study's figures
-// share colours.
-const char* const kPalette[] = {"#4E79A7", "#F28E2B", "#59A14F", "#E15759", "#B07AA1",
-                                "#76B7B2", "#EDC948", "#FF9DA7", "#9C755F", "#BAB0AC"};
-constexpr int kPaletteSize = static_cast<int>(sizeof(kPalette) / sizeof(kPalette[0]));
-constexpr const char* kShadeColour = "#d9d9d9";
-
-std::string colour(int i) {
-  if (i < 0) return "#000000";
-  return kPalette[i % kPaletteSize];
-}
+constexpr const char* kShadeColour = "#d9d9d9";  // slip episodes, behind the curves
 
 std::string num(double v) { return gnuplot_number(v); }
 std::string q(const std::string& s) { return gnuplot_quote(s); }
@@ -30,14 +20,6 @@ std::string q(const std::string& s) { return gnuplot_quote(s); }
 [[noreturn]] void bad(const std::string& what) { throw std::invalid_argument("learned figure: " + what); }
 
 bool plottable(double y, bool log_y) { return std::isfinite(y) && (!log_y || y > 0.0); }
-
-// Screen margins of panel p of n stacked between y = 0.10 and 0.90.
-std::pair<double, double> panel_span(std::size_t p, std::size_t n) {
-  constexpr double kTop = 0.90, kBottom = 0.10, kGap = 0.07;
-  const double h = (kTop - kBottom - kGap * static_cast<double>(n - 1)) / static_cast<double>(n);
-  const double top = kTop - static_cast<double>(p) * (h + kGap);
-  return {top, top - h};
-}
 
 // "x y" rows, a blank line where a point is not plottable (gnuplot breaks the line).
 std::string rows_of(const std::vector<double>& x, const std::vector<double>& y, bool log_y) {
@@ -99,7 +81,7 @@ void shaded_time_panels(const fs::path& stem, const std::string& title, const st
             ", graph 1 nohead back lw 1 dt 3 lc rgb '#606060'\n";
   for (std::size_t p = 0; p < panels.size(); ++p) {
     const ShadedPanel& panel = panels[p];
-    const auto [top, bottom] = panel_span(p, panels.size());
+    const auto [top, bottom] = stacked_panel_span(p, panels.size());
     body += "set tmargin at screen " + num(top) + "\nset bmargin at screen " + num(bottom) + "\n";
     body += "set ylabel " + q(panel.ylabel) + "\n";
     body += panel.log_y ? "set logscale y\nset format y '%.0e'\n"
@@ -128,7 +110,7 @@ void shaded_time_panels(const fs::path& stem, const std::string& title, const st
       files.emplace_back(file, std::move(rows));
       plot += (plot.empty() ? "plot " : ", \\\n     ") +
               ("'" + file + "' using 1:2 with " + (l.dashed ? "steps dt 2" : "lines") + " lw " +
-               (l.thin ? "1" : "1.8") + " lc rgb '" + colour(l.colour) + "' title " + q(l.name));
+               (l.thin ? "1" : "1.8") + " lc rgb '" + series_colour(l.colour) + "' title " + q(l.name));
     }
     if (p == 0 && !shades.empty() && !shade_label.empty())
       plot += ", \\\n     keyentry with boxes fs solid 1.0 noborder fc rgb '" + std::string(kShadeColour) +
@@ -176,7 +158,7 @@ void path_panels(const fs::path& stem, const std::string& title, const std::vect
       files.emplace_back(file, std::move(rows));
       plot += (plot.empty() ? "plot " : ", \\\n     ") +
               ("'" + file + "' using 1:2 with lines lw 1.6 " + (l.dashed ? "dt 2 " : "") + "lc rgb '" +
-               colour(l.colour) + "' title " + q(l.name));
+               series_colour(l.colour) + "' title " + q(l.name));
     }
     // The start: the first finite point of the first line.
     for (const PathLine& l : panel.lines) {

@@ -12,28 +12,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Ten distinguishable colours (Tableau 10), for up to ten runs; the first
-// three of the bars are the paper's Figure 4 colours in spirit (blue N_eff,
-// orange max weight, green every step) when callers order series so.
-const char* const kPalette[] = {"#4E79A7", "#F28E2B", "#59A14F", "#E15759", "#B07AA1",
-                                "#76B7B2", "#EDC948", "#FF9DA7", "#9C755F", "#BAB0AC"};
-constexpr int kPaletteSize = static_cast<int>(sizeof(kPalette) / sizeof(kPalette[0]));
-
-const char* colour(int i) { return kPalette[((i % kPaletteSize) + kPaletteSize) % kPaletteSize]; }
-
 std::string num(double v) { return gnuplot_number(v); }
 
 std::string q(const std::string& s) { return gnuplot_quote(s); }
 
 [[noreturn]] void bad(const std::string& what) { throw std::invalid_argument("study figure: " + what); }
-
-// Screen margins of panel p of n stacked between y = 0.10 and 0.90.
-std::pair<double, double> panel_span(std::size_t p, std::size_t n) {
-  constexpr double kTop = 0.90, kBottom = 0.10, kGap = 0.07;
-  const double h = (kTop - kBottom - kGap * static_cast<double>(n - 1)) / static_cast<double>(n);
-  const double top = kTop - static_cast<double>(p) * (h + kGap);
-  return {top, top - h};
-}
 
 }  // namespace
 
@@ -74,7 +57,7 @@ void grouped_bars(const fs::path& stem, const std::string& title, const std::vec
   for (std::size_t g = 0; g < groups.size(); ++g) tics += (g ? ", " : "") + q(groups[g]) + " " + std::to_string(g);
   tics += ")";
   for (std::size_t p = 0; p < panels.size(); ++p) {
-    const auto [top, bottom] = panel_span(p, panels.size());
+    const auto [top, bottom] = stacked_panel_span(p, panels.size());
     body += "set tmargin at screen " + num(top) + "\nset bmargin at screen " + num(bottom) + "\n";
     body += "set ylabel " + q(panels[p].ylabel) + "\n";
     body += "set xtics " + tics + "\n";
@@ -93,7 +76,7 @@ void grouped_bars(const fs::path& stem, const std::string& title, const std::vec
       const std::string file = "p" + std::to_string(p) + "s" + std::to_string(s) + ".dat";
       files.emplace_back(file, rows);
       plot += (plot.empty() ? "plot " : ", \\\n     ") + ("'" + file + "' using 1:2:3 with boxerrorbars lc rgb '" +
-              colour(static_cast<int>(s)) + "' title " + (p == 0 ? q(series[s]) : "''"));
+              series_colour(static_cast<int>(s)) + "' title " + (p == 0 ? q(series[s]) : "''"));
     }
     if (plot.empty()) plot = "plot NaN notitle";
     body += plot + "\n";
@@ -138,7 +121,7 @@ void time_panels(const fs::path& stem, const std::string& title, const std::vect
     body += "set arrow from first " + num(m.t_s) + ", graph 0 to first " + num(m.t_s) +
             ", graph 1 nohead back lw 1 dt 3 lc rgb '#606060'\n";
   for (std::size_t p = 0; p < panels.size(); ++p) {
-    const auto [top, bottom] = panel_span(p, panels.size());
+    const auto [top, bottom] = stacked_panel_span(p, panels.size());
     body += "set tmargin at screen " + num(top) + "\nset bmargin at screen " + num(bottom) + "\n";
     body += "set ylabel " + q(panels[p].ylabel) + "\n";
     if (p + 1 == panels.size()) {
@@ -174,7 +157,7 @@ void time_panels(const fs::path& stem, const std::string& title, const std::vect
       const std::string width = l.thin ? "1" : "1.8";
       plot += (plot.empty() ? "plot " : ", \\\n     ") +
               ("'" + file + "' using 1:2 with " + (l.dashed ? "steps dt 2" : "lines") + " lw " + width +
-               " lc rgb '" + colour(l.colour) + "' title " + q(l.name));
+               " lc rgb '" + series_colour(l.colour) + "' title " + q(l.name));
     }
     body += plot + "\n";
   }
