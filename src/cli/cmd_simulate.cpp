@@ -2,13 +2,16 @@
 //
 //   odotune simulate SCENARIO.yaml -o TRACK.csv [--seed N]
 //                    [--effect NAME:param=value,...]... [--no-effects]
+//                    [--random-slip N]
 //   odotune simulate --list-effects
 //
 // Effects given with --effect are applied after the file's effects: a new
 // effect is switched on (unset optional parameters take their defaults), an
 // effect the file already has keeps its parameters except those given.
 // --no-effects drops the file's effects first (so --no-effects with --effect
-// gives exactly the command-line effects).
+// gives exactly the command-line effects). --random-slip N replaces the
+// scenario's slip episodes with a random layout drawn with seed N
+// (tracks/random_slip.h): training drives for the slip detector.
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -24,6 +27,8 @@
 #include "cli/failure.h"
 #include "cli/scenario_yaml.h"
 #include "tracks/effects.h"
+#include "tracks/motion_profile.h"
+#include "tracks/random_slip.h"
 #include "tracks/simulator.h"
 #include "tracks/track_io.h"
 
@@ -35,6 +40,7 @@ struct SimulateOptions {
   std::string scenario;
   std::string output;
   std::string seed;  // parsed here: CLI11 would wrap "-1" around to 2^64-1
+  std::string random_slip;  // seed of a random slip-episode layout ("" = the scenario's episodes)
   std::vector<std::string> effects;
   bool no_effects = false;
   bool list_effects = false;
@@ -88,13 +94,26 @@ void run_simulate(const SimulateOptions& o) {
       throw Failure(fmt::format("simulate: -o {} is the scenario file itself; expected a track file name",
                                 o.output));
   }
-  if (!o.seed.empty()) {
+  const auto parse_seed = [](const char* flag, const std::string& text) {
     std::uint64_t seed = 0;
-    const char* end = o.seed.data() + o.seed.size();
-    const auto [p, ec] = std::from_chars(o.seed.data(), end, seed);
+    const char* end = text.data() + text.size();
+    const auto [p, ec] = std::from_chars(text.data(), end, seed);
     if (ec != std::errc() || p != end)
-      throw Failure(fmt::format("--seed {}: expected a non-negative integer below 2^64", o.seed));
-    sc.seed = seed;
+      throw Failure(fmt::format("{} {}: expected a non-negative integer below 2^64", flag, text));
+    return seed;
+  };
+  if (!o.seed.empty()) sc.seed = parse_seed("--seed", o.seed);
+  if (!o.random_slip.empty()) {
+    const std::uint64_t layout = parse_seed("--random-slip", o.random_slip);
+    try {
+      sc.slip_episodes = sim::random_slip_episodes(sim::MotionProfile(sc.motion), layout);
+    } catch (const std::exception& e) {  // the profile was validated with the scenario
+      throw Failure(fmt::format("{}: --random-slip: {}", o.scenario, e.what()));
+    }
+    if (sc.slip_episodes.empty())
+      throw Failure(fmt::format("{}: --random-slip {}: the drive has no stretch long and fast enough for a slip "
+                                "episode (>= 2 s at >= 0.3 m/s); expected a longer drive",
+                                o.scenario, o.random_slip));
   }
   if (o.no_effects) sc.effects = sim::Effects{};
   for (const auto& text : o.effects) {
@@ -123,9 +142,13 @@ void run_simulate(const SimulateOptions& o) {
   } catch (const std::exception& e) {
     throw Failure(e.what());
   }
-  std::cout << fmt::format("wrote {}: track '{}', {} rows over {:.1f} s, path {:.1f} m, seed {}, effects: {}\n",
+  std::cout << fmt::format("wrote {}: track '{}', {} rows over {:.1f} s, path {:.1f} m, seed {}, effects: {}",
                            o.output, track.name(), track.size(), track.duration_s(), path_length_m(track),
                            sc.seed, sim::format_effects(sc.effects));
+  if (!sc.slip_episodes.empty())
+    std::cout << fmt::format(", {} slip episode{}{}", sc.slip_episodes.size(), sc.slip_episodes.size() == 1 ? "" : "s",
+                             o.random_slip.empty() ? "" : fmt::format(" (random layout {})", o.random_slip));
+  std::cout << "\n";
 }
 
 }  // namespace
@@ -144,6 +167,9 @@ void register_simulate(CLI::App& app) {
                   "NAME:param=value,... switches on a physics effect or overrides its parameters "
                   "(repeatable; see --list-effects)")
       ->allow_extra_args(false);
+  sub->add_option("--random-slip", opts->random_slip,
+                  "replace the scenario's slip episodes with a random layout drawn with this seed (spin and hold, "
+                  "either wheel, s 0.3-0.8, 2-5 s, only while moving): training drives for the slip detector");
   sub->add_flag("--no-effects", opts->no_effects, "ignore the effects of the scenario file");
   sub->add_flag("--list-effects", opts->list_effects, "print the effects, their parameters and ranges, and exit");
   sub->callback([opts] { run_simulate(*opts); });

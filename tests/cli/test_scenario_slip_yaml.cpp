@@ -14,6 +14,8 @@
 #include <gtest/gtest.h>
 
 #include "cli/scenario_yaml.h"
+#include "cli_runner.h"
+#include "tracks/random_slip.h"
 #include "tracks/motion_profile.h"
 #include "tracks/simulator.h"
 #include "tracks/slip_episodes.h"
@@ -269,6 +271,27 @@ TEST(ScenarioSlipYaml, WheelchairSlipScenariosHaveEpisodesOfBothKindsOnBothWheel
   }
   EXPECT_EQ(eval_kinds.size(), 2u);
   EXPECT_EQ(eval_wheels.size(), 2u);
+}
+
+TEST(ScenarioSlipYaml, SimulateRandomSlipWritesTheSeededLayoutInPlaceOfTheScenarios) {
+  testing_support::TempDir dir("random-slip");
+  const std::string file = scenario("wheelchair_slip_eval").string();
+  const std::string out = (dir / "drive.csv").string();
+  const auto r = testing_support::run_cli(fmt::format("simulate {} --random-slip 5 -o {}", file, out));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("(random layout 5)"));
+  const sim::Scenario sc = load_scenario(file);
+  const auto expected = sim::random_slip_episodes(sim::MotionProfile(sc.motion), 5);
+  ASSERT_FALSE(expected.empty());
+  const std::vector<sim::SlipEpisode> written = sim::slip_episodes_from_metadata(read_track(out).meta());
+  EXPECT_EQ(sim::format_slip_episodes(written), sim::format_slip_episodes(expected));
+  EXPECT_NE(sim::format_slip_episodes(written), sim::format_slip_episodes(sc.slip_episodes));
+
+  const auto bad = testing_support::run_cli(fmt::format("simulate {} --random-slip -3 -o {}", file,
+                                                        (dir / "bad.csv").string()));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_THAT(bad.err, HasSubstr("--random-slip -3: expected a non-negative integer"));
+  EXPECT_FALSE(fs::exists(dir / "bad.csv"));
 }
 
 }  // namespace
