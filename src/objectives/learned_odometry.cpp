@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -58,6 +59,7 @@ bool LearnedTrainingOptions::IsValid(std::string* why) const {
   if (!(previous_noise_v >= 0.0) || !(previous_noise_w >= 0.0) || !std::isfinite(previous_noise_v) ||
       !std::isfinite(previous_noise_w))
     return fail("previous_noise_v/_w: expected finite values >= 0");
+  if (restarts < 1 || restarts > 100) return fail(fmt::format("restarts = {}: expected 1..100", restarts));
   return true;
 }
 
@@ -136,10 +138,47 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
   }
   const auto start = std::chrono::steady_clock::now();
   LearnedTrainingSummary s;
-  s.v = train_lstm(model.v_net, v_train, v_val, options.training);
-  LstmTrainingOptions w_opts = options.training;
-  w_opts.seed = options.training.seed + 1000;  // a different initialisation for the W net
-  s.w = train_lstm(model.w_net, w_train, w_val, w_opts);
+  // Best of options.restarts starts (see LearnedTrainingOptions::restarts),
+  // scored free-running: the net fed its own previous output, as when it
+  // runs alone (run_learned_odometry), MAE over the last (1 − train_fraction)
+  // of each track's steps. A net can have a small one-step (teacher-forced)
+  // validation MAE and still drift on its own outputs.
+  auto free_running_mae = [&](const filters::VelocityNet& net, bool w) {
+    LearnedOdometryModel m;
+    m.v_net = m.w_net = net;  // the same net in both slots: each slot feeds back its own output
+    double sum = 0.0;
+    std::size_t count = 0;
+    for (const FusionInput* in : tracks) {
+      const OdometrySeries run = run_learned_odometry(*in, m);
+      const std::vector<double>& est = w ? run.w : run.v;
+      const std::vector<double>& truth = w ? in->w_true : in->v_true;
+      const auto first = static_cast<std::size_t>(options.train_fraction * static_cast<double>(in->size()));
+      for (std::size_t k = std::max<std::size_t>(first, 1); k < in->size(); ++k)
+        if (std::isfinite(est[k]) && std::isfinite(truth[k])) sum += std::abs(est[k] - truth[k]), ++count;
+    }
+    return count > 0 ? sum / static_cast<double>(count) : std::numeric_limits<double>::infinity();
+  };
+  auto best_of = [&](filters::VelocityNet& net, const SequenceSet& train, const SequenceSet& val,
+                     std::uint64_t seed, bool w, int* kept, std::vector<double>* maes) {
+    LstmTrainingSummary best;
+    double best_mae = std::numeric_limits<double>::infinity();
+    const filters::VelocityNet fresh = net;
+    for (int r = 0; r < options.restarts; ++r) {
+      filters::VelocityNet candidate = fresh;
+      LstmTrainingOptions o = options.training;
+      o.seed = seed + 7919u * static_cast<std::uint64_t>(r);
+      const LstmTrainingSummary t = train_lstm(candidate, train, val, o);
+      const double mae = t.usable ? free_running_mae(candidate, w) : std::numeric_limits<double>::infinity();
+      maes->push_back(mae);
+      if (r == 0 || (t.usable && (!best.usable || mae < best_mae))) {
+        best = t, best_mae = mae, *kept = r, net = candidate;
+      }
+    }
+    return best;
+  };
+  s.v = best_of(model.v_net, v_train, v_val, options.training.seed, false, &s.v_restart, &s.v_restart_mae);
+  // A different initialisation for the W net.
+  s.w = best_of(model.w_net, w_train, w_val, options.training.seed + 1000, true, &s.w_restart, &s.w_restart_mae);
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   s.train_windows = v_train.size();
   s.validation_windows = v_val.size();

@@ -118,13 +118,13 @@ class CachedCost final : public ceres::SizedCostFunction<1, K> {
   std::size_t w_;
 };
 
-// ½·λ·‖w‖² as the residual block √λ·w (Jacobian √λ·I).
+// ½·λ·‖w − w̄‖² as the residual block √λ·(w − w̄) (Jacobian √λ·I).
 template <int K>
 class WeightDecay final : public ceres::SizedCostFunction<K, K> {
  public:
-  explicit WeightDecay(double lambda) : sqrt_lambda_(std::sqrt(lambda)) {}
+  WeightDecay(double lambda, const std::array<double, K>& centre) : sqrt_lambda_(std::sqrt(lambda)), centre_(centre) {}
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    for (int n = 0; n < K; ++n) residuals[n] = sqrt_lambda_ * parameters[0][n];
+    for (int n = 0; n < K; ++n) residuals[n] = sqrt_lambda_ * (parameters[0][n] - centre_[static_cast<std::size_t>(n)]);
     if (jacobians != nullptr && jacobians[0] != nullptr) {
       std::fill_n(jacobians[0], K * K, 0.0);
       for (int n = 0; n < K; ++n) jacobians[0][n * K + n] = sqrt_lambda_;
@@ -134,6 +134,7 @@ class WeightDecay final : public ceres::SizedCostFunction<K, K> {
 
  private:
   double sqrt_lambda_;
+  std::array<double, K> centre_;
 };
 
 // Population mean and sd (paper eq. 4); a zero or non-finite sd becomes 1.
@@ -165,7 +166,8 @@ void check_set(const SequenceSet& set, int inputs, const char* name) {
 // reports, the same at both ends whatever the continuation stages were.
 // Residuals come from the cache's evaluators (parallel, summed in order).
 template <int K>
-double robust_cost(WindowCache<K>& cache, const double* params, std::size_t n, const LstmTrainingOptions& options) {
+double robust_cost(WindowCache<K>& cache, const double* params, std::size_t n, const LstmTrainingOptions& options,
+                   const std::array<double, K>& centre) {
   const std::vector<double>& r = cache.residuals_at(params);
   const ceres::SoftLOneLoss loss(options.mae_scale);
   double cost = 0.0;
@@ -175,7 +177,10 @@ double robust_cost(WindowCache<K>& cache, const double* params, std::size_t n, c
     cost += 0.5 * rho[0];
   }
   if (options.weight_decay > 0.0)
-    for (int k = 0; k < K; ++k) cost += 0.5 * options.weight_decay * params[k] * params[k];
+    for (int k = 0; k < K; ++k) {
+      const double d = params[k] - centre[static_cast<std::size_t>(k)];
+      cost += 0.5 * options.weight_decay * d * d;
+    }
   return cost;
 }
 
@@ -207,6 +212,8 @@ LstmTrainingSummary solve(filters::LstmNet<I, H>& net, const SequenceSet& train,
   }
 
   std::array<double, K> params = net.weights;
+  std::array<double, K> centre{};  // the decay's centre w̄
+  if (options.decay_to_start) centre = net.weights;
   WindowCache<K> cache(params.data(), std::move(inner), options.num_threads);
   // The loss is swapped between the continuation stages (ceres::LossFunctionWrapper
   // is Ceres' documented way to anneal a loss scale).
@@ -217,7 +224,7 @@ LstmTrainingSummary solve(filters::LstmNet<I, H>& net, const SequenceSet& train,
   ceres::Problem problem(problem_options);
   for (std::size_t w = 0; w < n; ++w) problem.AddResidualBlock(new CachedCost<K>(&cache, w), &loss, params.data());
   if (options.weight_decay > 0.0)
-    problem.AddResidualBlock(new WeightDecay<K>(options.weight_decay), nullptr, params.data());
+    problem.AddResidualBlock(new WeightDecay<K>(options.weight_decay, centre), nullptr, params.data());
 
   ceres::Solver::Options solver_options;
   solver_options.minimizer_type = ceres::TRUST_REGION;
@@ -237,7 +244,7 @@ LstmTrainingSummary solve(filters::LstmNet<I, H>& net, const SequenceSet& train,
   scales.push_back(options.mae_scale);
 
   LstmTrainingSummary summary;
-  summary.initial_cost = robust_cost(cache, params.data(), n, options);
+  summary.initial_cost = robust_cost<K>(cache, params.data(), n, options, centre);
   ceres::Solver::Summary ceres_summary;
   bool failed = false;
   int budget = options.max_iterations;
@@ -259,7 +266,7 @@ LstmTrainingSummary solve(filters::LstmNet<I, H>& net, const SequenceSet& train,
 
   summary.termination =
       std::string(ceres::TerminationTypeToString(ceres_summary.termination_type)) + ": " + ceres_summary.message;
-  summary.final_cost = robust_cost(cache, params.data(), n, options);
+  summary.final_cost = robust_cost<K>(cache, params.data(), n, options, centre);
   summary.seconds = std::chrono::duration<double>(stop - start).count();
   const bool finite = std::all_of(params.begin(), params.end(), [](double v) { return std::isfinite(v); });
   summary.usable = finite && !failed && std::isfinite(summary.final_cost);

@@ -5,7 +5,8 @@
 // retrain online on 300 fresh samples (§4.2). Here the same objective is
 // minimised by Ceres' trust-region Levenberg–Marquardt, one residual block
 // per window:
-//   r_n(w) = net_w(z_n) − ỹ_n,   cost = ½ Σ_n ρ(r_n²)   (+ ½·λ·‖w‖² if weight_decay λ > 0)
+//   r_n(w) = net_w(z_n) − ỹ_n,   cost = ½ Σ_n ρ(r_n²)   (+ ½·λ·‖w − w̄‖² if weight_decay λ > 0;
+//   w̄ = 0, or the starting weights with decay_to_start)
 // with z_n the standardised window (eq. 4), ỹ_n = (y_n − output_mean)/output_sd
 // and ρ = ceres::SoftLOneLoss(a): ρ(s) = 2a²(√(1 + s/a²) − 1) ≈ 2a|r| for
 // |r| ≫ a, i.e. the MAE up to a constant factor, smooth near 0 so that LM's
@@ -89,6 +90,12 @@ struct LstmTrainingOptions {
   double mae_scale_start = 1.0;
   double function_tolerance = 1e-7;  // Ceres Solver::Options::function_tolerance (≥ 0)
   double weight_decay = 0.0;         // optional L2 λ on the weights (one extra residual block), 0 = off
+  // The decay pulls toward the starting weights instead of 0: for
+  // retraining, a Gaussian prior centred on the current model (MAP), so that
+  // a few hundred noisy samples move the weights only as far as they
+  // disagree with it ("elastic" refits; cf. Kirkpatrick et al., PNAS 2017,
+  // with an isotropic weight).
+  bool decay_to_start = false;
   std::uint64_t seed = 1;            // initial weights (Glorot-uniform from core/counter_rng.h: thread-count independent)
   int num_threads = 1;               // OpenMP threads evaluating the windows (≥ 1); results do not depend on it
   bool IsValid(std::string* why) const;

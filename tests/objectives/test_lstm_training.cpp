@@ -375,5 +375,46 @@ TEST(LstmTraining, WeightDecayShrinksWeights) {
   EXPECT_LT(n_decayed, n_plain);
 }
 
+// Refit settings like the fusion's (learned_fusion.h): final loss scale, 10 iterations.
+LstmTrainingOptions default_options_for_refit() {
+  LstmTrainingOptions o;
+  o.max_iterations = 10;
+  o.mae_scale_start = o.mae_scale;
+  return o;
+}
+
+TEST(LstmTraining, DecayToStartKeepsARefitNearTheCurrentWeights) {
+  // A refit on a few noisy samples of a shifted task: decay toward the
+  // starting weights (the retraining prior) moves the weights less than a
+  // free refit, and less than decay of the same λ toward zero; it still
+  // lowers the training cost from where it started.
+  const SequenceSet train = memory_task(41, 300);
+  LstmTrainingOptions options;
+  options.max_iterations = 40;
+  VelocityNet net;
+  ASSERT_TRUE(train_lstm(net, train, SequenceSet{}, options).usable);
+  const SequenceSet few = memory_task(42, 40, 0.9, 0.1);
+  auto moved = [&](double lambda, bool to_start, LstmTrainingSummary* summary) {
+    LstmTrainingOptions o = default_options_for_refit();
+    o.weight_decay = lambda;
+    o.decay_to_start = to_start;
+    VelocityNet refit = net;
+    *summary = retrain_lstm(refit, few, o);
+    double d2 = 0.0;
+    for (int n = 0; n < VelocityNet::kWeights; ++n) d2 += (refit.weights[n] - net.weights[n]) * (refit.weights[n] - net.weights[n]);
+    return std::sqrt(d2);
+  };
+  LstmTrainingSummary free_s, start_s, zero_s;
+  const double free_move = moved(0.0, false, &free_s);
+  const double start_move = moved(1.0, true, &start_s);
+  const double zero_move = moved(1.0, false, &zero_s);
+  ASSERT_TRUE(free_s.usable && start_s.usable && zero_s.usable);
+  EXPECT_GT(free_move, 0.0);
+  EXPECT_LT(start_move, 0.7 * free_move);
+  EXPECT_LT(start_move, zero_move);
+  EXPECT_LT(start_s.final_cost, start_s.initial_cost);
+  EXPECT_GT(start_s.initial_cost, 0.0);
+}
+
 }  // namespace
 }  // namespace odotune
