@@ -147,6 +147,8 @@ std::string learned_command(const LearnedArgs& a) {
     c += fmt::format(" --retrain-iterations {}", a.options.retrain_iterations);
   if (a.options.samples_per_retrain != d.samples_per_retrain)
     c += fmt::format(" --every {}", a.options.samples_per_retrain);
+  if (a.options.slip_drives != d.slip_drives) c += fmt::format(" --slip-drives {}", a.options.slip_drives);
+  if (a.options.slip_stride != d.slip_stride) c += fmt::format(" --slip-stride {}", a.options.slip_stride);
   for (int i = 0; i < 5; ++i)
     if (a.scenarios[i] != default_scenario(kLearnedScenarioFiles[i]))
       c += std::string(" ") + kLearnedScenarioFlags[i] + " " + a.scenarios[i];
@@ -169,6 +171,12 @@ void register_learned_study(CLI::App* study) {
       ->default_val(a->options.retrain_iterations);
   sub->add_option("--every", a->options.samples_per_retrain, "retrain every N well-localised samples (paper: 300)")
       ->default_val(a->options.samples_per_retrain);
+  sub->add_option("--slip-drives", a->options.slip_drives,
+                  "drives the slip detector trains on: the slip scenario and N-1 more of its route with random "
+                  "slip episodes")
+      ->default_val(a->options.slip_drives);
+  sub->add_option("--slip-stride", a->options.slip_stride, "train the slip detector on every N-th window")
+      ->default_val(a->options.slip_stride);
   sub->add_option("--threads", a->options.threads, "threads evaluating the training windows (results do not depend "
                                                    "on it)")
       ->check(CLI::PositiveNumber);

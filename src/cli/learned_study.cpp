@@ -1,12 +1,15 @@
 #include "cli/learned_study.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
+#include "tracks/motion_profile.h"
+#include "tracks/random_slip.h"
 #include "tracks/simulator.h"
 #include "tracks/slip_episodes.h"
 
@@ -15,7 +18,8 @@ namespace odotune::cli {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr long kStages = 14;   // 5 simulations, 2 trainings, 1 + 3 + 3 evaluations
+// 5 simulations, the extra slip drives, 2 trainings, 1 + 3 + 3 evaluations.
+long stage_count(const LearnedStudyOptions& o) { return 14 + (o.slip_drives - 1); }
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -23,15 +27,27 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 struct Stage {
   const LearnedStudyProgress& progress;
+  long total;
   long done = 0;
   void next(const std::string& name) {
-    if (progress) progress(done, kStages, name);
+    if (progress) progress(done, total, name);
     ++done;
   }
   void finish() {
-    if (progress) progress(kStages, kStages, "done");
+    if (progress) progress(total, total, "done");
   }
 };
+
+// Mean squared error pooled over several series pairs (NaN where none).
+double pooled_mean_squared_error(const std::vector<const std::vector<double>*>& est,
+                                 const std::vector<const std::vector<double>*>& truth) {
+  std::vector<double> e, t;
+  for (std::size_t i = 0; i < est.size(); ++i) {
+    e.insert(e.end(), est[i]->begin(), est[i]->end());
+    t.insert(t.end(), truth[i]->begin(), truth[i]->end());
+  }
+  return mean_squared_error(e, t);
+}
 
 PathSeries path_of(const PoseTrack& p) { return {p.x, p.y, p.theta}; }
 PathSeries truth_path(const FusionInput& in) { return {in.gt_x, in.gt_y, in.gt_theta}; }
@@ -49,8 +65,9 @@ LstmTrainingOptions training_options(const LearnedStudyOptions& o, int iteration
 // The fusion of the study: UKF defaults, the given odometry and variance.
 LearnedFusionOptions fusion_options(const LearnedStudyOptions& o, LearnedFusionOptions::Odometry odometry,
                                     const SlipDetectorModel* detector, double static_var_v, double static_var_w,
-                                    bool retrain) {
+                                    bool retrain, double gyro_var = UkfSensorNoise{}.gyro_var) {
   LearnedFusionOptions f;
+  f.noise.gyro_var = gyro_var;
   f.odometry = odometry;
   f.detector = detector;
   f.static_var_v = static_var_v;
@@ -119,6 +136,8 @@ bool LearnedStudyOptions::IsValid(std::string* why) const {
   if (!(previous_noise_v >= 0.0 && std::isfinite(previous_noise_v)) ||
       !(previous_noise_w >= 0.0 && std::isfinite(previous_noise_w)))
     return fail("previous_noise_v/_w must be finite and >= 0");
+  if (slip_drives < 1 || slip_drives > 20)
+    return fail(fmt::format("slip_drives = {} must be in 1..20", slip_drives));
   if (slip_stride < 1) return fail(fmt::format("slip_stride = {} must be >= 1", slip_stride));
   if (threads < 1) return fail(fmt::format("threads = {} must be >= 1", threads));
   return true;
@@ -180,7 +199,7 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
   if (!options.IsValid(&why)) throw std::invalid_argument("study learned: " + why);
   check_learned_scenarios(scenarios);
   const auto t0 = std::chrono::steady_clock::now();
-  Stage stage{progress};
+  Stage stage{progress, stage_count(options)};
 
   LearnedStudy out;
   out.options = options;
@@ -208,8 +227,26 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
                                               kLearnedScenarioRoles[i], roles[i]->name));
     if (i == 4) slip_eval_episodes = sim::slip_episodes_from_metadata(track.meta());
   }
-  const FusionInput &learn = inputs[0], &eval = inputs[1], &step = inputs[2], &slip = inputs[3],
-                    &slip_eval = inputs[4];
+  const FusionInput &learn = inputs[0], &eval = inputs[1], &step = inputs[2], &slip_eval = inputs[4];
+  // The extra drives of the slip route, with random episode layouts.
+  out.slip_drives.push_back({options.seed + 3, scenarios.slip.slip_episodes});
+  std::vector<FusionInput> extra;
+  const sim::MotionProfile route(scenarios.slip.motion);
+  for (int j = 1; j < options.slip_drives; ++j) {
+    sim::Scenario s = scenarios.slip;
+    s.seed = options.seed + 4 + static_cast<std::uint64_t>(j);
+    s.slip_episodes = sim::random_slip_episodes(route, s.seed);
+    s.name = fmt::format("{}_random{}", scenarios.slip.name, j);
+    stage.next(fmt::format("simulating {}", s.name));
+    if (s.slip_episodes.empty())
+      throw std::invalid_argument(fmt::format("slip scenario '{}': its route has no stretch long and fast enough "
+                                              "for a random slip episode (tracks/random_slip.h)",
+                                              scenarios.slip.name));
+    out.slip_drives.push_back({s.seed, s.slip_episodes});
+    extra.push_back(build_fusion_input(sim::simulate(s), fo));
+  }
+  std::vector<const FusionInput*> slips = {&inputs[3]};
+  for (const FusionInput& in : extra) slips.push_back(&in);
 
   // 2. Train.
   stage.next("training the velocity nets");
@@ -223,19 +260,35 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
   out.training.kinematic_w_mae = series_errors(learn_kin.w, learn.w_true, {}).mae;
 
   stage.next("training the slip detector");
-  const OdometrySeries slip_lstm = run_learned_odometry(slip, out.model);
+  std::vector<OdometrySeries> slip_lstm, slip_kin;
+  for (const FusionInput* in : slips) {
+    slip_lstm.push_back(run_learned_odometry(*in, out.model));
+    slip_kin.push_back(kinematic_odometry(*in));
+  }
   SlipTrainingOptions so;
   so.training = training_options(options, options.iterations);
   so.stride = options.slip_stride;
-  out.detector = train_slip_detector({&slip}, {slip_lstm}, so, &out.training.detector);
+  out.detector = train_slip_detector(slips, slip_lstm, so, &out.training.detector);
 
-  // 3. Static variances.
-  const OdometrySeries slip_kin = kinematic_odometry(slip);
-  out.static_var_lstm_v = mean_squared_error(slip_lstm.v, slip.v_true);
-  out.static_var_lstm_w = mean_squared_error(slip_lstm.w, slip.w_true);
-  out.static_var_kin_v = mean_squared_error(slip_kin.v, slip.v_true);
-  out.static_var_kin_w = mean_squared_error(slip_kin.w, slip.w_true);
-  for (double v : {out.static_var_lstm_v, out.static_var_lstm_w, out.static_var_kin_v, out.static_var_kin_w})
+  // 3. Static variances, pooled over the detector's training drives.
+  std::array<std::vector<const std::vector<double>*>, 6> series;  // lstm v, w; kin v, w; true v, w
+  std::vector<const std::vector<double>*> gyro, gyro_truth;
+  for (std::size_t i = 0; i < slips.size(); ++i) {
+    if (slips[i]->has_gyro) gyro.push_back(&slips[i]->gyro_z), gyro_truth.push_back(&slips[i]->w_true);
+    series[0].push_back(&slip_lstm[i].v);
+    series[1].push_back(&slip_lstm[i].w);
+    series[2].push_back(&slip_kin[i].v);
+    series[3].push_back(&slip_kin[i].w);
+    series[4].push_back(&slips[i]->v_true);
+    series[5].push_back(&slips[i]->w_true);
+  }
+  out.static_var_lstm_v = pooled_mean_squared_error(series[0], series[4]);
+  out.static_var_lstm_w = pooled_mean_squared_error(series[1], series[5]);
+  out.static_var_kin_v = pooled_mean_squared_error(series[2], series[4]);
+  out.static_var_kin_w = pooled_mean_squared_error(series[3], series[5]);
+  if (gyro.size() == slips.size()) out.static_var_gyro = pooled_mean_squared_error(gyro, gyro_truth);
+  for (double v : {out.static_var_lstm_v, out.static_var_lstm_w, out.static_var_kin_v, out.static_var_kin_w,
+                   out.static_var_gyro})
     if (!(v > 0.0) || !std::isfinite(v))
       throw std::invalid_argument(fmt::format("slip scenario '{}': the odometry's mean squared error there is {}: "
                                               "expected a finite value > 0 for the static variance",
@@ -319,7 +372,8 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
     stage.next("Table 3: LSTM + variable covariance");
     const LearnedFusionResult var = run_learned_fusion(
         slip_eval, &out.model,
-        fusion_options(options, Odo::learned, &out.detector, out.static_var_lstm_v, out.static_var_lstm_w, false));
+        fusion_options(options, Odo::learned, &out.detector, out.static_var_lstm_v, out.static_var_lstm_w, false,
+                       out.static_var_gyro));
     t.rows.push_back(table3_row("LSTM odometry + variable covariance", slip_eval, var));
     t.lstm_sq_error_v = abs_errors(var.odometry.v, slip_eval.v_true);
     t.lstm_sq_error_w = abs_errors(var.odometry.w, slip_eval.w_true);
@@ -329,13 +383,15 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
     stage.next("Table 3: traditional + static covariance");
     const LearnedFusionResult kin = run_learned_fusion(
         slip_eval, nullptr,
-        fusion_options(options, Odo::kinematic, nullptr, out.static_var_kin_v, out.static_var_kin_w, false));
+        fusion_options(options, Odo::kinematic, nullptr, out.static_var_kin_v, out.static_var_kin_w, false,
+                       out.static_var_gyro));
     t.rows.push_back(table3_row("Traditional odometry + static covariance", slip_eval, kin));
 
     stage.next("Table 3: LSTM + static covariance");
     const LearnedFusionResult fixed = run_learned_fusion(
         slip_eval, &out.model,
-        fusion_options(options, Odo::learned, nullptr, out.static_var_lstm_v, out.static_var_lstm_w, false));
+        fusion_options(options, Odo::learned, nullptr, out.static_var_lstm_v, out.static_var_lstm_w, false,
+                       out.static_var_gyro));
     t.rows.push_back(table3_row("LSTM odometry + static covariance", slip_eval, fixed));
   }
   stage.finish();

@@ -11,12 +11,19 @@
 //      (i = 0 learn, 1 eval, 2 step, 3 slip, 4 slip_eval), so that training
 //      and evaluation tracks never share sensor noise; lay each out at
 //      options.rate_hz (objectives/fusion_input.h).
+//      Then options.slip_drives − 1 more drives of the `slip` route, drive j
+//      (1-based) with seed options.seed + 4 + j and the random episode
+//      layout random_slip_episodes(route, seed + 4 + j) in place of the
+//      scenario's own episodes.
 //   2. Train the velocity nets on `learn` (train_learned_odometry, 70/30
-//      split, Ceres seed options.seed) and the slip detector on `slip`
-//      against the learned odometry's errors there (run_learned_odometry).
+//      split, Ceres seed options.seed) and the slip detector on `slip` and
+//      the extra drives, against the learned odometry's errors there
+//      (run_learned_odometry).
 //   3. Static odometry variances ("manually adjusted" in the paper): each
-//      odometry's mean squared velocity error on the detector's training
-//      track `slip` — the best constant variance for a track with slip.
+//      odometry's mean squared velocity error over the detector's training
+//      drives — the best constant variance for a track with slip; and the
+//      gyro's the same way (its bias and scale error make it more than the
+//      sensor's white noise), used for every row of Table 3.
 //   4. Table 1 on `eval`: learned vs kinematic odometry alone, pose
 //      dead-reckoned from each.
 //   5. Table 2 on `step` (a radius_step mid-drive): the UKF (external
@@ -56,6 +63,11 @@ struct LearnedStudyOptions {
   // V net's validation MAE worse, not better (tried with `learn train
   // --previous-noise`).
   double previous_noise_v = 0.0, previous_noise_w = 0.0;
+  // Drives the slip detector trains on: `slip` as written, and slip_drives − 1
+  // more of the same route with random episode layouts (tracks/random_slip.h),
+  // 1..20. One drive teaches the detector its ten episodes, not slip: trained
+  // on wheelchair_slip alone it missed episodes of the held-out drive.
+  int slip_drives = 4;
   int slip_stride = 1;             // every n-th detector window (SlipTrainingOptions::stride), ≥ 1
   int threads = 1;                 // OpenMP threads evaluating the windows; results do not depend on it, ≥ 1
   bool IsValid(std::string* why) const;
@@ -151,11 +163,21 @@ struct LearnedStudy {
   LearnedStudyOptions options;
   std::vector<std::string> scenario_names;   // kLearnedScenarioRoles order
   std::vector<std::string> track_names;      // the simulated tracks' names
+  // The detector's training drives: `slip` then the random layouts (step 1).
+  struct SlipDrive {
+    std::uint64_t seed = 0;
+    std::vector<sim::SlipEpisode> episodes;
+  };
+  std::vector<SlipDrive> slip_drives;
   LearnedOdometryModel model;
   SlipDetectorModel detector;
   TrainingRecord training;
   double static_var_lstm_v = 0.0, static_var_lstm_w = 0.0;   // step 3 [(m/s)², (rad/s)²]
   double static_var_kin_v = 0.0, static_var_kin_w = 0.0;
+  // The gyro's static variance in Table 3's fusion: its mean squared error
+  // (gyro_z − true W) over the detector's training drives; the UKF default
+  // (UkfSensorNoise::gyro_var) when they have no gyro [(rad/s)²].
+  double static_var_gyro = UkfSensorNoise{}.gyro_var;
   Table1Result table1;
   Table2Result table2;
   Table3Result table3;

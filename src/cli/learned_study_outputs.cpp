@@ -313,7 +313,11 @@ nlohmann::json learned_results_json(const LearnedStudy& s, const LearnedStudyCon
   j["options"] = {{"seed", o.seed}, {"iterations", o.iterations}, {"retrain_iterations", o.retrain_iterations},
                   {"samples_per_retrain", o.samples_per_retrain}, {"rate_hz", o.rate_hz},
                   {"previous_noise_v", o.previous_noise_v}, {"previous_noise_w", o.previous_noise_w},
-                  {"slip_stride", o.slip_stride}};
+                  {"slip_drives", o.slip_drives}, {"slip_stride", o.slip_stride}};
+  nlohmann::json drives = nlohmann::json::array();
+  for (const LearnedStudy::SlipDrive& d : s.slip_drives)
+    drives.push_back({{"seed", d.seed}, {"slip_episodes", sim::format_slip_episodes(d.episodes)}});
+  j["slip_training_drives"] = drives;
   nlohmann::json sc = nlohmann::json::array();
   for (std::size_t i = 0; i < s.scenario_names.size(); ++i)
     sc.push_back({{"role", kLearnedScenarioRoles[i]}, {"scenario", s.scenario_names[i]},
@@ -328,7 +332,7 @@ nlohmann::json learned_results_json(const LearnedStudy& s, const LearnedStudyCon
                     {"train_windows", t.detector.train_windows}, {"validation_windows", t.detector.validation_windows}}},
       {"kinematic_v_mae", num_json(t.kinematic_v_mae)}, {"kinematic_w_mae", num_json(t.kinematic_w_mae)}};
   j["static_variance"] = {{"lstm_v", s.static_var_lstm_v}, {"lstm_w", s.static_var_lstm_w},
-                          {"kinematic_v", s.static_var_kin_v}, {"kinematic_w", s.static_var_kin_w}};
+                          {"kinematic_v", s.static_var_kin_v}, {"kinematic_w", s.static_var_kin_w}, {"gyro", s.static_var_gyro}};
   nlohmann::json t1 = nlohmann::json::array();
   for (const ErrorRow& r : s.table1.rows) t1.push_back({{"method", r.name}, {"errors", errors_json(r.errors)}});
   j["table1"] = {{"track", s.table1.track}, {"rows", t1}};
