@@ -66,17 +66,7 @@ nlohmann::json calibration_tune_json(const CalibrationTuneOutcome& o, const Cali
                      {"particles", effective_particles(o.default_pf, r.model)},
                      {"seed", o.default_pf.seed},
                      {"ext_from_gt_hz", c.ext_from_gt_hz}};
-  nlohmann::json params = nlohmann::json::object(), units = nlohmann::json::object(),
-                 defaults = nlohmann::json::object();
-  for (std::size_t i = 0; i < o.params.size(); ++i) {
-    params[o.param_names[i]] = o.params[i];
-    units[o.param_names[i]] = o.param_units[i];
-    defaults[o.param_names[i]] = o.default_params[i];
-  }
-  j["params"] = params;
-  j["param_units"] = units;
-  j["default_params"] = defaults;
-  j["default_kept"] = o.default_kept;
+  put_tuned_params_json(j, o.param_names, o.param_units, o.params, o.default_params, o.default_kept);
   j["score_weights"] = {{"radius", r.weights.radius},
                         {"convergence", r.weights.convergence},
                         {"pose", r.weights.pose},

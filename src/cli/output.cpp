@@ -48,6 +48,22 @@ nlohmann::json tune_json(const TuneOutcome& o) {
   return j;
 }
 
+void put_tuned_params_json(nlohmann::json& j, const std::vector<std::string>& names,
+                           const std::vector<std::string>& units, const std::vector<double>& tuned,
+                           const std::vector<double>& defaults, bool default_kept) {
+  nlohmann::json params = nlohmann::json::object(), unit = nlohmann::json::object(),
+                 start = nlohmann::json::object();
+  for (std::size_t i = 0; i < tuned.size(); ++i) {
+    params[names[i]] = tuned[i];
+    unit[names[i]] = units[i];
+    start[names[i]] = defaults[i];
+  }
+  j["params"] = params;
+  j["param_units"] = unit;
+  j["default_params"] = start;
+  j["default_kept"] = default_kept;
+}
+
 nlohmann::json improvement_json(const ErrorMetrics& baseline, const ErrorMetrics& tuned) {
   return {{"rmse", improvement_pct(baseline.rmse_m, tuned.rmse_m)},
           {"mae", improvement_pct(baseline.mae_m, tuned.mae_m)},

@@ -28,6 +28,12 @@ std::string metric_change(double baseline_m, double tuned_m);
 nlohmann::json improvement_json(const ErrorMetrics& baseline, const ErrorMetrics& tuned);
 nlohmann::json track_scores_json(const std::vector<TrackScore>& tracks);
 nlohmann::json convergence_json(const tuner::Summary& summary);
+// The tuned and default values by parameter name, into j: "params",
+// "param_units", "default_params" (each an object keyed by name) and
+// "default_kept" (the calibrator and UKF tunes, which start from defaults).
+void put_tuned_params_json(nlohmann::json& j, const std::vector<std::string>& names,
+                           const std::vector<std::string>& units, const std::vector<double>& tuned,
+                           const std::vector<double>& defaults, bool default_kept);
 
 // The lines `tune` prints under its heading for a noise model (EKF or UKF):
 // RMSE/MAE/MAXE change, per track when several, the tuned parameters and the

@@ -19,17 +19,7 @@ nlohmann::json ukf_tune_json(const UkfTuneOutcome& o, double fusion_rate_hz) {
     j["iterations"] = r.iterations;
   }
   j["fusion_rate_hz"] = fusion_rate_hz;
-  nlohmann::json params = nlohmann::json::object(), units = nlohmann::json::object(),
-                 defaults = nlohmann::json::object();
-  for (std::size_t i = 0; i < o.params.size(); ++i) {
-    params[o.param_names[i]] = o.params[i];
-    units[o.param_names[i]] = o.param_units[i];
-    defaults[o.param_names[i]] = o.default_params[i];
-  }
-  j["params"] = params;
-  j["param_units"] = units;
-  j["default_params"] = defaults;
-  j["default_kept"] = o.default_kept;
+  put_tuned_params_json(j, o.param_names, o.param_units, o.params, o.default_params, o.default_kept);
   j["baseline"] = metrics_json(o.baseline_mean);
   j["tuned"] = metrics_json(o.tuned_mean);
   j["improvement_pct"] = improvement_json(o.baseline_mean, o.tuned_mean);

@@ -1,5 +1,6 @@
 #include "objectives/learned_odometry.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -139,46 +140,47 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
   const auto start = std::chrono::steady_clock::now();
   LearnedTrainingSummary s;
   // Best of options.restarts starts (see LearnedTrainingOptions::restarts),
-  // scored free-running: the net fed its own previous output, as when it
+  // scored free-running: each net fed its own previous output, as when it
   // runs alone (run_learned_odometry), MAE over the last (1 − train_fraction)
   // of each track's steps. A net can have a small one-step (teacher-forced)
-  // validation MAE and still drift on its own outputs.
-  auto free_running_mae = [&](const filters::VelocityNet& net, bool w) {
-    LearnedOdometryModel m;
-    m.v_net = m.w_net = net;  // the same net in both slots: each slot feeds back its own output
-    double sum = 0.0;
+  // validation MAE and still drift on its own outputs. The V and W nets do
+  // not feed each other, so start r's pair is scored in one run.
+  auto free_running_mae = [&](const LearnedOdometryModel& m) {
+    std::array<double, 2> sum{0.0, 0.0};
     std::size_t count = 0;
     for (const FusionInput* in : tracks) {
       const OdometrySeries run = run_learned_odometry(*in, m);
-      const std::vector<double>& est = w ? run.w : run.v;
-      const std::vector<double>& truth = w ? in->w_true : in->v_true;
       const auto first = static_cast<std::size_t>(options.train_fraction * static_cast<double>(in->size()));
       for (std::size_t k = std::max<std::size_t>(first, 1); k < in->size(); ++k)
-        if (std::isfinite(est[k]) && std::isfinite(truth[k])) sum += std::abs(est[k] - truth[k]), ++count;
+        if (finite_all({run.v[k], run.w[k], in->v_true[k], in->w_true[k]})) {
+          sum[0] += std::abs(run.v[k] - in->v_true[k]);
+          sum[1] += std::abs(run.w[k] - in->w_true[k]);
+          ++count;
+        }
     }
-    return count > 0 ? sum / static_cast<double>(count) : std::numeric_limits<double>::infinity();
+    const double inf = std::numeric_limits<double>::infinity();
+    return count > 0 ? std::array<double, 2>{sum[0] / static_cast<double>(count), sum[1] / static_cast<double>(count)}
+                     : std::array<double, 2>{inf, inf};
   };
-  auto best_of = [&](filters::VelocityNet& net, const SequenceSet& train, const SequenceSet& val,
-                     std::uint64_t seed, bool w, int* kept, std::vector<double>* maes) {
-    LstmTrainingSummary best;
-    double best_mae = std::numeric_limits<double>::infinity();
-    const filters::VelocityNet fresh = net;
-    for (int r = 0; r < options.restarts; ++r) {
-      filters::VelocityNet candidate = fresh;
-      LstmTrainingOptions o = options.training;
-      o.seed = seed + 7919u * static_cast<std::uint64_t>(r);
-      const LstmTrainingSummary t = train_lstm(candidate, train, val, o);
-      const double mae = t.usable ? free_running_mae(candidate, w) : std::numeric_limits<double>::infinity();
-      maes->push_back(mae);
-      if (r == 0 || (t.usable && (!best.usable || mae < best_mae))) {
-        best = t, best_mae = mae, *kept = r, net = candidate;
-      }
-    }
-    return best;
-  };
-  s.v = best_of(model.v_net, v_train, v_val, options.training.seed, false, &s.v_restart, &s.v_restart_mae);
-  // A different initialisation for the W net.
-  s.w = best_of(model.w_net, w_train, w_val, options.training.seed + 1000, true, &s.w_restart, &s.w_restart_mae);
+  const LearnedOdometryModel fresh = model;
+  std::array<double, 2> best_mae{0.0, 0.0};
+  for (int r = 0; r < options.restarts; ++r) {
+    LearnedOdometryModel candidate = fresh;
+    LstmTrainingOptions o = options.training;
+    o.seed = options.training.seed + 7919u * static_cast<std::uint64_t>(r);
+    const LstmTrainingSummary tv = train_lstm(candidate.v_net, v_train, v_val, o);
+    o.seed += 1000;  // a different initialisation for the W net
+    const LstmTrainingSummary tw = train_lstm(candidate.w_net, w_train, w_val, o);
+    std::array<double, 2> mae = free_running_mae(candidate);
+    if (!tv.usable) mae[0] = std::numeric_limits<double>::infinity();
+    if (!tw.usable) mae[1] = std::numeric_limits<double>::infinity();
+    s.v_restart_mae.push_back(mae[0]);
+    s.w_restart_mae.push_back(mae[1]);
+    if (r == 0 || (tv.usable && (!s.v.usable || mae[0] < best_mae[0])))
+      s.v = tv, best_mae[0] = mae[0], s.v_restart = r, model.v_net = candidate.v_net;
+    if (r == 0 || (tw.usable && (!s.w.usable || mae[1] < best_mae[1])))
+      s.w = tw, best_mae[1] = mae[1], s.w_restart = r, model.w_net = candidate.w_net;
+  }
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   s.train_windows = v_train.size();
   s.validation_windows = v_val.size();
