@@ -1,4 +1,4 @@
-// The slip_episodes list of the scenario YAML (src/cli/scenario_yaml.h):
+// The slip_episodes list of the scenario YAML (cli/scenario_yaml.h):
 // parsing, FILE:LINE one-line errors, the write -> read round trip, and the
 // wheelchair learning/slip scenarios (parse and validate; only the short
 // round-trip scenario is simulated).

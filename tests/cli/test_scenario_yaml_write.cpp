@@ -1,4 +1,4 @@
-// scenario_to_yaml (src/cli/scenario_yaml.h) and the motion.knots form of the
+// scenario_to_yaml (cli/scenario_yaml.h) and the motion.knots form of the
 // scenario reader: a written scenario parses back to the same fields and
 // simulates to a byte-identical track; knots errors name file and line.
 #include <cmath>

@@ -1,4 +1,4 @@
-// Scenario YAML (src/cli/scenario_yaml.h), the bundled reference scenarios and
+// Scenario YAML (cli/scenario_yaml.h), the bundled reference scenarios and
 // tracks, and the `odotune simulate` command end to end.
 #include <cmath>
 #include <filesystem>

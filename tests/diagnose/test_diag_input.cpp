@@ -1,4 +1,4 @@
-// build_diag_input (src/diagnose/diag_input.h): odometry from ticks, wheel
+// build_diag_input (diagnose/diag_input.h): odometry from ticks, wheel
 // rates or commands; gyro; ground truth or fixes as reference; the reference
 // sigma from metadata or estimated; never sim.effects; one-line errors.
 #include <algorithm>

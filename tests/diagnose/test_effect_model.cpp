@@ -1,4 +1,4 @@
-// The augmented odometry model (src/diagnose/effect_model.h) and the windowed
+// The augmented odometry model (diagnose/effect_model.h) and the windowed
 // replay (window_replay.h): names from the effect table, no-op parameters give
 // exactly the nominal kinematics (checked against an independent dead
 // reckoning), Jet derivatives match central differences, and the model with

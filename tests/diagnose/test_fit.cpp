@@ -1,4 +1,4 @@
-// fit_effects (src/diagnose/fit.h): for each effect that wheel dead reckoning
+// fit_effects (diagnose/fit.h): for each effect that wheel dead reckoning
 // sees, a track simulated WITH that effect (ground truth, 120 s, fixed seed)
 // gives back the simulated parameters within 10 % of their size, finite
 // standard errors, and a lower error on held-out windows; with 1 Hz fixes only

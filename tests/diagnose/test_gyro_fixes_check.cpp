@@ -1,4 +1,4 @@
-// check_gyro_with_fixes (src/diagnose/gyro_fixes_check.h): the gyro judged
+// check_gyro_with_fixes (diagnose/gyro_fixes_check.h): the gyro judged
 // against sparse position fixes by gyro-heading dead reckoning.
 //  * concealed suite: gyro_scale_fixes_only names the gyro scale within 25 %
 //    of its departure; wheel_base_error_fixes_only (the confounded mirror)

@@ -1,4 +1,4 @@
-// Locating residual growth (src/diagnose/locate.h) on synthetic residual
+// Locating residual growth (diagnose/locate.h) on synthetic residual
 // series: a robot on a figure-eight with a time-varying pace, dead-reckoning
 // residuals re-anchored every 20 s, built from an injected growth (known
 // segment, region or condition) plus reference noise and an odometry random

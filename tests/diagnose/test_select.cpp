@@ -1,4 +1,4 @@
-// Model selection of the diagnosis (src/diagnose/select.h) and its parts
+// Model selection of the diagnosis (diagnose/select.h) and its parts
 // (paired_test.h, zone_boxes.h), on tracks simulated in memory
 // (sim_track.h) with sensor noise: ground truth with 5 mm white noise, a
 // robot of 60/60.5 mm wheels on a 0.36 m base with 4000 counts per

@@ -1,4 +1,4 @@
-// Sensor checks (src/diagnose/sensor_checks.h) on synthetic recordings whose
+// Sensor checks (diagnose/sensor_checks.h) on synthetic recordings whose
 // truth is known: a robot driven by smooth commands, integrated at 1 ms,
 // with a gyro of known scale/bias, wheels of known true radii / base, an
 // optional odometry time offset and actuator lag, and ground truth or fixes.

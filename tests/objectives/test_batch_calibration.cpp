@@ -1,4 +1,4 @@
-// Offline batch calibration (src/objectives/batch_calibration.h): on
+// Offline batch calibration (objectives/batch_calibration.h): on
 // simulated wheelchair tracks with known radius and wheel-base errors the
 // least-squares fit recovers the truth within the paper's 0.5 %, its standard
 // errors cover the actual error and shrink with more data, and gross outliers

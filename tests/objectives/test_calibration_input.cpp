@@ -1,4 +1,4 @@
-// Calibration input (src/objectives/calibration_input.h): the truth schedule
+// Calibration input (objectives/calibration_input.h): the truth schedule
 // from sim.effects, odometry rows and calibration samples of a simulated
 // wheelchair track against the simulated truth, external velocities derived
 // from the ground truth, ground truth interpolated to odometry rows, and the

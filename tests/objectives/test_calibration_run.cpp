@@ -1,4 +1,4 @@
-// Running and scoring odometry calibration (src/objectives/calibration_run.h):
+// Running and scoring odometry calibration (objectives/calibration_run.h):
 // method names, the convergence-time rule on hand-made traces, dead-reckoning
 // scores of fixed parameters against an independent integration of the
 // ticks, and the online calibrators (DKF, adaptive PF) and the batch fit on

@@ -1,4 +1,4 @@
-// The effect vocabulary (src/tracks/effects.h): names verbatim from the spec,
+// The effect vocabulary (tracks/effects.h): names verbatim from the spec,
 // command-line specs, validation messages, override semantics.
 #include <filesystem>
 #include <fstream>

@@ -1,4 +1,4 @@
-// scenario_from_track (src/tracks/scenario_from_track.h) and the explicit
+// scenario_from_track (tracks/scenario_from_track.h) and the explicit
 // velocity knots of the motion profile (motion_profile.h): a track simulated
 // with an effect, turned back into a scenario with the same effect and
 // simulated again, drives the same ground path; the effect then shows in the

@@ -1,4 +1,4 @@
-// The simulator (src/tracks/simulator.h) and the motion profile: each physics
+// The simulator (tracks/simulator.h) and the motion profile: each physics
 // effect changes exactly what physics-effects.md says and nothing else; the
 // nominal kinematics of track-format.md reproduce the ground truth from the
 // ticks; noise is seeded and has the configured size; commands respect the

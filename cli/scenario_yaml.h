@@ -1,4 +1,4 @@
-// Reading a simulation scenario (src/tracks/scenario.h) from YAML, and writing
+// Reading a simulation scenario (tracks/scenario.h) from YAML, and writing
 // one (scenario_to_yaml, in scenario_yaml_write.cpp).
 //
 // Schema (every key optional unless marked; see scenarios/README.md and the

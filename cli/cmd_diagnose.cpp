@@ -1,6 +1,6 @@
 // odotune diagnose: where a nominal robot model and a recording disagree,
 // which physics of ../shared/specs/physics-effects.md was left out, its
-// fitted size, and the held-out proof (src/diagnose/diagnosis.h).
+// fitted size, and the held-out proof (diagnose/diagnosis.h).
 #include <filesystem>
 
 #include <fmt/format.h>

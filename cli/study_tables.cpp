@@ -281,7 +281,7 @@ std::string table2_markdown(const CalibrationStudy& s, const StudyContext& c) {
                     "(§V); random-walk σ = max(α·√((V_m − V_O)² + (W_m − W_O)²), {} m) with α = {} "
                     "(eq. 11). The floor is not in the paper: eq. 11 alone gives σ of a few µm here, "
                     "the particles collapse and a radius step is never followed "
-                    "(`src/filters/pf_calibrator.h`).\n",
+                    "(`filters/pf_calibrator.h`).\n",
                     s.options.adaptive_initial_particles > 0 ? s.options.adaptive_initial_particles : a.particles,
                     a.dispersion_per_particle_m, a.min_particles, a.max_particles, a.min_random_walk_sigma_m,
                     a.alpha);

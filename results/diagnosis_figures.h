@@ -2,7 +2,7 @@
 // diagnosis), rendered with gnuplot like the study's figures (results/
 // figures.h): each figure is STEM.png (pngcairo) + STEM.svg, both or neither,
 // texts verbatim (`noenhanced`), axes labelled with units, titles naming the
-// track. Takes plain data: the results layer does not see src/diagnose/.
+// track. Takes plain data: the results layer does not see diagnose/.
 #pragma once
 
 #include <cstdint>

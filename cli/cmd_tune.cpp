@@ -242,14 +242,14 @@ void register_tune(CLI::App& app) {
       "Calibrators (pf-calib, adaptive-pf-calib): tunes N_eff fraction, max-weight ratio, α,\n"
       "dispersion per particle and random-walk σ; the score weighs the final radius error,\n"
       "convergence time, the calibrated odometry's pose RMSE and the particle count\n"
-      "(src/objectives/calibration_objective.h). The baseline is the paper's default settings;\n"
+      "(objectives/calibration_objective.h). The baseline is the paper's default settings;\n"
       "if they score better than the solver's best they are kept. Tracks need external velocities\n"
       "(v_ext, w_ext, or --ext-from-gt HZ) and ground truth, all of one robot. --config-out writes\n"
-      "an odotune-pf-config/1 file (src/cli/pf_config_yaml.h).\n"
+      "an odotune-pf-config/1 file (cli/pf_config_yaml.h).\n"
       "UKF (ukf): tunes the (V, W) fusion filter's process noise, static odometry variances, gyro\n"
-      "variance and external-variance scale (src/objectives/ukf_objective.h) for --mode's error of\n"
+      "variance and external-variance scale (objectives/ukf_objective.h) for --mode's error of\n"
       "the fused pose against ground truth (tracks need it); the baseline is the default noise.\n"
-      "--config-out writes an odotune-ukf-config/1 file (src/cli/ukf_config_yaml.h).");
+      "--config-out writes an odotune-ukf-config/1 file (cli/ukf_config_yaml.h).");
   sub->add_option("--track", args->tracks, "track file (repeat for several; fitness = mean over tracks)")
       ->required();
   sub->add_option("--model", args->model, "rq | alpha | gyro | pf-calib | adaptive-pf-calib | ukf");

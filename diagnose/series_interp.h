@@ -1,7 +1,7 @@
 // Sampled signals on strictly increasing times, as the diagnosis reads them:
 // linear interpolation with the ends held, and a cumulative quantity (given,
 // or the exact integral of a rate's linear interpolant). One copy for every
-// step of src/diagnose/ (input, replay, sensor checks, residual series).
+// step of diagnose/ (input, replay, sensor checks, residual series).
 #pragma once
 
 #include <algorithm>
