@@ -11,7 +11,7 @@
 
 #include <string>
 
-#include "cli/scenario_yaml.h"
+#include "formats/scenario_yaml.h"
 #include "diagnose/diag_input.h"
 #include "diagnose/diagnosis.h"
 #include "tracks/motion_profile.h"
@@ -22,7 +22,7 @@ namespace {
 using namespace odotune;
 
 Track five_minutes_at_100hz() {
-  sim::Scenario sc = cli::load_scenario(std::string(ODOTUNE_SOURCE_DIR) + "/scenarios/track3.yaml");
+  sim::Scenario sc = odotune::load_scenario(std::string(ODOTUNE_SOURCE_DIR) + "/scenarios/track3.yaml");
   sc.sensors.encoders.rate_hz = 100.0;
   sc.sensors.commands.rate_hz = 100.0;
   sc.sensors.gyro.rate_hz = 100.0;

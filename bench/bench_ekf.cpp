@@ -10,7 +10,7 @@
 
 #include <string>
 
-#include "cli/tune_job.h"
+#include "jobs/tune_job.h"
 #include "objectives/param_space.h"
 #include "objectives/replay.h"
 #include "tracks/track_io.h"
@@ -19,10 +19,10 @@ namespace {
 
 using odotune::filters::NoiseModel;
 
-const odotune::cli::PreparedTrack& track1() {
+const odotune::PreparedTrack& track1() {
   static const odotune::Track track =
       odotune::read_track(std::string(ODOTUNE_SOURCE_DIR) + "/data/tracks/track1.csv");
-  static const odotune::cli::PreparedTrack prepared = odotune::cli::prepare_track(track);
+  static const odotune::PreparedTrack prepared = odotune::prepare_track(track);
   return prepared;
 }
 
@@ -62,13 +62,13 @@ void BM_FastReplay(benchmark::State& state) {
 void BM_PsoTune(benchmark::State& state) {
   const auto model = static_cast<NoiseModel>(state.range(0));
   const auto& t = track1();
-  odotune::cli::TuneRequest req;
+  odotune::TuneRequest req;
   req.model = model;
   req.mode = 7;
   req.seed = 1;
   long evals = 0;
   for (auto _ : state) {
-    auto out = odotune::cli::run_tune({&t}, req);
+    auto out = odotune::run_tune({&t}, req);
     evals = out.summary.evaluations;
     benchmark::DoNotOptimize(out);
   }

@@ -2,7 +2,7 @@
 #include <iostream>
 
 #include "cli/commands.h"
-#include "cli/failure.h"
+#include "core/failure.h"
 
 namespace odotune::cli {
 

@@ -25,15 +25,16 @@
 
 #include <fmt/format.h>
 
-#include "cli/calibration_figure_data.h"
-#include "cli/calibration_json.h"
-#include "cli/calibration_ranges.h"
-#include "cli/calibration_trace.h"
-#include "cli/calibration_yaml.h"
+#include "jobs/calibration_figure_data.h"
+#include "formats/calibration_json.h"
+#include "objectives/calibration_ranges.h"
+#include "jobs/calibration_trace.h"
+#include "formats/calibration_yaml.h"
 #include "cli/commands.h"
-#include "cli/config_yaml.h"
-#include "cli/failure.h"
+#include "formats/config_yaml.h"
+#include "core/failure.h"
 #include "cli/output.h"
+#include "tracks/track_io.h"
 #include "cli/progress.h"
 #include "objectives/calibration_input.h"
 #include "objectives/calibration_run.h"

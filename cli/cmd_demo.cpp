@@ -6,11 +6,13 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
-#include "cli/config_yaml.h"
-#include "cli/failure.h"
+#include "formats/config_yaml.h"
+#include "core/failure.h"
 #include "cli/output.h"
+#include "tracks/track_io.h"
+#include "jobs/tune_json.h"
 #include "cli/progress.h"
-#include "cli/tune_job.h"
+#include "jobs/tune_job.h"
 
 namespace odotune::cli {
 

@@ -2,9 +2,11 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
-#include "cli/config_yaml.h"
-#include "cli/failure.h"
+#include "formats/config_yaml.h"
+#include "core/failure.h"
 #include "cli/output.h"
+#include "tracks/track_io.h"
+#include "jobs/tune_json.h"
 #include "objectives/param_space.h"
 #include "objectives/replay.h"
 

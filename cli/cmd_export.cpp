@@ -9,7 +9,7 @@
 // calibrator model (pf-calib, adaptive-pf-calib) is refused with one line:
 // it holds PF settings, not EKF noise (tune --config-out writes those). A run
 // of the fusion UKF (ukf) exports as odotune's own format only (an
-// odotune-ukf-config/1 file, cli/ukf_config_yaml.h); robot_localization has
+// odotune-ukf-config/1 file, formats/ukf_config_yaml.h); robot_localization has
 // no mapping for it (its filters estimate the pose, not a (V, W) fusion of
 // this form), which is refused with one line.
 #include <algorithm>
@@ -22,11 +22,11 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
-#include "cli/config_yaml.h"
-#include "cli/failure.h"
-#include "cli/store_access.h"
-#include "cli/tuned_model.h"
-#include "cli/ukf_config_yaml.h"
+#include "formats/config_yaml.h"
+#include "core/failure.h"
+#include "jobs/store_access.h"
+#include "objectives/tuned_model.h"
+#include "formats/ukf_config_yaml.h"
 #include "objectives/param_space.h"
 #include "objectives/process_noise_rate.h"
 #include "objectives/replay_input.h"

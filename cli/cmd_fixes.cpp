@@ -2,7 +2,7 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
-#include "cli/failure.h"
+#include "core/failure.h"
 #include "cli/output.h"
 #include "tracks/synthetic_fixes.h"
 #include "tracks/track_io.h"

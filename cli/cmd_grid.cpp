@@ -2,9 +2,9 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
-#include "cli/failure.h"
-#include "cli/grid_job.h"
-#include "cli/grid_mpi.h"
+#include "core/failure.h"
+#include "jobs/grid_job.h"
+#include "jobs/grid_mpi.h"
 #include "cli/output.h"
 #include "cli/progress.h"
 

@@ -8,7 +8,7 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
-#include "cli/failure.h"
+#include "core/failure.h"
 #include "tracks/importers.h"
 #include "tracks/track_io.h"
 

@@ -5,7 +5,7 @@
 // retraining of objectives/learned_fusion.h), on recorded or simulated tracks.
 // This file reads the flags, checks the inputs, calls the objectives and
 // prints; the model file is results/learned_model_json.h, the JSON blocks
-// cli/learned_study_outputs.h.
+// studies/learned_study_outputs.h.
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -16,11 +16,12 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
-#include "cli/config_yaml.h"
-#include "cli/failure.h"
-#include "cli/learned_study.h"
-#include "cli/learned_study_outputs.h"
+#include "formats/config_yaml.h"
+#include "core/failure.h"
+#include "studies/learned_study.h"
+#include "studies/learned_study_outputs.h"
 #include "cli/output.h"
+#include "tracks/track_io.h"
 #include "cli/progress.h"
 #include "objectives/fusion_input.h"
 #include "objectives/learned_fusion.h"

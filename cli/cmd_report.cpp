@@ -2,7 +2,7 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
-#include "cli/report_job.h"
+#include "jobs/report_job.h"
 
 namespace odotune::cli {
 

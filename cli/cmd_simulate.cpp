@@ -24,8 +24,8 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
-#include "cli/failure.h"
-#include "cli/scenario_yaml.h"
+#include "core/failure.h"
+#include "formats/scenario_yaml.h"
 #include "tracks/effects.h"
 #include "tracks/motion_profile.h"
 #include "tracks/random_slip.h"

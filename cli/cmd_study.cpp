@@ -1,7 +1,7 @@
 // odotune study resampling|calibration: the Monte-Carlo studies of Tables I
 // and II of Fariña, Toledo & Acosta (RA-L 2026) on simulated wheelchair
-// tracks. The computation is cli/calibration_study.h, the files
-// cli/study_outputs.h; this command reads the flags and scenarios, shows
+// tracks. The computation is studies/calibration_study.h, the files
+// studies/study_outputs.h; this command reads the flags and scenarios, shows
 // progress and prints the table.
 #include <filesystem>
 #include <memory>
@@ -11,15 +11,15 @@
 
 #include <fmt/format.h>
 
-#include "cli/calibration_study.h"
+#include "studies/calibration_study.h"
 #include "cli/commands.h"
-#include "cli/failure.h"
-#include "cli/learned_study.h"
-#include "cli/learned_study_outputs.h"
+#include "core/failure.h"
+#include "studies/learned_study.h"
+#include "studies/learned_study_outputs.h"
 #include "cli/progress.h"
-#include "cli/scenario_yaml.h"
-#include "cli/study_outputs.h"
-#include "cli/study_tables.h"
+#include "formats/scenario_yaml.h"
+#include "studies/study_outputs.h"
+#include "studies/study_tables.h"
 #include "results/gnuplot.h"
 
 namespace odotune::cli {

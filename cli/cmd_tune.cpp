@@ -7,19 +7,22 @@
 
 #include <fmt/format.h>
 
-#include "cli/calibration_tune_job.h"
-#include "cli/calibration_tune_output.h"
+#include "jobs/calibration_tune_job.h"
+#include "jobs/calibration_tune_json.h"
 #include "cli/commands.h"
-#include "cli/config_yaml.h"
-#include "cli/failure.h"
+#include "formats/config_yaml.h"
+#include "core/failure.h"
 #include "cli/output.h"
-#include "cli/pf_config_yaml.h"
+#include "tracks/track_io.h"
+#include "cli/tune_output.h"
+#include "jobs/tune_json.h"
+#include "formats/pf_config_yaml.h"
 #include "cli/progress.h"
-#include "cli/tune_job.h"
-#include "cli/tuned_model.h"
-#include "cli/ukf_config_yaml.h"
-#include "cli/ukf_tune_job.h"
-#include "cli/ukf_tune_output.h"
+#include "jobs/tune_job.h"
+#include "objectives/tuned_model.h"
+#include "formats/ukf_config_yaml.h"
+#include "jobs/ukf_tune_job.h"
+#include "jobs/ukf_tune_json.h"
 #include "tuner/nlopt_solver.h"
 
 namespace odotune::cli {
@@ -245,11 +248,11 @@ void register_tune(CLI::App& app) {
       "(objectives/calibration_objective.h). The baseline is the paper's default settings;\n"
       "if they score better than the solver's best they are kept. Tracks need external velocities\n"
       "(v_ext, w_ext, or --ext-from-gt HZ) and ground truth, all of one robot. --config-out writes\n"
-      "an odotune-pf-config/1 file (cli/pf_config_yaml.h).\n"
+      "an odotune-pf-config/1 file (formats/pf_config_yaml.h).\n"
       "UKF (ukf): tunes the (V, W) fusion filter's process noise, static odometry variances, gyro\n"
       "variance and external-variance scale (objectives/ukf_objective.h) for --mode's error of\n"
       "the fused pose against ground truth (tracks need it); the baseline is the default noise.\n"
-      "--config-out writes an odotune-ukf-config/1 file (cli/ukf_config_yaml.h).");
+      "--config-out writes an odotune-ukf-config/1 file (formats/ukf_config_yaml.h).");
   sub->add_option("--track", args->tracks, "track file (repeat for several; fitness = mean over tracks)")
       ->required();
   sub->add_option("--model", args->model, "rq | alpha | gyro | pf-calib | adaptive-pf-calib | ukf");

@@ -1,5 +1,6 @@
-// Shared pieces of the commands' output: metrics as JSON and text, track
-// loading with one-line errors, the OpenMP thread option, Ctrl-C.
+// Shared pieces of the commands' output: metric changes and tune results as
+// text, the OpenMP thread option, Ctrl-C. (The JSON of a tune is
+// jobs/tune_json.h; loading tracks with one-line errors, tracks/track_io.h.)
 #pragma once
 
 #include <atomic>
@@ -7,33 +8,15 @@
 #include <vector>
 
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
 
-#include "cli/tune_job.h"
+#include "jobs/tune_job.h"
 #include "objectives/metrics.h"
 #include "tracks/track.h"
 
 namespace odotune::cli {
 
-nlohmann::json metrics_json(const ErrorMetrics& m);
-// The --json document of `tune` (see README for the keys).
-nlohmann::json tune_json(const TuneOutcome& o);
-
 // "  47.88 →  29.31 mm  (+38.8 %)"
 std::string metric_change(double baseline_m, double tuned_m);
-
-// The pieces every tune's --json shares (tune, the calibrator and UKF tunes):
-// {"rmse", "mae", "maxe"} improvement in %, the per-track baseline/tuned
-// metrics, and the solver's convergence log.
-nlohmann::json improvement_json(const ErrorMetrics& baseline, const ErrorMetrics& tuned);
-nlohmann::json track_scores_json(const std::vector<TrackScore>& tracks);
-nlohmann::json convergence_json(const tuner::Summary& summary);
-// The tuned and default values by parameter name, into j: "params",
-// "param_units", "default_params" (each an object keyed by name) and
-// "default_kept" (the calibrator and UKF tunes, which start from defaults).
-void put_tuned_params_json(nlohmann::json& j, const std::vector<std::string>& names,
-                           const std::vector<std::string>& units, const std::vector<double>& tuned,
-                           const std::vector<double>& defaults, bool default_kept);
 
 // The lines `tune` prints under its heading for a noise model (EKF or UKF):
 // RMSE/MAE/MAXE change, per track when several, the tuned parameters and the
@@ -43,9 +26,6 @@ void print_tune_result(const ErrorMetrics& baseline_mean, const ErrorMetrics& tu
                        const std::vector<std::string>& param_names,
                        const std::vector<double>& params, const tuner::Summary& summary,
                        long diverged);
-
-// Reads track files; a bad file becomes one Failure line (file:line: reason).
-std::vector<Track> load_tracks(const std::vector<std::string>& paths);
 
 // Adds --threads to a command; apply_threads() sets OpenMP's thread count
 // (0 = OpenMP's default, all cores).

@@ -41,6 +41,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "tracks/track.h"
 
@@ -62,6 +63,9 @@ class TrackError : public std::runtime_error {
 
 // Reads a track file. Throws TrackError.
 Track read_track(const std::filesystem::path& path);
+// Reads several track files, for the commands and jobs: a bad file becomes
+// one odotune::Failure line (file:line: reason) instead of a TrackError.
+std::vector<Track> load_tracks(const std::vector<std::string>& paths);
 // Parses a track from a stream; `filename` is used in error messages and as
 // the default name (its stem). Throws TrackError.
 Track parse_track(std::istream& in, std::string_view filename);

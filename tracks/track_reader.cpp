@@ -25,6 +25,7 @@
 
 #include <fmt/format.h>
 
+#include "core/failure.h"
 #include "tracks/track_io.h"
 #include "tracks/import_text.h"
 
@@ -451,6 +452,18 @@ Track read_track(const std::filesystem::path& path) {
   Track track = parse_track(in, file);
   if (in.bad()) throw TrackError(file, 0, "read error");
   return track;
+}
+
+std::vector<Track> load_tracks(const std::vector<std::string>& paths) {
+  std::vector<Track> tracks;
+  for (const auto& p : paths) {
+    try {
+      tracks.push_back(read_track(p));
+    } catch (const TrackError& e) {
+      throw Failure(e.what());
+    }
+  }
+  return tracks;
 }
 
 }  // namespace odotune

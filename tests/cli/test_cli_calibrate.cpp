@@ -15,7 +15,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "cli_runner.h"
+#include "support/cli_runner.h"
 #include "diagnose/sim_track.h"
 #include "support/temp_dir.h"
 #include "tracks/track_io.h"

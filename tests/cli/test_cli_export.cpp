@@ -11,8 +11,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "cli/config_yaml.h"
-#include "cli_runner.h"
+#include "formats/config_yaml.h"
+#include "support/cli_runner.h"
 #include "objectives/param_space.h"
 #include "results/ros_export.h"
 #include "results/store.h"
@@ -95,7 +95,7 @@ TEST_F(CliExport, OdotuneFormatReplaysToTheStoredTunedRmse) {
       EXPECT_NE(slurp(cfg).find(results::run_key(*want)), std::string::npos);  // provenance
 
       // read_ekf_config gives back the stored parameters.
-      const cli::EkfConfig got = cli::read_ekf_config(cfg);
+      const odotune::EkfConfig got = odotune::read_ekf_config(cfg);
       const ParamSpace space = ParamSpace::for_model(got.model);
       EXPECT_EQ(filters::to_string(got.model), model);
       const filters::NoiseParams stored = space.to_noise(want->params);

@@ -15,8 +15,8 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "cli_runner.h"
-#include "store_rows.h"
+#include "support/cli_runner.h"
+#include "support/store_rows.h"
 
 namespace odotune {
 namespace {

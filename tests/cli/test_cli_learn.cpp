@@ -13,7 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cli/cli_runner.h"
+#include "support/cli_runner.h"
 #include "results/learned_model_json.h"
 #include "support/temp_dir.h"
 

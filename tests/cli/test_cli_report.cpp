@@ -9,7 +9,7 @@
 
 #include <fmt/format.h>
 
-#include "cli/cli_runner.h"
+#include "support/cli_runner.h"
 #include "results/store.h"
 #include "support/temp_dir.h"
 

@@ -1,5 +1,5 @@
 // odotune study resampling|calibration: the computation helpers
-// (cli/calibration_study.h), the tables and figure data, and the command end
+// (studies/calibration_study.h), the tables and figure data, and the command end
 // to end on a short wheelchair drive (~20 s instead of 2 minutes, so that the
 // whole file runs in seconds).
 #include <gtest/gtest.h>
@@ -13,18 +13,18 @@
 #include <string>
 #include <vector>
 
-#include "cli/calibration_study.h"
-#include "cli/cli_runner.h"
-#include "cli/scenario_yaml.h"
-#include "cli/study_outputs.h"
-#include "cli/study_tables.h"
+#include "studies/calibration_study.h"
+#include "support/cli_runner.h"
+#include "formats/scenario_yaml.h"
+#include "studies/study_outputs.h"
+#include "studies/study_tables.h"
 #include "support/temp_dir.h"
 
 namespace odotune {
 namespace {
 
 namespace fs = std::filesystem;
-using cli::MeanSd;
+using odotune::MeanSd;
 using testing_support::run_cli;
 using testing_support::slurp;
 using testing_support::TempDir;
@@ -53,7 +53,7 @@ std::string short_scenario(double step_at_s = 0.0) {
 }
 
 sim::Scenario parsed(double step_at_s = 0.0) {
-  return cli::parse_scenario(short_scenario(step_at_s), step_at_s > 0 ? "short_step.yaml" : "short.yaml");
+  return odotune::parse_scenario(short_scenario(step_at_s), step_at_s > 0 ? "short_step.yaml" : "short.yaml");
 }
 
 // CSV text → header and rows of fields.
@@ -111,26 +111,26 @@ std::string without_timing(const std::string& text) {
 // ---------------------------------------------------------------- helpers
 
 TEST(StudyMeanSd, SampleStatisticsOverFiniteValues) {
-  const MeanSd m = cli::mean_sd({1.0, 2.0, 3.0, 4.0});
+  const MeanSd m = odotune::mean_sd({1.0, 2.0, 3.0, 4.0});
   EXPECT_EQ(m.n, 4);
   EXPECT_DOUBLE_EQ(m.mean, 2.5);
   EXPECT_NEAR(m.sd, std::sqrt(5.0 / 3.0), 1e-15);  // Σ(x − 2.5)² = 5, n − 1 = 3
-  const MeanSd with_nan = cli::mean_sd({NAN, 2.0, NAN, 4.0});
+  const MeanSd with_nan = odotune::mean_sd({NAN, 2.0, NAN, 4.0});
   EXPECT_EQ(with_nan.n, 2);
   EXPECT_DOUBLE_EQ(with_nan.mean, 3.0);
   EXPECT_NEAR(with_nan.sd, std::sqrt(2.0), 1e-15);
-  const MeanSd one = cli::mean_sd({7.0});
+  const MeanSd one = odotune::mean_sd({7.0});
   EXPECT_EQ(one.n, 1);
   EXPECT_DOUBLE_EQ(one.sd, 0.0);
-  const MeanSd none = cli::mean_sd({NAN});
+  const MeanSd none = odotune::mean_sd({NAN});
   EXPECT_EQ(none.n, 0);
   EXPECT_TRUE(std::isnan(none.mean) && std::isnan(none.sd));
-  EXPECT_EQ(cli::mean_sd_text(none), "–");
-  EXPECT_EQ(cli::mean_sd_text(m), "2.5 ± 1.3");
+  EXPECT_EQ(odotune::mean_sd_text(none), "–");
+  EXPECT_EQ(odotune::mean_sd_text(m), "2.5 ± 1.3");
 }
 
 TEST(StudyOptions, IsValidNamesTheBadValue) {
-  cli::StudyOptions o;
+  odotune::StudyOptions o;
   std::string why;
   EXPECT_TRUE(o.IsValid(&why)) << why;
   o.runs = 0;
@@ -147,13 +147,13 @@ TEST(StudyOptions, IsValidNamesTheBadValue) {
 }
 
 TEST(StudyDraws, SeedPerRunTruthWithinSpreadDkfWithinThePfRanges) {
-  cli::StudyOptions o;
+  odotune::StudyOptions o;
   o.seed = 40;
   o.truth_radius_spread = 0.02;
   const sim::Scenario sc = parsed(10.0);
   std::map<double, int> seen;
   for (int r = 0; r < 20; ++r) {
-    const cli::McDraw d = cli::mc_draw(o, sc, r);
+    const odotune::McDraw d = odotune::mc_draw(o, sc, r);
     EXPECT_EQ(d.seed, 40u + static_cast<unsigned>(r));
     for (double s : {d.truth_scale_l, d.truth_scale_r}) {
       EXPECT_GE(s, 0.98);
@@ -167,11 +167,11 @@ TEST(StudyDraws, SeedPerRunTruthWithinSpreadDkfWithinThePfRanges) {
     EXPECT_LE(d.dkf_initial.wheel_radius_left_m, ranges.wheel_radius_left_m.hi);
     EXPECT_DOUBLE_EQ(d.dkf_initial.wheel_base_m, 0.65);
     // Deterministic.
-    const cli::McDraw again = cli::mc_draw(o, sc, r);
+    const odotune::McDraw again = odotune::mc_draw(o, sc, r);
     EXPECT_EQ(again.truth_scale_l, d.truth_scale_l);
     EXPECT_EQ(again.dkf_initial.wheel_radius_left_m, d.dkf_initial.wheel_radius_left_m);
     // The run's scenario: its seed and truth, other effects kept.
-    const sim::Scenario rs = cli::run_scenario(sc, d);
+    const sim::Scenario rs = odotune::run_scenario(sc, d);
     EXPECT_EQ(rs.seed, d.seed);
     ASSERT_TRUE(rs.effects.radius_error.has_value());
     EXPECT_EQ(rs.effects.radius_error->scale_l, d.truth_scale_l);
@@ -183,12 +183,12 @@ TEST(StudyDraws, SeedPerRunTruthWithinSpreadDkfWithinThePfRanges) {
 }
 
 TEST(StudyScenarioCheck, RejectsRobotsOutsideThePfRangesAndMissingSensors) {
-  const cli::StudyOptions o;
-  EXPECT_NO_THROW(cli::check_study_scenario(parsed(), o));
+  const odotune::StudyOptions o;
+  EXPECT_NO_THROW(odotune::check_study_scenario(parsed(), o));
   sim::Scenario small = parsed();
   small.robot.wheel_radius_left_m = small.robot.wheel_radius_right_m = 0.05;
   try {
-    cli::check_study_scenario(small, o);
+    odotune::check_study_scenario(small, o);
     ADD_FAILURE() << "accepted 0.05 m wheels";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("short_chair"), std::string::npos) << e.what();
@@ -196,7 +196,7 @@ TEST(StudyScenarioCheck, RejectsRobotsOutsideThePfRangesAndMissingSensors) {
   }
   sim::Scenario blind = parsed();
   blind.sensors.ext_velocity.enabled = false;
-  EXPECT_THROW(cli::check_study_scenario(blind, o), std::invalid_argument);
+  EXPECT_THROW(odotune::check_study_scenario(blind, o), std::invalid_argument);
 }
 
 TEST(StudyConvergence, ReachedAndSettledPerPieceOfTheTruth) {
@@ -205,7 +205,7 @@ TEST(StudyConvergence, ReachedAndSettledPerPieceOfTheTruth) {
   TruthSchedule truth;
   truth.from_s = {-INFINITY, 10.0};
   truth.params = {{0.32, 0.32, 0.65}, {0.31, 0.31, 0.65}};
-  cli::ParamTrace tr;
+  odotune::ParamTrace tr;
   // Estimates at t = 0.5, 1.0, ..., 20: R_R enters the band at 2 s, leaves at
   // 3 s, re-enters at 4 s for good; R_L is within from the start. After the
   // step both are off until 13 s (3 s after the change), then within.
@@ -219,7 +219,7 @@ TEST(StudyConvergence, ReachedAndSettledPerPieceOfTheTruth) {
     tr.r_left_m.push_back(rl);
     tr.wheel_base_m.push_back(0.9);  // far off: must not matter
   }
-  const auto c = cli::radius_convergence(tr, truth, 0.5, 0.005);
+  const auto c = odotune::radius_convergence(tr, truth, 0.5, 0.005);
   ASSERT_EQ(c.size(), 2u);
   EXPECT_DOUBLE_EQ(c[0].reached_s, 2.0 - 0.5);
   EXPECT_DOUBLE_EQ(c[0].settled_s, 4.0 - 0.5);
@@ -228,16 +228,16 @@ TEST(StudyConvergence, ReachedAndSettledPerPieceOfTheTruth) {
   // Never within after the change → NaN.
   for (std::size_t i = 0; i < tr.t_s.size(); ++i)
     if (tr.t_s[i] >= 10.0) tr.r_left_m[i] = 0.33;
-  const auto never = cli::radius_convergence(tr, truth, 0.5, 0.005);
+  const auto never = odotune::radius_convergence(tr, truth, 0.5, 0.005);
   EXPECT_TRUE(std::isnan(never[1].reached_s));
   EXPECT_TRUE(std::isnan(never[1].settled_s));
 }
 
 TEST(StudyFigureData, ResamplingBarsAreNormalisedByTheLargestMean) {
-  cli::ResamplingStudy s;
-  for (auto r : cli::table1_resamplers())
-    for (auto p : cli::table1_policies()) {
-      cli::ResamplingCell c;
+  odotune::ResamplingStudy s;
+  for (auto r : odotune::table1_resamplers())
+    for (auto p : odotune::table1_policies()) {
+      odotune::ResamplingCell c;
       c.resampler = r;
       c.policy = p;
       s.cells.push_back(c);
@@ -248,7 +248,7 @@ TEST(StudyFigureData, ResamplingBarsAreNormalisedByTheLargestMean) {
   s.cells[5].runs = {{0.004, 0.004}, {0.003, 0.005}};
   for (auto& c : s.cells) c.ms_per_iteration = {1.0, 0.1, 2};
   s.cells[7].ms_per_iteration = {2.0, 0.5, 2};
-  const cli::ResamplingBars b = cli::resampling_bars(s);
+  const odotune::ResamplingBars b = odotune::resampling_bars(s);
   ASSERT_EQ(b.groups.size(), 4u);
   ASSERT_EQ(b.series.size(), 3u);
   ASSERT_EQ(b.panels.size(), 2u);
@@ -267,17 +267,17 @@ TEST(StudyFigureData, ResamplingBarsAreNormalisedByTheLargestMean) {
 
 // The computation in-process: the numbers do not depend on the thread count.
 TEST(StudyResampling, SameNumbersForOneAndTwoThreads) {
-  cli::StudyOptions o;
+  odotune::StudyOptions o;
   o.runs = 2;
   o.seed = 11;
   o.pf_particles = 300;
   const sim::Scenario sc = parsed();
   o.threads = 1;
-  const cli::ResamplingStudy a = cli::run_resampling_study(sc, o);
+  const odotune::ResamplingStudy a = odotune::run_resampling_study(sc, o);
   o.threads = 2;
-  const cli::ResamplingStudy b = cli::run_resampling_study(sc, o);
+  const odotune::ResamplingStudy b = odotune::run_resampling_study(sc, o);
   ASSERT_EQ(a.cells.size(), 12u);
-  EXPECT_EQ(without_timing(cli::table1_runs_csv(a)), without_timing(cli::table1_runs_csv(b)));
+  EXPECT_EQ(without_timing(odotune::table1_runs_csv(a)), without_timing(odotune::table1_runs_csv(b)));
   EXPECT_EQ(a.threads_used, 1);
   EXPECT_EQ(b.threads_used, 2);
   // The every-step policy resamples at every iteration; the others less often.

@@ -8,7 +8,7 @@
 
 #include <fmt/format.h>
 
-#include "cli_runner.h"
+#include "support/cli_runner.h"
 
 namespace odotune {
 namespace {

@@ -12,8 +12,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "cli/pf_config_yaml.h"
-#include "cli_runner.h"
+#include "formats/pf_config_yaml.h"
+#include "support/cli_runner.h"
 #include "objectives/calibration_objective.h"
 #include "results/store.h"
 
@@ -105,7 +105,7 @@ TEST(CliTuneCalibration, AdaptivePfJsonHasTheDocumentedKeysAndTunedNeverWorse) {
   EXPECT_TRUE(j["tracks"][0]["tuned"]["radius_error_pct"].is_number());  // a simulated track has truth
 
   // --config-out: the tuned settings, read back exactly by the reader.
-  const cli::PfConfig c = cli::read_pf_config(cfg);
+  const odotune::PfConfig c = odotune::read_pf_config(cfg);
   EXPECT_EQ(c.method, CalibrationMethod::adaptive_pf);
   EXPECT_EQ(c.resampler, filters::Resampler::stratified);
   EXPECT_EQ(c.policy, filters::ResamplePolicy::neff);

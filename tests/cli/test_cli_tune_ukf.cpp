@@ -13,9 +13,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "cli/failure.h"
-#include "cli/ukf_config_yaml.h"
-#include "cli_runner.h"
+#include "core/failure.h"
+#include "formats/ukf_config_yaml.h"
+#include "support/cli_runner.h"
 #include "objectives/fusion_input.h"
 #include "objectives/ukf_objective.h"
 #include "results/store.h"
@@ -70,12 +70,12 @@ TEST(CliTuneUkf, TuneBeatsTheDefaultsAndTheConfigRoundTrips) {
   const std::string text = slurp(cfg);
   EXPECT_NE(text.find("format: odotune-ukf-config/1"), std::string::npos);
   EXPECT_GE(std::count(text.begin(), text.end(), '#'), 15) << text;
-  const cli::UkfConfig c = cli::read_ukf_config(cfg);
+  const odotune::UkfConfig c = odotune::read_ukf_config(cfg);
   EXPECT_EQ(c.rate_hz, 10.0);
   for (std::size_t i = 0; i < space.dim(); ++i)
     EXPECT_EQ(c.params[i], j["params"][space.params()[i].name].get<double>()) << space.params()[i].name;
   const FusionInput in = build_fusion_input(read_track(wheelchair_track()));
-  EXPECT_NEAR(ukf_pose_errors(in, cli::apply_ukf_config(c)).rmse_m, tuned, 1e-12);
+  EXPECT_NEAR(ukf_pose_errors(in, odotune::apply_ukf_config(c)).rmse_m, tuned, 1e-12);
 
   // Same seed, one thread: the same result.
   const auto json1 = tmp / "t1.json";
@@ -89,16 +89,16 @@ TEST(CliTuneUkf, TuneBeatsTheDefaultsAndTheConfigRoundTrips) {
 TEST(CliTuneUkf, ConfigReaderErrorsAreOneLineWithFileAndLine) {
   TempDir tmp;
   const auto path = tmp / "c.yaml";
-  cli::UkfConfig good;
+  odotune::UkfConfig good;
   good.params = ukf_params_of(UkfSettings{});
-  cli::write_ukf_config(good, path);
-  EXPECT_EQ(cli::read_ukf_config(path).params, good.params);
+  odotune::write_ukf_config(good, path);
+  EXPECT_EQ(odotune::read_ukf_config(path).params, good.params);
 
   auto error_of = [&](const std::string& text) {
     std::ofstream(path) << text;
     try {
-      cli::read_ukf_config(path);
-    } catch (const cli::Failure& e) {
+      odotune::read_ukf_config(path);
+    } catch (const odotune::Failure& e) {
       return std::string(e.what());
     }
     return std::string("(no error)");
@@ -194,7 +194,7 @@ TEST(CliGridUkf, SmokeExperimentRunsStoresReportsAndExports) {
   const auto ex = run_cli("export " + store.string() + " --select model=ukf,mode=1 --format odotune --out " +
                           x.string());
   ASSERT_EQ(ex.exit_code, 0) << ex.err;
-  const cli::UkfConfig c = cli::read_ukf_config(x);
+  const odotune::UkfConfig c = odotune::read_ukf_config(x);
   const auto best = std::min_element(runs.begin(), runs.end(), [](const auto& a, const auto& b) {
     return (a.mode == 1 ? a.tuned.rmse_m : 1e9) < (b.mode == 1 ? b.tuned.rmse_m : 1e9);
   });

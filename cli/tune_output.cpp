@@ -1,0 +1,57 @@
+#include "cli/tune_output.h"
+
+#include <fmt/format.h>
+
+#include "cli/output.h"
+#include "jobs/calibration_tune_json.h"
+
+namespace odotune::cli {
+
+void print_calibration_outcome(const CalibrationTuneOutcome& o) {
+  const CalibrationTuneRequest& r = o.request;
+  std::string names;
+  for (const auto& t : o.baseline.tracks) names += (names.empty() ? "" : ", ") + t.track;
+  fmt::print("tuned the {} calibrator's settings on {} with {} (seed {}); resampler {}, policy {}, "
+             "calibrator seed {}\n",
+             to_string(TunedModel::calibration(r.model)), names, r.solver, r.seed,
+             filters::to_string(o.default_pf.resampler), filters::to_string(o.default_pf.policy),
+             o.default_pf.seed);
+  fmt::print("  score (lower is better): {:.4g} with the paper's defaults → {:.4g} tuned{}\n",
+             o.baseline_score, o.tuned_score,
+             o.default_kept ? " (the defaults scored best: kept)" : "");
+  fmt::print("  calibrated odometry, dead-reckoning position error:\n");
+  fmt::print("    RMSE {}\n", metric_change(o.baseline_mean.rmse_m, o.tuned_mean.rmse_m));
+  fmt::print("    MAE  {}\n", metric_change(o.baseline_mean.mae_m, o.tuned_mean.mae_m));
+  fmt::print("    MAXE {}\n", metric_change(o.baseline_mean.maxe_m, o.tuned_mean.maxe_m));
+  for (std::size_t k = 0; k < o.baseline.tracks.size() && k < o.tuned.tracks.size(); ++k) {
+    const auto& b = o.baseline.tracks[k];
+    const auto& t = o.tuned.tracks[k];
+    const auto eb = radius_error_pct(b.calibration), et = radius_error_pct(t.calibration);
+    fmt::print("    {}: RMSE {}; {} → {}", b.track, metric_change(b.errors.rmse_m, t.errors.rmse_m),
+               convergence_text(b.calibration), convergence_text(t.calibration));
+    if (eb && et) fmt::print("; final radius error {:.3f} → {:.3f} %", *eb, *et);
+    fmt::print("\n");
+  }
+  fmt::print("  mean particles per iteration: {:.0f} → {:.0f}\n", o.baseline.mean_particles,
+             o.tuned.mean_particles);
+  fmt::print("  settings:\n");
+  for (std::size_t i = 0; i < o.params.size(); ++i)
+    fmt::print("    {:<28} {:>12.6g}  (default {:.6g}) [{}]\n", o.param_names[i], o.params[i],
+               o.default_params[i], o.param_units[i]);
+  fmt::print("  {} evaluations in {:.2f} s ({}); failed evaluations: {}\n", o.summary.evaluations,
+             o.summary.seconds, o.summary.termination, o.failures);
+}
+
+void print_ukf_outcome(const UkfTuneOutcome& o) {
+  const UkfTuneRequest& r = o.request;
+  std::string names;
+  for (const auto& t : o.tracks) names += (names.empty() ? "" : ", ") + t.track;
+  fmt::print("tuned the fusion UKF's noise on {} for mode {} ({}) with {} (seed {})\n", names, r.mode,
+             fitness_mode_name(r.mode), r.solver, r.seed);
+  fmt::print("  fused pose vs ground truth, defaults → tuned{}\n",
+             o.default_kept ? " (the defaults scored best and are kept)" : "");
+  print_tune_result(o.baseline_mean, o.tuned_mean, o.tracks, o.param_names, o.params, o.summary,
+                    o.failures);
+}
+
+}  // namespace odotune::cli

@@ -1,0 +1,175 @@
+#include "formats/diagnosis_json.h"
+
+#include <cmath>
+
+namespace odotune {
+namespace {
+
+using nlohmann::json;
+using namespace odotune::diagnose;
+
+json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+json before_after(const BeforeAfter& s) {
+  return {{"before_pos_rmse_m", number(s.before_pos_rmse_m)},
+          {"after_pos_rmse_m", number(s.after_pos_rmse_m)}};
+}
+
+json segments(const std::vector<TimeSegment>& segs) {
+  json a = json::array();
+  for (const TimeSegment& s : segs) a.push_back({s.t0_s, s.t1_s});
+  return a;
+}
+
+json regions(const std::vector<MapRegion>& regs) {
+  json a = json::array();
+  for (const MapRegion& r : regs) a.push_back({r.x0_m, r.x1_m, r.y0_m, r.y1_m});
+  return a;
+}
+
+json named(const std::vector<NamedValue>& values) {
+  json o = json::object();
+  for (const NamedValue& v : values) o[v.name] = number(v.value);
+  return o;
+}
+
+json verdict(const Verdict& v) {
+  return {{"value", number(v.value)},       {"stderr", number(v.std_error)},
+          {"noop", v.noop},                 {"z", number(v.z)},
+          {"drift", number(v.drift)},       {"noise_drift", number(v.noise_drift)},
+          {"significant", v.significant},  {"relevant", v.relevant},
+          {"departs", v.departs()}};
+}
+
+json lag(const LagEstimate& l) {
+  if (!l.available) return nullptr;
+  return {{"lag_s", number(l.lag_s)}, {"stderr_s", number(l.std_error_s)},
+          {"peak_correlation", number(l.peak_correlation)}, {"at_edge", l.at_edge}};
+}
+
+json sensor_checks(const SensorCheck& s) {
+  json gyro = {{"available", s.gyro.available}};
+  if (s.gyro.available) {
+    gyro["bins"] = s.gyro.bins;
+    gyro["noise_sigma_rad_s"] = number(s.gyro.noise_sigma_radps);
+    gyro["gyro_scale.s"] = verdict(s.gyro.scale);
+    gyro["gyro_bias.b"] = verdict(s.gyro.bias);
+  } else {
+    gyro["reason"] = s.gyro.unavailable_reason;
+  }
+  json odo = {{"available", s.odometry.available}};
+  if (s.odometry.available) {
+    odo["bins"] = s.odometry.bins;
+    odo["speed_ratio"] = verdict(s.odometry.speed_ratio);
+    odo["yaw_ratio"] = verdict(s.odometry.yaw_ratio);
+    odo["odometry_late"] = lag(s.odometry.odometry_late);
+    odo["command_delay"] = lag(s.odometry.command_delay);
+  } else {
+    odo["reason"] = s.odometry.unavailable_reason;
+  }
+  return {{"gyro", gyro}, {"odometry", odo}};
+}
+
+json heldout_comparison(const HeldoutComparison& h) {
+  return {{"windows", h.windows}, {"informative", h.informative}, {"improved", h.improved},
+          {"before_pos_rmse_m", number(h.ref_pos_rmse_m)}, {"after_pos_rmse_m", number(h.alt_pos_rmse_m)},
+          {"z", number(h.z)}, {"p", number(h.p)}, {"passed", h.passed}};
+}
+
+// gyro_fixes_check.h: the gyro judged by dead reckoning against the fixes.
+json gyro_vs_fixes(const GyroFixesCheck& g) {
+  json o = {{"available", g.gyro.available}};
+  if (!g.gyro.available) {
+    o["reason"] = g.gyro.unavailable_reason;
+    return o;
+  }
+  o["window_s"] = g.window_s;
+  o["used_windows"] = g.used_windows;
+  o["heldout_windows"] = g.heldout_windows;
+  o["gyro_scale.s"] = verdict(g.gyro.scale);
+  o["gyro_bias.b"] = verdict(g.gyro.bias);
+  o["distance_scale"] = number(g.distance_scale);
+  o["standstill_s"] = g.standstill_s;
+  o["heldout"] = {{"joint", heldout_comparison(g.joint)},
+                  {"gyro_scale.s", heldout_comparison(g.scale_own)},
+                  {"gyro_bias.b", heldout_comparison(g.bias_own)}};
+  return o;
+}
+
+json search_log(const Selection& s) {
+  json a = json::array();
+  for (const SearchRecord& r : s.records)
+    a.push_back({{"phase", r.phase},
+                 {"step", r.step},
+                 {"candidate", r.candidate},
+                 {"set", r.set},
+                 {"cv_score", number(r.cv_score)},
+                 {"rel_improvement", number(r.rel_improvement)},
+                 {"p_rank", number(r.p_rank)},
+                 {"p_t", number(r.p_t)},
+                 {"delta_bic", number(r.delta_bic)},
+                 {"accepted", r.accepted},
+                 {"reason", r.reason}});
+  return {{"folds", s.folds},
+          {"windows", s.num_windows},
+          {"baseline_cv_score", number(s.baseline_cv_score)},
+          {"final_cv_score", number(s.final_cv_score)},
+          {"records", a}};
+}
+
+}  // namespace
+
+json diagnosis_json(const Diagnosis& d) {
+  json findings = json::array();
+  for (const Finding& f : d.findings) {
+    findings.push_back({{"effect", f.effect},
+                        {"params", named(f.params)},
+                        {"stderr", named(f.stderrs)},
+                        {"where",
+                         {{"segments", segments(f.segments)},
+                          {"conditions", f.conditions},
+                          {"regions", regions(f.regions)}}},
+                        {"explains", number(f.explains)},
+                        {"fit", {{"train", before_after(f.train)}, {"heldout", before_after(f.heldout)}}},
+                        {"rivals", f.rivals},
+                        {"discrete", f.discrete},
+                        {"evidence", f.evidence}});
+  }
+  json model = json::array();
+  for (const Finding& f : d.findings)
+    if (!f.spec().empty()) model.push_back(f.spec());
+  return {{"format", "odotune-diagnosis/1"},
+          {"track", d.track},
+          {"reference", d.reference == ReferenceKind::gt ? "gt" : "aps"},
+          {"replay", {{"window_s", d.window_s}}},
+          {"baseline",
+           {{"pos_rmse_m", number(d.baseline_pos_rmse_m)},
+            {"heading_rmse_rad", number(d.baseline_heading_rmse_rad)}}},
+          {"findings", findings},
+          {"final",
+           {{"pos_rmse_m", number(d.final_pos_rmse_m)},
+            {"heading_rmse_rad", number(d.final_heading_rmse_rad)}}},
+          {"train", before_after(d.train)},
+          {"heldout", before_after(d.heldout)},
+          {"split", {{"train_windows", d.train_windows},
+                     {"heldout_windows", d.heldout_windows},
+                     {"scored_against", d.scored_on_denoised_reference ? "denoised reference"
+                                                                       : "reference"}}},
+          {"model", model},
+          {"located", {{"segments", segments(d.located_before.segments)},
+                       {"regions", regions(d.located_before.regions)},
+                       {"conditions", d.located_before.phrase}}},
+          {"sensor_checks", d.has_gyro_fixes ? [&] {
+             json j = sensor_checks(d.sensors);
+             j["gyro_vs_fixes"] = gyro_vs_fixes(d.gyro_fixes);
+             return j;
+           }()
+                                             : sensor_checks(d.sensors)},
+          {"selection", search_log(d.selection)},
+          {"timing_s",
+           {{"total", d.timing.total_s}, {"sensors", d.timing.sensors_s},
+            {"select", d.timing.select_s}, {"locate", d.timing.locate_s}}},
+          {"note", d.note}};
+}
+
+}  // namespace odotune

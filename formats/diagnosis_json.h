@@ -1,0 +1,22 @@
+// The --json document of `odotune diagnose`: ../shared/specs/diagnosis-output.md
+// (format "odotune-diagnosis/1"), every required key, plus:
+//   top level: "heldout"/"train" (nominal vs the chosen model on the split),
+//     "split", "model" (the fitted effects in the simulator's form, what
+//     --scenario-out writes), "sensor_checks", "selection" (the search log),
+//     "located" (segments and conditions of the nominal residuals), "timing_s",
+//     "note";
+//   per finding: "rivals", "evidence", "discrete" (parameters found by a
+//     profile search: their stderr is the search resolution),
+//     "where.regions" ([[x0, x1, y0, y1], ...] in metres).
+// Numbers are SI; an undetermined number (NaN) is written as null.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "diagnose/diagnosis.h"
+
+namespace odotune {
+
+nlohmann::json diagnosis_json(const diagnose::Diagnosis& d);
+
+}  // namespace odotune

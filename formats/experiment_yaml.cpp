@@ -1,0 +1,180 @@
+#include "formats/experiment_yaml.h"
+
+#include <glob.h>
+
+#include <algorithm>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include "core/failure.h"
+#include "formats/yaml_error.h"
+#include "objectives/metrics.h"
+
+namespace odotune {
+
+namespace {
+
+constexpr const char* kFormat = "odotune-experiment/1";
+
+template <typename T>
+T scalar(const std::filesystem::path& path, const YAML::Node& node, const char* what) {
+  try {
+    return node.as<T>();
+  } catch (const YAML::Exception&) {
+    fail_at(path, node, fmt::format("{} has a bad value, expected {}", what,
+                                    std::is_same_v<T, std::string> ? "text" : "a number"));
+  }
+}
+
+std::vector<YAML::Node> list(const std::filesystem::path& path, const YAML::Node& root,
+                             const char* key) {
+  const YAML::Node n = root[key];
+  if (!n) fail_at(path, root, fmt::format("missing '{}'", key));
+  if (!n.IsSequence() || n.size() == 0) fail_at(path, n, fmt::format("'{}' must be a non-empty list", key));
+  return {n.begin(), n.end()};
+}
+
+std::vector<std::string> expand(const std::filesystem::path& path, const YAML::Node& node,
+                                const std::filesystem::path& base) {
+  const std::string pattern = scalar<std::string>(path, node, "a track");
+  const std::filesystem::path full = std::filesystem::path(pattern).is_absolute() ? std::filesystem::path(pattern) : base / pattern;
+  glob_t g{};
+  const int rc = ::glob(full.c_str(), 0, nullptr, &g);
+  std::vector<std::string> out;
+  if (rc == 0)
+    for (std::size_t i = 0; i < g.gl_pathc; ++i) out.emplace_back(g.gl_pathv[i]);
+  globfree(&g);
+  if (out.empty()) fail_at(path, node, fmt::format("no track file matches '{}'", full.string()));
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+void read_calibration(const std::filesystem::path& path, const YAML::Node& c, ExperimentCalibration* out) {
+  if (!c.IsMap())
+    fail_at(path, c, "calibration must be a mapping {resampler, policy, particles, seed, ext_from_gt_hz}");
+  for (const auto& kv : c) {
+    const auto key = kv.first.as<std::string>("");
+    if (key == "resampler") {
+      if (!filters::parse_resampler(scalar<std::string>(path, kv.second, "calibration.resampler"),
+                                    &out->resampler))
+        fail_at(path, kv.second, "calibration.resampler must be multinomial, stratified, systematic or residual");
+    } else if (key == "policy") {
+      if (!filters::parse_resample_policy(scalar<std::string>(path, kv.second, "calibration.policy"),
+                                          &out->policy))
+        fail_at(path, kv.second, "calibration.policy must be every, neff or max");
+    } else if (key == "particles") {
+      out->particles = scalar<int>(path, kv.second, "calibration.particles");
+      if (out->particles < 0)
+        fail_at(path, kv.second, "calibration.particles must be ≥ 1 (or 0 for the paper's count)");
+    } else if (key == "seed") {
+      out->seed = scalar<std::uint64_t>(path, kv.second, "calibration.seed");
+    } else if (key == "ext_from_gt_hz") {
+      out->ext_from_gt_hz = scalar<double>(path, kv.second, "calibration.ext_from_gt_hz");
+      if (!(out->ext_from_gt_hz >= 0.0 && out->ext_from_gt_hz <= 1000.0))
+        fail_at(path, kv.second, "calibration.ext_from_gt_hz must be 0 (off) or a rate in (0, 1000] Hz");
+    } else {
+      fail_at(path, kv.first,
+              fmt::format("unknown calibration key '{}', expected resampler, policy, particles, seed "
+                          "or ext_from_gt_hz",
+                          key));
+    }
+  }
+}
+
+}  // namespace
+
+bool Experiment::has_ekf_models() const {
+  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.is_ekf(); });
+}
+bool Experiment::has_calibrator_models() const {
+  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.calibrator; });
+}
+bool Experiment::has_ukf_models() const {
+  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.ukf; });
+}
+
+Experiment read_experiment(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Failure(fmt::format("{}: cannot open the experiment file", path.string()));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_experiment(ss.str(), path);
+}
+
+Experiment parse_experiment(const std::string& text, const std::filesystem::path& path) {
+  Experiment e;
+  e.file = path;
+  e.text = text;
+  YAML::Node root;
+  try {
+    root = YAML::Load(e.text);
+  } catch (const YAML::ParserException& ex) {
+    throw Failure(fmt::format("{}:{}: {}", path.string(), ex.mark.line + 1, ex.msg));
+  }
+  if (!root.IsMap()) fail_at(path, root, "expected a mapping (see experiments/smoke.yaml)");
+  static const std::set<std::string> known = {"format", "name",   "models",   "tracks",
+                                              "modes",  "seeds",  "solver",   "budget",
+                                              "leave_one_out", "store", "calibration"};
+  for (const auto& kv : root) {
+    const auto key = kv.first.as<std::string>("");
+    if (!known.count(key))
+      fail_at(path, kv.first, fmt::format("unknown key '{}', expected one of format, name, models, "
+                                          "tracks, modes, seeds, solver, budget, leave_one_out, store, "
+                                          "calibration",
+                                          key));
+  }
+  if (!root["format"] || root["format"].as<std::string>("") != kFormat)
+    fail_at(path, root["format"] ? root["format"] : root,
+            fmt::format("missing or unknown format, expected 'format: {}'", kFormat));
+  const std::filesystem::path base = path.parent_path().empty() ? "." : path.parent_path();
+  e.name = root["name"] ? scalar<std::string>(path, root["name"], "name") : path.stem().string();
+
+  for (const auto& n : list(path, root, "models")) {
+    TunedModel m;
+    if (!parse_tuned_model(scalar<std::string>(path, n, "a model"), &m))
+      fail_at(path, n, fmt::format("unknown model, expected {}", tuned_model_names()));
+    e.models.push_back(m);
+  }
+  for (const auto& n : list(path, root, "tracks"))
+    for (auto& t : expand(path, n, base)) e.tracks.push_back(std::move(t));
+  for (const auto& n : list(path, root, "modes")) {
+    const int m = scalar<int>(path, n, "a mode");
+    if (!valid_fitness_mode(m)) fail_at(path, n, fmt::format("mode {} is out of range, expected 1..7", m));
+    e.modes.push_back(m);
+  }
+  const YAML::Node seeds = root["seeds"];
+  if (!seeds) fail_at(path, root, "missing 'seeds'");
+  if (seeds.IsMap()) {
+    const auto first = scalar<std::uint64_t>(path, seeds["first"], "seeds.first");
+    const auto count = scalar<int>(path, seeds["count"], "seeds.count");
+    if (count < 1 || count > 100000) fail_at(path, seeds, "seeds.count must be 1..100000");
+    for (int i = 0; i < count; ++i) e.seeds.push_back(first + static_cast<std::uint64_t>(i));
+  } else {
+    for (const auto& n : list(path, root, "seeds"))
+      e.seeds.push_back(scalar<std::uint64_t>(path, n, "a seed"));
+  }
+  if (root["solver"]) e.solver = scalar<std::string>(path, root["solver"], "solver");
+  if (const YAML::Node b = root["budget"]) {
+    if (!b.IsMap()) fail_at(path, b, "budget must be a mapping {particles, iterations} or {evaluations}");
+    for (const auto& kv : b) {
+      const auto key = kv.first.as<std::string>("");
+      if (key == "particles") e.particles = scalar<int>(path, kv.second, "budget.particles");
+      else if (key == "iterations") e.iterations = scalar<int>(path, kv.second, "budget.iterations");
+      else if (key == "evaluations") e.evaluations = scalar<long>(path, kv.second, "budget.evaluations");
+      else fail_at(path, kv.first, fmt::format("unknown budget key '{}', expected particles, iterations or evaluations", key));
+    }
+  }
+  if (root["leave_one_out"]) e.leave_one_out = scalar<bool>(path, root["leave_one_out"], "leave_one_out");
+  if (e.leave_one_out && e.tracks.size() < 2)
+    fail_at(path, root["leave_one_out"], "leave_one_out needs at least two tracks");
+  if (const YAML::Node c = root["calibration"]) read_calibration(path, c, &e.calibration);
+  e.store = root["store"] ? base / scalar<std::string>(path, root["store"], "store")
+                          : base / (e.name + ".sqlite");
+  return e;
+}
+
+}  // namespace odotune

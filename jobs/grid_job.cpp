@@ -1,0 +1,283 @@
+#include "jobs/grid_job.h"
+
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "jobs/calibration_tune_job.h"
+#include "core/failure.h"
+#include "tracks/track_io.h"
+#include "jobs/tune_job.h"
+#include "jobs/ukf_tune_job.h"
+
+namespace odotune {
+
+std::vector<GridCell> grid_cells(const Experiment& e) {
+  std::vector<GridCell> cells;
+  for (auto model : e.models) {
+    // A calibrator has no fitness mode: the first listed stands for all.
+    const std::vector<int> modes =
+        model.calibrator ? std::vector<int>{e.modes.front()} : e.modes;
+    for (std::size_t t = 0; t < e.tracks.size(); ++t)
+      for (int mode : modes)
+        for (auto seed : e.seeds) cells.push_back({model, {t}, t, false, mode, seed});
+    if (!e.leave_one_out) continue;
+    for (std::size_t h = 0; h < e.tracks.size(); ++h) {
+      std::vector<std::size_t> others;
+      for (std::size_t t = 0; t < e.tracks.size(); ++t)
+        if (t != h) others.push_back(t);
+      for (int mode : modes)
+        for (auto seed : e.seeds) cells.push_back({model, others, h, true, mode, seed});
+    }
+  }
+  return cells;
+}
+
+namespace {
+results::Metrics to_metrics(const ErrorMetrics& m) { return {m.rmse_m, m.mae_m, m.maxe_m}; }
+}  // namespace
+
+std::vector<PreparedTrack> prepare_grid_tracks(const Experiment& e) {
+  std::vector<PreparedTrack> tracks;
+  CalibrationInputOptions calibration_options;
+  calibration_options.ext_from_gt_rate_hz = e.calibration.ext_from_gt_hz;
+  for (const auto& t : load_tracks(e.tracks)) {
+    PreparedTrack p;
+    p.name = t.name();
+    if (e.has_ekf_models()) {
+      try {
+        p = prepare_track(t);
+      } catch (const std::invalid_argument& ex) {
+        throw Failure(ex.what());
+      }
+    }
+    if (e.has_calibrator_models()) {
+      try {
+        p.calibration = build_calibration_input(t, calibration_options);
+      } catch (const std::invalid_argument& ex) {
+        throw Failure(fmt::format("{} (needed by the experiment's calibrator models)", ex.what()));
+      }
+      if (!p.calibration->has_gt)
+        throw Failure(fmt::format(
+            "track '{}': no ground truth (gt_x, gt_y, gt_theta), needed by the experiment's "
+            "calibrator models to score the calibrated odometry",
+            t.name()));
+    }
+    if (e.has_ukf_models()) {
+      try {
+        p.fusion = ukf_fusion_input(t);
+      } catch (const std::invalid_argument& ex) {
+        throw Failure(fmt::format("{} (needed by the experiment's ukf model)", ex.what()));
+      }
+    }
+    tracks.push_back(std::move(p));
+  }
+  return tracks;
+}
+
+results::RunRecord cell_record(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                               const GridCell& c) {
+  results::RunRecord r;
+  r.model = to_string(c.model);
+  r.track = c.heldout ? "all-but-" + tracks[c.score_on].name : tracks[c.score_on].name;
+  r.heldout_track = c.heldout ? tracks[c.score_on].name : "";
+  r.mode = c.mode;
+  r.seed = c.seed;
+  r.solver = e.solver;
+  return r;
+}
+
+std::vector<std::size_t> pending_cells(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                                       const std::vector<GridCell>& cells, const results::Store& store) {
+  const std::set<std::string> finished = store.finished_keys();
+  std::vector<std::size_t> pending;
+  for (std::size_t i = 0; i < cells.size(); ++i)
+    if (!finished.count(results::run_key(cell_record(e, tracks, cells[i])))) pending.push_back(i);
+  return pending;
+}
+
+namespace {
+
+// The experiment's solver for a cell (its seed), shared by EKF and calibrator cells.
+SolverSettings cell_solver(const Experiment& e, const GridCell& c, const std::atomic<bool>* stop) {
+  SolverSettings s;
+  s.solver = e.solver;
+  s.seed = c.seed;
+  s.particles = e.particles;
+  s.iterations = e.iterations;
+  s.evaluations = e.evaluations;
+  s.stop = stop;
+  return s;
+}
+
+// The solver's part of a cell's record, the same for every model.
+void set_solver_fields(results::RunRecord& r, const std::vector<std::string>& param_names,
+                       const std::vector<double>& params, double best_fitness,
+                       const tuner::Summary& summary, long diverged) {
+  r.param_names = param_names;
+  r.params = params;
+  r.best_fitness = best_fitness;
+  r.evaluations = summary.evaluations;
+  r.seconds = summary.seconds;
+  r.diverged = diverged;
+  r.termination = summary.termination;
+  for (const auto& rec : summary.log) r.convergence.push_back({rec.evaluations, rec.best_fitness});
+}
+
+std::optional<results::RunRecord> run_calibration_cell(const Experiment& e,
+                                                       const std::vector<PreparedTrack>& tracks,
+                                                       const GridCell& c, const std::atomic<bool>* stop) {
+  results::RunRecord r = cell_record(e, tracks, c);
+  CalibrationTuneRequest req;
+  req.model = c.model.calib;
+  req.resampler = e.calibration.resampler;
+  req.policy = e.calibration.policy;
+  req.pf_particles = e.calibration.particles;
+  req.pf_seed = e.calibration.seed;
+  static_cast<SolverSettings&>(req) = cell_solver(e, c, stop);
+  std::vector<const CalibrationInput*> tune_on;
+  for (auto t : c.tune_on) tune_on.push_back(&*tracks[t].calibration);
+  const CalibrationTuneOutcome o = run_calibration_tune(tune_on, req);
+  if (o.summary.termination == "stopped") return std::nullopt;
+  set_solver_fields(r, o.param_names, o.params, o.tuned_score, o.summary, o.failures);
+  if (!c.heldout) {
+    // Tuned on the scored track alone: its scores are the outcome's.
+    r.baseline = to_metrics(o.baseline.tracks.at(0).errors);
+    r.tuned = to_metrics(o.tuned.tracks.at(0).errors);
+  } else {
+    // The held-out track, calibrated from scratch with either setting (its
+    // robot's default calibrator, the tuned settings applied to it).
+    const CalibrationInput& held = *tracks[c.score_on].calibration;
+    const filters::PfCalibratorParams base = default_calibrator(req, held.nominal);
+    r.baseline = to_metrics(evaluate_calibrator({&held}, req.model, base).tracks.at(0).errors);
+    r.tuned = to_metrics(
+        evaluate_calibrator({&held}, req.model, apply_calibration_params(base, o.params)).tracks.at(0).errors);
+  }
+  return r;
+}
+
+std::optional<results::RunRecord> run_ukf_cell(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                                               const GridCell& c, const std::atomic<bool>* stop) {
+  results::RunRecord r = cell_record(e, tracks, c);
+  UkfTuneRequest req;
+  req.mode = c.mode;
+  static_cast<SolverSettings&>(req) = cell_solver(e, c, stop);
+  std::vector<const FusionInput*> tune_on;
+  for (auto t : c.tune_on) tune_on.push_back(&*tracks[t].fusion);
+  const UkfTuneOutcome o = run_ukf_tune(tune_on, req);
+  if (o.summary.termination == "stopped") return std::nullopt;
+  set_solver_fields(r, o.param_names, o.params, o.tuned_fitness, o.summary, o.failures);
+  // Scores on the cell's track (the tuned track itself, or the held-out
+  // one): the fused pose's errors with the default and the tuned noise.
+  const FusionInput* score = &*tracks[c.score_on].fusion;
+  r.baseline = to_metrics(ukf_track_errors({score}, o.default_settings).at(0));
+  r.tuned = to_metrics(ukf_track_errors({score}, o.tuned_settings).at(0));
+  return r;
+}
+
+}  // namespace
+
+std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                                           const GridCell& c, const std::atomic<bool>* stop) {
+  if (c.model.calibrator) return run_calibration_cell(e, tracks, c, stop);
+  if (c.model.ukf) return run_ukf_cell(e, tracks, c, stop);
+  results::RunRecord r = cell_record(e, tracks, c);
+  TuneRequest req;
+  req.model = c.model.noise;
+  req.mode = c.mode;
+  static_cast<SolverSettings&>(req) = cell_solver(e, c, stop);
+  std::vector<const PreparedTrack*> tune_on;
+  for (auto t : c.tune_on) tune_on.push_back(&tracks[t]);
+  const TuneOutcome o = run_tune(tune_on, req);
+  if (o.summary.termination == "stopped") return std::nullopt;
+  set_solver_fields(r, o.param_names, o.params, o.summary.best_fitness, o.summary, o.divergences.total());
+  // Scores on the cell's track: the tuned track itself, or the held-out one.
+  const auto& score = tracks[c.score_on].input;
+  r.baseline = to_metrics(replay_ekf(score, baseline_noise()).outcome.metrics);
+  r.tuned = to_metrics(replay_ekf(score, o.noise).outcome.metrics);
+  return r;
+}
+
+WorkResult work_cells(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                      const std::vector<GridCell>& cells, const CellSource& source,
+                      const std::atomic<bool>* stop) {
+  WorkResult out;
+  // Called under the lock: keeps the first failure and tells the source.
+  const auto fail = [&](const std::string& line) {
+    if (!out.failure.empty()) return;
+    out.failure = line;
+    if (source.failed) {
+      try {
+        source.failed(line);
+      } catch (const std::exception&) {  // the failure is returned all the same
+      }
+    }
+  };
+#pragma omp parallel
+  {
+    while (true) {
+      std::optional<std::size_t> k;
+#pragma omp critical(odotune_grid)
+      {
+        try {
+          if (out.failure.empty() && !(stop && stop->load())) k = source.next();
+        } catch (const std::exception& ex) {
+          fail(ex.what());
+        }
+      }
+      if (!k) break;
+      const GridCell& c = cells[*k];
+      try {
+        std::optional<results::RunRecord> r = run_cell(e, tracks, c, stop);
+#pragma omp critical(odotune_grid)
+        {
+          if (!r) {
+            ++out.abandoned;
+          } else {
+            try {
+              source.finished(std::move(*r));
+              ++out.ran;
+            } catch (const std::exception& ex) {
+              fail(ex.what());
+            }
+          }
+        }
+      } catch (const std::exception& ex) {
+#pragma omp critical(odotune_grid)
+        fail(fmt::format("run {}: {}", results::run_key(cell_record(e, tracks, c)), ex.what()));
+      }
+    }
+  }
+  return out;
+}
+
+GridOutcome run_grid(const Experiment& e, results::Store& store, const std::atomic<bool>* stop,
+                     const std::function<void(long, long)>& progress) {
+  const std::vector<PreparedTrack> tracks = prepare_grid_tracks(e);
+  const std::vector<GridCell> cells = grid_cells(e);
+  const std::vector<std::size_t> pending = pending_cells(e, tracks, cells, store);
+  GridOutcome out;
+  out.total = static_cast<long>(cells.size());
+  out.skipped = out.total - static_cast<long>(pending.size());
+  if (progress) progress(out.skipped, out.total);
+
+  std::size_t next = 0;
+  long done = out.skipped;
+  CellSource source;
+  source.next = [&]() -> std::optional<std::size_t> {
+    if (next == pending.size()) return std::nullopt;
+    return pending[next++];
+  };
+  source.finished = [&](results::RunRecord&& r) {
+    store.add(r);
+    ++done;
+    if (progress) progress(done, out.total);
+  };
+  const WorkResult w = work_cells(e, tracks, cells, source, stop);
+  if (!w.failure.empty()) throw Failure(w.failure);
+  out.ran = w.ran;
+  out.abandoned = w.abandoned;
+  return out;
+}
+
+}  // namespace odotune

@@ -1,0 +1,105 @@
+// The experiment grid: every cell (model × track × mode × seed, and the
+// leave-one-track-out cells) tuned and written to the results store. A
+// calibrator model (pf-calib, adaptive-pf-calib) has cells for the first
+// listed mode only (it has no fitness mode; experiment_yaml.h).
+// Computation only (the grid command prints). Cells run in parallel with
+// OpenMP (each tune then runs its swarm on one thread); results do not depend
+// on the thread count, so a resumed grid ends identical to an uninterrupted one.
+// Under MPI, jobs/grid_mpi.h shares the cells over processes with the same
+// pieces (run_cell, work_cells).
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "formats/experiment_yaml.h"
+#include "jobs/tune_job.h"
+#include "results/run_record.h"
+#include "results/store.h"
+
+namespace odotune {
+
+struct GridCell {
+  TunedModel model;
+  std::vector<std::size_t> tune_on;  // indices into the experiment's tracks
+  std::size_t score_on;              // index of the track the scores are for
+  bool heldout = false;              // leave-one-track-out cell
+  int mode;
+  std::uint64_t seed;
+};
+
+// The cells of an experiment, in a fixed order.
+std::vector<GridCell> grid_cells(const Experiment& e);
+
+struct GridOutcome {
+  long total = 0;     // cells in the experiment
+  long skipped = 0;   // already in the store
+  long ran = 0;       // finished and written now
+  long abandoned = 0; // in flight when stopped, not written
+};
+
+// The experiment's tracks, read and prepared for the listed models: for
+// replay when an EKF model is listed, as calibration input (with the
+// experiment's calibration.ext_from_gt_hz) when a calibrator model is, as
+// fusion input (ukf_tune_job.h) when the ukf model is.
+// Throws odotune::Failure (one line naming the track) when a track is
+// unusable for a listed model.
+std::vector<PreparedTrack> prepare_grid_tracks(const Experiment& e);
+
+// The record of a cell without its results: what identifies it in the store
+// (results::run_key).
+results::RunRecord cell_record(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                               const GridCell& c);
+
+// Indices (into `cells`) of the cells whose run the store does not have yet,
+// in cell order.
+std::vector<std::size_t> pending_cells(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                                       const std::vector<GridCell>& cells, const results::Store& store);
+
+// Tunes one cell and scores it. An EKF cell's scores are the reference
+// replay's position errors with the baseline and the tuned noise; a
+// calibrator cell's (calibration_tune_job.h) are the dead-reckoning position
+// errors of the calibrated odometry with the paper's default and the tuned
+// settings on the scored track, its params the tuned settings and its
+// best_fitness the tuned score; a ukf cell's (ukf_tune_job.h) are the fused
+// pose's position errors with the default and the tuned UKF noise. The result depends only on the experiment,
+// the tracks and the cell (not on the thread, process or machine that runs it).
+// Returns nothing when `stop` ended the run early (there is nothing to keep).
+// Throws std::exception when the solver fails.
+std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                                           const GridCell& c, const std::atomic<bool>* stop);
+
+// Where a worker gets cells and leaves finished runs. Both functions are
+// called by one thread at a time. `next` returns an index into the cells, or
+// nothing when there is no more work; `finished` keeps a run (throwing makes
+// it the failure).
+struct CellSource {
+  std::function<std::optional<std::size_t>()> next;
+  std::function<void(results::RunRecord&&)> finished;
+  // Optional: told the first failure's line as soon as it happens.
+  std::function<void(const std::string&)> failed;
+};
+
+struct WorkResult {
+  long ran = 0;         // runs handed to `finished`
+  long abandoned = 0;   // runs that `stop` ended early
+  std::string failure;  // the first failure, one line; empty if none
+};
+
+// Runs cells from `source` on all OpenMP threads (one cell per thread at a
+// time) until it has no more, `stop` is raised, or a run fails; then waits for
+// the runs in flight. Never throws: a failure is returned.
+WorkResult work_cells(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                      const std::vector<GridCell>& cells, const CellSource& source,
+                      const std::atomic<bool>* stop);
+
+// Runs the cells the store does not have yet. `progress(done, total)` is
+// called from one thread at a time. Throws odotune::Failure on a bad
+// track or a solver failure.
+GridOutcome run_grid(const Experiment& e, results::Store& store, const std::atomic<bool>* stop,
+                     const std::function<void(long, long)>& progress);
+
+}  // namespace odotune

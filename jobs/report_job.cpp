@@ -1,0 +1,425 @@
+#include "jobs/report_job.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "core/failure.h"
+#include "jobs/store_access.h"
+#include "objectives/tuned_model.h"
+#include "objectives/metrics.h"
+#include "objectives/param_space.h"
+#include "objectives/replay.h"
+#include "results/figures.h"
+#include "results/report_html.h"
+#include "results/report_tables.h"
+#include "tracks/atomic_file.h"
+
+namespace odotune {
+
+namespace {
+
+namespace fs = std::filesystem;
+using results::ReportMetric;
+using results::RunRecord;
+
+// A name usable in a file name: letters, digits, '-', '_', '.' kept.
+std::string file_safe(const std::string& s) {
+  std::string out;
+  for (char c : s)
+    out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.') ? c : '_';
+  return out;
+}
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  for (auto& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Collects the written files and the HTML figures.
+class Writer {
+ public:
+  explicit Writer(fs::path dir) : dir_(std::move(dir)) {}
+
+  // Renders a figure through `draw(stem)`; returns it for the HTML page.
+  template <typename Draw>
+  results::HtmlFigure figure(const std::string& name, const std::string& caption, Draw&& draw) {
+    const fs::path stem = dir_ / name;
+    try {
+      draw(stem);
+    } catch (const std::exception& ex) {
+      throw Failure(fmt::format("{}: cannot draw the figure: {}", stem.string(), ex.what()));
+    }
+    files.push_back(stem.string() + ".png");
+    files.push_back(stem.string() + ".svg");
+    return {caption, slurp(stem.string() + ".svg"), name + ".png", ""};
+  }
+
+  void text(const std::string& name, const std::string& what, const std::string& content) {
+    const fs::path p = dir_ / name;
+    try {
+      write_atomically(p, what, content);
+    } catch (const std::exception& ex) {
+      throw Failure(ex.what());
+    }
+    files.push_back(p);
+  }
+
+  std::vector<fs::path> files;
+
+ private:
+  fs::path dir_;
+};
+
+std::string seeds_phrase(const std::vector<RunRecord>& runs) {
+  std::vector<std::uint64_t> seeds;
+  for (const auto& r : runs)
+    if (std::find(seeds.begin(), seeds.end(), r.seed) == seeds.end()) seeds.push_back(r.seed);
+  return seeds.size() == 1 ? "1 seed" : fmt::format("mean over {} seeds", seeds.size());
+}
+
+// The run of `model` on `track` (per-track, mode `mode`) with the lowest
+// tuned RMSE, or nullptr.
+const RunRecord* best_run(const std::vector<RunRecord>& runs, const std::string& model,
+                          const std::string& track, int mode) {
+  const RunRecord* best = nullptr;
+  for (const auto& r : runs)
+    if (!r.is_heldout() && r.model == model && r.track == track && r.mode == mode &&
+        (!best || r.tuned.rmse_m < best->tuned.rmse_m))
+      best = &r;
+  return best;
+}
+
+results::TrajectoryPath path_of(const std::string& name, const std::vector<TrajectoryPoint>& pts) {
+  results::TrajectoryPath p{name, {}, {}};
+  for (const auto& q : pts) {
+    p.xs_m.push_back(q.x_m);
+    p.ys_m.push_back(q.y_m);
+  }
+  return p;
+}
+
+}  // namespace
+
+ReportOutcome write_report(const ReportRequest& req) {
+  if (!valid_fitness_mode(req.mode))
+    throw Failure(fmt::format("--mode {} is out of range, expected 1..7", req.mode));
+  const auto store = open_store_for_reading(req.store);
+  const results::ExperimentInfo info = store->experiment();
+  std::vector<RunRecord> runs;
+  try {
+    runs = store->runs();
+  } catch (const std::exception& ex) {
+    throw Failure(ex.what());
+  }
+  if (runs.empty())
+    throw Failure(fmt::format("{}: no finished runs yet (run odotune grid first)", req.store.string()));
+  const auto models = results::report_models(runs);
+  const auto tracks = results::report_tracks(runs);
+  std::vector<std::string> overlay_tracks;
+  for (const auto& t : tracks)
+    if (req.trajectory_track.empty() || t == req.trajectory_track) overlay_tracks.push_back(t);
+  if (overlay_tracks.empty())
+    throw Failure(fmt::format("--track-name '{}' is not a track of this store, expected one of {}",
+                              req.trajectory_track, fmt::join(tracks, ", ")));
+  std::error_code ec;
+  fs::create_directories(req.out_dir, ec);
+  if (ec || !fs::is_directory(req.out_dir))
+    throw Failure(fmt::format("{}: cannot create the report folder: {}", req.out_dir.string(),
+                              ec ? ec.message() : "not a folder"));
+
+  ReportOutcome out;
+  out.experiment = info.name;
+  std::vector<RunRecord> own, held;
+  for (const auto& r : runs) (r.is_heldout() ? held : own).push_back(r);
+  // Calibrator runs (pf-calib, adaptive-pf-calib; objectives/tuned_model.h) enter
+  // the generic heatmaps, boxplots and tables; their baseline is the paper's
+  // default PF settings and their metrics the calibrated odometry's dead
+  // reckoning, so Table 1 and the convergence curves keep them apart from
+  // the EKF models', and the EKF trajectory replay leaves them out.
+  // The fusion UKF's runs (ukf) likewise have their own baseline (the
+  // default UKF noise) and metrics (the fused pose's errors): their own
+  // table, and no EKF trajectory replay.
+  std::vector<std::string> ekf_models, calibrator_models, ukf_models;
+  for (const auto& m : models)
+    (is_calibrator_model_name(m) ? calibrator_models : is_ukf_model_name(m) ? ukf_models : ekf_models)
+        .push_back(m);
+  // Runs of one kind: EKF models (calibrator false, ukf false), the
+  // calibrators (calibrator true) or the UKF (ukf true); `model` narrows to one.
+  const auto runs_of = [](const std::vector<RunRecord>& from, bool calibrator, const std::string& model,
+                          bool ukf = false) {
+    std::vector<RunRecord> out_runs;
+    for (const auto& r : from)
+      if (is_calibrator_model_name(r.model) == calibrator && is_ukf_model_name(r.model) == ukf &&
+          (model.empty() || r.model == model))
+        out_runs.push_back(r);
+    return out_runs;
+  };
+  out.runs = static_cast<long>(runs.size());
+  out.heldout_runs = static_cast<long>(held.size());
+
+  Writer w(req.out_dir);
+  results::HtmlPage page(fmt::format("odotune report: {}", info.name));
+  page.paragraph(fmt::format(
+      "Experiment **{}** (file hash {}, odotune {}): {} runs, {} of them leave-one-track-out; "
+      "models {}; tracks {}. Improvement % = 100 · (baseline − tuned) / baseline, positive is "
+      "better; the baseline is odotune's untuned configuration (README, \"Baseline\").",
+      info.name, info.hash, info.code_version, runs.size(), held.size(), fmt::join(models, ", "),
+      fmt::join(tracks, ", ")));
+  if (!calibrator_models.empty())
+    page.paragraph(fmt::format(
+        "Calibrator models ({}) tune the particle-filter calibrator's settings instead of EKF "
+        "noise: their baseline is the paper's default settings, their metrics the dead-reckoning "
+        "position errors of the calibrated odometry against ground truth, and they have runs for "
+        "one fitness mode only (the experiment's first; a calibrator has none).",
+        fmt::join(calibrator_models, ", ")));
+  if (!ukf_models.empty())
+    page.paragraph(
+        "The ukf model tunes the noise of the velocity-fusion UKF (Fariña et al., Sensors 2023, "
+        "23, 961, §1: odometry, external velocities and gyro fused on (V, W), the pose integrated "
+        "by eq. 3) instead of EKF noise: its baseline is the default UKF noise and its metrics "
+        "the fused pose's position errors against ground truth.");
+
+  // Headline: mean RMSE improvement per model over all per-track runs.
+  {
+    std::vector<std::string> parts;
+    for (const auto& m : models) {
+      double s = 0;
+      int n = 0;
+      for (const auto& r : own)
+        if (r.model == m) s += r.improvement_rmse_pct(), ++n;
+      if (n) parts.push_back(fmt::format("{} {:+.1f} %", m, s / n));
+    }
+    out.headline = fmt::format("mean RMSE improvement over the baseline: {}", fmt::join(parts, ", "));
+    page.paragraph(out.headline + ".");
+  }
+
+  // (a) Figure 3: heatmaps, per-track and held-out side by side.
+  page.heading("Improvement over the baseline per fitness mode and track (Figure 3)");
+  page.paragraph(
+      "Rows: fitness modes 1–7; columns: tracks; each cell the mean improvement over seeds. "
+      "Left: tuned and scored on the same track; right (when the experiment has "
+      "leave_one_out): tuned on all other tracks, scored on the column's track.");
+  for (ReportMetric metric : results::kReportMetrics) {
+    const std::string mname(results::metric_name(metric));
+    for (const auto& model : models) {
+      std::vector<results::HtmlFigure> row;
+      for (bool heldout : {false, true}) {
+        const auto grid = results::improvement_grid(runs, model, metric, heldout, tracks);
+        if (grid.empty()) continue;
+        const std::string name = fmt::format("heatmap_{}{}_{}", heldout ? "heldout_" : "",
+                                             file_safe(model), lower(mname));
+        const std::string title =
+            fmt::format("{} improvement [%], {}{}", mname, model, heldout ? ", held out" : "");
+        const std::string caption = fmt::format(
+            "{} improvement over the baseline, model {}, {}; {}.", mname, model,
+            heldout ? "tuned on all other tracks and scored on the column's track"
+                    : "tuned and scored on the column's track",
+            seeds_phrase(heldout ? held : own));
+        row.push_back(w.figure(name, caption, [&](const fs::path& stem) {
+          results::heatmap(stem, title, grid.columns, grid.mean_pct);
+        }));
+      }
+      page.figures(row);
+    }
+  }
+
+  // (b) Figure 4: boxplots.
+  page.heading("Improvement per model (Figure 4)");
+  {
+    std::vector<results::HtmlFigure> row;
+    for (bool heldout : {false, true}) {
+      std::map<std::string, std::map<std::string, std::vector<double>>> data;
+      for (const auto& r : heldout ? held : own)
+        for (ReportMetric metric : results::kReportMetrics)
+          data[r.model][std::string(results::metric_name(metric))].push_back(
+              results::improvement_pct(r, metric));
+      if (data.empty()) continue;
+      const std::string title = fmt::format(
+          "Improvement over the baseline [%] per model, all {}{} runs", heldout ? "held-out " : "",
+          (heldout ? held : own).size());
+      row.push_back(w.figure(heldout ? "boxplots_heldout" : "boxplots", title,
+                             [&](const fs::path& stem) { results::boxplots(stem, title, data); }));
+    }
+    page.figures(row);
+  }
+
+  // (c) Table 1 and the generalisation table.
+  const results::RmseTable t1 = results::rmse_table(runs_of(runs, false, ""));
+  if (!t1.rows.empty()) {
+    const results::TextTable tt = results::text_table(t1);
+    w.text("table1.csv", "report table", results::to_csv(t1));
+    w.text("table1.md", "report table", results::to_markdown(tt));
+    page.heading("Absolute RMSE per track and fitness mode (Table 1)");
+    page.paragraph(fmt::format(
+        "Original = the baseline configuration; each model's column is the mean tuned RMSE over "
+        "seeds, the row's best in bold ({}). Also as table1.csv and table1.md.",
+        seeds_phrase(own)));
+    page.table(tt);
+  }
+  // One table per calibrator model: each has its own baseline (its kind's
+  // default settings), so they do not share an "original" column.
+  for (const auto& model : calibrator_models) {
+    const results::RmseTable tc = results::rmse_table(runs_of(runs, true, model));
+    if (tc.rows.empty()) continue;
+    const results::TextTable tt = results::text_table(tc);
+    const std::string stem = "table1_" + file_safe(model);
+    w.text(stem + ".csv", "report table", results::to_csv(tc));
+    w.text(stem + ".md", "report table", results::to_markdown(tt));
+    page.heading(fmt::format("Calibrated odometry RMSE per track, {}", model));
+    page.paragraph(fmt::format(
+        "Dead-reckoning position RMSE of the odometry calibrated online by {}: original = the "
+        "paper's default settings, {} = the tuned settings ({}). Also as {}.csv and {}.md.",
+        model, model, seeds_phrase(runs_of(own, true, model)), stem, stem));
+    page.table(tt);
+  }
+  // The UKF's table: its own baseline (the default UKF noise).
+  for (const auto& model : ukf_models) {
+    const results::RmseTable tu = results::rmse_table(runs_of(runs, false, model, true));
+    if (tu.rows.empty()) continue;
+    const results::TextTable tt = results::text_table(tu);
+    const std::string stem = "table1_" + file_safe(model);
+    w.text(stem + ".csv", "report table", results::to_csv(tu));
+    w.text(stem + ".md", "report table", results::to_markdown(tt));
+    page.heading(fmt::format("Fused pose RMSE per track and fitness mode, {}", model));
+    page.paragraph(fmt::format(
+        "Position RMSE of the pose integrated from the fusion UKF's (V, W): original = the default "
+        "UKF noise, {} = the tuned noise ({}). Also as {}.csv and {}.md.",
+        model, seeds_phrase(runs_of(own, false, model, true)), stem, stem));
+    page.table(tt);
+  }
+  {
+    page.heading("Generalisation: tuned on the track vs held out");
+    std::string md;
+    bool any = false;
+    for (ReportMetric metric : results::kReportMetrics) {
+      const auto rows = results::generalisation(runs, metric);
+      if (rows.empty()) continue;
+      any = true;
+      const results::TextTable tt = results::text_table(rows, metric);
+      md += results::to_markdown(tt) + "\n";
+      page.table(tt);
+    }
+    if (any) {
+      w.text("generalisation.md", "report table", md);
+      page.paragraph(
+          "Per-track tuning overfits: the held-out column is what a configuration tuned on the "
+          "other tracks achieves on this one. Means over all modes and seeds.");
+    } else {
+      out.notes.push_back(
+          "no leave-one-track-out runs: set leave_one_out: true in the experiment for the "
+          "generalisation table and held-out heatmaps");
+      page.paragraph("This experiment has no leave-one-track-out runs (leave_one_out: false).");
+    }
+  }
+
+  // (d) Figure 5: trajectory overlays.
+  int mode = req.mode;
+  const auto modes = results::report_modes(own);
+  if (!modes.empty() && std::find(modes.begin(), modes.end(), mode) == modes.end()) {
+    out.notes.push_back(fmt::format("mode {} has no runs; trajectories and convergence use mode {}",
+                                    mode, modes.back()));
+    mode = modes.back();
+  }
+  page.heading(fmt::format("Trajectories (Figure 5), fitness mode {}", mode));
+  if (!calibrator_models.empty())
+    out.notes.push_back(fmt::format(
+        "trajectory overlays replay the EKF: the calibrator models ({}) are left out of them",
+        fmt::join(calibrator_models, ", ")));
+  if (!ukf_models.empty())
+    out.notes.push_back(fmt::format(
+        "trajectory overlays replay the EKF: the fusion UKF runs ({}) are left out of them",
+        fmt::join(ukf_models, ", ")));
+  const auto track_data = ekf_models.empty() ? std::map<std::string, Track>{}
+                                             : experiment_tracks(info, req.track_files);
+  if (ekf_models.empty()) {
+    page.paragraph("No EKF runs in this store: no trajectory overlays.");
+  } else {
+    std::vector<results::HtmlFigure> row;
+    for (const auto& name : overlay_tracks) {
+      const auto it = track_data.find(name);
+      if (it == track_data.end()) {
+        out.notes.push_back(fmt::format(
+            "trajectory overlay of {} left out: its track file was not found (pass --track FILE)",
+            name));
+        continue;
+      }
+      ReplayInput in;
+      try {
+        in = build_replay_input(it->second);
+      } catch (const std::invalid_argument& ex) {
+        throw Failure(ex.what());
+      }
+      std::vector<results::TrajectoryPath> paths;
+      results::TrajectoryPath gt{"ground truth", {}, {}};
+      for (const auto& p : in.gt) {
+        gt.xs_m.push_back(p.x());
+        gt.ys_m.push_back(p.y());
+      }
+      paths.push_back(std::move(gt));
+      const ReplayResult base = replay_ekf(in, baseline_noise(), true);
+      paths.push_back(path_of(fmt::format("baseline EKF (RMSE {:.1f} mm)", base.outcome.metrics.rmse_m * 1e3),
+                              base.trajectory));
+      for (const auto& model : ekf_models) {
+        const RunRecord* r = best_run(runs, model, name, mode);
+        if (!r) continue;
+        const ReplayResult got = replay_ekf(in, run_noise(*r), true);
+        paths.push_back(path_of(fmt::format("{} tuned, seed {} (RMSE {:.1f} mm)", model, r->seed,
+                                            got.outcome.metrics.rmse_m * 1e3),
+                                got.trajectory));
+      }
+      const std::string title = fmt::format("{}: ground truth, baseline and tuned EKF (mode {})", name, mode);
+      row.push_back(w.figure("trajectories_" + file_safe(name), title, [&](const fs::path& stem) {
+        results::trajectories(stem, title, paths);
+      }));
+    }
+    if (!row.empty())
+      page.paragraph("Each model's run with the lowest tuned RMSE on the track, replayed by the reference EKF.");
+    page.figures(row);
+  }
+
+  // (e) Convergence curves: the EKF models' fitness (metres) and the
+  // calibrators' score (dimensionless) in separate figures.
+  page.heading(fmt::format("Convergence, fitness mode {}", mode));
+  page.paragraph("Best fitness so far against evaluations: median over seeds as a line, min–max as a band.");
+  for (bool calibrator : {false, true}) {
+    std::vector<results::HtmlFigure> row;
+    for (const auto& name : tracks) {
+      std::map<std::string, std::vector<std::vector<results::ConvergencePoint>>> series;
+      for (const auto& r : own)
+        if (is_calibrator_model_name(r.model) == calibrator && r.track == name &&
+            (calibrator || r.mode == mode) && !r.convergence.empty())
+          series[r.model].push_back(r.convergence);
+      if (series.empty()) continue;
+      const std::string title =
+          calibrator ? fmt::format("{}: best calibration score vs evaluations", name)
+                     : fmt::format("{}: best fitness (mode {}) vs evaluations", name, mode);
+      const std::string stem = (calibrator ? "convergence_calibration_" : "convergence_") + file_safe(name);
+      row.push_back(w.figure(stem, title, [&](const fs::path& p) { results::convergence(p, title, series); }));
+    }
+    if (calibrator && !row.empty())
+      page.paragraph("Calibrator models: best calibration score (objectives/calibration_objective.h, "
+                     "lower is better) against evaluations, whatever the fitness mode.");
+    page.figures(row);
+  }
+
+  for (const auto& n : out.notes) page.paragraph("Note: " + n + ".");
+  w.text("index.html", "report page", page.html());
+  out.files = std::move(w.files);
+  return out;
+}
+
+}  // namespace odotune

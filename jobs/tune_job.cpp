@@ -1,0 +1,150 @@
+#include "jobs/tune_job.h"
+
+#include <stdexcept>
+
+#include "tuner/nlopt_solver.h"
+#include "tuner/problem.h"
+#include "tuner/pso.h"
+
+namespace odotune {
+
+PreparedTrack prepare_track(const Track& track) {
+  PreparedTrack p;
+  p.name = track.name();
+  p.input = build_replay_input(track);
+  if (p.input.fixes.empty())
+    throw std::invalid_argument(
+        "track '" + track.name() +
+        "': no position fixes (aps_x, aps_y), so the EKF has nothing to correct with and its "
+        "noise cannot matter; add fixes made from ground truth with `odotune fixes`");
+  p.fast = std::make_unique<FastReplay>(p.input);
+  return p;
+}
+
+bool SolverSettings::IsValid(std::string* why) const {
+  if (solver != "pso" && solver.rfind("nlopt:", 0) != 0) {
+    if (why) *why = "solver '" + solver + "': expected pso or nlopt:NAME";
+    return false;
+  }
+  if (solver == "pso") {
+    tuner::PsoOptions o;
+    o.particles = particles;
+    o.iterations = iterations;
+    return o.IsValid(why);
+  }
+  tuner::NloptOptions o;
+  o.algorithm = solver.substr(6);
+  o.max_evaluations = evaluations > 0 ? evaluations : 1;
+  return o.IsValid(why);
+}
+
+bool TuneRequest::IsValid(std::string* why) const {
+  if (!valid_fitness_mode(mode)) {
+    if (why) *why = "mode = " + std::to_string(mode) + ": expected 1..7";
+    return false;
+  }
+  return SolverSettings::IsValid(why);
+}
+
+ErrorMetrics mean_metrics(const std::vector<ErrorMetrics>& per_track) {
+  ErrorMetrics m;
+  for (const auto& t : per_track) {
+    m.rmse_m += t.rmse_m;
+    m.mae_m += t.mae_m;
+    m.maxe_m += t.maxe_m;
+    m.samples += t.samples;
+  }
+  const double n = per_track.empty() ? 1.0 : static_cast<double>(per_track.size());
+  m.rmse_m /= n;
+  m.mae_m /= n;
+  m.maxe_m /= n;
+  return m;
+}
+
+tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s, std::vector<double> x0) {
+  tuner::Summary summary;
+  if (s.solver == "pso") {
+    tuner::PsoOptions o;
+    o.particles = s.particles;
+    o.iterations = s.iterations;
+    o.seed = s.seed;
+    o.progress = s.progress;
+    o.stop = s.stop;
+    summary = tuner::pso_minimize(problem, o);
+  } else {
+    tuner::NloptOptions o;
+    o.algorithm = s.solver.substr(6);
+    o.max_evaluations =
+        s.evaluations > 0 ? s.evaluations : static_cast<long>(s.particles) * (s.iterations + 1);
+    o.seed = s.seed;
+    if (!x0.empty()) o.x0 = std::move(x0);
+    o.progress = s.progress;
+    o.stop = s.stop;
+    summary = tuner::nlopt_minimize(problem, o);
+  }
+  if (!summary.ok() || summary.best_x.empty())
+    throw std::runtime_error("solver " + s.solver + ": " + summary.termination);
+  return summary;
+}
+
+DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSettings& s,
+                                      const BoxSpace& space, const std::vector<double>& default_params) {
+  DefaultsTune t;
+  for (const auto& p : space.params()) {
+    t.param_names.push_back(p.name);
+    t.param_units.push_back(p.unit);
+  }
+  const std::vector<double> default_x = space.to_box(default_params);
+  t.summary = run_solver(problem, s, default_x);
+  // The baseline's fitness by the same problem (an objective counts this
+  // evaluation like any other, but the solver's summary does not).
+  t.baseline_fitness = problem.fitness(default_x);
+  t.default_kept = t.baseline_fitness < t.summary.best_fitness;
+  t.tuned_fitness = t.default_kept ? t.baseline_fitness : t.summary.best_fitness;
+  t.params = t.default_kept ? default_params : space.to_physical(t.summary.best_x);
+  return t;
+}
+
+TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const TuneRequest& request) {
+  std::string why;
+  if (!request.IsValid(&why)) throw std::invalid_argument(why);
+  if (tracks.empty()) throw std::invalid_argument("no tracks to tune on");
+  std::vector<const FastReplay*> fast;
+  for (const auto* t : tracks) fast.push_back(t->fast.get());
+  const EkfObjective objective(fast, request.model, request.mode);
+  const BoxProblem<EkfObjective> problem{&objective};
+
+  TuneOutcome out;
+  out.request = request;
+  out.summary = run_solver(problem, request);
+
+  const ParamSpace& space = objective.space();
+  for (const auto& p : space.params()) {
+    out.param_names.push_back(p.name);
+    out.param_units.push_back(p.unit);
+  }
+  out.params = space.to_physical(out.summary.best_x);
+  out.noise = space.to_noise(out.params);
+  out.divergences = objective.divergences();
+
+  // Scores from the reference replay, independent of the fast path.
+  std::vector<ErrorMetrics> base, tuned;
+  for (const auto* t : tracks) {
+    TrackScore s;
+    s.track = t->name;
+    s.baseline = replay_ekf(t->input, baseline_noise()).outcome.metrics;
+    s.tuned = replay_ekf(t->input, out.noise).outcome.metrics;
+    base.push_back(s.baseline);
+    tuned.push_back(s.tuned);
+    out.tracks.push_back(s);
+  }
+  out.baseline_mean = mean_metrics(base);
+  out.tuned_mean = mean_metrics(tuned);
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    out.baseline_fitness += fitness_of(base[i], request.mode) / static_cast<double>(tracks.size());
+    out.tuned_fitness += fitness_of(tuned[i], request.mode) / static_cast<double>(tracks.size());
+  }
+  return out;
+}
+
+}  // namespace odotune

@@ -1,0 +1,125 @@
+// One tuning run: noise model × tracks × fitness mode × solver × seed →
+// tuned parameters, with baseline and tuned metrics from the reference replay.
+// Computation only: no parsing, no printing (the commands do those), so the
+// experiment grid can run many of these side by side.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "filters/ekf_noise.h"
+#include "objectives/box_space.h"
+#include "objectives/calibration_input.h"
+#include "objectives/ekf_objective.h"
+#include "objectives/fusion_input.h"
+#include "objectives/metrics.h"
+#include "objectives/replay.h"
+#include "tracks/track.h"
+#include "tuner/problem.h"
+#include "tuner/summary.h"
+
+namespace odotune {
+
+// A track prepared for replay: the reference input and its fast form; and,
+// when a calibrator model is tuned on it (grid), its calibration input; when
+// the fusion UKF is (grid), its fusion input. Each part is built only when a
+// model needs it: `fast` is null for a track prepared for calibrators or the
+// UKF only.
+struct PreparedTrack {
+  std::string name;
+  ReplayInput input;
+  std::unique_ptr<FastReplay> fast;
+  std::optional<CalibrationInput> calibration;
+  std::optional<FusionInput> fusion;
+};
+// Throws std::invalid_argument (one line naming the track) when it cannot be
+// replayed or has no position fixes (nothing to tune).
+PreparedTrack prepare_track(const Track& track);
+
+// The solver part of a tuning request, shared by the EKF (TuneRequest) and
+// the calibrator tunes (calibration_tune_job.h), which both extend it.
+struct SolverSettings {
+  std::string solver = "pso";      // "pso" or "nlopt:NAME"
+  std::uint64_t seed = 1;
+  int particles = 50;              // PSO
+  int iterations = 150;            // PSO
+  long evaluations = 0;            // NLopt budget; 0 = particles × (iterations + 1)
+  std::function<void(long, long)> progress;
+  const std::atomic<bool>* stop = nullptr;
+
+  // The solver's name and budget, checked as the solver itself would.
+  bool IsValid(std::string* why) const;
+};
+
+struct TuneRequest : SolverSettings {
+  filters::NoiseModel model = filters::NoiseModel::rq;
+  int mode = 7;                    // fitness mode 1..7
+
+  bool IsValid(std::string* why) const;
+};
+
+struct TrackScore {
+  std::string track;
+  ErrorMetrics baseline, tuned;
+};
+
+struct TuneOutcome {
+  TuneRequest request;
+  std::vector<std::string> param_names;
+  std::vector<std::string> param_units;
+  std::vector<double> params;             // physical values, in param_units
+  filters::NoiseParams noise;             // the same, as filter noise (SI)
+  std::vector<TrackScore> tracks;
+  ErrorMetrics baseline_mean, tuned_mean; // means over tracks
+  double baseline_fitness = 0, tuned_fitness = 0;
+  DivergenceCounts divergences;
+  tuner::Summary summary;                 // evaluations, seconds, termination, log
+};
+
+// An objective as the tuner sees it: a box and a function (objectives/ does
+// not depend on tuner/, so the adapter lives here). `Objective` has
+// fitness(x) const and bounds() → (lower, upper); it must outlive this.
+template <typename Objective>
+struct BoxProblem {
+  const Objective* objective;
+  double fitness(std::span<const double> x) const { return objective->fitness(x); }
+  tuner::Bounds bounds() const {
+    auto [lo, hi] = objective->bounds();
+    return {lo, hi};
+  }
+};
+
+// Minimises `problem` with PSO or NLopt as `s` says (NLopt from x0 when given,
+// else its default start). Throws std::runtime_error when the solver fails.
+tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s,
+                          std::vector<double> x0 = {});
+
+// A tune that starts from known defaults (the calibrator and UKF tunes): the
+// solver from the defaults' box point, the defaults' own fitness by the same
+// problem, and the tuned physical values — the defaults themselves when they
+// score better than anything the solver found (so a tune never worsens the
+// fitness on its tracks).
+struct DefaultsTune {
+  tuner::Summary summary;
+  double baseline_fitness = 0.0, tuned_fitness = 0.0;
+  bool default_kept = false;
+  std::vector<double> params;          // tuned physical values (or the defaults)
+  std::vector<std::string> param_names, param_units;  // the space's
+};
+DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSettings& s,
+                                      const BoxSpace& space, const std::vector<double>& default_params);
+
+// Runs the solver; throws std::invalid_argument for an invalid request and
+// std::runtime_error when the solver fails.
+TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const TuneRequest& request);
+
+// Mean of per-track metrics (each track weighs the same).
+ErrorMetrics mean_metrics(const std::vector<ErrorMetrics>& per_track);
+
+}  // namespace odotune

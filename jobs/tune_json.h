@@ -1,0 +1,35 @@
+// The JSON pieces of a tune's result (`tune --json`, the grid's stored runs):
+// metrics, improvement, per-track scores, the solver's convergence log and the
+// tuned parameters by name. The calibrator and UKF tunes add theirs in
+// calibration_tune_json.h and ukf_tune_json.h.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "jobs/tune_job.h"
+#include "objectives/metrics.h"
+#include "tuner/summary.h"
+
+namespace odotune {
+
+nlohmann::json metrics_json(const ErrorMetrics& m);
+// The --json document of `tune` (see README for the keys).
+nlohmann::json tune_json(const TuneOutcome& o);
+
+// The pieces every tune's --json shares (tune, the calibrator and UKF tunes):
+// {"rmse", "mae", "maxe"} improvement in %, the per-track baseline/tuned
+// metrics, and the solver's convergence log.
+nlohmann::json improvement_json(const ErrorMetrics& baseline, const ErrorMetrics& tuned);
+nlohmann::json track_scores_json(const std::vector<TrackScore>& tracks);
+nlohmann::json convergence_json(const tuner::Summary& summary);
+// The tuned and default values by parameter name, into j: "params",
+// "param_units", "default_params" (each an object keyed by name) and
+// "default_kept" (the calibrator and UKF tunes, which start from defaults).
+void put_tuned_params_json(nlohmann::json& j, const std::vector<std::string>& names,
+                           const std::vector<std::string>& units, const std::vector<double>& tuned,
+                           const std::vector<double>& defaults, bool default_kept);
+
+}  // namespace odotune
