@@ -33,6 +33,7 @@
 #include "cli/commands.h"
 #include "formats/config_yaml.h"
 #include "core/failure.h"
+#include "core/output_paths.h"
 #include "cli/output.h"
 #include "tracks/track_io.h"
 #include "cli/progress.h"
@@ -95,15 +96,6 @@ Range parse_range(const std::string& flag, const std::string& text) {
   return r;
 }
 
-
-// Each output's directory must exist before the (long) calibration runs.
-void check_output_dir(const std::string& flag, const std::string& path) {
-  if (path.empty()) return;
-  const fs::path parent = fs::path(path).parent_path();
-  std::error_code ec;
-  if (!parent.empty() && !fs::is_directory(parent, ec))
-    throw Failure(fmt::format("{} {}: the directory {} does not exist", flag, path, parent.string()));
-}
 
 std::vector<CalibrationInput> build_inputs(const std::vector<std::string>& files, double ext_from_gt_hz,
                                            bool apply, double ext_sigma_v_m_s, double ext_sigma_w_rad_s) {

@@ -18,6 +18,7 @@
 #include "cli/commands.h"
 #include "formats/config_yaml.h"
 #include "core/failure.h"
+#include "core/output_paths.h"
 #include "studies/learned_study.h"
 #include "studies/learned_study_outputs.h"
 #include "cli/output.h"
@@ -50,17 +51,6 @@ struct LearnArgs {
   int threads = 1;
   bool static_covariance = false;
 };
-
-// Each output's directory must exist before the work starts.
-void check_output(const std::string& flag, const std::string& path) {
-  if (path.empty()) return;
-  const fs::path p(path);
-  std::error_code ec;
-  if (fs::is_directory(p, ec)) throw Failure(fmt::format("{} {}: is a folder; expected a file name", flag, path));
-  const fs::path parent = p.parent_path();
-  if (!parent.empty() && !fs::is_directory(parent, ec))
-    throw Failure(fmt::format("{} {}: the directory {} does not exist", flag, path, parent.string()));
-}
 
 // Loads tracks and lays them out for fusion; needs ground truth (and power).
 std::vector<FusionInput> fusion_inputs(const std::vector<std::string>& files, double rate_hz, bool need_power,
@@ -133,7 +123,7 @@ void check_model_fits(const LearnedModelFile& m, const FusionInput& in, const st
 // ---------------------------------------------------------------- train
 
 void run_train(const LearnArgs& a, const std::string& command) {
-  check_output("--model-out", a.model_out);
+  check_output_file("--model-out", a.model_out);
   if (a.iterations < 1) throw Failure(fmt::format("--iterations {}: expected >= 1", a.iterations));
   const std::vector<FusionInput> tracks = fusion_inputs(a.tracks, a.rate_hz, false, "to learn odometry from");
   const std::vector<FusionInput> slips =
@@ -229,8 +219,8 @@ void print_errors(const char* name, const OdometryErrors& e) {
 }
 
 void run_eval(const LearnArgs& a) {
-  check_output("--json", a.json);
-  check_output("--csv", a.csv);
+  check_output_file("--json", a.json);
+  check_output_file("--csv", a.csv);
   const LearnedModelFile m = read_model(a.model);
   const std::vector<FusionInput> tracks =
       fusion_inputs({a.track}, m.odometry.rate_hz, false, "to score the odometry against");
@@ -263,8 +253,8 @@ nlohmann::json summary_json(const LstmTrainingSummary& s) {
 }
 
 void run_retrain(const LearnArgs& a, const std::string& command) {
-  check_output("--model-out", a.model_out);
-  check_output("--json", a.json);
+  check_output_file("--model-out", a.model_out);
+  check_output_file("--json", a.json);
   if (a.every < 20) throw Failure(fmt::format("--every {}: expected >= 20 samples", a.every));
   if (a.retrain_iterations < 1) throw Failure(fmt::format("--iterations {}: expected >= 1", a.retrain_iterations));
   LearnedModelFile m = read_model(a.model);
