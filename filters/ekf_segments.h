@@ -15,7 +15,7 @@
 // r_x, r_y, r_θ for rq), so Σ̃ is a fixed linear combination of matrices that
 // depend only on the odometry and are summed once per track. What remains per
 // noise setting and step is evaluating the error against ground truth, a
-// rotation and a norm that vectorise (see objectives/replay_fast.h).
+// rotation and a norm that vectorise (see objectives/replay.h).
 //
 // The equivalence with the step-by-step Ekf is a test (tests/filters).
 #pragma once
