@@ -1,0 +1,263 @@
+#include "jobs/calibrate_job.h"
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <stdexcept>
+#include <utility>
+
+#include <fmt/format.h>
+
+#include "core/failure.h"
+#include "core/output_paths.h"
+#include "formats/calibration_yaml.h"
+#include "formats/config_yaml.h"
+#include "jobs/calibration_figure_data.h"
+#include "jobs/calibration_summary.h"
+#include "jobs/calibration_trace.h"
+#include "objectives/calibration_ranges.h"
+#include "results/calibration_figures.h"
+#include "tracks/track_io.h"
+
+namespace odotune {
+
+namespace {
+
+using filters::OdometryParams;
+using Range = filters::PfCalibratorParams::Range;
+
+// The wheelchair the PF/DKF defaults were tuned for (PfCalibratorParams).
+constexpr double kPaperRadiusM = 0.32;
+constexpr double kPaperWheelBaseM = 0.65;
+// External velocities for --apply on tracks without v_ext (unused by the
+// dead reckoning it scores, but build_calibration_input wants some).
+constexpr double kApplyExtRateHz = 10.0;
+
+// "LO,HI" in metres with 0 < LO < HI.
+Range parse_range(const std::string& flag, const std::string& text) {
+  const auto comma = text.find(',');
+  Range r;
+  std::size_t used_lo = 0, used_hi = 0;
+  try {
+    if (comma == std::string::npos) throw std::invalid_argument("no comma");
+    const std::string lo = text.substr(0, comma), hi = text.substr(comma + 1);
+    r.lo = std::stod(lo, &used_lo);
+    r.hi = std::stod(hi, &used_hi);
+    if (used_lo != lo.size() || used_hi != hi.size()) throw std::invalid_argument("trailing text");
+  } catch (const std::exception&) {
+    throw Failure(fmt::format("{} '{}': expected LO,HI in metres, e.g. 0.30,0.34", flag, text));
+  }
+  if (!(std::isfinite(r.lo) && std::isfinite(r.hi) && r.lo > 0.0 && r.lo < r.hi))
+    throw Failure(fmt::format("{} '{}': expected 0 < LO < HI [m]", flag, text));
+  return r;
+}
+
+std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply) {
+  const std::vector<std::string>& files = a.tracks;
+  const std::vector<Track> tracks = load_tracks(files);
+  std::vector<CalibrationInput> inputs;
+  for (std::size_t k = 0; k < tracks.size(); ++k) {
+    CalibrationInputOptions o;
+    o.ext_from_gt_rate_hz = a.ext_from_gt_hz;
+    if (a.ext_sigma_v > 0.0) o.default_v_var = a.ext_sigma_v * a.ext_sigma_v;
+    if (a.ext_sigma_w > 0.0) o.default_w_var = a.ext_sigma_w * a.ext_sigma_w;
+    const Track& tr = tracks[k];
+    const bool has_ext = tr.has(Col::v_ext) && tr.has(Col::w_ext);
+    if (apply && o.ext_from_gt_rate_hz <= 0.0 && !has_ext && tr.has_gt()) o.ext_from_gt_rate_hz = kApplyExtRateHz;
+    std::string why;
+    if (!o.IsValid(&why)) throw Failure(fmt::format("--ext-from-gt {}: {}", a.ext_from_gt_hz, why));
+    if (o.ext_from_gt_rate_hz <= 0.0 && !has_ext)
+      throw Failure(tr.has_gt() ? fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext); expected "
+                                              "them, or --ext-from-gt HZ to derive them from its ground truth",
+                                              files[k], tr.name())
+                                : fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext) and no "
+                                              "ground truth (gt_x, gt_y) to derive them from; expected either",
+                                              files[k], tr.name()));
+    try {
+      inputs.push_back(build_calibration_input(tracks[k], o));
+    } catch (const std::invalid_argument& e) {
+      throw Failure(fmt::format("{}: {}", files[k], e.what()));
+    }
+    if (apply && !inputs.back().has_gt)
+      throw Failure(fmt::format("{}: track '{}' has no ground truth (gt_x, gt_y, gt_theta); --apply scores "
+                                "dead reckoning against it",
+                                files[k], inputs.back().track_name));
+  }
+  return inputs;
+}
+
+// Several tracks are calibrated as one robot: their nominal parameters must agree.
+void check_same_robot(const std::vector<CalibrationInput>& inputs, const std::vector<std::string>& files) {
+  const auto differs = [](double a, double b) { return std::abs(a - b) > 1e-9 * std::max(std::abs(a), std::abs(b)); };
+  for (std::size_t k = 1; k < inputs.size(); ++k) {
+    const OdometryParams &a = inputs[0].nominal, &b = inputs[k].nominal;
+    if (differs(a.wheel_radius_left_m, b.wheel_radius_left_m) ||
+        differs(a.wheel_radius_right_m, b.wheel_radius_right_m) || differs(a.wheel_base_m, b.wheel_base_m))
+      throw Failure(fmt::format(
+          "{}: nominal R_L/R_R/D = {}/{}/{} m differ from {}'s {}/{}/{} m; expected tracks of one robot",
+          files[k], b.wheel_radius_left_m, b.wheel_radius_right_m, b.wheel_base_m, files[0],
+          a.wheel_radius_left_m, a.wheel_radius_right_m, a.wheel_base_m));
+  }
+}
+
+CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<CalibrationInput>& inputs) {
+  CalibrationRunInfo info;
+  info.track_files = a.tracks;
+  info.ext_from_gt_rate_hz = a.ext_from_gt_hz;
+  CalibrationOptions& o = info.options;
+  if (!parse_calibration_method(a.method, &o.method))
+    throw Failure(fmt::format("--method '{}': unknown method, expected adaptive-pf, pf, dkf, batch or none",
+                              a.method));
+  const bool pf = o.method == CalibrationMethod::pf || o.method == CalibrationMethod::adaptive_pf;
+  for (const auto& [flag, given] : {std::pair{"--resampler", a.resampler_given}, std::pair{"--policy", a.policy_given},
+                                    std::pair{"--particles", a.particles_given}})
+    if (given && !pf)
+      throw Failure(fmt::format("{} applies to --method pf and adaptive-pf only (got --method {})", flag, a.method));
+  const OdometryParams& nom = inputs.front().nominal;
+  const double r_nom = 0.5 * (nom.wheel_radius_left_m + nom.wheel_radius_right_m);
+  const double r_scale = r_nom / kPaperRadiusM, d_scale = nom.wheel_base_m / kPaperWheelBaseM;
+
+  const CalibrationRanges ranges = default_calibration_ranges(nom);
+  Range r_left = ranges.wheel_radius_left_m;
+  Range r_right = ranges.wheel_radius_right_m;
+  Range base = ranges.wheel_base_m;
+  if (!a.init_radius_range.empty()) r_left = r_right = parse_range("--init-radius-range", a.init_radius_range);
+  if (!a.init_wheel_base_range.empty()) base = parse_range("--init-wheel-base-range", a.init_wheel_base_range);
+  info.init_radius_m = {std::min(r_left.lo, r_right.lo), std::max(r_left.hi, r_right.hi)};
+  info.init_wheel_base_m = base;
+
+  o.pf = o.method == CalibrationMethod::adaptive_pf ? filters::PfCalibratorParams::adaptive_defaults()
+                                                    : filters::PfCalibratorParams{};
+  o.pf.wheel_radius_left_m = r_left;
+  o.pf.wheel_radius_right_m = r_right;
+  o.pf.wheel_base_m = base;
+  o.pf.random_walk_sigma_m *= r_scale;
+  o.pf.alpha *= r_scale;
+  o.pf.dispersion_per_particle_m *= r_scale;
+  o.pf.min_random_walk_sigma_m *= r_scale;
+  if (!a.resampler.empty() && !filters::parse_resampler(a.resampler, &o.pf.resampler))
+    throw Failure(fmt::format("--resampler '{}': expected multinomial, stratified, systematic or residual",
+                              a.resampler));
+  if (!a.policy.empty() && !filters::parse_resample_policy(a.policy, &o.pf.policy))
+    throw Failure(fmt::format("--policy '{}': expected every, neff or max", a.policy));
+  if (a.particles > 0) o.pf.particles = a.particles;
+  o.pf.seed = a.seed;
+  o.pf.threads = a.threads;
+
+  const auto centre = [](const Range& r) { return 0.5 * (r.lo + r.hi); };
+  const auto uniform_sd = [](const Range& r) { return (r.hi - r.lo) / std::sqrt(12.0); };
+  o.dkf.initial = {centre(r_left), centre(r_right), centre(base)};
+  o.dkf.initial_sd_radius_m = std::max(uniform_sd(r_left), uniform_sd(r_right));
+  o.dkf.initial_sd_wheel_base_m = uniform_sd(base);
+  o.dkf.radius_walk_m_per_sqrt_s *= r_scale;
+  o.dkf.wheel_base_walk_m_per_sqrt_s *= d_scale;
+
+  if (!(std::isfinite(a.tolerance_pct) && a.tolerance_pct > 0.0 && a.tolerance_pct < 100.0))
+    throw Failure(fmt::format("--tolerance {}: expected a percentage in (0, 100)", a.tolerance_pct));
+  o.convergence_tolerance = a.tolerance_pct / 100.0;
+  std::string why;
+  if (!o.IsValid(&why)) throw Failure(fmt::format("--method {}: {}", a.method, why));
+  return info;
+}
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
+// Calls `f` (when set) on leaving the scope, normally or by an exception.
+struct OnExit {
+  const std::function<void()>& f;
+  ~OnExit() {
+    if (f) f();
+  }
+};
+
+}  // namespace
+
+CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& hooks) {
+  for (const auto& [flag, path] : {std::pair{"--json", &a.json}, std::pair{"--csv", &a.csv},
+                                   std::pair{"--figure", &a.figure}, std::pair{"--config-out", &a.config_out}})
+    check_output_dir(flag, *path);
+  CalibrateOutcome out;
+  out.inputs = build_inputs(a, false);
+  check_same_robot(out.inputs, a.tracks);
+  out.info = make_options(a, out.inputs);
+  std::vector<const CalibrationInput*> ptrs;
+  std::size_t samples = 0;
+  for (const auto& in : out.inputs) ptrs.push_back(&in), samples += in.samples.size();
+
+  if (hooks.on_start) hooks.on_start(fmt::format("calibrating with {} over {} samples…", a.method, samples));
+  {
+    const OnExit end{hooks.on_end};
+    try {
+      out.result = run_calibration(ptrs, out.info.options);
+    } catch (const std::invalid_argument& e) {
+      throw Failure(fmt::format("calibrate: {}", e.what()));
+    }
+  }
+
+  for (const auto& in : out.inputs) out.nominal.push_back(score_fixed_params(in, in.nominal));
+  out.summary = calibration_summary_lines(out.result, out.inputs, out.nominal, out.info);
+  const std::string json_text = calibration_json(out.result, ptrs, out.nominal, out.info).dump(2) + "\n";
+  CalibrationTraceTable table;
+  try {
+    table = build_trace_table(out.result, ptrs);
+  } catch (const std::invalid_argument& e) {
+    throw Failure(fmt::format("calibrate: {}", e.what()));
+  }
+
+  // Outputs: the figure first (gnuplot is the likeliest to fail), the JSON last.
+  if (!a.figure.empty()) {
+    std::vector<std::string> names;
+    for (const auto& in : out.inputs) names.push_back(in.track_name);
+    try {
+      results::calibration_estimates_figure(
+          a.figure, calibration_figure_data(table, fmt::format("{}: {} calibration", joined(names), a.method)));
+    } catch (const std::exception& e) {
+      throw Failure(fmt::format("--figure {}: {}", a.figure, e.what()));
+    }
+  }
+  if (!a.csv.empty()) write_file_atomically(a.csv, trace_csv(table));
+  if (!a.config_out.empty()) {
+    CalibrationFile file;
+    file.params = out.result.final_params;
+    const bool pf = out.result.method == CalibrationMethod::pf || out.result.method == CalibrationMethod::adaptive_pf;
+    file.comment = fmt::format("calibrated by odotune calibrate: method {}{}\ntracks: {}", a.method,
+                               pf ? fmt::format(", seed {}", a.seed) : "", joined(a.tracks));
+    write_calibration_file(file, a.config_out);
+  }
+  if (!a.json.empty()) write_file_atomically(a.json, json_text);
+  return out;
+}
+
+ApplyOutcome run_calibrate_apply(const CalibrateRequest& a) {
+  for (const auto& [flag, given] :
+       {std::pair{"--method", a.method_given}, std::pair{"--resampler", a.resampler_given},
+        std::pair{"--policy", a.policy_given}, std::pair{"--particles", a.particles_given},
+        std::pair{"--seed", a.seed_given}, std::pair{"--init-radius-range", a.init_radius_range_given},
+        std::pair{"--init-wheel-base-range", a.init_wheel_base_range_given},
+        std::pair{"--tolerance", a.tolerance_given}, std::pair{"--csv", !a.csv.empty()},
+        std::pair{"--figure", !a.figure.empty()}, std::pair{"--config-out", !a.config_out.empty()}})
+    if (given) throw Failure(fmt::format("{} does not combine with --apply (which replays a calibration file)", flag));
+  check_output_dir("--json", a.json);
+  const CalibrationFile cal = read_calibration_file(a.apply);
+  const std::vector<CalibrationInput> inputs = build_inputs(a, true);
+  ApplyOutcome out;
+  out.params = cal.params;
+  for (std::size_t k = 0; k < inputs.size(); ++k) {
+    AppliedTrack t;
+    t.file = a.tracks[k];
+    t.nominal_params = inputs[k].nominal;
+    t.nominal = score_fixed_params(inputs[k], inputs[k].nominal);
+    t.calibrated = score_fixed_params(inputs[k], cal.params);
+    out.tracks.push_back(std::move(t));
+  }
+  const std::string json_text = apply_json(a.apply, cal.params, out.tracks).dump(2) + "\n";
+  if (!a.json.empty()) write_file_atomically(a.json, json_text);
+  out.summary = apply_summary_lines(a.apply, cal.params, out.tracks);
+  return out;
+}
+
+}  // namespace odotune

@@ -1,0 +1,100 @@
+// `odotune calibrate`: an online (or batch) calibration of the odometry
+// parameters R_R, R_L and D from wheel rates and external body velocities
+// (Fariña, Toledo & Acosta, RA-L 2026; objectives/calibration_run.h) over
+// track files, with its output files; and the replay of a calibration file
+// on held-out tracks (`--apply`). Checking, loading, computing and file
+// output only: the command parses the flags and prints the summary lines.
+//
+// Initial guesses (a choice of this command, not the paper's): the PF draws
+// each radius uniformly from its track's nominal ±5 % and the wheel base
+// from nominal ±15 %, so any robot size works; for the paper's wheelchair
+// (R = 0.32 m, D = 0.65 m) these are 0.304–0.336 m and 0.5525–0.7475 m,
+// the paper's 0.305–0.335 m and 0.55–0.75 m to within 2.5 mm. The DKF
+// starts at the range's centre with sd = width/√12 (the uniform's sd). The
+// calibrators' length-valued tuning constants (PF random walk σ, adaptive α
+// and its σ floor, particles per dispersion, DKF random walks) are the paper's wheelchair
+// values scaled by R_nom/0.32 m (and D_nom/0.65 m for the DKF's wheel-base
+// walk), so a robot with 5 cm wheels gets the same relative noise.
+//
+// Errors are odotune::Failure with one line naming the flag or file at
+// fault (the command's error messages); nothing is written when a check
+// fails.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "filters/odometry_params.h"
+#include "formats/calibration_json.h"
+#include "objectives/calibration_input.h"
+#include "objectives/calibration_run.h"
+
+namespace odotune {
+
+// The command's flags as plain values (names as the flags').
+struct CalibrateRequest {
+  std::vector<std::string> tracks;      // track files, calibrated in this order (one robot)
+  std::string method = "adaptive-pf";   // adaptive-pf | pf | dkf | batch | none
+  std::string resampler;                // PF: multinomial | stratified | systematic | residual ("": systematic)
+  std::string policy;                   // PF: every | neff | max ("": neff)
+  std::uint64_t seed = 1;               // PF random seed
+  int particles = 0;                    // PF particles (adaptive-pf: initial); ≤ 0: 5000 (adaptive 8000)
+  int threads = 0;                      // PF threads (0: OpenMP's default); results do not depend on it
+  double ext_from_gt_hz = 0.0;          // > 0: derive the external velocities from the ground truth [Hz]
+  double ext_sigma_v = 0.0;             // [m/s] σ of v_ext where the track gives none; 0: 0.02
+  double ext_sigma_w = 0.0;             // [rad/s] σ of w_ext where the track gives none; 0: 0.02
+  std::string init_radius_range;        // "LO,HI" [m], both radii; "": nominal ±5 %
+  std::string init_wheel_base_range;    // "LO,HI" [m]; "": nominal ±15 %
+  double tolerance_pct = 0.5;           // convergence tolerance [%], in (0, 100)
+  // Output files ("": not written). calibrate: all four; --apply: json only.
+  std::string json, csv, figure, config_out;
+  std::string apply;                    // the calibration file --apply replays
+
+  // Which flags were given (even with a default or empty value): --resampler,
+  // --policy and --particles apply to the PF methods only, and none of these
+  // combines with --apply.
+  bool method_given = false, resampler_given = false, policy_given = false, particles_given = false,
+       seed_given = false, init_radius_range_given = false, init_wheel_base_range_given = false,
+       tolerance_given = false;
+};
+
+// The calibration itself reports no progress. on_start (when set) gets
+// "calibrating with METHOD over N samples…" just before it starts; on_end
+// (when set) is called once it has ended, returned or thrown.
+struct CalibrateHooks {
+  std::function<void(const std::string& status)> on_start;
+  std::function<void()> on_end;
+};
+
+struct CalibrateOutcome {
+  CalibrationRunInfo info;                    // the options that ran, the track files
+  std::vector<CalibrationInput> inputs;       // one per track file, in order
+  CalibrationResult result;
+  std::vector<TrackCalibrationScore> nominal; // the inputs' nominal parameters, scored
+  std::vector<std::string> summary;           // calibration_summary_lines()
+};
+
+// Checks the output folders, loads the tracks (one robot: equal nominal
+// radii and wheel base), builds the options, runs the calibration and
+// writes, in this order, the figure (STEM.png, STEM.svg; gnuplot is the
+// likeliest to fail), the CSV trace, the calibration YAML (--config-out, for
+// --apply) and the JSON (formats/calibration_json.h). Every file is written
+// atomically, after the run. Throws odotune::Failure.
+CalibrateOutcome run_calibrate(const CalibrateRequest& request, const CalibrateHooks& hooks = {});
+
+struct ApplyOutcome {
+  filters::OdometryParams params;             // the calibration file's
+  std::vector<AppliedTrack> tracks;           // per track: nominal and calibrated scores
+  std::vector<std::string> summary;           // apply_summary_lines()
+};
+
+// --apply: replays request.tracks (which need ground truth; external
+// velocities are derived from it at 10 Hz for tracks without them) with the
+// calibration file request.apply and with their nominal parameters, and
+// writes request.json. Throws odotune::Failure when a calibration flag or
+// another output was given, or on bad files.
+ApplyOutcome run_calibrate_apply(const CalibrateRequest& request);
+
+}  // namespace odotune

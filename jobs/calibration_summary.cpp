@@ -1,0 +1,114 @@
+#include "jobs/calibration_summary.h"
+
+#include <cmath>
+#include <optional>
+
+#include <fmt/format.h>
+
+namespace odotune {
+
+namespace {
+
+using filters::OdometryParams;
+
+std::string pct(double estimate, double truth) { return fmt::format("{:+.3f} %", 100.0 * (estimate - truth) / truth); }
+
+std::string param_line(const char* name, double estimate, const std::optional<OdometryParams>& truth,
+                       double OdometryParams::*field) {
+  if (!truth) return fmt::format("    {:<3} {:.5f} m   (truth unknown)", name, estimate);
+  const double t = (*truth).*field;
+  return fmt::format("    {:<3} {:.5f} m   true {:.5f} m   error {}", name, estimate, t, pct(estimate, t));
+}
+
+std::string rmse_line(const char* what, double calibrated, double nominal, const char* unit) {
+  if (!std::isfinite(calibrated)) return fmt::format("    {:<13} unknown (no ground truth)", what);
+  std::string s = fmt::format("    {:<13} {:.4f} {}", what, calibrated, unit);
+  if (std::isfinite(nominal)) {
+    s += fmt::format("   (nominal {:.4f} {}", nominal, unit);
+    const double imp = rmse_improvement_pct(nominal, calibrated);
+    if (std::isfinite(imp)) s += fmt::format(", {:.1f} % {}", std::abs(imp), imp >= 0.0 ? "better" : "worse");
+    s += ")";
+  }
+  return s;
+}
+
+}  // namespace
+
+std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
+                                                   const std::vector<CalibrationInput>& inputs,
+                                                   const std::vector<TrackCalibrationScore>& nominal,
+                                                   const CalibrationRunInfo& info) {
+  std::vector<std::string> out;
+  const bool pf = r.method == CalibrationMethod::pf || r.method == CalibrationMethod::adaptive_pf;
+  std::string how = fmt::format("initial R {:.4f}–{:.4f} m, D {:.4f}–{:.4f} m", info.init_radius_m.lo,
+                                info.init_radius_m.hi, info.init_wheel_base_m.lo, info.init_wheel_base_m.hi);
+  if (pf) {
+    const filters::PfCalibratorParams p = effective_pf_params(info.options);
+    how += fmt::format("; {} resampling, policy {}, {} particles{}, seed {}", filters::to_string(p.resampler),
+                       filters::to_string(p.policy), p.particles,
+                       r.method == CalibrationMethod::adaptive_pf ? " initially" : "", p.seed);
+  }
+  out.push_back(fmt::format("{} calibration on {} track{} ({})", to_string(r.method), inputs.size(),
+                            inputs.size() == 1 ? "" : "s", how));
+  const double tol_pct = 100.0 * info.options.convergence_tolerance;
+  for (std::size_t k = 0; k < r.tracks.size() && k < inputs.size(); ++k) {
+    const TrackCalibrationScore& s = r.tracks[k];
+    out.push_back(fmt::format("  track {} ({}):", s.track, info.track_files[k]));
+    out.push_back(param_line("R_R", s.final_params.wheel_radius_right_m, s.truth_final,
+                             &OdometryParams::wheel_radius_right_m));
+    out.push_back(param_line("R_L", s.final_params.wheel_radius_left_m, s.truth_final,
+                             &OdometryParams::wheel_radius_left_m));
+    out.push_back(param_line("D", s.final_params.wheel_base_m, s.truth_final, &OdometryParams::wheel_base_m));
+    if (!inputs[k].truth)
+      out.push_back("    convergence   unknown (the track has no truth: no sim.effects metadata)");
+    else if (r.method == CalibrationMethod::batch)
+      out.push_back("    convergence   n/a (an offline fit of the whole track)");
+    else if (s.convergence_time_s)
+      out.push_back(fmt::format("    convergence   {:.2f} s (both radii within {:g} % of the truth from then on)",
+                                *s.convergence_time_s, tol_pct));
+    else
+      out.push_back(fmt::format("    convergence   never (not within {:g} % of the truth to the end)", tol_pct));
+    const std::vector<double> changes = inputs[k].truth ? inputs[k].truth->change_times() : std::vector<double>{};
+    for (std::size_t c = 0; r.method != CalibrationMethod::batch && c < s.reconvergence_s.size(); ++c) {
+      const std::string at = c < changes.size() ? fmt::format(" at {:.2f} s", changes[c]) : "";
+      out.push_back(s.reconvergence_s[c]
+                        ? fmt::format("    re-convergence after the radius step{}: {:.2f} s", at, *s.reconvergence_s[c])
+                        : fmt::format("    re-convergence after the radius step{}: never", at));
+    }
+    const double np = k < nominal.size() ? nominal[k].pose_rmse_m : NAN;
+    const double nh = k < nominal.size() ? nominal[k].heading_rmse_rad : NAN;
+    out.push_back(rmse_line("pose RMSE", s.pose_rmse_m, np, "m"));
+    out.push_back(rmse_line("heading RMSE", s.heading_rmse_rad, nh, "rad"));
+  }
+  const OdometryParams& f = r.final_params;
+  out.push_back(fmt::format("  final: R_L = {:.5f} m, R_R = {:.5f} m, D = {:.5f} m", f.wheel_radius_left_m,
+                            f.wheel_radius_right_m, f.wheel_base_m));
+  if (r.method == CalibrationMethod::batch) {
+    out.push_back(fmt::format("  cost: {} residual pairs, {:.3g} ms per pair (fit {:.3g} s){}", r.iterations,
+                              r.ms_per_iteration, 1e-3 * r.ms_per_iteration * static_cast<double>(r.iterations),
+                              r.batch_converged ? "" : "; Ceres did NOT report convergence"));
+  } else if (r.method != CalibrationMethod::none) {
+    std::string cost =
+        fmt::format("  cost: {} iterations, {:.3g} ms per iteration", r.iterations, r.ms_per_iteration);
+    if (pf) cost += fmt::format(", mean {:.0f} particles", r.mean_particles);
+    out.push_back(cost);
+  }
+  return out;
+}
+
+std::vector<std::string> apply_summary_lines(const std::string& calibration_file, const OdometryParams& p,
+                                             const std::vector<AppliedTrack>& tracks) {
+  std::vector<std::string> out;
+  out.push_back(fmt::format(
+      "applied {} (R_L = {:.5f} m, R_R = {:.5f} m, D = {:.5f} m) to {} track{}, against the nominal parameters:",
+      calibration_file, p.wheel_radius_left_m, p.wheel_radius_right_m, p.wheel_base_m, tracks.size(),
+      tracks.size() == 1 ? "" : "s"));
+  for (const AppliedTrack& t : tracks) {
+    out.push_back(fmt::format("  track {} ({}):", t.calibrated.track, t.file));
+    out.push_back(rmse_line("pose RMSE", t.calibrated.pose_rmse_m, t.nominal.pose_rmse_m, "m"));
+    out.push_back(rmse_line("heading RMSE", t.calibrated.heading_rmse_rad, t.nominal.heading_rmse_rad, "rad"));
+  }
+  return out;
+}
+
+}  // namespace odotune

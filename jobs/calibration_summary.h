@@ -1,0 +1,29 @@
+// The text `odotune calibrate` prints: the summary of a calibration run
+// (method and initial ranges, per track the final estimate against the
+// truth, convergence, re-convergence after truth changes, pose and heading
+// RMSE against the nominal parameters, the cost) and of an --apply replay.
+// Lengths in metres, angles in radians, as printed.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "filters/odometry_params.h"
+#include "formats/calibration_json.h"
+#include "objectives/calibration_input.h"
+#include "objectives/calibration_run.h"
+
+namespace odotune {
+
+// `nominal[k]` scores inputs[k]'s nominal parameters; `info` says what ran.
+std::vector<std::string> calibration_summary_lines(const CalibrationResult& result,
+                                                   const std::vector<CalibrationInput>& inputs,
+                                                   const std::vector<TrackCalibrationScore>& nominal,
+                                                   const CalibrationRunInfo& info);
+
+// "applied FILE (R_L = …) to N tracks, …:" and each track's pose and heading RMSE.
+std::vector<std::string> apply_summary_lines(const std::string& calibration_file,
+                                             const filters::OdometryParams& params,
+                                             const std::vector<AppliedTrack>& tracks);
+
+}  // namespace odotune
