@@ -7,7 +7,17 @@
 
 namespace odotune::cli {
 
-void print_calibration_outcome(const CalibrationTuneOutcome& o) {
+void print_tune_outcome(const TuneOutcome& o) {
+  std::string names;
+  for (const auto& t : o.tracks) names += (names.empty() ? "" : ", ") + t.track;
+  fmt::print("tuned {} noise on {} for mode {} ({}) with {} (seed {})\n",
+             filters::to_string(o.request.model), names, o.request.mode,
+             fitness_mode_name(o.request.mode), o.request.solver, o.request.seed);
+  print_tune_result(o.baseline_mean, o.tuned_mean, o.tracks, o.param_names, o.params, o.summary,
+                    o.divergences.total());
+}
+
+void print_tune_outcome(const CalibrationTuneOutcome& o) {
   const CalibrationTuneRequest& r = o.request;
   std::string names;
   for (const auto& t : o.baseline.tracks) names += (names.empty() ? "" : ", ") + t.track;
@@ -42,7 +52,7 @@ void print_calibration_outcome(const CalibrationTuneOutcome& o) {
              o.summary.seconds, o.summary.termination, o.failures);
 }
 
-void print_ukf_outcome(const UkfTuneOutcome& o) {
+void print_tune_outcome(const UkfTuneOutcome& o) {
   const UkfTuneRequest& r = o.request;
   std::string names;
   for (const auto& t : o.tracks) names += (names.empty() ? "" : ", ") + t.track;

@@ -1,0 +1,267 @@
+#include "jobs/export_job.h"
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/failure.h"
+#include "formats/config_yaml.h"
+#include "formats/ukf_config_yaml.h"
+#include "jobs/store_access.h"
+#include "objectives/process_noise_rate.h"
+#include "objectives/replay_input.h"
+#include "objectives/tuned_model.h"
+#include "results/ros_export.h"
+
+namespace odotune {
+
+namespace {
+
+constexpr std::array<const char*, 5> kKeys = {"model", "track", "mode", "seed", "heldout"};
+const char* const kKeyList = "model, track, mode, seed, heldout";
+
+bool is_integer_key(const std::string& key) { return key == "mode" || key == "seed"; }
+
+// A run's value for a selection key, as the user writes it.
+std::string field(const results::RunRecord& r, const std::string& key) {
+  if (key == "model") return r.model;
+  if (key == "track") return r.track;
+  if (key == "mode") return std::to_string(r.mode);
+  if (key == "seed") return std::to_string(r.seed);
+  return r.heldout_track.empty() ? "none" : r.heldout_track;  // heldout
+}
+
+// The distinct values of `key` among `runs`, sorted (numerically for integers).
+std::string values_of(const std::vector<const results::RunRecord*>& runs, const std::string& key) {
+  std::vector<std::string> v;
+  for (const auto* r : runs) v.push_back(field(*r, key));
+  std::sort(v.begin(), v.end(), [&key](const std::string& a, const std::string& b) {
+    if (is_integer_key(key) && a.size() != b.size()) return a.size() < b.size();
+    return a < b;
+  });
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  std::string out;
+  for (const auto& s : v) out += (out.empty() ? "" : ", ") + s;
+  return out;
+}
+
+std::string describe(const std::vector<RunFilter>& filters, std::size_t upto) {
+  std::string out;
+  for (std::size_t i = 0; i < upto; ++i) out += (out.empty() ? "" : ",") + filters[i].text();
+  return out;
+}
+
+// The names of the tracks the run was tuned on: its track, or for a
+// leave-one-out run every track of the store's experiment but the held-out one.
+std::vector<std::string> tuning_track_names(const results::RunRecord& run,
+                                            const std::vector<results::RunRecord>& all) {
+  if (run.heldout_track.empty()) return {run.track};
+  std::set<std::string> names;
+  for (const auto& r : all) names.insert(r.scored_track());
+  names.erase(run.heldout_track);
+  return {names.begin(), names.end()};
+}
+
+std::vector<ReplayInput> tuning_inputs(const results::Store& store, const results::RunRecord& run,
+                                       const std::vector<results::RunRecord>& all,
+                                       const std::vector<std::string>& extra_files) {
+  const std::map<std::string, Track> tracks = experiment_tracks(store.experiment(), extra_files);
+  std::vector<ReplayInput> inputs;
+  for (const std::string& name : tuning_track_names(run, all)) {
+    const auto it = tracks.find(name);
+    if (it == tracks.end())
+      throw Failure(fmt::format(
+          "run {}: track '{}' (needed for its odometry rate) is not where the experiment "
+          "file said; pass it with --track FILE",
+          results::run_key(run), name));
+    try {
+      inputs.push_back(build_replay_input(it->second));
+    } catch (const std::invalid_argument& e) {
+      throw Failure(e.what());
+    }
+  }
+  return inputs;
+}
+
+std::string join_names(const std::vector<ReplayInput>& inputs) {
+  std::string out;
+  for (const auto& in : inputs) out += (out.empty() ? "" : ", ") + in.track_name;
+  return out;
+}
+
+std::string alpha_mapping_note(const results::RunRecord& run, const ProcessNoiseRate& q,
+                               const std::vector<ReplayInput>& inputs) {
+  const bool gyro = run.model == "gyro";
+  return fmt::format(
+      "Mapping from odotune's {} model (Kovacs et al. eq. 3-5{}) to robot_localization:\n"
+      "  odotune adds R_k = V_k·diag(σl², σr²)·V_kᵀ at every odometry step k, with\n"
+      "  σl² = (α1·l)² + (α2·(l−r))², σr² = (α1·r)² + (α2·(l−r))² for the step's wheel travel\n"
+      "  l, r [m]{}. R_k depends on the motion and, through V_k, on the heading θ,\n"
+      "  so it has no constant equivalent. Q here is its time average over the track(s) the run\n"
+      "  was tuned on ({}), replaying the tuned filter (prediction and fix correction) and\n"
+      "  taking V_k at the filter's heading before each step:\n"
+      "    Q[i][i] = Σ_k R_k[i][i] / Σ (t_N − t_1),  i = x, y [m²/s], yaw [rad²/s]\n"
+      "  summed over steps 2..N of each track (t_k = time the odometry sample ending step k;\n"
+      "  step 1 is left out, its start is unknown): {} steps over {:.6g} s, i.e. the mean\n"
+      "  per-step R × {:.6g} Hz (the odometry rate). R is in m², rad² already (no mm² here).\n"
+      "  R's off-diagonal terms (x–y, x–yaw, y–yaw) are dropped.\n"
+      "  Heading dependence: in the world frame R puts along- and across-track wheel noise on\n"
+      "  x and y according to θ; the average over the actual tracks is the honest constant for\n"
+      "  motion like theirs (their mix of headings, speeds and turns), not for any motion.\n"
+      "  (Alternatively, feed the wheel odometry as a twist input, odom0 vx/vyaw, and put the\n"
+      "  wheel noise into that message's twist covariance.)\n"
+      "  The fix variances below are the model's fixed σ = 60 mm (alpha/gyro do not tune q).",
+      run.model, gyro ? ", 6-7" : "",
+      gyro ? ",\n  α1 = a1 + b1·|ω_z|, α2 = a2 + b2·|ω_z| with the step's |ω_z| (gyro, else odometry)"
+           : "",
+      join_names(inputs), q.steps, q.duration_s, q.odometry_rate_hz);
+}
+
+results::RosExportInput ros_input(const results::Store& store, const results::RunRecord& run,
+                                  const std::vector<results::RunRecord>& all,
+                                  const ExportRequest& request) {
+  const filters::NoiseParams noise = run_noise(run);
+  const std::vector<ReplayInput> inputs = tuning_inputs(store, run, all, request.track_files);
+  results::RosExportInput in;
+  try {
+    if (noise.model == filters::NoiseModel::rq) {
+      const double rate = odometry_rate_hz(inputs);
+      in = results::ros_input_from_rq(run_param(run, "r1_mm2"), run_param(run, "r2_mm2"),
+                                      run_param(run, "r3_rad2"), run_param(run, "q1_mm2"),
+                                      run_param(run, "q2_mm2"), rate);
+      in.provenance = fmt::format("odometry rate {:.6g} Hz measured on {}", rate, join_names(inputs));
+    } else {
+      const ProcessNoiseRate q = equivalent_process_noise_rate(noise, inputs);
+      in.process_var_x_m2_per_s = q.x_m2_per_s;
+      in.process_var_y_m2_per_s = q.y_m2_per_s;
+      in.process_var_yaw_rad2_per_s = q.theta_rad2_per_s;
+      in.fix_var_x_m2 = noise.q_x_m2;
+      in.fix_var_y_m2 = noise.q_y_m2;
+      in.frequency_hz = q.odometry_rate_hz;
+      for (std::size_t i = 0; i < run.param_names.size() && i < run.params.size(); ++i)
+        in.tuned_params.emplace_back(run.param_names[i], run.params[i]);
+      in.mapping_note = alpha_mapping_note(run, q, inputs);
+    }
+  } catch (const std::exception& e) {
+    if (dynamic_cast<const Failure*>(&e)) throw;
+    throw Failure(fmt::format("run {}: {}", results::run_key(run), e.what()));
+  }
+  in.node_name = request.node_name;
+  return in;
+}
+
+}  // namespace
+
+std::vector<RunFilter> parse_run_filters(const std::vector<std::string>& items) {
+  std::vector<RunFilter> filters;
+  for (const std::string& item : items) {
+    const auto eq = item.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == item.size())
+      throw Failure(fmt::format("--select '{}': expected key=value with key one of {}", item, kKeyList));
+    RunFilter f{item.substr(0, eq), item.substr(eq + 1)};
+    if (std::find(kKeys.begin(), kKeys.end(), f.key) == kKeys.end())
+      throw Failure(fmt::format("--select '{}': unknown key '{}', expected one of {}", item, f.key, kKeyList));
+    if (is_integer_key(f.key)) {
+      std::uint64_t v = 0;
+      const char* end = f.value.data() + f.value.size();
+      const auto [ptr, ec] = std::from_chars(f.value.data(), end, v);
+      if (ec != std::errc() || ptr != end)
+        throw Failure(fmt::format("--select '{}': {} must be a non-negative integer", item, f.key));
+      f.value = std::to_string(v);
+    }
+    for (const RunFilter& g : filters)
+      if (g.key == f.key && g.value != f.value)
+        throw Failure(fmt::format("--select gives {} twice ({} and {}); give it once", f.key,
+                                  g.value, f.value));
+    filters.push_back(std::move(f));
+  }
+  return filters;
+}
+
+RunSelection select_best_run(const std::vector<results::RunRecord>& all,
+                             const std::vector<RunFilter>& filters, const std::string& store) {
+  if (all.empty()) throw Failure(fmt::format("{}: the store holds no finished runs yet", store));
+  std::vector<const results::RunRecord*> runs;
+  for (const auto& r : all) runs.push_back(&r);
+  for (std::size_t i = 0; i < filters.size(); ++i) {
+    std::vector<const results::RunRecord*> kept;
+    for (const auto* r : runs)
+      if (field(*r, filters[i].key) == filters[i].value) kept.push_back(r);
+    if (kept.empty())
+      throw Failure(fmt::format("--select {}: no run matches{}; {} is one of: {}", filters[i].text(),
+                                i == 0 ? "" : " (with " + describe(filters, i) + ")", filters[i].key,
+                                values_of(runs, filters[i].key)));
+    runs = std::move(kept);
+  }
+  std::set<std::string> models;
+  for (const auto* r : runs) models.insert(r->model);
+  if (models.size() > 1)
+    throw Failure(fmt::format("{} runs of {} models ({}); add --select model=… to pick one",
+                              filters.empty() ? "the store holds"
+                                              : "--select " + describe(filters, filters.size()) + " matches",
+                              models.size(), values_of(runs, "model")));
+  RunSelection s;
+  s.matching = runs.size();
+  for (const auto* r : runs)
+    if (!s.run || r->tuned.rmse_m < s.run->tuned.rmse_m) s.run = r;
+  return s;
+}
+
+ExportOutcome run_export(const ExportRequest& request) {
+  if (request.format != "odotune" && request.format != "robot_localization")
+    throw Failure(fmt::format("--format '{}': expected odotune or robot_localization", request.format));
+  const std::vector<RunFilter> filters = parse_run_filters(request.select);
+  const auto store = open_store_for_reading(request.store);
+  const std::vector<results::RunRecord> all = store->runs();
+  const RunSelection sel = select_best_run(all, filters, request.store);
+  const results::RunRecord& run = *sel.run;
+  const std::string key = results::run_key(run);
+  if (is_calibrator_model_name(run.model))
+    throw Failure(fmt::format(
+        "run {} tuned the {} calibrator's settings, not EKF noise: export writes EKF "
+        "configurations only; write a calibrator's settings with `odotune tune --model {} ... "
+        "--config-out FILE` (odotune-pf-config/1)",
+        key, run.model, run.model));
+  if (is_ukf_model_name(run.model) && request.format != "odotune")
+    throw Failure(fmt::format(
+        "run {} tuned the velocity-fusion UKF (model ukf): {} has no mapping for this model; "
+        "export it with --format odotune (odotune-ukf-config/1)",
+        key, request.format));
+  const std::string scores =
+      fmt::format("tuned RMSE {:.2f} mm vs baseline {:.2f} mm on {}", run.tuned.rmse_m * 1e3,
+                  run.baseline.rmse_m * 1e3, run.scored_track());
+  const std::string origin = fmt::format("odotune export from {} (experiment {}, {}): run {}",
+                                         request.store, store->experiment().name,
+                                         store->experiment().hash, key);
+
+  if (is_ukf_model_name(run.model)) {
+    UkfConfig cfg = run_ukf_config(run);
+    cfg.comment = origin + "\n" + scores + " (the fused pose; baseline: the default UKF noise)";
+    write_ukf_config(cfg, request.out);
+  } else if (request.format == "odotune") {
+    EkfConfig cfg;
+    cfg.noise = run_noise(run);
+    cfg.model = cfg.noise.model;
+    cfg.comment = origin + "\n" + scores;
+    write_ekf_config(cfg, request.out);
+  } else {
+    results::RosExportInput in = ros_input(*store, run, all, request);
+    in.provenance = origin + "; " + scores + (in.provenance.empty() ? "" : "; " + in.provenance);
+    std::string why;
+    if (!in.IsValid(&why)) throw Failure(fmt::format("run {}: cannot export: {}", key, why));
+    try {
+      results::write_robot_localization_yaml(in, request.out);
+    } catch (const std::exception& e) {
+      throw Failure(e.what());
+    }
+  }
+  return {key, scores, sel.matching};
+}
+
+
+}  // namespace odotune

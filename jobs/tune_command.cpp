@@ -1,0 +1,192 @@
+#include "jobs/tune_command.h"
+
+#include <algorithm>
+#include <exception>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/failure.h"
+#include "formats/config_yaml.h"
+#include "formats/pf_config_yaml.h"
+#include "formats/ukf_config_yaml.h"
+#include "jobs/calibration_tune_json.h"
+#include "jobs/tune_json.h"
+#include "jobs/ukf_tune_json.h"
+#include "objectives/tuned_model.h"
+#include "tracks/track_io.h"
+
+namespace odotune {
+
+namespace {
+
+// Options that belong to one kind of model only.
+const std::vector<std::string> kEkfOnly = {"--mode"};
+const std::vector<std::string> kCalibratorOnly = {"--resampler", "--policy", "--pf-particles",
+                                                  "--pf-seed", "--ext-from-gt"};
+
+void check_options(const TuneCommandRequest& r, const TunedModel& model) {
+  const auto& given = r.given_options;
+  for (const std::string& opt : model.calibrator ? kEkfOnly : kCalibratorOnly)
+    if (std::find(given.begin(), given.end(), opt) != given.end())
+      throw Failure(fmt::format("{} applies to {} models only, not to --model {}", opt,
+                                model.calibrator ? "the EKF and UKF (rq, alpha, gyro, ukf)" : "the calibrator",
+                                r.model));
+}
+
+// `prepare(track)` for each loaded track, its std::invalid_argument a Failure.
+template <class Prepare>
+auto prepare_tracks(const std::vector<Track>& tracks, Prepare prepare) {
+  std::vector<decltype(prepare(tracks.front()))> out;
+  for (const auto& t : tracks) {
+    try {
+      out.push_back(prepare(t));
+    } catch (const std::invalid_argument& e) {
+      throw Failure(e.what());
+    }
+  }
+  return out;
+}
+
+template <class T>
+std::vector<const T*> pointers(const std::vector<T>& v) {
+  std::vector<const T*> out;
+  for (const auto& x : v) out.push_back(&x);
+  return out;
+}
+
+// The request's solver settings with its progress and stop (the tune's own
+// request type extends SolverSettings).
+template <class Request>
+Request with_solver(const TuneCommandRequest& r) {
+  Request req;
+  static_cast<SolverSettings&>(req) = static_cast<const SolverSettings&>(r);
+  return req;
+}
+
+// Runs the tune (its failures one-line Failures) and reports the outcome.
+template <class Run>
+TuneCommandOutcome run_and_report(const TuneCommandRequest& r, Run run) {
+  TuneCommandOutcome out;
+  try {
+    out = run();
+  } catch (const std::exception& e) {
+    throw Failure(e.what());
+  }
+  if (r.report) r.report(out);
+  return out;
+}
+
+void write_json(const TuneCommandRequest& r, const nlohmann::json& j) {
+  if (!r.json_out.empty()) write_file_atomically(r.json_out, j.dump(2) + "\n");
+}
+
+TuneCommandOutcome ekf_tune(const TuneCommandRequest& r, filters::NoiseModel model) {
+  TuneRequest req = with_solver<TuneRequest>(r);
+  req.model = model;
+  req.mode = r.mode;
+  std::string why;
+  if (!req.IsValid(&why)) throw Failure(why);
+
+  const std::vector<PreparedTrack> prepared = prepare_tracks(load_tracks(r.tracks), prepare_track);
+  TuneCommandOutcome result = run_and_report(r, [&] { return run_tune(pointers(prepared), req); });
+  const auto& out = std::get<TuneOutcome>(result);
+  write_json(r, tune_json(out));
+  if (!r.config_out.empty()) {
+    EkfConfig cfg;
+    cfg.model = req.model;
+    cfg.noise = out.noise;
+    cfg.comment = fmt::format("tuned by odotune tune: model {}, mode {}, solver {}, seed {}", r.model,
+                              req.mode, req.solver, req.seed);
+    write_ekf_config(cfg, r.config_out);
+  }
+  return result;
+}
+
+TuneCommandOutcome calibration_tune(const TuneCommandRequest& r, CalibratorModel model) {
+  CalibrationTuneRequest req = with_solver<CalibrationTuneRequest>(r);
+  req.model = model;
+  if (!filters::parse_resampler(r.resampler, &req.resampler))
+    throw Failure(fmt::format("--resampler '{}': expected multinomial, stratified, systematic or residual",
+                              r.resampler));
+  if (!filters::parse_resample_policy(r.policy, &req.policy))
+    throw Failure(fmt::format("--policy '{}': expected every, neff or max", r.policy));
+  req.pf_particles = r.pf_particles;
+  req.pf_seed = r.pf_seed;
+  std::string why;
+  if (!req.IsValid(&why)) throw Failure(why);
+  CalibrationInputOptions input_options;
+  input_options.ext_from_gt_rate_hz = r.ext_from_gt_hz;
+  if (!input_options.IsValid(&why)) throw Failure("--ext-from-gt: " + why);
+
+  const std::vector<CalibrationInput> inputs =
+      prepare_tracks(load_tracks(r.tracks), [&](const Track& t) {
+        CalibrationInput in = build_calibration_input(t, input_options);
+        if (!in.has_gt)
+          throw Failure(fmt::format("track '{}': no ground truth (gt_x, gt_y, gt_theta): a calibrator's "
+                                    "settings are scored by its calibrated odometry against it",
+                                    t.name()));
+        return in;
+      });
+  TuneCommandOutcome result =
+      run_and_report(r, [&] { return run_calibration_tune(pointers(inputs), req); });
+  const auto& out = std::get<CalibrationTuneOutcome>(result);
+  write_json(r, calibration_tune_json(out, {r.ext_from_gt_hz}));
+  if (!r.config_out.empty()) {
+    CalibrationOptions effective;
+    effective.method = calibration_method(model);
+    effective.pf = out.tuned_pf;
+    const filters::PfCalibratorParams run_with = effective_pf_params(effective);
+    PfConfig cfg;
+    cfg.method = effective.method;
+    cfg.resampler = run_with.resampler;
+    cfg.policy = run_with.policy;
+    cfg.particles = run_with.particles;
+    cfg.params = out.params;
+    cfg.comment = fmt::format(
+        "tuned by odotune tune: model {}, solver {}, seed {}, calibrator seed {}; score {:.6g} "
+        "(paper's defaults {:.6g})",
+        r.model, req.solver, req.seed, req.pf_seed, out.tuned_score, out.baseline_score);
+    write_pf_config(cfg, r.config_out);
+  }
+  return result;
+}
+
+TuneCommandOutcome ukf_tune(const TuneCommandRequest& r) {
+  UkfTuneRequest req = with_solver<UkfTuneRequest>(r);
+  req.mode = r.mode;
+  std::string why;
+  if (!req.IsValid(&why)) throw Failure(why);
+
+  const std::vector<FusionInput> inputs = prepare_tracks(load_tracks(r.tracks), ukf_fusion_input);
+  TuneCommandOutcome result = run_and_report(r, [&] { return run_ukf_tune(pointers(inputs), req); });
+  const auto& out = std::get<UkfTuneOutcome>(result);
+  const double rate_hz = 1.0 / inputs.front().dt_s;
+  write_json(r, ukf_tune_json(out, rate_hz));
+  if (!r.config_out.empty()) {
+    UkfConfig cfg;
+    cfg.rate_hz = rate_hz;
+    cfg.params = out.params;
+    cfg.comment = fmt::format(
+        "tuned by odotune tune: model ukf, mode {} ({}), solver {}, seed {}\n"
+        "fused pose RMSE {:.2f} mm tuned vs {:.2f} mm with the defaults (mean over {} track{})",
+        req.mode, fitness_mode_name(req.mode), req.solver, req.seed, out.tuned_mean.rmse_m * 1e3,
+        out.baseline_mean.rmse_m * 1e3, inputs.size(), inputs.size() == 1 ? "" : "s");
+    write_ukf_config(cfg, r.config_out);
+  }
+  return result;
+}
+
+}  // namespace
+
+TuneCommandOutcome run_tune_command(const TuneCommandRequest& request) {
+  TunedModel model;
+  if (!parse_tuned_model(request.model, &model))
+    throw Failure(fmt::format("--model '{}': unknown model, expected {}", request.model, tuned_model_names()));
+  check_options(request, model);
+  if (model.calibrator) return calibration_tune(request, model.calib);
+  if (model.ukf) return ukf_tune(request);
+  return ekf_tune(request, model.noise);
+}
+
+}  // namespace odotune

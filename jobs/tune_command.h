@@ -1,0 +1,58 @@
+// `odotune tune` without its flags (cli/cmd_tune.cpp reads those and prints):
+// which model, which options apply to it, the tracks loaded and prepared for
+// it, the EKF, calibrator or UKF tune (tune_job.h, calibration_tune_job.h,
+// ukf_tune_job.h) and its --json and --config-out files:
+//
+//   EKF (rq, alpha, gyro)    --json tune_json.h,             --config-out odotune-ekf-config/1
+//   pf-calib, adaptive-…     --json calibration_tune_json.h, --config-out odotune-pf-config/1
+//   ukf                      --json ukf_tune_json.h,         --config-out odotune-ukf-config/1
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "jobs/calibration_tune_job.h"
+#include "jobs/tune_job.h"
+#include "jobs/ukf_tune_job.h"
+
+namespace odotune {
+
+// The result of one of the three tunes.
+using TuneCommandOutcome = std::variant<TuneOutcome, CalibrationTuneOutcome, UkfTuneOutcome>;
+
+// The solver settings (with `progress` and `stop`, which the tune passes on)
+// and the rest of the command's options.
+struct TuneCommandRequest : SolverSettings {
+  std::vector<std::string> tracks;   // track files; the fitness is the mean over them
+  std::string model = "rq";          // one of tuned_model_names()
+  int mode = 7;                      // EKF and UKF: fitness mode 1..7
+  // Calibrators only: the calibrator's fixed parts (calibration_tune_job.h).
+  std::string resampler = "systematic", policy = "neff";
+  int pf_particles = 0;              // 0: the paper's 5000 / 8000
+  std::uint64_t pf_seed = 1;
+  double ext_from_gt_hz = 0.0;       // 0: the tracks' own v_ext/w_ext
+  std::string json_out, config_out;  // files to write; empty: none
+  // The options the user gave, by name ("--mode", "--resampler", …): one that
+  // belongs to another kind of model is a Failure (--mode is the EKF models'
+  // and the UKF's; --resampler, --policy, --pf-particles, --pf-seed and
+  // --ext-from-gt are the calibrators').
+  std::vector<std::string> given_options;
+  // Called with the result when the tune has ended (finished or stopped),
+  // before the files are written: where the command prints it.
+  std::function<void(const TuneCommandOutcome&)> report;
+};
+
+// Checks the model and the options, loads and prepares the tracks, runs the
+// tune, calls `report`, then writes --json and --config-out (in that order).
+// A raised `stop` ends the tune early with the best found so far, which is
+// reported and written as a finished tune's (the caller tells the user).
+// Throws odotune::Failure (one line) for an unknown model, an option of
+// another model, invalid settings, an unusable track or a solver failure
+// (nothing is reported or written then), and for a file that cannot be
+// written (after `report`; --json's failure leaves --config-out unwritten).
+TuneCommandOutcome run_tune_command(const TuneCommandRequest& request);
+
+}  // namespace odotune
