@@ -1,0 +1,44 @@
+#include "jobs/import_job.h"
+
+#include <stdexcept>
+#include <string_view>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "core/failure.h"
+#include "tracks/importers.h"
+#include "tracks/track_io.h"
+
+namespace odotune {
+
+namespace {
+Track import_track(const ImportRequest& r) {
+  switch (r.dataset) {
+    case ImportDataset::mrclam: return import_mrclam(r.input, r.robot);
+    case ImportDataset::optiodom: return import_optiodom(r.input);
+    case ImportDataset::litw: return import_litw(r.input);
+  }
+  throw std::logic_error("run_import: unknown dataset");
+}
+}  // namespace
+
+std::string column_list(const Track& track) {
+  std::vector<std::string_view> names = {"t"};
+  if (!track.ticks_l().empty()) names.push_back("ticks_l");
+  if (!track.ticks_r().empty()) names.push_back("ticks_r");
+  for (int c = 0; c < kNumCols; ++c)
+    if (track.has(static_cast<Col>(c))) names.push_back(column_name(static_cast<Col>(c)));
+  return fmt::format("{}", fmt::join(names, ","));
+}
+
+ImportOutcome run_import(const ImportRequest& r) {
+  const Track track = import_track(r);
+  if (r.output.empty()) throw Failure("no output file given (-o TRACK.csv)");
+  write_track(track, r.output);
+  ImportOutcome out{track.size(), track.duration_s(), column_list(track), std::nullopt};
+  if (!track.has_cmd()) out.no_commands_why = track.meta().get("source.cmd_alignment");
+  return out;
+}
+
+}  // namespace odotune
