@@ -1,0 +1,82 @@
+#include "jobs/diagnose_job.h"
+
+#include <exception>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/failure.h"
+#include "diagnose/diag_input.h"
+#include "diagnose/diagnosis_summary.h"
+#include "formats/diagnosis_json.h"
+#include "formats/scenario_yaml.h"
+#include "jobs/diagnosis_figure_data.h"
+#include "results/diagnosis_report.h"
+#include "tracks/atomic_file.h"
+#include "tracks/scenario_from_track.h"
+#include "tracks/track_io.h"
+
+namespace odotune {
+
+namespace {
+
+// The scenario of --scenario-out: the track's robot with the findings'
+// effects, driven along its reference path.
+std::string corrected_scenario_yaml(const Track& track, const std::string& track_file,
+                                    const diagnose::Diagnosis& d) {
+  std::vector<std::string> specs;
+  std::string names;
+  for (const diagnose::Finding& f : d.findings)
+    if (!f.spec().empty()) specs.push_back(f.spec()), names += (names.empty() ? "" : ", ") + f.effect;
+  try {
+    const sim::Scenario sc = sim::scenario_from_track(track, specs);
+    return scenario_to_yaml(
+        sc, fmt::format("The robot of track '{}' ({}) with the physics `odotune diagnose` found:\n"
+                        "  {}\n"
+                        "driven along the recording's reference path (motion.knots: its body\n"
+                        "velocities, smoothed; simulated time 0 = the first reference sample).\n"
+                        "Reproduce the corrected model:  odotune simulate THIS_FILE -o corrected.csv",
+                        d.track, track_file, names.empty() ? "none (the nominal model explains it)" : names));
+  } catch (const std::exception& e) {
+    throw Failure(fmt::format("{}: cannot build the corrected scenario: {}", track_file, e.what()));
+  }
+}
+
+}  // namespace
+
+DiagnoseOutcome run_diagnose(const DiagnoseRequest& a) {
+  const Track track = load_tracks({a.track}).front();
+  diagnose::DiagInput in;
+  try {
+    in = diagnose::build_diag_input(track);
+    if (a.from_s > -1e300 || a.to_s < 1e300) in = diagnose::crop(in, a.from_s, a.to_s);
+  } catch (const std::invalid_argument& e) {
+    throw Failure(fmt::format("{}: {}", a.track, e.what()));
+  }
+  diagnose::DiagnoseOptions o;
+  o.select.fit.window_s = a.window_s;
+  DiagnoseOutcome out;
+  const diagnose::Diagnosis& d = out.diagnosis;
+  try {
+    out.diagnosis = diagnose::diagnose(in, o);
+  } catch (const std::invalid_argument& e) {
+    throw Failure(fmt::format("{}: cannot diagnose: {}", a.track, e.what()));
+  }
+  out.summary = diagnosis_summary(d);
+  const std::string json_text = diagnosis_json(d).dump(2) + "\n";
+  if (!a.report.empty()) {
+    std::string finding;  // the effects' names (the titles have room for no more)
+    for (const diagnose::Finding& f : d.findings) finding += (finding.empty() ? "" : ", ") + f.effect;
+    try {
+      results::write_diagnosis_report(a.report, diagnosis_figure_data(in, d, finding), out.summary, json_text);
+    } catch (const std::exception& e) {
+      throw Failure(fmt::format("{}: report: {}", a.report, e.what()));
+    }
+  }
+  if (!a.scenario_out.empty())
+    write_atomically(a.scenario_out, "scenario", corrected_scenario_yaml(track, a.track, d));
+  if (!a.json.empty()) write_atomically(a.json, "diagnosis JSON", json_text);
+  return out;
+}
+
+}  // namespace odotune

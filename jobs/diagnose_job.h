@@ -1,0 +1,41 @@
+// `odotune diagnose` as one call: read a recording, optionally cut it to a
+// time interval, find what the nominal robot model leaves out
+// (diagnose/diagnosis.h) and write the outputs asked for. Computation and
+// file output only; the command prints the summary.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "diagnose/diagnosis.h"
+
+namespace odotune {
+
+struct DiagnoseRequest {
+  std::string track;         // track file (../shared/specs/track-format.md)
+  std::string json;          // diagnosis JSON (diagnosis-output.md); empty = not written
+  std::string report;        // folder for the figures and index.html; empty = none
+  std::string scenario_out;  // the robot with the fitted effects as a scenario YAML; empty = none
+  double window_s = 20.0;    // replay window [s]; the odometry is re-anchored at each
+  // Track-time interval to diagnose [s]. The track is cut (diagnose::crop)
+  // only when one of them differs from these defaults (the whole track).
+  double from_s = -1e300, to_s = 1e300;
+};
+
+struct DiagnoseOutcome {
+  diagnose::Diagnosis diagnosis;
+  // diagnosis_summary(): the one-sentence first line, then the details.
+  std::vector<std::string> summary;
+};
+
+// Reads the track, diagnoses it and writes, in this order: the report folder
+// (results/diagnosis_report.h), the scenario (odotune simulate reads it), the
+// JSON; each file appears whole or not at all.
+// Throws odotune::Failure (one line naming the track or the report folder)
+// when the track cannot be read, cut or diagnosed, the report cannot be
+// written or the corrected scenario cannot be built; std::runtime_error
+// ("cannot write scenario|diagnosis JSON 'PATH': ...") when a file cannot be
+// written.
+DiagnoseOutcome run_diagnose(const DiagnoseRequest& request);
+
+}  // namespace odotune
