@@ -1,0 +1,50 @@
+// `odotune eval`: the EKF replayed on tracks with a tuned configuration (or
+// the baseline noise), its position errors beside the baseline's, and their
+// JSON. Computation and file output only; the command prints.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "filters/ekf.h"
+#include "filters/ekf_noise.h"
+#include "objectives/metrics.h"
+
+namespace odotune {
+
+struct EvalRequest {
+  std::string config;               // odotune-ekf-config/1 YAML; empty = the baseline noise
+  std::vector<std::string> tracks;  // track files, replayed in this order
+  std::string json_out;             // the metrics as JSON (eval_json); empty = not written
+};
+
+struct EvalTrack {
+  std::string track;                // the track's name
+  ErrorMetrics metrics;             // with the configuration's noise
+  ErrorMetrics baseline;            // with baseline_noise()
+  filters::Divergence divergence = filters::Divergence::none;  // of the configuration's replay
+};
+
+struct EvalOutcome {
+  std::string label;                // "baseline", or the configuration's path
+  filters::NoiseModel model = filters::NoiseModel::alpha;  // the configuration's noise model
+  std::vector<EvalTrack> tracks;    // in request order
+};
+
+// {"config": label, "model", "tracks": [{"track", "metrics", "baseline",
+// "divergence"}]} (metrics as jobs/tune_json.h's metrics_json).
+nlohmann::json eval_json(const EvalOutcome& o);
+
+// Reads the configuration and all tracks, then replays each track with the
+// baseline and the configuration's noise; `track_done` (if set) is told the
+// outcome so far after each track (the one just replayed last). Writes the
+// JSON last, atomically. Throws odotune::Failure (one line) on an unreadable
+// configuration or track, a track that cannot be replayed, or an unwritable
+// JSON file.
+EvalOutcome run_eval(const EvalRequest& request,
+                     const std::function<void(const EvalOutcome&)>& track_done = {});
+
+}  // namespace odotune
