@@ -1,43 +1,21 @@
-// odotune grid: run an experiment grid into a crash-safe results store.
+// odotune grid: run an experiment grid into a crash-safe results store
+// (jobs/grid_mpi.h, run_grid_job).
+#include <optional>
+
 #include <fmt/format.h>
 
 #include "cli/commands.h"
-#include "core/failure.h"
-#include "jobs/grid_job.h"
-#include "jobs/grid_mpi.h"
 #include "cli/output.h"
 #include "cli/progress.h"
+#include "core/failure.h"
+#include "jobs/grid_mpi.h"
 
 namespace odotune::cli {
 
-namespace {
-struct GridArgs {
-  std::string experiment, store;
-  bool allow_other = false;
-  int threads = 0;
-};
-
-// Opens (or creates, folder included) the experiment's store. Throws Failure.
-std::unique_ptr<results::Store> open_store(const Experiment& e, const std::filesystem::path& path,
-                                          bool allow_other) {
-  try {
-    if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
-    return std::make_unique<results::Store>(
-        path,
-        results::ExperimentInfo{e.name, e.text, results::experiment_hash(e.text), ODOTUNE_VERSION,
-                                std::filesystem::absolute(e.file).lexically_normal().string()},
-        allow_other);
-  } catch (const std::filesystem::filesystem_error& ex) {
-    throw Failure(fmt::format("{}: cannot create the store's folder: {}", path.string(),
-                              ex.code().message()));
-  } catch (const std::runtime_error& ex) {
-    throw Failure(ex.what());
-  }
-}
-}  // namespace
-
 void register_grid(CLI::App& app) {
-  auto args = std::make_shared<GridArgs>();
+  auto req = std::make_shared<GridRequest>();
+  req->code_version = ODOTUNE_VERSION;
+  auto threads = std::make_shared<int>(0);
   auto* sub = app.add_subcommand(
       "grid", "Run an experiment grid (models × tracks × modes × seeds) into a results store");
   sub->footer(
@@ -51,42 +29,31 @@ void register_grid(CLI::App& app) {
                         "(rank 0 writes the store); the results equal a one-process run's."
                       : "MPI: not built in (configure with -DODOTUNE_WITH_MPI=ON to share a grid over\n"
                         "the nodes of a cluster with mpirun)."));
-  sub->add_option("experiment", args->experiment, "experiment YAML (format odotune-experiment/1)")
+  sub->add_option("experiment", req->experiment, "experiment YAML (format odotune-experiment/1)")
       ->required();
-  sub->add_option("--store", args->store, "results store (SQLite); overrides the file's 'store'");
-  sub->add_flag("--allow-other-experiment", args->allow_other,
+  sub->add_option("--store", req->store, "results store (SQLite); overrides the file's 'store'");
+  sub->add_flag("--allow-other-experiment", req->allow_other,
                 "continue into a store made from a different experiment file");
-  add_threads_option(sub, &args->threads);
-  sub->callback([args] {
-    apply_threads(args->threads);
-    // Under mpirun/srun (MPI build): the ranks share the cells, rank 0 alone
-    // writes the store and prints; a failure anywhere is told once, by rank 0.
-    const MpiSession mpi;
-    Experiment e;
-    if (!mpi.agree([&] { e = read_experiment(args->experiment); })) return;
-    const std::filesystem::path store_path = args->store.empty() ? e.store : std::filesystem::path(args->store);
-    std::unique_ptr<results::Store> store;
-    if (!mpi.agree([&] {
-          if (mpi.rank() == 0) store = open_store(e, store_path, args->allow_other);
-        }))
-      return;
-    InterruptGuard interrupt;
-    Progress progress("grid " + e.name, "runs");
-    const auto update = [&progress](long done, long total) { progress.update(done, total); };
-    GridOutcome o;
-    if (mpi.size() > 1) {
-      const auto ranked = run_grid_mpi(mpi, e, store.get(), interrupt.flag(), update);
-      if (!ranked) return;  // not rank 0: rank 0 reports
-      o = *ranked;
-    } else {
-      o = run_grid(e, *store, interrupt.flag(), update);
-    }
-    progress.finish();
-    fmt::print("{}: {} runs in the experiment, {} already stored, {} run now{}{}\n",
-               store_path.string(), o.total, o.skipped, o.ran,
-               o.abandoned ? fmt::format(", {} abandoned", o.abandoned) : "",
-               mpi.size() > 1 ? fmt::format(" (on {} MPI ranks)", mpi.size()) : "");
-    if (interrupt.raised())
+  add_threads_option(sub, threads.get());
+  sub->callback([req, threads] {
+    apply_threads(*threads);
+    std::optional<InterruptGuard> interrupt;
+    std::optional<Progress> progress;
+    GridCallbacks cb;
+    cb.started = [&](const Experiment& e) {
+      interrupt.emplace();
+      progress.emplace("grid " + e.name, "runs");
+      return interrupt->flag();
+    };
+    cb.progress = [&](long done, long total) { progress->update(done, total); };
+    const std::optional<GridReport> r = run_grid_job(*req, cb);
+    if (!r) return;  // not rank 0 (MPI): rank 0 reports
+    progress->finish();
+    const GridOutcome& o = r->outcome;
+    fmt::print("{}: {} runs in the experiment, {} already stored, {} run now{}{}\n", r->store.string(),
+               o.total, o.skipped, o.ran, o.abandoned ? fmt::format(", {} abandoned", o.abandoned) : "",
+               r->ranks > 1 ? fmt::format(" (on {} MPI ranks)", r->ranks) : "");
+    if (interrupt->raised())
       throw Failure("interrupted; run the same command to continue where it stopped", 130);
   });
 }

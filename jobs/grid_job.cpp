@@ -1,5 +1,6 @@
 #include "jobs/grid_job.h"
 
+#include <filesystem>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -278,6 +279,23 @@ GridOutcome run_grid(const Experiment& e, results::Store& store, const std::atom
   out.ran = w.ran;
   out.abandoned = w.abandoned;
   return out;
+}
+
+std::unique_ptr<results::Store> open_grid_store(const Experiment& e, const std::filesystem::path& path,
+                                                bool allow_other, const std::string& code_version) {
+  try {
+    if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path());
+    return std::make_unique<results::Store>(
+        path,
+        results::ExperimentInfo{e.name, e.text, results::experiment_hash(e.text), code_version,
+                                std::filesystem::absolute(e.file).lexically_normal().string()},
+        allow_other);
+  } catch (const std::filesystem::filesystem_error& ex) {
+    throw Failure(fmt::format("{}: cannot create the store's folder: {}", path.string(),
+                              ex.code().message()));
+  } catch (const std::runtime_error& ex) {
+    throw Failure(ex.what());
+  }
 }
 
 }  // namespace odotune

@@ -10,7 +10,9 @@
 #pragma once
 
 #include <atomic>
+#include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -95,6 +97,13 @@ struct WorkResult {
 WorkResult work_cells(const Experiment& e, const std::vector<PreparedTrack>& tracks,
                       const std::vector<GridCell>& cells, const CellSource& source,
                       const std::atomic<bool>* stop);
+
+// Opens the experiment's results store at `path`, or creates it (and its
+// folder) recording the experiment's name, text, hash, absolute file path and
+// `code_version` (the odotune version). A store made from another experiment
+// is refused unless `allow_other`. Throws odotune::Failure (one line).
+std::unique_ptr<results::Store> open_grid_store(const Experiment& e, const std::filesystem::path& path,
+                                                bool allow_other, const std::string& code_version);
 
 // Runs the cells the store does not have yet. `progress(done, total)` is
 // called from one thread at a time. Throws odotune::Failure on a bad

@@ -364,4 +364,30 @@ std::optional<GridOutcome> run_grid_mpi(const MpiSession& mpi, const Experiment&
 
 #endif  // ODOTUNE_MPI_ENABLED
 
+std::optional<GridReport> run_grid_job(const GridRequest& request, const GridCallbacks& callbacks) {
+  // Under mpirun/srun (MPI build): the ranks share the cells, rank 0 alone
+  // writes the store and reports; a failure anywhere is told once, by rank 0.
+  const MpiSession mpi;
+  Experiment e;
+  if (!mpi.agree([&] { e = read_experiment(request.experiment); })) return std::nullopt;
+  GridReport report;
+  report.store = request.store.empty() ? e.store : std::filesystem::path(request.store);
+  report.ranks = mpi.size();
+  std::unique_ptr<results::Store> store;
+  if (!mpi.agree([&] {
+        if (mpi.rank() == 0)
+          store = open_grid_store(e, report.store, request.allow_other, request.code_version);
+      }))
+    return std::nullopt;
+  const std::atomic<bool>* stop = callbacks.started ? callbacks.started(e) : nullptr;
+  if (mpi.size() > 1) {
+    const auto ranked = run_grid_mpi(mpi, e, store.get(), stop, callbacks.progress);
+    if (!ranked) return std::nullopt;  // not rank 0: rank 0 reports
+    report.outcome = *ranked;
+  } else {
+    report.outcome = run_grid(e, *store, stop, callbacks.progress);
+  }
+  return report;
+}
+
 }  // namespace odotune

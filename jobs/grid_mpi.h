@@ -19,8 +19,10 @@
 #pragma once
 
 #include <atomic>
+#include <filesystem>
 #include <functional>
 #include <optional>
+#include <string>
 
 #include "formats/experiment_yaml.h"
 #include "jobs/grid_job.h"
@@ -63,5 +65,41 @@ class MpiSession {
 std::optional<GridOutcome> run_grid_mpi(const MpiSession& mpi, const Experiment& e,
                                         results::Store* store, const std::atomic<bool>* stop,
                                         const std::function<void(long, long)>& progress);
+
+// `odotune grid` as one call, with or without MPI.
+struct GridRequest {
+  std::string experiment;     // experiment YAML (odotune-experiment/1)
+  std::string store;          // results store; empty = the experiment's `store`
+  bool allow_other = false;   // continue into a store made from another experiment file
+  std::string code_version;   // odotune version recorded in a new store
+};
+
+// Where the command hears of the grid (each may be empty).
+struct GridCallbacks {
+  // On every rank, once the experiment is read and the store opened, before
+  // the first cell. Returns the flag that stops the grid when raised (null:
+  // never stopped).
+  std::function<const std::atomic<bool>*(const Experiment&)> started;
+  // progress(done, total): rank 0 only, one call at a time.
+  std::function<void(long, long)> progress;
+};
+
+struct GridReport {
+  std::filesystem::path store;  // the store written
+  GridOutcome outcome;
+  int ranks = 1;                // MPI ranks that shared the cells
+};
+
+// Starts an MpiSession for the call (finalised before it returns); on every
+// rank reads the experiment, on rank 0 opens (or creates) the store
+// (open_grid_store), then runs the cells the store lacks: over the ranks with
+// run_grid_mpi when started as several, else in-process with run_grid. A
+// stopped grid returns normally (the outcome counts the runs abandoned).
+// Returns the report on rank 0 and nothing on the other ranks (rank 0
+// reports, a failure included).
+// Throws odotune::Failure (one line) when MPI cannot be started (MpiSession),
+// and on rank 0 on an unreadable experiment, a store that cannot be opened, a
+// bad track or a solver failure.
+std::optional<GridReport> run_grid_job(const GridRequest& request, const GridCallbacks& callbacks);
 
 }  // namespace odotune
