@@ -3,8 +3,8 @@
 // Approach to Real-Time Odometry Calibration Using an Adaptive Particle
 // Filter Design" (RA-L 2026, ../shared/papers/000_*.txt, §IV–VI), on
 // simulated wheelchair tracks (scenarios/wheelchair*.yaml). Computation only:
-// scenarios and options in, plain numbers out; `cmd_study.cpp` reads the
-// files and prints, `study_tables.h` and `results/study_figures.h` format.
+// scenarios and options in, plain numbers out; `study_runs.h` reads the
+// scenario files and writes the outputs, `cli/cmd_study.cpp` prints, `study_tables.h` and `results/study_figures.h` format.
 //
 // Monte-Carlo run r (0-based) uses seed s_r = options.seed + r for
 //   * the simulated track's sensor noise (Scenario::seed = s_r);

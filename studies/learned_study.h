@@ -3,7 +3,8 @@
 // Networks", Sensors 2023, 23, 961 (../shared/papers/002_*.txt, §5), on
 // simulated wheelchair tracks (scenarios/wheelchair_learn*.yaml,
 // wheelchair_slip*.yaml). Computation only: scenarios and options in, plain
-// numbers and series out; `cmd_study.cpp` reads the files and prints,
+// numbers and series out; `study_runs.h` reads the scenario files,
+// `cli/cmd_study.cpp` prints,
 // `learned_study_outputs.h` writes tables, JSON and figures.
 //
 // Steps (every one seeded; the same seed gives the same numbers):
