@@ -1,0 +1,365 @@
+#include "studies/learn_job.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "core/failure.h"
+#include "core/output_paths.h"
+#include "formats/config_yaml.h"
+#include "studies/learned_study.h"
+#include "studies/learned_study_outputs.h"
+#include "tracks/track_io.h"
+
+namespace odotune {
+
+namespace {
+
+using results::LearnedModelFile;
+
+std::vector<const FusionInput*> pointers(const std::vector<FusionInput>& v) {
+  std::vector<const FusionInput*> p;
+  for (const auto& in : v) p.push_back(&in);
+  return p;
+}
+
+void report(const LearnProgress& progress, long done, long total) {
+  if (progress) progress(done, total);
+}
+
+std::string per_step_csv(const FusionInput& in, const OdometrySeries& lstm, const OdometrySeries& kin,
+                         const PoseTrack& pl, const PoseTrack& pk) {
+  const auto n = [](double v) { return std::isfinite(v) ? fmt::format("{}", v) : std::string(); };
+  std::string s =
+      "t_s,v_true,w_true,v_learned,w_learned,v_kinematic,w_kinematic,x_true,y_true,theta_true,x_learned,y_learned,"
+      "theta_learned,x_kinematic,y_kinematic,theta_kinematic\n";
+  for (std::size_t k = 0; k < in.size(); ++k)
+    s += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", n(in.t[k]), n(in.v_true[k]), n(in.w_true[k]),
+                     n(lstm.v[k]), n(lstm.w[k]), n(kin.v[k]), n(kin.w[k]), n(in.gt_x[k]), n(in.gt_y[k]),
+                     n(in.gt_theta[k]), n(pl.x[k]), n(pl.y[k]), n(pl.theta[k]), n(pk.x[k]), n(pk.y[k]),
+                     n(pk.theta[k]));
+  return s;
+}
+
+// One line of errors: "  NAME  V MAE … θ RMSE … rad".
+std::string errors_line(const char* name, const OdometryErrors& e) {
+  return fmt::format("  {:<10} V MAE {:.4f} RMSE {:.4f} m/s   W MAE {:.4f} RMSE {:.4f} rad/s   XY RMSE {:.3f} m   "
+                     "θ RMSE {:.4f} rad",
+                     name, e.v.mae, e.v.rmse, e.w.mae, e.w.rmse, e.xy.rmse, e.theta.rmse);
+}
+
+nlohmann::json summary_json(const LstmTrainingSummary& s) {
+  const auto n = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  return {{"cost_before", n(s.initial_cost)}, {"cost_after", n(s.final_cost)}, {"mae_after", n(s.train_mae)},
+          {"iterations", s.iterations}, {"usable", s.usable}};
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- shared pieces
+
+std::vector<FusionInput> load_fusion_inputs(const std::vector<std::string>& files, double rate_hz, bool need_power,
+                                            const char* purpose) {
+  const std::vector<Track> tracks = load_tracks(files);
+  FusionInputOptions o;
+  o.rate_hz = rate_hz;
+  std::string why;
+  if (!o.IsValid(&why)) throw Failure(fmt::format("--rate-hz {}: {}", rate_hz, why));
+  std::vector<FusionInput> out;
+  for (std::size_t k = 0; k < tracks.size(); ++k) {
+    try {
+      out.push_back(build_fusion_input(tracks[k], o));
+    } catch (const std::invalid_argument& e) {
+      throw Failure(fmt::format("{}: {}", files[k], e.what()));
+    }
+    const FusionInput& in = out.back();
+    if (!in.has_gt)
+      throw Failure(fmt::format("{}: track '{}' has no ground truth (gt_x, gt_y, gt_theta); expected it {}", files[k],
+                                in.track_name, purpose));
+    if (need_power && !in.has_power)
+      throw Failure(fmt::format("{}: track '{}' has no motor power (power_l, power_r); expected it {}", files[k],
+                                in.track_name, purpose));
+  }
+  return out;
+}
+
+LstmTrainingOptions learn_training_options(std::uint64_t seed, int iterations, int threads,
+                                           LstmTrainingOptions base) {
+  LstmTrainingOptions t = base;
+  t.seed = seed;
+  t.max_iterations = iterations;
+  t.num_threads = threads;
+  return t;
+}
+
+double pooled_mae(const std::vector<SeriesErrors>& e) {
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (const SeriesErrors& s : e)
+    if (s.samples > 0) sum += s.mae * static_cast<double>(s.samples), n += s.samples;
+  return n > 0 ? sum / static_cast<double>(n) : NAN;
+}
+
+LearnedModelFile load_learned_model(const std::string& path) {
+  try {
+    return results::read_learned_model(path);
+  } catch (const std::invalid_argument& e) {
+    throw Failure(e.what());
+  }
+}
+
+void check_model_fits(const LearnedModelFile& m, const FusionInput& in, const std::string& file,
+                      const std::string& model) {
+  if (std::abs(in.ticks_per_rev - m.odometry.ticks_per_rev) > 1e-9 * m.odometry.ticks_per_rev)
+    throw Failure(fmt::format("{}: track '{}' has ticks_per_rev = {}, the model {} was trained with {}; expected the "
+                              "same robot",
+                              file, in.track_name, in.ticks_per_rev, model, m.odometry.ticks_per_rev));
+}
+
+// ---------------------------------------------------------------- train
+
+LearnTrainOutcome run_learn_train(const LearnTrainRequest& r, const LearnProgress& progress) {
+  check_output_file("--model-out", r.model_out);
+  if (r.iterations < 1) throw Failure(fmt::format("--iterations {}: expected >= 1", r.iterations));
+  const std::vector<FusionInput> tracks = load_fusion_inputs(r.tracks, r.rate_hz, false, "to learn odometry from");
+  const std::vector<FusionInput> slips =
+      load_fusion_inputs(r.slip_tracks, r.rate_hz, true, "to train the slip detector on");
+
+  const long total = slips.empty() ? 1 : 2;
+  report(progress, 0, total);
+  LearnedTrainingOptions lo;
+  lo.training = learn_training_options(r.seed, r.iterations, r.threads);
+  lo.previous_noise_v = r.previous_noise >= 0.0 ? r.previous_noise : LearnedStudyOptions{}.previous_noise_v;
+  lo.previous_noise_w = r.previous_noise >= 0.0 ? r.previous_noise : LearnedStudyOptions{}.previous_noise_w;
+  LearnTrainOutcome out;
+  LearnedModelFile file;
+  try {
+    file.odometry = train_learned_odometry(pointers(tracks), lo, &out.odometry);
+  } catch (const std::invalid_argument& e) {
+    throw Failure(fmt::format("learn train: {}", e.what()));
+  }
+  report(progress, 1, total);
+  if (!slips.empty()) {
+    std::vector<OdometrySeries> odo;
+    for (const FusionInput& in : slips) {
+      check_model_fits(file, in, in.track_name, "being trained");
+      odo.push_back(run_learned_odometry(in, file.odometry));
+    }
+    SlipTrainingOptions so;
+    so.training = learn_training_options(r.seed, r.slip_iterations > 0 ? r.slip_iterations : r.iterations, r.threads);
+    SlipTrainingSummary slip_summary;
+    try {
+      file.detector = train_slip_detector(pointers(slips), odo, so, &slip_summary);
+    } catch (const std::invalid_argument& e) {
+      throw Failure(fmt::format("learn train: slip detector: {}", e.what()));
+    }
+    out.detector = slip_summary;
+    report(progress, 2, total);
+  }
+
+  const LearnedTrainingSummary& summary = out.odometry;
+  results::LearnedModelProvenance& p = file.provenance;
+  for (const FusionInput& in : tracks) p.tracks.push_back(in.track_name);
+  for (const FusionInput& in : slips) p.slip_tracks.push_back(in.track_name);
+  p.seed = r.seed;
+  p.odometry = results::training_record(summary.v, summary.w, summary.train_windows, summary.validation_windows,
+                                        summary.seconds);
+  if (out.detector)
+    p.detector = results::training_record(out.detector->v, out.detector->w, out.detector->train_windows,
+                                          out.detector->validation_windows, out.detector->seconds);
+  p.created_by = r.command;
+  results::write_learned_model(r.model_out, file);
+
+  std::vector<SeriesErrors> kin_v, kin_w;
+  for (const FusionInput& in : tracks) {
+    kin_v.push_back(series_errors(in.v_kin, in.v_true, {}));
+    kin_w.push_back(series_errors(in.w_kin, in.w_true, {}));
+  }
+  out.tracks = tracks.size();
+  out.slip_tracks = slips.size();
+  out.kinematic_v_mae = pooled_mae(kin_v);
+  out.kinematic_w_mae = pooled_mae(kin_w);
+  out.model_out = r.model_out;
+  return out;
+}
+
+std::vector<std::string> learn_train_lines(const LearnTrainOutcome& o) {
+  const LearnedTrainingSummary& s = o.odometry;
+  std::vector<std::string> l;
+  l.push_back(fmt::format("learned odometry trained on {} track{} ({} windows for training, {} for validation; "
+                          "{:.1f} s)",
+                          o.tracks, o.tracks == 1 ? "" : "s", s.train_windows, s.validation_windows, s.seconds));
+  l.push_back(fmt::format("  V net: MAE {:.4f} m/s (training), {:.4f} m/s (validation), {} iterations",
+                          s.v.train_mae, s.v.validation_mae, s.v.iterations));
+  l.push_back(fmt::format("  W net: MAE {:.4f} rad/s (training), {:.4f} rad/s (validation), {} iterations",
+                          s.w.train_mae, s.w.validation_mae, s.w.iterations));
+  l.push_back(fmt::format("  kinematic odometry on the same tracks: MAE {:.4f} m/s, {:.4f} rad/s", o.kinematic_v_mae,
+                          o.kinematic_w_mae));
+  if (o.detector)
+    l.push_back(fmt::format("slip detector trained on {} track{} ({} + {} windows; {:.1f} s): variance MAE V {:.3g}, W "
+                            "{:.3g} (validation)",
+                            o.slip_tracks, o.slip_tracks == 1 ? "" : "s", o.detector->train_windows,
+                            o.detector->validation_windows, o.detector->seconds, o.detector->v.validation_mae,
+                            o.detector->w.validation_mae));
+  l.push_back(fmt::format("model: {}", o.model_out));
+  return l;
+}
+
+// ---------------------------------------------------------------- eval
+
+LearnEvalOutcome run_learn_eval(const LearnEvalRequest& r) {
+  check_output_file("--json", r.json);
+  check_output_file("--csv", r.csv);
+  const LearnedModelFile m = load_learned_model(r.model);
+  const std::vector<FusionInput> tracks =
+      load_fusion_inputs({r.track}, m.odometry.rate_hz, false, "to score the odometry against");
+  const FusionInput& in = tracks.front();
+  check_model_fits(m, in, r.track, r.model);
+  const OdometrySeries lstm = run_learned_odometry(in, m.odometry);
+  const OdometrySeries kin = kinematic_odometry(in);
+  const PoseTrack pl = dead_reckon(in, lstm.v, lstm.w), pk = dead_reckon(in, kin.v, kin.w);
+  LearnEvalOutcome out;
+  out.learned = odometry_errors(in, lstm.v, lstm.w, {}, {}, {}, &pl);
+  out.kinematic = odometry_errors(in, kin.v, kin.w, {}, {}, {}, &pk);
+  const nlohmann::json j = {{"track", in.track_name}, {"file", r.track}, {"model", r.model},
+                            {"rate_hz", m.odometry.rate_hz}, {"learned", flat_errors_json(out.learned)},
+                            {"kinematic", flat_errors_json(out.kinematic)}};
+  if (!r.csv.empty()) write_file_atomically(r.csv, per_step_csv(in, lstm, kin, pl, pk));
+  if (!r.json.empty()) write_file_atomically(r.json, j.dump(2) + "\n");
+  out.track_name = in.track_name;
+  out.file = r.track;
+  out.model = r.model;
+  out.json = r.json;
+  out.csv = r.csv;
+  out.steps = in.size();
+  out.rate_hz = m.odometry.rate_hz;
+  return out;
+}
+
+std::vector<std::string> learn_eval_lines(const LearnEvalOutcome& o) {
+  std::vector<std::string> l;
+  l.push_back(fmt::format("track {} ({}), {} steps at {:g} Hz, model {}:", o.track_name, o.file, o.steps, o.rate_hz,
+                          o.model));
+  l.push_back(errors_line("learned", o.learned));
+  l.push_back(errors_line("kinematic", o.kinematic));
+  if (!o.csv.empty()) l.push_back(fmt::format("csv: {}", o.csv));
+  if (!o.json.empty()) l.push_back(fmt::format("json: {}", o.json));
+  return l;
+}
+
+// ---------------------------------------------------------------- retrain
+
+LearnRetrainOutcome run_learn_retrain(const LearnRetrainRequest& r, const LearnProgress& progress) {
+  check_output_file("--model-out", r.model_out);
+  check_output_file("--json", r.json);
+  if (r.every < 20) throw Failure(fmt::format("--every {}: expected >= 20 samples", r.every));
+  if (r.iterations < 1) throw Failure(fmt::format("--iterations {}: expected >= 1", r.iterations));
+  const LearnedModelFile m = load_learned_model(r.model);
+  const bool detector = m.detector && !r.static_covariance;
+  const std::vector<FusionInput> tracks =
+      load_fusion_inputs({r.track}, m.odometry.rate_hz, detector, "(the model's slip detector reads it; or give "
+                                                                  "--static-covariance)");
+  const FusionInput& in = tracks.front();
+  check_model_fits(m, in, r.track, r.model);
+  if (!in.has_ext)
+    throw Failure(fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext); expected them: the UKF "
+                              "retrains on its fused velocities",
+                              r.track, in.track_name));
+
+  LearnedFusionOptions o;
+  o.odometry = LearnedFusionOptions::Odometry::learned;
+  o.detector = detector ? &*m.detector : nullptr;
+  // Without a detector: a Gaussian's variance from the validation MAE, σ = MAE·√(π/2).
+  o.static_var_v = std::max(1e-8, m.odometry.v_validation_mae * m.odometry.v_validation_mae * std::numbers::pi / 2);
+  o.static_var_w = std::max(1e-8, m.odometry.w_validation_mae * m.odometry.w_validation_mae * std::numbers::pi / 2);
+  o.retrain.samples_per_retrain = r.every;
+  o.retrain.training = learn_training_options(m.provenance.seed, r.iterations, r.threads, default_retrain_training());
+
+  report(progress, 0, 2);
+  LearnedFusionResult with, without;
+  try {
+    o.retrain.enabled = true;
+    with = run_learned_fusion(in, &m.odometry, o);
+    report(progress, 1, 2);
+    o.retrain.enabled = false;
+    without = run_learned_fusion(in, &m.odometry, o);
+    report(progress, 2, 2);
+  } catch (const std::invalid_argument& e) {
+    throw Failure(fmt::format("learn retrain: {}", e.what()));
+  }
+
+  const auto block = [&](const LearnedFusionResult& f) {
+    PoseTrack pose{f.filter.x, f.filter.y, f.filter.theta};
+    return nlohmann::json{
+        {"odometry", flat_errors_json(odometry_only_errors(in, f.odometry))},
+        {"filter", flat_errors_json(odometry_errors(in, f.filter.v, f.filter.w, {}, {}, {}, &pose))},
+        {"filter_healthy", f.filter.healthy}};
+  };
+  nlohmann::json events = nlohmann::json::array();
+  for (const RetrainEvent& e : with.retrains)
+    events.push_back({{"step", e.step}, {"t_s", e.t_s}, {"ms", 1e3 * e.seconds}, {"v", summary_json(e.v)},
+                      {"w", summary_json(e.w)}});
+  const nlohmann::json j = {{"track", in.track_name},
+                            {"file", r.track},
+                            {"model", r.model},
+                            {"covariance", detector ? "slip detector" : "static"},
+                            {"every", r.every},
+                            {"iterations", r.iterations},
+                            {"retrains", events},
+                            {"with_retraining", block(with)},
+                            {"without_retraining", block(without)}};
+
+  if (!r.model_out.empty()) {
+    LearnedModelFile out = m;
+    out.odometry = with.final_model.value_or(m.odometry);
+    out.provenance.retrains += static_cast<int>(with.retrains.size());
+    out.provenance.retrain_tracks.push_back(in.track_name);
+    out.provenance.created_by = r.command;
+    results::write_learned_model(r.model_out, out);
+  }
+  if (!r.json.empty()) write_file_atomically(r.json, j.dump(2) + "\n");
+
+  LearnRetrainOutcome out;
+  out.track_name = in.track_name;
+  out.file = r.track;
+  out.model_out = r.model_out;
+  out.json = r.json;
+  out.every = r.every;
+  out.iterations = r.iterations;
+  out.detector = detector;
+  out.gate = o.retrain;
+  out.retrains = with.retrains;
+  out.retrained = odometry_only_errors(in, with.odometry);
+  out.fixed = odometry_only_errors(in, without.odometry);
+  return out;
+}
+
+std::vector<std::string> learn_retrain_lines(const LearnRetrainOutcome& o) {
+  const std::size_t n = o.retrains.size();
+  std::vector<std::string> l;
+  l.push_back(fmt::format("track {} ({}): {} retrain{} every {} samples ({} iterations each), {} covariance",
+                          o.track_name, o.file, n, n == 1 ? "" : "s", o.every, o.iterations,
+                          o.detector ? "slip-detector" : "static"));
+  if (o.retrains.empty())
+    l.push_back(fmt::format("  no retrain: fewer than {} steps had filter variances below {:g}/{:g} and odometry "
+                            "variances below {:g}/{:g} (V/W) — the retraining gate of paper §4.2",
+                            o.every, o.gate.max_filter_var_v, o.gate.max_filter_var_w, o.gate.max_odometry_var_v,
+                            o.gate.max_odometry_var_w));
+  for (const RetrainEvent& e : o.retrains)
+    l.push_back(fmt::format("  t = {:8.2f} s (step {:5}): {:7.1f} ms; V cost {:.4g} → {:.4g} (MAE {:.4f} m/s), W cost "
+                            "{:.4g} → {:.4g} (MAE {:.4f} rad/s)",
+                            e.t_s, e.step, 1e3 * e.seconds, e.v.initial_cost, e.v.final_cost, e.v.train_mae,
+                            e.w.initial_cost, e.w.final_cost, e.w.train_mae));
+  l.push_back("odometry fed to the UKF, against the ground truth:");
+  l.push_back(errors_line("retrained", o.retrained));
+  l.push_back(errors_line("fixed", o.fixed));
+  if (!o.model_out.empty()) l.push_back(fmt::format("model: {}", o.model_out));
+  if (!o.json.empty()) l.push_back(fmt::format("json: {}", o.json));
+  return l;
+}
+
+}  // namespace odotune

@@ -1,0 +1,145 @@
+// The work of `odotune learn train|eval|retrain`: the learned odometry of
+// Fariña, Acosta, Toledo & Acosta, "Improving Odometric Model Performance
+// Based on LSTM Networks", Sensors 2023, 23, 961 (objectives/learned_odometry.h,
+// the slip detector of objectives/slip_detector.h, the UKF fusion with online
+// retraining of objectives/learned_fusion.h), on recorded or simulated tracks.
+// Request in, files written, outcome and its lines of text out; the command
+// reads the flags, shows the progress and prints the lines. The model file is
+// results/learned_model_json.h, the JSON blocks studies/learned_study_outputs.h.
+//
+// Every function throws odotune::Failure with one line (naming the flag or
+// the file) on bad requests or inputs, before long work where it can: an
+// output path whose folder does not exist, too few iterations, a track
+// without ground truth (or motor power / external velocities where needed),
+// a model file that does not read or was trained for another robot.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "objectives/fusion_input.h"
+#include "objectives/learned_fusion.h"
+#include "objectives/learned_odometry.h"
+#include "objectives/lstm_training.h"
+#include "objectives/odometry_metrics.h"
+#include "objectives/slip_detector.h"
+#include "results/learned_model_json.h"
+
+namespace odotune {
+
+// Progress of a job in steps (nets trained, fusion runs).
+using LearnProgress = std::function<void(long done, long total)>;
+
+// ---------------------------------------------------------------- shared pieces
+
+// Loads track files and lays them out for fusion at `rate_hz`; every track
+// must have ground truth, and motor power when `need_power`. `purpose` ends
+// the error line ("expected it " + purpose).
+std::vector<FusionInput> load_fusion_inputs(const std::vector<std::string>& files, double rate_hz, bool need_power,
+                                            const char* purpose);
+
+// `base`: a fresh training's defaults, or default_retrain_training() for refits.
+LstmTrainingOptions learn_training_options(std::uint64_t seed, int iterations, int threads,
+                                           LstmTrainingOptions base = {});
+
+// Pooled MAE of a series over several tracks (weighted by samples); NaN
+// without samples.
+double pooled_mae(const std::vector<SeriesErrors>& e);
+
+// results::read_learned_model with its one-line errors as Failure.
+results::LearnedModelFile load_learned_model(const std::string& path);
+
+// The model and the track must describe the same robot: equal ticks_per_rev.
+// `file` names the track, `model` the model in the error line.
+void check_model_fits(const results::LearnedModelFile& m, const FusionInput& in, const std::string& file,
+                      const std::string& model);
+
+// ---------------------------------------------------------------- train
+
+struct LearnTrainRequest {
+  std::vector<std::string> tracks;        // with ground truth: the velocity nets
+  std::vector<std::string> slip_tracks;   // with motor power: the slip detector (none: no detector)
+  std::string model_out;                  // --model-out, required
+  std::uint64_t seed = 1;
+  int iterations = 100;                   // Ceres iterations per velocity net, ≥ 1
+  int slip_iterations = 0;                // per detector net (0 = iterations)
+  double rate_hz = 10.0;                  // network rate [Hz], (0, 1000]
+  double previous_noise = -1.0;           // σ on the teacher-forced previous V [m/s] and W [rad/s]; < 0 = the study's
+  int threads = 1;                        // OpenMP threads evaluating the windows; results do not depend on it
+  std::string command;                    // the model's provenance.created_by
+};
+
+struct LearnTrainOutcome {
+  std::size_t tracks = 0, slip_tracks = 0;
+  LearnedTrainingSummary odometry;
+  std::optional<SlipTrainingSummary> detector;      // when slip tracks were given
+  double kinematic_v_mae = 0.0, kinematic_w_mae = 0.0;   // pooled over the training tracks
+  std::string model_out;
+};
+
+// Trains the velocity nets and, with slip tracks, the slip detector on the
+// learned odometry's errors there, then writes the model file. Progress: 0, 1
+// (and 2) of 1 net pair (2 with a detector).
+LearnTrainOutcome run_learn_train(const LearnTrainRequest& request, const LearnProgress& progress = {});
+// The lines the command prints (without newlines): "learned odometry trained
+// on …", the nets' MAEs, the kinematic odometry's, the detector's, "model: FILE".
+std::vector<std::string> learn_train_lines(const LearnTrainOutcome& outcome);
+
+// ---------------------------------------------------------------- eval
+
+struct LearnEvalRequest {
+  std::string track;   // with ground truth
+  std::string model;   // model file
+  std::string json;    // optional: errors of the learned and the kinematic odometry
+  std::string csv;     // optional: velocities and dead-reckoned poses per step
+};
+
+struct LearnEvalOutcome {
+  std::string track_name, file, model, json, csv;
+  std::size_t steps = 0;
+  double rate_hz = 0.0;             // the model's [Hz]
+  OdometryErrors learned, kinematic;
+};
+
+// Scores the learned and the kinematic odometry (pose dead-reckoned from each)
+// against the track's ground truth; writes the CSV, then the JSON.
+LearnEvalOutcome run_learn_eval(const LearnEvalRequest& request);
+// "track … model …:", the learned and the kinematic odometry's errors, the files.
+std::vector<std::string> learn_eval_lines(const LearnEvalOutcome& outcome);
+
+// ---------------------------------------------------------------- retrain
+
+struct LearnRetrainRequest {
+  std::string track;                // with ground truth and external velocities
+  std::string model;                // model file to start from
+  std::string model_out;            // optional: the retrained model
+  std::string json;                 // optional: retrain events, errors with and without retraining
+  int every = 300;                  // samples per retrain, ≥ 20
+  int iterations = 10;              // Ceres iterations per refit, ≥ 1
+  bool static_covariance = false;   // ignore the model's slip detector
+  int threads = 1;
+  std::string command;              // the retrained model's provenance.created_by
+};
+
+struct LearnRetrainOutcome {
+  std::string track_name, file, model_out, json;
+  int every = 0, iterations = 0;
+  bool detector = false;            // slip-detector covariance (else static)
+  RetrainOptions gate;              // the retraining gate's thresholds
+  std::vector<RetrainEvent> retrains;
+  OdometryErrors retrained, fixed;  // the odometry fed to the UKF, with and without retraining
+};
+
+// Runs the UKF over the track with online retraining, then without (progress:
+// 0, 1, 2 of 2 runs); writes the retrained model, then the JSON. The model's
+// rate is the track's layout rate; retraining starts from the model's seed.
+LearnRetrainOutcome run_learn_retrain(const LearnRetrainRequest& request, const LearnProgress& progress = {});
+// The retrains (or why there was none), the odometry's errors with and
+// without retraining, the files.
+std::vector<std::string> learn_retrain_lines(const LearnRetrainOutcome& outcome);
+
+}  // namespace odotune
