@@ -9,5 +9,12 @@ cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 mpi=OFF
 if [[ "${ODOTUNE_WITH_MPI:-0}" == "1" ]]; then mpi=ON; fi
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DODOTUNE_WITH_MPI="$mpi" "$@" >/dev/null
+# ccache, when the machine has it (it is not a dependency), makes rebuilds and
+# builds of other clones fast; paths are hashed relative to the clone.
+launcher=()
+if command -v ccache >/dev/null 2>&1; then
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
+fi
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DODOTUNE_WITH_MPI="$mpi" "${launcher[@]}" "$@" >/dev/null
 cmake --build build -j"$(nproc)"
