@@ -35,6 +35,7 @@ std::string description(Effect e) {
     case Effect::gyro_scale: return "while turning: the gyro's heading error grows with the turn rate";
     case Effect::actuator_lag: return "when the commands change: the body follows them late";
     case Effect::time_offset: return "when the velocities change: the odometry's time stamps are shifted";
+    case Effect::odometry_bias: return "at all times, also at rest: the odometry reads its body velocities with a constant offset";
   }
   return "";
 }

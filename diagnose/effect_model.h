@@ -66,9 +66,9 @@ namespace odotune::diagnose {
 // is effect_name(), read from the table (tests check that the two orders agree).
 enum class Effect : int {
   radius_error, wheel_base_error, radius_step, speed_radius, lateral_skid, longitudinal_slip,
-  slip_zone, gyro_bias, gyro_scale, actuator_lag, time_offset
+  slip_zone, gyro_bias, gyro_scale, actuator_lag, time_offset, odometry_bias
 };
-inline constexpr int kNumEffects = 11;
+inline constexpr int kNumEffects = 12;
 
 std::string_view effect_name(Effect e);
 // Throws std::invalid_argument naming valid effects for an unknown name.

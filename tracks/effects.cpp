@@ -48,6 +48,11 @@ const std::vector<EffectInfo> kTable = {
      {{"tau", "s", "time constant", 0.0, 5.0, true, true, 0.0}}},
     {"time_offset", "odometry columns stamped t were measured at t - dt",
      {{"dt", "s", "odometry delay (positive: late)", -1.0, 1.0, false, true, 0.0}}},
+    // Both optional (an offset in one velocity alone is common), 0 = no offset;
+    // 0.5 m/s or rad/s of apparent motion at rest is far beyond a plausible offset.
+    {"odometry_bias", "the odometry's body velocities read v + b_v and w + b_w",
+     {{"b_v", "m/s", "offset of the odometry's body speed", -0.5, 0.5, false, false, 0.0},
+      {"b_w", "rad/s", "offset of the odometry's yaw rate", -0.5, 0.5, false, false, 0.0}}},
 };
 
 // Pointers to the parameter fields of effect `index` (table order) in `e`, or
@@ -72,6 +77,7 @@ std::vector<double*> fields(Effects& e, std::size_t index, bool on) {
     case 8: if (auto* p = get(e.gyro_scale)) return {&p->s}; break;
     case 9: if (auto* p = get(e.actuator_lag)) return {&p->tau}; break;
     case 10: if (auto* p = get(e.time_offset)) return {&p->dt}; break;
+    case 11: if (auto* p = get(e.odometry_bias)) return {&p->b_v, &p->b_w}; break;
     default: break;
   }
   return {};
@@ -90,6 +96,7 @@ void switch_off(Effects& e, std::size_t index) {
     case 8: e.gyro_scale.reset(); break;
     case 9: e.actuator_lag.reset(); break;
     case 10: e.time_offset.reset(); break;
+    case 11: e.odometry_bias.reset(); break;
     default: break;
   }
 }

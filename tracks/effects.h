@@ -38,7 +38,7 @@ struct EffectInfo {
   std::vector<EffectParamInfo> params;  // in the spec's order
 };
 
-// The 11 effects, in the spec's order.
+// The 12 effects, in the spec's order.
 const std::vector<EffectInfo>& effect_table();
 // nullptr when unknown.
 const EffectInfo* find_effect(std::string_view name);

@@ -154,6 +154,7 @@ struct Effects {
   struct GyroScale { double s = 1.0; };
   struct ActuatorLag { double tau = 0.0; };                                   // [s]
   struct TimeOffset { double dt = 0.0; };                                     // [s]
+  struct OdometryBias { double b_v = 0.0, b_w = 0.0; };                       // [m/s], [rad/s]
 
   std::optional<RadiusError> radius_error;
   std::optional<WheelBaseError> wheel_base_error;
@@ -166,6 +167,7 @@ struct Effects {
   std::optional<GyroScale> gyro_scale;
   std::optional<ActuatorLag> actuator_lag;
   std::optional<TimeOffset> time_offset;
+  std::optional<OdometryBias> odometry_bias;
 };
 
 // A slip episode: a transient, timed loss of the rolling contact of ONE

@@ -48,9 +48,9 @@
 //     differences over the knots (a first-order lead, the inverse of the lag);
 //   then v_cmd, w_cmd = the nominal forward kinematics of omega_ref (which is
 //   what the simulator's wheel controller inverts).
-// lateral_skid, gyro_bias, gyro_scale and time_offset need no inversion (they
-// do not change v, w or only change sensor readings). Without effects the
-// knots are the reference's (v, w).
+// lateral_skid, gyro_bias, gyro_scale, time_offset and odometry_bias need no
+// inversion (they do not change v, w or only change sensor readings). Without
+// effects the knots are the reference's (v, w).
 //
 // Frames: the scenario's start pose (MotionParams::start_*) is the
 // reference's first pose, fitted at the first knot: x, y from the fit; theta

@@ -415,6 +415,22 @@ Track simulate(const Scenario& sc) {
   d.t.resize(n_rows);
   for (std::size_t r = 0; r < n_rows; ++r) d.t[r] = static_cast<double>(row_k[r]) / spsd;
 
+  // odometry_bias (header comment, "Sensors"): the wheel-rate offsets whose
+  // NOMINAL forward kinematics are (b_v, b_w), added to the reported rates
+  // and, times the measurement time, to the counted rotation. Only when the
+  // effect is on, so tracks without it keep their bits.
+  const auto& ob = fx.odometry_bias;
+  const double bias_om_l = ob ? (ob->b_v - ob->b_w * D / 2.0) / R_l : 0.0;  // [rad/s]
+  const double bias_om_r = ob ? (ob->b_v + ob->b_w * D / 2.0) / R_r : 0.0;
+  if (ob) {
+    for (std::size_t r = 0; r < n_rows; ++r) {
+      const double t_meas = q[r] / spsd;  // t - dt, clamped to the run like the odometry
+      odo[r].phi_l += bias_om_l * t_meas;
+      odo[r].phi_r += bias_om_r * t_meas;
+      odo[r].om_l += bias_om_l;
+      odo[r].om_r += bias_om_r;
+    }
+  }
   if (period[kEnc] > 0) {
     d.ticks_l.assign(n_rows, kNoTick);
     d.ticks_r.assign(n_rows, kNoTick);
@@ -436,7 +452,8 @@ Track simulate(const Scenario& sc) {
     auto& wc = d.ensure(Col::w_cmd);
     for (std::size_t r = 0; r < n_rows; ++r) {
       if (!sampled(r, kCmd)) continue;
-      const Command c = profile.at(q[r] / spsd);
+      Command c = profile.at(q[r] / spsd);
+      if (ob) c.v_m_s += ob->b_v, c.w_rad_s += ob->b_w;
       vc[r] = quantise(c.v_m_s, sp.commands.resolution);
       wc[r] = quantise(c.w_rad_s, sp.commands.resolution);
     }

@@ -35,13 +35,26 @@
 //     second order in h, like RK2.
 //  6. Wheel rotation angle phi integrates omega (trapezoid; exact for omega
 //     linear over the step). Encoders count the ROTATION, so slip and radius
-//     errors never change the ticks: ticks = floor(phi/(2 pi)*ticks_per_rev).
+//     errors never change the ticks: ticks = floor(phi/(2 pi)*ticks_per_rev)
+//     (odometry_bias, below, offsets what they report).
 //
 // Sensors (rows at the union of the sample instants k/rate_hz):
 //  * ticks_l/r (+ omega_l/r), v_cmd, w_cmd: the odometry columns. With effect
 //    time_offset the row stamped t holds what was measured at t - dt (linear
 //    interpolation of the internal 1 ms states; the first value is held
 //    before t = 0 and the last after the end).
+//    With effect odometry_bias the odometry's body velocities read v + b_v,
+//    w + b_w (physics-effects.md): v_cmd, w_cmd get b_v, b_w added; for the
+//    wheels the offset is on the body velocities they imply through the
+//    odometry's own NOMINAL model (radii R_l, R_r, base D, track-format.md),
+//    i.e. constant wheel-rate offsets
+//        bias_l = (b_v - b_w*D/2)/R_l,  bias_r = (b_v + b_w*D/2)/R_r,
+//    added to omega_l/r, and bias*t_m added to the counted rotation phi
+//    before the ticks are taken (t_m the measurement time: t - dt, clamped to
+//    the run like the odometry itself). So the nominal kinematics of the
+//    recorded wheels give the wheels' own reading + (b_v, b_w), and a robot at
+//    rest counts ticks: its odometry drifts by b_v*t, its heading by b_w*t.
+//    Ground truth, gyro, power, ext_velocity and fixes are unaffected.
 //  * gyro_z = gyro_scale.s * w + gyro_bias.b + N(0, sigma^2).
 //  * v_ext, w_ext = true body v, w + N(0, sigma^2); v_ext_var, w_ext_var = sigma^2.
 //  * aps_x, aps_y = true position + N(0, sigma^2) per axis.

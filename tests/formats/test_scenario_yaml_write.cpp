@@ -176,7 +176,7 @@ sim::Scenario knots_scenario() {
                         "radius_step:t=2,scale_l=0.99", "speed_radius:c=-0.01", "lateral_skid:k=0.021",
                         "longitudinal_slip:k=0.05", "slip_zone:x0=-1,x1=0.5,y0=-0.25,y1=1e-3,s_l=0.3",
                         "gyro_bias:b=-0.0015", "gyro_scale:s=0.995", "actuator_lag:tau=0.05",
-                        "time_offset:dt=-0.01"})
+                        "time_offset:dt=-0.01", "odometry_bias:b_v=-0.0030000000000000001,b_w=1e-4"})
     sim::apply_effect(sc.effects, sim::parse_effect_spec(e));
   return sc;
 }

@@ -195,6 +195,20 @@ TEST(ScenarioYaml, EffectErrorsUseTheVocabulary) {
               AllOf(StartsWith("s.yaml:5:"), HasSubstr("x0 < x1")));
 }
 
+TEST(ScenarioYaml, ReadsOdometryBiasThroughTheEffectTable) {
+  // physics-effects.md's 12th effect; b_v, b_w are optional (0 = no offset).
+  const sim::Scenario sc =
+      parse_scenario(kMotion + "effects:\n  odometry_bias: {b_w: -0.002}\n  gyro_bias: {b: 0.001}\n", "s.yaml");
+  ASSERT_TRUE(sc.effects.odometry_bias);
+  EXPECT_EQ(sc.effects.odometry_bias->b_v, 0.0);
+  EXPECT_EQ(sc.effects.odometry_bias->b_w, -0.002);
+  EXPECT_EQ(sim::format_effects(sc.effects), "gyro_bias:b=0.001; odometry_bias:b_v=0,b_w=-0.002");
+  EXPECT_THAT(error_of(kMotion + "effects:\n  odometry_bias:\n    b_v: 0.7\n"),
+              AllOf(StartsWith("s.yaml:6: odometry_bias.b_v = 0.7"), HasSubstr("out of range [-0.5, 0.5] m/s")));
+  EXPECT_THAT(error_of(kMotion + "effects:\n  odometry_bias: {bw: 0.1}\n"),
+              AllOf(StartsWith("s.yaml:5:"), HasSubstr("'bw'"), HasSubstr("b_v, b_w")));
+}
+
 TEST(ScenarioYaml, StructuralErrors) {
   EXPECT_THAT(error_of("motion:\n  segments: [\n"), AllOf(StartsWith("s.yaml:"), HasSubstr("YAML syntax error")));
   EXPECT_THAT(error_of(""), HasSubstr("expected a scenario"));

@@ -43,6 +43,7 @@ const std::map<std::string, std::vector<std::string>> kSpecNames = {
     {"gyro_scale", {"s"}},
     {"actuator_lag", {"tau"}},
     {"time_offset", {"dt"}},
+    {"odometry_bias", {"b_v", "b_w"}},
 };
 
 TEST(EffectTable, NamesAreTheSpecsVerbatim) {
@@ -154,6 +155,25 @@ TEST(ApplyEffect, SwitchesOnWithDefaultsAndRequiresRequired) {
     EXPECT_THAT(e.what(), AllOf(HasSubstr("gyro_bias"), HasSubstr("needs parameter b")));
   }
   EXPECT_FALSE(fx.gyro_bias) << "a failed apply must leave the effects unchanged";
+}
+
+TEST(ApplyEffect, OdometryBiasParametersAreOptionalAndBounded) {
+  Effects fx;
+  apply_effect(fx, parse_effect_spec("odometry_bias:b_w=-0.01"));
+  ASSERT_TRUE(fx.odometry_bias);
+  EXPECT_EQ(fx.odometry_bias->b_v, 0.0);  // not given: no offset
+  EXPECT_EQ(fx.odometry_bias->b_w, -0.01);
+  EXPECT_EQ(format_effects(fx), "odometry_bias:b_v=0,b_w=-0.01");
+  EXPECT_THAT(error_of("odometry_bias:b_v=0.6"),
+              AllOf(HasSubstr("odometry_bias.b_v = 0.6"), HasSubstr("out of range [-0.5, 0.5] m/s")));
+  EXPECT_THAT(error_of("odometry_bias:b_w=-0.51"), HasSubstr("[-0.5, 0.5] rad/s"));
+  EXPECT_THAT(error_of("odometry_bias:bv=0.1"), HasSubstr("did you mean 'b_v'"));
+  fx.odometry_bias->b_v = 1.0;
+  std::string why;
+  EXPECT_FALSE(validate_effects(fx, &why));
+  EXPECT_THAT(why, HasSubstr("odometry_bias.b_v = 1"));
+  remove_effect(fx, "odometry_bias");
+  EXPECT_FALSE(fx.odometry_bias);
 }
 
 TEST(ApplyEffect, OverridesOnlyTheGivenParameters) {

@@ -331,6 +331,140 @@ TEST(Simulator, TimeOffsetShiftsOnlyTheOdometryColumns) {
   EXPECT_EQ(a.col(Col::power_l), b.col(Col::power_l));
 }
 
+// Nominal dead reckoning (track-format.md kinematics, nominal radii and base)
+// of the recorded ticks from row 0 to every row.
+struct DeadReckoned {
+  std::vector<double> x, y, th;
+};
+DeadReckoned dead_reckon_ticks(const Track& tr) {
+  const double q = tick_m(tr), D = *tr.meta().wheel_base_m;
+  DeadReckoned dr{{0.0}, {0.0}, {0.0}};
+  for (std::size_t i = 1; i < tr.size(); ++i) {
+    const double sl = static_cast<double>(tr.ticks_l()[i] - tr.ticks_l()[i - 1]) * q;
+    const double sr = static_cast<double>(tr.ticks_r()[i] - tr.ticks_r()[i - 1]) * q;
+    const double ds = 0.5 * (sl + sr), dth = (sr - sl) / D;
+    const double half = 0.5 * dth, sinc = std::abs(half) < 1e-9 ? 1.0 : std::sin(half) / half;
+    dr.x.push_back(dr.x.back() + ds * sinc * std::cos(dr.th.back() + half));
+    dr.y.push_back(dr.y.back() + ds * sinc * std::sin(dr.th.back() + half));
+    dr.th.push_back(dr.th.back() + dth);
+  }
+  return dr;
+}
+
+// physics-effects.md: "the odometry's body velocities read v + b_v and w +
+// b_w ... so a robot standing still seems to move". The robot stands for 10 s.
+TEST(Simulator, OdometryBiasBvMakesAStandingRobotsOdometryDriftByBvT) {
+  Scenario sc = quiet({stop(10)});
+  sc.effects.odometry_bias = Effects::OdometryBias{0.02, 0.0};
+  const Track tr = simulate(sc);
+  ASSERT_GT(tr.duration_s(), 9.99);
+  const double q = tick_m(tr), R = 0.05;
+  const DeadReckoned dr = dead_reckon_ticks(tr);
+  for (std::size_t i = 0; i < tr.size(); ++i) {
+    const double t = tr.t()[i];
+    // The world stands still; the gyro and the other sensors see it.
+    ASSERT_EQ(tr.col(Col::gt_x)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(Col::gt_y)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(Col::gt_theta)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(Col::gyro_z)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(Col::v_ext)[i], 0.0) << i;
+    // The odometry moves: b_v*t, within one count per wheel, straight ahead.
+    ASSERT_NEAR(dr.x[i], 0.02 * t, q + 1e-12) << i;
+    ASSERT_NEAR(dr.y[i], 0.0, 1e-12) << i;
+    ASSERT_NEAR(dr.th[i], 0.0, 2 * q / 0.30 + 1e-12) << i;
+    ASSERT_NEAR(tr.col(Col::omega_l)[i], 0.02 / R, 1e-12) << i;
+    ASSERT_NEAR(tr.col(Col::omega_r)[i], 0.02 / R, 1e-12) << i;
+    ASSERT_EQ(tr.col(Col::v_cmd)[i], 0.02) << i;
+    ASSERT_EQ(tr.col(Col::w_cmd)[i], 0.0) << i;
+  }
+  EXPECT_NEAR(dr.x.back(), 0.2, q);  // 20 cm in 10 s at rest
+  EXPECT_GT(tr.ticks_l().back(), 2000);  // 0.2 m / (2 pi 0.05 m / 4096) = 2608 counts
+
+  // While moving, too: the recorded ticks' nominal travel exceeds that of the
+  // same run without the bias by b_v*t (one count per wheel and run).
+  Scenario moving = quiet({stop(1), straight(2, 0.5), arc(0.8, 90, 0.4), stop(1)});
+  Scenario biased = moving;
+  biased.effects.odometry_bias = Effects::OdometryBias{-0.03, 0.0};
+  const Track a = simulate(moving), b = simulate(biased);
+  ASSERT_EQ(a.t(), b.t());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_NEAR(tick_distance(b, 0, i) - tick_distance(a, 0, i), -0.03 * a.t()[i], 2 * q) << i;
+    ASSERT_NEAR(b.col(Col::v_cmd)[i] - a.col(Col::v_cmd)[i], -0.03, 1e-12) << i;
+  }
+  EXPECT_EQ(a.col(Col::gt_x), b.col(Col::gt_x));
+  EXPECT_EQ(a.col(Col::gyro_z), b.col(Col::gyro_z));
+  EXPECT_EQ(a.col(Col::power_l), b.col(Col::power_l));
+}
+
+TEST(Simulator, OdometryBiasBwMakesTheOdometrysHeadingDriftByBwT) {
+  Scenario sc = quiet({stop(10)});
+  sc.effects.odometry_bias = Effects::OdometryBias{0.0, 0.05};
+  const Track tr = simulate(sc);
+  const double q = tick_m(tr), R = 0.05, D = 0.30;
+  const DeadReckoned dr = dead_reckon_ticks(tr);
+  for (std::size_t i = 0; i < tr.size(); ++i) {
+    const double t = tr.t()[i];
+    ASSERT_EQ(tr.col(Col::gt_theta)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(Col::gyro_z)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(Col::w_ext)[i], 0.0) << i;
+    // A spin on the spot in the odometry: heading b_w*t, no travel.
+    ASSERT_NEAR(dr.th[i], 0.05 * t, 2 * q / D + 1e-12) << i;
+    ASSERT_NEAR(std::hypot(dr.x[i], dr.y[i]), 0.0, q) << i;
+    ASSERT_NEAR(tr.col(Col::omega_l)[i], -0.05 * D / 2 / R, 1e-12) << i;
+    ASSERT_NEAR(tr.col(Col::omega_r)[i], 0.05 * D / 2 / R, 1e-12) << i;
+    ASSERT_EQ(tr.col(Col::v_cmd)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(Col::w_cmd)[i], 0.05) << i;
+  }
+  EXPECT_NEAR(dr.th.back(), 0.5, 2 * q / D);
+
+  // The offsets sit on the NOMINAL model's body velocities: with unequal
+  // nominal radii and both offsets, the recorded wheel rates still read
+  // exactly (v + b_v, w + b_w) through track-format.md's kinematics.
+  Scenario odd = quiet({straight(1, 0.4), arc(0.5, -90, 0.3)});
+  odd.robot.wheel_radius_left_m = 0.049;
+  odd.robot.wheel_radius_right_m = 0.052;
+  odd.robot.wheel_base_m = 0.33;
+  odd.effects.radius_error = Effects::RadiusError{0.99, 1.02};  // the world differs; the offset does not
+  Scenario odd_biased = odd;
+  odd_biased.effects.odometry_bias = Effects::OdometryBias{0.01, -0.04};
+  const Track a = simulate(odd), b = simulate(odd_biased);
+  auto body = [](const Track& t, std::size_t i) {
+    const double ul = t.col(Col::omega_l)[i] * 0.049, ur = t.col(Col::omega_r)[i] * 0.052;
+    return std::pair<double, double>{0.5 * (ur + ul), (ur - ul) / 0.33};
+  };
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const auto [va, wa] = body(a, i);
+    const auto [vb, wb] = body(b, i);
+    ASSERT_NEAR(vb - va, 0.01, 1e-12) << i;
+    ASSERT_NEAR(wb - wa, -0.04, 1e-12) << i;
+  }
+  EXPECT_EQ(a.col(Col::gt_theta), b.col(Col::gt_theta));
+}
+
+TEST(Simulator, OdometryBiasAtZeroIsANoOp) {
+  // Switched on at its defaults (b_v = b_w = 0), every column keeps its bits;
+  // only sim.effects names it. (Switched off, tracks keep the bytes they had
+  // before the effect existed: ReferenceScenarios.RegenerateTheCommittedTracks
+  // ByteForByte in tests/formats.)
+  Scenario sc;  // default, noisy, quantised sensors
+  sc.sensors.encoders.omega = true;
+  sc.motion.segments = {stop(0.5), straight(-1, 0.4), arc(0.6, 120, 0.3), stop(0.5)};
+  sc.effects.time_offset = Effects::TimeOffset{0.02};
+  Scenario zero = sc;
+  apply_effect(zero.effects, parse_effect_spec("odometry_bias"));
+  ASSERT_TRUE(zero.effects.odometry_bias);
+  EXPECT_EQ(zero.effects.odometry_bias->b_v, 0.0);
+  EXPECT_EQ(zero.effects.odometry_bias->b_w, 0.0);
+  const Track a = simulate(sc), b = simulate(zero);
+  EXPECT_EQ(b.meta().get("sim.effects"), "time_offset:dt=0.02; odometry_bias:b_v=0,b_w=0");
+  std::string ta = text_of(a), tb = text_of(b);
+  const std::string from = "time_offset:dt=0.02\n", to = "time_offset:dt=0.02; odometry_bias:b_v=0,b_w=0\n";
+  const auto at = ta.find(from);
+  ASSERT_NE(at, std::string::npos);
+  ta.replace(at, from.size(), to);
+  EXPECT_TRUE(ta == tb) << "odometry_bias at 0 changed the track";
+}
+
 // Which groups of columns each effect changes, relative to the same scenario
 // and seed without it (physics-effects.md, "what happens in the world").
 TEST(Simulator, EachEffectChangesExactlyItsColumns) {
@@ -366,6 +500,7 @@ TEST(Simulator, EachEffectChangesExactlyItsColumns) {
       {"gyro_scale:s=1.02", "gyro"},
       {"actuator_lag:tau=0.1", "ticks omega " + wheels_and_world},  // everything but the commands
       {"time_offset:dt=0.02", "ticks omega cmd"},
+      {"odometry_bias:b_v=0.01,b_w=-0.02", "ticks omega cmd"},  // the odometry only
   };
   ASSERT_EQ(cases.size(), effect_table().size());
   for (const auto& [spec, expected] : cases) {
