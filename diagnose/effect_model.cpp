@@ -272,6 +272,8 @@ EffectModel::EffectModel(const DiagInput& input, const EffectSet& structure, con
   idx_.z_r = at(Effect::slip_zone, "s_r");
   idx_.tau = at(Effect::actuator_lag, "tau");
   idx_.dt = at(Effect::time_offset, "dt");
+  idx_.ob_v = at(Effect::odometry_bias, "b_v");
+  idx_.ob_w = at(Effect::odometry_bias, "b_w");
 }
 
 }  // namespace odotune::diagnose

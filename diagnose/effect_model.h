@@ -23,6 +23,17 @@
 //    measure the lagged wheels, so an EffectSet with actuator_lag replays the
 //    commands (DiagInput::cmd_*, or the body_velocity odometry) instead of the
 //    wheels. The state starts at the command `lag_lead_in_s` before a window.
+//  * odometry_bias b_v, b_w: the odometry read the body velocities + (b_v,
+//    b_w) through its own nominal model (physics-effects.md; the simulator
+//    offsets the wheel rates by the nominal inverse kinematics of (b_v, b_w),
+//    or adds them to v_cmd, w_cmd), i.e. each nominal rim speed reads
+//    b_v -+ b_w*D/2 too (D nominal, the OdoSeries' wheel_base_m; - left,
+//    + right). So over an interval the nominal travel as recorded, d_rec
+//    (after time_offset's read or actuator_lag's replay, which both act on
+//    the recorded values; a constant offset commutes with both), becomes
+//    d = d_rec - (b_v -+ b_w*D/2)*h before every other wheel effect. The
+//    inverse of the simulator: the true body velocities are the odometry's
+//    minus the bias (a robot at rest whose odometry creeps).
 //  * Per wheel (left shown; right alike), with h = t_{k+1} - t_k and nominal
 //    travel d:
 //      R-scale   q  = radius_error.scale_l * (1 + (radius_step.scale_l - 1)*f),
@@ -190,7 +201,8 @@ class EffectModel {
   // Positions of each parameter in the flat vector (-1 when its effect is off).
   struct Index {
     int re_l = -1, re_r = -1, wb = -1, rs_t = -1, rs_l = -1, rs_r = -1, sr_c = -1, skid_k = -1,
-        slip_k = -1, zx0 = -1, zx1 = -1, zy0 = -1, zy1 = -1, z_l = -1, z_r = -1, tau = -1, dt = -1;
+        slip_k = -1, zx0 = -1, zx1 = -1, zy0 = -1, zy1 = -1, z_l = -1, z_r = -1, tau = -1, dt = -1,
+        ob_v = -1, ob_w = -1;
   };
   const Index& index() const { return idx_; }
 
@@ -238,6 +250,11 @@ class Stepper {
       read_travel(k + 1, sl1, sr1);
       dl = sl1 - sl_, dr = sr1 - sr_;
       sl_ = sl1, sr_ = sr1;
+    }
+    if (i_.ob_v >= 0) {  // odometry_bias: the recorded rim speeds read b_v -+ b_w*D/2 too
+      const T half_turn = p_[i_.ob_w] * (0.5 * d_.wheel_base_m);
+      dl = dl - (p_[i_.ob_v] - half_turn) * h;
+      dr = dr - (p_[i_.ob_v] + half_turn) * h;
     }
     bool zone = false;
     if (i_.z_l >= 0) {

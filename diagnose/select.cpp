@@ -107,10 +107,13 @@ double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet
 
 std::vector<Effect> candidate_list(const DiagInput& in, const SelectOptions& o) {
   std::vector<Effect> list = o.candidates;
-  if (list.empty())
+  if (list.empty()) {
     list = {Effect::radius_error, Effect::wheel_base_error, Effect::radius_step,
             Effect::speed_radius, Effect::lateral_skid,     Effect::longitudinal_slip,
             Effect::slip_zone,    Effect::time_offset,      Effect::actuator_lag};
+    // odometry_bias only against a reference heading (select.h, "Candidates").
+    if (in.has_ref_heading()) list.push_back(Effect::odometry_bias);
+  }
   const bool commands = in.odometry == OdometryKind::body_velocity ||
                         (!in.cmd_v_mps.empty() && in.cmd_v_mps.size() == in.odo_t_s.size());
   std::erase_if(list, [&](Effect e) { return e == Effect::actuator_lag && !commands; });

@@ -211,6 +211,12 @@ inline const std::vector<ConcealedCase>& concealed_cases() {
        {{"time_offset", {{"dt", 0.01}}}},
        "10 ms is one sample at 100 Hz; it matters only when velocities change, and the encoders "
        "measure the true rotation, so there is no lag physics to blame"},
+      {"odometry_bias_creeping_encoders", {"odometry_bias:b_v=0.002,b_w=-0.0004"}, Odometry::encoders,
+       {R::gt, 100, 0.01, 0.005}, kIndoorMid, 7323, 180,
+       {{"odometry_bias", {{"b_v", 0.002}, {"b_w", -0.0004}}}},
+       "at any one speed an offset of 2 mm/s IS a radius error (of b_v/v, 0.3-0.8 %), and on a "
+       "steady turn a yaw-rate offset looks like a wheel-base error; only the stops (the odometry "
+       "creeps while the robot stands) and the spread of speeds tell it apart: must name odometry_bias"},
       // ---- the other side of each confounded pair ------------------------
       {"radius_error_not_speed_radius", {"radius_error:scale_l=1.005,scale_r=1.005"}, Odometry::encoders,
        {R::aps, 1, 0.06, 0}, kOutdoorLarge, 7312, 200,

@@ -90,7 +90,8 @@ TEST(ConcealedCases, CoverTheDesign) {
   const std::pair<const char*, const char*> pairs[] = {{"wheel_base_error", "gyro_scale"},
                                                        {"speed_radius", "radius_error"},
                                                        {"longitudinal_slip", "radius_error"},
-                                                       {"time_offset", "actuator_lag"}};
+                                                       {"time_offset", "actuator_lag"},
+                                                       {"odometry_bias", "radius_error"}};
   for (const auto& [a, b] : pairs) {
     EXPECT_TRUE(alone.count(a) && alone.count(b)) << a << " vs " << b;
   }

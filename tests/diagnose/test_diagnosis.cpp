@@ -154,6 +154,34 @@ TEST(Diagnose, TwoEffectsAreBothFoundMostImportantFirst) {
     EXPECT_GE(d.findings[i - 1].explains, d.findings[i].explains);
 }
 
+// physics-effects.md's odometry_bias: the odometry reads v + b_v, w + b_w, so
+// it creeps at the stops. Named with both offsets within 3 standard errors
+// or 10 % of the truth, proved on held-out windows, and written back in the
+// simulator's form (what --scenario-out replays).
+TEST(Diagnose, OdometryBiasIsNamedWithItsOffsets) {
+  const double b_v = 0.004, b_w = -0.003;
+  const Diagnosis d = diagnose(simulated(options(89, 150.0, {"odometry_bias:b_v=0.004,b_w=-0.003"})));
+  ASSERT_EQ(d.findings.size(), 1u) << names(d);
+  const Finding& f = d.findings.front();
+  ASSERT_EQ(f.effect, "odometry_bias");
+  ASSERT_EQ(f.params.size(), 2u);
+  ASSERT_EQ(f.stderrs.size(), 2u);
+  for (const auto& [name, truth] : {std::pair<std::string, double>{"b_v", b_v}, {"b_w", b_w}}) {
+    const std::size_t i = name == "b_v" ? 0 : 1;
+    EXPECT_EQ(f.params[i].name, name);
+    const double se = f.stderrs[i].value;
+    EXPECT_GT(se, 0.0) << name;
+    EXPECT_LE(std::abs(f.param(name) - truth), std::max(3.0 * se, 0.1 * std::abs(truth)))
+        << name << " = " << f.param(name) << " +- " << se << ", truth " << truth;
+  }
+  EXPECT_LT(f.heldout.after_pos_rmse_m, f.heldout.before_pos_rmse_m);
+  EXPECT_LT(d.final_pos_rmse_m, 0.5 * d.baseline_pos_rmse_m);
+  EXPECT_TRUE(d.model.on(Effect::odometry_bias));
+  const EffectSet back = EffectSet::parse({f.spec()});
+  EXPECT_EQ(back.get(Effect::odometry_bias, "b_v"), f.param("b_v"));
+  EXPECT_EQ(back.get(Effect::odometry_bias, "b_w"), f.param("b_w"));
+}
+
 TEST(Diagnose, IsDeterministic) {
   const DiagInput in = simulated(options(88, 90.0, {"lateral_skid:k=0.04"}));
   const Diagnosis a = diagnose(in), b = diagnose(in);

@@ -67,6 +67,16 @@ TEST(EffectModel, NamesAndLayoutComeFromTheEffectTable) {
             "radius_error:scale_l=1,scale_r=1.01; slip_zone:x0=1,x1=2,y0=-1,y1=1,s_l=0.1,s_r=0; "
             "time_offset:dt=0.02");
 
+  // odometry_bias: both offsets fitted, no-op 0, the table's +-0.5 bounds.
+  const auto bias = param_layout(EffectSet::parse({"odometry_bias:b_w=0.01"}));
+  ASSERT_EQ(bias.size(), 2u);
+  EXPECT_EQ(bias[0].name, "odometry_bias.b_v");
+  EXPECT_EQ(bias[1].name, "odometry_bias.b_w");
+  EXPECT_TRUE(bias[0].fitted && bias[1].fitted);
+  EXPECT_EQ(bias[0].noop, 0.0);
+  EXPECT_EQ(bias[1].lower, -0.5);
+  EXPECT_EQ(bias[1].upper, 0.5);
+
   const auto lag = param_layout(EffectSet().enable(Effect::actuator_lag));
   ASSERT_EQ(lag.size(), 1u);
   EXPECT_GT(lag[0].lower, 0.0);  // tau's range excludes 0
@@ -209,13 +219,14 @@ TEST(EffectModel, JetDerivativesMatchCentralDifferences) {
       {"radius_error:scale_l=0.99,scale_r=1.02", "wheel_base_error:scale=1.05",
        "radius_step:t=12.345,scale_l=0.98,scale_r=1.01", "speed_radius:c=0.04",
        "lateral_skid:k=0.03", "longitudinal_slip:k=0.2",
-       "slip_zone:x0=1.8,x1=2.6,y0=-1,y1=1,s_l=0.1,s_r=0.05", "time_offset:dt=0.0234"});
-  check_derivatives<16>(in, set, 30.0, 0);
+       "slip_zone:x0=1.8,x1=2.6,y0=-1,y1=1,s_l=0.1,s_r=0.05", "time_offset:dt=0.0234",
+       "odometry_bias:b_v=0.01,b_w=-0.02"});
+  check_derivatives<18>(in, set, 30.0, 0);
 
   const DiagInput cmd = sim_input({"actuator_lag:tau=0.2"}, 40.0, /*encoders=*/false);
-  check_derivatives<3>(cmd,
+  check_derivatives<5>(cmd,
                        EffectSet::parse({"lateral_skid:k=0.02", "actuator_lag:tau=0.3",
-                                         "time_offset:dt=-0.0166"}),
+                                         "time_offset:dt=-0.0166", "odometry_bias:b_v=-0.01,b_w=0.02"}),
                        20.0, 1);
 }
 
@@ -230,7 +241,8 @@ TEST(EffectModel, TrueParametersReproduceTheSimulation) {
       "lateral_skid:k=0.04",
       "longitudinal_slip:k=0.3",
       "slip_zone:x0=1.8,x1=2.6,y0=-1,y1=1,s_l=0.12,s_r=0.04",
-      "time_offset:dt=0.08"};
+      "time_offset:dt=0.08",
+      "odometry_bias:b_v=0.02,b_w=-0.03"};
   for (const auto& e : effects) {
     const DiagInput in = sim_input({e}, 45.0);
     const ReplayResult nominal = replay(in, EffectSet(), 20.0);
@@ -250,6 +262,21 @@ TEST(EffectModel, TrueParametersReproduceTheSimulation) {
   EXPECT_LT(truth.pos_rmse_m, 0.1 * nominal.pos_rmse_m);
   EXPECT_LT(truth.pos_rmse_m, 0.005);
   std::cout << "lag: nominal " << nominal.pos_rmse_m << " m, truth " << truth.pos_rmse_m << " m\n";
+  // odometry_bias on command odometry (the offset added to v_cmd, w_cmd),
+  // alone and with the lag and a time offset (the offset commutes with both).
+  for (const std::vector<std::string>& specs :
+       {std::vector<std::string>{"odometry_bias:b_v=-0.02,b_w=0.03"},
+        std::vector<std::string>{"actuator_lag:tau=0.25", "time_offset:dt=0.05",
+                                 "odometry_bias:b_v=0.015,b_w=0.02"}}) {
+    const DiagInput c = sim_input(specs, 45.0, /*encoders=*/false);
+    const ReplayResult nom = replay(c, EffectSet(), 20.0);
+    const ReplayResult tru = replay(c, EffectSet::parse(specs), 20.0);
+    EXPECT_LT(tru.pos_rmse_m, 0.1 * nom.pos_rmse_m) << specs.back();
+    EXPECT_LT(tru.pos_rmse_m, 0.005) << specs.back();
+    EXPECT_LT(tru.heading_rmse_rad, 0.1 * nom.heading_rmse_rad) << specs.back();
+    std::cout << "commands, " << specs.size() << " effects ending " << specs.back() << ": nominal "
+              << nom.pos_rmse_m << " m, truth " << tru.pos_rmse_m << " m\n";
+  }
 }
 
 TEST(WindowReplay, WindowsCoverTheTrackAndFreeAnchorsAlign) {

@@ -230,6 +230,10 @@ TEST(Select, NoEffectGivesNoFindingOverSeeds) {
       return r.reason.find("best candidate rejected") != std::string::npos;
     });
     EXPECT_NE(best, s.records.end()) << "the best candidate of step 1 is logged as rejected";
+    // Ground truth has a heading: odometry_bias is among the default candidates (select.h).
+    EXPECT_TRUE(std::any_of(s.records.begin(), s.records.end(), [](const SearchRecord& r) {
+      return r.phase == "forward" && r.candidate == "odometry_bias";
+    }));
   }
 }
 
