@@ -52,9 +52,9 @@ const std::vector<CalibSample>& stream() {
 }
 
 void set_counters(benchmark::State& state, double particles) {
-  state.counters["per_particle"] =
-      benchmark::Counter(static_cast<double>(state.iterations()) * particles,
-                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["per_particle"] = benchmark::Counter(static_cast<double>(state.iterations()) * particles,
+                                                      benchmark::Counter::kIsRate |
+                                                          benchmark::Counter::kInvert);
 }
 
 // Args: particles, resampler, threads.
@@ -79,8 +79,7 @@ void BM_PfStep(benchmark::State& state) {
 // The adaptive PF from 8000 particles with the paper's defaults (policy neff):
 // what a run costs on average, N adapting as it converges.
 void BM_AdaptivePfStep(benchmark::State& state) {
-  odotune::filters::PfCalibratorParams p =
-      odotune::filters::PfCalibratorParams::adaptive_defaults();
+  odotune::filters::PfCalibratorParams p = odotune::filters::PfCalibratorParams::adaptive_defaults();
   p.threads = static_cast<int>(state.range(0));
   const auto& samples = stream();
   double particle_steps = 0.0;
@@ -92,8 +91,8 @@ void BM_AdaptivePfStep(benchmark::State& state) {
     for (const CalibSample& s : samples) particle_steps += pf.step(s).particles;
     steps += static_cast<long>(samples.size());
   }
-  state.counters["per_step"] = benchmark::Counter(
-      static_cast<double>(steps), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["per_step"] = benchmark::Counter(static_cast<double>(steps),
+                                                  benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.counters["mean_particles"] = particle_steps / static_cast<double>(steps);
   state.SetLabel("threads=" + std::to_string(p.threads));
 }

@@ -11,9 +11,9 @@
 
 #include <string>
 
-#include "formats/scenario_yaml.h"
 #include "diagnose/diag_input.h"
 #include "diagnose/diagnosis.h"
+#include "formats/scenario_yaml.h"
 #include "tracks/motion_profile.h"
 #include "tracks/simulator.h"
 

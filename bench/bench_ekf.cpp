@@ -20,8 +20,8 @@ namespace {
 using odotune::filters::NoiseModel;
 
 const odotune::PreparedTrack& track1() {
-  static const odotune::Track track =
-      odotune::read_track(std::string(ODOTUNE_SOURCE_DIR) + "/data/tracks/track1.csv");
+  static const odotune::Track track = odotune::read_track(std::string(ODOTUNE_SOURCE_DIR) +
+                                                          "/data/tracks/track1.csv");
   static const odotune::PreparedTrack prepared = odotune::prepare_track(track);
   return prepared;
 }
@@ -42,8 +42,7 @@ void BM_EkfStep(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(odotune::replay_ekf(t.input, noise));
   const double steps = static_cast<double>(t.input.steps.size());
   state.counters["ns_per_step"] = benchmark::Counter(steps * static_cast<double>(state.iterations()),
-                                                     benchmark::Counter::kIsRate |
-                                                         benchmark::Counter::kInvert);
+                                                     benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.SetLabel(std::string(odotune::filters::to_string(model)));
 }
 
@@ -54,8 +53,7 @@ void BM_FastReplay(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(t.fast->evaluate(noise));
   const double steps = static_cast<double>(t.fast->steps());
   state.counters["ns_per_step"] = benchmark::Counter(steps * static_cast<double>(state.iterations()),
-                                                     benchmark::Counter::kIsRate |
-                                                         benchmark::Counter::kInvert);
+                                                     benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.SetLabel(std::string(odotune::filters::to_string(model)));
 }
 

@@ -79,7 +79,7 @@ void BM_RetrainVelocityNet(benchmark::State& state) {
   odotune::filters::VelocityNet trained;
   odotune::train_lstm(trained, train, SequenceSet{}, LstmTrainingOptions{});
   SequenceSet fresh = velocity_windows(300);
-  for (double& y : fresh.y) y *= 0.97;  // a tyre change
+  for (double& y : fresh.y) y *= 0.97;                          // a tyre change
   LstmTrainingOptions o = odotune::default_retrain_training();  // what the online refit runs
   o.jacobian = state.range(0) == 0 ? LstmTrainingOptions::Jacobian::bptt
                                    : LstmTrainingOptions::Jacobian::autodiff;
@@ -108,7 +108,8 @@ template <typename Net>
 void predict_bench(benchmark::State& state, int inputs) {
   const SequenceSet s = velocity_windows(64, inputs);
   Net net;
-  for (std::size_t i = 0; i < net.weights.size(); ++i) net.weights[i] = 0.05 * std::sin(1.3 * static_cast<double>(i));
+  for (std::size_t i = 0; i < net.weights.size(); ++i)
+    net.weights[i] = 0.05 * std::sin(1.3 * static_cast<double>(i));
   std::size_t w = 0;
   for (auto _ : state) {
     benchmark::DoNotOptimize(net.predict(s.window_data(w)));

@@ -41,8 +41,8 @@ class StatusLine {
 void print_calibrate(const CalibrateRequest& a) {
   apply_threads(a.threads);
   std::optional<StatusLine> status;
-  const CalibrateOutcome o =
-      run_calibrate(a, {[&](const std::string& text) { status.emplace(text); }, [&] { status.reset(); }});
+  const CalibrateOutcome o = run_calibrate(a, {[&](const std::string& text) { status.emplace(text); },
+                                               [&] { status.reset(); }});
   for (const std::string& l : o.summary) fmt::print("{}\n", l);
   if (!a.figure.empty()) fmt::print("figure: {}.png, {}.svg\n", a.figure, a.figure);
   if (!a.csv.empty()) fmt::print("csv: {}\n", a.csv);
@@ -78,17 +78,18 @@ void register_calibrate(CLI::App& app) {
       "default to the nominal radii ±5 % and wheel base ±15 % (the paper's wheelchair ranges);\n"
       "the DKF starts at the range centre with sd = width/√12.");
   sub->add_option("--track", req->tracks, "track file (repeat for several, calibrated in order)")->required();
-  auto* method_opt =
-      sub->add_option("--method", req->method, "adaptive-pf | pf | dkf | batch | none (default adaptive-pf)");
+  auto* method_opt = sub->add_option("--method", req->method,
+                                     "adaptive-pf | pf | dkf | batch | none (default adaptive-pf)");
   auto* resampler_opt = sub->add_option("--resampler", req->resampler,
                                         "PF resampling: multinomial | stratified | systematic | residual "
                                         "(default systematic)");
-  auto* policy_opt =
-      sub->add_option("--policy", req->policy, "PF resampling policy: every | neff | max (default neff)");
+  auto* policy_opt = sub->add_option("--policy", req->policy,
+                                     "PF resampling policy: every | neff | max (default neff)");
   auto* seed_opt = sub->add_option("--seed", req->seed, "PF random seed (same seed ⇒ same estimates)");
-  auto* particles_opt = sub->add_option("--particles", req->particles,
-                                         "PF particles (adaptive-pf: the initial count; default 5000, adaptive 8000)")
-                             ->check(CLI::PositiveNumber);
+  auto* particles_opt = sub->add_option(
+                               "--particles", req->particles,
+                               "PF particles (adaptive-pf: the initial count; default 5000, adaptive 8000)")
+                            ->check(CLI::PositiveNumber);
   add_threads_option(sub, &req->threads);
   sub->add_option("--ext-from-gt", req->ext_from_gt_hz,
                   "derive the external velocities from the ground truth at this rate [Hz] (for tracks "
@@ -103,11 +104,11 @@ void register_calibrate(CLI::App& app) {
                   "--ext-from-gt); default 0.02")
       ->check(CLI::PositiveNumber);
   auto* radius_opt = sub->add_option("--init-radius-range", req->init_radius_range,
-                                      "LO,HI: initial range of both radii [m] (default nominal ±5 %)");
+                                     "LO,HI: initial range of both radii [m] (default nominal ±5 %)");
   auto* base_opt = sub->add_option("--init-wheel-base-range", req->init_wheel_base_range,
-                                    "LO,HI: initial range of the wheel base [m] (default nominal ±15 %)");
+                                   "LO,HI: initial range of the wheel base [m] (default nominal ±15 %)");
   auto* tolerance_opt = sub->add_option("--tolerance", req->tolerance_pct,
-                                         "convergence: within this % of the truth from then on (default 0.5)");
+                                        "convergence: within this % of the truth from then on (default 0.5)");
   sub->add_option("--json", req->json, "write the result as JSON to this file");
   sub->add_option("--csv", req->csv, "write the estimates over time as CSV to this file");
   sub->add_option("--figure", req->figure, "write the estimates over time as STEM.png and STEM.svg");

@@ -17,12 +17,11 @@ void register_demo(CLI::App& app) {
   auto req = std::make_shared<DemoRequest>();
   req->data_dir = std::string(ODOTUNE_SOURCE_DIR) + "/data/tracks";
   auto threads = std::make_shared<int>(0);
-  auto* sub = app.add_subcommand(
-      "demo", "Tune the three noise models on the five bundled reference tracks (mode 7)");
-  sub->footer(
-      "Example:\n"
-      "  odotune demo                       # PSO 50 × 150, seed 1, as in the study\n"
-      "  odotune demo --iterations 30 --json demo.json");
+  auto* sub = app.add_subcommand("demo",
+                                 "Tune the three noise models on the five bundled reference tracks (mode 7)");
+  sub->footer("Example:\n"
+              "  odotune demo                       # PSO 50 × 150, seed 1, as in the study\n"
+              "  odotune demo --iterations 30 --json demo.json");
   sub->add_option("--data", req->data_dir, "folder with track1.csv … track5.csv");
   sub->add_option("--particles", req->particles, "PSO swarm size")->check(CLI::PositiveNumber);
   sub->add_option("--iterations", req->iterations, "PSO iterations")->check(CLI::NonNegativeNumber);

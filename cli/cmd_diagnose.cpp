@@ -14,21 +14,22 @@ void register_diagnose(CLI::App& app) {
   auto req = std::make_shared<DiagnoseRequest>();
   auto* sub = app.add_subcommand(
       "diagnose", "Where the nominal model and a recording disagree, which physics was left out, and proof");
-  sub->footer(
-      "Example:\n"
-      "  odotune simulate scenarios/track2.yaml -o /tmp/t2.csv --effect lateral_skid:k=0.04\n"
-      "  odotune diagnose /tmp/t2.csv --json /tmp/t2-diagnosis.json\n"
-      "The first line of the output says what was left out, its fitted size with uncertainty and\n"
-      "the held-out improvement. The JSON follows ../shared/specs/diagnosis-output.md.");
+  sub->footer("Example:\n"
+              "  odotune simulate scenarios/track2.yaml -o /tmp/t2.csv --effect lateral_skid:k=0.04\n"
+              "  odotune diagnose /tmp/t2.csv --json /tmp/t2-diagnosis.json\n"
+              "The first line of the output says what was left out, its fitted size with uncertainty and\n"
+              "the held-out improvement. The JSON follows ../shared/specs/diagnosis-output.md.");
   sub->add_option("track", req->track, "track file (track-format.md)")->required();
   sub->add_option("--json", req->json, "write the diagnosis as JSON (diagnosis-output.md)");
   sub->add_option("--report", req->report,
                   "folder for the figures (residual vs time and condition, map, overlay) and index.html");
-  sub->add_option("--scenario-out", req->scenario_out,
-                  "write the robot with the fitted effects as a simulator scenario (odotune simulate reads it)");
+  sub->add_option(
+      "--scenario-out", req->scenario_out,
+      "write the robot with the fitted effects as a simulator scenario (odotune simulate reads it)");
   sub->add_option("--from", req->from_s, "diagnose only the samples from this track time on [s]");
   sub->add_option("--to", req->to_s, "diagnose only the samples up to this track time [s]");
-  sub->add_option("--window", req->window_s, "replay window [s]; the odometry is re-anchored on the reference at each")
+  sub->add_option("--window", req->window_s,
+                  "replay window [s]; the odometry is re-anchored on the reference at each")
       ->default_val(20.0)
       ->check(CLI::PositiveNumber);
   sub->callback([req] {
@@ -36,8 +37,10 @@ void register_diagnose(CLI::App& app) {
     const DiagnoseOutcome o = run_diagnose(a);
     for (const std::string& l : o.summary) fmt::print("{}\n", l);
     if (!a.json.empty()) fmt::print("json: {}\n", a.json);
-    if (!a.scenario_out.empty()) fmt::print("scenario: {} (odotune simulate {} -o corrected.csv)\n", a.scenario_out, a.scenario_out);
-    if (!a.report.empty()) fmt::print("report: {}\n", (std::filesystem::path(a.report) / "index.html").string());
+    if (!a.scenario_out.empty())
+      fmt::print("scenario: {} (odotune simulate {} -o corrected.csv)\n", a.scenario_out, a.scenario_out);
+    if (!a.report.empty())
+      fmt::print("report: {}\n", (std::filesystem::path(a.report) / "index.html").string());
   });
 }
 

@@ -24,8 +24,7 @@ void register_export(CLI::App& app) {
       "robot_localization needs the run's track(s) for the odometry rate and, for alpha/gyro, the\n"
       "time-averaged process noise (see the file's comments); --track supplies moved files.");
   sub->add_option("store", req->store, "results store written by odotune grid")->required();
-  sub->add_option("--select", req->select, "key=value filters, comma-separated or repeated")
-      ->delimiter(',');
+  sub->add_option("--select", req->select, "key=value filters, comma-separated or repeated")->delimiter(',');
   sub->add_option("--format", req->format, "odotune | robot_localization")
       ->required()
       ->check(CLI::IsMember({"odotune", "robot_localization"}));
@@ -37,8 +36,8 @@ void register_export(CLI::App& app) {
       ->default_val("ekf_filter_node");
   sub->callback([req] {
     const ExportOutcome o = run_export(*req);
-    fmt::print("exported run {} ({}; best of {} matching run{}) as {} to {}\n", o.run_key, o.scores,
-               o.matching, o.matching == 1 ? "" : "s", req->format, req->out);
+    fmt::print("exported run {} ({}; best of {} matching run{}) as {} to {}\n", o.run_key, o.scores, o.matching,
+               o.matching == 1 ? "" : "s", req->format, req->out);
   });
 }
 

@@ -11,14 +11,13 @@ namespace odotune::cli {
 
 void register_fixes(CLI::App& app) {
   auto req = std::make_shared<FixesRequest>();
-  auto* sub = app.add_subcommand(
-      "fixes", "Add position fixes made from ground truth (the study's APS: 1 Hz, σ 60 mm)");
-  sub->footer(
-      "Example:\n"
-      "  odotune import optiodom RUN.csv -o run.csv\n"
-      "  odotune fixes run.csv -o run-aps.csv --rate-hz 1 --sigma-m 0.06 --seed 7\n"
-      "  odotune tune --track run-aps.csv --model alpha\n"
-      "Existing aps_x/aps_y columns are replaced.");
+  auto* sub = app.add_subcommand("fixes",
+                                 "Add position fixes made from ground truth (the study's APS: 1 Hz, σ 60 mm)");
+  sub->footer("Example:\n"
+              "  odotune import optiodom RUN.csv -o run.csv\n"
+              "  odotune fixes run.csv -o run-aps.csv --rate-hz 1 --sigma-m 0.06 --seed 7\n"
+              "  odotune tune --track run-aps.csv --model alpha\n"
+              "Existing aps_x/aps_y columns are replaced.");
   sub->add_option("track", req->track, "input track")->required();
   sub->add_option("-o,--output", req->output, "output track")->required();
   sub->add_option("--rate-hz", req->options.rate_hz, "fix frequency [Hz]");

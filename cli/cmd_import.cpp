@@ -42,14 +42,12 @@ const Dataset kDatasets[] = {
 }  // namespace
 
 void register_import(CLI::App& app) {
-  auto* imp = app.add_subcommand(
-      "import", "Convert a recorded third-party dataset into an odotune track file");
+  auto* imp = app.add_subcommand("import", "Convert a recorded third-party dataset into an odotune track file");
   imp->require_subcommand(1);
-  imp->footer(
-      "Datasets: mrclam (UTIAS MRCLAM), optiodom (OptiOdom diff-drive runs), litw (UTIAS "
-      "Lost in the Woods). Every track cites its source, citation and licence in its metadata.\n"
-      "Example:\n  odotune import optiodom ../shared/data/real/optiodom_diff/square/231220200045/"
-      "231220200045_run-01.csv -o square-run01.csv");
+  imp->footer("Datasets: mrclam (UTIAS MRCLAM), optiodom (OptiOdom diff-drive runs), litw (UTIAS "
+              "Lost in the Woods). Every track cites its source, citation and licence in its metadata.\n"
+              "Example:\n  odotune import optiodom ../shared/data/real/optiodom_diff/square/231220200045/"
+              "231220200045_run-01.csv -o square-run01.csv");
   for (const Dataset& d : kDatasets) {
     auto req = std::make_shared<ImportRequest>();
     req->dataset = d.id;
@@ -59,7 +57,8 @@ void register_import(CLI::App& app) {
         ->required()
         ->option_text("TRACK.csv REQUIRED");
     sub->footer(std::string("Example:\n  ") + d.example);
-    if (d.id == ImportDataset::mrclam) sub->add_option("--robot", req->robot, "robot number N (1 to 5)")->required();
+    if (d.id == ImportDataset::mrclam)
+      sub->add_option("--robot", req->robot, "robot number N (1 to 5)")->required();
     sub->callback([req] {
       const ImportOutcome o = run_import(*req);
       fmt::print("{}: {} rows, {:.3f} s, columns {}{}\n", req->output, o.rows, o.duration_s, o.columns,

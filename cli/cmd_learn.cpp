@@ -39,7 +39,8 @@ void print_lines(const std::vector<std::string>& lines) {
 
 void register_learn(CLI::App& app) {
   auto* learn = app.add_subcommand(
-      "learn", "Learned (LSTM) odometry with a slip detector and online retraining (Fariña et al., Sensors 2023)");
+      "learn",
+      "Learned (LSTM) odometry with a slip detector and online retraining (Fariña et al., Sensors 2023)");
   learn->require_subcommand(1);
   learn->footer(
       "Examples:\n"
@@ -47,7 +48,8 @@ void register_learn(CLI::App& app) {
       "  odotune learn eval --track held_out.csv --model model.json --json eval.json\n"
       "  odotune learn retrain --track changed.csv --model model.json --model-out model2.json --json retrain.json");
   auto train = std::make_shared<LearnTrainRequest>();
-  auto* t = learn->add_subcommand("train", "Train the V and W nets (and the slip detector) on tracks with ground truth");
+  auto* t = learn->add_subcommand("train",
+                                  "Train the V and W nets (and the slip detector) on tracks with ground truth");
   t->add_option("--track", train->tracks, "track with ground truth (repeat for several)")->required();
   t->add_option("--slip-track", train->slip_tracks,
                 "track with motor power and slip, to train the slip detector on (repeat for several)");
@@ -69,16 +71,19 @@ void register_learn(CLI::App& app) {
     c = "odotune learn train";
     for (const auto& f : train->tracks) c += " --track " + f;
     for (const auto& f : train->slip_tracks) c += " --slip-track " + f;
-    c += " --model-out " + train->model_out + fmt::format(" --seed {} --iterations {}", train->seed, train->iterations);
+    c += " --model-out " + train->model_out +
+         fmt::format(" --seed {} --iterations {}", train->seed, train->iterations);
     if (train->slip_iterations > 0) c += fmt::format(" --slip-iterations {}", train->slip_iterations);
     if (train->previous_noise >= 0.0) c += fmt::format(" --previous-noise {}", train->previous_noise);
     if (t->count("--rate-hz") > 0) c += fmt::format(" --rate-hz {}", train->rate_hz);
-    print_lines(learn_train_lines(
-        with_progress("learn train", "nets", [&](const LearnProgress& p) { return run_learn_train(*train, p); })));
+    print_lines(learn_train_lines(with_progress("learn train", "nets", [&](const LearnProgress& p) {
+      return run_learn_train(*train, p);
+    })));
   });
 
   auto eval = std::make_shared<LearnEvalRequest>();
-  auto* e = learn->add_subcommand("eval", "Score the learned and the kinematic odometry against a track's ground truth");
+  auto* e = learn->add_subcommand(
+      "eval", "Score the learned and the kinematic odometry against a track's ground truth");
   e->add_option("--track", eval->track, "track with ground truth")->required();
   e->add_option("--model", eval->model, "model file (odotune learn train --model-out)")->required();
   e->add_option("--json", eval->json, "write the errors as JSON (blocks learned and kinematic)");
@@ -87,7 +92,8 @@ void register_learn(CLI::App& app) {
 
   auto retrain = std::make_shared<LearnRetrainRequest>();
   auto* r = learn->add_subcommand(
-      "retrain", "Run the UKF with online retraining over a track (and without), compare, save the retrained model");
+      "retrain",
+      "Run the UKF with online retraining over a track (and without), compare, save the retrained model");
   r->add_option("--track", retrain->track, "track with ground truth and external velocities")->required();
   r->add_option("--model", retrain->model, "model file to start from")->required();
   r->add_option("--model-out", retrain->model_out, "write the retrained model here");
@@ -103,8 +109,9 @@ void register_learn(CLI::App& app) {
   r->callback([retrain] {
     retrain->command = "odotune learn retrain --track " + retrain->track + " --model " + retrain->model +
                        fmt::format(" --every {} --iterations {}", retrain->every, retrain->iterations);
-    print_lines(learn_retrain_lines(with_progress(
-        "learn retrain", "runs", [&](const LearnProgress& p) { return run_learn_retrain(*retrain, p); })));
+    print_lines(learn_retrain_lines(with_progress("learn retrain", "runs", [&](const LearnProgress& p) {
+      return run_learn_retrain(*retrain, p);
+    })));
   });
 }
 

@@ -10,11 +10,10 @@ void register_report(CLI::App& app) {
   auto req = std::make_shared<ReportRequest>();
   auto* sub = app.add_subcommand(
       "report", "Heatmaps, boxplots, Table 1, trajectories, convergence and one HTML page from a store");
-  sub->footer(
-      "Example:\n"
-      "  odotune grid experiments/smoke.yaml\n"
-      "  odotune report out/smoke.sqlite --out out/smoke-report     # then open index.html\n"
-      "The store may still be growing: the report shows the runs finished so far.");
+  sub->footer("Example:\n"
+              "  odotune grid experiments/smoke.yaml\n"
+              "  odotune report out/smoke.sqlite --out out/smoke-report     # then open index.html\n"
+              "The store may still be growing: the report shows the runs finished so far.");
   sub->add_option("store", req->store, "results store written by odotune grid")->required();
   sub->add_option("--out", req->out_dir, "folder for the figures, tables and index.html")->required();
   sub->add_option("--track-name", req->trajectory_track,
@@ -25,8 +24,8 @@ void register_report(CLI::App& app) {
                   "track file to use instead of the experiment's (if its files have moved)");
   sub->callback([req] {
     const ReportOutcome o = write_report(*req);
-    fmt::print("{}: {} runs ({} leave-one-track-out) → {} files in {}\n", o.experiment, o.runs,
-               o.heldout_runs, o.files.size(), req->out_dir.string());
+    fmt::print("{}: {} runs ({} leave-one-track-out) → {} files in {}\n", o.experiment, o.runs, o.heldout_runs,
+               o.files.size(), req->out_dir.string());
     fmt::print("{}\n", o.headline);
     for (const auto& n : o.notes) fmt::print("note: {}\n", n);
     fmt::print("open {}\n", (req->out_dir / "index.html").string());

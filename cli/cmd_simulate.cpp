@@ -26,8 +26,9 @@ void print_effect_table() {
   for (const auto& e : sim::effect_table()) {
     fmt::print("  {}: {}\n", e.name, e.meaning);
     for (const auto& p : e.params)
-      fmt::print("      {:<8} [{}] {}, range {}{}, {}]{}\n", p.name, p.unit, p.meaning, p.min_exclusive ? "(" : "[",
-                 p.min, p.max, p.required ? ", required" : fmt::format(", default {}", p.default_value));
+      fmt::print("      {:<8} [{}] {}, range {}{}, {}]{}\n", p.name, p.unit, p.meaning,
+                 p.min_exclusive ? "(" : "[", p.min, p.max,
+                 p.required ? ", required" : fmt::format(", default {}", p.default_value));
   }
 }
 
@@ -48,9 +49,10 @@ void register_simulate(CLI::App& app) {
                   "NAME:param=value,... switches on a physics effect or overrides its parameters "
                   "(repeatable; see --list-effects)")
       ->allow_extra_args(false);
-  sub->add_option("--random-slip", req->random_slip,
-                  "replace the scenario's slip episodes with a random layout drawn with this seed (spin and hold, "
-                  "either wheel, s 0.3-0.8, 2-5 s, only while moving): training drives for the slip detector");
+  sub->add_option(
+      "--random-slip", req->random_slip,
+      "replace the scenario's slip episodes with a random layout drawn with this seed (spin and hold, "
+      "either wheel, s 0.3-0.8, 2-5 s, only while moving): training drives for the slip detector");
   sub->add_flag("--no-effects", req->no_effects, "ignore the effects of the scenario file");
   sub->add_flag("--list-effects", *list_effects, "print the effects, their parameters and ranges, and exit");
   sub->callback([req, list_effects] {

@@ -36,14 +36,16 @@ void run_and_print(const std::string& label, const std::string& unit, Request re
   const StudyRun r = run(request, hooks);
   std::string names;
   for (const auto& f : r.files) names += (names.empty() ? "" : ", ") + f.filename().string();
-  fmt::print("\nwrote {} files to {} ({}); the study took {:.1f} s\n", r.files.size(), request.out, names, r.wall_s);
+  fmt::print("\nwrote {} files to {} ({}); the study took {:.1f} s\n", r.files.size(), request.out, names,
+             r.wall_s);
 }
 
 // Adds the options resampling and calibration share.
 CLI::App* add_study(CLI::App* study, const std::string& name, const std::string& help, StudyRequest* r) {
   auto* sub = study->add_subcommand(name, help);
   sub->add_option("--out", r->out, "folder for the tables (Markdown, CSV) and figures (PNG, SVG)")->required();
-  sub->add_option("--runs", r->options.runs, "Monte-Carlo runs (run r: seed + r)")->default_val(r->options.runs);
+  sub->add_option("--runs", r->options.runs, "Monte-Carlo runs (run r: seed + r)")
+      ->default_val(r->options.runs);
   sub->add_option("--seed", r->options.seed, "base seed")->default_val(r->options.seed);
   sub->add_option("--threads", r->options.threads,
                   "OpenMP threads over runs × cells (0 = all cores); results do not depend on it, "
@@ -61,7 +63,8 @@ void register_learned_study(CLI::App* study) {
       "learned",
       "Tables 1-3 of Fariña et al. (Sensors 2023): LSTM vs traditional odometry, online retraining after a "
       "radius change, UKF with variable vs static odometry covariance under slip");
-  sub->add_option("--out", r->out, "folder for the tables (Markdown, CSV), results.json, model.json and figures")
+  sub->add_option("--out", r->out,
+                  "folder for the tables (Markdown, CSV), results.json, model.json and figures")
       ->required();
   sub->add_option("--seed", o.seed, "base seed (scenario i: seed + i; initial weights)")->default_val(o.seed);
   sub->add_option("--iterations", o.iterations, "Ceres iterations of each initial training")
@@ -76,11 +79,11 @@ void register_learned_study(CLI::App* study) {
       ->default_val(o.slip_drives);
   sub->add_option("--slip-stride", o.slip_stride, "train the slip detector on every N-th window")
       ->default_val(o.slip_stride);
-  sub->add_option("--threads", o.threads, "threads evaluating the training windows (results do not depend "
-                                          "on it)")
+  sub->add_option("--threads", o.threads,
+                  "threads evaluating the training windows (results do not depend "
+                  "on it)")
       ->check(CLI::PositiveNumber);
-  const char* const helps[5] = {"scenario the velocity nets are trained on",
-                                "held-out scenario of Table 1",
+  const char* const helps[5] = {"scenario the velocity nets are trained on", "held-out scenario of Table 1",
                                 "scenario with a radius change (radius_step) of Table 2",
                                 "scenario with slip episodes the detector is trained on",
                                 "held-out scenario with slip episodes of Table 3"};
@@ -96,12 +99,11 @@ void register_study(CLI::App& app) {
   auto* study = app.add_subcommand(
       "study", "Monte-Carlo studies of online odometry calibration (Tables I and II of Fariña et al.)");
   study->require_subcommand(1);
-  study->footer(
-      "Example:\n"
-      "  odotune study resampling --out docs/calibration/resampling\n"
-      "  odotune study calibration --out docs/calibration/calibration --runs 40 --seed 7\n"
-      "  odotune study learned --out docs/learned\n"
-      "Each run simulates the wheelchair scenario with its own seed and random true radii.");
+  study->footer("Example:\n"
+                "  odotune study resampling --out docs/calibration/resampling\n"
+                "  odotune study calibration --out docs/calibration/calibration --runs 40 --seed 7\n"
+                "  odotune study learned --out docs/learned\n"
+                "Each run simulates the wheelchair scenario with its own seed and random true radii.");
 
   auto resampling = std::make_shared<StudyRequest>();
   auto* rs = add_study(study, "resampling",

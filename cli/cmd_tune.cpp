@@ -19,9 +19,8 @@ void register_tune(CLI::App& app) {
   auto req = std::make_shared<TuneCommandRequest>();
   auto threads = std::make_shared<int>(0);
   auto* sub = app.add_subcommand(
-      "tune",
-      "Tune the EKF noise of one model, a particle-filter calibrator's settings, or the fusion UKF's "
-      "noise, on tracks");
+      "tune", "Tune the EKF noise of one model, a particle-filter calibrator's settings, or the fusion UKF's "
+              "noise, on tracks");
   sub->footer(
       "Example:\n"
       "  odotune tune --track data/tracks/track1.csv --model rq --mode 7 --seed 1 --json out.json\n"

@@ -11,12 +11,9 @@
 
 namespace odotune::cli {
 
-
 void print_tune_result(const ErrorMetrics& baseline_mean, const ErrorMetrics& tuned_mean,
-                       const std::vector<TrackScore>& tracks,
-                       const std::vector<std::string>& param_names,
-                       const std::vector<double>& params, const tuner::Summary& summary,
-                       long diverged) {
+                       const std::vector<TrackScore>& tracks, const std::vector<std::string>& param_names,
+                       const std::vector<double>& params, const tuner::Summary& summary, long diverged) {
   fmt::print("  RMSE {}\n", metric_change(baseline_mean.rmse_m, tuned_mean.rmse_m));
   fmt::print("  MAE  {}\n", metric_change(baseline_mean.mae_m, tuned_mean.mae_m));
   fmt::print("  MAXE {}\n", metric_change(baseline_mean.maxe_m, tuned_mean.maxe_m));
@@ -33,7 +30,6 @@ std::string metric_change(double baseline_m, double tuned_m) {
   return fmt::format("{:7.2f} → {:7.2f} mm  ({:+5.1f} %)", baseline_m * 1e3, tuned_m * 1e3,
                      improvement_pct(baseline_m, tuned_m));
 }
-
 
 void add_threads_option(CLI::App* sub, int* threads) {
   sub->add_option("--threads", *threads, "OpenMP threads (0 = all cores); results do not depend on it")

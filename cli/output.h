@@ -22,10 +22,8 @@ std::string metric_change(double baseline_m, double tuned_m);
 // RMSE/MAE/MAXE change, per track when several, the tuned parameters and the
 // solver's evaluations, time, termination and diverged evaluations.
 void print_tune_result(const ErrorMetrics& baseline_mean, const ErrorMetrics& tuned_mean,
-                       const std::vector<TrackScore>& tracks,
-                       const std::vector<std::string>& param_names,
-                       const std::vector<double>& params, const tuner::Summary& summary,
-                       long diverged);
+                       const std::vector<TrackScore>& tracks, const std::vector<std::string>& param_names,
+                       const std::vector<double>& params, const tuner::Summary& summary, long diverged);
 
 // Adds --threads to a command; apply_threads() sets OpenMP's thread count
 // (0 = OpenMP's default, all cores).

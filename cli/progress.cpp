@@ -26,8 +26,9 @@ void Progress::update(long done, long total) {
   const double secs = std::chrono::duration<double>(now - start_).count();
   const double rate = secs > 0 ? static_cast<double>(done) / secs : 0.0;
   const double eta = rate > 0 ? static_cast<double>(total - done) / rate : 0.0;
-  std::fputs(fmt::format("\r\x1b[2K{}  {}/{} {}  {:.0f}/s  ETA {:.0f} s", label_, done, total,
-                         unit_, rate, eta).c_str(), stderr);
+  std::fputs(fmt::format("\r\x1b[2K{}  {}/{} {}  {:.0f}/s  ETA {:.0f} s", label_, done, total, unit_, rate, eta)
+                 .c_str(),
+             stderr);
   std::fflush(stderr);
   drawn_ = true;
 }

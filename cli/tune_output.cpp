@@ -10,9 +10,8 @@ namespace odotune::cli {
 void print_tune_outcome(const TuneOutcome& o) {
   std::string names;
   for (const auto& t : o.tracks) names += (names.empty() ? "" : ", ") + t.track;
-  fmt::print("tuned {} noise on {} for mode {} ({}) with {} (seed {})\n",
-             filters::to_string(o.request.model), names, o.request.mode,
-             fitness_mode_name(o.request.mode), o.request.solver, o.request.seed);
+  fmt::print("tuned {} noise on {} for mode {} ({}) with {} (seed {})\n", filters::to_string(o.request.model),
+             names, o.request.mode, fitness_mode_name(o.request.mode), o.request.solver, o.request.seed);
   print_tune_result(o.baseline_mean, o.tuned_mean, o.tracks, o.param_names, o.params, o.summary,
                     o.divergences.total());
 }
@@ -26,9 +25,8 @@ void print_tune_outcome(const CalibrationTuneOutcome& o) {
              to_string(TunedModel::calibration(r.model)), names, r.solver, r.seed,
              filters::to_string(o.default_pf.resampler), filters::to_string(o.default_pf.policy),
              o.default_pf.seed);
-  fmt::print("  score (lower is better): {:.4g} with the paper's defaults → {:.4g} tuned{}\n",
-             o.baseline_score, o.tuned_score,
-             o.default_kept ? " (the defaults scored best: kept)" : "");
+  fmt::print("  score (lower is better): {:.4g} with the paper's defaults → {:.4g} tuned{}\n", o.baseline_score,
+             o.tuned_score, o.default_kept ? " (the defaults scored best: kept)" : "");
   fmt::print("  calibrated odometry, dead-reckoning position error:\n");
   fmt::print("    RMSE {}\n", metric_change(o.baseline_mean.rmse_m, o.tuned_mean.rmse_m));
   fmt::print("    MAE  {}\n", metric_change(o.baseline_mean.mae_m, o.tuned_mean.mae_m));
@@ -60,8 +58,7 @@ void print_tune_outcome(const UkfTuneOutcome& o) {
              fitness_mode_name(r.mode), r.solver, r.seed);
   fmt::print("  fused pose vs ground truth, defaults → tuned{}\n",
              o.default_kept ? " (the defaults scored best and are kept)" : "");
-  print_tune_result(o.baseline_mean, o.tuned_mean, o.tracks, o.param_names, o.params, o.summary,
-                    o.failures);
+  print_tune_result(o.baseline_mean, o.tuned_mean, o.tracks, o.param_names, o.params, o.summary, o.failures);
 }
 
 }  // namespace odotune::cli

@@ -28,8 +28,8 @@ constexpr std::uint64_t splitmix64_mix(std::uint64_t z) {
 }
 
 // 64 random bits for the key (seed, a, b, c, stream).
-constexpr std::uint64_t counter_hash(std::uint64_t seed, std::uint64_t a, std::uint64_t b,
-                                     std::uint64_t c, std::uint64_t stream) {
+constexpr std::uint64_t counter_hash(std::uint64_t seed, std::uint64_t a, std::uint64_t b, std::uint64_t c,
+                                     std::uint64_t stream) {
   std::uint64_t h = splitmix64_mix(seed);
   h = splitmix64_mix(h ^ a);
   h = splitmix64_mix(h ^ b);
@@ -39,9 +39,8 @@ constexpr std::uint64_t counter_hash(std::uint64_t seed, std::uint64_t a, std::u
 
 // Uniform double in [0, 1) with 53 random bits, for the key
 // (seed, iteration, particle, dimension, stream).
-constexpr double counter_uniform01(std::uint64_t seed, std::uint64_t iteration,
-                                   std::uint64_t particle, std::uint64_t dimension,
-                                   std::uint64_t stream) {
+constexpr double counter_uniform01(std::uint64_t seed, std::uint64_t iteration, std::uint64_t particle,
+                                   std::uint64_t dimension, std::uint64_t stream) {
   const std::uint64_t bits = counter_hash(seed, iteration, particle, dimension, stream);
   return static_cast<double>(bits >> 11) * 0x1.0p-53;
 }

@@ -21,9 +21,8 @@ constexpr double kInformativeDelta2 = 4.0;  // see compare()
 // Local quadratic least-squares fit of (t, v) over [lo, hi) evaluated at tc,
 // and its noise factor sqrt(e0' (X'X)^-1 e0) for white noise; the value at
 // `self` and factor 1 with fewer than 5 samples.
-std::pair<double, double> local_quadratic(const std::vector<double>& t,
-                                          const std::vector<double>& v, std::size_t lo,
-                                          std::size_t hi, std::size_t self) {
+std::pair<double, double> local_quadratic(const std::vector<double>& t, const std::vector<double>& v,
+                                          std::size_t lo, std::size_t hi, std::size_t self) {
   if (hi - lo < 5) return {v[self], 1.0};
   Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
   Eigen::Vector3d b = Eigen::Vector3d::Zero();
@@ -53,8 +52,7 @@ int denoised_reference(const DiagInput& in, double rate_hz, double half_s, doubl
   const int stride = static_cast<int>(std::floor(1.0 / period / rate_hz + 1e-9));
   if (stride <= 1) return 1;
   const bool heading = in.has_ref_heading();
-  correlated =
-      std::max(1.0, 2.0 * std::max(half_s, heading ? heading_half_s : 0.0) / (stride * period));
+  correlated = std::max(1.0, 2.0 * std::max(half_s, heading ? heading_half_s : 0.0) / (stride * period));
   // Heading residual against a trend that turns with the robot: the
   // integrated gyro (on time whatever the odometry does), else the nominal
   // odometry heading (S_r - S_l)/D. Linear interpolation at the reference times.
@@ -65,14 +63,12 @@ int denoised_reference(const DiagInput& in, double rate_hz, double half_s, doubl
       tt = in.gyro_t_s;
       th.assign(tt.size(), 0.0);
       for (std::size_t i = 1; i < tt.size(); ++i)
-        th[i] =
-            th[i - 1] + 0.5 * (tt[i] - tt[i - 1]) * (in.gyro_z_radps[i] + in.gyro_z_radps[i - 1]);
+        th[i] = th[i - 1] + 0.5 * (tt[i] - tt[i - 1]) * (in.gyro_z_radps[i] + in.gyro_z_radps[i - 1]);
     } else {
       const EffectModel nominal(in, EffectSet(), model);
       const OdoSeries& d = nominal.series();
       tt = d.t_s;
-      for (std::size_t i = 0; i < tt.size(); ++i)
-        th.push_back((d.s_r_m[i] - d.s_l_m[i]) / d.wheel_base_m);
+      for (std::size_t i = 0; i < tt.size(); ++i) th.push_back((d.s_r_m[i] - d.s_l_m[i]) / d.wheel_base_m);
     }
     std::size_t j = 0;
     for (std::size_t i = 0; i < t.size(); ++i) {
@@ -118,12 +114,10 @@ EffectSet start_from(const EffectSet& structure, const EffectSet& warm) {
   return unpack(structure, v);
 }
 
-CrossValidator::CrossValidator(const DiagInput& in, const FitOptions& fit, int folds,
-                               double correlated_samples)
+CrossValidator::CrossValidator(const DiagInput& in, const FitOptions& fit, int folds, double correlated_samples)
     : in_(&in), fit_(fit), corr_(correlated_samples) {
   if (!(corr_ >= 1.0 && std::isfinite(corr_)))
-    throw std::invalid_argument(
-        fmt::format("correlated_samples = {}; expected >= 1", correlated_samples));
+    throw std::invalid_argument(fmt::format("correlated_samples = {}; expected >= 1", correlated_samples));
   std::string why;
   if (!fit.IsValid(&why)) throw std::invalid_argument("fit options: " + why);
   if (folds < 2) throw std::invalid_argument(fmt::format("folds = {}; expected >= 2", folds));
@@ -143,8 +137,7 @@ CrossValidator::CrossValidator(const DiagInput& in, const FitOptions& fit, int f
   for (const Window& w : windows_) n_samples_ += w.ref_end - w.ref_begin;
 }
 
-FitSummary CrossValidator::fit(const EffectSet& start, const std::vector<int>& train,
-                               int max_iterations) {
+FitSummary CrossValidator::fit(const EffectSet& start, const std::vector<int>& train, int max_iterations) {
   FitOptions o = fit_;
   o.max_iterations = max_iterations;
   ++fits_;
@@ -194,8 +187,8 @@ void CrossValidator::finish(SetEval& e) const {
   if (!e.ok) e.error = "non-finite prediction";
 }
 
-SetEval CrossValidator::cross_validate(const EffectSet& structure,
-                                       const std::vector<EffectSet>& warm, int max_iterations) {
+SetEval CrossValidator::cross_validate(const EffectSet& structure, const std::vector<EffectSet>& warm,
+                                       int max_iterations) {
   SetEval e;
   e.pred = empty_pred();
   e.folds.resize(test_.size());
@@ -204,8 +197,7 @@ SetEval CrossValidator::cross_validate(const EffectSet& structure,
       if (structure.empty()) {
         e.folds[f] = structure;
       } else {
-        const EffectSet start =
-            warm.size() == test_.size() ? start_from(structure, warm[f]) : structure;
+        const EffectSet start = warm.size() == test_.size() ? start_from(structure, warm[f]) : structure;
         e.folds[f] = fit(start, train_[f], max_iterations).effects;
       }
       predict(e.folds[f], test_[f], e.pred);
@@ -218,8 +210,7 @@ SetEval CrossValidator::cross_validate(const EffectSet& structure,
   return e;
 }
 
-SetEval CrossValidator::fit_all(const EffectSet& structure, const EffectSet& warm,
-                                int max_iterations) {
+SetEval CrossValidator::fit_all(const EffectSet& structure, const EffectSet& warm, int max_iterations) {
   SetEval e;
   e.pred = empty_pred();
   e.cost = kNaN;
@@ -265,8 +256,7 @@ SetEval CrossValidator::own_noop(const SetEval& cv, Effect e) {
   return out;
 }
 
-PairedComparison CrossValidator::compare(const SetEval& ref, const SetEval& alt,
-                                         double alpha) const {
+PairedComparison CrossValidator::compare(const SetEval& ref, const SetEval& alt, double alpha) const {
   PairedComparison out;
   out.gain = ref.score - alt.score;
   out.rel = out.gain / ref.score;
@@ -288,8 +278,7 @@ PairedComparison CrossValidator::compare(const SetEval& ref, const SetEval& alt,
     if (dw > 0.0) ++out.improved;
     const double s2 = std::max(1.0, alt.window_sse[w] / (n * comps_));
     z.push_back(dw / (2.0 * std::sqrt(s2 * corr_ * delta2)));
-    lr.push_back(
-        std::log(std::max(ref.window_sse[w], 1e-300) / std::max(alt.window_sse[w], 1e-300)));
+    lr.push_back(std::log(std::max(ref.window_sse[w], 1e-300) / std::max(alt.window_sse[w], 1e-300)));
     zsum += z.back();
   }
   out.p_rank = wilcoxon_greater(d);

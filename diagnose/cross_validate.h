@@ -36,24 +36,24 @@ struct SamplePred {
 // (cross_validate) or in-sample ones (fit_all).
 struct SetEval {
   bool ok = false;
-  std::string error;                 // why not ok (a fit threw, non-finite errors)
+  std::string error;  // why not ok (a fit threw, non-finite errors)
   SamplePred pred;
-  std::vector<double> window_sse;    // normalised SSE per window
-  double score = 0.0;                // pooled normalised MSE per sample
+  std::vector<double> window_sse;                   // normalised SSE per window
+  double score = 0.0;                               // pooled normalised MSE per sample
   double pos_rmse_m = 0.0, heading_rmse_rad = 0.0;  // pooled (heading NaN without)
-  std::vector<EffectSet> folds;      // cross_validate: the fitted set of each fold
-  EffectSet fitted;                  // fit_all: the fitted set
-  double cost = 0.0;                 // fit_all: fit_effects' final cost (NaN for the empty set)
-  double bic = 0.0;                  // fit_all (see fit_all)
+  std::vector<EffectSet> folds;                     // cross_validate: the fitted set of each fold
+  EffectSet fitted;                                 // fit_all: the fitted set
+  double cost = 0.0;                                // fit_all: fit_effects' final cost (NaN for the empty set)
+  double bic = 0.0;                                 // fit_all (see fit_all)
 };
 
 // Paired comparison of two evaluations over the windows (see compare()).
 struct PairedComparison {
-  double rel = 0.0, gain = 0.0;      // (ref - alt)/ref and ref - alt of the pooled scores
-  int changed = 0, improved = 0;     // informative windows, and those alt improved
-  double p_rank = 1.0;               // Wilcoxon signed-rank, one-sided
-  double p_t = 0.0;                  // min of the t-tests on z and l (NaN with < 3 windows)
-  double p_param = 0.0;              // Stouffer (NaN unless every informative window improved)
+  double rel = 0.0, gain = 0.0;   // (ref - alt)/ref and ref - alt of the pooled scores
+  int changed = 0, improved = 0;  // informative windows, and those alt improved
+  double p_rank = 1.0;            // Wilcoxon signed-rank, one-sided
+  double p_t = 0.0;               // min of the t-tests on z and l (NaN with < 3 windows)
+  double p_param = 0.0;           // Stouffer (NaN unless every informative window improved)
   bool significant = false;
 };
 
@@ -88,8 +88,7 @@ class CrossValidator {
   // correlated_samples (>= 1): how many consecutive reference samples share
   // their noise (a smoothed reference); the white-noise law of compare()
   // counts that many samples as one.
-  CrossValidator(const DiagInput& in, const FitOptions& fit, int folds,
-                 double correlated_samples = 1.0);
+  CrossValidator(const DiagInput& in, const FitOptions& fit, int folds, double correlated_samples = 1.0);
 
   const DiagInput& input() const { return *in_; }
   const std::vector<Window>& windows() const { return windows_; }
@@ -107,8 +106,7 @@ class CrossValidator {
   // fold's fit of a smaller set, when warm is not empty; the empty set is
   // replayed as it is) and replayed on its own windows. Fit errors are
   // caught: ok = false with the message.
-  SetEval cross_validate(const EffectSet& structure, const std::vector<EffectSet>& warm,
-                         int max_iterations);
+  SetEval cross_validate(const EffectSet& structure, const std::vector<EffectSet>& warm, int max_iterations);
 
   // Fitted on all windows from start_from(structure, warm), replayed on all.
   // bic = n ln(RSS/n) + p ln(n): n scored samples, RSS the normalised SSE,

@@ -4,8 +4,8 @@
 
 #include <algorithm>
 #include <charconv>
-#include <initializer_list>
 #include <cmath>
+#include <initializer_list>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
@@ -19,8 +19,8 @@ namespace odotune::diagnose {
 namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
-constexpr double kMinSigmaM = 1e-3;    // floor of ref_sigma_m [m]
-constexpr double kMinSigmaRad = 1e-3;  // floor of ref_sigma_rad [rad]
+constexpr double kMinSigmaM = 1e-3;     // floor of ref_sigma_m [m]
+constexpr double kMinSigmaRad = 1e-3;   // floor of ref_sigma_rad [rad]
 constexpr double kMadToSigma = 1.4826;  // sigma = 1.4826*MAD for a normal distribution
 
 [[noreturn]] void fail(const Track& track, const std::string& what) {
@@ -37,7 +37,6 @@ std::optional<double> meta_number(const Track& track, std::string_view key) {
   if (ec != std::errc() || p != end || !std::isfinite(v) || v < 0.0) return std::nullopt;
   return v;
 }
-
 
 double median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
@@ -68,8 +67,8 @@ void fill_odometry(const Track& track, DiagInput& in) {
     in.radius_r_m = *meta.wheel_radius_right_m;
     in.wheel_base_m = *meta.wheel_base_m;
     if (!(in.radius_l_m > 0 && in.radius_r_m > 0 && in.wheel_base_m > 0))
-      fail(track, fmt::format("nominal robot radii {} m, {} m and base {} m; expected all > 0",
-                              in.radius_l_m, in.radius_r_m, in.wheel_base_m));
+      fail(track, fmt::format("nominal robot radii {} m, {} m and base {} m; expected all > 0", in.radius_l_m,
+                              in.radius_r_m, in.wheel_base_m));
     in.odometry = OdometryKind::wheel_angles;
   } else {
     in.radius_l_m = meta.wheel_radius_left_m.value_or(0.0);
@@ -160,8 +159,7 @@ void fill_reference(const Track& track, DiagInput& in) {
   if (in.ref_t_s.size() < need)
     fail(track, fmt::format("{} {} sample(s) within the odometry's time span [{}, {}] s; expected "
                             "at least {}",
-                            in.ref_t_s.size(), gt ? "ground-truth" : "position-fix", t_lo, t_hi,
-                            need));
+                            in.ref_t_s.size(), gt ? "ground-truth" : "position-fix", t_lo, t_hi, need));
   if (heading) {  // unwrap
     in.ref_theta_rad.resize(theta.size());
     double offset = 0.0;
@@ -182,8 +180,7 @@ struct NominalPath {
 };
 NominalPath nominal_path(const DiagInput& in) {
   const std::size_t n = in.odo_t_s.size();
-  NominalPath p{std::vector<double>(n, 0.0), std::vector<double>(n, 0.0),
-                std::vector<double>(n, 0.0)};
+  NominalPath p{std::vector<double>(n, 0.0), std::vector<double>(n, 0.0), std::vector<double>(n, 0.0)};
   const bool wheels = in.odometry == OdometryKind::wheel_angles;
   for (std::size_t k = 0; k + 1 < n; ++k) {
     double ds = 0.0, dth = 0.0;
@@ -221,8 +218,7 @@ void estimate_sigmas(DiagInput& in) {
     std::vector<double> chord(m - 1), diff(m - 1);
     for (std::size_t i = 0; i + 1 < m; ++i) {
       chord[i] = std::hypot(ox[i + 1] - ox[i], oy[i + 1] - oy[i]);
-      diff[i] = std::hypot(in.ref_x_m[i + 1] - in.ref_x_m[i], in.ref_y_m[i + 1] - in.ref_y_m[i]) -
-                chord[i];
+      diff[i] = std::hypot(in.ref_x_m[i + 1] - in.ref_x_m[i], in.ref_y_m[i + 1] - in.ref_y_m[i]) - chord[i];
     }
     auto sigma_above = [&](double min_chord) {
       std::vector<double> d;
@@ -275,8 +271,8 @@ DiagInput build_diag_input(const Track& track) {
 
 namespace {
 // Keeps the entries i of each array in `cols` for which keep(t[i]).
-void keep_between(std::vector<double>& t, std::initializer_list<std::vector<double>*> cols,
-                  double t0, double t1) {
+void keep_between(std::vector<double>& t, std::initializer_list<std::vector<double>*> cols, double t0,
+                  double t1) {
   std::size_t out = 0;
   for (std::size_t i = 0; i < t.size(); ++i) {
     if (t[i] < t0 || t[i] > t1) continue;

@@ -16,9 +16,7 @@ namespace odotune::diagnose {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // The effect's physical description, used as `conditions` when the residuals
 // do not single out a condition (the effect acts everywhere, a little).
@@ -35,7 +33,8 @@ std::string description(Effect e) {
     case Effect::gyro_scale: return "while turning: the gyro's heading error grows with the turn rate";
     case Effect::actuator_lag: return "when the commands change: the body follows them late";
     case Effect::time_offset: return "when the velocities change: the odometry's time stamps are shifted";
-    case Effect::odometry_bias: return "at all times, also at rest: the odometry reads its body velocities with a constant offset";
+    case Effect::odometry_bias:
+      return "at all times, also at rest: the odometry reads its body velocities with a constant offset";
   }
   return "";
 }
@@ -113,9 +112,7 @@ DiagInput gyro_heading_input(const DiagInput& in, double bias_radps, double scal
   return g;
 }
 
-std::string param_short_name(const std::string& slot_name) {
-  return slot_name.substr(slot_name.find('.') + 1);
-}
+std::string param_short_name(const std::string& slot_name) { return slot_name.substr(slot_name.find('.') + 1); }
 
 // Share of the series' squared position error inside the segments, and the
 // RMSE there.
@@ -150,10 +147,8 @@ bool DiagnoseOptions::IsValid(std::string* why) const {
       !part(gyro_fixes.IsValid(&w), "gyro_fixes") || !part(locate.IsValid(&w), "locate"))
     return false;
   return check_option_rules(
-      {{is_fraction(unexplained_min_share), "unexplained_min_share", unexplained_min_share,
-        "in [0, 1]"},
-       {is_non_negative(unexplained_min_sigmas), "unexplained_min_sigmas", unexplained_min_sigmas,
-        ">= 0"}},
+      {{is_fraction(unexplained_min_share), "unexplained_min_share", unexplained_min_share, "in [0, 1]"},
+       {is_non_negative(unexplained_min_sigmas), "unexplained_min_sigmas", unexplained_min_sigmas, ">= 0"}},
       why);
 }
 
@@ -278,10 +273,10 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
     if (wheel.on(Effect::lateral_skid))
       body.enable(Effect::lateral_skid).set(Effect::lateral_skid, "k", wheel.get(Effect::lateral_skid, "k"));
     // Corrected by every gyro finding: the "after" of each (replayed once).
-    const ReplayResult after_gyro =
-        via_fixes ? ReplayResult{} : replay(gyro_heading_input(scoring, b, s), body, ws);
+    const ReplayResult after_gyro = via_fixes ? ReplayResult{}
+                                              : replay(gyro_heading_input(scoring, b, s), body, ws);
     const std::pair<Effect, const Verdict*> checks[] = {{Effect::gyro_bias, &gc.bias},
-                                                       {Effect::gyro_scale, &gc.scale}};
+                                                        {Effect::gyro_scale, &gc.scale}};
     for (const auto& [effect, v] : checks) {
       if (!v->departs()) continue;
       Finding f;

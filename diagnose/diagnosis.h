@@ -63,12 +63,12 @@
 namespace odotune::diagnose {
 
 struct DiagnoseOptions {
-  SelectOptions select;          // select.fit.window_s is the replay window of the output
+  SelectOptions select;  // select.fit.window_s is the replay window of the output
   SensorCheckOptions sensors;
-  GyroFixesOptions gyro_fixes;   // gyro effects with position fixes only
+  GyroFixesOptions gyro_fixes;  // gyro effects with position fixes only
   LocateOptions locate;
-  double unexplained_min_share = 0.2;  // of the final model's SSE inside the located segments
-  double unexplained_min_sigmas = 3.0; // its RMSE there, in reference sigmas (DiagInput::ref_sigma_m)
+  double unexplained_min_share = 0.2;   // of the final model's SSE inside the located segments
+  double unexplained_min_sigmas = 3.0;  // its RMSE there, in reference sigmas (DiagInput::ref_sigma_m)
 
   bool IsValid(std::string* why) const;
 };
@@ -93,8 +93,8 @@ struct Finding {
   std::string conditions;             // where.conditions
   double explains = 0.0;
   BeforeAfter train, heldout;
-  std::vector<std::string> rivals;    // confounded alternatives the data could not rule out
-  std::string evidence;               // how it was found, one phrase
+  std::vector<std::string> rivals;  // confounded alternatives the data could not rule out
+  std::string evidence;             // how it was found, one phrase
 
   double param(std::string_view name) const;  // NaN when absent
   // The simulator's command-line form, "lateral_skid:k=0.021" ("" for unexplained).
@@ -111,19 +111,19 @@ struct Diagnosis {
   double window_s = 0.0;
   double baseline_pos_rmse_m = 0.0, baseline_heading_rmse_rad = 0.0;  // nominal, all windows
   double final_pos_rmse_m = 0.0, final_heading_rmse_rad = 0.0;        // chosen model, all windows
-  BeforeAfter train, heldout;          // nominal vs chosen model on the selection's split
+  BeforeAfter train, heldout;                 // nominal vs chosen model on the selection's split
   bool scored_on_denoised_reference = false;  // train/heldout numbers (file comment)
-  std::vector<Finding> findings;       // by importance; empty = nothing beyond noise
-  EffectSet model;                     // chosen wheel effects and gyro effects, fitted values
+  std::vector<Finding> findings;              // by importance; empty = nothing beyond noise
+  EffectSet model;                            // chosen wheel effects and gyro effects, fitted values
   std::vector<int> train_windows, heldout_windows;
   Selection selection;
   SensorCheck sensors;
-  bool has_gyro_fixes = false;         // gyro_fixes is set (fixes-only reference with a gyro)
+  bool has_gyro_fixes = false;  // gyro_fixes is set (fixes-only reference with a gyro)
   GyroFixesCheck gyro_fixes;
-  ResidualSeries before, after;        // nominal and chosen model, all windows
+  ResidualSeries before, after;  // nominal and chosen model, all windows
   Location located_before, located_after;
   DiagnosisTiming timing;
-  std::string note;                    // e.g. why selection could not run
+  std::string note;  // e.g. why selection could not run
 };
 
 // Throws std::invalid_argument (one line) for invalid options or an input the

@@ -55,8 +55,8 @@ std::string finding_size(const Finding& f) {
   std::string s;
   for (std::size_t i = 0; i < f.params.size(); ++i) {
     const double err = i < f.stderrs.size() ? f.stderrs[i].value : std::nan("");
-    s += fmt::format("{}{} = {}{}", i == 0 ? "" : ", ", f.params[i].name,
-                     plus_minus(f.params[i].value, err), unit_of(f.effect, f.params[i].name));
+    s += fmt::format("{}{} = {}{}", i == 0 ? "" : ", ", f.params[i].name, plus_minus(f.params[i].value, err),
+                     unit_of(f.effect, f.params[i].name));
   }
   return s;
 }
@@ -82,8 +82,7 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
     // Held-out proof: the chosen wheel model against the nominal one when a
     // wheel effect was found, else the (gyro) finding's own replay.
     bool wheel = false;
-    for (const Finding* f : effects)
-      wheel = wheel || (f->effect != "gyro_bias" && f->effect != "gyro_scale");
+    for (const Finding* f : effects) wheel = wheel || (f->effect != "gyro_bias" && f->effect != "gyro_scale");
     const BeforeAfter& h = wheel ? d.heldout : effects.front()->heldout;
     std::string proof = "no held-out windows to prove it on";
     if (std::isfinite(h.before_pos_rmse_m) && std::isfinite(h.after_pos_rmse_m) && h.before_pos_rmse_m > 0)
@@ -92,16 +91,16 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
                           metres(h.after_pos_rmse_m), pct_change(h));
     lines.push_back(fmt::format("{}: the nominal model leaves out {}; {}.", d.track, what, proof));
   } else if (unexplained) {
-    lines.push_back(fmt::format(
-        "{}: the model and the recording disagree at {}{} beyond sensor noise, and no effect of "
-        "physics-effects.md explains it.",
-        d.track, spans(unexplained->segments),
-        unexplained->conditions.empty() ? "" : " (" + unexplained->conditions + ")"));
+    lines.push_back(
+        fmt::format("{}: the model and the recording disagree at {}{} beyond sensor noise, and no effect of "
+                    "physics-effects.md explains it.",
+                    d.track, spans(unexplained->segments),
+                    unexplained->conditions.empty() ? "" : " (" + unexplained->conditions + ")"));
   } else {
-    lines.push_back(fmt::format(
-        "{}: nothing left out — the nominal model explains the recording within sensor noise "
-        "(held-out position error {} over windows of {:g} s).",
-        d.track, metres(d.heldout.before_pos_rmse_m), d.window_s));
+    lines.push_back(
+        fmt::format("{}: nothing left out — the nominal model explains the recording within sensor noise "
+                    "(held-out position error {} over windows of {:g} s).",
+                    d.track, metres(d.heldout.before_pos_rmse_m), d.window_s));
   }
 
   for (std::size_t i = 0; i < d.findings.size(); ++i) {
@@ -109,13 +108,13 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
     std::string line = fmt::format("  {}. {}", i + 1, f.effect);
     if (!f.params.empty()) line += " " + finding_size(f);
     line += fmt::format(" — explains {:.{}f} %; held-out {} → {}", 100.0 * f.explains,
-                        f.explains < 0.01 ? 2 : 0,
-                        metres(f.heldout.before_pos_rmse_m), metres(f.heldout.after_pos_rmse_m));
+                        f.explains < 0.01 ? 2 : 0, metres(f.heldout.before_pos_rmse_m),
+                        metres(f.heldout.after_pos_rmse_m));
     lines.push_back(line);
     if (!f.segments.empty()) lines.push_back("     where: " + spans(f.segments));
     for (const MapRegion& r : f.regions)
-      lines.push_back(fmt::format("     region: x {:.2f}…{:.2f} m, y {:.2f}…{:.2f} m", r.x0_m,
-                                  r.x1_m, r.y0_m, r.y1_m));
+      lines.push_back(fmt::format("     region: x {:.2f}…{:.2f} m, y {:.2f}…{:.2f} m", r.x0_m, r.x1_m, r.y0_m,
+                                  r.y1_m));
     if (!f.conditions.empty()) lines.push_back("     when: " + f.conditions);
     if (!f.rivals.empty()) {
       std::string r;

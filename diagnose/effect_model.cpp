@@ -16,8 +16,8 @@ namespace {
 const sim::EffectInfo& info(Effect e) {
   const auto& table = sim::effect_table();
   if (table.size() != static_cast<std::size_t>(kNumEffects))
-    throw std::logic_error(fmt::format("effect table has {} effects; diagnose expects {}",
-                                       table.size(), kNumEffects));
+    throw std::logic_error(fmt::format("effect table has {} effects; diagnose expects {}", table.size(),
+                                       kNumEffects));
   return table[static_cast<std::size_t>(e)];
 }
 
@@ -25,14 +25,14 @@ int param_index(Effect e, std::string_view param) {
   const auto& ps = info(e).params;
   for (std::size_t i = 0; i < ps.size(); ++i)
     if (ps[i].name == param) return static_cast<int>(i);
-  throw std::invalid_argument(fmt::format("effect {} has no parameter '{}'; valid parameters: {}",
-                                          info(e).name, param, sim::param_names(info(e))));
+  throw std::invalid_argument(fmt::format("effect {} has no parameter '{}'; valid parameters: {}", info(e).name,
+                                          param, sim::param_names(info(e))));
 }
 
 // Local quadratic least-squares fit of (t, s) around tc over nodes with
 // |t - tc| <= half; returns the second derivative, or NaN with < 3 nodes.
-double local_second_derivative(const std::vector<double>& t, const std::vector<double>& s,
-                               std::size_t lo, std::size_t hi, double tc) {
+double local_second_derivative(const std::vector<double>& t, const std::vector<double>& s, std::size_t lo,
+                               std::size_t hi, double tc) {
   if (hi - lo < 3) return std::nan("");
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
   Eigen::Vector3d b = Eigen::Vector3d::Zero();
@@ -112,8 +112,7 @@ Effect effect_from_name(std::string_view name) {
   const auto& table = sim::effect_table();
   for (std::size_t i = 0; i < table.size() && i < static_cast<std::size_t>(kNumEffects); ++i)
     if (table[i].name == name) return static_cast<Effect>(i);
-  throw std::invalid_argument(
-      fmt::format("unknown effect '{}'; valid effects: {}", name, sim::effect_names()));
+  throw std::invalid_argument(fmt::format("unknown effect '{}'; valid effects: {}", name, sim::effect_names()));
 }
 
 EffectSet EffectSet::parse(const std::vector<std::string>& specs) {
@@ -145,8 +144,8 @@ EffectSet& EffectSet::disable(Effect e) {
 
 EffectSet& EffectSet::set(Effect e, std::string_view param, double value) {
   if (!on(e))
-    throw std::invalid_argument(fmt::format("effect {} is off; enable it before setting {}",
-                                            effect_name(e), param));
+    throw std::invalid_argument(fmt::format("effect {} is off; enable it before setting {}", effect_name(e),
+                                            param));
   const int i = param_index(e, param);
   const auto& pi = info(e).params[static_cast<std::size_t>(i)];
   std::string why;
@@ -204,8 +203,8 @@ EffectSet unpack(const EffectSet& structure, const std::vector<double>& values) 
   std::size_t j = 0;
   for (const ParamSlot& s : param_layout(structure)) {
     if (j >= values.size())
-      throw std::invalid_argument(fmt::format("unpack: {} values for a layout of {} or more",
-                                              values.size(), j + 1));
+      throw std::invalid_argument(fmt::format("unpack: {} values for a layout of {} or more", values.size(),
+                                              j + 1));
     out.set(s.effect, info(s.effect).params[static_cast<std::size_t>(s.index)].name, values[j++]);
   }
   return out;
@@ -223,8 +222,7 @@ bool ModelOptions::IsValid(std::string* why) const {
     return false;
   };
   if (!(std::isfinite(accel_half_window_s) && accel_half_window_s > 0.0 && accel_half_window_s <= 10.0))
-    return fail(fmt::format("accel_half_window_s = {}; expected a number in (0, 10] s",
-                            accel_half_window_s));
+    return fail(fmt::format("accel_half_window_s = {}; expected a number in (0, 10] s", accel_half_window_s));
   if (!(std::isfinite(lag_lead_in_s) && lag_lead_in_s >= 0.0 && lag_lead_in_s <= 600.0))
     return fail(fmt::format("lag_lead_in_s = {}; expected a number in [0, 600] s", lag_lead_in_s));
   return true;
@@ -236,17 +234,19 @@ EffectModel::EffectModel(const DiagInput& input, const EffectSet& structure, con
   if (!opt.IsValid(&why)) throw std::invalid_argument("model options: " + why);
   const bool body = input.odometry == OdometryKind::body_velocity;
   const std::size_t n = input.odo_t_s.size();
-  if (n < 2) throw std::invalid_argument(fmt::format(
-                 "track '{}': {} odometry sample(s); expected at least 2", input.track_name, n));
+  if (n < 2)
+    throw std::invalid_argument(fmt::format("track '{}': {} odometry sample(s); expected at least 2",
+                                            input.track_name, n));
   const bool lag = structure.on(Effect::actuator_lag);
   if (lag && !body && input.cmd_v_mps.size() != n)
-    throw std::invalid_argument(fmt::format(
-        "track '{}': actuator_lag needs commands (v_cmd, w_cmd); the track has wheel odometry only",
-        input.track_name));
+    throw std::invalid_argument(
+        fmt::format("track '{}': actuator_lag needs commands (v_cmd, w_cmd); the track has wheel odometry only",
+                    input.track_name));
   if (body ? (input.v_mps.size() != n || input.w_radps.size() != n)
            : (input.phi_l_rad.size() != n || input.phi_r_rad.size() != n))
     throw std::invalid_argument(fmt::format("track '{}': odometry columns differ in length from "
-                                            "odo_t_s ({} samples)", input.track_name, n));
+                                            "odo_t_s ({} samples)",
+                                            input.track_name, n));
   series_ = make_series(input, body || lag, opt);
 
   auto at = [this](Effect e, std::string_view p) {

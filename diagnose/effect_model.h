@@ -76,8 +76,18 @@ namespace odotune::diagnose {
 // An effect, numbered as in sim::effect_table() (the spec's order); its name
 // is effect_name(), read from the table (tests check that the two orders agree).
 enum class Effect : int {
-  radius_error, wheel_base_error, radius_step, speed_radius, lateral_skid, longitudinal_slip,
-  slip_zone, gyro_bias, gyro_scale, actuator_lag, time_offset, odometry_bias
+  radius_error,
+  wheel_base_error,
+  radius_step,
+  speed_radius,
+  lateral_skid,
+  longitudinal_slip,
+  slip_zone,
+  gyro_bias,
+  gyro_scale,
+  actuator_lag,
+  time_offset,
+  odometry_bias
 };
 inline constexpr int kNumEffects = 12;
 
@@ -113,13 +123,13 @@ class EffectSet {
 // One entry of the flat parameter vector.
 struct ParamSlot {
   Effect effect;
-  int index;           // position in the effect's table parameters
-  std::string name;    // "effect.param", names verbatim from the spec
-  double lower, upper; // fitting bounds: the table's range (an exclusive minimum
-                       // is moved up by 1e-6 of the range)
-  double noop;         // the value that switches the parameter's effect off
-  bool fitted;         // false for radius_step.t, the slip_zone box and gyro_*:
-                       // held fixed by a dead-reckoning fit
+  int index;            // position in the effect's table parameters
+  std::string name;     // "effect.param", names verbatim from the spec
+  double lower, upper;  // fitting bounds: the table's range (an exclusive minimum
+                        // is moved up by 1e-6 of the range)
+  double noop;          // the value that switches the parameter's effect off
+  bool fitted;          // false for radius_step.t, the slip_zone box and gyro_*:
+                        // held fixed by a dead-reckoning fit
 };
 std::vector<ParamSlot> param_layout(const EffectSet& set);
 std::vector<double> pack(const EffectSet& set);
@@ -144,10 +154,10 @@ struct ModelOptions {
 // Parameter-independent data of the model, built once per input and effect
 // structure: the nominal rim travel per wheel at the odometry nodes.
 struct OdoSeries {
-  bool from_commands = false;        // commands replayed (body_velocity or actuator_lag)
-  double wheel_base_m = 0.0;         // nominal D (1 m when a body_velocity track has none)
-  std::vector<double> t_s;           // node times (DiagInput::odo_t_s)
-  std::vector<double> s_l_m, s_r_m;  // cumulative nominal rim travel at the nodes
+  bool from_commands = false;              // commands replayed (body_velocity or actuator_lag)
+  double wheel_base_m = 0.0;               // nominal D (1 m when a body_velocity track has none)
+  std::vector<double> t_s;                 // node times (DiagInput::odo_t_s)
+  std::vector<double> s_l_m, s_r_m;        // cumulative nominal rim travel at the nodes
   std::vector<double> u_l_mps, u_r_mps;    // nominal rim speed at the nodes
   std::vector<double> a_l_mps2, a_r_mps2;  // nominal rim acceleration per interval
 };
@@ -163,7 +173,9 @@ struct Pose {
 
 inline double scalar(double v) { return v; }
 template <typename T, int N>
-double scalar(const ceres::Jet<T, N>& v) { return v.a; }
+double scalar(const ceres::Jet<T, N>& v) {
+  return v.a;
+}
 
 // sin(x)/x, smooth through 0.
 template <typename T>
@@ -200,9 +212,8 @@ class EffectModel {
 
   // Positions of each parameter in the flat vector (-1 when its effect is off).
   struct Index {
-    int re_l = -1, re_r = -1, wb = -1, rs_t = -1, rs_l = -1, rs_r = -1, sr_c = -1, skid_k = -1,
-        slip_k = -1, zx0 = -1, zx1 = -1, zy0 = -1, zy1 = -1, z_l = -1, z_r = -1, tau = -1, dt = -1,
-        ob_v = -1, ob_w = -1;
+    int re_l = -1, re_r = -1, wb = -1, rs_t = -1, rs_l = -1, rs_r = -1, sr_c = -1, skid_k = -1, slip_k = -1,
+        zx0 = -1, zx1 = -1, zy0 = -1, zy1 = -1, z_l = -1, z_r = -1, tau = -1, dt = -1, ob_v = -1, ob_w = -1;
   };
   const Index& index() const { return idx_; }
 
@@ -375,7 +386,7 @@ class Stepper {
   const EffectModel::Index& i_;
   const T* p_;
   std::size_t cursor_ = 0;
-  T sl_{}, sr_{};            // travel read at the current node
+  T sl_{}, sr_{};                // travel read at the current node
   T yl_{}, yr_{}, cl_{}, cr_{};  // lag states and commands at the current node
 };
 

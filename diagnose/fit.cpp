@@ -26,13 +26,13 @@ constexpr double kMinEigenRatio = 1e-10;
 struct CostShared {
   const EffectModel* model = nullptr;
   const DiagInput* in = nullptr;
-  std::vector<double> all;     // the flat parameter vector (fixed values live here)
-  std::vector<int> free_pos;   // where block 0's entries go in `all`
+  std::vector<double> all;    // the flat parameter vector (fixed values live here)
+  std::vector<int> free_pos;  // where block 0's entries go in `all`
   bool free_anchor = false;
-  bool heading = false;        // heading residuals
+  bool heading = false;  // heading residuals
   double inv_sigma_m = 1.0, inv_sigma_rad = 1.0;
   RobustLoss loss = RobustLoss::none;
-  double c = 1.0;              // loss scale [sigmas]
+  double c = 1.0;  // loss scale [sigmas]
 };
 
 // r -> sign(r)*sqrt(rho(r^2)) for the chosen loss, smooth through 0.
@@ -59,9 +59,7 @@ class WindowCost {
   WindowCost(const CostShared* s, const Window& w, const Pose<double>& anchor)
       : s_(s), w_(w), anchor_(anchor) {}
 
-  int num_residuals() const {
-    return static_cast<int>((w_.ref_end - w_.ref_begin) * (s_->heading ? 3 : 2));
-  }
+  int num_residuals() const { return static_cast<int>((w_.ref_end - w_.ref_begin) * (s_->heading ? 3 : 2)); }
 
   template <typename T>
   bool operator()(T const* const* blocks, T* res) const {
@@ -119,8 +117,8 @@ class AnchorComposedCost : public ceres::CostFunction {
         p[static_cast<std::size_t>(s_->free_pos[j])] = J(blocks[0][j]);
         if (want_p) p[static_cast<std::size_t>(s_->free_pos[j])].v[static_cast<int>(j)] = 1.0;
       }
-      replay_window(*s_->model, p.data(), w_, Pose<J>{J(0.0), J(0.0), J(0.0)},
-                    s_->in->ref_t_s, local.data(), &a);
+      replay_window(*s_->model, p.data(), w_, Pose<J>{J(0.0), J(0.0), J(0.0)}, s_->in->ref_t_s, local.data(),
+                    &a);
     }
     const double c = std::cos(a.th), sn = std::sin(a.th);
     const DiagInput& in = *s_->in;
@@ -130,14 +128,11 @@ class AnchorComposedCost : public ceres::CostFunction {
       const J& lx = local[i].x;
       const J& ly = local[i].y;
       // Value and derivatives (by the effect parameters, by the anchor) of each component.
-      const double val[3] = {a.x + c * lx.a - sn * ly.a, a.y + sn * lx.a + c * ly.a,
-                             a.th + local[i].th.a};
-      const double ref[3] = {in.ref_x_m[g], in.ref_y_m[g],
-                             s_->heading ? in.ref_theta_rad[g] : 0.0};
+      const double val[3] = {a.x + c * lx.a - sn * ly.a, a.y + sn * lx.a + c * ly.a, a.th + local[i].th.a};
+      const double ref[3] = {in.ref_x_m[g], in.ref_y_m[g], s_->heading ? in.ref_theta_rad[g] : 0.0};
       const double inv[3] = {s_->inv_sigma_m, s_->inv_sigma_m, s_->inv_sigma_rad};
-      const double da[3][3] = {{1.0, 0.0, -sn * lx.a - c * ly.a},
-                               {0.0, 1.0, c * lx.a - sn * ly.a},
-                               {0.0, 0.0, 1.0}};
+      const double da[3][3] = {
+          {1.0, 0.0, -sn * lx.a - c * ly.a}, {0.0, 1.0, c * lx.a - sn * ly.a}, {0.0, 0.0, 1.0}};
       for (int m = 0; m < comps; ++m) {
         ceres::Jet<double, 1> u((val[m] - ref[m]) * inv[m], 0);
         const ceres::Jet<double, 1> r = robustify(u, s_->loss, s_->c);
@@ -173,8 +168,7 @@ ceres::CostFunction* make_cost(const CostShared* s, const Window& w, const Pose<
   return f;
 }
 
-ceres::CostFunction* make_cost(int active, const CostShared* s, const Window& w,
-                               const Pose<double>& a) {
+ceres::CostFunction* make_cost(int active, const CostShared* s, const Window& w, const Pose<double>& a) {
   const std::size_t k = s->free_pos.size();
   if (s->free_anchor && k <= 8) {
     if (k <= 2) return new AnchorComposedCost<2>(s, w);
@@ -191,9 +185,8 @@ SetScore score(const ReplayResult& before, const ReplayResult& after) {
   SetScore s;
   const double nan = std::nan("");
   for (std::size_t i = 0; i < before.windows.size(); ++i)
-    s.windows.push_back({before.windows[i].window, before.windows[i].pos_rmse_m,
-                         after.windows[i].pos_rmse_m, before.windows[i].heading_rmse_rad,
-                         after.windows[i].heading_rmse_rad});
+    s.windows.push_back({before.windows[i].window, before.windows[i].pos_rmse_m, after.windows[i].pos_rmse_m,
+                         before.windows[i].heading_rmse_rad, after.windows[i].heading_rmse_rad});
   const bool any = !before.windows.empty();
   s.before_pos_rmse_m = any ? before.pos_rmse_m : nan;
   s.after_pos_rmse_m = any ? after.pos_rmse_m : nan;
@@ -219,8 +212,7 @@ double spread(const ReplayResult& r, const Window& w) {
 // before ceres::Covariance, which would log an error on a singular problem.
 bool full_rank(ceres::Problem& problem) {
   ceres::CRSMatrix j;
-  if (!problem.Evaluate(ceres::Problem::EvaluateOptions(), nullptr, nullptr, nullptr, &j))
-    return false;
+  if (!problem.Evaluate(ceres::Problem::EvaluateOptions(), nullptr, nullptr, nullptr, &j)) return false;
   Eigen::MatrixXd jtj = Eigen::MatrixXd::Zero(j.num_cols, j.num_cols);
   for (int r = 0; r < j.num_rows; ++r)
     for (int a = j.rows[static_cast<std::size_t>(r)]; a < j.rows[static_cast<std::size_t>(r) + 1]; ++a)
@@ -255,8 +247,7 @@ bool FitOptions::IsValid(std::string* why) const {
   return true;
 }
 
-FitSummary fit_effects(const DiagInput& in, const EffectSet& which,
-                       const std::vector<int>& train_windows,
+FitSummary fit_effects(const DiagInput& in, const EffectSet& which, const std::vector<int>& train_windows,
                        const std::vector<int>& heldout_windows, const FitOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("fit options: " + why);
@@ -265,8 +256,8 @@ FitSummary fit_effects(const DiagInput& in, const EffectSet& which,
 }
 
 FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const EffectSet& which,
-                       const std::vector<int>& train_windows,
-                       const std::vector<int>& heldout_windows, const FitOptions& options) {
+                       const std::vector<int>& train_windows, const std::vector<int>& heldout_windows,
+                       const FitOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("fit options: " + why);
   for (int e = 0; e < kNumEffects; ++e)
@@ -282,14 +273,16 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
   for (int w : heldout_windows) {
     if (w < 0 || w >= n_win)
       throw std::invalid_argument(fmt::format("held-out window {} does not exist (the track has {} "
-                                              "windows of {} s)", w, n_win, options.window_s));
+                                              "windows of {} s)",
+                                              w, n_win, options.window_s));
     held.insert(w);
   }
   std::vector<int> train;
   for (int w : train_windows) {
     if (w < 0 || w >= n_win)
       throw std::invalid_argument(fmt::format("training window {} does not exist (the track has {} "
-                                              "windows of {} s)", w, n_win, options.window_s));
+                                              "windows of {} s)",
+                                              w, n_win, options.window_s));
     if (held.count(w))
       throw std::invalid_argument(fmt::format("window {} is both a training and a held-out window", w));
     train.push_back(w);
@@ -311,7 +304,8 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
     }
   if (sh.free_pos.empty())
     throw std::invalid_argument(fmt::format("fit: effects '{}' have no parameter that dead "
-                                            "reckoning can fit", which.to_string()));
+                                            "reckoning can fit",
+                                            which.to_string()));
   sh.all = init;
   const Anchoring mode = fit_anchoring(in, options);
   sh.free_anchor = mode == Anchoring::free;
@@ -344,9 +338,8 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
     throw std::invalid_argument("fit: every training window is too short a motion to fit");
   for (std::size_t i = 0; i < out.fitted_windows.size(); ++i) {
     const Window& w = windows[static_cast<std::size_t>(out.fitted_windows[i])];
-    const Pose<double> a = sh.free_anchor
-                               ? Pose<double>{anchors[i][0], anchors[i][1], anchors[i][2]}
-                               : reference_pose_at(in, w.t_begin_s);
+    const Pose<double> a = sh.free_anchor ? Pose<double>{anchors[i][0], anchors[i][1], anchors[i][2]}
+                                          : reference_pose_at(in, w.t_begin_s);
     ceres::CostFunction* cost = make_cost(active, &sh, w, a);
     if (sh.free_anchor)
       problem.AddResidualBlock(cost, nullptr, free_values.data(), anchors[i].data());
@@ -390,8 +383,7 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
     co.algorithm_type = ceres::DENSE_SVD;
     co.num_threads = 1;
     ceres::Covariance cov(co);
-    std::vector<std::pair<const double*, const double*>> blocks = {
-        {free_values.data(), free_values.data()}};
+    std::vector<std::pair<const double*, const double*>> blocks = {{free_values.data(), free_values.data()}};
     std::vector<double> c(free_values.size() * free_values.size());
     if (full_rank(problem) && cov.Compute(blocks, &problem) &&
         cov.GetCovarianceBlock(free_values.data(), free_values.data(), c.data())) {
@@ -434,8 +426,7 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
                         replay(model, fitted, in, windows, ho, nullptr, mode));
   else
     out.heldout = score(ReplayResult{}, ReplayResult{});
-  out.solve_time_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  out.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return out;
 }
 

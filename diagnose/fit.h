@@ -56,7 +56,7 @@ namespace odotune::diagnose {
 enum class RobustLoss { none, huber, cauchy };
 
 struct FitOptions {
-  double window_s = 20.0;          // replay window [s]; 0 = the whole track as one window
+  double window_s = 20.0;  // replay window [s]; 0 = the whole track as one window
   RobustLoss loss = RobustLoss::huber;
   double loss_scale = 3.0;         // where the loss turns robust [reference sigmas]
   bool use_heading = true;         // heading residuals when the reference has heading
@@ -92,18 +92,18 @@ struct SetScore {
 };
 
 struct FitSummary {
-  EffectSet effects;                 // `which` with the fitted values
-  std::vector<FitParam> params;      // layout order
-  bool converged = false;            // Ceres reported convergence
-  bool rank_deficient = false;       // covariance unavailable (see file comment)
-  std::string termination;           // Ceres' one-line report
+  EffectSet effects;             // `which` with the fitted values
+  std::vector<FitParam> params;  // layout order
+  bool converged = false;        // Ceres reported convergence
+  bool rank_deficient = false;   // covariance unavailable (see file comment)
+  std::string termination;       // Ceres' one-line report
   int iterations = 0;
   double initial_cost = 0.0, final_cost = 0.0;  // Ceres costs (1/2 sum of robustified r^2)
-  double residual_scale = 0.0;       // s = sqrt(2*final_cost/(m - n))
+  double residual_scale = 0.0;                  // s = sqrt(2*final_cost/(m - n))
   std::size_t num_residuals = 0;
   double solve_time_s = 0.0;
-  std::vector<int> fitted_windows;   // training windows in the problem
-  std::vector<int> skipped_windows;  // training windows left out (free anchor, no motion)
+  std::vector<int> fitted_windows;    // training windows in the problem
+  std::vector<int> skipped_windows;   // training windows left out (free anchor, no motion)
   std::vector<Pose<double>> anchors;  // fitted anchors of fitted_windows (free anchor only)
   SetScore train, heldout;
 };
@@ -113,16 +113,15 @@ struct FitSummary {
 // window not held out) and scores train and held-out windows before/after.
 // Throws std::invalid_argument (one line) for invalid options, a window index
 // out of range or in both lists, or a set with no free parameter.
-FitSummary fit_effects(const DiagInput& in, const EffectSet& which,
-                       const std::vector<int>& train_windows,
+FitSummary fit_effects(const DiagInput& in, const EffectSet& which, const std::vector<int>& train_windows,
                        const std::vector<int>& heldout_windows, const FitOptions& options = {});
 
 // The same with a prebuilt model: `model` must have been built for `in` with
 // options.model and the same active effects as `which` (its parameter
 // values do not matter); throws std::invalid_argument otherwise.
 FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const EffectSet& which,
-                       const std::vector<int>& train_windows,
-                       const std::vector<int>& heldout_windows, const FitOptions& options = {});
+                       const std::vector<int>& train_windows, const std::vector<int>& heldout_windows,
+                       const FitOptions& options = {});
 
 // The windows' anchoring a fit with `options` uses on `in` (window_replay.h).
 inline Anchoring fit_anchoring(const DiagInput& in, const FitOptions& options) {

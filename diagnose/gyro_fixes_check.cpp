@@ -57,7 +57,7 @@ struct Standstill {
   double t0_s = 0.0, t1_s = 0.0;
   double mean_radps = 0.0;  // (G(t1) - G(t0))/(t1 - t0)
   double sigma_radps = 0.0;
-  int window = -1;          // the used window it belongs to
+  int window = -1;  // the used window it belongs to
 };
 
 struct Context {
@@ -68,7 +68,7 @@ struct Context {
   RobustLoss loss = RobustLoss::huber;
   double loss_scale = 3.0;
   double s_lo = 0.5, s_hi = 1.5, b_lo = -1.0, b_hi = 1.0;  // the effect table's ranges
-  std::vector<Standstill> still;  // standstill runs (header comment)
+  std::vector<Standstill> still;                           // standstill runs (header comment)
 };
 
 // Cost of one window: parameter blocks {s, b, q} and the anchor {x0, y0, theta0}.
@@ -139,8 +139,8 @@ Aligned replay_aligned(const Context& c, const Window& w, const GyroParams<doubl
 }
 
 struct Solution {
-  std::array<double, 3> gyro{1.0, 0.0, 1.0};     // s, b, q
-  std::vector<std::array<double, 3>> anchors;     // per window of the fit, in order
+  std::array<double, 3> gyro{1.0, 0.0, 1.0};   // s, b, q
+  std::vector<std::array<double, 3>> anchors;  // per window of the fit, in order
   bool converged = false;
   // Model-based standard errors of s, b, q (Gauss-Newton, residual variance
   // factor 2*cost/(m - n)); NaN when not asked, q not fitted or rank deficient.
@@ -176,8 +176,8 @@ std::array<double, 3> model_standard_errors(ceres::Problem& problem, const std::
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(scaled);
   const Eigen::VectorXd ev = es.eigenvalues();
   if (!(ev.minCoeff() > 1e-10 * ev.maxCoeff())) return se;
-  const Eigen::MatrixXd cov_scaled =
-      es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
+  const Eigen::MatrixXd cov_scaled = es.eigenvectors() * ev.cwiseInverse().asDiagonal() *
+                                     es.eigenvectors().transpose();
   const double s2 = 2.0 * cost / static_cast<double>(m - n);
   for (int i = 0; i < k && i < 3; ++i)
     se[static_cast<std::size_t>(i)] = std::sqrt(cov_scaled(i, i) * inv(i) * inv(i) * s2);
@@ -199,8 +199,8 @@ Solution solve(const Context& c, const std::vector<int>& which, const Solution& 
   }
   for (const Standstill& r : c.still) {
     if (std::find(which.begin(), which.end(), r.window) == which.end()) continue;
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<StillCost, 1, 3>(new StillCost(&c, r)),
-                             nullptr, sol.gyro.data());
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<StillCost, 1, 3>(new StillCost(&c, r)), nullptr,
+                             sol.gyro.data());
   }
   double* g = sol.gyro.data();
   problem.SetParameterLowerBound(g, 0, c.s_lo);
@@ -237,7 +237,8 @@ void check_times(std::string_view track, std::string_view what, const std::vecto
       fail(fmt::format("{} time [{}] = {} (expected finite, strictly increasing)", what, i, t[i]));
   for (const auto& [name, col] : cols) {
     if (col->size() != t.size())
-      fail(fmt::format("{} has {} values for {} {} times (expected one per time)", name, col->size(), t.size(), what));
+      fail(fmt::format("{} has {} values for {} {} times (expected one per time)", name, col->size(), t.size(),
+                       what));
     for (std::size_t i = 0; i < col->size(); ++i)
       if (!std::isfinite((*col)[i])) fail(fmt::format("{}[{}] is not finite (expected a number)", name, i));
   }
@@ -437,8 +438,8 @@ double mean_abs_rate(const Context& c, const std::vector<int>& used, const GyroP
 }
 
 // Delete-one-window refits (warm-started from `all`): s, b, q of each.
-std::array<std::vector<double>, 3> jackknife(const Context& c, const std::vector<int>& used, const Solution& all,
-                                             const GyroFixesOptions& o) {
+std::array<std::vector<double>, 3> jackknife(const Context& c, const std::vector<int>& used,
+                                             const Solution& all, const GyroFixesOptions& o) {
   std::array<std::vector<double>, 3> out;
   for (std::size_t drop = 0; drop < used.size(); ++drop) {
     std::vector<int> which;
@@ -458,25 +459,27 @@ std::array<std::vector<double>, 3> jackknife(const Context& c, const std::vector
 }  // namespace
 
 bool GyroFixesOptions::IsValid(std::string* why) const {
-  if (!check_option_rules({
-          {is_positive(window_s), "window_s", window_s, "> 0 [s]"},
-          {loss == RobustLoss::none || loss == RobustLoss::huber || loss == RobustLoss::cauchy, "loss",
-           static_cast<double>(static_cast<int>(loss)), "none, huber or cauchy"},
-          {is_positive(loss_scale), "loss_scale", loss_scale, "> 0 [fix sigmas]"},
-          {max_iterations >= 1 && max_iterations <= 100000, "max_iterations",
-           static_cast<double>(max_iterations), "in [1, 100000]"},
-          {is_non_negative(min_spread_sigmas), "min_spread_sigmas", min_spread_sigmas, ">= 0"},
-          {is_positive(min_standstill_s), "min_standstill_s", min_standstill_s, "> 0 [s]"},
-          {is_non_negative(standstill_trim_s), "standstill_trim_s", standstill_trim_s, ">= 0 [s]"},
-          {is_positive(heldout_fraction) && heldout_fraction < 1, "heldout_fraction", heldout_fraction,
-           "in (0, 1)"},
-          {is_positive(alpha) && alpha < 1, "alpha", alpha, "in (0, 1)"},
-          {is_non_negative(min_informative), "min_informative", min_informative, ">= 0"},
-          {is_positive(z_threshold), "z_threshold", z_threshold, "> 0"},
-          {is_positive(relevance_window_s), "relevance_window_s", relevance_window_s, "> 0 [s]"},
-          {is_non_negative(relevance_factor), "relevance_factor", relevance_factor, ">= 0"},
-          {is_non_negative(min_drift_rad), "min_drift_rad", min_drift_rad, ">= 0 [rad]"},
-      }, why))
+  if (!check_option_rules(
+          {
+              {is_positive(window_s), "window_s", window_s, "> 0 [s]"},
+              {loss == RobustLoss::none || loss == RobustLoss::huber || loss == RobustLoss::cauchy, "loss",
+               static_cast<double>(static_cast<int>(loss)), "none, huber or cauchy"},
+              {is_positive(loss_scale), "loss_scale", loss_scale, "> 0 [fix sigmas]"},
+              {max_iterations >= 1 && max_iterations <= 100000, "max_iterations",
+               static_cast<double>(max_iterations), "in [1, 100000]"},
+              {is_non_negative(min_spread_sigmas), "min_spread_sigmas", min_spread_sigmas, ">= 0"},
+              {is_positive(min_standstill_s), "min_standstill_s", min_standstill_s, "> 0 [s]"},
+              {is_non_negative(standstill_trim_s), "standstill_trim_s", standstill_trim_s, ">= 0 [s]"},
+              {is_positive(heldout_fraction) && heldout_fraction < 1, "heldout_fraction", heldout_fraction,
+               "in (0, 1)"},
+              {is_positive(alpha) && alpha < 1, "alpha", alpha, "in (0, 1)"},
+              {is_non_negative(min_informative), "min_informative", min_informative, ">= 0"},
+              {is_positive(z_threshold), "z_threshold", z_threshold, "> 0"},
+              {is_positive(relevance_window_s), "relevance_window_s", relevance_window_s, "> 0 [s]"},
+              {is_non_negative(relevance_factor), "relevance_factor", relevance_factor, ">= 0"},
+              {is_non_negative(min_drift_rad), "min_drift_rad", min_drift_rad, ">= 0 [rad]"},
+          },
+          why))
     return false;
   std::string w;
   if (!model.IsValid(&w)) {
@@ -516,7 +519,8 @@ GyroFixesCheck check_gyro_with_fixes(const DiagInput& in, const GyroFixesOptions
   g.bins = n_used;
   if (n_used < kMinWindows)
     return finish(fmt::format("{} usable window(s) of {} s (expected at least {}: a held-out proof "
-                              "needs training and held-out windows)", n_used, o.window_s, kMinWindows));
+                              "needs training and held-out windows)",
+                              n_used, o.window_s, kMinWindows));
 
   // Gyro noise (per sample), period, standstill runs.
   g.noise_sigma_radps = second_difference_sigma(in.gyro_z_radps);

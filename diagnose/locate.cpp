@@ -46,7 +46,6 @@ double spearman(const std::vector<double>& a, const std::vector<double>& b) {
   return (saa > 0 && sbb > 0) ? sab / std::sqrt(saa * sbb) : 0.0;
 }
 
-
 struct Youden {
   double threshold = kNaN, j = 0.0;
 };
@@ -111,8 +110,8 @@ constexpr std::size_t kNone = static_cast<std::size_t>(-1);
 Growth growth(const ResidualSeries& s, double span) {
   const std::size_t n = s.t_s.size();
   const bool heading = !s.e_theta_rad.empty();
-  Growth g{std::vector<double>(n, kNaN), std::vector<double>(n, kNaN),
-           std::vector<double>(n, kNaN), std::vector<std::size_t>(n, kNone)};
+  Growth g{std::vector<double>(n, kNaN), std::vector<double>(n, kNaN), std::vector<double>(n, kNaN),
+           std::vector<std::size_t>(n, kNone)};
   std::vector<double> used(n, kNaN);  // dt_i
   const auto t0 = s.t_s.begin();
   std::size_t w0 = 0;  // first row of the current window
@@ -140,7 +139,8 @@ Growth growth(const ResidualSeries& s, double span) {
     w0 = w1;
   }
   std::vector<double> finite_dt;
-  for (double d : used) if (std::isfinite(d)) finite_dt.push_back(d);
+  for (double d : used)
+    if (std::isfinite(d)) finite_dt.push_back(d);
   const double ref = median(finite_dt);
   for (std::size_t i = 0; i < n; ++i) {
     if (!std::isfinite(used[i])) continue;
@@ -185,7 +185,8 @@ std::vector<TimeSegment> segments(const ResidualSeries& s, const Location& loc, 
 
 std::vector<MapRegion> regions(const ResidualSeries& s, const Location& loc, const LocateOptions& o) {
   std::vector<std::size_t> rows;
-  for (std::size_t i = 0; i < loc.z.size(); ++i) if (std::isfinite(loc.z[i])) rows.push_back(i);
+  for (std::size_t i = 0; i < loc.z.size(); ++i)
+    if (std::isfinite(loc.z[i])) rows.push_back(i);
   if (rows.empty() || loc.flagged_count == 0) return {};
   double x0 = s.x_m[rows[0]], x1 = x0, y0 = s.y_m[rows[0]], y1 = y0;
   for (std::size_t i : rows) {
@@ -243,13 +244,15 @@ std::vector<MapRegion> regions(const ResidualSeries& s, const Location& loc, con
     r.y0_m = y0 + cy0 * cell, r.y1_m = y0 + (cy1 + 1) * cell;
     out.push_back(r);
   }
-  std::sort(out.begin(), out.end(), [](const MapRegion& a, const MapRegion& b) { return a.flagged > b.flagged; });
+  std::sort(out.begin(), out.end(),
+            [](const MapRegion& a, const MapRegion& b) { return a.flagged > b.flagged; });
   return out;
 }
 
 void rank_conditions(const ResidualSeries& s, Location& loc, const LocateOptions& o) {
   std::vector<std::size_t> rows;
-  for (std::size_t i = 0; i < loc.z.size(); ++i) if (std::isfinite(loc.z[i])) rows.push_back(i);
+  for (std::size_t i = 0; i < loc.z.size(); ++i)
+    if (std::isfinite(loc.z[i])) rows.push_back(i);
   if (rows.size() < 3) return;
   std::vector<double> z(rows.size());
   std::vector<std::uint8_t> flag(rows.size());
@@ -269,10 +272,13 @@ void rank_conditions(const ResidualSeries& s, Location& loc, const LocateOptions
     loc.conditions.push_back(r);
   }
   std::stable_sort(loc.conditions.begin(), loc.conditions.end(),
-                   [](const ConditionRank& a, const ConditionRank& b) { return std::abs(a.rho) > std::abs(b.rho); });
+                   [](const ConditionRank& a, const ConditionRank& b) {
+                     return std::abs(a.rho) > std::abs(b.rho);
+                   });
 
   const ConditionRank& first = loc.conditions.front();
-  if (loc.flagged_count == 0 || std::abs(first.rho) < o.min_rank_correlation || first.youden_j < o.min_youden_j) return;
+  if (loc.flagged_count == 0 || std::abs(first.rho) < o.min_rank_correlation || first.youden_j < o.min_youden_j)
+    return;
   // A second condition among the rows beyond the first threshold.
   const auto& v1 = values[static_cast<std::size_t>(first.condition)];
   std::vector<std::size_t> sub;
@@ -347,17 +353,24 @@ bool ResidualSeries::IsValid(std::string* why) const {
   };
   const std::size_t n = t_s.size();
   if (n == 0) return fail("no rows (expected at least one residual sample)");
-  const std::pair<const char*, const std::vector<double>*> cols[] = {
-      {"ex_m", &ex_m}, {"ey_m", &ey_m}, {"x_m", &x_m}, {"y_m", &y_m}, {"v_mps", &v_mps},
-      {"w_radps", &w_radps}, {"accel_mps2", &accel_mps2}, {"t_since_start_s", &t_since_start_s},
-      {"e_theta_rad", &e_theta_rad}, {"t_s", &t_s}};
+  const std::pair<const char*, const std::vector<double>*> cols[] = {{"ex_m", &ex_m},
+                                                                     {"ey_m", &ey_m},
+                                                                     {"x_m", &x_m},
+                                                                     {"y_m", &y_m},
+                                                                     {"v_mps", &v_mps},
+                                                                     {"w_radps", &w_radps},
+                                                                     {"accel_mps2", &accel_mps2},
+                                                                     {"t_since_start_s", &t_since_start_s},
+                                                                     {"e_theta_rad", &e_theta_rad},
+                                                                     {"t_s", &t_s}};
   for (const auto& [name, col] : cols) {
     if (col == &e_theta_rad && col->empty()) continue;
     if (col->size() != n) {
       return fail(fmt::format("{} has {} values for {} rows (expected equal lengths)", name, col->size(), n));
     }
     for (std::size_t i = 0; i < n; ++i) {
-      if (!std::isfinite((*col)[i])) return fail(fmt::format("{}[{}] is not finite (expected a number)", name, i));
+      if (!std::isfinite((*col)[i]))
+        return fail(fmt::format("{}[{}] is not finite (expected a number)", name, i));
     }
   }
   if (window.size() != n) {
@@ -365,7 +378,8 @@ bool ResidualSeries::IsValid(std::string* why) const {
   }
   for (std::size_t i = 1; i < n; ++i) {
     if (window[i] < window[i - 1]) {
-      return fail(fmt::format("window[{}] = {} after {} (expected non-decreasing)", i, window[i], window[i - 1]));
+      return fail(fmt::format("window[{}] = {} after {} (expected non-decreasing)", i, window[i],
+                              window[i - 1]));
     }
     const bool same = window[i] == window[i - 1];
     if (same ? !(t_s[i] > t_s[i - 1]) : !(t_s[i] >= t_s[i - 1])) {
@@ -377,25 +391,28 @@ bool ResidualSeries::IsValid(std::string* why) const {
 }
 
 bool LocateOptions::IsValid(std::string* why) const {
-  return check_option_rules({
-      {is_positive(growth_span_s), "growth_span_s", growth_span_s, "> 0"},
-      {min_span_samples >= 2, "min_span_samples", static_cast<double>(min_span_samples), ">= 2"},
-      {is_positive(threshold_sigma), "threshold_sigma", threshold_sigma, "> 0"},
-      {is_positive(min_sigma_m), "min_sigma_m", min_sigma_m, "> 0"},
-      {is_positive(min_sigma_rad), "min_sigma_rad", min_sigma_rad, "> 0"},
-      {is_non_negative(merge_gap_s), "merge_gap_s", merge_gap_s, ">= 0"},
-      {is_non_negative(min_segment_s), "min_segment_s", min_segment_s, ">= 0"},
-      {min_segment_samples >= 1, "min_segment_samples", static_cast<double>(min_segment_samples), ">= 1"},
-      {is_positive(cell_m), "cell_m", cell_m, "> 0"},
-      {max_cells_per_axis >= 1 && max_cells_per_axis <= 2000, "max_cells_per_axis",
-       static_cast<double>(max_cells_per_axis), "in [1, 2000]"},
-      {min_cell_samples >= 1, "min_cell_samples", static_cast<double>(min_cell_samples), ">= 1"},
-      {is_fraction(cell_min_flagged_fraction), "cell_min_flagged_fraction", cell_min_flagged_fraction, "in [0, 1]"},
-      {is_non_negative(cell_enrichment), "cell_enrichment", cell_enrichment, ">= 0"},
-      {is_fraction(region_max_cover), "region_max_cover", region_max_cover, "in [0, 1]"},
-      {is_fraction(min_rank_correlation), "min_rank_correlation", min_rank_correlation, "in [0, 1]"},
-      {is_fraction(min_youden_j), "min_youden_j", min_youden_j, "in [0, 1]"},
-  }, why);
+  return check_option_rules(
+      {
+          {is_positive(growth_span_s), "growth_span_s", growth_span_s, "> 0"},
+          {min_span_samples >= 2, "min_span_samples", static_cast<double>(min_span_samples), ">= 2"},
+          {is_positive(threshold_sigma), "threshold_sigma", threshold_sigma, "> 0"},
+          {is_positive(min_sigma_m), "min_sigma_m", min_sigma_m, "> 0"},
+          {is_positive(min_sigma_rad), "min_sigma_rad", min_sigma_rad, "> 0"},
+          {is_non_negative(merge_gap_s), "merge_gap_s", merge_gap_s, ">= 0"},
+          {is_non_negative(min_segment_s), "min_segment_s", min_segment_s, ">= 0"},
+          {min_segment_samples >= 1, "min_segment_samples", static_cast<double>(min_segment_samples), ">= 1"},
+          {is_positive(cell_m), "cell_m", cell_m, "> 0"},
+          {max_cells_per_axis >= 1 && max_cells_per_axis <= 2000, "max_cells_per_axis",
+           static_cast<double>(max_cells_per_axis), "in [1, 2000]"},
+          {min_cell_samples >= 1, "min_cell_samples", static_cast<double>(min_cell_samples), ">= 1"},
+          {is_fraction(cell_min_flagged_fraction), "cell_min_flagged_fraction", cell_min_flagged_fraction,
+           "in [0, 1]"},
+          {is_non_negative(cell_enrichment), "cell_enrichment", cell_enrichment, ">= 0"},
+          {is_fraction(region_max_cover), "region_max_cover", region_max_cover, "in [0, 1]"},
+          {is_fraction(min_rank_correlation), "min_rank_correlation", min_rank_correlation, "in [0, 1]"},
+          {is_fraction(min_youden_j), "min_youden_j", min_youden_j, "in [0, 1]"},
+      },
+      why);
 }
 
 Location locate(const ResidualSeries& s, double sigma_m, const LocateOptions& o) {
@@ -407,7 +424,8 @@ Location locate(const ResidualSeries& s, double sigma_m, const LocateOptions& o)
   }
   const std::size_t n = s.t_s.size();
   std::vector<double> steps;
-  for (std::size_t i = 1; i < n; ++i) if (s.window[i] == s.window[i - 1]) steps.push_back(s.t_s[i] - s.t_s[i - 1]);
+  for (std::size_t i = 1; i < n; ++i)
+    if (s.window[i] == s.window[i - 1]) steps.push_back(s.t_s[i] - s.t_s[i - 1]);
   const double dt = steps.empty() ? 0.0 : median(std::move(steps));
   Location loc;
   loc.span_s = std::max(o.growth_span_s, (o.min_span_samples - 1) * dt);

@@ -68,15 +68,15 @@ namespace odotune::diagnose {
 // One row per reference sample. All arrays have the same length except
 // e_theta_rad, which is empty without a reference heading.
 struct ResidualSeries {
-  std::vector<double> t_s;            // non-decreasing; strictly increasing within a window
-  std::vector<double> ex_m, ey_m;     // predicted − reference position [m]
-  std::vector<double> e_theta_rad;    // predicted − reference heading [rad], or empty
-  std::vector<int> window;            // replay window id, non-decreasing
+  std::vector<double> t_s;          // non-decreasing; strictly increasing within a window
+  std::vector<double> ex_m, ey_m;   // predicted − reference position [m]
+  std::vector<double> e_theta_rad;  // predicted − reference heading [rad], or empty
+  std::vector<int> window;          // replay window id, non-decreasing
   // Robot state at the row (from the reference).
-  std::vector<double> x_m, y_m;       // position [m]
-  std::vector<double> v_mps;          // speed [m/s] (signed)
-  std::vector<double> w_radps;        // yaw rate [rad/s]
-  std::vector<double> accel_mps2;     // linear acceleration [m/s^2]
+  std::vector<double> x_m, y_m;    // position [m]
+  std::vector<double> v_mps;       // speed [m/s] (signed)
+  std::vector<double> w_radps;     // yaw rate [rad/s]
+  std::vector<double> accel_mps2;  // linear acceleration [m/s^2]
   std::vector<double> t_since_start_s;
 
   // Lengths, finiteness and ordering; `why` names the first broken rule.
@@ -84,22 +84,22 @@ struct ResidualSeries {
 };
 
 struct LocateOptions {
-  double growth_span_s = 1.0;          // span of the centred growth rate [s]
-  int min_span_samples = 3;            // a span covers at least this many rows
-  double threshold_sigma = 4.0;        // flag when z > this
-  double min_sigma_m = 1e-4;           // floor of the position noise [m]
-  double min_sigma_rad = 1e-5;         // floor of the heading noise [rad]
-  double merge_gap_s = 2.0;            // merge segments closer than this [s]
-  double min_segment_s = 1.0;          // drop shorter segments [s]
-  int min_segment_samples = 3;         // drop segments with fewer flagged rows
-  double cell_m = 0.5;                 // grid cell edge [m] (enlarged if the area needs > max_cells_per_axis)
+  double growth_span_s = 1.0;    // span of the centred growth rate [s]
+  int min_span_samples = 3;      // a span covers at least this many rows
+  double threshold_sigma = 4.0;  // flag when z > this
+  double min_sigma_m = 1e-4;     // floor of the position noise [m]
+  double min_sigma_rad = 1e-5;   // floor of the heading noise [rad]
+  double merge_gap_s = 2.0;      // merge segments closer than this [s]
+  double min_segment_s = 1.0;    // drop shorter segments [s]
+  int min_segment_samples = 3;   // drop segments with fewer flagged rows
+  double cell_m = 0.5;           // grid cell edge [m] (enlarged if the area needs > max_cells_per_axis)
   int max_cells_per_axis = 200;
   int min_cell_samples = 3;
   double cell_min_flagged_fraction = 0.3;
   double cell_enrichment = 3.0;
-  double region_max_cover = 0.5;       // fraction of visited cells
-  double min_rank_correlation = 0.1;   // |ρ| needed for the phrase
-  double min_youden_j = 0.3;           // J needed for a phrase part
+  double region_max_cover = 0.5;      // fraction of visited cells
+  double min_rank_correlation = 0.1;  // |ρ| needed for the phrase
+  double min_youden_j = 0.3;          // J needed for a phrase part
 
   bool IsValid(std::string* why) const;
 };
@@ -114,21 +114,21 @@ double condition_value(const ResidualSeries& s, Condition c, std::size_t i);
 struct TimeSegment {
   double t0_s = 0.0, t1_s = 0.0;  // first and last flagged row
   double peak_z = 0.0;
-  int flagged = 0;                // flagged rows inside
+  int flagged = 0;  // flagged rows inside
 };
 
 struct MapRegion {
   double x0_m = 0.0, x1_m = 0.0, y0_m = 0.0, y1_m = 0.0;  // box (cell edges)
   int cells = 0;
-  int samples = 0, flagged = 0;   // rows inside the flagged cells
+  int samples = 0, flagged = 0;  // rows inside the flagged cells
 };
 
 struct ConditionRank {
   Condition condition = Condition::speed;
-  double rho = 0.0;          // Spearman ρ of z with the condition's value
-  bool above = true;         // flagged rows lie above (ρ > 0) or below the threshold
+  double rho = 0.0;   // Spearman ρ of z with the condition's value
+  bool above = true;  // flagged rows lie above (ρ > 0) or below the threshold
   double threshold = std::numeric_limits<double>::quiet_NaN();  // condition units
-  double youden_j = 0.0;     // of the threshold (0 when nothing is flagged)
+  double youden_j = 0.0;                                        // of the threshold (0 when nothing is flagged)
 };
 
 // One part of the phrase: rows with the condition above (below) threshold.
@@ -140,17 +140,17 @@ struct ConditionPart {
 
 struct Location {
   double span_s = 0.0;
-  double sigma_growth_mps = 0.0;     // noise σ of the position growth rate [m/s]
-  double sigma_growth_radps = 0.0;   // of the heading growth rate [rad/s] (0 without heading)
-  std::vector<double> z;             // per row; NaN where no growth is defined
-  int exceedances = 0;               // rows with z > threshold_sigma
-  std::vector<std::uint8_t> flagged; // per row, 1 = an exceedance inside a kept segment
+  double sigma_growth_mps = 0.0;      // noise σ of the position growth rate [m/s]
+  double sigma_growth_radps = 0.0;    // of the heading growth rate [rad/s] (0 without heading)
+  std::vector<double> z;              // per row; NaN where no growth is defined
+  int exceedances = 0;                // rows with z > threshold_sigma
+  std::vector<std::uint8_t> flagged;  // per row, 1 = an exceedance inside a kept segment
   int flagged_count = 0;
-  std::vector<TimeSegment> segments;     // in time order
-  std::vector<MapRegion> regions;        // most flagged rows first
-  std::vector<ConditionRank> conditions; // by |ρ|, strongest first
+  std::vector<TimeSegment> segments;        // in time order
+  std::vector<MapRegion> regions;           // most flagged rows first
+  std::vector<ConditionRank> conditions;    // by |ρ|, strongest first
   std::vector<ConditionPart> phrase_parts;  // 0–2, in the phrase's order
-  std::string phrase;                    // "" when nothing stands out
+  std::string phrase;                       // "" when nothing stands out
 };
 
 // Throws std::invalid_argument (one line) for invalid options or series, or

@@ -18,9 +18,8 @@ double incomplete_beta(double x, double a, double b) {
   if (x <= 0.0) return 0.0;
   if (x >= 1.0) return 1.0;
   if (x > (a + 1.0) / (a + b + 2.0)) return 1.0 - incomplete_beta(1.0 - x, b, a);
-  const double front = std::exp(std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) +
-                                a * std::log(x) + b * std::log1p(-x)) /
-                       a;
+  const double front =
+      std::exp(std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) + b * std::log1p(-x)) / a;
   const double tiny = 1e-300;
   double f = 1.0, cc = 1.0, d = 0.0;
   for (int i = 0; i <= 400; ++i) {
@@ -79,8 +78,7 @@ double wilcoxon_greater(const std::vector<double>& d) {
     if (d[i] > 0.0) w += r2[i];
   }
   if (n > kExactRankMax) {
-    const double z =
-        (static_cast<double>(w) - 0.5 * static_cast<double>(total) - 1.0) / std::sqrt(var);
+    const double z = (static_cast<double>(w) - 0.5 * static_cast<double>(total) - 1.0) / std::sqrt(var);
     return normal_upper_tail(z);
   }
   std::vector<double> dist(static_cast<std::size_t>(total) + 1, 0.0);

@@ -10,7 +10,6 @@
 namespace odotune::diagnose {
 namespace {
 
-
 // Central difference of y over [tq − h, tq + h] clipped to t's span.
 double rate(const std::vector<double>& t, const std::vector<double>& y, double tq, double h) {
   const double a = std::max(t.front(), tq - h), b = std::min(t.back(), tq + h);
@@ -30,8 +29,7 @@ NominalKinematics nominal_kinematics(const DiagInput& in, const std::vector<doub
   const std::vector<double>& t = in.odo_t_s;
   NominalKinematics k;
   if (t.size() < 2) {
-    k.v_mps.assign(t_s.size(), 0.0), k.w_radps.assign(t_s.size(), 0.0),
-        k.accel_mps2.assign(t_s.size(), 0.0);
+    k.v_mps.assign(t_s.size(), 0.0), k.w_radps.assign(t_s.size(), 0.0), k.accel_mps2.assign(t_s.size(), 0.0);
     return k;
   }
   std::vector<double> s(t.size(), 0.0), h(t.size(), 0.0);
@@ -55,19 +53,17 @@ NominalKinematics nominal_kinematics(const DiagInput& in, const std::vector<doub
     k.w_radps[i] = rate(t, h, t_s[i], o.rate_half_s);
     const double a = std::max(t.front(), t_s[i] - o.accel_half_s);
     const double b = std::min(t.back(), t_s[i] + o.accel_half_s);
-    k.accel_mps2[i] = b > a ? (rate(t, s, b, o.rate_half_s) - rate(t, s, a, o.rate_half_s)) / (b - a)
-                            : 0.0;
+    k.accel_mps2[i] = b > a ? (rate(t, s, b, o.rate_half_s) - rate(t, s, a, o.rate_half_s)) / (b - a) : 0.0;
   }
   return k;
 }
 
-ResidualSeries residual_series(const DiagInput& in, const std::vector<Window>& windows,
-                               const ReplayResult& r, const ResidualSeriesOptions& o) {
+ResidualSeries residual_series(const DiagInput& in, const std::vector<Window>& windows, const ReplayResult& r,
+                               const ResidualSeriesOptions& o) {
   const std::size_t n = in.ref_t_s.size();
   if (r.pred_x_m.size() != n || r.pred_y_m.size() != n)
-    throw std::invalid_argument("residual_series: the replay holds " +
-                                std::to_string(r.pred_x_m.size()) + " predictions for " +
-                                std::to_string(n) + " reference samples");
+    throw std::invalid_argument("residual_series: the replay holds " + std::to_string(r.pred_x_m.size()) +
+                                " predictions for " + std::to_string(n) + " reference samples");
   const bool heading = in.has_ref_heading() && r.pred_theta_rad.size() == n;
   ResidualSeries s;
   for (const Window& w : windows) {

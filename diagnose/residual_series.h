@@ -24,8 +24,8 @@
 namespace odotune::diagnose {
 
 struct ResidualSeriesOptions {
-  double rate_half_s = 0.25;   // δ of v and w [s]
-  double accel_half_s = 0.5;   // δa of the acceleration [s]
+  double rate_half_s = 0.25;  // δ of v and w [s]
+  double accel_half_s = 0.5;  // δa of the acceleration [s]
 };
 
 // Nominal body speed [m/s], yaw rate [rad/s] and acceleration [m/s²] at times
@@ -41,7 +41,6 @@ NominalKinematics nominal_kinematics(const DiagInput& in, const std::vector<doub
 // predicted pose per reference sample (ReplayResult::pred_*). The heading
 // error is filled when the reference has heading (wrapped to (−π, π]).
 ResidualSeries residual_series(const DiagInput& in, const std::vector<Window>& windows,
-                               const ReplayResult& replayed,
-                               const ResidualSeriesOptions& options = {});
+                               const ReplayResult& replayed, const ResidualSeriesOptions& options = {});
 
 }  // namespace odotune::diagnose

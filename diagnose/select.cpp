@@ -23,9 +23,7 @@ using Clock = std::chrono::steady_clock;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-double since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 EffectSet with_effect(const EffectSet& s, Effect e) {
   EffectSet out = s;
@@ -41,10 +39,9 @@ std::string verdict(const PairedComparison& p, double delta_bic, const SelectOpt
   if (!(p.gain >= o.min_gain))
     return fmt::format("CV gain {:.3g} < {:.3g} (normalised units)", p.gain, o.min_gain);
   if (!p.significant)
-    return fmt::format(
-        "not significant: Wilcoxon p = {:.3g}, t p = {:.3g} (level halved), Stouffer "
-        "p = {:.3g} ({} of {} informative windows improved), level {:.3g}",
-        p.p_rank, p.p_t, p.p_param, p.improved, p.changed, o.alpha);
+    return fmt::format("not significant: Wilcoxon p = {:.3g}, t p = {:.3g} (level halved), Stouffer "
+                       "p = {:.3g} ({} of {} informative windows improved), level {:.3g}",
+                       p.p_rank, p.p_t, p.p_param, p.improved, p.changed, o.alpha);
   if (!(delta_bic < 0.0)) return fmt::format("BIC did not decrease (change {:.4g})", delta_bic);
   return "";
 }
@@ -61,8 +58,8 @@ void fill(SearchRecord& r, const PairedComparison& p) {
 }
 
 // radius_step.t by profile search of the all-window fit cost (select.h).
-double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet& s_fitted,
-                         double prev_t, const SelectOptions& o) {
+double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet& s_fitted, double prev_t,
+                         const SelectOptions& o) {
   const double coarse = o.step_coarse_s > 0.0 ? o.step_coarse_s : 0.5 * o.fit.window_s;
   const double lo = cv.windows().front().t_end_s;  // earlier, a step is a radius_error
   const double hi = cv.windows().back().t_end_s - 0.5 * coarse;
@@ -121,8 +118,8 @@ std::vector<Effect> candidate_list(const DiagInput& in, const SelectOptions& o) 
 }
 
 // Normalised SSE of a FitSummary's window scores (before or after).
-double summary_sse(const SetScore& s, const std::vector<Window>& w, bool heading, double ism,
-                   double ish, bool after) {
+double summary_sse(const SetScore& s, const std::vector<Window>& w, bool heading, double ism, double ish,
+                   bool after) {
   double sse = 0.0;
   for (const WindowScore& ws : s.windows) {
     const Window& win = w[static_cast<std::size_t>(ws.window)];
@@ -168,8 +165,8 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
         cd.rec.reason = "no step time to try (track too short)";
     } else if (e == Effect::slip_zone) {
       cd.st = choose_zone_box(z.cv, z.s, z.cur_full,
-                              {z.o.zone_cell_m, z.o.zone_max_boxes, z.o.zone_min_score,
-                               z.o.zone_boxes, z.o.profile_max_iterations});
+                              {z.o.zone_cell_m, z.o.zone_max_boxes, z.o.zone_min_score, z.o.zone_boxes,
+                               z.o.profile_max_iterations});
       if (cd.st.empty()) cd.rec.reason = "no candidate box";
     }
     if (e == Effect::radius_step || e == Effect::slip_zone) z.sel.timing.discrete_s += since(t0);
@@ -192,19 +189,17 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
   if (best) {
     for (Cand& cd : tried)
       if (cd.cv.ok && &cd != best)
-        cd.rec.reason = fmt::format("not the best of step {} (CV {:.4g} vs {:.4g})", step,
-                                    cd.cv.score, best->cv.score);
+        cd.rec.reason = fmt::format("not the best of step {} (CV {:.4g} vs {:.4g})", step, cd.cv.score,
+                                    best->cv.score);
     const auto t0 = Clock::now();
     SetEval full = z.cv.fit_all(best->st, z.cur_full.fitted, z.o.cv_max_iterations);
     best->rec.bic = full.ok ? full.bic : kNaN;
     best->rec.delta_bic = full.ok ? full.bic - z.cur_full.bic : kNaN;
-    std::string no =
-        full.ok ? verdict(z.cv.compare(z.cur_cv, best->cv, z.o.alpha), best->rec.delta_bic, z.o)
-                : "fit on all windows failed: " + full.error;
+    std::string no = full.ok ? verdict(z.cv.compare(z.cur_cv, best->cv, z.o.alpha), best->rec.delta_bic, z.o)
+                             : "fit on all windows failed: " + full.error;
     if (no.empty()) {  // the new effect itself must matter (actuator_lag's no-op is another source)
       const SetEval own = z.cv.own_noop(best->cv, best->e);
-      const std::string why =
-          own.ok ? verdict(z.cv.compare(own, best->cv, z.o.alpha), -1.0, z.o) : own.error;
+      const std::string why = own.ok ? verdict(z.cv.compare(own, best->cv, z.o.alpha), -1.0, z.o) : own.error;
       if (!why.empty()) no = "its own parameters at their no-op values do as well: " + why;
     }
     best->rec.time_s += since(t0);
@@ -213,8 +208,7 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
       best->rec.reason = "best candidate; improves CV significantly and BIC agrees";
       // Confounded alternatives: candidates the winner does not beat by (a)-(b).
       for (Cand& cd : tried)
-        if (cd.cv.ok && &cd != best &&
-            !verdict(z.cv.compare(cd.cv, best->cv, z.o.alpha), -1.0, z.o).empty())
+        if (cd.cv.ok && &cd != best && !verdict(z.cv.compare(cd.cv, best->cv, z.o.alpha), -1.0, z.o).empty())
           best->rec.rivals.push_back(std::string(effect_name(cd.e)));
       z.s = best->st;
       z.chosen.push_back(best->e);
@@ -248,16 +242,14 @@ bool backward_round(Search& z, int round) {
     if (d.cv.ok) d.full = z.cv.fit_all(d.st, z.cur_full.fitted, z.o.cv_max_iterations);
     fill(d.rec, d.cv);
     if (d.cv.ok && d.full.ok) {
-      const PairedComparison p =
-          z.cv.compare(d.cv, z.cur_cv, z.o.alpha);  // keeping e vs dropping it
+      const PairedComparison p = z.cv.compare(d.cv, z.cur_cv, z.o.alpha);  // keeping e vs dropping it
       fill(d.rec, p);
       d.rec.bic = d.full.bic;
       d.rec.delta_bic = z.cur_full.bic - d.full.bic;
       // Redundancy by rule (a) only: once another effect changes every
       // window, an intermittent effect's paired test has little power left.
       d.removable = !(p.rel >= z.o.min_rel_improvement && p.gain >= z.o.min_gain);
-      d.rec.reason = d.removable ? fmt::format("removable: without it CV is only {:.2f} % worse",
-                                               100.0 * p.rel)
+      d.rec.reason = d.removable ? fmt::format("removable: without it CV is only {:.2f} % worse", 100.0 * p.rel)
                                  : "kept: it is needed";
     } else {
       d.rec.reason = "fit without it failed: " + d.cv.error + d.full.error;
@@ -283,8 +275,7 @@ bool backward_round(Search& z, int round) {
 // Per window, the scored reference samples where an intermittent effect of
 // s acts (after radius_step.t; inside the slip_zone box), one row per such
 // effect.
-std::vector<std::vector<double>> acting_samples(const DiagInput& in,
-                                                const std::vector<Window>& windows,
+std::vector<std::vector<double>> acting_samples(const DiagInput& in, const std::vector<Window>& windows,
                                                 const EffectSet& s) {
   std::vector<std::vector<double>> out;
   for (Effect e : {Effect::radius_step, Effect::slip_zone}) {
@@ -293,10 +284,9 @@ std::vector<std::vector<double>> acting_samples(const DiagInput& in,
     for (const Window& w : windows) {
       double n = 0.0;
       for (std::size_t g = w.ref_begin; g < w.ref_end; ++g)
-        n += (e == Effect::radius_step
-                  ? in.ref_t_s[g] > s.get(e, "t")
-                  : in.ref_x_m[g] >= s.get(e, "x0") && in.ref_x_m[g] <= s.get(e, "x1") &&
-                        in.ref_y_m[g] >= s.get(e, "y0") && in.ref_y_m[g] <= s.get(e, "y1"))
+        n += (e == Effect::radius_step ? in.ref_t_s[g] > s.get(e, "t")
+                                       : in.ref_x_m[g] >= s.get(e, "x0") && in.ref_x_m[g] <= s.get(e, "x1") &&
+                                             in.ref_y_m[g] >= s.get(e, "y0") && in.ref_y_m[g] <= s.get(e, "y1"))
                  ? 1.0
                  : 0.0;
       row.push_back(n);
@@ -375,15 +365,13 @@ void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vecto
     double sse = base;
     if (!without.empty()) {
       ++sel.timing.fits;
-      sse = summary_sse(fit_effects(fit_in, without, sel.train_windows, {}, o.fit).train, fw,
-                        heading, ism, ish, true);
+      sse = summary_sse(fit_effects(fit_in, without, sel.train_windows, {}, o.fit).train, fw, heading, ism, ish,
+                        true);
     }
-    sel.effects.push_back(
-        {e, base > 0.0 ? std::clamp((sse - with_all) / base, 0.0, 1.0) : 0.0, {}});
+    sel.effects.push_back({e, base > 0.0 ? std::clamp((sse - with_all) / base, 0.0, 1.0) : 0.0, {}});
   }
-  std::stable_sort(
-      sel.effects.begin(), sel.effects.end(),
-      [](const SelectedEffect& a, const SelectedEffect& b) { return a.explains > b.explains; });
+  std::stable_sort(sel.effects.begin(), sel.effects.end(),
+                   [](const SelectedEffect& a, const SelectedEffect& b) { return a.explains > b.explains; });
 }
 
 }  // namespace
@@ -396,15 +384,13 @@ bool SelectOptions::IsValid(std::string* why) const {
   std::string w;
   if (!fit.IsValid(&w)) return fail("fit: " + w);
   if (!(fit.window_s > 0.0))
-    return fail(
-        fmt::format("fit.window_s = {}; selection needs windows: expected > 0 s", fit.window_s));
+    return fail(fmt::format("fit.window_s = {}; selection needs windows: expected > 0 s", fit.window_s));
   for (std::size_t i = 0; i < candidates.size(); ++i) {
     const Effect e = candidates[i];
     if (static_cast<int>(e) < 0 || static_cast<int>(e) >= kNumEffects)
       return fail(fmt::format("candidates[{}] is not an effect", i));
     if (e == Effect::gyro_bias || e == Effect::gyro_scale)
-      return fail(
-          fmt::format("candidate {} acts on the gyro, not on dead reckoning", effect_name(e)));
+      return fail(fmt::format("candidate {} acts on the gyro, not on dead reckoning", effect_name(e)));
     if (std::count(candidates.begin(), candidates.end(), e) > 1)
       return fail(fmt::format("candidate {} listed twice", effect_name(e)));
   }
@@ -427,8 +413,7 @@ bool SelectOptions::IsValid(std::string* why) const {
                 {"smooth_half_s", smooth_half_s, 0, 10, true, true},
                 {"smooth_heading_half_s", smooth_heading_half_s, 0, 10, true, true},
                 {"step_coarse_s", step_coarse_s, 0, 1e300, true, true},
-                {"step_fine_s (at most a fifth of the coarse step)", step_fine_s, 0, coarse / 5.0,
-                 false, true},
+                {"step_fine_s (at most a fifth of the coarse step)", step_fine_s, 0, coarse / 5.0, false, true},
                 {"zone_cell_m", zone_cell_m, 0, 1e300, false, true},
                 {"zone_max_boxes", double(zone_max_boxes), 0, 100, true, true},
                 {"zone_min_score", zone_min_score, 0, 1e300, true, true}};
@@ -436,28 +421,25 @@ bool SelectOptions::IsValid(std::string* why) const {
     const bool ok = std::isfinite(r.v) && (r.lo_in ? r.v >= r.lo : r.v > r.lo) &&
                     (r.hi_in ? r.v <= r.hi : r.v < r.hi);
     if (!ok)
-      return fail(fmt::format(
-          "{} = {}; expected a number in {}{}, {}{}", r.name, r.v, r.lo_in ? "[" : "(", r.lo,
-          r.hi >= 1e300 ? "inf" : fmt::format("{}", r.hi), r.hi_in && r.hi < 1e300 ? "]" : ")"));
+      return fail(fmt::format("{} = {}; expected a number in {}{}, {}{}", r.name, r.v, r.lo_in ? "[" : "(",
+                              r.lo, r.hi >= 1e300 ? "inf" : fmt::format("{}", r.hi),
+                              r.hi_in && r.hi < 1e300 ? "]" : ")"));
   }
   for (std::size_t i = 0; i < zone_boxes.size(); ++i) {
     const ZoneBox& b = zone_boxes[i];
-    if (!(std::isfinite(b.x0_m) && std::isfinite(b.x1_m) && std::isfinite(b.y0_m) &&
-          std::isfinite(b.y1_m) && b.x0_m < b.x1_m && b.y0_m < b.y1_m))
-      return fail(
-          fmt::format("zone_boxes[{}] = [{}, {}] x [{}, {}]; expected finite x0 < x1, y0 < y1", i,
-                      b.x0_m, b.x1_m, b.y0_m, b.y1_m));
+    if (!(std::isfinite(b.x0_m) && std::isfinite(b.x1_m) && std::isfinite(b.y0_m) && std::isfinite(b.y1_m) &&
+          b.x0_m < b.x1_m && b.y0_m < b.y1_m))
+      return fail(fmt::format("zone_boxes[{}] = [{}, {}] x [{}, {}]; expected finite x0 < x1, y0 < y1", i,
+                              b.x0_m, b.x1_m, b.y0_m, b.y1_m));
   }
   return true;
 }
 
 double selection_window_s(const DiagInput& in, const SelectOptions& o) {
-  if (in.has_ref_heading() || o.min_window_samples <= 0 || in.ref_t_s.size() < 3 ||
-      in.odo_t_s.empty())
+  if (in.has_ref_heading() || o.min_window_samples <= 0 || in.ref_t_s.size() < 3 || in.odo_t_s.empty())
     return o.fit.window_s;
   std::vector<double> dt;
-  for (std::size_t i = 1; i < in.ref_t_s.size(); ++i)
-    dt.push_back(in.ref_t_s[i] - in.ref_t_s[i - 1]);
+  for (std::size_t i = 1; i < in.ref_t_s.size(); ++i) dt.push_back(in.ref_t_s[i] - in.ref_t_s[i - 1]);
   std::nth_element(dt.begin(), dt.begin() + static_cast<long>(dt.size() / 2), dt.end());
   const double period = dt[dt.size() / 2];
   const double span = in.ref_t_s.back() - std::max(in.ref_t_s.front(), in.odo_t_s.front());
@@ -469,8 +451,8 @@ SelectionInput selection_input(const DiagInput& in, const SelectOptions& o) {
   const double window_s = selection_window_s(in, o);
   SelectionInput si;
   double correlated = 1.0;
-  const int stride = denoised_reference(in, o.select_ref_rate_hz, o.smooth_half_s,
-                                        o.smooth_heading_half_s, o.fit.model, si.input, correlated);
+  const int stride = denoised_reference(in, o.select_ref_rate_hz, o.smooth_half_s, o.smooth_heading_half_s,
+                                        o.fit.model, si.input, correlated);
   if (stride > 1) {
     const std::vector<Window> wf = make_windows(in, window_s), wt = make_windows(si.input, window_s);
     bool same = wt.size() == wf.size();
@@ -500,8 +482,7 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
   sel.baseline_pos_rmse_m = base.pos_rmse_m;
   sel.baseline_heading_rmse_rad = base.heading_rmse_rad;
   if (n_win < 3) {
-    sel.note = fmt::format("{} window(s) of {} s: too few to cross-validate (need 3)", n_win,
-                           o.fit.window_s);
+    sel.note = fmt::format("{} window(s) of {} s: too few to cross-validate (need 3)", n_win, o.fit.window_s);
     sel.timing.total_s = since(t_start);
     return sel;
   }
@@ -517,8 +498,8 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
   z.cur_cv = cv.cross_validate(EffectSet(), {}, o.cv_max_iterations);
   z.cur_full = cv.fit_all(EffectSet(), EffectSet(), o.cv_max_iterations);
   if (!z.cur_cv.ok || !z.cur_full.ok)
-    throw std::invalid_argument(fmt::format("track '{}': nominal replay failed: {}",
-                                            in_full.track_name, z.cur_cv.error + z.cur_full.error));
+    throw std::invalid_argument(fmt::format("track '{}': nominal replay failed: {}", in_full.track_name,
+                                            z.cur_cv.error + z.cur_full.error));
   sel.baseline_cv_score = z.cur_cv.score;
   SearchRecord rb;
   rb.phase = "baseline", rb.set = "none", rb.bic = z.cur_full.bic, rb.accepted = true;

@@ -160,53 +160,53 @@ inline FitOptions default_select_fit() {
 struct SelectOptions {
   // window_s (> 0 here), loss, model, anchoring; max_iterations: final fits
   FitOptions fit = default_select_fit();
-  std::vector<Effect> candidates;    // empty = every wheel-odometry effect (header comment)
-  int folds = 5;                     // K contiguous folds of windows (fewer with fewer windows)
-  int max_effects = 3;               // forward steps at most
-  double alpha = 1e-3;               // one-sided level of the paired test (rule (b))
-  double min_rel_improvement = 0.05; // relative CV improvement needed
-  double min_gain = 0.05;            // absolute CV improvement needed [normalised units/sample]
-  double heldout_fraction = 0.3;     // final model: share of windows held out
-  int cv_max_iterations = 50;        // Levenberg-Marquardt iterations of a CV fold fit
-  int profile_max_iterations = 20;   // of a fit of the radius_step / slip_zone searches
+  std::vector<Effect> candidates;     // empty = every wheel-odometry effect (header comment)
+  int folds = 5;                      // K contiguous folds of windows (fewer with fewer windows)
+  int max_effects = 3;                // forward steps at most
+  double alpha = 1e-3;                // one-sided level of the paired test (rule (b))
+  double min_rel_improvement = 0.05;  // relative CV improvement needed
+  double min_gain = 0.05;             // absolute CV improvement needed [normalised units/sample]
+  double heldout_fraction = 0.3;      // final model: share of windows held out
+  int cv_max_iterations = 50;         // Levenberg-Marquardt iterations of a CV fold fit
+  int profile_max_iterations = 20;    // of a fit of the radius_step / slip_zone searches
   // Windows of a reference without heading (fixes; free anchors) are
   // lengthened to hold at least this many reference samples, but to no more
   // than a third of the track (header comment, "Windows"); 0 = fit.window_s.
   double min_window_samples = 60.0;
-  double select_ref_rate_hz = 10.0;  // reference thinned to about this rate for selection; 0 = all
-  double smooth_half_s = 0.25;       // half span of the thinned reference's position fits [s]
+  double select_ref_rate_hz = 10.0;    // reference thinned to about this rate for selection; 0 = all
+  double smooth_half_s = 0.25;         // half span of the thinned reference's position fits [s]
   double smooth_heading_half_s = 1.0;  // of its heading fits (around a gyro/odometry trend) [s]
-  double step_coarse_s = 0.0;        // radius_step.t coarse grid [s]; 0 = window_s/2
-  double step_fine_s = 0.5;          // radius_step.t final resolution [s]
-  double zone_cell_m = 0.25;         // slip_zone grid cell [m]
-  int zone_max_boxes = 3;            // boxes found from the residual growth
-  double zone_min_score = 16.0;      // score a found box needs (zone_boxes.h)
-  std::vector<ZoneBox> zone_boxes;   // extra candidate boxes (e.g. from locate.h)
+  double step_coarse_s = 0.0;          // radius_step.t coarse grid [s]; 0 = window_s/2
+  double step_fine_s = 0.5;            // radius_step.t final resolution [s]
+  double zone_cell_m = 0.25;           // slip_zone grid cell [m]
+  int zone_max_boxes = 3;              // boxes found from the residual growth
+  double zone_min_score = 16.0;        // score a found box needs (zone_boxes.h)
+  std::vector<ZoneBox> zone_boxes;     // extra candidate boxes (e.g. from locate.h)
 
   bool IsValid(std::string* why) const;
 };
 
 // One evaluation of the search, in the order made.
 struct SearchRecord {
-  int step = 0;            // forward step (1, 2, ...), backward round, 0 for the baseline
-  std::string phase;       // "baseline", "forward", "backward"
-  std::string candidate;   // effect added (forward) or removed (backward); "" for the baseline
-  std::string set;         // the evaluated set (structure; discrete parameters shown)
-  double cv_score = 0.0;   // pooled held-out normalised MSE per sample (NaN: failed)
+  int step = 0;           // forward step (1, 2, ...), backward round, 0 for the baseline
+  std::string phase;      // "baseline", "forward", "backward"
+  std::string candidate;  // effect added (forward) or removed (backward); "" for the baseline
+  std::string set;        // the evaluated set (structure; discrete parameters shown)
+  double cv_score = 0.0;  // pooled held-out normalised MSE per sample (NaN: failed)
   double cv_pos_rmse_m = 0.0, cv_heading_rmse_rad = 0.0;  // pooled held-out (heading NaN without)
   double rel_improvement = 0.0;  // forward: (cur - cand)/cur; backward: (without - with)/without
   double gain = 0.0;             // the same difference, absolute
   int windows_changed = 0, windows_improved = 0;  // informative windows (cross_validate.h)
-  double p_rank = 1.0;     // one-sided Wilcoxon signed-rank p
-  double p_t = 0.0;        // smaller one-sided t-test p (window z's, log ratios; NaN: < 3 windows)
-  double p_param = 0.0;    // one-sided Stouffer p (NaN unless every informative window improved)
+  double p_rank = 1.0;                            // one-sided Wilcoxon signed-rank p
+  double p_t = 0.0;      // smaller one-sided t-test p (window z's, log ratios; NaN: < 3 windows)
+  double p_param = 0.0;  // one-sided Stouffer p (NaN unless every informative window improved)
   bool significant = false;
   // BIC of the evaluated set and its change against the set it competes with
   // (forward: new - current; backward: with - without, so < 0 favours keeping);
   // 0 when not fitted on all windows (forward candidates other than the best).
   double bic = 0.0, delta_bic = 0.0;
-  bool accepted = false;   // forward: added; backward: removed
-  std::string reason;      // why accepted or rejected
+  bool accepted = false;  // forward: added; backward: removed
+  std::string reason;     // why accepted or rejected
   // Accepted forward step: the other candidates of the step that the winner
   // does not beat by (a) and (b), i.e. confounded alternatives.
   std::vector<std::string> rivals;
@@ -215,7 +215,7 @@ struct SearchRecord {
 
 struct SelectedEffect {
   Effect effect = Effect::radius_error;
-  double explains = 0.0;      // share of the baseline training SSE it removes (header comment)
+  double explains = 0.0;       // share of the baseline training SSE it removes (header comment)
   std::vector<Effect> rivals;  // confounded alternatives when it was accepted (SearchRecord)
 };
 
@@ -229,20 +229,20 @@ struct SelectTiming {
 
 struct Selection {
   std::vector<SelectedEffect> effects;  // most explaining first; empty = nominal is enough
-  EffectSet structure;       // the selected effects with their discrete parameters, else no-op
-  bool fitted = false;       // final_fit is set (effects non-empty)
-  FitSummary final_fit;      // on train_windows of the selection input, scored on heldout_windows
+  EffectSet structure;                  // the selected effects with their discrete parameters, else no-op
+  bool fitted = false;                  // final_fit is set (effects non-empty)
+  FitSummary final_fit;                 // on train_windows of the selection input, scored on heldout_windows
   std::vector<int> train_windows, heldout_windows;
-  std::string split;         // "last" or "interleaved" ("" when nothing was fitted)
+  std::string split;  // "last" or "interleaved" ("" when nothing was fitted)
   double window_s = 0.0;
   int num_windows = 0, folds = 0;
-  int ref_stride = 1;        // thinning of the reference during selection
+  int ref_stride = 1;                                    // thinning of the reference during selection
   double baseline_cv_score = 0.0, final_cv_score = 0.0;  // nominal and selected set (CV)
   // Nominal model, all windows, full raw input.
   double baseline_pos_rmse_m = 0.0, baseline_heading_rmse_rad = 0.0;
   std::vector<SearchRecord> records;
-  SelectTiming timing;       // wall-clock seconds
-  std::string note;          // e.g. why selection could not run
+  SelectTiming timing;  // wall-clock seconds
+  std::string note;     // e.g. why selection could not run
 };
 
 // Throws std::invalid_argument (one line) for invalid options or an input

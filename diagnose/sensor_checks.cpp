@@ -1,8 +1,8 @@
 #include "diagnose/sensor_checks.h"
 
-#include "diagnose/series_interp.h"
 #include "diagnose/option_rules.h"
 #include "diagnose/robust_stats.h"
+#include "diagnose/series_interp.h"
 
 #include <algorithm>
 #include <cmath>
@@ -57,7 +57,8 @@ void check_series(std::string_view track, std::string_view what, const std::vect
   std::size_t k = 0;
   for (const auto& [name, col] : cols) {
     if ((k++ >= required && col->empty()) || col->size() == t.size()) continue;
-    fail(fmt::format("{} has {} values for {} {} times (expected one per time)", name, col->size(), t.size(), what));
+    fail(fmt::format("{} has {} values for {} {} times (expected one per time)", name, col->size(), t.size(),
+                     what));
   }
   for (const auto& [name, col] : cols) {
     for (std::size_t i = 0; i < col->size(); ++i) {
@@ -70,8 +71,13 @@ void check_input(const DiagInput& in) {
   check_series(in.track_name, "reference", in.ref_t_s,
                {{"ref_x_m", &in.ref_x_m}, {"ref_y_m", &in.ref_y_m}, {"ref_theta_rad", &in.ref_theta_rad}}, 2);
   check_series(in.track_name, "odometry", in.odo_t_s,
-               {{"phi_l_rad", &in.phi_l_rad}, {"phi_r_rad", &in.phi_r_rad}, {"v_mps", &in.v_mps},
-                {"w_radps", &in.w_radps}, {"cmd_v_mps", &in.cmd_v_mps}, {"cmd_w_radps", &in.cmd_w_radps}}, 0);
+               {{"phi_l_rad", &in.phi_l_rad},
+                {"phi_r_rad", &in.phi_r_rad},
+                {"v_mps", &in.v_mps},
+                {"w_radps", &in.w_radps},
+                {"cmd_v_mps", &in.cmd_v_mps},
+                {"cmd_w_radps", &in.cmd_w_radps}},
+               0);
   check_series(in.track_name, "gyro", in.gyro_t_s, {{"gyro_z_radps", &in.gyro_z_radps}}, 1);
 }
 
@@ -151,7 +157,8 @@ void huber_irls(RobustFit& f, const SensorCheckOptions& o) {
     double sxx = 0, sxu = 0, suu = 0, sxy = 0, suy = 0;
     for (std::size_t k = 0; k < n; ++k) {
       sxx += w[k] * f.xw[k] * f.xw[k], sxy += w[k] * f.xw[k] * f.yw[k];
-      if (two) sxu += w[k] * f.xw[k] * f.uw[k], suu += w[k] * f.uw[k] * f.uw[k], suy += w[k] * f.uw[k] * f.yw[k];
+      if (two)
+        sxu += w[k] * f.xw[k] * f.uw[k], suu += w[k] * f.uw[k] * f.uw[k], suy += w[k] * f.uw[k] * f.yw[k];
     }
     double na = 0, nb = 0;
     if (two) {
@@ -203,7 +210,8 @@ RobustFit gls_huber_fit(const Rows& r, const SensorCheckOptions& o) {
 // are added back to the fitted whitened values and the fit is repeated.
 // Calls `use(fit)` for each successful replicate.
 template <class Use>
-void bootstrap(const RobustFit& f, std::size_t block, std::uint64_t seed, const SensorCheckOptions& o, Use use) {
+void bootstrap(const RobustFit& f, std::size_t block, std::uint64_t seed, const SensorCheckOptions& o,
+               Use use) {
   BlockBootstrap boot(f.res.size(), block, seed);
   RobustFit b = f;
   for (int r = 0; r < o.bootstrap_replicates; ++r) {
@@ -324,9 +332,9 @@ double pearson(const std::vector<double>& a, const std::vector<double>& b,
 }
 
 struct LagCurves {
-  std::vector<double> shifts;                  // τ_k [s]
-  std::vector<std::vector<double>> sig_v;      // [k][bin] shifted signal speed
-  std::vector<std::vector<double>> sig_w;      // [k][bin] shifted signal yaw rate (gt only)
+  std::vector<double> shifts;              // τ_k [s]
+  std::vector<std::vector<double>> sig_v;  // [k][bin] shifted signal speed
+  std::vector<std::vector<double>> sig_w;  // [k][bin] shifted signal yaw rate (gt only)
 };
 
 struct Peak {
@@ -404,8 +412,10 @@ OdometryCheck check_odometry(const DiagInput& in, const ReferenceBins& rb, const
   oc.yaw_ratio.name = "yaw_ratio", oc.yaw_ratio.noop = 1.0;
   OdoSignal odo;
   if (in.odometry == OdometryKind::wheel_angles) {
-    if (in.phi_l_rad.size() < 2 || in.phi_r_rad.size() < 2) return oc.unavailable_reason = "no wheel angles", oc;
-    if (!finite_positive(in.radius_l_m) || !finite_positive(in.radius_r_m) || !finite_positive(in.wheel_base_m)) {
+    if (in.phi_l_rad.size() < 2 || in.phi_r_rad.size() < 2)
+      return oc.unavailable_reason = "no wheel angles", oc;
+    if (!finite_positive(in.radius_l_m) || !finite_positive(in.radius_r_m) ||
+        !finite_positive(in.wheel_base_m)) {
       return oc.unavailable_reason = "nominal radii / wheel base missing", oc;
     }
     std::vector<double> dist(in.odo_t_s.size()), head(in.odo_t_s.size());
@@ -413,7 +423,8 @@ OdometryCheck check_odometry(const DiagInput& in, const ReferenceBins& rb, const
       const double l = in.radius_l_m * in.phi_l_rad[i], r = in.radius_r_m * in.phi_r_rad[i];
       dist[i] = 0.5 * (l + r), head[i] = (r - l) / in.wheel_base_m;
     }
-    odo = {Cumulative::of_values(in.odo_t_s, std::move(dist)), Cumulative::of_values(in.odo_t_s, std::move(head))};
+    odo = {Cumulative::of_values(in.odo_t_s, std::move(dist)),
+           Cumulative::of_values(in.odo_t_s, std::move(head))};
   } else {
     if (in.v_mps.size() < 2 || in.w_radps.size() < 2) return oc.unavailable_reason = "no body velocities", oc;
     odo = {Cumulative::of_rates(in.odo_t_s, in.v_mps), Cumulative::of_rates(in.odo_t_s, in.w_radps)};
@@ -446,7 +457,8 @@ OdometryCheck check_odometry(const DiagInput& in, const ReferenceBins& rb, const
     }
   }
   oc.bins = static_cast<int>(rv.x.size());
-  if (oc.bins < kMinBins) return oc.unavailable_reason = "too few reference bins within the odometry's span", oc;
+  if (oc.bins < kMinBins)
+    return oc.unavailable_reason = "too few reference bins within the odometry's span", oc;
   const double nb = static_cast<double>(oc.bins);
   mean_abs_v /= nb, mean_abs_w /= nb, mean_width /= nb;
   const double T = o.relevance_window_s;
@@ -474,7 +486,8 @@ OdometryCheck check_odometry(const DiagInput& in, const ReferenceBins& rb, const
   oc.odometry_late = estimate_lag(odo, rb, step, o);
   if (in.odometry == OdometryKind::wheel_angles && in.cmd_v_mps.size() == in.odo_t_s.size() &&
       in.cmd_w_radps.size() == in.odo_t_s.size()) {
-    OdoSignal cmd{Cumulative::of_rates(in.odo_t_s, in.cmd_v_mps), Cumulative::of_rates(in.odo_t_s, in.cmd_w_radps)};
+    OdoSignal cmd{Cumulative::of_rates(in.odo_t_s, in.cmd_v_mps),
+                  Cumulative::of_rates(in.odo_t_s, in.cmd_w_radps)};
     LagEstimate l = estimate_lag(cmd, rb, step, o);
     l.lag_s = -l.lag_s;  // ref(t) ≈ cmd(t + τ)  ⇔  delay = −τ
     oc.command_delay = l;
@@ -485,25 +498,27 @@ OdometryCheck check_odometry(const DiagInput& in, const ReferenceBins& rb, const
 }  // namespace
 
 bool SensorCheckOptions::IsValid(std::string* why) const {
-  return check_option_rules({
-      {is_positive(bin_s), "bin_s", bin_s, "> 0"},
-      {is_non_negative(aps_min_bin_s), "aps_min_bin_s", aps_min_bin_s, ">= 0"},
-      {is_positive(huber_k), "huber_k", huber_k, "> 0"},
-      {max_irls_iterations >= 1 && max_irls_iterations <= 10000, "max_irls_iterations",
-       static_cast<double>(max_irls_iterations), "in [1, 10000]"},
-      {bootstrap_replicates >= 2 && bootstrap_replicates <= 100000, "bootstrap_replicates",
-       static_cast<double>(bootstrap_replicates), "in [2, 100000]"},
-      {is_positive(bootstrap_block_s), "bootstrap_block_s", bootstrap_block_s, "> 0"},
-      {is_positive(z_threshold), "z_threshold", z_threshold, "> 0"},
-      {is_positive(relevance_window_s), "relevance_window_s", relevance_window_s, "> 0"},
-      {is_non_negative(relevance_factor), "relevance_factor", relevance_factor, ">= 0"},
-      {is_non_negative(min_drift_rad), "min_drift_rad", min_drift_rad, ">= 0"},
-      {is_non_negative(min_drift_m), "min_drift_m", min_drift_m, ">= 0"},
-      {is_non_negative(max_lag_s) && max_lag_s <= 10, "max_lag_s", max_lag_s, "in [0, 10]"},
-      {is_non_negative(lag_step_s), "lag_step_s", lag_step_s, ">= 0 (0 = auto)"},
-      {!(lag_step_s > 0 && max_lag_s / lag_step_s > 5000), "lag_step_s", lag_step_s,
-       ">= max_lag_s / 5000 (at most 10001 lags)"},
-  }, why);
+  return check_option_rules(
+      {
+          {is_positive(bin_s), "bin_s", bin_s, "> 0"},
+          {is_non_negative(aps_min_bin_s), "aps_min_bin_s", aps_min_bin_s, ">= 0"},
+          {is_positive(huber_k), "huber_k", huber_k, "> 0"},
+          {max_irls_iterations >= 1 && max_irls_iterations <= 10000, "max_irls_iterations",
+           static_cast<double>(max_irls_iterations), "in [1, 10000]"},
+          {bootstrap_replicates >= 2 && bootstrap_replicates <= 100000, "bootstrap_replicates",
+           static_cast<double>(bootstrap_replicates), "in [2, 100000]"},
+          {is_positive(bootstrap_block_s), "bootstrap_block_s", bootstrap_block_s, "> 0"},
+          {is_positive(z_threshold), "z_threshold", z_threshold, "> 0"},
+          {is_positive(relevance_window_s), "relevance_window_s", relevance_window_s, "> 0"},
+          {is_non_negative(relevance_factor), "relevance_factor", relevance_factor, ">= 0"},
+          {is_non_negative(min_drift_rad), "min_drift_rad", min_drift_rad, ">= 0"},
+          {is_non_negative(min_drift_m), "min_drift_m", min_drift_m, ">= 0"},
+          {is_non_negative(max_lag_s) && max_lag_s <= 10, "max_lag_s", max_lag_s, "in [0, 10]"},
+          {is_non_negative(lag_step_s), "lag_step_s", lag_step_s, ">= 0 (0 = auto)"},
+          {!(lag_step_s > 0 && max_lag_s / lag_step_s > 5000), "lag_step_s", lag_step_s,
+           ">= max_lag_s / 5000 (at most 10001 lags)"},
+      },
+      why);
 }
 
 ReferenceBins reference_bins(const DiagInput& in, const SensorCheckOptions& o, double t_begin_s,
@@ -537,9 +552,10 @@ ReferenceBins reference_bins(const DiagInput& in, const SensorCheckOptions& o, d
   // Noise of the reference levels (see the header).
   if (rb.heading) {
     rb.heading_noise_rad = second_difference_sigma(in.ref_theta_rad);
-    rb.position_noise_m = in.ref_sigma_m > 0 ? in.ref_sigma_m
-                                             : std::sqrt(0.5 * (std::pow(second_difference_sigma(in.ref_x_m), 2) +
-                                                                std::pow(second_difference_sigma(in.ref_y_m), 2)));
+    rb.position_noise_m = in.ref_sigma_m > 0
+                              ? in.ref_sigma_m
+                              : std::sqrt(0.5 * (std::pow(second_difference_sigma(in.ref_x_m), 2) +
+                                                 std::pow(second_difference_sigma(in.ref_y_m), 2)));
   } else {
     rb.position_noise_m = std::max(in.ref_sigma_m, 0.0);
   }

@@ -93,9 +93,9 @@
 namespace odotune::diagnose {
 
 struct SensorCheckOptions {
-  double bin_s = 0.25;               // minimum width of a reference bin [s]
-  double aps_min_bin_s = 2.0;        // minimum bin width with fixes only [s]
-  double huber_k = 1.345;            // Huber threshold, in robust residual σ
+  double bin_s = 0.25;         // minimum width of a reference bin [s]
+  double aps_min_bin_s = 2.0;  // minimum bin width with fixes only [s]
+  double huber_k = 1.345;      // Huber threshold, in robust residual σ
   int max_irls_iterations = 50;
   int bootstrap_replicates = 200;
   double bootstrap_block_s = 5.0;    // block length of the bootstrap [s]
@@ -117,7 +117,7 @@ struct Verdict {
   std::string name;
   double value = std::numeric_limits<double>::quiet_NaN();
   double std_error = std::numeric_limits<double>::quiet_NaN();  // block residual bootstrap
-  double noop = 0.0;  // the value meaning "no effect"
+  double noop = 0.0;                                            // the value meaning "no effect"
   double z = std::numeric_limits<double>::quiet_NaN();          // (value − noop)/std_error
   // Drift the departure causes over relevance_window_s, and the drift the
   // noise alone causes. Gyro [rad]: the heading random walk of its white
@@ -152,8 +152,8 @@ struct GyroCheck {
   double noise_sigma_radps = std::numeric_limits<double>::quiet_NaN();     // per sample
   double residual_sigma_radps = std::numeric_limits<double>::quiet_NaN();  // per bin, robust
   double mean_abs_rate_radps = std::numeric_limits<double>::quiet_NaN();   // mean |w_ref|
-  Verdict scale;  // "gyro_scale.s", noop 1
-  Verdict bias;   // "gyro_bias.b" [rad/s], noop 0
+  Verdict scale;                                                           // "gyro_scale.s", noop 1
+  Verdict bias;                                                            // "gyro_bias.b" [rad/s], noop 0
 };
 
 struct LagEstimate {
@@ -169,8 +169,8 @@ struct OdometryCheck {
   std::string unavailable_reason;
   int bins = 0;
   double residual_sigma_mps = std::numeric_limits<double>::quiet_NaN();  // speed regression, per bin
-  Verdict speed_ratio;  // reference / odometry ground speed, noop 1
-  Verdict yaw_ratio;    // reference / odometry yaw rate, noop 1 (gt only)
+  Verdict speed_ratio;        // reference / odometry ground speed, noop 1
+  Verdict yaw_ratio;          // reference / odometry yaw rate, noop 1 (gt only)
   LagEstimate odometry_late;  // odo(t) ≈ ref(t − lag)
   LagEstimate command_delay;  // ref(t) ≈ cmd(t − lag)
 };

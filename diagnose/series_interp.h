@@ -46,8 +46,7 @@ class Cumulative {
     const std::vector<double>& tt = *t_;
     if (t <= tt.front()) return c_.front();
     if (t >= tt.back()) return c_.back();
-    const std::size_t i =
-        static_cast<std::size_t>(std::upper_bound(tt.begin(), tt.end(), t) - tt.begin()) - 1;
+    const std::size_t i = static_cast<std::size_t>(std::upper_bound(tt.begin(), tt.end(), t) - tt.begin()) - 1;
     const double h = tt[i + 1] - tt[i], u = t - tt[i];
     if (r_ == nullptr) return c_[i] + (c_[i + 1] - c_[i]) * (u / h);
     const double slope = ((*r_)[i + 1] - (*r_)[i]) / h;

@@ -16,7 +16,6 @@ namespace {
 constexpr double kTimeEps = 1e-9;  // [s] tolerance of window boundaries
 constexpr double kMaxWindows = 1e6;
 
-
 // A rigid 2D motion: rotation about the origin, then translation.
 struct Rigid {
   double phi = 0.0, tx = 0.0, ty = 0.0;  // p -> R(phi) p + t
@@ -29,8 +28,7 @@ struct Rigid {
 // The rigid motion that best maps `pred` onto the reference of w in least
 // squares: positions only, or positions and headings weighted by the
 // reference sigmas (file comment of window_replay.h).
-Rigid align(const std::vector<Pose<double>>& pred, const DiagInput& in, const Window& w,
-            bool heading) {
+Rigid align(const std::vector<Pose<double>>& pred, const DiagInput& in, const Window& w, bool heading) {
   const std::size_t n = pred.size();
   double px = 0, py = 0, qx = 0, qy = 0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -100,8 +98,7 @@ std::vector<Window> make_windows(const DiagInput& in, double window_s) {
     const double e = last ? std::numeric_limits<double>::infinity()
                           : t0 + static_cast<double>(j + 1) * window_s;
     Window w;
-    w.node_begin = static_cast<std::size_t>(std::lower_bound(ot.begin(), ot.end(), s - kTimeEps) -
-                                            ot.begin());
+    w.node_begin = static_cast<std::size_t>(std::lower_bound(ot.begin(), ot.end(), s - kTimeEps) - ot.begin());
     if (w.node_begin + 1 >= ot.size()) continue;
     w.t_begin_s = ot[w.node_begin];
     w.t_end_s = std::min(e, t_last);
@@ -110,43 +107,41 @@ std::vector<Window> make_windows(const DiagInput& in, double window_s) {
                  : std::lower_bound(rt.begin(), rt.end(), w.t_begin_s - kTimeEps)) -
         rt.begin());
     w.ref_end = last ? rt.size()
-                     : static_cast<std::size_t>(
-                           std::lower_bound(rt.begin(), rt.end(), e - kTimeEps) - rt.begin());
+                     : static_cast<std::size_t>(std::lower_bound(rt.begin(), rt.end(), e - kTimeEps) -
+                                                rt.begin());
     if (w.ref_end <= w.ref_begin || w.ref_end - w.ref_begin < min_ref) continue;
-    w.node_end = static_cast<std::size_t>(
-        std::lower_bound(ot.begin(), ot.end(), rt[w.ref_end - 1] - kTimeEps) - ot.begin());
+    w.node_end = static_cast<std::size_t>(std::lower_bound(ot.begin(), ot.end(), rt[w.ref_end - 1] - kTimeEps) -
+                                          ot.begin());
     w.node_end = std::clamp(w.node_end, w.node_begin, ot.size() - 1);
     w.index = static_cast<int>(out.size());
     out.push_back(w);
   }
   if (out.empty())
-    throw std::invalid_argument(fmt::format(
-        "track '{}': no window of {} s holds {} reference sample(s) to score", in.track_name,
-        window_s, min_ref));
+    throw std::invalid_argument(
+        fmt::format("track '{}': no window of {} s holds {} reference sample(s) to score", in.track_name,
+                    window_s, min_ref));
   return out;
 }
 
 Pose<double> reference_pose_at(const DiagInput& in, double t_s) {
   if (!in.has_ref_heading())
-    throw std::invalid_argument(fmt::format("track '{}': the reference has no heading",
-                                            in.track_name));
+    throw std::invalid_argument(fmt::format("track '{}': the reference has no heading", in.track_name));
   return {interp_held(in.ref_t_s, in.ref_x_m, t_s), interp_held(in.ref_t_s, in.ref_y_m, t_s),
           interp_held(in.ref_t_s, in.ref_theta_rad, t_s)};
 }
 
-ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
-                    const DiagInput& in, const std::vector<Window>& windows,
-                    const std::vector<int>& which, const std::vector<Pose<double>>* anchors) {
+ReplayResult replay(const EffectModel& model, const std::vector<double>& params, const DiagInput& in,
+                    const std::vector<Window>& windows, const std::vector<int>& which,
+                    const std::vector<Pose<double>>* anchors) {
   return replay(model, params, in, windows, which, anchors, anchoring(in));
 }
 
-ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
-                    const DiagInput& in, const std::vector<Window>& windows,
-                    const std::vector<int>& which, const std::vector<Pose<double>>* anchors,
-                    Anchoring mode) {
+ReplayResult replay(const EffectModel& model, const std::vector<double>& params, const DiagInput& in,
+                    const std::vector<Window>& windows, const std::vector<int>& which,
+                    const std::vector<Pose<double>>* anchors, Anchoring mode) {
   if (params.size() != model.layout().size())
-    throw std::invalid_argument(fmt::format("replay: {} parameters for a model of {}",
-                                            params.size(), model.layout().size()));
+    throw std::invalid_argument(fmt::format("replay: {} parameters for a model of {}", params.size(),
+                                            model.layout().size()));
   if (model.num_nodes() != in.odo_t_s.size())
     throw std::invalid_argument("replay: the model was built for another track");
   std::vector<int> list = which;
@@ -155,11 +150,10 @@ ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
   const bool heading = in.has_ref_heading();
   const bool free_anchor = mode == Anchoring::free;
   if (!free_anchor && !heading)
-    throw std::invalid_argument(fmt::format(
-        "replay: track '{}' has no reference heading to anchor windows on", in.track_name));
+    throw std::invalid_argument(fmt::format("replay: track '{}' has no reference heading to anchor windows on",
+                                            in.track_name));
   if (anchors && free_anchor && anchors->size() != list.size())
-    throw std::invalid_argument(fmt::format("replay: {} anchors for {} windows", anchors->size(),
-                                            list.size()));
+    throw std::invalid_argument(fmt::format("replay: {} anchors for {} windows", anchors->size(), list.size()));
   const double nan = std::nan("");
   ReplayResult res;
   res.pred_x_m.assign(in.ref_t_s.size(), nan);
@@ -169,8 +163,8 @@ ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
   std::size_t n_all = 0;
   for (std::size_t i = 0; i < list.size(); ++i) {
     if (list[i] < 0 || static_cast<std::size_t>(list[i]) >= windows.size())
-      throw std::invalid_argument(fmt::format("replay: window {} does not exist (the track has {})",
-                                              list[i], windows.size()));
+      throw std::invalid_argument(fmt::format("replay: window {} does not exist (the track has {})", list[i],
+                                              windows.size()));
     const Window& w = windows[static_cast<std::size_t>(list[i])];
     std::vector<Pose<double>> pred(w.ref_end - w.ref_begin);
     Pose<double> a;
@@ -221,8 +215,8 @@ ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
   return res;
 }
 
-ReplayResult replay(const DiagInput& in, const EffectSet& set, double window_s,
-                    const std::vector<int>& which, const ModelOptions& opt) {
+ReplayResult replay(const DiagInput& in, const EffectSet& set, double window_s, const std::vector<int>& which,
+                    const ModelOptions& opt) {
   const EffectModel model(in, set, opt);
   return replay(model, pack(set), in, make_windows(in, window_s), which);
 }

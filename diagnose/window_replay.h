@@ -82,9 +82,8 @@ Pose<double> reference_pose_at(const DiagInput& in, double t_s);
 // anchor composition): only slip_zone's inside test looks at the world pose,
 // and it gets frame (+) pose.
 template <typename T>
-void replay_window(const EffectModel& model, const T* params, const Window& w,
-                   const Pose<T>& anchor, const std::vector<double>& ref_t, Pose<T>* out,
-                   const Pose<double>* frame = nullptr) {
+void replay_window(const EffectModel& model, const T* params, const Window& w, const Pose<T>& anchor,
+                   const std::vector<double>& ref_t, Pose<T>* out, const Pose<double>* frame = nullptr) {
   const auto& t = model.series().t_s;
   Stepper<T> stepper(model, params);
   stepper.start(w.node_begin);
@@ -97,8 +96,8 @@ void replay_window(const EffectModel& model, const T* params, const Window& w,
     const Pose<T> prev = p;
     if (world) {
       const double lx = scalar(prev.x), ly = scalar(prev.y);
-      advance(p, stepper.step(k, Pose<T>{T(frame->x + fc * lx - fs * ly),
-                                         T(frame->y + fs * lx + fc * ly), prev.th}));
+      advance(p, stepper.step(k, Pose<T>{T(frame->x + fc * lx - fs * ly), T(frame->y + fs * lx + fc * ly),
+                                         prev.th}));
     } else {
       advance(p, stepper.step(k, prev));
     }
@@ -121,9 +120,9 @@ struct WindowError {
 };
 
 struct ReplayResult {
-  std::vector<WindowError> windows;  // in the order asked
-  double pos_rmse_m = 0.0;           // pooled over every scored sample of those windows
-  double heading_rmse_rad = 0.0;     // pooled; NaN without reference heading
+  std::vector<WindowError> windows;   // in the order asked
+  double pos_rmse_m = 0.0;            // pooled over every scored sample of those windows
+  double heading_rmse_rad = 0.0;      // pooled; NaN without reference heading
   std::vector<Pose<double>> anchors;  // anchor of each replayed window
   // Predicted pose per reference sample (DiagInput::ref_t_s); NaN where no
   // replayed window scores the sample.
@@ -137,14 +136,12 @@ struct ReplayResult {
 // form anchors as anchoring(in). Throws std::invalid_argument for a bad
 // window index or parameter count, or Anchoring::reference without a
 // reference heading.
-ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
-                    const DiagInput& in, const std::vector<Window>& windows,
-                    const std::vector<int>& which = {},
+ReplayResult replay(const EffectModel& model, const std::vector<double>& params, const DiagInput& in,
+                    const std::vector<Window>& windows, const std::vector<int>& which = {},
                     const std::vector<Pose<double>>* anchors = nullptr);
-ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
-                    const DiagInput& in, const std::vector<Window>& windows,
-                    const std::vector<int>& which, const std::vector<Pose<double>>* anchors,
-                    Anchoring mode);
+ReplayResult replay(const EffectModel& model, const std::vector<double>& params, const DiagInput& in,
+                    const std::vector<Window>& windows, const std::vector<int>& which,
+                    const std::vector<Pose<double>>* anchors, Anchoring mode);
 
 // Convenience: builds the model of `set` and the windows of window_s.
 ReplayResult replay(const DiagInput& in, const EffectSet& set, double window_s,

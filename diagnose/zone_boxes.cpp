@@ -25,17 +25,14 @@ constexpr double kFlatCost = 1.92;
 
 }  // namespace
 
-
 std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Window>& windows,
-                                     const std::vector<double>& pred_x_m,
-                                     const std::vector<double>& pred_y_m,
-                                     const std::vector<double>& pred_theta_rad, double cell_m,
-                                     int max_boxes, double min_score) {
+                                     const std::vector<double>& pred_x_m, const std::vector<double>& pred_y_m,
+                                     const std::vector<double>& pred_theta_rad, double cell_m, int max_boxes,
+                                     double min_score) {
   if (pred_x_m.size() != in.ref_t_s.size() || pred_y_m.size() != in.ref_t_s.size())
-    throw std::invalid_argument(
-        fmt::format("zone_candidates: {} and {} predictions for {} reference "
-                    "samples",
-                    pred_x_m.size(), pred_y_m.size(), in.ref_t_s.size()));
+    throw std::invalid_argument(fmt::format("zone_candidates: {} and {} predictions for {} reference "
+                                            "samples",
+                                            pred_x_m.size(), pred_y_m.size(), in.ref_t_s.size()));
   const bool heading = in.has_ref_heading() && pred_theta_rad.size() == in.ref_t_s.size();
   const double sm2 = in.ref_sigma_m * in.ref_sigma_m;
   const double sh2 = heading ? in.ref_sigma_rad * in.ref_sigma_rad : 1.0;
@@ -50,8 +47,8 @@ std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Wind
   for (const Window& w : windows)
     for (std::size_t g = w.ref_begin + 1; g < w.ref_end; ++g) {
       const std::size_t p = g - 1;
-      if (!(std::isfinite(pred_x_m[g]) && std::isfinite(pred_x_m[p]) &&
-            std::isfinite(pred_y_m[g]) && std::isfinite(pred_y_m[p])))
+      if (!(std::isfinite(pred_x_m[g]) && std::isfinite(pred_x_m[p]) && std::isfinite(pred_y_m[g]) &&
+            std::isfinite(pred_y_m[p])))
         continue;
       // Direction and length of travel from the prediction: dead reckoning
       // is smooth, the reference's noise would bias a (long noisy steps point
@@ -78,8 +75,7 @@ std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Wind
     }
   if (inc.empty() || max_boxes <= 0) return {};
   const double cell = std::max({cell_m, (xmax - xmin) / 400.0, (ymax - ymin) / 400.0});
-  const int nx = static_cast<int>((xmax - xmin) / cell) + 1,
-            ny = static_cast<int>((ymax - ymin) / cell) + 1;
+  const int nx = static_cast<int>((xmax - xmin) / cell) + 1, ny = static_cast<int>((ymax - ymin) / cell) + 1;
   for (Inc& k : inc) {
     k.cx = std::min(nx - 1, static_cast<int>((k.x - xmin) / cell));
     k.cy = std::min(ny - 1, static_cast<int>((k.y - ymin) / cell));
@@ -157,19 +153,17 @@ std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Wind
     }
     found.push_back(r);
     if (sc < min_score) continue;
-    out.push_back({xmin + r.x0 * cell, xmin + (r.x1 + 1) * cell, ymin + r.y0 * cell,
-                   ymin + (r.y1 + 1) * cell, sc});
+    out.push_back({xmin + r.x0 * cell, xmin + (r.x1 + 1) * cell, ymin + r.y0 * cell, ymin + (r.y1 + 1) * cell,
+                   sc});
   }
   return out;
 }
-
 
 namespace {
 
 // Centre of the scored reference samples inside box b along x (axis 0) or
 // y (axis 1); NaN when none is inside.
-double inside_centre(const DiagInput& in, const std::vector<Window>& windows, const ZoneBox& b,
-                     int axis) {
+double inside_centre(const DiagInput& in, const std::vector<Window>& windows, const ZoneBox& b, int axis) {
   double lo = kInf, hi = -kInf;
   for (const Window& w : windows)
     for (std::size_t g = w.ref_begin; g < w.ref_end; ++g)
@@ -185,9 +179,8 @@ double inside_centre(const DiagInput& in, const std::vector<Window>& windows, co
 
 EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval& cur_full,
                           const ZoneSearchOptions& o) {
-  std::vector<ZoneBox> boxes =
-      zone_candidates(cv.input(), cv.windows(), cur_full.pred.x_m, cur_full.pred.y_m,
-                      cur_full.pred.theta_rad, o.cell_m, o.max_boxes, o.min_score);
+  std::vector<ZoneBox> boxes = zone_candidates(cv.input(), cv.windows(), cur_full.pred.x_m, cur_full.pred.y_m,
+                                               cur_full.pred.theta_rad, o.cell_m, o.max_boxes, o.min_score);
   boxes.insert(boxes.end(), o.extra_boxes.begin(), o.extra_boxes.end());
   EffectSet warm = cur_full.fitted;
   auto try_box = [&](const ZoneBox& b, double& cost, EffectSet& fitted) {
@@ -212,8 +205,8 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
     const EffectSet st = try_box(b, cost, fitted);
     if (cost < best_cost) best_cost = cost, best = st, best_fit = fitted, bb = b;
   }
-  if (best.empty() || std::max(best_fit.get(Effect::slip_zone, "s_l"),
-                               best_fit.get(Effect::slip_zone, "s_r")) < kMinZoneSlip)
+  if (best.empty() ||
+      std::max(best_fit.get(Effect::slip_zone, "s_l"), best_fit.get(Effect::slip_zone, "s_r")) < kMinZoneSlip)
     return best;
   warm = best_fit;
   for (double step : {0.5 * o.cell_m, 0.25 * o.cell_m})
@@ -228,8 +221,7 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
           double cost;
           EffectSet fitted;
           const EffectSet st = try_box(q, cost, fitted);
-          if (cost < best_cost * (1.0 - 1e-6))
-            best_cost = cost, best = st, bb = q, warm = fitted, moved = 1;
+          if (cost < best_cost * (1.0 - 1e-6)) best_cost = cost, best = st, bb = q, warm = fitted, moved = 1;
         }
     }
   // Undetermined edges (select.h): each edge in turn is moved out to the

@@ -50,17 +50,16 @@ struct ZoneBox {
 // returned, best seed first, at most max_boxes. Throws std::invalid_argument
 // when pred_x_m or pred_y_m do not have one value per reference sample.
 std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Window>& windows,
-                                     const std::vector<double>& pred_x_m,
-                                     const std::vector<double>& pred_y_m,
-                                     const std::vector<double>& pred_theta_rad, double cell_m,
-                                     int max_boxes, double min_score);
+                                     const std::vector<double>& pred_x_m, const std::vector<double>& pred_y_m,
+                                     const std::vector<double>& pred_theta_rad, double cell_m, int max_boxes,
+                                     double min_score);
 
 struct ZoneSearchOptions {
-  double cell_m = 0.25;             // zone_candidates' cell, and the refinement's unit [m]
-  int max_boxes = 3;                // boxes from zone_candidates
-  double min_score = 16.0;          // their score threshold
-  std::vector<ZoneBox> extra_boxes; // more candidates (e.g. from locate.h)
-  int max_iterations = 20;          // of each fit
+  double cell_m = 0.25;              // zone_candidates' cell, and the refinement's unit [m]
+  int max_boxes = 3;                 // boxes from zone_candidates
+  double min_score = 16.0;           // their score threshold
+  std::vector<ZoneBox> extra_boxes;  // more candidates (e.g. from locate.h)
+  int max_iterations = 20;           // of each fit
 };
 
 // The structure s plus slip_zone with the best box, or an empty set when

@@ -32,9 +32,9 @@ struct WheelTravel {
 };
 
 struct MotionStep {
-  Pose next;                 // pose after the step
-  StateCov F;                // ∂next/∂pose
-  ControlJacobian V;         // ∂next/∂(l, r)
+  Pose next;          // pose after the step
+  StateCov F;         // ∂next/∂pose
+  ControlJacobian V;  // ∂next/∂(l, r)
 };
 
 // Applies the motion model to `pose`; `wheel_base_m` > 0.

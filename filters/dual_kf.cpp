@@ -51,8 +51,8 @@ DkfJacobian dkf_jacobian(const DkfParams& theta, double omega_l_rad_s, double om
   // W = (ω_r R_R − ω_l R_L)/D
   h(kDkfW, kDkfRadiusRight) = omega_r_rad_s / d;
   h(kDkfW, kDkfRadiusLeft) = -omega_l_rad_s / d;
-  h(kDkfW, kDkfWheelBase) =
-      -(omega_r_rad_s * theta(kDkfRadiusRight) - omega_l_rad_s * theta(kDkfRadiusLeft)) / (d * d);
+  h(kDkfW, kDkfWheelBase) = -(omega_r_rad_s * theta(kDkfRadiusRight) - omega_l_rad_s * theta(kDkfRadiusLeft)) /
+                            (d * d);
   return h;
 }
 
@@ -74,15 +74,13 @@ const CalibEstimate& DualKf::step(const CalibSample& s) {
   if (!(std::isfinite(s.dt_s) && s.dt_s >= 0.0) || !std::isfinite(s.omega_l_rad_s) ||
       !std::isfinite(s.omega_r_rad_s) || !std::isfinite(s.v_m_s) || !std::isfinite(s.w_rad_s) ||
       !(std::isfinite(s.v_var) && s.v_var > 0.0) || !(std::isfinite(s.w_var) && s.w_var > 0.0))
-    throw std::invalid_argument(
-        "CalibSample: expected dt_s ≥ 0, finite rates and measurement, variances > 0");
+    throw std::invalid_argument("CalibSample: expected dt_s ≥ 0, finite rates and measurement, variances > 0");
   const double wl = s.omega_l_rad_s;
   const double wr = s.omega_r_rad_s;
   const DkfVelocity z(s.v_m_s, s.w_rad_s);
-  const DkfVelocityCov p_odo =
-      DkfVelocity(params_.odometry_sd_v_m_s * params_.odometry_sd_v_m_s,
-                  params_.odometry_sd_w_rad_s * params_.odometry_sd_w_rad_s)
-          .asDiagonal();
+  const DkfVelocityCov p_odo = DkfVelocity(params_.odometry_sd_v_m_s * params_.odometry_sd_v_m_s,
+                                           params_.odometry_sd_w_rad_s * params_.odometry_sd_w_rad_s)
+                                   .asDiagonal();
   const DkfVelocityCov r_meas = DkfVelocity(s.v_var, s.w_var).asDiagonal();
 
   // State filter: prior x⁻ = h(θ̂, ω) with covariance P_odo, corrected by z.
@@ -96,14 +94,13 @@ const CalibEstimate& DualKf::step(const CalibSample& s) {
   // Parameter filter: random walk, then an EKF update with x̂ as the
   // measurement of h(θ, ω), H = ∂h/∂θ at θ⁻, covariance P_x + P_odo.
   const double qr = params_.radius_walk_m_per_sqrt_s * params_.radius_walk_m_per_sqrt_s * s.dt_s;
-  const double qd =
-      params_.wheel_base_walk_m_per_sqrt_s * params_.wheel_base_walk_m_per_sqrt_s * s.dt_s;
+  const double qd = params_.wheel_base_walk_m_per_sqrt_s * params_.wheel_base_walk_m_per_sqrt_s * s.dt_s;
   const DkfParamCov p_prior = P_theta_ + DkfParamCov(DkfParams(qr, qr, qd).asDiagonal());
   const DkfJacobian h = dkf_jacobian(theta_, wl, wr);
   const DkfVelocityCov r_theta = p_x + p_odo;
   const DkfVelocityCov innovation_cov = h * p_prior * h.transpose() + r_theta;
-  const Eigen::Matrix<double, kDkfParamDim, kDkfVelocityDim> k_theta =
-      p_prior * h.transpose() * innovation_cov.inverse();
+  const Eigen::Matrix<double, kDkfParamDim, kDkfVelocityDim> k_theta = p_prior * h.transpose() *
+                                                                       innovation_cov.inverse();
   theta_ += k_theta * (x_post - x_prior);  // x_prior = h(θ⁻, ω)
   const DkfParamCov i_kh = DkfParamCov::Identity() - k_theta * h;
   P_theta_ = i_kh * p_prior * i_kh.transpose() + k_theta * r_theta * k_theta.transpose();

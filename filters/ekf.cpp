@@ -57,8 +57,8 @@ StateCov Ekf::predict(WheelTravel u, double abs_yaw_rate_rad_s) {
 
 void Ekf::update(const Position& z) {
   // H = [I₂ 0]: the fix observes x and y directly.
-  const Eigen::Matrix2d S =
-      P_.topLeftCorner<2, 2>() + Eigen::Vector2d(noise_.q_x_m2, noise_.q_y_m2).asDiagonal().toDenseMatrix();
+  const Eigen::Matrix2d S = P_.topLeftCorner<2, 2>() +
+                            Eigen::Vector2d(noise_.q_x_m2, noise_.q_y_m2).asDiagonal().toDenseMatrix();
   const Eigen::Matrix<double, kStateDim, 2> PHt = P_.leftCols<2>();
   const Eigen::Matrix<double, kStateDim, 2> K = PHt * S.inverse();
   const Eigen::Vector2d innovation = z - x_.head<2>();

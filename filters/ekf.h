@@ -26,7 +26,7 @@ std::string_view to_string(Divergence d);
 
 struct EkfParams {
   NoiseParams noise;
-  double wheel_base_m = 0.3;      // D of the motion model
+  double wheel_base_m = 0.3;  // D of the motion model
   Pose initial_pose = Pose::Zero();
   // Initial covariance; the default says "we know where we start to 1 cm and 1°".
   StateCov initial_cov = (Pose() << 1e-4, 1e-4, 3.0e-4).finished().asDiagonal();

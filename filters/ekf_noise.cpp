@@ -29,9 +29,11 @@ bool NoiseParams::IsValid(std::string* why) const {
     if (why) *why = std::string(name) + " = " + std::to_string(v) + ": expected " + expected;
     return false;
   };
-  const struct { const char* name; double v; } nonneg[] = {
-      {"r_x_m2", r_x_m2}, {"r_y_m2", r_y_m2}, {"r_theta_rad2", r_theta_rad2},
-      {"a1", a1}, {"a2", a2}, {"b1", b1}, {"b2", b2}};
+  const struct {
+    const char* name;
+    double v;
+  } nonneg[] = {{"r_x_m2", r_x_m2}, {"r_y_m2", r_y_m2}, {"r_theta_rad2", r_theta_rad2}, {"a1", a1}, {"a2", a2},
+                {"b1", b1},         {"b2", b2}};
   for (const auto& f : nonneg)
     if (!std::isfinite(f.v) || f.v < 0.0) return fail(f.name, f.v, "a finite value >= 0");
   if (!std::isfinite(q_x_m2) || q_x_m2 <= 0.0) return fail("q_x_m2", q_x_m2, "a finite value > 0");

@@ -42,8 +42,8 @@ struct NoiseParams {
 };
 
 // σl², σr² of eq. 3–4 with α from eq. 6–7 for one step; |ω_z| in rad/s.
-inline void wheel_variances(const NoiseParams& p, WheelTravel u, double abs_yaw_rate_rad_s,
-                            double* var_l_m2, double* var_r_m2) {
+inline void wheel_variances(const NoiseParams& p, WheelTravel u, double abs_yaw_rate_rad_s, double* var_l_m2,
+                            double* var_r_m2) {
   const double alpha1 = p.a1 + p.b1 * abs_yaw_rate_rad_s;
   const double alpha2 = p.a2 + p.b2 * abs_yaw_rate_rad_s;
   const double diff = alpha2 * (u.left_m - u.right_m);
@@ -66,8 +66,7 @@ inline StateCov process_noise(const NoiseParams& p, WheelTravel u, double abs_ya
   }
   double vl = 0.0, vr = 0.0;
   wheel_variances(p, u, abs_yaw_rate_rad_s, &vl, &vr);
-  return vl * V.col(kLeft) * V.col(kLeft).transpose() +
-         vr * V.col(kRight) * V.col(kRight).transpose();
+  return vl * V.col(kLeft) * V.col(kLeft).transpose() + vr * V.col(kRight) * V.col(kRight).transpose();
 }
 
 }  // namespace odotune::filters

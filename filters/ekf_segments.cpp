@@ -32,9 +32,8 @@ StateCov to_matrix(const Sym3& s) {
 
 }  // namespace
 
-SegmentMoments reduce_segment(std::span<const WheelTravel> steps,
-                              std::span<const double> abs_yaw_rate_rad_s, double wheel_base_m,
-                              std::span<double> path_x, std::span<double> path_y) {
+SegmentMoments reduce_segment(std::span<const WheelTravel> steps, std::span<const double> abs_yaw_rate_rad_s,
+                              double wheel_base_m, std::span<double> path_x, std::span<double> path_y) {
   const std::size_t n = steps.size();
   SegmentMoments m;
   m.steps = static_cast<int>(n);
@@ -120,8 +119,7 @@ Sym3 to_sym(const StateCov& P) {
 }
 
 // The predicted covariance; c, s = cos θ_u, sin θ_u.
-Sym3 predict_sym(const NoiseParams& noise, const SegmentMoments& m, double c, double s,
-                 const Sym3& P) {
+Sym3 predict_sym(const NoiseParams& noise, const SegmentMoments& m, double c, double s, const Sym3& P) {
   // World-frame displacement over the segment, Rot(θ_u)·o_end.
   const double ex = c * m.end_x_m - s * m.end_y_m;
   const double ey = s * m.end_x_m + c * m.end_y_m;
@@ -164,11 +162,11 @@ StateCov predict_segment_cov(const NoiseParams& noise, const SegmentMoments& m, 
   return to_matrix(predict_sym(noise, m, std::cos(theta_u_rad), std::sin(theta_u_rad), to_sym(P)));
 }
 
-Divergence advance_segment(const NoiseParams& noise, const SegmentMoments& m, const Position& z,
-                           Pose* pose, StateCov* P) {
+Divergence advance_segment(const NoiseParams& noise, const SegmentMoments& m, const Position& z, Pose* pose,
+                           StateCov* P) {
   Sym3 Ps = to_sym(*P);
-  const Divergence d = advance_segment(noise, m, z, std::cos((*pose)(kTheta)),
-                                       std::sin((*pose)(kTheta)), pose, &Ps);
+  const Divergence d = advance_segment(noise, m, z, std::cos((*pose)(kTheta)), std::sin((*pose)(kTheta)), pose,
+                                       &Ps);
   *P = to_matrix(Ps);
   return d;
 }

@@ -34,9 +34,9 @@ using Sym3 = std::array<double, 6>;
 
 // Everything the prediction over one segment depends on.
 struct SegmentMoments {
-  int steps = 0;                       // number of odometry steps n
-  double end_x_m = 0.0, end_y_m = 0.0; // o_end: dead-reckoned end position (segment frame)
-  double end_theta_rad = 0.0;          // φ_end: dead-reckoned heading change
+  int steps = 0;                        // number of odometry steps n
+  double end_x_m = 0.0, end_y_m = 0.0;  // o_end: dead-reckoned end position (segment frame)
+  double end_theta_rad = 0.0;           // φ_end: dead-reckoned heading change
   // rq: S1 = Σ_j δ_j, S2 = Σ_j δ_j·δ_jᵀ with δ_j = o_end − o_j (segment frame).
   double s1_x = 0.0, s1_y = 0.0;
   double s2_xx = 0.0, s2_xy = 0.0, s2_yy = 0.0;
@@ -49,9 +49,9 @@ struct SegmentMoments {
 // |ω_z| used by the gyro model at step j. When `path_x/path_y` are non-empty
 // (size = steps.size()), the segment-frame position after each step is written
 // there. Cost O(n); done once per track, not per noise setting.
-SegmentMoments reduce_segment(std::span<const WheelTravel> steps,
-                              std::span<const double> abs_yaw_rate_rad_s, double wheel_base_m,
-                              std::span<double> path_x = {}, std::span<double> path_y = {});
+SegmentMoments reduce_segment(std::span<const WheelTravel> steps, std::span<const double> abs_yaw_rate_rad_s,
+                              double wheel_base_m, std::span<double> path_x = {},
+                              std::span<double> path_y = {});
 
 // Predicted covariance at the end of a segment that started with pose
 // heading θ_u [rad] and covariance P (world frame).
@@ -61,8 +61,8 @@ StateCov predict_segment_cov(const NoiseParams& noise, const SegmentMoments& m, 
 // Advances (pose, P) over the segment and applies the fix z at its end, exactly
 // as Ekf::predict over the steps followed by Ekf::update(z). Returns the first
 // problem found (the state is then unusable).
-Divergence advance_segment(const NoiseParams& noise, const SegmentMoments& m, const Position& z,
-                           Pose* pose, StateCov* P);
+Divergence advance_segment(const NoiseParams& noise, const SegmentMoments& m, const Position& z, Pose* pose,
+                           StateCov* P);
 // The same on the unique entries of P, with cos/sin of the pose's heading
 // supplied by a caller that already has them (the tuner's inner loop).
 Divergence advance_segment(const NoiseParams& noise, const SegmentMoments& m, const Position& z,

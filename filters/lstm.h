@@ -149,11 +149,11 @@ struct LstmNet {
   // the stack so that predict does not allocate).
   static constexpr int kMaxWindow = 256;
 
-  std::array<double, kWeights> weights{};            // layout: LstmLayout<I, H>
-  std::array<double, I> input_mean{}, input_sd{};    // paper eq. 4 (sd > 0; a constant input gets sd 1)
-  double output_mean = 0.0, output_sd = 1.0;         // y = output_mean + output_sd · net
+  std::array<double, kWeights> weights{};          // layout: LstmLayout<I, H>
+  std::array<double, I> input_mean{}, input_sd{};  // paper eq. 4 (sd > 0; a constant input gets sd 1)
+  double output_mean = 0.0, output_sd = 1.0;       // y = output_mean + output_sd · net
   OutputActivation activation = OutputActivation::linear;
-  int window = 20;                                   // samples per window (paper: 20 at 10 Hz)
+  int window = 20;  // samples per window (paper: 20 at 10 Hz)
 
   LstmNet() { input_sd.fill(1.0); }
 
@@ -186,11 +186,9 @@ struct LstmNet {
     if (window < 1 || window > kMaxWindow)
       return fail("window = " + std::to_string(window) + ": expected 1.." + std::to_string(kMaxWindow));
     for (int n = 0; n < kWeights; ++n)
-      if (!std::isfinite(weights[n]))
-        return fail("weights[" + std::to_string(n) + "] is not finite");
+      if (!std::isfinite(weights[n])) return fail("weights[" + std::to_string(n) + "] is not finite");
     for (int k = 0; k < I; ++k) {
-      if (!std::isfinite(input_mean[k]))
-        return fail("input_mean[" + std::to_string(k) + "] is not finite");
+      if (!std::isfinite(input_mean[k])) return fail("input_mean[" + std::to_string(k) + "] is not finite");
       if (!(input_sd[k] > 0.0) || !std::isfinite(input_sd[k]))
         return fail("input_sd[" + std::to_string(k) + "] = " + lstm_detail::number_text(input_sd[k]) +
                     ": expected a finite value > 0");

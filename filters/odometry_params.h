@@ -34,15 +34,13 @@ struct PlanarPose {
 };
 
 struct BodyVelocity {
-  double v_m_s = 0.0;     // V [m/s]
-  double w_rad_s = 0.0;   // W [rad/s]
+  double v_m_s = 0.0;    // V [m/s]
+  double w_rad_s = 0.0;  // W [rad/s]
 };
 
-inline BodyVelocity body_velocity(const OdometryParams& p, double omega_l_rad_s,
-                                  double omega_r_rad_s) {
+inline BodyVelocity body_velocity(const OdometryParams& p, double omega_l_rad_s, double omega_r_rad_s) {
   return {0.5 * (omega_r_rad_s * p.wheel_radius_right_m + omega_l_rad_s * p.wheel_radius_left_m),
-          (omega_r_rad_s * p.wheel_radius_right_m - omega_l_rad_s * p.wheel_radius_left_m) /
-              p.wheel_base_m};
+          (omega_r_rad_s * p.wheel_radius_right_m - omega_l_rad_s * p.wheel_radius_left_m) / p.wheel_base_m};
 }
 
 // One iteration's input to a calibrator: the wheel rates at the instant of an
@@ -52,27 +50,27 @@ inline BodyVelocity body_velocity(const OdometryParams& p, double omega_l_rad_s,
 // rates and measurement finite; variances > 0 (a caller without the sensor's
 // variances uses its configured defaults).
 struct CalibSample {
-  double dt_s = 0.0;             // [s]
-  double omega_l_rad_s = 0.0;    // ω_l [rad/s]
-  double omega_r_rad_s = 0.0;    // ω_r [rad/s]
-  double v_m_s = 0.0;            // V_m, external (e.g. lidar scan matching) [m/s]
-  double w_rad_s = 0.0;          // W_m [rad/s]
-  double v_var = 4e-4;           // var(V_m) [(m/s)²]
-  double w_var = 4e-4;           // var(W_m) [(rad/s)²]
+  double dt_s = 0.0;           // [s]
+  double omega_l_rad_s = 0.0;  // ω_l [rad/s]
+  double omega_r_rad_s = 0.0;  // ω_r [rad/s]
+  double v_m_s = 0.0;          // V_m, external (e.g. lidar scan matching) [m/s]
+  double w_rad_s = 0.0;        // W_m [rad/s]
+  double v_var = 4e-4;         // var(V_m) [(m/s)²]
+  double w_var = 4e-4;         // var(W_m) [(rad/s)²]
 };
 
 // What every calibrator reports after an iteration.
 struct CalibEstimate {
-  OdometryParams params;         // the estimate (PF: weighted mean, not the best particle)
-  BodyVelocity velocity;         // V_O, W_O: the calibrated odometry's velocities now
-                                 // (PF: weighted mean of the particles' V, W;
-                                 // DKF: h(θ̂, ω) with the updated θ̂)
-  double sd_radius_left_m = 0.0; // spread of the estimate (PF: weighted sd; KF: √P)
+  OdometryParams params;          // the estimate (PF: weighted mean, not the best particle)
+  BodyVelocity velocity;          // V_O, W_O: the calibrated odometry's velocities now
+                                  // (PF: weighted mean of the particles' V, W;
+                                  // DKF: h(θ̂, ω) with the updated θ̂)
+  double sd_radius_left_m = 0.0;  // spread of the estimate (PF: weighted sd; KF: √P)
   double sd_radius_right_m = 0.0;
   double sd_wheel_base_m = 0.0;
-  int particles = 0;             // N after this iteration's resampling (0 for the Kalman filters)
-  double n_eff = 0.0;            // N_eff before any resampling this iteration (PF)
-  bool resampled = false;        // the PF resampled this iteration
+  int particles = 0;       // N after this iteration's resampling (0 for the Kalman filters)
+  double n_eff = 0.0;      // N_eff before any resampling this iteration (PF)
+  bool resampled = false;  // the PF resampled this iteration
 };
 
 }  // namespace odotune::filters

@@ -112,18 +112,16 @@ struct PredictInputs {
 
 // Prediction and log-weight of particles [i0, i1); returns their largest
 // log-weight (−∞ when all are −∞). NaN log-weights become −∞ (weight 0).
-ODOTUNE_PF_HOT_LOOP double predict_block(
-    const PredictInputs in, double* __restrict r_right, double* __restrict r_left,
-    double* __restrict base, double* __restrict v, double* __restrict w,
-    double* __restrict log_weight, std::size_t i0, std::size_t i1) {
+ODOTUNE_PF_HOT_LOOP double predict_block(const PredictInputs in, double* __restrict r_right,
+                                         double* __restrict r_left, double* __restrict base,
+                                         double* __restrict v, double* __restrict w,
+                                         double* __restrict log_weight, std::size_t i0, std::size_t i1) {
   double block_max = -std::numeric_limits<double>::infinity();
 #pragma omp simd reduction(max : block_max)
   for (std::size_t i = i0; i < i1; ++i) {
     const std::uint64_t n = static_cast<std::uint64_t>(i) * kGolden;
-    const pf_kernels::NormalPair z_radii =
-        pf_kernels::normal_pair_from_bits(splitmix64_mix(in.key_radii + n));
-    const pf_kernels::NormalPair z_base =
-        pf_kernels::normal_pair_from_bits(splitmix64_mix(in.key_base + n));
+    const pf_kernels::NormalPair z_radii = pf_kernels::normal_pair_from_bits(splitmix64_mix(in.key_radii + n));
+    const pf_kernels::NormalPair z_base = pf_kernels::normal_pair_from_bits(splitmix64_mix(in.key_base + n));
     const std::uint64_t u_bits = splitmix64_mix(in.key_velocity + n);
     const double rr = r_right[i] + in.sigma_m * z_radii.first;
     const double rl = r_left[i] + in.sigma_m * z_radii.second;
@@ -134,8 +132,7 @@ ODOTUNE_PF_HOT_LOOP double predict_block(
                       in.a_w * (2.0 * pf_kernels::uniform_low32(u_bits) - 1.0);
     const double dv = in.v_m - vi;
     const double dw = in.w_m - wi;
-    double lw = log_weight[i] - in.log_weight_shift -
-                0.5 * (dv * dv * in.inv_v_var + dw * dw * in.inv_w_var);
+    double lw = log_weight[i] - in.log_weight_shift - 0.5 * (dv * dv * in.inv_v_var + dw * dw * in.inv_w_var);
     lw = pf_kernels::select(lw == lw, lw, -std::numeric_limits<double>::infinity());
     r_right[i] = rr;
     r_left[i] = rl;
@@ -168,9 +165,9 @@ constexpr std::size_t kLanes = 8;
 
 inline void weigh_one(const EstimateInputs& in, std::size_t i, std::size_t lane,
                       const double* __restrict r_right, const double* __restrict r_left,
-                      const double* __restrict base, const double* __restrict v,
-                      const double* __restrict w, const double* __restrict log_weight,
-                      double* __restrict weight, double (&acc)[kSumCount][kLanes]) {
+                      const double* __restrict base, const double* __restrict v, const double* __restrict w,
+                      const double* __restrict log_weight, double* __restrict weight,
+                      double (&acc)[kSumCount][kLanes]) {
   const double x = log_weight[i] - in.max_log_weight;
   const double rho = pf_kernels::fast_exp_nonpositive(
       pf_kernels::select(x < in.min_log_weight, in.clamp.floor, x), in.clamp);
@@ -190,11 +187,11 @@ inline void weigh_one(const EstimateInputs& in, std::size_t i, std::size_t lane,
   acc[kSumBase2][lane] += rho * dd * dd;
 }
 
-ODOTUNE_PF_HOT_LOOP void estimate_block(
-    const EstimateInputs in, const double* __restrict r_right, const double* __restrict r_left,
-    const double* __restrict base, const double* __restrict v, const double* __restrict w,
-    const double* __restrict log_weight, double* __restrict weight, std::size_t i0, std::size_t i1,
-    double* __restrict out) {
+ODOTUNE_PF_HOT_LOOP void estimate_block(const EstimateInputs in, const double* __restrict r_right,
+                                        const double* __restrict r_left, const double* __restrict base,
+                                        const double* __restrict v, const double* __restrict w,
+                                        const double* __restrict log_weight, double* __restrict weight,
+                                        std::size_t i0, std::size_t i1, double* __restrict out) {
   double acc[kSumCount][kLanes] = {};
   const std::size_t full = i0 + (i1 - i0) / kLanes * kLanes;
   for (std::size_t j = i0; j < full; j += kLanes) {
@@ -240,8 +237,7 @@ bool PfCalibratorParams::IsValid(std::string* why) const {
     return fail(why, "dispersion_per_particle_m = " + num(dispersion_per_particle_m) +
                          " must be a finite number > 0");
   if (!check_non_negative("min_random_walk_sigma_m", min_random_walk_sigma_m, why)) return false;
-  if (min_particles < 1)
-    return fail(why, "min_particles = " + std::to_string(min_particles) + " must be ≥ 1");
+  if (min_particles < 1) return fail(why, "min_particles = " + std::to_string(min_particles) + " must be ≥ 1");
   if (max_particles < min_particles)
     return fail(why, "max_particles = " + std::to_string(max_particles) +
                          " must be ≥ min_particles = " + std::to_string(min_particles));
@@ -262,8 +258,8 @@ PfCalibrator::PfCalibrator(const PfCalibratorParams& params) : params_(params) {
   log_weight_.assign(n, 0.0);
   weight_.assign(n, 1.0);
   // Uniform initial parameters (§III.1), iteration key 0.
-  const PfCalibratorParams::Range ranges[] = {params.wheel_radius_right_m,
-                                              params.wheel_radius_left_m, params.wheel_base_m};
+  const PfCalibratorParams::Range ranges[] = {params.wheel_radius_right_m, params.wheel_radius_left_m,
+                                              params.wheel_base_m};
   std::vector<double>* arrays[] = {&r_right_, &r_left_, &base_};
   for (std::size_t d = 0; d < 3; ++d) {
     const std::uint64_t key = counter_hash(params.seed, 0, 0, d, kStreamInit);
@@ -282,9 +278,7 @@ PfCalibrator::PfCalibrator(const PfCalibratorParams& params) : params_(params) {
   estimate_.particles = particle_count();
 }
 
-int PfCalibrator::thread_count() const {
-  return params_.threads > 0 ? params_.threads : omp_get_max_threads();
-}
+int PfCalibrator::thread_count() const { return params_.threads > 0 ? params_.threads : omp_get_max_threads(); }
 
 const CalibEstimate& PfCalibrator::step(const CalibSample& s) {
   if (!(std::isfinite(s.dt_s) && s.dt_s >= 0.0))
@@ -294,8 +288,8 @@ const CalibEstimate& PfCalibrator::step(const CalibSample& s) {
   if (!std::isfinite(s.v_m_s) || !std::isfinite(s.w_rad_s))
     throw std::invalid_argument("CalibSample: the measurement (v_m_s, w_rad_s) must be finite");
   if (!(std::isfinite(s.v_var) && s.v_var > 0.0) || !(std::isfinite(s.w_var) && s.w_var > 0.0))
-    throw std::invalid_argument("CalibSample: v_var = " + num(s.v_var) +
-                                ", w_var = " + num(s.w_var) + " must be finite and > 0");
+    throw std::invalid_argument("CalibSample: v_var = " + num(s.v_var) + ", w_var = " + num(s.w_var) +
+                                " must be finite and > 0");
 
   // Step 1: σ of the random walk (eq. 11 for the adaptive variant).
   double sigma = params_.random_walk_sigma_m;
@@ -335,12 +329,10 @@ const CalibEstimate& PfCalibrator::step(const CalibSample& s) {
   if (resample_now) {
     int count = particle_count();
     if (params_.adaptive) {
-      const double dispersion =
-          4.0 * estimate_.sd_radius_right_m + 4.0 * estimate_.sd_radius_left_m;
+      const double dispersion = 4.0 * estimate_.sd_radius_right_m + 4.0 * estimate_.sd_radius_left_m;
       const double wanted = dispersion / params_.dispersion_per_particle_m;
       count = std::isfinite(wanted)
-                  ? static_cast<int>(std::clamp(std::round(wanted),
-                                                static_cast<double>(params_.min_particles),
+                  ? static_cast<int>(std::clamp(std::round(wanted), static_cast<double>(params_.min_particles),
                                                 static_cast<double>(params_.max_particles)))
                   : params_.max_particles;
     }
@@ -381,8 +373,8 @@ double PfCalibrator::predict_and_weigh(const CalibSample& s, double sigma_m) {
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && blocks > 1)
   for (std::size_t b = 0; b < blocks; ++b) {
     const std::size_t i0 = b * kBlock;
-    maxima[b * kSumCount] =
-        predict_block(in, r_right, r_left, base, v, w, log_weight, i0, std::min(n, i0 + kBlock));
+    maxima[b * kSumCount] = predict_block(in, r_right, r_left, base, v, w, log_weight, i0,
+                                          std::min(n, i0 + kBlock));
   }
   double m = -std::numeric_limits<double>::infinity();
   for (std::size_t b = 0; b < blocks; ++b) m = std::max(m, maxima[b * kSumCount]);
@@ -401,15 +393,14 @@ void PfCalibrator::compute_estimate(double max_log_weight, const Shifts& sh) {
   const double* log_weight = log_weight_.data();
   double* weight = weight_.data();
   double* sums = block_sums_.data();
-  const EstimateInputs in{max_log_weight, kMinLogWeight, pf_kernels::ExpClamp{},
-                          sh.r_right,     sh.r_left,     sh.base,
+  const EstimateInputs in{max_log_weight, kMinLogWeight, pf_kernels::ExpClamp{}, sh.r_right, sh.r_left, sh.base,
                           sh.v,           sh.w};
   const int threads = thread_count();
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && blocks > 1)
   for (std::size_t b = 0; b < blocks; ++b) {
     const std::size_t i0 = b * kBlock;
-    estimate_block(in, r_right, r_left, base, v, w, log_weight, weight, i0,
-                   std::min(n, i0 + kBlock), sums + b * kSumCount);
+    estimate_block(in, r_right, r_left, base, v, w, log_weight, weight, i0, std::min(n, i0 + kBlock),
+                   sums + b * kSumCount);
   }
   // Combine the blocks in block order (into block 0's slots).
   for (std::size_t b = 1; b < blocks; ++b)
@@ -434,8 +425,7 @@ void PfCalibrator::compute_estimate(double max_log_weight, const Shifts& sh) {
 void PfCalibrator::resample_to(int count) {
   const auto m = static_cast<std::size_t>(count);
   ancestors_.resize(m);
-  resample(params_.resampler, weight_, params_.seed, static_cast<std::uint64_t>(iteration_),
-           ancestors_);
+  resample(params_.resampler, weight_, params_.seed, static_cast<std::uint64_t>(iteration_), ancestors_);
   next_r_right_.resize(m);
   next_r_left_.resize(m);
   next_base_.resize(m);

@@ -68,19 +68,19 @@ struct PfCalibratorParams {
   Range wheel_radius_left_m{0.305, 0.335};
   Range wheel_base_m{0.55, 0.75};
 
-  int particles = 5000;                  // N (plain PF), initial N (adaptive)
-  double random_walk_sigma_m = 0.0005;   // σ of the R_R, R_L, D walk per iteration [m] (plain PF)
-  double v_perturbation_m_s = 0.01;      // a_v: half-width of V's uniform perturbation [m/s]
-  double w_perturbation_rad_s = 0.01;    // a_w: half-width of W's uniform perturbation [rad/s]
+  int particles = 5000;                 // N (plain PF), initial N (adaptive)
+  double random_walk_sigma_m = 0.0005;  // σ of the R_R, R_L, D walk per iteration [m] (plain PF)
+  double v_perturbation_m_s = 0.01;     // a_v: half-width of V's uniform perturbation [m/s]
+  double w_perturbation_rad_s = 0.01;   // a_w: half-width of W's uniform perturbation [rad/s]
 
   Resampler resampler = Resampler::systematic;
   ResamplePolicy policy = ResamplePolicy::neff;
-  double neff_fraction = 0.5;            // neff policy: resample when N_eff < fraction·N
-  double max_weight_ratio = 10.0;        // max policy: resample when max ρ < ratio / N
+  double neff_fraction = 0.5;      // neff policy: resample when N_eff < fraction·N
+  double max_weight_ratio = 10.0;  // max policy: resample when max ρ < ratio / N
 
   // Adaptive variant (§V).
   bool adaptive = false;
-  double alpha = 1e-4;                   // α of eq. 11 [m per (m/s)]
+  double alpha = 1e-4;                      // α of eq. 11 [m per (m/s)]
   double dispersion_per_particle_m = 1e-5;  // one particle per 0.01 mm of radius dispersion
   // Lower bound of the adaptive σ [m per iteration]; 0 = eq. 11 as published.
   // Not in the paper: with α = 1e-4 and σ(V_m) = σ(W_m) = 0.02 at 10 Hz, eq. 11
@@ -92,8 +92,8 @@ struct PfCalibratorParams {
   int max_particles = 20000;
 
   std::uint64_t seed = 1;
-  int threads = 0;                       // OpenMP threads; 0 = OpenMP's default
-                                         // (results do not depend on it)
+  int threads = 0;  // OpenMP threads; 0 = OpenMP's default
+                    // (results do not depend on it)
 
   // Wheelchair defaults of the adaptive PF (initial N = 8000).
   static PfCalibratorParams adaptive_defaults();
@@ -135,12 +135,12 @@ class PfCalibrator {
   PfCalibratorParams params_;
   // Structure of arrays: particle i is (v_[i], w_[i], r_right_[i], r_left_[i], base_[i]).
   std::vector<double> v_, w_, r_right_, r_left_, base_;
-  std::vector<double> log_weight_;       // log ρ + log_weight_shift_ (unnormalised)
-  std::vector<double> weight_;           // ρ ∝ exp(log ρ), largest = 1 (not normalised)
+  std::vector<double> log_weight_;  // log ρ + log_weight_shift_ (unnormalised)
+  std::vector<double> weight_;      // ρ ∝ exp(log ρ), largest = 1 (not normalised)
   std::vector<double> next_r_right_, next_r_left_, next_base_;  // resampling buffers
-  std::vector<double> block_sums_;       // per-block partial sums / maxima
+  std::vector<double> block_sums_;                              // per-block partial sums / maxima
   std::vector<int> ancestors_;
-  double log_weight_shift_ = 0.0;        // subtract from log_weight_ to get log ρ (≤ 0)
+  double log_weight_shift_ = 0.0;  // subtract from log_weight_ to get log ρ (≤ 0)
   CalibEstimate estimate_;
   long iteration_ = 0;
   long degenerate_resets_ = 0;

@@ -110,8 +110,8 @@ inline double fast_exp_nonpositive(double x, const ExpClamp& clamp = {}) {
   // result would not be a normal number with room for p < 1.
   const double biased0 = n + 1023.0;
   const double biased = select(biased0 < 2.0, clamp.zero, biased0);
-  const std::uint64_t e_field =
-      std::bit_cast<std::uint64_t>(biased + kTwo52) - std::bit_cast<std::uint64_t>(kTwo52);
+  const std::uint64_t e_field = std::bit_cast<std::uint64_t>(biased + kTwo52) -
+                                std::bit_cast<std::uint64_t>(kTwo52);
   return p * std::bit_cast<double>(e_field << 52);
 }
 
@@ -165,8 +165,7 @@ inline NormalPair normal_pair_from_bits(std::uint64_t bits) {
   const std::uint64_t s_bits = std::bit_cast<std::uint64_t>(s);
   const std::uint64_t x_bits = ((s_bits ^ (1ULL << 63)) & rot) | (c_bits & ~rot);
   const std::uint64_t y_bits = (c_bits & rot) | (s_bits & ~rot);
-  return {radius * std::bit_cast<double>(x_bits ^ flip),
-          radius * std::bit_cast<double>(y_bits ^ flip)};
+  return {radius * std::bit_cast<double>(x_bits ^ flip), radius * std::bit_cast<double>(y_bits ^ flip)};
 }
 
 // Uniform double in (0, 1) from the high 32 bits, and from the low 32 bits, of

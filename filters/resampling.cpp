@@ -21,13 +21,9 @@ constexpr std::uint64_t kGolden = 0x9e3779b97f4a7c15ULL;
 // The n-th 64 random bits of the sequence keyed by `key`: SplitMix64's n-th
 // output for the seed `key` (one mix per draw; the key itself comes from the
 // full counter_hash of (seed, iteration, stream)).
-inline std::uint64_t draw_bits(std::uint64_t key, std::uint64_t n) {
-  return splitmix64_mix(key + n * kGolden);
-}
+inline std::uint64_t draw_bits(std::uint64_t key, std::uint64_t n) { return splitmix64_mix(key + n * kGolden); }
 // Uniform in the open interval (0, 1) (53 bits, never 0 or 1).
-inline double open01(std::uint64_t bits) {
-  return (static_cast<double>(bits >> 11) + 0.5) * 0x1.0p-53;
-}
+inline double open01(std::uint64_t bits) { return (static_cast<double>(bits >> 11) + 0.5) * 0x1.0p-53; }
 
 // Buffers reused across calls (one set per thread: resample() is reentrant).
 struct Scratch {
@@ -68,8 +64,8 @@ double running_sums(std::span<const double> w, std::vector<double>* cdf) {
 // Multinomial (eq. 7): M independent uniforms, counting-sorted into M equal
 // buckets (expected O(N + M), no comparison sort), then F_i from the bucket
 // prefix counts plus a scan of the one bucket that holds C_i/T.
-void multinomial_counts(std::span<const double> cdf, double total, std::uint64_t key, int draws,
-                        Scratch& s, std::span<int> cum) {
+void multinomial_counts(std::span<const double> cdf, double total, std::uint64_t key, int draws, Scratch& s,
+                        std::span<int> cum) {
   const std::size_t n_particles = cdf.size();
   if (draws <= 0) {
     std::fill(cum.begin(), cum.end(), 0);
@@ -90,8 +86,7 @@ void multinomial_counts(std::span<const double> cdf, double total, std::uint64_t
   {
     std::vector<int>& fill = s.hist;  // next free slot of each bucket
     fill.assign(s.bucket_start.begin(), s.bucket_start.end() - 1);
-    for (const double u : s.uniforms)
-      s.bucket_u[static_cast<std::size_t>(fill[bucket_of(u)]++)] = u;
+    for (const double u : s.uniforms) s.bucket_u[static_cast<std::size_t>(fill[bucket_of(u)]++)] = u;
   }
   for (std::size_t i = 0; i < n_particles; ++i) {
     const double x = cdf[i] / total;
@@ -222,8 +217,8 @@ std::string_view to_string(ResamplePolicy p) {
 }
 
 bool parse_resampler(std::string_view text, Resampler* out) {
-  for (const Resampler r : {Resampler::multinomial, Resampler::stratified, Resampler::systematic,
-                            Resampler::residual}) {
+  for (const Resampler r :
+       {Resampler::multinomial, Resampler::stratified, Resampler::systematic, Resampler::residual}) {
     if (text == to_string(r)) {
       *out = r;
       return true;
@@ -253,28 +248,24 @@ void resample(Resampler scheme, std::span<const double> normalised_weights, std:
               std::uint64_t iteration, std::span<int> out) {
   if (out.empty()) return;
   if (normalised_weights.empty()) throw std::invalid_argument("resample: no weights to draw from");
-  if (out.size() > static_cast<std::size_t>(1) << 30)
-    throw std::invalid_argument("resample: too many draws");
+  if (out.size() > static_cast<std::size_t>(1) << 30) throw std::invalid_argument("resample: too many draws");
   Scratch& s = scratch();
   const int m = static_cast<int>(out.size());
   const double total = running_sums(normalised_weights, &s.cdf);
   s.cum.resize(normalised_weights.size());
   switch (scheme) {
     case Resampler::multinomial:
-      multinomial_counts(s.cdf, total, counter_hash(seed, iteration, 0, 0, kStreamMultinomial), m,
-                         s, s.cum);
+      multinomial_counts(s.cdf, total, counter_hash(seed, iteration, 0, 0, kStreamMultinomial), m, s, s.cum);
       break;
     case Resampler::stratified:
-      stratified_counts(s.cdf, total, counter_hash(seed, iteration, 0, 0, kStreamStratified), m,
-                        s.cum);
+      stratified_counts(s.cdf, total, counter_hash(seed, iteration, 0, 0, kStreamStratified), m, s.cum);
       break;
     case Resampler::systematic:
-      systematic_counts(s.cdf, total, counter_hash(seed, iteration, 0, 0, kStreamSystematic), m,
-                        s.cum);
+      systematic_counts(s.cdf, total, counter_hash(seed, iteration, 0, 0, kStreamSystematic), m, s.cum);
       break;
     case Resampler::residual:
-      residual_counts(normalised_weights, total,
-                      counter_hash(seed, iteration, 0, 0, kStreamResidual), m, s, s.cum);
+      residual_counts(normalised_weights, total, counter_hash(seed, iteration, 0, 0, kStreamResidual), m, s,
+                      s.cum);
       break;
   }
   close_counts(normalised_weights, m, s.cum);

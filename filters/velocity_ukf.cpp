@@ -9,8 +9,8 @@
 namespace odotune::filters {
 namespace {
 
-constexpr int kN = 2;                   // state dimension n
-constexpr int kSigma = 2 * kN + 1;      // 2n + 1 sigma points
+constexpr int kN = 2;               // state dimension n
+constexpr int kSigma = 2 * kN + 1;  // 2n + 1 sigma points
 
 std::string describe(const char* name, double x, const char* expected) {
   std::ostringstream os;
@@ -49,8 +49,8 @@ SigmaWeights sigma_weights(const UkfParams& p) {
   const double n_lambda = n + w.lambda;
   w.wm[0] = w.lambda / n_lambda;
   w.wc[0] = w.wm[0] + (1.0 - p.alpha * p.alpha + p.beta);
-  for (int i = 1; i < kSigma; ++i) w.wm[static_cast<std::size_t>(i)] = w.wc[static_cast<std::size_t>(i)] =
-      0.5 / n_lambda;
+  for (int i = 1; i < kSigma; ++i)
+    w.wm[static_cast<std::size_t>(i)] = w.wc[static_cast<std::size_t>(i)] = 0.5 / n_lambda;
   return w;
 }
 
@@ -132,9 +132,8 @@ namespace {
 //   P_xz = Σ W^(c) (χ_i − x̄)(Z_i − ẑ)ᵀ,  K = P_xz S⁻¹,
 //   x ← x + K (z − ẑ),  P ← P − K S Kᵀ.
 template <int M, typename Measure>
-bool unscented_update(const UkfParams& p, Velocity* x, VelocityCov* P,
-                      const Eigen::Matrix<double, M, 1>& z, const Eigen::Matrix<double, M, M>& R,
-                      Measure&& h) {
+bool unscented_update(const UkfParams& p, Velocity* x, VelocityCov* P, const Eigen::Matrix<double, M, 1>& z,
+                      const Eigen::Matrix<double, M, M>& R, Measure&& h) {
   using Vec = Eigen::Matrix<double, M, 1>;
   using Mat = Eigen::Matrix<double, M, M>;
   const SigmaWeights w = sigma_weights(p);
@@ -183,9 +182,8 @@ void VelocityUkf::update_yaw_rate(double w_rad_s, double var) {
   // The gyro observes W: h(x) = x(kW).
   const Eigen::Matrix<double, 1, 1> z(w_rad_s);
   const Eigen::Matrix<double, 1, 1> R(var);
-  healthy_ = unscented_update<1>(p_, &x_, &P_, z, R, [](const Velocity& s) {
-    return Eigen::Matrix<double, 1, 1>(s(kW));
-  });
+  healthy_ = unscented_update<1>(p_, &x_, &P_, z, R,
+                                 [](const Velocity& s) { return Eigen::Matrix<double, 1, 1>(s(kW)); });
 }
 
 PlanarPose integrate_pose(const PlanarPose& pose, double v_m_s, double w_rad_s, double dt_s) {

@@ -32,12 +32,12 @@ namespace odotune::filters {
 
 // Named state indices (no magic numbers in the maths).
 enum VelocityIndex : int { kV = 0, kW = 1 };
-using Velocity = Eigen::Vector2d;      // (V [m/s], W [rad/s])
-using VelocityCov = Eigen::Matrix2d;   // [(m/s)², (m/s)(rad/s); ·, (rad/s)²]
+using Velocity = Eigen::Vector2d;     // (V [m/s], W [rad/s])
+using VelocityCov = Eigen::Matrix2d;  // [(m/s)², (m/s)(rad/s); ·, (rad/s)²]
 
 struct UkfParams {
-  double q_v_m2_s3 = 0.05;      // process-noise rate of V [(m/s)²/s]: P_VV grows by q·Δt
-  double q_w_rad2_s3 = 0.1;     // process-noise rate of W [(rad/s)²/s]
+  double q_v_m2_s3 = 0.05;   // process-noise rate of V [(m/s)²/s]: P_VV grows by q·Δt
+  double q_w_rad2_s3 = 0.1;  // process-noise rate of W [(rad/s)²/s]
   // Scaled unscented transform (Wan & van der Merwe 2000). Defaults: α = 1,
   // β = 2 (Gaussian prior), κ = 0; for a 2-D state these keep every weight
   // finite and the centre weight 0.

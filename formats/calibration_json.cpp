@@ -22,10 +22,11 @@ double pct_error(double estimate, double truth) { return 100.0 * (estimate - tru
 
 json error_pct_json(const filters::OdometryParams& est, const std::optional<filters::OdometryParams>& truth) {
   if (!truth) return nullptr;
-  return {{"wheel_radius_left_m", number_or_null(pct_error(est.wheel_radius_left_m, truth->wheel_radius_left_m))},
-          {"wheel_radius_right_m",
-           number_or_null(pct_error(est.wheel_radius_right_m, truth->wheel_radius_right_m))},
-          {"wheel_base_m", number_or_null(pct_error(est.wheel_base_m, truth->wheel_base_m))}};
+  return {
+      {"wheel_radius_left_m", number_or_null(pct_error(est.wheel_radius_left_m, truth->wheel_radius_left_m))},
+      {"wheel_radius_right_m",
+       number_or_null(pct_error(est.wheel_radius_right_m, truth->wheel_radius_right_m))},
+      {"wheel_base_m", number_or_null(pct_error(est.wheel_base_m, truth->wheel_base_m))}};
 }
 
 json range_json(const filters::PfCalibratorParams::Range& r) { return json::array({r.lo, r.hi}); }
@@ -91,12 +92,13 @@ json calibration_json(const CalibrationResult& result, const std::vector<const C
   } else {
     j["final_sd"] = nullptr;
   }
-  const std::optional<filters::OdometryParams> last_truth =
-      result.tracks.empty() ? std::nullopt : result.tracks.back().truth_final;
+  const std::optional<filters::OdometryParams> last_truth = result.tracks.empty()
+                                                                ? std::nullopt
+                                                                : result.tracks.back().truth_final;
   j["truth"] = last_truth ? params_json(*last_truth) : json(nullptr);
   j["error_pct"] = error_pct_json(result.final_params, last_truth);
-  j["convergence_time_s"] =
-      result.tracks.empty() ? json(nullptr) : number_or_null(result.tracks.front().convergence_time_s);
+  j["convergence_time_s"] = result.tracks.empty() ? json(nullptr)
+                                                  : number_or_null(result.tracks.front().convergence_time_s);
 
   std::vector<double> pose, heading, nominal_pose, nominal_heading;
   std::vector<int> iterations(inputs.size(), 0);
@@ -172,10 +174,12 @@ json apply_json(const std::string& calibration_file, const filters::OdometryPara
     cp.push_back(a.calibrated.pose_rmse_m), ch.push_back(a.calibrated.heading_rmse_rad);
   }
   j["tracks"] = arr;
-  j["mean"] = {{"nominal", {{"pose_rmse_m", number_or_null(finite_mean(np))},
-                            {"heading_rmse_rad", number_or_null(finite_mean(nh))}}},
-               {"calibrated", {{"pose_rmse_m", number_or_null(finite_mean(cp))},
-                               {"heading_rmse_rad", number_or_null(finite_mean(ch))}}}};
+  j["mean"] = {{"nominal",
+                {{"pose_rmse_m", number_or_null(finite_mean(np))},
+                 {"heading_rmse_rad", number_or_null(finite_mean(nh))}}},
+               {"calibrated",
+                {{"pose_rmse_m", number_or_null(finite_mean(cp))},
+                 {"heading_rmse_rad", number_or_null(finite_mean(ch))}}}};
   return j;
 }
 

@@ -38,10 +38,10 @@ namespace odotune {
 
 // What `calibrate` ran, beyond the result itself.
 struct CalibrationRunInfo {
-  std::vector<std::string> track_files;   // as given, in input order
+  std::vector<std::string> track_files;  // as given, in input order
   CalibrationOptions options;
   filters::PfCalibratorParams::Range init_radius_m, init_wheel_base_m;  // initial ranges
-  double ext_from_gt_rate_hz = 0.0;       // 0: the tracks' v_ext/w_ext
+  double ext_from_gt_rate_hz = 0.0;                                     // 0: the tracks' v_ext/w_ext
 };
 
 // `nominal[k]` scores inputs[k]'s nominal parameters (score_fixed_params).

@@ -7,8 +7,8 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "formats/config_yaml.h"
 #include "core/failure.h"
+#include "formats/config_yaml.h"
 #include "formats/yaml_error.h"
 
 namespace odotune {
@@ -25,8 +25,7 @@ struct Key {
 const Key kKeys[] = {
     {"wheel_radius_left_m", &filters::OdometryParams::wheel_radius_left_m, "R_L [m]"},
     {"wheel_radius_right_m", &filters::OdometryParams::wheel_radius_right_m, "R_R [m]"},
-    {"wheel_base_m", &filters::OdometryParams::wheel_base_m,
-     "D [m], between the wheel contact points"},
+    {"wheel_base_m", &filters::OdometryParams::wheel_base_m, "D [m], between the wheel contact points"},
 };
 
 std::string expected_keys() {
@@ -38,8 +37,8 @@ std::string expected_keys() {
 }  // namespace
 
 CalibrationFile read_calibration_file(const std::filesystem::path& path) {
-  const YAML::Node root =
-      load_format_file(path, "calibration file", kFormat, fmt::format("a mapping with {}", expected_keys()));
+  const YAML::Node root = load_format_file(path, "calibration file", kFormat,
+                                           fmt::format("a mapping with {}", expected_keys()));
   bool seen[std::size(kKeys)] = {};
   CalibrationFile file;
   for (const auto& kv : root) {
@@ -74,15 +73,13 @@ std::string format_calibration_file(const CalibrationFile& file) {
     for (std::string line; std::getline(lines, line);) out << "# " << line << "\n";
   }
   out << "format: " << kFormat << "\n";
-  for (const Key& k : kKeys)
-    out << fmt::format("{}: {}  # {}\n", k.name, file.params.*k.field, k.meaning);
+  for (const Key& k : kKeys) out << fmt::format("{}: {}  # {}\n", k.name, file.params.*k.field, k.meaning);
   return out.str();
 }
 
 void write_calibration_file(const CalibrationFile& file, const std::filesystem::path& path) {
   std::string why;
-  if (!file.params.IsValid(&why))
-    throw Failure(fmt::format("{}: not written: {}", path.string(), why));
+  if (!file.params.IsValid(&why)) throw Failure(fmt::format("{}: not written: {}", path.string(), why));
   write_file_atomically(path, format_calibration_file(file));
 }
 

@@ -1,6 +1,5 @@
 #include "formats/config_yaml.h"
 
-
 #include <cstdio>
 #include <set>
 #include <sstream>
@@ -10,8 +9,8 @@
 
 #include "core/failure.h"
 #include "formats/yaml_error.h"
-#include "tracks/atomic_file.h"
 #include "objectives/param_space.h"
+#include "tracks/atomic_file.h"
 
 namespace odotune {
 
@@ -29,8 +28,8 @@ void write_file_atomically(const std::filesystem::path& path, const std::string&
 }
 
 EkfConfig read_ekf_config(const std::filesystem::path& path) {
-  const YAML::Node root =
-      load_format_file(path, "configuration file", kFormat, "a mapping with format, model and params");
+  const YAML::Node root = load_format_file(path, "configuration file", kFormat,
+                                           "a mapping with format, model and params");
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>("");
     if (key != "format" && key != "model" && key != "params")
@@ -49,8 +48,9 @@ EkfConfig read_ekf_config(const std::filesystem::path& path) {
     const auto name = kv.first.as<std::string>("");
     const std::size_t i = space.index_of(name);
     if (i == space.dim()) {
-      fail_at(path, kv.first, fmt::format("unknown parameter '{}' for model {}, expected {}", name,
-                                          filters::to_string(cfg.model), space.names()));
+      fail_at(path, kv.first,
+              fmt::format("unknown parameter '{}' for model {}, expected {}", name,
+                          filters::to_string(cfg.model), space.names()));
     }
     try {
       values[i] = kv.second.as<double>();
@@ -80,8 +80,8 @@ void write_ekf_config(const EkfConfig& config, const std::filesystem::path& path
   out << "params:\n";
   for (std::size_t i = 0; i < space.dim(); ++i) {
     const auto& p = space.params()[i];
-    out << fmt::format("  {}: {}  # [{}] {}, bounds {}..{}\n", p.name, values[i], p.unit, p.meaning,
-                       p.lower, p.upper);
+    out << fmt::format("  {}: {}  # [{}] {}, bounds {}..{}\n", p.name, values[i], p.unit, p.meaning, p.lower,
+                       p.upper);
   }
   write_file_atomically(path, out.str());
 }

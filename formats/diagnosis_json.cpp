@@ -11,8 +11,7 @@ using namespace odotune::diagnose;
 json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 json before_after(const BeforeAfter& s) {
-  return {{"before_pos_rmse_m", number(s.before_pos_rmse_m)},
-          {"after_pos_rmse_m", number(s.after_pos_rmse_m)}};
+  return {{"before_pos_rmse_m", number(s.before_pos_rmse_m)}, {"after_pos_rmse_m", number(s.after_pos_rmse_m)}};
 }
 
 json segments(const std::vector<TimeSegment>& segs) {
@@ -34,17 +33,23 @@ json named(const std::vector<NamedValue>& values) {
 }
 
 json verdict(const Verdict& v) {
-  return {{"value", number(v.value)},       {"stderr", number(v.std_error)},
-          {"noop", v.noop},                 {"z", number(v.z)},
-          {"drift", number(v.drift)},       {"noise_drift", number(v.noise_drift)},
-          {"significant", v.significant},  {"relevant", v.relevant},
+  return {{"value", number(v.value)},
+          {"stderr", number(v.std_error)},
+          {"noop", v.noop},
+          {"z", number(v.z)},
+          {"drift", number(v.drift)},
+          {"noise_drift", number(v.noise_drift)},
+          {"significant", v.significant},
+          {"relevant", v.relevant},
           {"departs", v.departs()}};
 }
 
 json lag(const LagEstimate& l) {
   if (!l.available) return nullptr;
-  return {{"lag_s", number(l.lag_s)}, {"stderr_s", number(l.std_error_s)},
-          {"peak_correlation", number(l.peak_correlation)}, {"at_edge", l.at_edge}};
+  return {{"lag_s", number(l.lag_s)},
+          {"stderr_s", number(l.std_error_s)},
+          {"peak_correlation", number(l.peak_correlation)},
+          {"at_edge", l.at_edge}};
 }
 
 json sensor_checks(const SensorCheck& s) {
@@ -71,9 +76,14 @@ json sensor_checks(const SensorCheck& s) {
 }
 
 json heldout_comparison(const HeldoutComparison& h) {
-  return {{"windows", h.windows}, {"informative", h.informative}, {"improved", h.improved},
-          {"before_pos_rmse_m", number(h.ref_pos_rmse_m)}, {"after_pos_rmse_m", number(h.alt_pos_rmse_m)},
-          {"z", number(h.z)}, {"p", number(h.p)}, {"passed", h.passed}};
+  return {{"windows", h.windows},
+          {"informative", h.informative},
+          {"improved", h.improved},
+          {"before_pos_rmse_m", number(h.ref_pos_rmse_m)},
+          {"after_pos_rmse_m", number(h.alt_pos_rmse_m)},
+          {"z", number(h.z)},
+          {"p", number(h.p)},
+          {"passed", h.passed}};
 }
 
 // gyro_fixes_check.h: the gyro judged by dead reckoning against the fixes.
@@ -122,18 +132,17 @@ json search_log(const Selection& s) {
 json diagnosis_json(const Diagnosis& d) {
   json findings = json::array();
   for (const Finding& f : d.findings) {
-    findings.push_back({{"effect", f.effect},
-                        {"params", named(f.params)},
-                        {"stderr", named(f.stderrs)},
-                        {"where",
-                         {{"segments", segments(f.segments)},
-                          {"conditions", f.conditions},
-                          {"regions", regions(f.regions)}}},
-                        {"explains", number(f.explains)},
-                        {"fit", {{"train", before_after(f.train)}, {"heldout", before_after(f.heldout)}}},
-                        {"rivals", f.rivals},
-                        {"discrete", f.discrete},
-                        {"evidence", f.evidence}});
+    findings.push_back(
+        {{"effect", f.effect},
+         {"params", named(f.params)},
+         {"stderr", named(f.stderrs)},
+         {"where",
+          {{"segments", segments(f.segments)}, {"conditions", f.conditions}, {"regions", regions(f.regions)}}},
+         {"explains", number(f.explains)},
+         {"fit", {{"train", before_after(f.train)}, {"heldout", before_after(f.heldout)}}},
+         {"rivals", f.rivals},
+         {"discrete", f.discrete},
+         {"evidence", f.evidence}});
   }
   json model = json::array();
   for (const Finding& f : d.findings)

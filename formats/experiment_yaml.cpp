@@ -25,13 +25,13 @@ T scalar(const std::filesystem::path& path, const YAML::Node& node, const char* 
   try {
     return node.as<T>();
   } catch (const YAML::Exception&) {
-    fail_at(path, node, fmt::format("{} has a bad value, expected {}", what,
-                                    std::is_same_v<T, std::string> ? "text" : "a number"));
+    fail_at(path, node,
+            fmt::format("{} has a bad value, expected {}", what,
+                        std::is_same_v<T, std::string> ? "text" : "a number"));
   }
 }
 
-std::vector<YAML::Node> list(const std::filesystem::path& path, const YAML::Node& root,
-                             const char* key) {
+std::vector<YAML::Node> list(const std::filesystem::path& path, const YAML::Node& root, const char* key) {
   const YAML::Node n = root[key];
   if (!n) fail_at(path, root, fmt::format("missing '{}'", key));
   if (!n.IsSequence() || n.size() == 0) fail_at(path, n, fmt::format("'{}' must be a non-empty list", key));
@@ -41,7 +41,9 @@ std::vector<YAML::Node> list(const std::filesystem::path& path, const YAML::Node
 std::vector<std::string> expand(const std::filesystem::path& path, const YAML::Node& node,
                                 const std::filesystem::path& base) {
   const std::string pattern = scalar<std::string>(path, node, "a track");
-  const std::filesystem::path full = std::filesystem::path(pattern).is_absolute() ? std::filesystem::path(pattern) : base / pattern;
+  const std::filesystem::path full = std::filesystem::path(pattern).is_absolute()
+                                         ? std::filesystem::path(pattern)
+                                         : base / pattern;
   glob_t g{};
   const int rc = ::glob(full.c_str(), 0, nullptr, &g);
   std::vector<std::string> out;
@@ -61,7 +63,8 @@ void read_calibration(const std::filesystem::path& path, const YAML::Node& c, Ex
     if (key == "resampler") {
       if (!filters::parse_resampler(scalar<std::string>(path, kv.second, "calibration.resampler"),
                                     &out->resampler))
-        fail_at(path, kv.second, "calibration.resampler must be multinomial, stratified, systematic or residual");
+        fail_at(path, kv.second,
+                "calibration.resampler must be multinomial, stratified, systematic or residual");
     } else if (key == "policy") {
       if (!filters::parse_resample_policy(scalar<std::string>(path, kv.second, "calibration.policy"),
                                           &out->policy))
@@ -116,16 +119,17 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
     throw Failure(fmt::format("{}:{}: {}", path.string(), ex.mark.line + 1, ex.msg));
   }
   if (!root.IsMap()) fail_at(path, root, "expected a mapping (see experiments/smoke.yaml)");
-  static const std::set<std::string> known = {"format", "name",   "models",   "tracks",
-                                              "modes",  "seeds",  "solver",   "budget",
+  static const std::set<std::string> known = {"format",        "name",  "models",     "tracks",
+                                              "modes",         "seeds", "solver",     "budget",
                                               "leave_one_out", "store", "calibration"};
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>("");
     if (!known.count(key))
-      fail_at(path, kv.first, fmt::format("unknown key '{}', expected one of format, name, models, "
-                                          "tracks, modes, seeds, solver, budget, leave_one_out, store, "
-                                          "calibration",
-                                          key));
+      fail_at(path, kv.first,
+              fmt::format("unknown key '{}', expected one of format, name, models, "
+                          "tracks, modes, seeds, solver, budget, leave_one_out, store, "
+                          "calibration",
+                          key));
   }
   if (!root["format"] || root["format"].as<std::string>("") != kFormat)
     fail_at(path, root["format"] ? root["format"] : root,
@@ -154,18 +158,22 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
     if (count < 1 || count > 100000) fail_at(path, seeds, "seeds.count must be 1..100000");
     for (int i = 0; i < count; ++i) e.seeds.push_back(first + static_cast<std::uint64_t>(i));
   } else {
-    for (const auto& n : list(path, root, "seeds"))
-      e.seeds.push_back(scalar<std::uint64_t>(path, n, "a seed"));
+    for (const auto& n : list(path, root, "seeds")) e.seeds.push_back(scalar<std::uint64_t>(path, n, "a seed"));
   }
   if (root["solver"]) e.solver = scalar<std::string>(path, root["solver"], "solver");
   if (const YAML::Node b = root["budget"]) {
     if (!b.IsMap()) fail_at(path, b, "budget must be a mapping {particles, iterations} or {evaluations}");
     for (const auto& kv : b) {
       const auto key = kv.first.as<std::string>("");
-      if (key == "particles") e.particles = scalar<int>(path, kv.second, "budget.particles");
-      else if (key == "iterations") e.iterations = scalar<int>(path, kv.second, "budget.iterations");
-      else if (key == "evaluations") e.evaluations = scalar<long>(path, kv.second, "budget.evaluations");
-      else fail_at(path, kv.first, fmt::format("unknown budget key '{}', expected particles, iterations or evaluations", key));
+      if (key == "particles")
+        e.particles = scalar<int>(path, kv.second, "budget.particles");
+      else if (key == "iterations")
+        e.iterations = scalar<int>(path, kv.second, "budget.iterations");
+      else if (key == "evaluations")
+        e.evaluations = scalar<long>(path, kv.second, "budget.evaluations");
+      else
+        fail_at(path, kv.first,
+                fmt::format("unknown budget key '{}', expected particles, iterations or evaluations", key));
     }
   }
   if (root["leave_one_out"]) e.leave_one_out = scalar<bool>(path, root["leave_one_out"], "leave_one_out");

@@ -29,8 +29,8 @@
 #include <string>
 #include <vector>
 
-#include "objectives/tuned_model.h"
 #include "filters/resampling.h"
+#include "objectives/tuned_model.h"
 
 namespace odotune {
 
@@ -38,9 +38,9 @@ namespace odotune {
 struct ExperimentCalibration {
   filters::Resampler resampler = filters::Resampler::systematic;
   filters::ResamplePolicy policy = filters::ResamplePolicy::neff;
-  int particles = 0;               // 0 = the paper's count
+  int particles = 0;  // 0 = the paper's count
   std::uint64_t seed = 1;
-  double ext_from_gt_hz = 0.0;     // 0: the tracks' v_ext/w_ext
+  double ext_from_gt_hz = 0.0;  // 0: the tracks' v_ext/w_ext
 };
 
 struct Experiment {

@@ -53,8 +53,8 @@ inline void write_params_block(std::ostream& out, const BoxSpace& space, const s
   out << "params:\n";
   for (std::size_t i = 0; i < space.dim(); ++i) {
     const auto& p = space.params()[i];
-    out << fmt::format("  {}: {:.17g}  # [{}] {}; tuning bounds {}..{}\n", p.name, values[i], p.unit,
-                       p.meaning, p.lower, p.upper);
+    out << fmt::format("  {}: {:.17g}  # [{}] {}; tuning bounds {}..{}\n", p.name, values[i], p.unit, p.meaning,
+                       p.lower, p.upper);
   }
 }
 

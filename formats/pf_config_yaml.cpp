@@ -7,8 +7,8 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "formats/config_yaml.h"
 #include "core/failure.h"
+#include "formats/config_yaml.h"
 #include "formats/params_yaml.h"
 #include "formats/yaml_error.h"
 #include "objectives/calibration_objective.h"
@@ -36,15 +36,16 @@ filters::PfCalibratorParams apply_pf_config(const PfConfig& c, const filters::Pf
 }
 
 PfConfig read_pf_config(const std::filesystem::path& path) {
-  const YAML::Node root =
-      load_format_file(path, "PF configuration file", kFormat,
-                       "a mapping with format, method, resampler, policy, particles and params");
+  const YAML::Node root = load_format_file(
+      path, "PF configuration file", kFormat,
+      "a mapping with format, method, resampler, policy, particles and params");
   static const std::set<std::string> known = {"format", "method", "resampler", "policy", "particles", "params"};
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>("");
     if (!known.count(key))
       fail_at(path, kv.first,
-              fmt::format("unknown key '{}', expected format, method, resampler, policy, particles or params", key));
+              fmt::format("unknown key '{}', expected format, method, resampler, policy, particles or params",
+                          key));
   }
   for (const char* key : {"method", "resampler", "policy", "particles", "params"})
     if (!root[key]) fail_at(path, root, fmt::format("'{}' is missing", key));

@@ -53,12 +53,14 @@ class Parser {
     try {
       root = YAML::Load(std::string(text));
     } catch (const YAML::ParserException& e) {
-      const std::size_t line = e.mark.is_null() || e.mark.line < 0 ? 0 : static_cast<std::size_t>(e.mark.line) + 1;
+      const std::size_t line = e.mark.is_null() || e.mark.line < 0 ? 0
+                                                                   : static_cast<std::size_t>(e.mark.line) + 1;
       throw ScenarioError(file_, line, fmt::format("YAML syntax error: {}", e.msg));
     }
     if (!root.IsMap())
-      fail(root, fmt::format("expected a scenario (a map with at least motion.segments or motion.knots), got {}",
-                             kind_of(root)));
+      fail(root,
+           fmt::format("expected a scenario (a map with at least motion.segments or motion.knots), got {}",
+                       kind_of(root)));
     sim::Scenario sc;
     sc.name = std::filesystem::path(file_).stem().string();
     sc.source = std::filesystem::path(file_).filename().string();
@@ -110,8 +112,7 @@ class Parser {
   void for_each_key(const YAML::Node& node, const std::string& path,
                     const std::vector<std::string_view>& allowed, F&& f) {
     if (node.IsNull()) return;
-    if (!node.IsMap())
-      fail(node, fmt::format("{}: expected a map of key: value, got {}", path, kind_of(node)));
+    if (!node.IsMap()) fail(node, fmt::format("{}: expected a map of key: value, got {}", path, kind_of(node)));
     std::set<std::string> seen;
     for (auto it = node.begin(); it != node.end(); ++it) {
       const YAML::Node k = it->first;
@@ -124,8 +125,7 @@ class Parser {
         const std::string guess = sim::closest_name(key, allowed);
         std::string valid;
         for (auto a : allowed) valid += (valid.empty() ? "" : ", ") + std::string(a);
-        fail(k, fmt::format("unknown key '{}'{}{}; valid keys: {}", key,
-                            path.empty() ? "" : " in " + path,
+        fail(k, fmt::format("unknown key '{}'{}{}; valid keys: {}", key, path.empty() ? "" : " in " + path,
                             guess.empty() ? "" : fmt::format(" (did you mean '{}'?)", guess), valid));
       }
       if (!seen.insert(key).second) fail(k, fmt::format("duplicate key '{}'", join(path, key)));
@@ -139,8 +139,7 @@ class Parser {
   }
 
   double read_double(const YAML::Node& v, const YAML::Node& k, const std::string& what) const {
-    if (!v.IsScalar())
-      fail(value_or_key(v, k), fmt::format("{}: expected a number, got {}", what, kind_of(v)));
+    if (!v.IsScalar()) fail(value_or_key(v, k), fmt::format("{}: expected a number, got {}", what, kind_of(v)));
     std::string_view s = v.Scalar();
     if (!s.empty() && s.front() == '+') s.remove_prefix(1);
     double x = 0.0;
@@ -200,53 +199,68 @@ class Parser {
   }
 
   void read_sensors(const YAML::Node& n, sim::SensorParams& s) {
-    for_each_key(n, "sensors",
-                 {"encoders", "commands", "gyro", "power", "ext_velocity", "aps", "ground_truth"},
+    for_each_key(n, "sensors", {"encoders", "commands", "gyro", "power", "ext_velocity", "aps", "ground_truth"},
                  [&](const std::string& key, const YAML::Node&, const YAML::Node& v) {
                    const std::string p = "sensors." + key;
                    if (key == "encoders")
-                     read_fields(v, p, {{"enabled", &s.encoders.enabled}, {"rate_hz", &s.encoders.rate_hz},
-                                        {"omega", &s.encoders.omega},
-                                        {"omega_resolution_rad_s", &s.encoders.omega_resolution_rad_s}});
+                     read_fields(v, p,
+                                 {{"enabled", &s.encoders.enabled},
+                                  {"rate_hz", &s.encoders.rate_hz},
+                                  {"omega", &s.encoders.omega},
+                                  {"omega_resolution_rad_s", &s.encoders.omega_resolution_rad_s}});
                    else if (key == "commands")
-                     read_fields(v, p, {{"enabled", &s.commands.enabled}, {"rate_hz", &s.commands.rate_hz},
-                                        {"resolution", &s.commands.resolution}});
+                     read_fields(v, p,
+                                 {{"enabled", &s.commands.enabled},
+                                  {"rate_hz", &s.commands.rate_hz},
+                                  {"resolution", &s.commands.resolution}});
                    else if (key == "gyro")
-                     read_fields(v, p, {{"enabled", &s.gyro.enabled}, {"rate_hz", &s.gyro.rate_hz},
-                                        {"sigma_rad_s", &s.gyro.sigma_rad_s},
-                                        {"resolution_rad_s", &s.gyro.resolution_rad_s}});
+                     read_fields(v, p,
+                                 {{"enabled", &s.gyro.enabled},
+                                  {"rate_hz", &s.gyro.rate_hz},
+                                  {"sigma_rad_s", &s.gyro.sigma_rad_s},
+                                  {"resolution_rad_s", &s.gyro.resolution_rad_s}});
                    else if (key == "power")
-                     read_fields(v, p, {{"enabled", &s.power.enabled}, {"rate_hz", &s.power.rate_hz},
-                                        {"sigma_w", &s.power.sigma_w}, {"resolution_w", &s.power.resolution_w}});
+                     read_fields(v, p,
+                                 {{"enabled", &s.power.enabled},
+                                  {"rate_hz", &s.power.rate_hz},
+                                  {"sigma_w", &s.power.sigma_w},
+                                  {"resolution_w", &s.power.resolution_w}});
                    else if (key == "ext_velocity")
-                     read_fields(v, p, {{"enabled", &s.ext_velocity.enabled},
-                                        {"rate_hz", &s.ext_velocity.rate_hz},
-                                        {"sigma_v_m_s", &s.ext_velocity.sigma_v_m_s},
-                                        {"sigma_w_rad_s", &s.ext_velocity.sigma_w_rad_s},
-                                        {"resolution", &s.ext_velocity.resolution}});
+                     read_fields(v, p,
+                                 {{"enabled", &s.ext_velocity.enabled},
+                                  {"rate_hz", &s.ext_velocity.rate_hz},
+                                  {"sigma_v_m_s", &s.ext_velocity.sigma_v_m_s},
+                                  {"sigma_w_rad_s", &s.ext_velocity.sigma_w_rad_s},
+                                  {"resolution", &s.ext_velocity.resolution}});
                    else if (key == "aps")
-                     read_fields(v, p, {{"enabled", &s.aps.enabled}, {"rate_hz", &s.aps.rate_hz},
-                                        {"sigma_m", &s.aps.sigma_m}, {"resolution_m", &s.aps.resolution_m}});
+                     read_fields(v, p,
+                                 {{"enabled", &s.aps.enabled},
+                                  {"rate_hz", &s.aps.rate_hz},
+                                  {"sigma_m", &s.aps.sigma_m},
+                                  {"resolution_m", &s.aps.resolution_m}});
                    else if (key == "ground_truth")
-                     read_fields(v, p, {{"enabled", &s.ground_truth.enabled},
-                                        {"rate_hz", &s.ground_truth.rate_hz},
-                                        {"sigma_m", &s.ground_truth.sigma_m},
-                                        {"sigma_rad", &s.ground_truth.sigma_rad},
-                                        {"resolution_m", &s.ground_truth.resolution_m},
-                                        {"resolution_rad", &s.ground_truth.resolution_rad}});
+                     read_fields(v, p,
+                                 {{"enabled", &s.ground_truth.enabled},
+                                  {"rate_hz", &s.ground_truth.rate_hz},
+                                  {"sigma_m", &s.ground_truth.sigma_m},
+                                  {"sigma_rad", &s.ground_truth.sigma_rad},
+                                  {"resolution_m", &s.ground_truth.resolution_m},
+                                  {"resolution_rad", &s.ground_truth.resolution_rad}});
                  });
   }
 
   void read_motion(const YAML::Node& n, const YAML::Node& key, sim::MotionParams& m) {
     if (!n.IsMap())
-      fail(value_or_key(n, key), fmt::format("motion: expected a map with segments or knots, got {}", kind_of(n)));
+      fail(value_or_key(n, key),
+           fmt::format("motion: expected a map with segments or knots, got {}", kind_of(n)));
     bool have_segments = false, have_knots = false;
     YAML::Node knots_key;
     for_each_key(n, "motion", {"start", "max_accel_m_s2", "max_angular_accel_rad_s2", "segments", "knots"},
                  [&](const std::string& k, const YAML::Node& kn, const YAML::Node& v) {
                    if (k == "start")
-                     read_fields(v, "motion.start",
-                                 {{"x_m", &m.start_x_m}, {"y_m", &m.start_y_m}, {"theta_rad", &m.start_theta_rad}});
+                     read_fields(
+                         v, "motion.start",
+                         {{"x_m", &m.start_x_m}, {"y_m", &m.start_y_m}, {"theta_rad", &m.start_theta_rad}});
                    if (k == "max_accel_m_s2") m.max_accel_m_s2 = read_double(v, kn, "motion." + k);
                    if (k == "max_angular_accel_rad_s2")
                      m.max_angular_accel_rad_s2 = read_double(v, kn, "motion." + k);
@@ -265,7 +279,8 @@ class Parser {
                       "motion, knots: an explicit velocity profile)");
     if (have_knots) {
       if (m.knots.empty())
-        fail(knots_key, "motion.knots: no knots; expected knots: [[t_s, v_m_s, w_rad_s], ...] starting at t_s = 0");
+        fail(knots_key,
+             "motion.knots: no knots; expected knots: [[t_s, v_m_s, w_rad_s], ...] starting at t_s = 0");
       return;
     }
     if (!have_segments || m.segments.empty())
@@ -278,7 +293,8 @@ class Parser {
   void read_knots(const YAML::Node& n, const YAML::Node& key, std::vector<sim::VelocityKnot>& out) {
     if (!n.IsSequence())
       fail(value_or_key(n, key), fmt::format("motion.knots: expected a list of [t_s, v_m_s, w_rad_s] "
-                                             "triples, got {}", kind_of(n)));
+                                             "triples, got {}",
+                                             kind_of(n)));
     if (n.size() > kMaxKnots)
       fail(key, fmt::format("motion.knots: {} knots; expected at most {}", n.size(), kMaxKnots));
     out.reserve(n.size());
@@ -310,43 +326,46 @@ class Parser {
         fail(item, fmt::format("{}: expected a one-key map such as '- straight: {{distance_m: 2, "
                                "speed_m_s: 0.5}}' (kinds: straight, arc, spin, stop, repeat), got {}",
                                ip, item.IsMap() ? fmt::format("{} keys", item.size()) : kind_of(item)));
-      for_each_key(item, ip, {"straight", "arc", "spin", "stop", "repeat"},
-                   [&](const std::string& kind, const YAML::Node& kn, const YAML::Node& v) {
-                     if (kind == "repeat") {
-                       read_repeat(v, kn, ip + ".repeat", out);
-                       return;
-                     }
-                     sim::Segment s;
-                     s.line = static_cast<int>(line_of(kn));
-                     const std::string sp = ip + "." + kind;
-                     if (!v.IsMap()) fail(value_or_key(v, kn), fmt::format("{}: expected a map of parameters, got {}", sp, kind_of(v)));
-                     std::vector<Field> fields;
-                     if (kind == "straight") {
-                       s.kind = sim::Segment::Kind::straight;
-                       fields = {{"distance_m", &s.distance_m}, {"speed_m_s", &s.speed_m_s}};
-                     } else if (kind == "arc") {
-                       s.kind = sim::Segment::Kind::arc;
-                       fields = {{"radius_m", &s.radius_m}, {"angle_deg", &s.angle_deg}, {"speed_m_s", &s.speed_m_s}};
-                     } else if (kind == "spin") {
-                       s.kind = sim::Segment::Kind::spin;
-                       fields = {{"angle_deg", &s.angle_deg}, {"rate_deg_s", &s.rate_deg_s}};
-                     } else {
-                       s.kind = sim::Segment::Kind::stop;
-                       fields = {{"duration_s", &s.duration_s}};
-                     }
-                     read_fields(v, sp, fields);
-                     for (const auto& f : fields)
-                       if (!v[std::string(f.key)])
-                         fail(kn, fmt::format("{}: missing '{}'; {} needs {}", sp, f.key, kind, field_list(fields)));
-                     try {
-                       (void)sim::segment_cruise(s, out.size());
-                     } catch (const sim::ProfileError& e) {
-                       fail(kn, fmt::format("{}: {}", sp, strip_segment_prefix(e.what())));
-                     }
-                     if (out.size() >= kMaxSegments)
-                       fail(kn, fmt::format("more than {} segments after expanding repeats", kMaxSegments));
-                     out.push_back(s);
-                   });
+      for_each_key(
+          item, ip, {"straight", "arc", "spin", "stop", "repeat"},
+          [&](const std::string& kind, const YAML::Node& kn, const YAML::Node& v) {
+            if (kind == "repeat") {
+              read_repeat(v, kn, ip + ".repeat", out);
+              return;
+            }
+            sim::Segment s;
+            s.line = static_cast<int>(line_of(kn));
+            const std::string sp = ip + "." + kind;
+            if (!v.IsMap())
+              fail(value_or_key(v, kn),
+                   fmt::format("{}: expected a map of parameters, got {}", sp, kind_of(v)));
+            std::vector<Field> fields;
+            if (kind == "straight") {
+              s.kind = sim::Segment::Kind::straight;
+              fields = {{"distance_m", &s.distance_m}, {"speed_m_s", &s.speed_m_s}};
+            } else if (kind == "arc") {
+              s.kind = sim::Segment::Kind::arc;
+              fields = {{"radius_m", &s.radius_m}, {"angle_deg", &s.angle_deg}, {"speed_m_s", &s.speed_m_s}};
+            } else if (kind == "spin") {
+              s.kind = sim::Segment::Kind::spin;
+              fields = {{"angle_deg", &s.angle_deg}, {"rate_deg_s", &s.rate_deg_s}};
+            } else {
+              s.kind = sim::Segment::Kind::stop;
+              fields = {{"duration_s", &s.duration_s}};
+            }
+            read_fields(v, sp, fields);
+            for (const auto& f : fields)
+              if (!v[std::string(f.key)])
+                fail(kn, fmt::format("{}: missing '{}'; {} needs {}", sp, f.key, kind, field_list(fields)));
+            try {
+              (void)sim::segment_cruise(s, out.size());
+            } catch (const sim::ProfileError& e) {
+              fail(kn, fmt::format("{}: {}", sp, strip_segment_prefix(e.what())));
+            }
+            if (out.size() >= kMaxSegments)
+              fail(kn, fmt::format("more than {} segments after expanding repeats", kMaxSegments));
+            out.push_back(s);
+          });
     }
   }
 
@@ -355,18 +374,20 @@ class Parser {
     long count = -1;
     YAML::Node body, body_key;
     bool have_body = false;
-    for_each_key(v, path, {"count", "segments"}, [&](const std::string& k, const YAML::Node& kk, const YAML::Node& vv) {
-      if (k == "count") {
-        const double c = read_double(vv, kk, path + ".count");
-        if (!(c >= 1 && c <= static_cast<double>(kMaxRepeat) && c == std::floor(c)))
-          fail(vv, fmt::format("{}.count = {}; expected a whole number in [1, {}]", path, vv.Scalar(), kMaxRepeat));
-        count = static_cast<long>(c);
-      } else {
-        body.reset(vv);
-        body_key.reset(kk);
-        have_body = true;
-      }
-    });
+    for_each_key(v, path, {"count", "segments"},
+                 [&](const std::string& k, const YAML::Node& kk, const YAML::Node& vv) {
+                   if (k == "count") {
+                     const double c = read_double(vv, kk, path + ".count");
+                     if (!(c >= 1 && c <= static_cast<double>(kMaxRepeat) && c == std::floor(c)))
+                       fail(vv, fmt::format("{}.count = {}; expected a whole number in [1, {}]", path,
+                                            vv.Scalar(), kMaxRepeat));
+                     count = static_cast<long>(c);
+                   } else {
+                     body.reset(vv);
+                     body_key.reset(kk);
+                     have_body = true;
+                   }
+                 });
     if (count < 0 || !have_body) fail(kn, fmt::format("{}: expected {{count: N, segments: [...]}}", path));
     std::vector<sim::Segment> once;
     read_segments(body, body_key, path + ".segments", once);
@@ -390,7 +411,8 @@ class Parser {
 
   void read_effects(const YAML::Node& n, sim::Effects& fx) {
     if (n.IsNull()) return;
-    if (!n.IsMap()) fail(n, fmt::format("effects: expected a map of effect: {{param: value}}, got {}", kind_of(n)));
+    if (!n.IsMap())
+      fail(n, fmt::format("effects: expected a map of effect: {{param: value}}, got {}", kind_of(n)));
     std::vector<std::string_view> names;
     for (const auto& e : sim::effect_table()) names.push_back(e.name);
     for_each_key(n, "effects", names, [&](const std::string& name, const YAML::Node& kn, const YAML::Node& v) {
@@ -418,7 +440,8 @@ class Parser {
                           const std::vector<std::string_view>& choices) const {
     std::string valid;
     for (auto c : choices) valid += (valid.empty() ? "" : " or ") + std::string(c);
-    if (!v.IsScalar()) fail(value_or_key(v, k), fmt::format("{}: expected {}, got {}", what, valid, kind_of(v)));
+    if (!v.IsScalar())
+      fail(value_or_key(v, k), fmt::format("{}: expected {}, got {}", what, valid, kind_of(v)));
     for (auto c : choices)
       if (v.Scalar() == c) return v.Scalar();
     const std::string guess = sim::closest_name(v.Scalar(), choices);
@@ -436,7 +459,8 @@ class Parser {
                                              "left|right, t0_s, t1_s, s, ramp_s, brake_nm}} maps, got {}",
                                              kind_of(n)));
     if (n.size() > sim::kMaxSlipEpisodes)
-      fail(key, fmt::format("slip_episodes: {} episodes; expected at most {}", n.size(), sim::kMaxSlipEpisodes));
+      fail(key,
+           fmt::format("slip_episodes: {} episodes; expected at most {}", n.size(), sim::kMaxSlipEpisodes));
     for (std::size_t i = 0; i < n.size(); ++i) {
       const YAML::Node item = n[i];
       const std::string ip = fmt::format("slip_episodes[{}]", i + 1);
@@ -453,17 +477,23 @@ class Parser {
                      at[f].reset(value_or_key(v, k));
                      const std::string what = ip + "." + f;
                      if (f == "kind")
-                       e.kind = read_choice(v, k, what, {"spin", "hold"}) == "spin" ? sim::SlipEpisode::Kind::spin
-                                                                                  : sim::SlipEpisode::Kind::hold;
+                       e.kind = read_choice(v, k, what, {"spin", "hold"}) == "spin"
+                                    ? sim::SlipEpisode::Kind::spin
+                                    : sim::SlipEpisode::Kind::hold;
                      else if (f == "wheel")
                        e.wheel = read_choice(v, k, what, {"left", "right"}) == "left"
                                      ? sim::SlipEpisode::Wheel::left
                                      : sim::SlipEpisode::Wheel::right;
-                     else if (f == "t0_s") e.t0_s = read_double(v, k, what);
-                     else if (f == "t1_s") e.t1_s = read_double(v, k, what);
-                     else if (f == "s") e.s = read_double(v, k, what);
-                     else if (f == "ramp_s") e.ramp_s = read_double(v, k, what);
-                     else e.brake_nm = read_double(v, k, what);
+                     else if (f == "t0_s")
+                       e.t0_s = read_double(v, k, what);
+                     else if (f == "t1_s")
+                       e.t1_s = read_double(v, k, what);
+                     else if (f == "s")
+                       e.s = read_double(v, k, what);
+                     else if (f == "ramp_s")
+                       e.ramp_s = read_double(v, k, what);
+                     else
+                       e.brake_nm = read_double(v, k, what);
                    });
       for (const char* required : {"kind", "wheel", "t0_s", "t1_s", "s"})
         if (!at.count(required))
@@ -529,12 +559,14 @@ sim::Scenario load_scenario(const std::filesystem::path& file) {
   const std::string name = file.string();
   std::error_code ec;
   if (!fs::is_regular_file(file, ec))
-    throw ScenarioError(name, 0, fs::exists(file, ec) ? "not a regular file; expected a scenario YAML file"
-                                                      : "no such file; expected a scenario YAML file");
+    throw ScenarioError(name, 0,
+                        fs::exists(file, ec) ? "not a regular file; expected a scenario YAML file"
+                                             : "no such file; expected a scenario YAML file");
   const auto size = fs::file_size(file, ec);
   if (ec || size > kMaxFileBytes)
-    throw ScenarioError(name, 0, fmt::format("cannot use this file ({}); expected a scenario of at most {} bytes",
-                                             ec ? ec.message() : fmt::format("{} bytes", size), kMaxFileBytes));
+    throw ScenarioError(name, 0,
+                        fmt::format("cannot use this file ({}); expected a scenario of at most {} bytes",
+                                    ec ? ec.message() : fmt::format("{} bytes", size), kMaxFileBytes));
   std::ifstream in(file, std::ios::binary);
   if (!in) throw ScenarioError(name, 0, "cannot open the file for reading");
   std::ostringstream text;

@@ -117,9 +117,10 @@ std::string segment_line(const sim::Segment& s, std::size_t i) {
 void write_motion(std::string& out, const sim::MotionParams& m) {
   out += "motion:\n";
   if (m.start_x_m != 0.0 || m.start_y_m != 0.0 || m.start_theta_rad != 0.0)
-    out += fmt::format("  start: {}\n", flow_map({{"x_m", num("motion.start.x_m", m.start_x_m)},
-                                                  {"y_m", num("motion.start.y_m", m.start_y_m)},
-                                                  {"theta_rad", num("motion.start.theta_rad", m.start_theta_rad)}}));
+    out += fmt::format("  start: {}\n",
+                       flow_map({{"x_m", num("motion.start.x_m", m.start_x_m)},
+                                 {"y_m", num("motion.start.y_m", m.start_y_m)},
+                                 {"theta_rad", num("motion.start.theta_rad", m.start_theta_rad)}}));
   out += fmt::format("  max_accel_m_s2: {}\n", num("motion.max_accel_m_s2", m.max_accel_m_s2));
   out += fmt::format("  max_angular_accel_rad_s2: {}\n",
                      num("motion.max_angular_accel_rad_s2", m.max_angular_accel_rad_s2));
@@ -149,7 +150,9 @@ void write_sensors(std::string& out, const sim::SensorParams& s) {
   };
   out += "sensors:\n";
   sensor = "encoders";
-  line({on(s.encoders.enabled), n("rate_hz", s.encoders.rate_hz), {"omega", flag(s.encoders.omega)},
+  line({on(s.encoders.enabled),
+        n("rate_hz", s.encoders.rate_hz),
+        {"omega", flag(s.encoders.omega)},
         n("omega_resolution_rad_s", s.encoders.omega_resolution_rad_s)});
   sensor = "commands";
   line({on(s.commands.enabled), n("rate_hz", s.commands.rate_hz), n("resolution", s.commands.resolution)});
@@ -199,7 +202,8 @@ void write_slip_episodes(std::string& out, const std::vector<sim::SlipEpisode>& 
                                   {"t1_s", num(p + "t1_s", e.t1_s)},
                                   {"s", num(p + "s", e.s)},
                                   {"ramp_s", num(p + "ramp_s", e.ramp_s)}};
-    if (e.kind == sim::SlipEpisode::Kind::hold) entries.emplace_back("brake_nm", num(p + "brake_nm", e.brake_nm));
+    if (e.kind == sim::SlipEpisode::Kind::hold)
+      entries.emplace_back("brake_nm", num(p + "brake_nm", e.brake_nm));
     out += fmt::format("  - {}\n", flow_map(entries));
   }
 }
@@ -208,10 +212,12 @@ void write_slip_episodes(std::string& out, const std::vector<sim::SlipEpisode>& 
 
 std::string scenario_to_yaml(const sim::Scenario& sc, const std::string& header_comment) {
   if (sc.name.empty() || sc.name.find_first_of("\r\n") != std::string::npos)
-    throw std::invalid_argument(fmt::format("scenario_to_yaml: the name is {}; expected a non-empty one-line text",
-                                            sc.name.empty() ? "empty" : "split by a line break"));
+    throw std::invalid_argument(
+        fmt::format("scenario_to_yaml: the name is {}; expected a non-empty one-line text",
+                    sc.name.empty() ? "empty" : "split by a line break"));
   if (sc.motion.segments.empty() && sc.motion.knots.empty())
-    throw std::invalid_argument("scenario_to_yaml: motion has neither segments nor knots; expected one of them");
+    throw std::invalid_argument(
+        "scenario_to_yaml: motion has neither segments nor knots; expected one of them");
   std::string why;
   if (!sim::validate_scenario(sc, &why)) throw std::invalid_argument("scenario_to_yaml: " + why);
 

@@ -7,8 +7,8 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "formats/config_yaml.h"
 #include "core/failure.h"
+#include "formats/config_yaml.h"
 #include "formats/params_yaml.h"
 #include "formats/yaml_error.h"
 

@@ -31,9 +31,9 @@
 namespace odotune {
 
 struct UkfConfig {
-  double rate_hz = 10.0;        // fusion rate [Hz]
-  std::vector<double> params;   // physical values, ukf_space() order and units
-  std::string comment;          // written as leading YAML comments (provenance)
+  double rate_hz = 10.0;       // fusion rate [Hz]
+  std::vector<double> params;  // physical values, ukf_space() order and units
+  std::string comment;         // written as leading YAML comments (provenance)
 };
 
 // The file's values applied to `base` (apply_ukf_params).

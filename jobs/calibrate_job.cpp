@@ -63,16 +63,18 @@ std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply
     if (a.ext_sigma_w > 0.0) o.default_w_var = a.ext_sigma_w * a.ext_sigma_w;
     const Track& tr = tracks[k];
     const bool has_ext = tr.has(Col::v_ext) && tr.has(Col::w_ext);
-    if (apply && o.ext_from_gt_rate_hz <= 0.0 && !has_ext && tr.has_gt()) o.ext_from_gt_rate_hz = kApplyExtRateHz;
+    if (apply && o.ext_from_gt_rate_hz <= 0.0 && !has_ext && tr.has_gt())
+      o.ext_from_gt_rate_hz = kApplyExtRateHz;
     std::string why;
     if (!o.IsValid(&why)) throw Failure(fmt::format("--ext-from-gt {}: {}", a.ext_from_gt_hz, why));
     if (o.ext_from_gt_rate_hz <= 0.0 && !has_ext)
-      throw Failure(tr.has_gt() ? fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext); expected "
-                                              "them, or --ext-from-gt HZ to derive them from its ground truth",
-                                              files[k], tr.name())
-                                : fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext) and no "
-                                              "ground truth (gt_x, gt_y) to derive them from; expected either",
-                                              files[k], tr.name()));
+      throw Failure(tr.has_gt()
+                        ? fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext); expected "
+                                      "them, or --ext-from-gt HZ to derive them from its ground truth",
+                                      files[k], tr.name())
+                        : fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext) and no "
+                                      "ground truth (gt_x, gt_y) to derive them from; expected either",
+                                      files[k], tr.name()));
     try {
       inputs.push_back(build_calibration_input(tracks[k], o));
     } catch (const std::invalid_argument& e) {
@@ -88,7 +90,9 @@ std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply
 
 // Several tracks are calibrated as one robot: their nominal parameters must agree.
 void check_same_robot(const std::vector<CalibrationInput>& inputs, const std::vector<std::string>& files) {
-  const auto differs = [](double a, double b) { return std::abs(a - b) > 1e-9 * std::max(std::abs(a), std::abs(b)); };
+  const auto differs = [](double a, double b) {
+    return std::abs(a - b) > 1e-9 * std::max(std::abs(a), std::abs(b));
+  };
   for (std::size_t k = 1; k < inputs.size(); ++k) {
     const OdometryParams &a = inputs[0].nominal, &b = inputs[k].nominal;
     if (differs(a.wheel_radius_left_m, b.wheel_radius_left_m) ||
@@ -109,10 +113,12 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
     throw Failure(fmt::format("--method '{}': unknown method, expected adaptive-pf, pf, dkf, batch or none",
                               a.method));
   const bool pf = o.method == CalibrationMethod::pf || o.method == CalibrationMethod::adaptive_pf;
-  for (const auto& [flag, given] : {std::pair{"--resampler", a.resampler_given}, std::pair{"--policy", a.policy_given},
-                                    std::pair{"--particles", a.particles_given}})
+  for (const auto& [flag, given] :
+       {std::pair{"--resampler", a.resampler_given}, std::pair{"--policy", a.policy_given},
+        std::pair{"--particles", a.particles_given}})
     if (given && !pf)
-      throw Failure(fmt::format("{} applies to --method pf and adaptive-pf only (got --method {})", flag, a.method));
+      throw Failure(fmt::format("{} applies to --method pf and adaptive-pf only (got --method {})", flag,
+                                a.method));
   const OdometryParams& nom = inputs.front().nominal;
   const double r_nom = 0.5 * (nom.wheel_radius_left_m + nom.wheel_radius_right_m);
   const double r_scale = r_nom / kPaperRadiusM, d_scale = nom.wheel_base_m / kPaperWheelBaseM;
@@ -223,7 +229,8 @@ CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& 
   if (!a.config_out.empty()) {
     CalibrationFile file;
     file.params = out.result.final_params;
-    const bool pf = out.result.method == CalibrationMethod::pf || out.result.method == CalibrationMethod::adaptive_pf;
+    const bool pf = out.result.method == CalibrationMethod::pf ||
+                    out.result.method == CalibrationMethod::adaptive_pf;
     file.comment = fmt::format("calibrated by odotune calibrate: method {}{}\ntracks: {}", a.method,
                                pf ? fmt::format(", seed {}", a.seed) : "", joined(a.tracks));
     write_calibration_file(file, a.config_out);
@@ -240,7 +247,8 @@ ApplyOutcome run_calibrate_apply(const CalibrateRequest& a) {
         std::pair{"--init-wheel-base-range", a.init_wheel_base_range_given},
         std::pair{"--tolerance", a.tolerance_given}, std::pair{"--csv", !a.csv.empty()},
         std::pair{"--figure", !a.figure.empty()}, std::pair{"--config-out", !a.config_out.empty()}})
-    if (given) throw Failure(fmt::format("{} does not combine with --apply (which replays a calibration file)", flag));
+    if (given)
+      throw Failure(fmt::format("{} does not combine with --apply (which replays a calibration file)", flag));
   check_output_dir("--json", a.json);
   const CalibrationFile cal = read_calibration_file(a.apply);
   const std::vector<CalibrationInput> inputs = build_inputs(a, true);

@@ -35,22 +35,22 @@ namespace odotune {
 
 // The command's flags as plain values (names as the flags').
 struct CalibrateRequest {
-  std::vector<std::string> tracks;      // track files, calibrated in this order (one robot)
-  std::string method = "adaptive-pf";   // adaptive-pf | pf | dkf | batch | none
-  std::string resampler;                // PF: multinomial | stratified | systematic | residual ("": systematic)
-  std::string policy;                   // PF: every | neff | max ("": neff)
-  std::uint64_t seed = 1;               // PF random seed
-  int particles = 0;                    // PF particles (adaptive-pf: initial); ≤ 0: 5000 (adaptive 8000)
-  int threads = 0;                      // PF threads (0: OpenMP's default); results do not depend on it
-  double ext_from_gt_hz = 0.0;          // > 0: derive the external velocities from the ground truth [Hz]
-  double ext_sigma_v = 0.0;             // [m/s] σ of v_ext where the track gives none; 0: 0.02
-  double ext_sigma_w = 0.0;             // [rad/s] σ of w_ext where the track gives none; 0: 0.02
-  std::string init_radius_range;        // "LO,HI" [m], both radii; "": nominal ±5 %
-  std::string init_wheel_base_range;    // "LO,HI" [m]; "": nominal ±15 %
-  double tolerance_pct = 0.5;           // convergence tolerance [%], in (0, 100)
+  std::vector<std::string> tracks;     // track files, calibrated in this order (one robot)
+  std::string method = "adaptive-pf";  // adaptive-pf | pf | dkf | batch | none
+  std::string resampler;               // PF: multinomial | stratified | systematic | residual ("": systematic)
+  std::string policy;                  // PF: every | neff | max ("": neff)
+  std::uint64_t seed = 1;              // PF random seed
+  int particles = 0;                   // PF particles (adaptive-pf: initial); ≤ 0: 5000 (adaptive 8000)
+  int threads = 0;                     // PF threads (0: OpenMP's default); results do not depend on it
+  double ext_from_gt_hz = 0.0;         // > 0: derive the external velocities from the ground truth [Hz]
+  double ext_sigma_v = 0.0;            // [m/s] σ of v_ext where the track gives none; 0: 0.02
+  double ext_sigma_w = 0.0;            // [rad/s] σ of w_ext where the track gives none; 0: 0.02
+  std::string init_radius_range;       // "LO,HI" [m], both radii; "": nominal ±5 %
+  std::string init_wheel_base_range;   // "LO,HI" [m]; "": nominal ±15 %
+  double tolerance_pct = 0.5;          // convergence tolerance [%], in (0, 100)
   // Output files ("": not written). calibrate: all four; --apply: json only.
   std::string json, csv, figure, config_out;
-  std::string apply;                    // the calibration file --apply replays
+  std::string apply;  // the calibration file --apply replays
 
   // Which flags were given (even with a default or empty value): --resampler,
   // --policy and --particles apply to the PF methods only, and none of these
@@ -69,11 +69,11 @@ struct CalibrateHooks {
 };
 
 struct CalibrateOutcome {
-  CalibrationRunInfo info;                    // the options that ran, the track files
-  std::vector<CalibrationInput> inputs;       // one per track file, in order
+  CalibrationRunInfo info;               // the options that ran, the track files
+  std::vector<CalibrationInput> inputs;  // one per track file, in order
   CalibrationResult result;
-  std::vector<TrackCalibrationScore> nominal; // the inputs' nominal parameters, scored
-  std::vector<std::string> summary;           // calibration_summary_lines()
+  std::vector<TrackCalibrationScore> nominal;  // the inputs' nominal parameters, scored
+  std::vector<std::string> summary;            // calibration_summary_lines()
 };
 
 // Checks the output folders, loads the tracks (one robot: equal nominal
@@ -85,9 +85,9 @@ struct CalibrateOutcome {
 CalibrateOutcome run_calibrate(const CalibrateRequest& request, const CalibrateHooks& hooks = {});
 
 struct ApplyOutcome {
-  filters::OdometryParams params;             // the calibration file's
-  std::vector<AppliedTrack> tracks;           // per track: nominal and calibrated scores
-  std::vector<std::string> summary;           // apply_summary_lines()
+  filters::OdometryParams params;    // the calibration file's
+  std::vector<AppliedTrack> tracks;  // per track: nominal and calibrated scores
+  std::vector<std::string> summary;  // apply_summary_lines()
 };
 
 // --apply: replays request.tracks (which need ground truth; external

@@ -11,7 +11,9 @@ namespace {
 
 using filters::OdometryParams;
 
-std::string pct(double estimate, double truth) { return fmt::format("{:+.3f} %", 100.0 * (estimate - truth) / truth); }
+std::string pct(double estimate, double truth) {
+  return fmt::format("{:+.3f} %", 100.0 * (estimate - truth) / truth);
+}
 
 std::string param_line(const char* name, double estimate, const std::optional<OdometryParams>& truth,
                        double OdometryParams::*field) {
@@ -64,15 +66,19 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
     else if (r.method == CalibrationMethod::batch)
       out.push_back("    convergence   n/a (an offline fit of the whole track)");
     else if (s.convergence_time_s)
-      out.push_back(fmt::format("    convergence   {:.2f} s (both radii within {:g} % of the truth from then on)",
-                                *s.convergence_time_s, tol_pct));
+      out.push_back(
+          fmt::format("    convergence   {:.2f} s (both radii within {:g} % of the truth from then on)",
+                      *s.convergence_time_s, tol_pct));
     else
-      out.push_back(fmt::format("    convergence   never (not within {:g} % of the truth to the end)", tol_pct));
-    const std::vector<double> changes = inputs[k].truth ? inputs[k].truth->change_times() : std::vector<double>{};
+      out.push_back(fmt::format("    convergence   never (not within {:g} % of the truth to the end)",
+                                tol_pct));
+    const std::vector<double> changes = inputs[k].truth ? inputs[k].truth->change_times()
+                                                        : std::vector<double>{};
     for (std::size_t c = 0; r.method != CalibrationMethod::batch && c < s.reconvergence_s.size(); ++c) {
       const std::string at = c < changes.size() ? fmt::format(" at {:.2f} s", changes[c]) : "";
       out.push_back(s.reconvergence_s[c]
-                        ? fmt::format("    re-convergence after the radius step{}: {:.2f} s", at, *s.reconvergence_s[c])
+                        ? fmt::format("    re-convergence after the radius step{}: {:.2f} s", at,
+                                      *s.reconvergence_s[c])
                         : fmt::format("    re-convergence after the radius step{}: never", at));
     }
     const double np = k < nominal.size() ? nominal[k].pose_rmse_m : NAN;
@@ -88,8 +94,8 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
                               r.ms_per_iteration, 1e-3 * r.ms_per_iteration * static_cast<double>(r.iterations),
                               r.batch_converged ? "" : "; Ceres did NOT report convergence"));
   } else if (r.method != CalibrationMethod::none) {
-    std::string cost =
-        fmt::format("  cost: {} iterations, {:.3g} ms per iteration", r.iterations, r.ms_per_iteration);
+    std::string cost = fmt::format("  cost: {} iterations, {:.3g} ms per iteration", r.iterations,
+                                   r.ms_per_iteration);
     if (pf) cost += fmt::format(", mean {:.0f} particles", r.mean_particles);
     out.push_back(cost);
   }

@@ -21,9 +21,9 @@ CalibrationTraceTable build_trace_table(const CalibrationResult& result,
                                         const std::vector<const CalibrationInput*>& inputs) {
   const CalibrationTrace& tr = result.trace;
   if (tr.track.size() != tr.t.size() || tr.estimate.size() != tr.t.size())
-    throw std::invalid_argument(fmt::format(
-        "calibration trace: t has {} rows, track {}, estimate {} (expected equal lengths)", tr.t.size(),
-        tr.track.size(), tr.estimate.size()));
+    throw std::invalid_argument(
+        fmt::format("calibration trace: t has {} rows, track {}, estimate {} (expected equal lengths)",
+                    tr.t.size(), tr.track.size(), tr.estimate.size()));
   CalibrationTraceTable table;
   double offset = 0.0;
   for (std::size_t k = 0; k < inputs.size(); ++k) {
@@ -70,7 +70,8 @@ CalibrationTraceTable build_trace_table(const CalibrationResult& result,
   const bool fixed = result.method == CalibrationMethod::batch || result.method == CalibrationMethod::none;
   if (fixed || tr.t.empty())
     for (std::size_t k = 0; k < inputs.size(); ++k)
-      table.fixed_params.push_back(k < result.tracks.size() ? result.tracks[k].final_params : result.final_params);
+      table.fixed_params.push_back(k < result.tracks.size() ? result.tracks[k].final_params
+                                                            : result.final_params);
   return table;
 }
 

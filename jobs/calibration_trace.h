@@ -20,7 +20,7 @@
 namespace odotune {
 
 struct CalibrationTraceTable {
-  std::vector<std::string> track_names;     // per input, in order
+  std::vector<std::string> track_names;       // per input, in order
   std::vector<double> track_start_elapsed_s;  // offset_k of each track [s]
   std::vector<double> track_end_elapsed_s;    // offset_k + its duration [s]
   // Truth change times (radius steps) on the elapsed axis, with the index of
@@ -38,12 +38,12 @@ struct CalibrationTraceTable {
   std::vector<TruthPiece> truth_pieces;
 
   // One row per iteration of the run (all columns equally long).
-  std::vector<double> t_s;                  // on the track's own clock [s]
-  std::vector<double> elapsed_s;            // [s]
-  std::vector<int> track;                   // input index
+  std::vector<double> t_s;        // on the track's own clock [s]
+  std::vector<double> elapsed_s;  // [s]
+  std::vector<int> track;         // input index
   std::vector<filters::CalibEstimate> estimate;
   std::vector<std::optional<filters::OdometryParams>> truth;  // nullopt: this track has no truth
-  bool any_truth = false;                   // some row has a truth
+  bool any_truth = false;                                     // some row has a truth
 
   // Methods with fixed parameters (batch, none; their trace has one row per
   // track): per track, the constants it used. Empty for online methods.

@@ -4,9 +4,9 @@
 
 #include <fmt/format.h>
 
-#include "objectives/calibration_ranges.h"
 #include "jobs/tune_job.h"
 #include "objectives/calibrated_odometry_errors.h"
+#include "objectives/calibration_ranges.h"
 #include "tuner/nlopt_solver.h"
 #include "tuner/problem.h"
 #include "tuner/pso.h"
@@ -16,8 +16,8 @@ namespace odotune {
 namespace {
 
 bool same_robot(const filters::OdometryParams& a, const filters::OdometryParams& b) {
-  return a.wheel_radius_left_m == b.wheel_radius_left_m &&
-         a.wheel_radius_right_m == b.wheel_radius_right_m && a.wheel_base_m == b.wheel_base_m;
+  return a.wheel_radius_left_m == b.wheel_radius_left_m && a.wheel_radius_right_m == b.wheel_radius_right_m &&
+         a.wheel_base_m == b.wheel_base_m;
 }
 
 ErrorMetrics mean_errors(const CalibrationEvaluation& e) {
@@ -89,17 +89,17 @@ CalibrationTuneOutcome run_calibration_tune(const std::vector<const CalibrationI
   if (inputs.empty()) throw std::invalid_argument("no tracks to tune on");
   for (const auto* in : inputs)
     if (!same_robot(in->nominal, inputs.front()->nominal))
-      throw std::invalid_argument(fmt::format(
-          "tracks '{}' and '{}' have different nominal wheel radii or base: a calibrator runs its "
-          "tracks one after another with one filter, so they must be recordings of one robot",
-          inputs.front()->track_name, in->track_name));
+      throw std::invalid_argument(
+          fmt::format("tracks '{}' and '{}' have different nominal wheel radii or base: a calibrator runs its "
+                      "tracks one after another with one filter, so they must be recordings of one robot",
+                      inputs.front()->track_name, in->track_name));
 
   CalibrationTuneOutcome out;
   out.request = request;
   out.default_pf = default_calibrator(request, inputs.front()->nominal);
   if (!out.default_pf.IsValid(&why)) throw std::invalid_argument("calibrator: " + why);
-  const CalibrationObjective objective(inputs, out.default_pf,
-                                       request.model == CalibratorModel::adaptive_pf, request.weights);
+  const CalibrationObjective objective(inputs, out.default_pf, request.model == CalibratorModel::adaptive_pf,
+                                       request.weights);
   const BoxProblem<CalibrationObjective> problem{&objective};
   out.default_params = calibration_params_of(out.default_pf);
   DefaultsTune t = run_solver_from_defaults(problem, request, objective.space(), out.default_params);

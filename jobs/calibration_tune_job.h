@@ -28,13 +28,13 @@
 #include <string>
 #include <vector>
 
-#include "jobs/tune_job.h"
-#include "objectives/tuned_model.h"
 #include "filters/pf_calibrator.h"
+#include "jobs/tune_job.h"
 #include "objectives/calibration_input.h"
 #include "objectives/calibration_objective.h"
 #include "objectives/calibration_run.h"
 #include "objectives/metrics.h"
+#include "objectives/tuned_model.h"
 #include "tuner/summary.h"
 
 namespace odotune {
@@ -45,8 +45,8 @@ struct CalibrationTuneRequest : SolverSettings {
   // Fixed parts of the calibrator (not tuned).
   filters::Resampler resampler = filters::Resampler::systematic;
   filters::ResamplePolicy policy = filters::ResamplePolicy::neff;
-  int pf_particles = 0;            // N (plain) / initial N (adaptive); 0 = the paper's 5000 / 8000
-  std::uint64_t pf_seed = 1;       // the calibrator's own seed (same for every evaluation)
+  int pf_particles = 0;       // N (plain) / initial N (adaptive); 0 = the paper's 5000 / 8000
+  std::uint64_t pf_seed = 1;  // the calibrator's own seed (same for every evaluation)
   CalibrationScoreWeights weights;
 
   bool IsValid(std::string* why) const;
@@ -62,8 +62,8 @@ CalibrationMethod calibration_method(CalibratorModel model);
 // A calibrator's run over tracks (one after another), scored per track.
 struct CalibrationTrackScore {
   std::string track;
-  ErrorMetrics errors;                 // dead-reckoning position errors of the calibrated odometry [m]
-  TrackCalibrationScore calibration;   // final estimate, convergence, RMSEs (calibration_run.h)
+  ErrorMetrics errors;                // dead-reckoning position errors of the calibrated odometry [m]
+  TrackCalibrationScore calibration;  // final estimate, convergence, RMSEs (calibration_run.h)
 };
 struct CalibrationEvaluation {
   std::vector<CalibrationTrackScore> tracks;
@@ -76,17 +76,17 @@ CalibrationEvaluation evaluate_calibrator(const std::vector<const CalibrationInp
 
 struct CalibrationTuneOutcome {
   CalibrationTuneRequest request;
-  std::vector<std::string> param_names;   // calibration_space() order
+  std::vector<std::string> param_names;  // calibration_space() order
   std::vector<std::string> param_units;
-  std::vector<double> default_params;     // physical, in param_units
-  std::vector<double> params;             // tuned, physical
+  std::vector<double> default_params;                // physical, in param_units
+  std::vector<double> params;                        // tuned, physical
   filters::PfCalibratorParams default_pf, tuned_pf;  // full settings (SI)
   double baseline_score = 0.0, tuned_score = 0.0;    // objective score, lower is better
-  bool default_kept = false;              // the default scored better than the solver's best
-  CalibrationEvaluation baseline, tuned;  // per-track scores with either setting
-  ErrorMetrics baseline_mean, tuned_mean; // means over tracks
-  long failures = 0;                      // evaluations that scored the penalty
-  tuner::Summary summary;                 // evaluations, seconds, termination, log
+  bool default_kept = false;                         // the default scored better than the solver's best
+  CalibrationEvaluation baseline, tuned;             // per-track scores with either setting
+  ErrorMetrics baseline_mean, tuned_mean;            // means over tracks
+  long failures = 0;                                 // evaluations that scored the penalty
+  tuner::Summary summary;                            // evaluations, seconds, termination, log
 };
 
 // Runs the solver; throws std::invalid_argument for an invalid request, no

@@ -49,7 +49,6 @@ std::string convergence_text(const TrackCalibrationScore& s) {
   return s.convergence_time_s ? fmt::format("converged at {:.1f} s", *s.convergence_time_s) : "never converged";
 }
 
-
 nlohmann::json calibration_tune_json(const CalibrationTuneOutcome& o, const CalibrationTuneContext& c) {
   const CalibrationTuneRequest& r = o.request;
   nlohmann::json j;

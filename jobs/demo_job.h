@@ -16,24 +16,24 @@
 namespace odotune {
 
 struct DemoRequest {
-  std::string data_dir;   // folder with track1.csv … track5.csv
+  std::string data_dir;                  // folder with track1.csv … track5.csv
   int particles = 50, iterations = 150;  // PSO budget of each tune
-  int mode = 7;           // fitness mode 1..7
+  int mode = 7;                          // fitness mode 1..7
   std::uint64_t seed = 1;
-  std::string json_out;   // every tune's tune_json() as one JSON array; empty = not written
+  std::string json_out;  // every tune's tune_json() as one JSON array; empty = not written
 };
 
 // One row of the demo's table: a model tuned on a track.
 struct DemoRow {
   std::string track;
   filters::NoiseModel model = filters::NoiseModel::rq;
-  TuneOutcome outcome;    // baseline_mean and tuned_mean are the row's errors
+  TuneOutcome outcome;  // baseline_mean and tuned_mean are the row's errors
 };
 
 struct DemoOutcome {
-  std::vector<DemoRow> rows;       // track by track, rq, alpha, gyro for each
-  long evaluations_per_tune = 0;   // particles × (iterations + 1)
-  double seconds = 0.0;            // optimisation time summed over the tunes
+  std::vector<DemoRow> rows;      // track by track, rq, alpha, gyro for each
+  long evaluations_per_tune = 0;  // particles × (iterations + 1)
+  double seconds = 0.0;           // optimisation time summed over the tunes
 };
 
 // Where the command hears of the demo's progress (each may be empty).

@@ -44,9 +44,9 @@ results::DiagnosisFigureData diagnosis_figure_data(const DiagInput& in, const Di
   f.t_s = d.before.t_s;
   f.before_pos_err_m = error_norm(d.before);
   if (found) f.after_pos_err_m = error_norm(d.after);
-  const std::vector<TimeSegment>& segs =
-      !d.located_before.segments.empty() || !found ? d.located_before.segments
-                                                   : d.findings.front().segments;
+  const std::vector<TimeSegment>& segs = !d.located_before.segments.empty() || !found
+                                             ? d.located_before.segments
+                                             : d.findings.front().segments;
   for (const TimeSegment& s : segs) f.segments.push_back({s.t0_s, s.t1_s});
   for (const Window& w : make_windows(in, d.window_s)) f.window_starts_s.push_back(w.t_begin_s);
 
@@ -71,8 +71,8 @@ results::DiagnosisFigureData diagnosis_figure_data(const DiagInput& in, const Di
                          m.get(Effect::slip_zone, "y0"), m.get(Effect::slip_zone, "y1")});
   }
 
-  f.overlay.push_back({in.reference == ReferenceKind::gt ? "ground truth" : "position fixes",
-                       in.ref_x_m, in.ref_y_m});
+  f.overlay.push_back({in.reference == ReferenceKind::gt ? "ground truth" : "position fixes", in.ref_x_m,
+                       in.ref_y_m});
   f.overlay.push_back(path("nominal model", replay(in, EffectSet{}, 0.0)));
   if (found) f.overlay.push_back(path("with the findings", replay(in, d.model, 0.0)));
   return f;

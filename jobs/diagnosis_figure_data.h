@@ -19,8 +19,7 @@
 
 namespace odotune {
 
-results::DiagnosisFigureData diagnosis_figure_data(const diagnose::DiagInput& in,
-                                                   const diagnose::Diagnosis& d,
+results::DiagnosisFigureData diagnosis_figure_data(const diagnose::DiagInput& in, const diagnose::Diagnosis& d,
                                                    const std::string& finding_text);
 
 }  // namespace odotune

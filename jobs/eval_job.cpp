@@ -25,8 +25,7 @@ nlohmann::json eval_json(const EvalOutcome& o) {
   return j;
 }
 
-EvalOutcome run_eval(const EvalRequest& request,
-                     const std::function<void(const EvalOutcome&)>& track_done) {
+EvalOutcome run_eval(const EvalRequest& request, const std::function<void(const EvalOutcome&)>& track_done) {
   filters::NoiseParams noise = baseline_noise();
   EvalOutcome o;
   o.label = "baseline";

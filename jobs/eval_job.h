@@ -22,16 +22,16 @@ struct EvalRequest {
 };
 
 struct EvalTrack {
-  std::string track;                // the track's name
-  ErrorMetrics metrics;             // with the configuration's noise
-  ErrorMetrics baseline;            // with baseline_noise()
+  std::string track;                                           // the track's name
+  ErrorMetrics metrics;                                        // with the configuration's noise
+  ErrorMetrics baseline;                                       // with baseline_noise()
   filters::Divergence divergence = filters::Divergence::none;  // of the configuration's replay
 };
 
 struct EvalOutcome {
-  std::string label;                // "baseline", or the configuration's path
+  std::string label;                                       // "baseline", or the configuration's path
   filters::NoiseModel model = filters::NoiseModel::alpha;  // the configuration's noise model
-  std::vector<EvalTrack> tracks;    // in request order
+  std::vector<EvalTrack> tracks;                           // in request order
 };
 
 // {"config": label, "model", "tracks": [{"track", "metrics", "baseline",

@@ -75,10 +75,9 @@ std::vector<ReplayInput> tuning_inputs(const results::Store& store, const result
   for (const std::string& name : tuning_track_names(run, all)) {
     const auto it = tracks.find(name);
     if (it == tracks.end())
-      throw Failure(fmt::format(
-          "run {}: track '{}' (needed for its odometry rate) is not where the experiment "
-          "file said; pass it with --track FILE",
-          results::run_key(run), name));
+      throw Failure(fmt::format("run {}: track '{}' (needed for its odometry rate) is not where the experiment "
+                                "file said; pass it with --track FILE",
+                                results::run_key(run), name));
     try {
       inputs.push_back(build_replay_input(it->second));
     } catch (const std::invalid_argument& e) {
@@ -117,14 +116,12 @@ std::string alpha_mapping_note(const results::RunRecord& run, const ProcessNoise
       "  wheel noise into that message's twist covariance.)\n"
       "  The fix variances below are the model's fixed σ = 60 mm (alpha/gyro do not tune q).",
       run.model, gyro ? ", 6-7" : "",
-      gyro ? ",\n  α1 = a1 + b1·|ω_z|, α2 = a2 + b2·|ω_z| with the step's |ω_z| (gyro, else odometry)"
-           : "",
+      gyro ? ",\n  α1 = a1 + b1·|ω_z|, α2 = a2 + b2·|ω_z| with the step's |ω_z| (gyro, else odometry)" : "",
       join_names(inputs), q.steps, q.duration_s, q.odometry_rate_hz);
 }
 
 results::RosExportInput ros_input(const results::Store& store, const results::RunRecord& run,
-                                  const std::vector<results::RunRecord>& all,
-                                  const ExportRequest& request) {
+                                  const std::vector<results::RunRecord>& all, const ExportRequest& request) {
   const filters::NoiseParams noise = run_noise(run);
   const std::vector<ReplayInput> inputs = tuning_inputs(store, run, all, request.track_files);
   results::RosExportInput in;
@@ -176,15 +173,15 @@ std::vector<RunFilter> parse_run_filters(const std::vector<std::string>& items) 
     }
     for (const RunFilter& g : filters)
       if (g.key == f.key && g.value != f.value)
-        throw Failure(fmt::format("--select gives {} twice ({} and {}); give it once", f.key,
-                                  g.value, f.value));
+        throw Failure(fmt::format("--select gives {} twice ({} and {}); give it once", f.key, g.value,
+                                  f.value));
     filters.push_back(std::move(f));
   }
   return filters;
 }
 
-RunSelection select_best_run(const std::vector<results::RunRecord>& all,
-                             const std::vector<RunFilter>& filters, const std::string& store) {
+RunSelection select_best_run(const std::vector<results::RunRecord>& all, const std::vector<RunFilter>& filters,
+                             const std::string& store) {
   if (all.empty()) throw Failure(fmt::format("{}: the store holds no finished runs yet", store));
   std::vector<const results::RunRecord*> runs;
   for (const auto& r : all) runs.push_back(&r);
@@ -222,22 +219,20 @@ ExportOutcome run_export(const ExportRequest& request) {
   const results::RunRecord& run = *sel.run;
   const std::string key = results::run_key(run);
   if (is_calibrator_model_name(run.model))
-    throw Failure(fmt::format(
-        "run {} tuned the {} calibrator's settings, not EKF noise: export writes EKF "
-        "configurations only; write a calibrator's settings with `odotune tune --model {} ... "
-        "--config-out FILE` (odotune-pf-config/1)",
-        key, run.model, run.model));
+    throw Failure(
+        fmt::format("run {} tuned the {} calibrator's settings, not EKF noise: export writes EKF "
+                    "configurations only; write a calibrator's settings with `odotune tune --model {} ... "
+                    "--config-out FILE` (odotune-pf-config/1)",
+                    key, run.model, run.model));
   if (is_ukf_model_name(run.model) && request.format != "odotune")
-    throw Failure(fmt::format(
-        "run {} tuned the velocity-fusion UKF (model ukf): {} has no mapping for this model; "
-        "export it with --format odotune (odotune-ukf-config/1)",
-        key, request.format));
-  const std::string scores =
-      fmt::format("tuned RMSE {:.2f} mm vs baseline {:.2f} mm on {}", run.tuned.rmse_m * 1e3,
-                  run.baseline.rmse_m * 1e3, run.scored_track());
-  const std::string origin = fmt::format("odotune export from {} (experiment {}, {}): run {}",
-                                         request.store, store->experiment().name,
-                                         store->experiment().hash, key);
+    throw Failure(
+        fmt::format("run {} tuned the velocity-fusion UKF (model ukf): {} has no mapping for this model; "
+                    "export it with --format odotune (odotune-ukf-config/1)",
+                    key, request.format));
+  const std::string scores = fmt::format("tuned RMSE {:.2f} mm vs baseline {:.2f} mm on {}",
+                                         run.tuned.rmse_m * 1e3, run.baseline.rmse_m * 1e3, run.scored_track());
+  const std::string origin = fmt::format("odotune export from {} (experiment {}, {}): run {}", request.store,
+                                         store->experiment().name, store->experiment().hash, key);
 
   if (is_ukf_model_name(run.model)) {
     UkfConfig cfg = run_ukf_config(run);
@@ -262,6 +257,5 @@ ExportOutcome run_export(const ExportRequest& request) {
   }
   return {key, scores, sel.matching};
 }
-
 
 }  // namespace odotune

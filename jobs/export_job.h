@@ -46,15 +46,15 @@ struct RunSelection {
 // model and picks the lowest tuned RMSE (ties: the first). Throws
 // odotune::Failure for no runs (naming `store`), a filter that leaves none, or
 // runs of several models.
-RunSelection select_best_run(const std::vector<results::RunRecord>& runs,
-                             const std::vector<RunFilter>& filters, const std::string& store);
+RunSelection select_best_run(const std::vector<results::RunRecord>& runs, const std::vector<RunFilter>& filters,
+                             const std::string& store);
 
 struct ExportRequest {
-  std::string store;                     // results store written by `odotune grid`
-  std::vector<std::string> select;       // key=value items (parse_run_filters)
-  std::string format;                    // "odotune" | "robot_localization"
-  std::string out;                       // the file to write (atomically)
-  std::vector<std::string> track_files;  // take precedence over the experiment's tracks
+  std::string store;                          // results store written by `odotune grid`
+  std::vector<std::string> select;            // key=value items (parse_run_filters)
+  std::string format;                         // "odotune" | "robot_localization"
+  std::string out;                            // the file to write (atomically)
+  std::vector<std::string> track_files;       // take precedence over the experiment's tracks
   std::string node_name = "ekf_filter_node";  // robot_localization: the top-level key
 };
 

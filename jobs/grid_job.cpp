@@ -5,11 +5,11 @@
 
 #include <fmt/format.h>
 
-#include "jobs/calibration_tune_job.h"
 #include "core/failure.h"
-#include "tracks/track_io.h"
+#include "jobs/calibration_tune_job.h"
 #include "jobs/tune_job.h"
 #include "jobs/ukf_tune_job.h"
+#include "tracks/track_io.h"
 
 namespace odotune {
 
@@ -17,8 +17,7 @@ std::vector<GridCell> grid_cells(const Experiment& e) {
   std::vector<GridCell> cells;
   for (auto model : e.models) {
     // A calibrator has no fitness mode: the first listed stands for all.
-    const std::vector<int> modes =
-        model.calibrator ? std::vector<int>{e.modes.front()} : e.modes;
+    const std::vector<int> modes = model.calibrator ? std::vector<int>{e.modes.front()} : e.modes;
     for (std::size_t t = 0; t < e.tracks.size(); ++t)
       for (int mode : modes)
         for (auto seed : e.seeds) cells.push_back({model, {t}, t, false, mode, seed});
@@ -59,10 +58,10 @@ std::vector<PreparedTrack> prepare_grid_tracks(const Experiment& e) {
         throw Failure(fmt::format("{} (needed by the experiment's calibrator models)", ex.what()));
       }
       if (!p.calibration->has_gt)
-        throw Failure(fmt::format(
-            "track '{}': no ground truth (gt_x, gt_y, gt_theta), needed by the experiment's "
-            "calibrator models to score the calibrated odometry",
-            t.name()));
+        throw Failure(
+            fmt::format("track '{}': no ground truth (gt_x, gt_y, gt_theta), needed by the experiment's "
+                        "calibrator models to score the calibrated odometry",
+                        t.name()));
     }
     if (e.has_ukf_models()) {
       try {
@@ -113,8 +112,8 @@ SolverSettings cell_solver(const Experiment& e, const GridCell& c, const std::at
 
 // The solver's part of a cell's record, the same for every model.
 void set_solver_fields(results::RunRecord& r, const std::vector<std::string>& param_names,
-                       const std::vector<double>& params, double best_fitness,
-                       const tuner::Summary& summary, long diverged) {
+                       const std::vector<double>& params, double best_fitness, const tuner::Summary& summary,
+                       long diverged) {
   r.param_names = param_names;
   r.params = params;
   r.best_fitness = best_fitness;
@@ -291,8 +290,7 @@ std::unique_ptr<results::Store> open_grid_store(const Experiment& e, const std::
                                 std::filesystem::absolute(e.file).lexically_normal().string()},
         allow_other);
   } catch (const std::filesystem::filesystem_error& ex) {
-    throw Failure(fmt::format("{}: cannot create the store's folder: {}", path.string(),
-                              ex.code().message()));
+    throw Failure(fmt::format("{}: cannot create the store's folder: {}", path.string(), ex.code().message()));
   } catch (const std::runtime_error& ex) {
     throw Failure(ex.what());
   }

@@ -37,10 +37,10 @@ struct GridCell {
 std::vector<GridCell> grid_cells(const Experiment& e);
 
 struct GridOutcome {
-  long total = 0;     // cells in the experiment
-  long skipped = 0;   // already in the store
-  long ran = 0;       // finished and written now
-  long abandoned = 0; // in flight when stopped, not written
+  long total = 0;      // cells in the experiment
+  long skipped = 0;    // already in the store
+  long ran = 0;        // finished and written now
+  long abandoned = 0;  // in flight when stopped, not written
 };
 
 // The experiment's tracks, read and prepared for the listed models: for

@@ -61,10 +61,10 @@ long launched_ranks() {
 
 MpiSession::MpiSession() {
   if (launched_by_mpi() && launched_ranks() > 1)
-    throw Failure(fmt::format(
-        "started as one of {} MPI ranks, but this odotune was built without MPI (each rank would "
-        "run the whole grid); build with -DODOTUNE_WITH_MPI=ON, or run it without mpirun",
-        launched_ranks()));
+    throw Failure(
+        fmt::format("started as one of {} MPI ranks, but this odotune was built without MPI (each rank would "
+                    "run the whole grid); build with -DODOTUNE_WITH_MPI=ON, or run it without mpirun",
+                    launched_ranks()));
 }
 MpiSession::~MpiSession() = default;
 
@@ -74,8 +74,7 @@ bool MpiSession::agree(const std::function<void()>& step) const {
 }
 
 std::optional<GridOutcome> run_grid_mpi(const MpiSession&, const Experiment&, results::Store*,
-                                        const std::atomic<bool>*,
-                                        const std::function<void(long, long)>&) {
+                                        const std::atomic<bool>*, const std::function<void(long, long)>&) {
   throw std::logic_error("run_grid_mpi: this odotune was built without MPI");
 }
 
@@ -145,10 +144,10 @@ std::string grid_fingerprint(const Experiment& e, const std::vector<PreparedTrac
 // Rank 0: hands out the pending cells to its own threads and, through a
 // second thread that alone talks MPI here, to the other ranks; writes every
 // run to the store as it arrives.
-GridOutcome coordinate(const MpiSession& mpi, const Experiment& e,
-                       const std::vector<PreparedTrack>& tracks, const std::vector<GridCell>& cells,
-                       const std::vector<std::size_t>& pending, results::Store& store,
-                       const std::atomic<bool>* stop, const std::function<void(long, long)>& progress) {
+GridOutcome coordinate(const MpiSession& mpi, const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                       const std::vector<GridCell>& cells, const std::vector<std::size_t>& pending,
+                       results::Store& store, const std::atomic<bool>* stop,
+                       const std::function<void(long, long)>& progress) {
   GridOutcome out;
   out.total = static_cast<long>(cells.size());
   out.skipped = out.total - static_cast<long>(pending.size());
@@ -200,9 +199,7 @@ GridOutcome coordinate(const MpiSession& mpi, const Experiment& e,
               fail(ex.what());
             }
             break;
-          case kFailure:
-            fail(fmt::format("rank {}: {}", from, std::string(msg.begin(), msg.end())));
-            break;
+          case kFailure: fail(fmt::format("rank {}: {}", from, std::string(msg.begin(), msg.end()))); break;
           case kDone: {
             long long abandoned = 0;
             if (msg.size() == sizeof abandoned) std::memcpy(&abandoned, msg.data(), sizeof abandoned);
@@ -210,8 +207,7 @@ GridOutcome coordinate(const MpiSession& mpi, const Experiment& e,
             --working;
             break;
           }
-          default:
-            fail(fmt::format("rank {} sent an unknown message (tag {})", from, st.MPI_TAG));
+          default: fail(fmt::format("rank {} sent an unknown message (tag {})", from, st.MPI_TAG));
         }
       }
     } catch (const std::exception& ex) {
@@ -328,8 +324,8 @@ bool MpiSession::agree(const std::function<void()>& step) const {
   return false;
 }
 
-std::optional<GridOutcome> run_grid_mpi(const MpiSession& mpi, const Experiment& e,
-                                        results::Store* store, const std::atomic<bool>* stop,
+std::optional<GridOutcome> run_grid_mpi(const MpiSession& mpi, const Experiment& e, results::Store* store,
+                                        const std::atomic<bool>* stop,
                                         const std::function<void(long, long)>& progress) {
   std::vector<PreparedTrack> tracks;
   std::vector<GridCell> cells;
@@ -345,9 +341,8 @@ std::optional<GridOutcome> run_grid_mpi(const MpiSession& mpi, const Experiment&
   const std::string rank0_fingerprint = broadcast(fingerprint, mpi.rank());
   if (!mpi.agree([&] {
         if (fingerprint != rank0_fingerprint)
-          throw Failure(
-              "it reads another experiment than rank 0 (the experiment file, the track files or "
-              "their contents differ): every rank must see the same files");
+          throw Failure("it reads another experiment than rank 0 (the experiment file, the track files or "
+                        "their contents differ): every rank must see the same files");
       }))
     return std::nullopt;
 

@@ -62,16 +62,16 @@ class MpiSession {
 // is used on rank 0 only (null elsewhere); `progress(done, total)` is called on
 // rank 0 only, one call at a time. Returns the outcome on rank 0 and nothing on
 // the other ranks. Throws Failure on rank 0 when any rank failed.
-std::optional<GridOutcome> run_grid_mpi(const MpiSession& mpi, const Experiment& e,
-                                        results::Store* store, const std::atomic<bool>* stop,
+std::optional<GridOutcome> run_grid_mpi(const MpiSession& mpi, const Experiment& e, results::Store* store,
+                                        const std::atomic<bool>* stop,
                                         const std::function<void(long, long)>& progress);
 
 // `odotune grid` as one call, with or without MPI.
 struct GridRequest {
-  std::string experiment;     // experiment YAML (odotune-experiment/1)
-  std::string store;          // results store; empty = the experiment's `store`
-  bool allow_other = false;   // continue into a store made from another experiment file
-  std::string code_version;   // odotune version recorded in a new store
+  std::string experiment;    // experiment YAML (odotune-experiment/1)
+  std::string store;         // results store; empty = the experiment's `store`
+  bool allow_other = false;  // continue into a store made from another experiment file
+  std::string code_version;  // odotune version recorded in a new store
 };
 
 // Where the command hears of the grid (each may be empty).
@@ -87,7 +87,7 @@ struct GridCallbacks {
 struct GridReport {
   std::filesystem::path store;  // the store written
   GridOutcome outcome;
-  int ranks = 1;                // MPI ranks that shared the cells
+  int ranks = 1;  // MPI ranks that shared the cells
 };
 
 // Starts an MpiSession for the call (finalised before it returns); on every

@@ -11,10 +11,10 @@
 
 #include "core/failure.h"
 #include "jobs/store_access.h"
-#include "objectives/tuned_model.h"
 #include "objectives/metrics.h"
 #include "objectives/param_space.h"
 #include "objectives/replay.h"
+#include "objectives/tuned_model.h"
 #include "results/figures.h"
 #include "results/report_html.h"
 #include "results/report_tables.h"
@@ -155,7 +155,9 @@ ReportOutcome write_report(const ReportRequest& req) {
   // table, and no EKF trajectory replay.
   std::vector<std::string> ekf_models, calibrator_models, ukf_models;
   for (const auto& m : models)
-    (is_calibrator_model_name(m) ? calibrator_models : is_ukf_model_name(m) ? ukf_models : ekf_models)
+    (is_calibrator_model_name(m) ? calibrator_models
+     : is_ukf_model_name(m)      ? ukf_models
+                                 : ekf_models)
         .push_back(m);
   // Runs of one kind: EKF models (calibrator false, ukf false), the
   // calibrators (calibrator true) or the UKF (ukf true); `model` narrows to one.
@@ -173,25 +175,24 @@ ReportOutcome write_report(const ReportRequest& req) {
 
   Writer w(req.out_dir);
   results::HtmlPage page(fmt::format("odotune report: {}", info.name));
-  page.paragraph(fmt::format(
-      "Experiment **{}** (file hash {}, odotune {}): {} runs, {} of them leave-one-track-out; "
-      "models {}; tracks {}. Improvement % = 100 · (baseline − tuned) / baseline, positive is "
-      "better; the baseline is odotune's untuned configuration (README, \"Baseline\").",
-      info.name, info.hash, info.code_version, runs.size(), held.size(), fmt::join(models, ", "),
-      fmt::join(tracks, ", ")));
+  page.paragraph(
+      fmt::format("Experiment **{}** (file hash {}, odotune {}): {} runs, {} of them leave-one-track-out; "
+                  "models {}; tracks {}. Improvement % = 100 · (baseline − tuned) / baseline, positive is "
+                  "better; the baseline is odotune's untuned configuration (README, \"Baseline\").",
+                  info.name, info.hash, info.code_version, runs.size(), held.size(), fmt::join(models, ", "),
+                  fmt::join(tracks, ", ")));
   if (!calibrator_models.empty())
-    page.paragraph(fmt::format(
-        "Calibrator models ({}) tune the particle-filter calibrator's settings instead of EKF "
-        "noise: their baseline is the paper's default settings, their metrics the dead-reckoning "
-        "position errors of the calibrated odometry against ground truth, and they have runs for "
-        "one fitness mode only (the experiment's first; a calibrator has none).",
-        fmt::join(calibrator_models, ", ")));
-  if (!ukf_models.empty())
     page.paragraph(
-        "The ukf model tunes the noise of the velocity-fusion UKF (Fariña et al., Sensors 2023, "
-        "23, 961, §1: odometry, external velocities and gyro fused on (V, W), the pose integrated "
-        "by eq. 3) instead of EKF noise: its baseline is the default UKF noise and its metrics "
-        "the fused pose's position errors against ground truth.");
+        fmt::format("Calibrator models ({}) tune the particle-filter calibrator's settings instead of EKF "
+                    "noise: their baseline is the paper's default settings, their metrics the dead-reckoning "
+                    "position errors of the calibrated odometry against ground truth, and they have runs for "
+                    "one fitness mode only (the experiment's first; a calibrator has none).",
+                    fmt::join(calibrator_models, ", ")));
+  if (!ukf_models.empty())
+    page.paragraph("The ukf model tunes the noise of the velocity-fusion UKF (Fariña et al., Sensors 2023, "
+                   "23, 961, §1: odometry, external velocities and gyro fused on (V, W), the pose integrated "
+                   "by eq. 3) instead of EKF noise: its baseline is the default UKF noise and its metrics "
+                   "the fused pose's position errors against ground truth.");
 
   // Headline: mean RMSE improvement per model over all per-track runs.
   {
@@ -209,10 +210,9 @@ ReportOutcome write_report(const ReportRequest& req) {
 
   // (a) Figure 3: heatmaps, per-track and held-out side by side.
   page.heading("Improvement over the baseline per fitness mode and track (Figure 3)");
-  page.paragraph(
-      "Rows: fitness modes 1–7; columns: tracks; each cell the mean improvement over seeds. "
-      "Left: tuned and scored on the same track; right (when the experiment has "
-      "leave_one_out): tuned on all other tracks, scored on the column's track.");
+  page.paragraph("Rows: fitness modes 1–7; columns: tracks; each cell the mean improvement over seeds. "
+                 "Left: tuned and scored on the same track; right (when the experiment has "
+                 "leave_one_out): tuned on all other tracks, scored on the column's track.");
   for (ReportMetric metric : results::kReportMetrics) {
     const std::string mname(results::metric_name(metric));
     for (const auto& model : models) {
@@ -220,10 +220,10 @@ ReportOutcome write_report(const ReportRequest& req) {
       for (bool heldout : {false, true}) {
         const auto grid = results::improvement_grid(runs, model, metric, heldout, tracks);
         if (grid.empty()) continue;
-        const std::string name = fmt::format("heatmap_{}{}_{}", heldout ? "heldout_" : "",
-                                             file_safe(model), lower(mname));
-        const std::string title =
-            fmt::format("{} improvement [%], {}{}", mname, model, heldout ? ", held out" : "");
+        const std::string name = fmt::format("heatmap_{}{}_{}", heldout ? "heldout_" : "", file_safe(model),
+                                             lower(mname));
+        const std::string title = fmt::format("{} improvement [%], {}{}", mname, model,
+                                              heldout ? ", held out" : "");
         const std::string caption = fmt::format(
             "{} improvement over the baseline, model {}, {}; {}.", mname, model,
             heldout ? "tuned on all other tracks and scored on the column's track"
@@ -245,12 +245,11 @@ ReportOutcome write_report(const ReportRequest& req) {
       std::map<std::string, std::map<std::string, std::vector<double>>> data;
       for (const auto& r : heldout ? held : own)
         for (ReportMetric metric : results::kReportMetrics)
-          data[r.model][std::string(results::metric_name(metric))].push_back(
-              results::improvement_pct(r, metric));
+          data[r.model][std::string(results::metric_name(metric))].push_back(results::improvement_pct(r,
+                                                                                                      metric));
       if (data.empty()) continue;
-      const std::string title = fmt::format(
-          "Improvement over the baseline [%] per model, all {}{} runs", heldout ? "held-out " : "",
-          (heldout ? held : own).size());
+      const std::string title = fmt::format("Improvement over the baseline [%] per model, all {}{} runs",
+                                            heldout ? "held-out " : "", (heldout ? held : own).size());
       row.push_back(w.figure(heldout ? "boxplots_heldout" : "boxplots", title,
                              [&](const fs::path& stem) { results::boxplots(stem, title, data); }));
     }
@@ -264,10 +263,10 @@ ReportOutcome write_report(const ReportRequest& req) {
     w.text("table1.csv", "report table", results::to_csv(t1));
     w.text("table1.md", "report table", results::to_markdown(tt));
     page.heading("Absolute RMSE per track and fitness mode (Table 1)");
-    page.paragraph(fmt::format(
-        "Original = the baseline configuration; each model's column is the mean tuned RMSE over "
-        "seeds, the row's best in bold ({}). Also as table1.csv and table1.md.",
-        seeds_phrase(own)));
+    page.paragraph(
+        fmt::format("Original = the baseline configuration; each model's column is the mean tuned RMSE over "
+                    "seeds, the row's best in bold ({}). Also as table1.csv and table1.md.",
+                    seeds_phrase(own)));
     page.table(tt);
   }
   // One table per calibrator model: each has its own baseline (its kind's
@@ -280,10 +279,10 @@ ReportOutcome write_report(const ReportRequest& req) {
     w.text(stem + ".csv", "report table", results::to_csv(tc));
     w.text(stem + ".md", "report table", results::to_markdown(tt));
     page.heading(fmt::format("Calibrated odometry RMSE per track, {}", model));
-    page.paragraph(fmt::format(
-        "Dead-reckoning position RMSE of the odometry calibrated online by {}: original = the "
-        "paper's default settings, {} = the tuned settings ({}). Also as {}.csv and {}.md.",
-        model, model, seeds_phrase(runs_of(own, true, model)), stem, stem));
+    page.paragraph(
+        fmt::format("Dead-reckoning position RMSE of the odometry calibrated online by {}: original = the "
+                    "paper's default settings, {} = the tuned settings ({}). Also as {}.csv and {}.md.",
+                    model, model, seeds_phrase(runs_of(own, true, model)), stem, stem));
     page.table(tt);
   }
   // The UKF's table: its own baseline (the default UKF noise).
@@ -295,10 +294,10 @@ ReportOutcome write_report(const ReportRequest& req) {
     w.text(stem + ".csv", "report table", results::to_csv(tu));
     w.text(stem + ".md", "report table", results::to_markdown(tt));
     page.heading(fmt::format("Fused pose RMSE per track and fitness mode, {}", model));
-    page.paragraph(fmt::format(
-        "Position RMSE of the pose integrated from the fusion UKF's (V, W): original = the default "
-        "UKF noise, {} = the tuned noise ({}). Also as {}.csv and {}.md.",
-        model, seeds_phrase(runs_of(own, false, model, true)), stem, stem));
+    page.paragraph(
+        fmt::format("Position RMSE of the pose integrated from the fusion UKF's (V, W): original = the default "
+                    "UKF noise, {} = the tuned noise ({}). Also as {}.csv and {}.md.",
+                    model, seeds_phrase(runs_of(own, false, model, true)), stem, stem));
     page.table(tt);
   }
   {
@@ -315,13 +314,11 @@ ReportOutcome write_report(const ReportRequest& req) {
     }
     if (any) {
       w.text("generalisation.md", "report table", md);
-      page.paragraph(
-          "Per-track tuning overfits: the held-out column is what a configuration tuned on the "
-          "other tracks achieves on this one. Means over all modes and seeds.");
+      page.paragraph("Per-track tuning overfits: the held-out column is what a configuration tuned on the "
+                     "other tracks achieves on this one. Means over all modes and seeds.");
     } else {
-      out.notes.push_back(
-          "no leave-one-track-out runs: set leave_one_out: true in the experiment for the "
-          "generalisation table and held-out heatmaps");
+      out.notes.push_back("no leave-one-track-out runs: set leave_one_out: true in the experiment for the "
+                          "generalisation table and held-out heatmaps");
       page.paragraph("This experiment has no leave-one-track-out runs (leave_one_out: false).");
     }
   }
@@ -330,19 +327,19 @@ ReportOutcome write_report(const ReportRequest& req) {
   int mode = req.mode;
   const auto modes = results::report_modes(own);
   if (!modes.empty() && std::find(modes.begin(), modes.end(), mode) == modes.end()) {
-    out.notes.push_back(fmt::format("mode {} has no runs; trajectories and convergence use mode {}",
-                                    mode, modes.back()));
+    out.notes.push_back(fmt::format("mode {} has no runs; trajectories and convergence use mode {}", mode,
+                                    modes.back()));
     mode = modes.back();
   }
   page.heading(fmt::format("Trajectories (Figure 5), fitness mode {}", mode));
   if (!calibrator_models.empty())
-    out.notes.push_back(fmt::format(
-        "trajectory overlays replay the EKF: the calibrator models ({}) are left out of them",
-        fmt::join(calibrator_models, ", ")));
+    out.notes.push_back(
+        fmt::format("trajectory overlays replay the EKF: the calibrator models ({}) are left out of them",
+                    fmt::join(calibrator_models, ", ")));
   if (!ukf_models.empty())
-    out.notes.push_back(fmt::format(
-        "trajectory overlays replay the EKF: the fusion UKF runs ({}) are left out of them",
-        fmt::join(ukf_models, ", ")));
+    out.notes.push_back(
+        fmt::format("trajectory overlays replay the EKF: the fusion UKF runs ({}) are left out of them",
+                    fmt::join(ukf_models, ", ")));
   const auto track_data = ekf_models.empty() ? std::map<std::string, Track>{}
                                              : experiment_tracks(info, req.track_files);
   if (ekf_models.empty()) {
@@ -353,8 +350,7 @@ ReportOutcome write_report(const ReportRequest& req) {
       const auto it = track_data.find(name);
       if (it == track_data.end()) {
         out.notes.push_back(fmt::format(
-            "trajectory overlay of {} left out: its track file was not found (pass --track FILE)",
-            name));
+            "trajectory overlay of {} left out: its track file was not found (pass --track FILE)", name));
         continue;
       }
       ReplayInput in;
@@ -382,12 +378,12 @@ ReportOutcome write_report(const ReportRequest& req) {
                                 got.trajectory));
       }
       const std::string title = fmt::format("{}: ground truth, baseline and tuned EKF (mode {})", name, mode);
-      row.push_back(w.figure("trajectories_" + file_safe(name), title, [&](const fs::path& stem) {
-        results::trajectories(stem, title, paths);
-      }));
+      row.push_back(w.figure("trajectories_" + file_safe(name), title,
+                             [&](const fs::path& stem) { results::trajectories(stem, title, paths); }));
     }
     if (!row.empty())
-      page.paragraph("Each model's run with the lowest tuned RMSE on the track, replayed by the reference EKF.");
+      page.paragraph(
+          "Each model's run with the lowest tuned RMSE on the track, replayed by the reference EKF.");
     page.figures(row);
   }
 
@@ -404,9 +400,9 @@ ReportOutcome write_report(const ReportRequest& req) {
             (calibrator || r.mode == mode) && !r.convergence.empty())
           series[r.model].push_back(r.convergence);
       if (series.empty()) continue;
-      const std::string title =
-          calibrator ? fmt::format("{}: best calibration score vs evaluations", name)
-                     : fmt::format("{}: best fitness (mode {}) vs evaluations", name, mode);
+      const std::string title = calibrator
+                                    ? fmt::format("{}: best calibration score vs evaluations", name)
+                                    : fmt::format("{}: best fitness (mode {}) vs evaluations", name, mode);
       const std::string stem = (calibrator ? "convergence_calibration_" : "convergence_") + file_safe(name);
       row.push_back(w.figure(stem, title, [&](const fs::path& p) { results::convergence(p, title, series); }));
     }

@@ -51,9 +51,10 @@ sim::Scenario scenario_of(const SimulateRequest& r) {
       throw Failure(fmt::format("{}: --random-slip: {}", r.scenario, e.what()));
     }
     if (sc.slip_episodes.empty())
-      throw Failure(fmt::format("{}: --random-slip {}: the drive has no stretch long and fast enough for a slip "
-                                "episode (>= 2 s at >= 0.3 m/s); expected a longer drive",
-                                r.scenario, r.random_slip));
+      throw Failure(
+          fmt::format("{}: --random-slip {}: the drive has no stretch long and fast enough for a slip "
+                      "episode (>= 2 s at >= 0.3 m/s); expected a longer drive",
+                      r.scenario, r.random_slip));
   }
   if (r.no_effects) sc.effects = sim::Effects{};
   for (const auto& text : r.effects) {
@@ -102,8 +103,9 @@ SimulateOutcome run_simulate(const SimulateRequest& r) {
   } catch (const std::exception& e) {
     throw Failure(e.what());
   }
-  return {track.name(), track.size(), track.duration_s(), path_length_m(track), sc.seed,
-          sim::format_effects(sc.effects), sc.slip_episodes.size()};
+  return {track.name(),           track.size(), track.duration_s(),
+          path_length_m(track),   sc.seed,      sim::format_effects(sc.effects),
+          sc.slip_episodes.size()};
 }
 
 }  // namespace odotune

@@ -2,11 +2,11 @@
 
 #include <fmt/format.h>
 
-#include "formats/experiment_yaml.h"
 #include "core/failure.h"
-#include "tracks/track_io.h"
-#include "objectives/tuned_model.h"
+#include "formats/experiment_yaml.h"
 #include "objectives/param_space.h"
+#include "objectives/tuned_model.h"
+#include "tracks/track_io.h"
 
 namespace odotune {
 

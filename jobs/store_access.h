@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "formats/ukf_config_yaml.h"
 #include "filters/ekf_noise.h"
+#include "formats/ukf_config_yaml.h"
 #include "results/run_record.h"
 #include "results/store.h"
 #include "tracks/track.h"

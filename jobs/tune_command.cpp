@@ -22,8 +22,8 @@ namespace {
 
 // Options that belong to one kind of model only.
 const std::vector<std::string> kEkfOnly = {"--mode"};
-const std::vector<std::string> kCalibratorOnly = {"--resampler", "--policy", "--pf-particles",
-                                                  "--pf-seed", "--ext-from-gt"};
+const std::vector<std::string> kCalibratorOnly = {"--resampler", "--policy", "--pf-particles", "--pf-seed",
+                                                  "--ext-from-gt"};
 
 void check_options(const TuneCommandRequest& r, const TunedModel& model) {
   const auto& given = r.given_options;
@@ -96,8 +96,8 @@ TuneCommandOutcome ekf_tune(const TuneCommandRequest& r, filters::NoiseModel mod
     EkfConfig cfg;
     cfg.model = req.model;
     cfg.noise = out.noise;
-    cfg.comment = fmt::format("tuned by odotune tune: model {}, mode {}, solver {}, seed {}", r.model,
-                              req.mode, req.solver, req.seed);
+    cfg.comment = fmt::format("tuned by odotune tune: model {}, mode {}, solver {}, seed {}", r.model, req.mode,
+                              req.solver, req.seed);
     write_ekf_config(cfg, r.config_out);
   }
   return result;
@@ -119,17 +119,15 @@ TuneCommandOutcome calibration_tune(const TuneCommandRequest& r, CalibratorModel
   input_options.ext_from_gt_rate_hz = r.ext_from_gt_hz;
   if (!input_options.IsValid(&why)) throw Failure("--ext-from-gt: " + why);
 
-  const std::vector<CalibrationInput> inputs =
-      prepare_tracks(load_tracks(r.tracks), [&](const Track& t) {
-        CalibrationInput in = build_calibration_input(t, input_options);
-        if (!in.has_gt)
-          throw Failure(fmt::format("track '{}': no ground truth (gt_x, gt_y, gt_theta): a calibrator's "
-                                    "settings are scored by its calibrated odometry against it",
-                                    t.name()));
-        return in;
-      });
-  TuneCommandOutcome result =
-      run_and_report(r, [&] { return run_calibration_tune(pointers(inputs), req); });
+  const std::vector<CalibrationInput> inputs = prepare_tracks(load_tracks(r.tracks), [&](const Track& t) {
+    CalibrationInput in = build_calibration_input(t, input_options);
+    if (!in.has_gt)
+      throw Failure(fmt::format("track '{}': no ground truth (gt_x, gt_y, gt_theta): a calibrator's "
+                                "settings are scored by its calibrated odometry against it",
+                                t.name()));
+    return in;
+  });
+  TuneCommandOutcome result = run_and_report(r, [&] { return run_calibration_tune(pointers(inputs), req); });
   const auto& out = std::get<CalibrationTuneOutcome>(result);
   write_json(r, calibration_tune_json(out, {r.ext_from_gt_hz}));
   if (!r.config_out.empty()) {

@@ -26,12 +26,12 @@ using TuneCommandOutcome = std::variant<TuneOutcome, CalibrationTuneOutcome, Ukf
 // The solver settings (with `progress` and `stop`, which the tune passes on)
 // and the rest of the command's options.
 struct TuneCommandRequest : SolverSettings {
-  std::vector<std::string> tracks;   // track files; the fitness is the mean over them
-  std::string model = "rq";          // one of tuned_model_names()
-  int mode = 7;                      // EKF and UKF: fitness mode 1..7
+  std::vector<std::string> tracks;  // track files; the fitness is the mean over them
+  std::string model = "rq";         // one of tuned_model_names()
+  int mode = 7;                     // EKF and UKF: fitness mode 1..7
   // Calibrators only: the calibrator's fixed parts (calibration_tune_job.h).
   std::string resampler = "systematic", policy = "neff";
-  int pf_particles = 0;              // 0: the paper's 5000 / 8000
+  int pf_particles = 0;  // 0: the paper's 5000 / 8000
   std::uint64_t pf_seed = 1;
   double ext_from_gt_hz = 0.0;       // 0: the tracks' own v_ext/w_ext
   std::string json_out, config_out;  // files to write; empty: none

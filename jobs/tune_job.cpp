@@ -74,8 +74,7 @@ tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s, st
   } else {
     tuner::NloptOptions o;
     o.algorithm = s.solver.substr(6);
-    o.max_evaluations =
-        s.evaluations > 0 ? s.evaluations : static_cast<long>(s.particles) * (s.iterations + 1);
+    o.max_evaluations = s.evaluations > 0 ? s.evaluations : static_cast<long>(s.particles) * (s.iterations + 1);
     o.seed = s.seed;
     if (!x0.empty()) o.x0 = std::move(x0);
     o.progress = s.progress;
@@ -87,8 +86,8 @@ tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s, st
   return summary;
 }
 
-DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSettings& s,
-                                      const BoxSpace& space, const std::vector<double>& default_params) {
+DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSettings& s, const BoxSpace& space,
+                                      const std::vector<double>& default_params) {
   DefaultsTune t;
   for (const auto& p : space.params()) {
     t.param_names.push_back(p.name);

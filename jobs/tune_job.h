@@ -45,11 +45,11 @@ PreparedTrack prepare_track(const Track& track);
 // The solver part of a tuning request, shared by the EKF (TuneRequest) and
 // the calibrator tunes (calibration_tune_job.h), which both extend it.
 struct SolverSettings {
-  std::string solver = "pso";      // "pso" or "nlopt:NAME"
+  std::string solver = "pso";  // "pso" or "nlopt:NAME"
   std::uint64_t seed = 1;
-  int particles = 50;              // PSO
-  int iterations = 150;            // PSO
-  long evaluations = 0;            // NLopt budget; 0 = particles × (iterations + 1)
+  int particles = 50;    // PSO
+  int iterations = 150;  // PSO
+  long evaluations = 0;  // NLopt budget; 0 = particles × (iterations + 1)
   std::function<void(long, long)> progress;
   const std::atomic<bool>* stop = nullptr;
 
@@ -59,7 +59,7 @@ struct SolverSettings {
 
 struct TuneRequest : SolverSettings {
   filters::NoiseModel model = filters::NoiseModel::rq;
-  int mode = 7;                    // fitness mode 1..7
+  int mode = 7;  // fitness mode 1..7
 
   bool IsValid(std::string* why) const;
 };
@@ -73,13 +73,13 @@ struct TuneOutcome {
   TuneRequest request;
   std::vector<std::string> param_names;
   std::vector<std::string> param_units;
-  std::vector<double> params;             // physical values, in param_units
-  filters::NoiseParams noise;             // the same, as filter noise (SI)
+  std::vector<double> params;  // physical values, in param_units
+  filters::NoiseParams noise;  // the same, as filter noise (SI)
   std::vector<TrackScore> tracks;
-  ErrorMetrics baseline_mean, tuned_mean; // means over tracks
+  ErrorMetrics baseline_mean, tuned_mean;  // means over tracks
   double baseline_fitness = 0, tuned_fitness = 0;
   DivergenceCounts divergences;
-  tuner::Summary summary;                 // evaluations, seconds, termination, log
+  tuner::Summary summary;  // evaluations, seconds, termination, log
 };
 
 // An objective as the tuner sees it: a box and a function (objectives/ does
@@ -97,8 +97,7 @@ struct BoxProblem {
 
 // Minimises `problem` with PSO or NLopt as `s` says (NLopt from x0 when given,
 // else its default start). Throws std::runtime_error when the solver fails.
-tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s,
-                          std::vector<double> x0 = {});
+tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s, std::vector<double> x0 = {});
 
 // A tune that starts from known defaults (the calibrator and UKF tunes): the
 // solver from the defaults' box point, the defaults' own fitness by the same
@@ -109,11 +108,11 @@ struct DefaultsTune {
   tuner::Summary summary;
   double baseline_fitness = 0.0, tuned_fitness = 0.0;
   bool default_kept = false;
-  std::vector<double> params;          // tuned physical values (or the defaults)
+  std::vector<double> params;                         // tuned physical values (or the defaults)
   std::vector<std::string> param_names, param_units;  // the space's
 };
-DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSettings& s,
-                                      const BoxSpace& space, const std::vector<double>& default_params);
+DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSettings& s, const BoxSpace& space,
+                                      const std::vector<double>& default_params);
 
 // Runs the solver; throws std::invalid_argument for an invalid request and
 // std::runtime_error when the solver fails.

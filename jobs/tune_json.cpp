@@ -64,16 +64,16 @@ nlohmann::json improvement_json(const ErrorMetrics& baseline, const ErrorMetrics
 nlohmann::json track_scores_json(const std::vector<TrackScore>& tracks) {
   nlohmann::json out = nlohmann::json::array();
   for (const auto& t : tracks)
-    out.push_back({{"track", t.track}, {"baseline", metrics_json(t.baseline)},
-                   {"tuned", metrics_json(t.tuned)}});
+    out.push_back(
+        {{"track", t.track}, {"baseline", metrics_json(t.baseline)}, {"tuned", metrics_json(t.tuned)}});
   return out;
 }
 
 nlohmann::json convergence_json(const tuner::Summary& summary) {
   nlohmann::json log = nlohmann::json::array();
   for (const auto& r : summary.log)
-    log.push_back({{"iteration", r.iteration}, {"evaluations", r.evaluations},
-                   {"best_fitness", r.best_fitness}});
+    log.push_back(
+        {{"iteration", r.iteration}, {"evaluations", r.evaluations}, {"best_fitness", r.best_fitness}});
   return log;
 }
 

@@ -33,16 +33,16 @@ struct UkfTuneRequest : SolverSettings {
 
 struct UkfTuneOutcome {
   UkfTuneRequest request;
-  std::vector<std::string> param_names;   // ukf_space() order
+  std::vector<std::string> param_names;  // ukf_space() order
   std::vector<std::string> param_units;
-  std::vector<double> default_params;     // physical, in param_units
-  std::vector<double> params;             // tuned, physical
+  std::vector<double> default_params;  // physical, in param_units
+  std::vector<double> params;          // tuned, physical
   UkfSettings default_settings, tuned_settings;
   double baseline_fitness = 0.0, tuned_fitness = 0.0;  // the objective's, lower is better
   bool default_kept = false;
-  std::vector<TrackScore> tracks;         // per track: default vs tuned position errors
-  ErrorMetrics baseline_mean, tuned_mean; // means over tracks
-  long failures = 0;                      // evaluations that scored the divergence penalty
+  std::vector<TrackScore> tracks;          // per track: default vs tuned position errors
+  ErrorMetrics baseline_mean, tuned_mean;  // means over tracks
+  long failures = 0;                       // evaluations that scored the divergence penalty
   tuner::Summary summary;
 };
 

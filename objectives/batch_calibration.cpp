@@ -3,8 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <ceres/ceres.h>
 #include <Eigen/Dense>
+#include <ceres/ceres.h>
 #include <fmt/format.h>
 
 namespace odotune {
@@ -26,8 +26,8 @@ constexpr double kMinEigenRatio = 1e-12;
 
 // Whitened velocity residuals of one calibration sample (header comment).
 struct VelocityResidual {
-  double omega_l, omega_r;   // [rad/s]
-  double v_m, w_m;           // [m/s], [rad/s]
+  double omega_l, omega_r;  // [rad/s]
+  double v_m, w_m;          // [m/s], [rad/s]
   double inv_sd_v, inv_sd_w;
 
   template <typename T>
@@ -51,8 +51,7 @@ bool full_rank(ceres::Problem& problem) {
     const auto b = static_cast<std::size_t>(j.rows[static_cast<std::size_t>(row)]);
     const auto e = static_cast<std::size_t>(j.rows[static_cast<std::size_t>(row) + 1]);
     for (std::size_t a = b; a < e; ++a)
-      for (std::size_t c = b; c < e; ++c)
-        jtj(j.cols[a], j.cols[c]) += j.values[a] * j.values[c];
+      for (std::size_t c = b; c < e; ++c) jtj(j.cols[a], j.cols[c]) += j.values[a] * j.values[c];
   }
   const Eigen::Vector3d d = jtj.diagonal();
   if (!(d.array() > 0.0).all() || !d.allFinite()) return false;
@@ -85,10 +84,10 @@ BatchCalibrationSummary batch_calibrate(const std::vector<const CalibrationInput
   BatchCalibrationSummary out;
   for (const CalibrationInput* in : inputs)
     for (const filters::CalibSample& s : in->samples) {
-      auto* f = new VelocityResidual{s.omega_l_rad_s, s.omega_r_rad_s, s.v_m_s, s.w_rad_s,
-                                     1.0 / std::sqrt(s.v_var), 1.0 / std::sqrt(s.w_var)};
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<VelocityResidual, 2, kBatchParams>(f),
-                               loss, theta);
+      auto* f = new VelocityResidual{s.omega_l_rad_s, s.omega_r_rad_s,          s.v_m_s,
+                                     s.w_rad_s,       1.0 / std::sqrt(s.v_var), 1.0 / std::sqrt(s.w_var)};
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<VelocityResidual, 2, kBatchParams>(f), loss,
+                               theta);
       ++out.residual_pairs;
     }
   if (out.residual_pairs == 0) {

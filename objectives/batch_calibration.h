@@ -23,9 +23,9 @@ namespace odotune {
 struct BatchCalibrationSummary {
   filters::OdometryParams params;
   double sd_radius_left_m = 0.0, sd_radius_right_m = 0.0, sd_wheel_base_m = 0.0;  // [m]
-  long residual_pairs = 0;     // samples used
-  bool converged = false;      // Ceres reported CONVERGENCE
-  std::string termination;     // Ceres' message
+  long residual_pairs = 0;                                                        // samples used
+  bool converged = false;                                                         // Ceres reported CONVERGENCE
+  std::string termination;                                                        // Ceres' message
 };
 
 // Starts from `initial` (one thread, deterministic); throws

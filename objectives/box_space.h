@@ -14,10 +14,10 @@
 namespace odotune {
 
 struct ParamSpec {
-  std::string name;         // e.g. "r1_mm2"
-  std::string unit;         // e.g. "mm²"
-  double lower, upper;      // physical bounds, in `unit`; finite, lower < upper (> 0 if log_scale)
-  bool log_scale;           // searched as log10(value)
+  std::string name;     // e.g. "r1_mm2"
+  std::string unit;     // e.g. "mm²"
+  double lower, upper;  // physical bounds, in `unit`; finite, lower < upper (> 0 if log_scale)
+  bool log_scale;       // searched as log10(value)
   std::string meaning;
 };
 

@@ -81,7 +81,8 @@ std::optional<TruthSchedule> truth_from_metadata(const TrackMeta& meta) {
       const std::string_view part = trim(rest.substr(0, semi));
       if (part.empty())
         fail(meta.name, fmt::format("sim.effects '{}': empty effect; expected 'none' or "
-                                    "NAME:PARAM=VALUE,... parts separated by '; '", whole));
+                                    "NAME:PARAM=VALUE,... parts separated by '; '",
+                                    whole));
       try {
         sim::apply_effect(fx, sim::parse_effect_spec(part));
       } catch (const std::invalid_argument& e) {
@@ -128,9 +129,10 @@ CalibrationInput build_calibration_input(const Track& track, const CalibrationIn
 
   const TrackMeta& meta = track.meta();
   auto require = [&](const std::optional<double>& v, const char* key) {
-    if (!v) fail(name, fmt::format("metadata '{}' is missing: calibration needs the robot's nominal "
-                                   "wheel radii, wheel base{}", key,
-                                   from_ticks ? " and ticks_per_rev" : ""));
+    if (!v)
+      fail(name, fmt::format("metadata '{}' is missing: calibration needs the robot's nominal "
+                             "wheel radii, wheel base{}",
+                             key, from_ticks ? " and ticks_per_rev" : ""));
     return *v;
   };
   in.nominal.wheel_radius_left_m = require(meta.wheel_radius_left_m, "robot.wheel_radius_left");
@@ -150,7 +152,8 @@ CalibrationInput build_calibration_input(const Track& track, const CalibrationIn
   const bool has_ext = track.has(Col::v_ext) && track.has(Col::w_ext);
   if (derive && !in.has_gt)
     fail(name, fmt::format("no ground truth (gt_x, gt_y, gt_theta in at least two rows) to derive "
-                           "external velocities from at {} Hz", options.ext_from_gt_rate_hz));
+                           "external velocities from at {} Hz",
+                           options.ext_from_gt_rate_hz));
   if (!derive && !has_ext)
     fail(name, in.has_gt ? "no external velocities (v_ext, w_ext); derive them from the ground truth "
                            "instead (ext_from_gt_rate_hz > 0)"

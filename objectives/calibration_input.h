@@ -20,8 +20,8 @@ namespace odotune {
 // radius_step (from t on, radii × its scales).
 // A radius_step at t holds from t on (t included), as in the simulator.
 struct TruthSchedule {
-  std::vector<double> from_s;                     // start of each piece [s], increasing; from_s[0] = −∞
-  std::vector<filters::OdometryParams> params;    // the truth during each piece
+  std::vector<double> from_s;                   // start of each piece [s], increasing; from_s[0] = −∞
+  std::vector<filters::OdometryParams> params;  // the truth during each piece
 
   // The piece holding t_s (the last with from_s ≤ t_s). Throws
   // std::logic_error on an empty schedule.
@@ -38,8 +38,8 @@ struct CalibrationInputOptions {
   double ext_from_gt_rate_hz = 0.0;
   // Variances used when the track has no v_ext_var/w_ext_var (and for
   // velocities derived from the ground truth).
-  double default_v_var = 4e-4;    // [(m/s)²]
-  double default_w_var = 4e-4;    // [(rad/s)²]
+  double default_v_var = 4e-4;  // [(m/s)²]
+  double default_w_var = 4e-4;  // [(rad/s)²]
   // A sample's wheel rates are the mean over this window centred on the
   // measurement's time [s] (the wheel angle turned between the odometry rows
   // at or before t ∓ window/2, over their time apart); 0: the rate of the
@@ -55,16 +55,16 @@ struct CalibrationInputOptions {
 
 struct CalibrationInput {
   std::string track_name;
-  filters::OdometryParams nominal;           // the track's robot.* metadata
-  std::optional<TruthSchedule> truth;        // simulated tracks only
+  filters::OdometryParams nominal;     // the track's robot.* metadata
+  std::optional<TruthSchedule> truth;  // simulated tracks only
 
   // Odometry rows: the track rows with an odometry sample (both ticks, or
   // both omega columns; ticks win when a track has both), t[i] and the wheel
   // rates over (t[i−1], t[i]]: from ticks Δticks·2π/ticks_per_rev/Δt over the
   // previous tick row (row 0 has no interval: rates 0); from omega columns
   // the row's own sample (row 0 included).
-  std::vector<double> t;                     // [s]
-  std::vector<double> omega_l, omega_r;      // [rad/s]
+  std::vector<double> t;                 // [s]
+  std::vector<double> omega_l, omega_r;  // [rad/s]
   // Ground truth at those rows: the row's own sample when it has one, else
   // the linear interpolation of the ground-truth rows around it (NaN outside
   // the ground truth or across a gap > 0.5 s). Only rows with gt_x, gt_y AND
@@ -82,7 +82,7 @@ struct CalibrationInput {
   // else the options' defaults (always the defaults when derived from GT).
   std::vector<filters::CalibSample> samples;
   std::vector<std::size_t> sample_row;
-  std::vector<double> sample_t;              // [s]
+  std::vector<double> sample_t;  // [s]
 };
 
 // External velocities derived from the ground truth (ext_from_gt_rate_hz =

@@ -20,7 +20,7 @@ enum CalibrationParam : std::size_t {
   kCalibrationDim = 5
 };
 
-constexpr double kPoseTolerance = 0.005;        // pose RMSE scale: 0.5 % of the path length
+constexpr double kPoseTolerance = 0.005;  // pose RMSE scale: 0.5 % of the path length
 
 double relative_error(double estimate, double truth) { return std::abs(estimate - truth) / truth; }
 
@@ -43,14 +43,12 @@ BoxSpace calibration_space() {
   // α = 1e-4, one particle per 0.01 mm, σ = 0.5 mm).
   return BoxSpace({
       {"neff_fraction", "-", 0.05, 1.0, false, "resample when N_eff < fraction·N (policy neff)"},
-      {"max_weight_ratio", "-", 1.0, 1000.0, true,
-       "resample when the largest weight < ratio/N (policy max)"},
+      {"max_weight_ratio", "-", 1.0, 1000.0, true, "resample when the largest weight < ratio/N (policy max)"},
       {"alpha", "m/(m/s)", 1e-6, 1e-1, true,
        "adaptive random-walk σ per unit of velocity disagreement (eq. 11)"},
       {"dispersion_per_particle_mm", "mm", 1e-3, 1.0, true,
        "radius dispersion per particle of the adaptive count (§V: 0.01 mm)"},
-      {"random_walk_sigma_mm", "mm", 1e-3, 5.0, true,
-       "random-walk σ of R_R, R_L, D per iteration (plain PF)"},
+      {"random_walk_sigma_mm", "mm", 1e-3, 5.0, true, "random-walk σ of R_R, R_L, D per iteration (plain PF)"},
   });
 }
 
@@ -76,15 +74,14 @@ bool CalibrationScoreWeights::IsValid(std::string* why) const {
       {"radius", radius}, {"convergence", convergence}, {"pose", pose}, {"cost", cost}};
   for (const auto& [name, w] : all)
     if (!std::isfinite(w) || w < 0.0) {
-      if (why) *why = std::string("score weight ") + name + " = " + std::to_string(w) +
-                      " must be a finite number ≥ 0";
+      if (why)
+        *why = std::string("score weight ") + name + " = " + std::to_string(w) + " must be a finite number ≥ 0";
       return false;
     }
   return true;
 }
 
-double calibration_score(const CalibrationResult& result,
-                         const std::vector<const CalibrationInput*>& inputs,
+double calibration_score(const CalibrationResult& result, const std::vector<const CalibrationInput*>& inputs,
                          const CalibrationScoreWeights& w) {
   if (result.tracks.size() != inputs.size())
     throw std::invalid_argument("calibration_score: the result's tracks and the inputs differ in number");
@@ -97,10 +94,9 @@ double calibration_score(const CalibrationResult& result,
     if (std::isfinite(s.pose_rmse_m) && path_m > 0.0)
       score += w.pose * s.pose_rmse_m / (kPoseTolerance * path_m);
     if (s.truth_final) {
-      const double e_r = 0.5 * (relative_error(s.final_params.wheel_radius_left_m,
-                                               s.truth_final->wheel_radius_left_m) +
-                                relative_error(s.final_params.wheel_radius_right_m,
-                                               s.truth_final->wheel_radius_right_m));
+      const double e_r =
+          0.5 * (relative_error(s.final_params.wheel_radius_left_m, s.truth_final->wheel_radius_left_m) +
+                 relative_error(s.final_params.wheel_radius_right_m, s.truth_final->wheel_radius_right_m));
       const auto& t = inputs[k]->t;
       const double duration = t.size() > 1 ? t.back() - t.front() : 0.0;
       const double c = (s.convergence_time_s && duration > 0.0)

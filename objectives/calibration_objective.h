@@ -54,8 +54,7 @@ struct CalibrationScoreWeights {
 };
 
 // The score of one finished calibration of `inputs` (see the file comment).
-double calibration_score(const CalibrationResult& result,
-                         const std::vector<const CalibrationInput*>& inputs,
+double calibration_score(const CalibrationResult& result, const std::vector<const CalibrationInput*>& inputs,
                          const CalibrationScoreWeights& weights);
 
 class CalibrationObjective {
@@ -64,9 +63,8 @@ class CalibrationObjective {
   // (resampler, policy, ranges, initial particle count, seed); the PF always
   // runs single-threaded inside fitness() (the solver parallelises over its
   // own particles). `adaptive` selects the adaptive PF.
-  CalibrationObjective(std::vector<const CalibrationInput*> inputs,
-                       filters::PfCalibratorParams base, bool adaptive,
-                       CalibrationScoreWeights weights = {});
+  CalibrationObjective(std::vector<const CalibrationInput*> inputs, filters::PfCalibratorParams base,
+                       bool adaptive, CalibrationScoreWeights weights = {});
 
   double fitness(std::span<const double> x) const;
   std::pair<std::vector<double>, std::vector<double>> bounds() const { return space_.box(); }

@@ -111,8 +111,8 @@ void score_odometry(const CalibrationInput& in, const ParamTimeline& tl, TrackCa
   for (std::size_t i = 0; i < in.samples.size(); ++i) {
     const auto ref = central_difference_velocity(gt, in.sample_t[i], kScoreHalfWindowS, kScoreMaxGapS);
     if (!ref) continue;
-    const filters::BodyVelocity odo = filters::body_velocity(
-        tl.at(in.sample_t[i]), in.samples[i].omega_l_rad_s, in.samples[i].omega_r_rad_s);
+    const filters::BodyVelocity odo = filters::body_velocity(tl.at(in.sample_t[i]), in.samples[i].omega_l_rad_s,
+                                                             in.samples[i].omega_r_rad_s);
     sum_v += (odo.v_m_s - ref->v_m_s) * (odo.v_m_s - ref->v_m_s);
     sum_w += (odo.w_rad_s - ref->w_rad_s) * (odo.w_rad_s - ref->w_rad_s);
     ++count;
@@ -198,8 +198,8 @@ std::string_view to_string(CalibrationMethod m) {
 }
 
 bool parse_calibration_method(std::string_view text, CalibrationMethod* out) {
-  for (CalibrationMethod m : {CalibrationMethod::adaptive_pf, CalibrationMethod::pf,
-                              CalibrationMethod::dkf, CalibrationMethod::batch, CalibrationMethod::none})
+  for (CalibrationMethod m : {CalibrationMethod::adaptive_pf, CalibrationMethod::pf, CalibrationMethod::dkf,
+                              CalibrationMethod::batch, CalibrationMethod::none})
     if (text == to_string(m)) {
       if (out) *out = m;
       return true;
@@ -238,8 +238,7 @@ bool CalibrationOptions::IsValid(std::string* why) const {
       }
       break;
     case CalibrationMethod::batch:
-    case CalibrationMethod::none:
-      break;
+    case CalibrationMethod::none: break;
   }
   return true;
 }
@@ -261,8 +260,7 @@ std::optional<double> convergence_time(const std::vector<double>& times,
   return since;
 }
 
-TrackCalibrationScore score_fixed_params(const CalibrationInput& input,
-                                         const filters::OdometryParams& params,
+TrackCalibrationScore score_fixed_params(const CalibrationInput& input, const filters::OdometryParams& params,
                                          double convergence_tolerance) {
   std::string why;
   if (!params.IsValid(&why))

@@ -53,8 +53,8 @@ filters::PfCalibratorParams effective_pf_params(const CalibrationOptions& option
 // method. The fixed-parameter methods (batch, none) have one row per track,
 // at the track's first sample, with the constants (batch: with its sds).
 struct CalibrationTrace {
-  std::vector<double> t;                       // [s], on the track's clock (per track)
-  std::vector<int> track;                      // index of the track the row belongs to
+  std::vector<double> t;   // [s], on the track's clock (per track)
+  std::vector<int> track;  // index of the track the row belongs to
   std::vector<filters::CalibEstimate> estimate;
 };
 
@@ -80,8 +80,8 @@ struct CalibrationTrace {
 // over ±0.05 s (pose_series.h).
 struct TrackCalibrationScore {
   std::string track;
-  filters::OdometryParams final_params;        // at the end of this track
-  std::optional<filters::OdometryParams> truth_final;   // truth at the track's last odometry row
+  filters::OdometryParams final_params;                // at the end of this track
+  std::optional<filters::OdometryParams> truth_final;  // truth at the track's last odometry row
   // Since the track's first odometry row [s]; nullopt: no truth, or never
   // converged before the end of the first piece.
   std::optional<double> convergence_time_s;
@@ -89,15 +89,15 @@ struct TrackCalibrationScore {
   // change to re-converging [s]; nullopt when it never does (or the change
   // lies after the track's last sample).
   std::vector<std::optional<double>> reconvergence_s;
-  double pose_rmse_m = 0.0;                    // RMSE(x, y) of the calibrated odometry vs GT (NaN: no GT)
-  double heading_rmse_rad = 0.0;               // RMSE θ (NaN: no GT)
-  double v_rmse_m_s = 0.0;                     // calibrated odometry V vs GT-derived V (NaN: no GT)
-  double w_rmse_rad_s = 0.0;                   // W likewise
+  double pose_rmse_m = 0.0;       // RMSE(x, y) of the calibrated odometry vs GT (NaN: no GT)
+  double heading_rmse_rad = 0.0;  // RMSE θ (NaN: no GT)
+  double v_rmse_m_s = 0.0;        // calibrated odometry V vs GT-derived V (NaN: no GT)
+  double w_rmse_rad_s = 0.0;      // W likewise
 };
 
 struct CalibrationResult {
   CalibrationMethod method = CalibrationMethod::none;
-  filters::OdometryParams final_params;        // after the last track
+  filters::OdometryParams final_params;  // after the last track
   std::vector<TrackCalibrationScore> tracks;
   CalibrationTrace trace;
   // Online methods: step() calls, and their wall time (std::chrono::
@@ -105,7 +105,7 @@ struct CalibrationResult {
   // time of the whole fit / pairs (cost per measurement). none: 0 and 0.
   long iterations = 0;
   double ms_per_iteration = 0.0;
-  double mean_particles = 0.0;                 // PF: mean N over iterations (deterministic cost); else 0
+  double mean_particles = 0.0;  // PF: mean N over iterations (deterministic cost); else 0
   // batch only: Ceres reported convergence (the fit's sds are in the trace row).
   bool batch_converged = false;
 };
@@ -122,8 +122,7 @@ CalibrationResult run_calibration(const std::vector<const CalibrationInput*>& in
 // Dead-reckoning scores of fixed parameters on one track (what `--apply`
 // reports for a held-out run). Throws std::invalid_argument (naming the
 // track) for invalid parameters or an input without odometry rows.
-TrackCalibrationScore score_fixed_params(const CalibrationInput& input,
-                                         const filters::OdometryParams& params,
+TrackCalibrationScore score_fixed_params(const CalibrationInput& input, const filters::OdometryParams& params,
                                          double convergence_tolerance = 0.005);
 
 // The earliest times[i] such that estimates[j] is within `tolerance` of

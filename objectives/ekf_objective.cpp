@@ -5,8 +5,7 @@
 
 namespace odotune {
 
-EkfObjective::EkfObjective(std::vector<const FastReplay*> tracks, filters::NoiseModel model,
-                           int mode)
+EkfObjective::EkfObjective(std::vector<const FastReplay*> tracks, filters::NoiseModel model, int mode)
     : tracks_(std::move(tracks)), space_(ParamSpace::for_model(model)), mode_(mode) {
   if (tracks_.empty()) throw std::invalid_argument("EkfObjective: no tracks");
   if (!valid_fitness_mode(mode)) throw std::invalid_argument("EkfObjective: mode must be 1..7");

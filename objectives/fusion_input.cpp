@@ -1,8 +1,8 @@
 #include "objectives/fusion_input.h"
 
 #include <algorithm>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -66,8 +66,7 @@ bool FusionInputOptions::IsValid(std::string* why) const {
   if (!(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= kMaxRateHz))
     return bad(fmt::format("rate_hz = {} must be in (0, {}] Hz", rate_hz, kMaxRateHz));
   if (!(std::isfinite(default_ext_var_v) && default_ext_var_v > 0.0))
-    return bad(fmt::format("default_ext_var_v = {} must be a finite number > 0 [(m/s)^2]",
-                           default_ext_var_v));
+    return bad(fmt::format("default_ext_var_v = {} must be a finite number > 0 [(m/s)^2]", default_ext_var_v));
   if (!(std::isfinite(default_ext_var_w) && default_ext_var_w > 0.0))
     return bad(fmt::format("default_ext_var_w = {} must be a finite number > 0 [(rad/s)^2]",
                            default_ext_var_w));
@@ -87,8 +86,10 @@ FusionInput build_fusion_input(const Track& track, const FusionInputOptions& opt
 
   const TrackMeta& meta = track.meta();
   auto require = [&](const std::optional<double>& v, const char* key) {
-    if (!v) fail(name, fmt::format("metadata '{}' is missing: fusion needs the robot's nominal wheel "
-                                   "radii, wheel base and ticks_per_rev", key));
+    if (!v)
+      fail(name, fmt::format("metadata '{}' is missing: fusion needs the robot's nominal wheel "
+                             "radii, wheel base and ticks_per_rev",
+                             key));
     return *v;
   };
   in.nominal.wheel_radius_left_m = require(meta.wheel_radius_left_m, "robot.wheel_radius_left");
@@ -123,10 +124,10 @@ FusionInput build_fusion_input(const Track& track, const FusionInputOptions& opt
         const std::size_t p = odo_t.size() - 1;  // previous omega row (index in odo_t)
         const std::size_t pi = odo_row.back();   // ... and in the track
         const double dt = tt[i] - tt[pi];
-        cum_l.push_back(cum_l[p] + 0.5 * (track.col(Col::omega_l)[pi] + track.col(Col::omega_l)[i]) *
-                                       dt * counts_per_rad);
-        cum_r.push_back(cum_r[p] + 0.5 * (track.col(Col::omega_r)[pi] + track.col(Col::omega_r)[i]) *
-                                       dt * counts_per_rad);
+        cum_l.push_back(cum_l[p] +
+                        0.5 * (track.col(Col::omega_l)[pi] + track.col(Col::omega_l)[i]) * dt * counts_per_rad);
+        cum_r.push_back(cum_r[p] +
+                        0.5 * (track.col(Col::omega_r)[pi] + track.col(Col::omega_r)[i]) * dt * counts_per_rad);
       }
     }
     odo_t.push_back(tt[i]);
@@ -165,8 +166,8 @@ FusionInput build_fusion_input(const Track& track, const FusionInputOptions& opt
     prev_r = cr;
     // Eq. 1: wheel rate ω = 2π·Δct/(encRes·ΔT); eq. 2 with the radii and D.
     const double rad_per_count_s = 1.0 / (counts_per_rad * in.dt_s);
-    const filters::BodyVelocity b = filters::body_velocity(
-        in.nominal, in.dticks_l[k] * rad_per_count_s, in.dticks_r[k] * rad_per_count_s);
+    const filters::BodyVelocity b = filters::body_velocity(in.nominal, in.dticks_l[k] * rad_per_count_s,
+                                                           in.dticks_r[k] * rad_per_count_s);
     in.v_kin[k] = b.v_m_s;
     in.w_kin[k] = b.w_rad_s;
   }

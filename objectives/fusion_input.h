@@ -15,7 +15,7 @@
 namespace odotune {
 
 struct FusionInputOptions {
-  double rate_hz = 10.0;            // fusion / network rate (paper: 10 Hz); (0, 1000]
+  double rate_hz = 10.0;  // fusion / network rate (paper: 10 Hz); (0, 1000]
   // Variances used where the track has external velocities but no
   // v_ext_var/w_ext_var [(m/s)², (rad/s)²].
   double default_ext_var_v = 4e-4;
@@ -25,9 +25,9 @@ struct FusionInputOptions {
 
 struct FusionInput {
   std::string track_name;
-  filters::OdometryParams nominal;    // the track's robot.* metadata
-  double ticks_per_rev = 0.0;         // encoder counts per wheel revolution
-  double dt_s = 0.1;                  // 1 / rate_hz
+  filters::OdometryParams nominal;  // the track's robot.* metadata
+  double ticks_per_rev = 0.0;       // encoder counts per wheel revolution
+  double dt_s = 0.1;                // 1 / rate_hz
   // Step times [s]: t[0] = the first odometry row's time, t[k] = t[0] + k·dt
   // while an odometry row exists at or after it (the last step ends at or
   // before the last odometry row). Step 0 has no interval: its per-step

@@ -35,8 +35,8 @@ bool LearnedFusionOptions::IsValid(std::string* why) const {
     return false;
   };
   if (!positive_finite(static_var_v) || !positive_finite(static_var_w))
-    return fail(fmt::format("static_var_v = {}, static_var_w = {}: expected finite values > 0",
-                            static_var_v, static_var_w));
+    return fail(fmt::format("static_var_v = {}, static_var_w = {}: expected finite values > 0", static_var_v,
+                            static_var_w));
   std::string inner;
   if (detector && !detector->IsValid(&inner)) return fail("slip detector: " + inner);
   if (!ukf.IsValid(&inner)) return fail("ukf: " + inner);
@@ -68,7 +68,7 @@ LearnedFusionResult run_learned_fusion(const FusionInput& in, const LearnedOdome
   FusionTrace& f = r.filter;
   for (auto* v : {&f.v, &f.w, &f.var_v, &f.var_w, &f.cov_vw, &f.x, &f.y, &f.theta}) v->assign(n, nan());
 
-  LearnedOdometryModel current;   // the nets as retrained so far
+  LearnedOdometryModel current;  // the nets as retrained so far
   if (learned) current = *model;
   std::optional<LearnedOdometryStepper> odo;
   if (learned) odo.emplace(&current);
@@ -104,8 +104,7 @@ LearnedFusionResult run_learned_fusion(const FusionInput& in, const LearnedOdome
     OdometryMeasurement m;
     if (learned) {
       const auto vw = odo->step(in.dticks_l[k], in.dticks_r[k], in.v_kin[k], in.w_kin[k],
-                                std::isfinite(prev_v) ? prev_v : 0.0,
-                                std::isfinite(prev_w) ? prev_w : 0.0);
+                                std::isfinite(prev_v) ? prev_v : 0.0, std::isfinite(prev_w) ? prev_w : 0.0);
       m.v_m_s = vw[0];
       m.w_rad_s = vw[1];
     } else {

@@ -46,7 +46,7 @@ inline LstmTrainingOptions default_retrain_training() {
 
 struct RetrainOptions {
   bool enabled = false;
-  int samples_per_retrain = 300;           // paper §4.2
+  int samples_per_retrain = 300;                                // paper §4.2
   double max_filter_var_v = 4e-4, max_filter_var_w = 4e-4;      // [(m/s)², (rad/s)²]
   double max_odometry_var_v = 5e-3, max_odometry_var_w = 5e-3;  // [(m/s)², (rad/s)²]
   LstmTrainingOptions training = default_retrain_training();
@@ -58,7 +58,7 @@ struct LearnedFusionOptions {
   // Variable covariance from the slip detector when it is given; else the
   // static variances below.
   const SlipDetectorModel* detector = nullptr;
-  double static_var_v = 1e-3, static_var_w = 1e-3;   // [(m/s)², (rad/s)²]
+  double static_var_v = 1e-3, static_var_w = 1e-3;  // [(m/s)², (rad/s)²]
   filters::UkfParams ukf;
   UkfSensorNoise noise;
   RetrainOptions retrain;
@@ -66,18 +66,18 @@ struct LearnedFusionOptions {
 };
 
 struct RetrainEvent {
-  std::size_t step = 0;        // the step after which the nets were refitted
+  std::size_t step = 0;  // the step after which the nets were refitted
   double t_s = 0.0;
-  double seconds = 0.0;        // wall time of both refits
+  double seconds = 0.0;  // wall time of both refits
   LstmTrainingSummary v, w;
 };
 
 struct LearnedFusionResult {
-  OdometrySeries odometry;                 // the odometry fed to the UKF, per step
+  OdometrySeries odometry;  // the odometry fed to the UKF, per step
   std::vector<double> odo_var_v, odo_var_w;
-  FusionTrace filter;                      // UKF state, covariance and integrated pose
+  FusionTrace filter;  // UKF state, covariance and integrated pose
   std::vector<RetrainEvent> retrains;
-  std::optional<LearnedOdometryModel> final_model;   // after retraining (learned odometry only)
+  std::optional<LearnedOdometryModel> final_model;  // after retraining (learned odometry only)
 };
 
 // `model` is needed (non-null) for learned odometry; it is copied, never

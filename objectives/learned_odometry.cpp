@@ -110,26 +110,26 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     const FusionInput& in = *tracks[i];
     if (!in.has_gt)
-      throw std::invalid_argument(fmt::format(
-          "track '{}': no ground truth (gt_x, gt_y, gt_theta): expected it to learn odometry from",
-          in.track_name));
+      throw std::invalid_argument(
+          fmt::format("track '{}': no ground truth (gt_x, gt_y, gt_theta): expected it to learn odometry from",
+                      in.track_name));
     if (std::abs(in.ticks_per_rev - model.ticks_per_rev) > 1e-9 * model.ticks_per_rev)
-      throw std::invalid_argument(fmt::format(
-          "track '{}': ticks_per_rev = {} differs from the first track's {}: expected one robot",
-          in.track_name, in.ticks_per_rev, model.ticks_per_rev));
+      throw std::invalid_argument(
+          fmt::format("track '{}': ticks_per_rev = {} differs from the first track's {}: expected one robot",
+                      in.track_name, in.ticks_per_rev, model.ticks_per_rev));
     if (std::abs(in.dt_s - tracks.front()->dt_s) > 1e-12)
       throw std::invalid_argument(
-          fmt::format("track '{}': fusion step {} s differs from the first track's {} s",
-                      in.track_name, in.dt_s, tracks.front()->dt_s));
+          fmt::format("track '{}': fusion step {} s differs from the first track's {} s", in.track_name,
+                      in.dt_s, tracks.front()->dt_s));
     SequenceSet v_all, w_all;
     v_all.window = w_all.window = window;
     v_all.inputs = w_all.inputs = kFeatures;
     append_velocity_windows(in, window, options.previous_noise_v, options.previous_noise_w,
                             options.training.seed + i, &v_all, &w_all);
     if (v_all.size() < 10)
-      throw std::invalid_argument(fmt::format(
-          "track '{}': only {} windows of {} steps with ground truth: expected at least 10",
-          in.track_name, v_all.size(), window));
+      throw std::invalid_argument(
+          fmt::format("track '{}': only {} windows of {} steps with ground truth: expected at least 10",
+                      in.track_name, v_all.size(), window));
     auto [vt, vv] = split_sequences(v_all, options.train_fraction);
     auto [wt, wv] = split_sequences(w_all, options.train_fraction);
     v_train.append(vt);
@@ -159,8 +159,9 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
         }
     }
     const double inf = std::numeric_limits<double>::infinity();
-    return count > 0 ? std::array<double, 2>{sum[0] / static_cast<double>(count), sum[1] / static_cast<double>(count)}
-                     : std::array<double, 2>{inf, inf};
+    return count > 0
+               ? std::array<double, 2>{sum[0] / static_cast<double>(count), sum[1] / static_cast<double>(count)}
+               : std::array<double, 2>{inf, inf};
   };
   const LearnedOdometryModel fresh = model;
   std::array<double, 2> best_mae{0.0, 0.0};
@@ -197,9 +198,8 @@ LearnedOdometryStepper::LearnedOdometryStepper(const LearnedOdometryModel* model
       v_rows_(static_cast<std::size_t>(model->v_net.window) * kFeatures, 0.0),
       w_rows_(static_cast<std::size_t>(model->w_net.window) * kFeatures, 0.0) {}
 
-std::array<double, 2> LearnedOdometryStepper::step(double dticks_l, double dticks_r, double v_kin,
-                                                   double w_kin, double previous_v,
-                                                   double previous_w) {
+std::array<double, 2> LearnedOdometryStepper::step(double dticks_l, double dticks_r, double v_kin, double w_kin,
+                                                   double previous_v, double previous_w) {
   auto push = [&](std::vector<double>& rows, double previous) {
     // Shift the window one row (20 × 3 doubles: cheaper than a ring's
     // index arithmetic in predict, which wants the rows contiguous).

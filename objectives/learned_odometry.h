@@ -28,8 +28,8 @@ enum LearnedFeature : int { kFeatDticksR = 0, kFeatDticksL = 1, kFeatPrevious = 
 
 struct LearnedOdometryModel {
   filters::VelocityNet v_net, w_net;
-  double rate_hz = 10.0;          // the step rate the nets were trained at
-  double ticks_per_rev = 0.0;     // of the robot they were trained on (increments are in counts)
+  double rate_hz = 10.0;       // the step rate the nets were trained at
+  double ticks_per_rev = 0.0;  // of the robot they were trained on (increments are in counts)
   // Validation MAE of each net at training time [m/s, rad/s] (the static
   // odometry variance falls back on it when there is no slip detector).
   double v_validation_mae = 0.0, w_validation_mae = 0.0;
@@ -37,8 +37,8 @@ struct LearnedOdometryModel {
 };
 
 struct LearnedTrainingOptions {
-  LstmTrainingOptions training;            // Ceres solve of each net
-  double train_fraction = 0.7;             // paper: 70 / 30
+  LstmTrainingOptions training;  // Ceres solve of each net
+  double train_fraction = 0.7;   // paper: 70 / 30
   // Noise added to the teacher-forced previous velocity during training [m/s,
   // rad/s] (seeded); 0 = pure teacher forcing. A little noise teaches the nets
   // not to copy the previous velocity blindly, which matters when they run on
@@ -58,11 +58,11 @@ struct LearnedTrainingOptions {
 };
 
 struct LearnedTrainingSummary {
-  LstmTrainingSummary v, w;             // of the kept start
-  int v_restart = 0, w_restart = 0;     // which start was kept (0-based)
-  std::vector<double> v_restart_mae, w_restart_mae;   // each start's free-running MAE [m/s, rad/s]
+  LstmTrainingSummary v, w;                          // of the kept start
+  int v_restart = 0, w_restart = 0;                  // which start was kept (0-based)
+  std::vector<double> v_restart_mae, w_restart_mae;  // each start's free-running MAE [m/s, rad/s]
   std::size_t train_windows = 0, validation_windows = 0;
-  double seconds = 0.0;                    // both nets, wall time
+  double seconds = 0.0;  // both nets, wall time
 };
 
 // The windows of one track: every step k ≥ window with ground truth over the
@@ -84,8 +84,8 @@ class LearnedOdometryStepper {
  public:
   explicit LearnedOdometryStepper(const LearnedOdometryModel* model);
   // Step k's increments and the previous (V, W) to feed back; returns (V, W).
-  std::array<double, 2> step(double dticks_l, double dticks_r, double v_kin, double w_kin,
-                             double previous_v, double previous_w);
+  std::array<double, 2> step(double dticks_l, double dticks_r, double v_kin, double w_kin, double previous_v,
+                             double previous_w);
   const LearnedOdometryModel& model() const { return *model_; }
   // The raw feature rows of the last step's windows (window × 3, oldest
   // first) and whether the window is full: a retraining sample (§4.2).
@@ -95,7 +95,7 @@ class LearnedOdometryStepper {
 
  private:
   const LearnedOdometryModel* model_;
-  std::vector<double> v_rows_, w_rows_;   // ring of window × 3 raw features, oldest first
+  std::vector<double> v_rows_, w_rows_;  // ring of window × 3 raw features, oldest first
   int filled_ = 0;
 };
 

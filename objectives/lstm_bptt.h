@@ -39,11 +39,12 @@ double lstm_value_and_gradient(const double* w, const double* x, int window, fil
   using L = filters::LstmLayout<I, H>;
   constexpr int G = L::kGates;
   thread_local std::vector<double> buffer;
-  const std::size_t need = static_cast<std::size_t>(window) * (G + H) + static_cast<std::size_t>(window + 1) * 2 * H;
+  const std::size_t need = static_cast<std::size_t>(window) * (G + H) +
+                           static_cast<std::size_t>(window + 1) * 2 * H;
   if (buffer.size() < need) buffer.resize(need);
-  double* gates = buffer.data();                    // window × 4H: i, f, g, o after activation
-  double* cs = gates + static_cast<std::size_t>(window) * G;  // (window + 1) × H, cs[0..H) = c_0 = 0
-  double* hs = cs + static_cast<std::size_t>(window + 1) * H;  // (window + 1) × H, hs[0..H) = h_0 = 0
+  double* gates = buffer.data();                                // window × 4H: i, f, g, o after activation
+  double* cs = gates + static_cast<std::size_t>(window) * G;    // (window + 1) × H, cs[0..H) = c_0 = 0
+  double* hs = cs + static_cast<std::size_t>(window + 1) * H;   // (window + 1) × H, hs[0..H) = h_0 = 0
   double* tcs = hs + static_cast<std::size_t>(window + 1) * H;  // window × H: tanh(c_t)
   for (int j = 0; j < H; ++j) cs[j] = hs[j] = 0.0;
 

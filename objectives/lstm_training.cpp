@@ -58,11 +58,11 @@ class WindowCache final : public ceres::EvaluationCallback {
       const double* p = point_.data();
       double* row = jacobians_.data() + static_cast<std::size_t>(w) * K;
       double* jac[1] = {row};
-      ok_[static_cast<std::size_t>(w)] =
-          inner_[static_cast<std::size_t>(w)]->Evaluate(&p, &residuals_[static_cast<std::size_t>(w)],
-                                                        evaluate_jacobians ? jac : nullptr)
-              ? 1
-              : 0;
+      ok_[static_cast<std::size_t>(w)] = inner_[static_cast<std::size_t>(w)]->Evaluate(
+                                             &p, &residuals_[static_cast<std::size_t>(w)],
+                                             evaluate_jacobians ? jac : nullptr)
+                                             ? 1
+                                             : 0;
     }
     have_point_ = true;
     have_jacobians_ = evaluate_jacobians;
@@ -122,9 +122,11 @@ class CachedCost final : public ceres::SizedCostFunction<1, K> {
 template <int K>
 class WeightDecay final : public ceres::SizedCostFunction<K, K> {
  public:
-  WeightDecay(double lambda, const std::array<double, K>& centre) : sqrt_lambda_(std::sqrt(lambda)), centre_(centre) {}
+  WeightDecay(double lambda, const std::array<double, K>& centre)
+      : sqrt_lambda_(std::sqrt(lambda)), centre_(centre) {}
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
-    for (int n = 0; n < K; ++n) residuals[n] = sqrt_lambda_ * (parameters[0][n] - centre_[static_cast<std::size_t>(n)]);
+    for (int n = 0; n < K; ++n)
+      residuals[n] = sqrt_lambda_ * (parameters[0][n] - centre_[static_cast<std::size_t>(n)]);
     if (jacobians != nullptr && jacobians[0] != nullptr) {
       std::fill_n(jacobians[0], K * K, 0.0);
       for (int n = 0; n < K; ++n) jacobians[0][n * K + n] = sqrt_lambda_;
@@ -166,8 +168,8 @@ void check_set(const SequenceSet& set, int inputs, const char* name) {
 // reports, the same at both ends whatever the continuation stages were.
 // Residuals come from the cache's evaluators (parallel, summed in order).
 template <int K>
-double robust_cost(WindowCache<K>& cache, const double* params, std::size_t n, const LstmTrainingOptions& options,
-                   const std::array<double, K>& centre) {
+double robust_cost(WindowCache<K>& cache, const double* params, std::size_t n,
+                   const LstmTrainingOptions& options, const std::array<double, K>& centre) {
   const std::vector<double>& r = cache.residuals_at(params);
   const ceres::SoftLOneLoss loss(options.mae_scale);
   double cost = 0.0;
@@ -188,7 +190,8 @@ double robust_cost(WindowCache<K>& cache, const double* params, std::size_t n, c
 // with net's standardisation and minimises from net.weights. Writes the
 // weights into `net` only when usable.
 template <int I, int H>
-LstmTrainingSummary solve(filters::LstmNet<I, H>& net, const SequenceSet& train, const LstmTrainingOptions& options) {
+LstmTrainingSummary solve(filters::LstmNet<I, H>& net, const SequenceSet& train,
+                          const LstmTrainingOptions& options) {
   constexpr int K = filters::LstmLayout<I, H>::kCount;
   const std::size_t n = train.size();
   const std::size_t per_window = static_cast<std::size_t>(net.window) * I;
@@ -222,7 +225,8 @@ LstmTrainingSummary solve(filters::LstmNet<I, H>& net, const SequenceSet& train,
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.evaluation_callback = &cache;
   ceres::Problem problem(problem_options);
-  for (std::size_t w = 0; w < n; ++w) problem.AddResidualBlock(new CachedCost<K>(&cache, w), &loss, params.data());
+  for (std::size_t w = 0; w < n; ++w)
+    problem.AddResidualBlock(new CachedCost<K>(&cache, w), &loss, params.data());
   if (options.weight_decay > 0.0)
     problem.AddResidualBlock(new WeightDecay<K>(options.weight_decay, centre), nullptr, params.data());
 
@@ -264,8 +268,8 @@ LstmTrainingSummary solve(filters::LstmNet<I, H>& net, const SequenceSet& train,
   }
   const auto stop = std::chrono::steady_clock::now();
 
-  summary.termination =
-      std::string(ceres::TerminationTypeToString(ceres_summary.termination_type)) + ": " + ceres_summary.message;
+  summary.termination = std::string(ceres::TerminationTypeToString(ceres_summary.termination_type)) + ": " +
+                        ceres_summary.message;
   summary.final_cost = robust_cost<K>(cache, params.data(), n, options, centre);
   summary.seconds = std::chrono::duration<double>(stop - start).count();
   const bool finite = std::all_of(params.begin(), params.end(), [](double v) { return std::isfinite(v); });
@@ -281,8 +285,8 @@ bool SequenceSet::IsValid(std::string* why) const {
   if (inputs < 1) return fail(why, "inputs = " + std::to_string(inputs) + ": expected ≥ 1");
   const std::size_t per = static_cast<std::size_t>(window) * static_cast<std::size_t>(inputs);
   if (x.size() != y.size() * per)
-    return fail(why, "x has " + std::to_string(x.size()) + " values, expected size() × window × inputs = " +
-                         std::to_string(y.size() * per));
+    return fail(why, "x has " + std::to_string(x.size()) +
+                         " values, expected size() × window × inputs = " + std::to_string(y.size() * per));
   for (std::size_t n = 0; n < y.size(); ++n) {
     if (!std::isfinite(y[n])) return fail(why, "y[" + std::to_string(n) + "] is not finite");
     for (std::size_t i = 0; i < per; ++i)
@@ -315,13 +319,16 @@ std::pair<SequenceSet, SequenceSet> split_sequences(const SequenceSet& all, doub
 }
 
 bool LstmTrainingOptions::IsValid(std::string* why) const {
-  if (max_iterations < 0) return fail(why, "max_iterations = " + std::to_string(max_iterations) + ": expected ≥ 0");
+  if (max_iterations < 0)
+    return fail(why, "max_iterations = " + std::to_string(max_iterations) + ": expected ≥ 0");
   if (!(mae_scale > 0.0) || !std::isfinite(mae_scale))
     return fail(why, "mae_scale = " + fmt::format("{}", mae_scale) + ": expected a finite value > 0");
   if (!(mae_scale_start > 0.0) || !std::isfinite(mae_scale_start))
-    return fail(why, "mae_scale_start = " + fmt::format("{}", mae_scale_start) + ": expected a finite value > 0");
+    return fail(why,
+                "mae_scale_start = " + fmt::format("{}", mae_scale_start) + ": expected a finite value > 0");
   if (!(function_tolerance >= 0.0) || !std::isfinite(function_tolerance))
-    return fail(why, "function_tolerance = " + fmt::format("{}", function_tolerance) + ": expected a finite value ≥ 0");
+    return fail(why, "function_tolerance = " + fmt::format("{}", function_tolerance) +
+                         ": expected a finite value ≥ 0");
   if (!(weight_decay >= 0.0) || !std::isfinite(weight_decay))
     return fail(why, "weight_decay = " + fmt::format("{}", weight_decay) + ": expected a finite value ≥ 0");
   if (num_threads < 1) return fail(why, "num_threads = " + std::to_string(num_threads) + ": expected ≥ 1");
@@ -372,7 +379,8 @@ LstmTrainingSummary train_lstm(filters::LstmNet<I, H>& net, const SequenceSet& t
   if (validation.size() > 0) {  // an empty validation set of any shape means "none"
     check_set(validation, I, "validation");
     require(validation.window == train.window, "validation set: window = " + std::to_string(validation.window) +
-                                                   ", expected the train set's " + std::to_string(train.window));
+                                                   ", expected the train set's " +
+                                                   std::to_string(train.window));
   }
 
   filters::LstmNet<I, H> candidate = net;
@@ -415,12 +423,12 @@ LstmTrainingSummary retrain_lstm(filters::LstmNet<I, H>& net, const SequenceSet&
   return summary;
 }
 
-#define ODOTUNE_INSTANTIATE_LSTM_TRAINING(I, H)                                                          \
+#define ODOTUNE_INSTANTIATE_LSTM_TRAINING(I, H)                                                             \
   template std::array<double, filters::LstmLayout<I, H>::kCount> lstm_initial_weights<I, H>(std::uint64_t); \
-  template double lstm_mae<I, H>(const filters::LstmNet<I, H>&, const SequenceSet&);                     \
-  template LstmTrainingSummary train_lstm<I, H>(filters::LstmNet<I, H>&, const SequenceSet&,             \
-                                                const SequenceSet&, const LstmTrainingOptions&);         \
-  template LstmTrainingSummary retrain_lstm<I, H>(filters::LstmNet<I, H>&, const SequenceSet&,           \
+  template double lstm_mae<I, H>(const filters::LstmNet<I, H>&, const SequenceSet&);                        \
+  template LstmTrainingSummary train_lstm<I, H>(filters::LstmNet<I, H>&, const SequenceSet&,                \
+                                                const SequenceSet&, const LstmTrainingOptions&);            \
+  template LstmTrainingSummary retrain_lstm<I, H>(filters::LstmNet<I, H>&, const SequenceSet&,              \
                                                   const LstmTrainingOptions&);
 
 ODOTUNE_INSTANTIATE_LSTM_TRAINING(3, 5)

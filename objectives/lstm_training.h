@@ -55,7 +55,8 @@ struct SequenceSet {
   std::size_t size() const { return y.size(); }
   // Appends one window: window × inputs values of window_rows, and its target.
   void add(const double* window_rows, double target) {
-    x.insert(x.end(), window_rows, window_rows + static_cast<std::size_t>(window) * static_cast<std::size_t>(inputs));
+    x.insert(x.end(), window_rows,
+             window_rows + static_cast<std::size_t>(window) * static_cast<std::size_t>(inputs));
     y.push_back(target);
   }
   // Appends every window of `other` (same window and inputs).
@@ -80,8 +81,9 @@ std::pair<SequenceSet, SequenceSet> split_sequences(const SequenceSet& all, doub
 struct LstmTrainingOptions {
   enum class Jacobian { bptt, autodiff };
   Jacobian jacobian = Jacobian::bptt;
-  int max_iterations = 100;          // Ceres iterations (≥ 0)
-  double mae_scale = 0.05;           // robust-loss scale a, in standardised target units (ceres::SoftLOneLoss: ≈ |r| for |r| ≫ a → MAE)
+  int max_iterations = 100;  // Ceres iterations (≥ 0)
+  double mae_scale =
+      0.05;  // robust-loss scale a, in standardised target units (ceres::SoftLOneLoss: ≈ |r| for |r| ≫ a → MAE)
   // Continuation (graduated loss): Levenberg–Marquardt's Gauss–Newton model
   // of ρ is nearly flat where |r| ≫ a (Ceres' robust-loss correction; the
   // MAE has no curvature), so training starts at this larger scale and
@@ -96,18 +98,18 @@ struct LstmTrainingOptions {
   // disagree with it ("elastic" refits; cf. Kirkpatrick et al., PNAS 2017,
   // with an isotropic weight).
   bool decay_to_start = false;
-  std::uint64_t seed = 1;            // initial weights (Glorot-uniform from core/counter_rng.h: thread-count independent)
-  int num_threads = 1;               // OpenMP threads evaluating the windows (≥ 1); results do not depend on it
+  std::uint64_t seed = 1;  // initial weights (Glorot-uniform from core/counter_rng.h: thread-count independent)
+  int num_threads = 1;     // OpenMP threads evaluating the windows (≥ 1); results do not depend on it
   bool IsValid(std::string* why) const;
 };
 
 struct LstmTrainingSummary {
-  std::string termination;  // Ceres termination type + message
-  int iterations = 0;       // Ceres iterations (successful + unsuccessful steps, all stages)
+  std::string termination;                  // Ceres termination type + message
+  int iterations = 0;                       // Ceres iterations (successful + unsuccessful steps, all stages)
   double initial_cost = 0, final_cost = 0;  // ½ Σ ρ(r²) at mae_scale (+ decay), standardised units
   double train_mae = 0, validation_mae = std::numeric_limits<double>::quiet_NaN();  // raw target units
-  double seconds = 0;       // wall time of the solve
-  bool usable = false;      // finite weights and the solver did not fail
+  double seconds = 0;                                                               // wall time of the solve
+  bool usable = false;  // finite weights and the solver did not fail
 };
 
 // Residual r = net(z) − ỹ of one standardised window z (window × I) with

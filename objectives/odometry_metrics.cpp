@@ -44,8 +44,7 @@ SeriesErrors series_errors(const std::vector<double>& est, const std::vector<dou
   return r;
 }
 
-PoseTrack dead_reckon(const FusionInput& in, const std::vector<double>& v,
-                      const std::vector<double>& w) {
+PoseTrack dead_reckon(const FusionInput& in, const std::vector<double>& v, const std::vector<double>& w) {
   PoseTrack p;
   const std::size_t n = in.size();
   p.x.assign(n, kNaN);

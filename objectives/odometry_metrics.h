@@ -14,15 +14,15 @@ namespace odotune {
 
 struct SeriesErrors {
   double mae = 0.0, rmse = 0.0, r2 = 0.0;
-  double nees = 0.0;          // mean e²/var (one dimension; NaN when no variance given)
+  double nees = 0.0;  // mean e²/var (one dimension; NaN when no variance given)
   std::size_t samples = 0;
 };
 
 struct OdometryErrors {
-  SeriesErrors v, w;          // [m/s], [rad/s]
-  SeriesErrors xy;            // position error norm [m]; r2 over X and Y stacked
-  SeriesErrors theta;         // wrapped heading error [rad]; r2 not used (NaN)
-  double nees_vw = 0.0;       // mean (e ᵀ P⁻¹ e) of (V, W) with the full covariance when given, else NaN
+  SeriesErrors v, w;     // [m/s], [rad/s]
+  SeriesErrors xy;       // position error norm [m]; r2 over X and Y stacked
+  SeriesErrors theta;    // wrapped heading error [rad]; r2 not used (NaN)
+  double nees_vw = 0.0;  // mean (e ᵀ P⁻¹ e) of (V, W) with the full covariance when given, else NaN
 };
 
 // Errors of a scalar series against truth (NaN truth steps skipped). var may

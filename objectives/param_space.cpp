@@ -18,22 +18,21 @@ ParamSpace ParamSpace::for_model(NoiseModel model) {
   std::vector<ParamSpec> params;
   switch (model) {
     case NoiseModel::rq:  // §2.3.1
-      params = {
-          {"r1_mm2", "mm²", 1.0, 1e5, true, "process noise of x per prediction step"},
-          {"r2_mm2", "mm²", 1.0, 1e5, true, "process noise of y per prediction step"},
-          {"r3_rad2", "rad²", 1e-6, 1.0, true, "process noise of θ per prediction step"},
-          {"q1_mm2", "mm²", 10.0, 1e4, true, "measurement noise of a fix's x"},
-          {"q2_mm2", "mm²", 10.0, 1e4, true, "measurement noise of a fix's y"}};
+      params = {{"r1_mm2", "mm²", 1.0, 1e5, true, "process noise of x per prediction step"},
+                {"r2_mm2", "mm²", 1.0, 1e5, true, "process noise of y per prediction step"},
+                {"r3_rad2", "rad²", 1e-6, 1.0, true, "process noise of θ per prediction step"},
+                {"q1_mm2", "mm²", 10.0, 1e4, true, "measurement noise of a fix's x"},
+                {"q2_mm2", "mm²", 10.0, 1e4, true, "measurement noise of a fix's y"}};
       break;
     case NoiseModel::alpha:  // §2.3.2
       params = {{"alpha1", "-", 0.0, 1.0, false, "wheel noise per unit of own travel"},
-                   {"alpha2", "-", 0.0, 1.0, false, "wheel noise per unit of travel difference"}};
+                {"alpha2", "-", 0.0, 1.0, false, "wheel noise per unit of travel difference"}};
       break;
     case NoiseModel::gyro:  // §2.3.3
       params = {{"a1", "-", 0.0, 1.0, false, "base of α1"},
-                   {"a2", "-", 0.0, 1.0, false, "base of α2"},
-                   {"b1", "s/rad", 0.0, 5.0, false, "growth of α1 with |ω_z|"},
-                   {"b2", "s/rad", 0.0, 5.0, false, "growth of α2 with |ω_z|"}};
+                {"a2", "-", 0.0, 1.0, false, "base of α2"},
+                {"b1", "s/rad", 0.0, 5.0, false, "growth of α1 with |ω_z|"},
+                {"b2", "s/rad", 0.0, 5.0, false, "growth of α2 with |ω_z|"}};
       break;
   }
   return ParamSpace(model, std::move(params));

@@ -30,8 +30,7 @@ std::optional<PlanarPose> interpolate_pose(const PoseSeries& s, double t_s, doub
 }
 
 std::optional<filters::BodyVelocity> central_difference_velocity(const PoseSeries& s, double t_s,
-                                                                 double half_window_s,
-                                                                 double max_gap_s) {
+                                                                 double half_window_s, double max_gap_s) {
   const auto a = interpolate_pose(s, t_s - half_window_s, max_gap_s);
   const auto b = interpolate_pose(s, t_s + half_window_s, max_gap_s);
   if (!a || !b) return std::nullopt;

@@ -46,7 +46,6 @@ std::optional<PlanarPose> interpolate_pose(const PoseSeries& s, double t_s, doub
 // is < 0.02 % at 0.6 rad/s over 0.1 s). nullopt when a pose is missing or the
 // robot turns by more than π within the window (no usable chord).
 std::optional<filters::BodyVelocity> central_difference_velocity(const PoseSeries& s, double t_s,
-                                                                 double half_window_s,
-                                                                 double max_gap_s);
+                                                                 double half_window_s, double max_gap_s);
 
 }  // namespace odotune

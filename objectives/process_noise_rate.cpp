@@ -27,9 +27,9 @@ StepSpan step_span(const ReplayInput& in) {
     ++s.steps;
   }
   if (s.steps < 2 || !(s.t_last_s > s.t_first_s))
-    throw std::invalid_argument(fmt::format(
-        "track '{}': {} odometry step(s); at least two are needed for an odometry rate",
-        in.track_name, s.steps));
+    throw std::invalid_argument(
+        fmt::format("track '{}': {} odometry step(s); at least two are needed for an odometry rate",
+                    in.track_name, s.steps));
   return s;
 }
 
@@ -76,10 +76,10 @@ ProcessNoiseRate equivalent_process_noise_rate(const filters::NoiseParams& noise
       }
       if (row.fix >= 0) ekf.update(in.fixes[static_cast<std::size_t>(row.fix)]);
       if ((row.step >= 0 || row.fix >= 0) && ekf.check() != filters::Divergence::none)
-        throw std::runtime_error(fmt::format(
-            "track '{}': the filter diverges ({}) at t = {} s with these parameters; no "
-            "process noise rate can be averaged over it",
-            in.track_name, filters::to_string(ekf.divergence()), row.t_s));
+        throw std::runtime_error(
+            fmt::format("track '{}': the filter diverges ({}) at t = {} s with these parameters; no "
+                        "process noise rate can be averaged over it",
+                        in.track_name, filters::to_string(ekf.divergence()), row.t_s));
     }
   }
   out.odometry_rate_hz = static_cast<double>(out.steps) / out.duration_s;

@@ -17,14 +17,12 @@ filters::EkfParams ekf_params_for(const ReplayInput& in, const filters::NoisePar
   return p;
 }
 
-ReplayResult replay_ekf(const ReplayInput& in, const filters::NoiseParams& noise,
-                        bool keep_trajectory) {
+ReplayResult replay_ekf(const ReplayInput& in, const filters::NoiseParams& noise, bool keep_trajectory) {
   filters::Ekf ekf(ekf_params_for(in, noise));
   ReplayResult result;
   ErrorAccumulator acc;
   if (keep_trajectory) result.trajectory.reserve(in.gt.size() + 1);
-  if (keep_trajectory)
-    result.trajectory.push_back({in.t0_s, ekf.pose()(0), ekf.pose()(1), ekf.pose()(2)});
+  if (keep_trajectory) result.trajectory.push_back({in.t0_s, ekf.pose()(0), ekf.pose()(1), ekf.pose()(2)});
   for (const ReplayRow& row : in.rows) {
     if (row.step >= 0) ekf.predict(in.steps[row.step], in.abs_yaw_rate_rad_s[row.step]);
     if (row.fix >= 0) {
@@ -101,10 +99,9 @@ namespace {
 // Error samples of one segment: e_k = |p_u + Rot(θ_u)·o_k − g_k|. The hot loop
 // of the tuner; compiled for AVX2 as well as the baseline ISA and chosen at
 // load time (GCC function multi-versioning), so one binary runs anywhere.
-__attribute__((target_clones("avx2", "default")))
-void accumulate_errors(const double* __restrict ox, const double* __restrict oy,
-                       const double* __restrict gx, const double* __restrict gy, int n, double px,
-                       double py, double c, double s, ErrorAccumulator* acc) {
+__attribute__((target_clones("avx2", "default"))) void accumulate_errors(
+    const double* __restrict ox, const double* __restrict oy, const double* __restrict gx,
+    const double* __restrict gy, int n, double px, double py, double c, double s, ErrorAccumulator* acc) {
   double sum = 0.0, sum_sq = 0.0, mx = 0.0;
 #pragma omp simd reduction(+ : sum, sum_sq) reduction(max : mx)
   for (int k = 0; k < n; ++k) {
@@ -134,9 +131,8 @@ ReplayOutcome FastReplay::evaluate(const filters::NoiseParams& noise) const {
     const double c = std::cos(x(2)), s = std::sin(x(2));
     const int n = seg.eval_end - seg.eval_begin;
     if (n > 0)
-      accumulate_errors(ox_.data() + seg.eval_begin, oy_.data() + seg.eval_begin,
-                        gx_.data() + seg.eval_begin, gy_.data() + seg.eval_begin, n, x(0), x(1),
-                        c, s, &acc);
+      accumulate_errors(ox_.data() + seg.eval_begin, oy_.data() + seg.eval_begin, gx_.data() + seg.eval_begin,
+                        gy_.data() + seg.eval_begin, n, x(0), x(1), c, s, &acc);
     if (seg.has_fix) {
       out.divergence = filters::advance_segment(noise, seg.moments, seg.fix, c, s, &x, &P);
       if (out.divergence != Divergence::none) break;

@@ -36,8 +36,7 @@ struct ReplayResult {
 filters::EkfParams ekf_params_for(const ReplayInput& in, const filters::NoiseParams& noise);
 
 // Reference replay. Throws std::invalid_argument if `noise` is invalid.
-ReplayResult replay_ekf(const ReplayInput& in, const filters::NoiseParams& noise,
-                        bool keep_trajectory = false);
+ReplayResult replay_ekf(const ReplayInput& in, const filters::NoiseParams& noise, bool keep_trajectory = false);
 
 class FastReplay {
  public:
@@ -49,7 +48,7 @@ class FastReplay {
   ReplayOutcome evaluate(const filters::NoiseParams& noise) const;
 
   const std::string& track_name() const { return name_; }
-  long steps() const { return steps_; }          // odometry steps replayed
+  long steps() const { return steps_; }                           // odometry steps replayed
   long samples() const { return static_cast<long>(ox_.size()); }  // error samples
 
  private:

@@ -111,9 +111,8 @@ ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& opt
             break;
           }
         }
-        const double yaw_rate = std::isnan(last_gyro)
-                                    ? (u.right_m - u.left_m) / in.wheel_base_m / dt
-                                    : last_gyro;
+        const double yaw_rate = std::isnan(last_gyro) ? (u.right_m - u.left_m) / in.wheel_base_m / dt
+                                                      : last_gyro;
         row.step = static_cast<std::int32_t>(in.steps.size());
         in.steps.push_back(u);
         in.abs_yaw_rate_rad_s.push_back(std::abs(yaw_rate));

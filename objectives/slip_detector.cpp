@@ -32,8 +32,8 @@ bool SlipDetectorModel::IsValid(std::string* why) const {
   if (!v_net.IsValid(&inner)) return fail("v_net: " + inner);
   if (!w_net.IsValid(&inner)) return fail("w_net: " + inner);
   if (!positive_finite(floor_var_v) || !positive_finite(floor_var_w))
-    return fail(fmt::format("floor_var_v = {}, floor_var_w = {}: expected finite values > 0",
-                            floor_var_v, floor_var_w));
+    return fail(fmt::format("floor_var_v = {}, floor_var_w = {}: expected finite values > 0", floor_var_v,
+                            floor_var_w));
   if (previous_lag < 1 || previous_lag > v_net.window)
     return fail(fmt::format("previous_lag = {}: expected 1..{}", previous_lag, v_net.window));
   return true;
@@ -58,14 +58,14 @@ bool SlipTrainingOptions::IsValid(std::string* why) const {
     return fail(fmt::format("weight_decay = {}: expected a finite value >= 0", weight_decay));
   if (feedback_rounds < 0) return fail(fmt::format("feedback_rounds = {}: expected >= 0", feedback_rounds));
   if (validation_chunk < 0 || patience < 1)
-    return fail(fmt::format("validation_chunk = {}, patience = {}: expected >= 0 and >= 1", validation_chunk, patience));
+    return fail(fmt::format("validation_chunk = {}, patience = {}: expected >= 0 and >= 1", validation_chunk,
+                            patience));
   if (previous_lag < 1 || previous_lag > 20)
     return fail(fmt::format("previous_lag = {}: expected 1..20 steps", previous_lag));
   return true;
 }
 
-std::array<std::vector<double>, 2> slip_target_variances(const FusionInput& in,
-                                                         const OdometrySeries& odometry,
+std::array<std::vector<double>, 2> slip_target_variances(const FusionInput& in, const OdometrySeries& odometry,
                                                          const SlipTrainingOptions& options) {
   const std::size_t n = in.size();
   std::array<std::vector<double>, 2> var;
@@ -94,14 +94,13 @@ std::array<std::vector<double>, 2> slip_target_variances(const FusionInput& in,
 
 SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tracks,
                                       const std::vector<OdometrySeries>& odometry,
-                                      const SlipTrainingOptions& options,
-                                      SlipTrainingSummary* summary) {
+                                      const SlipTrainingOptions& options, SlipTrainingSummary* summary) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("slip detector training: " + why);
   if (tracks.empty() || tracks.size() != odometry.size())
-    throw std::invalid_argument(fmt::format(
-        "slip detector training: {} tracks and {} odometry series: expected the same number, >= 1",
-        tracks.size(), odometry.size()));
+    throw std::invalid_argument(
+        fmt::format("slip detector training: {} tracks and {} odometry series: expected the same number, >= 1",
+                    tracks.size(), odometry.size()));
   SlipDetectorModel model;
   // Trained with a linear output; the stepper applies the ReLU (see the
   // header: training through the ReLU leaves the windows whose output starts
@@ -117,16 +116,15 @@ SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tra
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     const FusionInput& in = *tracks[i];
     if (!in.has_power)
-      throw std::invalid_argument(fmt::format(
-          "track '{}': no motor power (power_l, power_r): expected it to train the slip detector",
-          in.track_name));
+      throw std::invalid_argument(
+          fmt::format("track '{}': no motor power (power_l, power_r): expected it to train the slip detector",
+                      in.track_name));
     if (!in.has_gt)
-      throw std::invalid_argument(fmt::format(
-          "track '{}': no ground truth: expected it to train the slip detector", in.track_name));
+      throw std::invalid_argument(
+          fmt::format("track '{}': no ground truth: expected it to train the slip detector", in.track_name));
     if (odometry[i].v.size() != in.size() || odometry[i].w.size() != in.size())
-      throw std::invalid_argument(fmt::format(
-          "track '{}': odometry series of {} steps for {} steps", in.track_name,
-          odometry[i].v.size(), in.size()));
+      throw std::invalid_argument(fmt::format("track '{}': odometry series of {} steps for {} steps",
+                                              in.track_name, odometry[i].v.size(), in.size()));
     targets[i] = slip_target_variances(in, odometry[i], options);
   }
   // The floor: the configured one, raised to the `floor_quantile` of the
@@ -189,9 +187,9 @@ SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tra
           all.add(rows.data(), target[k]);
         }
         if (all.size() < 10)
-          throw std::invalid_argument(fmt::format(
-              "track '{}': only {} usable windows for the slip detector: expected at least 10",
-              in.track_name, all.size()));
+          throw std::invalid_argument(
+              fmt::format("track '{}': only {} usable windows for the slip detector: expected at least 10",
+                          in.track_name, all.size()));
         auto [t, v] = split_sequences(all, options.train_fraction);
         (*train)[d].append(t);
         (*val)[d].append(v);
@@ -218,8 +216,8 @@ SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tra
   v_opts.weight_decay = options.weight_decay;
   // One fit of `net` (fresh: train_lstm, else retrain_lstm from its weights),
   // in validation chunks when asked (see SlipTrainingOptions::validation_chunk).
-  auto fit = [&](filters::SlipNet& net, const SequenceSet& t, const SequenceSet& v,
-                 LstmTrainingOptions opts, bool fresh, std::vector<double>* curve) {
+  auto fit = [&](filters::SlipNet& net, const SequenceSet& t, const SequenceSet& v, LstmTrainingOptions opts,
+                 bool fresh, std::vector<double>* curve) {
     curve->clear();
     if (options.validation_chunk <= 0 || v.size() == 0) {
       LstmTrainingSummary r = fresh ? train_lstm(net, t, v, opts) : retrain_lstm(net, t, opts);
@@ -268,12 +266,14 @@ SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tra
     // scale, so the refits start from the first fit's function exactly.
     for (auto [net, set] : {std::pair{&model.v_net, &train[0]}, std::pair{&model.w_net, &train[1]}}) {
       using L = filters::LstmLayout<kFeatures, filters::SlipNet::kHidden>;
-      for (int n = 0; n < L::kGates; ++n) net->weights[static_cast<std::size_t>(L::kKernel + kSlipPrevious * L::kGates + n)] = 0.0;
+      for (int n = 0; n < L::kGates; ++n)
+        net->weights[static_cast<std::size_t>(L::kKernel + kSlipPrevious * L::kGates + n)] = 0.0;
       double sum = 0.0, sum2 = 0.0;
       for (double y : set->y) sum += y, sum2 += y * y;
       const double m = sum / static_cast<double>(set->size());
       net->input_mean[kSlipPrevious] = m;
-      net->input_sd[kSlipPrevious] = std::max(1e-3, std::sqrt(std::max(0.0, sum2 / static_cast<double>(set->size()) - m * m)));
+      net->input_sd[kSlipPrevious] = std::max(
+          1e-3, std::sqrt(std::max(0.0, sum2 / static_cast<double>(set->size()) - m * m)));
     }
   }
   for (int round = 0; round < options.feedback_rounds; ++round) {

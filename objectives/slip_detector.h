@@ -40,13 +40,17 @@
 namespace odotune {
 
 enum SlipFeature : int {
-  kSlipPowerR = 0, kSlipPowerL = 1, kSlipDticksR = 2, kSlipDticksL = 3, kSlipPrevious = 4
+  kSlipPowerR = 0,
+  kSlipPowerL = 1,
+  kSlipDticksR = 2,
+  kSlipDticksL = 3,
+  kSlipPrevious = 4
 };
 
 struct SlipDetectorModel {
-  filters::SlipNet v_net, w_net;     // predict ln(var / floor) (see the file comment)
-  double floor_var_v = 1e-5, floor_var_w = 1e-5;   // smallest variance it reports [(m/s)², (rad/s)²]
-  int previous_lag = 1;                            // n of COV_{k−n} [steps]
+  filters::SlipNet v_net, w_net;                  // predict ln(var / floor) (see the file comment)
+  double floor_var_v = 1e-5, floor_var_w = 1e-5;  // smallest variance it reports [(m/s)², (rad/s)²]
+  int previous_lag = 1;                           // n of COV_{k−n} [steps]
   // Largest log-ratio ln(var/floor) seen in training per net; the stepper
   // clamps its output there, so a fed-back error cannot run away.
   double max_log_ratio_v = 20.0, max_log_ratio_w = 20.0;
@@ -56,8 +60,8 @@ struct SlipDetectorModel {
 struct SlipTrainingOptions {
   LstmTrainingOptions training;
   double train_fraction = 0.7;
-  int target_window = 5;                 // steps, odd
-  int previous_lag = 1;                  // n of the previous-variance input COV_{k−n} [steps] ≥ 1
+  int target_window = 5;  // steps, odd
+  int previous_lag = 1;   // n of the previous-variance input COV_{k−n} [steps] ≥ 1
   double floor_var_v = 1e-5, floor_var_w = 1e-5;
   // Raise each floor to this quantile of the training targets (0 = keep the
   // floors above): the odometry's own variance while the wheels grip.
@@ -111,8 +115,7 @@ struct SlipTrainingSummary {
 };
 
 // The target variances of `odometry` on `in` (see the file comment).
-std::array<std::vector<double>, 2> slip_target_variances(const FusionInput& in,
-                                                         const OdometrySeries& odometry,
+std::array<std::vector<double>, 2> slip_target_variances(const FusionInput& in, const OdometrySeries& odometry,
                                                          const SlipTrainingOptions& options);
 
 // Trains both detectors on tracks with motor power and ground truth, against
@@ -120,8 +123,7 @@ std::array<std::vector<double>, 2> slip_target_variances(const FusionInput& in,
 // (one line naming the track) without power or ground truth.
 SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tracks,
                                       const std::vector<OdometrySeries>& odometry,
-                                      const SlipTrainingOptions& options,
-                                      SlipTrainingSummary* summary);
+                                      const SlipTrainingOptions& options, SlipTrainingSummary* summary);
 
 // Step by step; before the window is full it returns the floors.
 class SlipDetectorStepper {
@@ -135,8 +137,8 @@ class SlipDetectorStepper {
   const SlipDetectorModel* model_;
   std::vector<double> v_rows_, w_rows_;
   std::array<double, 2> previous_;
-  std::vector<std::array<double, 2>> history_;   // the last previous_lag outputs, oldest first
-  std::array<double, 2> last_power_{0.0, 0.0};   // (P_l, P_r) last finite [W]
+  std::vector<std::array<double, 2>> history_;  // the last previous_lag outputs, oldest first
+  std::array<double, 2> last_power_{0.0, 0.0};  // (P_l, P_r) last finite [W]
   int filled_ = 0;
 };
 

@@ -23,10 +23,10 @@ namespace odotune {
 enum class CalibratorModel { pf, adaptive_pf };
 
 struct TunedModel {
-  bool calibrator = false;                         // true: a PF calibrator
+  bool calibrator = false;                              // true: a PF calibrator
   filters::NoiseModel noise = filters::NoiseModel::rq;  // when an EKF model
-  CalibratorModel calib = CalibratorModel::pf;     // when calibrator
-  bool ukf = false;                                // true: the fusion UKF (calibrator false)
+  CalibratorModel calib = CalibratorModel::pf;          // when calibrator
+  bool ukf = false;                                     // true: the fusion UKF (calibrator false)
 
   static TunedModel ekf(filters::NoiseModel m) { return {false, m, CalibratorModel::pf, false}; }
   static TunedModel calibration(CalibratorModel c) { return {true, filters::NoiseModel::rq, c, false}; }

@@ -22,18 +22,18 @@ bool UkfSensorNoise::IsValid(std::string* why) const {
 
 std::vector<OdometryMeasurement> static_odometry(const FusionInput& in, double var_v, double var_w) {
   if (!(std::isfinite(var_v) && var_v > 0.0))
-    throw std::invalid_argument(
-        fmt::format("odometry var_v = {} must be a finite number > 0 [(m/s)^2]", var_v));
+    throw std::invalid_argument(fmt::format("odometry var_v = {} must be a finite number > 0 [(m/s)^2]",
+                                            var_v));
   if (!(std::isfinite(var_w) && var_w > 0.0))
-    throw std::invalid_argument(
-        fmt::format("odometry var_w = {} must be a finite number > 0 [(rad/s)^2]", var_w));
+    throw std::invalid_argument(fmt::format("odometry var_w = {} must be a finite number > 0 [(rad/s)^2]",
+                                            var_w));
   std::vector<OdometryMeasurement> out(in.size());
   for (std::size_t k = 0; k < in.size(); ++k) out[k] = {in.v_kin[k], in.w_kin[k], var_v, var_w};
   return out;
 }
 
-void fuse_step(filters::VelocityUkf& ukf, const FusionInput& in, std::size_t k,
-               const OdometryMeasurement& odo, const UkfSensorNoise& noise) {
+void fuse_step(filters::VelocityUkf& ukf, const FusionInput& in, std::size_t k, const OdometryMeasurement& odo,
+               const UkfSensorNoise& noise) {
   using filters::kV;
   using filters::kW;
   ukf.predict(in.dt_s);
@@ -41,8 +41,7 @@ void fuse_step(filters::VelocityUkf& ukf, const FusionInput& in, std::size_t k,
              filters::Velocity(odo.var_v, odo.var_w).asDiagonal().toDenseMatrix());
   if (noise.use_external && in.has_ext && !std::isnan(in.v_ext[k]) && !std::isnan(in.w_ext[k])) {
     const filters::VelocityCov R =
-        filters::Velocity(in.v_ext_var[k], in.w_ext_var[k]).asDiagonal().toDenseMatrix() *
-        noise.ext_var_scale;
+        filters::Velocity(in.v_ext_var[k], in.w_ext_var[k]).asDiagonal().toDenseMatrix() * noise.ext_var_scale;
     ukf.update(filters::Velocity(in.v_ext[k], in.w_ext[k]), R);
   }
   if (noise.use_gyro && in.has_gyro && !std::isnan(in.gyro_z[k]))
@@ -63,8 +62,7 @@ FusionTrace replay_fusion(const FusionInput& in, const std::vector<OdometryMeasu
   const std::size_t n = in.size();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   FusionTrace tr;
-  for (auto* v : {&tr.v, &tr.w, &tr.var_v, &tr.var_w, &tr.cov_vw, &tr.x, &tr.y, &tr.theta})
-    v->assign(n, nan);
+  for (auto* v : {&tr.v, &tr.w, &tr.var_v, &tr.var_w, &tr.cov_vw, &tr.x, &tr.y, &tr.theta}) v->assign(n, nan);
   if (n == 0) return tr;
 
   filters::PlanarPose pose;

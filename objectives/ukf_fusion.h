@@ -19,8 +19,8 @@ namespace odotune {
 
 // Sensor variances of the fusion other than the odometry's.
 struct UkfSensorNoise {
-  double gyro_var = 4e-6;        // σ² of the gyro's W [(rad/s)²] (static, paper §1)
-  double ext_var_scale = 1.0;    // multiplies the track's external-velocity variances [-]
+  double gyro_var = 4e-6;      // σ² of the gyro's W [(rad/s)²] (static, paper §1)
+  double ext_var_scale = 1.0;  // multiplies the track's external-velocity variances [-]
   bool use_external = true, use_gyro = true;
   // gyro_var and ext_var_scale finite and > 0; `why` names the bad value.
   bool IsValid(std::string* why) const;
@@ -42,16 +42,16 @@ std::vector<OdometryMeasurement> static_odometry(const FusionInput& in, double v
 // gyro if present at k (and noise.use_gyro; variance gyro_var). A non-finite
 // or non-positive input makes the filter unhealthy (filters/velocity_ukf.h);
 // nothing is thrown for it.
-void fuse_step(filters::VelocityUkf& ukf, const FusionInput& in, std::size_t k,
-               const OdometryMeasurement& odo, const UkfSensorNoise& noise);
+void fuse_step(filters::VelocityUkf& ukf, const FusionInput& in, std::size_t k, const OdometryMeasurement& odo,
+               const UkfSensorNoise& noise);
 
 struct FusionTrace {
-  std::vector<double> v, w, var_v, var_w, cov_vw;   // filtered state and covariance per step
-                                                    // [m/s, rad/s, (m/s)², (rad/s)², (m/s)(rad/s)]
-  std::vector<double> x, y, theta;                  // pose integrated (eq. 3) from the filtered V, W
-                                                    // [m, m, rad], starting at the GT pose at t[0]
-                                                    // ((0, 0, 0) without a GT pose there)
-  bool healthy = true;                              // the filter stayed healthy to the end
+  std::vector<double> v, w, var_v, var_w, cov_vw;  // filtered state and covariance per step
+                                                   // [m/s, rad/s, (m/s)², (rad/s)², (m/s)(rad/s)]
+  std::vector<double> x, y, theta;                 // pose integrated (eq. 3) from the filtered V, W
+                                                   // [m, m, rad], starting at the GT pose at t[0]
+                                                   // ((0, 0, 0) without a GT pose there)
+  bool healthy = true;                             // the filter stayed healthy to the end
 };
 
 // Replays the whole input: the filter starts from params.initial_state and

@@ -33,10 +33,10 @@ namespace odotune {
 // Everything a fusion replay needs besides the input: the filter's
 // parameters, the sensors' noise and the odometry's static variances.
 struct UkfSettings {
-  filters::UkfParams params;                 // q_v, q_w (+ the fixed UT parameters, initial state)
-  UkfSensorNoise noise;                      // gyro_var, ext_var_scale, sensors used
-  double odo_var_v = 1e-3;                   // static variance of the kinematic V [(m/s)²]
-  double odo_var_w = 1e-3;                   // static variance of the kinematic W [(rad/s)²]
+  filters::UkfParams params;  // q_v, q_w (+ the fixed UT parameters, initial state)
+  UkfSensorNoise noise;       // gyro_var, ext_var_scale, sensors used
+  double odo_var_v = 1e-3;    // static variance of the kinematic V [(m/s)²]
+  double odo_var_w = 1e-3;    // static variance of the kinematic W [(rad/s)²]
   // params and noise valid, odometry variances finite and > 0; `why` names
   // the bad value.
   bool IsValid(std::string* why) const;

@@ -23,9 +23,7 @@ std::string num(double v) { return gnuplot_number(v); }
 
 std::string q(const std::string& s) { return gnuplot_quote(s); }
 
-[[noreturn]] void bad(const std::string& what) {
-  throw std::invalid_argument("calibration figure: " + what);
-}
+[[noreturn]] void bad(const std::string& what) { throw std::invalid_argument("calibration figure: " + what); }
 
 bool finite_point(const EstimateSeries& s, std::size_t i) {
   return std::isfinite(s.t_s[i]) && std::isfinite(s.value_m[i]);
@@ -106,13 +104,15 @@ std::string panel_plot(const std::vector<EstimateSeries>& panel, const std::stri
       std::string band = band_rows(s);
       if (!band.empty()) {
         files.emplace_back(base + "_band.dat", std::move(band));
-        bands += (bands.empty() ? "" : ", \\\n     ") + ("'" + base + "_band.dat' using 1:2:3 with filledcurves fc rgb '" +
-                 colour + "' fs transparent solid 0.18 noborder notitle");
+        bands += (bands.empty() ? "" : ", \\\n     ") +
+                 ("'" + base + "_band.dat' using 1:2:3 with filledcurves fc rgb '" + colour +
+                  "' fs transparent solid 0.18 noborder notitle");
         *any_band = true;
       }
     }
-    lines += (lines.empty() ? "" : ", \\\n     ") + ("'" + base + ".dat' using 1:2 with " +
-             (s.truth ? "steps dt 2 lw 2" : "lines lw 1.8") + " lc rgb '" + colour + "' title " + q(s.name));
+    lines += (lines.empty() ? "" : ", \\\n     ") +
+             ("'" + base + ".dat' using 1:2 with " + (s.truth ? "steps dt 2 lw 2" : "lines lw 1.8") +
+              " lc rgb '" + colour + "' title " + q(s.name));
   }
   std::string plot = "plot ";
   if (!bands.empty()) plot += bands + ", \\\n     ";
@@ -138,7 +138,8 @@ void calibration_estimates_figure(const fs::path& stem, const CalibrationFigureD
   const std::string bottom = two_panels ? panel_plot(d.wheel_base, "d", files, &next_colour, &any_band) : "";
 
   std::string body;
-  body += "set multiplot title " + q(d.title + (any_band ? " (shaded: estimate ± 1 sd)" : "")) + " font ',13'\n";
+  body += "set multiplot title " + q(d.title + (any_band ? " (shaded: estimate ± 1 sd)" : "")) +
+          " font ',13'\n";
   body += "set grid lc rgb '#e0e0e0'\n";
   body += "set xrange [" + num(t_min) + ":" + num(t_max) + "]\n";
   body += "set key outside right top Left reverse\n";

@@ -22,11 +22,11 @@ namespace odotune::results {
 // band value ± sd is shaded in the series' colour (rows with a NaN sd are
 // left out of the band).
 struct EstimateSeries {
-  std::string name;               // legend entry, e.g. "R_R adaptive-pf" or "R_R true"
-  std::vector<double> t_s;        // [s]
-  std::vector<double> value_m;    // [m]
-  std::vector<double> sd_m;       // [m], optional
-  bool truth = false;             // drawn dashed (and black unless colour is set)
+  std::string name;             // legend entry, e.g. "R_R adaptive-pf" or "R_R true"
+  std::vector<double> t_s;      // [s]
+  std::vector<double> value_m;  // [m]
+  std::vector<double> sd_m;     // [m], optional
+  bool truth = false;           // drawn dashed (and black unless colour is set)
   // Index into the figure's colour-blind-safe palette (Okabe & Ito 2008;
   // taken modulo its size), so that an estimate and its truth can share a
   // colour. nullopt: estimates take the next unused colour, truths black.
@@ -34,9 +34,9 @@ struct EstimateSeries {
 };
 
 struct CalibrationFigureData {
-  std::string title;                        // e.g. "track_a: adaptive-pf calibration"
-  std::vector<EstimateSeries> radii;        // upper panel, "wheel radius [m]"; at least one series
-  std::vector<EstimateSeries> wheel_base;   // lower panel, "wheel base [m]"; empty = no lower panel
+  std::string title;                       // e.g. "track_a: adaptive-pf calibration"
+  std::vector<EstimateSeries> radii;       // upper panel, "wheel radius [m]"; at least one series
+  std::vector<EstimateSeries> wheel_base;  // lower panel, "wheel base [m]"; empty = no lower panel
   // Thin vertical lines in both panels with a short label at the top of the
   // upper panel (track boundaries, radius steps). Times [s] on the series'
   // axis; labels may be empty.
@@ -45,7 +45,7 @@ struct CalibrationFigureData {
     std::string label;
   };
   std::vector<Marker> markers;
-  std::string time_label = "time [s]";      // x axis label (with its unit)
+  std::string time_label = "time [s]";  // x axis label (with its unit)
 };
 
 // Draws the figure to STEM.png and STEM.svg. Throws std::invalid_argument

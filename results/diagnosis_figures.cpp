@@ -31,9 +31,7 @@ std::string num(double v) { return gnuplot_number(v); }
 
 std::string q(const std::string& s) { return gnuplot_quote(s); }
 
-[[noreturn]] void bad(const std::string& what) {
-  throw std::invalid_argument("diagnosis figures: " + what);
-}
+[[noreturn]] void bad(const std::string& what) { throw std::invalid_argument("diagnosis figures: " + what); }
 
 // `field` must have as many values as `ref_field` (or be empty when
 // `may_be_empty`).
@@ -41,8 +39,8 @@ template <typename T>
 void check_length(const std::vector<T>& v, const char* field, std::size_t n, const char* ref_field,
                   bool may_be_empty) {
   if (v.size() == n || (may_be_empty && v.empty())) return;
-  bad(std::string(field) + " has " + std::to_string(v.size()) + " values but " + ref_field +
-      " has " + std::to_string(n) + (may_be_empty ? " (expected the same or none)" : ""));
+  bad(std::string(field) + " has " + std::to_string(v.size()) + " values but " + ref_field + " has " +
+      std::to_string(n) + (may_be_empty ? " (expected the same or none)" : ""));
 }
 
 bool any_finite_pair(const std::vector<double>& a, const std::vector<double>& b) {
@@ -56,8 +54,7 @@ void validate(const DiagnosisFigureData& d) {
   if (d.t_s.empty()) bad("t_s is empty (no reference samples)");
   check_length(d.before_pos_err_m, "before_pos_err_m", d.t_s.size(), "t_s", false);
   check_length(d.after_pos_err_m, "after_pos_err_m", d.t_s.size(), "t_s", true);
-  if (!any_finite_pair(d.t_s, d.before_pos_err_m))
-    bad("before_pos_err_m has no finite value at a finite time");
+  if (!any_finite_pair(d.t_s, d.before_pos_err_m)) bad("before_pos_err_m has no finite value at a finite time");
   for (std::size_t i = 0; i < d.segments.size(); ++i) {
     const TimeSpan& s = d.segments[i];
     if (!std::isfinite(s.t0_s) || !std::isfinite(s.t1_s) || s.t1_s < s.t0_s)
@@ -65,20 +62,16 @@ void validate(const DiagnosisFigureData& d) {
           "] s is not a finite span with t0_s <= t1_s");
   }
   for (std::size_t i = 0; i < d.window_starts_s.size(); ++i)
-    if (!std::isfinite(d.window_starts_s[i]))
-      bad("window_starts_s[" + std::to_string(i) + "] is not finite");
+    if (!std::isfinite(d.window_starts_s[i])) bad("window_starts_s[" + std::to_string(i) + "] is not finite");
 
   if (!d.condition_value.empty()) {
-    check_length(d.before_residual, "before_residual", d.condition_value.size(),
-                 "condition_value", false);
-    check_length(d.after_residual, "after_residual", d.condition_value.size(), "condition_value",
-                 true);
+    check_length(d.before_residual, "before_residual", d.condition_value.size(), "condition_value", false);
+    check_length(d.after_residual, "after_residual", d.condition_value.size(), "condition_value", true);
     if (!any_finite_pair(d.condition_value, d.before_residual))
       bad("no row has a finite condition_value and before_residual");
   } else if (!d.before_residual.empty() || !d.after_residual.empty()) {
-    bad("before_residual has " + std::to_string(d.before_residual.size()) +
-        " values and after_residual " + std::to_string(d.after_residual.size()) +
-        " but condition_value has 0");
+    bad("before_residual has " + std::to_string(d.before_residual.size()) + " values and after_residual " +
+        std::to_string(d.after_residual.size()) + " but condition_value has 0");
   }
 
   check_length(d.ref_y_m, "ref_y_m", d.ref_x_m.size(), "ref_x_m", false);
@@ -89,22 +82,20 @@ void validate(const DiagnosisFigureData& d) {
     const bool finite = std::isfinite(b.x0_m) && std::isfinite(b.x1_m) && std::isfinite(b.y0_m) &&
                         std::isfinite(b.y1_m);
     if (!finite || b.x1_m < b.x0_m || b.y1_m < b.y0_m)
-      bad("regions[" + std::to_string(i) + "] = x [" + num(b.x0_m) + ", " + num(b.x1_m) +
-          "] m, y [" + num(b.y0_m) + ", " + num(b.y1_m) +
-          "] m is not a finite box with x0 <= x1 and y0 <= y1");
+      bad("regions[" + std::to_string(i) + "] = x [" + num(b.x0_m) + ", " + num(b.x1_m) + "] m, y [" +
+          num(b.y0_m) + ", " + num(b.y1_m) + "] m is not a finite box with x0 <= x1 and y0 <= y1");
   }
 
   if (d.overlay.empty()) bad("overlay has no path");
   bool any = false;
   for (const auto& p : d.overlay) {
     if (p.xs_m.size() != p.ys_m.size())
-      bad("overlay path '" + p.name + "' has " + std::to_string(p.xs_m.size()) +
-          " xs_m values but " + std::to_string(p.ys_m.size()) + " ys_m values");
+      bad("overlay path '" + p.name + "' has " + std::to_string(p.xs_m.size()) + " xs_m values but " +
+          std::to_string(p.ys_m.size()) + " ys_m values");
     any = any || any_finite_pair(p.xs_m, p.ys_m);
   }
   if (!any) bad("no overlay path has a finite point");
 }
-
 
 // "x y" rows of the finite pairs; a blank line where a pair is not finite
 // (breaks a line plot).
@@ -142,13 +133,11 @@ double quantile_sorted(const std::vector<double>& v, double p) {
 // A legend below the plot, one entry per line, with the bottom margin
 // reserved for it (gnuplot would otherwise draw the x label over the box).
 std::string key_below(int entries) {
-  return "set key outside below center box Left reverse maxcols 1\nset bmargin " +
-         std::to_string(5 + entries) + "\n";
+  return "set key outside below center box Left reverse maxcols 1\nset bmargin " + std::to_string(5 + entries) +
+         "\n";
 }
 
-std::string with_finding(const std::string& finding) {
-  return finding.empty() ? "corrected model" : finding;
-}
+std::string with_finding(const std::string& finding) { return finding.empty() ? "corrected model" : finding; }
 
 // ---------------------------------------------------------------- figure 1
 
@@ -163,8 +152,7 @@ void residual_time(const fs::path& stem, const DiagnosisFigureData& d) {
       if (std::isfinite(e) && e < 0) all_nonneg = false;
 
   std::string body;
-  body += "set title " + q(d.track + ": position error of the window replay vs time") +
-          " font ',13'\n";
+  body += "set title " + q(d.track + ": position error of the window replay vs time") + " font ',13'\n";
   body += "set xlabel 'time [s]'\nset ylabel 'position error [m]'\n";
   body += "set xrange [" + num(t_min) + ":" + num(t_max) + "]\n";
   if (all_nonneg) body += "set yrange [0:*]\n";
@@ -175,9 +163,8 @@ void residual_time(const fs::path& stem, const DiagnosisFigureData& d) {
     const double a = std::max(s.t0_s, t_min), b = std::min(s.t1_s, t_max);
     if (b < a) continue;  // outside the track's time range
     any_segment = true;
-    body += "set object " + std::to_string(tag++) + " rectangle from first " + num(a) +
-            ", graph 0 to first " + num(b) + ", graph 1 behind fc rgb '" + kSegment +
-            "' fs transparent solid 0.25 noborder\n";
+    body += "set object " + std::to_string(tag++) + " rectangle from first " + num(a) + ", graph 0 to first " +
+            num(b) + ", graph 1 behind fc rgb '" + kSegment + "' fs transparent solid 0.25 noborder\n";
   }
   bool any_window = false;
   for (double w : d.window_starts_s) {
@@ -187,18 +174,17 @@ void residual_time(const fs::path& stem, const DiagnosisFigureData& d) {
             ", graph 1 nohead back lw 0.7 dt 3 lc rgb '" + kWindow + "'\n";
   }
 
-  std::vector<std::pair<std::string, std::string>> files = {
-      {"before.dat", xy_rows(d.t_s, d.before_pos_err_m)}};
-  std::string plot = "plot 'before.dat' using 1:2 with lines lw 1.5 lc rgb '" +
-                     std::string(kBefore) + "' title 'before: nominal model'";
+  std::vector<std::pair<std::string, std::string>> files = {{"before.dat", xy_rows(d.t_s, d.before_pos_err_m)}};
+  std::string plot = "plot 'before.dat' using 1:2 with lines lw 1.5 lc rgb '" + std::string(kBefore) +
+                     "' title 'before: nominal model'";
   int entries = 1 + (any_segment ? 1 : 0) + (any_window ? 1 : 0);
   if (!d.after_pos_err_m.empty()) {
     std::string rows = xy_rows(d.t_s, d.after_pos_err_m);
     if (!rows.empty()) {
       files.emplace_back("after.dat", std::move(rows));
       ++entries;
-      plot += ", \\\n     'after.dat' using 1:2 with lines lw 1.5 lc rgb '" + std::string(kAfter) +
-              "' title " + q("after: " + with_finding(d.finding));
+      plot += ", \\\n     'after.dat' using 1:2 with lines lw 1.5 lc rgb '" + std::string(kAfter) + "' title " +
+              q("after: " + with_finding(d.finding));
     }
   }
   if (any_segment)
@@ -216,23 +202,21 @@ void residual_time(const fs::path& stem, const DiagnosisFigureData& d) {
 // Scatter rows of the finite (condition, residual) pairs, every `step`-th
 // (deterministic) so that at most kMaxScatterPoints remain; `total` = number
 // of finite pairs.
-std::string scatter_rows(const std::vector<double>& x, const std::vector<double>& y,
-                         std::size_t* step, std::size_t* total) {
+std::string scatter_rows(const std::vector<double>& x, const std::vector<double>& y, std::size_t* step,
+                         std::size_t* total) {
   std::vector<std::size_t> rows;
   for (std::size_t i = 0; i < x.size(); ++i)
     if (std::isfinite(x[i]) && std::isfinite(y[i])) rows.push_back(i);
   *total = rows.size();
   *step = std::max<std::size_t>(1, (rows.size() + kMaxScatterPoints - 1) / kMaxScatterPoints);
   std::string out;
-  for (std::size_t j = 0; j < rows.size(); j += *step)
-    out += num(x[rows[j]]) + " " + num(y[rows[j]]) + "\n";
+  for (std::size_t j = 0; j < rows.size(); j += *step) out += num(x[rows[j]]) + " " + num(y[rows[j]]) + "\n";
   return out;
 }
 
 std::string points_title(const std::string& what, std::size_t step, std::size_t total) {
   const std::string rows = std::to_string(total) + (total == 1 ? " row" : " rows");
-  return step == 1 ? what + ", " + rows
-                   : what + ", " + rows + " (1 in " + std::to_string(step) + " shown)";
+  return step == 1 ? what + ", " + rows : what + ", " + rows + " (1 in " + std::to_string(step) + " shown)";
 }
 
 void residual_condition(const fs::path& stem, const DiagnosisFigureData& d) {
@@ -314,17 +298,14 @@ void map_figure(const fs::path& stem, const DiagnosisFigureData& d) {
   for (std::size_t i = 0; i < d.regions.size(); ++i) {
     const MapBox& b = d.regions[i];
     const std::string tag = std::to_string(i + 1);
-    body += "set object " + tag + " rectangle from " + num(b.x0_m) + "," + num(b.y0_m) + " to " +
-            num(b.x1_m) + "," + num(b.y1_m) + " front fs empty border lc rgb '" + kRegion +
-            "' lw 2\n";
-    body += "set label " + tag + " " + q("region " + tag) + " at " + num(b.x0_m) + "," +
-            num(b.y1_m) + " left offset 0.2,0.6 front tc rgb '" + kRegion + "'\n";
+    body += "set object " + tag + " rectangle from " + num(b.x0_m) + "," + num(b.y0_m) + " to " + num(b.x1_m) +
+            "," + num(b.y1_m) + " front fs empty border lc rgb '" + kRegion + "' lw 2\n";
+    body += "set label " + tag + " " + q("region " + tag) + " at " + num(b.x0_m) + "," + num(b.y1_m) +
+            " left offset 0.2,0.6 front tc rgb '" + kRegion + "'\n";
   }
 
-  std::vector<std::pair<std::string, std::string>> files = {
-      {"ref.dat", xy_rows(d.ref_x_m, d.ref_y_m)}};
-  std::string plot =
-      "plot 'ref.dat' using 1:2 with lines lw 1.5 lc rgb '#9A9A9A' title 'reference path'";
+  std::vector<std::pair<std::string, std::string>> files = {{"ref.dat", xy_rows(d.ref_x_m, d.ref_y_m)}};
+  std::string plot = "plot 'ref.dat' using 1:2 with lines lw 1.5 lc rgb '#9A9A9A' title 'reference path'";
   std::string flagged;
   std::size_t n_flagged = 0;
   for (std::size_t i = 0; i < d.flagged.size(); ++i) {
@@ -334,13 +315,11 @@ void map_figure(const fs::path& stem, const DiagnosisFigureData& d) {
   }
   if (n_flagged > 0) {
     files.emplace_back("flagged.dat", std::move(flagged));
-    plot += ", \\\n     'flagged.dat' using 1:2 with points pt 7 ps 0.45 lc rgb '" +
-            std::string(kFlagged) + "' title " +
-            q("residual above noise (" + std::to_string(n_flagged) + " samples)");
+    plot += ", \\\n     'flagged.dat' using 1:2 with points pt 7 ps 0.45 lc rgb '" + std::string(kFlagged) +
+            "' title " + q("residual above noise (" + std::to_string(n_flagged) + " samples)");
   }
   if (!d.regions.empty())
-    plot += ", \\\n     keyentry with lines lw 2 lc rgb '" + std::string(kRegion) +
-            "' title 'located region'";
+    plot += ", \\\n     keyentry with lines lw 2 lc rgb '" + std::string(kRegion) + "' title 'located region'";
   body += plot + "\n";
   render_png_svg(stem, std::move(files), body, 1000, 750);
 }
@@ -349,8 +328,8 @@ void map_figure(const fs::path& stem, const DiagnosisFigureData& d) {
 
 BinnedMedian binned_median(const std::vector<double>& x, const std::vector<double>& y, int bins) {
   if (x.size() != y.size())
-    throw std::invalid_argument("binned_median: x has " + std::to_string(x.size()) +
-                                " values but y has " + std::to_string(y.size()));
+    throw std::invalid_argument("binned_median: x has " + std::to_string(x.size()) + " values but y has " +
+                                std::to_string(y.size()));
   if (bins < 1) throw std::invalid_argument("binned_median: bins must be >= 1, got " + std::to_string(bins));
   std::vector<std::size_t> rows;
   for (std::size_t i = 0; i < x.size(); ++i)
@@ -390,8 +369,7 @@ std::vector<fs::path> diagnosis_figures(const fs::path& dir, const DiagnosisFigu
   stems.push_back(dir / "overlay");
   trajectories(stems.back(),
                data.track + ": trajectory overlay" +
-                   (data.finding.empty() ? std::string(" (no finding)")
-                                         : " (finding: " + data.finding + ")"),
+                   (data.finding.empty() ? std::string(" (no finding)") : " (finding: " + data.finding + ")"),
                data.overlay);
   return stems;
 }

@@ -29,8 +29,8 @@ class StagingDir {
   explicit StagingDir(const fs::path& parent) {
     std::string tmpl = (parent / ".diagnosis-report-XXXXXX").string();
     if (::mkdtemp(tmpl.data()) == nullptr)
-      throw std::runtime_error(fmt::format("cannot write the diagnosis report into {}: {}",
-                                           parent.string(), std::strerror(errno)));
+      throw std::runtime_error(fmt::format("cannot write the diagnosis report into {}: {}", parent.string(),
+                                           std::strerror(errno)));
     path_ = tmpl;
   }
   ~StagingDir() {
@@ -55,15 +55,13 @@ std::string slurp(const fs::path& p) {
 
 // What figure `stem` shows, for the caption under it.
 std::string caption(const std::string& stem, const DiagnosisFigureData& d) {
-  const std::string after =
-      d.finding.empty() ? "the corrected model" : fmt::format("the finding ({})", d.finding);
+  const std::string after = d.finding.empty() ? "the corrected model"
+                                              : fmt::format("the finding ({})", d.finding);
   if (stem == "residual_time") {
-    std::string s =
-        "Position error |predicted − reference| of the odometry replay at every reference "
-        "sample, the replay re-anchored to the reference at each window start (dotted lines). ";
-    s += d.after_pos_err_m.empty()
-             ? "There is no finding, so only the nominal model's error is shown."
-             : fmt::format("Before: nominal model; after: with {}.", after);
+    std::string s = "Position error |predicted − reference| of the odometry replay at every reference "
+                    "sample, the replay re-anchored to the reference at each window start (dotted lines). ";
+    s += d.after_pos_err_m.empty() ? "There is no finding, so only the nominal model's error is shown."
+                                   : fmt::format("Before: nominal model; after: with {}.", after);
     if (!d.segments.empty()) s += " Shaded: the located segments.";
     return s;
   }
@@ -89,8 +87,7 @@ std::string caption(const std::string& stem, const DiagnosisFigureData& d) {
   }
   std::vector<std::string> names;
   for (const auto& p : d.overlay) names.push_back(p.name);
-  return fmt::format("Trajectories over the whole track, equal axis scale: {}.",
-                     fmt::join(names, "; "));
+  return fmt::format("Trajectories over the whole track, equal axis scale: {}.", fmt::join(names, "; "));
 }
 
 const char* heading(const std::string& stem) {
@@ -130,8 +127,7 @@ std::string page_html(const DiagnosisFigureData& d, const std::vector<std::strin
 }  // namespace
 
 void write_diagnosis_report(const fs::path& dir, const DiagnosisFigureData& data,
-                            const std::vector<std::string>& summary_lines,
-                            const std::string& json_text) {
+                            const std::vector<std::string>& summary_lines, const std::string& json_text) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir))
@@ -154,8 +150,8 @@ void write_diagnosis_report(const fs::path& dir, const DiagnosisFigureData& data
       const fs::path from = staging.path() / (f.stem + ext), to = dir / (f.stem + ext);
       fs::rename(from, to, ec);
       if (ec)
-        throw std::runtime_error(fmt::format("cannot move the figure {} into place: {}",
-                                             to.string(), ec.message()));
+        throw std::runtime_error(fmt::format("cannot move the figure {} into place: {}", to.string(),
+                                             ec.message()));
     }
   }
   for (const char* stem : kStems) {

@@ -28,7 +28,6 @@ namespace odotune::results {
 // and std::runtime_error with one line when DIR cannot be created or
 // written, or gnuplot is missing or fails.
 void write_diagnosis_report(const std::filesystem::path& dir, const DiagnosisFigureData& data,
-                            const std::vector<std::string>& summary_lines,
-                            const std::string& json_text);
+                            const std::vector<std::string>& summary_lines, const std::string& json_text);
 
 }  // namespace odotune::results

@@ -32,7 +32,6 @@ std::string one_decimal(double v) {
 
 std::string q(const std::string& s) { return gnuplot_quote(s); }
 
-
 // `set xtics (...)`/`set ytics (...)` list for categorical positions 0..n-1
 // (or `first`, `first+1`, …).
 std::string category_tics(const std::vector<std::string>& names, int first) {
@@ -55,8 +54,7 @@ std::string heatmap_mode_label(int mode) {
   return std::to_string(mode) + " " + names[mode - 1];
 }
 
-void heatmap(const fs::path& stem, const std::string& title,
-             const std::vector<std::string>& columns,
+void heatmap(const fs::path& stem, const std::string& title, const std::vector<std::string>& columns,
              const std::vector<std::vector<double>>& values) {
   constexpr int kModes = 7;
   if (columns.empty()) throw std::invalid_argument("heatmap: no columns (tracks)");
@@ -89,8 +87,7 @@ void heatmap(const fs::path& stem, const std::string& title,
         continue;
       }
       cells += xy + " " + num(v) + "\n";
-      (std::abs(v) > 0.6 * range ? light_labels : dark_labels) +=
-          xy + " \"" + one_decimal(v) + "\"\n";
+      (std::abs(v) > 0.6 * range ? light_labels : dark_labels) += xy + " \"" + one_decimal(v) + "\"\n";
     }
   }
 
@@ -105,8 +102,8 @@ void heatmap(const fs::path& stem, const std::string& title,
   body += "set xlabel 'track'\nset ylabel 'fitness mode'\n";
   body += "set cblabel 'improvement [%]'\n";
   body += "set xrange [-0.5:" + num(ncols - 0.5) + "]\nset yrange [6.5:-0.5]\n";
-  body += "set xtics " + category_tics(columns, 0) + " scale 0" +
-          (longest > 8 ? " rotate by 30 right" : "") + "\n";
+  body += "set xtics " + category_tics(columns, 0) + " scale 0" + (longest > 8 ? " rotate by 30 right" : "") +
+          "\n";
   body += "set ytics " + category_tics(mode_names, 0) + " scale 0\n";
   body += "set palette defined (-1 '#b2182b', -0.5 '#ef8a62', 0 '#f7f7f7', 0.5 '#67a9cf', "
           "1 '#2166ac')\n";
@@ -131,10 +128,10 @@ void heatmap(const fs::path& stem, const std::string& title,
 
   const int width = std::max(700, 260 + 95 * ncols);
   const int height = 560 + (longest > 8 ? static_cast<int>(std::min<std::size_t>(longest, 40)) * 5 : 0);
-  render_png_svg(stem,
-         {{"cells.dat", cells}, {"missing.dat", missing}, {"dark.dat", dark_labels},
-          {"light.dat", light_labels}},
-         body, width, height);
+  render_png_svg(
+      stem,
+      {{"cells.dat", cells}, {"missing.dat", missing}, {"dark.dat", dark_labels}, {"light.dat", light_labels}},
+      body, width, height);
 }
 
 // ---------------------------------------------------------------- boxplots
@@ -216,8 +213,7 @@ void boxplots(const fs::path& stem, const std::string& title,
       if (!outliers.empty()) {
         const std::string ofile = "out_" + std::to_string(g) + "_" + std::to_string(m) + ".dat";
         files.emplace_back(ofile, outliers);
-        plot += ", \\\n     '" + ofile + "' using 1:2 with points pt 7 ps 0.5 lc rgb '" + colour +
-                "' notitle";
+        plot += ", \\\n     '" + ofile + "' using 1:2 with points pt 7 ps 0.5 lc rgb '" + colour + "' notitle";
       }
     }
   }
@@ -290,11 +286,10 @@ void convergence(const fs::path& stem, const std::string& title,
     for (std::size_t i = 0; i < band.evaluations.size(); ++i) {
       const std::string e = std::to_string(band.evaluations[i]) + " ";
       if (i > 0) {
-        content += e + num(band.median_m[i - 1]) + " " + num(band.min_m[i - 1]) + " " +
-                   num(band.max_m[i - 1]) + "\n";
+        content += e + num(band.median_m[i - 1]) + " " + num(band.min_m[i - 1]) + " " + num(band.max_m[i - 1]) +
+                   "\n";
       }
-      content += e + num(band.median_m[i]) + " " + num(band.min_m[i]) + " " +
-                 num(band.max_m[i]) + "\n";
+      content += e + num(band.median_m[i]) + " " + num(band.min_m[i]) + " " + num(band.max_m[i]) + "\n";
     }
     std::size_t nruns = 0;
     for (const auto& r : runs) nruns += r.empty() ? 0 : 1;
@@ -304,8 +299,8 @@ void convergence(const fs::path& stem, const std::string& title,
     if (k > 0) plot += ", \\\n     ";
     plot += "'" + file + "' using 1:3:4 with filledcurves lc rgb '" + colour + "' title " +
             q(name + " min–max (" + std::to_string(nruns) + (nruns == 1 ? " run)" : " runs)")) +
-            ", \\\n     '" + file + "' using 1:2 with lines lw 2 lc rgb '" + colour +
-            "' title " + q(name + " median");
+            ", \\\n     '" + file + "' using 1:2 with lines lw 2 lc rgb '" + colour + "' title " +
+            q(name + " median");
     ++k;
   }
   if (files.empty()) throw std::invalid_argument("convergence: no series has a point");
@@ -322,8 +317,7 @@ void convergence(const fs::path& stem, const std::string& title,
 
 // ---------------------------------------------------------------- trajectories
 
-void trajectories(const fs::path& stem, const std::string& title,
-                  const std::vector<TrajectoryPath>& paths) {
+void trajectories(const fs::path& stem, const std::string& title, const std::vector<TrajectoryPath>& paths) {
   if (paths.empty()) throw std::invalid_argument("trajectories: no paths");
   std::vector<std::pair<std::string, std::string>> files;
   std::string plot = "plot ";
@@ -331,9 +325,8 @@ void trajectories(const fs::path& stem, const std::string& title,
   for (std::size_t i = 0; i < paths.size(); ++i) {
     const auto& p = paths[i];
     if (p.xs_m.size() != p.ys_m.size()) {
-      throw std::invalid_argument("trajectories: path '" + p.name + "' has " +
-                                  std::to_string(p.xs_m.size()) + " x values but " +
-                                  std::to_string(p.ys_m.size()) + " y values");
+      throw std::invalid_argument("trajectories: path '" + p.name + "' has " + std::to_string(p.xs_m.size()) +
+                                  " x values but " + std::to_string(p.ys_m.size()) + " y values");
     }
     std::string content;
     bool gap = false;
@@ -352,8 +345,8 @@ void trajectories(const fs::path& stem, const std::string& title,
     files.emplace_back(file, content);
     const std::string colour = i == 0 ? "#000000" : series_colour(i - 1);
     if (plot != "plot ") plot += ", \\\n     ";
-    plot += "'" + file + "' using 1:2 with lines lw " + (i == 0 ? "2.5" : "1.5") + " lc rgb '" +
-            colour + "' title " + q(p.name);
+    plot += "'" + file + "' using 1:2 with lines lw " + (i == 0 ? "2.5" : "1.5") + " lc rgb '" + colour +
+            "' title " + q(p.name);
   }
   if (!any_point) throw std::invalid_argument("trajectories: no finite point in any path");
 

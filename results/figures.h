@@ -27,8 +27,7 @@ std::string heatmap_mode_label(int mode);
 // ±max|value|) with its value printed to one decimal. NaN cells are drawn
 // grey and labelled "n/a". `values` must be 7 rows of columns.size() values.
 void heatmap(const std::filesystem::path& stem, const std::string& title,
-             const std::vector<std::string>& columns,
-             const std::vector<std::vector<double>>& values);
+             const std::vector<std::string>& columns, const std::vector<std::vector<double>>& values);
 
 // Improvement % per model (groups on the x axis) for each metric (one box
 // colour per metric, with a legend) — the study's Figure 4. Input:
@@ -44,7 +43,7 @@ void boxplots(const std::filesystem::path& stem, const std::string& title,
 // evaluations) and undefined before its first point; it holds its last
 // value after its last point.
 struct ConvergenceBand {
-  std::vector<long> evaluations;  // strictly increasing grid
+  std::vector<long> evaluations;               // strictly increasing grid
   std::vector<double> median_m, min_m, max_m;  // over the runs defined there
   std::vector<int> runs;                       // how many runs were defined
 };

@@ -33,8 +33,8 @@ class TempDir {
   TempDir() {
     std::string tmpl = (fs::temp_directory_path() / "odotune-gnuplot-XXXXXX").string();
     if (::mkdtemp(tmpl.data()) == nullptr) {
-      throw std::runtime_error("cannot create a temp dir for gnuplot in " +
-                               fs::temp_directory_path().string() + ": " + std::strerror(errno));
+      throw std::runtime_error("cannot create a temp dir for gnuplot in " + fs::temp_directory_path().string() +
+                               ": " + std::strerror(errno));
     }
     path_ = tmpl;
   }
@@ -96,8 +96,7 @@ int spawn_gnuplot(const fs::path& dir) {
   int rc = posix_spawn_file_actions_addchdir_np(&actions, dir_str.c_str());
   if (rc == 0) rc = posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
   if (rc == 0) {
-    rc = posix_spawn_file_actions_addopen(&actions, 1, "gnuplot.log",
-                                          O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    rc = posix_spawn_file_actions_addopen(&actions, 1, "gnuplot.log", O_WRONLY | O_CREAT | O_TRUNC, 0644);
   }
   if (rc == 0) rc = posix_spawn_file_actions_adddup2(&actions, 1, 2);
   if (rc != 0) throw std::runtime_error(std::string("cannot start gnuplot: ") + std::strerror(rc));
@@ -129,7 +128,7 @@ bool gnuplot_available() {
   while (std::getline(in, dir, ':')) {
     if (dir.empty()) dir = ".";
     const std::string exe = dir + "/gnuplot";
-    struct stat st{};
+    struct stat st {};
     if (::stat(exe.c_str(), &st) == 0 && S_ISREG(st.st_mode) && ::access(exe.c_str(), X_OK) == 0) {
       return true;
     }
@@ -186,9 +185,8 @@ void run_gnuplot(const GnuplotJob& job) {
 
   const int status = spawn_gnuplot(tmp.path());
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    const std::string how = WIFEXITED(status)
-                                ? "exit status " + std::to_string(WEXITSTATUS(status))
-                                : "killed by signal " + std::to_string(WTERMSIG(status));
+    const std::string how = WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
+                                              : "killed by signal " + std::to_string(WTERMSIG(status));
     throw std::runtime_error("gnuplot failed (" + how +
                              "): " + first_error_line(read_file(tmp.path() / "gnuplot.log")));
   }
@@ -223,18 +221,17 @@ void run_gnuplot(const GnuplotJob& job) {
   }
 }
 
-void render_png_svg(const std::filesystem::path& stem, std::vector<std::pair<std::string, std::string>> data_files,
-            const std::string& body, int width_px, int height_px) {
+void render_png_svg(const std::filesystem::path& stem,
+                    std::vector<std::pair<std::string, std::string>> data_files, const std::string& body,
+                    int width_px, int height_px) {
   if (stem.filename().empty()) {
     throw std::invalid_argument("figure output stem '" + stem.string() + "' has no file name");
   }
   const std::string size = std::to_string(width_px) + "," + std::to_string(height_px);
   std::string script = "set encoding utf8\n";
-  script += "set terminal pngcairo size " + size +
-            " noenhanced font 'DejaVu Sans,11' background rgb 'white'\n";
+  script += "set terminal pngcairo size " + size + " noenhanced font 'DejaVu Sans,11' background rgb 'white'\n";
   script += "set output 'figure.png'\n" + body + "\n";
-  script += "set terminal svg size " + size +
-            " noenhanced font 'DejaVu Sans,12' background rgb 'white'\n";
+  script += "set terminal svg size " + size + " noenhanced font 'DejaVu Sans,12' background rgb 'white'\n";
   script += "set output 'figure.svg'\n" + body + "\nunset output\n";
 
   std::filesystem::path png = stem, svg = stem;

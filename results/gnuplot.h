@@ -43,8 +43,8 @@ void run_gnuplot(const GnuplotJob& job);
 // width_px x height_px, texts verbatim (noenhanced). Throws
 // std::invalid_argument for a stem without a file name, else as run_gnuplot.
 void render_png_svg(const std::filesystem::path& stem,
-                    std::vector<std::pair<std::string, std::string>> data_files,
-                    const std::string& body, int width_px, int height_px);
+                    std::vector<std::pair<std::string, std::string>> data_files, const std::string& body,
+                    int width_px, int height_px);
 
 // True when a `gnuplot` executable is found on PATH.
 bool gnuplot_available();

@@ -74,8 +74,9 @@ void shaded_time_panels(const fs::path& stem, const std::string& title, const st
   body += "set lmargin at screen 0.10\nset rmargin at screen 0.74\n";
   int object = 1;
   for (const TimeShade& s : shades)
-    body += "set object " + std::to_string(object++) + " rect from first " + num(s.t0_s) + ", graph 0 to first " +
-            num(s.t1_s) + ", graph 1 behind fc rgb '" + kShadeColour + "' fs solid 1.0 noborder\n";
+    body += "set object " + std::to_string(object++) + " rect from first " + num(s.t0_s) +
+            ", graph 0 to first " + num(s.t1_s) + ", graph 1 behind fc rgb '" + kShadeColour +
+            "' fs solid 1.0 noborder\n";
   for (const TimeMarker& m : markers)
     body += "set arrow from first " + num(m.t_s) + ", graph 0 to first " + num(m.t_s) +
             ", graph 1 nohead back lw 1 dt 3 lc rgb '#606060'\n";
@@ -84,8 +85,7 @@ void shaded_time_panels(const fs::path& stem, const std::string& title, const st
     const auto [top, bottom] = stacked_panel_span(p, panels.size());
     body += "set tmargin at screen " + num(top) + "\nset bmargin at screen " + num(bottom) + "\n";
     body += "set ylabel " + q(panel.ylabel) + "\n";
-    body += panel.log_y ? "set logscale y\nset format y '%.0e'\n"
-                        : "unset logscale y\nset format y '%.3g'\n";
+    body += panel.log_y ? "set logscale y\nset format y '%.0e'\n" : "unset logscale y\nset format y '%.3g'\n";
     body += std::isfinite(panel.y_min) && (!panel.log_y || panel.y_min > 0.0)
                 ? "set yrange [" + num(panel.y_min) + ":*]\n"
                 : "set yrange [*:*]\n";
@@ -129,7 +129,8 @@ void path_panels(const fs::path& stem, const std::string& title, const std::vect
       if (l.x_m.size() != l.y_m.size())
         bad("path panel '" + p.title + "', line '" + l.name + "' has " + std::to_string(l.x_m.size()) +
             " x values but " + std::to_string(l.y_m.size()) + " y values");
-      for (std::size_t i = 0; i < l.x_m.size(); ++i) any = any || (std::isfinite(l.x_m[i]) && std::isfinite(l.y_m[i]));
+      for (std::size_t i = 0; i < l.x_m.size(); ++i)
+        any = any || (std::isfinite(l.x_m[i]) && std::isfinite(l.y_m[i]));
     }
     if (!any) bad("path panel '" + p.title + "' has no finite point");
   }

@@ -31,12 +31,12 @@ struct TimeShade {
 };
 
 struct ShadedPanel {
-  std::string ylabel;               // with its unit
-  bool log_y = false;               // log scale: values ≤ 0 break the line like NaN
+  std::string ylabel;  // with its unit
+  bool log_y = false;  // log scale: values ≤ 0 break the line like NaN
   // Lower end of the y axis (NaN: automatic); points below it are clipped by
   // the axis, not dropped (e.g. squared errors of 1e-12 on a variance panel).
   double y_min = std::numeric_limits<double>::quiet_NaN();
-  std::vector<PanelLine> lines;     // PanelLine of study_figures.h (dashed: steps)
+  std::vector<PanelLine> lines;  // PanelLine of study_figures.h (dashed: steps)
 };
 
 // Panels stacked top to bottom on a shared time axis ("time [s]"); `shades`
@@ -51,14 +51,14 @@ void shaded_time_panels(const std::filesystem::path& stem, const std::string& ti
 
 // One path of an XY panel [m]; NaN breaks the line.
 struct PathLine {
-  std::string name;                 // legend entry
+  std::string name;  // legend entry
   std::vector<double> x_m, y_m;
-  int colour = 0;                   // palette index (study_figures.h's 10 colours); -1 = black
+  int colour = 0;  // palette index (study_figures.h's 10 colours); -1 = black
   bool dashed = false;
 };
 
 struct PathPanel {
-  std::string title;                // the panel's own title
+  std::string title;  // the panel's own title
   std::vector<PathLine> lines;
 };
 

@@ -39,8 +39,9 @@ class Reader {
   double number(const json& obj, const std::string& path, const char* key, bool positive, bool nullable) const {
     const json& v = field(obj, path, key);
     if (nullable && v.is_null()) return kNaN;
-    if (!v.is_number()) fail(join(path, key), fmt::format("{} is not a number; expected {}", short_dump(v),
-                                                          nullable ? "a number or null" : "a number"));
+    if (!v.is_number())
+      fail(join(path, key), fmt::format("{} is not a number; expected {}", short_dump(v),
+                                        nullable ? "a number or null" : "a number"));
     const double d = v.get<double>();
     if (!std::isfinite(d)) fail(join(path, key), "not finite; expected a finite number");
     if (positive && !(d > 0.0)) fail(join(path, key), fmt::format("{} must be > 0", d));
@@ -49,7 +50,8 @@ class Reader {
   }
   std::uint64_t count(const json& obj, const std::string& path, const char* key) const {
     const json& v = field(obj, path, key);
-    if (!v.is_number_integer() || (v.is_number_integer() && !v.is_number_unsigned() && v.get<std::int64_t>() < 0))
+    if (!v.is_number_integer() ||
+        (v.is_number_integer() && !v.is_number_unsigned() && v.get<std::int64_t>() < 0))
       fail(join(path, key), fmt::format("{} is not a whole number >= 0", short_dump(v)));
     return v.get<std::uint64_t>();
   }
@@ -70,7 +72,9 @@ class Reader {
   }
   const std::string& file() const { return file_; }
 
-  static std::string join(const std::string& path, const char* key) { return path.empty() ? key : path + "." + key; }
+  static std::string join(const std::string& path, const char* key) {
+    return path.empty() ? key : path + "." + key;
+  }
 
  private:
   static std::string short_dump(const json& v) {
@@ -82,10 +86,15 @@ class Reader {
 
 json training_json(const ModelTrainingRecord& t) {
   const auto net = [](const NetTrainingRecord& n) {
-    return json{{"iterations", n.iterations}, {"train_mae", num(n.train_mae)}, {"validation_mae", num(n.validation_mae)}};
+    return json{{"iterations", n.iterations},
+                {"train_mae", num(n.train_mae)},
+                {"validation_mae", num(n.validation_mae)}};
   };
-  return {{"train_windows", t.train_windows}, {"validation_windows", t.validation_windows}, {"seconds", t.seconds},
-          {"v", net(t.v)}, {"w", net(t.w)}};
+  return {{"train_windows", t.train_windows},
+          {"validation_windows", t.validation_windows},
+          {"seconds", t.seconds},
+          {"v", net(t.v)},
+          {"w", net(t.w)}};
 }
 
 ModelTrainingRecord parse_training(const Reader& r, const json& j, const std::string& path) {
@@ -140,13 +149,11 @@ json learned_model_json(const LearnedModelFile& m) {
                    {"v_net", lstm_to_json(o.v_net)},
                    {"w_net", lstm_to_json(o.w_net)}};
   if (m.detector)
-    j["detector"] = {{"floor_var_v", m.detector->floor_var_v},
-                     {"floor_var_w", m.detector->floor_var_w},
-                     {"previous_lag", m.detector->previous_lag},
-                     {"max_log_ratio_v", m.detector->max_log_ratio_v},
-                     {"max_log_ratio_w", m.detector->max_log_ratio_w},
-                     {"v_net", lstm_to_json(m.detector->v_net)},
-                     {"w_net", lstm_to_json(m.detector->w_net)}};
+    j["detector"] = {
+        {"floor_var_v", m.detector->floor_var_v},         {"floor_var_w", m.detector->floor_var_w},
+        {"previous_lag", m.detector->previous_lag},       {"max_log_ratio_v", m.detector->max_log_ratio_v},
+        {"max_log_ratio_w", m.detector->max_log_ratio_w}, {"v_net", lstm_to_json(m.detector->v_net)},
+        {"w_net", lstm_to_json(m.detector->w_net)}};
   const LearnedModelProvenance& p = m.provenance;
   json prov = {{"tracks", p.tracks},
                {"slip_tracks", p.slip_tracks},
@@ -222,7 +229,8 @@ LearnedModelFile read_learned_model(const std::filesystem::path& path) {
                                             "--model-out)",
                                             path.string(), kLearnedModelFormat));
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::invalid_argument(fmt::format("{}: cannot open the model file for reading", path.string()));
+  if (!in)
+    throw std::invalid_argument(fmt::format("{}: cannot open the model file for reading", path.string()));
   std::stringstream ss;
   ss << in.rdbuf();
   json j;

@@ -52,18 +52,18 @@ struct NetTrainingRecord {
 struct ModelTrainingRecord {
   NetTrainingRecord v, w;
   std::size_t train_windows = 0, validation_windows = 0;
-  double seconds = 0.0;                    // wall time of both nets
+  double seconds = 0.0;  // wall time of both nets
 };
 
 struct LearnedModelProvenance {
-  std::vector<std::string> tracks;         // the velocity nets' training tracks (names)
-  std::vector<std::string> slip_tracks;    // the detector's (empty without one)
-  std::uint64_t seed = 0;                  // Ceres initial weights
+  std::vector<std::string> tracks;       // the velocity nets' training tracks (names)
+  std::vector<std::string> slip_tracks;  // the detector's (empty without one)
+  std::uint64_t seed = 0;                // Ceres initial weights
   ModelTrainingRecord odometry;
   std::optional<ModelTrainingRecord> detector;
-  int retrains = 0;                        // online refits since training (`learn retrain`)
-  std::vector<std::string> retrain_tracks; // where they happened (names)
-  std::string created_by;                  // the command line
+  int retrains = 0;                         // online refits since training (`learn retrain`)
+  std::vector<std::string> retrain_tracks;  // where they happened (names)
+  std::string created_by;                   // the command line
 };
 
 struct LearnedModelFile {

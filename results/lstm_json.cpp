@@ -38,7 +38,8 @@ void numbers(const nlohmann::json& j, const char* name, int n, double* out) {
   if (!v.is_array()) bad(name, fmt::format("expected an array of {} numbers", n));
   if (v.size() != static_cast<std::size_t>(n))
     bad(name, fmt::format("expected {} numbers, got {}", n, v.size()));
-  for (int k = 0; k < n; ++k) out[k] = finite_number(v[static_cast<std::size_t>(k)], fmt::format("{}[{}]", name, k));
+  for (int k = 0; k < n; ++k)
+    out[k] = finite_number(v[static_cast<std::size_t>(k)], fmt::format("{}[{}]", name, k));
 }
 
 }  // namespace
@@ -88,7 +89,8 @@ filters::LstmNet<I, H> lstm_from_json(const nlohmann::json& j) {
   numbers(j, "input_mean", I, net.input_mean.data());
   numbers(j, "input_sd", I, net.input_sd.data());
   for (int k = 0; k < I; ++k)
-    if (!(net.input_sd[k] > 0.0)) bad(fmt::format("input_sd[{}]", k), fmt::format("expected > 0, got {}", net.input_sd[k]));
+    if (!(net.input_sd[k] > 0.0))
+      bad(fmt::format("input_sd[{}]", k), fmt::format("expected > 0, got {}", net.input_sd[k]));
   net.output_mean = finite_number(field(j, "output_mean"), "output_mean");
   net.output_sd = finite_number(field(j, "output_sd"), "output_sd");
   if (!(net.output_sd > 0.0)) bad("output_sd", fmt::format("expected > 0, got {}", net.output_sd));
@@ -96,10 +98,10 @@ filters::LstmNet<I, H> lstm_from_json(const nlohmann::json& j) {
   return net;
 }
 
-#define ODOTUNE_INSTANTIATE_LSTM_JSON(I, H)                                                   \
-  template nlohmann::json lstm_to_json<I, H>(const filters::LstmNet<I, H>&);                  \
-  template filters::LstmNet<I, H> lstm_from_json<I, H>(const nlohmann::json&);                \
-  template void filters::to_json<I, H>(nlohmann::json&, const filters::LstmNet<I, H>&);      \
+#define ODOTUNE_INSTANTIATE_LSTM_JSON(I, H)                                             \
+  template nlohmann::json lstm_to_json<I, H>(const filters::LstmNet<I, H>&);            \
+  template filters::LstmNet<I, H> lstm_from_json<I, H>(const nlohmann::json&);          \
+  template void filters::to_json<I, H>(nlohmann::json&, const filters::LstmNet<I, H>&); \
   template void filters::from_json<I, H>(const nlohmann::json&, filters::LstmNet<I, H>&);
 
 }  // namespace odotune

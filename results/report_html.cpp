@@ -49,9 +49,7 @@ std::string inline_svg(const std::string& svg_text, const std::string& id_prefix
 
 HtmlPage::HtmlPage(std::string title) : title_(std::move(title)) {}
 
-void HtmlPage::heading(const std::string& text) {
-  body_ += fmt::format("<h2>{}</h2>\n", html_escape(text));
-}
+void HtmlPage::heading(const std::string& text) { body_ += fmt::format("<h2>{}</h2>\n", html_escape(text)); }
 
 void HtmlPage::paragraph(const std::string& text) {
   body_ += fmt::format("<p>{}</p>\n", emphasis(html_escape(text)));
@@ -62,19 +60,15 @@ void HtmlPage::figures(const std::vector<HtmlFigure>& figs) {
   for (const auto& f : figs) {
     const std::string prefix = f.id_prefix.empty() ? fmt::format("f{}-", next_figure_) : f.id_prefix;
     ++next_figure_;
-    body_ += "<figure>\n" + inline_svg(f.svg_text, prefix) + "\n<figcaption>" +
-             html_escape(f.caption);
-    if (!f.png_href.empty())
-      body_ += fmt::format(" (<a href=\"{}\">PNG</a>)", html_escape(f.png_href));
+    body_ += "<figure>\n" + inline_svg(f.svg_text, prefix) + "\n<figcaption>" + html_escape(f.caption);
+    if (!f.png_href.empty()) body_ += fmt::format(" (<a href=\"{}\">PNG</a>)", html_escape(f.png_href));
     body_ += "</figcaption>\n</figure>\n";
   }
   body_ += "</div>\n";
 }
 
 void HtmlPage::table(const TextTable& t) {
-  auto align = [&t](std::size_t i) {
-    return i < t.numeric.size() && t.numeric[i] ? " class=\"num\"" : "";
-  };
+  auto align = [&t](std::size_t i) { return i < t.numeric.size() && t.numeric[i] ? " class=\"num\"" : ""; };
   body_ += "<table>\n<thead><tr>";
   for (std::size_t i = 0; i < t.header.size(); ++i)
     body_ += fmt::format("<th{}>{}</th>", align(i), html_escape(t.header[i]));
@@ -94,9 +88,7 @@ void HtmlPage::list(const std::vector<std::string>& items) {
   body_ += "</ul>\n";
 }
 
-void HtmlPage::preformatted(const std::string& text) {
-  body_ += "<pre>" + html_escape(text) + "</pre>\n";
-}
+void HtmlPage::preformatted(const std::string& text) { body_ += "<pre>" + html_escape(text) + "</pre>\n"; }
 
 std::string HtmlPage::html() const {
   return fmt::format(

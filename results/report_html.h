@@ -22,9 +22,9 @@ std::string html_escape(const std::string& text);
 
 struct HtmlFigure {
   std::string caption;
-  std::string svg_text;  // the figure's SVG file, verbatim
-  std::string png_href;  // relative link to the PNG version (may be empty)
-  std::string id_prefix; // prefix of the figure's SVG ids ("" = "f<n>-", n counting figures)
+  std::string svg_text;   // the figure's SVG file, verbatim
+  std::string png_href;   // relative link to the PNG version (may be empty)
+  std::string id_prefix;  // prefix of the figure's SVG ids ("" = "f<n>-", n counting figures)
 };
 
 class HtmlPage {

@@ -63,8 +63,7 @@ std::vector<std::string> report_models(const std::vector<RunRecord>& runs) {
 std::vector<std::string> report_tracks(const std::vector<RunRecord>& runs) {
   std::vector<std::string> out;
   for (const auto& r : runs)
-    if (std::find(out.begin(), out.end(), r.scored_track()) == out.end())
-      out.push_back(r.scored_track());
+    if (std::find(out.begin(), out.end(), r.scored_track()) == out.end()) out.push_back(r.scored_track());
   return out;
 }
 
@@ -84,8 +83,7 @@ bool ImprovementGrid::empty() const {
 }
 
 ImprovementGrid improvement_grid(const std::vector<RunRecord>& runs, const std::string& model,
-                                 ReportMetric metric, bool heldout,
-                                 const std::vector<std::string>& tracks) {
+                                 ReportMetric metric, bool heldout, const std::vector<std::string>& tracks) {
   std::vector<std::vector<Mean>> acc(kModes, std::vector<Mean>(tracks.size()));
   for (const auto& r : runs) {
     if (r.model != model || r.is_heldout() != heldout || r.mode < 1 || r.mode > kModes) continue;
@@ -176,8 +174,7 @@ std::string to_markdown(const TextTable& t) {
   return s;
 }
 
-std::vector<GeneralisationRow> generalisation(const std::vector<RunRecord>& runs,
-                                              ReportMetric metric) {
+std::vector<GeneralisationRow> generalisation(const std::vector<RunRecord>& runs, ReportMetric metric) {
   std::vector<GeneralisationRow> out;
   const auto tracks = report_tracks(runs);
   for (const auto& model : report_models(runs))

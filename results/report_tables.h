@@ -19,11 +19,9 @@
 namespace odotune::results {
 
 enum class ReportMetric { rmse, mae, maxe };
-inline constexpr ReportMetric kReportMetrics[] = {ReportMetric::rmse, ReportMetric::mae,
-                                                  ReportMetric::maxe};
+inline constexpr ReportMetric kReportMetrics[] = {ReportMetric::rmse, ReportMetric::mae, ReportMetric::maxe};
 std::string_view metric_name(ReportMetric m);  // "RMSE", "MAE", "MAXE"
 double improvement_pct(const RunRecord& r, ReportMetric m);
-
 
 // Models present, in the order rq, alpha, gyro, then any other by name.
 std::vector<std::string> report_models(const std::vector<RunRecord>& runs);
@@ -33,26 +31,25 @@ std::vector<std::string> report_tracks(const std::vector<RunRecord>& runs);
 std::vector<int> report_modes(const std::vector<RunRecord>& runs);
 
 struct ImprovementGrid {
-  std::vector<std::string> columns;          // tracks
-  std::vector<std::vector<double>> mean_pct; // 7 rows (modes 1..7) × columns; NaN = no run
-  std::vector<std::vector<int>> runs;        // how many runs each mean is over
-  bool empty() const;                        // no run at all
+  std::vector<std::string> columns;           // tracks
+  std::vector<std::vector<double>> mean_pct;  // 7 rows (modes 1..7) × columns; NaN = no run
+  std::vector<std::vector<int>> runs;         // how many runs each mean is over
+  bool empty() const;                         // no run at all
 };
 // Runs of `model` that are (heldout) or are not (!heldout) leave-one-out
 // runs, grouped by mode and scored track; columns are `tracks`.
 ImprovementGrid improvement_grid(const std::vector<RunRecord>& runs, const std::string& model,
-                                 ReportMetric metric, bool heldout,
-                                 const std::vector<std::string>& tracks);
+                                 ReportMetric metric, bool heldout, const std::vector<std::string>& tracks);
 
 struct RmseTable {
   std::vector<std::string> models;
   struct Row {
     std::string track;
     int mode = 0;
-    double original_m = 0.0;       // baseline RMSE (mean over the row's runs)
-    std::vector<double> tuned_m;   // per model: mean tuned RMSE over seeds; NaN = no run
+    double original_m = 0.0;      // baseline RMSE (mean over the row's runs)
+    std::vector<double> tuned_m;  // per model: mean tuned RMSE over seeds; NaN = no run
   };
-  std::vector<Row> rows;           // tracks in report order, modes ascending
+  std::vector<Row> rows;  // tracks in report order, modes ascending
 };
 // From per-track runs only (leave-one-out runs are in the generalisation table).
 RmseTable rmse_table(const std::vector<RunRecord>& runs);
@@ -79,8 +76,7 @@ struct GeneralisationRow {
   int per_track_runs = 0, heldout_runs = 0;
 };
 // One row per model × track that has both kinds of runs.
-std::vector<GeneralisationRow> generalisation(const std::vector<RunRecord>& runs,
-                                              ReportMetric metric);
+std::vector<GeneralisationRow> generalisation(const std::vector<RunRecord>& runs, ReportMetric metric);
 TextTable text_table(const std::vector<GeneralisationRow>& rows, ReportMetric metric);
 
 }  // namespace odotune::results

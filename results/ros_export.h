@@ -88,8 +88,8 @@ struct RosExportInput {
 // Sets frequency_hz = odometry_rate_hz and tuned_params to the five inputs
 // (r1_mm2, r2_mm2, r3_rad2, q1_mm2, q2_mm2); provenance is left empty.
 // Throws std::invalid_argument if odometry_rate_hz is not finite and > 0.
-RosExportInput ros_input_from_rq(double r1_mm2, double r2_mm2, double r3_rad2, double q1_mm2,
-                                 double q2_mm2, double odometry_rate_hz);
+RosExportInput ros_input_from_rq(double r1_mm2, double r2_mm2, double r3_rad2, double q1_mm2, double q2_mm2,
+                                 double odometry_rate_hz);
 
 // The commented ROS 2 parameter file
 //   NODE:

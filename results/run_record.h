@@ -19,20 +19,20 @@ struct ConvergencePoint {
 
 struct RunRecord {
   // The cell: model × track × mode × seed (× held-out track for leave-one-out).
-  std::string model;            // "rq" | "alpha" | "gyro"
-  std::string track;            // track name (tuned on; "all-but-X" for leave-one-out)
-  std::string heldout_track;    // empty unless leave-one-track-out
-  int mode = 7;                 // fitness mode 1..7
+  std::string model;          // "rq" | "alpha" | "gyro"
+  std::string track;          // track name (tuned on; "all-but-X" for leave-one-out)
+  std::string heldout_track;  // empty unless leave-one-track-out
+  int mode = 7;               // fitness mode 1..7
   std::uint64_t seed = 0;
   std::string solver = "pso";
   // The result.
   std::vector<std::string> param_names;
-  std::vector<double> params;   // physical values (units as in ParamSpace)
+  std::vector<double> params;  // physical values (units as in ParamSpace)
   double best_fitness = 0.0;
-  Metrics baseline, tuned;      // on `track` (or on the held-out track)
+  Metrics baseline, tuned;  // on `track` (or on the held-out track)
   long evaluations = 0;
   double seconds = 0.0;
-  long diverged = 0;            // evaluations that diverged
+  long diverged = 0;  // evaluations that diverged
   std::string termination;
   std::vector<ConvergencePoint> convergence;
 

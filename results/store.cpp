@@ -76,11 +76,9 @@ void Store::exec(const std::string& sql) const {
   }
 }
 
-Store::Store(const std::filesystem::path& path, const ExperimentInfo& info,
-             bool allow_other_experiment)
+Store::Store(const std::filesystem::path& path, const ExperimentInfo& info, bool allow_other_experiment)
     : path_(path.string()) {
-  if (sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) !=
-      SQLITE_OK) {
+  if (sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) != SQLITE_OK) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
     db_ = nullptr;
@@ -89,18 +87,17 @@ Store::Store(const std::filesystem::path& path, const ExperimentInfo& info,
   try {
     sqlite3_busy_timeout(db_, 10000);
     exec("PRAGMA journal_mode=WAL; PRAGMA synchronous=FULL;");
-    exec(fmt::format(
-        "CREATE TABLE IF NOT EXISTS experiment (key TEXT PRIMARY KEY, value TEXT NOT NULL);"
-        "CREATE TABLE IF NOT EXISTS runs ("
-        " id INTEGER PRIMARY KEY AUTOINCREMENT, key TEXT UNIQUE NOT NULL,"
-        " model TEXT, track TEXT, heldout_track TEXT, mode INTEGER, seed INTEGER, solver TEXT,"
-        " params TEXT, best_fitness REAL,"
-        " baseline_rmse_m REAL, baseline_mae_m REAL, baseline_maxe_m REAL,"
-        " tuned_rmse_m REAL, tuned_mae_m REAL, tuned_maxe_m REAL,"
-        " evaluations INTEGER, seconds REAL, diverged INTEGER, termination TEXT,"
-        " convergence TEXT);"
-        "INSERT OR IGNORE INTO experiment VALUES ('schema_version', '{}');",
-        kSchemaVersion));
+    exec(fmt::format("CREATE TABLE IF NOT EXISTS experiment (key TEXT PRIMARY KEY, value TEXT NOT NULL);"
+                     "CREATE TABLE IF NOT EXISTS runs ("
+                     " id INTEGER PRIMARY KEY AUTOINCREMENT, key TEXT UNIQUE NOT NULL,"
+                     " model TEXT, track TEXT, heldout_track TEXT, mode INTEGER, seed INTEGER, solver TEXT,"
+                     " params TEXT, best_fitness REAL,"
+                     " baseline_rmse_m REAL, baseline_mae_m REAL, baseline_maxe_m REAL,"
+                     " tuned_rmse_m REAL, tuned_mae_m REAL, tuned_maxe_m REAL,"
+                     " evaluations INTEGER, seconds REAL, diverged INTEGER, termination TEXT,"
+                     " convergence TEXT);"
+                     "INSERT OR IGNORE INTO experiment VALUES ('schema_version', '{}');",
+                     kSchemaVersion));
     const ExperimentInfo have = experiment();
     if (have.hash.empty()) {
       exec("BEGIN IMMEDIATE");
@@ -117,10 +114,10 @@ Store::Store(const std::filesystem::path& path, const ExperimentInfo& info,
       }
       exec("COMMIT");
     } else if (have.hash != info.hash && !allow_other_experiment) {
-      throw std::runtime_error(fmt::format(
-          "{}: this store belongs to another experiment ('{}', hash {}; this file has hash {}); "
-          "use another --store, or --allow-other-experiment to continue into it",
-          path_, have.name, have.hash, info.hash));
+      throw std::runtime_error(
+          fmt::format("{}: this store belongs to another experiment ('{}', hash {}; this file has hash {}); "
+                      "use another --store, or --allow-other-experiment to continue into it",
+                      path_, have.name, have.hash, info.hash));
     }
   } catch (...) {
     sqlite3_close(db_);
@@ -130,8 +127,7 @@ Store::Store(const std::filesystem::path& path, const ExperimentInfo& info,
 }
 
 Store::Store(const std::filesystem::path& path) : path_(path.string()) {
-  if (!std::filesystem::exists(path))
-    throw std::runtime_error(fmt::format("{}: no such results store", path_));
+  if (!std::filesystem::exists(path)) throw std::runtime_error(fmt::format("{}: no such results store", path_));
   if (sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
     const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);

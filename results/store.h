@@ -48,8 +48,7 @@ class Store {
   // existing one must hold the same experiment hash, else std::runtime_error
   // names both hashes (unless allow_other_experiment). Throws
   // std::runtime_error naming the path on any SQLite failure.
-  Store(const std::filesystem::path& path, const ExperimentInfo& info,
-        bool allow_other_experiment = false);
+  Store(const std::filesystem::path& path, const ExperimentInfo& info, bool allow_other_experiment = false);
   // Opens an existing store read-only (for report and export).
   explicit Store(const std::filesystem::path& path);
   ~Store();

@@ -31,7 +31,8 @@ void grouped_bars(const fs::path& stem, const std::string& title, const std::vec
   for (const BarPanel& p : panels) {
     if (p.mean.size() != groups.size() || p.sd.size() != groups.size())
       bad("grouped bars: panel '" + p.ylabel + "' has " + std::to_string(p.mean.size()) + " mean rows and " +
-          std::to_string(p.sd.size()) + " sd rows, expected " + std::to_string(groups.size()) + " (one per group)");
+          std::to_string(p.sd.size()) + " sd rows, expected " + std::to_string(groups.size()) +
+          " (one per group)");
     for (std::size_t g = 0; g < groups.size(); ++g) {
       if (p.mean[g].size() != series.size() || p.sd[g].size() != series.size())
         bad("grouped bars: panel '" + p.ylabel + "', group '" + groups[g] + "' has " +
@@ -54,7 +55,8 @@ void grouped_bars(const fs::path& stem, const std::string& title, const std::vec
   body += "set key outside right top Left reverse\n";
   body += "set format y '%.3g'\n";
   std::string tics = "(";
-  for (std::size_t g = 0; g < groups.size(); ++g) tics += (g ? ", " : "") + q(groups[g]) + " " + std::to_string(g);
+  for (std::size_t g = 0; g < groups.size(); ++g)
+    tics += (g ? ", " : "") + q(groups[g]) + " " + std::to_string(g);
   tics += ")";
   for (std::size_t p = 0; p < panels.size(); ++p) {
     const auto [top, bottom] = stacked_panel_span(p, panels.size());
@@ -75,8 +77,9 @@ void grouped_bars(const fs::path& stem, const std::string& title, const std::vec
       if (rows.empty()) continue;
       const std::string file = "p" + std::to_string(p) + "s" + std::to_string(s) + ".dat";
       files.emplace_back(file, rows);
-      plot += (plot.empty() ? "plot " : ", \\\n     ") + ("'" + file + "' using 1:2:3 with boxerrorbars lc rgb '" +
-              series_colour(static_cast<int>(s)) + "' title " + (p == 0 ? q(series[s]) : "''"));
+      plot += (plot.empty() ? "plot " : ", \\\n     ") +
+              ("'" + file + "' using 1:2:3 with boxerrorbars lc rgb '" + series_colour(static_cast<int>(s)) +
+               "' title " + (p == 0 ? q(series[s]) : "''"));
     }
     if (plot.empty()) plot = "plot NaN notitle";
     body += plot + "\n";

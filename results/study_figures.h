@@ -21,9 +21,9 @@ namespace odotune::results {
 // series s (one colour each, with a legend). NaN means draw no bar; a NaN
 // or zero sd draws no error bar.
 struct BarPanel {
-  std::string ylabel;                       // with its unit, e.g. "normalised error [-]"
-  std::vector<std::vector<double>> mean;    // [group][series]
-  std::vector<std::vector<double>> sd;      // [group][series], same shape
+  std::string ylabel;                     // with its unit, e.g. "normalised error [-]"
+  std::vector<std::vector<double>> mean;  // [group][series]
+  std::vector<std::vector<double>> sd;    // [group][series], same shape
 };
 
 // Panels stacked top to bottom sharing the group axis. Throws
@@ -35,16 +35,16 @@ void grouped_bars(const std::filesystem::path& stem, const std::string& title,
 
 // One line of a time panel; NaN breaks the line.
 struct PanelLine {
-  std::string name;                 // legend entry; "" = none
-  std::vector<double> t_s;          // [s]
-  std::vector<double> y;            // in the panel's unit
-  int colour = 0;                   // index into a 10-colour palette (modulo)
-  bool dashed = false;              // truth lines: dashed, drawn as steps
-  bool thin = false;                // many-run lines: thinner
+  std::string name;         // legend entry; "" = none
+  std::vector<double> t_s;  // [s]
+  std::vector<double> y;    // in the panel's unit
+  int colour = 0;           // index into a 10-colour palette (modulo)
+  bool dashed = false;      // truth lines: dashed, drawn as steps
+  bool thin = false;        // many-run lines: thinner
 };
 
 struct TimePanel {
-  std::string ylabel;               // with its unit
+  std::string ylabel;  // with its unit
   std::vector<PanelLine> lines;
 };
 

@@ -22,8 +22,8 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Counter-RNG streams of the per-run draws (core/counter_rng.h); any fixed,
 // distinct values do.
-constexpr std::uint64_t kTruthStream = 0x7472757468ULL;   // "truth"
-constexpr std::uint64_t kDkfStream = 0x646b66ULL;         // "dkf"
+constexpr std::uint64_t kTruthStream = 0x7472757468ULL;  // "truth"
+constexpr std::uint64_t kDkfStream = 0x646b66ULL;        // "dkf"
 
 double uniform_in(double lo, double hi, std::uint64_t seed, std::uint64_t dim, std::uint64_t stream) {
   return lo + (hi - lo) * counter_uniform01(seed, 0, 0, dim, stream);
@@ -43,7 +43,8 @@ struct PreparedRun {
 CalibrationInput simulate_input(const sim::Scenario& scenario, const McDraw& draw) {
   const Track track = sim::simulate(run_scenario(scenario, draw));
   CalibrationInput in = build_calibration_input(track, CalibrationInputOptions{});
-  if (!in.truth) throw std::invalid_argument("scenario '" + scenario.name + "': the simulated track has no truth");
+  if (!in.truth)
+    throw std::invalid_argument("scenario '" + scenario.name + "': the simulated track has no truth");
   if (in.samples.empty() || in.t.empty())
     throw std::invalid_argument("scenario '" + scenario.name + "': no calibration samples");
   return in;
@@ -91,8 +92,8 @@ ParamTrace param_trace(const CalibrationResult& r, const CalibrationInput& in) {
   ParamTrace p;
   const std::size_t n = r.trace.t.size();
   p.t_s = r.trace.t;
-  for (auto* v : {&p.r_right_m, &p.r_left_m, &p.wheel_base_m, &p.true_r_right_m, &p.true_r_left_m,
-                  &p.true_wheel_base_m})
+  for (auto* v :
+       {&p.r_right_m, &p.r_left_m, &p.wheel_base_m, &p.true_r_right_m, &p.true_r_left_m, &p.true_wheel_base_m})
     v->reserve(n);
   p.particles.reserve(n);
   for (std::size_t i = 0; i < n; ++i) {
@@ -129,8 +130,8 @@ MeanSd stat(const std::vector<Run>& runs, Field field) {
 }
 
 std::vector<PreparedRun> prepare_runs(const sim::Scenario& constant, const sim::Scenario* step,
-                                      const std::vector<McDraw>& draws, int threads, long* done,
-                                      long total, const StudyProgress& progress) {
+                                      const std::vector<McDraw>& draws, int threads, long* done, long total,
+                                      const StudyProgress& progress) {
   std::vector<PreparedRun> runs(draws.size());
   parallel_tasks(static_cast<long>(draws.size()), threads, done, total, progress, [&](long r) {
     runs[r].constant = simulate_input(constant, draws[r]);
@@ -181,10 +182,10 @@ McDraw mc_draw(const StudyOptions& options, const sim::Scenario& scenario, int r
   d.truth_scale_l = uniform_in(1.0 - s, 1.0 + s, d.seed, 0, kTruthStream);
   d.truth_scale_r = uniform_in(1.0 - s, 1.0 + s, d.seed, 1, kTruthStream);
   const filters::PfCalibratorParams ranges;
-  d.dkf_initial.wheel_radius_right_m =
-      uniform_in(ranges.wheel_radius_right_m.lo, ranges.wheel_radius_right_m.hi, d.seed, 0, kDkfStream);
-  d.dkf_initial.wheel_radius_left_m =
-      uniform_in(ranges.wheel_radius_left_m.lo, ranges.wheel_radius_left_m.hi, d.seed, 1, kDkfStream);
+  d.dkf_initial.wheel_radius_right_m = uniform_in(ranges.wheel_radius_right_m.lo,
+                                                  ranges.wheel_radius_right_m.hi, d.seed, 0, kDkfStream);
+  d.dkf_initial.wheel_radius_left_m = uniform_in(ranges.wheel_radius_left_m.lo, ranges.wheel_radius_left_m.hi,
+                                                 d.seed, 1, kDkfStream);
   d.dkf_initial.wheel_base_m = scenario.robot.wheel_base_m;
   return d;
 }
@@ -214,13 +215,14 @@ void check_study_scenario(const sim::Scenario& scenario, const StudyOptions& opt
     for (double scale : {1.0 - s, 1.0 + s, (1.0 - s) * step_scale, (1.0 + s) * step_scale}) {
       const double r = nominal * scale;
       if (r < range.lo || r > range.hi)
-        throw std::invalid_argument(fmt::format(
-            "{}: a true {} radius of {:.5f} m (nominal {} × {:.4f}) would lie outside the PF's "
-            "initial range [{}, {}] m; use a smaller spread or a wheelchair-sized robot",
-            name, wheel, r, nominal, scale, range.lo, range.hi));
+        throw std::invalid_argument(
+            fmt::format("{}: a true {} radius of {:.5f} m (nominal {} × {:.4f}) would lie outside the PF's "
+                        "initial range [{}, {}] m; use a smaller spread or a wheelchair-sized robot",
+                        name, wheel, r, nominal, scale, range.lo, range.hi));
     }
   };
-  check_radius("right", scenario.robot.wheel_radius_right_m, step ? step->scale_r : 1.0, pf.wheel_radius_right_m);
+  check_radius("right", scenario.robot.wheel_radius_right_m, step ? step->scale_r : 1.0,
+               pf.wheel_radius_right_m);
   check_radius("left", scenario.robot.wheel_radius_left_m, step ? step->scale_l : 1.0, pf.wheel_radius_left_m);
   const double base = scenario.robot.wheel_base_m *
                       (scenario.effects.wheel_base_error ? scenario.effects.wheel_base_error->scale : 1.0);
@@ -245,8 +247,9 @@ std::vector<PieceConvergence> radius_convergence(const ParamTrace& trace, const 
       times.push_back(trace.t_s[i]);
       // D pinned to the truth: only the radii decide.
       est.push_back({trace.r_left_m[i], trace.r_right_m[i], t.wheel_base_m});
-      const bool within = std::abs(trace.r_left_m[i] - t.wheel_radius_left_m) <= tolerance * t.wheel_radius_left_m &&
-                          std::abs(trace.r_right_m[i] - t.wheel_radius_right_m) <= tolerance * t.wheel_radius_right_m;
+      const bool within =
+          std::abs(trace.r_left_m[i] - t.wheel_radius_left_m) <= tolerance * t.wheel_radius_left_m &&
+          std::abs(trace.r_right_m[i] - t.wheel_radius_right_m) <= tolerance * t.wheel_radius_right_m;
       if (within && std::isnan(out[k].reached_s)) out[k].reached_s = trace.t_s[i] - origin;
     }
     const std::optional<double> c = convergence_time(times, est, t, tolerance);
@@ -293,8 +296,8 @@ ResamplingStudy run_resampling_study(const sim::Scenario& scenario, const StudyO
   const long total = options.runs + tasks;
   long done = 0;
   if (progress) progress(0, total);
-  const std::vector<PreparedRun> runs =
-      prepare_runs(scenario, nullptr, out.draws, out.threads_used, &done, total, progress);
+  const std::vector<PreparedRun> runs = prepare_runs(scenario, nullptr, out.draws, out.threads_used, &done,
+                                                     total, progress);
   double iterations = 0.0;
   for (const auto& r : runs) iterations += static_cast<double>(r.constant.samples.size());
   out.iterations_per_run = iterations / options.runs;
@@ -322,8 +325,9 @@ ResamplingStudy run_resampling_study(const sim::Scenario& scenario, const StudyO
     rr.w_rmse_rad_s = s.w_rmse_rad_s;
     const auto resampled = std::count_if(res.trace.estimate.begin(), res.trace.estimate.end(),
                                          [](const filters::CalibEstimate& x) { return x.resampled; });
-    rr.resampled_fraction =
-        res.trace.estimate.empty() ? kNaN : static_cast<double>(resampled) / static_cast<double>(res.trace.estimate.size());
+    rr.resampled_fraction = res.trace.estimate.empty() ? kNaN
+                                                       : static_cast<double>(resampled) /
+                                                             static_cast<double>(res.trace.estimate.size());
     rr.ms_per_iteration = res.ms_per_iteration;
   });
 
@@ -380,8 +384,8 @@ CalibrationStudy run_calibration_study(const sim::Scenario& constant, const sim:
   const long total = options.runs + tasks;
   long done = 0;
   if (progress) progress(0, total);
-  const std::vector<PreparedRun> runs =
-      prepare_runs(constant, &step, out.draws, out.threads_used, &done, total, progress);
+  const std::vector<PreparedRun> runs = prepare_runs(constant, &step, out.draws, out.threads_used, &done, total,
+                                                     progress);
   const std::vector<double> changes = runs.front().step.truth->change_times();
   if (!changes.empty()) out.step_time_s = changes.front();
   out.track_duration_s = runs.front().constant.t.back() - runs.front().constant.t.front();
@@ -415,8 +419,8 @@ CalibrationStudy run_calibration_study(const sim::Scenario& constant, const sim:
     mr.ms_per_iteration = res.ms_per_iteration;
     if (row.online) {
       ParamTrace trace = param_trace(res, in);
-      const std::vector<PieceConvergence> c =
-          radius_convergence(trace, *in.truth, in.t.front(), o.convergence_tolerance);
+      const std::vector<PieceConvergence> c = radius_convergence(trace, *in.truth, in.t.front(),
+                                                                 o.convergence_tolerance);
       mr.convergence_s = c.at(0).settled_s;
       mr.reached_s = c.at(0).reached_s;
       if (c.size() > 1) {
@@ -424,7 +428,8 @@ CalibrationStudy run_calibration_study(const sim::Scenario& constant, const sim:
         mr.rereached_s = c[1].reached_s;
       }
       const bool pf = row.method == CalibrationMethod::adaptive_pf;
-      auto& traces = pf ? (is_step ? out.pf_step : out.pf_constant) : (is_step ? out.dkf_step : out.dkf_constant);
+      auto& traces = pf ? (is_step ? out.pf_step : out.pf_constant)
+                        : (is_step ? out.dkf_step : out.dkf_constant);
       traces[run] = std::move(trace);
     }
   });

@@ -67,8 +67,8 @@ struct StudyOptions {
 // What Monte-Carlo run r draws (see the file comment).
 struct McDraw {
   int run = 0;
-  std::uint64_t seed = 0;             // options.seed + run
-  double truth_scale_l = 1.0;         // radius_error.scale_l of this run's truth
+  std::uint64_t seed = 0;      // options.seed + run
+  double truth_scale_l = 1.0;  // radius_error.scale_l of this run's truth
   double truth_scale_r = 1.0;
   filters::OdometryParams dkf_initial;  // DKF's initial radii (and nominal base)
 };
@@ -91,32 +91,32 @@ using StudyProgress = std::function<void(long done, long total)>;
 
 // One plain-PF run of one resampler × policy cell.
 struct ResamplingRunResult {
-  double err_rr_m = 0.0;           // |final R_R − true R_R| [m]
-  double err_rl_m = 0.0;           // |final R_L − true R_L| [m]
-  double v_rmse_m_s = 0.0;         // RMSE of the calibrated odometry's V vs the truth [m/s]
-  double w_rmse_rad_s = 0.0;       // likewise W [rad/s]
-  double resampled_fraction = 0.0; // iterations that resampled / iterations
-  double ms_per_iteration = 0.0;   // wall time [ms] (timing: varies run to run)
+  double err_rr_m = 0.0;            // |final R_R − true R_R| [m]
+  double err_rl_m = 0.0;            // |final R_L − true R_L| [m]
+  double v_rmse_m_s = 0.0;          // RMSE of the calibrated odometry's V vs the truth [m/s]
+  double w_rmse_rad_s = 0.0;        // likewise W [rad/s]
+  double resampled_fraction = 0.0;  // iterations that resampled / iterations
+  double ms_per_iteration = 0.0;    // wall time [ms] (timing: varies run to run)
 };
 
 struct ResamplingCell {
   filters::Resampler resampler = filters::Resampler::systematic;
   filters::ResamplePolicy policy = filters::ResamplePolicy::neff;
-  std::vector<ResamplingRunResult> runs;   // index = Monte-Carlo run
+  std::vector<ResamplingRunResult> runs;  // index = Monte-Carlo run
   MeanSd err_rr_m, err_rl_m, v_rmse_m_s, w_rmse_rad_s, resampled_fraction, ms_per_iteration;
 };
 
 struct ResamplingStudy {
-  std::string scenario;                  // the scenario's name
+  std::string scenario;  // the scenario's name
   StudyOptions options;
-  int threads_used = 0;                  // OpenMP threads the study ran on
-  std::vector<McDraw> draws;             // one per run
-  double iterations_per_run = 0.0;       // mean PF iterations (external measurements) per run
-  double track_duration_s = 0.0;         // run 0's track, first to last odometry row [s]
+  int threads_used = 0;             // OpenMP threads the study ran on
+  std::vector<McDraw> draws;        // one per run
+  double iterations_per_run = 0.0;  // mean PF iterations (external measurements) per run
+  double track_duration_s = 0.0;    // run 0's track, first to last odometry row [s]
   // 12 cells: resamplers in the paper's order (stratified, multinomial,
   // residual, systematic), each with policies neff, max_weight, every_step.
   std::vector<ResamplingCell> cells;
-  double wall_s = 0.0;                   // the whole study [s] (timing)
+  double wall_s = 0.0;  // the whole study [s] (timing)
 };
 
 // The paper's row order of Table I.
@@ -133,9 +133,9 @@ ResamplingStudy run_resampling_study(const sim::Scenario& scenario, const StudyO
 // iteration, t_s on the track's clock.
 struct ParamTrace {
   std::vector<double> t_s;
-  std::vector<double> r_right_m, r_left_m, wheel_base_m;               // estimates [m]
+  std::vector<double> r_right_m, r_left_m, wheel_base_m;                 // estimates [m]
   std::vector<double> true_r_right_m, true_r_left_m, true_wheel_base_m;  // the truth at t_s [m]
-  std::vector<int> particles;                                          // N (0 for the DKF)
+  std::vector<int> particles;                                            // N (0 for the DKF)
 };
 
 // Radii-only convergence (the paper's Table II: "when the error falls below
@@ -156,10 +156,10 @@ std::vector<PieceConvergence> radius_convergence(const ParamTrace& trace, const 
                                                  double start_s, double tolerance);
 
 struct MethodRunResult {
-  double err_rr_m = 0.0, err_rl_m = 0.0;   // |final − true| at the track's end [m]
-  double pose_rmse_m = 0.0;                // RMSE(x, y) of the calibrated odometry vs GT [m]
-  double heading_rmse_rad = 0.0;           // RMSE θ [rad]
-  double err_d_m = 0.0;                    // |final − true| of the wheel base [m]
+  double err_rr_m = 0.0, err_rl_m = 0.0;  // |final − true| at the track's end [m]
+  double pose_rmse_m = 0.0;               // RMSE(x, y) of the calibrated odometry vs GT [m]
+  double heading_rmse_rad = 0.0;          // RMSE θ [rad]
+  double err_d_m = 0.0;                   // |final − true| of the wheel base [m]
   // Radii-only convergence (radius_convergence()) [s]; NaN: never, or n.a.
   // (fixed-parameter methods). convergence = settled, reached = first within
   // tolerance; re* = the same after the first truth change.
@@ -167,28 +167,28 @@ struct MethodRunResult {
   double reached_s = std::numeric_limits<double>::quiet_NaN();
   double reconvergence_s = std::numeric_limits<double>::quiet_NaN();
   double rereached_s = std::numeric_limits<double>::quiet_NaN();
-  double mean_particles = 0.0;             // PF: mean N over iterations
-  double ms_per_iteration = 0.0;           // timing
+  double mean_particles = 0.0;    // PF: mean N over iterations
+  double ms_per_iteration = 0.0;  // timing
 };
 
 struct MethodRow {
-  std::string track;                        // "constant" or "step"
+  std::string track;  // "constant" or "step"
   CalibrationMethod method = CalibrationMethod::none;
-  std::vector<MethodRunResult> runs;        // index = Monte-Carlo run
-  MeanSd err_rr_m, err_rl_m, err_d_m, pose_rmse_m, heading_rmse_rad, convergence_s, reached_s,
-      reconvergence_s, rereached_s, mean_particles, ms_per_iteration;
-  bool online = false;                      // convergence is defined (adaptive-pf, dkf)
-  bool has_step = false;                    // the track's truth changes (re-convergence defined)
+  std::vector<MethodRunResult> runs;  // index = Monte-Carlo run
+  MeanSd err_rr_m, err_rl_m, err_d_m, pose_rmse_m, heading_rmse_rad, convergence_s, reached_s, reconvergence_s,
+      rereached_s, mean_particles, ms_per_iteration;
+  bool online = false;    // convergence is defined (adaptive-pf, dkf)
+  bool has_step = false;  // the track's truth changes (re-convergence defined)
 };
 
 struct CalibrationStudy {
-  std::string scenario, step_scenario;      // scenario names
+  std::string scenario, step_scenario;  // scenario names
   StudyOptions options;
   int threads_used = 0;
   std::vector<McDraw> draws;
   double step_time_s = std::numeric_limits<double>::quiet_NaN();  // first truth change of the step track
-  double track_duration_s = 0.0;            // run 0's constant track, first to last odometry row [s]
-  double convergence_tolerance = 0.0;       // fraction of the truth (the paper's 0.5 %)
+  double track_duration_s = 0.0;       // run 0's constant track, first to last odometry row [s]
+  double convergence_tolerance = 0.0;  // fraction of the truth (the paper's 0.5 %)
   // 8 rows: track constant then step, each with adaptive-pf, dkf, batch, none.
   std::vector<MethodRow> rows;
   // Per run (index = run): the adaptive PF on both tracks and the DKF on both.
@@ -201,7 +201,6 @@ std::vector<CalibrationMethod> table2_methods();
 
 // Throws std::invalid_argument for invalid options or scenarios.
 CalibrationStudy run_calibration_study(const sim::Scenario& constant, const sim::Scenario& step,
-                                       const StudyOptions& options,
-                                       const StudyProgress& progress = {});
+                                       const StudyOptions& options, const StudyProgress& progress = {});
 
 }  // namespace odotune

@@ -38,32 +38,36 @@ std::string per_step_csv(const FusionInput& in, const OdometrySeries& lstm, cons
       "t_s,v_true,w_true,v_learned,w_learned,v_kinematic,w_kinematic,x_true,y_true,theta_true,x_learned,y_learned,"
       "theta_learned,x_kinematic,y_kinematic,theta_kinematic\n";
   for (std::size_t k = 0; k < in.size(); ++k)
-    s += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", n(in.t[k]), n(in.v_true[k]), n(in.w_true[k]),
-                     n(lstm.v[k]), n(lstm.w[k]), n(kin.v[k]), n(kin.w[k]), n(in.gt_x[k]), n(in.gt_y[k]),
-                     n(in.gt_theta[k]), n(pl.x[k]), n(pl.y[k]), n(pl.theta[k]), n(pk.x[k]), n(pk.y[k]),
-                     n(pk.theta[k]));
+    s += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", n(in.t[k]), n(in.v_true[k]),
+                     n(in.w_true[k]), n(lstm.v[k]), n(lstm.w[k]), n(kin.v[k]), n(kin.w[k]), n(in.gt_x[k]),
+                     n(in.gt_y[k]), n(in.gt_theta[k]), n(pl.x[k]), n(pl.y[k]), n(pl.theta[k]), n(pk.x[k]),
+                     n(pk.y[k]), n(pk.theta[k]));
   return s;
 }
 
 // One line of errors: "  NAME  V MAE … θ RMSE … rad".
 std::string errors_line(const char* name, const OdometryErrors& e) {
-  return fmt::format("  {:<10} V MAE {:.4f} RMSE {:.4f} m/s   W MAE {:.4f} RMSE {:.4f} rad/s   XY RMSE {:.3f} m   "
-                     "θ RMSE {:.4f} rad",
-                     name, e.v.mae, e.v.rmse, e.w.mae, e.w.rmse, e.xy.rmse, e.theta.rmse);
+  return fmt::format(
+      "  {:<10} V MAE {:.4f} RMSE {:.4f} m/s   W MAE {:.4f} RMSE {:.4f} rad/s   XY RMSE {:.3f} m   "
+      "θ RMSE {:.4f} rad",
+      name, e.v.mae, e.v.rmse, e.w.mae, e.w.rmse, e.xy.rmse, e.theta.rmse);
 }
 
 nlohmann::json summary_json(const LstmTrainingSummary& s) {
   const auto n = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-  return {{"cost_before", n(s.initial_cost)}, {"cost_after", n(s.final_cost)}, {"mae_after", n(s.train_mae)},
-          {"iterations", s.iterations}, {"usable", s.usable}};
+  return {{"cost_before", n(s.initial_cost)},
+          {"cost_after", n(s.final_cost)},
+          {"mae_after", n(s.train_mae)},
+          {"iterations", s.iterations},
+          {"usable", s.usable}};
 }
 
 }  // namespace
 
 // ---------------------------------------------------------------- shared pieces
 
-std::vector<FusionInput> load_fusion_inputs(const std::vector<std::string>& files, double rate_hz, bool need_power,
-                                            const char* purpose) {
+std::vector<FusionInput> load_fusion_inputs(const std::vector<std::string>& files, double rate_hz,
+                                            bool need_power, const char* purpose) {
   const std::vector<Track> tracks = load_tracks(files);
   FusionInputOptions o;
   o.rate_hz = rate_hz;
@@ -78,11 +82,11 @@ std::vector<FusionInput> load_fusion_inputs(const std::vector<std::string>& file
     }
     const FusionInput& in = out.back();
     if (!in.has_gt)
-      throw Failure(fmt::format("{}: track '{}' has no ground truth (gt_x, gt_y, gt_theta); expected it {}", files[k],
-                                in.track_name, purpose));
+      throw Failure(fmt::format("{}: track '{}' has no ground truth (gt_x, gt_y, gt_theta); expected it {}",
+                                files[k], in.track_name, purpose));
     if (need_power && !in.has_power)
-      throw Failure(fmt::format("{}: track '{}' has no motor power (power_l, power_r); expected it {}", files[k],
-                                in.track_name, purpose));
+      throw Failure(fmt::format("{}: track '{}' has no motor power (power_l, power_r); expected it {}",
+                                files[k], in.track_name, purpose));
   }
   return out;
 }
@@ -115,9 +119,10 @@ LearnedModelFile load_learned_model(const std::string& path) {
 void check_model_fits(const LearnedModelFile& m, const FusionInput& in, const std::string& file,
                       const std::string& model) {
   if (std::abs(in.ticks_per_rev - m.odometry.ticks_per_rev) > 1e-9 * m.odometry.ticks_per_rev)
-    throw Failure(fmt::format("{}: track '{}' has ticks_per_rev = {}, the model {} was trained with {}; expected the "
-                              "same robot",
-                              file, in.track_name, in.ticks_per_rev, model, m.odometry.ticks_per_rev));
+    throw Failure(
+        fmt::format("{}: track '{}' has ticks_per_rev = {}, the model {} was trained with {}; expected the "
+                    "same robot",
+                    file, in.track_name, in.ticks_per_rev, model, m.odometry.ticks_per_rev));
 }
 
 // ---------------------------------------------------------------- train
@@ -125,9 +130,10 @@ void check_model_fits(const LearnedModelFile& m, const FusionInput& in, const st
 LearnTrainOutcome run_learn_train(const LearnTrainRequest& r, const LearnProgress& progress) {
   check_output_file("--model-out", r.model_out);
   if (r.iterations < 1) throw Failure(fmt::format("--iterations {}: expected >= 1", r.iterations));
-  const std::vector<FusionInput> tracks = load_fusion_inputs(r.tracks, r.rate_hz, false, "to learn odometry from");
-  const std::vector<FusionInput> slips =
-      load_fusion_inputs(r.slip_tracks, r.rate_hz, true, "to train the slip detector on");
+  const std::vector<FusionInput> tracks = load_fusion_inputs(r.tracks, r.rate_hz, false,
+                                                             "to learn odometry from");
+  const std::vector<FusionInput> slips = load_fusion_inputs(r.slip_tracks, r.rate_hz, true,
+                                                            "to train the slip detector on");
 
   const long total = slips.empty() ? 1 : 2;
   report(progress, 0, total);
@@ -150,7 +156,8 @@ LearnTrainOutcome run_learn_train(const LearnTrainRequest& r, const LearnProgres
       odo.push_back(run_learned_odometry(in, file.odometry));
     }
     SlipTrainingOptions so;
-    so.training = learn_training_options(r.seed, r.slip_iterations > 0 ? r.slip_iterations : r.iterations, r.threads);
+    so.training = learn_training_options(r.seed, r.slip_iterations > 0 ? r.slip_iterations : r.iterations,
+                                         r.threads);
     SlipTrainingSummary slip_summary;
     try {
       file.detector = train_slip_detector(pointers(slips), odo, so, &slip_summary);
@@ -192,19 +199,20 @@ std::vector<std::string> learn_train_lines(const LearnTrainOutcome& o) {
   std::vector<std::string> l;
   l.push_back(fmt::format("learned odometry trained on {} track{} ({} windows for training, {} for validation; "
                           "{:.1f} s)",
-                          o.tracks, o.tracks == 1 ? "" : "s", s.train_windows, s.validation_windows, s.seconds));
+                          o.tracks, o.tracks == 1 ? "" : "s", s.train_windows, s.validation_windows,
+                          s.seconds));
   l.push_back(fmt::format("  V net: MAE {:.4f} m/s (training), {:.4f} m/s (validation), {} iterations",
                           s.v.train_mae, s.v.validation_mae, s.v.iterations));
   l.push_back(fmt::format("  W net: MAE {:.4f} rad/s (training), {:.4f} rad/s (validation), {} iterations",
                           s.w.train_mae, s.w.validation_mae, s.w.iterations));
-  l.push_back(fmt::format("  kinematic odometry on the same tracks: MAE {:.4f} m/s, {:.4f} rad/s", o.kinematic_v_mae,
-                          o.kinematic_w_mae));
+  l.push_back(fmt::format("  kinematic odometry on the same tracks: MAE {:.4f} m/s, {:.4f} rad/s",
+                          o.kinematic_v_mae, o.kinematic_w_mae));
   if (o.detector)
-    l.push_back(fmt::format("slip detector trained on {} track{} ({} + {} windows; {:.1f} s): variance MAE V {:.3g}, W "
-                            "{:.3g} (validation)",
-                            o.slip_tracks, o.slip_tracks == 1 ? "" : "s", o.detector->train_windows,
-                            o.detector->validation_windows, o.detector->seconds, o.detector->v.validation_mae,
-                            o.detector->w.validation_mae));
+    l.push_back(fmt::format(
+        "slip detector trained on {} track{} ({} + {} windows; {:.1f} s): variance MAE V {:.3g}, W "
+        "{:.3g} (validation)",
+        o.slip_tracks, o.slip_tracks == 1 ? "" : "s", o.detector->train_windows, o.detector->validation_windows,
+        o.detector->seconds, o.detector->v.validation_mae, o.detector->w.validation_mae));
   l.push_back(fmt::format("model: {}", o.model_out));
   return l;
 }
@@ -215,8 +223,8 @@ LearnEvalOutcome run_learn_eval(const LearnEvalRequest& r) {
   check_output_file("--json", r.json);
   check_output_file("--csv", r.csv);
   const LearnedModelFile m = load_learned_model(r.model);
-  const std::vector<FusionInput> tracks =
-      load_fusion_inputs({r.track}, m.odometry.rate_hz, false, "to score the odometry against");
+  const std::vector<FusionInput> tracks = load_fusion_inputs({r.track}, m.odometry.rate_hz, false,
+                                                             "to score the odometry against");
   const FusionInput& in = tracks.front();
   check_model_fits(m, in, r.track, r.model);
   const OdometrySeries lstm = run_learned_odometry(in, m.odometry);
@@ -225,8 +233,11 @@ LearnEvalOutcome run_learn_eval(const LearnEvalRequest& r) {
   LearnEvalOutcome out;
   out.learned = odometry_errors(in, lstm.v, lstm.w, {}, {}, {}, &pl);
   out.kinematic = odometry_errors(in, kin.v, kin.w, {}, {}, {}, &pk);
-  const nlohmann::json j = {{"track", in.track_name}, {"file", r.track}, {"model", r.model},
-                            {"rate_hz", m.odometry.rate_hz}, {"learned", flat_errors_json(out.learned)},
+  const nlohmann::json j = {{"track", in.track_name},
+                            {"file", r.track},
+                            {"model", r.model},
+                            {"rate_hz", m.odometry.rate_hz},
+                            {"learned", flat_errors_json(out.learned)},
                             {"kinematic", flat_errors_json(out.kinematic)}};
   if (!r.csv.empty()) write_file_atomically(r.csv, per_step_csv(in, lstm, kin, pl, pk));
   if (!r.json.empty()) write_file_atomically(r.json, j.dump(2) + "\n");
@@ -242,8 +253,8 @@ LearnEvalOutcome run_learn_eval(const LearnEvalRequest& r) {
 
 std::vector<std::string> learn_eval_lines(const LearnEvalOutcome& o) {
   std::vector<std::string> l;
-  l.push_back(fmt::format("track {} ({}), {} steps at {:g} Hz, model {}:", o.track_name, o.file, o.steps, o.rate_hz,
-                          o.model));
+  l.push_back(fmt::format("track {} ({}), {} steps at {:g} Hz, model {}:", o.track_name, o.file, o.steps,
+                          o.rate_hz, o.model));
   l.push_back(errors_line("learned", o.learned));
   l.push_back(errors_line("kinematic", o.kinematic));
   if (!o.csv.empty()) l.push_back(fmt::format("csv: {}", o.csv));
@@ -260,24 +271,28 @@ LearnRetrainOutcome run_learn_retrain(const LearnRetrainRequest& r, const LearnP
   if (r.iterations < 1) throw Failure(fmt::format("--iterations {}: expected >= 1", r.iterations));
   const LearnedModelFile m = load_learned_model(r.model);
   const bool detector = m.detector && !r.static_covariance;
-  const std::vector<FusionInput> tracks =
-      load_fusion_inputs({r.track}, m.odometry.rate_hz, detector, "(the model's slip detector reads it; or give "
-                                                                  "--static-covariance)");
+  const std::vector<FusionInput> tracks = load_fusion_inputs({r.track}, m.odometry.rate_hz, detector,
+                                                             "(the model's slip detector reads it; or give "
+                                                             "--static-covariance)");
   const FusionInput& in = tracks.front();
   check_model_fits(m, in, r.track, r.model);
   if (!in.has_ext)
-    throw Failure(fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext); expected them: the UKF "
-                              "retrains on its fused velocities",
-                              r.track, in.track_name));
+    throw Failure(
+        fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext); expected them: the UKF "
+                    "retrains on its fused velocities",
+                    r.track, in.track_name));
 
   LearnedFusionOptions o;
   o.odometry = LearnedFusionOptions::Odometry::learned;
   o.detector = detector ? &*m.detector : nullptr;
   // Without a detector: a Gaussian's variance from the validation MAE, σ = MAE·√(π/2).
-  o.static_var_v = std::max(1e-8, m.odometry.v_validation_mae * m.odometry.v_validation_mae * std::numbers::pi / 2);
-  o.static_var_w = std::max(1e-8, m.odometry.w_validation_mae * m.odometry.w_validation_mae * std::numbers::pi / 2);
+  o.static_var_v = std::max(1e-8,
+                            m.odometry.v_validation_mae * m.odometry.v_validation_mae * std::numbers::pi / 2);
+  o.static_var_w = std::max(1e-8,
+                            m.odometry.w_validation_mae * m.odometry.w_validation_mae * std::numbers::pi / 2);
   o.retrain.samples_per_retrain = r.every;
-  o.retrain.training = learn_training_options(m.provenance.seed, r.iterations, r.threads, default_retrain_training());
+  o.retrain.training = learn_training_options(m.provenance.seed, r.iterations, r.threads,
+                                              default_retrain_training());
 
   report(progress, 0, 2);
   LearnedFusionResult with, without;
@@ -301,7 +316,10 @@ LearnRetrainOutcome run_learn_retrain(const LearnRetrainRequest& r, const LearnP
   };
   nlohmann::json events = nlohmann::json::array();
   for (const RetrainEvent& e : with.retrains)
-    events.push_back({{"step", e.step}, {"t_s", e.t_s}, {"ms", 1e3 * e.seconds}, {"v", summary_json(e.v)},
+    events.push_back({{"step", e.step},
+                      {"t_s", e.t_s},
+                      {"ms", 1e3 * e.seconds},
+                      {"v", summary_json(e.v)},
                       {"w", summary_json(e.w)}});
   const nlohmann::json j = {{"track", in.track_name},
                             {"file", r.track},
@@ -345,15 +363,17 @@ std::vector<std::string> learn_retrain_lines(const LearnRetrainOutcome& o) {
                           o.track_name, o.file, n, n == 1 ? "" : "s", o.every, o.iterations,
                           o.detector ? "slip-detector" : "static"));
   if (o.retrains.empty())
-    l.push_back(fmt::format("  no retrain: fewer than {} steps had filter variances below {:g}/{:g} and odometry "
-                            "variances below {:g}/{:g} (V/W) — the retraining gate of paper §4.2",
-                            o.every, o.gate.max_filter_var_v, o.gate.max_filter_var_w, o.gate.max_odometry_var_v,
-                            o.gate.max_odometry_var_w));
+    l.push_back(
+        fmt::format("  no retrain: fewer than {} steps had filter variances below {:g}/{:g} and odometry "
+                    "variances below {:g}/{:g} (V/W) — the retraining gate of paper §4.2",
+                    o.every, o.gate.max_filter_var_v, o.gate.max_filter_var_w, o.gate.max_odometry_var_v,
+                    o.gate.max_odometry_var_w));
   for (const RetrainEvent& e : o.retrains)
-    l.push_back(fmt::format("  t = {:8.2f} s (step {:5}): {:7.1f} ms; V cost {:.4g} → {:.4g} (MAE {:.4f} m/s), W cost "
-                            "{:.4g} → {:.4g} (MAE {:.4f} rad/s)",
-                            e.t_s, e.step, 1e3 * e.seconds, e.v.initial_cost, e.v.final_cost, e.v.train_mae,
-                            e.w.initial_cost, e.w.final_cost, e.w.train_mae));
+    l.push_back(
+        fmt::format("  t = {:8.2f} s (step {:5}): {:7.1f} ms; V cost {:.4g} → {:.4g} (MAE {:.4f} m/s), W cost "
+                    "{:.4g} → {:.4g} (MAE {:.4f} rad/s)",
+                    e.t_s, e.step, 1e3 * e.seconds, e.v.initial_cost, e.v.final_cost, e.v.train_mae,
+                    e.w.initial_cost, e.w.final_cost, e.w.train_mae));
   l.push_back("odometry fed to the UKF, against the ground truth:");
   l.push_back(errors_line("retrained", o.retrained));
   l.push_back(errors_line("fixed", o.fixed));

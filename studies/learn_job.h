@@ -39,8 +39,8 @@ using LearnProgress = std::function<void(long done, long total)>;
 // Loads track files and lays them out for fusion at `rate_hz`; every track
 // must have ground truth, and motor power when `need_power`. `purpose` ends
 // the error line ("expected it " + purpose).
-std::vector<FusionInput> load_fusion_inputs(const std::vector<std::string>& files, double rate_hz, bool need_power,
-                                            const char* purpose);
+std::vector<FusionInput> load_fusion_inputs(const std::vector<std::string>& files, double rate_hz,
+                                            bool need_power, const char* purpose);
 
 // `base`: a fresh training's defaults, or default_retrain_training() for refits.
 LstmTrainingOptions learn_training_options(std::uint64_t seed, int iterations, int threads,
@@ -61,23 +61,23 @@ void check_model_fits(const results::LearnedModelFile& m, const FusionInput& in,
 // ---------------------------------------------------------------- train
 
 struct LearnTrainRequest {
-  std::vector<std::string> tracks;        // with ground truth: the velocity nets
-  std::vector<std::string> slip_tracks;   // with motor power: the slip detector (none: no detector)
-  std::string model_out;                  // --model-out, required
+  std::vector<std::string> tracks;       // with ground truth: the velocity nets
+  std::vector<std::string> slip_tracks;  // with motor power: the slip detector (none: no detector)
+  std::string model_out;                 // --model-out, required
   std::uint64_t seed = 1;
-  int iterations = 100;                   // Ceres iterations per velocity net, ≥ 1
-  int slip_iterations = 0;                // per detector net (0 = iterations)
-  double rate_hz = 10.0;                  // network rate [Hz], (0, 1000]
-  double previous_noise = -1.0;           // σ on the teacher-forced previous V [m/s] and W [rad/s]; < 0 = the study's
-  int threads = 1;                        // OpenMP threads evaluating the windows; results do not depend on it
-  std::string command;                    // the model's provenance.created_by
+  int iterations = 100;          // Ceres iterations per velocity net, ≥ 1
+  int slip_iterations = 0;       // per detector net (0 = iterations)
+  double rate_hz = 10.0;         // network rate [Hz], (0, 1000]
+  double previous_noise = -1.0;  // σ on the teacher-forced previous V [m/s] and W [rad/s]; < 0 = the study's
+  int threads = 1;               // OpenMP threads evaluating the windows; results do not depend on it
+  std::string command;           // the model's provenance.created_by
 };
 
 struct LearnTrainOutcome {
   std::size_t tracks = 0, slip_tracks = 0;
   LearnedTrainingSummary odometry;
-  std::optional<SlipTrainingSummary> detector;      // when slip tracks were given
-  double kinematic_v_mae = 0.0, kinematic_w_mae = 0.0;   // pooled over the training tracks
+  std::optional<SlipTrainingSummary> detector;          // when slip tracks were given
+  double kinematic_v_mae = 0.0, kinematic_w_mae = 0.0;  // pooled over the training tracks
   std::string model_out;
 };
 
@@ -92,16 +92,16 @@ std::vector<std::string> learn_train_lines(const LearnTrainOutcome& outcome);
 // ---------------------------------------------------------------- eval
 
 struct LearnEvalRequest {
-  std::string track;   // with ground truth
-  std::string model;   // model file
-  std::string json;    // optional: errors of the learned and the kinematic odometry
-  std::string csv;     // optional: velocities and dead-reckoned poses per step
+  std::string track;  // with ground truth
+  std::string model;  // model file
+  std::string json;   // optional: errors of the learned and the kinematic odometry
+  std::string csv;    // optional: velocities and dead-reckoned poses per step
 };
 
 struct LearnEvalOutcome {
   std::string track_name, file, model, json, csv;
   std::size_t steps = 0;
-  double rate_hz = 0.0;             // the model's [Hz]
+  double rate_hz = 0.0;  // the model's [Hz]
   OdometryErrors learned, kinematic;
 };
 
@@ -114,22 +114,22 @@ std::vector<std::string> learn_eval_lines(const LearnEvalOutcome& outcome);
 // ---------------------------------------------------------------- retrain
 
 struct LearnRetrainRequest {
-  std::string track;                // with ground truth and external velocities
-  std::string model;                // model file to start from
-  std::string model_out;            // optional: the retrained model
-  std::string json;                 // optional: retrain events, errors with and without retraining
-  int every = 300;                  // samples per retrain, ≥ 20
-  int iterations = 10;              // Ceres iterations per refit, ≥ 1
-  bool static_covariance = false;   // ignore the model's slip detector
+  std::string track;               // with ground truth and external velocities
+  std::string model;               // model file to start from
+  std::string model_out;           // optional: the retrained model
+  std::string json;                // optional: retrain events, errors with and without retraining
+  int every = 300;                 // samples per retrain, ≥ 20
+  int iterations = 10;             // Ceres iterations per refit, ≥ 1
+  bool static_covariance = false;  // ignore the model's slip detector
   int threads = 1;
-  std::string command;              // the retrained model's provenance.created_by
+  std::string command;  // the retrained model's provenance.created_by
 };
 
 struct LearnRetrainOutcome {
   std::string track_name, file, model_out, json;
   int every = 0, iterations = 0;
-  bool detector = false;            // slip-detector covariance (else static)
-  RetrainOptions gate;              // the retraining gate's thresholds
+  bool detector = false;  // slip-detector covariance (else static)
+  RetrainOptions gate;    // the retraining gate's thresholds
   std::vector<RetrainEvent> retrains;
   OdometryErrors retrained, fixed;  // the odometry fed to the UKF, with and without retraining
 };

@@ -83,7 +83,8 @@ Table3Row table3_row(const std::string& name, const FusionInput& in, const Learn
   row.name = name;
   row.healthy = r.filter.healthy;
   PoseTrack pose{r.filter.x, r.filter.y, r.filter.theta};
-  row.filter = odometry_errors(in, r.filter.v, r.filter.w, r.filter.var_v, r.filter.var_w, r.filter.cov_vw, &pose);
+  row.filter = odometry_errors(in, r.filter.v, r.filter.w, r.filter.var_v, r.filter.var_w, r.filter.cov_vw,
+                               &pose);
   row.odometry = odometry_errors(in, r.odometry.v, r.odometry.w, r.odo_var_v, r.odo_var_w, {});
   row.path = path_of(pose);
   row.odo_var_v = r.odo_var_v;
@@ -114,8 +115,10 @@ void check_role(const sim::Scenario& s, const char* role, bool power, bool slip,
   if (slip && s.slip_episodes.empty())
     throw std::invalid_argument(name + ": needs slip episodes (slip_episodes)");
   if (fusion && !s.sensors.ext_velocity.enabled)
-    throw std::invalid_argument(name + ": needs the external velocity sensor (sensors.ext_velocity) for the UKF");
-  if (fusion && !s.sensors.gyro.enabled) throw std::invalid_argument(name + ": needs the gyro (sensors.gyro) for the UKF");
+    throw std::invalid_argument(name +
+                                ": needs the external velocity sensor (sensors.ext_velocity) for the UKF");
+  if (fusion && !s.sensors.gyro.enabled)
+    throw std::invalid_argument(name + ": needs the gyro (sensors.gyro) for the UKF");
   if (step && !s.effects.radius_step)
     throw std::invalid_argument(name + ": needs a radius change (effects.radius_step)");
 }
@@ -127,12 +130,14 @@ bool LearnedStudyOptions::IsValid(std::string* why) const {
     if (why) *why = m;
     return false;
   };
-  if (iterations < 1 || iterations > 10000) return fail(fmt::format("iterations = {} must be in 1..10000", iterations));
+  if (iterations < 1 || iterations > 10000)
+    return fail(fmt::format("iterations = {} must be in 1..10000", iterations));
   if (retrain_iterations < 1 || retrain_iterations > 10000)
     return fail(fmt::format("retrain_iterations = {} must be in 1..10000", retrain_iterations));
   if (samples_per_retrain < 20 || samples_per_retrain > 100000)
     return fail(fmt::format("samples_per_retrain = {} must be in 20..100000", samples_per_retrain));
-  if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) return fail(fmt::format("rate_hz = {} must be in (0, 1000]", rate_hz));
+  if (!(rate_hz > 0.0 && rate_hz <= 1000.0))
+    return fail(fmt::format("rate_hz = {} must be in (0, 1000]", rate_hz));
   if (!(previous_noise_v >= 0.0 && std::isfinite(previous_noise_v)) ||
       !(previous_noise_w >= 0.0 && std::isfinite(previous_noise_w)))
     return fail("previous_noise_v/_w must be finite and >= 0");
@@ -153,19 +158,21 @@ void check_learned_scenarios(const LearnedStudyScenarios& s) {
 
 FusionInput slice_fusion_input(const FusionInput& in, std::size_t first) {
   if (first == 0 || first + 1 > in.size())
-    throw std::invalid_argument(fmt::format("track '{}': cannot take steps {}.. of {}: fewer than 2 steps remain",
-                                            in.track_name, first, in.size()));
+    throw std::invalid_argument(
+        fmt::format("track '{}': cannot take steps {}.. of {}: fewer than 2 steps remain", in.track_name, first,
+                    in.size()));
   FusionInput out = in;
   const std::size_t from = first - 1;
   for (std::vector<double>* v : {&out.t, &out.dticks_l, &out.dticks_r, &out.v_kin, &out.w_kin, &out.power_l,
-                                 &out.power_r, &out.v_ext, &out.w_ext, &out.v_ext_var, &out.w_ext_var, &out.gyro_z,
-                                 &out.gt_x, &out.gt_y, &out.gt_theta, &out.v_true, &out.w_true})
+                                 &out.power_r, &out.v_ext, &out.w_ext, &out.v_ext_var, &out.w_ext_var,
+                                 &out.gyro_z, &out.gt_x, &out.gt_y, &out.gt_theta, &out.v_true, &out.w_true})
     if (!v->empty()) v->erase(v->begin(), v->begin() + static_cast<std::ptrdiff_t>(std::min(from, v->size())));
   // Step 0 has no interval (fusion_input.h).
-  for (std::vector<double>* v : {&out.dticks_l, &out.dticks_r, &out.v_kin, &out.w_kin, &out.v_true, &out.w_true})
+  for (std::vector<double>* v :
+       {&out.dticks_l, &out.dticks_r, &out.v_kin, &out.w_kin, &out.v_true, &out.w_true})
     if (!v->empty()) (*v)[0] = 0.0;
-  for (std::vector<double>* v : {&out.power_l, &out.power_r, &out.v_ext, &out.w_ext, &out.v_ext_var, &out.w_ext_var,
-                                 &out.gyro_z})
+  for (std::vector<double>* v :
+       {&out.power_l, &out.power_r, &out.v_ext, &out.w_ext, &out.v_ext_var, &out.w_ext_var, &out.gyro_z})
     if (!v->empty()) (*v)[0] = kNaN;
   return out;
 }
@@ -220,7 +227,8 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
     try {
       inputs.push_back(build_fusion_input(track, fo));
     } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(fmt::format("{} scenario '{}': {}", kLearnedScenarioRoles[i], roles[i]->name, e.what()));
+      throw std::invalid_argument(fmt::format("{} scenario '{}': {}", kLearnedScenarioRoles[i], roles[i]->name,
+                                              e.what()));
     }
     if (!inputs.back().has_gt)
       throw std::invalid_argument(fmt::format("{} scenario '{}': the simulated track has no ground truth",
@@ -239,9 +247,10 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
     s.name = fmt::format("{}_random{}", scenarios.slip.name, j);
     stage.next(fmt::format("simulating {}", s.name));
     if (s.slip_episodes.empty())
-      throw std::invalid_argument(fmt::format("slip scenario '{}': its route has no stretch long and fast enough "
-                                              "for a random slip episode (tracks/random_slip.h)",
-                                              scenarios.slip.name));
+      throw std::invalid_argument(
+          fmt::format("slip scenario '{}': its route has no stretch long and fast enough "
+                      "for a random slip episode (tracks/random_slip.h)",
+                      scenarios.slip.name));
     out.slip_drives.push_back({s.seed, s.slip_episodes});
     extra.push_back(build_fusion_input(sim::simulate(s), fo));
   }
@@ -290,9 +299,10 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
   for (double v : {out.static_var_lstm_v, out.static_var_lstm_w, out.static_var_kin_v, out.static_var_kin_w,
                    out.static_var_gyro})
     if (!(v > 0.0) || !std::isfinite(v))
-      throw std::invalid_argument(fmt::format("slip scenario '{}': the odometry's mean squared error there is {}: "
-                                              "expected a finite value > 0 for the static variance",
-                                              scenarios.slip.name, v));
+      throw std::invalid_argument(
+          fmt::format("slip scenario '{}': the odometry's mean squared error there is {}: "
+                      "expected a finite value > 0 for the static variance",
+                      scenarios.slip.name, v));
 
   // 4. Table 1.
   stage.next("Table 1: odometry on the evaluation track");
@@ -328,7 +338,8 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
 
     stage.next("Table 2: LSTM with retraining");
     const LearnedFusionResult re = run_learned_fusion(
-        step, &out.model, fusion_options(options, Odo::learned, det, out.static_var_lstm_v, out.static_var_lstm_w, true));
+        step, &out.model,
+        fusion_options(options, Odo::learned, det, out.static_var_lstm_v, out.static_var_lstm_w, true));
     Table2Row r = table2_row("LSTM retraining", step, after, t.change_step, re.odometry);
     r.retrains = static_cast<int>(re.retrains.size());
     double ms = 0.0;
@@ -353,7 +364,8 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
 
     stage.next("Table 2: LSTM without retraining");
     const LearnedFusionResult no = run_learned_fusion(
-        step, &out.model, fusion_options(options, Odo::learned, det, out.static_var_lstm_v, out.static_var_lstm_w, false));
+        step, &out.model,
+        fusion_options(options, Odo::learned, det, out.static_var_lstm_v, out.static_var_lstm_w, false));
     t.rows.push_back(table2_row("LSTM no retraining", step, after, t.change_step, no.odometry));
 
     stage.next("Table 2: traditional odometry");
@@ -372,8 +384,8 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
     stage.next("Table 3: LSTM + variable covariance");
     const LearnedFusionResult var = run_learned_fusion(
         slip_eval, &out.model,
-        fusion_options(options, Odo::learned, &out.detector, out.static_var_lstm_v, out.static_var_lstm_w, false,
-                       out.static_var_gyro));
+        fusion_options(options, Odo::learned, &out.detector, out.static_var_lstm_v, out.static_var_lstm_w,
+                       false, out.static_var_gyro));
     t.rows.push_back(table3_row("LSTM odometry + variable covariance", slip_eval, var));
     t.lstm_sq_error_v = abs_errors(var.odometry.v, slip_eval.v_true);
     t.lstm_sq_error_w = abs_errors(var.odometry.w, slip_eval.w_true);

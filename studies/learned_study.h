@@ -54,11 +54,11 @@
 namespace odotune {
 
 struct LearnedStudyOptions {
-  std::uint64_t seed = 1;          // scenario i simulated with seed + i; Ceres initial weights
-  int iterations = 100;            // Ceres iterations of each initial training (velocity nets, detector), 1..10000
-  int retrain_iterations = 10;     // Ceres iterations of each online retrain (paper §4.2), 1..10000
-  int samples_per_retrain = 300;   // paper §4.2, 20..100000
-  double rate_hz = 10.0;           // fusion / network rate (paper: 10 Hz), (0, 1000]
+  std::uint64_t seed = 1;       // scenario i simulated with seed + i; Ceres initial weights
+  int iterations = 100;         // Ceres iterations of each initial training (velocity nets, detector), 1..10000
+  int retrain_iterations = 10;  // Ceres iterations of each online retrain (paper §4.2), 1..10000
+  int samples_per_retrain = 300;  // paper §4.2, 20..100000
+  double rate_hz = 10.0;          // fusion / network rate (paper: 10 Hz), (0, 1000]
   // Noise on the teacher-forced previous velocity while training [m/s, rad/s]
   // (LearnedTrainingOptions), ≥ 0. 0: on short simulated drives 0.02 made the
   // V net's validation MAE worse, not better (tried with `learn train
@@ -69,8 +69,8 @@ struct LearnedStudyOptions {
   // 1..20. One drive teaches the detector its ten episodes, not slip: trained
   // on wheelchair_slip alone it missed episodes of the held-out drive.
   int slip_drives = 4;
-  int slip_stride = 1;             // every n-th detector window (SlipTrainingOptions::stride), ≥ 1
-  int threads = 1;                 // OpenMP threads evaluating the windows; results do not depend on it, ≥ 1
+  int slip_stride = 1;  // every n-th detector window (SlipTrainingOptions::stride), ≥ 1
+  int threads = 1;      // OpenMP threads evaluating the windows; results do not depend on it, ≥ 1
   bool IsValid(std::string* why) const;
 };
 
@@ -93,31 +93,31 @@ struct PathSeries {
 };
 
 struct ErrorRow {
-  std::string name;                // the paper's row label
+  std::string name;  // the paper's row label
   OdometryErrors errors;
 };
 
 // ---------------------------------------------------------------- Table 1
 struct Table1Result {
   std::string track;
-  std::vector<ErrorRow> rows;      // "LSTM odometry", "Traditional odometry"
+  std::vector<ErrorRow> rows;  // "LSTM odometry", "Traditional odometry"
   PathSeries truth, lstm, traditional;
 };
 
 // ---------------------------------------------------------------- Table 2
 struct Table2Row {
-  std::string name;                // "LSTM retraining", "LSTM no retraining", "Traditional odometry"
-  OdometryErrors whole;            // the whole track
-  OdometryErrors after;            // from the radius change on (pose re-reckoned from the true pose there)
-  int retrains = 0;                // online refits
+  std::string name;      // "LSTM retraining", "LSTM no retraining", "Traditional odometry"
+  OdometryErrors whole;  // the whole track
+  OdometryErrors after;  // from the radius change on (pose re-reckoned from the true pose there)
+  int retrains = 0;      // online refits
   double ms_per_retrain = std::numeric_limits<double>::quiet_NaN();  // mean wall time of one refit (timing)
-  std::vector<double> v_abs_error, w_abs_error;   // |odometry − truth| per step (NaN without truth)
+  std::vector<double> v_abs_error, w_abs_error;  // |odometry − truth| per step (NaN without truth)
 };
 
 struct RetrainRecord {
   std::size_t step = 0;
   double t_s = 0.0;
-  double ms = 0.0;                 // timing
+  double ms = 0.0;  // timing
   // RetrainEvent gives no MAE before the refit: the Ceres cost (½ Σ ρ over the
   // samples, standardised units) before and after, and the MAE after [m/s, rad/s].
   double v_cost_before = 0.0, v_cost_after = 0.0, v_mae_after = 0.0;
@@ -127,43 +127,43 @@ struct RetrainRecord {
 
 struct Table2Result {
   std::string track;
-  double change_t_s = 0.0;         // the radius_step time [s]
-  std::size_t change_step = 0;     // first step at or after it
-  std::vector<double> t_s;         // step times
+  double change_t_s = 0.0;      // the radius_step time [s]
+  std::size_t change_step = 0;  // first step at or after it
+  std::vector<double> t_s;      // step times
   std::vector<Table2Row> rows;
-  std::vector<RetrainRecord> retrains;   // of the retraining row
-  PathSeries truth;                // for completeness of results.json
+  std::vector<RetrainRecord> retrains;  // of the retraining row
+  PathSeries truth;                     // for completeness of results.json
 };
 
 // ---------------------------------------------------------------- Table 3
 struct Table3Row {
-  std::string name;                // "LSTM odometry + variable covariance", ...
-  OdometryErrors filter;           // UKF output (V, W and its integrated pose); v/w.nees = NEES_Filter
-  OdometryErrors odometry;         // the odometry fed to it with its variance; v/w.nees = NEES_Odom
+  std::string name;         // "LSTM odometry + variable covariance", ...
+  OdometryErrors filter;    // UKF output (V, W and its integrated pose); v/w.nees = NEES_Filter
+  OdometryErrors odometry;  // the odometry fed to it with its variance; v/w.nees = NEES_Odom
   bool healthy = true;
-  PathSeries path;                 // UKF pose
-  std::vector<double> odo_var_v, odo_var_w;   // the odometry variance fed [(m/s)², (rad/s)²]
+  PathSeries path;                           // UKF pose
+  std::vector<double> odo_var_v, odo_var_w;  // the odometry variance fed [(m/s)², (rad/s)²]
 };
 
 struct Table3Result {
   std::string track;
   std::vector<Table3Row> rows;
   std::vector<double> t_s;
-  std::vector<sim::SlipEpisode> episodes;   // the slip_eval scenario's
-  std::vector<double> lstm_sq_error_v, lstm_sq_error_w;   // (LSTM odometry − truth)² per step
+  std::vector<sim::SlipEpisode> episodes;                // the slip_eval scenario's
+  std::vector<double> lstm_sq_error_v, lstm_sq_error_w;  // (LSTM odometry − truth)² per step
   PathSeries truth;
 };
 
 struct TrainingRecord {
   LearnedTrainingSummary odometry;
   SlipTrainingSummary detector;
-  double kinematic_v_mae = 0.0, kinematic_w_mae = 0.0;   // on the learn track, for comparison
+  double kinematic_v_mae = 0.0, kinematic_w_mae = 0.0;  // on the learn track, for comparison
 };
 
 struct LearnedStudy {
   LearnedStudyOptions options;
-  std::vector<std::string> scenario_names;   // kLearnedScenarioRoles order
-  std::vector<std::string> track_names;      // the simulated tracks' names
+  std::vector<std::string> scenario_names;  // kLearnedScenarioRoles order
+  std::vector<std::string> track_names;     // the simulated tracks' names
   // The detector's training drives: `slip` then the random layouts (step 1).
   struct SlipDrive {
     std::uint64_t seed = 0;
@@ -173,7 +173,7 @@ struct LearnedStudy {
   LearnedOdometryModel model;
   SlipDetectorModel detector;
   TrainingRecord training;
-  double static_var_lstm_v = 0.0, static_var_lstm_w = 0.0;   // step 3 [(m/s)², (rad/s)²]
+  double static_var_lstm_v = 0.0, static_var_lstm_w = 0.0;  // step 3 [(m/s)², (rad/s)²]
   double static_var_kin_v = 0.0, static_var_kin_w = 0.0;
   // The gyro's static variance in Table 3's fusion: its mean squared error
   // (gyro_z − true W) over the detector's training drives; the UKF default
@@ -182,7 +182,7 @@ struct LearnedStudy {
   Table1Result table1;
   Table2Result table2;
   Table3Result table3;
-  double wall_s = 0.0;                        // timing
+  double wall_s = 0.0;  // timing
 };
 
 // Progress: (stage done, stages total) and the stage's name.

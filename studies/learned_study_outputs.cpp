@@ -21,7 +21,7 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // ---------------------------------------------------------------- metric blocks
 
 enum class Metric { mae, rmse, r2, nees_odom, nees_filter };
-constexpr int kColumns = 4;   // V, W, X-Y, θ
+constexpr int kColumns = 4;  // V, W, X-Y, θ
 const char* const kColumnHeaders[kColumns] = {"V (m/s)", "W (rad/s)", "X-Y (m)", "θ (rad)"};
 const char* const kColumnCsv[kColumns] = {"V_m_s", "W_rad_s", "XY_m", "theta_rad"};
 
@@ -53,7 +53,7 @@ Values values_of(const OdometryErrors& e, Metric m) {
   switch (m) {
     case Metric::mae: return {e.v.mae, e.w.mae, e.xy.mae, e.theta.mae};
     case Metric::rmse: return {e.v.rmse, e.w.rmse, e.xy.rmse, e.theta.rmse};
-    case Metric::r2: return {e.v.r2, e.w.r2, e.xy.r2, kNaN};   // θ has no R² (paper: "–")
+    case Metric::r2: return {e.v.r2, e.w.r2, e.xy.r2, kNaN};  // θ has no R² (paper: "–")
     case Metric::nees_odom:
     case Metric::nees_filter: return {e.v.nees, e.w.nees, kNaN, kNaN};
   }
@@ -117,24 +117,27 @@ std::string metric_csv_rows(const std::string& prefix, const MethodValues& mv, c
 }
 
 MethodValues table1_method(const ErrorRow& r) {
-  return {r.name, {{Metric::mae, values_of(r.errors, Metric::mae)},
-                   {Metric::rmse, values_of(r.errors, Metric::rmse)},
-                   {Metric::r2, values_of(r.errors, Metric::r2)}}};
+  return {r.name,
+          {{Metric::mae, values_of(r.errors, Metric::mae)},
+           {Metric::rmse, values_of(r.errors, Metric::rmse)},
+           {Metric::r2, values_of(r.errors, Metric::r2)}}};
 }
 
 MethodValues table2_method(const Table2Row& r, bool after) {
   const OdometryErrors& e = after ? r.after : r.whole;
-  return {r.name, {{Metric::mae, values_of(e, Metric::mae)},
-                   {Metric::rmse, values_of(e, Metric::rmse)},
-                   {Metric::r2, values_of(e, Metric::r2)}}};
+  return {r.name,
+          {{Metric::mae, values_of(e, Metric::mae)},
+           {Metric::rmse, values_of(e, Metric::rmse)},
+           {Metric::r2, values_of(e, Metric::r2)}}};
 }
 
 MethodValues table3_method(const Table3Row& r) {
-  return {r.name, {{Metric::mae, values_of(r.filter, Metric::mae)},
-                   {Metric::rmse, values_of(r.filter, Metric::rmse)},
-                   {Metric::r2, values_of(r.filter, Metric::r2)},
-                   {Metric::nees_odom, values_of(r.odometry, Metric::nees_odom)},
-                   {Metric::nees_filter, values_of(r.filter, Metric::nees_filter)}}};
+  return {r.name,
+          {{Metric::mae, values_of(r.filter, Metric::mae)},
+           {Metric::rmse, values_of(r.filter, Metric::rmse)},
+           {Metric::r2, values_of(r.filter, Metric::r2)},
+           {Metric::nees_odom, values_of(r.odometry, Metric::nees_odom)},
+           {Metric::nees_filter, values_of(r.filter, Metric::nees_filter)}}};
 }
 
 // ---------------------------------------------------------------- JSON
@@ -142,21 +145,31 @@ MethodValues table3_method(const Table3Row& r) {
 nlohmann::json num_json(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 nlohmann::json series_json(const SeriesErrors& s) {
-  return {{"mae", num_json(s.mae)}, {"rmse", num_json(s.rmse)}, {"r2", num_json(s.r2)},
-          {"nees", num_json(s.nees)}, {"samples", s.samples}};
+  return {{"mae", num_json(s.mae)},
+          {"rmse", num_json(s.rmse)},
+          {"r2", num_json(s.r2)},
+          {"nees", num_json(s.nees)},
+          {"samples", s.samples}};
 }
 
 nlohmann::json net_summary_json(const LstmTrainingSummary& s) {
-  return {{"iterations", s.iterations}, {"train_mae", num_json(s.train_mae)},
-          {"validation_mae", num_json(s.validation_mae)}, {"initial_cost", num_json(s.initial_cost)},
-          {"final_cost", num_json(s.final_cost)}, {"termination", s.termination}, {"usable", s.usable}};
+  return {{"iterations", s.iterations},
+          {"train_mae", num_json(s.train_mae)},
+          {"validation_mae", num_json(s.validation_mae)},
+          {"initial_cost", num_json(s.initial_cost)},
+          {"final_cost", num_json(s.final_cost)},
+          {"termination", s.termination},
+          {"usable", s.usable}};
 }
 
 nlohmann::json episodes_json(const std::vector<sim::SlipEpisode>& eps) {
   nlohmann::json a = nlohmann::json::array();
   for (const auto& e : eps)
-    a.push_back({{"kind", std::string(sim::kind_name(e.kind))}, {"wheel", std::string(sim::wheel_name(e.wheel))},
-                 {"t0_s", e.t0_s}, {"t1_s", e.t1_s}, {"s", e.s}});
+    a.push_back({{"kind", std::string(sim::kind_name(e.kind))},
+                 {"wheel", std::string(sim::wheel_name(e.wheel))},
+                 {"t0_s", e.t0_s},
+                 {"t1_s", e.t1_s},
+                 {"s", e.s}});
   return a;
 }
 
@@ -190,7 +203,8 @@ void slip_variance_figure(const LearnedStudy& s, const fs::path& stem) {
     p.ylabel = w ? "variance of W [(rad/s)²]" : "variance of V [(m/s)²]";
     p.log_y = true;
     p.y_min = 0.1 * (w ? s.detector.floor_var_w : s.detector.floor_var_v);
-    p.lines.push_back({"(LSTM odometry − truth)²", t.t_s, w ? t.lstm_sq_error_w : t.lstm_sq_error_v, 9, false, true});
+    p.lines.push_back({"(LSTM odometry − truth)²", t.t_s, w ? t.lstm_sq_error_w : t.lstm_sq_error_v, 9, false,
+                       true});
     p.lines.push_back({"detector variance (LSTM)", t.t_s, w ? var.odo_var_w : var.odo_var_v, 3, false, false});
     const double stat = w ? s.static_var_lstm_w : s.static_var_lstm_v;
     p.lines.push_back({"static variance (LSTM)", {t.t_s.front(), t.t_s.back()}, {stat, stat}, 0, true, false});
@@ -198,14 +212,14 @@ void slip_variance_figure(const LearnedStudy& s, const fs::path& stem) {
   }
   std::vector<results::TimeShade> shades;
   for (const auto& e : t.episodes) shades.push_back({e.t0_s, e.t1_s});
-  results::shaded_time_panels(stem,
-                              fmt::format("Slip detector on {}: odometry variance over time (Fig. 6 analogue)", t.track),
-                              panels, shades, "slip episode", {});
+  results::shaded_time_panels(
+      stem, fmt::format("Slip detector on {}: odometry variance over time (Fig. 6 analogue)", t.track), panels,
+      shades, "slip episode", {});
 }
 
 void retraining_error_figure(const LearnedStudy& s, const fs::path& stem) {
   const Table2Result& t = s.table2;
-  constexpr std::size_t kHalf = 5;   // 11 steps: ~1 s at 10 Hz
+  constexpr std::size_t kHalf = 5;  // 11 steps: ~1 s at 10 Hz
   const double window_s = static_cast<double>(2 * kHalf + 1) / s.options.rate_hz;
   std::vector<results::ShadedPanel> panels;
   for (const bool w : {true, false}) {
@@ -215,16 +229,17 @@ void retraining_error_figure(const LearnedStudy& s, const fs::path& stem) {
     // The rows drawn last first, so that "LSTM retraining" lies on top of
     // "no retraining" where the two agree (before the first refit).
     for (std::size_t r = t.rows.size(); r-- > 0;)
-      p.lines.push_back({t.rows[r].name, t.t_s, moving_mean(w ? t.rows[r].w_abs_error : t.rows[r].v_abs_error, kHalf),
-                         colours[r % 3], false, r == 2});
+      p.lines.push_back({t.rows[r].name, t.t_s,
+                         moving_mean(w ? t.rows[r].w_abs_error : t.rows[r].v_abs_error, kHalf), colours[r % 3],
+                         false, r == 2});
     panels.push_back(std::move(p));
   }
   std::vector<results::TimeMarker> markers = {{t.change_t_s, "radius change"}};
   for (std::size_t i = 0; i < t.retrains.size(); ++i)
     markers.push_back({t.retrains[i].t_s, i == 0 ? "retrain" : ""});
   results::shaded_time_panels(
-      stem, fmt::format("Odometry error on {} with and without online retraining (Fig. 7 analogue)", t.track), panels,
-      {}, "", markers);
+      stem, fmt::format("Odometry error on {} with and without online retraining (Fig. 7 analogue)", t.track),
+      panels, {}, "", markers);
 }
 
 void paths_figure(const LearnedStudy& s, const fs::path& stem) {
@@ -244,17 +259,26 @@ void paths_figure(const LearnedStudy& s, const fs::path& stem) {
 }  // namespace
 
 nlohmann::json errors_json(const OdometryErrors& e) {
-  return {{"v", series_json(e.v)}, {"w", series_json(e.w)}, {"xy", series_json(e.xy)},
-          {"theta", series_json(e.theta)}, {"nees_vw", num_json(e.nees_vw)}};
+  return {{"v", series_json(e.v)},
+          {"w", series_json(e.w)},
+          {"xy", series_json(e.xy)},
+          {"theta", series_json(e.theta)},
+          {"nees_vw", num_json(e.nees_vw)}};
 }
 
 nlohmann::json flat_errors_json(const OdometryErrors& e) {
-  return {{"v_mae", num_json(e.v.mae)},         {"w_mae", num_json(e.w.mae)},
-          {"v_rmse", num_json(e.v.rmse)},       {"w_rmse", num_json(e.w.rmse)},
-          {"v_r2", num_json(e.v.r2)},           {"w_r2", num_json(e.w.r2)},
-          {"pos_mae_m", num_json(e.xy.mae)},    {"pos_rmse_m", num_json(e.xy.rmse)},
-          {"pos_r2", num_json(e.xy.r2)},        {"theta_mae_rad", num_json(e.theta.mae)},
-          {"theta_rmse_rad", num_json(e.theta.rmse)}, {"samples", e.v.samples}};
+  return {{"v_mae", num_json(e.v.mae)},
+          {"w_mae", num_json(e.w.mae)},
+          {"v_rmse", num_json(e.v.rmse)},
+          {"w_rmse", num_json(e.w.rmse)},
+          {"v_r2", num_json(e.v.r2)},
+          {"w_r2", num_json(e.w.r2)},
+          {"pos_mae_m", num_json(e.xy.mae)},
+          {"pos_rmse_m", num_json(e.xy.rmse)},
+          {"pos_r2", num_json(e.xy.r2)},
+          {"theta_mae_rad", num_json(e.theta.mae)},
+          {"theta_rmse_rad", num_json(e.theta.rmse)},
+          {"samples", e.v.samples}};
 }
 
 results::TextTable learned_table1_text(const LearnedStudy& s) {
@@ -310,54 +334,83 @@ nlohmann::json learned_results_json(const LearnedStudy& s, const LearnedStudyCon
   const LearnedStudyOptions& o = s.options;
   nlohmann::json j;
   j["format"] = "odotune-study-learned/1";
-  j["options"] = {{"seed", o.seed}, {"iterations", o.iterations}, {"retrain_iterations", o.retrain_iterations},
-                  {"samples_per_retrain", o.samples_per_retrain}, {"rate_hz", o.rate_hz},
-                  {"previous_noise_v", o.previous_noise_v}, {"previous_noise_w", o.previous_noise_w},
-                  {"slip_drives", o.slip_drives}, {"slip_stride", o.slip_stride}};
+  j["options"] = {{"seed", o.seed},
+                  {"iterations", o.iterations},
+                  {"retrain_iterations", o.retrain_iterations},
+                  {"samples_per_retrain", o.samples_per_retrain},
+                  {"rate_hz", o.rate_hz},
+                  {"previous_noise_v", o.previous_noise_v},
+                  {"previous_noise_w", o.previous_noise_w},
+                  {"slip_drives", o.slip_drives},
+                  {"slip_stride", o.slip_stride}};
   nlohmann::json drives = nlohmann::json::array();
   for (const LearnedStudy::SlipDrive& d : s.slip_drives)
     drives.push_back({{"seed", d.seed}, {"slip_episodes", sim::format_slip_episodes(d.episodes)}});
   j["slip_training_drives"] = drives;
   nlohmann::json sc = nlohmann::json::array();
   for (std::size_t i = 0; i < s.scenario_names.size(); ++i)
-    sc.push_back({{"role", kLearnedScenarioRoles[i]}, {"scenario", s.scenario_names[i]},
-                  {"file", i < c.scenario_files.size() ? c.scenario_files[i] : ""}, {"seed", o.seed + i},
+    sc.push_back({{"role", kLearnedScenarioRoles[i]},
+                  {"scenario", s.scenario_names[i]},
+                  {"file", i < c.scenario_files.size() ? c.scenario_files[i] : ""},
+                  {"seed", o.seed + i},
                   {"track", s.track_names.at(i)}});
   j["scenarios"] = sc;
   const TrainingRecord& t = s.training;
-  j["training"] = {
-      {"odometry", {{"v", net_summary_json(t.odometry.v)}, {"w", net_summary_json(t.odometry.w)},
-                    {"train_windows", t.odometry.train_windows}, {"validation_windows", t.odometry.validation_windows}}},
-      {"detector", {{"v", net_summary_json(t.detector.v)}, {"w", net_summary_json(t.detector.w)},
-                    {"train_windows", t.detector.train_windows}, {"validation_windows", t.detector.validation_windows}}},
-      {"kinematic_v_mae", num_json(t.kinematic_v_mae)}, {"kinematic_w_mae", num_json(t.kinematic_w_mae)}};
-  j["static_variance"] = {{"lstm_v", s.static_var_lstm_v}, {"lstm_w", s.static_var_lstm_w},
-                          {"kinematic_v", s.static_var_kin_v}, {"kinematic_w", s.static_var_kin_w}, {"gyro", s.static_var_gyro}};
+  j["training"] = {{"odometry",
+                    {{"v", net_summary_json(t.odometry.v)},
+                     {"w", net_summary_json(t.odometry.w)},
+                     {"train_windows", t.odometry.train_windows},
+                     {"validation_windows", t.odometry.validation_windows}}},
+                   {"detector",
+                    {{"v", net_summary_json(t.detector.v)},
+                     {"w", net_summary_json(t.detector.w)},
+                     {"train_windows", t.detector.train_windows},
+                     {"validation_windows", t.detector.validation_windows}}},
+                   {"kinematic_v_mae", num_json(t.kinematic_v_mae)},
+                   {"kinematic_w_mae", num_json(t.kinematic_w_mae)}};
+  j["static_variance"] = {{"lstm_v", s.static_var_lstm_v},
+                          {"lstm_w", s.static_var_lstm_w},
+                          {"kinematic_v", s.static_var_kin_v},
+                          {"kinematic_w", s.static_var_kin_w},
+                          {"gyro", s.static_var_gyro}};
   nlohmann::json t1 = nlohmann::json::array();
   for (const ErrorRow& r : s.table1.rows) t1.push_back({{"method", r.name}, {"errors", errors_json(r.errors)}});
   j["table1"] = {{"track", s.table1.track}, {"rows", t1}};
   nlohmann::json t2 = nlohmann::json::array();
   for (const Table2Row& r : s.table2.rows)
-    t2.push_back({{"method", r.name}, {"whole", errors_json(r.whole)}, {"after_change", errors_json(r.after)},
+    t2.push_back({{"method", r.name},
+                  {"whole", errors_json(r.whole)},
+                  {"after_change", errors_json(r.after)},
                   {"retrains", r.retrains}});
   nlohmann::json ev = nlohmann::json::array();
   for (const RetrainRecord& r : s.table2.retrains)
-    ev.push_back({{"step", r.step}, {"t_s", r.t_s}, {"v_cost_before", num_json(r.v_cost_before)},
-                  {"v_cost_after", num_json(r.v_cost_after)}, {"v_mae_after", num_json(r.v_mae_after)},
-                  {"w_cost_before", num_json(r.w_cost_before)}, {"w_cost_after", num_json(r.w_cost_after)},
-                  {"w_mae_after", num_json(r.w_mae_after)}, {"v_iterations", r.v_iterations},
+    ev.push_back({{"step", r.step},
+                  {"t_s", r.t_s},
+                  {"v_cost_before", num_json(r.v_cost_before)},
+                  {"v_cost_after", num_json(r.v_cost_after)},
+                  {"v_mae_after", num_json(r.v_mae_after)},
+                  {"w_cost_before", num_json(r.w_cost_before)},
+                  {"w_cost_after", num_json(r.w_cost_after)},
+                  {"w_mae_after", num_json(r.w_mae_after)},
+                  {"v_iterations", r.v_iterations},
                   {"w_iterations", r.w_iterations}});
-  j["table2"] = {{"track", s.table2.track}, {"change_t_s", s.table2.change_t_s},
-                 {"change_step", s.table2.change_step}, {"rows", t2}, {"retrains", ev}};
+  j["table2"] = {{"track", s.table2.track},
+                 {"change_t_s", s.table2.change_t_s},
+                 {"change_step", s.table2.change_step},
+                 {"rows", t2},
+                 {"retrains", ev}};
   nlohmann::json t3 = nlohmann::json::array();
   for (const Table3Row& r : s.table3.rows)
-    t3.push_back({{"method", r.name}, {"filter", errors_json(r.filter)}, {"odometry", errors_json(r.odometry)},
+    t3.push_back({{"method", r.name},
+                  {"filter", errors_json(r.filter)},
+                  {"odometry", errors_json(r.odometry)},
                   {"healthy", r.healthy}});
   j["table3"] = {{"track", s.table3.track}, {"slip_episodes", episodes_json(s.table3.episodes)}, {"rows", t3}};
   return j;
 }
 
-std::vector<fs::path> write_learned_outputs(const LearnedStudy& s, const LearnedStudyContext& c, const fs::path& dir) {
+std::vector<fs::path> write_learned_outputs(const LearnedStudy& s, const LearnedStudyContext& c,
+                                            const fs::path& dir) {
   std::vector<fs::path> files;
   const auto text = [&](const std::string& name, const std::string& content) {
     write_atomically(dir / name, "study output", content);
@@ -404,9 +457,11 @@ std::vector<fs::path> write_learned_outputs(const LearnedStudy& s, const Learned
   p.tracks = {s.track_names.at(0)};
   p.slip_tracks = {s.track_names.at(3)};
   p.seed = s.options.seed;
-  p.odometry = results::training_record(s.training.odometry.v, s.training.odometry.w, s.training.odometry.train_windows,
+  p.odometry = results::training_record(s.training.odometry.v, s.training.odometry.w,
+                                        s.training.odometry.train_windows,
                                         s.training.odometry.validation_windows, s.training.odometry.seconds);
-  p.detector = results::training_record(s.training.detector.v, s.training.detector.w, s.training.detector.train_windows,
+  p.detector = results::training_record(s.training.detector.v, s.training.detector.w,
+                                        s.training.detector.train_windows,
                                         s.training.detector.validation_windows, s.training.detector.seconds);
   p.created_by = c.command;
   results::write_learned_model(dir / "model.json", model);

@@ -22,16 +22,16 @@
 
 #include <nlohmann/json.hpp>
 
-#include "studies/learned_study.h"
 #include "objectives/odometry_metrics.h"
 #include "results/report_tables.h"
+#include "studies/learned_study.h"
 
 namespace odotune {
 
 // What the command knows beyond the results, for the Markdown's setup.
 struct LearnedStudyContext {
-  std::string command;                       // regenerates the outputs
-  std::vector<std::string> scenario_files;   // kLearnedScenarioRoles order, as displayed
+  std::string command;                      // regenerates the outputs
+  std::vector<std::string> scenario_files;  // kLearnedScenarioRoles order, as displayed
 };
 
 // {"v": {mae, rmse, r2, nees, samples}, "w": …, "xy": …, "theta": …, "nees_vw"}

@@ -24,7 +24,9 @@ std::string runs_shown(std::size_t runs) {
                                : fmt::format("{} runs", runs);
 }
 
-std::size_t decimation(std::size_t n) { return std::max<std::size_t>(1, (n + kMaxFigurePoints - 1) / kMaxFigurePoints); }
+std::size_t decimation(std::size_t n) {
+  return std::max<std::size_t>(1, (n + kMaxFigurePoints - 1) / kMaxFigurePoints);
+}
 
 // Every k-th point and the last one.
 template <class T>
@@ -51,7 +53,8 @@ Steps change_points(const std::vector<double>& t, const std::vector<double>& v) 
   return out;
 }
 
-void write_text(const fs::path& p, std::string_view what, const std::string& text, std::vector<fs::path>* files) {
+void write_text(const fs::path& p, std::string_view what, const std::string& text,
+                std::vector<fs::path>* files) {
   write_atomically(p, what, text);
   files->push_back(p);
 }
@@ -83,7 +86,8 @@ std::vector<results::TimePanel> radius_panels(const std::vector<ParamTrace>& tra
     const std::size_t k = decimation(t.t_s.size());
     const auto ts = thin(t.t_s, k);
     const int colour = static_cast<int>(r);
-    const Steps true_right = change_points(t.t_s, t.true_r_right_m), true_left = change_points(t.t_s, t.true_r_left_m);
+    const Steps true_right = change_points(t.t_s, t.true_r_right_m),
+                true_left = change_points(t.t_s, t.true_r_left_m);
     right.lines.push_back({fmt::format("run {}", r), ts, thin(t.r_right_m, k), colour, false, true});
     right.lines.push_back({r == 0 ? "truth (dashed)" : "", true_right.t, true_right.v, colour, true, false});
     left.lines.push_back({"", ts, thin(t.r_left_m, k), colour, false, true});
@@ -108,7 +112,8 @@ std::vector<results::TimeMarker> step_markers(const CalibrationStudy& s) {
 }
 
 // Fig. 8 analogue: one run, adaptive PF vs DKF, with the truth.
-results::CalibrationFigureData dkf_vs_pf(const ParamTrace& pf, const ParamTrace& dkf, const std::string& title) {
+results::CalibrationFigureData dkf_vs_pf(const ParamTrace& pf, const ParamTrace& dkf,
+                                         const std::string& title) {
   results::CalibrationFigureData d;
   d.title = title;
   const auto series = [](const std::string& name, const ParamTrace& t, const std::vector<double>& v,
@@ -148,14 +153,17 @@ ResamplingBars resampling_bars(const ResamplingStudy& s) {
   const auto policies = table1_policies();
   for (auto r : resamplers) b.groups.emplace_back(filters::to_string(r));
   for (auto p : policies) b.series.emplace_back(filters::to_string(p));
-  results::BarPanel err{"radius error, normalised [-]", {}, {}}, time{"time per iteration, normalised [-]", {}, {}};
+  results::BarPanel err{"radius error, normalised [-]", {}, {}},
+      time{"time per iteration, normalised [-]", {}, {}};
   for (auto* p : {&err, &time}) {
     p->mean.assign(resamplers.size(), std::vector<double>(policies.size(), NAN));
     p->sd = p->mean;
   }
   for (const ResamplingCell& c : s.cells) {
-    const auto g = static_cast<std::size_t>(std::find(resamplers.begin(), resamplers.end(), c.resampler) - resamplers.begin());
-    const auto k = static_cast<std::size_t>(std::find(policies.begin(), policies.end(), c.policy) - policies.begin());
+    const auto g = static_cast<std::size_t>(std::find(resamplers.begin(), resamplers.end(), c.resampler) -
+                                            resamplers.begin());
+    const auto k = static_cast<std::size_t>(std::find(policies.begin(), policies.end(), c.policy) -
+                                            policies.begin());
     if (g >= resamplers.size() || k >= policies.size()) continue;
     std::vector<double> e;
     for (const ResamplingRunResult& r : c.runs) e.push_back(0.5 * (r.err_rr_m + r.err_rl_m));
@@ -171,7 +179,8 @@ ResamplingBars resampling_bars(const ResamplingStudy& s) {
   return b;
 }
 
-std::vector<fs::path> write_resampling_outputs(const ResamplingStudy& s, const StudyContext& c, const fs::path& dir) {
+std::vector<fs::path> write_resampling_outputs(const ResamplingStudy& s, const StudyContext& c,
+                                               const fs::path& dir) {
   std::vector<fs::path> files;
   write_text(dir / "table1.csv", "table", table1_csv(s), &files);
   write_text(dir / "table1_runs.csv", "table", table1_runs_csv(s), &files);
@@ -196,8 +205,7 @@ std::vector<fs::path> write_calibration_outputs(const CalibrationStudy& s, const
   const std::string runs = runs_shown(static_cast<std::size_t>(s.options.runs));
 
   fs::path stem = dir / "fig5_particles";
-  results::time_panels(stem,
-                       fmt::format("Adaptive-PF particle count over time, {} (Fig. 5 analogue)", runs),
+  results::time_panels(stem, fmt::format("Adaptive-PF particle count over time, {} (Fig. 5 analogue)", runs),
                        {particle_panel("N, step track [-]", s.pf_step),
                         particle_panel("N, constant track [-]", s.pf_constant)},
                        markers);

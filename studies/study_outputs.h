@@ -14,9 +14,9 @@
 #include <filesystem>
 #include <vector>
 
+#include "results/study_figures.h"
 #include "studies/calibration_study.h"
 #include "studies/study_tables.h"
-#include "results/study_figures.h"
 
 namespace odotune {
 

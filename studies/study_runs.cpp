@@ -29,7 +29,8 @@ sim::Scenario read_scenario(const std::string& path) {
 // made, before the long computation.
 void prepare_output(const std::string& out_dir) {
   if (!results::gnuplot_available())
-    throw Failure("study: gnuplot not found on PATH (needed for the figures); install it (apt-get install gnuplot)");
+    throw Failure(
+        "study: gnuplot not found on PATH (needed for the figures); install it (apt-get install gnuplot)");
   const fs::path out(out_dir);
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
@@ -66,7 +67,8 @@ std::string learned_command(const LearnedStudyRequest& r) {
   std::string c = "odotune study learned --out " + r.out;
   if (o.seed != d.seed) c += fmt::format(" --seed {}", o.seed);
   if (o.iterations != d.iterations) c += fmt::format(" --iterations {}", o.iterations);
-  if (o.retrain_iterations != d.retrain_iterations) c += fmt::format(" --retrain-iterations {}", o.retrain_iterations);
+  if (o.retrain_iterations != d.retrain_iterations)
+    c += fmt::format(" --retrain-iterations {}", o.retrain_iterations);
   if (o.samples_per_retrain != d.samples_per_retrain) c += fmt::format(" --every {}", o.samples_per_retrain);
   if (o.slip_drives != d.slip_drives) c += fmt::format(" --slip-drives {}", o.slip_drives);
   if (o.slip_stride != d.slip_stride) c += fmt::format(" --slip-stride {}", o.slip_stride);
@@ -166,7 +168,8 @@ StudyRun run_learned_to_folder(const LearnedStudyRequest& r, const StudyHooks& h
                   fmt::format("Table 2 ({}), after the radius change at {:g} s:\n{}\n", s.table2.track,
                               s.table2.change_t_s, results::to_markdown(learned_table2_text(s, true))) +
                   fmt::format("{}\n", results::to_markdown(learned_table2_cost_text(s))) +
-                  fmt::format("Table 3 ({}):\n{}", s.table3.track, results::to_markdown(learned_table3_text(s))));
+                  fmt::format("Table 3 ({}):\n{}", s.table3.track,
+                              results::to_markdown(learned_table3_text(s))));
   try {
     return {write_learned_outputs(s, c, r.out), s.wall_s};
   } catch (const std::exception& e) {

@@ -32,8 +32,8 @@ inline constexpr const char* kStudyStepScenarioFile = "wheelchair_step.yaml";  /
 inline constexpr const char* kLearnedScenarioFiles[5] = {"wheelchair_learn.yaml", "wheelchair_learn_eval.yaml",
                                                          "wheelchair_learn_step.yaml", "wheelchair_slip.yaml",
                                                          "wheelchair_slip_eval.yaml"};
-inline constexpr const char* kLearnedScenarioFlags[5] = {"--learn-scenario", "--eval-scenario", "--step-scenario",
-                                                         "--slip-scenario", "--slip-eval-scenario"};
+inline constexpr const char* kLearnedScenarioFlags[5] = {
+    "--learn-scenario", "--eval-scenario", "--step-scenario", "--slip-scenario", "--slip-eval-scenario"};
 
 // SOURCE_DIR/scenarios/FILE.
 std::string default_scenario(const std::string& source_dir, const std::string& file);
@@ -52,7 +52,7 @@ struct StudyRequest {
 
 // `study learned` (Tables 1-3 of the Sensors 2023 paper).
 struct LearnedStudyRequest {
-  std::string source_dir;    // as StudyRequest::source_dir
+  std::string source_dir;  // as StudyRequest::source_dir
   std::string out;
   std::string scenarios[5];  // kLearnedScenarioRoles order
   LearnedStudyOptions options;
@@ -69,7 +69,7 @@ struct StudyHooks {
 
 struct StudyRun {
   std::vector<std::filesystem::path> files;  // written, in order
-  double wall_s = 0.0;                        // the study's computation [s]
+  double wall_s = 0.0;                       // the study's computation [s]
 };
 
 StudyRun run_resampling_to_folder(const StudyRequest& request, const StudyHooks& hooks = {});

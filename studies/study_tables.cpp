@@ -32,7 +32,8 @@ std::string count_text(const MeanSd& m, std::size_t runs) {
 }
 
 std::string seeds_text(const StudyOptions& o) {
-  return o.runs == 1 ? fmt::format("{}", o.seed) : fmt::format("{}…{}", o.seed, o.seed + static_cast<std::uint64_t>(o.runs) - 1);
+  return o.runs == 1 ? fmt::format("{}", o.seed)
+                     : fmt::format("{}…{}", o.seed, o.seed + static_cast<std::uint64_t>(o.runs) - 1);
 }
 
 std::string setup_common(const StudyOptions& o, int threads_used, double wall_s, const StudyContext& c) {
@@ -72,16 +73,15 @@ std::string table1_csv(const ResamplingStudy& s) {
       "ms_per_iter_mean,ms_per_iter_sd\n";
   for (const ResamplingCell& c : s.cells)
     out += fmt::format("{},{},{},{},{},{},{},{},{}\n", filters::to_string(c.resampler),
-                       filters::to_string(c.policy), c.runs.size(), pair_csv(c.err_rr_m),
-                       pair_csv(c.err_rl_m), pair_csv(c.v_rmse_m_s), pair_csv(c.w_rmse_rad_s),
-                       pair_csv(c.resampled_fraction), pair_csv(c.ms_per_iteration));
+                       filters::to_string(c.policy), c.runs.size(), pair_csv(c.err_rr_m), pair_csv(c.err_rl_m),
+                       pair_csv(c.v_rmse_m_s), pair_csv(c.w_rmse_rad_s), pair_csv(c.resampled_fraction),
+                       pair_csv(c.ms_per_iteration));
   return out;
 }
 
 std::string table1_runs_csv(const ResamplingStudy& s) {
-  std::string out =
-      "resampler,policy,run,seed,truth_scale_l,truth_scale_r,err_rr_m,err_rl_m,v_rmse_m_s,"
-      "w_rmse_rad_s,resampled_fraction,ms_per_iter\n";
+  std::string out = "resampler,policy,run,seed,truth_scale_l,truth_scale_r,err_rr_m,err_rl_m,v_rmse_m_s,"
+                    "w_rmse_rad_s,resampled_fraction,ms_per_iter\n";
   for (const ResamplingCell& c : s.cells)
     for (std::size_t r = 0; r < c.runs.size(); ++r) {
       const ResamplingRunResult& x = c.runs[r];
@@ -89,16 +89,16 @@ std::string table1_runs_csv(const ResamplingStudy& s) {
       out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{}\n", filters::to_string(c.resampler),
                          filters::to_string(c.policy), r, d.seed, csv_number(d.truth_scale_l),
                          csv_number(d.truth_scale_r), csv_number(x.err_rr_m), csv_number(x.err_rl_m),
-                         csv_number(x.v_rmse_m_s), csv_number(x.w_rmse_rad_s),
-                         csv_number(x.resampled_fraction), csv_number(x.ms_per_iteration));
+                         csv_number(x.v_rmse_m_s), csv_number(x.w_rmse_rad_s), csv_number(x.resampled_fraction),
+                         csv_number(x.ms_per_iteration));
     }
   return out;
 }
 
 results::TextTable table1_text(const ResamplingStudy& s) {
   results::TextTable t;
-  t.header = {"Method", "Freq.", "Err final R_R [m]", "Err final R_L [m]", "V RMSE [m/s]",
-              "W RMSE [rad/s]", "resampled [%]", "time [ms/iter]"};
+  t.header = {"Method",       "Freq.",          "Err final R_R [m]", "Err final R_L [m]",
+              "V RMSE [m/s]", "W RMSE [rad/s]", "resampled [%]",     "time [ms/iter]"};
   t.numeric = {false, false, true, true, true, true, true, true};
   for (const ResamplingCell& c : s.cells) {
     MeanSd pct = c.resampled_fraction;
@@ -114,8 +114,7 @@ results::TextTable table1_text(const ResamplingStudy& s) {
 
 results::TextTable table1_paper() {
   results::TextTable t;
-  t.header = {"Method", "Freq.", "Err final R_R [m]", "Err final R_L [m]", "V [m/s]", "W [rad/s]",
-              "time [ms]"};
+  t.header = {"Method", "Freq.", "Err final R_R [m]", "Err final R_L [m]", "V [m/s]", "W [rad/s]", "time [ms]"};
   t.numeric = {false, false, true, true, true, true, true};
   t.rows = {
       {"Stratified", "neff", "0.002623", "0.00080", "0.005167", "0.01750", "1.11274"},
@@ -185,7 +184,9 @@ std::string table2_csv(const CalibrationStudy& s) {
       "mean_particles_mean,mean_particles_sd,ms_per_iter_mean,ms_per_iter_sd\n";
   for (const MethodRow& r : s.rows) {
     // Counts only where the quantity is defined.
-    const auto count = [](bool defined, const MeanSd& m) { return defined ? std::to_string(m.n) : std::string(); };
+    const auto count = [](bool defined, const MeanSd& m) {
+      return defined ? std::to_string(m.n) : std::string();
+    };
     const bool re = r.online && r.has_step;
     out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.track, to_string(r.method),
                        r.runs.size(), pair_csv(r.err_rr_m), pair_csv(r.err_rl_m), pair_csv(r.err_d_m),
@@ -205,20 +206,21 @@ std::string table2_runs_csv(const CalibrationStudy& s) {
     for (std::size_t r = 0; r < row.runs.size(); ++r) {
       const MethodRunResult& x = row.runs[r];
       const McDraw& d = s.draws.at(r);
-      out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", row.track, to_string(row.method),
-                         r, d.seed, csv_number(d.truth_scale_l), csv_number(d.truth_scale_r),
-                         csv_number(x.err_rr_m), csv_number(x.err_rl_m), csv_number(x.err_d_m),
-                         csv_number(x.pose_rmse_m), csv_number(x.heading_rmse_rad),
+      out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", row.track,
+                         to_string(row.method), r, d.seed, csv_number(d.truth_scale_l),
+                         csv_number(d.truth_scale_r), csv_number(x.err_rr_m), csv_number(x.err_rl_m),
+                         csv_number(x.err_d_m), csv_number(x.pose_rmse_m), csv_number(x.heading_rmse_rad),
                          csv_number(x.convergence_s), csv_number(x.reached_s), csv_number(x.reconvergence_s),
-                         csv_number(x.rereached_s), csv_number(x.mean_particles), csv_number(x.ms_per_iteration));
+                         csv_number(x.rereached_s), csv_number(x.mean_particles),
+                         csv_number(x.ms_per_iteration));
     }
   return out;
 }
 
 results::TextTable table2_text(const CalibrationStudy& s) {
   results::TextTable t;
-  t.header = {"Track", "Method", "Err R_R [m]", "Err R_L [m]", "RMSE (x, y) [m]", "RMSE θ [rad]",
-              "time [ms/iter]", "convergence [s]", "re-convergence [s]", "mean N"};
+  t.header = {"Track",        "Method",         "Err R_R [m]",     "Err R_L [m]",        "RMSE (x, y) [m]",
+              "RMSE θ [rad]", "time [ms/iter]", "convergence [s]", "re-convergence [s]", "mean N"};
   t.numeric = {false, false, true, true, true, true, true, true, true, true};
   for (const MethodRow& r : s.rows) {
     const std::size_t n = r.runs.size();
@@ -235,8 +237,8 @@ results::TextTable table2_text(const CalibrationStudy& s) {
 
 results::TextTable table2_convergence_text(const CalibrationStudy& s) {
   results::TextTable t;
-  t.header = {"Track", "Method", "reached [s]", "settled [s]", "re-reached [s]", "re-settled [s]",
-              "final err D [m]"};
+  t.header = {"Track",          "Method",         "reached [s]",    "settled [s]",
+              "re-reached [s]", "re-settled [s]", "final err D [m]"};
   t.numeric = {false, false, true, true, true, true, true};
   for (const MethodRow& r : s.rows) {
     if (!r.online) continue;
@@ -276,15 +278,15 @@ std::string table2_markdown(const CalibrationStudy& s, const StudyContext& c) {
                                       "a passenger boards)",
                                       s.step_time_s)
                         : std::string("the step scenario has no `radius_step` (no re-convergence to measure)"));
-  md += fmt::format("- adaptive-pf: initial N = {}, particles uniform in the paper's ranges with the run's "
-                    "seed; at each resampling N = (4·sd(R_R) + 4·sd(R_L)) / {} m, clamped to [{}, {}] "
-                    "(§V); random-walk σ = max(α·√((V_m − V_O)² + (W_m − W_O)²), {} m) with α = {} "
-                    "(eq. 11). The floor is not in the paper: eq. 11 alone gives σ of a few µm here, "
-                    "the particles collapse and a radius step is never followed "
-                    "(`filters/pf_calibrator.h`).\n",
-                    s.options.adaptive_initial_particles > 0 ? s.options.adaptive_initial_particles : a.particles,
-                    a.dispersion_per_particle_m, a.min_particles, a.max_particles, a.min_random_walk_sigma_m,
-                    a.alpha);
+  md += fmt::format(
+      "- adaptive-pf: initial N = {}, particles uniform in the paper's ranges with the run's "
+      "seed; at each resampling N = (4·sd(R_R) + 4·sd(R_L)) / {} m, clamped to [{}, {}] "
+      "(§V); random-walk σ = max(α·√((V_m − V_O)² + (W_m − W_O)²), {} m) with α = {} "
+      "(eq. 11). The floor is not in the paper: eq. 11 alone gives σ of a few µm here, "
+      "the particles collapse and a radius step is never followed "
+      "(`filters/pf_calibrator.h`).\n",
+      s.options.adaptive_initial_particles > 0 ? s.options.adaptive_initial_particles : a.particles,
+      a.dispersion_per_particle_m, a.min_particles, a.max_particles, a.min_random_walk_sigma_m, a.alpha);
   md += "- dkf: dual Kalman filter (velocity filter + parameter filter); initial radii drawn uniformly in "
         "the PF's initial ranges per run, initial D nominal.\n";
   md += "- batch: offline least-squares fit of R_R, R_L, D to the whole track (Ceres, Huber loss), "

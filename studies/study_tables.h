@@ -7,17 +7,17 @@
 
 #include <string>
 
-#include "studies/calibration_study.h"
 #include "results/report_tables.h"
+#include "studies/calibration_study.h"
 
 namespace odotune {
 
 // What the command knows beyond the results, for the Markdown's setup.
 struct StudyContext {
-  std::string command;              // the command line that regenerates the outputs
-  std::string scenario_file;        // as given (or the default's path)
-  std::string step_scenario_file;   // calibration study only
-  unsigned hardware_threads = 0;    // std::thread::hardware_concurrency()
+  std::string command;             // the command line that regenerates the outputs
+  std::string scenario_file;       // as given (or the default's path)
+  std::string step_scenario_file;  // calibration study only
+  unsigned hardware_threads = 0;   // std::thread::hardware_concurrency()
 };
 
 // Numbers in CSV: the shortest form that reads back to the same double, NaN

@@ -42,8 +42,7 @@ void write_atomically(const std::filesystem::path& path, std::string_view what,
   if (ec) fail(fmt::format("cannot rename '{}' to it: {}", tmp.string(), ec.message()));
 }
 
-void write_atomically(const std::filesystem::path& path, std::string_view what,
-                      std::string_view text) {
+void write_atomically(const std::filesystem::path& path, std::string_view what, std::string_view text) {
   write_atomically(path, what, [text](std::ostream& out) {
     out.write(text.data(), static_cast<std::streamsize>(text.size()));
   });

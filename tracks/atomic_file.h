@@ -17,7 +17,6 @@ namespace odotune {
 // removed and std::runtime_error "cannot write WHAT 'PATH': reason" is thrown.
 void write_atomically(const std::filesystem::path& path, std::string_view what,
                       const std::function<void(std::ostream&)>& fill);
-void write_atomically(const std::filesystem::path& path, std::string_view what,
-                      std::string_view text);
+void write_atomically(const std::filesystem::path& path, std::string_view what, std::string_view text);
 
 }  // namespace odotune

@@ -18,39 +18,47 @@ constexpr double kBig = 1e4;  // bound of world coordinates [m] accepted for sli
 // simulated robot still behaves like a robot (a radius scale of 3 is a typo).
 // Defaults are the no-op values of optional parameters.
 const std::vector<EffectInfo> kTable = {
-    {"radius_error", "true radii are R_nom*scale (tyre wear, pressure, a mis-measured wheel)",
+    {"radius_error",
+     "true radii are R_nom*scale (tyre wear, pressure, a mis-measured wheel)",
      {{"scale_l", "1", "true/nominal left radius", 0.5, 1.5, false, false, 1.0},
       {"scale_r", "1", "true/nominal right radius", 0.5, 1.5, false, false, 1.0}}},
-    {"wheel_base_error", "true wheel base is D_nom*scale (contact patch not where assumed; scrub)",
+    {"wheel_base_error",
+     "true wheel base is D_nom*scale (contact patch not where assumed; scrub)",
      {{"scale", "1", "true/nominal wheel base", 0.5, 2.0, false, true, 1.0}}},
-    {"radius_step", "from time t on, the true radii are multiplied by the scales",
+    {"radius_step",
+     "from time t on, the true radii are multiplied by the scales",
      {{"t", "s", "time of the step", 0.0, 1e6, false, true, 0.0},
       {"scale_l", "1", "left radius factor from t on", 0.5, 1.5, false, false, 1.0},
       {"scale_r", "1", "right radius factor from t on", 0.5, 1.5, false, false, 1.0}}},
-    {"speed_radius", "each wheel's effective radius is R*(1 + c*u^2), u its rim speed R*omega",
+    {"speed_radius",
+     "each wheel's effective radius is R*(1 + c*u^2), u its rim speed R*omega",
      {{"c", "s^2/m^2", "radius growth per squared rim speed", -0.1, 0.1, false, true, 0.0}}},
-    {"lateral_skid", "the body slides outward in turns: v_y = -k*v*w",
+    {"lateral_skid",
+     "the body slides outward in turns: v_y = -k*v*w",
      {{"k", "s", "lateral velocity per v*w", 0.0, 1.0, false, true, 0.0}}},
-    {"longitudinal_slip", "wheel ground speed R*omega*(1 - s), s = min(0.5, k*|du/dt|)",
+    {"longitudinal_slip",
+     "wheel ground speed R*omega*(1 - s), s = min(0.5, k*|du/dt|)",
      {{"k", "s^2/m", "slip per rim acceleration", 0.0, 10.0, false, true, 0.0}}},
-    {"slip_zone", "inside the box x0<=x<=x1, y0<=y<=y1, wheel ground speed R*omega*(1 - s)",
+    {"slip_zone",
+     "inside the box x0<=x<=x1, y0<=y<=y1, wheel ground speed R*omega*(1 - s)",
      {{"x0", "m", "box lower x (world)", -kBig, kBig, false, true, 0.0},
       {"x1", "m", "box upper x (world)", -kBig, kBig, false, true, 0.0},
       {"y0", "m", "box lower y (world)", -kBig, kBig, false, true, 0.0},
       {"y1", "m", "box upper y (world)", -kBig, kBig, false, true, 0.0},
       {"s_l", "1", "left wheel slip inside the box", 0.0, 0.9, false, false, 0.0},
       {"s_r", "1", "right wheel slip inside the box", 0.0, 0.9, false, false, 0.0}}},
-    {"gyro_bias", "the gyro reads w + b",
-     {{"b", "rad/s", "gyro bias", -1.0, 1.0, false, true, 0.0}}},
-    {"gyro_scale", "the gyro reads s*w",
-     {{"s", "1", "gyro scale factor", 0.5, 1.5, false, true, 1.0}}},
-    {"actuator_lag", "true body velocities follow v_cmd, w_cmd through a first-order lag",
+    {"gyro_bias", "the gyro reads w + b", {{"b", "rad/s", "gyro bias", -1.0, 1.0, false, true, 0.0}}},
+    {"gyro_scale", "the gyro reads s*w", {{"s", "1", "gyro scale factor", 0.5, 1.5, false, true, 1.0}}},
+    {"actuator_lag",
+     "true body velocities follow v_cmd, w_cmd through a first-order lag",
      {{"tau", "s", "time constant", 0.0, 5.0, true, true, 0.0}}},
-    {"time_offset", "odometry columns stamped t were measured at t - dt",
+    {"time_offset",
+     "odometry columns stamped t were measured at t - dt",
      {{"dt", "s", "odometry delay (positive: late)", -1.0, 1.0, false, true, 0.0}}},
     // Both optional (an offset in one velocity alone is common), 0 = no offset;
     // 0.5 m/s or rad/s of apparent motion at rest is far beyond a plausible offset.
-    {"odometry_bias", "the odometry's body velocities read v + b_v and w + b_w",
+    {"odometry_bias",
+     "the odometry's body velocities read v + b_v and w + b_w",
      {{"b_v", "m/s", "offset of the odometry's body speed", -0.5, 0.5, false, false, 0.0},
       {"b_w", "rad/s", "offset of the odometry's yaw rate", -0.5, 0.5, false, false, 0.0}}},
 };
@@ -64,20 +72,42 @@ std::vector<double*> fields(Effects& e, std::size_t index, bool on) {
     return opt ? &*opt : nullptr;
   };
   switch (index) {
-    case 0: if (auto* p = get(e.radius_error)) return {&p->scale_l, &p->scale_r}; break;
-    case 1: if (auto* p = get(e.wheel_base_error)) return {&p->scale}; break;
-    case 2: if (auto* p = get(e.radius_step)) return {&p->t, &p->scale_l, &p->scale_r}; break;
-    case 3: if (auto* p = get(e.speed_radius)) return {&p->c}; break;
-    case 4: if (auto* p = get(e.lateral_skid)) return {&p->k}; break;
-    case 5: if (auto* p = get(e.longitudinal_slip)) return {&p->k}; break;
+    case 0:
+      if (auto* p = get(e.radius_error)) return {&p->scale_l, &p->scale_r};
+      break;
+    case 1:
+      if (auto* p = get(e.wheel_base_error)) return {&p->scale};
+      break;
+    case 2:
+      if (auto* p = get(e.radius_step)) return {&p->t, &p->scale_l, &p->scale_r};
+      break;
+    case 3:
+      if (auto* p = get(e.speed_radius)) return {&p->c};
+      break;
+    case 4:
+      if (auto* p = get(e.lateral_skid)) return {&p->k};
+      break;
+    case 5:
+      if (auto* p = get(e.longitudinal_slip)) return {&p->k};
+      break;
     case 6:
       if (auto* p = get(e.slip_zone)) return {&p->x0, &p->x1, &p->y0, &p->y1, &p->s_l, &p->s_r};
       break;
-    case 7: if (auto* p = get(e.gyro_bias)) return {&p->b}; break;
-    case 8: if (auto* p = get(e.gyro_scale)) return {&p->s}; break;
-    case 9: if (auto* p = get(e.actuator_lag)) return {&p->tau}; break;
-    case 10: if (auto* p = get(e.time_offset)) return {&p->dt}; break;
-    case 11: if (auto* p = get(e.odometry_bias)) return {&p->b_v, &p->b_w}; break;
+    case 7:
+      if (auto* p = get(e.gyro_bias)) return {&p->b};
+      break;
+    case 8:
+      if (auto* p = get(e.gyro_scale)) return {&p->s};
+      break;
+    case 9:
+      if (auto* p = get(e.actuator_lag)) return {&p->tau};
+      break;
+    case 10:
+      if (auto* p = get(e.time_offset)) return {&p->dt};
+      break;
+    case 11:
+      if (auto* p = get(e.odometry_bias)) return {&p->b_v, &p->b_w};
+      break;
     default: break;
   }
   return {};
@@ -101,9 +131,7 @@ void switch_off(Effects& e, std::size_t index) {
   }
 }
 
-std::size_t index_of(const EffectInfo& info) {
-  return static_cast<std::size_t>(&info - kTable.data());
-}
+std::size_t index_of(const EffectInfo& info) { return static_cast<std::size_t>(&info - kTable.data()); }
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
@@ -131,8 +159,7 @@ std::string unknown_effect_message(std::string_view name) {
   for (const auto& e : kTable) names.push_back(e.name);
   const std::string guess = closest_name(name, names);
   return fmt::format("unknown effect '{}'{}; valid effects: {}", name,
-                     guess.empty() ? "" : fmt::format(" (did you mean '{}'?)", guess),
-                     effect_names());
+                     guess.empty() ? "" : fmt::format(" (did you mean '{}'?)", guess), effect_names());
 }
 
 std::string unknown_param_message(const EffectInfo& e, std::string_view param) {
@@ -140,8 +167,7 @@ std::string unknown_param_message(const EffectInfo& e, std::string_view param) {
   for (const auto& p : e.params) names.push_back(p.name);
   const std::string guess = closest_name(param, names);
   return fmt::format("effect {} has no parameter '{}'{}; valid parameters: {}", e.name, param,
-                     guess.empty() ? "" : fmt::format(" (did you mean '{}'?)", guess),
-                     param_names(e));
+                     guess.empty() ? "" : fmt::format(" (did you mean '{}'?)", guess), param_names(e));
 }
 
 bool check_cross(const Effects& e, std::string* why) {
@@ -194,8 +220,7 @@ std::string closest_name(std::string_view word, const std::vector<std::string_vi
   return best_d <= limit ? best : std::string();
 }
 
-bool check_param(const EffectInfo& effect, const EffectParamInfo& param, double value,
-                 std::string* why) {
+bool check_param(const EffectInfo& effect, const EffectParamInfo& param, double value, std::string* why) {
   const bool low_ok = param.min_exclusive ? value > param.min : value >= param.min;
   if (std::isfinite(value) && low_ok && value <= param.max) return true;
   if (why)
@@ -212,8 +237,8 @@ EffectSpec parse_effect_spec(std::string_view text) {
   auto fail = [&](const std::string& msg) {
     throw std::invalid_argument(fmt::format("effect '{}': {}", whole, msg));
   };
-  if (name.empty()) fail("missing effect name; expected NAME:PARAM=VALUE,... with NAME one of " +
-                         effect_names());
+  if (name.empty())
+    fail("missing effect name; expected NAME:PARAM=VALUE,... with NAME one of " + effect_names());
   const EffectInfo* info = find_effect(name);
   if (!info) fail(unknown_effect_message(name));
   EffectSpec spec{std::string(name), {}};
@@ -225,8 +250,7 @@ EffectSpec parse_effect_spec(std::string_view text) {
     rest = comma == std::string_view::npos ? std::string_view() : rest.substr(comma + 1);
     const auto eq = item.find('=');
     if (eq == std::string_view::npos)
-      fail(fmt::format("'{}' is not PARAM=VALUE; parameters of {}: {}", item, info->name,
-                       param_names(*info)));
+      fail(fmt::format("'{}' is not PARAM=VALUE; parameters of {}: {}", item, info->name, param_names(*info)));
     const std::string_view pname = trim(item.substr(0, eq));
     const std::string_view vtext = trim(item.substr(eq + 1));
     const EffectParamInfo* p = find_param(*info, pname);
@@ -234,8 +258,8 @@ EffectSpec parse_effect_spec(std::string_view text) {
     double value = 0.0;
     const auto [end, ec] = std::from_chars(vtext.data(), vtext.data() + vtext.size(), value);
     if (vtext.empty() || ec != std::errc() || end != vtext.data() + vtext.size())
-      fail(fmt::format("{}.{} = '{}' is not a number; expected a value in {}{}, {}]", info->name, pname,
-                       vtext, p->min_exclusive ? "(" : "[", p->min, p->max));
+      fail(fmt::format("{}.{} = '{}' is not a number; expected a value in {}{}, {}]", info->name, pname, vtext,
+                       p->min_exclusive ? "(" : "[", p->min, p->max));
     std::string why;
     if (!check_param(*info, *p, value, &why)) fail(why);
     for (const auto& [k, v] : spec.values)
@@ -267,10 +291,10 @@ void apply_effect(Effects& effects, const EffectSpec& spec) {
   if (!was_on)
     for (std::size_t i = 0; i < info->params.size(); ++i)
       if (info->params[i].required && !given[i])
-        throw std::invalid_argument(fmt::format(
-            "effect {} needs parameter {} [{}] ({}); expected {}:{}=VALUE,...", info->name,
-            info->params[i].name, info->params[i].unit, info->params[i].meaning, info->name,
-            info->params[i].name));
+        throw std::invalid_argument(
+            fmt::format("effect {} needs parameter {} [{}] ({}); expected {}:{}=VALUE,...", info->name,
+                        info->params[i].name, info->params[i].unit, info->params[i].meaning, info->name,
+                        info->params[i].name));
   std::string why;
   if (!check_cross(out, &why)) throw std::invalid_argument(why);
   effects = out;

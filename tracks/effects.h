@@ -22,18 +22,18 @@
 namespace odotune::sim {
 
 struct EffectParamInfo {
-  std::string_view name;     // verbatim from the spec
-  std::string_view unit;     // "s", "s^2/m^2", "m", "1" (dimensionless), ...
+  std::string_view name;  // verbatim from the spec
+  std::string_view unit;  // "s", "s^2/m^2", "m", "1" (dimensionless), ...
   std::string_view meaning;
-  double min;                // valid range [min, max] ...
+  double min;  // valid range [min, max] ...
   double max;
-  bool min_exclusive;        // ... or (min, max] when true
-  bool required;             // must be given when the effect is switched on
-  double default_value;      // used when not required and not given (the no-op value)
+  bool min_exclusive;    // ... or (min, max] when true
+  bool required;         // must be given when the effect is switched on
+  double default_value;  // used when not required and not given (the no-op value)
 };
 
 struct EffectInfo {
-  std::string_view name;     // verbatim from the spec
+  std::string_view name;  // verbatim from the spec
   std::string_view meaning;
   std::vector<EffectParamInfo> params;  // in the spec's order
 };
@@ -52,8 +52,7 @@ std::string closest_name(std::string_view word, const std::vector<std::string_vi
 
 // Checks one value against the table (finite, inside the range). On failure
 // `why` says e.g. "radius_error.scale_l = 3 is out of range [0.5, 1.5]".
-bool check_param(const EffectInfo& effect, const EffectParamInfo& param, double value,
-                 std::string* why);
+bool check_param(const EffectInfo& effect, const EffectParamInfo& param, double value, std::string* why);
 
 // A partial setting of one effect: the parameters the user gave.
 struct EffectSpec {

@@ -28,8 +28,8 @@ constexpr const char* kLicence =
     "none stated (UTIAS AER1513 course data); check the terms before redistributing";
 
 enum Field { kK, kT, kV, kOm, kX, kY, kTh, kValid, kNumFields };
-constexpr std::array<const char*, kNumFields> kHeader = {
-    "k", "t_s", "v_mps", "om_radps", "x_true_m", "y_true_m", "th_true_rad", "true_valid"};
+constexpr std::array<const char*, kNumFields> kHeader = {"k",        "t_s",      "v_mps",       "om_radps",
+                                                         "x_true_m", "y_true_m", "th_true_rad", "true_valid"};
 
 // Scalars of litw_scalars.csv ("name,value" lines) as (name, value text).
 std::vector<std::pair<std::string, std::string>> read_scalars(const fs::path& path) {
@@ -69,7 +69,8 @@ Track import_litw(const fs::path& series_csv) {
   for (std::size_t f = 0; f < kNumFields; ++f) {
     std::size_t p = 0;
     while (p < head.size() && head[p] != kHeader[f]) ++p;
-    if (p == head.size()) r.fail(fmt::format("missing column '{}', expected the header {}", kHeader[f], expected));
+    if (p == head.size())
+      r.fail(fmt::format("missing column '{}', expected the header {}", kHeader[f], expected));
     pos[f] = p;
   }
 
@@ -100,7 +101,8 @@ Track import_litw(const fs::path& series_csv) {
       r.fail(fmt::format("t_s {} is not after the previous row's {}, expected strictly increasing time", t,
                          d.t.back()));
     const double valid = num(kValid);
-    if (valid != 0.0 && valid != 1.0) r.fail(fmt::format("true_valid {}, expected 0 or 1", quote(f[pos[kValid]])));
+    if (valid != 0.0 && valid != 1.0)
+      r.fail(fmt::format("true_valid {}, expected 0 or 1", quote(f[pos[kValid]])));
     d.t.push_back(t);
     v.push_back(num(kV));
     w.push_back(num(kOm));
@@ -132,9 +134,8 @@ Track import_litw(const fs::path& series_csv) {
   e.emplace_back("citation", kCitation);
   e.emplace_back("licence", kLicence);
   e.emplace_back("source.gt_invalid_samples", std::to_string(invalid));
-  e.emplace_back("source.note",
-                 "v_cmd/w_cmd hold the base's odometry v, om (measured, biased), not commands; "
-                 "gt cells are empty where true_valid = 0");
+  e.emplace_back("source.note", "v_cmd/w_cmd hold the base's odometry v, om (measured, biased), not commands; "
+                                "gt cells are empty where true_valid = 0");
   if (have_scalars)
     for (auto& [name, value] : read_scalars(scalars_path)) e.emplace_back("litw." + name, value);
   return Track(std::move(d));

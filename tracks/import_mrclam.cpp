@@ -26,9 +26,8 @@ constexpr const char* kCitation =
     "K. Y. K. Leung, Y. Halpern, T. D. Barfoot, H. H. T. Liu, \"The UTIAS Multi-Robot "
     "Cooperative Localization and Mapping Dataset\", International Journal of Robotics "
     "Research, 30(8):969-974, 2011";
-constexpr const char* kLicence =
-    "none stated; research data whose authors ask to be cited "
-    "(http://asrl.utias.utoronto.ca/datasets/mrclam/)";
+constexpr const char* kLicence = "none stated; research data whose authors ask to be cited "
+                                 "(http://asrl.utias.utoronto.ca/datasets/mrclam/)";
 
 // One time-stamped line of a .dat file: time [ns since the epoch], values.
 struct Sample {
@@ -37,16 +36,15 @@ struct Sample {
 };
 
 struct Series {
-  std::vector<Sample> samples;  // sorted by time, one per stamp (last one kept)
-  std::size_t lines = 0;        // data lines read
-  std::size_t duplicates = 0;   // samples dropped because their stamp repeated
-  std::size_t out_of_order = 0; // lines whose stamp was earlier than the line before
+  std::vector<Sample> samples;   // sorted by time, one per stamp (last one kept)
+  std::size_t lines = 0;         // data lines read
+  std::size_t duplicates = 0;    // samples dropped because their stamp repeated
+  std::size_t out_of_order = 0;  // lines whose stamp was earlier than the line before
 };
 
 // Reads a whitespace-separated MRCLAM file: '#' comment lines, then lines of
 // "time v1 .. vN" (N = names.size()).
-Series read_series(const fs::path& path, const std::vector<const char*>& names,
-                   std::string_view what) {
+Series read_series(const fs::path& path, const std::vector<const char*>& names, std::string_view what) {
   LineReader r(path, what);
   const std::string expected = fmt::format("time {}", fmt::join(names, " "));
   Series out;
@@ -126,7 +124,8 @@ Track import_mrclam(const fs::path& dir, int robot) {
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   std::size_t i = 0, j = 0;
   while (i < odo.samples.size() || j < gt.samples.size()) {
-    const std::int64_t ti = i < odo.samples.size() ? odo.samples[i].ns : std::numeric_limits<std::int64_t>::max();
+    const std::int64_t ti = i < odo.samples.size() ? odo.samples[i].ns
+                                                   : std::numeric_limits<std::int64_t>::max();
     const std::int64_t tj = j < gt.samples.size() ? gt.samples[j].ns : std::numeric_limits<std::int64_t>::max();
     const std::int64_t now = std::min(ti, tj);
     ns.push_back(now);
@@ -171,11 +170,10 @@ Track import_mrclam(const fs::path& dir, int robot) {
                : fmt::format("mrclam-{}-robot{}", folder, robot);
   m.origin = "recorded";
   auto& e = m.extra;
-  e.emplace_back("source",
-                 fmt::format("UTIAS Multi-Robot Cooperative Localization and Mapping Dataset "
-                             "(MRCLAM), folder {}, robot {} (iRobot Create): {} (commanded v, w), "
-                             "{} (Vicon pose)",
-                             folder, robot, odo_name, gt_name));
+  e.emplace_back("source", fmt::format("UTIAS Multi-Robot Cooperative Localization and Mapping Dataset "
+                                       "(MRCLAM), folder {}, robot {} (iRobot Create): {} (commanded v, w), "
+                                       "{} (Vicon pose)",
+                                       folder, robot, odo_name, gt_name));
   e.emplace_back("citation", kCitation);
   e.emplace_back("licence", kLicence);
   e.emplace_back("source.t0_unix", ns_to_decimal(t0));
@@ -184,13 +182,11 @@ Track import_mrclam(const fs::path& dir, int robot) {
   e.emplace_back("source.odometry_duplicate_stamps", std::to_string(odo.duplicates));
   e.emplace_back("source.groundtruth_duplicate_stamps", std::to_string(gt.duplicates));
   if (odo.out_of_order + gt.out_of_order > 0)
-    e.emplace_back("source.out_of_order_lines",
-                   fmt::format("odometry {}, groundtruth {} (sorted by time)", odo.out_of_order,
-                               gt.out_of_order));
-  e.emplace_back("source.note",
-                 "v_cmd/w_cmd are the logged velocity COMMANDS, not measured motion; a repeated "
-                 "time stamp within one file keeps its last sample (counts in "
-                 "source.*_duplicate_stamps); rows are the union of both files' stamps");
+    e.emplace_back("source.out_of_order_lines", fmt::format("odometry {}, groundtruth {} (sorted by time)",
+                                                            odo.out_of_order, gt.out_of_order));
+  e.emplace_back("source.note", "v_cmd/w_cmd are the logged velocity COMMANDS, not measured motion; a repeated "
+                                "time stamp within one file keeps its last sample (counts in "
+                                "source.*_duplicate_stamps); rows are the union of both files' stamps");
   return Track(std::move(d));
 }
 

@@ -52,12 +52,13 @@ struct RunMeta {
   double positive(std::string_view key, std::size_t index, std::string_view expected) const {
     const MetaEntry& e = need(key, expected);
     if (index >= e.values.size())
-      throw TrackError(file, e.line, fmt::format("'{}' has {} value(s), expected {}", key,
-                                                 e.values.size(), index + 1));
+      throw TrackError(file, e.line,
+                       fmt::format("'{}' has {} value(s), expected {}", key, e.values.size(), index + 1));
     const auto v = to_double(e.values[index]);
     if (!v || !(*v > 0.0))
-      throw TrackError(file, e.line, fmt::format("'{}' value {} is not a positive number (expected {})",
-                                                 key, quote(e.values[index]), expected));
+      throw TrackError(file, e.line,
+                       fmt::format("'{}' value {} is not a positive number (expected {})", key,
+                                   quote(e.values[index]), expected));
     return *v;
   }
   // The index-th value of `key` as a finite number, if there is one.
@@ -114,14 +115,16 @@ RunRows read_run(const fs::path& path) {
     double num[4];
     for (int i = 0; i < 4; ++i) {
       const auto v = to_double(f[static_cast<std::size_t>(i)]);
-      if (!v) r.fail(fmt::format("{} {} is not a finite number", kNames[i], quote(f[static_cast<std::size_t>(i)])));
+      if (!v)
+        r.fail(fmt::format("{} {} is not a finite number", kNames[i], quote(f[static_cast<std::size_t>(i)])));
       num[i] = *v;
     }
     std::int64_t cnt[2];
     for (int i = 0; i < 2; ++i) {
       const auto c = tick_count(f[static_cast<std::size_t>(4 + i)]);
       if (!c)
-        r.fail(fmt::format("{} {} is not a whole tick count", kNames[4 + i], quote(f[static_cast<std::size_t>(4 + i)])));
+        r.fail(fmt::format("{} {} is not a whole tick count", kNames[4 + i],
+                           quote(f[static_cast<std::size_t>(4 + i)])));
       cnt[i] = *c;
     }
     if (!out.t.empty() && !(num[0] > out.t.back()))
@@ -134,7 +137,8 @@ RunRows read_run(const fs::path& path) {
     out.dr.push_back(cnt[0]);  // file order is R, then L
     out.dl.push_back(cnt[1]);
   }
-  if (out.t.empty()) throw TrackError(r.file(), r.line_no(), fmt::format("no data lines, expected lines of {}", kExpected));
+  if (out.t.empty())
+    throw TrackError(r.file(), r.line_no(), fmt::format("no data lines, expected lines of {}", kExpected));
   return out;
 }
 
@@ -173,18 +177,17 @@ RobotLog read_log(const fs::path& path, int run) {
     }
     if (block != run || f[0].empty() || f[0].front() == '+') continue;
     if (f.size() < 8)
-      r.fail(fmt::format("{} fields, expected at least 8 (time,odoL,odoR,xodo,yodo,thodo,vlin,omega)", f.size()));
+      r.fail(fmt::format("{} fields, expected at least 8 (time,odoL,odoR,xodo,yodo,thodo,vlin,omega)",
+                         f.size()));
     const auto t = to_double(f[0]);
     const auto l = tick_count(f[1]);
     const auto rr = tick_count(f[2]);
     const auto v = to_double(f[6]);
     const auto w = to_double(f[7]);
-    if (!t || !l || !rr || !v || !w)
-      r.fail("non-numeric time, odoL, odoR, vlin or omega, expected numbers");
+    if (!t || !l || !rr || !v || !w) r.fail("non-numeric time, odoL, odoR, vlin or omega, expected numbers");
     log.rows.push_back({*t, *l, *rr, *v, *w});
   }
-  if (!seen || log.rows.empty())
-    throw TrackError(r.file(), 0, fmt::format("no data for 'Run:,{}'", run));
+  if (!seen || log.rows.empty()) throw TrackError(r.file(), 0, fmt::format("no data for 'Run:,{}'", run));
   return log;
 }
 
@@ -196,8 +199,8 @@ bool matches(const std::vector<LogRow>& rows, std::size_t off, const RunRows& ru
 }
 
 // Row offset of the run inside the log block, or nullopt with *why set.
-std::optional<std::size_t> align(const RobotLog& log, const RunRows& run, const RunMeta& meta,
-                                 int k, std::string* why) {
+std::optional<std::size_t> align(const RobotLog& log, const RunRows& run, const RunMeta& meta, int k,
+                                 std::string* why) {
   const auto& rows = log.rows;
   std::vector<std::size_t> hits;
   for (std::size_t o = 0; o + run.t.size() <= rows.size() && hits.size() < 3; ++o)
@@ -221,7 +224,8 @@ std::optional<std::size_t> align(const RobotLog& log, const RunRows& run, const 
       *why = fmt::format("log run {} trimmed by odo_ti/odo_tf = {}/{} s reproduces odoL/odoR of all {} "
                          "rows{}",
                          k, *ti, *tf, run.t.size(),
-                         hits.size() == 1 ? " (and no other offset does)" : " (the sequence also fits elsewhere)");
+                         hits.size() == 1 ? " (and no other offset does)"
+                                          : " (the sequence also fits elsewhere)");
       return first;
     }
   }

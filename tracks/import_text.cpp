@@ -16,8 +16,7 @@ bool is_file(const std::filesystem::path& path) {
   return std::filesystem::is_regular_file(path, ec);
 }
 
-LineReader::LineReader(const std::filesystem::path& path, std::string_view what)
-    : file_(path.string()) {
+LineReader::LineReader(const std::filesystem::path& path, std::string_view what) : file_(path.string()) {
   std::error_code ec;
   const auto st = std::filesystem::status(path, ec);
   if (!std::filesystem::exists(st))

@@ -11,9 +11,9 @@ namespace odotune::sim {
 namespace {
 
 constexpr double kDegToRad = std::numbers::pi / 180.0;
-constexpr double kShrink = 0.95;       // cruise lowering factor per try
-constexpr double kMinScale = 1e-3;     // give up below this cruise fraction
-constexpr double kTimeTol = 1e-12;     // [s]
+constexpr double kShrink = 0.95;    // cruise lowering factor per try
+constexpr double kMinScale = 1e-3;  // give up below this cruise fraction
+constexpr double kTimeTol = 1e-12;  // [s]
 
 const char* kind_name(Segment::Kind k) {
   switch (k) {
@@ -27,8 +27,8 @@ const char* kind_name(Segment::Kind k) {
 
 [[noreturn]] void bad_field(const Segment& s, std::size_t i, const char* field, double value,
                             const char* expected) {
-  throw ProfileError(i, fmt::format("segment {} ({}): {} = {}; expected {}", i + 1,
-                                    kind_name(s.kind), field, value, expected));
+  throw ProfileError(i, fmt::format("segment {} ({}): {} = {}; expected {}", i + 1, kind_name(s.kind), field,
+                                    value, expected));
 }
 
 void need_positive(const Segment& s, std::size_t i, const char* field, double value) {
@@ -81,8 +81,7 @@ Cruise segment_cruise(const Segment& s, std::size_t i) {
     case Segment::Kind::spin:
       need_nonzero(s, i, "angle_deg", s.angle_deg);
       need_positive(s, i, "rate_deg_s", s.rate_deg_s);
-      return {0.0, std::copysign(s.rate_deg_s * kDegToRad, s.angle_deg),
-              std::abs(s.angle_deg) / s.rate_deg_s};
+      return {0.0, std::copysign(s.rate_deg_s * kDegToRad, s.angle_deg), std::abs(s.angle_deg) / s.rate_deg_s};
     case Segment::Kind::stop:
       if (!(std::isfinite(s.duration_s) && s.duration_s >= 0.0))
         bad_field(s, i, "duration_s", s.duration_s, "a number >= 0");
@@ -95,8 +94,7 @@ MotionProfile::MotionProfile(const MotionParams& motion) {
   const double acc = motion.max_accel_m_s2;
   const double ang = motion.max_angular_accel_rad_s2;
   if (!(std::isfinite(acc) && acc > 0.0))
-    throw ProfileError(ProfileError::npos,
-                       fmt::format("max_accel_m_s2 = {}; expected a number > 0", acc));
+    throw ProfileError(ProfileError::npos, fmt::format("max_accel_m_s2 = {}; expected a number > 0", acc));
   if (!(std::isfinite(ang) && ang > 0.0))
     throw ProfileError(ProfileError::npos,
                        fmt::format("max_angular_accel_rad_s2 = {}; expected a number > 0", ang));

@@ -52,8 +52,7 @@ namespace odotune::sim {
 // (or npos for the whole list).
 class ProfileError : public std::invalid_argument {
  public:
-  ProfileError(std::size_t segment, const std::string& what)
-      : std::invalid_argument(what), segment_(segment) {}
+  ProfileError(std::size_t segment, const std::string& what) : std::invalid_argument(what), segment_(segment) {}
   std::size_t segment() const { return segment_; }
   static constexpr std::size_t npos = static_cast<std::size_t>(-1);
 

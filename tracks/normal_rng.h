@@ -26,7 +26,7 @@ class Normal {
       has_spare_ = false;
       return spare_;
     }
-    constexpr double k2pow53 = 1.0 / 9007199254740992.0;  // 2^-53
+    constexpr double k2pow53 = 1.0 / 9007199254740992.0;                  // 2^-53
     const double u1 = static_cast<double>((gen_() >> 11) + 1) * k2pow53;  // (0, 1]
     const double u2 = static_cast<double>(gen_() >> 11) * k2pow53;        // [0, 1)
     const double r = std::sqrt(-2.0 * std::log(u1));

@@ -37,18 +37,20 @@ bool RandomSlipOptions::IsValid(std::string* why) const {
     return fail(fmt::format("min_duration_s = {}, max_duration_s = {}: expected 0.5 <= min <= max, finite",
                             min_duration_s, max_duration_s));
   if (!(min_gap_s >= 0.0 && max_gap_s >= min_gap_s && std::isfinite(max_gap_s)))
-    return fail(fmt::format("min_gap_s = {}, max_gap_s = {}: expected 0 <= min <= max, finite", min_gap_s, max_gap_s));
+    return fail(fmt::format("min_gap_s = {}, max_gap_s = {}: expected 0 <= min <= max, finite", min_gap_s,
+                            max_gap_s));
   if (!(min_strength > 0.0 && max_strength >= min_strength && max_strength <= 0.9))
-    return fail(fmt::format("min_strength = {}, max_strength = {}: expected 0 < min <= max <= 0.9", min_strength,
-                            max_strength));
+    return fail(fmt::format("min_strength = {}, max_strength = {}: expected 0 < min <= max <= 0.9",
+                            min_strength, max_strength));
   if (!finite_nonneg(min_speed_m_s))
     return fail(fmt::format("min_speed_m_s = {}: expected a finite value >= 0", min_speed_m_s));
   if (!std::isfinite(hold_brake_per_s_nm) || !std::isfinite(hold_brake_offset_nm) ||
       hold_brake_per_s_nm * min_strength + hold_brake_offset_nm < 0.0 ||
       hold_brake_per_s_nm * max_strength + hold_brake_offset_nm < 0.0)
-    return fail(fmt::format("hold_brake_per_s_nm = {}, hold_brake_offset_nm = {}: expected finite values giving a "
-                            "brake >= 0 N*m over the strength range",
-                            hold_brake_per_s_nm, hold_brake_offset_nm));
+    return fail(
+        fmt::format("hold_brake_per_s_nm = {}, hold_brake_offset_nm = {}: expected finite values giving a "
+                    "brake >= 0 N*m over the strength range",
+                    hold_brake_per_s_nm, hold_brake_offset_nm));
   if (!finite_nonneg(ramp_per_strength_s))
     return fail(fmt::format("ramp_per_strength_s = {}: expected a finite value >= 0", ramp_per_strength_s));
   return true;

@@ -23,12 +23,12 @@
 namespace odotune::sim {
 
 struct RandomSlipOptions {
-  double first_s = 6.0;                                   // no episode starts before [s]
-  double end_margin_s = 3.0;                              // none ends within this of the drive's end [s]
-  double min_duration_s = 2.0, max_duration_s = 5.0;      // episode length, ramps included [s]
-  double min_gap_s = 4.0, max_gap_s = 10.0;               // grip between episodes [s]
-  double min_strength = 0.3, max_strength = 0.8;          // s, within (0, 0.9]
-  double min_speed_m_s = 0.3;                             // |v| commanded throughout an episode
+  double first_s = 6.0;                               // no episode starts before [s]
+  double end_margin_s = 3.0;                          // none ends within this of the drive's end [s]
+  double min_duration_s = 2.0, max_duration_s = 5.0;  // episode length, ramps included [s]
+  double min_gap_s = 4.0, max_gap_s = 10.0;           // grip between episodes [s]
+  double min_strength = 0.3, max_strength = 0.8;      // s, within (0, 0.9]
+  double min_speed_m_s = 0.3;                         // |v| commanded throughout an episode
   // Hold brake [N*m] = hold_brake_per_s_nm * s + hold_brake_offset_nm, so
   // that a hold raises the motor power (simulator.h, "Slip episodes"; the
   // hand-placed episodes of scenarios/wheelchair_slip.yaml follow ~40 s − 6).

@@ -25,10 +25,10 @@ namespace odotune::sim {
 // (simulator.h) and are order-of-magnitude values for such a base: a 12 V
 // gearmotor with a wheel-side torque constant of 0.5 N*m/A.
 struct RobotParams {
-  double wheel_radius_left_m = 0.05;    // nominal R_l [m]
-  double wheel_radius_right_m = 0.05;   // nominal R_r [m]
-  double wheel_base_m = 0.30;           // nominal D, between contact points [m]
-  double ticks_per_rev = 4096;          // encoder counts per wheel revolution
+  double wheel_radius_left_m = 0.05;   // nominal R_l [m]
+  double wheel_radius_right_m = 0.05;  // nominal R_r [m]
+  double wheel_base_m = 0.30;          // nominal D, between contact points [m]
+  double ticks_per_rev = 4096;         // encoder counts per wheel revolution
 
   // Power model (see simulator.h, "Motor power").
   double mass_kg = 10.0;                  // body mass m [kg]
@@ -63,9 +63,9 @@ struct Segment {
 // One point of an explicit velocity profile: the commanded body velocities at
 // time t_s. Between knots the command is linear in t (motion_profile.h).
 struct VelocityKnot {
-  double t_s = 0.0;       // [s]; the first knot at 0, strictly increasing
-  double v_m_s = 0.0;     // v_cmd [m/s]
-  double w_rad_s = 0.0;   // w_cmd [rad/s]
+  double t_s = 0.0;      // [s]; the first knot at 0, strictly increasing
+  double v_m_s = 0.0;    // v_cmd [m/s]
+  double w_rad_s = 0.0;  // w_cmd [rad/s]
 };
 
 // The commanded motion: EITHER segments (planned under the acceleration
@@ -81,10 +81,10 @@ struct VelocityKnot {
 // default: the origin, heading along +x.
 struct MotionParams {
   double start_x_m = 0, start_y_m = 0, start_theta_rad = 0;  // initial pose [m, m, rad]
-  double max_accel_m_s2 = 0.5;              // |dv_cmd/dt| limit [m/s^2]
-  double max_angular_accel_rad_s2 = 2.0;    // |dw_cmd/dt| limit [rad/s^2]
-  std::vector<Segment> segments;            // flat; repeats already expanded
-  std::vector<VelocityKnot> knots;          // explicit profile (e.g. from a recorded track)
+  double max_accel_m_s2 = 0.5;                               // |dv_cmd/dt| limit [m/s^2]
+  double max_angular_accel_rad_s2 = 2.0;                     // |dw_cmd/dt| limit [rad/s^2]
+  std::vector<Segment> segments;                             // flat; repeats already expanded
+  std::vector<VelocityKnot> knots;                           // explicit profile (e.g. from a recorded track)
 };
 
 // Sensors. Every sensor samples at t = k / rate_hz (k = 0, 1, ...); a row of
@@ -93,47 +93,47 @@ struct MotionParams {
 // reported value to that step (0 = full double precision); it is the sensor's
 // LSB and keeps files small.
 struct SensorParams {
-  struct Encoders {                  // ticks_l, ticks_r (+ omega_l, omega_r)
+  struct Encoders {  // ticks_l, ticks_r (+ omega_l, omega_r)
     bool enabled = true;
     double rate_hz = 100.0;
-    bool omega = false;              // also write omega_l, omega_r [rad/s]
+    bool omega = false;  // also write omega_l, omega_r [rad/s]
     double omega_resolution_rad_s = 1e-4;
   } encoders;
-  struct Commands {                  // v_cmd, w_cmd
+  struct Commands {  // v_cmd, w_cmd
     bool enabled = true;
     double rate_hz = 100.0;
-    double resolution = 1e-4;        // [m/s] and [rad/s]
+    double resolution = 1e-4;  // [m/s] and [rad/s]
   } commands;
-  struct Gyro {                      // gyro_z
+  struct Gyro {  // gyro_z
     bool enabled = true;
     double rate_hz = 100.0;
-    double sigma_rad_s = 0.002;      // white noise std [rad/s]
+    double sigma_rad_s = 0.002;  // white noise std [rad/s]
     double resolution_rad_s = 1e-5;
   } gyro;
-  struct Power {                     // power_l, power_r
+  struct Power {  // power_l, power_r
     bool enabled = true;
     double rate_hz = 100.0;
-    double sigma_w = 0.02;           // white noise std [W]
+    double sigma_w = 0.02;  // white noise std [W]
     double resolution_w = 1e-3;
   } power;
-  struct ExtVelocity {               // v_ext, w_ext, v_ext_var, w_ext_var
+  struct ExtVelocity {  // v_ext, w_ext, v_ext_var, w_ext_var
     bool enabled = true;
     double rate_hz = 10.0;
-    double sigma_v_m_s = 0.02;       // white noise std of v_ext [m/s]
-    double sigma_w_rad_s = 0.02;     // white noise std of w_ext [rad/s]
-    double resolution = 1e-4;        // [m/s] and [rad/s]
+    double sigma_v_m_s = 0.02;    // white noise std of v_ext [m/s]
+    double sigma_w_rad_s = 0.02;  // white noise std of w_ext [rad/s]
+    double resolution = 1e-4;     // [m/s] and [rad/s]
   } ext_velocity;
-  struct Aps {                       // aps_x, aps_y
+  struct Aps {  // aps_x, aps_y
     bool enabled = true;
     double rate_hz = 1.0;
-    double sigma_m = 0.06;           // white noise std per axis [m] (the study's 60 mm)
+    double sigma_m = 0.06;  // white noise std per axis [m] (the study's 60 mm)
     double resolution_m = 1e-4;
   } aps;
-  struct GroundTruth {               // gt_x, gt_y, gt_theta (theta unwrapped)
+  struct GroundTruth {  // gt_x, gt_y, gt_theta (theta unwrapped)
     bool enabled = true;
     double rate_hz = 100.0;
-    double sigma_m = 0.0;            // optional white noise [m], default off
-    double sigma_rad = 0.0;          // optional white noise [rad], default off
+    double sigma_m = 0.0;    // optional white noise [m], default off
+    double sigma_rad = 0.0;  // optional white noise [rad], default off
     double resolution_m = 1e-5;
     double resolution_rad = 1e-6;
   } ground_truth;
@@ -143,18 +143,42 @@ struct SensorParams {
 // effect switched off. Field names are the spec's parameter names verbatim;
 // the table of names, units and valid ranges is effects.h.
 struct Effects {
-  struct RadiusError { double scale_l = 1.0, scale_r = 1.0; };
-  struct WheelBaseError { double scale = 1.0; };
-  struct RadiusStep { double t = 0.0, scale_l = 1.0, scale_r = 1.0; };        // t [s]
-  struct SpeedRadius { double c = 0.0; };                                     // [s^2/m^2]
-  struct LateralSkid { double k = 0.0; };                                     // [s]
-  struct LongitudinalSlip { double k = 0.0; };                                // [s^2/m]
-  struct SlipZone { double x0 = 0, x1 = 0, y0 = 0, y1 = 0, s_l = 0, s_r = 0; };  // [m], [-]
-  struct GyroBias { double b = 0.0; };                                        // [rad/s]
-  struct GyroScale { double s = 1.0; };
-  struct ActuatorLag { double tau = 0.0; };                                   // [s]
-  struct TimeOffset { double dt = 0.0; };                                     // [s]
-  struct OdometryBias { double b_v = 0.0, b_w = 0.0; };                       // [m/s], [rad/s]
+  struct RadiusError {
+    double scale_l = 1.0, scale_r = 1.0;
+  };
+  struct WheelBaseError {
+    double scale = 1.0;
+  };
+  struct RadiusStep {
+    double t = 0.0, scale_l = 1.0, scale_r = 1.0;
+  };  // t [s]
+  struct SpeedRadius {
+    double c = 0.0;
+  };  // [s^2/m^2]
+  struct LateralSkid {
+    double k = 0.0;
+  };  // [s]
+  struct LongitudinalSlip {
+    double k = 0.0;
+  };  // [s^2/m]
+  struct SlipZone {
+    double x0 = 0, x1 = 0, y0 = 0, y1 = 0, s_l = 0, s_r = 0;
+  };  // [m], [-]
+  struct GyroBias {
+    double b = 0.0;
+  };  // [rad/s]
+  struct GyroScale {
+    double s = 1.0;
+  };
+  struct ActuatorLag {
+    double tau = 0.0;
+  };  // [s]
+  struct TimeOffset {
+    double dt = 0.0;
+  };  // [s]
+  struct OdometryBias {
+    double b_v = 0.0, b_w = 0.0;
+  };  // [m/s], [rad/s]
 
   std::optional<RadiusError> radius_error;
   std::optional<WheelBaseError> wheel_base_error;
@@ -193,19 +217,19 @@ struct SlipEpisode {
   enum class Wheel { left, right };
   Kind kind = Kind::spin;
   Wheel wheel = Wheel::left;
-  double t0_s = 0.0;       // start [s] (simulation time)
-  double t1_s = 0.0;       // end [s]
-  double s = 0.0;          // peak strength [-]: the lost fraction of ground speed (spin) or rotation (hold)
-  double ramp_s = 0.2;     // duration of each linear ramp [s]
-  double brake_nm = 0.0;   // hold: braking torque at full strength [N*m]; 0 = 2*robot.coulomb_friction_nm
-  int line = 0;            // line in the scenario file, for error messages (0 = unknown)
+  double t0_s = 0.0;      // start [s] (simulation time)
+  double t1_s = 0.0;      // end [s]
+  double s = 0.0;         // peak strength [-]: the lost fraction of ground speed (spin) or rotation (hold)
+  double ramp_s = 0.2;    // duration of each linear ramp [s]
+  double brake_nm = 0.0;  // hold: braking torque at full strength [N*m]; 0 = 2*robot.coulomb_friction_nm
+  int line = 0;           // line in the scenario file, for error messages (0 = unknown)
 };
 
 struct Scenario {
-  std::string name = "simulated";   // track name (metadata `name`)
-  std::string source;               // scenario file name, written as sim.scenario ("" = none)
-  std::uint64_t seed = 1;           // all noise derives from it
-  double step_s = 0.001;            // integration step [s]; 1/step_s must be a whole number
+  std::string name = "simulated";  // track name (metadata `name`)
+  std::string source;              // scenario file name, written as sim.scenario ("" = none)
+  std::uint64_t seed = 1;          // all noise derives from it
+  double step_s = 0.001;           // integration step [s]; 1/step_s must be a whole number
   RobotParams robot;
   MotionParams motion;
   SensorParams sensors;

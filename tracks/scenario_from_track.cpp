@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <charconv>
-#include <initializer_list>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -79,7 +79,10 @@ std::pair<std::size_t, std::size_t> window_at(const std::vector<double>& t, doub
   while (hi - lo < min_pts && (lo > 0 || hi < t.size())) {
     const double left = lo > 0 ? tc - t[lo - 1] : std::numeric_limits<double>::infinity();
     const double right = hi < t.size() ? t[hi] - tc : std::numeric_limits<double>::infinity();
-    if (left <= right) --lo; else ++hi;
+    if (left <= right)
+      --lo;
+    else
+      ++hi;
   }
   return {lo, hi};
 }
@@ -136,7 +139,7 @@ std::vector<Local> fit_at(const std::vector<double>& t, const std::vector<const 
 
 // Smoothed reference motion at the knot times.
 struct Motion {
-  std::vector<double> t;        // knot times, shifted to start at 0 [s]
+  std::vector<double> t;         // knot times, shifted to start at 0 [s]
   std::vector<double> x, y, th;  // pose [m, m, rad] (th unwrapped)
   std::vector<double> v, w;      // body velocities [m/s, rad/s]
   double start_th = 0;           // heading of the scenario's start pose [rad] (header: Frames)
@@ -150,7 +153,8 @@ struct Motion {
 // next to th_0. Unlike th_0 alone it is not thrown off by one spurious
 // trusted heading while the robot stands, nor by a turn lost in an untrusted
 // stretch (it then splits the loss, like a rigid best fit).
-double consensus_start_heading(const Motion& m, const std::vector<bool>& known, const std::vector<double>& speed) {
+double consensus_start_heading(const Motion& m, const std::vector<bool>& known,
+                               const std::vector<double>& speed) {
   double sum_s = 0.0, sum_c = 0.0, turned = 0.0;
   for (std::size_t k = 0; k < m.t.size(); ++k) {
     if (k > 0) turned += 0.5 * (m.w[k - 1] + m.w[k]) * (m.t[k] - m.t[k - 1]);
@@ -197,7 +201,8 @@ Motion reference_motion(const Reference& ref, const ScenarioFromTrackOptions& o)
   }
   if (!have_th) {  // hold the heading while slow; before the first known one, use it
     const auto first = std::find(heading_known.begin(), heading_known.end(), true);
-    double prev = first == heading_known.end() ? 0.0 : m.th[static_cast<std::size_t>(first - heading_known.begin())];
+    double prev = first == heading_known.end() ? 0.0
+                                               : m.th[static_cast<std::size_t>(first - heading_known.begin())];
     for (std::size_t k = 0; k < n; ++k) {
       m.th[k] = heading_known[k] ? prev + wrap_pi(m.th[k] - prev) : prev;
       prev = m.th[k];
@@ -260,7 +265,8 @@ std::vector<VelocityKnot> invert_effects(const Motion& m, const RobotParams& r, 
     auto& u = g[static_cast<std::size_t>(side)];
     if (fx.longitudinal_slip) {
       const std::vector<double> du = rate_of(m.t, u);
-      for (std::size_t k = 0; k < n; ++k) u[k] /= 1.0 - std::min(0.5, fx.longitudinal_slip->k * std::abs(du[k]));
+      for (std::size_t k = 0; k < n; ++k)
+        u[k] /= 1.0 - std::min(0.5, fx.longitudinal_slip->k * std::abs(du[k]));
     }
     const double R_nom = side == 0 ? r.wheel_radius_left_m : r.wheel_radius_right_m;
     for (std::size_t k = 0; k < n; ++k) {
@@ -303,15 +309,15 @@ RobotParams robot_of(const Track& track) {
   if (meta.wheel_radius_right_m) r.wheel_radius_right_m = *meta.wheel_radius_right_m;
   if (meta.wheel_base_m) r.wheel_base_m = *meta.wheel_base_m;
   if (meta.ticks_per_rev) r.ticks_per_rev = *meta.ticks_per_rev;
-  const std::array<std::tuple<std::string_view, double*, bool>, 8> extra = {{
-      {"sim.robot.mass_kg", &r.mass_kg, false},
-      {"sim.robot.yaw_inertia_kg_m2", &r.yaw_inertia_kg_m2, false},
-      {"sim.robot.wheel_inertia_kg_m2", &r.wheel_inertia_kg_m2, false},
-      {"sim.robot.viscous_friction_nm_s", &r.viscous_friction_nm_s, false},
-      {"sim.robot.coulomb_friction_nm", &r.coulomb_friction_nm, false},
-      {"sim.robot.coulomb_smoothing_rad_s", &r.coulomb_smoothing_rad_s, true},
-      {"sim.robot.torque_constant_nm_per_a", &r.torque_constant_nm_per_a, true},
-      {"sim.robot.coil_resistance_ohm", &r.coil_resistance_ohm, false}}};
+  const std::array<std::tuple<std::string_view, double*, bool>, 8> extra = {
+      {{"sim.robot.mass_kg", &r.mass_kg, false},
+       {"sim.robot.yaw_inertia_kg_m2", &r.yaw_inertia_kg_m2, false},
+       {"sim.robot.wheel_inertia_kg_m2", &r.wheel_inertia_kg_m2, false},
+       {"sim.robot.viscous_friction_nm_s", &r.viscous_friction_nm_s, false},
+       {"sim.robot.coulomb_friction_nm", &r.coulomb_friction_nm, false},
+       {"sim.robot.coulomb_smoothing_rad_s", &r.coulomb_smoothing_rad_s, true},
+       {"sim.robot.torque_constant_nm_per_a", &r.torque_constant_nm_per_a, true},
+       {"sim.robot.coil_resistance_ohm", &r.coil_resistance_ohm, false}}};
   for (const auto& [key, field, positive] : extra)
     if (const auto x = meta_number(meta, key, positive)) *field = *x;
   return r;
@@ -369,7 +375,8 @@ class SensorBuilder {
     const SensorParams def;
     s.encoders.enabled = tr.has_ticks() || tr.has_wheel_rates();
     s.encoders.omega = tr.has_wheel_rates();
-    if (s.encoders.enabled) s.encoders.rate_hz = rate_hz(rows({Col::omega_l, Col::omega_r}, true), def.encoders.rate_hz);
+    if (s.encoders.enabled)
+      s.encoders.rate_hz = rate_hz(rows({Col::omega_l, Col::omega_r}, true), def.encoders.rate_hz);
     s.commands.enabled = tr.has(Col::v_cmd) || tr.has(Col::w_cmd);
     if (s.commands.enabled) s.commands.rate_hz = rate_hz(rows({Col::v_cmd, Col::w_cmd}), def.commands.rate_hz);
     s.gyro.enabled = tr.has(Col::gyro_z);
@@ -381,10 +388,10 @@ class SensorBuilder {
     s.ext_velocity.enabled = tr.has(Col::v_ext) || tr.has(Col::w_ext);
     if (s.ext_velocity.enabled)
       s.ext_velocity.rate_hz = rate_hz(rows({Col::v_ext, Col::w_ext}), def.ext_velocity.rate_hz);
-    s.ext_velocity.sigma_v_m_s =
-        sigma("sim.ext_sigma_v_m_s", sigma_from_variance(Col::v_ext_var, def.ext_velocity.sigma_v_m_s));
-    s.ext_velocity.sigma_w_rad_s =
-        sigma("sim.ext_sigma_w_rad_s", sigma_from_variance(Col::w_ext_var, def.ext_velocity.sigma_w_rad_s));
+    s.ext_velocity.sigma_v_m_s = sigma("sim.ext_sigma_v_m_s",
+                                       sigma_from_variance(Col::v_ext_var, def.ext_velocity.sigma_v_m_s));
+    s.ext_velocity.sigma_w_rad_s = sigma("sim.ext_sigma_w_rad_s",
+                                         sigma_from_variance(Col::w_ext_var, def.ext_velocity.sigma_w_rad_s));
     s.aps.enabled = tr.has(Col::aps_x) || tr.has(Col::aps_y);
     if (s.aps.enabled) s.aps.rate_hz = rate_hz(rows({Col::aps_x, Col::aps_y}), def.aps.rate_hz);
     s.aps.sigma_m = sigma("sim.aps_sigma_m", def.aps.sigma_m);
@@ -393,12 +400,11 @@ class SensorBuilder {
       s.ground_truth.rate_hz = rate_hz(rows({Col::gt_x, Col::gt_y, Col::gt_theta}), def.ground_truth.rate_hz);
     } else {
       double fastest = 0.0;
-      for (const auto& [on, rate] : {std::pair{s.encoders.enabled, s.encoders.rate_hz},
-                                     std::pair{s.commands.enabled, s.commands.rate_hz},
-                                     std::pair{s.gyro.enabled, s.gyro.rate_hz},
-                                     std::pair{s.power.enabled, s.power.rate_hz},
-                                     std::pair{s.ext_velocity.enabled, s.ext_velocity.rate_hz},
-                                     std::pair{s.aps.enabled, s.aps.rate_hz}})
+      for (const auto& [on, rate] :
+           {std::pair{s.encoders.enabled, s.encoders.rate_hz},
+            std::pair{s.commands.enabled, s.commands.rate_hz}, std::pair{s.gyro.enabled, s.gyro.rate_hz},
+            std::pair{s.power.enabled, s.power.rate_hz},
+            std::pair{s.ext_velocity.enabled, s.ext_velocity.rate_hz}, std::pair{s.aps.enabled, s.aps.rate_hz}})
         if (on) fastest = std::max(fastest, rate);
       s.ground_truth.rate_hz = fastest > 0.0 ? fastest : rate_hz({}, def.ground_truth.rate_hz);
     }
@@ -431,7 +437,8 @@ bool ScenarioFromTrackOptions::IsValid(std::string* why) const {
   const double inv = 1.0 / step_s;
   if (!(std::isfinite(step_s) && step_s > 0.0 && step_s <= 0.1 && inv <= 1e7 &&
         std::abs(inv - std::round(inv)) <= 1e-9 * std::round(inv)))
-    return fail(fmt::format("step_s = {}; expected a step in (0, 0.1] s whose inverse is a whole number", step_s));
+    return fail(fmt::format("step_s = {}; expected a step in (0, 0.1] s whose inverse is a whole number",
+                            step_s));
   return true;
 }
 
@@ -476,7 +483,8 @@ Scenario scenario_from_track(const Track& track, const std::vector<std::string>&
   sc.motion.knots = invert_effects(m, sc.robot, fx);
 
   if (!validate_scenario(sc, &why))
-    throw std::invalid_argument(fmt::format("track '{}': the corrected scenario is not valid: {}", track.name(), why));
+    throw std::invalid_argument(fmt::format("track '{}': the corrected scenario is not valid: {}", track.name(),
+                                            why));
   return sc;
 }
 

@@ -100,13 +100,13 @@
 namespace odotune::sim {
 
 struct ScenarioFromTrackOptions {
-  std::uint64_t seed = 1;             // the scenario's noise seed
-  double knot_rate_hz = 10.0;         // knots per second, in (0, 1000]
-  double half_window_s = 0.5;         // smoothing half-width [s], > 0
-  double fixes_half_window_s = 2.0;   // the same for a position-fix reference [s]
-  std::size_t min_fit_points = 6;     // at least this many samples per local fit, >= 4
-  double min_speed_m_s = 0.02;        // heading-from-path speed threshold [m/s], >= 0
-  double step_s = 0.001;              // the scenario's integration step [s]
+  std::uint64_t seed = 1;            // the scenario's noise seed
+  double knot_rate_hz = 10.0;        // knots per second, in (0, 1000]
+  double half_window_s = 0.5;        // smoothing half-width [s], > 0
+  double fixes_half_window_s = 2.0;  // the same for a position-fix reference [s]
+  std::size_t min_fit_points = 6;    // at least this many samples per local fit, >= 4
+  double min_speed_m_s = 0.02;       // heading-from-path speed threshold [m/s], >= 0
+  double step_s = 0.001;             // the scenario's integration step [s]
 
   bool IsValid(std::string* why) const;
 };

@@ -125,9 +125,11 @@ bool validate_scenario(const Scenario& sc, std::string* why) {
                             sc.step_s));
 
   const RobotParams& r = sc.robot;
-  const std::array<std::pair<const char*, double>, 4> pos = {{
-      {"wheel_radius_left_m", r.wheel_radius_left_m}, {"wheel_radius_right_m", r.wheel_radius_right_m},
-      {"wheel_base_m", r.wheel_base_m}, {"coulomb_smoothing_rad_s", r.coulomb_smoothing_rad_s}}};
+  const std::array<std::pair<const char*, double>, 4> pos = {
+      {{"wheel_radius_left_m", r.wheel_radius_left_m},
+       {"wheel_radius_right_m", r.wheel_radius_right_m},
+       {"wheel_base_m", r.wheel_base_m},
+       {"coulomb_smoothing_rad_s", r.coulomb_smoothing_rad_s}}};
   for (const auto& [name, v] : pos)
     if (!positive(v)) return fail(fmt::format("robot.{} = {}; expected a number > 0", name, v));
   if (!(std::isfinite(r.ticks_per_rev) && r.ticks_per_rev >= 1.0 && r.ticks_per_rev <= 1e9))
@@ -135,10 +137,12 @@ bool validate_scenario(const Scenario& sc, std::string* why) {
   if (!positive(r.torque_constant_nm_per_a))
     return fail(fmt::format("robot.torque_constant_nm_per_a = {}; expected a number > 0",
                             r.torque_constant_nm_per_a));
-  const std::array<std::pair<const char*, double>, 6> nn = {{
-      {"mass_kg", r.mass_kg}, {"yaw_inertia_kg_m2", r.yaw_inertia_kg_m2},
-      {"wheel_inertia_kg_m2", r.wheel_inertia_kg_m2}, {"viscous_friction_nm_s", r.viscous_friction_nm_s},
-      {"coulomb_friction_nm", r.coulomb_friction_nm}, {"coil_resistance_ohm", r.coil_resistance_ohm}}};
+  const std::array<std::pair<const char*, double>, 6> nn = {{{"mass_kg", r.mass_kg},
+                                                             {"yaw_inertia_kg_m2", r.yaw_inertia_kg_m2},
+                                                             {"wheel_inertia_kg_m2", r.wheel_inertia_kg_m2},
+                                                             {"viscous_friction_nm_s", r.viscous_friction_nm_s},
+                                                             {"coulomb_friction_nm", r.coulomb_friction_nm},
+                                                             {"coil_resistance_ohm", r.coil_resistance_ohm}}};
   for (const auto& [name, v] : nn)
     if (!nonneg(v)) return fail(fmt::format("robot.{} = {}; expected a number >= 0", name, v));
 
@@ -155,24 +159,27 @@ bool validate_scenario(const Scenario& sc, std::string* why) {
   if (!s.encoders.enabled && !s.commands.enabled)
     return fail("sensors: neither encoders nor commands is enabled; a track needs an odometry "
                 "source (expected sensors.encoders or sensors.commands enabled)");
-  const std::array<std::pair<const char*, double>, 15> nn2 = {{
-      {"encoders.omega_resolution_rad_s", s.encoders.omega_resolution_rad_s},
-      {"commands.resolution", s.commands.resolution},
-      {"gyro.sigma_rad_s", s.gyro.sigma_rad_s}, {"gyro.resolution_rad_s", s.gyro.resolution_rad_s},
-      {"power.sigma_w", s.power.sigma_w}, {"power.resolution_w", s.power.resolution_w},
-      {"ext_velocity.sigma_v_m_s", s.ext_velocity.sigma_v_m_s},
-      {"ext_velocity.sigma_w_rad_s", s.ext_velocity.sigma_w_rad_s},
-      {"ext_velocity.resolution", s.ext_velocity.resolution},
-      {"aps.sigma_m", s.aps.sigma_m}, {"aps.resolution_m", s.aps.resolution_m},
-      {"ground_truth.sigma_m", s.ground_truth.sigma_m},
-      {"ground_truth.sigma_rad", s.ground_truth.sigma_rad},
-      {"ground_truth.resolution_m", s.ground_truth.resolution_m},
-      {"ground_truth.resolution_rad", s.ground_truth.resolution_rad}}};
+  const std::array<std::pair<const char*, double>, 15> nn2 = {
+      {{"encoders.omega_resolution_rad_s", s.encoders.omega_resolution_rad_s},
+       {"commands.resolution", s.commands.resolution},
+       {"gyro.sigma_rad_s", s.gyro.sigma_rad_s},
+       {"gyro.resolution_rad_s", s.gyro.resolution_rad_s},
+       {"power.sigma_w", s.power.sigma_w},
+       {"power.resolution_w", s.power.resolution_w},
+       {"ext_velocity.sigma_v_m_s", s.ext_velocity.sigma_v_m_s},
+       {"ext_velocity.sigma_w_rad_s", s.ext_velocity.sigma_w_rad_s},
+       {"ext_velocity.resolution", s.ext_velocity.resolution},
+       {"aps.sigma_m", s.aps.sigma_m},
+       {"aps.resolution_m", s.aps.resolution_m},
+       {"ground_truth.sigma_m", s.ground_truth.sigma_m},
+       {"ground_truth.sigma_rad", s.ground_truth.sigma_rad},
+       {"ground_truth.resolution_m", s.ground_truth.resolution_m},
+       {"ground_truth.resolution_rad", s.ground_truth.resolution_rad}}};
   for (const auto& [name, v] : nn2)
     if (!nonneg(v)) return fail(fmt::format("sensors.{} = {}; expected a number >= 0", name, v));
 
-  const std::array<std::pair<const char*, double>, 3> start = {{
-      {"x_m", sc.motion.start_x_m}, {"y_m", sc.motion.start_y_m}, {"theta_rad", sc.motion.start_theta_rad}}};
+  const std::array<std::pair<const char*, double>, 3> start = {
+      {{"x_m", sc.motion.start_x_m}, {"y_m", sc.motion.start_y_m}, {"theta_rad", sc.motion.start_theta_rad}}};
   for (const auto& [name, v] : start)
     if (!std::isfinite(v)) return fail(fmt::format("motion.start.{} = {}; expected a finite number", name, v));
 
@@ -240,8 +247,7 @@ Track simulate(const Scenario& sc) {
   // sensor samples (at most 10 s; else the next row instant), so the last row
   // is complete and shows the final pose.
   const std::int64_t end_multiple = l <= 10 * sps ? l : g;
-  auto n_steps =
-      static_cast<std::int64_t>(std::max(0.0, std::ceil(profile.duration_s() * spsd - 1e-6)));
+  auto n_steps = static_cast<std::int64_t>(std::max(0.0, std::ceil(profile.duration_s() * spsd - 1e-6)));
   n_steps = (n_steps + end_multiple - 1) / end_multiple * end_multiple;
   std::vector<std::int64_t> row_k;
   for (std::int64_t k = 0; k <= n_steps; k += g)
@@ -251,9 +257,7 @@ Track simulate(const Scenario& sc) {
         break;
       }
   const std::size_t n_rows = row_k.size();
-  auto sampled = [&](std::size_t r, SensorIndex s) {
-    return period[s] > 0 && row_k[r] % period[s] == 0;
-  };
+  auto sampled = [&](std::size_t r, SensorIndex s) { return period[s] > 0 && row_k[r] % period[s] == 0; };
 
   // Odometry query positions (fractional step index of t - dt), clamped.
   const Effects& fx = sc.effects;
@@ -325,9 +329,9 @@ Track simulate(const Scenario& sc) {
   std::vector<Truth> truth(n_rows);
   std::vector<WheelState> odo(n_rows);
   std::size_t next_row = 0, next_q = 0;
-  WheelState w0;                          // rotation
-  double c0_l = 0.0, c0_r = 0.0;          // controller rates omega_ctrl [rad/s]
-  WheelSlip sl0_l, sl0_r;                 // no episode acts at t = 0 (strength 0 at t0_s)
+  WheelState w0;                  // rotation
+  double c0_l = 0.0, c0_r = 0.0;  // controller rates omega_ctrl [rad/s]
+  WheelSlip sl0_l, sl0_r;         // no episode acts at t = 0 (strength 0 at t0_s)
   double ref0_l = 0.0, ref0_r = 0.0;
   const MotionParams& mo = sc.motion;
   double x = mo.start_x_m, y = mo.start_y_m, th = mo.start_theta_rad, v_prev = 0.0, w_prev = 0.0;
@@ -359,10 +363,10 @@ Track simulate(const Scenario& sc) {
     const bool zone = in_zone(x, y);
     const double s_zone_l = zone ? fx.slip_zone->s_l : 0.0;
     const double s_zone_r = zone ? fx.slip_zone->s_r : 0.0;
-    const double g_l =
-        0.5 * (u0_l + u1_l) * (1.0 - s_long_l) * (1.0 - s_zone_l) * (1.0 - 0.5 * (sl0_l.spin + sl1_l.spin));
-    const double g_r =
-        0.5 * (u0_r + u1_r) * (1.0 - s_long_r) * (1.0 - s_zone_r) * (1.0 - 0.5 * (sl0_r.spin + sl1_r.spin));
+    const double g_l = 0.5 * (u0_l + u1_l) * (1.0 - s_long_l) * (1.0 - s_zone_l) *
+                       (1.0 - 0.5 * (sl0_l.spin + sl1_l.spin));
+    const double g_r = 0.5 * (u0_r + u1_r) * (1.0 - s_long_r) * (1.0 - s_zone_r) *
+                       (1.0 - 0.5 * (sl0_r.spin + sl1_r.spin));
 
     const double v = 0.5 * (g_r + g_l);
     const double w = (g_r - g_l) / D_true;
@@ -376,12 +380,17 @@ Track simulate(const Scenario& sc) {
 
     if (next_row < n_rows && row_k[next_row] == k + 1) {
       const double a = (v - v_prev) / h, alpha = (w - w_prev) / h;
-      const double f_lin = 0.5 * rb.mass_kg * a;            // [N] per wheel
+      const double f_lin = 0.5 * rb.mass_kg * a;                   // [N] per wheel
       const double f_rot = rb.yaw_inertia_kg_m2 * alpha / D_true;  // [N], + right
       Truth& tr = truth[next_row++];
-      tr = {x, y, th, v, w,
-            motor_power(w1.om_l, (w1.om_l - w0.om_l) / h, f_lin - f_rot, eff_radius(w1.om_l, Rb_l), sl1_l, c1_l),
-            motor_power(w1.om_r, (w1.om_r - w0.om_r) / h, f_lin + f_rot, eff_radius(w1.om_r, Rb_r), sl1_r, c1_r)};
+      tr = {
+          x,
+          y,
+          th,
+          v,
+          w,
+          motor_power(w1.om_l, (w1.om_l - w0.om_l) / h, f_lin - f_rot, eff_radius(w1.om_l, Rb_l), sl1_l, c1_l),
+          motor_power(w1.om_r, (w1.om_r - w0.om_r) / h, f_lin + f_rot, eff_radius(w1.om_r, Rb_r), sl1_r, c1_r)};
     }
     const double kd1 = static_cast<double>(k + 1);
     while (next_q < n_rows && q[next_q] <= kd1) {
@@ -465,8 +474,7 @@ Track simulate(const Scenario& sc) {
     const double gb = fx.gyro_bias ? fx.gyro_bias->b : 0.0;
     for (std::size_t r = 0; r < n_rows; ++r)
       if (sampled(r, kGyro))
-        gz[r] = quantise(gs * truth[r].w + gb + sp.gyro.sigma_rad_s * noise(),
-                         sp.gyro.resolution_rad_s);
+        gz[r] = quantise(gs * truth[r].w + gb + sp.gyro.sigma_rad_s * noise(), sp.gyro.resolution_rad_s);
   }
   if (period[kPower] > 0) {
     Normal noise = make_stream(sc.seed, kPowerStream);
@@ -520,7 +528,9 @@ Track simulate(const Scenario& sc) {
 
   // --- metadata --------------------------------------------------------------
   auto& ex = d.meta.extra;
-  auto put = [&ex](std::string key, double value) { ex.emplace_back(std::move(key), fmt::format("{}", value)); };
+  auto put = [&ex](std::string key, double value) {
+    ex.emplace_back(std::move(key), fmt::format("{}", value));
+  };
   ex.emplace_back("sim.seed", fmt::format("{}", sc.seed));
   if (!sc.source.empty()) ex.emplace_back("sim.scenario", sc.source);
   ex.emplace_back("sim.effects", format_effects(fx));

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <charconv>
-#include <iterator>
 #include <cmath>
+#include <iterator>
 #include <optional>
 #include <stdexcept>
 #include <utility>
@@ -19,7 +19,9 @@ constexpr double kMaxStrength = 0.9;  // s in (0, 0.9]: some grip/rotation alway
 std::size_t wheel_index(SlipEpisode::Wheel w) { return w == SlipEpisode::Wheel::left ? 0 : 1; }
 
 bool valid_kind(SlipEpisode::Kind k) { return k == SlipEpisode::Kind::spin || k == SlipEpisode::Kind::hold; }
-bool valid_wheel(SlipEpisode::Wheel w) { return w == SlipEpisode::Wheel::left || w == SlipEpisode::Wheel::right; }
+bool valid_wheel(SlipEpisode::Wheel w) {
+  return w == SlipEpisode::Wheel::left || w == SlipEpisode::Wheel::right;
+}
 
 std::string_view trim(std::string_view s) {
   const auto b = s.find_first_not_of(" \t");
@@ -59,22 +61,23 @@ SlipEpisode parse_part(std::string_view part, std::size_t index) {
     const auto comma = rest.find(',');
     const std::string_view item = trim(rest.substr(0, comma));
     const auto eq = item.find('=');
-    if (eq == std::string_view::npos)
-      return fail(fmt::format("'{}' is not KEY=VALUE", item));
+    if (eq == std::string_view::npos) return fail(fmt::format("'{}' is not KEY=VALUE", item));
     const std::string key(trim(item.substr(0, eq)));
     const std::string_view value = trim(item.substr(eq + 1));
-    if (std::find(seen.begin(), seen.end(), key) != seen.end())
-      return fail(fmt::format("{} given twice", key));
+    if (std::find(seen.begin(), seen.end(), key) != seen.end()) return fail(fmt::format("{} given twice", key));
     seen.push_back(key);
     if (key == "wheel") {
-      if (value == "left") e.wheel = SlipEpisode::Wheel::left;
-      else if (value == "right") e.wheel = SlipEpisode::Wheel::right;
-      else return fail(fmt::format("wheel = '{}'; expected left or right", value));
+      if (value == "left")
+        e.wheel = SlipEpisode::Wheel::left;
+      else if (value == "right")
+        e.wheel = SlipEpisode::Wheel::right;
+      else
+        return fail(fmt::format("wheel = '{}'; expected left or right", value));
     } else {
-      double* target = key == "t0_s" ? &e.t0_s
-                       : key == "t1_s" ? &e.t1_s
-                       : key == "s" ? &e.s
-                       : key == "ramp_s" ? &e.ramp_s
+      double* target = key == "t0_s"                                            ? &e.t0_s
+                       : key == "t1_s"                                          ? &e.t1_s
+                       : key == "s"                                             ? &e.s
+                       : key == "ramp_s"                                        ? &e.ramp_s
                        : key == "brake_nm" && e.kind == SlipEpisode::Kind::hold ? &e.brake_nm
                                                                                 : nullptr;
       if (!target)
@@ -95,9 +98,7 @@ SlipEpisode parse_part(std::string_view part, std::size_t index) {
 
 }  // namespace
 
-std::string_view kind_name(SlipEpisode::Kind kind) {
-  return kind == SlipEpisode::Kind::hold ? "hold" : "spin";
-}
+std::string_view kind_name(SlipEpisode::Kind kind) { return kind == SlipEpisode::Kind::hold ? "hold" : "spin"; }
 std::string_view wheel_name(SlipEpisode::Wheel wheel) {
   return wheel == SlipEpisode::Wheel::right ? "right" : "left";
 }
@@ -143,7 +144,8 @@ bool validate_slip_episodes(const std::vector<SlipEpisode>& episodes, std::strin
     return false;
   };
   if (episodes.size() > kMaxSlipEpisodes)
-    return fail(fmt::format("slip_episodes: {} episodes; expected at most {}", episodes.size(), kMaxSlipEpisodes));
+    return fail(fmt::format("slip_episodes: {} episodes; expected at most {}", episodes.size(),
+                            kMaxSlipEpisodes));
   for (std::size_t i = 0; i < episodes.size(); ++i) {
     std::string field, msg;
     if (!check_slip_episode(episodes[i], &field, &msg))
@@ -165,11 +167,11 @@ bool validate_slip_episodes(const std::vector<SlipEpisode>& episodes, std::strin
         const std::size_t a = std::max(i, owner), b = std::min(i, owner);
         const SlipEpisode& ea = episodes[a];
         const SlipEpisode& eb = episodes[b];
-        return fail(fmt::format("slip_episodes[{}] ([{}, {}] s) overlaps slip_episodes[{}]{} ([{}, {}] s) on the "
-                                "{} wheel; expected episodes on the same wheel not to overlap in time",
-                                a + 1, ea.t0_s, ea.t1_s, b + 1,
-                                eb.line > 0 ? fmt::format(" (line {})", eb.line) : std::string(), eb.t0_s,
-                                eb.t1_s, wheel_name(wheel)));
+        return fail(fmt::format(
+            "slip_episodes[{}] ([{}, {}] s) overlaps slip_episodes[{}]{} ([{}, {}] s) on the "
+            "{} wheel; expected episodes on the same wheel not to overlap in time",
+            a + 1, ea.t0_s, ea.t1_s, b + 1, eb.line > 0 ? fmt::format(" (line {})", eb.line) : std::string(),
+            eb.t0_s, eb.t1_s, wheel_name(wheel)));
       }
       if (!have || e.t1_s > episodes[owner].t1_s) owner = i;
       have = true;
@@ -199,8 +201,8 @@ bool slipping(const std::vector<SlipEpisode>& episodes, double t_s) {
 std::string format_slip_episodes(const std::vector<SlipEpisode>& episodes) {
   std::string out;
   for (const SlipEpisode& e : episodes) {
-    out += fmt::format("{}{}:wheel={},t0_s={},t1_s={},s={},ramp_s={}", out.empty() ? "" : "; ", kind_name(e.kind),
-                       wheel_name(e.wheel), e.t0_s, e.t1_s, e.s, e.ramp_s);
+    out += fmt::format("{}{}:wheel={},t0_s={},t1_s={},s={},ramp_s={}", out.empty() ? "" : "; ",
+                       kind_name(e.kind), wheel_name(e.wheel), e.t0_s, e.t1_s, e.s, e.ramp_s);
     if (e.kind == SlipEpisode::Kind::hold) out += fmt::format(",brake_nm={}", e.brake_nm);
   }
   return out.empty() ? "none" : out;
@@ -215,12 +217,13 @@ std::vector<SlipEpisode> parse_slip_episodes(std::string_view text) {
     const auto semi = text.find(';');
     const std::string_view part = trim(text.substr(0, semi));
     if (part.empty())
-      throw std::invalid_argument(fmt::format("slip episode {}: empty; expected KIND:wheel=..,t0_s=..,t1_s=..,s=.. "
-                                              "between '; ' separators",
-                                              index));
+      throw std::invalid_argument(
+          fmt::format("slip episode {}: empty; expected KIND:wheel=..,t0_s=..,t1_s=..,s=.. "
+                      "between '; ' separators",
+                      index));
     if (out.size() >= kMaxSlipEpisodes)
-      throw std::invalid_argument(fmt::format("slip episodes: more than {}; expected at most {}", kMaxSlipEpisodes,
-                                              kMaxSlipEpisodes));
+      throw std::invalid_argument(fmt::format("slip episodes: more than {}; expected at most {}",
+                                              kMaxSlipEpisodes, kMaxSlipEpisodes));
     out.push_back(parse_part(part, index++));
     if (semi == std::string_view::npos) break;
     text = text.substr(semi + 1);

@@ -26,8 +26,8 @@ Track with_synthetic_fixes(const Track& track, const SyntheticFixOptions& option
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("synthetic fixes: " + why);
   if (!track.has_gt())
-    throw std::invalid_argument(fmt::format(
-        "track '{}': no ground truth (gt_x, gt_y) to make position fixes from", track.name()));
+    throw std::invalid_argument(
+        fmt::format("track '{}': no ground truth (gt_x, gt_y) to make position fixes from", track.name()));
   TrackData d = track.data();
   const std::size_t n = d.t.size();
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -56,11 +56,10 @@ Track with_synthetic_fixes(const Track& track, const SyntheticFixOptions& option
     // The next multiple of the period after this row (gaps skip missed ones).
     k = static_cast<long>(std::floor((d.t[i] - t_first) / period + 1e-9)) + 1;
   }
-  d.meta.extra.emplace_back(
-      "fixes.synthetic",
-      fmt::format("{} fixes from ground truth at {} Hz with sigma {} m, seed {} "
-                  "(Kovacs et al. 2.1: selection then Gaussian perturbation)",
-                  made, options.rate_hz, options.sigma_m, options.seed));
+  d.meta.extra.emplace_back("fixes.synthetic",
+                            fmt::format("{} fixes from ground truth at {} Hz with sigma {} m, seed {} "
+                                        "(Kovacs et al. 2.1: selection then Gaussian perturbation)",
+                                        made, options.rate_hz, options.sigma_m, options.seed));
   return Track(std::move(d));
 }
 

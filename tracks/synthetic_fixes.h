@@ -13,9 +13,9 @@
 namespace odotune {
 
 struct SyntheticFixOptions {
-  double rate_hz = 1.0;     // fix frequency
-  double sigma_m = 0.060;   // noise σ per axis [m]
-  std::uint64_t seed = 1;   // explicit seed of the noise
+  double rate_hz = 1.0;    // fix frequency
+  double sigma_m = 0.060;  // noise σ per axis [m]
+  std::uint64_t seed = 1;  // explicit seed of the noise
 
   bool IsValid(std::string* why) const;
 };

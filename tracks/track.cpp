@@ -8,9 +8,8 @@ namespace odotune {
 
 namespace {
 constexpr std::array<std::string_view, kNumCols> kNames = {
-    "omega_l", "omega_r", "v_cmd",     "w_cmd",     "gyro_z", "power_l",
-    "power_r", "v_ext",   "w_ext",     "v_ext_var", "w_ext_var", "aps_x",
-    "aps_y",   "gt_x",    "gt_y",      "gt_theta"};
+    "omega_l", "omega_r",   "v_cmd",     "w_cmd", "gyro_z", "power_l", "power_r", "v_ext",
+    "w_ext",   "v_ext_var", "w_ext_var", "aps_x", "aps_y",  "gt_x",    "gt_y",    "gt_theta"};
 }  // namespace
 
 std::string_view column_name(Col c) { return kNames[static_cast<std::size_t>(c)]; }
@@ -41,17 +40,15 @@ Track::Track(TrackData data) : d_(std::move(data)) {
   for (int c = 0; c < kNumCols; ++c) {
     const auto& v = d_.cols[static_cast<std::size_t>(c)];
     if (!v.empty() && v.size() != n)
-      throw std::invalid_argument(fmt::format("track '{}': column {} has {} rows, t has {}",
-                                              d_.meta.name, kNames[static_cast<std::size_t>(c)],
-                                              v.size(), n));
+      throw std::invalid_argument(fmt::format("track '{}': column {} has {} rows, t has {}", d_.meta.name,
+                                              kNames[static_cast<std::size_t>(c)], v.size(), n));
   }
-  if ((!d_.ticks_l.empty() && d_.ticks_l.size() != n) ||
-      (!d_.ticks_r.empty() && d_.ticks_r.size() != n))
+  if ((!d_.ticks_l.empty() && d_.ticks_l.size() != n) || (!d_.ticks_r.empty() && d_.ticks_r.size() != n))
     throw std::invalid_argument(fmt::format("track '{}': tick columns do not match t", d_.meta.name));
   for (std::size_t i = 1; i < n; ++i)
     if (!(d_.t[i] > d_.t[i - 1]))
-      throw std::invalid_argument(fmt::format("track '{}': t not strictly increasing at row {}",
-                                              d_.meta.name, i));
+      throw std::invalid_argument(fmt::format("track '{}': t not strictly increasing at row {}", d_.meta.name,
+                                              i));
 }
 
 }  // namespace odotune

@@ -27,14 +27,22 @@ namespace odotune {
 // Real-valued columns of the format, in the order of the spec's table
 // (t and the integer tick columns are held separately).
 enum class Col : int {
-  omega_l, omega_r,        // wheel angular rates [rad/s]
-  v_cmd, w_cmd,            // commanded / base-reported body velocities [m/s, rad/s]
-  gyro_z,                  // yaw rate [rad/s]
-  power_l, power_r,        // motor electrical power [W]
-  v_ext, w_ext,            // external body-velocity measurement [m/s, rad/s]
-  v_ext_var, w_ext_var,    // its variances [(m/s)^2, (rad/s)^2]
-  aps_x, aps_y,            // absolute position fix [m]
-  gt_x, gt_y, gt_theta,    // ground-truth pose [m, m, rad]
+  omega_l,
+  omega_r,  // wheel angular rates [rad/s]
+  v_cmd,
+  w_cmd,   // commanded / base-reported body velocities [m/s, rad/s]
+  gyro_z,  // yaw rate [rad/s]
+  power_l,
+  power_r,  // motor electrical power [W]
+  v_ext,
+  w_ext,  // external body-velocity measurement [m/s, rad/s]
+  v_ext_var,
+  w_ext_var,  // its variances [(m/s)^2, (rad/s)^2]
+  aps_x,
+  aps_y,  // absolute position fix [m]
+  gt_x,
+  gt_y,
+  gt_theta,  // ground-truth pose [m, m, rad]
   kCount
 };
 inline constexpr int kNumCols = static_cast<int>(Col::kCount);
@@ -48,9 +56,9 @@ inline constexpr std::int64_t kNoTick = std::numeric_limits<std::int64_t>::min()
 
 // The robot's nominal parameters and any other metadata of a track.
 struct TrackMeta {
-  std::string name;                          // short name; file stem by default
-  std::string origin;                        // "recorded", "simulated" or ""
-  std::optional<double> ticks_per_rev;       // encoder counts per wheel revolution
+  std::string name;                     // short name; file stem by default
+  std::string origin;                   // "recorded", "simulated" or ""
+  std::optional<double> ticks_per_rev;  // encoder counts per wheel revolution
   std::optional<double> wheel_radius_left_m;
   std::optional<double> wheel_radius_right_m;
   std::optional<double> wheel_base_m;
@@ -64,9 +72,9 @@ struct TrackMeta {
 // Mutable staging area for building a Track.
 struct TrackData {
   TrackMeta meta;
-  std::vector<double> t;                              // [s], strictly increasing
-  std::array<std::vector<double>, kNumCols> cols;     // each empty or t.size() long
-  std::vector<std::int64_t> ticks_l, ticks_r;         // each empty or t.size() long
+  std::vector<double> t;                           // [s], strictly increasing
+  std::array<std::vector<double>, kNumCols> cols;  // each empty or t.size() long
+  std::vector<std::int64_t> ticks_l, ticks_r;      // each empty or t.size() long
 
   std::vector<double>& col(Col c) { return cols[static_cast<int>(c)]; }
   // Makes column c present (all cells empty) if it is not already.

@@ -26,8 +26,8 @@
 #include <fmt/format.h>
 
 #include "core/failure.h"
-#include "tracks/track_io.h"
 #include "tracks/import_text.h"
+#include "tracks/track_io.h"
 
 namespace odotune {
 
@@ -106,15 +106,15 @@ std::optional<std::size_t> misspelling_score(std::string_view name, std::string_
   // Edit distance, with a budget that shrinks for short names so that common
   // unrelated columns ("x", "dt", "acc_x") are not taken for "t" or "aps_x".
   const std::size_t budget = known.size() <= 2 ? 0 : known.size() <= 5 ? 1 : 2;
-  const std::size_t len_gap = name.size() > known.size() ? name.size() - known.size() : known.size() - name.size();
+  const std::size_t len_gap = name.size() > known.size() ? name.size() - known.size()
+                                                         : known.size() - name.size();
   if (len_gap <= budget) {
     const std::size_t d = osa_distance(name, known);
     if (d <= budget) return d;
   }
   // A known name with something added: "gyro_z_rad", "t[s]", "ticks_left", "raw_gyro_z".
   if (istarts_with(name, known) && (known.size() >= 4 || !is_alnum(name[known.size()]))) return 3;
-  if (known.size() >= 4 && iends_with(name, known) && !is_alnum(name[name.size() - known.size() - 1]))
-    return 3;
+  if (known.size() >= 4 && iends_with(name, known) && !is_alnum(name[name.size() - known.size() - 1])) return 3;
   // A known name cut at an underscore: "gyro" for "gyro_z", "ticks" for "ticks_l".
   if (!name.empty() && known.size() > name.size() && istarts_with(known, name) && known[name.size()] == '_')
     return 4;
@@ -251,7 +251,8 @@ class Parser {
     seen_keys_.emplace_back("format", line_no_);
   }
 
-  void set_robot(std::optional<double>& field, std::string_view key, std::string_view value, std::string_view unit) {
+  void set_robot(std::optional<double>& field, std::string_view key, std::string_view value,
+                 std::string_view unit) {
     double v = 0;
     if (parse_real(value, v) != NumParse::kOk || !(v > 0))
       fail(fmt::format("metadata {} must be a finite positive number{}, got {}", key, unit, quote(value)));
@@ -259,23 +260,34 @@ class Parser {
   }
 
   void read_meta(std::string_view key, std::string_view value) {
-    static constexpr std::array<std::string_view, 7> kKnown = {
-        "format", "name", "origin", "robot.ticks_per_rev", "robot.wheel_radius_left",
-        "robot.wheel_radius_right", "robot.wheel_base"};
+    static constexpr std::array<std::string_view, 7> kKnown = {"format",
+                                                               "name",
+                                                               "origin",
+                                                               "robot.ticks_per_rev",
+                                                               "robot.wheel_radius_left",
+                                                               "robot.wheel_radius_right",
+                                                               "robot.wheel_base"};
     if (std::find(kKnown.begin(), kKnown.end(), key) == kKnown.end()) {
       data_.meta.extra.emplace_back(std::string(key), std::string(value));
       return;
     }
     for (const auto& [k, at] : seen_keys_)
-      if (k == key) fail(fmt::format("duplicate metadata key '{}' (first given on line {}); expected it once", key, at));
+      if (k == key)
+        fail(fmt::format("duplicate metadata key '{}' (first given on line {}); expected it once", key, at));
     seen_keys_.emplace_back(std::string(key), line_no_);
     TrackMeta& m = data_.meta;
-    if (key == "name") m.name = value;
-    else if (key == "origin") m.origin = value;
-    else if (key == "robot.ticks_per_rev") set_robot(m.ticks_per_rev, key, value, " (counts per revolution)");
-    else if (key == "robot.wheel_radius_left") set_robot(m.wheel_radius_left_m, key, value, " [m]");
-    else if (key == "robot.wheel_radius_right") set_robot(m.wheel_radius_right_m, key, value, " [m]");
-    else if (key == "robot.wheel_base") set_robot(m.wheel_base_m, key, value, " [m]");
+    if (key == "name")
+      m.name = value;
+    else if (key == "origin")
+      m.origin = value;
+    else if (key == "robot.ticks_per_rev")
+      set_robot(m.ticks_per_rev, key, value, " (counts per revolution)");
+    else if (key == "robot.wheel_radius_left")
+      set_robot(m.wheel_radius_left_m, key, value, " [m]");
+    else if (key == "robot.wheel_radius_right")
+      set_robot(m.wheel_radius_right_m, key, value, " [m]");
+    else if (key == "robot.wheel_base")
+      set_robot(m.wheel_base_m, key, value, " [m]");
   }
 
   void read_metadata_and_header() {
@@ -304,16 +316,19 @@ class Parser {
       const std::string_view name = trim(line.substr(start, comma - start));
       start = comma + 1;
       if (name.empty())
-        fail(fmt::format("empty column name at position {} of the header; expected a name such as 't' or 'gyro_z'",
-                         i + 1));
+        fail(fmt::format(
+            "empty column name at position {} of the header; expected a name such as 't' or 'gyro_z'", i + 1));
       for (std::size_t j = 0; j < cols_.size(); ++j)
         if (cols_[j].name == name)
-          fail(fmt::format("duplicate column {} (positions {} and {}); expected each column once", quote(name), j + 1,
-                           i + 1));
+          fail(fmt::format("duplicate column {} (positions {} and {}); expected each column once", quote(name),
+                           j + 1, i + 1));
       Column c{std::string(name), Kind::kIgnored, Col::kCount};
-      if (name == "t") c.kind = Kind::kTime;
-      else if (name == "ticks_l") c.kind = Kind::kTickL;
-      else if (name == "ticks_r") c.kind = Kind::kTickR;
+      if (name == "t")
+        c.kind = Kind::kTime;
+      else if (name == "ticks_l")
+        c.kind = Kind::kTickL;
+      else if (name == "ticks_r")
+        c.kind = Kind::kTickR;
       for (int k = 0; k < kNumCols; ++k)
         if (name == column_name(static_cast<Col>(k))) {
           c.kind = Kind::kReal;
@@ -330,9 +345,12 @@ class Parser {
   }
 
   void check_header(const std::vector<std::string_view>& present) {
-    const auto has = [&](std::string_view n) { return std::find(present.begin(), present.end(), n) != present.end(); };
+    const auto has = [&](std::string_view n) {
+      return std::find(present.begin(), present.end(), n) != present.end();
+    };
     if (!has("t")) fail("missing column 't' (time [s]); expected it in the header");
-    if (!(has("ticks_l") && has("ticks_r")) && !(has("omega_l") && has("omega_r")) && !(has("v_cmd") && has("w_cmd")))
+    if (!(has("ticks_l") && has("ticks_r")) && !(has("omega_l") && has("omega_r")) &&
+        !(has("v_cmd") && has("w_cmd")))
       fail("no odometry source; expected a column pair ticks_l+ticks_r, omega_l+omega_r or v_cmd+w_cmd");
     const TrackMeta& m = data_.meta;
     const bool ticks = has("ticks_l") || has("ticks_r");
@@ -366,7 +384,8 @@ class Parser {
   void parse_row(std::string_view line) {
     const std::size_t n = static_cast<std::size_t>(std::count(line.begin(), line.end(), ',')) + 1;
     if (n != cols_.size())
-      fail(fmt::format("row has {} cell{}, expected {} (one per header column)", n, n == 1 ? "" : "s", cols_.size()));
+      fail(fmt::format("row has {} cell{}, expected {} (one per header column)", n, n == 1 ? "" : "s",
+                       cols_.size()));
     std::size_t start = 0;
     for (const Column& c : cols_) {
       const std::size_t comma = std::min(line.find(',', start), line.size());
@@ -388,15 +407,15 @@ class Parser {
     switch (parse_real(cell, v)) {
       case NumParse::kOk: return v;
       case NumParse::kNonFinite:
-        fail(fmt::format("non-finite value {} in column '{}'; expected a finite number or an empty cell", quote(cell),
-                         c.name));
+        fail(fmt::format("non-finite value {} in column '{}'; expected a finite number or an empty cell",
+                         quote(cell), c.name));
       case NumParse::kOutOfRange:
         fail(fmt::format("value {} in column '{}' is out of the range of a double; expected a finite number",
                          quote(cell), c.name));
       case NumParse::kBad: break;
     }
-    fail(fmt::format("non-numeric value {} in column '{}'; expected a decimal number or an empty cell", quote(cell),
-                     c.name));
+    fail(fmt::format("non-numeric value {} in column '{}'; expected a decimal number or an empty cell",
+                     quote(cell), c.name));
   }
 
   double parse_time(std::string_view cell) {
@@ -416,12 +435,13 @@ class Parser {
     switch (parse_int64(cell, v)) {
       case NumParse::kOk:
         if (v == kNoTick)
-          fail(fmt::format("tick value {} in column '{}' is reserved for 'no sample'; expected a count above it",
-                           quote(cell), c.name));
+          fail(
+              fmt::format("tick value {} in column '{}' is reserved for 'no sample'; expected a count above it",
+                          quote(cell), c.name));
         return v;
       case NumParse::kOutOfRange:
-        fail(fmt::format("tick value {} in column '{}' overflows; expected a signed 64-bit integer", quote(cell),
-                         c.name));
+        fail(fmt::format("tick value {} in column '{}' overflows; expected a signed 64-bit integer",
+                         quote(cell), c.name));
       default: break;
     }
     fail(fmt::format("tick value {} in column '{}' is not an integer; expected a signed 64-bit integer count",

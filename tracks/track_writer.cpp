@@ -8,11 +8,11 @@
 // Before writing anything the track is checked against the reader's rules, so
 // the writer never produces a file that read_track would reject.
 #include <array>
-#include <optional>
 #include <cerrno>
 #include <cmath>
 #include <filesystem>
 #include <iterator>
+#include <optional>
 #include <ostream>
 #include <stdexcept>
 #include <string>
@@ -20,19 +20,22 @@
 #include <system_error>
 #include <vector>
 
-
 #include <fmt/format.h>
 
-#include "tracks/track_io.h"
 #include "tracks/atomic_file.h"
+#include "tracks/track_io.h"
 
 namespace odotune {
 
 namespace {
 
-constexpr std::array<std::string_view, 7> kKnownKeys = {
-    "format", "name", "origin", "robot.ticks_per_rev", "robot.wheel_radius_left",
-    "robot.wheel_radius_right", "robot.wheel_base"};
+constexpr std::array<std::string_view, 7> kKnownKeys = {"format",
+                                                        "name",
+                                                        "origin",
+                                                        "robot.ticks_per_rev",
+                                                        "robot.wheel_radius_left",
+                                                        "robot.wheel_radius_right",
+                                                        "robot.wheel_base"};
 
 bool has_line_break(std::string_view s) { return s.find_first_of("\r\n") != std::string_view::npos; }
 
@@ -47,7 +50,8 @@ void check_writable(const Track& track) {
     const bool blank_edge = key.empty() || key.front() == ' ' || key.front() == '\t' || key.back() == ' ' ||
                             key.back() == '\t';
     if (blank_edge || key.find(':') != std::string::npos || has_line_break(key))
-      bad(fmt::format("metadata key '{}' cannot be written (empty, ':', line break or surrounding blanks)", key));
+      bad(fmt::format("metadata key '{}' cannot be written (empty, ':', line break or surrounding blanks)",
+                      key));
     for (std::string_view k : kKnownKeys)
       if (key == k) bad(fmt::format("extra metadata key '{}' collides with a standard key", key));
     if (has_line_break(value)) bad(fmt::format("value of metadata key '{}' contains a line break", key));
@@ -71,7 +75,8 @@ void check_writable(const Track& track) {
     if (!std::isfinite(t)) bad(fmt::format("t holds a non-finite value {}", t));
   for (int c = 0; c < kNumCols; ++c)
     for (double v : track.col(static_cast<Col>(c)))
-      if (std::isinf(v)) bad(fmt::format("column {} holds an infinite value", column_name(static_cast<Col>(c))));
+      if (std::isinf(v))
+        bad(fmt::format("column {} holds an infinite value", column_name(static_cast<Col>(c))));
 }
 
 }  // namespace

@@ -24,7 +24,6 @@ using detail::kInf;
 using detail::str;
 using detail::what_of;
 
-
 struct AlgorithmInfo {
   const char* name;
   nlopt_algorithm algorithm;
@@ -62,8 +61,6 @@ const AlgorithmInfo* find_algorithm(std::string_view name) {
   return nullptr;
 }
 
-
-
 std::string result_name(nlopt_result r) {
   const char* s = nlopt_result_to_string(r);
   return s != nullptr ? s : "result " + std::to_string(static_cast<int>(r));
@@ -84,10 +81,10 @@ struct Run {
   double best_f = kInf;
   std::vector<double> best_x;
   std::vector<LogRecord> log;
-  std::string failure;       // non-empty: the fitness/progress threw
-  bool stopped = false;      // the caller's stop flag was seen
-  bool budget_hit = false;   // NLopt asked for more than max_evaluations
-  long last_percent = -1;    // last percentage passed to progress
+  std::string failure;      // non-empty: the fitness/progress threw
+  bool stopped = false;     // the caller's stop flag was seen
+  bool budget_hit = false;  // NLopt asked for more than max_evaluations
+  long last_percent = -1;   // last percentage passed to progress
 
   bool halted() const { return !failure.empty() || stopped || budget_hit; }
 };
@@ -121,8 +118,7 @@ double objective(unsigned n, const double* x, double* grad, void* data) noexcept
   if (std::isfinite(f) && f < run.best_f) {
     run.best_f = f;
     run.best_x.assign(x, x + n);
-    run.log.push_back(
-        {static_cast<int>(std::min<long>(run.evaluations, INT_MAX)), run.evaluations, f});
+    run.log.push_back({static_cast<int>(std::min<long>(run.evaluations, INT_MAX)), run.evaluations, f});
   }
   if (run.options.progress) {
     const long percent = run.evaluations * 100 / run.options.max_evaluations;
@@ -182,9 +178,7 @@ bool NloptOptions::IsValid(std::string* why) const {
 Summary nlopt_minimize(ProblemRef problem, const NloptOptions& options) {
   detail::SolverRun solver_run;
   Summary& summary = solver_run.summary;
-  auto finish = [&solver_run](std::string termination) {
-    return solver_run.finish(std::move(termination));
-  };
+  auto finish = [&solver_run](std::string termination) { return solver_run.finish(std::move(termination)); };
   Bounds box;
   if (auto failure = solver_run.start(options, problem, &box)) return finish(*failure);
   std::string why;
@@ -193,8 +187,8 @@ Summary nlopt_minimize(ProblemRef problem, const NloptOptions& options) {
   std::vector<double> x(dim);
   if (options.x0) {
     if (options.x0->size() != dim)
-      return finish("failure: nlopt: x0 has " + std::to_string(options.x0->size()) +
-                    " entries, expected " + std::to_string(dim) + " (the box dimension)");
+      return finish("failure: nlopt: x0 has " + std::to_string(options.x0->size()) + " entries, expected " +
+                    std::to_string(dim) + " (the box dimension)");
     if (!box.Contains(*options.x0))
       return finish("failure: nlopt: x0 lies outside the box, expected lower <= x0 <= upper");
     x = *options.x0;
@@ -219,13 +213,10 @@ Summary nlopt_minimize(ProblemRef problem, const NloptOptions& options) {
   if (!check(nlopt_set_lower_bounds(opt.get(), box.lower.data()), "set_lower_bounds") ||
       !check(nlopt_set_upper_bounds(opt.get(), box.upper.data()), "set_upper_bounds") ||
       !check(nlopt_set_min_objective(opt.get(), objective, &run), "set_min_objective") ||
-      !check(nlopt_set_maxeval(opt.get(), static_cast<int>(std::min<long>(options.max_evaluations,
-                                                                          INT_MAX))),
+      !check(nlopt_set_maxeval(opt.get(), static_cast<int>(std::min<long>(options.max_evaluations, INT_MAX))),
              "set_maxeval") ||
-      !check(nlopt_set_xtol_rel(opt.get(), info.global ? 0.0 : options.xtol_rel),
-             "set_xtol_rel") ||
-      (options.population > 0 &&
-       !check(nlopt_set_population(opt.get(), options.population), "set_population")))
+      !check(nlopt_set_xtol_rel(opt.get(), info.global ? 0.0 : options.xtol_rel), "set_xtol_rel") ||
+      (options.population > 0 && !check(nlopt_set_population(opt.get(), options.population), "set_population")))
     return finish(why);
   if (info.algorithm == NLOPT_G_MLSL_LDS) {
     OptPtr local(nlopt_create(kMlslLocal, n));

@@ -57,17 +57,17 @@
 namespace odotune::tuner {
 
 struct NloptOptions {
-  std::string algorithm = "CRS2_LM";  // one of nlopt_algorithm_names(), any case
-  long max_evaluations = 7550;        // >= 1; default = PsoOptions{}.evaluation_budget()
-  std::uint64_t seed = 0;             // explicit seed (NLopt uses its low 32 bits
-                                      // after folding: seed ^ (seed >> 32))
-  double xtol_rel = 1e-6;             // NLopt relative x tolerance, >= 0 (0 = off).
-                                      // Used by the local algorithms and by MLSL_LDS's
-                                      // local searches only: global algorithms run
-                                      // until max_evaluations (their own x-tolerance
-                                      // tests end e.g. CRS2_LM inside a local basin)
-  unsigned population = 0;            // CRS2_LM, ISRES, ESCH, MLSL_LDS: population /
-                                      // points per iteration; 0 = NLopt's default
+  std::string algorithm = "CRS2_LM";      // one of nlopt_algorithm_names(), any case
+  long max_evaluations = 7550;            // >= 1; default = PsoOptions{}.evaluation_budget()
+  std::uint64_t seed = 0;                 // explicit seed (NLopt uses its low 32 bits
+                                          // after folding: seed ^ (seed >> 32))
+  double xtol_rel = 1e-6;                 // NLopt relative x tolerance, >= 0 (0 = off).
+                                          // Used by the local algorithms and by MLSL_LDS's
+                                          // local searches only: global algorithms run
+                                          // until max_evaluations (their own x-tolerance
+                                          // tests end e.g. CRS2_LM inside a local basin)
+  unsigned population = 0;                // CRS2_LM, ISRES, ESCH, MLSL_LDS: population /
+                                          // points per iteration; 0 = NLopt's default
   std::optional<std::vector<double>> x0;  // start point (finite, inside the box)
 
   // Optional. Called from the calling thread (inside NLopt's callback, never

@@ -28,8 +28,8 @@
 
 #include <cmath>
 #include <concepts>
-#include <sstream>
 #include <span>
+#include <sstream>
 #include <string>
 #include <type_traits>
 #include <vector>

@@ -22,12 +22,9 @@ using detail::what_of;
 // Streams of the counter-based generator (the last key word).
 enum Stream : std::uint64_t { kInitPosition = 0, kInitVelocity = 1, kR1 = 2, kR2 = 3 };
 
-
-
 // Non-finite values become +inf so that a plain `<` never prefers them and
 // NaN never poisons a comparison.
 double sanitize(double f) { return std::isfinite(f) ? f : kInf; }
-
 
 }  // namespace
 
@@ -37,8 +34,7 @@ bool PsoOptions::IsValid(std::string* why) const {
     return false;
   };
   if (particles < 1) return fail("particles = " + std::to_string(particles) + ", expected >= 1");
-  if (iterations < 0)
-    return fail("iterations = " + std::to_string(iterations) + ", expected >= 0");
+  if (iterations < 0) return fail("iterations = " + std::to_string(iterations) + ", expected >= 0");
   if (!(std::isfinite(inertia) && inertia >= 0 && inertia < 1))
     return fail("inertia = " + str(inertia) + ", expected a value in [0, 1)");
   if (!(std::isfinite(cognitive) && cognitive >= 0))
@@ -49,17 +45,14 @@ bool PsoOptions::IsValid(std::string* why) const {
     return fail("initial_velocity_fraction = " + str(initial_velocity_fraction) +
                 ", expected a value in [0, 1]");
   if (!(max_velocity_fraction > 0 && max_velocity_fraction <= 1))
-    return fail("max_velocity_fraction = " + str(max_velocity_fraction) +
-                ", expected a value in (0, 1]");
+    return fail("max_velocity_fraction = " + str(max_velocity_fraction) + ", expected a value in (0, 1]");
   return true;
 }
 
 Summary pso_minimize(ProblemRef problem, const PsoOptions& options) {
   detail::SolverRun solver_run;
   Summary& summary = solver_run.summary;
-  auto finish = [&solver_run](std::string termination) {
-    return solver_run.finish(std::move(termination));
-  };
+  auto finish = [&solver_run](std::string termination) { return solver_run.finish(std::move(termination)); };
   Bounds box;
   if (auto failure = solver_run.start(options, problem, &box)) return finish(*failure);
 
@@ -82,8 +75,8 @@ Summary pso_minimize(ProblemRef problem, const PsoOptions& options) {
   double gbest_f = kInf;
 
   auto uniform = [seed](int iteration, int particle, std::size_t d, Stream stream) {
-    return counter_uniform01(seed, static_cast<std::uint64_t>(iteration),
-                             static_cast<std::uint64_t>(particle), d, stream);
+    return counter_uniform01(seed, static_cast<std::uint64_t>(iteration), static_cast<std::uint64_t>(particle),
+                             d, stream);
   };
 
   // Moves particle i for iteration t (t >= 1) and evaluates it; or, for
@@ -98,8 +91,7 @@ Summary pso_minimize(ProblemRef problem, const PsoOptions& options) {
       if (t == 0) {
         xi[d] = box.lower[d] + uniform(0, i, d, kInitPosition) * width[d];
         xi[d] = std::min(xi[d], box.upper[d]);
-        vi[d] = (2 * uniform(0, i, d, kInitVelocity) - 1) * options.initial_velocity_fraction *
-                width[d];
+        vi[d] = (2 * uniform(0, i, d, kInitVelocity) - 1) * options.initial_velocity_fraction * width[d];
         continue;
       }
       const double r1 = uniform(t, i, d, kR1);

@@ -52,11 +52,11 @@
 namespace odotune::tuner {
 
 struct PsoOptions {
-  int particles = 50;                   // swarm size, >= 1
-  int iterations = 150;                 // iterations after the initial swarm, >= 0
-  double inertia = 0.7298;              // w (constriction χ), in [0, 1)
-  double cognitive = 1.49618;           // c1, >= 0, finite
-  double social = 1.49618;              // c2, >= 0, finite
+  int particles = 50;                      // swarm size, >= 1
+  int iterations = 150;                    // iterations after the initial swarm, >= 0
+  double inertia = 0.7298;                 // w (constriction χ), in [0, 1)
+  double cognitive = 1.49618;              // c1, >= 0, finite
+  double social = 1.49618;                 // c2, >= 0, finite
   double initial_velocity_fraction = 0.1;  // v0: initial |v_d| <= v0·width_d, in [0, 1]
   double max_velocity_fraction = 0.5;      // |v_d| <= vmax·width_d after each update, in (0, 1]
 
@@ -75,9 +75,7 @@ struct PsoOptions {
   bool IsValid(std::string* why) const;
 
   // particles × (iterations + 1), the evaluations of an unstopped run.
-  long evaluation_budget() const {
-    return static_cast<long>(particles) * (static_cast<long>(iterations) + 1);
-  }
+  long evaluation_budget() const { return static_cast<long>(particles) * (static_cast<long>(iterations) + 1); }
 };
 
 // Minimises problem.fitness over problem.bounds(). Never throws for bad

@@ -10,23 +10,23 @@ namespace odotune::tuner {
 
 // One point of a run's convergence history.
 struct LogRecord {
-  int iteration = 0;         // PSO: swarm iteration (0 = initial swarm);
-                             // NLopt: 1-based index of the evaluation that improved
-  long evaluations = 0;      // fitness evaluations done so far
-  double best_fitness = 0;   // best fitness so far (after this record's step)
+  int iteration = 0;        // PSO: swarm iteration (0 = initial swarm);
+                            // NLopt: 1-based index of the evaluation that improved
+  long evaluations = 0;     // fitness evaluations done so far
+  double best_fitness = 0;  // best fitness so far (after this record's step)
 
   bool operator==(const LogRecord&) const = default;
 };
 
 struct Summary {
-  std::vector<double> best_x;   // best point evaluated; if no finite fitness was
-                                // seen, the start point (PSO: particle 0's first
-                                // position; NLopt: x0 or the box centre); empty
-                                // if the run failed before any value was recorded
-  double best_fitness = 0;      // its fitness; +infinity if no finite value was seen
-  long evaluations = 0;         // fitness calls made
-  int iterations = 0;           // PSO: completed swarm iterations after the initial
-                                // one; NLopt: equal to evaluations (capped at INT_MAX)
+  std::vector<double> best_x;  // best point evaluated; if no finite fitness was
+                               // seen, the start point (PSO: particle 0's first
+                               // position; NLopt: x0 or the box centre); empty
+                               // if the run failed before any value was recorded
+  double best_fitness = 0;     // its fitness; +infinity if no finite value was seen
+  long evaluations = 0;        // fitness calls made
+  int iterations = 0;          // PSO: completed swarm iterations after the initial
+                               // one; NLopt: equal to evaluations (capped at INT_MAX)
   // Why the run ended, one of:
   //   "max_iterations"   PSO ran all its iterations
   //   "max_evaluations"  the evaluation budget is used up (NLopt)
@@ -34,8 +34,8 @@ struct Summary {
   //   "nlopt: <CODE>"    NLopt ended by its own criterion, e.g. "nlopt: XTOL_REACHED"
   //   "failure: <what>"  invalid input, or the fitness (or progress callback) threw
   std::string termination;
-  double seconds = 0;           // wall-clock duration of the run [s]
-  std::vector<LogRecord> log;   // convergence history, in order
+  double seconds = 0;          // wall-clock duration of the run [s]
+  std::vector<LogRecord> log;  // convergence history, in order
 
   // True unless the run ended with "failure: ...".
   bool ok() const { return termination.rfind("failure:", 0) != 0; }

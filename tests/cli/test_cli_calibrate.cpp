@@ -15,8 +15,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "support/cli_runner.h"
 #include "diagnose/sim_track.h"
+#include "support/cli_runner.h"
 #include "support/temp_dir.h"
 #include "tracks/track_io.h"
 
@@ -147,8 +147,9 @@ std::string CliCalibrateSim::track_a_;
 TEST_F(CliCalibrateSim, AdaptivePfWritesJsonCsvFigureAndConvergesWithinHalfPercent) {
   TempDir tmp;
   const fs::path out = tmp / "a.json", csv = tmp / "a.csv", fig = tmp / "a";
-  const auto r = run_cli("calibrate --track " + track_a_ + " --method adaptive-pf --seed 3 --threads 1 --json " +
-                         out.string() + " --csv " + csv.string() + " --figure " + fig.string());
+  const auto r = run_cli("calibrate --track " + track_a_ +
+                         " --method adaptive-pf --seed 3 --threads 1 --json " + out.string() + " --csv " +
+                         csv.string() + " --figure " + fig.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json j = json::parse(slurp(out));
   expect_required_keys(j, "adaptive-pf");
@@ -191,9 +192,9 @@ TEST_F(CliCalibrateSim, AdaptivePfWritesJsonCsvFigureAndConvergesWithinHalfPerce
   ASSERT_EQ(static_cast<long>(rows.size()), iterations + 1);
   const std::vector<std::string> header = split_csv(rows[0]);
   const std::vector<std::string> expected = {
-      "t_s",          "elapsed_s",       "track",       "r_right_m",   "r_left_m",
-      "wheel_base_m", "sd_r_right_m",    "sd_r_left_m", "sd_wheel_base_m", "particles",
-      "n_eff",        "true_r_right_m",  "true_r_left_m", "true_wheel_base_m"};
+      "t_s",          "elapsed_s",      "track",         "r_right_m",        "r_left_m",
+      "wheel_base_m", "sd_r_right_m",   "sd_r_left_m",   "sd_wheel_base_m",  "particles",
+      "n_eff",        "true_r_right_m", "true_r_left_m", "true_wheel_base_m"};
   EXPECT_EQ(header, expected);
   double last_t = -1e300;
   for (std::size_t i = 1; i < rows.size(); ++i) {
@@ -233,8 +234,10 @@ TEST_F(CliCalibrateSim, BatchAndDkfConvergeWithinHalfPercentAndPfAveragesThere) 
     ASSERT_EQ(r.exit_code, 0) << method << ": " << r.err;
     const json j = json::parse(slurp(out));
     expect_required_keys(j, method);
-    EXPECT_LT(rel_error(j["final"]["wheel_radius_left_m"].get<double>(), kTrueLeftM), 0.005) << method << j["final"];
-    EXPECT_LT(rel_error(j["final"]["wheel_radius_right_m"].get<double>(), kTrueRightM), 0.005) << method << j["final"];
+    EXPECT_LT(rel_error(j["final"]["wheel_radius_left_m"].get<double>(), kTrueLeftM), 0.005)
+        << method << j["final"];
+    EXPECT_LT(rel_error(j["final"]["wheel_radius_right_m"].get<double>(), kTrueRightM), 0.005)
+        << method << j["final"];
     if (method == "batch") {
       EXPECT_TRUE(j["convergence_time_s"].is_null()) << "an offline fit has no convergence time";
     } else {
@@ -246,8 +249,8 @@ TEST_F(CliCalibrateSim, BatchAndDkfConvergeWithinHalfPercentAndPfAveragesThere) 
   }
   // The plain PF: the mean of its second half within 0.5 % (see above).
   const fs::path out = tmp / "pf.json", csv = tmp / "pf.csv";
-  const auto r = run_cli("calibrate --track " + track_a_ + " --method pf --seed 2 --threads 1 --json " + out.string() +
-                         " --csv " + csv.string());
+  const auto r = run_cli("calibrate --track " + track_a_ + " --method pf --seed 2 --threads 1 --json " +
+                         out.string() + " --csv " + csv.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json j = json::parse(slurp(out));
   expect_required_keys(j, "pf");
@@ -293,9 +296,8 @@ TEST_F(CliCalibrateSim, TwoTracksAtOnceAreOneRunWithAPerTrackScore) {
   second.duration_s = 40.0;
   const std::string track_b = write_sim_track(tmp, "chair_ccw", second);
   const fs::path out = tmp / "two.json", csv = tmp / "two.csv", fig = tmp / "two";
-  const auto r = run_cli("calibrate --track " + track_a_ + " --track " + track_b +
-                         " --method dkf --json " + out.string() + " --csv " + csv.string() + " --figure " +
-                         fig.string());
+  const auto r = run_cli("calibrate --track " + track_a_ + " --track " + track_b + " --method dkf --json " +
+                         out.string() + " --csv " + csv.string() + " --figure " + fig.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json j = json::parse(slurp(out));
   ASSERT_EQ(j["tracks"].size(), 2u);
@@ -418,8 +420,8 @@ TEST(CliCalibrate, RadiusStepIsReportedWithItsReconvergence) {
   o.effects = {kRadiusError, "radius_step:t=60,scale_l=0.995,scale_r=0.99"};
   const std::string track = write_sim_track(tmp, "step", o);
   const fs::path out = tmp / "step.json", fig = tmp / "step";
-  const auto r = run_cli("calibrate --track " + track + " --method adaptive-pf --threads 1 --json " + out.string() +
-                         " --figure " + fig.string());
+  const auto r = run_cli("calibrate --track " + track + " --method adaptive-pf --threads 1 --json " +
+                         out.string() + " --figure " + fig.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json j = json::parse(slurp(out));
   const json& rec = j["tracks"][0]["reconvergence"];

@@ -30,8 +30,7 @@ std::string scenario(int i) {
 std::string first_line(const std::string& s) { return s.substr(0, s.find('\n')); }
 
 // A simulated track of scenarios/track2.yaml with only the given effects.
-std::string simulate(const testing_support::TempDir& dir, const std::string& name,
-                     const std::string& effects) {
+std::string simulate(const testing_support::TempDir& dir, const std::string& name, const std::string& effects) {
   const std::string out = (dir.path() / (name + ".csv")).string();
   const auto r = run_cli("simulate " + scenario(2) + " -o " + out + " --no-effects " + effects);
   EXPECT_EQ(r.exit_code, 0) << r.err;
@@ -108,14 +107,14 @@ TEST(CliDiagnose, ScenarioOutReproducesTheFittedEffectAndReportHasTheFigures) {
   const std::string yaml = (dir.path() / "corrected.yaml").string();
   const std::string report = (dir.path() / "report").string();
   const std::string first = (dir.path() / "first.json").string();
-  auto r = run_cli("diagnose " + track + " --scenario-out " + yaml + " --report " + report +
-                   " --json " + first);
+  auto r = run_cli("diagnose " + track + " --scenario-out " + yaml + " --report " + report + " --json " +
+                   first);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json a = json::parse(slurp(first));
   ASSERT_EQ(a.at("findings").size(), 1u) << a.at("findings").dump();
   EXPECT_EQ(a.at("findings")[0].at("effect"), "longitudinal_slip");
-  for (const char* f : {"index.html", "residual_time.svg", "residual_time.png", "map.svg",
-                        "overlay.svg", "residual_condition.svg"})
+  for (const char* f : {"index.html", "residual_time.svg", "residual_time.png", "map.svg", "overlay.svg",
+                        "residual_condition.svg"})
     EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(report) / f)) << f;
   EXPECT_THAT(slurp(std::filesystem::path(report) / "index.html"), HasSubstr("longitudinal_slip"));
 
@@ -157,8 +156,7 @@ TEST(CliDiagnose, BadInputIsOneLineAndNoFile) {
 
   // A track with odometry but no reference at all.
   const std::string bare = (dir.path() / "bare.csv").string();
-  ASSERT_EQ(run_cli("simulate " + scenario(1) + " -o " + bare +
-                    " --no-effects").exit_code, 0);
+  ASSERT_EQ(run_cli("simulate " + scenario(1) + " -o " + bare + " --no-effects").exit_code, 0);
   std::string text = slurp(bare);
   // Hide the reference columns under names no tool uses.
   int hidden = 0;

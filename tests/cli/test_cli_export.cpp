@@ -12,10 +12,10 @@
 #include <nlohmann/json.hpp>
 
 #include "formats/config_yaml.h"
-#include "support/cli_runner.h"
 #include "objectives/param_space.h"
 #include "results/ros_export.h"
 #include "results/store.h"
+#include "support/cli_runner.h"
 #include "tracks/track_io.h"
 
 namespace odotune {
@@ -79,8 +79,9 @@ TEST_F(CliExport, OdotuneFormatReplaysToTheStoredTunedRmse) {
   for (const std::string model : {"rq", "alpha"}) {
     for (const std::string track : {"track1", "track5"}) {
       SCOPED_TRACE(model + " " + track);
-      const RunRecord* want =
-          best_run(all, [&](const RunRecord& r) { return r.model == model && r.track == track; });
+      const RunRecord* want = best_run(all, [&](const RunRecord& r) {
+        return r.model == model && r.track == track;
+      });
       ASSERT_NE(want, nullptr);
       const fs::path cfg = tmp / (model + "-" + track + ".yaml");
       const auto r = run_cli(fmt::format("export {} --select model={},track={} --format odotune --out {}",
@@ -158,8 +159,8 @@ TEST_F(CliExport, SelectionPicksTheLowestTunedRmseOfTheMatchingRuns) {
 
 TEST_F(CliExport, RobotLocalizationRqIsRTimesTheOdometryRate) {
   const auto all = runs();
-  const RunRecord* want =
-      best_run(all, [](const RunRecord& r) { return r.model == "rq" && r.track == "track5"; });
+  const RunRecord* want = best_run(all,
+                                   [](const RunRecord& r) { return r.model == "rq" && r.track == "track5"; });
   ASSERT_NE(want, nullptr);
   // The odometry rate as the simulator recorded it in the track's metadata.
   const Track t5 = read_track(reference_track(5));
@@ -186,8 +187,8 @@ TEST_F(CliExport, RobotLocalizationRqIsRTimesTheOdometryRate) {
   EXPECT_EQ(p.at(2, 2), 0.06);  // robot_localization's default for z
   EXPECT_NE(text.find(results::run_key(*want)), std::string::npos);
   // The fix variance goes into a comment for the fix message's covariance.
-  for (const auto& [label, name] : {std::pair{"covariance[0] (x, x) = ", "q1_mm2"},
-                                    std::pair{"covariance[7] (y, y) = ", "q2_mm2"}}) {
+  for (const auto& [label, name] :
+       {std::pair{"covariance[0] (x, x) = ", "q1_mm2"}, std::pair{"covariance[7] (y, y) = ", "q2_mm2"}}) {
     const auto at = text.find(label);
     ASSERT_NE(at, std::string::npos) << label;
     expect_rel(param(*want, name) * 1e-6, std::stod(text.substr(at + std::string(label).size())), 1e-12);
@@ -202,7 +203,8 @@ void expect_one_line_failure(const std::string& args, const fs::path& out,
   EXPECT_NE(r.exit_code, 0);
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_EQ(r.err.rfind("odotune: ", 0), 0u) << r.err;
-  for (const auto& n : needles) EXPECT_NE(r.err.find(n), std::string::npos) << "missing '" << n << "': " << r.err;
+  for (const auto& n : needles)
+    EXPECT_NE(r.err.find(n), std::string::npos) << "missing '" << n << "': " << r.err;
   EXPECT_FALSE(fs::exists(out));
   EXPECT_EQ(r.out, "");
 }
@@ -294,9 +296,8 @@ void add_line(const Line& l, double alpha1, Sum* s) {
 
 TEST(CliExportLines, AlphaAndGyroExportTheTimeAveragedProcessNoise) {
   TempDir tmp;
-  const std::vector<Line> lines = {{"line_a", 0.5, 0.5, 0.02, 20.0},
-                                   {"line_b", -1.0, 0.3, 0.04, 20.0},
-                                   {"line_c", 2.0, 0.8, 0.02, 10.0}};
+  const std::vector<Line> lines = {
+      {"line_a", 0.5, 0.5, 0.02, 20.0}, {"line_b", -1.0, 0.3, 0.04, 20.0}, {"line_c", 2.0, 0.8, 0.02, 10.0}};
   for (const auto& l : lines) write_track(line_track(l), tmp / (l.name + ".csv"));
   std::ofstream(tmp / "lines.yaml")
       << "format: odotune-experiment/1\nname: lines\nmodels: [alpha, gyro]\n"
@@ -345,7 +346,8 @@ TEST(CliExportLines, AlphaAndGyroExportTheTimeAveragedProcessNoise) {
     EXPECT_EQ(p.at(0, 1), 0.0);
     EXPECT_EQ(p.at(0, 5), 0.0);
     EXPECT_EQ(p.at(6, 6), 0.025);  // robot_localization's default for vx
-    for (const char* needle : {"time average", "Heading dependence", "off-diagonal", "covariance[0] (x, x) = 0.0036 m²"})
+    for (const char* needle :
+         {"time average", "Heading dependence", "off-diagonal", "covariance[0] (x, x) = 0.0036 m²"})
       EXPECT_NE(text.find(needle), std::string::npos) << needle;
     for (auto i : c.tuned_on) EXPECT_NE(text.find(lines[i].name), std::string::npos);
     if (c.model == "gyro") {
@@ -356,12 +358,13 @@ TEST(CliExportLines, AlphaAndGyroExportTheTimeAveragedProcessNoise) {
   // A moved track: one line asking for --track, no file; with --track it works.
   fs::rename(tmp / "line_b.csv", tmp / "moved_b.csv");
   const fs::path out = tmp / "b.yaml";
-  const std::string args = fmt::format("export {} --select model=alpha,track=line_b --format robot_localization",
-                                       store.string());
+  const std::string args = fmt::format(
+      "export {} --select model=alpha,track=line_b --format robot_localization", store.string());
   expect_one_line_failure(args, out, {"line_b", "--track"});
   const auto r = run_cli(args + " --track " + (tmp / "moved_b.csv").string() + " --out " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const RunRecord* run = best_run(all, [](const RunRecord& x) { return x.model == "alpha" && x.track == "line_b"; });
+  const RunRecord* run = best_run(all,
+                                  [](const RunRecord& x) { return x.model == "alpha" && x.track == "line_b"; });
   ASSERT_NE(run, nullptr);
   Sum s;
   add_line(lines[1], param(*run, "alpha1"), &s);

@@ -9,8 +9,8 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "support/cli_runner.h"
 #include "results/store.h"
+#include "support/cli_runner.h"
 #include "support/store_rows.h"
 
 namespace odotune {
@@ -22,11 +22,10 @@ using testing_support::store_rows;
 using testing_support::TempDir;
 
 std::string experiment_text(int iterations) {
-  return fmt::format(
-      "format: odotune-experiment/1\nname: kill-test\nmodels: [rq, gyro]\n"
-      "tracks: [{}, {}]\nmodes: [1, 6]\nseeds: [1, 2, 3]\nsolver: pso\n"
-      "budget: {{particles: 16, iterations: {}}}\nleave_one_out: true\nstore: s.sqlite\n",
-      reference_track(2), reference_track(4), iterations);
+  return fmt::format("format: odotune-experiment/1\nname: kill-test\nmodels: [rq, gyro]\n"
+                     "tracks: [{}, {}]\nmodes: [1, 6]\nseeds: [1, 2, 3]\nsolver: pso\n"
+                     "budget: {{particles: 16, iterations: {}}}\nleave_one_out: true\nstore: s.sqlite\n",
+                     reference_track(2), reference_track(4), iterations);
 }
 
 TEST(CliGrid, ResumesAfterSigkillToTheSameRowsAsAnUninterruptedRun) {

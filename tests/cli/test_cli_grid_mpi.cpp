@@ -32,28 +32,26 @@ using testing_support::TempDir;
 // cells (tuned on one track, scored on the other): 16 runs per seed, PSO with
 // 12 particles; 32 runs of 12 iterations take ~0.3 s.
 std::string experiment_text(int iterations, int seeds = 2) {
-  return fmt::format(
-      "format: odotune-experiment/1\nname: mpi-test\nmodels: [rq, alpha]\n"
-      "tracks: [{}, {}]\nmodes: [1, 7]\nseeds: {{first: 1, count: {}}}\nsolver: pso\n"
-      "budget: {{particles: 12, iterations: {}}}\nleave_one_out: true\nstore: s.sqlite\n",
-      reference_track(1), reference_track(3), seeds, iterations);
+  return fmt::format("format: odotune-experiment/1\nname: mpi-test\nmodels: [rq, alpha]\n"
+                     "tracks: [{}, {}]\nmodes: [1, 7]\nseeds: {{first: 1, count: {}}}\nsolver: pso\n"
+                     "budget: {{particles: 12, iterations: {}}}\nleave_one_out: true\nstore: s.sqlite\n",
+                     reference_track(1), reference_track(3), seeds, iterations);
 }
 constexpr std::size_t kRuns = 2 * 2 * 2 * 2 * 2;
 
 // `mpirun -np N odotune ARGS` with CI=1, bounded in time; allowed as root (CI).
 // (`program` is odotune unless given.)
 std::string mpirun_command(int ranks, const std::string& args, const std::string& program = ODOTUNE_BINARY) {
-  return fmt::format(
-      "CI=1 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
-      "timeout -s KILL 240 {} -np {} --oversubscribe {} {}",
-      ODOTUNE_MPIEXEC, ranks, program, args);
+  return fmt::format("CI=1 OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+                     "timeout -s KILL 240 {} -np {} --oversubscribe {} {}",
+                     ODOTUNE_MPIEXEC, ranks, program, args);
 }
 
 CliResult run_mpi(int ranks, const std::string& args, const std::string& program = ODOTUNE_BINARY) {
   TempDir io("mpi-io");
-  const int status = std::system((mpirun_command(ranks, args, program) + " >" + (io / "out").string() +
-                                  " 2>" + (io / "err").string())
-                                     .c_str());
+  const int status = std::system(
+      (mpirun_command(ranks, args, program) + " >" + (io / "out").string() + " 2>" + (io / "err").string())
+          .c_str());
   CliResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   r.out = slurp(io / "out");
@@ -83,7 +81,8 @@ TEST(CliGridMpi, TwoRanksWriteExactlyTheRowsOfOneProcess) {
   EXPECT_EQ(store_rows(dir / "two.sqlite"), expected);
 
   // Run again: everything is stored, nothing runs twice.
-  const auto again = run_mpi(2, "grid " + (dir / "e.yaml").string() + " --store " + (dir / "two.sqlite").string());
+  const auto again = run_mpi(2,
+                             "grid " + (dir / "e.yaml").string() + " --store " + (dir / "two.sqlite").string());
   ASSERT_EQ(again.exit_code, 0) << again.err;
   EXPECT_NE(again.out.find(fmt::format("{} already stored, 0 run now", kRuns)), std::string::npos) << again.out;
 }

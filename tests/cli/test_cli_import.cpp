@@ -48,7 +48,8 @@ class ImportCli : public ::testing::Test {
   // Runs odotune with `args` (already shell-quoted where needed).
   ProcResult odotune(const std::string& args) const {
     const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string cmd = fmt::format("'{}' {} >'{}' 2>'{}'", ODOTUNE_BINARY, args, out.string(), err.string());
+    const std::string cmd = fmt::format("'{}' {} >'{}' 2>'{}'", ODOTUNE_BINARY, args, out.string(),
+                                        err.string());
     const int status = std::system(cmd.c_str());
     return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
   }
@@ -66,7 +67,8 @@ std::size_t count_lines(const std::string& s) {
 TEST_F(ImportCli, OptiOdomRunWritesTrackAndSummary) {
   const fs::path track = dir_ / "run01.csv";
   const auto r = odotune(fmt::format("import optiodom {} -o {}",
-                                     q(kReal / "optiodom_diff/circular/231220200146/231220200146_run-01.csv"), q(track)));
+                                     q(kReal / "optiodom_diff/circular/231220200146/231220200146_run-01.csv"),
+                                     q(track)));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(count_lines(r.out), 1u) << r.out;
   // SOURCE.md: 2066 samples, 103.25 s.
@@ -90,7 +92,8 @@ TEST_F(ImportCli, MrclamAndLitw) {
   EXPECT_EQ(tm.meta().get("source.t0_unix"), "1248446182.116");
 
   const fs::path l = dir_ / "litw.csv";
-  r = odotune(fmt::format("import litw {} -o {}", q(kReal / "utias_lost_in_the_woods/derived/litw_series.csv"), q(l)));
+  r = odotune(fmt::format("import litw {} -o {}", q(kReal / "utias_lost_in_the_woods/derived/litw_series.csv"),
+                          q(l)));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // SOURCE.md: 12 609 samples over 1260.8 s.
   EXPECT_TRUE(contains(r.out, "12609 rows")) << r.out;
@@ -112,7 +115,8 @@ TEST_F(ImportCli, MissingInputIsOneLineAndNoOutput) {
   EXPECT_TRUE(contains(r.err, "no-folder")) << r.err;
   EXPECT_FALSE(fs::exists(track));
 
-  r = odotune(fmt::format("import litw {}", q(kReal / "utias_lost_in_the_woods/derived/litw_series.csv")));  // no -o
+  r = odotune(fmt::format("import litw {}",
+                          q(kReal / "utias_lost_in_the_woods/derived/litw_series.csv")));  // no -o
   EXPECT_NE(r.exit_code, 0);
 }
 

@@ -13,8 +13,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "support/cli_runner.h"
 #include "results/learned_model_json.h"
+#include "support/cli_runner.h"
 #include "support/temp_dir.h"
 
 namespace odotune {
@@ -46,19 +46,18 @@ std::string chair(const std::string& name, int seed, const std::string& segments
          more;
 }
 
-const char* const kLearnRoute =
-    "    - stop: {duration_s: 1}\n"
-    "    - straight: {distance_m: 4, speed_m_s: 0.5}\n"
-    "    - arc: {radius_m: 1.5, angle_deg: 90, speed_m_s: 0.6}\n"
-    "    - straight: {distance_m: 6, speed_m_s: 1.0}\n"
-    "    - arc: {radius_m: 1.0, angle_deg: -120, speed_m_s: 0.5}\n"
-    "    - straight: {distance_m: 3, speed_m_s: 0.8}\n"
-    "    - spin: {angle_deg: 90, rate_deg_s: 40}\n"
-    "    - straight: {distance_m: 3, speed_m_s: 0.6}\n"
-    "    - arc: {radius_m: 2.0, angle_deg: -60, speed_m_s: 0.9}\n"
-    "    - arc: {radius_m: 1.2, angle_deg: 100, speed_m_s: 0.7}\n"
-    "    - straight: {distance_m: 4, speed_m_s: 0.4}\n"
-    "    - stop: {duration_s: 1}\n";
+const char* const kLearnRoute = "    - stop: {duration_s: 1}\n"
+                                "    - straight: {distance_m: 4, speed_m_s: 0.5}\n"
+                                "    - arc: {radius_m: 1.5, angle_deg: 90, speed_m_s: 0.6}\n"
+                                "    - straight: {distance_m: 6, speed_m_s: 1.0}\n"
+                                "    - arc: {radius_m: 1.0, angle_deg: -120, speed_m_s: 0.5}\n"
+                                "    - straight: {distance_m: 3, speed_m_s: 0.8}\n"
+                                "    - spin: {angle_deg: 90, rate_deg_s: 40}\n"
+                                "    - straight: {distance_m: 3, speed_m_s: 0.6}\n"
+                                "    - arc: {radius_m: 2.0, angle_deg: -60, speed_m_s: 0.9}\n"
+                                "    - arc: {radius_m: 1.2, angle_deg: 100, speed_m_s: 0.7}\n"
+                                "    - straight: {distance_m: 4, speed_m_s: 0.4}\n"
+                                "    - stop: {duration_s: 1}\n";
 
 // The learning route and its mirror image (turns the other way): ~100 s.
 std::string learn_route() {
@@ -72,19 +71,17 @@ std::string learn_route() {
   return kLearnRoute + mirrored;
 }
 
-const char* const kEvalRoute =
-    "    - stop: {duration_s: 1}\n"
-    "    - straight: {distance_m: 3, speed_m_s: 0.7}\n"
-    "    - arc: {radius_m: 1.2, angle_deg: -90, speed_m_s: 0.55}\n"
-    "    - straight: {distance_m: 5, speed_m_s: 0.9}\n"
-    "    - arc: {radius_m: 1.8, angle_deg: 120, speed_m_s: 0.7}\n"
-    "    - straight: {distance_m: 3, speed_m_s: 0.5}\n"
-    "    - stop: {duration_s: 1}\n";
+const char* const kEvalRoute = "    - stop: {duration_s: 1}\n"
+                               "    - straight: {distance_m: 3, speed_m_s: 0.7}\n"
+                               "    - arc: {radius_m: 1.2, angle_deg: -90, speed_m_s: 0.55}\n"
+                               "    - straight: {distance_m: 5, speed_m_s: 0.9}\n"
+                               "    - arc: {radius_m: 1.8, angle_deg: 120, speed_m_s: 0.7}\n"
+                               "    - straight: {distance_m: 3, speed_m_s: 0.5}\n"
+                               "    - stop: {duration_s: 1}\n";
 
-const char* const kSlipEpisodes =
-    "slip_episodes:\n"
-    "  - {kind: hold, wheel: left, t0_s: 6, t1_s: 8.5, s: 0.5, brake_nm: 14}\n"
-    "  - {kind: spin, wheel: right, t0_s: 14, t1_s: 16.5, s: 0.6}\n";
+const char* const kSlipEpisodes = "slip_episodes:\n"
+                                  "  - {kind: hold, wheel: left, t0_s: 6, t1_s: 8.5, s: 0.5, brake_nm: 14}\n"
+                                  "  - {kind: spin, wheel: right, t0_s: 14, t1_s: 16.5, s: 0.6}\n";
 
 class LearnCli : public ::testing::Test {
  protected:
@@ -154,14 +151,14 @@ TEST_F(LearnCli, TrainWritesAModelThatLoads) {
 TEST_F(LearnCli, EvalHasBothBlocksAndLearnedBeatsKinematic) {
   const fs::path out = *dir_ / "eval.json";
   const fs::path csv = *dir_ / "eval.csv";
-  const auto r = run_cli("learn eval --track " + track("eval") + " --model " + model() + " --json " + out.string() +
-                         " --csv " + csv.string());
+  const auto r = run_cli("learn eval --track " + track("eval") + " --model " + model() + " --json " +
+                         out.string() + " --csv " + csv.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json j = read_json(out);
   EXPECT_EQ(j.at("track"), "eval");
   for (const char* block : {"learned", "kinematic"})
-    for (const char* key : {"v_mae", "w_mae", "v_rmse", "w_rmse", "v_r2", "w_r2", "pos_mae_m", "pos_rmse_m", "pos_r2",
-                            "theta_mae_rad", "theta_rmse_rad"}) {
+    for (const char* key : {"v_mae", "w_mae", "v_rmse", "w_rmse", "v_r2", "w_r2", "pos_mae_m", "pos_rmse_m",
+                            "pos_r2", "theta_mae_rad", "theta_rmse_rad"}) {
       ASSERT_TRUE(j.at(block).contains(key)) << block << "." << key;
       ASSERT_TRUE(j[block][key].is_number()) << block << "." << key << " = " << j[block][key];
       EXPECT_TRUE(std::isfinite(j[block][key].get<double>())) << block << "." << key;
@@ -200,31 +197,31 @@ TEST_F(LearnCli, RetrainWritesEventsAndAModel) {
   EXPECT_EQ(m.provenance.retrains, static_cast<int>(j["retrains"].size()));
   EXPECT_EQ(m.provenance.retrain_tracks, std::vector<std::string>{"step"});
   const results::LearnedModelFile before = results::read_learned_model(model());
-  EXPECT_NE(m.odometry.w_net.weights, before.odometry.w_net.weights);   // the nets were refitted
+  EXPECT_NE(m.odometry.w_net.weights, before.odometry.w_net.weights);        // the nets were refitted
   EXPECT_EQ(m.odometry.w_net.input_mean, before.odometry.w_net.input_mean);  // standardisation kept
 }
 
 TEST_F(LearnCli, BadInputsFailWithOneLineAndNoOutput) {
   const fs::path out = *dir_ / "bad.json";
   // A missing track file.
-  expect_one_line_failure(run_cli("learn eval --track " + (*dir_ / "none.csv").string() + " --model " + model() +
-                                  " --json " + out.string()),
+  expect_one_line_failure(run_cli("learn eval --track " + (*dir_ / "none.csv").string() + " --model " +
+                                  model() + " --json " + out.string()),
                           "none.csv");
   EXPECT_FALSE(fs::exists(out));
   // A model file that is not JSON, and one with a bad field.
   const fs::path garbage = *dir_ / "garbage.json";
   std::ofstream(garbage) << "{ not json";
-  expect_one_line_failure(
-      run_cli("learn eval --track " + track("eval") + " --model " + garbage.string() + " --json " + out.string()),
-      "garbage.json");
+  expect_one_line_failure(run_cli("learn eval --track " + track("eval") + " --model " + garbage.string() +
+                                  " --json " + out.string()),
+                          "garbage.json");
   EXPECT_FALSE(fs::exists(out));
   json m = read_json(model());
   m["odometry"]["rate_hz"] = -10;
   const fs::path bad_model = *dir_ / "bad_model.json";
   std::ofstream(bad_model) << m.dump();
-  expect_one_line_failure(
-      run_cli("learn eval --track " + track("eval") + " --model " + bad_model.string() + " --json " + out.string()),
-      "odometry.rate_hz");
+  expect_one_line_failure(run_cli("learn eval --track " + track("eval") + " --model " + bad_model.string() +
+                                  " --json " + out.string()),
+                          "odometry.rate_hz");
   EXPECT_FALSE(fs::exists(out));
   // A track without ground truth.
   expect_one_line_failure(
@@ -301,9 +298,10 @@ TEST_F(LearnCli, StudyLearnedTablesAreRecomputableAndDeterministic) {
   // Determinism: everything but timing is in results.json.
   EXPECT_EQ(slurp(a / "results.json"), slurp(b / "results.json"));
 
-  for (const char* f : {"table1.md", "table1.csv", "table2.md", "table2.csv", "table3.md", "table3.csv", "results.json",
-                        "model.json", "fig_slip_variance.png", "fig_slip_variance.svg", "fig_retraining_error.png",
-                        "fig_retraining_error.svg", "fig_paths.png", "fig_paths.svg"})
+  for (const char* f :
+       {"table1.md", "table1.csv", "table2.md", "table2.csv", "table3.md", "table3.csv", "results.json",
+        "model.json", "fig_slip_variance.png", "fig_slip_variance.svg", "fig_retraining_error.png",
+        "fig_retraining_error.svg", "fig_paths.png", "fig_paths.svg"})
     EXPECT_TRUE(fs::exists(a / f)) << f;
   const std::string md1 = slurp(a / "table1.md"), md2 = slurp(a / "table2.md"), md3 = slurp(a / "table3.md");
   for (const char* h : {"V (m/s)", "W (rad/s)", "X-Y (m)", "θ (rad)"}) {
@@ -312,8 +310,8 @@ TEST_F(LearnCli, StudyLearnedTablesAreRecomputableAndDeterministic) {
   }
   for (const char* row : {"LSTM odometry", "Traditional odometry", "MAE", "RMSE", "R²"})
     EXPECT_NE(md1.find(row), std::string::npos) << row;
-  for (const char* row : {"LSTM retraining", "LSTM no retraining", "Traditional odometry", "After the radius change",
-                          "Whole track", "retrains"})
+  for (const char* row : {"LSTM retraining", "LSTM no retraining", "Traditional odometry",
+                          "After the radius change", "Whole track", "retrains"})
     EXPECT_NE(md2.find(row), std::string::npos) << row;
   for (const char* row : {"LSTM odometry + variable covariance", "Traditional odometry + static covariance",
                           "LSTM odometry + static covariance", "NEES_Odom", "NEES_Filter"})

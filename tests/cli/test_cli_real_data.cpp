@@ -27,9 +27,9 @@ TEST(CliRealData, OptiOdomRunTunesAfterSyntheticFixes) {
   EXPECT_NE(refused.err.find("no position fixes"), std::string::npos) << refused.err;
 
   ASSERT_EQ(run_cli(fmt::format("fixes {} -o {} --seed 7", raw.string(), aps.string())).exit_code, 0);
-  const auto r = run_cli(fmt::format(
-      "tune --track {} --model alpha --mode 1 --particles 12 --iterations 15 --json {}",
-      aps.string(), json.string()));
+  const auto r = run_cli(
+      fmt::format("tune --track {} --model alpha --mode 1 --particles 12 --iterations 15 --json {}",
+                  aps.string(), json.string()));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(testing_support::slurp(json));
   EXPECT_LT(j["tuned"]["rmse_m"].get<double>(), j["baseline"]["rmse_m"].get<double>());

@@ -9,8 +9,8 @@
 
 #include <fmt/format.h>
 
-#include "support/cli_runner.h"
 #include "results/store.h"
+#include "support/cli_runner.h"
 #include "support/temp_dir.h"
 
 namespace odotune {
@@ -24,11 +24,10 @@ using testing_support::TempDir;
 
 // 2 models × 2 tracks × 2 modes × 2 seeds, plus the leave-one-out cells.
 std::string experiment(const std::string& track_a, const std::string& track_b) {
-  return fmt::format(
-      "format: odotune-experiment/1\nname: report-test\nmodels: [rq, gyro]\n"
-      "tracks: [{}, {}]\nmodes: [1, 7]\nseeds: [1, 2]\nsolver: pso\n"
-      "budget: {{particles: 8, iterations: 6}}\nleave_one_out: true\nstore: s.sqlite\n",
-      track_a, track_b);
+  return fmt::format("format: odotune-experiment/1\nname: report-test\nmodels: [rq, gyro]\n"
+                     "tracks: [{}, {}]\nmodes: [1, 7]\nseeds: [1, 2]\nsolver: pso\n"
+                     "budget: {{particles: 8, iterations: 6}}\nleave_one_out: true\nstore: s.sqlite\n",
+                     track_a, track_b);
 }
 
 void expect_png(const fs::path& p) {
@@ -73,9 +72,8 @@ TEST_F(CliReport, WritesEveryFigureAsPngAndSvgWithItsLabels) {
         expect_png(stem.string() + ".png");
         std::string upper = metric;
         for (auto& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-        expect_labels(stem.string() + ".svg",
-                      {"fitness mode", "track1", "track5", "7 RMSE+MAE+MAXE",
-                       upper + " improvement [%], " + model, "improvement [%]"});
+        expect_labels(stem.string() + ".svg", {"fitness mode", "track1", "track5", "7 RMSE+MAE+MAXE",
+                                               upper + " improvement [%], " + model, "improvement [%]"});
       }
   for (const std::string stem : {"boxplots", "boxplots_heldout"}) {
     expect_png(r / (stem + ".png"));
@@ -132,9 +130,10 @@ TEST_F(CliReport, HtmlPageIsSelfContainedAndHoldsEveryFigure) {
   std::size_t inlined = 0;
   for (auto p = html.find("<svg"); p != std::string::npos; p = html.find("<svg", p + 1)) ++inlined;
   EXPECT_EQ(inlined, svgs);
-  EXPECT_EQ(svgs, 12u + 2u + 4u);  // 2 models × 3 metrics × 2 kinds of heatmap, boxplots, trajectories + convergence
-  for (const std::string label : {"Figure 3", "Figure 4", "Table 1", "Figure 5", "Convergence",
-                                  "held out", "ground truth", "fitness mode", "track5"})
+  EXPECT_EQ(svgs,
+            12u + 2u + 4u);  // 2 models × 3 metrics × 2 kinds of heatmap, boxplots, trajectories + convergence
+  for (const std::string label : {"Figure 3", "Figure 4", "Table 1", "Figure 5", "Convergence", "held out",
+                                  "ground truth", "fitness mode", "track5"})
     EXPECT_NE(html.find(label), std::string::npos) << label;
   EXPECT_EQ(html.find("<script"), std::string::npos);
   EXPECT_EQ(html.find("src=\"http"), std::string::npos);

@@ -12,12 +12,12 @@
 #include <string>
 #include <vector>
 
-#include "studies/calibration_study.h"
-#include "support/cli_runner.h"
-#include "support/study_fixtures.h"
 #include "formats/scenario_yaml.h"
+#include "studies/calibration_study.h"
 #include "studies/study_outputs.h"
 #include "studies/study_tables.h"
+#include "support/cli_runner.h"
+#include "support/study_fixtures.h"
 #include "support/temp_dir.h"
 
 namespace odotune {
@@ -99,9 +99,9 @@ TEST_F(CliStudy, ResamplingWritesTable1WithTwelvePlausibleRowsAndIsReproducible)
   for (const char* p : {"neff", "max", "every"}) EXPECT_EQ(per_policy[p], 4) << p;
 
   const std::string md = slurp(out / "table1.md");
-  EXPECT_NE(md.find("0.002623"), std::string::npos);      // the paper's Table I beside ours
+  EXPECT_NE(md.find("0.002623"), std::string::npos);  // the paper's Table I beside ours
   EXPECT_NE(md.find("Fariña"), std::string::npos);
-  EXPECT_NE(md.find("--runs 2"), std::string::npos);      // the command that regenerates it
+  EXPECT_NE(md.find("--runs 2"), std::string::npos);  // the command that regenerates it
 
   // Same seed: identical numbers except timing; another seed: different.
   ASSERT_EQ(run_cli(resampling("rs_b", 3)).exit_code, 0);
@@ -172,7 +172,8 @@ TEST_F(CliStudy, BadInputIsOneLineAndNonZeroExit) {
   // --out under a regular file.
   std::ofstream(*dir_ / "a_file") << "x";
   const auto bad_out = run_cli("study resampling --runs 1 --particles 100 --scenario " +
-                               (*dir_ / "short.yaml").string() + " --out " + (*dir_ / "a_file" / "sub").string());
+                               (*dir_ / "short.yaml").string() + " --out " +
+                               (*dir_ / "a_file" / "sub").string());
   EXPECT_NE(bad_out.exit_code, 0);
   EXPECT_EQ(std::count(bad_out.err.begin(), bad_out.err.end(), '\n'), 1) << bad_out.err;
   EXPECT_NE(bad_out.err.find("a_file"), std::string::npos) << bad_out.err;

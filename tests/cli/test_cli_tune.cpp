@@ -42,12 +42,11 @@ TEST(CliTune, JsonHasTheDocumentedKeysAndTunedBeatsBaseline) {
 
   // The written configuration replays to the same tuned RMSE.
   const auto jp = tmp / "eval.json";
-  const auto e = run_cli("eval --config " + cfg_path.string() + " --track " + reference_track(1) +
-                         " --json " + jp.string());
+  const auto e = run_cli("eval --config " + cfg_path.string() + " --track " + reference_track(1) + " --json " +
+                         jp.string());
   ASSERT_EQ(e.exit_code, 0) << e.err;
   const auto ej = nlohmann::json::parse(testing_support::slurp(jp));
-  EXPECT_NEAR(ej["tracks"][0]["metrics"]["rmse_m"].get<double>(), j["tuned"]["rmse_m"].get<double>(),
-              1e-9);
+  EXPECT_NEAR(ej["tracks"][0]["metrics"]["rmse_m"].get<double>(), j["tuned"]["rmse_m"].get<double>(), 1e-9);
 }
 
 TEST(CliTune, SameSeedSameResultAnyThreadCount) {
@@ -71,8 +70,7 @@ TEST(CliTune, NloptSolverRuns) {
   TempDir tmp;
   const auto p = tmp / "n.json";
   const auto r = run_cli("tune --track " + reference_track(3) +
-                         " --model rq --mode 2 --solver nlopt:SBPLX --evals 150 --seed 2 --json " +
-                         p.string());
+                         " --model rq --mode 2 --solver nlopt:SBPLX --evals 150 --seed 2 --json " + p.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(testing_support::slurp(p));
   EXPECT_LE(j["evaluations"].get<long>(), 151);

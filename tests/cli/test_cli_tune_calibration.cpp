@@ -13,9 +13,9 @@
 #include <nlohmann/json.hpp>
 
 #include "formats/pf_config_yaml.h"
-#include "support/cli_runner.h"
 #include "objectives/calibration_objective.h"
 #include "results/store.h"
+#include "support/cli_runner.h"
 
 namespace odotune {
 namespace {
@@ -30,7 +30,9 @@ using testing_support::TempDir;
 // R = 0.32 m, D = 0.65 m, 8800 counts/rev, encoders 100 Hz, v_ext/w_ext
 // 10 Hz σ 0.02, ground truth 100 Hz, radius_error 0.99 / 1.012).
 std::string wheelchair_track() { return std::string(ODOTUNE_SOURCE_DIR) + "/data/sim/wheelchair_short.csv"; }
-std::string smoke_experiment() { return std::string(ODOTUNE_SOURCE_DIR) + "/experiments/calibration_smoke.yaml"; }
+std::string smoke_experiment() {
+  return std::string(ODOTUNE_SOURCE_DIR) + "/experiments/calibration_smoke.yaml";
+}
 
 long lines_of(const std::string& s) { return std::count(s.begin(), s.end(), '\n'); }
 
@@ -46,10 +48,9 @@ TEST(CliTuneCalibration, TheKeptTrackIsWhatItsScenarioSimulates) {
 
 // One small adaptive-PF tune: 3 particles × (1 + 1) iterations.
 std::string adaptive_tune_args(const fs::path& json, int threads, int seed = 4) {
-  return fmt::format(
-      "tune --track {} --model adaptive-pf-calib --particles 3 --iterations 1 --seed {} "
-      "--pf-particles 400 --pf-seed 2 --resampler stratified --threads {} --json {}",
-      wheelchair_track(), seed, threads, json.string());
+  return fmt::format("tune --track {} --model adaptive-pf-calib --particles 3 --iterations 1 --seed {} "
+                     "--pf-particles 400 --pf-seed 2 --resampler stratified --threads {} --json {}",
+                     wheelchair_track(), seed, threads, json.string());
 }
 
 TEST(CliTuneCalibration, AdaptivePfJsonHasTheDocumentedKeysAndTunedNeverWorse) {
@@ -61,10 +62,10 @@ TEST(CliTuneCalibration, AdaptivePfJsonHasTheDocumentedKeysAndTunedNeverWorse) {
   EXPECT_NE(r.out.find("RMSE"), std::string::npos) << r.out;
   const auto j = nlohmann::json::parse(slurp(json));
   for (const char* key :
-       {"model", "solver", "seed", "particles", "iterations", "calibrator", "params", "param_units",
-        "default_params", "default_kept", "score_weights", "baseline_score", "tuned_score",
-        "baseline_fitness", "tuned_fitness", "baseline", "tuned", "improvement_pct", "evaluations",
-        "seconds", "termination", "failures", "tracks", "convergence"})
+       {"model",       "solver",           "seed",           "particles",    "iterations",    "calibrator",
+        "params",      "param_units",      "default_params", "default_kept", "score_weights", "baseline_score",
+        "tuned_score", "baseline_fitness", "tuned_fitness",  "baseline",     "tuned",         "improvement_pct",
+        "evaluations", "seconds",          "termination",    "failures",     "tracks",        "convergence"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["model"], "adaptive-pf-calib");
   EXPECT_EQ(j["calibrator"]["method"], "adaptive-pf");
@@ -208,8 +209,8 @@ TEST(CliGridCalibration, SmokeExperimentStoresOneRunPerModelAndSeedAndReports) {
     // best_fitness is the tuned score, never above the solver's own best.
     EXPECT_LE(r.best_fitness, r.convergence.back().best_fitness);
   }
-  EXPECT_EQ(cells, (std::set<std::string>{"pf-calib 1", "pf-calib 2", "adaptive-pf-calib 1",
-                                          "adaptive-pf-calib 2"}));
+  EXPECT_EQ(cells,
+            (std::set<std::string>{"pf-calib 1", "pf-calib 2", "adaptive-pf-calib 1", "adaptive-pf-calib 2"}));
   // Both seeds of a model share the baseline (the default settings do not
   // depend on the solver's seed).
   for (const auto& a : runs)
@@ -222,16 +223,17 @@ TEST(CliGridCalibration, SmokeExperimentStoresOneRunPerModelAndSeedAndReports) {
   const auto out = tmp / "report";
   const auto rep = run_cli("report " + store.string() + " --out " + out.string());
   ASSERT_EQ(rep.exit_code, 0) << rep.err;
-  for (const char* f : {"index.html", "table1_pf-calib.csv", "table1_adaptive-pf-calib.csv",
-                        "heatmap_pf-calib_rmse.svg", "heatmap_adaptive-pf-calib_rmse.svg",
-                        "boxplots.svg", "convergence_calibration_wheelchair_short.svg"})
+  for (const char* f :
+       {"index.html", "table1_pf-calib.csv", "table1_adaptive-pf-calib.csv", "heatmap_pf-calib_rmse.svg",
+        "heatmap_adaptive-pf-calib_rmse.svg", "boxplots.svg", "convergence_calibration_wheelchair_short.svg"})
     EXPECT_TRUE(fs::exists(out / f)) << f;
   for (const auto& e : fs::directory_iterator(out))
     EXPECT_EQ(e.path().filename().string().rfind("trajectories_", 0), std::string::npos) << e.path();
   EXPECT_NE(slurp(out / "index.html").find("pf-calib"), std::string::npos);
 
   // export: a calibrator run is refused in one line.
-  const auto ex = run_cli("export " + store.string() + " --select model=adaptive-pf-calib --format odotune --out " +
+  const auto ex = run_cli("export " + store.string() +
+                          " --select model=adaptive-pf-calib --format odotune --out " +
                           (tmp / "x.yaml").string());
   EXPECT_NE(ex.exit_code, 0);
   EXPECT_EQ(lines_of(ex.err), 1) << ex.err;
@@ -277,8 +279,7 @@ TEST(CliGridCalibration, TrackUnusableForAListedModelIsOneLineNamingIt) {
   EXPECT_NE(g.err.find("b.yaml:7:"), std::string::npos) << g.err;
   // An unknown model names the choices.
   std::ofstream(tmp / "m.yaml") << fmt::format(
-      "format: odotune-experiment/1\nmodels: [pf]\ntracks: [{}]\nmodes: [1]\nseeds: [1]\n",
-      wheelchair_track());
+      "format: odotune-experiment/1\nmodels: [pf]\ntracks: [{}]\nmodes: [1]\nseeds: [1]\n", wheelchair_track());
   g = run_cli("grid " + (tmp / "m.yaml").string());
   EXPECT_NE(g.exit_code, 0);
   EXPECT_NE(g.err.find("m.yaml:2:"), std::string::npos) << g.err;

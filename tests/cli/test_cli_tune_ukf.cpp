@@ -15,10 +15,10 @@
 
 #include "core/failure.h"
 #include "formats/ukf_config_yaml.h"
-#include "support/cli_runner.h"
 #include "objectives/fusion_input.h"
 #include "objectives/ukf_objective.h"
 #include "results/store.h"
+#include "support/cli_runner.h"
 #include "tracks/track_io.h"
 
 namespace odotune {
@@ -42,10 +42,10 @@ long lines_of(const std::string& s) { return std::count(s.begin(), s.end(), '\n'
 TEST(CliTuneUkf, TuneBeatsTheDefaultsAndTheConfigRoundTrips) {
   TempDir tmp;
   const auto json = tmp / "t.json", cfg = tmp / "ukf.yaml";
-  const auto r = run_cli(fmt::format(
-      "tune --track {} --model ukf --mode 1 --particles 8 --iterations 5 --seed 3 --threads 2 "
-      "--json {} --config-out {}",
-      wheelchair_track(), json.string(), cfg.string()));
+  const auto r = run_cli(
+      fmt::format("tune --track {} --model ukf --mode 1 --particles 8 --iterations 5 --seed 3 --threads 2 "
+                  "--json {} --config-out {}",
+                  wheelchair_track(), json.string(), cfg.string()));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("fusion UKF"), std::string::npos) << r.out;
 
@@ -166,7 +166,8 @@ TEST(CliGridUkf, SmokeExperimentRunsStoresReportsAndExports) {
     EXPECT_EQ(r.diverged, 0);
     EXPECT_GT(r.baseline.rmse_m, 0.0);
     // Tuned on the scored track: never worse than the defaults for the mode.
-    const double base = r.mode == 1 ? r.baseline.rmse_m : r.baseline.rmse_m + r.baseline.mae_m + r.baseline.maxe_m;
+    const double base = r.mode == 1 ? r.baseline.rmse_m
+                                    : r.baseline.rmse_m + r.baseline.mae_m + r.baseline.maxe_m;
     const double tuned = r.mode == 1 ? r.tuned.rmse_m : r.tuned.rmse_m + r.tuned.mae_m + r.tuned.maxe_m;
     EXPECT_LE(tuned, base) << r.mode << " " << r.seed;
     EXPECT_NEAR(r.best_fitness, tuned, 1e-12);
@@ -201,8 +202,8 @@ TEST(CliGridUkf, SmokeExperimentRunsStoresReportsAndExports) {
   EXPECT_EQ(c.params, best->params);
   // robot_localization has no mapping for the UKF: one line, no file.
   const auto y = tmp / "y.yaml";
-  const auto er = run_cli("export " + store.string() + " --select model=ukf --format robot_localization --out " +
-                          y.string());
+  const auto er = run_cli("export " + store.string() +
+                          " --select model=ukf --format robot_localization --out " + y.string());
   EXPECT_NE(er.exit_code, 0);
   EXPECT_EQ(lines_of(er.err), 1) << er.err;
   EXPECT_NE(er.err.find("no mapping for this model"), std::string::npos) << er.err;

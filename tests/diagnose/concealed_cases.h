@@ -43,13 +43,15 @@ enum class Odometry { encoders, commands };
 struct CaseRobot {
   std::string_view kind;
   double radius_l_m, radius_r_m, wheel_base_m, ticks_per_rev;
-  double odo_rate_hz;                    // encoders and commands [Hz]
+  double odo_rate_hz;  // encoders and commands [Hz]
   double gyro_rate_hz, gyro_sigma_rad_s;
   // Base motion scale: lengths in units of geometry_m, speeds of speed_mps.
   double geometry_m, speed_mps, spin_rate_deg_s;
   double max_accel_m_s2, max_angular_accel_rad_s2;
 };
 
+// The robots, the base lap and the cases below are hand-aligned tables.
+// clang-format off
 // A 0.23 m TurtleBot-class base with small wheels and a coarse encoder.
 inline constexpr CaseRobot kIndoorSmall{"indoor-small", 0.035, 0.035, 0.235, 1440, 50, 100, 0.003,
                                         0.8, 0.35, 120, 0.4, 2.0};
@@ -63,6 +65,7 @@ inline constexpr CaseRobot kOutdoorLarge{"outdoor-large", 0.165, 0.165, 0.58, 81
 inline constexpr CaseRobot kOutdoorSkid{"outdoor-skid", 0.125, 0.1255, 0.51, 1000, 40, 40, 0.005,
                                         2.0, 1.0, 90, 0.7, 1.5};
 
+// clang-format on
 enum class Reference { gt, aps };
 struct CaseReference {
   Reference kind;
@@ -109,6 +112,7 @@ struct ConcealedCase {
 // and braking at every segment change plus a reversal (longitudinal_slip,
 // time_offset, actuator_lag), turns both ways at several v·w (lateral_skid,
 // wheel_base_error, gyro_scale), spins (w without v), stops (gyro_bias).
+// clang-format off
 inline std::vector<sim::Segment> base_lap(const CaseRobot& r) {
   const double g = r.geometry_m, u = r.speed_mps;
   using K = sim::Segment::Kind;
@@ -351,4 +355,5 @@ inline sim::Scenario base_scenario(const ConcealedCase& c) {
   return sc;
 }
 
+// clang-format on
 }  // namespace odotune::concealed

@@ -31,13 +31,13 @@ struct SimTrackOptions {
   double duration_s = 120.0;  // minimum motion length [s]
   double wheel_radius_left_m = 0.08, wheel_radius_right_m = 0.08;
   double wheel_base_m = 0.42, ticks_per_rev = 2048;
-  double odo_rate_hz = 100.0;  // encoders and commands [Hz]
-  bool encoders = true;        // false: the odometry is v_cmd/w_cmd only
-  bool omega = false;          // also write omega_l/omega_r
+  double odo_rate_hz = 100.0;                             // encoders and commands [Hz]
+  bool encoders = true;                                   // false: the odometry is v_cmd/w_cmd only
+  bool omega = false;                                     // also write omega_l/omega_r
   double gyro_rate_hz = 100.0, gyro_sigma_rad_s = 0.002;  // rate 0 = no gyro
-  double gt_rate_hz = 100.0, gt_sigma_m = 0.0;             // rate 0 = no ground truth
-  double aps_rate_hz = 0.0, aps_sigma_m = 0.05;            // rate 0 = no fixes
-  std::vector<std::string> effects;  // "lateral_skid:k=0.03" (tracks/effects.h syntax)
+  double gt_rate_hz = 100.0, gt_sigma_m = 0.0;            // rate 0 = no ground truth
+  double aps_rate_hz = 0.0, aps_sigma_m = 0.05;           // rate 0 = no fixes
+  std::vector<std::string> effects;                       // "lateral_skid:k=0.03" (tracks/effects.h syntax)
   std::uint64_t seed = 1;
 };
 
@@ -55,12 +55,12 @@ inline sim::Segment seg(sim::Segment::Kind kind, double a, double b, double c = 
 inline void append_lap(std::vector<sim::Segment>& v) {
   using K = sim::Segment::Kind;
   const std::vector<sim::Segment> lap = {
-      seg(K::straight, 1.0, 0.6),     seg(K::arc, 1.0, 30, 0.5),  seg(K::arc, 1.0, -30, 0.5),
-      seg(K::straight, 0.6, 0.7),     seg(K::arc, 1.0, -30, 0.5), seg(K::arc, 1.0, 30, 0.5),
-      seg(K::straight, 0.8, 0.6),     seg(K::arc, 0.6, 90, 0.4),  seg(K::straight, 0.8, 0.5),
-      seg(K::stop, 1.0, 0),           seg(K::straight, 0.8, 0.5), seg(K::arc, 0.6, 90, 0.4),
-      seg(K::straight, 2.2, 0.8),     seg(K::spin, 180, 90),      seg(K::spin, -180, 90),
-      seg(K::straight, 2.2, 0.8),     seg(K::arc, 0.6, 90, 0.4),  seg(K::straight, 1.6, 0.5),
+      seg(K::straight, 1.0, 0.6), seg(K::arc, 1.0, 30, 0.5),  seg(K::arc, 1.0, -30, 0.5),
+      seg(K::straight, 0.6, 0.7), seg(K::arc, 1.0, -30, 0.5), seg(K::arc, 1.0, 30, 0.5),
+      seg(K::straight, 0.8, 0.6), seg(K::arc, 0.6, 90, 0.4),  seg(K::straight, 0.8, 0.5),
+      seg(K::stop, 1.0, 0),       seg(K::straight, 0.8, 0.5), seg(K::arc, 0.6, 90, 0.4),
+      seg(K::straight, 2.2, 0.8), seg(K::spin, 180, 90),      seg(K::spin, -180, 90),
+      seg(K::straight, 2.2, 0.8), seg(K::arc, 0.6, 90, 0.4),  seg(K::straight, 1.6, 0.5),
       seg(K::arc, 0.6, 90, 0.4)};
   v.insert(v.end(), lap.begin(), lap.end());
 }

@@ -123,16 +123,19 @@ TEST(ConcealedCases, ExpectedFindingsMatchTheEffectsAndRanges) {
       const sim::EffectInfo* info = sim::find_effect(f.effect);
       ASSERT_NE(info, nullptr) << f.effect;
       ASSERT_EQ(f.params.size(), info->params.size()) << f.effect << ": all parameters expected";
-      const auto it = std::find_if(active.begin(), active.end(), [&](const sim::EffectSpec& s) { return s.name == f.effect; });
+      const auto it = std::find_if(active.begin(), active.end(),
+                                   [&](const sim::EffectSpec& s) { return s.name == f.effect; });
       ASSERT_NE(it, active.end()) << f.effect << " expected but not simulated";
       for (const ExpectedParam& p : f.params) {
         const sim::EffectParamInfo* pi = sim::find_param(*info, p.name);
         ASSERT_NE(pi, nullptr) << f.effect << "." << p.name;
         std::string why;
         EXPECT_TRUE(sim::check_param(*info, *pi, p.value, &why)) << why;
-        const auto v = std::find_if(it->values.begin(), it->values.end(), [&](const auto& kv) { return kv.first == p.name; });
+        const auto v = std::find_if(it->values.begin(), it->values.end(),
+                                    [&](const auto& kv) { return kv.first == p.name; });
         ASSERT_NE(v, it->values.end());
-        EXPECT_EQ(v->second, p.value) << f.effect << "." << p.name << ": expected truth differs from the simulated value";
+        EXPECT_EQ(v->second, p.value) << f.effect << "." << p.name
+                                      << ": expected truth differs from the simulated value";
         const double tol = expected_tolerance(f, p);
         EXPECT_GT(tol, 0.0) << f.effect << "." << p.name;
         // The tolerance never admits "no effect": for a wheel pair, not for
@@ -141,7 +144,8 @@ TEST(ConcealedCases, ExpectedFindingsMatchTheEffectsAndRanges) {
         if (p.name == "scale_l" || p.name == "scale_r" || p.name == "s_l" || p.name == "s_r") {
           for (const ExpectedParam& q : f.params) {
             if (q.name == "scale_l" || q.name == "scale_r" || q.name == "s_l" || q.name == "s_r") {
-              departure = std::max(departure, std::abs(q.value - sim::find_param(*info, q.name)->default_value));
+              departure = std::max(departure,
+                                   std::abs(q.value - sim::find_param(*info, q.name)->default_value));
             }
           }
         }
@@ -212,8 +216,10 @@ void window_errors(const Track& tr, const CaseRobot& r, std::vector<Xy>* wheel, 
   const auto &gx = tr.col(Col::gt_x), &gy = tr.col(Col::gt_y), &gth = tr.col(Col::gt_theta);
   const auto &vc = tr.col(Col::v_cmd), &wc = tr.col(Col::w_cmd);
   for (double t0 = 0.0; t0 + 20.0 <= t.back(); t0 += 20.0) {
-    const auto a = std::lower_bound(odo.begin(), odo.end(), t0, [&](std::size_t i, double v) { return t[i] < v; });
-    const auto b = std::upper_bound(odo.begin(), odo.end(), t0 + 20.0, [&](double v, std::size_t i) { return v < t[i]; });
+    const auto a = std::lower_bound(odo.begin(), odo.end(), t0,
+                                    [&](std::size_t i, double v) { return t[i] < v; });
+    const auto b = std::upper_bound(odo.begin(), odo.end(), t0 + 20.0,
+                                    [&](double v, std::size_t i) { return v < t[i]; });
     if (a == odo.end() || b - a < 2) continue;
     double xw = gx[*a], yw = gy[*a], hw = gth[*a];
     double xg = xw, yg = yw, hg = hw;

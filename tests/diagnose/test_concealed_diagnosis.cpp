@@ -61,17 +61,18 @@ Verdict judge(const ConcealedCase& c, const Diagnosis& d) {
       const double got = f->param(p.name), tol = concealed::expected_tolerance(e, p);
       const bool ok = std::isfinite(got) && std::abs(got - p.value) <= tol;
       v.params_right = v.params_right && ok;
-      v.detail += std::string(e.effect) + "." + std::string(p.name) + " = " + std::to_string(got) +
-                  " (truth " + std::to_string(p.value) + " ± " + std::to_string(tol) + ")" +
-                  (ok ? "" : " OUT") + "; ";
+      v.detail += std::string(e.effect) + "." + std::string(p.name) + " = " + std::to_string(got) + " (truth " +
+                  std::to_string(p.value) + " ± " + std::to_string(tol) + ")" + (ok ? "" : " OUT") + "; ";
     }
     const bool gyro = e.effect == "gyro_bias" || e.effect == "gyro_scale";
     const BeforeAfter& h = gyro ? f->heldout : d.heldout;
     v.heldout_improved = v.heldout_improved && h.after_pos_rmse_m < h.before_pos_rmse_m;
     v.detail += "held-out " + std::to_string(f->heldout.before_pos_rmse_m) + " -> " +
                 std::to_string(f->heldout.after_pos_rmse_m) + " m (without it -> all)" +
-                (gyro ? "" : ", nominal -> chosen " + std::to_string(d.heldout.before_pos_rmse_m) +
-                                 " -> " + std::to_string(d.heldout.after_pos_rmse_m) + " m") + "; ";
+                (gyro ? ""
+                      : ", nominal -> chosen " + std::to_string(d.heldout.before_pos_rmse_m) + " -> " +
+                            std::to_string(d.heldout.after_pos_rmse_m) + " m") +
+                "; ";
   }
   return v;
 }
@@ -96,8 +97,8 @@ TEST_P(ConcealedDiagnosis, NamesTheEffectsWithinToleranceAndProvesThemHeldOut) {
   SCOPED_TRACE(std::string(c.name) + ": " + std::string(c.why_hard));
   const auto miss = known_misses().find(std::string(c.name));
   if (miss == known_misses().end()) {
-    EXPECT_TRUE(v.named_right) << "found {" << set_text(v.found) << "}, expected {"
-                               << set_text(v.expected) << "}";
+    EXPECT_TRUE(v.named_right) << "found {" << set_text(v.found) << "}, expected {" << set_text(v.expected)
+                               << "}";
     EXPECT_TRUE(v.params_right) << v.detail;
     EXPECT_TRUE(v.heldout_improved) << v.detail;
     return;
@@ -108,11 +109,11 @@ TEST_P(ConcealedDiagnosis, NamesTheEffectsWithinToleranceAndProvesThemHeldOut) {
   EXPECT_FALSE(v.pass()) << c.name << " passes now: remove it from known_misses()";
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Suite, ConcealedDiagnosis, ::testing::Range<std::size_t>(0, concealed::concealed_cases().size()),
-    [](const ::testing::TestParamInfo<std::size_t>& p) {
-      return std::string(concealed::concealed_cases().at(p.param).name);
-    });
+INSTANTIATE_TEST_SUITE_P(Suite, ConcealedDiagnosis,
+                         ::testing::Range<std::size_t>(0, concealed::concealed_cases().size()),
+                         [](const ::testing::TestParamInfo<std::size_t>& p) {
+                           return std::string(concealed::concealed_cases().at(p.param).name);
+                         });
 
 TEST(ConcealedDiagnosis, KnownMissesNameRealCasesAndLeaveMostPassing) {
   std::set<std::string> names;

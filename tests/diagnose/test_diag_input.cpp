@@ -43,10 +43,8 @@ TEST(DiagInput, WheelTicksCommandsGyroAndGroundTruth) {
   ASSERT_EQ(in.odo_t_s.size(), tr.size());  // every row holds ticks at 100 Hz
   const double per_tick = 2 * std::numbers::pi / 2048;
   for (std::size_t i = 0; i < tr.size(); i += 97) {
-    EXPECT_DOUBLE_EQ(in.phi_l_rad[i],
-                     static_cast<double>(tr.ticks_l()[i] - tr.ticks_l()[0]) * per_tick);
-    EXPECT_DOUBLE_EQ(in.phi_r_rad[i],
-                     static_cast<double>(tr.ticks_r()[i] - tr.ticks_r()[0]) * per_tick);
+    EXPECT_DOUBLE_EQ(in.phi_l_rad[i], static_cast<double>(tr.ticks_l()[i] - tr.ticks_l()[0]) * per_tick);
+    EXPECT_DOUBLE_EQ(in.phi_r_rad[i], static_cast<double>(tr.ticks_r()[i] - tr.ticks_r()[0]) * per_tick);
     EXPECT_EQ(in.cmd_v_mps[i], tr.col(Col::v_cmd)[i]);
     EXPECT_EQ(in.cmd_w_radps[i], tr.col(Col::w_cmd)[i]);
   }
@@ -162,7 +160,8 @@ TEST(DiagInput, ReferenceOutsideTheOdometrySpanIsDropped) {
   d.ticks_r = d.ticks_l;
   auto& gx = d.ensure(Col::gt_x);
   auto& gy = d.ensure(Col::gt_y);
-  for (int i = 0; i < 10; ++i) gx[static_cast<std::size_t>(i)] = 0.01 * i, gy[static_cast<std::size_t>(i)] = 0.0;
+  for (int i = 0; i < 10; ++i)
+    gx[static_cast<std::size_t>(i)] = 0.01 * i, gy[static_cast<std::size_t>(i)] = 0.0;
   const DiagInput in = build_diag_input(Track(std::move(d)));
   ASSERT_EQ(in.odo_t_s.size(), 7u);
   EXPECT_DOUBLE_EQ(in.odo_t_s.front(), 0.1);
@@ -220,8 +219,7 @@ TEST(DiagInput, ErrorsAreOneLineNamingTheTrack) {
 // A real recording: UTIAS MRCLAM robot 1 (commanded body velocities, Vicon
 // ground truth at irregular stamps, no sim.* metadata, no wheel base).
 TEST(DiagInput, RealMrclamTrack) {
-  const Track tr =
-      import_mrclam(std::filesystem::path(ODOTUNE_SHARED_DIR) / "data" / "real" / "mrclam7", 1);
+  const Track tr = import_mrclam(std::filesystem::path(ODOTUNE_SHARED_DIR) / "data" / "real" / "mrclam7", 1);
   const DiagInput in = build_diag_input(tr);
   EXPECT_EQ(in.odometry, OdometryKind::body_velocity);
   EXPECT_EQ(in.wheel_base_m, 0.0);

@@ -145,9 +145,8 @@ TEST(Diagnose, GyroBiasIsJudgedAgainstTheReferenceHeading) {
 }
 
 TEST(Diagnose, TwoEffectsAreBothFoundMostImportantFirst) {
-  const Diagnosis d =
-      diagnose(simulated(options(87, 150.0, {"radius_error:scale_l=0.994,scale_r=1.003",
-                                             "gyro_bias:b=0.003"})));
+  const Diagnosis d = diagnose(
+      simulated(options(87, 150.0, {"radius_error:scale_l=0.994,scale_r=1.003", "gyro_bias:b=0.003"})));
   ASSERT_NE(finding(d, "radius_error"), nullptr) << names(d);
   ASSERT_NE(finding(d, "gyro_bias"), nullptr) << names(d);
   for (std::size_t i = 1; i < d.findings.size(); ++i)

@@ -24,8 +24,7 @@ namespace {
 using testing_support::SimTrackOptions;
 using testing_support::simulate_track;
 
-DiagInput sim_input(std::vector<std::string> effects, double duration_s = 60.0,
-                    bool encoders = true) {
+DiagInput sim_input(std::vector<std::string> effects, double duration_s = 60.0, bool encoders = true) {
   SimTrackOptions o;
   o.duration_s = duration_s;
   o.effects = std::move(effects);
@@ -44,16 +43,15 @@ TEST(EffectModel, NamesAndLayoutComeFromTheEffectTable) {
   EXPECT_EQ(effect_name(Effect::time_offset), "time_offset");
   EXPECT_THROW(effect_from_name("lateral_skd"), std::invalid_argument);
 
-  const EffectSet set =
-      EffectSet::parse({"time_offset:dt=0.02", "radius_error:scale_r=1.01", "slip_zone:x0=1,x1=2,"
-                        "y0=-1,y1=1,s_l=0.1"});
+  const EffectSet set = EffectSet::parse({"time_offset:dt=0.02", "radius_error:scale_r=1.01",
+                                          "slip_zone:x0=1,x1=2,"
+                                          "y0=-1,y1=1,s_l=0.1"});
   const auto layout = param_layout(set);
   std::vector<std::string> names;
   for (const auto& s : layout) names.push_back(s.name);
-  const std::vector<std::string> want = {"radius_error.scale_l", "radius_error.scale_r",
-                                         "slip_zone.x0", "slip_zone.x1", "slip_zone.y0",
-                                         "slip_zone.y1", "slip_zone.s_l", "slip_zone.s_r",
-                                         "time_offset.dt"};
+  const std::vector<std::string> want = {"radius_error.scale_l", "radius_error.scale_r", "slip_zone.x0",
+                                         "slip_zone.x1",         "slip_zone.y0",         "slip_zone.y1",
+                                         "slip_zone.s_l",        "slip_zone.s_r",        "time_offset.dt"};
   EXPECT_EQ(names, want);
   const std::vector<double> values = pack(set);
   EXPECT_EQ(values, (std::vector<double>{1.0, 1.01, 1, 2, -1, 1, 0.1, 0.0, 0.02}));
@@ -142,8 +140,7 @@ TEST(EffectModel, NoOpParametersReproduceNominalExactly) {
       if (s.on(static_cast<Effect>(e))) {
         all.enable(static_cast<Effect>(e));
         for (std::size_t i = 0; i < s.params(static_cast<Effect>(e)).size(); ++i)
-          all.set(static_cast<Effect>(e),
-                  sim::effect_table()[static_cast<std::size_t>(e)].params[i].name,
+          all.set(static_cast<Effect>(e), sim::effect_table()[static_cast<std::size_t>(e)].params[i].name,
                   s.params(static_cast<Effect>(e))[i]);
       }
   sets.push_back(all);
@@ -183,7 +180,7 @@ void check_derivatives(const DiagInput& in, const EffectSet& set, double window_
   std::vector<J> pj(N);
   for (int i = 0; i < N; ++i) pj[static_cast<std::size_t>(i)] = J(p0[static_cast<std::size_t>(i)], i);
   const Pose<double> a0 = in.has_ref_heading() ? reference_pose_at(in, w.t_begin_s)
-                                                : Pose<double>{1.0, 2.0, 0.5};
+                                               : Pose<double>{1.0, 2.0, 0.5};
   const Pose<J> aj{J(a0.x), J(a0.y), J(a0.th)};
   const std::size_t n = w.ref_end - w.ref_begin;
   std::vector<Pose<J>> out(n);
@@ -217,10 +214,9 @@ TEST(EffectModel, JetDerivativesMatchCentralDifferences) {
   const DiagInput in = sim_input({"radius_error:scale_l=0.99,scale_r=1.01"}, 40.0);
   const EffectSet set = EffectSet::parse(
       {"radius_error:scale_l=0.99,scale_r=1.02", "wheel_base_error:scale=1.05",
-       "radius_step:t=12.345,scale_l=0.98,scale_r=1.01", "speed_radius:c=0.04",
-       "lateral_skid:k=0.03", "longitudinal_slip:k=0.2",
-       "slip_zone:x0=1.8,x1=2.6,y0=-1,y1=1,s_l=0.1,s_r=0.05", "time_offset:dt=0.0234",
-       "odometry_bias:b_v=0.01,b_w=-0.02"});
+       "radius_step:t=12.345,scale_l=0.98,scale_r=1.01", "speed_radius:c=0.04", "lateral_skid:k=0.03",
+       "longitudinal_slip:k=0.2", "slip_zone:x0=1.8,x1=2.6,y0=-1,y1=1,s_l=0.1,s_r=0.05",
+       "time_offset:dt=0.0234", "odometry_bias:b_v=0.01,b_w=-0.02"});
   check_derivatives<18>(in, set, 30.0, 0);
 
   const DiagInput cmd = sim_input({"actuator_lag:tau=0.2"}, 40.0, /*encoders=*/false);
@@ -233,16 +229,15 @@ TEST(EffectModel, JetDerivativesMatchCentralDifferences) {
 // The model with the simulated effect's true values reproduces the ground truth
 // far better than the nominal model: the model mirrors the simulator.
 TEST(EffectModel, TrueParametersReproduceTheSimulation) {
-  const std::vector<std::string> effects = {
-      "radius_error:scale_l=0.985,scale_r=1.01",
-      "wheel_base_error:scale=1.06",
-      "radius_step:t=20,scale_l=0.97,scale_r=0.99",
-      "speed_radius:c=0.06",
-      "lateral_skid:k=0.04",
-      "longitudinal_slip:k=0.3",
-      "slip_zone:x0=1.8,x1=2.6,y0=-1,y1=1,s_l=0.12,s_r=0.04",
-      "time_offset:dt=0.08",
-      "odometry_bias:b_v=0.02,b_w=-0.03"};
+  const std::vector<std::string> effects = {"radius_error:scale_l=0.985,scale_r=1.01",
+                                            "wheel_base_error:scale=1.06",
+                                            "radius_step:t=20,scale_l=0.97,scale_r=0.99",
+                                            "speed_radius:c=0.06",
+                                            "lateral_skid:k=0.04",
+                                            "longitudinal_slip:k=0.3",
+                                            "slip_zone:x0=1.8,x1=2.6,y0=-1,y1=1,s_l=0.12,s_r=0.04",
+                                            "time_offset:dt=0.08",
+                                            "odometry_bias:b_v=0.02,b_w=-0.03"};
   for (const auto& e : effects) {
     const DiagInput in = sim_input({e}, 45.0);
     const ReplayResult nominal = replay(in, EffectSet(), 20.0);
@@ -252,8 +247,8 @@ TEST(EffectModel, TrueParametersReproduceTheSimulation) {
     // (lateral_skid and time_offset hardly turn the robot: heading stays at
     // the encoder-quantisation level of ~1e-4 rad either way.)
     EXPECT_LT(truth.heading_rmse_rad, std::max(0.1 * nominal.heading_rmse_rad, 1e-3)) << e;
-    std::cout << e << ": nominal " << nominal.pos_rmse_m << " m " << nominal.heading_rmse_rad
-              << " rad, truth " << truth.pos_rmse_m << " m " << truth.heading_rmse_rad << " rad\n";
+    std::cout << e << ": nominal " << nominal.pos_rmse_m << " m " << nominal.heading_rmse_rad << " rad, truth "
+              << truth.pos_rmse_m << " m " << truth.heading_rmse_rad << " rad\n";
   }
   // Actuator lag, on a track whose odometry is the commands.
   const DiagInput cmd = sim_input({"actuator_lag:tau=0.25"}, 45.0, /*encoders=*/false);

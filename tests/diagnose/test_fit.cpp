@@ -47,21 +47,32 @@ const char* kBox = "x0=1.8,x1=2.6,y0=-1,y1=1";
 
 std::vector<FitCase> cases() {
   return {
-      {"radius_error", "radius_error:scale_l=0.99,scale_r=1.012", "radius_error",
+      {"radius_error",
+       "radius_error:scale_l=0.99,scale_r=1.012",
+       "radius_error",
        {{"radius_error.scale_l", 0.99}, {"radius_error.scale_r", 1.012}}},
-      {"wheel_base_error", "wheel_base_error:scale=1.05", "wheel_base_error:scale=1",
+      {"wheel_base_error",
+       "wheel_base_error:scale=1.05",
+       "wheel_base_error:scale=1",
        {{"wheel_base_error.scale", 1.05}}},
       {"lateral_skid", "lateral_skid:k=0.03", "lateral_skid:k=0", {{"lateral_skid.k", 0.03}}},
       {"speed_radius", "speed_radius:c=0.05", "speed_radius:c=0", {{"speed_radius.c", 0.05}}},
-      {"longitudinal_slip", "longitudinal_slip:k=0.25", "longitudinal_slip:k=0",
+      {"longitudinal_slip",
+       "longitudinal_slip:k=0.25",
+       "longitudinal_slip:k=0",
        {{"longitudinal_slip.k", 0.25}}},
       {"time_offset", "time_offset:dt=0.05", "time_offset:dt=0", {{"time_offset.dt", 0.05}}},
-      {"radius_step", "radius_step:t=50,scale_l=0.97,scale_r=0.985", "radius_step:t=50",
+      {"radius_step",
+       "radius_step:t=50,scale_l=0.97,scale_r=0.985",
+       "radius_step:t=50",
        {{"radius_step.scale_l", 0.97}, {"radius_step.scale_r", 0.985}}},
-      {"slip_zone", std::string("slip_zone:") + kBox + ",s_l=0.12,s_r=0.05",
+      {"slip_zone",
+       std::string("slip_zone:") + kBox + ",s_l=0.12,s_r=0.05",
        std::string("slip_zone:") + kBox,
        {{"slip_zone.s_l", 0.12}, {"slip_zone.s_r", 0.05}}},
-      {"odometry_bias", "odometry_bias:b_v=0.01,b_w=-0.008", "odometry_bias",
+      {"odometry_bias",
+       "odometry_bias:b_v=0.01,b_w=-0.008",
+       "odometry_bias",
        {{"odometry_bias.b_v", 0.01}, {"odometry_bias.b_w", -0.008}}},
   };
 }
@@ -128,8 +139,8 @@ TEST_P(FitRecovers, SimulatedEffectWithin10Percent) {
   EXPECT_EQ(s.fitted_windows, train);
   EXPECT_LT(s.final_cost, s.initial_cost);
   std::cout << "[ " << c.name << " ] " << s.effects.to_string() << "  held-out pos rmse "
-            << s.heldout.before_pos_rmse_m << " -> " << s.heldout.after_pos_rmse_m << " m, "
-            << s.iterations << " iterations, " << s.solve_time_s << " s\n";
+            << s.heldout.before_pos_rmse_m << " -> " << s.heldout.after_pos_rmse_m << " m, " << s.iterations
+            << " iterations, " << s.solve_time_s << " s\n";
 }
 
 INSTANTIATE_TEST_SUITE_P(Effects, FitRecovers, ::testing::ValuesIn(cases()),
@@ -160,8 +171,8 @@ TEST(Fit, FixesOnlyRecoverRadiusErrorWithin25Percent) {
   // After the fit only the fix noise (5 cm) is left.
   EXPECT_LT(s.heldout.after_pos_rmse_m, 0.08);
   EXPECT_TRUE(std::isnan(s.heldout.after_heading_rmse_rad));
-  std::cout << "[ aps ] " << s.effects.to_string() << "  held-out " << s.heldout.before_pos_rmse_m
-            << " -> " << s.heldout.after_pos_rmse_m << " m, " << s.solve_time_s << " s\n";
+  std::cout << "[ aps ] " << s.effects.to_string() << "  held-out " << s.heldout.before_pos_rmse_m << " -> "
+            << s.heldout.after_pos_rmse_m << " m, " << s.solve_time_s << " s\n";
 }
 
 // odometry_bias with 1 Hz fixes only: the model fits it there too (the
@@ -187,8 +198,8 @@ TEST(Fit, FixesOnlyRecoverOdometryBiasWithin25Percent) {
   EXPECT_NEAR(param(s, "odometry_bias.b_w").value, 0.01, 0.25 * 0.01);
   EXPECT_LT(s.heldout.after_pos_rmse_m, s.heldout.before_pos_rmse_m);
   EXPECT_LT(s.heldout.after_pos_rmse_m, 0.08);
-  std::cout << "[ aps ] " << s.effects.to_string() << "  held-out " << s.heldout.before_pos_rmse_m
-            << " -> " << s.heldout.after_pos_rmse_m << " m, " << s.solve_time_s << " s\n";
+  std::cout << "[ aps ] " << s.effects.to_string() << "  held-out " << s.heldout.before_pos_rmse_m << " -> "
+            << s.heldout.after_pos_rmse_m << " m, " << s.solve_time_s << " s\n";
 }
 
 // Gross outliers in the ground truth (a burst of 1 s per 20 s window, 0.3 m to
@@ -223,8 +234,8 @@ TEST(Fit, RobustLossResistsReferenceOutliers) {
   EXPECT_LT(huber, 0.1);
   EXPECT_LT(cauchy, 0.1);
   EXPECT_GT(plain, 2.0 * std::max(huber, cauchy));
-  std::cout << "[ outliers ] relative error huber " << huber << ", cauchy " << cauchy << ", none "
-            << plain << "\n";
+  std::cout << "[ outliers ] relative error huber " << huber << ", cauchy " << cauchy << ", none " << plain
+            << "\n";
 }
 
 // Ground truth whose sample at every window start is off by 20 mm to the
@@ -261,9 +272,9 @@ TEST(Fit, FreeAnchorsWithHeadingIgnoreABadAnchorSample) {
                     std::abs(param(s, "radius_error.scale_r").value - 1.002));
   };
   const double fixed = error(false), free = error(true);
-  std::cout << "[ anchors ] largest scale error: on the reference sample " << fixed
-            << ", free " << free << "\n";
-  EXPECT_LT(free, 0.1 * 0.003);    // a tenth of the smaller departure
+  std::cout << "[ anchors ] largest scale error: on the reference sample " << fixed << ", free " << free
+            << "\n";
+  EXPECT_LT(free, 0.1 * 0.003);  // a tenth of the smaller departure
   EXPECT_GT(fixed, 5.0 * free);
   // With the simulated parameters, the closed-form alignment with heading
   // puts the free anchor back on the true pose (noise-free ground truth
@@ -271,8 +282,7 @@ TEST(Fit, FreeAnchorsWithHeadingIgnoreABadAnchorSample) {
   const EffectSet truth = EffectSet::parse({"radius_error:scale_l=0.997,scale_r=1.002"});
   const EffectModel model(in, truth);
   const ReplayResult r = replay(model, pack(truth), in, windows, {}, nullptr, Anchoring::free);
-  const ReplayResult on_sample =
-      replay(model, pack(truth), in, windows, {}, nullptr, Anchoring::reference);
+  const ReplayResult on_sample = replay(model, pack(truth), in, windows, {}, nullptr, Anchoring::reference);
   ASSERT_EQ(r.anchors.size(), windows.size());
   for (std::size_t i = 0; i < windows.size(); ++i) {
     const Pose<double> ideal = reference_pose_at(good, windows[i].t_begin_s);
@@ -284,8 +294,8 @@ TEST(Fit, FreeAnchorsWithHeadingIgnoreABadAnchorSample) {
   SimTrackOptions f;
   f.duration_s = 45.0, f.gt_rate_hz = 0.0, f.aps_rate_hz = 1.0;
   const DiagInput fixes = build_diag_input(simulate_track(f));
-  EXPECT_THROW(replay(EffectModel(fixes, EffectSet()), {}, fixes, make_windows(fixes, 20.0), {},
-                      nullptr, Anchoring::reference),
+  EXPECT_THROW(replay(EffectModel(fixes, EffectSet()), {}, fixes, make_windows(fixes, 20.0), {}, nullptr,
+                      Anchoring::reference),
                std::invalid_argument);
 }
 
@@ -317,8 +327,8 @@ TEST(Fit, ZoneNeverEnteredIsRankDeficientNotACrash) {
   o.duration_s = 50.0;
   o.effects = {"lateral_skid:k=0.02"};
   const DiagInput in = build_diag_input(simulate_track(o));
-  const FitSummary s = fit_effects(
-      in, EffectSet::parse({"lateral_skid", "slip_zone:x0=50,x1=60,y0=50,y1=60"}), {}, {});
+  const FitSummary s = fit_effects(in, EffectSet::parse({"lateral_skid", "slip_zone:x0=50,x1=60,y0=50,y1=60"}),
+                                   {}, {});
   EXPECT_TRUE(s.rank_deficient);
   EXPECT_TRUE(std::isnan(param(s, "slip_zone.s_l").std_error));
   EXPECT_FALSE(param(s, "slip_zone.x0").fitted);
@@ -342,8 +352,7 @@ TEST(Fit, BadRequestsAreOneLineErrors) {
   EXPECT_THROW(fit_effects(in, skid, {}, {}, bad), std::invalid_argument);
   EXPECT_THROW(fit_effects(in, skid, {0, 99}, {}), std::invalid_argument);
   EXPECT_THROW(fit_effects(in, skid, {0, 1}, {1}), std::invalid_argument);
-  EXPECT_THROW(fit_effects(in, EffectSet::parse({"gyro_bias:b=0.01"}), {}, {}),
-               std::invalid_argument);
+  EXPECT_THROW(fit_effects(in, EffectSet::parse({"gyro_bias:b=0.01"}), {}, {}), std::invalid_argument);
   EXPECT_THROW(fit_effects(in, EffectSet(), {}, {}), std::invalid_argument);
 }
 
@@ -354,8 +363,7 @@ TEST(Fit, FiveMinutesAt100HzFitsTwoEffectsInSeconds) {
   o.effects = {"radius_error:scale_l=0.992,scale_r=1.006", "lateral_skid:k=0.025"};
   const DiagInput in = build_diag_input(simulate_track(o));
   ASSERT_GE(in.ref_t_s.size(), 30000u);
-  const FitSummary s =
-      fit_effects(in, EffectSet::parse({"radius_error", "lateral_skid"}), {}, {});
+  const FitSummary s = fit_effects(in, EffectSet::parse({"radius_error", "lateral_skid"}), {}, {});
   std::cout << "[ 300 s ] " << s.effects.to_string() << "  " << s.iterations << " iterations, "
             << s.solve_time_s << " s\n";
   EXPECT_NEAR(param(s, "lateral_skid.k").value, 0.025, 0.0025);

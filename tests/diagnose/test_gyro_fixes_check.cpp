@@ -60,14 +60,13 @@ GyroFixesCheck run(const DiagInput& in, std::string_view label, const GyroFixesO
   const GyroFixesCheck r = check_gyro_with_fixes(in, o);
   const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const GyroCheck& g = r.gyro;
-  std::cout << "[gyro-fixes] " << label << ": s = " << g.scale.value << " +- " << g.scale.std_error
-            << " (z " << g.scale.z << ", departs " << g.scale.departs() << "), b = " << g.bias.value
-            << " +- " << g.bias.std_error << " (z " << g.bias.z << ", departs " << g.bias.departs()
-            << "); held-out p joint " << r.joint.p << " scale " << r.scale_own.p << " bias "
-            << r.bias_own.p << "; train s " << r.train_scale << " b " << r.train_bias_radps
-            << "; rmse " << r.nominal_pos_rmse_m << " -> " << r.fitted_pos_rmse_m << " m; windows "
-            << r.used_windows.size() << "/" << r.num_windows << ", fits " << r.fits << ", "
-            << dt << " s\n";
+  std::cout << "[gyro-fixes] " << label << ": s = " << g.scale.value << " +- " << g.scale.std_error << " (z "
+            << g.scale.z << ", departs " << g.scale.departs() << "), b = " << g.bias.value << " +- "
+            << g.bias.std_error << " (z " << g.bias.z << ", departs " << g.bias.departs()
+            << "); held-out p joint " << r.joint.p << " scale " << r.scale_own.p << " bias " << r.bias_own.p
+            << "; train s " << r.train_scale << " b " << r.train_bias_radps << "; rmse " << r.nominal_pos_rmse_m
+            << " -> " << r.fitted_pos_rmse_m << " m; windows " << r.used_windows.size() << "/" << r.num_windows
+            << ", fits " << r.fits << ", " << dt << " s\n";
   return r;
 }
 
@@ -146,8 +145,8 @@ TEST(GyroFixesCheck, OutlierFixesMakeNoVerdict) {
 
 TEST(GyroFixesCheck, NoEffectSeedsNoVerdict) {
   for (std::uint64_t seed : {931u, 932u, 933u}) {
-    const GyroFixesCheck r =
-        run(build_diag_input(simulate_track(fixes_track(seed, 120.0))), "none seed " + std::to_string(seed));
+    const GyroFixesCheck r = run(build_diag_input(simulate_track(fixes_track(seed, 120.0))),
+                                 "none seed " + std::to_string(seed));
     ASSERT_TRUE(r.gyro.available) << r.gyro.unavailable_reason;
     EXPECT_FALSE(r.gyro.scale.departs()) << seed;
     EXPECT_FALSE(r.gyro.bias.departs()) << seed;

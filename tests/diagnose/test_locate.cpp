@@ -27,7 +27,8 @@ struct State {
 // pace modulated so that speed and turn rate are not functions of place.
 void pose_at(double t, double* x, double* y) {
   const double om = 2 * std::numbers::pi / 40.0;
-  const double phi = om * (t + 0.4 * 23.0 / (2 * std::numbers::pi) * (1 - std::cos(2 * std::numbers::pi * t / 23.0)));
+  const double phi = om * (t + 0.4 * 23.0 / (2 * std::numbers::pi) *
+                                   (1 - std::cos(2 * std::numbers::pi * t / 23.0)));
   *x = 3.0 * std::sin(phi);
   *y = 1.5 * std::sin(2 * phi);
 }
@@ -41,7 +42,12 @@ State state_at(double t) {
   const double th0 = std::atan2(yb - ya, xb - xa), th1 = std::atan2(yc - yb, xc - xb);
   const double v = std::hypot(xc - xa, yc - ya) / (2 * h);
   const double v0 = std::hypot(xb - xa, yb - ya) / h, v1 = std::hypot(xc - xb, yc - yb) / h;
-  return {t, xb, yb, std::atan2(yc - ya, xc - xa), v, std::remainder(th1 - th0, 2 * std::numbers::pi) / h,
+  return {t,
+          xb,
+          yb,
+          std::atan2(yc - ya, xc - xa),
+          v,
+          std::remainder(th1 - th0, 2 * std::numbers::pi) / h,
           (v1 - v0) / h};
 }
 
@@ -50,8 +56,8 @@ using Injection = std::function<void(const State&, double* gx, double* gy)>;
 
 struct SeriesSpec {
   double duration_s = 200.0, rate_hz = 50.0, window_s = 20.0;
-  double ref_sigma_m = 0.005;   // white noise of the reference, per axis
-  double walk_sigma_m = 2e-4;   // odometry random walk per row, per axis
+  double ref_sigma_m = 0.005;  // white noise of the reference, per axis
+  double walk_sigma_m = 2e-4;  // odometry random walk per row, per axis
   bool heading = false;
   std::uint64_t seed = 1;
 };
@@ -118,8 +124,8 @@ TEST(Locate, PureNoiseFindsNothing) {
       SeriesSpec sp{.seed = seed};
       if (fixes) sp.rate_hz = 1.0, sp.ref_sigma_m = 0.06, sp.walk_sigma_m = 0.002;
       const Location loc = locate(make_series(sp, kNothing), sp.ref_sigma_m);
-      EXPECT_TRUE(loc.segments.empty()) << "seed " << seed << " fixes " << fixes << " t0 "
-                                        << loc.segments.front().t0_s;
+      EXPECT_TRUE(loc.segments.empty())
+          << "seed " << seed << " fixes " << fixes << " t0 " << loc.segments.front().t0_s;
       EXPECT_TRUE(loc.regions.empty()) << "seed " << seed << " fixes " << fixes;
       EXPECT_EQ(loc.phrase, "") << "seed " << seed << " fixes " << fixes;
       EXPECT_EQ(loc.flagged_count, 0) << "seed " << seed;

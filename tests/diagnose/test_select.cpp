@@ -34,8 +34,7 @@ namespace {
 using testing_support::SimTrackOptions;
 using testing_support::simulate_track;
 
-SimTrackOptions sim_options(std::uint64_t seed, double duration_s,
-                            std::vector<std::string> effects) {
+SimTrackOptions sim_options(std::uint64_t seed, double duration_s, std::vector<std::string> effects) {
   SimTrackOptions o;
   o.duration_s = duration_s;
   o.seed = seed;
@@ -58,8 +57,8 @@ std::vector<Effect> found(const Selection& s) {
 std::string describe(const Selection& s) {
   std::string out = "selected: " + s.structure.to_string() + "\n";
   for (const SearchRecord& r : s.records)
-    out += r.phase + " " + std::to_string(r.step) + " " + r.candidate + ": cv " +
-           std::to_string(r.cv_score) + ", " + r.reason + "\n";
+    out += r.phase + " " + std::to_string(r.step) + " " + r.candidate + ": cv " + std::to_string(r.cv_score) +
+           ", " + r.reason + "\n";
   return out;
 }
 
@@ -92,9 +91,8 @@ void expect_proof(const Selection& s) {
     }
   EXPECT_GE(accepted, static_cast<int>(s.effects.size()));
   std::cout << "[ select ] " << s.final_fit.effects.to_string() << " (" << s.split << ")  held-out "
-            << s.final_fit.heldout.before_pos_rmse_m << " -> "
-            << s.final_fit.heldout.after_pos_rmse_m << " m; " << s.timing.fits << " fits, "
-            << s.timing.total_s << " s\n";
+            << s.final_fit.heldout.before_pos_rmse_m << " -> " << s.final_fit.heldout.after_pos_rmse_m << " m; "
+            << s.timing.fits << " fits, " << s.timing.total_s << " s\n";
 }
 
 // ---- paired tests ---------------------------------------------------------
@@ -141,8 +139,7 @@ const char* kZone = "slip_zone:x0=1.8,x1=2.6,y0=-1,y1=1,s_l=0.08,s_r=0.04";
 
 std::vector<ZoneBox> boxes_of_nominal(const DiagInput& in) {
   const ReplayResult r = replay(in, EffectSet(), 20.0);
-  return zone_candidates(in, make_windows(in, 20.0), r.pred_x_m, r.pred_y_m, r.pred_theta_rad, 0.25,
-                         3, 16.0);
+  return zone_candidates(in, make_windows(in, 20.0), r.pred_x_m, r.pred_y_m, r.pred_theta_rad, 0.25, 3, 16.0);
 }
 
 TEST(ZoneBoxes, FindThePatchWhereTheResidualGrows) {
@@ -179,11 +176,7 @@ TEST(SelectOptions, DefaultsAreValidAndBadValuesAreNamed) {
   bad([](SelectOptions& o) { o.min_rel_improvement = 1.0; }, "min_rel_improvement");
   bad([](SelectOptions& o) { o.fit.window_s = 0.0; }, "window_s");
   bad([](SelectOptions& o) { o.candidates = {Effect::gyro_bias}; }, "gyro_bias");
-  bad(
-      [](SelectOptions& o) {
-        o.candidates = {Effect::lateral_skid, Effect::lateral_skid};
-      },
-      "twice");
+  bad([](SelectOptions& o) { o.candidates = {Effect::lateral_skid, Effect::lateral_skid}; }, "twice");
   bad([](SelectOptions& o) { o.step_fine_s = 5.0; }, "step_fine_s");
   bad([](SelectOptions& o) { o.zone_boxes = {{1.0, 0.5, 0.0, 1.0}}; }, "zone_boxes[0]");
   bad([](SelectOptions& o) { o.heldout_fraction = 0.0; }, "heldout_fraction");
@@ -253,8 +246,7 @@ TEST_P(SelectSingle, NamesExactlyTheSimulatedEffect) {
   SCOPED_TRACE(describe(s));
   EXPECT_THAT(found(s), ::testing::ElementsAre(c.effect));
   expect_proof(s);
-  for (const auto& [name, value] : c.truth)
-    EXPECT_NEAR(fitted(s, name), value, c.tolerance) << name;
+  for (const auto& [name, value] : c.truth) EXPECT_NEAR(fitted(s, name), value, c.tolerance) << name;
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -270,11 +262,8 @@ INSTANTIATE_TEST_SUITE_P(
                    Effect::radius_error,
                    {{"radius_error.scale_l", 0.996}, {"radius_error.scale_r", 1.003}},
                    0.25 * 0.004},
-        SingleCase{"time_offset",
-                   "time_offset:dt=0.04",
-                   Effect::time_offset,
-                   {{"time_offset.dt", 0.04}},
-                   0.25 * 0.04},
+        SingleCase{
+            "time_offset", "time_offset:dt=0.04", Effect::time_offset, {{"time_offset.dt", 0.04}}, 0.25 * 0.04},
         // Confounded with radius_error (at one speed it is one): must name speed_radius.
         SingleCase{"speed_radius",
                    "speed_radius:c=0.04",
@@ -284,8 +273,7 @@ INSTANTIATE_TEST_SUITE_P(
     [](const auto& p) { return p.param.name; });
 
 TEST(Select, LateRadiusStepIsFoundWithItsTime) {
-  const DiagInput in =
-      simulated(sim_options(62, 200.0, {"radius_step:t=150,scale_l=0.992,scale_r=0.995"}));
+  const DiagInput in = simulated(sim_options(62, 200.0, {"radius_step:t=150,scale_l=0.992,scale_r=0.995"}));
   const Selection s = select_effects(in);
   SCOPED_TRACE(describe(s));
   EXPECT_THAT(found(s), ::testing::ElementsAre(Effect::radius_step));

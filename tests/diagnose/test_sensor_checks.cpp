@@ -9,8 +9,8 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
-#include <string_view>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "concealed_cases.h"
@@ -24,9 +24,9 @@ namespace {
 struct Truth {
   double gyro_s = 1.0, gyro_b = 0.0, gyro_sigma = 0.002;
   double scale_l = 1.0, scale_r = 1.0, base_scale = 1.0;  // true / nominal
-  double time_offset_s = 0.0;  // odometry stamped t measured at t − dt
-  double act_tau_s = 0.0;      // body follows the commands through a 1st-order lag
-  bool aps = false;            // fixes only (1 Hz) instead of ground truth (100 Hz)
+  double time_offset_s = 0.0;                             // odometry stamped t measured at t − dt
+  double act_tau_s = 0.0;                                 // body follows the commands through a 1st-order lag
+  bool aps = false;                                       // fixes only (1 Hz) instead of ground truth (100 Hz)
   double aps_sigma_m = 0.03;
   double gt_sigma_m = 0.0, gt_sigma_rad = 0.0;
   double ticks_per_rev = 4000;  // encoder quantisation (0 = none)
@@ -42,7 +42,8 @@ double cmd_v(double t) {
 }
 double cmd_w(double t) {
   return (0.9 * std::sin(2 * std::numbers::pi * t / 11.0 + 0.3) +
-          0.35 * std::sin(2 * std::numbers::pi * t / 4.3)) * std::min(1.0, t / 3.0);
+          0.35 * std::sin(2 * std::numbers::pi * t / 4.3)) *
+         std::min(1.0, t / 3.0);
 }
 
 double interp(const std::vector<double>& y, double h, double t) {
@@ -305,8 +306,13 @@ TEST(SensorChecks, ActuatorLagShowsAsCommandDelayNotLateOdometry) {
 }
 
 TEST(SensorChecks, FixesOnlyReference) {
-  const Truth tr{.gyro_b = 0.01, .scale_l = 1.03, .scale_r = 1.03, .aps = true, .aps_sigma_m = 0.03,
-                 .duration_s = 240, .seed = 21};
+  const Truth tr{.gyro_b = 0.01,
+                 .scale_l = 1.03,
+                 .scale_r = 1.03,
+                 .aps = true,
+                 .aps_sigma_m = 0.03,
+                 .duration_s = 240,
+                 .seed = 21};
   const SensorCheck sc = check_sensors(make_input(tr));
   EXPECT_FALSE(sc.gyro.available);
   EXPECT_NE(sc.gyro.unavailable_reason.find("heading"), std::string::npos);
@@ -350,7 +356,6 @@ TEST(SensorChecks, MissingGyroAndRadiiAreReportedNotThrown) {
   EXPECT_FALSE(sc.odometry.available);
   EXPECT_NE(sc.odometry.unavailable_reason.find("radii"), std::string::npos);
 }
-
 
 // ---- on the project's simulator (the concealed suite's robots) -----------
 

@@ -66,8 +66,7 @@ TEST(DualKf, ConvergesToTheTrueRadii) {
   for (std::size_t k = 0; k < s.samples.size(); ++k) {
     const CalibEstimate& e = dkf.step(s.samples[k]);
     ASSERT_TRUE(symmetric_positive_definite(dkf.param_covariance())) << k;
-    EXPECT_EQ(e.sd_radius_right_m,
-              std::sqrt(dkf.param_covariance()(kDkfRadiusRight, kDkfRadiusRight)));
+    EXPECT_EQ(e.sd_radius_right_m, std::sqrt(dkf.param_covariance()(kDkfRadiusRight, kDkfRadiusRight)));
     EXPECT_EQ(e.particles, 0);
     if (s.t[k] < 30.0) continue;
     EXPECT_LT(radius_error(e.params, spec.truth), 0.01) << s.t[k];
@@ -86,8 +85,7 @@ TEST(DualKf, ConvergesToTheTrueRadii) {
   EXPECT_LT(dkf.estimate().sd_radius_right_m, 0.2 * DualKfParams{}.initial_sd_radius_m);
   // The reported velocity is the calibrated odometry h(θ̂, ω).
   const CalibSample& last = s.samples.back();
-  const BodyVelocity v =
-      body_velocity(dkf.estimate().params, last.omega_l_rad_s, last.omega_r_rad_s);
+  const BodyVelocity v = body_velocity(dkf.estimate().params, last.omega_l_rad_s, last.omega_r_rad_s);
   EXPECT_DOUBLE_EQ(dkf.estimate().velocity.v_m_s, v.v_m_s);
   EXPECT_DOUBLE_EQ(dkf.estimate().velocity.w_rad_s, v.w_rad_s);
 }

@@ -23,7 +23,8 @@ double draw(std::uint64_t seed, std::uint64_t n, double lo, double hi) {
 template <int I, int H>
 LstmNet<I, H> random_net(std::uint64_t seed, double scale) {
   LstmNet<I, H> net;
-  for (int n = 0; n < net.kWeights; ++n) net.weights[n] = draw(seed, static_cast<std::uint64_t>(n), -scale, scale);
+  for (int n = 0; n < net.kWeights; ++n)
+    net.weights[n] = draw(seed, static_cast<std::uint64_t>(n), -scale, scale);
   return net;
 }
 
@@ -77,7 +78,8 @@ void check_against_reference(std::uint64_t seed) {
   const auto net = random_net<I, H>(seed, 0.8);
   for (int window : {1, 2, 20}) {
     const auto x = random_window(seed, window, I, 2.0);
-    const double ours = lstm_forward<I, H, double>(net.weights.data(), x.data(), window, OutputActivation::linear);
+    const double ours = lstm_forward<I, H, double>(net.weights.data(), x.data(), window,
+                                                   OutputActivation::linear);
     const double ref = reference_lstm<I, H>(net.weights, x, window, false);
     EXPECT_NEAR(ours, ref, 1e-12 * (1.0 + std::abs(ref))) << "window " << window << " seed " << seed;
   }
@@ -108,7 +110,8 @@ TEST(LstmForward, ReluFloorsAtZeroAndPassesPositive) {
   // Shift the dense bias so that the linear output is −0.7, then +0.7.
   const int bias = LstmLayout<5, 10>::kDenseBias;
   net.weights[bias] += -0.7 - base;
-  const double neg_lin = lstm_forward<5, 10, double>(net.weights.data(), x.data(), 20, OutputActivation::linear);
+  const double neg_lin = lstm_forward<5, 10, double>(net.weights.data(), x.data(), 20,
+                                                     OutputActivation::linear);
   EXPECT_NEAR(neg_lin, -0.7, 1e-12);
   EXPECT_EQ((lstm_forward<5, 10, double>(net.weights.data(), x.data(), 20, OutputActivation::relu)), 0.0);
   net.weights[bias] += 1.4;

@@ -183,8 +183,7 @@ TEST(PfCalibratorParams, IsValidNamesTheBadField) {
 // Filter behaviour
 
 // Mean of the estimates with t in [t0, t1).
-OdometryParams window_mean(const Stream& s, const std::vector<CalibEstimate>& est, double t0,
-                           double t1) {
+OdometryParams window_mean(const Stream& s, const std::vector<CalibEstimate>& est, double t0, double t1) {
   OdometryParams m{0.0, 0.0, 0.0};
   int n = 0;
   for (std::size_t k = 0; k < est.size(); ++k) {
@@ -312,8 +311,7 @@ TEST(PfCalibrator, BitIdenticalForAnyThreadCountAndSeedSensitive) {
   spec.duration_s = 8.0;
   const Stream s = make_stream(spec);
   for (const bool adaptive : {false, true}) {
-    PfCalibratorParams p =
-        adaptive ? PfCalibratorParams::adaptive_defaults() : PfCalibratorParams{};
+    PfCalibratorParams p = adaptive ? PfCalibratorParams::adaptive_defaults() : PfCalibratorParams{};
     p.particles = 3500;  // four reduction blocks, so both threads work
     p.min_particles = 2100;
     p.seed = 99;

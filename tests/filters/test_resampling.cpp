@@ -15,8 +15,8 @@
 namespace odotune::filters {
 namespace {
 
-constexpr Resampler kAllSchemes[] = {Resampler::multinomial, Resampler::stratified,
-                                     Resampler::systematic, Resampler::residual};
+constexpr Resampler kAllSchemes[] = {Resampler::multinomial, Resampler::stratified, Resampler::systematic,
+                                     Resampler::residual};
 
 // A lopsided weight vector with zeros, weights above and below 1/N, and one
 // particle holding several expected copies.
@@ -125,8 +125,7 @@ TEST(Resampling, LowVarianceSchemesBeatMultinomial) {
     return sum / static_cast<double>(w.size());
   };
   const double multinomial = mean_var(Resampler::multinomial);
-  for (const Resampler scheme :
-       {Resampler::stratified, Resampler::systematic, Resampler::residual}) {
+  for (const Resampler scheme : {Resampler::stratified, Resampler::systematic, Resampler::residual}) {
     const double v = mean_var(scheme);
     EXPECT_LT(v, multinomial) << to_string(scheme) << ": " << v << " vs " << multinomial;
   }
@@ -183,8 +182,7 @@ TEST(Resampling, OneHotAndUnnormalisedWeights) {
 
 TEST(Resampling, RejectsUnusableWeights) {
   std::vector<int> out(5);
-  EXPECT_THROW(resample(Resampler::systematic, std::vector<double>{}, 1, 1, out),
-               std::invalid_argument);
+  EXPECT_THROW(resample(Resampler::systematic, std::vector<double>{}, 1, 1, out), std::invalid_argument);
   EXPECT_THROW(resample(Resampler::systematic, std::vector<double>{0.0, 0.0}, 1, 1, out),
                std::invalid_argument);
   EXPECT_THROW(resample(Resampler::multinomial, std::vector<double>{1.0, NAN}, 1, 1, out),
@@ -213,8 +211,7 @@ TEST(Resampling, ParseAndToStringRoundTrip) {
   }
   for (const ResamplePolicy p :
        {ResamplePolicy::every_step, ResamplePolicy::neff, ResamplePolicy::max_weight}) {
-    ResamplePolicy parsed =
-        p == ResamplePolicy::neff ? ResamplePolicy::every_step : ResamplePolicy::neff;
+    ResamplePolicy parsed = p == ResamplePolicy::neff ? ResamplePolicy::every_step : ResamplePolicy::neff;
     ASSERT_TRUE(parse_resample_policy(to_string(p), &parsed)) << to_string(p);
     EXPECT_EQ(parsed, p);
   }

@@ -39,8 +39,7 @@ struct LinearKf {
   }
 };
 
-void expect_close(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double rel, const char* what,
-                  int step) {
+void expect_close(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double rel, const char* what, int step) {
   for (Eigen::Index i = 0; i < a.size(); ++i) {
     const double tol = rel * std::max(1.0, std::abs(b(i)));
     ASSERT_NEAR(a(i), b(i), tol) << what << " element " << i << " at step " << step;

@@ -15,8 +15,8 @@
 
 #include "formats/scenario_yaml.h"
 #include "support/cli_runner.h"
-#include "tracks/random_slip.h"
 #include "tracks/motion_profile.h"
+#include "tracks/random_slip.h"
 #include "tracks/simulator.h"
 #include "tracks/slip_episodes.h"
 #include "tracks/track_io.h"
@@ -33,10 +33,9 @@ using Kind = sim::SlipEpisode::Kind;
 using Wheel = sim::SlipEpisode::Wheel;
 
 // Lines 1-3; the motion lasts about 14 s.
-const std::string kMotion =
-    "motion:\n"
-    "  segments:\n"
-    "    - straight: {distance_m: 10, speed_m_s: 0.8}\n";
+const std::string kMotion = "motion:\n"
+                            "  segments:\n"
+                            "    - straight: {distance_m: 10, speed_m_s: 0.8}\n";
 
 std::string error_of(const std::string& yaml) {
   try {
@@ -66,8 +65,8 @@ TEST(ScenarioSlipYaml, ParsesAListOfEpisodes) {
   EXPECT_EQ(a.t0_s, 2.0);
   EXPECT_EQ(a.t1_s, 4.0);
   EXPECT_EQ(a.s, 0.6);
-  EXPECT_EQ(a.ramp_s, 0.2);   // default
-  EXPECT_EQ(a.brake_nm, 0.0); // default
+  EXPECT_EQ(a.ramp_s, 0.2);    // default
+  EXPECT_EQ(a.brake_nm, 0.0);  // default
   EXPECT_EQ(a.line, 5);
   const sim::SlipEpisode& b = sc.slip_episodes[1];
   EXPECT_EQ(b.kind, Kind::hold);
@@ -87,7 +86,8 @@ TEST(ScenarioSlipYaml, ParsesAListOfEpisodes) {
 TEST(ScenarioSlipYaml, ErrorsNameFileLineAndField) {
   const std::string list = kMotion + "slip_episodes:\n";  // items from line 5
   EXPECT_THAT(error_of(list + "  - {kind: spin, whel: left, t0_s: 2, t1_s: 4, s: 0.6}\n"),
-              AllOf(StartsWith("s.yaml:5: unknown key 'whel' in slip_episodes[1]"), HasSubstr("did you mean 'wheel'"),
+              AllOf(StartsWith("s.yaml:5: unknown key 'whel' in slip_episodes[1]"),
+                    HasSubstr("did you mean 'wheel'"),
                     HasSubstr("kind, wheel, t0_s, t1_s, s, ramp_s, brake_nm")));
   EXPECT_THAT(error_of(list + "  - {kind: spn, wheel: left, t0_s: 2, t1_s: 4, s: 0.6}\n"),
               AllOf(StartsWith("s.yaml:5: slip_episodes[1].kind = 'spn'"), HasSubstr("did you mean 'spin'"),
@@ -107,7 +107,8 @@ TEST(ScenarioSlipYaml, ErrorsNameFileLineAndField) {
                               "    t1_s: 2.3\n"
                               "    s: 0.5\n"
                               "    ramp_s: 0.2\n"),  // line 10
-              AllOf(StartsWith("s.yaml:10: slip_episodes[1].ramp_s = 0.2"), HasSubstr("2*ramp_s <= t1_s - t0_s")));
+              AllOf(StartsWith("s.yaml:10: slip_episodes[1].ramp_s = 0.2"),
+                    HasSubstr("2*ramp_s <= t1_s - t0_s")));
   EXPECT_THAT(error_of(list + "  - kind: spin\n"
                               "    wheel: right\n"
                               "    t0_s: 2\n"
@@ -116,9 +117,11 @@ TEST(ScenarioSlipYaml, ErrorsNameFileLineAndField) {
                               "    brake_nm: 5\n"),  // line 10
               AllOf(StartsWith("s.yaml:10: slip_episodes[1].brake_nm = 5"), HasSubstr("hold episodes only")));
   EXPECT_THAT(error_of(list + "  - {kind: spin, wheel: left, t0_s: 2, s: 0.6}\n"),
-              AllOf(StartsWith("s.yaml:5: slip_episodes[1]: missing 't1_s'"), HasSubstr("kind, wheel, t0_s, t1_s and s")));
+              AllOf(StartsWith("s.yaml:5: slip_episodes[1]: missing 't1_s'"),
+                    HasSubstr("kind, wheel, t0_s, t1_s and s")));
   EXPECT_THAT(error_of(list + "  - {kind: spin, wheel: left, t0_s: soon, t1_s: 4, s: 0.6}\n"),
-              AllOf(StartsWith("s.yaml:5: slip_episodes[1].t0_s"), HasSubstr("finite number"), HasSubstr("'soon'")));
+              AllOf(StartsWith("s.yaml:5: slip_episodes[1].t0_s"), HasSubstr("finite number"),
+                    HasSubstr("'soon'")));
   EXPECT_THAT(error_of(list + "  - {kind: spin, wheel: left, t0_s: 20, t1_s: 24, s: 0.6}\n"),
               AllOf(StartsWith("s.yaml:5: slip_episodes[1]: t0_s = 20"), HasSubstr("end of the motion")));
   EXPECT_THAT(error_of(list + "  - spin\n"),
@@ -126,7 +129,8 @@ TEST(ScenarioSlipYaml, ErrorsNameFileLineAndField) {
   EXPECT_THAT(error_of(kMotion + "slip_episodes: {kind: spin}\n"),
               AllOf(StartsWith("s.yaml:4: slip_episodes: expected a list"), HasSubstr("got a map")));
   EXPECT_THAT(error_of(kMotion + "slip_episode: []\n"),
-              AllOf(StartsWith("s.yaml:4: unknown key 'slip_episode'"), HasSubstr("did you mean 'slip_episodes'")));
+              AllOf(StartsWith("s.yaml:4: unknown key 'slip_episode'"),
+                    HasSubstr("did you mean 'slip_episodes'")));
   // Overlap on one wheel: at the later episode's line, naming both.
   EXPECT_THAT(error_of(list + "  - {kind: hold, wheel: left, t0_s: 2, t1_s: 6, s: 0.5, brake_nm: 9}\n"
                               "  - {kind: spin, wheel: right, t0_s: 3, t1_s: 5, s: 0.5}\n"
@@ -227,8 +231,8 @@ TEST(ScenarioSlipYaml, WheelchairLearningScenariosParseAndValidate) {
     const auto& fx = sc->effects;
     EXPECT_TRUE(fx.radius_error && fx.wheel_base_error && fx.speed_radius && fx.longitudinal_slip) << sc->name;
   }
-  EXPECT_NE(route_of(learn), route_of(eval));   // held out: a different drive
-  EXPECT_EQ(route_of(step), route_of(eval));    // the eval drive with a radius step
+  EXPECT_NE(route_of(learn), route_of(eval));  // held out: a different drive
+  EXPECT_EQ(route_of(step), route_of(eval));   // the eval drive with a radius step
   EXPECT_FALSE(learn.effects.radius_step || eval.effects.radius_step);
   ASSERT_TRUE(step.effects.radius_step);
   // Everything else as in the eval scenario.
@@ -262,7 +266,8 @@ TEST(ScenarioSlipYaml, WheelchairSlipScenariosHaveEpisodesOfBothKindsOnBothWheel
     }
   }
   std::set<std::pair<int, int>> train_kinds;
-  for (const auto& e : train.slip_episodes) train_kinds.insert({static_cast<int>(e.kind), static_cast<int>(e.wheel)});
+  for (const auto& e : train.slip_episodes)
+    train_kinds.insert({static_cast<int>(e.kind), static_cast<int>(e.wheel)});
   EXPECT_EQ(train_kinds.size(), 4u);  // spin and hold, each on both wheels
   std::set<int> eval_kinds, eval_wheels;
   for (const auto& e : eval.slip_episodes) {

@@ -156,8 +156,8 @@ sim::Scenario knots_scenario() {
   sc.motion.start_x_m = 0.1 + 0.2;
   sc.motion.start_y_m = -1e-3;
   sc.motion.start_theta_rad = -2.0 / 3.0;
-  sc.motion.knots = {{0, -0.0, 0},         {0.1, 0.1 + 0.2, 1.0 / 3.0}, {0.7, 0.45, -2.0 / 7.0},
-                     {2.5, 0.5, 1e-300},   {4, -0.25, 0.1},             {5.000000000000001, 0, 0}};
+  sc.motion.knots = {{0, -0.0, 0},    {0.1, 0.1 + 0.2, 1.0 / 3.0}, {0.7, 0.45, -2.0 / 7.0}, {2.5, 0.5, 1e-300},
+                     {4, -0.25, 0.1}, {5.000000000000001, 0, 0}};
   auto& s = sc.sensors;
   s.encoders.rate_hz = 50;
   s.encoders.omega = true;
@@ -261,10 +261,10 @@ std::string error_of(const std::string& yaml) {
 }
 
 TEST(ScenarioYamlKnots, ParsesTriples) {
-  const sim::Scenario sc =
-      parse_scenario("motion:\n  max_accel_m_s2: 0.3\n  knots:\n    - [0, 0, 0]\n    - [1.5, 0.5, -0.25]\n"
-                     "    - [2, +0, 1e-3]\n",
-                     "k.yaml");
+  const sim::Scenario sc = parse_scenario(
+      "motion:\n  max_accel_m_s2: 0.3\n  knots:\n    - [0, 0, 0]\n    - [1.5, 0.5, -0.25]\n"
+      "    - [2, +0, 1e-3]\n",
+      "k.yaml");
   EXPECT_TRUE(sc.motion.segments.empty());
   ASSERT_EQ(sc.motion.knots.size(), 3u);
   EXPECT_EQ(sc.motion.knots[1].t_s, 1.5);
@@ -292,7 +292,8 @@ TEST(ScenarioYamlKnots, ErrorsNameFileLineAndKnot) {
   EXPECT_THAT(error_of("motion:\n  knots: []\n"), AllOf(StartsWith("s.yaml:2: motion.knots: no knots")));
   EXPECT_THAT(error_of("motion:\n  knots: {t_s: [0]}\n"),
               AllOf(StartsWith("s.yaml:2:"), HasSubstr("expected a list of [t_s, v_m_s, w_rad_s] triples")));
-  EXPECT_THAT(error_of("motion:\n  max_accel_m_s2: 1\n"), AllOf(StartsWith("s.yaml:2:"), HasSubstr("no segments or knots")));
+  EXPECT_THAT(error_of("motion:\n  max_accel_m_s2: 1\n"),
+              AllOf(StartsWith("s.yaml:2:"), HasSubstr("no segments or knots")));
   EXPECT_THAT(error_of("motion:\n  knot: []\n"), HasSubstr("did you mean 'knots'"));
 }
 
@@ -329,11 +330,13 @@ TEST(ScenarioYamlStart, ErrorsNameFileLineAndKey) {
   EXPECT_THAT(error_of("motion:\n  start: {theta_rad: north}\n" + seg),
               StartsWith("s.yaml:2: motion.start.theta_rad: expected a finite number, got 'north'"));
   EXPECT_THAT(error_of("motion:\n  start: {x: 1}\n" + seg),
-              AllOf(StartsWith("s.yaml:2: unknown key 'x' in motion.start"), HasSubstr("valid keys: x_m, y_m, theta_rad")));
+              AllOf(StartsWith("s.yaml:2: unknown key 'x' in motion.start"),
+                    HasSubstr("valid keys: x_m, y_m, theta_rad")));
   EXPECT_THAT(error_of("motion:\n  start: {theta_deg: 90}\n" + seg), HasSubstr("did you mean 'theta_rad'"));
   EXPECT_THAT(error_of("motion:\n  start: [1, 2, 0]\n" + seg),
               AllOf(StartsWith("s.yaml:2: motion.start: expected a map"), HasSubstr("got a list")));
-  EXPECT_THAT(error_of("motion:\n  start: {x_m: 1, x_m: 2}\n" + seg), HasSubstr("duplicate key 'motion.start.x_m'"));
+  EXPECT_THAT(error_of("motion:\n  start: {x_m: 1, x_m: 2}\n" + seg),
+              HasSubstr("duplicate key 'motion.start.x_m'"));
   EXPECT_THAT(error_of("motion:\n  starts: {x_m: 1}\n" + seg), HasSubstr("did you mean 'start'"));
 }
 

@@ -55,8 +55,8 @@ TEST(ReferenceScenarios, RegenerateTheCommittedTracksByteForByte) {
     format_track(sim::simulate(sc), out);
     const std::string committed = slurp(track_file(i));
     ASSERT_FALSE(committed.empty()) << "missing " << track_file(i);
-    EXPECT_TRUE(out.str() == committed) << first_difference(out.str(), committed)
-                                        << "\n(regenerate: see scenarios/README.md)";
+    EXPECT_TRUE(out.str() == committed)
+        << first_difference(out.str(), committed) << "\n(regenerate: see scenarios/README.md)";
   }
 }
 
@@ -154,7 +154,8 @@ TEST(ScenarioYaml, UnknownKeysSuggestTheClosest) {
   EXPECT_THAT(error_of("motion:\n  segments:\n    - straight: {distance_m: 1, sped_m_s: 0.5}\n"),
               AllOf(StartsWith("s.yaml:3:"), HasSubstr("'sped_m_s'"), HasSubstr("did you mean 'speed_m_s'")));
   EXPECT_THAT(error_of("motion:\n  segments:\n    - turn: {angle_deg: 90}\n"),
-              AllOf(StartsWith("s.yaml:3:"), HasSubstr("unknown key 'turn'"), HasSubstr("straight, arc, spin")));
+              AllOf(StartsWith("s.yaml:3:"), HasSubstr("unknown key 'turn'"),
+                    HasSubstr("straight, arc, spin")));
   EXPECT_THAT(error_of(kMotion + "sensors:\n  gyro: {sigma: 0.1}\n"),
               AllOf(StartsWith("s.yaml:5:"), HasSubstr("sensors.gyro"), HasSubstr("sigma_rad_s")));
 }
@@ -171,14 +172,17 @@ TEST(ScenarioYaml, BadValuesNameKeyValueAndLine) {
               AllOf(StartsWith("s.yaml:6: sensors.gyro.rate_hz = 300"), HasSubstr("divides 1000 Hz")));
   EXPECT_THAT(error_of(kMotion + "sensors:\n  aps: {enabled: maybe}\n"),
               AllOf(StartsWith("s.yaml:5:"), HasSubstr("true or false")));
-  EXPECT_THAT(error_of("motion:\n  segments:\n    - stop: {duration_s: 1}\n    - arc: {radius_m: -1, angle_deg: 90, speed_m_s: 0.3}\n"),
-              AllOf(StartsWith("s.yaml:4:"), HasSubstr("radius_m = -1"), HasSubstr("expected a number > 0")));
+  EXPECT_THAT(
+      error_of(
+          "motion:\n  segments:\n    - stop: {duration_s: 1}\n    - arc: {radius_m: -1, angle_deg: 90, speed_m_s: 0.3}\n"),
+      AllOf(StartsWith("s.yaml:4:"), HasSubstr("radius_m = -1"), HasSubstr("expected a number > 0")));
   EXPECT_THAT(error_of("motion:\n  segments:\n    - straight: {distance_m: 1}\n"),
               AllOf(StartsWith("s.yaml:3:"), HasSubstr("missing 'speed_m_s'")));
   EXPECT_THAT(error_of("motion:\n  segments:\n    - repeat: {count: 0, segments: []}\n"),
               AllOf(StartsWith("s.yaml:3:"), HasSubstr("count = 0")));
-  EXPECT_THAT(error_of("motion:\n  max_accel_m_s2: 0\n  segments:\n    - straight: {distance_m: 1, speed_m_s: 0.5}\n"),
-              AllOf(StartsWith("s.yaml:2:"), HasSubstr("max_accel_m_s2 = 0")));
+  EXPECT_THAT(
+      error_of("motion:\n  max_accel_m_s2: 0\n  segments:\n    - straight: {distance_m: 1, speed_m_s: 0.5}\n"),
+      AllOf(StartsWith("s.yaml:2:"), HasSubstr("max_accel_m_s2 = 0")));
 }
 
 TEST(ScenarioYaml, EffectErrorsUseTheVocabulary) {
@@ -197,27 +201,32 @@ TEST(ScenarioYaml, EffectErrorsUseTheVocabulary) {
 
 TEST(ScenarioYaml, ReadsOdometryBiasThroughTheEffectTable) {
   // physics-effects.md's 12th effect; b_v, b_w are optional (0 = no offset).
-  const sim::Scenario sc =
-      parse_scenario(kMotion + "effects:\n  odometry_bias: {b_w: -0.002}\n  gyro_bias: {b: 0.001}\n", "s.yaml");
+  const sim::Scenario sc = parse_scenario(
+      kMotion + "effects:\n  odometry_bias: {b_w: -0.002}\n  gyro_bias: {b: 0.001}\n", "s.yaml");
   ASSERT_TRUE(sc.effects.odometry_bias);
   EXPECT_EQ(sc.effects.odometry_bias->b_v, 0.0);
   EXPECT_EQ(sc.effects.odometry_bias->b_w, -0.002);
   EXPECT_EQ(sim::format_effects(sc.effects), "gyro_bias:b=0.001; odometry_bias:b_v=0,b_w=-0.002");
   EXPECT_THAT(error_of(kMotion + "effects:\n  odometry_bias:\n    b_v: 0.7\n"),
-              AllOf(StartsWith("s.yaml:6: odometry_bias.b_v = 0.7"), HasSubstr("out of range [-0.5, 0.5] m/s")));
+              AllOf(StartsWith("s.yaml:6: odometry_bias.b_v = 0.7"),
+                    HasSubstr("out of range [-0.5, 0.5] m/s")));
   EXPECT_THAT(error_of(kMotion + "effects:\n  odometry_bias: {bw: 0.1}\n"),
               AllOf(StartsWith("s.yaml:5:"), HasSubstr("'bw'"), HasSubstr("b_v, b_w")));
 }
 
 TEST(ScenarioYaml, StructuralErrors) {
-  EXPECT_THAT(error_of("motion:\n  segments: [\n"), AllOf(StartsWith("s.yaml:"), HasSubstr("YAML syntax error")));
+  EXPECT_THAT(error_of("motion:\n  segments: [\n"),
+              AllOf(StartsWith("s.yaml:"), HasSubstr("YAML syntax error")));
   EXPECT_THAT(error_of(""), HasSubstr("expected a scenario"));
   EXPECT_THAT(error_of("- 1\n- 2\n"), StartsWith("s.yaml:1: expected a scenario"));
   EXPECT_THAT(error_of("seed: 1\n"), HasSubstr("missing 'motion'"));
   EXPECT_THAT(error_of("motion:\n  segments: []\n"), HasSubstr("no segments"));
-  EXPECT_THAT(error_of("seed: 1\nseed: 2\n" + kMotion), AllOf(StartsWith("s.yaml:2:"), HasSubstr("duplicate key 'seed'")));
-  EXPECT_THAT(error_of("motion:\n  segments:\n    - {straight: {distance_m: 1, speed_m_s: 1}, stop: {duration_s: 1}}\n"),
-              AllOf(StartsWith("s.yaml:3:"), HasSubstr("one-key map")));
+  EXPECT_THAT(error_of("seed: 1\nseed: 2\n" + kMotion),
+              AllOf(StartsWith("s.yaml:2:"), HasSubstr("duplicate key 'seed'")));
+  EXPECT_THAT(
+      error_of(
+          "motion:\n  segments:\n    - {straight: {distance_m: 1, speed_m_s: 1}, stop: {duration_s: 1}}\n"),
+      AllOf(StartsWith("s.yaml:3:"), HasSubstr("one-key map")));
 }
 
 TEST(ScenarioYaml, MissingFileIsOneLine) {
@@ -244,19 +253,19 @@ TEST(SimulateCommand, WritesATrackWithCommandLineEffects) {
   EXPECT_EQ(tr.meta().get("sim.scenario"), "track1.yaml");
   EXPECT_EQ(tr.meta().get("sim.effects"), "radius_error:scale_l=0.99,scale_r=1.01; lateral_skid:k=0.05");
   // Command-line effects add to the file's ones.
-  const auto r2 = run_cli("simulate " + scenario_file(1).string() + " -o " + out + " --effect time_offset:dt=0.01");
+  const auto r2 = run_cli("simulate " + scenario_file(1).string() + " -o " + out +
+                          " --effect time_offset:dt=0.01");
   ASSERT_EQ(r2.exit_code, 0) << r2.err;
-  EXPECT_EQ(read_track(out).meta().get("sim.effects"),
-            "radius_error:scale_l=0.997,scale_r=1.003; lateral_skid:k=0.02; gyro_bias:b=0.0015; time_offset:dt=0.01");
+  EXPECT_EQ(
+      read_track(out).meta().get("sim.effects"),
+      "radius_error:scale_l=0.997,scale_r=1.003; lateral_skid:k=0.02; gyro_bias:b=0.0015; time_offset:dt=0.01");
 }
 
 TEST(SimulateCommand, BadInputIsOneLineAndWritesNothing) {
   TempDir dir;
   const std::string out = (dir / "t.csv").string();
   const std::string sc = scenario_file(1).string();
-  const auto one_line = [](const std::string& err) {
-    return !err.empty() && err.find('\n') == err.size() - 1;
-  };
+  const auto one_line = [](const std::string& err) { return !err.empty() && err.find('\n') == err.size() - 1; };
   auto r = run_cli("simulate " + sc + " -o " + out + " --effect lateral_skd:k=0.1");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_TRUE(one_line(r.err)) << r.err;

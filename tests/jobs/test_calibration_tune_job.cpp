@@ -122,8 +122,8 @@ TEST(CalibrationTune, NloptStartsFromTheDefaults) {
 }
 
 TEST(CalibrationTune, ScoresAndErrorsAreConsistent) {
-  const odotune::CalibrationTuneOutcome o =
-      odotune::run_calibration_tune({&track()}, small_request(CalibratorModel::adaptive_pf));
+  const odotune::CalibrationTuneOutcome o = odotune::run_calibration_tune(
+      {&track()}, small_request(CalibratorModel::adaptive_pf));
   ASSERT_EQ(o.baseline.tracks.size(), 1u);
   ASSERT_EQ(o.tuned.tracks.size(), 1u);
   EXPECT_EQ(o.baseline.tracks[0].track, "chair");

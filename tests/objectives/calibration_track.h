@@ -19,11 +19,11 @@ inline constexpr double kChairBaseM = 0.65;
 
 struct ChairTrackOptions {
   double duration_s = 120.0;
-  std::vector<std::string> effects;      // tracks/effects.h syntax
+  std::vector<std::string> effects;  // tracks/effects.h syntax
   double ext_sigma_v_m_s = 0.02;
   double ext_sigma_w_rad_s = 0.02;
-  bool ext = true;                       // external velocity sensor on
-  bool gt = true;                        // ground truth on
+  bool ext = true;  // external velocity sensor on
+  bool gt = true;   // ground truth on
   std::uint64_t seed = 7;
 };
 

@@ -23,16 +23,16 @@ struct FusionTrackOptions {
   std::uint64_t seed = 1;
   double wheel_radius_m = 0.08, wheel_base_m = 0.42, ticks_per_rev = 2048;
   // The drive's cruise commands (the steady values tests compare with).
-  double straight_speed_m_s = 0.5;              // both straights
-  double straight_m = 2.0;                      // first straight; the second is half
+  double straight_speed_m_s = 0.5;  // both straights
+  double straight_m = 2.0;          // first straight; the second is half
   double arc_radius_m = 1.0, arc_deg = 90.0, arc_speed_m_s = 0.4;
   double spin_deg = 90.0, spin_rate_deg_s = 45.0;
   double max_accel_m_s2 = 0.5, max_angular_accel_rad_s2 = 2.0;
-  int laps = 1;                                 // the four moving segments, repeated
+  int laps = 1;  // the four moving segments, repeated
   double gyro_sigma_rad_s = 0.002;
   double ext_sigma_v_m_s = 0.02, ext_sigma_w_rad_s = 0.02;
   bool ext = true, gyro = true, power = true, gt = true;
-  std::vector<std::string> effects;             // tracks/effects.h syntax
+  std::vector<std::string> effects;  // tracks/effects.h syntax
 };
 
 inline sim::Scenario fusion_scenario(const FusionTrackOptions& o) {

@@ -42,8 +42,7 @@ const CalibrationInput& input_b() {
   return in;
 }
 
-void expect_within(const filters::OdometryParams& got, const filters::OdometryParams& truth,
-                   double rel_tol) {
+void expect_within(const filters::OdometryParams& got, const filters::OdometryParams& truth, double rel_tol) {
   EXPECT_NEAR(got.wheel_radius_left_m, truth.wheel_radius_left_m, rel_tol * truth.wheel_radius_left_m);
   EXPECT_NEAR(got.wheel_radius_right_m, truth.wheel_radius_right_m, rel_tol * truth.wheel_radius_right_m);
   EXPECT_NEAR(got.wheel_base_m, truth.wheel_base_m, rel_tol * truth.wheel_base_m);
@@ -104,8 +103,7 @@ TEST(BatchCalibration, HuberLossResistsGrossOutliers) {
   // And the fit stays close to the clean one (within ~1 sd).
   const BatchCalibrationSummary clean = batch_calibrate({&input_a()}, in.nominal);
   EXPECT_NEAR(fit.params.wheel_base_m, clean.params.wheel_base_m, 1.5 * clean.sd_wheel_base_m);
-  EXPECT_NEAR(fit.params.wheel_radius_left_m, clean.params.wheel_radius_left_m,
-              1.5 * clean.sd_radius_left_m);
+  EXPECT_NEAR(fit.params.wheel_radius_left_m, clean.params.wheel_radius_left_m, 1.5 * clean.sd_radius_left_m);
 }
 
 TEST(BatchCalibration, NoSamplesOrBadStartThrow) {

@@ -54,9 +54,9 @@ const Track& shared_track() {
 }
 
 TEST(CalibrationTruth, ScheduleFromSimEffects) {
-  const auto truth = truth_from_metadata(chair_meta(
-      "radius_error:scale_l=0.99,scale_r=1.01; wheel_base_error:scale=1.02; lateral_skid:k=0.01; "
-      "radius_step:t=30,scale_l=1.05,scale_r=0.98"));
+  const auto truth = truth_from_metadata(
+      chair_meta("radius_error:scale_l=0.99,scale_r=1.01; wheel_base_error:scale=1.02; lateral_skid:k=0.01; "
+                 "radius_step:t=30,scale_l=1.05,scale_r=0.98"));
   ASSERT_TRUE(truth.has_value());
   ASSERT_EQ(truth->params.size(), 2u);
   ASSERT_EQ(truth->change_times(), std::vector<double>{30.0});
@@ -134,8 +134,8 @@ TEST(CalibrationInput, RowsAndSamplesMatchTheSimulatedTruth) {
   }
   // Rates from ticks: Δticks·2π/8800/Δt over each row.
   const std::size_t r = in.t.size() / 2;
-  const double expected_wr = static_cast<double>(track.ticks_r()[r] - track.ticks_r()[r - 1]) * 2.0 *
-                             kPi / 8800.0 / (track.t()[r] - track.t()[r - 1]);
+  const double expected_wr = static_cast<double>(track.ticks_r()[r] - track.ticks_r()[r - 1]) * 2.0 * kPi /
+                             8800.0 / (track.t()[r] - track.t()[r - 1]);
   EXPECT_NEAR(in.omega_r[r], expected_wr, 1e-9);
 
   // One sample per ext row except the one at t = 0 (no rate before it).
@@ -153,7 +153,7 @@ TEST(CalibrationInput, RowsAndSamplesMatchTheSimulatedTruth) {
     if (i > 0) {
       EXPECT_NEAR(s.dt_s, 0.1, 1e-9);
     }
-    EXPECT_NEAR(s.v_var, 9e-4, 1e-15);                  // the column, not the default
+    EXPECT_NEAR(s.v_var, 9e-4, 1e-15);  // the column, not the default
     EXPECT_NEAR(s.w_var, 9e-4, 1e-15);
     {  // The rate is the mean over the 0.1 s window centred on the sample.
       const std::size_t row = in.sample_row[i];
@@ -370,7 +370,7 @@ TEST(PoseSeries, WrapInterpolateAndCentralDifferenceOnAnArc) {
   EXPECT_FALSE(interpolate_pose(s, 2.01, 1.0).has_value());    // outside
   const auto v = central_difference_velocity(s, 1.0, 0.05, 0.06);
   ASSERT_TRUE(v.has_value());
-  EXPECT_NEAR(v->v_m_s, V, 1e-12);   // the chord correction makes an arc exact
+  EXPECT_NEAR(v->v_m_s, V, 1e-12);  // the chord correction makes an arc exact
   EXPECT_NEAR(v->w_rad_s, W, 1e-12);
   EXPECT_FALSE(central_difference_velocity(s, 1.98, 0.05, 0.06).has_value());
 }

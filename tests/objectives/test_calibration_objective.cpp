@@ -187,7 +187,7 @@ TEST(CalibrationScore, EachTermAsDocumented) {
   CalibrationResult r;
   r.tracks = {perfect_track()};
   r.tracks[0].final_params.wheel_radius_left_m = truth().wheel_radius_left_m * 1.005;  // 0.5 %
-  EXPECT_NEAR(calibration_score(r, {&in}, w), 0.5, 1e-12);  // mean of 1 and 0
+  EXPECT_NEAR(calibration_score(r, {&in}, w), 0.5, 1e-12);                             // mean of 1 and 0
   r.tracks[0].final_params.wheel_radius_right_m = truth().wheel_radius_right_m * (1 - 0.01);
   EXPECT_NEAR(calibration_score(r, {&in}, w), 0.5 * (1.0 + 2.0), 1e-12);
   w.radius = 2.0;

@@ -68,8 +68,10 @@ std::pair<double, double> reference_dead_reckoning(const Track& track, const Odo
   double ss_pos = 0, ss_th = 0;
   int n = 0;
   for (std::size_t i = 1; i < track.size(); ++i) {
-    const double l = static_cast<double>(track.ticks_l()[i] - track.ticks_l()[i - 1]) * k * p.wheel_radius_left_m;
-    const double r = static_cast<double>(track.ticks_r()[i] - track.ticks_r()[i - 1]) * k * p.wheel_radius_right_m;
+    const double l = static_cast<double>(track.ticks_l()[i] - track.ticks_l()[i - 1]) * k *
+                     p.wheel_radius_left_m;
+    const double r = static_cast<double>(track.ticks_r()[i] - track.ticks_r()[i - 1]) * k *
+                     p.wheel_radius_right_m;
     const double dth = (r - l) / p.wheel_base_m;
     x += 0.5 * (l + r) * std::cos(th + 0.5 * dth);
     y += 0.5 * (l + r) * std::sin(th + 0.5 * dth);
@@ -133,9 +135,9 @@ TEST(CalibrationOptions, ValidationAndAdaptiveParticleRule) {
 
 TEST(ConvergenceTime, HandMadeTraces) {
   const OdometryParams truth = params(0.30, 0.32, 0.60);
-  const OdometryParams in = params(0.3014, 0.3185, 0.6029);   // all within 0.5 %
-  const OdometryParams out_r = params(0.30, 0.322, 0.60);     // R_R 0.625 % off
-  const OdometryParams out_d = params(0.30, 0.32, 0.596);     // D 0.67 % off
+  const OdometryParams in = params(0.3014, 0.3185, 0.6029);  // all within 0.5 %
+  const OdometryParams out_r = params(0.30, 0.322, 0.60);    // R_R 0.625 % off
+  const OdometryParams out_d = params(0.30, 0.32, 0.596);    // D 0.67 % off
   const std::vector<double> t = {1, 2, 3, 4, 5, 6};
   EXPECT_EQ(convergence_time(t, {out_r, in, out_r, in, in, in}, truth, 0.005), std::optional<double>(4.0));
   EXPECT_EQ(convergence_time(t, {in, in, in, in, in, in}, truth, 0.005), std::optional<double>(1.0));
@@ -271,7 +273,7 @@ TEST(CalibrationRun, AdaptivePfApproachesTheTruth) {
   ASSERT_EQ(r.trace.estimate.size(), in.samples.size());
   EXPECT_EQ(r.trace.estimate.front().particles, 8000);  // the adaptive rule's initial count
   EXPECT_GT(r.mean_particles, 0.0);
-  EXPECT_LT(r.mean_particles, 8000.0);                   // and it adapted
+  EXPECT_LT(r.mean_particles, 8000.0);  // and it adapted
   OdometryParams mean;
   int n = 0;
   for (std::size_t i = 0; i < r.trace.t.size(); ++i) {

@@ -51,8 +51,8 @@ TEST(FusionInput, StepTimesAtTheFusionRate) {
   for (std::size_t k = 1; k < in.size(); ++k) ASSERT_NEAR(in.t[k] - in.t[k - 1], 0.1, 1e-9);
   EXPECT_LE(in.t.back(), track.t().back() + 1e-6);
   EXPECT_GT(in.t.back() + 0.1, track.t().back());  // no whole step left out
-  for (const auto* v : {&in.dticks_l, &in.dticks_r, &in.v_kin, &in.w_kin, &in.power_l, &in.v_ext,
-                        &in.v_ext_var, &in.gyro_z, &in.gt_x, &in.v_true, &in.w_true})
+  for (const auto* v : {&in.dticks_l, &in.dticks_r, &in.v_kin, &in.w_kin, &in.power_l, &in.v_ext, &in.v_ext_var,
+                        &in.gyro_z, &in.gt_x, &in.v_true, &in.w_true})
     EXPECT_EQ(v->size(), in.size());
   EXPECT_EQ(in.dticks_l[0], 0.0);
   EXPECT_EQ(in.v_kin[0], 0.0);

@@ -23,9 +23,9 @@ using testing_support::ChairTrackOptions;
 // Effects a kinematic model with the nominal geometry lacks: unequal tyres,
 // a wider contact base, tyres growing with speed and traction loss when
 // accelerating (../shared/specs/physics-effects.md).
-const std::vector<std::string> kHiddenEffects = {
-    "radius_error:scale_l=1.012,scale_r=0.991", "wheel_base_error:scale=1.02",
-    "speed_radius:c=0.02", "longitudinal_slip:k=0.05"};
+const std::vector<std::string> kHiddenEffects = {"radius_error:scale_l=1.012,scale_r=0.991",
+                                                 "wheel_base_error:scale=1.02", "speed_radius:c=0.02",
+                                                 "longitudinal_slip:k=0.05"};
 
 FusionInput chair_input(double duration_s, std::uint64_t seed,
                         std::vector<std::string> effects = kHiddenEffects) {
@@ -253,8 +253,10 @@ TEST(SlipDetector, VarianceRisesDuringSimulatedSlipAndStaysLowElsewhere) {
       in = in || (t >= e.t0_s + 0.5 && t <= e.t1_s);
       near = near || (t >= e.t0_s - 1.0 && t <= e.t1_s + 2.5);  // the window's memory
     }
-    if (in) inside.push_back(var[1] + var[0]);
-    else if (!near && k > 25) outside.push_back(var[1] + var[0]);
+    if (in)
+      inside.push_back(var[1] + var[0]);
+    else if (!near && k > 25)
+      outside.push_back(var[1] + var[0]);
   }
   ASSERT_GT(inside.size(), 50u);
   ASSERT_GT(outside.size(), 300u);

@@ -44,7 +44,8 @@ struct GradientCase {
   }
   // Shifts the dense bias so that the linear output equals `value`.
   void set_output(double value) {
-    const double out = filters::lstm_forward<I, H, double>(w.data(), x.data(), window, OutputActivation::linear);
+    const double out = filters::lstm_forward<I, H, double>(w.data(), x.data(), window,
+                                                           OutputActivation::linear);
     w[LstmLayout<I, H>::kDenseBias] += value - out;
   }
 };
@@ -55,8 +56,8 @@ void check_gradients(std::uint64_t seed, OutputActivation act, double output) {
   GradientCase<I, H> c(seed, 20);
   c.set_output(output);
   LstmBpttCost<I, H> bptt(c.x.data(), c.window, c.target, act);
-  ceres::AutoDiffCostFunction<LstmResidual<I, H>, 1, K> autodiff(
-      new LstmResidual<I, H>{c.x.data(), c.window, c.target, act});
+  ceres::AutoDiffCostFunction<LstmResidual<I, H>, 1, K> autodiff(new LstmResidual<I, H>{c.x.data(), c.window,
+                                                                                        c.target, act});
 
   const double* params[1] = {c.w.data()};
   double r_bptt = 0.0, r_auto = 0.0;
@@ -329,7 +330,8 @@ TEST(LstmTraining, BadInputNamesTheField) {
   wrong_inputs.inputs = 4;
   std::vector<double> rows(80, 0.0);
   wrong_inputs.add(rows.data(), 1.0);
-  EXPECT_TRUE(contains(message_of([&] { train_lstm(net, wrong_inputs, SequenceSet{}, options); }), "inputs = 4"));
+  EXPECT_TRUE(contains(message_of([&] { train_lstm(net, wrong_inputs, SequenceSet{}, options); }),
+                       "inputs = 4"));
   SequenceSet short_x = good;
   short_x.x.pop_back();
   EXPECT_TRUE(contains(message_of([&] { train_lstm(net, short_x, SequenceSet{}, options); }), "x has"));
@@ -339,7 +341,8 @@ TEST(LstmTraining, BadInputNamesTheField) {
   SequenceSet other_window;
   other_window.window = 10;
   other_window.add(rows.data(), 0.0);
-  EXPECT_TRUE(contains(message_of([&] { train_lstm(net, good, other_window, options); }), "validation set: window"));
+  EXPECT_TRUE(contains(message_of([&] { train_lstm(net, good, other_window, options); }),
+                       "validation set: window"));
 
   LstmTrainingOptions bad = options;
   bad.mae_scale = 0.0;
@@ -401,7 +404,8 @@ TEST(LstmTraining, DecayToStartKeepsARefitNearTheCurrentWeights) {
     VelocityNet refit = net;
     *summary = retrain_lstm(refit, few, o);
     double d2 = 0.0;
-    for (int n = 0; n < VelocityNet::kWeights; ++n) d2 += (refit.weights[n] - net.weights[n]) * (refit.weights[n] - net.weights[n]);
+    for (int n = 0; n < VelocityNet::kWeights; ++n)
+      d2 += (refit.weights[n] - net.weights[n]) * (refit.weights[n] - net.weights[n]);
     return std::sqrt(d2);
   };
   LstmTrainingSummary free_s, start_s, zero_s;

@@ -23,8 +23,8 @@ void expect_rel(double expected, double actual, double rel = 1e-9) {
 // d_first on step 1 and d on steps 2..n, one step per dt; a position fix every
 // `fix_every` rows, placed `fix_scale` times as far along the line as the
 // odometry says (the true motion is longer): along-track innovations only.
-ReplayInput straight_line(const std::string& name, double theta0, double d_first, double d,
-                          int n, double dt, double fix_scale = 1.02, int fix_every = 50) {
+ReplayInput straight_line(const std::string& name, double theta0, double d_first, double d, int n, double dt,
+                          double fix_scale = 1.02, int fix_every = 50) {
   ReplayInput in;
   in.track_name = name;
   in.wheel_base_m = kD;

@@ -106,8 +106,7 @@ TEST_P(FastVsStep, SameMetrics) {
   const auto [lo, hi] = space.box();
   for (int trial = 0; trial < 20; ++trial) {
     std::vector<double> x(space.dim());
-    for (std::size_t i = 0; i < x.size(); ++i)
-      x[i] = std::uniform_real_distribution<double>(lo[i], hi[i])(rng);
+    for (std::size_t i = 0; i < x.size(); ++i) x[i] = std::uniform_real_distribution<double>(lo[i], hi[i])(rng);
     const NoiseParams noise = space.to_noise(space.to_physical(x));
     const ReplayResult ref = replay_ekf(in, noise);
     const ReplayOutcome got = fast.evaluate(noise);

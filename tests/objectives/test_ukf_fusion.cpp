@@ -115,10 +115,10 @@ NeesRuns nees_runs(const std::vector<FusionInput>& inputs, double var_v, double 
 //  * the fraction of per-step NEES below χ²₂(0.95) = 5.99 is at least
 //    0.95 − 3·√(0.95·0.05/n_eff) (the binomial's 3σ lower bound; 0.904 here).
 struct NeesVerdict {
-  double mean = 0.0;            // time- and run-averaged NEES
-  double lo = 0.0, hi = 0.0;    // its two-sided 99 % χ² interval
-  double below_95 = 0.0;        // fraction of per-step NEES below χ²₂(0.95)
-  double min_below = 0.0;       // the lowest acceptable fraction
+  double mean = 0.0;          // time- and run-averaged NEES
+  double lo = 0.0, hi = 0.0;  // its two-sided 99 % χ² interval
+  double below_95 = 0.0;      // fraction of per-step NEES below χ²₂(0.95)
+  double min_below = 0.0;     // the lowest acceptable fraction
   bool consistent() const { return mean >= lo && mean <= hi && below_95 >= min_below; }
 };
 
@@ -177,9 +177,9 @@ std::vector<FusionInput>* UkfConsistency::inputs_ = nullptr;
 TEST_F(UkfConsistency, NeesWithinChiSquareBoundsOnACleanTrack) {
   const CleanSetup s;
   const NeesVerdict v = verdict(nees_runs(*inputs_, s.var_v(), s.var_w(), s.params(), s.noise()));
-  EXPECT_TRUE(v.consistent()) << "mean NEES " << v.mean << " (99 % interval [" << v.lo << ", " << v.hi
-                              << "]), " << 100.0 * v.below_95 << " % below 5.99 (at least "
-                              << 100.0 * v.min_below << " % expected)";
+  EXPECT_TRUE(v.consistent()) << "mean NEES " << v.mean << " (99 % interval [" << v.lo << ", " << v.hi << "]), "
+                              << 100.0 * v.below_95 << " % below 5.99 (at least " << 100.0 * v.min_below
+                              << " % expected)";
 }
 
 TEST_F(UkfConsistency, ProcessNoiseFarTooSmallFails) {
@@ -257,8 +257,8 @@ TEST(UkfFusion, TraceStartsAtTheGroundTruthAndIntegratesEq3) {
   EXPECT_EQ(tr.theta[0], in.gt_theta[0]);
   EXPECT_EQ(tr.v[0], 0.0);  // UkfParams' initial state: at rest
   for (std::size_t k = 1; k < in.size(); ++k) {
-    const filters::PlanarPose next =
-        filters::integrate_pose({tr.x[k - 1], tr.y[k - 1], tr.theta[k - 1]}, tr.v[k], tr.w[k], in.dt_s);
+    const filters::PlanarPose next = filters::integrate_pose({tr.x[k - 1], tr.y[k - 1], tr.theta[k - 1]},
+                                                             tr.v[k], tr.w[k], in.dt_s);
     ASSERT_DOUBLE_EQ(tr.x[k], next.x_m);
     ASSERT_DOUBLE_EQ(tr.theta[k], next.theta_rad);
     ASSERT_GT(tr.var_v[k], 0.0);

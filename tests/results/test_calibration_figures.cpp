@@ -80,9 +80,9 @@ TEST(CalibrationFigure, WritesPngAndSvgWithPanelsLegendsAndMarkers) {
   calibration_estimates_figure(stem, two_methods());
   ASSERT_TRUE(is_png(dir / "radii.png"));
   const std::string svg = slurp(dir / "radii.svg");
-  for (const char* text : {"chair_a: radii over time", "wheel radius [m]", "wheel base [m]", "time [s]",
-                           "R_R adaptive-pf", "R_R dkf", "R_R true", "D adaptive-pf", "D true", "radius step",
-                           "estimate ± 1 sd"})
+  for (const char* text :
+       {"chair_a: radii over time", "wheel radius [m]", "wheel base [m]", "time [s]", "R_R adaptive-pf",
+        "R_R dkf", "R_R true", "D adaptive-pf", "D true", "radius step", "estimate ± 1 sd"})
     EXPECT_NE(svg.find(text), std::string::npos) << text;
   EXPECT_EQ(dir.entries(), 2u);  // the two figures, no leftovers
 }

@@ -132,8 +132,7 @@ class PathOverride {
 class DiagnosisFiguresTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    ASSERT_TRUE(gnuplot_available())
-        << "gnuplot is required (Debian gnuplot-nox, see scripts/install-deps.sh)";
+    ASSERT_TRUE(gnuplot_available()) << "gnuplot is required (Debian gnuplot-nox, see scripts/install-deps.sh)";
   }
   TempDir dir_{"diagfig"};
 };
@@ -141,33 +140,34 @@ class DiagnosisFiguresTest : public ::testing::Test {
 TEST_F(DiagnosisFiguresTest, WritesEveryFigureWithTitlesLabelsAndLegends) {
   const DiagnosisFigureData d = synthetic(true);
   const auto stems = diagnosis_figures(dir_.path(), d);
-  ASSERT_EQ(stems, (std::vector<fs::path>{dir_ / "residual_time", dir_ / "residual_condition",
-                                          dir_ / "map", dir_ / "overlay"}));
+  ASSERT_EQ(stems, (std::vector<fs::path>{dir_ / "residual_time", dir_ / "residual_condition", dir_ / "map",
+                                          dir_ / "overlay"}));
   EXPECT_EQ(dir_.entries(), 8u);  // 4 × (png, svg), nothing else
 
   const std::string time = expect_figure(stems[0]);
-  for (const std::string& s : std::vector<std::string>{"circle_cw", "time [s]", "position error [m]",
-                              "before: nominal model", "after: " + kFinding, "located segment",
-                              "window start"})
+  for (const std::string& s :
+       std::vector<std::string>{"circle_cw", "time [s]", "position error [m]", "before: nominal model",
+                                "after: " + kFinding, "located segment", "window start"})
     expect_contains(time, s, "residual_time.svg");
 
   const std::string cond = expect_figure(stems[1]);
-  for (const std::string& s : std::vector<std::string>{"circle_cw", "|v*w| [m/s^2]", "lateral error growth [m/s]",
-                              "before: nominal model", "after: " + kFinding,
-                              "median in 15 quantile bins", "(y axis: 0.5–99.5 % quantiles)",
-                              // 5999 finite before rows → every 2nd shown.
-                              "5999 rows (1 in 2 shown)", "6000 rows (1 in 2 shown)"})
+  for (const std::string& s : std::vector<std::string>{
+           "circle_cw", "|v*w| [m/s^2]", "lateral error growth [m/s]", "before: nominal model",
+           "after: " + kFinding, "median in 15 quantile bins", "(y axis: 0.5–99.5 % quantiles)",
+           // 5999 finite before rows → every 2nd shown.
+           "5999 rows (1 in 2 shown)", "6000 rows (1 in 2 shown)"})
     expect_contains(cond, s, "residual_condition.svg");
 
   const std::string map = expect_figure(stems[2]);
-  for (const std::string& s : std::vector<std::string>{"circle_cw", "x [m]", "y [m]", "reference path", "region 1",
-                              "region 2", "located region", "residual above noise (202 samples)"})
+  for (const std::string& s :
+       std::vector<std::string>{"circle_cw", "x [m]", "y [m]", "reference path", "region 1", "region 2",
+                                "located region", "residual above noise (202 samples)"})
     expect_contains(map, s, "map.svg");
   EXPECT_EQ(map.find("region 3"), std::string::npos);
 
   const std::string overlay = expect_figure(stems[3]);
   for (const std::string& s : std::vector<std::string>{"circle_cw", "x [m]", "reference", "nominal replay",
-                              "corrected replay", kFinding})
+                                                       "corrected replay", kFinding})
     expect_contains(overlay, s, "overlay.svg");
 }
 
@@ -294,8 +294,7 @@ TEST_F(DiagnosisReportTest, PageInlinesEveryFigureSummaryAndEscapedJson) {
     EXPECT_NE(e.path().filename().string().front(), '.') << "staging left: " << e.path();
   }
   EXPECT_EQ(n, 9u);  // 4 figures × (png, svg) + index.html
-  for (const char* stem : {"residual_time", "residual_condition", "map", "overlay"})
-    expect_figure(out / stem);
+  for (const char* stem : {"residual_time", "residual_condition", "map", "overlay"}) expect_figure(out / stem);
 
   const std::string html = slurp(out / "index.html");
   EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
@@ -305,15 +304,12 @@ TEST_F(DiagnosisReportTest, PageInlinesEveryFigureSummaryAndEscapedJson) {
   EXPECT_EQ(count(html, "<figcaption>"), 4u);
   EXPECT_EQ(html.find("<?xml"), std::string::npos);
   // Every figure's ids are prefixed, so none is shared between figures.
-  for (const char* prefix : {"id=\"residual_time-", "id=\"residual_condition-", "id=\"map-",
-                             "id=\"overlay-"})
+  for (const char* prefix : {"id=\"residual_time-", "id=\"residual_condition-", "id=\"map-", "id=\"overlay-"})
     expect_contains(html, prefix, "index.html");
   for (const char* label : {"|v*w| [m/s^2]", "region 1", "corrected replay", "located segment"})
     expect_contains(html, label, "index.html");
-  expect_contains(html, "<li>finding: lateral_skid k = 0.021 ± 0.002 (p &lt; 0.001)</li>",
-                  "index.html");
-  expect_contains(html, "<li>region 1: x in [-2.8, 2.8] m &amp; y in [-5.3, -4.0] m</li>",
-                  "index.html");
+  expect_contains(html, "<li>finding: lateral_skid k = 0.021 ± 0.002 (p &lt; 0.001)</li>", "index.html");
+  expect_contains(html, "<li>region 1: x in [-2.8, 2.8] m &amp; y in [-5.3, -4.0] m</li>", "index.html");
   expect_contains(html,
                   "<pre>{&quot;track&quot;: &quot;circle&lt;cw&gt;&quot;, &quot;effect&quot;: "
                   "&quot;lateral_skid&quot;, &quot;note&quot;: &quot;a &amp; b&quot;}</pre>",
@@ -342,17 +338,14 @@ TEST_F(DiagnosisReportTest, FailureKeepsTheEarlierReportAsItWas) {
   const std::string map_svg = slurp(out / "map.svg");
   {
     const PathOverride no_gnuplot((dir_ / "empty-path").string());
-    EXPECT_THROW(write_diagnosis_report(out, synthetic(false), {"other"}, "{}"),
-                 std::runtime_error);
+    EXPECT_THROW(write_diagnosis_report(out, synthetic(false), {"other"}, "{}"), std::runtime_error);
   }
   DiagnosisFigureData bad = synthetic(false);
   bad.ref_x_m.pop_back();
   EXPECT_THROW(write_diagnosis_report(out, bad, {"other"}, "{}"), std::invalid_argument);
   EXPECT_EQ(slurp(out / "index.html"), page);
   EXPECT_EQ(slurp(out / "map.svg"), map_svg);
-  EXPECT_EQ(static_cast<std::size_t>(std::distance(fs::directory_iterator(out),
-                                                   fs::directory_iterator{})),
-            9u);
+  EXPECT_EQ(static_cast<std::size_t>(std::distance(fs::directory_iterator(out), fs::directory_iterator{})), 9u);
 }
 
 TEST_F(DiagnosisReportTest, NoFindingAndNoConditionRemovesAStaleScatter) {

@@ -33,8 +33,7 @@ std::string slurp(const fs::path& p) {
 class FiguresTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    ASSERT_TRUE(gnuplot_available())
-        << "gnuplot is required (Debian gnuplot-nox, see scripts/install-deps.sh)";
+    ASSERT_TRUE(gnuplot_available()) << "gnuplot is required (Debian gnuplot-nox, see scripts/install-deps.sh)";
     std::string tmpl = (fs::temp_directory_path() / "odotune-figtest-XXXXXX").string();
     ASSERT_NE(::mkdtemp(tmpl.data()), nullptr);
     dir_ = tmpl;
@@ -58,8 +57,7 @@ class FiguresTest : public ::testing::Test {
     // Nothing but the two outputs is left in the directory (no .tmp files).
     int n = 0;
     for (const auto& e : fs::directory_iterator(dir_)) {
-      EXPECT_EQ(e.path().extension() == ".png" || e.path().extension() == ".svg", true)
-          << e.path();
+      EXPECT_EQ(e.path().extension() == ".png" || e.path().extension() == ".svg", true) << e.path();
       ++n;
     }
     EXPECT_EQ(n % 2, 0);
@@ -86,10 +84,10 @@ std::vector<std::vector<double>> heat_values(std::size_t ncols) {
 TEST_F(FiguresTest, HeatmapRendersTitleLabelsTracksAndCellValues) {
   const std::vector<std::string> tracks = {"square_cw", "figure8", "corridor"};
   auto v = heat_values(tracks.size());
-  v[0][0] = 12.34;     // printed as 12.3
-  v[6][2] = -5.06;     // printed as -5.1
-  v[3][1] = kNaN;      // missing cell
-  v[2][2] = -0.01;     // printed as 0.0, not -0.0
+  v[0][0] = 12.34;  // printed as 12.3
+  v[6][2] = -5.06;  // printed as -5.1
+  v[3][1] = kNaN;   // missing cell
+  v[2][2] = -0.01;  // printed as 0.0, not -0.0
   heatmap(dir_ / "heat", "RMSE improvement (%) — rq model", tracks, v);
   const std::string svg = expect_outputs("heat");
   expect_contains(svg, "RMSE improvement (%) — rq model");
@@ -140,8 +138,7 @@ TEST_F(FiguresTest, MissingOutputDirectoryThrowsAndLeavesNothing) {
     heatmap(missing / "heat", "t", {"a"}, std::vector<std::vector<double>>(7, {1.0}));
     FAIL() << "expected an exception";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("output directory does not exist"), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("output directory does not exist"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find(missing.string()), std::string::npos) << e.what();
   }
   EXPECT_FALSE(fs::exists(dir_ / "no"));
@@ -171,8 +168,7 @@ TEST_F(FiguresTest, MissingGnuplotIsAPlainError) {
     heatmap(dir_ / "h", "t", {"a"}, std::vector<std::vector<double>>(7, {1.0}));
   } catch (const std::runtime_error& e) {
     threw = true;
-    EXPECT_NE(std::string(e.what()).find("gnuplot is not installed"), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("gnuplot is not installed"), std::string::npos) << e.what();
   }
   ::setenv("PATH", saved.c_str(), 1);
   EXPECT_TRUE(threw);
@@ -197,7 +193,7 @@ TEST_F(FiguresTest, BoxplotsRenderModelsMetricsAndLegend) {
     }
   }
   data["gyro"]["MAXE"].push_back(kNaN);  // ignored
-  data["rq"]["MAE"].clear();              // no box
+  data["rq"]["MAE"].clear();             // no box
   boxplots(dir_ / "box", "Improvement per model", data);
   const std::string svg = expect_outputs("box");
   expect_contains(svg, "Improvement per model");

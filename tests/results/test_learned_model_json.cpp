@@ -133,7 +133,8 @@ TEST(LearnedModelJson, RoundTripIsExact) {
   // Writing what was read gives the same bytes.
   results::write_learned_model(dir / "again.json", r);
   std::ifstream a(dir / "m.json"), b(dir / "again.json");
-  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(a), {}), std::string(std::istreambuf_iterator<char>(b), {}));
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(a), {}),
+            std::string(std::istreambuf_iterator<char>(b), {}));
 }
 
 TEST(LearnedModelJson, DetectorIsOptional) {
@@ -151,7 +152,7 @@ TEST(LearnedModelJson, DetectorIsOptional) {
 struct BadCase {
   const char* name;
   std::function<void(json&)> mutate;
-  const char* field;   // must appear in the message
+  const char* field;  // must appear in the message
 };
 
 TEST(LearnedModelJson, BadFieldsAreOneLineErrorsNamingFileAndField) {
@@ -165,7 +166,8 @@ TEST(LearnedModelJson, BadFieldsAreOneLineErrorsNamingFileAndField) {
       {"negative mae", [](json& j) { j["odometry"]["w_validation_mae"] = -0.1; }, "odometry.w_validation_mae"},
       {"bad weight", [](json& j) { j["odometry"]["v_net"]["weights"][3] = "x"; }, "odometry.v_net"},
       {"short weights", [](json& j) { j["odometry"]["w_net"]["weights"].erase(0); }, "odometry.w_net"},
-      {"slip net as velocity net", [](json& j) { j["odometry"]["v_net"] = j["detector"]["v_net"]; }, "odometry.v_net"},
+      {"slip net as velocity net", [](json& j) { j["odometry"]["v_net"] = j["detector"]["v_net"]; },
+       "odometry.v_net"},
       {"relu velocity net", [](json& j) { j["odometry"]["v_net"]["activation"] = "relu"; }, "odometry.v_net"},
       {"zero floor", [](json& j) { j["detector"]["floor_var_w"] = 0; }, "detector.floor_var_w"},
       {"zero lag", [](json& j) { j["detector"]["previous_lag"] = 0; }, "detector.previous_lag"},
@@ -174,7 +176,8 @@ TEST(LearnedModelJson, BadFieldsAreOneLineErrorsNamingFileAndField) {
       {"no provenance", [](json& j) { j.erase("provenance"); }, "provenance"},
       {"negative seed", [](json& j) { j["provenance"]["seed"] = -1; }, "provenance.seed"},
       {"tracks not a list", [](json& j) { j["provenance"]["tracks"] = "a"; }, "provenance.tracks"},
-      {"track not a string", [](json& j) { j["provenance"]["slip_tracks"] = {1}; }, "provenance.slip_tracks[0]"},
+      {"track not a string", [](json& j) { j["provenance"]["slip_tracks"] = {1}; },
+       "provenance.slip_tracks[0]"},
       {"bad summary", [](json& j) { j["provenance"]["odometry"]["v"]["train_mae"] = "x"; },
        "provenance.odometry.v.train_mae"},
       {"bad detector summary", [](json& j) { j["provenance"]["detector"].erase("train_windows"); },

@@ -26,11 +26,11 @@ RunRecord run(const std::string& model, const std::string& track, int mode, std:
 
 std::vector<RunRecord> sample_runs() {
   return {
-      run("alpha", "t2", 7, 1, 0.100, 0.050),  // +50 %
-      run("alpha", "t2", 7, 2, 0.100, 0.070),  // +30 %
-      run("rq", "t2", 7, 1, 0.100, 0.080),     // +20 %
-      run("rq", "t1", 1, 1, 0.200, 0.100),     // +50 %
-      run("rq", "t1", 7, 1, 0.200, 0.300),     // −50 %
+      run("alpha", "t2", 7, 1, 0.100, 0.050),   // +50 %
+      run("alpha", "t2", 7, 2, 0.100, 0.070),   // +30 %
+      run("rq", "t2", 7, 1, 0.100, 0.080),      // +20 %
+      run("rq", "t1", 1, 1, 0.200, 0.100),      // +50 %
+      run("rq", "t1", 7, 1, 0.200, 0.300),      // −50 %
       run("rq", "", 7, 1, 0.100, 0.090, "t2"),  // held out, +10 %
       run("rq", "", 7, 2, 0.100, 0.070, "t2"),  // held out, +30 %
   };
@@ -102,10 +102,9 @@ TEST(ReportTables, GeneralisationPutsPerTrackAndHeldOutSideBySide) {
 }
 
 TEST(ReportHtml, InlinedSvgDropsThePrologAndPrefixesEveryId) {
-  const std::string svg =
-      "<?xml version=\"1.0\"?>\n<!DOCTYPE svg>\n<svg width=\"10\">"
-      "<filter id='textbox'/><path id=\"gpPt0\"/><use xlink:href=\"#gpPt0\"/>"
-      "<text filter='url(#textbox)'>x_y</text></svg>\n";
+  const std::string svg = "<?xml version=\"1.0\"?>\n<!DOCTYPE svg>\n<svg width=\"10\">"
+                          "<filter id='textbox'/><path id=\"gpPt0\"/><use xlink:href=\"#gpPt0\"/>"
+                          "<text filter='url(#textbox)'>x_y</text></svg>\n";
   const std::string out = inline_svg(svg, "f3-");
   EXPECT_EQ(out.rfind("<svg", 0), 0u) << out;
   EXPECT_EQ(out.find("<?xml"), std::string::npos);

@@ -100,8 +100,8 @@ TEST(RosExport, RqConversionPerStepToPerSecondAndMm2ToM2) {
   EXPECT_EQ(in.process_var_x_m2_per_s, 5e-3);  // one rounding only
   expect_rel_near(0.125, in.process_var_y_m2_per_s, 1e-12);
   expect_rel_near(5e-3, in.process_var_yaw_rad2_per_s, 1e-12);  // rad², no unit change
-  expect_rel_near(3.6e-3, in.fix_var_x_m2, 1e-12);                // (60 mm)²
-  expect_rel_near(9e-4, in.fix_var_y_m2, 1e-12);                  // (30 mm)²
+  expect_rel_near(3.6e-3, in.fix_var_x_m2, 1e-12);              // (60 mm)²
+  expect_rel_near(9e-4, in.fix_var_y_m2, 1e-12);                // (30 mm)²
   EXPECT_EQ(in.frequency_hz, 50.0);
   ASSERT_EQ(in.tuned_params.size(), 5u);
   EXPECT_EQ(in.tuned_params[0].first, "r1_mm2");
@@ -145,8 +145,8 @@ TEST(RosExport, FileIsValidRos2YamlWithDoubleLiterals) {
   // Tiny and huge values keep the float form.
   in.process_var_yaw_rad2_per_s = 1e-5;
   in.process_var_y_m2_per_s = 1e22;
-  const YAML::Node m2 = YAML::Load(robot_localization_yaml(in))["ekf_filter_node"]["ros__parameters"]
-                                                               ["process_noise_covariance"];
+  const YAML::Node m2 = YAML::Load(
+      robot_localization_yaml(in))["ekf_filter_node"]["ros__parameters"]["process_noise_covariance"];
   EXPECT_EQ(m2[5 * 15 + 5].Scalar(), "1.0e-05");
   EXPECT_TRUE(std::regex_match(m2[1 * 15 + 1].Scalar(), yaml11_float)) << m2[16].Scalar();
   EXPECT_EQ(m2[1 * 15 + 1].as<double>(), 1e22);
@@ -155,8 +155,8 @@ TEST(RosExport, FileIsValidRos2YamlWithDoubleLiterals) {
   std::istringstream lines(text);
   std::string line;
   int rows = 0;
-  const char* names[15] = {"x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz",
-                           "vroll", "vpitch", "vyaw", "ax", "ay", "az"};
+  const char* names[15] = {"x",  "y",     "z",      "roll", "pitch", "yaw", "vx", "vy",
+                           "vz", "vroll", "vpitch", "vyaw", "ax",    "ay",  "az"};
   bool in_matrix = false;
   while (std::getline(lines, line)) {
     if (line.find("process_noise_covariance: [") != std::string::npos) {
@@ -182,11 +182,10 @@ TEST(RosExport, CommentsExplainMappingConversionAndMeasurementCovariance) {
   RosExportInput in = ros_input_from_rq(100.0, 100.0, 1e-4, 3600.0, 2500.0, 50.0);
   in.provenance = "odotune tune: model rq, mode 7, seed 1, track1";
   const std::string text = robot_localization_yaml(in);
-  for (const char* needle :
-       {"odotune tune: model rq, mode 7, seed 1, track1", "r1_mm2 = 100", "q2_mm2 = 2500",
-        "odometry rate", "1e-6", "delta_sec", "src/ekf.cpp", "filter_base.cpp", "pose0",
-        "odom0", "covariance[0] (x, x) = 0.0036 m²", "covariance[7] (y, y) = 0.0025 m²",
-        "x, y, z, roll, pitch, yaw, vx, vy, vz, vroll, vpitch, vyaw, ax, ay, az"}) {
+  for (const char* needle : {"odotune tune: model rq, mode 7, seed 1, track1", "r1_mm2 = 100", "q2_mm2 = 2500",
+                             "odometry rate", "1e-6", "delta_sec", "src/ekf.cpp", "filter_base.cpp", "pose0",
+                             "odom0", "covariance[0] (x, x) = 0.0036 m²", "covariance[7] (y, y) = 0.0025 m²",
+                             "x, y, z, roll, pitch, yaw, vx, vy, vz, vroll, vpitch, vyaw, ax, ay, az"}) {
     EXPECT_NE(text.find(needle), std::string::npos) << "missing: " << needle << "\n" << text;
   }
 }
@@ -210,8 +209,8 @@ TEST(RosExport, MappingNoteReplacesTheRqExplanationLineByLine) {
   const std::string text = robot_localization_yaml(in);
   EXPECT_EQ(text.find("Mapping from odotune's rq model"), std::string::npos) << text;
   EXPECT_EQ(text.find("r1 [mm²/step]"), std::string::npos) << text;
-  for (const char* needle : {"\n# Mapping from the alpha model:\n", "\n#   Q = mean R x rate \n", "\n# evil: 3\n",
-                             "\n# last\n", "Values here: Q[x][x]", "filter_base.cpp"})
+  for (const char* needle : {"\n# Mapping from the alpha model:\n", "\n#   Q = mean R x rate \n",
+                             "\n# evil: 3\n", "\n# last\n", "Values here: Q[x][x]", "filter_base.cpp"})
     EXPECT_NE(text.find(needle), std::string::npos) << "missing: " << needle << "\n" << text;
   // Every line of the note is a comment: the YAML is unchanged.
   const YAML::Node root = YAML::Load(text);
@@ -295,8 +294,7 @@ TEST(RosExportErrors, MatrixOfWrongSizeOrContentIsExplained) {
 
   msg = message_of("n:\n  ros__parameters:\n    frequency: 1.0\n    two_d_mode: true\n"
                    "    process_noise_covariance: 3.0\n");
-  EXPECT_NE(msg.find("robot_localization YAML:5: 'process_noise_covariance' is not a list"),
-            std::string::npos)
+  EXPECT_NE(msg.find("robot_localization YAML:5: 'process_noise_covariance' is not a list"), std::string::npos)
       << msg;
 }
 
@@ -304,8 +302,7 @@ TEST(RosExportErrors, InvalidYamlAndWrongTypesGiveLineNumbers) {
   std::string msg = message_of("n:\n  ros__parameters:\n    frequency: [1.0\n");
   EXPECT_NE(msg.find("invalid YAML"), std::string::npos) << msg;
   msg = message_of("n:\n  ros__parameters:\n    frequency: fast\n    two_d_mode: true\n");
-  EXPECT_NE(msg.find("robot_localization YAML:3: 'frequency' is 'fast', expected a number"),
-            std::string::npos)
+  EXPECT_NE(msg.find("robot_localization YAML:3: 'frequency' is 'fast', expected a number"), std::string::npos)
       << msg;
   msg = message_of("n:\n  ros__parameters:\n    frequency: 1.0\n    two_d_mode: maybe\n");
   EXPECT_NE(msg.find(":4: 'two_d_mode' is 'maybe', expected true or false"), std::string::npos) << msg;
@@ -313,7 +310,6 @@ TEST(RosExportErrors, InvalidYamlAndWrongTypesGiveLineNumbers) {
   EXPECT_NE(msg.find("top level"), std::string::npos) << msg;
   EXPECT_THROW(parse_robot_localization_yaml(""), std::runtime_error);
 }
-
 
 std::string slurp(const fs::path& p) {
   std::ifstream f(p, std::ios::binary);

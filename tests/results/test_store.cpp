@@ -9,8 +9,8 @@ namespace {
 
 struct TempPath {
   std::filesystem::path p = std::filesystem::temp_directory_path() /
-                            ("odotune_store_" + std::to_string(::getpid()) + "_" +
-                             std::to_string(std::rand()) + ".sqlite");
+                            ("odotune_store_" + std::to_string(::getpid()) + "_" + std::to_string(std::rand()) +
+                             ".sqlite");
   ~TempPath() {
     for (const char* s : {"", "-wal", "-shm"}) std::filesystem::remove(p.string() + s);
   }

@@ -32,8 +32,8 @@ inline CliResult run_cli(const std::string& args) {
   const auto dir = std::filesystem::temp_directory_path() /
                    ("odotune_cli_" + std::to_string(::getpid()) + "_" + std::to_string(std::rand()));
   std::filesystem::create_directories(dir);
-  const std::string cmd = "CI=1 " + std::string(ODOTUNE_BINARY) + " " + args + " >" +
-                          (dir / "out").string() + " 2>" + (dir / "err").string();
+  const std::string cmd = "CI=1 " + std::string(ODOTUNE_BINARY) + " " + args + " >" + (dir / "out").string() +
+                          " 2>" + (dir / "err").string();
   const int status = std::system(cmd.c_str());
   CliResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -42,7 +42,6 @@ inline CliResult run_cli(const std::string& args) {
   std::filesystem::remove_all(dir);
   return r;
 }
-
 
 inline std::string reference_track(int i) {
   return std::string(ODOTUNE_SOURCE_DIR) + "/data/tracks/track" + std::to_string(i) + ".csv";

@@ -17,9 +17,8 @@ inline std::map<std::string, std::string> store_rows(const std::filesystem::path
   std::map<std::string, std::string> out;
   for (const auto& r : results::Store(store).runs()) {
     std::string v = fmt::format("{:a} {:a} {:a} {:a} {:a} {:a} {:a} {} {} {}", r.best_fitness,
-                                r.baseline.rmse_m, r.baseline.mae_m, r.baseline.maxe_m,
-                                r.tuned.rmse_m, r.tuned.mae_m, r.tuned.maxe_m, r.evaluations,
-                                r.diverged, r.termination);
+                                r.baseline.rmse_m, r.baseline.mae_m, r.baseline.maxe_m, r.tuned.rmse_m,
+                                r.tuned.mae_m, r.tuned.maxe_m, r.evaluations, r.diverged, r.termination);
     for (std::size_t i = 0; i < r.params.size(); ++i)
       v += fmt::format(" {}={:a}", i < r.param_names.size() ? r.param_names[i] : "?", r.params[i]);
     for (const auto& c : r.convergence) v += fmt::format(" {}:{:a}", c.evaluations, c.best_fitness);

@@ -36,8 +36,8 @@ class TempDir {
   std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
   // Number of entries directly inside.
   std::size_t entries() const {
-    return static_cast<std::size_t>(
-        std::distance(std::filesystem::directory_iterator(path_), std::filesystem::directory_iterator{}));
+    return static_cast<std::size_t>(std::distance(std::filesystem::directory_iterator(path_),
+                                                  std::filesystem::directory_iterator{}));
   }
 
  private:

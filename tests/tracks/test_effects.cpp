@@ -116,8 +116,8 @@ TEST(EffectSpec, UnknownEffectNamesTheValidOnesAndSuggests) {
   EXPECT_THAT(e, AllOf(HasSubstr("unknown effect 'lateral_skd'"), HasSubstr("did you mean 'lateral_skid'"),
                        HasSubstr("radius_error"), HasSubstr("time_offset")));
   EXPECT_EQ(e.find('\n'), std::string::npos);
-  EXPECT_THAT(error_of("warp_drive"), AllOf(HasSubstr("unknown effect 'warp_drive'"),
-                                            ::testing::Not(HasSubstr("did you mean"))));
+  EXPECT_THAT(error_of("warp_drive"),
+              AllOf(HasSubstr("unknown effect 'warp_drive'"), ::testing::Not(HasSubstr("did you mean"))));
 }
 
 TEST(EffectSpec, UnknownParameterNamesTheValidOnes) {
@@ -128,8 +128,8 @@ TEST(EffectSpec, UnknownParameterNamesTheValidOnes) {
 }
 
 TEST(EffectSpec, BadValuesAreNamed) {
-  EXPECT_THAT(error_of("lateral_skid:k=abc"), AllOf(HasSubstr("lateral_skid.k"), HasSubstr("'abc'"),
-                                                   HasSubstr("not a number")));
+  EXPECT_THAT(error_of("lateral_skid:k=abc"),
+              AllOf(HasSubstr("lateral_skid.k"), HasSubstr("'abc'"), HasSubstr("not a number")));
   EXPECT_THAT(error_of("lateral_skid:k=0.02x"), HasSubstr("'0.02x'"));
   EXPECT_THAT(error_of("lateral_skid:k="), HasSubstr("not a number"));
   EXPECT_THAT(error_of("lateral_skid:k=nan"), HasSubstr("lateral_skid.k"));

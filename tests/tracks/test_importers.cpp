@@ -153,7 +153,8 @@ TEST(ImportMrclam, Robot1PathLengths) {
   for (std::size_t i = 0; i < tr.size(); ++i) {
     if (tr.at(Col::gt_x, i)) {
       if (pg < tr.size())
-        gt_path += std::hypot(tr.col(Col::gt_x)[i] - tr.col(Col::gt_x)[pg], tr.col(Col::gt_y)[i] - tr.col(Col::gt_y)[pg]);
+        gt_path += std::hypot(tr.col(Col::gt_x)[i] - tr.col(Col::gt_x)[pg],
+                              tr.col(Col::gt_y)[i] - tr.col(Col::gt_y)[pg]);
       pg = i;
     }
     if (tr.at(Col::v_cmd, i)) {
@@ -255,7 +256,8 @@ void check_optiodom_run(const OptiRun& p) {
   EXPECT_EQ(tr.col(Col::gt_theta)[0], 0.0);
   double path = 0;
   for (std::size_t i = 1; i < tr.size(); ++i)
-    path += std::hypot(tr.col(Col::gt_x)[i] - tr.col(Col::gt_x)[i - 1], tr.col(Col::gt_y)[i] - tr.col(Col::gt_y)[i - 1]);
+    path += std::hypot(tr.col(Col::gt_x)[i] - tr.col(Col::gt_x)[i - 1],
+                       tr.col(Col::gt_y)[i] - tr.col(Col::gt_y)[i - 1]);
   EXPECT_NEAR(path, p.gt_path_m, 0.006);
 
   // Dead reckoning of the ticks with the track's own metadata (midpoint rule).

@@ -41,7 +41,8 @@ std::vector<std::string> read_lines(const fs::path& p) {
 }
 
 // Writes lines[0 .. n) joined by '\n', then `tail` (no newline after it).
-void write_lines(const fs::path& p, const std::vector<std::string>& lines, std::size_t n, const std::string& tail = "") {
+void write_lines(const fs::path& p, const std::vector<std::string>& lines, std::size_t n,
+                 const std::string& tail = "") {
   std::ofstream out(p, std::ios::binary);
   for (std::size_t i = 0; i < n && i < lines.size(); ++i) out << lines[i] << '\n';
   out << tail;
@@ -157,7 +158,8 @@ TEST(ImportErrors, OptiOdomGarbledRunAndUnmatchedLog) {
   write_lines(dir.path() / "231220200146.csv", log, log.size());
   tr = import_optiodom(run);
   EXPECT_FALSE(tr.has_cmd());
-  EXPECT_EQ(tr.meta().get("source.cmd_alignment")->rfind("not added", 0), 0u) << *tr.meta().get("source.cmd_alignment");
+  EXPECT_EQ(tr.meta().get("source.cmd_alignment")->rfind("not added", 0), 0u)
+      << *tr.meta().get("source.cmd_alignment");
 
   // Garbled run file: a letter in odoL on line 100; a missing field on line 7.
   auto lines = read_lines(kCircular / "231220200146_run-01.csv");

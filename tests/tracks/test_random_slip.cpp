@@ -95,7 +95,9 @@ TEST(RandomSlip, LayoutsMixKindsAndWheelsAndDependOnlyOnTheSeed) {
       seen.insert({static_cast<int>(e.kind), static_cast<int>(e.wheel)});
   EXPECT_EQ(seen.size(), 4u);  // spin/hold × left/right
 
-  const auto text = [&](std::uint64_t seed) { return format_slip_episodes(random_slip_episodes(profile, seed)); };
+  const auto text = [&](std::uint64_t seed) {
+    return format_slip_episodes(random_slip_episodes(profile, seed));
+  };
   EXPECT_EQ(text(7), text(7));
   EXPECT_NE(text(7), text(8));
 }

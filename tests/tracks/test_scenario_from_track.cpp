@@ -243,7 +243,9 @@ Odometry dead_reckoning(const Track& tr) {
   return o;
 }
 
-double gt_heading_change(const Track& tr) { return tr.col(Col::gt_theta).back() - tr.col(Col::gt_theta).front(); }
+double gt_heading_change(const Track& tr) {
+  return tr.col(Col::gt_theta).back() - tr.col(Col::gt_theta).front();
+}
 
 // --- re-simulation ------------------------------------------------------------------
 
@@ -369,11 +371,11 @@ TEST(ScenarioFromTrack, PositionFixesAloneGiveThePathInItsFrame) {
   };
   for (const Case& c : {Case{5.0, 0.02, 0, 0, 0}, Case{1.0, 0.06, 0, 0, 0}, Case{5.0, 0.02, -3, 4, -2.5},
                         Case{1.0, 0.06, -3, 4, -2.5}}) {
-    SCOPED_TRACE(testing::Message() << c.rate_hz << " Hz fixes, sigma " << c.sigma_m << " m, start " << c.x << ", "
-                                    << c.y << ", " << c.theta);
+    SCOPED_TRACE(testing::Message() << c.rate_hz << " Hz fixes, sigma " << c.sigma_m << " m, start " << c.x
+                                    << ", " << c.y << ", " << c.theta);
     Scenario s = drive({"lateral_skid:k=0.02"});
-    s.motion.segments = {seg(K::stop, 1, 0),          seg(K::straight, 3, 0.5), seg(K::arc, 1.5, 90, 0.5),
-                         seg(K::straight, 2, 0.5),    seg(K::arc, 2, -120, 0.5), seg(K::straight, 3, 0.5),
+    s.motion.segments = {seg(K::stop, 1, 0),       seg(K::straight, 3, 0.5),  seg(K::arc, 1.5, 90, 0.5),
+                         seg(K::straight, 2, 0.5), seg(K::arc, 2, -120, 0.5), seg(K::straight, 3, 0.5),
                          seg(K::stop, 1, 0)};
     s.sensors.aps.rate_hz = c.rate_hz;
     s.sensors.aps.sigma_m = c.sigma_m;
@@ -564,7 +566,7 @@ TEST(ScenarioFromTrack, ARecordedTrackGetsRatesFromItsRowsAndDocumentedDefaults)
   EXPECT_FALSE(sc.sensors.gyro.enabled);
   EXPECT_FALSE(sc.sensors.power.enabled);
   EXPECT_EQ(sc.sensors.ext_velocity.rate_hz, 10);
-  EXPECT_DOUBLE_EQ(sc.sensors.ext_velocity.sigma_v_m_s, 0.03);   // sqrt of the variance column
+  EXPECT_DOUBLE_EQ(sc.sensors.ext_velocity.sigma_v_m_s, 0.03);  // sqrt of the variance column
   EXPECT_DOUBLE_EQ(sc.sensors.ext_velocity.sigma_w_rad_s, 0.04);
   EXPECT_EQ(sc.sensors.aps.rate_hz, 1);
   EXPECT_EQ(sc.sensors.aps.sigma_m, def.aps.sigma_m);  // no sim.aps_sigma_m: default

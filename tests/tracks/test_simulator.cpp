@@ -95,7 +95,8 @@ double tick_m(const Track& tr) { return 2 * kPi * *tr.meta().wheel_radius_left_m
 double gt_distance(const Track& tr, std::size_t a, std::size_t b) {
   double d = 0;
   for (std::size_t i = a; i < b; ++i)
-    d += std::hypot(tr.col(Col::gt_x)[i + 1] - tr.col(Col::gt_x)[i], tr.col(Col::gt_y)[i + 1] - tr.col(Col::gt_y)[i]);
+    d += std::hypot(tr.col(Col::gt_x)[i + 1] - tr.col(Col::gt_x)[i],
+                    tr.col(Col::gt_y)[i + 1] - tr.col(Col::gt_y)[i]);
   return d;
 }
 double tick_distance(const Track& tr, std::size_t a, std::size_t b) {
@@ -145,7 +146,8 @@ TEST(Simulator, RadiusErrorCurvesTheTruePathButNotTheTicks) {
   EXPECT_NEAR(a.col(Col::gt_y)[n], 0.0, 1e-12);
   // True heading change = (R_r_true*phi_r - R_l*phi_l)/D, phi from the ticks (+-1 count).
   const double q = tick_m(b);
-  const double expect = (1.01 * static_cast<double>(b.ticks_r()[n]) - static_cast<double>(b.ticks_l()[n])) * q / 0.30;
+  const double expect = (1.01 * static_cast<double>(b.ticks_r()[n]) - static_cast<double>(b.ticks_l()[n])) * q /
+                        0.30;
   EXPECT_NEAR(b.col(Col::gt_theta)[n], expect, 2 * q / 0.30);
   EXPECT_GT(expect, 0.1);
   EXPECT_GT(b.col(Col::gt_y)[n], 0.1);  // curves left
@@ -377,7 +379,7 @@ TEST(Simulator, OdometryBiasBvMakesAStandingRobotsOdometryDriftByBvT) {
     ASSERT_EQ(tr.col(Col::v_cmd)[i], 0.02) << i;
     ASSERT_EQ(tr.col(Col::w_cmd)[i], 0.0) << i;
   }
-  EXPECT_NEAR(dr.x.back(), 0.2, q);  // 20 cm in 10 s at rest
+  EXPECT_NEAR(dr.x.back(), 0.2, q);      // 20 cm in 10 s at rest
   EXPECT_GT(tr.ticks_l().back(), 2000);  // 0.2 m / (2 pi 0.05 m / 4096) = 2608 counts
 
   // While moving, too: the recorded ticks' nominal travel exceeds that of the
@@ -471,19 +473,23 @@ TEST(Simulator, EachEffectChangesExactlyItsColumns) {
   Scenario sc;  // default, noisy sensors: the noise streams must not shift either
   sc.seed = 11;
   sc.sensors.encoders.omega = true;
-  sc.motion.segments = {stop(0.5), straight(2, 0.5), arc(0.8, 90, 0.4), spin(90, 60), straight(1, 0.4), stop(0.5)};
+  sc.motion.segments = {stop(0.5),    straight(2, 0.5), arc(0.8, 90, 0.4),
+                        spin(90, 60), straight(1, 0.4), stop(0.5)};
   const Track base = simulate(sc);
   struct Group {
     const char* name;
     std::vector<Col> cols;
     bool ticks;
   };
-  const std::vector<Group> groups = {
-      {"ticks", {}, true},          {"omega", {Col::omega_l, Col::omega_r}, false},
-      {"cmd", {Col::v_cmd, Col::w_cmd}, false}, {"gyro", {Col::gyro_z}, false},
-      {"power", {Col::power_l, Col::power_r}, false}, {"v_ext", {Col::v_ext}, false},
-      {"w_ext", {Col::w_ext}, false}, {"aps", {Col::aps_x, Col::aps_y}, false},
-      {"gt", {Col::gt_x, Col::gt_y, Col::gt_theta}, false}};
+  const std::vector<Group> groups = {{"ticks", {}, true},
+                                     {"omega", {Col::omega_l, Col::omega_r}, false},
+                                     {"cmd", {Col::v_cmd, Col::w_cmd}, false},
+                                     {"gyro", {Col::gyro_z}, false},
+                                     {"power", {Col::power_l, Col::power_r}, false},
+                                     {"v_ext", {Col::v_ext}, false},
+                                     {"w_ext", {Col::w_ext}, false},
+                                     {"aps", {Col::aps_x, Col::aps_y}, false},
+                                     {"gt", {Col::gt_x, Col::gt_y, Col::gt_theta}, false}};
   const std::string wheels_and_world = "gyro power v_ext w_ext aps gt";
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"radius_error:scale_l=0.99,scale_r=1.01", wheels_and_world},
@@ -577,7 +583,8 @@ TEST(Simulator, PowerFollowsTheMotorModel) {
   const std::size_t i = row_at(tr, 4.0);
   const double om = tr.col(Col::omega_l)[i];
   EXPECT_NEAR(om, 0.5 / 0.05, 1e-9);
-  const double tau = r.viscous_friction_nm_s * om + r.coulomb_friction_nm * std::tanh(om / r.coulomb_smoothing_rad_s);
+  const double tau = r.viscous_friction_nm_s * om +
+                     r.coulomb_friction_nm * std::tanh(om / r.coulomb_smoothing_rad_s);
   const double p = tau * om + std::pow(tau / r.torque_constant_nm_per_a, 2) * r.coil_resistance_ohm;
   EXPECT_NEAR(tr.col(Col::power_l)[i], p, 1e-9);
   EXPECT_NEAR(tr.col(Col::power_r)[i], p, 1e-9);
@@ -588,7 +595,8 @@ TEST(Simulator, PowerFollowsTheMotorModel) {
 }
 
 TEST(Simulator, StartPoseMovesTheWorldPathRigidlyAndNothingElse) {
-  const Scenario origin = quiet({stop(0.5), straight(2, 0.5), arc(0.6, 150, 0.4), spin(-200, 90), straight(-1, 0.3)});
+  const Scenario origin = quiet({stop(0.5), straight(2, 0.5), arc(0.6, 150, 0.4), spin(-200, 90),
+                                 straight(-1, 0.3)});
   Scenario moved = origin;
   moved.motion.start_x_m = 1, moved.motion.start_y_m = -2, moved.motion.start_theta_rad = 0.7;
   const Track a = simulate(origin), b = simulate(moved);
@@ -680,9 +688,9 @@ MotionParams motion(std::vector<Segment> segs, double acc = 0.5, double ang = 2.
 }
 
 TEST(MotionProfile, RespectsLimitsAndMeetsTheGeometry) {
-  const std::vector<Segment> segs = {straight(2, 0.6), arc(0.7, 90, 0.4), spin(-180, 120), stop(2),
+  const std::vector<Segment> segs = {straight(2, 0.6),    arc(0.7, 90, 0.4),  spin(-180, 120), stop(2),
                                      straight(0.05, 1.0),  // too short for its speed: lowered
-                                     arc(0.3, -45, 0.3), straight(-0.5, 0.3)};
+                                     arc(0.3, -45, 0.3),  straight(-0.5, 0.3)};
   const MotionParams m = motion(segs);
   const MotionProfile p(m);
   const double h = 1e-4;
@@ -703,7 +711,8 @@ TEST(MotionProfile, RespectsLimitsAndMeetsTheGeometry) {
   for (const auto& s : segs) {
     if (s.kind == Segment::Kind::straight) want_dist += s.distance_m;
     if (s.kind == Segment::Kind::arc) want_dist += s.radius_m * std::abs(s.angle_deg) * kPi / 180;
-    if (s.kind != Segment::Kind::stop) want_angle += s.kind == Segment::Kind::straight ? 0 : s.angle_deg * kPi / 180;
+    if (s.kind != Segment::Kind::stop)
+      want_angle += s.kind == Segment::Kind::straight ? 0 : s.angle_deg * kPi / 180;
   }
   EXPECT_NEAR(dist, want_dist, 1e-6);
   EXPECT_NEAR(angle, want_angle, 1e-6);

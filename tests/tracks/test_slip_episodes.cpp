@@ -221,14 +221,16 @@ TEST(SlipEpisodes, StrengthRampsUpHoldsAndRampsDown) {
   EXPECT_FALSE(slipping(list, 10.0));
   const SlipSchedule schedule(list);
   for (double t = 0; t < 11; t += 0.0137)
-    for (Wheel w : {Wheel::left, Wheel::right}) EXPECT_EQ(schedule.at(t, w).strength, slip_strength(list, t, w)) << t;
+    for (Wheel w : {Wheel::left, Wheel::right})
+      EXPECT_EQ(schedule.at(t, w).strength, slip_strength(list, t, w)) << t;
 
   // In the simulation: the hold's wheel rate follows the ramp (rows at 100 Hz).
   Scenario sc = chair();
   sc.slip_episodes = {episode(Kind::hold, Wheel::right, 5, 8, 0.6, 0.4, 10)};
   const Track tr = simulate(sc);
   for (double t : {5.0, 5.1, 5.2, 5.3, 6.0, 7.7, 8.0, 8.5})
-    EXPECT_NEAR(tr.col(Col::omega_r)[row_at(tr, t)], kOmega * (1 - episode_strength(sc.slip_episodes[0], t)), 1e-9)
+    EXPECT_NEAR(tr.col(Col::omega_r)[row_at(tr, t)], kOmega * (1 - episode_strength(sc.slip_episodes[0], t)),
+                1e-9)
         << t;
 }
 
@@ -250,8 +252,8 @@ TEST(SlipEpisodes, EpisodesOnBothWheelsMayOverlap) {
   std::string why;
   ASSERT_TRUE(validate_scenario(sc, &why)) << why;
   const Track base = simulate(chair()), tr = simulate(sc);
-  EXPECT_EQ(tr.ticks_l(), base.ticks_l());                          // spin: rotation untouched
-  EXPECT_LT(tr.ticks_r().back() + 1000, base.ticks_r().back());     // hold: counts missed
+  EXPECT_EQ(tr.ticks_l(), base.ticks_l());                       // spin: rotation untouched
+  EXPECT_LT(tr.ticks_r().back() + 1000, base.ticks_r().back());  // hold: counts missed
   const std::size_t both = row_at(tr, 7);
   EXPECT_LT(tr.col(Col::power_l)[both], base.col(Col::power_l)[both]);
   EXPECT_GT(tr.col(Col::power_r)[both], base.col(Col::power_r)[both]);
@@ -260,17 +262,16 @@ TEST(SlipEpisodes, EpisodesOnBothWheelsMayOverlap) {
 TEST(SlipEpisodes, MetadataTextIsExactAndRoundTrips) {
   const std::vector<SlipEpisode> list = {episode(Kind::spin, Wheel::left, 40, 44, 0.6),
                                          episode(Kind::hold, Wheel::right, 70.125, 73, 0.5, 0.25, 6)};
-  EXPECT_EQ(format_slip_episodes(list),
-            "spin:wheel=left,t0_s=40,t1_s=44,s=0.6,ramp_s=0.2; "
-            "hold:wheel=right,t0_s=70.125,t1_s=73,s=0.5,ramp_s=0.25,brake_nm=6");
+  EXPECT_EQ(format_slip_episodes(list), "spin:wheel=left,t0_s=40,t1_s=44,s=0.6,ramp_s=0.2; "
+                                        "hold:wheel=right,t0_s=70.125,t1_s=73,s=0.5,ramp_s=0.25,brake_nm=6");
   EXPECT_EQ(format_slip_episodes({}), "none");
   EXPECT_TRUE(parse_slip_episodes("none").empty());
   EXPECT_TRUE(parse_slip_episodes("").empty());
 
   // Awkward doubles come back bit for bit.
-  const std::vector<SlipEpisode> odd = {episode(Kind::hold, Wheel::left, 0.1 + 0.2, 1.0 / 3.0 + 2, 0.1 * 3, 0.7 / 7,
-                                                12.000000000000002),
-                                        episode(Kind::spin, Wheel::right, 1e-3, 123.456789012345, 0.9)};
+  const std::vector<SlipEpisode> odd = {
+      episode(Kind::hold, Wheel::left, 0.1 + 0.2, 1.0 / 3.0 + 2, 0.1 * 3, 0.7 / 7, 12.000000000000002),
+      episode(Kind::spin, Wheel::right, 1e-3, 123.456789012345, 0.9)};
   const std::vector<SlipEpisode> back = parse_slip_episodes(format_slip_episodes(odd));
   ASSERT_EQ(back.size(), odd.size());
   for (std::size_t i = 0; i < odd.size(); ++i) {
@@ -290,7 +291,8 @@ TEST(SlipEpisodes, MetadataTextIsExactAndRoundTrips) {
 
   // Through a simulated track and its file.
   Scenario sc = chair();
-  sc.slip_episodes = {episode(Kind::spin, Wheel::left, 5, 8, 0.5), episode(Kind::hold, Wheel::right, 2.5, 4.25, 0.3)};
+  sc.slip_episodes = {episode(Kind::spin, Wheel::left, 5, 8, 0.5),
+                      episode(Kind::hold, Wheel::right, 2.5, 4.25, 0.3)};
   std::ostringstream file;
   format_track(simulate(sc), file);
   EXPECT_THAT(file.str(), HasSubstr("sim.slip_episodes: spin:wheel=left,t0_s=5,t1_s=8,s=0.5,ramp_s=0.2; "
@@ -318,7 +320,7 @@ TEST(SlipEpisodes, BadTextGivesOneLineErrors) {
   };
   const std::string ok = "wheel=left,t0_s=1,t1_s=2,s=0.5";
   EXPECT_THAT(error_of("slide:" + ok), AllOf(HasSubstr("slip episode 1"), HasSubstr("kind 'slide'"),
-                                              HasSubstr("expected spin or hold")));
+                                             HasSubstr("expected spin or hold")));
   EXPECT_THAT(error_of("spin:wheel=middle,t0_s=1,t1_s=2,s=0.5"),
               AllOf(HasSubstr("wheel = 'middle'"), HasSubstr("left or right")));
   EXPECT_THAT(error_of("spin:wheel=left,t0_s=1,t1_s=2"), HasSubstr("missing s"));
@@ -332,8 +334,10 @@ TEST(SlipEpisodes, BadTextGivesOneLineErrors) {
   EXPECT_THAT(error_of("spin:wheel=left,t0_s=1,t1_s=2,s=1.5"),
               AllOf(StartsWith("slip_episodes[1]: s = 1.5"), HasSubstr("(0, 0.9]")));
   EXPECT_THAT(error_of("spin:" + ok + "; hold:wheel=left,t0_s=1.5,t1_s=3,s=0.5"),
-              AllOf(HasSubstr("slip_episodes[2]"), HasSubstr("overlaps slip_episodes[1]"), HasSubstr("left wheel")));
-  for (const std::string& bad : std::vector<std::string>{"slide:" + ok, "spin:" + ok + ",s=0.4", "spin:wheel=left,t0_s=1,t1_s=2,s=2"})
+              AllOf(HasSubstr("slip_episodes[2]"), HasSubstr("overlaps slip_episodes[1]"),
+                    HasSubstr("left wheel")));
+  for (const std::string& bad :
+       std::vector<std::string>{"slide:" + ok, "spin:" + ok + ",s=0.4", "spin:wheel=left,t0_s=1,t1_s=2,s=2"})
     EXPECT_THAT(error_of(bad), Not(HasSubstr("\n")));
 
   TrackMeta meta;
@@ -355,19 +359,24 @@ TEST(SlipEpisodes, ValidationNamesEpisodeFieldValueAndExpectation) {
     EXPECT_THROW((void)simulate(sc), std::invalid_argument);
     return why;
   };
-  EXPECT_THAT(why_of({episode(Kind::spin, Wheel::left, 5, 8, 0.3), episode(Kind::hold, Wheel::right, 1, 2, 0.95)}),
-              AllOf(StartsWith("slip_episodes[2]: s = 0.95"), HasSubstr("(0, 0.9]")));
+  EXPECT_THAT(
+      why_of({episode(Kind::spin, Wheel::left, 5, 8, 0.3), episode(Kind::hold, Wheel::right, 1, 2, 0.95)}),
+      AllOf(StartsWith("slip_episodes[2]: s = 0.95"), HasSubstr("(0, 0.9]")));
   EXPECT_THAT(why_of({episode(Kind::spin, Wheel::left, 5, 8, 0.0)}), StartsWith("slip_episodes[1]: s = 0;"));
   EXPECT_THAT(why_of({episode(Kind::spin, Wheel::left, 5, 5.3, 0.5, 0.2)}),
               AllOf(StartsWith("slip_episodes[1]: ramp_s = 0.2"), HasSubstr("2*ramp_s <= t1_s - t0_s")));
-  EXPECT_THAT(why_of({episode(Kind::spin, Wheel::left, 5, 8, 0.5, 0.0)}), StartsWith("slip_episodes[1]: ramp_s = 0;"));
+  EXPECT_THAT(why_of({episode(Kind::spin, Wheel::left, 5, 8, 0.5, 0.0)}),
+              StartsWith("slip_episodes[1]: ramp_s = 0;"));
   EXPECT_THAT(why_of({episode(Kind::spin, Wheel::left, 5, 4, 0.5)}),
               AllOf(StartsWith("slip_episodes[1]: t1_s = 4"), HasSubstr("> t0_s = 5")));
-  EXPECT_THAT(why_of({episode(Kind::spin, Wheel::left, -1, 4, 0.5)}), StartsWith("slip_episodes[1]: t0_s = -1"));
-  EXPECT_THAT(why_of({episode(Kind::hold, Wheel::left, 1, 4, 0.5, 0.2, -2)}), StartsWith("slip_episodes[1]: brake_nm = -2"));
+  EXPECT_THAT(why_of({episode(Kind::spin, Wheel::left, -1, 4, 0.5)}),
+              StartsWith("slip_episodes[1]: t0_s = -1"));
+  EXPECT_THAT(why_of({episode(Kind::hold, Wheel::left, 1, 4, 0.5, 0.2, -2)}),
+              StartsWith("slip_episodes[1]: brake_nm = -2"));
   EXPECT_THAT(why_of({episode(Kind::spin, Wheel::left, 1, 4, 0.5, 0.2, 2)}),
               AllOf(StartsWith("slip_episodes[1]: brake_nm = 2"), HasSubstr("hold episodes only")));
-  EXPECT_THAT(why_of({episode(Kind::spin, Wheel::left, 1, 4, std::nan(""))}), StartsWith("slip_episodes[1]: s = nan"));
+  EXPECT_THAT(why_of({episode(Kind::spin, Wheel::left, 1, 4, std::nan(""))}),
+              StartsWith("slip_episodes[1]: s = nan"));
   EXPECT_THAT(why_of({episode(Kind::spin, Wheel::left, 100, 104, 0.5)}),
               AllOf(StartsWith("slip_episodes[1]: t0_s = 100"), HasSubstr("end of the motion")));
   SlipEpisode odd = episode(Kind::spin, Wheel::left, 1, 4, 0.5);
@@ -376,14 +385,19 @@ TEST(SlipEpisodes, ValidationNamesEpisodeFieldValueAndExpectation) {
   // Same wheel overlapping: both named, whatever the list order; touching is fine.
   SlipEpisode first = episode(Kind::hold, Wheel::right, 2, 6, 0.5);
   first.line = 12;
-  EXPECT_THAT(why_of({first, episode(Kind::spin, Wheel::left, 1, 3, 0.5), episode(Kind::spin, Wheel::right, 5, 9, 0.5)}),
-              AllOf(StartsWith("slip_episodes[3] ([5, 9] s) overlaps slip_episodes[1] (line 12) ([2, 6] s) on the right "
-                               "wheel"),
-                    HasSubstr("not to overlap")));
-  EXPECT_THAT(why_of({episode(Kind::spin, Wheel::left, 5, 9, 0.5), episode(Kind::spin, Wheel::left, 1, 12, 0.5)}),
-              StartsWith("slip_episodes[2] ([1, 12] s) overlaps slip_episodes[1]"));
+  EXPECT_THAT(
+      why_of({first, episode(Kind::spin, Wheel::left, 1, 3, 0.5),
+              episode(Kind::spin, Wheel::right, 5, 9, 0.5)}),
+      AllOf(
+          StartsWith("slip_episodes[3] ([5, 9] s) overlaps slip_episodes[1] (line 12) ([2, 6] s) on the right "
+                     "wheel"),
+          HasSubstr("not to overlap")));
+  EXPECT_THAT(
+      why_of({episode(Kind::spin, Wheel::left, 5, 9, 0.5), episode(Kind::spin, Wheel::left, 1, 12, 0.5)}),
+      StartsWith("slip_episodes[2] ([1, 12] s) overlaps slip_episodes[1]"));
   Scenario touching = chair();
-  touching.slip_episodes = {episode(Kind::spin, Wheel::left, 2, 5, 0.5), episode(Kind::hold, Wheel::left, 5, 8, 0.5)};
+  touching.slip_episodes = {episode(Kind::spin, Wheel::left, 2, 5, 0.5),
+                            episode(Kind::hold, Wheel::left, 5, 8, 0.5)};
   std::string why;
   EXPECT_TRUE(validate_scenario(touching, &why)) << why;
 }
@@ -393,7 +407,8 @@ TEST(SlipEpisodes, SameSeedSameTrack) {
   sc.sensors.power.sigma_w = 0.5;
   sc.sensors.gyro.sigma_rad_s = 0.002;
   sc.sensors.ext_velocity.sigma_v_m_s = 0.02;
-  sc.slip_episodes = {episode(Kind::spin, Wheel::left, 3, 6, 0.6), episode(Kind::hold, Wheel::right, 7, 10, 0.4, 0.3, 12)};
+  sc.slip_episodes = {episode(Kind::spin, Wheel::left, 3, 6, 0.6),
+                      episode(Kind::hold, Wheel::right, 7, 10, 0.4, 0.3, 12)};
   auto text = [](const Scenario& s) {
     std::ostringstream out;
     format_track(simulate(s), out);

@@ -39,8 +39,8 @@ TEST(SyntheticFixes, OnePerPeriodWithTheRequestedNoise) {
       EXPECT_NEAR(out.t()[i] - last_t, 0.5, 1e-9);
     }
     last_t = out.t()[i];
-    for (double e : {out.col(Col::aps_x)[i] - out.col(Col::gt_x)[i],
-                     out.col(Col::aps_y)[i] - out.col(Col::gt_y)[i]}) {
+    for (double e :
+         {out.col(Col::aps_x)[i] - out.col(Col::gt_x)[i], out.col(Col::aps_y)[i] - out.col(Col::gt_y)[i]}) {
       sum += e;
       sum_sq += e * e;
     }

@@ -48,13 +48,12 @@ TrackError error_of(const std::string& text) {
 }
 
 // Lines 1..6: format and robot metadata.
-const std::string kMeta =
-    "# format: odotune-track/1\n"
-    "# name: base\n"
-    "# robot.ticks_per_rev: 1000\n"
-    "# robot.wheel_radius_left: 0.1\n"
-    "# robot.wheel_radius_right: 0.11\n"
-    "# robot.wheel_base: 0.5\n";
+const std::string kMeta = "# format: odotune-track/1\n"
+                          "# name: base\n"
+                          "# robot.ticks_per_rev: 1000\n"
+                          "# robot.wheel_radius_left: 0.1\n"
+                          "# robot.wheel_radius_right: 0.11\n"
+                          "# robot.wheel_base: 0.5\n";
 // Line 7: header; data rows start at line 8.
 const std::string kHeader = "t,ticks_l,ticks_r,gyro_z\n";
 
@@ -156,7 +155,8 @@ TEST(TrackIoErrors, TickColumnWithoutTicksPerRev) {
 }
 
 TEST(TrackIoErrors, WheelColumnsWithoutGeometry) {
-  const auto e = error_of("# format: odotune-track/1\n# robot.wheel_radius_left: 0.1\nt,omega_l,omega_r\n0,0,0\n");
+  const auto e = error_of(
+      "# format: odotune-track/1\n# robot.wheel_radius_left: 0.1\nt,omega_l,omega_r\n0,0,0\n");
   EXPECT_EQ(e.line(), 3u);
   EXPECT_THAT(e.reason(), HasSubstr("missing: robot.wheel_radius_right robot.wheel_base"));
   // v_cmd/w_cmd alone need no robot metadata.
@@ -178,9 +178,9 @@ TEST(TrackIoErrors, MisspelledColumnWithSuggestion) {
   // {typo, meant}; the odometry columns of the header avoid the meant name,
   // since names already in the header are not suggested.
   const std::pair<const char*, const char*> cases[] = {
-      {"Gyro_Z", "gyro_z"},    {"gyroz", "gyro_z"},     {"gyro", "gyro_z"},        {"gyro_z_rad", "gyro_z"},
-      {"v_cdm", "v_cmd"},      {"tick_l", "ticks_l"},   {"ticks_left", "ticks_l"}, {"gt_theat", "gt_theta"},
-      {"aps_z", "aps_x"},      {"power", "power_l"},    {"omegal", "omega_l"},     {"raw_gyro_z", "gyro_z"}};
+      {"Gyro_Z", "gyro_z"}, {"gyroz", "gyro_z"},   {"gyro", "gyro_z"},        {"gyro_z_rad", "gyro_z"},
+      {"v_cdm", "v_cmd"},   {"tick_l", "ticks_l"}, {"ticks_left", "ticks_l"}, {"gt_theat", "gt_theta"},
+      {"aps_z", "aps_x"},   {"power", "power_l"},  {"omegal", "omega_l"},     {"raw_gyro_z", "gyro_z"}};
   for (const auto& [typo, meant] : cases) {
     SCOPED_TRACE(typo);
     const std::string odo = std::string_view(meant) == "v_cmd" ? "omega_l,omega_r" : "v_cmd,w_cmd";
@@ -220,9 +220,8 @@ TEST(TrackIoErrors, BadHeaderNames) {
 TEST(TrackIoErrors, BadRobotMetadata) {
   for (const char* value : {"-0.5", "0", "abc", "nan", "inf", "", "0.5 m"}) {
     SCOPED_TRACE(value);
-    const auto e =
-        error_of(fmt::format("# format: odotune-track/1\n# name: n\n# robot.wheel_base: {}\nt,v_cmd,w_cmd\n0,0,0\n",
-                             value));
+    const auto e = error_of(fmt::format(
+        "# format: odotune-track/1\n# name: n\n# robot.wheel_base: {}\nt,v_cmd,w_cmd\n0,0,0\n", value));
     EXPECT_EQ(e.line(), 3u);
     EXPECT_THAT(e.reason(), HasSubstr("robot.wheel_base must be a finite positive number"));
   }
@@ -275,17 +274,16 @@ TEST(TrackIoErrors, UnopenableFile) {
 
 // ----------------------------------------------------------------- reads ---
 
-const std::string kSpecExample =
-    "# format: odotune-track/1\n"
-    "# name: square-2m\n"
-    "# origin: simulated\n"
-    "# robot.ticks_per_rev: 8800\n"
-    "# robot.wheel_radius_left: 0.32\n"
-    "# robot.wheel_radius_right: 0.32\n"
-    "# robot.wheel_base: 0.65\n"
-    "t,ticks_l,ticks_r,gyro_z,aps_x,aps_y,gt_x,gt_y,gt_theta\n"
-    "0.00,0,0,0.0003,0.012,-0.031,0,0,0\n"
-    "0.01,2,3,0.0011,,,0.0001,0,0.00002\n";
+const std::string kSpecExample = "# format: odotune-track/1\n"
+                                 "# name: square-2m\n"
+                                 "# origin: simulated\n"
+                                 "# robot.ticks_per_rev: 8800\n"
+                                 "# robot.wheel_radius_left: 0.32\n"
+                                 "# robot.wheel_radius_right: 0.32\n"
+                                 "# robot.wheel_base: 0.65\n"
+                                 "t,ticks_l,ticks_r,gyro_z,aps_x,aps_y,gt_x,gt_y,gt_theta\n"
+                                 "0.00,0,0,0.0003,0.012,-0.031,0,0,0\n"
+                                 "0.01,2,3,0.0011,,,0.0001,0,0.00002\n";
 
 // The values of the spec's example, as written there.
 void expect_spec_example(const Track& tr) {
@@ -347,7 +345,8 @@ TEST(TrackIoRead, UnknownMetadataKeysKeptInOrder) {
 TEST(TrackIoRead, NameDefaultsToFileStem) {
   EXPECT_EQ(parse("# format: odotune-track/1\nt,v_cmd,w_cmd\n0,1,2\n", "/data/runs/run-7.track.csv").name(),
             "run-7.track");
-  EXPECT_EQ(parse("# format: odotune-track/1\n# name: given\nt,v_cmd,w_cmd\n0,1,2\n", "/x/y.csv").name(), "given");
+  EXPECT_EQ(parse("# format: odotune-track/1\n# name: given\nt,v_cmd,w_cmd\n0,1,2\n", "/x/y.csv").name(),
+            "given");
 }
 
 TEST(TrackIoRead, CrlfAndBomAccepted) {
@@ -366,11 +365,11 @@ TEST(TrackIoRead, CrlfAndBomAccepted) {
 }
 
 TEST(TrackIoRead, LenientLayoutAndNumberForms) {
-  const auto tr = parse(kMeta +
-                        "\n# comment before the header\n w_cmd , t,\tticks_r ,v_cmd,ticks_l, dt, acc_x, note, x\n"
-                        "+1.5, 1e-3 ,+5,-0,-7,1,2,any text: here,\n"
-                        "# a comment row\n\n"
-                        "  ,.5 ,, 2.5E+2 , ,,,,\n");
+  const auto tr = parse(
+      kMeta + "\n# comment before the header\n w_cmd , t,\tticks_r ,v_cmd,ticks_l, dt, acc_x, note, x\n"
+              "+1.5, 1e-3 ,+5,-0,-7,1,2,any text: here,\n"
+              "# a comment row\n\n"
+              "  ,.5 ,, 2.5E+2 , ,,,,\n");
   ASSERT_EQ(tr.size(), 2u);
   EXPECT_EQ(tr.t(), (std::vector<double>{1e-3, 0.5}));
   EXPECT_EQ(tr.col(Col::w_cmd)[0], 1.5);
@@ -424,7 +423,6 @@ TEST(TrackIoWrite, LayoutFollowsTheSpecOrder) {
             "# sim.seed: 7\n# source: unit test\n"
             "t,ticks_l,ticks_r,gyro_z,gt_x\n0,0,1,,1.5\n0.25,,-2,-0.125,2\n");
 }
-
 
 TEST(TrackIoWrite, WritesAtomicallyAndLeavesNoTempFile) {
   TempDir dir;

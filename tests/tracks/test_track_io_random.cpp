@@ -109,7 +109,8 @@ Track random_track(Rng& rng, std::size_t rows, bool all_columns) {
     }
   }
   for (int c = 0; c < kNumCols; ++c) {
-    const bool odometry_pair = !ticks && (c == static_cast<int>(Col::v_cmd) || c == static_cast<int>(Col::w_cmd));
+    const bool odometry_pair = !ticks &&
+                               (c == static_cast<int>(Col::v_cmd) || c == static_cast<int>(Col::w_cmd));
     if (!all_columns && !odometry_pair && rng() % 2) continue;
     auto& col = d.col(static_cast<Col>(c));
     for (std::size_t i = 0; i < rows; ++i) col.push_back(rng() % 5 == 0 ? kNaN : random_finite(rng));
@@ -160,7 +161,8 @@ TEST(TrackIoRoundTrip, RandomTracksAreBitIdentical) {
     expect_identical(original, back);
     // The extremes of the tick range survive.
     if (k == 0) {
-      EXPECT_NE(std::find(back.ticks_l().begin(), back.ticks_l().end(), std::numeric_limits<std::int64_t>::max()),
+      EXPECT_NE(std::find(back.ticks_l().begin(), back.ticks_l().end(),
+                          std::numeric_limits<std::int64_t>::max()),
                 back.ticks_l().end());
       EXPECT_NE(std::find(back.ticks_r().begin(), back.ticks_r().end(), kNoTick + 1), back.ticks_r().end());
     }
@@ -186,11 +188,10 @@ TEST(TrackIoRoundTrip, ThroughAFile) {
 
 // A valid file exercising every feature the mutations can break.
 std::string valid_file() {
-  std::string s =
-      "# format: odotune-track/1\n# name: fuzz\n# origin: recorded\n# robot.ticks_per_rev: 2048\n"
-      "# robot.wheel_radius_left: 0.1\n# robot.wheel_radius_right: 0.1\n# robot.wheel_base: 0.4\n"
-      "# sim.seed: 5\n"
-      "t,ticks_l,ticks_r,omega_l,omega_r,gyro_z,aps_x,aps_y,gt_theta,note\n";
+  std::string s = "# format: odotune-track/1\n# name: fuzz\n# origin: recorded\n# robot.ticks_per_rev: 2048\n"
+                  "# robot.wheel_radius_left: 0.1\n# robot.wheel_radius_right: 0.1\n# robot.wheel_base: 0.4\n"
+                  "# sim.seed: 5\n"
+                  "t,ticks_l,ticks_r,omega_l,omega_r,gyro_z,aps_x,aps_y,gt_theta,note\n";
   for (int i = 0; i < 20; ++i) {
     s += fmt::format("{},{},{},{},{},{},{},{},{},n{}\n", 0.01 * i, 3 * i, -5 * i, 0.5 + 0.01 * i, 1e-3 * i,
                      i % 3 ? std::string("2.5e-3") : std::string(), i % 4 ? "" : "1.25", i % 4 ? "" : "-3",
@@ -201,9 +202,27 @@ std::string valid_file() {
 }
 
 void mutate(std::string& s, Rng& rng) {
-  static const char* kTokens[] = {",", "\n", "\r\n", "#", "nan", "inf", "-", "+", "1e999", ".", " ", "\0",
-                                  "9223372036854775808", "\xEF\xBB\xBF", "t", "ticks_l", "gyro_zz", ",,,,"};
-  const auto pos = [&] { return s.empty() ? std::size_t{0} : static_cast<std::size_t>(rng() % (s.size() + 1)); };
+  static const char* kTokens[] = {",",
+                                  "\n",
+                                  "\r\n",
+                                  "#",
+                                  "nan",
+                                  "inf",
+                                  "-",
+                                  "+",
+                                  "1e999",
+                                  ".",
+                                  " ",
+                                  "\0",
+                                  "9223372036854775808",
+                                  "\xEF\xBB\xBF",
+                                  "t",
+                                  "ticks_l",
+                                  "gyro_zz",
+                                  ",,,,"};
+  const auto pos = [&] {
+    return s.empty() ? std::size_t{0} : static_cast<std::size_t>(rng() % (s.size() + 1));
+  };
   switch (rng() % 6) {
     case 0:  // flip a byte
       if (!s.empty()) s[rng() % s.size()] = static_cast<char>(rng() % 256);
@@ -262,7 +281,8 @@ TEST(TrackIoRobustness, RandomMutationsParseOrRaiseTrackError) {
     std::string s = base;
     const int n = 1 + static_cast<int>(rng() % 4);
     for (int m = 0; m < n; ++m) mutate(s, rng);
-    if (k % 400 == 0) s.insert(s.size() / 2, std::string((1u << 20) + 10, k % 800 ? ',' : '7'));  // very long line
+    if (k % 400 == 0)
+      s.insert(s.size() / 2, std::string((1u << 20) + 10, k % 800 ? ',' : '7'));  // very long line
     std::istringstream in(s);
     try {
       const Track tr = parse_track(in, "fuzz.csv");

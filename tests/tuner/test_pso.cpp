@@ -103,10 +103,12 @@ TEST(Pso, DifferentSeedsGiveDifferentRuns) {
 }
 
 TEST(Pso, EvaluationCountIsParticlesTimesIterationsPlusOne) {
-  struct Shape { int particles, iterations; };
+  struct Shape {
+    int particles, iterations;
+  };
   for (const Shape shape : {Shape{1, 0}, Shape{1, 5}, Shape{7, 3}, Shape{50, 150}}) {
-    SCOPED_TRACE(std::to_string(shape.particles) + " particles, " +
-                 std::to_string(shape.iterations) + " iterations");
+    SCOPED_TRACE(std::to_string(shape.particles) + " particles, " + std::to_string(shape.iterations) +
+                 " iterations");
     PsoOptions o;
     o.particles = shape.particles;
     o.iterations = shape.iterations;
@@ -405,8 +407,8 @@ TEST(Nlopt, UnknownAlgorithmIsRejectedListingTheValidNames) {
 
 TEST(Nlopt, NamesAndClassification) {
   const std::vector<std::string>& names = nlopt_algorithm_names();
-  for (const char* required : {"DIRECT_L", "CRS2_LM", "ISRES", "ESCH", "BOBYQA", "SBPLX",
-                               "NELDERMEAD", "COBYLA"})
+  for (const char* required :
+       {"DIRECT_L", "CRS2_LM", "ISRES", "ESCH", "BOBYQA", "SBPLX", "NELDERMEAD", "COBYLA"})
     EXPECT_NE(std::find(names.begin(), names.end(), required), names.end()) << required;
   EXPECT_TRUE(nlopt_is_global("DIRECT_L"));
   EXPECT_TRUE(nlopt_is_global("isres"));
@@ -436,9 +438,12 @@ TEST(Nlopt, OtherInvalidOptionsNameTheBadValue) {
 // or small PRAXIS budgets make NLopt ask for more than maxeval: the adapter
 // must still stop at the budget exactly.
 TEST(Nlopt, BudgetIsRespectedAndReported) {
-  struct Run { const char* algorithm; long budget; };
-  for (const Run r : {Run{"CRS2_LM", 20}, Run{"CRS2_LM", 137}, Run{"PRAXIS", 30},
-                      Run{"DIRECT_L", 101}, Run{"ESCH", 77}}) {
+  struct Run {
+    const char* algorithm;
+    long budget;
+  };
+  for (const Run r :
+       {Run{"CRS2_LM", 20}, Run{"CRS2_LM", 137}, Run{"PRAXIS", 30}, Run{"DIRECT_L", 101}, Run{"ESCH", 77}}) {
     SCOPED_TRACE(std::string(r.algorithm) + " with budget " + std::to_string(r.budget));
     Sphere sphere;
     Counted<Sphere> counted(sphere);

@@ -154,8 +154,7 @@ void check_cell(const Case& c, Fn fn, const P& problem) {
     // Quality.
     ASSERT_TRUE(std::isfinite(s.best_fitness));
     if (global || fn != Fn::kRastrigin) {
-      EXPECT_LE(s.best_fitness, tol) << "best_x[0] = " << s.best_x[0]
-                                     << ", termination " << s.termination;
+      EXPECT_LE(s.best_fitness, tol) << "best_x[0] = " << s.best_x[0] << ", termination " << s.termination;
     } else {
       EXPECT_LE(s.best_fitness, f_start);
     }
@@ -174,13 +173,12 @@ TEST_P(SolverMatrix, ReachesExpectedOptimumWithinBudget) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    AllSolversAllFunctions, SolverMatrix,
-    ::testing::Combine(::testing::ValuesIn(all_solvers()),
-                       ::testing::Values(Fn::kSphere, Fn::kRosenbrock, Fn::kRastrigin)),
-    [](const ::testing::TestParamInfo<SolverMatrix::ParamType>& param_info) {
-      return std::get<0>(param_info.param) + "_" + fn_name(std::get<1>(param_info.param));
-    });
+INSTANTIATE_TEST_SUITE_P(AllSolversAllFunctions, SolverMatrix,
+                         ::testing::Combine(::testing::ValuesIn(all_solvers()),
+                                            ::testing::Values(Fn::kSphere, Fn::kRosenbrock, Fn::kRastrigin)),
+                         [](const ::testing::TestParamInfo<SolverMatrix::ParamType>& param_info) {
+                           return std::get<0>(param_info.param) + "_" + fn_name(std::get<1>(param_info.param));
+                         });
 
 // The matrix is over every solver: a row without a solver would be dead.
 TEST(SolverMatrixTable, EveryRowNamesAnOfferedSolver) {
