@@ -20,7 +20,7 @@ set -euo pipefail
 
 script="$(cd "$(dirname "$0")" && pwd)/$(basename "$0")"
 root="$(cd "$(dirname "$script")/.." && pwd)"
-usage() { sed -n '2,19p' "$script" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,18p' "$script" | sed 's/^# \{0,1\}//'; }
 
 case "${1:-}" in
   -h | --help) usage; exit 0 ;;
@@ -100,8 +100,10 @@ fi
 mapfile -t units <<<"$units"
 
 jobs="${TIDY_JOBS:-$(nproc 2>/dev/null || echo 1)}"
-echo "tidy.sh: clang-tidy on ${#units[@]} translation units from $db (-j$jobs, niced)" >&2
+echo "tidy.sh: clang-tidy on ${#units[@]} translation unit(s) from $db (-j$jobs, niced)" >&2
 
+# clang's per-file "N warnings generated." counts the diagnostics that .clang-tidy hides.
+noise='^[0-9]+ warnings? (and [0-9]+ errors? )?generated\.$'
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
 set +e
@@ -114,19 +116,21 @@ if [ -n "$runner" ]; then
   # clang-tidy finds .clang-tidy by walking up from each source file. The runner
   # echoes each clang-tidy command line (left out here) and turns colours on (removed).
   nice -n 19 "$runner" -clang-tidy-binary "$tidy" -p "$build_dir" -j "$jobs" -quiet "${regexes[@]}" 2>&1 |
-    grep --line-buffered -v -F "$tidy --use-color " | sed -u 's/\x1b\[[0-9;]*m//g' | tee "$log"
+    grep --line-buffered -v -F "$tidy --use-color " | sed -u 's/\x1b\[[0-9;]*m//g' |
+    grep --line-buffered -v -E "$noise" | tee "$log"
   status=${PIPESTATUS[0]}
 else
   # No run-clang-tidy: the same with xargs.
   printf '%s\0' "${units[@]}" |
-    xargs -0 -n 1 -P "$jobs" nice -n 19 "$tidy" -p "$build_dir" --quiet 2>&1 | tee "$log"
+    xargs -0 -n 1 -P "$jobs" nice -n 19 "$tidy" -p "$build_dir" --quiet 2>&1 |
+    grep --line-buffered -v -E "$noise" | tee "$log"
   status=${PIPESTATUS[1]}
 fi
 set -e
 
 findings=$(grep -cE '^[^ ].*:[0-9]+:[0-9]+: (warning|error):' "$log" || true)
 if [ "$status" -ne 0 ] || [ "$findings" -ne 0 ]; then
-  echo "tidy.sh: FAILED: $findings finding(s) in ${#units[@]} translation units (exit status $status)" >&2
+  echo "tidy.sh: FAILED: $findings finding(s) in ${#units[@]} translation unit(s) (exit status $status)" >&2
   exit 1
 fi
-echo "tidy.sh: OK, no findings in ${#units[@]} translation units" >&2
+echo "tidy.sh: OK, no findings in ${#units[@]} translation unit(s)" >&2

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <type_traits>
 
 #include <fmt/format.h>
 
@@ -68,7 +69,9 @@ const std::vector<EffectInfo> kTable = {
 // whatever the struct holds; apply_effect then sets them all).
 std::vector<double*> fields(Effects& e, std::size_t index, bool on) {
   auto get = [on](auto& opt) -> decltype(&*opt) {
-    if (!opt && on) opt.emplace();
+    // Not opt.emplace(): clang 14 (clang-tidy) rejects emplace() of a nested struct with
+    // default member initialisers; the value-initialised struct is the same.
+    if (!opt && on) opt = std::remove_reference_t<decltype(*opt)>{};
     return opt ? &*opt : nullptr;
   };
   switch (index) {
