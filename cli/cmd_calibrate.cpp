@@ -2,7 +2,6 @@
 // parameters R_R, R_L and D from wheel rates and external body velocities,
 // and the replay of a calibration on held-out tracks (--apply); the work is
 // jobs/calibrate_job.h, the summary text jobs/calibration_summary.h.
-#include <cstdio>
 #include <memory>
 #include <optional>
 #include <string>
@@ -18,32 +17,12 @@ namespace odotune::cli {
 
 namespace {
 
-// run_calibration reports no progress: while it runs, one status line on
-// stderr when that is a terminal (the Progress rule: not in logs or CI),
-// cleared when done or failed.
-class StatusLine {
- public:
-  explicit StatusLine(const std::string& text) : enabled_(Progress("", "").enabled()) {
-    if (!enabled_) return;
-    std::fputs(text.c_str(), stderr);
-    std::fflush(stderr);
-  }
-  ~StatusLine() {
-    if (enabled_) std::fputs("\r\x1b[2K", stderr), std::fflush(stderr);
-  }
-  StatusLine(const StatusLine&) = delete;
-  StatusLine& operator=(const StatusLine&) = delete;
-
- private:
-  bool enabled_;
-};
-
 void print_calibrate(const CalibrateRequest& a) {
   apply_threads(a.threads);
   std::optional<StatusLine> status;
   const CalibrateOutcome o = run_calibrate(a, {[&](const std::string& text) { status.emplace(text); },
                                                [&] { status.reset(); }});
-  for (const std::string& l : o.summary) fmt::print("{}\n", l);
+  print_lines(o.summary);
   if (!a.figure.empty()) fmt::print("figure: {}.png, {}.svg\n", a.figure, a.figure);
   if (!a.csv.empty()) fmt::print("csv: {}\n", a.csv);
   if (!a.config_out.empty())
@@ -54,7 +33,7 @@ void print_calibrate(const CalibrateRequest& a) {
 
 void print_apply(const CalibrateRequest& a) {
   const ApplyOutcome o = run_calibrate_apply(a);
-  for (const std::string& l : o.summary) fmt::print("{}\n", l);
+  print_lines(o.summary);
   if (!a.json.empty()) fmt::print("json: {}\n", a.json);
 }
 

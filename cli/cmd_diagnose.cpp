@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
+#include "cli/output.h"
 #include "jobs/diagnose_job.h"
 
 namespace odotune::cli {
@@ -35,7 +36,7 @@ void register_diagnose(CLI::App& app) {
   sub->callback([req] {
     const DiagnoseRequest& a = *req;
     const DiagnoseOutcome o = run_diagnose(a);
-    for (const std::string& l : o.summary) fmt::print("{}\n", l);
+    print_lines(o.summary);
     if (!a.json.empty()) fmt::print("json: {}\n", a.json);
     if (!a.scenario_out.empty())
       fmt::print("scenario: {} (odotune simulate {} -o corrected.csv)\n", a.scenario_out, a.scenario_out);

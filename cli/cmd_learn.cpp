@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
+#include "cli/output.h"
 #include "cli/progress.h"
 #include "studies/learn_job.h"
 
@@ -29,10 +30,6 @@ auto with_progress(const char* label, const char* unit, Job job) {
   });
   if (bar) bar->finish();
   return outcome;
-}
-
-void print_lines(const std::vector<std::string>& lines) {
-  for (const std::string& l : lines) fmt::print("{}\n", l);
 }
 
 }  // namespace

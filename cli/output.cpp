@@ -26,6 +26,10 @@ void print_tune_result(const ErrorMetrics& baseline_mean, const ErrorMetrics& tu
              summary.seconds, summary.termination, diverged);
 }
 
+void print_lines(const std::vector<std::string>& lines) {
+  for (const std::string& l : lines) fmt::print("{}\n", l);
+}
+
 std::string metric_change(double baseline_m, double tuned_m) {
   return fmt::format("{:7.2f} → {:7.2f} mm  ({:+5.1f} %)", baseline_m * 1e3, tuned_m * 1e3,
                      improvement_pct(baseline_m, tuned_m));

@@ -15,6 +15,9 @@
 
 namespace odotune::cli {
 
+// Prints each line and a newline on stdout (the text a job returns).
+void print_lines(const std::vector<std::string>& lines);
+
 // "  47.88 →  29.31 mm  (+38.8 %)"
 std::string metric_change(double baseline_m, double tuned_m);
 

@@ -9,10 +9,24 @@
 
 namespace odotune::cli {
 
+bool progress_shown() { return isatty(STDERR_FILENO) != 0 && std::getenv("CI") == nullptr; }
+
+StatusLine::StatusLine(const std::string& text) : enabled_(progress_shown()) {
+  if (!enabled_) return;
+  std::fputs(text.c_str(), stderr);
+  std::fflush(stderr);
+}
+
+StatusLine::~StatusLine() {
+  if (!enabled_) return;
+  std::fputs("\r\x1b[2K", stderr);
+  std::fflush(stderr);
+}
+
 Progress::Progress(std::string label, std::string unit)
     : label_(std::move(label)),
       unit_(std::move(unit)),
-      enabled_(isatty(STDERR_FILENO) != 0 && std::getenv("CI") == nullptr),
+      enabled_(progress_shown()),
       start_(std::chrono::steady_clock::now()),
       last_draw_(start_) {}
 

@@ -8,6 +8,9 @@
 
 namespace odotune::cli {
 
+// True when progress is shown: stderr is a terminal and CI is not set.
+bool progress_shown();
+
 class Progress {
  public:
   Progress(std::string label, std::string unit);
@@ -26,6 +29,20 @@ class Progress {
   bool enabled_;
   bool drawn_ = false;
   std::chrono::steady_clock::time_point start_, last_draw_;
+};
+
+// One status line on stderr for work that reports no counts (e.g. a
+// calibration run), shown under the same rule as Progress and cleared when the
+// object goes (the work ended or threw).
+class StatusLine {
+ public:
+  explicit StatusLine(const std::string& text);
+  ~StatusLine();
+  StatusLine(const StatusLine&) = delete;
+  StatusLine& operator=(const StatusLine&) = delete;
+
+ private:
+  bool enabled_;
 };
 
 }  // namespace odotune::cli

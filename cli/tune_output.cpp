@@ -7,9 +7,20 @@
 
 namespace odotune::cli {
 
-void print_tune_outcome(const TuneOutcome& o) {
+namespace {
+
+// "track1, track2": the tracks a tune ran on (each score names its track).
+template <class Scores>
+std::string track_names(const Scores& tracks) {
   std::string names;
-  for (const auto& t : o.tracks) names += (names.empty() ? "" : ", ") + t.track;
+  for (const auto& t : tracks) names += (names.empty() ? "" : ", ") + t.track;
+  return names;
+}
+
+}  // namespace
+
+void print_tune_outcome(const TuneOutcome& o) {
+  const std::string names = track_names(o.tracks);
   fmt::print("tuned {} noise on {} for mode {} ({}) with {} (seed {})\n", filters::to_string(o.request.model),
              names, o.request.mode, fitness_mode_name(o.request.mode), o.request.solver, o.request.seed);
   print_tune_result(o.baseline_mean, o.tuned_mean, o.tracks, o.param_names, o.params, o.summary,
@@ -18,8 +29,7 @@ void print_tune_outcome(const TuneOutcome& o) {
 
 void print_tune_outcome(const CalibrationTuneOutcome& o) {
   const CalibrationTuneRequest& r = o.request;
-  std::string names;
-  for (const auto& t : o.baseline.tracks) names += (names.empty() ? "" : ", ") + t.track;
+  const std::string names = track_names(o.baseline.tracks);
   fmt::print("tuned the {} calibrator's settings on {} with {} (seed {}); resampler {}, policy {}, "
              "calibrator seed {}\n",
              to_string(TunedModel::calibration(r.model)), names, r.solver, r.seed,
@@ -52,8 +62,7 @@ void print_tune_outcome(const CalibrationTuneOutcome& o) {
 
 void print_tune_outcome(const UkfTuneOutcome& o) {
   const UkfTuneRequest& r = o.request;
-  std::string names;
-  for (const auto& t : o.tracks) names += (names.empty() ? "" : ", ") + t.track;
+  const std::string names = track_names(o.tracks);
   fmt::print("tuned the fusion UKF's noise on {} for mode {} ({}) with {} (seed {})\n", names, r.mode,
              fitness_mode_name(r.mode), r.solver, r.seed);
   fmt::print("  fused pose vs ground truth, defaults → tuned{}\n",

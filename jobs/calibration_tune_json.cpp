@@ -53,12 +53,7 @@ nlohmann::json calibration_tune_json(const CalibrationTuneOutcome& o, const Cali
   const CalibrationTuneRequest& r = o.request;
   nlohmann::json j;
   j["model"] = to_string(TunedModel::calibration(r.model));
-  j["solver"] = r.solver;
-  j["seed"] = r.seed;
-  if (r.solver == "pso") {
-    j["particles"] = r.particles;
-    j["iterations"] = r.iterations;
-  }
+  put_solver_json(j, r);
   j["calibrator"] = {{"method", std::string(to_string(calibration_method(r.model)))},
                      {"resampler", std::string(filters::to_string(o.default_pf.resampler))},
                      {"policy", std::string(filters::to_string(o.default_pf.policy))},
@@ -72,14 +67,7 @@ nlohmann::json calibration_tune_json(const CalibrationTuneOutcome& o, const Cali
                         {"cost", r.weights.cost}};
   j["baseline_score"] = o.baseline_score;
   j["tuned_score"] = o.tuned_score;
-  j["baseline_fitness"] = o.baseline_score;
-  j["tuned_fitness"] = o.tuned_score;
-  j["baseline"] = metrics_json(o.baseline_mean);
-  j["tuned"] = metrics_json(o.tuned_mean);
-  j["improvement_pct"] = improvement_json(o.baseline_mean, o.tuned_mean);
-  j["evaluations"] = o.summary.evaluations;
-  j["seconds"] = o.summary.seconds;
-  j["termination"] = o.summary.termination;
+  put_scores_json(j, o.baseline_mean, o.tuned_mean, o.baseline_score, o.tuned_score, o.summary);
   j["failures"] = o.failures;
   nlohmann::json tracks = nlohmann::json::array();
   for (std::size_t k = 0; k < o.baseline.tracks.size() && k < o.tuned.tracks.size(); ++k)
@@ -87,7 +75,6 @@ nlohmann::json calibration_tune_json(const CalibrationTuneOutcome& o, const Cali
                       {"baseline", side_json(o.baseline.tracks[k], o.baseline.mean_particles)},
                       {"tuned", side_json(o.tuned.tracks[k], o.tuned.mean_particles)}});
   j["tracks"] = tracks;
-  j["convergence"] = convergence_json(o.summary);
   return j;
 }
 

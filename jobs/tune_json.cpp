@@ -11,12 +11,7 @@ nlohmann::json tune_json(const TuneOutcome& o) {
   j["model"] = std::string(filters::to_string(o.request.model));
   j["mode"] = o.request.mode;
   j["mode_name"] = fitness_mode_name(o.request.mode);
-  j["solver"] = o.request.solver;
-  j["seed"] = o.request.seed;
-  if (o.request.solver == "pso") {
-    j["particles"] = o.request.particles;
-    j["iterations"] = o.request.iterations;
-  }
+  put_solver_json(j, o.request);
   nlohmann::json params = nlohmann::json::object(), units = nlohmann::json::object();
   for (std::size_t i = 0; i < o.params.size(); ++i) {
     params[o.param_names[i]] = o.params[i];
@@ -24,19 +19,33 @@ nlohmann::json tune_json(const TuneOutcome& o) {
   }
   j["params"] = params;
   j["param_units"] = units;
-  j["baseline"] = metrics_json(o.baseline_mean);
-  j["tuned"] = metrics_json(o.tuned_mean);
-  j["improvement_pct"] = improvement_json(o.baseline_mean, o.tuned_mean);
-  j["baseline_fitness"] = o.baseline_fitness;
-  j["tuned_fitness"] = o.tuned_fitness;
-  j["evaluations"] = o.summary.evaluations;
-  j["seconds"] = o.summary.seconds;
-  j["termination"] = o.summary.termination;
+  put_scores_json(j, o.baseline_mean, o.tuned_mean, o.baseline_fitness, o.tuned_fitness, o.summary);
   j["divergences"] = {{"non_finite", o.divergences.non_finite},
                       {"covariance_not_pd", o.divergences.covariance_not_pd}};
   j["tracks"] = track_scores_json(o.tracks);
-  j["convergence"] = convergence_json(o.summary);
   return j;
+}
+
+void put_solver_json(nlohmann::json& j, const SolverSettings& s) {
+  j["solver"] = s.solver;
+  j["seed"] = s.seed;
+  if (s.solver == "pso") {
+    j["particles"] = s.particles;
+    j["iterations"] = s.iterations;
+  }
+}
+
+void put_scores_json(nlohmann::json& j, const ErrorMetrics& baseline, const ErrorMetrics& tuned,
+                     double baseline_fitness, double tuned_fitness, const tuner::Summary& summary) {
+  j["baseline"] = metrics_json(baseline);
+  j["tuned"] = metrics_json(tuned);
+  j["improvement_pct"] = improvement_json(baseline, tuned);
+  j["baseline_fitness"] = baseline_fitness;
+  j["tuned_fitness"] = tuned_fitness;
+  j["evaluations"] = summary.evaluations;
+  j["seconds"] = summary.seconds;
+  j["termination"] = summary.termination;
+  j["convergence"] = convergence_json(summary);
 }
 
 void put_tuned_params_json(nlohmann::json& j, const std::vector<std::string>& names,

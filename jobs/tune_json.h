@@ -25,6 +25,14 @@ nlohmann::json tune_json(const TuneOutcome& o);
 nlohmann::json improvement_json(const ErrorMetrics& baseline, const ErrorMetrics& tuned);
 nlohmann::json track_scores_json(const std::vector<TrackScore>& tracks);
 nlohmann::json convergence_json(const tuner::Summary& summary);
+// The solver of a tune, into j: "solver", "seed", and for PSO "particles" and
+// "iterations".
+void put_solver_json(nlohmann::json& j, const SolverSettings& s);
+// What every tune scored, into j: "baseline" and "tuned" (mean position errors
+// over the tracks), "improvement_pct", "baseline_fitness", "tuned_fitness", the
+// solver's "evaluations", "seconds", "termination" and its "convergence" log.
+void put_scores_json(nlohmann::json& j, const ErrorMetrics& baseline, const ErrorMetrics& tuned,
+                     double baseline_fitness, double tuned_fitness, const tuner::Summary& summary);
 // The tuned and default values by parameter name, into j: "params",
 // "param_units", "default_params" (each an object keyed by name) and
 // "default_kept" (the calibrator and UKF tunes, which start from defaults).
