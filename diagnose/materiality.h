@@ -1,0 +1,61 @@
+// When a finding matters (docs/diagnosis-design.md, "Findings that matter";
+// issue 15): a finding is reported only when it is significant (select.h's
+// paired tests and BIC) AND material: the held-out position error it removes
+// must pass a floor tied to the reference's own noise and to the nominal
+// model's error,
+//
+//   floor_m = max(min_gain_sigmas * ref_sigma_m,
+//                 min_gain_share * nominal_heldout_pos_rmse_m),
+//   material  <=>  before_heldout_pos_rmse_m - after_heldout_pos_rmse_m >= floor_m.
+//
+// ref_sigma_m is the standard deviation of one reference position sample
+// (DiagInput::ref_sigma_m: stated by the metadata or estimated, >= 1 mm);
+// nominal_heldout_pos_rmse_m the nominal model's held-out position RMSE of the
+// windowed replay. Why both terms: a gain below one reference sigma cannot be
+// seen in any single position the user compares against (on tens of thousands
+// of samples it can still be significant: a 0.6 ms lag, a 2 ms time offset
+// beside a 0.13 s lag); a gain below a few percent of what the nominal model
+// gets wrong changes nothing a user acts on, even when the reference is
+// precise. Timing effects far below the sampling period are not exempt and get
+// no other rule: they are findings exactly when they pass this floor.
+//
+// The same floor decides, from the truth, whether a simulated effect is
+// detectable at all (the random benchmark, studies/): the true model's
+// held-out gain over the nominal one against this floor.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "diagnose/option_rules.h"
+
+namespace odotune::diagnose {
+
+struct MaterialityOptions {
+  double min_gain_sigmas = 1.0;  // floor part: reference position sigmas
+  double min_gain_share = 0.05;  // floor part: share of the nominal held-out position RMSE
+
+  bool IsValid(std::string* why) const {
+    return check_option_rules(
+        {{is_non_negative(min_gain_sigmas), "min_gain_sigmas", min_gain_sigmas, ">= 0"},
+         {is_fraction(min_gain_share), "min_gain_share", min_gain_share, "in [0, 1]"}},
+        why);
+  }
+};
+
+// The floor [m] (file comment); NaN inputs count as 0.
+inline double materiality_floor_m(double ref_sigma_m, double nominal_heldout_pos_rmse_m,
+                                  const MaterialityOptions& o = {}) {
+  const double s = std::isfinite(ref_sigma_m) ? ref_sigma_m : 0.0;
+  const double n = std::isfinite(nominal_heldout_pos_rmse_m) ? nominal_heldout_pos_rmse_m : 0.0;
+  return std::max(o.min_gain_sigmas * s, o.min_gain_share * n);
+}
+
+// True when before - after passes floor_m (file comment); false for NaN.
+inline bool is_material(double before_pos_rmse_m, double after_pos_rmse_m, double floor_m) {
+  const double gain = before_pos_rmse_m - after_pos_rmse_m;
+  return std::isfinite(gain) && gain >= floor_m;
+}
+
+}  // namespace odotune::diagnose
