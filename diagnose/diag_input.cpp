@@ -76,6 +76,12 @@ void fill_odometry(const Track& track, DiagInput& in) {
     in.radius_r_m = meta.wheel_radius_right_m.value_or(0.0);
     in.wheel_base_m = meta.wheel_base_m.value_or(0.0);
     in.odometry = OdometryKind::body_velocity;
+    const auto note = track.meta().get("source.note");
+    const bool measured = note &&
+                          (note->find("measured") != std::string::npos ||
+                           note->find("not commands") != std::string::npos) &&
+                          note->find("not measured") == std::string::npos;
+    in.velocity_source = measured ? "velocity odometry" : "command";
   }
 
   if (track.has_ticks()) {

@@ -33,6 +33,10 @@ struct DiagInput {
   std::vector<double> phi_l_rad, phi_r_rad;  // wheel_angles: rotation since the first sample
   std::vector<double> v_mps, w_radps;        // body_velocity: samples of v, w (the model
                                              // takes them linear between stamps, see effect_model.h)
+  // body_velocity: what v, w are, in words: "command" (v_cmd/w_cmd as the
+  // track format defines them), or "velocity odometry" when the metadata's
+  // source.note says they are measured (e.g. Lost in the Woods); "" otherwise.
+  std::string velocity_source;
 
   // Commanded body velocities when the track has them alongside wheel odometry
   // (for actuator_lag), same times as odo_t_s; empty otherwise.

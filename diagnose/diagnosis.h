@@ -16,12 +16,21 @@
 //    judged against the reference heading (ground truth), or with position
 //    fixes only by gyro-heading dead reckoning against the fixes
 //    (gyro_fixes_check.h, its own 40 s windows, split and held-out test);
+// Every finding is material (materiality.h, options select.materiality): its
+// held-out gain (before - after below) passes the floor against the
+// reference sigma and the nominal held-out error (gyro effects: the
+// gyro-heading replay without the correction). A wheel effect that fails is
+// dropped and the others refitted without it (select.h drop_effect); a gyro
+// effect that fails is not reported; both are listed in `immaterial`.
+//
 //  * `unexplained`: where the residual growth of the chosen model still
 //    exceeds what noise explains (locate.h on the final model's residuals) in
 //    segments that carry at least `unexplained_min_share` of its squared
 //    error, where its position RMSE is at least `unexplained_min_sigmas`
 //    reference sigmas (a growth far above a tiny noise floor can still be a
-//    sub-millimetre mismatch: not physics one can act on); params empty.
+//    sub-millimetre mismatch: not physics one can act on), and where the
+//    chosen model's held-out position RMSE is at least that many sigmas and
+//    the materiality floor (what is left is worth modelling); params empty.
 //
 // Numbers of a finding (diagnosis-output.md), all position RMSEs of the
 // windowed replay. baseline/final: against the raw reference. train/heldout
@@ -108,6 +117,12 @@ struct DiagnosisTiming {
 struct Diagnosis {
   std::string track;
   ReferenceKind reference = ReferenceKind::gt;
+  std::size_t ref_gt_samples = 0, ref_fix_samples = 0;  // reference samples of each source (diag_input.h)
+  bool ref_heading = false;                             // compared against a reference heading too
+  std::string velocity_source;  // body-velocity odometry: "command" or "velocity odometry" (diag_input.h)
+  // The sensor checks reconciled with the findings (reconcile.h): per flagged
+  // check, which finding carries it or why none does.
+  std::vector<std::string> sensor_notes;
   double window_s = 0.0;
   double baseline_pos_rmse_m = 0.0, baseline_heading_rmse_rad = 0.0;  // nominal, all windows
   double final_pos_rmse_m = 0.0, final_heading_rmse_rad = 0.0;        // chosen model, all windows
@@ -124,6 +139,11 @@ struct Diagnosis {
   Location located_before, located_after;
   DiagnosisTiming timing;
   std::string note;  // e.g. why selection could not run
+  // Materiality (materiality.h): the floor of the wheel findings' held-out
+  // gains [m] (against the nominal held-out error), and the effects that were
+  // significant but fell below their floor, one line each ("spec: why").
+  double floor_m = 0.0;
+  std::vector<std::string> immaterial;
 };
 
 // Throws std::invalid_argument (one line) for invalid options or an input the

@@ -37,10 +37,9 @@ struct MaterialityOptions {
   double min_gain_share = 0.05;  // floor part: share of the nominal held-out position RMSE
 
   bool IsValid(std::string* why) const {
-    return check_option_rules(
-        {{is_non_negative(min_gain_sigmas), "min_gain_sigmas", min_gain_sigmas, ">= 0"},
-         {is_fraction(min_gain_share), "min_gain_share", min_gain_share, "in [0, 1]"}},
-        why);
+    return check_option_rules({{is_non_negative(min_gain_sigmas), "min_gain_sigmas", min_gain_sigmas, ">= 0"},
+                               {is_fraction(min_gain_share), "min_gain_share", min_gain_share, "in [0, 1]"}},
+                              why);
   }
 };
 

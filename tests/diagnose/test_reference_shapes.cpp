@@ -108,8 +108,8 @@ TEST(ReferenceShapes, GroundTruthWithGapsKeepsItsHeadingAndAnchorsAfterAGap) {
 }
 
 TEST(ReferenceShapes, FixesFillTheGroundTruthGapsWithTheirOwnWeight) {
-  const Track tr =
-      without_gt(simulate_track(run(120, 50, 2)), [](std::size_t, double t) { return t >= 30 && t < 60; });
+  const Track tr = without_gt(simulate_track(run(120, 50, 2)),
+                              [](std::size_t, double t) { return t >= 30 && t < 60; });
   const DiagInput in = build_diag_input(tr);
   EXPECT_FALSE(in.has_ref_heading());
   EXPECT_NEAR(static_cast<double>(in.ref_fix_samples), 60.0, 2.0);  // 30 s of 2 Hz fixes in the gap
