@@ -1,8 +1,10 @@
-// odotune study resampling|calibration|learned: the Monte-Carlo studies of
-// Tables I and II of Fariña, Toledo & Acosta (RA-L 2026) and Tables 1-3 of
-// Fariña et al. (Sensors 2023) on simulated wheelchair tracks. The work is
-// studies/study_runs.h; this command reads the flags, shows progress and
-// prints the tables and the files written.
+// odotune study resampling|calibration|learned|diagnosis: the Monte-Carlo
+// studies of Tables I and II of Fariña, Toledo & Acosta (RA-L 2026) and
+// Tables 1-3 of Fariña et al. (Sensors 2023) on simulated wheelchair tracks,
+// and the random benchmark of the diagnosis (docs/diagnosis/benchmark.md).
+// The work is studies/study_runs.h and studies/diagnosis_benchmark_outputs.h;
+// this command reads the flags, shows progress and prints the tables and the
+// files written.
 #include <memory>
 #include <string>
 

@@ -17,6 +17,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/failure.h"
 #include "studies/diagnosis_benchmark.h"
 #include "studies/diagnosis_benchmark_outputs.h"
 #include "studies/diagnosis_drives.h"
@@ -471,6 +472,22 @@ TEST(DiagnosisBenchmarkRun, BadOptionsFailBeforeWork) {
   o.draw.null_share = 0.8, o.draw.two_share = 0.5;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("two_share"), std::string::npos);
+  // The command's library call: one line, before any work, nothing written.
+  testing_support::TempDir dir;
+  DiagnosisBenchmarkRequest r;
+  r.out = (dir.path() / "out").string();
+  r.options = o;
+  EXPECT_THROW(run_diagnosis_benchmark_to_folder(r), Failure);
+  EXPECT_FALSE(std::filesystem::exists(r.out));
+  r.options = {};
+  r.out = (dir.path() / "file.txt").string();
+  std::ofstream(r.out) << "x";
+  try {
+    run_diagnosis_benchmark_to_folder(r);
+    ADD_FAILURE() << "an --out that is a file was accepted";
+  } catch (const Failure& e) {
+    EXPECT_NE(std::string(e.what()).find("not a folder"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
