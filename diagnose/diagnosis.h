@@ -22,6 +22,12 @@
 //    error, where its position RMSE is at least `unexplained_min_sigmas`
 //    reference sigmas (a growth far above a tiny noise floor can still be a
 //    sub-millimetre mismatch: not physics one can act on); params empty.
+//    It carries `model` when the term search (term_search.h, run on every
+//    track unless options.terms.enabled is off) finds terms outside
+//    physics-effects.md whose held-out gain passes the materiality floor
+//    (materiality.h); such terms make an `unexplained` finding on their own
+//    when nothing was located (a residual periodic in a wheel's angle
+//    averages out of locate.h's noise estimate), with the terms' fit.
 //
 // Numbers of a finding (diagnosis-output.md), all position RMSEs of the
 // windowed replay. baseline/final: against the raw reference. train/heldout
@@ -50,6 +56,7 @@
 #pragma once
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -59,6 +66,7 @@
 #include "diagnose/locate.h"
 #include "diagnose/select.h"
 #include "diagnose/sensor_checks.h"
+#include "diagnose/term_search.h"
 
 namespace odotune::diagnose {
 
@@ -69,6 +77,7 @@ struct DiagnoseOptions {
   LocateOptions locate;
   double unexplained_min_share = 0.2;   // of the final model's SSE inside the located segments
   double unexplained_min_sigmas = 3.0;  // its RMSE there, in reference sigmas (DiagInput::ref_sigma_m)
+  TermSearchOptions terms;              // physics outside the list (term_search.h)
 
   bool IsValid(std::string* why) const;
 };
@@ -95,6 +104,7 @@ struct Finding {
   BeforeAfter train, heldout;
   std::vector<std::string> rivals;  // confounded alternatives the data could not rule out
   std::string evidence;             // how it was found, one phrase
+  std::optional<TermModel> model;   // unexplained only: terms that reproduce it (term_search.h)
 
   double param(std::string_view name) const;  // NaN when absent
   // The simulator's command-line form, "lateral_skid:k=0.021" ("" for unexplained).
@@ -122,6 +132,7 @@ struct Diagnosis {
   GyroFixesCheck gyro_fixes;
   ResidualSeries before, after;  // nominal and chosen model, all windows
   Location located_before, located_after;
+  TermSearchResult term_search;  // the search on the chosen model's mismatch (term_search.h)
   DiagnosisTiming timing;
   std::string note;  // e.g. why selection could not run
 };
