@@ -377,7 +377,9 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
       d.findings.push_back(std::move(f));
     }
   }
+  const auto t_terms = Clock::now();
   attach_term_model(d, in, scoring, wheel, o);
+  d.timing.terms_s = seconds_since(t_terms);
   std::stable_sort(d.findings.begin(), d.findings.end(),
                    [](const Finding& a, const Finding& b) { return a.explains > b.explains; });
   d.timing.locate_s = seconds_since(t0);

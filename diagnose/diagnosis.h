@@ -113,6 +113,7 @@ struct Finding {
 
 struct DiagnosisTiming {
   double total_s = 0.0, sensors_s = 0.0, select_s = 0.0, locate_s = 0.0;
+  double terms_s = 0.0;  // the term search (term_search.h)
 };
 
 struct Diagnosis {

@@ -216,7 +216,7 @@ json diagnosis_json(const Diagnosis& d) {
           {"term_search", term_search_log(d.term_search)},
           {"timing_s",
            {{"total", d.timing.total_s}, {"sensors", d.timing.sensors_s},
-            {"select", d.timing.select_s}, {"locate", d.timing.locate_s}}},
+            {"select", d.timing.select_s}, {"locate", d.timing.locate_s}, {"terms", d.timing.terms_s}}},
           {"note", d.note}};
 }
 
