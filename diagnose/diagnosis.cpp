@@ -145,8 +145,12 @@ void attach_term_model(Diagnosis& d, const DiagInput& in, const DiagInput& scori
                        const DiagnoseOptions& o) {
   if (!o.terms.enabled || d.train_windows.empty()) return;
   const double floor_m = materiality_floor_m(in.ref_sigma_m, d.heldout.before_pos_rmse_m);
-  d.term_search = search_terms(scoring, wheel, make_windows(scoring, d.window_s), d.train_windows,
-                               d.heldout_windows, floor_m, o.terms);
+  try {
+    d.term_search = search_terms(scoring, wheel, make_windows(scoring, d.window_s), d.train_windows,
+                                 d.heldout_windows, floor_m, o.terms);
+  } catch (const std::invalid_argument& e) {  // an input the search cannot use: no model, the reason logged
+    d.term_search.reason = std::string("term search not run: ") + e.what();
+  }
   if (!d.term_search.found) return;
   const TermModel& tm = d.term_search.model;
   auto it = std::find_if(d.findings.begin(), d.findings.end(),
