@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -137,6 +138,48 @@ Inside inside_segments(const ResidualSeries& s, const std::vector<TimeSegment>& 
   return {all > 0.0 ? in_seg / all : 0.0, n > 0 ? std::sqrt(in_seg / static_cast<double>(n)) : 0.0};
 }
 
+// Physics outside the list (term_search.h): terms that reproduce what the
+// chosen model leaves, on the scoring input's windows and split; a model that
+// passes the materiality floor goes on the `unexplained` finding, made here
+// when there is none (diagnosis.h).
+void attach_term_model(Diagnosis& d, const DiagInput& in, const DiagInput& scoring, const EffectSet& wheel,
+                       const DiagnoseOptions& o) {
+  if (!o.terms.enabled || d.train_windows.empty()) return;
+  const double floor_m = d.floor_m;
+  try {
+    d.term_search = search_terms(scoring, wheel, make_windows(scoring, d.window_s), d.train_windows,
+                                 d.heldout_windows, floor_m, o.terms);
+  } catch (const std::invalid_argument& e) {  // an input the search cannot use: no model, the reason logged
+    d.term_search.reason = std::string("term search not run: ") + e.what();
+  }
+  if (!d.term_search.found) return;
+  const TermModel& tm = d.term_search.model;
+  auto it = std::find_if(d.findings.begin(), d.findings.end(),
+                         [](const Finding& f) { return f.effect == "unexplained"; });
+  if (it == d.findings.end()) {
+    Finding f;
+    f.effect = "unexplained";
+    f.segments.push_back({in.ref_t_s.front(), in.ref_t_s.back(), 0.0, 0});
+    f.train = {tm.train.before_pos_rmse_m, tm.train.after_pos_rmse_m};
+    f.heldout = {tm.heldout.before_pos_rmse_m, tm.heldout.after_pos_rmse_m};
+    // Share of the nominal model's training error the terms remove.
+    const double nominal = d.train.before_pos_rmse_m;
+    f.explains = nominal > 0.0
+                     ? std::max(0.0,
+                                (sq(tm.train.before_pos_rmse_m) - sq(tm.train.after_pos_rmse_m)) / sq(nominal))
+                     : 0.0;
+    d.findings.push_back(std::move(f));
+    it = std::prev(d.findings.end());
+  }
+  it->conditions = (it->conditions.empty() ? "" : it->conditions + "; ") + tm.conditions;
+  it->evidence = (it->evidence.empty() ? "" : it->evidence + "; ") +
+                 fmt::format("a sparse regression over {} candidate terms, chosen by cross-validation, "
+                             "lowers the held-out position error from {:.4f} m to {:.4f} m",
+                             d.term_search.library_size, tm.heldout.before_pos_rmse_m,
+                             tm.heldout.after_pos_rmse_m);
+  it->model = tm;
+}
+
 }  // namespace
 
 bool DiagnoseOptions::IsValid(std::string* why) const {
@@ -146,7 +189,8 @@ bool DiagnoseOptions::IsValid(std::string* why) const {
     return ok;
   };
   if (!part(select.IsValid(&w), "select") || !part(sensors.IsValid(&w), "sensors") ||
-      !part(gyro_fixes.IsValid(&w), "gyro_fixes") || !part(locate.IsValid(&w), "locate"))
+      !part(gyro_fixes.IsValid(&w), "gyro_fixes") || !part(locate.IsValid(&w), "locate") ||
+      !part(terms.IsValid(&w), "terms"))
     return false;
   return check_option_rules(
       {{is_fraction(unexplained_min_share), "unexplained_min_share", unexplained_min_share, "in [0, 1]"},
@@ -390,6 +434,9 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
       d.findings.push_back(std::move(f));
     }
   }
+  const auto t_terms = Clock::now();
+  attach_term_model(d, in, scoring, wheel, o);
+  d.timing.terms_s = seconds_since(t_terms);
   std::stable_sort(d.findings.begin(), d.findings.end(),
                    [](const Finding& a, const Finding& b) { return a.explains > b.explains; });
   d.sensor_notes = reconcile_sensor_checks(d);

@@ -31,6 +31,12 @@
 //    sub-millimetre mismatch: not physics one can act on), and where the
 //    chosen model's held-out position RMSE is at least that many sigmas and
 //    the materiality floor (what is left is worth modelling); params empty.
+//    It carries `model` when the term search (term_search.h, run on every
+//    track unless options.terms.enabled is off) finds terms outside
+//    physics-effects.md whose held-out gain passes the materiality floor
+//    (materiality.h); such terms make an `unexplained` finding on their own
+//    when nothing was located (a residual periodic in a wheel's angle
+//    averages out of locate.h's noise estimate), with the terms' fit.
 //
 // Numbers of a finding (diagnosis-output.md), all position RMSEs of the
 // windowed replay. baseline/final: against the raw reference. train/heldout
@@ -59,6 +65,7 @@
 #pragma once
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -68,6 +75,7 @@
 #include "diagnose/locate.h"
 #include "diagnose/select.h"
 #include "diagnose/sensor_checks.h"
+#include "diagnose/term_search.h"
 
 namespace odotune::diagnose {
 
@@ -78,6 +86,7 @@ struct DiagnoseOptions {
   LocateOptions locate;
   double unexplained_min_share = 0.2;   // of the final model's SSE inside the located segments
   double unexplained_min_sigmas = 3.0;  // its RMSE there, in reference sigmas (DiagInput::ref_sigma_m)
+  TermSearchOptions terms;              // physics outside the list (term_search.h)
 
   bool IsValid(std::string* why) const;
 };
@@ -104,6 +113,7 @@ struct Finding {
   BeforeAfter train, heldout;
   std::vector<std::string> rivals;  // confounded alternatives the data could not rule out
   std::string evidence;             // how it was found, one phrase
+  std::optional<TermModel> model;   // unexplained only: terms that reproduce it (term_search.h)
 
   double param(std::string_view name) const;  // NaN when absent
   // The simulator's command-line form, "lateral_skid:k=0.021" ("" for unexplained).
@@ -112,6 +122,7 @@ struct Finding {
 
 struct DiagnosisTiming {
   double total_s = 0.0, sensors_s = 0.0, select_s = 0.0, locate_s = 0.0;
+  double terms_s = 0.0;  // the term search (term_search.h)
 };
 
 struct Diagnosis {
@@ -137,6 +148,7 @@ struct Diagnosis {
   GyroFixesCheck gyro_fixes;
   ResidualSeries before, after;  // nominal and chosen model, all windows
   Location located_before, located_after;
+  TermSearchResult term_search;  // the search on the chosen model's mismatch (term_search.h)
   DiagnosisTiming timing;
   std::string note;  // e.g. why selection could not run
   // Materiality (materiality.h): the floor of the wheel findings' held-out

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "tracks/effects.h"
+#include "tracks/model_terms.h"
 
 namespace odotune {
 namespace {
@@ -125,10 +126,15 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
     lines.push_back(fmt::format("{}: the nominal model leaves out {}; {}.", d.track, what, proof));
   } else if (unexplained) {
     lines.push_back(
-        fmt::format("{}: the model and the recording disagree at {}{} beyond sensor noise, and no effect of "
-                    "physics-effects.md explains it.",
-                    d.track, spans(unexplained->segments),
-                    unexplained->conditions.empty() ? "" : " (" + unexplained->conditions + ")"));
+        unexplained->model
+            ? fmt::format("{}: the model and the recording disagree beyond sensor noise, no effect of "
+                          "physics-effects.md explains it, and terms outside that list reproduce it: {}.",
+                          d.track, unexplained->model->formula)
+            : fmt::format(
+                  "{}: the model and the recording disagree at {}{} beyond sensor noise, and no effect of "
+                  "physics-effects.md explains it.",
+                  d.track, spans(unexplained->segments),
+                  unexplained->conditions.empty() ? "" : " (" + unexplained->conditions + ")"));
   } else {
     lines.push_back(
         fmt::format("{}: nothing left out — the nominal model explains the recording within sensor noise "
@@ -152,6 +158,16 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
     if (!d.velocity_source.empty()) {
       const std::string v = velocity_terms(f, d.velocity_source);
       if (!v.empty()) lines.push_back("     in the " + d.velocity_source + "'s terms: " + v);
+    }
+    if (f.model) {  // terms outside physics-effects.md (term_search.h)
+      lines.push_back("     model: " + f.model->formula);
+      std::string t;
+      for (const FoundTerm& ft : f.model->terms)
+        t += fmt::format("{}{} on {} = {}", t.empty() ? "" : ", ", ft.name, sim::target_name(ft.term.target),
+                         plus_minus(ft.term.coef, ft.std_error));
+      lines.push_back(fmt::format("     terms: {} (held-out {} → {})", t,
+                                  metres(f.model->heldout.before_pos_rmse_m),
+                                  metres(f.model->heldout.after_pos_rmse_m)));
     }
     if (!f.rivals.empty()) {
       std::string r;

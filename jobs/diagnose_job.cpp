@@ -28,8 +28,17 @@ std::string corrected_scenario_yaml(const Track& track, const std::string& track
   std::string names;
   for (const diagnose::Finding& f : d.findings)
     if (!f.spec().empty()) specs.push_back(f.spec()), names += (names.empty() ? "" : ", ") + f.effect;
+  // Terms outside physics-effects.md (an unexplained finding's model): the
+  // simulator replays them (tracks/model_terms.h).
+  std::vector<sim::ModelTerm> terms;
+  for (const diagnose::Finding& f : d.findings)
+    if (f.model) {
+      for (const diagnose::FoundTerm& t : f.model->terms) terms.push_back(t.term);
+      names += (names.empty() ? "" : ", ") + std::string("terms ") + f.model->formula;
+    }
   try {
-    const sim::Scenario sc = sim::scenario_from_track(track, specs);
+    sim::Scenario sc = sim::scenario_from_track(track, specs);
+    sc.terms = terms;
     return scenario_to_yaml(
         sc, fmt::format("The robot of track '{}' ({}) with the physics `odotune diagnose` found:\n"
                         "  {}\n"

@@ -15,7 +15,8 @@ struct DiagnoseRequest {
   std::string track;         // track file (../shared/specs/track-format.md)
   std::string json;          // diagnosis JSON (diagnosis-output.md); empty = not written
   std::string report;        // folder for the figures and index.html; empty = none
-  std::string scenario_out;  // the robot with the fitted effects as a scenario YAML; empty = none
+  std::string scenario_out;  // the robot with the fitted effects (and the terms of an unexplained
+                             // finding's model, tracks/model_terms.h) as a scenario YAML; empty = none
   double window_s = 20.0;    // replay window [s]; the odometry is re-anchored at each
   // Track-time interval to diagnose [s]. The track is cut (diagnose::crop)
   // only when one of them differs from these defaults (the whole track).
