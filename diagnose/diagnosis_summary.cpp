@@ -189,4 +189,23 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
   return lines;
 }
 
+std::vector<std::string> pooled_summary(const PooledDiagnosis& p) {
+  std::vector<std::string> lines = diagnosis_summary(p.pooled);
+  lines.push_back(fmt::format("recordings ({} fitted{}); held-out proof from {}:",
+                              std::count_if(p.recordings.begin(), p.recordings.end(),
+                                            [](const RecordingResult& r) { return !r.heldout; }),
+                              p.heldout_recordings ? ", the others held out" : "",
+                              p.heldout_recordings ? "the held-out recordings" : "the pooled split"));
+  for (const RecordingResult& r : p.recordings)
+    lines.push_back(fmt::format("  {} [{}] {:.0f} s, {} reference samples{}: nominal {} → pooled model {}{}",
+                                r.track, r.heldout ? "held out" : "fitted", r.duration_s, r.ref_samples,
+                                std::isfinite(r.pooled_time_offset_s) && r.pooled_time_offset_s != 0.0
+                                    ? fmt::format(" (pooled time = own + {:.1f} s)", r.pooled_time_offset_s)
+                                    : "",
+                                metres(r.error.before_pos_rmse_m), metres(r.error.after_pos_rmse_m),
+                                r.note.empty() ? "" : " (" + r.note + ")"));
+  for (const std::string& c : p.consistency) lines.push_back("  " + c);
+  return lines;
+}
+
 }  // namespace odotune

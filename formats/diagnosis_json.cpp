@@ -224,4 +224,30 @@ json diagnosis_json(const Diagnosis& d) {
           {"note", d.note}};
 }
 
+json pooled_diagnosis_json(const diagnose::PooledDiagnosis& p) {
+  json j = diagnosis_json(p.pooled);
+  json tracks = json::array();
+  for (const diagnose::RecordingResult& r : p.recordings) {
+    json refit = json::object(), refit_se = json::object();
+    for (const NamedValue& v : r.refit) refit[v.name] = number(v.value);
+    for (const NamedValue& v : r.refit_stderr) refit_se[v.name] = number(v.value);
+    tracks.push_back({{"track", r.track},
+                      {"role", r.heldout ? "heldout" : "fit"},
+                      {"duration_s", number(r.duration_s)},
+                      {"reference_samples", r.ref_samples},
+                      {"ref_sigma_m", number(r.ref_sigma_m)},
+                      {"error", before_after(r.error)},
+                      {"floor_m", number(r.floor_m)},
+                      {"helped", r.helped},
+                      {"refit", refit},
+                      {"refit_stderr", refit_se},
+                      {"pooled_time_offset_s", number(r.pooled_time_offset_s)},
+                      {"note", r.note}});
+  }
+  j["tracks"] = tracks;
+  j["heldout_from"] = p.heldout_recordings ? "heldout recordings" : "pooled split";
+  j["consistency"] = p.consistency;
+  return j;
+}
+
 }  // namespace odotune
