@@ -317,14 +317,14 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
       f.segments = loc.segments, f.regions = loc.regions, f.conditions = loc.phrase;
       if (f.segments.empty()) f.segments = helped_windows(wo, fin);
       if (f.conditions.empty()) f.conditions = description(se.effect);
-      const double gain = f.heldout.before_pos_rmse_m - f.heldout.after_pos_rmse_m;
+      const double gain = removed_error_m(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m);
       if (!is_material(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m, d.floor_m) &&
           (!weakest || !(gain >= weakest_gain)))
         weakest = &se, weakest_gain = gain;
       d.findings.push_back(std::move(f));
     }
     if (!weakest) break;
-    const std::string small = fmt::format("held-out position error {:.3g} mm lower with it, floor {:.3g} mm",
+    const std::string small = fmt::format("removes {:.3g} mm of held-out position error, floor {:.3g} mm",
                                           1e3 * weakest_gain, 1e3 * d.floor_m);
     for (const Finding& f : d.findings)
       if (f.effect == effect_name(weakest->effect)) d.immaterial.push_back(f.spec() + ": " + small);
@@ -394,11 +394,11 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
       const double floor_g = materiality_floor_m(in.ref_sigma_m, f.heldout.before_pos_rmse_m,
                                                  o.select.materiality);
       if (!is_material(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m, floor_g)) {
-        d.immaterial.push_back(fmt::format("{} {} = {:.3g}: held-out position error {:.3g} mm lower with it, "
-                                           "floor {:.3g} mm",
-                                           f.effect, name, v->value,
-                                           1e3 * (f.heldout.before_pos_rmse_m - f.heldout.after_pos_rmse_m),
-                                           1e3 * floor_g));
+        d.immaterial.push_back(fmt::format(
+            "{} {} = {:.3g}: removes {:.3g} mm of held-out position error, "
+            "floor {:.3g} mm",
+            f.effect, name, v->value,
+            1e3 * removed_error_m(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m), 1e3 * floor_g));
         continue;
       }
       f.segments.push_back({in.ref_t_s.front(), in.ref_t_s.back(), 0.0, 0});

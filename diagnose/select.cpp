@@ -33,13 +33,13 @@ EffectSet with_effect(const EffectSet& s, Effect e) {
 }
 
 // Rules (a)-(c) and (e) of select.h for `alt` to beat `ref`; "" when they
-// hold. pos_gain_m: ref's minus alt's CV position RMSE; floor_m: the
-// materiality floor (0 = not asked).
+// hold. pos_gain_m: the CV position error alt removes from ref's (materiality.h
+// removed_error_m); floor_m: the materiality floor (0 = not asked).
 std::string verdict(const PairedComparison& p, double delta_bic, const SelectOptions& o,
                     double pos_gain_m = 0.0, double floor_m = 0.0) {
   if (floor_m > 0.0 && !(pos_gain_m >= floor_m))
-    return fmt::format("immaterial: held-out position error {:.3g} mm lower, floor {:.3g} mm", 1e3 * pos_gain_m,
-                       1e3 * floor_m);
+    return fmt::format("immaterial: removes {:.3g} mm of held-out position error, floor {:.3g} mm",
+                       1e3 * pos_gain_m, 1e3 * floor_m);
   if (!(p.rel >= o.min_rel_improvement))
     return fmt::format("relative CV improvement {:.2f} % < {:.2f} %", 100.0 * p.rel,
                        100.0 * o.min_rel_improvement);
@@ -204,12 +204,12 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
     best->rec.bic = full.ok ? full.bic : kNaN;
     best->rec.delta_bic = full.ok ? full.bic - z.cur_full.bic : kNaN;
     std::string no = full.ok ? verdict(z.cv.compare(z.cur_cv, best->cv, z.o.alpha), best->rec.delta_bic, z.o,
-                                       z.cur_cv.pos_rmse_m - best->cv.pos_rmse_m, z.floor_m)
+                                       removed_error_m(z.cur_cv.pos_rmse_m, best->cv.pos_rmse_m), z.floor_m)
                              : "fit on all windows failed: " + full.error;
     if (no.empty()) {  // the new effect itself must matter (actuator_lag's no-op is another source)
       const SetEval own = z.cv.own_noop(best->cv, best->e);
       const std::string why = own.ok ? verdict(z.cv.compare(own, best->cv, z.o.alpha), -1.0, z.o,
-                                               own.pos_rmse_m - best->cv.pos_rmse_m, z.floor_m)
+                                               removed_error_m(own.pos_rmse_m, best->cv.pos_rmse_m), z.floor_m)
                                      : own.error;
       if (!why.empty()) no = "its own parameters at their no-op values do as well: " + why;
     }
@@ -292,13 +292,13 @@ bool pair_step(Search& z, int step, const std::vector<Effect>& cands) {
     best->rec.bic = full.ok ? full.bic : kNaN;
     best->rec.delta_bic = full.ok ? full.bic - z.cur_full.bic : kNaN;
     std::string no = full.ok ? verdict(z.cv.compare(z.cur_cv, best->cv, z.o.alpha), best->rec.delta_bic, z.o,
-                                       z.cur_cv.pos_rmse_m - best->cv.pos_rmse_m, z.floor_m)
+                                       removed_error_m(z.cur_cv.pos_rmse_m, best->cv.pos_rmse_m), z.floor_m)
                              : "fit on all windows failed: " + full.error;
     for (Effect e : {best->p.first, best->p.second}) {
       if (!no.empty()) break;
       const SetEval own = z.cv.own_noop(best->cv, e);
       const std::string why = own.ok ? verdict(z.cv.compare(own, best->cv, z.o.alpha), -1.0, z.o,
-                                               own.pos_rmse_m - best->cv.pos_rmse_m, z.floor_m)
+                                               removed_error_m(own.pos_rmse_m, best->cv.pos_rmse_m), z.floor_m)
                                      : own.error;
       if (!why.empty()) no = fmt::format("{} at its no-op values does as well: {}", effect_name(e), why);
     }
@@ -346,12 +346,13 @@ bool backward_round(Search& z, int round) {
       // Redundancy by rule (a) only: once another effect changes every
       // window, an intermittent effect's paired test has little power left.
       // Or by rule (e): what it gains is immaterial.
-      const double pos_gain = d.cv.pos_rmse_m - z.cur_cv.pos_rmse_m;
+      const double pos_gain = removed_error_m(d.cv.pos_rmse_m, z.cur_cv.pos_rmse_m);
       const bool material = !(z.floor_m > 0.0) || pos_gain >= z.floor_m;
       d.removable = !(p.rel >= z.o.min_rel_improvement && p.gain >= z.o.min_gain) || !material;
-      d.rec.reason = !material ? fmt::format("removable: immaterial, without it the CV position error is only "
-                                             "{:.3g} mm higher (floor {:.3g} mm)",
-                                             1e3 * pos_gain, 1e3 * z.floor_m)
+      d.rec.reason = !material
+                         ? fmt::format("removable: immaterial, it removes only {:.3g} mm of CV position error "
+                                       "(floor {:.3g} mm)",
+                                       1e3 * pos_gain, 1e3 * z.floor_m)
                      : d.removable
                          ? fmt::format("removable: without it CV is only {:.2f} % worse", 100.0 * p.rel)
                          : "kept: it is needed";

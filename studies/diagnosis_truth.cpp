@@ -153,7 +153,7 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
       t.after_m = out.true_heldout_m;
       t.floor_m = out.floor_m;
     }
-    t.gain_m = t.before_m - t.after_m;
+    t.gain_m = diagnose::removed_error_m(t.before_m, t.after_m);
     t.detectable = !is_noop(t.effect) && diagnose::is_material(t.before_m, t.after_m, t.floor_m);
     if (!t.detectable && !is_noop(t.effect) &&
         (t.effect.name == "slip_zone" || t.effect.name == "radius_step")) {
@@ -164,7 +164,8 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
                                                          materiality);
       if (diagnose::is_material(before, after, floor)) {
         t.detectable = true, t.on_all_windows = true;
-        t.before_m = before, t.after_m = after, t.gain_m = before - after, t.floor_m = floor;
+        t.before_m = before, t.after_m = after, t.gain_m = diagnose::removed_error_m(before, after),
+        t.floor_m = floor;
       }
     }
   }

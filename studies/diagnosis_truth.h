@@ -56,7 +56,8 @@ struct EffectTruth {
   bool on_all_windows = false;  // judged on every window (slip_zone, radius_step; header comment)
   double before_m = std::numeric_limits<double>::quiet_NaN();  // held-out RMSE without it
   double after_m = std::numeric_limits<double>::quiet_NaN();   // with every true effect
-  double gain_m = std::numeric_limits<double>::quiet_NaN();    // before - after
+  double gain_m =
+      std::numeric_limits<double>::quiet_NaN();  // removed error: sqrt(before^2 - after^2) (materiality.h)
   double floor_m = std::numeric_limits<double>::quiet_NaN();
 };
 
