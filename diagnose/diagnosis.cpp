@@ -263,11 +263,11 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   d.before = residual_series(in, windows, base);
   d.located_before = locate(d.before, in.ref_sigma_m, o.locate);
 
-  // Wheel-odometry findings; one whose held-out gain is immaterial
-  // (materiality.h) is dropped and the others refitted without it.
+  // Wheel-odometry findings (each material on the selection's cross-validated
+  // held-out predictions: select.h rule (e) and its backward pass).
   EffectSet wheel;
   ReplayResult fin;
-  for (;;) {
+  {
     wheel = sel.fitted ? sel.final_fit.effects : nominal;
     // Train / held-out split: the selection's, else its rule (last 30 %).
     d.train_windows = sel.train_windows, d.heldout_windows = sel.heldout_windows;
@@ -284,8 +284,6 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
     d.floor_m = materiality_floor_m(in.ref_sigma_m, d.heldout.before_pos_rmse_m, o.select.materiality);
     d.findings.clear();
     const std::vector<ParamSlot> layout = param_layout(wheel);
-    const SelectedEffect* weakest = nullptr;
-    double weakest_gain = 0.0;
     for (const SelectedEffect& se : sel.effects) {
       Finding f;
       f.effect = std::string(effect_name(se.effect));
@@ -317,18 +315,8 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
       f.segments = loc.segments, f.regions = loc.regions, f.conditions = loc.phrase;
       if (f.segments.empty()) f.segments = helped_windows(wo, fin);
       if (f.conditions.empty()) f.conditions = description(se.effect);
-      const double gain = removed_error_m(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m);
-      if (!is_material(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m, d.floor_m) &&
-          (!weakest || !(gain >= weakest_gain)))
-        weakest = &se, weakest_gain = gain;
       d.findings.push_back(std::move(f));
     }
-    if (!weakest) break;
-    const std::string small = fmt::format("removes {:.3g} mm of held-out position error, floor {:.3g} mm",
-                                          1e3 * weakest_gain, 1e3 * d.floor_m);
-    for (const Finding& f : d.findings)
-      if (f.effect == effect_name(weakest->effect)) d.immaterial.push_back(f.spec() + ": " + small);
-    drop_effect(in, o.select, d.selection, weakest->effect, small);
   }
   d.final_pos_rmse_m = fin.pos_rmse_m, d.final_heading_rmse_rad = fin.heading_rmse_rad;
   d.after = residual_series(in, windows, fin);

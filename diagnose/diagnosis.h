@@ -16,12 +16,13 @@
 //    judged against the reference heading (ground truth), or with position
 //    fixes only by gyro-heading dead reckoning against the fixes
 //    (gyro_fixes_check.h, its own 40 s windows, split and held-out test);
-// Every finding is material (materiality.h, options select.materiality): its
-// held-out gain (before - after below) passes the floor against the
-// reference sigma and the nominal held-out error (gyro effects: the
-// gyro-heading replay without the correction). A wheel effect that fails is
-// dropped and the others refitted without it (select.h drop_effect); a gyro
-// effect that fails is not reported; both are listed in `immaterial`.
+// Every finding is material (materiality.h, options select.materiality):
+// wheel effects on the selection's cross-validated held-out predictions
+// (select.h rule (e) and its backward pass: every fold's windows are held
+// out once, more evidence than the final split's last 30 %, whose numbers
+// are reported as they are); a gyro effect on its held-out replay below
+// (before - after against the floor of the gyro-heading replay without the
+// correction), else it is not reported but listed in `immaterial`.
 //
 //  * `unexplained`: where the residual growth of the chosen model still
 //    exceeds what noise explains (locate.h on the final model's residuals) in
@@ -151,9 +152,9 @@ struct Diagnosis {
   TermSearchResult term_search;  // the search on the chosen model's mismatch (term_search.h)
   DiagnosisTiming timing;
   std::string note;  // e.g. why selection could not run
-  // Materiality (materiality.h): the floor of the wheel findings' held-out
-  // gains [m] (against the nominal held-out error), and the effects that were
-  // significant but fell below their floor, one line each ("spec: why").
+  // Materiality (materiality.h): the floor [m] against the nominal held-out
+  // error of the final split, and the gyro effects that were significant but
+  // fell below their floor, one line each ("spec: why").
   double floor_m = 0.0;
   std::vector<std::string> immaterial;
 };

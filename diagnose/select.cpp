@@ -190,15 +190,21 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
     cd.rec.time_s = since(t0);
     tried.push_back(std::move(cd));
   }
-  Cand* best = nullptr;
+  // Candidates by CV score; the best few are judged in turn (select.h,
+  // "Forward step"): the first that passes every rule is accepted.
+  std::vector<Cand*> order;
   for (Cand& cd : tried)
-    if (cd.cv.ok && (!best || cd.cv.score < best->cv.score)) best = &cd;
+    if (cd.cv.ok) order.push_back(&cd);
+  std::stable_sort(order.begin(), order.end(),
+                   [](const Cand* a, const Cand* b) { return a->cv.score < b->cv.score; });
   bool accepted = false;
-  if (best) {
-    for (Cand& cd : tried)
-      if (cd.cv.ok && &cd != best)
-        cd.rec.reason = fmt::format("not the best of step {} (CV {:.4g} vs {:.4g})", step, cd.cv.score,
-                                    best->cv.score);
+  for (std::size_t rank = 0; rank < order.size(); ++rank) {
+    Cand* best = order[rank];
+    if (rank >= static_cast<std::size_t>(z.o.tries_per_step) || accepted) {
+      best->rec.reason = fmt::format("not the best of step {} (CV {:.4g} vs {:.4g})", step, best->cv.score,
+                                     order.front()->cv.score);
+      continue;
+    }
     const auto t0 = Clock::now();
     SetEval full = z.cv.fit_all(best->st, z.cur_full.fitted, z.o.cv_max_iterations);
     best->rec.bic = full.ok ? full.bic : kNaN;
@@ -214,9 +220,11 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
       if (!why.empty()) no = "its own parameters at their no-op values do as well: " + why;
     }
     best->rec.time_s += since(t0);
+    const std::string which = rank == 0 ? "best candidate"
+                                        : fmt::format("best candidate that passes (rank {})", rank + 1);
     if (no.empty()) {
       accepted = best->rec.accepted = true;
-      best->rec.reason = "best candidate; improves CV significantly and BIC agrees";
+      best->rec.reason = which + "; improves CV significantly and BIC agrees";
       // Confounded alternatives: candidates the winner does not beat by (a)-(b).
       for (Cand& cd : tried)
         if (cd.cv.ok && &cd != best && !verdict(z.cv.compare(cd.cv, best->cv, z.o.alpha), -1.0, z.o).empty())
@@ -226,7 +234,8 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
       z.cur_cv = std::move(best->cv);
       z.cur_full = std::move(full);
     } else {
-      best->rec.reason = "best candidate rejected: " + no;
+      best->rec.reason = (rank == 0 ? "best candidate" : fmt::format("candidate of rank {}", rank + 1)) +
+                         " rejected: " + no;
     }
   }
   for (Cand& cd : tried) z.sel.records.push_back(std::move(cd.rec));
@@ -510,6 +519,7 @@ bool SelectOptions::IsValid(std::string* why) const {
     bool lo_in, hi_in;
   } ranges[] = {{"folds", double(folds), 2, 100, true, true},
                 {"max_effects", double(max_effects), 0, kNumEffects, true, true},
+                {"tries_per_step", double(tries_per_step), 1, kNumEffects, true, true},
                 {"alpha", alpha, 0, 0.5, false, false},
                 {"min_rel_improvement", min_rel_improvement, 0, 1, true, false},
                 {"min_gain", min_gain, 0, 1e300, true, true},
@@ -646,49 +656,6 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
         for (const std::string& name : r.rivals) e.rivals.push_back(effect_from_name(name));
   sel.timing.total_s = since(t_start);
   return sel;
-}
-
-void drop_effect(const DiagInput& in_full, const SelectOptions& o_in, Selection& sel, Effect e,
-                 const std::string& reason) {
-  if (!sel.structure.on(e))
-    throw std::invalid_argument(fmt::format("drop_effect: {} is not selected", effect_name(e)));
-  const auto t0 = Clock::now();
-  SelectOptions o = o_in;
-  o.fit.window_s = sel.window_s;
-  std::vector<Effect> chosen;
-  for (const SearchRecord& r : sel.records) {  // in the order accepted (a pair's record names both)
-    if (!r.accepted || (r.phase != "forward" && r.phase != "pair")) continue;
-    for (const std::string& name :
-         {r.candidate.substr(0, r.candidate.find('+')), r.candidate.find('+') == std::string::npos
-                                                            ? std::string()
-                                                            : r.candidate.substr(r.candidate.find('+') + 1)}) {
-      if (name.empty()) continue;
-      const Effect c = effect_from_name(name);
-      if (c != e && sel.structure.on(c) && std::count(chosen.begin(), chosen.end(), c) == 0)
-        chosen.push_back(c);
-    }
-  }
-  std::vector<std::vector<Effect>> rivals;
-  for (Effect c : chosen)
-    for (const SelectedEffect& se : sel.effects)
-      if (se.effect == c) rivals.push_back(se.rivals);
-  sel.structure.disable(e);
-  sel.effects.clear();
-  sel.fitted = false;
-  sel.final_fit = FitSummary{};
-  sel.train_windows.clear(), sel.heldout_windows.clear(), sel.split.clear();
-  SearchRecord rec;
-  rec.phase = "material", rec.candidate = effect_name(e), rec.set = sel.structure.to_string();
-  rec.accepted = true, rec.reason = "removed: " + reason;
-  if (!chosen.empty()) {
-    const SelectionInput si = selection_input(in_full, o_in);
-    final_model(in_full, si.input, make_windows(in_full, o.fit.window_s), o, chosen, sel);
-    for (SelectedEffect& se : sel.effects)
-      for (std::size_t i = 0; i < chosen.size(); ++i)
-        if (chosen[i] == se.effect && i < rivals.size()) se.rivals = rivals[i];
-  }
-  rec.time_s = since(t0);
-  sel.records.push_back(rec);
 }
 
 }  // namespace odotune::diagnose

@@ -58,7 +58,7 @@
 // held-out fold); a new effect starts at its no-op values.
 //
 // Forward step: every remaining candidate is added to the current set S and
-// cross-validated; the one with the lowest CV score, c, is accepted only if
+// cross-validated; a candidate c (in order of CV score, below) is accepted only if
 //  (a) the relative CV improvement is >= min_rel_improvement and the
 //      absolute one >= min_gain (a mismatch far below the reference noise is
 //      not physics one can see; sensor quantisation and discretisation leave
@@ -84,7 +84,11 @@
 //      what rule (d) compares (c's own parameters against their no-op). A
 //      0.6 ms lag or a 2 ms time offset can be significant on tens of
 //      thousands of samples and still change nothing a user can see.
-// Forward selection stops when the best candidate fails or after
+// The candidates are judged in order of CV score, up to tries_per_step of
+// them, and the first that passes (a)-(e) is accepted: a candidate that
+// predicts best but cannot be proven (MRCLAM: longitudinal_slip, not
+// significant) must not hide one that can (the 0.2 s command delay).
+// Forward selection stops when no judged candidate passes or after
 // max_effects steps. Backward pass: while |S| >= 2, each effect e is removed
 // in turn (CV and fit_all of S without e) and, among those whose removal
 // makes the CV score worse by less than rule (a) asks or the CV position
@@ -205,6 +209,7 @@ struct SelectOptions {
   double zone_min_score = 16.0;        // score a found box needs (zone_boxes.h)
   std::vector<ZoneBox> zone_boxes;     // extra candidate boxes (e.g. from locate.h)
   MaterialityOptions materiality;      // rule (e) and the final check (materiality.h)
+  int tries_per_step = 3;              // forward step: candidates judged in CV order ("Forward step")
   bool pairs = true;                   // try the condition pairs ("Pairs") when the error stays high
   double pair_above_floor = 3.0;       // ... when the CV position RMSE exceeds this many floors
 
@@ -277,14 +282,6 @@ struct Selection {
 // options)) (= Selection::window_s): callers that index them (train_windows,
 // heldout_windows) must use that length, not options.fit.window_s.
 Selection select_effects(const DiagInput& in, const SelectOptions& options = {});
-
-// Removes effect e from `sel` (a finding whose held-out gain is immaterial,
-// diagnosis.h) and refits the final model of the others as select_effects
-// does (same split rule); adds a SearchRecord of phase "material" with
-// `reason`. `in` and `options` must be select_effects'. Throws
-// std::invalid_argument when e is not selected.
-void drop_effect(const DiagInput& in, const SelectOptions& options, Selection& sel, Effect e,
-                 const std::string& reason);
 
 // The input the selection searches and scores on ("Data" above): `in` with
 // its reference thinned to about select_ref_rate_hz and denoised

