@@ -66,6 +66,11 @@ struct FitOptions {
   // truth): the anchor is then a nuisance pose, not one noisy sample
   // (window_replay.h). Off by default here; the model selection turns it on.
   bool free_anchor_with_heading = false;
+  // Standard errors (ceres::Covariance and the rank check, which cost about
+  // two Jacobian evaluations and a dense SVD per fit). Off for the fits of
+  // the model search, which read the cost and the values only: std_error is
+  // then NaN and rank_deficient false.
+  bool standard_errors = true;
   ModelOptions model;
   bool IsValid(std::string* why) const;
 };
