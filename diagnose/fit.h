@@ -40,7 +40,13 @@
 // the effect parameters only and composed with its anchor analytically
 // (a rigid motion), and the anchors, each meeting only its own window's
 // residuals, are eliminated by a Schur complement (DENSE_SCHUR): a dense QR
-// of the whole Jacobian would cost rows x (3 windows)^2.
+// of the whole Jacobian would cost rows x (3 windows)^2. Cost-only
+// evaluations (trial steps) replay in doubles, and a window remembers its
+// last one (Ceres' projected line search and the minimizer evaluate the same
+// trial point); the line search interpolates quadratically, so it needs no
+// Jacobian. Standard errors (a dense SVD over effect and anchor parameters,
+// rows x (3 windows)^2, i.e. quadratic in the track's length) are skipped
+// when FitOptions::standard_errors is off (the model search's fits).
 #pragma once
 
 #include <cstddef>
