@@ -78,9 +78,6 @@
 //      This rejects actuator_lag on wheel odometry when tau ~ 0: its no-op
 //      replays the commands instead of the encoders, which can beat the
 //      encoders for reasons other than a lag.
-// (The candidates' cross-validations of a step run as one parallel batch,
-// CrossValidator::cross_validate_all; the decision reads them afterwards,
-// so it does not depend on the number of threads.)
 // Forward selection stops when the best candidate fails or after
 // max_effects steps. Backward pass: while |S| >= 2, each effect e is removed
 // in turn (CV and fit_all of S without e) and, among those whose removal
@@ -149,7 +146,9 @@
 // the same training windows).
 //
 // Deterministic (no randomness); parallel with OpenMP where fits are
-// independent (candidates, folds, grid points, boxes), each fit single-
+// independent (the candidates of a forward step and their folds, one batch
+// of CrossValidator::cross_validate_all that the rules read afterwards; the
+// backward removals; grid points; boxes), each fit single-
 // threaded and started from values fixed before the parallel batch, so the
 // results are the same for any number of threads. Logs are data:
 // Selection::records (time_s of a candidate: its discrete search plus an
