@@ -19,8 +19,14 @@ void register_diagnose(CLI::App& app) {
               "  odotune simulate scenarios/track2.yaml -o /tmp/t2.csv --effect lateral_skid:k=0.04\n"
               "  odotune diagnose /tmp/t2.csv --json /tmp/t2-diagnosis.json\n"
               "The first line of the output says what was left out, its fitted size with uncertainty and\n"
-              "the held-out improvement. The JSON follows ../shared/specs/diagnosis-output.md.");
-  sub->add_option("track", req->track, "track file (track-format.md)")->required();
+              "the held-out improvement. The JSON follows ../shared/specs/diagnosis-output.md.\n"
+              "Several recordings of one robot:  odotune diagnose A.csv B.csv --heldout C.csv --json all.json\n"
+              "(fitted on A and B pooled, proven on C; one JSON document with a `tracks` list).");
+  sub->add_option("tracks", req->tracks,
+                  "track file(s) (track-format.md); several recordings of one robot are fitted pooled")
+      ->required();
+  sub->add_option("--heldout", req->heldout,
+                  "recordings of the same robot to prove the findings on (never fitted); repeatable");
   sub->add_option("--json", req->json, "write the diagnosis as JSON (diagnosis-output.md)");
   sub->add_option("--report", req->report,
                   "folder for the figures (residual vs time and condition, map, overlay) and index.html");
@@ -33,6 +39,14 @@ void register_diagnose(CLI::App& app) {
                   "replay window [s]; the odometry is re-anchored on the reference at each")
       ->default_val(20.0)
       ->check(CLI::PositiveNumber);
+  sub->add_option("--min-gain-sigmas", req->materiality.min_gain_sigmas,
+                  "a finding's held-out gain must reach this many reference sigmas (materiality floor)")
+      ->default_val(req->materiality.min_gain_sigmas)
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--min-gain-share", req->materiality.min_gain_share,
+                  "... and this share of the nominal model's held-out error (the larger of the two)")
+      ->default_val(req->materiality.min_gain_share)
+      ->check(CLI::Range(0.0, 1.0));
   sub->callback([req] {
     const DiagnoseRequest& a = *req;
     const DiagnoseOutcome o = run_diagnose(a);

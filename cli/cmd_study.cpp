@@ -1,15 +1,19 @@
-// odotune study resampling|calibration|learned: the Monte-Carlo studies of
-// Tables I and II of Fariña, Toledo & Acosta (RA-L 2026) and Tables 1-3 of
-// Fariña et al. (Sensors 2023) on simulated wheelchair tracks. The work is
-// studies/study_runs.h; this command reads the flags, shows progress and
-// prints the tables and the files written.
+// odotune study resampling|calibration|learned|diagnosis: the Monte-Carlo
+// studies of Tables I and II of Fariña, Toledo & Acosta (RA-L 2026) and
+// Tables 1-3 of Fariña et al. (Sensors 2023) on simulated wheelchair tracks,
+// and the random benchmark of the diagnosis (docs/diagnosis/benchmark.md).
+// The work is studies/study_runs.h and studies/diagnosis_benchmark_outputs.h;
+// this command reads the flags, shows progress and prints the tables and the
+// files written.
 #include <memory>
 #include <string>
 
 #include <fmt/format.h>
 
 #include "cli/commands.h"
+#include "cli/output.h"
 #include "cli/progress.h"
+#include "studies/diagnosis_benchmark_outputs.h"
 #include "studies/study_runs.h"
 
 namespace odotune::cli {
@@ -22,7 +26,7 @@ std::string source_scenario(const char* file) { return default_scenario(ODOTUNE_
 // Runs one study with progress on stderr, then prints its tables and files.
 template <class Request, class Run>
 void run_and_print(const std::string& label, const std::string& unit, Request request, Run run) {
-  request.source_dir = ODOTUNE_SOURCE_DIR;
+  if constexpr (requires { request.source_dir; }) request.source_dir = ODOTUNE_SOURCE_DIR;
   Progress progress(label, unit);
   StudyHooks hooks;
   hooks.progress = [&](long done, long total, const std::string& stage) {
@@ -93,6 +97,42 @@ void register_learned_study(CLI::App* study) {
   sub->callback([r] { run_and_print("study learned", "stages", *r, run_learned_to_folder); });
 }
 
+void register_diagnosis_study(CLI::App* study) {
+  auto r = std::make_shared<DiagnosisBenchmarkRequest>();
+  DiagnosisBenchmarkOptions& o = r->options;
+  auto* sub = study->add_subcommand(
+      "diagnosis",
+      "random benchmark of `odotune diagnose`: random robots, drives, odometry, references and 0-2 effects; "
+      "graded against the truth (confusion matrix, recall, precision, parameter errors, time per case)");
+  sub->add_option("--out", r->out, "folder for summary.md, cases.csv, confusion.csv and confusion.png/.svg")
+      ->required();
+  sub->add_option("--cases", o.cases, "number of random cases")
+      ->default_val(o.cases)
+      ->check(CLI::Range(1, 100000));
+  sub->add_option("--seed", o.seed, "seed of the run (case i draws from a hash of seed and i)")
+      ->default_val(o.seed);
+  sub->add_option("--first", o.first, "index of the first case (re-run case I alone: --first I --cases 1)")
+      ->default_val(o.first)
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--min-minutes", o.draw.min_minutes, "shortest drive [min]")->capture_default_str();
+  sub->add_option("--max-minutes", o.draw.max_minutes, "longest drive [min]")->capture_default_str();
+  sub->add_option("--max-rate", o.draw.max_rate_hz, "highest odometry, gyro and ground-truth rate drawn [Hz]")
+      ->capture_default_str();
+  sub->add_option("--null-share", o.draw.null_share, "share of cases with no effect")->capture_default_str();
+  sub->add_option("--two-share", o.draw.two_share, "share of cases with two effects (the rest have one)")
+      ->capture_default_str();
+  sub->add_flag("--keep-tracks", r->keep_tracks, "also write each case's track to OUT/tracks/case_IIII.csv");
+  add_threads_option(sub, &o.threads);
+  sub->footer("Example:\n  odotune study diagnosis --cases 20 --seed 1001 --max-minutes 3 --out /tmp/bench\n"
+              "Development runs use seeds other than the committed docs run (docs/diagnosis/benchmark.md).");
+  sub->callback([r] {
+    apply_threads(r->options.threads);
+    InterruptGuard guard;
+    r->stop = guard.flag();
+    run_and_print("study diagnosis", "cases", *r, run_diagnosis_benchmark_to_folder);
+  });
+}
+
 }  // namespace
 
 void register_study(CLI::App& app) {
@@ -132,6 +172,7 @@ void register_study(CLI::App& app) {
   });
 
   register_learned_study(study);
+  register_diagnosis_study(study);
 }
 
 }  // namespace odotune::cli

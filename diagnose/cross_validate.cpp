@@ -43,7 +43,10 @@ std::pair<double, double> local_quadratic(const std::vector<double>& t, const st
 int denoised_reference(const DiagInput& in, double rate_hz, double half_s, double heading_half_s,
                        const ModelOptions& model, DiagInput& out, double& correlated) {
   correlated = 1.0;
-  if (!(rate_hz > 0.0) || in.ref_t_s.size() < 3) return 1;
+  // A mixed reference (per-sample weights) is used as it is: a local fit
+  // across samples of different noise would need the weights too, and mixes
+  // are sparse (a known start plus fixes, fixes filling ground-truth gaps).
+  if (!(rate_hz > 0.0) || in.ref_t_s.size() < 3 || !in.ref_w.empty()) return 1;
   const auto& t = in.ref_t_s;
   std::vector<double> dt;
   for (std::size_t i = 1; i < t.size(); ++i) dt.push_back(t[i] - t[i - 1]);
@@ -185,7 +188,7 @@ void CrossValidator::finish(SetEval& e) const {
     for (std::size_t g = windows_[w].ref_begin; g < windows_[w].ref_end; ++g) {
       const double dx = e.pred.x_m[g] - in.ref_x_m[g], dy = e.pred.y_m[g] - in.ref_y_m[g];
       const double dh = heading_ ? e.pred.theta_rad[g] - in.ref_theta_rad[g] : 0.0;
-      e.window_sse[w] += (dx * dx + dy * dy) * ism_ * ism_ + dh * dh * ish_ * ish_;
+      e.window_sse[w] += (dx * dx + dy * dy) * ism_ * ism_ * in.ref_weight(g) + dh * dh * ish_ * ish_;
       sp += dx * dx + dy * dy, sh += dh * dh;
     }
   for (double s : e.window_sse) all += s;
@@ -298,7 +301,7 @@ PairedComparison CrossValidator::compare(const SetEval& ref, const SetEval& alt,
     for (std::size_t g = win.ref_begin; g < win.ref_end; ++g) {
       const double dx = alt.pred.x_m[g] - ref.pred.x_m[g], dy = alt.pred.y_m[g] - ref.pred.y_m[g];
       const double dh = heading_ ? alt.pred.theta_rad[g] - ref.pred.theta_rad[g] : 0.0;
-      delta2 += (dx * dx + dy * dy) * ism_ * ism_ + dh * dh * ish_ * ish_;
+      delta2 += (dx * dx + dy * dy) * ism_ * ism_ * in_->ref_weight(g) + dh * dh * ish_ * ish_;
     }
     if (!(delta2 >= kInformativeDelta2 * corr_)) continue;
     const auto n = static_cast<double>(win.ref_end - win.ref_begin);

@@ -69,7 +69,8 @@ struct PairedComparison {
 
 // A thinned, denoised copy of a reference for cross-validation: every
 // stride-th reference sample (stride = floor(reference rate / rate_hz);
-// returns 1 and leaves `out` untouched when that is 1, rate_hz is 0 or the
+// returns 1 and leaves `out` untouched when that is 1, rate_hz is 0, the
+// reference is mixed (DiagInput::ref_w non-empty) or the
 // reference has fewer than 3 samples), each kept position replaced by a
 // local quadratic least-squares fit of the reference over +-half_s (its bias
 // at a step change of acceleration a is at most ~0.011 a h^2: 0.3 mm for

@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <initializer_list>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
@@ -75,6 +76,12 @@ void fill_odometry(const Track& track, DiagInput& in) {
     in.radius_r_m = meta.wheel_radius_right_m.value_or(0.0);
     in.wheel_base_m = meta.wheel_base_m.value_or(0.0);
     in.odometry = OdometryKind::body_velocity;
+    const auto note = track.meta().get("source.note");
+    const bool measured = note &&
+                          (note->find("measured") != std::string::npos ||
+                           note->find("not commands") != std::string::npos) &&
+                          note->find("not measured") == std::string::npos;
+    in.velocity_source = measured ? "velocity odometry" : "command";
   }
 
   if (track.has_ticks()) {
@@ -133,43 +140,69 @@ void fill_odometry(const Track& track, DiagInput& in) {
                 "omega_l and omega_r, or v_cmd and w_cmd");
 }
 
-void fill_reference(const Track& track, DiagInput& in) {
+// One source of reference samples (ground truth or fixes) within the odometry's span.
+struct RefSource {
+  std::vector<double> t, x, y, theta;  // theta: only when every sample has it
+  bool heading = false;
+  double sigma_m = 0.0, sigma_rad = 0.0;  // NaN = not stated (estimated later)
+};
+
+RefSource read_source(const Track& track, Col cx, Col cy, bool with_heading, double t_lo, double t_hi) {
+  RefSource s;
   const auto& t = track.t();
-  const double t_lo = in.odo_t_s.front(), t_hi = in.odo_t_s.back();
-  const bool gt = track.has_gt();
-  if (!gt && !track.has_aps())
-    fail(track, "no reference; expected gt_x, gt_y (ground truth) or aps_x, aps_y (fixes)");
-  const Col cx = gt ? Col::gt_x : Col::aps_x, cy = gt ? Col::gt_y : Col::aps_y;
-  bool heading = gt && track.has(Col::gt_theta);
-  std::vector<double> theta;
+  s.heading = with_heading;
   for (std::size_t i = 0; i < t.size(); ++i) {
     if (!track.at(cx, i) || !track.at(cy, i) || t[i] < t_lo || t[i] > t_hi) continue;
-    in.ref_t_s.push_back(t[i]);
-    in.ref_x_m.push_back(track.col(cx)[i]);
-    in.ref_y_m.push_back(track.col(cy)[i]);
-    if (heading) {
+    s.t.push_back(t[i]);
+    s.x.push_back(track.col(cx)[i]);
+    s.y.push_back(track.col(cy)[i]);
+    if (s.heading) {
       if (track.at(Col::gt_theta, i))
-        theta.push_back(track.col(Col::gt_theta)[i]);
+        s.theta.push_back(track.col(Col::gt_theta)[i]);
       else
-        heading = false;
+        s.heading = false;
     }
   }
-  in.reference = gt ? ReferenceKind::gt : ReferenceKind::aps;
-  const std::size_t need = heading ? 2 : 3;
-  if (in.ref_t_s.size() < need)
-    fail(track, fmt::format("{} {} sample(s) within the odometry's time span [{}, {}] s; expected "
-                            "at least {}",
-                            in.ref_t_s.size(), gt ? "ground-truth" : "position-fix", t_lo, t_hi, need));
-  if (heading) {  // unwrap
-    in.ref_theta_rad.resize(theta.size());
-    double offset = 0.0;
-    for (std::size_t i = 0; i < theta.size(); ++i) {
-      if (i > 0) {
-        const double d = theta[i] + offset - in.ref_theta_rad[i - 1];
-        offset -= kTwoPi * std::round(d / kTwoPi);
-      }
-      in.ref_theta_rad[i] = theta[i] + offset;
+  if (!s.heading) s.theta.clear();
+  return s;
+}
+
+// Median interval between consecutive samples [s]; +inf with fewer than 2.
+double median_interval(const std::vector<double>& t) {
+  if (t.size() < 2) return std::numeric_limits<double>::infinity();
+  std::vector<double> d(t.size() - 1);
+  for (std::size_t i = 0; i + 1 < t.size(); ++i) d[i] = t[i + 1] - t[i];
+  return median(std::move(d));
+}
+
+// Fixes that ground truth does not already cover: those with no ground-truth
+// sample within 1.5 of its median intervals (header comment).
+RefSource uncovered(const RefSource& fixes, const RefSource& gt) {
+  const double reach = 1.5 * median_interval(gt.t);
+  RefSource out;
+  out.sigma_m = fixes.sigma_m;
+  for (std::size_t i = 0; i < fixes.t.size(); ++i) {
+    const auto it = std::lower_bound(gt.t.begin(), gt.t.end(), fixes.t[i]);
+    double gap = std::numeric_limits<double>::infinity();
+    if (it != gt.t.end()) gap = *it - fixes.t[i];
+    if (it != gt.t.begin()) gap = std::min(gap, fixes.t[i] - *(it - 1));
+    if (gap < 1e-9 || (std::isfinite(reach) && gap <= reach)) continue;
+    out.t.push_back(fixes.t[i]);
+    out.x.push_back(fixes.x[i]);
+    out.y.push_back(fixes.y[i]);
+  }
+  return out;
+}
+
+void unwrap_into(const std::vector<double>& theta, std::vector<double>& out) {
+  out.resize(theta.size());
+  double offset = 0.0;
+  for (std::size_t i = 0; i < theta.size(); ++i) {
+    if (i > 0) {
+      const double d = theta[i] + offset - out[i - 1];
+      offset -= kTwoPi * std::round(d / kTwoPi);
     }
+    out[i] = theta[i] + offset;
   }
 }
 
@@ -204,21 +237,22 @@ NominalPath nominal_path(const DiagInput& in) {
   return p;
 }
 
-// Estimates the sigmas that are NaN (not stated), then applies the floors.
-void estimate_sigmas(DiagInput& in) {
-  const NominalPath p = nominal_path(in);
-  const std::size_t m = in.ref_t_s.size();
+// Estimates the sigmas of `s` that are NaN (not stated) from its own samples
+// (header comment); leaves them NaN with fewer than 3 samples.
+void estimate_sigmas(const DiagInput& in, const NominalPath& p, RefSource& s) {
+  const std::size_t m = s.t.size();
+  if (m < 3) return;
   std::vector<double> ox(m), oy(m), oth(m);
   for (std::size_t i = 0; i < m; ++i) {
-    ox[i] = interp_held(in.odo_t_s, p.x, in.ref_t_s[i]);
-    oy[i] = interp_held(in.odo_t_s, p.y, in.ref_t_s[i]);
-    oth[i] = interp_held(in.odo_t_s, p.th, in.ref_t_s[i]);
+    ox[i] = interp_held(in.odo_t_s, p.x, s.t[i]);
+    oy[i] = interp_held(in.odo_t_s, p.y, s.t[i]);
+    oth[i] = interp_held(in.odo_t_s, p.th, s.t[i]);
   }
-  if (std::isnan(in.ref_sigma_m)) {
+  if (std::isnan(s.sigma_m)) {
     std::vector<double> chord(m - 1), diff(m - 1);
     for (std::size_t i = 0; i + 1 < m; ++i) {
       chord[i] = std::hypot(ox[i + 1] - ox[i], oy[i + 1] - oy[i]);
-      diff[i] = std::hypot(in.ref_x_m[i + 1] - in.ref_x_m[i], in.ref_y_m[i + 1] - in.ref_y_m[i]) - chord[i];
+      diff[i] = std::hypot(s.x[i + 1] - s.x[i], s.y[i + 1] - s.y[i]) - chord[i];
     }
     auto sigma_above = [&](double min_chord) {
       std::vector<double> d;
@@ -229,20 +263,57 @@ void estimate_sigmas(DiagInput& in) {
     auto [n0, s0] = sigma_above(0.0);
     const auto [n1, s1] = sigma_above(3.0 * s0);
     if (n1 >= 10) s0 = s1;
-    in.ref_sigma_m = n0 >= 3 ? s0 : 0.0;
+    s.sigma_m = n0 >= 3 ? s0 : 0.0;
   }
-  in.ref_sigma_m = std::max(in.ref_sigma_m, kMinSigmaM);
-  if (!in.has_ref_heading()) {
-    in.ref_sigma_rad = std::nan("");
+  if (s.heading && std::isnan(s.sigma_rad)) {
+    std::vector<double> d(m - 1);
+    for (std::size_t i = 0; i + 1 < m; ++i) d[i] = (s.theta[i + 1] - s.theta[i]) - (oth[i + 1] - oth[i]);
+    s.sigma_rad = robust_sigma(d) / std::sqrt(2.0);
+  }
+}
+
+// Lays the sources out as the input's reference (header comment, "Reference").
+void assemble_reference(RefSource gt, RefSource fixes, DiagInput& in) {
+  const NominalPath p = nominal_path(in);
+  if (gt.heading) unwrap_into(std::vector<double>(gt.theta), gt.theta);
+  estimate_sigmas(in, p, gt);
+  estimate_sigmas(in, p, fixes);
+  // A source too small to estimate its own noise borrows the other's.
+  if (std::isnan(gt.sigma_m)) gt.sigma_m = fixes.sigma_m;
+  if (std::isnan(fixes.sigma_m)) fixes.sigma_m = gt.sigma_m;
+  const double sigma_gt = std::max(std::isnan(gt.sigma_m) ? 0.0 : gt.sigma_m, kMinSigmaM);
+  const double sigma_fix = std::max(std::isnan(fixes.sigma_m) ? 0.0 : fixes.sigma_m, kMinSigmaM);
+  in.ref_gt_samples = gt.t.size();
+  in.ref_fix_samples = fixes.t.size();
+  in.reference = gt.t.size() >= fixes.t.size() ? ReferenceKind::gt : ReferenceKind::aps;
+  in.ref_sigma_m = in.reference == ReferenceKind::gt ? sigma_gt : sigma_fix;
+  in.ref_sigma_rad = std::nan("");
+  if (fixes.t.empty()) {
+    in.ref_t_s = std::move(gt.t), in.ref_x_m = std::move(gt.x), in.ref_y_m = std::move(gt.y);
+    if (gt.heading) {
+      in.ref_theta_rad = std::move(gt.theta);
+      in.ref_sigma_rad = std::max(std::isnan(gt.sigma_rad) ? 0.0 : gt.sigma_rad, kMinSigmaRad);
+    }
     return;
   }
-  if (std::isnan(in.ref_sigma_rad)) {
-    std::vector<double> d(m - 1);
-    for (std::size_t i = 0; i + 1 < m; ++i)
-      d[i] = (in.ref_theta_rad[i + 1] - in.ref_theta_rad[i]) - (oth[i + 1] - oth[i]);
-    in.ref_sigma_rad = d.size() >= 3 ? robust_sigma(d) / std::sqrt(2.0) : 0.0;
+  if (gt.t.empty()) {
+    in.ref_t_s = std::move(fixes.t), in.ref_x_m = std::move(fixes.x), in.ref_y_m = std::move(fixes.y);
+    return;
   }
-  in.ref_sigma_rad = std::max(in.ref_sigma_rad, kMinSigmaRad);
+  // Mixed: positions of both sources in time order, each weighted by its own
+  // noise against ref_sigma_m; headings unused (fixes carry none).
+  const double w_gt = (in.ref_sigma_m / sigma_gt) * (in.ref_sigma_m / sigma_gt);
+  const double w_fix = (in.ref_sigma_m / sigma_fix) * (in.ref_sigma_m / sigma_fix);
+  std::size_t a = 0, b = 0;
+  while (a < gt.t.size() || b < fixes.t.size()) {
+    const bool take_gt = b >= fixes.t.size() || (a < gt.t.size() && gt.t[a] <= fixes.t[b]);
+    const RefSource& s = take_gt ? gt : fixes;
+    const std::size_t i = take_gt ? a++ : b++;
+    in.ref_t_s.push_back(s.t[i]);
+    in.ref_x_m.push_back(s.x[i]);
+    in.ref_y_m.push_back(s.y[i]);
+    in.ref_w.push_back(take_gt ? w_gt : w_fix);
+  }
 }
 
 }  // namespace
@@ -259,13 +330,26 @@ DiagInput build_diag_input(const Track& track) {
         in.gyro_t_s.push_back(track.t()[i]);
         in.gyro_z_radps.push_back(track.col(Col::gyro_z)[i]);
       }
-  fill_reference(track, in);
-  const bool gt = in.reference == ReferenceKind::gt;
+  if (!track.has_gt() && !track.has_aps())
+    fail(track, "no reference; expected gt_x, gt_y (ground truth) or aps_x, aps_y (position fixes)");
+  const double t_lo = in.odo_t_s.front(), t_hi = in.odo_t_s.back();
+  RefSource gt, fixes;
   // NaN = not stated: estimate_sigmas() estimates it.
   const double nan = std::nan("");
-  in.ref_sigma_m = meta_number(track, gt ? "sim.gt_sigma_m" : "sim.aps_sigma_m").value_or(nan);
-  in.ref_sigma_rad = gt ? meta_number(track, "sim.gt_sigma_rad").value_or(nan) : nan;
-  estimate_sigmas(in);
+  if (track.has_gt()) {
+    gt = read_source(track, Col::gt_x, Col::gt_y, track.has(Col::gt_theta), t_lo, t_hi);
+    gt.sigma_m = meta_number(track, "sim.gt_sigma_m").value_or(nan);
+    gt.sigma_rad = meta_number(track, "sim.gt_sigma_rad").value_or(nan);
+  }
+  if (track.has_aps()) {
+    fixes = uncovered(read_source(track, Col::aps_x, Col::aps_y, false, t_lo, t_hi), gt);
+    fixes.sigma_m = meta_number(track, "sim.aps_sigma_m").value_or(nan);
+  }
+  if (gt.t.empty() && fixes.t.empty())
+    fail(track, fmt::format("no reference sample within the odometry's time span [{}, {}] s; expected ground "
+                            "truth (gt_x, gt_y) or position fixes (aps_x, aps_y) there",
+                            t_lo, t_hi));
+  assemble_reference(std::move(gt), std::move(fixes), in);
   return in;
 }
 
@@ -293,7 +377,7 @@ DiagInput crop(const DiagInput& in, double t0_s, double t1_s) {
   keep_between(c.odo_t_s, {&c.phi_l_rad, &c.phi_r_rad, &c.v_mps, &c.w_radps, &c.cmd_v_mps, &c.cmd_w_radps},
                t0_s, t1_s);
   keep_between(c.gyro_t_s, {&c.gyro_z_radps}, t0_s, t1_s);
-  keep_between(c.ref_t_s, {&c.ref_x_m, &c.ref_y_m, &c.ref_theta_rad}, t0_s, t1_s);
+  keep_between(c.ref_t_s, {&c.ref_x_m, &c.ref_y_m, &c.ref_theta_rad, &c.ref_w}, t0_s, t1_s);
   if (c.odo_t_s.size() < 2 || c.ref_t_s.size() < 2)
     throw std::invalid_argument(fmt::format(
         "{}: the range [{}, {}] s holds {} odometry and {} reference samples; expected at least 2 of each",

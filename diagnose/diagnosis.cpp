@@ -3,11 +3,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
+#include "diagnose/materiality.h"
 #include "diagnose/option_rules.h"
+#include "diagnose/reconcile.h"
 #include "diagnose/residual_series.h"
 #include "diagnose/series_interp.h"
 #include "diagnose/window_replay.h"
@@ -135,6 +138,48 @@ Inside inside_segments(const ResidualSeries& s, const std::vector<TimeSegment>& 
   return {all > 0.0 ? in_seg / all : 0.0, n > 0 ? std::sqrt(in_seg / static_cast<double>(n)) : 0.0};
 }
 
+// Physics outside the list (term_search.h): terms that reproduce what the
+// chosen model leaves, on the scoring input's windows and split; a model that
+// passes the materiality floor goes on the `unexplained` finding, made here
+// when there is none (diagnosis.h).
+void attach_term_model(Diagnosis& d, const DiagInput& in, const DiagInput& scoring, const EffectSet& wheel,
+                       const DiagnoseOptions& o) {
+  if (!o.terms.enabled || d.train_windows.empty()) return;
+  const double floor_m = d.floor_m;
+  try {
+    d.term_search = search_terms(scoring, wheel, make_windows(scoring, d.window_s), d.train_windows,
+                                 d.heldout_windows, floor_m, o.terms);
+  } catch (const std::invalid_argument& e) {  // an input the search cannot use: no model, the reason logged
+    d.term_search.reason = std::string("term search not run: ") + e.what();
+  }
+  if (!d.term_search.found) return;
+  const TermModel& tm = d.term_search.model;
+  auto it = std::find_if(d.findings.begin(), d.findings.end(),
+                         [](const Finding& f) { return f.effect == "unexplained"; });
+  if (it == d.findings.end()) {
+    Finding f;
+    f.effect = "unexplained";
+    f.segments.push_back({in.ref_t_s.front(), in.ref_t_s.back(), 0.0, 0});
+    f.train = {tm.train.before_pos_rmse_m, tm.train.after_pos_rmse_m};
+    f.heldout = {tm.heldout.before_pos_rmse_m, tm.heldout.after_pos_rmse_m};
+    // Share of the nominal model's training error the terms remove.
+    const double nominal = d.train.before_pos_rmse_m;
+    f.explains = nominal > 0.0
+                     ? std::max(0.0,
+                                (sq(tm.train.before_pos_rmse_m) - sq(tm.train.after_pos_rmse_m)) / sq(nominal))
+                     : 0.0;
+    d.findings.push_back(std::move(f));
+    it = std::prev(d.findings.end());
+  }
+  it->conditions = (it->conditions.empty() ? "" : it->conditions + "; ") + tm.conditions;
+  it->evidence = (it->evidence.empty() ? "" : it->evidence + "; ") +
+                 fmt::format("a sparse regression over {} candidate terms, chosen by cross-validation, "
+                             "lowers the held-out position error from {:.4f} m to {:.4f} m",
+                             d.term_search.library_size, tm.heldout.before_pos_rmse_m,
+                             tm.heldout.after_pos_rmse_m);
+  it->model = tm;
+}
+
 }  // namespace
 
 bool DiagnoseOptions::IsValid(std::string* why) const {
@@ -144,7 +189,8 @@ bool DiagnoseOptions::IsValid(std::string* why) const {
     return ok;
   };
   if (!part(select.IsValid(&w), "select") || !part(sensors.IsValid(&w), "sensors") ||
-      !part(gyro_fixes.IsValid(&w), "gyro_fixes") || !part(locate.IsValid(&w), "locate"))
+      !part(gyro_fixes.IsValid(&w), "gyro_fixes") || !part(locate.IsValid(&w), "locate") ||
+      !part(terms.IsValid(&w), "terms"))
     return false;
   return check_option_rules(
       {{is_fraction(unexplained_min_share), "unexplained_min_share", unexplained_min_share, "in [0, 1]"},
@@ -173,10 +219,27 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   Diagnosis d;
   d.track = in.track_name;
   d.reference = in.reference;
+  d.ref_gt_samples = in.ref_gt_samples, d.ref_fix_samples = in.ref_fix_samples;
+  d.ref_heading = in.has_ref_heading();
+  d.velocity_source = in.velocity_source;
   // The selection's window (longer than fit.window_s for sparse fixes, select.h).
   const double ws = selection_window_s(in, o.select);
   d.window_s = ws;
-  const std::vector<Window> windows = make_windows(in, ws);
+  std::vector<Window> windows;
+  try {
+    windows = make_windows(in, ws);
+  } catch (const std::invalid_argument&) {
+    // Too few reference samples to score any window: no finding, said plainly.
+    const double nan = std::nan("");
+    d.baseline_pos_rmse_m = d.baseline_heading_rmse_rad = d.final_pos_rmse_m = d.final_heading_rmse_rad = nan;
+    d.note = fmt::format(
+        "{} reference sample(s) ({} ground truth, {} fixes): too few to compare a model against "
+        "(a window needs {}); no finding",
+        in.ref_t_s.size(), in.ref_gt_samples, in.ref_fix_samples,
+        in.has_ref_heading() ? "2 poses" : "3 positions");
+    d.timing.total_s = seconds_since(t_all);
+    return d;
+  }
 
   auto t0 = Clock::now();
   d.sensors = check_sensors(in, o.sensors);
@@ -188,70 +251,88 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   const Selection& sel = d.selection;
   d.note = sel.note;
   const EffectSet nominal;
-  const EffectSet wheel = sel.fitted ? sel.final_fit.effects : nominal;
-
-  // Train / held-out split: the selection's, else its rule (last 30 %).
-  d.train_windows = sel.train_windows, d.heldout_windows = sel.heldout_windows;
-  if (!sel.fitted) {
-    d.train_windows.clear(), d.heldout_windows.clear();
-    const auto n = static_cast<int>(windows.size());
-    const int n_train = n - static_cast<int>(std::round(o.select.heldout_fraction * n));
-    for (int i = 0; i < n; ++i) (i < n_train ? d.train_windows : d.heldout_windows).push_back(i);
-  }
-
-  t0 = Clock::now();
-  const ReplayResult base = replay(in, nominal, ws), fin = replay(in, wheel, ws);
-  d.baseline_pos_rmse_m = base.pos_rmse_m, d.baseline_heading_rmse_rad = base.heading_rmse_rad;
-  d.final_pos_rmse_m = fin.pos_rmse_m, d.final_heading_rmse_rad = fin.heading_rmse_rad;
   // Before/after scores against the selection's denoised reference (select.h).
   const SelectionInput si = selection_input(in, o.select);
   const bool use_denoised = si.stride > 1;
   const DiagInput& scoring = use_denoised ? si.input : in;
   d.scored_on_denoised_reference = use_denoised;
+  t0 = Clock::now();
+  const ReplayResult base = replay(in, nominal, ws);
   const ReplayResult base_s = use_denoised ? replay(scoring, nominal, ws) : base;
-  const ReplayResult fin_s = use_denoised ? replay(scoring, wheel, ws) : fin;
-  d.train = scores(base_s, fin_s, d.train_windows);
-  d.heldout = scores(base_s, fin_s, d.heldout_windows);
+  d.baseline_pos_rmse_m = base.pos_rmse_m, d.baseline_heading_rmse_rad = base.heading_rmse_rad;
   d.before = residual_series(in, windows, base);
-  d.after = residual_series(in, windows, fin);
   d.located_before = locate(d.before, in.ref_sigma_m, o.locate);
-  d.located_after = locate(d.after, in.ref_sigma_m, o.locate);
 
-  // Wheel-odometry findings.
-  const std::vector<ParamSlot> layout = param_layout(wheel);
-  for (const SelectedEffect& se : sel.effects) {
-    Finding f;
-    f.effect = std::string(effect_name(se.effect));
-    for (std::size_t k = 0; k < layout.size(); ++k) {
-      const ParamSlot& slot = layout[k];
-      if (slot.effect != se.effect) continue;
-      const std::string name = param_short_name(slot.name);
-      f.params.push_back({name, wheel.params(se.effect)[static_cast<std::size_t>(slot.index)]});
-      double se_value = std::nan("");
-      if (slot.fitted) {
-        for (const FitParam& fp : sel.final_fit.params)
-          if (fp.name == slot.name) se_value = fp.std_error;
-      } else {
-        f.discrete.push_back(name);
-        se_value = se.effect == Effect::radius_step ? o.select.step_fine_s : o.select.zone_cell_m / 4.0;
-      }
-      f.stderrs.push_back({name, se_value});
+  // Wheel-odometry findings; one whose held-out gain is immaterial
+  // (materiality.h) is dropped and the others refitted without it.
+  EffectSet wheel;
+  ReplayResult fin;
+  for (;;) {
+    wheel = sel.fitted ? sel.final_fit.effects : nominal;
+    // Train / held-out split: the selection's, else its rule (last 30 %).
+    d.train_windows = sel.train_windows, d.heldout_windows = sel.heldout_windows;
+    if (!sel.fitted) {
+      d.train_windows.clear(), d.heldout_windows.clear();
+      const auto n = static_cast<int>(windows.size());
+      const int n_train = n - static_cast<int>(std::round(o.select.heldout_fraction * n));
+      for (int i = 0; i < n; ++i) (i < n_train ? d.train_windows : d.heldout_windows).push_back(i);
     }
-    EffectSet without = wheel;
-    without.disable(se.effect);
-    const ReplayResult wo_s = replay(scoring, without, ws);
-    f.train = scores(wo_s, fin_s, d.train_windows);
-    f.heldout = scores(wo_s, fin_s, d.heldout_windows);
-    f.explains = se.explains;
-    for (Effect r : se.rivals) f.rivals.emplace_back(effect_name(r));
-    f.evidence = "model selection: cross-validated over time blocks, fitted with Ceres";
-    const ReplayResult wo = replay(in, without, ws);
-    const Location loc = locate(residual_series(in, windows, wo), in.ref_sigma_m, o.locate);
-    f.segments = loc.segments, f.regions = loc.regions, f.conditions = loc.phrase;
-    if (f.segments.empty()) f.segments = helped_windows(wo, fin);
-    if (f.conditions.empty()) f.conditions = description(se.effect);
-    d.findings.push_back(std::move(f));
+    fin = replay(in, wheel, ws);
+    const ReplayResult fin_s = use_denoised ? replay(scoring, wheel, ws) : fin;
+    d.train = scores(base_s, fin_s, d.train_windows);
+    d.heldout = scores(base_s, fin_s, d.heldout_windows);
+    d.floor_m = materiality_floor_m(in.ref_sigma_m, d.heldout.before_pos_rmse_m, o.select.materiality);
+    d.findings.clear();
+    const std::vector<ParamSlot> layout = param_layout(wheel);
+    const SelectedEffect* weakest = nullptr;
+    double weakest_gain = 0.0;
+    for (const SelectedEffect& se : sel.effects) {
+      Finding f;
+      f.effect = std::string(effect_name(se.effect));
+      for (std::size_t k = 0; k < layout.size(); ++k) {
+        const ParamSlot& slot = layout[k];
+        if (slot.effect != se.effect) continue;
+        const std::string name = param_short_name(slot.name);
+        f.params.push_back({name, wheel.params(se.effect)[static_cast<std::size_t>(slot.index)]});
+        double se_value = std::nan("");
+        if (slot.fitted) {
+          for (const FitParam& fp : sel.final_fit.params)
+            if (fp.name == slot.name) se_value = fp.std_error;
+        } else {
+          f.discrete.push_back(name);
+          se_value = se.effect == Effect::radius_step ? o.select.step_fine_s : o.select.zone_cell_m / 4.0;
+        }
+        f.stderrs.push_back({name, se_value});
+      }
+      EffectSet without = wheel;
+      without.disable(se.effect);
+      const ReplayResult wo_s = replay(scoring, without, ws);
+      f.train = scores(wo_s, fin_s, d.train_windows);
+      f.heldout = scores(wo_s, fin_s, d.heldout_windows);
+      f.explains = se.explains;
+      for (Effect r : se.rivals) f.rivals.emplace_back(effect_name(r));
+      f.evidence = "model selection: cross-validated over time blocks, fitted with Ceres";
+      const ReplayResult wo = replay(in, without, ws);
+      const Location loc = locate(residual_series(in, windows, wo), in.ref_sigma_m, o.locate);
+      f.segments = loc.segments, f.regions = loc.regions, f.conditions = loc.phrase;
+      if (f.segments.empty()) f.segments = helped_windows(wo, fin);
+      if (f.conditions.empty()) f.conditions = description(se.effect);
+      const double gain = removed_error_m(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m);
+      if (!is_material(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m, d.floor_m) &&
+          (!weakest || !(gain >= weakest_gain)))
+        weakest = &se, weakest_gain = gain;
+      d.findings.push_back(std::move(f));
+    }
+    if (!weakest) break;
+    const std::string small = fmt::format("removes {:.3g} mm of held-out position error, floor {:.3g} mm",
+                                          1e3 * weakest_gain, 1e3 * d.floor_m);
+    for (const Finding& f : d.findings)
+      if (f.effect == effect_name(weakest->effect)) d.immaterial.push_back(f.spec() + ": " + small);
+    drop_effect(in, o.select, d.selection, weakest->effect, small);
   }
+  d.final_pos_rmse_m = fin.pos_rmse_m, d.final_heading_rmse_rad = fin.heading_rmse_rad;
+  d.after = residual_series(in, windows, fin);
+  d.located_after = locate(d.after, in.ref_sigma_m, o.locate);
   d.model = wheel;
 
   // Gyro findings: the sensor check against the reference heading, or with
@@ -309,6 +390,17 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
       f.explains = f.train.before_pos_rmse_m > 0.0
                        ? std::max(0.0, 1.0 - sq(f.train.after_pos_rmse_m / f.train.before_pos_rmse_m))
                        : 0.0;
+      // Its floor against the gyro-heading replay without this correction.
+      const double floor_g = materiality_floor_m(in.ref_sigma_m, f.heldout.before_pos_rmse_m,
+                                                 o.select.materiality);
+      if (!is_material(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m, floor_g)) {
+        d.immaterial.push_back(fmt::format(
+            "{} {} = {:.3g}: removes {:.3g} mm of held-out position error, "
+            "floor {:.3g} mm",
+            f.effect, name, v->value,
+            1e3 * removed_error_m(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m), 1e3 * floor_g));
+        continue;
+      }
       f.segments.push_back({in.ref_t_s.front(), in.ref_t_s.back(), 0.0, 0});
       f.conditions = description(effect);
       d.model.enable(effect).set(effect, name, v->value);
@@ -322,7 +414,13 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   if (!la.segments.empty()) {
     const Inside ins = inside_segments(d.after, la.segments);
     const double share = ins.share;
-    if (share >= o.unexplained_min_share && ins.rmse_m >= o.unexplained_min_sigmas * in.ref_sigma_m) {
+    // Material too: the chosen model's held-out error must itself stand
+    // unexplained_min_sigmas reference sigmas and the floor above zero (a
+    // null track's 1 mm left after dead reckoning is not a finding).
+    const bool material = d.heldout.after_pos_rmse_m >=
+                          std::max(o.unexplained_min_sigmas * in.ref_sigma_m, d.floor_m);
+    if (share >= o.unexplained_min_share && ins.rmse_m >= o.unexplained_min_sigmas * in.ref_sigma_m &&
+        material) {
       Finding f;
       f.effect = "unexplained";
       f.segments = la.segments, f.regions = la.regions, f.conditions = la.phrase;
@@ -336,8 +434,12 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
       d.findings.push_back(std::move(f));
     }
   }
+  const auto t_terms = Clock::now();
+  attach_term_model(d, in, scoring, wheel, o);
+  d.timing.terms_s = seconds_since(t_terms);
   std::stable_sort(d.findings.begin(), d.findings.end(),
                    [](const Finding& a, const Finding& b) { return a.explains > b.explains; });
+  d.sensor_notes = reconcile_sensor_checks(d);
   d.timing.locate_s = seconds_since(t0);
   d.timing.total_s = seconds_since(t_all);
   return d;

@@ -16,12 +16,27 @@
 //    judged against the reference heading (ground truth), or with position
 //    fixes only by gyro-heading dead reckoning against the fixes
 //    (gyro_fixes_check.h, its own 40 s windows, split and held-out test);
+// Every finding is material (materiality.h, options select.materiality): its
+// held-out gain (before - after below) passes the floor against the
+// reference sigma and the nominal held-out error (gyro effects: the
+// gyro-heading replay without the correction). A wheel effect that fails is
+// dropped and the others refitted without it (select.h drop_effect); a gyro
+// effect that fails is not reported; both are listed in `immaterial`.
+//
 //  * `unexplained`: where the residual growth of the chosen model still
 //    exceeds what noise explains (locate.h on the final model's residuals) in
 //    segments that carry at least `unexplained_min_share` of its squared
 //    error, where its position RMSE is at least `unexplained_min_sigmas`
 //    reference sigmas (a growth far above a tiny noise floor can still be a
-//    sub-millimetre mismatch: not physics one can act on); params empty.
+//    sub-millimetre mismatch: not physics one can act on), and where the
+//    chosen model's held-out position RMSE is at least that many sigmas and
+//    the materiality floor (what is left is worth modelling); params empty.
+//    It carries `model` when the term search (term_search.h, run on every
+//    track unless options.terms.enabled is off) finds terms outside
+//    physics-effects.md whose held-out gain passes the materiality floor
+//    (materiality.h); such terms make an `unexplained` finding on their own
+//    when nothing was located (a residual periodic in a wheel's angle
+//    averages out of locate.h's noise estimate), with the terms' fit.
 //
 // Numbers of a finding (diagnosis-output.md), all position RMSEs of the
 // windowed replay. baseline/final: against the raw reference. train/heldout
@@ -50,6 +65,7 @@
 #pragma once
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -59,6 +75,7 @@
 #include "diagnose/locate.h"
 #include "diagnose/select.h"
 #include "diagnose/sensor_checks.h"
+#include "diagnose/term_search.h"
 
 namespace odotune::diagnose {
 
@@ -69,6 +86,7 @@ struct DiagnoseOptions {
   LocateOptions locate;
   double unexplained_min_share = 0.2;   // of the final model's SSE inside the located segments
   double unexplained_min_sigmas = 3.0;  // its RMSE there, in reference sigmas (DiagInput::ref_sigma_m)
+  TermSearchOptions terms;              // physics outside the list (term_search.h)
 
   bool IsValid(std::string* why) const;
 };
@@ -95,6 +113,7 @@ struct Finding {
   BeforeAfter train, heldout;
   std::vector<std::string> rivals;  // confounded alternatives the data could not rule out
   std::string evidence;             // how it was found, one phrase
+  std::optional<TermModel> model;   // unexplained only: terms that reproduce it (term_search.h)
 
   double param(std::string_view name) const;  // NaN when absent
   // The simulator's command-line form, "lateral_skid:k=0.021" ("" for unexplained).
@@ -103,11 +122,18 @@ struct Finding {
 
 struct DiagnosisTiming {
   double total_s = 0.0, sensors_s = 0.0, select_s = 0.0, locate_s = 0.0;
+  double terms_s = 0.0;  // the term search (term_search.h)
 };
 
 struct Diagnosis {
   std::string track;
   ReferenceKind reference = ReferenceKind::gt;
+  std::size_t ref_gt_samples = 0, ref_fix_samples = 0;  // reference samples of each source (diag_input.h)
+  bool ref_heading = false;                             // compared against a reference heading too
+  std::string velocity_source;  // body-velocity odometry: "command" or "velocity odometry" (diag_input.h)
+  // The sensor checks reconciled with the findings (reconcile.h): per flagged
+  // check, which finding carries it or why none does.
+  std::vector<std::string> sensor_notes;
   double window_s = 0.0;
   double baseline_pos_rmse_m = 0.0, baseline_heading_rmse_rad = 0.0;  // nominal, all windows
   double final_pos_rmse_m = 0.0, final_heading_rmse_rad = 0.0;        // chosen model, all windows
@@ -122,8 +148,14 @@ struct Diagnosis {
   GyroFixesCheck gyro_fixes;
   ResidualSeries before, after;  // nominal and chosen model, all windows
   Location located_before, located_after;
+  TermSearchResult term_search;  // the search on the chosen model's mismatch (term_search.h)
   DiagnosisTiming timing;
   std::string note;  // e.g. why selection could not run
+  // Materiality (materiality.h): the floor of the wheel findings' held-out
+  // gains [m] (against the nominal held-out error), and the effects that were
+  // significant but fell below their floor, one line each ("spec: why").
+  double floor_m = 0.0;
+  std::vector<std::string> immaterial;
 };
 
 // Throws std::invalid_argument (one line) for invalid options or an input the

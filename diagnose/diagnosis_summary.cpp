@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "tracks/effects.h"
+#include "tracks/model_terms.h"
 
 namespace odotune {
 namespace {
@@ -47,6 +48,39 @@ std::string spans(const std::vector<TimeSegment>& segs, std::size_t max_shown = 
     s += fmt::format("{}{:.1f}–{:.1f} s", i == 0 ? "" : ", ", segs[i].t0_s, segs[i].t1_s);
   if (segs.size() > max_shown) s += fmt::format(" and {} more", segs.size() - max_shown);
   return s;
+}
+
+// A finding on body-velocity odometry in the odometry's own terms (issue 15,
+// item 4); "" for effects without such a reading. `src` is "command" or
+// "velocity odometry". Kinematics as effect_model.h applies them to v, w:
+// radius_error scales both wheels' rim speeds (v, w gain (s_l + s_r)/2),
+// wheel_base_error divides w by its scale, time_offset dt < 0 means the
+// motion shows up |dt| after the odometry's stamp.
+std::string velocity_terms(const Finding& f, const std::string& src) {
+  const std::string& e = f.effect;
+  if (e == "radius_error") {
+    const double g = 0.5 * (f.param("scale_l") + f.param("scale_r"));
+    return fmt::format("speed and turn-rate gain {:.4f}: the robot moves {:.2f} % {} than the {} says", g,
+                       100.0 * std::abs(g - 1.0), g >= 1.0 ? "more" : "less", src);
+  }
+  if (e == "wheel_base_error")
+    return fmt::format("turn-rate gain {:.4f}: the robot turns {:.2f} % {} than the {} says",
+                       1.0 / f.param("scale"), 100.0 * std::abs(1.0 / f.param("scale") - 1.0),
+                       f.param("scale") <= 1.0 ? "more" : "less", src);
+  if (e == "time_offset") {
+    const double dt = f.param("dt");
+    return dt <= 0.0 ? fmt::format("motion lags the {} by {:.3f} s", src, -dt)
+                     : fmt::format("the {} lags the motion by {:.3f} s", src, dt);
+  }
+  if (e == "actuator_lag")
+    return fmt::format("motion follows the {} through a first-order lag of {:.3f} s", src, f.param("tau"));
+  if (e == "odometry_bias")
+    return fmt::format(
+        "the {} reads {:+.4f} m/s and {:+.4f} rad/s at rest: a robot standing still seems to move", src,
+        f.param("b_v"), f.param("b_w"));
+  if (e == "speed_radius")
+    return fmt::format("speed gain grows with speed: 1 + {:.3g}·u² (u the wheel rim speed, m/s)", f.param("c"));
+  return "";
 }
 
 }  // namespace
@@ -92,10 +126,15 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
     lines.push_back(fmt::format("{}: the nominal model leaves out {}; {}.", d.track, what, proof));
   } else if (unexplained) {
     lines.push_back(
-        fmt::format("{}: the model and the recording disagree at {}{} beyond sensor noise, and no effect of "
-                    "physics-effects.md explains it.",
-                    d.track, spans(unexplained->segments),
-                    unexplained->conditions.empty() ? "" : " (" + unexplained->conditions + ")"));
+        unexplained->model
+            ? fmt::format("{}: the model and the recording disagree beyond sensor noise, no effect of "
+                          "physics-effects.md explains it, and terms outside that list reproduce it: {}.",
+                          d.track, unexplained->model->formula)
+            : fmt::format(
+                  "{}: the model and the recording disagree at {}{} beyond sensor noise, and no effect of "
+                  "physics-effects.md explains it.",
+                  d.track, spans(unexplained->segments),
+                  unexplained->conditions.empty() ? "" : " (" + unexplained->conditions + ")"));
   } else {
     lines.push_back(
         fmt::format("{}: nothing left out — the nominal model explains the recording within sensor noise "
@@ -116,6 +155,20 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
       lines.push_back(fmt::format("     region: x {:.2f}…{:.2f} m, y {:.2f}…{:.2f} m", r.x0_m, r.x1_m, r.y0_m,
                                   r.y1_m));
     if (!f.conditions.empty()) lines.push_back("     when: " + f.conditions);
+    if (!d.velocity_source.empty()) {
+      const std::string v = velocity_terms(f, d.velocity_source);
+      if (!v.empty()) lines.push_back("     in the " + d.velocity_source + "'s terms: " + v);
+    }
+    if (f.model) {  // terms outside physics-effects.md (term_search.h)
+      lines.push_back("     model: " + f.model->formula);
+      std::string t;
+      for (const FoundTerm& ft : f.model->terms)
+        t += fmt::format("{}{} on {} = {}", t.empty() ? "" : ", ", ft.name, sim::target_name(ft.term.target),
+                         plus_minus(ft.term.coef, ft.std_error));
+      lines.push_back(fmt::format("     terms: {} (held-out {} → {})", t,
+                                  metres(f.model->heldout.before_pos_rmse_m),
+                                  metres(f.model->heldout.after_pos_rmse_m)));
+    }
     if (!f.rivals.empty()) {
       std::string r;
       for (const std::string& name : f.rivals) r += (r.empty() ? "" : ", ") + name;
@@ -123,10 +176,35 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
     }
     lines.push_back("     evidence: " + f.evidence);
   }
+  for (const std::string& s : d.immaterial) lines.push_back("not a finding (immaterial): " + s);
+  for (const std::string& s : d.sensor_notes) lines.push_back("sensor check: " + s);
+  const std::string against = d.ref_gt_samples > 0 && d.ref_fix_samples > 0
+                                  ? fmt::format("{} ground-truth positions and {} position fixes",
+                                                d.ref_gt_samples, d.ref_fix_samples)
+                              : d.reference == ReferenceKind::gt ? "ground truth"
+                                                                 : "position fixes";
   lines.push_back(fmt::format(
-      "replay: windows of {:g} s against {}; position RMSE nominal {} → chosen model {}{}", d.window_s,
-      d.reference == ReferenceKind::gt ? "ground truth" : "position fixes", metres(d.baseline_pos_rmse_m),
-      metres(d.final_pos_rmse_m), d.note.empty() ? "" : "; note: " + d.note));
+      "replay: windows of {:g} s against {}; position RMSE nominal {} → chosen model {}{}", d.window_s, against,
+      metres(d.baseline_pos_rmse_m), metres(d.final_pos_rmse_m), d.note.empty() ? "" : "; note: " + d.note));
+  return lines;
+}
+
+std::vector<std::string> pooled_summary(const PooledDiagnosis& p) {
+  std::vector<std::string> lines = diagnosis_summary(p.pooled);
+  lines.push_back(fmt::format("recordings ({} fitted{}); held-out proof from {}:",
+                              std::count_if(p.recordings.begin(), p.recordings.end(),
+                                            [](const RecordingResult& r) { return !r.heldout; }),
+                              p.heldout_recordings ? ", the others held out" : "",
+                              p.heldout_recordings ? "the held-out recordings" : "the pooled split"));
+  for (const RecordingResult& r : p.recordings)
+    lines.push_back(fmt::format("  {} [{}] {:.0f} s, {} reference samples{}: nominal {} → pooled model {}{}",
+                                r.track, r.heldout ? "held out" : "fitted", r.duration_s, r.ref_samples,
+                                std::isfinite(r.pooled_time_offset_s) && r.pooled_time_offset_s != 0.0
+                                    ? fmt::format(" (pooled time = own + {:.1f} s)", r.pooled_time_offset_s)
+                                    : "",
+                                metres(r.error.before_pos_rmse_m), metres(r.error.after_pos_rmse_m),
+                                r.note.empty() ? "" : " (" + r.note + ")"));
+  for (const std::string& c : p.consistency) lines.push_back("  " + c);
   return lines;
 }
 

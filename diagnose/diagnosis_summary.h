@@ -10,10 +10,15 @@
 #include <vector>
 
 #include "diagnose/diagnosis.h"
+#include "diagnose/recordings.h"
 
 namespace odotune {
 
 std::vector<std::string> diagnosis_summary(const diagnose::Diagnosis& d);
+
+// Several recordings: the pooled summary, then one line per recording
+// (role, nominal -> pooled-model error) and what holds across recordings.
+std::vector<std::string> pooled_summary(const diagnose::PooledDiagnosis& p);
 
 // "k = 0.0212 ± 0.0018" / "scale_l = 0.99400 ± 0.00021, scale_r = ..." with
 // the units of physics-effects.md; significant digits follow the uncertainty.

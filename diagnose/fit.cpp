@@ -75,8 +75,9 @@ class WindowCost {
     T* r = res;
     for (std::size_t i = 0; i < pred.size(); ++i) {
       const std::size_t g = w_.ref_begin + i;
-      *r++ = robustify(T((pred[i].x - in.ref_x_m[g]) * s_->inv_sigma_m), s_->loss, s_->c);
-      *r++ = robustify(T((pred[i].y - in.ref_y_m[g]) * s_->inv_sigma_m), s_->loss, s_->c);
+      const double ism = s_->inv_sigma_m * std::sqrt(in.ref_weight(g));  // this sample's own sigma
+      *r++ = robustify(T((pred[i].x - in.ref_x_m[g]) * ism), s_->loss, s_->c);
+      *r++ = robustify(T((pred[i].y - in.ref_y_m[g]) * ism), s_->loss, s_->c);
       if (s_->heading)
         *r++ = robustify(T((pred[i].th - in.ref_theta_rad[g]) * s_->inv_sigma_rad), s_->loss, s_->c);
     }
@@ -131,7 +132,8 @@ class AnchorComposedCost : public ceres::CostFunction {
       // Value and derivatives (by the effect parameters, by the anchor) of each component.
       const double val[3] = {a.x + c * lx.a - sn * ly.a, a.y + sn * lx.a + c * ly.a, a.th + local[i].th.a};
       const double ref[3] = {in.ref_x_m[g], in.ref_y_m[g], s_->heading ? in.ref_theta_rad[g] : 0.0};
-      const double inv[3] = {s_->inv_sigma_m, s_->inv_sigma_m, s_->inv_sigma_rad};
+      const double ism = s_->inv_sigma_m * std::sqrt(in.ref_weight(g));  // this sample's own sigma
+      const double inv[3] = {ism, ism, s_->inv_sigma_rad};
       const double da[3][3] = {
           {1.0, 0.0, -sn * lx.a - c * ly.a}, {0.0, 1.0, c * lx.a - sn * ly.a}, {0.0, 0.0, 1.0}};
       for (int m = 0; m < comps; ++m) {

@@ -6,8 +6,14 @@
 //
 //   floor_m = max(min_gain_sigmas * ref_sigma_m,
 //                 min_gain_share * nominal_heldout_pos_rmse_m),
-//   material  <=>  before_heldout_pos_rmse_m - after_heldout_pos_rmse_m >= floor_m.
+//   removed_m = sqrt(before_heldout_pos_rmse_m^2 - after_heldout_pos_rmse_m^2),
+//   material  <=>  removed_m >= floor_m.
 //
+// removed_m is the RMS error the finding removes: the reference's own noise
+// adds to both RMSEs in quadrature (before^2 = e^2 + n^2, after^2 = n^2 for a
+// perfect model), so their plain difference shrinks a real gain whenever the
+// noise is comparable (e = n: before - after = 0.41 n, removed = n); the
+// quadrature difference measures e itself, whatever the noise.
 // ref_sigma_m is the standard deviation of one reference position sample
 // (DiagInput::ref_sigma_m: stated by the metadata or estimated, >= 1 mm);
 // nominal_heldout_pos_rmse_m the nominal model's held-out position RMSE of the
@@ -37,10 +43,9 @@ struct MaterialityOptions {
   double min_gain_share = 0.05;  // floor part: share of the nominal held-out position RMSE
 
   bool IsValid(std::string* why) const {
-    return check_option_rules(
-        {{is_non_negative(min_gain_sigmas), "min_gain_sigmas", min_gain_sigmas, ">= 0"},
-         {is_fraction(min_gain_share), "min_gain_share", min_gain_share, "in [0, 1]"}},
-        why);
+    return check_option_rules({{is_non_negative(min_gain_sigmas), "min_gain_sigmas", min_gain_sigmas, ">= 0"},
+                               {is_fraction(min_gain_share), "min_gain_share", min_gain_share, "in [0, 1]"}},
+                              why);
   }
 };
 
@@ -52,10 +57,16 @@ inline double materiality_floor_m(double ref_sigma_m, double nominal_heldout_pos
   return std::max(o.min_gain_sigmas * s, o.min_gain_share * n);
 }
 
-// True when before - after passes floor_m (file comment); false for NaN.
+// sqrt(before^2 - after^2) [m], 0 when after >= before; NaN for NaN input.
+inline double removed_error_m(double before_pos_rmse_m, double after_pos_rmse_m) {
+  const double d = before_pos_rmse_m * before_pos_rmse_m - after_pos_rmse_m * after_pos_rmse_m;
+  return std::isfinite(d) ? std::sqrt(std::max(d, 0.0)) : std::nan("");
+}
+
+// True when removed_error_m passes floor_m (file comment); false for NaN.
 inline bool is_material(double before_pos_rmse_m, double after_pos_rmse_m, double floor_m) {
-  const double gain = before_pos_rmse_m - after_pos_rmse_m;
-  return std::isfinite(gain) && gain >= floor_m;
+  const double removed = removed_error_m(before_pos_rmse_m, after_pos_rmse_m);
+  return std::isfinite(removed) && removed > 0.0 && removed >= floor_m;
 }
 
 }  // namespace odotune::diagnose

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "diagnose/cross_validate.h"
+#include "diagnose/materiality.h"
 #include "diagnose/window_replay.h"
 #include "diagnose/zone_boxes.h"
 
@@ -32,8 +33,14 @@ EffectSet with_effect(const EffectSet& s, Effect e) {
   return out;
 }
 
-// Rules (a)-(c) of select.h for `alt` to beat `ref`; "" when they hold.
-std::string verdict(const PairedComparison& p, double delta_bic, const SelectOptions& o) {
+// Rules (a)-(c) and (e) of select.h for `alt` to beat `ref`; "" when they
+// hold. pos_gain_m: the CV position error alt removes from ref's (materiality.h
+// removed_error_m); floor_m: the materiality floor (0 = not asked).
+std::string verdict(const PairedComparison& p, double delta_bic, const SelectOptions& o,
+                    double pos_gain_m = 0.0, double floor_m = 0.0) {
+  if (floor_m > 0.0 && !(pos_gain_m >= floor_m))
+    return fmt::format("immaterial: removes {:.3g} mm of held-out position error, floor {:.3g} mm",
+                       1e3 * pos_gain_m, 1e3 * floor_m);
   if (!(p.rel >= o.min_rel_improvement))
     return fmt::format("relative CV improvement {:.2f} % < {:.2f} %", 100.0 * p.rel,
                        100.0 * o.min_rel_improvement);
@@ -162,6 +169,7 @@ struct Search {
   std::vector<Effect> chosen;  // in the order accepted
   SetEval cur_cv, cur_full;    // of s
   double step_t = kNaN;        // last radius_step.t found
+  double floor_m = 0.0;        // materiality floor (rule (e)) [m]
 };
 
 // One forward step; true when a candidate was accepted.
@@ -233,11 +241,14 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
     SetEval full = z.cv.fit_all(best->st, z.cur_full.fitted, z.o.cv_max_iterations);
     best->rec.bic = full.ok ? full.bic : kNaN;
     best->rec.delta_bic = full.ok ? full.bic - z.cur_full.bic : kNaN;
-    std::string no = full.ok ? verdict(z.cv.compare(z.cur_cv, best->cv, z.o.alpha), best->rec.delta_bic, z.o)
+    std::string no = full.ok ? verdict(z.cv.compare(z.cur_cv, best->cv, z.o.alpha), best->rec.delta_bic, z.o,
+                                       removed_error_m(z.cur_cv.pos_rmse_m, best->cv.pos_rmse_m), z.floor_m)
                              : "fit on all windows failed: " + full.error;
     if (no.empty()) {  // the new effect itself must matter (actuator_lag's no-op is another source)
       const SetEval own = z.cv.own_noop(best->cv, best->e);
-      const std::string why = own.ok ? verdict(z.cv.compare(own, best->cv, z.o.alpha), -1.0, z.o) : own.error;
+      const std::string why = own.ok ? verdict(z.cv.compare(own, best->cv, z.o.alpha), -1.0, z.o,
+                                               removed_error_m(own.pos_rmse_m, best->cv.pos_rmse_m), z.floor_m)
+                                     : own.error;
       if (!why.empty()) no = "its own parameters at their no-op values do as well: " + why;
     }
     best->rec.time_s += since(t0);
@@ -254,6 +265,92 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
       z.cur_full = std::move(full);
     } else {
       best->rec.reason = "best candidate rejected: " + no;
+    }
+  }
+  for (Cand& cd : tried) z.sel.records.push_back(std::move(cd.rec));
+  return accepted;
+}
+
+// The pairs of effects the conditions of a mismatch point to (select.h,
+// "Pairs"): the effect a condition names with the effect it is confounded
+// with, so that two effects that only together explain the data get tried
+// together.
+constexpr std::pair<Effect, Effect> kConditionPairs[] = {
+    {Effect::longitudinal_slip, Effect::radius_error},  // acceleration
+    {Effect::speed_radius, Effect::radius_error},       // speed
+    {Effect::actuator_lag, Effect::time_offset},        // velocity changes: lag vs offset
+    {Effect::time_offset, Effect::radius_error},        // velocity changes
+    {Effect::wheel_base_error, Effect::lateral_skid},   // turn rate
+    {Effect::wheel_base_error, Effect::radius_error},   // turn rate
+    {Effect::odometry_bias, Effect::radius_error},      // at rest / everywhere
+};
+
+// One pair step: every pair of kConditionPairs whose effects are candidates
+// and not yet chosen is added to the current set and cross-validated; the
+// best is accepted by rules (a)-(c) and (e) against the current set, and
+// each of its effects must matter by rule (d). True when a pair was accepted.
+bool pair_step(Search& z, int step, const std::vector<Effect>& cands) {
+  auto usable = [&](Effect e) {
+    return std::count(cands.begin(), cands.end(), e) > 0 &&
+           std::count(z.chosen.begin(), z.chosen.end(), e) == 0;
+  };
+  struct Cand {
+    std::pair<Effect, Effect> p;
+    EffectSet st;
+    SetEval cv;
+    SearchRecord rec;
+  };
+  std::vector<Cand> tried;
+  for (const auto& pr : kConditionPairs) {
+    if (!usable(pr.first) || !usable(pr.second)) continue;
+    const auto t0 = Clock::now();
+    Cand cd{pr, with_effect(with_effect(z.s, pr.first), pr.second), {}, {}};
+    cd.rec.step = step, cd.rec.phase = "pair";
+    cd.rec.candidate = fmt::format("{}+{}", effect_name(pr.first), effect_name(pr.second));
+    cd.rec.set = cd.st.to_string();
+    cd.cv = z.cv.cross_validate(cd.st, z.cur_cv.folds, z.o.cv_max_iterations);
+    if (cd.cv.ok)
+      fill(cd.rec, z.cv.compare(z.cur_cv, cd.cv, z.o.alpha));
+    else
+      cd.rec.reason = "fit failed: " + cd.cv.error;
+    fill(cd.rec, cd.cv);
+    cd.rec.time_s = since(t0);
+    tried.push_back(std::move(cd));
+  }
+  Cand* best = nullptr;
+  for (Cand& cd : tried)
+    if (cd.cv.ok && (!best || cd.cv.score < best->cv.score)) best = &cd;
+  bool accepted = false;
+  if (best) {
+    for (Cand& cd : tried)
+      if (cd.cv.ok && &cd != best)
+        cd.rec.reason = fmt::format("not the best pair (CV {:.4g} vs {:.4g})", cd.cv.score, best->cv.score);
+    const auto t0 = Clock::now();
+    SetEval full = z.cv.fit_all(best->st, z.cur_full.fitted, z.o.cv_max_iterations);
+    best->rec.bic = full.ok ? full.bic : kNaN;
+    best->rec.delta_bic = full.ok ? full.bic - z.cur_full.bic : kNaN;
+    std::string no = full.ok ? verdict(z.cv.compare(z.cur_cv, best->cv, z.o.alpha), best->rec.delta_bic, z.o,
+                                       removed_error_m(z.cur_cv.pos_rmse_m, best->cv.pos_rmse_m), z.floor_m)
+                             : "fit on all windows failed: " + full.error;
+    for (Effect e : {best->p.first, best->p.second}) {
+      if (!no.empty()) break;
+      const SetEval own = z.cv.own_noop(best->cv, e);
+      const std::string why = own.ok ? verdict(z.cv.compare(own, best->cv, z.o.alpha), -1.0, z.o,
+                                               removed_error_m(own.pos_rmse_m, best->cv.pos_rmse_m), z.floor_m)
+                                     : own.error;
+      if (!why.empty()) no = fmt::format("{} at its no-op values does as well: {}", effect_name(e), why);
+    }
+    best->rec.time_s += since(t0);
+    if (no.empty()) {
+      accepted = best->rec.accepted = true;
+      best->rec.reason = "best pair; improves CV significantly and materially, BIC agrees, both effects matter";
+      z.s = best->st;
+      z.chosen.push_back(best->p.first);
+      z.chosen.push_back(best->p.second);
+      z.cur_cv = std::move(best->cv);
+      z.cur_full = std::move(full);
+    } else {
+      best->rec.reason = "best pair rejected: " + no;
     }
   }
   for (Cand& cd : tried) z.sel.records.push_back(std::move(cd.rec));
@@ -300,9 +397,17 @@ bool backward_round(Search& z, int round) {
       d.rec.delta_bic = z.cur_full.bic - d.full.bic;
       // Redundancy by rule (a) only: once another effect changes every
       // window, an intermittent effect's paired test has little power left.
-      d.removable = !(p.rel >= z.o.min_rel_improvement && p.gain >= z.o.min_gain);
-      d.rec.reason = d.removable ? fmt::format("removable: without it CV is only {:.2f} % worse", 100.0 * p.rel)
-                                 : "kept: it is needed";
+      // Or by rule (e): what it gains is immaterial.
+      const double pos_gain = removed_error_m(d.cv.pos_rmse_m, z.cur_cv.pos_rmse_m);
+      const bool material = !(z.floor_m > 0.0) || pos_gain >= z.floor_m;
+      d.removable = !(p.rel >= z.o.min_rel_improvement && p.gain >= z.o.min_gain) || !material;
+      d.rec.reason = !material
+                         ? fmt::format("removable: immaterial, it removes only {:.3g} mm of CV position error "
+                                       "(floor {:.3g} mm)",
+                                       1e3 * pos_gain, 1e3 * z.floor_m)
+                     : d.removable
+                         ? fmt::format("removable: without it CV is only {:.2f} % worse", 100.0 * p.rel)
+                         : "kept: it is needed";
     } else {
       d.rec.reason = "fit without it failed: " + d.cv.error + d.full.error;
     }
@@ -447,6 +552,9 @@ bool SelectOptions::IsValid(std::string* why) const {
   };
   std::string w;
   if (!fit.IsValid(&w)) return fail("fit: " + w);
+  if (!materiality.IsValid(&w)) return fail("materiality: " + w);
+  if (!(pair_above_floor >= 1.0))
+    return fail(fmt::format("pair_above_floor = {}; expected >= 1", pair_above_floor));
   if (!(fit.window_s > 0.0))
     return fail(fmt::format("fit.window_s = {}; selection needs windows: expected > 0 s", fit.window_s));
   for (std::size_t i = 0; i < candidates.size(); ++i) {
@@ -565,6 +673,9 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
     throw std::invalid_argument(fmt::format("track '{}': nominal replay failed: {}", in_full.track_name,
                                             z.cur_cv.error + z.cur_full.error));
   sel.baseline_cv_score = z.cur_cv.score;
+  // Rule (e): against the raw reference's noise and the nominal model's CV error.
+  z.floor_m = materiality_floor_m(in_full.ref_sigma_m, z.cur_cv.pos_rmse_m, o.materiality);
+  sel.floor_m = z.floor_m;
   SearchRecord rb;
   rb.phase = "baseline", rb.set = "none", rb.bic = z.cur_full.bic, rb.accepted = true;
   rb.reason = "nominal model";
@@ -573,9 +684,16 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
   sel.records.push_back(rb);
 
   const std::vector<Effect> cands = candidate_list(in_full, o);
-  for (int step = 1; step <= o.max_effects && forward_step(z, step, cands); ++step) {
+  int step = 1;
+  for (; step <= o.max_effects && forward_step(z, step, cands); ++step) {
   }
   for (int round = 1; z.chosen.size() >= 2 && backward_round(z, round); ++round) {
+  }
+  // Pairs, when what is left stays well above the floor ("Pairs").
+  if (o.pairs && static_cast<int>(z.chosen.size()) + 2 <= o.max_effects + 1 &&
+      z.cur_cv.pos_rmse_m > o.pair_above_floor * z.floor_m && pair_step(z, step, cands)) {
+    for (int round = 1; z.chosen.size() >= 2 && backward_round(z, round); ++round) {
+    }
   }
   sel.final_cv_score = z.cur_cv.score;
   sel.structure = z.s;
@@ -592,6 +710,49 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
         for (const std::string& name : r.rivals) e.rivals.push_back(effect_from_name(name));
   sel.timing.total_s = since(t_start);
   return sel;
+}
+
+void drop_effect(const DiagInput& in_full, const SelectOptions& o_in, Selection& sel, Effect e,
+                 const std::string& reason) {
+  if (!sel.structure.on(e))
+    throw std::invalid_argument(fmt::format("drop_effect: {} is not selected", effect_name(e)));
+  const auto t0 = Clock::now();
+  SelectOptions o = o_in;
+  o.fit.window_s = sel.window_s;
+  std::vector<Effect> chosen;
+  for (const SearchRecord& r : sel.records) {  // in the order accepted (a pair's record names both)
+    if (!r.accepted || (r.phase != "forward" && r.phase != "pair")) continue;
+    for (const std::string& name :
+         {r.candidate.substr(0, r.candidate.find('+')), r.candidate.find('+') == std::string::npos
+                                                            ? std::string()
+                                                            : r.candidate.substr(r.candidate.find('+') + 1)}) {
+      if (name.empty()) continue;
+      const Effect c = effect_from_name(name);
+      if (c != e && sel.structure.on(c) && std::count(chosen.begin(), chosen.end(), c) == 0)
+        chosen.push_back(c);
+    }
+  }
+  std::vector<std::vector<Effect>> rivals;
+  for (Effect c : chosen)
+    for (const SelectedEffect& se : sel.effects)
+      if (se.effect == c) rivals.push_back(se.rivals);
+  sel.structure.disable(e);
+  sel.effects.clear();
+  sel.fitted = false;
+  sel.final_fit = FitSummary{};
+  sel.train_windows.clear(), sel.heldout_windows.clear(), sel.split.clear();
+  SearchRecord rec;
+  rec.phase = "material", rec.candidate = effect_name(e), rec.set = sel.structure.to_string();
+  rec.accepted = true, rec.reason = "removed: " + reason;
+  if (!chosen.empty()) {
+    const SelectionInput si = selection_input(in_full, o_in);
+    final_model(in_full, si.input, make_windows(in_full, o.fit.window_s), o, chosen, sel);
+    for (SelectedEffect& se : sel.effects)
+      for (std::size_t i = 0; i < chosen.size(); ++i)
+        if (chosen[i] == se.effect && i < rivals.size()) se.rivals = rivals[i];
+  }
+  rec.time_s = since(t0);
+  sel.records.push_back(rec);
 }
 
 }  // namespace odotune::diagnose

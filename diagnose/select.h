@@ -78,10 +78,17 @@
 //      This rejects actuator_lag on wheel odometry when tau ~ 0: its no-op
 //      replays the commands instead of the encoders, which can beat the
 //      encoders for reasons other than a lag.
+//  (e) c is material (materiality.h): the CV position RMSE it removes is at
+//      least max(min_gain_sigmas reference sigmas of the raw input,
+//      min_gain_share of the nominal model's CV position RMSE), and so is
+//      what rule (d) compares (c's own parameters against their no-op). A
+//      0.6 ms lag or a 2 ms time offset can be significant on tens of
+//      thousands of samples and still change nothing a user can see.
 // Forward selection stops when the best candidate fails or after
 // max_effects steps. Backward pass: while |S| >= 2, each effect e is removed
 // in turn (CV and fit_all of S without e) and, among those whose removal
-// makes the CV score worse by less than rule (a) asks, the one whose
+// makes the CV score worse by less than rule (a) asks or the CV position
+// RMSE worse by less than rule (e)'s floor, the one whose
 // removal costs least is dropped (significance is not asked again: once
 // another effect changes every window, the paired test of an intermittent
 // effect has little power, and a needed effect must not be dropped for it).
@@ -91,6 +98,20 @@
 // pass once the true effect explains its share. Candidates the winner does
 // not beat by (a) and (b) are logged as its rivals: the data cannot tell
 // them apart, and the diagnosis should say so.
+//
+// Pairs. Greedy steps add one effect at a time; two effects that each bend
+// the path the other way (longitudinal slip beside a radius error, a lag
+// beside a time offset) can each fail alone and only help together. When
+// the forward and backward passes end with a CV position RMSE above
+// pair_above_floor times the floor of rule (e), and max_effects leaves room,
+// the pairs the conditions point to are tried, each added to the current set
+// at once: acceleration (longitudinal_slip + radius_error), speed
+// (speed_radius + radius_error), velocity changes (actuator_lag +
+// time_offset, time_offset + radius_error), turn rate (wheel_base_error +
+// lateral_skid or + radius_error), and odometry_bias + radius_error; the best
+// pair by CV score is accepted by rules (a)-(c) and (e) against the current
+// set, each of its effects by rule (d); then the backward pass runs again.
+// Logged as SearchRecords of phase "pair".
 //
 // Discrete parameters, chosen on all windows before cross-validation (so
 // the held-out fold saw the choice of one or four numbers; BIC counts them):
@@ -161,6 +182,7 @@
 #include "diagnose/diag_input.h"
 #include "diagnose/effect_model.h"
 #include "diagnose/fit.h"
+#include "diagnose/materiality.h"
 #include "diagnose/zone_boxes.h"
 
 namespace odotune::diagnose {
@@ -197,6 +219,9 @@ struct SelectOptions {
   int zone_max_boxes = 3;              // boxes found from the residual growth
   double zone_min_score = 16.0;        // score a found box needs (zone_boxes.h)
   std::vector<ZoneBox> zone_boxes;     // extra candidate boxes (e.g. from locate.h)
+  MaterialityOptions materiality;      // rule (e) and the final check (materiality.h)
+  bool pairs = true;                   // try the condition pairs ("Pairs") when the error stays high
+  double pair_above_floor = 3.0;       // ... when the CV position RMSE exceeds this many floors
 
   bool IsValid(std::string* why) const;
 };
@@ -253,6 +278,7 @@ struct Selection {
   int num_windows = 0, folds = 0;
   int ref_stride = 1;                                    // thinning of the reference during selection
   double baseline_cv_score = 0.0, final_cv_score = 0.0;  // nominal and selected set (CV)
+  double floor_m = 0.0;  // materiality floor of rule (e) [m] (materiality.h; 0 before the baseline)
   // Nominal model, all windows, full raw input.
   double baseline_pos_rmse_m = 0.0, baseline_heading_rmse_rad = 0.0;
   std::vector<SearchRecord> records;
@@ -266,6 +292,14 @@ struct Selection {
 // options)) (= Selection::window_s): callers that index them (train_windows,
 // heldout_windows) must use that length, not options.fit.window_s.
 Selection select_effects(const DiagInput& in, const SelectOptions& options = {});
+
+// Removes effect e from `sel` (a finding whose held-out gain is immaterial,
+// diagnosis.h) and refits the final model of the others as select_effects
+// does (same split rule); adds a SearchRecord of phase "material" with
+// `reason`. `in` and `options` must be select_effects'. Throws
+// std::invalid_argument when e is not selected.
+void drop_effect(const DiagInput& in, const SelectOptions& options, Selection& sel, Effect e,
+                 const std::string& reason);
 
 // The input the selection searches and scores on ("Data" above): `in` with
 // its reference thinned to about select_ref_rate_hz and denoised

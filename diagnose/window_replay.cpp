@@ -29,20 +29,23 @@ struct Rigid {
 // squares: positions only, or positions and headings weighted by the
 // reference sigmas (file comment of window_replay.h).
 Rigid align(const std::vector<Pose<double>>& pred, const DiagInput& in, const Window& w, bool heading) {
+  // Each sample weighted by DiagInput::ref_weight (1 with one reference source).
   const std::size_t n = pred.size();
-  double px = 0, py = 0, qx = 0, qy = 0;
+  double px = 0, py = 0, qx = 0, qy = 0, sw = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    px += pred[i].x, py += pred[i].y;
-    qx += in.ref_x_m[w.ref_begin + i], qy += in.ref_y_m[w.ref_begin + i];
+    const double wi = in.ref_weight(w.ref_begin + i);
+    px += wi * pred[i].x, py += wi * pred[i].y;
+    qx += wi * in.ref_x_m[w.ref_begin + i], qy += wi * in.ref_y_m[w.ref_begin + i];
+    sw += wi;
   }
-  px /= static_cast<double>(n), py /= static_cast<double>(n);
-  qx /= static_cast<double>(n), qy /= static_cast<double>(n);
+  px /= sw, py /= sw, qx /= sw, qy /= sw;
   double c = 0, s = 0;
   for (std::size_t i = 0; i < n; ++i) {
+    const double wi = in.ref_weight(w.ref_begin + i);
     const double ax = pred[i].x - px, ay = pred[i].y - py;
     const double bx = in.ref_x_m[w.ref_begin + i] - qx, by = in.ref_y_m[w.ref_begin + i] - qy;
-    c += ax * bx + ay * by;
-    s += ax * by - ay * bx;
+    c += wi * (ax * bx + ay * by);
+    s += wi * (ax * by - ay * bx);
   }
   double phi = (c == 0.0 && s == 0.0) ? 0.0 : std::atan2(s, c);
   if (heading) {
@@ -91,9 +94,24 @@ std::vector<Window> make_windows(const DiagInput& in, double window_s) {
                                             "expected at most {:.0g}",
                                             window_s, t_last - t0, count, kMaxWindows));
   const auto n_win = static_cast<std::size_t>(count);
+  // A reference with gaps (issue 15, "any reference"): a window whose first
+  // reference sample comes more than two reference periods after its nominal
+  // start starts at that sample instead, so that its anchor is a measured
+  // pose, not one interpolated across the gap.
+  double gap_s = std::numeric_limits<double>::infinity();
+  if (heading && rt.size() >= 2) {
+    std::vector<double> dt(rt.size() - 1);
+    for (std::size_t i = 0; i + 1 < rt.size(); ++i) dt[i] = rt[i + 1] - rt[i];
+    std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
+    gap_s = 2.0 * dt[dt.size() / 2];
+  }
   std::vector<Window> out;
   for (std::size_t j = 0; j < n_win; ++j) {
-    const double s = t0 + static_cast<double>(j) * window_s;
+    double s = t0 + static_cast<double>(j) * window_s;
+    if (heading) {
+      const auto first = std::lower_bound(rt.begin(), rt.end(), s - kTimeEps);
+      if (first != rt.end() && *first - s > gap_s) s = *first;
+    }
     const bool last = j + 1 == n_win;
     const double e = last ? std::numeric_limits<double>::infinity()
                           : t0 + static_cast<double>(j + 1) * window_s;

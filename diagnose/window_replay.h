@@ -7,7 +7,10 @@
 // nominally covers [t0 + j*W, t0 + (j+1)*W) (W = window_s; 0 = one window up
 // to the last reference sample, which the last window always includes). It
 // starts at the first odometry node at or after its nominal start
-// (t_begin_s), the anchor time. Scored samples: reference samples in the
+// (t_begin_s), the anchor time; with a reference heading and a gap in the
+// reference at the nominal start (its first sample more than two median
+// reference periods later), at or after that first sample instead, so that
+// the anchor is a measured pose. Scored samples: reference samples in the
 // nominal span at or after t_begin_s, strictly after it when the reference has
 // heading (that sample is the anchor itself). Windows without a scored sample
 // (with a free anchor: fewer than 3) are dropped; the rest are numbered 0, 1,

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "tracks/model_terms.h"
+
 namespace odotune {
 namespace {
 
@@ -127,6 +129,41 @@ json search_log(const Selection& s) {
           {"records", a}};
 }
 
+// An unexplained finding's `model` (diagnosis-output.md): the formula, the
+// terms (name as the spec writes it, the wheel speed it corrects, the
+// coefficient's unit) and the terms' own before/after fit.
+json term_model(const TermModel& m) {
+  json terms = json::array();
+  for (const FoundTerm& t : m.terms)
+    terms.push_back({{"name", t.name},
+                     {"target", std::string(sim::target_name(t.term.target))},
+                     {"coef", number(t.term.coef)},
+                     {"stderr", number(t.std_error)},
+                     {"unit", std::string(sim::coef_unit(t.term.basis))}});
+  return {{"formula", m.formula},
+          {"terms", terms},
+          {"fit",
+           {{"train",
+             {{"before_pos_rmse_m", number(m.train.before_pos_rmse_m)},
+              {"after_pos_rmse_m", number(m.train.after_pos_rmse_m)}}},
+            {"heldout",
+             {{"before_pos_rmse_m", number(m.heldout.before_pos_rmse_m)},
+              {"after_pos_rmse_m", number(m.heldout.after_pos_rmse_m)}}}}}};
+}
+
+// The term search's log (term_search.h).
+json term_search_log(const TermSearchResult& r) {
+  json steps = json::array();
+  for (const TermStep& s : r.steps)
+    steps.push_back(
+        {{"step", s.step}, {"added", s.added}, {"cv_score", number(s.cv_score)}, {"accepted", s.accepted}});
+  return {{"found", r.found},
+          {"library_size", r.library_size},
+          {"floor_m", number(r.floor_m)},
+          {"steps", steps},
+          {"reason", r.reason}};
+}
+
 }  // namespace
 
 json diagnosis_json(const Diagnosis& d) {
@@ -143,6 +180,7 @@ json diagnosis_json(const Diagnosis& d) {
          {"rivals", f.rivals},
          {"discrete", f.discrete},
          {"evidence", f.evidence}});
+    if (f.model) findings.back()["model"] = term_model(*f.model);
   }
   json model = json::array();
   for (const Finding& f : d.findings)
@@ -150,6 +188,10 @@ json diagnosis_json(const Diagnosis& d) {
   return {{"format", "odotune-diagnosis/1"},
           {"track", d.track},
           {"reference", d.reference == ReferenceKind::gt ? "gt" : "aps"},
+          {"reference_samples",
+           {{"gt", d.ref_gt_samples}, {"aps", d.ref_fix_samples}, {"heading", d.ref_heading}}},
+          {"materiality", {{"floor_m", number(d.floor_m)}, {"immaterial", d.immaterial}}},
+          {"sensor_checks_reconciled", d.sensor_notes},
           {"replay", {{"window_s", d.window_s}}},
           {"baseline",
            {{"pos_rmse_m", number(d.baseline_pos_rmse_m)},
@@ -175,10 +217,37 @@ json diagnosis_json(const Diagnosis& d) {
            }()
                                              : sensor_checks(d.sensors)},
           {"selection", search_log(d.selection)},
+          {"term_search", term_search_log(d.term_search)},
           {"timing_s",
            {{"total", d.timing.total_s}, {"sensors", d.timing.sensors_s},
-            {"select", d.timing.select_s}, {"locate", d.timing.locate_s}}},
+            {"select", d.timing.select_s}, {"locate", d.timing.locate_s}, {"terms", d.timing.terms_s}}},
           {"note", d.note}};
+}
+
+json pooled_diagnosis_json(const diagnose::PooledDiagnosis& p) {
+  json j = diagnosis_json(p.pooled);
+  json tracks = json::array();
+  for (const diagnose::RecordingResult& r : p.recordings) {
+    json refit = json::object(), refit_se = json::object();
+    for (const NamedValue& v : r.refit) refit[v.name] = number(v.value);
+    for (const NamedValue& v : r.refit_stderr) refit_se[v.name] = number(v.value);
+    tracks.push_back({{"track", r.track},
+                      {"role", r.heldout ? "heldout" : "fit"},
+                      {"duration_s", number(r.duration_s)},
+                      {"reference_samples", r.ref_samples},
+                      {"ref_sigma_m", number(r.ref_sigma_m)},
+                      {"error", before_after(r.error)},
+                      {"floor_m", number(r.floor_m)},
+                      {"helped", r.helped},
+                      {"refit", refit},
+                      {"refit_stderr", refit_se},
+                      {"pooled_time_offset_s", number(r.pooled_time_offset_s)},
+                      {"note", r.note}});
+  }
+  j["tracks"] = tracks;
+  j["heldout_from"] = p.heldout_recordings ? "heldout recordings" : "pooled split";
+  j["consistency"] = p.consistency;
+  return j;
 }
 
 }  // namespace odotune

@@ -14,9 +14,20 @@
 #include <nlohmann/json.hpp>
 
 #include "diagnose/diagnosis.h"
+#include "diagnose/recordings.h"
 
 namespace odotune {
 
 nlohmann::json diagnosis_json(const diagnose::Diagnosis& d);
+
+// Several recordings (diagnose/recordings.h): ONE document whose spec keys
+// are the pooled result's (diagnosis_json of p.pooled; with held-out
+// recordings, fit.heldout and "heldout" come from them), plus "tracks": one
+// entry per recording {"track", "role": "fit" | "heldout", "duration_s",
+// "reference_samples", "ref_sigma_m", "error": {"before_pos_rmse_m",
+// "after_pos_rmse_m"} (nominal -> pooled model over its windows), "floor_m",
+// "helped", "refit": {"effect.param": value}, "refit_stderr", "note"}, and
+// "consistency" (what holds across recordings, sentences).
+nlohmann::json pooled_diagnosis_json(const diagnose::PooledDiagnosis& p);
 
 }  // namespace odotune

@@ -13,6 +13,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "tracks/effects.h"
+#include "tracks/model_terms.h"
 #include "tracks/motion_profile.h"
 #include "tracks/simulator.h"
 #include "tracks/slip_episodes.h"
@@ -25,6 +26,8 @@ constexpr std::uintmax_t kMaxFileBytes = 16u << 20;  // a scenario is a few kB
 constexpr std::size_t kMaxSegments = 1'000'000;      // after expanding repeats
 constexpr std::size_t kMaxKnots = 1'000'000;         // motion.knots entries
 constexpr long kMaxRepeat = 100'000;
+const std::vector<std::string_view> kTopKeys = {"name",    "seed",    "step_s",        "robot", "motion",
+                                                "sensors", "effects", "slip_episodes", "terms"};
 
 std::size_t line_of(const YAML::Node& n) {
   const YAML::Mark m = n.Mark();
@@ -65,30 +68,30 @@ class Parser {
     sc.name = std::filesystem::path(file_).stem().string();
     sc.source = std::filesystem::path(file_).filename().string();
     bool have_motion = false;
-    for_each_key(root, "", {"name", "seed", "step_s", "robot", "motion", "sensors", "effects", "slip_episodes"},
-                 [&](const std::string& key, const YAML::Node& k, const YAML::Node& v) {
-                   if (key == "name") {
-                     if (!v.IsScalar() || v.Scalar().empty() ||
-                         v.Scalar().find_first_of("\r\n") != std::string::npos)
-                       fail(v.IsDefined() && !v.IsNull() ? v : k, "name: expected a one-line text");
-                     sc.name = v.Scalar();
-                   } else if (key == "seed") {
-                     sc.seed = read_uint(v, k, "seed");
-                   } else if (key == "step_s") {
-                     sc.step_s = read_double(v, k, "step_s");
-                   } else if (key == "robot") {
-                     read_robot(v, sc.robot);
-                   } else if (key == "motion") {
-                     read_motion(v, k, sc.motion);
-                     have_motion = true;
-                   } else if (key == "sensors") {
-                     read_sensors(v, sc.sensors);
-                   } else if (key == "effects") {
-                     read_effects(v, sc.effects);
-                   } else if (key == "slip_episodes") {
-                     read_slip_episodes(v, k, sc.slip_episodes);
-                   }
-                 });
+    for_each_key(root, "", kTopKeys, [&](const std::string& key, const YAML::Node& k, const YAML::Node& v) {
+      if (key == "name") {
+        if (!v.IsScalar() || v.Scalar().empty() || v.Scalar().find_first_of("\r\n") != std::string::npos)
+          fail(v.IsDefined() && !v.IsNull() ? v : k, "name: expected a one-line text");
+        sc.name = v.Scalar();
+      } else if (key == "seed") {
+        sc.seed = read_uint(v, k, "seed");
+      } else if (key == "step_s") {
+        sc.step_s = read_double(v, k, "step_s");
+      } else if (key == "robot") {
+        read_robot(v, sc.robot);
+      } else if (key == "motion") {
+        read_motion(v, k, sc.motion);
+        have_motion = true;
+      } else if (key == "sensors") {
+        read_sensors(v, sc.sensors);
+      } else if (key == "effects") {
+        read_effects(v, sc.effects);
+      } else if (key == "slip_episodes") {
+        read_slip_episodes(v, k, sc.slip_episodes);
+      } else if (key == "terms") {
+        read_terms(v, k, sc.terms);
+      }
+    });
     if (!have_motion)
       fail(root, "missing 'motion'; expected motion: {segments: [...]} or motion: {knots: [...]} describing "
                  "what the robot does");
@@ -503,6 +506,42 @@ class Parser {
       std::string field, why;
       if (!sim::check_slip_episode(e, &field, &why)) fail(at.count(field) ? at[field] : item, ip + "." + why);
       out.push_back(e);
+    }
+  }
+
+  // terms: a list of {target: v_l|v_r, term: NAME, coef: NUMBER} maps
+  // (tracks/model_terms.h; NAME in either form, e.g. "v_l*sin(phi_l)").
+  void read_terms(const YAML::Node& n, const YAML::Node& key, std::vector<sim::ModelTerm>& out) {
+    if (n.IsNull()) return;
+    const std::string form = "{target: v_l|v_r, term: NAME, coef: NUMBER} maps";
+    if (!n.IsSequence())
+      fail(value_or_key(n, key), fmt::format("terms: expected a list of {}, got {}", form, kind_of(n)));
+    for (std::size_t i = 0; i < n.size(); ++i) {
+      const std::string ip = fmt::format("terms[{}]", i + 1);
+      std::map<std::string, YAML::Node> at;
+      if (!n[i].IsMap())
+        fail(value_or_key(n[i], key),
+             fmt::format("{}: expected one of the {}, got {}", ip, form, kind_of(n[i])));
+      for_each_key(n[i], ip, {"target", "term", "coef"},
+                   [&](const std::string& f, const YAML::Node& k, const YAML::Node& v) {
+                     at[f].reset(value_or_key(v, k));
+                   });
+      for (const char* required : {"target", "term", "coef"})
+        if (!at.count(required))
+          fail(n[i], fmt::format("{}: missing '{}'; a term needs target, term and coef", ip, required));
+      sim::ModelTerm m;
+      const char* field = "target";
+      try {
+        m.target = sim::parse_target(at["target"].IsScalar() ? at["target"].Scalar() : "");
+        field = "term";
+        m.basis = sim::parse_basis(m.target, at["term"].IsScalar() ? at["term"].Scalar() : "");
+      } catch (const std::invalid_argument& e) {
+        fail(at[field], fmt::format("{}.{}: {}", ip, field, e.what()));
+      }
+      m.coef = read_double(at["coef"], at["coef"], ip + ".coef");
+      out.push_back(m);
+      std::string why;
+      if (!sim::validate_terms(out, &why)) fail(n[i], "terms: " + why);
     }
   }
 

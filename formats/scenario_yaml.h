@@ -38,6 +38,10 @@
 //                                 # only; default 0 = 2*coulomb_friction_nm) optional;
 //                                 # 0 < s <= 0.9, 2*ramp_s <= t1_s - t0_s, no overlap
 //                                 # on one wheel, t0_s before the motion's end
+//   terms:                        # ground-speed corrections outside the effects
+//     - {target: v_l, term: "v_l*sin(phi_l)", coef: 0.01}   # (tracks/model_terms.h;
+//                                 # names ASCII or as diagnose prints them, each
+//                                 # (target, term) once, coef finite)
 //
 // Errors: ScenarioError whose what() is one line "FILE:LINE: what is wrong;
 // what was expected" (line 1-based, from YAML::Mark). Unknown keys are errors
@@ -81,7 +85,8 @@ sim::Scenario parse_scenario(std::string_view yaml_text, const std::string& file
 // kind) or knots (one [t_s, v_m_s, w_rad_s] line each), every field of every
 // sensor, the active effects with
 // all their parameters, the slip episodes (all fields but line; brake_nm for
-// hold only; the key omitted when there are none); numbers in shortest round-trip form, so they parse
+// hold only; the key omitted when there are none), the model terms (ASCII
+// names; the key omitted when there are none); numbers in shortest round-trip form, so they parse
 // back bit for bit). Not written: Scenario::source (the reader sets it from
 // the file name) and Segment::line. `header_comment` goes first, each of its
 // lines prefixed "# " (nothing for ""). Throws std::invalid_argument for a

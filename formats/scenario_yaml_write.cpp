@@ -208,6 +208,18 @@ void write_slip_episodes(std::string& out, const std::vector<sim::SlipEpisode>& 
   }
 }
 
+// terms: one flow map per term, ASCII names (tracks/model_terms.h).
+void write_terms(std::string& out, const std::vector<sim::ModelTerm>& terms) {
+  if (terms.empty()) return;
+  out += "terms:\n";
+  for (std::size_t i = 0; i < terms.size(); ++i) {
+    const sim::ModelTerm& m = terms[i];
+    out += fmt::format("  - {}\n", flow_map({{"target", std::string(sim::target_name(m.target))},
+                                             {"term", yaml_quoted(sim::term_name(m.target, m.basis, true))},
+                                             {"coef", num(fmt::format("terms[{}].coef", i + 1), m.coef)}}));
+  }
+}
+
 }  // namespace
 
 std::string scenario_to_yaml(const sim::Scenario& sc, const std::string& header_comment) {
@@ -231,6 +243,7 @@ std::string scenario_to_yaml(const sim::Scenario& sc, const std::string& header_
   write_sensors(out, sc.sensors);
   write_effects(out, sc.effects);
   write_slip_episodes(out, sc.slip_episodes);
+  write_terms(out, sc.terms);
   return out;
 }
 

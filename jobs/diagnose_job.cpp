@@ -28,8 +28,17 @@ std::string corrected_scenario_yaml(const Track& track, const std::string& track
   std::string names;
   for (const diagnose::Finding& f : d.findings)
     if (!f.spec().empty()) specs.push_back(f.spec()), names += (names.empty() ? "" : ", ") + f.effect;
+  // Terms outside physics-effects.md (an unexplained finding's model): the
+  // simulator replays them (tracks/model_terms.h).
+  std::vector<sim::ModelTerm> terms;
+  for (const diagnose::Finding& f : d.findings)
+    if (f.model) {
+      for (const diagnose::FoundTerm& t : f.model->terms) terms.push_back(t.term);
+      names += (names.empty() ? "" : ", ") + std::string("terms ") + f.model->formula;
+    }
   try {
-    const sim::Scenario sc = sim::scenario_from_track(track, specs);
+    sim::Scenario sc = sim::scenario_from_track(track, specs);
+    sc.terms = terms;
     return scenario_to_yaml(
         sc, fmt::format("The robot of track '{}' ({}) with the physics `odotune diagnose` found:\n"
                         "  {}\n"
@@ -44,26 +53,54 @@ std::string corrected_scenario_yaml(const Track& track, const std::string& track
 
 }  // namespace
 
-DiagnoseOutcome run_diagnose(const DiagnoseRequest& a) {
-  const Track track = load_tracks({a.track}).front();
-  diagnose::DiagInput in;
+namespace {
+
+// One recording as the diagnosis reads it, cut to [from_s, to_s] when asked.
+diagnose::DiagInput diag_input(const DiagnoseRequest& a, const std::string& file, const Track& track) {
   try {
-    in = diagnose::build_diag_input(track);
+    diagnose::DiagInput in = diagnose::build_diag_input(track);
     if (a.from_s > -1e300 || a.to_s < 1e300) in = diagnose::crop(in, a.from_s, a.to_s);
+    return in;
   } catch (const std::invalid_argument& e) {
-    throw Failure(fmt::format("{}: {}", a.track, e.what()));
+    throw Failure(fmt::format("{}: {}", file, e.what()));
   }
+}
+
+}  // namespace
+
+DiagnoseOutcome run_diagnose(const DiagnoseRequest& a) {
+  if (a.tracks.empty()) throw Failure("diagnose: no track given");
+  std::vector<std::string> files = a.tracks;
+  files.insert(files.end(), a.heldout.begin(), a.heldout.end());
+  const std::vector<Track> tracks = load_tracks(files);
+  const Track& track = tracks.front();
+  std::vector<diagnose::DiagInput> inputs;
+  for (std::size_t k = 0; k < tracks.size(); ++k) inputs.push_back(diag_input(a, files[k], tracks[k]));
+  diagnose::DiagInput in = inputs.front();
   diagnose::DiagnoseOptions o;
   o.select.fit.window_s = a.window_s;
+  o.select.materiality = a.materiality;
   DiagnoseOutcome out;
   const diagnose::Diagnosis& d = out.diagnosis;
+  out.several = files.size() > 1;
   try {
-    out.diagnosis = diagnose::diagnose(in, o);
+    if (out.several) {
+      const std::vector<diagnose::DiagInput> fit(inputs.begin(),
+                                                 inputs.begin() + static_cast<long>(a.tracks.size()));
+      const std::vector<diagnose::DiagInput> held(inputs.begin() + static_cast<long>(a.tracks.size()),
+                                                  inputs.end());
+      out.pooled = diagnose::diagnose_recordings(fit, held, o);
+      out.diagnosis = out.pooled.pooled;
+      in = out.pooled.input;
+    } else {
+      out.diagnosis = diagnose::diagnose(in, o);
+    }
   } catch (const std::invalid_argument& e) {
-    throw Failure(fmt::format("{}: cannot diagnose: {}", a.track, e.what()));
+    throw Failure(fmt::format("{}: cannot diagnose: {}", files.front(), e.what()));
   }
-  out.summary = diagnosis_summary(d);
-  const std::string json_text = diagnosis_json(d).dump(2) + "\n";
+  out.summary = out.several ? pooled_summary(out.pooled) : diagnosis_summary(d);
+  const std::string json_text = (out.several ? pooled_diagnosis_json(out.pooled) : diagnosis_json(d)).dump(2) +
+                                "\n";
   if (!a.report.empty()) {
     std::string finding;  // the effects' names (the titles have room for no more)
     for (const diagnose::Finding& f : d.findings) finding += (finding.empty() ? "" : ", ") + f.effect;
@@ -74,7 +111,7 @@ DiagnoseOutcome run_diagnose(const DiagnoseRequest& a) {
     }
   }
   if (!a.scenario_out.empty())
-    write_atomically(a.scenario_out, "scenario", corrected_scenario_yaml(track, a.track, d));
+    write_atomically(a.scenario_out, "scenario", corrected_scenario_yaml(track, files.front(), d));
   if (!a.json.empty()) write_atomically(a.json, "diagnosis JSON", json_text);
   return out;
 }

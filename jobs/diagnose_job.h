@@ -8,27 +8,40 @@
 #include <vector>
 
 #include "diagnose/diagnosis.h"
+#include "diagnose/recordings.h"
 
 namespace odotune {
 
 struct DiagnoseRequest {
-  std::string track;         // track file (../shared/specs/track-format.md)
-  std::string json;          // diagnosis JSON (diagnosis-output.md); empty = not written
-  std::string report;        // folder for the figures and index.html; empty = none
-  std::string scenario_out;  // the robot with the fitted effects as a scenario YAML; empty = none
-  double window_s = 20.0;    // replay window [s]; the odometry is re-anchored at each
+  // Track files (../shared/specs/track-format.md): one recording, or several
+  // recordings of one robot fitted pooled (diagnose/recordings.h).
+  std::vector<std::string> tracks;
+  std::vector<std::string> heldout;  // recordings of the same robot to prove on, never fitted
+  std::string json;                  // diagnosis JSON (diagnosis-output.md); empty = not written
+  std::string report;                // folder for the figures and index.html; empty = none
+  std::string scenario_out;          // the robot with the fitted effects (and the terms of an unexplained
+                                     // finding's model, tracks/model_terms.h) as a scenario YAML; empty = none
+  double window_s = 20.0;            // replay window [s]; the odometry is re-anchored at each
+  // Materiality floor of a finding's held-out gain (diagnose/materiality.h):
+  // max(min_gain_sigmas reference sigmas, min_gain_share of the nominal error).
+  diagnose::MaterialityOptions materiality;
   // Track-time interval to diagnose [s]. The track is cut (diagnose::crop)
   // only when one of them differs from these defaults (the whole track).
   double from_s = -1e300, to_s = 1e300;
 };
 
 struct DiagnoseOutcome {
-  diagnose::Diagnosis diagnosis;
+  diagnose::Diagnosis diagnosis;  // several recordings: the pooled one (= pooled.pooled)
+  bool several = false;           // several recordings (or held-out ones) were given
+  diagnose::PooledDiagnosis pooled;
   // diagnosis_summary(): the one-sentence first line, then the details.
   std::vector<std::string> summary;
 };
 
-// Reads the track, diagnoses it and writes, in this order: the report folder
+// Reads the track(s), diagnoses them (several: fitted pooled, proven on the
+// held-out ones; the JSON is one document with a `tracks` list, the report
+// and the scenario are those of the pooled fit recordings, the scenario
+// driven along the first) and writes, in this order: the report folder
 // (results/diagnosis_report.h), the scenario (odotune simulate reads it), the
 // JSON; each file appears whole or not at all.
 // Throws odotune::Failure (one line naming the track or the report folder)

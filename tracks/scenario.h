@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "tracks/model_terms.h"
+
 namespace odotune::sim {
 
 // The robot as built. The wheel controller and every tool reading the track
@@ -235,6 +237,7 @@ struct Scenario {
   SensorParams sensors;
   Effects effects;
   std::vector<SlipEpisode> slip_episodes;  // transient slips, any order (see SlipEpisode)
+  std::vector<ModelTerm> terms;            // ground-speed corrections outside the effects (model_terms.h)
 };
 
 }  // namespace odotune::sim

@@ -186,6 +186,7 @@ bool validate_scenario(const Scenario& sc, std::string* why) {
   std::string ewhy;
   if (!validate_effects(sc.effects, &ewhy)) return fail("effects: " + ewhy);
   if (!validate_slip_episodes(sc.slip_episodes, &ewhy)) return fail(ewhy);
+  if (!validate_terms(sc.terms, &ewhy)) return fail("terms: " + ewhy);
 
   double duration = 0.0;
   double max_rim_m_s = 0.0;  // fastest nominal rim speed |v| + |w|*D/2
@@ -363,10 +364,25 @@ Track simulate(const Scenario& sc) {
     const bool zone = in_zone(x, y);
     const double s_zone_l = zone ? fx.slip_zone->s_l : 0.0;
     const double s_zone_r = zone ? fx.slip_zone->s_r : 0.0;
-    const double g_l = 0.5 * (u0_l + u1_l) * (1.0 - s_long_l) * (1.0 - s_zone_l) *
-                       (1.0 - 0.5 * (sl0_l.spin + sl1_l.spin));
-    const double g_r = 0.5 * (u0_r + u1_r) * (1.0 - s_long_r) * (1.0 - s_zone_r) *
-                       (1.0 - 0.5 * (sl0_r.spin + sl1_r.spin));
+    double g_l = 0.5 * (u0_l + u1_l) * (1.0 - s_long_l) * (1.0 - s_zone_l) *
+                 (1.0 - 0.5 * (sl0_l.spin + sl1_l.spin));
+    double g_r = 0.5 * (u0_r + u1_r) * (1.0 - s_long_r) * (1.0 - s_zone_r) *
+                 (1.0 - 0.5 * (sl0_r.spin + sl1_r.spin));
+    if (!sc.terms.empty()) {  // model terms (header comment, step 5a); none: every bit as before
+      const TermState ts{g_l,
+                         g_r,
+                         (u1_l - u0_l) / h,
+                         (u1_r - u0_r) / h,
+                         0.5 * (g_r + g_l),
+                         (g_r - g_l) / D_true,
+                         0.5 * (w0.phi_l + w1.phi_l),
+                         0.5 * (w0.phi_r + w1.phi_r),
+                         x,
+                         y,
+                         t1 - 0.5 * h};
+      g_l += term_correction(sc.terms, TermTarget::v_l, ts);
+      g_r += term_correction(sc.terms, TermTarget::v_r, ts);
+    }
 
     const double v = 0.5 * (g_r + g_l);
     const double w = (g_r - g_l) / D_true;
@@ -536,6 +552,7 @@ Track simulate(const Scenario& sc) {
   ex.emplace_back("sim.effects", format_effects(fx));
   // Only with episodes, so tracks without any keep their earlier bytes.
   if (!sc.slip_episodes.empty()) ex.emplace_back("sim.slip_episodes", format_slip_episodes(sc.slip_episodes));
+  if (!sc.terms.empty()) ex.emplace_back("sim.terms", format_terms(sc.terms));  // likewise
   put("sim.step_s", sc.step_s);
   put("sim.max_accel_m_s2", sc.motion.max_accel_m_s2);
   put("sim.max_angular_accel_rad_s2", sc.motion.max_angular_accel_rad_s2);

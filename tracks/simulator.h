@@ -33,6 +33,14 @@
 //     +y = left). The pose integrates exactly for velocities constant over the
 //     step (arc update with sinc), using the step means of the wheel rates:
 //     second order in h, like RK2.
+//  5a. Model terms (Scenario::terms, model_terms.h; none by default): before
+//     step 5, each wheel's ground speed g gets sum coef*basis(state) added,
+//     the state taken at the step's middle: g_l, g_r as step 4 gives them,
+//     rim accelerations (u1 - u0)/h, v, w from g_l, g_r (D_true), the
+//     rotation angles phi of step 6 averaged over the step's ends, the pose
+//     at the step's start, t = the step's middle. Written to the track as
+//     sim.terms. An out-of-round left wheel, radius ±1 % once per turn:
+//     the term v_l*sin(phi_l) with coef 0.01.
 //  6. Wheel rotation angle phi integrates omega (trapezoid; exact for omega
 //     linear over the step). Encoders count the ROTATION, so slip and radius
 //     errors never change the ticks: ticks = floor(phi/(2 pi)*ticks_per_rev)

@@ -213,7 +213,19 @@ TEST(DiagInput, ErrorsAreOneLineNamingTheTrack) {
   few_fixes.col(Col::w_cmd) = {0.0, 0.0, 0.0};
   few_fixes.col(Col::aps_x) = {0.0, std::nan(""), 0.2};
   few_fixes.col(Col::aps_y) = {0.0, std::nan(""), 0.0};
-  EXPECT_THAT(message(Track(std::move(few_fixes))), HasSubstr("expected at least 3"));
+  // Two fixes are accepted (issue 15: only a track without any reference
+  // sample is refused; diagnose() says when too few leave nothing to fit) ...
+  TrackData outside = few_fixes;
+  EXPECT_EQ(message(Track(std::move(few_fixes))), "no error");
+  // ... but none within the odometry's time span is refused.
+  outside.t = {0.0, 1.0, 2.0, 3.0};
+  outside.col(Col::v_cmd) = {0.1, 0.1, std::nan(""), std::nan("")};
+  outside.col(Col::w_cmd) = {0.0, 0.0, std::nan(""), std::nan("")};
+  outside.col(Col::aps_x) = {std::nan(""), std::nan(""), 0.2, 0.3};
+  outside.col(Col::aps_y) = {std::nan(""), std::nan(""), 0.0, 0.0};
+  const std::string m2 = message(Track(std::move(outside)));
+  EXPECT_THAT(m2, HasSubstr("no reference sample within the odometry's time span"));
+  EXPECT_EQ(m2.find('\n'), std::string::npos);
 }
 
 // A real recording: UTIAS MRCLAM robot 1 (commanded body velocities, Vicon

@@ -1,0 +1,216 @@
+#include "diagnose/recordings.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "diagnose/fit.h"
+#include "diagnose/materiality.h"
+#include "diagnose/select.h"
+#include "diagnose/window_replay.h"
+
+namespace odotune::diagnose {
+namespace {
+
+bool same(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max({1.0, std::abs(a), std::abs(b)}); }
+
+template <class V>
+void append_shifted(V& out, const V& in, double shift) {
+  for (double v : in) out.push_back(v + shift);
+}
+
+// Sum of n_ref * rmse^2 and n_ref over the replay's windows.
+struct Sse {
+  double sse = 0.0;
+  std::size_t n = 0;
+  void add(const ReplayResult& r) {
+    for (const WindowError& w : r.windows) {
+      sse += static_cast<double>(w.n_ref) * w.pos_rmse_m * w.pos_rmse_m;
+      n += w.n_ref;
+    }
+  }
+  double rmse() const { return n > 0 ? std::sqrt(sse / static_cast<double>(n)) : std::nan(""); }
+};
+
+// The wheel effects the pooled diagnosis chose, with their fitted values.
+EffectSet wheel_model(const Diagnosis& d) {
+  return d.selection.fitted ? d.selection.final_fit.effects : EffectSet();
+}
+
+std::string short_name(const std::string& slot) { return slot.substr(slot.find('.') + 1); }
+
+}  // namespace
+
+DiagInput concatenate(const std::vector<DiagInput>& parts, double gap_s, std::vector<double>* shifts) {
+  if (parts.empty()) throw std::invalid_argument("concatenate: no recording");
+  if (shifts) shifts->assign(parts.size(), 0.0);
+  if (parts.size() == 1) return parts.front();
+  const DiagInput& a = parts.front();
+  double sigma = a.ref_sigma_m;  // the pooled sigma: that of the recording with the most samples
+  std::size_t most = 0;
+  for (const DiagInput& p : parts) {
+    const auto bad = [&](const std::string& what) {
+      throw std::invalid_argument(fmt::format("recording '{}' is not of the robot of '{}': {}", p.track_name,
+                                              a.track_name, what));
+    };
+    if (p.odometry != a.odometry) bad("another kind of odometry");
+    if (!same(p.radius_l_m, a.radius_l_m) || !same(p.radius_r_m, a.radius_r_m) ||
+        !same(p.wheel_base_m, a.wheel_base_m))
+      bad(fmt::format("nominal radii {} m, {} m and base {} m, expected {} m, {} m and {} m", p.radius_l_m,
+                      p.radius_r_m, p.wheel_base_m, a.radius_l_m, a.radius_r_m, a.wheel_base_m));
+    if (p.has_ref_heading() != a.has_ref_heading()) bad("reference heading on one and not on the other");
+    if (p.cmd_v_mps.empty() != a.cmd_v_mps.empty()) bad("commands on one and not on the other");
+    if (p.ref_t_s.size() > most) most = p.ref_t_s.size(), sigma = p.ref_sigma_m;
+  }
+  DiagInput c;
+  c.track_name = a.track_name;
+  for (std::size_t k = 1; k < parts.size(); ++k) c.track_name += " + " + parts[k].track_name;
+  c.radius_l_m = a.radius_l_m, c.radius_r_m = a.radius_r_m, c.wheel_base_m = a.wheel_base_m;
+  c.odometry = a.odometry, c.velocity_source = a.velocity_source;
+  c.reference = a.reference;
+  c.ref_sigma_m = sigma;
+  c.ref_sigma_rad = a.ref_sigma_rad;
+  bool weighted = false;
+  for (const DiagInput& p : parts) weighted = weighted || !p.ref_w.empty() || !same(p.ref_sigma_m, sigma);
+  double end = 0.0, phi_l = 0.0, phi_r = 0.0;
+  for (std::size_t k = 0; k < parts.size(); ++k) {
+    const DiagInput& p = parts[k];
+    const double start = std::min(p.odo_t_s.front(), p.ref_t_s.empty() ? p.odo_t_s.front() : p.ref_t_s.front());
+    const double shift = k == 0 ? 0.0 : end + gap_s - start;
+    if (shifts) (*shifts)[k] = shift;
+    append_shifted(c.odo_t_s, p.odo_t_s, shift);
+    if (!p.phi_l_rad.empty()) {
+      const double l0 = k == 0 ? 0.0 : phi_l - p.phi_l_rad.front(),
+                   r0 = k == 0 ? 0.0 : phi_r - p.phi_r_rad.front();
+      append_shifted(c.phi_l_rad, p.phi_l_rad, l0);
+      append_shifted(c.phi_r_rad, p.phi_r_rad, r0);
+      phi_l = c.phi_l_rad.back(), phi_r = c.phi_r_rad.back();
+    }
+    c.v_mps.insert(c.v_mps.end(), p.v_mps.begin(), p.v_mps.end());
+    c.w_radps.insert(c.w_radps.end(), p.w_radps.begin(), p.w_radps.end());
+    c.cmd_v_mps.insert(c.cmd_v_mps.end(), p.cmd_v_mps.begin(), p.cmd_v_mps.end());
+    c.cmd_w_radps.insert(c.cmd_w_radps.end(), p.cmd_w_radps.begin(), p.cmd_w_radps.end());
+    append_shifted(c.gyro_t_s, p.gyro_t_s, shift);
+    c.gyro_z_radps.insert(c.gyro_z_radps.end(), p.gyro_z_radps.begin(), p.gyro_z_radps.end());
+    append_shifted(c.ref_t_s, p.ref_t_s, shift);
+    c.ref_x_m.insert(c.ref_x_m.end(), p.ref_x_m.begin(), p.ref_x_m.end());
+    c.ref_y_m.insert(c.ref_y_m.end(), p.ref_y_m.begin(), p.ref_y_m.end());
+    c.ref_theta_rad.insert(c.ref_theta_rad.end(), p.ref_theta_rad.begin(), p.ref_theta_rad.end());
+    if (weighted) {
+      const double scale = (sigma / p.ref_sigma_m) * (sigma / p.ref_sigma_m);
+      for (std::size_t i = 0; i < p.ref_t_s.size(); ++i) c.ref_w.push_back(scale * p.ref_weight(i));
+    }
+    c.ref_gt_samples += p.ref_gt_samples, c.ref_fix_samples += p.ref_fix_samples;
+    end = std::max(c.odo_t_s.back(), c.ref_t_s.empty() ? c.odo_t_s.back() : c.ref_t_s.back());
+  }
+  return c;
+}
+
+PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std::vector<DiagInput>& heldout,
+                                    const DiagnoseOptions& o) {
+  if (fit.empty()) throw std::invalid_argument("diagnose_recordings: no recording to fit on");
+  std::vector<DiagInput> all = fit;
+  all.insert(all.end(), heldout.begin(), heldout.end());
+  (void)concatenate(all, 1.0);  // one robot (throws otherwise)
+  // Longer than any window the selection may choose (at most a third of the pooled span).
+  double span = 0.0;
+  for (const DiagInput& p : fit) span += p.odo_t_s.back() - p.odo_t_s.front();
+  const double gap_s = std::max(1000.0, span);
+  PooledDiagnosis out;
+  std::vector<double> shifts;
+  out.input = concatenate(fit, gap_s, &shifts);
+  out.pooled = diagnose(out.input, o);
+  Diagnosis& d = out.pooled;
+  const EffectSet wheel = wheel_model(d);
+  const double ws = d.window_s;
+  out.heldout_recordings = !heldout.empty();
+
+  // Per recording: nominal vs the pooled model, and the refit alone.
+  FitOptions fo = o.select.fit;
+  fo.window_s = ws;
+  Sse held_nominal, held_model;
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    const DiagInput& in = all[k];
+    RecordingResult r;
+    r.track = in.track_name;
+    r.heldout = k >= fit.size();
+    r.duration_s = in.odo_t_s.back() - in.odo_t_s.front();
+    r.ref_samples = in.ref_t_s.size();
+    r.ref_sigma_m = in.ref_sigma_m;
+    r.pooled_time_offset_s = k < shifts.size() ? shifts[k] : std::nan("");
+    try {
+      const ReplayResult nom = replay(in, EffectSet(), ws), mod = replay(in, wheel, ws);
+      r.error = {nom.pos_rmse_m, mod.pos_rmse_m};
+      if (r.heldout) held_nominal.add(nom), held_model.add(mod);
+      r.floor_m = materiality_floor_m(in.ref_sigma_m, nom.pos_rmse_m, o.select.materiality);
+      r.helped = is_material(nom.pos_rmse_m, mod.pos_rmse_m, r.floor_m);
+      if (!wheel.empty()) {
+        const FitSummary f = fit_effects(in, d.selection.structure, {}, {}, fo);
+        for (const FitParam& p : f.params)
+          if (p.fitted) r.refit.push_back({p.name, p.value}), r.refit_stderr.push_back({p.name, p.std_error});
+      }
+    } catch (const std::exception& e) {
+      r.note = e.what();
+    }
+    out.recordings.push_back(std::move(r));
+  }
+
+  // Held-out recordings prove the findings (file comment).
+  if (out.heldout_recordings) {
+    d.heldout = {held_nominal.rmse(), held_model.rmse()};
+    for (Finding& f : d.findings) {
+      if (f.effect == "unexplained" || f.effect == "gyro_bias" || f.effect == "gyro_scale") continue;
+      EffectSet without = wheel;
+      without.disable(effect_from_name(f.effect));
+      Sse before, after;
+      for (const DiagInput& in : heldout) {
+        before.add(replay(in, without, ws));
+        after.add(replay(in, wheel, ws));
+      }
+      f.heldout = {before.rmse(), after.rmse()};
+    }
+  }
+
+  // What holds across recordings.
+  for (const RecordingResult& r : out.recordings) {
+    if (!r.note.empty()) {
+      out.consistency.push_back(fmt::format("{}: not evaluated ({})", r.track, r.note));
+      continue;
+    }
+    if (wheel.empty()) continue;
+    out.consistency.push_back(fmt::format(
+        "{} ({}): the pooled model {} its position error {:.1f} → {:.1f} mm (floor {:.1f} mm)", r.track,
+        r.heldout ? "held out" : "fitted", r.helped ? "cuts" : "does not materially change",
+        1e3 * r.error.before_pos_rmse_m, 1e3 * r.error.after_pos_rmse_m, 1e3 * r.floor_m));
+  }
+  if (!wheel.empty() && !out.recordings.empty()) {
+    const auto& names = out.recordings.front().refit;
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      std::vector<double> v;
+      std::string list;
+      double se = 0.0;
+      for (const RecordingResult& r : out.recordings)
+        if (i < r.refit.size()) {
+          v.push_back(r.refit[i].value);
+          se = std::max(se, r.refit_stderr[i].value);
+          list += fmt::format("{}{:.5g}", list.empty() ? "" : ", ", r.refit[i].value);
+        }
+      if (v.size() < 2) continue;
+      const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+      const double pooled = wheel.get(effect_from_name(names[i].name.substr(0, names[i].name.find('.'))),
+                                      short_name(names[i].name));
+      const double noop_dist = std::abs(pooled -
+                                        (short_name(names[i].name).rfind("scale", 0) == 0 ? 1.0 : 0.0));
+      // Holds when the recordings agree within half the effect's size (or within 4 standard errors).
+      const bool holds = (*hi - *lo) <= std::max(0.5 * noop_dist, 4.0 * se);
+      out.consistency.push_back(fmt::format(
+          "{}: {} alone on each recording ({}), pooled {:.5g}: {}", names[i].name, holds ? "agrees" : "differs",
+          list, pooled, holds ? "holds across recordings" : "does not hold across recordings"));
+    }
+  }
+  return out;
+}
+
+}  // namespace odotune::diagnose

@@ -1,0 +1,258 @@
+#include "studies/diagnosis_benchmark.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/failure.h"
+#include "diagnose/diag_input.h"
+#include "diagnose/diagnosis.h"
+#include "tracks/effects.h"
+#include "tracks/track_io.h"
+
+namespace odotune {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+bool contains(const std::vector<std::string>& v, const std::string& s) {
+  return std::find(v.begin(), v.end(), s) != v.end();
+}
+
+// |values| at the nearest rank of quantile q (values non-empty).
+double abs_quantile(std::vector<double> values, double q) {
+  for (double& v : values) v = std::abs(v);
+  std::sort(values.begin(), values.end());
+  const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(values.size())));
+  return values[std::clamp<std::size_t>(k, 1, values.size()) - 1];
+}
+
+Confusion empty_confusion() {
+  Confusion c;
+  for (const sim::EffectInfo& e : sim::effect_table()) {
+    c.rows.emplace_back(e.name);
+    c.cols.emplace_back(e.name);
+  }
+  c.rows.emplace_back("none");
+  c.cols.emplace_back("unexplained");
+  c.cols.emplace_back("none");
+  c.counts.assign(c.rows.size(), std::vector<int>(c.cols.size(), 0));
+  return c;
+}
+
+void count(Confusion& c, const std::string& row, const std::string& col) {
+  const auto r = std::find(c.rows.begin(), c.rows.end(), row) - c.rows.begin();
+  const auto k = std::find(c.cols.begin(), c.cols.end(), col) - c.cols.begin();
+  if (r < static_cast<long>(c.rows.size()) && k < static_cast<long>(c.cols.size())) ++c.counts[r][k];
+}
+
+}  // namespace
+
+bool DiagnosisBenchmarkOptions::IsValid(std::string* why) const {
+  auto bad = [why](const std::string& text) {
+    if (why) *why = text;
+    return false;
+  };
+  if (cases < 1 || cases > 100000) return bad(fmt::format("cases = {} must be in 1..100000", cases));
+  if (first < 0 || first > 100000000) return bad(fmt::format("first = {} must be in 0..100000000", first));
+  if (threads < 0) return bad(fmt::format("threads = {} must be >= 0", threads));
+  std::string w;
+  if (!draw.IsValid(&w)) return bad(w);
+  if (!materiality.IsValid(&w)) return bad("materiality: " + w);
+  return true;
+}
+
+CaseResult run_benchmark_case(const DiagnosisBenchmarkOptions& o, int index) {
+  CaseResult r;
+  auto t0 = Clock::now();
+  r.c = draw_case(case_seed(o.seed, index), index, o.draw);
+  const CaseTrack ct = make_case_track(r.c);
+  r.track_rows = static_cast<int>(ct.track.size());
+  r.track_duration_s = ct.track.duration_s();
+  if (!o.tracks_dir.empty())
+    write_track(ct.track, std::filesystem::path(o.tracks_dir) / fmt::format("case_{:04d}.csv", index));
+  r.simulate_s = seconds_since(t0);
+
+  t0 = Clock::now();
+  std::optional<diagnose::DiagInput> in;
+  std::string refusal;
+  try {
+    in = diagnose::build_diag_input(ct.track);
+  } catch (const std::exception& e) {
+    refusal = e.what();
+  }
+  const double input_s = seconds_since(t0);
+
+  t0 = Clock::now();
+  try {
+    if (in) {
+      r.truth = assess_detectability(*in, r.c.effects, o.materiality);
+    } else {
+      r.truth_note = "judged on the track's position fixes alone (the track was refused)";
+      r.truth = assess_detectability(diagnose::build_diag_input(without_ground_truth(ct.track)), r.c.effects,
+                                     o.materiality);
+    }
+  } catch (const std::exception& e) {
+    r.truth = Detectability{};
+    for (const TrueEffect& e2 : r.c.effects) r.truth.effects.push_back(EffectTruth{e2});
+    r.truth_note = std::string("detectability not judged: ") + e.what();
+  }
+  r.truth_s = seconds_since(t0);
+
+  t0 = Clock::now();
+  if (in) {
+    try {
+      const diagnose::Diagnosis d = diagnose::diagnose(*in);
+      for (const diagnose::Finding& f : d.findings)
+        r.findings.push_back({f.effect, f.spec(), f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m});
+      r.grade = grade_case(r.truth.effects, d, r.c.scenario.robot.wheel_base_m,
+                           TruePath{ct.path_x_m, ct.path_y_m});
+    } catch (const std::exception& e) {
+      refusal = e.what();
+    }
+  }
+  if (!refusal.empty()) r.grade = grade_refusal(r.truth.effects, refusal);
+  r.diagnose_s = input_s + seconds_since(t0);
+  return r;
+}
+
+DiagnosisBenchmark run_diagnosis_benchmark(const DiagnosisBenchmarkOptions& o,
+                                           const BenchmarkProgress& progress, const std::atomic<bool>* stop) {
+  std::string why;
+  if (!o.IsValid(&why)) throw std::invalid_argument("study diagnosis: " + why);
+  const auto t0 = Clock::now();
+  DiagnosisBenchmark b;
+  b.options = o;
+  b.threads_used = o.threads > 0 ? o.threads : omp_get_max_threads();
+  b.cases.resize(static_cast<std::size_t>(o.cases));
+  std::string failure;
+  bool invalid = false, stopped = false;
+  long done = 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(b.threads_used)
+  for (int k = 0; k < o.cases; ++k) {
+    bool skip = false;
+#pragma omp critical(odotune_diag_bench)
+    {
+      stopped = stopped || (stop != nullptr && stop->load());
+      skip = !failure.empty() || stopped;
+    }
+    if (skip) continue;
+    try {
+      b.cases[static_cast<std::size_t>(k)] = run_benchmark_case(o, o.first + k);
+    } catch (const std::invalid_argument& e) {
+#pragma omp critical(odotune_diag_bench)
+      if (failure.empty()) failure = e.what(), invalid = true;
+    } catch (const std::exception& e) {
+#pragma omp critical(odotune_diag_bench)
+      if (failure.empty()) failure = e.what();
+    }
+#pragma omp critical(odotune_diag_bench)
+    {
+      ++done;
+      if (progress) progress(done, o.cases);
+    }
+  }
+  if (!failure.empty()) {
+    if (invalid) throw std::invalid_argument(failure);
+    throw std::runtime_error(failure);
+  }
+  if (stopped) throw Failure("study diagnosis: interrupted", 130);
+  b.summary = summarise(b.cases);
+  b.wall_s = seconds_since(t0);
+  return b;
+}
+
+BenchmarkSummary summarise(const std::vector<CaseResult>& cases) {
+  BenchmarkSummary s;
+  s.confusion = empty_confusion();
+  std::map<std::string, EffectScore> scores;
+  std::map<std::string, std::vector<double>> param_errors;
+  std::map<std::string, int> param_within;
+  std::vector<double> times;
+  for (const CaseResult& r : cases) {
+    const CaseGrade& g = r.grade;
+    Rate* rate = g.category == CaseCategory::null_case      ? &s.null_cases
+                 : g.category == CaseCategory::undetectable ? &s.undetectable
+                 : g.category == CaseCategory::single       ? &s.single
+                                                            : &s.two;
+    for (Rate* x : {rate, &s.all}) ++x->cases, x->passed += g.pass ? 1 : 0;
+    s.refused += g.refused ? 1 : 0;
+    if (g.category == CaseCategory::null_case && !g.found.empty()) ++s.null_with_finding;
+    if (!g.pass) {
+      if (g.refused) ++s.failures["refused"];
+      if (!g.missed.empty() && !g.refused) ++s.failures["missed an effect"];
+      if (!g.extra.empty()) ++s.failures["named a wrong effect"];
+      if (!g.refused && !g.params_ok) ++s.failures["parameter out of tolerance"];
+      if (!g.refused && !g.heldout_ok) ++s.failures["held-out not improved"];
+    }
+
+    // Confusion matrix.
+    for (const std::string& e : g.expected)
+      if (contains(g.found, e)) count(s.confusion, e, e);
+    for (const std::string& e : g.missed) {
+      if (g.extra.empty()) count(s.confusion, e, "none");
+      for (const std::string& x : g.extra) count(s.confusion, e, x);
+    }
+    if (g.missed.empty())
+      for (const std::string& x : g.extra) count(s.confusion, "none", x);
+    if (g.expected.empty() && g.extra.empty()) count(s.confusion, "none", "none");
+
+    // Per-effect scores.
+    for (const std::string& e : g.expected) {
+      EffectScore& sc = scores[e];
+      ++sc.expected;
+      sc.named_expected += contains(g.found, e) ? 1 : 0;
+      sc.right += g.pass ? 1 : 0;
+    }
+    for (const std::string& f : g.found)
+      if (!contains(g.tolerated, f)) ++scores[f].named;
+
+    for (const ParamCheck& p : g.params) {
+      if (!p.graded) continue;
+      const std::string name = p.effect + "." + p.param;
+      if (std::isfinite(p.normalised)) param_errors[name].push_back(p.normalised);
+      param_within[name] += p.ok ? 1 : 0;
+    }
+    times.push_back(r.total_s());
+    s.diagnose_mean_s += r.diagnose_s;
+  }
+  std::vector<std::string> order;
+  for (const sim::EffectInfo& e : sim::effect_table()) order.emplace_back(e.name);
+  order.emplace_back("unexplained");
+  for (const std::string& e : order) {
+    auto it = scores.find(e);
+    if (it == scores.end()) continue;
+    it->second.effect = e;
+    s.effects.push_back(it->second);
+  }
+  for (const auto& [name, errors] : param_errors) {
+    ParamStats p;
+    p.name = name, p.n = static_cast<int>(errors.size()), p.within = param_within[name];
+    if (!errors.empty()) {
+      p.median_abs = abs_quantile(errors, 0.5);
+      p.p90_abs = abs_quantile(errors, 0.9);
+      p.max_abs = abs_quantile(errors, 1.0);
+    }
+    s.params.push_back(p);
+  }
+  if (!times.empty()) {
+    double sum = 0.0;
+    for (double t : times) sum += t;
+    s.time_mean_s = sum / static_cast<double>(times.size());
+    s.time_median_s = abs_quantile(times, 0.5);
+    s.time_max_s = abs_quantile(times, 1.0);
+    s.diagnose_mean_s /= static_cast<double>(times.size());
+  }
+  return s;
+}
+
+}  // namespace odotune

@@ -1,0 +1,148 @@
+// The random benchmark of the sim-to-real diagnosis (`odotune study
+// diagnosis`, issue 15 item 6; method in docs/diagnosis/benchmark.md): cases
+// first .. first + cases - 1 of a seed are drawn (diagnosis_cases.h),
+// simulated, judged detectable from their truth (diagnosis_truth.h),
+// diagnosed (diagnose::diagnose at default options on
+// diagnose::build_diag_input of the track, as `odotune diagnose TRACK` does)
+// and graded (diagnosis_grading.h); then summarised: pass rates per category
+// against the issue's aims, a confusion matrix of true × named effects,
+// per-effect recall and precision, parameter errors and time per case.
+//
+// Seeds. Case i of seed S uses case_seed(S, i) for everything, so a case
+// re-runs alone (`--first i --cases 1`) and every number but the timings is
+// bit-identical for any thread count. Development runs use seeds 1001-1003;
+// the committed docs run (docs/diagnosis/) uses a seed kept apart from
+// development (kDocsSeed), so that its numbers measure generalisation.
+//
+// Refusals. A track the diagnosis refuses (build_diag_input or diagnose
+// throws std::invalid_argument: e.g. today's "known start + fixes") is a
+// failed case carrying the message; its detectability is then judged on the
+// same track without its ground truth (the fixes alone), and so is the
+// category. A case that cannot be simulated is a bug and stops the run.
+//
+// Cases run in parallel over OpenMP threads (one case per task, dynamic
+// schedule); each task is single-threaded. Progress through a callback (from
+// one thread at a time); the stop flag ends the run before the next case
+// starts (odotune::Failure "interrupted", exit code 130). No output here:
+// diagnosis_benchmark_outputs.h writes the files.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "diagnose/materiality.h"
+#include "studies/diagnosis_cases.h"
+#include "studies/diagnosis_grading.h"
+#include "studies/diagnosis_truth.h"
+
+namespace odotune {
+
+// The docs run's seed (never used while developing; development: 1001-1003).
+inline constexpr std::uint64_t kDocsSeed = 20261125;
+
+struct DiagnosisBenchmarkOptions {
+  int cases = 300;                           // 1..100000
+  int first = 0;                             // index of the first case, >= 0
+  std::uint64_t seed = 1;                    // case i: case_seed(seed, i)
+  int threads = 0;                           // OpenMP threads over cases; 0 = OpenMP's default
+  CaseDrawOptions draw;                      // what a case draws
+  diagnose::MaterialityOptions materiality;  // the floor of detectability
+  std::string tracks_dir;                    // when set: each case's track written there as case_IIII.csv
+  bool IsValid(std::string* why) const;
+};
+
+struct CaseFinding {
+  std::string effect;  // or "unexplained"
+  std::string spec;    // tracks/effects.h form ("" for unexplained)
+  double heldout_before_m = std::numeric_limits<double>::quiet_NaN();
+  double heldout_after_m = std::numeric_limits<double>::quiet_NaN();
+};
+
+struct CaseResult {
+  DiagnosisCase c;
+  int track_rows = 0;
+  double track_duration_s = 0.0;
+  Detectability truth;
+  std::string truth_note;  // "" or how detectability was judged on a refused track
+  std::vector<CaseFinding> findings;
+  CaseGrade grade;
+  double simulate_s = 0.0, truth_s = 0.0, diagnose_s = 0.0;  // timing [s]
+  double total_s() const { return simulate_s + truth_s + diagnose_s; }
+};
+
+// Pass counts of one category.
+struct Rate {
+  int cases = 0, passed = 0;
+  double share() const { return cases > 0 ? static_cast<double>(passed) / cases : std::nan(""); }
+};
+
+struct EffectScore {
+  std::string effect;
+  int expected = 0;        // cases where it is detectable
+  int named_expected = 0;  // ... and named (recall numerator)
+  int right = 0;           // ... and the case passed
+  int named = 0;           // cases where it is named and not tolerated (precision denominator)
+  double recall() const { return expected > 0 ? static_cast<double>(named_expected) / expected : std::nan(""); }
+  double precision() const { return named > 0 ? static_cast<double>(named_expected) / named : std::nan(""); }
+};
+
+struct ParamStats {
+  std::string name;  // "effect.param" (slip_zone.box: the path rule's error)
+  int n = 0, within = 0;
+  double median_abs = std::nan(""), p90_abs = std::nan(""), max_abs = std::nan("");  // |normalised|
+};
+
+// Rows: the 12 effects then "none" (no detectable effect); columns: the 12
+// effects, "unexplained", then "none" (nothing wrong named). Per case: each
+// expected effect that is named counts (e, e); each missed one (e, x) for
+// every extra finding x, or (e, none) when there is none; extra findings
+// with nothing missed count (none, x); a case with nothing expected and
+// nothing wrong named counts (none, none). A refused case counts its
+// expected effects as missed with nothing named.
+struct Confusion {
+  std::vector<std::string> rows, cols;
+  std::vector<std::vector<int>> counts;  // [row][col]
+};
+
+struct BenchmarkSummary {
+  Rate null_cases, undetectable, single, two, all;
+  int refused = 0, null_with_finding = 0;
+  std::map<std::string, int>
+      failures;  // failure kind -> cases (missed, wrong effect, parameter, held-out, refused)
+  Confusion confusion;
+  std::vector<EffectScore> effects;  // table order, effects that occur
+  std::vector<ParamStats> params;
+  double time_mean_s = 0.0, time_median_s = 0.0, time_max_s = 0.0, diagnose_mean_s = 0.0;
+};
+
+struct DiagnosisBenchmark {
+  DiagnosisBenchmarkOptions options;
+  int threads_used = 0;
+  std::vector<CaseResult> cases;  // index order
+  BenchmarkSummary summary;
+  double wall_s = 0.0;
+};
+
+using BenchmarkProgress = std::function<void(long done, long total)>;
+
+// One case end to end (the file comment). Throws std::invalid_argument when
+// the case cannot be simulated; writes its track when tracks_dir is set
+// (std::runtime_error when that fails).
+CaseResult run_benchmark_case(const DiagnosisBenchmarkOptions& options, int index);
+
+// The whole run. Throws std::invalid_argument for invalid options, and what
+// run_benchmark_case throws (the first such error, after the running cases
+// finish); odotune::Failure (code 130) when stopped.
+DiagnosisBenchmark run_diagnosis_benchmark(const DiagnosisBenchmarkOptions& options,
+                                           const BenchmarkProgress& progress = {},
+                                           const std::atomic<bool>* stop = nullptr);
+
+// The summary of graded cases (the fields' comments).
+BenchmarkSummary summarise(const std::vector<CaseResult>& cases);
+
+}  // namespace odotune

@@ -1,0 +1,177 @@
+#include "studies/diagnosis_grading.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "tracks/effects.h"
+
+namespace odotune {
+
+namespace {
+
+bool contains(const std::vector<std::string>& v, const std::string& s) {
+  return std::find(v.begin(), v.end(), s) != v.end();
+}
+
+bool is_gyro(const std::string& name) { return name == "gyro_bias" || name == "gyro_scale"; }
+
+bool is_box_edge(const std::string& effect, std::string_view p) {
+  return effect == "slip_zone" && (p == "x0" || p == "x1" || p == "y0" || p == "y1");
+}
+
+double departure(const TrueEffect& e, std::string_view param) {
+  const sim::EffectInfo* info = sim::find_effect(e.name);
+  const sim::EffectParamInfo* p = info ? sim::find_param(*info, param) : nullptr;
+  if (p == nullptr) throw std::invalid_argument(fmt::format("{} has no parameter {}", e.name, param));
+  return std::abs(e.param(param) - p->default_value);
+}
+
+void join(std::string& why, const std::string& part) { why += (why.empty() ? "" : "; ") + part; }
+
+bool inside(double x, double y, double x0, double x1, double y0, double y1) {
+  return x >= x0 && x <= x1 && y >= y0 && y <= y1;
+}
+
+}  // namespace
+
+std::string_view to_string(CaseCategory c) {
+  switch (c) {
+    case CaseCategory::null_case: return "null";
+    case CaseCategory::undetectable: return "undetectable";
+    case CaseCategory::single: return "single";
+    case CaseCategory::two: return "two";
+  }
+  return "";
+}
+
+CaseCategory case_category(const std::vector<EffectTruth>& truth) {
+  const auto k = std::count_if(truth.begin(), truth.end(), [](const EffectTruth& t) { return t.detectable; });
+  if (k >= 2) return CaseCategory::two;
+  if (k == 1) return CaseCategory::single;
+  return truth.empty() ? CaseCategory::null_case : CaseCategory::undetectable;
+}
+
+double param_tolerance(const TrueEffect& e, std::string_view param, double wheel_base_m) {
+  if (e.name == "radius_step" && param == "t") return 5.0;
+  if (is_box_edge(e.name, param))
+    throw std::invalid_argument("param_tolerance: slip_zone's box is graded by box_coverage");
+  if (param == "scale_l" || param == "scale_r")
+    return 0.25 * std::max(departure(e, "scale_l"), departure(e, "scale_r"));
+  if (e.name == "slip_zone") return 0.25 * std::max(departure(e, "s_l"), departure(e, "s_r"));
+  if (e.name == "odometry_bias") {
+    const double half = 0.5 * wheel_base_m;
+    const double rim = std::max(departure(e, "b_v"), departure(e, "b_w") * half);
+    return param == "b_w" ? 0.25 * rim / half : 0.25 * rim;
+  }
+  return 0.25 * departure(e, param);
+}
+
+BoxCoverage box_coverage(const TrueEffect& t, double x0, double x1, double y0, double y1,
+                         const TruePath& path) {
+  BoxCoverage c;
+  int both = 0, only_found = 0;
+  for (std::size_t i = 0; i < path.x_m.size(); ++i) {
+    const double x = path.x_m[i], y = path.y_m[i];
+    const bool in_true = inside(x, y, t.param("x0"), t.param("x1"), t.param("y0"), t.param("y1"));
+    const bool in_found = inside(x, y, x0, x1, y0, y1);
+    c.samples += in_true ? 1 : 0;
+    both += in_true && in_found ? 1 : 0;
+    only_found += !in_true && in_found ? 1 : 0;
+  }
+  if (c.samples > 0) {
+    c.covered = static_cast<double>(both) / c.samples;
+    c.extra = static_cast<double>(only_found) / c.samples;
+  } else {
+    c.extra = only_found > 0 ? 1.0 : 0.0;
+  }
+  return c;
+}
+
+CaseGrade grade_case(const std::vector<EffectTruth>& truth, const diagnose::Diagnosis& d, double wheel_base_m,
+                     const TruePath& path) {
+  CaseGrade g;
+  g.category = case_category(truth);
+  for (const EffectTruth& t : truth) (t.detectable ? g.expected : g.tolerated).push_back(t.effect.name);
+  for (const diagnose::Finding& f : d.findings)
+    if (!contains(g.found, f.effect)) g.found.push_back(f.effect);
+  for (const std::string& e : g.expected)
+    if (!contains(g.found, e)) g.missed.push_back(e);
+  for (const std::string& f : g.found)
+    if (!contains(g.expected, f) && !contains(g.tolerated, f)) g.extra.push_back(f);
+  g.named_ok = g.missed.empty() && g.extra.empty();
+  g.heldout_before_m = d.heldout.before_pos_rmse_m, g.heldout_after_m = d.heldout.after_pos_rmse_m;
+  for (const std::string& e : g.missed) join(g.why, "missed " + e);
+  for (const std::string& e : g.extra) join(g.why, "named " + e);
+
+  g.params_ok = true;
+  g.heldout_ok = true;
+  bool wheel_expected = false;
+  for (const EffectTruth& t : truth) {
+    if (!t.detectable) continue;
+    const auto f = std::find_if(d.findings.begin(), d.findings.end(),
+                                [&](const diagnose::Finding& x) { return x.effect == t.effect.name; });
+    if (f == d.findings.end()) continue;  // missed: reported above
+    wheel_expected = wheel_expected || !is_gyro(t.effect.name);
+    if (is_gyro(t.effect.name) && !(f->heldout.after_pos_rmse_m < f->heldout.before_pos_rmse_m)) {
+      g.heldout_ok = false;
+      join(g.why, fmt::format("{} held-out {:.4g} -> {:.4g} m not improved", t.effect.name,
+                              f->heldout.before_pos_rmse_m, f->heldout.after_pos_rmse_m));
+    }
+    for (const auto& [name, value] : t.effect.params) {
+      ParamCheck p;
+      p.effect = t.effect.name, p.param = name, p.truth = value, p.found = f->param(name);
+      if (is_box_edge(t.effect.name, name)) {
+        p.graded = false;
+        p.ok = std::isfinite(p.found);
+        p.normalised = (p.found - p.truth) / (t.effect.param(name[0] == 'x' ? "x1" : "y1") -
+                                              t.effect.param(name[0] == 'x' ? "x0" : "y0"));
+        g.params.push_back(p);
+        continue;
+      }
+      p.tolerance = param_tolerance(t.effect, name, wheel_base_m);
+      p.normalised = p.tolerance > 0.0 ? 0.25 * (p.found - p.truth) / p.tolerance : std::nan("");
+      p.ok = std::isfinite(p.found) && std::abs(p.found - p.truth) <= p.tolerance;
+      if (!p.ok)
+        join(g.why, fmt::format("{}.{} = {:.6g}, truth {:.6g} ± {:.3g}", p.effect, p.param, p.found, p.truth,
+                                p.tolerance));
+      g.params_ok = g.params_ok && p.ok;
+      g.params.push_back(p);
+    }
+    if (t.effect.name == "slip_zone") {
+      const BoxCoverage c = box_coverage(t.effect, f->param("x0"), f->param("x1"), f->param("y0"),
+                                         f->param("y1"), path);
+      ParamCheck p;
+      p.effect = "slip_zone", p.param = "box";
+      p.truth = 0.0, p.found = std::max(1.0 - c.covered, c.extra), p.tolerance = 0.25;
+      p.normalised = p.found;
+      p.ok = c.samples > 0 && p.found <= 0.25;
+      if (!p.ok)
+        join(g.why, fmt::format("slip_zone box covers {:.0f} % of the true box's path, {:.0f} % extra",
+                                100 * c.covered, 100 * c.extra));
+      g.params_ok = g.params_ok && p.ok;
+      g.params.push_back(p);
+    }
+  }
+  if (wheel_expected && !(d.heldout.after_pos_rmse_m < d.heldout.before_pos_rmse_m)) {
+    g.heldout_ok = false;
+    join(g.why, fmt::format("held-out {:.4g} -> {:.4g} m not improved", d.heldout.before_pos_rmse_m,
+                            d.heldout.after_pos_rmse_m));
+  }
+  g.pass = g.named_ok && g.params_ok && g.heldout_ok;
+  return g;
+}
+
+CaseGrade grade_refusal(const std::vector<EffectTruth>& truth, const std::string& message) {
+  CaseGrade g;
+  g.category = case_category(truth);
+  g.refused = true;
+  for (const EffectTruth& t : truth) (t.detectable ? g.expected : g.tolerated).push_back(t.effect.name);
+  g.missed = g.expected;
+  g.why = "refused: " + message;
+  return g;
+}
+
+}  // namespace odotune

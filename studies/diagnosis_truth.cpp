@@ -1,0 +1,175 @@
+#include "studies/diagnosis_truth.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "diagnose/effect_model.h"
+#include "diagnose/select.h"
+#include "diagnose/series_interp.h"
+#include "diagnose/window_replay.h"
+#include "tracks/effects.h"
+
+namespace odotune {
+
+namespace {
+
+using diagnose::DiagInput;
+using diagnose::Effect;
+using diagnose::EffectSet;
+
+bool is_gyro(const std::string& name) { return name == "gyro_bias" || name == "gyro_scale"; }
+
+bool is_noop(const TrueEffect& e) {
+  const sim::EffectInfo* info = sim::find_effect(e.name);
+  for (const auto& [name, v] : e.params) {
+    const sim::EffectParamInfo* p = info ? sim::find_param(*info, name) : nullptr;
+    // radius_step.t and the slip_zone box have no no-op value of their own.
+    const bool position = (e.name == "radius_step" && name == "t") ||
+                          (e.name == "slip_zone" &&
+                           (name == "x0" || name == "x1" || name == "y0" || name == "y1"));
+    if (p && !position && v != p->default_value) return false;
+  }
+  return true;
+}
+
+EffectSet wheel_set(const std::vector<TrueEffect>& truth, const std::string& without) {
+  EffectSet set;
+  for (const TrueEffect& e : truth) {
+    if (is_gyro(e.name) || e.name == without) continue;
+    const Effect id = diagnose::effect_from_name(e.name);
+    set.enable(id);
+    for (const auto& [name, v] : e.params) set.set(id, name, v);
+  }
+  return set;
+}
+
+// Dead reckoning with the wheels' nominal travel and the gyro's heading as a
+// body_velocity input: the same construction as gyro_heading_input() in
+// diagnose/diagnosis.cpp (not exported there), so that replaying it with the
+// nominal model is what the diagnosis replays to prove a gyro finding.
+DiagInput gyro_heading_input(const DiagInput& in, double bias_radps, double scale) {
+  DiagInput g = in;
+  const std::vector<double>& t = in.odo_t_s;
+  const bool wheels = in.odometry == diagnose::OdometryKind::wheel_angles;
+  std::vector<double> s(t.size(), 0.0);
+  if (wheels)
+    for (std::size_t i = 0; i < t.size(); ++i)
+      s[i] = 0.5 * (in.radius_l_m * in.phi_l_rad[i] + in.radius_r_m * in.phi_r_rad[i]);
+  g.odometry = diagnose::OdometryKind::body_velocity;
+  g.v_mps.assign(t.size(), 0.0);
+  g.w_radps.assign(t.size(), 0.0);
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    if (wheels) {
+      const std::size_t a = i == 0 ? 0 : i - 1, b = std::min(i + 1, t.size() - 1);
+      g.v_mps[i] = t[b] > t[a] ? (s[b] - s[a]) / (t[b] - t[a]) : 0.0;
+    } else {
+      g.v_mps[i] = in.v_mps[i];
+    }
+    const double gz = diagnose::interp_held(in.gyro_t_s, in.gyro_z_radps, t[i]);
+    g.w_radps[i] = diagnose::corrected_gyro_rate(gz, bias_radps, scale);
+  }
+  g.cmd_v_mps.clear(), g.cmd_w_radps.clear();
+  return g;
+}
+
+}  // namespace
+
+int Detectability::detectable_count() const {
+  return static_cast<int>(std::count_if(effects.begin(), effects.end(),
+                                        [](const EffectTruth& e) { return e.detectable; }));
+}
+
+Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEffect>& truth,
+                                   const diagnose::MaterialityOptions& materiality) {
+  const diagnose::SelectOptions so;
+  Detectability out;
+  out.ref_sigma_m = in.ref_sigma_m;
+  out.window_s = diagnose::selection_window_s(in, so);
+  const diagnose::SelectionInput si = diagnose::selection_input(in, so);
+  const DiagInput& scoring = si.stride > 1 ? si.input : in;
+  // Held out: the last windows holding >= heldout_fraction of the scored
+  // reference samples (header comment).
+  const diagnose::ReplayResult all = diagnose::replay(scoring, EffectSet{}, out.window_s);
+  const auto n = static_cast<int>(all.windows.size());
+  std::size_t total = 0, tail = 0;
+  for (const diagnose::WindowError& w : all.windows) total += w.n_ref;
+  std::vector<int> held;
+  for (int i = n - 1; i >= 0 && static_cast<double>(tail) < so.heldout_fraction * static_cast<double>(total);
+       --i) {
+    held.insert(held.begin(), all.windows[static_cast<std::size_t>(i)].window);
+    tail += all.windows[static_cast<std::size_t>(i)].n_ref;
+  }
+  if (n < 2) held.clear();  // nothing to train on: no split
+  const auto n_held = static_cast<int>(held.size());
+  out.windows = n, out.heldout_windows = n_held;
+  for (const TrueEffect& e : truth) {
+    EffectTruth t;
+    t.effect = e;
+    t.gyro = is_gyro(e.name);
+    out.effects.push_back(t);
+  }
+  if (held.empty()) return out;
+  auto heldout_rmse = [&](const DiagInput& input, const EffectSet& set) {
+    return diagnose::replay(input, set, out.window_s, held).pos_rmse_m;
+  };
+  auto all_rmse = [&](const DiagInput& input, const EffectSet& set) {
+    return diagnose::replay(input, set, out.window_s).pos_rmse_m;
+  };
+
+  // Wheel-odometry effects.
+  out.nominal_heldout_m = heldout_rmse(scoring, EffectSet{});
+  out.true_heldout_m = heldout_rmse(scoring, wheel_set(truth, ""));
+  out.floor_m = diagnose::materiality_floor_m(in.ref_sigma_m, out.nominal_heldout_m, materiality);
+
+  // Gyro effects: the true corrections, each left out in turn.
+  const bool gyro = !in.gyro_t_s.empty();
+  double bias = 0.0, scale = 1.0;
+  for (const TrueEffect& e : truth) {
+    if (e.name == "gyro_bias") bias = e.param("b");
+    if (e.name == "gyro_scale") scale = e.param("s");
+  }
+  EffectSet body;  // lateral_skid acts on the gyro-heading replay too
+  for (const TrueEffect& e : truth)
+    if (e.name == "lateral_skid")
+      body.enable(Effect::lateral_skid).set(Effect::lateral_skid, "k", e.param("k"));
+  double gyro_floor = 0.0, gyro_after = 0.0;
+  const bool any_gyro = std::any_of(truth.begin(), truth.end(),
+                                    [](const TrueEffect& e) { return is_gyro(e.name); });
+  if (gyro && any_gyro) {
+    gyro_floor = diagnose::materiality_floor_m(
+        in.ref_sigma_m, heldout_rmse(gyro_heading_input(scoring, 0.0, 1.0), body), materiality);
+    gyro_after = heldout_rmse(gyro_heading_input(scoring, bias, scale), body);
+  }
+
+  for (EffectTruth& t : out.effects) {
+    if (t.gyro) {
+      if (!gyro) continue;
+      const bool b = t.effect.name == "gyro_bias";
+      t.before_m = heldout_rmse(gyro_heading_input(scoring, b ? 0.0 : bias, b ? scale : 1.0), body);
+      t.after_m = gyro_after;
+      t.floor_m = gyro_floor;
+    } else {
+      t.before_m = heldout_rmse(scoring, wheel_set(truth, t.effect.name));
+      t.after_m = out.true_heldout_m;
+      t.floor_m = out.floor_m;
+    }
+    t.gain_m = diagnose::removed_error_m(t.before_m, t.after_m);
+    t.detectable = !is_noop(t.effect) && diagnose::is_material(t.before_m, t.after_m, t.floor_m);
+    if (!t.detectable && !is_noop(t.effect) &&
+        (t.effect.name == "slip_zone" || t.effect.name == "radius_step")) {
+      // Bound to a place or a time: judged on every window (header comment).
+      const double before = all_rmse(scoring, wheel_set(truth, t.effect.name));
+      const double after = all_rmse(scoring, wheel_set(truth, ""));
+      const double floor = diagnose::materiality_floor_m(in.ref_sigma_m, all_rmse(scoring, EffectSet{}),
+                                                         materiality);
+      if (diagnose::is_material(before, after, floor)) {
+        t.detectable = true, t.on_all_windows = true;
+        t.before_m = before, t.after_m = after, t.gain_m = diagnose::removed_error_m(before, after),
+        t.floor_m = floor;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace odotune

@@ -1,0 +1,80 @@
+// Whether a benchmark case's true effects are detectable at all, decided from
+// the truth (issue 15 item 6; docs/diagnosis/benchmark.md, "Detectable"):
+// the true model's held-out gain must be material against the reference
+// noise, by the same floor that a finding must pass (diagnose/materiality.h).
+//
+// Setting (the diagnosis's own, at default options): the selection input
+// (diagnose/select.h selection_input: the reference thinned to ~10 Hz and
+// denoised, when that keeps the windows), windows of selection_window_s, and
+// the default held-out share (SelectOptions::heldout_fraction, 0.3) taken
+// from the end: the last windows that hold at least 30 % of the scored
+// reference samples. (The diagnosis holds out the last round(0.3 n) of the n
+// windows; counting samples instead keeps a short last window, e.g. 1.5 s
+// after three full 20 s windows, from being the whole held-out evidence.)
+// Position RMSEs are pooled over the held-out windows' samples.
+//  * nominal_heldout_m: the nominal model (window_replay.h replay(), anchors
+//    as the diagnosis's replay chooses them);
+//  * floor_m = materiality_floor_m(in.ref_sigma_m, nominal_heldout_m).
+//  * A wheel-odometry effect e (every effect but gyro_bias, gyro_scale):
+//    gain_e = RMSE(true wheel effects without e) - RMSE(all true wheel
+//    effects), each replayed with the TRUE parameters (diagnose::EffectSet);
+//    with one wheel effect "without e" is the nominal model.
+//  * A gyro effect e: the same difference for gyro-heading dead reckoning
+//    (the wheels' nominal travel, the gyro's yaw rate corrected by the true
+//    gyro_bias/gyro_scale, with e's correction left out; lateral_skid's true
+//    k when the case has it), which is how diagnose/diagnosis.cpp proves a
+//    gyro finding against a reference heading; its floor uses the raw
+//    gyro-heading replay's held-out RMSE as the nominal one. (With fixes only
+//    the diagnosis proves gyro effects with its own 40 s windows,
+//    gyro_fixes_check.h; the windows here are the selection's.)
+//  * detectable_e  <=>  gain_e >= floor (is_material).
+//  * slip_zone and radius_step act only in some places or after some time:
+//    when they are not detectable on the held-out windows (e.g. the robot,
+//    drifting under the effect, misses the box in its last laps), they are
+//    judged on ALL windows instead (gain and floor over every window;
+//    EffectTruth::on_all_windows), because the diagnosis moves its held-out
+//    windows to where these two act (select.h, "interleaved"), and the truth
+//    has no fitted parameter a held-out window would guard against.
+// Effects whose parameters equal their no-op values are never detectable.
+// Deterministic; no I/O.
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "diagnose/diag_input.h"
+#include "diagnose/materiality.h"
+#include "studies/diagnosis_cases.h"
+
+namespace odotune {
+
+struct EffectTruth {
+  TrueEffect effect;
+  bool gyro = false;  // judged by gyro-heading replay
+  bool detectable = false;
+  bool on_all_windows = false;  // judged on every window (slip_zone, radius_step; header comment)
+  double before_m = std::numeric_limits<double>::quiet_NaN();  // held-out RMSE without it
+  double after_m = std::numeric_limits<double>::quiet_NaN();   // with every true effect
+  double gain_m =
+      std::numeric_limits<double>::quiet_NaN();  // removed error: sqrt(before^2 - after^2) (materiality.h)
+  double floor_m = std::numeric_limits<double>::quiet_NaN();
+};
+
+struct Detectability {
+  std::vector<EffectTruth> effects;  // the case's effects, table order
+  double ref_sigma_m = 0.0;          // DiagInput::ref_sigma_m
+  double window_s = 0.0;
+  int windows = 0, heldout_windows = 0;
+  double nominal_heldout_m = std::numeric_limits<double>::quiet_NaN();  // wheel (or command) replay
+  double true_heldout_m = std::numeric_limits<double>::quiet_NaN();     // all true wheel effects
+  double floor_m = std::numeric_limits<double>::quiet_NaN();            // of the wheel replay
+  int detectable_count() const;
+};
+
+// Throws std::invalid_argument for an effect the diagnosis's model does not
+// know, or a replay that cannot run on `in`.
+Detectability assess_detectability(const diagnose::DiagInput& in, const std::vector<TrueEffect>& truth,
+                                   const diagnose::MaterialityOptions& materiality = {});
+
+}  // namespace odotune

@@ -1,0 +1,102 @@
+// Several recordings of one robot (diagnose/recordings.h; issue 15 item 3):
+// pooled fit on some recordings, proof on others, per-recording results, and
+// recordings of another robot refused in one line.
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <fmt/format.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "diagnose/diag_input.h"
+#include "diagnose/recordings.h"
+#include "diagnose/sim_track.h"
+#include "diagnose/window_replay.h"
+
+namespace odotune::diagnose {
+namespace {
+
+using testing_support::SimTrackOptions;
+using testing_support::simulate_track;
+
+DiagInput recording(std::uint64_t seed, double duration_s, double scale_l = 0.99) {
+  SimTrackOptions o;
+  o.duration_s = duration_s;
+  o.gt_sigma_m = 0.002;
+  o.effects = {fmt::format("radius_error:scale_l={},scale_r=1.0", scale_l)};
+  o.seed = seed;
+  DiagInput in = build_diag_input(simulate_track(o));
+  in.track_name = fmt::format("rec{}", seed);
+  return in;
+}
+
+TEST(Recordings, ConcatenationKeepsEachRecordingAndNeverSpansTheGap) {
+  const DiagInput a = recording(1601, 60), b = recording(1602, 60);
+  const DiagInput c = concatenate({a, b}, 1000.0);
+  EXPECT_EQ(c.track_name, "rec1601 + rec1602");
+  ASSERT_EQ(c.odo_t_s.size(), a.odo_t_s.size() + b.odo_t_s.size());
+  ASSERT_EQ(c.ref_t_s.size(), a.ref_t_s.size() + b.ref_t_s.size());
+  const std::size_t na = a.odo_t_s.size();
+  EXPECT_GE(c.odo_t_s[na] - c.odo_t_s[na - 1], 1000.0);
+  // Wheel angles continue across the gap: no motion is invented there.
+  EXPECT_DOUBLE_EQ(c.phi_l_rad[na], c.phi_l_rad[na - 1]);
+  EXPECT_DOUBLE_EQ(c.phi_l_rad.back() - c.phi_l_rad[na], b.phi_l_rad.back() - b.phi_l_rad.front());
+  for (const Window& w : make_windows(c, 20.0)) {
+    const bool first = c.ref_t_s[w.ref_begin] < c.odo_t_s[na];
+    const bool last = c.ref_t_s[w.ref_end - 1] < c.odo_t_s[na];
+    EXPECT_EQ(first, last) << "window " << w.index << " spans two recordings";
+  }
+}
+
+TEST(Recordings, AnotherRobotIsRefusedInOneLine) {
+  DiagInput a = recording(1601, 40), b = recording(1602, 40);
+  b.wheel_base_m *= 1.1;
+  try {
+    (void)concatenate({a, b}, 1000.0);
+    FAIL() << "expected a refusal";
+  } catch (const std::invalid_argument& e) {
+    const std::string m = e.what();
+    EXPECT_THAT(m, ::testing::HasSubstr("rec1602"));
+    EXPECT_THAT(m, ::testing::HasSubstr("not of the robot"));
+    EXPECT_EQ(m.find('\n'), std::string::npos);
+  }
+}
+
+TEST(Recordings, FittedOnTwoProvenOnAThird) {
+  const PooledDiagnosis p = diagnose_recordings({recording(1611, 100), recording(1612, 100)},
+                                                {recording(1613, 100)});
+  ASSERT_EQ(p.recordings.size(), 3u);
+  EXPECT_TRUE(p.heldout_recordings);
+  EXPECT_FALSE(p.recordings[0].heldout);
+  EXPECT_TRUE(p.recordings[2].heldout);
+  ASSERT_FALSE(p.pooled.findings.empty()) << p.pooled.note;
+  const Finding& f = p.pooled.findings.front();
+  EXPECT_EQ(f.effect, "radius_error");
+  EXPECT_NEAR(f.param("scale_l"), 0.99, 0.0025);
+  // The pooled held-out numbers are the third recording's, which the fit never saw.
+  EXPECT_DOUBLE_EQ(p.pooled.heldout.before_pos_rmse_m, p.recordings[2].error.before_pos_rmse_m);
+  EXPECT_DOUBLE_EQ(p.pooled.heldout.after_pos_rmse_m, p.recordings[2].error.after_pos_rmse_m);
+  EXPECT_LT(p.pooled.heldout.after_pos_rmse_m, 0.5 * p.pooled.heldout.before_pos_rmse_m);
+  EXPECT_DOUBLE_EQ(f.heldout.before_pos_rmse_m, p.recordings[2].error.before_pos_rmse_m);
+  for (const RecordingResult& r : p.recordings) {
+    EXPECT_TRUE(r.helped) << r.track;
+    ASSERT_FALSE(r.refit.empty()) << r.track << ": " << r.note;
+    EXPECT_NEAR(r.refit.front().value, 0.99, 0.003) << r.track;  // radius_error.scale_l alone
+  }
+  bool holds = false;
+  for (const std::string& c : p.consistency)
+    holds = holds || c.find("holds across recordings") != std::string::npos;
+  EXPECT_TRUE(holds);
+}
+
+TEST(Recordings, AChangedRobotDoesNotHoldAcrossRecordings) {
+  const PooledDiagnosis p = diagnose_recordings({recording(1621, 100, 0.99)}, {recording(1622, 100, 1.0)});
+  ASSERT_EQ(p.recordings.size(), 2u);
+  // The held-out recording has no radius error: the fitted one does not help it.
+  EXPECT_FALSE(p.recordings[1].helped);
+  EXPECT_GT(p.pooled.heldout.after_pos_rmse_m, p.pooled.heldout.before_pos_rmse_m);
+}
+
+}  // namespace
+}  // namespace odotune::diagnose

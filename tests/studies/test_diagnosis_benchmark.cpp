@@ -1,0 +1,494 @@
+// The random diagnosis benchmark (studies/diagnosis_*.h): the case generator
+// is deterministic per case seed and for any thread count, respects what each
+// effect needs and shapes every reference as asked; the grading rules on
+// hand-made diagnoses; the summary's counts; and one tiny end-to-end run
+// that writes consistent files.
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/failure.h"
+#include "studies/diagnosis_benchmark.h"
+#include "studies/diagnosis_benchmark_outputs.h"
+#include "studies/diagnosis_drives.h"
+#include "support/temp_dir.h"
+#include "tracks/effects.h"
+#include "tracks/motion_profile.h"
+#include "tracks/simulator.h"
+
+namespace odotune {
+namespace {
+
+CaseDrawOptions short_draws() {
+  CaseDrawOptions o;
+  o.min_minutes = 0.5, o.max_minutes = 1.0, o.max_rate_hz = 20.0;
+  return o;
+}
+
+bool same_track(const Track& a, const Track& b) {
+  const TrackData &x = a.data(), &y = b.data();
+  if (x.t != y.t || x.ticks_l != y.ticks_l || x.ticks_r != y.ticks_r) return false;
+  for (int k = 0; k < kNumCols; ++k) {
+    if (x.cols[k].size() != y.cols[k].size()) return false;
+    for (std::size_t i = 0; i < x.cols[k].size(); ++i) {
+      const double u = x.cols[k][i], v = y.cols[k][i];
+      if (!(u == v || (std::isnan(u) && std::isnan(v)))) return false;
+    }
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------- generator
+
+TEST(DiagnosisCases, SameSeedSameCaseAndTrackForAnyThreadCount) {
+  const CaseDrawOptions o = short_draws();
+  constexpr int kCases = 4;
+  std::vector<std::string> text[2];
+  std::vector<Track> tracks[2];
+  for (int run = 0; run < 2; ++run) {
+    text[run].resize(kCases);
+    std::vector<std::optional<Track>> t(kCases);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(run == 0 ? 1 : 2)
+    for (int i = 0; i < kCases; ++i) {
+      const DiagnosisCase c = draw_case(case_seed(77, i), i, o);
+      text[run][static_cast<std::size_t>(i)] = c.robot + "|" + c.drive + "|" + c.effects_text() + "|" +
+                                               std::string(to_string(c.reference)) + "|" +
+                                               std::string(to_string(c.odometry));
+      t[static_cast<std::size_t>(i)] = make_case_track(c).track;
+    }
+    for (auto& x : t) tracks[run].push_back(*x);
+  }
+  EXPECT_EQ(text[0], text[1]);
+  for (int i = 0; i < kCases; ++i) EXPECT_TRUE(same_track(tracks[0][i], tracks[1][i])) << "case " << i;
+  // A different seed gives different cases; case seeds differ per index.
+  EXPECT_NE(case_seed(77, 0), case_seed(77, 1));
+  EXPECT_NE(case_seed(77, 0), case_seed(78, 0));
+  const DiagnosisCase other = draw_case(case_seed(78, 0), 0, o);
+  EXPECT_NE(other.robot + other.drive, text[0][0].substr(0, other.robot.size() + other.drive.size() + 1));
+}
+
+TEST(DiagnosisCases, DrawsRespectWhatEachEffectNeeds) {
+  CaseDrawOptions o = short_draws();
+  o.min_minutes = 2.0, o.max_minutes = 4.0;
+  std::set<std::string> effects, references, odometries;
+  int counts[3] = {0, 0, 0};
+  constexpr int kDraws = 300;
+  for (int i = 0; i < kDraws; ++i) {
+    const DiagnosisCase c = draw_case(case_seed(5, i), i, o);
+    SCOPED_TRACE("case " + std::to_string(i) + ": " + c.effects_text());
+    ASSERT_LE(c.effects.size(), 2u);
+    ++counts[c.effects.size()];
+    references.insert(std::string(to_string(c.reference)));
+    odometries.insert(std::string(to_string(c.odometry)));
+    const double dur = sim::MotionProfile(c.scenario.motion).duration_s();
+    EXPECT_GE(dur, c.duration_s);
+    EXPECT_GE(c.duration_s, 120.0);
+    EXPECT_LE(c.duration_s, 240.0);
+    EXPECT_LE(c.odo_rate_hz, 20.0);
+    std::string why;
+    EXPECT_TRUE(sim::validate_scenario(c.scenario, &why)) << why;
+    EXPECT_EQ(sim::active_effects(c.scenario.effects).size(), c.effects.size());
+    for (const TrueEffect& e : c.effects) {
+      effects.insert(e.name);
+      if (e.name == "gyro_bias" || e.name == "gyro_scale") {
+        EXPECT_GT(c.gyro_rate_hz, 0.0);
+      }
+      if (e.name == "actuator_lag") {
+        EXPECT_EQ(c.odometry, BenchOdometry::commands);
+      }
+      if (e.name == "radius_step") {
+        EXPECT_GE(e.param("t"), 0.29 * c.duration_s);
+        EXPECT_LE(e.param("t"), 0.81 * c.duration_s);
+      }
+      if (e.name == "slip_zone") {
+        // The commanded path crosses the box on its first lap at least.
+        const PathSamples p = commanded_path(c.scenario.motion, 0.1);
+        int inside = 0;
+        for (std::size_t k = 0; k < p.t_s.size(); ++k)
+          inside += p.x_m[k] >= e.param("x0") && p.x_m[k] <= e.param("x1") && p.y_m[k] >= e.param("y0") &&
+                    p.y_m[k] <= e.param("y1");
+        EXPECT_GT(inside, 0);
+      }
+    }
+  }
+  // Every effect, every reference shape and odometry source occurs, in roughly
+  // the asked shares (1/3 each, +-0.1).
+  EXPECT_EQ(effects.size(), sim::effect_table().size());
+  EXPECT_EQ(references.size(), 5u);
+  EXPECT_EQ(odometries.size(), 3u);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(counts[k] / double(kDraws), 1.0 / 3.0, 0.1) << k << " effects";
+}
+
+TEST(DiagnosisCases, TracksHaveTheirReferenceShape) {
+  const CaseDrawOptions o = short_draws();
+  std::set<BenchReference> seen;
+  bool wheel_rates = false;
+  for (int i = 0; i < 200 && (seen.size() < 5 || !wheel_rates); ++i) {
+    const DiagnosisCase c = draw_case(case_seed(9, i), i, o);
+    if (seen.count(c.reference) && (wheel_rates || c.odometry != BenchOdometry::wheel_rates)) continue;
+    seen.insert(c.reference);
+    const CaseTrack ct = make_case_track(c);
+    const Track& t = ct.track;
+    SCOPED_TRACE(std::string(to_string(c.reference)));
+    EXPECT_FALSE(ct.path_x_m.empty());
+    std::vector<double> gt_t, fix_t;
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      if (t.at(Col::gt_x, k)) gt_t.push_back(t.t()[k]);
+      if (t.at(Col::aps_x, k)) fix_t.push_back(t.t()[k]);
+    }
+    if (c.odometry == BenchOdometry::wheel_rates) {
+      wheel_rates = true;
+      EXPECT_FALSE(t.has_ticks());
+      EXPECT_TRUE(t.has_wheel_rates());
+    }
+    switch (c.reference) {
+      case BenchReference::gt_full:
+        EXPECT_GT(gt_t.size(), 100u);
+        EXPECT_TRUE(fix_t.empty());
+        break;
+      case BenchReference::gt_gaps:
+        ASSERT_FALSE(c.gt_gaps_s.empty());
+        for (double x : gt_t)
+          for (const auto& [a, b] : c.gt_gaps_s) EXPECT_FALSE(x >= a && x < b) << x;
+        EXPECT_GT(gt_t.size(), 50u);
+        break;
+      case BenchReference::start_fixes:
+        ASSERT_EQ(gt_t.size(), 1u);
+        EXPECT_EQ(gt_t[0], t.t().front());
+        EXPECT_GT(fix_t.size(), 10u);
+        break;
+      case BenchReference::fixes:
+        EXPECT_FALSE(t.has_gt());
+        EXPECT_FALSE(t.meta().get("sim.gt_sigma_m").has_value());
+        EXPECT_GT(fix_t.size(), 10u);
+        break;
+      case BenchReference::fixes_irregular: {
+        EXPECT_FALSE(t.has_gt());
+        ASSERT_GT(fix_t.size(), 10u);
+        double lo = 1e9, hi = 0.0;
+        for (std::size_t k = 1; k < fix_t.size(); ++k)
+          lo = std::min(lo, fix_t[k] - fix_t[k - 1]), hi = std::max(hi, fix_t[k] - fix_t[k - 1]);
+        EXPECT_GT(hi, 2.0 * lo);  // irregular
+        const double mean = (fix_t.back() - fix_t.front()) / static_cast<double>(fix_t.size() - 1);
+        EXPECT_NEAR(mean * c.fix_rate_hz, 1.0, 0.35);
+        break;
+      }
+    }
+  }
+  EXPECT_EQ(seen.size(), 5u);
+  EXPECT_TRUE(wheel_rates);
+}
+
+// ---------------------------------------------------------------- grading
+
+TrueEffect effect(const std::string& name, std::vector<std::pair<std::string, double>> params) {
+  TrueEffect e;
+  e.name = name, e.params = std::move(params);
+  return e;
+}
+
+EffectTruth truth_of(TrueEffect e, bool detectable) {
+  EffectTruth t;
+  t.effect = std::move(e);
+  t.detectable = detectable;
+  t.gyro = t.effect.name == "gyro_bias" || t.effect.name == "gyro_scale";
+  return t;
+}
+
+diagnose::Finding finding(const std::string& name, std::vector<diagnose::NamedValue> params,
+                          double before = 0.2, double after = 0.1) {
+  diagnose::Finding f;
+  f.effect = name, f.params = std::move(params);
+  f.heldout = {before, after};
+  return f;
+}
+
+diagnose::Diagnosis diagnosis(std::vector<diagnose::Finding> findings, double before = 0.2,
+                              double after = 0.05) {
+  diagnose::Diagnosis d;
+  d.findings = std::move(findings);
+  d.heldout = {before, after};
+  return d;
+}
+
+const TruePath kNoPath;
+
+TEST(DiagnosisGrading, RightEffectWithinToleranceAndImprovedPasses) {
+  const std::vector<EffectTruth> truth = {truth_of(effect("lateral_skid", {{"k", 0.04}}), true)};
+  const CaseGrade g = grade_case(truth, diagnosis({finding("lateral_skid", {{"k", 0.045}})}), 0.4, kNoPath);
+  EXPECT_EQ(g.category, CaseCategory::single);
+  EXPECT_TRUE(g.pass) << g.why;
+  ASSERT_EQ(g.params.size(), 1u);
+  EXPECT_NEAR(g.params[0].tolerance, 0.01, 1e-12);
+  EXPECT_NEAR(g.params[0].normalised, 0.125, 1e-12);
+}
+
+TEST(DiagnosisGrading, ParameterOutOfToleranceFails) {
+  const std::vector<EffectTruth> truth = {truth_of(effect("lateral_skid", {{"k", 0.04}}), true)};
+  const CaseGrade g = grade_case(truth, diagnosis({finding("lateral_skid", {{"k", 0.0511}})}), 0.4, kNoPath);
+  EXPECT_FALSE(g.pass);
+  EXPECT_TRUE(g.named_ok);
+  EXPECT_FALSE(g.params_ok);
+  EXPECT_NE(g.why.find("lateral_skid.k"), std::string::npos) << g.why;
+}
+
+TEST(DiagnosisGrading, ExtraFindingFailsUnexplainedIncluded) {
+  const std::vector<EffectTruth> truth = {truth_of(effect("wheel_base_error", {{"scale", 1.02}}), true)};
+  for (const char* extra : {"unexplained", "time_offset"}) {
+    const CaseGrade g = grade_case(
+        truth, diagnosis({finding("wheel_base_error", {{"scale", 1.021}}), finding(extra, {})}), 0.4, kNoPath);
+    EXPECT_FALSE(g.pass) << extra;
+    EXPECT_EQ(g.extra, std::vector<std::string>{extra});
+    EXPECT_TRUE(g.params_ok);
+  }
+}
+
+TEST(DiagnosisGrading, NullCaseWithAnyFindingFailsAndWithoutPasses) {
+  const CaseGrade clean = grade_case({}, diagnosis({}), 0.4, kNoPath);
+  EXPECT_EQ(clean.category, CaseCategory::null_case);
+  EXPECT_TRUE(clean.pass);
+  const CaseGrade noisy = grade_case({}, diagnosis({finding("unexplained", {})}), 0.4, kNoPath);
+  EXPECT_FALSE(noisy.pass);
+  EXPECT_EQ(noisy.extra, std::vector<std::string>{"unexplained"});
+}
+
+TEST(DiagnosisGrading, UndetectableEffectsAreTolerated) {
+  // Two effects, one detectable: graded on it; naming the other is no error,
+  // missing it neither.
+  const std::vector<EffectTruth> truth = {truth_of(effect("gyro_bias", {{"b", 1e-4}}), false),
+                                          truth_of(effect("time_offset", {{"dt", 0.05}}), true)};
+  EXPECT_EQ(case_category(truth), CaseCategory::single);
+  EXPECT_TRUE(grade_case(truth, diagnosis({finding("time_offset", {{"dt", 0.052}})}), 0.4, kNoPath).pass);
+  EXPECT_TRUE(
+      grade_case(truth,
+                 diagnosis({finding("time_offset", {{"dt", 0.052}}), finding("gyro_bias", {{"b", 9e-3}})}), 0.4,
+                 kNoPath)
+          .pass);
+  const CaseGrade missed = grade_case(truth, diagnosis({finding("gyro_bias", {{"b", 1e-4}})}), 0.4, kNoPath);
+  EXPECT_FALSE(missed.pass);
+  EXPECT_EQ(missed.missed, std::vector<std::string>{"time_offset"});
+  const std::vector<EffectTruth> none_detectable = {truth_of(effect("gyro_bias", {{"b", 1e-4}}), false)};
+  EXPECT_EQ(case_category(none_detectable), CaseCategory::undetectable);
+}
+
+TEST(DiagnosisGrading, HeldOutMustImprove) {
+  const std::vector<EffectTruth> wheel = {
+      truth_of(effect("radius_error", {{"scale_l", 1.01}, {"scale_r", 1.0}}), true)};
+  const CaseGrade flat = grade_case(
+      wheel, diagnosis({finding("radius_error", {{"scale_l", 1.01}, {"scale_r", 1.0}})}, 0.1, 0.1), 0.4,
+      kNoPath);
+  EXPECT_FALSE(flat.pass);
+  EXPECT_FALSE(flat.heldout_ok);
+  // A gyro finding is proven by its own held-out numbers.
+  const std::vector<EffectTruth> gyro = {truth_of(effect("gyro_scale", {{"s", 1.01}}), true)};
+  EXPECT_FALSE(
+      grade_case(gyro, diagnosis({finding("gyro_scale", {{"s", 1.01}}, 0.3, 0.31)}), 0.4, kNoPath).pass);
+  EXPECT_TRUE(grade_case(gyro, diagnosis({finding("gyro_scale", {{"s", 1.01}}, 0.3, 0.2)}, 0.1, 0.1), 0.4,
+                         kNoPath)
+                  .pass);
+}
+
+TEST(DiagnosisGrading, ToleranceRulesForNoOpLikeParameters) {
+  // Scale pairs: 25 % of the larger departure, for the wheel that is not off too.
+  const TrueEffect re = effect("radius_error", {{"scale_l", 1.008}, {"scale_r", 1.0}});
+  EXPECT_NEAR(param_tolerance(re, "scale_l", 0.4), 0.002, 1e-12);
+  EXPECT_NEAR(param_tolerance(re, "scale_r", 0.4), 0.002, 1e-12);
+  // radius_step.t: 5 s.
+  const TrueEffect step = effect("radius_step", {{"t", 100}, {"scale_l", 0.99}, {"scale_r", 0.99}});
+  EXPECT_EQ(param_tolerance(step, "t", 0.4), 5.0);
+  const std::vector<EffectTruth> truth = {truth_of(step, true)};
+  EXPECT_TRUE(
+      grade_case(truth,
+                 diagnosis({finding("radius_step", {{"t", 104.5}, {"scale_l", 0.991}, {"scale_r", 0.9905}})}),
+                 0.4, kNoPath)
+          .pass);
+  EXPECT_FALSE(
+      grade_case(truth,
+                 diagnosis({finding("radius_step", {{"t", 105.5}, {"scale_l", 0.991}, {"scale_r", 0.9905}})}),
+                 0.4, kNoPath)
+          .pass);
+  // odometry_bias: the larger departure as a rim speed, max(|b_v|, |b_w| D/2).
+  const TrueEffect ob = effect("odometry_bias", {{"b_v", 0.0}, {"b_w", 0.01}});
+  EXPECT_NEAR(param_tolerance(ob, "b_v", 0.4), 0.25 * 0.002, 1e-12);
+  EXPECT_NEAR(param_tolerance(ob, "b_w", 0.4), 0.25 * 0.01, 1e-12);
+}
+
+TEST(DiagnosisGrading, SlipZoneBoxIsGradedByThePath) {
+  // A path along y = 0 from x = 0 to 10; the true box covers x in [4, 6].
+  TruePath path;
+  for (int i = 0; i <= 100; ++i) path.x_m.push_back(0.1 * i), path.y_m.push_back(0.0);
+  const TrueEffect zone = effect("slip_zone",
+                                 {{"x0", 4}, {"x1", 6}, {"y0", -0.5}, {"y1", 0.5}, {"s_l", 0.1}, {"s_r", 0.1}});
+  // Edges across the path are not determined: a much wider box that covers
+  // the same stretch of path is right.
+  EXPECT_NEAR(box_coverage(zone, 4.1, 6.1, -3, 3, path).covered, 20.0 / 21.0, 1e-9);
+  const std::vector<EffectTruth> truth = {truth_of(zone, true)};
+  auto found = [](double x0, double x1) {
+    return finding("slip_zone",
+                   {{"x0", x0}, {"x1", x1}, {"y0", -3}, {"y1", 3}, {"s_l", 0.105}, {"s_r", 0.095}});
+  };
+  EXPECT_TRUE(grade_case(truth, diagnosis({found(4.1, 6.1)}), 0.4, path).pass);
+  // Half the stretch missed, or twice as long: wrong.
+  EXPECT_FALSE(grade_case(truth, diagnosis({found(5.0, 6.0)}), 0.4, path).pass);
+  EXPECT_FALSE(grade_case(truth, diagnosis({found(3.0, 7.0)}), 0.4, path).pass);
+}
+
+TEST(DiagnosisGrading, RefusalFailsWithItsMessage) {
+  const std::vector<EffectTruth> truth = {truth_of(effect("lateral_skid", {{"k", 0.04}}), true)};
+  const CaseGrade g = grade_refusal(truth, "track 'x': 1 ground-truth sample(s)");
+  EXPECT_FALSE(g.pass);
+  EXPECT_TRUE(g.refused);
+  EXPECT_EQ(g.missed, std::vector<std::string>{"lateral_skid"});
+  EXPECT_NE(g.why.find("1 ground-truth sample"), std::string::npos);
+}
+
+// ---------------------------------------------------------------- summary
+
+CaseResult graded(std::vector<EffectTruth> truth, const diagnose::Diagnosis& d) {
+  CaseResult r;
+  r.truth.effects = truth;
+  r.grade = grade_case(truth, d, 0.4, kNoPath);
+  r.diagnose_s = 1.0;
+  return r;
+}
+
+TEST(DiagnosisBenchmarkSummary, CountsConfusionRecallAndPrecision) {
+  const EffectTruth skid = truth_of(effect("lateral_skid", {{"k", 0.04}}), true);
+  const EffectTruth lag = truth_of(effect("time_offset", {{"dt", 0.05}}), true);
+  std::vector<CaseResult> cases = {
+      graded({skid}, diagnosis({finding("lateral_skid", {{"k", 0.04}})})),          // right
+      graded({skid}, diagnosis({finding("wheel_base_error", {{"scale", 1.01}})})),  // confused
+      graded({skid, lag},
+             diagnosis({finding("lateral_skid", {{"k", 0.04}}), finding("time_offset", {{"dt", 0.05}})})),
+      graded({}, diagnosis({})),                            // null right
+      graded({}, diagnosis({finding("unexplained", {})})),  // null false finding
+  };
+  const BenchmarkSummary s = summarise(cases);
+  EXPECT_EQ(s.single.cases, 2);
+  EXPECT_EQ(s.single.passed, 1);
+  EXPECT_EQ(s.two.cases, 1);
+  EXPECT_EQ(s.two.passed, 1);
+  EXPECT_EQ(s.null_cases.cases, 2);
+  EXPECT_EQ(s.null_with_finding, 1);
+  EXPECT_EQ(s.all.cases, 5);
+  const Confusion& c = s.confusion;
+  auto at = [&](const std::string& row, const std::string& col) {
+    const auto r = std::find(c.rows.begin(), c.rows.end(), row) - c.rows.begin();
+    const auto k = std::find(c.cols.begin(), c.cols.end(), col) - c.cols.begin();
+    return c.counts[static_cast<std::size_t>(r)][static_cast<std::size_t>(k)];
+  };
+  EXPECT_EQ(at("lateral_skid", "lateral_skid"), 2);
+  EXPECT_EQ(at("lateral_skid", "wheel_base_error"), 1);
+  EXPECT_EQ(at("time_offset", "time_offset"), 1);
+  EXPECT_EQ(at("none", "none"), 1);
+  EXPECT_EQ(at("none", "unexplained"), 1);
+  int total = 0;
+  for (const auto& row : c.counts)
+    for (int v : row) total += v;
+  EXPECT_EQ(total, 6);
+  const auto skid_score = std::find_if(s.effects.begin(), s.effects.end(),
+                                       [](const EffectScore& e) { return e.effect == "lateral_skid"; });
+  ASSERT_NE(skid_score, s.effects.end());
+  EXPECT_EQ(skid_score->expected, 3);
+  EXPECT_NEAR(skid_score->recall(), 2.0 / 3.0, 1e-12);
+  EXPECT_NEAR(skid_score->precision(), 1.0, 1e-12);
+  EXPECT_EQ(s.failures.at("named a wrong effect"), 2);
+  EXPECT_EQ(s.failures.at("missed an effect"), 1);
+}
+
+// ---------------------------------------------------------------- end to end
+
+std::string read_file(const std::filesystem::path& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+TEST(DiagnosisBenchmarkRun, TinyRunWritesConsistentFiles) {
+  testing_support::TempDir dir;
+  DiagnosisBenchmarkRequest r;
+  r.out = (dir.path() / "bench").string();
+  r.keep_tracks = true;
+  r.options.cases = 2;
+  r.options.seed = 1002;  // a development seed
+  r.options.threads = 2;
+  r.options.draw = short_draws();
+  r.options.draw.max_minutes = 0.6;
+  const StudyRun run = run_diagnosis_benchmark_to_folder(r);
+  for (const char* f : {"cases.csv", "confusion.csv", "confusion.png", "confusion.svg", "summary.md"})
+    EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(r.out) / f)) << f;
+  EXPECT_EQ(run.files.size(), 5u);
+  for (int i = 0; i < 2; ++i)
+    EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(r.out) / "tracks" /
+                                        (std::string("case_000") + std::to_string(i) + ".csv")));
+  // cases.csv: a header and one row per case, each with the case's seed.
+  const std::string csv = read_file(std::filesystem::path(r.out) / "cases.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3);
+  for (int i = 0; i < 2; ++i)
+    EXPECT_NE(csv.find("\n" + std::to_string(i) + "," + std::to_string(case_seed(1002, i)) + ","),
+              std::string::npos);
+  // confusion.csv: 13 rows of 14 counts under a header; at least one count per case.
+  std::istringstream conf(read_file(std::filesystem::path(r.out) / "confusion.csv"));
+  std::string line;
+  std::getline(conf, line);
+  EXPECT_EQ(std::count(line.begin(), line.end(), ','), 14);
+  int rows = 0, total = 0;
+  while (std::getline(conf, line)) {
+    ++rows;
+    std::istringstream cells(line);
+    std::string cell;
+    std::getline(cells, cell, ',');
+    while (std::getline(cells, cell, ',')) total += std::stoi(cell);
+  }
+  EXPECT_EQ(rows, 13);
+  EXPECT_GE(total, 2);
+  const std::string md = read_file(std::filesystem::path(r.out) / "summary.md");
+  EXPECT_NE(md.find("## Against the aims"), std::string::npos);
+  EXPECT_NE(md.find("seed 1002"), std::string::npos);
+}
+
+TEST(DiagnosisBenchmarkRun, BadOptionsFailBeforeWork) {
+  DiagnosisBenchmarkOptions o;
+  std::string why;
+  o.cases = 0;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("cases"), std::string::npos);
+  o.cases = 1;
+  o.draw.max_minutes = 0.1;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("max_minutes"), std::string::npos);
+  o.draw = {};
+  o.draw.null_share = 0.8, o.draw.two_share = 0.5;
+  EXPECT_FALSE(o.IsValid(&why));
+  EXPECT_NE(why.find("two_share"), std::string::npos);
+  // The command's library call: one line, before any work, nothing written.
+  testing_support::TempDir dir;
+  DiagnosisBenchmarkRequest r;
+  r.out = (dir.path() / "out").string();
+  r.options = o;
+  EXPECT_THROW(run_diagnosis_benchmark_to_folder(r), Failure);
+  EXPECT_FALSE(std::filesystem::exists(r.out));
+  r.options = {};
+  r.out = (dir.path() / "file.txt").string();
+  std::ofstream(r.out) << "x";
+  try {
+    run_diagnosis_benchmark_to_folder(r);
+    ADD_FAILURE() << "an --out that is a file was accepted";
+  } catch (const Failure& e) {
+    EXPECT_NE(std::string(e.what()).find("not a folder"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace odotune
