@@ -186,10 +186,11 @@ class AnchorComposedCost : public ceres::CostFunction {
       const double lx = local[i].x, ly = local[i].y;
       const double val[3] = {a.x + c * lx - sn * ly, a.y + sn * lx + c * ly, a.th + local[i].th};
       const double ref[3] = {in.ref_x_m[g], in.ref_y_m[g], s_->heading ? in.ref_theta_rad[g] : 0.0};
-      const double inv[3] = {s_->inv_sigma_m, s_->inv_sigma_m, s_->inv_sigma_rad};
+      // Residual scaling: the same as Evaluate's (this sample's own sigma).
+      const double ism = s_->inv_sigma_m * std::sqrt(in.ref_weight(g));
+      const double inv[3] = {ism, ism, s_->inv_sigma_rad};
       for (int m = 0; m < comps; ++m)
-        res[i * static_cast<std::size_t>(comps) + static_cast<std::size_t>(m)] =  // scaled as in Evaluate
-
+        res[i * static_cast<std::size_t>(comps) + static_cast<std::size_t>(m)] =
             robustify(ceres::Jet<double, 1>((val[m] - ref[m]) * inv[m], 0), s_->loss, s_->c).a;
     }
     memo_key_ = std::move(key);
