@@ -143,6 +143,7 @@ CrossValidator::CrossValidator(const DiagInput& in, const FitOptions& fit, int f
 FitSummary CrossValidator::fit(const EffectSet& start, const std::vector<int>& train, int max_iterations) {
   FitOptions o = fit_;
   o.max_iterations = max_iterations;
+  o.standard_errors = false;  // the search reads costs and values only
   ++fits_;
   return fit_effects(model_for(start), *in_, start, train, {}, o);
 }
@@ -150,8 +151,17 @@ FitSummary CrossValidator::fit(const EffectSet& start, const std::vector<int>& t
 const EffectModel& CrossValidator::model_for(const EffectSet& set) {
   std::string key;
   for (int e = 0; e < kNumEffects; ++e) key += set.on(static_cast<Effect>(e)) ? '1' : '0';
+  {
+    const std::lock_guard<std::mutex> lock(models_mutex_);
+    const auto it = models_.find(key);
+    if (it != models_.end()) return *it->second;
+  }
+  // Built outside the lock (other threads keep fitting); two threads that
+  // build the same model keep the first, which equals the second.
+  auto built = std::make_unique<EffectModel>(*in_, set, fit_.model);
+  const std::lock_guard<std::mutex> lock(models_mutex_);
   auto& model = models_[key];
-  if (!model) model = std::make_unique<EffectModel>(*in_, set, fit_.model);
+  if (!model) model = std::move(built);
   return *model;
 }
 
@@ -192,25 +202,45 @@ void CrossValidator::finish(SetEval& e) const {
 
 SetEval CrossValidator::cross_validate(const EffectSet& structure, const std::vector<EffectSet>& warm,
                                        int max_iterations) {
-  SetEval e;
-  e.pred = empty_pred();
-  e.folds.resize(test_.size());
-  try {
-    for (std::size_t f = 0; f < test_.size(); ++f) {
+  return std::move(cross_validate_all({structure}, warm, max_iterations).front());
+}
+
+std::vector<SetEval> CrossValidator::cross_validate_all(
+    const std::vector<EffectSet>& structures, const std::vector<EffectSet>& warm, int max_iterations) {
+  const std::size_t n_sets = structures.size(), k = test_.size();
+  std::vector<SetEval> out(n_sets);
+  for (SetEval& e : out) {
+    e.pred = empty_pred();
+    e.folds.resize(k);
+  }
+  // One task per (set, fold): fit on the other folds, predict the fold's own
+  // windows (disjoint samples of the set's pred). Errors are kept per task
+  // and the first fold's reported, as a serial loop would.
+  std::vector<std::string> errors(n_sets * k);
+  const auto tasks = static_cast<long>(n_sets * k);
+#pragma omp parallel for schedule(dynamic, 1) if (tasks > 1)
+  for (long t = 0; t < tasks; ++t) {
+    const auto s = static_cast<std::size_t>(t) / k, f = static_cast<std::size_t>(t) % k;
+    const EffectSet& structure = structures[s];
+    SetEval& e = out[s];
+    try {
       if (structure.empty()) {
         e.folds[f] = structure;
       } else {
-        const EffectSet start = warm.size() == test_.size() ? start_from(structure, warm[f]) : structure;
+        const EffectSet start = warm.size() == k ? start_from(structure, warm[f]) : structure;
         e.folds[f] = fit(start, train_[f], max_iterations).effects;
       }
       predict(e.folds[f], test_[f], e.pred);
+    } catch (const std::exception& ex) {
+      errors[static_cast<std::size_t>(t)] = ex.what();
+      if (errors[static_cast<std::size_t>(t)].empty()) errors[static_cast<std::size_t>(t)] = "fit failed";
     }
-  } catch (const std::exception& ex) {
-    e.error = ex.what();
-    return e;
   }
-  finish(e);
-  return e;
+  for (std::size_t s = 0; s < n_sets; ++s) {
+    for (std::size_t f = 0; f < k && out[s].error.empty(); ++f) out[s].error = errors[s * k + f];
+    if (out[s].error.empty()) finish(out[s]);
+  }
+  return out;
 }
 
 SetEval CrossValidator::fit_all(const EffectSet& structure, const EffectSet& warm, int max_iterations) {

@@ -9,14 +9,24 @@
 //   and fit.use_heading), sigma = DiagInput::ref_sigma_*,
 // so reference noise alone scores about 2 (3 with heading) per sample.
 //
-// Fits are fit_effects() calls (counted in fits()); fits and replays reuse
-// one EffectModel per combination of active effects (building a model costs
-// far more than replaying it, and a model replays any parameter values).
+// Fits are fit_effects() calls (counted in fits()) without standard errors
+// (FitOptions::standard_errors off: the search reads costs and values);
+// fits and replays reuse one EffectModel per combination of active effects
+// (building a model costs far more than replaying it, and a model replays
+// any parameter values).
+//
+// Threads. fit(), model_for(), cross_validate(), fit_all() and own_noop()
+// may be called from several threads at once (the model cache is locked,
+// the fit count atomic, a built model is read only); cross_validate_all
+// runs its fold fits in parallel with OpenMP. Every fit is single-threaded
+// and deterministic, so results do not depend on the number of threads.
 // Windows are anchored as fit_anchoring(in, fit) says (window_replay.h).
 #pragma once
 
+#include <atomic>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -95,7 +105,7 @@ class CrossValidator {
   const std::vector<Window>& windows() const { return windows_; }
   int num_folds() const { return static_cast<int>(test_.size()); }
   std::size_t num_samples() const { return n_samples_; }
-  int fits() const { return fits_; }
+  int fits() const { return fits_.load(); }
 
   // fit_effects on `train` (empty = all windows) with max_iterations.
   FitSummary fit(const EffectSet& start, const std::vector<int>& train, int max_iterations);
@@ -108,6 +118,12 @@ class CrossValidator {
   // replayed as it is) and replayed on its own windows. Fit errors are
   // caught: ok = false with the message.
   SetEval cross_validate(const EffectSet& structure, const std::vector<EffectSet>& warm, int max_iterations);
+
+  // cross_validate of each set (same warm for all), the (set, fold) fits run
+  // in parallel (OpenMP): the same results as one call per set in turn, for
+  // any number of threads.
+  std::vector<SetEval> cross_validate_all(const std::vector<EffectSet>& structures,
+                                          const std::vector<EffectSet>& warm, int max_iterations);
 
   // Fitted on all windows from start_from(structure, warm), replayed on all.
   // bic = n ln(RSS/n) + p ln(n): n scored samples, RSS the normalised SSE,
@@ -152,7 +168,8 @@ class CrossValidator {
   double ism_ = 1.0, ish_ = 0.0;  // inverse reference sigmas
   int comps_ = 2;                 // error components per sample
   std::size_t n_samples_ = 0;
-  int fits_ = 0;
+  std::atomic<int> fits_{0};
+  std::mutex models_mutex_;  // guards models_ (model_for from several threads)
   std::map<std::string, std::unique_ptr<EffectModel>> models_;
 };
 

@@ -109,6 +109,7 @@ class AnchorComposedCost : public ceres::CostFunction {
     const std::size_t k = s_->free_pos.size(), n = w_.ref_end - w_.ref_begin;
     const Pose<double> a{blocks[1][0], blocks[1][1], blocks[1][2]};
     const bool want_p = jac && jac[0], want_a = jac && jac[1];
+    if (!want_p && !want_a) return evaluate_cost(blocks, a, res);
     using J = ceres::Jet<double, N>;
     std::vector<Pose<J>> local(n);
     {
@@ -157,8 +158,49 @@ class AnchorComposedCost : public ceres::CostFunction {
   }
 
  private:
+  // Residuals only (the solver's cost evaluations: trial steps, line
+  // search): the same replay in doubles, about N times cheaper than in jets
+  // whose derivatives nobody reads. The same arithmetic as the jets' values.
+  // The last cost evaluation is remembered: Ceres' projected line search
+  // evaluates the full trust-region step, and then the minimizer evaluates
+  // the same point again (ComputeCandidatePointAndEvaluateCost).
+  bool evaluate_cost(double const* const* blocks, const Pose<double>& a, double* res) const {
+    const std::size_t n = w_.ref_end - w_.ref_begin, k = s_->free_pos.size();
+    const int comps_n = s_->heading ? 3 : 2;
+    std::vector<double> key(blocks[0], blocks[0] + k);
+    key.insert(key.end(), blocks[1], blocks[1] + 3);
+    if (key == memo_key_) {
+      std::copy(memo_res_.begin(), memo_res_.end(), res);
+      return true;
+    }
+    std::vector<double> p = s_->all;
+    for (std::size_t j = 0; j < s_->free_pos.size(); ++j)
+      p[static_cast<std::size_t>(s_->free_pos[j])] = blocks[0][j];
+    std::vector<Pose<double>> local(n);
+    replay_window(*s_->model, p.data(), w_, Pose<double>{0.0, 0.0, 0.0}, s_->in->ref_t_s, local.data(), &a);
+    const double c = std::cos(a.th), sn = std::sin(a.th);
+    const DiagInput& in = *s_->in;
+    const int comps = s_->heading ? 3 : 2;
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t g = w_.ref_begin + i;
+      const double lx = local[i].x, ly = local[i].y;
+      const double val[3] = {a.x + c * lx - sn * ly, a.y + sn * lx + c * ly, a.th + local[i].th};
+      const double ref[3] = {in.ref_x_m[g], in.ref_y_m[g], s_->heading ? in.ref_theta_rad[g] : 0.0};
+      // Residual scaling: the same as Evaluate's (this sample's own sigma).
+      const double ism = s_->inv_sigma_m * std::sqrt(in.ref_weight(g));
+      const double inv[3] = {ism, ism, s_->inv_sigma_rad};
+      for (int m = 0; m < comps; ++m)
+        res[i * static_cast<std::size_t>(comps) + static_cast<std::size_t>(m)] =
+            robustify(ceres::Jet<double, 1>((val[m] - ref[m]) * inv[m], 0), s_->loss, s_->c).a;
+    }
+    memo_key_ = std::move(key);
+    memo_res_.assign(res, res + n * static_cast<std::size_t>(comps_n));
+    return true;
+  }
+
   const CostShared* s_;
   Window w_;
+  mutable std::vector<double> memo_key_, memo_res_;  // one problem, one thread (solver_options.h)
 };
 
 template <int Stride>
@@ -356,6 +398,12 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
   }
 
   ceres::Solver::Options so = diagnosis_solver_options(options.max_iterations);
+  // The bounds make Ceres run a projected Armijo line search on every trust
+  // region step; with cubic interpolation (the default) its first trial
+  // evaluates the Jacobian too, a second Jacobian per iteration. Quadratic
+  // interpolation needs the cost only (the step is the same whenever the
+  // full step satisfies Armijo, as it mostly does).
+  so.line_search_interpolation_type = ceres::QUADRATIC;
   if (sh.free_anchor && anchors.size() > 1) {
     // Each window's anchor meets only its own residuals: eliminate them
     // (Schur complement) and solve densely for the effect parameters; a
@@ -380,7 +428,7 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
 
   // Standard errors.
   std::vector<double> var(free_values.size(), std::nan(""));
-  {
+  if (options.standard_errors) {
     ceres::Covariance::Options co;
     co.algorithm_type = ceres::DENSE_SVD;
     co.num_threads = 1;
@@ -415,7 +463,7 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
     }
     out.params.push_back(p);
   }
-  if (!out.rank_deficient)
+  if (!out.rank_deficient && options.standard_errors)
     for (const FitParam& p : out.params)
       if (p.fitted && !std::isfinite(p.std_error)) out.rank_deficient = true;
   if (sh.free_anchor)

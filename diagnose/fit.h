@@ -40,7 +40,13 @@
 // the effect parameters only and composed with its anchor analytically
 // (a rigid motion), and the anchors, each meeting only its own window's
 // residuals, are eliminated by a Schur complement (DENSE_SCHUR): a dense QR
-// of the whole Jacobian would cost rows x (3 windows)^2.
+// of the whole Jacobian would cost rows x (3 windows)^2. Cost-only
+// evaluations (trial steps) replay in doubles, and a window remembers its
+// last one (Ceres' projected line search and the minimizer evaluate the same
+// trial point); the line search interpolates quadratically, so it needs no
+// Jacobian. Standard errors (a dense SVD over effect and anchor parameters,
+// rows x (3 windows)^2, i.e. quadratic in the track's length) are skipped
+// when FitOptions::standard_errors is off (the model search's fits).
 #pragma once
 
 #include <cstddef>
@@ -66,6 +72,11 @@ struct FitOptions {
   // truth): the anchor is then a nuisance pose, not one noisy sample
   // (window_replay.h). Off by default here; the model selection turns it on.
   bool free_anchor_with_heading = false;
+  // Standard errors (ceres::Covariance and the rank check, which cost about
+  // two Jacobian evaluations and a dense SVD per fit). Off for the fits of
+  // the model search, which read the cost and the values only: std_error is
+  // then NaN and rank_deficient false.
+  bool standard_errors = true;
   ModelOptions model;
   bool IsValid(std::string* why) const;
 };

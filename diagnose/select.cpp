@@ -23,6 +23,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kMaxCoarseSteps = 32.0;  // radius_step.t coarse grid (profile_step_time)
 
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
@@ -65,26 +66,39 @@ void fill(SearchRecord& r, const PairedComparison& p) {
 }
 
 // radius_step.t by profile search of the all-window fit cost (select.h).
+// The points of one grid level are fitted in parallel (OpenMP), each
+// warm-started from the same fit (the current set's, then the best point's
+// of the level before), so the result does not depend on the thread count.
 double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet& s_fitted, double prev_t,
                          const SelectOptions& o) {
-  const double coarse = o.step_coarse_s > 0.0 ? o.step_coarse_s : 0.5 * o.fit.window_s;
   const double lo = cv.windows().front().t_end_s;  // earlier, a step is a radius_error
+  const double span = cv.windows().back().t_end_s - lo;
+  // At most kMaxCoarseSteps coarse steps: on long tracks the coarse step
+  // grows with the track, so the count of fits (each costing the track's
+  // length) stays bounded and the search costs linear time.
+  const double coarse = std::max(o.step_coarse_s > 0.0 ? o.step_coarse_s : 0.5 * o.fit.window_s,
+                                 span / kMaxCoarseSteps);
   const double hi = cv.windows().back().t_end_s - 0.5 * coarse;
   if (!(hi > lo)) return kNaN;
   std::map<double, std::pair<double, EffectSet>> seen;  // t -> (cost, fitted)
-  EffectSet warm = s_fitted;
-  auto cost = [&](double t) {
-    t = std::clamp(t, lo, hi);
-    if (seen.count(t)) return;
-    EffectSet st = with_effect(s, Effect::radius_step);
-    st.set(Effect::radius_step, "t", t);
-    double v = kInf;
-    try {
-      const FitSummary f = cv.fit(start_from(st, warm), {}, o.profile_max_iterations);
-      if (std::isfinite(f.final_cost)) v = f.final_cost, warm = f.effects;
-    } catch (const std::exception&) {
+  // Fits the times not seen yet, all from `warm`.
+  auto costs = [&](std::vector<double> ts, const EffectSet& warm) {
+    for (double& t : ts) t = std::clamp(t, lo, hi);
+    std::sort(ts.begin(), ts.end());
+    ts.erase(std::unique(ts.begin(), ts.end()), ts.end());
+    std::erase_if(ts, [&](double t) { return seen.count(t) > 0; });
+    std::vector<std::pair<double, EffectSet>> res(ts.size(), {kInf, warm});
+#pragma omp parallel for schedule(dynamic, 1) if (ts.size() > 1)
+    for (std::size_t i = 0; i < ts.size(); ++i) {
+      EffectSet st = with_effect(s, Effect::radius_step);
+      st.set(Effect::radius_step, "t", ts[i]);
+      try {
+        const FitSummary f = cv.fit(start_from(st, warm), {}, o.profile_max_iterations);
+        if (std::isfinite(f.final_cost)) res[i] = {f.final_cost, f.effects};
+      } catch (const std::exception&) {
+      }
     }
-    seen[t] = {v, warm};
+    for (std::size_t i = 0; i < ts.size(); ++i) seen[ts[i]] = std::move(res[i]);
   };
   auto best_t = [&]() {
     double bt = kNaN, bc = kInf;
@@ -93,18 +107,26 @@ double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet
     return bt;
   };
   if (std::isfinite(prev_t)) {
-    cost(prev_t);
+    costs({prev_t}, s_fitted);
   } else {
-    for (double t = lo; t <= hi + 1e-9; t += coarse) cost(t);
+    std::vector<double> grid;
+    for (double t = lo; t <= hi + 1e-9; t += coarse) grid.push_back(t);
+    costs(grid, s_fitted);
   }
-  const double refine[2][2] = {{coarse / 5.0, std::isfinite(prev_t) ? 0.4 * coarse : 0.6 * coarse},
-                               {o.step_fine_s, coarse / 5.0}};  // {step, reach}
-  for (const auto& r : refine) {
+  // Refinement: steps of coarse/5 over +-0.6 coarse (+-0.4 from a previous
+  // time), then each level a fifth of the last step (at least step_fine_s)
+  // over +- the last step, down to step_fine_s.
+  double step = coarse / 5.0, reach = std::isfinite(prev_t) ? 0.4 * coarse : 0.6 * coarse;
+  for (;;) {
     const double centre = best_t();
     if (!std::isfinite(centre)) return kNaN;
-    warm = seen[centre].second;
-    const int k = static_cast<int>(std::floor(r[1] / r[0] + 1e-9));
-    for (int i = -k; i <= k; ++i) cost(centre + i * r[0]);
+    const int k = static_cast<int>(std::floor(reach / step + 1e-9));
+    std::vector<double> ts;
+    for (int i = -k; i <= k; ++i) ts.push_back(centre + i * step);
+    costs(ts, seen[centre].second);
+    if (step <= o.step_fine_s * (1.0 + 1e-9)) break;
+    reach = step;
+    step = std::max(o.step_fine_s, step / 5.0);
   }
   return best_t();
 }
@@ -159,6 +181,7 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
     SearchRecord rec;
   };
   std::vector<Cand> tried;
+  std::vector<double> t_cand;  // wall time of each candidate's discrete search
   for (Effect e : cands) {
     if (std::count(z.chosen.begin(), z.chosen.end(), e)) continue;
     const auto t0 = Clock::now();
@@ -177,18 +200,33 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
                                z.o.profile_max_iterations});
       if (cd.st.empty()) cd.rec.reason = "no candidate box";
     }
-    if (e == Effect::radius_step || e == Effect::slip_zone) z.sel.timing.discrete_s += since(t0);
-    if (cd.rec.reason.empty()) {
-      cd.rec.set = cd.st.to_string();
-      cd.cv = z.cv.cross_validate(cd.st, z.cur_cv.folds, z.o.cv_max_iterations);
-      if (cd.cv.ok)
-        fill(cd.rec, z.cv.compare(z.cur_cv, cd.cv, z.o.alpha));
-      else
-        cd.rec.reason = "fit failed: " + cd.cv.error;
-    }
-    fill(cd.rec, cd.cv);
-    cd.rec.time_s = since(t0);
+    t_cand.push_back(since(t0));
+    if (e == Effect::radius_step || e == Effect::slip_zone) z.sel.timing.discrete_s += t_cand.back();
     tried.push_back(std::move(cd));
+  }
+  // Every candidate's cross-validation at once: the (candidate, fold) fits
+  // run in parallel (CrossValidator::cross_validate_all); record times are
+  // the discrete search plus the candidate's share of the batch.
+  std::vector<EffectSet> sets;
+  std::vector<std::size_t> which;
+  for (std::size_t i = 0; i < tried.size(); ++i)
+    if (tried[i].rec.reason.empty()) sets.push_back(tried[i].st), which.push_back(i);
+  const auto t_batch = Clock::now();
+  std::vector<SetEval> evals = z.cv.cross_validate_all(sets, z.cur_cv.folds, z.o.cv_max_iterations);
+  const double share = sets.empty() ? 0.0 : since(t_batch) / static_cast<double>(sets.size());
+  for (std::size_t j = 0; j < which.size(); ++j) {
+    Cand& cd = tried[which[j]];
+    cd.rec.set = cd.st.to_string();
+    cd.cv = std::move(evals[j]);
+    if (cd.cv.ok)
+      fill(cd.rec, z.cv.compare(z.cur_cv, cd.cv, z.o.alpha));
+    else
+      cd.rec.reason = "fit failed: " + cd.cv.error;
+    t_cand[which[j]] += share;
+  }
+  for (std::size_t i = 0; i < tried.size(); ++i) {
+    fill(tried[i].rec, tried[i].cv);
+    tried[i].rec.time_s = t_cand[i];
   }
   // Candidates by CV score; the best few are judged in turn (select.h,
   // "Forward step"): the first that passes every rule is accepted.
@@ -220,11 +258,11 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
       if (!why.empty()) no = "its own parameters at their no-op values do as well: " + why;
     }
     best->rec.time_s += since(t0);
-    const std::string which = rank == 0 ? "best candidate"
+    const std::string label = rank == 0 ? "best candidate"
                                         : fmt::format("best candidate that passes (rank {})", rank + 1);
     if (no.empty()) {
       accepted = best->rec.accepted = true;
-      best->rec.reason = which + "; improves CV significantly and BIC agrees";
+      best->rec.reason = label + "; improves CV significantly and BIC agrees";
       // Confounded alternatives: candidates the winner does not beat by (a)-(b).
       for (Cand& cd : tried)
         if (cd.cv.ok && &cd != best && !verdict(z.cv.compare(cd.cv, best->cv, z.o.alpha), -1.0, z.o).empty())
@@ -272,21 +310,29 @@ bool pair_step(Search& z, int step, const std::vector<Effect>& cands) {
     SearchRecord rec;
   };
   std::vector<Cand> tried;
+  std::vector<EffectSet> sets;
   for (const auto& pr : kConditionPairs) {
     if (!usable(pr.first) || !usable(pr.second)) continue;
-    const auto t0 = Clock::now();
     Cand cd{pr, with_effect(with_effect(z.s, pr.first), pr.second), {}, {}};
     cd.rec.step = step, cd.rec.phase = "pair";
     cd.rec.candidate = fmt::format("{}+{}", effect_name(pr.first), effect_name(pr.second));
     cd.rec.set = cd.st.to_string();
-    cd.cv = z.cv.cross_validate(cd.st, z.cur_cv.folds, z.o.cv_max_iterations);
+    sets.push_back(cd.st);
+    tried.push_back(std::move(cd));
+  }
+  // All pairs' (pair, fold) fits in one parallel batch, as a forward step's.
+  const auto t_batch = Clock::now();
+  std::vector<SetEval> evals = z.cv.cross_validate_all(sets, z.cur_cv.folds, z.o.cv_max_iterations);
+  const double share = sets.empty() ? 0.0 : since(t_batch) / static_cast<double>(sets.size());
+  for (std::size_t i = 0; i < tried.size(); ++i) {
+    Cand& cd = tried[i];
+    cd.cv = std::move(evals[i]);
     if (cd.cv.ok)
       fill(cd.rec, z.cv.compare(z.cur_cv, cd.cv, z.o.alpha));
     else
       cd.rec.reason = "fit failed: " + cd.cv.error;
     fill(cd.rec, cd.cv);
-    cd.rec.time_s = since(t0);
-    tried.push_back(std::move(cd));
+    cd.rec.time_s = share;
   }
   Cand* best = nullptr;
   for (Cand& cd : tried)
@@ -338,14 +384,28 @@ bool backward_round(Search& z, int round) {
     bool removable = false;
   };
   std::vector<Drop> drops;
+  const auto t0 = Clock::now();
+  std::vector<EffectSet> sets;
   for (Effect e : z.chosen) {
-    const auto t0 = Clock::now();
     Drop d{e, z.s, {}, {}, {}, false};
     d.st.disable(e);
     d.rec.step = round, d.rec.phase = "backward", d.rec.candidate = effect_name(e);
     d.rec.set = d.st.to_string();
-    d.cv = z.cv.cross_validate(d.st, z.cur_cv.folds, z.o.cv_max_iterations);
+    sets.push_back(d.st);
+    drops.push_back(std::move(d));
+  }
+  // All removals cross-validated at once, then their all-window fits, in
+  // parallel (CrossValidator is thread-safe; results independent of threads).
+  std::vector<SetEval> evals = z.cv.cross_validate_all(sets, z.cur_cv.folds, z.o.cv_max_iterations);
+  const auto n_drops = static_cast<long>(drops.size());
+#pragma omp parallel for schedule(dynamic, 1) if (n_drops > 1)
+  for (long i = 0; i < n_drops; ++i) {
+    Drop& d = drops[static_cast<std::size_t>(i)];
+    d.cv = std::move(evals[static_cast<std::size_t>(i)]);
     if (d.cv.ok) d.full = z.cv.fit_all(d.st, z.cur_full.fitted, z.o.cv_max_iterations);
+  }
+  const double share = drops.empty() ? 0.0 : since(t0) / static_cast<double>(drops.size());
+  for (Drop& d : drops) {
     fill(d.rec, d.cv);
     if (d.cv.ok && d.full.ok) {
       const PairedComparison p = z.cv.compare(d.cv, z.cur_cv, z.o.alpha);  // keeping e vs dropping it
@@ -368,8 +428,7 @@ bool backward_round(Search& z, int round) {
     } else {
       d.rec.reason = "fit without it failed: " + d.cv.error + d.full.error;
     }
-    d.rec.time_s = since(t0);
-    drops.push_back(std::move(d));
+    d.rec.time_s = share;
   }
   Drop* out = nullptr;
   for (Drop& d : drops)
@@ -473,16 +532,29 @@ void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vecto
   const double ism = 1.0 / fit_in.ref_sigma_m, ish = heading ? 1.0 / fit_in.ref_sigma_rad : 0.0;
   const double base = summary_sse(sel.final_fit.train, fw, heading, ism, ish, false);
   const double with_all = summary_sse(sel.final_fit.train, fw, heading, ism, ish, true);
-  for (Effect e : chosen) {
+  // The refits without each effect, in parallel (training scores only: no standard errors).
+  std::vector<double> sse(chosen.size(), base);
+  FitOptions fo = o.fit;
+  fo.standard_errors = false;
+  const auto n_chosen = static_cast<long>(chosen.size());
+  std::vector<std::exception_ptr> failed(chosen.size());  // rethrown in order, outside the threads
+#pragma omp parallel for schedule(dynamic, 1) if (n_chosen > 1)
+  for (long i = 0; i < n_chosen; ++i) {
     EffectSet without = s;
-    without.disable(e);
-    double sse = base;
-    if (!without.empty()) {
-      ++sel.timing.fits;
-      sse = summary_sse(fit_effects(fit_in, without, sel.train_windows, {}, o.fit).train, fw, heading, ism, ish,
-                        true);
+    without.disable(chosen[static_cast<std::size_t>(i)]);
+    try {
+      if (!without.empty())
+        sse[static_cast<std::size_t>(i)] = summary_sse(
+            fit_effects(fit_in, without, sel.train_windows, {}, fo).train, fw, heading, ism, ish, true);
+    } catch (...) {
+      failed[static_cast<std::size_t>(i)] = std::current_exception();
     }
-    sel.effects.push_back({e, base > 0.0 ? std::clamp((sse - with_all) / base, 0.0, 1.0) : 0.0, {}});
+  }
+  for (const std::exception_ptr& f : failed)
+    if (f) std::rethrow_exception(f);
+  for (std::size_t i = 0; i < chosen.size(); ++i) {
+    if (chosen.size() > 1) ++sel.timing.fits;
+    sel.effects.push_back({chosen[i], base > 0.0 ? std::clamp((sse[i] - with_all) / base, 0.0, 1.0) : 0.0, {}});
   }
   std::stable_sort(sel.effects.begin(), sel.effects.end(),
                    [](const SelectedEffect& a, const SelectedEffect& b) { return a.explains > b.explains; });

@@ -120,17 +120,25 @@
 // Discrete parameters, chosen on all windows before cross-validation (so
 // the held-out fold saw the choice of one or four numbers; BIC counts them):
 //  * radius_step.t: profile search of the robust fit cost (fit_effects'
-//    final cost, profile_max_iterations, warm-started along the search) over
-//    [end of the first window, end of the last - coarse/2] (earlier, a step
-//    is a radius_error): a grid of coarse = step_coarse_s (window_s/2 by
-//    default), then +-0.6 coarse in steps of coarse/5, then +-coarse/5 in
-//    steps of step_fine_s. After the first search, later forward steps
-//    start from the previous time and refine +-0.4 coarse, then finely.
+//    final cost, profile_max_iterations) over [end of the first window, end
+//    of the last - coarse/2] (earlier, a step is a radius_error): a grid of
+//    coarse = step_coarse_s (window_s/2 by default), but at least 1/32 of
+//    that span (so the number of fits, each as long as the track, does not
+//    grow with it: the search costs linear time), then +-0.6 coarse in steps
+//    of coarse/5, then each level +- the last step in steps of a fifth of
+//    it (at least step_fine_s) down to step_fine_s (with the default coarse
+//    step: +-coarse/5 in steps of step_fine_s). The points of a level are
+//    fitted in parallel, all warm-started from the same fit (the current
+//    set's for the coarse grid, then the best point's so far). After the
+//    first search, later forward steps start from the previous time and
+//    refine +-0.4 coarse, then finely.
 //  * slip_zone box (choose_zone_box, zone_boxes.h): zone_candidates on the all-window
 //    residuals of the current set, plus SelectOptions::zone_boxes (e.g. from
 //    locate.h); each box is fitted (s_l, s_r with S) on all windows, the
 //    lowest cost wins, and its edges are refined by coordinate search on the
-//    fit cost in steps of zone_cell_m/2 then /4 (up to 4 rounds each),
+//    fit cost in steps of zone_cell_m/2 then /4 (up to 4 rounds each,
+//    first improvement in edge order; the moves are fitted speculatively
+//    in parallel, zone_boxes.h),
 //    unless its fitted slips are both below 0.01 (a box from noise). Edges
 //    across which the robot never drives are not determined by the data
 //    (typically the two sides of a path that runs through the patch): each
@@ -162,7 +170,14 @@
 // all) / baseline training SSE (normalised; the set without it refitted on
 // the same training windows).
 //
-// Deterministic (no randomness). Logs are data: Selection::records.
+// Deterministic (no randomness); parallel with OpenMP where fits are
+// independent (the candidates of a forward step and their folds, one batch
+// of CrossValidator::cross_validate_all that the rules read afterwards; the
+// backward removals; grid points; boxes), each fit single-
+// threaded and started from values fixed before the parallel batch, so the
+// results are the same for any number of threads. Logs are data:
+// Selection::records (time_s of a candidate: its discrete search plus an
+// equal share of its step's parallel batch).
 #pragma once
 
 #include <string>

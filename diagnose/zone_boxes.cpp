@@ -199,30 +199,54 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
   EffectSet best, best_fit;
   ZoneBox bb;
   double best_cost = kInf;
-  for (const ZoneBox& b : boxes) {
-    double cost;
-    EffectSet fitted;
-    const EffectSet st = try_box(b, cost, fitted);
-    if (cost < best_cost) best_cost = cost, best = st, best_fit = fitted, bb = b;
+  {  // every candidate box from the same start, in parallel; the first lowest cost wins
+    std::vector<double> costs(boxes.size(), kInf);
+    std::vector<EffectSet> sets(boxes.size()), fits(boxes.size());
+#pragma omp parallel for schedule(dynamic, 1) if (boxes.size() > 1)
+    for (std::size_t i = 0; i < boxes.size(); ++i) sets[i] = try_box(boxes[i], costs[i], fits[i]);
+    for (std::size_t i = 0; i < boxes.size(); ++i)
+      if (costs[i] < best_cost) best_cost = costs[i], best = sets[i], best_fit = fits[i], bb = boxes[i];
   }
   if (best.empty() ||
       std::max(best_fit.get(Effect::slip_zone, "s_l"), best_fit.get(Effect::slip_zone, "s_r")) < kMinZoneSlip)
     return best;
   warm = best_fit;
+  // Coordinate search, first improvement in the order (edge, sign). The
+  // moves left in a round are fitted speculatively in parallel from the
+  // current box and warm start; the first that improves is taken and the
+  // moves after it are fitted again from the new box: the same boxes, starts
+  // and results as one move at a time, for any number of threads.
+  struct Move {
+    int edge;
+    double sign;
+  };
   for (double step : {0.5 * o.cell_m, 0.25 * o.cell_m})
     for (int round = 0, moved = 1; moved && round < 4; ++round) {
       moved = 0;
+      std::vector<Move> left;
       for (int edge = 0; edge < 4; ++edge)
-        for (double sign : {-1.0, 1.0}) {
+        for (double sign : {-1.0, 1.0}) left.push_back({edge, sign});
+      while (!left.empty()) {
+        std::vector<ZoneBox> qs;
+        for (const Move& m : left) {
           ZoneBox q = bb;
           double* v[4] = {&q.x0_m, &q.x1_m, &q.y0_m, &q.y1_m};
-          *v[edge] += sign * step;
-          if (!(q.x0_m < q.x1_m && q.y0_m < q.y1_m)) continue;
-          double cost;
-          EffectSet fitted;
-          const EffectSet st = try_box(q, cost, fitted);
-          if (cost < best_cost * (1.0 - 1e-6)) best_cost = cost, best = st, bb = q, warm = fitted, moved = 1;
+          *v[m.edge] += m.sign * step;
+          qs.push_back(q);
         }
+        std::vector<double> costs(qs.size(), kInf);
+        std::vector<EffectSet> sets(qs.size()), fits(qs.size());
+        // try_box reads `warm`, which no task writes.
+#pragma omp parallel for schedule(dynamic, 1) if (qs.size() > 1)
+        for (std::size_t i = 0; i < qs.size(); ++i)
+          if (qs[i].x0_m < qs[i].x1_m && qs[i].y0_m < qs[i].y1_m) sets[i] = try_box(qs[i], costs[i], fits[i]);
+        std::size_t taken = qs.size();
+        for (std::size_t i = 0; i < qs.size() && taken == qs.size(); ++i)
+          if (costs[i] < best_cost * (1.0 - 1e-6)) taken = i;
+        if (taken == qs.size()) break;
+        best_cost = costs[taken], best = sets[taken], bb = qs[taken], warm = fits[taken], moved = 1;
+        left.erase(left.begin(), left.begin() + static_cast<long>(taken) + 1);
+      }
     }
   // Undetermined edges (select.h): each edge in turn is moved out to the
   // isotropic patch, by the whole way, else half or a quarter of it, kept
@@ -235,19 +259,27 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
     double* v[4] = {&bb.x0_m, &bb.x1_m, &bb.y0_m, &bb.y1_m};
     const double target = edge % 2 == 0 ? std::min(*v[edge], c - 0.5 * side)
                                         : std::max(*v[edge], c + 0.5 * side);
-    for (double frac : {1.0, 0.5, 0.25}) {
-      if (!(std::abs(target - *v[edge]) > 0.25 * o.cell_m)) break;
-      ZoneBox q = bb;
-      double* qv[4] = {&q.x0_m, &q.x1_m, &q.y0_m, &q.y1_m};
-      *qv[edge] += frac * (target - *v[edge]);
-      double cost;
-      EffectSet fitted;
-      const EffectSet st = try_box(q, cost, fitted);
-      if (cost <= ref_cost + kFlatCost) {
-        best = st, bb = q;
+    if (!(std::abs(target - *v[edge]) > 0.25 * o.cell_m)) continue;
+    // The whole and half way fitted at once (parallel), then the quarter
+    // way if neither stays flat; the first that stays flat is kept.
+    const double fracs[3] = {1.0, 0.5, 0.25};
+    ZoneBox qs[3];
+    double costs[3] = {kInf, kInf, kInf};
+    EffectSet sets[3], fits[3];
+    for (int i = 0; i < 3; ++i) {
+      qs[i] = bb;
+      double* qv[4] = {&qs[i].x0_m, &qs[i].x1_m, &qs[i].y0_m, &qs[i].y1_m};
+      *qv[edge] += fracs[i] * (target - *v[edge]);
+    }
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int i = 0; i < 2; ++i) sets[i] = try_box(qs[i], costs[i], fits[i]);
+    if (!(costs[0] <= ref_cost + kFlatCost || costs[1] <= ref_cost + kFlatCost))
+      sets[2] = try_box(qs[2], costs[2], fits[2]);
+    for (int i = 0; i < 3; ++i)
+      if (costs[i] <= ref_cost + kFlatCost) {
+        best = sets[i], bb = qs[i];
         break;
       }
-    }
   }
   return best;
 }

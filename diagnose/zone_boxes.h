@@ -68,7 +68,11 @@ struct ZoneSearchOptions {
 // with s, warm-started from cur_full.fitted) on all of cv's windows and the
 // lowest fit cost wins. Unless its slips both stay below 0.01 (a box from
 // noise), its edges are then refined by coordinate search on the fit cost
-// in steps of cell_m/2 then cell_m/4 (up to 4 rounds each), and the edges
+// in steps of cell_m/2 then cell_m/4 (up to 4 rounds each; a round moves
+// each edge out and in, in order, keeping each move that lowers the cost;
+// the remaining moves are fitted speculatively in parallel from the current
+// box, and those after a kept move fitted again, so the result is that of
+// one move at a time for any number of threads), and the edges
 // the data does not determine are set by the isotropic-patch convention of
 // select.h (moved out to the square centred on the inside samples whose
 // side is the box's larger extent, or half or a quarter of the way, where
