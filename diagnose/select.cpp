@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <initializer_list>
 #include <limits>
 #include <map>
 #include <stdexcept>
@@ -172,6 +173,31 @@ struct Search {
   double floor_m = 0.0;        // materiality floor (rule (e)) [m]
 };
 
+// Rules (a)-(e) of a candidate set `cv` (its effects `added`) against the
+// current set: fits it on all windows (BIC, into rec), then asks each added
+// effect's own parameters to matter (rule (d)). "" when it passes; `full`
+// receives the all-window fit.
+std::string judge(Search& z, const EffectSet& st, const SetEval& cv, std::initializer_list<Effect> added,
+                  SearchRecord& rec, SetEval& full) {
+  full = z.cv.fit_all(st, z.cur_full.fitted, z.o.cv_max_iterations);
+  rec.bic = full.ok ? full.bic : kNaN;
+  rec.delta_bic = full.ok ? full.bic - z.cur_full.bic : kNaN;
+  if (!full.ok) return "fit on all windows failed: " + full.error;
+  std::string no = verdict(z.cv.compare(z.cur_cv, cv, z.o.alpha), rec.delta_bic, z.o,
+                           removed_error_m(z.cur_cv.pos_rmse_m, cv.pos_rmse_m), z.floor_m);
+  for (Effect e : added) {  // each new effect itself must matter (actuator_lag's no-op is another source)
+    if (!no.empty()) break;
+    const SetEval own = z.cv.own_noop(cv, e);
+    const std::string why = own.ok ? verdict(z.cv.compare(own, cv, z.o.alpha), -1.0, z.o,
+                                             removed_error_m(own.pos_rmse_m, cv.pos_rmse_m), z.floor_m)
+                                   : own.error;
+    if (!why.empty())
+      no = added.size() == 1 ? "its own parameters at their no-op values do as well: " + why
+                             : fmt::format("{} at its no-op values does as well: {}", effect_name(e), why);
+  }
+  return no;
+}
+
 // One forward step; true when a candidate was accepted.
 bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
   struct Cand {
@@ -244,19 +270,8 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
       continue;
     }
     const auto t0 = Clock::now();
-    SetEval full = z.cv.fit_all(best->st, z.cur_full.fitted, z.o.cv_max_iterations);
-    best->rec.bic = full.ok ? full.bic : kNaN;
-    best->rec.delta_bic = full.ok ? full.bic - z.cur_full.bic : kNaN;
-    std::string no = full.ok ? verdict(z.cv.compare(z.cur_cv, best->cv, z.o.alpha), best->rec.delta_bic, z.o,
-                                       removed_error_m(z.cur_cv.pos_rmse_m, best->cv.pos_rmse_m), z.floor_m)
-                             : "fit on all windows failed: " + full.error;
-    if (no.empty()) {  // the new effect itself must matter (actuator_lag's no-op is another source)
-      const SetEval own = z.cv.own_noop(best->cv, best->e);
-      const std::string why = own.ok ? verdict(z.cv.compare(own, best->cv, z.o.alpha), -1.0, z.o,
-                                               removed_error_m(own.pos_rmse_m, best->cv.pos_rmse_m), z.floor_m)
-                                     : own.error;
-      if (!why.empty()) no = "its own parameters at their no-op values do as well: " + why;
-    }
+    SetEval full;
+    const std::string no = judge(z, best->st, best->cv, {best->e}, best->rec, full);
     best->rec.time_s += since(t0);
     const std::string label = rank == 0 ? "best candidate"
                                         : fmt::format("best candidate that passes (rank {})", rank + 1);
@@ -343,20 +358,8 @@ bool pair_step(Search& z, int step, const std::vector<Effect>& cands) {
       if (cd.cv.ok && &cd != best)
         cd.rec.reason = fmt::format("not the best pair (CV {:.4g} vs {:.4g})", cd.cv.score, best->cv.score);
     const auto t0 = Clock::now();
-    SetEval full = z.cv.fit_all(best->st, z.cur_full.fitted, z.o.cv_max_iterations);
-    best->rec.bic = full.ok ? full.bic : kNaN;
-    best->rec.delta_bic = full.ok ? full.bic - z.cur_full.bic : kNaN;
-    std::string no = full.ok ? verdict(z.cv.compare(z.cur_cv, best->cv, z.o.alpha), best->rec.delta_bic, z.o,
-                                       removed_error_m(z.cur_cv.pos_rmse_m, best->cv.pos_rmse_m), z.floor_m)
-                             : "fit on all windows failed: " + full.error;
-    for (Effect e : {best->p.first, best->p.second}) {
-      if (!no.empty()) break;
-      const SetEval own = z.cv.own_noop(best->cv, e);
-      const std::string why = own.ok ? verdict(z.cv.compare(own, best->cv, z.o.alpha), -1.0, z.o,
-                                               removed_error_m(own.pos_rmse_m, best->cv.pos_rmse_m), z.floor_m)
-                                     : own.error;
-      if (!why.empty()) no = fmt::format("{} at its no-op values does as well: {}", effect_name(e), why);
-    }
+    SetEval full;
+    const std::string no = judge(z, best->st, best->cv, {best->p.first, best->p.second}, best->rec, full);
     best->rec.time_s += since(t0);
     if (no.empty()) {
       accepted = best->rec.accepted = true;
