@@ -210,5 +210,37 @@ TEST(CliDiagnose, RealOptiOdomRunNamesTheWheelBaseAndImprovesHeldOut) {
             0.8 * j.at("heldout").at("before_pos_rmse_m").get<double>());
 }
 
+// Issue 15, several recordings: two OptiOdom runs of one robot, one fitted
+// and one held out; one JSON document with the spec's keys and a `tracks`
+// list; a recording of another robot is refused in one line, no file.
+TEST(CliDiagnose, SeveralRecordingsFitOneProveOnAnotherInOneDocument) {
+  testing_support::TempDir dir;
+  const std::string base = std::string(ODOTUNE_SHARED_DIR) + "/data/real/optiodom_diff/free/030120210001/";
+  const std::string a = (dir.path() / "a.csv").string(), b = (dir.path() / "b.csv").string();
+  ASSERT_EQ(run_cli("import optiodom " + base + "030120210001_run-01.csv -o " + a).exit_code, 0);
+  ASSERT_EQ(run_cli("import optiodom " + base + "030120210001_run-02.csv -o " + b).exit_code, 0);
+  const std::string out = (dir.path() / "d.json").string();
+  const auto r = run_cli("diagnose " + a + " --heldout " + b + " --json " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("[held out]"));
+  const json j = json::parse(slurp(out));
+  expect_spec_document(j);
+  ASSERT_EQ(j.at("tracks").size(), 2u);
+  EXPECT_EQ(j.at("tracks")[0].at("role"), "fit");
+  EXPECT_EQ(j.at("tracks")[1].at("role"), "heldout");
+  EXPECT_EQ(j.at("heldout_from"), "heldout recordings");
+  // The pooled held-out numbers are the held-out recording's own.
+  EXPECT_DOUBLE_EQ(j.at("heldout").at("before_pos_rmse_m").get<double>(),
+                   j.at("tracks")[1].at("error").at("before_pos_rmse_m").get<double>());
+
+  const std::string other = simulate(dir, "other", "");  // another robot (scenarios/track2.yaml)
+  const std::string bad = (dir.path() / "bad.json").string();
+  const auto e = run_cli("diagnose " + a + " --heldout " + other + " --json " + bad);
+  EXPECT_NE(e.exit_code, 0);
+  EXPECT_THAT(e.err, HasSubstr("not of the robot"));
+  EXPECT_EQ(std::count(e.err.begin(), e.err.end(), '\n'), 1) << e.err;
+  EXPECT_FALSE(std::filesystem::exists(bad));
+}
+
 }  // namespace
 }  // namespace odotune
