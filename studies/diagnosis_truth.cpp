@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "diagnose/effect_model.h"
+#include "diagnose/gyro_heading_input.h"
 #include "diagnose/select.h"
 #include "diagnose/series_interp.h"
 #include "diagnose/window_replay.h"
@@ -41,35 +42,6 @@ EffectSet wheel_set(const std::vector<TrueEffect>& truth, const std::string& wit
     for (const auto& [name, v] : e.params) set.set(id, name, v);
   }
   return set;
-}
-
-// Dead reckoning with the wheels' nominal travel and the gyro's heading as a
-// body_velocity input: the same construction as gyro_heading_input() in
-// diagnose/diagnosis.cpp (not exported there), so that replaying it with the
-// nominal model is what the diagnosis replays to prove a gyro finding.
-DiagInput gyro_heading_input(const DiagInput& in, double bias_radps, double scale) {
-  DiagInput g = in;
-  const std::vector<double>& t = in.odo_t_s;
-  const bool wheels = in.odometry == diagnose::OdometryKind::wheel_angles;
-  std::vector<double> s(t.size(), 0.0);
-  if (wheels)
-    for (std::size_t i = 0; i < t.size(); ++i)
-      s[i] = 0.5 * (in.radius_l_m * in.phi_l_rad[i] + in.radius_r_m * in.phi_r_rad[i]);
-  g.odometry = diagnose::OdometryKind::body_velocity;
-  g.v_mps.assign(t.size(), 0.0);
-  g.w_radps.assign(t.size(), 0.0);
-  for (std::size_t i = 0; i < t.size(); ++i) {
-    if (wheels) {
-      const std::size_t a = i == 0 ? 0 : i - 1, b = std::min(i + 1, t.size() - 1);
-      g.v_mps[i] = t[b] > t[a] ? (s[b] - s[a]) / (t[b] - t[a]) : 0.0;
-    } else {
-      g.v_mps[i] = in.v_mps[i];
-    }
-    const double gz = diagnose::interp_held(in.gyro_t_s, in.gyro_z_radps, t[i]);
-    g.w_radps[i] = diagnose::corrected_gyro_rate(gz, bias_radps, scale);
-  }
-  g.cmd_v_mps.clear(), g.cmd_w_radps.clear();
-  return g;
 }
 
 }  // namespace
@@ -137,15 +109,15 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
                                     [](const TrueEffect& e) { return is_gyro(e.name); });
   if (gyro && any_gyro) {
     gyro_floor = diagnose::materiality_floor_m(
-        in.ref_sigma_m, heldout_rmse(gyro_heading_input(scoring, 0.0, 1.0), body), materiality);
-    gyro_after = heldout_rmse(gyro_heading_input(scoring, bias, scale), body);
+        in.ref_sigma_m, heldout_rmse(diagnose::gyro_heading_input(scoring, 0.0, 1.0), body), materiality);
+    gyro_after = heldout_rmse(diagnose::gyro_heading_input(scoring, bias, scale), body);
   }
 
   for (EffectTruth& t : out.effects) {
     if (t.gyro) {
       if (!gyro) continue;
       const bool b = t.effect.name == "gyro_bias";
-      t.before_m = heldout_rmse(gyro_heading_input(scoring, b ? 0.0 : bias, b ? scale : 1.0), body);
+      t.before_m = heldout_rmse(diagnose::gyro_heading_input(scoring, b ? 0.0 : bias, b ? scale : 1.0), body);
       t.after_m = gyro_after;
       t.floor_m = gyro_floor;
     } else {
