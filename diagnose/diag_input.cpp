@@ -194,15 +194,13 @@ RefSource uncovered(const RefSource& fixes, const RefSource& gt) {
   return out;
 }
 
-void unwrap_into(const std::vector<double>& theta, std::vector<double>& out) {
-  out.resize(theta.size());
-  double offset = 0.0;
+// Unwraps headings in place: each step brought into (-pi, pi].
+void unwrap(std::vector<double>& theta) {
+  double offset = 0.0, prev = 0.0;
   for (std::size_t i = 0; i < theta.size(); ++i) {
-    if (i > 0) {
-      const double d = theta[i] + offset - out[i - 1];
-      offset -= kTwoPi * std::round(d / kTwoPi);
-    }
-    out[i] = theta[i] + offset;
+    const double raw = theta[i];
+    if (i > 0) offset -= kTwoPi * std::round((raw + offset - prev) / kTwoPi);
+    theta[i] = prev = raw + offset;
   }
 }
 
@@ -275,7 +273,7 @@ void estimate_sigmas(const DiagInput& in, const NominalPath& p, RefSource& s) {
 // Lays the sources out as the input's reference (header comment, "Reference").
 void assemble_reference(RefSource gt, RefSource fixes, DiagInput& in) {
   const NominalPath p = nominal_path(in);
-  if (gt.heading) unwrap_into(std::vector<double>(gt.theta), gt.theta);
+  if (gt.heading) unwrap(gt.theta);
   estimate_sigmas(in, p, gt);
   estimate_sigmas(in, p, fixes);
   // A source too small to estimate its own noise borrows the other's.

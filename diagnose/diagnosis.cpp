@@ -237,58 +237,53 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
 
   // Wheel-odometry findings (each material on the selection's cross-validated
   // held-out predictions: select.h rule (e) and its backward pass).
-  EffectSet wheel;
-  ReplayResult fin;
-  {
-    wheel = sel.fitted ? sel.final_fit.effects : nominal;
-    // Train / held-out split: the selection's, else its rule (last 30 %).
-    d.train_windows = sel.train_windows, d.heldout_windows = sel.heldout_windows;
-    if (!sel.fitted) {
-      d.train_windows.clear(), d.heldout_windows.clear();
-      const auto n = static_cast<int>(windows.size());
-      const int n_train = n - static_cast<int>(std::round(o.select.heldout_fraction * n));
-      for (int i = 0; i < n; ++i) (i < n_train ? d.train_windows : d.heldout_windows).push_back(i);
-    }
-    fin = replay(in, wheel, ws);
-    const ReplayResult fin_s = use_denoised ? replay(scoring, wheel, ws) : fin;
-    d.train = scores(base_s, fin_s, d.train_windows);
-    d.heldout = scores(base_s, fin_s, d.heldout_windows);
-    d.floor_m = materiality_floor_m(in.ref_sigma_m, d.heldout.before_pos_rmse_m, o.select.materiality);
-    d.findings.clear();
-    const std::vector<ParamSlot> layout = param_layout(wheel);
-    for (const SelectedEffect& se : sel.effects) {
-      Finding f;
-      f.effect = std::string(effect_name(se.effect));
-      for (std::size_t k = 0; k < layout.size(); ++k) {
-        const ParamSlot& slot = layout[k];
-        if (slot.effect != se.effect) continue;
-        const std::string name = param_short_name(slot.name);
-        f.params.push_back({name, wheel.params(se.effect)[static_cast<std::size_t>(slot.index)]});
-        double se_value = std::nan("");
-        if (slot.fitted) {
-          for (const FitParam& fp : sel.final_fit.params)
-            if (fp.name == slot.name) se_value = fp.std_error;
-        } else {
-          f.discrete.push_back(name);
-          se_value = se.effect == Effect::radius_step ? o.select.step_fine_s : o.select.zone_cell_m / 4.0;
-        }
-        f.stderrs.push_back({name, se_value});
+  const EffectSet wheel = sel.fitted ? sel.final_fit.effects : nominal;
+  // Train / held-out split: the selection's, else its rule (last 30 %).
+  d.train_windows = sel.train_windows, d.heldout_windows = sel.heldout_windows;
+  if (!sel.fitted) {
+    d.train_windows.clear(), d.heldout_windows.clear();
+    const auto n = static_cast<int>(windows.size());
+    const int n_train = n - static_cast<int>(std::round(o.select.heldout_fraction * n));
+    for (int i = 0; i < n; ++i) (i < n_train ? d.train_windows : d.heldout_windows).push_back(i);
+  }
+  const ReplayResult fin = replay(in, wheel, ws);
+  const ReplayResult fin_s = use_denoised ? replay(scoring, wheel, ws) : fin;
+  d.train = scores(base_s, fin_s, d.train_windows);
+  d.heldout = scores(base_s, fin_s, d.heldout_windows);
+  d.floor_m = materiality_floor_m(in.ref_sigma_m, d.heldout.before_pos_rmse_m, o.select.materiality);
+  const std::vector<ParamSlot> layout = param_layout(wheel);
+  for (const SelectedEffect& se : sel.effects) {
+    Finding f;
+    f.effect = std::string(effect_name(se.effect));
+    for (std::size_t k = 0; k < layout.size(); ++k) {
+      const ParamSlot& slot = layout[k];
+      if (slot.effect != se.effect) continue;
+      const std::string name = param_short_name(slot.name);
+      f.params.push_back({name, wheel.params(se.effect)[static_cast<std::size_t>(slot.index)]});
+      double se_value = std::nan("");
+      if (slot.fitted) {
+        for (const FitParam& fp : sel.final_fit.params)
+          if (fp.name == slot.name) se_value = fp.std_error;
+      } else {
+        f.discrete.push_back(name);
+        se_value = se.effect == Effect::radius_step ? o.select.step_fine_s : o.select.zone_cell_m / 4.0;
       }
-      EffectSet without = wheel;
-      without.disable(se.effect);
-      const ReplayResult wo_s = replay(scoring, without, ws);
-      f.train = scores(wo_s, fin_s, d.train_windows);
-      f.heldout = scores(wo_s, fin_s, d.heldout_windows);
-      f.explains = se.explains;
-      for (Effect r : se.rivals) f.rivals.emplace_back(effect_name(r));
-      f.evidence = "model selection: cross-validated over time blocks, fitted with Ceres";
-      const ReplayResult wo = replay(in, without, ws);
-      const Location loc = locate(residual_series(in, windows, wo), in.ref_sigma_m, o.locate);
-      f.segments = loc.segments, f.regions = loc.regions, f.conditions = loc.phrase;
-      if (f.segments.empty()) f.segments = helped_windows(wo, fin);
-      if (f.conditions.empty()) f.conditions = description(se.effect);
-      d.findings.push_back(std::move(f));
+      f.stderrs.push_back({name, se_value});
     }
+    EffectSet without = wheel;
+    without.disable(se.effect);
+    const ReplayResult wo_s = replay(scoring, without, ws);
+    f.train = scores(wo_s, fin_s, d.train_windows);
+    f.heldout = scores(wo_s, fin_s, d.heldout_windows);
+    f.explains = se.explains;
+    for (Effect r : se.rivals) f.rivals.emplace_back(effect_name(r));
+    f.evidence = "model selection: cross-validated over time blocks, fitted with Ceres";
+    const ReplayResult wo = replay(in, without, ws);
+    const Location loc = locate(residual_series(in, windows, wo), in.ref_sigma_m, o.locate);
+    f.segments = loc.segments, f.regions = loc.regions, f.conditions = loc.phrase;
+    if (f.segments.empty()) f.segments = helped_windows(wo, fin);
+    if (f.conditions.empty()) f.conditions = description(se.effect);
+    d.findings.push_back(std::move(f));
   }
   d.final_pos_rmse_m = fin.pos_rmse_m, d.final_heading_rmse_rad = fin.heading_rmse_rad;
   d.after = residual_series(in, windows, fin);

@@ -43,13 +43,9 @@ std::string short_name(const std::string& slot) { return slot.substr(slot.find('
 
 }  // namespace
 
-DiagInput concatenate(const std::vector<DiagInput>& parts, double gap_s, std::vector<double>* shifts) {
-  if (parts.empty()) throw std::invalid_argument("concatenate: no recording");
-  if (shifts) shifts->assign(parts.size(), 0.0);
-  if (parts.size() == 1) return parts.front();
+void check_one_robot(const std::vector<DiagInput>& parts) {
+  if (parts.empty()) return;
   const DiagInput& a = parts.front();
-  double sigma = a.ref_sigma_m;  // the pooled sigma: that of the recording with the most samples
-  std::size_t most = 0;
   for (const DiagInput& p : parts) {
     const auto bad = [&](const std::string& what) {
       throw std::invalid_argument(fmt::format("recording '{}' is not of the robot of '{}': {}", p.track_name,
@@ -62,8 +58,19 @@ DiagInput concatenate(const std::vector<DiagInput>& parts, double gap_s, std::ve
                       p.radius_r_m, p.wheel_base_m, a.radius_l_m, a.radius_r_m, a.wheel_base_m));
     if (p.has_ref_heading() != a.has_ref_heading()) bad("reference heading on one and not on the other");
     if (p.cmd_v_mps.empty() != a.cmd_v_mps.empty()) bad("commands on one and not on the other");
-    if (p.ref_t_s.size() > most) most = p.ref_t_s.size(), sigma = p.ref_sigma_m;
   }
+}
+
+DiagInput concatenate(const std::vector<DiagInput>& parts, double gap_s, std::vector<double>* shifts) {
+  if (parts.empty()) throw std::invalid_argument("concatenate: no recording");
+  if (shifts) shifts->assign(parts.size(), 0.0);
+  if (parts.size() == 1) return parts.front();
+  check_one_robot(parts);
+  const DiagInput& a = parts.front();
+  double sigma = a.ref_sigma_m;  // the pooled sigma: that of the recording with the most samples
+  std::size_t most = 0;
+  for (const DiagInput& p : parts)
+    if (p.ref_t_s.size() > most) most = p.ref_t_s.size(), sigma = p.ref_sigma_m;
   DiagInput c;
   c.track_name = a.track_name;
   for (std::size_t k = 1; k < parts.size(); ++k) c.track_name += " + " + parts[k].track_name;
@@ -113,7 +120,7 @@ PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std
   if (fit.empty()) throw std::invalid_argument("diagnose_recordings: no recording to fit on");
   std::vector<DiagInput> all = fit;
   all.insert(all.end(), heldout.begin(), heldout.end());
-  (void)concatenate(all, 1.0);  // one robot (throws otherwise)
+  check_one_robot(all);
   // Longer than any window the selection may choose (at most a third of the pooled span).
   double span = 0.0;
   for (const DiagInput& p : fit) span += p.odo_t_s.back() - p.odo_t_s.front();

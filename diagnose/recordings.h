@@ -58,10 +58,13 @@ struct PooledDiagnosis {
   std::vector<std::string> consistency;
 };
 
-// The recordings laid end to end (file comment). Throws std::invalid_argument
-// (one line naming the recording) when they are not of one robot: another
-// odometry kind, another nominal radius or wheel base (relative difference
-// above 1e-9), or reference heading on some and not on others.
+// Throws std::invalid_argument (one line naming the recording) when the
+// recordings are not of one robot: another odometry kind, another nominal
+// radius or wheel base (relative difference above 1e-9), reference heading or
+// commands on some and not on others.
+void check_one_robot(const std::vector<DiagInput>& parts);
+
+// The recordings laid end to end (file comment); throws as check_one_robot.
 // shifts (optional): per part, pooled time = its own time + shift [s].
 DiagInput concatenate(const std::vector<DiagInput>& parts, double gap_s, std::vector<double>* shifts = nullptr);
 

@@ -35,6 +35,7 @@
 // written verbatim, so surrounding blanks in them do not survive a re-read.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <filesystem>
 #include <iosfwd>
@@ -46,6 +47,16 @@
 #include "tracks/track.h"
 
 namespace odotune {
+
+// The metadata keys track-format.md defines (TrackMeta's own fields); every
+// other key is kept verbatim in TrackMeta::extra. Read and write share it.
+inline constexpr std::array<std::string_view, 7> kStandardMetaKeys = {"format",
+                                                                      "name",
+                                                                      "origin",
+                                                                      "robot.ticks_per_rev",
+                                                                      "robot.wheel_radius_left",
+                                                                      "robot.wheel_radius_right",
+                                                                      "robot.wheel_base"};
 
 class TrackError : public std::runtime_error {
  public:

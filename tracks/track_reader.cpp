@@ -260,14 +260,7 @@ class Parser {
   }
 
   void read_meta(std::string_view key, std::string_view value) {
-    static constexpr std::array<std::string_view, 7> kKnown = {"format",
-                                                               "name",
-                                                               "origin",
-                                                               "robot.ticks_per_rev",
-                                                               "robot.wheel_radius_left",
-                                                               "robot.wheel_radius_right",
-                                                               "robot.wheel_base"};
-    if (std::find(kKnown.begin(), kKnown.end(), key) == kKnown.end()) {
+    if (std::find(kStandardMetaKeys.begin(), kStandardMetaKeys.end(), key) == kStandardMetaKeys.end()) {
       data_.meta.extra.emplace_back(std::string(key), std::string(value));
       return;
     }

@@ -29,14 +29,6 @@ namespace odotune {
 
 namespace {
 
-constexpr std::array<std::string_view, 7> kKnownKeys = {"format",
-                                                        "name",
-                                                        "origin",
-                                                        "robot.ticks_per_rev",
-                                                        "robot.wheel_radius_left",
-                                                        "robot.wheel_radius_right",
-                                                        "robot.wheel_base"};
-
 bool has_line_break(std::string_view s) { return s.find_first_of("\r\n") != std::string_view::npos; }
 
 // Throws std::invalid_argument naming the first thing read_track would reject
@@ -52,7 +44,7 @@ void check_writable(const Track& track) {
     if (blank_edge || key.find(':') != std::string::npos || has_line_break(key))
       bad(fmt::format("metadata key '{}' cannot be written (empty, ':', line break or surrounding blanks)",
                       key));
-    for (std::string_view k : kKnownKeys)
+    for (std::string_view k : kStandardMetaKeys)
       if (key == k) bad(fmt::format("extra metadata key '{}' collides with a standard key", key));
     if (has_line_break(value)) bad(fmt::format("value of metadata key '{}' contains a line break", key));
   }

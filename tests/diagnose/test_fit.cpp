@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -146,21 +147,27 @@ TEST_P(FitRecovers, SimulatedEffectWithin10Percent) {
 INSTANTIATE_TEST_SUITE_P(Effects, FitRecovers, ::testing::ValuesIn(cases()),
                          [](const auto& p) { return p.param.name; });
 
-TEST(Fit, FixesOnlyRecoverRadiusErrorWithin25Percent) {
+// A 180 s track with 1 Hz fixes (5 cm) only and `spec` acting, `effect`
+// fitted on all 20 s windows but the last two, which are held out.
+FitSummary fit_on_fixes_only(std::uint64_t seed, const std::string& spec, const std::string& effect) {
   SimTrackOptions o;
   o.duration_s = 180.0;
-  o.seed = 11;
+  o.seed = seed;
   o.gt_rate_hz = 0.0;
   o.aps_rate_hz = 1.0;
   o.aps_sigma_m = 0.05;
-  o.effects = {"radius_error:scale_l=0.985,scale_r=1.01"};
+  o.effects = {spec};
   const DiagInput in = build_diag_input(simulate_track(o));
-  ASSERT_EQ(in.reference, ReferenceKind::aps);
+  EXPECT_EQ(in.reference, ReferenceKind::aps);
   const auto windows = make_windows(in, 20.0);
   const int n = static_cast<int>(windows.size());
   std::vector<int> train, held;
   for (int i = 0; i < n; ++i) (i >= n - 2 ? held : train).push_back(i);
-  const FitSummary s = fit_effects(in, EffectSet::parse({"radius_error"}), train, held);
+  return fit_effects(in, EffectSet::parse({effect}), train, held);
+}
+
+TEST(Fit, FixesOnlyRecoverRadiusErrorWithin25Percent) {
+  const FitSummary s = fit_on_fixes_only(11, "radius_error:scale_l=0.985,scale_r=1.01", "radius_error");
   SCOPED_TRACE(s.termination);
   EXPECT_TRUE(s.converged);
   EXPECT_NEAR(param(s, "radius_error.scale_l").value, 0.985, 0.25 * 0.015);
@@ -178,20 +185,7 @@ TEST(Fit, FixesOnlyRecoverRadiusErrorWithin25Percent) {
 // odometry_bias with 1 Hz fixes only: the model fits it there too (the
 // selection proposes it only against a reference heading, select.h).
 TEST(Fit, FixesOnlyRecoverOdometryBiasWithin25Percent) {
-  SimTrackOptions o;
-  o.duration_s = 180.0;
-  o.seed = 12;
-  o.gt_rate_hz = 0.0;
-  o.aps_rate_hz = 1.0;
-  o.aps_sigma_m = 0.05;
-  o.effects = {"odometry_bias:b_v=0.02,b_w=0.01"};
-  const DiagInput in = build_diag_input(simulate_track(o));
-  ASSERT_EQ(in.reference, ReferenceKind::aps);
-  const auto windows = make_windows(in, 20.0);
-  const int n = static_cast<int>(windows.size());
-  std::vector<int> train, held;
-  for (int i = 0; i < n; ++i) (i >= n - 2 ? held : train).push_back(i);
-  const FitSummary s = fit_effects(in, EffectSet::parse({"odometry_bias"}), train, held);
+  const FitSummary s = fit_on_fixes_only(12, "odometry_bias:b_v=0.02,b_w=0.01", "odometry_bias");
   SCOPED_TRACE(s.termination);
   EXPECT_TRUE(s.converged);
   EXPECT_NEAR(param(s, "odometry_bias.b_v").value, 0.02, 0.25 * 0.02);
