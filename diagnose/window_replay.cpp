@@ -94,10 +94,12 @@ std::vector<Window> make_windows(const DiagInput& in, double window_s) {
                                             "expected at most {:.0g}",
                                             window_s, t_last - t0, count, kMaxWindows));
   const auto n_win = static_cast<std::size_t>(count);
-  // A reference with gaps (issue 15, "any reference"): a window whose first
-  // reference sample comes more than two reference periods after its nominal
-  // start starts at that sample instead, so that its anchor is a measured
-  // pose, not one interpolated across the gap.
+  // A reference with gaps (issue 15, "any reference"): a gap longer than two
+  // reference periods ends a window at its last sample before the gap and
+  // starts the next at its first sample after it, so that no window dead-
+  // reckons across a gap and every anchor is a measured pose, not one
+  // interpolated across the gap. Window boundaries: the nominal starts t0 +
+  // j*window_s plus the first sample after each gap.
   double gap_s = std::numeric_limits<double>::infinity();
   if (heading && rt.size() >= 2) {
     std::vector<double> dt(rt.size() - 1);
@@ -105,16 +107,26 @@ std::vector<Window> make_windows(const DiagInput& in, double window_s) {
     std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
     gap_s = 2.0 * dt[dt.size() / 2];
   }
-  std::vector<Window> out;
-  for (std::size_t j = 0; j < n_win; ++j) {
-    double s = t0 + static_cast<double>(j) * window_s;
-    if (heading) {
-      const auto first = std::lower_bound(rt.begin(), rt.end(), s - kTimeEps);
-      if (first != rt.end() && *first - s > gap_s) s = *first;
+  std::vector<double> starts;
+  for (std::size_t j = 0; j < n_win; ++j) starts.push_back(t0 + static_cast<double>(j) * window_s);
+  if (std::isfinite(gap_s)) {
+    for (std::size_t i = 0; i + 1 < rt.size(); ++i)
+      if (rt[i + 1] - rt[i] > gap_s && rt[i + 1] > t0) starts.push_back(rt[i + 1]);
+    std::sort(starts.begin(), starts.end());
+    // A nominal start inside a gap moves to the gap's end (already a start).
+    std::vector<double> kept;
+    for (double st : starts) {
+      const auto first = std::lower_bound(rt.begin(), rt.end(), st - kTimeEps);
+      const double moved = first != rt.end() && *first - st > gap_s ? *first : st;
+      if (kept.empty() || moved > kept.back() + kTimeEps) kept.push_back(moved);
     }
-    const bool last = j + 1 == n_win;
-    const double e = last ? std::numeric_limits<double>::infinity()
-                          : t0 + static_cast<double>(j + 1) * window_s;
+    starts = std::move(kept);
+  }
+  std::vector<Window> out;
+  for (std::size_t j = 0; j < starts.size(); ++j) {
+    const double s = starts[j];
+    const bool last = j + 1 == starts.size();
+    const double e = last ? std::numeric_limits<double>::infinity() : starts[j + 1];
     Window w;
     w.node_begin = static_cast<std::size_t>(std::lower_bound(ot.begin(), ot.end(), s - kTimeEps) - ot.begin());
     if (w.node_begin + 1 >= ot.size()) continue;

@@ -69,6 +69,20 @@ double param_tolerance(const TrueEffect& e, std::string_view param, double wheel
   return 0.25 * departure(e, param);
 }
 
+std::vector<std::pair<double, double>> reference_gaps(const std::vector<double>& ref_t_s) {
+  std::vector<std::pair<double, double>> gaps;
+  if (ref_t_s.size() < 3) return gaps;
+  std::vector<double> dt(ref_t_s.size() - 1);
+  for (std::size_t i = 0; i + 1 < ref_t_s.size(); ++i) dt[i] = ref_t_s[i + 1] - ref_t_s[i];
+  std::vector<double> sorted = dt;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
+                   sorted.end());
+  const double limit = 2.0 * sorted[sorted.size() / 2];
+  for (std::size_t i = 0; i < dt.size(); ++i)
+    if (dt[i] > limit) gaps.emplace_back(ref_t_s[i], ref_t_s[i + 1]);
+  return gaps;
+}
+
 BoxCoverage box_coverage(const TrueEffect& t, double x0, double x1, double y0, double y1,
                          const TruePath& path) {
   BoxCoverage c;
@@ -132,8 +146,12 @@ CaseGrade grade_case(const std::vector<EffectTruth>& truth, const diagnose::Diag
         continue;
       }
       p.tolerance = param_tolerance(t.effect, name, wheel_base_m);
-      p.normalised = p.tolerance > 0.0 ? 0.25 * (p.found - p.truth) / p.tolerance : std::nan("");
-      p.ok = std::isfinite(p.found) && std::abs(p.found - p.truth) <= p.tolerance;
+      double miss = p.found - p.truth;
+      if (t.effect.name == "radius_step" && name == "t")
+        for (const auto& [a, b] : path.ref_gaps_s)
+          if (p.truth > a && p.truth < b) miss = p.found < a ? p.found - a : p.found > b ? p.found - b : 0.0;
+      p.normalised = p.tolerance > 0.0 ? 0.25 * miss / p.tolerance : std::nan("");
+      p.ok = std::isfinite(p.found) && std::abs(miss) <= p.tolerance;
       if (!p.ok)
         join(g.why, fmt::format("{}.{} = {:.6g}, truth {:.6g} ± {:.3g}", p.effect, p.param, p.found, p.truth,
                                 p.tolerance));

@@ -23,7 +23,9 @@
 //
 // Parameter tolerances: ±25 % of the parameter's DEPARTURE from its no-op
 // value, with these rules for parameters that can sit at their no-op value:
-//  * radius_step.t: ±5 s;
+//  * radius_step.t: ±5 s; when the true t lies in a gap of the reference
+//    (TruePath::ref_gaps_s), anywhere in that gap ±5 s: no reference sample
+//    tells where in the gap the step happened;
 //  * scale pairs (radius_error and radius_step scale_l/scale_r, slip_zone
 //    s_l/s_r): 25 % of the pair's larger departure, so a wheel that is not
 //    off (scale 1) must come out within that of 1;
@@ -44,6 +46,7 @@
 #include <limits>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "diagnose/diagnosis.h"
@@ -67,7 +70,14 @@ struct ParamCheck {
 // The true path, for the slip_zone box rule (CaseTrack::path_*).
 struct TruePath {
   std::vector<double> x_m, y_m;
+  // Gaps of the track's reference [s] (reference_gaps below): radius_step.t
+  // inside one is graded against the gap (header comment).
+  std::vector<std::pair<double, double>> ref_gaps_s;
 };
+
+// The gaps of a reference: consecutive sample times more than two median
+// periods apart, as (last sample before, first sample after).
+std::vector<std::pair<double, double>> reference_gaps(const std::vector<double>& ref_t_s);
 
 struct CaseGrade {
   CaseCategory category = CaseCategory::null_case;
