@@ -462,6 +462,7 @@ bool GyroFixesOptions::IsValid(std::string* why) const {
   if (!check_option_rules(
           {
               {is_positive(window_s), "window_s", window_s, "> 0 [s]"},
+              {is_positive(min_window_s), "min_window_s", min_window_s, "> 0 [s]"},
               {loss == RobustLoss::none || loss == RobustLoss::huber || loss == RobustLoss::cauchy, "loss",
                static_cast<double>(static_cast<int>(loss)), "none, huber or cauchy"},
               {is_positive(loss_scale), "loss_scale", loss_scale, "> 0 [fix sigmas]"},
@@ -489,9 +490,17 @@ bool GyroFixesOptions::IsValid(std::string* why) const {
   return true;
 }
 
-GyroFixesCheck check_gyro_with_fixes(const DiagInput& in, const GyroFixesOptions& o) {
+GyroFixesCheck check_gyro_with_fixes(const DiagInput& in, const GyroFixesOptions& options) {
   std::string why;
-  if (!o.IsValid(&why)) throw std::invalid_argument("gyro fixes check options: " + why);
+  if (!options.IsValid(&why)) throw std::invalid_argument("gyro fixes check options: " + why);
+  // A track too short for kMinWindows windows of window_s gets shorter ones,
+  // down to min_window_s (header comment).
+  GyroFixesOptions o = options;
+  if (in.ref_t_s.size() >= 2) {
+    const double span = in.ref_t_s.back() - in.ref_t_s.front();
+    if (span < kMinWindows * o.window_s)
+      o.window_s = std::max(std::min(o.window_s, o.min_window_s), span / kMinWindows);
+  }
   const auto t_start = std::chrono::steady_clock::now();
   GyroFixesCheck out;
   out.window_s = o.window_s;
@@ -589,7 +598,7 @@ GyroFixesCheck check_gyro_with_fixes(const DiagInput& in, const GyroFixesOptions
   g.scale.noise_drift = g.bias.noise_drift = g.noise_sigma_radps * std::sqrt(T * dt_gyro);
   const auto judge = [&](Verdict& v, const HeldoutComparison& own) {
     v.z = (v.value - v.noop) / v.std_error;
-    v.significant = std::isfinite(v.z) && std::abs(v.z) > o.z_threshold && out.joint.passed && own.passed;
+    v.significant = std::isfinite(v.z) && std::abs(v.z) > o.z_threshold && own.passed;
     v.relevant = std::isfinite(v.drift) && std::isfinite(v.noise_drift) &&
                  v.drift > std::max(o.relevance_factor * v.noise_drift, o.min_drift_rad);
   };

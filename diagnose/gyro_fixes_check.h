@@ -25,7 +25,9 @@
 //             interval's heading change; a fix between two nodes is
 //             predicted by linear interpolation, as in window_replay.h.
 //
-// Windows: make_windows(in, window_s) of window_replay.h (a last window
+// Windows: make_windows(in, window_s) of window_replay.h, window_s shortened
+// to max(min_window_s, span/3) on a track whose reference spans fewer than
+// three of them (GyroFixesCheck::window_s is the one used) (a last window
 // shorter than window_s/2 joins the one before: its few fixes would hardly
 // constrain its own anchor, nor show a heading drift), each with a free
 // anchor pose (x0, y0, theta0) [m, m, rad], a nuisance parameter as in fit.h
@@ -116,9 +118,13 @@
 // corrected gyro rate over the used windows' span, |b|*T; noise: the
 // random walk of the gyro's white noise sigma_g*sqrt(T*dt_gyro), sigma_g =
 // 1.4826*MAD of second differences / sqrt(6)). significant = |z| >
-// z_threshold AND the joint AND the parameter's own held-out tests passed
-// (HERE "significant" includes the held-out proof, so noise alone yields no
-// verdict); relevant = drift > max(relevance_factor*noise_drift,
+// z_threshold AND the parameter's own held-out test passed (HERE
+// "significant" includes the held-out proof, so noise alone yields no
+// verdict). The joint test is reported, not required: a parameter that
+// proves itself against the trained model without it is proven, and the
+// joint test of a scale error beside an idle bias is diluted by the bias's
+// noise (random benchmark, dev seed 1001 case 115: own p = 0.0006, joint
+// 0.0011 over 3 held-out windows, z = 9.7); relevant = drift > max(relevance_factor*noise_drift,
 // min_drift_rad).
 //
 // No I/O. SI units. Deterministic (no randomness).
@@ -137,6 +143,10 @@ namespace odotune::diagnose {
 
 struct GyroFixesOptions {
   double window_s = 40.0;  // replay window [s] (make_windows; > 0); see header
+  // A track shorter than 3 windows gets windows of a third of its span, but
+  // not shorter than this [s] (a 71 s track: 3 windows of 23.7 s instead of
+  // 2 of 40 s, too few for a held-out proof).
+  double min_window_s = 20.0;
   RobustLoss loss = RobustLoss::huber;
   double loss_scale = 3.0;         // where the loss turns robust [fix sigmas]
   int max_iterations = 100;        // Levenberg-Marquardt iterations per fit

@@ -258,12 +258,21 @@ TEST(GyroFixesCheck, UnavailableOrBadInputs) {
     EXPECT_EQ(r.gyro.unavailable_reason, "no gyro");
     EXPECT_FALSE(r.gyro.scale.departs());
   }
-  {  // 60 s in 40 s windows: 2 windows, too few for a held-out proof.
+  {  // 60 s in 40 s windows, not shortened below 40 s: 2 windows, too few for a held-out proof.
     GyroFixesOptions opt;
     opt.window_s = 40.0;
+    opt.min_window_s = 40.0;
     const GyroFixesCheck r = check_gyro_with_fixes(good, opt);
     EXPECT_FALSE(r.gyro.available);
     EXPECT_NE(r.gyro.unavailable_reason.find("usable window"), std::string::npos) << r.gyro.unavailable_reason;
+  }
+  {  // The same track with the default shortest window (20 s): three windows of a third of it.
+    GyroFixesOptions opt;
+    opt.window_s = 40.0;
+    const GyroFixesCheck r = check_gyro_with_fixes(good, opt);
+    EXPECT_TRUE(r.gyro.available) << r.gyro.unavailable_reason;
+    EXPECT_NEAR(r.window_s, (good.ref_t_s.back() - good.ref_t_s.front()) / 3.0, 1e-9);
+    EXPECT_EQ(r.used_windows.size(), 3U);
   }
   {  // mismatched gyro arrays: one clear line
     DiagInput in = good;
