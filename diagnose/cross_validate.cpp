@@ -279,13 +279,31 @@ SetEval CrossValidator::own_noop(const SetEval& cv, Effect e) {
       const auto layout = param_layout(cv.folds[f]);
       for (std::size_t j = 0; j < layout.size(); ++j)
         if (layout[j].effect == e && layout[j].fitted) v[j] = layout[j].noop;
-      predict(unpack(cv.folds[f], v), test_[f], out.pred);
+      out.folds.push_back(unpack(cv.folds[f], v));
+      predict(out.folds.back(), test_[f], out.pred);
     }
   } catch (const std::exception& ex) {
     out.error = ex.what();
     return out;
   }
   finish(out);
+  return out;
+}
+
+CrossValidator::Replayed CrossValidator::replayed(const SetEval& cv) {
+  double sp = 0.0, sh = 0.0, n = 0.0;
+  for (std::size_t f = 0; f < test_.size(); ++f) {
+    const EffectSet set = f < cv.folds.size() ? cv.folds[f] : EffectSet{};
+    const ReplayResult r = replay(model_for(set), pack(set), *in_, windows_, test_[f]);
+    for (const WindowError& w : r.windows) {
+      const auto k = static_cast<double>(w.n_ref);
+      sp += k * w.pos_rmse_m * w.pos_rmse_m;
+      sh += k * w.heading_rmse_rad * w.heading_rmse_rad;
+      n += k;
+    }
+  }
+  Replayed out;
+  if (n > 0.0) out.pos_rmse_m = std::sqrt(sp / n), out.heading_rmse_rad = std::sqrt(sh / n);
   return out;
 }
 

@@ -24,6 +24,7 @@
 #pragma once
 
 #include <atomic>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -132,8 +133,23 @@ class CrossValidator {
   SetEval fit_all(const EffectSet& structure, const EffectSet& warm, int max_iterations);
 
   // `cv` replayed with effect e's fitted parameters at their no-op values in
-  // every fold (no refit): what the effect itself adds to its set.
+  // every fold (no refit): what the effect itself adds to its set (its
+  // `folds` hold those sets).
   SetEval own_noop(const SetEval& cv, Effect e);
+
+  // The held-out predictions of `cv` as a user's dead reckoning sees them:
+  // each fold's fitted set replayed on the fold's own windows with the
+  // replay's own anchors (window_replay.h: on the reference pose at the
+  // window's start when the reference has a heading, else the closed-form
+  // rigid alignment), position and heading RMSE pooled over every window's
+  // scored samples (heading NaN without a reference heading). A `cv`
+  // without fold sets (the nominal model) is the empty set in every fold.
+  // The measure of select.h's rule (e), the same as the benchmark's truth.
+  struct Replayed {
+    double pos_rmse_m = std::numeric_limits<double>::quiet_NaN();
+    double heading_rmse_rad = std::numeric_limits<double>::quiet_NaN();
+  };
+  Replayed replayed(const SetEval& cv);
 
   // `alt` against `ref`, window by window. A window is informative when alt
   // moves its normalised predictions by sum |delta|^2 >= 4 L (below, the

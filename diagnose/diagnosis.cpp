@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <iterator>
+#include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -111,24 +112,31 @@ Inside inside_segments(const ResidualSeries& s, const std::vector<TimeSegment>& 
 }
 
 // Physics outside the list (term_search.h): terms that reproduce what the
-// chosen model leaves, on the scoring input's windows and split; a model that
-// passes the materiality floor goes on the `unexplained` finding, made here
-// when there is none (diagnosis.h).
+// chosen model leaves, on the scoring input's windows and split. A model that
+// passes the materiality floor goes on the `unexplained` finding: the
+// located one (`located`, from locate.h) or, when nothing was located, one
+// made here. Located growth that no term reproduces on the held-out windows
+// is not a finding: it goes to `not_reproduced` (diagnosis.h).
 void attach_term_model(Diagnosis& d, const DiagInput& in, const DiagInput& scoring, const EffectSet& wheel,
-                       const DiagnoseOptions& o) {
-  if (!o.terms.enabled || d.train_windows.empty()) return;
-  const double floor_m = d.floor_m;
-  try {
-    d.term_search = search_terms(scoring, wheel, make_windows(scoring, d.window_s), d.train_windows,
-                                 d.heldout_windows, floor_m, o.terms);
-  } catch (const std::invalid_argument& e) {  // an input the search cannot use: no model, the reason logged
-    d.term_search.reason = std::string("term search not run: ") + e.what();
+                       const DiagnoseOptions& o, std::optional<Finding>& located) {
+  if (o.terms.enabled && !d.train_windows.empty()) {
+    try {
+      d.term_search = search_terms(scoring, wheel, make_windows(scoring, d.window_s), d.train_windows,
+                                   d.heldout_windows, d.floor_m, o.terms);
+    } catch (const std::invalid_argument& e) {  // an input the search cannot use: no model, the reason logged
+      d.term_search.reason = std::string("term search not run: ") + e.what();
+    }
   }
-  if (!d.term_search.found) return;
+  if (!d.term_search.found) {
+    if (located)
+      d.not_reproduced.push_back(fmt::format(
+          "unexplained: the chosen model's residuals grow faster than noise ({}), but no term "
+          "reproduces that on held-out windows: random wheel slip or sensor noise, nothing to model",
+          located->conditions.empty() ? "in places" : located->conditions));
+    return;
+  }
   const TermModel& tm = d.term_search.model;
-  auto it = std::find_if(d.findings.begin(), d.findings.end(),
-                         [](const Finding& f) { return f.effect == "unexplained"; });
-  if (it == d.findings.end()) {
+  if (!located) {
     Finding f;
     f.effect = "unexplained";
     f.segments.push_back({in.ref_t_s.front(), in.ref_t_s.back(), 0.0, 0});
@@ -140,16 +148,17 @@ void attach_term_model(Diagnosis& d, const DiagInput& in, const DiagInput& scori
                      ? std::max(0.0,
                                 (sq(tm.train.before_pos_rmse_m) - sq(tm.train.after_pos_rmse_m)) / sq(nominal))
                      : 0.0;
-    d.findings.push_back(std::move(f));
-    it = std::prev(d.findings.end());
+    located = std::move(f);
   }
-  it->conditions = (it->conditions.empty() ? "" : it->conditions + "; ") + tm.conditions;
-  it->evidence = (it->evidence.empty() ? "" : it->evidence + "; ") +
-                 fmt::format("a sparse regression over {} candidate terms, chosen by cross-validation, "
-                             "lowers the held-out position error from {:.4f} m to {:.4f} m",
-                             d.term_search.library_size, tm.heldout.before_pos_rmse_m,
-                             tm.heldout.after_pos_rmse_m);
-  it->model = tm;
+  Finding& f = *located;
+  f.conditions = (f.conditions.empty() ? "" : f.conditions + "; ") + tm.conditions;
+  f.evidence = (f.evidence.empty() ? "" : f.evidence + "; ") +
+               fmt::format("a sparse regression over {} candidate terms, chosen by cross-validation, "
+                           "lowers the held-out position error from {:.4f} m to {:.4f} m",
+                           d.term_search.library_size, tm.heldout.before_pos_rmse_m,
+                           tm.heldout.after_pos_rmse_m);
+  f.model = tm;
+  d.findings.push_back(std::move(f));
 }
 
 }  // namespace
@@ -364,7 +373,11 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   }
 
   // What the chosen model leaves: located growth carrying a real share of
-  // its squared error.
+  // its squared error. A finding only when something reproduces it on data
+  // the fit did not see (the term search below); growth that nothing
+  // predicts on held-out windows (random wheel slip, noise the model lacks)
+  // is listed in `not_reproduced` instead (diagnosis.h).
+  std::optional<Finding> located;
   const Location& la = d.located_after;
   if (!la.segments.empty()) {
     const Inside ins = inside_segments(d.after, la.segments);
@@ -386,11 +399,11 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
           "the chosen model's residuals still grow faster than noise there ({:.0f} % of its "
           "squared error)",
           100.0 * share);
-      d.findings.push_back(std::move(f));
+      located = std::move(f);
     }
   }
   const auto t_terms = Clock::now();
-  attach_term_model(d, in, scoring, wheel, o);
+  attach_term_model(d, in, scoring, wheel, o, located);
   d.timing.terms_s = seconds_since(t_terms);
   std::stable_sort(d.findings.begin(), d.findings.end(),
                    [](const Finding& a, const Finding& b) { return a.explains > b.explains; });

@@ -177,6 +177,7 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
     lines.push_back("     evidence: " + f.evidence);
   }
   for (const std::string& s : d.immaterial) lines.push_back("not a finding (immaterial): " + s);
+  for (const std::string& s : d.not_reproduced) lines.push_back("not a finding (not reproduced): " + s);
   for (const std::string& s : d.sensor_notes) lines.push_back("sensor check: " + s);
   const std::string against = d.ref_gt_samples > 0 && d.ref_fix_samples > 0
                                   ? fmt::format("{} ground-truth positions and {} position fixes",

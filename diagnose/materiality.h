@@ -25,6 +25,11 @@
 // precise. Timing effects far below the sampling period are not exempt and get
 // no other rule: they are findings exactly when they pass this floor.
 //
+// The selection (select.h rule (e)) applies the same floor to heading too
+// when the reference has one: a wheel effect is material when its removed
+// heading error passes max(min_gain_sigmas * ref_sigma_rad, min_gain_share
+// * nominal heading RMSE), whatever its position gain.
+//
 // The same floor decides, from the truth, whether a simulated effect is
 // detectable at all (the random benchmark, studies/): the true model's
 // held-out gain over the nominal one against this floor.

@@ -34,14 +34,41 @@ EffectSet with_effect(const EffectSet& s, Effect e) {
   return out;
 }
 
+// Rule (e) of select.h: the error `alt` removes from `ref`'s, position and
+// (with a reference heading) heading, both measured on their held-out
+// predictions replayed as dead reckoning (CrossValidator::replayed), against
+// the floors of Search.
+struct Removed {
+  double pos_m = 0.0, heading_rad = 0.0;  // materiality.h removed_error_m of each
+};
+Removed removed(CrossValidator& cv, const SetEval& ref, const SetEval& alt) {
+  const CrossValidator::Replayed a = cv.replayed(ref), b = cv.replayed(alt);
+  return {removed_error_m(a.pos_rmse_m, b.pos_rmse_m),
+          std::isfinite(a.heading_rmse_rad) && std::isfinite(b.heading_rmse_rad)
+              ? removed_error_m(a.heading_rmse_rad, b.heading_rmse_rad)
+              : 0.0};
+}
+
+// Material (rule (e)): "" when the removed position error passes floor_m or
+// the removed heading error passes floor_rad (> 0 only with a reference
+// heading); a floor_m of 0 asks nothing.
+std::string immaterial(const Removed& r, double floor_m, double floor_rad) {
+  if (!(floor_m > 0.0) || r.pos_m >= floor_m || (floor_rad > 0.0 && r.heading_rad >= floor_rad)) return "";
+  if (floor_rad > 0.0)
+    return fmt::format(
+        "immaterial: removes {:.3g} mm of held-out position error (floor {:.3g} mm) and {:.3g} mrad of "
+        "heading error (floor {:.3g} mrad)",
+        1e3 * r.pos_m, 1e3 * floor_m, 1e3 * r.heading_rad, 1e3 * floor_rad);
+  return fmt::format("immaterial: removes {:.3g} mm of held-out position error, floor {:.3g} mm", 1e3 * r.pos_m,
+                     1e3 * floor_m);
+}
+
 // Rules (a)-(c) and (e) of select.h for `alt` to beat `ref`; "" when they
-// hold. pos_gain_m: the CV position error alt removes from ref's (materiality.h
-// removed_error_m); floor_m: the materiality floor (0 = not asked).
+// hold. gain: what alt removes from ref's CV error; floor_m, floor_rad: the
+// materiality floors (floor_m 0 = not asked).
 std::string verdict(const PairedComparison& p, double delta_bic, const SelectOptions& o,
-                    double pos_gain_m = 0.0, double floor_m = 0.0) {
-  if (floor_m > 0.0 && !(pos_gain_m >= floor_m))
-    return fmt::format("immaterial: removes {:.3g} mm of held-out position error, floor {:.3g} mm",
-                       1e3 * pos_gain_m, 1e3 * floor_m);
+                    const Removed& gain = {}, double floor_m = 0.0, double floor_rad = 0.0) {
+  if (std::string why = immaterial(gain, floor_m, floor_rad); !why.empty()) return why;
   if (!(p.rel >= o.min_rel_improvement))
     return fmt::format("relative CV improvement {:.2f} % < {:.2f} %", 100.0 * p.rel,
                        100.0 * o.min_rel_improvement);
@@ -135,11 +162,9 @@ double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet
 std::vector<Effect> candidate_list(const DiagInput& in, const SelectOptions& o) {
   std::vector<Effect> list = o.candidates;
   if (list.empty()) {
-    list = {Effect::radius_error, Effect::wheel_base_error, Effect::radius_step,
-            Effect::speed_radius, Effect::lateral_skid,     Effect::longitudinal_slip,
-            Effect::slip_zone,    Effect::time_offset,      Effect::actuator_lag};
-    // odometry_bias only against a reference heading (select.h, "Candidates").
-    if (in.has_ref_heading()) list.push_back(Effect::odometry_bias);
+    list = {Effect::radius_error, Effect::wheel_base_error,  Effect::radius_step, Effect::speed_radius,
+            Effect::lateral_skid, Effect::longitudinal_slip, Effect::slip_zone,   Effect::time_offset,
+            Effect::actuator_lag, Effect::odometry_bias};
   }
   const bool commands = in.odometry == OdometryKind::body_velocity ||
                         (!in.cmd_v_mps.empty() && in.cmd_v_mps.size() == in.odo_t_s.size());
@@ -171,6 +196,8 @@ struct Search {
   SetEval cur_cv, cur_full;    // of s
   double step_t = kNaN;        // last radius_step.t found
   double floor_m = 0.0;        // materiality floor (rule (e)) [m]
+  double floor_rad = 0.0;      // its heading part [rad] (0 without a reference heading)
+  bool heading = false;        // the reference has a heading
 };
 
 // Rules (a)-(e) of a candidate set `cv` (its effects `added`) against the
@@ -184,12 +211,12 @@ std::string judge(Search& z, const EffectSet& st, const SetEval& cv, std::initia
   rec.delta_bic = full.ok ? full.bic - z.cur_full.bic : kNaN;
   if (!full.ok) return "fit on all windows failed: " + full.error;
   std::string no = verdict(z.cv.compare(z.cur_cv, cv, z.o.alpha), rec.delta_bic, z.o,
-                           removed_error_m(z.cur_cv.pos_rmse_m, cv.pos_rmse_m), z.floor_m);
+                           removed(z.cv, z.cur_cv, cv), z.floor_m, z.floor_rad);
   for (Effect e : added) {  // each new effect itself must matter (actuator_lag's no-op is another source)
     if (!no.empty()) break;
     const SetEval own = z.cv.own_noop(cv, e);
     const std::string why = own.ok ? verdict(z.cv.compare(own, cv, z.o.alpha), -1.0, z.o,
-                                             removed_error_m(own.pos_rmse_m, cv.pos_rmse_m), z.floor_m)
+                                             removed(z.cv, own, cv), z.floor_m, z.floor_rad)
                                    : own.error;
     if (!why.empty())
       no = added.size() == 1 ? "its own parameters at their no-op values do as well: " + why
@@ -261,6 +288,18 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
     if (cd.cv.ok) order.push_back(&cd);
   std::stable_sort(order.begin(), order.end(),
                    [](const Cand* a, const Cand* b) { return a->cv.score < b->cv.score; });
+  // Without a reference heading a yaw-rate offset bends the path as a wheel
+  // differential does (select.h, "Candidates"): odometry_bias goes before
+  // radius_error only when it beats it by rules (a) and (b).
+  if (!z.heading) {
+    const auto at = [&](Effect e) {
+      return std::find_if(order.begin(), order.end(), [e](const Cand* c) { return c->e == e; });
+    };
+    const auto ob = at(Effect::odometry_bias), re = at(Effect::radius_error);
+    if (ob != order.end() && re != order.end() && ob < re &&
+        !verdict(z.cv.compare((*re)->cv, (*ob)->cv, z.o.alpha), -1.0, z.o).empty())
+      std::rotate(ob, re, re + 1);
+  }
   bool accepted = false;
   for (std::size_t rank = 0; rank < order.size(); ++rank) {
     Cand* best = order[rank];
@@ -293,6 +332,49 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
   }
   for (Cand& cd : tried) z.sel.records.push_back(std::move(cd.rec));
   return accepted;
+}
+
+// Without a reference heading (select.h, "Candidates"): when the selected set
+// holds odometry_bias and not radius_error, the set with radius_error in its
+// place is cross-validated, and swapped in unless the selected set beats it
+// by rules (a) and (b) and the materiality floor. Logged as a record of
+// phase "swap".
+void prefer_radius_error(Search& z, int step) {
+  const auto has = [&](Effect e) { return std::count(z.chosen.begin(), z.chosen.end(), e) > 0; };
+  if (z.heading || !has(Effect::odometry_bias) || has(Effect::radius_error)) return;
+  const auto t0 = Clock::now();
+  EffectSet st = z.s;
+  st.disable(Effect::odometry_bias);
+  st.enable(Effect::radius_error);
+  SearchRecord rec;
+  rec.step = step, rec.phase = "swap", rec.candidate = "radius_error for odometry_bias";
+  rec.set = st.to_string();
+  SetEval cv = z.cv.cross_validate_all({st}, z.cur_cv.folds, z.o.cv_max_iterations).front();
+  fill(rec, cv);
+  if (!cv.ok) {
+    rec.reason = "fit failed: " + cv.error;
+  } else {
+    const PairedComparison p = z.cv.compare(cv, z.cur_cv, z.o.alpha);  // keeping odometry_bias vs the swap
+    fill(rec, p);
+    const std::string beats = verdict(p, -1.0, z.o, removed(z.cv, cv, z.cur_cv), z.floor_m, z.floor_rad);
+    if (beats.empty()) {
+      rec.reason = "kept odometry_bias: it predicts held-out windows better than radius_error in its place";
+    } else {
+      SetEval full = z.cv.fit_all(st, z.cur_full.fitted, z.o.cv_max_iterations);
+      if (!full.ok) {
+        rec.reason = "fit on all windows failed: " + full.error;
+      } else {
+        rec.accepted = true;
+        rec.reason = "swapped: odometry_bias does not beat radius_error in its place (" + beats + ")";
+        std::replace(z.chosen.begin(), z.chosen.end(), Effect::odometry_bias, Effect::radius_error);
+        z.s = st;
+        z.cur_cv = std::move(cv);
+        z.cur_full = std::move(full);
+      }
+    }
+  }
+  rec.time_s = since(t0);
+  z.sel.records.push_back(std::move(rec));
 }
 
 // The pairs of effects the conditions of a mismatch point to (select.h,
@@ -418,13 +500,10 @@ bool backward_round(Search& z, int round) {
       // Redundancy by rule (a) only: once another effect changes every
       // window, an intermittent effect's paired test has little power left.
       // Or by rule (e): what it gains is immaterial.
-      const double pos_gain = removed_error_m(d.cv.pos_rmse_m, z.cur_cv.pos_rmse_m);
-      const bool material = !(z.floor_m > 0.0) || pos_gain >= z.floor_m;
+      const std::string why = immaterial(removed(z.cv, d.cv, z.cur_cv), z.floor_m, z.floor_rad);
+      const bool material = why.empty();
       d.removable = !(p.rel >= z.o.min_rel_improvement && p.gain >= z.o.min_gain) || !material;
-      d.rec.reason = !material
-                         ? fmt::format("removable: immaterial, it removes only {:.3g} mm of CV position error "
-                                       "(floor {:.3g} mm)",
-                                       1e3 * pos_gain, 1e3 * z.floor_m)
+      d.rec.reason = !material ? "removable: " + why
                      : d.removable
                          ? fmt::format("removable: without it CV is only {:.2f} % worse", 100.0 * p.rel)
                          : "kept: it is needed";
@@ -686,6 +765,7 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
   CrossValidator cv(*in, o.fit, o.folds, si.correlated);
   sel.folds = cv.num_folds();
   Search z{cv, o, sel, EffectSet(), {}, {}, {}, kNaN};
+  z.heading = in->has_ref_heading();
 
   auto t0 = Clock::now();
   z.cur_cv = cv.cross_validate(EffectSet(), {}, o.cv_max_iterations);
@@ -694,9 +774,13 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
     throw std::invalid_argument(fmt::format("track '{}': nominal replay failed: {}", in_full.track_name,
                                             z.cur_cv.error + z.cur_full.error));
   sel.baseline_cv_score = z.cur_cv.score;
-  // Rule (e): against the raw reference's noise and the nominal model's CV error.
-  z.floor_m = materiality_floor_m(in_full.ref_sigma_m, z.cur_cv.pos_rmse_m, o.materiality);
+  // Rule (e)'s floors against the nominal model's held-out dead reckoning.
+  const CrossValidator::Replayed nominal = cv.replayed(z.cur_cv);
+  z.floor_m = materiality_floor_m(in_full.ref_sigma_m, nominal.pos_rmse_m, o.materiality);
+  if (in_full.has_ref_heading() && std::isfinite(nominal.heading_rmse_rad))
+    z.floor_rad = materiality_floor_m(in_full.ref_sigma_rad, nominal.heading_rmse_rad, o.materiality);
   sel.floor_m = z.floor_m;
+  sel.floor_rad = z.floor_rad;
   SearchRecord rb;
   rb.phase = "baseline", rb.set = "none", rb.bic = z.cur_full.bic, rb.accepted = true;
   rb.reason = "nominal model";
@@ -712,10 +796,11 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
   }
   // Pairs, when what is left stays well above the floor ("Pairs").
   if (o.pairs && static_cast<int>(z.chosen.size()) + 2 <= o.max_effects + 1 &&
-      z.cur_cv.pos_rmse_m > o.pair_above_floor * z.floor_m && pair_step(z, step, cands)) {
+      cv.replayed(z.cur_cv).pos_rmse_m > o.pair_above_floor * z.floor_m && pair_step(z, step, cands)) {
     for (int round = 1; z.chosen.size() >= 2 && backward_round(z, round); ++round) {
     }
   }
+  prefer_radius_error(z, step);
   sel.final_cv_score = z.cur_cv.score;
   sel.structure = z.s;
   sel.timing.search_s = since(t_start);

@@ -112,8 +112,12 @@ std::string cases_csv(const DiagnosisBenchmark& b) {
     const DiagnosisCase& c = r.c;
     std::vector<std::string> gains, found, perr;
     for (const EffectTruth& t : r.truth.effects)
-      gains.push_back(fmt::format("{}: {} / {}{}", t.effect.name, g(t.gain_m), g(t.floor_m),
-                                  t.on_all_windows ? " (all windows)" : ""));
+      gains.push_back(
+          fmt::format("{}: {} / {}{}{}", t.effect.name, g(t.gain_m), g(t.floor_m),
+                      std::isfinite(t.heading_floor_rad)
+                          ? fmt::format(" heading {} / {} rad", g(t.heading_gain_rad), g(t.heading_floor_rad))
+                          : "",
+                      t.on_all_windows ? " (all windows)" : ""));
     for (const CaseFinding& f : r.findings) found.push_back(f.spec.empty() ? f.effect : f.spec);
     for (const ParamCheck& p : r.grade.params)
       if (p.graded) perr.push_back(fmt::format("{}.{}={}", p.effect, p.param, g(p.normalised)));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "diagnose/effect_model.h"
 #include "diagnose/gyro_heading_input.h"
@@ -13,6 +14,8 @@
 namespace odotune {
 
 namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 using diagnose::DiagInput;
 using diagnose::Effect;
@@ -84,14 +87,26 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
   auto heldout_rmse = [&](const DiagInput& input, const EffectSet& set) {
     return diagnose::replay(input, set, out.window_s, held).pos_rmse_m;
   };
-  auto all_rmse = [&](const DiagInput& input, const EffectSet& set) {
-    return diagnose::replay(input, set, out.window_s).pos_rmse_m;
+  auto heldout_rmse_of = [&](const DiagInput& input, const EffectSet& set, const std::vector<int>& which) {
+    return diagnose::replay(input, set, out.window_s, which).pos_rmse_m;
   };
 
   // Wheel-odometry effects.
   out.nominal_heldout_m = heldout_rmse(scoring, EffectSet{});
   out.true_heldout_m = heldout_rmse(scoring, wheel_set(truth, ""));
   out.floor_m = diagnose::materiality_floor_m(in.ref_sigma_m, out.nominal_heldout_m, materiality);
+  // With a reference heading, rule (e) also accepts a material heading gain.
+  const bool heading = in.has_ref_heading();
+  double true_heading_rad = kNaN, heading_floor_rad = kNaN;
+  if (heading) {
+    true_heading_rad = diagnose::replay(scoring, wheel_set(truth, ""), out.window_s, held).heading_rmse_rad;
+    heading_floor_rad = diagnose::materiality_floor_m(
+        in.ref_sigma_rad, diagnose::replay(scoring, EffectSet{}, out.window_s, held).heading_rmse_rad,
+        materiality);
+  }
+  const auto heading_material = [](double gain_rad, double floor_rad) {
+    return std::isfinite(gain_rad) && std::isfinite(floor_rad) && gain_rad > 0.0 && gain_rad >= floor_rad;
+  };
 
   // Gyro effects: the true corrections, each left out in turn.
   const bool gyro = !in.gyro_t_s.empty();
@@ -121,20 +136,43 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
       t.after_m = gyro_after;
       t.floor_m = gyro_floor;
     } else {
-      t.before_m = heldout_rmse(scoring, wheel_set(truth, t.effect.name));
+      const diagnose::ReplayResult without = diagnose::replay(scoring, wheel_set(truth, t.effect.name),
+                                                              out.window_s, held);
+      t.before_m = without.pos_rmse_m;
       t.after_m = out.true_heldout_m;
       t.floor_m = out.floor_m;
+      if (heading) {  // rule (e)'s heading part (select.h)
+        t.heading_gain_rad = diagnose::removed_error_m(without.heading_rmse_rad, true_heading_rad);
+        t.heading_floor_rad = heading_floor_rad;
+      }
     }
     t.gain_m = diagnose::removed_error_m(t.before_m, t.after_m);
-    t.detectable = !is_noop(t.effect) && diagnose::is_material(t.before_m, t.after_m, t.floor_m);
+    t.detectable = !is_noop(t.effect) && (diagnose::is_material(t.before_m, t.after_m, t.floor_m) ||
+                                          heading_material(t.heading_gain_rad, t.heading_floor_rad));
     if (!t.detectable && !is_noop(t.effect) &&
         (t.effect.name == "slip_zone" || t.effect.name == "radius_step")) {
-      // Bound to a place or a time: judged on every window (header comment).
-      const double before = all_rmse(scoring, wheel_set(truth, t.effect.name));
-      const double after = all_rmse(scoring, wheel_set(truth, ""));
-      const double floor = diagnose::materiality_floor_m(in.ref_sigma_m, all_rmse(scoring, EffectSet{}),
-                                                         materiality);
-      if (diagnose::is_material(before, after, floor)) {
+      // Bound to a place or a time: judged on every window but the one
+      // where it gains most (header comment: one window cannot both fit it
+      // and prove it).
+      const diagnose::ReplayResult wo = diagnose::replay(scoring, wheel_set(truth, t.effect.name),
+                                                         out.window_s);
+      const diagnose::ReplayResult wi = diagnose::replay(scoring, wheel_set(truth, ""), out.window_s);
+      std::vector<int> rest;
+      std::size_t top = 0;
+      double top_gain = -1.0;
+      for (std::size_t k = 0; k < wo.windows.size(); ++k) {
+        const double g = wo.windows[k].pos_rmse_m * wo.windows[k].pos_rmse_m -
+                         wi.windows[k].pos_rmse_m * wi.windows[k].pos_rmse_m;
+        const double gain = g * static_cast<double>(wo.windows[k].n_ref);
+        if (gain > top_gain) top_gain = gain, top = k;
+      }
+      for (std::size_t k = 0; k < wo.windows.size(); ++k)
+        if (k != top) rest.push_back(wo.windows[k].window);
+      const double before = heldout_rmse_of(scoring, wheel_set(truth, t.effect.name), rest);
+      const double after = heldout_rmse_of(scoring, wheel_set(truth, ""), rest);
+      const double floor = diagnose::materiality_floor_m(
+          in.ref_sigma_m, heldout_rmse_of(scoring, EffectSet{}, rest), materiality);
+      if (!rest.empty() && diagnose::is_material(before, after, floor)) {
         t.detectable = true, t.on_all_windows = true;
         t.before_m = before, t.after_m = after, t.gain_m = diagnose::removed_error_m(before, after),
         t.floor_m = floor;

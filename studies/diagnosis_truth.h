@@ -27,14 +27,24 @@
 //    gyro-heading replay's held-out RMSE as the nominal one. (With fixes only
 //    the diagnosis proves gyro effects with its own 40 s windows,
 //    gyro_fixes_check.h; the windows here are the selection's.)
-//  * detectable_e  <=>  gain_e >= floor (is_material).
+//  * detectable_e  <=>  gain_e >= floor (is_material), or, for a wheel effect
+//    against a reference heading (ground truth with gt_theta), the held-out
+//    heading error it removes passes the heading floor max(min_gain_sigmas *
+//    ref_sigma_rad, min_gain_share * nominal held-out heading RMSE): rule
+//    (e) of select.h accepts either, since a free-anchored window shows a
+//    wheel differential more in heading than in position.
 //  * slip_zone and radius_step act only in some places or after some time:
 //    when they are not detectable on the held-out windows (e.g. the robot,
 //    drifting under the effect, misses the box in its last laps), they are
-//    judged on ALL windows instead (gain and floor over every window;
-//    EffectTruth::on_all_windows), because the diagnosis moves its held-out
-//    windows to where these two act (select.h, "interleaved"), and the truth
-//    has no fitted parameter a held-out window would guard against.
+//    judged on all windows instead (EffectTruth::on_all_windows), because
+//    the diagnosis moves its held-out windows to where these two act
+//    (select.h, "interleaved"), and the truth has no fitted parameter a
+//    held-out window would guard against; all windows but the one where the
+//    effect gains most (gain and floor over the others): an effect seen in
+//    one window only (a slip zone crossed once, the robot drifting away from
+//    it afterwards, as command odometry with 14 % slip does) cannot be both
+//    fitted and proven on data the fit did not see, so it is not detectable
+//    by the rule a finding must pass.
 // Effects whose parameters equal their no-op values are never detectable.
 // Deterministic; no I/O.
 #pragma once
@@ -59,6 +69,10 @@ struct EffectTruth {
   double gain_m =
       std::numeric_limits<double>::quiet_NaN();  // removed error: sqrt(before^2 - after^2) (materiality.h)
   double floor_m = std::numeric_limits<double>::quiet_NaN();
+  // Wheel effects against a reference heading: the held-out heading error it
+  // removes and rule (e)'s heading floor (NaN otherwise; header comment).
+  double heading_gain_rad = std::numeric_limits<double>::quiet_NaN();
+  double heading_floor_rad = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct Detectability {
