@@ -110,8 +110,12 @@ std::vector<Window> make_windows(const DiagInput& in, double window_s) {
   std::vector<double> starts;
   for (std::size_t j = 0; j < n_win; ++j) starts.push_back(t0 + static_cast<double>(j) * window_s);
   if (std::isfinite(gap_s)) {
+    // Only a gap longer than a quarter window ends one: dead reckoning across
+    // a short dropout is harmless, and a recording with frequent dropouts
+    // (MRCLAM's Vicon) must not be cut into windows too short to show drift.
+    const double split_s = std::max(gap_s, 0.25 * window_s);
     for (std::size_t i = 0; i + 1 < rt.size(); ++i)
-      if (rt[i + 1] - rt[i] > gap_s && rt[i + 1] > t0) starts.push_back(rt[i + 1]);
+      if (rt[i + 1] - rt[i] > split_s && rt[i + 1] > t0) starts.push_back(rt[i + 1]);
     std::sort(starts.begin(), starts.end());
     // A nominal start inside a gap moves to the gap's end (already a start).
     std::vector<double> kept;

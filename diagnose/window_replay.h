@@ -7,12 +7,15 @@
 // nominally covers [t0 + j*W, t0 + (j+1)*W) (W = window_s; 0 = one window up
 // to the last reference sample, which the last window always includes). It
 // starts at the first odometry node at or after its nominal start
-// (t_begin_s), the anchor time. With a reference heading, a gap in the
-// reference (consecutive samples more than two median reference periods
-// apart) ends a window at its last sample before the gap and starts another
-// at the first sample after it: no window dead-reckons across a gap (a 15 s
-// gap inside a 20 s window made one window's error outweigh all others by
-// 10^4), and every anchor is a measured pose. Scored samples: reference samples in the
+// (t_begin_s), the anchor time. With a reference heading, a window whose
+// nominal start falls in a gap of the reference (consecutive samples more
+// than two median reference periods apart) starts at the first sample after
+// it, and a gap longer than a quarter window ends a window at its last
+// sample before the gap and starts another at the first sample after it: no
+// window dead-reckons across a long gap (a 15 s gap inside a 20 s window
+// made one window's error outweigh all others by 10^4), every anchor is a
+// measured pose, and short dropouts (MRCLAM's Vicon) do not cut windows
+// short. Scored samples: reference samples in the
 // nominal span at or after t_begin_s, strictly after it when the reference has
 // heading (that sample is the anchor itself). Windows without a scored sample
 // (with a free anchor: fewer than 3) are dropped; the rest are numbered 0, 1,
