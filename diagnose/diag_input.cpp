@@ -194,12 +194,20 @@ RefSource uncovered(const RefSource& fixes, const RefSource& gt) {
   return out;
 }
 
-// Unwraps headings in place: each step brought into (-pi, pi].
-void unwrap(std::vector<double>& theta) {
+// Unwraps headings in place: each step brought within pi of the heading
+// change `predicted(t_prev, t_next)` that the robot's own sensors show over it
+// (the gyro's integral where it covers the step, else the nominal odometry's).
+// Between densely sampled headings the prediction hardly matters (a step
+// turns far less than pi); across a gap of the reference it decides: a robot
+// that turned 5 rad during a 10 s gap must not come out 2 pi short, or every
+// heading after the gap (window residuals, the sensor checks' bins across the
+// gap) is off by a whole turn.
+template <class Predict>
+void unwrap(const std::vector<double>& t, std::vector<double>& theta, Predict predicted) {
   double offset = 0.0, prev = 0.0;
   for (std::size_t i = 0; i < theta.size(); ++i) {
     const double raw = theta[i];
-    if (i > 0) offset -= kTwoPi * std::round((raw + offset - prev) / kTwoPi);
+    if (i > 0) offset -= kTwoPi * std::round((raw + offset - prev - predicted(t[i - 1], t[i])) / kTwoPi);
     theta[i] = prev = raw + offset;
   }
 }
@@ -273,7 +281,14 @@ void estimate_sigmas(const DiagInput& in, const NominalPath& p, RefSource& s) {
 // Lays the sources out as the input's reference (header comment, "Reference").
 void assemble_reference(RefSource gt, RefSource fixes, DiagInput& in) {
   const NominalPath p = nominal_path(in);
-  if (gt.heading) unwrap(gt.theta);
+  if (gt.heading) {
+    const bool gyro = in.gyro_t_s.size() >= 2;
+    const Cumulative g = gyro ? Cumulative::of_rates(in.gyro_t_s, in.gyro_z_radps) : Cumulative{};
+    unwrap(gt.t, gt.theta, [&](double t0, double t1) {
+      if (gyro && t0 >= g.front_t() && t1 <= g.back_t()) return g.at(t1) - g.at(t0);
+      return interp_held(in.odo_t_s, p.th, t1) - interp_held(in.odo_t_s, p.th, t0);
+    });
+  }
   estimate_sigmas(in, p, gt);
   estimate_sigmas(in, p, fixes);
   // A source too small to estimate its own noise borrows the other's.

@@ -132,7 +132,20 @@ class BlockBootstrap {
 // var_extra[k] on the diagonal and −level_var beside it.
 struct Rows {
   std::vector<double> x, u, y, var_extra;  // u empty: no second regressor
+  // Row k shares its first edge sample with row k-1 (so their errors are
+  // correlated); 0 after a gap or a skipped bin: the whitening restarts.
+  std::vector<std::uint8_t> linked;
   double level_var = 0.0;
+  // Appends a row for bin [t0, t1]; linked when t0 is the previous row's t1.
+  void add(double t0, double t1, double xk, double yk, double var, double uk = kNaN) {
+    linked.push_back(!x.empty() && t0 == last_t1_ ? 1 : 0);
+    x.push_back(xk), y.push_back(yk), var_extra.push_back(var);
+    if (!std::isnan(uk)) u.push_back(uk);
+    last_t1_ = t1;
+  }
+
+ private:
+  double last_t1_ = kNaN;
 };
 
 struct RobustFit {
@@ -192,7 +205,7 @@ RobustFit gls_huber_fit(const Rows& r, const SensorCheckOptions& o) {
   double prev_l = 0.0;
   for (std::size_t k = 0; k < n; ++k) {
     const double diag = 2.0 * r.level_var + r.var_extra[k];
-    const double m = k == 0 ? 0.0 : -r.level_var / prev_l;  // sub-diagonal of L
+    const double m = k == 0 || !r.linked[k] ? 0.0 : -r.level_var / prev_l;  // sub-diagonal of L
     const double l2 = diag - m * m;
     if (!(l2 > 0)) return f;
     const double l = std::sqrt(l2);
@@ -284,10 +297,8 @@ GyroCheck check_gyro(const DiagInput& in, const ReferenceBins& rb, const SensorC
   for (std::size_t i = 0; i < rb.t0_s.size(); ++i) {
     const double t0 = rb.t0_s[i], t1 = rb.t1_s[i];
     if (t0 < gyro.front_t() || t1 > gyro.back_t()) continue;
-    rows.x.push_back(gyro.at(t1) - gyro.at(t0));
-    rows.u.push_back(t1 - t0);
-    rows.y.push_back(rb.w_radps[i] * (t1 - t0));
-    rows.var_extra.push_back(std::max(g.noise_sigma_radps * g.noise_sigma_radps * dt_gyro * (t1 - t0), 1e-18));
+    rows.add(t0, t1, gyro.at(t1) - gyro.at(t0), rb.w_radps[i] * (t1 - t0),
+             std::max(g.noise_sigma_radps * g.noise_sigma_radps * dt_gyro * (t1 - t0), 1e-18), t1 - t0);
     mabs += std::abs(rb.w_radps[i]);
   }
   g.bins = static_cast<int>(rows.x.size());
@@ -447,12 +458,12 @@ OdometryCheck check_odometry(const DiagInput& in, const ReferenceBins& rb, const
     const double t0 = rb.t0_s[i], t1 = rb.t1_s[i], dt = t1 - t0;
     if (t0 < odo.dist.front_t() || t1 > odo.dist.back_t()) continue;
     const double ds = rb.heading ? odo.dist.at(t1) - odo.dist.at(t0) : odo.chord(t0, t1);
-    rv.x.push_back(ds), rv.y.push_back(rb.v_mps[i] * dt), rv.var_extra.push_back(var_s);
+    rv.add(t0, t1, ds, rb.v_mps[i] * dt, var_s);
     width.push_back(dt);
     mean_abs_v += std::abs(ds) / dt, mean_width += dt;
     if (rb.heading) {
       const double dh = odo.head.at(t1) - odo.head.at(t0);
-      rw.x.push_back(dh), rw.y.push_back(rb.w_radps[i] * dt), rw.var_extra.push_back(var_h);
+      rw.add(t0, t1, dh, rb.w_radps[i] * dt, var_h);
       mean_abs_w += std::abs(dh) / dt;
     }
   }
@@ -530,11 +541,18 @@ ReferenceBins reference_bins(const DiagInput& in, const SensorCheckOptions& o, d
   rb.heading = in.reference == ReferenceKind::gt && in.ref_theta_rad.size() == in.ref_t_s.size();
   const double width = rb.heading ? o.bin_s : std::max(o.bin_s, o.aps_min_bin_s);
   const auto& t = in.ref_t_s;
+  // A gap of the reference: a step between two samples longer than this. No
+  // bin spans one (header comment, "Gaps").
+  const double gap_s = std::max(2.0 * width, 5.0 * median_step(t));
   std::size_t i = static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), t_begin_s) - t.begin());
   while (i < t.size()) {
     std::size_t j = i + 1;
-    while (j < t.size() && t[j] - t[i] < width * (1.0 - 1e-9)) ++j;
+    while (j < t.size() && t[j] - t[i] < width * (1.0 - 1e-9) && !(t[j] - t[j - 1] > gap_s)) ++j;
     if (j >= t.size() || t[j] > t_end_s) break;
+    if (t[j] - t[j - 1] > gap_s) {  // the next bin starts after the gap
+      i = j;
+      continue;
+    }
     const double dt = t[j] - t[i], dx = in.ref_x_m[j] - in.ref_x_m[i], dy = in.ref_y_m[j] - in.ref_y_m[i];
     rb.t0_s.push_back(t[i]);
     rb.t1_s.push_back(t[j]);

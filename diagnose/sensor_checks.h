@@ -16,6 +16,13 @@
 //    t1 − t0); every sensor is reduced to its mean over the very same
 //    interval, so changing velocities do not bias the comparison. 0.25 s
 //    holds 25 gyro samples at 100 Hz.
+//    Gaps: no bin spans a step between reference samples longer than
+//    max(2 bin widths, 5 median reference periods); the next bin starts at
+//    the sample after the gap. Over a gap the chord is not the path (the
+//    speed would come out low wherever the robot turned in it) and a bin's
+//    error is no longer one reference sample's noise at each edge; the
+//    regression's whitening (below) restarts after a skipped bin, since the
+//    bins beside it share no edge sample.
 //
 //  * Regression (gyro and wheel ratios) in INCREMENT form over the bins:
 //    reference increment = coefficients × sensor increments + e_k. The

@@ -12,6 +12,8 @@
 
 #include "diagnose/diag_input.h"
 #include "diagnose/diagnosis.h"
+#include "diagnose/sensor_checks.h"
+#include "diagnose/series_interp.h"
 #include "diagnose/sim_track.h"
 #include "diagnose/window_replay.h"
 
@@ -105,6 +107,41 @@ TEST(ReferenceShapes, GroundTruthWithGapsKeepsItsHeadingAndAnchorsAfterAGap) {
     if (std::abs(x.t_begin_s - 47.0) < 0.02) after_gap = true;
   }
   EXPECT_TRUE(after_gap);
+}
+
+// A gap in which the robot turns by more than half a turn: the heading after
+// it must continue the truth's (unwrapped through the gyro's turn), not come
+// out a whole turn short, and the sensor checks' bins must not span the gap.
+TEST(ReferenceShapes, HeadingIsUnwrappedThroughAGapInWhichTheRobotTurns) {
+  SimTrackOptions o = run(120, 50, 0);
+  o.effects = {"gyro_bias:b=0.003"};
+  const Track full = simulate_track(o);
+  const DiagInput whole = build_diag_input(full);
+  // The first 20 s stretch after 10 s over which the true heading turns by 3.6-5.5 rad.
+  const auto& t = whole.ref_t_s;
+  double gap0 = -1.0;
+  for (std::size_t i = 0; i < t.size() && gap0 < 0; ++i) {
+    if (t[i] < 10.0 || t[i] > 80.0) continue;
+    const double turn = std::abs(interp_held(t, whole.ref_theta_rad, t[i] + 20.0) - whole.ref_theta_rad[i]);
+    if (turn > 3.6 && turn < 5.5) gap0 = t[i];
+  }
+  ASSERT_GT(gap0, 0.0) << "the drive has no such turn";
+  const Track gappy = without_gt(full, [&](std::size_t, double ti) { return ti > gap0 && ti < gap0 + 20.0; });
+  const DiagInput in = build_diag_input(gappy);
+  ASSERT_TRUE(in.has_ref_heading());
+  ASSERT_LT(in.ref_t_s.size(), t.size());
+  for (std::size_t i = 0; i < in.ref_t_s.size(); ++i) {
+    const double truth = interp_held(t, whole.ref_theta_rad, in.ref_t_s[i]);
+    ASSERT_NEAR(in.ref_theta_rad[i], truth, 1e-9) << "t = " << in.ref_t_s[i];
+  }
+  const SensorCheck sc = check_sensors(in);
+  for (std::size_t k = 0; k < sc.reference.t0_s.size(); ++k)
+    EXPECT_FALSE(sc.reference.t0_s[k] <= gap0 && sc.reference.t1_s[k] >= gap0 + 20.0) << "bin spans the gap";
+  ASSERT_TRUE(sc.gyro.available);
+  EXPECT_NEAR(sc.gyro.bias.value, 0.003, std::max(4 * sc.gyro.bias.std_error, 2e-4));
+  EXPECT_TRUE(sc.gyro.bias.departs()) << "z " << sc.gyro.bias.z;
+  EXPECT_FALSE(sc.gyro.scale.departs()) << "s " << sc.gyro.scale.value << " z " << sc.gyro.scale.z;
+  EXPECT_FALSE(sc.odometry.speed_ratio.departs()) << sc.odometry.speed_ratio.value;
 }
 
 TEST(ReferenceShapes, FixesFillTheGroundTruthGapsWithTheirOwnWeight) {
