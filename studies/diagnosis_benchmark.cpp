@@ -115,7 +115,8 @@ CaseResult run_benchmark_case(const DiagnosisBenchmarkOptions& o, int index) {
       for (const diagnose::Finding& f : d.findings)
         r.findings.push_back({f.effect, f.spec(), f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m});
       r.grade = grade_case(r.truth.effects, d, r.c.scenario.robot.wheel_base_m,
-                           TruePath{ct.path_x_m, ct.path_y_m, reference_gaps(in->ref_t_s)});
+                           TruePath{ct.path_x_m, ct.path_y_m, reference_gaps(in->ref_t_s),
+                                    odometry_standstills(*in)});
     } catch (const std::exception& e) {
       refusal = e.what();
     }

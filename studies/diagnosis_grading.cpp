@@ -83,6 +83,33 @@ std::vector<std::pair<double, double>> reference_gaps(const std::vector<double>&
   return gaps;
 }
 
+std::vector<std::pair<double, double>> odometry_standstills(const diagnose::DiagInput& in) {
+  std::vector<std::pair<double, double>> out;
+  const bool wheels = in.odometry == diagnose::OdometryKind::wheel_angles;
+  const auto& t = in.odo_t_s;
+  const auto still = [&](std::size_t i) {  // no motion over [t[i], t[i+1]]
+    if (wheels) return in.phi_l_rad[i + 1] == in.phi_l_rad[i] && in.phi_r_rad[i + 1] == in.phi_r_rad[i];
+    return in.v_mps[i] == 0.0 && in.v_mps[i + 1] == 0.0 && in.w_radps[i] == 0.0 && in.w_radps[i + 1] == 0.0;
+  };
+  const std::size_t n = wheels ? in.phi_l_rad.size() : in.v_mps.size();
+  if (n != t.size() || (!wheels && in.w_radps.size() != n)) return out;
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    if (!still(i)) continue;
+    std::size_t j = i;
+    while (j + 1 < n && still(j)) ++j;
+    out.emplace_back(t[i], t[j]);
+    i = j;
+  }
+  return out;
+}
+
+double driving_time_between(double a, double b, const std::vector<std::pair<double, double>>& standstills_s) {
+  const double lo = std::min(a, b), hi = std::max(a, b);
+  double d = hi - lo;
+  for (const auto& [s0, s1] : standstills_s) d -= std::max(0.0, std::min(hi, s1) - std::max(lo, s0));
+  return std::max(d, 0.0);
+}
+
 BoxCoverage box_coverage(const TrueEffect& t, double x0, double x1, double y0, double y1,
                          const TruePath& path) {
   BoxCoverage c;
@@ -147,9 +174,13 @@ CaseGrade grade_case(const std::vector<EffectTruth>& truth, const diagnose::Diag
       }
       p.tolerance = param_tolerance(t.effect, name, wheel_base_m);
       double miss = p.found - p.truth;
-      if (t.effect.name == "radius_step" && name == "t")
+      if (t.effect.name == "radius_step" && name == "t") {
         for (const auto& [a, b] : path.ref_gaps_s)
           if (p.truth > a && p.truth < b) miss = p.found < a ? p.found - a : p.found > b ? p.found - b : 0.0;
+        // Counted in driving time: standstills between the two do not count.
+        const double target = p.found - miss;
+        miss = (miss < 0.0 ? -1.0 : 1.0) * driving_time_between(target, p.found, path.standstills_s);
+      }
       p.normalised = p.tolerance > 0.0 ? 0.25 * miss / p.tolerance : std::nan("");
       p.ok = std::isfinite(p.found) && std::abs(miss) <= p.tolerance;
       if (!p.ok)

@@ -23,9 +23,13 @@
 //
 // Parameter tolerances: ±25 % of the parameter's DEPARTURE from its no-op
 // value, with these rules for parameters that can sit at their no-op value:
-//  * radius_step.t: ±5 s; when the true t lies in a gap of the reference
-//    (TruePath::ref_gaps_s), anywhere in that gap ±5 s: no reference sample
-//    tells where in the gap the step happened;
+//  * radius_step.t: ±5 s of driving time; when the true t lies in a gap of
+//    the reference (TruePath::ref_gaps_s), anywhere in that gap ±5 s: no
+//    reference sample tells where in the gap the step happened; and the
+//    time between the found t and the truth (or the gap) during which the
+//    odometry stands still (TruePath::standstills_s) does not count: a
+//    radius that changes while the wheels do not turn changes nothing until
+//    they do, so no sample tells when in the standstill it changed;
 //  * scale pairs (radius_error and radius_step scale_l/scale_r, slip_zone
 //    s_l/s_r): 25 % of the pair's larger departure, so a wheel that is not
 //    off (scale 1) must come out within that of 1;
@@ -73,7 +77,18 @@ struct TruePath {
   // Gaps of the track's reference [s] (reference_gaps below): radius_step.t
   // inside one is graded against the gap (header comment).
   std::vector<std::pair<double, double>> ref_gaps_s;
+  // Standstills of the odometry [s] (odometry_standstills below): not
+  // counted in radius_step.t's miss (header comment).
+  std::vector<std::pair<double, double>> standstills_s;
 };
+
+// The intervals over which the odometry shows no motion: both wheel angles
+// unchanged between consecutive samples, or body velocities v = w = 0 at
+// both ends, as (first sample, last sample) of each run.
+std::vector<std::pair<double, double>> odometry_standstills(const diagnose::DiagInput& in);
+
+// |b - a| less the parts of [min, max] that lie in `standstills_s` [s].
+double driving_time_between(double a, double b, const std::vector<std::pair<double, double>>& standstills_s);
 
 // The gaps of a reference: consecutive sample times more than two median
 // periods apart, as (last sample before, first sample after).

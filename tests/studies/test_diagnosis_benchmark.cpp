@@ -332,6 +332,32 @@ TEST(DiagnosisGrading, ToleranceRulesForNoOpLikeParameters) {
           .pass);
   EXPECT_EQ(reference_gaps({0.0, 1.0, 2.0, 3.0, 9.0, 10.0, 11.0}),
             (std::vector<std::pair<double, double>>{{3.0, 9.0}}));
+  // Standstills between the found and the true step time do not count: 8 s
+  // apart with 4 s standing still is 4 s of driving (the wheels did not turn).
+  TruePath still = kNoPath;
+  still.standstills_s = {{101.0, 105.0}};
+  EXPECT_TRUE(
+      grade_case(truth,
+                 diagnosis({finding("radius_step", {{"t", 108.0}, {"scale_l", 0.991}, {"scale_r", 0.9905}})}),
+                 0.4, still)
+          .pass);
+  EXPECT_FALSE(
+      grade_case(truth,
+                 diagnosis({finding("radius_step", {{"t", 110.5}, {"scale_l", 0.991}, {"scale_r", 0.9905}})}),
+                 0.4, still)
+          .pass);
+  EXPECT_DOUBLE_EQ(driving_time_between(108.0, 100.0, still.standstills_s), 4.0);
+  EXPECT_DOUBLE_EQ(driving_time_between(102.0, 104.0, still.standstills_s), 0.0);
+  diagnose::DiagInput odo;
+  odo.odometry = diagnose::OdometryKind::wheel_angles;
+  odo.odo_t_s = {0.0, 1.0, 2.0, 3.0, 4.0, 5.0};
+  odo.phi_l_rad = {0.0, 1.0, 1.0, 1.0, 2.0, 3.0};
+  odo.phi_r_rad = {0.0, 1.0, 1.0, 1.0, 1.0, 2.0};
+  EXPECT_EQ(odometry_standstills(odo), (std::vector<std::pair<double, double>>{{1.0, 3.0}}));
+  odo.odometry = diagnose::OdometryKind::body_velocity;
+  odo.v_mps = {0.0, 0.0, 0.0, 0.5, 0.0, 0.0};
+  odo.w_radps = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+  EXPECT_EQ(odometry_standstills(odo), (std::vector<std::pair<double, double>>{{0.0, 2.0}, {4.0, 5.0}}));
   // odometry_bias: the larger departure as a rim speed, max(|b_v|, |b_w| D/2).
   const TrueEffect ob = effect("odometry_bias", {{"b_v", 0.0}, {"b_w", 0.01}});
   EXPECT_NEAR(param_tolerance(ob, "b_v", 0.4), 0.25 * 0.002, 1e-12);
