@@ -312,7 +312,6 @@ PairedComparison CrossValidator::compare(const SetEval& ref, const SetEval& alt,
   out.gain = ref.score - alt.score;
   out.rel = out.gain / ref.score;
   std::vector<double> d, z, lr;
-  double zsum = 0.0;
   for (std::size_t w = 0; w < windows_.size(); ++w) {
     const Window& win = windows_[w];
     double delta2 = 0.0;
@@ -330,13 +329,14 @@ PairedComparison CrossValidator::compare(const SetEval& ref, const SetEval& alt,
     const double s2 = std::max(1.0, alt.window_sse[w] / (n * comps_));
     z.push_back(dw / (2.0 * std::sqrt(s2 * corr_ * delta2)));
     lr.push_back(std::log(std::max(ref.window_sse[w], 1e-300) / std::max(alt.window_sse[w], 1e-300)));
-    zsum += z.back();
   }
   out.p_rank = wilcoxon_greater(d);
   out.p_t = std::min(t_test_greater(z), t_test_greater(lr));  // NaN-safe: min(NaN, NaN) = NaN
-  out.p_param = out.changed >= 2 && out.improved == out.changed
-                    ? normal_upper_tail(zsum / std::sqrt(static_cast<double>(out.changed)))
-                    : kNaN;
+  // Stouffer over every window when all improved; else (or also) over all
+  // but the strongest (header comment).
+  out.p_param = out.changed >= 2 && out.improved == out.changed ? stouffer_greater(z) : kNaN;
+  const double p_but = stouffer_greater_but_strongest(z);
+  if (!std::isnan(p_but)) out.p_param = std::isnan(out.p_param) ? p_but : std::min(out.p_param, p_but);
   out.significant = out.p_rank < alpha || out.p_t < 0.5 * alpha || out.p_param < alpha;
   return out;
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <numeric>
 
 namespace odotune::diagnose {
 
@@ -12,6 +13,17 @@ constexpr std::size_t kExactRankMax = 60;  // exact Wilcoxon distribution up to 
 }  // namespace
 
 double normal_upper_tail(double z) { return 0.5 * std::erfc(z / std::sqrt(2.0)); }
+
+double stouffer_greater(const std::vector<double>& z) {
+  if (z.empty()) return std::numeric_limits<double>::quiet_NaN();
+  return normal_upper_tail(std::accumulate(z.begin(), z.end(), 0.0) / std::sqrt(static_cast<double>(z.size())));
+}
+
+double stouffer_greater_but_strongest(const std::vector<double>& z) {
+  if (z.size() < 3) return std::numeric_limits<double>::quiet_NaN();
+  const double sum = std::accumulate(z.begin(), z.end(), 0.0) - *std::max_element(z.begin(), z.end());
+  return normal_upper_tail(sum / std::sqrt(static_cast<double>(z.size() - 1)));
+}
 
 // Regularised incomplete beta I_x(a, b), continued fraction (modified Lentz).
 double incomplete_beta(double x, double a, double b) {

@@ -21,6 +21,14 @@ double wilcoxon_greater(const std::vector<double>& d);
 // (NaN for fewer than 3 values; 0 or 1 when all values are equal).
 double t_test_greater(const std::vector<double>& v);
 
+// One-sided Stouffer p that the z-scores z (independent, standard normal
+// under the null) are centred above 0: normal_upper_tail(sum z / sqrt(n)).
+// stouffer_greater: all of them (NaN for none). stouffer_greater_but_strongest:
+// all but the largest, so that no single value carries the result (NaN for
+// fewer than 3 values).
+double stouffer_greater(const std::vector<double>& z);
+double stouffer_greater_but_strongest(const std::vector<double>& z);
+
 // Regularised incomplete beta function I_x(a, b), a, b > 0, x in [0, 1]
 // (continued fraction; used for the t distribution).
 double incomplete_beta(double x, double a, double b);

@@ -113,6 +113,17 @@ TEST(PairedTest, WilcoxonExactMatchesHandCountedTails) {
   EXPECT_NEAR(wilcoxon_greater(balanced), 0.5, 0.05);
 }
 
+TEST(PairedTest, StoufferWithoutTheStrongestWindow) {
+  EXPECT_NEAR(stouffer_greater({1.0, 2.0, 3.0}), normal_upper_tail(6.0 / std::sqrt(3.0)), 1e-15);
+  EXPECT_TRUE(std::isnan(stouffer_greater({})));
+  // Five windows far better and a short one slightly worse: significant.
+  EXPECT_LT(stouffer_greater_but_strongest({30.0, 25.0, 28.0, 20.0, 15.0, -0.3}), 1e-20);
+  // One window carries it all: not significant once it is left out.
+  EXPECT_GT(stouffer_greater_but_strongest({40.0, -1.0, 0.5, -0.2}), 0.5);
+  EXPECT_NEAR(stouffer_greater_but_strongest({9.0, 1.0, 2.0}), normal_upper_tail(3.0 / std::sqrt(2.0)), 1e-15);
+  EXPECT_TRUE(std::isnan(stouffer_greater_but_strongest({5.0, 4.0})));
+}
+
 TEST(PairedTest, TTestAndIncompleteBetaMatchTables) {
   EXPECT_NEAR(incomplete_beta(0.3, 1.0, 1.0), 0.3, 1e-12);
   EXPECT_NEAR(incomplete_beta(0.3, 2.0, 1.0), 0.09, 1e-12);
