@@ -71,7 +71,7 @@
 //      significant at alpha: the exact Wilcoxon signed-rank test on the
 //      per-window gains, or t-tests on their z-scores and log ratios, or
 //      (when every informative window improved) Stouffer's combination of
-//      the z-scores. A rank test over n windows cannot go below 2^-n
+//      the z-scores, or that of all informative windows but the strongest. A rank test over n windows cannot go below 2^-n
 //      (p < 1e-3 needs 10 windows, all improved), and an effect that acts in
 //      a few windows only (a slip zone crossed twice, a late radius step) or
 //      shows little in some windows (lateral_skid needs turns) needs the
@@ -150,7 +150,9 @@
 //    residuals of the current set, plus SelectOptions::zone_boxes (e.g. from
 //    locate.h); each box is fitted (s_l, s_r with S) on all windows, the
 //    lowest cost wins, and its edges are refined by coordinate search on the
-//    fit cost in steps of zone_cell_m/2 then /4 (up to 4 rounds each,
+//    fit cost in steps of half the box's own grid cell (zone_boxes.h: boxes
+//    come from grids of 1, 2 and 4 zone_cell_m) halved down to zone_cell_m/4
+//    (up to 4 rounds each,
 //    first improvement in edge order; the moves are fitted speculatively
 //    in parallel, zone_boxes.h),
 //    unless its fitted slips are both below 0.01 (a box from noise). Edges
@@ -258,7 +260,7 @@ struct SearchRecord {
   int windows_changed = 0, windows_improved = 0;  // informative windows (cross_validate.h)
   double p_rank = 1.0;                            // one-sided Wilcoxon signed-rank p
   double p_t = 0.0;      // smaller one-sided t-test p (window z's, log ratios; NaN: < 3 windows)
-  double p_param = 0.0;  // one-sided Stouffer p (NaN unless every informative window improved)
+  double p_param = 0.0;  // one-sided Stouffer p (cross_validate.h compare(); NaN: not computed)
   bool significant = false;
   // BIC of the evaluated set and its change against the set it competes with
   // (forward: new - current; backward: with - without, so < 0 favours keeping);

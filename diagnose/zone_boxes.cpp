@@ -25,14 +25,14 @@ constexpr double kFlatCost = 1.92;
 
 }  // namespace
 
-std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Window>& windows,
-                                     const std::vector<double>& pred_x_m, const std::vector<double>& pred_y_m,
-                                     const std::vector<double>& pred_theta_rad, double cell_m, int max_boxes,
-                                     double min_score) {
-  if (pred_x_m.size() != in.ref_t_s.size() || pred_y_m.size() != in.ref_t_s.size())
-    throw std::invalid_argument(fmt::format("zone_candidates: {} and {} predictions for {} reference "
-                                            "samples",
-                                            pred_x_m.size(), pred_y_m.size(), in.ref_t_s.size()));
+namespace {
+
+// zone_candidates on one grid of cell_m (header comment).
+std::vector<ZoneBox> zone_candidates_at(const DiagInput& in, const std::vector<Window>& windows,
+                                        const std::vector<double>& pred_x_m,
+                                        const std::vector<double>& pred_y_m,
+                                        const std::vector<double>& pred_theta_rad, double cell_m, int max_boxes,
+                                        double min_score, int exhaustive_cells) {
   const bool heading = in.has_ref_heading() && pred_theta_rad.size() == in.ref_t_s.size();
   const double sm2 = in.ref_sigma_m * in.ref_sigma_m;
   const double sh2 = heading ? in.ref_sigma_rad * in.ref_sigma_rad : 1.0;
@@ -114,6 +114,32 @@ std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Wind
     const double p2 = 2.0 * passes;
     return std::max(a, 0.0) * std::max(a, 0.0) / (p2 * sm2) + (heading ? h * h / (p2 * sh2) : 0.0);
   };
+  if (exhaustive_cells > 0) {
+    // Every box of 1..exhaustive_cells cells per side that holds some
+    // travel, best first, none whose centre lies in a better one.
+    std::vector<std::pair<double, Rect>> all;
+    for (int y0 = 0; y0 < ny; ++y0)
+      for (int x0 = 0; x0 < nx; ++x0)
+        for (int h = 1; h <= exhaustive_cells && y0 + h <= ny; ++h)
+          for (int w = 1; w <= exhaustive_cells && x0 + w <= nx; ++w) {
+            const Rect r{x0, x0 + w - 1, y0, y0 + h - 1};
+            const double v = score(r);
+            if (v >= min_score) all.push_back({v, r});
+          }
+    std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::vector<ZoneBox> out;
+    for (const auto& [v, r] : all) {
+      if (static_cast<int>(out.size()) >= max_boxes) break;
+      const ZoneBox b{
+          xmin + r.x0 * cell, xmin + (r.x1 + 1) * cell, ymin + r.y0 * cell, ymin + (r.y1 + 1) * cell, v, cell};
+      const double cx = 0.5 * (b.x0_m + b.x1_m), cy = 0.5 * (b.y0_m + b.y1_m);
+      if (std::none_of(out.begin(), out.end(), [&](const ZoneBox& k) {
+            return cx >= k.x0_m && cx <= k.x1_m && cy >= k.y0_m && cy <= k.y1_m;
+          }))
+        out.push_back(b);
+    }
+    return out;
+  }
   std::vector<std::pair<double, int>> seeds;
   for (int i = 0; i < nx * ny; ++i)
     if (cl[static_cast<std::size_t>(i)] > 0.0 || ch[static_cast<std::size_t>(i)] != 0.0)
@@ -154,7 +180,40 @@ std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Wind
     found.push_back(r);
     if (sc < min_score) continue;
     out.push_back({xmin + r.x0 * cell, xmin + (r.x1 + 1) * cell, ymin + r.y0 * cell, ymin + (r.y1 + 1) * cell,
-                   sc});
+                   sc, cell});
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Window>& windows,
+                                     const std::vector<double>& pred_x_m, const std::vector<double>& pred_y_m,
+                                     const std::vector<double>& pred_theta_rad, double cell_m, int max_boxes,
+                                     double min_score) {
+  if (pred_x_m.size() != in.ref_t_s.size() || pred_y_m.size() != in.ref_t_s.size())
+    throw std::invalid_argument(fmt::format("zone_candidates: {} and {} predictions for {} reference "
+                                            "samples",
+                                            pred_x_m.size(), pred_y_m.size(), in.ref_t_s.size()));
+  // Three grids (header comment, "Scales"): the best boxes of all, a box
+  // whose centre lies in a better one dropped.
+  std::vector<ZoneBox> all;
+  for (double scale : {1.0, 2.0, 4.0}) {
+    const std::vector<ZoneBox> b = zone_candidates_at(in, windows, pred_x_m, pred_y_m, pred_theta_rad,
+                                                      scale * cell_m, max_boxes, min_score,
+                                                      scale > 2.0 ? 4 : 0);
+    all.insert(all.end(), b.begin(), b.end());
+  }
+  std::stable_sort(all.begin(), all.end(),
+                   [](const ZoneBox& a, const ZoneBox& b) { return a.score > b.score; });
+  std::vector<ZoneBox> out;
+  for (const ZoneBox& b : all) {
+    if (static_cast<int>(out.size()) >= max_boxes) break;
+    const double cx = 0.5 * (b.x0_m + b.x1_m), cy = 0.5 * (b.y0_m + b.y1_m);
+    const bool inside = std::any_of(out.begin(), out.end(), [&](const ZoneBox& k) {
+      return cx >= k.x0_m && cx <= k.x1_m && cy >= k.y0_m && cy <= k.y1_m;
+    });
+    if (!inside) out.push_back(b);
   }
   return out;
 }
@@ -220,7 +279,12 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
     int edge;
     double sign;
   };
-  for (double step : {0.5 * o.cell_m, 0.25 * o.cell_m})
+  // Steps from half the cell the box was proposed on (coarser grids give
+  // coarser boxes) down to a quarter of cell_m.
+  std::vector<double> steps;
+  for (double step = 0.5 * std::max(bb.cell_m, o.cell_m); step > 0.2 * o.cell_m; step *= 0.5)
+    steps.push_back(step);
+  for (double step : steps)
     for (int round = 0, moved = 1; moved && round < 4; ++round) {
       moved = 0;
       std::vector<Move> left;

@@ -17,7 +17,8 @@ namespace odotune::diagnose {
 // An axis-aligned box of the world frame [m] (x0 < x1, y0 < y1).
 struct ZoneBox {
   double x0_m = 0.0, x1_m = 0.0, y0_m = 0.0, y1_m = 0.0;
-  double score = 0.0;  // zone_candidates' score (unused in boxes given to the selection)
+  double score = 0.0;   // zone_candidates' score (unused in boxes given to the selection)
+  double cell_m = 0.0;  // the grid's cell it was found on (0: not from a grid)
 };
 
 // Candidate boxes from the predictions pred_* of a model (per reference
@@ -47,7 +48,17 @@ struct ZoneBox {
 // the one row or column of cells (of four) that raises sqrt(score) most, while
 // it raises it by at least 1 (a cell with no slip in it moves the sum by
 // reference noise only). Boxes (cell edges) scoring at least min_score are
-// returned, best seed first, at most max_boxes. Throws std::invalid_argument
+// returned, best seed first, at most max_boxes.
+//
+// Scales. All this on three grids, cells of cell_m, 2 cell_m and 4 cell_m,
+// on the coarsest by scoring every box of 1-4 cells per side instead of
+// growing seeds, and the max_boxes best boxes of the three kept (a box whose
+// centre lies in a better one dropped): with sparse fixes (1 Hz, 0.2-0.5 m apart, 20-50 mm
+// noise) a single fine cell holds one noisy increment per pass, too little
+// for a seed to stand out or to grow, while a patch of a few metres shows on
+// the coarser grids (benchmark dev seed 1002 case 125: a 2.4 m x 1.8 m patch,
+// s = 0.07 crossed three times, scores 54 as a whole, but no seed of the
+// 0.25 m grid grew into a box). Throws std::invalid_argument
 // when pred_x_m or pred_y_m do not have one value per reference sample.
 std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Window>& windows,
                                      const std::vector<double>& pred_x_m, const std::vector<double>& pred_y_m,
@@ -68,7 +79,8 @@ struct ZoneSearchOptions {
 // with s, warm-started from cur_full.fitted) on all of cv's windows and the
 // lowest fit cost wins. Unless its slips both stay below 0.01 (a box from
 // noise), its edges are then refined by coordinate search on the fit cost
-// in steps of cell_m/2 then cell_m/4 (up to 4 rounds each; a round moves
+// in steps of half the box's own grid cell (ZoneBox::cell_m, at least
+// cell_m), halved down to cell_m/4 (up to 4 rounds each; a round moves
 // each edge out and in, in order, keeping each move that lowers the cost;
 // the remaining moves are fitted speculatively in parallel from the current
 // box, and those after a kept move fitted again, so the result is that of

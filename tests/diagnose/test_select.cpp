@@ -163,6 +163,26 @@ TEST(ZoneBoxes, FindThePatchWhereTheResidualGrows) {
   EXPECT_TRUE(boxes_of_nominal(simulated(sim_options(41, 120.0, {}))).empty());
 }
 
+// Sparse fixes (1 Hz, 30 mm): one noisy increment per 0.25 m cell and pass
+// is too little for a seed to grow from; the coarser grids find the patch.
+TEST(ZoneBoxes, FindThePatchFromSparseFixes) {
+  for (std::uint64_t seed : {43u, 44u}) {
+    SimTrackOptions o = sim_options(seed, 240.0, {"slip_zone:x0=0.2,x1=2.8,y0=-1,y1=1,s_l=0.08,s_r=0.08"});
+    o.gt_rate_hz = 0.0, o.aps_rate_hz = 1.0, o.aps_sigma_m = 0.03;
+    const DiagInput in = simulated(o);
+    ASSERT_EQ(in.reference, ReferenceKind::aps);
+    const ReplayResult r = replay(in, EffectSet(), 40.0);
+    const std::vector<ZoneBox> boxes =
+        zone_candidates(in, make_windows(in, 40.0), r.pred_x_m, r.pred_y_m, r.pred_theta_rad, 0.25, 3, 16.0);
+    ASSERT_FALSE(boxes.empty()) << "seed " << seed;
+    const ZoneBox& b = boxes.front();
+    const double cx = 0.5 * (b.x0_m + b.x1_m), cy = 0.5 * (b.y0_m + b.y1_m);
+    EXPECT_TRUE(cx > 0.2 && cx < 2.8 && cy > -1.0 && cy < 1.0)
+        << "seed " << seed << ": [" << b.x0_m << ", " << b.x1_m << "] x [" << b.y0_m << ", " << b.y1_m << "]";
+    EXPECT_GE(b.cell_m, 0.25);
+  }
+}
+
 TEST(ZoneBoxes, MismatchedPredictionsAreAnError) {
   const DiagInput in = simulated(sim_options(42, 30.0, {}));
   const std::vector<double> two(2, 0.0);
