@@ -512,6 +512,7 @@ bool SensorCheckOptions::IsValid(std::string* why) const {
   return check_option_rules(
       {
           {is_positive(bin_s), "bin_s", bin_s, "> 0"},
+          {is_positive(gyro_bin_s), "gyro_bin_s", gyro_bin_s, "> 0"},
           {is_non_negative(aps_min_bin_s), "aps_min_bin_s", aps_min_bin_s, ">= 0"},
           {is_positive(huber_k), "huber_k", huber_k, "> 0"},
           {max_irls_iterations >= 1 && max_irls_iterations <= 10000, "max_irls_iterations",
@@ -583,7 +584,11 @@ ReferenceBins reference_bins(const DiagInput& in, const SensorCheckOptions& o, d
 SensorCheck check_sensors(const DiagInput& in, const SensorCheckOptions& options) {
   SensorCheck out;
   out.reference = reference_bins(in, options);  // validates options and input
-  out.gyro = check_gyro(in, out.reference, options);
+  // The gyro's own, finer bins (header comment, gyro_bin_s).
+  SensorCheckOptions g = options;
+  const double dt_gyro = in.gyro_t_s.size() >= 2 ? median_step(in.gyro_t_s) : 0.0;
+  g.bin_s = std::min(options.bin_s, std::max(options.gyro_bin_s, 2.0 * dt_gyro));
+  out.gyro = check_gyro(in, g.bin_s < options.bin_s ? reference_bins(in, g) : out.reference, options);
   out.odometry = check_odometry(in, out.reference, options);
   return out;
 }
