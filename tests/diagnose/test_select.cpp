@@ -172,8 +172,8 @@ TEST(ZoneBoxes, FindThePatchFromSparseFixes) {
     const DiagInput in = simulated(o);
     ASSERT_EQ(in.reference, ReferenceKind::aps);
     const ReplayResult r = replay(in, EffectSet(), 40.0);
-    const std::vector<ZoneBox> boxes =
-        zone_candidates(in, make_windows(in, 40.0), r.pred_x_m, r.pred_y_m, r.pred_theta_rad, 0.25, 3, 16.0);
+    const std::vector<ZoneBox> boxes = zone_candidates(in, make_windows(in, 40.0), r.pred_x_m, r.pred_y_m,
+                                                       r.pred_theta_rad, 0.25, 3, 16.0);
     ASSERT_FALSE(boxes.empty()) << "seed " << seed;
     const ZoneBox& b = boxes.front();
     const double cx = 0.5 * (b.x0_m + b.x1_m), cy = 0.5 * (b.y0_m + b.y1_m);

@@ -200,6 +200,28 @@ TEST(SensorChecks, GyroScaleAndBiasRecovered) {
   }
 }
 
+// The gyro regression's own finer bins keep more reference headings: a
+// noisy heading reference pins the bias down better than with 0.25 s bins.
+TEST(SensorChecks, GyroBinsKeepMoreHeadingsAndShrinkTheBiasError) {
+  Truth tr{.gyro_b = 0.0005, .seed = 11};
+  tr.gt_sigma_m = 0.002, tr.gt_sigma_rad = 0.015;
+  const DiagInput in = make_input(tr);
+  const SensorCheck fine = check_sensors(in);
+  SensorCheckOptions o;
+  o.gyro_bin_s = o.bin_s;  // the reference bins of the other checks
+  const SensorCheck coarse = check_sensors(in, o);
+  ASSERT_TRUE(fine.gyro.available && coarse.gyro.available);
+  EXPECT_EQ(coarse.gyro.bins, static_cast<int>(coarse.reference.t0_s.size()));
+  EXPECT_GT(fine.gyro.bins, 4 * coarse.gyro.bins);                        // 0.05 s against 0.25 s
+  EXPECT_LT(fine.gyro.bias.std_error, 0.9 * coarse.gyro.bias.std_error);  // 0.78 here
+  EXPECT_LT(std::abs(fine.gyro.bias.value - 0.0005), 4 * fine.gyro.bias.std_error);
+  SensorCheckOptions bad;
+  bad.gyro_bin_s = 0.0;
+  std::string why;
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_NE(why.find("gyro_bin_s"), std::string::npos) << why;
+}
+
 TEST(SensorChecks, RelevanceGateSeparatesSignificantFromRelevant) {
   const DiagInput in = make_input(Truth{.gyro_b = 0.001, .seed = 3});
   SensorCheckOptions o;
