@@ -117,11 +117,20 @@ std::vector<ZoneBox> zone_candidates_at(const DiagInput& in, const std::vector<W
   if (exhaustive_cells > 0) {
     // Every box of 1..exhaustive_cells cells per side that holds some
     // travel, best first, none whose centre lies in a better one.
+    // Cells with travel, as 2D prefix counts: a box without any is skipped
+    // unscored (a large drive's area is mostly empty).
+    std::vector<int> pre(static_cast<std::size_t>((nx + 1) * (ny + 1)), 0);
+    const auto P = [&](int x, int y) -> int& { return pre[static_cast<std::size_t>(y * (nx + 1) + x)]; };
+    for (int y = 0; y < ny; ++y)
+      for (int x = 0; x < nx; ++x)
+        P(x + 1, y + 1) = P(x, y + 1) + P(x + 1, y) - P(x, y) +
+                          (cl[static_cast<std::size_t>(y * nx + x)] > 0.0);
     std::vector<std::pair<double, Rect>> all;
     for (int y0 = 0; y0 < ny; ++y0)
       for (int x0 = 0; x0 < nx; ++x0)
         for (int h = 1; h <= exhaustive_cells && y0 + h <= ny; ++h)
           for (int w = 1; w <= exhaustive_cells && x0 + w <= nx; ++w) {
+            if (P(x0 + w, y0 + h) - P(x0, y0 + h) - P(x0 + w, y0) + P(x0, y0) == 0) continue;
             const Rect r{x0, x0 + w - 1, y0, y0 + h - 1};
             const double v = score(r);
             if (v >= min_score) all.push_back({v, r});
