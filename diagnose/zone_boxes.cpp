@@ -204,13 +204,14 @@ std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Wind
     throw std::invalid_argument(fmt::format("zone_candidates: {} and {} predictions for {} reference "
                                             "samples",
                                             pred_x_m.size(), pred_y_m.size(), in.ref_t_s.size()));
-  // Up to three grids (header comment, "Scales"): a coarser one only when
-  // the finer ones found no box.
+  // Three grids (header comment, "Scales"): the best boxes of all, a box
+  // whose centre lies in a better one dropped.
   std::vector<ZoneBox> all;
   for (double scale : {1.0, 2.0, 4.0}) {
-    if (!all.empty()) break;
-    all = zone_candidates_at(in, windows, pred_x_m, pred_y_m, pred_theta_rad, scale * cell_m, max_boxes,
-                             min_score, scale > 2.0 ? 4 : 0);
+    const std::vector<ZoneBox> b = zone_candidates_at(in, windows, pred_x_m, pred_y_m, pred_theta_rad,
+                                                      scale * cell_m, max_boxes, min_score,
+                                                      scale > 2.0 ? 4 : 0);
+    all.insert(all.end(), b.begin(), b.end());
   }
   std::stable_sort(all.begin(), all.end(),
                    [](const ZoneBox& a, const ZoneBox& b) { return a.score > b.score; });

@@ -50,10 +50,10 @@ struct ZoneBox {
 // reference noise only). Boxes (cell edges) scoring at least min_score are
 // returned, best seed first, at most max_boxes.
 //
-// Scales. When this finds no box on cells of cell_m, it runs on cells of
-// 2 cell_m, and then of 4 cell_m scoring every box of 1-4 cells per side
-// instead of growing seeds (the best first, none whose centre lies in a
-// better one): with sparse fixes (1 Hz, 0.2-0.5 m apart, 20-50 mm
+// Scales. All this on three grids, cells of cell_m, 2 cell_m and 4 cell_m,
+// on the coarsest by scoring every box of 1-4 cells per side instead of
+// growing seeds, and the max_boxes best boxes of the three kept (a box whose
+// centre lies in a better one dropped): with sparse fixes (1 Hz, 0.2-0.5 m apart, 20-50 mm
 // noise) a single fine cell holds one noisy increment per pass, too little
 // for a seed to stand out or to grow, while a patch of a few metres shows on
 // the coarser grids (benchmark dev seed 1002 case 125: a 2.4 m x 1.8 m patch,
