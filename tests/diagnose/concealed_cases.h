@@ -279,7 +279,8 @@ inline const std::vector<ConcealedCase>& concealed_cases() {
 // a step time). "25 %" applies to the DEPARTURE from the no-op value (a
 // scale of 1.004 must come out within 1.003..1.005, not 0.75..1.25):
 //   radius_step.t: 5 s;
-//   slip_zone box edges: 25 % of the box's extent along that axis;
+//   slip_zone box edges: 25 % of the box's extent along that axis (the
+//     concealed-case test grades the box by the path instead);
 //   two-wheel scale pairs (scale_l/scale_r): 25 % of the pair's larger
 //     departure (so an unchanged wheel still has a tolerance);
 //   otherwise 25 % of |value − default|.
