@@ -43,7 +43,10 @@
 namespace odotune {
 
 // The docs run's seed (never used while developing; development: 1001-1003).
-inline constexpr std::uint64_t kDocsSeed = 20261125;
+// 20261125 was the docs seed of issue 15's first two runs; it was retired
+// once its failure list had been read while developing (docs/diagnosis/
+// benchmark.md, "Seeds").
+inline constexpr std::uint64_t kDocsSeed = 20261126;
 
 struct DiagnosisBenchmarkOptions {
   int cases = 300;                           // 1..100000

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
@@ -515,6 +516,16 @@ TEST(DiagnosisBenchmarkRun, TinyRunWritesConsistentFiles) {
   const std::string md = read_file(std::filesystem::path(r.out) / "summary.md");
   EXPECT_NE(md.find("## Against the aims"), std::string::npos);
   EXPECT_NE(md.find("seed 1002"), std::string::npos);
+  // The margin table counts every graded case but the undetectable ones once.
+  const auto at = md.find("## By margin");
+  ASSERT_NE(at, std::string::npos);
+  const std::string part = md.substr(at, md.find("## By reference shape") - at);
+  const std::regex row(R"(\| (null|single|two)[^|]* \| (\d+)/(\d+) \()");
+  int in_margin = 0;
+  for (auto it = std::sregex_iterator(part.begin(), part.end(), row); it != std::sregex_iterator(); ++it)
+    in_margin += std::stoi((*it)[3].str());
+  EXPECT_GE(in_margin, 1);
+  EXPECT_LE(in_margin, 2);
 }
 
 TEST(DiagnosisBenchmarkRun, BadOptionsFailBeforeWork) {
