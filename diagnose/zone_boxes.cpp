@@ -243,6 +243,16 @@ double inside_centre(const DiagInput& in, const std::vector<Window>& windows, co
   return lo <= hi ? 0.5 * (lo + hi) : kNaN;
 }
 
+// Share of the scored reference samples of `windows` inside box b.
+double inside_share(const DiagInput& in, const std::vector<Window>& windows, const ZoneBox& b) {
+  std::size_t inside = 0, all = 0;
+  for (const Window& w : windows)
+    for (std::size_t g = w.ref_begin; g < w.ref_end; ++g, ++all)
+      inside += in.ref_x_m[g] >= b.x0_m && in.ref_x_m[g] <= b.x1_m && in.ref_y_m[g] >= b.y0_m &&
+                in.ref_y_m[g] <= b.y1_m;
+  return all > 0 ? static_cast<double>(inside) / static_cast<double>(all) : 0.0;
+}
+
 }  // namespace
 
 EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval& cur_full,
@@ -250,6 +260,12 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
   std::vector<ZoneBox> boxes = zone_candidates(cv.input(), cv.windows(), cur_full.pred.x_m, cur_full.pred.y_m,
                                                cur_full.pred.theta_rad, o.cell_m, o.max_boxes, o.min_score);
   boxes.insert(boxes.end(), o.extra_boxes.begin(), o.extra_boxes.end());
+  // A place, not the whole drive (header comment): a box over most of the
+  // path is a radius error by another name.
+  const auto too_wide = [&](const ZoneBox& b) {
+    return inside_share(cv.input(), cv.windows(), b) > o.max_share;
+  };
+  boxes.erase(std::remove_if(boxes.begin(), boxes.end(), too_wide), boxes.end());
   EffectSet warm = cur_full.fitted;
   auto try_box = [&](const ZoneBox& b, double& cost, EffectSet& fitted) {
     EffectSet st = s;
@@ -312,7 +328,8 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
         // try_box reads `warm`, which no task writes.
 #pragma omp parallel for schedule(dynamic, 1) if (qs.size() > 1)
         for (std::size_t i = 0; i < qs.size(); ++i)
-          if (qs[i].x0_m < qs[i].x1_m && qs[i].y0_m < qs[i].y1_m) sets[i] = try_box(qs[i], costs[i], fits[i]);
+          if (qs[i].x0_m < qs[i].x1_m && qs[i].y0_m < qs[i].y1_m && !too_wide(qs[i]))
+            sets[i] = try_box(qs[i], costs[i], fits[i]);
         std::size_t taken = qs.size();
         for (std::size_t i = 0; i < qs.size() && taken == qs.size(); ++i)
           if (costs[i] < best_cost * (1.0 - 1e-6)) taken = i;

@@ -71,11 +71,16 @@ struct ZoneSearchOptions {
   double min_score = 16.0;           // their score threshold
   std::vector<ZoneBox> extra_boxes;  // more candidates (e.g. from locate.h)
   int max_iterations = 20;           // of each fit
+  double max_share = 0.5;            // a box may hold at most this share of the scored reference samples
 };
 
 // The structure s plus slip_zone with the best box, or an empty set when
 // there is no candidate. Candidates: zone_candidates on cur_full's
-// predictions (cv.fit_all of s) plus extra_boxes; each is fitted (s_l, s_r
+// predictions (cv.fit_all of s) plus extra_boxes, but none (and no refined
+// box) that holds more than max_share of the scored reference samples: a
+// slip zone is a place, and a box over most of the path fits a radius error
+// as well as radius_error does (a pooled fit of three recordings with a 1 %
+// radius error chose a coarse box over half the map, slips 0.01); each is fitted (s_l, s_r
 // with s, warm-started from cur_full.fitted) on all of cv's windows and the
 // lowest fit cost wins. Unless its slips both stay below 0.01 (a box from
 // noise), its edges are then refined by coordinate search on the fit cost
