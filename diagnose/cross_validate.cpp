@@ -334,9 +334,9 @@ PairedComparison CrossValidator::compare(const SetEval& ref, const SetEval& alt,
   out.p_t = std::min(t_test_greater(z), t_test_greater(lr));  // NaN-safe: min(NaN, NaN) = NaN
   // Stouffer over every window when all improved; else (or also) over all
   // but the strongest (header comment).
-  out.p_param = out.changed >= 2 && out.improved == out.changed ? stouffer_greater(z) : kNaN;
-  const double p_but = stouffer_greater_but_strongest(z);
-  if (!std::isnan(p_but)) out.p_param = std::isnan(out.p_param) ? p_but : std::min(out.p_param, p_but);
+  // (fmin: the other when one is NaN, NaN when both are.)
+  const double p_all = out.changed >= 2 && out.improved == out.changed ? stouffer_greater(z) : kNaN;
+  out.p_param = std::fmin(p_all, stouffer_greater_but_strongest(z));
   out.significant = out.p_rank < alpha || out.p_t < 0.5 * alpha || out.p_param < alpha;
   return out;
 }

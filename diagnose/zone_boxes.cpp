@@ -27,6 +27,23 @@ constexpr double kFlatCost = 1.92;
 
 namespace {
 
+// The max_boxes best of `boxes` (by score, stable), none whose centre lies
+// in a better one kept.
+std::vector<ZoneBox> best_apart(std::vector<ZoneBox> boxes, int max_boxes) {
+  std::stable_sort(boxes.begin(), boxes.end(),
+                   [](const ZoneBox& a, const ZoneBox& b) { return a.score > b.score; });
+  std::vector<ZoneBox> out;
+  for (const ZoneBox& b : boxes) {
+    if (static_cast<int>(out.size()) >= max_boxes) break;
+    const double cx = 0.5 * (b.x0_m + b.x1_m), cy = 0.5 * (b.y0_m + b.y1_m);
+    if (std::none_of(out.begin(), out.end(), [&](const ZoneBox& k) {
+          return cx >= k.x0_m && cx <= k.x1_m && cy >= k.y0_m && cy <= k.y1_m;
+        }))
+      out.push_back(b);
+  }
+  return out;
+}
+
 // zone_candidates on one grid of cell_m (header comment).
 std::vector<ZoneBox> zone_candidates_at(const DiagInput& in, const std::vector<Window>& windows,
                                         const std::vector<double>& pred_x_m,
@@ -125,7 +142,7 @@ std::vector<ZoneBox> zone_candidates_at(const DiagInput& in, const std::vector<W
       for (int x = 0; x < nx; ++x)
         P(x + 1, y + 1) = P(x, y + 1) + P(x + 1, y) - P(x, y) +
                           (cl[static_cast<std::size_t>(y * nx + x)] > 0.0);
-    std::vector<std::pair<double, Rect>> all;
+    std::vector<ZoneBox> all;
     for (int y0 = 0; y0 < ny; ++y0)
       for (int x0 = 0; x0 < nx; ++x0)
         for (int h = 1; h <= exhaustive_cells && y0 + h <= ny; ++h)
@@ -133,21 +150,11 @@ std::vector<ZoneBox> zone_candidates_at(const DiagInput& in, const std::vector<W
             if (P(x0 + w, y0 + h) - P(x0, y0 + h) - P(x0 + w, y0) + P(x0, y0) == 0) continue;
             const Rect r{x0, x0 + w - 1, y0, y0 + h - 1};
             const double v = score(r);
-            if (v >= min_score) all.push_back({v, r});
+            if (v >= min_score)
+              all.push_back({xmin + r.x0 * cell, xmin + (r.x1 + 1) * cell, ymin + r.y0 * cell,
+                             ymin + (r.y1 + 1) * cell, v, cell});
           }
-    std::stable_sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-    std::vector<ZoneBox> out;
-    for (const auto& [v, r] : all) {
-      if (static_cast<int>(out.size()) >= max_boxes) break;
-      const ZoneBox b{
-          xmin + r.x0 * cell, xmin + (r.x1 + 1) * cell, ymin + r.y0 * cell, ymin + (r.y1 + 1) * cell, v, cell};
-      const double cx = 0.5 * (b.x0_m + b.x1_m), cy = 0.5 * (b.y0_m + b.y1_m);
-      if (std::none_of(out.begin(), out.end(), [&](const ZoneBox& k) {
-            return cx >= k.x0_m && cx <= k.x1_m && cy >= k.y0_m && cy <= k.y1_m;
-          }))
-        out.push_back(b);
-    }
-    return out;
+    return best_apart(std::move(all), max_boxes);
   }
   std::vector<std::pair<double, int>> seeds;
   for (int i = 0; i < nx * ny; ++i)
@@ -213,18 +220,7 @@ std::vector<ZoneBox> zone_candidates(const DiagInput& in, const std::vector<Wind
                                                       scale > 2.0 ? 4 : 0);
     all.insert(all.end(), b.begin(), b.end());
   }
-  std::stable_sort(all.begin(), all.end(),
-                   [](const ZoneBox& a, const ZoneBox& b) { return a.score > b.score; });
-  std::vector<ZoneBox> out;
-  for (const ZoneBox& b : all) {
-    if (static_cast<int>(out.size()) >= max_boxes) break;
-    const double cx = 0.5 * (b.x0_m + b.x1_m), cy = 0.5 * (b.y0_m + b.y1_m);
-    const bool inside = std::any_of(out.begin(), out.end(), [&](const ZoneBox& k) {
-      return cx >= k.x0_m && cx <= k.x1_m && cy >= k.y0_m && cy <= k.y1_m;
-    });
-    if (!inside) out.push_back(b);
-  }
-  return out;
+  return best_apart(std::move(all), max_boxes);
 }
 
 namespace {

@@ -308,45 +308,29 @@ TEST(DiagnosisGrading, ToleranceRulesForNoOpLikeParameters) {
   const TrueEffect step = effect("radius_step", {{"t", 100}, {"scale_l", 0.99}, {"scale_r", 0.99}});
   EXPECT_EQ(param_tolerance(step, "t", 0.4), 5.0);
   const std::vector<EffectTruth> truth = {truth_of(step, true)};
-  EXPECT_TRUE(
-      grade_case(truth,
-                 diagnosis({finding("radius_step", {{"t", 104.5}, {"scale_l", 0.991}, {"scale_r", 0.9905}})}),
-                 0.4, kNoPath)
-          .pass);
-  EXPECT_FALSE(
-      grade_case(truth,
-                 diagnosis({finding("radius_step", {{"t", 105.5}, {"scale_l", 0.991}, {"scale_r", 0.9905}})}),
-                 0.4, kNoPath)
-          .pass);
+  // The step found at t_s (scales within tolerance), graded against `path`.
+  const auto step_at_passes = [&](double t_s, const TruePath& path) {
+    return grade_case(
+               truth,
+               diagnosis({finding("radius_step", {{"t", t_s}, {"scale_l", 0.991}, {"scale_r", 0.9905}})}), 0.4,
+               path)
+        .pass;
+  };
+  EXPECT_TRUE(step_at_passes(104.5, kNoPath));
+  EXPECT_FALSE(step_at_passes(105.5, kNoPath));
   // A step inside a reference gap: anywhere in the gap +-5 s (no sample tells where).
   TruePath gapped = kNoPath;
   gapped.ref_gaps_s = {{95.0, 115.0}};
-  EXPECT_TRUE(
-      grade_case(truth,
-                 diagnosis({finding("radius_step", {{"t", 114.0}, {"scale_l", 0.991}, {"scale_r", 0.9905}})}),
-                 0.4, gapped)
-          .pass);
-  EXPECT_FALSE(
-      grade_case(truth,
-                 diagnosis({finding("radius_step", {{"t", 120.5}, {"scale_l", 0.991}, {"scale_r", 0.9905}})}),
-                 0.4, gapped)
-          .pass);
+  EXPECT_TRUE(step_at_passes(114.0, gapped));
+  EXPECT_FALSE(step_at_passes(120.5, gapped));
   EXPECT_EQ(reference_gaps({0.0, 1.0, 2.0, 3.0, 9.0, 10.0, 11.0}),
             (std::vector<std::pair<double, double>>{{3.0, 9.0}}));
   // Standstills between the found and the true step time do not count: 8 s
   // apart with 4 s standing still is 4 s of driving (the wheels did not turn).
   TruePath still = kNoPath;
   still.standstills_s = {{101.0, 105.0}};
-  EXPECT_TRUE(
-      grade_case(truth,
-                 diagnosis({finding("radius_step", {{"t", 108.0}, {"scale_l", 0.991}, {"scale_r", 0.9905}})}),
-                 0.4, still)
-          .pass);
-  EXPECT_FALSE(
-      grade_case(truth,
-                 diagnosis({finding("radius_step", {{"t", 110.5}, {"scale_l", 0.991}, {"scale_r", 0.9905}})}),
-                 0.4, still)
-          .pass);
+  EXPECT_TRUE(step_at_passes(108.0, still));
+  EXPECT_FALSE(step_at_passes(110.5, still));
   EXPECT_DOUBLE_EQ(driving_time_between(108.0, 100.0, still.standstills_s), 4.0);
   EXPECT_DOUBLE_EQ(driving_time_between(102.0, 104.0, still.standstills_s), 0.0);
   diagnose::DiagInput odo;
