@@ -87,9 +87,6 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
   auto heldout_rmse = [&](const DiagInput& input, const EffectSet& set) {
     return diagnose::replay(input, set, out.window_s, held).pos_rmse_m;
   };
-  auto heldout_rmse_of = [&](const DiagInput& input, const EffectSet& set, const std::vector<int>& which) {
-    return diagnose::replay(input, set, out.window_s, which).pos_rmse_m;
-  };
 
   // Wheel-odometry effects.
   out.nominal_heldout_m = heldout_rmse(scoring, EffectSet{});
@@ -149,11 +146,10 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
     t.gain_m = diagnose::removed_error_m(t.before_m, t.after_m);
     t.detectable = !is_noop(t.effect) && (diagnose::is_material(t.before_m, t.after_m, t.floor_m) ||
                                           heading_material(t.heading_gain_rad, t.heading_floor_rad));
-    if (!t.detectable && !is_noop(t.effect) &&
-        (t.effect.name == "slip_zone" || t.effect.name == "radius_step")) {
+    if (!is_noop(t.effect) && (t.effect.name == "slip_zone" || t.effect.name == "radius_step")) {
       // Bound to a place or a time: judged on every window but the one
       // where it gains most (header comment: one window cannot both fit it
-      // and prove it).
+      // and prove it), whether or not the held-out tail shows it.
       const diagnose::ReplayResult wo = diagnose::replay(scoring, wheel_set(truth, t.effect.name),
                                                          out.window_s);
       const diagnose::ReplayResult wi = diagnose::replay(scoring, wheel_set(truth, ""), out.window_s);
@@ -168,11 +164,24 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
       }
       for (std::size_t k = 0; k < wo.windows.size(); ++k)
         if (k != top) rest.push_back(wo.windows[k].window);
-      const double before = heldout_rmse_of(scoring, wheel_set(truth, t.effect.name), rest);
-      const double after = heldout_rmse_of(scoring, wheel_set(truth, ""), rest);
-      const double floor = diagnose::materiality_floor_m(
-          in.ref_sigma_m, heldout_rmse_of(scoring, EffectSet{}, rest), materiality);
-      if (!rest.empty() && diagnose::is_material(before, after, floor)) {
+      bool rest_material = false;
+      double before = kNaN, after = kNaN, floor = kNaN;
+      if (!rest.empty()) {
+        const diagnose::ReplayResult b = diagnose::replay(scoring, wheel_set(truth, t.effect.name),
+                                                          out.window_s, rest);
+        const diagnose::ReplayResult a = diagnose::replay(scoring, wheel_set(truth, ""), out.window_s, rest);
+        const diagnose::ReplayResult n0 = diagnose::replay(scoring, EffectSet{}, out.window_s, rest);
+        before = b.pos_rmse_m, after = a.pos_rmse_m;
+        floor = diagnose::materiality_floor_m(in.ref_sigma_m, n0.pos_rmse_m, materiality);
+        rest_material = diagnose::is_material(before, after, floor) ||
+                        (heading &&
+                         heading_material(diagnose::removed_error_m(b.heading_rmse_rad, a.heading_rmse_rad),
+                                          diagnose::materiality_floor_m(in.ref_sigma_rad, n0.heading_rmse_rad,
+                                                                        materiality)));
+      }
+      if (!rest_material) {
+        t.detectable = false;  // seen in one window at most
+      } else if (!t.detectable) {
         t.detectable = true, t.on_all_windows = true;
         t.before_m = before, t.after_m = after, t.gain_m = diagnose::removed_error_m(before, after),
         t.floor_m = floor;
