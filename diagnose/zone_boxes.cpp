@@ -16,8 +16,14 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // A found box whose fitted slips both stay below this is not refined (a box
-// from noise is not worth the fits).
+// from noise is not worth the fits) unless its fit cost fell by kRefineCost
+// or more: a box larger than the patch dilutes the slip (dev seed 1004, case
+// 119: slips 0.013/0.014 in a 2.7 m patch fitted 0.004/0.008 in the 4 m box
+// of the coarse grid, which was then never refined).
 constexpr double kMinZoneSlip = 0.01;
+// Half the 99.9 % point of a chi-square with six degrees of freedom (the
+// box's four edges and two slips): 22.46 / 2.
+constexpr double kRefineCost = 11.23;
 // A slip-zone edge whose outward move raises the fit cost (1/2 chi-square)
 // by less than this is not determined by the data: half the 95 % point of a
 // chi-square with one degree of freedom (3.84).
@@ -287,9 +293,18 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
     for (std::size_t i = 0; i < boxes.size(); ++i)
       if (costs[i] < best_cost) best_cost = costs[i], best = sets[i], best_fit = fits[i], bb = boxes[i];
   }
-  if (best.empty() ||
-      std::max(best_fit.get(Effect::slip_zone, "s_l"), best_fit.get(Effect::slip_zone, "s_r")) < kMinZoneSlip)
-    return best;
+  if (best.empty()) return best;
+  if (std::max(best_fit.get(Effect::slip_zone, "s_l"), best_fit.get(Effect::slip_zone, "s_r")) < kMinZoneSlip) {
+    // The current set's own cost; for the nominal model (no fitted cost) a
+    // box far off the path, whose slips act nowhere.
+    double ref_cost = cur_full.cost, unused = kInf;
+    if (!std::isfinite(ref_cost)) {
+      EffectSet far_fit;
+      try_box({9e3, 9e3 + 1.0, 9e3, 9e3 + 1.0, 0.0, o.cell_m}, unused, far_fit);  // within the table's +-1e4 m
+      ref_cost = unused;
+    }
+    if (!(ref_cost - best_cost >= kRefineCost)) return best;
+  }
   warm = best_fit;
   // Coordinate search, first improvement in the order (edge, sign). The
   // moves left in a round are fitted speculatively in parallel from the

@@ -82,8 +82,9 @@ struct ZoneSearchOptions {
 // as well as radius_error does (a pooled fit of three recordings with a 1 %
 // radius error chose a coarse box over half the map, slips 0.01); each is fitted (s_l, s_r
 // with s, warm-started from cur_full.fitted) on all of cv's windows and the
-// lowest fit cost wins. Unless its slips both stay below 0.01 (a box from
-// noise), its edges are then refined by coordinate search on the fit cost
+// lowest fit cost wins. Unless its slips both stay below 0.01 and its fit
+// cost fell by less than 11.23 below the current set's (a box from noise; a
+// box larger than the patch dilutes the slip), its edges are then refined by coordinate search on the fit cost
 // in steps of half the box's own grid cell (ZoneBox::cell_m, at least
 // cell_m), halved down to cell_m/4 (up to 4 rounds each; a round moves
 // each edge out and in, in order, keeping each move that lowers the cost;
