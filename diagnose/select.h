@@ -23,7 +23,9 @@
 // by rules (a), (b) and (e) (record phase "swap"): when the data cannot
 // tell them apart, the common effect is named (concealed case
 // radius_error_and_time_offset: CV alone chose odometry_bias over the true
-// radius_error).
+// radius_error). Likewise radius_step, a radius error from a time on (the
+// nested model; its time is a searched parameter), goes before radius_error
+// only when it beats it by rules (a) and (b), with or without a heading.
 //
 // Windows. make_windows(in, W) with W = selection_window_s(in, options)
 // (Selection::window_s): fit.window_s, except for a reference without
@@ -131,12 +133,29 @@
 // set, each of its effects by rule (d); then the backward pass runs again.
 // Logged as SearchRecords of phase "pair".
 //
+// Swaps. Greedy steps accept what predicts best at each step, and two
+// accepted effects can together mimic a third that never predicted best
+// alone (a constant speed offset as radius error + speed radius). After the
+// forward, pair and backward passes, when two or more effects are selected,
+// each candidate without a discrete parameter (not radius_step, not
+// slip_zone) is tried in place of each pair of them, each fitted on all
+// windows (in parallel); the lowest BIC is cross-validated, unless its
+// all-window score is already worse than the selected set's by rule (a)'s
+// share, and swapped in when the selected set does not beat it by rules (a)
+// and (e) (what the backward pass asks of a
+// removal) and the incoming effect passes rule (d). Then the backward pass
+// runs again (down to one effect: an effect accepted in a pair or swapped
+// in never passed a forward step alone), and in it actuator_lag, whose
+// no-op is not its absence, must still pass rule (d). Logged as
+// SearchRecords of phase "swap".
+//
 // Discrete parameters, chosen on all windows before cross-validation (so
 // the held-out fold saw the choice of one or four numbers; BIC counts them):
 //  * radius_step.t: profile search of the robust fit cost (fit_effects'
-//    final cost, profile_max_iterations) over [end of the first window, end
-//    of the last - coarse/2] (earlier, a step is a radius_error): a grid of
-//    coarse = step_coarse_s (window_s/2 by default), but at least 1/32 of
+//    final cost, profile_max_iterations) over [start + head, end of the
+//    last window - coarse/2], head = the shorter of step_head_s and the
+//    first window (earlier, a step is a radius_error): a grid of
+//    coarse = step_coarse_s (head/2 by default), but at least 1/32 of
 //    that span (so the number of fits, each as long as the track, does not
 //    grow with it: the search costs linear time), then +-0.6 coarse in steps
 //    of coarse/5, then each level +- the last step in steps of a fifth of
@@ -155,7 +174,8 @@
 //    (up to 4 rounds each,
 //    first improvement in edge order; the moves are fitted speculatively
 //    in parallel, zone_boxes.h),
-//    unless its fitted slips are both below 0.01 (a box from noise). Edges
+//    unless its fitted slips are both below 0.01 and its fit cost fell by
+//    less than 11.23 (half chi-square(6) at 99.9 %): a box from noise. Edges
 //    across which the robot never drives are not determined by the data
 //    (typically the two sides of a path that runs through the patch): each
 //    edge in turn is moved out to the "isotropic patch" (the square centred
@@ -233,7 +253,8 @@ struct SelectOptions {
   double select_ref_rate_hz = 10.0;    // reference thinned to about this rate for selection; 0 = all
   double smooth_half_s = 0.25;         // half span of the thinned reference's position fits [s]
   double smooth_heading_half_s = 1.0;  // of its heading fits (around a gyro/odometry trend) [s]
-  double step_coarse_s = 0.0;          // radius_step.t coarse grid [s]; 0 = window_s/2
+  double step_head_s = 20.0;           // radius_step.t: no step this early (or in the first window) [s]
+  double step_coarse_s = 0.0;          // radius_step.t coarse grid [s]; 0 = half the head (above)
   double step_fine_s = 0.5;            // radius_step.t final resolution [s]
   double zone_cell_m = 0.25;           // slip_zone grid cell [m]
   int zone_max_boxes = 3;              // boxes found from the residual growth
@@ -243,6 +264,7 @@ struct SelectOptions {
   int tries_per_step = 3;              // forward step: candidates judged in CV order ("Forward step")
   bool pairs = true;                   // try the condition pairs ("Pairs") when the error stays high
   double pair_above_floor = 3.0;       // ... when the CV position RMSE exceeds this many floors
+  bool swaps = true;                   // try one candidate in place of two selected effects ("Swaps")
 
   bool IsValid(std::string* why) const;
 };

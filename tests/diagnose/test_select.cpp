@@ -318,6 +318,22 @@ TEST(Select, LateRadiusStepIsFoundWithItsTime) {
   EXPECT_GT(w[static_cast<std::size_t>(s.heldout_windows.back())].t_begin_s, 150.0);
 }
 
+// Sparse fixes lengthen the windows (1 Hz: 60 s); a step inside the first
+// window but after step_head_s is still a step, with its time (dev seed 1004,
+// case 118: a step at 74.2 s in an 80 s first window was put at its end).
+TEST(Select, StepInsideALongFirstWindowKeepsItsTime) {
+  SimTrackOptions o = sim_options(67, 240.0, {"radius_step:t=42,scale_l=0.99,scale_r=0.995"});
+  o.gt_rate_hz = 0.0, o.aps_rate_hz = 1.0, o.aps_sigma_m = 0.02;
+  const DiagInput in = simulated(o);
+  const Selection s = select_effects(in);
+  SCOPED_TRACE(describe(s));
+  ASSERT_GT(s.window_s, 42.0);  // the step lies in the first window
+  EXPECT_THAT(found(s), ::testing::ElementsAre(Effect::radius_step));
+  EXPECT_NEAR(fitted(s, "radius_step.t"), 42.0, 5.0);
+  EXPECT_NEAR(fitted(s, "radius_step.scale_l"), 0.99, 0.25 * 0.01);
+  EXPECT_NEAR(fitted(s, "radius_step.scale_r"), 0.995, 0.25 * 0.01);
+}
+
 TEST(Select, SlipZoneIsFoundWithItsBox) {
   const Selection s = select_effects(simulated(sim_options(63, 200.0, {kZone})));
   SCOPED_TRACE(describe(s));

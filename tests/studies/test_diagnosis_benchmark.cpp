@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -441,6 +442,22 @@ std::string read_file(const std::filesystem::path& p) {
   return ss.str();
 }
 
+// A development case the diagnosis once got wrong, run alone and graded:
+// `expected` are its detectable effects (empty: a null case, which must give
+// no finding at all).
+void expect_right(std::uint64_t seed, int index, const std::vector<std::string>& expected) {
+  DiagnosisBenchmarkOptions o;
+  o.seed = seed;
+  const CaseResult c = run_benchmark_case(o, index);
+  SCOPED_TRACE("seed " + std::to_string(seed) + " case " + std::to_string(index));
+  EXPECT_EQ(c.grade.expected, expected);
+  if (expected.empty()) {
+    EXPECT_EQ(c.grade.category, CaseCategory::null_case);
+    EXPECT_TRUE(c.findings.empty());
+  }
+  EXPECT_TRUE(c.grade.pass) << c.grade.why;
+}
+
 // Cases of development seed 1001 that the diagnosis once got wrong (issue 15):
 // 50, a null track on ground truth with gaps whose random wheel slip made
 // residuals grow (named `unexplained` until an unexplained finding had to be
@@ -448,16 +465,23 @@ std::string read_file(const std::filesystem::path& p) {
 // ground truth with a 15 s gap inside one 20 s window (missed until windows
 // stopped dead-reckoning across gaps).
 TEST(DiagnosisBenchmarkRun, DevelopmentCasesOnceWrongAreRight) {
-  DiagnosisBenchmarkOptions o;
-  o.seed = 1001;
-  const CaseResult null_case = run_benchmark_case(o, 50);
-  EXPECT_EQ(null_case.grade.category, CaseCategory::null_case);
-  EXPECT_TRUE(null_case.findings.empty());
-  EXPECT_TRUE(null_case.grade.pass) << null_case.grade.why;
-  const CaseResult skid = run_benchmark_case(o, 98);
-  EXPECT_EQ(skid.grade.expected, std::vector<std::string>{"lateral_skid"});
-  EXPECT_TRUE(skid.grade.pass) << skid.grade.why;
+  expect_right(1001, 50, {});
+  expect_right(1001, 98, {"lateral_skid"});
 }
+
+// Case 40 of development seed 1004: a null track whose 360-cpr encoders
+// lost to the commands beside them; actuator_lag + time_offset passed as a
+// pair, the backward pass dropped time_offset and kept actuator_lag at
+// tau = 0.14 ms, whose no-op (the commands) did as well (select.h, "Swaps":
+// rule (d) again in the backward pass).
+TEST(DiagnosisBenchmarkRun, PairSurvivorMustStillMatterAlone) { expect_right(1004, 40, {}); }
+
+// Case 119 of development seed 1004: slips of 0.013/0.014 in a 2.7 m patch,
+// 1 Hz fixes. The coarse grid's 4 m box diluted them to 0.004/0.008, under the
+// 0.01 below which a box was never refined, and a radius step + lateral skid
+// was named instead (zone_boxes.h: a box whose fit cost falls by 11.23 or
+// more is refined whatever its slips).
+TEST(DiagnosisBenchmarkRun, DilutedSlipZoneIsRefined) { expect_right(1004, 119, {"slip_zone"}); }
 
 TEST(DiagnosisBenchmarkRun, TinyRunWritesConsistentFiles) {
   testing_support::TempDir dir;
