@@ -1,0 +1,68 @@
+// Internals of the model search of select.h, shared by select.cpp (the
+// search's driver and the final model), select_search.cpp (the rules and
+// the forward step) and select_moves.cpp (the swap to radius_error, swaps,
+// pairs and the backward pass). Not part of the module's interface: nothing
+// outside diagnose/ includes it. The rules (a)-(e) are select.h's.
+#pragma once
+
+#include <chrono>
+#include <initializer_list>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "diagnose/cross_validate.h"
+#include "diagnose/select.h"
+
+namespace odotune::diagnose::select_detail {
+
+using Clock = std::chrono::steady_clock;
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Seconds since t0.
+double since(Clock::time_point t0);
+// s with e switched on (its no-op values when it was off).
+EffectSet with_effect(const EffectSet& s, Effect e);
+
+// Rule (e): the held-out error (position [m], heading [rad]) one evaluation
+// removes from another's (removed()).
+struct Removed {
+  double pos_m = 0.0, heading_rad = 0.0;  // materiality.h removed_error_m of each
+};
+Removed removed(CrossValidator& cv, const SetEval& ref, const SetEval& alt);
+// "" when material (rule (e)), else why not.
+std::string immaterial(const Removed& r, double floor_m, double floor_rad);
+// "" when `p` passes rules (a)-(c) and (e), else why not (delta_bic < 0 asked
+// unless it is negative already; floor_m 0 = materiality not asked).
+std::string verdict(const PairedComparison& p, double delta_bic, const SelectOptions& o,
+                    const Removed& gain = {}, double floor_m = 0.0, double floor_rad = 0.0);
+// Copy an evaluation's or a comparison's figures into a record.
+void fill(SearchRecord& r, const SetEval& e);
+void fill(SearchRecord& r, const PairedComparison& p);
+
+// State of the search.
+struct Search {
+  CrossValidator& cv;
+  const SelectOptions& o;
+  Selection& sel;
+  EffectSet s;                 // selected structure (no-op fitted values, discrete set)
+  std::vector<Effect> chosen;  // in the order accepted
+  SetEval cur_cv, cur_full;    // of s
+  double step_t = kNaN;        // last radius_step.t found
+  double floor_m = 0.0;        // materiality floor (rule (e)) [m]
+  double floor_rad = 0.0;      // its heading part [rad] (0 without a reference heading)
+  bool heading = false;        // the reference has a heading
+};
+
+// Rules (a)-(e) of a candidate set against the current set (select_search.cpp).
+std::string judge(Search& z, const EffectSet& st, const SetEval& cv, std::initializer_list<Effect> added,
+                  SearchRecord& rec, SetEval& full);
+// The phases of the search (select.h): each true when it changed the set.
+bool forward_step(Search& z, int step, const std::vector<Effect>& cands);
+void prefer_radius_error(Search& z, int step);
+bool swap_step(Search& z, int step, const std::vector<Effect>& cands);
+bool pair_step(Search& z, int step, const std::vector<Effect>& cands);
+bool backward_round(Search& z, int round);
+
+}  // namespace odotune::diagnose::select_detail
