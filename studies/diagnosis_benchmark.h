@@ -42,7 +42,7 @@
 
 namespace odotune {
 
-// The docs run's seed (never used while developing; development: 1001-1003).
+// The docs run's seed (never used while developing; development: 1001-1004).
 // 20261125 was the docs seed of issue 15's first two runs; it was retired
 // once its failure list had been read while developing (docs/diagnosis/
 // benchmark.md, "Seeds").
