@@ -292,13 +292,13 @@ bool backward_round(Search& z, int round) {
                          ? fmt::format("removable: without it CV is only {:.2f} % worse", 100.0 * p.rel)
                          : "kept: it is needed";
       // Rule (d) again for an effect whose no-op is not its absence
-      // (actuator_lag: its no-op replays the commands, not the encoders):
+      // (noop_differs_from_absence; actuator_lag replays the commands):
       // accepted within a pair, it may be left alone by the pair's other
       // effect's removal, and then its own parameters must still matter
       // (benchmark dev seed 1004, case 40: a null track's 360-cpr encoders
       // lost to the commands; actuator_lag + time_offset passed as a pair,
       // time_offset was dropped, tau = 0.14 ms stayed).
-      if (!d.removable && d.e == Effect::actuator_lag) {
+      if (!d.removable && noop_differs_from_absence(d.e)) {
         const SetEval own = z.cv.own_noop(z.cur_cv, d.e);
         const std::string no = own.ok ? verdict(z.cv.compare(own, z.cur_cv, z.o.alpha), -1.0, z.o,
                                                 removed(z.cv, own, z.cur_cv), z.floor_m, z.floor_rad)

@@ -36,6 +36,22 @@ bool is_noop(const TrueEffect& e) {
   return true;
 }
 
+// Position and heading RMSE pooled over the windows `which` of an
+// all-window replay (each window is anchored on its own, so this is what a
+// replay of those windows alone gives, without replaying them again).
+struct Pooled {
+  double pos_m = kNaN, heading_rad = kNaN;
+};
+Pooled pooled(const diagnose::ReplayResult& r, const std::vector<int>& which) {
+  double sp = 0.0, sh = 0.0, n = 0.0;
+  for (const diagnose::WindowError& w : r.windows)
+    if (std::find(which.begin(), which.end(), w.window) != which.end()) {
+      const auto k = static_cast<double>(w.n_ref);
+      sp += k * w.pos_rmse_m * w.pos_rmse_m, sh += k * w.heading_rmse_rad * w.heading_rmse_rad, n += k;
+    }
+  return n > 0.0 ? Pooled{std::sqrt(sp / n), std::sqrt(sh / n)} : Pooled{};
+}
+
 EffectSet wheel_set(const std::vector<TrueEffect>& truth, const std::string& without) {
   EffectSet set;
   for (const TrueEffect& e : truth) {
@@ -167,17 +183,13 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
       bool rest_material = false;
       double before = kNaN, after = kNaN, floor = kNaN;
       if (!rest.empty()) {
-        const diagnose::ReplayResult b = diagnose::replay(scoring, wheel_set(truth, t.effect.name),
-                                                          out.window_s, rest);
-        const diagnose::ReplayResult a = diagnose::replay(scoring, wheel_set(truth, ""), out.window_s, rest);
-        const diagnose::ReplayResult n0 = diagnose::replay(scoring, EffectSet{}, out.window_s, rest);
-        before = b.pos_rmse_m, after = a.pos_rmse_m;
-        floor = diagnose::materiality_floor_m(in.ref_sigma_m, n0.pos_rmse_m, materiality);
+        const Pooled b = pooled(wo, rest), a = pooled(wi, rest), n0 = pooled(all, rest);
+        before = b.pos_m, after = a.pos_m;
+        floor = diagnose::materiality_floor_m(in.ref_sigma_m, n0.pos_m, materiality);
         rest_material = diagnose::is_material(before, after, floor) ||
-                        (heading &&
-                         heading_material(diagnose::removed_error_m(b.heading_rmse_rad, a.heading_rmse_rad),
-                                          diagnose::materiality_floor_m(in.ref_sigma_rad, n0.heading_rmse_rad,
-                                                                        materiality)));
+                        (heading && heading_material(diagnose::removed_error_m(b.heading_rad, a.heading_rad),
+                                                     diagnose::materiality_floor_m(
+                                                         in.ref_sigma_rad, n0.heading_rad, materiality)));
       }
       if (!rest_material) {
         t.detectable = false;  // seen in one window at most
