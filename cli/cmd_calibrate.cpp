@@ -57,8 +57,10 @@ void register_calibrate(CLI::App& app) {
       "default to the nominal radii ±5 % and wheel base ±15 % (the paper's wheelchair ranges);\n"
       "the DKF starts at the range centre with sd = width/√12.");
   sub->add_option("--track", req->tracks, "track file (repeat for several, calibrated in order)")->required();
-  auto* method_opt = sub->add_option("--method", req->method,
-                                     "adaptive-pf | pf | dkf | batch | none (default adaptive-pf)");
+  auto* method_opt = sub->add_option(
+      "--method", req->method,
+      "adaptive-pf | pf | dkf | batch-pose (alias batch) | batch-velocity | none (default "
+      "adaptive-pf)");
   auto* resampler_opt = sub->add_option("--resampler", req->resampler,
                                         "PF resampling: multinomial | stratified | systematic | residual "
                                         "(default systematic)");
@@ -88,6 +90,13 @@ void register_calibrate(CLI::App& app) {
                                    "LO,HI: initial range of the wheel base [m] (default nominal ±15 %)");
   auto* tolerance_opt = sub->add_option("--tolerance", req->tolerance_pct,
                                         "convergence: within this % of the truth from then on (default 0.5)");
+  auto* segment_opt = sub->add_option("--segment", req->segment_s,
+                                      "batch-pose: dead-reckon segments of this length [s] from a reference "
+                                      "pose (default 0: whole runs)")
+                          ->check(CLI::NonNegativeNumber);
+  sub->add_flag("--fit-start-heading", req->fit_start_heading,
+                "batch-pose: fit each segment's start heading too (ground truth; with fixes the whole start "
+                "pose is always fitted)");
   sub->add_option("--json", req->json, "write the result as JSON to this file");
   sub->add_option("--csv", req->csv, "write the estimates over time as CSV to this file");
   sub->add_option("--figure", req->figure, "write the estimates over time as STEM.png and STEM.svg");
@@ -106,6 +115,7 @@ void register_calibrate(CLI::App& app) {
     req->init_radius_range_given = given(radius_opt);
     req->init_wheel_base_range_given = given(base_opt);
     req->tolerance_given = given(tolerance_opt);
+    req->segment_given = given(segment_opt);
     if (req->apply.empty())
       print_calibrate(*req);
     else

@@ -59,6 +59,12 @@ json options_json(const CalibrationRunInfo& info, CalibrationMethod method) {
       o["particles_range"] = json::array({pf.min_particles, pf.max_particles});
     }
   }
+  if (method == CalibrationMethod::batch_pose) {
+    const PoseCalibrationOptions& p = info.options.pose;
+    o["segment_s"] = p.segment_s > 0.0 ? json(p.segment_s) : json(nullptr);  // null: whole runs
+    o["fit_start_heading"] = p.fit_start_heading;
+    o["loss_scale_m"] = p.loss_scale_m;
+  }
   if (method == CalibrationMethod::dkf) {
     const filters::DualKfParams& k = info.options.dkf;
     o["initial"] = params_json(k.initial);
@@ -140,7 +146,10 @@ json calibration_json(const CalibrationResult& result, const std::vector<const C
   j["ms_per_iteration"] = number_or_null(result.ms_per_iteration);
   j["iterations"] = result.iterations;
   j["mean_particles"] = number_or_null(result.mean_particles);
-  if (result.method == CalibrationMethod::batch) j["batch_converged"] = result.batch_converged;
+  if (is_offline(result.method)) {
+    j["batch_converged"] = result.batch_converged;
+    j["batch_residuals"] = result.batch_residuals;
+  }
   j["options"] = options_json(info, result.method);
   j["tracks"] = tracks;
   return j;

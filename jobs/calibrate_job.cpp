@@ -30,7 +30,7 @@ using Range = filters::PfCalibratorParams::Range;
 constexpr double kPaperRadiusM = 0.32;
 constexpr double kPaperWheelBaseM = 0.65;
 // External velocities for --apply on tracks without v_ext (unused by the
-// dead reckoning it scores, but build_calibration_input wants some).
+// dead reckoning it scores; the V/W errors it also reports compare at them).
 constexpr double kApplyExtRateHz = 10.0;
 
 // "LO,HI" in metres with 0 < LO < HI.
@@ -54,6 +54,11 @@ Range parse_range(const std::string& flag, const std::string& text) {
 
 std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply) {
   const std::vector<std::string>& files = a.tracks;
+  // The pose fit needs no external velocity (it fits to the ground truth or
+  // the fixes); nor does --apply, which scores dead reckoning.
+  CalibrationMethod method = CalibrationMethod::none;
+  const bool pose_fit = !apply && parse_calibration_method(a.method, &method) &&
+                        method == CalibrationMethod::batch_pose;
   const std::vector<Track> tracks = load_tracks(files);
   std::vector<CalibrationInput> inputs;
   for (std::size_t k = 0; k < tracks.size(); ++k) {
@@ -65,9 +70,10 @@ std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply
     const bool has_ext = tr.has(Col::v_ext) && tr.has(Col::w_ext);
     if (apply && o.ext_from_gt_rate_hz <= 0.0 && !has_ext && tr.has_gt())
       o.ext_from_gt_rate_hz = kApplyExtRateHz;
+    o.require_velocity_samples = !(pose_fit || apply);
     std::string why;
     if (!o.IsValid(&why)) throw Failure(fmt::format("--ext-from-gt {}: {}", a.ext_from_gt_hz, why));
-    if (o.ext_from_gt_rate_hz <= 0.0 && !has_ext)
+    if (o.ext_from_gt_rate_hz <= 0.0 && !has_ext && o.require_velocity_samples)
       throw Failure(tr.has_gt()
                         ? fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext); expected "
                                       "them, or --ext-from-gt HZ to derive them from its ground truth",
@@ -110,8 +116,14 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
   info.ext_from_gt_rate_hz = a.ext_from_gt_hz;
   CalibrationOptions& o = info.options;
   if (!parse_calibration_method(a.method, &o.method))
-    throw Failure(fmt::format("--method '{}': unknown method, expected adaptive-pf, pf, dkf, batch or none",
+    throw Failure(fmt::format("--method '{}': unknown method, expected adaptive-pf, pf, dkf, batch-pose (or "
+                              "batch), batch-velocity or none",
                               a.method));
+  if ((a.segment_given || a.fit_start_heading) && o.method != CalibrationMethod::batch_pose)
+    throw Failure(fmt::format(
+        "--segment and --fit-start-heading apply to --method batch-pose only (got --method {})", a.method));
+  o.pose.segment_s = a.segment_s;
+  o.pose.fit_start_heading = a.fit_start_heading;
   const bool pf = o.method == CalibrationMethod::pf || o.method == CalibrationMethod::adaptive_pf;
   for (const auto& [flag, given] :
        {std::pair{"--resampler", a.resampler_given}, std::pair{"--policy", a.policy_given},

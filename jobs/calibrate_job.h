@@ -36,7 +36,7 @@ namespace odotune {
 // The command's flags as plain values (names as the flags').
 struct CalibrateRequest {
   std::vector<std::string> tracks;     // track files, calibrated in this order (one robot)
-  std::string method = "adaptive-pf";  // adaptive-pf | pf | dkf | batch | none
+  std::string method = "adaptive-pf";  // adaptive-pf | pf | dkf | batch-pose (batch) | batch-velocity | none
   std::string resampler;               // PF: multinomial | stratified | systematic | residual ("": systematic)
   std::string policy;                  // PF: every | neff | max ("": neff)
   std::uint64_t seed = 1;              // PF random seed
@@ -48,6 +48,8 @@ struct CalibrateRequest {
   std::string init_radius_range;       // "LO,HI" [m], both radii; "": nominal ±5 %
   std::string init_wheel_base_range;   // "LO,HI" [m]; "": nominal ±15 %
   double tolerance_pct = 0.5;          // convergence tolerance [%], in (0, 100)
+  double segment_s = 0.0;              // batch-pose: segment length [s]; 0: whole runs
+  bool fit_start_heading = false;      // batch-pose: fit each segment's start heading too
   // Output files ("": not written). calibrate: all four; --apply: json only.
   std::string json, csv, figure, config_out;
   std::string apply;  // the calibration file --apply replays
@@ -57,7 +59,7 @@ struct CalibrateRequest {
   // combines with --apply.
   bool method_given = false, resampler_given = false, policy_given = false, particles_given = false,
        seed_given = false, init_radius_range_given = false, init_wheel_base_range_given = false,
-       tolerance_given = false;
+       tolerance_given = false, segment_given = false;
 };
 
 // The calibration itself reports no progress. on_start (when set) gets

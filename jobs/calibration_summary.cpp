@@ -63,7 +63,7 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
     out.push_back(param_line("D", s.final_params.wheel_base_m, s.truth_final, &OdometryParams::wheel_base_m));
     if (!inputs[k].truth)
       out.push_back("    convergence   unknown (the track has no truth: no sim.effects metadata)");
-    else if (r.method == CalibrationMethod::batch)
+    else if (is_offline(r.method))
       out.push_back("    convergence   n/a (an offline fit of the whole track)");
     else if (s.convergence_time_s)
       out.push_back(
@@ -74,7 +74,7 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
                                 tol_pct));
     const std::vector<double> changes = inputs[k].truth ? inputs[k].truth->change_times()
                                                         : std::vector<double>{};
-    for (std::size_t c = 0; r.method != CalibrationMethod::batch && c < s.reconvergence_s.size(); ++c) {
+    for (std::size_t c = 0; !is_offline(r.method) && c < s.reconvergence_s.size(); ++c) {
       const std::string at = c < changes.size() ? fmt::format(" at {:.2f} s", changes[c]) : "";
       out.push_back(s.reconvergence_s[c]
                         ? fmt::format("    re-convergence after the radius step{}: {:.2f} s", at,
@@ -89,8 +89,10 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
   const OdometryParams& f = r.final_params;
   out.push_back(fmt::format("  final: R_L = {:.5f} m, R_R = {:.5f} m, D = {:.5f} m", f.wheel_radius_left_m,
                             f.wheel_radius_right_m, f.wheel_base_m));
-  if (r.method == CalibrationMethod::batch) {
-    out.push_back(fmt::format("  cost: {} residual pairs, {:.3g} ms per pair (fit {:.3g} s){}", r.iterations,
+  if (is_offline(r.method)) {
+    out.push_back("  fit: " + r.batch_residuals);
+    out.push_back(fmt::format("  cost: {} residual {}, {:.3g} ms each (fit {:.3g} s){}", r.iterations,
+                              r.method == CalibrationMethod::batch_pose ? "positions" : "pairs",
                               r.ms_per_iteration, 1e-3 * r.ms_per_iteration * static_cast<double>(r.iterations),
                               r.batch_converged ? "" : "; Ceres did NOT report convergence"));
   } else if (r.method != CalibrationMethod::none) {

@@ -67,7 +67,7 @@ CalibrationTraceTable build_trace_table(const CalibrationResult& result,
       table.truth.emplace_back(std::nullopt);
     }
   }
-  const bool fixed = result.method == CalibrationMethod::batch || result.method == CalibrationMethod::none;
+  const bool fixed = is_offline(result.method) || result.method == CalibrationMethod::none;
   if (fixed || tr.t.empty())
     for (std::size_t k = 0; k < inputs.size(); ++k)
       table.fixed_params.push_back(k < result.tracks.size() ? result.tracks[k].final_params

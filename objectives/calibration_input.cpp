@@ -154,7 +154,7 @@ CalibrationInput build_calibration_input(const Track& track, const CalibrationIn
     fail(name, fmt::format("no ground truth (gt_x, gt_y, gt_theta in at least two rows) to derive "
                            "external velocities from at {} Hz",
                            options.ext_from_gt_rate_hz));
-  if (!derive && !has_ext)
+  if (!derive && !has_ext && options.require_velocity_samples)
     fail(name, in.has_gt ? "no external velocities (v_ext, w_ext); derive them from the ground truth "
                            "instead (ext_from_gt_rate_hz > 0)"
                          : "no external velocities (v_ext, w_ext) and no ground truth (gt_x, gt_y, "
@@ -256,7 +256,7 @@ CalibrationInput build_calibration_input(const Track& track, const CalibrationIn
       s.w_var = options.default_w_var;
       add(tk, row, s);
     }
-  } else {
+  } else if (has_ext) {
     const auto& v_ext = track.col(Col::v_ext);
     const auto& w_ext = track.col(Col::w_ext);
     const auto& v_var = track.col(Col::v_ext_var);
@@ -275,7 +275,14 @@ CalibrationInput build_calibration_input(const Track& track, const CalibrationIn
       add(t[i], row, s);
     }
   }
-  if (in.samples.empty())
+  for (std::size_t i = 0; track.has_aps() && i < track.size(); ++i) {
+    if (!track.at(Col::aps_x, i) || !track.at(Col::aps_y, i)) continue;
+    if (t[i] < in.t.front() || t[i] > in.t.back()) continue;
+    in.fix_t.push_back(t[i]);
+    in.fix_x.push_back(track.col(Col::aps_x)[i]);
+    in.fix_y.push_back(track.col(Col::aps_y)[i]);
+  }
+  if (in.samples.empty() && (derive || has_ext || options.require_velocity_samples))
     fail(name, derive ? "no calibration sample: no ground-truth velocity window overlaps the wheel odometry"
                       : "no calibration sample: no row with both v_ext and w_ext after the first "
                         "odometry rate");

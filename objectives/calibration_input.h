@@ -49,6 +49,12 @@ struct CalibrationInputOptions {
   // errors-in-variables bias it puts on D. Online, it means holding a
   // measurement back half a window (50 ms) until the encoders have caught up.
   double wheel_rate_window_s = 0.1;
+  // false: a track without external velocities (and without ground truth to
+  // derive them from) is accepted with no calibration sample, for the
+  // methods that need none (the pose-domain fit, pose_calibration.h, which
+  // uses the ground truth or the position fixes). Velocities are still built
+  // when the track has them or ext_from_gt_rate_hz > 0.
+  bool require_velocity_samples = true;
 
   bool IsValid(std::string* why) const;
 };
@@ -71,6 +77,10 @@ struct CalibrationInput {
   // gt_theta count as ground truth.
   std::vector<double> gt_x, gt_y, gt_theta;  // [m, m, rad], theta unwrapped
   bool has_gt = false;                       // ≥ 2 ground-truth poses
+
+  // Absolute position fixes (aps_x, aps_y) stamped within the odometry's
+  // time span [t.front(), t.back()], in time order.
+  std::vector<double> fix_t, fix_x, fix_y;  // [s, m, m]
 
   // One calibration sample per external measurement, in time order, with the
   // odometry row it belongs to (sample_row: index into t, the last odometry
@@ -95,7 +105,9 @@ struct CalibrationInput {
 //
 // Throws std::invalid_argument (one line naming the track and what is
 // missing: wheel odometry, nominal radii/base/ticks_per_rev, external
-// velocities or ground truth to derive them from, any usable sample) and for
+// velocities or ground truth to derive them from, any usable sample; the
+// last two only with require_velocity_samples, or when velocities are
+// available but none is usable) and for
 // invalid options or a malformed sim.effects.
 CalibrationInput build_calibration_input(const Track& track, const CalibrationInputOptions& options);
 

@@ -142,13 +142,49 @@ ParamTimeline constant_timeline(const filters::OdometryParams& p) {
 // One trace row per track for a fixed-parameter method.
 void add_fixed_trace_row(const CalibrationInput& in, int track, const filters::CalibEstimate& proto,
                          CalibrationTrace* trace) {
-  if (in.samples.empty()) return;
   filters::CalibEstimate e = proto;
-  e.velocity = filters::body_velocity(e.params, in.samples.front().omega_l_rad_s,
-                                      in.samples.front().omega_r_rad_s);
-  trace->t.push_back(in.sample_t.front());
+  // At the first sample; a track without samples (pose fit) at its first
+  // odometry row with a rate.
+  const bool sample = !in.samples.empty();
+  const std::size_t row = in.t.size() > 1 ? 1 : 0;
+  e.velocity = filters::body_velocity(e.params, sample ? in.samples.front().omega_l_rad_s : in.omega_l[row],
+                                      sample ? in.samples.front().omega_r_rad_s : in.omega_r[row]);
+  trace->t.push_back(sample ? in.sample_t.front() : in.t[row]);
   trace->track.push_back(track);
   trace->estimate.push_back(e);
+}
+
+// What run_calibration keeps of an offline fit.
+struct OfflineFit {
+  filters::CalibEstimate estimate;  // the parameters and their sds
+  long residuals = 0;               // velocity pairs / reference positions
+  bool converged = false;
+  std::string description;
+};
+
+OfflineFit offline_fit(const BatchCalibrationSummary& f) {
+  OfflineFit o;
+  o.estimate.params = f.params;
+  o.estimate.sd_radius_left_m = f.sd_radius_left_m;
+  o.estimate.sd_radius_right_m = f.sd_radius_right_m;
+  o.estimate.sd_wheel_base_m = f.sd_wheel_base_m;
+  o.residuals = f.residual_pairs;
+  o.converged = f.converged;
+  o.description = fmt::format("velocity residuals: {} (V, W) pairs of the external velocities, Huber 3 sigma",
+                              f.residual_pairs);
+  return o;
+}
+
+OfflineFit offline_fit(const PoseCalibrationSummary& f) {
+  OfflineFit o;
+  o.estimate.params = f.params;
+  o.estimate.sd_radius_left_m = f.sd_radius_left_m;
+  o.estimate.sd_radius_right_m = f.sd_radius_right_m;
+  o.estimate.sd_wheel_base_m = f.sd_wheel_base_m;
+  o.residuals = f.reference_points;
+  o.converged = f.converged;
+  o.description = f.residuals;
+  return o;
 }
 
 // Runs an online calibrator (PfCalibrator or DualKf) over every sample.
@@ -191,15 +227,21 @@ std::string_view to_string(CalibrationMethod m) {
     case CalibrationMethod::adaptive_pf: return "adaptive-pf";
     case CalibrationMethod::pf: return "pf";
     case CalibrationMethod::dkf: return "dkf";
-    case CalibrationMethod::batch: return "batch";
+    case CalibrationMethod::batch_pose: return "batch-pose";
+    case CalibrationMethod::batch_velocity: return "batch-velocity";
     case CalibrationMethod::none: return "none";
   }
   return "?";
 }
 
 bool parse_calibration_method(std::string_view text, CalibrationMethod* out) {
-  for (CalibrationMethod m : {CalibrationMethod::adaptive_pf, CalibrationMethod::pf, CalibrationMethod::dkf,
-                              CalibrationMethod::batch, CalibrationMethod::none})
+  if (text == "batch") {
+    if (out) *out = CalibrationMethod::batch_pose;
+    return true;
+  }
+  for (CalibrationMethod m :
+       {CalibrationMethod::adaptive_pf, CalibrationMethod::pf, CalibrationMethod::dkf,
+        CalibrationMethod::batch_pose, CalibrationMethod::batch_velocity, CalibrationMethod::none})
     if (text == to_string(m)) {
       if (out) *out = m;
       return true;
@@ -237,7 +279,13 @@ bool CalibrationOptions::IsValid(std::string* why) const {
         return false;
       }
       break;
-    case CalibrationMethod::batch:
+    case CalibrationMethod::batch_pose:
+      if (!pose.IsValid(&inner)) {
+        if (why) *why = "pose." + inner;
+        return false;
+      }
+      break;
+    case CalibrationMethod::batch_velocity:
     case CalibrationMethod::none: break;
   }
   return true;
@@ -296,23 +344,22 @@ CalibrationResult run_calibration(const std::vector<const CalibrationInput*>& in
       run_online(dkf, inputs, tol, &res);
       break;
     }
-    case CalibrationMethod::batch: {
+    case CalibrationMethod::batch_pose:
+    case CalibrationMethod::batch_velocity: {
       const auto t0 = std::chrono::steady_clock::now();
-      const BatchCalibrationSummary fit = batch_calibrate(inputs, inputs.front()->nominal);
+      const OfflineFit fit = options.method == CalibrationMethod::batch_pose
+                                 ? offline_fit(pose_calibrate(inputs, inputs.front()->nominal, options.pose))
+                                 : offline_fit(batch_calibrate(inputs, inputs.front()->nominal));
       const double ms =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      res.iterations = fit.residual_pairs;
-      res.ms_per_iteration = fit.residual_pairs > 0 ? ms / static_cast<double>(fit.residual_pairs) : 0.0;
+      res.iterations = fit.residuals;
+      res.ms_per_iteration = fit.residuals > 0 ? ms / static_cast<double>(fit.residuals) : 0.0;
       res.batch_converged = fit.converged;
-      res.final_params = fit.params;
-      filters::CalibEstimate proto;
-      proto.params = fit.params;
-      proto.sd_radius_left_m = fit.sd_radius_left_m;
-      proto.sd_radius_right_m = fit.sd_radius_right_m;
-      proto.sd_wheel_base_m = fit.sd_wheel_base_m;
+      res.batch_residuals = fit.description;
+      res.final_params = fit.estimate.params;
       for (std::size_t k = 0; k < inputs.size(); ++k) {
-        add_fixed_trace_row(*inputs[k], static_cast<int>(k), proto, &res.trace);
-        TrackCalibrationScore score = score_track(*inputs[k], constant_timeline(fit.params), tol);
+        add_fixed_trace_row(*inputs[k], static_cast<int>(k), fit.estimate, &res.trace);
+        TrackCalibrationScore score = score_track(*inputs[k], constant_timeline(fit.estimate.params), tol);
         // An offline fit of the whole track has no convergence over time.
         score.convergence_time_s.reset();
         for (auto& r : score.reconvergence_s) r.reset();

@@ -5,7 +5,10 @@
 // Methods (Fariña, Toledo & Acosta, RA-L 2026, Tables I–II):
 //   adaptive-pf, pf  filters/pf_calibrator.h (online)
 //   dkf              filters/dual_kf.h (online)
-//   batch            objectives/batch_calibration.h (offline least squares)
+//   batch-pose       objectives/pose_calibration.h (offline: dead reckoning
+//                    fitted to the reference positions; `batch` is its alias)
+//   batch-velocity   objectives/batch_calibration.h (offline least squares
+//                    on body velocities)
 //   none             the track's nominal parameters
 // Online methods run the tracks one after another with the same filter (as
 // UMBmark combines a clockwise and a counter-clockwise run); batch fits all
@@ -20,12 +23,20 @@
 #include "filters/dual_kf.h"
 #include "filters/pf_calibrator.h"
 #include "objectives/calibration_input.h"
+#include "objectives/pose_calibration.h"
 
 namespace odotune {
 
-enum class CalibrationMethod { adaptive_pf, pf, dkf, batch, none };
+enum class CalibrationMethod { adaptive_pf, pf, dkf, batch_pose, batch_velocity, none };
+// "adaptive-pf", "pf", "dkf", "batch-pose", "batch-velocity", "none".
 std::string_view to_string(CalibrationMethod m);
+// Also accepts "batch" for batch-pose (the pose fit beat the velocity fit on
+// the real OptiOdom runs, docs/calibration/real-data.md).
 bool parse_calibration_method(std::string_view text, CalibrationMethod* out);
+// batch-pose or batch-velocity: one fit of fixed parameters to all tracks.
+inline bool is_offline(CalibrationMethod m) {
+  return m == CalibrationMethod::batch_pose || m == CalibrationMethod::batch_velocity;
+}
 
 struct CalibrationOptions {
   CalibrationMethod method = CalibrationMethod::adaptive_pf;
@@ -37,6 +48,7 @@ struct CalibrationOptions {
   // them around the robot's nominal values).
   filters::PfCalibratorParams pf;
   filters::DualKfParams dkf;
+  PoseCalibrationOptions pose;  // batch-pose
   // Convergence: the first time after which R_R, R_L and D all stay within
   // this fraction of the truth (the paper: 0.5 %; see TrackCalibrationScore).
   double convergence_tolerance = 0.005;
@@ -106,8 +118,10 @@ struct CalibrationResult {
   long iterations = 0;
   double ms_per_iteration = 0.0;
   double mean_particles = 0.0;  // PF: mean N over iterations (deterministic cost); else 0
-  // batch only: Ceres reported convergence (the fit's sds are in the trace row).
+  // batch methods only: Ceres reported convergence (the fit's sds are in the
+  // trace row), and which residuals the fit used.
   bool batch_converged = false;
+  std::string batch_residuals;
 };
 
 // Runs `options.method` over the inputs in order. The calibrated odometry is

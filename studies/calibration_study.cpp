@@ -348,7 +348,7 @@ ResamplingStudy run_resampling_study(const sim::Scenario& scenario, const StudyO
 
 std::vector<CalibrationMethod> table2_methods() {
   using M = CalibrationMethod;
-  return {M::adaptive_pf, M::dkf, M::batch, M::none};
+  return {M::adaptive_pf, M::dkf, M::batch_velocity, M::none};
 }
 
 CalibrationStudy run_calibration_study(const sim::Scenario& constant, const sim::Scenario& step,

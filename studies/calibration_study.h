@@ -189,7 +189,7 @@ struct CalibrationStudy {
   double step_time_s = std::numeric_limits<double>::quiet_NaN();  // first truth change of the step track
   double track_duration_s = 0.0;       // run 0's constant track, first to last odometry row [s]
   double convergence_tolerance = 0.0;  // fraction of the truth (the paper's 0.5 %)
-  // 8 rows: track constant then step, each with adaptive-pf, dkf, batch, none.
+  // 8 rows: track constant then step, each with adaptive-pf, dkf, batch-velocity, none.
   std::vector<MethodRow> rows;
   // Per run (index = run): the adaptive PF on both tracks and the DKF on both.
   std::vector<ParamTrace> pf_constant, pf_step, dkf_constant, dkf_step;

@@ -228,7 +228,7 @@ TEST_F(CliCalibrateSim, AdaptivePfWritesJsonCsvFigureAndConvergesWithinHalfPerce
 
 TEST_F(CliCalibrateSim, BatchAndDkfConvergeWithinHalfPercentAndPfAveragesThere) {
   TempDir tmp;
-  for (const std::string method : {"batch", "dkf"}) {
+  for (const std::string method : {"batch-pose", "batch-velocity", "dkf"}) {
     const fs::path out = tmp / (method + ".json");
     const auto r = run_cli("calibrate --track " + track_a_ + " --method " + method + " --json " + out.string());
     ASSERT_EQ(r.exit_code, 0) << method << ": " << r.err;
@@ -238,8 +238,10 @@ TEST_F(CliCalibrateSim, BatchAndDkfConvergeWithinHalfPercentAndPfAveragesThere) 
         << method << j["final"];
     EXPECT_LT(rel_error(j["final"]["wheel_radius_right_m"].get<double>(), kTrueRightM), 0.005)
         << method << j["final"];
-    if (method == "batch") {
+    if (method != "dkf") {
       EXPECT_TRUE(j["convergence_time_s"].is_null()) << "an offline fit has no convergence time";
+      EXPECT_THAT(j["batch_residuals"].get<std::string>(),
+                  HasSubstr(method == "batch-pose" ? "pose residuals" : "velocity residuals"));
     } else {
       ASSERT_TRUE(j["convergence_time_s"].is_number()) << method;
       EXPECT_GE(j["convergence_time_s"].get<double>(), 0.0);
@@ -337,7 +339,7 @@ TEST_F(CliCalibrateSim, TrackWithoutTruthMetadataHasNullConvergence) {
   const auto r = run_cli("calibrate --track " + plain + " --method batch --json " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json j = json::parse(slurp(out));
-  expect_required_keys(j, "batch");
+  expect_required_keys(j, "batch-pose");  // batch is batch-pose's alias
   EXPECT_TRUE(j["convergence_time_s"].is_null());
   EXPECT_TRUE(j["truth"].is_null());
   EXPECT_TRUE(j["tracks"][0]["truth"].is_null());
@@ -367,17 +369,25 @@ TEST_F(CliCalibrateSim, BadInputIsOneLineAndLeavesNoOutput) {
   bare.duration_s = 20.0;
   TempDir other;
   const std::string no_ext = write_sim_track(other, "no_ext_track", bare);
-  expect_one_line_failure("--track " + no_ext + " --method batch", "no_ext_track");
+  expect_one_line_failure("--track " + no_ext + " --method batch-velocity", "no_ext_track");
 
-  // With ground truth but no external velocities: the error points to
-  // --ext-from-gt, which then derives them (as for OptiOdom).
+  // With ground truth but no external velocities: a velocity method's error
+  // points to --ext-from-gt, which then derives them (as for OptiOdom); the
+  // pose fit (batch) needs none.
   SimOptions gt_only;
   gt_only.ext_velocity = false;
   gt_only.duration_s = 40.0;
   const std::string gt_track = write_sim_track(other, "gt_only", gt_only);
-  expect_one_line_failure("--track " + gt_track + " --method batch", "--ext-from-gt");
+  expect_one_line_failure("--track " + gt_track + " --method batch-velocity", "--ext-from-gt");
+  expect_one_line_failure("--track " + gt_track + " --method dkf", "--ext-from-gt");
+  const fs::path pose = other / "pose.json";
+  const auto rp = run_cli("calibrate --track " + gt_track + " --method batch --json " + pose.string());
+  ASSERT_EQ(rp.exit_code, 0) << rp.err;
+  EXPECT_LT(json::parse(slurp(pose))["pose_rmse_m"].get<double>(),
+            json::parse(slurp(pose))["nominal_pose_rmse_m"].get<double>());
+  expect_one_line_failure("--track " + track_a_ + " --method dkf --segment 10", "--segment");
   const fs::path derived = other / "derived.json";
-  const auto r = run_cli("calibrate --track " + gt_track + " --method batch --ext-from-gt 10 --json " +
+  const auto r = run_cli("calibrate --track " + gt_track + " --method batch-velocity --ext-from-gt 10 --json " +
                          derived.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const json j = json::parse(slurp(derived));

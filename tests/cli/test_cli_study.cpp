@@ -123,7 +123,7 @@ TEST_F(CliStudy, CalibrationWritesTable2AndFiguresWithCheckableNumbers) {
 
   const Csv t = parse_csv(slurp(out / "table2.csv"));
   ASSERT_EQ(t.rows.size(), 8u);
-  const std::vector<std::string> methods = {"adaptive-pf", "dkf", "batch", "none"};
+  const std::vector<std::string> methods = {"adaptive-pf", "dkf", "batch-velocity", "none"};
   for (std::size_t i = 0; i < 8; ++i) {
     EXPECT_EQ(t.rows[i][t.col("track")], i < 4 ? "constant" : "step");
     EXPECT_EQ(t.rows[i][t.col("method")], methods[i % 4]);

@@ -86,8 +86,9 @@ std::pair<double, double> reference_dead_reckoning(const Track& track, const Odo
 }
 
 TEST(CalibrationMethodNames, RoundTrip) {
-  for (CalibrationMethod m : {CalibrationMethod::adaptive_pf, CalibrationMethod::pf, CalibrationMethod::dkf,
-                              CalibrationMethod::batch, CalibrationMethod::none}) {
+  for (CalibrationMethod m :
+       {CalibrationMethod::adaptive_pf, CalibrationMethod::pf, CalibrationMethod::dkf,
+        CalibrationMethod::batch_pose, CalibrationMethod::batch_velocity, CalibrationMethod::none}) {
     CalibrationMethod back = CalibrationMethod::none;
     ASSERT_TRUE(parse_calibration_method(to_string(m), &back)) << to_string(m);
     EXPECT_EQ(back, m);
@@ -116,7 +117,7 @@ TEST(CalibrationOptions, ValidationAndAdaptiveParticleRule) {
   o.dkf.initial_sd_radius_m = -1.0;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_THAT(why, HasSubstr("dkf."));
-  o.method = CalibrationMethod::batch;  // the DKF parameters are not used
+  o.method = CalibrationMethod::batch_velocity;  // the DKF parameters are not used
   EXPECT_TRUE(o.IsValid(&why)) << why;
 
   // adaptive-pf: the plain default count becomes 8000; any other is kept.
@@ -303,7 +304,7 @@ TEST(CalibrationRun, AdaptivePfApproachesTheTruth) {
 TEST(CalibrationRun, BatchScoresAreThoseOfTheFittedConstants) {
   const CalibrationInput& in = input_120();
   CalibrationOptions o;
-  o.method = CalibrationMethod::batch;
+  o.method = CalibrationMethod::batch_velocity;
   const CalibrationResult r = run_calibration({&in}, o);
   EXPECT_TRUE(r.batch_converged);
   EXPECT_EQ(r.iterations, static_cast<long>(in.samples.size()));
