@@ -71,18 +71,26 @@ void register_calibrate(CLI::App& app) {
                                "--particles", req->particles,
                                "PF particles (adaptive-pf: the initial count; default 5000, adaptive 8000)")
                             ->check(CLI::PositiveNumber);
+  auto* evolution_opt = sub->add_option("--pf-evolution", req->pf_evolution,
+                                        "PF parameter evolution: evidence (default: a walk scaled to the "
+                                        "posterior spread, whose memory grows until the innovations show a "
+                                        "change) | paper (§III's fixed or eq. 11 walk)");
+  auto* memory_opt = sub->add_option("--pf-memory", req->pf_memory_s,
+                                     "PF evidence evolution: the memory after a detected change [s] "
+                                     "(default 10)")
+                         ->check(CLI::PositiveNumber);
   add_threads_option(sub, &req->threads);
   sub->add_option("--ext-from-gt", req->ext_from_gt_hz,
                   "derive the external velocities from the ground truth at this rate [Hz] (for tracks "
                   "without v_ext/w_ext, e.g. OptiOdom)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--ext-sigma-v", req->ext_sigma_v,
-                  "σ of the external speed [m/s] where the track gives no v_ext_var (and for --ext-from-gt); "
-                  "default 0.02")
+                  "σ of the external speed [m/s] where the track gives no v_ext_var (and for --ext-from-gt, "
+                  "instead of the σ estimated from the ground truth's jitter); default 0.02")
       ->check(CLI::PositiveNumber);
   sub->add_option("--ext-sigma-w", req->ext_sigma_w,
                   "σ of the external yaw rate [rad/s] where the track gives no w_ext_var (and for "
-                  "--ext-from-gt); default 0.02")
+                  "--ext-from-gt, instead of the estimated σ); default 0.02")
       ->check(CLI::PositiveNumber);
   auto* radius_opt = sub->add_option("--init-radius-range", req->init_radius_range,
                                      "LO,HI: initial range of both radii [m] (default nominal ±5 %)");
@@ -116,6 +124,8 @@ void register_calibrate(CLI::App& app) {
     req->init_wheel_base_range_given = given(base_opt);
     req->tolerance_given = given(tolerance_opt);
     req->segment_given = given(segment_opt);
+    req->pf_evolution_given = given(evolution_opt);
+    req->pf_memory_given = given(memory_opt);
     if (req->apply.empty())
       print_calibrate(*req);
     else

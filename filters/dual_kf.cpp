@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>  // fixed-size closed-form inverse()
 #include <cmath>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
@@ -33,6 +34,10 @@ bool DualKfParams::IsValid(std::string* why) const {
     if (why) *why = "initial." + inner;
     return false;
   }
+  if (!evidence.IsValid(&inner)) {
+    if (why) *why = "evidence." + inner;
+    return false;
+  }
   return check("initial_sd_radius_m", initial_sd_radius_m, false, why) &&
          check("initial_sd_wheel_base_m", initial_sd_wheel_base_m, false, why) &&
          check("odometry_sd_v_m_s", odometry_sd_v_m_s, false, why) &&
@@ -56,7 +61,7 @@ DkfJacobian dkf_jacobian(const DkfParams& theta, double omega_l_rad_s, double om
   return h;
 }
 
-DualKf::DualKf(const DualKfParams& params) : params_(params) {
+DualKf::DualKf(const DualKfParams& params) : params_(params), memory_(params.evidence) {
   std::string why;
   if (!params.IsValid(&why)) throw std::invalid_argument("DualKfParams: " + why);
   theta_ << params.initial.wheel_radius_right_m, params.initial.wheel_radius_left_m,
@@ -93,11 +98,37 @@ const CalibEstimate& DualKf::step(const CalibSample& s) {
 
   // Parameter filter: random walk, then an EKF update with x̂ as the
   // measurement of h(θ, ω), H = ∂h/∂θ at θ⁻, covariance P_x + P_odo.
-  const double qr = params_.radius_walk_m_per_sqrt_s * params_.radius_walk_m_per_sqrt_s * s.dt_s;
-  const double qd = params_.wheel_base_walk_m_per_sqrt_s * params_.wheel_base_walk_m_per_sqrt_s * s.dt_s;
-  const DkfParamCov p_prior = P_theta_ + DkfParamCov(DkfParams(qr, qr, qd).asDiagonal());
   const DkfJacobian h = dkf_jacobian(theta_, wl, wr);
   const DkfVelocityCov r_theta = p_x + p_odo;
+  {
+    // log p(z | past): z against the odometry's prediction h(θ̂, ω), with
+    // the covariance it has before this step (H P_θ Hᵀ + P_odo + R).
+    const DkfVelocityCov s_pred = h * P_theta_ * h.transpose() + p_odo + r_meas;
+    const DkfVelocity e = z - x_prior;
+    last_log_predictive_ = -0.5 * e.dot(s_pred.inverse() * e) - 0.5 * std::log(s_pred.determinant()) -
+                           std::log(2.0 * std::numbers::pi);
+  }
+  DkfParamCov p_prior = P_theta_;
+  if (params_.fading_memory) {
+    // Fading memory (pf_evolution.h).
+    const double inflate = memory_.step(s.dt_s);
+    p_prior *= 1.0 + inflate;
+    // Bounded: no variance grows past its initial value (no wind-up of a
+    // direction the drive does not excite).
+    const DkfParams p0(params_.initial_sd_radius_m * params_.initial_sd_radius_m,
+                       params_.initial_sd_radius_m * params_.initial_sd_radius_m,
+                       params_.initial_sd_wheel_base_m * params_.initial_sd_wheel_base_m);
+    for (int k = 0; k < kDkfParamDim; ++k)
+      if (p_prior(k, k) > p0(k)) {
+        const double f = std::sqrt(p0(k) / p_prior(k, k));
+        p_prior.row(k) *= f;
+        p_prior.col(k) *= f;
+      }
+  } else {
+    const double qr = params_.radius_walk_m_per_sqrt_s * params_.radius_walk_m_per_sqrt_s * s.dt_s;
+    const double qd = params_.wheel_base_walk_m_per_sqrt_s * params_.wheel_base_walk_m_per_sqrt_s * s.dt_s;
+    p_prior += DkfParamCov(DkfParams(qr, qr, qd).asDiagonal());
+  }
   const DkfVelocityCov innovation_cov = h * p_prior * h.transpose() + r_theta;
   const Eigen::Matrix<double, kDkfParamDim, kDkfVelocityDim> k_theta = p_prior * h.transpose() *
                                                                        innovation_cov.inverse();

@@ -8,7 +8,8 @@
 //   state filter:     x⁻ = h(θ̂, ω) (the odometry velocities with the current
 //                     parameters), P⁻ = P_odo; update with z (R = diag(var_v,
 //                     var_w)) → x̂, P_x.
-//   parameter filter: θ⁻ = θ̂ (random walk), P_θ⁻ = P_θ + Q_θ·dt; update with
+//   parameter filter: θ⁻ = θ̂ (random walk), P_θ⁻ = P_θ + Q_θ·dt (or, with
+//                     fading_memory, P_θ⁻ = e^{dt/M}·P_θ); update with
 //                     the state filter's x̂ as the measurement of h(θ, ω)
 //                     (extended KF: H = ∂h/∂θ at θ⁻), measurement covariance
 //                     P_x + P_odo.
@@ -25,6 +26,7 @@
 #include <Eigen/Core>
 
 #include "filters/odometry_params.h"
+#include "filters/pf_evolution.h"
 
 namespace odotune::filters {
 
@@ -46,6 +48,12 @@ struct DualKfParams {
   double odometry_sd_w_rad_s = 0.02;           // √P_odo of W [rad/s]
   double radius_walk_m_per_sqrt_s = 2e-4;      // √Q_θ of each radius [m/√s]
   double wheel_base_walk_m_per_sqrt_s = 2e-4;  // √Q_θ of D [m/√s]
+  // false: the random walk above (the paper's baseline). true: no walk; the
+  // parameter covariance fades instead, P_θ⁻ = e^{dt/M}·P_θ bounded by the
+  // initial covariance, with the memory M and its change test of
+  // filters/pf_evolution.h (the PF's evidence evolution, issue 16).
+  bool fading_memory = true;
+  EvidenceMemoryParams evidence;
 
   // True when usable; otherwise *why names the first bad value, e.g.
   // "initial.wheel_base_m = 0 must be a finite number > 0". sds > 0, walks ≥ 0.
@@ -65,6 +73,10 @@ class DualKf {
   const CalibEstimate& estimate() const { return estimate_; }
   const DkfParamCov& param_covariance() const { return P_theta_; }
   long iterations() const { return iteration_; }
+  // As PfCalibrator's (filters/memory_pair.h).
+  double last_log_predictive() const { return last_log_predictive_; }
+  void set_memory(const EvidenceMemoryParams& p) { memory_ = EvidenceMemory(p); }
+  double memory_s() const { return memory_.memory_s(); }
 
  private:
   DualKfParams params_;
@@ -72,6 +84,8 @@ class DualKf {
   DkfParamCov P_theta_;
   CalibEstimate estimate_;
   long iteration_ = 0;
+  EvidenceMemory memory_;
+  double last_log_predictive_ = 0.0;
 };
 
 }  // namespace odotune::filters

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <stdexcept>
 
@@ -31,6 +32,9 @@ constexpr std::size_t kBlock = 1024;
 // Weights below e^kMinLogWeight of the largest are set to 0 (negligible in any
 // sum of doubles; keeps ρ² and ρ·d² clear of slow subnormal numbers).
 constexpr double kMinLogWeight = -300.0;
+// Evidence evolution: the smallest spread a parameter's walk scales with, as
+// a fraction of its value (a cloud resampled onto one value must not freeze).
+constexpr double kMinRelativeSpread = 1e-6;
 
 // Layout of one block's partial sums in block_sums_ (weights are
 // exp(log ρ − max), the d* are differences from the Shifts).
@@ -81,7 +85,7 @@ bool check_non_negative(const char* name, double x, std::string* why) {
 // Everything one block of the prediction/update needs (step 1–2).
 struct PredictInputs {
   std::uint64_t key_radii, key_base, key_velocity;  // per-iteration stream keys
-  double sigma_m;                                   // random-walk σ
+  double sigma_rr, sigma_rl, sigma_d;               // random-walk σ of R_R, R_L, D [m]
   double omega_l, omega_r;                          // [rad/s]
   double a_v, a_w;                                  // uniform half-widths
   double v_m, w_m;                                  // measurement
@@ -123,9 +127,9 @@ ODOTUNE_PF_HOT_LOOP double predict_block(const PredictInputs in, double* __restr
     const pf_kernels::NormalPair z_radii = pf_kernels::normal_pair_from_bits(splitmix64_mix(in.key_radii + n));
     const pf_kernels::NormalPair z_base = pf_kernels::normal_pair_from_bits(splitmix64_mix(in.key_base + n));
     const std::uint64_t u_bits = splitmix64_mix(in.key_velocity + n);
-    const double rr = r_right[i] + in.sigma_m * z_radii.first;
-    const double rl = r_left[i] + in.sigma_m * z_radii.second;
-    const double d = base[i] + in.sigma_m * z_base.first;
+    const double rr = r_right[i] + in.sigma_rr * z_radii.first;
+    const double rl = r_left[i] + in.sigma_rl * z_radii.second;
+    const double d = base[i] + in.sigma_d * z_base.first;
     const double vi = 0.5 * (in.omega_r * rr + in.omega_l * rl) +
                       in.a_v * (2.0 * pf_kernels::uniform_high32(u_bits) - 1.0);
     const double wi = (in.omega_r * rr - in.omega_l * rl) / d +
@@ -217,6 +221,17 @@ PfCalibratorParams PfCalibratorParams::adaptive_defaults() {
   return p;
 }
 
+std::string_view to_string(PfEvolution e) { return e == PfEvolution::paper ? "paper" : "evidence"; }
+
+bool parse_pf_evolution(std::string_view text, PfEvolution* out) {
+  for (PfEvolution e : {PfEvolution::paper, PfEvolution::evidence})
+    if (text == to_string(e)) {
+      if (out) *out = e;
+      return true;
+    }
+  return false;
+}
+
 bool PfCalibratorParams::IsValid(std::string* why) const {
   if (!check_range("wheel_radius_right_m", wheel_radius_right_m, why) ||
       !check_range("wheel_radius_left_m", wheel_radius_left_m, why) ||
@@ -237,6 +252,8 @@ bool PfCalibratorParams::IsValid(std::string* why) const {
     return fail(why, "dispersion_per_particle_m = " + num(dispersion_per_particle_m) +
                          " must be a finite number > 0");
   if (!check_non_negative("min_random_walk_sigma_m", min_random_walk_sigma_m, why)) return false;
+  std::string inner;
+  if (!evidence.IsValid(&inner)) return fail(why, "evidence." + inner);
   if (min_particles < 1) return fail(why, "min_particles = " + std::to_string(min_particles) + " must be ≥ 1");
   if (max_particles < min_particles)
     return fail(why, "max_particles = " + std::to_string(max_particles) +
@@ -246,7 +263,8 @@ bool PfCalibratorParams::IsValid(std::string* why) const {
   return true;
 }
 
-PfCalibrator::PfCalibrator(const PfCalibratorParams& params) : params_(params) {
+PfCalibrator::PfCalibrator(const PfCalibratorParams& params) : params_(params), memory_(params.evidence) {
+  memory_ = EvidenceMemory(params_.evidence);
   std::string why;
   if (!params.IsValid(&why)) throw std::invalid_argument("PfCalibratorParams: " + why);
   const auto n = static_cast<std::size_t>(params.particles);
@@ -257,6 +275,7 @@ PfCalibrator::PfCalibrator(const PfCalibratorParams& params) : params_(params) {
   w_.assign(n, 0.0);
   log_weight_.assign(n, 0.0);
   weight_.assign(n, 1.0);
+  prev_weight_sum_ = static_cast<double>(n);
   // Uniform initial parameters (§III.1), iteration key 0.
   const PfCalibratorParams::Range ranges[] = {params.wheel_radius_right_m, params.wheel_radius_left_m,
                                               params.wheel_base_m};
@@ -291,19 +310,54 @@ const CalibEstimate& PfCalibrator::step(const CalibSample& s) {
     throw std::invalid_argument("CalibSample: v_var = " + num(s.v_var) + ", w_var = " + num(s.w_var) +
                                 " must be finite and > 0");
 
-  // Step 1: σ of the random walk (eq. 11 for the adaptive variant).
-  double sigma = params_.random_walk_sigma_m;
-  if (params_.adaptive && iteration_ > 0) {
-    const double dv = s.v_m_s - estimate_.velocity.v_m_s;
-    const double dw = s.w_rad_s - estimate_.velocity.w_rad_s;
-    sigma = std::max(params_.alpha * std::sqrt(dv * dv + dw * dw), params_.min_random_walk_sigma_m);
-    // An absurd measurement (|V_m| ~ 1e200) must not scatter the particles to ∞.
-    if (!std::isfinite(sigma)) sigma = params_.random_walk_sigma_m;
+  // Step 1: σ of the random walk of R_R, R_L, D.
+  double sigma[3];
+  if (params_.evolution == PfEvolution::paper) {
+    // §III: fixed, or eq. 11 for the adaptive variant (floored).
+    double sd = params_.random_walk_sigma_m;
+    if (params_.adaptive && iteration_ > 0) {
+      const double dv = s.v_m_s - estimate_.velocity.v_m_s;
+      const double dw = s.w_rad_s - estimate_.velocity.w_rad_s;
+      sd = std::max(params_.alpha * std::sqrt(dv * dv + dw * dw), params_.min_random_walk_sigma_m);
+      // An absurd measurement (|V_m| ~ 1e200) must not scatter the particles to ∞.
+      if (!std::isfinite(sd)) sd = params_.random_walk_sigma_m;
+    }
+    sigma[0] = sigma[1] = sigma[2] = sd;
+  } else {
+    // Evidence (pf_evolution.h): each parameter's posterior variance
+    // inflated by e^{dt/M} − 1; the adaptive variant adds eq. 11's σ
+    // (unfloored).
+    const double inflate = iteration_ > 0 ? memory_.step(s.dt_s) : 0.0;
+    double extra = 0.0;
+    if (params_.adaptive && iteration_ > 0) {
+      const double dv = s.v_m_s - estimate_.velocity.v_m_s;
+      const double dw = s.w_rad_s - estimate_.velocity.w_rad_s;
+      extra = params_.alpha * std::sqrt(dv * dv + dw * dw);
+      if (!std::isfinite(extra)) extra = 0.0;
+    }
+    const double sds[3] = {estimate_.sd_radius_right_m, estimate_.sd_radius_left_m, estimate_.sd_wheel_base_m};
+    const double values[3] = {estimate_.params.wheel_radius_right_m, estimate_.params.wheel_radius_left_m,
+                              estimate_.params.wheel_base_m};
+    // Bounded forgetting (pf_evolution.h): a parameter's spread is never
+    // widened past its prior's (the initial range's uniform sd), so a
+    // direction the drive does not excite (D on a circle at one curvature)
+    // cannot wind up and wander off.
+    const PfCalibratorParams::Range ranges[3] = {params_.wheel_radius_right_m, params_.wheel_radius_left_m,
+                                                 params_.wheel_base_m};
+    for (int k = 0; k < 3; ++k) {
+      // A cloud that has collapsed onto one value keeps a sliver of spread.
+      const double sd = std::max(sds[k], kMinRelativeSpread * values[k]);
+      const double prior_sd = (ranges[k].hi - ranges[k].lo) / std::sqrt(12.0);
+      const double room = std::max(0.0, prior_sd * prior_sd - sd * sd);
+      sigma[k] = std::sqrt(std::min(inflate * sd * sd, room) + extra * extra);
+      if (!std::isfinite(sigma[k])) sigma[k] = 0.0;
+    }
   }
   ++iteration_;
   const Shifts shifts{estimate_.params.wheel_radius_right_m, estimate_.params.wheel_radius_left_m,
                       estimate_.params.wheel_base_m, s.v_m_s, s.w_rad_s};
   // Steps 1–2.
+  const long resets_before = degenerate_resets_;
   double max_log_weight = predict_and_weigh(s, sigma);
   if (!std::isfinite(max_log_weight)) {
     // Every weight is zero or undefined: the sample carries no usable
@@ -315,6 +369,12 @@ const CalibEstimate& PfCalibrator::step(const CalibSample& s) {
   // Steps 3–4.
   compute_estimate(max_log_weight, shifts);
   log_weight_shift_ = max_log_weight;
+  // log p(y_k | y_1..k−1) = log Σ ρ_{k−1}·N(y; ŷ_i, var) − log Σ ρ_{k−1}
+  // (header), the Gaussian's normalisation included.
+  last_log_predictive_ = max_log_weight + std::log(block_sums_[kSumW]) - std::log(prev_weight_sum_) -
+                         std::log(2.0 * std::numbers::pi) + 0.5 * std::log(last_inv_var_product_);
+  if (degenerate_resets_ > resets_before) last_log_predictive_ = std::nan("");
+  prev_weight_sum_ = block_sums_[kSumW];
 
   const double n = static_cast<double>(particle_count());
   bool resample_now = false;
@@ -343,7 +403,7 @@ const CalibEstimate& PfCalibrator::step(const CalibSample& s) {
   return estimate_;
 }
 
-double PfCalibrator::predict_and_weigh(const CalibSample& s, double sigma_m) {
+double PfCalibrator::predict_and_weigh(const CalibSample& s, const double (&sigma_m)[3]) {
   const std::size_t n = r_right_.size();
   const std::size_t blocks = block_count(n);
   block_sums_.assign(blocks * kSumCount, 0.0);
@@ -352,16 +412,28 @@ double PfCalibrator::predict_and_weigh(const CalibSample& s, double sigma_m) {
   in.key_radii = counter_hash(params_.seed, it, 0, 0, kStreamWalkRadii);
   in.key_base = counter_hash(params_.seed, it, 0, 0, kStreamWalkBase);
   in.key_velocity = counter_hash(params_.seed, it, 0, 0, kStreamVelocity);
-  in.sigma_m = sigma_m;
+  in.sigma_rr = sigma_m[0];
+  in.sigma_rl = sigma_m[1];
+  in.sigma_d = sigma_m[2];
   in.omega_l = s.omega_l_rad_s;
   in.omega_r = s.omega_r_rad_s;
-  in.a_v = params_.v_perturbation_m_s;
-  in.a_w = params_.w_perturbation_rad_s;
   in.v_m = s.v_m_s;
   in.w_m = s.w_rad_s;
-  in.inv_v_var = 1.0 / s.v_var;
-  in.inv_w_var = 1.0 / s.w_var;
+  if (params_.evolution == PfEvolution::evidence) {
+    // The perturbation integrated out (header): no draw, its variance a²/3
+    // added to the measurement's.
+    const double a_v = params_.v_perturbation_m_s, a_w = params_.w_perturbation_rad_s;
+    in.a_v = in.a_w = 0.0;
+    in.inv_v_var = 1.0 / (s.v_var + a_v * a_v / 3.0);
+    in.inv_w_var = 1.0 / (s.w_var + a_w * a_w / 3.0);
+  } else {
+    in.a_v = params_.v_perturbation_m_s;
+    in.a_w = params_.w_perturbation_rad_s;
+    in.inv_v_var = 1.0 / s.v_var;
+    in.inv_w_var = 1.0 / s.w_var;
+  }
   in.log_weight_shift = log_weight_shift_;
+  last_inv_var_product_ = in.inv_v_var * in.inv_w_var;
   double* r_right = r_right_.data();
   double* r_left = r_left_.data();
   double* base = base_.data();
@@ -457,6 +529,7 @@ void PfCalibrator::resample_to(int count) {
   log_weight_.assign(m, 0.0);
   weight_.resize(m);  // rewritten by the next compute_estimate()
   log_weight_shift_ = 0.0;
+  prev_weight_sum_ = static_cast<double>(m);  // equal weights exp(0)
 }
 
 }  // namespace odotune::filters

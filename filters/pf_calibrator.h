@@ -42,6 +42,23 @@
 // radii of a few mm; Params::min_random_walk_sigma_m bounds it from below
 // (set it to 0 for eq. 11 as published).
 //
+// Evolution (PfCalibratorParams::evolution). `paper` is steps 1–2 above.
+// `evidence` (the default) departs from the paper where a measurement
+// carries little information (a slow robot: OptiOdom, issue 16):
+//   - the walk of R_R, R_L, D is each parameter's posterior spread (the
+//     cloud's weighted sd) times √(e^{dt/M} − 1), M the memory of
+//     filters/pf_evolution.h (the time since the last change, 10 s to
+//     1000 s), never widening a parameter past its prior's sd (bounded
+//     forgetting); the adaptive variant adds eq. 11's σ, without the floor;
+//   - V and W are not perturbed by a draw: the uniform perturbation is
+//     integrated out of the weight, approximated by its variance a²/3 added
+//     to the measurement's (a Rao–Blackwellised weight: a draw of ±a_v on a
+//     robot moving at 0.1 m/s swamps the radii's effect on V);
+//   - run_calibration runs it as a slow/fast pair that finds changes
+//     (filters/memory_pair.h); last_log_predictive() is the pair's evidence.
+// The wheelchair studies (docs/calibration/README.md) keep their
+// convergence and step tracking under it.
+//
 // Particles live in structure-of-arrays form and are updated in parallel
 // (OpenMP). Random numbers are counter-based (core/counter_rng.h: one
 // counter_hash per iteration and stream, then one SplitMix64 mix per particle;
@@ -51,13 +68,24 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "filters/odometry_params.h"
+#include "filters/pf_evolution.h"
 #include "filters/resampling.h"
 
 namespace odotune::filters {
+
+// paper: §III's walk (σ fixed, or eq. 11 for the adaptive variant, floored)
+// and V, W perturbed by uniform draws. evidence: this file's departure from
+// the paper for robots on which a measurement carries little information
+// (header, "Evolution").
+enum class PfEvolution { paper, evidence };
+std::string_view to_string(PfEvolution e);
+bool parse_pf_evolution(std::string_view text, PfEvolution* out);
 
 struct PfCalibratorParams {
   struct Range {
@@ -72,6 +100,11 @@ struct PfCalibratorParams {
   double random_walk_sigma_m = 0.0005;  // σ of the R_R, R_L, D walk per iteration [m] (plain PF)
   double v_perturbation_m_s = 0.01;     // a_v: half-width of V's uniform perturbation [m/s]
   double w_perturbation_rad_s = 0.01;   // a_w: half-width of W's uniform perturbation [rad/s]
+  // How the parameters evolve between measurements (header, "Evolution").
+  PfEvolution evolution = PfEvolution::evidence;
+  // evidence: its memory (filters/pf_evolution.h; run as a pair with a fast
+  // twin to find changes, filters/memory_pair.h).
+  EvidenceMemoryParams evidence;
 
   Resampler resampler = Resampler::systematic;
   ResamplePolicy policy = ResamplePolicy::neff;
@@ -119,6 +152,15 @@ class PfCalibrator {
   const PfCalibratorParams& params() const { return params_; }
   // Iterations whose weights were all degenerate and were reset to uniform.
   long degenerate_resets() const { return degenerate_resets_; }
+  // Evidence evolution: the current memory [s], and a new memory (starting
+  // from its min_memory_s) for the next steps (filters/memory_pair.h).
+  double memory_s() const { return memory_.memory_s(); }
+  void set_memory(const EvidenceMemoryParams& p) { memory_ = EvidenceMemory(p); }
+  // log p(y_k | y_1..k−1) of the last step's measurement under the filter's
+  // predictive distribution (the weighted particles' Gaussian likelihoods,
+  // normalised by the weights before the step); NaN after a degenerate
+  // reset or before the first step.
+  double last_log_predictive() const { return last_log_predictive_; }
 
  private:
   struct Shifts;  // reference values subtracted before the weighted sums
@@ -126,7 +168,7 @@ class PfCalibrator {
   int thread_count() const;
   // Prediction and log-likelihood of every particle (step 1–2); returns the
   // largest log-weight.
-  double predict_and_weigh(const CalibSample& sample, double sigma_m);
+  double predict_and_weigh(const CalibSample& sample, const double (&sigma_m)[3]);
   // Weights exp(log ρ − max_log_weight) into weight_ and the weighted
   // moments into estimate_ (step 3–4, before resampling).
   void compute_estimate(double max_log_weight, const Shifts& shifts);
@@ -144,6 +186,10 @@ class PfCalibrator {
   CalibEstimate estimate_;
   long iteration_ = 0;
   long degenerate_resets_ = 0;
+  EvidenceMemory memory_;
+  double prev_weight_sum_ = 0.0;       // Σ exp(log ρ − log_weight_shift_) before the step
+  double last_inv_var_product_ = 1.0;  // 1/(var_v·var_w) of the last step's likelihood
+  double last_log_predictive_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace odotune::filters

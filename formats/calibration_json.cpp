@@ -135,6 +135,13 @@ json calibration_json(const CalibrationResult& result, const std::vector<const C
     const double nh = k < nominal.size() ? nominal[k].heading_rmse_rad : NAN;
     t["nominal"] = {{"pose_rmse_m", number_or_null(np)}, {"heading_rmse_rad", number_or_null(nh)}};
     t["iterations"] = k < iterations.size() ? iterations[k] : 0;
+    if (k < inputs.size()) {
+      t["ext_noise"] = inputs[k]->ext_noise;
+      t["ext_sigma_v_m_s"] = inputs[k]->ext_sigma_v_m_s > 0.0 ? json(inputs[k]->ext_sigma_v_m_s)
+                                                              : json(nullptr);
+      t["ext_sigma_w_rad_s"] = inputs[k]->ext_sigma_w_rad_s > 0.0 ? json(inputs[k]->ext_sigma_w_rad_s)
+                                                                  : json(nullptr);
+    }
     tracks.push_back(t);
     pose.push_back(s.pose_rmse_m), heading.push_back(s.heading_rmse_rad);
     nominal_pose.push_back(np), nominal_heading.push_back(nh);
@@ -146,6 +153,7 @@ json calibration_json(const CalibrationResult& result, const std::vector<const C
   j["ms_per_iteration"] = number_or_null(result.ms_per_iteration);
   j["iterations"] = result.iterations;
   j["mean_particles"] = number_or_null(result.mean_particles);
+  j["memory_restarts"] = result.memory_restarts;
   if (is_offline(result.method)) {
     j["batch_converged"] = result.batch_converged;
     j["batch_residuals"] = result.batch_residuals;

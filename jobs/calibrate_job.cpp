@@ -64,6 +64,8 @@ std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply
   for (std::size_t k = 0; k < tracks.size(); ++k) {
     CalibrationInputOptions o;
     o.ext_from_gt_rate_hz = a.ext_from_gt_hz;
+    // --ext-sigma-v/-w given: those, not the noise estimated from the ground truth's jitter.
+    o.estimate_ext_noise = !(a.ext_sigma_v > 0.0 || a.ext_sigma_w > 0.0);
     if (a.ext_sigma_v > 0.0) o.default_v_var = a.ext_sigma_v * a.ext_sigma_v;
     if (a.ext_sigma_w > 0.0) o.default_w_var = a.ext_sigma_w * a.ext_sigma_w;
     const Track& tr = tracks[k];
@@ -127,7 +129,8 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
   const bool pf = o.method == CalibrationMethod::pf || o.method == CalibrationMethod::adaptive_pf;
   for (const auto& [flag, given] :
        {std::pair{"--resampler", a.resampler_given}, std::pair{"--policy", a.policy_given},
-        std::pair{"--particles", a.particles_given}})
+        std::pair{"--particles", a.particles_given}, std::pair{"--pf-evolution", a.pf_evolution_given},
+        std::pair{"--pf-memory", a.pf_memory_given}})
     if (given && !pf)
       throw Failure(fmt::format("{} applies to --method pf and adaptive-pf only (got --method {})", flag,
                                 a.method));
@@ -159,6 +162,12 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
   if (!a.policy.empty() && !filters::parse_resample_policy(a.policy, &o.pf.policy))
     throw Failure(fmt::format("--policy '{}': expected every, neff or max", a.policy));
   if (a.particles > 0) o.pf.particles = a.particles;
+  if (!a.pf_evolution.empty() && !filters::parse_pf_evolution(a.pf_evolution, &o.pf.evolution))
+    throw Failure(fmt::format("--pf-evolution '{}': expected paper or evidence", a.pf_evolution));
+  if (a.pf_memory_s > 0.0) {
+    o.pf.evidence.min_memory_s = a.pf_memory_s;
+    o.pf.evidence.max_memory_s = std::max(o.pf.evidence.max_memory_s, a.pf_memory_s);
+  }
   o.pf.seed = a.seed;
   o.pf.threads = a.threads;
 

@@ -48,6 +48,8 @@ struct CalibrateRequest {
   std::string init_radius_range;       // "LO,HI" [m], both radii; "": nominal ±5 %
   std::string init_wheel_base_range;   // "LO,HI" [m]; "": nominal ±15 %
   double tolerance_pct = 0.5;          // convergence tolerance [%], in (0, 100)
+  std::string pf_evolution;            // PF: paper | evidence ("": evidence)
+  double pf_memory_s = 0.0;            // PF evidence evolution: memory after a change [s]; ≤ 0: 10
   double segment_s = 0.0;              // batch-pose: segment length [s]; 0: whole runs
   bool fit_start_heading = false;      // batch-pose: fit each segment's start heading too
   // Output files ("": not written). calibrate: all four; --apply: json only.
@@ -59,7 +61,7 @@ struct CalibrateRequest {
   // combines with --apply.
   bool method_given = false, resampler_given = false, policy_given = false, particles_given = false,
        seed_given = false, init_radius_range_given = false, init_wheel_base_range_given = false,
-       tolerance_given = false, segment_given = false;
+       tolerance_given = false, segment_given = false, pf_evolution_given = false, pf_memory_given = false;
 };
 
 // The calibration itself reports no progress. on_start (when set) gets

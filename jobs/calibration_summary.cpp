@@ -56,6 +56,7 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
   for (std::size_t k = 0; k < r.tracks.size() && k < inputs.size(); ++k) {
     const TrackCalibrationScore& s = r.tracks[k];
     out.push_back(fmt::format("  track {} ({}):", s.track, info.track_files[k]));
+    if (!inputs[k].ext_noise.empty()) out.push_back("    velocities    " + inputs[k].ext_noise);
     out.push_back(param_line("R_R", s.final_params.wheel_radius_right_m, s.truth_final,
                              &OdometryParams::wheel_radius_right_m));
     out.push_back(param_line("R_L", s.final_params.wheel_radius_left_m, s.truth_final,
@@ -99,6 +100,11 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
     std::string cost = fmt::format("  cost: {} iterations, {:.3g} ms per iteration", r.iterations,
                                    r.ms_per_iteration);
     if (pf) cost += fmt::format(", mean {:.0f} particles", r.mean_particles);
+    if (r.memory_restarts > 0 || info.options.method == CalibrationMethod::dkf
+            ? info.options.dkf.fading_memory
+            : info.options.pf.evolution == filters::PfEvolution::evidence)
+      cost += fmt::format("; memory restarted {} time(s) (a change found, filters/memory_pair.h)",
+                          r.memory_restarts);
     out.push_back(cost);
   }
   return out;

@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "objectives/pose_series.h"
+#include "objectives/reference_jitter.h"
 #include "objectives/track_samples.h"
 #include "tracks/effects.h"
 
@@ -241,6 +242,34 @@ CalibrationInput build_calibration_input(const Track& track, const CalibrationIn
     const double rate = options.ext_from_gt_rate_hz;
     const double period = 1.0 / rate;
     const double half = 0.5 * period;
+    double v_var = options.default_v_var, w_var = options.default_w_var;
+    if (options.estimate_ext_noise) {
+      const ReferenceJitter j = estimate_reference_jitter(gt);
+      double enc_v = 0.0, enc_w = 0.0;  // encoder quantisation variances (header)
+      if (from_ticks && options.wheel_rate_window_s > 0.0) {
+        const double q = 2.0 * std::numbers::pi / ticks_per_rev / options.wheel_rate_window_s;
+        const double var_omega = q * q / 6.0;
+        const double r = 0.5 * (in.nominal.wheel_radius_left_m + in.nominal.wheel_radius_right_m);
+        enc_v = r * r * var_omega / 2.0;
+        enc_w = 2.0 * r * r * var_omega / (in.nominal.wheel_base_m * in.nominal.wheel_base_m);
+      }
+      v_var = 2.0 * j.sigma_xy_m * j.sigma_xy_m / (period * period) + enc_v;
+      w_var = 2.0 * j.sigma_theta_rad * j.sigma_theta_rad / (period * period) + enc_w;
+      if (!(v_var > 0.0)) v_var = options.default_v_var;  // an exact reference without ticks
+      if (!(w_var > 0.0)) w_var = options.default_w_var;
+      in.ext_noise = fmt::format(
+          "derived from the ground truth at {:g} Hz; sigma_v = {:.3g} m/s, sigma_w = {:.3g} rad/s from its jitter "
+          "(sigma_xy = {:.3g} mm, sigma_theta = {:.3g} mrad over {} samples){}",
+          rate, std::sqrt(v_var), std::sqrt(w_var), 1e3 * j.sigma_xy_m, 1e3 * j.sigma_theta_rad, j.triples,
+          from_ticks ? " and the encoders' quantisation" : "");
+    } else {
+      in.ext_noise = fmt::format(
+          "derived from the ground truth at {:g} Hz; sigma_v = {:.3g} m/s, sigma_w = {:.3g} "
+          "rad/s as given",
+          rate, std::sqrt(v_var), std::sqrt(w_var));
+    }
+    in.ext_sigma_v_m_s = std::sqrt(v_var);
+    in.ext_sigma_w_rad_s = std::sqrt(w_var);
     const double k_first = std::ceil((gt.t.front() + half) * rate);
     const double k_last = std::floor((gt.t.back() - half) * rate);
     for (double k = k_first; k <= k_last; k += 1.0) {
@@ -252,8 +281,8 @@ CalibrationInput build_calibration_input(const Track& track, const CalibrationIn
       filters::CalibSample s;
       s.v_m_s = vel->v_m_s;
       s.w_rad_s = vel->w_rad_s;
-      s.v_var = options.default_v_var;
-      s.w_var = options.default_w_var;
+      s.v_var = v_var;
+      s.w_var = w_var;
       add(tk, row, s);
     }
   } else if (has_ext) {
@@ -274,6 +303,8 @@ CalibrationInput build_calibration_input(const Track& track, const CalibrationIn
       s.w_var = positive_or(w_var, i, options.default_w_var);
       add(t[i], row, s);
     }
+    in.ext_noise =
+        "the track's v_ext/w_ext (variances from v_ext_var/w_ext_var where given, else the defaults)";
   }
   for (std::size_t i = 0; track.has_aps() && i < track.size(); ++i) {
     if (!track.at(Col::aps_x, i) || !track.at(Col::aps_y, i)) continue;

@@ -36,8 +36,16 @@ struct CalibrationInputOptions {
   // matching on tracks that have none, e.g. OptiOdom with OptiTrack), by a
   // central difference of the pose over one period. At most 1000 Hz.
   double ext_from_gt_rate_hz = 0.0;
+  // Velocities derived from the ground truth: their variances from the
+  // reference's own jitter (reference_jitter.h: var_v = 2σ_xy²/T²,
+  // var_w = 2σ_θ²/T² for a difference of poses T = 1/rate apart) plus the
+  // wheel rates' encoder quantisation over wheel_rate_window_s (ticks only:
+  // var_ω = (2π/ticks_per_rev)²/6/window² per wheel, so var_V += R²var_ω/2
+  // and var_W += 2R²var_ω/D²). false: default_v_var/default_w_var.
+  bool estimate_ext_noise = true;
   // Variances used when the track has no v_ext_var/w_ext_var (and for
-  // velocities derived from the ground truth).
+  // velocities derived from the ground truth when estimate_ext_noise is
+  // false).
   double default_v_var = 4e-4;  // [(m/s)²]
   double default_w_var = 4e-4;  // [(rad/s)²]
   // A sample's wheel rates are the mean over this window centred on the
@@ -91,6 +99,12 @@ struct CalibrationInput {
   // first); variances: v_ext_var/w_ext_var of the row when present and > 0,
   // else the options' defaults (always the defaults when derived from GT).
   std::vector<filters::CalibSample> samples;
+  // How the samples' variances were set, one line (e.g. "derived from the
+  // ground truth at 10 Hz; σ_v = 0.0051 m/s, σ_w = 0.029 rad/s from its
+  // jitter (σ_xy = 0.19 mm, σ_θ = 1.43 mrad) and the encoders"); empty
+  // without samples.
+  std::string ext_noise;
+  double ext_sigma_v_m_s = 0.0, ext_sigma_w_rad_s = 0.0;  // derived samples' σ (0: from the track)
   std::vector<std::size_t> sample_row;
   std::vector<double> sample_t;  // [s]
 };

@@ -56,6 +56,10 @@ filters::PfCalibratorParams apply_calibration_params(const filters::PfCalibrator
                                                      std::span<const double> v) {
   if (v.size() != kCalibrationDim) throw std::invalid_argument("calibration params: wrong dimension");
   filters::PfCalibratorParams p = base;
+  // The space is the paper's PF settings (its walk σ, α, ...): tuned under
+  // the paper's evolution, which they drive (the evidence evolution has no
+  // walk σ to tune, filters/pf_evolution.h).
+  p.evolution = filters::PfEvolution::paper;
   p.neff_fraction = v[kNeffFraction];
   p.max_weight_ratio = v[kMaxWeightRatio];
   p.alpha = v[kAlpha];

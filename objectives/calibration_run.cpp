@@ -265,6 +265,10 @@ bool CalibrationOptions::IsValid(std::string* why) const {
     return false;
   }
   std::string inner;
+  if (!memory_pair.IsValid(&inner)) {
+    if (why) *why = "memory_pair." + inner;
+    return false;
+  }
   switch (method) {
     case CalibrationMethod::adaptive_pf:
     case CalibrationMethod::pf:
@@ -335,13 +339,28 @@ CalibrationResult run_calibration(const std::vector<const CalibrationInput*>& in
   switch (options.method) {
     case CalibrationMethod::adaptive_pf:
     case CalibrationMethod::pf: {
-      filters::PfCalibrator pf(effective_pf_params(options));
-      run_online(pf, inputs, tol, &res);
+      const filters::PfCalibratorParams p = effective_pf_params(options);
+      if (p.evolution == filters::PfEvolution::evidence) {
+        filters::MemoryPair<filters::PfCalibrator> pair(filters::PfCalibrator(p), p.evidence,
+                                                        options.memory_pair);
+        run_online(pair, inputs, tol, &res);
+        res.memory_restarts = pair.changes();
+      } else {
+        filters::PfCalibrator pf(p);
+        run_online(pf, inputs, tol, &res);
+      }
       break;
     }
     case CalibrationMethod::dkf: {
-      filters::DualKf dkf(options.dkf);
-      run_online(dkf, inputs, tol, &res);
+      if (options.dkf.fading_memory) {
+        filters::MemoryPair<filters::DualKf> pair(filters::DualKf(options.dkf), options.dkf.evidence,
+                                                  options.memory_pair);
+        run_online(pair, inputs, tol, &res);
+        res.memory_restarts = pair.changes();
+      } else {
+        filters::DualKf dkf(options.dkf);
+        run_online(dkf, inputs, tol, &res);
+      }
       break;
     }
     case CalibrationMethod::batch_pose:

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "filters/dual_kf.h"
+#include "filters/memory_pair.h"
 #include "filters/pf_calibrator.h"
 #include "objectives/calibration_input.h"
 #include "objectives/pose_calibration.h"
@@ -49,6 +50,9 @@ struct CalibrationOptions {
   filters::PfCalibratorParams pf;
   filters::DualKfParams dkf;
   PoseCalibrationOptions pose;  // batch-pose
+  // pf/adaptive-pf with the evidence evolution and dkf with fading memory
+  // run as a slow/fast pair that finds changes (filters/memory_pair.h).
+  filters::MemoryPairParams memory_pair;
   // Convergence: the first time after which R_R, R_L and D all stay within
   // this fraction of the truth (the paper: 0.5 %; see TrackCalibrationScore).
   double convergence_tolerance = 0.005;
@@ -118,6 +122,7 @@ struct CalibrationResult {
   long iterations = 0;
   double ms_per_iteration = 0.0;
   double mean_particles = 0.0;  // PF: mean N over iterations (deterministic cost); else 0
+  long memory_restarts = 0;     // online methods run as a memory pair: changes found (else 0)
   // batch methods only: Ceres reported convergence (the fit's sds are in the
   // trace row), and which residuals the fit used.
   bool batch_converged = false;

@@ -94,6 +94,7 @@ TEST(DualKf, ConvergesToTheTrueRadii) {
 // so θ̂ stays and P_θ only grows by the random walk Q_θ·dt.
 TEST(DualKf, StandingStillOnlyAddsTheRandomWalk) {
   DualKfParams p;
+  p.fading_memory = false;  // the paper's random walk
   DualKf dkf(p);
   const DkfParamCov p0 = dkf.param_covariance();
   CalibSample still;
@@ -108,6 +109,20 @@ TEST(DualKf, StandingStillOnlyAddsTheRandomWalk) {
   EXPECT_NEAR(dkf.param_covariance()(kDkfRadiusLeft, kDkfRadiusLeft), p0(1, 1) + qr, 1e-18);
   EXPECT_NEAR(dkf.param_covariance()(kDkfWheelBase, kDkfWheelBase), p0(2, 2) + qd, 1e-18);
   EXPECT_EQ(dkf.param_covariance()(0, 1), 0.0);
+}
+
+// With fading memory, standing still multiplies P_θ by e^{dt/M}, but never
+// past the initial covariance: at the prior it stays there (no wind-up).
+TEST(DualKf, FadingMemoryNeverWidensPastThePrior) {
+  DualKfParams p;
+  DualKf dkf(p);
+  const DkfParamCov p0 = dkf.param_covariance();
+  CalibSample still;
+  still.dt_s = 0.5;
+  still.v_m_s = 0.05;
+  for (int i = 0; i < 100; ++i) dkf.step(still);
+  for (int k = 0; k < kDkfParamDim; ++k) EXPECT_NEAR(dkf.param_covariance()(k, k), p0(k, k), 1e-15 * p0(k, k));
+  EXPECT_EQ(dkf.estimate().params.wheel_base_m, p.initial.wheel_base_m);
 }
 
 TEST(DualKf, IsValidNamesTheBadField) {

@@ -16,6 +16,7 @@
 
 #include "core/counter_rng.h"
 #include "filters/calib_stream.h"
+#include "filters/memory_pair.h"
 #include "filters/pf_calibrator.h"
 #include "filters/pf_kernels.h"
 
@@ -250,17 +251,36 @@ TEST(PfCalibrator, PlainPfConvergesToTheTrueRadii) {
 
 // The adaptive PF (adaptive_defaults: N₀ = 8000, α = 1e-4, σ floor 0.1 mm)
 // converges from the uniform ranges, drops far below 8000 particles, and
-// follows a 1 % step of both radii at 55 s (the paper's Figure 6b scenario).
-TEST(PfCalibrator, AdaptivePfConvergesShrinksAndTracksARadiusStep) {
+// follows a 1 % step of both radii at 55 s (the paper's Figure 6b scenario):
+// alone with the paper's evolution, and with the evidence evolution run as a
+// slow/fast pair (filters/memory_pair.h), which finds the step.
+template <class Filter>
+std::vector<CalibEstimate> run_any(Filter& f, const Stream& s) {
+  std::vector<CalibEstimate> out;
+  for (const CalibSample& sample : s.samples) out.push_back(f.step(sample));
+  return out;
+}
+
+class AdaptivePfStep : public ::testing::TestWithParam<PfEvolution> {};
+
+TEST_P(AdaptivePfStep, ConvergesShrinksAndTracksARadiusStep) {
   StreamSpec spec;
   spec.duration_s = 150.0;
   spec.step_time_s = 55.0;
-  spec.step_factor = 1.01;
+  // The pair finds a change once its fast twin (10 s of evidence) predicts
+  // better than the slow one; at 0.5 m/s under σ 0.02 its own noise is
+  // ~0.8 % of R, so it is shown a 2 % step (the paper's walk a 1 % one).
+  spec.step_factor = GetParam() == PfEvolution::paper ? 1.01 : 1.02;
   const Stream s = make_stream(spec);
   PfCalibratorParams p = PfCalibratorParams::adaptive_defaults();
+  p.evolution = GetParam();
   PfCalibrator pf(p);
   EXPECT_EQ(pf.particle_count(), 8000);
-  const std::vector<CalibEstimate> est = run(pf, s);
+  MemoryPair<PfCalibrator> pair(pf, p.evidence, MemoryPairParams{});
+  const std::vector<CalibEstimate> est = GetParam() == PfEvolution::paper ? run(pf, s) : run_any(pair, s);
+  if (GetParam() == PfEvolution::evidence) {
+    EXPECT_GE(pair.changes(), 1);
+  }
   const OdometryParams before = window_mean(s, est, 30.0, 55.0);
   EXPECT_LT(radius_error(before, s.truth.front()), 0.005);
   EXPECT_NEAR(before.wheel_base_m, spec.truth.wheel_base_m, 0.01 * spec.truth.wheel_base_m);
@@ -269,7 +289,9 @@ TEST(PfCalibrator, AdaptivePfConvergesShrinksAndTracksARadiusStep) {
   EXPECT_GT(radius_error(est[k_step + 5].params, s.truth[k_step + 5]), 0.005);
   // …and back within 0.5 % later.
   const OdometryParams after = window_mean(s, est, 100.0, 150.0);
-  EXPECT_LT(radius_error(after, s.truth.back()), 0.005);
+  // (The pair: its memory restarted at the change, so 100-150 s rests on
+  // less evidence; it must close at least 65 % of the 2 % step.)
+  EXPECT_LT(radius_error(after, s.truth.back()), GetParam() == PfEvolution::paper ? 0.005 : 0.35 * 0.02);
   // Particle count: adapted at every resampling, far below 8000 once converged.
   int most_after_30s = 0;
   for (std::size_t k = 0; k < est.size(); ++k)
@@ -277,6 +299,10 @@ TEST(PfCalibrator, AdaptivePfConvergesShrinksAndTracksARadiusStep) {
   EXPECT_LT(most_after_30s, 2000);
   EXPECT_GE(most_after_30s, p.min_particles);
 }
+
+INSTANTIATE_TEST_SUITE_P(Evolutions, AdaptivePfStep,
+                         ::testing::Values(PfEvolution::paper, PfEvolution::evidence),
+                         [](const auto& param_info) { return std::string(to_string(param_info.param)); });
 
 // At each resampling the adaptive PF sets N = round((4 sd(R_R) + 4 sd(R_L)) /
 // dispersion_per_particle_m), clamped to [min, max] (§V), from the sds it

@@ -188,9 +188,11 @@ TEST(CalibrationInput, ExtFromGroundTruthReproducesTheExternalSensor) {
   const Track track = chair_track(o);
   CalibrationInputOptions opt;
   opt.ext_from_gt_rate_hz = 10.0;
+  opt.estimate_ext_noise = false;  // the given variances
   opt.default_v_var = 1e-4;
   opt.default_w_var = 2e-4;
   const CalibrationInput derived = build_calibration_input(track, opt);
+  EXPECT_THAT(derived.ext_noise, HasSubstr("as given"));
   const CalibrationInput measured = build_calibration_input(track, {});
   // Measured: σ = 0 gives a zero variance column, so the defaults are used.
   EXPECT_DOUBLE_EQ(measured.samples[0].v_var, CalibrationInputOptions{}.default_v_var);
