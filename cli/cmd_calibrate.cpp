@@ -110,6 +110,8 @@ void register_calibrate(CLI::App& app) {
   sub->add_option("--figure", req->figure, "write the estimates over time as STEM.png and STEM.svg");
   sub->add_option("--config-out", req->config_out,
                   "write the calibrated parameters (YAML, odotune-calibration/1) for --apply");
+  sub->add_option("--paths-csv", req->paths_csv,
+                  "--apply: write the dead-reckoned paths (nominal, calibrated) and the ground truth as CSV");
   sub->add_option("--apply", req->apply,
                   "replay the tracks with this calibration file and with their nominal parameters, and "
                   "compare pose and heading RMSE (no calibration is run)");

@@ -55,10 +55,10 @@ Range parse_range(const std::string& flag, const std::string& text) {
 std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply) {
   const std::vector<std::string>& files = a.tracks;
   // The pose fit needs no external velocity (it fits to the ground truth or
-  // the fixes); nor does --apply, which scores dead reckoning.
+  // the fixes); nor do none and --apply, which score dead reckoning.
   CalibrationMethod method = CalibrationMethod::none;
   const bool pose_fit = !apply && parse_calibration_method(a.method, &method) &&
-                        method == CalibrationMethod::batch_pose;
+                        (method == CalibrationMethod::batch_pose || method == CalibrationMethod::none);
   const std::vector<Track> tracks = load_tracks(files);
   std::vector<CalibrationInput> inputs;
   for (std::size_t k = 0; k < tracks.size(); ++k) {
@@ -207,6 +207,8 @@ CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& 
   for (const auto& [flag, path] : {std::pair{"--json", &a.json}, std::pair{"--csv", &a.csv},
                                    std::pair{"--figure", &a.figure}, std::pair{"--config-out", &a.config_out}})
     check_output_dir(flag, *path);
+  if (!a.paths_csv.empty())
+    throw Failure("--paths-csv applies to --apply only (the paths of a calibration file)");
   CalibrateOutcome out;
   out.inputs = build_inputs(a, false);
   check_same_robot(out.inputs, a.tracks);
@@ -271,6 +273,7 @@ ApplyOutcome run_calibrate_apply(const CalibrateRequest& a) {
     if (given)
       throw Failure(fmt::format("{} does not combine with --apply (which replays a calibration file)", flag));
   check_output_dir("--json", a.json);
+  check_output_dir("--paths-csv", a.paths_csv);
   const CalibrationFile cal = read_calibration_file(a.apply);
   const std::vector<CalibrationInput> inputs = build_inputs(a, true);
   ApplyOutcome out;
@@ -284,6 +287,17 @@ ApplyOutcome run_calibrate_apply(const CalibrateRequest& a) {
     out.tracks.push_back(std::move(t));
   }
   const std::string json_text = apply_json(a.apply, cal.params, out.tracks).dump(2) + "\n";
+  if (!a.paths_csv.empty()) {
+    std::string csv = "track,t_s,gt_x_m,gt_y_m,nominal_x_m,nominal_y_m,calibrated_x_m,calibrated_y_m\n";
+    for (const CalibrationInput& in : inputs) {
+      const DeadReckonedPath nom = dead_reckoned_path(in, in.nominal);
+      const DeadReckonedPath calp = dead_reckoned_path(in, cal.params);
+      for (std::size_t i = 0; i < nom.t.size(); ++i)
+        csv += fmt::format("{},{:.4f},{:.5f},{:.5f},{:.5f},{:.5f},{:.5f},{:.5f}\n", in.track_name, nom.t[i],
+                           nom.gt_x[i], nom.gt_y[i], nom.x[i], nom.y[i], calp.x[i], calp.y[i]);
+    }
+    write_file_atomically(a.paths_csv, csv);
+  }
   if (!a.json.empty()) write_file_atomically(a.json, json_text);
   out.summary = apply_summary_lines(a.apply, cal.params, out.tracks);
   return out;

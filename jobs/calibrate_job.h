@@ -55,6 +55,10 @@ struct CalibrateRequest {
   // Output files ("": not written). calibrate: all four; --apply: json only.
   std::string json, csv, figure, config_out;
   std::string apply;  // the calibration file --apply replays
+  // --apply: the dead-reckoned paths (nominal and calibrated) and the ground
+  // truth of every track as CSV ("": not written): track, t_s, gt_x_m,
+  // gt_y_m, nominal_x_m, nominal_y_m, calibrated_x_m, calibrated_y_m.
+  std::string paths_csv;
 
   // Which flags were given (even with a default or empty value): --resampler,
   // --policy and --particles apply to the PF methods only, and none of these

@@ -312,6 +312,36 @@ std::optional<double> convergence_time(const std::vector<double>& times,
   return since;
 }
 
+DeadReckonedPath dead_reckoned_path(const CalibrationInput& in, const filters::OdometryParams& p) {
+  std::string why;
+  if (!p.IsValid(&why))
+    throw std::invalid_argument(fmt::format("track '{}': parameters: {}", in.track_name, why));
+  DeadReckonedPath out;
+  const std::size_t n = in.t.size();
+  auto has_gt_row = [&](std::size_t r) {
+    return !std::isnan(in.gt_x[r]) && !std::isnan(in.gt_y[r]) && !std::isnan(in.gt_theta[r]);
+  };
+  std::size_t start = 0;
+  while (start < n && !has_gt_row(start)) ++start;
+  if (start >= n) return out;
+  filters::Pose pose;
+  pose << in.gt_x[start], in.gt_y[start], in.gt_theta[start];
+  for (std::size_t r = start; r < n; ++r) {
+    if (r > start) {
+      const double dt = in.t[r] - in.t[r - 1];
+      const filters::WheelTravel u{in.omega_l[r] * p.wheel_radius_left_m * dt,
+                                   in.omega_r[r] * p.wheel_radius_right_m * dt};
+      pose = filters::diff_drive_step(pose, u, p.wheel_base_m).next;
+    }
+    out.t.push_back(in.t[r]);
+    out.x.push_back(pose(filters::kX));
+    out.y.push_back(pose(filters::kY));
+    out.gt_x.push_back(in.gt_x[r]);
+    out.gt_y.push_back(in.gt_y[r]);
+  }
+  return out;
+}
+
 TrackCalibrationScore score_fixed_params(const CalibrationInput& input, const filters::OdometryParams& params,
                                          double convergence_tolerance) {
   std::string why;

@@ -144,6 +144,17 @@ CalibrationResult run_calibration(const std::vector<const CalibrationInput*>& in
 TrackCalibrationScore score_fixed_params(const CalibrationInput& input, const filters::OdometryParams& params,
                                          double convergence_tolerance = 0.005);
 
+// The dead-reckoned path of fixed parameters on one track (the dead
+// reckoning of TrackCalibrationScore): from the first odometry row with
+// ground truth, at its pose, one point per later odometry row, with the
+// ground truth at that row (NaN where it has none). Empty without ground
+// truth. Throws std::invalid_argument for invalid parameters.
+struct DeadReckonedPath {
+  std::vector<double> t, x, y;     // [s, m, m]
+  std::vector<double> gt_x, gt_y;  // [m]
+};
+DeadReckonedPath dead_reckoned_path(const CalibrationInput& input, const filters::OdometryParams& params);
+
 // The earliest times[i] such that estimates[j] is within `tolerance` of
 // `truth` (|est − truth| ≤ tolerance·truth for R_R and R_L: the radii, as
 // the paper's convergence time, Fariña et al. §VI; D is reported, not
