@@ -94,15 +94,18 @@ struct PredictInputs {
 };
 
 // The two hot loops below are functions of their own (GCC does not vectorise
-// them once inlined into an OpenMP region) compiled twice, for AVX2 and for
-// baseline x86-64, the CPU picking one at load time (target_clones, an ELF
-// ifunc). Neither version may contract a·b + c into an FMA (AVX2 without
-// FMA), the reductions have a fixed order, and everything else is elementwise
-// IEEE arithmetic, so both versions give bit-identical results. Elsewhere the
+// them once inlined into an OpenMP region) compiled three times, for
+// x86-64-v4 (AVX-512, whose native 64-bit multiplies make the counter-based
+// generator's SplitMix64 cheap: 0.17 → 0.09 ms per step at N = 8000,
+// docs/benchmarks.md), for AVX2 and for baseline x86-64, the CPU picking one at
+// load time (target_clones, an ELF ifunc). No version may contract a·b + c
+// into an FMA (-ffp-contract=off, CMakeLists.txt), the reductions have a fixed
+// order, and everything else is elementwise IEEE arithmetic, so all versions
+// give bit-identical results. Elsewhere the
 // functions are only kept out of line (and, for GCC, out of interprocedural
 // constant propagation, which would defeat ExpClamp).
 #if defined(__x86_64__) && defined(__linux__)
-#define ODOTUNE_PF_HOT_LOOP [[gnu::target_clones("avx2", "default")]]
+#define ODOTUNE_PF_HOT_LOOP [[gnu::target_clones("arch=x86-64-v4", "avx2", "default")]]
 #elif defined(__clang__)
 #define ODOTUNE_PF_HOT_LOOP [[gnu::noinline]]
 #else
@@ -116,6 +119,7 @@ struct PredictInputs {
 
 // Prediction and log-weight of particles [i0, i1); returns their largest
 // log-weight (−∞ when all are −∞). NaN log-weights become −∞ (weight 0).
+template <bool kPerturb>
 ODOTUNE_PF_HOT_LOOP double predict_block(const PredictInputs in, double* __restrict r_right,
                                          double* __restrict r_left, double* __restrict base,
                                          double* __restrict v, double* __restrict w,
@@ -126,14 +130,18 @@ ODOTUNE_PF_HOT_LOOP double predict_block(const PredictInputs in, double* __restr
     const std::uint64_t n = static_cast<std::uint64_t>(i) * kGolden;
     const pf_kernels::NormalPair z_radii = pf_kernels::normal_pair_from_bits(splitmix64_mix(in.key_radii + n));
     const pf_kernels::NormalPair z_base = pf_kernels::normal_pair_from_bits(splitmix64_mix(in.key_base + n));
-    const std::uint64_t u_bits = splitmix64_mix(in.key_velocity + n);
     const double rr = r_right[i] + in.sigma_rr * z_radii.first;
     const double rl = r_left[i] + in.sigma_rl * z_radii.second;
     const double d = base[i] + in.sigma_d * z_base.first;
-    const double vi = 0.5 * (in.omega_r * rr + in.omega_l * rl) +
-                      in.a_v * (2.0 * pf_kernels::uniform_high32(u_bits) - 1.0);
-    const double wi = (in.omega_r * rr - in.omega_l * rl) / d +
-                      in.a_w * (2.0 * pf_kernels::uniform_low32(u_bits) - 1.0);
+    double vi = 0.5 * (in.omega_r * rr + in.omega_l * rl);
+    double wi = (in.omega_r * rr - in.omega_l * rl) / d;
+    if constexpr (kPerturb) {
+      // The paper's uniform perturbation of V and W (no draw when it is
+      // integrated out of the weight instead, the evidence evolution).
+      const std::uint64_t u_bits = splitmix64_mix(in.key_velocity + n);
+      vi += in.a_v * (2.0 * pf_kernels::uniform_high32(u_bits) - 1.0);
+      wi += in.a_w * (2.0 * pf_kernels::uniform_low32(u_bits) - 1.0);
+    }
     const double dv = in.v_m - vi;
     const double dw = in.w_m - wi;
     double lw = log_weight[i] - in.log_weight_shift - 0.5 * (dv * dv * in.inv_v_var + dw * dw * in.inv_w_var);
@@ -441,12 +449,15 @@ double PfCalibrator::predict_and_weigh(const CalibSample& s, const double (&sigm
   double* w = w_.data();
   double* log_weight = log_weight_.data();
   double* maxima = block_sums_.data();
+  const bool perturb = in.a_v != 0.0 || in.a_w != 0.0;
   const int threads = thread_count();
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && blocks > 1)
   for (std::size_t b = 0; b < blocks; ++b) {
     const std::size_t i0 = b * kBlock;
-    maxima[b * kSumCount] = predict_block(in, r_right, r_left, base, v, w, log_weight, i0,
-                                          std::min(n, i0 + kBlock));
+    maxima[b * kSumCount] =
+        perturb
+            ? predict_block<true>(in, r_right, r_left, base, v, w, log_weight, i0, std::min(n, i0 + kBlock))
+            : predict_block<false>(in, r_right, r_left, base, v, w, log_weight, i0, std::min(n, i0 + kBlock));
   }
   double m = -std::numeric_limits<double>::infinity();
   for (std::size_t b = 0; b < blocks; ++b) m = std::max(m, maxima[b * kSumCount]);

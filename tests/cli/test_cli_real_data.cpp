@@ -36,5 +36,44 @@ TEST(CliRealData, OptiOdomRunTunesAfterSyntheticFixes) {
   EXPECT_EQ(j["divergences"]["non_finite"], 0);
 }
 
+// Calibration on real recordings (docs/calibration/real-data.md, protocol A):
+// calibrated on three OptiOdom runs, replayed on four others. The pose fit
+// (batch) and the adaptive PF must improve every held-out run over the
+// nominal parameters, the pose fit's mean below 25 mm (19.3 mm in the docs).
+TEST(CliRealData, OptiOdomCalibrationImprovesEveryHeldOutRun) {
+  TempDir tmp;
+  const std::string oo = std::string(ODOTUNE_SHARED_DIR) + "/data/real/optiodom_diff/";
+  const auto import = [&](const std::string& run) {
+    const auto out = tmp / (run.substr(run.rfind('/') + 1) + ".csv");
+    EXPECT_EQ(run_cli(fmt::format("import optiodom {}{}.csv -o {}", oo, run, out.string())).exit_code, 0)
+        << run;
+    return out.string();
+  };
+  std::string fit, held;
+  for (const char* r : {"circular/231220200146/231220200146_run-01", "square/231220200045/231220200045_run-01",
+                        "free/030120210001/030120210001_run-01"})
+    fit += " --track " + import(r);
+  for (const char* r : {"circular/231220200146/231220200146_run-02", "square/231220200045/231220200045_run-02",
+                        "free/020120212354/020120212354_run-01", "free/030120210001/030120210001_run-02"})
+    held += " --track " + import(r);
+  for (const std::string method : {"batch", "adaptive-pf"}) {
+    const auto cfg = tmp / (method + ".yaml"), json = tmp / (method + ".json");
+    const auto r = run_cli(fmt::format("calibrate{} --method {} --ext-from-gt 10 --threads 1 --config-out {}",
+                                       fit, method, cfg.string()));
+    ASSERT_EQ(r.exit_code, 0) << method << ": " << r.err;
+    ASSERT_EQ(
+        run_cli(fmt::format("calibrate{} --apply {} --json {}", held, cfg.string(), json.string())).exit_code,
+        0);
+    const auto j = nlohmann::json::parse(testing_support::slurp(json));
+    ASSERT_EQ(j["tracks"].size(), 4u);
+    for (const auto& t : j["tracks"])
+      EXPECT_LT(t["calibrated"]["pose_rmse_m"].get<double>(), t["nominal"]["pose_rmse_m"].get<double>())
+          << method << " " << t["track"];
+    if (method == "batch") {
+      EXPECT_LT(j["mean"]["calibrated"]["pose_rmse_m"].get<double>(), 0.025);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace odotune
