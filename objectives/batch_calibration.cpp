@@ -1,11 +1,13 @@
 #include "objectives/batch_calibration.h"
 
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
-#include <Eigen/Dense>
 #include <ceres/ceres.h>
 #include <fmt/format.h>
+
+#include "objectives/ceres_fit.h"
 
 namespace odotune {
 
@@ -19,10 +21,6 @@ constexpr double kHuberScale = 3.0;
 // Lower bound of every parameter as a fraction of its initial value: keeps
 // D (and the radii) away from 0 without ever binding a plausible fit.
 constexpr double kLowerBoundFraction = 1e-2;
-// Smallest eigenvalue ratio of the unit-diagonal-scaled JᵀJ for which the
-// covariance is computed (below it a direction is unobservable, e.g. D on a
-// track without turning).
-constexpr double kMinEigenRatio = 1e-12;
 
 // Whitened velocity residuals of one calibration sample (header comment).
 struct VelocityResidual {
@@ -39,27 +37,6 @@ struct VelocityResidual {
     return true;
   }
 };
-
-// Whether the Jacobian at the solution has full column rank (judged on JᵀJ
-// scaled to a unit diagonal, so units do not matter); checked before
-// ceres::Covariance, which would log an error on a singular problem.
-bool full_rank(ceres::Problem& problem) {
-  ceres::CRSMatrix j;
-  if (!problem.Evaluate(ceres::Problem::EvaluateOptions(), nullptr, nullptr, nullptr, &j)) return false;
-  Eigen::Matrix3d jtj = Eigen::Matrix3d::Zero();
-  for (int row = 0; row < j.num_rows; ++row) {
-    const auto b = static_cast<std::size_t>(j.rows[static_cast<std::size_t>(row)]);
-    const auto e = static_cast<std::size_t>(j.rows[static_cast<std::size_t>(row) + 1]);
-    for (std::size_t a = b; a < e; ++a)
-      for (std::size_t c = b; c < e; ++c) jtj(j.cols[a], j.cols[c]) += j.values[a] * j.values[c];
-  }
-  const Eigen::Vector3d d = jtj.diagonal();
-  if (!(d.array() > 0.0).all() || !d.allFinite()) return false;
-  const Eigen::Vector3d inv = d.array().rsqrt();
-  const Eigen::Matrix3d scaled = inv.asDiagonal() * jtj * inv.asDiagonal();
-  const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scaled).eigenvalues();
-  return ev.minCoeff() > kMinEigenRatio * ev.maxCoeff();
-}
 
 }  // namespace
 
@@ -99,15 +76,7 @@ BatchCalibrationSummary batch_calibrate(const std::vector<const CalibrationInput
   for (int i = 0; i < kBatchParams; ++i)
     problem.SetParameterLowerBound(theta, i, kLowerBoundFraction * theta[i]);
 
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = 100;
-  so.num_threads = 1;  // results independent of the machine
-  so.logging_type = ceres::SILENT;
-  so.minimizer_progress_to_stdout = false;
-  so.function_tolerance = 1e-12;
-  so.gradient_tolerance = 1e-14;
-  so.parameter_tolerance = 1e-12;
+  const ceres::Solver::Options so = deterministic_solver_options(100);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
   out.converged = summary.termination_type == ceres::CONVERGENCE;
@@ -121,24 +90,11 @@ BatchCalibrationSummary batch_calibrate(const std::vector<const CalibrationInput
   // they stay honest when the given variances are off, e.g. under encoder
   // quantisation noise in the wheel rates). NaN when D or a radius is
   // unobservable from the samples.
-  const double nan = std::nan("");
-  out.sd_radius_right_m = out.sd_radius_left_m = out.sd_wheel_base_m = nan;
   const double dof = 2.0 * static_cast<double>(out.residual_pairs) - static_cast<double>(kBatchParams);
-  if (dof > 0.0 && full_rank(problem)) {
-    ceres::Covariance::Options co;
-    co.algorithm_type = ceres::DENSE_SVD;
-    co.num_threads = 1;
-    ceres::Covariance cov(co);
-    const std::vector<std::pair<const double*, const double*>> blocks = {{theta, theta}};
-    double c[kBatchParams * kBatchParams];
-    if (cov.Compute(blocks, &problem) && cov.GetCovarianceBlock(theta, theta, c)) {
-      const double s2 = 2.0 * summary.final_cost / dof;
-      auto sd = [&](int i) { return std::sqrt(c[i * kBatchParams + i] * s2); };
-      out.sd_radius_right_m = sd(kRadiusRight);
-      out.sd_radius_left_m = sd(kRadiusLeft);
-      out.sd_wheel_base_m = sd(kWheelBase);
-    }
-  }
+  const std::array<double, 3> sd = scaled_standard_errors(problem, theta, summary.final_cost, dof);
+  out.sd_radius_right_m = sd[kRadiusRight];
+  out.sd_radius_left_m = sd[kRadiusLeft];
+  out.sd_wheel_base_m = sd[kWheelBase];
   return out;
 }
 

@@ -162,29 +162,29 @@ struct OfflineFit {
   std::string description;
 };
 
-OfflineFit offline_fit(const BatchCalibrationSummary& f) {
+// The fields both fits' summaries have.
+template <class Summary>
+OfflineFit offline_fit(const Summary& f, long residuals, std::string description) {
   OfflineFit o;
   o.estimate.params = f.params;
   o.estimate.sd_radius_left_m = f.sd_radius_left_m;
   o.estimate.sd_radius_right_m = f.sd_radius_right_m;
   o.estimate.sd_wheel_base_m = f.sd_wheel_base_m;
-  o.residuals = f.residual_pairs;
+  o.residuals = residuals;
   o.converged = f.converged;
-  o.description = fmt::format("velocity residuals: {} (V, W) pairs of the external velocities, Huber 3 sigma",
-                              f.residual_pairs);
+  o.description = std::move(description);
   return o;
 }
 
+OfflineFit offline_fit(const BatchCalibrationSummary& f) {
+  return offline_fit(
+      f, f.residual_pairs,
+      fmt::format("velocity residuals: {} (V, W) pairs of the external velocities, Huber 3 sigma",
+                  f.residual_pairs));
+}
+
 OfflineFit offline_fit(const PoseCalibrationSummary& f) {
-  OfflineFit o;
-  o.estimate.params = f.params;
-  o.estimate.sd_radius_left_m = f.sd_radius_left_m;
-  o.estimate.sd_radius_right_m = f.sd_radius_right_m;
-  o.estimate.sd_wheel_base_m = f.sd_wheel_base_m;
-  o.residuals = f.reference_points;
-  o.converged = f.converged;
-  o.description = f.residuals;
-  return o;
+  return offline_fit(f, f.reference_points, f.residuals);
 }
 
 // Runs an online calibrator (PfCalibrator or DualKf) over every sample.

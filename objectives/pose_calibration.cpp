@@ -1,6 +1,7 @@
 #include "objectives/pose_calibration.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <numbers>
@@ -8,6 +9,8 @@
 
 #include <ceres/ceres.h>
 #include <fmt/format.h>
+
+#include "objectives/ceres_fit.h"
 
 namespace odotune {
 
@@ -263,33 +266,16 @@ Solved solve(std::vector<Segment>& segs, double* theta, const PoseCalibrationOpt
   }
   for (int i = 0; i < kPoseParams; ++i) problem.SetParameterLowerBound(theta, i, lower[i]);
 
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = options.max_iterations;
-  so.num_threads = 1;  // results independent of the machine
-  so.logging_type = ceres::SILENT;
-  so.minimizer_progress_to_stdout = false;
-  so.function_tolerance = 1e-12;
-  so.gradient_tolerance = 1e-14;
-  so.parameter_tolerance = 1e-12;
+  const ceres::Solver::Options so = deterministic_solver_options(options.max_iterations);
   ceres::Solve(so, &problem, &out.summary);
 
   const double nan = std::nan("");
   for (double& v : out.sd) v = nan;
   const double dof = 2.0 * static_cast<double>(points) -
                      static_cast<double>(kPoseParams + out.start_params_fitted);
-  if (covariance && dof > 0.0) {
-    ceres::Covariance::Options co;
-    co.algorithm_type = ceres::DENSE_SVD;
-    co.num_threads = 1;
-    ceres::Covariance cov(co);
-    const std::vector<std::pair<const double*, const double*>> blocks = {{theta, theta}};
-    double c[kPoseParams * kPoseParams];
-    if (cov.Compute(blocks, &problem) && cov.GetCovarianceBlock(theta, theta, c)) {
-      const double s2 = 2.0 * out.summary.final_cost / dof;
-      for (int i = 0; i < kPoseParams; ++i)
-        if (c[i * kPoseParams + i] > 0.0) out.sd[i] = std::sqrt(c[i * kPoseParams + i] * s2);
-    }
+  if (covariance) {
+    const std::array<double, 3> sd = scaled_standard_errors(problem, theta, out.summary.final_cost, dof);
+    for (int i = 0; i < kPoseParams; ++i) out.sd[i] = sd[static_cast<std::size_t>(i)];
   }
   return out;
 }
