@@ -73,8 +73,8 @@ void register_calibrate(CLI::App& app) {
                             ->check(CLI::PositiveNumber);
   auto* evolution_opt = sub->add_option("--pf-evolution", req->pf_evolution,
                                         "PF parameter evolution: evidence (default: a walk scaled to the "
-                                        "posterior spread, whose memory grows until the innovations show a "
-                                        "change) | paper (§III's fixed or eq. 11 walk)");
+                                        "posterior spread, whose memory grows until a fast-forgetting twin "
+                                        "predicts better, a change) | paper (§III's fixed or eq. 11 walk)");
   auto* memory_opt = sub->add_option("--pf-memory", req->pf_memory_s,
                                      "PF evidence evolution: the memory after a detected change [s] "
                                      "(default 10)")
