@@ -272,7 +272,6 @@ bool PfCalibratorParams::IsValid(std::string* why) const {
 }
 
 PfCalibrator::PfCalibrator(const PfCalibratorParams& params) : params_(params), memory_(params.evidence) {
-  memory_ = EvidenceMemory(params_.evidence);
   std::string why;
   if (!params.IsValid(&why)) throw std::invalid_argument("PfCalibratorParams: " + why);
   const auto n = static_cast<std::size_t>(params.particles);

@@ -57,8 +57,9 @@ std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply
   // The pose fit needs no external velocity (it fits to the ground truth or
   // the fixes); nor do none and --apply, which score dead reckoning.
   CalibrationMethod method = CalibrationMethod::none;
-  const bool pose_fit = !apply && parse_calibration_method(a.method, &method) &&
-                        (method == CalibrationMethod::batch_pose || method == CalibrationMethod::none);
+  const bool no_velocity_method = !apply && parse_calibration_method(a.method, &method) &&
+                                  (method == CalibrationMethod::batch_pose ||
+                                   method == CalibrationMethod::none);
   const std::vector<Track> tracks = load_tracks(files);
   std::vector<CalibrationInput> inputs;
   for (std::size_t k = 0; k < tracks.size(); ++k) {
@@ -72,7 +73,7 @@ std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply
     const bool has_ext = tr.has(Col::v_ext) && tr.has(Col::w_ext);
     if (apply && o.ext_from_gt_rate_hz <= 0.0 && !has_ext && tr.has_gt())
       o.ext_from_gt_rate_hz = kApplyExtRateHz;
-    o.require_velocity_samples = !(pose_fit || apply);
+    o.require_velocity_samples = !(no_velocity_method || apply);
     std::string why;
     if (!o.IsValid(&why)) throw Failure(fmt::format("--ext-from-gt {}: {}", a.ext_from_gt_hz, why));
     if (o.ext_from_gt_rate_hz <= 0.0 && !has_ext && o.require_velocity_samples)

@@ -100,11 +100,7 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
     std::string cost = fmt::format("  cost: {} iterations, {:.3g} ms per iteration", r.iterations,
                                    r.ms_per_iteration);
     if (pf) cost += fmt::format(", mean {:.0f} particles", r.mean_particles);
-    // Run as a slow/fast memory pair (objectives/calibration_run.cpp)?
-    const bool pair = r.method == CalibrationMethod::dkf
-                          ? info.options.dkf.fading_memory
-                          : info.options.pf.evolution == filters::PfEvolution::evidence;
-    if (pair)
+    if (r.memory_pair)
       cost += fmt::format("; memory restarted {} time(s) (a change found, filters/memory_pair.h)",
                           r.memory_restarts);
     out.push_back(cost);

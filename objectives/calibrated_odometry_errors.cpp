@@ -5,33 +5,23 @@
 #include <vector>
 
 #include "filters/diff_drive.h"
+#include "objectives/dead_reckoning.h"
 
 namespace odotune {
 
 namespace {
 
-// Dead reckoning over the rows with the parameters `params_at(t)` at time t.
+// Dead-reckoning errors (dead_reckoning.h) with the parameters `params_at(t)`.
 template <typename ParamsAt>
 ErrorMetrics dead_reckoning_errors(const CalibrationInput& in, ParamsAt&& params_at) {
   ErrorAccumulator acc;
   if (!in.has_gt) return acc.metrics();
-  const std::size_t n = in.t.size();
-  auto has_gt_row = [&](std::size_t r) {
-    return !std::isnan(in.gt_x[r]) && !std::isnan(in.gt_y[r]) && !std::isnan(in.gt_theta[r]);
-  };
-  std::size_t start = 0;
-  while (start < n && !has_gt_row(start)) ++start;
-  if (start == n) return acc.metrics();
-  filters::Pose pose;
-  pose << in.gt_x[start], in.gt_y[start], in.gt_theta[start];
-  for (std::size_t r = start + 1; r < n; ++r) {
-    const filters::OdometryParams& p = params_at(in.t[r]);
-    const double dt = in.t[r] - in.t[r - 1];
-    const filters::WheelTravel u{in.omega_l[r] * p.wheel_radius_left_m * dt,
-                                 in.omega_r[r] * p.wheel_radius_right_m * dt};
-    pose = filters::diff_drive_step(pose, u, p.wheel_base_m).next;
-    if (has_gt_row(r)) acc.add(std::hypot(pose(filters::kX) - in.gt_x[r], pose(filters::kY) - in.gt_y[r]));
-  }
+  bool start = true;  // the first visit is the start row, not scored
+  dead_reckon(in, params_at, [&](std::size_t r, const filters::Pose& pose) {
+    if (!start && in.has_gt_row(r))
+      acc.add(std::hypot(pose(filters::kX) - in.gt_x[r], pose(filters::kY) - in.gt_y[r]));
+    start = false;
+  });
   return acc.metrics();
 }
 

@@ -5,6 +5,8 @@
 // parameters over time (from its `sim.effects` metadata).
 #pragma once
 
+#include <cmath>
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <vector>
@@ -85,6 +87,10 @@ struct CalibrationInput {
   // gt_theta count as ground truth.
   std::vector<double> gt_x, gt_y, gt_theta;  // [m, m, rad], theta unwrapped
   bool has_gt = false;                       // ≥ 2 ground-truth poses
+  // Row r has a ground-truth pose (x, y and θ).
+  bool has_gt_row(std::size_t r) const {
+    return !std::isnan(gt_x[r]) && !std::isnan(gt_y[r]) && !std::isnan(gt_theta[r]);
+  }
 
   // Absolute position fixes (aps_x, aps_y) stamped within the odometry's
   // time span [t.front(), t.back()], in time order.

@@ -10,6 +10,7 @@
 
 #include "filters/diff_drive.h"
 #include "objectives/batch_calibration.h"
+#include "objectives/dead_reckoning.h"
 #include "objectives/pose_series.h"
 
 namespace odotune {
@@ -73,39 +74,29 @@ void score_odometry(const CalibrationInput& in, const ParamTimeline& tl, TrackCa
   out->pose_rmse_m = out->heading_rmse_rad = out->v_rmse_m_s = out->w_rmse_rad_s = nan();
   if (!in.has_gt) return;
   const std::size_t n = in.t.size();
-  auto has_gt_row = [&](std::size_t r) {
-    return !std::isnan(in.gt_x[r]) && !std::isnan(in.gt_y[r]) && !std::isnan(in.gt_theta[r]);
-  };
-  std::size_t start = 0;
-  while (start < n && !has_gt_row(start)) ++start;
-  if (start < n) {
-    filters::Pose pose;
-    pose << in.gt_x[start], in.gt_y[start], in.gt_theta[start];
-    double sum_pos = 0.0, sum_head = 0.0;
-    long count = 0;
-    for (std::size_t r = start + 1; r < n; ++r) {
-      const filters::OdometryParams& p = tl.at(in.t[r]);
-      const double dt = in.t[r] - in.t[r - 1];
-      const filters::WheelTravel u{in.omega_l[r] * p.wheel_radius_left_m * dt,
-                                   in.omega_r[r] * p.wheel_radius_right_m * dt};
-      pose = filters::diff_drive_step(pose, u, p.wheel_base_m).next;
-      if (!has_gt_row(r)) continue;
-      const double dx = pose(filters::kX) - in.gt_x[r];
-      const double dy = pose(filters::kY) - in.gt_y[r];
-      const double dh = wrap_angle(pose(filters::kTheta) - in.gt_theta[r]);
-      sum_pos += dx * dx + dy * dy;
-      sum_head += dh * dh;
-      ++count;
-    }
-    if (count > 0) {
-      out->pose_rmse_m = std::sqrt(sum_pos / static_cast<double>(count));
-      out->heading_rmse_rad = std::sqrt(sum_head / static_cast<double>(count));
-    }
+  double sum_pos = 0.0, sum_head = 0.0;
+  long poses = 0;
+  std::size_t start = n;
+  dead_reckon(
+      in, [&](double t_s) -> const filters::OdometryParams& { return tl.at(t_s); },
+      [&](std::size_t r, const filters::Pose& pose) {
+        if (start == n) start = r;  // the first visit is the start row, not scored
+        if (r == start || !in.has_gt_row(r)) return;
+        const double dx = pose(filters::kX) - in.gt_x[r];
+        const double dy = pose(filters::kY) - in.gt_y[r];
+        const double dh = wrap_angle(pose(filters::kTheta) - in.gt_theta[r]);
+        sum_pos += dx * dx + dy * dy;
+        sum_head += dh * dh;
+        ++poses;
+      });
+  if (poses > 0) {
+    out->pose_rmse_m = std::sqrt(sum_pos / static_cast<double>(poses));
+    out->heading_rmse_rad = std::sqrt(sum_head / static_cast<double>(poses));
   }
 
   PoseSeries gt;
   for (std::size_t r = 0; r < n; ++r)
-    if (has_gt_row(r)) gt.push_back(in.t[r], PlanarPose{in.gt_x[r], in.gt_y[r], in.gt_theta[r]});
+    if (in.has_gt_row(r)) gt.push_back(in.t[r], PlanarPose{in.gt_x[r], in.gt_y[r], in.gt_theta[r]});
   double sum_v = 0.0, sum_w = 0.0;
   long count = 0;
   for (std::size_t i = 0; i < in.samples.size(); ++i) {
@@ -317,28 +308,15 @@ DeadReckonedPath dead_reckoned_path(const CalibrationInput& in, const filters::O
   if (!p.IsValid(&why))
     throw std::invalid_argument(fmt::format("track '{}': parameters: {}", in.track_name, why));
   DeadReckonedPath out;
-  const std::size_t n = in.t.size();
-  auto has_gt_row = [&](std::size_t r) {
-    return !std::isnan(in.gt_x[r]) && !std::isnan(in.gt_y[r]) && !std::isnan(in.gt_theta[r]);
-  };
-  std::size_t start = 0;
-  while (start < n && !has_gt_row(start)) ++start;
-  if (start >= n) return out;
-  filters::Pose pose;
-  pose << in.gt_x[start], in.gt_y[start], in.gt_theta[start];
-  for (std::size_t r = start; r < n; ++r) {
-    if (r > start) {
-      const double dt = in.t[r] - in.t[r - 1];
-      const filters::WheelTravel u{in.omega_l[r] * p.wheel_radius_left_m * dt,
-                                   in.omega_r[r] * p.wheel_radius_right_m * dt};
-      pose = filters::diff_drive_step(pose, u, p.wheel_base_m).next;
-    }
-    out.t.push_back(in.t[r]);
-    out.x.push_back(pose(filters::kX));
-    out.y.push_back(pose(filters::kY));
-    out.gt_x.push_back(in.gt_x[r]);
-    out.gt_y.push_back(in.gt_y[r]);
-  }
+  dead_reckon(
+      in, [&](double) -> const filters::OdometryParams& { return p; },
+      [&](std::size_t r, const filters::Pose& pose) {
+        out.t.push_back(in.t[r]);
+        out.x.push_back(pose(filters::kX));
+        out.y.push_back(pose(filters::kY));
+        out.gt_x.push_back(in.gt_x[r]);
+        out.gt_y.push_back(in.gt_y[r]);
+      });
   return out;
 }
 
@@ -374,6 +352,7 @@ CalibrationResult run_calibration(const std::vector<const CalibrationInput*>& in
         filters::MemoryPair<filters::PfCalibrator> pair(filters::PfCalibrator(p), p.evidence,
                                                         options.memory_pair);
         run_online(pair, inputs, tol, &res);
+        res.memory_pair = true;
         res.memory_restarts = pair.changes();
       } else {
         filters::PfCalibrator pf(p);
@@ -386,6 +365,7 @@ CalibrationResult run_calibration(const std::vector<const CalibrationInput*>& in
         filters::MemoryPair<filters::DualKf> pair(filters::DualKf(options.dkf), options.dkf.evidence,
                                                   options.memory_pair);
         run_online(pair, inputs, tol, &res);
+        res.memory_pair = true;
         res.memory_restarts = pair.changes();
       } else {
         filters::DualKf dkf(options.dkf);

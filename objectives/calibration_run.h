@@ -122,7 +122,8 @@ struct CalibrationResult {
   long iterations = 0;
   double ms_per_iteration = 0.0;
   double mean_particles = 0.0;  // PF: mean N over iterations (deterministic cost); else 0
-  long memory_restarts = 0;     // online methods run as a memory pair: changes found (else 0)
+  bool memory_pair = false;     // an online method run as a slow/fast memory pair (filters/memory_pair.h)
+  long memory_restarts = 0;     // ... and the changes it found (else 0)
   // batch methods only: Ceres reported convergence (the fit's sds are in the
   // trace row), and which residuals the fit used.
   bool batch_converged = false;

@@ -10,6 +10,7 @@
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 
+#include "filters/diff_drive.h"
 #include "objectives/ceres_fit.h"
 
 namespace odotune {
@@ -45,19 +46,6 @@ struct SegmentDeadReckoning {
   std::vector<RefPoint> refs;
 
   template <typename T>
-  static void advance(T* x, T* y, T* h, const T& l, const T& r, const T& d_m) {
-    // filters::diff_drive_step's midpoint rule, on any scalar type.
-    const T dist = 0.5 * (l + r);
-    const T dh = (r - l) / d_m;
-    const T hm = *h + 0.5 * dh;
-    using std::cos;
-    using std::sin;
-    *x += dist * cos(hm);
-    *y += dist * sin(hm);
-    *h += dh;
-  }
-
-  template <typename T>
   bool operator()(T const* const* p, T* res) const {
     const T* th = p[0];
     const T* s = p[1];
@@ -70,11 +58,11 @@ struct SegmentDeadReckoning {
       for (; k < refs.size() && refs[k].row == r; ++k) {
         T px = x, py = y, ph = h;
         const double f = refs[k].fraction;
-        if (f > 0.0) advance(&px, &py, &ph, T(f) * l, T(f) * rr, th[kWheelBase]);
+        if (f > 0.0) filters::diff_drive_advance(&px, &py, &ph, T(f) * l, T(f) * rr, th[kWheelBase]);
         res[2 * k] = px - refs[k].x_m;
         res[2 * k + 1] = py - refs[k].y_m;
       }
-      advance(&x, &y, &h, l, rr, th[kWheelBase]);
+      filters::diff_drive_advance(&x, &y, &h, l, rr, th[kWheelBase]);
     }
     return true;
   }
@@ -95,17 +83,13 @@ struct Segment {
   bool fixes = false;  // start pose fitted whole (fixes) or from the reference
 };
 
-bool has_gt_row(const CalibrationInput& in, std::size_t r) {
-  return !std::isnan(in.gt_x[r]) && !std::isnan(in.gt_y[r]) && !std::isnan(in.gt_theta[r]);
-}
-
 // Ground-truth segments: stretches of consecutive rows with ground truth,
 // cut every segment_s (0: never).
 void ground_truth_segments(const CalibrationInput& in, double segment_s, std::vector<Segment>* out) {
   const std::size_t n = in.t.size();
   std::size_t r = 0;
   while (r < n) {
-    while (r < n && !has_gt_row(in, r)) ++r;
+    while (r < n && !in.has_gt_row(r)) ++r;
     if (r >= n) break;
     Segment seg;
     seg.f.in = &in;
@@ -114,13 +98,13 @@ void ground_truth_segments(const CalibrationInput& in, double segment_s, std::ve
     seg.start[kStartY] = in.gt_y[r];
     seg.start[kStartHeading] = in.gt_theta[r];
     std::size_t q = r + 1;
-    for (; q < n && has_gt_row(in, q); ++q) {
+    for (; q < n && in.has_gt_row(q); ++q) {
       seg.f.refs.push_back({q, 1.0, in.gt_x[q], in.gt_y[q]});
       if (segment_s > 0.0 && in.t[q] - in.t[r] >= segment_s) break;
     }
     if (!seg.f.refs.empty()) out->push_back(std::move(seg));
     // The next segment starts where this one ended (abutting), or after the gap.
-    r = (q < n && has_gt_row(in, q)) ? q : q + 1;
+    r = (q < n && in.has_gt_row(q)) ? q : q + 1;
   }
 }
 

@@ -48,6 +48,17 @@ inline sim::Scenario chair_scenario(const ChairTrackOptions& o) {
 
 inline Track chair_track(const ChairTrackOptions& o) { return sim::simulate(chair_scenario(o)); }
 
+// The misaligned chair the calibration tests recover: left radius × 0.99,
+// right × 1.012, wheel base × 1.02.
+inline constexpr double kMisalignedScaleL = 0.99, kMisalignedScaleR = 1.012, kMisalignedScaleBase = 1.02;
+inline ChairTrackOptions misaligned_chair(double duration_s, std::uint64_t seed) {
+  ChairTrackOptions o;
+  o.duration_s = duration_s;
+  o.seed = seed;
+  o.effects = {"radius_error:scale_l=0.99,scale_r=1.012", "wheel_base_error:scale=1.02"};
+  return o;
+}
+
 // The true parameters of radius_error / wheel_base_error scales (computed
 // here from the scales, independently of the code under test).
 inline filters::OdometryParams chair_truth(double scale_l, double scale_r, double scale_base) {

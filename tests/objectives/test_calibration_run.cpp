@@ -27,18 +27,11 @@ using testing_support::ChairTrackOptions;
 using filters::OdometryParams;
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kScaleL = 0.99, kScaleR = 1.012, kScaleBase = 1.02;
-
-ChairTrackOptions chair_options(double duration_s, std::uint64_t seed) {
-  ChairTrackOptions o;
-  o.duration_s = duration_s;
-  o.seed = seed;
-  o.effects = {"radius_error:scale_l=0.99,scale_r=1.012", "wheel_base_error:scale=1.02"};
-  return o;
-}
+constexpr double kScaleL = testing_support::kMisalignedScaleL, kScaleR = testing_support::kMisalignedScaleR,
+                 kScaleBase = testing_support::kMisalignedScaleBase;
 
 const Track& track_120() {
-  static const Track t = chair_track(chair_options(120.0, 21));
+  static const Track t = chair_track(testing_support::misaligned_chair(120.0, 21));
   return t;
 }
 const CalibrationInput& input_120() {
@@ -202,7 +195,7 @@ TEST(CalibrationScore, NoneIsNominalDeadReckoningAndTruthIsFarBetter) {
 }
 
 TEST(CalibrationScore, RadiusStepSplitsConvergence) {
-  ChairTrackOptions o = chair_options(40.0, 5);
+  ChairTrackOptions o = testing_support::misaligned_chair(40.0, 5);
   o.effects.push_back("radius_step:t=20,scale_l=1.01,scale_r=0.985");
   const CalibrationInput in = build_calibration_input(chair_track(o), {});
   ASSERT_TRUE(in.truth.has_value());
@@ -322,7 +315,8 @@ TEST(CalibrationRun, BatchScoresAreThoseOfTheFittedConstants) {
 
 TEST(CalibrationRun, OnlineMethodsCarryTheFilterAcrossTracks) {
   const CalibrationInput& first = input_120();
-  const CalibrationInput second = build_calibration_input(chair_track(chair_options(30.0, 22)), {});
+  const CalibrationInput second = build_calibration_input(
+      chair_track(testing_support::misaligned_chair(30.0, 22)), {});
   CalibrationOptions o;
   o.method = CalibrationMethod::dkf;
   const CalibrationResult both = run_calibration({&first, &second}, o);

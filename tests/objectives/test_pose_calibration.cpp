@@ -23,15 +23,8 @@ using testing_support::chair_scenario;
 using testing_support::chair_truth;
 using testing_support::ChairTrackOptions;
 
-constexpr double kScaleL = 0.99, kScaleR = 1.012, kScaleBase = 1.02;
-
-ChairTrackOptions errors(double duration_s, std::uint64_t seed) {
-  ChairTrackOptions o;
-  o.duration_s = duration_s;
-  o.seed = seed;
-  o.effects = {"radius_error:scale_l=0.99,scale_r=1.012", "wheel_base_error:scale=1.02"};
-  return o;
-}
+constexpr double kScaleL = testing_support::kMisalignedScaleL, kScaleR = testing_support::kMisalignedScaleR,
+                 kScaleBase = testing_support::kMisalignedScaleBase;
 
 double worst_relative_error(const OdometryParams& p, const OdometryParams& truth) {
   return std::max({std::abs(p.wheel_radius_left_m / truth.wheel_radius_left_m - 1.0),
@@ -46,7 +39,7 @@ CalibrationInput pose_input(const Track& track) {
 }
 
 TEST(PoseCalibration, GroundTruthWholeRunRecoversTheGeometry) {
-  const Track track = testing_support::chair_track(errors(120.0, 31));
+  const Track track = testing_support::chair_track(testing_support::misaligned_chair(120.0, 31));
   const CalibrationInput in = build_calibration_input(track, {});
   const PoseCalibrationSummary s = pose_calibrate({&in}, in.nominal);
   const OdometryParams truth = chair_truth(kScaleL, kScaleR, kScaleBase);
@@ -68,7 +61,7 @@ TEST(PoseCalibration, GroundTruthWholeRunRecoversTheGeometry) {
 }
 
 TEST(PoseCalibration, TicksAndSparseFixesRecoverTheGeometryWithinAFifthOfAPercent) {
-  ChairTrackOptions o = errors(600.0, 32);
+  ChairTrackOptions o = testing_support::misaligned_chair(600.0, 32);
   o.gt = false;
   o.ext = false;
   sim::Scenario sc = chair_scenario(o);
@@ -98,7 +91,7 @@ TEST(PoseCalibration, TicksAndSparseFixesRecoverTheGeometryWithinAFifthOfAPercen
 }
 
 TEST(PoseCalibration, SegmentsCutTheRunAndStillRecoverTheGeometry) {
-  const Track track = testing_support::chair_track(errors(120.0, 33));
+  const Track track = testing_support::chair_track(testing_support::misaligned_chair(120.0, 33));
   const CalibrationInput in = build_calibration_input(track, {});
   PoseCalibrationOptions po;
   po.segment_s = 20.0;
@@ -113,7 +106,7 @@ TEST(PoseCalibration, SegmentsCutTheRunAndStillRecoverTheGeometry) {
 TEST(PoseCalibration, FittedStartHeadingAbsorbsAWrongReferenceHeading) {
   // The first ground-truth heading is off by 0.05 rad (a mis-set mocap
   // frame): held fixed it biases the wheel base; fitted, it does not.
-  TrackData d = testing_support::chair_track(errors(120.0, 34)).data();
+  TrackData d = testing_support::chair_track(testing_support::misaligned_chair(120.0, 34)).data();
   std::vector<double>& th = d.col(Col::gt_theta);
   th[0] += 0.05;
   const Track track(std::move(d));
@@ -129,7 +122,7 @@ TEST(PoseCalibration, FittedStartHeadingAbsorbsAWrongReferenceHeading) {
 }
 
 TEST(PoseCalibration, RefusesARunWithoutReferenceAndBadOptions) {
-  ChairTrackOptions o = errors(30.0, 35);
+  ChairTrackOptions o = testing_support::misaligned_chair(30.0, 35);
   o.gt = false;
   sim::Scenario sc = chair_scenario(o);
   sc.sensors.aps.enabled = false;
