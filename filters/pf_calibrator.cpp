@@ -93,24 +93,12 @@ struct PredictInputs {
   double log_weight_shift;
 };
 
-// The two hot loops below are functions of their own (GCC does not vectorise
-// them once inlined into an OpenMP region) compiled three times, for
-// x86-64-v4 (AVX-512, whose native 64-bit multiplies make the counter-based
-// generator's SplitMix64 cheap: 0.17 → 0.09 ms per step at N = 8000,
-// docs/benchmarks.md), for AVX2 and for baseline x86-64, the CPU picking one at
-// load time (target_clones, an ELF ifunc). No version may contract a·b + c
-// into an FMA (-ffp-contract=off, CMakeLists.txt), the reductions have a fixed
-// order, and everything else is elementwise IEEE arithmetic, so all versions
-// give bit-identical results. Elsewhere the
-// functions are only kept out of line (and, for GCC, out of interprocedural
-// constant propagation, which would defeat ExpClamp).
-#if defined(__x86_64__) && defined(__linux__)
-#define ODOTUNE_PF_HOT_LOOP [[gnu::target_clones("arch=x86-64-v4", "avx2", "default")]]
-#elif defined(__clang__)
-#define ODOTUNE_PF_HOT_LOOP [[gnu::noinline]]
-#else
-#define ODOTUNE_PF_HOT_LOOP [[gnu::noipa]]
-#endif
+// The two hot loops below are ODOTUNE_PF_HOT_LOOP functions (pf_kernels.h):
+// compiled for x86-64-v4 (AVX-512, whose native 64-bit multiplies make the
+// counter-based generator's SplitMix64 cheap: 0.17 → 0.09 ms per step at
+// N = 8000, docs/benchmarks.md), AVX2 and baseline x86-64, with bit-identical
+// results. They are functions of their own because GCC does not vectorise them
+// once inlined into an OpenMP region.
 #if defined(__clang__)
 // Clang may decline to vectorise a `#pragma omp simd` loop here and says so
 // as a warning; the loop is correct either way.

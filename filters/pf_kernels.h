@@ -25,6 +25,23 @@
 #include <cmath>
 #include <cstdint>
 
+// ODOTUNE_PF_HOT_LOOP marks a particle loop that is compiled three times,
+// for x86-64-v4 (AVX-512), for AVX2 and for baseline x86-64, the CPU picking
+// one at load time (target_clones, an ELF ifunc). No version may contract
+// a·b + c into an FMA (-ffp-contract=off, CMakeLists.txt), reductions must
+// have an order fixed by the source, and everything else is elementwise IEEE
+// arithmetic (floor, min and integer conversion are exact), so all versions
+// give bit-identical results. Elsewhere the functions are only kept out of
+// line (and, for GCC, out of interprocedural constant propagation, which
+// would defeat ExpClamp).
+#if defined(__x86_64__) && defined(__linux__)
+#define ODOTUNE_PF_HOT_LOOP [[gnu::target_clones("arch=x86-64-v4", "avx2", "default")]]
+#elif defined(__clang__)
+#define ODOTUNE_PF_HOT_LOOP [[gnu::noinline]]
+#else
+#define ODOTUNE_PF_HOT_LOOP [[gnu::noipa]]
+#endif
+
 namespace odotune::filters::pf_kernels {
 
 inline constexpr std::uint64_t kGolden = 0x9e3779b97f4a7c15ULL;  // SplitMix64's increment

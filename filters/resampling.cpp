@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/counter_rng.h"
+#include "filters/pf_kernels.h"
 
 namespace odotune::filters {
 namespace {
@@ -29,7 +30,7 @@ inline double open01(std::uint64_t bits) { return (static_cast<double>(bits >> 1
 struct Scratch {
   std::vector<double> cdf;        // running sums C_i of the weights
   std::vector<int> cum;           // F_i = copies of particles 0..i
-  std::vector<int> hist;          // #{i : F_i = k}
+  std::vector<int> hist;          // expand: 1 + the last i with F_i = k
   std::vector<double> residual;   // residual weights (residual scheme)
   std::vector<int> residual_cum;  // cumulative multinomial copies of the residuals
   std::vector<double> uniforms;   // multinomial: the draws,
@@ -103,31 +104,48 @@ void multinomial_counts(std::span<const double> cdf, double total, std::uint64_t
   }
 }
 
-// Systematic (eq. 8): u_n = (n + U)/M, so F_i = ⌊C_i M/T − U⌋ + 1.
+// Systematic (eq. 8): u_n = (n + U)/M, so F_i = ⌊C_i M/T − U⌋ + 1. The loop
+// is an ODOTUNE_PF_HOT_LOOP (pf_kernels.h): vectorised where the CPU allows,
+// with identical results (the comparisons, min and int conversions are exact).
+ODOTUNE_PF_HOT_LOOP void systematic_count_loop(const double* __restrict cdf, std::size_t n, double scale,
+                                               double u, int m, int* __restrict cum) {
+  for (std::size_t i = 0; i < n; ++i) {
+    // ⌊x⌋ by truncation and a correction for negative x (x > −1 here, and
+    // x < M + 1 ≤ 2^30 + 1, so the int conversion is exact): GCC does not
+    // vectorise std::floor under the default -ftrapping-math.
+    const double x = cdf[i] * scale - u;
+    const int t = static_cast<int>(x);
+    const int floor_x = t - static_cast<int>(static_cast<double>(t) > x);
+    cum[i] = std::min(floor_x + 1, m);
+  }
+}
+
 void systematic_counts(std::span<const double> cdf, double total, std::uint64_t key, int m,
                        std::span<int> cum) {
   const double u = open01(draw_bits(key, 0));
-  const double scale = static_cast<double>(m) / total;
-  const double dm = static_cast<double>(m);
-  for (std::size_t i = 0; i < cdf.size(); ++i) {
-    const double f = std::floor(cdf[i] * scale - u) + 1.0;  // ≥ 0
-    cum[i] = static_cast<int>(std::min(f, dm));
-  }
+  systematic_count_loop(cdf.data(), cdf.size(), static_cast<double>(m) / total, u, m, cum.data());
 }
 
 // Stratified: u_n = (n + U_n)/M with an independent U_n per stratum. For
 // x = C_i M/T and k = ⌊x⌋, the strata below k lie under x, and stratum k does
-// iff U_k ≤ x − k: F_i = k + [U_k ≤ x − k].
+// iff U_k ≤ x − k: F_i = k + [U_k ≤ x − k]. An ODOTUNE_PF_HOT_LOOP, like the
+// systematic one.
+ODOTUNE_PF_HOT_LOOP void stratified_count_loop(const double* __restrict cdf, std::size_t n, double scale,
+                                               std::uint64_t key, double dm, int* __restrict cum) {
+  for (std::size_t i = 0; i < n; ++i) {
+    // x ≥ 0, so ⌊x⌋ is the int truncation (std::floor does not vectorise).
+    const double x = std::min(cdf[i] * scale, dm);
+    const int k = static_cast<int>(x);
+    const double kd = static_cast<double>(k);
+    const double uk = open01(draw_bits(key, static_cast<std::uint64_t>(k)));
+    cum[i] = static_cast<int>(std::min(kd + static_cast<double>(uk <= x - kd), dm));
+  }
+}
+
 void stratified_counts(std::span<const double> cdf, double total, std::uint64_t key, int m,
                        std::span<int> cum) {
-  const double scale = static_cast<double>(m) / total;
-  const double dm = static_cast<double>(m);
-  for (std::size_t i = 0; i < cdf.size(); ++i) {
-    const double x = std::min(cdf[i] * scale, dm);
-    const double k = std::floor(x);
-    const double uk = open01(draw_bits(key, static_cast<std::uint64_t>(k)));
-    cum[i] = static_cast<int>(std::min(k + static_cast<double>(uk <= x - k), dm));
-  }
+  stratified_count_loop(cdf.data(), cdf.size(), static_cast<double>(m) / total, key, static_cast<double>(m),
+                        cum.data());
 }
 
 // Residual (eq. 9): ⌊M ρ_i⌋ copies each, then the remaining R draws
@@ -183,14 +201,20 @@ void close_counts(std::span<const double> w, int m, std::span<int> cum) {
   for (std::size_t i = last; i < cum.size(); ++i) cum[i] = m;
 }
 
-// ancestor(n) = #{i : F_i ≤ n}: a histogram of F then its running sum.
+// ancestor(n) = #{i : F_i ≤ n}. Every scheme's F is non-decreasing (C_i is,
+// and so is each scheme's count of points at or below it), so this is
+// 1 + the largest i with F_i ≤ n (0 when there is none): record 1 + the
+// last i of each value of F (plain stores, later i overwriting earlier), then
+// carry the running maximum forward. Unlike a histogram (++hist[F_i]), the
+// stores do not wait on one another when consecutive F_i are equal.
 void expand(std::span<const int> cum, Scratch& s, std::span<int> out) {
   const std::size_t m = out.size();
   s.hist.assign(m + 1, 0);
-  for (const int f : cum) ++s.hist[static_cast<std::size_t>(f)];
+  int* last = s.hist.data();
+  for (std::size_t i = 0; i < cum.size(); ++i) last[cum[i]] = static_cast<int>(i) + 1;
   int running = 0;
   for (std::size_t n = 0; n < m; ++n) {
-    running += s.hist[n];
+    running = std::max(running, last[n]);
     out[n] = running;
   }
 }

@@ -139,6 +139,40 @@ TEST(Resampling, LowVarianceSchemesBeatMultinomial) {
   }
 }
 
+// Every single systematic draw (not only the mean) gives each particle
+// ⌊Mρ_i⌋ or ⌈Mρ_i⌉ copies, here on thousands of particles with runs of zero
+// weights and particles worth several copies, M both below and above N: the
+// counts, their expansion into sorted ancestors and the vectorised loops agree
+// with the scheme's definition (eq. 8).
+TEST(Resampling, SystematicCountsAreFloorOrCeilOnLargeClouds) {
+  constexpr std::size_t kN = 5003;  // not a multiple of any vector width
+  std::vector<double> w(kN);
+  std::uint64_t state = 12345;
+  double sum = 0.0;
+  for (std::size_t i = 0; i < kN; ++i) {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    const double u = static_cast<double>(state >> 11) * 0x1.0p-53;
+    w[i] = (i / 50) % 3 == 0 ? 0.0 : (u < 0.01 ? 40.0 * u / 0.01 : u);
+    sum += w[i];
+  }
+  for (double& x : w) x /= sum;
+  for (const int draws : {1, 977, 5003, 12000}) {
+    for (std::uint64_t it = 1; it <= 5; ++it) {
+      const std::vector<int> c = copies(Resampler::systematic, w, 3, it, draws);
+      for (std::size_t i = 0; i < kN; ++i) {
+        const double mr = draws * w[i];
+        const int lo = std::max(0, static_cast<int>(std::floor(mr - 1e-9)));  // rounding of C_i·M/T
+        const int hi = static_cast<int>(std::ceil(mr + 1e-9));
+        ASSERT_GE(c[i], lo) << "particle " << i << ", M = " << draws;
+        ASSERT_LE(c[i], hi) << "particle " << i << ", M = " << draws;
+        if (w[i] == 0.0) {
+          ASSERT_EQ(c[i], 0) << "particle " << i;
+        }
+      }
+    }
+  }
+}
+
 TEST(Resampling, DeterministicGivenSeedAndIteration) {
   const std::vector<double> w = test_weights();
   for (const Resampler scheme : kAllSchemes) {
