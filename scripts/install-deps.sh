@@ -17,6 +17,14 @@ PACKAGES=(
   nlohmann-json3-dev     # --json outputs
   libsqlite3-dev         # results store
   gnuplot-nox            # figures
+  # bags/ and `odotune import rosbag`:
+  libzstd-dev liblz4-dev zlib1g-dev  # MCAP chunk compression and CRC-32
+  libgeographiclib-dev   # GNSS fixes to a local east-north frame
+  # ROS 1 bags, read with librosbag_storage; its header rosbag/bag.h needs
+  # pluginlib's, which need these ROS 2 helpers (without them odotune still
+  # builds, and `import rosbag` says it cannot read ROS 1 bags).
+  librosbag-storage-dev libroscpp-core-dev pluginlib-dev libclass-loader-dev librcpputils-dev librcutils-dev
+  libament-index-cpp-dev
 )
 if [[ "${ODOTUNE_WITH_MPI:-0}" == "1" ]]; then
   PACKAGES+=(libopenmpi-dev openmpi-bin)
