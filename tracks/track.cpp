@@ -8,8 +8,8 @@ namespace odotune {
 
 namespace {
 constexpr std::array<std::string_view, kNumCols> kNames = {
-    "omega_l", "omega_r",   "v_cmd",     "w_cmd", "gyro_z", "power_l", "power_r", "v_ext",
-    "w_ext",   "v_ext_var", "w_ext_var", "aps_x", "aps_y",  "gt_x",    "gt_y",    "gt_theta"};
+    "omega_l",   "omega_r",   "v_cmd", "w_cmd", "gyro_z",    "power_l",   "power_r", "v_ext", "w_ext",
+    "v_ext_var", "w_ext_var", "aps_x", "aps_y", "aps_var_x", "aps_var_y", "gt_x",    "gt_y",  "gt_theta"};
 }  // namespace
 
 std::string_view column_name(Col c) { return kNames[static_cast<std::size_t>(c)]; }

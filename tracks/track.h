@@ -40,6 +40,8 @@ enum class Col : int {
   w_ext_var,  // its variances [(m/s)^2, (rad/s)^2]
   aps_x,
   aps_y,  // absolute position fix [m]
+  aps_var_x,
+  aps_var_y,  // its variances [m^2], when known (e.g. from a NavSatFix covariance)
   gt_x,
   gt_y,
   gt_theta,  // ground-truth pose [m, m, rad]

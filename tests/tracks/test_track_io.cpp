@@ -394,6 +394,23 @@ TEST(TrackIoRead, UnrelatedUnknownColumnsIgnored) {
   }
 }
 
+TEST(TrackIoRead, FixVariancesReadAndWrittenBack) {
+  // aps_var_x, aps_var_y (the spec's table, e.g. from a NavSatFix covariance).
+  const auto tr = parse(kMeta +
+                        "t,v_cmd,w_cmd,aps_x,aps_y,aps_var_x,aps_var_y\n0,1,0,2.5,-1,4.0,6.25\n0.1,1,0,,,,\n");
+  ASSERT_TRUE(tr.has(Col::aps_var_x));
+  EXPECT_EQ(tr.col(Col::aps_var_x)[0], 4.0);
+  EXPECT_EQ(tr.col(Col::aps_var_y)[0], 6.25);
+  EXPECT_FALSE(tr.at(Col::aps_var_y, 1));
+  std::ostringstream out;
+  format_track(tr, out);
+  EXPECT_NE(out.str().find("aps_x,aps_y,aps_var_x,aps_var_y"), std::string::npos) << out.str();
+  const auto back = parse(out.str());
+  EXPECT_EQ(back.col(Col::aps_var_y)[0], 6.25);
+  // A misspelling of the new columns is caught like any other.
+  EXPECT_THROW(parse(kMeta + "t,v_cmd,w_cmd,aps_vr_x\n0,1,0,1\n"), TrackError);
+}
+
 // ---------------------------------------------------------------- writes ---
 
 // A small track with ticks, an empty cell and columns out of enum order.
