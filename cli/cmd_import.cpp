@@ -1,13 +1,18 @@
 // `odotune import <dataset> ...`: converts a third-party recording to an
 // odotune track file (jobs/import_job.h over tracks/importers.h); this file
 // only reads flags and prints the one-line summary.
+#include <array>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 
+#include "bags/bag.h"
 #include "cli/commands.h"
+#include "core/failure.h"
 #include "jobs/import_job.h"
+#include "tracks/import_rosbag.h"
 
 namespace odotune::cli {
 
@@ -41,11 +46,86 @@ const Dataset kDatasets[] = {
 
 }  // namespace
 
+namespace {
+
+void register_import_rosbag(CLI::App& imp) {
+  auto req = std::make_shared<ImportRequest>();
+  req->dataset = ImportDataset::rosbag;
+  auto list = std::make_shared<bool>(false);
+  auto stamps = std::make_shared<std::string>("header");
+  auto rpy = std::make_shared<std::vector<double>>();
+  auto radius = std::make_shared<double>(0.0);
+  auto base = std::make_shared<double>(0.0);
+  auto* sub = imp.add_subcommand(
+      "rosbag",
+      std::string("A ROS bag: ROS 1 .bag (") +
+          (bags::ros1_supported() ? "supported"
+                                  : "NOT supported by this build: built without librosbag_storage") +
+          "), MCAP (.mcap), rosbag2 SQLite (.db3) or a rosbag2 folder: odometry (nav_msgs/Odometry twist, "
+          "or sensor_msgs/JointState wheels), gyro (sensor_msgs/Imu), position fixes (sensor_msgs/NavSatFix "
+          "to local east/north, or a pose topic) and, when named, ground truth");
+  sub->add_option("BAG", req->input, "bag file or rosbag2 folder")->required();
+  sub->add_option("-o,--output", req->output, "track file to write (odotune-track/1 CSV)")
+      ->option_text("TRACK.csv");
+  sub->add_flag("--list", *list, "list the bag's topics, types and counts, and write nothing");
+  sub->add_option("--odom-topic", req->rosbag.odom_topic,
+                  "nav_msgs/Odometry (twist → v_cmd, w_cmd) or sensor_msgs/JointState topic (default: the one "
+                  "Odometry topic that is not a filter's output)");
+  sub->add_option("--imu-topic", req->rosbag.imu_topic,
+                  "sensor_msgs/Imu topic, or none (default: the one Imu topic)");
+  sub->add_option(
+      "--fix-topic", req->rosbag.fix_topic,
+      "sensor_msgs/NavSatFix, PoseWithCovarianceStamped or PoseStamped topic, or none (default: the one "
+      "NavSatFix topic)");
+  sub->add_option("--gt-topic", req->rosbag.gt_topic,
+                  "ground-truth topic (Odometry, PoseStamped or PoseWithCovarianceStamped; default: none)");
+  sub->add_option("--imu-rpy", *rpy,
+                  "R,P,Y: the IMU's mounting roll, pitch, yaw relative to the base frame [rad] (default: from "
+                  "/tf_static when the bag has it, else none)")
+      ->delimiter(',')
+      ->expected(3);
+  sub->add_option("--stamps", *stamps,
+                  "header: the messages' header stamps (default); receive: the times the bag recorded them")
+      ->check(CLI::IsMember({"header", "receive"}));
+  sub->add_option("--left-joint", req->rosbag.left_joint, "JointState odometry: the left wheel's joint name");
+  sub->add_option("--right-joint", req->rosbag.right_joint,
+                  "JointState odometry: the right wheel's joint name");
+  sub->add_option("--wheel-radius", *radius,
+                  "wheel radius [m] (JointState odometry; written as robot metadata)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--wheel-base", *base, "wheel base [m] (JointState odometry; written as robot metadata)")
+      ->check(CLI::PositiveNumber);
+  sub->footer("Examples:\n"
+              "  odotune import rosbag ../shared/data/real/robot_localization_bags/test1.bag --list\n"
+              "  odotune import rosbag ../shared/data/real/robot_localization_bags/ros2/test1.mcap \\\n"
+              "      --imu-rpy -1.5707963,0,1.5707963 -o husky.csv\n"
+              "Every conversion (topics, frames, the fixes' local origin, stamps) is written into the track's "
+              "source.* metadata and printed.");
+  sub->callback([req, list, stamps, rpy, radius, base] {
+    if (*list) {
+      fmt::print("{}:\n", req->input);
+      for (const std::string& line : describe_bag_topics(req->input)) fmt::print("{}\n", line);
+      return;
+    }
+    if (req->output.empty()) throw Failure("import rosbag: no output file given (-o TRACK.csv, or --list)");
+    if (!rpy->empty()) req->rosbag.imu_rpy_rad = std::array<double, 3>{(*rpy)[0], (*rpy)[1], (*rpy)[2]};
+    req->rosbag.receive_time_stamps = *stamps == "receive";
+    if (*radius > 0.0) req->rosbag.wheel_radius_m = *radius;
+    if (*base > 0.0) req->rosbag.wheel_base_m = *base;
+    const ImportOutcome o = run_import(*req);
+    fmt::print("{}: {} rows, {:.3f} s, columns {}\n", req->output, o.rows, o.duration_s, o.columns);
+    for (const std::string& n : o.notes) fmt::print("  {}\n", n);
+  });
+}
+
+}  // namespace
+
 void register_import(CLI::App& app) {
   auto* imp = app.add_subcommand("import", "Convert a recorded third-party dataset into an odotune track file");
   imp->require_subcommand(1);
   imp->footer("Datasets: mrclam (UTIAS MRCLAM), optiodom (OptiOdom diff-drive runs), litw (UTIAS "
-              "Lost in the Woods). Every track cites its source, citation and licence in its metadata.\n"
+              "Lost in the Woods); rosbag (a robot's own ROS 1 / ROS 2 bag). Every track cites its source, "
+              "citation and licence in its metadata.\n"
               "Example:\n  odotune import optiodom ../shared/data/real/optiodom_diff/square/231220200045/"
               "231220200045_run-01.csv -o square-run01.csv");
   for (const Dataset& d : kDatasets) {
@@ -65,6 +145,7 @@ void register_import(CLI::App& app) {
                  o.no_commands_why ? "; velocity commands " + *o.no_commands_why : "");
     });
   }
+  register_import_rosbag(*imp);
 }
 
 }  // namespace odotune::cli

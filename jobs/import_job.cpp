@@ -18,6 +18,7 @@ Track import_track(const ImportRequest& r) {
     case ImportDataset::mrclam: return import_mrclam(r.input, r.robot);
     case ImportDataset::optiodom: return import_optiodom(r.input);
     case ImportDataset::litw: return import_litw(r.input);
+    case ImportDataset::rosbag: return import_rosbag(r.input, r.rosbag);
   }
   throw std::logic_error("run_import: unknown dataset");
 }
@@ -36,8 +37,12 @@ ImportOutcome run_import(const ImportRequest& r) {
   const Track track = import_track(r);
   if (r.output.empty()) throw Failure("no output file given (-o TRACK.csv)");
   write_track(track, r.output);
-  ImportOutcome out{track.size(), track.duration_s(), column_list(track), std::nullopt};
+  ImportOutcome out{track.size(), track.duration_s(), column_list(track), std::nullopt, {}};
   if (!track.has_cmd()) out.no_commands_why = track.meta().get("source.cmd_alignment");
+  if (r.dataset == ImportDataset::rosbag)
+    for (const char* key :
+         {"source.odometry", "source.gyro", "source.fixes", "source.ground_truth", "source.stamps"})
+      if (const auto v = track.meta().get(key)) out.notes.push_back(std::string(key).substr(7) + ": " + *v);
   return out;
 }
 

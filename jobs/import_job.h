@@ -6,18 +6,22 @@
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <vector>
 
+#include "tracks/import_rosbag.h"
 #include "tracks/track.h"
 
 namespace odotune {
 
-enum class ImportDataset { mrclam, optiodom, litw };
+enum class ImportDataset { mrclam, optiodom, litw, rosbag };
 
 struct ImportRequest {
   ImportDataset dataset = ImportDataset::optiodom;
-  std::string input;   // dataset folder (mrclam) or file (optiodom: the run, litw: litw_series.csv)
-  int robot = 0;       // mrclam only: robot N, 1..5
-  std::string output;  // track file to write
+  std::string
+      input;      // dataset folder (mrclam) or file (optiodom: the run, litw: litw_series.csv; rosbag: the bag)
+  int robot = 0;  // mrclam only: robot N, 1..5
+  std::string output;          // track file to write
+  RosbagImportOptions rosbag;  // rosbag only
 };
 
 struct ImportOutcome {
@@ -27,6 +31,8 @@ struct ImportOutcome {
   // Why the track has no velocity commands (its source.cmd_alignment); none
   // when it has them or the importer says nothing.
   std::optional<std::string> no_commands_why;
+  // rosbag: what each column came from (the track's source.* lines), to print.
+  std::vector<std::string> notes;
 };
 
 // Throws on an unreadable recording (TrackError naming the file), an empty

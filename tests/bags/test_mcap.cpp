@@ -2,7 +2,7 @@
 // (../shared/data/mcap-conformance, SOURCE.md there): every file reads to the
 // records of its .json, in order, field by field. The .mcap files there are
 // Git LFS pointers, so each is rebuilt from its .json and name
-// (mcap_conformance_writer.h, which explains why that still checks the
+// (support/mcap_writer.h, which explains why that still checks the
 // layout); a real .mcap, where one is present, is read too and must equal the
 // rebuilt bytes. Then damaged files (cut, flipped bytes) give one BagError
 // and never a crash or hang.
@@ -18,7 +18,7 @@
 
 #include "bags/bag_error.h"
 #include "bags/mcap.h"
-#include "mcap_conformance_writer.h"
+#include "support/mcap_writer.h"
 
 namespace odotune::bags::mcap {
 namespace {

@@ -129,5 +129,43 @@ TEST_F(ImportCli, HelpHasAnExample) {
   }
 }
 
+TEST_F(ImportCli, RosbagListsImportsAndRefusesInOneLine) {
+  const fs::path bags = kReal / "robot_localization_bags";
+  auto r = odotune(fmt::format("import rosbag {} --list", q(bags / "ros2" / "test1_db3")));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "/husky_velocity_controller/odom")) << r.out;
+  EXPECT_TRUE(contains(r.out, "sensor_msgs/NavSatFix")) << r.out;
+  EXPECT_TRUE(contains(r.out, "11865")) << r.out;
+
+  const fs::path track = dir_ / "husky.csv";
+  r = odotune(fmt::format("import rosbag {} --imu-rpy 1.5707963267948966,0,-1.5707963267948966 -o {}",
+                          q(bags / "ros2" / "test1.mcap"), q(track)));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(contains(r.out, "16806 rows")) << r.out;
+  EXPECT_TRUE(contains(r.out, "fixes: /fix")) << r.out;
+  const Track tr = read_track(track);
+  EXPECT_TRUE(tr.has(Col::aps_var_x));
+  EXPECT_NE(tr.meta().get("source.gyro")->find("roll 1.5708"), std::string::npos);
+
+  // A wrong topic: one line, non-zero, nothing written.
+  const fs::path never = dir_ / "never.csv";
+  r = odotune(fmt::format("import rosbag {} --fix-topic /imu/data -o {}", q(bags / "ros2" / "test1.mcap"),
+                          q(never)));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(count_lines(r.err), 1u) << r.err;
+  EXPECT_TRUE(contains(r.err, "--fix-topic /imu/data is a sensor_msgs/Imu topic")) << r.err;
+  EXPECT_FALSE(fs::exists(never));
+  // Not a bag.
+  r = odotune(fmt::format("import rosbag {} -o {}", q(track), q(never)));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_TRUE(contains(r.err, "not a bag")) << r.err;
+  EXPECT_FALSE(fs::exists(never));
+  // The help says whether ROS 1 bags are supported.
+  r = odotune("import rosbag --help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_TRUE(contains(r.out, "ROS 1 .bag (")) << r.out;
+  EXPECT_TRUE(contains(r.out, "Examples")) << r.out;
+}
+
 }  // namespace
 }  // namespace odotune

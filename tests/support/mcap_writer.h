@@ -1,14 +1,37 @@
-#include "mcap_conformance_writer.h"
+// Test support (header-only): writes MCAP files, as the MCAP project lays
+// out its conformance files; rebuilds a conformance file from its .json.
+//
+// Why: the conformance .mcap files in ../shared/data/mcap-conformance are Git
+// LFS pointers (the MCAP repository stores them in LFS, and the copy we have
+// holds only the pointers), while every .json is complete. The MCAP project
+// generates each file deterministically from its records and the features
+// in its name (foxglove/mcap, tests/conformance/scripts/generate-inputs.ts:
+// ch chunked, mx message indexes, chx chunk index, pad three extra bytes
+// 01 ff ff after each padded record's fields, rsh/rch schemas and channels
+// repeated in the summary, st statistics, sum summary offsets, ax/mdx
+// attachment and metadata indexes). This writer lays the records out the same
+// way, written from the spec and that description (not from its code). The
+// .json then checks the layout as well as the reader: chunk and summary
+// offsets, lengths and the CRC-32s of chunk, data section and summary are in
+// it, so a file that reads back to its .json has the reference layout.
+#pragma once
 
+#include <cstdint>
 #include <cstring>
 #include <functional>
+#include <set>
+#include <span>
 #include <sstream>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "bags/compression.h"
+#include "bags/mcap.h"
 
 namespace odotune::bags::mcap::testing {
-namespace {
+
+namespace detail {
 
 constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', 0x30, '\r', '\n'};
 
@@ -59,7 +82,7 @@ struct Buf {
   }
 };
 
-void schema(Buf& out, const Schema& s, bool pad) {
+inline void schema(Buf& out, const Schema& s, bool pad) {
   out.record(Opcode::schema, pad, [&](Buf& b) {
     b.put(s.id);
     b.str(s.name);
@@ -68,7 +91,7 @@ void schema(Buf& out, const Schema& s, bool pad) {
     b.raw(s.data);
   });
 }
-void channel(Buf& out, const Channel& c, bool pad) {
+inline void channel(Buf& out, const Channel& c, bool pad) {
   out.record(Opcode::channel, pad, [&](Buf& b) {
     b.put(c.id);
     b.put(c.schema_id);
@@ -77,7 +100,7 @@ void channel(Buf& out, const Channel& c, bool pad) {
     b.string_map(c.metadata);
   });
 }
-void message(Buf& out, const Message& m) {  // never padded: its data runs to the end
+inline void message(Buf& out, const Message& m) {  // never padded: its data runs to the end
   out.record(Opcode::message, false, [&](Buf& b) {
     b.put(m.channel_id);
     b.put(m.sequence);
@@ -103,9 +126,10 @@ struct OrderedMap {
   }
 };
 
-}  // namespace
+}  // namespace detail
 
-std::set<std::string> features_of(const std::string& stem) {
+// The feature suffixes of a conformance file name ("OneMessage-ch-mx-pad").
+inline std::set<std::string> features_of(const std::string& stem) {
   std::set<std::string> f;
   std::stringstream ss(stem);
   std::string part;
@@ -114,8 +138,11 @@ std::set<std::string> features_of(const std::string& stem) {
   return f;
 }
 
-std::vector<std::uint8_t> conformance_file(const std::set<std::string>& features,
-                                           const std::vector<Record>& data_records) {
+// The file's bytes from its data records (Schema, Channel, Message,
+// Attachment, Metadata, in order) and features (none: a plain unchunked file).
+inline std::vector<std::uint8_t> conformance_file(const std::set<std::string>& features,
+                                                  const std::vector<Record>& data_records) {
+  using namespace detail;
   auto has = [&](const char* f) { return features.count(f) > 0; };
   const bool pad = has("pad"), chunked = has("ch"), message_index = has("mx");
   Buf out;
