@@ -44,9 +44,11 @@ void register_tune(CLI::App& app) {
       ->required();
   sub->add_option("--model", req->model, "rq | alpha | gyro | pf-calib | adaptive-pf-calib | ukf");
   sub->add_option("--mode", req->mode,
-                  "EKF/UKF fitness mode: 1 RMSE, 2 MAE, 3 MAXE, 4 RMSE+MAE, 5 RMSE+MAXE, 6 MAE+MAXE, "
-                  "7 RMSE+MAE+MAXE")
-      ->check(CLI::Range(1, 7));
+                  "EKF/UKF fitness mode against ground truth: 1 RMSE, 2 MAE, 3 MAXE, 4 RMSE+MAE, 5 RMSE+MAXE, "
+                  "6 MAE+MAXE, 7 RMSE+MAE+MAXE (default); EKF without ground truth, cross-validating over the "
+                  "position fixes: 8 held-out fix RMSE, 9 held-out fix NLL (the default when a track has no "
+                  "ground truth)")
+      ->check(CLI::Range(1, 9));
   std::string algos;
   for (const auto& a : tuner::nlopt_algorithm_names()) algos += " " + a;
   sub->add_option("--solver", req->solver, "pso or nlopt:NAME, NAME one of" + algos);

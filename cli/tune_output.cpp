@@ -21,10 +21,23 @@ std::string track_names(const Scores& tracks) {
 
 void print_tune_outcome(const TuneOutcome& o) {
   const std::string names = track_names(o.tracks);
+  if (!o.note.empty()) fmt::print("{}\n", o.note);
   fmt::print("tuned {} noise on {} for mode {} ({}) with {} (seed {})\n", filters::to_string(o.request.model),
              names, o.request.mode, fitness_mode_name(o.request.mode), o.request.solver, o.request.seed);
+  if (o.against_fixes) {
+    const FixCvOptions cv;
+    fmt::print("  held-out fixes ({} folds of {:g} s blocks), baseline → tuned:\n", cv.folds, cv.block_s);
+    for (const auto& t : o.tracks)
+      fmt::print("    {}: NLL {:.3f} → {:.3f} nats per fix; NIS {:.2f} → {:.2f} (2 when consistent)\n", t.track,
+                 t.baseline_nll, t.tuned_nll, t.baseline_nis, t.tuned_nis);
+  }
   print_tune_result(o.baseline_mean, o.tuned_mean, o.tracks, o.param_names, o.params, o.summary,
                     o.divergences.total());
+  if (o.against_fixes)
+    for (const auto& t : o.tracks)
+      if (t.gt_baseline && t.gt_tuned)
+        fmt::print("  {} against its ground truth (never seen by the tune): RMSE {}\n", t.track,
+                   metric_change(t.gt_baseline->rmse_m, t.gt_tuned->rmse_m));
 }
 
 void print_tune_outcome(const CalibrationTuneOutcome& o) {

@@ -55,10 +55,12 @@ StateCov Ekf::predict(WheelTravel u, double abs_yaw_rate_rad_s) {
   return R;
 }
 
-void Ekf::update(const Position& z) {
+void Ekf::update(const Position& z) { update(z, noise_.q_x_m2, noise_.q_y_m2); }
+
+void Ekf::update(const Position& z, double q_x_m2, double q_y_m2) {
   // H = [I₂ 0]: the fix observes x and y directly.
   const Eigen::Matrix2d S = P_.topLeftCorner<2, 2>() +
-                            Eigen::Vector2d(noise_.q_x_m2, noise_.q_y_m2).asDiagonal().toDenseMatrix();
+                            Eigen::Vector2d(q_x_m2, q_y_m2).asDiagonal().toDenseMatrix();
   const Eigen::Matrix<double, kStateDim, 2> PHt = P_.leftCols<2>();
   const Eigen::Matrix<double, kStateDim, 2> K = PHt * S.inverse();
   const Eigen::Vector2d innovation = z - x_.head<2>();

@@ -48,6 +48,9 @@ class Ekf {
   // Correction by a position fix z = (x, y) [m]:
   //   S = H·P·Hᵀ + Q, K = P·Hᵀ·S⁻¹, x ← x + K·(z − H·x), P ← P − K·S·Kᵀ.
   void update(const Position& z);
+  // The same with this fix's own measurement variances q_x, q_y [m²] (e.g. a
+  // GNSS receiver's covariance) in place of the noise model's.
+  void update(const Position& z, double q_x_m2, double q_y_m2);
 
   const Pose& pose() const { return x_; }
   const StateCov& cov() const { return P_; }

@@ -173,6 +173,21 @@ Divergence advance_segment(const NoiseParams& noise, const SegmentMoments& m, co
 
 Divergence advance_segment(const NoiseParams& noise, const SegmentMoments& m, const Position& z,
                            double cos_theta, double sin_theta, Pose* pose, Sym3* P) {
+  return advance_segment(noise, m, z, noise.q_x_m2, noise.q_y_m2, cos_theta, sin_theta, pose, P);
+}
+
+void predict_over_segment(const NoiseParams& noise, const SegmentMoments& m, double cos_theta, double sin_theta,
+                          Pose* pose, Sym3* P) {
+  const double c = cos_theta, s = sin_theta;
+  *P = predict_sym(noise, m, c, s, *P);
+  Pose& x = *pose;
+  x(kX) += c * m.end_x_m - s * m.end_y_m;
+  x(kY) += s * m.end_x_m + c * m.end_y_m;
+  x(kTheta) += m.end_theta_rad;
+}
+
+Divergence advance_segment(const NoiseParams& noise, const SegmentMoments& m, const Position& z, double q_x_m2,
+                           double q_y_m2, double cos_theta, double sin_theta, Pose* pose, Sym3* P) {
   const double c = cos_theta, s = sin_theta;
   Sym3 Pp = predict_sym(noise, m, c, s, *P);
   Pose& x = *pose;
@@ -182,7 +197,7 @@ Divergence advance_segment(const NoiseParams& noise, const SegmentMoments& m, co
 
   // The correction, as in Ekf::update: S = H·P·Hᵀ + Q, K = P·Hᵀ·S⁻¹,
   // x += K·ν, P −= K·(H·P).
-  const double s11 = Pp[kXX] + noise.q_x_m2, s12 = Pp[kXY], s22 = Pp[kYY] + noise.q_y_m2;
+  const double s11 = Pp[kXX] + q_x_m2, s12 = Pp[kXY], s22 = Pp[kYY] + q_y_m2;
   const double inv_det = 1.0 / (s11 * s22 - s12 * s12);
   const double i11 = s22 * inv_det, i12 = -s12 * inv_det, i22 = s11 * inv_det;
   // Rows of P·Hᵀ = (P_ix, P_iy) for i = x, y, θ.

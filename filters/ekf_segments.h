@@ -67,5 +67,12 @@ Divergence advance_segment(const NoiseParams& noise, const SegmentMoments& m, co
 // supplied by a caller that already has them (the tuner's inner loop).
 Divergence advance_segment(const NoiseParams& noise, const SegmentMoments& m, const Position& z,
                            double cos_theta, double sin_theta, Pose* pose, Sym3* P);
+// The same with the fix's own measurement variances [m²] (Ekf::update(z, q_x, q_y)).
+Divergence advance_segment(const NoiseParams& noise, const SegmentMoments& m, const Position& z, double q_x_m2,
+                           double q_y_m2, double cos_theta, double sin_theta, Pose* pose, Sym3* P);
+// Advances (pose, P) over the segment without a correction, exactly as
+// Ekf::predict over its steps.
+void predict_over_segment(const NoiseParams& noise, const SegmentMoments& m, double cos_theta, double sin_theta,
+                          Pose* pose, Sym3* P);
 
 }  // namespace odotune::filters

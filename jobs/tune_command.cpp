@@ -84,12 +84,34 @@ void write_json(const TuneCommandRequest& r, const nlohmann::json& j) {
 TuneCommandOutcome ekf_tune(const TuneCommandRequest& r, filters::NoiseModel model) {
   TuneRequest req = with_solver<TuneRequest>(r);
   req.model = model;
+  const std::vector<Track> tracks = load_tracks(r.tracks);
+  std::string no_gt;
+  for (const Track& t : tracks)
+    if (!t.has_gt()) no_gt += (no_gt.empty() ? "" : ", ") + t.name();
+  std::string note;
   req.mode = r.mode;
+  if (req.mode == 0) {
+    req.mode = no_gt.empty() ? 7 : kFixCvNllMode;
+    if (!no_gt.empty())
+      note = fmt::format("no ground truth in {}: tuning by cross-validation over the position fixes, mode 9 "
+                         "({}; mode 8 scores their prediction RMSE)",
+                         no_gt, fitness_mode_name(kFixCvNllMode));
+  } else if (!no_gt.empty() && !is_fix_cv_mode(req.mode)) {
+    throw Failure(fmt::format("--mode {} scores against ground truth, which {} has not; use --mode 8 or 9 "
+                              "(cross-validation over the position fixes), or leave --mode out",
+                              req.mode, no_gt));
+  }
   std::string why;
   if (!req.IsValid(&why)) throw Failure(why);
 
-  const std::vector<PreparedTrack> prepared = prepare_tracks(load_tracks(r.tracks), prepare_track);
-  TuneCommandOutcome result = run_and_report(r, [&] { return run_tune(pointers(prepared), req); });
+  const std::vector<PreparedTrack> prepared =
+      is_fix_cv_mode(req.mode) ? prepare_tracks(tracks, [](const Track& t) { return prepare_track_fix_cv(t); })
+                               : prepare_tracks(tracks, prepare_track);
+  TuneCommandOutcome result = run_and_report(r, [&] {
+    TuneOutcome o = run_tune(pointers(prepared), req);
+    o.note = note;
+    return o;
+  });
   const auto& out = std::get<TuneOutcome>(result);
   write_json(r, tune_json(out));
   if (!r.config_out.empty()) {
@@ -152,7 +174,7 @@ TuneCommandOutcome calibration_tune(const TuneCommandRequest& r, CalibratorModel
 
 TuneCommandOutcome ukf_tune(const TuneCommandRequest& r) {
   UkfTuneRequest req = with_solver<UkfTuneRequest>(r);
-  req.mode = r.mode;
+  req.mode = r.mode == 0 ? 7 : r.mode;
   std::string why;
   if (!req.IsValid(&why)) throw Failure(why);
 

@@ -21,6 +21,20 @@ PreparedTrack prepare_track(const Track& track) {
   return p;
 }
 
+PreparedTrack prepare_track_fix_cv(const Track& track, const FixCvOptions& cv) {
+  PreparedTrack p;
+  p.name = track.name();
+  ReplayInputOptions o;
+  o.reference = ReplayReference::fixes;
+  p.input = build_replay_input(track, o);
+  p.cv = std::make_unique<FixCvReplay>(p.input, cv);
+  if (track.has_gt()) {
+    p.gt_input = build_replay_input(track);
+    p.fast = std::make_unique<FastReplay>(*p.gt_input);
+  }
+  return p;
+}
+
 bool SolverSettings::IsValid(std::string* why) const {
   if (solver != "pso" && solver.rfind("nlopt:", 0) != 0) {
     if (why) *why = "solver '" + solver + "': expected pso or nlopt:NAME";
@@ -39,8 +53,8 @@ bool SolverSettings::IsValid(std::string* why) const {
 }
 
 bool TuneRequest::IsValid(std::string* why) const {
-  if (!valid_fitness_mode(mode)) {
-    if (why) *why = "mode = " + std::to_string(mode) + ": expected 1..7";
+  if (!valid_ekf_fitness_mode(mode)) {
+    if (why) *why = "mode = " + std::to_string(mode) + ": expected 1..9";
     return false;
   }
   return SolverSettings::IsValid(why);
@@ -104,12 +118,73 @@ DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSet
   return t;
 }
 
+namespace {
+
+// Modes 8 and 9: the same tune over the fix cross-validation replays; scores
+// are the held-out fixes' (and, where the track has it, ground truth's).
+TuneOutcome run_tune_fix_cv(const std::vector<const PreparedTrack*>& tracks, const TuneRequest& request) {
+  std::vector<const FixCvReplay*> cv;
+  for (const auto* t : tracks) {
+    if (!t->cv)
+      throw std::invalid_argument("track '" + t->name +
+                                  "': not prepared for fix cross-validation (modes 8, 9)");
+    cv.push_back(t->cv.get());
+  }
+  const EkfObjective objective = EkfObjective::over_fixes(cv, request.model, request.mode);
+  const BoxProblem<EkfObjective> problem{&objective};
+  TuneOutcome out;
+  out.request = request;
+  out.against_fixes = true;
+  out.summary = run_solver(problem, request);
+  const ParamSpace& space = objective.space();
+  for (const auto& p : space.params()) {
+    out.param_names.push_back(p.name);
+    out.param_units.push_back(p.unit);
+  }
+  out.params = space.to_physical(out.summary.best_x);
+  out.noise = space.to_noise(out.params);
+  out.divergences = objective.divergences();
+  std::vector<ErrorMetrics> base, tuned;
+  for (const auto* t : tracks) {
+    TrackScore s;
+    s.track = t->name;
+    const FixCvOutcome b = t->cv->evaluate(baseline_noise()), u = t->cv->evaluate(out.noise);
+    s.baseline = b.heldout;
+    s.tuned = u.heldout;
+    s.baseline_nll = b.nll;
+    s.tuned_nll = u.nll;
+    s.baseline_nis = b.nis;
+    s.tuned_nis = u.nis;
+    if (t->gt_input) {
+      s.gt_baseline = replay_ekf(*t->gt_input, baseline_noise()).outcome.metrics;
+      s.gt_tuned = replay_ekf(*t->gt_input, out.noise).outcome.metrics;
+    }
+    const double n = static_cast<double>(tracks.size());
+    out.baseline_fitness += (request.mode == kFixCvRmseMode ? b.heldout.rmse_m : b.nll) / n;
+    out.tuned_fitness += (request.mode == kFixCvRmseMode ? u.heldout.rmse_m : u.nll) / n;
+    base.push_back(s.baseline);
+    tuned.push_back(s.tuned);
+    out.tracks.push_back(std::move(s));
+  }
+  out.baseline_mean = mean_metrics(base);
+  out.tuned_mean = mean_metrics(tuned);
+  return out;
+}
+
+}  // namespace
+
 TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const TuneRequest& request) {
   std::string why;
   if (!request.IsValid(&why)) throw std::invalid_argument(why);
   if (tracks.empty()) throw std::invalid_argument("no tracks to tune on");
+  if (is_fix_cv_mode(request.mode)) return run_tune_fix_cv(tracks, request);
   std::vector<const FastReplay*> fast;
-  for (const auto* t : tracks) fast.push_back(t->fast.get());
+  for (const auto* t : tracks) {
+    if (!t->fast || t->input.reference_is_fixes)
+      throw std::invalid_argument("track '" + t->name + "': mode " + std::to_string(request.mode) +
+                                  " needs ground truth; tracks without it are tuned with modes 8 and 9");
+    fast.push_back(t->fast.get());
+  }
   const EkfObjective objective(fast, request.model, request.mode);
   const BoxProblem<EkfObjective> problem{&objective};
 

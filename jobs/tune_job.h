@@ -35,12 +35,21 @@ struct PreparedTrack {
   std::string name;
   ReplayInput input;
   std::unique_ptr<FastReplay> fast;
+  // Fix cross-validation (modes 8 and 9): the replay from the first fix, and
+  // the ground-truth input when the track has ground truth (to report the
+  // error the tune never saw).
+  std::unique_ptr<FixCvReplay> cv;
+  std::optional<ReplayInput> gt_input;
   std::optional<CalibrationInput> calibration;
   std::optional<FusionInput> fusion;
 };
 // Throws std::invalid_argument (one line naming the track) when it cannot be
 // replayed or has no position fixes (nothing to tune).
 PreparedTrack prepare_track(const Track& track);
+// The same for fix cross-validation (modes 8 and 9): `input` starts at the
+// first fix (ReplayReference::fixes) and `cv` holds its folds; a track with
+// ground truth also gets `gt_input` and `fast`.
+PreparedTrack prepare_track_fix_cv(const Track& track, const FixCvOptions& cv = {});
 
 // The solver part of a tuning request, shared by the EKF (TuneRequest) and
 // the calibrator tunes (calibration_tune_job.h), which both extend it.
@@ -59,14 +68,18 @@ struct SolverSettings {
 
 struct TuneRequest : SolverSettings {
   filters::NoiseModel model = filters::NoiseModel::rq;
-  int mode = 7;  // fitness mode 1..7
+  int mode = 7;  // fitness mode 1..7 (ground truth) or 8..9 (fix cross-validation)
 
   bool IsValid(std::string* why) const;
 };
 
 struct TrackScore {
   std::string track;
-  ErrorMetrics baseline, tuned;
+  ErrorMetrics baseline, tuned;  // against ground truth, or (modes 8, 9) the held-out fixes
+  // Modes 8 and 9: the held-out fixes' mean −log likelihood and NIS, and the
+  // errors against ground truth when the track has it (never seen by the tune).
+  double baseline_nll = 0.0, tuned_nll = 0.0, baseline_nis = 0.0, tuned_nis = 0.0;
+  std::optional<ErrorMetrics> gt_baseline, gt_tuned;
 };
 
 struct TuneOutcome {
@@ -79,7 +92,9 @@ struct TuneOutcome {
   ErrorMetrics baseline_mean, tuned_mean;  // means over tracks
   double baseline_fitness = 0, tuned_fitness = 0;
   DivergenceCounts divergences;
-  tuner::Summary summary;  // evaluations, seconds, termination, log
+  tuner::Summary summary;      // evaluations, seconds, termination, log
+  bool against_fixes = false;  // modes 8, 9: the metrics are of the held-out fixes
+  std::string note;            // how the mode was chosen, when the command chose it
 };
 
 // An objective as the tuner sees it: a box and a function (objectives/ does

@@ -23,6 +23,24 @@ nlohmann::json tune_json(const TuneOutcome& o) {
   j["divergences"] = {{"non_finite", o.divergences.non_finite},
                       {"covariance_not_pd", o.divergences.covariance_not_pd}};
   j["tracks"] = track_scores_json(o.tracks);
+  j["scored_against"] = o.against_fixes ? "held-out position fixes" : "ground truth";
+  if (o.against_fixes) {
+    const FixCvOptions cv;
+    j["fix_cv"] = {{"folds", cv.folds}, {"block_s", cv.block_s}};
+    for (std::size_t i = 0; i < o.tracks.size(); ++i) {
+      const TrackScore& t = o.tracks[i];
+      auto& jt = j["tracks"][i];
+      jt["baseline_nll"] = t.baseline_nll;
+      jt["tuned_nll"] = t.tuned_nll;
+      jt["baseline_nis"] = t.baseline_nis;
+      jt["tuned_nis"] = t.tuned_nis;
+      if (t.gt_baseline && t.gt_tuned) {
+        jt["ground_truth_baseline"] = metrics_json(*t.gt_baseline);
+        jt["ground_truth_tuned"] = metrics_json(*t.gt_tuned);
+      }
+    }
+  }
+  if (!o.note.empty()) j["note"] = o.note;
   return j;
 }
 

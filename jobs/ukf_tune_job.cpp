@@ -63,8 +63,13 @@ UkfTuneOutcome run_ukf_tune(const std::vector<const FusionInput*>& inputs, const
 
   const std::vector<ErrorMetrics> base = ukf_track_errors(inputs, out.default_settings);
   const std::vector<ErrorMetrics> tuned = ukf_track_errors(inputs, out.tuned_settings);
-  for (std::size_t i = 0; i < inputs.size(); ++i)
-    out.tracks.push_back({inputs[i]->track_name, base[i], tuned[i]});
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    TrackScore score;
+    score.track = inputs[i]->track_name;
+    score.baseline = base[i];
+    score.tuned = tuned[i];
+    out.tracks.push_back(score);
+  }
   out.baseline_mean = mean_metrics(base);
   out.tuned_mean = mean_metrics(tuned);
   return out;

@@ -11,13 +11,32 @@ EkfObjective::EkfObjective(std::vector<const FastReplay*> tracks, filters::Noise
   if (!valid_fitness_mode(mode)) throw std::invalid_argument("EkfObjective: mode must be 1..7");
 }
 
+EkfObjective EkfObjective::over_fixes(std::vector<const FixCvReplay*> tracks, filters::NoiseModel model,
+                                      int mode) {
+  if (tracks.empty()) throw std::invalid_argument("EkfObjective: no tracks");
+  if (!is_fix_cv_mode(mode))
+    throw std::invalid_argument("EkfObjective: fix cross-validation modes are 8 and 9");
+  EkfObjective o(model, mode);
+  o.cv_tracks_ = std::move(tracks);
+  return o;
+}
+
 double EkfObjective::fitness(std::span<const double> x) const {
   counters_->evaluations.fetch_add(1, std::memory_order_relaxed);
   const filters::NoiseParams noise = space_.to_noise(space_.to_physical(x));
   double total = 0.0;
-  for (const FastReplay* track : tracks_) {
-    const ReplayOutcome out = track->evaluate(noise);
-    double f = fitness_of(out.metrics, mode_);
+  const std::size_t n = tracks_.empty() ? cv_tracks_.size() : tracks_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    ReplayOutcome out;
+    double f = 0.0;
+    if (tracks_.empty()) {
+      const FixCvOutcome cv = cv_tracks_[i]->evaluate(noise);
+      out.divergence = cv.divergence;
+      f = mode_ == kFixCvRmseMode ? cv.heldout.rmse_m : cv.nll;
+    } else {
+      out = tracks_[i]->evaluate(noise);
+      f = fitness_of(out.metrics, mode_);
+    }
     if (out.divergence == filters::Divergence::covariance_not_pd) {
       counters_->covariance_not_pd.fetch_add(1, std::memory_order_relaxed);
       return kDivergencePenalty;
@@ -28,7 +47,7 @@ double EkfObjective::fitness(std::span<const double> x) const {
     }
     total += f;
   }
-  return total / static_cast<double>(tracks_.size());
+  return total / static_cast<double>(n);
 }
 
 DivergenceCounts EkfObjective::divergences() const {

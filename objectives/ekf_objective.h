@@ -4,7 +4,9 @@
 // box and never the filter.
 //
 // Several tracks: the fitness is the mean of the per-track fitness values, so
-// every track weighs the same whatever its length.
+// every track weighs the same whatever its length. Modes 1..7 replay against
+// ground truth (FastReplay); modes 8 and 9 cross-validate over the fixes
+// (FixCvReplay), for tracks without ground truth.
 // Divergence: a replay that diverges (non-finite state, covariance not
 // positive definite) scores kDivergencePenalty and is counted by reason;
 // nothing is thrown (an exception must never cross an optimiser).
@@ -16,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "objectives/fix_cv_replay.h"
 #include "objectives/param_space.h"
 #include "objectives/replay.h"
 
@@ -33,6 +36,9 @@ class EkfObjective {
  public:
   // `tracks` must outlive the objective. `mode` in 1..7.
   EkfObjective(std::vector<const FastReplay*> tracks, filters::NoiseModel model, int mode);
+  // Without ground truth: `mode` 8 or 9 over fix cross-validation replays
+  // (which must outlive the objective).
+  static EkfObjective over_fixes(std::vector<const FixCvReplay*> tracks, filters::NoiseModel model, int mode);
 
   double fitness(std::span<const double> x) const;
   std::pair<std::vector<double>, std::vector<double>> bounds() const { return space_.box(); }
@@ -43,12 +49,14 @@ class EkfObjective {
   DivergenceCounts divergences() const;
 
  private:
+  EkfObjective(filters::NoiseModel model, int mode) : space_(ParamSpace::for_model(model)), mode_(mode) {}
   struct Counters {
     std::atomic<long> evaluations{0};
     std::atomic<long> non_finite{0};
     std::atomic<long> covariance_not_pd{0};
   };
   std::vector<const FastReplay*> tracks_;
+  std::vector<const FixCvReplay*> cv_tracks_;
   ParamSpace space_;
   int mode_;
   std::shared_ptr<Counters> counters_ = std::make_shared<Counters>();

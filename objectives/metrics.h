@@ -1,6 +1,7 @@
 // Position-error metrics against ground truth and the seven fitness modes of
 // Kovacs et al. §2.3.4: 1 RMSE, 2 MAE, 3 MAXE, 4 RMSE+MAE, 5 RMSE+MAXE,
-// 6 MAE+MAXE, 7 RMSE+MAE+MAXE. All in metres.
+// 6 MAE+MAXE, 7 RMSE+MAE+MAXE. All in metres. Modes 8 and 9 (below) need no
+// ground truth.
 #pragma once
 
 #include <algorithm>
@@ -41,7 +42,19 @@ struct ErrorAccumulator {
 
 inline constexpr int kNumFitnessModes = 7;
 
+// Modes 1..7 score against ground truth.
 inline bool valid_fitness_mode(int mode) { return mode >= 1 && mode <= kNumFitnessModes; }
+
+// Modes after the study's seven score an EKF without ground truth, by
+// cross-validation over its position fixes (objectives/fix_cv_replay.h):
+//   8: RMSE of the held-out fixes' prediction errors [m];
+//   9: mean negative log predictive likelihood of the held-out fixes [nats].
+inline constexpr int kFixCvRmseMode = 8;
+inline constexpr int kFixCvNllMode = 9;
+inline constexpr int kNumEkfFitnessModes = 9;
+inline bool is_fix_cv_mode(int mode) { return mode == kFixCvRmseMode || mode == kFixCvNllMode; }
+// The modes the EKF tune, grid and report take.
+inline bool valid_ekf_fitness_mode(int mode) { return valid_fitness_mode(mode) || is_fix_cv_mode(mode); }
 
 // The scalar a fitness mode minimises; mode in 1..7 (checked by the caller).
 inline double fitness_of(const ErrorMetrics& m, int mode) {
@@ -56,7 +69,7 @@ inline double fitness_of(const ErrorMetrics& m, int mode) {
   }
 }
 
-// Human-readable name of a mode, e.g. "RMSE+MAE".
+// Human-readable name of a mode 1..9, e.g. "RMSE+MAE", "held-out fix NLL".
 std::string fitness_mode_name(int mode);
 
 // Improvement of `tuned` over `baseline` in percent (positive = better).

@@ -14,6 +14,7 @@ filters::EkfParams ekf_params_for(const ReplayInput& in, const filters::NoisePar
   p.noise = noise;
   p.wheel_base_m = in.wheel_base_m;
   p.initial_pose = in.initial_pose;
+  p.initial_cov = in.initial_cov;
   return p;
 }
 
@@ -26,7 +27,11 @@ ReplayResult replay_ekf(const ReplayInput& in, const filters::NoiseParams& noise
   for (const ReplayRow& row : in.rows) {
     if (row.step >= 0) ekf.predict(in.steps[row.step], in.abs_yaw_rate_rad_s[row.step]);
     if (row.fix >= 0) {
-      ekf.update(in.fixes[row.fix]);
+      const double vx = in.fix_var_x_m2[row.fix], vy = in.fix_var_y_m2[row.fix];
+      if (std::isnan(vx))
+        ekf.update(in.fixes[row.fix]);
+      else
+        ekf.update(in.fixes[row.fix], vx, vy);
       if (ekf.check() != Divergence::none) break;
     }
     if (row.gt >= 0) {
@@ -45,7 +50,7 @@ FastReplay::FastReplay(const ReplayInput& in)
     : name_(in.track_name),
       steps_(static_cast<long>(in.steps.size())),
       initial_pose_(in.initial_pose),
-      initial_cov_(filters::EkfParams{}.initial_cov) {
+      initial_cov_(in.initial_cov) {
   ox_.reserve(in.gt.size());
   oy_.reserve(in.gt.size());
   gx_.reserve(in.gt.size());
@@ -56,7 +61,7 @@ FastReplay::FastReplay(const ReplayInput& in)
   std::vector<std::int32_t> seg_eval_step;  // per pending sample: steps done in the segment
   std::vector<filters::Position> seg_eval_gt;
 
-  auto close_segment = [&](const filters::Position* fix) {
+  auto close_segment = [&](const filters::Position* fix, double var_x, double var_y) {
     Segment seg;
     std::vector<double> px(seg_steps.size()), py(seg_steps.size());
     seg.moments = filters::reduce_segment(seg_steps, seg_yaw, in.wheel_base_m, px, py);
@@ -71,6 +76,8 @@ FastReplay::FastReplay(const ReplayInput& in)
     seg.eval_end = static_cast<std::int32_t>(ox_.size());
     seg.has_fix = fix != nullptr;
     if (fix) seg.fix = *fix;
+    seg.fix_var_x_m2 = var_x;
+    seg.fix_var_y_m2 = var_y;
     segments_.push_back(seg);
     seg_steps.clear();
     seg_yaw.clear();
@@ -85,13 +92,13 @@ FastReplay::FastReplay(const ReplayInput& in)
     }
     // A fix ends the segment; this row's ground truth is compared after the
     // correction, i.e. at the start (o = 0) of the next segment.
-    if (row.fix >= 0) close_segment(&in.fixes[row.fix]);
+    if (row.fix >= 0) close_segment(&in.fixes[row.fix], in.fix_var_x_m2[row.fix], in.fix_var_y_m2[row.fix]);
     if (row.gt >= 0) {
       seg_eval_step.push_back(static_cast<std::int32_t>(seg_steps.size()));
       seg_eval_gt.push_back(in.gt[row.gt]);
     }
   }
-  close_segment(nullptr);
+  close_segment(nullptr, std::nan(""), std::nan(""));
 }
 
 namespace {
@@ -134,7 +141,10 @@ ReplayOutcome FastReplay::evaluate(const filters::NoiseParams& noise) const {
       accumulate_errors(ox_.data() + seg.eval_begin, oy_.data() + seg.eval_begin, gx_.data() + seg.eval_begin,
                         gy_.data() + seg.eval_begin, n, x(0), x(1), c, s, &acc);
     if (seg.has_fix) {
-      out.divergence = filters::advance_segment(noise, seg.moments, seg.fix, c, s, &x, &P);
+      out.divergence = std::isnan(seg.fix_var_x_m2)
+                           ? filters::advance_segment(noise, seg.moments, seg.fix, c, s, &x, &P)
+                           : filters::advance_segment(noise, seg.moments, seg.fix, seg.fix_var_x_m2,
+                                                      seg.fix_var_y_m2, c, s, &x, &P);
       if (out.divergence != Divergence::none) break;
     }
   }

@@ -55,6 +55,7 @@ class FastReplay {
   struct Segment {
     filters::SegmentMoments moments;
     filters::Position fix = filters::Position::Zero();  // applied at the end (unless last)
+    double fix_var_x_m2 = 0.0, fix_var_y_m2 = 0.0;      // its own variances, NaN: the model's Q
     std::int32_t eval_begin = 0, eval_end = 0;
     bool has_fix = false;
   };

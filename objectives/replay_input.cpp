@@ -1,5 +1,6 @@
 #include "objectives/replay_input.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -28,6 +29,43 @@ double require(const Track& track, const std::optional<double>& v, const char* k
   return *v;
 }
 
+// θ₀ that rotates the dead-reckoned path (started at heading 0) onto the
+// fixes, both relative to the start (header, ReplayReference::fixes). The fit
+// stops once the robot has driven 20 fix σ (at least 5 m), so that neither
+// the fixes' noise nor the odometry's own heading drift decides it, or at
+// heading_window_s.
+double initial_heading_from_fixes(const ReplayInput& in, double window_s, std::string* note) {
+  const double var0 = std::isnan(in.fix_var_x_m2.front())
+                          ? filters::NoiseParams{}.q_x_m2
+                          : 0.5 * (in.fix_var_x_m2.front() + in.fix_var_y_m2.front());
+  const double enough_m = std::max(5.0, 20.0 * std::sqrt(var0));
+  double x = 0.0, y = 0.0, th = 0.0;
+  double dot = 0.0, cross = 0.0, reach = 0.0, driven = 0.0;
+  long pairs = 0;
+  double t_end = in.t0_s;
+  for (const ReplayRow& row : in.rows) {
+    if (row.step >= 0) {
+      const filters::WheelTravel& u = in.steps[static_cast<std::size_t>(row.step)];
+      filters::diff_drive_advance(&x, &y, &th, u.left_m, u.right_m, in.wheel_base_m);
+      driven += std::abs(0.5 * (u.left_m + u.right_m));
+    }
+    if (row.fix < 0) continue;
+    if (pairs >= 3 && (driven >= enough_m || row.t_s - in.t0_s > window_s)) break;
+    const filters::Position f = in.fixes[static_cast<std::size_t>(row.fix)] - in.initial_pose.head<2>();
+    dot += x * f(0) + y * f(1);
+    cross += x * f(1) - y * f(0);
+    reach = std::max(reach, std::hypot(x, y));
+    ++pairs;
+    t_end = row.t_s;
+  }
+  const double theta = (dot == 0.0 && cross == 0.0) ? 0.0 : std::atan2(cross, dot);
+  *note = fmt::format(
+      "start at the first fix (t = {:.3f} s); heading {:.4f} rad fitted to {} fixes over {:.1f} s "
+      "({:.1f} m driven, {:.1f} m from the start)",
+      in.t0_s, theta, pairs, t_end - in.t0_s, driven, reach);
+  return theta;
+}
+
 }  // namespace
 
 ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& options) {
@@ -36,7 +74,13 @@ ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& opt
   ReplayInput in;
   in.track_name = track.name();
   if (!track.has_odometry()) fail(track, "no odometry columns (ticks_*, omega_* or v_cmd/w_cmd)");
-  if (!track.has_gt()) fail(track, "no ground truth (gt_x, gt_y): metrics need it");
+  const bool by_fixes = options.reference == ReplayReference::fixes;
+  in.reference_is_fixes = by_fixes;
+  if (!by_fixes && !track.has_gt())
+    fail(track, "no ground truth (gt_x, gt_y): metrics need it (a track whose only reference is its position "
+                "fixes is tuned with the fix cross-validation modes 8 and 9)");
+  if (by_fixes && !track.has_aps())
+    fail(track, "no position fixes (aps_x, aps_y) to start from and score against");
 
   const auto& meta = track.meta();
   double Rl = 0.0, Rr = 0.0, tick_rev = 0.0;
@@ -54,16 +98,25 @@ ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& opt
 
   const std::size_t n = track.size();
   const auto& t = track.t();
-  const auto& gx = track.col(Col::gt_x);
-  const auto& gy = track.col(Col::gt_y);
-  std::size_t start = 0;
-  while (start < n && (std::isnan(gx[start]) || std::isnan(gy[start]))) ++start;
-  if (start == n) fail(track, "no row with a ground-truth position");
-  in.t0_s = t[start];
+  const std::vector<double> none(n, std::nan(""));
+  const auto& gx = track.has(Col::gt_x) ? track.col(Col::gt_x) : none;
+  const auto& gy = track.has(Col::gt_y) ? track.col(Col::gt_y) : none;
   const bool has_theta = track.has(Col::gt_theta);
-  if (has_theta && std::isnan(track.col(Col::gt_theta)[start]))
-    fail(track, fmt::format("the first ground-truth row (t = {} s) has no gt_theta", t[start]));
-  in.initial_pose << gx[start], gy[start], has_theta ? track.col(Col::gt_theta)[start] : 0.0;
+  auto has_fix = [&](std::size_t i) { return track.at(Col::aps_x, i) && track.at(Col::aps_y, i); };
+  std::size_t start = 0;
+  if (by_fixes) {
+    while (start < n && !has_fix(start)) ++start;
+    if (start == n) fail(track, "no row with a position fix");
+    in.initial_pose << track.col(Col::aps_x)[start], track.col(Col::aps_y)[start], 0.0;  // heading: below
+  } else {
+    while (start < n && (std::isnan(gx[start]) || std::isnan(gy[start]))) ++start;
+    if (start == n) fail(track, "no row with a ground-truth position");
+    if (has_theta && std::isnan(track.col(Col::gt_theta)[start]))
+      fail(track, fmt::format("the first ground-truth row (t = {} s) has no gt_theta", t[start]));
+    in.initial_pose << gx[start], gy[start], has_theta ? track.col(Col::gt_theta)[start] : 0.0;
+  }
+  in.t0_s = t[start];
+  const bool has_fix_var = track.has(Col::aps_var_x) && track.has(Col::aps_var_y);
 
   // Odometry sample presence at row i.
   auto odo_at = [&](std::size_t i) {
@@ -119,9 +172,14 @@ ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& opt
       }
       last_odo = static_cast<std::ptrdiff_t>(i);
     }
-    if (track.at(Col::aps_x, i) && track.at(Col::aps_y, i)) {
+    if (has_fix(i)) {
       row.fix = static_cast<std::int32_t>(in.fixes.size());
       in.fixes.emplace_back(track.col(Col::aps_x)[i], track.col(Col::aps_y)[i]);
+      const double vx = has_fix_var ? track.col(Col::aps_var_x)[i] : std::nan("");
+      const double vy = has_fix_var ? track.col(Col::aps_var_y)[i] : std::nan("");
+      const bool usable = vx > 0.0 && vy > 0.0 && std::isfinite(vx) && std::isfinite(vy);
+      in.fix_var_x_m2.push_back(usable ? vx : std::nan(""));
+      in.fix_var_y_m2.push_back(usable ? vy : std::nan(""));
     }
     if (!std::isnan(gx[i]) && !std::isnan(gy[i])) {
       row.gt = static_cast<std::int32_t>(in.gt.size());
@@ -130,7 +188,16 @@ ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& opt
     }
     if (row.step >= 0 || row.fix >= 0 || row.gt >= 0) in.rows.push_back(row);
   }
-  if (in.gt.empty()) fail(track, "only one ground-truth row: nothing to compare with");
+  if (!by_fixes && in.gt.empty()) fail(track, "only one ground-truth row: nothing to compare with");
+  if (by_fixes) {
+    if (in.fixes.empty()) fail(track, "only one position fix: nothing to compare with");
+    in.initial_pose(2) = initial_heading_from_fixes(in, options.heading_window_s, &in.initial_pose_note);
+    const double var = std::isnan(in.fix_var_x_m2.front())
+                           ? filters::NoiseParams{}.q_x_m2
+                           : 0.5 * (in.fix_var_x_m2.front() + in.fix_var_y_m2.front());
+    const double heading_sd_rad = 10.0 * std::numbers::pi / 180.0;
+    in.initial_cov = filters::Pose(var, var, heading_sd_rad * heading_sd_rad).asDiagonal();
+  }
   return in;
 }
 

@@ -34,16 +34,39 @@ struct ReplayInput {
   OdometrySource source = OdometrySource::ticks;
   double wheel_base_m = 0.0;
   filters::Pose initial_pose = filters::Pose::Zero();
+  // Its covariance: the EKF's default (1 cm, 1°) at a ground-truth start;
+  // at the first fix, the fix's variance and (10°)² for the fitted heading.
+  filters::StateCov initial_cov = filters::EkfParams{}.initial_cov;
   double t0_s = 0.0;
   std::vector<filters::WheelTravel> steps;
   std::vector<double> abs_yaw_rate_rad_s;  // per step: |gyro_z|, or |odometry yaw rate| without a gyro
   std::vector<filters::Position> fixes;    // [m]
-  std::vector<filters::Position> gt;       // [m]
-  std::vector<double> gt_theta_rad;        // per gt sample (NaN when the track has none)
-  std::vector<ReplayRow> rows;             // rows after the start row, in time order
+  // Per fix: its own variances [m²] from the track's aps_var_x/aps_var_y, NaN
+  // where the track gives none (the noise model's Q is used there).
+  std::vector<double> fix_var_x_m2, fix_var_y_m2;
+  // The reference the replay starts from and is scored against (options).
+  bool reference_is_fixes = false;
+  std::string initial_pose_note;      // how the initial pose was found (fixes reference)
+  std::vector<filters::Position> gt;  // [m]
+  std::vector<double> gt_theta_rad;   // per gt sample (NaN when the track has none)
+  std::vector<ReplayRow> rows;        // rows after the start row, in time order
 };
 
+// What a replay starts from:
+//   ground_truth: the first row with a ground-truth pose (the study's setup;
+//     a track without ground truth is refused);
+//   fixes: the first position fix, with the heading that best aligns the
+//     dead-reckoned odometry with the fixes of the first `heading_window_s`
+//     (a least-squares rotation of the path about the start, Umeyama's
+//     closed form without scale: θ₀ = atan2(Σ o×f, Σ o·f) over the pairs of
+//     odometry path point o and fix f, both relative to the start), for
+//     tracks whose only reference is the fixes; ground truth, when present,
+//     is still kept for scoring.
+enum class ReplayReference { ground_truth, fixes };
+
 struct ReplayInputOptions {
+  ReplayReference reference = ReplayReference::ground_truth;
+  double heading_window_s = 60.0;  // fixes reference: the window of the heading fit
   // Wheel base for tracks whose odometry is body velocities and whose
   // metadata gives no robot.wheel_base: only splits (v, w) into wheel travel
   // for the alpha/gyro noise models, it does not change the dead reckoning.

@@ -93,9 +93,13 @@ TEST(CliTune, BadTrackGivesOneLineWithFileLineAndReasonAndNoOutput) {
 }
 
 TEST(CliTune, RejectsBadOptionsClearly) {
-  auto r = run_cli("tune --track " + reference_track(1) + " --mode 9");
+  auto r = run_cli("tune --track " + reference_track(1) + " --mode 10");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("mode"), std::string::npos);
+  // The UKF takes the ground-truth modes only.
+  r = run_cli("tune --track " + reference_track(1) + " --model ukf --mode 9 --particles 4 --iterations 1");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("mode"), std::string::npos) << r.err;
   r = run_cli("tune --track " + reference_track(1) + " --solver nlopt:NOPE");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("NOPE"), std::string::npos);
@@ -140,6 +144,30 @@ TEST(CliHelp, EveryCommandHasHelpWithAnExample) {
     EXPECT_EQ(r.exit_code, 0) << c;
     EXPECT_NE(r.out.find("Example"), std::string::npos) << c;
   }
+}
+
+// A recording without ground truth (the Husky of robot_localization's tests,
+// imported from its MCAP form) is tuned by fix cross-validation, mode 9 by
+// default, and says so; a ground-truth mode is refused in one line.
+TEST(CliTune, WithoutGroundTruthTunesByFixCrossValidation) {
+  const std::string dir = ::testing::TempDir();
+  const std::string track = dir + "/odotune_cli_husky.csv";
+  const std::string bag = std::string(ODOTUNE_SHARED_DIR) +
+                          "/data/real/robot_localization_bags/ros2/test1.mcap";
+  auto r = run_cli("import rosbag " + bag + " --imu-rpy 1.5707963267948966,0,-1.5707963267948966 -o " + track);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string json = dir + "/odotune_cli_husky.json";
+  r = run_cli("tune --track " + track + " --model alpha --particles 8 --iterations 5 --json " + json);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("no ground truth in"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("mode 9 (held-out fix NLL)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("NLL"), std::string::npos) << r.out;
+  r = run_cli("tune --track " + track + " --model alpha --mode 1 --particles 8 --iterations 5");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("use --mode 8 or 9"), std::string::npos) << r.err;
+  std::remove(track.c_str());
+  std::remove(json.c_str());
 }
 
 }  // namespace

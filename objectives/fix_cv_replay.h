@@ -1,0 +1,76 @@
+// Scoring an EKF without ground truth: cross-validation over the position
+// fixes (fitness modes 8 and 9, objectives/metrics.h).
+//
+// The fixes are split into K folds by time block: a fix at time t belongs to
+// fold ⌊(t − t₀)/block⌋ mod K, so each fold holds out whole stretches of the
+// drive, over which the filter must carry its estimate on odometry alone. For
+// each fold the filter runs over the track applying every other fix; at each
+// held-out fix z (variance R: the fix's own, aps_var_x/aps_var_y, else the
+// noise model's Q) it is compared with the filter's prediction x̂ at that
+// instant, covariance P:
+//   e = z − x̂ (prediction error, mode 8 scores its RMSE over all folds);
+//   S = P_xy + R, −log p(z) = ½ eᵀS⁻¹e + ½ log det S + log 2π (mode 9 scores
+//   its mean: the predictive likelihood rewards a filter whose uncertainty is
+//   right, not only its estimate); NIS = eᵀS⁻¹e (mean 2 when consistent, for
+//   reports).
+// Why this scores what ground truth would: with fix noise independent of the
+// filter, E|z − x̂|² = E|x − x̂|² + tr R, so the noise that minimises the
+// held-out prediction error also minimises the true error, up to a constant.
+//
+// Like FastReplay, each fold is reduced to segments once (filters/
+// ekf_segments.h: every fix, applied or held out, ends a segment), and
+// evaluate() is const, allocation-free and thread-safe.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "filters/ekf.h"
+#include "filters/ekf_segments.h"
+#include "objectives/metrics.h"
+#include "objectives/replay_input.h"
+
+namespace odotune {
+
+struct FixCvOptions {
+  int folds = 5;
+  double block_s = 10.0;  // [s] stretches held out together
+
+  bool IsValid(std::string* why) const;
+};
+
+struct FixCvOutcome {
+  ErrorMetrics heldout;  // |z − x̂| over every held-out fix [m]
+  double nll = 0.0;      // mean −log predictive likelihood per held-out fix [nats]
+  double nis = 0.0;      // mean normalised innovation squared
+  filters::Divergence divergence = filters::Divergence::none;
+};
+
+class FixCvReplay {
+ public:
+  // Throws std::invalid_argument for invalid options or fewer than two fixes
+  // per fold.
+  FixCvReplay(const ReplayInput& in, const FixCvOptions& options);
+
+  FixCvOutcome evaluate(const filters::NoiseParams& noise) const;
+
+  const std::string& track_name() const { return name_; }
+  long heldout_fixes() const { return heldout_; }
+  const FixCvOptions& options() const { return options_; }
+
+ private:
+  struct Segment {
+    filters::SegmentMoments moments;
+    filters::Position fix = filters::Position::Zero();
+    double var_x_m2 = 0.0, var_y_m2 = 0.0;  // NaN: the model's Q
+    bool held_out = false;                  // else applied
+  };
+  std::string name_;
+  FixCvOptions options_;
+  filters::Pose initial_pose_;
+  filters::StateCov initial_cov_;
+  std::vector<std::vector<Segment>> folds_;
+  long heldout_ = 0;
+};
+
+}  // namespace odotune
