@@ -46,9 +46,14 @@ void register_tune(CLI::App& app) {
   sub->add_option("--mode", req->mode,
                   "EKF/UKF fitness mode against ground truth: 1 RMSE, 2 MAE, 3 MAXE, 4 RMSE+MAE, 5 RMSE+MAXE, "
                   "6 MAE+MAXE, 7 RMSE+MAE+MAXE (default); EKF without ground truth, cross-validating over the "
-                  "position fixes: 8 held-out fix RMSE, 9 held-out fix NLL (the default when a track has no "
-                  "ground truth)")
+                  "position fixes: 8 held-out fix RMSE (the default when a track has no ground truth), 9 "
+                  "held-out fix NLL (needs the fixes' variances right)")
       ->check(CLI::Range(1, 9));
+  sub->add_option("--cv-folds", req->fix_cv.folds, "modes 8, 9: folds of the fix cross-validation (default 5)")
+      ->check(CLI::Range(2, 100));
+  sub->add_option("--cv-block", req->fix_cv.block_s,
+                  "modes 8, 9: fixes within blocks of this many seconds are held out together (default 1)")
+      ->check(CLI::PositiveNumber);
   std::string algos;
   for (const auto& a : tuner::nlopt_algorithm_names()) algos += " " + a;
   sub->add_option("--solver", req->solver, "pso or nlopt:NAME, NAME one of" + algos);

@@ -25,7 +25,7 @@ void print_tune_outcome(const TuneOutcome& o) {
   fmt::print("tuned {} noise on {} for mode {} ({}) with {} (seed {})\n", filters::to_string(o.request.model),
              names, o.request.mode, fitness_mode_name(o.request.mode), o.request.solver, o.request.seed);
   if (o.against_fixes) {
-    const FixCvOptions cv;
+    const FixCvOptions& cv = o.fix_cv;
     fmt::print("  held-out fixes ({} folds of {:g} s blocks), baseline → tuned:\n", cv.folds, cv.block_s);
     for (const auto& t : o.tracks)
       fmt::print("    {}: NLL {:.3f} → {:.3f} nats per fix; NIS {:.2f} → {:.2f} (2 when consistent)\n", t.track,

@@ -147,7 +147,7 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
     for (auto& t : expand(path, n, base)) e.tracks.push_back(std::move(t));
   for (const auto& n : list(path, root, "modes")) {
     const int m = scalar<int>(path, n, "a mode");
-    if (!valid_fitness_mode(m)) fail_at(path, n, fmt::format("mode {} is out of range, expected 1..7", m));
+    if (!valid_ekf_fitness_mode(m)) fail_at(path, n, fmt::format("mode {} is out of range, expected 1..9", m));
     e.modes.push_back(m);
   }
   const YAML::Node seeds = root["seeds"];

@@ -1,6 +1,11 @@
 #include "jobs/eval_job.h"
 
+#include "objectives/fix_cv_replay.h"
+#include "results/tum.h"
+
 #include <stdexcept>
+
+#include <fmt/format.h>
 
 #include "core/failure.h"
 #include "formats/config_yaml.h"
@@ -34,16 +39,46 @@ EvalOutcome run_eval(const EvalRequest& request, const std::function<void(const 
     o.label = request.config;
   }
   o.model = noise.model;
-  for (const auto& track : load_tracks(request.tracks)) {
+  const std::vector<Track> tracks = load_tracks(request.tracks);
+  if (!request.trajectory_out.empty() && tracks.size() != 1)
+    throw Failure("--trajectory-out writes one track's trajectory: give exactly one --track");
+  for (const auto& track : tracks) {
     ReplayInput in;
+    EvalTrack et;
+    et.track = track.name();
     try {
-      in = build_replay_input(track);
+      if (track.has_gt()) {
+        in = build_replay_input(track);
+        const ReplayResult base = replay_ekf(in, baseline_noise());
+        const ReplayResult got = replay_ekf(in, noise);
+        et.metrics = got.outcome.metrics;
+        et.baseline = base.outcome.metrics;
+        et.divergence = got.outcome.divergence;
+      } else {
+        ReplayInputOptions from_fix;
+        from_fix.reference = ReplayReference::fixes;
+        in = build_replay_input(track, from_fix);
+        const FixCvReplay cv(in, {});
+        const FixCvOutcome got = cv.evaluate(noise);
+        et.metrics = got.heldout;
+        et.baseline = cv.evaluate(baseline_noise()).heldout;
+        et.divergence = got.divergence;
+        et.against_fixes = true;
+      }
     } catch (const std::invalid_argument& e) {
       throw Failure(e.what());
     }
-    const ReplayResult base = replay_ekf(in, baseline_noise());
-    const ReplayResult got = replay_ekf(in, noise);
-    o.tracks.push_back({track.name(), got.outcome.metrics, base.outcome.metrics, got.outcome.divergence});
+    o.tracks.push_back(et);
+    if (!request.trajectory_out.empty()) {
+      const auto t0 = track.meta().get("source.t0_ns");
+      const double offset_s = t0 ? std::stod(*t0) * 1e-9 : 0.0;
+      results::write_tum(request.trajectory_out, ekf_trajectory(in, noise),
+                         fmt::format("odotune eval: EKF {} on track '{}' ({}); {}", o.label, track.name(),
+                                     filters::to_string(noise.model),
+                                     in.reference_is_fixes ? in.initial_pose_note
+                                                           : "at the first ground-truth pose"),
+                         offset_s);
+    }
     if (track_done) track_done(o);
   }
   if (!request.json_out.empty()) write_file_atomically(request.json_out, eval_json(o).dump(2) + "\n");

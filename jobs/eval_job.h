@@ -19,12 +19,18 @@ struct EvalRequest {
   std::string config;               // odotune-ekf-config/1 YAML; empty = the baseline noise
   std::vector<std::string> tracks;  // track files, replayed in this order
   std::string json_out;             // the metrics as JSON (eval_json); empty = not written
+  // The configured filter's trajectory in TUM format (results/tum.h), one
+  // track only; on the recording's clock when the track has source.t0_ns.
+  std::string trajectory_out;
 };
 
 struct EvalTrack {
-  std::string track;                                           // the track's name
-  ErrorMetrics metrics;                                        // with the configuration's noise
-  ErrorMetrics baseline;                                       // with baseline_noise()
+  std::string track;      // the track's name
+  ErrorMetrics metrics;   // with the configuration's noise
+  ErrorMetrics baseline;  // with baseline_noise()
+  // A track without ground truth: the metrics are of its held-out fixes
+  // (objectives/fix_cv_replay.h, default folds), not of ground truth.
+  bool against_fixes = false;
   filters::Divergence divergence = filters::Divergence::none;  // of the configuration's replay
 };
 

@@ -1,5 +1,7 @@
 #include "jobs/grid_job.h"
 
+#include <algorithm>
+
 #include <filesystem>
 #include <stdexcept>
 
@@ -44,9 +46,10 @@ std::vector<PreparedTrack> prepare_grid_tracks(const Experiment& e) {
   for (const auto& t : load_tracks(e.tracks)) {
     PreparedTrack p;
     p.name = t.name();
+    const bool fix_cv = std::any_of(e.modes.begin(), e.modes.end(), is_fix_cv_mode);
     if (e.has_ekf_models()) {
       try {
-        p = prepare_track(t);
+        p = fix_cv ? prepare_track_fix_cv(t) : prepare_track(t);
       } catch (const std::invalid_argument& ex) {
         throw Failure(ex.what());
       }
@@ -191,7 +194,14 @@ std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vecto
   const TuneOutcome o = run_tune(tune_on, req);
   if (o.summary.termination == "stopped") return std::nullopt;
   set_solver_fields(r, o.param_names, o.params, o.summary.best_fitness, o.summary, o.divergences.total());
-  // Scores on the cell's track: the tuned track itself, or the held-out one.
+  // Scores on the cell's track: the tuned track itself, or the held-out one;
+  // modes 8 and 9 score the held-out fixes (the track may have no ground truth).
+  if (is_fix_cv_mode(c.mode)) {
+    const FixCvReplay& cv = *tracks[c.score_on].cv;
+    r.baseline = to_metrics(cv.evaluate(baseline_noise()).heldout);
+    r.tuned = to_metrics(cv.evaluate(o.noise).heldout);
+    return r;
+  }
   const auto& score = tracks[c.score_on].input;
   r.baseline = to_metrics(replay_ekf(score, baseline_noise()).outcome.metrics);
   r.tuned = to_metrics(replay_ekf(score, o.noise).outcome.metrics);

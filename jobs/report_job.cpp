@@ -115,8 +115,8 @@ results::TrajectoryPath path_of(const std::string& name, const std::vector<Traje
 }  // namespace
 
 ReportOutcome write_report(const ReportRequest& req) {
-  if (!valid_fitness_mode(req.mode))
-    throw Failure(fmt::format("--mode {} is out of range, expected 1..7", req.mode));
+  if (!valid_ekf_fitness_mode(req.mode))
+    throw Failure(fmt::format("--mode {} is out of range, expected 1..9", req.mode));
   const auto store = open_store_for_reading(req.store);
   const results::ExperimentInfo info = store->experiment();
   std::vector<RunRecord> runs;

@@ -91,11 +91,11 @@ TuneCommandOutcome ekf_tune(const TuneCommandRequest& r, filters::NoiseModel mod
   std::string note;
   req.mode = r.mode;
   if (req.mode == 0) {
-    req.mode = no_gt.empty() ? 7 : kFixCvNllMode;
+    req.mode = no_gt.empty() ? 7 : kFixCvRmseMode;
     if (!no_gt.empty())
-      note = fmt::format("no ground truth in {}: tuning by cross-validation over the position fixes, mode 9 "
-                         "({}; mode 8 scores their prediction RMSE)",
-                         no_gt, fitness_mode_name(kFixCvNllMode));
+      note = fmt::format("no ground truth in {}: tuning by cross-validation over the position fixes, mode 8 "
+                         "({}; mode 9 scores their predictive likelihood instead)",
+                         no_gt, fitness_mode_name(kFixCvRmseMode));
   } else if (!no_gt.empty() && !is_fix_cv_mode(req.mode)) {
     throw Failure(fmt::format("--mode {} scores against ground truth, which {} has not; use --mode 8 or 9 "
                               "(cross-validation over the position fixes), or leave --mode out",
@@ -105,8 +105,9 @@ TuneCommandOutcome ekf_tune(const TuneCommandRequest& r, filters::NoiseModel mod
   if (!req.IsValid(&why)) throw Failure(why);
 
   const std::vector<PreparedTrack> prepared =
-      is_fix_cv_mode(req.mode) ? prepare_tracks(tracks, [](const Track& t) { return prepare_track_fix_cv(t); })
-                               : prepare_tracks(tracks, prepare_track);
+      is_fix_cv_mode(req.mode)
+          ? prepare_tracks(tracks, [&](const Track& t) { return prepare_track_fix_cv(t, r.fix_cv); })
+          : prepare_tracks(tracks, prepare_track);
   TuneCommandOutcome result = run_and_report(r, [&] {
     TuneOutcome o = run_tune(pointers(prepared), req);
     o.note = note;

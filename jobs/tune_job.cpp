@@ -22,16 +22,17 @@ PreparedTrack prepare_track(const Track& track) {
 }
 
 PreparedTrack prepare_track_fix_cv(const Track& track, const FixCvOptions& cv) {
-  PreparedTrack p;
-  p.name = track.name();
   ReplayInputOptions o;
   o.reference = ReplayReference::fixes;
-  p.input = build_replay_input(track, o);
-  p.cv = std::make_unique<FixCvReplay>(p.input, cv);
+  ReplayInput from_fix = build_replay_input(track, o);
+  PreparedTrack p;
   if (track.has_gt()) {
-    p.gt_input = build_replay_input(track);
-    p.fast = std::make_unique<FastReplay>(*p.gt_input);
+    p = prepare_track(track);
+  } else {
+    p.name = track.name();
+    p.input = from_fix;
   }
+  p.cv = std::make_unique<FixCvReplay>(from_fix, cv);
   return p;
 }
 
@@ -135,6 +136,7 @@ TuneOutcome run_tune_fix_cv(const std::vector<const PreparedTrack*>& tracks, con
   TuneOutcome out;
   out.request = request;
   out.against_fixes = true;
+  out.fix_cv = tracks.front()->cv->options();
   out.summary = run_solver(problem, request);
   const ParamSpace& space = objective.space();
   for (const auto& p : space.params()) {
@@ -155,9 +157,9 @@ TuneOutcome run_tune_fix_cv(const std::vector<const PreparedTrack*>& tracks, con
     s.tuned_nll = u.nll;
     s.baseline_nis = b.nis;
     s.tuned_nis = u.nis;
-    if (t->gt_input) {
-      s.gt_baseline = replay_ekf(*t->gt_input, baseline_noise()).outcome.metrics;
-      s.gt_tuned = replay_ekf(*t->gt_input, out.noise).outcome.metrics;
+    if (!t->input.reference_is_fixes) {
+      s.gt_baseline = replay_ekf(t->input, baseline_noise()).outcome.metrics;
+      s.gt_tuned = replay_ekf(t->input, out.noise).outcome.metrics;
     }
     const double n = static_cast<double>(tracks.size());
     out.baseline_fitness += (request.mode == kFixCvRmseMode ? b.heldout.rmse_m : b.nll) / n;

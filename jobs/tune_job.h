@@ -35,20 +35,21 @@ struct PreparedTrack {
   std::string name;
   ReplayInput input;
   std::unique_ptr<FastReplay> fast;
-  // Fix cross-validation (modes 8 and 9): the replay from the first fix, and
-  // the ground-truth input when the track has ground truth (to report the
-  // error the tune never saw).
+  // Fix cross-validation (modes 8 and 9): its folds, replayed from the first
+  // fix. For a track without ground truth `input` is that replay's (from the
+  // first fix) and `fast` is null.
   std::unique_ptr<FixCvReplay> cv;
-  std::optional<ReplayInput> gt_input;
   std::optional<CalibrationInput> calibration;
   std::optional<FusionInput> fusion;
 };
 // Throws std::invalid_argument (one line naming the track) when it cannot be
 // replayed or has no position fixes (nothing to tune).
 PreparedTrack prepare_track(const Track& track);
-// The same for fix cross-validation (modes 8 and 9): `input` starts at the
-// first fix (ReplayReference::fixes) and `cv` holds its folds; a track with
-// ground truth also gets `gt_input` and `fast`.
+// The same, ready for fix cross-validation (modes 8 and 9) too: `cv` holds
+// its folds (from the first fix, ReplayReference::fixes); a track with ground
+// truth keeps its ground-truth `input` and `fast` (for modes 1..7 and to
+// report the error a fix-tuned noise makes), one without gets the
+// first-fix input and no `fast`.
 PreparedTrack prepare_track_fix_cv(const Track& track, const FixCvOptions& cv = {});
 
 // The solver part of a tuning request, shared by the EKF (TuneRequest) and
@@ -94,6 +95,7 @@ struct TuneOutcome {
   DivergenceCounts divergences;
   tuner::Summary summary;      // evaluations, seconds, termination, log
   bool against_fixes = false;  // modes 8, 9: the metrics are of the held-out fixes
+  FixCvOptions fix_cv;         // ... and their folds
   std::string note;            // how the mode was chosen, when the command chose it
 };
 

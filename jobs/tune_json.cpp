@@ -25,7 +25,7 @@ nlohmann::json tune_json(const TuneOutcome& o) {
   j["tracks"] = track_scores_json(o.tracks);
   j["scored_against"] = o.against_fixes ? "held-out position fixes" : "ground truth";
   if (o.against_fixes) {
-    const FixCvOptions cv;
+    const FixCvOptions& cv = o.fix_cv;
     j["fix_cv"] = {{"folds", cv.folds}, {"block_s", cv.block_s}};
     for (std::size_t i = 0; i < o.tracks.size(); ++i) {
       const TrackScore& t = o.tracks[i];

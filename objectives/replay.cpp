@@ -46,6 +46,26 @@ ReplayResult replay_ekf(const ReplayInput& in, const filters::NoiseParams& noise
   return result;
 }
 
+std::vector<TrajectoryPoint> ekf_trajectory(const ReplayInput& in, const filters::NoiseParams& noise) {
+  filters::Ekf ekf(ekf_params_for(in, noise));
+  std::vector<TrajectoryPoint> out;
+  out.reserve(in.rows.size() + 1);
+  out.push_back({in.t0_s, ekf.pose()(0), ekf.pose()(1), ekf.pose()(2)});
+  for (const ReplayRow& row : in.rows) {
+    if (row.step >= 0) ekf.predict(in.steps[row.step], in.abs_yaw_rate_rad_s[row.step]);
+    if (row.fix >= 0) {
+      const double vx = in.fix_var_x_m2[row.fix], vy = in.fix_var_y_m2[row.fix];
+      if (std::isnan(vx))
+        ekf.update(in.fixes[row.fix]);
+      else
+        ekf.update(in.fixes[row.fix], vx, vy);
+    }
+    if (ekf.check() != Divergence::none) break;
+    out.push_back({row.t_s, ekf.pose()(0), ekf.pose()(1), ekf.pose()(2)});
+  }
+  return out;
+}
+
 FastReplay::FastReplay(const ReplayInput& in)
     : name_(in.track_name),
       steps_(static_cast<long>(in.steps.size())),

@@ -38,6 +38,11 @@ filters::EkfParams ekf_params_for(const ReplayInput& in, const filters::NoisePar
 // Reference replay. Throws std::invalid_argument if `noise` is invalid.
 ReplayResult replay_ekf(const ReplayInput& in, const filters::NoiseParams& noise, bool keep_trajectory = false);
 
+// The filter's pose at the start row and after every later row (odometry
+// step, fix or ground truth), on the track's clock; stops at a divergence.
+// For trajectories written out (results/tum.h).
+std::vector<TrajectoryPoint> ekf_trajectory(const ReplayInput& in, const filters::NoiseParams& noise);
+
 class FastReplay {
  public:
   explicit FastReplay(const ReplayInput& in);

@@ -147,7 +147,7 @@ TEST(CliHelp, EveryCommandHasHelpWithAnExample) {
 }
 
 // A recording without ground truth (the Husky of robot_localization's tests,
-// imported from its MCAP form) is tuned by fix cross-validation, mode 9 by
+// imported from its MCAP form) is tuned by fix cross-validation, mode 8 by
 // default, and says so; a ground-truth mode is refused in one line.
 TEST(CliTune, WithoutGroundTruthTunesByFixCrossValidation) {
   const std::string dir = ::testing::TempDir();
@@ -160,8 +160,26 @@ TEST(CliTune, WithoutGroundTruthTunesByFixCrossValidation) {
   r = run_cli("tune --track " + track + " --model alpha --particles 8 --iterations 5 --json " + json);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("no ground truth in"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("mode 9 (held-out fix NLL)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("mode 8 (held-out fix RMSE)"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("NLL"), std::string::npos) << r.out;
+  // eval scores it by its held-out fixes too, and writes its TUM trajectory on the bag's clock.
+  const std::string tum = dir + "/odotune_cli_husky.tum";
+  r = run_cli("eval --track " + track + " --trajectory-out " + tum);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("held-out fixes (no ground truth)"), std::string::npos) << r.out;
+  {
+    std::ifstream in(tum);
+    std::string line;
+    int poses = 0;
+    double t_first = 0;
+    while (std::getline(in, line))
+      if (!line.empty() && line[0] != '#') {
+        if (poses++ == 0) t_first = std::stod(line.substr(0, line.find(' ')));
+      }
+    EXPECT_GT(poses, 4000);
+    EXPECT_NEAR(t_first, 1432235498.04, 0.05);  // the recording's clock (source.t0_ns)
+  }
+  std::remove(tum.c_str());
   r = run_cli("tune --track " + track + " --model alpha --mode 1 --particles 8 --iterations 5");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
