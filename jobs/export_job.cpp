@@ -79,7 +79,7 @@ std::vector<ReplayInput> tuning_inputs(const results::Store& store, const result
                                 "file said; pass it with --track FILE",
                                 results::run_key(run), name));
     try {
-      inputs.push_back(build_replay_input(it->second));
+      inputs.push_back(build_replay_input_any(it->second));
     } catch (const std::invalid_argument& e) {
       throw Failure(e.what());
     }

@@ -355,11 +355,30 @@ ReportOutcome write_report(const ReportRequest& req) {
       }
       ReplayInput in;
       try {
-        in = build_replay_input(it->second);
+        in = build_replay_input_any(it->second);
       } catch (const std::invalid_argument& ex) {
         throw Failure(ex.what());
       }
       std::vector<results::TrajectoryPath> paths;
+      if (in.reference_is_fixes) {
+        // No ground truth: the fixes, and each filter's whole trajectory.
+        results::TrajectoryPath fixes{"position fixes", {}, {}};
+        for (const auto& p : in.fixes) {
+          fixes.xs_m.push_back(p.x());
+          fixes.ys_m.push_back(p.y());
+        }
+        paths.push_back(std::move(fixes));
+        paths.push_back(path_of("baseline EKF", ekf_trajectory(in, baseline_noise())));
+        for (const auto& model : ekf_models)
+          if (const RunRecord* r = best_run(runs, model, name, mode))
+            paths.push_back(path_of(fmt::format("{} tuned (mode {})", model, mode),
+                                    ekf_trajectory(in, run_noise(*r))));
+        const std::string title = fmt::format("{}: position fixes, baseline and tuned EKF (mode {})", name,
+                                              mode);
+        row.push_back(w.figure("trajectories_" + file_safe(name), title,
+                               [&](const fs::path& stem) { results::trajectories(stem, title, paths); }));
+        continue;
+      }
       results::TrajectoryPath gt{"ground truth", {}, {}};
       for (const auto& p : in.gt) {
         gt.xs_m.push_back(p.x());

@@ -201,4 +201,11 @@ ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& opt
   return in;
 }
 
+ReplayInput build_replay_input_any(const Track& track) {
+  if (track.has_gt()) return build_replay_input(track);
+  ReplayInputOptions o;
+  o.reference = ReplayReference::fixes;
+  return build_replay_input(track, o);
+}
+
 }  // namespace odotune

@@ -78,4 +78,9 @@ struct ReplayInputOptions {
 // robot metadata).
 ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& options = {});
 
+// The replay input a track supports: from ground truth when it has it, else
+// from its first fix (ReplayReference::fixes). For exports and figures that
+// need the odometry and a start, not ground-truth metrics.
+ReplayInput build_replay_input_any(const Track& track);
+
 }  // namespace odotune
