@@ -121,6 +121,24 @@ DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSet
 
 namespace {
 
+// Runs the solver on `objective` and fills the outcome's request, summary,
+// tuned parameters (names, units, physical values, noise) and divergences.
+TuneOutcome solve(const EkfObjective& objective, const TuneRequest& request) {
+  const BoxProblem<EkfObjective> problem{&objective};
+  TuneOutcome out;
+  out.request = request;
+  out.summary = run_solver(problem, request);
+  const ParamSpace& space = objective.space();
+  for (const auto& p : space.params()) {
+    out.param_names.push_back(p.name);
+    out.param_units.push_back(p.unit);
+  }
+  out.params = space.to_physical(out.summary.best_x);
+  out.noise = space.to_noise(out.params);
+  out.divergences = objective.divergences();
+  return out;
+}
+
 // Modes 8 and 9: the same tune over the fix cross-validation replays; scores
 // are the held-out fixes' (and, where the track has it, ground truth's).
 TuneOutcome run_tune_fix_cv(const std::vector<const PreparedTrack*>& tracks, const TuneRequest& request) {
@@ -131,21 +149,9 @@ TuneOutcome run_tune_fix_cv(const std::vector<const PreparedTrack*>& tracks, con
                                   "': not prepared for fix cross-validation (modes 8, 9)");
     cv.push_back(t->cv.get());
   }
-  const EkfObjective objective = EkfObjective::over_fixes(cv, request.model, request.mode);
-  const BoxProblem<EkfObjective> problem{&objective};
-  TuneOutcome out;
-  out.request = request;
+  TuneOutcome out = solve(EkfObjective::over_fixes(cv, request.model, request.mode), request);
   out.against_fixes = true;
   out.fix_cv = tracks.front()->cv->options();
-  out.summary = run_solver(problem, request);
-  const ParamSpace& space = objective.space();
-  for (const auto& p : space.params()) {
-    out.param_names.push_back(p.name);
-    out.param_units.push_back(p.unit);
-  }
-  out.params = space.to_physical(out.summary.best_x);
-  out.noise = space.to_noise(out.params);
-  out.divergences = objective.divergences();
   std::vector<ErrorMetrics> base, tuned;
   for (const auto* t : tracks) {
     TrackScore s;
@@ -187,21 +193,7 @@ TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const Tune
                                   " needs ground truth; tracks without it are tuned with modes 8 and 9");
     fast.push_back(t->fast.get());
   }
-  const EkfObjective objective(fast, request.model, request.mode);
-  const BoxProblem<EkfObjective> problem{&objective};
-
-  TuneOutcome out;
-  out.request = request;
-  out.summary = run_solver(problem, request);
-
-  const ParamSpace& space = objective.space();
-  for (const auto& p : space.params()) {
-    out.param_names.push_back(p.name);
-    out.param_units.push_back(p.unit);
-  }
-  out.params = space.to_physical(out.summary.best_x);
-  out.noise = space.to_noise(out.params);
-  out.divergences = objective.divergences();
+  TuneOutcome out = solve(EkfObjective(fast, request.model, request.mode), request);
 
   // Scores from the reference replay, independent of the fast path.
   std::vector<ErrorMetrics> base, tuned;

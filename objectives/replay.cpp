@@ -18,6 +18,17 @@ filters::EkfParams ekf_params_for(const ReplayInput& in, const filters::NoisePar
   return p;
 }
 
+namespace {
+// Ekf::update with the row's fix and, when the track gives them, its own variances.
+void apply_fix(const ReplayInput& in, std::int32_t fix, filters::Ekf* ekf) {
+  const double vx = in.fix_var_x_m2[fix], vy = in.fix_var_y_m2[fix];
+  if (std::isnan(vx))
+    ekf->update(in.fixes[fix]);
+  else
+    ekf->update(in.fixes[fix], vx, vy);
+}
+}  // namespace
+
 ReplayResult replay_ekf(const ReplayInput& in, const filters::NoiseParams& noise, bool keep_trajectory) {
   filters::Ekf ekf(ekf_params_for(in, noise));
   ReplayResult result;
@@ -27,11 +38,7 @@ ReplayResult replay_ekf(const ReplayInput& in, const filters::NoiseParams& noise
   for (const ReplayRow& row : in.rows) {
     if (row.step >= 0) ekf.predict(in.steps[row.step], in.abs_yaw_rate_rad_s[row.step]);
     if (row.fix >= 0) {
-      const double vx = in.fix_var_x_m2[row.fix], vy = in.fix_var_y_m2[row.fix];
-      if (std::isnan(vx))
-        ekf.update(in.fixes[row.fix]);
-      else
-        ekf.update(in.fixes[row.fix], vx, vy);
+      apply_fix(in, row.fix, &ekf);
       if (ekf.check() != Divergence::none) break;
     }
     if (row.gt >= 0) {
@@ -53,13 +60,7 @@ std::vector<TrajectoryPoint> ekf_trajectory(const ReplayInput& in, const filters
   out.push_back({in.t0_s, ekf.pose()(0), ekf.pose()(1), ekf.pose()(2)});
   for (const ReplayRow& row : in.rows) {
     if (row.step >= 0) ekf.predict(in.steps[row.step], in.abs_yaw_rate_rad_s[row.step]);
-    if (row.fix >= 0) {
-      const double vx = in.fix_var_x_m2[row.fix], vy = in.fix_var_y_m2[row.fix];
-      if (std::isnan(vx))
-        ekf.update(in.fixes[row.fix]);
-      else
-        ekf.update(in.fixes[row.fix], vx, vy);
-    }
+    if (row.fix >= 0) apply_fix(in, row.fix, &ekf);
     if (ekf.check() != Divergence::none) break;
     out.push_back({row.t_s, ekf.pose()(0), ekf.pose()(1), ekf.pose()(2)});
   }

@@ -178,9 +178,9 @@ TEST(CliReportErrors, OneLineAndNoOutput) {
       << bad.err;
   EXPECT_FALSE(fs::exists(d / "o"));
   const auto mode = run_cli("report " + (d / "s.sqlite").string() + " --out " + (d / "o").string() +
-                            " --mode 9");
+                            " --mode 10");
   EXPECT_NE(mode.exit_code, 0);
-  EXPECT_NE(mode.err.find("--mode 9 is out of range"), std::string::npos) << mode.err;
+  EXPECT_NE(mode.err.find("--mode 10 is out of range"), std::string::npos) << mode.err;
 
   std::ofstream(d / "junk.sqlite") << "not a database at all, just text\n";
   const auto junk = run_cli("report " + (d / "junk.sqlite").string() + " --out " + (d / "o").string());

@@ -180,6 +180,25 @@ TEST(CliTune, WithoutGroundTruthTunesByFixCrossValidation) {
     EXPECT_NEAR(t_first, 1432235498.04, 0.05);  // the recording's clock (source.t0_ns)
   }
   std::remove(tum.c_str());
+  // A grid with mode 8 stores it, and its run exports to robot_localization.
+  const std::string exp = dir + "/odotune_cli_husky_exp.yaml", store = dir + "/odotune_cli_husky.sqlite";
+  const std::string ekf = dir + "/odotune_cli_husky_ekf.yaml";
+  std::remove(store.c_str());
+  std::ofstream(exp) << "format: odotune-experiment/1\nname: husky\nmodels: [alpha]\ntracks: [" << track
+                     << "]\nmodes: [8]\nseeds: [1]\nsolver: pso\nbudget: {particles: 6, iterations: 3}\n"
+                        "leave_one_out: false\nstore: "
+                     << store << "\n";
+  r = run_cli("grid " + exp);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_cli("export " + store + " --select mode=8 --format robot_localization --out " + ekf);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  {
+    std::ifstream in(ekf);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    EXPECT_NE(ss.str().find("process_noise_covariance"), std::string::npos);
+  }
+  for (const std::string& f : {exp, store, ekf}) std::remove(f.c_str());
   r = run_cli("tune --track " + track + " --model alpha --mode 1 --particles 8 --iterations 5");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
