@@ -88,6 +88,24 @@ TEST(ImportRosbag, HuskyGivesOneTrackFromItsThreeForms) {
   }
 }
 
+TEST(ImportRosbag, JackalGivesOneTrackFromItsThreeForms) {
+  // test2: odometry and IMU only, in simulated time (no fixes).
+  std::vector<fs::path> forms = {kBags / "ros2" / "test2.mcap", kBags / "ros2" / "test2_db3"};
+  if (bags::ros1_supported()) forms.insert(forms.begin(), kBags / "test2.bag");
+  const Track ref = import_rosbag(forms[0], {});
+  EXPECT_EQ(ref.size(), 6121u);
+  EXPECT_FALSE(ref.has(Col::aps_x));
+  EXPECT_EQ(*ref.meta().get("source.fixes"), "none");
+  for (std::size_t k = 1; k < forms.size(); ++k) {
+    const Track tr = import_rosbag(forms[k], {});
+    ASSERT_EQ(tr.t(), ref.t()) << forms[k];
+    for (Col c : {Col::v_cmd, Col::w_cmd, Col::gyro_z})
+      for (std::size_t i = 0; i < tr.size(); ++i)
+        ASSERT_TRUE(tr.col(c)[i] == ref.col(c)[i] || (std::isnan(tr.col(c)[i]) && std::isnan(ref.col(c)[i])))
+            << forms[k] << " " << column_name(c) << " row " << i;
+  }
+}
+
 TEST(ImportRosbag, TheImuMountingMakesTheGyroAgreeWithTheOdometry) {
   const fs::path bag = kBags / "ros2" / "test1.mcap";
   const auto [corr, slope] = gyro_vs_odometry(import_rosbag(bag, husky()));
