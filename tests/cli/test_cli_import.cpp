@@ -160,6 +160,21 @@ TEST_F(ImportCli, RosbagListsImportsAndRefusesInOneLine) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_TRUE(contains(r.err, "not a bag")) << r.err;
   EXPECT_FALSE(fs::exists(never));
+  // A ROS 1 bag cut short or with a damaged (bz2) chunk: one line naming it, nothing written.
+  {
+    std::ifstream in(bags / "test1.bag", std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream(dir_ / "cut.bag", std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+    for (std::size_t k = 0; k < 16; ++k) bytes[bytes.size() / 3 + 997 * k] ^= '\xff';
+    std::ofstream(dir_ / "flipped.bag", std::ios::binary) << bytes;
+  }
+  for (const char* bad : {"cut.bag", "flipped.bag"}) {
+    r = odotune(fmt::format("import rosbag {} -o {}", q(dir_ / bad), q(never)));
+    EXPECT_NE(r.exit_code, 0) << bad;
+    EXPECT_EQ(count_lines(r.err), 1u) << r.err;
+    EXPECT_TRUE(contains(r.err, bad)) << r.err;
+    EXPECT_FALSE(fs::exists(never));
+  }
   // The help says whether ROS 1 bags are supported.
   r = odotune("import rosbag --help");
   EXPECT_EQ(r.exit_code, 0);
