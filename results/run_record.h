@@ -22,7 +22,7 @@ struct RunRecord {
   std::string model;          // "rq" | "alpha" | "gyro"
   std::string track;          // track name (tuned on; "all-but-X" for leave-one-out)
   std::string heldout_track;  // empty unless leave-one-track-out
-  int mode = 7;               // fitness mode 1..7
+  int mode = 7;               // fitness mode 1..9 (8, 9: scored on held-out fixes)
   std::uint64_t seed = 0;
   std::string solver = "pso";
   // The result.

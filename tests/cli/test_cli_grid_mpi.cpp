@@ -140,7 +140,7 @@ TEST(CliGridMpi, AFailureOnAnyRankIsToldOnceAndEndsTheJob) {
   TempDir dir;
   // A bad experiment file: every rank finds it, rank 0 alone says so.
   std::ofstream(dir / "bad.yaml") << "format: odotune-experiment/1\nmodels: [rq]\ntracks: ["
-                                  << reference_track(1) << "]\nmodes: [1, 9]\nseeds: [1]\n";
+                                  << reference_track(1) << "]\nmodes: [1, 10]\nseeds: [1]\n";
   const auto bad = run_mpi(2, "grid " + (dir / "bad.yaml").string());
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_EQ(count(bad.err, "bad.yaml:4:"), 1u) << bad.err;
