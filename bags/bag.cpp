@@ -91,12 +91,13 @@ BagInfo inspect_bag(const fs::path& path) {
   BagInfo info;
   info.path = path;
   info.files = storage_files(path);
-  info.format = sniff(info.files.front());
   std::map<std::string, std::size_t, std::less<>> index;
   bool first = true;
   for (const fs::path& f : info.files) {
+    const BagFormat format = sniff(f);
+    if (f == info.files.front()) info.format = format;
     read_file(
-        f, sniff(f), [](std::string_view) { return true; },
+        f, format, [](std::string_view) { return true; },
         [&](const BagMessage& m) {
           auto it = index.find(m.topic);
           if (it == index.end()) {

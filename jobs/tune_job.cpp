@@ -168,8 +168,8 @@ TuneOutcome run_tune_fix_cv(const std::vector<const PreparedTrack*>& tracks, con
       s.gt_tuned = replay_ekf(t->input, out.noise).outcome.metrics;
     }
     const double n = static_cast<double>(tracks.size());
-    out.baseline_fitness += (request.mode == kFixCvRmseMode ? b.heldout.rmse_m : b.nll) / n;
-    out.tuned_fitness += (request.mode == kFixCvRmseMode ? u.heldout.rmse_m : u.nll) / n;
+    out.baseline_fitness += fix_cv_fitness(b, request.mode) / n;
+    out.tuned_fitness += fix_cv_fitness(u, request.mode) / n;
     base.push_back(s.baseline);
     tuned.push_back(s.tuned);
     out.tracks.push_back(std::move(s));

@@ -32,7 +32,7 @@ double EkfObjective::fitness(std::span<const double> x) const {
     if (tracks_.empty()) {
       const FixCvOutcome cv = cv_tracks_[i]->evaluate(noise);
       out.divergence = cv.divergence;
-      f = mode_ == kFixCvRmseMode ? cv.heldout.rmse_m : cv.nll;
+      f = fix_cv_fitness(cv, mode_);
     } else {
       out = tracks_[i]->evaluate(noise);
       f = fitness_of(out.metrics, mode_);

@@ -27,32 +27,31 @@ FixCvReplay::FixCvReplay(const ReplayInput& in, const FixCvOptions& options)
     : name_(in.track_name), options_(options), initial_pose_(in.initial_pose), initial_cov_(in.initial_cov) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("FixCvOptions: " + why);
-  folds_.resize(static_cast<std::size_t>(options.folds));
-  std::vector<long> held(folds_.size(), 0), applied(folds_.size(), 0);
-  for (std::size_t k = 0; k < folds_.size(); ++k) {
-    std::vector<filters::WheelTravel> steps;
-    std::vector<double> yaw;
-    for (const ReplayRow& row : in.rows) {
-      if (row.step >= 0) {
-        steps.push_back(in.steps[static_cast<std::size_t>(row.step)]);
-        yaw.push_back(in.abs_yaw_rate_rad_s[static_cast<std::size_t>(row.step)]);
-      }
-      if (row.fix < 0) continue;
-      const auto f = static_cast<std::size_t>(row.fix);
-      Segment seg;
-      seg.moments = filters::reduce_segment(steps, yaw, in.wheel_base_m);
-      seg.fix = in.fixes[f];
-      seg.var_x_m2 = in.fix_var_x_m2[f];
-      seg.var_y_m2 = in.fix_var_y_m2[f];
-      const auto block = static_cast<long>(std::floor((row.t_s - in.t0_s) / options.block_s));
-      seg.held_out = block % options.folds == static_cast<long>(k);
-      (seg.held_out ? held : applied)[k]++;
-      folds_[k].push_back(seg);
-      steps.clear();
-      yaw.clear();
+  std::vector<filters::WheelTravel> steps;
+  std::vector<double> yaw;
+  for (const ReplayRow& row : in.rows) {
+    if (row.step >= 0) {
+      steps.push_back(in.steps[static_cast<std::size_t>(row.step)]);
+      yaw.push_back(in.abs_yaw_rate_rad_s[static_cast<std::size_t>(row.step)]);
     }
+    if (row.fix < 0) continue;
+    const auto f = static_cast<std::size_t>(row.fix);
+    Segment seg;
+    seg.moments = filters::reduce_segment(steps, yaw, in.wheel_base_m);
+    seg.fix = in.fixes[f];
+    seg.var_x_m2 = in.fix_var_x_m2[f];
+    seg.var_y_m2 = in.fix_var_y_m2[f];
+    const auto block = static_cast<long>(std::floor((row.t_s - in.t0_s) / options.block_s));
+    seg.fold = static_cast<int>(block % options.folds);
+    segments_.push_back(seg);
+    steps.clear();
+    yaw.clear();
   }
-  for (std::size_t k = 0; k < folds_.size(); ++k) {
+  const auto folds = static_cast<std::size_t>(options.folds);
+  std::vector<long> held(folds, 0), applied(folds, 0);
+  for (const Segment& seg : segments_)
+    for (std::size_t k = 0; k < folds; ++k) (seg.fold == static_cast<int>(k) ? held : applied)[k]++;
+  for (std::size_t k = 0; k < folds; ++k) {
     if (held[k] < 2 || applied[k] < 2)
       throw std::invalid_argument(fmt::format(
           "track '{}': fold {} of {} holds out {} fixes and applies {}; fix cross-validation needs at least 2 "
@@ -67,15 +66,15 @@ FixCvOutcome FixCvReplay::evaluate(const filters::NoiseParams& noise) const {
   FixCvOutcome out;
   ErrorAccumulator acc;
   double nll = 0.0, nis = 0.0;
-  for (const auto& fold : folds_) {
+  for (int fold = 0; fold < options_.folds; ++fold) {
     Pose x = initial_pose_;
     Sym3 P = {initial_cov_(0, 0), initial_cov_(0, 1), initial_cov_(0, 2),
               initial_cov_(1, 1), initial_cov_(1, 2), initial_cov_(2, 2)};
-    for (const Segment& seg : fold) {
+    for (const Segment& seg : segments_) {
       const double c = std::cos(x(2)), s = std::sin(x(2));
       const double qx = std::isnan(seg.var_x_m2) ? noise.q_x_m2 : seg.var_x_m2;
       const double qy = std::isnan(seg.var_y_m2) ? noise.q_y_m2 : seg.var_y_m2;
-      if (!seg.held_out) {
+      if (seg.fold != fold) {
         out.divergence = filters::advance_segment(noise, seg.moments, seg.fix, qx, qy, c, s, &x, &P);
         if (out.divergence != Divergence::none) return out;
         continue;

@@ -18,9 +18,9 @@
 // filter, E|z − x̂|² = E|x − x̂|² + tr R, so the noise that minimises the
 // held-out prediction error also minimises the true error, up to a constant.
 //
-// Like FastReplay, each fold is reduced to segments once (filters/
-// ekf_segments.h: every fix, applied or held out, ends a segment), and
-// evaluate() is const, allocation-free and thread-safe.
+// Like FastReplay, the track is reduced to segments once (filters/
+// ekf_segments.h: every fix, applied or held out, ends a segment; the folds
+// share them), and evaluate() is const, allocation-free and thread-safe.
 #pragma once
 
 #include <string>
@@ -51,6 +51,12 @@ struct FixCvOutcome {
   filters::Divergence divergence = filters::Divergence::none;
 };
 
+// The scalar fitness mode 8 or 9 minimises: the held-out RMSE [m] or the
+// mean −log likelihood [nats].
+inline double fix_cv_fitness(const FixCvOutcome& o, int mode) {
+  return mode == kFixCvRmseMode ? o.heldout.rmse_m : o.nll;
+}
+
 class FixCvReplay {
  public:
   // Throws std::invalid_argument for invalid options or fewer than two fixes
@@ -68,13 +74,15 @@ class FixCvReplay {
     filters::SegmentMoments moments;
     filters::Position fix = filters::Position::Zero();
     double var_x_m2 = 0.0, var_y_m2 = 0.0;  // NaN: the model's Q
-    bool held_out = false;                  // else applied
+    int fold = 0;                           // held out in this fold, applied in the others
   };
   std::string name_;
   FixCvOptions options_;
   filters::Pose initial_pose_;
   filters::StateCov initial_cov_;
-  std::vector<std::vector<Segment>> folds_;
+  // One segment per fix, shared by every fold (a fix ends a segment whether
+  // it is applied or held out).
+  std::vector<Segment> segments_;
   long heldout_ = 0;
 };
 

@@ -34,11 +34,10 @@ double require(const Track& track, const std::optional<double>& v, const char* k
 // stops once the robot has driven 20 fix σ (at least 5 m), so that neither
 // the fixes' noise nor the odometry's own heading drift decides it, or at
 // heading_window_s.
-double initial_heading_from_fixes(const ReplayInput& in, double window_s, std::string* note) {
-  const double var0 = std::isnan(in.fix_var_x_m2.front())
-                          ? filters::NoiseParams{}.q_x_m2
-                          : 0.5 * (in.fix_var_x_m2.front() + in.fix_var_y_m2.front());
-  const double enough_m = std::max(5.0, 20.0 * std::sqrt(var0));
+// `fix_var_m2`: the fixes' variance per axis.
+double initial_heading_from_fixes(const ReplayInput& in, double fix_var_m2, double window_s,
+                                  std::string* note) {
+  const double enough_m = std::max(5.0, 20.0 * std::sqrt(fix_var_m2));
   double x = 0.0, y = 0.0, th = 0.0;
   double dot = 0.0, cross = 0.0, reach = 0.0, driven = 0.0;
   long pairs = 0;
@@ -191,10 +190,11 @@ ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& opt
   if (!by_fixes && in.gt.empty()) fail(track, "only one ground-truth row: nothing to compare with");
   if (by_fixes) {
     if (in.fixes.empty()) fail(track, "only one position fix: nothing to compare with");
-    in.initial_pose(2) = initial_heading_from_fixes(in, options.heading_window_s, &in.initial_pose_note);
+    // The fixes' variance: the first fix's own, else the noise model's default.
     const double var = std::isnan(in.fix_var_x_m2.front())
                            ? filters::NoiseParams{}.q_x_m2
                            : 0.5 * (in.fix_var_x_m2.front() + in.fix_var_y_m2.front());
+    in.initial_pose(2) = initial_heading_from_fixes(in, var, options.heading_window_s, &in.initial_pose_note);
     const double heading_sd_rad = 10.0 * std::numbers::pi / 180.0;
     in.initial_cov = filters::Pose(var, var, heading_sd_rad * heading_sd_rad).asDiagonal();
   }

@@ -1,5 +1,6 @@
 #include "tracks/import_rosbag.h"
 
+#include <Eigen/Geometry>
 #include <GeographicLib/LocalCartesian.hpp>
 #include <fmt/format.h>
 
@@ -112,30 +113,18 @@ void order(Stream& s) {
   s.samples = std::move(kept);
 }
 
-// R = Rz(yaw)·Ry(pitch)·Rx(roll): the rotation of a frame given by fixed-axis
-// roll, pitch, yaw (REP 103, tf's setRPY), mapping its vectors to the parent's.
-std::array<std::array<double, 3>, 3> rotation_rpy(const std::array<double, 3>& rpy) {
-  const double cr = std::cos(rpy[0]), sr = std::sin(rpy[0]);
-  const double cp = std::cos(rpy[1]), sp = std::sin(rpy[1]);
-  const double cy = std::cos(rpy[2]), sy = std::sin(rpy[2]);
-  return {{{cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr},
-           {sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr},
-           {-sp, cp * sr, cp * cr}}};
+using Rotation = Eigen::Matrix3d;  // maps a child frame's vectors to its parent's
+
+// R = Rz(yaw)·Ry(pitch)·Rx(roll): a frame given by fixed-axis roll, pitch,
+// yaw (REP 103, tf's setRPY).
+Rotation rotation_rpy(const std::array<double, 3>& rpy) {
+  return (Eigen::AngleAxisd(rpy[2], Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(rpy[1], Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(rpy[0], Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
 }
-std::array<std::array<double, 3>, 3> rotation_quat(const ros::Quaternion& q) {
-  const double n = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
-  const double x = q.x / n, y = q.y / n, z = q.z / n, w = q.w / n;
-  return {{{1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)},
-           {2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)},
-           {2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)}}};
-}
-using Mat3 = std::array<std::array<double, 3>, 3>;
-Mat3 mul(const Mat3& a, const Mat3& b) {
-  Mat3 c{};
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 3; ++k) c[i][j] += a[i][k] * b[k][j];
-  return c;
+Rotation rotation_quat(const ros::Quaternion& q) {
+  return Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized().toRotationMatrix();
 }
 double yaw_of(const ros::Quaternion& q) {
   return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
@@ -143,18 +132,18 @@ double yaw_of(const ros::Quaternion& q) {
 
 // The rotation from `child` to `parent` through /tf_static transforms
 // (parent → … → child), if they connect.
-std::optional<Mat3> static_rotation(const std::vector<ros::TransformStamped>& tf, const std::string& parent,
-                                    const std::string& child) {
+std::optional<Rotation> static_rotation(const std::vector<ros::TransformStamped>& tf, const std::string& parent,
+                                        const std::string& child) {
   auto strip = [](std::string f) { return !f.empty() && f[0] == '/' ? f.substr(1) : f; };
   std::string frame = strip(child);
-  Mat3 r = rotation_rpy({0, 0, 0});
+  Rotation r = Rotation::Identity();
   for (std::size_t hop = 0; hop < tf.size() + 1; ++hop) {
     if (frame == strip(parent)) return r;
     const ros::TransformStamped* up = nullptr;
     for (const auto& t : tf)
       if (strip(t.child_frame_id) == frame) up = &t;
     if (!up) return std::nullopt;
-    r = mul(rotation_quat(up->rotation), r);
+    r = rotation_quat(up->rotation) * r;
     frame = strip(up->header.frame_id);
   }
   return std::nullopt;
@@ -215,6 +204,7 @@ Track import_rosbag(const fs::path& bag, const RosbagImportOptions& o) {
   std::vector<ros::TransformStamped> tf_static;
   std::string imu_frame, base_frame;
   std::optional<ros::NavSatFix> origin_fix;
+  std::optional<GeographicLib::LocalCartesian> local;  // the tangent frame at origin_fix
   std::map<std::string, std::size_t> message_counts;
   // JointState differencing state.
   std::optional<std::pair<std::int64_t, std::array<double, 2>>> last_joint_pos;
@@ -286,13 +276,13 @@ Track import_rosbag(const fs::path& bag, const RosbagImportOptions& o) {
               ++s.dropped;  // no fix
               return;
             }
-            if (!origin_fix) origin_fix = f;
-            const GeographicLib::LocalCartesian local(
-                origin_fix->latitude_deg, origin_fix->longitude_deg,
-                std::isfinite(origin_fix->altitude_m) ? origin_fix->altitude_m : 0.0);
+            if (!origin_fix) {
+              origin_fix = f;
+              local.emplace(f.latitude_deg, f.longitude_deg, std::isfinite(f.altitude_m) ? f.altitude_m : 0.0);
+            }
             double e = 0, n = 0, u = 0;
-            local.Forward(f.latitude_deg, f.longitude_deg, std::isfinite(f.altitude_m) ? f.altitude_m : 0.0, e,
-                          n, u);
+            local->Forward(f.latitude_deg, f.longitude_deg, std::isfinite(f.altitude_m) ? f.altitude_m : 0.0, e,
+                           n, u);
             const bool known = f.covariance_type != 0;
             x.v = {e, n, known ? f.position_covariance[0] : kNan, known ? f.position_covariance[4] : kNan};
           } else if (topic == fix || topic == gt) {
@@ -341,7 +331,7 @@ Track import_rosbag(const fs::path& bag, const RosbagImportOptions& o) {
                      joints ? fmt::format(" (none names both {} and {})", o.left_joint, o.right_joint) : ""));
 
   // --- IMU mounting -------------------------------------------------------------
-  Mat3 imu_rot = rotation_rpy({0, 0, 0});
+  Rotation imu_rot = Rotation::Identity();
   std::string imu_rot_note;
   if (!imu.empty()) {
     if (o.imu_rpy_rad) {
@@ -390,9 +380,8 @@ Track import_rosbag(const fs::path& bag, const RosbagImportOptions& o) {
   else
     fill(odom, {{Col::v_cmd, 0}, {Col::w_cmd, 1}});
   if (!imu.empty())
-    fill(imu, {{Col::gyro_z, 0}}, [&](std::array<double, 4>& v) {
-      v[0] = imu_rot[2][0] * v[0] + imu_rot[2][1] * v[1] + imu_rot[2][2] * v[2];
-    });
+    fill(imu, {{Col::gyro_z, 0}},
+         [&](std::array<double, 4>& v) { v[0] = imu_rot.row(2).dot(Eigen::Vector3d(v[0], v[1], v[2])); });
   if (!fix.empty()) {
     bool has_var = false;
     for (const Sample& x : streams.at(fix).samples) has_var |= std::isfinite(x.v[2]) || std::isfinite(x.v[3]);

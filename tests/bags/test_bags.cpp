@@ -17,6 +17,7 @@
 #include "bags/bag.h"
 #include "bags/bag_error.h"
 #include "bags/ros_messages.h"
+#include "support/ros2_bag.h"
 
 namespace odotune::bags {
 namespace {
@@ -132,25 +133,7 @@ TEST(Bags, Test2IsTheJackalInSimulatedTime) {
   }
 }
 
-// A little CDR writer for hand-made messages (alignment from the byte after
-// the 4-byte encapsulation header).
-struct Cdr {
-  std::vector<std::uint8_t> b = {0, 1, 0, 0};
-  void align(std::size_t n) {
-    while ((b.size() - 4) % n) b.push_back(0);
-  }
-  template <class T>
-  void put(T v) {
-    align(sizeof(T));
-    const auto* p = reinterpret_cast<const std::uint8_t*>(&v);
-    b.insert(b.end(), p, p + sizeof(T));
-  }
-  void str(const std::string& s) {
-    put(static_cast<std::uint32_t>(s.size() + 1));
-    b.insert(b.end(), s.begin(), s.end());
-    b.push_back(0);
-  }
-};
+using testing_support::Cdr;  // CDR for hand-made messages (support/ros2_bag.h)
 
 TEST(Bags, CdrJointStateWithAlignmentAndBigEndian) {
   Cdr c;
