@@ -1,0 +1,112 @@
+// robot_localization's extended Kalman filter (Moore & Stouch, "A Generalized
+// Extended Kalman Filter Implementation for the Robot Operating System",
+// IAS-13, 2014; behaviour read from cra-ros-pkg/robot_localization's
+// filter_base.cpp and ekf.cpp): a 15-D state of pose, body-frame velocities
+// and linear accelerations under an omnidirectional kinematic model, corrected
+// by masked measurements of any subset of the state.
+//
+//   predict:  x ← f(x, Δt) = A(x, Δt)·x,  P ← J·P·Jᵀ + Δt·Q   (Q or its dynamic form)
+//   correct:  S = H·P·Hᵀ + R, K = P·Hᵀ·S⁻¹, x ← x + K·(z − H·x) (angles wrapped),
+//             P ← (I − K·H)·P·(I − K·H)ᵀ + K·R·Kᵀ
+//             unless the squared Mahalanobis distance νᵀ·S⁻¹·ν ≥ threshold².
+//
+// The node's first measurement initialises the fused members and their
+// covariance block instead of correcting. Times are integer nanoseconds, as the
+// node's rclcpp::Time; no I/O and no allocation per step.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <string>
+
+#include <Eigen/Core>
+
+namespace odotune::filters::rl {
+
+// State members (robot_localization's StateMembers).
+enum Member : int {
+  kX = 0,
+  kY,
+  kZ,
+  kRoll,
+  kPitch,
+  kYaw,
+  kVx,
+  kVy,
+  kVz,
+  kVroll,
+  kVpitch,
+  kVyaw,
+  kAx,
+  kAy,
+  kAz,
+};
+constexpr int kStateSize = 15;
+
+using State = Eigen::Matrix<double, kStateSize, 1>;
+using Cov = Eigen::Matrix<double, kStateSize, kStateSize>;
+using Mask = std::array<bool, kStateSize>;
+
+// One measurement as the node enqueues it: all 15 members, its covariance and
+// the members to fuse; `mahalanobis_threshold` in standard deviations.
+struct Measurement {
+  std::int64_t time_ns = 0;
+  State z = State::Zero();
+  Cov R = Cov::Zero();
+  Mask mask{};
+  double mahalanobis_threshold = std::numeric_limits<double>::max();
+};
+
+struct RlEkfParams {
+  Cov process_noise = Cov::Zero();           // Q per second [unit²/s]
+  Cov initial_cov = Cov::Identity() * 1e-9;  // P before the first measurement
+  bool dynamic_process_noise = false;        // scale Q's pose block by |velocity|²
+  State initial_state = State::Zero();
+
+  bool IsValid(std::string* why) const;
+};
+
+// The transition of the kinematic model over Δt: A (with x' = A·x) and its
+// Jacobian J = ∂f/∂x at x (ekf.cpp's transfer function and its Jacobian).
+struct Transition {
+  Cov A;
+  Cov J;
+};
+Transition transition(const State& x, double dt_s);
+
+// Wraps an angle to [−π, π] (angles::normalize_angle).
+double normalize_angle(double a);
+
+class RlEkf {
+ public:
+  explicit RlEkf(const RlEkfParams& params);
+
+  // FilterBase::processMeasurement: the first measurement initialises; later
+  // ones predict over the time since the last measurement when it is positive,
+  // then correct. The last measurement time moves only forward. Returns false
+  // when the Mahalanobis test rejected the measurement.
+  bool process(const Measurement& m);
+  // The node's prediction to `time_ns` when no measurement came for its sensor
+  // timeout (or with predict_to_current_time); sets the last measurement time.
+  void predict_to(std::int64_t time_ns);
+
+  void predict(double dt_s);
+  bool correct(const Measurement& m);
+
+  bool initialized() const { return initialized_; }
+  std::int64_t last_time_ns() const { return last_time_ns_; }
+  const State& state() const { return x_; }
+  const Cov& cov() const { return P_; }
+  void set_last_time_ns(std::int64_t t) { last_time_ns_ = t; }
+
+ private:
+  Cov Q_;
+  bool dynamic_q_;
+  State x_;
+  Cov P_;
+  bool initialized_ = false;
+  std::int64_t last_time_ns_ = 0;
+};
+
+}  // namespace odotune::filters::rl
