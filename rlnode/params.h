@@ -1,0 +1,117 @@
+// robot_localization's parameters as its ekf_node and navsat_transform_node
+// read them (robot_localization's src/ros_filter.cpp loadParams() and
+// navsat_transform.cpp, read for behaviour): the user's own parameter file,
+// ROS 1 rosparam YAML (`NODE: {key: value}` or the keys at the top level) or
+// ROS 2 (`NODE: {ros__parameters: {…}}`), with the node's defaults where a key
+// is missing. A parameter that would change the estimate and that the replay
+// does not reproduce is refused by name; so is a key the node does not know.
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace odotune::rlnode {
+
+using Matrix15 = Eigen::Matrix<double, 15, 15>;
+using Vector15 = Eigen::Matrix<double, 15, 1>;
+using UpdateMask = std::array<bool, 15>;  // x y z roll pitch yaw vx vy vz vroll vpitch vyaw ax ay az
+
+// robot_localization's FilterBase defaults (its params/ekf.yaml says the same).
+Matrix15 default_process_noise();
+// 1e-9 on the diagonal (FilterBase::reset).
+Matrix15 default_initial_estimate_covariance();
+
+enum class SensorKind { odom, imu, pose, twist };
+std::string_view to_string(SensorKind k);  // "odom", "imu", "pose", "twist"
+
+constexpr double kNoRejection = std::numeric_limits<double>::max();
+
+// One input: odomN, imuN, poseN or twistN and its keys.
+struct SensorParams {
+  SensorKind kind = SensorKind::odom;
+  int index = 0;        // N of odomN
+  std::string name;     // "odom0"
+  std::string topic;    // the value of odomN
+  UpdateMask config{};  // odomN_config (15 booleans; all false when missing)
+  bool differential = false;
+  bool relative = false;  // false when differential is also true (the node's rule)
+  // Mahalanobis thresholds [σ]: odomN_pose_/_twist_rejection_threshold,
+  // poseN_/twistN_rejection_threshold (in pose/twist), imuN_pose_/_twist_/
+  // _linear_acceleration_rejection_threshold. kNoRejection when not given.
+  double pose_rejection_threshold = kNoRejection;
+  double twist_rejection_threshold = kNoRejection;
+  double accel_rejection_threshold = kNoRejection;
+  bool remove_gravitational_acceleration = false;  // imuN_remove_gravitational_acceleration
+  int yaml_line = 0;                               // line of the odomN key in the file (1-based), for messages
+};
+
+// navsat_transform_node's keys (its section of the file, when present).
+struct NavsatParams {
+  bool present = false;
+  std::string node_name;  // the section's name in the file
+  double frequency_hz = 10.0;
+  double delay_s = 0.0;
+  double magnetic_declination_radians = 0.0;
+  double yaw_offset = 0.0;  // [rad]
+  bool zero_altitude = false;
+  bool use_local_cartesian = false;  // false: the UTM grid (the node's default)
+  bool use_odometry_yaw = false;
+  bool wait_for_datum = false;
+  std::optional<std::array<double, 3>> datum;  // latitude [deg], longitude [deg], heading [rad]
+};
+
+struct RlParams {
+  std::filesystem::path file;
+  bool ros2 = true;       // the file's form: ROS 2 (ros__parameters) or ROS 1
+  std::string node_name;  // the EKF's section name ("" when keys are at the top level)
+  double frequency_hz = 30.0;
+  double sensor_timeout_s = 1.0 / 30.0;  // default 1/frequency
+  bool two_d_mode = false;
+  bool predict_to_current_time = false;
+  bool dynamic_process_noise_covariance = false;
+  double gravitational_acceleration = 9.80665;  // [m/s²]
+  std::string map_frame = "map", odom_frame = "odom", base_link_frame = "base_link", world_frame = "odom";
+  Matrix15 process_noise_covariance = default_process_noise();
+  Matrix15 initial_estimate_covariance = default_initial_estimate_covariance();
+  std::optional<Vector15> initial_state;
+  std::vector<SensorParams> sensors;  // odom0, odom1, …, then pose*, twist*, imu* (the node's order)
+  NavsatParams navsat;
+};
+
+// Reads the file. `node_name` picks the EKF's section when the file has
+// several (empty: the one section that has odomN/imuN/poseN/twistN keys, or
+// the top level). Throws std::invalid_argument with one line
+// "FILE:LINE: what is wrong, what was expected" for: a file that is not
+// YAML, no EKF section or several without `node_name`, a key the node does
+// not know, a value of the wrong type or size (a covariance must have 15 or
+// 225 entries, a _config 15 booleans), a negative frequency or timeout, and a
+// supported key's value the replay does not reproduce, named:
+// smooth_lagged_data: true, use_control: true, odomN_pose_use_child_frame:
+// true, disabled_at_startup: true, reset_on_time_jump: true,
+// navsat use_odometry_yaw: true.
+RlParams read_rl_params(const std::filesystem::path& file, const std::string& node_name = "");
+
+// What a tune changes in the file.
+struct RlParamsUpdate {
+  std::optional<Matrix15> process_noise_covariance;
+  std::optional<Matrix15> initial_estimate_covariance;
+  // per sensor name ("odom0"): new thresholds, kNoRejection leaves the key out
+  std::vector<std::pair<std::string, std::array<double, 3>>> rejection_thresholds;  // pose, twist, accel
+  std::optional<double> navsat_yaw_offset;
+};
+
+// The user's file with `update`'s values substituted (other keys, their order
+// and the file's form kept), as text in the form asked: ROS 2 when `ros2`,
+// else ROS 1 (`NODE: {key: value}`), with `header_comment` (lines without
+// '#', each written as a comment) at the top. Covariances are written as 15
+// rows of 15 entries.
+std::string write_rl_params(const std::filesystem::path& original, const RlParams& params,
+                            const RlParamsUpdate& update, bool ros2, const std::string& header_comment);
+
+}  // namespace odotune::rlnode

@@ -1,0 +1,190 @@
+#include "rlnode/recording.h"
+
+#include <algorithm>
+#include <set>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "bags/bag.h"
+#include "bags/ros_messages.h"
+#include "rlnode/input_loader.h"
+
+namespace odotune::rlnode {
+namespace {
+
+namespace ros = bags::ros;
+
+std::string_view expected_type(SensorKind k) {
+  switch (k) {
+    case SensorKind::odom: return "nav_msgs/Odometry";
+    case SensorKind::imu: return "sensor_msgs/Imu";
+    case SensorKind::pose: return "geometry_msgs/PoseWithCovarianceStamped";
+    case SensorKind::twist: return "geometry_msgs/TwistWithCovarianceStamped";
+  }
+  return "";
+}
+
+std::string topic_list(const bags::BagInfo& info) {
+  std::string s;
+  for (const auto& t : info.topics) s += (s.empty() ? "" : ", ") + t.name + " (" + t.type + ")";
+  return s;
+}
+
+// Which topic feeds which sensor; the odomN whose topic is not in the bag is
+// navsat_transform_node's output when the file configures navsat and the bag
+// has NavSatFix.
+struct TopicPlan {
+  std::map<std::string, std::vector<int>> sensors_of;  // topic → sensor indices
+  int gps_sensor = -1;
+  std::string gps_topic, imu_topic;
+};
+
+TopicPlan plan_topics(const bags::BagInfo& info, const RlParams& params, const RecordingOptions& options) {
+  std::map<std::string, std::string> types;
+  for (const auto& t : info.topics) types[t.name] = t.type;
+  TopicPlan plan;
+  for (std::size_t s = 0; s < params.sensors.size(); ++s) {
+    const SensorParams& sp = params.sensors[s];
+    const std::string topic = detail::with_slash(sp.topic);
+    auto it = types.find(topic);
+    if (it == types.end() && sp.kind == SensorKind::odom && params.navsat.present && plan.gps_sensor < 0) {
+      plan.gps_sensor = static_cast<int>(s);
+      continue;
+    }
+    if (it == types.end()) {
+      throw std::invalid_argument(fmt::format("{}: {} topic {} is not in the bag (its topics: {})",
+                                              info.path.string(), sp.name, topic, topic_list(info)));
+    }
+    if (it->second != expected_type(sp.kind)) {
+      throw std::invalid_argument(fmt::format("{}: {} topic {} is {}, expected {}", info.path.string(), sp.name,
+                                              topic, it->second, expected_type(sp.kind)));
+    }
+    if (sp.kind == SensorKind::twist) {
+      throw std::invalid_argument(
+          fmt::format("{}: {} ({}): TwistWithCovarianceStamped inputs are not read by this "
+                      "version; expected odomN, imuN or poseN inputs",
+                      info.path.string(), sp.name, topic));
+    }
+    if (sp.kind == SensorKind::imu && plan.imu_topic.empty()) plan.imu_topic = topic;
+    plan.sensors_of[topic].push_back(static_cast<int>(s));
+  }
+  if (plan.gps_sensor >= 0) {
+    const SensorParams& sp = params.sensors[plan.gps_sensor];
+    for (int i = 3; i < 15; ++i) {
+      if (sp.config[i]) {
+        throw std::invalid_argument(
+            fmt::format("{}: {} is navsat_transform_node's output; expected only x, y, z "
+                        "in {}_config (its orientation and twist are not measured)",
+                        params.file.string(), sp.name, sp.name));
+      }
+    }
+    std::vector<std::string> fixes;
+    for (const auto& t : info.topics) {
+      if (t.type == "sensor_msgs/NavSatFix") fixes.push_back(t.name);
+    }
+    if (!options.gps_topic.empty()) {
+      plan.gps_topic = detail::with_slash(options.gps_topic);
+      if (types[plan.gps_topic] != "sensor_msgs/NavSatFix") {
+        throw std::invalid_argument(
+            fmt::format("{}: --gps-topic {} is not a NavSatFix topic of the bag (its topics: {})",
+                        info.path.string(), plan.gps_topic, topic_list(info)));
+      }
+    } else if (fixes.size() == 1) {
+      plan.gps_topic = fixes[0];
+    } else {
+      throw std::invalid_argument(fmt::format(
+          "{}: {} ({}) is navsat_transform_node's output, and the bag has {} NavSatFix topics; expected one, or "
+          "--gps-topic",
+          info.path.string(), sp.name, sp.topic, fixes.size()));
+    }
+  }
+  return plan;
+}
+
+// /tf_static's transforms as poses in base_link, following chains of
+// parents up to base_link.
+std::map<std::string, Pose3> static_frames(const std::filesystem::path& bag, const bags::BagInfo& info,
+                                           const std::string& base) {
+  const bool has = std::any_of(info.topics.begin(), info.topics.end(),
+                               [](const bags::BagTopic& t) { return t.name == "/tf_static"; });
+  std::map<std::string, std::pair<std::string, Pose3>> parent_of;  // child → (parent, child in parent)
+  if (has) {
+    bags::read_bag(
+        bag, [](std::string_view t) { return t == "/tf_static"; },
+        [&](const bags::BagMessage& m) {
+          for (const auto& tf : ros::decode_tf_message(m.data, m.encoding).transforms) {
+            Pose3 p;
+            p.t = {tf.translation.x, tf.translation.y, tf.translation.z};
+            p.R = rotation_of_quaternion(tf.rotation.x, tf.rotation.y, tf.rotation.z, tf.rotation.w);
+            parent_of[tf.child_frame_id] = {tf.header.frame_id, p};
+          }
+        });
+  }
+  std::map<std::string, Pose3> frames;
+  for (const auto& [child, link] : parent_of) {
+    Pose3 pose = link.second;
+    std::string parent = link.first;
+    for (int depth = 0; parent != base && depth < 32; ++depth) {
+      auto up = parent_of.find(parent);
+      if (up == parent_of.end()) break;
+      pose = {up->second.second.R * pose.t + up->second.second.t, up->second.second.R * pose.R};
+      parent = up->second.first;
+    }
+    if (parent == base) frames[child] = pose;
+  }
+  return frames;
+}
+
+}  // namespace
+
+Recording load_recording(const std::filesystem::path& bag, const RlParams& params,
+                         const RecordingOptions& options) {
+  const bags::BagInfo info = bags::inspect_bag(bag);
+  const TopicPlan plan = plan_topics(info, params, options);
+  Recording rec;
+  rec.params = params;
+  rec.bag = bag;
+  rec.gps_sensor = plan.gps_sensor;
+  rec.gps_topic = plan.gps_topic;
+  detail::Loader loader(params, options, rec);
+  loader.set_static_frames(static_frames(bag, info, params.base_link_frame));
+
+  std::set<std::string, std::less<>> wanted;
+  for (const auto& [topic, s] : plan.sensors_of) wanted.insert(topic);
+  if (!plan.gps_topic.empty()) wanted.insert(plan.gps_topic);
+  bags::read_bag(
+      bag, [&](std::string_view t) { return wanted.count(t) > 0; },
+      [&](const bags::BagMessage& m) {
+        const std::string topic(m.topic);
+        if (topic == plan.gps_topic)
+          loader.on_fix(ros::decode_navsatfix(m.data, m.encoding), m.receive_time_ns);
+        auto it = plan.sensors_of.find(topic);
+        if (it == plan.sensors_of.end()) return;
+        const SensorKind kind = params.sensors[it->second.front()].kind;
+        if (kind == SensorKind::odom) {
+          const ros::Odometry o = ros::decode_odometry(m.data, m.encoding);
+          for (int s : it->second) loader.on_odometry(o, s, m.receive_time_ns);
+        } else if (kind == SensorKind::imu) {
+          const ros::Imu imu = ros::decode_imu(m.data, m.encoding);
+          if (topic == plan.imu_topic && plan.gps_sensor >= 0)
+            loader.note_imu_orientation(imu, m.receive_time_ns);
+          for (int s : it->second) loader.on_imu(imu, s, m.receive_time_ns);
+        } else if (kind == SensorKind::pose) {
+          const ros::PoseStamped p = ros::decode_pose_with_covariance_stamped(m.data, m.encoding);
+          for (int s : it->second) loader.on_pose(p, s, m.receive_time_ns);
+        }
+      });
+  loader.finish();
+  std::stable_sort(rec.inputs.begin(), rec.inputs.end(),
+                   [](const Input& a, const Input& b) { return a.receive_ns < b.receive_ns; });
+  if (rec.inputs.empty()) {
+    throw std::invalid_argument(fmt::format("{}: none of the configured inputs has a message in the bag",
+                                            bag.string()));
+  }
+  rec.start_ns = rec.inputs.front().receive_ns;
+  rec.end_ns = rec.inputs.back().receive_ns;
+  return rec;
+}
+
+}  // namespace odotune::rlnode

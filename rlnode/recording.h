@@ -1,0 +1,103 @@
+// A robot's bag as robot_localization's ekf_node receives it: every message
+// of a configured input prepared as the node's callbacks prepare it
+// (ros_filter.cpp's odometryCallback, imuCallback, poseCallback,
+// prepareTwist, preparePose, prepareAcceleration, read for behaviour), and
+// the GPS fixes as navsat_transform_node turns them into odometry.
+//
+// What depends on the filter's state when a message arrives is left for the
+// replay (rlnode/replay.h): the lever-arm terms of twists and accelerations
+// measured away from base_link, gravity removed with the filter's attitude
+// when the IMU gives no orientation, and the GPS datum (the filter's pose at
+// the first fix). Everything else is done once here.
+//
+// Frames: a message's frame_id is base_link (or empty), the world frame for
+// poses, or a frame whose pose in base_link is given (RecordingOptions::frames)
+// or in the bag's /tf_static; any other frame is refused. The IMU's
+// acceleration is handled as robot_localization's ROS 1 release does
+// (gravity removed in the IMU's frame, then rotated into base_link).
+//
+// Errors: one line (std::invalid_argument), naming the bag, the parameter and
+// what was expected: a configured topic missing from the bag or of another
+// type, a frame without a transform, an input kind the bag reader cannot
+// decode.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "filters/rl_ekf.h"
+#include "rlnode/frames.h"
+#include "rlnode/params.h"
+
+namespace odotune::rlnode {
+
+enum class InputKind : std::uint8_t { twist, pose, imu_orientation, acceleration, gps };
+
+// One measurement as the node enqueues it, in compact form: the fused members
+// `idx[0..n)`, their values and covariance block in Recording::pool from
+// `slot` (n values, then n·n row-major).
+struct Input {
+  std::int64_t stamp_ns = 0;    // header stamp: the time the filter gives it
+  std::int64_t receive_ns = 0;  // the bag's receive time: when the callback ran
+  InputKind kind = InputKind::twist;
+  std::uint8_t sensor = 0;  // index into RlParams::sensors
+  std::uint8_t n = 0;
+  std::array<std::uint8_t, filters::rl::kStateSize> idx{};
+  std::uint32_t slot = 0;
+  double threshold = kNoRejection;  // Mahalanobis threshold [σ]
+  // Origin of the sensor's frame in base_link [m]: the lever arm of the
+  // twist's ω × r and the acceleration's α × r − (ω × r) × ω terms.
+  Eigen::Vector3d lever = Eigen::Vector3d::Zero();
+  bool gravity_from_state = false;  // acceleration: remove g with the filter's attitude
+  int fix = -1;                     // gps: index into Recording::fixes
+};
+
+// A NavSatFix in projected coordinates: UTM (navsat_transform_node's default)
+// easting, northing [m] and altitude [m], with the grid's meridian convergence.
+struct GpsFix {
+  std::int64_t stamp_ns = 0, receive_ns = 0;
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Identity();  // east, north, up [m²]
+  double convergence_rad = 0.0;
+};
+
+// How navsat_transform_node's output is formed, once its datum is known.
+struct GpsTransform {
+  bool fixed = false;         // given (fitted or the datum parameter), not taken at the first fix
+  double rotation_rad = 0.0;  // odom yaw of the grid's east axis
+  Eigen::Vector3d grid_origin = Eigen::Vector3d::Zero();  // grid point mapped to odom_origin
+  Eigen::Vector3d odom_origin = Eigen::Vector3d::Zero();
+};
+
+struct Recording {
+  RlParams params;
+  std::filesystem::path bag;
+  std::vector<Input> inputs;  // in receive order (the node's callback order)
+  std::vector<double> pool;
+  std::vector<GpsFix> fixes;
+  int gps_sensor = -1;    // the odomN that is navsat_transform_node's output, or −1
+  std::string gps_topic;  // the NavSatFix topic read for it
+  // The IMU's yaw (in base_link, as navsat_transform_node corrects it with its
+  // mounting, declination and yaw_offset) from the last orientation before the
+  // first fix; navsat's heading at the datum.
+  double navsat_imu_yaw_rad = 0.0;
+  bool navsat_imu_yaw_known = false;
+  GpsTransform gps_transform;
+  std::int64_t start_ns = 0, end_ns = 0;  // first and last receive time of an input
+  std::vector<std::string> notes;         // what was read and converted, for the user
+};
+
+struct RecordingOptions {
+  // frame_id → its pose in base_link; takes precedence over /tf_static.
+  std::map<std::string, Pose3> frames;
+  std::string gps_topic;  // NavSatFix topic for navsat's output; empty: the bag's one
+};
+
+Recording load_recording(const std::filesystem::path& bag, const RlParams& params,
+                         const RecordingOptions& options = {});
+
+}  // namespace odotune::rlnode

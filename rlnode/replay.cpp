@@ -1,0 +1,276 @@
+#include "rlnode/replay.h"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+
+#include "rlnode/frames.h"
+
+namespace odotune::rlnode {
+namespace {
+
+namespace rl = filters::rl;
+
+// Inputs whose measurement depends on the filter's state when they arrive.
+bool needs_callback(const Input& in) { return !in.lever.isZero(0.0) || in.gravity_from_state; }
+
+// The node's queue: earliest stamp first; equal stamps in arrival order.
+struct Queued {
+  std::int64_t stamp_ns;
+  std::int32_t input;
+  bool operator>(const Queued& o) const {
+    return stamp_ns != o.stamp_ns ? stamp_ns > o.stamp_ns : input > o.input;
+  }
+};
+using Queue = std::priority_queue<Queued, std::vector<Queued>, std::greater<>>;
+
+// The bookkeeping of the filter that decides the schedule: whether it is
+// initialised and its last measurement time.
+struct Clock {
+  bool initialized = false;
+  std::int64_t last_ns = 0;
+  void process(std::int64_t stamp_ns) {
+    if (!initialized) {
+      initialized = true;
+      last_ns = stamp_ns;
+    } else if (stamp_ns >= last_ns) {
+      last_ns = stamp_ns;
+    }
+  }
+};
+
+}  // namespace
+
+ReplaySettings settings_of(const RlParams& params) {
+  ReplaySettings s;
+  s.process_noise = params.process_noise_covariance;
+  s.initial_cov = params.initial_estimate_covariance;
+  s.dynamic_process_noise = params.dynamic_process_noise_covariance;
+  for (const SensorParams& sp : params.sensors) {
+    s.covariance_scale.push_back(1.0);
+    s.thresholds.push_back({sp.pose_rejection_threshold, sp.twist_rejection_threshold,
+                            sp.accel_rejection_threshold});
+  }
+  return s;
+}
+
+Schedule make_schedule(const Recording& rec, std::span<const FixRole> roles, std::int64_t until_ns) {
+  const RlParams& p = rec.params;
+  const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 / p.frequency_hz));
+  const auto timeout_ns = static_cast<std::int64_t>(std::llround(p.sensor_timeout_s * 1e9));
+  auto role = [&](const Input& in) {
+    if (in.kind != InputKind::gps || roles.empty()) return FixRole::fuse;
+    return roles[static_cast<std::size_t>(in.fix)];
+  };
+  Schedule s;
+  Queue queue, held_out;
+  Clock clock;
+  bool datum_pending = rec.gps_sensor >= 0 && !rec.gps_transform.fixed;
+  std::size_t next = 0;
+  const std::int64_t last = std::min(rec.end_ns, until_ns);
+  for (std::int64_t t = rec.start_ns; t <= last; t += period_ns) {
+    for (; next < rec.inputs.size() && rec.inputs[next].receive_ns <= t; ++next) {
+      const Input& in = rec.inputs[next];
+      const auto i = static_cast<std::int32_t>(next);
+      const bool datum = in.kind == InputKind::gps && datum_pending;
+      if (datum) datum_pending = false;
+      if (in.stamp_ns >= until_ns) continue;
+      const FixRole r = role(in);
+      if (needs_callback(in) || datum) s.events.push_back({Event::callback, i, t});
+      if (r == FixRole::fuse) queue.push({in.stamp_ns, i});
+      if (r == FixRole::score) held_out.push({in.stamp_ns, i});
+    }
+    if (queue.empty() && clock.initialized && t - clock.last_ns >= timeout_ns) {
+      s.events.push_back({Event::timeout_predict, -1, t});
+      clock.last_ns = t;
+    }
+    while (true) {
+      const bool m = !queue.empty() && queue.top().stamp_ns <= t;
+      const bool h = !held_out.empty() && held_out.top().stamp_ns <= t;
+      if (!m && !h) break;
+      if (m && (!h || queue.top().stamp_ns <= held_out.top().stamp_ns)) {
+        s.events.push_back({Event::process, queue.top().input, t});
+        clock.process(queue.top().stamp_ns);
+        queue.pop();
+      } else {
+        s.events.push_back({Event::score, held_out.top().input, t});
+        held_out.pop();
+      }
+    }
+    if (p.predict_to_current_time && clock.initialized) {
+      s.events.push_back({Event::timeout_predict, -1, t});
+      clock.last_ns = t;
+    }
+    s.events.push_back({Event::tick, -1, t});
+    s.end_ns = t;
+  }
+  return s;
+}
+
+Eigen::Vector3d fix_in_odom(const GpsFix& fix, const GpsTransform& t) {
+  return rotation_rpy(0.0, 0.0, t.rotation_rad) * (fix.p - t.grid_origin) + t.odom_origin;
+}
+
+namespace {
+
+// One replay's mutable state.
+class Run {
+ public:
+  Run(const Recording& rec, const ReplaySettings& settings)
+      : rec_(rec),
+        settings_(settings),
+        filter_(filter_params(rec, settings)),
+        adjust_(rec.inputs.size(), Eigen::Vector3d::Zero()) {
+    out_.gps_transform = rec.gps_transform;
+  }
+
+  void callback(int i);
+  void process(int i);
+  void score(int i);
+  void tick(std::int64_t t_ns, bool keep);
+  void timeout_predict(std::int64_t t_ns) { filter_.predict_to(t_ns); }
+  ReplayOutput finish();
+
+ private:
+  static rl::RlEkfParams filter_params(const Recording& rec, const ReplaySettings& s) {
+    rl::RlEkfParams fp;
+    fp.process_noise = s.process_noise;
+    fp.initial_cov = s.initial_cov;
+    fp.dynamic_process_noise = s.dynamic_process_noise;
+    if (rec.params.initial_state) fp.initial_state = *rec.params.initial_state;
+    return fp;
+  }
+  double threshold_of(const Input& in) const {
+    const auto& t = settings_.thresholds[in.sensor];
+    switch (in.kind) {
+      case InputKind::twist: return t[1];
+      case InputKind::acceleration: return t[2];
+      default: return t[0];
+    }
+  }
+
+  const Recording& rec_;
+  const ReplaySettings& settings_;
+  rl::RlEkf filter_;
+  std::vector<Eigen::Vector3d> adjust_;  // per input: what its callback added
+  rl::Measurement m_;                    // scratch
+  Eigen::Vector3d last_rates_ = Eigen::Vector3d::Zero(), angular_acc_ = Eigen::Vector3d::Zero();
+  double last_diff_s_ = 0.0;
+  ReplayOutput out_;
+};
+
+// What the callback computes from the state when the message arrives
+// (prepareTwist's ω × r, prepareAcceleration's α × r − (ω × r) × ω and its
+// gravity without an orientation; navsat_transform_node's datum).
+void Run::callback(int i) {
+  const Input& in = rec_.inputs[i];
+  const rl::State& x = filter_.state();
+  const Eigen::Vector3d w = x.segment<3>(rl::kVroll);
+  if (in.kind == InputKind::gps) {
+    GpsTransform& g = out_.gps_transform;
+    const GpsFix& f = rec_.fixes[in.fix];
+    g.grid_origin = f.p;
+    g.odom_origin = x.segment<3>(rl::kX);
+    if (rec_.params.navsat.zero_altitude) g.odom_origin.z() = 0.0;
+    g.rotation_rad = x[rl::kYaw] - (rec_.navsat_imu_yaw_rad + f.convergence_rad);
+    return;
+  }
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();
+  if (in.kind == InputKind::twist) {
+    a = in.lever.cross(w);
+  } else if (in.kind == InputKind::acceleration) {
+    a = in.lever.cross(angular_acc_) - in.lever.cross(w).cross(w);
+    if (in.gravity_from_state) {
+      const Eigen::Matrix3d att = rotation_rpy(x[rl::kRoll], x[rl::kPitch], x[rl::kYaw]);
+      a -= att.transpose() * Eigen::Vector3d(0.0, 0.0, rec_.params.gravitational_acceleration);
+    }
+  }
+  adjust_[i] = a;
+}
+
+void Run::process(int i) {
+  const Input& in = rec_.inputs[i];
+  const double* v = rec_.pool.data() + in.slot;
+  const double scale = settings_.covariance_scale[in.sensor];
+  m_.time_ns = in.stamp_ns;
+  m_.mask.fill(false);
+  for (int a = 0; a < in.n; ++a) {
+    const int r = in.idx[a];
+    m_.mask[r] = true;
+    m_.z[r] = v[a];
+    for (int b = 0; b < in.n; ++b) m_.R(r, in.idx[b]) = scale * v[in.n + a * in.n + b];
+  }
+  const int offset = in.kind == InputKind::acceleration ? rl::kAx : rl::kVx;
+  if (in.kind == InputKind::twist || in.kind == InputKind::acceleration) {
+    m_.z.segment<3>(offset) += adjust_[i];
+  } else if (in.kind == InputKind::gps) {
+    const GpsFix& f = rec_.fixes[in.fix];
+    const Eigen::Matrix3d rot = rotation_rpy(0.0, 0.0, out_.gps_transform.rotation_rad);
+    const Eigen::Matrix3d cov = scale * rot * f.cov * rot.transpose();
+    const Eigen::Vector3d p = fix_in_odom(f, out_.gps_transform);
+    for (int r = rl::kX; r <= rl::kZ; ++r) {
+      if (!m_.mask[r] || (rec_.params.two_d_mode && r == rl::kZ)) continue;
+      m_.z[r] = p[r];
+      for (int c = rl::kX; c <= rl::kZ; ++c) m_.R(r, c) = cov(r, c);
+    }
+  }
+  m_.mahalanobis_threshold = threshold_of(in);
+  ++out_.processed;
+  if (!filter_.process(m_)) ++out_.rejected;
+}
+
+// The filter's position at the held-out fix's stamp (predicted from its last
+// measurement, the filter itself unchanged) against the fix.
+void Run::score(int i) {
+  const Input& in = rec_.inputs[i];
+  if (!filter_.initialized()) return;
+  const GpsFix& f = rec_.fixes[in.fix];
+  ScoredFix s;
+  s.fix = in.fix;
+  s.stamp_ns = in.stamp_ns;
+  const double dt = static_cast<double>(in.stamp_ns - filter_.last_time_ns()) * 1e-9;
+  const rl::State& x = filter_.state();
+  s.predicted = dt > 0.0 ? Eigen::Vector3d((rl::transition(x, dt).A * x).head<3>())
+                         : Eigen::Vector3d(x.head<3>());
+  s.measured = fix_in_odom(f, out_.gps_transform);
+  const Eigen::Matrix2d rot = rotation_rpy(0.0, 0.0, out_.gps_transform.rotation_rad).topLeftCorner<2, 2>();
+  s.fix_cov = rot * f.cov.topLeftCorner<2, 2>() * rot.transpose();
+  out_.scored.push_back(s);
+}
+
+// RosFilter::differentiateMeasurements, then the published state.
+void Run::tick(std::int64_t t_ns, bool keep) {
+  if (!filter_.initialized()) return;
+  const double now = static_cast<double>(t_ns) * 1e-9;
+  const Eigen::Vector3d w = filter_.state().segment<3>(rl::kVroll);
+  angular_acc_ = (w - last_rates_) / (now - last_diff_s_);
+  last_rates_ = w;
+  last_diff_s_ = now;
+  if (keep) out_.trajectory.push_back({t_ns, filter_.state()});
+}
+
+ReplayOutput Run::finish() {
+  out_.final_state = filter_.state();
+  out_.final_cov = filter_.cov();
+  out_.finite = out_.final_state.allFinite() && out_.final_cov.allFinite();
+  return std::move(out_);
+}
+
+}  // namespace
+
+ReplayOutput replay(const Recording& rec, const Schedule& schedule, const ReplaySettings& settings,
+                    bool keep_trajectory) {
+  Run run(rec, settings);
+  for (const Event& e : schedule.events) {
+    switch (e.type) {
+      case Event::callback: run.callback(e.input); break;
+      case Event::process: run.process(e.input); break;
+      case Event::score: run.score(e.input); break;
+      case Event::timeout_predict: run.timeout_predict(e.time_ns); break;
+      case Event::tick: run.tick(e.time_ns, keep_trajectory); break;
+    }
+  }
+  return run.finish();
+}
+
+}  // namespace odotune::rlnode

@@ -1,0 +1,92 @@
+// robot_localization's ekf_node replayed on a Recording: its timer at
+// `frequency` on the bag's clock (receive times), the callbacks of the
+// messages received since the last tick, then the queue's measurements
+// stamped up to the tick in stamp order (RosFilter::periodicUpdate and
+// integrateMeasurements), the sensor-timeout prediction when the queue is
+// empty, and the angular acceleration differenced from tick to tick.
+//
+// Which message is processed when does not depend on the filter's numbers, so
+// it is laid out once (Schedule) and replayed for any noise setting. Held-out
+// fixes (FixRole::score) are not fused: at their stamp the filter's
+// prediction is compared with them.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "filters/rl_ekf.h"
+#include "rlnode/recording.h"
+
+namespace odotune::rlnode {
+
+enum class FixRole : std::uint8_t {
+  fuse,    // the node fuses it
+  score,   // held out: the filter's prediction at its stamp is scored against it
+  absent,  // neither (e.g. after the scored span)
+};
+
+// What a tune changes; the file's own values by settings_of().
+struct ReplaySettings {
+  Matrix15 process_noise = default_process_noise();
+  Matrix15 initial_cov = default_initial_estimate_covariance();
+  bool dynamic_process_noise = false;
+  // Per sensor (RlParams::sensors' order): a factor on the messages' own
+  // covariance (1: as recorded) and the Mahalanobis thresholds [σ] of its
+  // pose, twist and acceleration parts.
+  std::vector<double> covariance_scale;
+  std::vector<std::array<double, 3>> thresholds;
+};
+ReplaySettings settings_of(const RlParams& params);
+
+struct Event {
+  enum Type : std::uint8_t { callback, process, score, timeout_predict, tick };
+  Type type = tick;
+  std::int32_t input = -1;
+  std::int64_t time_ns = 0;  // tick time (timeout_predict, tick)
+};
+
+struct Schedule {
+  std::vector<Event> events;
+  std::int64_t end_ns = 0;  // the last tick
+};
+
+// `roles`: one per Recording::fixes entry (empty: every fix fused). Inputs
+// stamped at or after `until_ns` are not given to the node (the bag cut
+// there), and the timer stops there too.
+Schedule make_schedule(const Recording& rec, std::span<const FixRole> roles = {},
+                       std::int64_t until_ns = std::numeric_limits<std::int64_t>::max());
+
+struct ScoredFix {
+  int fix = -1;
+  std::int64_t stamp_ns = 0;
+  Eigen::Vector3d predicted =
+      Eigen::Vector3d::Zero();  // the filter's position at the fix's stamp, odom frame [m]
+  Eigen::Vector3d measured = Eigen::Vector3d::Zero();  // the fix in the odom frame [m]
+  Eigen::Matrix2d fix_cov = Eigen::Matrix2d::Zero();   // its x, y covariance in the odom frame [m²]
+};
+
+struct TrajectoryPoint {
+  std::int64_t time_ns = 0;
+  filters::rl::State state;
+};
+
+struct ReplayOutput {
+  filters::rl::State final_state = filters::rl::State::Zero();
+  filters::rl::Cov final_cov = filters::rl::Cov::Zero();
+  std::vector<ScoredFix> scored;
+  std::vector<TrajectoryPoint> trajectory;  // after every tick, when asked
+  GpsTransform gps_transform;               // as used (taken at the first fix unless fixed)
+  long processed = 0, rejected = 0;
+  bool finite = true;  // false when the state or covariance stopped being finite
+};
+
+ReplayOutput replay(const Recording& rec, const Schedule& schedule, const ReplaySettings& settings,
+                    bool keep_trajectory = false);
+
+// A fix in the odom frame under a GPS transform.
+Eigen::Vector3d fix_in_odom(const GpsFix& fix, const GpsTransform& t);
+
+}  // namespace odotune::rlnode

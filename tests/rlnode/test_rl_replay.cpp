@@ -1,0 +1,338 @@
+// robot_localization's ekf_node replayed from a bag and a parameter file
+// (rlnode/): its own two bag integration tests (expected final positions and
+// tolerances from its test/test_ekf_localization_node_bag{1,2}.yaml, facts of
+// the package), the same result from the bag's ROS 2 form, and on small bags
+// made here: differential and relative inputs, a standing robot with an IMU,
+// held-out fixes, refusals, the GPS heading fit.
+#include <cmath>
+#include <fstream>
+#include <numbers>
+
+#include <GeographicLib/LocalCartesian.hpp>
+#include <gtest/gtest.h>
+
+#include "bags/bag.h"
+#include "rlnode/gps_alignment.h"
+#include "rlnode/params.h"
+#include "rlnode/recording.h"
+#include "rlnode/replay.h"
+#include "support/ros2_bag.h"
+#include "support/temp_dir.h"
+
+namespace rl = odotune::filters::rl;
+using namespace odotune::rlnode;
+using odotune::testing_support::BagMessageSpec;
+using odotune::testing_support::BagTopicSpec;
+using odotune::testing_support::TempDir;
+
+namespace {
+
+const std::filesystem::path kBags = std::filesystem::path(ODOTUNE_SHARED_DIR) /
+                                    "data/real/robot_localization_bags";
+
+std::filesystem::path write_file(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+  return path;
+}
+
+// The IMU mounting of robot_localization's ROS 1 bag1 test (static_transform_publisher
+// 0 -0.3 0.52 -1.570796327 0 1.570796327 base_link imu_link: x y z yaw pitch roll).
+RecordingOptions bag1_mounting() {
+  RecordingOptions o;
+  Pose3 mount;
+  mount.t = {0.0, -0.3, 0.52};
+  mount.R = rotation_rpy(1.570796327, 0.0, -1.570796327);
+  o.frames["imu_link"] = mount;
+  return o;
+}
+
+const char* kBag1Params = R"(test_ekf_localization_node_bag1_ekf:
+  ros__parameters:
+    frequency: 30.0
+    sensor_timeout: 0.1
+    two_d_mode: false
+    map_frame: map
+    odom_frame: odom
+    base_link_frame: base_link
+    world_frame: odom
+    odom0: /husky_velocity_controller/odom
+    imu0: /imu/data
+    odom0_config: [false, false, false, false, false, false, true, true, true, false, false, false, false, false, false]
+    imu0_config: [false, false, false, true, true, true, false, false, false, true, true, false, true, true, true]
+    odom0_differential: false
+    imu0_differential: false
+    imu0_remove_gravitational_acceleration: true
+    process_noise_covariance: [0.05, 0.05, 0.06, 0.03, 0.03, 0.06, 0.025, 0.025, 0.04, 0.01, 0.01, 0.02, 0.01, 0.01, 0.015]
+)";
+
+const char* kBag2Params = R"(test_ekf_localization_node_bag2_ekf:
+  ros__parameters:
+    frequency: 50.0
+    sensor_timeout: 0.1
+    odom0: /jackal_velocity_controller/odom
+    imu0: /imu/data
+    odom0_config: [false, false, false, false, false, false, true, true, true, false, false, true, false, false, false]
+    imu0_config: [false, false, false, true, true, true, false, false, false, true, true, true, true, true, true]
+    imu0_remove_gravitational_acceleration: true
+    process_noise_covariance: [0.03, 0.03, 0.04, 0.03, 0.03, 0.06, 0.025, 0.025, 0.05, 0.002, 0.002, 0.004, 0.01, 0.01, 0.01]
+)";
+
+double distance_to(const rl::State& x, double ex, double ey, double ez) {
+  return std::sqrt(std::pow(x[rl::kX] - ex, 2) + std::pow(x[rl::kY] - ey, 2) + std::pow(x[rl::kZ] - ez, 2));
+}
+
+rl::State final_state(const std::filesystem::path& bag, const RlParams& p, const RecordingOptions& o = {}) {
+  const Recording rec = load_recording(bag, p, o);
+  return replay(rec, make_schedule(rec), settings_of(p)).final_state;
+}
+
+}  // namespace
+
+// robot_localization's test_ekf_localization_node_bag1: final position
+// (−40.0454, −76.9988, −2.6974) m within 1.0452 m; we aim for 0.3 m.
+TEST(RlReplay, Bag1EndsWhereRobotLocalizationsOwnTestExpects) {
+  TempDir dir("rl-bag1");
+  const RlParams p = read_rl_params(write_file(dir.path() / "bag1.yaml", kBag1Params));
+  const rl::State x = final_state(kBags / "ros2/test1.mcap", p, bag1_mounting());
+  const double d = distance_to(x, -40.0454, -76.9988, -2.6974);
+  EXPECT_LT(d, 0.3) << "final " << x.head<3>().transpose();
+}
+
+// The ROS 1 form of the same recording gives the same filter, to the tenth of
+// a millimetre: the ROS 2 forms' receive times differ by up to 256 ns, which
+// moves a message across a tick boundary now and then.
+TEST(RlReplay, Bag1RosOneAndMcapFormsAgree) {
+  if (!odotune::bags::ros1_supported()) GTEST_SKIP() << "this build does not read ROS 1 bags";
+  TempDir dir("rl-bag1-forms");
+  const RlParams p = read_rl_params(write_file(dir.path() / "bag1.yaml", kBag1Params));
+  const rl::State a = final_state(kBags / "test1.bag", p, bag1_mounting());
+  const rl::State b = final_state(kBags / "ros2/test1.mcap", p, bag1_mounting());
+  EXPECT_LT((a - b).head<3>().norm(), 1e-3);
+}
+
+// robot_localization's test_ekf_localization_node_bag2: (1.0206, 3.4292,
+// 0.7419) m within 0.1383 m.
+TEST(RlReplay, Bag2EndsWhereRobotLocalizationsOwnTestExpects) {
+  TempDir dir("rl-bag2");
+  const RlParams p = read_rl_params(write_file(dir.path() / "bag2.yaml", kBag2Params));
+  const rl::State x = final_state(kBags / "ros2/test2.mcap", p);
+  EXPECT_LT(distance_to(x, 1.0206, 3.4292, 0.7419), 0.1383) << "final " << x.head<3>().transpose();
+}
+
+TEST(RlReplay, SameInputsGiveTheSameBits) {
+  TempDir dir("rl-bits");
+  const RlParams p = read_rl_params(write_file(dir.path() / "bag2.yaml", kBag2Params));
+  const Recording rec = load_recording(kBags / "ros2/test2.mcap", p);
+  const Schedule s = make_schedule(rec);
+  const ReplayOutput a = replay(rec, s, settings_of(p)), b = replay(rec, s, settings_of(p));
+  EXPECT_EQ(a.final_state, b.final_state);
+  EXPECT_EQ(a.final_cov, b.final_cov);
+  // Every input is processed but those that arrive or are stamped after the last tick.
+  long due = 0;
+  for (const Input& in : rec.inputs) due += in.stamp_ns <= s.end_ns && in.receive_ns <= s.end_ns ? 1 : 0;
+  EXPECT_EQ(a.processed, due);
+  EXPECT_GT(due, static_cast<long>(rec.inputs.size()) - 5);
+}
+
+namespace {
+
+// A robot driving along x at 1 m/s for 10 s from (5, 3), its odometry's pose
+// (frame odom) at 20 Hz.
+std::filesystem::path driving_bag(const std::filesystem::path& dir) {
+  std::vector<BagMessageSpec> msgs;
+  for (int k = 0; k <= 200; ++k) {
+    const std::int64_t t = 1'000'000'000 + k * 50'000'000LL;
+    msgs.push_back({0, static_cast<std::uint64_t>(t),
+                    odotune::testing_support::odometry(t, 1.0, 0.0, 5.0 + 0.05 * k, 3.0)});
+  }
+  const auto path = dir / "drive.mcap";
+  odotune::testing_support::write_ros2_mcap(path, {{"/odom", "nav_msgs/msg/Odometry"}}, msgs);
+  return path;
+}
+
+RlParams pose_params(const std::filesystem::path& dir, const std::string& extra) {
+  return read_rl_params(write_file(dir / "p.yaml",
+                                   "ekf:\n  ros__parameters:\n    frequency: 20.0\n    two_d_mode: true\n"
+                                   "    odom0: /odom\n"
+                                   "    odom0_config: [true, true, false, false, false, true, "
+                                   "false, false, false, false, false, false, false, false, false]\n" +
+                                       extra));
+}
+
+}  // namespace
+
+// An absolute pose input puts the filter where the odometry says.
+TEST(RlReplay, AbsolutePoseIsFollowed) {
+  TempDir dir("rl-abs");
+  const rl::State x = final_state(driving_bag(dir.path()), pose_params(dir.path(), ""));
+  EXPECT_NEAR(x[rl::kX], 15.0, 1e-3);
+  EXPECT_NEAR(x[rl::kY], 3.0, 1e-3);
+}
+
+// A relative input starts at zero: its first pose is subtracted.
+TEST(RlReplay, RelativePoseStartsAtZero) {
+  TempDir dir("rl-rel");
+  const rl::State x = final_state(driving_bag(dir.path()),
+                                  pose_params(dir.path(), "    odom0_relative: true\n"));
+  EXPECT_NEAR(x[rl::kX], 10.0, 1e-3);
+  EXPECT_NEAR(x[rl::kY], 0.0, 1e-3);
+}
+
+// A differential input becomes the velocity between consecutive poses: the
+// filter moves at 1 m/s from where it starts (0), and never sees (5, 3).
+TEST(RlReplay, DifferentialPoseBecomesVelocity) {
+  TempDir dir("rl-diff");
+  const RlParams p = pose_params(dir.path(), "    odom0_differential: true\n");
+  const Recording rec = load_recording(driving_bag(dir.path()), p);
+  const ReplayOutput out = replay(rec, make_schedule(rec), settings_of(p));
+  EXPECT_NEAR(out.final_state[rl::kVx], 1.0, 1e-6);
+  EXPECT_NEAR(out.final_state[rl::kX], 10.0, 0.1);  // the first interval is lost to the difference
+  EXPECT_LT(std::abs(out.final_state[rl::kY]), 1e-6);
+  EXPECT_EQ(rec.inputs.size(), 200u);  // one message fewer: the first has no predecessor
+}
+
+// A robot standing still with an IMU that feels only gravity: with gravity
+// removed the accelerations are zero and the robot does not move.
+TEST(RlReplay, StandingRobotWithImuStaysPut) {
+  TempDir dir("rl-stand");
+  std::vector<BagMessageSpec> msgs;
+  for (int k = 0; k <= 300; ++k) {
+    const std::int64_t t = 1'000'000'000 + k * 20'000'000LL;
+    msgs.push_back({0, static_cast<std::uint64_t>(t), odotune::testing_support::odometry(t, 0.0, 0.0)});
+    msgs.push_back({1, static_cast<std::uint64_t>(t),
+                    odotune::testing_support::imu(t, "base_link", 0.0, 0.0, 0.0)});
+  }
+  const auto bag = dir.path() / "stand.mcap";
+  odotune::testing_support::write_ros2_mcap(
+      bag, {{"/odom", "nav_msgs/msg/Odometry"}, {"/imu", "sensor_msgs/msg/Imu"}}, msgs);
+  const RlParams p = read_rl_params(write_file(
+      dir.path() / "p.yaml",
+      "ekf:\n  ros__parameters:\n    odom0: /odom\n"
+      "    odom0_config: [false, false, false, false, false, false, true, true, false, false, false, true, "
+      "false, false, false]\n    imu0: /imu\n"
+      "    imu0_config: [false, false, false, true, true, true, false, false, false, true, true, true, true, true, "
+      "true]\n    imu0_remove_gravitational_acceleration: true\n    gravitational_acceleration: 9.81\n"));
+  const rl::State x = final_state(bag, p);
+  EXPECT_LT(x.head<3>().norm(), 1e-6);
+  EXPECT_LT(x.segment<3>(rl::kAx).norm(), 1e-6);
+  // Without gravity removed, the IMU's 9.81 m/s² up is fused as an acceleration.
+  const RlParams q = read_rl_params(write_file(
+      dir.path() / "q.yaml",
+      "ekf:\n  ros__parameters:\n    odom0: /odom\n"
+      "    odom0_config: [false, false, false, false, false, false, true, true, false, false, false, true, "
+      "false, false, false]\n    imu0: /imu\n"
+      "    imu0_config: [false, false, false, true, true, true, false, false, false, true, true, true, true, true, "
+      "true]\n"));
+  EXPECT_GT(final_state(bag, q)[rl::kAz], 9.0);
+}
+
+TEST(RlReplay, FrameWithoutTransformIsRefusedNamingIt) {
+  TempDir dir("rl-frame");
+  std::vector<BagMessageSpec> msgs;
+  for (int k = 0; k < 10; ++k) {
+    const std::int64_t t = 1'000'000'000 + k * 20'000'000LL;
+    msgs.push_back({0, static_cast<std::uint64_t>(t),
+                    odotune::testing_support::imu(t, "imu_link", 0.0, 0.0, 0.1)});
+  }
+  const auto bag = dir.path() / "imu.mcap";
+  odotune::testing_support::write_ros2_mcap(bag, {{"/imu", "sensor_msgs/msg/Imu"}}, msgs);
+  const RlParams p = read_rl_params(write_file(
+      dir.path() / "p.yaml", "ekf:\n  ros__parameters:\n    imu0: /imu\n    imu0_config: [false, false, "
+                             "false, false, false, false, false, false, false, false, false, true, false, "
+                             "false, false]\n"));
+  try {
+    load_recording(bag, p);
+    FAIL() << "expected a refusal";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'imu_link'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--tf"), std::string::npos) << e.what();
+  }
+  RecordingOptions o;
+  o.frames["imu_link"] = Pose3{};
+  EXPECT_NEAR(final_state(bag, p, o)[rl::kVyaw], 0.1, 1e-6);
+}
+
+TEST(RlReplay, MissingTopicIsRefusedWithTheBagsTopics) {
+  TempDir dir("rl-topic");
+  const RlParams p = read_rl_params(write_file(dir.path() / "p.yaml", kBag2Params));
+  try {
+    load_recording(driving_bag(dir.path()), p);
+    FAIL() << "expected a refusal";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("/jackal_velocity_controller/odom"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/odom"), std::string::npos) << e.what();
+  }
+}
+
+namespace {
+
+// Odometry driving a 20 m square at 1 m/s in the odom frame, and GPS fixes
+// (2 Hz, σ 1 cm) of the same path turned by `heading` [rad] in east/north.
+std::filesystem::path gps_bag(const std::filesystem::path& dir, double heading) {
+  GeographicLib::LocalCartesian local(42.0, -71.0, 0.0);
+  std::vector<BagMessageSpec> msgs;
+  double x = 0.0, y = 0.0, yaw = 0.0;
+  const double dt = 0.05;
+  for (int k = 0; k <= 1600; ++k) {
+    const std::int64_t t = 1'000'000'000 + k * 50'000'000LL;
+    const double w = (k % 400 >= 380) ? (std::numbers::pi / 2) / (20 * dt) : 0.0;  // turn at each corner
+    const double v = w == 0.0 ? 1.0 : 0.0;
+    msgs.push_back({0, static_cast<std::uint64_t>(t), odotune::testing_support::odometry(t, v, w)});
+    if (k % 10 == 0) {
+      const double e = std::cos(heading) * x - std::sin(heading) * y,
+                   n = std::sin(heading) * x + std::cos(heading) * y;
+      double lat = 0, lon = 0, h = 0;
+      local.Reverse(e, n, 0.0, lat, lon, h);
+      msgs.push_back({1, static_cast<std::uint64_t>(t),
+                      odotune::testing_support::navsatfix(t, lat, lon, 1e-4)});
+    }
+    x += v * std::cos(yaw) * dt;
+    y += v * std::sin(yaw) * dt;
+    yaw += w * dt;
+  }
+  const auto path = dir / "gps.mcap";
+  odotune::testing_support::write_ros2_mcap(
+      path, {{"/odom", "nav_msgs/msg/Odometry"}, {"/fix", "sensor_msgs/msg/NavSatFix"}}, msgs);
+  return path;
+}
+
+const char* kGpsParams = R"(ekf:
+  ros__parameters:
+    frequency: 20.0
+    two_d_mode: true
+    odom0: /odom
+    odom0_config: [false, false, false, false, false, false, true, true, false, false, false, true, false, false, false]
+    odom1: /odometry/gps
+    odom1_config: [true, true, false, false, false, false, false, false, false, false, false, false, false, false, false]
+navsat:
+  ros__parameters:
+    zero_altitude: true
+    use_local_cartesian: true
+)";
+
+}  // namespace
+
+// The rotation between the GPS's east/north and the odom frame, fitted on the
+// first seconds of fixes, is the one the bag was made with; with it the fixes
+// land on the odometry's path.
+TEST(RlReplay, GpsHeadingFitFindsTheRotation) {
+  TempDir dir("rl-gps");
+  const double heading = 0.7;
+  const RlParams p = read_rl_params(write_file(dir.path() / "p.yaml", kGpsParams));
+  Recording rec = load_recording(gps_bag(dir.path(), heading), p);
+  ASSERT_EQ(rec.gps_sensor, 1);
+  ASSERT_GT(rec.fixes.size(), 100u);
+  const GpsAlignment a = fit_gps_alignment(rec, settings_of(p), 30.0);
+  EXPECT_NEAR(a.transform.rotation_rad, -heading, 1e-3);
+  EXPECT_LT(a.rms_m, 0.05);
+  EXPECT_THROW(fit_gps_alignment(rec, settings_of(p), 2.0), std::invalid_argument);  // 2 s: too little driving
+  rec.gps_transform = a.transform;
+  // Every 3rd fix held out: the filter predicts it within centimetres.
+  std::vector<FixRole> roles(rec.fixes.size(), FixRole::fuse);
+  for (std::size_t i = 0; i < roles.size(); i += 3) roles[i] = FixRole::score;
+  const ReplayOutput out = replay(rec, make_schedule(rec, roles), settings_of(p));
+  ASSERT_EQ(out.scored.size(), (rec.fixes.size() + 2) / 3);
+  double worst = 0.0;
+  for (const ScoredFix& s : out.scored) worst = std::max(worst, (s.predicted - s.measured).head<2>().norm());
+  EXPECT_LT(worst, 0.1);
+}
