@@ -4,7 +4,10 @@
 
 #include "cli/commands.h"
 #include "cli/output.h"
+#include "cli/rl_output.h"
+#include "core/failure.h"
 #include "jobs/eval_job.h"
+#include "jobs/rl_job.h"
 
 namespace odotune::cli {
 
@@ -17,13 +20,38 @@ void register_eval(CLI::App& app) {
       "  odotune eval --config alpha.yaml --track data/tracks/track3.csv\n"
       "  odotune eval --config alpha.yaml --track husky.csv --trajectory-out husky.tum   # evo_traj tum husky.tum\n"
       "Without --config the baseline configuration is evaluated. A track without ground truth is scored by\n"
-      "its held-out position fixes (5 folds of 1 s blocks, as tune's mode 8).");
+      "its held-out position fixes (5 folds of 1 s blocks, as tune's mode 8).\n"
+      "robot_localization's EKF as the robot runs it, from its own bag and parameter file:\n"
+      "  odotune eval --rl-params husky_ekf.yaml --bag test1.bag --tf imu_link=0,-0.3,0.52,1.5707963,0,-1.5707963 \\\n"
+      "      --gps-heading-fit 60 --from 197.6 --trajectory-out husky.tum\n"
+      "  prints the final pose and the held-out fix errors (docs/husky.md).");
   sub->add_option("--config", req->config, "configuration YAML (format odotune-ekf-config/1)");
-  sub->add_option("--track", req->tracks, "track file (repeat for several)")->required();
+  sub->add_option("--track", req->tracks, "track file (repeat for several)");
   sub->add_option("--json", req->json_out, "write the metrics as JSON to this file");
   sub->add_option("--trajectory-out", req->trajectory_out,
                   "write the filter's trajectory in TUM format (t x y z qx qy qz qw; evo reads it); one track");
-  sub->callback([req] {
+  auto rl = std::make_shared<RlEvalRequest>();
+  add_rl_source_options(sub, rl->src);
+  sub->add_option("--until", rl->until_s, "--rl-params: use the recording before this many seconds")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--from", rl->from_s,
+                  "--rl-params: score from this many seconds on: a GPS outage from there, and every 5th fix "
+                  "held out from there")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--noise-from", rl->noise_from,
+                  "--rl-params: take process_noise_covariance from this robot_localization file instead")
+      ->check(CLI::ExistingFile);
+  sub->add_option("--fixes-out", rl->fixes_out, "--rl-params: write the GPS fixes in the odom frame (t x y)");
+  sub->callback([req, rl] {
+    if (!rl->src.params_file.empty()) {
+      if (!req->tracks.empty() || !req->config.empty())
+        throw Failure("eval: --rl-params replays a bag; expected no --track or --config with it");
+      rl->trajectory_out = req->trajectory_out;
+      rl->json_out = req->json_out;
+      print_rl_eval(run_rl_eval(*rl));
+      return;
+    }
+    if (req->tracks.empty()) throw Failure("eval: expected --track, or --rl-params with --bag");
     run_eval(*req, [&](const EvalOutcome& o) {
       const EvalTrack& t = o.tracks.back();
       const ErrorMetrics& m = t.metrics;

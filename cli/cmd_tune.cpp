@@ -3,17 +3,91 @@
 // item 1), on one or more tracks (jobs/tune_command.h runs it and writes the
 // files; cli/tune_output.h prints the result).
 #include <cstdio>
+#include <map>
+#include <set>
+
+#include <fmt/format.h>
 #include <variant>
 
 #include "cli/commands.h"
 #include "cli/output.h"
 #include "cli/progress.h"
+#include "cli/rl_output.h"
 #include "cli/tune_output.h"
 #include "core/failure.h"
 #include "jobs/tune_command.h"
 #include "tuner/nlopt_solver.h"
 
 namespace odotune::cli {
+namespace {
+
+// The --rl-params choices as given, turned into their kinds in one place.
+struct RlChoices {
+  std::string fitness = "outage", space = "diagonal", format = "ros2";
+  bool no_input_covariances = false;
+};
+
+// tune --rl-params: the EKF-model flags do not apply and are refused by name.
+void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const RlChoices& c,
+                         const CLI::App& sub) {
+  static const std::set<std::string> kApplies = {"--rl-params",
+                                                 "--bag",
+                                                 "--node",
+                                                 "--tf",
+                                                 "--gps-topic",
+                                                 "--gps-heading-fit",
+                                                 "--until",
+                                                 "--end",
+                                                 "--fitness",
+                                                 "--space",
+                                                 "--no-input-covariances",
+                                                 "--outage",
+                                                 "--format",
+                                                 "--solver",
+                                                 "--seed",
+                                                 "--particles",
+                                                 "--iterations",
+                                                 "--evals",
+                                                 "--json",
+                                                 "--config-out",
+                                                 "--config-out-ros1",
+                                                 "--cv-folds",
+                                                 "--cv-block",
+                                                 "--threads"};
+  std::string command = "odotune tune";
+  for (const CLI::Option* opt : sub.get_options()) {
+    if (opt->count() == 0) continue;
+    if (kApplies.count(opt->get_name()) == 0) {
+      throw Failure(fmt::format("tune: {} does not apply to --rl-params (robot_localization's EKF)",
+                                opt->get_name()));
+    }
+    command += " " + opt->get_name();
+    for (const std::string& v : opt->results()) command += " " + v;
+  }
+  static_cast<SolverSettings&>(r) = req;
+  r.options.folds = req.fix_cv.folds;
+  r.options.block_s = req.fix_cv.block_s;
+  r.options.fitness = c.fitness == "both"            ? RlFitness::both
+                      : c.fitness == "heldout-fixes" ? RlFitness::heldout_fixes
+                                                     : RlFitness::outage;
+  r.options.space = c.space == "blocks" ? RlNoiseSpace::blocks : RlNoiseSpace::diagonal;
+  r.options.input_covariances = !c.no_input_covariances;
+  r.ros1_out = c.format == "ros1";
+  r.json_out = req.json_out;
+  r.config_out = req.config_out;
+  r.command_line = command;
+  InterruptGuard interrupt;
+  Progress progress("tune", "evaluations");
+  r.progress = [&progress](long done, long total) { progress.update(done, total); };
+  r.stop = interrupt.flag();
+  const RlTuneOutcome o = run_rl_tune(r);
+  progress.finish();
+  if (interrupt.raised()) std::fprintf(stderr, "odotune: interrupted; reporting the best so far\n");
+  print_rl_tune(r, o);
+  if (interrupt.raised()) throw Failure("interrupted", 130);
+}
+
+}  // namespace
 
 void register_tune(CLI::App& app) {
   auto req = std::make_shared<TuneCommandRequest>();
@@ -39,9 +113,14 @@ void register_tune(CLI::App& app) {
       "UKF (ukf): tunes the (V, W) fusion filter's process noise, static odometry variances, gyro\n"
       "variance and external-variance scale (objectives/ukf_objective.h) for --mode's error of\n"
       "the fused pose against ground truth (tracks need it); the baseline is the default noise.\n"
-      "--config-out writes an odotune-ukf-config/1 file (formats/ukf_config_yaml.h).");
-  sub->add_option("--track", req->tracks, "track file (repeat for several; fitness = mean over tracks)")
-      ->required();
+      "--config-out writes an odotune-ukf-config/1 file (formats/ukf_config_yaml.h).\n"
+      "robot_localization (--rl-params FILE --bag BAG): tunes the process noise of the robot's own ekf_node\n"
+      "(factors on its process_noise_covariance, per diagonal entry or per block) and, as advice, factors on\n"
+      "each input's message covariance, by held-out GPS fixes and simulated GPS outages; --config-out\n"
+      "writes the user's file with the tuned values and the held-out scores in comments:\n"
+      "  odotune tune --rl-params husky_ekf.yaml --bag test1.bag --tf imu_link=0,-0.3,0.52,1.5707963,0,-1.5707963 \\\n"
+      "      --gps-heading-fit 60 --until 197.6 --fitness both --config-out ekf.yaml");
+  sub->add_option("--track", req->tracks, "track file (repeat for several; fitness = mean over tracks)");
   sub->add_option("--model", req->model, "rq | alpha | gyro | pf-calib | adaptive-pf-calib | ukf");
   sub->add_option("--mode", req->mode,
                   "EKF/UKF fitness mode against ground truth: 1 RMSE, 2 MAE, 3 MAXE, 4 RMSE+MAE, 5 RMSE+MAXE, "
@@ -79,10 +158,41 @@ void register_tune(CLI::App& app) {
                   "calibrators: derive the external velocities from the ground truth at this rate [Hz] "
                   "instead of the tracks' v_ext/w_ext")
       ->check(CLI::PositiveNumber);
+  auto rl = std::make_shared<RlTuneRequest>();
+  auto rl_names = std::make_shared<RlChoices>();
+  add_rl_source_options(sub, rl->src);
+  sub->add_option("--until", rl->until_s,
+                  "--rl-params: tune on the recording before this many seconds; the rest is scored as held out")
+      ->check(CLI::PositiveNumber);
+  sub->add_option(
+         "--fitness", rl_names->fitness,
+         "--rl-params: outage (simulated GPS outages, default), heldout-fixes (mode 8 on this filter) or both")
+      ->check(CLI::IsMember({"outage", "heldout-fixes", "both"}));
+  sub->add_option("--space", rl_names->space,
+                  "--rl-params: search a factor per diagonal entry of the process noise (default) or per block")
+      ->check(CLI::IsMember({"diagonal", "blocks"}));
+  sub->add_flag("--no-input-covariances", rl_names->no_input_covariances,
+                "--rl-params: do not search factors on the inputs' message covariances");
+  sub->add_option("--outage", rl->options.outage_s,
+                  "--rl-params: length of the simulated GPS outages [s] (default 60)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--format", rl_names->format,
+                  "--rl-params: --config-out as ros2 (default) or ros1 parameters")
+      ->check(CLI::IsMember({"ros2", "ros1"}));
+  sub->add_option("--end", rl->end_s,
+                  "--rl-params: ignore the recording after this many seconds (the held-out span ends there)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--config-out-ros1", rl->config_out_ros1,
+                  "--rl-params: also write the ROS 1 form to this file");
   add_threads_option(sub, threads.get());
 
-  sub->callback([req, threads, sub] {
+  sub->callback([req, rl, rl_names, threads, sub] {
     apply_threads(*threads);
+    if (!rl->src.params_file.empty()) {
+      run_rl_tune_command(*req, *rl, *rl_names, *sub);
+      return;
+    }
+    if (req->tracks.empty()) throw Failure("tune: expected --track, or --rl-params with --bag");
     TuneCommandRequest r = *req;
     for (const CLI::Option* opt : sub->get_options())
       if (opt->count() > 0) r.given_options.push_back(opt->get_name());

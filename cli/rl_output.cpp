@@ -1,0 +1,91 @@
+#include "cli/rl_output.h"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+namespace odotune::cli {
+namespace {
+
+namespace rl = filters::rl;
+
+std::string metres(const FixScore& s) {
+  return s.finite ? fmt::format("{:.3f} m ({} fixes)", s.rmse_m, s.fixes) : "diverged";
+}
+
+std::string change(const FixScore& a, const FixScore& b) {
+  if (!a.finite || !b.finite || !(a.rmse_m > 0.0)) return fmt::format("{} -> {}", metres(a), metres(b));
+  return fmt::format("{:.3f} -> {:.3f} m  ({:+.1f} %, {} fixes)", a.rmse_m, b.rmse_m,
+                     100.0 * (b.rmse_m / a.rmse_m - 1.0), b.fixes);
+}
+
+void print_notes(const std::vector<std::string>& notes, const std::optional<rlnode::GpsAlignment>& a) {
+  for (const std::string& n : notes) fmt::print("  note: {}\n", n);
+  if (a) {
+    fmt::print("  GPS heading fitted on the first {} fixes: navsat's rotation {:.4f} rad (residual {:.2f} m; "
+               "yaw_offset {:.4f} rad with this IMU)\n",
+               a->fixes, a->transform.rotation_rad, a->rms_m, a->yaw_offset_rad);
+  }
+}
+
+}  // namespace
+
+void add_rl_source_options(CLI::App* sub, RlSource& src) {
+  sub->add_option("--rl-params", src.params_file,
+                  "robot_localization parameter file (ROS 1 or ROS 2 YAML): replay its ekf_node on --bag")
+      ->check(CLI::ExistingFile);
+  sub->add_option("--bag", src.bag, "--rl-params: the robot's bag (ROS 1 .bag, MCAP, rosbag2 .db3 or folder)");
+  sub->add_option("--node", src.node_name, "--rl-params: the EKF's section of the file when it has several");
+  sub->add_option("--tf", src.tf,
+                  "--rl-params: FRAME=x,y,z,roll,pitch,yaw, a sensor frame's pose in base_link (repeat; "
+                  "else /tf_static in the bag)");
+  sub->add_option("--gps-topic", src.gps_topic, "--rl-params: the NavSatFix topic behind navsat's output");
+  sub->add_option("--gps-heading-fit", src.gps_heading_fit_s,
+                  "--rl-params: fit navsat's GPS-to-odom rotation on the first SECONDS of fixes (for an IMU "
+                  "whose absolute yaw cannot be trusted) instead of taking the IMU's heading")
+      ->check(CLI::PositiveNumber);
+}
+
+void print_rl_eval(const RlEvalOutcome& o) {
+  const rl::State& x = o.final_state;
+  fmt::print("{}: robot_localization EKF ({}) over {:.1f} s: {} measurements, {} rejected\n",
+             o.bag.filename().string(), o.params_file.filename().string(), o.duration_s, o.processed,
+             o.rejected);
+  fmt::print("  final pose: x {:.4f} m, y {:.4f} m, z {:.4f} m, yaw {:.4f} rad\n", x[rl::kX], x[rl::kY],
+             x[rl::kZ], x[rl::kYaw]);
+  if (o.heldout) fmt::print("  held-out fixes (5 folds of 1 s blocks): RMSE {}\n", metres(*o.heldout));
+  if (o.protocols) {
+    fmt::print("  after --from: GPS outage RMSE {}; every 5th fix held out: RMSE {}\n",
+               metres(o.protocols->outage), metres(o.protocols->every_fifth));
+  }
+  print_notes(o.notes, o.alignment);
+}
+
+void print_rl_tune(const RlTuneRequest& r, const RlTuneOutcome& o) {
+  fmt::print("{}: robot_localization EKF ({}), tuned on the first {:.1f} s of {:.1f} s; fitness {}, {} process "
+             "noise{}, {} seed {}\n",
+             o.bag.filename().string(), o.params_file.filename().string(), o.span_s, o.duration_s,
+             to_string(r.options.fitness), to_string(r.options.space),
+             r.options.input_covariances ? " and input covariances" : "", r.solver, r.seed);
+  fmt::print("  tuning span, held-out fixes:  {}\n", change(o.baseline_heldout, o.tuned_heldout));
+  fmt::print("  tuning span, {:.0f}-s outages:  {}\n", r.options.outage_s,
+             change(o.baseline_outage, o.tuned_outage));
+  if (o.baseline_after && o.tuned_after) {
+    fmt::print("  held out (after {:.1f} s, never seen by the tune):\n", o.span_s);
+    fmt::print("    GPS outage:            {}\n", change(o.baseline_after->outage, o.tuned_after->outage));
+    fmt::print("    every 5th fix held out: {}\n",
+               change(o.baseline_after->every_fifth, o.tuned_after->every_fifth));
+  }
+  std::string factors;
+  for (std::size_t i = 0; i < o.param_names.size(); ++i) {
+    factors += fmt::format("{}{} ×{:.3g}", i == 0 ? "" : ", ", o.param_names[i], o.factors[i]);
+  }
+  fmt::print("  factors: {}\n", factors);
+  fmt::print("  {} evaluations in {:.1f} s ({})\n", o.summary.evaluations, o.summary.seconds,
+             o.summary.termination);
+  print_notes(o.notes, o.alignment);
+  if (!r.config_out.empty())
+    fmt::print("  wrote {} ({})\n", r.config_out.string(), r.ros1_out ? "ROS 1" : "ROS 2");
+}
+
+}  // namespace odotune::cli

@@ -1,0 +1,197 @@
+#include "jobs/rl_job.h"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "core/failure.h"
+#include "core/output_paths.h"
+#include "tracks/atomic_file.h"
+
+namespace odotune {
+namespace {
+
+namespace rl = filters::rl;
+using rlnode::FixRole;
+
+constexpr std::int64_t kEnd = std::numeric_limits<std::int64_t>::max();
+
+std::int64_t at_seconds(const rlnode::Recording& rec, const std::optional<double>& s) {
+  return s ? rec.start_ns + static_cast<std::int64_t>(std::llround(*s * 1e9)) : kEnd;
+}
+
+nlohmann::json json_of(const FixScore& s) {
+  return {{"rmse_m", s.rmse_m}, {"fixes", s.fixes}, {"finite", s.finite}};
+}
+
+nlohmann::json json_of(const RlProtocolScores& p) {
+  return {{"outage", json_of(p.outage)}, {"every_fifth_fix", json_of(p.every_fifth)}};
+}
+
+// The filter's trajectory in TUM format (t x y z qx qy qz qw) on the bag's clock.
+void write_trajectory(const std::filesystem::path& path, const std::vector<rlnode::TrajectoryPoint>& points,
+                      const std::string& comment) {
+  std::ostringstream out;
+  out << "# " << comment << "\n";
+  for (const rlnode::TrajectoryPoint& p : points) {
+    const Eigen::Quaterniond q(rlnode::rotation_rpy(p.state[rl::kRoll], p.state[rl::kPitch],
+                                                    p.state[rl::kYaw]));
+    out << fmt::format("{:.9f} {:.6f} {:.6f} {:.6f} {:.9f} {:.9f} {:.9f} {:.9f}\n",
+                       static_cast<double>(p.time_ns) * 1e-9, p.state[rl::kX], p.state[rl::kY], p.state[rl::kZ],
+                       q.x(), q.y(), q.z(), q.w());
+  }
+  write_atomically(path, "trajectory", out.str());
+}
+
+}  // namespace
+
+std::pair<std::string, rlnode::Pose3> parse_tf(const std::string& text) {
+  const auto eq = text.find('=');
+  std::vector<double> v;
+  if (eq != std::string::npos && eq > 0) {
+    std::stringstream ss(text.substr(eq + 1));
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      try {
+        std::size_t used = 0;
+        v.push_back(std::stod(item, &used));
+        if (used != item.size()) v.clear();
+      } catch (const std::exception&) {
+        v.clear();
+        break;
+      }
+    }
+  }
+  if (eq == std::string::npos || eq == 0 || v.size() != 6) {
+    throw Failure(fmt::format("--tf {}: expected FRAME=x,y,z,roll,pitch,yaw (the frame's pose in base_link, "
+                              "metres and radians)",
+                              text));
+  }
+  rlnode::Pose3 p;
+  p.t = {v[0], v[1], v[2]};
+  p.R = rlnode::rotation_rpy(v[3], v[4], v[5]);
+  return {text.substr(0, eq), p};
+}
+
+RlLoaded load_rl(const RlSource& src) {
+  rlnode::RecordingOptions options;
+  for (const std::string& t : src.tf) options.frames.insert(parse_tf(t));
+  options.gps_topic = src.gps_topic;
+  RlLoaded out;
+  try {
+    const rlnode::RlParams params = rlnode::read_rl_params(src.params_file, src.node_name);
+    out.rec = rlnode::load_recording(src.bag, params, options);
+    if (src.gps_heading_fit_s > 0.0) {
+      // With robot_localization's default noise, not the file's: the rotation
+      // must not change with the noise being tuned, so that a tuned file
+      // replays to the figures its tune reported.
+      rlnode::ReplaySettings reference = rlnode::settings_of(params);
+      reference.process_noise = rlnode::default_process_noise();
+      reference.initial_cov = rlnode::default_initial_estimate_covariance();
+      out.alignment = rlnode::fit_gps_alignment(out.rec, reference, src.gps_heading_fit_s);
+      out.rec.gps_transform = out.alignment->transform;
+    }
+  } catch (const Failure&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Failure(e.what());
+  }
+  const rlnode::Recording& rec = out.rec;
+  if (rec.gps_sensor >= 0 && !rec.gps_transform.fixed && !rec.navsat_imu_yaw_known) {
+    throw Failure(fmt::format("{}: navsat_transform_node needs the IMU's heading at the first fix, and no IMU "
+                              "orientation came before it; expected --gps-heading-fit SECONDS",
+                              src.bag.string()));
+  }
+  return out;
+}
+
+RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
+                                 std::int64_t from_ns, std::int64_t until_ns) {
+  std::vector<FixRole> outage(rec.fixes.size(), FixRole::fuse), fifth(rec.fixes.size(), FixRole::fuse);
+  int k = 0;
+  for (std::size_t i = 0; i < rec.fixes.size(); ++i) {
+    const std::int64_t t = rec.fixes[i].stamp_ns;
+    if (t < from_ns) continue;
+    if (t >= until_ns) {
+      outage[i] = fifth[i] = FixRole::absent;
+      continue;
+    }
+    outage[i] = FixRole::score;
+    fifth[i] = k++ % 5 == 0 ? FixRole::score : FixRole::fuse;
+  }
+  const rlnode::ReplayOutput a = rlnode::replay(rec, rlnode::make_schedule(rec, outage, until_ns), s);
+  const rlnode::ReplayOutput b = rlnode::replay(rec, rlnode::make_schedule(rec, fifth, until_ns), s);
+  return {score_of(std::span(&a, 1)), score_of(std::span(&b, 1))};
+}
+
+RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
+  if (!request.trajectory_out.empty()) check_output_file("--trajectory-out", request.trajectory_out.string());
+  if (!request.json_out.empty()) check_output_file("--json", request.json_out.string());
+  if (!request.fixes_out.empty()) check_output_file("--fixes-out", request.fixes_out.string());
+  const RlLoaded loaded = load_rl(request.src);
+  const rlnode::Recording& rec = loaded.rec;
+  const std::int64_t until = at_seconds(rec, request.until_s);
+  rlnode::ReplaySettings s = rlnode::settings_of(rec.params);
+  if (!request.noise_from.empty()) {
+    try {
+      // The same node's section in the other file (it need not configure inputs).
+      s.process_noise =
+          rlnode::read_rl_params(request.noise_from, rec.params.node_name).process_noise_covariance;
+    } catch (const std::exception& e) {
+      throw Failure(e.what());
+    }
+  }
+  const rlnode::ReplayOutput run = rlnode::replay(rec, rlnode::make_schedule(rec, {}, until), s, true);
+  RlEvalOutcome out;
+  out.bag = rec.bag;
+  out.params_file = rec.params.file;
+  out.final_state = run.final_state;
+  out.processed = run.processed;
+  out.rejected = run.rejected;
+  out.alignment = loaded.alignment;
+  out.notes = rec.notes;
+  out.duration_s = static_cast<double>(std::min(rec.end_ns, until) - rec.start_ns) * 1e-9;
+  if (!rec.fixes.empty()) {
+    std::vector<rlnode::ReplayOutput> folds;
+    for (const auto& roles : heldout_fix_folds(rec, 5, 1.0, until)) {
+      folds.push_back(rlnode::replay(rec, rlnode::make_schedule(rec, roles, until), s));
+    }
+    out.heldout = score_of(folds);
+    if (request.from_s) out.protocols = score_protocols(rec, s, at_seconds(rec, request.from_s), until);
+  }
+  if (!request.trajectory_out.empty()) {
+    write_trajectory(request.trajectory_out, run.trajectory,
+                     fmt::format("robot_localization EKF replayed by odotune: {} with {}",
+                                 rec.bag.filename().string(), rec.params.file.filename().string()));
+  }
+  if (!request.fixes_out.empty()) {
+    std::ostringstream text;
+    text << "# GPS fixes in the odom frame as navsat_transform_node placed them: t [s] x [m] y [m]\n";
+    for (const rlnode::GpsFix& f : rec.fixes) {
+      const Eigen::Vector3d p = rlnode::fix_in_odom(f, run.gps_transform);
+      text << fmt::format("{:.9f} {:.4f} {:.4f}\n", static_cast<double>(f.stamp_ns) * 1e-9, p.x(), p.y());
+    }
+    write_atomically(request.fixes_out, "fixes", text.str());
+  }
+  if (!request.json_out.empty()) {
+    nlohmann::json j = {
+        {"bag", rec.bag.string()},
+        {"params", rec.params.file.string()},
+        {"noise_from", request.noise_from.string()},
+        {"duration_s", out.duration_s},
+        {"final_position_m", {run.final_state[rl::kX], run.final_state[rl::kY], run.final_state[rl::kZ]}},
+        {"final_yaw_rad", run.final_state[rl::kYaw]},
+        {"processed", run.processed},
+        {"rejected", run.rejected}};
+    if (out.heldout) j["heldout_fixes"] = json_of(*out.heldout);
+    if (out.protocols) j["after_from"] = json_of(*out.protocols);
+    write_atomically(request.json_out, "JSON", j.dump(2) + "\n");
+  }
+  return out;
+}
+
+}  // namespace odotune

@@ -1,0 +1,103 @@
+// robot_localization's EKF on a robot's own bag and parameter file:
+// `odotune eval --rl-params P --bag B` replays and scores it,
+// `odotune tune --rl-params P --bag B` tunes its process noise (and advises
+// its inputs' covariances) and writes the user's file back with the tuned
+// values (rlnode/ replays the node, objectives/rl_objective.h scores it).
+//
+// Scores without ground truth, in the odom frame, by the GPS fixes as
+// navsat_transform_node turns them into odometry:
+//   held-out fixes  5 folds of 1 s blocks, the prediction at each held-out fix;
+//   outage          GPS fused until `from`, none after; the error at every later fix;
+//   every 5th       GPS fused until `from`; after it every 5th fix held out.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "jobs/tune_job.h"
+#include "objectives/rl_objective.h"
+#include "rlnode/gps_alignment.h"
+#include "rlnode/params.h"
+#include "rlnode/recording.h"
+#include "rlnode/replay.h"
+#include "tuner/summary.h"
+
+namespace odotune {
+
+struct RlSource {
+  std::filesystem::path params_file, bag;
+  std::string node_name;         // the EKF's section of the file when it has several
+  std::vector<std::string> tf;   // "FRAME=x,y,z,roll,pitch,yaw": FRAME's pose in base_link [m, rad]
+  std::string gps_topic;         // NavSatFix topic behind navsat's output (empty: the bag's one)
+  double gps_heading_fit_s = 0;  // > 0: fit navsat's rotation on the first seconds instead of the IMU's heading
+};
+
+struct RlLoaded {
+  rlnode::Recording rec;
+  std::optional<rlnode::GpsAlignment> alignment;
+};
+// Reads the parameter file and the bag; throws Failure with one line.
+RlLoaded load_rl(const RlSource& src);
+
+// "FRAME=x,y,z,roll,pitch,yaw" → (FRAME, pose); throws Failure naming the flag.
+std::pair<std::string, rlnode::Pose3> parse_tf(const std::string& text);
+
+struct RlProtocolScores {
+  FixScore outage, every_fifth;
+};
+RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
+                                 std::int64_t from_ns, std::int64_t until_ns);
+
+struct RlEvalRequest {
+  RlSource src;
+  std::optional<double> until_s, from_s;  // seconds from the recording's first message
+  // Another robot_localization file whose process_noise_covariance replaces
+  // this file's (e.g. a noise exported from another model); empty: none.
+  std::filesystem::path noise_from;
+  std::filesystem::path trajectory_out, json_out;
+  std::filesystem::path fixes_out;  // the GPS fixes in the odom frame (t x y), as navsat placed them
+};
+
+struct RlEvalOutcome {
+  std::filesystem::path bag, params_file;
+  filters::rl::State final_state;
+  double duration_s = 0.0;
+  long processed = 0, rejected = 0;
+  std::optional<FixScore> heldout;            // 5 folds of 1 s blocks over the span
+  std::optional<RlProtocolScores> protocols;  // with from_s
+  std::optional<rlnode::GpsAlignment> alignment;
+  std::vector<std::string> notes;
+};
+RlEvalOutcome run_rl_eval(const RlEvalRequest& request);
+
+struct RlTuneRequest : SolverSettings {
+  RlSource src;
+  std::optional<double> until_s;  // tune on the recording before this [s]; the rest is held out
+  std::optional<double> end_s;    // ignore the recording after this [s] (the held-out span ends there)
+  RlTuneOptions options;
+  std::filesystem::path config_out, json_out;
+  bool ros1_out = false;                  // write the ROS 1 form (default ROS 2)
+  std::filesystem::path config_out_ros1;  // also the ROS 1 form, here
+  std::string command_line;               // for the file's provenance comment
+
+  bool IsValid(std::string* why) const;
+};
+
+struct RlTuneOutcome {
+  std::filesystem::path bag, params_file;
+  double span_s = 0.0, duration_s = 0.0;
+  std::vector<std::string> param_names;
+  std::vector<double> factors;  // per parameter: the tuned multiplier
+  rlnode::ReplaySettings baseline, tuned;
+  double baseline_fitness = 0.0, tuned_fitness = 0.0;
+  FixScore baseline_heldout, tuned_heldout, baseline_outage, tuned_outage;  // on the tuning span
+  std::optional<RlProtocolScores> baseline_after, tuned_after;              // after until_s: never seen
+  tuner::Summary summary;
+  std::optional<rlnode::GpsAlignment> alignment;
+  std::vector<std::string> notes;
+};
+RlTuneOutcome run_rl_tune(const RlTuneRequest& request);
+
+}  // namespace odotune

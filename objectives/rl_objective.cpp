@@ -1,0 +1,206 @@
+#include "objectives/rl_objective.h"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace odotune {
+namespace {
+
+namespace rl = filters::rl;
+using rlnode::FixRole;
+
+// The state members two_d_mode measures as zero: not worth searching there.
+bool forced_in_2d(int m) {
+  return m == rl::kZ || m == rl::kRoll || m == rl::kPitch || m == rl::kVz || m == rl::kVroll ||
+         m == rl::kVpitch || m == rl::kAz;
+}
+
+constexpr const char* kMemberNames[rl::kStateSize] = {
+    "x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz", "vroll", "vpitch", "vyaw", "ax", "ay", "az"};
+
+// A penalty the solvers rank below every real score.
+constexpr double kDiverged = 1e9;
+
+}  // namespace
+
+std::string_view to_string(RlFitness f) {
+  switch (f) {
+    case RlFitness::heldout_fixes: return "heldout-fixes";
+    case RlFitness::outage: return "outage";
+    case RlFitness::both: return "both";
+  }
+  return "";
+}
+
+std::string_view to_string(RlNoiseSpace s) {
+  switch (s) {
+    case RlNoiseSpace::diagonal: return "diagonal";
+    case RlNoiseSpace::blocks: return "blocks";
+  }
+  return "";
+}
+
+bool RlTuneOptions::IsValid(std::string* why) const {
+  auto fail = [why](std::string s) {
+    if (why) *why = std::move(s);
+    return false;
+  };
+  if (folds < 2) return fail(fmt::format("folds = {}, expected at least 2", folds));
+  if (!(block_s > 0.0)) return fail(fmt::format("block_s = {}, expected > 0", block_s));
+  if (!(outage_s > 0.0)) return fail(fmt::format("outage_s = {}, expected > 0", outage_s));
+  if (!(decades_down >= 0.0 && decades_up >= 0.0 && decades_down + decades_up > 0.0)) {
+    return fail(fmt::format("decades {} down, {} up: expected ≥ 0 and a non-empty range", decades_down,
+                            decades_up));
+  }
+  return true;
+}
+
+FixScore score_of(std::span<const rlnode::ReplayOutput> outputs) {
+  FixScore s;
+  double sum = 0.0;
+  for (const rlnode::ReplayOutput& o : outputs) {
+    s.finite = s.finite && o.finite;
+    for (const rlnode::ScoredFix& f : o.scored) sum += (f.predicted - f.measured).head<2>().squaredNorm();
+    s.fixes += static_cast<long>(o.scored.size());
+  }
+  s.rmse_m = s.fixes > 0 ? std::sqrt(sum / static_cast<double>(s.fixes))
+                         : std::numeric_limits<double>::quiet_NaN();
+  if (!std::isfinite(s.rmse_m)) s.finite = false;
+  return s;
+}
+
+std::vector<std::vector<FixRole>> heldout_fix_folds(const rlnode::Recording& rec, int folds, double block_s,
+                                                    std::int64_t until_ns) {
+  std::vector<std::vector<FixRole>> out(folds, std::vector<FixRole>(rec.fixes.size(), FixRole::fuse));
+  if (rec.fixes.empty()) return out;
+  const std::int64_t t0 = rec.fixes.front().stamp_ns;
+  for (std::size_t i = 0; i < rec.fixes.size(); ++i) {
+    if (rec.fixes[i].stamp_ns >= until_ns) continue;
+    const auto block = static_cast<long>(
+        std::floor(static_cast<double>(rec.fixes[i].stamp_ns - t0) * 1e-9 / block_s));
+    out[block % folds][i] = FixRole::score;
+  }
+  return out;
+}
+
+std::vector<FixRole> outage_roles(const rlnode::Recording& rec, double outage_s, std::int64_t until_ns) {
+  std::vector<FixRole> roles(rec.fixes.size(), FixRole::fuse);
+  if (rec.fixes.empty()) return roles;
+  const double t0 = static_cast<double>(rec.fixes.front().stamp_ns) * 1e-9;
+  for (std::size_t i = 0; i < rec.fixes.size(); ++i) {
+    const double since = static_cast<double>(rec.fixes[i].stamp_ns) * 1e-9 - t0 - 0.5 * outage_s;
+    if (since < 0.0 || rec.fixes[i].stamp_ns >= until_ns) continue;
+    if (std::fmod(since, 1.5 * outage_s) < outage_s) roles[i] = FixRole::score;
+  }
+  return roles;
+}
+
+RlObjective::RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySettings& base,
+                         const RlTuneOptions& options)
+    : rec_(&rec), base_(base), options_(options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("rl tune: " + why);
+  if (rec.fixes.empty()) {
+    throw std::invalid_argument(
+        fmt::format("{}: no GPS fixes to score the filter by; expected a NavSatFix topic "
+                    "fused through navsat_transform_node's output",
+                    rec.bag.string()));
+  }
+  std::vector<ParamSpec> specs;
+  const double lo = std::pow(10.0, -options.decades_down), hi = std::pow(10.0, options.decades_up);
+  auto add_noise = [&](std::string name, std::vector<int> members, std::string meaning) {
+    specs.push_back({std::move(name), "×", lo, hi, true, std::move(meaning)});
+    noise_members_.push_back(std::move(members));
+  };
+  const bool two_d = rec.params.two_d_mode;
+  if (options.space == RlNoiseSpace::diagonal) {
+    for (int m = 0; m < rl::kStateSize; ++m) {
+      if (two_d && forced_in_2d(m)) continue;
+      add_noise(fmt::format("q_{}", kMemberNames[m]), {m},
+                "factor on process_noise_covariance's diagonal entry");
+    }
+  } else {
+    const char* names[5] = {"q_position", "q_orientation", "q_linear_velocity", "q_angular_velocity",
+                            "q_acceleration"};
+    for (int b = 0; b < 5; ++b) {
+      std::vector<int> members;
+      for (int m = 3 * b; m < 3 * b + 3; ++m) {
+        if (!(two_d && forced_in_2d(m))) members.push_back(m);
+      }
+      add_noise(names[b], members, "factor on a block of process_noise_covariance");
+    }
+  }
+  if (options.input_covariances) {
+    for (std::size_t s = 0; s < rec.params.sensors.size(); ++s) {
+      specs.push_back({"cov_" + rec.params.sensors[s].name, "×", lo, hi, true,
+                       "factor on the input's message covariance"});
+      cov_sensors_.push_back(static_cast<int>(s));
+    }
+  }
+  space_ = BoxSpace(std::move(specs));
+
+  const bool want_heldout = options.fitness != RlFitness::outage;
+  const bool want_outage = options.fitness != RlFitness::heldout_fixes;
+  if (want_heldout) {
+    for (const auto& roles : heldout_fix_folds(rec, options.folds, options.block_s, options.until_ns)) {
+      heldout_.push_back(rlnode::make_schedule(rec, roles, options.until_ns));
+    }
+  }
+  if (want_outage) {
+    outage_.push_back(rlnode::make_schedule(rec, outage_roles(rec, options.outage_s, options.until_ns),
+                                            options.until_ns));
+  }
+  if (want_heldout) heldout_base_ = heldout_score(base_).rmse_m;
+  if (want_outage) outage_base_ = outage_score(base_).rmse_m;
+  if (!(heldout_base_ > 0.0) || !(outage_base_ > 0.0)) {
+    throw std::invalid_argument(
+        fmt::format("{}: no fix is scored before the tuning span ends (outages of {} s); "
+                    "expected a longer span or shorter outages",
+                    rec.bag.string(), options.outage_s));
+  }
+}
+
+rlnode::ReplaySettings RlObjective::settings_at(std::span<const double> x) const {
+  const std::vector<double> v = space_.to_physical(x);
+  rlnode::ReplaySettings s = base_;
+  std::size_t k = 0;
+  for (const std::vector<int>& members : noise_members_) {
+    for (int m : members) s.process_noise(m, m) = base_.process_noise(m, m) * v[k];
+    ++k;
+  }
+  for (int sensor : cov_sensors_) s.covariance_scale[sensor] = base_.covariance_scale[sensor] * v[k++];
+  return s;
+}
+
+FixScore RlObjective::heldout_score(const rlnode::ReplaySettings& s) const {
+  std::vector<rlnode::ReplayOutput> outs;
+  for (const rlnode::Schedule& schedule : heldout_) outs.push_back(rlnode::replay(*rec_, schedule, s));
+  return score_of(outs);
+}
+
+FixScore RlObjective::outage_score(const rlnode::ReplaySettings& s) const {
+  std::vector<rlnode::ReplayOutput> outs;
+  for (const rlnode::Schedule& schedule : outage_) outs.push_back(rlnode::replay(*rec_, schedule, s));
+  return score_of(outs);
+}
+
+double RlObjective::fitness(std::span<const double> x) const {
+  const rlnode::ReplaySettings s = settings_at(x);
+  double f = 0.0;
+  if (!heldout_.empty()) {
+    const FixScore h = heldout_score(s);
+    if (!h.finite) return kDiverged;
+    f += options_.fitness == RlFitness::both ? h.rmse_m / heldout_base_ : h.rmse_m;
+  }
+  if (!outage_.empty()) {
+    const FixScore o = outage_score(s);
+    if (!o.finite) return kDiverged;
+    f += options_.fitness == RlFitness::both ? o.rmse_m / outage_base_ : o.rmse_m;
+  }
+  return f;
+}
+
+}  // namespace odotune

@@ -1,0 +1,95 @@
+// eval and tune with --rl-params: robot_localization's EKF from the Husky bag
+// and the user's parameter file (husky_ekf.yaml), end to end through the
+// binary; the tuned file replays to the figures the tune reported.
+#include <gtest/gtest.h>
+
+#include <regex>
+#include <string>
+
+#include "rlnode/params.h"
+#include "support/cli_runner.h"
+#include "support/temp_dir.h"
+
+using odotune::testing_support::run_cli;
+using odotune::testing_support::slurp;
+using odotune::testing_support::TempDir;
+
+namespace {
+
+const std::string kBags = std::string(ODOTUNE_SHARED_DIR) + "/data/real/robot_localization_bags";
+const std::string kSource =
+    "--rl-params " + kBags + "/husky_ekf.yaml --bag " + kBags +
+    "/ros2/test1.mcap --tf imu_link=0,-0.3,0.52,1.5707963267948966,0,-1.5707963267948966 "
+    "--gps-heading-fit 60";
+
+double number_after(const std::string& text, const std::string& label) {
+  const std::regex re(label + R"(\s*([-0-9.]+))");
+  std::smatch m;
+  if (!std::regex_search(text, m, re)) return -1e300;
+  return std::stod(m[1]);
+}
+
+}  // namespace
+
+TEST(CliRl, EvalReplaysTheUsersFileAndScoresTheSecondHalf) {
+  TempDir dir("cli-rl-eval");
+  const auto json = dir.path() / "e.json", tum = dir.path() / "e.tum";
+  const auto r = run_cli("eval " + kSource + " --from 197.65 --json " + json.string() + " --trajectory-out " +
+                         tum.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("GPS heading fitted"), std::string::npos) << r.out;
+  // robot_localization's defaults on the held-out half: the outage error is
+  // metres, the every-5th-fix error under a metre (docs/husky.md).
+  const double outage = number_after(r.out, "GPS outage RMSE");
+  const double fifth = number_after(r.out, "every 5th fix held out: RMSE");
+  EXPECT_GT(outage, 5.0) << r.out;
+  EXPECT_GT(fifth, 0.1) << r.out;
+  EXPECT_LT(fifth, 1.5) << r.out;
+  EXPECT_NE(slurp(json).find("\"every_fifth_fix\""), std::string::npos);
+  const std::string t = slurp(tum);
+  EXPECT_GT(std::count(t.begin(), t.end(), '\n'), 10000);  // 30 Hz over 395 s
+}
+
+TEST(CliRl, RefusesFlagsThatBelongToTracks) {
+  const auto a = run_cli("eval " + kSource + " --track " + odotune::testing_support::reference_track(1));
+  EXPECT_NE(a.exit_code, 0);
+  EXPECT_NE(a.err.find("--rl-params"), std::string::npos) << a.err;
+  const auto b = run_cli("tune " + kSource + " --model alpha");
+  EXPECT_NE(b.exit_code, 0);
+  EXPECT_NE(b.err.find("--model does not apply to --rl-params"), std::string::npos) << b.err;
+  const auto c = run_cli("eval --rl-params " + kBags + "/husky_ekf.yaml --bag " + kBags +
+                         "/ros2/test1.mcap --tf imu_link=1,2");
+  EXPECT_NE(c.exit_code, 0);
+  EXPECT_NE(c.err.find("--tf imu_link=1,2"), std::string::npos) << c.err;
+  EXPECT_EQ(std::count(c.err.begin(), c.err.end(), '\n'), 1) << c.err;
+}
+
+// A small tune on the first 100 s: the written file is the user's file with
+// the tuned noise, it reads back, and replayed as written it gives the held-out
+// figure the tune printed.
+TEST(CliRl, TunedFileReplaysToTheReportedFigures) {
+  TempDir dir("cli-rl-tune");
+  const auto out = dir.path() / "ekf.yaml", ros1 = dir.path() / "ekf-ros1.yaml";
+  const auto r = run_cli("tune " + kSource +
+                         " --until 100 --fitness both --space blocks --no-input-covariances --particles 4 "
+                         "--iterations 2 --seed 3 --config-out " +
+                         out.string() + " --config-out-ros1 " + ros1.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string text = slurp(out);
+  EXPECT_NE(text.find("# Tuned by odotune"), std::string::npos);
+  EXPECT_NE(text.find("navsat_transform"), std::string::npos);  // the user's other section kept
+  const auto p2 = odotune::rlnode::read_rl_params(out);
+  const auto p1 = odotune::rlnode::read_rl_params(ros1);
+  EXPECT_TRUE(p2.ros2);
+  EXPECT_FALSE(p1.ros2);
+  EXPECT_EQ(p1.process_noise_covariance, p2.process_noise_covariance);
+  EXPECT_EQ(p2.sensors.size(), 3u);
+
+  const double tuned_outage = number_after(r.out, R"(GPS outage:\s+[0-9.]+ ->)");
+  const auto e = run_cli("eval --rl-params " + out.string() + " --bag " + kBags +
+                         "/ros2/test1.mcap --tf imu_link=0,-0.3,0.52,1.5707963267948966,0,-1.5707963267948966 "
+                         "--gps-heading-fit 60 --from 100");
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  const double replayed = number_after(e.out, "GPS outage RMSE");
+  EXPECT_NEAR(replayed, tuned_outage, 0.001) << r.out << "\n" << e.out;
+}
