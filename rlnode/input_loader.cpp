@@ -29,6 +29,7 @@ bool Loader::in_order(const std::string& callback, std::int64_t stamp_ns) {
     ++out_of_order_;
     return false;
   }
+  it->second = stamp_ns;
   return true;
 }
 
@@ -153,7 +154,12 @@ void Loader::prepare_differential(const PoseInput& in, const Pose3& pose, const 
                                   const std::string& callback) {
   auto prev = previous_.find(callback);
   if (prev != previous_.end()) {
-    const double dt = static_cast<double>(in.stamp_ns - last_stamp_.at(callback)) * 1e-9;
+    const double dt = static_cast<double>(in.stamp_ns - prev->second.stamp_ns) * 1e-9;
+    if (!(dt > 0.0)) {
+      // robot_localization would divide by zero here and fuse nothing finite.
+      ++repeated_differential_;
+      return;
+    }
     const Pose3& a = prev->second.pose;
     const Eigen::Vector3d dp = a.R.transpose() * (pose.t - a.t);
     const Rpy dr = rpy_of(a.R.transpose() * pose.R);
@@ -169,8 +175,7 @@ void Loader::prepare_differential(const PoseInput& in, const Pose3& pose, const 
     prepare_twist(tw, s, twist_mask, sensor(s).pose_rejection_threshold,
                   in.imu ? InputKind::imu_orientation : InputKind::pose);
   }
-  previous_[callback] = {pose, cov};
-  last_stamp_[callback] = in.stamp_ns;
+  previous_[callback] = {pose, cov, in.stamp_ns};
 }
 
 // prepareTwist: velocities rotated from the message's frame into base_link;
@@ -320,8 +325,18 @@ void Loader::on_fix(const ros::NavSatFix& m, std::int64_t receive_ns) {
   Prepared out;  // the position is filled in by the replay, from the fix and the datum
   for (int i = rl::kX; i <= rl::kZ; ++i) out.mask[i] = sp.config[i];
   if (p_.two_d_mode) force_two_d(out);
-  store(out, InputKind::gps, rec_.gps_sensor, f.stamp_ns, receive_ns, sp.pose_rejection_threshold,
-        Eigen::Vector3d::Zero(), false, static_cast<int>(rec_.fixes.size()) - 1);
+  // The antenna's offset from base_link, when its frame is known (navsat uses
+  // the identity when it cannot look the transform up).
+  Eigen::Vector3d antenna = Eigen::Vector3d::Zero();
+  if (!m.header.frame_id.empty() && m.header.frame_id != p_.base_link_frame) {
+    if (auto it = o_.frames.find(m.header.frame_id); it != o_.frames.end()) {
+      antenna = it->second.t;
+    } else if (auto jt = tf_.find(m.header.frame_id); jt != tf_.end()) {
+      antenna = jt->second.t;
+    }
+  }
+  store(out, InputKind::gps, rec_.gps_sensor, f.stamp_ns, receive_ns, sp.pose_rejection_threshold, antenna,
+        false, static_cast<int>(rec_.fixes.size()) - 1);
 }
 
 void Loader::finish() {

@@ -140,6 +140,17 @@ std::map<std::string, Pose3> static_frames(const std::filesystem::path& bag, con
 
 Recording load_recording(const std::filesystem::path& bag, const RlParams& params,
                          const RecordingOptions& options) {
+  if (!(params.frequency_hz >= 1e-3 && params.frequency_hz <= 1e5) || !(params.sensor_timeout_s >= 0.0)) {
+    throw std::invalid_argument(
+        fmt::format("{}: frequency {} Hz, sensor_timeout {} s: expected 0.001–100000 Hz and "
+                    "a timeout ≥ 0",
+                    params.file.string(), params.frequency_hz, params.sensor_timeout_s));
+  }
+  if (params.navsat.present && params.navsat.datum) {
+    throw std::invalid_argument(fmt::format("{}: navsat_transform_node's wait_for_datum with a datum is not "
+                                            "reproduced by the replay; expected wait_for_datum: false",
+                                            params.file.string()));
+  }
   const bags::BagInfo info = bags::inspect_bag(bag);
   const TopicPlan plan = plan_topics(info, params, options);
   Recording rec;

@@ -50,7 +50,8 @@ struct Input {
   std::uint32_t slot = 0;
   double threshold = kNoRejection;  // Mahalanobis threshold [σ]
   // Origin of the sensor's frame in base_link [m]: the lever arm of the
-  // twist's ω × r and the acceleration's α × r − (ω × r) × ω terms.
+  // twist's ω × r and the acceleration's α × r − (ω × r) × ω terms, and the GPS
+  // antenna's offset that navsat_transform_node removes from each fix.
   Eigen::Vector3d lever = Eigen::Vector3d::Zero();
   bool gravity_from_state = false;  // acceleration: remove g with the filter's attitude
   int fix = -1;                     // gps: index into Recording::fixes

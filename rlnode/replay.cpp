@@ -72,7 +72,8 @@ Schedule make_schedule(const Recording& rec, std::span<const FixRole> roles, std
     for (; next < rec.inputs.size() && rec.inputs[next].receive_ns <= t; ++next) {
       const Input& in = rec.inputs[next];
       const auto i = static_cast<std::int32_t>(next);
-      const bool datum = in.kind == InputKind::gps && datum_pending;
+      // navsat_transform_node takes its datum once the filter has published.
+      const bool datum = in.kind == InputKind::gps && datum_pending && clock.initialized;
       if (datum) datum_pending = false;
       if (in.stamp_ns >= until_ns) continue;
       const FixRole r = role(in);
@@ -156,6 +157,7 @@ class Run {
   rl::Measurement m_;                    // scratch
   Eigen::Vector3d last_rates_ = Eigen::Vector3d::Zero(), angular_acc_ = Eigen::Vector3d::Zero();
   double last_diff_s_ = 0.0;
+  bool datum_taken_ = false;
   ReplayOutput out_;
 };
 
@@ -167,12 +169,20 @@ void Run::callback(int i) {
   const rl::State& x = filter_.state();
   const Eigen::Vector3d w = x.segment<3>(rl::kVroll);
   if (in.kind == InputKind::gps) {
-    GpsTransform& g = out_.gps_transform;
+    // navsat_transform_node: the datum at the first fix after the filter has
+    // published (the antenna's offset turned by the IMU's heading), then each
+    // fix less the antenna's offset turned by the filter's attitude.
     const GpsFix& f = rec_.fixes[in.fix];
-    g.grid_origin = f.p;
-    g.odom_origin = x.segment<3>(rl::kX);
-    if (rec_.params.navsat.zero_altitude) g.odom_origin.z() = 0.0;
-    g.rotation_rad = x[rl::kYaw] - (rec_.navsat_imu_yaw_rad + f.convergence_rad);
+    if (!out_.gps_transform.fixed && !datum_taken_) {
+      GpsTransform& g = out_.gps_transform;
+      const double imu_yaw = rec_.navsat_imu_yaw_rad + f.convergence_rad;
+      g.grid_origin = f.p - rotation_rpy(0.0, 0.0, imu_yaw) * in.lever;
+      g.odom_origin = x.segment<3>(rl::kX);
+      if (rec_.params.navsat.zero_altitude) g.odom_origin.z() = 0.0;
+      g.rotation_rad = x[rl::kYaw] - imu_yaw;
+      datum_taken_ = true;
+    }
+    adjust_[i] = -(rotation_rpy(x[rl::kRoll], x[rl::kPitch], x[rl::kYaw]) * in.lever);
     return;
   }
   Eigen::Vector3d a = Eigen::Vector3d::Zero();
@@ -200,18 +210,21 @@ void Run::process(int i) {
     m_.z[r] = v[a];
     for (int b = 0; b < in.n; ++b) m_.R(r, in.idx[b]) = scale * v[in.n + a * in.n + b];
   }
+  // two_d_mode's forced members (z, a_z, …) keep their zeros: the node forces
+  // them after adding these terms.
+  const int components = rec_.params.two_d_mode ? 2 : 3;
   const int offset = in.kind == InputKind::acceleration ? rl::kAx : rl::kVx;
   if (in.kind == InputKind::twist || in.kind == InputKind::acceleration) {
-    m_.z.segment<3>(offset) += adjust_[i];
+    m_.z.segment(offset, components) += adjust_[i].head(components);
   } else if (in.kind == InputKind::gps) {
     const GpsFix& f = rec_.fixes[in.fix];
     const Eigen::Matrix3d rot = rotation_rpy(0.0, 0.0, out_.gps_transform.rotation_rad);
     const Eigen::Matrix3d cov = scale * rot * f.cov * rot.transpose();
-    const Eigen::Vector3d p = fix_in_odom(f, out_.gps_transform);
-    for (int r = rl::kX; r <= rl::kZ; ++r) {
-      if (!m_.mask[r] || (rec_.params.two_d_mode && r == rl::kZ)) continue;
+    const Eigen::Vector3d p = fix_in_odom(f, out_.gps_transform) + adjust_[i];
+    for (int r = rl::kX; r < rl::kX + components; ++r) {
+      if (!m_.mask[r]) continue;
       m_.z[r] = p[r];
-      for (int c = rl::kX; c <= rl::kZ; ++c) m_.R(r, c) = cov(r, c);
+      for (int c = rl::kX; c < rl::kX + components; ++c) m_.R(r, c) = cov(r, c);
     }
   }
   m_.mahalanobis_threshold = threshold_of(in);
@@ -230,9 +243,10 @@ void Run::score(int i) {
   s.stamp_ns = in.stamp_ns;
   const double dt = static_cast<double>(in.stamp_ns - filter_.last_time_ns()) * 1e-9;
   const rl::State& x = filter_.state();
-  s.predicted = dt > 0.0 ? Eigen::Vector3d((rl::transition(x, dt).A * x).head<3>())
-                         : Eigen::Vector3d(x.head<3>());
-  s.measured = fix_in_odom(f, out_.gps_transform);
+  const rl::State at = dt > 0.0 ? rl::State(rl::transition(x, dt).A * x) : x;
+  s.predicted = at.head<3>();
+  s.predicted_yaw = at[rl::kYaw];
+  s.measured = fix_in_odom(f, out_.gps_transform) + adjust_[i];
   const Eigen::Matrix2d rot = rotation_rpy(0.0, 0.0, out_.gps_transform.rotation_rad).topLeftCorner<2, 2>();
   s.fix_cov = rot * f.cov.topLeftCorner<2, 2>() * rot.transpose();
   out_.scored.push_back(s);

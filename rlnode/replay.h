@@ -62,8 +62,9 @@ Schedule make_schedule(const Recording& rec, std::span<const FixRole> roles = {}
 struct ScoredFix {
   int fix = -1;
   std::int64_t stamp_ns = 0;
-  Eigen::Vector3d predicted =
-      Eigen::Vector3d::Zero();  // the filter's position at the fix's stamp, odom frame [m]
+  // The filter's position [m] and yaw [rad] at the fix's stamp, odom frame.
+  Eigen::Vector3d predicted = Eigen::Vector3d::Zero();
+  double predicted_yaw = 0.0;
   Eigen::Vector3d measured = Eigen::Vector3d::Zero();  // the fix in the odom frame [m]
   Eigen::Matrix2d fix_cov = Eigen::Matrix2d::Zero();   // its x, y covariance in the odom frame [m²]
 };

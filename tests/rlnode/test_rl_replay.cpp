@@ -336,3 +336,27 @@ TEST(RlReplay, GpsHeadingFitFindsTheRotation) {
   for (const ScoredFix& s : out.scored) worst = std::max(worst, (s.predicted - s.measured).head<2>().norm());
   EXPECT_LT(worst, 0.1);
 }
+
+// The node drops a message stamped before its topic's previous one (not only
+// before the first), and says how many it dropped.
+TEST(RlReplay, MessageOlderThanItsPredecessorIsDropped) {
+  TempDir dir("rl-order");
+  const std::int64_t stamps[] = {1'000'000'000, 1'100'000'000, 1'300'000'000, 1'200'000'000, 1'400'000'000};
+  std::vector<BagMessageSpec> msgs;
+  std::uint64_t receive = 1'000'000'000;
+  for (std::int64_t t : stamps) {
+    msgs.push_back({0, receive, odotune::testing_support::odometry(t, 1.0, 0.0)});
+    receive += 100'000'000;
+  }
+  const auto bag = dir.path() / "order.mcap";
+  odotune::testing_support::write_ros2_mcap(bag, {{"/odom", "nav_msgs/msg/Odometry"}}, msgs);
+  const RlParams p = read_rl_params(
+      write_file(dir.path() / "p.yaml",
+                 "ekf:\n  ros__parameters:\n    odom0: /odom\n    odom0_config: [false, false, false, "
+                 "false, false, false, true, false, false, false, false, false, false, false, false]\n"));
+  const Recording rec = load_recording(bag, p);
+  ASSERT_EQ(rec.inputs.size(), 4u);
+  for (const Input& in : rec.inputs) EXPECT_NE(in.stamp_ns, 1'200'000'000);
+  ASSERT_EQ(rec.notes.size(), 1u);
+  EXPECT_NE(rec.notes[0].find("1 message"), std::string::npos) << rec.notes[0];
+}
