@@ -28,8 +28,10 @@ void register_eval(CLI::App& app) {
   sub->add_option("--config", req->config, "configuration YAML (format odotune-ekf-config/1)");
   sub->add_option("--track", req->tracks, "track file (repeat for several)");
   sub->add_option("--json", req->json_out, "write the metrics as JSON to this file");
-  sub->add_option("--trajectory-out", req->trajectory_out,
-                  "write the filter's trajectory in TUM format (t x y z qx qy qz qw; evo reads it); one track");
+  sub->add_option(
+      "--trajectory-out", req->trajectory_out,
+      "write the filter's trajectory in TUM format (t x y z qx qy qz qw; evo reads it); one track; with "
+      "--rl-params and --from, the run with GPS fused before --from only");
   auto rl = std::make_shared<RlEvalRequest>();
   add_rl_source_options(sub, rl->src);
   sub->add_option("--until", rl->until_s, "--rl-params: use the recording before this many seconds")

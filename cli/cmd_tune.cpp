@@ -62,6 +62,7 @@ void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const R
                                 opt->get_name()));
     }
     command += " " + opt->get_name();
+    if (opt->get_expected_min() == 0) continue;  // a flag: its name says it
     for (const std::string& v : opt->results()) command += " " + v;
   }
   static_cast<SolverSettings&>(r) = req;

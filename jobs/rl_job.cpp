@@ -164,9 +164,21 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
     if (request.from_s) out.protocols = score_protocols(rec, s, at_seconds(rec, request.from_s), until);
   }
   if (!request.trajectory_out.empty()) {
-    write_trajectory(request.trajectory_out, run.trajectory,
-                     fmt::format("robot_localization EKF replayed by odotune: {} with {}",
-                                 rec.bag.filename().string(), rec.params.file.filename().string()));
+    // With --from, the outage run: GPS fused before --from only.
+    std::vector<rlnode::TrajectoryPoint> points = run.trajectory;
+    std::string what = "all inputs";
+    if (request.from_s && !rec.fixes.empty()) {
+      const std::int64_t from = at_seconds(rec, request.from_s);
+      std::vector<rlnode::FixRole> roles(rec.fixes.size(), rlnode::FixRole::fuse);
+      for (std::size_t i = 0; i < roles.size(); ++i) {
+        if (rec.fixes[i].stamp_ns >= from) roles[i] = rlnode::FixRole::absent;
+      }
+      points = rlnode::replay(rec, rlnode::make_schedule(rec, roles, until), s, true).trajectory;
+      what = fmt::format("GPS fused until {} s only", *request.from_s);
+    }
+    write_trajectory(request.trajectory_out, points,
+                     fmt::format("robot_localization EKF replayed by odotune: {} with {}, {}",
+                                 rec.bag.filename().string(), rec.params.file.filename().string(), what));
   }
   if (!request.fixes_out.empty()) {
     std::ostringstream text;
