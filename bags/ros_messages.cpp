@@ -107,6 +107,17 @@ PoseStamped decode_pose_with_covariance_stamped(std::span<const std::uint8_t> da
   return p;
 }
 
+TwistWithCovarianceStamped decode_twist_with_covariance_stamped(std::span<const std::uint8_t> data,
+                                                                WireEncoding encoding) {
+  WireReader r(data, encoding);
+  TwistWithCovarianceStamped t;
+  t.header = header(r);
+  t.linear = vector3(r, "twist.twist.linear");
+  t.angular = vector3(r, "twist.twist.angular");
+  t.covariance = doubles<36>(r, "twist.covariance");
+  return t;
+}
+
 JointState decode_joint_state(std::span<const std::uint8_t> data, WireEncoding encoding) {
   WireReader r(data, encoding);
   JointState j;

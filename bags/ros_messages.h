@@ -77,6 +77,13 @@ struct PoseStamped {
 };
 
 // sensor_msgs/JointState.
+// geometry_msgs/TwistWithCovarianceStamped (robot_localization's twistN inputs).
+struct TwistWithCovarianceStamped {
+  Header header;
+  Vector3 linear, angular;  // [m/s], [rad/s]
+  std::array<double, 36> covariance{};
+};
+
 struct JointState {
   Header header;
   std::vector<std::string> name;
@@ -103,6 +110,8 @@ Imu decode_imu(std::span<const std::uint8_t> data, WireEncoding encoding);
 NavSatFix decode_navsatfix(std::span<const std::uint8_t> data, WireEncoding encoding);
 PoseStamped decode_pose_stamped(std::span<const std::uint8_t> data, WireEncoding encoding);
 PoseStamped decode_pose_with_covariance_stamped(std::span<const std::uint8_t> data, WireEncoding encoding);
+TwistWithCovarianceStamped decode_twist_with_covariance_stamped(std::span<const std::uint8_t> data,
+                                                                WireEncoding encoding);
 JointState decode_joint_state(std::span<const std::uint8_t> data, WireEncoding encoding);
 TFMessage decode_tf_message(std::span<const std::uint8_t> data, WireEncoding encoding);
 

@@ -95,6 +95,22 @@ void Loader::on_pose(const ros::PoseStamped& m, int s, std::int64_t receive_ns) 
   if (in_order(sp.name, in.stamp_ns)) prepare_pose(in, s, mask, sp.name);
 }
 
+// twistCallback: twistN_config's velocity (and, as the node keeps them,
+// acceleration) members, in the message's frame.
+void Loader::on_twist(const ros::TwistWithCovarianceStamped& m, int s, std::int64_t receive_ns) {
+  const SensorParams& sp = sensor(s);
+  rl::Mask mask = sp.config;
+  std::fill(mask.begin(), mask.begin() + rl::kVx, false);
+  TwistInput in{m.header.stamp_ns,
+                receive_ns,
+                m.header.frame_id,
+                {m.linear.x, m.linear.y, m.linear.z},
+                {m.angular.x, m.angular.y, m.angular.z},
+                to_mat6(m.covariance)};
+  if (in_order(sp.name, in.stamp_ns))
+    prepare_twist(in, s, mask, sp.twist_rejection_threshold, InputKind::twist);
+}
+
 // preparePose. Poses are taken in the world frame; an IMU's orientation is
 // reported in the world but measured by a sensor mounted in its frame, so its
 // roll, pitch and yaw lose the mounting's angles and are turned by its yaw.

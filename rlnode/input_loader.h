@@ -87,6 +87,7 @@ class Loader {
 
   void on_odometry(const ros::Odometry& m, int s, std::int64_t receive_ns);
   void on_pose(const ros::PoseStamped& m, int s, std::int64_t receive_ns);
+  void on_twist(const ros::TwistWithCovarianceStamped& m, int s, std::int64_t receive_ns);
   void on_imu(const ros::Imu& m, int s, std::int64_t receive_ns);
   void on_fix(const ros::NavSatFix& m, std::int64_t receive_ns);
   void note_imu_orientation(const ros::Imu& m, std::int64_t receive_ns);

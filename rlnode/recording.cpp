@@ -60,12 +60,6 @@ TopicPlan plan_topics(const bags::BagInfo& info, const RlParams& params, const R
       throw std::invalid_argument(fmt::format("{}: {} topic {} is {}, expected {}", info.path.string(), sp.name,
                                               topic, it->second, expected_type(sp.kind)));
     }
-    if (sp.kind == SensorKind::twist) {
-      throw std::invalid_argument(
-          fmt::format("{}: {} ({}): TwistWithCovarianceStamped inputs are not read by this "
-                      "version; expected odomN, imuN or poseN inputs",
-                      info.path.string(), sp.name, topic));
-    }
     if (sp.kind == SensorKind::imu && plan.imu_topic.empty()) plan.imu_topic = topic;
     plan.sensors_of[topic].push_back(static_cast<int>(s));
   }
@@ -184,6 +178,10 @@ Recording load_recording(const std::filesystem::path& bag, const RlParams& param
         } else if (kind == SensorKind::pose) {
           const ros::PoseStamped p = ros::decode_pose_with_covariance_stamped(m.data, m.encoding);
           for (int s : it->second) loader.on_pose(p, s, m.receive_time_ns);
+        } else if (kind == SensorKind::twist) {
+          const ros::TwistWithCovarianceStamped t = ros::decode_twist_with_covariance_stamped(m.data,
+                                                                                              m.encoding);
+          for (int s : it->second) loader.on_twist(t, s, m.receive_time_ns);
         }
       });
   loader.finish();

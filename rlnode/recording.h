@@ -18,8 +18,7 @@
 //
 // Errors: one line (std::invalid_argument), naming the bag, the parameter and
 // what was expected: a configured topic missing from the bag or of another
-// type, a frame without a transform, an input kind the bag reader cannot
-// decode.
+// type, a frame without a transform.
 #pragma once
 
 #include <array>

@@ -360,3 +360,33 @@ TEST(RlReplay, MessageOlderThanItsPredecessorIsDropped) {
   ASSERT_EQ(rec.notes.size(), 1u);
   EXPECT_NE(rec.notes[0].find("1 message"), std::string::npos) << rec.notes[0];
 }
+
+// A twistN input (TwistWithCovarianceStamped), measured in a frame turned by
+// 90° about z from base_link: its x velocity is the robot's y velocity.
+TEST(RlReplay, TwistInputIsRotatedIntoBaseLink) {
+  TempDir dir("rl-twist");
+  std::vector<BagMessageSpec> msgs;
+  for (int k = 0; k <= 100; ++k) {
+    const std::int64_t t = 1'000'000'000 + k * 50'000'000LL;
+    odotune::testing_support::Cdr c;
+    c.header(t, "sensor");
+    c.put(0.5).put(0.0).put(0.0);  // linear
+    c.put(0.0).put(0.0).put(0.0);  // angular
+    c.doubles(36, 0.0);
+    msgs.push_back({0, static_cast<std::uint64_t>(t), c.b});
+  }
+  const auto bag = dir.path() / "twist.mcap";
+  odotune::testing_support::write_ros2_mcap(bag, {{"/vel", "geometry_msgs/msg/TwistWithCovarianceStamped"}},
+                                            msgs);
+  const RlParams p = read_rl_params(
+      write_file(dir.path() / "p.yaml",
+                 "ekf:\n  ros__parameters:\n    two_d_mode: true\n    twist0: /vel\n    twist0_config: "
+                 "[false, false, false, false, false, false, true, true, false, false, false, true, false, "
+                 "false, false]\n"));
+  RecordingOptions o;
+  o.frames["sensor"].R = rotation_rpy(0.0, 0.0, std::numbers::pi / 2);
+  const rl::State x = final_state(bag, p, o);
+  EXPECT_NEAR(x[rl::kVy], 0.5, 1e-6);
+  EXPECT_NEAR(x[rl::kVx], 0.0, 1e-6);
+  EXPECT_NEAR(x[rl::kY], 2.5, 0.05);  // 5 s at 0.5 m/s
+}
