@@ -16,6 +16,7 @@
 #include "rlnode/params.h"
 #include "rlnode/recording.h"
 #include "rlnode/replay.h"
+#include "support/rl_gps_bag.h"
 #include "support/ros2_bag.h"
 #include "support/temp_dir.h"
 
@@ -264,62 +265,14 @@ TEST(RlReplay, MissingTopicIsRefusedWithTheBagsTopics) {
   }
 }
 
-namespace {
-
-// Odometry driving a 20 m square at 1 m/s in the odom frame, and GPS fixes
-// (2 Hz, σ 1 cm) of the same path turned by `heading` [rad] in east/north.
-std::filesystem::path gps_bag(const std::filesystem::path& dir, double heading) {
-  GeographicLib::LocalCartesian local(42.0, -71.0, 0.0);
-  std::vector<BagMessageSpec> msgs;
-  double x = 0.0, y = 0.0, yaw = 0.0;
-  const double dt = 0.05;
-  for (int k = 0; k <= 1600; ++k) {
-    const std::int64_t t = 1'000'000'000 + k * 50'000'000LL;
-    const double w = (k % 400 >= 380) ? (std::numbers::pi / 2) / (20 * dt) : 0.0;  // turn at each corner
-    const double v = w == 0.0 ? 1.0 : 0.0;
-    msgs.push_back({0, static_cast<std::uint64_t>(t), odotune::testing_support::odometry(t, v, w)});
-    if (k % 10 == 0) {
-      const double e = std::cos(heading) * x - std::sin(heading) * y,
-                   n = std::sin(heading) * x + std::cos(heading) * y;
-      double lat = 0, lon = 0, h = 0;
-      local.Reverse(e, n, 0.0, lat, lon, h);
-      msgs.push_back({1, static_cast<std::uint64_t>(t),
-                      odotune::testing_support::navsatfix(t, lat, lon, 1e-4)});
-    }
-    x += v * std::cos(yaw) * dt;
-    y += v * std::sin(yaw) * dt;
-    yaw += w * dt;
-  }
-  const auto path = dir / "gps.mcap";
-  odotune::testing_support::write_ros2_mcap(
-      path, {{"/odom", "nav_msgs/msg/Odometry"}, {"/fix", "sensor_msgs/msg/NavSatFix"}}, msgs);
-  return path;
-}
-
-const char* kGpsParams = R"(ekf:
-  ros__parameters:
-    frequency: 20.0
-    two_d_mode: true
-    odom0: /odom
-    odom0_config: [false, false, false, false, false, false, true, true, false, false, false, true, false, false, false]
-    odom1: /odometry/gps
-    odom1_config: [true, true, false, false, false, false, false, false, false, false, false, false, false, false, false]
-navsat:
-  ros__parameters:
-    zero_altitude: true
-    use_local_cartesian: true
-)";
-
-}  // namespace
-
 // The rotation between the GPS's east/north and the odom frame, fitted on the
 // first seconds of fixes, is the one the bag was made with; with it the fixes
 // land on the odometry's path.
 TEST(RlReplay, GpsHeadingFitFindsTheRotation) {
   TempDir dir("rl-gps");
   const double heading = 0.7;
-  const RlParams p = read_rl_params(write_file(dir.path() / "p.yaml", kGpsParams));
-  Recording rec = load_recording(gps_bag(dir.path(), heading), p);
+  const RlParams p = read_rl_params(write_file(dir.path() / "p.yaml", odotune::testing_support::kRlGpsParams));
+  Recording rec = load_recording(odotune::testing_support::rl_gps_bag(dir.path(), heading), p);
   ASSERT_EQ(rec.gps_sensor, 1);
   ASSERT_GT(rec.fixes.size(), 100u);
   const GpsAlignment a = fit_gps_alignment(rec, settings_of(p), 30.0);
