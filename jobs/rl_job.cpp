@@ -110,7 +110,8 @@ RlLoaded load_rl(const RlSource& src) {
 }
 
 RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
-                                 std::int64_t from_ns, std::int64_t until_ns) {
+                                 std::int64_t from_ns, std::int64_t until_ns,
+                                 std::vector<rlnode::TrajectoryPoint>* outage_trajectory) {
   std::vector<FixRole> outage(rec.fixes.size(), FixRole::fuse), fifth(rec.fixes.size(), FixRole::fuse);
   int k = 0;
   for (std::size_t i = 0; i < rec.fixes.size(); ++i) {
@@ -123,8 +124,12 @@ RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::Rep
     outage[i] = FixRole::score;
     fifth[i] = k++ % 5 == 0 ? FixRole::score : FixRole::fuse;
   }
-  const rlnode::ReplayOutput a = rlnode::replay(rec, rlnode::make_schedule(rec, outage, until_ns), s);
+  // Scoring a fix leaves the filter as it is, so the outage run is the
+  // trajectory of GPS fused before `from_ns` only.
+  rlnode::ReplayOutput a = rlnode::replay(rec, rlnode::make_schedule(rec, outage, until_ns), s,
+                                          outage_trajectory != nullptr);
   const rlnode::ReplayOutput b = rlnode::replay(rec, rlnode::make_schedule(rec, fifth, until_ns), s);
+  if (outage_trajectory) *outage_trajectory = std::move(a.trajectory);
   return {score_of(std::span(&a, 1)), score_of(std::span(&b, 1))};
 }
 
@@ -155,27 +160,20 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
   out.alignment = loaded.alignment;
   out.notes = rec.notes;
   out.duration_s = static_cast<double>(std::min(rec.end_ns, until) - rec.start_ns) * 1e-9;
+  std::vector<rlnode::TrajectoryPoint> points = run.trajectory;
+  std::string what = "all inputs";
   if (!rec.fixes.empty()) {
-    std::vector<rlnode::ReplayOutput> folds;
-    for (const auto& roles : heldout_fix_folds(rec, 5, 1.0, until)) {
-      folds.push_back(rlnode::replay(rec, rlnode::make_schedule(rec, roles, until), s));
-    }
-    out.heldout = score_of(folds);
-    if (request.from_s) out.protocols = score_protocols(rec, s, at_seconds(rec, request.from_s), until);
-  }
-  if (!request.trajectory_out.empty()) {
-    // With --from, the outage run: GPS fused before --from only.
-    std::vector<rlnode::TrajectoryPoint> points = run.trajectory;
-    std::string what = "all inputs";
-    if (request.from_s && !rec.fixes.empty()) {
-      const std::int64_t from = at_seconds(rec, request.from_s);
-      std::vector<rlnode::FixRole> roles(rec.fixes.size(), rlnode::FixRole::fuse);
-      for (std::size_t i = 0; i < roles.size(); ++i) {
-        if (rec.fixes[i].stamp_ns >= from) roles[i] = rlnode::FixRole::absent;
-      }
-      points = rlnode::replay(rec, rlnode::make_schedule(rec, roles, until), s, true).trajectory;
+    std::vector<rlnode::Schedule> folds;
+    for (const auto& roles : heldout_fix_folds(rec, 5, 1.0, until))
+      folds.push_back(rlnode::make_schedule(rec, roles, until));
+    out.heldout = replay_score(rec, folds, s);
+    if (request.from_s) {
+      out.protocols = score_protocols(rec, s, at_seconds(rec, request.from_s), until,
+                                      request.trajectory_out.empty() ? nullptr : &points);
       what = fmt::format("GPS fused until {} s only", *request.from_s);
     }
+  }
+  if (!request.trajectory_out.empty()) {
     write_trajectory(request.trajectory_out, points,
                      fmt::format("robot_localization EKF replayed by odotune: {} with {}, {}",
                                  rec.bag.filename().string(), rec.params.file.filename().string(), what));

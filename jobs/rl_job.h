@@ -47,8 +47,11 @@ std::pair<std::string, rlnode::Pose3> parse_tf(const std::string& text);
 struct RlProtocolScores {
   FixScore outage, every_fifth;
 };
+// Both protocols from `from_ns` to `until_ns`; with `outage_trajectory`,
+// also the outage run's trajectory (GPS fused before `from_ns` only).
 RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
-                                 std::int64_t from_ns, std::int64_t until_ns);
+                                 std::int64_t from_ns, std::int64_t until_ns,
+                                 std::vector<rlnode::TrajectoryPoint>* outage_trajectory = nullptr);
 
 struct RlEvalRequest {
   RlSource src;

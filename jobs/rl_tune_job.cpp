@@ -153,18 +153,18 @@ RlTuneOutcome run_rl_tune(const RlTuneRequest& request) {
   for (const ParamSpec& p : objective.space().params()) o.param_names.push_back(p.name);
   o.factors = objective.space().to_physical(o.summary.best_x);
   o.tuned_fitness = o.summary.best_fitness;
-  o.baseline_fitness = objective.fitness(objective.space().to_box(std::vector<double>(o.factors.size(), 1.0)));
-  RlTuneOptions both = options;
-  both.fitness = RlFitness::both;
-  const RlObjective scorer(rec, o.baseline, both);
-  o.baseline_heldout = scorer.heldout_score(o.baseline);
-  o.tuned_heldout = scorer.heldout_score(o.tuned);
-  o.baseline_outage = scorer.outage_score(o.baseline);
-  o.tuned_outage = scorer.outage_score(o.tuned);
-  if (options.until_ns < rec.end_ns) {
-    o.baseline_after = score_protocols(rec, o.baseline, options.until_ns,
-                                       std::numeric_limits<std::int64_t>::max());
-    o.tuned_after = score_protocols(rec, o.tuned, options.until_ns, std::numeric_limits<std::int64_t>::max());
+  o.baseline_fitness = objective.baseline_fitness();
+  o.baseline_heldout = objective.baseline_heldout();
+  o.baseline_outage = objective.baseline_outage();
+  o.tuned_heldout = objective.heldout_score(o.tuned);
+  o.tuned_outage = objective.outage_score(o.tuned);
+  // The held-out span: after --until, up to --end or the recording's end.
+  const std::int64_t end_ns = request.end_s
+                                  ? rec.start_ns + static_cast<std::int64_t>(std::llround(*request.end_s * 1e9))
+                                  : std::numeric_limits<std::int64_t>::max();
+  if (options.until_ns < std::min(rec.end_ns, end_ns)) {
+    o.baseline_after = score_protocols(rec, o.baseline, options.until_ns, end_ns);
+    o.tuned_after = score_protocols(rec, o.tuned, options.until_ns, end_ns);
   }
   rlnode::RlParamsUpdate update;
   update.process_noise_covariance = o.tuned.process_noise;

@@ -72,6 +72,14 @@ FixScore score_of(std::span<const rlnode::ReplayOutput> outputs) {
   return s;
 }
 
+FixScore replay_score(const rlnode::Recording& rec, std::span<const rlnode::Schedule> schedules,
+                      const rlnode::ReplaySettings& s) {
+  std::vector<rlnode::ReplayOutput> outs;
+  outs.reserve(schedules.size());
+  for (const rlnode::Schedule& schedule : schedules) outs.push_back(rlnode::replay(rec, schedule, s));
+  return score_of(outs);
+}
+
 std::vector<std::vector<FixRole>> heldout_fix_folds(const rlnode::Recording& rec, int folds, double block_s,
                                                     std::int64_t until_ns) {
   std::vector<std::vector<FixRole>> out(folds, std::vector<FixRole>(rec.fixes.size(), FixRole::fuse));
@@ -142,20 +150,16 @@ RlObjective::RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySetti
   }
   space_ = BoxSpace(std::move(specs));
 
-  const bool want_heldout = options.fitness != RlFitness::outage;
-  const bool want_outage = options.fitness != RlFitness::heldout_fixes;
-  if (want_heldout) {
-    for (const auto& roles : heldout_fix_folds(rec, options.folds, options.block_s, options.until_ns)) {
-      heldout_.push_back(rlnode::make_schedule(rec, roles, options.until_ns));
-    }
+  for (const auto& roles : heldout_fix_folds(rec, options.folds, options.block_s, options.until_ns)) {
+    heldout_.push_back(rlnode::make_schedule(rec, roles, options.until_ns));
   }
-  if (want_outage) {
-    outage_.push_back(rlnode::make_schedule(rec, outage_roles(rec, options.outage_s, options.until_ns),
-                                            options.until_ns));
-  }
-  if (want_heldout) heldout_base_ = heldout_score(base_).rmse_m;
-  if (want_outage) outage_base_ = outage_score(base_).rmse_m;
-  if (!(heldout_base_ > 0.0) || !(outage_base_ > 0.0)) {
+  outage_.push_back(rlnode::make_schedule(rec, outage_roles(rec, options.outage_s, options.until_ns),
+                                          options.until_ns));
+  heldout_base_ = heldout_score(base_);
+  outage_base_ = outage_score(base_);
+  const bool heldout_used = options.fitness != RlFitness::outage;
+  const bool outage_used = options.fitness != RlFitness::heldout_fixes;
+  if ((heldout_used && !(heldout_base_.rmse_m > 0.0)) || (outage_used && !(outage_base_.rmse_m > 0.0))) {
     throw std::invalid_argument(
         fmt::format("{}: no fix is scored before the tuning span ends (outages of {} s); "
                     "expected a longer span or shorter outages",
@@ -175,32 +179,25 @@ rlnode::ReplaySettings RlObjective::settings_at(std::span<const double> x) const
   return s;
 }
 
-FixScore RlObjective::heldout_score(const rlnode::ReplaySettings& s) const {
-  std::vector<rlnode::ReplayOutput> outs;
-  for (const rlnode::Schedule& schedule : heldout_) outs.push_back(rlnode::replay(*rec_, schedule, s));
-  return score_of(outs);
-}
-
-FixScore RlObjective::outage_score(const rlnode::ReplaySettings& s) const {
-  std::vector<rlnode::ReplayOutput> outs;
-  for (const rlnode::Schedule& schedule : outage_) outs.push_back(rlnode::replay(*rec_, schedule, s));
-  return score_of(outs);
+double RlObjective::combine(const FixScore& heldout, const FixScore& outage) const {
+  const bool both = options_.fitness == RlFitness::both;
+  double f = 0.0;
+  if (options_.fitness != RlFitness::outage) {
+    if (!heldout.finite) return kDiverged;
+    f += both ? heldout.rmse_m / heldout_base_.rmse_m : heldout.rmse_m;
+  }
+  if (options_.fitness != RlFitness::heldout_fixes) {
+    if (!outage.finite) return kDiverged;
+    f += both ? outage.rmse_m / outage_base_.rmse_m : outage.rmse_m;
+  }
+  return f;
 }
 
 double RlObjective::fitness(std::span<const double> x) const {
   const rlnode::ReplaySettings s = settings_at(x);
-  double f = 0.0;
-  if (!heldout_.empty()) {
-    const FixScore h = heldout_score(s);
-    if (!h.finite) return kDiverged;
-    f += options_.fitness == RlFitness::both ? h.rmse_m / heldout_base_ : h.rmse_m;
-  }
-  if (!outage_.empty()) {
-    const FixScore o = outage_score(s);
-    if (!o.finite) return kDiverged;
-    f += options_.fitness == RlFitness::both ? o.rmse_m / outage_base_ : o.rmse_m;
-  }
-  return f;
+  const FixScore none;
+  return combine(options_.fitness != RlFitness::outage ? heldout_score(s) : none,
+                 options_.fitness != RlFitness::heldout_fixes ? outage_score(s) : none);
 }
 
 }  // namespace odotune

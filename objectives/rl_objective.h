@@ -64,6 +64,9 @@ struct FixScore {
   bool finite = true;
 };
 FixScore score_of(std::span<const rlnode::ReplayOutput> outputs);
+// `s` replayed over each schedule, its held-out fixes scored together.
+FixScore replay_score(const rlnode::Recording& rec, std::span<const rlnode::Schedule> schedules,
+                      const rlnode::ReplaySettings& s);
 
 // The roles of the fixes under each protocol.
 std::vector<std::vector<rlnode::FixRole>> heldout_fix_folds(const rlnode::Recording& rec, int folds,
@@ -72,8 +75,9 @@ std::vector<rlnode::FixRole> outage_roles(const rlnode::Recording& rec, double o
 
 class RlObjective {
  public:
-  // Throws std::invalid_argument for invalid options, a recording without
-  // GPS fixes, or a protocol that scores no fix before `until_ns`.
+  // Lays out both parts' schedules and scores `base` on them. Throws
+  // std::invalid_argument for invalid options, a recording without GPS fixes,
+  // or a part the fitness uses that scores no fix before `until_ns`.
   RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySettings& base, const RlTuneOptions& options);
 
   double fitness(std::span<const double> x) const;
@@ -81,9 +85,13 @@ class RlObjective {
 
   const BoxSpace& space() const { return space_; }
   rlnode::ReplaySettings settings_at(std::span<const double> x) const;
-  // Per part: the held-out fixes' and the outages' scores (those the fitness uses).
-  FixScore heldout_score(const rlnode::ReplaySettings& s) const;
-  FixScore outage_score(const rlnode::ReplaySettings& s) const;
+  // Per part: the held-out fixes' and the outages' scores, whether or not the
+  // fitness uses them; the base settings' own, from the constructor.
+  FixScore heldout_score(const rlnode::ReplaySettings& s) const { return replay_score(*rec_, heldout_, s); }
+  FixScore outage_score(const rlnode::ReplaySettings& s) const { return replay_score(*rec_, outage_, s); }
+  const FixScore& baseline_heldout() const { return heldout_base_; }
+  const FixScore& baseline_outage() const { return outage_base_; }
+  double baseline_fitness() const { return combine(heldout_base_, outage_base_); }
   const RlTuneOptions& options() const { return options_; }
 
  private:
@@ -94,7 +102,9 @@ class RlObjective {
   std::vector<std::vector<int>> noise_members_;  // per noise parameter: the diagonal entries it scales
   std::vector<int> cov_sensors_;                 // per covariance parameter: the sensor
   std::vector<rlnode::Schedule> heldout_, outage_;
-  double heldout_base_ = 1.0, outage_base_ = 1.0;
+  FixScore heldout_base_, outage_base_;
+  // The fitness of the two parts' scores (kDiverged-like penalty when a used part is not finite).
+  double combine(const FixScore& heldout, const FixScore& outage) const;
 };
 
 }  // namespace odotune

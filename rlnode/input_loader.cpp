@@ -10,10 +10,16 @@
 
 namespace odotune::rlnode::detail {
 
+const Pose3* Loader::find_frame(const std::string& frame) const {
+  static const Pose3 kIdentity;
+  if (frame.empty() || frame == p_.base_link_frame) return &kIdentity;
+  if (auto it = o_.frames.find(frame); it != o_.frames.end()) return &it->second;
+  if (auto it = tf_.find(frame); it != tf_.end()) return &it->second;
+  return nullptr;
+}
+
 Pose3 Loader::frame_in_base(const std::string& frame, int s) const {
-  if (frame.empty() || frame == p_.base_link_frame) return {};
-  if (auto it = o_.frames.find(frame); it != o_.frames.end()) return it->second;
-  if (auto it = tf_.find(frame); it != tf_.end()) return it->second;
+  if (const Pose3* p = find_frame(frame)) return *p;
   throw std::invalid_argument(
       fmt::format("{}: {} ({}) is in frame '{}', and neither the bag's /tf_static nor --tf gives {} -> {}; "
                   "expected --tf {}=x,y,z,roll,pitch,yaw (the frame's pose in {})",
@@ -133,11 +139,7 @@ void Loader::prepare_pose(const PoseInput& in, int s, rl::Mask mask, const std::
 
   Pose3 pose = in.pose;
   if (in.imu) {
-    const Rpy a = rpy_of(in.pose.R);
-    Eigen::Vector3d rpy(rl::normalize_angle(a.roll - offset.roll), rl::normalize_angle(a.pitch - offset.pitch),
-                        rl::normalize_angle(a.yaw - offset.yaw));
-    rpy = yaw_rotation(offset.yaw) * rpy;
-    pose.R = rotation_rpy(rpy.x(), rpy.y(), rpy.z());
+    pose.R = imu_orientation_in_base(in.pose.R, target);
     target = {};
   }
   if (sp.differential) {
@@ -286,24 +288,11 @@ void Loader::prepare_acceleration(const ros::Imu& m, int s, std::int64_t receive
 // added per fix).
 void Loader::note_imu_orientation(const ros::Imu& m, std::int64_t receive_ns) {
   if (!rec_.fixes.empty() || std::abs(m.orientation_covariance[0] + 1.0) < 1e-9) return;
-  Pose3 mount;
-  if (!m.header.frame_id.empty() && m.header.frame_id != p_.base_link_frame) {
-    if (auto it = o_.frames.find(m.header.frame_id); it != o_.frames.end()) {
-      mount = it->second;
-    } else if (auto jt = tf_.find(m.header.frame_id); jt != tf_.end()) {
-      mount = jt->second;
-    } else {
-      return;
-    }
-  }
-  const Rpy off = rpy_of(mount.R);
-  const Rpy a = rpy_of(rotation_of_quaternion(m.orientation.x, m.orientation.y, m.orientation.z,
-                                              m.orientation.w));
-  const Eigen::Vector3d rpy = yaw_rotation(off.yaw) * Eigen::Vector3d(rl::normalize_angle(a.roll - off.roll),
-                                                                      rl::normalize_angle(a.pitch - off.pitch),
-                                                                      rl::normalize_angle(a.yaw - off.yaw));
-  imu_yaw_ = rpy_of(rotation_rpy(rpy.x(), rpy.y(), rpy.z())).yaw + p_.navsat.magnetic_declination_radians +
-             p_.navsat.yaw_offset;
+  const Pose3* mount = find_frame(m.header.frame_id);
+  if (!mount) return;
+  const Eigen::Matrix3d R = imu_orientation_in_base(
+      rotation_of_quaternion(m.orientation.x, m.orientation.y, m.orientation.z, m.orientation.w), *mount);
+  imu_yaw_ = rpy_of(R).yaw + p_.navsat.magnetic_declination_radians + p_.navsat.yaw_offset;
   imu_yaw_receive_ns_ = receive_ns;
 }
 
@@ -343,14 +332,8 @@ void Loader::on_fix(const ros::NavSatFix& m, std::int64_t receive_ns) {
   if (p_.two_d_mode) force_two_d(out);
   // The antenna's offset from base_link, when its frame is known (navsat uses
   // the identity when it cannot look the transform up).
-  Eigen::Vector3d antenna = Eigen::Vector3d::Zero();
-  if (!m.header.frame_id.empty() && m.header.frame_id != p_.base_link_frame) {
-    if (auto it = o_.frames.find(m.header.frame_id); it != o_.frames.end()) {
-      antenna = it->second.t;
-    } else if (auto jt = tf_.find(m.header.frame_id); jt != tf_.end()) {
-      antenna = jt->second.t;
-    }
-  }
+  const Pose3* antenna_frame = find_frame(m.header.frame_id);
+  const Eigen::Vector3d antenna = antenna_frame ? antenna_frame->t : Eigen::Vector3d::Zero();
   store(out, InputKind::gps, rec_.gps_sensor, f.stamp_ns, receive_ns, sp.pose_rejection_threshold, antenna,
         false, static_cast<int>(rec_.fixes.size()) - 1);
 }

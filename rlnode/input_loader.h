@@ -63,6 +63,18 @@ inline Mat6 to_mat6(const Cov36& c) {
 
 inline Eigen::Matrix3d yaw_rotation(double yaw) { return rotation_rpy(0.0, 0.0, yaw); }
 
+// An IMU's reported orientation as the node and navsat take it for base_link
+// (preparePose's IMU branch): the mounting's roll, pitch and yaw subtracted,
+// the result turned by the mounting's yaw.
+inline Eigen::Matrix3d imu_orientation_in_base(const Eigen::Matrix3d& reported, const Pose3& mount) {
+  const Rpy off = rpy_of(mount.R), a = rpy_of(reported);
+  const Eigen::Vector3d rpy = yaw_rotation(off.yaw) *
+                              Eigen::Vector3d(filters::rl::normalize_angle(a.roll - off.roll),
+                                              filters::rl::normalize_angle(a.pitch - off.pitch),
+                                              filters::rl::normalize_angle(a.yaw - off.yaw));
+  return rotation_rpy(rpy.x(), rpy.y(), rpy.z());
+}
+
 struct PoseInput {
   std::int64_t stamp_ns = 0, receive_ns = 0;
   std::string frame;
@@ -95,6 +107,10 @@ class Loader {
 
  private:
   const SensorParams& sensor(int s) const { return p_.sensors[s]; }
+  // The frame's pose in base_link: base_link itself, --tf, then /tf_static;
+  // null when none gives it.
+  const Pose3* find_frame(const std::string& frame) const;
+  // The same, or a one-line refusal naming sensor `s`.
   Pose3 frame_in_base(const std::string& frame, int s) const;
   bool in_order(const std::string& callback, std::int64_t stamp_ns);
   void store(const Prepared& m, InputKind kind, int s, std::int64_t stamp_ns, std::int64_t receive_ns,

@@ -72,12 +72,16 @@ Schedule make_schedule(const Recording& rec, std::span<const FixRole> roles, std
     for (; next < rec.inputs.size() && rec.inputs[next].receive_ns <= t; ++next) {
       const Input& in = rec.inputs[next];
       const auto i = static_cast<std::int32_t>(next);
-      // navsat_transform_node takes its datum once the filter has published.
-      const bool datum = in.kind == InputKind::gps && datum_pending && clock.initialized;
-      if (datum) datum_pending = false;
+      // navsat_transform_node takes its datum at the first fix after the
+      // filter has published, and publishes nothing before it.
+      if (in.kind == InputKind::gps && datum_pending) {
+        if (!clock.initialized) continue;
+        datum_pending = false;
+        s.events.push_back({Event::datum, i, t});
+      }
       if (in.stamp_ns >= until_ns) continue;
       const FixRole r = role(in);
-      if (needs_callback(in) || datum) s.events.push_back({Event::callback, i, t});
+      if (needs_callback(in)) s.events.push_back({Event::callback, i, t});
       if (r == FixRole::fuse) queue.push({in.stamp_ns, i});
       if (r == FixRole::score) held_out.push({in.stamp_ns, i});
     }
@@ -126,6 +130,7 @@ class Run {
   }
 
   void callback(int i);
+  void datum(int i);
   void process(int i);
   void score(int i);
   void tick(std::int64_t t_ns, bool keep);
@@ -157,31 +162,33 @@ class Run {
   rl::Measurement m_;                    // scratch
   Eigen::Vector3d last_rates_ = Eigen::Vector3d::Zero(), angular_acc_ = Eigen::Vector3d::Zero();
   double last_diff_s_ = 0.0;
-  bool datum_taken_ = false;
   ReplayOutput out_;
 };
 
+// navsat_transform_node's datum (computeTransform): the filter's pose at this
+// fix against the fix, less the antenna's offset turned by the IMU's heading.
+void Run::datum(int i) {
+  const Input& in = rec_.inputs[i];
+  const rl::State& x = filter_.state();
+  const GpsFix& f = rec_.fixes[in.fix];
+  GpsTransform& g = out_.gps_transform;
+  const double imu_yaw = rec_.navsat_imu_yaw_rad + f.convergence_rad;
+  g.grid_origin = f.p - rotation_rpy(0.0, 0.0, imu_yaw) * in.lever;
+  g.odom_origin = x.segment<3>(rl::kX);
+  if (rec_.params.navsat.zero_altitude) g.odom_origin.z() = 0.0;
+  g.rotation_rad = x[rl::kYaw] - imu_yaw;
+}
+
 // What the callback computes from the state when the message arrives
 // (prepareTwist's ω × r, prepareAcceleration's α × r − (ω × r) × ω and its
-// gravity without an orientation; navsat_transform_node's datum).
+// gravity without an orientation; the GPS antenna's offset).
 void Run::callback(int i) {
   const Input& in = rec_.inputs[i];
   const rl::State& x = filter_.state();
   const Eigen::Vector3d w = x.segment<3>(rl::kVroll);
   if (in.kind == InputKind::gps) {
-    // navsat_transform_node: the datum at the first fix after the filter has
-    // published (the antenna's offset turned by the IMU's heading), then each
-    // fix less the antenna's offset turned by the filter's attitude.
-    const GpsFix& f = rec_.fixes[in.fix];
-    if (!out_.gps_transform.fixed && !datum_taken_) {
-      GpsTransform& g = out_.gps_transform;
-      const double imu_yaw = rec_.navsat_imu_yaw_rad + f.convergence_rad;
-      g.grid_origin = f.p - rotation_rpy(0.0, 0.0, imu_yaw) * in.lever;
-      g.odom_origin = x.segment<3>(rl::kX);
-      if (rec_.params.navsat.zero_altitude) g.odom_origin.z() = 0.0;
-      g.rotation_rad = x[rl::kYaw] - imu_yaw;
-      datum_taken_ = true;
-    }
+    // navsat_transform_node removes the antenna's offset turned by the
+    // filter's attitude from each fix.
     adjust_[i] = -(rotation_rpy(x[rl::kRoll], x[rl::kPitch], x[rl::kYaw]) * in.lever);
     return;
   }
@@ -278,6 +285,7 @@ ReplayOutput replay(const Recording& rec, const Schedule& schedule, const Replay
   for (const Event& e : schedule.events) {
     switch (e.type) {
       case Event::callback: run.callback(e.input); break;
+      case Event::datum: run.datum(e.input); break;
       case Event::process: run.process(e.input); break;
       case Event::score: run.score(e.input); break;
       case Event::timeout_predict: run.timeout_predict(e.time_ns); break;

@@ -42,7 +42,7 @@ struct ReplaySettings {
 ReplaySettings settings_of(const RlParams& params);
 
 struct Event {
-  enum Type : std::uint8_t { callback, process, score, timeout_predict, tick };
+  enum Type : std::uint8_t { callback, datum, process, score, timeout_predict, tick };
   Type type = tick;
   std::int32_t input = -1;
   std::int64_t time_ns = 0;  // tick time (timeout_predict, tick)
