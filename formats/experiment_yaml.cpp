@@ -94,10 +94,10 @@ bool Experiment::has_ekf_models() const {
   return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.is_ekf(); });
 }
 bool Experiment::has_calibrator_models() const {
-  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.calibrator; });
+  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.is_calibrator(); });
 }
 bool Experiment::has_ukf_models() const {
-  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.ukf; });
+  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.is_ukf(); });
 }
 
 Experiment read_experiment(const std::filesystem::path& path) {

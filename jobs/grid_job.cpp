@@ -19,7 +19,7 @@ std::vector<GridCell> grid_cells(const Experiment& e) {
   std::vector<GridCell> cells;
   for (auto model : e.models) {
     // A calibrator has no fitness mode: the first listed stands for all.
-    const std::vector<int> modes = model.calibrator ? std::vector<int>{e.modes.front()} : e.modes;
+    const std::vector<int> modes = model.is_calibrator() ? std::vector<int>{e.modes.front()} : e.modes;
     for (std::size_t t = 0; t < e.tracks.size(); ++t)
       for (int mode : modes)
         for (auto seed : e.seeds) cells.push_back({model, {t}, t, false, mode, seed});
@@ -132,7 +132,7 @@ std::optional<results::RunRecord> run_calibration_cell(const Experiment& e,
                                                        const GridCell& c, const std::atomic<bool>* stop) {
   results::RunRecord r = cell_record(e, tracks, c);
   CalibrationTuneRequest req;
-  req.model = c.model.calib;
+  req.model = c.model.calib();
   req.resampler = e.calibration.resampler;
   req.policy = e.calibration.policy;
   req.pf_particles = e.calibration.particles;
@@ -182,11 +182,11 @@ std::optional<results::RunRecord> run_ukf_cell(const Experiment& e, const std::v
 
 std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vector<PreparedTrack>& tracks,
                                            const GridCell& c, const std::atomic<bool>* stop) {
-  if (c.model.calibrator) return run_calibration_cell(e, tracks, c, stop);
-  if (c.model.ukf) return run_ukf_cell(e, tracks, c, stop);
+  if (c.model.is_calibrator()) return run_calibration_cell(e, tracks, c, stop);
+  if (c.model.is_ukf()) return run_ukf_cell(e, tracks, c, stop);
   results::RunRecord r = cell_record(e, tracks, c);
   TuneRequest req;
-  req.model = c.model.noise;
+  req.model = c.model.noise();
   req.mode = c.mode;
   static_cast<SolverSettings&>(req) = cell_solver(e, c, stop);
   std::vector<const PreparedTrack*> tune_on;

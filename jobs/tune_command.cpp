@@ -27,11 +27,11 @@ const std::vector<std::string> kCalibratorOnly = {"--resampler", "--policy", "--
 
 void check_options(const TuneCommandRequest& r, const TunedModel& model) {
   const auto& given = r.given_options;
-  for (const std::string& opt : model.calibrator ? kEkfOnly : kCalibratorOnly)
+  for (const std::string& opt : model.is_calibrator() ? kEkfOnly : kCalibratorOnly)
     if (std::find(given.begin(), given.end(), opt) != given.end())
-      throw Failure(fmt::format("{} applies to {} models only, not to --model {}", opt,
-                                model.calibrator ? "the EKF and UKF (rq, alpha, gyro, ukf)" : "the calibrator",
-                                r.model));
+      throw Failure(fmt::format(
+          "{} applies to {} models only, not to --model {}", opt,
+          model.is_calibrator() ? "the EKF and UKF (rq, alpha, gyro, ukf)" : "the calibrator", r.model));
 }
 
 // `prepare(track)` for each loaded track, its std::invalid_argument a Failure.
@@ -204,10 +204,13 @@ TuneCommandOutcome run_tune_command(const TuneCommandRequest& request) {
   TunedModel model;
   if (!parse_tuned_model(request.model, &model))
     throw Failure(fmt::format("--model '{}': unknown model, expected {}", request.model, tuned_model_names()));
+  if (model.is_rl_ekf())
+    throw Failure("--model rl-ekf: robot_localization's EKF is tuned from its parameter file and bag: "
+                  "odotune tune --rl-params FILE --bag BAG");
   check_options(request, model);
-  if (model.calibrator) return calibration_tune(request, model.calib);
-  if (model.ukf) return ukf_tune(request);
-  return ekf_tune(request, model.noise);
+  if (model.is_calibrator()) return calibration_tune(request, model.calib());
+  if (model.is_ukf()) return ukf_tune(request);
+  return ekf_tune(request, model.noise());
 }
 
 }  // namespace odotune

@@ -6,30 +6,37 @@ namespace {
 constexpr std::string_view kPf = "pf-calib";
 constexpr std::string_view kAdaptivePf = "adaptive-pf-calib";
 constexpr std::string_view kUkf = "ukf";
+constexpr std::string_view kRlEkf = "rl-ekf";
+
+template <class... F>
+struct Overloaded : F... {
+  using F::operator()...;
+};
 }  // namespace
 
 std::string to_string(const TunedModel& m) {
-  if (m.ukf) return std::string(kUkf);
-  if (!m.calibrator) return std::string(filters::to_string(m.noise));
-  return std::string(m.calib == CalibratorModel::pf ? kPf : kAdaptivePf);
+  return std::visit(
+      Overloaded{[](filters::NoiseModel n) { return std::string(filters::to_string(n)); },
+                 [](CalibratorModel c) { return std::string(c == CalibratorModel::pf ? kPf : kAdaptivePf); },
+                 [](FusionUkfModel) { return std::string(kUkf); },
+                 [](RlEkfModel) { return std::string(kRlEkf); }},
+      m.kind);
 }
 
 bool parse_tuned_model(std::string_view text, TunedModel* out) {
   if (text == kUkf) {
     *out = TunedModel::fusion_ukf();
-    return true;
-  }
-  if (text == kPf) {
+  } else if (text == kRlEkf) {
+    *out = TunedModel::rl_ekf();
+  } else if (text == kPf) {
     *out = TunedModel::calibration(CalibratorModel::pf);
-    return true;
-  }
-  if (text == kAdaptivePf) {
+  } else if (text == kAdaptivePf) {
     *out = TunedModel::calibration(CalibratorModel::adaptive_pf);
-    return true;
+  } else {
+    filters::NoiseModel m;
+    if (!filters::parse_noise_model(text, &m)) return false;
+    *out = TunedModel::ekf(m);
   }
-  filters::NoiseModel m;
-  if (!filters::parse_noise_model(text, &m)) return false;
-  *out = TunedModel::ekf(m);
   return true;
 }
 
@@ -37,6 +44,8 @@ bool is_calibrator_model_name(std::string_view text) { return text == kPf || tex
 
 bool is_ukf_model_name(std::string_view text) { return text == kUkf; }
 
-const char* tuned_model_names() { return "rq, alpha, gyro, pf-calib, adaptive-pf-calib or ukf"; }
+bool is_rl_ekf_model_name(std::string_view text) { return text == kRlEkf; }
+
+const char* tuned_model_names() { return "rq, alpha, gyro, pf-calib, adaptive-pf-calib, ukf or rl-ekf"; }
 
 }  // namespace odotune

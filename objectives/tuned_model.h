@@ -1,13 +1,12 @@
 // What one tuning run (`tune --model`, an experiment's `models:` entry, a
-// stored run's `model`) tunes: the noise of one of the EKF models, the
-// settings of one of the particle-filter calibrators (issue 5, item 7;
-// objectives/calibration_objective.h), or the noise of the velocity-fusion
-// UKF (issue 6, item 1; objectives/ukf_objective.h).
+// stored run's `model`) tunes:
 //
 //   rq | alpha | gyro       EKF noise model (filters/ekf_noise.h)
-//   pf-calib                plain PF calibrator's settings
+//   pf-calib                plain PF calibrator's settings (objectives/calibration_objective.h)
 //   adaptive-pf-calib       adaptive PF calibrator's settings
-//   ukf                     the (V, W) fusion UKF's noise (filters/velocity_ukf.h)
+//   ukf                     the (V, W) fusion UKF's noise (objectives/ukf_objective.h)
+//   rl-ekf                  robot_localization's EKF on a bag and its parameter file
+//                           (objectives/rl_objective.h; grid only, `tune --rl-params` otherwise)
 //
 // Shared by `tune`, `grid` (experiment_yaml.h) and the commands that read a
 // store (report, export), so the names are spelt in one place.
@@ -15,31 +14,39 @@
 
 #include <string>
 #include <string_view>
+#include <variant>
 
 #include "filters/ekf_noise.h"
 
 namespace odotune {
 
 enum class CalibratorModel { pf, adaptive_pf };
-
-struct TunedModel {
-  bool calibrator = false;                              // true: a PF calibrator
-  filters::NoiseModel noise = filters::NoiseModel::rq;  // when an EKF model
-  CalibratorModel calib = CalibratorModel::pf;          // when calibrator
-  bool ukf = false;                                     // true: the fusion UKF (calibrator false)
-
-  static TunedModel ekf(filters::NoiseModel m) { return {false, m, CalibratorModel::pf, false}; }
-  static TunedModel calibration(CalibratorModel c) { return {true, filters::NoiseModel::rq, c, false}; }
-  static TunedModel fusion_ukf() { return {false, filters::NoiseModel::rq, CalibratorModel::pf, true}; }
-  // An EKF noise model (rq, alpha, gyro): neither a calibrator nor the UKF.
-  bool is_ekf() const { return !calibrator && !ukf; }
-  bool operator==(const TunedModel& o) const {
-    if (calibrator != o.calibrator || ukf != o.ukf) return false;
-    return calibrator ? calib == o.calib : (ukf || noise == o.noise);
-  }
+struct FusionUkfModel {
+  bool operator==(const FusionUkfModel&) const = default;
+};
+struct RlEkfModel {
+  bool operator==(const RlEkfModel&) const = default;
 };
 
-// "rq", "alpha", "gyro", "pf-calib", "adaptive-pf-calib", "ukf".
+// One of the kinds above; a value can only be one of them.
+struct TunedModel {
+  std::variant<filters::NoiseModel, CalibratorModel, FusionUkfModel, RlEkfModel> kind = filters::NoiseModel::rq;
+
+  static TunedModel ekf(filters::NoiseModel m) { return {m}; }
+  static TunedModel calibration(CalibratorModel c) { return {c}; }
+  static TunedModel fusion_ukf() { return {FusionUkfModel{}}; }
+  static TunedModel rl_ekf() { return {RlEkfModel{}}; }
+  bool is_ekf() const { return std::holds_alternative<filters::NoiseModel>(kind); }  // rq, alpha, gyro
+  bool is_calibrator() const { return std::holds_alternative<CalibratorModel>(kind); }
+  bool is_ukf() const { return std::holds_alternative<FusionUkfModel>(kind); }
+  bool is_rl_ekf() const { return std::holds_alternative<RlEkfModel>(kind); }
+  // Preconditions: is_ekf(), is_calibrator() respectively.
+  filters::NoiseModel noise() const { return std::get<filters::NoiseModel>(kind); }
+  CalibratorModel calib() const { return std::get<CalibratorModel>(kind); }
+  bool operator==(const TunedModel&) const = default;
+};
+
+// "rq", "alpha", "gyro", "pf-calib", "adaptive-pf-calib", "ukf", "rl-ekf".
 std::string to_string(const TunedModel& m);
 // Parses the names above; false (and *out untouched) for anything else.
 bool parse_tuned_model(std::string_view text, TunedModel* out);
@@ -47,7 +54,9 @@ bool parse_tuned_model(std::string_view text, TunedModel* out);
 bool is_calibrator_model_name(std::string_view text);
 // True for "ukf".
 bool is_ukf_model_name(std::string_view text);
-// "rq, alpha, gyro, pf-calib, adaptive-pf-calib or ukf", for error messages.
+// True for "rl-ekf".
+bool is_rl_ekf_model_name(std::string_view text);
+// "rq, alpha, gyro, pf-calib, adaptive-pf-calib, ukf or rl-ekf", for error messages.
 const char* tuned_model_names();
 
 }  // namespace odotune
