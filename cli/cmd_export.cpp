@@ -22,7 +22,10 @@ void register_export(CLI::App& app) {
       "seed, heldout (the held-out track of a leave-one-out run, or none). They must leave runs of\n"
       "one model; of those the run with the lowest tuned RMSE on its scored track is exported.\n"
       "robot_localization needs the run's track(s) for the odometry rate and, for alpha/gyro, the\n"
-      "time-averaged process noise (see the file's comments); --track supplies moved files.");
+      "time-averaged process noise (see the file's comments); --track supplies moved files.\n"
+      "An rl-ekf run (robot_localization's own EKF, experiments/rl_smoke.yaml) is written as the robot's\n"
+      "parameter file with the tuned values; its runs must be of one fitness (--select mode=8|10|11) and\n"
+      "the lowest tuning fitness wins, since their scores are on data the tune never saw.");
   sub->add_option("store", req->store, "results store written by odotune grid")->required();
   sub->add_option("--select", req->select, "key=value filters, comma-separated or repeated")->delimiter(',');
   sub->add_option("--format", req->format, "odotune | robot_localization")
@@ -34,6 +37,7 @@ void register_export(CLI::App& app) {
   sub->add_option("--node-name", req->node_name,
                   "robot_localization: the ekf node's name, the file's top-level key")
       ->default_val("ekf_filter_node");
+  sub->add_flag("--ros1", req->ros1, "rl-ekf runs: write the ROS 1 form of the robot's file (default ROS 2)");
   sub->callback([req] {
     const ExportOutcome o = run_export(*req);
     fmt::print("exported run {} ({}; best of {} matching run{}) as {} to {}\n", o.run_key, o.scores, o.matching,

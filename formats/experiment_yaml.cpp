@@ -88,8 +88,92 @@ void read_calibration(const std::filesystem::path& path, const YAML::Node& c, Ex
   }
 }
 
+ExperimentRl read_rl(const std::filesystem::path& path, const YAML::Node& c,
+                     const std::filesystem::path& base) {
+  if (!c.IsMap()) fail_at(path, c, "robot_localization must be a mapping {params, until_s, ...}");
+  ExperimentRl rl;
+  bool has_params = false, has_until = false;
+  for (const auto& kv : c) {
+    const auto key = kv.first.as<std::string>("");
+    const YAML::Node& v = kv.second;
+    const std::string what = "robot_localization." + key;
+    if (key == "params") {
+      rl.params = base / scalar<std::string>(path, v, what.c_str());
+      has_params = true;
+    } else if (key == "node_name") {
+      rl.node_name = scalar<std::string>(path, v, what.c_str());
+    } else if (key == "gps_topic") {
+      rl.gps_topic = scalar<std::string>(path, v, what.c_str());
+    } else if (key == "tf") {
+      if (!v.IsSequence())
+        fail_at(path, v, "robot_localization.tf must be a list of FRAME=x,y,z,roll,pitch,yaw");
+      for (const auto& t : v) rl.tf.push_back(scalar<std::string>(path, t, "a robot_localization.tf entry"));
+    } else if (key == "gps_heading_fit_s") {
+      rl.gps_heading_fit_s = scalar<double>(path, v, what.c_str());
+      if (!(rl.gps_heading_fit_s >= 0.0)) fail_at(path, v, "robot_localization.gps_heading_fit_s must be ≥ 0");
+    } else if (key == "until_s") {
+      rl.until_s = scalar<double>(path, v, what.c_str());
+      if (!(rl.until_s > 0.0))
+        fail_at(path, v, "robot_localization.until_s must be a positive number of seconds");
+      has_until = true;
+    } else if (key == "end_s") {
+      rl.end_s = scalar<double>(path, v, what.c_str());
+    } else if (key == "fitness") {
+      if (!v.IsSequence() || v.size() == 0)
+        fail_at(path, v, "robot_localization.fitness must be a non-empty list of heldout-fixes, outage, both");
+      rl.fitness.clear();
+      for (const auto& f : v) {
+        RlFitness fit;
+        if (!parse_rl_fitness(scalar<std::string>(path, f, "a fitness"), &fit))
+          fail_at(path, f, "unknown fitness, expected heldout-fixes, outage or both");
+        rl.fitness.push_back(fit);
+      }
+    } else if (key == "space") {
+      if (!parse_rl_noise_space(scalar<std::string>(path, v, what.c_str()), &rl.space))
+        fail_at(path, v, "robot_localization.space must be diagonal or blocks");
+    } else if (key == "input_covariances") {
+      rl.input_covariances = scalar<bool>(path, v, what.c_str());
+    } else if (key == "outage_s") {
+      rl.outage_s = scalar<double>(path, v, what.c_str());
+      if (!(rl.outage_s > 0.0)) fail_at(path, v, "robot_localization.outage_s must be > 0");
+    } else {
+      fail_at(path, kv.first,
+              fmt::format("unknown robot_localization key '{}', expected params, node_name, tf, gps_topic, "
+                          "gps_heading_fit_s, until_s, end_s, fitness, space, input_covariances or outage_s",
+                          key));
+    }
+  }
+  if (!has_params) fail_at(path, c, "robot_localization: missing 'params' (the robot's parameter file)");
+  if (!has_until)
+    fail_at(path, c, "robot_localization: missing 'until_s' (runs are tuned before it and scored after it)");
+  if (rl.end_s && !(*rl.end_s > rl.until_s))
+    fail_at(path, c["end_s"], "robot_localization.end_s must be later than until_s");
+  return rl;
+}
+
+// rl-ekf tunes bags with its own fitnesses: it stands alone, and its modes
+// are the stored modes of robot_localization.fitness.
+void check_rl(const std::filesystem::path& path, const YAML::Node& root, Experiment* e) {
+  const YAML::Node section = root["robot_localization"];
+  if (!e->has_rl_models()) {
+    if (section) fail_at(path, section, "a robot_localization section needs model rl-ekf in 'models'");
+    return;
+  }
+  if (root["leave_one_out"] && root["leave_one_out"].as<std::string>("") != "false")
+    fail_at(path, root["leave_one_out"], "leave_one_out is not supported for rl-ekf (a run tunes one bag)");
+  if (e->models.size() != 1)
+    fail_at(path, root["models"],
+            "rl-ekf tunes bags, not tracks: list it alone in 'models' (one experiment per kind)");
+  if (!section) fail_at(path, root, "model rl-ekf needs a robot_localization section (params, until_s, ...)");
+  if (root["modes"])
+    fail_at(path, root["modes"], "modes do not apply to rl-ekf; list robot_localization.fitness instead");
+}
+
 }  // namespace
 
+bool Experiment::has_rl_models() const {
+  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.is_rl_ekf(); });
+}
 bool Experiment::has_ekf_models() const {
   return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.is_ekf(); });
 }
@@ -119,16 +203,16 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
     throw Failure(fmt::format("{}:{}: {}", path.string(), ex.mark.line + 1, ex.msg));
   }
   if (!root.IsMap()) fail_at(path, root, "expected a mapping (see experiments/smoke.yaml)");
-  static const std::set<std::string> known = {"format",        "name",  "models",     "tracks",
-                                              "modes",         "seeds", "solver",     "budget",
-                                              "leave_one_out", "store", "calibration"};
+  static const std::set<std::string> known = {"format",        "name",  "models",      "tracks",
+                                              "modes",         "seeds", "solver",      "budget",
+                                              "leave_one_out", "store", "calibration", "robot_localization"};
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>("");
     if (!known.count(key))
       fail_at(path, kv.first,
               fmt::format("unknown key '{}', expected one of format, name, models, "
                           "tracks, modes, seeds, solver, budget, leave_one_out, store, "
-                          "calibration",
+                          "calibration, robot_localization",
                           key));
   }
   if (!root["format"] || root["format"].as<std::string>("") != kFormat)
@@ -143,12 +227,18 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
       fail_at(path, n, fmt::format("unknown model, expected {}", tuned_model_names()));
     e.models.push_back(m);
   }
+  check_rl(path, root, &e);
   for (const auto& n : list(path, root, "tracks"))
     for (auto& t : expand(path, n, base)) e.tracks.push_back(std::move(t));
-  for (const auto& n : list(path, root, "modes")) {
-    const int m = scalar<int>(path, n, "a mode");
-    if (!valid_ekf_fitness_mode(m)) fail_at(path, n, fmt::format("mode {} is out of range, expected 1..9", m));
-    e.modes.push_back(m);
+  if (e.has_rl_models()) {
+    if (const YAML::Node c = root["robot_localization"]) e.robot_localization = read_rl(path, c, base);
+  } else {
+    for (const auto& n : list(path, root, "modes")) {
+      const int m = scalar<int>(path, n, "a mode");
+      if (!valid_ekf_fitness_mode(m))
+        fail_at(path, n, fmt::format("mode {} is out of range, expected 1..9", m));
+      e.modes.push_back(m);
+    }
   }
   const YAML::Node seeds = root["seeds"];
   if (!seeds) fail_at(path, root, "missing 'seeds'");
@@ -180,6 +270,8 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
   if (e.leave_one_out && e.tracks.size() < 2)
     fail_at(path, root["leave_one_out"], "leave_one_out needs at least two tracks");
   if (const YAML::Node c = root["calibration"]) read_calibration(path, c, &e.calibration);
+  if (e.robot_localization)
+    for (RlFitness f : e.robot_localization->fitness) e.modes.push_back(stored_mode(f));
   e.store = root["store"] ? base / scalar<std::string>(path, root["store"], "store")
                           : base / (e.name + ".sqlite");
   return e;

@@ -17,6 +17,17 @@
 //     seed: 1                            # the particle filter's own seed
 //     ext_from_gt_hz: 0                  # > 0: external velocities from the ground truth
 //
+//   robot_localization:                  # model rl-ekf only (its tracks are bags)
+//     params: husky_ekf.yaml             # the robot's parameter file, relative to this file
+//     tf: ["imu_link=0,-0.3,0.52,1.5708,0,-1.5708"]   # FRAME=x,y,z,roll,pitch,yaw [m, rad], quoted
+//     gps_heading_fit_s: 60              # fit navsat's rotation on the first seconds of fixes
+//     until_s: 197.65                    # required: tune before, score after (held out)
+//     end_s: 395                         # optional: the held-out span ends here
+//     fitness: [outage, both]            # instead of modes: heldout-fixes, outage, both
+//     space: diagonal                    # or blocks
+//     input_covariances: false           # also search factors on the inputs' covariances
+//     outage_s: 60                       # the outage fitness's outages [s]
+//
 // A calibrator model (pf-calib, adaptive-pf-calib) has no fitness mode: its
 // cells are made for the first listed mode only (the run records that mode),
 // so a calibrator run is not repeated per mode. The fusion UKF (ukf) has
@@ -26,10 +37,12 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "filters/resampling.h"
+#include "objectives/rl_objective.h"
 #include "objectives/tuned_model.h"
 
 namespace odotune {
@@ -41,6 +54,23 @@ struct ExperimentCalibration {
   int particles = 0;  // 0 = the paper's count
   std::uint64_t seed = 1;
   double ext_from_gt_hz = 0.0;  // 0: the tracks' v_ext/w_ext
+};
+
+// robot_localization's EKF (model rl-ekf, objectives/rl_objective.h): how its
+// bags are read and tuned. Its runs are scored by the GPS-outage protocol on
+// the span after until_s (jobs/rl_job.h), which the tune never sees.
+struct ExperimentRl {
+  std::filesystem::path params;  // resolved
+  std::string node_name;         // the EKF's section of the file when it has several
+  std::vector<std::string> tf;
+  std::string gps_topic;
+  double gps_heading_fit_s = 0.0;
+  double until_s = 0.0;
+  std::optional<double> end_s;
+  std::vector<RlFitness> fitness{RlFitness::outage};
+  RlNoiseSpace space = RlNoiseSpace::diagonal;
+  bool input_covariances = true;
+  double outage_s = 60.0;
 };
 
 struct Experiment {
@@ -57,10 +87,13 @@ struct Experiment {
   bool leave_one_out = false;
   std::filesystem::path store;
   ExperimentCalibration calibration;
+  std::optional<ExperimentRl>
+      robot_localization;  // with model rl-ekf; then modes are its fitnesses' stored modes
 
   bool has_ekf_models() const;         // rq, alpha, gyro
   bool has_calibrator_models() const;  // pf-calib, adaptive-pf-calib
   bool has_ukf_models() const;         // ukf
+  bool has_rl_models() const;          // rl-ekf
 };
 
 // Throws odotune::Failure.

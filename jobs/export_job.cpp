@@ -12,6 +12,7 @@
 #include "core/failure.h"
 #include "formats/config_yaml.h"
 #include "formats/ukf_config_yaml.h"
+#include "jobs/rl_job.h"
 #include "jobs/store_access.h"
 #include "objectives/process_noise_rate.h"
 #include "objectives/replay_input.h"
@@ -204,6 +205,20 @@ RunSelection select_best_run(const std::vector<results::RunRecord>& all, const s
                               models.size(), values_of(runs, "model")));
   RunSelection s;
   s.matching = runs.size();
+  if (is_rl_ekf_model_name(*models.begin())) {
+    // An rl-ekf run's scores are on data its tune never saw: choosing by them
+    // would make them optimistic, so the runs of one fitness are compared by
+    // their tuning fitness instead.
+    std::set<int> modes;
+    for (const auto* r : runs) modes.insert(r->mode);
+    if (modes.size() > 1)
+      throw Failure(fmt::format("rl-ekf runs of {} fitnesses (modes {}); add --select mode=… to pick one (8 "
+                                "heldout-fixes, 10 outage, 11 both)",
+                                modes.size(), values_of(runs, "mode")));
+    for (const auto* r : runs)
+      if (!s.run || r->best_fitness < s.run->best_fitness) s.run = r;
+    return s;
+  }
   for (const auto* r : runs)
     if (!s.run || r->tuned.rmse_m < s.run->tuned.rmse_m) s.run = r;
   return s;
@@ -234,6 +249,23 @@ ExportOutcome run_export(const ExportRequest& request) {
   const std::string origin = fmt::format("odotune export from {} (experiment {}, {}): run {}", request.store,
                                          store->experiment().name, store->experiment().hash, key);
 
+  if (is_rl_ekf_model_name(run.model)) {
+    if (request.format != "robot_localization")
+      throw Failure(
+          fmt::format("run {} tuned robot_localization's EKF (model rl-ekf): it exports as the robot's "
+                      "own parameter file only; use --format robot_localization",
+                      key));
+    const results::ExperimentInfo info = store->experiment();
+    write_rl_run(parse_experiment(info.text, info.file), run, request.out, !request.ros1,
+                 origin + fmt::format("\nChosen as the lowest tuning fitness of {} matching run{}.",
+                                      sel.matching, sel.matching == 1 ? "" : "s"));
+    return {key,
+            fmt::format("held-out GPS-outage RMSE {:.3f} m vs {:.3f} m with the file's values on {}",
+                        run.tuned.rmse_m, run.baseline.rmse_m, run.track),
+            sel.matching};
+  }
+  if (request.ros1)
+    throw Failure(fmt::format("--ros1 applies to rl-ekf runs only; run {} is of model {}", key, run.model));
   if (is_ukf_model_name(run.model)) {
     UkfConfig cfg = run_ukf_config(run);
     cfg.comment = origin + "\n" + scores + " (the fused pose; baseline: the default UKF noise)";

@@ -6,7 +6,10 @@
 //
 // Selection: --select key=value filters (model, track, mode, seed, heldout)
 // must leave runs of exactly one model; of those the run with the lowest tuned
-// RMSE on its scored track is exported (ties: the first stored). A run of a
+// RMSE on its scored track is exported (ties: the first stored). An rl-ekf
+// run (robot_localization's EKF) is scored on data its tune never saw, so its
+// runs must be of one fitness and are compared by their tuning fitness; it
+// exports as the robot's own parameter file (jobs/rl_job.h, write_rl_run). A run of a
 // calibrator model (pf-calib, adaptive-pf-calib) is refused with one line:
 // it holds PF settings, not EKF noise (tune --config-out writes those). A run
 // of the fusion UKF (ukf) exports as odotune's own format only (an
@@ -56,6 +59,7 @@ struct ExportRequest {
   std::string out;                            // the file to write (atomically)
   std::vector<std::string> track_files;       // take precedence over the experiment's tracks
   std::string node_name = "ekf_filter_node";  // robot_localization: the top-level key
+  bool ros1 = false;                          // rl-ekf runs: the ROS 1 form (default ROS 2)
 };
 
 struct ExportOutcome {

@@ -9,6 +9,7 @@
 
 #include "core/failure.h"
 #include "jobs/calibration_tune_job.h"
+#include "jobs/rl_job.h"
 #include "jobs/tune_job.h"
 #include "jobs/ukf_tune_job.h"
 #include "tracks/track_io.h"
@@ -41,6 +42,21 @@ results::Metrics to_metrics(const ErrorMetrics& m) { return {m.rmse_m, m.mae_m, 
 
 std::vector<PreparedTrack> prepare_grid_tracks(const Experiment& e) {
   std::vector<PreparedTrack> tracks;
+  if (e.robot_localization) {
+    // rl-ekf stands alone (experiment_yaml.h): its tracks are bags.
+    for (const std::string& bag : e.tracks) {
+      PreparedTrack p;
+      p.name = std::filesystem::path(bag).stem().string();
+      p.rl = std::make_shared<const RlLoaded>(load_rl(rl_source_of(*e.robot_localization, bag)));
+      const double duration_s = static_cast<double>(p.rl->rec.end_ns - p.rl->rec.start_ns) * 1e-9;
+      if (!(e.robot_localization->until_s < duration_s))
+        throw Failure(fmt::format("{}: robot_localization.until_s {} s leaves nothing to score (the bag lasts "
+                                  "{:.1f} s); expected an earlier until_s",
+                                  bag, e.robot_localization->until_s, duration_s));
+      tracks.push_back(std::move(p));
+    }
+    return tracks;
+  }
   CalibrationInputOptions calibration_options;
   calibration_options.ext_from_gt_rate_hz = e.calibration.ext_from_gt_hz;
   for (const auto& t : load_tracks(e.tracks)) {
@@ -178,12 +194,41 @@ std::optional<results::RunRecord> run_ukf_cell(const Experiment& e, const std::v
   return r;
 }
 
+results::Metrics to_metrics(const FixScore& s) { return {s.rmse_m, s.mae_m, s.maxe_m}; }
+
+// robot_localization's EKF tuned on the bag before until_s; its scores are
+// the GPS-outage protocol's errors after it (GPS fused until until_s, none
+// after), with the file's own and the tuned settings.
+std::optional<results::RunRecord> run_rl_cell(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+                                              const GridCell& c, const std::atomic<bool>* stop) {
+  const ExperimentRl& x = *e.robot_localization;
+  results::RunRecord r = cell_record(e, tracks, c);
+  RlTuneRequest req;
+  static_cast<SolverSettings&>(req) = cell_solver(e, c, stop);
+  req.until_s = x.until_s;
+  req.end_s = x.end_s;
+  req.options.fitness = rl_fitness_of_mode(c.mode).value();
+  req.options.space = x.space;
+  req.options.input_covariances = x.input_covariances;
+  req.options.outage_s = x.outage_s;
+  std::string why;
+  if (!req.IsValid(&why)) throw Failure(why);
+  const RlTuneOutcome o = tune_rl(*tracks[c.score_on].rl, req);
+  if (o.summary.termination == "stopped") return std::nullopt;
+  set_solver_fields(r, o.param_names, o.factors, o.tuned_fitness, o.summary, o.diverged);
+  if (!o.baseline_after || !o.tuned_after) throw Failure("nothing to score after robot_localization.until_s");
+  r.baseline = to_metrics(o.baseline_after->outage);
+  r.tuned = to_metrics(o.tuned_after->outage);
+  return r;
+}
+
 }  // namespace
 
 std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vector<PreparedTrack>& tracks,
                                            const GridCell& c, const std::atomic<bool>* stop) {
   if (c.model.is_calibrator()) return run_calibration_cell(e, tracks, c, stop);
   if (c.model.is_ukf()) return run_ukf_cell(e, tracks, c, stop);
+  if (c.model.is_rl_ekf()) return run_rl_cell(e, tracks, c, stop);
   results::RunRecord r = cell_record(e, tracks, c);
   TuneRequest req;
   req.model = c.model.noise();

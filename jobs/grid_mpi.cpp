@@ -126,7 +126,9 @@ std::string grid_fingerprint(const Experiment& e, const std::vector<PreparedTrac
                              const std::vector<GridCell>& cells) {
   std::string all = e.text;
   for (const auto& c : cells) all += "\n" + results::run_key(cell_record(e, tracks, c));
-  for (const auto& path : e.tracks) {
+  std::vector<std::string> files = e.tracks;
+  if (e.robot_localization) files.push_back(e.robot_localization->params.string());
+  for (const auto& path : files) {
     std::ifstream in(path, std::ios::binary);
     all += "\n";
     all.append(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
@@ -369,18 +371,32 @@ std::optional<GridReport> run_grid_job(const GridRequest& request, const GridCal
   report.store = request.store.empty() ? e.store : std::filesystem::path(request.store);
   report.ranks = mpi.size();
   std::unique_ptr<results::Store> store;
+  const bool created = !std::filesystem::exists(report.store);
   if (!mpi.agree([&] {
         if (mpi.rank() == 0)
           store = open_grid_store(e, report.store, request.allow_other, request.code_version);
       }))
     return std::nullopt;
   const std::atomic<bool>* stop = callbacks.started ? callbacks.started(e) : nullptr;
-  if (mpi.size() > 1) {
-    const auto ranked = run_grid_mpi(mpi, e, store.get(), stop, callbacks.progress);
-    if (!ranked) return std::nullopt;  // not rank 0: rank 0 reports
-    report.outcome = *ranked;
-  } else {
-    report.outcome = run_grid(e, *store, stop, callbacks.progress);
+  try {
+    if (mpi.size() > 1) {
+      const auto ranked = run_grid_mpi(mpi, e, store.get(), stop, callbacks.progress);
+      if (!ranked) return std::nullopt;  // not rank 0: rank 0 reports
+      report.outcome = *ranked;
+    } else {
+      report.outcome = run_grid(e, *store, stop, callbacks.progress);
+    }
+  } catch (const Failure&) {
+    // A store this command created and left without a run (e.g. a bad track)
+    // is not left behind.
+    if (store && created && store->finished_keys().empty()) {
+      store.reset();
+      for (const char* suffix : {"", "-wal", "-shm"}) {
+        std::error_code ec;
+        std::filesystem::remove(report.store.string() + suffix, ec);
+      }
+    }
+    throw;
   }
   return report;
 }

@@ -10,6 +10,8 @@
 #include <fmt/format.h>
 
 #include "core/failure.h"
+#include "jobs/report_writer.h"
+#include "jobs/rl_job.h"
 #include "jobs/store_access.h"
 #include "objectives/metrics.h"
 #include "objectives/param_space.h"
@@ -27,69 +29,6 @@ namespace {
 namespace fs = std::filesystem;
 using results::ReportMetric;
 using results::RunRecord;
-
-// A name usable in a file name: letters, digits, '-', '_', '.' kept.
-std::string file_safe(const std::string& s) {
-  std::string out;
-  for (char c : s)
-    out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.') ? c : '_';
-  return out;
-}
-
-std::string lower(std::string_view s) {
-  std::string out(s);
-  for (auto& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return out;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-// Collects the written files and the HTML figures.
-class Writer {
- public:
-  explicit Writer(fs::path dir) : dir_(std::move(dir)) {}
-
-  // Renders a figure through `draw(stem)`; returns it for the HTML page.
-  template <typename Draw>
-  results::HtmlFigure figure(const std::string& name, const std::string& caption, Draw&& draw) {
-    const fs::path stem = dir_ / name;
-    try {
-      draw(stem);
-    } catch (const std::exception& ex) {
-      throw Failure(fmt::format("{}: cannot draw the figure: {}", stem.string(), ex.what()));
-    }
-    files.push_back(stem.string() + ".png");
-    files.push_back(stem.string() + ".svg");
-    return {caption, slurp(stem.string() + ".svg"), name + ".png", ""};
-  }
-
-  void text(const std::string& name, const std::string& what, const std::string& content) {
-    const fs::path p = dir_ / name;
-    try {
-      write_atomically(p, what, content);
-    } catch (const std::exception& ex) {
-      throw Failure(ex.what());
-    }
-    files.push_back(p);
-  }
-
-  std::vector<fs::path> files;
-
- private:
-  fs::path dir_;
-};
-
-std::string seeds_phrase(const std::vector<RunRecord>& runs) {
-  std::vector<std::uint64_t> seeds;
-  for (const auto& r : runs)
-    if (std::find(seeds.begin(), seeds.end(), r.seed) == seeds.end()) seeds.push_back(r.seed);
-  return seeds.size() == 1 ? "1 seed" : fmt::format("mean over {} seeds", seeds.size());
-}
 
 // The run of `model` on `track` (per-track, mode `mode`) with the lowest
 // tuned RMSE, or nullptr.
@@ -141,6 +80,10 @@ ReportOutcome write_report(const ReportRequest& req) {
     throw Failure(fmt::format("{}: cannot create the report folder: {}", req.out_dir.string(),
                               ec ? ec.message() : "not a folder"));
 
+  if (std::find_if(models.begin(), models.end(),
+                   [](const std::string& m) { return is_rl_ekf_model_name(m); }) != models.end())
+    return write_rl_report(req, info, runs);  // rl-ekf stands alone in an experiment
+
   ReportOutcome out;
   out.experiment = info.name;
   std::vector<RunRecord> own, held;
@@ -173,7 +116,7 @@ ReportOutcome write_report(const ReportRequest& req) {
   out.runs = static_cast<long>(runs.size());
   out.heldout_runs = static_cast<long>(held.size());
 
-  Writer w(req.out_dir);
+  ReportWriter w(req.out_dir);
   results::HtmlPage page(fmt::format("odotune report: {}", info.name));
   page.paragraph(
       fmt::format("Experiment **{}** (file hash {}, odotune {}): {} runs, {} of them leave-one-track-out; "

@@ -77,6 +77,17 @@ std::pair<std::string, rlnode::Pose3> parse_tf(const std::string& text) {
   return {text.substr(0, eq), p};
 }
 
+RlSource rl_source_of(const ExperimentRl& x, const std::filesystem::path& bag) {
+  RlSource src;
+  src.params_file = x.params;
+  src.bag = bag;
+  src.node_name = x.node_name;
+  src.tf = x.tf;
+  src.gps_topic = x.gps_topic;
+  src.gps_heading_fit_s = x.gps_heading_fit_s;
+  return src;
+}
+
 RlLoaded load_rl(const RlSource& src) {
   rlnode::RecordingOptions options;
   for (const std::string& t : src.tf) options.frames.insert(parse_tf(t));
@@ -111,7 +122,8 @@ RlLoaded load_rl(const RlSource& src) {
 
 RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
                                  std::int64_t from_ns, std::int64_t until_ns,
-                                 std::vector<rlnode::TrajectoryPoint>* outage_trajectory) {
+                                 std::vector<rlnode::TrajectoryPoint>* outage_trajectory,
+                                 std::vector<rlnode::ScoredFix>* outage_fixes) {
   std::vector<FixRole> outage(rec.fixes.size(), FixRole::fuse), fifth(rec.fixes.size(), FixRole::fuse);
   int k = 0;
   for (std::size_t i = 0; i < rec.fixes.size(); ++i) {
@@ -130,6 +142,7 @@ RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::Rep
                                           outage_trajectory != nullptr);
   const rlnode::ReplayOutput b = rlnode::replay(rec, rlnode::make_schedule(rec, fifth, until_ns), s);
   if (outage_trajectory) *outage_trajectory = std::move(a.trajectory);
+  if (outage_fixes) *outage_fixes = a.scored;
   return {score_of(std::span(&a, 1)), score_of(std::span(&b, 1))};
 }
 

@@ -16,8 +16,12 @@
 #include <string>
 #include <vector>
 
+#include "formats/experiment_yaml.h"
+#include "jobs/report_job.h"
 #include "jobs/tune_job.h"
 #include "objectives/rl_objective.h"
+#include "results/run_record.h"
+#include "results/store.h"
 #include "rlnode/gps_alignment.h"
 #include "rlnode/params.h"
 #include "rlnode/recording.h"
@@ -40,6 +44,8 @@ struct RlLoaded {
 };
 // Reads the parameter file and the bag; throws Failure with one line.
 RlLoaded load_rl(const RlSource& src);
+// An experiment's robot_localization section applied to one of its bags.
+RlSource rl_source_of(const ExperimentRl& x, const std::filesystem::path& bag);
 
 // "FRAME=x,y,z,roll,pitch,yaw" → (FRAME, pose); throws Failure naming the flag.
 std::pair<std::string, rlnode::Pose3> parse_tf(const std::string& text);
@@ -48,10 +54,12 @@ struct RlProtocolScores {
   FixScore outage, every_fifth;
 };
 // Both protocols from `from_ns` to `until_ns`; with `outage_trajectory`,
-// also the outage run's trajectory (GPS fused before `from_ns` only).
+// also the outage run's trajectory (GPS fused before `from_ns` only), with
+// `outage_fixes` its scored fixes (measured and predicted, odom frame).
 RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
                                  std::int64_t from_ns, std::int64_t until_ns,
-                                 std::vector<rlnode::TrajectoryPoint>* outage_trajectory = nullptr);
+                                 std::vector<rlnode::TrajectoryPoint>* outage_trajectory = nullptr,
+                                 std::vector<rlnode::ScoredFix>* outage_fixes = nullptr);
 
 struct RlEvalRequest {
   RlSource src;
@@ -98,9 +106,28 @@ struct RlTuneOutcome {
   FixScore baseline_heldout, tuned_heldout, baseline_outage, tuned_outage;  // on the tuning span
   std::optional<RlProtocolScores> baseline_after, tuned_after;              // after until_s: never seen
   tuner::Summary summary;
+  long diverged = 0;  // evaluations whose replay diverged
   std::optional<rlnode::GpsAlignment> alignment;
   std::vector<std::string> notes;
 };
+// Validates the request, reads the file and the bag, tunes (tune_rl) and
+// writes the requested files. Throws Failure with one line.
 RlTuneOutcome run_rl_tune(const RlTuneRequest& request);
+// A stored rl-ekf run (a grid's results store; model rl-ekf) written as the
+// robot's parameter file: the experiment's file with the run's factors
+// applied, navsat's yaw_offset when the experiment fits the GPS heading, the
+// held-out scores and `provenance` in comments. Reads the run's bag again.
+// Throws Failure with one line; nothing is written then.
+void write_rl_run(const Experiment& e, const results::RunRecord& run, const std::filesystem::path& out,
+                  bool ros2, const std::string& provenance);
+// `odotune report` for a store of rl-ekf runs (jobs/report_job.h calls it):
+// the held-out GPS-outage errors per bag and fitness, improvement per
+// fitness, the best run's outage trajectory per bag and fitness (the run of
+// lowest tuning fitness, replayed from the bag) and convergence curves.
+ReportOutcome write_rl_report(const ReportRequest& req, const results::ExperimentInfo& info,
+                              const std::vector<results::RunRecord>& runs);
+// The search and its scores on an already loaded recording (no file read or
+// written; the request's output paths are not used). Throws Failure.
+RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request);
 
 }  // namespace odotune

@@ -120,13 +120,7 @@ bool RlTuneRequest::IsValid(std::string* why) const {
   return true;
 }
 
-RlTuneOutcome run_rl_tune(const RlTuneRequest& request) {
-  std::string why;
-  if (!request.IsValid(&why)) throw Failure("tune: " + why);
-  check_output_file("--config-out", request.config_out.string());
-  check_output_file("--json", request.json_out.string());
-  check_output_file("--config-out-ros1", request.config_out_ros1.string());
-  const RlLoaded loaded = load_rl(request.src);
+RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request) {
   const rlnode::Recording& rec = loaded.rec;
   RlTuneOptions options = request.options;
   options.until_ns = request.until_s
@@ -149,6 +143,7 @@ RlTuneOutcome run_rl_tune(const RlTuneRequest& request) {
   }();
   const BoxProblem<RlObjective> problem{&objective};
   o.summary = run_solver(problem, request);
+  o.diverged = objective.diverged();
   o.tuned = objective.settings_at(o.summary.best_x);
   for (const ParamSpec& p : objective.space().params()) o.param_names.push_back(p.name);
   o.factors = objective.space().to_physical(o.summary.best_x);
@@ -166,6 +161,18 @@ RlTuneOutcome run_rl_tune(const RlTuneRequest& request) {
     o.baseline_after = score_protocols(rec, o.baseline, options.until_ns, end_ns);
     o.tuned_after = score_protocols(rec, o.tuned, options.until_ns, end_ns);
   }
+  return o;
+}
+
+RlTuneOutcome run_rl_tune(const RlTuneRequest& request) {
+  std::string why;
+  if (!request.IsValid(&why)) throw Failure("tune: " + why);
+  check_output_file("--config-out", request.config_out.string());
+  check_output_file("--json", request.json_out.string());
+  check_output_file("--config-out-ros1", request.config_out_ros1.string());
+  const RlLoaded loaded = load_rl(request.src);
+  const rlnode::Recording& rec = loaded.rec;
+  RlTuneOutcome o = tune_rl(loaded, request);
   rlnode::RlParamsUpdate update;
   update.process_noise_covariance = o.tuned.process_noise;
   if (o.alignment) update.navsat_yaw_offset = o.alignment->yaw_offset_rad;

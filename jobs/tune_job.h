@@ -26,6 +26,8 @@
 
 namespace odotune {
 
+struct RlLoaded;  // jobs/rl_job.h
+
 // A track prepared for replay: the reference input and its fast form; and,
 // when a calibrator model is tuned on it (grid), its calibration input; when
 // the fusion UKF is (grid), its fusion input. Each part is built only when a
@@ -41,6 +43,8 @@ struct PreparedTrack {
   std::unique_ptr<FixCvReplay> cv;
   std::optional<CalibrationInput> calibration;
   std::optional<FusionInput> fusion;
+  // A bag with robot_localization's parameter file (model rl-ekf, grid; jobs/rl_job.h).
+  std::shared_ptr<const RlLoaded> rl;
 };
 // Throws std::invalid_argument (one line naming the track) when it cannot be
 // replayed or has no position fixes (nothing to tune).

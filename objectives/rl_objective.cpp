@@ -1,5 +1,6 @@
 #include "objectives/rl_objective.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -21,10 +22,101 @@ bool forced_in_2d(int m) {
 constexpr const char* kMemberNames[rl::kStateSize] = {
     "x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz", "vroll", "vpitch", "vyaw", "ax", "ay", "az"};
 
+constexpr const char* kBlockNames[5] = {"position", "orientation", "linear_velocity", "angular_velocity",
+                                        "acceleration"};
+
 // A penalty the solvers rank below every real score.
 constexpr double kDiverged = 1e9;
 
 }  // namespace
+
+bool parse_rl_fitness(std::string_view text, RlFitness* out) {
+  for (RlFitness f : {RlFitness::heldout_fixes, RlFitness::outage, RlFitness::both}) {
+    if (text == to_string(f)) {
+      *out = f;
+      return true;
+    }
+  }
+  return false;
+}
+
+bool parse_rl_noise_space(std::string_view text, RlNoiseSpace* out) {
+  for (RlNoiseSpace sp : {RlNoiseSpace::diagonal, RlNoiseSpace::blocks}) {
+    if (text == to_string(sp)) {
+      *out = sp;
+      return true;
+    }
+  }
+  return false;
+}
+
+int stored_mode(RlFitness f) {
+  switch (f) {
+    case RlFitness::heldout_fixes: return kRlHeldoutFixesMode;
+    case RlFitness::outage: return kRlOutageMode;
+    case RlFitness::both: return kRlBothMode;
+  }
+  return 0;
+}
+
+std::optional<RlFitness> rl_fitness_of_mode(int mode) {
+  for (RlFitness f : {RlFitness::heldout_fixes, RlFitness::outage, RlFitness::both})
+    if (stored_mode(f) == mode) return f;
+  return std::nullopt;
+}
+
+std::vector<std::string> rl_noise_parameter_names(RlNoiseSpace space, bool two_d) {
+  std::vector<std::string> names;
+  if (space == RlNoiseSpace::diagonal) {
+    for (int m = 0; m < rl::kStateSize; ++m)
+      if (!(two_d && forced_in_2d(m))) names.push_back(fmt::format("q_{}", kMemberNames[m]));
+  } else {
+    for (const char* b : kBlockNames) names.push_back(fmt::format("q_{}", b));
+  }
+  return names;
+}
+
+std::vector<int> rl_noise_members(std::string_view name, bool two_d) {
+  for (int m = 0; m < rl::kStateSize; ++m)
+    if (name == fmt::format("q_{}", kMemberNames[m])) return {m};
+  for (int b = 0; b < 5; ++b) {
+    if (name != fmt::format("q_{}", kBlockNames[b])) continue;
+    std::vector<int> members;
+    for (int m = 3 * b; m < 3 * b + 3; ++m)
+      if (!(two_d && forced_in_2d(m))) members.push_back(m);
+    return members;
+  }
+  return {};
+}
+
+bool apply_rl_factors(const rlnode::RlParams& params, std::span<const std::string> names,
+                      std::span<const double> factors, rlnode::ReplaySettings* s, std::string* why) {
+  const rlnode::ReplaySettings base = *s;
+  for (std::size_t i = 0; i < names.size() && i < factors.size(); ++i) {
+    if (!(factors[i] > 0.0 && std::isfinite(factors[i]))) {
+      if (why) *why = fmt::format("{} = {}: expected a positive factor", names[i], factors[i]);
+      return false;
+    }
+    const std::vector<int> members = rl_noise_members(names[i], params.two_d_mode);
+    for (int m : members) s->process_noise(m, m) = base.process_noise(m, m) * factors[i];
+    if (!members.empty()) continue;
+    bool found = false;
+    for (std::size_t k = 0; k < params.sensors.size() && !found; ++k) {
+      if (names[i] != "cov_" + params.sensors[k].name) continue;
+      s->covariance_scale[k] = base.covariance_scale[k] * factors[i];
+      found = true;
+    }
+    if (!found) {
+      if (why) *why = fmt::format("'{}' is not a parameter of this file's filter", names[i]);
+      return false;
+    }
+  }
+  if (names.size() != factors.size()) {
+    if (why) *why = fmt::format("{} names for {} factors", names.size(), factors.size());
+    return false;
+  }
+  return true;
+}
 
 std::string_view to_string(RlFitness f) {
   switch (f) {
@@ -60,14 +152,20 @@ bool RlTuneOptions::IsValid(std::string* why) const {
 
 FixScore score_of(std::span<const rlnode::ReplayOutput> outputs) {
   FixScore s;
-  double sum = 0.0;
+  double sum = 0.0, sum_abs = 0.0;
   for (const rlnode::ReplayOutput& o : outputs) {
     s.finite = s.finite && o.finite;
-    for (const rlnode::ScoredFix& f : o.scored) sum += (f.predicted - f.measured).head<2>().squaredNorm();
+    for (const rlnode::ScoredFix& f : o.scored) {
+      const double e = (f.predicted - f.measured).head<2>().norm();
+      sum += e * e;
+      sum_abs += e;
+      s.maxe_m = std::max(s.maxe_m, e);
+    }
     s.fixes += static_cast<long>(o.scored.size());
   }
-  s.rmse_m = s.fixes > 0 ? std::sqrt(sum / static_cast<double>(s.fixes))
-                         : std::numeric_limits<double>::quiet_NaN();
+  const double n = static_cast<double>(s.fixes);
+  s.rmse_m = s.fixes > 0 ? std::sqrt(sum / n) : std::numeric_limits<double>::quiet_NaN();
+  s.mae_m = s.fixes > 0 ? sum_abs / n : std::numeric_limits<double>::quiet_NaN();
   if (!std::isfinite(s.rmse_m)) s.finite = false;
   return s;
 }
@@ -123,23 +221,10 @@ RlObjective::RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySetti
     specs.push_back({std::move(name), "×", lo, hi, true, std::move(meaning)});
     noise_members_.push_back(std::move(members));
   };
-  const bool two_d = rec.params.two_d_mode;
-  if (options.space == RlNoiseSpace::diagonal) {
-    for (int m = 0; m < rl::kStateSize; ++m) {
-      if (two_d && forced_in_2d(m)) continue;
-      add_noise(fmt::format("q_{}", kMemberNames[m]), {m},
-                "factor on process_noise_covariance's diagonal entry");
-    }
-  } else {
-    const char* names[5] = {"q_position", "q_orientation", "q_linear_velocity", "q_angular_velocity",
-                            "q_acceleration"};
-    for (int b = 0; b < 5; ++b) {
-      std::vector<int> members;
-      for (int m = 3 * b; m < 3 * b + 3; ++m) {
-        if (!(two_d && forced_in_2d(m))) members.push_back(m);
-      }
-      add_noise(names[b], members, "factor on a block of process_noise_covariance");
-    }
+  for (const std::string& name : rl_noise_parameter_names(options.space, rec.params.two_d_mode)) {
+    add_noise(name, rl_noise_members(name, rec.params.two_d_mode),
+              options.space == RlNoiseSpace::diagonal ? "factor on process_noise_covariance's diagonal entry"
+                                                      : "factor on a block of process_noise_covariance");
   }
   if (options.input_covariances) {
     for (std::size_t s = 0; s < rec.params.sensors.size(); ++s) {
@@ -196,8 +281,10 @@ double RlObjective::combine(const FixScore& heldout, const FixScore& outage) con
 double RlObjective::fitness(std::span<const double> x) const {
   const rlnode::ReplaySettings s = settings_at(x);
   const FixScore none;
-  return combine(options_.fitness != RlFitness::outage ? heldout_score(s) : none,
-                 options_.fitness != RlFitness::heldout_fixes ? outage_score(s) : none);
+  const double f = combine(options_.fitness != RlFitness::outage ? heldout_score(s) : none,
+                           options_.fitness != RlFitness::heldout_fixes ? outage_score(s) : none);
+  if (f >= kDiverged) diverged_->fetch_add(1, std::memory_order_relaxed);
+  return f;
 }
 
 }  // namespace odotune

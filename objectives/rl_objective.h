@@ -21,8 +21,11 @@
 // thread-safe; the schedules are laid out once.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -36,10 +39,31 @@
 namespace odotune {
 
 enum class RlFitness { heldout_fixes, outage, both };
-std::string_view to_string(RlFitness f);  // "heldout-fixes", "outage", "both"
+std::string_view to_string(RlFitness f);                       // "heldout-fixes", "outage", "both"
+bool parse_rl_fitness(std::string_view text, RlFitness* out);  // false (out untouched) for other text
+
+// The fitness mode a results store records for each (results/run_record.h):
+// held-out fixes is mode 8 on this filter too; the others have numbers of their own.
+constexpr int kRlHeldoutFixesMode = 8, kRlOutageMode = 10, kRlBothMode = 11;
+int stored_mode(RlFitness f);
+std::optional<RlFitness> rl_fitness_of_mode(int mode);
 
 enum class RlNoiseSpace { diagonal, blocks };
 std::string_view to_string(RlNoiseSpace s);  // "diagonal", "blocks"
+bool parse_rl_noise_space(std::string_view text, RlNoiseSpace* out);
+
+// The process-noise parameters of a space ("q_x" … per diagonal entry, or
+// "q_position" … per block), without the entries two_d_mode forces.
+std::vector<std::string> rl_noise_parameter_names(RlNoiseSpace space, bool two_d);
+// The diagonal entries the parameter `name` scales; empty for a name that is
+// not a process-noise parameter.
+std::vector<int> rl_noise_members(std::string_view name, bool two_d);
+// Applies tuned factors by name (process-noise parameters as above, and
+// "cov_<sensor>" on an input's message covariance) to *s, which holds the
+// file's own settings (rlnode::settings_of). False with *why for an unknown
+// name, a factor that is not positive and finite, or lists of unequal length.
+bool apply_rl_factors(const rlnode::RlParams& params, std::span<const std::string> names,
+                      std::span<const double> factors, rlnode::ReplaySettings* s, std::string* why);
 
 struct RlTuneOptions {
   RlFitness fitness = RlFitness::outage;
@@ -59,7 +83,7 @@ struct RlTuneOptions {
 
 // Held-out fix errors of one or more replays.
 struct FixScore {
-  double rmse_m = 0.0;
+  double rmse_m = 0.0, mae_m = 0.0, maxe_m = 0.0;  // of the horizontal error at the scored fixes
   long fixes = 0;
   bool finite = true;
 };
@@ -93,6 +117,8 @@ class RlObjective {
   const FixScore& baseline_outage() const { return outage_base_; }
   double baseline_fitness() const { return combine(heldout_base_, outage_base_); }
   const RlTuneOptions& options() const { return options_; }
+  // fitness() calls whose replay diverged (scored as a penalty), so far.
+  long diverged() const { return diverged_->load(); }
 
  private:
   const rlnode::Recording* rec_;
@@ -103,6 +129,7 @@ class RlObjective {
   std::vector<int> cov_sensors_;                 // per covariance parameter: the sensor
   std::vector<rlnode::Schedule> heldout_, outage_;
   FixScore heldout_base_, outage_base_;
+  std::unique_ptr<std::atomic<long>> diverged_ = std::make_unique<std::atomic<long>>(0);
   // The fitness of the two parts' scores (kDiverged-like penalty when a used part is not finite).
   double combine(const FixScore& heldout, const FixScore& outage) const;
 };

@@ -105,7 +105,7 @@ ImprovementGrid improvement_grid(const std::vector<RunRecord>& runs, const std::
   return g;
 }
 
-RmseTable rmse_table(const std::vector<RunRecord>& runs) {
+RmseTable rmse_table(const std::vector<RunRecord>& runs, const std::vector<int>& modes) {
   RmseTable t;
   t.models = report_models(runs);
   // (track, mode) → original mean, per-model tuned means.
@@ -119,7 +119,7 @@ RmseTable rmse_table(const std::vector<RunRecord>& runs) {
     cell.second[static_cast<std::size_t>(m)].add(r.tuned.rmse_m);
   }
   for (const auto& track : report_tracks(runs))
-    for (int mode = 1; mode <= kModes; ++mode) {
+    for (int mode : modes) {
       const auto it = acc.find({track, mode});
       if (it == acc.end()) continue;
       RmseTable::Row row{track, mode, it->second.first.value(), {}};

@@ -52,7 +52,8 @@ struct RmseTable {
   std::vector<Row> rows;  // tracks in report order, modes ascending
 };
 // From per-track runs only (leave-one-out runs are in the generalisation table).
-RmseTable rmse_table(const std::vector<RunRecord>& runs);
+// Rows for `modes` only (default: the paper's modes 1..7), in that order.
+RmseTable rmse_table(const std::vector<RunRecord>& runs, const std::vector<int>& modes = {1, 2, 3, 4, 5, 6, 7});
 // RMSE in mm with 2 decimals; header "track,mode,original_mm,<model>_mm…";
 // a missing value is an empty field.
 std::string to_csv(const RmseTable& t);

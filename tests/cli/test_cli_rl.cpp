@@ -10,6 +10,7 @@
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 
+using odotune::testing_support::number_after;
 using odotune::testing_support::run_cli;
 using odotune::testing_support::slurp;
 using odotune::testing_support::TempDir;
@@ -21,13 +22,6 @@ const std::string kSource =
     "--rl-params " + kBags + "/husky_ekf.yaml --bag " + kBags +
     "/ros2/test1.mcap --tf imu_link=0,-0.3,0.52,1.5707963267948966,0,-1.5707963267948966 "
     "--gps-heading-fit 60";
-
-double number_after(const std::string& text, const std::string& label) {
-  const std::regex re(label + R"(\s*([-0-9.]+))");
-  std::smatch m;
-  if (!std::regex_search(text, m, re)) return -1e300;
-  return std::stod(m[1]);
-}
 
 }  // namespace
 

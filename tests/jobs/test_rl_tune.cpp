@@ -96,3 +96,56 @@ TEST(RlTune, SameSeedGivesTheSameTuneWithOneOrTwoThreads) {
   EXPECT_EQ(a.best_fitness, b.best_fitness);
   EXPECT_EQ(a.log, b.log);
 }
+
+// A stored run's factors, applied by name (as export and report do), give
+// the settings the objective replayed, in both spaces; names that are not the
+// filter's are refused.
+TEST(RlTune, FactorsAppliedByNameGiveTheObjectivesSettings) {
+  Fixture f;
+  const rlnode::ReplaySettings base = rlnode::settings_of(f.rec.params);
+  for (RlNoiseSpace space : {RlNoiseSpace::diagonal, RlNoiseSpace::blocks}) {
+    RlTuneOptions o = small_options(f.rec);
+    o.space = space;
+    const RlObjective objective(f.rec, base, o);
+    const auto [lo, hi] = objective.bounds();
+    std::vector<double> x(lo.size());
+    for (std::size_t i = 0; i < x.size(); ++i)
+      x[i] = lo[i] + (hi[i] - lo[i]) * (0.1 + 0.8 * static_cast<double>(i) / static_cast<double>(x.size()));
+    std::vector<std::string> names;
+    for (const ParamSpec& p : objective.space().params()) names.push_back(p.name);
+    const std::vector<double> factors = objective.space().to_physical(x);
+    rlnode::ReplaySettings s = base;
+    std::string why;
+    ASSERT_TRUE(apply_rl_factors(f.rec.params, names, factors, &s, &why)) << why;
+    const rlnode::ReplaySettings want = objective.settings_at(x);
+    EXPECT_EQ(s.process_noise, want.process_noise) << to_string(space);
+    EXPECT_EQ(s.covariance_scale, want.covariance_scale) << to_string(space);
+    EXPECT_NE(s.process_noise, base.process_noise);
+  }
+  rlnode::ReplaySettings s = base;
+  std::string why;
+  const std::vector<std::string> bad = {"q_warp"};
+  const std::vector<double> one = {2.0};
+  EXPECT_FALSE(apply_rl_factors(f.rec.params, bad, one, &s, &why));
+  EXPECT_NE(why.find("q_warp"), std::string::npos) << why;
+  const std::vector<std::string> good = {"q_x"};
+  const std::vector<double> negative = {-1.0};
+  EXPECT_FALSE(apply_rl_factors(f.rec.params, good, negative, &s, &why));
+  // two_d_mode: a block leaves the entries the mode forces alone.
+  EXPECT_EQ(rl_noise_members("q_position", true), std::vector<int>({0, 1}));
+  EXPECT_EQ(rl_noise_members("q_position", false), std::vector<int>({0, 1, 2}));
+}
+
+TEST(RlTune, FitnessNamesAndStoredModesRoundTrip) {
+  for (RlFitness fit : {RlFitness::heldout_fixes, RlFitness::outage, RlFitness::both}) {
+    RlFitness back{};
+    ASSERT_TRUE(parse_rl_fitness(to_string(fit), &back));
+    EXPECT_EQ(back, fit);
+    EXPECT_EQ(rl_fitness_of_mode(stored_mode(fit)), fit);
+  }
+  EXPECT_EQ(stored_mode(RlFitness::heldout_fixes), 8);  // mode 8 on this filter too
+  EXPECT_FALSE(rl_fitness_of_mode(7).has_value());
+  RlFitness untouched = RlFitness::both;
+  EXPECT_FALSE(parse_rl_fitness("gt", &untouched));
+  EXPECT_EQ(untouched, RlFitness::both);
+}

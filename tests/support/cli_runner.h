@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <string>
 
@@ -41,6 +42,15 @@ inline CliResult run_cli(const std::string& args) {
   r.err = slurp(dir / "err");
   std::filesystem::remove_all(dir);
   return r;
+}
+
+// The number printed right after `label` in `text` (label is a regex), or
+// -1e300 when there is none.
+inline double number_after(const std::string& text, const std::string& label) {
+  const std::regex re(label + R"(\s*([-0-9.]+))");
+  std::smatch m;
+  if (!std::regex_search(text, m, re)) return -1e300;
+  return std::stod(m[1]);
 }
 
 inline std::string reference_track(int i) {
