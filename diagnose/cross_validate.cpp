@@ -117,7 +117,30 @@ EffectSet start_from(const EffectSet& structure, const EffectSet& warm) {
   return unpack(structure, v);
 }
 
-CrossValidator::CrossValidator(const DiagInput& in, const FitOptions& fit, int folds, double correlated_samples)
+namespace {
+
+// Per window, the recording it is anchored in (the last start at or before
+// its anchor time), renumbered over the recordings that have windows; empty
+// when fewer than two recordings have windows.
+std::vector<int> recording_folds(const std::vector<Window>& windows, const std::vector<double>& starts_s) {
+  if (starts_s.size() < 2) return {};
+  std::vector<int> raw;
+  for (const Window& w : windows) {
+    const auto it = std::upper_bound(starts_s.begin(), starts_s.end(), w.t_begin_s);
+    raw.push_back(std::max(0, static_cast<int>(it - starts_s.begin()) - 1));
+  }
+  std::vector<int> used(raw);
+  std::sort(used.begin(), used.end());
+  used.erase(std::unique(used.begin(), used.end()), used.end());
+  if (used.size() < 2) return {};
+  for (int& f : raw) f = static_cast<int>(std::lower_bound(used.begin(), used.end(), f) - used.begin());
+  return raw;
+}
+
+}  // namespace
+
+CrossValidator::CrossValidator(const DiagInput& in, const FitOptions& fit, int folds, double correlated_samples,
+                               const std::vector<double>& recording_starts_s)
     : in_(&in), fit_(fit), corr_(correlated_samples) {
   if (!(corr_ >= 1.0 && std::isfinite(corr_)))
     throw std::invalid_argument(fmt::format("correlated_samples = {}; expected >= 1", correlated_samples));
@@ -126,11 +149,15 @@ CrossValidator::CrossValidator(const DiagInput& in, const FitOptions& fit, int f
   if (folds < 2) throw std::invalid_argument(fmt::format("folds = {}; expected >= 2", folds));
   windows_ = make_windows(in, fit.window_s);
   const int n = static_cast<int>(windows_.size());
-  const int k = std::min(folds, n);
+  const std::vector<int> by_recording = recording_folds(windows_, recording_starts_s);
+  by_recording_ = !by_recording.empty();
+  const int k = by_recording_ ? *std::max_element(by_recording.begin(), by_recording.end()) + 1
+                              : std::min(folds, n);
   train_.resize(static_cast<std::size_t>(k));
   test_.resize(static_cast<std::size_t>(k));
   for (int w = 0; w < n; ++w) {
-    const auto f = static_cast<int>(static_cast<long>(w) * k / n);
+    const int f = by_recording_ ? by_recording[static_cast<std::size_t>(w)]
+                                : static_cast<int>(static_cast<long>(w) * k / n);
     for (int g = 0; g < k; ++g) (g == f ? test_ : train_)[static_cast<std::size_t>(g)].push_back(w);
   }
   heading_ = in.has_ref_heading() && fit.use_heading;

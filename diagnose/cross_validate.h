@@ -2,7 +2,8 @@
 // selection (select.h; docs/diagnosis-design.md step 7).
 //
 // Windows: make_windows(in, fit.window_s). Folds: K = min(folds, #windows)
-// contiguous blocks of windows (window w in fold floor(w*K/#windows)).
+// contiguous blocks of windows (window w in fold floor(w*K/#windows)), or,
+// for several recordings laid end to end, one fold per recording.
 //
 // Errors are NORMALISED: per reference sample
 //   (dx^2 + dy^2)/sigma_m^2 (+ dtheta^2/sigma_rad^2 with a reference heading
@@ -100,7 +101,17 @@ class CrossValidator {
   // correlated_samples (>= 1): how many consecutive reference samples share
   // their noise (a smoothed reference); the white-noise law of compare()
   // counts that many samples as one.
-  CrossValidator(const DiagInput& in, const FitOptions& fit, int folds, double correlated_samples = 1.0);
+  // recording_starts_s (ascending pooled start times of recordings laid end
+  // to end): with two or more, fold f holds the windows anchored in
+  // recording f (leave one recording out; recordings without a window are
+  // dropped), unless fewer than two folds would have windows; then `folds`
+  // blocks as above.
+  CrossValidator(const DiagInput& in, const FitOptions& fit, int folds, double correlated_samples = 1.0,
+                 const std::vector<double>& recording_starts_s = {});
+  // The windows fold f is tested on (indices into windows()).
+  const std::vector<int>& fold_windows(int f) const { return test_.at(static_cast<std::size_t>(f)); }
+  // True when the folds are recordings (above).
+  bool folds_are_recordings() const { return by_recording_; }
 
   const DiagInput& input() const { return *in_; }
   const std::vector<Window>& windows() const { return windows_; }
@@ -187,6 +198,7 @@ class CrossValidator {
   std::vector<Window> windows_;
   std::vector<std::vector<int>> train_, test_;  // per fold
   bool heading_ = false;
+  bool by_recording_ = false;
   double ism_ = 1.0, ish_ = 0.0;  // inverse reference sigmas
   int comps_ = 2;                 // error components per sample
   std::size_t n_samples_ = 0;

@@ -128,7 +128,14 @@ PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std
   PooledDiagnosis out;
   std::vector<double> shifts;
   out.input = concatenate(fit, gap_s, &shifts);
-  out.pooled = diagnose(out.input, o);
+  // The selection leaves one recording out at a time: an effect is chosen
+  // because it predicts a recording it was not fitted on.
+  DiagnoseOptions pooled_options = o;
+  pooled_options.select.recording_starts_s.clear();
+  if (fit.size() >= 2)
+    for (std::size_t k = 0; k < fit.size(); ++k)
+      pooled_options.select.recording_starts_s.push_back(fit[k].odo_t_s.front() + shifts[k]);
+  out.pooled = diagnose(out.input, pooled_options);
   Diagnosis& d = out.pooled;
   const EffectSet wheel = wheel_model(d);
   const double ws = d.window_s;

@@ -285,8 +285,9 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
   const SelectionInput si = selection_input(in_full, o_in);
   const DiagInput* in = &si.input;
   sel.ref_stride = si.stride;
-  CrossValidator cv(*in, o.fit, o.folds, si.correlated);
+  CrossValidator cv(*in, o.fit, o.folds, si.correlated, o.recording_starts_s);
   sel.folds = cv.num_folds();
+  sel.folds_are_recordings = cv.folds_are_recordings();
   Search z{cv, o, sel, EffectSet(), {}, {}, {}, kNaN};
   z.heading = in->has_ref_heading();
 

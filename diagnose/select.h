@@ -237,8 +237,12 @@ inline FitOptions default_select_fit() {
 struct SelectOptions {
   // window_s (> 0 here), loss, model, anchoring; max_iterations: final fits
   FitOptions fit = default_select_fit();
-  std::vector<Effect> candidates;     // empty = every wheel-odometry effect (header comment)
-  int folds = 5;                      // K contiguous folds of windows (fewer with fewer windows)
+  std::vector<Effect> candidates;  // empty = every wheel-odometry effect (header comment)
+  int folds = 5;                   // K contiguous folds of windows (fewer with fewer windows)
+  // Several recordings laid end to end (recordings.h): each one's start in
+  // pooled time [s], ascending. With two or more, the folds are the
+  // recordings (leave one recording out) instead of `folds` blocks.
+  std::vector<double> recording_starts_s;
   int max_effects = 3;                // forward steps at most
   double alpha = 1e-3;                // one-sided level of the paired test (rule (b))
   double min_rel_improvement = 0.05;  // relative CV improvement needed
@@ -319,7 +323,8 @@ struct Selection {
   std::string split;  // "last" or "interleaved" ("" when nothing was fitted)
   double window_s = 0.0;
   int num_windows = 0, folds = 0;
-  int ref_stride = 1;                                    // thinning of the reference during selection
+  bool folds_are_recordings = false;  // leave one recording out (SelectOptions::recording_starts_s)
+  int ref_stride = 1;                 // thinning of the reference during selection
   double baseline_cv_score = 0.0, final_cv_score = 0.0;  // nominal and selected set (CV)
   double floor_m = 0.0;    // materiality floor of rule (e) [m] (materiality.h; 0 before the baseline)
   double floor_rad = 0.0;  // its heading part [rad] (0 without a reference heading)

@@ -123,6 +123,7 @@ json search_log(const Selection& s) {
                  {"accepted", r.accepted},
                  {"reason", r.reason}});
   return {{"folds", s.folds},
+          {"folds_are_recordings", s.folds_are_recordings},
           {"windows", s.num_windows},
           {"baseline_cv_score", number(s.baseline_cv_score)},
           {"final_cv_score", number(s.final_cv_score)},

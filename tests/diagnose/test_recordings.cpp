@@ -9,6 +9,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "diagnose/cross_validate.h"
 #include "diagnose/diag_input.h"
 #include "diagnose/recordings.h"
 #include "diagnose/sim_track.h"
@@ -88,6 +89,48 @@ TEST(Recordings, FittedOnTwoProvenOnAThird) {
   for (const std::string& c : p.consistency)
     holds = holds || c.find("holds across recordings") != std::string::npos;
   EXPECT_TRUE(holds);
+  // The selection left one fitted recording out at a time.
+  EXPECT_TRUE(p.pooled.selection.folds_are_recordings);
+  EXPECT_EQ(p.pooled.selection.folds, 2);
+}
+
+TEST(Recordings, FoldsAreTheRecordingsWhenTheirStartsAreGiven) {
+  std::vector<double> shifts;
+  const std::vector<DiagInput> parts = {recording(1631, 60), recording(1632, 80), recording(1633, 60)};
+  const DiagInput c = concatenate(parts, 1000.0, &shifts);
+  std::vector<double> starts;
+  for (std::size_t k = 0; k < parts.size(); ++k) starts.push_back(parts[k].odo_t_s.front() + shifts[k]);
+  FitOptions fit;
+  fit.window_s = 20.0;
+  CrossValidator by_recording(c, fit, 5, 1.0, starts);
+  EXPECT_TRUE(by_recording.folds_are_recordings());
+  ASSERT_EQ(by_recording.num_folds(), 3);
+  // Fold k holds exactly the windows of recording k.
+  std::size_t total = 0;
+  for (int f = 0; f < 3; ++f) {
+    const auto k = static_cast<std::size_t>(f);
+    const double end = k + 1 < starts.size() ? starts[k + 1] : 1e300;
+    ASSERT_FALSE(by_recording.fold_windows(f).empty()) << f;
+    for (int w : by_recording.fold_windows(f)) {
+      const Window& win = by_recording.windows()[static_cast<std::size_t>(w)];
+      EXPECT_GE(win.t_begin_s, starts[k]) << f;
+      EXPECT_LT(win.t_begin_s, end) << f;
+    }
+    total += by_recording.fold_windows(f).size();
+  }
+  EXPECT_EQ(total, by_recording.windows().size());
+  CrossValidator blocks(c, fit, 5, 1.0, {starts.front()});
+  EXPECT_FALSE(blocks.folds_are_recordings());
+  EXPECT_EQ(blocks.num_folds(), 5);
+}
+
+// An effect that one fitted recording has and the other has not predicts
+// neither from the other: leaving one recording out, no wheel effect is
+// chosen (with time blocks over both, a slip zone stood in for it).
+TEST(Recordings, AnEffectOfOneRecordingOnlyIsNotChosenPooled) {
+  const PooledDiagnosis p = diagnose_recordings({recording(1641, 150, 0.97), recording(1642, 80, 1.0)}, {});
+  EXPECT_TRUE(p.pooled.selection.folds_are_recordings);
+  for (const Finding& f : p.pooled.findings) EXPECT_EQ(f.effect, "unexplained") << f.spec();
 }
 
 TEST(Recordings, AChangedRobotDoesNotHoldAcrossRecordings) {
