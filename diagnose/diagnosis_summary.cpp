@@ -126,15 +126,16 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
     lines.push_back(fmt::format("{}: the nominal model leaves out {}; {}.", d.track, what, proof));
   } else if (unexplained) {
     lines.push_back(
-        unexplained->model
+        unexplained->model && unexplained->model->proven
             ? fmt::format("{}: the model and the recording disagree beyond sensor noise, no effect of "
                           "physics-effects.md explains it, and terms outside that list reproduce it: {}.",
                           d.track, unexplained->model->formula)
             : fmt::format(
                   "{}: the model and the recording disagree at {}{} beyond sensor noise, and no effect of "
-                  "physics-effects.md explains it.",
+                  "physics-effects.md explains it{}.",
                   d.track, spans(unexplained->segments),
-                  unexplained->conditions.empty() ? "" : " (" + unexplained->conditions + ")"));
+                  unexplained->conditions.empty() ? "" : " (" + unexplained->conditions + ")",
+                  unexplained->model ? "; terms fitted to it are not proven on the held-out recordings" : ""));
   } else {
     lines.push_back(
         fmt::format("{}: nothing left out — the nominal model explains the recording within sensor noise "
@@ -160,7 +161,8 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
       if (!v.empty()) lines.push_back("     in the " + d.velocity_source + "'s terms: " + v);
     }
     if (f.model) {  // terms outside physics-effects.md (term_search.h)
-      lines.push_back("     model: " + f.model->formula);
+      lines.push_back("     model: " + f.model->formula +
+                      (f.model->proven ? "" : " (fits the fitted data, not proven elsewhere)"));
       std::string t;
       for (const FoundTerm& ft : f.model->terms)
         t += fmt::format("{}{} on {} = {}", t.empty() ? "" : ", ", ft.name, sim::target_name(ft.term.target),
@@ -168,6 +170,10 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
       lines.push_back(fmt::format("     terms: {} (held-out {} → {})", t,
                                   metres(f.model->heldout.before_pos_rmse_m),
                                   metres(f.model->heldout.after_pos_rmse_m)));
+      if (f.model->other_recordings)
+        lines.push_back(fmt::format("     on the held-out recordings: {} → {}",
+                                    metres(f.model->other_recordings->before_pos_rmse_m),
+                                    metres(f.model->other_recordings->after_pos_rmse_m)));
     }
     if (!f.rivals.empty()) {
       std::string r;

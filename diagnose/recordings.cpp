@@ -9,6 +9,7 @@
 #include "diagnose/fit.h"
 #include "diagnose/materiality.h"
 #include "diagnose/select.h"
+#include "diagnose/term_search.h"
 #include "diagnose/window_replay.h"
 
 namespace odotune::diagnose {
@@ -40,6 +41,37 @@ EffectSet wheel_model(const Diagnosis& d) {
 }
 
 std::string short_name(const std::string& slot) { return slot.substr(slot.find('.') + 1); }
+
+// A term model found on the fitted recordings (the unexplained finding's
+// `model`), replayed on the held-out recordings: proven only when it lowers
+// their pooled error by their materiality floor; else said so.
+void prove_terms_elsewhere(Diagnosis& d, const EffectSet& wheel, const std::vector<DiagInput>& heldout,
+                           const DiagnoseOptions& o, std::vector<std::string>& consistency) {
+  for (Finding& f : d.findings) {
+    if (!f.model) continue;
+    std::vector<sim::ModelTerm> terms;
+    for (const FoundTerm& t : f.model->terms) terms.push_back(t.term);
+    double sb = 0.0, sa = 0.0, sigma2 = 0.0;
+    std::size_t n = 0;
+    for (const DiagInput& in : heldout) {
+      const TermScore t = replay_terms(in, wheel, terms, d.window_s, o.terms);
+      const auto k = static_cast<double>(t.samples);
+      sb += t.before_pos_rmse_m * t.before_pos_rmse_m * k, sa += t.after_pos_rmse_m * t.after_pos_rmse_m * k;
+      sigma2 += in.ref_sigma_m * in.ref_sigma_m * k, n += t.samples;
+    }
+    if (n == 0) continue;
+    const auto nn = static_cast<double>(n);
+    TermScore pooled{std::sqrt(sb / nn), std::sqrt(sa / nn), n};
+    const double floor = materiality_floor_m(std::sqrt(sigma2 / nn), pooled.before_pos_rmse_m,
+                                             o.select.materiality);
+    f.model->other_recordings = pooled;
+    f.model->proven = is_material(pooled.before_pos_rmse_m, pooled.after_pos_rmse_m, floor);
+    consistency.push_back(
+        fmt::format("the terms {} {} on the held-out recordings: {:.1f} → {:.1f} mm (floor {:.1f} mm)",
+                    f.model->formula, f.model->proven ? "hold" : "fit the fitted recordings only, not proven",
+                    1e3 * pooled.before_pos_rmse_m, 1e3 * pooled.after_pos_rmse_m, 1e3 * floor));
+  }
+}
 
 }  // namespace
 
@@ -185,6 +217,7 @@ PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std
       }
       f.heldout = {before.rmse(), after.rmse()};
     }
+    prove_terms_elsewhere(d, wheel, heldout, o, out.consistency);
   }
 
   // What holds across recordings.

@@ -300,6 +300,29 @@ std::string conditions_of(const std::vector<sim::ModelTerm>& terms) {
   return out;
 }
 
+// The wheel effects of `chosen` (term search ignores gyro effects).
+EffectSet wheel_only(const EffectSet& chosen) {
+  EffectSet wheel = chosen;
+  wheel.disable(Effect::gyro_bias).disable(Effect::gyro_scale);
+  return wheel;
+}
+
+// The problem of `in` cut into `windows` with the chosen model and the
+// library's columns (`in`, `windows` and `model` must outlive it).
+Problem make_problem(const DiagInput& in, const std::vector<Window>& windows, const EffectModel& model,
+                     const EffectSet& wheel, const TermSearchOptions& o) {
+  Problem p{in, windows, model, pack(wheel), 1.0, 0.0, false, false, {}, {}, 4};
+  p.base_eff_m = model.series().wheel_base_m *
+                 (wheel.on(Effect::wheel_base_error) ? wheel.get(Effect::wheel_base_error, "scale") : 1.0);
+  p.skid = wheel.on(Effect::lateral_skid);
+  p.skid_k = p.skid ? wheel.get(Effect::lateral_skid, "k") : 0.0;
+  p.heading = in.has_ref_heading() && std::isfinite(in.ref_sigma_rad) && in.ref_sigma_rad > 0.0;
+  p.align_iterations = o.align_iterations;
+  p.anchors = replay(model, p.params, in, windows, {}, nullptr, Anchoring::free).anchors;
+  build_columns(p, o.harmonics);
+  return p;
+}
+
 }  // namespace
 
 bool TermSearchOptions::IsValid(std::string* why) const {
@@ -328,18 +351,9 @@ TermSearchResult search_terms(const DiagInput& in, const EffectSet& chosen, cons
       if (w < 0 || static_cast<std::size_t>(w) >= windows.size())
         throw std::invalid_argument(fmt::format("term search: window {} does not exist (the track has {})", w,
                                                 windows.size()));
-  EffectSet wheel = chosen;
-  wheel.disable(Effect::gyro_bias).disable(Effect::gyro_scale);
+  const EffectSet wheel = wheel_only(chosen);
   const EffectModel model(in, wheel);
-  Problem p{in, windows, model, pack(wheel), 1.0, 0.0, false, false, {}, {}, 4};
-  p.base_eff_m = model.series().wheel_base_m *
-                 (wheel.on(Effect::wheel_base_error) ? wheel.get(Effect::wheel_base_error, "scale") : 1.0);
-  p.skid = wheel.on(Effect::lateral_skid);
-  p.skid_k = p.skid ? wheel.get(Effect::lateral_skid, "k") : 0.0;
-  p.heading = in.has_ref_heading() && std::isfinite(in.ref_sigma_rad) && in.ref_sigma_rad > 0.0;
-  p.align_iterations = o.align_iterations;
-  p.anchors = replay(model, p.params, in, windows, {}, nullptr, Anchoring::free).anchors;
-  build_columns(p, o.harmonics);
+  Problem p = make_problem(in, windows, model, wheel, o);
 
   TermSearchResult out;
   out.floor_m = floor_m;
@@ -455,6 +469,30 @@ TermSearchResult search_terms(const DiagInput& in, const EffectSet& chosen, cons
   } else {
     out.found = true;
   }
+  return out;
+}
+
+TermScore replay_terms(const DiagInput& in, const EffectSet& chosen, const std::vector<sim::ModelTerm>& terms,
+                       double window_s, const TermSearchOptions& o) {
+  const EffectSet wheel = wheel_only(chosen);
+  const EffectModel model(in, wheel);
+  const std::vector<Window> windows = make_windows(in, window_s);
+  const Problem p = make_problem(in, windows, model, wheel, o);
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(p.cols.size()));
+  for (const sim::ModelTerm& t : terms) {
+    // A basis that does not vary here (no column) adds nothing to this recording.
+    for (std::size_t j = 0; j < p.cols.size(); ++j)
+      if (p.cols[j].target == t.target && p.cols[j].basis == t.basis) c(static_cast<Eigen::Index>(j)) = t.coef;
+  }
+  std::vector<int> all(windows.size());
+  for (std::size_t w = 0; w < windows.size(); ++w) all[w] = static_cast<int>(w);
+  const bool free = anchoring(in) == Anchoring::free;
+  TermScore out;
+  const std::vector<Eigen::VectorXd> before = all_residuals(p, all, Eigen::VectorXd::Zero(c.size()), free);
+  out.before_pos_rmse_m = pos_rmse(before, p.heading, in.ref_sigma_m);
+  out.after_pos_rmse_m = pos_rmse(all_residuals(p, all, c, free), p.heading, in.ref_sigma_m);
+  for (const Eigen::VectorXd& r : before)
+    out.samples += static_cast<std::size_t>(r.size() / (p.heading ? 3 : 2));
   return out;
 }
 

@@ -58,6 +58,7 @@
 #pragma once
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -84,6 +85,7 @@ struct TermSearchOptions {
 struct TermScore {
   double before_pos_rmse_m = std::numeric_limits<double>::quiet_NaN();  // the chosen model
   double after_pos_rmse_m = std::numeric_limits<double>::quiet_NaN();   // with the terms
+  std::size_t samples = 0;  // replay_terms: scored reference samples
 };
 
 struct FoundTerm {
@@ -105,6 +107,10 @@ struct TermModel {
   std::string formula;           // sim::term_formula of the terms
   std::string conditions;        // in words: "periodic in the left wheel's angle, once per turn"
   TermScore train, heldout;
+  // Recordings the fit never saw (recordings.h), pooled, when there are any;
+  // `proven` is false when the terms do not lower their error by the floor.
+  std::optional<TermScore> other_recordings;
+  bool proven = true;
 };
 
 struct TermSearchResult {
@@ -125,5 +131,11 @@ struct TermSearchResult {
 TermSearchResult search_terms(const DiagInput& in, const EffectSet& model, const std::vector<Window>& windows,
                               const std::vector<int>& train, const std::vector<int>& heldout, double floor_m,
                               const TermSearchOptions& options = {});
+
+// Position RMSE of `in`'s windows of window_s (anchored as a finding's fit)
+// with the chosen model without and with `terms` (found on another
+// recording of the robot): the proof of a term model elsewhere.
+TermScore replay_terms(const DiagInput& in, const EffectSet& model, const std::vector<sim::ModelTerm>& terms,
+                       double window_s, const TermSearchOptions& options = {});
 
 }  // namespace odotune::diagnose

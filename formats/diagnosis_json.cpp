@@ -132,7 +132,8 @@ json search_log(const Selection& s) {
 
 // An unexplained finding's `model` (diagnosis-output.md): the formula, the
 // terms (name as the spec writes it, the wheel speed it corrects, the
-// coefficient's unit) and the terms' own before/after fit.
+// coefficient's unit), the terms' own before/after fit, and whether they are
+// proven on recordings the fit never saw (`proven`, `fit.heldout_recordings`).
 json term_model(const TermModel& m) {
   json terms = json::array();
   for (const FoundTerm& t : m.terms)
@@ -141,15 +142,20 @@ json term_model(const TermModel& m) {
                      {"coef", number(t.term.coef)},
                      {"stderr", number(t.std_error)},
                      {"unit", std::string(sim::coef_unit(t.term.basis))}});
-  return {{"formula", m.formula},
-          {"terms", terms},
-          {"fit",
-           {{"train",
-             {{"before_pos_rmse_m", number(m.train.before_pos_rmse_m)},
-              {"after_pos_rmse_m", number(m.train.after_pos_rmse_m)}}},
-            {"heldout",
-             {{"before_pos_rmse_m", number(m.heldout.before_pos_rmse_m)},
-              {"after_pos_rmse_m", number(m.heldout.after_pos_rmse_m)}}}}}};
+  json out = {{"formula", m.formula},
+              {"terms", terms},
+              {"proven", m.proven},
+              {"fit",
+               {{"train",
+                 {{"before_pos_rmse_m", number(m.train.before_pos_rmse_m)},
+                  {"after_pos_rmse_m", number(m.train.after_pos_rmse_m)}}},
+                {"heldout",
+                 {{"before_pos_rmse_m", number(m.heldout.before_pos_rmse_m)},
+                  {"after_pos_rmse_m", number(m.heldout.after_pos_rmse_m)}}}}}};
+  if (m.other_recordings)
+    out["fit"]["heldout_recordings"] = {{"before_pos_rmse_m", number(m.other_recordings->before_pos_rmse_m)},
+                                        {"after_pos_rmse_m", number(m.other_recordings->after_pos_rmse_m)}};
+  return out;
 }
 
 // The term search's log (term_search.h).

@@ -12,7 +12,9 @@
 #include <gtest/gtest.h>
 
 #include "diagnose/diagnosis.h"
+#include "diagnose/diagnosis_summary.h"
 #include "diagnose/materiality.h"
+#include "diagnose/recordings.h"
 #include "diagnose/sim_track.h"
 #include "diagnose/window_replay.h"
 
@@ -128,6 +130,37 @@ TEST(TermSearch, RejectsBadOptionsAndWindows) {
   EXPECT_THROW(search_terms(in, EffectSet{}, s.windows, {}, s.heldout, 0.0), std::invalid_argument);
   EXPECT_THROW(search_terms(in, EffectSet{}, s.windows, {0, 99}, s.heldout, 0.0), std::invalid_argument);
   EXPECT_THROW(search_terms(in, EffectSet{}, s.windows, s.train, s.heldout, 0.0, o), std::invalid_argument);
+}
+
+// A term model found on one recording is proven elsewhere only where it
+// holds: replayed on another recording of the out-of-round robot it lowers
+// the error, on a recording with round wheels it does not, and the pooled
+// diagnosis then keeps the formula out of its first line.
+TEST(TermSearch, TermsAreProvenOnlyOnRecordingsWhereTheyHold) {
+  const DiagInput planted = build_diag_input(out_of_round_track(true, 7));
+  const Split s = split(planted);
+  const TermSearchResult r = search(planted, s);
+  ASSERT_TRUE(r.found) << r.reason;
+  std::vector<sim::ModelTerm> terms;
+  for (const FoundTerm& t : r.model.terms) terms.push_back(t.term);
+  const TermScore same = replay_terms(build_diag_input(out_of_round_track(true, 8)), EffectSet{}, terms, 20.0);
+  EXPECT_LT(same.after_pos_rmse_m, 0.7 * same.before_pos_rmse_m);
+  EXPECT_GT(same.samples, 1000u);
+  const TermScore round = replay_terms(build_diag_input(out_of_round_track(false, 8)), EffectSet{}, terms,
+                                       20.0);
+  EXPECT_GE(round.after_pos_rmse_m, round.before_pos_rmse_m);
+
+  const DiagInput other = build_diag_input(out_of_round_track(false, 9));
+  const PooledDiagnosis p = diagnose_recordings({planted}, {other});
+  const Finding* u = nullptr;
+  for (const Finding& f : p.pooled.findings)
+    if (f.model) u = &f;
+  ASSERT_NE(u, nullptr);
+  EXPECT_FALSE(u->model->proven);
+  ASSERT_TRUE(u->model->other_recordings.has_value());
+  const std::vector<std::string> lines = pooled_summary(p);
+  EXPECT_EQ(lines.front().find(u->model->formula), std::string::npos) << lines.front();
+  EXPECT_NE(lines.front().find("not proven"), std::string::npos) << lines.front();
 }
 
 }  // namespace
