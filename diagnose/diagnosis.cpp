@@ -286,7 +286,9 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
     f.heldout = scores(wo_s, fin_s, d.heldout_windows);
     f.explains = se.explains;
     for (Effect r : se.rivals) f.rivals.emplace_back(effect_name(r));
-    f.evidence = "model selection: cross-validated over time blocks, fitted with Ceres";
+    f.evidence = d.selection.folds_are_recordings
+                     ? "model selection: cross-validated by leaving one recording out, fitted with Ceres"
+                     : "model selection: cross-validated over time blocks, fitted with Ceres";
     const ReplayResult wo = replay(in, without, ws);
     const Location loc = locate(residual_series(in, windows, wo), in.ref_sigma_m, o.locate);
     f.segments = loc.segments, f.regions = loc.regions, f.conditions = loc.phrase;

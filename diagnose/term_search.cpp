@@ -23,6 +23,10 @@ struct Column {
   TermBasis basis = TermBasis::speed;
   std::vector<double> f;  // basis(state) per interval [m/s per unit coef]
   double step = 0.0;      // forward-difference step of its coefficient
+  // Both wheels with one coefficient: f on the left wheel (target v_l), f_right
+  // (the basis of the right wheel's state) on the right.
+  bool both = false;
+  std::vector<double> f_right;
 };
 
 // Everything that does not depend on the coefficients.
@@ -77,7 +81,7 @@ void build_columns(Problem& p, int harmonics) {
     for (TermBasis b : sim::all_term_bases()) {
       const int k = b >= TermBasis::sin_1 && b <= TermBasis::cos_3 ? (static_cast<int>(b) + 1) / 2 : 0;
       if (k > harmonics || (k > 0 && !have_phi)) continue;
-      Column c{t, b, std::vector<double>(st.size()), 0.0};
+      Column c{t, b, std::vector<double>(st.size()), 0.0, false, {}};
       double sum_sq = 0.0;
       for (std::size_t i = 0; i < st.size(); ++i) {
         c.f[i] = sim::basis_value(t, b, st[i]);
@@ -89,6 +93,27 @@ void build_columns(Problem& p, int harmonics) {
       p.cols.push_back(std::move(c));
     }
   }
+  // The same basis on both wheels with one coefficient: the reading in which
+  // the robot, not one wheel, departs from the model.
+  const std::size_t singles = p.cols.size();
+  for (std::size_t i = 0; i < singles; ++i) {
+    if (p.cols[i].target != TermTarget::v_l) continue;
+    for (std::size_t j = 0; j < singles; ++j) {
+      if (p.cols[j].target != TermTarget::v_r || p.cols[j].basis != p.cols[i].basis) continue;
+      Column c{TermTarget::v_l, p.cols[i].basis, p.cols[i].f, std::min(p.cols[i].step, p.cols[j].step), true,
+               p.cols[j].f};
+      p.cols.push_back(std::move(c));
+    }
+  }
+}
+
+// The column of the same basis on both wheels, for a one-wheel column; -1 if none.
+int both_wheels_column(const Problem& p, int j) {
+  const Column& c = p.cols[static_cast<std::size_t>(j)];
+  if (c.both) return -1;
+  for (std::size_t k = 0; k < p.cols.size(); ++k)
+    if (p.cols[k].both && p.cols[k].basis == c.basis) return static_cast<int>(k);
+  return -1;
 }
 
 // Travel corrections per interval [m/s] of both wheels for coefficients c
@@ -104,6 +129,8 @@ Corrections corrections(const Problem& p, const Eigen::VectorXd& c) {
     const double cj = c(static_cast<Eigen::Index>(j));
     std::vector<double>& dst = p.cols[j].target == TermTarget::v_l ? out.l : out.r;
     for (std::size_t k = 0; k < n; ++k) dst[k] += cj * p.cols[j].f[k];
+    if (p.cols[j].both)
+      for (std::size_t k = 0; k < n; ++k) out.r[k] += cj * p.cols[j].f_right[k];
   }
   return out;
 }
@@ -263,6 +290,9 @@ double cv_score(const std::vector<Normal>& fold, const Normal& total, const std:
 }
 
 std::string label(const Column& c) {
+  if (c.both)
+    return fmt::format("both wheels: {} and {}", sim::term_name(TermTarget::v_l, c.basis),
+                       sim::term_name(TermTarget::v_r, c.basis));
   return fmt::format("{}: {}", sim::target_name(c.target), sim::term_name(c.target, c.basis));
 }
 
@@ -407,6 +437,15 @@ TermSearchResult search_terms(const DiagInput& in, const EffectSet& chosen, cons
       if (best < 0 || cv < best_cv) best = j, best_cv = cv;
     }
     if (best < 0) break;
+    // A term on one wheel needs evidence that the wheels differ: it must beat
+    // the same term on both wheels as clearly as a term must beat none.
+    const int pair = both_wheels_column(p, best);
+    if (pair >= 0 && scale(pair) != 0.0 && std::find(S.begin(), S.end(), pair) == S.end()) {
+      std::vector<int> T = S;
+      T.push_back(pair);
+      const double pair_cv = cv_score(fold, total, T);
+      if (!(best_cv <= pair_cv * (1.0 - o.min_rel_cv_gain))) best = pair, best_cv = pair_cv;
+    }
     const bool accept = best_cv <= current * (1.0 - o.min_rel_cv_gain);
     out.steps.push_back({step, label(p.cols[static_cast<std::size_t>(best)]), best_cv, accept});
     if (!accept) break;
@@ -450,9 +489,12 @@ TermSearchResult search_terms(const DiagInput& in, const EffectSet& chosen, cons
   for (std::size_t i = 0; i < S.size(); ++i) {
     const Column& col = p.cols[static_cast<std::size_t>(S[i])];
     const double se = std::sqrt(cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i)));
-    terms.push_back({col.target, col.basis, c(S[i])});
-    out.model.terms.push_back({terms.back(), sim::term_name(col.target, col.basis),
-                               std::isfinite(se) ? se : std::nan("")});
+    for (TermTarget t : {col.target, TermTarget::v_r}) {
+      terms.push_back({t, col.basis, c(S[i])});
+      out.model.terms.push_back({terms.back(), sim::term_name(t, col.basis),
+                                 std::isfinite(se) ? se : std::nan("")});
+      if (!col.both) break;
+    }
   }
   out.model.formula = sim::term_formula(terms);
   out.model.conditions = conditions_of(terms);
@@ -482,7 +524,8 @@ TermScore replay_terms(const DiagInput& in, const EffectSet& chosen, const std::
   for (const sim::ModelTerm& t : terms) {
     // A basis that does not vary here (no column) adds nothing to this recording.
     for (std::size_t j = 0; j < p.cols.size(); ++j)
-      if (p.cols[j].target == t.target && p.cols[j].basis == t.basis) c(static_cast<Eigen::Index>(j)) = t.coef;
+      if (!p.cols[j].both && p.cols[j].target == t.target && p.cols[j].basis == t.basis)
+        c(static_cast<Eigen::Index>(j)) = t.coef;
   }
   std::vector<int> all(windows.size());
   for (std::size_t w = 0; w < windows.size(); ++w) all[w] = static_cast<int>(w);

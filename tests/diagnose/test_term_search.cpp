@@ -28,6 +28,18 @@ constexpr double kAmp = 0.01, kPhase = 0.4;  // radius ±1 % once per turn
 
 // A 90 s drive of sim_track.h's circuit by a robot with 0.15 m wheels,
 // ground truth at 50 Hz (1 mm), the left wheel out of round when asked.
+Track track_with_terms(const std::vector<sim::ModelTerm>& terms, std::uint64_t seed) {
+  testing_support::SimTrackOptions o;
+  o.duration_s = 90.0, o.seed = seed;
+  o.wheel_radius_left_m = o.wheel_radius_right_m = 0.15;
+  o.wheel_base_m = 0.45, o.ticks_per_rev = 4096;
+  o.odo_rate_hz = o.gt_rate_hz = o.gyro_rate_hz = 50.0;
+  o.gt_sigma_m = 0.001;
+  sim::Scenario sc = testing_support::sim_scenario(o);
+  sc.terms = terms;
+  return sim::simulate(sc);
+}
+
 Track out_of_round_track(bool planted, std::uint64_t seed) {
   testing_support::SimTrackOptions o;
   o.duration_s = 90.0, o.seed = seed;
@@ -71,7 +83,7 @@ TEST(TermSearch, RecoversAPlantedOutOfRoundWheel) {
   const Split s = split(in);
   const TermSearchResult r = search(in, s);
   ASSERT_TRUE(r.found) << r.reason;
-  EXPECT_EQ(r.library_size, 30);
+  EXPECT_EQ(r.library_size, 45);  // 15 bases on each wheel, and on both with one coefficient
   EXPECT_EQ(r.model.terms.size(), 2u) << r.model.formula;
   const FoundTerm* sn = term(r.model, TermBasis::sin_1);
   const FoundTerm* cs = term(r.model, TermBasis::cos_1);
@@ -86,6 +98,26 @@ TEST(TermSearch, RecoversAPlantedOutOfRoundWheel) {
   EXPECT_THAT(r.model.conditions, ::testing::HasSubstr("left wheel's angle, once per turn"));
   EXPECT_LT(r.model.heldout.after_pos_rmse_m, r.model.heldout.before_pos_rmse_m - r.floor_m);
   EXPECT_LT(r.model.train.after_pos_rmse_m, r.model.train.before_pos_rmse_m);
+}
+
+// Both wheels slowed alike in turns taken at speed: the terms come out on
+// both wheels with one coefficient, not on one wheel (which would claim the
+// wheels differ).
+TEST(TermSearch, ATermOfBothWheelsIsNotPinnedOnOne) {
+  constexpr double kCoef = -0.08;
+  const DiagInput in = build_diag_input(track_with_terms(
+      {{TermTarget::v_l, TermBasis::turn_speed, kCoef}, {TermTarget::v_r, TermBasis::turn_speed, kCoef}}, 11));
+  const TermSearchResult r = search(in, split(in));
+  ASSERT_TRUE(r.found) << r.reason;
+  ASSERT_GE(r.model.terms.size(), 2u) << r.model.formula;
+  const FoundTerm& a = r.model.terms[0];
+  const FoundTerm& b = r.model.terms[1];
+  EXPECT_EQ(a.term.basis, TermBasis::turn_speed) << r.model.formula;
+  EXPECT_EQ(a.term.target, TermTarget::v_l) << r.model.formula;
+  EXPECT_EQ(b.term.target, TermTarget::v_r) << r.model.formula;
+  EXPECT_EQ(a.term.coef, b.term.coef);
+  EXPECT_NEAR(a.term.coef, kCoef, 0.25 * std::abs(kCoef));
+  EXPECT_THAT(r.model.formula, ::testing::HasSubstr("v_r,true"));
 }
 
 TEST(TermSearch, FindsNothingOnACleanTrack) {
