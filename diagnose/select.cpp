@@ -288,7 +288,7 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
   CrossValidator cv(*in, o.fit, o.folds, si.correlated, o.recording_starts_s);
   sel.folds = cv.num_folds();
   sel.folds_are_recordings = cv.folds_are_recordings();
-  Search z{cv, o, sel, EffectSet(), {}, {}, {}, kNaN};
+  Search z{cv, o, sel, EffectSet(), {}, {}, {}, kNaN, 0.0, 0.0, false, {}};
   z.heading = in->has_ref_heading();
 
   auto t0 = Clock::now();
@@ -331,6 +331,7 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
     }
   }
   prefer_radius_error(z, step);
+  if (o.look_alikes) look_alike_step(z, step);
   sel.final_cv_score = z.cur_cv.score;
   sel.structure = z.s;
   sel.timing.search_s = since(t_start);
@@ -344,6 +345,15 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
     for (const SearchRecord& r : sel.records)
       if (r.phase == "forward" && r.accepted && r.candidate == effect_name(e.effect))
         for (const std::string& name : r.rivals) e.rivals.push_back(effect_from_name(name));
+  // Look-alikes that predict as well: rivals of the chosen ones among them.
+  static constexpr Effect kAlike[] = {Effect::time_offset, Effect::actuator_lag, Effect::longitudinal_slip};
+  for (SelectedEffect& e : sel.effects) {
+    if (std::find(std::begin(kAlike), std::end(kAlike), e.effect) == std::end(kAlike)) continue;
+    for (Effect r : z.look_alikes) {
+      const bool chosen = std::find(z.chosen.begin(), z.chosen.end(), r) != z.chosen.end();
+      if (!chosen && std::find(e.rivals.begin(), e.rivals.end(), r) == e.rivals.end()) e.rivals.push_back(r);
+    }
+  }
   sel.timing.total_s = since(t_start);
   return sel;
 }

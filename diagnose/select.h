@@ -119,6 +119,15 @@
 // not beat by (a) and (b) are logged as its rivals: the data cannot tell
 // them apart, and the diagnosis should say so.
 //
+// Look-alikes. On commanded velocities a time offset, a first-order
+// actuator lag and acceleration-driven longitudinal slip all make the motion
+// trail the command, and their combinations predict much alike. After the
+// other steps, the chosen ones among them are compared with every other
+// choice of those three with no more effects (cross-validated, warm-started):
+// those the chosen effects do not beat by rules (a) and (b) become their
+// rivals, and the one with the fewest effects replaces them when it has
+// fewer (the simpler physical reading). Logged as phase "look-alike".
+//
 // Pairs. Greedy steps add one effect at a time; two effects that each bend
 // the path the other way (longitudinal slip beside a radius error, a lag
 // beside a time offset) can each fail alone and only help together. When
@@ -257,6 +266,7 @@ struct SelectOptions {
   double select_ref_rate_hz = 10.0;    // reference thinned to about this rate for selection; 0 = all
   double smooth_half_s = 0.25;         // half span of the thinned reference's position fits [s]
   double smooth_heading_half_s = 1.0;  // of its heading fits (around a gyro/odometry trend) [s]
+  bool look_alikes = true;             // the look-alike step (header comment, "Look-alikes")
   double step_head_s = 20.0;           // radius_step.t: no step this early (or in the first window) [s]
   double step_coarse_s = 0.0;          // radius_step.t coarse grid [s]; 0 = half the head (above)
   double step_fine_s = 0.5;            // radius_step.t final resolution [s]
@@ -276,7 +286,7 @@ struct SelectOptions {
 // One evaluation of the search, in the order made.
 struct SearchRecord {
   int step = 0;           // forward step (1, 2, ...), backward round, 0 for the baseline
-  std::string phase;      // "baseline", "forward", "backward", "pair", "swap"
+  std::string phase;      // "baseline", "forward", "backward", "pair", "swap", "look-alike"
   std::string candidate;  // effect added (forward) or removed (backward); "" for the baseline
   std::string set;        // the evaluated set (structure; discrete parameters shown)
   double cv_score = 0.0;  // pooled held-out normalised MSE per sample (NaN: failed)

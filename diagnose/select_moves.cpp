@@ -329,4 +329,84 @@ bool backward_round(Search& z, int round) {
   return out != nullptr;
 }
 
+// Look-alikes (select.h, "Look-alikes"): the chosen effects among a time
+// offset, a first-order actuator lag and acceleration-driven longitudinal
+// slip, against every other choice of those three with no more effects.
+bool look_alike_step(Search& z, int step) {
+  static constexpr Effect kAlike[] = {Effect::time_offset, Effect::actuator_lag, Effect::longitudinal_slip};
+  std::vector<Effect> have;
+  for (Effect e : kAlike)
+    if (std::count(z.chosen.begin(), z.chosen.end(), e)) have.push_back(e);
+  if (have.empty()) return false;
+  struct Alt {
+    std::vector<Effect> effects;
+    EffectSet st;
+    SearchRecord rec;
+  };
+  std::vector<Alt> alts;
+  for (unsigned mask = 1; mask < 8; ++mask) {
+    std::vector<Effect> a;
+    for (unsigned i = 0; i < 3; ++i)
+      if (mask & (1u << i)) a.push_back(kAlike[i]);
+    if (a == have || a.size() > have.size()) continue;
+    Alt alt{a, z.s, {}};
+    for (Effect e : have) alt.st.disable(e);
+    for (Effect e : a) alt.st = with_effect(alt.st, e);
+    std::string names;
+    for (Effect e : a) names += (names.empty() ? "" : "+") + std::string(effect_name(e));
+    alt.rec.step = step, alt.rec.phase = "look-alike", alt.rec.candidate = names;
+    alt.rec.set = alt.st.to_string();
+    alts.push_back(std::move(alt));
+  }
+  std::vector<EffectSet> sets;
+  for (const Alt& a : alts) sets.push_back(a.st);
+  const auto t0 = Clock::now();
+  std::vector<SetEval> evals = z.cv.cross_validate_all(sets, z.cur_cv.folds, z.o.cv_max_iterations);
+  const double share = since(t0) / static_cast<double>(std::max<std::size_t>(alts.size(), 1));
+  // An alternative predicts alike when the chosen effects do not beat it by
+  // rules (a) and (b); of those, the one with the fewest effects (then the
+  // best CV) replaces them when it has fewer.
+  std::size_t best = alts.size();
+  for (std::size_t i = 0; i < alts.size(); ++i) {
+    Alt& a = alts[i];
+    a.rec.time_s = share;
+    if (!evals[i].ok) {
+      a.rec.reason = "fit failed: " + evals[i].error;
+      continue;
+    }
+    fill(a.rec, evals[i]);
+    fill(a.rec, z.cv.compare(evals[i], z.cur_cv, z.o.alpha));
+    const bool alike = !verdict(z.cv.compare(evals[i], z.cur_cv, z.o.alpha), -1.0, z.o).empty();
+    a.rec.reason = alike ? "predicts alike: the chosen effects do not beat it"
+                         : "the chosen effects predict better";
+    if (!alike) continue;
+    for (Effect e : a.effects)
+      if (!std::count(z.look_alikes.begin(), z.look_alikes.end(), e)) z.look_alikes.push_back(e);
+    if (a.effects.size() < have.size() &&
+        (best == alts.size() || a.effects.size() < alts[best].effects.size() ||
+         (a.effects.size() == alts[best].effects.size() && evals[i].score < evals[best].score)))
+      best = i;
+  }
+  bool replaced = false;
+  if (best < alts.size()) {
+    Alt& b = alts[best];
+    SetEval full = z.cv.fit_all(b.st, z.cur_full.fitted, z.o.cv_max_iterations);
+    if (full.ok) {
+      b.rec.accepted = true;
+      b.rec.reason = "predicts alike with fewer effects: the simpler reading replaces the chosen ones";
+      for (Effect e : have) {
+        z.chosen.erase(std::remove(z.chosen.begin(), z.chosen.end(), e), z.chosen.end());
+        if (!std::count(z.look_alikes.begin(), z.look_alikes.end(), e)) z.look_alikes.push_back(e);
+      }
+      for (Effect e : b.effects) z.chosen.push_back(e);
+      z.s = b.st;
+      z.cur_cv = std::move(evals[best]);
+      z.cur_full = std::move(full);
+      replaced = true;
+    }
+  }
+  for (Alt& a : alts) z.sel.records.push_back(std::move(a.rec));
+  return replaced;
+}
+
 }  // namespace odotune::diagnose::select_detail

@@ -53,6 +53,8 @@ struct Search {
   double floor_m = 0.0;        // materiality floor (rule (e)) [m]
   double floor_rad = 0.0;      // its heading part [rad] (0 without a reference heading)
   bool heading = false;        // the reference has a heading
+  // Look-alikes that predict as well as the chosen effects (look_alike_step).
+  std::vector<Effect> look_alikes;
 };
 
 // Rules (a)-(e) of a candidate set against the current set (select_search.cpp).
@@ -64,5 +66,6 @@ void prefer_radius_error(Search& z, int step);
 bool swap_step(Search& z, int step, const std::vector<Effect>& cands);
 bool pair_step(Search& z, int step, const std::vector<Effect>& cands);
 bool backward_round(Search& z, int round);
+bool look_alike_step(Search& z, int step);
 
 }  // namespace odotune::diagnose::select_detail

@@ -368,6 +368,38 @@ TEST(Select, TwoEffectsOnFiveMinutesAt100HzAreBothFound) {
   EXPECT_EQ(s.effects.front().effect, Effect::radius_error);  // the larger share first
 }
 
+// Look-alikes (select.h): motion that trails the command through a lag,
+// on commanded velocities. Every other reading among time offset, actuator
+// lag and longitudinal slip with no more effects is cross-validated and
+// logged; those that predict alike are the chosen one's rivals, and no more
+// of the three are chosen than one.
+TEST(Select, LookAlikesOfALagAreWeighedAndNamedAsRivals) {
+  SimTrackOptions o = sim_options(71, 120.0, {"actuator_lag:tau=0.25"});
+  o.encoders = false;
+  const Selection s = select_effects(simulated(o));
+  SCOPED_TRACE(describe(s));
+  const std::vector<Effect> lag_like = {Effect::time_offset, Effect::actuator_lag, Effect::longitudinal_slip};
+  std::vector<Effect> chosen;
+  for (Effect e : found(s))
+    if (std::count(lag_like.begin(), lag_like.end(), e)) chosen.push_back(e);
+  ASSERT_EQ(chosen.size(), 1u);
+  std::vector<std::string> alike;
+  int weighed = 0;
+  for (const SearchRecord& r : s.records) {
+    if (r.phase != "look-alike") continue;
+    ++weighed;
+    if (r.reason.rfind("predicts alike", 0) == 0) alike.push_back(r.candidate);
+  }
+  EXPECT_EQ(weighed, 2);  // the other two, alone
+  for (const SelectedEffect& e : s.effects) {
+    if (e.effect != chosen.front()) continue;
+    std::vector<std::string> rivals;
+    for (Effect r : e.rivals)
+      if (std::count(lag_like.begin(), lag_like.end(), r)) rivals.push_back(std::string(effect_name(r)));
+    for (const std::string& a : alike) EXPECT_THAT(rivals, ::testing::Contains(a));
+  }
+}
+
 TEST(Select, IsDeterministic) {
   const DiagInput in = simulated(sim_options(65, 110.0, {"lateral_skid:k=0.03"}));
   const Selection a = select_effects(in), b = select_effects(in);
