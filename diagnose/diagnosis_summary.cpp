@@ -196,6 +196,30 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
   return lines;
 }
 
+namespace {
+
+// A recording's own sensor checks in the odometry's terms: how far and how
+// much it turns against what the odometry (or the command) says, and how
+// late the motion is; "" when none was measured.
+std::string own_terms(const diagnose::RecordingResult& r, const std::string& src) {
+  std::vector<std::string> parts;
+  const std::string what = src.empty() ? "odometry" : src;
+  if (std::isfinite(r.speed_ratio))
+    parts.push_back(fmt::format("covers {:.1f} % of the distance the {} says", 100.0 * r.speed_ratio, what));
+  if (std::isfinite(r.yaw_ratio))
+    parts.push_back(fmt::format("turns {:.1f} % of its angle", 100.0 * r.yaw_ratio));
+  if (std::isfinite(r.motion_late_s))
+    parts.push_back(r.motion_late_s >= 0.0 ? fmt::format("moves {:.3f} s after it", r.motion_late_s)
+                                           : fmt::format("moves {:.3f} s before it", -r.motion_late_s));
+  if (parts.empty()) return "";
+  std::string out = "the robot ";
+  for (std::size_t i = 0; i < parts.size(); ++i)
+    out += (i == 0 ? "" : i + 1 == parts.size() ? " and " : ", ") + parts[i];
+  return out + " (its own sensor checks)";
+}
+
+}  // namespace
+
 std::vector<std::string> pooled_summary(const PooledDiagnosis& p) {
   std::vector<std::string> lines = diagnosis_summary(p.pooled);
   lines.push_back(fmt::format("recordings ({} fitted{}); held-out proof from {}:",
@@ -211,6 +235,10 @@ std::vector<std::string> pooled_summary(const PooledDiagnosis& p) {
                                     : "",
                                 metres(r.error.before_pos_rmse_m), metres(r.error.after_pos_rmse_m),
                                 r.note.empty() ? "" : " (" + r.note + ")"));
+  for (const RecordingResult& r : p.recordings) {
+    const std::string m = own_terms(r, p.pooled.velocity_source);
+    if (!m.empty()) lines.push_back(fmt::format("  {}: {}", r.track, m));
+  }
   for (const std::string& c : p.consistency) lines.push_back("  " + c);
   return lines;
 }

@@ -9,6 +9,7 @@
 #include "diagnose/fit.h"
 #include "diagnose/materiality.h"
 #include "diagnose/select.h"
+#include "diagnose/sensor_checks.h"
 #include "diagnose/term_search.h"
 #include "diagnose/window_replay.h"
 
@@ -187,6 +188,13 @@ PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std
     r.ref_sigma_m = in.ref_sigma_m;
     r.pooled_time_offset_s = k < shifts.size() ? shifts[k] : std::nan("");
     try {
+      const OdometryCheck oc = check_sensors(in, o.sensors).odometry;
+      if (oc.available) {
+        r.speed_ratio = oc.speed_ratio.value, r.yaw_ratio = oc.yaw_ratio.value;
+        // odo(t) ≈ ref(t − lag): the motion shows up -lag after the odometry.
+        const LagEstimate& lag = oc.command_delay.available ? oc.command_delay : oc.odometry_late;
+        if (lag.available) r.motion_late_s = oc.command_delay.available ? lag.lag_s : -lag.lag_s;
+      }
       const ReplayResult nom = replay(in, EffectSet(), ws), mod = replay(in, wheel, ws);
       r.error = {nom.pos_rmse_m, mod.pos_rmse_m};
       if (r.heldout) held_nominal.add(nom), held_model.add(mod);

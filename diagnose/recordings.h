@@ -25,6 +25,7 @@
 // model helping every recording by at least its own materiality floor.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,12 @@ struct RecordingResult {
   bool helped = false;   // error.before - error.after >= floor_m
   std::vector<NamedValue> refit, refit_stderr;  // "effect.param", fitted on this recording alone
   std::string note;                             // e.g. why the refit could not run
+  // Its own sensor checks (sensor_checks.h): reference / odometry ground
+  // speed and yaw rate (NaN when not measurable), and how late the motion
+  // is against the odometry [s] (NaN when not measured).
+  double speed_ratio = std::numeric_limits<double>::quiet_NaN();
+  double yaw_ratio = std::numeric_limits<double>::quiet_NaN();
+  double motion_late_s = std::numeric_limits<double>::quiet_NaN();
   // Fit recordings: pooled time (the pooled findings' segments) = own time +
   // this [s]; NaN for held-out recordings.
   double pooled_time_offset_s = 0.0;

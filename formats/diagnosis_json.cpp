@@ -250,6 +250,9 @@ json pooled_diagnosis_json(const diagnose::PooledDiagnosis& p) {
                       {"refit", refit},
                       {"refit_stderr", refit_se},
                       {"pooled_time_offset_s", number(r.pooled_time_offset_s)},
+                      {"speed_ratio", number(r.speed_ratio)},
+                      {"yaw_ratio", number(r.yaw_ratio)},
+                      {"motion_late_s", number(r.motion_late_s)},
                       {"note", r.note}});
   }
   j["tracks"] = tracks;
