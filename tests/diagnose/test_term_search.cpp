@@ -27,7 +27,7 @@ using sim::TermTarget;
 constexpr double kAmp = 0.01, kPhase = 0.4;  // radius ±1 % once per turn
 
 // A 90 s drive of sim_track.h's circuit by a robot with 0.15 m wheels,
-// ground truth at 50 Hz (1 mm), the left wheel out of round when asked.
+// ground truth at 50 Hz (1 mm), with `terms` planted.
 Track track_with_terms(const std::vector<sim::ModelTerm>& terms, std::uint64_t seed) {
   testing_support::SimTrackOptions o;
   o.duration_s = 90.0, o.seed = seed;
@@ -40,18 +40,12 @@ Track track_with_terms(const std::vector<sim::ModelTerm>& terms, std::uint64_t s
   return sim::simulate(sc);
 }
 
+// The same drive, the left wheel out of round when asked.
 Track out_of_round_track(bool planted, std::uint64_t seed) {
-  testing_support::SimTrackOptions o;
-  o.duration_s = 90.0, o.seed = seed;
-  o.wheel_radius_left_m = o.wheel_radius_right_m = 0.15;
-  o.wheel_base_m = 0.45, o.ticks_per_rev = 4096;
-  o.odo_rate_hz = o.gt_rate_hz = o.gyro_rate_hz = 50.0;
-  o.gt_sigma_m = 0.001;
-  sim::Scenario sc = testing_support::sim_scenario(o);
-  if (planted)
-    sc.terms = {{TermTarget::v_l, TermBasis::sin_1, kAmp * std::cos(kPhase)},
-                {TermTarget::v_l, TermBasis::cos_1, kAmp * std::sin(kPhase)}};
-  return sim::simulate(sc);
+  if (!planted) return track_with_terms({}, seed);
+  return track_with_terms({{TermTarget::v_l, TermBasis::sin_1, kAmp * std::cos(kPhase)},
+                           {TermTarget::v_l, TermBasis::cos_1, kAmp * std::sin(kPhase)}},
+                          seed);
 }
 
 struct Split {
