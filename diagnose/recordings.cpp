@@ -27,11 +27,12 @@ void append_shifted(V& out, const V& in, double shift) {
 struct Sse {
   double sse = 0.0;
   std::size_t n = 0;
+  void add(double rmse, std::size_t samples) {
+    sse += static_cast<double>(samples) * rmse * rmse;
+    n += samples;
+  }
   void add(const ReplayResult& r) {
-    for (const WindowError& w : r.windows) {
-      sse += static_cast<double>(w.n_ref) * w.pos_rmse_m * w.pos_rmse_m;
-      n += w.n_ref;
-    }
+    for (const WindowError& w : r.windows) add(w.pos_rmse_m, w.n_ref);
   }
   double rmse() const { return n > 0 ? std::sqrt(sse / static_cast<double>(n)) : std::nan(""); }
 };
@@ -52,19 +53,15 @@ void prove_terms_elsewhere(Diagnosis& d, const EffectSet& wheel, const std::vect
     if (!f.model) continue;
     std::vector<sim::ModelTerm> terms;
     for (const FoundTerm& t : f.model->terms) terms.push_back(t.term);
-    double sb = 0.0, sa = 0.0, sigma2 = 0.0;
-    std::size_t n = 0;
+    Sse before, after, sigma;
     for (const DiagInput& in : heldout) {
       const TermScore t = replay_terms(in, wheel, terms, d.window_s, o.terms);
-      const auto k = static_cast<double>(t.samples);
-      sb += t.before_pos_rmse_m * t.before_pos_rmse_m * k, sa += t.after_pos_rmse_m * t.after_pos_rmse_m * k;
-      sigma2 += in.ref_sigma_m * in.ref_sigma_m * k, n += t.samples;
+      before.add(t.before_pos_rmse_m, t.samples), after.add(t.after_pos_rmse_m, t.samples);
+      sigma.add(in.ref_sigma_m, t.samples);
     }
-    if (n == 0) continue;
-    const auto nn = static_cast<double>(n);
-    TermScore pooled{std::sqrt(sb / nn), std::sqrt(sa / nn), n};
-    const double floor = materiality_floor_m(std::sqrt(sigma2 / nn), pooled.before_pos_rmse_m,
-                                             o.select.materiality);
+    if (before.n == 0) continue;
+    const TermScore pooled{before.rmse(), after.rmse(), before.n};
+    const double floor = materiality_floor_m(sigma.rmse(), pooled.before_pos_rmse_m, o.select.materiality);
     f.model->other_recordings = pooled;
     f.model->proven = is_material(pooled.before_pos_rmse_m, pooled.after_pos_rmse_m, floor);
     consistency.push_back(

@@ -346,9 +346,9 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
       if (r.phase == "forward" && r.accepted && r.candidate == effect_name(e.effect))
         for (const std::string& name : r.rivals) e.rivals.push_back(effect_from_name(name));
   // Look-alikes that predict as well: rivals of the chosen ones among them.
-  static constexpr Effect kAlike[] = {Effect::time_offset, Effect::actuator_lag, Effect::longitudinal_slip};
   for (SelectedEffect& e : sel.effects) {
-    if (std::find(std::begin(kAlike), std::end(kAlike), e.effect) == std::end(kAlike)) continue;
+    if (std::find(std::begin(kLagLookAlikes), std::end(kLagLookAlikes), e.effect) == std::end(kLagLookAlikes))
+      continue;
     for (Effect r : z.look_alikes) {
       const bool chosen = std::find(z.chosen.begin(), z.chosen.end(), r) != z.chosen.end();
       if (!chosen && std::find(e.rivals.begin(), e.rivals.end(), r) == e.rivals.end()) e.rivals.push_back(r);

@@ -333,9 +333,8 @@ bool backward_round(Search& z, int round) {
 // offset, a first-order actuator lag and acceleration-driven longitudinal
 // slip, against every other choice of those three with no more effects.
 bool look_alike_step(Search& z, int step) {
-  static constexpr Effect kAlike[] = {Effect::time_offset, Effect::actuator_lag, Effect::longitudinal_slip};
   std::vector<Effect> have;
-  for (Effect e : kAlike)
+  for (Effect e : kLagLookAlikes)
     if (std::count(z.chosen.begin(), z.chosen.end(), e)) have.push_back(e);
   if (have.empty()) return false;
   struct Alt {
@@ -347,7 +346,7 @@ bool look_alike_step(Search& z, int step) {
   for (unsigned mask = 1; mask < 8; ++mask) {
     std::vector<Effect> a;
     for (unsigned i = 0; i < 3; ++i)
-      if (mask & (1u << i)) a.push_back(kAlike[i]);
+      if (mask & (1u << i)) a.push_back(kLagLookAlikes[i]);
     if (a == have || a.size() > have.size()) continue;
     Alt alt{a, z.s, {}};
     for (Effect e : have) alt.st.disable(e);

@@ -20,6 +20,11 @@ using Clock = std::chrono::steady_clock;
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// The look-alikes of commanded velocities (select.h, "Look-alikes"): each
+// makes the motion trail the command.
+inline constexpr Effect kLagLookAlikes[] = {Effect::time_offset, Effect::actuator_lag,
+                                            Effect::longitudinal_slip};
+
 // Seconds since t0.
 double since(Clock::time_point t0);
 // s with e switched on (its no-op values when it was off).

@@ -159,7 +159,7 @@ void check_rl(const std::filesystem::path& path, const YAML::Node& root, Experim
     if (section) fail_at(path, section, "a robot_localization section needs model rl-ekf in 'models'");
     return;
   }
-  if (root["leave_one_out"] && root["leave_one_out"].as<std::string>("") != "false")
+  if (root["leave_one_out"] && scalar<bool>(path, root["leave_one_out"], "leave_one_out"))
     fail_at(path, root["leave_one_out"], "leave_one_out is not supported for rl-ekf (a run tunes one bag)");
   if (e->models.size() != 1)
     fail_at(path, root["models"],

@@ -374,9 +374,7 @@ ReportOutcome write_report(const ReportRequest& req) {
     page.figures(row);
   }
 
-  for (const auto& n : out.notes) page.paragraph("Note: " + n + ".");
-  w.text("index.html", "report page", page.html());
-  out.files = std::move(w.files);
+  out.files = w.finish(page, out.notes);
   return out;
 }
 

@@ -37,6 +37,13 @@ void ReportWriter::text(const std::string& name, const std::string& what, const 
   files.push_back(p);
 }
 
+std::vector<std::filesystem::path> ReportWriter::finish(results::HtmlPage& page,
+                                                        const std::vector<std::string>& notes) {
+  for (const std::string& n : notes) page.paragraph("Note: " + n + ".");
+  text("index.html", "report page", page.html());
+  return std::move(files);
+}
+
 std::string ReportWriter::svg_of(const std::filesystem::path& p) {
   std::ifstream in(p, std::ios::binary);
   std::ostringstream ss;

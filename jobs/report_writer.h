@@ -44,6 +44,9 @@ class ReportWriter {
   }
   // Writes `content` atomically; throws Failure with one line.
   void text(const std::string& name, const std::string& what, const std::string& content);
+  // Ends `page` with a paragraph per note, writes it as index.html and
+  // returns every file written, in order.
+  std::vector<std::filesystem::path> finish(results::HtmlPage& page, const std::vector<std::string>& notes);
 
   std::vector<std::filesystem::path> files;
 

@@ -1,13 +1,11 @@
 // write_rl_run (jobs/rl_job.h): a stored rl-ekf run as the robot's own
 // parameter file.
 #include <algorithm>
-#include <cmath>
 
 #include <fmt/format.h>
 
 #include "core/failure.h"
 #include "jobs/rl_job.h"
-#include "tracks/atomic_file.h"
 
 namespace odotune {
 
@@ -28,36 +26,13 @@ void write_rl_run(const Experiment& e, const results::RunRecord& run, const std:
   std::string why;
   if (!apply_rl_factors(params, run.param_names, run.params, &s, &why))
     throw Failure(fmt::format("{}: cannot apply the run's factors: {}", x.params.string(), why));
-  rlnode::RlParamsUpdate update;
-  update.process_noise_covariance = s.process_noise;
-  std::string comment = provenance + "\n";
-  comment += fmt::format(
+  const std::string held_out = fmt::format(
       "Tuned on the first {} s of {} (fitness {}, {} process noise); scored after it{}, never seen by the tune:\n"
       "  GPS fused until {} s, none after: RMSE {:.3f} m with the file's values -> {:.3f} m tuned ({:+.0f} %).\n",
       x.until_s, bag->c_str(), to_string(rl_fitness_of_mode(run.mode).value_or(RlFitness::outage)),
       to_string(x.space), x.end_s ? fmt::format(" until {} s", *x.end_s) : "", x.until_s, run.baseline.rmse_m,
       run.tuned.rmse_m, 100.0 * (run.tuned.rmse_m / run.baseline.rmse_m - 1.0));
-  if (loaded.alignment) {
-    update.navsat_yaw_offset = loaded.alignment->yaw_offset_rad;
-    comment += fmt::format(
-        "navsat_transform_node: the GPS-to-odom rotation was fitted on the first {:.0f} s ({:.4f} rad, residual "
-        "{:.2f} m);\n  yaw_offset {:.4f} rad gives it with this IMU's heading at the first fix.\n",
-        x.gps_heading_fit_s, loaded.alignment->transform.rotation_rad, loaded.alignment->rms_m,
-        loaded.alignment->yaw_offset_rad);
-  }
-  for (std::size_t k = 0; k < params.sensors.size(); ++k) {
-    const double f = s.covariance_scale[k];
-    if (std::abs(std::log10(f)) < 0.05) continue;
-    comment += fmt::format(
-        "Advised: multiply {} ({})'s message covariance by {:.3g} (the node reads it from the messages)\n",
-        params.sensors[k].name, params.sensors[k].topic, f);
-  }
-  try {
-    write_atomically(out, "parameter file",
-                     rlnode::write_rl_params(params.file, params, update, ros2, comment));
-  } catch (const std::invalid_argument& ex) {
-    throw Failure(ex.what());
-  }
+  write_tuned_params(out, params, s, loaded.alignment, x.gps_heading_fit_s, ros2, provenance + "\n" + held_out);
 }
 
 }  // namespace odotune

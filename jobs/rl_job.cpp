@@ -120,29 +120,39 @@ RlLoaded load_rl(const RlSource& src) {
   return out;
 }
 
-RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
-                                 std::int64_t from_ns, std::int64_t until_ns,
-                                 std::vector<rlnode::TrajectoryPoint>* outage_trajectory,
-                                 std::vector<rlnode::ScoredFix>* outage_fixes) {
-  std::vector<FixRole> outage(rec.fixes.size(), FixRole::fuse), fifth(rec.fixes.size(), FixRole::fuse);
+namespace {
+
+// The fixes' roles from `from_ns` to `until_ns`: each scored (every fifth
+// when `fifth`, the others fused); fused before, absent after.
+std::vector<FixRole> protocol_roles(const rlnode::Recording& rec, std::int64_t from_ns, std::int64_t until_ns,
+                                    bool fifth) {
+  std::vector<FixRole> roles(rec.fixes.size(), FixRole::fuse);
   int k = 0;
   for (std::size_t i = 0; i < rec.fixes.size(); ++i) {
     const std::int64_t t = rec.fixes[i].stamp_ns;
     if (t < from_ns) continue;
-    if (t >= until_ns) {
-      outage[i] = fifth[i] = FixRole::absent;
-      continue;
-    }
-    outage[i] = FixRole::score;
-    fifth[i] = k++ % 5 == 0 ? FixRole::score : FixRole::fuse;
+    roles[i] = t >= until_ns ? FixRole::absent : !fifth || k++ % 5 == 0 ? FixRole::score : FixRole::fuse;
   }
-  // Scoring a fix leaves the filter as it is, so the outage run is the
-  // trajectory of GPS fused before `from_ns` only.
-  rlnode::ReplayOutput a = rlnode::replay(rec, rlnode::make_schedule(rec, outage, until_ns), s,
-                                          outage_trajectory != nullptr);
-  const rlnode::ReplayOutput b = rlnode::replay(rec, rlnode::make_schedule(rec, fifth, until_ns), s);
+  return roles;
+}
+
+}  // namespace
+
+rlnode::ReplayOutput outage_run(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
+                                std::int64_t from_ns, std::int64_t until_ns, bool trajectory) {
+  // Scoring a fix leaves the filter as it is, so this is the trajectory of
+  // GPS fused before `from_ns` only.
+  return rlnode::replay(
+      rec, rlnode::make_schedule(rec, protocol_roles(rec, from_ns, until_ns, false), until_ns), s, trajectory);
+}
+
+RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
+                                 std::int64_t from_ns, std::int64_t until_ns,
+                                 std::vector<rlnode::TrajectoryPoint>* outage_trajectory) {
+  rlnode::ReplayOutput a = outage_run(rec, s, from_ns, until_ns, outage_trajectory != nullptr);
+  const rlnode::ReplayOutput b = rlnode::replay(
+      rec, rlnode::make_schedule(rec, protocol_roles(rec, from_ns, until_ns, true), until_ns), s);
   if (outage_trajectory) *outage_trajectory = std::move(a.trajectory);
-  if (outage_fixes) *outage_fixes = a.scored;
   return {score_of(std::span(&a, 1)), score_of(std::span(&b, 1))};
 }
 

@@ -53,13 +53,16 @@ std::pair<std::string, rlnode::Pose3> parse_tf(const std::string& text);
 struct RlProtocolScores {
   FixScore outage, every_fifth;
 };
+// The outage protocol's run: GPS fused before `from_ns` only, every fix from
+// there to `until_ns` scored (its `scored`: measured and predicted, odom
+// frame); with `trajectory`, the filter's trajectory too.
+rlnode::ReplayOutput outage_run(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
+                                std::int64_t from_ns, std::int64_t until_ns, bool trajectory = false);
 // Both protocols from `from_ns` to `until_ns`; with `outage_trajectory`,
-// also the outage run's trajectory (GPS fused before `from_ns` only), with
-// `outage_fixes` its scored fixes (measured and predicted, odom frame).
+// also the outage run's trajectory.
 RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
                                  std::int64_t from_ns, std::int64_t until_ns,
-                                 std::vector<rlnode::TrajectoryPoint>* outage_trajectory = nullptr,
-                                 std::vector<rlnode::ScoredFix>* outage_fixes = nullptr);
+                                 std::vector<rlnode::TrajectoryPoint>* outage_trajectory = nullptr);
 
 struct RlEvalRequest {
   RlSource src;
@@ -113,6 +116,15 @@ struct RlTuneOutcome {
 // Validates the request, reads the file and the bag, tunes (tune_rl) and
 // writes the requested files. Throws Failure with one line.
 RlTuneOutcome run_rl_tune(const RlTuneRequest& request);
+// The user's file `params` with `tuned`'s process noise (and, with
+// `alignment`, navsat's yaw_offset) written to `path`, ROS 2 or ROS 1, with
+// `header` followed by navsat's fitted rotation (fitted on the first fit_s)
+// and the advised input covariances as comments. Throws Failure; nothing is
+// written then.
+void write_tuned_params(const std::filesystem::path& path, const rlnode::RlParams& params,
+                        const rlnode::ReplaySettings& tuned,
+                        const std::optional<rlnode::GpsAlignment>& alignment, double fit_s, bool ros2,
+                        std::string header);
 // A stored rl-ekf run (a grid's results store; model rl-ekf) written as the
 // robot's parameter file: the experiment's file with the run's factors
 // applied, navsat's yaw_offset when the experiment fits the GPS heading, the

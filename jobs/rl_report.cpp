@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <limits>
 #include <map>
+#include <span>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -61,27 +62,27 @@ void trajectory_figures(const Experiment& e, const std::vector<RunRecord>& runs,
     const std::int64_t from = rec.start_ns + static_cast<std::int64_t>(std::llround(x.until_s * 1e9));
     const std::int64_t end = x.end_s ? rec.start_ns + static_cast<std::int64_t>(std::llround(*x.end_s * 1e9))
                                      : std::numeric_limits<std::int64_t>::max();
-    std::vector<rlnode::TrajectoryPoint> traj;
-    std::vector<rlnode::ScoredFix> fixes;
     const rlnode::ReplaySettings base = rlnode::settings_of(rec.params);
-    const RlProtocolScores b = score_protocols(rec, base, from, end, &traj, &fixes);
+    const rlnode::ReplayOutput b = outage_run(rec, base, from, end, true);
     std::vector<results::TrajectoryPath> paths;
     results::TrajectoryPath held{"held-out GPS fixes", {}, {}};
-    for (const rlnode::ScoredFix& f : fixes) {
+    for (const rlnode::ScoredFix& f : b.scored) {
       held.xs_m.push_back(f.measured.x());
       held.ys_m.push_back(f.measured.y());
     }
     paths.push_back(std::move(held));
-    paths.push_back(path_of(fmt::format("the file's values ({:.2f} m)", b.outage.rmse_m), traj));
+    paths.push_back(path_of(fmt::format("the file's values ({:.2f} m)", score_of(std::span(&b, 1)).rmse_m),
+                            b.trajectory));
     for (const auto& [key, r] : best) {
       if (key.first != name) continue;
       rlnode::ReplaySettings s = base;
       std::string why;
       if (!apply_rl_factors(rec.params, r->param_names, r->params, &s, &why))
         throw Failure(fmt::format("run {}: {}", results::run_key(*r), why));
-      const RlProtocolScores t = score_protocols(rec, s, from, end, &traj);
-      paths.push_back(path_of(
-          fmt::format("tuned, {} seed {} ({:.2f} m)", fitness_name(r->mode), r->seed, t.outage.rmse_m), traj));
+      const rlnode::ReplayOutput t = outage_run(rec, s, from, end, true);
+      paths.push_back(path_of(fmt::format("tuned, {} seed {} ({:.2f} m)", fitness_name(r->mode), r->seed,
+                                          score_of(std::span(&t, 1)).rmse_m),
+                              t.trajectory));
     }
     const std::string title = fmt::format(
         "{}: GPS fused until {} s only; robot_localization's EKF, the file's and tuned values", name,
@@ -166,9 +167,7 @@ ReportOutcome write_rl_report(const ReportRequest& req, const results::Experimen
   }
   page.figures(row);
 
-  for (const auto& n : out.notes) page.paragraph("Note: " + n + ".");
-  w.text("index.html", "report page", page.html());
-  out.files = std::move(w.files);
+  out.files = w.finish(page, out.notes);
   return out;
 }
 

@@ -23,9 +23,9 @@ std::string percent(double before, double after) {
              : "n/a";
 }
 
-// The comment at the top of the written file: where it came from, what it
-// scored, and what to change on the robot that the file cannot carry.
-std::string provenance(const RlTuneRequest& r, const RlTuneOutcome& o, const rlnode::RlParams& params) {
+// The comment at the top of the written file: where it came from and what it
+// scored (write_tuned_params adds navsat's rotation and the advice).
+std::string provenance(const RlTuneRequest& r, const RlTuneOutcome& o) {
   std::string c = fmt::format(
       "Tuned by odotune (robot_localization's EKF replayed from the robot's bag).\n"
       "Command: {}\n"
@@ -45,23 +45,6 @@ std::string provenance(const RlTuneRequest& r, const RlTuneOutcome& o, const rln
                      percent(o.baseline_after->outage.rmse_m, o.tuned_after->outage.rmse_m),
                      score_text(o.baseline_after->every_fifth), score_text(o.tuned_after->every_fifth),
                      percent(o.baseline_after->every_fifth.rmse_m, o.tuned_after->every_fifth.rmse_m));
-  }
-  if (o.alignment) {
-    c += fmt::format(
-        "navsat_transform_node: the GPS-to-odom rotation was fitted on the first {:.0f} s ({:.4f} rad, residual "
-        "{:.2f} m);\n  yaw_offset {:.4f} rad gives it with this IMU's heading at the first fix.\n",
-        r.src.gps_heading_fit_s, o.alignment->transform.rotation_rad, o.alignment->rms_m,
-        o.alignment->yaw_offset_rad);
-  }
-  bool advice = false;
-  for (std::size_t s = 0; s < params.sensors.size(); ++s) {
-    const double f = o.tuned.covariance_scale[s];
-    if (std::abs(std::log10(f)) < 0.05) continue;
-    if (!advice)
-      c += "Advised input covariances (the node reads them from the messages, so set them at the source):\n";
-    advice = true;
-    c += fmt::format("  {} ({}): multiply its message covariance by {:.3g} (standard deviations by {:.3g})\n",
-                     params.sensors[s].name, params.sensors[s].topic, f, std::sqrt(f));
   }
   return c;
 }
@@ -106,6 +89,39 @@ void write_json(const std::filesystem::path& path, const RlTuneRequest& r, const
 }
 
 }  // namespace
+
+void write_tuned_params(const std::filesystem::path& path, const rlnode::RlParams& params,
+                        const rlnode::ReplaySettings& tuned,
+                        const std::optional<rlnode::GpsAlignment>& alignment, double fit_s, bool ros2,
+                        std::string header) {
+  rlnode::RlParamsUpdate update;
+  update.process_noise_covariance = tuned.process_noise;
+  if (alignment) {
+    update.navsat_yaw_offset = alignment->yaw_offset_rad;
+    header += fmt::format(
+        "navsat_transform_node: the GPS-to-odom rotation was fitted on the first {:.0f} s ({:.4f} rad, residual "
+        "{:.2f} m);\n  yaw_offset {:.4f} rad gives it with this IMU's heading at the first fix.\n",
+        fit_s, alignment->transform.rotation_rad, alignment->rms_m, alignment->yaw_offset_rad);
+  }
+  bool advice = false;
+  for (std::size_t s = 0; s < params.sensors.size(); ++s) {
+    const double f = tuned.covariance_scale[s];
+    if (std::abs(std::log10(f)) < 0.05) continue;
+    if (!advice)
+      header +=
+          "Advised input covariances (the node reads them from the messages, so set them at the source):\n";
+    advice = true;
+    header += fmt::format(
+        "  {} ({}): multiply its message covariance by {:.3g} (standard deviations by {:.3g})\n",
+        params.sensors[s].name, params.sensors[s].topic, f, std::sqrt(f));
+  }
+  try {
+    write_atomically(path, "parameter file",
+                     rlnode::write_rl_params(params.file, params, update, ros2, header));
+  } catch (const std::invalid_argument& e) {
+    throw Failure(e.what());
+  }
+}
 
 bool RlTuneRequest::IsValid(std::string* why) const {
   if (!SolverSettings::IsValid(why) || !options.IsValid(why)) return false;
@@ -173,21 +189,12 @@ RlTuneOutcome run_rl_tune(const RlTuneRequest& request) {
   const RlLoaded loaded = load_rl(request.src);
   const rlnode::Recording& rec = loaded.rec;
   RlTuneOutcome o = tune_rl(loaded, request);
-  rlnode::RlParamsUpdate update;
-  update.process_noise_covariance = o.tuned.process_noise;
-  if (o.alignment) update.navsat_yaw_offset = o.alignment->yaw_offset_rad;
-  auto write = [&](const std::filesystem::path& path, bool ros2) {
-    if (path.empty()) return;
-    try {
-      write_atomically(path, "parameter file",
-                       rlnode::write_rl_params(rec.params.file, rec.params, update, ros2,
-                                               provenance(request, o, rec.params)));
-    } catch (const std::invalid_argument& e) {
-      throw Failure(e.what());
-    }
-  };
-  write(request.config_out, !request.ros1_out);
-  write(request.config_out_ros1, false);
+  const std::string header = provenance(request, o);
+  for (const auto& [path, ros2] :
+       {std::pair{request.config_out, !request.ros1_out}, std::pair{request.config_out_ros1, false}}) {
+    if (!path.empty())
+      write_tuned_params(path, rec.params, o.tuned, o.alignment, request.src.gps_heading_fit_s, ros2, header);
+  }
   if (!request.json_out.empty()) write_json(request.json_out, request, o);
   return o;
 }
