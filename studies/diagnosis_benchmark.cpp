@@ -55,7 +55,56 @@ void count(Confusion& c, const std::string& row, const std::string& col) {
   if (r < static_cast<long>(c.rows.size()) && k < static_cast<long>(c.cols.size())) ++c.counts[r][k];
 }
 
+void add(Rate& rate, bool pass) { ++rate.cases, rate.passed += pass ? 1 : 0; }
+
+// Counts case r in its category of `rates`, and in its margin bucket.
+void count_rates(CategoryRates& rates, const CaseResult& r) {
+  const CaseGrade& g = r.grade;
+  const auto bucket = static_cast<std::size_t>(margin_bucket(case_margin(r.truth)));
+  switch (g.category) {
+    case CaseCategory::null_case:
+      add(rates.null_cases, g.pass);
+      rates.null_with_finding += g.found.empty() ? 0 : 1;
+      break;
+    case CaseCategory::undetectable: add(rates.undetectable, g.pass); break;
+    case CaseCategory::single:
+      add(rates.single, g.pass);
+      add(rates.single_by_margin[bucket], g.pass);
+      break;
+    case CaseCategory::two:
+      add(rates.two, g.pass);
+      add(rates.two_by_margin[bucket], g.pass);
+      break;
+  }
+}
+
 }  // namespace
+
+double case_margin(const Detectability& truth) {
+  double margin = std::numeric_limits<double>::infinity();
+  for (const EffectTruth& t : truth.effects) {
+    if (!t.detectable) continue;
+    double m = t.floor_m > 0.0 ? t.gain_m / t.floor_m : 0.0;
+    if (t.heading_floor_rad > 0.0) m = std::max(m, t.heading_gain_rad / t.heading_floor_rad);
+    margin = std::min(margin, m);
+  }
+  return margin;
+}
+
+MarginBucket margin_bucket(double margin) {
+  return margin < 1.5   ? MarginBucket::under_1_5
+         : margin < 3.0 ? MarginBucket::from_1_5_to_3
+                        : MarginBucket::from_3;
+}
+
+std::string_view to_string(MarginBucket b) {
+  switch (b) {
+    case MarginBucket::under_1_5: return "under 1.5 floors";
+    case MarginBucket::from_1_5_to_3: return "1.5-3 floors";
+    case MarginBucket::from_3: return "3 floors or more";
+  }
+  return "";
+}
 
 bool DiagnosisBenchmarkOptions::IsValid(std::string* why) const {
   auto bad = [why](const std::string& text) {
@@ -181,13 +230,9 @@ BenchmarkSummary summarise(const std::vector<CaseResult>& cases) {
   std::vector<double> times;
   for (const CaseResult& r : cases) {
     const CaseGrade& g = r.grade;
-    Rate* rate = g.category == CaseCategory::null_case      ? &s.null_cases
-                 : g.category == CaseCategory::undetectable ? &s.undetectable
-                 : g.category == CaseCategory::single       ? &s.single
-                                                            : &s.two;
-    for (Rate* x : {rate, &s.all}) ++x->cases, x->passed += g.pass ? 1 : 0;
+    count_rates(s.single_recording, r);
+    ++s.all.cases, s.all.passed += g.pass ? 1 : 0;
     s.refused += g.refused ? 1 : 0;
-    if (g.category == CaseCategory::null_case && !g.found.empty()) ++s.null_with_finding;
     if (!g.pass) {
       if (g.refused) ++s.failures["refused"];
       if (!g.missed.empty() && !g.refused) ++s.failures["missed an effect"];

@@ -27,12 +27,14 @@
 // diagnosis_benchmark_outputs.h writes the files.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
 #include <limits>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "diagnose/materiality.h"
@@ -112,9 +114,44 @@ struct Confusion {
   std::vector<std::vector<int>> counts;  // [row][col]
 };
 
+// A case's margin: the smallest, over its detectable effects, of the true
+// gain over its floor (EffectTruth: gain_m / floor_m, or the heading ratio
+// when that is larger); +infinity without a detectable effect.
+double case_margin(const Detectability& truth);
+
+// The margin buckets the aims are stated in (docs/diagnosis/benchmark.md,
+// "Aims"): under 1.5 floors (no aim), 1.5 to 3 floors, 3 floors or more.
+enum class MarginBucket { under_1_5, from_1_5_to_3, from_3 };
+inline constexpr std::size_t kMarginBuckets = 3;
+MarginBucket margin_bucket(double margin);   // < 1.5, [1.5, 3), >= 3
+std::string_view to_string(MarginBucket b);  // "under 1.5 floors", "1.5-3 floors", "3 floors or more"
+
+// The aims by margin (docs/diagnosis/benchmark.md, "Aims"): the least share
+// of single and two-effect cases right per margin bucket (indexed by
+// MarginBucket; NaN: reported, no aim), and the largest share of null cases
+// with any finding.
+inline constexpr std::array<double, kMarginBuckets> kSingleEffectAims = {
+    std::numeric_limits<double>::quiet_NaN(), 0.75, 0.97};
+inline constexpr std::array<double, kMarginBuckets> kTwoEffectAims = {std::numeric_limits<double>::quiet_NaN(),
+                                                                      0.60, 0.90};
+inline constexpr double kNullFindingAim = 0.02;
+
+// Pass counts per category, and of single and two-effect cases per margin
+// bucket (indexed by MarginBucket).
+struct CategoryRates {
+  Rate null_cases, undetectable, single, two;
+  int null_with_finding = 0;  // null cases with any finding (refusals are not findings)
+  std::array<Rate, kMarginBuckets> single_by_margin{}, two_by_margin{};
+  // Share of null cases with any finding (NaN without null cases).
+  double null_finding_share() const {
+    return null_cases.cases > 0 ? static_cast<double>(null_with_finding) / null_cases.cases : std::nan("");
+  }
+};
+
 struct BenchmarkSummary {
-  Rate null_cases, undetectable, single, two, all;
-  int refused = 0, null_with_finding = 0;
+  CategoryRates single_recording;  // every case (one recording each)
+  Rate all;
+  int refused = 0;
   std::map<std::string, int>
       failures;  // failure kind -> cases (missed, wrong effect, parameter, held-out, refused)
   Confusion confusion;

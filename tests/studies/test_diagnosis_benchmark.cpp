@@ -401,12 +401,14 @@ TEST(DiagnosisBenchmarkSummary, CountsConfusionRecallAndPrecision) {
       graded({}, diagnosis({finding("unexplained", {})})),  // null false finding
   };
   const BenchmarkSummary s = summarise(cases);
-  EXPECT_EQ(s.single.cases, 2);
-  EXPECT_EQ(s.single.passed, 1);
-  EXPECT_EQ(s.two.cases, 1);
-  EXPECT_EQ(s.two.passed, 1);
-  EXPECT_EQ(s.null_cases.cases, 2);
-  EXPECT_EQ(s.null_with_finding, 1);
+  const CategoryRates& rates = s.single_recording;
+  EXPECT_EQ(rates.single.cases, 2);
+  EXPECT_EQ(rates.single.passed, 1);
+  EXPECT_EQ(rates.two.cases, 1);
+  EXPECT_EQ(rates.two.passed, 1);
+  EXPECT_EQ(rates.null_cases.cases, 2);
+  EXPECT_EQ(rates.null_with_finding, 1);
+  EXPECT_DOUBLE_EQ(rates.null_finding_share(), 0.5);
   EXPECT_EQ(s.all.cases, 5);
   const Confusion& c = s.confusion;
   auto at = [&](const std::string& row, const std::string& col) {
@@ -431,6 +433,56 @@ TEST(DiagnosisBenchmarkSummary, CountsConfusionRecallAndPrecision) {
   EXPECT_NEAR(skid_score->precision(), 1.0, 1e-12);
   EXPECT_EQ(s.failures.at("named a wrong effect"), 2);
   EXPECT_EQ(s.failures.at("missed an effect"), 1);
+}
+
+// An effect's truth with its gain and floor (and heading gain and floor when given).
+EffectTruth with_margin(EffectTruth t, double gain_m, double floor_m, double heading_gain_rad = std::nan(""),
+                        double heading_floor_rad = std::nan("")) {
+  t.gain_m = gain_m, t.floor_m = floor_m;
+  t.heading_gain_rad = heading_gain_rad, t.heading_floor_rad = heading_floor_rad;
+  return t;
+}
+
+TEST(DiagnosisBenchmarkSummary, RatesByMarginBucket) {
+  const TrueEffect skid = effect("lateral_skid", {{"k", 0.04}});
+  const TrueEffect offset = effect("time_offset", {{"dt", 0.05}});
+  const diagnose::Diagnosis right = diagnosis({finding("lateral_skid", {{"k", 0.04}})});
+  const diagnose::Diagnosis wrong = diagnosis({});
+  const diagnose::Diagnosis both = diagnosis({finding("lateral_skid", {{"k", 0.04}}),
+                                              finding("time_offset", {{"dt", 0.05}})});
+  const EffectTruth hidden = with_margin(truth_of(offset, false), 0.1, 1.0);  // not detectable: no margin
+  std::vector<CaseResult> cases = {
+      graded({with_margin(truth_of(skid, true), 1.2, 1.0)}, right),              // under 1.5, right
+      graded({with_margin(truth_of(skid, true), 1.5, 1.0), hidden}, wrong),      // 1.5-3 (1.5 itself), wrong
+      graded({with_margin(truth_of(skid, true), 5.0, 2.0)}, right),              // 1.5-3 (2.5), right
+      graded({with_margin(truth_of(skid, true), 3.0, 1.0)}, right),              // 3 or more (3 itself), right
+      graded({with_margin(truth_of(skid, true), 0.5, 1.0, 0.04, 0.01)}, wrong),  // heading: 4 floors, wrong
+      graded({with_margin(truth_of(skid, true), 9.0, 1.0)}, right),              // 3 or more, right
+      graded({with_margin(truth_of(skid, true), 9.0, 1.0), with_margin(truth_of(offset, true), 1.6, 1.0)},
+             both),  // two effects: the smaller margin, 1.6
+      graded({with_margin(truth_of(skid, true), 4.0, 1.0), with_margin(truth_of(offset, true), 3.5, 1.0)},
+             wrong),  // two effects, 3.5
+  };
+  EXPECT_DOUBLE_EQ(case_margin(cases[1].truth), 1.5);
+  EXPECT_DOUBLE_EQ(case_margin(cases[4].truth), 4.0);
+  EXPECT_DOUBLE_EQ(case_margin(cases[6].truth), 1.6);
+  EXPECT_TRUE(std::isinf(case_margin(Detectability{})));
+  EXPECT_EQ(margin_bucket(1.4999), MarginBucket::under_1_5);
+  EXPECT_EQ(margin_bucket(1.5), MarginBucket::from_1_5_to_3);
+  EXPECT_EQ(margin_bucket(3.0), MarginBucket::from_3);
+  const CategoryRates k = summarise(cases).single_recording;
+  auto counts = [](const Rate& r) { return std::pair{r.passed, r.cases}; };
+  const auto under = static_cast<std::size_t>(MarginBucket::under_1_5);
+  const auto mid = static_cast<std::size_t>(MarginBucket::from_1_5_to_3);
+  const auto top = static_cast<std::size_t>(MarginBucket::from_3);
+  EXPECT_EQ(counts(k.single_by_margin[under]), std::pair(1, 1));
+  EXPECT_EQ(counts(k.single_by_margin[mid]), std::pair(1, 2));
+  EXPECT_EQ(counts(k.single_by_margin[top]), std::pair(2, 3));
+  EXPECT_EQ(counts(k.two_by_margin[under]), std::pair(0, 0));
+  EXPECT_EQ(counts(k.two_by_margin[mid]), std::pair(1, 1));
+  EXPECT_EQ(counts(k.two_by_margin[top]), std::pair(0, 1));
+  EXPECT_EQ(counts(k.single), std::pair(4, 6));
+  EXPECT_EQ(counts(k.two), std::pair(1, 2));
 }
 
 // ---------------------------------------------------------------- end to end
@@ -523,6 +575,12 @@ TEST(DiagnosisBenchmarkRun, TinyRunWritesConsistentFiles) {
   EXPECT_GE(total, 2);
   const std::string md = read_file(std::filesystem::path(r.out) / "summary.md");
   EXPECT_NE(md.find("## Against the aims"), std::string::npos);
+  for (const char* row : {"| single effect, 3 floors or more |", "| two effects, 3 floors or more |",
+                          "| single effect, 1.5-3 floors |", "| two effects, 1.5-3 floors |",
+                          "| single effect, under 1.5 floors |", "| null cases with any finding |"})
+    EXPECT_NE(md.find(row), std::string::npos) << row;
+  EXPECT_NE(md.find(">= 97 %"), std::string::npos);
+  EXPECT_NE(md.find("<= 2 %"), std::string::npos);
   EXPECT_NE(md.find("seed 1002"), std::string::npos);
   // The margin table counts every graded case but the undetectable ones once.
   const auto at = md.find("## By margin");
