@@ -121,7 +121,11 @@ void register_diagnosis_study(CLI::App* study) {
   sub->add_option("--null-share", o.draw.null_share, "share of cases with no effect")->capture_default_str();
   sub->add_option("--two-share", o.draw.two_share, "share of cases with two effects (the rest have one)")
       ->capture_default_str();
-  sub->add_flag("--keep-tracks", r->keep_tracks, "also write each case's track to OUT/tracks/case_IIII.csv");
+  sub->add_option("--multi-share", o.draw.multi_share,
+                  "share of multi-recording cases (2-4 recordings of one robot, the last held out)")
+      ->capture_default_str();
+  sub->add_flag("--keep-tracks", r->keep_tracks,
+                "also write each case's track to OUT/tracks/case_IIII.csv (case_IIII_rK.csv per recording)");
   add_threads_option(sub, &o.threads);
   sub->footer("Example:\n  odotune study diagnosis --cases 20 --seed 1001 --max-minutes 3 --out /tmp/bench\n"
               "Development runs use seeds other than the committed docs run (docs/diagnosis/benchmark.md).");

@@ -14,6 +14,7 @@
 #include "core/failure.h"
 #include "diagnose/diag_input.h"
 #include "diagnose/diagnosis.h"
+#include "diagnose/recordings.h"
 #include "tracks/effects.h"
 #include "tracks/track_io.h"
 
@@ -120,15 +121,31 @@ bool DiagnosisBenchmarkOptions::IsValid(std::string* why) const {
   return true;
 }
 
-CaseResult run_benchmark_case(const DiagnosisBenchmarkOptions& o, int index) {
+namespace {
+
+// The case's effects, none judged detectable, with why (`note`).
+Detectability not_judged(const std::vector<TrueEffect>& effects, const std::string& why, std::string* note) {
+  Detectability d;
+  for (const TrueEffect& e : effects) d.effects.push_back(EffectTruth{e});
+  *note = "detectability not judged: " + why;
+  return d;
+}
+
+void add_findings(CaseResult& r, const diagnose::Diagnosis& d) {
+  for (const diagnose::Finding& f : d.findings)
+    r.findings.push_back({f.effect, f.spec(), f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m});
+}
+
+// A single-recording case (the header's file comment).
+CaseResult run_single_case(const DiagnosisBenchmarkOptions& o, DiagnosisCase c) {
   CaseResult r;
+  r.c = std::move(c);
   auto t0 = Clock::now();
-  r.c = draw_case(case_seed(o.seed, index), index, o.draw);
   const CaseTrack ct = make_case_track(r.c);
   r.track_rows = static_cast<int>(ct.track.size());
   r.track_duration_s = ct.track.duration_s();
   if (!o.tracks_dir.empty())
-    write_track(ct.track, std::filesystem::path(o.tracks_dir) / fmt::format("case_{:04d}.csv", index));
+    write_track(ct.track, std::filesystem::path(o.tracks_dir) / fmt::format("case_{:04d}.csv", r.c.index));
   r.simulate_s = seconds_since(t0);
 
   t0 = Clock::now();
@@ -151,9 +168,7 @@ CaseResult run_benchmark_case(const DiagnosisBenchmarkOptions& o, int index) {
                                      o.materiality);
     }
   } catch (const std::exception& e) {
-    r.truth = Detectability{};
-    for (const TrueEffect& e2 : r.c.effects) r.truth.effects.push_back(EffectTruth{e2});
-    r.truth_note = std::string("detectability not judged: ") + e.what();
+    r.truth = not_judged(r.c.effects, e.what(), &r.truth_note);
   }
   r.truth_s = seconds_since(t0);
 
@@ -161,8 +176,7 @@ CaseResult run_benchmark_case(const DiagnosisBenchmarkOptions& o, int index) {
   if (in) {
     try {
       const diagnose::Diagnosis d = diagnose::diagnose(*in);
-      for (const diagnose::Finding& f : d.findings)
-        r.findings.push_back({f.effect, f.spec(), f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m});
+      add_findings(r, d);
       r.grade = grade_case(r.truth.effects, d, r.c.scenario.robot.wheel_base_m,
                            TruePath{ct.path_x_m, ct.path_y_m, reference_gaps(in->ref_t_s),
                                     odometry_standstills(*in)});
@@ -173,6 +187,83 @@ CaseResult run_benchmark_case(const DiagnosisBenchmarkOptions& o, int index) {
   if (!refusal.empty()) r.grade = grade_refusal(r.truth.effects, refusal);
   r.diagnose_s = input_s + seconds_since(t0);
   return r;
+}
+
+// The recordings' diagnosis inputs, fit recordings in `fit`, held-out ones in
+// `held` (without ground truth when `fixes_only`). Throws what
+// build_diag_input throws.
+void recording_inputs(const DiagnosisCase& c, const std::vector<Track>& tracks, bool fixes_only,
+                      std::vector<diagnose::DiagInput>& fit, std::vector<diagnose::DiagInput>& held) {
+  fit.clear(), held.clear();
+  for (std::size_t k = 0; k < tracks.size(); ++k)
+    (c.recordings[k].heldout ? held : fit)
+        .push_back(diagnose::build_diag_input(fixes_only ? without_ground_truth(tracks[k]) : tracks[k]));
+}
+
+// A multi-recording case: diagnosed as `odotune diagnose FIT... --heldout
+// HELD...` does (diagnose::diagnose_recordings at default options), judged
+// by assess_recordings_detectability, graded as a single-recording case.
+CaseResult run_multi_case(const DiagnosisBenchmarkOptions& o, DiagnosisCase c) {
+  CaseResult r;
+  r.c = std::move(c);
+  auto t0 = Clock::now();
+  std::vector<Track> tracks;
+  for (std::size_t k = 0; k < r.c.recordings.size(); ++k) {
+    CaseTrack ct = make_recording_track(r.c, k);
+    r.track_rows += static_cast<int>(ct.track.size());
+    r.track_duration_s += ct.track.duration_s();
+    if (!o.tracks_dir.empty())
+      write_track(ct.track,
+                  std::filesystem::path(o.tracks_dir) / fmt::format("case_{:04d}_r{}.csv", r.c.index, k + 1));
+    tracks.push_back(std::move(ct.track));
+  }
+  r.simulate_s = seconds_since(t0);
+
+  t0 = Clock::now();
+  std::vector<diagnose::DiagInput> fit, held;
+  std::string refusal;
+  try {
+    recording_inputs(r.c, tracks, false, fit, held);
+  } catch (const std::exception& e) {
+    refusal = e.what();
+  }
+  const double input_s = seconds_since(t0);
+
+  t0 = Clock::now();
+  try {
+    if (refusal.empty()) {
+      r.truth = assess_recordings_detectability(fit, held, r.c.effects, o.materiality);
+    } else {
+      r.truth_note = "judged on the recordings' position fixes alone (a recording was refused)";
+      std::vector<diagnose::DiagInput> fit_fixes, held_fixes;
+      recording_inputs(r.c, tracks, true, fit_fixes, held_fixes);
+      r.truth = assess_recordings_detectability(fit_fixes, held_fixes, r.c.effects, o.materiality);
+    }
+  } catch (const std::exception& e) {
+    r.truth = not_judged(r.c.effects, e.what(), &r.truth_note);
+  }
+  r.truth_s = seconds_since(t0);
+
+  t0 = Clock::now();
+  if (refusal.empty()) {
+    try {
+      const diagnose::PooledDiagnosis p = diagnose::diagnose_recordings(fit, held);
+      add_findings(r, p.pooled);
+      r.grade = grade_case(r.truth.effects, p.pooled, r.c.scenario.robot.wheel_base_m, TruePath{});
+    } catch (const std::exception& e) {
+      refusal = e.what();
+    }
+  }
+  if (!refusal.empty()) r.grade = grade_refusal(r.truth.effects, refusal);
+  r.diagnose_s = input_s + seconds_since(t0);
+  return r;
+}
+
+}  // namespace
+
+CaseResult run_benchmark_case(const DiagnosisBenchmarkOptions& o, int index) {
+  DiagnosisCase c = draw_case(case_seed(o.seed, index), index, o.draw);
+  return c.multi() ? run_multi_case(o, std::move(c)) : run_single_case(o, std::move(c));
 }
 
 DiagnosisBenchmark run_diagnosis_benchmark(const DiagnosisBenchmarkOptions& o,
@@ -230,7 +321,7 @@ BenchmarkSummary summarise(const std::vector<CaseResult>& cases) {
   std::vector<double> times;
   for (const CaseResult& r : cases) {
     const CaseGrade& g = r.grade;
-    count_rates(s.single_recording, r);
+    count_rates(r.c.multi() ? s.multi_recording : s.single_recording, r);
     ++s.all.cases, s.all.passed += g.pass ? 1 : 0;
     s.refused += g.refused ? 1 : 0;
     if (!g.pass) {

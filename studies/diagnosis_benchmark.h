@@ -4,7 +4,12 @@
 // simulated, judged detectable from their truth (diagnosis_truth.h),
 // diagnosed (diagnose::diagnose at default options on
 // diagnose::build_diag_input of the track, as `odotune diagnose TRACK` does)
-// and graded (diagnosis_grading.h); then summarised: pass rates per category
+// and graded (diagnosis_grading.h). A multi-recording case (2-4 recordings of
+// one robot, diagnosis_cases.h) is diagnosed as `odotune diagnose FIT...
+// --heldout HELD...` does (diagnose::diagnose_recordings at default options
+// on each recording's build_diag_input), judged on its held-out recordings
+// (assess_recordings_detectability) and graded by the same rules, with the
+// held-out recordings' numbers (diagnose/recordings.h). Then summarised: pass rates per category
 // against the aims, a confusion matrix of true × named effects,
 // per-effect recall and precision, parameter errors and time per case.
 //
@@ -16,9 +21,10 @@
 //
 // Refusals. A track the diagnosis refuses (build_diag_input or diagnose
 // throws std::invalid_argument: e.g. today's "known start + fixes") is a
-// failed case carrying the message; its detectability is then judged on the
-// same track without its ground truth (the fixes alone), and so is the
-// category. A case that cannot be simulated is a bug and stops the run.
+// failed case carrying the message; when build_diag_input refused it, its
+// detectability is judged on the same track without its ground truth (the
+// fixes alone), and so is the category. Likewise for a multi-recording case
+// when any of its recordings is refused. A case that cannot be simulated is a bug and stops the run.
 //
 // Cases run in parallel over OpenMP threads (one case per task, dynamic
 // schedule); each task is single-threaded. Progress through a callback (from
@@ -57,7 +63,9 @@ struct DiagnosisBenchmarkOptions {
   int threads = 0;                           // OpenMP threads over cases; 0 = OpenMP's default
   CaseDrawOptions draw;                      // what a case draws
   diagnose::MaterialityOptions materiality;  // the floor of detectability
-  std::string tracks_dir;                    // when set: each case's track written there as case_IIII.csv
+  // When set: each case's track written there as case_IIII.csv, each
+  // recording of a multi-recording case as case_IIII_rK.csv (K from 1).
+  std::string tracks_dir;
   bool IsValid(std::string* why) const;
 };
 
@@ -149,7 +157,8 @@ struct CategoryRates {
 };
 
 struct BenchmarkSummary {
-  CategoryRates single_recording;  // every case (one recording each)
+  CategoryRates single_recording;  // cases of one recording
+  CategoryRates multi_recording;   // multi-recording cases (diagnosis_cases.h)
   Rate all;
   int refused = 0;
   std::map<std::string, int>

@@ -58,6 +58,11 @@ std::string breakdown(const std::vector<CaseResult>& cases, const std::string& t
   return md;
 }
 
+// "1", or for a multi-recording case "3 (1 held out)".
+std::string recordings_text(const DiagnosisCase& c) {
+  return c.multi() ? fmt::format("{} ({} held out)", c.recordings.size(), c.heldout_recordings()) : "1";
+}
+
 // "| what | right | aim | verdict |" for a rate and its least share right
 // (NaN: no aim).
 std::string aim_row(const std::string& what, const Rate& r, double least) {
@@ -133,11 +138,26 @@ void confusion_figure(const Confusion& c, const fs::path& stem, int cases) {
                           820);
 }
 
+// summary.md's "Against the aims": the aims table of each kind of case.
+std::string aims_section(const DiagnosisBenchmark& b) {
+  const BenchmarkSummary& s = b.summary;
+  std::string md;
+  md += "## Against the aims\n\nBy margin: the smallest true gain of a case's detectable effects over its "
+        "floor (\"By margin\" below; docs/diagnosis/benchmark.md, \"Aims\"). Under 1.5 floors is reported "
+        "with no aim.\n\n| cases | right | aim | verdict |\n|---|---|---|---|\n";
+  md += aims_rows(s.single_recording, "");
+  const bool any_multi = std::any_of(b.cases.begin(), b.cases.end(),
+                                     [](const CaseResult& r) { return r.c.multi(); });
+  if (b.options.draw.multi_share > 0.0 || any_multi) md += aims_rows(s.multi_recording, "multi-recording: ");
+  md += fmt::format("| all | {} | | |\n\n", rate_cell(s.all));
+  return md;
+}
+
 }  // namespace
 
 std::string cases_csv(const DiagnosisBenchmark& b) {
   std::string s =
-      "case,case_seed,category,pass,why,robot,drive,duration_s,track_rows,odometry,commands_alongside,"
+      "case,case_seed,category,recordings,heldout_recordings,pass,why,robot,drive,duration_s,track_rows,odometry,commands_alongside,"
       "odo_rate_hz,gyro_rate_hz,gyro_sigma_rad_s,reference,gt_rate_hz,gt_sigma_m,gt_sigma_rad,fix_rate_hz,"
       "fix_sigma_m,ref_sigma_m,true_effects,detectable,tolerated,gain_over_floor_m,nominal_heldout_m,"
       "findings,heldout_before_m,heldout_after_m,param_errors,simulate_s,truth_s,diagnose_s,truth_note\n";
@@ -157,6 +177,8 @@ std::string cases_csv(const DiagnosisBenchmark& b) {
     const std::vector<std::string> row = {std::to_string(c.index),
                                           std::to_string(c.seed),
                                           std::string(to_string(r.grade.category)),
+                                          std::to_string(c.multi() ? c.recordings.size() : 1),
+                                          std::to_string(c.heldout_recordings()),
                                           r.grade.pass ? "1" : "0",
                                           r.grade.why,
                                           c.robot,
@@ -212,16 +234,13 @@ std::string benchmark_summary_markdown(const DiagnosisBenchmark& b, const std::s
   std::string md = "# Diagnosis benchmark\n\n";
   md += fmt::format(
       "`{}`\n\n{} random cases ({}..{}) of seed {}: drives of {:g}-{:g} min, rates up to {:g} Hz, "
-      "{:.0f} % null and {:.0f} % two-effect draws; {} threads, {:.0f} s in all. Method and grading: "
-      "docs/diagnosis/benchmark.md.\n\n",
+      "{:.0f} % null and {:.0f} % two-effect draws, {:.0f} % multi-recording cases; {} threads, {:.0f} s in "
+      "all. Method and grading: docs/diagnosis/benchmark.md.\n\n",
       command, o.cases, o.first, o.first + o.cases - 1, o.seed, o.draw.min_minutes, o.draw.max_minutes,
-      o.draw.max_rate_hz, 100.0 * o.draw.null_share, 100.0 * o.draw.two_share, b.threads_used, b.wall_s);
+      o.draw.max_rate_hz, 100.0 * o.draw.null_share, 100.0 * o.draw.two_share, 100.0 * o.draw.multi_share,
+      b.threads_used, b.wall_s);
 
-  md += "## Against the aims\n\nBy margin: the smallest true gain of a case's detectable effects over its "
-        "floor (\"By margin\" below; docs/diagnosis/benchmark.md, \"Aims\"). Under 1.5 floors is reported "
-        "with no aim.\n\n| cases | right | aim | verdict |\n|---|---|---|---|\n";
-  md += aims_rows(s.single_recording, "");
-  md += fmt::format("| all | {} | | |\n\n", rate_cell(s.all));
+  md += aims_section(b);
   md += fmt::format("Refused tracks: {} (graded as failed).\n\n", s.refused);
 
   md += "## Failures by kind\n\nA failed case may count under several kinds.\n\n| kind | cases |\n|---|---|\n";
@@ -274,8 +293,10 @@ std::string benchmark_summary_markdown(const DiagnosisBenchmark& b, const std::s
         "larger of position and heading), as the truth measures it with the true parameters; near 1 a "
         "fitted model recovers about half the time.\n\n";
   md += breakdown(b.cases, "category, margin", [](const CaseResult& r) {
-    if (r.grade.category == CaseCategory::null_case) return std::string("null");
-    return fmt::format("{}, {}", to_string(r.grade.category), to_string(margin_bucket(case_margin(r.truth))));
+    const char* kind = r.c.multi() ? "multi " : "";
+    if (r.grade.category == CaseCategory::null_case) return fmt::format("{}null", kind);
+    return fmt::format("{}{}, {}", kind, to_string(r.grade.category),
+                       to_string(margin_bucket(case_margin(r.truth))));
   });
   md += "\n## By reference shape and odometry\n\n";
   md += breakdown(b.cases, "reference",
@@ -283,18 +304,26 @@ std::string benchmark_summary_markdown(const DiagnosisBenchmark& b, const std::s
   md += "\n";
   md += breakdown(b.cases, "odometry",
                   [](const CaseResult& r) { return std::string(to_string(r.c.odometry)); });
+  md += "\n";
+  md += breakdown(b.cases, "recordings", [](const CaseResult& r) {
+    if (!r.c.multi()) return std::string("1");
+    return fmt::format("{} ({} held out)", r.c.recordings.size(), r.c.heldout_recordings());
+  });
 
-  md += "\n## Failed cases\n\nRe-run one alone: `odotune study diagnosis --seed S --first I --cases 1 "
-        "--keep-tracks --out DIR`, then `odotune diagnose DIR/tracks/case_IIII.csv`.\n\n"
-        "| case | category | true effects | named | why |\n|---|---|---|---|---|\n";
+  md +=
+      "\n## Failed cases\n\nRe-run one alone: `odotune study diagnosis --seed S --first I --cases 1 "
+      "--keep-tracks --out DIR`, then `odotune diagnose DIR/tracks/case_IIII.csv` (a multi-recording case: "
+      "`odotune diagnose DIR/tracks/case_IIII_r1.csv ... --heldout DIR/tracks/case_IIII_rN.csv`, the held-out "
+      "recordings last).\n\n"
+      "| case | category | recordings | true effects | named | why |\n|---|---|---|---|---|---|\n";
   for (const CaseResult& r : b.cases) {
     if (r.grade.pass) continue;
     std::vector<std::string> found;
     for (const CaseFinding& f : r.findings) found.push_back(f.spec.empty() ? f.effect : f.spec);
     std::string why = r.grade.why;
     std::replace(why.begin(), why.end(), '|', '/');
-    md += fmt::format("| {} | {} | {} | {} | {} |\n", r.c.index, to_string(r.grade.category),
-                      r.c.effects_text(), found.empty() ? "none" : joined(found), why);
+    md += fmt::format("| {} | {} | {} | {} | {} | {} |\n", r.c.index, to_string(r.grade.category),
+                      recordings_text(r.c), r.c.effects_text(), found.empty() ? "none" : joined(found), why);
   }
   return md;
 }
@@ -324,6 +353,7 @@ std::string benchmark_command_line(const DiagnosisBenchmarkRequest& r) {
   if (o.draw.max_rate_hz != d.draw.max_rate_hz) c += fmt::format(" --max-rate {:g}", o.draw.max_rate_hz);
   if (o.draw.null_share != d.draw.null_share) c += fmt::format(" --null-share {:g}", o.draw.null_share);
   if (o.draw.two_share != d.draw.two_share) c += fmt::format(" --two-share {:g}", o.draw.two_share);
+  if (o.draw.multi_share != d.draw.multi_share) c += fmt::format(" --multi-share {:g}", o.draw.multi_share);
   if (r.keep_tracks) c += " --keep-tracks";
   return c + " --out " + r.out;
 }

@@ -1,5 +1,6 @@
 // The files of `odotune study diagnosis --out DIR` (docs/diagnosis/benchmark.md):
-//   cases.csv      one row per case: seed, robot, drive, odometry, rates and
+//   cases.csv      one row per case: seed, category, recordings (and held-out
+//                  recordings), robot, drive, odometry, rates and
 //                  noise, reference shape, true effects, detectability (gain
 //                  and floor per effect), findings, verdict and why, timing;
 //   confusion.csv  true (detectable) effect × named effect (Confusion in
@@ -11,7 +12,9 @@
 //                  time per case, breakdowns by reference shape and odometry,
 //                  and the failed cases with why;
 //   tracks/        (--keep-tracks) case_IIII.csv, each re-runnable with
-//                  `odotune diagnose`.
+//                  `odotune diagnose`; case_IIII_rK.csv (K from 1) for the
+//                  recordings of a multi-recording case, the held-out ones
+//                  last (`odotune diagnose r1 ... --heldout rN`).
 // Every file is written atomically (tracks/atomic_file.h; figures through a
 // temporary and a rename), the figure first, then the CSVs, then summary.md.
 #pragma once

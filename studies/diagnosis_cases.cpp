@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -18,9 +19,16 @@ namespace odotune {
 namespace {
 
 // Counter-RNG streams (core/counter_rng.h); any fixed, distinct values do.
-constexpr std::uint64_t kCaseStream = 0x6469616763617365ULL;  // "diagcase"
-constexpr std::uint64_t kDrawStream = 0x64726177ULL;          // "draw"
-constexpr std::uint64_t kFixStream = 0x6669786573ULL;         // "fixes"
+constexpr std::uint64_t kCaseStream = 0x6469616763617365ULL;   // "diagcase"
+constexpr std::uint64_t kDrawStream = 0x64726177ULL;           // "draw"
+constexpr std::uint64_t kFixStream = 0x6669786573ULL;          // "fixes"
+constexpr std::uint64_t kMultiStream = 0x6d756c7469ULL;        // "multi"
+constexpr std::uint64_t kRecordingStream = 0x7265636f7264ULL;  // "record"
+
+// Recording-to-recording variation of the true geometry (relative sigmas)
+// and of the noise (log-uniform factor bound) of multi-recording cases
+// (diagnosis_cases.h).
+constexpr double kRadiusJitter = 1e-4, kBaseJitter = 3e-4, kNoiseLogSpread = 0.3;
 
 template <class T>
 std::vector<T> at_most(const std::vector<T>& values, double cap) {
@@ -125,16 +133,76 @@ std::size_t table_position(const std::string& name) {
       std::find_if(t.begin(), t.end(), [&](const sim::EffectInfo& e) { return e.name == name; }) - t.begin());
 }
 
-// Effects the case can have (file comment), in table order.
-std::vector<std::string> eligible_effects(const DiagnosisCase& c) {
+// Effects the case can have (file comment), in table order; a
+// multi-recording case has neither slip_zone nor radius_step.
+std::vector<std::string> eligible_effects(const DiagnosisCase& c, bool multi) {
   std::vector<std::string> out;
   for (const sim::EffectInfo& e : sim::effect_table()) {
     const std::string n(e.name);
     if ((n == "gyro_bias" || n == "gyro_scale") && c.gyro_rate_hz <= 0.0) continue;
     if (n == "actuator_lag" && c.odometry != BenchOdometry::commands) continue;
+    if (multi && (n == "slip_zone" || n == "radius_step")) continue;
     out.push_back(n);
   }
   return out;
+}
+
+// 1-4 gaps removing 15-40 % of a drive of duration_s, none in its first 5 s.
+std::vector<std::pair<double, double>> draw_gaps(CaseRng& rng, double duration_s) {
+  std::vector<std::pair<double, double>> out;
+  const int gaps = 1 + rng.index(4);
+  const double total = rng.uniform(0.15, 0.40) * duration_s;
+  const double span = duration_s - 5.0;
+  for (int k = 0; k < gaps; ++k) {
+    // Gap k starts in the k-th of `gaps` equal parts after the first 5 s.
+    const double len = total / gaps, part = span / gaps;
+    const double t0 = 5.0 + k * part + rng.uniform(0.0, std::max(0.0, part - len));
+    out.emplace_back(t0, t0 + std::min(len, part));
+  }
+  return out;
+}
+
+// A standard normal draw (Box-Muller).
+double normal(CaseRng& rng) {
+  const double u = rng.uniform(), v = rng.uniform();
+  return std::sqrt(-2.0 * std::log(1.0 - u)) * std::cos(2.0 * std::numbers::pi * v);
+}
+
+// Recording k (1-based) of `count` of multi-recording case c (header
+// comment): c's scenario with its own drive, seed, true geometry and noise.
+CaseRecording draw_recording(const DiagnosisCase& c, const DriveScale& scale, int k, int count,
+                             const CaseDrawOptions& o) {
+  CaseRecording rec;
+  rec.seed = recording_seed(c.seed, k);
+  rec.heldout = k > count - (count >= 4 ? 2 : 1);
+  CaseRng rng(rec.seed, kDrawStream);
+  sim::Scenario& sc = rec.scenario;
+  sc = c.scenario;
+  sc.name = fmt::format("bench_case_{}_r{}", c.index, k);
+  sc.seed = rec.seed;
+  sim::MotionParams& m = sc.motion;
+  m.start_x_m = rng.uniform(-5.0, 5.0), m.start_y_m = rng.uniform(-5.0, 5.0);
+  m.start_theta_rad = rng.uniform(-3.14159, 3.14159);
+  const Drive drive = draw_drive(rng, scale);
+  rec.drive = drive.family;
+  rec.duration_s = 60.0 * rng.uniform(o.min_minutes, o.max_minutes);
+  m.segments = repeat_lap(drive.lap, m, rec.duration_s);
+  rec.radius_factor_l = 1.0 + kRadiusJitter * normal(rng);
+  rec.radius_factor_r = 1.0 + kRadiusJitter * normal(rng);
+  rec.base_factor = 1.0 + kBaseJitter * normal(rng);
+  sc.robot.wheel_radius_left_m *= rec.radius_factor_l;
+  sc.robot.wheel_radius_right_m *= rec.radius_factor_r;
+  sc.robot.wheel_base_m *= rec.base_factor;
+  rec.noise_factor = std::exp(rng.uniform(-kNoiseLogSpread, kNoiseLogSpread));
+  sim::SensorParams& s = sc.sensors;
+  for (double* sigma :
+       {&s.gyro.sigma_rad_s, &s.ground_truth.sigma_m, &s.ground_truth.sigma_rad, &s.aps.sigma_m})
+    *sigma *= rec.noise_factor;
+  if (c.reference == BenchReference::gt_gaps) rec.gt_gaps_s = draw_gaps(rng, rec.duration_s);
+  std::string why;
+  if (!sim::validate_scenario(sc, &why))
+    throw std::invalid_argument(fmt::format("diagnosis benchmark case {} recording {}: {}", c.index, k, why));
+  return rec;
 }
 
 void set_sensors(DiagnosisCase& c) {
@@ -160,6 +228,17 @@ void set_sensors(DiagnosisCase& c) {
   s.aps.enabled = !gt_ref;
   s.aps.rate_hz = c.reference == BenchReference::fixes_irregular ? 10.0 : (gt_ref ? 1.0 : c.fix_rate_hz);
   s.aps.sigma_m = gt_ref ? 0.06 : c.fix_sigma_m;
+}
+
+// Draws the `count` recordings of multi-recording case c; its drive and
+// duration_s then describe them together.
+void add_recordings(DiagnosisCase& c, const DriveScale& scale, int count, const CaseDrawOptions& o) {
+  c.drive.clear(), c.duration_s = 0.0;
+  for (int k = 1; k <= count; ++k) {
+    c.recordings.push_back(draw_recording(c, scale, k, count, o));
+    c.drive += (k > 1 ? " + " : "") + c.recordings.back().drive;
+    c.duration_s += c.recordings.back().duration_s;
+  }
 }
 
 }  // namespace
@@ -199,6 +278,8 @@ bool CaseDrawOptions::IsValid(std::string* why) const {
     return bad(fmt::format("two_share = {} must be in [0, 1 - null_share = {}]", two_share, 1.0 - null_share));
   if (!(max_rate_hz >= 10.0 && max_rate_hz <= 1000.0))
     return bad(fmt::format("max_rate_hz = {} must be in [10, 1000]", max_rate_hz));
+  if (!(multi_share >= 0.0 && multi_share <= 1.0))
+    return bad(fmt::format("multi_share = {} must be in [0, 1]", multi_share));
   return true;
 }
 
@@ -213,6 +294,11 @@ std::string TrueEffect::spec() const {
   return sim::format_effect(s);
 }
 
+int DiagnosisCase::heldout_recordings() const {
+  return static_cast<int>(std::count_if(recordings.begin(), recordings.end(),
+                                        [](const CaseRecording& r) { return r.heldout; }));
+}
+
 std::string DiagnosisCase::effects_text() const {
   std::string out;
   for (const TrueEffect& e : effects) out += (out.empty() ? "" : "; ") + e.spec();
@@ -221,6 +307,10 @@ std::string DiagnosisCase::effects_text() const {
 
 std::uint64_t case_seed(std::uint64_t seed, int index) {
   return counter_hash(seed, static_cast<std::uint64_t>(index), 0, 0, kCaseStream);
+}
+
+std::uint64_t recording_seed(std::uint64_t case_seed, int k) {
+  return counter_hash(case_seed, static_cast<std::uint64_t>(k), 0, 0, kRecordingStream);
 }
 
 DiagnosisCase draw_case(std::uint64_t seed, int index, const CaseDrawOptions& o) {
@@ -287,23 +377,15 @@ DiagnosisCase draw_case(std::uint64_t seed, int index, const CaseDrawOptions& o)
                         : rng.pick(std::vector<double>{0.5, 1, 2, 4, 5});
     c.fix_sigma_m = rng.log_uniform(0.01, 0.1);
   }
-  if (c.reference == BenchReference::gt_gaps) {
-    const int gaps = 1 + rng.index(4);
-    const double total = rng.uniform(0.15, 0.40) * c.duration_s;
-    const double span = c.duration_s - 5.0;
-    for (int k = 0; k < gaps; ++k) {
-      // Gap k starts in the k-th of `gaps` equal parts after the first 5 s.
-      const double len = total / gaps, part = span / gaps;
-      const double t0 = 5.0 + k * part + rng.uniform(0.0, std::max(0.0, part - len));
-      c.gt_gaps_s.emplace_back(t0, t0 + std::min(len, part));
-    }
-  }
+  if (c.reference == BenchReference::gt_gaps) c.gt_gaps_s = draw_gaps(rng, c.duration_s);
   set_sensors(c);
+  CaseRng multi_rng(seed, kMultiStream);  // its own stream: the draws above do not depend on multi_share
+  const bool multi = multi_rng.uniform() < o.multi_share;
 
   // Effects.
   const double count_draw = rng.uniform();
   const int count = count_draw < o.null_share ? 0 : count_draw < o.null_share + o.two_share ? 2 : 1;
-  std::vector<std::string> pool = eligible_effects(c);
+  std::vector<std::string> pool = eligible_effects(c, multi);
   for (int k = 0; k < count; ++k) {
     const std::size_t at = static_cast<std::size_t>(rng.index(static_cast<int>(pool.size())));
     const std::string name = pool[at];
@@ -318,6 +400,7 @@ DiagnosisCase draw_case(std::uint64_t seed, int index, const CaseDrawOptions& o)
     sim::apply_effect(c.scenario.effects, sim::EffectSpec{e.name, e.params});
   if (!sim::validate_scenario(c.scenario, &why))
     throw std::invalid_argument(fmt::format("diagnosis benchmark case {}: {}", index, why));
+  if (multi) add_recordings(c, scale, 2 + multi_rng.index(3), o);
   return c;
 }
 
@@ -354,10 +437,11 @@ void erase_meta(TrackMeta& meta, std::string_view prefix) {
   std::erase_if(meta.extra, [&](const auto& kv) { return kv.first.rfind(prefix, 0) == 0; });
 }
 
-}  // namespace
-
-CaseTrack make_case_track(const DiagnosisCase& c) {
-  TrackData d = sim::simulate(c.scenario).data();
+// The simulation of `sc` shaped to c's reference (make_case_track): `gaps`
+// the ground-truth gaps, `seed` the seed of the irregular fixes' times.
+CaseTrack shape_track(const DiagnosisCase& c, const sim::Scenario& sc,
+                      const std::vector<std::pair<double, double>>& gaps, std::uint64_t seed) {
+  TrackData d = sim::simulate(sc).data();
   const std::size_t n = d.t.size();
   std::vector<double> path_t, path_x, path_y;
   const auto& gx = d.col(Col::gt_x);
@@ -375,7 +459,7 @@ CaseTrack make_case_track(const DiagnosisCase& c) {
     case BenchReference::gt_full: break;
     case BenchReference::gt_gaps:
       clear_gt_if([&](std::size_t i) {
-        return std::any_of(c.gt_gaps_s.begin(), c.gt_gaps_s.end(),
+        return std::any_of(gaps.begin(), gaps.end(),
                            [&](const auto& g) { return d.t[i] >= g.first && d.t[i] < g.second; });
       });
       break;
@@ -395,7 +479,7 @@ CaseTrack make_case_track(const DiagnosisCase& c) {
   if (c.reference == BenchReference::fixes_irregular) {
     // Gaps of P*exp(U(-1.2, 1.2)) divided by that factor's mean, sinh(1.2)/1.2,
     // so that the mean gap is P = 1/fix_rate_hz.
-    CaseRng rng(c.seed, kFixStream);
+    CaseRng rng(seed, kFixStream);
     const double period = 1.0 / c.fix_rate_hz, mean_factor = std::sinh(1.2) / 1.2;
     auto& ax = d.col(Col::aps_x);
     auto& ay = d.col(Col::aps_y);
@@ -423,8 +507,41 @@ CaseTrack make_case_track(const DiagnosisCase& c) {
   meta.extra.emplace_back("bench.case_seed", std::to_string(c.seed));
   meta.extra.emplace_back("bench.odometry", std::string(to_string(c.odometry)));
   meta.extra.emplace_back("bench.reference", std::string(to_string(c.reference)));
-  meta.extra.emplace_back("bench.drive", c.drive);
   return CaseTrack{Track(std::move(shaped)), std::move(path_t), std::move(path_x), std::move(path_y)};
+}
+
+}  // namespace
+
+CaseTrack make_case_track(const DiagnosisCase& c) {
+  if (c.multi())
+    throw std::invalid_argument(fmt::format("case {} is a multi-recording case: make_recording_track",
+                                            c.index));
+  CaseTrack ct = shape_track(c, c.scenario, c.gt_gaps_s, c.seed);
+  TrackData d = ct.track.data();
+  d.meta.extra.emplace_back("bench.drive", c.drive);
+  ct.track = Track(std::move(d));
+  return ct;
+}
+
+CaseTrack make_recording_track(const DiagnosisCase& c, std::size_t k) {
+  if (k >= c.recordings.size())
+    throw std::invalid_argument(fmt::format("case {} has {} recording(s), not a recording {}", c.index,
+                                            c.recordings.size(), k + 1));
+  const CaseRecording& rec = c.recordings[k];
+  CaseTrack ct = shape_track(c, rec.scenario, rec.gt_gaps_s, rec.seed);
+  TrackData d = ct.track.data();
+  // The nominal geometry: the recording was simulated with its true one.
+  const sim::RobotParams& nominal = c.scenario.robot;
+  d.meta.wheel_radius_left_m = nominal.wheel_radius_left_m;
+  d.meta.wheel_radius_right_m = nominal.wheel_radius_right_m;
+  d.meta.wheel_base_m = nominal.wheel_base_m;
+  d.meta.extra.emplace_back("bench.drive", rec.drive);
+  d.meta.extra.emplace_back("bench.recording", std::to_string(k + 1));
+  d.meta.extra.emplace_back("bench.recordings", std::to_string(c.recordings.size()));
+  d.meta.extra.emplace_back("bench.heldout", rec.heldout ? "1" : "0");
+  d.meta.extra.emplace_back("bench.recording_seed", std::to_string(rec.seed));
+  ct.track = Track(std::move(d));
+  return ct;
 }
 
 Track without_ground_truth(const Track& track) {

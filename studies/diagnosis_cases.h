@@ -37,6 +37,26 @@
 //    crosses it on every lap).
 // Power and external-velocity sensors are off. The simulator's seed is the
 // case seed.
+//
+// Multi-recording cases (a share multi_share of the cases, decided from a
+// stream of the case seed of its own, so the single-recording draws above are
+// the same whatever multi_share): 2, 3 or 4 recordings (1/3 each) of the
+// case's ONE robot (its nominal geometry, odometry kind, sensor set, reference
+// shape and true effects, with the same parameters), the last one held out
+// (the last two of four). Recording k (1-based) draws from its own seed
+// recording_seed(case seed, k): its own lap of the same family scale
+// (diagnosis_drives.h), start pose and length 60*U(min_minutes, max_minutes) s,
+// its own gaps (gt_gaps), its own simulator seed, and
+//  * its true geometry: each wheel radius times 1 + N(0, 1e-4), the wheel base
+//    times 1 + N(0, 3e-4) (half and under a third of the smallest radius_error
+//    and wheel_base_error departures drawn, 2e-4 and 1e-3, and averaged over
+//    the fit recordings: recording-to-recording variation far below
+//    detectability); its track states the nominal geometry;
+//  * its noise: the reference (ground-truth and fix) and gyro sigmas times
+//    exp(U(-0.3, 0.3)) (the encoders have no noise beyond their counts).
+// slip_zone and radius_step are never drawn for them: a box in world
+// coordinates is not crossed by other drives, and a step time is a time of
+// one recording.
 #pragma once
 
 #include <cstdint>
@@ -60,6 +80,7 @@ struct CaseDrawOptions {
   double null_share = 1.0 / 3.0;                 // share of cases with no effect
   double two_share = 1.0 / 3.0;                  // share with two effects (the rest: one)
   double max_rate_hz = 200.0;                    // caps odometry, gyro and ground-truth rates (>= 10)
+  double multi_share = 0.25;                     // share of multi-recording cases, [0, 1]
 
   // True when usable; otherwise *why names the first bad value.
   bool IsValid(std::string* why) const;
@@ -71,6 +92,20 @@ struct TrueEffect {
   std::vector<std::pair<std::string, double>> params;
   double param(std::string_view name) const;  // NaN when absent
   std::string spec() const;                   // "lateral_skid:k=0.021" (tracks/effects.h form)
+};
+
+// One recording of a multi-recording case (file comment).
+struct CaseRecording {
+  std::uint64_t seed = 0;  // recording_seed(case seed, k): everything below derives from it
+  std::string drive;       // drive family (diagnosis_drives.h)
+  double duration_s = 0.0;
+  double radius_factor_l = 1.0, radius_factor_r = 1.0, base_factor = 1.0;  // true / nominal geometry
+  double noise_factor = 1.0;                                               // reference and gyro sigmas
+  bool heldout = false;                                                    // proven on, not fitted on
+  std::vector<std::pair<double, double>> gt_gaps_s;                        // gt_gaps: [t0, t1) removed
+  // What is simulated: the case's scenario with this recording's motion,
+  // seed, true geometry and noise.
+  sim::Scenario scenario;
 };
 
 struct DiagnosisCase {
@@ -94,12 +129,21 @@ struct DiagnosisCase {
   // The simulation: its ground truth is always on (the true path, for
   // grading); make_case_track removes what the reference shape does not keep.
   sim::Scenario scenario;
+  // Multi-recording case: its recordings, fit recordings first (file
+  // comment); then `scenario` holds the nominal robot, sensors and effects,
+  // drive and duration_s describe the recordings together, and each
+  // recording's scenario is what is simulated. Empty: a single-recording case.
+  std::vector<CaseRecording> recordings;
 
+  bool multi() const { return !recordings.empty(); }
+  int heldout_recordings() const;    // multi-recording cases: 1 or 2; else 0
   std::string effects_text() const;  // "; "-separated specs, or "none"
 };
 
 // Seed of case `index` of a run with seed `seed`.
 std::uint64_t case_seed(std::uint64_t seed, int index);
+// Seed of recording k (1-based) of a multi-recording case with seed `case_seed`.
+std::uint64_t recording_seed(std::uint64_t case_seed, int k);
 
 // Case `index` drawn from `seed` = case_seed(S, index) (file comment). Throws
 // std::invalid_argument for invalid options.
@@ -115,8 +159,14 @@ struct CaseTrack {
 // Simulates the case and shapes its reference (file comment): ground truth
 // removed, thinned or cut, fixes kept at irregular times, ticks dropped for
 // wheel-rate odometry, rows left empty dropped; metadata bench.* records the
-// case. Throws std::invalid_argument if the simulator rejects the scenario.
+// case. Throws std::invalid_argument if the simulator rejects the scenario,
+// or for a multi-recording case.
 CaseTrack make_case_track(const DiagnosisCase& c);
+// Recording k (0-based) of a multi-recording case, simulated and shaped as
+// make_case_track does; the track states the nominal geometry (the case's
+// scenario.robot), bench.recording its number (1-based) and whether it is
+// held out. Throws std::invalid_argument for k out of range.
+CaseTrack make_recording_track(const DiagnosisCase& c, std::size_t k);
 
 // `track` without its ground-truth columns (rows left empty dropped, sim.gt_*
 // metadata removed): what a known-start track's fixes give alone.

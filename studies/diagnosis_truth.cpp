@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "diagnose/effect_model.h"
 #include "diagnose/gyro_heading_input.h"
+#include "diagnose/recordings.h"
 #include "diagnose/select.h"
 #include "diagnose/series_interp.h"
 #include "diagnose/window_replay.h"
@@ -199,6 +201,82 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
         t.floor_m = floor;
       }
     }
+  }
+  return out;
+}
+
+namespace {
+
+// Position and heading RMSE pooled over every window of several replays.
+struct PooledSums {
+  double sp = 0.0, sh = 0.0, n = 0.0;
+  void add(const diagnose::ReplayResult& r) {
+    for (const diagnose::WindowError& w : r.windows) {
+      const auto k = static_cast<double>(w.n_ref);
+      sp += k * w.pos_rmse_m * w.pos_rmse_m, sh += k * w.heading_rmse_rad * w.heading_rmse_rad, n += k;
+    }
+  }
+  Pooled rmse() const { return n > 0.0 ? Pooled{std::sqrt(sp / n), std::sqrt(sh / n)} : Pooled{}; }
+};
+
+// The fit recordings laid end to end, with the gap diagnose_recordings puts
+// between them (longer than any window the selection may choose).
+DiagInput laid_end_to_end(const std::vector<DiagInput>& fit) {
+  double span = 0.0;
+  for (const DiagInput& p : fit) span += p.odo_t_s.back() - p.odo_t_s.front();
+  return diagnose::concatenate(fit, std::max(1000.0, span));
+}
+
+}  // namespace
+
+Detectability assess_recordings_detectability(const std::vector<DiagInput>& fit,
+                                              const std::vector<DiagInput>& heldout,
+                                              const std::vector<TrueEffect>& truth,
+                                              const diagnose::MaterialityOptions& materiality) {
+  if (fit.empty() || heldout.empty())
+    throw std::invalid_argument("assess_recordings_detectability: needs fit and held-out recordings");
+  const DiagInput pooled_fit = laid_end_to_end(fit);
+  // Gyro effects: on the fit recordings, as for one track.
+  Detectability out = assess_detectability(pooled_fit, truth, materiality);
+  out.window_s = diagnose::selection_window_s(pooled_fit, diagnose::SelectOptions{});
+  const auto replay_all = [&](const EffectSet& set) {
+    PooledSums sums;
+    for (const DiagInput& in : heldout) sums.add(diagnose::replay(in, set, out.window_s));
+    return sums.rmse();
+  };
+  // Reference sigmas pooled as RMS over the held-out recordings' scored samples.
+  double sigma_sse = 0.0, sigma_rad_sse = 0.0, samples = 0.0;
+  out.windows = 0;
+  for (const DiagInput& in : heldout) {
+    const diagnose::ReplayResult r = diagnose::replay(in, EffectSet{}, out.window_s);
+    out.windows += static_cast<int>(r.windows.size());
+    for (const diagnose::WindowError& w : r.windows) {
+      const auto k = static_cast<double>(w.n_ref);
+      sigma_sse += k * in.ref_sigma_m * in.ref_sigma_m, samples += k;
+      sigma_rad_sse += k * in.ref_sigma_rad * in.ref_sigma_rad;
+    }
+  }
+  out.heldout_windows = out.windows;
+  out.ref_sigma_m = samples > 0.0 ? std::sqrt(sigma_sse / samples) : heldout.front().ref_sigma_m;
+  const Pooled nominal = replay_all(EffectSet{}), all_true = replay_all(wheel_set(truth, ""));
+  out.nominal_heldout_m = nominal.pos_m, out.true_heldout_m = all_true.pos_m;
+  out.floor_m = diagnose::materiality_floor_m(out.ref_sigma_m, nominal.pos_m, materiality);
+  const bool heading = heldout.front().has_ref_heading();
+  const double sigma_rad = samples > 0.0 ? std::sqrt(sigma_rad_sse / samples) : kNaN;
+  const double heading_floor_rad =
+      heading ? diagnose::materiality_floor_m(sigma_rad, nominal.heading_rad, materiality) : kNaN;
+  for (EffectTruth& t : out.effects) {
+    if (t.gyro) continue;
+    const Pooled without = replay_all(wheel_set(truth, t.effect.name));
+    t.on_all_windows = false;
+    t.before_m = without.pos_m, t.after_m = all_true.pos_m, t.floor_m = out.floor_m;
+    t.gain_m = diagnose::removed_error_m(t.before_m, t.after_m);
+    t.heading_gain_rad = heading ? diagnose::removed_error_m(without.heading_rad, all_true.heading_rad) : kNaN;
+    t.heading_floor_rad = heading_floor_rad;
+    const bool heading_material = std::isfinite(t.heading_gain_rad) && t.heading_gain_rad > 0.0 &&
+                                  t.heading_gain_rad >= t.heading_floor_rad;
+    t.detectable = !is_noop(t.effect) &&
+                   (diagnose::is_material(t.before_m, t.after_m, t.floor_m) || heading_material);
   }
   return out;
 }

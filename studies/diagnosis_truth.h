@@ -94,4 +94,28 @@ struct Detectability {
 Detectability assess_detectability(const diagnose::DiagInput& in, const std::vector<TrueEffect>& truth,
                                    const diagnose::MaterialityOptions& materiality = {});
 
+// A multi-recording case (diagnosis_cases.h): several recordings of one
+// robot, diagnosed on `fit` pooled and proven on `heldout`, as
+// diagnose::diagnose_recordings does (diagnose/recordings.h).
+//  * Wheel-odometry effects are judged on the held-out recordings, where the
+//    diagnosis proves them: each held-out recording replayed on its own
+//    windows (window_replay.h, raw reference) with the window length the
+//    pooled diagnosis uses (selection_window_s of the fit recordings laid end
+//    to end as diagnose_recordings lays them), RMSEs pooled over their
+//    reference samples; nominal_heldout_m, true_heldout_m and each effect's
+//    before_m (the true wheel effects without it) as for one track;
+//    floor_m = materiality_floor_m(pooled reference sigma, nominal_heldout_m),
+//    the reference sigma pooled as an RMS over the held-out recordings'
+//    samples; the heading rule likewise with pooled heading RMSEs.
+//  * Gyro effects are judged as assess_detectability judges them, on the fit
+//    recordings laid end to end: the diagnosis checks the gyro there.
+// No window is left out (slip_zone and radius_step, which need that rule,
+// are not drawn for multi-recording cases); windows and heldout_windows count
+// the held-out recordings' windows. Throws as assess_detectability, and
+// std::invalid_argument for an empty `fit` or `heldout`.
+Detectability assess_recordings_detectability(const std::vector<diagnose::DiagInput>& fit,
+                                              const std::vector<diagnose::DiagInput>& heldout,
+                                              const std::vector<TrueEffect>& truth,
+                                              const diagnose::MaterialityOptions& materiality = {});
+
 }  // namespace odotune
