@@ -17,9 +17,12 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "core/failure.h"
+#include "diagnose/diag_input.h"
+#include "diagnose/recordings.h"
 #include "studies/diagnosis_benchmark.h"
 #include "studies/diagnosis_benchmark_outputs.h"
 #include "studies/diagnosis_drives.h"
@@ -485,6 +488,13 @@ TEST(DiagnosisBenchmarkSummary, RatesByMarginBucket) {
   EXPECT_EQ(counts(k.two_by_margin[top]), std::pair(0, 1));
   EXPECT_EQ(counts(k.single), std::pair(4, 6));
   EXPECT_EQ(counts(k.two), std::pair(1, 2));
+  // A multi-recording case counts in its own rates only.
+  cases[0].c.recordings.resize(2);
+  const BenchmarkSummary with_multi = summarise(cases);
+  EXPECT_EQ(counts(with_multi.single_recording.single_by_margin[under]), std::pair(0, 0));
+  EXPECT_EQ(counts(with_multi.multi_recording.single_by_margin[under]), std::pair(1, 1));
+  EXPECT_EQ(counts(with_multi.multi_recording.single), std::pair(1, 1));
+  EXPECT_EQ(counts(with_multi.all), std::pair(5, 8));
 }
 
 // ---------------------------------------------------------------- end to end
@@ -611,6 +621,27 @@ TEST(DiagnosisBenchmarkRun, BadOptionsFailBeforeWork) {
   o.draw.null_share = 0.8, o.draw.two_share = 0.5;
   EXPECT_FALSE(o.IsValid(&why));
   EXPECT_NE(why.find("two_share"), std::string::npos);
+  for (double bad : {-0.1, 1.5, std::nan("")}) {
+    o.draw = {};
+    o.draw.multi_share = bad;
+    EXPECT_FALSE(o.IsValid(&why));
+    EXPECT_NE(why.find("multi_share"), std::string::npos) << why;
+  }
+  {
+    testing_support::TempDir d;
+    DiagnosisBenchmarkRequest r;
+    r.out = (d.path() / "out").string();
+    r.options.draw.multi_share = 2.0;
+    try {
+      run_diagnosis_benchmark_to_folder(r);
+      ADD_FAILURE() << "--multi-share 2 was accepted";
+    } catch (const Failure& e) {
+      EXPECT_NE(std::string(e.what()).find("multi_share = 2"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(r.out));
+  }
+  o.draw = {};
+  o.draw.null_share = 0.8, o.draw.two_share = 0.5;
   // The command's library call: one line, before any work, nothing written.
   testing_support::TempDir dir;
   DiagnosisBenchmarkRequest r;
@@ -627,6 +658,231 @@ TEST(DiagnosisBenchmarkRun, BadOptionsFailBeforeWork) {
   } catch (const Failure& e) {
     EXPECT_NE(std::string(e.what()).find("not a folder"), std::string::npos) << e.what();
   }
+}
+
+// ---------------------------------------------------------------- multi-recording cases
+
+CaseDrawOptions multi_draws() {
+  CaseDrawOptions o = short_draws();
+  o.multi_share = 1.0;
+  return o;
+}
+
+TEST(DiagnosisMultiCases, OneRobotSameEffectsOwnDrives) {
+  const CaseDrawOptions o = multi_draws();
+  CaseDrawOptions single = o;
+  single.multi_share = 0.0;
+  std::set<std::size_t> counts;
+  for (int i = 0; i < 40; ++i) {
+    const DiagnosisCase c = draw_case(case_seed(5, i), i, o);
+    SCOPED_TRACE("case " + std::to_string(i) + ": " + c.effects_text());
+    ASSERT_TRUE(c.multi());
+    const std::size_t n = c.recordings.size();
+    counts.insert(n);
+    ASSERT_GE(n, 2u);
+    ASSERT_LE(n, 4u);
+    // The held-out recordings are the last one (two of four).
+    const int held = n == 4 ? 2 : 1;
+    EXPECT_EQ(c.heldout_recordings(), held);
+    for (std::size_t k = 0; k < n; ++k) EXPECT_EQ(c.recordings[k].heldout, k + held >= n) << k;
+    // The robot, sensors and reference of the single-recording draw.
+    const DiagnosisCase one = draw_case(case_seed(5, i), i, single);
+    EXPECT_FALSE(one.multi());
+    EXPECT_EQ(c.robot, one.robot);
+    EXPECT_EQ(c.reference, one.reference);
+    EXPECT_EQ(c.odometry, one.odometry);
+    EXPECT_EQ(c.gyro_rate_hz, one.gyro_rate_hz);
+    const std::string effects = sim::format_effects(c.scenario.effects);
+    std::set<std::uint64_t> seeds;
+    std::set<double> starts;
+    for (const CaseRecording& r : c.recordings) {
+      // Same effects and parameters, own seed, start pose and drive length.
+      EXPECT_EQ(sim::format_effects(r.scenario.effects), effects);
+      seeds.insert(r.seed);
+      starts.insert(r.scenario.motion.start_x_m);
+      EXPECT_EQ(r.scenario.seed, r.seed);
+      EXPECT_GE(sim::MotionProfile(r.scenario.motion).duration_s(), r.duration_s);
+      EXPECT_GE(r.duration_s, 30.0);
+      EXPECT_LE(r.duration_s, 60.0);
+      // Geometry jitter far below detectability; noise within exp(+-0.3).
+      for (double f : {r.radius_factor_l, r.radius_factor_r}) EXPECT_LT(std::abs(f - 1.0), 6e-4);
+      EXPECT_LT(std::abs(r.base_factor - 1.0), 2e-3);
+      EXPECT_NE(r.radius_factor_l, 1.0);
+      EXPECT_NEAR(r.scenario.robot.wheel_base_m, c.scenario.robot.wheel_base_m * r.base_factor, 1e-12);
+      EXPECT_GE(r.noise_factor, std::exp(-0.3));
+      EXPECT_LE(r.noise_factor, std::exp(0.3));
+      EXPECT_NEAR(r.scenario.sensors.gyro.sigma_rad_s, c.scenario.sensors.gyro.sigma_rad_s * r.noise_factor,
+                  1e-15);
+      if (c.reference == BenchReference::gt_gaps) {
+        EXPECT_FALSE(r.gt_gaps_s.empty());
+      }
+    }
+    EXPECT_EQ(seeds.size(), n);
+    EXPECT_EQ(starts.size(), n);
+    for (const TrueEffect& e : c.effects) {
+      EXPECT_NE(e.name, "slip_zone");
+      EXPECT_NE(e.name, "radius_step");
+    }
+  }
+  EXPECT_EQ(counts, (std::set<std::size_t>{2, 3, 4}));
+  // multi_share = 0.25: some cases are multi-recording, the others are the
+  // single-recording draws they would be with multi_share = 0.
+  CaseDrawOptions quarter = o;
+  quarter.multi_share = 0.25;
+  int multi = 0;
+  for (int i = 0; i < 40; ++i) {
+    const DiagnosisCase c = draw_case(case_seed(5, i), i, quarter);
+    multi += c.multi() ? 1 : 0;
+    if (!c.multi()) {
+      EXPECT_EQ(c.effects_text(), draw_case(case_seed(5, i), i, single).effects_text());
+    }
+  }
+  EXPECT_GT(multi, 2);
+  EXPECT_LT(multi, 25);
+}
+
+TEST(DiagnosisMultiCases, RecordingsAreOfOneRobotAndDeterministic) {
+  const CaseDrawOptions o = multi_draws();
+  constexpr int kCases = 3;
+  std::vector<Track> tracks[2];
+  for (int run = 0; run < 2; ++run) {
+    std::vector<std::vector<Track>> per_case(kCases);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(run == 0 ? 1 : 2)
+    for (int i = 0; i < kCases; ++i) {
+      const DiagnosisCase c = draw_case(case_seed(9, i), i, o);
+      for (std::size_t k = 0; k < c.recordings.size(); ++k)
+        per_case[static_cast<std::size_t>(i)].push_back(make_recording_track(c, k).track);
+    }
+    for (auto& v : per_case) tracks[run].insert(tracks[run].end(), v.begin(), v.end());
+  }
+  ASSERT_EQ(tracks[0].size(), tracks[1].size());
+  for (std::size_t k = 0; k < tracks[0].size(); ++k) EXPECT_TRUE(same_track(tracks[0][k], tracks[1][k])) << k;
+
+  for (int i = 0; i < kCases; ++i) {
+    const DiagnosisCase c = draw_case(case_seed(9, i), i, o);
+    SCOPED_TRACE("case " + std::to_string(i));
+    EXPECT_THROW(make_case_track(c), std::invalid_argument);
+    EXPECT_THROW(make_recording_track(c, c.recordings.size()), std::invalid_argument);
+    std::vector<diagnose::DiagInput> inputs;
+    for (std::size_t k = 0; k < c.recordings.size(); ++k) {
+      const Track t = make_recording_track(c, k).track;
+      // The nominal geometry, whatever the recording's true one.
+      EXPECT_EQ(t.meta().wheel_radius_left_m, c.scenario.robot.wheel_radius_left_m);
+      EXPECT_EQ(t.meta().wheel_base_m, c.scenario.robot.wheel_base_m);
+      EXPECT_EQ(t.meta().get("bench.recording"), std::to_string(k + 1));
+      inputs.push_back(diagnose::build_diag_input(t));
+    }
+    ASSERT_GE(inputs.size(), 2u);
+    EXPECT_NO_THROW(diagnose::check_one_robot(inputs));
+    EXPECT_NE(inputs[0].ref_x_m.front(), inputs[1].ref_x_m.front());  // own start pose
+  }
+}
+
+// Inputs of the recordings of `c`, held out last.
+void multi_inputs(const DiagnosisCase& c, std::vector<diagnose::DiagInput>& fit,
+                  std::vector<diagnose::DiagInput>& held) {
+  for (std::size_t k = 0; k < c.recordings.size(); ++k)
+    (c.recordings[k].heldout ? held : fit)
+        .push_back(diagnose::build_diag_input(make_recording_track(c, k).track));
+}
+
+TEST(DiagnosisMultiCases, TruthOfALargeEffectIsDetectableAndOfNoneNot) {
+  CaseDrawOptions o = multi_draws();
+  o.null_share = 1.0, o.two_share = 0.0;
+  // A null case on ground truth with ticks.
+  DiagnosisCase c;
+  for (int i = 0; i < 100; ++i) {
+    c = draw_case(case_seed(77, i), i, o);
+    if (c.reference == BenchReference::gt_full && c.odometry == BenchOdometry::ticks) break;
+  }
+  ASSERT_EQ(c.reference, BenchReference::gt_full);
+  ASSERT_TRUE(c.effects.empty());
+  std::vector<diagnose::DiagInput> fit, held;
+  multi_inputs(c, fit, held);
+  const Detectability none = assess_recordings_detectability(fit, held, c.effects);
+  EXPECT_EQ(none.detectable_count(), 0);
+  EXPECT_GT(none.floor_m, 0.0);
+  EXPECT_GT(none.windows, 0);
+  // The same recordings with a 5 % wider wheel base on every one of them.
+  const TrueEffect base = effect("wheel_base_error", {{"scale", 1.05}});
+  c.effects = {base};
+  for (CaseRecording& r : c.recordings)
+    sim::apply_effect(r.scenario.effects, sim::EffectSpec{base.name, base.params});
+  fit.clear(), held.clear();
+  multi_inputs(c, fit, held);
+  const Detectability large = assess_recordings_detectability(fit, held, c.effects);
+  ASSERT_EQ(large.effects.size(), 1u);
+  EXPECT_TRUE(large.effects[0].detectable);
+  EXPECT_GT(large.effects[0].gain_m, 3.0 * large.effects[0].floor_m);
+  EXPECT_LT(large.true_heldout_m, large.nominal_heldout_m);
+  // Judged on the held-out recordings: their nominal error, not the fit ones'.
+  double sse = 0.0, n = 0.0;
+  for (const diagnose::DiagInput& in : held) {
+    const diagnose::ReplayResult r = diagnose::replay(in, diagnose::EffectSet{}, large.window_s);
+    for (const diagnose::WindowError& w : r.windows)
+      sse += static_cast<double>(w.n_ref) * w.pos_rmse_m * w.pos_rmse_m, n += static_cast<double>(w.n_ref);
+  }
+  EXPECT_NEAR(large.nominal_heldout_m, std::sqrt(sse / n), 1e-12);
+  EXPECT_THROW(assess_recordings_detectability(fit, {}, c.effects), std::invalid_argument);
+}
+
+// Every number of two runs but the timings.
+std::string run_text(const DiagnosisBenchmark& b) {
+  std::string s;
+  for (const CaseResult& r : b.cases) {
+    s += std::to_string(r.c.index) + "|" + std::to_string(r.c.recordings.size()) + "|" + r.grade.why + "|" +
+         (r.grade.pass ? "pass" : "fail") + "|" + std::to_string(r.track_rows);
+    for (const CaseFinding& f : r.findings) s += "|" + f.spec + fmt::format("{}", f.heldout_after_m);
+    for (const EffectTruth& t : r.truth.effects)
+      s += fmt::format("|{}:{}:{}", t.effect.name, t.gain_m, t.floor_m);
+    s += fmt::format("|{}|{}\n", r.grade.heldout_before_m, r.grade.heldout_after_m);
+  }
+  return s;
+}
+
+TEST(DiagnosisMultiCases, ShortRunGradesAndWritesTheirRows) {
+  DiagnosisBenchmarkOptions o;
+  o.cases = 3;
+  o.seed = 1003;  // a development seed
+  o.draw = multi_draws();
+  o.draw.max_minutes = 0.6;
+  o.threads = 1;
+  const DiagnosisBenchmark one = run_diagnosis_benchmark(o);
+  o.threads = 2;
+  const DiagnosisBenchmark two = run_diagnosis_benchmark(o);
+  EXPECT_EQ(run_text(one), run_text(two));
+  const CategoryRates& m = one.summary.multi_recording;
+  EXPECT_EQ(m.null_cases.cases + m.undetectable.cases + m.single.cases + m.two.cases, 3);
+  const CategoryRates& s = one.summary.single_recording;
+  EXPECT_EQ(s.null_cases.cases + s.undetectable.cases + s.single.cases + s.two.cases, 0);
+  for (const CaseResult& r : one.cases) {
+    EXPECT_TRUE(r.c.multi());
+    EXPECT_FALSE(r.grade.refused && r.c.reference != BenchReference::start_fixes) << r.grade.why;
+    EXPECT_GT(r.truth.windows, 0) << r.truth_note;
+  }
+
+  testing_support::TempDir dir;
+  DiagnosisBenchmarkRequest req;
+  req.out = (dir.path() / "bench").string();
+  req.keep_tracks = true;
+  req.options = o;
+  run_diagnosis_benchmark_to_folder(req);
+  const std::filesystem::path out(req.out);
+  for (const CaseResult& r : one.cases)
+    for (std::size_t k = 1; k <= r.c.recordings.size(); ++k)
+      EXPECT_TRUE(std::filesystem::exists(out / "tracks" / fmt::format("case_{:04d}_r{}.csv", r.c.index, k)));
+  EXPECT_FALSE(std::filesystem::exists(out / "tracks" / "case_0000.csv"));
+  const std::string md = read_file(out / "summary.md");
+  for (const char* row :
+       {"| multi-recording: single effect, 3 floors or more |",
+        "| multi-recording: two effects, 1.5-3 floors |", "| multi-recording: null cases with any finding |"})
+    EXPECT_NE(md.find(row), std::string::npos) << row;
+  const std::string csv = read_file(out / "cases.csv");
+  EXPECT_EQ(csv.rfind("case,case_seed,category,recordings,heldout_recordings,", 0), 0u);
+  for (const CaseResult& r : one.cases)
+    EXPECT_NE(csv.find(fmt::format("\n{},{},{},{},{},", r.c.index, r.c.seed, to_string(r.grade.category),
+                                   r.c.recordings.size(), r.c.heldout_recordings())),
+              std::string::npos);
 }
 
 }  // namespace
