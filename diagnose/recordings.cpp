@@ -145,19 +145,22 @@ DiagInput concatenate(const std::vector<DiagInput>& parts, double gap_s, std::ve
   return c;
 }
 
+DiagInput pool_recordings(const std::vector<DiagInput>& fit, std::vector<double>* shifts) {
+  // A gap longer than any window the selection may choose (at most a third of the pooled span).
+  double span = 0.0;
+  for (const DiagInput& p : fit) span += p.odo_t_s.back() - p.odo_t_s.front();
+  return concatenate(fit, std::max(1000.0, span), shifts);
+}
+
 PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std::vector<DiagInput>& heldout,
                                     const DiagnoseOptions& o) {
   if (fit.empty()) throw std::invalid_argument("diagnose_recordings: no recording to fit on");
   std::vector<DiagInput> all = fit;
   all.insert(all.end(), heldout.begin(), heldout.end());
   check_one_robot(all);
-  // Longer than any window the selection may choose (at most a third of the pooled span).
-  double span = 0.0;
-  for (const DiagInput& p : fit) span += p.odo_t_s.back() - p.odo_t_s.front();
-  const double gap_s = std::max(1000.0, span);
   PooledDiagnosis out;
   std::vector<double> shifts;
-  out.input = concatenate(fit, gap_s, &shifts);
+  out.input = pool_recordings(fit, &shifts);
   // The selection leaves one recording out at a time: an effect is chosen
   // because it predicts a recording it was not fitted on.
   DiagnoseOptions pooled_options = o;
@@ -171,13 +174,21 @@ PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std
   const double ws = d.window_s;
   out.heldout_recordings = !heldout.empty();
 
-  // Per recording: nominal vs the pooled model, and the refit alone.
+  // Per recording: nominal vs the pooled model, and the refit alone (on its
+  // selection input, as the pooled final fit, from the pooled values),
+  // recordings in parallel.
   FitOptions fo = o.select.fit;
   fo.window_s = ws;
-  Sse held_nominal, held_model;
+  SelectOptions so = o.select;
+  so.fit.window_s = ws;
+  so.min_window_samples = 0.0;  // the pooled windows' length, not one of its own
+  out.recordings.resize(all.size());
+  std::vector<ReplayResult> nominal(all.size()), modelled(all.size());
+  std::vector<char> replayed(all.size(), 0);
+#pragma omp parallel for schedule(dynamic, 1) if (all.size() > 1)
   for (std::size_t k = 0; k < all.size(); ++k) {
     const DiagInput& in = all[k];
-    RecordingResult r;
+    RecordingResult& r = out.recordings[k];
     r.track = in.track_name;
     r.heldout = k >= fit.size();
     r.duration_s = in.odo_t_s.back() - in.odo_t_s.front();
@@ -192,21 +203,24 @@ PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std
         const LagEstimate& lag = oc.command_delay.available ? oc.command_delay : oc.odometry_late;
         if (lag.available) r.motion_late_s = oc.command_delay.available ? lag.lag_s : -lag.lag_s;
       }
-      const ReplayResult nom = replay(in, EffectSet(), ws), mod = replay(in, wheel, ws);
-      r.error = {nom.pos_rmse_m, mod.pos_rmse_m};
-      if (r.heldout) held_nominal.add(nom), held_model.add(mod);
-      r.floor_m = materiality_floor_m(in.ref_sigma_m, nom.pos_rmse_m, o.select.materiality);
-      r.helped = is_material(nom.pos_rmse_m, mod.pos_rmse_m, r.floor_m);
+      nominal[k] = replay(in, EffectSet(), ws), modelled[k] = replay(in, wheel, ws);
+      replayed[k] = 1;
+      r.error = {nominal[k].pos_rmse_m, modelled[k].pos_rmse_m};
+      r.floor_m = materiality_floor_m(in.ref_sigma_m, nominal[k].pos_rmse_m, o.select.materiality);
+      r.helped = is_material(nominal[k].pos_rmse_m, modelled[k].pos_rmse_m, r.floor_m);
       if (!wheel.empty()) {
-        const FitSummary f = fit_effects(in, d.selection.structure, {}, {}, fo);
+        // From the pooled values: a parameter started at its no-op bound can stay there.
+        const FitSummary f = fit_effects(selection_input(in, so).input, wheel, {}, {}, fo);
         for (const FitParam& p : f.params)
           if (p.fitted) r.refit.push_back({p.name, p.value}), r.refit_stderr.push_back({p.name, p.std_error});
       }
     } catch (const std::exception& e) {
       r.note = e.what();
     }
-    out.recordings.push_back(std::move(r));
   }
+  Sse held_nominal, held_model;
+  for (std::size_t k = fit.size(); k < all.size(); ++k)
+    if (replayed[k]) held_nominal.add(nominal[k]), held_model.add(modelled[k]);
 
   // Held-out recordings prove the findings (file comment).
   if (out.heldout_recordings) {

@@ -75,6 +75,10 @@ void check_one_robot(const std::vector<DiagInput>& parts);
 // shifts (optional): per part, pooled time = its own time + shift [s].
 DiagInput concatenate(const std::vector<DiagInput>& parts, double gap_s, std::vector<double>* shifts = nullptr);
 
+// The fit recordings laid end to end as diagnose_recordings pools them
+// (concatenate with its gap); throws as concatenate.
+DiagInput pool_recordings(const std::vector<DiagInput>& fit, std::vector<double>* shifts = nullptr);
+
 // Diagnoses `fit` pooled and proves on `heldout` (may be empty: then the
 // pooled split, as for one track). Throws std::invalid_argument (one line)
 // for an empty `fit`, recordings of different robots, or invalid options.

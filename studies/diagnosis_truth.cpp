@@ -219,14 +219,6 @@ struct PooledSums {
   Pooled rmse() const { return n > 0.0 ? Pooled{std::sqrt(sp / n), std::sqrt(sh / n)} : Pooled{}; }
 };
 
-// The fit recordings laid end to end, with the gap diagnose_recordings puts
-// between them (longer than any window the selection may choose).
-DiagInput laid_end_to_end(const std::vector<DiagInput>& fit) {
-  double span = 0.0;
-  for (const DiagInput& p : fit) span += p.odo_t_s.back() - p.odo_t_s.front();
-  return diagnose::concatenate(fit, std::max(1000.0, span));
-}
-
 }  // namespace
 
 Detectability assess_recordings_detectability(const std::vector<DiagInput>& fit,
@@ -235,7 +227,7 @@ Detectability assess_recordings_detectability(const std::vector<DiagInput>& fit,
                                               const diagnose::MaterialityOptions& materiality) {
   if (fit.empty() || heldout.empty())
     throw std::invalid_argument("assess_recordings_detectability: needs fit and held-out recordings");
-  const DiagInput pooled_fit = laid_end_to_end(fit);
+  const DiagInput pooled_fit = diagnose::pool_recordings(fit);
   // Gyro effects: on the fit recordings, as for one track.
   Detectability out = assess_detectability(pooled_fit, truth, materiality);
   out.window_s = diagnose::selection_window_s(pooled_fit, diagnose::SelectOptions{});
