@@ -15,8 +15,9 @@
 //     and gyro_bias acting: the table "Diagnosis cost by track length and
 //     rate" of docs/benchmarks.md (--benchmark_filter=Scaling). Counters:
 //     the timing breakdown of Diagnosis::timing and Selection::timing.
-// Breakdown of one recording instead of benchmarks:
-//   bench_diagnose --track FILE [--from S] [--to S] [--window S]
+// Breakdown of one recording (or several, pooled as `odotune diagnose FILE...`
+// pools them; --from/--to crop each) instead of benchmarks:
+//   bench_diagnose --track FILE [--track FILE...] [--from S] [--to S] [--window S]
 // prints the diagnosis' first line, its timing (sensors, selection: search,
 // discrete searches, final fit; locate and findings) and the time of every
 // search record (step, phase, candidate).
@@ -28,12 +29,14 @@
 #include <map>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 
 #include "diagnose/diag_input.h"
 #include "diagnose/diagnosis.h"
 #include "diagnose/diagnosis_summary.h"
+#include "diagnose/recordings.h"
 #include "formats/scenario_yaml.h"
 #include "tests/diagnose/sim_track.h"
 #include "tracks/motion_profile.h"
@@ -120,24 +123,31 @@ BENCHMARK(BM_DiagnoseScaling)
     ->UseRealTime()
     ->Iterations(1);
 
-// --track mode: the breakdown of one recording (header comment).
-int breakdown(const std::string& path, double from_s, double to_s, double window_s) {
-  diagnose::DiagInput in = diagnose::build_diag_input(read_track(path));
-  if (from_s > -1e299 || to_s < 1e299) in = diagnose::crop(in, from_s, to_s);
+// --track mode: the breakdown of one recording, or of several pooled
+// (header comment).
+int breakdown(const std::vector<std::string>& paths, double from_s, double to_s, double window_s) {
+  std::vector<diagnose::DiagInput> parts;
+  for (const std::string& path : paths) {
+    parts.push_back(diagnose::build_diag_input(read_track(path)));
+    if (from_s > -1e299 || to_s < 1e299) parts.back() = diagnose::crop(parts.back(), from_s, to_s);
+  }
   diagnose::DiagnoseOptions o;
   o.select.fit.window_s = window_s;
   const auto t0 = std::chrono::steady_clock::now();
-  const diagnose::Diagnosis d = diagnose::diagnose(in, o);
+  const diagnose::PooledDiagnosis pd = diagnose::diagnose_recordings(parts, {}, o);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const diagnose::Diagnosis& d = pd.pooled;
+  const diagnose::DiagInput& in = pd.input;
   const auto lines = diagnosis_summary(d);
   fmt::print("{}\n", lines.empty() ? "" : lines.front());
   const auto& st = d.selection.timing;
-  fmt::print("track {:.1f} s, {} odometry nodes, {} reference samples, {} windows of {:g} s\n"
-             "wall {:.2f} s: sensors {:.2f}, select {:.2f} (search {:.2f} incl. discrete {:.2f}, final {:.2f}; "
-             "{} fits), locate+findings {:.2f}\n",
-             in.ref_t_s.back() - in.ref_t_s.front(), in.odo_t_s.size(), in.ref_t_s.size(),
-             d.selection.num_windows, d.selection.window_s, wall, d.timing.sensors_s, d.timing.select_s,
-             st.search_s, st.discrete_s, st.final_s, st.fits, d.timing.locate_s);
+  fmt::print(
+      "track {:.1f} s, {} odometry nodes, {} reference samples (every {}th in the selection), {} windows of {:g} s\n"
+      "wall {:.2f} s: sensors {:.2f}, select {:.2f} (search {:.2f} incl. discrete {:.2f}, final {:.2f}; "
+      "{} fits), locate+findings {:.2f}\n",
+      in.ref_t_s.back() - in.ref_t_s.front(), in.odo_t_s.size(), in.ref_t_s.size(), d.selection.ref_stride,
+      d.selection.num_windows, d.selection.window_s, wall, d.timing.sensors_s, d.timing.select_s, st.search_s,
+      st.discrete_s, st.final_s, st.fits, d.timing.locate_s);
   std::map<std::string, double> by_candidate;
   for (const auto& r : d.selection.records) {
     fmt::print("  {:>2} {:<9} {:<18} {:7.2f} s {}\n", r.step, r.phase, r.candidate, r.time_s,
@@ -153,18 +163,18 @@ int breakdown(const std::string& path, double from_s, double to_s, double window
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string track_path;
+  std::vector<std::string> track_paths;
   double from_s = -1e300, to_s = 1e300, window_s = 20.0;
   for (int i = 1; i + 1 < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--track") track_path = argv[i + 1];
+    if (a == "--track") track_paths.push_back(argv[i + 1]);
     if (a == "--from") from_s = std::atof(argv[i + 1]);
     if (a == "--to") to_s = std::atof(argv[i + 1]);
     if (a == "--window") window_s = std::atof(argv[i + 1]);
   }
-  if (!track_path.empty()) {
+  if (!track_paths.empty()) {
     try {
-      return breakdown(track_path, from_s, to_s, window_s);
+      return breakdown(track_paths, from_s, to_s, window_s);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "bench_diagnose: %s\n", e.what());
       return 1;

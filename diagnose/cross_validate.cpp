@@ -167,6 +167,34 @@ CrossValidator::CrossValidator(const DiagInput& in, const FitOptions& fit, int f
   for (const Window& w : windows_) n_samples_ += w.ref_end - w.ref_begin;
 }
 
+FitSummary CrossValidator::screen(const EffectSet& start, Effect trial, const std::vector<int>& windows,
+                                  int max_iterations) {
+  FitOptions o = fit_;
+  o.max_iterations = max_iterations;
+  o.standard_errors = false;
+  for (int e = 0; e < kNumEffects; ++e)
+    if (static_cast<Effect>(e) != trial && start.on(static_cast<Effect>(e)))
+      o.held_effects.push_back(static_cast<Effect>(e));
+  ++fits_;
+  return fit_effects(model_for(start), *in_, start, windows, {}, o);
+}
+
+std::vector<double> CrossValidator::settled_costs(const EffectSet& at, Effect trial) {
+  FitOptions o = fit_;
+  o.max_iterations = 1;  // the settled costs are read before the fit moves anything
+  o.standard_errors = false;
+  o.settle_anchors = true;
+  for (int e = 0; e < kNumEffects; ++e)
+    if (static_cast<Effect>(e) != trial && at.on(static_cast<Effect>(e)))
+      o.held_effects.push_back(static_cast<Effect>(e));
+  ++fits_;
+  const FitSummary f = fit_effects(model_for(at), *in_, at, {}, {}, o);
+  std::vector<double> out(windows_.size(), 0.0);
+  for (std::size_t i = 0; i < f.fitted_windows.size() && i < f.settled_window_costs.size(); ++i)
+    out[static_cast<std::size_t>(f.fitted_windows[i])] = f.settled_window_costs[i];
+  return out;
+}
+
 FitSummary CrossValidator::fit(const EffectSet& start, const std::vector<int>& train, int max_iterations) {
   FitOptions o = fit_;
   o.max_iterations = max_iterations;

@@ -121,6 +121,15 @@ class CrossValidator {
 
   // fit_effects on `train` (empty = all windows) with max_iterations.
   FitSummary fit(const EffectSet& start, const std::vector<int>& train, int max_iterations);
+  // A screening fit of `trial` alone beside the other effects of `start`
+  // (held at their values) on `windows` (empty = all).
+  FitSummary screen(const EffectSet& start, Effect trial, const std::vector<int>& windows, int max_iterations);
+  // Per window (index order), the fit cost of `at` with the window's anchor
+  // fitted alone (FitSummary::settled_window_costs; 0 for a window a fit
+  // skips). A screening fit's final cost minus the sum of these over its
+  // fitted windows, with `at` = its start with the trial at no-op, is what
+  // the trial removes there, comparable between trials over other windows.
+  std::vector<double> settled_costs(const EffectSet& at, Effect trial);
 
   // The cached model of `set`'s active effects (built on first use).
   const EffectModel& model_for(const EffectSet& set);

@@ -387,6 +387,7 @@ DiagInput crop(const DiagInput& in, double t0_s, double t1_s) {
   if (!(t0_s < t1_s))
     throw std::invalid_argument(fmt::format("{}: empty time range [{}, {}] s", in.track_name, t0_s, t1_s));
   DiagInput c = in;
+  c.fixed_window_starts_s.clear();
   keep_between(c.odo_t_s, {&c.phi_l_rad, &c.phi_r_rad, &c.v_mps, &c.w_radps, &c.cmd_v_mps, &c.cmd_w_radps},
                t0_s, t1_s);
   keep_between(c.gyro_t_s, {&c.gyro_z_radps}, t0_s, t1_s);

@@ -63,6 +63,13 @@ struct DiagInput {
   std::vector<double> ref_w;
   std::size_t ref_gt_samples = 0, ref_fix_samples = 0;  // samples of each source
 
+  // Window starts fixed from outside [s], used by make_windows (window_replay.h)
+  // for windows of fixed_window_s instead of its own rule: a thinned copy of
+  // an input (the selection's, cross_validate.h) keeps its raw input's
+  // windows. Empty: make_windows' rule. Cleared by crop and concatenate.
+  std::vector<double> fixed_window_starts_s;
+  double fixed_window_s = 0.0;
+
   // Weight of reference sample i (1 without ref_w).
   double ref_weight(std::size_t i) const { return ref_w.empty() ? 1.0 : ref_w[i]; }
   bool has_ref_heading() const { return !ref_theta_rad.empty(); }

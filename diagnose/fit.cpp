@@ -110,6 +110,7 @@ class AnchorComposedCost : public ceres::CostFunction {
     const Pose<double> a{blocks[1][0], blocks[1][1], blocks[1][2]};
     const bool want_p = jac && jac[0], want_a = jac && jac[1];
     if (!want_p && !want_a) return evaluate_cost(blocks, a, res);
+    if (!want_p) return evaluate_anchor_jacobian(blocks, a, res, jac[1]);
     using J = ceres::Jet<double, N>;
     std::vector<Pose<J>> local(n);
     {
@@ -158,6 +159,39 @@ class AnchorComposedCost : public ceres::CostFunction {
   }
 
  private:
+  // Residuals and their derivatives by the anchor only (parameters held
+  // constant): the replay in doubles, the anchor's derivatives those of a
+  // rigid motion, as in Evaluate.
+  bool evaluate_anchor_jacobian(double const* const* blocks, const Pose<double>& a, double* res,
+                                double* jac_a) const {
+    const std::size_t n = w_.ref_end - w_.ref_begin;
+    std::vector<double> p = s_->all;
+    for (std::size_t j = 0; j < s_->free_pos.size(); ++j)
+      p[static_cast<std::size_t>(s_->free_pos[j])] = blocks[0][j];
+    std::vector<Pose<double>> local(n);
+    replay_window(*s_->model, p.data(), w_, Pose<double>{0.0, 0.0, 0.0}, s_->in->ref_t_s, local.data(), &a);
+    const double c = std::cos(a.th), sn = std::sin(a.th);
+    const DiagInput& in = *s_->in;
+    const int comps = s_->heading ? 3 : 2;
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t g = w_.ref_begin + i;
+      const double lx = local[i].x, ly = local[i].y;
+      const double val[3] = {a.x + c * lx - sn * ly, a.y + sn * lx + c * ly, a.th + local[i].th};
+      const double ref[3] = {in.ref_x_m[g], in.ref_y_m[g], s_->heading ? in.ref_theta_rad[g] : 0.0};
+      const double ism = s_->inv_sigma_m * std::sqrt(in.ref_weight(g));
+      const double inv[3] = {ism, ism, s_->inv_sigma_rad};
+      const double da[3][3] = {{1.0, 0.0, -sn * lx - c * ly}, {0.0, 1.0, c * lx - sn * ly}, {0.0, 0.0, 1.0}};
+      for (int m = 0; m < comps; ++m) {
+        const ceres::Jet<double, 1> r = robustify(ceres::Jet<double, 1>((val[m] - ref[m]) * inv[m], 0),
+                                                  s_->loss, s_->c);
+        const std::size_t row = i * static_cast<std::size_t>(comps) + static_cast<std::size_t>(m);
+        res[row] = r.a;
+        for (std::size_t q = 0; q < 3; ++q) jac_a[row * 3 + q] = r.v[0] * inv[m] * da[m][q];
+      }
+    }
+    return true;
+  }
+
   // Residuals only (the solver's cost evaluations: trial steps, line
   // search): the same replay in doubles, about N times cheaper than in jets
   // whose derivatives nobody reads. The same arithmetic as the jets' values.
@@ -341,8 +375,11 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
   CostShared sh;
   sh.model = &model;
   sh.in = &in;
+  const auto held_fixed = [&](Effect e) {
+    return std::find(options.held_effects.begin(), options.held_effects.end(), e) != options.held_effects.end();
+  };
   for (std::size_t i = 0; i < layout.size(); ++i)
-    if (layout[i].fitted) {
+    if (layout[i].fitted && !held_fixed(layout[i].effect)) {
       init[i] = std::clamp(init[i], layout[i].lower, layout[i].upper);
       sh.free_pos.push_back(static_cast<int>(i));
     }
@@ -367,6 +404,26 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
 
   ceres::Problem problem;
   const int active = static_cast<int>(sh.free_pos.size()) + (sh.free_anchor ? 3 : 0);
+  // The window's cost at the starting values, its free anchor fitted alone
+  // (a rigid pose against the window's samples converges in a few steps).
+  const auto settle = [&](const Window& w, std::array<double, 3>& anchor) {
+    ceres::Problem alone;
+    const Pose<double> fixed = sh.free_anchor ? Pose<double>{} : reference_pose_at(in, w.t_begin_s);
+    double cost = 0.0;
+    if (sh.free_anchor) {
+      alone.AddResidualBlock(make_cost(active, &sh, w, fixed), nullptr, free_values.data(), anchor.data());
+      alone.SetParameterBlockConstant(free_values.data());
+      ceres::Solver::Options so = diagnosis_solver_options(5);
+      so.function_tolerance = 1e-8;
+      ceres::Solver::Summary summary;
+      ceres::Solve(so, &alone, &summary);
+      cost = summary.final_cost;
+    } else {
+      alone.AddResidualBlock(make_cost(active, &sh, w, fixed), nullptr, free_values.data());
+      alone.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
+    }
+    out.settled_window_costs.push_back(cost);
+  };
   for (std::size_t i = 0; i < train.size(); ++i) {
     const Window& w = windows[static_cast<std::size_t>(train[i])];
     if (sh.free_anchor && !in.has_ref_heading() &&
@@ -377,6 +434,7 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
     out.fitted_windows.push_back(w.index);
     const Pose<double>& a = train_before.anchors[i];
     anchors.push_back({a.x, a.y, a.th});
+    if (options.settle_anchors) settle(w, anchors.back());
   }
   if (out.fitted_windows.empty())
     throw std::invalid_argument("fit: every training window is too short a motion to fit");
@@ -451,7 +509,7 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
   for (std::size_t i = 0, j = 0; i < layout.size(); ++i) {
     FitParam p;
     p.name = layout[i].name;
-    p.fitted = layout[i].fitted;
+    p.fitted = layout[i].fitted && !held_fixed(layout[i].effect);
     p.initial = p.fitted ? init[i] : orig[i];
     p.value = fitted[i];
     p.std_error = std::nan("");
@@ -469,10 +527,12 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
   if (sh.free_anchor)
     for (const auto& a : anchors) out.anchors.push_back({a[0], a[1], a[2]});
 
-  out.train = score(train_before, replay(model, fitted, in, windows, train, nullptr, mode));
+  const std::vector<double> before = options.score_before_at ? pack(*options.score_before_at) : init;
+  out.train = score(options.score_before_at ? replay(model, before, in, windows, train, nullptr, mode) : train_before,
+                    replay(model, fitted, in, windows, train, nullptr, mode));
   std::vector<int> ho(held.begin(), held.end());
   if (!ho.empty())
-    out.heldout = score(replay(model, init, in, windows, ho, nullptr, mode),
+    out.heldout = score(replay(model, before, in, windows, ho, nullptr, mode),
                         replay(model, fitted, in, windows, ho, nullptr, mode));
   else
     out.heldout = score(ReplayResult{}, ReplayResult{});

@@ -50,6 +50,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -77,6 +78,17 @@ struct FitOptions {
   // the model search, which read the cost and the values only: std_error is
   // then NaN and rank_deficient false.
   bool standard_errors = true;
+  // Effects whose parameters the fit holds at their starting values (the
+  // search's screening fits of one new effect beside a fitted set).
+  std::vector<Effect> held_effects;
+  // Free anchors only: before the fit, each window's anchor is fitted alone
+  // with the parameters at their starting values (FitSummary::
+  // settled_window_costs): the start's cost per window at its best anchor.
+  bool settle_anchors = false;
+  // FitSummary's "before" scores at these values (the same structure)
+  // instead of the starting values: a fit warm-started from an earlier fit
+  // still reports nominal -> fitted.
+  std::optional<EffectSet> score_before_at;
   ModelOptions model;
   bool IsValid(std::string* why) const;
 };
@@ -86,7 +98,7 @@ struct FitParam {
   double initial = 0.0;    // starting value (clamped into the bounds)
   double value = 0.0;      // fitted value (= initial when not fitted)
   double std_error = 0.0;  // standard error; NaN when not fitted or rank deficient
-  bool fitted = false;     // false: held fixed (see param_layout)
+  bool fitted = false;     // false: held fixed (see param_layout, FitOptions::held_effects)
   bool at_bound = false;   // the fitted value sits on a bound of its range
 };
 
@@ -116,6 +128,9 @@ struct FitSummary {
   std::vector<int> fitted_windows;    // training windows in the problem
   std::vector<int> skipped_windows;   // training windows left out (free anchor, no motion)
   std::vector<Pose<double>> anchors;  // fitted anchors of fitted_windows (free anchor only)
+  // settle_anchors: per fitted window, the cost at the starting values with
+  // its anchor fitted alone (1/2 sum of robustified r^2).
+  std::vector<double> settled_window_costs;
   SetScore train, heldout;
 };
 

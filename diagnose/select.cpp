@@ -89,8 +89,15 @@ bool covers(const std::vector<std::vector<double>>& acting, const std::vector<in
 // The final model (select.h) on the selection input `fit_in` (same windows
 // as `raw`, which decides the split).
 void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vector<Window>& windows,
-                 const SelectOptions& o, const std::vector<Effect>& chosen, Selection& sel) {
+                 const SelectOptions& o, const std::vector<Effect>& chosen, const EffectSet& warm,
+                 Selection& sel) {
   const EffectSet& s = sel.structure;
+  // From where the search's all-window fit of the set ended: a parameter
+  // started at its no-op bound (a lag's tau = 0) can stay there while
+  // another effect takes its share.
+  const EffectSet start = start_from(s, warm);
+  FitOptions fo_final = o.fit;
+  fo_final.score_before_at = s;  // scores nominal -> fitted
   const int n = static_cast<int>(windows.size());
   const int n_held = std::clamp(static_cast<int>(std::lround(o.heldout_fraction * n)), 1, n - 1);
   // phase < 0: the last n_held windows; else n_held windows spread evenly,
@@ -109,7 +116,7 @@ void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vecto
   bool alt_split = !covers(acting, sel.train_windows, sel.heldout_windows);
   if (!alt_split) {
     ++sel.timing.fits;
-    sel.final_fit = fit_effects(fit_in, s, sel.train_windows, sel.heldout_windows, o.fit);
+    sel.final_fit = fit_effects(fit_in, start, sel.train_windows, sel.heldout_windows, fo_final);
     alt_split = sel.final_fit.rank_deficient;
   }
   if (alt_split) {
@@ -124,7 +131,7 @@ void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vecto
     }
     split(phase, tr, ho);
     ++sel.timing.fits;
-    FitSummary f = fit_effects(fit_in, s, tr, ho, o.fit);
+    FitSummary f = fit_effects(fit_in, start, tr, ho, fo_final);
     if (!f.rank_deficient || sel.final_fit.params.empty()) {
       sel.final_fit = std::move(f);
       sel.train_windows = tr, sel.heldout_windows = ho, sel.split = "interleaved";
@@ -144,7 +151,7 @@ void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vecto
   std::vector<std::exception_ptr> failed(chosen.size());  // rethrown in order, outside the threads
 #pragma omp parallel for schedule(dynamic, 1) if (n_chosen > 1)
   for (long i = 0; i < n_chosen; ++i) {
-    EffectSet without = s;
+    EffectSet without = start;
     without.disable(chosen[static_cast<std::size_t>(i)]);
     try {
       if (!without.empty())
@@ -249,6 +256,9 @@ SelectionInput selection_input(const DiagInput& in, const SelectOptions& o) {
   const int stride = denoised_reference(in, o.select_ref_rate_hz, o.smooth_half_s, o.smooth_heading_half_s,
                                         o.fit.model, si.input, correlated);
   if (stride > 1) {
+    // The raw input's windows (its gap rule reads the reference's own period).
+    si.input.fixed_window_starts_s = window_starts(in, window_s);
+    si.input.fixed_window_s = window_s;
     const std::vector<Window> wf = make_windows(in, window_s), wt = make_windows(si.input, window_s);
     bool same = wt.size() == wf.size();
     for (std::size_t i = 0; same && i < wt.size(); ++i)
@@ -338,7 +348,7 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
   sel.timing.fits = cv.fits();
   if (!z.chosen.empty()) {
     t0 = Clock::now();
-    final_model(in_full, *in, windows_full, o, z.chosen, sel);
+    final_model(in_full, *in, windows_full, o, z.chosen, z.cur_full.fitted, sel);
     sel.timing.final_s = since(t0);
   }
   for (SelectedEffect& e : sel.effects)

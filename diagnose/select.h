@@ -159,14 +159,21 @@
 // SearchRecords of phase "swap".
 //
 // Discrete parameters, chosen on all windows before cross-validation (so
-// the held-out fold saw the choice of one or four numbers; BIC counts them):
-//  * radius_step.t: profile search of the robust fit cost (fit_effects'
-//    final cost, profile_max_iterations) over [start + head, end of the
-//    last window - coarse/2], head = the shorter of step_head_s and the
+// the held-out fold saw the choice of one or four numbers; BIC counts them).
+// Each trial is a screening fit: the new effect's own parameters alone, the
+// current set held at its all-window fit, on the windows where the trial
+// can act (after the step time; near the box); its cost is what it removes
+// there: its final cost minus those windows' costs without it, each window's
+// anchor fitted (CrossValidator::settled_costs), so that trials over
+// different windows compare. The chosen set is then
+// cross-validated with every parameter free.
+//  * radius_step.t: profile search of that cost over [start + head, end of
+//    the last window - coarse/2], head = the shorter of step_head_s and the
 //    first window (earlier, a step is a radius_error): a grid of
 //    coarse = step_coarse_s (head/2 by default), but at least 1/32 of
-//    that span (so the number of fits, each as long as the track, does not
-//    grow with it: the search costs linear time), then +-0.6 coarse in steps
+//    the time the windows cover in that span (gaps between pooled
+//    recordings skipped; so the number of fits does not grow with the
+//    track: the search costs linear time), then +-0.6 coarse in steps
 //    of coarse/5, then each level +- the last step in steps of a fifth of
 //    it (at least step_fine_s) down to step_fine_s (with the default coarse
 //    step: +-coarse/5 in steps of step_fine_s). The points of a level are
@@ -176,8 +183,8 @@
 //    refine +-0.4 coarse, then finely.
 //  * slip_zone box (choose_zone_box, zone_boxes.h): zone_candidates on the all-window
 //    residuals of the current set, plus SelectOptions::zone_boxes (e.g. from
-//    locate.h); each box is fitted (s_l, s_r with S) on all windows, the
-//    lowest cost wins, and its edges are refined by coordinate search on the
+//    locate.h); each box is screened (s_l, s_r beside S, on the windows
+//    that come within 1 m of it), the lowest cost wins, and its edges are refined by coordinate search on the
 //    fit cost in steps of half the box's own grid cell (zone_boxes.h: boxes
 //    come from grids of 1, 2 and 4 zone_cell_m) halved down to zone_cell_m/4
 //    (up to 4 rounds each,

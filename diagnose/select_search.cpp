@@ -82,10 +82,11 @@ namespace {
 
 constexpr double kMaxCoarseSteps = 32.0;  // radius_step.t coarse grid (profile_step_time)
 
-// radius_step.t by profile search of the all-window fit cost (select.h).
-// The points of one grid level are fitted in parallel (OpenMP), each
-// warm-started from the same fit (the current set's, then the best point's
-// of the level before), so the result does not depend on the thread count.
+// radius_step.t by profile search of the screening cost (select.h,
+// "Discrete parameters"). The points of one grid level are fitted in
+// parallel (OpenMP), each warm-started from the same fit (the current set's,
+// then the best point's of the level before), so the result does not depend
+// on the thread count.
 double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet& s_fitted, double prev_t,
                          const SelectOptions& o) {
   // Earlier, a step is a radius_error: the first step_head_s of the track, or
@@ -95,7 +96,10 @@ double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet
   const Window& first = cv.windows().front();
   const double head = std::min(o.step_head_s, first.t_end_s - first.t_begin_s);
   const double lo = first.t_begin_s + head;
-  const double span = cv.windows().back().t_end_s - lo;
+  // The time the windows cover after lo: gaps between windows (between
+  // pooled recordings, or in the reference) hold no step time worth a fit.
+  double span = 0.0;
+  for (const Window& w : cv.windows()) span += std::max(0.0, w.t_end_s - std::max(w.t_begin_s, lo));
   // At most kMaxCoarseSteps coarse steps: on long tracks the coarse step
   // grows with the track, so the count of fits (each costing the track's
   // length) stays bounded and the search costs linear time.
@@ -103,6 +107,15 @@ double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet
   const double hi = cv.windows().back().t_end_s - 0.5 * coarse;
   if (!(hi > lo)) return kNaN;
   std::map<double, std::pair<double, EffectSet>> seen;  // t -> (cost, fitted)
+  // Each window's settled cost without a step (a no-op step at any time).
+  std::vector<double> settled;
+  try {
+    settled = cv.settled_costs(
+        start_from(with_effect(s, Effect::radius_step), s_fitted).set(Effect::radius_step, "t", lo),
+        Effect::radius_step);
+  } catch (const std::exception&) {
+    return kNaN;
+  }
   // Fits the times not seen yet, all from `warm`.
   auto costs = [&](std::vector<double> ts, const EffectSet& warm) {
     for (double& t : ts) t = std::clamp(t, lo, hi);
@@ -114,9 +127,18 @@ double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet
     for (std::size_t i = 0; i < ts.size(); ++i) {
       EffectSet st = with_effect(s, Effect::radius_step);
       st.set(Effect::radius_step, "t", ts[i]);
+      // The step's scales alone, the current set held at its fit, on the
+      // windows after t (before it the step changes nothing); the cost is
+      // what the step removes, negative.
+      std::vector<int> after;
+      for (const Window& w : cv.windows())
+        if (w.t_end_s > ts[i]) after.push_back(w.index);
       try {
-        const FitSummary f = cv.fit(start_from(st, warm), {}, o.profile_max_iterations);
-        if (std::isfinite(f.final_cost)) res[i] = {f.final_cost, f.effects};
+        const FitSummary f = cv.screen(start_from(st, warm), Effect::radius_step, after,
+                                       o.profile_max_iterations);
+        double base = 0.0;
+        for (int w : f.fitted_windows) base += settled[static_cast<std::size_t>(w)];
+        if (std::isfinite(f.final_cost)) res[i] = {f.final_cost - base, f.effects};
       } catch (const std::exception&) {
       }
     }
@@ -131,8 +153,12 @@ double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet
   if (std::isfinite(prev_t)) {
     costs({prev_t}, s_fitted);
   } else {
-    std::vector<double> grid;
-    for (double t = lo; t <= hi + 1e-9; t += coarse) grid.push_back(t);
+    std::vector<double> grid;  // every coarse step of covered time, a gap skipped to the next window
+    double t = lo;
+    for (const Window& w : cv.windows()) {
+      t = std::max(t, w.t_begin_s);
+      for (; t <= std::min(w.t_end_s, hi + 1e-9); t += coarse) grid.push_back(t);
+    }
     costs(grid, s_fitted);
   }
   // Refinement: steps of coarse/5 over +-0.6 coarse (+-0.4 from a previous

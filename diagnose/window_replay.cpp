@@ -75,7 +75,7 @@ Rigid align(const std::vector<Pose<double>>& pred, const DiagInput& in, const Wi
 
 }  // namespace
 
-std::vector<Window> make_windows(const DiagInput& in, double window_s) {
+std::vector<double> window_starts(const DiagInput& in, double window_s) {
   if (!(std::isfinite(window_s) && window_s >= 0.0))
     throw std::invalid_argument(fmt::format("window_s = {}; expected a number >= 0 s (0 = one window)",
                                             window_s));
@@ -84,9 +84,9 @@ std::vector<Window> make_windows(const DiagInput& in, double window_s) {
   if (ot.size() < 2 || rt.empty())
     throw std::invalid_argument(fmt::format("track '{}': no odometry or no reference to window",
                                             in.track_name));
+  if (!in.fixed_window_starts_s.empty() && window_s == in.fixed_window_s) return in.fixed_window_starts_s;
   const double t0 = std::max(ot.front(), rt.front()), t_last = rt.back();
   const bool heading = in.has_ref_heading();
-  const std::size_t min_ref = heading ? 1 : 3;
   double count = 1.0;
   if (window_s > 0.0) count = std::max(1.0, std::ceil((t_last - t0) / window_s - 1e-9));
   if (count > kMaxWindows)
@@ -126,6 +126,16 @@ std::vector<Window> make_windows(const DiagInput& in, double window_s) {
     }
     starts = std::move(kept);
   }
+  return starts;
+}
+
+std::vector<Window> make_windows(const DiagInput& in, double window_s) {
+  const std::vector<double> starts = window_starts(in, window_s);
+  const auto& ot = in.odo_t_s;
+  const auto& rt = in.ref_t_s;
+  const double t_last = rt.back();
+  const bool heading = in.has_ref_heading();
+  const std::size_t min_ref = heading ? 1 : 3;
   std::vector<Window> out;
   for (std::size_t j = 0; j < starts.size(); ++j) {
     const double s = starts[j];

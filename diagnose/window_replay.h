@@ -67,6 +67,10 @@ struct Window {
 // Throws std::invalid_argument for window_s < 0 or not finite.
 std::vector<Window> make_windows(const DiagInput& in, double window_s);
 
+// The nominal window starts make_windows cuts at [s] (DiagInput::
+// fixed_window_starts_s when they are set for window_s); throws as make_windows.
+std::vector<double> window_starts(const DiagInput& in, double window_s);
+
 // True when windows are anchored on the reference pose (reference with heading).
 inline bool anchored_on_reference(const DiagInput& in) { return in.has_ref_heading(); }
 

@@ -28,6 +28,27 @@ constexpr double kRefineCost = 11.23;
 // by less than this is not determined by the data: half the 95 % point of a
 // chi-square with one degree of freedom (3.84).
 constexpr double kFlatCost = 1.92;
+// Windows whose reference or predicted path comes this close to a box [m]
+// take part in its fit: a refinement move shifts an edge by at most a cell,
+// and the prediction strays from the reference by its residual.
+constexpr double kZoneReachM = 1.0;
+
+// Windows of cv with a scored sample (reference or cur's prediction) within
+// reach_m of box b.
+std::vector<int> windows_near(const CrossValidator& cv, const SetEval& cur, const ZoneBox& b, double reach_m) {
+  const DiagInput& in = cv.input();
+  const auto near = [&](double x, double y) {
+    return x >= b.x0_m - reach_m && x <= b.x1_m + reach_m && y >= b.y0_m - reach_m && y <= b.y1_m + reach_m;
+  };
+  std::vector<int> out;
+  for (const Window& w : cv.windows())
+    for (std::size_t g = w.ref_begin; g < w.ref_end; ++g)
+      if (near(in.ref_x_m[g], in.ref_y_m[g]) || near(cur.pred.x_m[g], cur.pred.y_m[g])) {
+        out.push_back(w.index);
+        break;
+      }
+  return out;
+}
 
 }  // namespace
 
@@ -268,16 +289,38 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
     return inside_share(cv.input(), cv.windows(), b) > o.max_share;
   };
   boxes.erase(std::remove_if(boxes.begin(), boxes.end(), too_wide), boxes.end());
-  EffectSet warm = cur_full.fitted;
+  // A box's cost is measured from the windows' settled costs without slip
+  // (the same for every box: slips at no-op act nowhere), so that its fit
+  // may start from the best box's slips so far (`warm`).
+  const EffectSet& start = cur_full.fitted;
+  EffectSet warm = start;
+  std::vector<double> settled;
+  if (!boxes.empty()) {
+    EffectSet at = start_from(s, start).enable(Effect::slip_zone);
+    at.set(Effect::slip_zone, "x0", boxes[0].x0_m).set(Effect::slip_zone, "x1", boxes[0].x1_m);
+    at.set(Effect::slip_zone, "y0", boxes[0].y0_m).set(Effect::slip_zone, "y1", boxes[0].y1_m);
+    try {
+      settled = cv.settled_costs(at, Effect::slip_zone);
+    } catch (const std::exception&) {
+      return {};
+    }
+  }
+  // A box's cost: the current set's fit cost (0 here) minus what its slips
+  // remove, fitted alone on the windows that come near the box (elsewhere
+  // the slips act nowhere and no window's cost changes).
   auto try_box = [&](const ZoneBox& b, double& cost, EffectSet& fitted) {
     EffectSet st = s;
     st.enable(Effect::slip_zone);
     st.set(Effect::slip_zone, "x0", b.x0_m).set(Effect::slip_zone, "x1", b.x1_m);
     st.set(Effect::slip_zone, "y0", b.y0_m).set(Effect::slip_zone, "y1", b.y1_m);
     cost = kInf;
+    const std::vector<int> near = windows_near(cv, cur_full, b, kZoneReachM);
+    if (near.empty()) return st;
     try {
-      const FitSummary f = cv.fit(start_from(st, warm), {}, o.max_iterations);
-      if (std::isfinite(f.final_cost)) cost = f.final_cost, fitted = f.effects;
+      const FitSummary f = cv.screen(start_from(st, warm), Effect::slip_zone, near, o.max_iterations);
+      double base = 0.0;
+      for (int w : f.fitted_windows) base += settled[static_cast<std::size_t>(w)];
+      if (std::isfinite(f.final_cost)) cost = f.final_cost - base, fitted = f.effects;
     } catch (const std::exception&) {
     }
     return st;
@@ -294,17 +337,9 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
       if (costs[i] < best_cost) best_cost = costs[i], best = sets[i], best_fit = fits[i], bb = boxes[i];
   }
   if (best.empty()) return best;
-  if (std::max(best_fit.get(Effect::slip_zone, "s_l"), best_fit.get(Effect::slip_zone, "s_r")) < kMinZoneSlip) {
-    // The current set's own cost; for the nominal model (no fitted cost) a
-    // box far off the path, whose slips act nowhere.
-    double ref_cost = cur_full.cost, unused = kInf;
-    if (!std::isfinite(ref_cost)) {
-      EffectSet far_fit;
-      try_box({9e3, 9e3 + 1.0, 9e3, 9e3 + 1.0, 0.0, o.cell_m}, unused, far_fit);  // within the table's +-1e4 m
-      ref_cost = unused;
-    }
-    if (!(ref_cost - best_cost >= kRefineCost)) return best;
-  }
+  if (std::max(best_fit.get(Effect::slip_zone, "s_l"), best_fit.get(Effect::slip_zone, "s_r")) < kMinZoneSlip &&
+      !(-best_cost >= kRefineCost))
+    return best;
   warm = best_fit;
   // Coordinate search, first improvement in the order (edge, sign). The
   // moves left in a round are fitted speculatively in parallel from the
@@ -343,7 +378,7 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
             sets[i] = try_box(qs[i], costs[i], fits[i]);
         std::size_t taken = qs.size();
         for (std::size_t i = 0; i < qs.size() && taken == qs.size(); ++i)
-          if (costs[i] < best_cost * (1.0 - 1e-6)) taken = i;
+          if (costs[i] < best_cost - 1e-6 * std::abs(best_cost)) taken = i;
         if (taken == qs.size()) break;
         best_cost = costs[taken], best = sets[taken], bb = qs[taken], warm = fits[taken], moved = 1;
         left.erase(left.begin(), left.begin() + static_cast<long>(taken) + 1);

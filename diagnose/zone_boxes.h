@@ -81,9 +81,11 @@ struct ZoneSearchOptions {
 // slip zone is a place, and a box over most of the path fits a radius error
 // as well as radius_error does (a pooled fit of three recordings with a 1 %
 // radius error chose a coarse box over half the map, slips 0.01); each is fitted (s_l, s_r
-// with s, warm-started from cur_full.fitted) on all of cv's windows and the
-// lowest fit cost wins. Unless its slips both stay below 0.01 and its fit
-// cost fell by less than 11.23 below the current set's (a box from noise; a
+// beside s held at cur_full.fitted) on the windows of cv whose reference or
+// predicted path comes within 1 m of it, and the lowest cost (the fit's final
+// cost minus those windows' settled costs without slip: what the slips
+// remove, CrossValidator::settled_costs) wins. Unless its slips both stay
+// below 0.01 and its cost is above -11.23 (a box from noise; a
 // box larger than the patch dilutes the slip), its edges are then refined by coordinate search on the fit cost
 // in steps of half the box's own grid cell (ZoneBox::cell_m, at least
 // cell_m), halved down to cell_m/4 (up to 4 rounds each; a round moves

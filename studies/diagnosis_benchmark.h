@@ -51,10 +51,9 @@
 namespace odotune {
 
 // The docs run's seed (never used while developing; development: 1001-1004).
-// 20261125 was the docs seed of issue 15's first two runs; it was retired
-// once its failure list had been read while developing (docs/diagnosis/
-// benchmark.md, "Seeds").
-inline constexpr std::uint64_t kDocsSeed = 20261126;
+// 20261125 and 20261126 were earlier docs seeds, retired once their failure
+// lists had been read (docs/diagnosis/benchmark.md, "Seeds").
+inline constexpr std::uint64_t kDocsSeed = 20261127;
 
 struct DiagnosisBenchmarkOptions {
   int cases = 300;                           // 1..100000

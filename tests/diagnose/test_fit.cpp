@@ -316,6 +316,28 @@ TEST(Fit, PrebuiltModelGivesTheSameFit) {
   EXPECT_THROW(fit_effects(EffectModel(other, skid), in, skid, {}, {}), std::invalid_argument);
 }
 
+TEST(Fit, HeldEffectsKeepTheirValuesAndTheOthersAreFitted) {
+  SimTrackOptions o;
+  o.duration_s = 60.0;
+  o.seed = 9;
+  o.effects = {"radius_error:scale_l=0.99,scale_r=1.01", "lateral_skid:k=0.03"};
+  const DiagInput in = build_diag_input(simulate_track(o));
+  FitOptions fo;
+  fo.held_effects = {Effect::lateral_skid};
+  const EffectSet start = EffectSet::parse({"radius_error", "lateral_skid:k=0.02"});
+  const FitSummary f = fit_effects(in, start, {}, {}, fo);
+  EXPECT_EQ(f.effects.get(Effect::lateral_skid, "k"), 0.02);
+  EXPECT_NEAR(f.effects.get(Effect::radius_error, "scale_l"), 0.99, 0.002);
+  EXPECT_NEAR(f.effects.get(Effect::radius_error, "scale_r"), 1.01, 0.002);
+  for (const FitParam& p : f.params) {
+    EXPECT_EQ(p.fitted, p.name.rfind("radius_error.", 0) == 0) << p.name;
+    EXPECT_EQ(std::isfinite(p.std_error), p.fitted) << p.name;
+  }
+  // Every parameter held: nothing left to fit.
+  fo.held_effects = {Effect::radius_error, Effect::lateral_skid};
+  EXPECT_THROW(fit_effects(in, start, {}, {}, fo), std::invalid_argument);
+}
+
 TEST(Fit, ZoneNeverEnteredIsRankDeficientNotACrash) {
   SimTrackOptions o;
   o.duration_s = 50.0;

@@ -238,6 +238,41 @@ TEST(SelectOptions, FixesWindowsHoldEnoughSamples) {
   EXPECT_DOUBLE_EQ(selection_window_s(short_track, plain), 20.0);
 }
 
+TEST(SelectionInput, ThinnedReferenceWithDropoutsKeepsTheRawWindows) {
+  DiagInput in = simulated(sim_options(44, 200.0, {}));
+  // Dropouts as MRCLAM's Vicon has them: one where a window would start
+  // (it moves that start), one longer than a quarter window (it cuts one).
+  const auto drop = [&](double t0, double t1) {
+    for (std::size_t i = in.ref_t_s.size(); i-- > 0;)
+      if (in.ref_t_s[i] > t0 && in.ref_t_s[i] < t1) {
+        const auto at = static_cast<long>(i);
+        in.ref_t_s.erase(in.ref_t_s.begin() + at), in.ref_x_m.erase(in.ref_x_m.begin() + at);
+        in.ref_y_m.erase(in.ref_y_m.begin() + at), in.ref_theta_rad.erase(in.ref_theta_rad.begin() + at);
+      }
+  };
+  const double t0 = std::max(in.odo_t_s.front(), in.ref_t_s.front());
+  drop(t0 + 39.97, t0 + 40.08);
+  drop(t0 + 100.0, t0 + 106.5);
+  const SelectOptions so;
+  const std::vector<Window> raw = make_windows(in, so.fit.window_s);
+  const SelectionInput si = selection_input(in, so);
+  EXPECT_GT(si.stride, 1);
+  EXPECT_LT(si.input.ref_t_s.size(), in.ref_t_s.size() / 2);
+  const std::vector<Window> thin = make_windows(si.input, so.fit.window_s);
+  ASSERT_EQ(thin.size(), raw.size());
+  for (std::size_t w = 0; w < raw.size(); ++w) {
+    EXPECT_EQ(thin[w].t_begin_s, raw[w].t_begin_s) << w;
+    EXPECT_EQ(thin[w].node_begin, raw[w].node_begin) << w;
+  }
+  // The raw rule itself moved a start: the windows are not on the 20 s grid.
+  bool moved = false;
+  for (const Window& w : raw) moved = moved || std::abs(std::remainder(w.t_begin_s - t0, 20.0)) > 0.05;
+  EXPECT_TRUE(moved);
+  // Another window length, or a crop, cuts by the rule again.
+  EXPECT_NO_THROW(make_windows(si.input, 30.0));
+  EXPECT_TRUE(crop(si.input, t0, t0 + 150.0).fixed_window_starts_s.empty());
+}
+
 // ---- selection --------------------------------------------------------------
 
 TEST(Select, NoEffectGivesNoFindingOverSeeds) {
