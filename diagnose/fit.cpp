@@ -528,7 +528,8 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
     for (const auto& a : anchors) out.anchors.push_back({a[0], a[1], a[2]});
 
   const std::vector<double> before = options.score_before_at ? pack(*options.score_before_at) : init;
-  out.train = score(options.score_before_at ? replay(model, before, in, windows, train, nullptr, mode) : train_before,
+  out.train = score(options.score_before_at ? replay(model, before, in, windows, train, nullptr, mode)
+                                            : train_before,
                     replay(model, fitted, in, windows, train, nullptr, mode));
   std::vector<int> ho(held.begin(), held.end());
   if (!ho.empty())
