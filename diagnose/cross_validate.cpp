@@ -167,14 +167,25 @@ CrossValidator::CrossValidator(const DiagInput& in, const FitOptions& fit, int f
   for (const Window& w : windows_) n_samples_ += w.ref_end - w.ref_begin;
 }
 
+namespace {
+
+// The effects of `set` other than `trial`.
+std::vector<Effect> others(const EffectSet& set, Effect trial) {
+  std::vector<Effect> out;
+  for (int e = 0; e < kNumEffects; ++e)
+    if (static_cast<Effect>(e) != trial && set.on(static_cast<Effect>(e)))
+      out.push_back(static_cast<Effect>(e));
+  return out;
+}
+
+}  // namespace
+
 FitSummary CrossValidator::screen(const EffectSet& start, Effect trial, const std::vector<int>& windows,
                                   int max_iterations) {
   FitOptions o = fit_;
   o.max_iterations = max_iterations;
   o.standard_errors = false;
-  for (int e = 0; e < kNumEffects; ++e)
-    if (static_cast<Effect>(e) != trial && start.on(static_cast<Effect>(e)))
-      o.held_effects.push_back(static_cast<Effect>(e));
+  o.held_effects = others(start, trial);
   ++fits_;
   return fit_effects(model_for(start), *in_, start, windows, {}, o);
 }
@@ -184,9 +195,7 @@ std::vector<double> CrossValidator::settled_costs(const EffectSet& at, Effect tr
   o.max_iterations = 1;  // the settled costs are read before the fit moves anything
   o.standard_errors = false;
   o.settle_anchors = true;
-  for (int e = 0; e < kNumEffects; ++e)
-    if (static_cast<Effect>(e) != trial && at.on(static_cast<Effect>(e)))
-      o.held_effects.push_back(static_cast<Effect>(e));
+  o.held_effects = others(at, trial);
   ++fits_;
   const FitSummary f = fit_effects(model_for(at), *in_, at, {}, {}, o);
   std::vector<double> out(windows_.size(), 0.0);

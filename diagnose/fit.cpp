@@ -110,7 +110,10 @@ class AnchorComposedCost : public ceres::CostFunction {
     const Pose<double> a{blocks[1][0], blocks[1][1], blocks[1][2]};
     const bool want_p = jac && jac[0], want_a = jac && jac[1];
     if (!want_p && !want_a) return evaluate_cost(blocks, a, res);
-    if (!want_p) return evaluate_anchor_jacobian(blocks, a, res, jac[1]);
+    if (!want_p) {
+      evaluate_doubles(blocks, a, res, jac[1]);
+      return true;
+    }
     using J = ceres::Jet<double, N>;
     std::vector<Pose<J>> local(n);
     {
@@ -159,54 +162,11 @@ class AnchorComposedCost : public ceres::CostFunction {
   }
 
  private:
-  // Residuals and their derivatives by the anchor only (parameters held
-  // constant): the replay in doubles, the anchor's derivatives those of a
-  // rigid motion, as in Evaluate.
-  bool evaluate_anchor_jacobian(double const* const* blocks, const Pose<double>& a, double* res,
-                                double* jac_a) const {
+  // Residuals and, when jac_a is given, their derivatives by the anchor
+  // (parameters held constant: the anchor's are those of a rigid motion, as
+  // in Evaluate): the replay in doubles, the same arithmetic as the jets' values.
+  void evaluate_doubles(double const* const* blocks, const Pose<double>& a, double* res, double* jac_a) const {
     const std::size_t n = w_.ref_end - w_.ref_begin;
-    std::vector<double> p = s_->all;
-    for (std::size_t j = 0; j < s_->free_pos.size(); ++j)
-      p[static_cast<std::size_t>(s_->free_pos[j])] = blocks[0][j];
-    std::vector<Pose<double>> local(n);
-    replay_window(*s_->model, p.data(), w_, Pose<double>{0.0, 0.0, 0.0}, s_->in->ref_t_s, local.data(), &a);
-    const double c = std::cos(a.th), sn = std::sin(a.th);
-    const DiagInput& in = *s_->in;
-    const int comps = s_->heading ? 3 : 2;
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t g = w_.ref_begin + i;
-      const double lx = local[i].x, ly = local[i].y;
-      const double val[3] = {a.x + c * lx - sn * ly, a.y + sn * lx + c * ly, a.th + local[i].th};
-      const double ref[3] = {in.ref_x_m[g], in.ref_y_m[g], s_->heading ? in.ref_theta_rad[g] : 0.0};
-      const double ism = s_->inv_sigma_m * std::sqrt(in.ref_weight(g));
-      const double inv[3] = {ism, ism, s_->inv_sigma_rad};
-      const double da[3][3] = {{1.0, 0.0, -sn * lx - c * ly}, {0.0, 1.0, c * lx - sn * ly}, {0.0, 0.0, 1.0}};
-      for (int m = 0; m < comps; ++m) {
-        const ceres::Jet<double, 1> r = robustify(ceres::Jet<double, 1>((val[m] - ref[m]) * inv[m], 0),
-                                                  s_->loss, s_->c);
-        const std::size_t row = i * static_cast<std::size_t>(comps) + static_cast<std::size_t>(m);
-        res[row] = r.a;
-        for (std::size_t q = 0; q < 3; ++q) jac_a[row * 3 + q] = r.v[0] * inv[m] * da[m][q];
-      }
-    }
-    return true;
-  }
-
-  // Residuals only (the solver's cost evaluations: trial steps, line
-  // search): the same replay in doubles, about N times cheaper than in jets
-  // whose derivatives nobody reads. The same arithmetic as the jets' values.
-  // The last cost evaluation is remembered: Ceres' projected line search
-  // evaluates the full trust-region step, and then the minimizer evaluates
-  // the same point again (ComputeCandidatePointAndEvaluateCost).
-  bool evaluate_cost(double const* const* blocks, const Pose<double>& a, double* res) const {
-    const std::size_t n = w_.ref_end - w_.ref_begin, k = s_->free_pos.size();
-    const int comps_n = s_->heading ? 3 : 2;
-    std::vector<double> key(blocks[0], blocks[0] + k);
-    key.insert(key.end(), blocks[1], blocks[1] + 3);
-    if (key == memo_key_) {
-      std::copy(memo_res_.begin(), memo_res_.end(), res);
-      return true;
-    }
     std::vector<double> p = s_->all;
     for (std::size_t j = 0; j < s_->free_pos.size(); ++j)
       p[static_cast<std::size_t>(s_->free_pos[j])] = blocks[0][j];
@@ -223,12 +183,35 @@ class AnchorComposedCost : public ceres::CostFunction {
       // Residual scaling: the same as Evaluate's (this sample's own sigma).
       const double ism = s_->inv_sigma_m * std::sqrt(in.ref_weight(g));
       const double inv[3] = {ism, ism, s_->inv_sigma_rad};
-      for (int m = 0; m < comps; ++m)
-        res[i * static_cast<std::size_t>(comps) + static_cast<std::size_t>(m)] =
-            robustify(ceres::Jet<double, 1>((val[m] - ref[m]) * inv[m], 0), s_->loss, s_->c).a;
+      const double da[3][3] = {{1.0, 0.0, -sn * lx - c * ly}, {0.0, 1.0, c * lx - sn * ly}, {0.0, 0.0, 1.0}};
+      for (int m = 0; m < comps; ++m) {
+        const ceres::Jet<double, 1> r = robustify(ceres::Jet<double, 1>((val[m] - ref[m]) * inv[m], 0),
+                                                  s_->loss, s_->c);
+        const std::size_t row = i * static_cast<std::size_t>(comps) + static_cast<std::size_t>(m);
+        res[row] = r.a;
+        if (jac_a)
+          for (std::size_t q = 0; q < 3; ++q) jac_a[row * 3 + q] = r.v[0] * inv[m] * da[m][q];
+      }
     }
+  }
+
+  // Residuals only (the solver's cost evaluations: trial steps, line
+  // search): the replay in doubles, about N times cheaper than in jets
+  // whose derivatives nobody reads. The last cost evaluation is remembered:
+  // Ceres' projected line search evaluates the full trust-region step, and
+  // then the minimizer evaluates the same point again
+  // (ComputeCandidatePointAndEvaluateCost).
+  bool evaluate_cost(double const* const* blocks, const Pose<double>& a, double* res) const {
+    const std::size_t n = w_.ref_end - w_.ref_begin, k = s_->free_pos.size();
+    std::vector<double> key(blocks[0], blocks[0] + k);
+    key.insert(key.end(), blocks[1], blocks[1] + 3);
+    if (key == memo_key_) {
+      std::copy(memo_res_.begin(), memo_res_.end(), res);
+      return true;
+    }
+    evaluate_doubles(blocks, a, res, nullptr);
     memo_key_ = std::move(key);
-    memo_res_.assign(res, res + n * static_cast<std::size_t>(comps_n));
+    memo_res_.assign(res, res + n * static_cast<std::size_t>(s_->heading ? 3 : 2));
     return true;
   }
 

@@ -14,14 +14,7 @@ BIN=${BIN:-build/odotune}
 mkdir -p "$OUT/tracks"
 T=$OUT/tracks
 "$BIN" import litw "$REAL/utias_lost_in_the_woods/derived/litw_series.csv" -o "$T/litw.csv" > /dev/null
-# The first data row's and the last row's time; rows split at their middle.
-read -r t0 t1 < <(awk -F, '!/^#/ && $1 ~ /^[0-9.]+$/ {if (!n++) a = $1; b = $1} END {print a, b}' "$T/litw.csv")
-for half in first second; do
-  awk -F, -v mid="$(echo "$t0 $t1" | awk '{print ($1 + $2) / 2}')" -v half=$half '
-    /^# name:/ {print $0 "-" half "-half"; next}
-    /^#/ || $1 !~ /^[0-9.]+$/ {print; next}
-    (half == "first" && $1 < mid) || (half == "second" && $1 >= mid) {print}' "$T/litw.csv" > "$T/litw-$half-half.csv"
-done
+bash scripts/split-track-halves.sh "$T/litw.csv" "$T/litw"
 echo "== litw-halves (first half fitted, second half held out)" | tee "$OUT/litw-halves.txt"
 t=$SECONDS
 "$BIN" diagnose "$T/litw-first-half.csv" --heldout "$T/litw-second-half.csv" --json "$OUT/litw-halves.json" 2>&1 |
