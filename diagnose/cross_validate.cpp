@@ -355,19 +355,13 @@ SetEval CrossValidator::own_noop(const SetEval& cv, Effect e) {
 }
 
 CrossValidator::Replayed CrossValidator::replayed(const SetEval& cv) {
-  double sp = 0.0, sh = 0.0, n = 0.0;
+  PooledError p;
   for (std::size_t f = 0; f < test_.size(); ++f) {
     const EffectSet set = f < cv.folds.size() ? cv.folds[f] : EffectSet{};
-    const ReplayResult r = replay(model_for(set), pack(set), *in_, windows_, test_[f]);
-    for (const WindowError& w : r.windows) {
-      const auto k = static_cast<double>(w.n_ref);
-      sp += k * w.pos_rmse_m * w.pos_rmse_m;
-      sh += k * w.heading_rmse_rad * w.heading_rmse_rad;
-      n += k;
-    }
+    p.add(replay(model_for(set), pack(set), *in_, windows_, test_[f]));
   }
   Replayed out;
-  if (n > 0.0) out.pos_rmse_m = std::sqrt(sp / n), out.heading_rmse_rad = std::sqrt(sh / n);
+  if (!p.empty()) out.pos_rmse_m = p.pos_rmse_m(), out.heading_rmse_rad = p.heading_rmse_rad();
   return out;
 }
 

@@ -50,14 +50,10 @@ double sq(double v) { return v * v; }
 // (windows replay independently, so this equals replaying only `which`);
 // NaN for no window.
 double pooled_pos_rmse(const ReplayResult& r, const std::vector<int>& which) {
-  double sum = 0.0;
-  std::size_t n = 0;
+  PooledError p;
   for (const WindowError& w : r.windows)
-    if (std::find(which.begin(), which.end(), w.window) != which.end()) {
-      sum += static_cast<double>(w.n_ref) * w.pos_rmse_m * w.pos_rmse_m;
-      n += w.n_ref;
-    }
-  return n > 0 ? std::sqrt(sum / static_cast<double>(n)) : std::nan("");
+    if (std::find(which.begin(), which.end(), w.window) != which.end()) p.add(w);
+  return p.pos_rmse_m();
 }
 
 BeforeAfter scores(const ReplayResult& before, const ReplayResult& after, const std::vector<int>& which) {

@@ -23,20 +23,6 @@ void append_shifted(V& out, const V& in, double shift) {
   for (double v : in) out.push_back(v + shift);
 }
 
-// Sum of n_ref * rmse^2 and n_ref over the replay's windows.
-struct Sse {
-  double sse = 0.0;
-  std::size_t n = 0;
-  void add(double rmse, std::size_t samples) {
-    sse += static_cast<double>(samples) * rmse * rmse;
-    n += samples;
-  }
-  void add(const ReplayResult& r) {
-    for (const WindowError& w : r.windows) add(w.pos_rmse_m, w.n_ref);
-  }
-  double rmse() const { return n > 0 ? std::sqrt(sse / static_cast<double>(n)) : std::nan(""); }
-};
-
 // The wheel effects the pooled diagnosis chose, with their fitted values.
 EffectSet wheel_model(const Diagnosis& d) {
   return d.selection.fitted ? d.selection.final_fit.effects : EffectSet();
@@ -53,15 +39,16 @@ void prove_terms_elsewhere(Diagnosis& d, const EffectSet& wheel, const std::vect
     if (!f.model) continue;
     std::vector<sim::ModelTerm> terms;
     for (const FoundTerm& t : f.model->terms) terms.push_back(t.term);
-    Sse before, after, sigma;
+    PooledError before, after, sigma;
     for (const DiagInput& in : heldout) {
       const TermScore t = replay_terms(in, wheel, terms, d.window_s, o.terms);
-      before.add(t.before_pos_rmse_m, t.samples), after.add(t.after_pos_rmse_m, t.samples);
-      sigma.add(in.ref_sigma_m, t.samples);
+      before.add(t.before_pos_rmse_m, 0.0, t.samples), after.add(t.after_pos_rmse_m, 0.0, t.samples);
+      sigma.add(in.ref_sigma_m, 0.0, t.samples);
     }
-    if (before.n == 0) continue;
-    const TermScore pooled{before.rmse(), after.rmse(), before.n};
-    const double floor = materiality_floor_m(sigma.rmse(), pooled.before_pos_rmse_m, o.select.materiality);
+    if (before.empty()) continue;
+    const TermScore pooled{before.pos_rmse_m(), after.pos_rmse_m(), static_cast<std::size_t>(before.n)};
+    const double floor = materiality_floor_m(sigma.pos_rmse_m(), pooled.before_pos_rmse_m,
+                                             o.select.materiality);
     f.model->other_recordings = pooled;
     f.model->proven = is_material(pooled.before_pos_rmse_m, pooled.after_pos_rmse_m, floor);
     consistency.push_back(
@@ -218,23 +205,23 @@ PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std
       r.note = e.what();
     }
   }
-  Sse held_nominal, held_model;
+  PooledError held_nominal, held_model;
   for (std::size_t k = fit.size(); k < all.size(); ++k)
     if (replayed[k]) held_nominal.add(nominal[k]), held_model.add(modelled[k]);
 
   // Held-out recordings prove the findings (file comment).
   if (out.heldout_recordings) {
-    d.heldout = {held_nominal.rmse(), held_model.rmse()};
+    d.heldout = {held_nominal.pos_rmse_m(), held_model.pos_rmse_m()};
     for (Finding& f : d.findings) {
       if (f.effect == "unexplained" || f.effect == "gyro_bias" || f.effect == "gyro_scale") continue;
       EffectSet without = wheel;
       without.disable(effect_from_name(f.effect));
-      Sse before, after;
+      PooledError before, after;
       for (const DiagInput& in : heldout) {
         before.add(replay(in, without, ws));
         after.add(replay(in, wheel, ws));
       }
-      f.heldout = {before.rmse(), after.rmse()};
+      f.heldout = {before.pos_rmse_m(), after.pos_rmse_m()};
     }
     prove_terms_elsewhere(d, wheel, heldout, o, out.consistency);
   }

@@ -141,6 +141,25 @@ struct ReplayResult {
   std::vector<double> pred_x_m, pred_y_m, pred_theta_rad;
 };
 
+// Position and heading RMSE pooled over the scored samples of windows from
+// any number of replays (windows replay independently, so the windows of an
+// all-window replay pool to what replaying only them gives).
+struct PooledError {
+  double sp = 0.0, sh = 0.0, n = 0.0;  // sums of n_ref * rmse^2, and of n_ref
+  // n samples of RMSEs pos and heading.
+  void add(double pos, double heading, std::size_t samples) {
+    const auto k = static_cast<double>(samples);
+    sp += k * pos * pos, sh += k * heading * heading, n += k;
+  }
+  void add(const WindowError& w) { add(w.pos_rmse_m, w.heading_rmse_rad, w.n_ref); }
+  void add(const ReplayResult& r) {
+    for (const WindowError& w : r.windows) add(w);
+  }
+  bool empty() const { return !(n > 0.0); }
+  double pos_rmse_m() const { return empty() ? std::nan("") : std::sqrt(sp / n); }
+  double heading_rmse_rad() const { return empty() ? std::nan("") : std::sqrt(sh / n); }
+};
+
 // Replays windows `which` (indices into `windows`; empty = all) with the flat
 // parameters `params` (layout order of model.layout()). `anchors`, when given,
 // holds one anchor per entry of `which` for free-anchor windows (ignored with

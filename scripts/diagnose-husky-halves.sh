@@ -16,9 +16,4 @@ RPY=1.5707963267948966,0,-1.5707963267948966
 mkdir -p "$OUT/tracks"
 T=$OUT/tracks
 "$BIN" import rosbag "$REAL/robot_localization_bags/ros2/test1.mcap" --imu-rpy "$RPY" -o "$T/husky.csv" > /dev/null
-bash scripts/split-track-halves.sh "$T/husky.csv" "$T/husky"
-echo "== husky-halves (first half fitted, second half held out)" | tee "$OUT/husky-halves.txt"
-t=$SECONDS
-"$BIN" diagnose "$T/husky-first-half.csv" --heldout "$T/husky-second-half.csv" --json "$OUT/husky-halves.json" 2>&1 |
-  tee -a "$OUT/husky-halves.txt"
-echo "wall $((SECONDS - t)) s" | tee -a "$OUT/husky-halves.txt"
+BIN=$BIN bash scripts/diagnose-track-halves.sh "$T/husky.csv" "$OUT" husky

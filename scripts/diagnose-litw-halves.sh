@@ -14,9 +14,4 @@ BIN=${BIN:-build/odotune}
 mkdir -p "$OUT/tracks"
 T=$OUT/tracks
 "$BIN" import litw "$REAL/utias_lost_in_the_woods/derived/litw_series.csv" -o "$T/litw.csv" > /dev/null
-bash scripts/split-track-halves.sh "$T/litw.csv" "$T/litw"
-echo "== litw-halves (first half fitted, second half held out)" | tee "$OUT/litw-halves.txt"
-t=$SECONDS
-"$BIN" diagnose "$T/litw-first-half.csv" --heldout "$T/litw-second-half.csv" --json "$OUT/litw-halves.json" 2>&1 |
-  tee -a "$OUT/litw-halves.txt"
-echo "wall $((SECONDS - t)) s" | tee -a "$OUT/litw-halves.txt"
+BIN=$BIN bash scripts/diagnose-track-halves.sh "$T/litw.csv" "$OUT" litw

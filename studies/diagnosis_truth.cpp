@@ -44,14 +44,14 @@ bool is_noop(const TrueEffect& e) {
 struct Pooled {
   double pos_m = kNaN, heading_rad = kNaN;
 };
+Pooled pooled(const diagnose::PooledError& p) {
+  return p.empty() ? Pooled{} : Pooled{p.pos_rmse_m(), p.heading_rmse_rad()};
+}
 Pooled pooled(const diagnose::ReplayResult& r, const std::vector<int>& which) {
-  double sp = 0.0, sh = 0.0, n = 0.0;
+  diagnose::PooledError p;
   for (const diagnose::WindowError& w : r.windows)
-    if (std::find(which.begin(), which.end(), w.window) != which.end()) {
-      const auto k = static_cast<double>(w.n_ref);
-      sp += k * w.pos_rmse_m * w.pos_rmse_m, sh += k * w.heading_rmse_rad * w.heading_rmse_rad, n += k;
-    }
-  return n > 0.0 ? Pooled{std::sqrt(sp / n), std::sqrt(sh / n)} : Pooled{};
+    if (std::find(which.begin(), which.end(), w.window) != which.end()) p.add(w);
+  return pooled(p);
 }
 
 EffectSet wheel_set(const std::vector<TrueEffect>& truth, const std::string& without) {
@@ -205,22 +205,6 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
   return out;
 }
 
-namespace {
-
-// Position and heading RMSE pooled over every window of several replays.
-struct PooledSums {
-  double sp = 0.0, sh = 0.0, n = 0.0;
-  void add(const diagnose::ReplayResult& r) {
-    for (const diagnose::WindowError& w : r.windows) {
-      const auto k = static_cast<double>(w.n_ref);
-      sp += k * w.pos_rmse_m * w.pos_rmse_m, sh += k * w.heading_rmse_rad * w.heading_rmse_rad, n += k;
-    }
-  }
-  Pooled rmse() const { return n > 0.0 ? Pooled{std::sqrt(sp / n), std::sqrt(sh / n)} : Pooled{}; }
-};
-
-}  // namespace
-
 Detectability assess_recordings_detectability(const std::vector<DiagInput>& fit,
                                               const std::vector<DiagInput>& heldout,
                                               const std::vector<TrueEffect>& truth,
@@ -232,29 +216,27 @@ Detectability assess_recordings_detectability(const std::vector<DiagInput>& fit,
   Detectability out = assess_detectability(pooled_fit, truth, materiality);
   out.window_s = diagnose::selection_window_s(pooled_fit, diagnose::SelectOptions{});
   const auto replay_all = [&](const EffectSet& set) {
-    PooledSums sums;
-    for (const DiagInput& in : heldout) sums.add(diagnose::replay(in, set, out.window_s));
-    return sums.rmse();
+    diagnose::PooledError p;
+    for (const DiagInput& in : heldout) p.add(diagnose::replay(in, set, out.window_s));
+    return pooled(p);
   };
-  // Reference sigmas pooled as RMS over the held-out recordings' scored samples.
-  double sigma_sse = 0.0, sigma_rad_sse = 0.0, samples = 0.0;
+  // The nominal replay, and the reference sigmas pooled as RMS over the
+  // held-out recordings' scored samples.
+  diagnose::PooledError nominal_sums, sigmas;
   out.windows = 0;
   for (const DiagInput& in : heldout) {
     const diagnose::ReplayResult r = diagnose::replay(in, EffectSet{}, out.window_s);
+    nominal_sums.add(r);
     out.windows += static_cast<int>(r.windows.size());
-    for (const diagnose::WindowError& w : r.windows) {
-      const auto k = static_cast<double>(w.n_ref);
-      sigma_sse += k * in.ref_sigma_m * in.ref_sigma_m, samples += k;
-      sigma_rad_sse += k * in.ref_sigma_rad * in.ref_sigma_rad;
-    }
+    for (const diagnose::WindowError& w : r.windows) sigmas.add(in.ref_sigma_m, in.ref_sigma_rad, w.n_ref);
   }
   out.heldout_windows = out.windows;
-  out.ref_sigma_m = samples > 0.0 ? std::sqrt(sigma_sse / samples) : heldout.front().ref_sigma_m;
-  const Pooled nominal = replay_all(EffectSet{}), all_true = replay_all(wheel_set(truth, ""));
+  out.ref_sigma_m = sigmas.empty() ? heldout.front().ref_sigma_m : sigmas.pos_rmse_m();
+  const Pooled nominal = pooled(nominal_sums), all_true = replay_all(wheel_set(truth, ""));
   out.nominal_heldout_m = nominal.pos_m, out.true_heldout_m = all_true.pos_m;
   out.floor_m = diagnose::materiality_floor_m(out.ref_sigma_m, nominal.pos_m, materiality);
   const bool heading = heldout.front().has_ref_heading();
-  const double sigma_rad = samples > 0.0 ? std::sqrt(sigma_rad_sse / samples) : kNaN;
+  const double sigma_rad = sigmas.heading_rmse_rad();
   const double heading_floor_rad =
       heading ? diagnose::materiality_floor_m(sigma_rad, nominal.heading_rad, materiality) : kNaN;
   for (EffectTruth& t : out.effects) {
