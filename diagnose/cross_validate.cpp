@@ -16,7 +16,6 @@ namespace odotune::diagnose {
 
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInformativeDelta2 = 4.0;  // see compare()
 
 // Local quadratic least-squares fit of (t, v) over [lo, hi) evaluated at tc,
 // and its noise factor sqrt(e0' (X'X)^-1 e0) for white noise; the value at
@@ -366,10 +365,7 @@ CrossValidator::Replayed CrossValidator::replayed(const SetEval& cv) {
 }
 
 PairedComparison CrossValidator::compare(const SetEval& ref, const SetEval& alt, double alpha) const {
-  PairedComparison out;
-  out.gain = ref.score - alt.score;
-  out.rel = out.gain / ref.score;
-  std::vector<double> d, z, lr;
+  std::vector<WindowPair> pairs;
   for (std::size_t w = 0; w < windows_.size(); ++w) {
     const Window& win = windows_[w];
     double delta2 = 0.0;
@@ -378,24 +374,12 @@ PairedComparison CrossValidator::compare(const SetEval& ref, const SetEval& alt,
       const double dh = heading_ ? alt.pred.theta_rad[g] - ref.pred.theta_rad[g] : 0.0;
       delta2 += (dx * dx + dy * dy) * ism_ * ism_ * in_->ref_weight(g) + dh * dh * ish_ * ish_;
     }
-    if (!(delta2 >= kInformativeDelta2 * corr_)) continue;
     const auto n = static_cast<double>(win.ref_end - win.ref_begin);
-    const double dw = ref.window_sse[w] - alt.window_sse[w];
-    d.push_back(dw);
-    ++out.changed;
-    if (dw > 0.0) ++out.improved;
-    const double s2 = std::max(1.0, alt.window_sse[w] / (n * comps_));
-    z.push_back(dw / (2.0 * std::sqrt(s2 * corr_ * delta2)));
-    lr.push_back(std::log(std::max(ref.window_sse[w], 1e-300) / std::max(alt.window_sse[w], 1e-300)));
+    pairs.push_back({ref.window_sse[w], alt.window_sse[w], delta2, n * comps_});
   }
-  out.p_rank = wilcoxon_greater(d);
-  out.p_t = std::min(t_test_greater(z), t_test_greater(lr));  // NaN-safe: min(NaN, NaN) = NaN
-  // Stouffer over every window when all improved; else (or also) over all
-  // but the strongest (header comment).
-  // (fmin: the other when one is NaN, NaN when both are.)
-  const double p_all = out.changed >= 2 && out.improved == out.changed ? stouffer_greater(z) : kNaN;
-  out.p_param = std::fmin(p_all, stouffer_greater_but_strongest(z));
-  out.significant = out.p_rank < alpha || out.p_t < 0.5 * alpha || out.p_param < alpha;
+  PairedComparison out = paired_windows(pairs, corr_, alpha);
+  out.gain = ref.score - alt.score;
+  out.rel = out.gain / ref.score;
   return out;
 }
 

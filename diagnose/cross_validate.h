@@ -35,6 +35,7 @@
 #include "diagnose/diag_input.h"
 #include "diagnose/effect_model.h"
 #include "diagnose/fit.h"
+#include "diagnose/paired_test.h"
 #include "diagnose/window_replay.h"
 
 namespace odotune::diagnose {
@@ -57,16 +58,6 @@ struct SetEval {
   EffectSet fitted;                                 // fit_all: the fitted set
   double cost = 0.0;                                // fit_all: fit_effects' final cost (NaN for the empty set)
   double bic = 0.0;                                 // fit_all (see fit_all)
-};
-
-// Paired comparison of two evaluations over the windows (see compare()).
-struct PairedComparison {
-  double rel = 0.0, gain = 0.0;   // (ref - alt)/ref and ref - alt of the pooled scores
-  int changed = 0, improved = 0;  // informative windows, and those alt improved
-  double p_rank = 1.0;            // Wilcoxon signed-rank, one-sided
-  double p_t = 0.0;               // min of the t-tests on z and l (NaN with < 3 windows)
-  double p_param = 0.0;           // Stouffer (NaN with < 3 windows unless every one improved)
-  bool significant = false;
 };
 
 // A thinned, denoised copy of a reference for cross-validation: every
@@ -171,29 +162,9 @@ class CrossValidator {
   };
   Replayed replayed(const SetEval& cv);
 
-  // `alt` against `ref`, window by window. A window is informative when alt
-  // moves its normalised predictions by sum |delta|^2 >= 4 L (below, the
-  // window's gain cannot stand out of the reference noise; L =
-  // correlated_samples). Over informative windows: d_w = SSE_ref(w) -
-  // SSE_alt(w), z_w = d_w / (2 s_w sqrt(L sum |delta|^2)) with s_w^2 =
-  // max(1, alt's mean squared normalised error per component) (the
-  // white-noise law of d_w, inflated when the residual exceeds the noise),
-  // and l_w = ln(SSE_ref(w)/SSE_alt(w)). significant when any of
-  //  - the Wilcoxon signed-rank p on d < alpha (window signs and ranks; it
-  //    cannot go below 2^-n with n windows),
-  //  - the smaller of the t-test p's on z and on l < alpha/2 (consistent
-  //    standardised gains, or consistent relative gains when windows differ
-  //    in how much the effect shows; Bonferroni over the two),
-  //  - every informative window improved (at least 2) and Stouffer's p of z
-  //    < alpha (an effect acting in a few windows only), or, with at least 3
-  //    informative windows, Stouffer's p of the signed z of all of them but
-  //    the one with the largest z < alpha (a strong effect whose few
-  //    informative windows include a short one that it leaves slightly worse:
-  //    a 5 s tail window beside five windows 25-40 times better, benchmark
-  //    dev seed 1002 case 89; leaving the strongest window out keeps one
-  //    window from carrying the result).
-  // The three address different regimes; their union has a nominal level of
-  // at most 3 alpha (select.h adds practical-size and BIC conditions).
+  // `alt` against `ref`, window by window: paired_windows (paired_test.h)
+  // over every window's normalised SSEs and prediction change, with
+  // L = correlated_samples; gain and rel from the pooled scores.
   PairedComparison compare(const SetEval& ref, const SetEval& alt, double alpha) const;
 
  private:

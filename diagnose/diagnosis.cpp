@@ -171,7 +171,8 @@ bool DiagnoseOptions::IsValid(std::string* why) const {
     return false;
   return check_option_rules(
       {{is_fraction(unexplained_min_share), "unexplained_min_share", unexplained_min_share, "in [0, 1]"},
-       {is_non_negative(unexplained_min_sigmas), "unexplained_min_sigmas", unexplained_min_sigmas, ">= 0"}},
+       {is_non_negative(unexplained_min_sigmas), "unexplained_min_sigmas", unexplained_min_sigmas, ">= 0"},
+       {heldout_alpha > 0.0 && heldout_alpha < 1.0, "heldout_alpha", heldout_alpha, "in (0, 1)"}},
       why);
 }
 

@@ -80,6 +80,7 @@
 #include "diagnose/effect_model.h"
 #include "diagnose/gyro_fixes_check.h"
 #include "diagnose/locate.h"
+#include "diagnose/paired_test.h"
 #include "diagnose/select.h"
 #include "diagnose/sensor_checks.h"
 #include "diagnose/term_search.h"
@@ -94,6 +95,9 @@ struct DiagnoseOptions {
   double unexplained_min_share = 0.2;   // of the final model's SSE inside the located segments
   double unexplained_min_sigmas = 3.0;  // its RMSE there, in reference sigmas (DiagInput::ref_sigma_m)
   TermSearchOptions terms;              // physics outside the list (term_search.h)
+  // One-sided level of the paired test over held-out recordings' windows
+  // (recordings.h) that proves the pooled model on them.
+  double heldout_alpha = 0.05;
 
   bool IsValid(std::string* why) const;
 };
@@ -108,6 +112,18 @@ struct BeforeAfter {
   double after_pos_rmse_m = std::numeric_limits<double>::quiet_NaN();
 };
 
+// Held-out recordings' verdict on a model against another (recordings.h):
+// pooled position RMSE over their windows, their materiality floor, and the
+// paired tests over their windows.
+struct HeldoutTest {
+  BeforeAfter error;
+  double floor_m = std::numeric_limits<double>::quiet_NaN();
+  int windows = 0;
+  PairedComparison paired;  // over their windows (paired_test.h), at DiagnoseOptions::heldout_alpha
+  bool material = false;    // removes at least their floor, in position or in heading
+  bool proven = false;      // material and paired.significant
+};
+
 struct Finding {
   std::string effect;                 // physics-effects.md name, or "unexplained"
   std::vector<NamedValue> params;     // the spec's parameter names, table order
@@ -118,9 +134,10 @@ struct Finding {
   std::string conditions;             // where.conditions
   double explains = 0.0;
   BeforeAfter train, heldout;
-  std::vector<std::string> rivals;  // confounded alternatives the data could not rule out
-  std::string evidence;             // how it was found, one phrase
-  std::optional<TermModel> model;   // unexplained only: terms that reproduce it (term_search.h)
+  std::vector<std::string> rivals;          // confounded alternatives the data could not rule out
+  std::string evidence;                     // how it was found, one phrase
+  std::optional<TermModel> model;           // unexplained only: terms that reproduce it (term_search.h)
+  std::optional<HeldoutTest> heldout_test;  // wheel effects, with held-out recordings (recordings.h)
 
   double param(std::string_view name) const;  // NaN when absent
   // The simulator's command-line form, "lateral_skid:k=0.021" ("" for unexplained).
@@ -166,6 +183,10 @@ struct Diagnosis {
   // Located growth that would have been `unexplained` but that no term of the
   // term search reproduces on held-out windows (file comment), one line each.
   std::vector<std::string> not_reproduced;
+  // Wheel findings of the fitted recordings that remove less than the
+  // held-out recordings' floor there (recordings.h), one line each; empty for
+  // one track.
+  std::vector<std::string> not_confirmed;
 };
 
 // Throws std::invalid_argument (one line) for invalid options or an input the

@@ -136,6 +136,10 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
                   d.track, spans(unexplained->segments),
                   unexplained->conditions.empty() ? "" : " (" + unexplained->conditions + ")",
                   unexplained->model ? "; terms fitted to it are not proven on the held-out recordings" : ""));
+  } else if (!d.not_confirmed.empty()) {
+    lines.push_back(fmt::format("{}: nothing proven — what the fitted recordings show does not predict the "
+                                "held-out recordings (below).",
+                                d.track));
   } else {
     lines.push_back(
         fmt::format("{}: nothing left out — the nominal model explains the recording within sensor noise "
@@ -151,6 +155,7 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
                         f.explains < 0.01 ? 2 : 0, metres(f.heldout.before_pos_rmse_m),
                         metres(f.heldout.after_pos_rmse_m));
     lines.push_back(line);
+    if (f.heldout_test) lines.push_back("     held-out recordings: " + describe(*f.heldout_test));
     if (!f.segments.empty()) lines.push_back("     where: " + spans(f.segments));
     for (const MapRegion& r : f.regions)
       lines.push_back(fmt::format("     region: x {:.2f}…{:.2f} m, y {:.2f}…{:.2f} m", r.x0_m, r.x1_m, r.y0_m,
@@ -184,6 +189,7 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
   }
   for (const std::string& s : d.immaterial) lines.push_back("not a finding (immaterial): " + s);
   for (const std::string& s : d.not_reproduced) lines.push_back("not a finding (not reproduced): " + s);
+  for (const std::string& s : d.not_confirmed) lines.push_back("not a finding (not confirmed): " + s);
   for (const std::string& s : d.sensor_notes) lines.push_back("sensor check: " + s);
   const std::string against = d.ref_gt_samples > 0 && d.ref_fix_samples > 0
                                   ? fmt::format("{} ground-truth positions and {} position fixes",
@@ -227,6 +233,15 @@ std::vector<std::string> pooled_summary(const PooledDiagnosis& p) {
                                             [](const RecordingResult& r) { return !r.heldout; }),
                               p.heldout_recordings ? ", the others held out" : "",
                               p.heldout_recordings ? "the held-out recordings" : "the pooled split"));
+  const bool wheel = std::any_of(p.pooled.findings.begin(), p.pooled.findings.end(), [](const Finding& f) {
+    return f.effect != "unexplained" && f.effect != "gyro_bias" && f.effect != "gyro_scale";
+  });
+  if (p.heldout_recordings && wheel) {
+    const HeldoutTest& t = p.heldout_test;
+    lines.push_back(fmt::format("  the model on the held-out recordings: {} → {} (floor {}), {}: {}",
+                                metres(t.error.before_pos_rmse_m), metres(t.error.after_pos_rmse_m),
+                                metres(t.floor_m), describe(t), t.proven ? "proven" : "not proven"));
+  }
   for (const RecordingResult& r : p.recordings)
     lines.push_back(fmt::format("  {} [{}] {:.0f} s, {} reference samples{}: nominal {} → pooled model {}{}",
                                 r.track, r.heldout ? "held out" : "fitted", r.duration_s, r.ref_samples,

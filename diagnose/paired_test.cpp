@@ -109,4 +109,28 @@ double wilcoxon_greater(const std::vector<double>& d) {
   return std::min(1.0, p);
 }
 
+PairedComparison paired_windows(const std::vector<WindowPair>& windows, double correlated, double alpha) {
+  constexpr double kInformativeDelta2 = 4.0;  // in units of L (header comment)
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  PairedComparison out;
+  std::vector<double> d, z, lr;
+  for (const WindowPair& w : windows) {
+    if (!(w.delta2 >= kInformativeDelta2 * correlated)) continue;
+    const double dw = w.sse_ref - w.sse_alt;
+    d.push_back(dw);
+    ++out.changed;
+    if (dw > 0.0) ++out.improved;
+    const double s2 = std::max(1.0, w.sse_alt / w.components);
+    z.push_back(dw / (2.0 * std::sqrt(s2 * correlated * w.delta2)));
+    lr.push_back(std::log(std::max(w.sse_ref, 1e-300) / std::max(w.sse_alt, 1e-300)));
+  }
+  out.p_rank = wilcoxon_greater(d);
+  out.p_t = std::min(t_test_greater(z), t_test_greater(lr));  // NaN-safe: min(NaN, NaN) = NaN
+  // (fmin: the other when one is NaN, NaN when both are.)
+  const double p_all = out.changed >= 2 && out.improved == out.changed ? stouffer_greater(z) : nan;
+  out.p_param = std::fmin(p_all, stouffer_greater_but_strongest(z));
+  out.significant = out.p_rank < alpha || out.p_t < 0.5 * alpha || out.p_param < alpha;
+  return out;
+}
+
 }  // namespace odotune::diagnose

@@ -8,6 +8,7 @@
 
 #include "diagnose/fit.h"
 #include "diagnose/materiality.h"
+#include "diagnose/paired_test.h"
 #include "diagnose/select.h"
 #include "diagnose/sensor_checks.h"
 #include "diagnose/term_search.h"
@@ -58,7 +59,121 @@ void prove_terms_elsewhere(Diagnosis& d, const EffectSet& wheel, const std::vect
   }
 }
 
+// The windows of `after` against `before` on one recording, for the paired
+// test (paired_test.h): errors against the raw reference, normalised by its
+// sigmas (and weights); heading only when the reference has it.
+void add_window_pairs(const DiagInput& in, double ws, const ReplayResult& before, const ReplayResult& after,
+                      std::vector<WindowPair>& out) {
+  const bool heading = in.has_ref_heading();
+  const double ism = 1.0 / in.ref_sigma_m, ish = heading ? 1.0 / in.ref_sigma_rad : 0.0;
+  const auto sq = [](double v) { return v * v; };
+  for (const Window& w : make_windows(in, ws)) {
+    WindowPair p;
+    for (std::size_t g = w.ref_begin; g < w.ref_end; ++g) {
+      if (!std::isfinite(before.pred_x_m[g]) || !std::isfinite(after.pred_x_m[g])) continue;
+      const double wt = in.ref_weight(g) * ism * ism;
+      p.sse_ref += wt * (sq(before.pred_x_m[g] - in.ref_x_m[g]) + sq(before.pred_y_m[g] - in.ref_y_m[g]));
+      p.sse_alt += wt * (sq(after.pred_x_m[g] - in.ref_x_m[g]) + sq(after.pred_y_m[g] - in.ref_y_m[g]));
+      p.delta2 += wt *
+                  (sq(after.pred_x_m[g] - before.pred_x_m[g]) + sq(after.pred_y_m[g] - before.pred_y_m[g]));
+      if (heading) {
+        const double hb = before.pred_theta_rad[g] - in.ref_theta_rad[g],
+                     ha = after.pred_theta_rad[g] - in.ref_theta_rad[g];
+        p.sse_ref += sq(hb * ish), p.sse_alt += sq(ha * ish), p.delta2 += sq((ha - hb) * ish);
+      }
+      p.components += heading ? 3.0 : 2.0;
+    }
+    if (p.components > 0.0) out.push_back(p);
+  }
+}
+
+std::vector<ReplayResult> replay_each(const std::vector<DiagInput>& ins, const EffectSet& set, double ws) {
+  std::vector<ReplayResult> out;
+  for (const DiagInput& in : ins) out.push_back(replay(in, set, ws));
+  return out;
+}
+
+PooledError pool(const std::vector<ReplayResult>& r) {
+  PooledError p;
+  for (const ReplayResult& x : r) p.add(x);
+  return p;
+}
+
+// The held-out recordings' test of `after` against `before` (recordings.h):
+// material against their own floor, in position or in heading, and
+// consistent over their windows. The floors are against `nominal`'s error.
+HeldoutTest heldout_test(const std::vector<ReplayResult>& before, const std::vector<ReplayResult>& after,
+                         const std::vector<ReplayResult>& nominal, const std::vector<DiagInput>& heldout,
+                         double ws, const DiagnoseOptions& o) {
+  PooledError b = pool(before), a = pool(after), n = pool(nominal), nominal_sigma;
+  for (std::size_t k = 0; k < heldout.size(); ++k)
+    for (const WindowError& w : before[k].windows)
+      nominal_sigma.add(heldout[k].ref_sigma_m, heldout[k].ref_sigma_rad, w.n_ref);
+  HeldoutTest t;
+  for (const ReplayResult& r : before) t.windows += static_cast<int>(r.windows.size());
+  t.error = {b.pos_rmse_m(), a.pos_rmse_m()};
+  std::vector<WindowPair> pairs;
+  for (std::size_t k = 0; k < heldout.size(); ++k) add_window_pairs(heldout[k], ws, before[k], after[k], pairs);
+  t.paired = paired_windows(pairs, 1.0, o.heldout_alpha);
+  const auto& m = o.select.materiality;
+  t.floor_m = materiality_floor_m(nominal_sigma.pos_rmse_m(), n.pos_rmse_m(), m);
+  t.material = is_material(b.pos_rmse_m(), a.pos_rmse_m(), t.floor_m);
+  if (heldout.front().has_ref_heading()) {
+    const double floor_rad = materiality_floor_m(nominal_sigma.heading_rmse_rad(), n.heading_rmse_rad(), m);
+    t.material = t.material ||
+                 (floor_rad > 0.0 && is_material(b.heading_rmse_rad(), a.heading_rmse_rad(), floor_rad));
+  }
+  t.proven = t.material && t.paired.significant;
+  return t;
+}
+
+bool is_wheel_finding(const Finding& f) {
+  return f.effect != "unexplained" && f.effect != "gyro_bias" && f.effect != "gyro_scale";
+}
+
+// Held-out recordings confirm each wheel finding (recordings.h): those they
+// do not are dropped from the findings and from `wheel` and listed in
+// d.not_confirmed; every kept finding's `heldout` numbers and test are then
+// against the reduced model.
+void confirm_on_heldout(Diagnosis& d, EffectSet& wheel, const std::vector<DiagInput>& heldout,
+                        const DiagnoseOptions& o) {
+  const double ws = d.window_s;
+  const std::vector<ReplayResult> nominal = replay_each(heldout, EffectSet(), ws);
+  const auto test_each = [&](bool drop) {
+    const std::vector<ReplayResult> with = replay_each(heldout, wheel, ws);
+    std::vector<Effect> dropped;
+    for (Finding& f : d.findings) {
+      if (!is_wheel_finding(f)) continue;
+      EffectSet without = wheel;
+      without.disable(effect_from_name(f.effect));
+      const HeldoutTest t = heldout_test(replay_each(heldout, without, ws), with, nominal, heldout, ws, o);
+      f.heldout = t.error, f.heldout_test = t;
+      if (drop && !t.material) {
+        dropped.push_back(effect_from_name(f.effect));
+        d.not_confirmed.push_back(fmt::format(
+            "{}: fits the fitted recordings; on the held-out recordings it removes less than their floor "
+            "({:.1f} → {:.1f} mm, floor {:.1f} mm; {})",
+            f.spec(), 1e3 * t.error.before_pos_rmse_m, 1e3 * t.error.after_pos_rmse_m, 1e3 * t.floor_m,
+            describe(t)));
+      }
+    }
+    for (Effect e : dropped) wheel.disable(e), d.model.disable(e);
+    std::erase_if(d.findings, [&](const Finding& f) {
+      return is_wheel_finding(f) && !wheel.on(effect_from_name(f.effect));
+    });
+    return !dropped.empty();
+  };
+  if (test_each(true)) test_each(false);
+}
+
 }  // namespace
+
+std::string describe(const HeldoutTest& t) {
+  const PairedComparison& c = t.paired;
+  return fmt::format("paired test over {} windows, {} informative, {} better: rank p = {:.2g}, t p = {:.2g}, "
+                     "Stouffer p = {:.2g}",
+                     t.windows, c.changed, c.improved, c.p_rank, c.p_t, c.p_param);
+}
 
 void check_one_robot(const std::vector<DiagInput>& parts) {
   if (parts.empty()) return;
@@ -157,9 +272,16 @@ PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std
       pooled_options.select.recording_starts_s.push_back(fit[k].odo_t_s.front() + shifts[k]);
   out.pooled = diagnose(out.input, pooled_options);
   Diagnosis& d = out.pooled;
-  const EffectSet wheel = wheel_model(d);
+  EffectSet wheel = wheel_model(d);
   const double ws = d.window_s;
   out.heldout_recordings = !heldout.empty();
+  if (out.heldout_recordings) {
+    confirm_on_heldout(d, wheel, heldout, o);
+    if (!d.not_confirmed.empty()) {  // the fitted recordings' error with the model as reported
+      const ReplayResult fin = replay(out.input, wheel, ws);
+      d.final_pos_rmse_m = fin.pos_rmse_m, d.final_heading_rmse_rad = fin.heading_rmse_rad;
+    }
+  }
 
   // Per recording: nominal vs the pooled model, and the refit alone (on its
   // selection input, as the pooled final fit, from the pooled values),
@@ -205,23 +327,17 @@ PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std
       r.note = e.what();
     }
   }
-  PooledError held_nominal, held_model;
-  for (std::size_t k = fit.size(); k < all.size(); ++k)
-    if (replayed[k]) held_nominal.add(nominal[k]), held_model.add(modelled[k]);
-
-  // Held-out recordings prove the findings (file comment).
+  // Held-out recordings prove the pooled model (file comment).
   if (out.heldout_recordings) {
-    d.heldout = {held_nominal.pos_rmse_m(), held_model.pos_rmse_m()};
-    for (Finding& f : d.findings) {
-      if (f.effect == "unexplained" || f.effect == "gyro_bias" || f.effect == "gyro_scale") continue;
-      EffectSet without = wheel;
-      without.disable(effect_from_name(f.effect));
-      PooledError before, after;
-      for (const DiagInput& in : heldout) {
-        before.add(replay(in, without, ws));
-        after.add(replay(in, wheel, ws));
-      }
-      f.heldout = {before.pos_rmse_m(), after.pos_rmse_m()};
+    std::vector<ReplayResult> held_nominal, held_model;
+    std::vector<DiagInput> replayed_heldout;
+    for (std::size_t k = fit.size(); k < all.size(); ++k)
+      if (replayed[k])
+        held_nominal.push_back(nominal[k]), held_model.push_back(modelled[k]),
+            replayed_heldout.push_back(all[k]);
+    if (!replayed_heldout.empty()) {
+      out.heldout_test = heldout_test(held_nominal, held_model, held_nominal, replayed_heldout, ws, o);
+      d.heldout = out.heldout_test.error;
     }
     prove_terms_elsewhere(d, wheel, heldout, o, out.consistency);
   }

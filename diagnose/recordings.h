@@ -11,12 +11,22 @@
 // blocks, which now also fall between recordings; the pooled split).
 //
 // Held-out recordings. With held-out recordings, the pooled result's
-// train/held-out numbers and every wheel finding's `fit.heldout` come from
-// them, which the fit never saw: before = the chosen model without the
-// finding (the nominal model for the pooled numbers), after = the chosen
-// model, replayed on each held-out recording's own windows (window_replay.h,
-// raw reference); pooled over their reference samples. Gyro findings keep the
-// pooled split's numbers (the gyro check runs on the fit recordings).
+// held-out numbers and every wheel finding's `fit.heldout` come from them,
+// which the fit never saw: before = the chosen model without the finding (the
+// nominal model for the pooled numbers), after = the chosen model, replayed on
+// each held-out recording's own windows (window_replay.h, raw reference);
+// pooled over their reference samples. A wheel finding holds there when it
+// removes at least their materiality floor (materiality.h, from their pooled
+// nominal error and sigmas) in position or in heading; one that does not (it
+// fits the fitted recordings only, e.g. one recording's own radius
+// tolerance) is dropped from the findings and the reported model, listed in
+// `not_confirmed`, and the others are tested again against the reduced model
+// (not refitted). The pooled model is proven on them when it is material and
+// the paired test over their windows (paired_test.h paired_windows, raw
+// reference, options.heldout_alpha) is significant; each finding carries
+// the same test of itself (`heldout_test`), as evidence. Gyro
+// findings keep the pooled split's numbers (the gyro check runs on the fit
+// recordings).
 //
 // Per recording: its nominal and chosen-model position RMSE over its windows,
 // whether it was held out, and the chosen wheel structure refitted on that
@@ -60,10 +70,15 @@ struct PooledDiagnosis {
   DiagInput input;   // the concatenated fit recordings the pooled diagnosis ran on
   Diagnosis pooled;  // on the concatenated fit recordings (see the file comment for held-out numbers)
   bool heldout_recordings = false;
+  HeldoutTest heldout_test;  // the pooled model against the nominal one on the held-out recordings
   std::vector<RecordingResult> recordings;  // fit recordings first, in the order given
   // What holds across recordings and what does not, one sentence each.
   std::vector<std::string> consistency;
 };
+
+// "paired test over N windows, M informative, K better: rank p = …, t p = …,
+// Stouffer p = …", for a summary line.
+std::string describe(const HeldoutTest& t);
 
 // Throws std::invalid_argument (one line naming the recording) when the
 // recordings are not of one robot: another odometry kind, another nominal

@@ -77,6 +77,22 @@ json sensor_checks(const SensorCheck& s) {
   return {{"gyro", gyro}, {"odometry", odo}};
 }
 
+// The held-out recordings' verdict (recordings.h HeldoutTest).
+json heldout_test(const diagnose::HeldoutTest& t) {
+  return {{"before_pos_rmse_m", number(t.error.before_pos_rmse_m)},
+          {"after_pos_rmse_m", number(t.error.after_pos_rmse_m)},
+          {"floor_m", number(t.floor_m)},
+          {"windows", t.windows},
+          {"informative_windows", t.paired.changed},
+          {"better_windows", t.paired.improved},
+          {"p_rank", number(t.paired.p_rank)},
+          {"p_t", number(t.paired.p_t)},
+          {"p_stouffer", number(t.paired.p_param)},
+          {"significant", t.paired.significant},
+          {"material", t.material},
+          {"proven", t.proven}};
+}
+
 json heldout_comparison(const HeldoutComparison& h) {
   return {{"windows", h.windows},
           {"informative", h.informative},
@@ -188,6 +204,7 @@ json diagnosis_json(const Diagnosis& d) {
          {"discrete", f.discrete},
          {"evidence", f.evidence}});
     if (f.model) findings.back()["model"] = term_model(*f.model);
+    if (f.heldout_test) findings.back()["fit"]["heldout_recordings_test"] = heldout_test(*f.heldout_test);
   }
   json model = json::array();
   for (const Finding& f : d.findings)
@@ -198,7 +215,7 @@ json diagnosis_json(const Diagnosis& d) {
           {"reference_samples",
            {{"gt", d.ref_gt_samples}, {"aps", d.ref_fix_samples}, {"heading", d.ref_heading}}},
           {"materiality", {{"floor_m", number(d.floor_m)}, {"immaterial", d.immaterial},
-                           {"not_reproduced", d.not_reproduced}}},
+                           {"not_reproduced", d.not_reproduced}, {"not_confirmed", d.not_confirmed}}},
           {"sensor_checks_reconciled", d.sensor_notes},
           {"replay", {{"window_s", d.window_s}}},
           {"baseline",
@@ -257,6 +274,7 @@ json pooled_diagnosis_json(const diagnose::PooledDiagnosis& p) {
   }
   j["tracks"] = tracks;
   j["heldout_from"] = p.heldout_recordings ? "heldout recordings" : "pooled split";
+  if (p.heldout_recordings) j["heldout_recordings_test"] = heldout_test(p.heldout_test);
   j["consistency"] = p.consistency;
   return j;
 }

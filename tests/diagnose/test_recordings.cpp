@@ -80,6 +80,15 @@ TEST(Recordings, FittedOnTwoProvenOnAThird) {
   EXPECT_DOUBLE_EQ(p.pooled.heldout.after_pos_rmse_m, p.recordings[2].error.after_pos_rmse_m);
   EXPECT_LT(p.pooled.heldout.after_pos_rmse_m, 0.5 * p.pooled.heldout.before_pos_rmse_m);
   EXPECT_DOUBLE_EQ(f.heldout.before_pos_rmse_m, p.recordings[2].error.before_pos_rmse_m);
+  // Proven there: material and consistent over its windows (the paired test).
+  EXPECT_TRUE(p.heldout_test.proven);
+  EXPECT_TRUE(p.heldout_test.paired.significant);
+  EXPECT_EQ(p.heldout_test.windows,
+            static_cast<int>(replay(recording(1613, 100), EffectSet(), p.pooled.window_s).windows.size()));
+  ASSERT_TRUE(f.heldout_test.has_value());
+  EXPECT_TRUE(f.heldout_test->material);
+  EXPECT_TRUE(f.heldout_test->proven);
+  EXPECT_TRUE(p.pooled.not_confirmed.empty());
   for (const RecordingResult& r : p.recordings) {
     EXPECT_TRUE(r.helped) << r.track;
     ASSERT_FALSE(r.refit.empty()) << r.track << ": " << r.note;
@@ -139,9 +148,25 @@ TEST(Recordings, AnEffectOfOneRecordingOnlyIsNotChosenPooled) {
 TEST(Recordings, AChangedRobotDoesNotHoldAcrossRecordings) {
   const PooledDiagnosis p = diagnose_recordings({recording(1621, 100, 0.99)}, {recording(1622, 100, 1.0)});
   ASSERT_EQ(p.recordings.size(), 2u);
-  // The held-out recording has no radius error: the fitted one does not help it.
+  // The held-out recording has no radius error: the fitted one does not
+  // predict it, so it is no finding, only listed as not confirmed, and the
+  // reported model leaves it out.
+  EXPECT_TRUE(p.pooled.findings.empty()) << p.pooled.findings.front().spec();
+  ASSERT_EQ(p.pooled.not_confirmed.size(), 1u);
+  EXPECT_THAT(p.pooled.not_confirmed.front(), ::testing::HasSubstr("radius_error"));
+  EXPECT_FALSE(p.pooled.model.on(Effect::radius_error));
   EXPECT_FALSE(p.recordings[1].helped);
-  EXPECT_GT(p.pooled.heldout.after_pos_rmse_m, p.pooled.heldout.before_pos_rmse_m);
+  EXPECT_DOUBLE_EQ(p.pooled.heldout.after_pos_rmse_m, p.pooled.heldout.before_pos_rmse_m);
+}
+
+// A held-out recording with the same effect confirms it even when it is short.
+TEST(Recordings, HeldOutRecordingConfirmsWhatItShares) {
+  const PooledDiagnosis p = diagnose_recordings({recording(1651, 100, 0.99)}, {recording(1652, 100, 0.99)});
+  ASSERT_EQ(p.pooled.findings.size(), 1u) << p.pooled.note;
+  EXPECT_EQ(p.pooled.findings.front().effect, "radius_error");
+  EXPECT_TRUE(p.pooled.findings.front().heldout_test->material);
+  EXPECT_TRUE(p.heldout_test.proven);
+  EXPECT_TRUE(p.recordings[1].helped);
 }
 
 }  // namespace

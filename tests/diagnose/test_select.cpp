@@ -124,6 +124,30 @@ TEST(PairedTest, StoufferWithoutTheStrongestWindow) {
   EXPECT_TRUE(std::isnan(stouffer_greater_but_strongest({5.0, 4.0})));
 }
 
+// The window rules of paired_windows: an uninformative window is left out,
+// one window carrying the gain is not enough, consistent gains are.
+TEST(PairedTest, WindowsCountOnlyWhereTheModelMovesAndNotOneAlone) {
+  // sse_ref, sse_alt, delta2, components
+  const std::vector<WindowPair> one_carries = {{50000, 8000, 24000, 1200},
+                                               {4000, 7700, 1500, 700},
+                                               {4000, 5000, 1000, 1300},
+                                               {1300, 2000, 900, 550},
+                                               {1500, 1500, 0, 1400}};
+  const PairedComparison a = paired_windows(one_carries, 1.0, 0.05);
+  EXPECT_EQ(a.changed, 4);  // the last window does not move
+  EXPECT_EQ(a.improved, 1);
+  EXPECT_FALSE(a.significant);
+  std::vector<WindowPair> consistent;
+  for (int i = 0; i < 6; ++i) consistent.push_back({3000.0 + 100 * i, 1000.0, 2000, 1000});
+  const PairedComparison b = paired_windows(consistent, 1.0, 0.05);
+  EXPECT_EQ(b.improved, 6);
+  EXPECT_NEAR(b.p_rank, 1.0 / 64.0, 1e-12);
+  EXPECT_TRUE(b.significant);
+  // The same gains from a reference whose samples share their noise over 1000
+  // samples are not informative at all.
+  EXPECT_EQ(paired_windows(consistent, 1000.0, 0.05).changed, 0);
+}
+
 TEST(PairedTest, TTestAndIncompleteBetaMatchTables) {
   EXPECT_NEAR(incomplete_beta(0.3, 1.0, 1.0), 0.3, 1e-12);
   EXPECT_NEAR(incomplete_beta(0.3, 2.0, 1.0), 0.09, 1e-12);
