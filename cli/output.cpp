@@ -23,7 +23,7 @@ void print_tune_result(const ErrorMetrics& baseline_mean, const ErrorMetrics& tu
   fmt::print("  params:");
   for (std::size_t i = 0; i < params.size(); ++i) fmt::print(" {}={:.6g}", param_names[i], params[i]);
   fmt::print("\n  {} evaluations in {:.2f} s ({}); diverged evaluations: {}\n", summary.evaluations,
-             summary.seconds, summary.termination, diverged);
+             summary.seconds, summary.termination_text(), diverged);
 }
 
 void print_lines(const std::vector<std::string>& lines) {

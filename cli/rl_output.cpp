@@ -82,7 +82,7 @@ void print_rl_tune(const RlTuneRequest& r, const RlTuneOutcome& o) {
   }
   fmt::print("  factors: {}\n", factors);
   fmt::print("  {} evaluations in {:.1f} s ({})\n", o.summary.evaluations, o.summary.seconds,
-             o.summary.termination);
+             o.summary.termination_text());
   print_notes(o.notes, o.alignment);
   if (!r.config_out.empty())
     fmt::print("  wrote {} ({})\n", r.config_out.string(), r.ros1_out ? "ROS 1" : "ROS 2");

@@ -70,7 +70,7 @@ void print_tune_outcome(const CalibrationTuneOutcome& o) {
     fmt::print("    {:<28} {:>12.6g}  (default {:.6g}) [{}]\n", o.param_names[i], o.params[i],
                o.default_params[i], o.param_units[i]);
   fmt::print("  {} evaluations in {:.2f} s ({}); failed evaluations: {}\n", o.summary.evaluations,
-             o.summary.seconds, o.summary.termination, o.failures);
+             o.summary.seconds, o.summary.termination_text(), o.failures);
 }
 
 void print_tune_outcome(const UkfTuneOutcome& o) {

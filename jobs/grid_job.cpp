@@ -139,7 +139,7 @@ void set_solver_fields(results::RunRecord& r, const std::vector<std::string>& pa
   r.evaluations = summary.evaluations;
   r.seconds = summary.seconds;
   r.diverged = diverged;
-  r.termination = summary.termination;
+  r.termination = summary.termination_text();
   for (const auto& rec : summary.log) r.convergence.push_back({rec.evaluations, rec.best_fitness});
 }
 
@@ -157,7 +157,7 @@ std::optional<results::RunRecord> run_calibration_cell(const Experiment& e,
   std::vector<const CalibrationInput*> tune_on;
   for (auto t : c.tune_on) tune_on.push_back(&*tracks[t].calibration);
   const CalibrationTuneOutcome o = run_calibration_tune(tune_on, req);
-  if (o.summary.termination == "stopped") return std::nullopt;
+  if (o.summary.termination == tuner::Termination::stopped) return std::nullopt;
   set_solver_fields(r, o.param_names, o.params, o.tuned_score, o.summary, o.failures);
   if (!c.heldout) {
     // Tuned on the scored track alone: its scores are the outcome's.
@@ -184,7 +184,7 @@ std::optional<results::RunRecord> run_ukf_cell(const Experiment& e, const std::v
   std::vector<const FusionInput*> tune_on;
   for (auto t : c.tune_on) tune_on.push_back(&*tracks[t].fusion);
   const UkfTuneOutcome o = run_ukf_tune(tune_on, req);
-  if (o.summary.termination == "stopped") return std::nullopt;
+  if (o.summary.termination == tuner::Termination::stopped) return std::nullopt;
   set_solver_fields(r, o.param_names, o.params, o.tuned_fitness, o.summary, o.failures);
   // Scores on the cell's track (the tuned track itself, or the held-out
   // one): the fused pose's errors with the default and the tuned noise.
@@ -214,7 +214,7 @@ std::optional<results::RunRecord> run_rl_cell(const Experiment& e, const std::ve
   std::string why;
   if (!req.IsValid(&why)) throw Failure(why);
   const RlTuneOutcome o = tune_rl(*tracks[c.score_on].rl, req);
-  if (o.summary.termination == "stopped") return std::nullopt;
+  if (o.summary.termination == tuner::Termination::stopped) return std::nullopt;
   set_solver_fields(r, o.param_names, o.factors, o.tuned_fitness, o.summary, o.diverged);
   if (!o.baseline_after || !o.tuned_after) throw Failure("nothing to score after robot_localization.until_s");
   r.baseline = to_metrics(o.baseline_after->outage);
@@ -237,7 +237,7 @@ std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vecto
   std::vector<const PreparedTrack*> tune_on;
   for (auto t : c.tune_on) tune_on.push_back(&tracks[t]);
   const TuneOutcome o = run_tune(tune_on, req);
-  if (o.summary.termination == "stopped") return std::nullopt;
+  if (o.summary.termination == tuner::Termination::stopped) return std::nullopt;
   set_solver_fields(r, o.param_names, o.params, o.summary.best_fitness, o.summary, o.divergences.total());
   // Scores on the cell's track: the tuned track itself, or the held-out one;
   // modes 8 and 9 score the held-out fixes (the track may have no ground truth).

@@ -65,7 +65,7 @@ void write_json(const std::filesystem::path& path, const RlTuneRequest& r, const
       {"solver", r.solver},
       {"seed", r.seed},
       {"evaluations", o.summary.evaluations},
-      {"termination", o.summary.termination},
+      {"termination", o.summary.termination_text()},
       {"seconds", o.summary.seconds},
       {"factors", params},
       {"baseline_fitness", o.baseline_fitness},

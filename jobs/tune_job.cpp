@@ -97,7 +97,7 @@ tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s, st
     summary = tuner::nlopt_minimize(problem, o);
   }
   if (!summary.ok() || summary.best_x.empty())
-    throw std::runtime_error("solver " + s.solver + ": " + summary.termination);
+    throw std::runtime_error("solver " + s.solver + ": " + summary.termination_text());
   return summary;
 }
 

@@ -62,7 +62,7 @@ void put_scores_json(nlohmann::json& j, const ErrorMetrics& baseline, const Erro
   j["tuned_fitness"] = tuned_fitness;
   j["evaluations"] = summary.evaluations;
   j["seconds"] = summary.seconds;
-  j["termination"] = summary.termination;
+  j["termination"] = summary.termination_text();
   j["convergence"] = convergence_json(summary);
 }
 

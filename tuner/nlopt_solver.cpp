@@ -178,19 +178,22 @@ bool NloptOptions::IsValid(std::string* why) const {
 Summary nlopt_minimize(ProblemRef problem, const NloptOptions& options) {
   detail::SolverRun solver_run;
   Summary& summary = solver_run.summary;
-  auto finish = [&solver_run](std::string termination) { return solver_run.finish(std::move(termination)); };
+  auto finish = [&solver_run](Termination t, std::string message = {}) {
+    return solver_run.finish(t, std::move(message));
+  };
   Bounds box;
-  if (auto failure = solver_run.start(options, problem, &box)) return finish(*failure);
+  if (auto failure = solver_run.start(options, problem, &box)) return finish(Termination::failure, *failure);
   std::string why;
   const std::size_t dim = box.dimension();
 
   std::vector<double> x(dim);
   if (options.x0) {
     if (options.x0->size() != dim)
-      return finish("failure: nlopt: x0 has " + std::to_string(options.x0->size()) + " entries, expected " +
-                    std::to_string(dim) + " (the box dimension)");
+      return finish(Termination::failure, "nlopt: x0 has " + std::to_string(options.x0->size()) +
+                                              " entries, expected " + std::to_string(dim) +
+                                              " (the box dimension)");
     if (!box.Contains(*options.x0))
-      return finish("failure: nlopt: x0 lies outside the box, expected lower <= x0 <= upper");
+      return finish(Termination::failure, "nlopt: x0 lies outside the box, expected lower <= x0 <= upper");
     x = *options.x0;
   } else {
     for (std::size_t d = 0; d < dim; ++d) x[d] = 0.5 * (box.lower[d] + box.upper[d]);
@@ -200,13 +203,13 @@ Summary nlopt_minimize(ProblemRef problem, const NloptOptions& options) {
   const std::vector<double> start = x;
   const unsigned n = static_cast<unsigned>(dim);
   OptPtr opt(nlopt_create(info.algorithm, n));
-  if (!opt) return finish("failure: nlopt: could not create " + std::string(info.name));
+  if (!opt) return finish(Termination::failure, "nlopt: could not create " + std::string(info.name));
 
   Run run(problem, options, opt.get());
   auto check = [&](nlopt_result r, const char* what) {
     if (r >= 0) return true;
     const char* msg = nlopt_get_errmsg(opt.get());
-    why = "failure: nlopt: " + std::string(what) + ": " + result_name(r) +
+    why = "nlopt: " + std::string(what) + ": " + result_name(r) +
           (msg != nullptr ? std::string(" (") + msg + ")" : "");
     return false;
   };
@@ -217,13 +220,13 @@ Summary nlopt_minimize(ProblemRef problem, const NloptOptions& options) {
              "set_maxeval") ||
       !check(nlopt_set_xtol_rel(opt.get(), info.global ? 0.0 : options.xtol_rel), "set_xtol_rel") ||
       (options.population > 0 && !check(nlopt_set_population(opt.get(), options.population), "set_population")))
-    return finish(why);
+    return finish(Termination::failure, why);
   if (info.algorithm == NLOPT_G_MLSL_LDS) {
     OptPtr local(nlopt_create(kMlslLocal, n));
-    if (!local) return finish("failure: nlopt: could not create the MLSL local optimizer");
+    if (!local) return finish(Termination::failure, "nlopt: could not create the MLSL local optimizer");
     if (!check(nlopt_set_xtol_rel(local.get(), options.xtol_rel), "local set_xtol_rel") ||
         !check(nlopt_set_local_optimizer(opt.get(), local.get()), "set_local_optimizer"))
-      return finish(why);
+      return finish(Termination::failure, why);
   }
 
   // Fold the 64-bit seed: NLopt's generator uses only the low 32 bits.
@@ -236,13 +239,14 @@ Summary nlopt_minimize(ProblemRef problem, const NloptOptions& options) {
   summary.best_fitness = run.best_f;
   summary.best_x = run.best_x.empty() ? start : run.best_x;
   summary.log = std::move(run.log);
-  if (!run.failure.empty()) return finish("failure: " + run.failure);
-  if (run.stopped) return finish("stopped");
-  if (run.budget_hit || result == NLOPT_MAXEVAL_REACHED) return finish("max_evaluations");
-  if (result == NLOPT_ROUNDOFF_LIMITED || result > 0) return finish("nlopt: " + result_name(result));
+  if (!run.failure.empty()) return finish(Termination::failure, run.failure);
+  if (run.stopped) return finish(Termination::stopped);
+  if (run.budget_hit || result == NLOPT_MAXEVAL_REACHED) return finish(Termination::max_evaluations);
+  if (result == NLOPT_ROUNDOFF_LIMITED || result > 0)
+    return finish(Termination::solver_criterion, "nlopt: " + result_name(result));
   const char* msg = nlopt_get_errmsg(opt.get());
-  return finish("failure: nlopt: " + result_name(result) +
-                (msg != nullptr ? std::string(" (") + msg + ")" : ""));
+  return finish(Termination::failure,
+                "nlopt: " + result_name(result) + (msg != nullptr ? std::string(" (") + msg + ")" : ""));
 }
 
 }  // namespace odotune::tuner

@@ -75,7 +75,7 @@ struct NloptOptions {
   // grows, with (evaluations done, max_evaluations).
   std::function<void(long done, long total)> progress;
   // Optional. Polled before every evaluation; when it reads true the run
-  // ends with termination "stopped".
+  // ends with Termination::stopped.
   const std::atomic<bool>* stop = nullptr;
 
   // True if usable; otherwise false and *why (if given) says what is wrong,
@@ -94,12 +94,12 @@ bool nlopt_is_global(std::string_view name);
 // Summary: best_x/best_fitness are the best evaluated point (tracked by the
 // adapter, not NLopt's return); log has a record at every strict improvement
 // (iteration = 1-based evaluation index); iterations = evaluations.
-// termination: "max_evaluations" (NLopt's MAXEVAL_REACHED or the adapter's
-// cap), "stopped", "nlopt: <CODE>" for NLopt's other endings (SUCCESS,
-// STOPVAL_REACHED, FTOL_REACHED, XTOL_REACHED, MAXTIME_REACHED,
-// ROUNDOFF_LIMITED — the last still returns a usable point), or
-// "failure: ..." for invalid options/bounds/x0, an NLopt error, or an
-// exception thrown by the fitness or progress callback. Never throws for
+// termination: max_evaluations (NLopt's MAXEVAL_REACHED or the adapter's
+// cap), stopped, solver_criterion with message "nlopt: <CODE>" for NLopt's
+// other endings (SUCCESS, STOPVAL_REACHED, FTOL_REACHED, XTOL_REACHED,
+// MAXTIME_REACHED, ROUNDOFF_LIMITED — the last still returns a usable point),
+// or failure (message: what) for invalid options/bounds/x0, an NLopt error,
+// or an exception thrown by the fitness or progress callback. Never throws for
 // those; exceptions never pass through NLopt's C code.
 Summary nlopt_minimize(ProblemRef problem, const NloptOptions& options);
 

@@ -17,7 +17,7 @@
 //     the best) but they give derivative-free model-based methods (BOBYQA,
 //     COBYLA, ...) nothing to work with.
 //   * It may throw; the solvers turn an exception into
-//     Summary::termination == "failure: <what()>" and never rethrow it.
+//     Termination::failure with message what() and never rethrow it.
 //
 // ProblemRef is a small non-owning, type-erased view of such a struct (like
 // std::function_ref): it stores a pointer to the problem, so the problem must

@@ -52,9 +52,11 @@ bool PsoOptions::IsValid(std::string* why) const {
 Summary pso_minimize(ProblemRef problem, const PsoOptions& options) {
   detail::SolverRun solver_run;
   Summary& summary = solver_run.summary;
-  auto finish = [&solver_run](std::string termination) { return solver_run.finish(std::move(termination)); };
+  auto finish = [&solver_run](Termination t, std::string message = {}) {
+    return solver_run.finish(t, std::move(message));
+  };
   Bounds box;
-  if (auto failure = solver_run.start(options, problem, &box)) return finish(*failure);
+  if (auto failure = solver_run.start(options, problem, &box)) return finish(Termination::failure, *failure);
 
   const int n = options.particles;
   const std::size_t dim = box.dimension();
@@ -119,7 +121,7 @@ Summary pso_minimize(ProblemRef problem, const PsoOptions& options) {
   };
 
   for (int t = 0; t <= options.iterations; ++t) {
-    if (t > 0 && options.stop != nullptr && options.stop->load()) return finish("stopped");
+    if (t > 0 && options.stop != nullptr && options.stop->load()) return finish(Termination::stopped);
 
 #pragma omp parallel for schedule(dynamic)
     for (int i = 0; i < n; ++i) step_particle(t, i);
@@ -130,7 +132,7 @@ Summary pso_minimize(ProblemRef problem, const PsoOptions& options) {
     // earlier (lower-index / older) record on ties.
     for (int i = 0; i < n; ++i) {
       const std::size_t ui = static_cast<std::size_t>(i);
-      if (errors[ui]) return finish("failure: " + what_of(errors[ui]));
+      if (errors[ui]) return finish(Termination::failure, what_of(errors[ui]));
       const double* xi = &x[ui * dim];
       if (t == 0 || fit[ui] < pbest_f[ui]) {
         pbest_f[ui] = fit[ui];
@@ -148,11 +150,11 @@ Summary pso_minimize(ProblemRef problem, const PsoOptions& options) {
       try {
         options.progress(summary.evaluations, total);
       } catch (...) {
-        return finish("failure: progress callback threw: " + what_of(std::current_exception()));
+        return finish(Termination::failure, "progress callback threw: " + what_of(std::current_exception()));
       }
     }
   }
-  return finish("max_iterations");
+  return finish(Termination::max_iterations);
 }
 
 }  // namespace odotune::tuner

@@ -67,7 +67,7 @@ struct PsoOptions {
   std::function<void(long done, long total)> progress;
   // Optional. Polled by the calling thread before each iteration t >= 1 (the
   // initial swarm is always evaluated); when it reads true the run ends with
-  // termination "stopped". Set it from a signal handler for Ctrl-C.
+  // Termination::stopped. Set it from a signal handler for Ctrl-C.
   const std::atomic<bool>* stop = nullptr;
 
   // True if usable; otherwise false and *why (if given) names the bad field
@@ -80,7 +80,7 @@ struct PsoOptions {
 
 // Minimises problem.fitness over problem.bounds(). Never throws for bad
 // options, bad bounds or an exception from the fitness/progress callback:
-// those end the run with termination "failure: <why>" (best so far kept).
+// those end the run with Termination::failure, message why (best so far kept).
 Summary pso_minimize(ProblemRef problem, const PsoOptions& options);
 
 }  // namespace odotune::tuner

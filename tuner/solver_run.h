@@ -41,23 +41,24 @@ class SolverRun {
   SolverRun() { summary.best_fitness = kInf; }
 
   // Validates `options` and fetches and validates the box into *box. On a
-  // problem returns the failure text ("failure: ...") for finish().
+  // problem returns what is wrong, the message of a Termination::failure.
   template <typename Options>
   std::optional<std::string> start(const Options& options, ProblemRef problem, Bounds* box) {
     std::string why;
-    if (!options.IsValid(&why)) return "failure: " + why;
+    if (!options.IsValid(&why)) return why;
     try {
       *box = problem.bounds();
     } catch (...) {
-      return "failure: bounds() threw: " + what_of(std::current_exception());
+      return "bounds() threw: " + what_of(std::current_exception());
     }
-    if (!box->IsValid(&why)) return "failure: " + why;
+    if (!box->IsValid(&why)) return why;
     return std::nullopt;
   }
 
-  // Sets the termination and the wall time, and returns the summary.
-  Summary finish(std::string termination) {
-    summary.termination = std::move(termination);
+  // Sets the termination, its message and the wall time, and returns the summary.
+  Summary finish(Termination termination, std::string message = {}) {
+    summary.termination = termination;
+    summary.message = std::move(message);
     summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
     return summary;
   }

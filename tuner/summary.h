@@ -18,6 +18,18 @@ struct LogRecord {
   bool operator==(const LogRecord&) const = default;
 };
 
+// Why a run ended (Ceres' TerminationType is the model).
+enum class Termination {
+  max_iterations,    // PSO ran all its iterations
+  max_evaluations,   // the evaluation budget is used up (NLopt)
+  stopped,           // the caller's stop flag was raised
+  solver_criterion,  // the solver's own criterion (message: e.g. "nlopt: XTOL_REACHED")
+  failure,           // invalid input, or the fitness (or progress callback) threw (message: what)
+};
+
+// "max_iterations", "max_evaluations", "stopped", "solver_criterion", "failure".
+const char* to_string(Termination t);
+
 struct Summary {
   std::vector<double> best_x;  // best point evaluated; if no finite fitness was
                                // seen, the start point (PSO: particle 0's first
@@ -27,18 +39,16 @@ struct Summary {
   long evaluations = 0;        // fitness calls made
   int iterations = 0;          // PSO: completed swarm iterations after the initial
                                // one; NLopt: equal to evaluations (capped at INT_MAX)
-  // Why the run ended, one of:
-  //   "max_iterations"   PSO ran all its iterations
-  //   "max_evaluations"  the evaluation budget is used up (NLopt)
-  //   "stopped"          the caller's stop flag was raised
-  //   "nlopt: <CODE>"    NLopt ended by its own criterion, e.g. "nlopt: XTOL_REACHED"
-  //   "failure: <what>"  invalid input, or the fitness (or progress callback) threw
-  std::string termination;
+  Termination termination = Termination::failure;
+  std::string message;         // solver_criterion and failure: what (see Termination)
   double seconds = 0;          // wall-clock duration of the run [s]
   std::vector<LogRecord> log;  // convergence history, in order
 
-  // True unless the run ended with "failure: ...".
-  bool ok() const { return termination.rfind("failure:", 0) != 0; }
+  bool ok() const { return termination != Termination::failure; }
+  // The end as one line, as outputs and stores print it: the termination's
+  // name; the message for solver_criterion ("nlopt: XTOL_REACHED"); "failure:
+  // <message>" for failure.
+  std::string termination_text() const;
 };
 
 }  // namespace odotune::tuner

@@ -64,7 +64,7 @@ TEST(RlTune, EverySolverRunsOnTheRobotLocalizationObjective) {
     s.particles = 5;
     s.iterations = 4;  // 25 evaluations, as the NLopt budget
     const tuner::Summary sum = run_solver(problem, s);
-    EXPECT_TRUE(sum.ok()) << solver << ": " << sum.termination;
+    EXPECT_TRUE(sum.ok()) << solver << ": " << sum.termination_text();
     EXPECT_GT(sum.evaluations, 0) << solver;
     EXPECT_LE(sum.evaluations, 25) << solver;
     ASSERT_EQ(sum.best_x.size(), lo.size()) << solver;

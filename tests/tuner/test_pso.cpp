@@ -84,7 +84,7 @@ TEST(Pso, SameSeedIsBitIdenticalWith1_2And4Threads) {
   const Summary s1 = with_threads(1, [&] { return pso_minimize(p1, o); });
   const Summary s2 = with_threads(2, [&] { return pso_minimize(p2, o); });
   const Summary s4 = with_threads(4, [&] { return pso_minimize(p4, o); });
-  ASSERT_TRUE(s1.ok()) << s1.termination;
+  ASSERT_TRUE(s1.ok()) << s1.termination_text();
   EXPECT_EQ(s1.log.size(), 41u);
   expect_identical(s1, s2);
   expect_identical(s1, s4);
@@ -117,7 +117,8 @@ TEST(Pso, EvaluationCountIsParticlesTimesIterationsPlusOne) {
     Counted<Sphere> counted(sphere);
     const Summary s = pso_minimize(counted, o);
     const long expected = static_cast<long>(shape.particles) * (shape.iterations + 1);
-    EXPECT_EQ(s.termination, "max_iterations");
+    EXPECT_EQ(s.termination_text(), "max_iterations");
+    EXPECT_EQ(s.termination, Termination::max_iterations);
     EXPECT_EQ(counted.calls.load(), expected);
     EXPECT_EQ(s.evaluations, expected);
     EXPECT_EQ(o.evaluation_budget(), expected);
@@ -191,8 +192,8 @@ TEST(Pso, InvalidOptionsAreRejectedWithAMessageNamingTheBadValue) {
     Sphere sphere;
     Counted<Sphere> counted(sphere);
     const Summary s = pso_minimize(counted, o);
-    EXPECT_THAT(s.termination, StartsWith("failure: "));
-    EXPECT_THAT(s.termination, HasSubstr(b.expected));
+    EXPECT_THAT(s.termination_text(), StartsWith("failure: "));
+    EXPECT_THAT(s.termination_text(), HasSubstr(b.expected));
     EXPECT_FALSE(s.ok());
     EXPECT_EQ(counted.calls.load(), 0);
     EXPECT_EQ(s.evaluations, 0);
@@ -208,13 +209,13 @@ struct BadBox {
 TEST(Pso, InvalidBoundsEndInAFailureNamingTheEntry) {
   const BadBox reversed{{{0, 3}, {1, 2}}};
   Summary s = pso_minimize(reversed, small_pso(1));
-  EXPECT_THAT(s.termination, StartsWith("failure: bounds: lower[1] = 3"));
+  EXPECT_THAT(s.termination_text(), StartsWith("failure: bounds: lower[1] = 3"));
   const BadBox infinite{{{0}, {std::numeric_limits<double>::infinity()}}};
   s = pso_minimize(infinite, small_pso(1));
-  EXPECT_THAT(s.termination, HasSubstr("upper[0] = inf"));
+  EXPECT_THAT(s.termination_text(), HasSubstr("upper[0] = inf"));
   const BadBox mismatched{{{0, 0}, {1}}};
   s = nlopt_minimize(mismatched, NloptOptions{});
-  EXPECT_THAT(s.termination, HasSubstr("lower has 2 entries but upper has 1"));
+  EXPECT_THAT(s.termination_text(), HasSubstr("lower has 2 entries but upper has 1"));
   EXPECT_EQ(s.evaluations, 0);
 }
 
@@ -232,7 +233,8 @@ TEST(Pso, StopFlagRaisedByProgressStopsBeforeTheNextIteration) {
     if (done >= 3L * o.particles) stop = true;  // after iteration 2
   };
   const Summary s = with_threads(2, [&] { return pso_minimize(Rastrigin{}, o); });
-  EXPECT_EQ(s.termination, "stopped");
+  EXPECT_EQ(s.termination_text(), "stopped");
+  EXPECT_EQ(s.termination, Termination::stopped);
   EXPECT_EQ(s.evaluations, 3L * o.particles);
   EXPECT_EQ(s.iterations, 2);
   EXPECT_EQ(s.log.size(), 3u);
@@ -259,7 +261,8 @@ TEST(Pso, StopFlagRaisedDuringEvaluationsStopsEarly) {
   PsoOptions o = small_pso(6);
   o.stop = &stop;
   const Summary s = with_threads(4, [&] { return pso_minimize(p, o); });
-  EXPECT_EQ(s.termination, "stopped");
+  EXPECT_EQ(s.termination_text(), "stopped");
+  EXPECT_EQ(s.termination, Termination::stopped);
   EXPECT_LT(s.evaluations, o.evaluation_budget());
   EXPECT_EQ(s.evaluations % o.particles, 0);
   EXPECT_EQ(s.evaluations, 5L * o.particles);  // 100 falls in iteration 4 (evals 97..120)
@@ -275,7 +278,8 @@ TEST(Pso, ThrowingObjectiveEndsInFailureWithoutEscaping) {
   };
   Summary s;
   EXPECT_NO_THROW(s = with_threads(4, [&] { return pso_minimize(Thrower{}, small_pso(7)); }));
-  EXPECT_EQ(s.termination, "failure: model diverged at x0 > 4");
+  EXPECT_EQ(s.termination_text(), "failure: model diverged at x0 > 4");
+  EXPECT_EQ(s.termination, Termination::failure);
   EXPECT_FALSE(s.ok());
 }
 
@@ -341,7 +345,7 @@ NloptOptions crs2(std::uint64_t seed) {
 TEST(Nlopt, SameSeedGivesIdenticalResultForCrs2) {
   const Summary a = nlopt_minimize(Rastrigin{}, crs2(11));
   const Summary b = nlopt_minimize(Rastrigin{}, crs2(11));
-  ASSERT_TRUE(a.ok()) << a.termination;
+  ASSERT_TRUE(a.ok()) << a.termination_text();
   expect_identical(a, b);
   const Summary c = nlopt_minimize(Rastrigin{}, crs2(12));
   EXPECT_NE(a.log, c.log);
@@ -380,7 +384,8 @@ TEST(Nlopt, ThrowingObjectiveEndsInFailureWithoutEscaping) {
     o.max_evaluations = 1000;
     Summary s;
     EXPECT_NO_THROW(s = nlopt_minimize(p, o));
-    EXPECT_EQ(s.termination, "failure: simulation blew up");
+    EXPECT_EQ(s.termination_text(), "failure: simulation blew up");
+    EXPECT_EQ(s.termination, Termination::failure);
     EXPECT_EQ(s.evaluations, 10);
     EXPECT_EQ(p.calls, 10);
     EXPECT_EQ(s.best_x.size(), 3u);
@@ -398,7 +403,7 @@ TEST(Nlopt, UnknownAlgorithmIsRejectedListingTheValidNames) {
   Sphere sphere;
   Counted<Sphere> counted(sphere);
   const Summary s = nlopt_minimize(counted, o);
-  EXPECT_THAT(s.termination, StartsWith("failure: nlopt: unknown algorithm"));
+  EXPECT_THAT(s.termination_text(), StartsWith("failure: nlopt: unknown algorithm"));
   EXPECT_EQ(counted.calls.load(), 0);
 
   o.algorithm = "crs2_lm";  // names are case-insensitive
@@ -452,7 +457,8 @@ TEST(Nlopt, BudgetIsRespectedAndReported) {
     o.max_evaluations = r.budget;
     o.xtol_rel = 0;  // PRAXIS: run to the budget
     const Summary s = nlopt_minimize(counted, o);
-    EXPECT_EQ(s.termination, "max_evaluations");
+    EXPECT_EQ(s.termination_text(), "max_evaluations");
+    EXPECT_EQ(s.termination, Termination::max_evaluations);
     EXPECT_EQ(s.evaluations, r.budget);
     EXPECT_EQ(counted.calls.load(), r.budget);
   }
@@ -473,7 +479,8 @@ TEST(Nlopt, StopFlagStopsBeforeTheNextEvaluation) {
   NloptOptions o = crs2(2);
   o.stop = &stop;
   const Summary s = nlopt_minimize(p, o);
-  EXPECT_EQ(s.termination, "stopped");
+  EXPECT_EQ(s.termination_text(), "stopped");
+  EXPECT_EQ(s.termination, Termination::stopped);
   EXPECT_EQ(s.evaluations, 50);
   EXPECT_EQ(p.calls, 50);
 }
@@ -503,10 +510,10 @@ TEST(Nlopt, LocalSolverStartsAtX0OrTheBoxCentre) {
 
   o.x0 = std::vector<double>{1, 2};
   s = nlopt_minimize(Sphere{}, o);
-  EXPECT_EQ(s.termination, "failure: nlopt: x0 has 2 entries, expected 3 (the box dimension)");
+  EXPECT_EQ(s.termination_text(), "failure: nlopt: x0 has 2 entries, expected 3 (the box dimension)");
   o.x0 = std::vector<double>{1, 2, 6};
   s = nlopt_minimize(Sphere{}, o);
-  EXPECT_THAT(s.termination, StartsWith("failure: nlopt: x0 lies outside the box"));
+  EXPECT_THAT(s.termination_text(), StartsWith("failure: nlopt: x0 lies outside the box"));
   EXPECT_EQ(s.evaluations, 0);
 }
 
@@ -527,6 +534,23 @@ TEST(Nlopt, ProgressRunsOnTheCallingThreadAndIsMonotone) {
   EXPECT_LE(seen.size(), 101u);
   EXPECT_TRUE(std::is_sorted(seen.begin(), seen.end()));
   EXPECT_EQ(seen.back(), s.evaluations);
+}
+
+// The end of a run as a kind and a message; its text is what outputs and
+// stores have always printed.
+TEST(Summary, TerminationTextKeepsTheWordsOutputsPrint) {
+  Summary s;
+  s.termination = Termination::max_iterations;
+  EXPECT_EQ(s.termination_text(), "max_iterations");
+  EXPECT_TRUE(s.ok());
+  s.termination = Termination::solver_criterion, s.message = "nlopt: XTOL_REACHED";
+  EXPECT_EQ(s.termination_text(), "nlopt: XTOL_REACHED");
+  EXPECT_TRUE(s.ok());
+  s.termination = Termination::failure, s.message = "bounds: lower[1] = 3 > upper[1] = 2";
+  EXPECT_EQ(s.termination_text(), "failure: bounds: lower[1] = 3 > upper[1] = 2");
+  EXPECT_FALSE(s.ok());
+  EXPECT_STREQ(to_string(Termination::stopped), "stopped");
+  EXPECT_STREQ(to_string(Termination::max_evaluations), "max_evaluations");
 }
 
 }  // namespace

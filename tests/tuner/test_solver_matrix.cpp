@@ -135,7 +135,7 @@ void check_cell(const Case& c, Fn fn, const P& problem) {
     const Summary s = run(c, counted, static_cast<std::uint64_t>(seed));
 
     // Consistency of the Summary.
-    ASSERT_TRUE(s.ok()) << s.termination;
+    ASSERT_TRUE(s.ok()) << s.termination_text();
     EXPECT_GT(s.evaluations, 0);
     EXPECT_LE(s.evaluations, c.budget);
     EXPECT_EQ(s.evaluations, counted.calls.load());
@@ -154,7 +154,8 @@ void check_cell(const Case& c, Fn fn, const P& problem) {
     // Quality.
     ASSERT_TRUE(std::isfinite(s.best_fitness));
     if (global || fn != Fn::kRastrigin) {
-      EXPECT_LE(s.best_fitness, tol) << "best_x[0] = " << s.best_x[0] << ", termination " << s.termination;
+      EXPECT_LE(s.best_fitness, tol) << "best_x[0] = " << s.best_x[0] << ", termination "
+                                     << s.termination_text();
     } else {
       EXPECT_LE(s.best_fitness, f_start);
     }
