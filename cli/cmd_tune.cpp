@@ -136,7 +136,16 @@ void register_tune(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   std::string algos;
   for (const auto& a : tuner::nlopt_algorithm_names()) algos += " " + a;
-  sub->add_option("--solver", req->solver, "pso or nlopt:NAME, NAME one of" + algos);
+  sub->add_option_function<std::string>(
+         "--solver",
+         [req](const std::string& text) {
+           std::string why;
+           const std::optional<tuner::SolverChoice> solver = tuner::SolverChoice::parse(text, &why);
+           if (!solver) throw CLI::ValidationError("--solver", why);
+           req->solver = *solver;
+         },
+         "pso or nlopt:NAME, NAME one of" + algos)
+      ->default_str("pso");
   sub->add_option("--seed", req->seed, "random seed (same seed ⇒ same result)");
   sub->add_option("--particles", req->particles, "PSO swarm size")->check(CLI::PositiveNumber);
   sub->add_option("--iterations", req->iterations, "PSO iterations")->check(CLI::NonNegativeNumber);

@@ -66,7 +66,7 @@ void print_rl_tune(const RlTuneRequest& r, const RlTuneOutcome& o) {
              "noise{}, {} seed {}\n",
              o.bag.filename().string(), o.params_file.filename().string(), o.span_s, o.duration_s,
              to_string(r.options.fitness), to_string(r.options.space),
-             r.options.input_covariances ? " and input covariances" : "", r.solver, r.seed);
+             r.options.input_covariances ? " and input covariances" : "", r.solver.name(), r.seed);
   fmt::print("  tuning span, held-out fixes:  {}\n", change(o.baseline_heldout, o.tuned_heldout));
   fmt::print("  tuning span, {:.0f}-s outages:  {}\n", r.options.outage_s,
              change(o.baseline_outage, o.tuned_outage));

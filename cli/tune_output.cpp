@@ -23,7 +23,7 @@ void print_tune_outcome(const TuneOutcome& o) {
   const std::string names = track_names(o.tracks);
   if (!o.note.empty()) fmt::print("{}\n", o.note);
   fmt::print("tuned {} noise on {} for mode {} ({}) with {} (seed {})\n", filters::to_string(o.request.model),
-             names, o.request.mode, fitness_mode_name(o.request.mode), o.request.solver, o.request.seed);
+             names, o.request.mode, fitness_mode_name(o.request.mode), o.request.solver.name(), o.request.seed);
   if (o.against_fixes) {
     const FixCvOptions& cv = o.fix_cv;
     fmt::print("  held-out fixes ({} folds of {:g} s blocks), baseline → tuned:\n", cv.folds, cv.block_s);
@@ -45,7 +45,7 @@ void print_tune_outcome(const CalibrationTuneOutcome& o) {
   const std::string names = track_names(o.baseline.tracks);
   fmt::print("tuned the {} calibrator's settings on {} with {} (seed {}); resampler {}, policy {}, "
              "calibrator seed {}\n",
-             to_string(TunedModel::calibration(r.model)), names, r.solver, r.seed,
+             to_string(TunedModel::calibration(r.model)), names, r.solver.name(), r.seed,
              filters::to_string(o.default_pf.resampler), filters::to_string(o.default_pf.policy),
              o.default_pf.seed);
   fmt::print("  score (lower is better): {:.4g} with the paper's defaults → {:.4g} tuned{}\n", o.baseline_score,
@@ -77,7 +77,7 @@ void print_tune_outcome(const UkfTuneOutcome& o) {
   const UkfTuneRequest& r = o.request;
   const std::string names = track_names(o.tracks);
   fmt::print("tuned the fusion UKF's noise on {} for mode {} ({}) with {} (seed {})\n", names, r.mode,
-             fitness_mode_name(r.mode), r.solver, r.seed);
+             fitness_mode_name(r.mode), r.solver.name(), r.seed);
   fmt::print("  fused pose vs ground truth, defaults → tuned{}\n",
              o.default_kept ? " (the defaults scored best and are kept)" : "");
   print_tune_result(o.baseline_mean, o.tuned_mean, o.tracks, o.param_names, o.params, o.summary, o.failures);

@@ -117,10 +117,14 @@ std::vector<std::size_t> pending_cells(const Experiment& e, const std::vector<Pr
 
 namespace {
 
-// The experiment's solver for a cell (its seed), shared by EKF and calibrator cells.
+// The experiment's solver for a cell (its seed), shared by EKF and calibrator
+// cells. Throws std::invalid_argument for a solver that is not one.
 SolverSettings cell_solver(const Experiment& e, const GridCell& c, const std::atomic<bool>* stop) {
   SolverSettings s;
-  s.solver = e.solver;
+  std::string why;
+  const std::optional<tuner::SolverChoice> solver = tuner::SolverChoice::parse(e.solver, &why);
+  if (!solver) throw std::invalid_argument(why);
+  s.solver = *solver;
   s.seed = c.seed;
   s.particles = e.particles;
   s.iterations = e.iterations;

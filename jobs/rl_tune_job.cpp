@@ -34,8 +34,8 @@ std::string provenance(const RlTuneRequest& r, const RlTuneOutcome& o) {
       "On the tuning span: held-out fixes {} -> {}; outages of {:.0f} s {} -> {}.\n",
       r.command_line.empty() ? "odotune tune --rl-params ..." : r.command_line, o.bag.string(),
       o.params_file.string(), o.span_s, o.duration_s, to_string(r.options.fitness), to_string(r.options.space),
-      r.options.input_covariances ? " and input covariances" : "", r.solver, r.seed, o.summary.evaluations,
-      score_text(o.baseline_heldout), score_text(o.tuned_heldout), r.options.outage_s,
+      r.options.input_covariances ? " and input covariances" : "", r.solver.name(), r.seed,
+      o.summary.evaluations, score_text(o.baseline_heldout), score_text(o.tuned_heldout), r.options.outage_s,
       score_text(o.baseline_outage), score_text(o.tuned_outage));
   if (o.baseline_after && o.tuned_after) {
     c += fmt::format("Held out (after {:.1f} s, never seen by the tune), file's values -> tuned:\n"
@@ -62,7 +62,7 @@ void write_json(const std::filesystem::path& path, const RlTuneRequest& r, const
       {"fitness", std::string(to_string(r.options.fitness))},
       {"space", std::string(to_string(r.options.space))},
       {"span_s", o.span_s},
-      {"solver", r.solver},
+      {"solver", r.solver.name()},
       {"seed", r.seed},
       {"evaluations", o.summary.evaluations},
       {"termination", o.summary.termination_text()},

@@ -120,7 +120,7 @@ TuneCommandOutcome ekf_tune(const TuneCommandRequest& r, filters::NoiseModel mod
     cfg.model = req.model;
     cfg.noise = out.noise;
     cfg.comment = fmt::format("tuned by odotune tune: model {}, mode {}, solver {}, seed {}", r.model, req.mode,
-                              req.solver, req.seed);
+                              req.solver.name(), req.seed);
     write_ekf_config(cfg, r.config_out);
   }
   return result;
@@ -167,7 +167,7 @@ TuneCommandOutcome calibration_tune(const TuneCommandRequest& r, CalibratorModel
     cfg.comment = fmt::format(
         "tuned by odotune tune: model {}, solver {}, seed {}, calibrator seed {}; score {:.6g} "
         "(paper's defaults {:.6g})",
-        r.model, req.solver, req.seed, req.pf_seed, out.tuned_score, out.baseline_score);
+        r.model, req.solver.name(), req.seed, req.pf_seed, out.tuned_score, out.baseline_score);
     write_pf_config(cfg, r.config_out);
   }
   return result;
@@ -191,7 +191,7 @@ TuneCommandOutcome ukf_tune(const TuneCommandRequest& r) {
     cfg.comment = fmt::format(
         "tuned by odotune tune: model ukf, mode {} ({}), solver {}, seed {}\n"
         "fused pose RMSE {:.2f} mm tuned vs {:.2f} mm with the defaults (mean over {} track{})",
-        req.mode, fitness_mode_name(req.mode), req.solver, req.seed, out.tuned_mean.rmse_m * 1e3,
+        req.mode, fitness_mode_name(req.mode), req.solver.name(), req.seed, out.tuned_mean.rmse_m * 1e3,
         out.baseline_mean.rmse_m * 1e3, inputs.size(), inputs.size() == 1 ? "" : "s");
     write_ukf_config(cfg, r.config_out);
   }

@@ -37,18 +37,14 @@ PreparedTrack prepare_track_fix_cv(const Track& track, const FixCvOptions& cv) {
 }
 
 bool SolverSettings::IsValid(std::string* why) const {
-  if (solver != "pso" && solver.rfind("nlopt:", 0) != 0) {
-    if (why) *why = "solver '" + solver + "': expected pso or nlopt:NAME";
-    return false;
-  }
-  if (solver == "pso") {
+  if (solver.kind == tuner::SolverChoice::Kind::pso) {
     tuner::PsoOptions o;
     o.particles = particles;
     o.iterations = iterations;
     return o.IsValid(why);
   }
   tuner::NloptOptions o;
-  o.algorithm = solver.substr(6);
+  o.algorithm = solver.nlopt_algorithm;
   o.max_evaluations = evaluations > 0 ? evaluations : 1;
   return o.IsValid(why);
 }
@@ -78,7 +74,7 @@ ErrorMetrics mean_metrics(const std::vector<ErrorMetrics>& per_track) {
 
 tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s, std::vector<double> x0) {
   tuner::Summary summary;
-  if (s.solver == "pso") {
+  if (s.solver.kind == tuner::SolverChoice::Kind::pso) {
     tuner::PsoOptions o;
     o.particles = s.particles;
     o.iterations = s.iterations;
@@ -88,7 +84,7 @@ tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s, st
     summary = tuner::pso_minimize(problem, o);
   } else {
     tuner::NloptOptions o;
-    o.algorithm = s.solver.substr(6);
+    o.algorithm = s.solver.nlopt_algorithm;
     o.max_evaluations = s.evaluations > 0 ? s.evaluations : static_cast<long>(s.particles) * (s.iterations + 1);
     o.seed = s.seed;
     if (!x0.empty()) o.x0 = std::move(x0);
@@ -97,7 +93,7 @@ tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s, st
     summary = tuner::nlopt_minimize(problem, o);
   }
   if (!summary.ok() || summary.best_x.empty())
-    throw std::runtime_error("solver " + s.solver + ": " + summary.termination_text());
+    throw std::runtime_error("solver " + s.solver.name() + ": " + summary.termination_text());
   return summary;
 }
 

@@ -22,6 +22,7 @@
 #include "objectives/replay.h"
 #include "tracks/track.h"
 #include "tuner/problem.h"
+#include "tuner/solver_choice.h"
 #include "tuner/summary.h"
 
 namespace odotune {
@@ -59,7 +60,7 @@ PreparedTrack prepare_track_fix_cv(const Track& track, const FixCvOptions& cv = 
 // The solver part of a tuning request, shared by the EKF (TuneRequest) and
 // the calibrator tunes (calibration_tune_job.h), which both extend it.
 struct SolverSettings {
-  std::string solver = "pso";  // "pso" or "nlopt:NAME"
+  tuner::SolverChoice solver;  // PSO by default
   std::uint64_t seed = 1;
   int particles = 50;    // PSO
   int iterations = 150;  // PSO

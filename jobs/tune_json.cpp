@@ -45,9 +45,9 @@ nlohmann::json tune_json(const TuneOutcome& o) {
 }
 
 void put_solver_json(nlohmann::json& j, const SolverSettings& s) {
-  j["solver"] = s.solver;
+  j["solver"] = s.solver.name();
   j["seed"] = s.seed;
-  if (s.solver == "pso") {
+  if (s.solver.kind == tuner::SolverChoice::Kind::pso) {
     j["particles"] = s.particles;
     j["iterations"] = s.iterations;
   }

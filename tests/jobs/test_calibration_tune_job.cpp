@@ -109,7 +109,7 @@ TEST(CalibrationTune, TunedIsTheBetterOfTheSolversBestAndTheDefaults) {
 
 TEST(CalibrationTune, NloptStartsFromTheDefaults) {
   CalibrationTuneRequest r = small_request(CalibratorModel::adaptive_pf);
-  r.solver = "nlopt:SBPLX";
+  r.solver = {odotune::tuner::SolverChoice::Kind::nlopt, "SBPLX"};
   r.evaluations = 4;
   const odotune::CalibrationTuneOutcome o = odotune::run_calibration_tune({&track()}, r);
   EXPECT_LE(o.summary.evaluations, 4);
@@ -147,10 +147,10 @@ TEST(CalibrationTune, RefusesTracksOfDifferentRobotsAndBadRequests) {
                std::invalid_argument);
   EXPECT_THROW(odotune::run_calibration_tune({}, small_request(CalibratorModel::pf)), std::invalid_argument);
   CalibrationTuneRequest bad = small_request(CalibratorModel::pf);
-  bad.solver = "annealing";
+  bad.solver = {odotune::tuner::SolverChoice::Kind::nlopt, "ANNEALING"};
   std::string why;
   EXPECT_FALSE(bad.IsValid(&why));
-  EXPECT_NE(why.find("annealing"), std::string::npos) << why;
+  EXPECT_NE(why.find("ANNEALING"), std::string::npos) << why;
   EXPECT_THROW(odotune::run_calibration_tune({&track()}, bad), std::invalid_argument);
   bad = small_request(CalibratorModel::pf);
   bad.weights.pose = -1;

@@ -59,7 +59,7 @@ TEST(RlTune, EverySolverRunsOnTheRobotLocalizationObjective) {
   for (const std::string& n : tuner::nlopt_algorithm_names()) solvers.push_back("nlopt:" + n);
   for (const std::string& solver : solvers) {
     SolverSettings s;
-    s.solver = solver;
+    s.solver = tuner::SolverChoice::parse(solver, nullptr).value();
     s.seed = 2;
     s.particles = 5;
     s.iterations = 4;  // 25 evaluations, as the NLopt budget

@@ -19,6 +19,7 @@
 #include "core/counter_rng.h"
 #include "tuner/nlopt_solver.h"
 #include "tuner/pso.h"
+#include "tuner/solver_choice.h"
 
 namespace odotune::tuner {
 namespace {
@@ -551,6 +552,30 @@ TEST(Summary, TerminationTextKeepsTheWordsOutputsPrint) {
   EXPECT_FALSE(s.ok());
   EXPECT_STREQ(to_string(Termination::stopped), "stopped");
   EXPECT_STREQ(to_string(Termination::max_evaluations), "max_evaluations");
+}
+
+// A solver is named once, as the user writes it, and printed the same way.
+TEST(SolverChoice, ParsesWhatUsersWriteAndRefusesTheRestByName) {
+  std::string why;
+  const std::optional<SolverChoice> pso = SolverChoice::parse("pso", &why);
+  ASSERT_TRUE(pso.has_value());
+  EXPECT_EQ(pso->kind, SolverChoice::Kind::pso);
+  EXPECT_EQ(pso->name(), "pso");
+  const std::optional<SolverChoice> sbplx = SolverChoice::parse("nlopt:SBPLX", &why);
+  ASSERT_TRUE(sbplx.has_value()) << why;
+  EXPECT_EQ(sbplx->kind, SolverChoice::Kind::nlopt);
+  EXPECT_EQ(sbplx->nlopt_algorithm, "SBPLX");
+  EXPECT_EQ(sbplx->name(), "nlopt:SBPLX");
+  for (const std::string& n : nlopt_algorithm_names()) {
+    const std::optional<SolverChoice> c = SolverChoice::parse("nlopt:" + n, &why);
+    ASSERT_TRUE(c.has_value()) << n << ": " << why;
+    EXPECT_EQ(SolverChoice::parse(c->name(), nullptr), c) << n;  // round trip
+  }
+  EXPECT_FALSE(SolverChoice::parse("annealing", &why).has_value());
+  EXPECT_EQ(why, "solver 'annealing': expected pso or nlopt:NAME");
+  EXPECT_FALSE(SolverChoice::parse("nlopt:NOPE", &why).has_value());
+  EXPECT_THAT(why, StartsWith("nlopt: unknown algorithm 'NOPE'"));
+  EXPECT_FALSE(SolverChoice::parse("PSO", &why).has_value());
 }
 
 }  // namespace
