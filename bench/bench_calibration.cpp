@@ -1,4 +1,4 @@
-// Online odometry calibration speed (issue 5; Fariña, Toledo & Acosta,
+// Online odometry calibration speed (Fariña, Toledo & Acosta,
 // RA-L 2026, Table I: 0.5–1.9 ms per PF iteration, Table II: 0.89 ms for the
 // adaptive PF at ≈ 8000 particles, 0.46 ms for the DKF).
 //   BM_PfStep:  one PfCalibrator::step() (prediction, update, estimate,

@@ -1,6 +1,6 @@
-// Speed of the sim-to-real diagnosis (docs/benchmarks.md; issue 4 asks for a
-// five-minute 100 Hz track "well under a minute", issue 15 for cost linear
-// in the track's length): diagnose() end to end (sensor checks, model
+// Speed of the sim-to-real diagnosis (docs/benchmarks.md; the aims: a
+// five-minute 100 Hz track well under a minute, cost linear in the track's
+// length): diagnose() end to end (sensor checks, model
 // selection over the wheel effects, location, findings).
 //   BM_Diagnose/300s_100Hz: scenarios/track3.yaml (corridor circuit with
 //     radius_error, speed_radius, lateral_skid and gyro_bias) with every

@@ -1,4 +1,4 @@
-// Learned odometry speed (issue 6, item 7; Fariña et al., Sensors 2023, 23,
+// Learned odometry speed (Fariña et al., Sensors 2023, 23,
 // 961: the nets "must retrain on the robot in milliseconds").
 //   BM_TrainVelocityNet: one training run of a V net (5 units, 186 weights)
 //       on N windows of 20 steps, 100 LM iterations at most, BPTT or

@@ -3,7 +3,7 @@
 //       husky_ekf.yaml: wheel odometry (10 Hz), IMU (30 Hz: orientation,
 //       rates, accelerations) and GPS (2.5 Hz) through navsat — the unit of
 //       work of a tune. robot_localization's own filter core did the same in
-//       0.7 s on this machine (issue 25's measurement); the aim is 20× less.
+//       0.7 s on this machine (measured, docs/benchmarks.md); the aim is 20× less.
 //   BM_RlReplayBag1: the same bag with robot_localization's bag1 test file
 //       (odometry and IMU).
 //   BM_RlSchedule: laying out the node's timer and queue once.

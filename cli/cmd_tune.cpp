@@ -1,6 +1,5 @@
 // odotune tune: tune one EKF noise model, one particle-filter calibrator's
-// settings (issue 5, item 7), or the velocity-fusion UKF's noise (issue 6,
-// item 1), on one or more tracks (jobs/tune_command.h runs it and writes the
+// settings, or the velocity-fusion UKF's noise, on one or more tracks (jobs/tune_command.h runs it and writes the
 // files; cli/tune_output.h prints the result).
 #include <cstdio>
 #include <map>

@@ -83,7 +83,7 @@ struct DiagInput {
 // else v_cmd/w_cmd as body_velocity. With wheel odometry and v_cmd/w_cmd,
 // cmd_* holds the commands linearly interpolated at odo_t_s (first/last value
 // held outside their span). Wheel odometry needs the nominal radii and base.
-// Reference (issue 15, "any reference"): every reference the track has, in any
+// Reference: every reference the track has, in any
 // mix. Ground truth = gt_x/gt_y rows (with gt_theta, unwrapped, when every such
 // row has it); fixes = aps_x/aps_y rows that ground truth does not already
 // cover (no ground-truth sample within 1.5 of its median intervals: fixes

@@ -50,8 +50,7 @@ std::string spans(const std::vector<TimeSegment>& segs, std::size_t max_shown = 
   return s;
 }
 
-// A finding on body-velocity odometry in the odometry's own terms (issue 15,
-// item 4); "" for effects without such a reading. `src` is "command" or
+// A finding on body-velocity odometry in the odometry's own terms; "" for effects without such a reading. `src` is "command" or
 // "velocity odometry". Kinematics as effect_model.h applies them to v, w:
 // radius_error scales both wheels' rim speeds (v, w gain (s_l + s_r)/2),
 // wheel_base_error divides w by its scale, time_offset dt < 0 means the

@@ -1,5 +1,5 @@
 // The human summary `odotune diagnose` prints on stdout. Its first line is one
-// sentence (the contract): what the nominal model left out, its fitted
+// sentence: what the nominal model left out, its fitted
 // size with uncertainty, and the held-out improvement; or that nothing beyond
 // sensor noise was found; or where an unexplained mismatch appears.
 // Later lines: one per finding (where, conditions, share explained, held-out

@@ -1,5 +1,5 @@
-// When a finding matters (docs/diagnosis-design.md, "Findings that matter";
-// issue 15): a finding is reported only when it is significant (select.h's
+// When a finding matters (docs/diagnosis-design.md, "Findings that matter"):
+// a finding is reported only when it is significant (select.h's
 // paired tests and BIC) AND material: the held-out position error it removes
 // must pass a floor tied to the reference's own noise and to the nominal
 // model's error,
@@ -53,7 +53,7 @@ struct MaterialityOptions {
   // model gets wrong.
   double min_gain_share = 0.05;
   // Both chosen on the development seeds 1001-1003 of `odotune study
-  // diagnosis`, the unit tests and the examples of issue 15, never on the
+  // diagnosis`, the unit tests and the documented examples, never on the
   // docs run's seed.
 
   bool IsValid(std::string* why) const {

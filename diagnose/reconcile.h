@@ -1,4 +1,4 @@
-// The sensor checks reconciled with the findings (issue 15, item 3): every
+// The sensor checks reconciled with the findings: every
 // check that flags a departure (sensor_checks.h: a speed or yaw-rate ratio
 // off 1, a gyro bias or scale, a lag between odometry and reference or
 // between commands and motion) either is carried by a finding of an effect

@@ -1,4 +1,4 @@
-// Several recordings of one robot (issue 15, item 3): the diagnosis fitted on
+// Several recordings of one robot: the diagnosis fitted on
 // some recordings and proven on others, reported per recording and pooled.
 //
 // Pooling. The fit recordings are laid end to end in one DiagInput

@@ -1,5 +1,5 @@
 // Physics outside the list (docs/diagnosis-design.md, "Physics outside the
-// list: term search"; issue 15 item 5): when the chosen model of a track
+// list: term search"): when the chosen model of a track
 // still leaves a mismatch, search a library of candidate terms
 // (tracks/model_terms.h: corrections of a wheel's ground speed by functions
 // of v, w, their changes, |v·w|, sin/cos harmonics of each wheel's rotation

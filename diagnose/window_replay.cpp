@@ -94,7 +94,7 @@ std::vector<double> window_starts(const DiagInput& in, double window_s) {
                                             "expected at most {:.0g}",
                                             window_s, t_last - t0, count, kMaxWindows));
   const auto n_win = static_cast<std::size_t>(count);
-  // A reference with gaps (issue 15, "any reference"): a gap longer than two
+  // A reference with gaps: a gap longer than two
   // reference periods ends a window at its last sample before the gap and
   // starts the next at its first sample after it, so that no window dead-
   // reckons across a gap and every anchor is a measured pose, not one

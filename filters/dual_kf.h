@@ -51,7 +51,7 @@ struct DualKfParams {
   // false: the random walk above (the paper's baseline). true: no walk; the
   // parameter covariance fades instead, P_θ⁻ = e^{dt/M}·P_θ bounded by the
   // initial covariance, with the memory M and its change test of
-  // filters/pf_evolution.h (the PF's evidence evolution, issue 16).
+  // filters/pf_evolution.h (the PF's evidence evolution).
   bool fading_memory = true;
   EvidenceMemoryParams evidence;
 

@@ -44,7 +44,7 @@
 //
 // Evolution (PfCalibratorParams::evolution). `paper` is steps 1–2 above.
 // `evidence` (the default) departs from the paper where a measurement
-// carries little information (a slow robot: OptiOdom, issue 16):
+// carries little information (a slow robot: OptiOdom):
 //   - the walk of R_R, R_L, D is each parameter's posterior spread (the
 //     cloud's weighted sd) times √(e^{dt/M} − 1), M the memory of
 //     filters/pf_evolution.h (the time since the last change, 10 s to
@@ -119,7 +119,7 @@ struct PfCalibratorParams {
   // Not in the paper: with α = 1e-4 and σ(V_m) = σ(W_m) = 0.02 at 10 Hz, eq. 11
   // alone gives σ ≈ 5e-6 m, the particles collapse within seconds (often on
   // a value 1 % off) and a 1 % radius step is not tracked; 1e-4 converged and
-  // re-converged in all of 16 synthetic runs (issue 5 report).
+  // re-converged in all of 16 synthetic runs.
   double min_random_walk_sigma_m = 1e-4;
   int min_particles = 500;
   int max_particles = 20000;

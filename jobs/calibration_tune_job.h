@@ -1,5 +1,4 @@
-// One tuning run of a particle-filter calibrator's settings (issue 5, item
-// 7): calibrator kind × tracks × solver × seed → the tuned settings (N_eff
+// One tuning run of a particle-filter calibrator's settings: calibrator kind × tracks × solver × seed → the tuned settings (N_eff
 // fraction, max-weight ratio, α, dispersion per particle, random-walk σ;
 // objectives/calibration_objective.h), scored against the paper's default
 // settings. The mirror of tune_job.h for calibrators; computation only (the

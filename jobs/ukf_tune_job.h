@@ -1,4 +1,4 @@
-// One tuning run of the velocity-fusion UKF's noise (issue 6, item 1):
+// One tuning run of the velocity-fusion UKF's noise:
 // tracks × fitness mode × solver × seed → the tuned process-noise rates,
 // static odometry variances, gyro variance and external-variance scale
 // (objectives/ukf_objective.h), scored against the default settings. The

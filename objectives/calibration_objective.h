@@ -1,4 +1,4 @@
-// Tuning the particle-filter calibrator's own settings (issue 5, item 7): the
+// Tuning the particle-filter calibrator's own settings: the
 // N_eff threshold fraction, the max-weight threshold, α of the adaptive
 // process noise (Fariña, Toledo & Acosta, RA-L 2026, eq. 11), the particles
 // per unit of radius dispersion (§V) and the random-walk σ form a named,

@@ -6,7 +6,7 @@
 // passes (186 for the V/W nets, 651 for the slip detector); Ceres has no
 // reverse mode. The network here is one scalar output of ~200 weights, for
 // which reverse mode gives the whole row for about three forward passes —
-// what lets the nets retrain on the robot in milliseconds (issue 6). The
+// what lets the nets retrain on the robot in milliseconds. The
 // forward-mode path (objectives/lstm_training.h, LstmResidual) remains the
 // reference: tests/objectives/test_lstm_training.cpp checks this gradient
 // against it and against central finite differences.

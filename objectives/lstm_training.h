@@ -1,4 +1,4 @@
-// Training of the LSTM nets (filters/lstm.h) with Ceres, issue 6 item 2.
+// Training of the LSTM nets (filters/lstm.h) with Ceres.
 //
 // Fariña et al., "Improving Odometric Model Performance Based on LSTM
 // Networks", Sensors 2023, 23, 961, train with ADAM on the MAE (§4, §4.1) and

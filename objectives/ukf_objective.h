@@ -1,4 +1,4 @@
-// The velocity-fusion UKF as a tunable model (issue 6, item 1): its noise
+// The velocity-fusion UKF as a tunable model: its noise
 // parameters (the process-noise rates of V and W, the static variances of
 // the kinematic odometry, the gyro's variance and a scale on the external
 // velocities' variances) form a named, bounded, log-scaled space that `tune`

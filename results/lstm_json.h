@@ -1,6 +1,6 @@
 // JSON form of the LSTM nets (filters/lstm.h): weights, standardisation and
 // shape, so that a net trained offline (objectives/lstm_training.h) is saved
-// and loaded on the robot (issue 6: "Weights saved and loaded as JSON").
+// and loaded on the robot.
 //
 //   {
 //     "format": "odotune-lstm/1",

@@ -1,5 +1,5 @@
 // The random benchmark of the sim-to-real diagnosis (`odotune study
-// diagnosis`, issue 15 item 6; method in docs/diagnosis/benchmark.md): cases
+// diagnosis`; method in docs/diagnosis/benchmark.md): cases
 // first .. first + cases - 1 of a seed are drawn (diagnosis_cases.h),
 // simulated, judged detectable from their truth (diagnosis_truth.h),
 // diagnosed (diagnose::diagnose at default options on
@@ -10,7 +10,7 @@
 // on each recording's build_diag_input), judged on its held-out recordings
 // (assess_recordings_detectability) and graded by the same rules, with the
 // held-out recordings' numbers (diagnose/recordings.h). Then summarised: pass rates per category
-// against the issue's aims, a confusion matrix of true × named effects,
+// against the aims (docs/diagnosis/benchmark.md), a confusion matrix of true × named effects,
 // per-effect recall and precision, parameter errors and time per case.
 //
 // Seeds. Case i of seed S uses case_seed(S, i) for everything, so a case

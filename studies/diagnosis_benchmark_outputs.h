@@ -7,7 +7,7 @@
 //                  diagnosis_benchmark.h), with "none" and "unexplained";
 //   confusion.png  and .svg: the same as a heat map (gnuplot, results/gnuplot.h),
 //                  each row coloured by its share of the row's cases;
-//   summary.md     rates per category against the aims, failures by
+//   summary.md     rates per category against the aims (docs/diagnosis/benchmark.md), failures by
 //                  kind, per-effect recall and precision, parameter errors,
 //                  time per case, breakdowns by reference shape and odometry,
 //                  and the failed cases with why;

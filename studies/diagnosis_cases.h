@@ -1,7 +1,8 @@
-// The random cases of the diagnosis benchmark (`odotune study diagnosis`,
-// issue 15 item 6; method in docs/diagnosis/benchmark.md): what case i of a
+// The random cases of the diagnosis benchmark (`odotune study diagnosis`;
+// method in docs/diagnosis/benchmark.md): what case i of a
 // run with seed S draws, and the track it simulates (tracks/simulator.h),
-// shaped to one of the reference shapes of issue 15 item 1.
+// shaped to one of the reference shapes of docs/diagnosis-design.md ("Any
+// reference").
 //
 // Case i draws everything from its own seed case_seed(S, i) (a SplitMix64
 // hash of S and i, core/counter_rng.h), so a case is reproducible alone and

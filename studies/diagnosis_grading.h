@@ -1,4 +1,4 @@
-// Grading one benchmark case (issue 15 item 6; docs/diagnosis/benchmark.md,
+// Grading one benchmark case (docs/diagnosis/benchmark.md,
 // "Grading"): the diagnosis of the case's track against its truth and the
 // truth's detectability (diagnosis_truth.h).
 //

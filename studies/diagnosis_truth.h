@@ -1,5 +1,5 @@
 // Whether a benchmark case's true effects are detectable at all, decided from
-// the truth (issue 15 item 6; docs/diagnosis/benchmark.md, "Detectable"):
+// the truth (docs/diagnosis/benchmark.md, "Detectable"):
 // the true model's held-out gain must be material against the reference
 // noise, by the same floor that a finding must pass (diagnose/materiality.h).
 //

@@ -1,6 +1,6 @@
 // Model terms: corrections of a wheel's ground speed that are NOT physics
-// effects of ../shared/specs/physics-effects.md (issue 15 item 5, "physics
-// outside the list"). One vocabulary for the simulator (tracks/simulator.h,
+// effects of ../shared/specs/physics-effects.md (docs/diagnosis-design.md,
+// "Physics outside the list: term search"). One vocabulary for the simulator (tracks/simulator.h,
 // Scenario::terms), the scenario YAML (`terms:`, formats/scenario_yaml.h) and
 // the diagnosis's term search (diagnose/term_search.h), which finds such
 // terms in a recording and reports them as a formula.

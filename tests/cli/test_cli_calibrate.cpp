@@ -449,7 +449,7 @@ TEST(CliCalibrate, RadiusStepIsReportedWithItsReconvergence) {
 // motion capture): every online method converges toward the truth and ends
 // nearer than the nominal parameters, and the calibrated odometry beats the
 // nominal on a held-out run. The paper's walk (--pf-evolution paper) is the
-// contrast: on this robot it drifts away (issue 16).
+// contrast: on this robot it drifts away.
 TEST(CliCalibrate, SlowRobotEveryOnlineMethodEndsNearerThanNominal) {
   TempDir tmp;
   const std::string scenario = std::string(ODOTUNE_SOURCE_DIR) + "/scenarios/slow_robot.yaml";

@@ -215,7 +215,7 @@ TEST(CliDiagnose, RealOptiOdomRunNamesTheWheelBaseAndImprovesHeldOut) {
             0.8 * j.at("heldout").at("before_pos_rmse_m").get<double>());
 }
 
-// Issue 15, several recordings: two OptiOdom runs of one robot, one fitted
+// Several recordings: two OptiOdom runs of one robot, one fitted
 // and one held out; one JSON document with the spec's keys and a `tracks`
 // list; a recording of another robot is refused in one line, no file.
 TEST(CliDiagnose, SeveralRecordingsFitOneProveOnAnotherInOneDocument) {

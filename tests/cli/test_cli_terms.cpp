@@ -1,4 +1,4 @@
-// Physics outside the list end to end (issue 15 item 5): simulate an
+// Physics outside the list end to end: simulate an
 // out-of-round wheel (scenarios/out_of_round.yaml, shortened), diagnose it,
 // write the scenario with the discovered terms (--scenario-out), simulate
 // that scenario and diagnose again: the same terms come back at the same

@@ -1,5 +1,4 @@
-// End-to-end: tuning the particle-filter calibrators' settings (issue 5,
-// item 7) with `tune --model pf-calib|adaptive-pf-calib`, in an experiment
+// End-to-end: tuning the particle-filter calibrators' settings with `tune --model pf-calib|adaptive-pf-calib`, in an experiment
 // grid (experiments/calibration_smoke.yaml), and what report/export make of
 // such a store.
 #include <algorithm>

@@ -1,4 +1,4 @@
-// End-to-end: tuning the velocity-fusion UKF's noise (issue 6, item 1) with
+// End-to-end: tuning the velocity-fusion UKF's noise with
 // `tune --model ukf`, the odotune-ukf-config/1 round trip, an experiment grid
 // with `models: [ukf]` (experiments/ukf_smoke.yaml), what report and export
 // make of such a store, and the one-line errors.

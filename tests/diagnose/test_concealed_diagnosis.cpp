@@ -1,4 +1,4 @@
-// The concealed-effect suite (issue 4, item 7; cases in concealed_cases.h):
+// The concealed-effect suite (cases in concealed_cases.h):
 // every case is simulated and diagnosed end to end (diagnose(): sensor
 // checks, model selection, location). Pass rule of the design note: exactly
 // the expected effects named (no other finding, `unexplained` included), each
@@ -12,7 +12,7 @@
 // seen through 1 Hz fixes, dropping the smaller one changes the held-out
 // error by less than the fixes' noise, either way.)
 // No-effect cases must give no finding at all.
-// Issue 15 (findings that matter): an expected effect whose true model is not
+// Findings that matter: an expected effect whose true model is not
 // material (studies/diagnosis_truth.h assess_detectability: the true model's
 // held-out gain against diagnose/materiality.h's floor, the random
 // benchmark's rule) is tolerated, named or not, and so is a borderline one
@@ -51,7 +51,7 @@ using odotune::TrueEffect;
 
 // Case name -> why the diagnosis misses it today.
 const std::map<std::string, std::string>& known_misses() {
-  // Empty since issue 15's rule (e) measures the held-out gain as dead
+  // Empty since the selection's materiality rule measures the held-out gain as dead
   // reckoning from the window's start (select.h), as the truth does: both
   // former misses (radius_error_unequal_small, radius_step_late: the gain of
   // the last windows passed the floor, the free-anchored gain over every fold
@@ -79,7 +79,7 @@ std::vector<TrueEffect> truth_of(const ConcealedCase& c) {
   return out;
 }
 
-// Issue 15: only material effects are findings. An expected effect whose
+// Only material effects are findings. An expected effect whose
 // true model is not material (assess_detectability, the benchmark's rule)
 // may be named or not; every material one must be named, nothing else.
 Verdict judge(const ConcealedCase& c, const Diagnosis& d, const Detectability& truth, const DiagInput& in) {

@@ -213,7 +213,7 @@ TEST(DiagInput, ErrorsAreOneLineNamingTheTrack) {
   few_fixes.col(Col::w_cmd) = {0.0, 0.0, 0.0};
   few_fixes.col(Col::aps_x) = {0.0, std::nan(""), 0.2};
   few_fixes.col(Col::aps_y) = {0.0, std::nan(""), 0.0};
-  // Two fixes are accepted (issue 15: only a track without any reference
+  // Two fixes are accepted (only a track without any reference
   // sample is refused; diagnose() says when too few leave nothing to fit) ...
   TrackData outside = few_fixes;
   EXPECT_EQ(message(Track(std::move(few_fixes))), "no error");

@@ -1,4 +1,4 @@
-// Several recordings of one robot (diagnose/recordings.h; issue 15 item 3):
+// Several recordings of one robot (diagnose/recordings.h):
 // pooled fit on some recordings, proof on others, per-recording results, and
 // recordings of another robot refused in one line.
 #include <cmath>

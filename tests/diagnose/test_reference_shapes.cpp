@@ -1,4 +1,4 @@
-// Issue 15, "any reference": build_diag_input and diagnose() accept every mix
+// Any reference: build_diag_input and diagnose() accept every mix
 // of ground truth and position fixes a recording can have (full ground truth,
 // ground truth with gaps, a known start plus fixes, fixes only, fixes at an
 // irregular rate, gaps filled by fixes) and refuse only a track with no

@@ -1,5 +1,5 @@
-// The particle-filter calibrator's settings as a tuning problem (issue 5,
-// item 7; objectives/calibration_objective.h): the space, applying a point,
+// The particle-filter calibrator's settings as a tuning problem
+// (objectives/calibration_objective.h): the space, applying a point,
 // the score's terms on hand-built results, and the objective on a short
 // simulated wheelchair drive.
 #include "objectives/calibration_objective.h"

@@ -523,7 +523,7 @@ void expect_right(std::uint64_t seed, int index, const std::vector<std::string>&
   EXPECT_TRUE(c.grade.pass) << c.grade.why;
 }
 
-// Cases of development seed 1001 that the diagnosis once got wrong (issue 15):
+// Cases of development seed 1001 that the diagnosis once got wrong:
 // 50, a null track on ground truth with gaps whose random wheel slip made
 // residuals grow (named `unexplained` until an unexplained finding had to be
 // reproduced by the term search on held-out windows); 98, a lateral skid on
