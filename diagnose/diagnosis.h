@@ -37,7 +37,7 @@
 //    floor. Growth that no term predicts on held-out windows (a null track's
 //    random wheel slip makes dead reckoning drift faster than the reference
 //    noise, in no repeatable way) is listed in `not_reproduced`, not
-//    reported (random benchmark, dev seed 1001: 4 of 61 null tracks).
+//    reported (4 of 61 null tracks of a development run of the benchmark).
 //    It carries `model` when the term search (term_search.h, run on every
 //    track unless options.terms.enabled is off) finds terms outside
 //    physics-effects.md whose held-out gain passes the materiality floor

@@ -123,7 +123,7 @@
 // verdict). The joint test is reported, not required: a parameter that
 // proves itself against the trained model without it is proven, and the
 // joint test of a scale error beside an idle bias is diluted by the bias's
-// noise (random benchmark, dev seed 1001 case 115: own p = 0.0006, joint
+// noise (a benchmark case: own p = 0.0006, joint
 // 0.0011 over 3 held-out windows, z = 9.7); relevant = drift > max(relevance_factor*noise_drift,
 // min_drift_rad).
 //

@@ -95,7 +95,7 @@
 //      anchor on the reference pose at the window's start with a heading),
 //      what a user's dead reckoning from a known pose gains and what the
 //      benchmark's truth measures; the free anchors of the fits and paired
-//      tests absorb part of a drift (benchmark dev seed 1001, case 110: a
+//      tests absorb part of a drift (a
 //      0.24 % one-wheel radius step cut the CV score by 89 % while removing
 //      9 mm of free-anchored error under a 15 mm floor, 41 mm anchored). A
 //      0.6 ms lag or a 2 ms time offset can be significant on tens of

@@ -54,15 +54,14 @@ void prefer_radius_error(Search& z, int step) {
 
 // Swaps (select.h, "Swaps"): one candidate in place of two selected
 // effects. Greedy steps accept the effect that predicts best now, and two
-// of them can together mimic a third that was never best alone (benchmark
-// dev seed 1004, case 66: a speed offset b_v = -0.027 m/s fitted as radius
+// of them can together mimic a third that was never best alone (a speed offset b_v = -0.027 m/s fitted as radius
 // error + speed radius beside the true wheel base error). Every candidate
 // without a discrete search (not radius_step, not slip_zone) in place of
 // each pair of selected effects is fitted on all windows; the lowest BIC is
 // cross-validated and swapped in when the selected set does not beat it by
 // rules (a) and (e), as the backward pass asks of a removal, and the incoming
 // effect's own parameters matter (rule (d)). (One in place of one, tried
-// too on dev seed 1004, changed no case.)
+// too, changed no case; docs/diagnosis-design.md, "Cases behind the rules".)
 // True when a swap was made; logged as records of phase "swap".
 bool swap_step(Search& z, int step, const std::vector<Effect>& cands) {
   const auto chosen = [&](Effect e) { return std::count(z.chosen.begin(), z.chosen.end(), e) > 0; };
@@ -295,7 +294,7 @@ bool backward_round(Search& z, int round) {
       // (noop_differs_from_absence; actuator_lag replays the commands):
       // accepted within a pair, it may be left alone by the pair's other
       // effect's removal, and then its own parameters must still matter
-      // (benchmark dev seed 1004, case 40: a null track's 360-cpr encoders
+      // (a null track's 360-cpr encoders
       // lost to the commands; actuator_lag + time_offset passed as a pair,
       // time_offset was dropped, tau = 0.14 ms stayed).
       if (!d.removable && noop_differs_from_absence(d.e)) {

@@ -92,7 +92,8 @@ double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet
   // Earlier, a step is a radius_error: the first step_head_s of the track, or
   // its first window when that is shorter. Not the whole first window: with
   // sparse fixes the windows grow (selection_window_s) and an 80 s first
-  // window held the step of dev seed 1004's case 118 (74.2 s, found at 80).
+  // window held a step at 74.2 s, found at 80 s (docs/diagnosis-design.md,
+  // "Cases behind the rules").
   const Window& first = cv.windows().front();
   const double head = std::min(o.step_head_s, first.t_end_s - first.t_begin_s);
   const double lo = first.t_begin_s + head;
@@ -272,7 +273,7 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
   // radius_error goes first unless `rival`, ranked before it, beats it by
   // rules (a) and (b) (select.h, "Candidates"): a radius step is a radius
   // error from a time on (nested: an early step fits a constant error's
-  // noise, dev seed 1002 case 105 at 31 s of 20 s windows' head); without a
+  // noise, a step at 31 s behind 20 s windows' head); without a
   // reference heading a yaw-rate offset bends the path as a wheel
   // differential does.
   const auto radius_error_unless_beaten = [&](Effect rival) {

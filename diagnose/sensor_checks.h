@@ -53,8 +53,7 @@
 //    integral is exact), and every reference heading the bins keep lowers
 //    the level noise of b and s. With 0.25 s bins a 25 Hz reference kept one
 //    heading in six, and its 16 mrad noise left a 0.2 mrad/s gyro bias at 2
-//    standard errors over 165 s (benchmark dev seed 1003 case 3; over 24
-//    seeds of that setting the bootstrap standard error matched the spread).
+//    standard errors over 165 s (over 24 seeds of that setting the bootstrap standard error matched the spread).
 //  * Gyro: gyro = s·w + b (physics-effects.md), i.e. Δθ_ref = α·Δψ_gyro +
 //    β·(t1 − t0) with s = 1/α, b = −β/α; Δψ_gyro is the exact integral of
 //    the gyro samples' linear interpolant. Needs a reference heading. The

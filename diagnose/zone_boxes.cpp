@@ -17,9 +17,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // A found box whose fitted slips both stay below this is not refined (a box
 // from noise is not worth the fits) unless its fit cost fell by kRefineCost
-// or more: a box larger than the patch dilutes the slip (dev seed 1004, case
-// 119: slips 0.013/0.014 in a 2.7 m patch fitted 0.004/0.008 in the 4 m box
-// of the coarse grid, which was then never refined).
+// or more: a box larger than the patch dilutes the slip (slips 0.013/0.014
+// in a 2.7 m patch fitted 0.004/0.008 in the 4 m box of the coarse grid,
+// which was then never refined; docs/diagnosis-design.md, "Cases behind the
+// rules").
 constexpr double kMinZoneSlip = 0.01;
 // Half the 99.9 % point of a chi-square with six degrees of freedom (the
 // box's four edges and two slips): 22.46 / 2.

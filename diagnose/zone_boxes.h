@@ -56,7 +56,7 @@ struct ZoneBox {
 // centre lies in a better one dropped): with sparse fixes (1 Hz, 0.2-0.5 m apart, 20-50 mm
 // noise) a single fine cell holds one noisy increment per pass, too little
 // for a seed to stand out or to grow, while a patch of a few metres shows on
-// the coarser grids (benchmark dev seed 1002 case 125: a 2.4 m x 1.8 m patch,
+// the coarser grids (a 2.4 m x 1.8 m patch,
 // s = 0.07 crossed three times, scores 54 as a whole, but no seed of the
 // 0.25 m grid grew into a box). Throws std::invalid_argument
 // when pred_x_m or pred_y_m do not have one value per reference sample.

@@ -38,7 +38,7 @@
 //    (gain and floor, in position or heading, over the others): an effect
 //    seen in one window only (a slip zone crossed once, the robot drifting
 //    away from it afterwards, as command odometry with 14 % slip does; one
-//    crossing in ground truth with gaps, dev seed 1004 case 49) cannot be
+//    crossing in ground truth with gaps) cannot be
 //    both fitted and proven on data the fit did not see (every fold that
 //    holds that window out fits a no-op), so it is not detectable by the
 //    rule a finding must pass, even when the held-out tail holds it. When
