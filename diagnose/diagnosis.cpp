@@ -242,7 +242,7 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   d.located_before = locate(d.before, in.ref_sigma_m, o.locate);
 
   // Wheel-odometry findings (each material on the selection's cross-validated
-  // held-out predictions: select.h rule (e) and its backward pass).
+  // held-out predictions: select.h the materiality rule and its backward pass).
   const EffectSet wheel = sel.fitted ? sel.final_fit.effects : nominal;
   // Train / held-out split: the selection's, else its rule (last 30 %).
   d.train_windows = sel.train_windows, d.heldout_windows = sel.heldout_windows;

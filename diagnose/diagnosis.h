@@ -18,7 +18,7 @@
 //    (gyro_fixes_check.h, its own 40 s windows, split and held-out test);
 // Every finding is material (materiality.h, options select.materiality):
 // wheel effects on the selection's cross-validated held-out predictions
-// (select.h rule (e) and its backward pass: every fold's windows are held
+// (select.h the materiality rule and its backward pass: every fold's windows are held
 // out once, more evidence than the final split's last 30 %, whose numbers
 // are reported as they are); a gyro effect on its held-out replay below
 // (before - after against the floor of the gyro-heading replay without the

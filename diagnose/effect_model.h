@@ -98,7 +98,7 @@ Effect effect_from_name(std::string_view name);
 // True when e at its no-op values is another model than e switched off:
 // actuator_lag, whose presence replays the commands instead of the wheels
 // (file comment), so that its no-op still changes the odometry source. The
-// selection's rule (d) compares such an effect with its own no-op, not only
+// selection's the own-parameters rule compares such an effect with its own no-op, not only
 // with its absence (select.h).
 inline bool noop_differs_from_absence(Effect e) { return e == Effect::actuator_lag; }
 

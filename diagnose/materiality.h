@@ -25,7 +25,7 @@
 // precise. Timing effects far below the sampling period are not exempt and get
 // no other rule: they are findings exactly when they pass this floor.
 //
-// The selection (select.h rule (e)) applies the same floor to heading too
+// The selection (select.h the materiality rule) applies the same floor to heading too
 // when the reference has one: a wheel effect is material when its removed
 // heading error passes max(min_gain_sigmas * ref_sigma_rad, min_gain_share
 // * nominal heading RMSE), whatever its position gain.

@@ -308,7 +308,7 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
     throw std::invalid_argument(fmt::format("track '{}': nominal replay failed: {}", in_full.track_name,
                                             z.cur_cv.error + z.cur_full.error));
   sel.baseline_cv_score = z.cur_cv.score;
-  // Rule (e)'s floors against the nominal model's held-out dead reckoning.
+  // The materiality rule's floors against the nominal model's held-out dead reckoning.
   const CrossValidator::Replayed nominal = cv.replayed(z.cur_cv);
   z.floor_m = materiality_floor_m(in_full.ref_sigma_m, nominal.pos_rmse_m, o.materiality);
   if (in_full.has_ref_heading() && std::isfinite(nominal.heading_rmse_rad))

@@ -18,14 +18,14 @@
 // So with fixes only it is a candidate (the random benchmark's fixes-only
 // odometry biases were otherwise named radius_error), but it goes before
 // radius_error in a forward step's order only when it beats radius_error
-// by rules (a) and (b) below, and after the search a selected odometry_bias
+// by the size and paired-test rules below, and after the search a selected odometry_bias
 // is swapped for radius_error unless the selected set beats the swapped one
-// by rules (a), (b) and (e) (record phase "swap"): when the data cannot
+// by the size, paired-test and materiality rules (record phase "swap"): when the data cannot
 // tell them apart, the common effect is named (concealed case
 // radius_error_and_time_offset: CV alone chose odometry_bias over the true
 // radius_error). Likewise radius_step, a radius error from a time on (the
 // nested model; its time is a searched parameter), goes before radius_error
-// only when it beats it by rules (a) and (b), with or without a heading.
+// only when it beats it by the size and paired-test rules, with or without a heading.
 //
 // Windows. make_windows(in, W) with W = selection_window_s(in, options)
 // (Selection::window_s): fit.window_s, except for a reference without
@@ -65,11 +65,11 @@
 //
 // Forward step: every remaining candidate is added to the current set S and
 // cross-validated; a candidate c (in order of CV score, below) is accepted only if
-//  (a) the relative CV improvement is >= min_rel_improvement and the
+//  size: the relative CV improvement is >= min_rel_improvement and the
 //      absolute one >= min_gain (a mismatch far below the reference noise is
 //      not physics one can see; sensor quantisation and discretisation leave
 //      such consistent but tiny mismatches);
-//  (b) the paired test of CrossValidator::compare over held-out windows is
+//  paired test: the paired test of CrossValidator::compare over held-out windows is
 //      significant at alpha: the exact Wilcoxon signed-rank test on the
 //      per-window gains, or t-tests on their z-scores and log ratios, or
 //      (when every informative window improved) Stouffer's combination of
@@ -78,18 +78,18 @@
 //      a few windows only (a slip zone crossed twice, a late radius step) or
 //      shows little in some windows (lateral_skid needs turns) needs the
 //      magnitude-aware branches;
-//  (c) BIC of a fit on all windows (CrossValidator::fit_all) decreases;
-//  (d) c's own parameters matter: the CV predictions with c's fitted
-//      parameters reset to their no-op values must be worse by (a) and (b).
+//  BIC: BIC of a fit on all windows (CrossValidator::fit_all) decreases;
+//  own parameters: c's own parameters matter: the CV predictions with c's fitted
+//      parameters reset to their no-op values must be worse by the size and paired-test rules.
 //      This rejects actuator_lag on wheel odometry when tau ~ 0: its no-op
 //      replays the commands instead of the encoders, which can beat the
 //      encoders for reasons other than a lag.
-//  (e) c is material (materiality.h): the held-out position RMSE it removes
+//  materiality: c is material (materiality.h): the held-out position RMSE it removes
 //      is at least max(min_gain_sigmas reference sigmas of the raw input,
 //      min_gain_share of the nominal model's held-out position RMSE), or,
 //      with a reference heading, the held-out heading RMSE it removes passes
 //      the same floor in heading (ref_sigma_rad, nominal heading RMSE); and
-//      so is what rule (d) compares (c's own parameters against their
+//      so is what the own-parameters rule compares (c's own parameters against their
 //      no-op). Held-out RMSEs here are the CV's fold fits replayed as dead
 //      reckoning on their held-out windows (CrossValidator::replayed: the
 //      anchor on the reference pose at the window's start with a heading),
@@ -101,14 +101,14 @@
 //      0.6 ms lag or a 2 ms time offset can be significant on tens of
 //      thousands of samples and still change nothing a user can see.
 // The candidates are judged in order of CV score, up to tries_per_step of
-// them, and the first that passes (a)-(e) is accepted: a candidate that
+// them, and the first that passes every rule is accepted: a candidate that
 // predicts best but cannot be proven (MRCLAM: longitudinal_slip, not
 // significant) must not hide one that can (the 0.2 s command delay).
 // Forward selection stops when no judged candidate passes or after
 // max_effects steps. Backward pass: while |S| >= 2, each effect e is removed
 // in turn (CV and fit_all of S without e) and, among those whose removal
-// makes the CV score worse by less than rule (a) asks or the CV position
-// RMSE worse by less than rule (e)'s floor, the one whose
+// makes the CV score worse by less than the size rule asks or the CV position
+// RMSE worse by less than the materiality rule's floor, the one whose
 // removal costs least is dropped (significance is not asked again: once
 // another effect changes every window, the paired test of an intermittent
 // effect has little power, and a needed effect must not be dropped for it).
@@ -116,7 +116,7 @@
 // by the CV score: the best candidate of a step is the one that predicts
 // held-out windows best; a proxy accepted early is dropped by the backward
 // pass once the true effect explains its share. Candidates the winner does
-// not beat by (a) and (b) are logged as its rivals: the data cannot tell
+// not beat by the size and paired-test rules are logged as its rivals: the data cannot tell
 // them apart, and the diagnosis should say so.
 //
 // Look-alikes. On commanded velocities a time offset, a first-order
@@ -124,7 +124,7 @@
 // trail the command, and their combinations predict much alike. After the
 // other steps, the chosen ones among them are compared with every other
 // choice of those three with no more effects (cross-validated, warm-started):
-// those the chosen effects do not beat by rules (a) and (b) become their
+// those the chosen effects do not beat by the size and paired-test rules become their
 // rivals, and the one with the fewest effects replaces them when it has
 // fewer (the simpler physical reading). Logged as phase "look-alike".
 //
@@ -132,14 +132,14 @@
 // the path the other way (longitudinal slip beside a radius error, a lag
 // beside a time offset) can each fail alone and only help together. When
 // the forward and backward passes end with a CV position RMSE above
-// pair_above_floor times the floor of rule (e), and max_effects leaves room,
+// pair_above_floor times the floor of the materiality rule, and max_effects leaves room,
 // the pairs the conditions point to are tried, each added to the current set
 // at once: acceleration (longitudinal_slip + radius_error), speed
 // (speed_radius + radius_error), velocity changes (actuator_lag +
 // time_offset, time_offset + radius_error), turn rate (wheel_base_error +
 // lateral_skid or + radius_error), and odometry_bias + radius_error; the best
-// pair by CV score is accepted by rules (a)-(c) and (e) against the current
-// set, each of its effects by rule (d); then the backward pass runs again.
+// pair by CV score is accepted by the size, paired-test, BIC and materiality rules against the current
+// set, each of its effects by the own-parameters rule; then the backward pass runs again.
 // Logged as SearchRecords of phase "pair".
 //
 // Swaps. Greedy steps accept what predicts best at each step, and two
@@ -149,13 +149,13 @@
 // each candidate without a discrete parameter (not radius_step, not
 // slip_zone) is tried in place of each pair of them, each fitted on all
 // windows (in parallel); the lowest BIC is cross-validated, unless its
-// all-window score is already worse than the selected set's by rule (a)'s
-// share, and swapped in when the selected set does not beat it by rules (a)
-// and (e) (what the backward pass asks of a
-// removal) and the incoming effect passes rule (d). Then the backward pass
+// all-window score is already worse than the selected set's by the size rule's
+// share, and swapped in when the selected set does not beat it by the size
+// and materiality rules (what the backward pass asks of a
+// removal) and the incoming effect passes the own-parameters rule. Then the backward pass
 // runs again (down to one effect: an effect accepted in a pair or swapped
 // in never passed a forward step alone), and in it actuator_lag, whose
-// no-op is not its absence, must still pass rule (d). Logged as
+// no-op is not its absence, must still pass the own-parameters rule. Logged as
 // SearchRecords of phase "swap".
 //
 // Discrete parameters, chosen on all windows before cross-validation (so
@@ -260,7 +260,7 @@ struct SelectOptions {
   // recordings (leave one recording out) instead of `folds` blocks.
   std::vector<double> recording_starts_s;
   int max_effects = 3;                // forward steps at most
-  double alpha = 1e-3;                // one-sided level of the paired test (rule (b))
+  double alpha = 1e-3;                // one-sided level of the paired test (the paired-test rule)
   double min_rel_improvement = 0.05;  // relative CV improvement needed
   double min_gain = 0.05;             // absolute CV improvement needed [normalised units/sample]
   double heldout_fraction = 0.3;      // final model: share of windows held out
@@ -281,7 +281,7 @@ struct SelectOptions {
   int zone_max_boxes = 3;              // boxes found from the residual growth
   double zone_min_score = 16.0;        // score a found box needs (zone_boxes.h)
   std::vector<ZoneBox> zone_boxes;     // extra candidate boxes (e.g. from locate.h)
-  MaterialityOptions materiality;      // rule (e) and the final check (materiality.h)
+  MaterialityOptions materiality;      // the materiality rule and the final check (materiality.h)
   int tries_per_step = 3;              // forward step: candidates judged in CV order ("Forward step")
   bool pairs = true;                   // try the condition pairs ("Pairs") when the error stays high
   double pair_above_floor = 3.0;       // ... when the CV position RMSE exceeds this many floors
@@ -312,7 +312,7 @@ struct SearchRecord {
   bool accepted = false;  // forward: added; backward: removed
   std::string reason;     // why accepted or rejected
   // Accepted forward step: the other candidates of the step that the winner
-  // does not beat by (a) and (b), i.e. confounded alternatives.
+  // does not beat by the size and paired-test rules, i.e. confounded alternatives.
   std::vector<std::string> rivals;
   double time_s = 0.0;
 };
@@ -343,7 +343,7 @@ struct Selection {
   bool folds_are_recordings = false;  // leave one recording out (SelectOptions::recording_starts_s)
   int ref_stride = 1;                 // thinning of the reference during selection
   double baseline_cv_score = 0.0, final_cv_score = 0.0;  // nominal and selected set (CV)
-  double floor_m = 0.0;    // materiality floor of rule (e) [m] (materiality.h; 0 before the baseline)
+  double floor_m = 0.0;  // materiality floor of the materiality rule [m] (materiality.h; 0 before the baseline)
   double floor_rad = 0.0;  // its heading part [rad] (0 without a reference heading)
   // Nominal model, all windows, full raw input.
   double baseline_pos_rmse_m = 0.0, baseline_heading_rmse_rad = 0.0;

@@ -12,7 +12,7 @@ namespace odotune::diagnose::select_detail {
 // Without a reference heading (select.h, "Candidates"): when the selected set
 // holds odometry_bias and not radius_error, the set with radius_error in its
 // place is cross-validated, and swapped in unless the selected set beats it
-// by rules (a) and (b) and the materiality floor. Logged as a record of
+// by the size and paired-test rules and the materiality floor. Logged as a record of
 // phase "swap".
 void prefer_radius_error(Search& z, int step) {
   const auto has = [&](Effect e) { return std::count(z.chosen.begin(), z.chosen.end(), e) > 0; };
@@ -59,8 +59,8 @@ void prefer_radius_error(Search& z, int step) {
 // without a discrete search (not radius_step, not slip_zone) in place of
 // each pair of selected effects is fitted on all windows; the lowest BIC is
 // cross-validated and swapped in when the selected set does not beat it by
-// rules (a) and (e), as the backward pass asks of a removal, and the incoming
-// effect's own parameters matter (rule (d)). (One in place of one, tried
+// the size and materiality rules, as the backward pass asks of a removal, and the incoming
+// effect's own parameters matter (the own-parameters rule). (One in place of one, tried
 // too, changed no case; docs/diagnosis-design.md, "Cases behind the rules".)
 // True when a swap was made; logged as records of phase "swap".
 bool swap_step(Search& z, int step, const std::vector<Effect>& cands) {
@@ -91,7 +91,7 @@ bool swap_step(Search& z, int step, const std::vector<Effect>& cands) {
   if (tried.empty()) return false;
   // Screened by one fit on all windows each (in parallel; a fifth of a
   // cross-validation): the lowest BIC is cross-validated, unless even its
-  // all-window score is worse than the selected set's by rule (a)'s share.
+  // all-window score is worse than the selected set's by the size rule's share.
   const auto t0 = Clock::now();
   std::vector<SetEval> fulls(tried.size());
   const auto n_tried = static_cast<long>(tried.size());
@@ -176,8 +176,8 @@ constexpr std::pair<Effect, Effect> kConditionPairs[] = {
 
 // One pair step: every pair of kConditionPairs whose effects are candidates
 // and not yet chosen is added to the current set and cross-validated; the
-// best is accepted by rules (a)-(c) and (e) against the current set, and
-// each of its effects must matter by rule (d). True when a pair was accepted.
+// best is accepted by the size, paired-test, BIC and materiality rules against the current set, and
+// each of its effects must matter by the own-parameters rule. True when a pair was accepted.
 bool pair_step(Search& z, int step, const std::vector<Effect>& cands) {
   auto usable = [&](Effect e) {
     return std::count(cands.begin(), cands.end(), e) > 0 &&
@@ -280,9 +280,9 @@ bool backward_round(Search& z, int round) {
       fill(d.rec, p);
       d.rec.bic = d.full.bic;
       d.rec.delta_bic = z.cur_full.bic - d.full.bic;
-      // Redundancy by rule (a) only: once another effect changes every
+      // Redundancy by the size rule only: once another effect changes every
       // window, an intermittent effect's paired test has little power left.
-      // Or by rule (e): what it gains is immaterial.
+      // Or by the materiality rule: what it gains is immaterial.
       const std::string why = immaterial(removed(z.cv, d.cv, z.cur_cv), z.floor_m, z.floor_rad);
       const bool material = why.empty();
       d.removable = !(p.rel >= z.o.min_rel_improvement && p.gain >= z.o.min_gain) || !material;
@@ -362,7 +362,7 @@ bool look_alike_step(Search& z, int step) {
   std::vector<SetEval> evals = z.cv.cross_validate_all(sets, z.cur_cv.folds, z.o.cv_max_iterations);
   const double share = since(t0) / static_cast<double>(std::max<std::size_t>(alts.size(), 1));
   // An alternative predicts alike when the chosen effects do not beat it by
-  // rules (a) and (b); of those, the one with the fewest effects (then the
+  // the size and paired-test rules; of those, the one with the fewest effects (then the
   // best CV) replaces them when it has fewer.
   std::size_t best = alts.size();
   for (std::size_t i = 0; i < alts.size(); ++i) {

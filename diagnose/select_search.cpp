@@ -34,7 +34,7 @@ Removed removed(CrossValidator& cv, const SetEval& ref, const SetEval& alt) {
               : 0.0};
 }
 
-// Material (rule (e)): "" when the removed position error passes floor_m or
+// Material (the materiality rule): "" when the removed position error passes floor_m or
 // the removed heading error passes floor_rad (> 0 only with a reference
 // heading); a floor_m of 0 asks nothing.
 std::string immaterial(const Removed& r, double floor_m, double floor_rad) {
@@ -48,7 +48,7 @@ std::string immaterial(const Removed& r, double floor_m, double floor_rad) {
                      1e3 * floor_m);
 }
 
-// Rules (a)-(c) and (e) of select.h for `alt` to beat `ref`; "" when they
+// The size, paired-test, BIC and materiality rules of select.h for `alt` to beat `ref`; "" when they
 // hold. gain: what alt removes from ref's CV error; floor_m, floor_rad: the
 // materiality floors (floor_m 0 = not asked).
 std::string verdict(const PairedComparison& p, double delta_bic, const SelectOptions& o, const Removed& gain,
@@ -182,9 +182,9 @@ double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet
 
 }  // namespace
 
-// Rules (a)-(e) of a candidate set `cv` (its effects `added`) against the
+// The selection rules (select.h) of a candidate set `cv` (its effects `added`) against the
 // current set: fits it on all windows (BIC, into rec), then asks each added
-// effect's own parameters to matter (rule (d)). "" when it passes; `full`
+// effect's own parameters to matter (the own-parameters rule). "" when it passes; `full`
 // receives the all-window fit.
 std::string judge(Search& z, const EffectSet& st, const SetEval& cv, std::initializer_list<Effect> added,
                   SearchRecord& rec, SetEval& full) {
@@ -271,7 +271,7 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
   std::stable_sort(order.begin(), order.end(),
                    [](const Cand* a, const Cand* b) { return a->cv.score < b->cv.score; });
   // radius_error goes first unless `rival`, ranked before it, beats it by
-  // rules (a) and (b) (select.h, "Candidates"): a radius step is a radius
+  // the size and paired-test rules (select.h, "Candidates"): a radius step is a radius
   // error from a time on (nested: an early step fits a constant error's
   // noise, a step at 31 s behind 20 s windows' head); without a
   // reference heading a yaw-rate offset bends the path as a wheel
@@ -304,7 +304,7 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
     if (no.empty()) {
       accepted = best->rec.accepted = true;
       best->rec.reason = label + "; improves CV significantly and BIC agrees";
-      // Confounded alternatives: candidates the winner does not beat by (a)-(b).
+      // Confounded alternatives: candidates the winner does not beat by the size and paired-test rules.
       for (Cand& cd : tried)
         if (cd.cv.ok && &cd != best && !verdict(z.cv.compare(cd.cv, best->cv, z.o.alpha), -1.0, z.o).empty())
           best->rec.rivals.push_back(std::string(effect_name(cd.e)));

@@ -2,7 +2,7 @@
 // search's driver and the final model), select_search.cpp (the rules and
 // the forward step) and select_moves.cpp (the swap to radius_error, swaps,
 // pairs and the backward pass). Not part of the module's interface: nothing
-// outside diagnose/ includes it. The rules (a)-(e) are select.h's.
+// outside diagnose/ includes it. The the rules (size, paired test, BIC, own parameters, materiality) are select.h's.
 #pragma once
 
 #include <chrono>
@@ -30,15 +30,15 @@ double since(Clock::time_point t0);
 // s with e switched on (its no-op values when it was off).
 EffectSet with_effect(const EffectSet& s, Effect e);
 
-// Rule (e): the held-out error (position [m], heading [rad]) one evaluation
+// The materiality rule: the held-out error (position [m], heading [rad]) one evaluation
 // removes from another's (removed()).
 struct Removed {
   double pos_m = 0.0, heading_rad = 0.0;  // materiality.h removed_error_m of each
 };
 Removed removed(CrossValidator& cv, const SetEval& ref, const SetEval& alt);
-// "" when material (rule (e)), else why not.
+// "" when material (the materiality rule), else why not.
 std::string immaterial(const Removed& r, double floor_m, double floor_rad);
-// "" when `p` passes rules (a)-(c) and (e), else why not (delta_bic < 0 asked
+// "" when `p` passes the size, paired-test, BIC and materiality rules, else why not (delta_bic < 0 asked
 // unless it is negative already; floor_m 0 = materiality not asked).
 std::string verdict(const PairedComparison& p, double delta_bic, const SelectOptions& o,
                     const Removed& gain = {}, double floor_m = 0.0, double floor_rad = 0.0);
@@ -55,14 +55,14 @@ struct Search {
   std::vector<Effect> chosen;  // in the order accepted
   SetEval cur_cv, cur_full;    // of s
   double step_t = kNaN;        // last radius_step.t found
-  double floor_m = 0.0;        // materiality floor (rule (e)) [m]
+  double floor_m = 0.0;        // materiality floor (the materiality rule) [m]
   double floor_rad = 0.0;      // its heading part [rad] (0 without a reference heading)
   bool heading = false;        // the reference has a heading
   // Look-alikes that predict as well as the chosen effects (look_alike_step).
   std::vector<Effect> look_alikes;
 };
 
-// Rules (a)-(e) of a candidate set against the current set (select_search.cpp).
+// The selection rules (select.h: size, paired test, BIC, own parameters, materiality) of a candidate set against the current set (select_search.cpp).
 std::string judge(Search& z, const EffectSet& st, const SetEval& cv, std::initializer_list<Effect> added,
                   SearchRecord& rec, SetEval& full);
 // The phases of the search (select.h): each true when it changed the set.

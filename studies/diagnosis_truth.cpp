@@ -110,7 +110,7 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
   out.nominal_heldout_m = heldout_rmse(scoring, EffectSet{});
   out.true_heldout_m = heldout_rmse(scoring, wheel_set(truth, ""));
   out.floor_m = diagnose::materiality_floor_m(in.ref_sigma_m, out.nominal_heldout_m, materiality);
-  // With a reference heading, rule (e) also accepts a material heading gain.
+  // With a reference heading, the materiality rule also accepts a material heading gain.
   const bool heading = in.has_ref_heading();
   double true_heading_rad = kNaN, heading_floor_rad = kNaN;
   if (heading) {
@@ -156,7 +156,7 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
       t.before_m = without.pos_rmse_m;
       t.after_m = out.true_heldout_m;
       t.floor_m = out.floor_m;
-      if (heading) {  // rule (e)'s heading part (select.h)
+      if (heading) {  // the materiality rule's heading part (select.h)
         t.heading_gain_rad = diagnose::removed_error_m(without.heading_rmse_rad, true_heading_rad);
         t.heading_floor_rad = heading_floor_rad;
       }

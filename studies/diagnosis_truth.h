@@ -73,7 +73,7 @@ struct EffectTruth {
       std::numeric_limits<double>::quiet_NaN();  // removed error: sqrt(before^2 - after^2) (materiality.h)
   double floor_m = std::numeric_limits<double>::quiet_NaN();
   // Wheel effects against a reference heading: the held-out heading error it
-  // removes and rule (e)'s heading floor (NaN otherwise; header comment).
+  // removes and the materiality rule's heading floor (NaN otherwise; header comment).
   double heading_gain_rad = std::numeric_limits<double>::quiet_NaN();
   double heading_floor_rad = std::numeric_limits<double>::quiet_NaN();
 };

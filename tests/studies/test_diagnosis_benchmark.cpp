@@ -538,7 +538,7 @@ TEST(DiagnosisBenchmarkRun, DevelopmentCasesOnceWrongAreRight) {
 // lost to the commands beside them; actuator_lag + time_offset passed as a
 // pair, the backward pass dropped time_offset and kept actuator_lag at
 // tau = 0.14 ms, whose no-op (the commands) did as well (select.h, "Swaps":
-// rule (d) again in the backward pass).
+// the own-parameters rule again in the backward pass).
 TEST(DiagnosisBenchmarkRun, PairSurvivorMustStillMatterAlone) { expect_right(1004, 40, {}); }
 
 // Case 119 of development seed 1004: slips of 0.013/0.014 in a 2.7 m patch,
