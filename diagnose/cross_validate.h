@@ -155,7 +155,7 @@ class CrossValidator {
   // rigid alignment), position and heading RMSE pooled over every window's
   // scored samples (heading NaN without a reference heading). A `cv`
   // without fold sets (the nominal model) is the empty set in every fold.
-  // The measure of select.h's the materiality rule, the same as the benchmark's truth.
+  // The measure of the selection's materiality rule, the same as the benchmark's truth.
   struct Replayed {
     double pos_rmse_m = std::numeric_limits<double>::quiet_NaN();
     double heading_rmse_rad = std::numeric_limits<double>::quiet_NaN();

@@ -9,7 +9,7 @@
 
 namespace odotune::diagnose::select_detail {
 
-// Without a reference heading (select.h, "Candidates"): when the selected set
+// Without a reference heading (diagnosis-design.md "Model selection", "Candidates"): when the selected set
 // holds odometry_bias and not radius_error, the set with radius_error in its
 // place is cross-validated, and swapped in unless the selected set beats it
 // by the size and paired-test rules and the materiality floor. Logged as a record of
@@ -52,7 +52,7 @@ void prefer_radius_error(Search& z, int step) {
   z.sel.records.push_back(std::move(rec));
 }
 
-// Swaps (select.h, "Swaps"): one candidate in place of two selected
+// Swaps (diagnosis-design.md "Model selection", "Swaps"): one candidate in place of two selected
 // effects. Greedy steps accept the effect that predicts best now, and two
 // of them can together mimic a third that was never best alone (a speed offset b_v = -0.027 m/s fitted as radius
 // error + speed radius beside the true wheel base error). Every candidate
@@ -328,7 +328,7 @@ bool backward_round(Search& z, int round) {
   return out != nullptr;
 }
 
-// Look-alikes (select.h, "Look-alikes"): the chosen effects among a time
+// Look-alikes (diagnosis-design.md "Model selection", "Look-alikes"): the chosen effects among a time
 // offset, a first-order actuator lag and acceleration-driven longitudinal
 // slip, against every other choice of those three with no more effects.
 bool look_alike_step(Search& z, int step) {

@@ -22,7 +22,7 @@ EffectSet with_effect(const EffectSet& s, Effect e) {
   return out;
 }
 
-// Rule (e) of select.h: the error `alt` removes from `ref`'s, position and
+// The materiality rule of the selection: the error `alt` removes from `ref`'s, position and
 // (with a reference heading) heading, both measured on their held-out
 // predictions replayed as dead reckoning (CrossValidator::replayed), against
 // the floors of Search.
@@ -271,7 +271,7 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
   std::stable_sort(order.begin(), order.end(),
                    [](const Cand* a, const Cand* b) { return a->cv.score < b->cv.score; });
   // radius_error goes first unless `rival`, ranked before it, beats it by
-  // the size and paired-test rules (select.h, "Candidates"): a radius step is a radius
+  // the size and paired-test rules (diagnosis-design.md "Model selection", "Candidates"): a radius step is a radius
   // error from a time on (nested: an early step fits a constant error's
   // noise, a step at 31 s behind 20 s windows' head); without a
   // reference heading a yaw-rate offset bends the path as a wheel

@@ -2,7 +2,7 @@
 // search's driver and the final model), select_search.cpp (the rules and
 // the forward step) and select_moves.cpp (the swap to radius_error, swaps,
 // pairs and the backward pass). Not part of the module's interface: nothing
-// outside diagnose/ includes it. The the rules (size, paired test, BIC, own parameters, materiality) are select.h's.
+// outside diagnose/ includes it. The rules (size, paired test, BIC, own parameters, materiality) are select.h's.
 #pragma once
 
 #include <chrono>
@@ -20,7 +20,7 @@ using Clock = std::chrono::steady_clock;
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// The look-alikes of commanded velocities (select.h, "Look-alikes"): each
+// The look-alikes of commanded velocities (diagnosis-design.md "Model selection", "Look-alikes"): each
 // makes the motion trail the command.
 inline constexpr Effect kLagLookAlikes[] = {Effect::time_offset, Effect::actuator_lag,
                                             Effect::longitudinal_slip};

@@ -46,7 +46,7 @@
 //    (e.g. the robot, drifting under the effect, misses the box in its last
 //    laps), they are judged on all windows instead
 //    (EffectTruth::on_all_windows), because the diagnosis moves its held-out
-//    windows to where these two act (select.h, "interleaved"), and the truth
+//    windows to where these two act (diagnosis-design.md "Model selection", "interleaved"), and the truth
 //    has no fitted parameter a held-out window would guard against.
 // Effects whose parameters equal their no-op values are never detectable.
 // Deterministic; no I/O.

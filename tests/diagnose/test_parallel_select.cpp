@@ -1,5 +1,5 @@
 // The model selection's parallel batches (cross_validate.h
-// cross_validate_all, select.h "Deterministic") give the same numbers as
+// cross_validate_all, diagnosis-design.md "Model selection", "Deterministic") give the same numbers as
 // one fit at a time, for any number of OpenMP threads. Tracks simulated in
 // memory (sim_track.h): 50 Hz odometry and ground truth with 5 mm noise.
 #include <omp.h>

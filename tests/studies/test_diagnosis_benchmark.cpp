@@ -537,7 +537,7 @@ TEST(DiagnosisBenchmarkRun, DevelopmentCasesOnceWrongAreRight) {
 // Case 40 of development seed 1004: a null track whose 360-cpr encoders
 // lost to the commands beside them; actuator_lag + time_offset passed as a
 // pair, the backward pass dropped time_offset and kept actuator_lag at
-// tau = 0.14 ms, whose no-op (the commands) did as well (select.h, "Swaps":
+// tau = 0.14 ms, whose no-op (the commands) did as well (diagnosis-design.md "Model selection", "Swaps":
 // the own-parameters rule again in the backward pass).
 TEST(DiagnosisBenchmarkRun, PairSurvivorMustStillMatterAlone) { expect_right(1004, 40, {}); }
 
