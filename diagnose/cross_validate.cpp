@@ -368,12 +368,8 @@ PairedComparison CrossValidator::compare(const SetEval& ref, const SetEval& alt,
   std::vector<WindowPair> pairs;
   for (std::size_t w = 0; w < windows_.size(); ++w) {
     const Window& win = windows_[w];
-    double delta2 = 0.0;
-    for (std::size_t g = win.ref_begin; g < win.ref_end; ++g) {
-      const double dx = alt.pred.x_m[g] - ref.pred.x_m[g], dy = alt.pred.y_m[g] - ref.pred.y_m[g];
-      const double dh = heading_ ? alt.pred.theta_rad[g] - ref.pred.theta_rad[g] : 0.0;
-      delta2 += (dx * dx + dy * dy) * ism_ * ism_ * in_->ref_weight(g) + dh * dh * ish_ * ish_;
-    }
+    const double delta2 = normalised_sq_distance(*in_, win, {alt.pred.x_m, alt.pred.y_m, alt.pred.theta_rad},
+                                                 {ref.pred.x_m, ref.pred.y_m, ref.pred.theta_rad}, heading_);
     const auto n = static_cast<double>(win.ref_end - win.ref_begin);
     pairs.push_back({ref.window_sse[w], alt.window_sse[w], delta2, n * comps_});
   }

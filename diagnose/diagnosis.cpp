@@ -182,6 +182,10 @@ double Finding::param(std::string_view name) const {
   return std::nan("");
 }
 
+bool Finding::is_wheel_effect() const {
+  return effect != "unexplained" && effect != "gyro_bias" && effect != "gyro_scale";
+}
+
 std::string Finding::spec() const {
   if (effect == "unexplained") return "";
   std::string s = effect;

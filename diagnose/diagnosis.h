@@ -140,6 +140,8 @@ struct Finding {
   std::optional<HeldoutTest> heldout_test;  // wheel effects, with held-out recordings (recordings.h)
 
   double param(std::string_view name) const;  // NaN when absent
+  // A wheel-odometry effect: neither a gyro effect nor `unexplained`.
+  bool is_wheel_effect() const;
   // The simulator's command-line form, "lateral_skid:k=0.021" ("" for unexplained).
   std::string spec() const;
 };

@@ -115,7 +115,7 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
     // Held-out proof: the chosen wheel model against the nominal one when a
     // wheel effect was found, else the (gyro) finding's own replay.
     bool wheel = false;
-    for (const Finding* f : effects) wheel = wheel || (f->effect != "gyro_bias" && f->effect != "gyro_scale");
+    for (const Finding* f : effects) wheel = wheel || f->is_wheel_effect();
     const BeforeAfter& h = wheel ? d.heldout : effects.front()->heldout;
     std::string proof = "no held-out windows to prove it on";
     if (std::isfinite(h.before_pos_rmse_m) && std::isfinite(h.after_pos_rmse_m) && h.before_pos_rmse_m > 0)
@@ -232,9 +232,8 @@ std::vector<std::string> pooled_summary(const PooledDiagnosis& p) {
                                             [](const RecordingResult& r) { return !r.heldout; }),
                               p.heldout_recordings ? ", the others held out" : "",
                               p.heldout_recordings ? "the held-out recordings" : "the pooled split"));
-  const bool wheel = std::any_of(p.pooled.findings.begin(), p.pooled.findings.end(), [](const Finding& f) {
-    return f.effect != "unexplained" && f.effect != "gyro_bias" && f.effect != "gyro_scale";
-  });
+  const bool wheel = std::any_of(p.pooled.findings.begin(), p.pooled.findings.end(),
+                                 [](const Finding& f) { return f.is_wheel_effect(); });
   if (p.heldout_recordings && wheel) {
     const HeldoutTest& t = p.heldout_test;
     lines.push_back(fmt::format("  the model on the held-out recordings: {} → {} (floor {}), {}: {}",

@@ -60,30 +60,17 @@ void prove_terms_elsewhere(Diagnosis& d, const EffectSet& wheel, const std::vect
 }
 
 // The windows of `after` against `before` on one recording, for the paired
-// test (paired_test.h): errors against the raw reference, normalised by its
-// sigmas (and weights); heading only when the reference has it.
+// test (paired_test.h): against the raw reference, heading when it has one.
 void add_window_pairs(const DiagInput& in, double ws, const ReplayResult& before, const ReplayResult& after,
                       std::vector<WindowPair>& out) {
   const bool heading = in.has_ref_heading();
-  const double ism = 1.0 / in.ref_sigma_m, ish = heading ? 1.0 / in.ref_sigma_rad : 0.0;
-  const auto sq = [](double v) { return v * v; };
+  const PoseSamples b{before.pred_x_m, before.pred_y_m, before.pred_theta_rad},
+      a{after.pred_x_m, after.pred_y_m, after.pred_theta_rad}, ref = reference_poses(in);
   for (const Window& w : make_windows(in, ws)) {
-    WindowPair p;
-    for (std::size_t g = w.ref_begin; g < w.ref_end; ++g) {
-      if (!std::isfinite(before.pred_x_m[g]) || !std::isfinite(after.pred_x_m[g])) continue;
-      const double wt = in.ref_weight(g) * ism * ism;
-      p.sse_ref += wt * (sq(before.pred_x_m[g] - in.ref_x_m[g]) + sq(before.pred_y_m[g] - in.ref_y_m[g]));
-      p.sse_alt += wt * (sq(after.pred_x_m[g] - in.ref_x_m[g]) + sq(after.pred_y_m[g] - in.ref_y_m[g]));
-      p.delta2 += wt *
-                  (sq(after.pred_x_m[g] - before.pred_x_m[g]) + sq(after.pred_y_m[g] - before.pred_y_m[g]));
-      if (heading) {
-        const double hb = before.pred_theta_rad[g] - in.ref_theta_rad[g],
-                     ha = after.pred_theta_rad[g] - in.ref_theta_rad[g];
-        p.sse_ref += sq(hb * ish), p.sse_alt += sq(ha * ish), p.delta2 += sq((ha - hb) * ish);
-      }
-      p.components += heading ? 3.0 : 2.0;
-    }
-    if (p.components > 0.0) out.push_back(p);
+    const double n = static_cast<double>(w.ref_end - w.ref_begin);
+    out.push_back({normalised_sq_distance(in, w, b, ref, heading),
+                   normalised_sq_distance(in, w, a, ref, heading), normalised_sq_distance(in, w, a, b, heading),
+                   n * (heading ? 3.0 : 2.0)});
   }
 }
 
@@ -127,10 +114,6 @@ HeldoutTest heldout_test(const std::vector<ReplayResult>& before, const std::vec
   return t;
 }
 
-bool is_wheel_finding(const Finding& f) {
-  return f.effect != "unexplained" && f.effect != "gyro_bias" && f.effect != "gyro_scale";
-}
-
 // Held-out recordings confirm each wheel finding (recordings.h): those they
 // do not are dropped from the findings and from `wheel` and listed in
 // d.not_confirmed; every kept finding's `heldout` numbers and test are then
@@ -143,7 +126,7 @@ void confirm_on_heldout(Diagnosis& d, EffectSet& wheel, const std::vector<DiagIn
     const std::vector<ReplayResult> with = replay_each(heldout, wheel, ws);
     std::vector<Effect> dropped;
     for (Finding& f : d.findings) {
-      if (!is_wheel_finding(f)) continue;
+      if (!f.is_wheel_effect()) continue;
       EffectSet without = wheel;
       without.disable(effect_from_name(f.effect));
       const HeldoutTest t = heldout_test(replay_each(heldout, without, ws), with, nominal, heldout, ws, o);
@@ -159,7 +142,7 @@ void confirm_on_heldout(Diagnosis& d, EffectSet& wheel, const std::vector<DiagIn
     }
     for (Effect e : dropped) wheel.disable(e), d.model.disable(e);
     std::erase_if(d.findings, [&](const Finding& f) {
-      return is_wheel_finding(f) && !wheel.on(effect_from_name(f.effect));
+      return f.is_wheel_effect() && !wheel.on(effect_from_name(f.effect));
     });
     return !dropped.empty();
   };

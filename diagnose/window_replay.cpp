@@ -265,4 +265,16 @@ ReplayResult replay(const DiagInput& in, const EffectSet& set, double window_s, 
   return replay(model, pack(set), in, make_windows(in, window_s), which);
 }
 
+double normalised_sq_distance(const DiagInput& in, const Window& w, const PoseSamples& a, const PoseSamples& b,
+                              bool heading) {
+  const double ism = 1.0 / in.ref_sigma_m, ish = heading ? 1.0 / in.ref_sigma_rad : 0.0;
+  double sum = 0.0;
+  for (std::size_t g = w.ref_begin; g < w.ref_end; ++g) {
+    const double dx = a.x_m[g] - b.x_m[g], dy = a.y_m[g] - b.y_m[g];
+    const double dh = heading ? a.theta_rad[g] - b.theta_rad[g] : 0.0;
+    sum += (dx * dx + dy * dy) * ism * ism * in.ref_weight(g) + dh * dh * ish * ish;
+  }
+  return sum;
+}
+
 }  // namespace odotune::diagnose

@@ -160,6 +160,22 @@ struct PooledError {
   double heading_rmse_rad() const { return empty() ? std::nan("") : std::sqrt(sh / n); }
 };
 
+// Poses per reference sample (DiagInput::ref_t_s) of a prediction, or of the
+// reference itself (reference_poses); theta only read with a heading.
+struct PoseSamples {
+  const std::vector<double>& x_m;
+  const std::vector<double>& y_m;
+  const std::vector<double>& theta_rad;
+};
+inline PoseSamples reference_poses(const DiagInput& in) { return {in.ref_x_m, in.ref_y_m, in.ref_theta_rad}; }
+
+// Sum over window w's reference samples g of |a_g - b_g|^2 in reference
+// sigmas: position by ref_sigma_m and the sample's weight, plus heading by
+// ref_sigma_rad when `heading`. With b = reference_poses(in) it is a's
+// normalised SSE; with two predictions, how far one moves from the other.
+double normalised_sq_distance(const DiagInput& in, const Window& w, const PoseSamples& a, const PoseSamples& b,
+                              bool heading);
+
 // Replays windows `which` (indices into `windows`; empty = all) with the flat
 // parameters `params` (layout order of model.layout()). `anchors`, when given,
 // holds one anchor per entry of `which` for free-anchor windows (ignored with
