@@ -62,7 +62,7 @@ void BM_PsoTune(benchmark::State& state) {
   const auto& t = track1();
   odotune::TuneRequest req;
   req.model = model;
-  req.mode = 7;
+  req.mode = odotune::FitnessMode::rmse_mae_maxe;
   req.seed = 1;
   long evals = 0;
   for (auto _ : state) {

@@ -25,7 +25,10 @@ void register_demo(CLI::App& app) {
   sub->add_option("--data", req->data_dir, "folder with track1.csv … track5.csv");
   sub->add_option("--particles", req->particles, "PSO swarm size")->check(CLI::PositiveNumber);
   sub->add_option("--iterations", req->iterations, "PSO iterations")->check(CLI::NonNegativeNumber);
-  sub->add_option("--mode", req->mode, "fitness mode 1..7")->check(CLI::Range(1, 7));
+  add_fitness_mode_option(
+      sub, [req](FitnessMode m) { req->mode = m; },
+      "fitness mode 1..7, number or name (default 7, rmse+mae+maxe)",
+      /*ground_truth_only=*/true);
   sub->add_option("--seed", req->seed, "random seed");
   sub->add_option("--json", req->json_out, "write all results as JSON to this file");
   add_threads_option(sub, threads.get());
@@ -37,7 +40,7 @@ void register_demo(CLI::App& app) {
     cb.started = [&] {
       fmt::print("odotune demo: EKF noise tuned by PSO ({} particles × {} iterations, seed {}), "
                  "fitness mode {} ({})\n",
-                 req->particles, req->iterations, req->seed, req->mode, fitness_mode_name(req->mode));
+                 req->particles, req->iterations, req->seed, number(req->mode), fitness_mode_name(req->mode));
       fmt::print("baseline: alpha noise α1 = α2 = 0.01, fixes σ = 60 mm (see README)\n\n");
       fmt::print("{:<8} {:<6} {:>33} {:>33} {:>33}\n", "track", "model", "RMSE baseline → tuned",
                  "MAE baseline → tuned", "MAXE baseline → tuned");

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
+#include "cli/output.h"
 #include "jobs/report_job.h"
 
 namespace odotune::cli {
@@ -18,8 +19,10 @@ void register_report(CLI::App& app) {
   sub->add_option("--out", req->out_dir, "folder for the figures, tables and index.html")->required();
   sub->add_option("--track-name", req->trajectory_track,
                   "draw the trajectory overlay for this track only (default: every track)");
-  sub->add_option("--mode", req->mode, "fitness mode of the trajectory and convergence figures")
-      ->default_val(7);
+  add_fitness_mode_option(
+      sub, [req](FitnessMode m) { req->mode = m; },
+      "fitness mode of the trajectory and convergence figures, number or name")
+      ->default_str("7");
   sub->add_option("--track", req->track_files,
                   "track file to use instead of the experiment's (if its files have moved)");
   sub->callback([req] {

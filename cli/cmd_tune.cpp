@@ -122,12 +122,12 @@ void register_tune(CLI::App& app) {
       "      --gps-heading-fit 60 --until 197.6 --fitness both --config-out ekf.yaml");
   sub->add_option("--track", req->tracks, "track file (repeat for several; fitness = mean over tracks)");
   sub->add_option("--model", req->model, "rq | alpha | gyro | pf-calib | adaptive-pf-calib | ukf");
-  sub->add_option("--mode", req->mode,
-                  "EKF/UKF fitness mode against ground truth: 1 RMSE, 2 MAE, 3 MAXE, 4 RMSE+MAE, 5 RMSE+MAXE, "
-                  "6 MAE+MAXE, 7 RMSE+MAE+MAXE (default); EKF without ground truth, cross-validating over the "
-                  "position fixes: 8 held-out fix RMSE (the default when a track has no ground truth), 9 "
-                  "held-out fix NLL (needs the fixes' variances right)")
-      ->check(CLI::Range(1, 9));
+  add_fitness_mode_option(
+      sub, [req](FitnessMode m) { req->mode = m; },
+      "EKF/UKF fitness mode (number or name) against ground truth: 1 rmse, 2 mae, 3 maxe, 4 rmse+mae, "
+      "5 rmse+maxe, 6 mae+maxe, 7 rmse+mae+maxe (default); EKF without ground truth, cross-validating over the "
+      "position fixes: 8 fix-rmse, held-out fix RMSE (the default when a track has no ground truth), 9 fix-nll, "
+      "held-out fix NLL (needs the fixes' variances right)");
   sub->add_option("--cv-folds", req->fix_cv.folds, "modes 8, 9: folds of the fix cross-validation (default 5)")
       ->check(CLI::Range(2, 100));
   sub->add_option("--cv-block", req->fix_cv.block_s,

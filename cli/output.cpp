@@ -35,6 +35,20 @@ std::string metric_change(double baseline_m, double tuned_m) {
                      improvement_pct(baseline_m, tuned_m));
 }
 
+CLI::Option* add_fitness_mode_option(CLI::App* sub, std::function<void(FitnessMode)> set,
+                                     const std::string& help, bool ground_truth_only) {
+  return sub->add_option_function<std::string>(
+      "--mode",
+      [set = std::move(set), ground_truth_only](const std::string& text) {
+        FitnessMode m{};
+        if (!parse_fitness_mode(text, &m) || (ground_truth_only && is_fix_cv(m)))
+          throw CLI::ValidationError(fmt::format("--mode {} is out of range, expected {}", text,
+                                                 fitness_mode_choices(ground_truth_only)));
+        set(m);
+      },
+      help);
+}
+
 void add_threads_option(CLI::App* sub, int* threads) {
   sub->add_option("--threads", *threads, "OpenMP threads (0 = all cores); results do not depend on it")
       ->check(CLI::NonNegativeNumber);

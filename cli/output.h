@@ -4,12 +4,14 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
 #include "jobs/tune_job.h"
+#include "objectives/fitness_mode.h"
 #include "objectives/metrics.h"
 #include "tracks/track.h"
 
@@ -27,6 +29,12 @@ std::string metric_change(double baseline_m, double tuned_m);
 void print_tune_result(const ErrorMetrics& baseline_mean, const ErrorMetrics& tuned_mean,
                        const std::vector<TrackScore>& tracks, const std::vector<std::string>& param_names,
                        const std::vector<double>& params, const tuner::Summary& summary, long diverged);
+
+// Adds --mode, which takes a fitness mode's number or key ("7",
+// "rmse+mae+maxe"); with `ground_truth_only` modes 8 and 9 are refused at the
+// flag. `set` receives the parsed mode.
+CLI::Option* add_fitness_mode_option(CLI::App* sub, std::function<void(FitnessMode)> set,
+                                     const std::string& help, bool ground_truth_only = false);
 
 // Adds --threads to a command; apply_threads() sets OpenMP's thread count
 // (0 = OpenMP's default, all cores).

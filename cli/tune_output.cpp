@@ -23,7 +23,8 @@ void print_tune_outcome(const TuneOutcome& o) {
   const std::string names = track_names(o.tracks);
   if (!o.note.empty()) fmt::print("{}\n", o.note);
   fmt::print("tuned {} noise on {} for mode {} ({}) with {} (seed {})\n", filters::to_string(o.request.model),
-             names, o.request.mode, fitness_mode_name(o.request.mode), o.request.solver.name(), o.request.seed);
+             names, number(o.request.mode), fitness_mode_name(o.request.mode), o.request.solver.name(),
+             o.request.seed);
   if (o.against_fixes) {
     const FixCvOptions& cv = o.fix_cv;
     fmt::print("  held-out fixes ({} folds of {:g} s blocks), baseline → tuned:\n", cv.folds, cv.block_s);
@@ -76,7 +77,7 @@ void print_tune_outcome(const CalibrationTuneOutcome& o) {
 void print_tune_outcome(const UkfTuneOutcome& o) {
   const UkfTuneRequest& r = o.request;
   const std::string names = track_names(o.tracks);
-  fmt::print("tuned the fusion UKF's noise on {} for mode {} ({}) with {} (seed {})\n", names, r.mode,
+  fmt::print("tuned the fusion UKF's noise on {} for mode {} ({}) with {} (seed {})\n", names, number(r.mode),
              fitness_mode_name(r.mode), r.solver.name(), r.seed);
   fmt::print("  fused pose vs ground truth, defaults → tuned{}\n",
              o.default_kept ? " (the defaults scored best and are kept)" : "");

@@ -234,9 +234,11 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
     if (const YAML::Node c = root["robot_localization"]) e.robot_localization = read_rl(path, c, base);
   } else {
     for (const auto& n : list(path, root, "modes")) {
-      const int m = scalar<int>(path, n, "a mode");
-      if (!valid_ekf_fitness_mode(m))
-        fail_at(path, n, fmt::format("mode {} is out of range, expected 1..9", m));
+      const auto mode_text = scalar<std::string>(path, n, "a mode");
+      FitnessMode m{};
+      if (!parse_fitness_mode(mode_text, &m))
+        fail_at(path, n,
+                fmt::format("mode {} is out of range, expected {}", mode_text, fitness_mode_choices()));
       e.modes.push_back(m);
     }
   }
@@ -270,8 +272,6 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
   if (e.leave_one_out && e.tracks.size() < 2)
     fail_at(path, root["leave_one_out"], "leave_one_out needs at least two tracks");
   if (const YAML::Node c = root["calibration"]) read_calibration(path, c, &e.calibration);
-  if (e.robot_localization)
-    for (RlFitness f : e.robot_localization->fitness) e.modes.push_back(stored_mode(f));
   e.store = root["store"] ? base / scalar<std::string>(path, root["store"], "store")
                           : base / (e.name + ".sqlite");
   return e;

@@ -4,7 +4,7 @@
 //   name: study
 //   models: [rq, alpha, gyro]            # also pf-calib, adaptive-pf-calib, ukf (objectives/tuned_model.h)
 //   tracks: [../data/tracks/track*.csv]   # paths or globs, relative to this file
-//   modes: [1, 2, 3, 4, 5, 6, 7]
+//   modes: [1, 2, 3, 4, 5, 6, 7]         # numbers or names (rmse, …, rmse+mae+maxe, fix-rmse, fix-nll)
 //   seeds: {first: 1, count: 20}         # or a list: [1, 2, 3]
 //   solver: pso                          # or nlopt:NAME
 //   budget: {particles: 50, iterations: 150}   # nlopt: {evaluations: 7550}
@@ -42,6 +42,7 @@
 #include <vector>
 
 #include "filters/resampling.h"
+#include "objectives/fitness_mode.h"
 #include "objectives/rl_objective.h"
 #include "objectives/tuned_model.h"
 
@@ -79,7 +80,7 @@ struct Experiment {
   std::string name;
   std::vector<TunedModel> models;
   std::vector<std::string> tracks;  // resolved paths, sorted within each glob
-  std::vector<int> modes;
+  std::vector<FitnessMode> modes;   // empty with rl-ekf, whose fitnesses are robot_localization.fitness
   std::vector<std::uint64_t> seeds;
   std::string solver = "pso";
   int particles = 50, iterations = 150;
@@ -87,8 +88,7 @@ struct Experiment {
   bool leave_one_out = false;
   std::filesystem::path store;
   ExperimentCalibration calibration;
-  std::optional<ExperimentRl>
-      robot_localization;  // with model rl-ekf; then modes are its fitnesses' stored modes
+  std::optional<ExperimentRl> robot_localization;  // with model rl-ekf
 
   bool has_ekf_models() const;         // rq, alpha, gyro
   bool has_calibrator_models() const;  // pf-calib, adaptive-pf-calib

@@ -16,9 +16,9 @@
 namespace odotune {
 
 struct DemoRequest {
-  std::string data_dir;                  // folder with track1.csv … track5.csv
-  int particles = 50, iterations = 150;  // PSO budget of each tune
-  int mode = 7;                          // fitness mode 1..7
+  std::string data_dir;                    // folder with track1.csv … track5.csv
+  int particles = 50, iterations = 150;    // PSO budget of each tune
+  FitnessMode mode = kDefaultFitnessMode;  // against ground truth (1..7)
   std::uint64_t seed = 1;
   std::string json_out;  // every tune's tune_json() as one JSON array; empty = not written
 };

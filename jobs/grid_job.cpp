@@ -16,20 +16,30 @@
 
 namespace odotune {
 
+int stored_mode(const CellFitness& f) {
+  if (const auto* m = std::get_if<FitnessMode>(&f)) return number(*m);
+  return stored_mode(std::get<RlFitness>(f));
+}
+
 std::vector<GridCell> grid_cells(const Experiment& e) {
+  std::vector<CellFitness> all;
+  if (e.robot_localization)
+    all.assign(e.robot_localization->fitness.begin(), e.robot_localization->fitness.end());
+  else
+    all.assign(e.modes.begin(), e.modes.end());
   std::vector<GridCell> cells;
   for (auto model : e.models) {
     // A calibrator has no fitness mode: the first listed stands for all.
-    const std::vector<int> modes = model.is_calibrator() ? std::vector<int>{e.modes.front()} : e.modes;
+    const std::vector<CellFitness> modes = model.is_calibrator() ? std::vector<CellFitness>{all.front()} : all;
     for (std::size_t t = 0; t < e.tracks.size(); ++t)
-      for (int mode : modes)
+      for (const CellFitness& mode : modes)
         for (auto seed : e.seeds) cells.push_back({model, {t}, t, false, mode, seed});
     if (!e.leave_one_out) continue;
     for (std::size_t h = 0; h < e.tracks.size(); ++h) {
       std::vector<std::size_t> others;
       for (std::size_t t = 0; t < e.tracks.size(); ++t)
         if (t != h) others.push_back(t);
-      for (int mode : modes)
+      for (const CellFitness& mode : modes)
         for (auto seed : e.seeds) cells.push_back({model, others, h, true, mode, seed});
     }
   }
@@ -62,7 +72,7 @@ std::vector<PreparedTrack> prepare_grid_tracks(const Experiment& e) {
   for (const auto& t : load_tracks(e.tracks)) {
     PreparedTrack p;
     p.name = t.name();
-    const bool fix_cv = std::any_of(e.modes.begin(), e.modes.end(), is_fix_cv_mode);
+    const bool fix_cv = std::any_of(e.modes.begin(), e.modes.end(), [](FitnessMode m) { return is_fix_cv(m); });
     if (e.has_ekf_models()) {
       try {
         p = fix_cv ? prepare_track_fix_cv(t) : prepare_track(t);
@@ -100,7 +110,7 @@ results::RunRecord cell_record(const Experiment& e, const std::vector<PreparedTr
   r.model = to_string(c.model);
   r.track = c.heldout ? "all-but-" + tracks[c.score_on].name : tracks[c.score_on].name;
   r.heldout_track = c.heldout ? tracks[c.score_on].name : "";
-  r.mode = c.mode;
+  r.mode = stored_mode(c.fitness);
   r.seed = c.seed;
   r.solver = e.solver;
   return r;
@@ -183,7 +193,7 @@ std::optional<results::RunRecord> run_ukf_cell(const Experiment& e, const std::v
                                                const GridCell& c, const std::atomic<bool>* stop) {
   results::RunRecord r = cell_record(e, tracks, c);
   UkfTuneRequest req;
-  req.mode = c.mode;
+  req.mode = std::get<FitnessMode>(c.fitness);
   static_cast<SolverSettings&>(req) = cell_solver(e, c, stop);
   std::vector<const FusionInput*> tune_on;
   for (auto t : c.tune_on) tune_on.push_back(&*tracks[t].fusion);
@@ -211,7 +221,7 @@ std::optional<results::RunRecord> run_rl_cell(const Experiment& e, const std::ve
   static_cast<SolverSettings&>(req) = cell_solver(e, c, stop);
   req.until_s = x.until_s;
   req.end_s = x.end_s;
-  req.options.fitness = rl_fitness_of_mode(c.mode).value();
+  req.options.fitness = std::get<RlFitness>(c.fitness);
   req.options.space = x.space;
   req.options.input_covariances = x.input_covariances;
   req.options.outage_s = x.outage_s;
@@ -236,7 +246,7 @@ std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vecto
   results::RunRecord r = cell_record(e, tracks, c);
   TuneRequest req;
   req.model = c.model.noise();
-  req.mode = c.mode;
+  req.mode = std::get<FitnessMode>(c.fitness);
   static_cast<SolverSettings&>(req) = cell_solver(e, c, stop);
   std::vector<const PreparedTrack*> tune_on;
   for (auto t : c.tune_on) tune_on.push_back(&tracks[t]);
@@ -245,7 +255,7 @@ std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vecto
   set_solver_fields(r, o.param_names, o.params, o.summary.best_fitness, o.summary, o.divergences.total());
   // Scores on the cell's track: the tuned track itself, or the held-out one;
   // modes 8 and 9 score the held-out fixes (the track may have no ground truth).
-  if (is_fix_cv_mode(c.mode)) {
+  if (is_fix_cv(req.mode)) {
     const FixCvReplay& cv = *tracks[c.score_on].cv;
     r.baseline = to_metrics(cv.evaluate(baseline_noise()).heldout);
     r.tuned = to_metrics(cv.evaluate(o.noise).heldout);

@@ -15,6 +15,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "formats/experiment_yaml.h"
@@ -24,12 +25,18 @@
 
 namespace odotune {
 
+// What a cell minimises: a fitness mode, or (model rl-ekf) one of
+// robot_localization's fitnesses.
+using CellFitness = std::variant<FitnessMode, RlFitness>;
+// The mode number a results store records for it (results/run_record.h).
+int stored_mode(const CellFitness& f);
+
 struct GridCell {
   TunedModel model;
   std::vector<std::size_t> tune_on;  // indices into the experiment's tracks
   std::size_t score_on;              // index of the track the scores are for
   bool heldout = false;              // leave-one-track-out cell
-  int mode;
+  CellFitness fitness;
   std::uint64_t seed;
 };
 

@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "objectives/fitness_mode.h"
+
 namespace odotune {
 
 struct ReportRequest {
@@ -25,8 +27,8 @@ struct ReportRequest {
   std::filesystem::path out_dir;
   // Track of the trajectory overlay (empty = every track of the experiment).
   std::string trajectory_track;
-  // Fitness mode of the trajectory and convergence figures (1..9; the heatmaps show 1..7).
-  int mode = 7;
+  // Fitness mode of the trajectory and convergence figures (the heatmaps show 1..7).
+  FitnessMode mode = kDefaultFitnessMode;
   // Track files that take precedence over those the experiment names
   // (for a store whose experiment's tracks have moved).
   std::vector<std::string> track_files;

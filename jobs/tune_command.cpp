@@ -89,23 +89,24 @@ TuneCommandOutcome ekf_tune(const TuneCommandRequest& r, filters::NoiseModel mod
   for (const Track& t : tracks)
     if (!t.has_gt()) no_gt += (no_gt.empty() ? "" : ", ") + t.name();
   std::string note;
-  req.mode = r.mode;
-  if (req.mode == 0) {
-    req.mode = no_gt.empty() ? 7 : kFixCvRmseMode;
+  if (r.mode) {
+    req.mode = *r.mode;
+    if (!no_gt.empty() && !is_fix_cv(req.mode))
+      throw Failure(fmt::format("--mode {} scores against ground truth, which {} has not; use --mode 8 or 9 "
+                                "(cross-validation over the position fixes), or leave --mode out",
+                                number(req.mode), no_gt));
+  } else {
+    req.mode = no_gt.empty() ? kDefaultFitnessMode : FitnessMode::fix_rmse;
     if (!no_gt.empty())
       note = fmt::format("no ground truth in {}: tuning by cross-validation over the position fixes, mode 8 "
                          "({}; mode 9 scores their predictive likelihood instead)",
-                         no_gt, fitness_mode_name(kFixCvRmseMode));
-  } else if (!no_gt.empty() && !is_fix_cv_mode(req.mode)) {
-    throw Failure(fmt::format("--mode {} scores against ground truth, which {} has not; use --mode 8 or 9 "
-                              "(cross-validation over the position fixes), or leave --mode out",
-                              req.mode, no_gt));
+                         no_gt, fitness_mode_name(FitnessMode::fix_rmse));
   }
   std::string why;
   if (!req.IsValid(&why)) throw Failure(why);
 
   const std::vector<PreparedTrack> prepared =
-      is_fix_cv_mode(req.mode)
+      is_fix_cv(req.mode)
           ? prepare_tracks(tracks, [&](const Track& t) { return prepare_track_fix_cv(t, r.fix_cv); })
           : prepare_tracks(tracks, prepare_track);
   TuneCommandOutcome result = run_and_report(r, [&] {
@@ -119,8 +120,8 @@ TuneCommandOutcome ekf_tune(const TuneCommandRequest& r, filters::NoiseModel mod
     EkfConfig cfg;
     cfg.model = req.model;
     cfg.noise = out.noise;
-    cfg.comment = fmt::format("tuned by odotune tune: model {}, mode {}, solver {}, seed {}", r.model, req.mode,
-                              req.solver.name(), req.seed);
+    cfg.comment = fmt::format("tuned by odotune tune: model {}, mode {}, solver {}, seed {}", r.model,
+                              number(req.mode), req.solver.name(), req.seed);
     write_ekf_config(cfg, r.config_out);
   }
   return result;
@@ -175,7 +176,7 @@ TuneCommandOutcome calibration_tune(const TuneCommandRequest& r, CalibratorModel
 
 TuneCommandOutcome ukf_tune(const TuneCommandRequest& r) {
   UkfTuneRequest req = with_solver<UkfTuneRequest>(r);
-  req.mode = r.mode == 0 ? 7 : r.mode;
+  req.mode = r.mode.value_or(kDefaultFitnessMode);
   std::string why;
   if (!req.IsValid(&why)) throw Failure(why);
 
@@ -191,7 +192,7 @@ TuneCommandOutcome ukf_tune(const TuneCommandRequest& r) {
     cfg.comment = fmt::format(
         "tuned by odotune tune: model ukf, mode {} ({}), solver {}, seed {}\n"
         "fused pose RMSE {:.2f} mm tuned vs {:.2f} mm with the defaults (mean over {} track{})",
-        req.mode, fitness_mode_name(req.mode), req.solver.name(), req.seed, out.tuned_mean.rmse_m * 1e3,
+        number(req.mode), fitness_mode_name(req.mode), req.solver.name(), req.seed, out.tuned_mean.rmse_m * 1e3,
         out.baseline_mean.rmse_m * 1e3, inputs.size(), inputs.size() == 1 ? "" : "s");
     write_ukf_config(cfg, r.config_out);
   }

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -28,9 +29,9 @@ using TuneCommandOutcome = std::variant<TuneOutcome, CalibrationTuneOutcome, Ukf
 struct TuneCommandRequest : SolverSettings {
   std::vector<std::string> tracks;  // track files; the fitness is the mean over them
   std::string model = "rq";         // one of tuned_model_names()
-  // EKF: fitness mode 1..9; UKF: 1..7. 0 (not given): 7, or 8 for an EKF tune
-  // on a track without ground truth.
-  int mode = 0;
+  // EKF: any fitness mode; UKF: 1..7. Not given: the default (7), or 8 for
+  // an EKF tune on a track without ground truth.
+  std::optional<FitnessMode> mode;
   FixCvOptions fix_cv;  // EKF modes 8, 9: the folds (objectives/fix_cv_replay.h)
   // Calibrators only: the calibrator's fixed parts (calibration_tune_job.h).
   std::string resampler = "systematic", policy = "neff";

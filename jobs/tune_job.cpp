@@ -49,14 +49,6 @@ bool SolverSettings::IsValid(std::string* why) const {
   return o.IsValid(why);
 }
 
-bool TuneRequest::IsValid(std::string* why) const {
-  if (!valid_ekf_fitness_mode(mode)) {
-    if (why) *why = "mode = " + std::to_string(mode) + ": expected 1..9";
-    return false;
-  }
-  return SolverSettings::IsValid(why);
-}
-
 ErrorMetrics mean_metrics(const std::vector<ErrorMetrics>& per_track) {
   ErrorMetrics m;
   for (const auto& t : per_track) {
@@ -181,11 +173,11 @@ TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const Tune
   std::string why;
   if (!request.IsValid(&why)) throw std::invalid_argument(why);
   if (tracks.empty()) throw std::invalid_argument("no tracks to tune on");
-  if (is_fix_cv_mode(request.mode)) return run_tune_fix_cv(tracks, request);
+  if (is_fix_cv(request.mode)) return run_tune_fix_cv(tracks, request);
   std::vector<const FastReplay*> fast;
   for (const auto* t : tracks) {
     if (!t->fast || t->input.reference_is_fixes)
-      throw std::invalid_argument("track '" + t->name + "': mode " + std::to_string(request.mode) +
+      throw std::invalid_argument("track '" + t->name + "': mode " + std::to_string(number(request.mode)) +
                                   " needs ground truth; tracks without it are tuned with modes 8 and 9");
     fast.push_back(t->fast.get());
   }

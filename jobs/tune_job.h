@@ -74,9 +74,7 @@ struct SolverSettings {
 
 struct TuneRequest : SolverSettings {
   filters::NoiseModel model = filters::NoiseModel::rq;
-  int mode = 7;  // fitness mode 1..7 (ground truth) or 8..9 (fix cross-validation)
-
-  bool IsValid(std::string* why) const;
+  FitnessMode mode = kDefaultFitnessMode;  // 1..7 against ground truth, 8 and 9 by fix cross-validation
 };
 
 struct TrackScore {

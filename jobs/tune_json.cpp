@@ -9,7 +9,7 @@ nlohmann::json metrics_json(const ErrorMetrics& m) {
 nlohmann::json tune_json(const TuneOutcome& o) {
   nlohmann::json j;
   j["model"] = std::string(filters::to_string(o.request.model));
-  j["mode"] = o.request.mode;
+  j["mode"] = number(o.request.mode);
   j["mode_name"] = fitness_mode_name(o.request.mode);
   put_solver_json(j, o.request);
   nlohmann::json params = nlohmann::json::object(), units = nlohmann::json::object();

@@ -11,8 +11,8 @@ namespace odotune {
 
 bool UkfTuneRequest::IsValid(std::string* why) const {
   if (!SolverSettings::IsValid(why)) return false;
-  if (!valid_fitness_mode(mode)) {
-    if (why) *why = fmt::format("mode = {} must be 1..7", mode);
+  if (is_fix_cv(mode)) {
+    if (why) *why = fmt::format("mode = {} must be 1..7", number(mode));
     return false;
   }
   return true;

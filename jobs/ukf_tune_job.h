@@ -27,7 +27,7 @@
 namespace odotune {
 
 struct UkfTuneRequest : SolverSettings {
-  int mode = 7;  // fitness mode 1..7
+  FitnessMode mode = kDefaultFitnessMode;  // against ground truth (1..7)
   bool IsValid(std::string* why) const;
 };
 

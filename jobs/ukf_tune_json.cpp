@@ -10,7 +10,7 @@ nlohmann::json ukf_tune_json(const UkfTuneOutcome& o, double fusion_rate_hz) {
   const UkfTuneRequest& r = o.request;
   nlohmann::json j;
   j["model"] = "ukf";
-  j["mode"] = r.mode;
+  j["mode"] = number(r.mode);
   j["mode_name"] = fitness_mode_name(r.mode);
   put_solver_json(j, r);
   j["fusion_rate_hz"] = fusion_rate_hz;

@@ -5,17 +5,16 @@
 
 namespace odotune {
 
-EkfObjective::EkfObjective(std::vector<const FastReplay*> tracks, filters::NoiseModel model, int mode)
+EkfObjective::EkfObjective(std::vector<const FastReplay*> tracks, filters::NoiseModel model, FitnessMode mode)
     : tracks_(std::move(tracks)), space_(ParamSpace::for_model(model)), mode_(mode) {
   if (tracks_.empty()) throw std::invalid_argument("EkfObjective: no tracks");
-  if (!valid_fitness_mode(mode)) throw std::invalid_argument("EkfObjective: mode must be 1..7");
+  if (is_fix_cv(mode)) throw std::invalid_argument("EkfObjective: mode must be 1..7");
 }
 
 EkfObjective EkfObjective::over_fixes(std::vector<const FixCvReplay*> tracks, filters::NoiseModel model,
-                                      int mode) {
+                                      FitnessMode mode) {
   if (tracks.empty()) throw std::invalid_argument("EkfObjective: no tracks");
-  if (!is_fix_cv_mode(mode))
-    throw std::invalid_argument("EkfObjective: fix cross-validation modes are 8 and 9");
+  if (!is_fix_cv(mode)) throw std::invalid_argument("EkfObjective: fix cross-validation modes are 8 and 9");
   EkfObjective o(model, mode);
   o.cv_tracks_ = std::move(tracks);
   return o;

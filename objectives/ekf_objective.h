@@ -34,22 +34,24 @@ struct DivergenceCounts {
 
 class EkfObjective {
  public:
-  // `tracks` must outlive the objective. `mode` in 1..7.
-  EkfObjective(std::vector<const FastReplay*> tracks, filters::NoiseModel model, int mode);
+  // `tracks` must outlive the objective. `mode` against ground truth.
+  EkfObjective(std::vector<const FastReplay*> tracks, filters::NoiseModel model, FitnessMode mode);
   // Without ground truth: `mode` 8 or 9 over fix cross-validation replays
   // (which must outlive the objective).
-  static EkfObjective over_fixes(std::vector<const FixCvReplay*> tracks, filters::NoiseModel model, int mode);
+  static EkfObjective over_fixes(std::vector<const FixCvReplay*> tracks, filters::NoiseModel model,
+                                 FitnessMode mode);
 
   double fitness(std::span<const double> x) const;
   std::pair<std::vector<double>, std::vector<double>> bounds() const { return space_.box(); }
 
   const ParamSpace& space() const { return space_; }
-  int mode() const { return mode_; }
+  FitnessMode mode() const { return mode_; }
   long evaluations() const { return counters_->evaluations.load(); }
   DivergenceCounts divergences() const;
 
  private:
-  EkfObjective(filters::NoiseModel model, int mode) : space_(ParamSpace::for_model(model)), mode_(mode) {}
+  EkfObjective(filters::NoiseModel model, FitnessMode mode)
+      : space_(ParamSpace::for_model(model)), mode_(mode) {}
   struct Counters {
     std::atomic<long> evaluations{0};
     std::atomic<long> non_finite{0};
@@ -58,7 +60,7 @@ class EkfObjective {
   std::vector<const FastReplay*> tracks_;
   std::vector<const FixCvReplay*> cv_tracks_;
   ParamSpace space_;
-  int mode_;
+  FitnessMode mode_;
   std::shared_ptr<Counters> counters_ = std::make_shared<Counters>();
 };
 

@@ -52,9 +52,11 @@ struct FixCvOutcome {
 };
 
 // The scalar fitness mode 8 or 9 minimises: the held-out RMSE [m] or the
-// mean −log likelihood [nats].
-inline double fix_cv_fitness(const FixCvOutcome& o, int mode) {
-  return mode == kFixCvRmseMode ? o.heldout.rmse_m : o.nll;
+// mean −log likelihood [nats]; std::logic_error for a ground-truth mode.
+inline double fix_cv_fitness(const FixCvOutcome& o, FitnessMode mode) {
+  if (mode == FitnessMode::fix_rmse) return o.heldout.rmse_m;
+  if (mode == FitnessMode::fix_nll) return o.nll;
+  throw std::logic_error("fix_cv_fitness: mode " + std::to_string(number(mode)) + " scores ground truth");
 }
 
 class FixCvReplay {

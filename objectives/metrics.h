@@ -1,12 +1,14 @@
-// Position-error metrics against ground truth and the seven fitness modes of
-// Kovacs et al. §2.3.4: 1 RMSE, 2 MAE, 3 MAXE, 4 RMSE+MAE, 5 RMSE+MAXE,
-// 6 MAE+MAXE, 7 RMSE+MAE+MAXE. All in metres. Modes 8 and 9 (below) need no
-// ground truth.
+// Position-error metrics against ground truth and the scalar each of the
+// seven fitness modes of Kovacs et al. §2.3.4 makes of them (fitness_mode.h).
+// All in metres.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <string>
+
+#include "objectives/fitness_mode.h"
 
 namespace odotune {
 
@@ -40,37 +42,23 @@ struct ErrorAccumulator {
   }
 };
 
-inline constexpr int kNumFitnessModes = 7;
-
-// Modes 1..7 score against ground truth.
-inline bool valid_fitness_mode(int mode) { return mode >= 1 && mode <= kNumFitnessModes; }
-
-// Modes after the study's seven score an EKF without ground truth, by
-// cross-validation over its position fixes (objectives/fix_cv_replay.h):
-//   8: RMSE of the held-out fixes' prediction errors [m];
-//   9: mean negative log predictive likelihood of the held-out fixes [nats].
-inline constexpr int kFixCvRmseMode = 8;
-inline constexpr int kFixCvNllMode = 9;
-inline constexpr int kNumEkfFitnessModes = 9;
-inline bool is_fix_cv_mode(int mode) { return mode == kFixCvRmseMode || mode == kFixCvNllMode; }
-// The modes the EKF tune, grid and report take.
-inline bool valid_ekf_fitness_mode(int mode) { return valid_fitness_mode(mode) || is_fix_cv_mode(mode); }
-
-// The scalar a fitness mode minimises; mode in 1..7 (checked by the caller).
-inline double fitness_of(const ErrorMetrics& m, int mode) {
+// The scalar a mode against ground truth minimises [m]; std::logic_error
+// for modes 8 and 9, which score fixes (fix_cv_replay.h fix_cv_fitness).
+inline double fitness_of(const ErrorMetrics& m, FitnessMode mode) {
   switch (mode) {
-    case 1: return m.rmse_m;
-    case 2: return m.mae_m;
-    case 3: return m.maxe_m;
-    case 4: return m.rmse_m + m.mae_m;
-    case 5: return m.rmse_m + m.maxe_m;
-    case 6: return m.mae_m + m.maxe_m;
-    default: return m.rmse_m + m.mae_m + m.maxe_m;
+    case FitnessMode::rmse: return m.rmse_m;
+    case FitnessMode::mae: return m.mae_m;
+    case FitnessMode::maxe: return m.maxe_m;
+    case FitnessMode::rmse_mae: return m.rmse_m + m.mae_m;
+    case FitnessMode::rmse_maxe: return m.rmse_m + m.maxe_m;
+    case FitnessMode::mae_maxe: return m.mae_m + m.maxe_m;
+    case FitnessMode::rmse_mae_maxe: return m.rmse_m + m.mae_m + m.maxe_m;
+    case FitnessMode::fix_rmse:
+    case FitnessMode::fix_nll: break;
   }
+  throw std::logic_error("fitness_of: mode " + std::to_string(number(mode)) +
+                         " scores fixes, not ground truth");
 }
-
-// Human-readable name of a mode 1..9, e.g. "RMSE+MAE", "held-out fix NLL".
-std::string fitness_mode_name(int mode);
 
 // Improvement of `tuned` over `baseline` in percent (positive = better).
 inline double improvement_pct(double baseline, double tuned) {

@@ -93,9 +93,9 @@ ErrorMetrics ukf_pose_errors(const FusionInput& in, const UkfSettings& s, bool* 
   return fusion_pose_errors(in, trace);
 }
 
-UkfObjective::UkfObjective(std::vector<const FusionInput*> inputs, int mode, UkfSettings base)
+UkfObjective::UkfObjective(std::vector<const FusionInput*> inputs, FitnessMode mode, UkfSettings base)
     : inputs_(std::move(inputs)), mode_(mode), base_(std::move(base)), space_(ukf_space()) {
-  if (!valid_fitness_mode(mode)) throw std::invalid_argument("UkfObjective: mode must be 1..7");
+  if (is_fix_cv(mode)) throw std::invalid_argument("UkfObjective: mode must be 1..7");
   if (inputs_.empty()) throw std::invalid_argument("UkfObjective: no track");
   std::string why;
   if (!base_.IsValid(&why)) throw std::invalid_argument("UkfObjective: " + why);

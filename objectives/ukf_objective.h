@@ -64,13 +64,13 @@ class UkfObjective {
   // 1..7. `base` carries the fixed parts (UT parameters, initial state,
   // which sensors are used). Throws std::invalid_argument naming a track
   // without ground truth, or for a bad mode or base.
-  UkfObjective(std::vector<const FusionInput*> inputs, int mode, UkfSettings base = {});
+  UkfObjective(std::vector<const FusionInput*> inputs, FitnessMode mode, UkfSettings base = {});
 
   double fitness(std::span<const double> x) const;
   std::pair<std::vector<double>, std::vector<double>> bounds() const { return space_.box(); }
 
   const BoxSpace& space() const { return space_; }
-  int mode() const { return mode_; }
+  FitnessMode mode() const { return mode_; }
   // The settings at box point x (what fitness() replays).
   UkfSettings settings_at(std::span<const double> x) const;
   long evaluations() const { return counters_->evaluations.load(); }
@@ -82,7 +82,7 @@ class UkfObjective {
     std::atomic<long> failures{0};
   };
   std::vector<const FusionInput*> inputs_;
-  int mode_;
+  FitnessMode mode_;
   UkfSettings base_;
   BoxSpace space_;
   std::shared_ptr<Counters> counters_ = std::make_shared<Counters>();

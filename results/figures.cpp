@@ -47,16 +47,13 @@ std::string category_tics(const std::vector<std::string>& names, int first) {
 
 // ---------------------------------------------------------------- heatmap
 
-std::string heatmap_mode_label(int mode) {
-  static const char* const names[] = {"RMSE",      "MAE",      "MAXE",         "RMSE+MAE",
-                                      "RMSE+MAXE", "MAE+MAXE", "RMSE+MAE+MAXE"};
-  if (mode < 1 || mode > 7) throw std::invalid_argument("fitness mode must be 1..7");
-  return std::to_string(mode) + " " + names[mode - 1];
+std::string heatmap_mode_label(FitnessMode mode) {
+  return std::to_string(number(mode)) + " " + fitness_mode_name(mode);
 }
 
 void heatmap(const fs::path& stem, const std::string& title, const std::vector<std::string>& columns,
              const std::vector<std::vector<double>>& values) {
-  constexpr int kModes = 7;
+  constexpr auto kModes = static_cast<int>(kGroundTruthModes.size());
   if (columns.empty()) throw std::invalid_argument("heatmap: no columns (tracks)");
   if (values.size() != kModes) {
     throw std::invalid_argument("heatmap: expected 7 rows (fitness modes 1..7), got " +
@@ -92,7 +89,7 @@ void heatmap(const fs::path& stem, const std::string& title, const std::vector<s
   }
 
   std::vector<std::string> mode_names;
-  for (int m = 1; m <= kModes; ++m) mode_names.push_back(heatmap_mode_label(m));
+  for (FitnessMode m : kGroundTruthModes) mode_names.push_back(heatmap_mode_label(m));
   std::size_t longest = 0;
   for (const auto& c : columns) longest = std::max(longest, c.size());
   const int ncols = static_cast<int>(columns.size());

@@ -13,13 +13,13 @@
 #include <string>
 #include <vector>
 
+#include "objectives/fitness_mode.h"
 #include "results/run_record.h"
 
 namespace odotune::results {
 
-// Row labels of the heatmap: "1 RMSE", "2 MAE", …, "7 RMSE+MAE+MAXE" (same
-// mode names as objectives/metrics.h fitness_mode_name()).
-std::string heatmap_mode_label(int mode);
+// Row labels of the heatmap: "1 RMSE", "2 MAE", …, "7 RMSE+MAE+MAXE".
+std::string heatmap_mode_label(FitnessMode mode);
 
 // Improvement % over the baseline per fitness mode × track (the study's
 // Figure 3): rows = modes 1..7 (top to bottom), columns = `columns`, each

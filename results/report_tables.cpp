@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -11,7 +12,14 @@ namespace odotune::results {
 
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr int kModes = 7;
+constexpr std::size_t kModes = kGroundTruthModes.size();
+
+// The grid row of a stored mode number: modes against ground truth only.
+std::optional<std::size_t> grid_row(int stored_mode) {
+  const std::optional<FitnessMode> m = fitness_mode_of_number(stored_mode);
+  if (!m || is_fix_cv(*m)) return std::nullopt;
+  return static_cast<std::size_t>(number(*m) - 1);
+}
 
 struct Mean {
   double sum = 0.0;
@@ -86,11 +94,11 @@ ImprovementGrid improvement_grid(const std::vector<RunRecord>& runs, const std::
                                  ReportMetric metric, bool heldout, const std::vector<std::string>& tracks) {
   std::vector<std::vector<Mean>> acc(kModes, std::vector<Mean>(tracks.size()));
   for (const auto& r : runs) {
-    if (r.model != model || r.is_heldout() != heldout || r.mode < 1 || r.mode > kModes) continue;
+    const std::optional<std::size_t> row = grid_row(r.mode);
+    if (r.model != model || r.is_heldout() != heldout || !row) continue;
     const auto it = std::find(tracks.begin(), tracks.end(), r.scored_track());
     if (it == tracks.end()) continue;
-    acc[static_cast<std::size_t>(r.mode - 1)][static_cast<std::size_t>(it - tracks.begin())].add(
-        improvement_pct(r, metric));
+    acc[*row][static_cast<std::size_t>(it - tracks.begin())].add(improvement_pct(r, metric));
   }
   ImprovementGrid g;
   g.columns = tracks;

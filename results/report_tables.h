@@ -14,6 +14,7 @@
 #include <string_view>
 #include <vector>
 
+#include "objectives/fitness_mode.h"
 #include "results/run_record.h"
 
 namespace odotune::results {
@@ -27,7 +28,7 @@ double improvement_pct(const RunRecord& r, ReportMetric m);
 std::vector<std::string> report_models(const std::vector<RunRecord>& runs);
 // Tracks scored by any run, in the order first stored.
 std::vector<std::string> report_tracks(const std::vector<RunRecord>& runs);
-// Fitness modes present, ascending.
+// Stored fitness mode numbers present, ascending.
 std::vector<int> report_modes(const std::vector<RunRecord>& runs);
 
 struct ImprovementGrid {
@@ -53,7 +54,8 @@ struct RmseTable {
 };
 // From per-track runs only (leave-one-out runs are in the generalisation table).
 // Rows for `modes` only (default: the paper's modes 1..7), in that order.
-RmseTable rmse_table(const std::vector<RunRecord>& runs, const std::vector<int>& modes = {1, 2, 3, 4, 5, 6, 7});
+RmseTable rmse_table(const std::vector<RunRecord>& runs,
+                     const std::vector<int>& modes = ground_truth_mode_numbers());
 // RMSE in mm with 2 decimals; header "track,mode,original_mm,<model>_mm…";
 // a missing value is an empty field.
 std::string to_csv(const RmseTable& t);

@@ -20,7 +20,7 @@ TEST_P(ReferenceTuning, PsoBeatsBaselineRmse) {
   const odotune::PreparedTrack prepared = odotune::prepare_track(track);
   odotune::TuneRequest req;
   req.model = model;
-  req.mode = 1;
+  req.mode = odotune::FitnessMode::rmse;
   req.seed = 42;
   req.particles = 16;
   req.iterations = 20;

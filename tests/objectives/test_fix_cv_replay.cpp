@@ -162,8 +162,9 @@ TEST(FixCvReplay, Refusals) {
   EXPECT_THROW(FixCvReplay(by_fixes(tr), o), std::invalid_argument);
   // The objective: modes 8 and 9 only, over fixes; and a mode 1..7 tune needs ground truth.
   const FixCvReplay cv(by_fixes(tr), {});
-  EXPECT_THROW(EkfObjective::over_fixes({&cv}, NoiseModel::alpha, 7), std::invalid_argument);
-  const EkfObjective obj = EkfObjective::over_fixes({&cv}, NoiseModel::alpha, kFixCvRmseMode);
+  EXPECT_THROW(EkfObjective::over_fixes({&cv}, NoiseModel::alpha, FitnessMode::rmse_mae_maxe),
+               std::invalid_argument);
+  const EkfObjective obj = EkfObjective::over_fixes({&cv}, NoiseModel::alpha, FitnessMode::fix_rmse);
   EXPECT_NEAR(obj.fitness(std::vector<double>{0.01, 0.01}), cv.evaluate(alpha(0.01, 0.01)).heldout.rmse_m,
               1e-15);
   TrackData d;

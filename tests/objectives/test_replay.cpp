@@ -22,14 +22,14 @@ TEST(Metrics, FitnessModesCombineRmseMaeMaxe) {
   EXPECT_NEAR(m.rmse_m, std::sqrt((0.01 + 0.04 + 0.16) / 3), 1e-15);
   EXPECT_NEAR(m.mae_m, 0.7 / 3, 1e-15);
   EXPECT_DOUBLE_EQ(m.maxe_m, 0.4);
-  EXPECT_DOUBLE_EQ(fitness_of(m, 1), m.rmse_m);
-  EXPECT_DOUBLE_EQ(fitness_of(m, 2), m.mae_m);
-  EXPECT_DOUBLE_EQ(fitness_of(m, 3), m.maxe_m);
-  EXPECT_DOUBLE_EQ(fitness_of(m, 4), m.rmse_m + m.mae_m);
-  EXPECT_DOUBLE_EQ(fitness_of(m, 5), m.rmse_m + m.maxe_m);
-  EXPECT_DOUBLE_EQ(fitness_of(m, 6), m.mae_m + m.maxe_m);
-  EXPECT_DOUBLE_EQ(fitness_of(m, 7), m.rmse_m + m.mae_m + m.maxe_m);
-  EXPECT_EQ(fitness_mode_name(7), "RMSE+MAE+MAXE");
+  EXPECT_DOUBLE_EQ(fitness_of(m, FitnessMode::rmse), m.rmse_m);
+  EXPECT_DOUBLE_EQ(fitness_of(m, FitnessMode::mae), m.mae_m);
+  EXPECT_DOUBLE_EQ(fitness_of(m, FitnessMode::maxe), m.maxe_m);
+  EXPECT_DOUBLE_EQ(fitness_of(m, FitnessMode::rmse_mae), m.rmse_m + m.mae_m);
+  EXPECT_DOUBLE_EQ(fitness_of(m, FitnessMode::rmse_maxe), m.rmse_m + m.maxe_m);
+  EXPECT_DOUBLE_EQ(fitness_of(m, FitnessMode::mae_maxe), m.mae_m + m.maxe_m);
+  EXPECT_DOUBLE_EQ(fitness_of(m, FitnessMode::rmse_mae_maxe), m.rmse_m + m.mae_m + m.maxe_m);
+  EXPECT_EQ(fitness_mode_name(FitnessMode::rmse_mae_maxe), "RMSE+MAE+MAXE");
 }
 
 TEST(ParamSpace, StudyBoundsAndLogScaling) {
@@ -143,7 +143,7 @@ TEST(EkfObjective, PenalisesAndCountsDivergence) {
   ReplayInput in = build_replay_input(track);
   for (auto& z : in.fixes) z = filters::Position(std::nan(""), 0.0);
   const FastReplay fast(in);
-  const EkfObjective obj({&fast}, NoiseModel::alpha, 1);
+  const EkfObjective obj({&fast}, NoiseModel::alpha, FitnessMode::rmse);
   const double f = obj.fitness(std::vector<double>{0.1, 0.1});
   EXPECT_EQ(f, kDivergencePenalty);
   EXPECT_EQ(obj.divergences().non_finite, 1);
@@ -153,13 +153,13 @@ TEST(EkfObjective, PenalisesAndCountsDivergence) {
 TEST(EkfObjective, MeanOverTracksAndBaselineIsBeatable) {
   const Track a = testing_support::synthetic_track(6), b = testing_support::synthetic_track(7);
   const FastReplay fa(build_replay_input(a)), fb(build_replay_input(b));
-  const EkfObjective both({&fa, &fb}, NoiseModel::alpha, 7);
-  const EkfObjective only_a({&fa}, NoiseModel::alpha, 7);
-  const EkfObjective only_b({&fb}, NoiseModel::alpha, 7);
+  const EkfObjective both({&fa, &fb}, NoiseModel::alpha, FitnessMode::rmse_mae_maxe);
+  const EkfObjective only_a({&fa}, NoiseModel::alpha, FitnessMode::rmse_mae_maxe);
+  const EkfObjective only_b({&fb}, NoiseModel::alpha, FitnessMode::rmse_mae_maxe);
   const std::vector<double> x{0.02, 0.3};
   EXPECT_NEAR(both.fitness(x), 0.5 * (only_a.fitness(x) + only_b.fitness(x)), 1e-15);
-  EXPECT_THROW(EkfObjective({}, NoiseModel::alpha, 1), std::invalid_argument);
-  EXPECT_THROW(EkfObjective({&fa}, NoiseModel::alpha, 8), std::invalid_argument);
+  EXPECT_THROW(EkfObjective({}, NoiseModel::alpha, FitnessMode::rmse), std::invalid_argument);
+  EXPECT_THROW(EkfObjective({&fa}, NoiseModel::alpha, FitnessMode::fix_rmse), std::invalid_argument);
 }
 
 }  // namespace

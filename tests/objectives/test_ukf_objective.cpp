@@ -66,7 +66,7 @@ TEST(UkfSpace, NamedBoundedLogScaledAroundTheDefaults) {
 
 TEST(UkfObjective, FitnessIsTheModeOfTheReplaysErrors) {
   const FusionInput& in = biased_input();
-  const UkfObjective obj({&in}, 1);
+  const UkfObjective obj({&in}, FitnessMode::rmse);
   const UkfSettings defaults;
   const std::vector<double> x = ukf_space().to_box(ukf_params_of(defaults));
   bool healthy = false;
@@ -74,7 +74,7 @@ TEST(UkfObjective, FitnessIsTheModeOfTheReplaysErrors) {
   ASSERT_TRUE(healthy);
   EXPECT_GT(e.samples, 100);
   EXPECT_NEAR(obj.fitness(x), e.rmse_m, 1e-12 * e.rmse_m);
-  const UkfObjective obj7({&in, &in}, 7);
+  const UkfObjective obj7({&in, &in}, FitnessMode::rmse_mae_maxe);
   EXPECT_NEAR(obj7.fitness(x), e.rmse_m + e.mae_m + e.maxe_m, 1e-12);  // mean of two equal tracks
   EXPECT_EQ(obj.evaluations(), 1);
   EXPECT_EQ(obj.failures(), 0);
@@ -101,7 +101,7 @@ tuner::Summary small_pso(const UkfObjective& obj, std::uint64_t seed) {
 
 TEST(UkfObjective, PsoBeatsTheDefaultsAndIsDeterministic) {
   const FusionInput& in = biased_input();
-  const UkfObjective obj({&in}, 1);
+  const UkfObjective obj({&in}, FitnessMode::rmse);
   const double at_defaults = obj.fitness(ukf_space().to_box(ukf_params_of(UkfSettings{})));
 
   const int threads_before = omp_get_max_threads();
@@ -123,7 +123,7 @@ TEST(UkfObjective, PsoBeatsTheDefaultsAndIsDeterministic) {
 TEST(UkfObjective, DivergenceIsACountedPenalty) {
   FusionInput broken = biased_input();
   broken.v_kin[30] = std::nan("");  // the odometry breaks mid-way: the filter turns unhealthy
-  const UkfObjective obj({&broken}, 1);
+  const UkfObjective obj({&broken}, FitnessMode::rmse);
   const std::vector<double> x = ukf_space().to_box(ukf_params_of(UkfSettings{}));
   EXPECT_EQ(obj.fitness(x), kDivergencePenalty);
   EXPECT_EQ(obj.failures(), 1);
@@ -141,15 +141,15 @@ TEST(UkfObjective, OneLineErrors) {
   o.gt = false;
   const FusionInput no_gt = build_fusion_input(fusion_track(o));
   try {
-    UkfObjective obj({&no_gt}, 1);
+    UkfObjective obj({&no_gt}, FitnessMode::rmse);
     FAIL() << "expected std::invalid_argument";
   } catch (const std::invalid_argument& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("track 'no_truth': no ground truth"), std::string::npos) << what;
     EXPECT_EQ(what.find('\n'), std::string::npos);
   }
-  EXPECT_THROW(UkfObjective({&biased_input()}, 8), std::invalid_argument);
-  EXPECT_THROW(UkfObjective({}, 1), std::invalid_argument);
+  EXPECT_THROW(UkfObjective({&biased_input()}, FitnessMode::fix_rmse), std::invalid_argument);
+  EXPECT_THROW(UkfObjective({}, FitnessMode::rmse), std::invalid_argument);
   UkfSettings bad;
   bad.odo_var_w = 0.0;
   std::string why;
