@@ -52,22 +52,10 @@ U16U64Map u16_u64_map(ByteReader& r, const char* field) {
 }
 
 const char* opcode_name(std::uint8_t op) {
-  static constexpr const char* kNames[] = {"?",
-                                           "Header",
-                                           "Footer",
-                                           "Schema",
-                                           "Channel",
-                                           "Message",
-                                           "Chunk",
-                                           "MessageIndex",
-                                           "ChunkIndex",
-                                           "Attachment",
-                                           "AttachmentIndex",
-                                           "Statistics",
-                                           "Metadata",
-                                           "MetadataIndex",
-                                           "SummaryOffset",
-                                           "DataEnd"};
+  static constexpr const char* kNames[] = {"?",          "Header",        "Footer",          "Schema",
+                                           "Channel",    "Message",       "Chunk",           "MessageIndex",
+                                           "ChunkIndex", "Attachment",    "AttachmentIndex", "Statistics",
+                                           "Metadata",   "MetadataIndex", "SummaryOffset",   "DataEnd"};
   return op >= 1 && op <= 0x0f ? kNames[op] : "unknown record";
 }
 
@@ -76,10 +64,9 @@ bool known(std::uint8_t op) { return op >= 0x01 && op <= 0x0f; }
 }  // namespace
 
 const char* record_name(const Record& r) {
-  static constexpr const char* kNames[] = {"Header",     "Footer",          "Schema",     "Channel", "Message",
-                                           "ChunkIndex", "Attachment",      "AttachmentIndex",
-                                           "Statistics", "Metadata",        "MetadataIndex",
-                                           "SummaryOffset", "DataEnd"};
+  static constexpr const char* kNames[] = {
+      "Header",          "Footer",     "Schema",   "Channel",       "Message",       "ChunkIndex", "Attachment",
+      "AttachmentIndex", "Statistics", "Metadata", "MetadataIndex", "SummaryOffset", "DataEnd"};
   return kNames[r.index()];
 }
 
@@ -95,8 +82,9 @@ StreamReader::StreamReader(const std::filesystem::path& path) : path_(path), nam
   read_exact(magic.data(), magic.size(), 0, "magic");
   if (std::memcmp(magic.data(), kMagic.data(), 5) != 0)
     fail(0, "not an MCAP file (expected the magic bytes 0x89 'MCAP')");
-  if (magic[5] != kMagic[5]) fail(5, "MCAP major version '" + std::string(1, static_cast<char>(magic[5])) +
-                                         "' is not supported (expected '0')");
+  if (magic[5] != kMagic[5])
+    fail(5, "MCAP major version '" + std::string(1, static_cast<char>(magic[5])) +
+                "' is not supported (expected '0')");
   if (magic[6] != '\r' || magic[7] != '\n') fail(6, "damaged magic bytes (expected \\r\\n after 'MCAP0')");
   data_crc_ = crc32(magic);
   pos_ = magic.size();
@@ -132,8 +120,7 @@ std::optional<Record> StreamReader::next() {
       return std::nullopt;
     }
     const std::uint64_t offset = pos_;
-    if (size_ - pos_ < kRecordHeaderBytes)
-      fail(offset, "the file ends without a Footer record (truncated?)");
+    if (size_ - pos_ < kRecordHeaderBytes) fail(offset, "the file ends without a Footer record (truncated?)");
     std::array<std::uint8_t, kRecordHeaderBytes> head{};
     read_exact(head.data(), head.size(), offset, "record header");
     const std::uint8_t op = head[0];

@@ -35,8 +35,9 @@ void read_sqlite_bag(const std::filesystem::path& file, const Want& want, const 
   auto prepare = [&](const char* sql) {
     sqlite3_stmt* s = nullptr;
     if (sqlite3_prepare_v2(db.get(), sql, -1, &s, nullptr) != SQLITE_OK)
-      throw BagError(name, "", std::string("not a rosbag2 SQLite bag (") + sqlite3_errmsg(db.get()) +
-                                   "; expected the tables topics and messages)");
+      throw BagError(name, "",
+                     std::string("not a rosbag2 SQLite bag (") + sqlite3_errmsg(db.get()) +
+                         "; expected the tables topics and messages)");
     return std::unique_ptr<sqlite3_stmt, StmtCloser>(s);
   };
   struct Topic {

@@ -38,9 +38,9 @@
 #include "diagnose/diagnosis_summary.h"
 #include "diagnose/recordings.h"
 #include "formats/scenario_yaml.h"
+#include "sim/motion_profile.h"
+#include "sim/simulator.h"
 #include "tests/diagnose/sim_track.h"
-#include "tracks/motion_profile.h"
-#include "tracks/simulator.h"
 #include "tracks/track_io.h"
 
 namespace {

@@ -21,11 +21,11 @@
 #include <numbers>
 #include <vector>
 
-#include "filters/lstm.h"
 #include "filters/velocity_ukf.h"
-#include "objectives/learned_fusion.h"
-#include "objectives/learned_odometry.h"
-#include "objectives/lstm_training.h"
+#include "learned/learned_fusion.h"
+#include "learned/learned_odometry.h"
+#include "learned/lstm.h"
+#include "learned/lstm_training.h"
 
 namespace {
 
@@ -65,7 +65,7 @@ void BM_TrainVelocityNet(benchmark::State& state) {
                                    : LstmTrainingOptions::Jacobian::autodiff;
   int iterations = 0;
   for (auto _ : state) {
-    odotune::filters::VelocityNet net;
+    odotune::VelocityNet net;
     const auto s = odotune::train_lstm(net, train, SequenceSet{}, o);
     iterations = s.iterations;
     benchmark::DoNotOptimize(net.weights.data());
@@ -76,7 +76,7 @@ BENCHMARK(BM_TrainVelocityNet)->Args({800, 0})->Args({800, 1})->Unit(benchmark::
 
 void BM_RetrainVelocityNet(benchmark::State& state) {
   const SequenceSet train = velocity_windows(800);
-  odotune::filters::VelocityNet trained;
+  odotune::VelocityNet trained;
   odotune::train_lstm(trained, train, SequenceSet{}, LstmTrainingOptions{});
   SequenceSet fresh = velocity_windows(300);
   for (double& y : fresh.y) y *= 0.97;                          // a tyre change
@@ -84,7 +84,7 @@ void BM_RetrainVelocityNet(benchmark::State& state) {
   o.jacobian = state.range(0) == 0 ? LstmTrainingOptions::Jacobian::bptt
                                    : LstmTrainingOptions::Jacobian::autodiff;
   for (auto _ : state) {
-    odotune::filters::VelocityNet net = trained;
+    odotune::VelocityNet net = trained;
     odotune::retrain_lstm(net, fresh, o);
     benchmark::DoNotOptimize(net.weights.data());
   }
@@ -96,8 +96,8 @@ void BM_TrainSlipNet(benchmark::State& state) {
   LstmTrainingOptions o;
   o.max_iterations = 30;
   for (auto _ : state) {
-    odotune::filters::SlipNet net;
-    net.activation = odotune::filters::OutputActivation::relu;
+    odotune::SlipNet net;
+    net.activation = odotune::OutputActivation::relu;
     odotune::train_lstm(net, train, SequenceSet{}, o);
     benchmark::DoNotOptimize(net.weights.data());
   }
@@ -116,8 +116,8 @@ void predict_bench(benchmark::State& state, int inputs) {
     w = (w + 1) % s.size();
   }
 }
-void BM_PredictVelocityNet(benchmark::State& state) { predict_bench<odotune::filters::VelocityNet>(state, 3); }
-void BM_PredictSlipNet(benchmark::State& state) { predict_bench<odotune::filters::SlipNet>(state, 5); }
+void BM_PredictVelocityNet(benchmark::State& state) { predict_bench<odotune::VelocityNet>(state, 3); }
+void BM_PredictSlipNet(benchmark::State& state) { predict_bench<odotune::SlipNet>(state, 5); }
 BENCHMARK(BM_PredictVelocityNet)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_PredictSlipNet)->Unit(benchmark::kMicrosecond);
 

@@ -15,7 +15,7 @@
 #include "cli/commands.h"
 #include "core/failure.h"
 #include "jobs/simulate_job.h"
-#include "tracks/effects.h"
+#include "sim/effects.h"
 
 namespace odotune::cli {
 

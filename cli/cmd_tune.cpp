@@ -106,12 +106,12 @@ void register_tune(CLI::App& app) {
       "Calibrators (pf-calib, adaptive-pf-calib): tunes N_eff fraction, max-weight ratio, α,\n"
       "dispersion per particle and random-walk σ; the score weighs the final radius error,\n"
       "convergence time, the calibrated odometry's pose RMSE and the particle count\n"
-      "(objectives/calibration_objective.h). The baseline is the paper's default settings;\n"
+      "(calibration/calibration_objective.h). The baseline is the paper's default settings;\n"
       "if they score better than the solver's best they are kept. Tracks need external velocities\n"
       "(v_ext, w_ext, or --ext-from-gt HZ) and ground truth, all of one robot. --config-out writes\n"
       "an odotune-pf-config/1 file (formats/pf_config_yaml.h).\n"
       "UKF (ukf): tunes the (V, W) fusion filter's process noise, static odometry variances, gyro\n"
-      "variance and external-variance scale (objectives/ukf_objective.h) for --mode's error of\n"
+      "variance and external-variance scale (learned/ukf_objective.h) for --mode's error of\n"
       "the fused pose against ground truth (tracks need it); the baseline is the default noise.\n"
       "--config-out writes an odotune-ukf-config/1 file (formats/ukf_config_yaml.h).\n"
       "robot_localization (--rl-params FILE --bag BAG): tunes the process noise of the robot's own ekf_node\n"
@@ -203,8 +203,6 @@ void register_tune(CLI::App& app) {
     }
     if (req->tracks.empty()) throw Failure("tune: expected --track, or --rl-params with --bag");
     TuneCommandRequest r = *req;
-    for (const CLI::Option* opt : sub->get_options())
-      if (opt->count() > 0) r.given_options.push_back(opt->get_name());
     InterruptGuard interrupt;  // Ctrl-C stops the tune: the best so far is printed and written
     Progress progress("tune", "evaluations");
     r.progress = [&progress](long done, long total) { progress.update(done, total); };

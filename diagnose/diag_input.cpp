@@ -1,5 +1,7 @@
 #include "diagnose/diag_input.h"
 
+#include "core/robust_stats.h"
+
 #include "diagnose/series_interp.h"
 
 #include <algorithm>
@@ -20,9 +22,8 @@ namespace odotune::diagnose {
 namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
-constexpr double kMinSigmaM = 1e-3;     // floor of ref_sigma_m [m]
-constexpr double kMinSigmaRad = 1e-3;   // floor of ref_sigma_rad [rad]
-constexpr double kMadToSigma = 1.4826;  // sigma = 1.4826*MAD for a normal distribution
+constexpr double kMinSigmaM = 1e-3;    // floor of ref_sigma_m [m]
+constexpr double kMinSigmaRad = 1e-3;  // floor of ref_sigma_rad [rad]
 
 [[noreturn]] void fail(const Track& track, const std::string& what) {
   throw std::invalid_argument(fmt::format("track '{}': {}", track.name(), what));
@@ -37,23 +38,6 @@ std::optional<double> meta_number(const Track& track, std::string_view key) {
   const auto [p, ec] = std::from_chars(text->data(), end, v);
   if (ec != std::errc() || p != end || !std::isfinite(v) || v < 0.0) return std::nullopt;
   return v;
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  double m = *mid;
-  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), mid));
-  return m;
-}
-
-// Robust standard deviation of a sample: 1.4826*median(|v - median(v)|).
-double robust_sigma(const std::vector<double>& v) {
-  const double m = median(v);
-  std::vector<double> dev(v.size());
-  for (std::size_t i = 0; i < v.size(); ++i) dev[i] = std::abs(v[i] - m);
-  return kMadToSigma * median(std::move(dev));
 }
 
 void fill_odometry(const Track& track, DiagInput& in) {

@@ -5,8 +5,8 @@
 
 #include <fmt/format.h>
 
-#include "tracks/effects.h"
-#include "tracks/model_terms.h"
+#include "sim/effects.h"
+#include "sim/model_terms.h"
 
 namespace odotune {
 namespace {

@@ -7,7 +7,7 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
-#include "tracks/effects.h"
+#include "sim/effects.h"
 
 namespace odotune::diagnose {
 

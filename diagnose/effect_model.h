@@ -2,7 +2,7 @@
 // step 2): the nominal kinematics of track-format.md plus any subset of the
 // physics effects of ../shared/specs/physics-effects.md, mapping the MEASURED
 // odometry of one interval (node k -> k+1 of DiagInput::odo_t_s) to the TRUE
-// body motion. It inverts the simulator's world model (tracks/simulator.h,
+// body motion. It inverts the simulator's world model (docs/simulator.md,
 // header comment) step for step, so that a simulated effect is recovered:
 //
 //  * Source. The odometry becomes, per wheel, the cumulative NOMINAL rim travel
@@ -53,7 +53,7 @@
 //  * gyro_bias, gyro_scale act on the gyro only (corrected_gyro_rate).
 //
 // Parameters travel as one flat vector: every parameter of every active effect,
-// effects in the table order of tracks/effects.h and parameters in each
+// effects in the table order of sim/effects.h and parameters in each
 // effect's order (param_layout() names them "effect.param"). radius_step.t and
 // the slip_zone box enter as fixed numbers (their value is read, they are not
 // differentiated); gyro parameters do not enter dead reckoning at all.
@@ -105,7 +105,7 @@ inline bool noop_differs_from_absence(Effect e) { return e == Effect::actuator_l
 // Which effects are active and their parameter values.
 class EffectSet {
  public:
-  // Specs in the command-line form of tracks/effects.h ("lateral_skid:k=0.03");
+  // Specs in the command-line form of sim/effects.h ("lateral_skid:k=0.03");
   // parameters not given take their no-op values. Throws std::invalid_argument.
   static EffectSet parse(const std::vector<std::string>& specs);
 

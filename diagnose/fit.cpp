@@ -1,6 +1,6 @@
 #include "diagnose/fit.h"
 
-#include "diagnose/solver_options.h"
+#include "core/ceres_options.h"
 
 #include <algorithm>
 #include <array>
@@ -217,7 +217,7 @@ class AnchorComposedCost : public ceres::CostFunction {
 
   const CostShared* s_;
   Window w_;
-  mutable std::vector<double> memo_key_, memo_res_;  // one problem, one thread (solver_options.h)
+  mutable std::vector<double> memo_key_, memo_res_;  // one problem, one thread (core/ceres_options.h)
 };
 
 template <int Stride>
@@ -396,7 +396,7 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
     if (sh.free_anchor) {
       alone.AddResidualBlock(make_cost(active, &sh, w, fixed), nullptr, free_values.data(), anchor.data());
       alone.SetParameterBlockConstant(free_values.data());
-      ceres::Solver::Options so = diagnosis_solver_options(5);
+      ceres::Solver::Options so = deterministic_solver_options(5, FitTolerance::diagnosis);
       so.function_tolerance = 1e-8;
       ceres::Solver::Summary summary;
       ceres::Solve(so, &alone, &summary);
@@ -438,7 +438,7 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
     problem.SetParameterUpperBound(free_values.data(), static_cast<int>(j), s.upper);
   }
 
-  ceres::Solver::Options so = diagnosis_solver_options(options.max_iterations);
+  ceres::Solver::Options so = deterministic_solver_options(options.max_iterations, FitTolerance::diagnosis);
   // The bounds make Ceres run a projected Armijo line search on every trust
   // region step; with cubic interpolation (the default) its first trial
   // evaluates the Jacobian too, a second Jacobian per iteration. Quadratic

@@ -16,12 +16,12 @@
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 
+#include "core/ceres_options.h"
+#include "core/robust_stats.h"
 #include "diagnose/gyro_dead_reckoning.h"
 #include "diagnose/option_rules.h"
 #include "diagnose/paired_test.h"
-#include "diagnose/robust_stats.h"
 #include "diagnose/series_interp.h"
-#include "diagnose/solver_options.h"
 #include "diagnose/window_replay.h"
 
 namespace odotune::diagnose {
@@ -214,7 +214,7 @@ Solution solve(const Context& c, const std::vector<int>& which, const Solution& 
     g[2] = 1.0;
     problem.SetManifold(g, new ceres::SubsetManifold(3, {2}));
   }
-  const ceres::Solver::Options so = diagnosis_solver_options(o.max_iterations);
+  const ceres::Solver::Options so = deterministic_solver_options(o.max_iterations, FitTolerance::diagnosis);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
   sol.converged = summary.termination_type == ceres::CONVERGENCE;

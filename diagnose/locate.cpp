@@ -1,6 +1,6 @@
 #include "diagnose/locate.h"
+#include "core/robust_stats.h"
 #include "diagnose/option_rules.h"
-#include "diagnose/robust_stats.h"
 
 #include <algorithm>
 #include <array>

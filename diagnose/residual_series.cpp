@@ -1,5 +1,6 @@
 #include "diagnose/residual_series.h"
 
+#include "core/angles.h"
 #include "diagnose/series_interp.h"
 
 #include <algorithm>
@@ -15,11 +16,6 @@ double rate(const std::vector<double>& t, const std::vector<double>& y, double t
   const double a = std::max(t.front(), tq - h), b = std::min(t.back(), tq + h);
   if (b - a <= 0.0) return 0.0;
   return (interp_held(t, y, b) - interp_held(t, y, a)) / (b - a);
-}
-
-double wrap(double a) {
-  a = std::remainder(a, 2.0 * std::numbers::pi);
-  return a <= -std::numbers::pi ? a + 2.0 * std::numbers::pi : a;
 }
 
 }  // namespace
@@ -72,7 +68,7 @@ ResidualSeries residual_series(const DiagInput& in, const std::vector<Window>& w
       s.t_s.push_back(in.ref_t_s[i]);
       s.ex_m.push_back(r.pred_x_m[i] - in.ref_x_m[i]);
       s.ey_m.push_back(r.pred_y_m[i] - in.ref_y_m[i]);
-      if (heading) s.e_theta_rad.push_back(wrap(r.pred_theta_rad[i] - in.ref_theta_rad[i]));
+      if (heading) s.e_theta_rad.push_back(wrap_angle(r.pred_theta_rad[i] - in.ref_theta_rad[i]));
       s.window.push_back(w.index);
       s.x_m.push_back(in.ref_x_m[i]);
       s.y_m.push_back(in.ref_y_m[i]);

@@ -1,7 +1,7 @@
 #include "diagnose/sensor_checks.h"
 
+#include "core/robust_stats.h"
 #include "diagnose/option_rules.h"
-#include "diagnose/robust_stats.h"
 #include "diagnose/series_interp.h"
 
 #include <algorithm>

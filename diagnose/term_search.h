@@ -1,7 +1,7 @@
 // Physics outside the list (docs/diagnosis-design.md, "Physics outside the
 // list: term search"): when the chosen model of a track
 // still leaves a mismatch, search a library of candidate terms
-// (tracks/model_terms.h: corrections of a wheel's ground speed by functions
+// (sim/model_terms.h: corrections of a wheel's ground speed by functions
 // of v, w, their changes, |v·w|, sin/cos harmonics of each wheel's rotation
 // angle, position and time) by sparse regression, choose the terms by
 // cross-validated error, prove them on the held-out windows, and report them
@@ -18,7 +18,7 @@
 // bases without radii), x, y = the reference position interpolated there,
 // t = time since the first odometry sample. The body step is then rebuilt
 // (lateral_skid's v_y from the new ds, dθ) and dead-reckoned per window as
-// window_replay.h does. As the simulator (tracks/simulator.h step 5a), so a
+// window_replay.h does. As the simulator (docs/simulator.md step 5a), so a
 // term found replays in `odotune simulate` (model_terms.h).
 //
 // Residuals. Per scored reference sample of a window: (predicted −
@@ -65,7 +65,7 @@
 #include "diagnose/diag_input.h"
 #include "diagnose/effect_model.h"
 #include "diagnose/window_replay.h"
-#include "tracks/model_terms.h"
+#include "sim/model_terms.h"
 
 namespace odotune::diagnose {
 

@@ -39,7 +39,7 @@ struct MotionStep {
 
 // The motion model above on any scalar type, pose only (no Jacobians): for
 // fits that differentiate through the dead reckoning with ceres::Jet
-// (objectives/pose_calibration.h). Same operations in the same order as
+// (calibration/pose_calibration.h). Same operations in the same order as
 // diff_drive_step, so on doubles it gives the same pose.
 template <typename T>
 void diff_drive_advance(T* x, T* y, T* theta, const T& left_m, const T& right_m, const T& wheel_base_m) {

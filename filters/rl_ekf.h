@@ -75,7 +75,8 @@ struct Transition {
 };
 Transition transition(const State& x, double dt_s);
 
-// Wraps an angle to [−π, π] (angles::normalize_angle).
+// Wraps an angle to [−π, π] as ROS's angles::normalize_angle does (fmod), which
+// the node's replay must match bit for bit (core/angles.h is std::remainder).
 double normalize_angle(double a);
 
 class RlEkf {

@@ -31,8 +31,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "objectives/calibration_input.h"
-#include "objectives/calibration_run.h"
+#include "calibration/calibration_input.h"
+#include "calibration/calibration_run.h"
 
 namespace odotune {
 

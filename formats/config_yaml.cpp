@@ -7,10 +7,10 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include "core/atomic_file.h"
 #include "core/failure.h"
 #include "formats/yaml_error.h"
 #include "objectives/param_space.h"
-#include "tracks/atomic_file.h"
 
 namespace odotune {
 

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "tracks/model_terms.h"
+#include "sim/model_terms.h"
 
 namespace odotune {
 namespace {

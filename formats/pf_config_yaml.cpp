@@ -7,11 +7,11 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include "calibration/calibration_objective.h"
 #include "core/failure.h"
 #include "formats/config_yaml.h"
 #include "formats/params_yaml.h"
 #include "formats/yaml_error.h"
-#include "objectives/calibration_objective.h"
 
 namespace odotune {
 

@@ -17,9 +17,9 @@
 #include <fmt/format.h>
 
 #include "formats/scenario_yaml.h"
-#include "tracks/effects.h"
-#include "tracks/simulator.h"
-#include "tracks/slip_episodes.h"
+#include "sim/effects.h"
+#include "sim/simulator.h"
+#include "sim/slip_episodes.h"
 
 namespace odotune {
 
@@ -208,7 +208,7 @@ void write_slip_episodes(std::string& out, const std::vector<sim::SlipEpisode>& 
   }
 }
 
-// terms: one flow map per term, ASCII names (tracks/model_terms.h).
+// terms: one flow map per term, ASCII names (sim/model_terms.h).
 void write_terms(std::string& out, const std::vector<sim::ModelTerm>& terms) {
   if (terms.empty()) return;
   out += "terms:\n";

@@ -22,7 +22,7 @@ constexpr const char* kFormat = "odotune-ukf-config/1";
 constexpr const char* kExplanation =
     "The velocity-fusion UKF of Farina, Acosta, Toledo & Acosta, \"Improving Odometric Model\n"
     "Performance Based on LSTM Networks\", Sensors 2023, 23, 961, section 1 (odotune:\n"
-    "filters/velocity_ukf.h, objectives/ukf_fusion.h):\n"
+    "filters/velocity_ukf.h, learned/ukf_fusion.h):\n"
     "  state       x = (V, W), body velocities [m/s, rad/s]\n"
     "  model       constant velocity, x_k = x_(k-1) + n with n ~ N(0, diag(q_v, q_w) * dt)\n"
     "  measures    every step: the kinematic wheel odometry (V, W) with the static variances\n"

@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "objectives/ukf_objective.h"
+#include "learned/ukf_objective.h"
 
 namespace odotune {
 

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "calibration/calibration_ranges.h"
 #include "core/failure.h"
 #include "core/output_paths.h"
 #include "formats/calibration_yaml.h"
@@ -15,7 +16,6 @@
 #include "jobs/calibration_figure_data.h"
 #include "jobs/calibration_summary.h"
 #include "jobs/calibration_trace.h"
-#include "objectives/calibration_ranges.h"
 #include "results/calibration_figures.h"
 #include "tracks/track_io.h"
 

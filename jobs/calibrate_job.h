@@ -1,6 +1,6 @@
 // `odotune calibrate`: an online (or batch) calibration of the odometry
 // parameters R_R, R_L and D from wheel rates and external body velocities
-// (Fariña, Toledo & Acosta, RA-L 2026; objectives/calibration_run.h) over
+// (Fariña, Toledo & Acosta, RA-L 2026; calibration/calibration_run.h) over
 // track files, with its output files; and the replay of a calibration file
 // on held-out tracks (`--apply`). Checking, loading, computing and file
 // output only: the command parses the flags and prints the summary lines.
@@ -26,10 +26,10 @@
 #include <string>
 #include <vector>
 
+#include "calibration/calibration_input.h"
+#include "calibration/calibration_run.h"
 #include "filters/odometry_params.h"
 #include "formats/calibration_json.h"
-#include "objectives/calibration_input.h"
-#include "objectives/calibration_run.h"
 
 namespace odotune {
 

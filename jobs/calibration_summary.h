@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
+#include "calibration/calibration_input.h"
+#include "calibration/calibration_run.h"
 #include "filters/odometry_params.h"
 #include "formats/calibration_json.h"
-#include "objectives/calibration_input.h"
-#include "objectives/calibration_run.h"
 
 namespace odotune {
 

@@ -1,5 +1,5 @@
 // The estimates of a calibration run over time as one table: the run's
-// trace (objectives/calibration_run.h) with, per row, the time elapsed since
+// trace (calibration/calibration_run.h) with, per row, the time elapsed since
 // the calibration began and the truth where the track knows it. This is what
 // `calibrate --csv` writes and what its figure (jobs/calibration_figure_data.h)
 // and the study's figures draw.
@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "objectives/calibration_input.h"
-#include "objectives/calibration_run.h"
+#include "calibration/calibration_input.h"
+#include "calibration/calibration_run.h"
 
 namespace odotune {
 

@@ -4,9 +4,9 @@
 
 #include <fmt/format.h>
 
+#include "calibration/calibrated_odometry_errors.h"
+#include "calibration/calibration_ranges.h"
 #include "jobs/tune_job.h"
-#include "objectives/calibrated_odometry_errors.h"
-#include "objectives/calibration_ranges.h"
 #include "tuner/nlopt_solver.h"
 #include "tuner/problem.h"
 #include "tuner/pso.h"

@@ -1,6 +1,6 @@
 // One tuning run of a particle-filter calibrator's settings: calibrator kind × tracks × solver × seed → the tuned settings (N_eff
 // fraction, max-weight ratio, α, dispersion per particle, random-walk σ;
-// objectives/calibration_objective.h), scored against the paper's default
+// calibration/calibration_objective.h), scored against the paper's default
 // settings. The mirror of tune_job.h for calibrators; computation only (the
 // commands parse and print), so `tune` and `grid` share it.
 //
@@ -27,11 +27,11 @@
 #include <string>
 #include <vector>
 
+#include "calibration/calibration_input.h"
+#include "calibration/calibration_objective.h"
+#include "calibration/calibration_run.h"
 #include "filters/pf_calibrator.h"
 #include "jobs/tune_job.h"
-#include "objectives/calibration_input.h"
-#include "objectives/calibration_objective.h"
-#include "objectives/calibration_run.h"
 #include "objectives/metrics.h"
 #include "objectives/tuned_model.h"
 #include "tuner/summary.h"

@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.h"
 #include "core/failure.h"
 #include "diagnose/diag_input.h"
 #include "diagnose/diagnosis_summary.h"
@@ -12,8 +13,7 @@
 #include "formats/scenario_yaml.h"
 #include "jobs/diagnosis_figure_data.h"
 #include "results/diagnosis_report.h"
-#include "tracks/atomic_file.h"
-#include "tracks/scenario_from_track.h"
+#include "sim/scenario_from_track.h"
 #include "tracks/track_io.h"
 
 namespace odotune {
@@ -29,7 +29,7 @@ std::string corrected_scenario_yaml(const Track& track, const std::string& track
   for (const diagnose::Finding& f : d.findings)
     if (!f.spec().empty()) specs.push_back(f.spec()), names += (names.empty() ? "" : ", ") + f.effect;
   // Terms outside physics-effects.md (an unexplained finding's model): the
-  // simulator replays them (tracks/model_terms.h).
+  // simulator replays them (sim/model_terms.h).
   std::vector<sim::ModelTerm> terms;
   for (const diagnose::Finding& f : d.findings)
     if (f.model) {
@@ -59,7 +59,8 @@ namespace {
 diagnose::DiagInput diag_input(const DiagnoseRequest& a, const std::string& file, const Track& track) {
   try {
     diagnose::DiagInput in = diagnose::build_diag_input(track);
-    if (a.from_s > -1e300 || a.to_s < 1e300) in = diagnose::crop(in, a.from_s, a.to_s);
+    // An open end of the interval is ±1e300 s, beyond any track's time.
+    if (a.from_s || a.to_s) in = diagnose::crop(in, a.from_s.value_or(-1e300), a.to_s.value_or(1e300));
     return in;
   } catch (const std::invalid_argument& e) {
     throw Failure(fmt::format("{}: {}", file, e.what()));

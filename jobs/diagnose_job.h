@@ -4,6 +4,7 @@
 // file output only; the command prints the summary.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,14 +21,14 @@ struct DiagnoseRequest {
   std::string json;                  // diagnosis JSON (diagnosis-output.md); empty = not written
   std::string report;                // folder for the figures and index.html; empty = none
   std::string scenario_out;          // the robot with the fitted effects (and the terms of an unexplained
-                                     // finding's model, tracks/model_terms.h) as a scenario YAML; empty = none
+                                     // finding's model, sim/model_terms.h) as a scenario YAML; empty = none
   double window_s = 20.0;            // replay window [s]; the odometry is re-anchored at each
   // Materiality floor of a finding's held-out gain (diagnose/materiality.h):
   // max(min_gain_sigmas reference sigmas, min_gain_share of the nominal error).
   diagnose::MaterialityOptions materiality;
   // Track-time interval to diagnose [s]. The track is cut (diagnose::crop)
-  // only when one of them differs from these defaults (the whole track).
-  double from_s = -1e300, to_s = 1e300;
+  // only when one of them is given; neither: the whole track.
+  std::optional<double> from_s, to_s;
 };
 
 struct DiagnoseOutcome {

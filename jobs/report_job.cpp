@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.h"
 #include "core/failure.h"
 #include "jobs/report_writer.h"
 #include "jobs/rl_job.h"
@@ -20,7 +21,6 @@
 #include "results/figures.h"
 #include "results/report_html.h"
 #include "results/report_tables.h"
-#include "tracks/atomic_file.h"
 
 namespace odotune {
 
@@ -367,7 +367,7 @@ ReportOutcome write_report(const ReportRequest& req) {
       row.push_back(w.figure(stem, title, [&](const fs::path& p) { results::convergence(p, title, series); }));
     }
     if (calibrator && !row.empty())
-      page.paragraph("Calibrator models: best calibration score (objectives/calibration_objective.h, "
+      page.paragraph("Calibrator models: best calibration score (calibration/calibration_objective.h, "
                      "lower is better) against evaluations, whatever the fitness mode.");
     page.figures(row);
   }

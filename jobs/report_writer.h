@@ -10,10 +10,10 @@
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.h"
 #include "core/failure.h"
 #include "results/report_html.h"
 #include "results/run_record.h"
-#include "tracks/atomic_file.h"
 
 namespace odotune {
 

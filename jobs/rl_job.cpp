@@ -8,9 +8,9 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "core/atomic_file.h"
 #include "core/failure.h"
 #include "core/output_paths.h"
-#include "tracks/atomic_file.h"
 
 namespace odotune {
 namespace {

@@ -9,10 +9,10 @@
 
 #include "core/failure.h"
 #include "formats/scenario_yaml.h"
-#include "tracks/effects.h"
-#include "tracks/motion_profile.h"
-#include "tracks/random_slip.h"
-#include "tracks/simulator.h"
+#include "sim/effects.h"
+#include "sim/motion_profile.h"
+#include "sim/random_slip.h"
+#include "sim/simulator.h"
 #include "tracks/track_io.h"
 
 namespace odotune {

@@ -20,15 +20,17 @@ namespace odotune {
 
 namespace {
 
-// Options that belong to one kind of model only.
-const std::vector<std::string> kEkfOnly = {"--mode"};
-const std::vector<std::string> kCalibratorOnly = {"--resampler", "--policy", "--pf-particles", "--pf-seed",
-                                                  "--ext-from-gt"};
-
+// Options that belong to one kind of model only, by flag, and whether given.
 void check_options(const TuneCommandRequest& r, const TunedModel& model) {
-  const auto& given = r.given_options;
-  for (const std::string& opt : model.is_calibrator() ? kEkfOnly : kCalibratorOnly)
-    if (std::find(given.begin(), given.end(), opt) != given.end())
+  const std::vector<std::pair<const char*, bool>> ekf_only = {{"--mode", r.mode.has_value()}};
+  const std::vector<std::pair<const char*, bool>> calibrator_only = {
+      {"--resampler", r.resampler.has_value()},
+      {"--policy", r.policy.has_value()},
+      {"--pf-particles", r.pf_particles.has_value()},
+      {"--pf-seed", r.pf_seed.has_value()},
+      {"--ext-from-gt", r.ext_from_gt_hz.has_value()}};
+  for (const auto& [opt, given] : model.is_calibrator() ? ekf_only : calibrator_only)
+    if (given)
       throw Failure(fmt::format(
           "{} applies to {} models only, not to --model {}", opt,
           model.is_calibrator() ? "the EKF and UKF (rq, alpha, gyro, ukf)" : "the calibrator", r.model));
@@ -130,17 +132,18 @@ TuneCommandOutcome ekf_tune(const TuneCommandRequest& r, filters::NoiseModel mod
 TuneCommandOutcome calibration_tune(const TuneCommandRequest& r, CalibratorModel model) {
   CalibrationTuneRequest req = with_solver<CalibrationTuneRequest>(r);
   req.model = model;
-  if (!filters::parse_resampler(r.resampler, &req.resampler))
+  const std::string resampler = r.resampler.value_or("systematic"), policy = r.policy.value_or("neff");
+  if (!filters::parse_resampler(resampler, &req.resampler))
     throw Failure(fmt::format("--resampler '{}': expected multinomial, stratified, systematic or residual",
-                              r.resampler));
-  if (!filters::parse_resample_policy(r.policy, &req.policy))
-    throw Failure(fmt::format("--policy '{}': expected every, neff or max", r.policy));
-  req.pf_particles = r.pf_particles;
-  req.pf_seed = r.pf_seed;
+                              resampler));
+  if (!filters::parse_resample_policy(policy, &req.policy))
+    throw Failure(fmt::format("--policy '{}': expected every, neff or max", policy));
+  req.pf_particles = r.pf_particles.value_or(0);
+  req.pf_seed = r.pf_seed.value_or(1);
   std::string why;
   if (!req.IsValid(&why)) throw Failure(why);
   CalibrationInputOptions input_options;
-  input_options.ext_from_gt_rate_hz = r.ext_from_gt_hz;
+  input_options.ext_from_gt_rate_hz = r.ext_from_gt_hz.value_or(0.0);
   if (!input_options.IsValid(&why)) throw Failure("--ext-from-gt: " + why);
 
   const std::vector<CalibrationInput> inputs = prepare_tracks(load_tracks(r.tracks), [&](const Track& t) {
@@ -153,7 +156,7 @@ TuneCommandOutcome calibration_tune(const TuneCommandRequest& r, CalibratorModel
   });
   TuneCommandOutcome result = run_and_report(r, [&] { return run_calibration_tune(pointers(inputs), req); });
   const auto& out = std::get<CalibrationTuneOutcome>(result);
-  write_json(r, calibration_tune_json(out, {r.ext_from_gt_hz}));
+  write_json(r, calibration_tune_json(out, {input_options.ext_from_gt_rate_hz}));
   if (!r.config_out.empty()) {
     CalibrationOptions effective;
     effective.method = calibration_method(model);

@@ -33,17 +33,15 @@ struct TuneCommandRequest : SolverSettings {
   // an EKF tune on a track without ground truth.
   std::optional<FitnessMode> mode;
   FixCvOptions fix_cv;  // EKF modes 8, 9: the folds (objectives/fix_cv_replay.h)
-  // Calibrators only: the calibrator's fixed parts (calibration_tune_job.h).
-  std::string resampler = "systematic", policy = "neff";
-  int pf_particles = 0;  // 0: the paper's 5000 / 8000
-  std::uint64_t pf_seed = 1;
-  double ext_from_gt_hz = 0.0;       // 0: the tracks' own v_ext/w_ext
-  std::string json_out, config_out;  // files to write; empty: none
-  // The options the user gave, by name ("--mode", "--resampler", …): one that
-  // belongs to another kind of model is a Failure (--mode is the EKF models'
-  // and the UKF's; --resampler, --policy, --pf-particles, --pf-seed and
-  // --ext-from-gt are the calibrators').
-  std::vector<std::string> given_options;
+  // Calibrators only: the calibrator's fixed parts (calibration_tune_job.h);
+  // given for another model, a Failure names the flag (as --mode for a
+  // calibrator).
+  std::optional<std::string> resampler;  // not given: systematic
+  std::optional<std::string> policy;     // not given: neff
+  std::optional<int> pf_particles;       // not given: the paper's 5000 / 8000
+  std::optional<std::uint64_t> pf_seed;  // not given: 1
+  std::optional<double> ext_from_gt_hz;  // [Hz]; not given: the tracks' own v_ext/w_ext
+  std::string json_out, config_out;      // files to write; empty: none
   // Called with the result when the tune has ended (finished or stopped),
   // before the files are written: where the command prints it.
   std::function<void(const TuneCommandOutcome&)> report;

@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
+#include "calibration/calibration_input.h"
 #include "filters/ekf_noise.h"
+#include "learned/fusion_input.h"
 #include "objectives/box_space.h"
-#include "objectives/calibration_input.h"
 #include "objectives/ekf_objective.h"
-#include "objectives/fusion_input.h"
 #include "objectives/metrics.h"
 #include "objectives/replay.h"
 #include "tracks/track.h"

@@ -1,7 +1,7 @@
 // One tuning run of the velocity-fusion UKF's noise:
 // tracks × fitness mode × solver × seed → the tuned process-noise rates,
 // static odometry variances, gyro variance and external-variance scale
-// (objectives/ukf_objective.h), scored against the default settings. The
+// (learned/ukf_objective.h), scored against the default settings. The
 // mirror of tune_job.h for the UKF; computation only (the commands parse and
 // print), so `tune` and `grid` share it.
 //
@@ -19,9 +19,9 @@
 #include <vector>
 
 #include "jobs/tune_job.h"
-#include "objectives/fusion_input.h"
+#include "learned/fusion_input.h"
+#include "learned/ukf_objective.h"
 #include "objectives/metrics.h"
-#include "objectives/ukf_objective.h"
 #include "tuner/summary.h"
 
 namespace odotune {

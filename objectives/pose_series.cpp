@@ -6,13 +6,6 @@
 
 namespace odotune {
 
-double wrap_angle(double a_rad) {
-  constexpr double kPi = std::numbers::pi;
-  double w = std::remainder(a_rad, 2.0 * kPi);  // [−π, π]
-  if (w <= -kPi) w += 2.0 * kPi;
-  return w;
-}
-
 std::optional<PlanarPose> interpolate_pose(const PoseSeries& s, double t_s, double max_gap_s) {
   const std::size_t n = s.size();
   if (n == 0 || !(t_s >= s.t.front()) || !(t_s <= s.t.back())) return std::nullopt;

@@ -7,6 +7,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/angles.h"
 #include "filters/odometry_params.h"
 
 namespace odotune {
@@ -26,9 +27,6 @@ struct PoseSeries {
     theta.push_back(p.theta_rad);
   }
 };
-
-// Wraps an angle to (−π, π] [rad].
-double wrap_angle(double a_rad);
 
 // Linear interpolation of the series at t_s (the sample itself when t_s is a
 // sample time). nullopt outside [t.front(), t.back()] or when the two samples

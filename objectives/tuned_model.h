@@ -2,9 +2,9 @@
 // stored run's `model`) tunes:
 //
 //   rq | alpha | gyro       EKF noise model (filters/ekf_noise.h)
-//   pf-calib                plain PF calibrator's settings (objectives/calibration_objective.h)
+//   pf-calib                plain PF calibrator's settings (calibration/calibration_objective.h)
 //   adaptive-pf-calib       adaptive PF calibrator's settings
-//   ukf                     the (V, W) fusion UKF's noise (objectives/ukf_objective.h)
+//   ukf                     the (V, W) fusion UKF's noise (learned/ukf_objective.h)
 //   rl-ekf                  robot_localization's EKF on a bag and its parameter file
 //                           (objectives/rl_objective.h; grid only, `tune --rl-params` otherwise)
 //

@@ -1,5 +1,7 @@
 #include "results/diagnosis_figures.h"
 
+#include "core/robust_stats.h"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -112,14 +114,6 @@ std::string xy_rows(const std::vector<double>& x, const std::vector<double>& y) 
     out += num(x[i]) + " " + num(y[i]) + "\n";
   }
   return out;
-}
-
-double median_of(std::vector<double> v) {
-  const std::size_t n = v.size(), h = n / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(h), v.end());
-  const double upper = v[h];
-  if (n % 2 == 1) return upper;
-  return 0.5 * (*std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(h)) + upper);
 }
 
 // Linear-interpolated quantile p of sorted `v` (non-empty).
@@ -348,8 +342,8 @@ BinnedMedian binned_median(const std::vector<double>& x, const std::vector<doubl
       gx.push_back(x[rows[j]]);
       gy.push_back(y[rows[j]]);
     }
-    out.x.push_back(median_of(gx));
-    out.y.push_back(median_of(gy));
+    out.x.push_back(median(gx));
+    out.y.push_back(median(gy));
     begin += count;
   }
   return out;

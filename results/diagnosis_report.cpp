@@ -11,8 +11,8 @@
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.h"
 #include "results/report_html.h"
-#include "tracks/atomic_file.h"
 
 namespace odotune::results {
 namespace fs = std::filesystem;

@@ -7,8 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.h"
 #include "results/lstm_json.h"
-#include "tracks/atomic_file.h"
 
 namespace odotune::results {
 
@@ -180,10 +180,10 @@ LearnedModelFile parse_learned_model(const json& j, const std::string& file) {
   m.odometry.ticks_per_rev = r.number(o, "odometry", "ticks_per_rev", true, false);
   m.odometry.v_validation_mae = r.number(o, "odometry", "v_validation_mae", false, false);
   m.odometry.w_validation_mae = r.number(o, "odometry", "w_validation_mae", false, false);
-  m.odometry.v_net = parse_net<filters::VelocityNet>(r, o, "odometry", "v_net");
-  m.odometry.w_net = parse_net<filters::VelocityNet>(r, o, "odometry", "w_net");
-  if (m.odometry.v_net.activation != filters::OutputActivation::linear ||
-      m.odometry.w_net.activation != filters::OutputActivation::linear)
+  m.odometry.v_net = parse_net<VelocityNet>(r, o, "odometry", "v_net");
+  m.odometry.w_net = parse_net<VelocityNet>(r, o, "odometry", "w_net");
+  if (m.odometry.v_net.activation != OutputActivation::linear ||
+      m.odometry.w_net.activation != OutputActivation::linear)
     r.fail("odometry.v_net/w_net", "a ReLU output; expected the velocity nets' linear output (paper §4)");
 
   if (r.has(j, "detector") && !j["detector"].is_null()) {
@@ -193,8 +193,8 @@ LearnedModelFile parse_learned_model(const json& j, const std::string& file) {
     det.floor_var_w = r.number(d, "detector", "floor_var_w", true, false);
     det.max_log_ratio_v = r.number(d, "detector", "max_log_ratio_v", true, false);
     det.max_log_ratio_w = r.number(d, "detector", "max_log_ratio_w", true, false);
-    det.v_net = parse_net<filters::SlipNet>(r, d, "detector", "v_net");
-    det.w_net = parse_net<filters::SlipNet>(r, d, "detector", "w_net");
+    det.v_net = parse_net<SlipNet>(r, d, "detector", "v_net");
+    det.w_net = parse_net<SlipNet>(r, d, "detector", "w_net");
     const std::uint64_t lag = r.count(d, "detector", "previous_lag");
     if (lag < 1 || lag > static_cast<std::uint64_t>(det.v_net.window))
       r.fail("detector.previous_lag", fmt::format("{}; expected 1..{} (the window)", lag, det.v_net.window));

@@ -1,8 +1,8 @@
 // The learned-odometry model file, format "odotune-learned/1", written by
 // `odotune learn train|retrain` and `odotune study learned` and read by
 // `odotune learn eval|retrain`: the velocity nets of Fariña et al., Sensors
-// 2023, 23, 961 (objectives/learned_odometry.h), optionally the slip detector
-// (objectives/slip_detector.h), and where they came from.
+// 2023, 23, 961 (learned/learned_odometry.h), optionally the slip detector
+// (learned/slip_detector.h), and where they came from.
 //
 //   {
 //     "format": "odotune-learned/1",
@@ -33,9 +33,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "objectives/learned_odometry.h"
-#include "objectives/lstm_training.h"
-#include "objectives/slip_detector.h"
+#include "learned/learned_odometry.h"
+#include "learned/lstm_training.h"
+#include "learned/slip_detector.h"
 
 namespace odotune::results {
 
@@ -82,7 +82,7 @@ nlohmann::json learned_model_json(const LearnedModelFile& model);
 // odometry.v_net.weights[3] or provenance.seed).
 LearnedModelFile parse_learned_model(const nlohmann::json& j, const std::string& file);
 
-// Writes the file atomically (tracks/atomic_file.h); std::runtime_error on failure.
+// Writes the file atomically (core/atomic_file.h); std::runtime_error on failure.
 void write_learned_model(const std::filesystem::path& path, const LearnedModelFile& model);
 // Reads and parses; std::invalid_argument (one line naming the file) for a
 // missing or unreadable file, bad JSON or a bad field.

@@ -45,14 +45,14 @@ void numbers(const nlohmann::json& j, const char* name, int n, double* out) {
 }  // namespace
 
 template <int I, int H>
-nlohmann::json lstm_to_json(const filters::LstmNet<I, H>& net) {
+nlohmann::json lstm_to_json(const LstmNet<I, H>& net) {
   std::string why;
   if (!net.IsValid(&why)) throw std::invalid_argument("LSTM JSON: cannot write an invalid net: " + why);
   nlohmann::json j;
   j["format"] = kLstmJsonFormat;
   j["inputs"] = I;
   j["hidden"] = H;
-  j["activation"] = net.activation == filters::OutputActivation::relu ? "relu" : "linear";
+  j["activation"] = net.activation == OutputActivation::relu ? "relu" : "linear";
   j["window"] = net.window;
   j["input_mean"] = net.input_mean;
   j["input_sd"] = net.input_sd;
@@ -63,7 +63,7 @@ nlohmann::json lstm_to_json(const filters::LstmNet<I, H>& net) {
 }
 
 template <int I, int H>
-filters::LstmNet<I, H> lstm_from_json(const nlohmann::json& j) {
+LstmNet<I, H> lstm_from_json(const nlohmann::json& j) {
   if (!j.is_object()) throw std::invalid_argument("LSTM JSON: expected an object at the top level");
   const nlohmann::json& format = field(j, "format");
   if (!format.is_string() || format.get<std::string>() != kLstmJsonFormat)
@@ -73,12 +73,12 @@ filters::LstmNet<I, H> lstm_from_json(const nlohmann::json& j) {
   if (const int hidden = integer(field(j, "hidden"), "hidden"); hidden != H)
     bad("hidden", fmt::format("expected {} (this net's unit count), got {}", H, hidden));
 
-  filters::LstmNet<I, H> net;
+  LstmNet<I, H> net;
   const nlohmann::json& act = field(j, "activation");
   if (act == "linear") {
-    net.activation = filters::OutputActivation::linear;
+    net.activation = OutputActivation::linear;
   } else if (act == "relu") {
-    net.activation = filters::OutputActivation::relu;
+    net.activation = OutputActivation::relu;
   } else {
     bad("activation", fmt::format("expected \"linear\" or \"relu\", got {}", act.dump()));
   }
@@ -98,15 +98,11 @@ filters::LstmNet<I, H> lstm_from_json(const nlohmann::json& j) {
   return net;
 }
 
-#define ODOTUNE_INSTANTIATE_LSTM_JSON(I, H)                                             \
-  template nlohmann::json lstm_to_json<I, H>(const filters::LstmNet<I, H>&);            \
-  template filters::LstmNet<I, H> lstm_from_json<I, H>(const nlohmann::json&);          \
-  template void filters::to_json<I, H>(nlohmann::json&, const filters::LstmNet<I, H>&); \
-  template void filters::from_json<I, H>(const nlohmann::json&, filters::LstmNet<I, H>&);
-
-}  // namespace odotune
-
-namespace odotune::filters {
+#define ODOTUNE_INSTANTIATE_LSTM_JSON(I, H)                           \
+  template nlohmann::json lstm_to_json<I, H>(const LstmNet<I, H>&);   \
+  template LstmNet<I, H> lstm_from_json<I, H>(const nlohmann::json&); \
+  template void to_json<I, H>(nlohmann::json&, const LstmNet<I, H>&); \
+  template void from_json<I, H>(const nlohmann::json&, LstmNet<I, H>&);
 
 template <int I, int H>
 void to_json(nlohmann::json& j, const LstmNet<I, H>& net) {
@@ -117,10 +113,6 @@ template <int I, int H>
 void from_json(const nlohmann::json& j, LstmNet<I, H>& net) {
   net = lstm_from_json<I, H>(j);
 }
-
-}  // namespace odotune::filters
-
-namespace odotune {
 
 ODOTUNE_INSTANTIATE_LSTM_JSON(3, 5)
 ODOTUNE_INSTANTIATE_LSTM_JSON(5, 10)

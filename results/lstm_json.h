@@ -1,5 +1,5 @@
-// JSON form of the LSTM nets (filters/lstm.h): weights, standardisation and
-// shape, so that a net trained offline (objectives/lstm_training.h) is saved
+// JSON form of the LSTM nets (learned/lstm.h): weights, standardisation and
+// shape, so that a net trained offline (learned/lstm_training.h) is saved
 // and loaded on the robot.
 //
 //   {
@@ -9,7 +9,7 @@
 //     "window": 20,                        // samples per window, 1..LstmNet::kMaxWindow
 //     "input_mean": [I numbers], "input_sd": [I numbers > 0],
 //     "output_mean": number, "output_sd": number > 0,
-//     "weights": [LstmLayout<I, H>::kCount numbers]   // layout: filters/lstm.h (Keras order)
+//     "weights": [LstmLayout<I, H>::kCount numbers]   // layout: learned/lstm.h (Keras order)
 //   }
 //
 // Doubles are written in nlohmann's shortest round-trip form, so weights read
@@ -21,7 +21,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "filters/lstm.h"
+#include "learned/lstm.h"
 
 namespace odotune {
 
@@ -30,14 +30,10 @@ inline constexpr const char* kLstmJsonFormat = "odotune-lstm/1";
 // Throws std::invalid_argument when !net.IsValid() (a non-finite value would
 // otherwise be written as null).
 template <int I, int H>
-nlohmann::json lstm_to_json(const filters::LstmNet<I, H>& net);
+nlohmann::json lstm_to_json(const LstmNet<I, H>& net);
 
 template <int I, int H>
-filters::LstmNet<I, H> lstm_from_json(const nlohmann::json& j);
-
-}  // namespace odotune
-
-namespace odotune::filters {
+LstmNet<I, H> lstm_from_json(const nlohmann::json& j);
 
 // nlohmann's ADL hooks (`nlohmann::json j = net;`, `j.get<VelocityNet>()`),
 // forwarding to the functions above. Instantiated for <3, 5> and <5, 10>.
@@ -46,4 +42,4 @@ void to_json(nlohmann::json& j, const LstmNet<I, H>& net);
 template <int I, int H>
 void from_json(const nlohmann::json& j, LstmNet<I, H>& net);
 
-}  // namespace odotune::filters
+}  // namespace odotune

@@ -1,5 +1,5 @@
 #include "results/ros_export.h"
-#include "tracks/atomic_file.h"
+#include "core/atomic_file.h"
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>

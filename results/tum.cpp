@@ -5,7 +5,7 @@
 
 #include <fmt/format.h>
 
-#include "tracks/atomic_file.h"
+#include "core/atomic_file.h"
 
 namespace odotune::results {
 

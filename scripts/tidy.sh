@@ -7,8 +7,8 @@
 #   bash scripts/tidy.sh [BUILD_DIR] FILE…  only these .cpp files (they must be in the database)
 #
 # Project translation units are the database entries under the module folders
-# (core/ tracks/ filters/ objectives/ tuner/ results/ diagnose/ formats/ jobs/ studies/
-# cli/), tests/ or bench/; any other entry (for example a
+# (core/ bags/ tracks/ sim/ filters/ rlnode/ objectives/ calibration/ learned/ tuner/ results/
+# diagnose/ formats/ jobs/ studies/ cli/), tests/ or bench/; any other entry (for example a
 # dependency built with FetchContent) is skipped. Project headers are checked through the
 # files that include them (HeaderFilterRegex in .clang-tidy).
 # clang-tidy runs under `nice -n 19`, as many at a time as nproc says (set TIDY_JOBS to
@@ -74,8 +74,8 @@ fi
 units="$(python3 - "$root" "$db" "${files[@]}" <<'EOF'
 import json, os, sys
 root, db, wanted = os.path.realpath(sys.argv[1]), sys.argv[2], sys.argv[3:]
-modules = {"core", "tracks", "filters", "objectives", "tuner", "results", "diagnose",
-           "formats", "jobs", "studies", "cli", "tests", "bench"}
+modules = {"core", "bags", "tracks", "sim", "filters", "rlnode", "objectives", "calibration", "learned",
+           "tuner", "results", "diagnose", "formats", "jobs", "studies", "cli", "tests", "bench"}
 units = {}
 for e in json.load(open(db)):
     name = e["file"] if os.path.isabs(e["file"]) else os.path.normpath(os.path.join(e["directory"], e["file"]))

@@ -12,7 +12,7 @@
 
 #include "core/counter_rng.h"
 #include "filters/pf_calibrator.h"
-#include "tracks/simulator.h"
+#include "sim/simulator.h"
 
 namespace odotune {
 

@@ -30,11 +30,11 @@
 #include <string>
 #include <vector>
 
+#include "calibration/calibration_input.h"
+#include "calibration/calibration_run.h"
 #include "filters/odometry_params.h"
 #include "filters/resampling.h"
-#include "objectives/calibration_input.h"
-#include "objectives/calibration_run.h"
-#include "tracks/scenario.h"
+#include "sim/scenario.h"
 
 namespace odotune {
 

@@ -15,7 +15,7 @@
 #include "diagnose/diag_input.h"
 #include "diagnose/diagnosis.h"
 #include "diagnose/recordings.h"
-#include "tracks/effects.h"
+#include "sim/effects.h"
 #include "tracks/track_io.h"
 
 namespace odotune {

@@ -70,7 +70,7 @@ struct DiagnosisBenchmarkOptions {
 
 struct CaseFinding {
   std::string effect;  // or "unexplained"
-  std::string spec;    // tracks/effects.h form ("" for unexplained)
+  std::string spec;    // sim/effects.h form ("" for unexplained)
   double heldout_before_m = std::numeric_limits<double>::quiet_NaN();
   double heldout_after_m = std::numeric_limits<double>::quiet_NaN();
 };

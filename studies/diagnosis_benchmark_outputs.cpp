@@ -7,9 +7,9 @@
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.h"
 #include "core/failure.h"
 #include "results/gnuplot.h"
-#include "tracks/atomic_file.h"
 
 namespace odotune {
 

@@ -15,7 +15,7 @@
 //                  `odotune diagnose`; case_IIII_rK.csv (K from 1) for the
 //                  recordings of a multi-recording case, the held-out ones
 //                  last (`odotune diagnose r1 ... --heldout rN`).
-// Every file is written atomically (tracks/atomic_file.h; figures through a
+// Every file is written atomically (core/atomic_file.h; figures through a
 // temporary and a rename), the figure first, then the CSVs, then summary.md.
 #pragma once
 

@@ -9,10 +9,10 @@
 #include <fmt/format.h>
 
 #include "core/counter_rng.h"
+#include "sim/effects.h"
+#include "sim/motion_profile.h"
+#include "sim/simulator.h"
 #include "studies/diagnosis_drives.h"
-#include "tracks/effects.h"
-#include "tracks/motion_profile.h"
-#include "tracks/simulator.h"
 
 namespace odotune {
 

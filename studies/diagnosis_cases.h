@@ -1,6 +1,6 @@
 // The random cases of the diagnosis benchmark (`odotune study diagnosis`;
 // method in docs/diagnosis/benchmark.md): what case i of a
-// run with seed S draws, and the track it simulates (tracks/simulator.h),
+// run with seed S draws, and the track it simulates (sim/simulator.h),
 // shaped to one of the reference shapes of docs/diagnosis-design.md ("Any
 // reference").
 //
@@ -66,7 +66,7 @@
 #include <utility>
 #include <vector>
 
-#include "tracks/scenario.h"
+#include "sim/scenario.h"
 #include "tracks/track.h"
 
 namespace odotune {
@@ -92,7 +92,7 @@ struct TrueEffect {
   std::string name;
   std::vector<std::pair<std::string, double>> params;
   double param(std::string_view name) const;  // NaN when absent
-  std::string spec() const;                   // "lateral_skid:k=0.021" (tracks/effects.h form)
+  std::string spec() const;                   // "lateral_skid:k=0.021" (sim/effects.h form)
 };
 
 // One recording of a multi-recording case (file comment).

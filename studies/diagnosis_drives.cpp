@@ -4,7 +4,7 @@
 #include <stdexcept>
 
 #include "core/counter_rng.h"
-#include "tracks/motion_profile.h"
+#include "sim/motion_profile.h"
 
 namespace odotune {
 

@@ -1,6 +1,6 @@
 // Random drives of the diagnosis benchmark (`odotune study diagnosis`,
 // docs/diagnosis/benchmark.md): a closed lap of motion segments
-// (tracks/scenario.h) drawn from one of three families and repeated until the
+// (sim/scenario.h) drawn from one of three families and repeated until the
 // drive lasts long enough, and the commanded path of a motion (for placing a
 // slip_zone box where the drive passes and for grading a found box).
 //
@@ -34,7 +34,7 @@
 #include <string>
 #include <vector>
 
-#include "tracks/scenario.h"
+#include "sim/scenario.h"
 
 namespace odotune {
 

@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "tracks/effects.h"
+#include "sim/effects.h"
 
 namespace odotune {
 

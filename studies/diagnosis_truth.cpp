@@ -11,7 +11,7 @@
 #include "diagnose/select.h"
 #include "diagnose/series_interp.h"
 #include "diagnose/window_replay.h"
-#include "tracks/effects.h"
+#include "sim/effects.h"
 
 namespace odotune {
 

@@ -1,8 +1,8 @@
 // The work of `odotune learn train|eval|retrain`: the learned odometry of
 // Fariña, Acosta, Toledo & Acosta, "Improving Odometric Model Performance
-// Based on LSTM Networks", Sensors 2023, 23, 961 (objectives/learned_odometry.h,
-// the slip detector of objectives/slip_detector.h, the UKF fusion with online
-// retraining of objectives/learned_fusion.h), on recorded or simulated tracks.
+// Based on LSTM Networks", Sensors 2023, 23, 961 (learned/learned_odometry.h,
+// the slip detector of learned/slip_detector.h, the UKF fusion with online
+// retraining of learned/learned_fusion.h), on recorded or simulated tracks.
 // Request in, files written, outcome and its lines of text out; the command
 // reads the flags, shows the progress and prints the lines. The model file is
 // results/learned_model_json.h, the JSON blocks studies/learned_study_outputs.h.
@@ -21,12 +21,12 @@
 #include <string>
 #include <vector>
 
-#include "objectives/fusion_input.h"
-#include "objectives/learned_fusion.h"
-#include "objectives/learned_odometry.h"
-#include "objectives/lstm_training.h"
-#include "objectives/odometry_metrics.h"
-#include "objectives/slip_detector.h"
+#include "learned/fusion_input.h"
+#include "learned/learned_fusion.h"
+#include "learned/learned_odometry.h"
+#include "learned/lstm_training.h"
+#include "learned/odometry_metrics.h"
+#include "learned/slip_detector.h"
 #include "results/learned_model_json.h"
 
 namespace odotune {

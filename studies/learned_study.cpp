@@ -8,10 +8,10 @@
 
 #include <fmt/format.h>
 
-#include "tracks/motion_profile.h"
-#include "tracks/random_slip.h"
-#include "tracks/simulator.h"
-#include "tracks/slip_episodes.h"
+#include "sim/motion_profile.h"
+#include "sim/random_slip.h"
+#include "sim/simulator.h"
+#include "sim/slip_episodes.h"
 
 namespace odotune {
 
@@ -249,7 +249,7 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
     if (s.slip_episodes.empty())
       throw std::invalid_argument(
           fmt::format("slip scenario '{}': its route has no stretch long and fast enough "
-                      "for a random slip episode (tracks/random_slip.h)",
+                      "for a random slip episode (sim/random_slip.h)",
                       scenarios.slip.name));
     out.slip_drives.push_back({s.seed, s.slip_episodes});
     extra.push_back(build_fusion_input(sim::simulate(s), fo));

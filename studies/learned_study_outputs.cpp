@@ -6,10 +6,10 @@
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.h"
 #include "results/learned_figures.h"
 #include "results/learned_model_json.h"
-#include "tracks/atomic_file.h"
-#include "tracks/slip_episodes.h"
+#include "sim/slip_episodes.h"
 
 namespace odotune {
 namespace fs = std::filesystem;

@@ -1,6 +1,6 @@
 // What `odotune study learned` writes into its --out folder, and the JSON
 // blocks `odotune learn eval|retrain` share with it. Plain study results in,
-// text and files out; every file written atomically (tracks/atomic_file.h;
+// text and files out; every file written atomically (core/atomic_file.h;
 // figures: results/gnuplot.h, PNG + SVG both or neither).
 //
 //   table1.md/.csv   learned vs traditional odometry (paper Table 1 layout)
@@ -22,7 +22,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "objectives/odometry_metrics.h"
+#include "learned/odometry_metrics.h"
 #include "results/report_tables.h"
 #include "studies/learned_study.h"
 

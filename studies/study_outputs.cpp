@@ -6,8 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "core/atomic_file.h"
 #include "results/calibration_figures.h"
-#include "tracks/atomic_file.h"
 
 namespace odotune {
 namespace fs = std::filesystem;

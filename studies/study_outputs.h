@@ -1,6 +1,6 @@
 // What `odotune study resampling|calibration` writes into its --out folder:
 // the tables (study_tables.h) and the figures, built here from the plain
-// study results. Every file is written atomically (tracks/atomic_file.h;
+// study results. Every file is written atomically (core/atomic_file.h;
 // figures: results/gnuplot.h, PNG + SVG both or neither).
 //
 //   resampling:  table1.md, table1.csv, table1_runs.csv,

@@ -22,7 +22,7 @@
 
 #include <fmt/format.h>
 
-#include "tracks/atomic_file.h"
+#include "core/atomic_file.h"
 #include "tracks/track_io.h"
 
 namespace odotune {

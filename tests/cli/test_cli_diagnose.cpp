@@ -10,9 +10,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "sim/effects.h"
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
-#include "tracks/effects.h"
 
 namespace odotune {
 namespace {

@@ -11,8 +11,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "calibration/calibration_objective.h"
 #include "formats/pf_config_yaml.h"
-#include "objectives/calibration_objective.h"
 #include "results/store.h"
 #include "support/cli_runner.h"
 

@@ -15,8 +15,8 @@
 
 #include "core/failure.h"
 #include "formats/ukf_config_yaml.h"
-#include "objectives/fusion_input.h"
-#include "objectives/ukf_objective.h"
+#include "learned/fusion_input.h"
+#include "learned/ukf_objective.h"
 #include "results/store.h"
 #include "support/cli_runner.h"
 #include "tracks/track_io.h"

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "concealed_cases.h"
-#include "tracks/effects.h"
-#include "tracks/simulator.h"
+#include "sim/effects.h"
+#include "sim/simulator.h"
 #include "tracks/track.h"
 
 namespace odotune::concealed {

@@ -36,9 +36,9 @@
 #include "concealed_cases.h"
 #include "diagnose/diag_input.h"
 #include "diagnose/diagnosis.h"
+#include "sim/simulator.h"
 #include "studies/diagnosis_grading.h"
 #include "studies/diagnosis_truth.h"
-#include "tracks/simulator.h"
 
 namespace odotune::diagnose {
 namespace {

@@ -16,7 +16,7 @@
 #include "diagnose/effect_model.h"
 #include "diagnose/sim_track.h"
 #include "diagnose/window_replay.h"
-#include "tracks/effects.h"
+#include "sim/effects.h"
 
 namespace odotune::diagnose {
 namespace {

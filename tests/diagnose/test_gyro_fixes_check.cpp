@@ -26,7 +26,7 @@
 #include "diagnose/diag_input.h"
 #include "diagnose/gyro_fixes_check.h"
 #include "diagnose/sim_track.h"
-#include "tracks/simulator.h"
+#include "sim/simulator.h"
 
 namespace odotune::diagnose {
 namespace {

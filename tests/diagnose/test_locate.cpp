@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "diagnose/locate.h"
-#include "tracks/normal_rng.h"
+#include "sim/normal_rng.h"
 
 namespace odotune::diagnose {
 namespace {

@@ -15,8 +15,8 @@
 
 #include "concealed_cases.h"
 #include "diagnose/sensor_checks.h"
-#include "tracks/normal_rng.h"
-#include "tracks/simulator.h"
+#include "sim/normal_rng.h"
+#include "sim/simulator.h"
 
 namespace odotune::diagnose {
 namespace {

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "filters/calib_stream.h"
 #include "filters/dual_kf.h"
+#include "support/calib_stream.h"
 
 namespace odotune::filters {
 namespace {

@@ -15,10 +15,10 @@
 #include <vector>
 
 #include "core/counter_rng.h"
-#include "filters/calib_stream.h"
 #include "filters/memory_pair.h"
 #include "filters/pf_calibrator.h"
 #include "filters/pf_kernels.h"
+#include "support/calib_stream.h"
 
 namespace odotune::filters {
 namespace {

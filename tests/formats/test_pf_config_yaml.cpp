@@ -9,8 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "calibration/calibration_objective.h"
 #include "core/failure.h"
-#include "objectives/calibration_objective.h"
 #include "support/temp_dir.h"
 
 namespace odotune {

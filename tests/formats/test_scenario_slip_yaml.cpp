@@ -14,11 +14,11 @@
 #include <gtest/gtest.h>
 
 #include "formats/scenario_yaml.h"
+#include "sim/motion_profile.h"
+#include "sim/random_slip.h"
+#include "sim/simulator.h"
+#include "sim/slip_episodes.h"
 #include "support/cli_runner.h"
-#include "tracks/motion_profile.h"
-#include "tracks/random_slip.h"
-#include "tracks/simulator.h"
-#include "tracks/slip_episodes.h"
 #include "tracks/track_io.h"
 
 namespace odotune::cli {

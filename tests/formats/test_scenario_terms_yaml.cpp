@@ -1,5 +1,5 @@
 // The `terms:` section of scenario YAML (formats/scenario_yaml.h,
-// tracks/model_terms.h): read in both name forms, written back to the same
+// sim/model_terms.h): read in both name forms, written back to the same
 // terms, errors naming file, line and field.
 #include <stdexcept>
 #include <string>

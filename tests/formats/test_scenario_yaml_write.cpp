@@ -14,9 +14,9 @@
 #include <gtest/gtest.h>
 
 #include "formats/scenario_yaml.h"
-#include "tracks/effects.h"
-#include "tracks/scenario_from_track.h"
-#include "tracks/simulator.h"
+#include "sim/effects.h"
+#include "sim/scenario_from_track.h"
+#include "sim/simulator.h"
 #include "tracks/track_io.h"
 
 namespace odotune::cli {

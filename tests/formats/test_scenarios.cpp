@@ -12,9 +12,9 @@
 #include <gtest/gtest.h>
 
 #include "formats/scenario_yaml.h"
+#include "sim/effects.h"
+#include "sim/simulator.h"
 #include "support/cli_runner.h"
-#include "tracks/effects.h"
-#include "tracks/simulator.h"
 #include "tracks/track_io.h"
 
 namespace odotune::cli {

@@ -9,8 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "calibration/calibration_objective.h"
 #include "diagnose/sim_track.h"
-#include "objectives/calibration_objective.h"
 
 namespace odotune {
 namespace {

@@ -7,7 +7,7 @@
 #include "objectives/param_space.h"
 #include "objectives/replay.h"
 #include "objectives/replay_input.h"
-#include "synthetic_track.h"
+#include "support/synthetic_track.h"
 
 namespace odotune {
 namespace {

@@ -24,7 +24,7 @@ using testing_support::TempDir;
 // Seeded random values spanning magnitudes, so that a lossy number format
 // would show.
 template <class Net>
-Net random_net(std::mt19937_64& rng, filters::OutputActivation act) {
+Net random_net(std::mt19937_64& rng, OutputActivation act) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   Net n;
   for (double& w : n.weights) w = u(rng) * std::pow(10.0, 3.0 * u(rng));
@@ -40,16 +40,16 @@ Net random_net(std::mt19937_64& rng, filters::OutputActivation act) {
 LearnedModelFile sample_model(bool detector) {
   std::mt19937_64 rng(42);
   LearnedModelFile m;
-  m.odometry.v_net = random_net<filters::VelocityNet>(rng, filters::OutputActivation::linear);
-  m.odometry.w_net = random_net<filters::VelocityNet>(rng, filters::OutputActivation::linear);
+  m.odometry.v_net = random_net<VelocityNet>(rng, OutputActivation::linear);
+  m.odometry.w_net = random_net<VelocityNet>(rng, OutputActivation::linear);
   m.odometry.rate_hz = 10.0;
   m.odometry.ticks_per_rev = 8800.0;
   m.odometry.v_validation_mae = 0.1 + 0.2;  // not exactly 0.3
   m.odometry.w_validation_mae = 1.0 / 3.0;
   if (detector) {
     SlipDetectorModel d;
-    d.v_net = random_net<filters::SlipNet>(rng, filters::OutputActivation::linear);
-    d.w_net = random_net<filters::SlipNet>(rng, filters::OutputActivation::relu);
+    d.v_net = random_net<SlipNet>(rng, OutputActivation::linear);
+    d.w_net = random_net<SlipNet>(rng, OutputActivation::relu);
     d.floor_var_v = 1.234567890123e-5;
     d.floor_var_w = 2e-300;
     d.previous_lag = 3;

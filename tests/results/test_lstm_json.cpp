@@ -15,8 +15,8 @@ namespace odotune {
 namespace {
 
 template <int I, int H>
-filters::LstmNet<I, H> random_net(std::uint64_t seed) {
-  filters::LstmNet<I, H> net;
+LstmNet<I, H> random_net(std::uint64_t seed) {
+  LstmNet<I, H> net;
   // Awkward doubles (full 53-bit mantissas, tiny and huge magnitudes) so that
   // a lossy writer would show.
   for (int n = 0; n < net.kWeights; ++n)
@@ -33,7 +33,7 @@ filters::LstmNet<I, H> random_net(std::uint64_t seed) {
 }
 
 template <int I, int H>
-void expect_identical(const filters::LstmNet<I, H>& a, const filters::LstmNet<I, H>& b) {
+void expect_identical(const LstmNet<I, H>& a, const LstmNet<I, H>& b) {
   EXPECT_EQ(0, std::memcmp(a.weights.data(), b.weights.data(), sizeof(a.weights)));
   EXPECT_EQ(0, std::memcmp(a.input_mean.data(), b.input_mean.data(), sizeof(a.input_mean)));
   EXPECT_EQ(0, std::memcmp(a.input_sd.data(), b.input_sd.data(), sizeof(a.input_sd)));
@@ -49,9 +49,9 @@ TEST(LstmJson, RoundTripIsExactThroughText) {
   expect_identical(v, lstm_from_json<3, 5>(nlohmann::json::parse(text)));
 
   auto s = random_net<5, 10>(2);
-  s.activation = filters::OutputActivation::relu;
+  s.activation = OutputActivation::relu;
   const nlohmann::json j = s;  // ADL hook
-  const auto back = nlohmann::json::parse(j.dump(2)).get<filters::SlipNet>();
+  const auto back = nlohmann::json::parse(j.dump(2)).get<SlipNet>();
   expect_identical(s, back);
   EXPECT_EQ(j.at("format"), "odotune-lstm/1");
   EXPECT_EQ(j.at("inputs"), 5);

@@ -23,13 +23,13 @@
 #include "core/failure.h"
 #include "diagnose/diag_input.h"
 #include "diagnose/recordings.h"
+#include "sim/effects.h"
+#include "sim/motion_profile.h"
+#include "sim/simulator.h"
 #include "studies/diagnosis_benchmark.h"
 #include "studies/diagnosis_benchmark_outputs.h"
 #include "studies/diagnosis_drives.h"
 #include "support/temp_dir.h"
-#include "tracks/effects.h"
-#include "tracks/motion_profile.h"
-#include "tracks/simulator.h"
 
 namespace odotune {
 namespace {

@@ -1,0 +1,240 @@
+#include "learned/fusion_input.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "objectives/pose_series.h"
+#include "objectives/track_samples.h"
+
+namespace odotune {
+
+namespace {
+
+// Upper bound of rate_hz [Hz] (beyond any encoder rate of the reference
+// tracks; keeps the step count bounded).
+constexpr double kMaxRateHz = 1000.0;
+// Time stamps closer than this are the same instant [s]: t[0] + k·Δt against
+// a row stamp k'/rate written with a few decimals.
+constexpr double kSameInstantS = 1e-6;
+
+[[noreturn]] void fail(const std::string& track, const std::string& what) {
+  throw std::invalid_argument(fmt::format("track '{}': {}", track, what));
+}
+
+// A cumulative wheel count sampled at the odometry rows, interpolated
+// linearly between them; a row stamped within kSameInstantS of t_s gives its
+// own count (t[0] + k·Δt and a row stamp k'/rate differ in the last bits).
+// Clamped at the ends, which the step times never pass by more than
+// kSameInstantS.
+double count_at(const std::vector<double>& t, const std::vector<double>& c, double t_s) {
+  if (t_s <= t.front()) return c.front();
+  if (t_s >= t.back()) return c.back();
+  const auto after = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), t_s + kSameInstantS) -
+                                              t.begin());
+  const std::size_t lo = after - 1;  // ≥ 0: t_s > t.front()
+  if (std::abs(t[lo] - t_s) <= kSameInstantS || lo + 1 == t.size()) return c[lo];
+  const double f = (t_s - t[lo]) / (t[lo + 1] - t[lo]);
+  return c[lo] + f * (c[lo + 1] - c[lo]);
+}
+
+// The ground-truth pose at t_s: a sample stamped within kSameInstantS of t_s
+// itself, else the linear interpolation (pose_series.h).
+std::optional<PlanarPose> gt_pose_at(const PoseSeries& gt, double t_s) {
+  if (gt.size() == 0) return std::nullopt;
+  const auto it = std::lower_bound(gt.t.begin(), gt.t.end(), t_s - kSameInstantS);
+  if (it != gt.t.end() && std::abs(*it - t_s) <= kSameInstantS) {
+    const auto i = static_cast<std::size_t>(it - gt.t.begin());
+    return PlanarPose{gt.x[i], gt.y[i], gt.theta[i]};
+  }
+  return interpolate_pose(gt, t_s, kMaxGtGapS);
+}
+
+}  // namespace
+
+bool FusionInputOptions::IsValid(std::string* why) const {
+  auto bad = [why](const std::string& msg) {
+    if (why) *why = msg;
+    return false;
+  };
+  if (!(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= kMaxRateHz))
+    return bad(fmt::format("rate_hz = {} must be in (0, {}] Hz", rate_hz, kMaxRateHz));
+  if (!(std::isfinite(default_ext_var_v) && default_ext_var_v > 0.0))
+    return bad(fmt::format("default_ext_var_v = {} must be a finite number > 0 [(m/s)^2]", default_ext_var_v));
+  if (!(std::isfinite(default_ext_var_w) && default_ext_var_w > 0.0))
+    return bad(fmt::format("default_ext_var_w = {} must be a finite number > 0 [(rad/s)^2]",
+                           default_ext_var_w));
+  return true;
+}
+
+FusionInput build_fusion_input(const Track& track, const FusionInputOptions& options) {
+  const std::string& name = track.name();
+  std::string why;
+  if (!options.IsValid(&why)) fail(name, "invalid fusion input options: " + why);
+
+  FusionInput in;
+  in.track_name = name;
+  const bool from_ticks = track.has_ticks();
+  if (!from_ticks && !track.has_wheel_rates())
+    fail(name, "no wheel odometry (ticks_l/ticks_r or omega_l/omega_r): fusion needs encoder increments");
+
+  const TrackMeta& meta = track.meta();
+  auto require = [&](const std::optional<double>& v, const char* key) {
+    if (!v)
+      fail(name, fmt::format("metadata '{}' is missing: fusion needs the robot's nominal wheel "
+                             "radii, wheel base and ticks_per_rev",
+                             key));
+    return *v;
+  };
+  in.nominal.wheel_radius_left_m = require(meta.wheel_radius_left_m, "robot.wheel_radius_left");
+  in.nominal.wheel_radius_right_m = require(meta.wheel_radius_right_m, "robot.wheel_radius_right");
+  in.nominal.wheel_base_m = require(meta.wheel_base_m, "robot.wheel_base");
+  in.ticks_per_rev = require(meta.ticks_per_rev, "robot.ticks_per_rev");
+  if (!in.nominal.IsValid(&why)) fail(name, "nominal robot metadata: " + why);
+  if (!(std::isfinite(in.ticks_per_rev) && in.ticks_per_rev > 0.0))
+    fail(name, fmt::format("robot.ticks_per_rev = {} must be a finite number > 0", in.ticks_per_rev));
+
+  // --- cumulative wheel counts at the odometry rows ---------------------------
+  // From ticks: the count itself (relative to the first row, so the doubles
+  // stay exact). From omega: the trapezoid integral of ω, in counts.
+  const auto& tt = track.t();
+  const double counts_per_rad = in.ticks_per_rev / (2.0 * std::numbers::pi);
+  std::vector<double> odo_t, cum_l, cum_r;
+  std::vector<std::size_t> odo_row;  // the odometry rows' indices in the track
+  std::int64_t first_l = 0, first_r = 0;
+  for (std::size_t i = 0; i < track.size(); ++i) {
+    if (from_ticks) {
+      if (track.ticks_l()[i] == kNoTick || track.ticks_r()[i] == kNoTick) continue;
+      if (odo_t.empty()) first_l = track.ticks_l()[i], first_r = track.ticks_r()[i];
+      cum_l.push_back(static_cast<double>(track.ticks_l()[i] - first_l));
+      cum_r.push_back(static_cast<double>(track.ticks_r()[i] - first_r));
+    } else {
+      if (!track.at(Col::omega_l, i) || !track.at(Col::omega_r, i)) continue;
+      // Trapezoid over the omega rows: φ_i = φ_{i−1} + (ω_{i−1} + ω_i)/2 · Δt.
+      if (odo_t.empty()) {
+        cum_l.push_back(0.0);
+        cum_r.push_back(0.0);
+      } else {
+        const std::size_t p = odo_t.size() - 1;  // previous omega row (index in odo_t)
+        const std::size_t pi = odo_row.back();   // ... and in the track
+        const double dt = tt[i] - tt[pi];
+        cum_l.push_back(cum_l[p] +
+                        0.5 * (track.col(Col::omega_l)[pi] + track.col(Col::omega_l)[i]) * dt * counts_per_rad);
+        cum_r.push_back(cum_r[p] +
+                        0.5 * (track.col(Col::omega_r)[pi] + track.col(Col::omega_r)[i]) * dt * counts_per_rad);
+      }
+    }
+    odo_t.push_back(tt[i]);
+    odo_row.push_back(i);
+  }
+  if (odo_t.size() < 2) fail(name, "fewer than two odometry rows: no encoder increment to fuse");
+
+  // --- step times ----------------------------------------------------------
+  in.dt_s = 1.0 / options.rate_hz;
+  const double t0 = odo_t.front();
+  const double t_end = odo_t.back() + kSameInstantS;
+  for (std::size_t k = 0;; ++k) {
+    const double tk = t0 + static_cast<double>(k) * in.dt_s;
+    if (tk > t_end) break;
+    in.t.push_back(tk);
+  }
+  const std::size_t n = in.t.size();
+  if (n < 2)
+    fail(name, fmt::format("fewer than 2 steps of {} s: the odometry spans {} s", in.dt_s,
+                           odo_t.back() - odo_t.front()));
+
+  // --- increments and kinematic odometry (paper eqs. 1–2) ---------------------
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  in.dticks_l.assign(n, 0.0);
+  in.dticks_r.assign(n, 0.0);
+  in.v_kin.assign(n, 0.0);
+  in.w_kin.assign(n, 0.0);
+  double prev_l = count_at(odo_t, cum_l, in.t[0]);
+  double prev_r = count_at(odo_t, cum_r, in.t[0]);
+  for (std::size_t k = 1; k < n; ++k) {
+    const double cl = count_at(odo_t, cum_l, in.t[k]);
+    const double cr = count_at(odo_t, cum_r, in.t[k]);
+    in.dticks_l[k] = cl - prev_l;
+    in.dticks_r[k] = cr - prev_r;
+    prev_l = cl;
+    prev_r = cr;
+    // Eq. 1: wheel rate ω = 2π·Δct/(encRes·ΔT); eq. 2 with the radii and D.
+    const double rad_per_count_s = 1.0 / (counts_per_rad * in.dt_s);
+    const filters::BodyVelocity b = filters::body_velocity(in.nominal, in.dticks_l[k] * rad_per_count_s,
+                                                           in.dticks_r[k] * rad_per_count_s);
+    in.v_kin[k] = b.v_m_s;
+    in.w_kin[k] = b.w_rad_s;
+  }
+
+  // --- sensors per step: rows in (t[k−1], t[k]] ---------------------------------
+  in.power_l.assign(n, nan);
+  in.power_r.assign(n, nan);
+  in.v_ext.assign(n, nan);
+  in.w_ext.assign(n, nan);
+  in.v_ext_var.assign(n, nan);
+  in.w_ext_var.assign(n, nan);
+  in.gyro_z.assign(n, nan);
+  const bool track_power = track.has(Col::power_l) && track.has(Col::power_r);
+  const bool track_ext = track.has(Col::v_ext) && track.has(Col::w_ext);
+  const bool track_gyro = track.has(Col::gyro_z);
+  {
+    std::size_t i = 0;  // first track row not yet assigned to a step
+    // Rows at or before t[0] belong to no step.
+    while (i < track.size() && tt[i] <= in.t[0] + kSameInstantS) ++i;
+    for (std::size_t k = 1; k < n; ++k) {
+      double sum_pl = 0.0, sum_pr = 0.0, sum_g = 0.0;
+      int n_pl = 0, n_pr = 0, n_g = 0;
+      for (; i < track.size() && tt[i] <= in.t[k] + kSameInstantS; ++i) {
+        if (track_power && track.at(Col::power_l, i)) sum_pl += track.col(Col::power_l)[i], ++n_pl;
+        if (track_power && track.at(Col::power_r, i)) sum_pr += track.col(Col::power_r)[i], ++n_pr;
+        if (track_gyro && track.at(Col::gyro_z, i)) sum_g += track.col(Col::gyro_z)[i], ++n_g;
+        if (track_ext && track.at(Col::v_ext, i) && track.at(Col::w_ext, i)) {
+          in.v_ext[k] = track.col(Col::v_ext)[i];
+          in.w_ext[k] = track.col(Col::w_ext)[i];
+          in.v_ext_var[k] = positive_or(track.col(Col::v_ext_var), i, options.default_ext_var_v);
+          in.w_ext_var[k] = positive_or(track.col(Col::w_ext_var), i, options.default_ext_var_w);
+          in.has_ext = true;
+        }
+      }
+      if (n_pl > 0) in.power_l[k] = sum_pl / n_pl;
+      if (n_pr > 0) in.power_r[k] = sum_pr / n_pr;
+      if (n_pl > 0 && n_pr > 0) in.has_power = true;
+      if (n_g > 0) {
+        in.gyro_z[k] = sum_g / n_g;
+        in.has_gyro = true;
+      }
+    }
+  }
+
+  // --- ground truth ----------------------------------------------------------
+  in.gt_x.assign(n, nan);
+  in.gt_y.assign(n, nan);
+  in.gt_theta.assign(n, nan);
+  in.v_true.assign(n, 0.0);
+  in.w_true.assign(n, 0.0);
+  const PoseSeries gt = ground_truth_series(track);
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto p = gt_pose_at(gt, in.t[k]);
+    if (!p) continue;
+    in.gt_x[k] = p->x_m;
+    in.gt_y[k] = p->y_m;
+    in.gt_theta[k] = p->theta_rad;
+  }
+  for (std::size_t k = 1; k < n; ++k) {
+    const double dx = in.gt_x[k] - in.gt_x[k - 1], dy = in.gt_y[k] - in.gt_y[k - 1];
+    const double dth = in.gt_theta[k] - in.gt_theta[k - 1];
+    const double mid = 0.5 * (in.gt_theta[k] + in.gt_theta[k - 1]);
+    in.w_true[k] = dth / in.dt_s;
+    in.v_true[k] = (dx * std::cos(mid) + dy * std::sin(mid)) / in.dt_s;
+    if (std::isfinite(in.v_true[k]) && std::isfinite(in.w_true[k])) in.has_gt = true;
+  }
+  return in;
+}
+
+}  // namespace odotune

@@ -1,0 +1,164 @@
+#include "learned/learned_fusion.h"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace odotune {
+namespace {
+
+bool positive_finite(double x) { return x > 0.0 && std::isfinite(x); }
+
+double nan() { return std::nan(""); }
+
+}  // namespace
+
+bool RetrainOptions::IsValid(std::string* why) const {
+  auto fail = [why](std::string m) {
+    if (why) *why = std::move(m);
+    return false;
+  };
+  if (!enabled) return true;
+  if (samples_per_retrain < 20)
+    return fail(fmt::format("samples_per_retrain = {}: expected >= 20", samples_per_retrain));
+  for (double x : {max_filter_var_v, max_filter_var_w, max_odometry_var_v, max_odometry_var_w})
+    if (!positive_finite(x))
+      return fail(fmt::format("retraining thresholds must be finite and > 0, got {}", x));
+  return training.IsValid(why);
+}
+
+bool LearnedFusionOptions::IsValid(std::string* why) const {
+  auto fail = [why](std::string m) {
+    if (why) *why = std::move(m);
+    return false;
+  };
+  if (!positive_finite(static_var_v) || !positive_finite(static_var_w))
+    return fail(fmt::format("static_var_v = {}, static_var_w = {}: expected finite values > 0", static_var_v,
+                            static_var_w));
+  std::string inner;
+  if (detector && !detector->IsValid(&inner)) return fail("slip detector: " + inner);
+  if (!ukf.IsValid(&inner)) return fail("ukf: " + inner);
+  if (!noise.IsValid(&inner)) return fail("noise: " + inner);
+  if (retrain.enabled && odometry != Odometry::learned)
+    return fail("retraining needs the learned odometry (odometry = learned)");
+  if (!retrain.IsValid(&inner)) return fail("retrain: " + inner);
+  return true;
+}
+
+LearnedFusionResult run_learned_fusion(const FusionInput& in, const LearnedOdometryModel* model,
+                                       const LearnedFusionOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("learned fusion: " + why);
+  const bool learned = options.odometry == LearnedFusionOptions::Odometry::learned;
+  if (learned && model == nullptr)
+    throw std::invalid_argument("learned fusion: learned odometry needs a model");
+  if (learned && !model->IsValid(&why)) throw std::invalid_argument("learned fusion: model: " + why);
+  if (options.detector && !in.has_power)
+    throw std::invalid_argument(fmt::format(
+        "track '{}': no motor power (power_l, power_r): the slip detector needs it", in.track_name));
+
+  const std::size_t n = in.size();
+  LearnedFusionResult r;
+  r.odometry.v.assign(n, 0.0);
+  r.odometry.w.assign(n, 0.0);
+  r.odo_var_v.assign(n, nan());
+  r.odo_var_w.assign(n, nan());
+  FusionTrace& f = r.filter;
+  for (auto* v : {&f.v, &f.w, &f.var_v, &f.var_w, &f.cov_vw, &f.x, &f.y, &f.theta}) v->assign(n, nan());
+
+  LearnedOdometryModel current;  // the nets as retrained so far
+  if (learned) current = *model;
+  std::optional<LearnedOdometryStepper> odo;
+  if (learned) odo.emplace(&current);
+  std::optional<SlipDetectorStepper> detector;
+  if (options.detector) detector.emplace(options.detector);
+
+  filters::VelocityUkf ukf(options.ukf);
+  filters::PlanarPose pose;
+  if (in.has_gt && std::isfinite(in.gt_x[0]) && std::isfinite(in.gt_theta[0]))
+    pose = {in.gt_x[0], in.gt_y[0], in.gt_theta[0]};
+  auto record = [&](std::size_t k) {
+    f.v[k] = ukf.state()[filters::kV];
+    f.w[k] = ukf.state()[filters::kW];
+    f.var_v[k] = ukf.cov()(filters::kV, filters::kV);
+    f.var_w[k] = ukf.cov()(filters::kW, filters::kW);
+    f.cov_vw[k] = ukf.cov()(filters::kV, filters::kW);
+    f.x[k] = pose.x_m;
+    f.y[k] = pose.y_m;
+    f.theta[k] = pose.theta_rad;
+  };
+  if (n > 0) record(0);
+
+  // Retraining samples (paper §4.2): windows and the UKF's velocities.
+  SequenceSet v_samples, w_samples;
+  if (learned) {
+    v_samples.window = current.v_net.window;
+    w_samples.window = current.w_net.window;
+    v_samples.inputs = w_samples.inputs = VelocityNet::kInputs;
+  }
+
+  for (std::size_t k = 1; k < n; ++k) {
+    const double prev_v = f.v[k - 1], prev_w = f.w[k - 1];
+    OdometryMeasurement m;
+    if (learned) {
+      const auto vw = odo->step(in.dticks_l[k], in.dticks_r[k], in.v_kin[k], in.w_kin[k],
+                                std::isfinite(prev_v) ? prev_v : 0.0, std::isfinite(prev_w) ? prev_w : 0.0);
+      m.v_m_s = vw[0];
+      m.w_rad_s = vw[1];
+    } else {
+      m.v_m_s = in.v_kin[k];
+      m.w_rad_s = in.w_kin[k];
+    }
+    if (detector) {
+      const auto var = detector->step(in.power_l[k], in.power_r[k], in.dticks_l[k], in.dticks_r[k]);
+      m.var_v = var[0];
+      m.var_w = var[1];
+    } else {
+      m.var_v = options.static_var_v;
+      m.var_w = options.static_var_w;
+    }
+    r.odometry.v[k] = m.v_m_s;
+    r.odometry.w[k] = m.w_rad_s;
+    r.odo_var_v[k] = m.var_v;
+    r.odo_var_w[k] = m.var_w;
+
+    fuse_step(ukf, in, k, m, options.noise);
+    if (!ukf.healthy()) {
+      f.healthy = false;
+      break;
+    }
+    pose = filters::integrate_pose(pose, ukf.state()[filters::kV], ukf.state()[filters::kW], in.dt_s);
+    record(k);
+
+    if (!options.retrain.enabled || !odo->ready()) continue;
+    const RetrainOptions& ro = options.retrain;
+    if (f.var_v[k] < ro.max_filter_var_v && f.var_w[k] < ro.max_filter_var_w &&
+        m.var_v < ro.max_odometry_var_v && m.var_w < ro.max_odometry_var_w) {
+      v_samples.add(odo->v_window().data(), f.v[k]);
+      w_samples.add(odo->w_window().data(), f.w[k]);
+    }
+    if (static_cast<int>(v_samples.size()) < ro.samples_per_retrain) continue;
+    RetrainEvent ev;
+    ev.step = k;
+    ev.t_s = in.t[k];
+    const auto start = std::chrono::steady_clock::now();
+    VelocityNet v_net = current.v_net, w_net = current.w_net;
+    ev.v = retrain_lstm(v_net, v_samples, ro.training);
+    ev.w = retrain_lstm(w_net, w_samples, ro.training);
+    ev.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    // A refit that failed keeps the previous nets (the robot keeps running).
+    if (ev.v.usable) current.v_net = v_net;
+    if (ev.w.usable) current.w_net = w_net;
+    r.retrains.push_back(ev);
+    v_samples.x.clear();
+    v_samples.y.clear();
+    w_samples.x.clear();
+    w_samples.y.clear();
+  }
+  if (learned) r.final_model = current;
+  return r;
+}
+
+}  // namespace odotune

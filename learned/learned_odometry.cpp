@@ -1,0 +1,235 @@
+#include "learned/learned_odometry.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "core/counter_rng.h"
+
+namespace odotune {
+namespace {
+
+constexpr int kFeatures = VelocityNet::kInputs;
+static_assert(kFeatures == 3, "learned odometry features: Δct_r, Δct_l, previous");
+
+// Uniform noise of standard deviation sd (±sd·√3), from the counter RNG so a
+// seeded training set is the same whatever the thread count.
+double teacher_noise(double sd, std::uint64_t seed, std::size_t track, std::size_t step, int which) {
+  if (sd <= 0.0) return 0.0;
+  const double u = counter_uniform01(seed, track, step, static_cast<std::uint64_t>(which), 0x7ea);
+  return sd * std::sqrt(3.0) * (2.0 * u - 1.0);
+}
+
+bool finite_all(std::initializer_list<double> xs) {
+  for (double x : xs)
+    if (!std::isfinite(x)) return false;
+  return true;
+}
+
+}  // namespace
+
+bool LearnedOdometryModel::IsValid(std::string* why) const {
+  auto fail = [why](std::string m) {
+    if (why) *why = std::move(m);
+    return false;
+  };
+  std::string inner;
+  if (!v_net.IsValid(&inner)) return fail("v_net: " + inner);
+  if (!w_net.IsValid(&inner)) return fail("w_net: " + inner);
+  if (!(rate_hz > 0.0) || !std::isfinite(rate_hz))
+    return fail(fmt::format("rate_hz = {}: expected a finite value > 0", rate_hz));
+  if (!(ticks_per_rev > 0.0) || !std::isfinite(ticks_per_rev))
+    return fail(fmt::format("ticks_per_rev = {}: expected a finite value > 0", ticks_per_rev));
+  if (!(v_validation_mae >= 0.0) || !(w_validation_mae >= 0.0))
+    return fail("validation MAEs must be finite values >= 0");
+  return true;
+}
+
+bool LearnedTrainingOptions::IsValid(std::string* why) const {
+  if (!training.IsValid(why)) return false;
+  auto fail = [why](std::string m) {
+    if (why) *why = std::move(m);
+    return false;
+  };
+  if (!(train_fraction > 0.0 && train_fraction < 1.0))
+    return fail(fmt::format("train_fraction = {}: expected a value in (0, 1)", train_fraction));
+  if (!(previous_noise_v >= 0.0) || !(previous_noise_w >= 0.0) || !std::isfinite(previous_noise_v) ||
+      !std::isfinite(previous_noise_w))
+    return fail("previous_noise_v/_w: expected finite values >= 0");
+  if (restarts < 1 || restarts > 100) return fail(fmt::format("restarts = {}: expected 1..100", restarts));
+  return true;
+}
+
+void append_velocity_windows(const FusionInput& in, int window, double previous_noise_v,
+                             double previous_noise_w, std::uint64_t seed, SequenceSet* v_set,
+                             SequenceSet* w_set) {
+  const std::size_t n = in.size();
+  const auto W = static_cast<std::size_t>(window);
+  std::vector<double> v_rows(W * kFeatures), w_rows(W * kFeatures);
+  // Step j's features need the increments over step j and the truth of step
+  // j − 1; the window (k − W, k] therefore needs truth from k − W on.
+  for (std::size_t k = W + 1; k < n; ++k) {
+    bool ok = finite_all({in.v_true[k], in.w_true[k]});
+    for (std::size_t j = k + 1 - W; ok && j <= k; ++j)
+      ok = finite_all({in.v_true[j - 1], in.w_true[j - 1], in.dticks_l[j], in.dticks_r[j]});
+    if (!ok) continue;
+    for (std::size_t r = 0; r < W; ++r) {
+      const std::size_t j = k + 1 - W + r;
+      double* vr = &v_rows[r * kFeatures];
+      double* wr = &w_rows[r * kFeatures];
+      vr[kFeatDticksR] = wr[kFeatDticksR] = in.dticks_r[j];
+      vr[kFeatDticksL] = wr[kFeatDticksL] = in.dticks_l[j];
+      vr[kFeatPrevious] = in.v_true[j - 1] + teacher_noise(previous_noise_v, seed, 0, j, 0);
+      wr[kFeatPrevious] = in.w_true[j - 1] + teacher_noise(previous_noise_w, seed, 0, j, 1);
+    }
+    v_set->add(v_rows.data(), in.v_true[k]);
+    w_set->add(w_rows.data(), in.w_true[k]);
+  }
+}
+
+LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*>& tracks,
+                                            const LearnedTrainingOptions& options,
+                                            LearnedTrainingSummary* summary) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("learned odometry training: " + why);
+  if (tracks.empty()) throw std::invalid_argument("learned odometry training: no tracks given");
+  LearnedOdometryModel model;
+  const int window = model.v_net.window;
+  model.rate_hz = 1.0 / tracks.front()->dt_s;
+  model.ticks_per_rev = tracks.front()->ticks_per_rev;
+
+  SequenceSet v_train, v_val, w_train, w_val;
+  for (SequenceSet* s : {&v_train, &v_val, &w_train, &w_val}) {
+    s->window = window;
+    s->inputs = kFeatures;
+  }
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    const FusionInput& in = *tracks[i];
+    if (!in.has_gt)
+      throw std::invalid_argument(
+          fmt::format("track '{}': no ground truth (gt_x, gt_y, gt_theta): expected it to learn odometry from",
+                      in.track_name));
+    if (std::abs(in.ticks_per_rev - model.ticks_per_rev) > 1e-9 * model.ticks_per_rev)
+      throw std::invalid_argument(
+          fmt::format("track '{}': ticks_per_rev = {} differs from the first track's {}: expected one robot",
+                      in.track_name, in.ticks_per_rev, model.ticks_per_rev));
+    if (std::abs(in.dt_s - tracks.front()->dt_s) > 1e-12)
+      throw std::invalid_argument(
+          fmt::format("track '{}': fusion step {} s differs from the first track's {} s", in.track_name,
+                      in.dt_s, tracks.front()->dt_s));
+    SequenceSet v_all, w_all;
+    v_all.window = w_all.window = window;
+    v_all.inputs = w_all.inputs = kFeatures;
+    append_velocity_windows(in, window, options.previous_noise_v, options.previous_noise_w,
+                            options.training.seed + i, &v_all, &w_all);
+    if (v_all.size() < 10)
+      throw std::invalid_argument(
+          fmt::format("track '{}': only {} windows of {} steps with ground truth: expected at least 10",
+                      in.track_name, v_all.size(), window));
+    auto [vt, vv] = split_sequences(v_all, options.train_fraction);
+    auto [wt, wv] = split_sequences(w_all, options.train_fraction);
+    v_train.append(vt);
+    v_val.append(vv);
+    w_train.append(wt);
+    w_val.append(wv);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  LearnedTrainingSummary s;
+  // Best of options.restarts starts (see LearnedTrainingOptions::restarts),
+  // scored free-running: each net fed its own previous output, as when it
+  // runs alone (run_learned_odometry), MAE over the last (1 − train_fraction)
+  // of each track's steps. A net can have a small one-step (teacher-forced)
+  // validation MAE and still drift on its own outputs. The V and W nets do
+  // not feed each other, so start r's pair is scored in one run.
+  auto free_running_mae = [&](const LearnedOdometryModel& m) {
+    std::array<double, 2> sum{0.0, 0.0};
+    std::size_t count = 0;
+    for (const FusionInput* in : tracks) {
+      const OdometrySeries run = run_learned_odometry(*in, m);
+      const auto first = static_cast<std::size_t>(options.train_fraction * static_cast<double>(in->size()));
+      for (std::size_t k = std::max<std::size_t>(first, 1); k < in->size(); ++k)
+        if (finite_all({run.v[k], run.w[k], in->v_true[k], in->w_true[k]})) {
+          sum[0] += std::abs(run.v[k] - in->v_true[k]);
+          sum[1] += std::abs(run.w[k] - in->w_true[k]);
+          ++count;
+        }
+    }
+    const double inf = std::numeric_limits<double>::infinity();
+    return count > 0
+               ? std::array<double, 2>{sum[0] / static_cast<double>(count), sum[1] / static_cast<double>(count)}
+               : std::array<double, 2>{inf, inf};
+  };
+  const LearnedOdometryModel fresh = model;
+  std::array<double, 2> best_mae{0.0, 0.0};
+  for (int r = 0; r < options.restarts; ++r) {
+    LearnedOdometryModel candidate = fresh;
+    LstmTrainingOptions o = options.training;
+    o.seed = options.training.seed + 7919u * static_cast<std::uint64_t>(r);
+    const LstmTrainingSummary tv = train_lstm(candidate.v_net, v_train, v_val, o);
+    o.seed += 1000;  // a different initialisation for the W net
+    const LstmTrainingSummary tw = train_lstm(candidate.w_net, w_train, w_val, o);
+    std::array<double, 2> mae = free_running_mae(candidate);
+    if (!tv.usable) mae[0] = std::numeric_limits<double>::infinity();
+    if (!tw.usable) mae[1] = std::numeric_limits<double>::infinity();
+    s.v_restart_mae.push_back(mae[0]);
+    s.w_restart_mae.push_back(mae[1]);
+    if (r == 0 || (tv.usable && (!s.v.usable || mae[0] < best_mae[0])))
+      s.v = tv, best_mae[0] = mae[0], s.v_restart = r, model.v_net = candidate.v_net;
+    if (r == 0 || (tw.usable && (!s.w.usable || mae[1] < best_mae[1])))
+      s.w = tw, best_mae[1] = mae[1], s.w_restart = r, model.w_net = candidate.w_net;
+  }
+  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  s.train_windows = v_train.size();
+  s.validation_windows = v_val.size();
+  model.v_validation_mae = std::isfinite(s.v.validation_mae) ? s.v.validation_mae : s.v.train_mae;
+  model.w_validation_mae = std::isfinite(s.w.validation_mae) ? s.w.validation_mae : s.w.train_mae;
+  if (!model.IsValid(&why))
+    throw std::invalid_argument("learned odometry training produced an unusable model: " + why);
+  if (summary) *summary = s;
+  return model;
+}
+
+LearnedOdometryStepper::LearnedOdometryStepper(const LearnedOdometryModel* model)
+    : model_(model),
+      v_rows_(static_cast<std::size_t>(model->v_net.window) * kFeatures, 0.0),
+      w_rows_(static_cast<std::size_t>(model->w_net.window) * kFeatures, 0.0) {}
+
+std::array<double, 2> LearnedOdometryStepper::step(double dticks_l, double dticks_r, double v_kin, double w_kin,
+                                                   double previous_v, double previous_w) {
+  auto push = [&](std::vector<double>& rows, double previous) {
+    // Shift the window one row (20 × 3 doubles: cheaper than a ring's
+    // index arithmetic in predict, which wants the rows contiguous).
+    std::copy(rows.begin() + kFeatures, rows.end(), rows.begin());
+    double* last = &rows[rows.size() - kFeatures];
+    last[kFeatDticksR] = dticks_r;
+    last[kFeatDticksL] = dticks_l;
+    last[kFeatPrevious] = previous;
+  };
+  push(v_rows_, previous_v);
+  push(w_rows_, previous_w);
+  if (filled_ < model_->v_net.window) ++filled_;
+  if (filled_ < model_->v_net.window) return {v_kin, w_kin};
+  return {model_->v_net.predict(v_rows_.data()), model_->w_net.predict(w_rows_.data())};
+}
+
+OdometrySeries run_learned_odometry(const FusionInput& in, const LearnedOdometryModel& model) {
+  OdometrySeries s;
+  s.v.assign(in.size(), 0.0);
+  s.w.assign(in.size(), 0.0);
+  LearnedOdometryStepper stepper(&model);
+  double pv = 0.0, pw = 0.0;
+  for (std::size_t k = 1; k < in.size(); ++k) {
+    const auto vw = stepper.step(in.dticks_l[k], in.dticks_r[k], in.v_kin[k], in.w_kin[k], pv, pw);
+    s.v[k] = pv = vw[0];
+    s.w[k] = pw = vw[1];
+  }
+  return s;
+}
+
+OdometrySeries kinematic_odometry(const FusionInput& in) { return {in.v_kin, in.w_kin}; }
+
+}  // namespace odotune

@@ -1,0 +1,130 @@
+#include "learned/odometry_metrics.h"
+
+#include <cmath>
+#include <limits>
+
+#include "filters/velocity_ukf.h"
+#include "objectives/pose_series.h"
+
+namespace odotune {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+bool usable(double a, double b) { return std::isfinite(a) && std::isfinite(b); }
+
+}  // namespace
+
+SeriesErrors series_errors(const std::vector<double>& est, const std::vector<double>& truth,
+                           const std::vector<double>& var, std::size_t first) {
+  SeriesErrors r;
+  double sum_abs = 0, sum_sq = 0, sum_t = 0, sum_t2 = 0, sum_nees = 0;
+  std::size_t n_nees = 0;
+  const bool with_var = !var.empty();
+  for (std::size_t k = first; k < est.size() && k < truth.size(); ++k) {
+    if (!usable(est[k], truth[k])) continue;
+    const double e = est[k] - truth[k];
+    sum_abs += std::abs(e);
+    sum_sq += e * e;
+    sum_t += truth[k];
+    sum_t2 += truth[k] * truth[k];
+    ++r.samples;
+    if (with_var && std::isfinite(var[k]) && var[k] > 0) {
+      sum_nees += e * e / var[k];
+      ++n_nees;
+    }
+  }
+  if (r.samples == 0) return {kNaN, kNaN, kNaN, kNaN, 0};
+  const auto n = static_cast<double>(r.samples);
+  r.mae = sum_abs / n;
+  r.rmse = std::sqrt(sum_sq / n);
+  const double ss_tot = sum_t2 - sum_t * sum_t / n;  // Σ (y − ȳ)²
+  r.r2 = ss_tot > 0 ? 1.0 - sum_sq / ss_tot : kNaN;
+  r.nees = n_nees > 0 ? sum_nees / static_cast<double>(n_nees) : kNaN;
+  return r;
+}
+
+PoseTrack dead_reckon(const FusionInput& in, const std::vector<double>& v, const std::vector<double>& w) {
+  PoseTrack p;
+  const std::size_t n = in.size();
+  p.x.assign(n, kNaN);
+  p.y.assign(n, kNaN);
+  p.theta.assign(n, kNaN);
+  if (n == 0) return p;
+  filters::PlanarPose pose;
+  if (in.has_gt && std::isfinite(in.gt_x[0]) && std::isfinite(in.gt_theta[0]))
+    pose = {in.gt_x[0], in.gt_y[0], in.gt_theta[0]};
+  p.x[0] = pose.x_m;
+  p.y[0] = pose.y_m;
+  p.theta[0] = pose.theta_rad;
+  for (std::size_t k = 1; k < n; ++k) {
+    pose = filters::integrate_pose(pose, v[k], w[k], in.dt_s);
+    p.x[k] = pose.x_m;
+    p.y[k] = pose.y_m;
+    p.theta[k] = pose.theta_rad;
+  }
+  return p;
+}
+
+OdometryErrors odometry_errors(const FusionInput& in, const std::vector<double>& v,
+                               const std::vector<double>& w, const std::vector<double>& var_v,
+                               const std::vector<double>& var_w, const std::vector<double>& cov_vw,
+                               const PoseTrack* pose) {
+  OdometryErrors r;
+  r.v = series_errors(v, in.v_true, var_v);
+  r.w = series_errors(w, in.w_true, var_w);
+
+  PoseTrack own;
+  if (pose == nullptr) {
+    own = dead_reckon(in, v, w);
+    pose = &own;
+  }
+  // Position: error norm; R² over X and Y stacked (paper eq. 9 on both axes).
+  double sum_abs = 0, sum_sq = 0, sx = 0, sy = 0, sxx = 0, syy = 0;
+  double th_abs = 0, th_sq = 0;
+  std::size_t n = 0;
+  for (std::size_t k = 1; k < in.size(); ++k) {
+    if (!usable(in.gt_x[k], in.gt_y[k]) || !usable(pose->x[k], pose->y[k])) continue;
+    const double ex = pose->x[k] - in.gt_x[k], ey = pose->y[k] - in.gt_y[k];
+    const double e2 = ex * ex + ey * ey;
+    sum_abs += std::sqrt(e2);
+    sum_sq += e2;
+    sx += in.gt_x[k];
+    sy += in.gt_y[k];
+    sxx += in.gt_x[k] * in.gt_x[k];
+    syy += in.gt_y[k] * in.gt_y[k];
+    const double eth = wrap_angle(pose->theta[k] - in.gt_theta[k]);
+    th_abs += std::abs(eth);
+    th_sq += eth * eth;
+    ++n;
+  }
+  if (n > 0) {
+    const auto nd = static_cast<double>(n);
+    const double ss_tot = (sxx - sx * sx / nd) + (syy - sy * sy / nd);
+    r.xy = {sum_abs / nd, std::sqrt(sum_sq / nd), ss_tot > 0 ? 1.0 - sum_sq / ss_tot : kNaN, kNaN, n};
+    r.theta = {th_abs / nd, std::sqrt(th_sq / nd), kNaN, kNaN, n};
+  } else {
+    r.xy = r.theta = {kNaN, kNaN, kNaN, kNaN, 0};
+  }
+
+  // Joint NEES of (V, W) with the full covariance (paper eq. 10).
+  r.nees_vw = kNaN;
+  if (!var_v.empty() && !var_w.empty()) {
+    double sum = 0;
+    std::size_t m = 0;
+    for (std::size_t k = 1; k < in.size(); ++k) {
+      if (!usable(v[k], in.v_true[k]) || !usable(w[k], in.w_true[k])) continue;
+      filters::VelocityCov P;
+      const double c = cov_vw.empty() ? 0.0 : cov_vw[k];
+      P << var_v[k], c, c, var_w[k];
+      const double e = filters::nees({in.v_true[k], in.w_true[k]}, {v[k], w[k]}, P);
+      if (!std::isfinite(e)) continue;
+      sum += e;
+      ++m;
+    }
+    if (m > 0) r.nees_vw = sum / static_cast<double>(m);
+  }
+  return r;
+}
+
+}  // namespace odotune
