@@ -171,6 +171,75 @@ void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vecto
                    [](const SelectedEffect& a, const SelectedEffect& b) { return a.explains > b.explains; });
 }
 
+// The search's start: the nominal model cross-validated and fitted on all
+// windows, the materiality rule's floors against its held-out dead reckoning,
+// and its record of phase "baseline".
+void start_from_nominal(Search& z, const DiagInput& in_full, const SelectOptions& o) {
+  Selection& sel = z.sel;
+  const auto t0 = Clock::now();
+  z.cur_cv = z.cv.cross_validate(EffectSet(), {}, o.cv_max_iterations);
+  z.cur_full = z.cv.fit_all(EffectSet(), EffectSet(), o.cv_max_iterations);
+  if (!z.cur_cv.ok || !z.cur_full.ok)
+    throw std::invalid_argument(fmt::format("track '{}': nominal replay failed: {}", in_full.track_name,
+                                            z.cur_cv.error + z.cur_full.error));
+  sel.baseline_cv_score = z.cur_cv.score;
+  // The materiality rule's floors against the nominal model's held-out dead reckoning.
+  const CrossValidator::Replayed nominal = z.cv.replayed(z.cur_cv);
+  z.floor_m = materiality_floor_m(in_full.ref_sigma_m, nominal.pos_rmse_m, o.materiality);
+  if (in_full.has_ref_heading() && std::isfinite(nominal.heading_rmse_rad))
+    z.floor_rad = materiality_floor_m(in_full.ref_sigma_rad, nominal.heading_rmse_rad, o.materiality);
+  sel.floor_m = z.floor_m;
+  sel.floor_rad = z.floor_rad;
+  SearchRecord rb;
+  rb.phase = "baseline", rb.set = "none", rb.bic = z.cur_full.bic, rb.accepted = true;
+  rb.reason = "nominal model";
+  fill(rb, z.cur_cv);
+  rb.time_s = since(t0);
+  sel.records.push_back(rb);
+}
+
+// The search's moves in order (select.h): forward steps, backward rounds,
+// pairs, swaps, radius_error preferred, look-alikes.
+void search_moves(Search& z, const SelectOptions& o, const std::vector<Effect>& cands) {
+  int step = 1;
+  for (; step <= o.max_effects && forward_step(z, step, cands); ++step) {
+  }
+  for (int round = 1; z.chosen.size() >= 2 && backward_round(z, round); ++round) {
+  }
+  // Pairs, when what is left stays well above the floor ("Pairs").
+  if (o.pairs && static_cast<int>(z.chosen.size()) + 2 <= o.max_effects + 1 &&
+      z.cv.replayed(z.cur_cv).pos_rmse_m > o.pair_above_floor * z.floor_m && pair_step(z, step, cands)) {
+    // Down to one effect: the pair's survivor never passed a forward step alone.
+    for (int round = 1; !z.chosen.empty() && backward_round(z, round); ++round) {
+    }
+  }
+  // Swaps, then the backward pass again (a swap can leave an effect redundant).
+  if (o.swaps && z.chosen.size() >= 2 && swap_step(z, step, cands)) {
+    for (int round = 1; !z.chosen.empty() && backward_round(z, round); ++round) {
+    }
+  }
+  prefer_radius_error(z, step);
+  if (o.look_alikes) look_alike_step(z, step);
+}
+
+// Each selected effect's rivals: the candidates its forward step did not beat,
+// and for a lag look-alike the look-alikes that predict as well and were not chosen.
+void add_rivals(Selection& sel, const Search& z) {
+  for (SelectedEffect& e : sel.effects)
+    for (const SearchRecord& r : sel.records)
+      if (r.phase == "forward" && r.accepted && r.candidate == effect_name(e.effect))
+        for (const std::string& name : r.rivals) e.rivals.push_back(effect_from_name(name));
+  // Look-alikes that predict as well: rivals of the chosen ones among them.
+  for (SelectedEffect& e : sel.effects) {
+    if (std::find(std::begin(kLagLookAlikes), std::end(kLagLookAlikes), e.effect) == std::end(kLagLookAlikes))
+      continue;
+    for (Effect r : z.look_alikes) {
+      const bool chosen = std::find(z.chosen.begin(), z.chosen.end(), r) != z.chosen.end();
+      if (!chosen && std::find(e.rivals.begin(), e.rivals.end(), r) == e.rivals.end()) e.rivals.push_back(r);
+    }
+  }
+}
+
 }  // namespace
 
 bool SelectOptions::IsValid(std::string* why) const {
@@ -301,69 +370,18 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
   Search z{cv, o, sel, EffectSet(), {}, {}, {}, kNaN, 0.0, 0.0, false, {}};
   z.heading = in->has_ref_heading();
 
-  auto t0 = Clock::now();
-  z.cur_cv = cv.cross_validate(EffectSet(), {}, o.cv_max_iterations);
-  z.cur_full = cv.fit_all(EffectSet(), EffectSet(), o.cv_max_iterations);
-  if (!z.cur_cv.ok || !z.cur_full.ok)
-    throw std::invalid_argument(fmt::format("track '{}': nominal replay failed: {}", in_full.track_name,
-                                            z.cur_cv.error + z.cur_full.error));
-  sel.baseline_cv_score = z.cur_cv.score;
-  // The materiality rule's floors against the nominal model's held-out dead reckoning.
-  const CrossValidator::Replayed nominal = cv.replayed(z.cur_cv);
-  z.floor_m = materiality_floor_m(in_full.ref_sigma_m, nominal.pos_rmse_m, o.materiality);
-  if (in_full.has_ref_heading() && std::isfinite(nominal.heading_rmse_rad))
-    z.floor_rad = materiality_floor_m(in_full.ref_sigma_rad, nominal.heading_rmse_rad, o.materiality);
-  sel.floor_m = z.floor_m;
-  sel.floor_rad = z.floor_rad;
-  SearchRecord rb;
-  rb.phase = "baseline", rb.set = "none", rb.bic = z.cur_full.bic, rb.accepted = true;
-  rb.reason = "nominal model";
-  fill(rb, z.cur_cv);
-  rb.time_s = since(t0);
-  sel.records.push_back(rb);
-
-  const std::vector<Effect> cands = candidate_list(in_full, o);
-  int step = 1;
-  for (; step <= o.max_effects && forward_step(z, step, cands); ++step) {
-  }
-  for (int round = 1; z.chosen.size() >= 2 && backward_round(z, round); ++round) {
-  }
-  // Pairs, when what is left stays well above the floor ("Pairs").
-  if (o.pairs && static_cast<int>(z.chosen.size()) + 2 <= o.max_effects + 1 &&
-      cv.replayed(z.cur_cv).pos_rmse_m > o.pair_above_floor * z.floor_m && pair_step(z, step, cands)) {
-    // Down to one effect: the pair's survivor never passed a forward step alone.
-    for (int round = 1; !z.chosen.empty() && backward_round(z, round); ++round) {
-    }
-  }
-  // Swaps, then the backward pass again (a swap can leave an effect redundant).
-  if (o.swaps && z.chosen.size() >= 2 && swap_step(z, step, cands)) {
-    for (int round = 1; !z.chosen.empty() && backward_round(z, round); ++round) {
-    }
-  }
-  prefer_radius_error(z, step);
-  if (o.look_alikes) look_alike_step(z, step);
+  start_from_nominal(z, in_full, o);
+  search_moves(z, o, candidate_list(in_full, o));
   sel.final_cv_score = z.cur_cv.score;
   sel.structure = z.s;
   sel.timing.search_s = since(t_start);
   sel.timing.fits = cv.fits();
   if (!z.chosen.empty()) {
-    t0 = Clock::now();
+    const auto t0 = Clock::now();
     final_model(in_full, *in, windows_full, o, z.chosen, z.cur_full.fitted, sel);
     sel.timing.final_s = since(t0);
   }
-  for (SelectedEffect& e : sel.effects)
-    for (const SearchRecord& r : sel.records)
-      if (r.phase == "forward" && r.accepted && r.candidate == effect_name(e.effect))
-        for (const std::string& name : r.rivals) e.rivals.push_back(effect_from_name(name));
-  // Look-alikes that predict as well: rivals of the chosen ones among them.
-  for (SelectedEffect& e : sel.effects) {
-    if (std::find(std::begin(kLagLookAlikes), std::end(kLagLookAlikes), e.effect) == std::end(kLagLookAlikes))
-      continue;
-    for (Effect r : z.look_alikes) {
-      const bool chosen = std::find(z.chosen.begin(), z.chosen.end(), r) != z.chosen.end();
-      if (!chosen && std::find(e.rivals.begin(), e.rivals.end(), r) == e.rivals.end()) e.rivals.push_back(r);
-    }
-  }
+  add_rivals(sel, z);
   sel.timing.total_s = since(t_start);
   return sel;
 }
