@@ -458,6 +458,72 @@ void add_fitted_params(FitSummary& out, const std::vector<ParamSlot>& layout, co
       if (p.fitted && !std::isfinite(p.std_error)) out.rank_deficient = true;
 }
 
+// The training windows the fit uses, each with its starting anchor (and,
+// with options.settle_anchors, its settled cost); a window too short a
+// motion for a free anchor (without a reference heading) is skipped.
+void choose_windows(const CostShared& sh, int active, const std::vector<Window>& windows,
+                    const std::vector<int>& train, const ReplayResult& train_before, const FitOptions& options,
+                    std::vector<double>& free_values, std::vector<std::array<double, 3>>& anchors,
+                    FitSummary& out) {
+  const DiagInput& in = *sh.in;
+  for (std::size_t i = 0; i < train.size(); ++i) {
+    const Window& w = windows[static_cast<std::size_t>(train[i])];
+    if (sh.free_anchor && !in.has_ref_heading() &&
+        spread(train_before, w) < options.min_spread_sigmas * in.ref_sigma_m) {
+      out.skipped_windows.push_back(w.index);
+      continue;
+    }
+    out.fitted_windows.push_back(w.index);
+    const Pose<double>& a = train_before.anchors[i];
+    anchors.push_back({a.x, a.y, a.th});
+    if (options.settle_anchors)
+      out.settled_window_costs.push_back(settled_cost(sh, active, w, free_values, anchors.back()));
+  }
+}
+
+// One residual block per fitted window (its free anchor a parameter block
+// of its own), and the free parameters' bounds.
+void add_residual_blocks(ceres::Problem& problem, const CostShared& sh, int active,
+                         const std::vector<Window>& windows, std::vector<double>& free_values,
+                         std::vector<std::array<double, 3>>& anchors, FitSummary& out) {
+  const DiagInput& in = *sh.in;
+  const auto& layout = sh.model->layout();
+  for (std::size_t i = 0; i < out.fitted_windows.size(); ++i) {
+    const Window& w = windows[static_cast<std::size_t>(out.fitted_windows[i])];
+    const Pose<double> a = sh.free_anchor ? Pose<double>{anchors[i][0], anchors[i][1], anchors[i][2]}
+                                          : reference_pose_at(in, w.t_begin_s);
+    ceres::CostFunction* cost = make_cost(active, &sh, w, a);
+    if (sh.free_anchor)
+      problem.AddResidualBlock(cost, nullptr, free_values.data(), anchors[i].data());
+    else
+      problem.AddResidualBlock(cost, nullptr, free_values.data());
+    out.num_residuals += static_cast<std::size_t>(cost->num_residuals());
+  }
+  for (std::size_t j = 0; j < sh.free_pos.size(); ++j) {
+    const ParamSlot& s = layout[static_cast<std::size_t>(sh.free_pos[j])];
+    problem.SetParameterLowerBound(free_values.data(), static_cast<int>(j), s.lower);
+    problem.SetParameterUpperBound(free_values.data(), static_cast<int>(j), s.upper);
+  }
+}
+
+// The fit's train and held-out scores: the fitted values against the start
+// (or options.score_before_at).
+void score_fit(const EffectModel& model, const DiagInput& in, const std::vector<Window>& windows,
+               const std::vector<int>& train, const std::set<int>& held, const ReplayResult& train_before,
+               const std::vector<double>& init, const std::vector<double>& fitted, Anchoring mode,
+               const FitOptions& options, FitSummary& out) {
+  const std::vector<double> before = options.score_before_at ? pack(*options.score_before_at) : init;
+  out.train = score(options.score_before_at ? replay(model, before, in, windows, train, nullptr, mode)
+                                            : train_before,
+                    replay(model, fitted, in, windows, train, nullptr, mode));
+  std::vector<int> ho(held.begin(), held.end());
+  if (!ho.empty())
+    out.heldout = score(replay(model, before, in, windows, ho, nullptr, mode),
+                        replay(model, fitted, in, windows, ho, nullptr, mode));
+  else
+    out.heldout = score(ReplayResult{}, ReplayResult{});
+}
+
 }  // namespace
 
 bool FitOptions::IsValid(std::string* why) const {
@@ -512,38 +578,10 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
 
   ceres::Problem problem;
   const int active = static_cast<int>(sh.free_pos.size()) + (sh.free_anchor ? 3 : 0);
-  for (std::size_t i = 0; i < train.size(); ++i) {
-    const Window& w = windows[static_cast<std::size_t>(train[i])];
-    if (sh.free_anchor && !in.has_ref_heading() &&
-        spread(train_before, w) < options.min_spread_sigmas * in.ref_sigma_m) {
-      out.skipped_windows.push_back(w.index);
-      continue;
-    }
-    out.fitted_windows.push_back(w.index);
-    const Pose<double>& a = train_before.anchors[i];
-    anchors.push_back({a.x, a.y, a.th});
-    if (options.settle_anchors)
-      out.settled_window_costs.push_back(settled_cost(sh, active, w, free_values, anchors.back()));
-  }
+  choose_windows(sh, active, windows, train, train_before, options, free_values, anchors, out);
   if (out.fitted_windows.empty())
     throw std::invalid_argument("fit: every training window is too short a motion to fit");
-  for (std::size_t i = 0; i < out.fitted_windows.size(); ++i) {
-    const Window& w = windows[static_cast<std::size_t>(out.fitted_windows[i])];
-    const Pose<double> a = sh.free_anchor ? Pose<double>{anchors[i][0], anchors[i][1], anchors[i][2]}
-                                          : reference_pose_at(in, w.t_begin_s);
-    ceres::CostFunction* cost = make_cost(active, &sh, w, a);
-    if (sh.free_anchor)
-      problem.AddResidualBlock(cost, nullptr, free_values.data(), anchors[i].data());
-    else
-      problem.AddResidualBlock(cost, nullptr, free_values.data());
-    out.num_residuals += static_cast<std::size_t>(cost->num_residuals());
-  }
-  for (std::size_t j = 0; j < sh.free_pos.size(); ++j) {
-    const ParamSlot& s = layout[static_cast<std::size_t>(sh.free_pos[j])];
-    problem.SetParameterLowerBound(free_values.data(), static_cast<int>(j), s.lower);
-    problem.SetParameterUpperBound(free_values.data(), static_cast<int>(j), s.upper);
-  }
-
+  add_residual_blocks(problem, sh, active, windows, free_values, anchors, out);
   const ceres::Solver::Options so = fit_solver_options(options, sh.free_anchor, anchors, free_values);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
@@ -568,16 +606,7 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
   if (sh.free_anchor)
     for (const auto& a : anchors) out.anchors.push_back({a[0], a[1], a[2]});
 
-  const std::vector<double> before = options.score_before_at ? pack(*options.score_before_at) : init;
-  out.train = score(options.score_before_at ? replay(model, before, in, windows, train, nullptr, mode)
-                                            : train_before,
-                    replay(model, fitted, in, windows, train, nullptr, mode));
-  std::vector<int> ho(held.begin(), held.end());
-  if (!ho.empty())
-    out.heldout = score(replay(model, before, in, windows, ho, nullptr, mode),
-                        replay(model, fitted, in, windows, ho, nullptr, mode));
-  else
-    out.heldout = score(ReplayResult{}, ReplayResult{});
+  score_fit(model, in, windows, train, held, train_before, init, fitted, mode, options, out);
   out.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return out;
 }
