@@ -86,32 +86,30 @@ bool covers(const std::vector<std::vector<double>>& acting, const std::vector<in
   return true;
 }
 
-// The final model (select.h) on the selection input `fit_in` (same windows
-// as `raw`, which decides the split).
-void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vector<Window>& windows,
-                 const SelectOptions& o, const std::vector<Effect>& chosen, const EffectSet& warm,
-                 Selection& sel) {
+// The windows of a split of n: phase < 0, the last n_held held out; else
+// n_held spread evenly, the pattern rotated by `phase` windows.
+void split_at(int phase, int n, int n_held, std::vector<int>& train, std::vector<int>& held) {
+  train.clear(), held.clear();
+  for (int w = 0; w < n; ++w) {
+    const long r = (w + std::max(phase, 0)) % n;
+    const bool h = phase < 0 ? w >= n - n_held : (r + 1) * n_held / n > r * n_held / n;
+    (h ? held : train).push_back(w);
+  }
+}
+
+// The final fit of sel.structure from `start` and its split (select.h): the
+// last windows held out, else (when those do not cover where each effect
+// acts, or the fit is rank deficient) the first interleaved rotation that
+// covers.
+void fit_final(const DiagInput& raw, const DiagInput& fit_in, const std::vector<Window>& windows,
+               const SelectOptions& o, const EffectSet& start, Selection& sel) {
   const EffectSet& s = sel.structure;
-  // From where the search's all-window fit of the set ended: a parameter
-  // started at its no-op bound (a lag's tau = 0) can stay there while
-  // another effect takes its share.
-  const EffectSet start = start_from(s, warm);
   FitOptions fo_final = o.fit;
   fo_final.score_before_at = s;  // scores nominal -> fitted
   const int n = static_cast<int>(windows.size());
   const int n_held = std::clamp(static_cast<int>(std::lround(o.heldout_fraction * n)), 1, n - 1);
-  // phase < 0: the last n_held windows; else n_held windows spread evenly,
-  // the pattern rotated by `phase` windows.
-  auto split = [&](int phase, std::vector<int>& train, std::vector<int>& held) {
-    train.clear(), held.clear();
-    for (int w = 0; w < n; ++w) {
-      const long r = (w + std::max(phase, 0)) % n;
-      const bool h = phase < 0 ? w >= n - n_held : (r + 1) * n_held / n > r * n_held / n;
-      (h ? held : train).push_back(w);
-    }
-  };
   const auto acting = acting_samples(raw, windows, s);
-  split(-1, sel.train_windows, sel.heldout_windows);
+  split_at(-1, n, n_held, sel.train_windows, sel.heldout_windows);
   sel.split = "last";
   bool alt_split = !covers(acting, sel.train_windows, sel.heldout_windows);
   if (!alt_split) {
@@ -123,13 +121,13 @@ void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vecto
     std::vector<int> tr, ho;
     int phase = 0;  // the first rotation that covers, else none
     for (int p = 0; p < n; ++p) {
-      split(p, tr, ho);
+      split_at(p, n, n_held, tr, ho);
       if (covers(acting, tr, ho)) {
         phase = p;
         break;
       }
     }
-    split(phase, tr, ho);
+    split_at(phase, n, n_held, tr, ho);
     ++sel.timing.fits;
     FitSummary f = fit_effects(fit_in, start, tr, ho, fo_final);
     if (!f.rank_deficient || sel.final_fit.params.empty()) {
@@ -137,7 +135,13 @@ void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vecto
       sel.train_windows = tr, sel.heldout_windows = ho, sel.split = "interleaved";
     }
   }
-  sel.fitted = true;
+}
+
+// sel.effects: each chosen effect with the share of the final fit's training
+// error it explains (the refit without it, in parallel; training scores only,
+// no standard errors), most first.
+void add_explained_shares(const DiagInput& fit_in, const SelectOptions& o, const std::vector<Effect>& chosen,
+                          const EffectSet& start, Selection& sel) {
   const std::vector<Window> fw = make_windows(fit_in, o.fit.window_s);
   const bool heading = fit_in.has_ref_heading() && o.fit.use_heading;
   const double ism = 1.0 / fit_in.ref_sigma_m, ish = heading ? 1.0 / fit_in.ref_sigma_rad : 0.0;
@@ -169,6 +173,20 @@ void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vecto
   }
   std::stable_sort(sel.effects.begin(), sel.effects.end(),
                    [](const SelectedEffect& a, const SelectedEffect& b) { return a.explains > b.explains; });
+}
+
+// The final model (select.h) on the selection input `fit_in` (same windows
+// as `raw`, which decides the split).
+void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vector<Window>& windows,
+                 const SelectOptions& o, const std::vector<Effect>& chosen, const EffectSet& warm,
+                 Selection& sel) {
+  // From where the search's all-window fit of the set ended: a parameter
+  // started at its no-op bound (a lag's tau = 0) can stay there while
+  // another effect takes its share.
+  const EffectSet start = start_from(sel.structure, warm);
+  fit_final(raw, fit_in, windows, o, start, sel);
+  sel.fitted = true;
+  add_explained_shares(fit_in, o, chosen, start, sel);
 }
 
 // The search's start: the nominal model cross-validated and fitted on all
