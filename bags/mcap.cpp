@@ -61,6 +61,133 @@ const char* opcode_name(std::uint8_t op) {
 
 bool known(std::uint8_t op) { return op >= 0x01 && op <= 0x0f; }
 
+// A Chunk record's records, decompressed into `chunk` and checked against
+// its CRC-32; `fail` throws with the reason (the caller adds the record's offset).
+template <class Fail>
+void read_chunk(const Bytes& content, Bytes& chunk, Fail&& fail) {
+  ByteReader r(content);
+  try {
+    r.u64("message_start_time");
+    r.u64("message_end_time");
+    const std::uint64_t uncompressed_size = r.u64("uncompressed_size");
+    const std::uint32_t uncompressed_crc = r.u32("uncompressed_crc");
+    const std::string compression = str(r, "compression");
+    const std::uint64_t n = r.u64("records length");
+    const auto records = r.bytes(n, "records");
+    if (uncompressed_size > kMaxChunkBytes)
+      fail("Chunk declares " + std::to_string(uncompressed_size) +
+           " bytes uncompressed (more than the 1 GiB this reader accepts)");
+    try {
+      chunk = decompress(compression, records, uncompressed_size);
+    } catch (const std::runtime_error& e) {
+      fail(std::string("Chunk: ") + e.what());
+    }
+    if (uncompressed_crc != 0 && crc32(chunk) != uncompressed_crc)
+      fail("Chunk: CRC-32 of its records does not match (the chunk is corrupt)");
+  } catch (const ByteReader::Short& e) {
+    fail(std::string("Chunk: ") + e.what());
+  }
+}
+
+// The records without state to check, read field by field (ByteReader::Short
+// when one is cut off).
+Header read_header(ByteReader& r) {
+  Header h;
+  h.profile = str(r, "profile");
+  h.library = str(r, "library");
+  return h;
+}
+
+Footer read_footer(ByteReader& r) {
+  Footer f;
+  f.summary_start = r.u64("summary_start");
+  f.summary_offset_start = r.u64("summary_offset_start");
+  f.summary_crc = r.u32("summary_crc");
+  return f;
+}
+
+ChunkIndex read_chunk_index(ByteReader& r) {
+  ChunkIndex c;
+  c.message_start_time = r.u64("message_start_time");
+  c.message_end_time = r.u64("message_end_time");
+  c.chunk_start_offset = r.u64("chunk_start_offset");
+  c.chunk_length = r.u64("chunk_length");
+  c.message_index_offsets = u16_u64_map(r, "message_index_offsets");
+  c.message_index_length = r.u64("message_index_length");
+  c.compression = str(r, "compression");
+  c.compressed_size = r.u64("compressed_size");
+  c.uncompressed_size = r.u64("uncompressed_size");
+  return c;
+}
+
+Attachment read_attachment(ByteReader& r) {
+  Attachment a;
+  a.log_time = r.u64("log_time");
+  a.create_time = r.u64("create_time");
+  a.name = str(r, "name");
+  a.media_type = str(r, "media_type");
+  const std::uint64_t n = r.u64("data length");
+  const auto d = r.bytes(n, "data");
+  a.data.assign(d.begin(), d.end());
+  a.crc = r.u32("crc");
+  return a;
+}
+
+AttachmentIndex read_attachment_index(ByteReader& r) {
+  AttachmentIndex a;
+  a.offset = r.u64("offset");
+  a.length = r.u64("length");
+  a.log_time = r.u64("log_time");
+  a.create_time = r.u64("create_time");
+  a.data_size = r.u64("data_size");
+  a.name = str(r, "name");
+  a.media_type = str(r, "media_type");
+  return a;
+}
+
+Statistics read_statistics(ByteReader& r) {
+  Statistics s;
+  s.message_count = r.u64("message_count");
+  s.schema_count = r.u16("schema_count");
+  s.channel_count = r.u32("channel_count");
+  s.attachment_count = r.u32("attachment_count");
+  s.metadata_count = r.u32("metadata_count");
+  s.chunk_count = r.u32("chunk_count");
+  s.message_start_time = r.u64("message_start_time");
+  s.message_end_time = r.u64("message_end_time");
+  s.channel_message_counts = u16_u64_map(r, "channel_message_counts");
+  return s;
+}
+
+Metadata read_metadata(ByteReader& r) {
+  Metadata m;
+  m.name = str(r, "name");
+  m.metadata = string_map(r, "metadata");
+  return m;
+}
+
+MetadataIndex read_metadata_index(ByteReader& r) {
+  MetadataIndex m;
+  m.offset = r.u64("offset");
+  m.length = r.u64("length");
+  m.name = str(r, "name");
+  return m;
+}
+
+SummaryOffset read_summary_offset(ByteReader& r) {
+  SummaryOffset s;
+  s.group_opcode = r.u8("group_opcode");
+  s.group_start = r.u64("group_start");
+  s.group_length = r.u64("group_length");
+  return s;
+}
+
+DataEnd read_data_end(ByteReader& r) {
+  DataEnd d;
+  d.data_section_crc = r.u32("data_section_crc");
+  return d;
+}
+
 }  // namespace
 
 const char* record_name(const Record& r) {
@@ -147,28 +274,7 @@ std::optional<Record> StreamReader::next() {
       case Opcode::footer: seen_footer_ = true; break;
       case Opcode::message_index: continue;  // an index of what the chunks return
       case Opcode::chunk: {
-        ByteReader r(content);
-        try {
-          r.u64("message_start_time");
-          r.u64("message_end_time");
-          const std::uint64_t uncompressed_size = r.u64("uncompressed_size");
-          const std::uint32_t uncompressed_crc = r.u32("uncompressed_crc");
-          const std::string compression = str(r, "compression");
-          const std::uint64_t n = r.u64("records length");
-          const auto records = r.bytes(n, "records");
-          if (uncompressed_size > kMaxChunkBytes)
-            fail(offset, "Chunk declares " + std::to_string(uncompressed_size) +
-                             " bytes uncompressed (more than the 1 GiB this reader accepts)");
-          try {
-            chunk_ = decompress(compression, records, uncompressed_size);
-          } catch (const std::runtime_error& e) {
-            fail(offset, std::string("Chunk: ") + e.what());
-          }
-          if (uncompressed_crc != 0 && crc32(chunk_) != uncompressed_crc)
-            fail(offset, "Chunk: CRC-32 of its records does not match (the chunk is corrupt)");
-        } catch (const ByteReader::Short& e) {
-          fail(offset, std::string("Chunk: ") + e.what());
-        }
+        read_chunk(content, chunk_, [&](const std::string& reason) { fail(offset, reason); });
         chunk_pos_ = 0;
         chunk_offset_ = offset;
         continue;
@@ -217,19 +323,8 @@ Record StreamReader::parse(std::uint8_t op, const Bytes& content, std::uint64_t 
   const std::string prefix = std::string(in_chunk ? "in a Chunk: " : "") + opcode_name(op) + ": ";
   try {
     switch (static_cast<Opcode>(op)) {
-      case Opcode::header: {
-        Header h;
-        h.profile = str(r, "profile");
-        h.library = str(r, "library");
-        return h;
-      }
-      case Opcode::footer: {
-        Footer f;
-        f.summary_start = r.u64("summary_start");
-        f.summary_offset_start = r.u64("summary_offset_start");
-        f.summary_crc = r.u32("summary_crc");
-        return f;
-      }
+      case Opcode::header: return read_header(r);
+      case Opcode::footer: return read_footer(r);
       case Opcode::schema: {
         Schema s;
         s.id = r.u16("id");
@@ -266,80 +361,14 @@ Record StreamReader::parse(std::uint8_t op, const Bytes& content, std::uint64_t 
                            ", which no Channel record defined before it");
         return m;
       }
-      case Opcode::chunk_index: {
-        ChunkIndex c;
-        c.message_start_time = r.u64("message_start_time");
-        c.message_end_time = r.u64("message_end_time");
-        c.chunk_start_offset = r.u64("chunk_start_offset");
-        c.chunk_length = r.u64("chunk_length");
-        c.message_index_offsets = u16_u64_map(r, "message_index_offsets");
-        c.message_index_length = r.u64("message_index_length");
-        c.compression = str(r, "compression");
-        c.compressed_size = r.u64("compressed_size");
-        c.uncompressed_size = r.u64("uncompressed_size");
-        return c;
-      }
-      case Opcode::attachment: {
-        Attachment a;
-        a.log_time = r.u64("log_time");
-        a.create_time = r.u64("create_time");
-        a.name = str(r, "name");
-        a.media_type = str(r, "media_type");
-        const std::uint64_t n = r.u64("data length");
-        const auto d = r.bytes(n, "data");
-        a.data.assign(d.begin(), d.end());
-        a.crc = r.u32("crc");
-        return a;
-      }
-      case Opcode::attachment_index: {
-        AttachmentIndex a;
-        a.offset = r.u64("offset");
-        a.length = r.u64("length");
-        a.log_time = r.u64("log_time");
-        a.create_time = r.u64("create_time");
-        a.data_size = r.u64("data_size");
-        a.name = str(r, "name");
-        a.media_type = str(r, "media_type");
-        return a;
-      }
-      case Opcode::statistics: {
-        Statistics s;
-        s.message_count = r.u64("message_count");
-        s.schema_count = r.u16("schema_count");
-        s.channel_count = r.u32("channel_count");
-        s.attachment_count = r.u32("attachment_count");
-        s.metadata_count = r.u32("metadata_count");
-        s.chunk_count = r.u32("chunk_count");
-        s.message_start_time = r.u64("message_start_time");
-        s.message_end_time = r.u64("message_end_time");
-        s.channel_message_counts = u16_u64_map(r, "channel_message_counts");
-        return s;
-      }
-      case Opcode::metadata: {
-        Metadata m;
-        m.name = str(r, "name");
-        m.metadata = string_map(r, "metadata");
-        return m;
-      }
-      case Opcode::metadata_index: {
-        MetadataIndex m;
-        m.offset = r.u64("offset");
-        m.length = r.u64("length");
-        m.name = str(r, "name");
-        return m;
-      }
-      case Opcode::summary_offset: {
-        SummaryOffset s;
-        s.group_opcode = r.u8("group_opcode");
-        s.group_start = r.u64("group_start");
-        s.group_length = r.u64("group_length");
-        return s;
-      }
-      case Opcode::data_end: {
-        DataEnd d;
-        d.data_section_crc = r.u32("data_section_crc");
-        return d;
-      }
+      case Opcode::chunk_index: return read_chunk_index(r);
+      case Opcode::attachment: return read_attachment(r);
+      case Opcode::attachment_index: return read_attachment_index(r);
+      case Opcode::statistics: return read_statistics(r);
+      case Opcode::metadata: return read_metadata(r);
+      case Opcode::metadata_index: return read_metadata_index(r);
+      case Opcode::summary_offset: return read_summary_offset(r);
+      case Opcode::data_end: return read_data_end(r);
       case Opcode::chunk:
       case Opcode::message_index: break;
     }

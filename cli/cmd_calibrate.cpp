@@ -37,6 +37,100 @@ void print_apply(const CalibrateRequest& a) {
   if (!a.json.empty()) fmt::print("json: {}\n", a.json);
 }
 
+// The options whose presence the request records (`*_given`): a default
+// the user did not ask for may be replaced by a method's own.
+struct TrackedOptions {
+  CLI::Option *method = nullptr, *resampler = nullptr, *policy = nullptr, *seed = nullptr, *particles = nullptr,
+              *evolution = nullptr, *memory = nullptr, *radius = nullptr, *base = nullptr, *tolerance = nullptr,
+              *segment = nullptr;
+};
+
+// The method and the particle filter's settings.
+void add_method_options(CLI::App* sub, CalibrateRequest& req, TrackedOptions& t) {
+  t.method = sub->add_option(
+      "--method", req.method,
+      "adaptive-pf | pf | dkf | batch-pose (alias batch) | batch-velocity | none (default "
+      "adaptive-pf)");
+  t.resampler = sub->add_option("--resampler", req.resampler,
+                                "PF resampling: multinomial | stratified | systematic | residual "
+                                "(default systematic)");
+  t.policy = sub->add_option("--policy", req.policy, "PF resampling policy: every | neff | max (default neff)");
+  t.seed = sub->add_option("--seed", req.seed, "PF random seed (same seed ⇒ same estimates)");
+  t.particles = sub->add_option("--particles", req.particles,
+                                "PF particles (adaptive-pf: the initial count; default 5000, adaptive 8000)")
+                    ->check(CLI::PositiveNumber);
+  t.evolution = sub->add_option("--pf-evolution", req.pf_evolution,
+                                "PF parameter evolution: evidence (default: a walk scaled to the "
+                                "posterior spread, whose memory grows until a fast-forgetting twin "
+                                "predicts better, a change) | paper (§III's fixed or eq. 11 walk)");
+  t.memory = sub->add_option("--pf-memory", req.pf_memory_s,
+                             "PF evidence evolution: the memory after a detected change [s] "
+                             "(default 10)")
+                 ->check(CLI::PositiveNumber);
+}
+
+// The external velocities: from the track, or derived from its ground truth.
+void add_ext_options(CLI::App* sub, CalibrateRequest& req) {
+  sub->add_option("--ext-from-gt", req.ext_from_gt_hz,
+                  "derive the external velocities from the ground truth at this rate [Hz] (for tracks "
+                  "without v_ext/w_ext, e.g. OptiOdom)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--ext-sigma-v", req.ext_sigma_v,
+                  "σ of the external speed [m/s] where the track gives no v_ext_var (and for --ext-from-gt, "
+                  "instead of the σ estimated from the ground truth's jitter); default 0.02")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--ext-sigma-w", req.ext_sigma_w,
+                  "σ of the external yaw rate [rad/s] where the track gives no w_ext_var (and for "
+                  "--ext-from-gt, instead of the estimated σ); default 0.02")
+      ->check(CLI::PositiveNumber);
+}
+
+// The initial ranges, the convergence tolerance and the batch fit's segments.
+void add_fit_options(CLI::App* sub, CalibrateRequest& req, TrackedOptions& t) {
+  t.radius = sub->add_option("--init-radius-range", req.init_radius_range,
+                             "LO,HI: initial range of both radii [m] (default nominal ±5 %)");
+  t.base = sub->add_option("--init-wheel-base-range", req.init_wheel_base_range,
+                           "LO,HI: initial range of the wheel base [m] (default nominal ±15 %)");
+  t.tolerance = sub->add_option("--tolerance", req.tolerance_pct,
+                                "convergence: within this % of the truth from then on (default 0.5)");
+  t.segment = sub->add_option("--segment", req.segment_s,
+                              "batch-pose: dead-reckon segments of this length [s] from a reference "
+                              "pose (default 0: whole runs)")
+                  ->check(CLI::NonNegativeNumber);
+  sub->add_flag("--fit-start-heading", req.fit_start_heading,
+                "batch-pose: fit each segment's start heading too (ground truth; with fixes the whole start "
+                "pose is always fitted)");
+}
+
+// The outputs, and --apply.
+void add_output_options(CLI::App* sub, CalibrateRequest& req) {
+  sub->add_option("--json", req.json, "write the result as JSON to this file");
+  sub->add_option("--csv", req.csv, "write the estimates over time as CSV to this file");
+  sub->add_option("--figure", req.figure, "write the estimates over time as STEM.png and STEM.svg");
+  sub->add_option("--config-out", req.config_out,
+                  "write the calibrated parameters (YAML, odotune-calibration/1) for --apply");
+  sub->add_option("--paths-csv", req.paths_csv,
+                  "--apply: write the dead-reckoned paths (nominal, calibrated) and the ground truth as CSV");
+  sub->add_option("--apply", req.apply,
+                  "replay the tracks with this calibration file and with their nominal parameters, and "
+                  "compare pose and heading RMSE (no calibration is run)");
+}
+
+void set_given(CalibrateRequest& req, const TrackedOptions& t) {
+  const auto given = [](const CLI::Option* o) { return o->count() > 0; };
+  req.method_given = given(t.method);
+  req.resampler_given = given(t.resampler);
+  req.policy_given = given(t.policy);
+  req.particles_given = given(t.particles);
+  req.seed_given = given(t.seed);
+  req.init_radius_range_given = given(t.radius);
+  req.init_wheel_base_range_given = given(t.base);
+  req.tolerance_given = given(t.tolerance);
+  req.segment_given = given(t.segment);
+  req.pf_evolution_given = given(t.evolution);
+  req.pf_memory_given = given(t.memory);
+}
+
 }  // namespace
 
 void register_calibrate(CLI::App& app) {
@@ -57,77 +151,14 @@ void register_calibrate(CLI::App& app) {
       "default to the nominal radii ±5 % and wheel base ±15 % (the paper's wheelchair ranges);\n"
       "the DKF starts at the range centre with sd = width/√12.");
   sub->add_option("--track", req->tracks, "track file (repeat for several, calibrated in order)")->required();
-  auto* method_opt = sub->add_option(
-      "--method", req->method,
-      "adaptive-pf | pf | dkf | batch-pose (alias batch) | batch-velocity | none (default "
-      "adaptive-pf)");
-  auto* resampler_opt = sub->add_option("--resampler", req->resampler,
-                                        "PF resampling: multinomial | stratified | systematic | residual "
-                                        "(default systematic)");
-  auto* policy_opt = sub->add_option("--policy", req->policy,
-                                     "PF resampling policy: every | neff | max (default neff)");
-  auto* seed_opt = sub->add_option("--seed", req->seed, "PF random seed (same seed ⇒ same estimates)");
-  auto* particles_opt = sub->add_option(
-                               "--particles", req->particles,
-                               "PF particles (adaptive-pf: the initial count; default 5000, adaptive 8000)")
-                            ->check(CLI::PositiveNumber);
-  auto* evolution_opt = sub->add_option("--pf-evolution", req->pf_evolution,
-                                        "PF parameter evolution: evidence (default: a walk scaled to the "
-                                        "posterior spread, whose memory grows until a fast-forgetting twin "
-                                        "predicts better, a change) | paper (§III's fixed or eq. 11 walk)");
-  auto* memory_opt = sub->add_option("--pf-memory", req->pf_memory_s,
-                                     "PF evidence evolution: the memory after a detected change [s] "
-                                     "(default 10)")
-                         ->check(CLI::PositiveNumber);
+  TrackedOptions t;
+  add_method_options(sub, *req, t);
   add_threads_option(sub, &req->threads);
-  sub->add_option("--ext-from-gt", req->ext_from_gt_hz,
-                  "derive the external velocities from the ground truth at this rate [Hz] (for tracks "
-                  "without v_ext/w_ext, e.g. OptiOdom)")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--ext-sigma-v", req->ext_sigma_v,
-                  "σ of the external speed [m/s] where the track gives no v_ext_var (and for --ext-from-gt, "
-                  "instead of the σ estimated from the ground truth's jitter); default 0.02")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--ext-sigma-w", req->ext_sigma_w,
-                  "σ of the external yaw rate [rad/s] where the track gives no w_ext_var (and for "
-                  "--ext-from-gt, instead of the estimated σ); default 0.02")
-      ->check(CLI::PositiveNumber);
-  auto* radius_opt = sub->add_option("--init-radius-range", req->init_radius_range,
-                                     "LO,HI: initial range of both radii [m] (default nominal ±5 %)");
-  auto* base_opt = sub->add_option("--init-wheel-base-range", req->init_wheel_base_range,
-                                   "LO,HI: initial range of the wheel base [m] (default nominal ±15 %)");
-  auto* tolerance_opt = sub->add_option("--tolerance", req->tolerance_pct,
-                                        "convergence: within this % of the truth from then on (default 0.5)");
-  auto* segment_opt = sub->add_option("--segment", req->segment_s,
-                                      "batch-pose: dead-reckon segments of this length [s] from a reference "
-                                      "pose (default 0: whole runs)")
-                          ->check(CLI::NonNegativeNumber);
-  sub->add_flag("--fit-start-heading", req->fit_start_heading,
-                "batch-pose: fit each segment's start heading too (ground truth; with fixes the whole start "
-                "pose is always fitted)");
-  sub->add_option("--json", req->json, "write the result as JSON to this file");
-  sub->add_option("--csv", req->csv, "write the estimates over time as CSV to this file");
-  sub->add_option("--figure", req->figure, "write the estimates over time as STEM.png and STEM.svg");
-  sub->add_option("--config-out", req->config_out,
-                  "write the calibrated parameters (YAML, odotune-calibration/1) for --apply");
-  sub->add_option("--paths-csv", req->paths_csv,
-                  "--apply: write the dead-reckoned paths (nominal, calibrated) and the ground truth as CSV");
-  sub->add_option("--apply", req->apply,
-                  "replay the tracks with this calibration file and with their nominal parameters, and "
-                  "compare pose and heading RMSE (no calibration is run)");
+  add_ext_options(sub, *req);
+  add_fit_options(sub, *req, t);
+  add_output_options(sub, *req);
   sub->callback([=] {
-    const auto given = [](const CLI::Option* o) { return o->count() > 0; };
-    req->method_given = given(method_opt);
-    req->resampler_given = given(resampler_opt);
-    req->policy_given = given(policy_opt);
-    req->particles_given = given(particles_opt);
-    req->seed_given = given(seed_opt);
-    req->init_radius_range_given = given(radius_opt);
-    req->init_wheel_base_range_given = given(base_opt);
-    req->tolerance_given = given(tolerance_opt);
-    req->segment_given = given(segment_opt);
-    req->pf_evolution_given = given(evolution_opt);
-    req->pf_memory_given = given(memory_opt);
+    set_given(*req, t);
     if (req->apply.empty())
       print_calibrate(*req);
     else

@@ -87,6 +87,88 @@ void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const R
   if (interrupt.raised()) throw Failure("interrupted", 130);
 }
 
+// --solver: pso or nlopt:NAME, parsed into req->solver.
+void add_solver_option(CLI::App* sub, const std::shared_ptr<TuneCommandRequest>& req) {
+  std::string algos;
+  for (const auto& a : tuner::nlopt_algorithm_names()) algos += " " + a;
+  sub->add_option_function<std::string>(
+         "--solver",
+         [req](const std::string& text) {
+           std::string why;
+           const std::optional<tuner::SolverChoice> solver = tuner::SolverChoice::parse(text, &why);
+           if (!solver) throw CLI::ValidationError("--solver", why);
+           req->solver = *solver;
+         },
+         "pso or nlopt:NAME, NAME one of" + algos)
+      ->default_str("pso");
+}
+
+// The calibrators' particle filter and external velocities.
+void add_calibrator_options(CLI::App* sub, TuneCommandRequest& req) {
+  sub->add_option("--resampler", req.resampler,
+                  "calibrators: multinomial | stratified | systematic | residual (default systematic)");
+  sub->add_option("--policy", req.policy, "calibrators: resampling policy every | neff | max (default neff)");
+  sub->add_option("--pf-particles", req.pf_particles,
+                  "calibrators: N (pf-calib) or initial N (adaptive-pf-calib); default the paper's "
+                  "5000 / 8000")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--pf-seed", req.pf_seed, "calibrators: the particle filter's own seed (default 1)");
+  sub->add_option("--ext-from-gt", req.ext_from_gt_hz,
+                  "calibrators: derive the external velocities from the ground truth at this rate [Hz] "
+                  "instead of the tracks' v_ext/w_ext")
+      ->check(CLI::PositiveNumber);
+}
+
+// robot_localization tuning (--rl-params): the span, fitness, search space and outputs.
+void add_rl_tune_options(CLI::App* sub, RlTuneRequest& rl, RlChoices& rl_names) {
+  sub->add_option("--until", rl.until_s,
+                  "--rl-params: tune on the recording before this many seconds; the rest is scored as held out")
+      ->check(CLI::PositiveNumber);
+  sub->add_option(
+         "--fitness", rl_names.fitness,
+         "--rl-params: outage (simulated GPS outages, default), heldout-fixes (mode 8 on this filter) or both")
+      ->check(CLI::IsMember({"outage", "heldout-fixes", "both"}));
+  sub->add_option("--space", rl_names.space,
+                  "--rl-params: search a factor per diagonal entry of the process noise (default) or per block")
+      ->check(CLI::IsMember({"diagonal", "blocks"}));
+  sub->add_flag("--no-input-covariances", rl_names.no_input_covariances,
+                "--rl-params: do not search factors on the inputs' message covariances");
+  sub->add_option("--outage", rl.options.outage_s,
+                  "--rl-params: length of the simulated GPS outages [s] (default 60)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--format", rl_names.format, "--rl-params: --config-out as ros2 (default) or ros1 parameters")
+      ->check(CLI::IsMember({"ros2", "ros1"}));
+  sub->add_option("--end", rl.end_s,
+                  "--rl-params: ignore the recording after this many seconds (the held-out span ends there)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--config-out-ros1", rl.config_out_ros1,
+                  "--rl-params: also write the ROS 1 form to this file");
+}
+
+// The tune command itself: robot_localization tuning with --rl-params, else
+// the tracks' tune, printed (the best so far after Ctrl-C).
+void run_tune_subcommand(const TuneCommandRequest& req, const RlTuneRequest& rl, const RlChoices& rl_names,
+                         int threads, const CLI::App& sub) {
+  apply_threads(threads);
+  if (!rl.src.params_file.empty()) {
+    run_rl_tune_command(req, rl, rl_names, sub);
+    return;
+  }
+  if (req.tracks.empty()) throw Failure("tune: expected --track, or --rl-params with --bag");
+  TuneCommandRequest r = req;
+  InterruptGuard interrupt;  // Ctrl-C stops the tune: the best so far is printed and written
+  Progress progress("tune", "evaluations");
+  r.progress = [&progress](long done, long total) { progress.update(done, total); };
+  r.stop = interrupt.flag();
+  r.report = [&](const TuneCommandOutcome& outcome) {
+    progress.finish();
+    if (interrupt.raised()) std::fprintf(stderr, "odotune: interrupted; reporting the best so far\n");
+    std::visit([](const auto& o) { print_tune_outcome(o); }, outcome);
+  };
+  run_tune_command(r);
+  if (interrupt.raised()) throw Failure("interrupted", 130);
+}
+
 }  // namespace
 
 void register_tune(CLI::App& app) {
@@ -133,18 +215,7 @@ void register_tune(CLI::App& app) {
   sub->add_option("--cv-block", req->fix_cv.block_s,
                   "modes 8, 9: fixes within blocks of this many seconds are held out together (default 1)")
       ->check(CLI::PositiveNumber);
-  std::string algos;
-  for (const auto& a : tuner::nlopt_algorithm_names()) algos += " " + a;
-  sub->add_option_function<std::string>(
-         "--solver",
-         [req](const std::string& text) {
-           std::string why;
-           const std::optional<tuner::SolverChoice> solver = tuner::SolverChoice::parse(text, &why);
-           if (!solver) throw CLI::ValidationError("--solver", why);
-           req->solver = *solver;
-         },
-         "pso or nlopt:NAME, NAME one of" + algos)
-      ->default_str("pso");
+  add_solver_option(sub, req);
   sub->add_option("--seed", req->seed, "random seed (same seed ⇒ same result)");
   sub->add_option("--particles", req->particles, "PSO swarm size")->check(CLI::PositiveNumber);
   sub->add_option("--iterations", req->iterations, "PSO iterations")->check(CLI::NonNegativeNumber);
@@ -155,65 +226,15 @@ void register_tune(CLI::App& app) {
   sub->add_option("--config-out", req->config_out,
                   "write the tuned configuration (YAML: EKF models for eval --config, calibrators "
                   "odotune-pf-config/1, ukf odotune-ukf-config/1)");
-  sub->add_option("--resampler", req->resampler,
-                  "calibrators: multinomial | stratified | systematic | residual (default systematic)");
-  sub->add_option("--policy", req->policy, "calibrators: resampling policy every | neff | max (default neff)");
-  sub->add_option("--pf-particles", req->pf_particles,
-                  "calibrators: N (pf-calib) or initial N (adaptive-pf-calib); default the paper's "
-                  "5000 / 8000")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--pf-seed", req->pf_seed, "calibrators: the particle filter's own seed (default 1)");
-  sub->add_option("--ext-from-gt", req->ext_from_gt_hz,
-                  "calibrators: derive the external velocities from the ground truth at this rate [Hz] "
-                  "instead of the tracks' v_ext/w_ext")
-      ->check(CLI::PositiveNumber);
+  add_calibrator_options(sub, *req);
   auto rl = std::make_shared<RlTuneRequest>();
   auto rl_names = std::make_shared<RlChoices>();
   add_rl_source_options(sub, rl->src);
-  sub->add_option("--until", rl->until_s,
-                  "--rl-params: tune on the recording before this many seconds; the rest is scored as held out")
-      ->check(CLI::PositiveNumber);
-  sub->add_option(
-         "--fitness", rl_names->fitness,
-         "--rl-params: outage (simulated GPS outages, default), heldout-fixes (mode 8 on this filter) or both")
-      ->check(CLI::IsMember({"outage", "heldout-fixes", "both"}));
-  sub->add_option("--space", rl_names->space,
-                  "--rl-params: search a factor per diagonal entry of the process noise (default) or per block")
-      ->check(CLI::IsMember({"diagonal", "blocks"}));
-  sub->add_flag("--no-input-covariances", rl_names->no_input_covariances,
-                "--rl-params: do not search factors on the inputs' message covariances");
-  sub->add_option("--outage", rl->options.outage_s,
-                  "--rl-params: length of the simulated GPS outages [s] (default 60)")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--format", rl_names->format,
-                  "--rl-params: --config-out as ros2 (default) or ros1 parameters")
-      ->check(CLI::IsMember({"ros2", "ros1"}));
-  sub->add_option("--end", rl->end_s,
-                  "--rl-params: ignore the recording after this many seconds (the held-out span ends there)")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--config-out-ros1", rl->config_out_ros1,
-                  "--rl-params: also write the ROS 1 form to this file");
+  add_rl_tune_options(sub, *rl, *rl_names);
   add_threads_option(sub, threads.get());
 
   sub->callback([req, rl, rl_names, threads, sub] {
-    apply_threads(*threads);
-    if (!rl->src.params_file.empty()) {
-      run_rl_tune_command(*req, *rl, *rl_names, *sub);
-      return;
-    }
-    if (req->tracks.empty()) throw Failure("tune: expected --track, or --rl-params with --bag");
-    TuneCommandRequest r = *req;
-    InterruptGuard interrupt;  // Ctrl-C stops the tune: the best so far is printed and written
-    Progress progress("tune", "evaluations");
-    r.progress = [&progress](long done, long total) { progress.update(done, total); };
-    r.stop = interrupt.flag();
-    r.report = [&](const TuneCommandOutcome& outcome) {
-      progress.finish();
-      if (interrupt.raised()) std::fprintf(stderr, "odotune: interrupted; reporting the best so far\n");
-      std::visit([](const auto& o) { print_tune_outcome(o); }, outcome);
-    };
-    run_tune_command(r);
-    if (interrupt.raised()) throw Failure("interrupted", 130);
+    run_tune_subcommand(*req, *rl, *rl_names, *threads, *sub);
   });
 }
 

@@ -40,10 +40,11 @@ std::optional<double> meta_number(const Track& track, std::string_view key) {
   return v;
 }
 
-void fill_odometry(const Track& track, DiagInput& in) {
-  const auto& t = track.t();
+// The robot's nominal kinematics and the odometry's kind: wheel angles
+// (which need the radii and wheel base) or body velocities (commanded, or
+// measured as the source note says).
+void fill_kinematics(const Track& track, bool wheels, DiagInput& in) {
   const auto& meta = track.meta();
-  const bool wheels = track.has_ticks() || track.has_wheel_rates();
   if (wheels) {
     if (!meta.wheel_radius_left_m || !meta.wheel_radius_right_m || !meta.wheel_base_m)
       fail(track, "wheel odometry needs robot.wheel_radius_left, robot.wheel_radius_right and "
@@ -67,7 +68,13 @@ void fill_odometry(const Track& track, DiagInput& in) {
                           note->find("not measured") == std::string::npos;
     in.velocity_source = measured ? "velocity odometry" : "command";
   }
+}
 
+// The wheel angles from the first tick counts on, or integrated from the
+// wheel rates (trapezoids); nothing when the track has neither.
+void fill_wheel_angles(const Track& track, DiagInput& in) {
+  const auto& t = track.t();
+  const auto& meta = track.meta();
   if (track.has_ticks()) {
     if (!meta.ticks_per_rev || !(*meta.ticks_per_rev > 0))
       fail(track, "tick columns need robot.ticks_per_rev > 0 in the metadata");
@@ -98,27 +105,38 @@ void fill_odometry(const Track& track, DiagInput& in) {
       in.phi_r_rad.push_back(pr);
     }
   }
-  if (track.has_cmd()) {
-    std::vector<double> ct, cv, cw;
-    for (std::size_t i = 0; i < t.size(); ++i) {
-      if (!track.at(Col::v_cmd, i) || !track.at(Col::w_cmd, i)) continue;
-      ct.push_back(t[i]);
-      cv.push_back(track.col(Col::v_cmd)[i]);
-      cw.push_back(track.col(Col::w_cmd)[i]);
-    }
-    if (!wheels) {
-      in.odo_t_s = std::move(ct);
-      in.v_mps = std::move(cv);
-      in.w_radps = std::move(cw);
-    } else if (!ct.empty()) {
-      in.cmd_v_mps.reserve(in.odo_t_s.size());
-      in.cmd_w_radps.reserve(in.odo_t_s.size());
-      for (double x : in.odo_t_s) {
-        in.cmd_v_mps.push_back(interp_held(ct, cv, x));
-        in.cmd_w_radps.push_back(interp_held(ct, cw, x));
-      }
+}
+
+// The commands: the odometry itself without wheels, else held at each
+// odometry time.
+void fill_commands(const Track& track, bool wheels, DiagInput& in) {
+  const auto& t = track.t();
+  std::vector<double> ct, cv, cw;
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    if (!track.at(Col::v_cmd, i) || !track.at(Col::w_cmd, i)) continue;
+    ct.push_back(t[i]);
+    cv.push_back(track.col(Col::v_cmd)[i]);
+    cw.push_back(track.col(Col::w_cmd)[i]);
+  }
+  if (!wheels) {
+    in.odo_t_s = std::move(ct);
+    in.v_mps = std::move(cv);
+    in.w_radps = std::move(cw);
+  } else if (!ct.empty()) {
+    in.cmd_v_mps.reserve(in.odo_t_s.size());
+    in.cmd_w_radps.reserve(in.odo_t_s.size());
+    for (double x : in.odo_t_s) {
+      in.cmd_v_mps.push_back(interp_held(ct, cv, x));
+      in.cmd_w_radps.push_back(interp_held(ct, cw, x));
     }
   }
+}
+
+void fill_odometry(const Track& track, DiagInput& in) {
+  const bool wheels = track.has_ticks() || track.has_wheel_rates();
+  fill_kinematics(track, wheels, in);
+  fill_wheel_angles(track, in);
+  if (track.has_cmd()) fill_commands(track, wheels, in);
   if (in.odo_t_s.size() < 2)
     fail(track, "no usable odometry; expected at least 2 rows with ticks_l and ticks_r, "
                 "omega_l and omega_r, or v_cmd and w_cmd");

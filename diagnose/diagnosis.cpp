@@ -157,6 +157,203 @@ void attach_term_model(Diagnosis& d, const DiagInput& in, const DiagInput& scori
   d.findings.push_back(std::move(f));
 }
 
+// What the findings are replayed on: the input, the scoring input (the
+// selection's denoised reference, or `in` itself), the windows and their
+// length.
+struct ReplayContext {
+  const DiagInput& in;
+  const DiagInput& scoring;
+  const std::vector<Window>& windows;
+  double ws;
+};
+
+// The diagnosis of an input with too few reference samples to score any
+// window: no finding, said plainly.
+void mark_too_few_samples(Diagnosis& d, const DiagInput& in) {
+  const double nan = std::nan("");
+  d.baseline_pos_rmse_m = d.baseline_heading_rmse_rad = d.final_pos_rmse_m = d.final_heading_rmse_rad = nan;
+  d.note = fmt::format("{} reference sample(s) ({} ground truth, {} fixes): too few to compare a model against "
+                       "(a window needs {}); no finding",
+                       in.ref_t_s.size(), in.ref_gt_samples, in.ref_fix_samples,
+                       in.has_ref_heading() ? "2 poses" : "3 positions");
+}
+
+// Train / held-out split: the selection's, else its rule (last 30 %).
+void set_train_heldout_split(Diagnosis& d, const Selection& sel, const std::vector<Window>& windows,
+                             const DiagnoseOptions& o) {
+  d.train_windows = sel.train_windows, d.heldout_windows = sel.heldout_windows;
+  if (!sel.fitted) {
+    d.train_windows.clear(), d.heldout_windows.clear();
+    const auto n = static_cast<int>(windows.size());
+    const int n_train = n - static_cast<int>(std::round(o.select.heldout_fraction * n));
+    for (int i = 0; i < n; ++i) (i < n_train ? d.train_windows : d.heldout_windows).push_back(i);
+  }
+}
+
+// The parameters of the selected effect `se` in the chosen model `wheel`, with
+// their standard errors (a discrete parameter's: a quarter of its zone cell, or
+// the step search's fine step).
+void add_wheel_params(Finding& f, const SelectedEffect& se, const EffectSet& wheel,
+                      const std::vector<ParamSlot>& layout, const Selection& sel, const DiagnoseOptions& o) {
+  for (std::size_t k = 0; k < layout.size(); ++k) {
+    const ParamSlot& slot = layout[k];
+    if (slot.effect != se.effect) continue;
+    const std::string name = param_short_name(slot.name);
+    f.params.push_back({name, wheel.params(se.effect)[static_cast<std::size_t>(slot.index)]});
+    double se_value = std::nan("");
+    if (slot.fitted) {
+      for (const FitParam& fp : sel.final_fit.params)
+        if (fp.name == slot.name) se_value = fp.std_error;
+    } else {
+      f.discrete.push_back(name);
+      se_value = se.effect == Effect::radius_step ? o.select.step_fine_s : o.select.zone_cell_m / 4.0;
+    }
+    f.stderrs.push_back({name, se_value});
+  }
+}
+
+// The finding of one selected wheel effect: its parameters, the chosen model
+// against the model without it (train and held out), and where it acts.
+Finding wheel_finding(const ReplayContext& c, const Diagnosis& d, const EffectSet& wheel,
+                      const std::vector<ParamSlot>& layout, const SelectedEffect& se, const ReplayResult& fin,
+                      const ReplayResult& fin_s, const DiagnoseOptions& o) {
+  Finding f;
+  f.effect = std::string(effect_name(se.effect));
+  add_wheel_params(f, se, wheel, layout, d.selection, o);
+  EffectSet without = wheel;
+  without.disable(se.effect);
+  const ReplayResult wo_s = replay(c.scoring, without, c.ws);
+  f.train = scores(wo_s, fin_s, d.train_windows);
+  f.heldout = scores(wo_s, fin_s, d.heldout_windows);
+  f.explains = se.explains;
+  for (Effect r : se.rivals) f.rivals.emplace_back(effect_name(r));
+  f.evidence = d.selection.folds_are_recordings
+                   ? "model selection: cross-validated by leaving one recording out, fitted with Ceres"
+                   : "model selection: cross-validated over time blocks, fitted with Ceres";
+  const ReplayResult wo = replay(c.in, without, c.ws);
+  const Location loc = locate(residual_series(c.in, c.windows, wo), c.in.ref_sigma_m, o.locate);
+  f.segments = loc.segments, f.regions = loc.regions, f.conditions = loc.phrase;
+  if (f.segments.empty()) f.segments = helped_windows(wo, fin);
+  if (f.conditions.empty()) f.conditions = description(se.effect);
+  return f;
+}
+
+// A gyro finding scored by the fixes check's own split and windows
+// (gyro_fixes_check.h): held out = its test of this parameter, train = its
+// in-sample fit.
+void score_gyro_via_fixes(Finding& f, const GyroFixesCheck& g, Effect effect, const Verdict& v) {
+  const HeldoutComparison& h = effect == Effect::gyro_bias ? g.bias_own : g.scale_own;
+  f.train = {g.nominal_pos_rmse_m, g.fitted_pos_rmse_m};
+  f.heldout = {h.ref_pos_rmse_m, h.alt_pos_rmse_m};
+  f.evidence = fmt::format("gyro-heading dead reckoning against the fixes over {} windows of {:g} s, {:.1f} "
+                           "standard errors from the no-op value, held-out p = {:.1g}",
+                           g.used_windows.size(), g.window_s, std::abs(v.z), h.p);
+}
+
+// The chosen lateral_skid acts on the gyro-heading replay too (v_y = -k v w
+// with the gyro's w); the other wheel effects change travel or wheel heading,
+// which this replay takes from the nominal wheels and the gyro.
+EffectSet gyro_replay_body(const EffectSet& wheel) {
+  EffectSet body;
+  if (wheel.on(Effect::lateral_skid))
+    body.enable(Effect::lateral_skid).set(Effect::lateral_skid, "k", wheel.get(Effect::lateral_skid, "k"));
+  return body;
+}
+
+// Gyro findings: the sensor check against the reference heading, or with
+// position fixes only, gyro-heading dead reckoning against the fixes. Each
+// material one goes into the findings and the model, the others into
+// `immaterial`.
+void add_gyro_findings(Diagnosis& d, const ReplayContext& c, const EffectSet& wheel, const DiagnoseOptions& o) {
+  const DiagInput& in = c.in;
+  const bool via_fixes = !in.has_ref_heading() && !in.gyro_t_s.empty();
+  if (via_fixes) {
+    d.gyro_fixes = check_gyro_with_fixes(in, o.gyro_fixes);
+    d.has_gyro_fixes = true;
+  }
+  const GyroCheck& gc = via_fixes ? d.gyro_fixes.gyro : d.sensors.gyro;
+  if (!gc.available || !(gc.bias.departs() || gc.scale.departs())) return;
+  const double b = gc.bias.departs() ? gc.bias.value : 0.0;
+  const double s = gc.scale.departs() ? gc.scale.value : 1.0;
+  const EffectSet body = gyro_replay_body(wheel);
+  // Corrected by every gyro finding: the "after" of each (replayed once).
+  const ReplayResult after_gyro = via_fixes ? ReplayResult{}
+                                            : replay(gyro_heading_input(c.scoring, b, s), body, c.ws);
+  const std::pair<Effect, const Verdict*> checks[] = {{Effect::gyro_bias, &gc.bias},
+                                                      {Effect::gyro_scale, &gc.scale}};
+  for (const auto& [effect, v] : checks) {
+    if (!v->departs()) continue;
+    Finding f;
+    f.effect = std::string(effect_name(effect));
+    const std::string name = effect == Effect::gyro_bias ? "b" : "s";
+    f.params.push_back({name, v->value});
+    f.stderrs.push_back({name, v->std_error});
+    if (via_fixes) {
+      score_gyro_via_fixes(f, d.gyro_fixes, effect, *v);
+    } else {
+      const DiagInput without = effect == Effect::gyro_bias ? gyro_heading_input(c.scoring, 0.0, s)
+                                                            : gyro_heading_input(c.scoring, b, 1.0);
+      const ReplayResult before = replay(without, body, c.ws);
+      f.train = scores(before, after_gyro, d.train_windows);
+      f.heldout = scores(before, after_gyro, d.heldout_windows);
+      f.evidence = fmt::format(
+          "gyro against the reference yaw rate: robust regression over {} bins, {:.1f} standard "
+          "errors from the no-op value",
+          gc.bins, std::abs(v->z));
+    }
+    f.explains = f.train.before_pos_rmse_m > 0.0
+                     ? std::max(0.0, 1.0 - sq(f.train.after_pos_rmse_m / f.train.before_pos_rmse_m))
+                     : 0.0;
+    // Its floor against the gyro-heading replay without this correction.
+    const double floor_g = materiality_floor_m(in.ref_sigma_m, f.heldout.before_pos_rmse_m,
+                                               o.select.materiality);
+    if (!is_material(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m, floor_g)) {
+      d.immaterial.push_back(fmt::format(
+          "{} {} = {:.3g}: removes {:.3g} mm of held-out position error, "
+          "floor {:.3g} mm",
+          f.effect, name, v->value,
+          1e3 * removed_error_m(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m), 1e3 * floor_g));
+      continue;
+    }
+    f.segments.push_back({in.ref_t_s.front(), in.ref_t_s.back(), 0.0, 0});
+    f.conditions = description(effect);
+    d.model.enable(effect).set(effect, name, v->value);
+    d.findings.push_back(std::move(f));
+  }
+}
+
+// What the chosen model leaves: located growth carrying a real share of
+// its squared error. A finding only when something reproduces it on data
+// the fit did not see (the term search, attach_term_model); growth that
+// nothing predicts on held-out windows (random wheel slip, noise the model
+// lacks) is listed in `not_reproduced` instead (diagnosis.h).
+std::optional<Finding> located_unexplained(const Diagnosis& d, const DiagInput& in, const ReplayResult& base,
+                                           const ReplayResult& fin, const DiagnoseOptions& o) {
+  std::optional<Finding> located;
+  const Location& la = d.located_after;
+  if (la.segments.empty()) return located;
+  const Inside ins = inside_segments(d.after, la.segments);
+  const double share = ins.share;
+  // Material too: the chosen model's held-out error must itself stand
+  // unexplained_min_sigmas reference sigmas and the floor above zero (a
+  // null track's 1 mm left after dead reckoning is not a finding).
+  const bool material = d.heldout.after_pos_rmse_m >=
+                        std::max(o.unexplained_min_sigmas * in.ref_sigma_m, d.floor_m);
+  if (share >= o.unexplained_min_share && ins.rmse_m >= o.unexplained_min_sigmas * in.ref_sigma_m && material) {
+    Finding f;
+    f.effect = "unexplained";
+    f.segments = la.segments, f.regions = la.regions, f.conditions = la.phrase;
+    // Share of the baseline's squared error that remains inside the segments.
+    f.explains = base.pos_rmse_m > 0.0 ? share * sq(fin.pos_rmse_m / base.pos_rmse_m) : 0.0;
+    f.train = d.train, f.heldout = d.heldout;
+    f.evidence = fmt::format("the chosen model's residuals still grow faster than noise there ({:.0f} % of its "
+                             "squared error)",
+                             100.0 * share);
+    located = std::move(f);
+  }
+  return located;
+}
+
 }  // namespace
 
 bool DiagnoseOptions::IsValid(std::string* why) const {
@@ -211,14 +408,7 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   try {
     windows = make_windows(in, ws);
   } catch (const std::invalid_argument&) {
-    // Too few reference samples to score any window: no finding, said plainly.
-    const double nan = std::nan("");
-    d.baseline_pos_rmse_m = d.baseline_heading_rmse_rad = d.final_pos_rmse_m = d.final_heading_rmse_rad = nan;
-    d.note = fmt::format(
-        "{} reference sample(s) ({} ground truth, {} fixes): too few to compare a model against "
-        "(a window needs {}); no finding",
-        in.ref_t_s.size(), in.ref_gt_samples, in.ref_fix_samples,
-        in.has_ref_heading() ? "2 poses" : "3 positions");
+    mark_too_few_samples(d, in);
     d.timing.total_s = seconds_since(t_all);
     return d;
   }
@@ -237,6 +427,7 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   const SelectionInput si = selection_input(in, o.select);
   const bool use_denoised = si.stride > 1;
   const DiagInput& scoring = use_denoised ? si.input : in;
+  const ReplayContext c{in, scoring, windows, ws};
   d.scored_on_denoised_reference = use_denoised;
   t0 = Clock::now();
   const ReplayResult base = replay(in, nominal, ws);
@@ -248,163 +439,23 @@ Diagnosis diagnose(const DiagInput& in, const DiagnoseOptions& o) {
   // Wheel-odometry findings (each material on the selection's cross-validated
   // held-out predictions: select.h the materiality rule and its backward pass).
   const EffectSet wheel = sel.fitted ? sel.final_fit.effects : nominal;
-  // Train / held-out split: the selection's, else its rule (last 30 %).
-  d.train_windows = sel.train_windows, d.heldout_windows = sel.heldout_windows;
-  if (!sel.fitted) {
-    d.train_windows.clear(), d.heldout_windows.clear();
-    const auto n = static_cast<int>(windows.size());
-    const int n_train = n - static_cast<int>(std::round(o.select.heldout_fraction * n));
-    for (int i = 0; i < n; ++i) (i < n_train ? d.train_windows : d.heldout_windows).push_back(i);
-  }
+  set_train_heldout_split(d, sel, windows, o);
   const ReplayResult fin = replay(in, wheel, ws);
   const ReplayResult fin_s = use_denoised ? replay(scoring, wheel, ws) : fin;
   d.train = scores(base_s, fin_s, d.train_windows);
   d.heldout = scores(base_s, fin_s, d.heldout_windows);
   d.floor_m = materiality_floor_m(in.ref_sigma_m, d.heldout.before_pos_rmse_m, o.select.materiality);
   const std::vector<ParamSlot> layout = param_layout(wheel);
-  for (const SelectedEffect& se : sel.effects) {
-    Finding f;
-    f.effect = std::string(effect_name(se.effect));
-    for (std::size_t k = 0; k < layout.size(); ++k) {
-      const ParamSlot& slot = layout[k];
-      if (slot.effect != se.effect) continue;
-      const std::string name = param_short_name(slot.name);
-      f.params.push_back({name, wheel.params(se.effect)[static_cast<std::size_t>(slot.index)]});
-      double se_value = std::nan("");
-      if (slot.fitted) {
-        for (const FitParam& fp : sel.final_fit.params)
-          if (fp.name == slot.name) se_value = fp.std_error;
-      } else {
-        f.discrete.push_back(name);
-        se_value = se.effect == Effect::radius_step ? o.select.step_fine_s : o.select.zone_cell_m / 4.0;
-      }
-      f.stderrs.push_back({name, se_value});
-    }
-    EffectSet without = wheel;
-    without.disable(se.effect);
-    const ReplayResult wo_s = replay(scoring, without, ws);
-    f.train = scores(wo_s, fin_s, d.train_windows);
-    f.heldout = scores(wo_s, fin_s, d.heldout_windows);
-    f.explains = se.explains;
-    for (Effect r : se.rivals) f.rivals.emplace_back(effect_name(r));
-    f.evidence = d.selection.folds_are_recordings
-                     ? "model selection: cross-validated by leaving one recording out, fitted with Ceres"
-                     : "model selection: cross-validated over time blocks, fitted with Ceres";
-    const ReplayResult wo = replay(in, without, ws);
-    const Location loc = locate(residual_series(in, windows, wo), in.ref_sigma_m, o.locate);
-    f.segments = loc.segments, f.regions = loc.regions, f.conditions = loc.phrase;
-    if (f.segments.empty()) f.segments = helped_windows(wo, fin);
-    if (f.conditions.empty()) f.conditions = description(se.effect);
-    d.findings.push_back(std::move(f));
-  }
+  for (const SelectedEffect& se : sel.effects)
+    d.findings.push_back(wheel_finding(c, d, wheel, layout, se, fin, fin_s, o));
   d.final_pos_rmse_m = fin.pos_rmse_m, d.final_heading_rmse_rad = fin.heading_rmse_rad;
   d.after = residual_series(in, windows, fin);
   d.located_after = locate(d.after, in.ref_sigma_m, o.locate);
   d.model = wheel;
 
-  // Gyro findings: the sensor check against the reference heading, or with
-  // position fixes only, gyro-heading dead reckoning against the fixes.
-  const bool via_fixes = !in.has_ref_heading() && !in.gyro_t_s.empty();
-  if (via_fixes) {
-    d.gyro_fixes = check_gyro_with_fixes(in, o.gyro_fixes);
-    d.has_gyro_fixes = true;
-  }
-  const GyroCheck& gc = via_fixes ? d.gyro_fixes.gyro : d.sensors.gyro;
-  if (gc.available && (gc.bias.departs() || gc.scale.departs())) {
-    const double b = gc.bias.departs() ? gc.bias.value : 0.0;
-    const double s = gc.scale.departs() ? gc.scale.value : 1.0;
-    // The chosen lateral_skid acts on the gyro-heading replay too (v_y =
-    // -k v w with the gyro's w); the other wheel effects change travel or
-    // wheel heading, which this replay takes from the nominal wheels and
-    // the gyro.
-    EffectSet body;
-    if (wheel.on(Effect::lateral_skid))
-      body.enable(Effect::lateral_skid).set(Effect::lateral_skid, "k", wheel.get(Effect::lateral_skid, "k"));
-    // Corrected by every gyro finding: the "after" of each (replayed once).
-    const ReplayResult after_gyro = via_fixes ? ReplayResult{}
-                                              : replay(gyro_heading_input(scoring, b, s), body, ws);
-    const std::pair<Effect, const Verdict*> checks[] = {{Effect::gyro_bias, &gc.bias},
-                                                        {Effect::gyro_scale, &gc.scale}};
-    for (const auto& [effect, v] : checks) {
-      if (!v->departs()) continue;
-      Finding f;
-      f.effect = std::string(effect_name(effect));
-      const std::string name = effect == Effect::gyro_bias ? "b" : "s";
-      f.params.push_back({name, v->value});
-      f.stderrs.push_back({name, v->std_error});
-      if (via_fixes) {
-        // The check's own split and windows (gyro_fixes_check.h): held out =
-        // its test of this parameter, train = its in-sample fit.
-        const GyroFixesCheck& g = d.gyro_fixes;
-        const HeldoutComparison& h = effect == Effect::gyro_bias ? g.bias_own : g.scale_own;
-        f.train = {g.nominal_pos_rmse_m, g.fitted_pos_rmse_m};
-        f.heldout = {h.ref_pos_rmse_m, h.alt_pos_rmse_m};
-        f.evidence = fmt::format(
-            "gyro-heading dead reckoning against the fixes over {} windows of {:g} s, {:.1f} "
-            "standard errors from the no-op value, held-out p = {:.1g}",
-            g.used_windows.size(), g.window_s, std::abs(v->z), h.p);
-      } else {
-        const DiagInput without = effect == Effect::gyro_bias ? gyro_heading_input(scoring, 0.0, s)
-                                                              : gyro_heading_input(scoring, b, 1.0);
-        const ReplayResult before = replay(without, body, ws);
-        f.train = scores(before, after_gyro, d.train_windows);
-        f.heldout = scores(before, after_gyro, d.heldout_windows);
-        f.evidence = fmt::format(
-            "gyro against the reference yaw rate: robust regression over {} bins, {:.1f} standard "
-            "errors from the no-op value",
-            gc.bins, std::abs(v->z));
-      }
-      f.explains = f.train.before_pos_rmse_m > 0.0
-                       ? std::max(0.0, 1.0 - sq(f.train.after_pos_rmse_m / f.train.before_pos_rmse_m))
-                       : 0.0;
-      // Its floor against the gyro-heading replay without this correction.
-      const double floor_g = materiality_floor_m(in.ref_sigma_m, f.heldout.before_pos_rmse_m,
-                                                 o.select.materiality);
-      if (!is_material(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m, floor_g)) {
-        d.immaterial.push_back(fmt::format(
-            "{} {} = {:.3g}: removes {:.3g} mm of held-out position error, "
-            "floor {:.3g} mm",
-            f.effect, name, v->value,
-            1e3 * removed_error_m(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m), 1e3 * floor_g));
-        continue;
-      }
-      f.segments.push_back({in.ref_t_s.front(), in.ref_t_s.back(), 0.0, 0});
-      f.conditions = description(effect);
-      d.model.enable(effect).set(effect, name, v->value);
-      d.findings.push_back(std::move(f));
-    }
-  }
+  add_gyro_findings(d, c, wheel, o);
 
-  // What the chosen model leaves: located growth carrying a real share of
-  // its squared error. A finding only when something reproduces it on data
-  // the fit did not see (the term search below); growth that nothing
-  // predicts on held-out windows (random wheel slip, noise the model lacks)
-  // is listed in `not_reproduced` instead (diagnosis.h).
-  std::optional<Finding> located;
-  const Location& la = d.located_after;
-  if (!la.segments.empty()) {
-    const Inside ins = inside_segments(d.after, la.segments);
-    const double share = ins.share;
-    // Material too: the chosen model's held-out error must itself stand
-    // unexplained_min_sigmas reference sigmas and the floor above zero (a
-    // null track's 1 mm left after dead reckoning is not a finding).
-    const bool material = d.heldout.after_pos_rmse_m >=
-                          std::max(o.unexplained_min_sigmas * in.ref_sigma_m, d.floor_m);
-    if (share >= o.unexplained_min_share && ins.rmse_m >= o.unexplained_min_sigmas * in.ref_sigma_m &&
-        material) {
-      Finding f;
-      f.effect = "unexplained";
-      f.segments = la.segments, f.regions = la.regions, f.conditions = la.phrase;
-      // Share of the baseline's squared error that remains inside the segments.
-      f.explains = base.pos_rmse_m > 0.0 ? share * sq(fin.pos_rmse_m / base.pos_rmse_m) : 0.0;
-      f.train = d.train, f.heldout = d.heldout;
-      f.evidence = fmt::format(
-          "the chosen model's residuals still grow faster than noise there ({:.0f} % of its "
-          "squared error)",
-          100.0 * share);
-      located = std::move(f);
-    }
-  }
+  std::optional<Finding> located = located_unexplained(d, in, base, fin, o);
   const auto t_terms = Clock::now();
   attach_term_model(d, in, scoring, wheel, o, located);
   d.timing.terms_s = seconds_since(t_terms);

@@ -94,8 +94,11 @@ std::string finding_size(const Finding& f) {
   return s;
 }
 
-std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
-  std::vector<std::string> lines;
+namespace {
+
+// The summary's first line: what the nominal model leaves out and its
+// held-out proof, else the unexplained disagreement, else why nothing.
+std::string headline(const Diagnosis& d) {
   std::vector<const Finding*> effects;
   const Finding* unexplained = nullptr;
   for (const Finding& f : d.findings) {
@@ -122,82 +125,97 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
       proof = fmt::format("modelling {} changes the held-out position error from {} to {} ({:+.0f} %)",
                           effects.size() == 1 ? "it" : "them", metres(h.before_pos_rmse_m),
                           metres(h.after_pos_rmse_m), pct_change(h));
-    lines.push_back(fmt::format("{}: the nominal model leaves out {}; {}.", d.track, what, proof));
-  } else if (unexplained) {
-    lines.push_back(
-        unexplained->model && unexplained->model->proven
-            ? fmt::format("{}: the model and the recording disagree beyond sensor noise, no effect of "
-                          "physics-effects.md explains it, and terms outside that list reproduce it: {}.",
-                          d.track, unexplained->model->formula)
-            : fmt::format(
-                  "{}: the model and the recording disagree at {}{} beyond sensor noise, and no effect of "
-                  "physics-effects.md explains it{}.",
-                  d.track, spans(unexplained->segments),
-                  unexplained->conditions.empty() ? "" : " (" + unexplained->conditions + ")",
-                  unexplained->model ? "; terms fitted to it are not proven on the held-out recordings" : ""));
-  } else if (!d.not_confirmed.empty()) {
-    lines.push_back(fmt::format("{}: nothing proven — what the fitted recordings show does not predict the "
-                                "held-out recordings (below).",
-                                d.track));
-  } else {
-    lines.push_back(
-        fmt::format("{}: nothing left out — the nominal model explains the recording within sensor noise "
-                    "(held-out position error {} over windows of {:g} s).",
-                    d.track, metres(d.heldout.before_pos_rmse_m), d.window_s));
+    return fmt::format("{}: the nominal model leaves out {}; {}.", d.track, what, proof);
   }
+  if (unexplained)
+    return unexplained->model && unexplained->model->proven
+               ? fmt::format("{}: the model and the recording disagree beyond sensor noise, no effect of "
+                             "physics-effects.md explains it, and terms outside that list reproduce it: {}.",
+                             d.track, unexplained->model->formula)
+               : fmt::format(
+                     "{}: the model and the recording disagree at {}{} beyond sensor noise, and no effect of "
+                     "physics-effects.md explains it{}.",
+                     d.track, spans(unexplained->segments),
+                     unexplained->conditions.empty() ? "" : " (" + unexplained->conditions + ")",
+                     unexplained->model ? "; terms fitted to it are not proven on the held-out recordings"
+                                        : "");
+  if (!d.not_confirmed.empty())
+    return fmt::format("{}: nothing proven — what the fitted recordings show does not predict the "
+                       "held-out recordings (below).",
+                       d.track);
+  return fmt::format("{}: nothing left out — the nominal model explains the recording within sensor noise "
+                     "(held-out position error {} over windows of {:g} s).",
+                     d.track, metres(d.heldout.before_pos_rmse_m), d.window_s);
+}
 
-  for (std::size_t i = 0; i < d.findings.size(); ++i) {
-    const Finding& f = d.findings[i];
-    std::string line = fmt::format("  {}. {}", i + 1, f.effect);
-    if (!f.params.empty()) line += " " + finding_size(f);
-    line += fmt::format(" — explains {:.{}f} %; held-out {} → {}", 100.0 * f.explains,
-                        f.explains < 0.01 ? 2 : 0, metres(f.heldout.before_pos_rmse_m),
-                        metres(f.heldout.after_pos_rmse_m));
-    lines.push_back(line);
-    if (f.heldout_test) lines.push_back("     held-out recordings: " + describe(*f.heldout_test));
-    if (!f.segments.empty()) lines.push_back("     where: " + spans(f.segments));
-    for (const MapRegion& r : f.regions)
-      lines.push_back(fmt::format("     region: x {:.2f}…{:.2f} m, y {:.2f}…{:.2f} m", r.x0_m, r.x1_m, r.y0_m,
-                                  r.y1_m));
-    if (!f.conditions.empty()) lines.push_back("     when: " + f.conditions);
-    if (!d.velocity_source.empty()) {
-      const std::string v = velocity_terms(f, d.velocity_source);
-      if (!v.empty()) lines.push_back("     in the " + d.velocity_source + "'s terms: " + v);
-    }
-    if (f.model) {  // terms outside physics-effects.md (term_search.h)
-      lines.push_back("     model: " + f.model->formula +
-                      (f.model->proven ? "" : " (fits the fitted data, not proven elsewhere)"));
-      std::string t;
-      for (const FoundTerm& ft : f.model->terms)
-        t += fmt::format("{}{} on {} = {}", t.empty() ? "" : ", ", ft.name, sim::target_name(ft.term.target),
-                         plus_minus(ft.term.coef, ft.std_error));
-      lines.push_back(fmt::format("     terms: {} (held-out {} → {})", t,
-                                  metres(f.model->heldout.before_pos_rmse_m),
-                                  metres(f.model->heldout.after_pos_rmse_m)));
-      if (f.model->other_recordings)
-        lines.push_back(fmt::format("     on the held-out recordings: {} → {}",
-                                    metres(f.model->other_recordings->before_pos_rmse_m),
-                                    metres(f.model->other_recordings->after_pos_rmse_m)));
-    }
-    if (!f.rivals.empty()) {
-      std::string r;
-      for (const std::string& name : f.rivals) r += (r.empty() ? "" : ", ") + name;
-      lines.push_back("     the data cannot rule out: " + r);
-    }
-    lines.push_back("     evidence: " + f.evidence);
+// A finding's term model (terms outside physics-effects.md, term_search.h):
+// its formula, its terms and their held-out errors.
+void add_model_lines(const TermModel& m, std::vector<std::string>& lines) {
+  lines.push_back("     model: " + m.formula +
+                  (m.proven ? "" : " (fits the fitted data, not proven elsewhere)"));
+  std::string t;
+  for (const FoundTerm& ft : m.terms)
+    t += fmt::format("{}{} on {} = {}", t.empty() ? "" : ", ", ft.name, sim::target_name(ft.term.target),
+                     plus_minus(ft.term.coef, ft.std_error));
+  lines.push_back(fmt::format("     terms: {} (held-out {} → {})", t, metres(m.heldout.before_pos_rmse_m),
+                              metres(m.heldout.after_pos_rmse_m)));
+  if (m.other_recordings)
+    lines.push_back(fmt::format("     on the held-out recordings: {} → {}",
+                                metres(m.other_recordings->before_pos_rmse_m),
+                                metres(m.other_recordings->after_pos_rmse_m)));
+}
+
+// Finding number i (from 0): its size, share and held-out errors, then where,
+// when and why.
+void add_finding_lines(const Diagnosis& d, std::size_t i, std::vector<std::string>& lines) {
+  const Finding& f = d.findings[i];
+  std::string line = fmt::format("  {}. {}", i + 1, f.effect);
+  if (!f.params.empty()) line += " " + finding_size(f);
+  line += fmt::format(" — explains {:.{}f} %; held-out {} → {}", 100.0 * f.explains, f.explains < 0.01 ? 2 : 0,
+                      metres(f.heldout.before_pos_rmse_m), metres(f.heldout.after_pos_rmse_m));
+  lines.push_back(line);
+  if (f.heldout_test) lines.push_back("     held-out recordings: " + describe(*f.heldout_test));
+  if (!f.segments.empty()) lines.push_back("     where: " + spans(f.segments));
+  for (const MapRegion& r : f.regions)
+    lines.push_back(fmt::format("     region: x {:.2f}…{:.2f} m, y {:.2f}…{:.2f} m", r.x0_m, r.x1_m, r.y0_m,
+                                r.y1_m));
+  if (!f.conditions.empty()) lines.push_back("     when: " + f.conditions);
+  if (!d.velocity_source.empty()) {
+    const std::string v = velocity_terms(f, d.velocity_source);
+    if (!v.empty()) lines.push_back("     in the " + d.velocity_source + "'s terms: " + v);
   }
-  for (const std::string& s : d.immaterial) lines.push_back("not a finding (immaterial): " + s);
-  for (const std::string& s : d.not_reproduced) lines.push_back("not a finding (not reproduced): " + s);
-  for (const std::string& s : d.not_confirmed) lines.push_back("not a finding (not confirmed): " + s);
-  for (const std::string& s : d.sensor_notes) lines.push_back("sensor check: " + s);
+  if (f.model) add_model_lines(*f.model, lines);
+  if (!f.rivals.empty()) {
+    std::string r;
+    for (const std::string& name : f.rivals) r += (r.empty() ? "" : ", ") + name;
+    lines.push_back("     the data cannot rule out: " + r);
+  }
+  lines.push_back("     evidence: " + f.evidence);
+}
+
+// The last line: the replay's windows, reference and errors.
+std::string replay_line(const Diagnosis& d) {
   const std::string against = d.ref_gt_samples > 0 && d.ref_fix_samples > 0
                                   ? fmt::format("{} ground-truth positions and {} position fixes",
                                                 d.ref_gt_samples, d.ref_fix_samples)
                               : d.reference == ReferenceKind::gt ? "ground truth"
                                                                  : "position fixes";
-  lines.push_back(fmt::format(
-      "replay: windows of {:g} s against {}; position RMSE nominal {} → chosen model {}{}", d.window_s, against,
-      metres(d.baseline_pos_rmse_m), metres(d.final_pos_rmse_m), d.note.empty() ? "" : "; note: " + d.note));
+  return fmt::format("replay: windows of {:g} s against {}; position RMSE nominal {} → chosen model {}{}",
+                     d.window_s, against, metres(d.baseline_pos_rmse_m), metres(d.final_pos_rmse_m),
+                     d.note.empty() ? "" : "; note: " + d.note);
+}
+
+}  // namespace
+
+std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
+  std::vector<std::string> lines;
+  lines.push_back(headline(d));
+  for (std::size_t i = 0; i < d.findings.size(); ++i) add_finding_lines(d, i, lines);
+  for (const std::string& s : d.immaterial) lines.push_back("not a finding (immaterial): " + s);
+  for (const std::string& s : d.not_reproduced) lines.push_back("not a finding (not reproduced): " + s);
+  for (const std::string& s : d.not_confirmed) lines.push_back("not a finding (not confirmed): " + s);
+  for (const std::string& s : d.sensor_notes) lines.push_back("sensor check: " + s);
+  lines.push_back(replay_line(d));
   return lines;
 }
 

@@ -288,6 +288,242 @@ bool full_rank(ceres::Problem& problem) {
   return ev.minCoeff() > kMinEigenRatio * ev.maxCoeff();
 }
 
+// Whether options.held_effects keeps `e`'s parameters at their given values.
+bool held_fixed(const FitOptions& options, Effect e) {
+  return std::find(options.held_effects.begin(), options.held_effects.end(), e) != options.held_effects.end();
+}
+
+// Throws unless `model` was built for `in` and holds exactly the effects of `which`.
+void check_model_matches(const EffectModel& model, const DiagInput& in, const EffectSet& which) {
+  for (int e = 0; e < kNumEffects; ++e)
+    if (model.structure().on(static_cast<Effect>(e)) != which.on(static_cast<Effect>(e)))
+      throw std::invalid_argument(fmt::format("fit: the model holds '{}', the set to fit '{}'",
+                                              model.structure().to_string(), which.to_string()));
+  if (model.num_nodes() != in.odo_t_s.size())
+    throw std::invalid_argument("fit: the model was built for another track");
+}
+
+// The held-out and training windows, checked against the track's `n_win`
+// windows; no training windows given: every window not held out.
+struct WindowSplit {
+  std::set<int> held;
+  std::vector<int> train;
+};
+WindowSplit split_windows(const std::vector<int>& train_windows, const std::vector<int>& heldout_windows,
+                          int n_win, double window_s) {
+  WindowSplit s;
+  for (int w : heldout_windows) {
+    if (w < 0 || w >= n_win)
+      throw std::invalid_argument(fmt::format("held-out window {} does not exist (the track has {} "
+                                              "windows of {} s)",
+                                              w, n_win, window_s));
+    s.held.insert(w);
+  }
+  for (int w : train_windows) {
+    if (w < 0 || w >= n_win)
+      throw std::invalid_argument(fmt::format("training window {} does not exist (the track has {} "
+                                              "windows of {} s)",
+                                              w, n_win, window_s));
+    if (s.held.count(w))
+      throw std::invalid_argument(fmt::format("window {} is both a training and a held-out window", w));
+    s.train.push_back(w);
+  }
+  if (train_windows.empty())
+    for (int w = 0; w < n_win; ++w)
+      if (!s.held.count(w)) s.train.push_back(w);
+  if (s.train.empty()) throw std::invalid_argument("fit: no training window");
+  return s;
+}
+
+// What every window's cost shares; clamps the free entries of `init` into
+// their bounds. Throws when no parameter is free.
+CostShared make_shared_cost(const EffectModel& model, const DiagInput& in, const EffectSet& which,
+                            const FitOptions& options, Anchoring mode, std::vector<double>& init) {
+  const auto& layout = model.layout();
+  CostShared sh;
+  sh.model = &model;
+  sh.in = &in;
+  for (std::size_t i = 0; i < layout.size(); ++i)
+    if (layout[i].fitted && !held_fixed(options, layout[i].effect)) {
+      init[i] = std::clamp(init[i], layout[i].lower, layout[i].upper);
+      sh.free_pos.push_back(static_cast<int>(i));
+    }
+  if (sh.free_pos.empty())
+    throw std::invalid_argument(fmt::format("fit: effects '{}' have no parameter that dead "
+                                            "reckoning can fit",
+                                            which.to_string()));
+  sh.all = init;
+  sh.free_anchor = mode == Anchoring::free;
+  sh.heading = in.has_ref_heading() && options.use_heading;
+  sh.inv_sigma_m = 1.0 / in.ref_sigma_m;
+  sh.inv_sigma_rad = sh.heading ? 1.0 / in.ref_sigma_rad : 1.0;
+  sh.loss = options.loss;
+  sh.c = options.loss_scale;
+  return sh;
+}
+
+// The window's cost at the starting values, its free anchor fitted alone
+// (a rigid pose against the window's samples converges in a few steps).
+double settled_cost(const CostShared& sh, int active, const Window& w, std::vector<double>& free_values,
+                    std::array<double, 3>& anchor) {
+  ceres::Problem alone;
+  const Pose<double> fixed = sh.free_anchor ? Pose<double>{} : reference_pose_at(*sh.in, w.t_begin_s);
+  double cost = 0.0;
+  if (sh.free_anchor) {
+    alone.AddResidualBlock(make_cost(active, &sh, w, fixed), nullptr, free_values.data(), anchor.data());
+    alone.SetParameterBlockConstant(free_values.data());
+    ceres::Solver::Options so = deterministic_solver_options(5, FitTolerance::diagnosis);
+    so.function_tolerance = 1e-8;
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, &alone, &summary);
+    cost = summary.final_cost;
+  } else {
+    alone.AddResidualBlock(make_cost(active, &sh, w, fixed), nullptr, free_values.data());
+    alone.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
+  }
+  return cost;
+}
+
+// The solver's options: bounded, and with free anchors over several windows
+// the anchors eliminated first.
+ceres::Solver::Options fit_solver_options(const FitOptions& options, bool free_anchor,
+                                          std::vector<std::array<double, 3>>& anchors,
+                                          std::vector<double>& free_values) {
+  ceres::Solver::Options so = deterministic_solver_options(options.max_iterations, FitTolerance::diagnosis);
+  // The bounds make Ceres run a projected Armijo line search on every trust
+  // region step; with cubic interpolation (the default) its first trial
+  // evaluates the Jacobian too, a second Jacobian per iteration. Quadratic
+  // interpolation needs the cost only (the step is the same whenever the
+  // full step satisfies Armijo, as it mostly does).
+  so.line_search_interpolation_type = ceres::QUADRATIC;
+  if (free_anchor && anchors.size() > 1) {
+    // Each window's anchor meets only its own residuals: eliminate them
+    // (Schur complement) and solve densely for the effect parameters; a
+    // dense QR of the whole Jacobian costs O(rows * (3 windows)^2).
+    so.linear_solver_type = ceres::DENSE_SCHUR;
+    auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+    for (auto& a : anchors) ordering->AddElementToGroup(a.data(), 0);
+    ordering->AddElementToGroup(free_values.data(), 1);
+    so.linear_solver_ordering = ordering;
+  }
+  return so;
+}
+
+// The free parameters' variances (their covariance's diagonal scaled by
+// `s2`), NaN without standard errors; sets out.rank_deficient when the
+// covariance cannot be computed.
+std::vector<double> free_variances(ceres::Problem& problem, std::vector<double>& free_values, double s2,
+                                   const FitOptions& options, FitSummary& out) {
+  std::vector<double> var(free_values.size(), std::nan(""));
+  if (options.standard_errors) {
+    ceres::Covariance::Options co;
+    co.algorithm_type = ceres::DENSE_SVD;
+    co.num_threads = 1;
+    ceres::Covariance cov(co);
+    std::vector<std::pair<const double*, const double*>> blocks = {{free_values.data(), free_values.data()}};
+    std::vector<double> c(free_values.size() * free_values.size());
+    if (full_rank(problem) && cov.Compute(blocks, &problem) &&
+        cov.GetCovarianceBlock(free_values.data(), free_values.data(), c.data())) {
+      for (std::size_t j = 0; j < var.size(); ++j) var[j] = c[j * var.size() + j] * s2;
+    } else {
+      out.rank_deficient = true;
+    }
+  }
+  return var;
+}
+
+// out.params: each parameter's start, fitted value, standard error and
+// whether it ended at a bound.
+void add_fitted_params(FitSummary& out, const std::vector<ParamSlot>& layout, const EffectSet& which,
+                       const std::vector<double>& init, const std::vector<double>& fitted,
+                       const std::vector<double>& var, const FitOptions& options) {
+  const std::vector<double> orig = pack(which);
+  for (std::size_t i = 0, j = 0; i < layout.size(); ++i) {
+    FitParam p;
+    p.name = layout[i].name;
+    p.fitted = layout[i].fitted && !held_fixed(options, layout[i].effect);
+    p.initial = p.fitted ? init[i] : orig[i];
+    p.value = fitted[i];
+    p.std_error = std::nan("");
+    if (p.fitted) {
+      if (std::isfinite(var[j]) && var[j] >= 0.0) p.std_error = std::sqrt(var[j]);
+      const double tol = 1e-9 * (layout[i].upper - layout[i].lower);
+      p.at_bound = p.value <= layout[i].lower + tol || p.value >= layout[i].upper - tol;
+      ++j;
+    }
+    out.params.push_back(p);
+  }
+  if (!out.rank_deficient && options.standard_errors)
+    for (const FitParam& p : out.params)
+      if (p.fitted && !std::isfinite(p.std_error)) out.rank_deficient = true;
+}
+
+// The training windows the fit uses, each with its starting anchor (and,
+// with options.settle_anchors, its settled cost); a window too short a
+// motion for a free anchor (without a reference heading) is skipped.
+void choose_windows(const CostShared& sh, int active, const std::vector<Window>& windows,
+                    const std::vector<int>& train, const ReplayResult& train_before, const FitOptions& options,
+                    std::vector<double>& free_values, std::vector<std::array<double, 3>>& anchors,
+                    FitSummary& out) {
+  const DiagInput& in = *sh.in;
+  for (std::size_t i = 0; i < train.size(); ++i) {
+    const Window& w = windows[static_cast<std::size_t>(train[i])];
+    if (sh.free_anchor && !in.has_ref_heading() &&
+        spread(train_before, w) < options.min_spread_sigmas * in.ref_sigma_m) {
+      out.skipped_windows.push_back(w.index);
+      continue;
+    }
+    out.fitted_windows.push_back(w.index);
+    const Pose<double>& a = train_before.anchors[i];
+    anchors.push_back({a.x, a.y, a.th});
+    if (options.settle_anchors)
+      out.settled_window_costs.push_back(settled_cost(sh, active, w, free_values, anchors.back()));
+  }
+}
+
+// One residual block per fitted window (its free anchor a parameter block
+// of its own), and the free parameters' bounds.
+void add_residual_blocks(ceres::Problem& problem, const CostShared& sh, int active,
+                         const std::vector<Window>& windows, std::vector<double>& free_values,
+                         std::vector<std::array<double, 3>>& anchors, FitSummary& out) {
+  const DiagInput& in = *sh.in;
+  const auto& layout = sh.model->layout();
+  for (std::size_t i = 0; i < out.fitted_windows.size(); ++i) {
+    const Window& w = windows[static_cast<std::size_t>(out.fitted_windows[i])];
+    const Pose<double> a = sh.free_anchor ? Pose<double>{anchors[i][0], anchors[i][1], anchors[i][2]}
+                                          : reference_pose_at(in, w.t_begin_s);
+    ceres::CostFunction* cost = make_cost(active, &sh, w, a);
+    if (sh.free_anchor)
+      problem.AddResidualBlock(cost, nullptr, free_values.data(), anchors[i].data());
+    else
+      problem.AddResidualBlock(cost, nullptr, free_values.data());
+    out.num_residuals += static_cast<std::size_t>(cost->num_residuals());
+  }
+  for (std::size_t j = 0; j < sh.free_pos.size(); ++j) {
+    const ParamSlot& s = layout[static_cast<std::size_t>(sh.free_pos[j])];
+    problem.SetParameterLowerBound(free_values.data(), static_cast<int>(j), s.lower);
+    problem.SetParameterUpperBound(free_values.data(), static_cast<int>(j), s.upper);
+  }
+}
+
+// The fit's train and held-out scores: the fitted values against the start
+// (or options.score_before_at).
+void score_fit(const EffectModel& model, const DiagInput& in, const std::vector<Window>& windows,
+               const std::vector<int>& train, const std::set<int>& held, const ReplayResult& train_before,
+               const std::vector<double>& init, const std::vector<double>& fitted, Anchoring mode,
+               const FitOptions& options, FitSummary& out) {
+  const std::vector<double> before = options.score_before_at ? pack(*options.score_before_at) : init;
+  out.train = score(options.score_before_at ? replay(model, before, in, windows, train, nullptr, mode)
+                                            : train_before,
+                    replay(model, fitted, in, windows, train, nullptr, mode));
+  std::vector<int> ho(held.begin(), held.end());
+  if (!ho.empty())
+    out.heldout = score(replay(model, before, in, windows, ho, nullptr, mode),
+                        replay(model, fitted, in, windows, ho, nullptr, mode));
+  else
+    out.heldout = score(ReplayResult{}, ReplayResult{});
+}
+
 }  // namespace
 
 bool FitOptions::IsValid(std::string* why) const {
@@ -321,63 +557,18 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
                        const FitOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("fit options: " + why);
-  for (int e = 0; e < kNumEffects; ++e)
-    if (model.structure().on(static_cast<Effect>(e)) != which.on(static_cast<Effect>(e)))
-      throw std::invalid_argument(fmt::format("fit: the model holds '{}', the set to fit '{}'",
-                                              model.structure().to_string(), which.to_string()));
-  if (model.num_nodes() != in.odo_t_s.size())
-    throw std::invalid_argument("fit: the model was built for another track");
+  check_model_matches(model, in, which);
   const auto t_start = std::chrono::steady_clock::now();
   const std::vector<Window> windows = make_windows(in, options.window_s);
   const int n_win = static_cast<int>(windows.size());
-  std::set<int> held;
-  for (int w : heldout_windows) {
-    if (w < 0 || w >= n_win)
-      throw std::invalid_argument(fmt::format("held-out window {} does not exist (the track has {} "
-                                              "windows of {} s)",
-                                              w, n_win, options.window_s));
-    held.insert(w);
-  }
-  std::vector<int> train;
-  for (int w : train_windows) {
-    if (w < 0 || w >= n_win)
-      throw std::invalid_argument(fmt::format("training window {} does not exist (the track has {} "
-                                              "windows of {} s)",
-                                              w, n_win, options.window_s));
-    if (held.count(w))
-      throw std::invalid_argument(fmt::format("window {} is both a training and a held-out window", w));
-    train.push_back(w);
-  }
-  if (train_windows.empty())
-    for (int w = 0; w < n_win; ++w)
-      if (!held.count(w)) train.push_back(w);
-  if (train.empty()) throw std::invalid_argument("fit: no training window");
+  const WindowSplit split = split_windows(train_windows, heldout_windows, n_win, options.window_s);
+  const std::set<int>& held = split.held;
+  const std::vector<int>& train = split.train;
 
   const auto& layout = model.layout();
   std::vector<double> init = pack(which);
-  CostShared sh;
-  sh.model = &model;
-  sh.in = &in;
-  const auto held_fixed = [&](Effect e) {
-    return std::find(options.held_effects.begin(), options.held_effects.end(), e) != options.held_effects.end();
-  };
-  for (std::size_t i = 0; i < layout.size(); ++i)
-    if (layout[i].fitted && !held_fixed(layout[i].effect)) {
-      init[i] = std::clamp(init[i], layout[i].lower, layout[i].upper);
-      sh.free_pos.push_back(static_cast<int>(i));
-    }
-  if (sh.free_pos.empty())
-    throw std::invalid_argument(fmt::format("fit: effects '{}' have no parameter that dead "
-                                            "reckoning can fit",
-                                            which.to_string()));
-  sh.all = init;
   const Anchoring mode = fit_anchoring(in, options);
-  sh.free_anchor = mode == Anchoring::free;
-  sh.heading = in.has_ref_heading() && options.use_heading;
-  sh.inv_sigma_m = 1.0 / in.ref_sigma_m;
-  sh.inv_sigma_rad = sh.heading ? 1.0 / in.ref_sigma_rad : 1.0;
-  sh.loss = options.loss;
-  sh.c = options.loss_scale;
+  const CostShared sh = make_shared_cost(model, in, which, options, mode, init);
 
   FitSummary out;
   const ReplayResult train_before = replay(model, init, in, windows, train, nullptr, mode);
@@ -387,74 +578,11 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
 
   ceres::Problem problem;
   const int active = static_cast<int>(sh.free_pos.size()) + (sh.free_anchor ? 3 : 0);
-  // The window's cost at the starting values, its free anchor fitted alone
-  // (a rigid pose against the window's samples converges in a few steps).
-  const auto settle = [&](const Window& w, std::array<double, 3>& anchor) {
-    ceres::Problem alone;
-    const Pose<double> fixed = sh.free_anchor ? Pose<double>{} : reference_pose_at(in, w.t_begin_s);
-    double cost = 0.0;
-    if (sh.free_anchor) {
-      alone.AddResidualBlock(make_cost(active, &sh, w, fixed), nullptr, free_values.data(), anchor.data());
-      alone.SetParameterBlockConstant(free_values.data());
-      ceres::Solver::Options so = deterministic_solver_options(5, FitTolerance::diagnosis);
-      so.function_tolerance = 1e-8;
-      ceres::Solver::Summary summary;
-      ceres::Solve(so, &alone, &summary);
-      cost = summary.final_cost;
-    } else {
-      alone.AddResidualBlock(make_cost(active, &sh, w, fixed), nullptr, free_values.data());
-      alone.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
-    }
-    out.settled_window_costs.push_back(cost);
-  };
-  for (std::size_t i = 0; i < train.size(); ++i) {
-    const Window& w = windows[static_cast<std::size_t>(train[i])];
-    if (sh.free_anchor && !in.has_ref_heading() &&
-        spread(train_before, w) < options.min_spread_sigmas * in.ref_sigma_m) {
-      out.skipped_windows.push_back(w.index);
-      continue;
-    }
-    out.fitted_windows.push_back(w.index);
-    const Pose<double>& a = train_before.anchors[i];
-    anchors.push_back({a.x, a.y, a.th});
-    if (options.settle_anchors) settle(w, anchors.back());
-  }
+  choose_windows(sh, active, windows, train, train_before, options, free_values, anchors, out);
   if (out.fitted_windows.empty())
     throw std::invalid_argument("fit: every training window is too short a motion to fit");
-  for (std::size_t i = 0; i < out.fitted_windows.size(); ++i) {
-    const Window& w = windows[static_cast<std::size_t>(out.fitted_windows[i])];
-    const Pose<double> a = sh.free_anchor ? Pose<double>{anchors[i][0], anchors[i][1], anchors[i][2]}
-                                          : reference_pose_at(in, w.t_begin_s);
-    ceres::CostFunction* cost = make_cost(active, &sh, w, a);
-    if (sh.free_anchor)
-      problem.AddResidualBlock(cost, nullptr, free_values.data(), anchors[i].data());
-    else
-      problem.AddResidualBlock(cost, nullptr, free_values.data());
-    out.num_residuals += static_cast<std::size_t>(cost->num_residuals());
-  }
-  for (std::size_t j = 0; j < sh.free_pos.size(); ++j) {
-    const ParamSlot& s = layout[static_cast<std::size_t>(sh.free_pos[j])];
-    problem.SetParameterLowerBound(free_values.data(), static_cast<int>(j), s.lower);
-    problem.SetParameterUpperBound(free_values.data(), static_cast<int>(j), s.upper);
-  }
-
-  ceres::Solver::Options so = deterministic_solver_options(options.max_iterations, FitTolerance::diagnosis);
-  // The bounds make Ceres run a projected Armijo line search on every trust
-  // region step; with cubic interpolation (the default) its first trial
-  // evaluates the Jacobian too, a second Jacobian per iteration. Quadratic
-  // interpolation needs the cost only (the step is the same whenever the
-  // full step satisfies Armijo, as it mostly does).
-  so.line_search_interpolation_type = ceres::QUADRATIC;
-  if (sh.free_anchor && anchors.size() > 1) {
-    // Each window's anchor meets only its own residuals: eliminate them
-    // (Schur complement) and solve densely for the effect parameters; a
-    // dense QR of the whole Jacobian costs O(rows * (3 windows)^2).
-    so.linear_solver_type = ceres::DENSE_SCHUR;
-    auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-    for (auto& a : anchors) ordering->AddElementToGroup(a.data(), 0);
-    ordering->AddElementToGroup(free_values.data(), 1);
-    so.linear_solver_ordering = ordering;
-  }
+  add_residual_blocks(problem, sh, active, windows, free_values, anchors, out);
+  const ceres::Solver::Options so = fit_solver_options(options, sh.free_anchor, anchors, free_values);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
   out.converged = summary.termination_type == ceres::CONVERGENCE;
@@ -468,58 +596,17 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
   out.residual_scale = std::sqrt(s2);
 
   // Standard errors.
-  std::vector<double> var(free_values.size(), std::nan(""));
-  if (options.standard_errors) {
-    ceres::Covariance::Options co;
-    co.algorithm_type = ceres::DENSE_SVD;
-    co.num_threads = 1;
-    ceres::Covariance cov(co);
-    std::vector<std::pair<const double*, const double*>> blocks = {{free_values.data(), free_values.data()}};
-    std::vector<double> c(free_values.size() * free_values.size());
-    if (full_rank(problem) && cov.Compute(blocks, &problem) &&
-        cov.GetCovarianceBlock(free_values.data(), free_values.data(), c.data())) {
-      for (std::size_t j = 0; j < var.size(); ++j) var[j] = c[j * var.size() + j] * s2;
-    } else {
-      out.rank_deficient = true;
-    }
-  }
+  const std::vector<double> var = free_variances(problem, free_values, s2, options, out);
 
   std::vector<double> fitted = init;
   for (std::size_t j = 0; j < sh.free_pos.size(); ++j)
     fitted[static_cast<std::size_t>(sh.free_pos[j])] = free_values[j];
   out.effects = unpack(which, fitted);
-  const std::vector<double> orig = pack(which);
-  for (std::size_t i = 0, j = 0; i < layout.size(); ++i) {
-    FitParam p;
-    p.name = layout[i].name;
-    p.fitted = layout[i].fitted && !held_fixed(layout[i].effect);
-    p.initial = p.fitted ? init[i] : orig[i];
-    p.value = fitted[i];
-    p.std_error = std::nan("");
-    if (p.fitted) {
-      if (std::isfinite(var[j]) && var[j] >= 0.0) p.std_error = std::sqrt(var[j]);
-      const double tol = 1e-9 * (layout[i].upper - layout[i].lower);
-      p.at_bound = p.value <= layout[i].lower + tol || p.value >= layout[i].upper - tol;
-      ++j;
-    }
-    out.params.push_back(p);
-  }
-  if (!out.rank_deficient && options.standard_errors)
-    for (const FitParam& p : out.params)
-      if (p.fitted && !std::isfinite(p.std_error)) out.rank_deficient = true;
+  add_fitted_params(out, layout, which, init, fitted, var, options);
   if (sh.free_anchor)
     for (const auto& a : anchors) out.anchors.push_back({a[0], a[1], a[2]});
 
-  const std::vector<double> before = options.score_before_at ? pack(*options.score_before_at) : init;
-  out.train = score(options.score_before_at ? replay(model, before, in, windows, train, nullptr, mode)
-                                            : train_before,
-                    replay(model, fitted, in, windows, train, nullptr, mode));
-  std::vector<int> ho(held.begin(), held.end());
-  if (!ho.empty())
-    out.heldout = score(replay(model, before, in, windows, ho, nullptr, mode),
-                        replay(model, fitted, in, windows, ho, nullptr, mode));
-  else
-    out.heldout = score(ReplayResult{}, ReplayResult{});
+  score_fit(model, in, windows, train, held, train_before, init, fitted, mode, options, out);
   out.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return out;
 }

@@ -456,6 +456,122 @@ std::array<std::vector<double>, 3> jackknife(const Context& c, const std::vector
   return out;
 }
 
+// The options as run: a track too short for kMinWindows windows of window_s
+// gets shorter ones, down to min_window_s (header comment).
+GyroFixesOptions options_for_track(const DiagInput& in, const GyroFixesOptions& options) {
+  GyroFixesOptions o = options;
+  if (in.ref_t_s.size() >= 2) {
+    const double span = in.ref_t_s.back() - in.ref_t_s.front();
+    if (span < kMinWindows * o.window_s)
+      o.window_s = std::max(std::min(o.window_s, o.min_window_s), span / kMinWindows);
+  }
+  return o;
+}
+
+// Gyro noise (per sample), period, standstill runs (into c.still and out);
+// returns the gyro's median sample period [s].
+double gyro_noise_and_standstill(const DiagInput& in, const GyroFixesOptions& o, Context& c,
+                                 const std::vector<bool>& still_interval, const std::vector<int>& used,
+                                 GyroFixesCheck& out) {
+  GyroCheck& g = out.gyro;
+  g.noise_sigma_radps = second_difference_sigma(in.gyro_z_radps);
+  std::vector<double> steps(in.gyro_t_s.size() - 1);
+  for (std::size_t i = 0; i + 1 < in.gyro_t_s.size(); ++i) steps[i] = in.gyro_t_s[i + 1] - in.gyro_t_s[i];
+  const double dt_gyro = median(std::move(steps));
+  if (o.use_standstill && in.odometry == OdometryKind::wheel_angles)
+    c.still = standstill_runs(c, o, still_interval, used, g.noise_sigma_radps, dt_gyro);
+  out.standstill_runs = static_cast<int>(c.still.size());
+  for (const Standstill& r : c.still) out.standstill_s += r.t1_s - r.t0_s;
+  return dt_gyro;
+}
+
+// A fit's start on windows `which`: the nominal gyro and each window's
+// closed-form anchor (`start_anchor`, in the order of `used`).
+Solution start_for(const std::vector<int>& used, const std::vector<Pose<double>>& start_anchor,
+                   const std::vector<int>& which) {
+  Solution s;
+  for (int wi : which) {
+    const auto it = std::find(used.begin(), used.end(), wi);
+    const Pose<double>& a = start_anchor[static_cast<std::size_t>(it - used.begin())];
+    s.anchors.push_back({a.x, a.y, a.th});
+  }
+  return s;
+}
+
+// All-window fit, with its model-based standard errors, and its errors
+// against nominal.
+Solution fit_all_windows(const Context& c, const std::vector<int>& used,
+                         const std::vector<Pose<double>>& start_anchor, const GyroFixesOptions& o,
+                         GyroFixesCheck& out) {
+  GyroCheck& g = out.gyro;
+  Solution all = solve(c, used, start_for(used, start_anchor, used), o, true);
+  ++out.fits;
+  out.converged = all.converged;
+  const GyroParams<double> noop{1.0, 0.0, 1.0}, fitted{all.gyro[0], all.gyro[1], all.gyro[2]};
+  g.available = true;
+  g.scale.value = fitted.s;
+  g.bias.value = fitted.b;
+  out.distance_scale = fitted.q;
+  out.nominal_pos_rmse_m = pooled_rmse(c, used, noop);
+  out.fitted_pos_rmse_m = pooled_rmse(c, used, fitted);
+  g.mean_abs_rate_radps = mean_abs_rate(c, used, fitted);
+  return all;
+}
+
+// Jackknife, floored by the model-based error (header comment).
+void set_standard_errors(const Context& c, const std::vector<int>& used, const Solution& all,
+                         const GyroFixesOptions& o, GyroFixesCheck& out) {
+  GyroCheck& g = out.gyro;
+  const std::array<std::vector<double>, 3> jk = jackknife(c, used, all, o);
+  out.fits += static_cast<int>(used.size());
+  const auto floored = [](double jk_se, double model_se) {
+    return std::isfinite(jk_se) && std::isfinite(model_se) ? std::max(jk_se, model_se) : kNaN;
+  };
+  out.scale_jackknife_se = jackknife_se(jk[0]);
+  out.bias_jackknife_se = jackknife_se(jk[1]);
+  out.scale_model_se = all.model_se[0];
+  out.bias_model_se = all.model_se[1];
+  g.scale.std_error = floored(out.scale_jackknife_se, out.scale_model_se);
+  g.bias.std_error = floored(out.bias_jackknife_se, out.bias_model_se);
+  if (o.fit_distance_scale) out.distance_scale_std_error = floored(jackknife_se(jk[2]), all.model_se[2]);
+}
+
+// Held-out proof: train on the first windows, test on the last.
+void heldout_proof(const Context& c, const std::vector<int>& used,
+                   const std::vector<Pose<double>>& start_anchor, const GyroFixesOptions& o,
+                   GyroFixesCheck& out) {
+  const int n_used = static_cast<int>(used.size());
+  const int n_held = std::clamp(static_cast<int>(std::lround(o.heldout_fraction * n_used)), 1, n_used - 2);
+  out.train_windows.assign(used.begin(), used.end() - n_held);
+  out.heldout_windows.assign(used.end() - n_held, used.end());
+  const Solution train = solve(c, out.train_windows, start_for(used, start_anchor, out.train_windows), o);
+  ++out.fits;
+  out.train_scale = train.gyro[0];
+  out.train_bias_radps = train.gyro[1];
+  const GyroParams<double> tr{train.gyro[0], train.gyro[1], train.gyro[2]};
+  out.joint = compare(c, out.heldout_windows, {1.0, 0.0, tr.q}, tr, "joint", o);
+  out.scale_own = compare(c, out.heldout_windows, {1.0, tr.b, tr.q}, tr, "gyro_scale.s", o);
+  out.bias_own = compare(c, out.heldout_windows, {tr.s, 0.0, tr.q}, tr, "gyro_bias.b", o);
+}
+
+// Verdicts: each parameter's z against its no-op, its held-out test, and its
+// drift over relevance_window_s against the gyro noise's.
+void judge_verdicts(const GyroFixesOptions& o, double dt_gyro, GyroFixesCheck& out) {
+  GyroCheck& g = out.gyro;
+  const double T = o.relevance_window_s;
+  g.scale.drift = std::abs(g.scale.value - 1.0) * g.mean_abs_rate_radps * T;
+  g.bias.drift = std::abs(g.bias.value) * T;
+  g.scale.noise_drift = g.bias.noise_drift = g.noise_sigma_radps * std::sqrt(T * dt_gyro);
+  const auto judge = [&](Verdict& v, const HeldoutComparison& own) {
+    v.z = (v.value - v.noop) / v.std_error;
+    v.significant = std::isfinite(v.z) && std::abs(v.z) > o.z_threshold && own.passed;
+    v.relevant = std::isfinite(v.drift) && std::isfinite(v.noise_drift) &&
+                 v.drift > std::max(o.relevance_factor * v.noise_drift, o.min_drift_rad);
+  };
+  judge(g.scale, out.scale_own);
+  judge(g.bias, out.bias_own);
+}
+
 }  // namespace
 
 bool GyroFixesOptions::IsValid(std::string* why) const {
@@ -493,14 +609,7 @@ bool GyroFixesOptions::IsValid(std::string* why) const {
 GyroFixesCheck check_gyro_with_fixes(const DiagInput& in, const GyroFixesOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("gyro fixes check options: " + why);
-  // A track too short for kMinWindows windows of window_s gets shorter ones,
-  // down to min_window_s (header comment).
-  GyroFixesOptions o = options;
-  if (in.ref_t_s.size() >= 2) {
-    const double span = in.ref_t_s.back() - in.ref_t_s.front();
-    if (span < kMinWindows * o.window_s)
-      o.window_s = std::max(std::min(o.window_s, o.min_window_s), span / kMinWindows);
-  }
+  const GyroFixesOptions o = options_for_track(in, options);
   const auto t_start = std::chrono::steady_clock::now();
   GyroFixesCheck out;
   out.window_s = o.window_s;
@@ -531,79 +640,11 @@ GyroFixesCheck check_gyro_with_fixes(const DiagInput& in, const GyroFixesOptions
                               "needs training and held-out windows)",
                               n_used, o.window_s, kMinWindows));
 
-  // Gyro noise (per sample), period, standstill runs.
-  g.noise_sigma_radps = second_difference_sigma(in.gyro_z_radps);
-  std::vector<double> steps(in.gyro_t_s.size() - 1);
-  for (std::size_t i = 0; i + 1 < in.gyro_t_s.size(); ++i) steps[i] = in.gyro_t_s[i + 1] - in.gyro_t_s[i];
-  const double dt_gyro = median(std::move(steps));
-  if (o.use_standstill && in.odometry == OdometryKind::wheel_angles)
-    c.still = standstill_runs(c, o, still_interval, used, g.noise_sigma_radps, dt_gyro);
-  out.standstill_runs = static_cast<int>(c.still.size());
-  for (const Standstill& r : c.still) out.standstill_s += r.t1_s - r.t0_s;
-
-  const auto start_for = [&](const std::vector<int>& which) {
-    Solution s;
-    for (int wi : which) {
-      const auto it = std::find(used.begin(), used.end(), wi);
-      const Pose<double>& a = start_anchor[static_cast<std::size_t>(it - used.begin())];
-      s.anchors.push_back({a.x, a.y, a.th});
-    }
-    return s;
-  };
-
-  // All-window fit, with its model-based standard errors.
-  const Solution all = solve(c, used, start_for(used), o, true);
-  ++out.fits;
-  out.converged = all.converged;
-  const GyroParams<double> noop{1.0, 0.0, 1.0}, fitted{all.gyro[0], all.gyro[1], all.gyro[2]};
-  g.available = true;
-  g.scale.value = fitted.s;
-  g.bias.value = fitted.b;
-  out.distance_scale = fitted.q;
-  out.nominal_pos_rmse_m = pooled_rmse(c, used, noop);
-  out.fitted_pos_rmse_m = pooled_rmse(c, used, fitted);
-  g.mean_abs_rate_radps = mean_abs_rate(c, used, fitted);
-
-  // Jackknife, floored by the model-based error (header comment).
-  const std::array<std::vector<double>, 3> jk = jackknife(c, used, all, o);
-  out.fits += n_used;
-  const auto floored = [](double jk_se, double model_se) {
-    return std::isfinite(jk_se) && std::isfinite(model_se) ? std::max(jk_se, model_se) : kNaN;
-  };
-  out.scale_jackknife_se = jackknife_se(jk[0]);
-  out.bias_jackknife_se = jackknife_se(jk[1]);
-  out.scale_model_se = all.model_se[0];
-  out.bias_model_se = all.model_se[1];
-  g.scale.std_error = floored(out.scale_jackknife_se, out.scale_model_se);
-  g.bias.std_error = floored(out.bias_jackknife_se, out.bias_model_se);
-  if (o.fit_distance_scale) out.distance_scale_std_error = floored(jackknife_se(jk[2]), all.model_se[2]);
-
-  // Held-out proof: train on the first windows, test on the last.
-  const int n_held = std::clamp(static_cast<int>(std::lround(o.heldout_fraction * n_used)), 1, n_used - 2);
-  out.train_windows.assign(used.begin(), used.end() - n_held);
-  out.heldout_windows.assign(used.end() - n_held, used.end());
-  const Solution train = solve(c, out.train_windows, start_for(out.train_windows), o);
-  ++out.fits;
-  out.train_scale = train.gyro[0];
-  out.train_bias_radps = train.gyro[1];
-  const GyroParams<double> tr{train.gyro[0], train.gyro[1], train.gyro[2]};
-  out.joint = compare(c, out.heldout_windows, {1.0, 0.0, tr.q}, tr, "joint", o);
-  out.scale_own = compare(c, out.heldout_windows, {1.0, tr.b, tr.q}, tr, "gyro_scale.s", o);
-  out.bias_own = compare(c, out.heldout_windows, {tr.s, 0.0, tr.q}, tr, "gyro_bias.b", o);
-
-  // Verdicts.
-  const double T = o.relevance_window_s;
-  g.scale.drift = std::abs(g.scale.value - 1.0) * g.mean_abs_rate_radps * T;
-  g.bias.drift = std::abs(g.bias.value) * T;
-  g.scale.noise_drift = g.bias.noise_drift = g.noise_sigma_radps * std::sqrt(T * dt_gyro);
-  const auto judge = [&](Verdict& v, const HeldoutComparison& own) {
-    v.z = (v.value - v.noop) / v.std_error;
-    v.significant = std::isfinite(v.z) && std::abs(v.z) > o.z_threshold && own.passed;
-    v.relevant = std::isfinite(v.drift) && std::isfinite(v.noise_drift) &&
-                 v.drift > std::max(o.relevance_factor * v.noise_drift, o.min_drift_rad);
-  };
-  judge(g.scale, out.scale_own);
-  judge(g.bias, out.bias_own);
+  const double dt_gyro = gyro_noise_and_standstill(in, o, c, still_interval, used, out);
+  const Solution all = fit_all_windows(c, used, start_anchor, o, out);
+  set_standard_errors(c, used, all, o, out);
+  heldout_proof(c, used, start_anchor, o, out);
+  judge_verdicts(o, dt_gyro, out);
   out.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return out;
 }

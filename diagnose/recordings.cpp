@@ -149,6 +149,103 @@ void confirm_on_heldout(Diagnosis& d, EffectSet& wheel, const std::vector<DiagIn
   if (test_each(true)) test_each(false);
 }
 
+// The options of the pooled diagnosis: the selection leaves one recording out
+// at a time (an effect is chosen because it predicts a recording it was not
+// fitted on).
+DiagnoseOptions pooled_options(const DiagnoseOptions& o, const std::vector<DiagInput>& fit,
+                               const std::vector<double>& shifts) {
+  DiagnoseOptions pooled = o;
+  pooled.select.recording_starts_s.clear();
+  if (fit.size() >= 2)
+    for (std::size_t k = 0; k < fit.size(); ++k)
+      pooled.select.recording_starts_s.push_back(fit[k].odo_t_s.front() + shifts[k]);
+  return pooled;
+}
+
+// What evaluate_recording needs besides the recording: the pooled model,
+// its window, and the options of each recording's refit.
+struct RecordingEval {
+  const EffectSet& wheel;
+  double ws;
+  const DiagnoseOptions& o;
+  const SelectOptions& so;
+  const FitOptions& fo;
+};
+
+// One recording: its sensor check, nominal vs the pooled model (`nominal`,
+// `modelled`; `replayed` set once both exist) and the refit alone (on its
+// selection input, as the pooled final fit, from the pooled values). A
+// failure goes to r.note.
+void evaluate_recording(const DiagInput& in, const RecordingEval& e, RecordingResult& r, ReplayResult& nominal,
+                        ReplayResult& modelled, char& replayed) {
+  try {
+    const OdometryCheck oc = check_sensors(in, e.o.sensors).odometry;
+    if (oc.available) {
+      r.speed_ratio = oc.speed_ratio.value, r.yaw_ratio = oc.yaw_ratio.value;
+      // odo(t) ≈ ref(t − lag): the motion shows up -lag after the odometry.
+      const LagEstimate& lag = oc.command_delay.available ? oc.command_delay : oc.odometry_late;
+      if (lag.available) r.motion_late_s = oc.command_delay.available ? lag.lag_s : -lag.lag_s;
+    }
+    nominal = replay(in, EffectSet(), e.ws), modelled = replay(in, e.wheel, e.ws);
+    replayed = 1;
+    r.error = {nominal.pos_rmse_m, modelled.pos_rmse_m};
+    r.floor_m = materiality_floor_m(in.ref_sigma_m, nominal.pos_rmse_m, e.o.select.materiality);
+    r.helped = is_material(nominal.pos_rmse_m, modelled.pos_rmse_m, r.floor_m);
+    if (!e.wheel.empty()) {
+      // From the pooled values: a parameter started at its no-op bound can stay there.
+      const FitSummary f = fit_effects(selection_input(in, e.so).input, e.wheel, {}, {}, e.fo);
+      for (const FitParam& p : f.params)
+        if (p.fitted) r.refit.push_back({p.name, p.value}), r.refit_stderr.push_back({p.name, p.std_error});
+    }
+  } catch (const std::exception& ex) {
+    r.note = ex.what();
+  }
+}
+
+// Per refitted parameter: whether the recordings' refits agree, as a line of
+// out.consistency.
+void add_refit_agreement(PooledDiagnosis& out, const EffectSet& wheel) {
+  const auto& names = out.recordings.front().refit;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    std::vector<double> v;
+    std::string list;
+    double se = 0.0;
+    for (const RecordingResult& r : out.recordings)
+      if (i < r.refit.size()) {
+        v.push_back(r.refit[i].value);
+        se = std::max(se, r.refit_stderr[i].value);
+        list += fmt::format("{}{:.5g}", list.empty() ? "" : ", ", r.refit[i].value);
+      }
+    if (v.size() < 2) continue;
+    const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+    const double pooled = wheel.get(effect_from_name(names[i].name.substr(0, names[i].name.find('.'))),
+                                    short_name(names[i].name));
+    const double noop_dist = std::abs(pooled - (short_name(names[i].name).rfind("scale", 0) == 0 ? 1.0 : 0.0));
+    // Holds when the recordings agree within half the effect's size (or within 4 standard errors).
+    const bool holds = (*hi - *lo) <= std::max(0.5 * noop_dist, 4.0 * se);
+    out.consistency.push_back(fmt::format(
+        "{}: {} alone on each recording ({}), pooled {:.5g}: {}", names[i].name, holds ? "agrees" : "differs",
+        list, pooled, holds ? "holds across recordings" : "does not hold across recordings"));
+  }
+}
+
+// What holds across recordings: each recording's error with the pooled
+// model, then whether the refits agree.
+void add_consistency(PooledDiagnosis& out, const EffectSet& wheel) {
+  for (const RecordingResult& r : out.recordings) {
+    if (!r.note.empty()) {
+      out.consistency.push_back(fmt::format("{}: not evaluated ({})", r.track, r.note));
+      continue;
+    }
+    if (wheel.empty()) continue;
+    out.consistency.push_back(fmt::format(
+        "{} ({}): the pooled model {} its position error {:.1f} → {:.1f} mm (floor {:.1f} mm)", r.track,
+        r.heldout ? "held out" : "fitted", r.helped ? "cuts" : "does not materially change",
+        1e3 * r.error.before_pos_rmse_m, 1e3 * r.error.after_pos_rmse_m, 1e3 * r.floor_m));
+  }
+  if (!wheel.empty() && !out.recordings.empty()) add_refit_agreement(out, wheel);
+}
+
 }  // namespace
 
 std::string describe(const HeldoutTest& t) {
@@ -246,14 +343,7 @@ PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std
   PooledDiagnosis out;
   std::vector<double> shifts;
   out.input = pool_recordings(fit, &shifts);
-  // The selection leaves one recording out at a time: an effect is chosen
-  // because it predicts a recording it was not fitted on.
-  DiagnoseOptions pooled_options = o;
-  pooled_options.select.recording_starts_s.clear();
-  if (fit.size() >= 2)
-    for (std::size_t k = 0; k < fit.size(); ++k)
-      pooled_options.select.recording_starts_s.push_back(fit[k].odo_t_s.front() + shifts[k]);
-  out.pooled = diagnose(out.input, pooled_options);
+  out.pooled = diagnose(out.input, pooled_options(o, fit, shifts));
   Diagnosis& d = out.pooled;
   EffectSet wheel = wheel_model(d);
   const double ws = d.window_s;
@@ -266,14 +356,14 @@ PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std
     }
   }
 
-  // Per recording: nominal vs the pooled model, and the refit alone (on its
-  // selection input, as the pooled final fit, from the pooled values),
+  // Per recording: nominal vs the pooled model, and the refit alone,
   // recordings in parallel.
   FitOptions fo = o.select.fit;
   fo.window_s = ws;
   SelectOptions so = o.select;
   so.fit.window_s = ws;
   so.min_window_samples = 0.0;  // the pooled windows' length, not one of its own
+  const RecordingEval eval{wheel, ws, o, so, fo};
   out.recordings.resize(all.size());
   std::vector<ReplayResult> nominal(all.size()), modelled(all.size());
   std::vector<char> replayed(all.size(), 0);
@@ -287,28 +377,7 @@ PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std
     r.ref_samples = in.ref_t_s.size();
     r.ref_sigma_m = in.ref_sigma_m;
     r.pooled_time_offset_s = k < shifts.size() ? shifts[k] : std::nan("");
-    try {
-      const OdometryCheck oc = check_sensors(in, o.sensors).odometry;
-      if (oc.available) {
-        r.speed_ratio = oc.speed_ratio.value, r.yaw_ratio = oc.yaw_ratio.value;
-        // odo(t) ≈ ref(t − lag): the motion shows up -lag after the odometry.
-        const LagEstimate& lag = oc.command_delay.available ? oc.command_delay : oc.odometry_late;
-        if (lag.available) r.motion_late_s = oc.command_delay.available ? lag.lag_s : -lag.lag_s;
-      }
-      nominal[k] = replay(in, EffectSet(), ws), modelled[k] = replay(in, wheel, ws);
-      replayed[k] = 1;
-      r.error = {nominal[k].pos_rmse_m, modelled[k].pos_rmse_m};
-      r.floor_m = materiality_floor_m(in.ref_sigma_m, nominal[k].pos_rmse_m, o.select.materiality);
-      r.helped = is_material(nominal[k].pos_rmse_m, modelled[k].pos_rmse_m, r.floor_m);
-      if (!wheel.empty()) {
-        // From the pooled values: a parameter started at its no-op bound can stay there.
-        const FitSummary f = fit_effects(selection_input(in, so).input, wheel, {}, {}, fo);
-        for (const FitParam& p : f.params)
-          if (p.fitted) r.refit.push_back({p.name, p.value}), r.refit_stderr.push_back({p.name, p.std_error});
-      }
-    } catch (const std::exception& e) {
-      r.note = e.what();
-    }
+    evaluate_recording(in, eval, r, nominal[k], modelled[k], replayed[k]);
   }
   // Held-out recordings prove the pooled model (file comment).
   if (out.heldout_recordings) {
@@ -324,44 +393,7 @@ PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std
     }
     prove_terms_elsewhere(d, wheel, heldout, o, out.consistency);
   }
-
-  // What holds across recordings.
-  for (const RecordingResult& r : out.recordings) {
-    if (!r.note.empty()) {
-      out.consistency.push_back(fmt::format("{}: not evaluated ({})", r.track, r.note));
-      continue;
-    }
-    if (wheel.empty()) continue;
-    out.consistency.push_back(fmt::format(
-        "{} ({}): the pooled model {} its position error {:.1f} → {:.1f} mm (floor {:.1f} mm)", r.track,
-        r.heldout ? "held out" : "fitted", r.helped ? "cuts" : "does not materially change",
-        1e3 * r.error.before_pos_rmse_m, 1e3 * r.error.after_pos_rmse_m, 1e3 * r.floor_m));
-  }
-  if (!wheel.empty() && !out.recordings.empty()) {
-    const auto& names = out.recordings.front().refit;
-    for (std::size_t i = 0; i < names.size(); ++i) {
-      std::vector<double> v;
-      std::string list;
-      double se = 0.0;
-      for (const RecordingResult& r : out.recordings)
-        if (i < r.refit.size()) {
-          v.push_back(r.refit[i].value);
-          se = std::max(se, r.refit_stderr[i].value);
-          list += fmt::format("{}{:.5g}", list.empty() ? "" : ", ", r.refit[i].value);
-        }
-      if (v.size() < 2) continue;
-      const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
-      const double pooled = wheel.get(effect_from_name(names[i].name.substr(0, names[i].name.find('.'))),
-                                      short_name(names[i].name));
-      const double noop_dist = std::abs(pooled -
-                                        (short_name(names[i].name).rfind("scale", 0) == 0 ? 1.0 : 0.0));
-      // Holds when the recordings agree within half the effect's size (or within 4 standard errors).
-      const bool holds = (*hi - *lo) <= std::max(0.5 * noop_dist, 4.0 * se);
-      out.consistency.push_back(fmt::format(
-          "{}: {} alone on each recording ({}), pooled {:.5g}: {}", names[i].name, holds ? "agrees" : "differs",
-          list, pooled, holds ? "holds across recordings" : "does not hold across recordings"));
-    }
-  }
+  add_consistency(out, wheel);
   return out;
 }
 

@@ -86,32 +86,30 @@ bool covers(const std::vector<std::vector<double>>& acting, const std::vector<in
   return true;
 }
 
-// The final model (select.h) on the selection input `fit_in` (same windows
-// as `raw`, which decides the split).
-void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vector<Window>& windows,
-                 const SelectOptions& o, const std::vector<Effect>& chosen, const EffectSet& warm,
-                 Selection& sel) {
+// The windows of a split of n: phase < 0, the last n_held held out; else
+// n_held spread evenly, the pattern rotated by `phase` windows.
+void split_at(int phase, int n, int n_held, std::vector<int>& train, std::vector<int>& held) {
+  train.clear(), held.clear();
+  for (int w = 0; w < n; ++w) {
+    const long r = (w + std::max(phase, 0)) % n;
+    const bool h = phase < 0 ? w >= n - n_held : (r + 1) * n_held / n > r * n_held / n;
+    (h ? held : train).push_back(w);
+  }
+}
+
+// The final fit of sel.structure from `start` and its split (select.h): the
+// last windows held out, else (when those do not cover where each effect
+// acts, or the fit is rank deficient) the first interleaved rotation that
+// covers.
+void fit_final(const DiagInput& raw, const DiagInput& fit_in, const std::vector<Window>& windows,
+               const SelectOptions& o, const EffectSet& start, Selection& sel) {
   const EffectSet& s = sel.structure;
-  // From where the search's all-window fit of the set ended: a parameter
-  // started at its no-op bound (a lag's tau = 0) can stay there while
-  // another effect takes its share.
-  const EffectSet start = start_from(s, warm);
   FitOptions fo_final = o.fit;
   fo_final.score_before_at = s;  // scores nominal -> fitted
   const int n = static_cast<int>(windows.size());
   const int n_held = std::clamp(static_cast<int>(std::lround(o.heldout_fraction * n)), 1, n - 1);
-  // phase < 0: the last n_held windows; else n_held windows spread evenly,
-  // the pattern rotated by `phase` windows.
-  auto split = [&](int phase, std::vector<int>& train, std::vector<int>& held) {
-    train.clear(), held.clear();
-    for (int w = 0; w < n; ++w) {
-      const long r = (w + std::max(phase, 0)) % n;
-      const bool h = phase < 0 ? w >= n - n_held : (r + 1) * n_held / n > r * n_held / n;
-      (h ? held : train).push_back(w);
-    }
-  };
   const auto acting = acting_samples(raw, windows, s);
-  split(-1, sel.train_windows, sel.heldout_windows);
+  split_at(-1, n, n_held, sel.train_windows, sel.heldout_windows);
   sel.split = "last";
   bool alt_split = !covers(acting, sel.train_windows, sel.heldout_windows);
   if (!alt_split) {
@@ -123,13 +121,13 @@ void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vecto
     std::vector<int> tr, ho;
     int phase = 0;  // the first rotation that covers, else none
     for (int p = 0; p < n; ++p) {
-      split(p, tr, ho);
+      split_at(p, n, n_held, tr, ho);
       if (covers(acting, tr, ho)) {
         phase = p;
         break;
       }
     }
-    split(phase, tr, ho);
+    split_at(phase, n, n_held, tr, ho);
     ++sel.timing.fits;
     FitSummary f = fit_effects(fit_in, start, tr, ho, fo_final);
     if (!f.rank_deficient || sel.final_fit.params.empty()) {
@@ -137,7 +135,13 @@ void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vecto
       sel.train_windows = tr, sel.heldout_windows = ho, sel.split = "interleaved";
     }
   }
-  sel.fitted = true;
+}
+
+// sel.effects: each chosen effect with the share of the final fit's training
+// error it explains (the refit without it, in parallel; training scores only,
+// no standard errors), most first.
+void add_explained_shares(const DiagInput& fit_in, const SelectOptions& o, const std::vector<Effect>& chosen,
+                          const EffectSet& start, Selection& sel) {
   const std::vector<Window> fw = make_windows(fit_in, o.fit.window_s);
   const bool heading = fit_in.has_ref_heading() && o.fit.use_heading;
   const double ism = 1.0 / fit_in.ref_sigma_m, ish = heading ? 1.0 / fit_in.ref_sigma_rad : 0.0;
@@ -169,6 +173,89 @@ void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vecto
   }
   std::stable_sort(sel.effects.begin(), sel.effects.end(),
                    [](const SelectedEffect& a, const SelectedEffect& b) { return a.explains > b.explains; });
+}
+
+// The final model (select.h) on the selection input `fit_in` (same windows
+// as `raw`, which decides the split).
+void final_model(const DiagInput& raw, const DiagInput& fit_in, const std::vector<Window>& windows,
+                 const SelectOptions& o, const std::vector<Effect>& chosen, const EffectSet& warm,
+                 Selection& sel) {
+  // From where the search's all-window fit of the set ended: a parameter
+  // started at its no-op bound (a lag's tau = 0) can stay there while
+  // another effect takes its share.
+  const EffectSet start = start_from(sel.structure, warm);
+  fit_final(raw, fit_in, windows, o, start, sel);
+  sel.fitted = true;
+  add_explained_shares(fit_in, o, chosen, start, sel);
+}
+
+// The search's start: the nominal model cross-validated and fitted on all
+// windows, the materiality rule's floors against its held-out dead reckoning,
+// and its record of phase "baseline".
+void start_from_nominal(Search& z, const DiagInput& in_full, const SelectOptions& o) {
+  Selection& sel = z.sel;
+  const auto t0 = Clock::now();
+  z.cur_cv = z.cv.cross_validate(EffectSet(), {}, o.cv_max_iterations);
+  z.cur_full = z.cv.fit_all(EffectSet(), EffectSet(), o.cv_max_iterations);
+  if (!z.cur_cv.ok || !z.cur_full.ok)
+    throw std::invalid_argument(fmt::format("track '{}': nominal replay failed: {}", in_full.track_name,
+                                            z.cur_cv.error + z.cur_full.error));
+  sel.baseline_cv_score = z.cur_cv.score;
+  // The materiality rule's floors against the nominal model's held-out dead reckoning.
+  const CrossValidator::Replayed nominal = z.cv.replayed(z.cur_cv);
+  z.floor_m = materiality_floor_m(in_full.ref_sigma_m, nominal.pos_rmse_m, o.materiality);
+  if (in_full.has_ref_heading() && std::isfinite(nominal.heading_rmse_rad))
+    z.floor_rad = materiality_floor_m(in_full.ref_sigma_rad, nominal.heading_rmse_rad, o.materiality);
+  sel.floor_m = z.floor_m;
+  sel.floor_rad = z.floor_rad;
+  SearchRecord rb;
+  rb.phase = "baseline", rb.set = "none", rb.bic = z.cur_full.bic, rb.accepted = true;
+  rb.reason = "nominal model";
+  fill(rb, z.cur_cv);
+  rb.time_s = since(t0);
+  sel.records.push_back(rb);
+}
+
+// The search's moves in order (select.h): forward steps, backward rounds,
+// pairs, swaps, radius_error preferred, look-alikes.
+void search_moves(Search& z, const SelectOptions& o, const std::vector<Effect>& cands) {
+  int step = 1;
+  for (; step <= o.max_effects && forward_step(z, step, cands); ++step) {
+  }
+  for (int round = 1; z.chosen.size() >= 2 && backward_round(z, round); ++round) {
+  }
+  // Pairs, when what is left stays well above the floor ("Pairs").
+  if (o.pairs && static_cast<int>(z.chosen.size()) + 2 <= o.max_effects + 1 &&
+      z.cv.replayed(z.cur_cv).pos_rmse_m > o.pair_above_floor * z.floor_m && pair_step(z, step, cands)) {
+    // Down to one effect: the pair's survivor never passed a forward step alone.
+    for (int round = 1; !z.chosen.empty() && backward_round(z, round); ++round) {
+    }
+  }
+  // Swaps, then the backward pass again (a swap can leave an effect redundant).
+  if (o.swaps && z.chosen.size() >= 2 && swap_step(z, step, cands)) {
+    for (int round = 1; !z.chosen.empty() && backward_round(z, round); ++round) {
+    }
+  }
+  prefer_radius_error(z, step);
+  if (o.look_alikes) look_alike_step(z, step);
+}
+
+// Each selected effect's rivals: the candidates its forward step did not beat,
+// and for a lag look-alike the look-alikes that predict as well and were not chosen.
+void add_rivals(Selection& sel, const Search& z) {
+  for (SelectedEffect& e : sel.effects)
+    for (const SearchRecord& r : sel.records)
+      if (r.phase == "forward" && r.accepted && r.candidate == effect_name(e.effect))
+        for (const std::string& name : r.rivals) e.rivals.push_back(effect_from_name(name));
+  // Look-alikes that predict as well: rivals of the chosen ones among them.
+  for (SelectedEffect& e : sel.effects) {
+    if (std::find(std::begin(kLagLookAlikes), std::end(kLagLookAlikes), e.effect) == std::end(kLagLookAlikes))
+      continue;
+    for (Effect r : z.look_alikes) {
+      const bool chosen = std::find(z.chosen.begin(), z.chosen.end(), r) != z.chosen.end();
+      if (!chosen && std::find(e.rivals.begin(), e.rivals.end(), r) == e.rivals.end()) e.rivals.push_back(r);
+    }
+  }
 }
 
 }  // namespace
@@ -301,69 +388,18 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
   Search z{cv, o, sel, EffectSet(), {}, {}, {}, kNaN, 0.0, 0.0, false, {}};
   z.heading = in->has_ref_heading();
 
-  auto t0 = Clock::now();
-  z.cur_cv = cv.cross_validate(EffectSet(), {}, o.cv_max_iterations);
-  z.cur_full = cv.fit_all(EffectSet(), EffectSet(), o.cv_max_iterations);
-  if (!z.cur_cv.ok || !z.cur_full.ok)
-    throw std::invalid_argument(fmt::format("track '{}': nominal replay failed: {}", in_full.track_name,
-                                            z.cur_cv.error + z.cur_full.error));
-  sel.baseline_cv_score = z.cur_cv.score;
-  // The materiality rule's floors against the nominal model's held-out dead reckoning.
-  const CrossValidator::Replayed nominal = cv.replayed(z.cur_cv);
-  z.floor_m = materiality_floor_m(in_full.ref_sigma_m, nominal.pos_rmse_m, o.materiality);
-  if (in_full.has_ref_heading() && std::isfinite(nominal.heading_rmse_rad))
-    z.floor_rad = materiality_floor_m(in_full.ref_sigma_rad, nominal.heading_rmse_rad, o.materiality);
-  sel.floor_m = z.floor_m;
-  sel.floor_rad = z.floor_rad;
-  SearchRecord rb;
-  rb.phase = "baseline", rb.set = "none", rb.bic = z.cur_full.bic, rb.accepted = true;
-  rb.reason = "nominal model";
-  fill(rb, z.cur_cv);
-  rb.time_s = since(t0);
-  sel.records.push_back(rb);
-
-  const std::vector<Effect> cands = candidate_list(in_full, o);
-  int step = 1;
-  for (; step <= o.max_effects && forward_step(z, step, cands); ++step) {
-  }
-  for (int round = 1; z.chosen.size() >= 2 && backward_round(z, round); ++round) {
-  }
-  // Pairs, when what is left stays well above the floor ("Pairs").
-  if (o.pairs && static_cast<int>(z.chosen.size()) + 2 <= o.max_effects + 1 &&
-      cv.replayed(z.cur_cv).pos_rmse_m > o.pair_above_floor * z.floor_m && pair_step(z, step, cands)) {
-    // Down to one effect: the pair's survivor never passed a forward step alone.
-    for (int round = 1; !z.chosen.empty() && backward_round(z, round); ++round) {
-    }
-  }
-  // Swaps, then the backward pass again (a swap can leave an effect redundant).
-  if (o.swaps && z.chosen.size() >= 2 && swap_step(z, step, cands)) {
-    for (int round = 1; !z.chosen.empty() && backward_round(z, round); ++round) {
-    }
-  }
-  prefer_radius_error(z, step);
-  if (o.look_alikes) look_alike_step(z, step);
+  start_from_nominal(z, in_full, o);
+  search_moves(z, o, candidate_list(in_full, o));
   sel.final_cv_score = z.cur_cv.score;
   sel.structure = z.s;
   sel.timing.search_s = since(t_start);
   sel.timing.fits = cv.fits();
   if (!z.chosen.empty()) {
-    t0 = Clock::now();
+    const auto t0 = Clock::now();
     final_model(in_full, *in, windows_full, o, z.chosen, z.cur_full.fitted, sel);
     sel.timing.final_s = since(t0);
   }
-  for (SelectedEffect& e : sel.effects)
-    for (const SearchRecord& r : sel.records)
-      if (r.phase == "forward" && r.accepted && r.candidate == effect_name(e.effect))
-        for (const std::string& name : r.rivals) e.rivals.push_back(effect_from_name(name));
-  // Look-alikes that predict as well: rivals of the chosen ones among them.
-  for (SelectedEffect& e : sel.effects) {
-    if (std::find(std::begin(kLagLookAlikes), std::end(kLagLookAlikes), e.effect) == std::end(kLagLookAlikes))
-      continue;
-    for (Effect r : z.look_alikes) {
-      const bool chosen = std::find(z.chosen.begin(), z.chosen.end(), r) != z.chosen.end();
-      if (!chosen && std::find(e.rivals.begin(), e.rivals.end(), r) == e.rivals.end()) e.rivals.push_back(r);
-    }
-  }
+  add_rivals(sel, z);
   sel.timing.total_s = since(t_start);
   return sel;
 }

@@ -52,26 +52,21 @@ void prefer_radius_error(Search& z, int step) {
   z.sel.records.push_back(std::move(rec));
 }
 
-// Swaps (diagnosis-design.md "Model selection", "Swaps"): one candidate in place of two selected
-// effects. Greedy steps accept the effect that predicts best now, and two
-// of them can together mimic a third that was never best alone (a speed offset b_v = -0.027 m/s fitted as radius
-// error + speed radius beside the true wheel base error). Every candidate
-// without a discrete search (not radius_step, not slip_zone) in place of
-// each pair of selected effects is fitted on all windows; the lowest BIC is
-// cross-validated and swapped in when the selected set does not beat it by
-// the size and materiality rules, as the backward pass asks of a removal, and the incoming
-// effect's own parameters matter (the own-parameters rule). (One in place of one, tried
-// too, changed no case; docs/diagnosis-design.md, "Cases behind the rules".)
-// True when a swap was made; logged as records of phase "swap".
-bool swap_step(Search& z, int step, const std::vector<Effect>& cands) {
+namespace {
+
+// A swap: `in` in place of the two selected effects `out`.
+struct SwapCand {
+  Effect in;
+  std::vector<Effect> out;
+  EffectSet st;
+  SearchRecord rec;
+};
+
+// Every candidate without a discrete search, not chosen yet, in place of
+// each pair of selected effects.
+std::vector<SwapCand> swap_candidates(const Search& z, int step, const std::vector<Effect>& cands) {
   const auto chosen = [&](Effect e) { return std::count(z.chosen.begin(), z.chosen.end(), e) > 0; };
-  struct Cand {
-    Effect in;
-    std::vector<Effect> out;
-    EffectSet st;
-    SearchRecord rec;
-  };
-  std::vector<Cand> tried;
+  std::vector<SwapCand> tried;
   std::vector<std::vector<Effect>> outs;
   for (std::size_t i = 0; i < z.chosen.size(); ++i) {
     for (std::size_t j = i + 1; j < z.chosen.size(); ++j) outs.push_back({z.chosen[i], z.chosen[j]});
@@ -79,7 +74,7 @@ bool swap_step(Search& z, int step, const std::vector<Effect>& cands) {
   for (Effect c : cands) {
     if (chosen(c) || c == Effect::radius_step || c == Effect::slip_zone) continue;
     for (const std::vector<Effect>& out : outs) {
-      Cand cd{c, out, z.s, {}};
+      SwapCand cd{c, out, z.s, {}};
       for (Effect e : out) cd.st.disable(e);
       cd.st = with_effect(cd.st, c);
       cd.rec.step = step, cd.rec.phase = "swap";
@@ -88,12 +83,15 @@ bool swap_step(Search& z, int step, const std::vector<Effect>& cands) {
       tried.push_back(std::move(cd));
     }
   }
-  if (tried.empty()) return false;
-  // Screened by one fit on all windows each (in parallel; a fifth of a
-  // cross-validation): the lowest BIC is cross-validated, unless even its
-  // all-window score is worse than the selected set's by the size rule's share.
+  return tried;
+}
+
+// Screened by one fit on all windows each (in parallel; a fifth of a
+// cross-validation), into `fulls`; returns the one of lowest BIC
+// (tried.size() when every fit failed).
+std::size_t screen_swaps(Search& z, std::vector<SwapCand>& tried, std::vector<SetEval>& fulls) {
   const auto t0 = Clock::now();
-  std::vector<SetEval> fulls(tried.size());
+  fulls.assign(tried.size(), SetEval{});
   const auto n_tried = static_cast<long>(tried.size());
 #pragma omp parallel for schedule(dynamic, 1) if (n_tried > 1)
   for (long i = 0; i < n_tried; ++i) {
@@ -111,39 +109,70 @@ bool swap_step(Search& z, int step, const std::vector<Effect>& cands) {
     else if (best == tried.size() || fulls[i].bic < fulls[best].bic)
       best = i;
   }
+  return best;
+}
+
+// Why the best swap `b` (all-window fit `full`) is not made, "" when it is:
+// it is cross-validated (into `cv`) unless even its all-window score is
+// worse than the selected set's by the size rule's share; the selected set
+// must not beat it by the size and materiality rules, and the incoming
+// effect's own parameters must matter.
+std::string swap_objection(Search& z, SwapCand& b, const SetEval& full, SetEval& cv) {
+  std::string no;
+  if (!(full.score * (1.0 - z.o.min_rel_improvement) <= z.cur_full.score)) {
+    no = fmt::format("on all windows it fits {:.2f} % worse than the selected set",
+                     100.0 * (full.score / z.cur_full.score - 1.0));
+  } else {
+    const auto t1 = Clock::now();
+    cv = z.cv.cross_validate_all({b.st}, z.cur_cv.folds, z.o.cv_max_iterations).front();
+    b.rec.time_s += since(t1);
+    fill(b.rec, cv);
+    if (!cv.ok) no = "fit failed: " + cv.error;
+  }
+  if (no.empty()) {
+    const PairedComparison p = z.cv.compare(cv, z.cur_cv, z.o.alpha);  // keeping the selected vs the swap
+    fill(b.rec, z.cv.compare(z.cur_cv, cv, z.o.alpha));
+    const std::string keep = immaterial(removed(z.cv, cv, z.cur_cv), z.floor_m, z.floor_rad);
+    if (keep.empty() && p.rel >= z.o.min_rel_improvement && p.gain >= z.o.min_gain)
+      no = fmt::format("the selected set predicts {:.2f} % better", 100.0 * p.rel);
+  }
+  if (no.empty()) {
+    const SetEval own = z.cv.own_noop(cv, b.in);
+    const std::string why = own.ok ? verdict(z.cv.compare(own, cv, z.o.alpha), -1.0, z.o,
+                                             removed(z.cv, own, cv), z.floor_m, z.floor_rad)
+                                   : own.error;
+    if (!why.empty()) no = fmt::format("{} at its no-op values does as well: {}", effect_name(b.in), why);
+  }
+  return no;
+}
+
+}  // namespace
+
+// Swaps (diagnosis-design.md "Model selection", "Swaps"): one candidate in place of two selected
+// effects. Greedy steps accept the effect that predicts best now, and two
+// of them can together mimic a third that was never best alone (a speed offset b_v = -0.027 m/s fitted as radius
+// error + speed radius beside the true wheel base error). Every candidate
+// without a discrete search (not radius_step, not slip_zone) in place of
+// each pair of selected effects is fitted on all windows; the lowest BIC is
+// cross-validated and swapped in when the selected set does not beat it by
+// the size and materiality rules, as the backward pass asks of a removal, and the incoming
+// effect's own parameters matter (the own-parameters rule). (One in place of one, tried
+// too, changed no case; docs/diagnosis-design.md, "Cases behind the rules".)
+// True when a swap was made; logged as records of phase "swap".
+bool swap_step(Search& z, int step, const std::vector<Effect>& cands) {
+  std::vector<SwapCand> tried = swap_candidates(z, step, cands);
+  if (tried.empty()) return false;
+  std::vector<SetEval> fulls;
+  const std::size_t best = screen_swaps(z, tried, fulls);
   bool swapped = false;
   if (best < tried.size()) {
-    Cand& b = tried[best];
+    SwapCand& b = tried[best];
     for (std::size_t i = 0; i < tried.size(); ++i)
       if (i != best && fulls[i].ok)
         tried[i].rec.reason = fmt::format("not the best swap (BIC on all windows {:.6g} vs {:.6g})",
                                           fulls[i].bic, fulls[best].bic);
-    std::string no;
     SetEval cv;
-    if (!(fulls[best].score * (1.0 - z.o.min_rel_improvement) <= z.cur_full.score)) {
-      no = fmt::format("on all windows it fits {:.2f} % worse than the selected set",
-                       100.0 * (fulls[best].score / z.cur_full.score - 1.0));
-    } else {
-      const auto t1 = Clock::now();
-      cv = z.cv.cross_validate_all({b.st}, z.cur_cv.folds, z.o.cv_max_iterations).front();
-      b.rec.time_s += since(t1);
-      fill(b.rec, cv);
-      if (!cv.ok) no = "fit failed: " + cv.error;
-    }
-    if (no.empty()) {
-      const PairedComparison p = z.cv.compare(cv, z.cur_cv, z.o.alpha);  // keeping the selected vs the swap
-      fill(b.rec, z.cv.compare(z.cur_cv, cv, z.o.alpha));
-      const std::string keep = immaterial(removed(z.cv, cv, z.cur_cv), z.floor_m, z.floor_rad);
-      if (keep.empty() && p.rel >= z.o.min_rel_improvement && p.gain >= z.o.min_gain)
-        no = fmt::format("the selected set predicts {:.2f} % better", 100.0 * p.rel);
-    }
-    if (no.empty()) {
-      const SetEval own = z.cv.own_noop(cv, b.in);
-      const std::string why = own.ok ? verdict(z.cv.compare(own, cv, z.o.alpha), -1.0, z.o,
-                                               removed(z.cv, own, cv), z.floor_m, z.floor_rad)
-                                     : own.error;
-      if (!why.empty()) no = fmt::format("{} at its no-op values does as well: {}", effect_name(b.in), why);
-    }
+    const std::string no = swap_objection(z, b, fulls[best], cv);
     if (no.empty()) {
       swapped = b.rec.accepted = true;
       b.rec.reason = "swapped: the two it replaces do not predict held-out windows materially better";
@@ -156,7 +185,7 @@ bool swap_step(Search& z, int step, const std::vector<Effect>& cands) {
       b.rec.reason = "best swap rejected: " + no;
     }
   }
-  for (Cand& cd : tried) z.sel.records.push_back(std::move(cd.rec));
+  for (SwapCand& cd : tried) z.sel.records.push_back(std::move(cd.rec));
   return swapped;
 }
 
@@ -242,15 +271,57 @@ bool pair_step(Search& z, int step, const std::vector<Effect>& cands) {
   return accepted;
 }
 
+namespace {
+
+// A removal of the backward pass: the selected set without `e`.
+struct Drop {
+  Effect e;
+  EffectSet st;
+  SetEval cv, full;
+  SearchRecord rec;
+  bool removable = false;
+};
+
+// Whether d's effect can go (d.removable, with its reason in d.rec), its
+// removal cross-validated and fitted on all windows.
+void judge_drop(Search& z, Drop& d) {
+  const PairedComparison p = z.cv.compare(d.cv, z.cur_cv, z.o.alpha);  // keeping e vs dropping it
+  fill(d.rec, p);
+  d.rec.bic = d.full.bic;
+  d.rec.delta_bic = z.cur_full.bic - d.full.bic;
+  // Redundancy by the size rule only: once another effect changes every
+  // window, an intermittent effect's paired test has little power left.
+  // Or by the materiality rule: what it gains is immaterial.
+  const std::string why = immaterial(removed(z.cv, d.cv, z.cur_cv), z.floor_m, z.floor_rad);
+  const bool material = why.empty();
+  d.removable = !(p.rel >= z.o.min_rel_improvement && p.gain >= z.o.min_gain) || !material;
+  d.rec.reason = !material     ? "removable: " + why
+                 : d.removable ? fmt::format("removable: without it CV is only {:.2f} % worse", 100.0 * p.rel)
+                               : "kept: it is needed";
+  // Rule (d) again for an effect whose no-op is not its absence
+  // (noop_differs_from_absence; actuator_lag replays the commands):
+  // accepted within a pair, it may be left alone by the pair's other
+  // effect's removal, and then its own parameters must still matter
+  // (a null track's 360-cpr encoders
+  // lost to the commands; actuator_lag + time_offset passed as a pair,
+  // time_offset was dropped, tau = 0.14 ms stayed).
+  if (!d.removable && noop_differs_from_absence(d.e)) {
+    const SetEval own = z.cv.own_noop(z.cur_cv, d.e);
+    const std::string no = own.ok ? verdict(z.cv.compare(own, z.cur_cv, z.o.alpha), -1.0, z.o,
+                                            removed(z.cv, own, z.cur_cv), z.floor_m, z.floor_rad)
+                                  : own.error;
+    if (!no.empty()) {
+      d.removable = true;
+      d.rec.rel_improvement = std::min(d.rec.rel_improvement, 0.0);
+      d.rec.reason = "removable: its own parameters at their no-op values do as well: " + no;
+    }
+  }
+}
+
+}  // namespace
+
 // One backward round; true when an effect was removed.
 bool backward_round(Search& z, int round) {
-  struct Drop {
-    Effect e;
-    EffectSet st;
-    SetEval cv, full;
-    SearchRecord rec;
-    bool removable = false;
-  };
   std::vector<Drop> drops;
   const auto t0 = Clock::now();
   std::vector<EffectSet> sets;
@@ -275,42 +346,10 @@ bool backward_round(Search& z, int round) {
   const double share = drops.empty() ? 0.0 : since(t0) / static_cast<double>(drops.size());
   for (Drop& d : drops) {
     fill(d.rec, d.cv);
-    if (d.cv.ok && d.full.ok) {
-      const PairedComparison p = z.cv.compare(d.cv, z.cur_cv, z.o.alpha);  // keeping e vs dropping it
-      fill(d.rec, p);
-      d.rec.bic = d.full.bic;
-      d.rec.delta_bic = z.cur_full.bic - d.full.bic;
-      // Redundancy by the size rule only: once another effect changes every
-      // window, an intermittent effect's paired test has little power left.
-      // Or by the materiality rule: what it gains is immaterial.
-      const std::string why = immaterial(removed(z.cv, d.cv, z.cur_cv), z.floor_m, z.floor_rad);
-      const bool material = why.empty();
-      d.removable = !(p.rel >= z.o.min_rel_improvement && p.gain >= z.o.min_gain) || !material;
-      d.rec.reason = !material ? "removable: " + why
-                     : d.removable
-                         ? fmt::format("removable: without it CV is only {:.2f} % worse", 100.0 * p.rel)
-                         : "kept: it is needed";
-      // Rule (d) again for an effect whose no-op is not its absence
-      // (noop_differs_from_absence; actuator_lag replays the commands):
-      // accepted within a pair, it may be left alone by the pair's other
-      // effect's removal, and then its own parameters must still matter
-      // (a null track's 360-cpr encoders
-      // lost to the commands; actuator_lag + time_offset passed as a pair,
-      // time_offset was dropped, tau = 0.14 ms stayed).
-      if (!d.removable && noop_differs_from_absence(d.e)) {
-        const SetEval own = z.cv.own_noop(z.cur_cv, d.e);
-        const std::string no = own.ok ? verdict(z.cv.compare(own, z.cur_cv, z.o.alpha), -1.0, z.o,
-                                                removed(z.cv, own, z.cur_cv), z.floor_m, z.floor_rad)
-                                      : own.error;
-        if (!no.empty()) {
-          d.removable = true;
-          d.rec.rel_improvement = std::min(d.rec.rel_improvement, 0.0);
-          d.rec.reason = "removable: its own parameters at their no-op values do as well: " + no;
-        }
-      }
-    } else {
+    if (d.cv.ok && d.full.ok)
+      judge_drop(z, d);
+    else
       d.rec.reason = "fit without it failed: " + d.cv.error + d.full.error;
-    }
     d.rec.time_s = share;
   }
   Drop* out = nullptr;

@@ -82,13 +82,11 @@ namespace {
 
 constexpr double kMaxCoarseSteps = 32.0;  // radius_step.t coarse grid (profile_step_time)
 
-// radius_step.t by profile search of the screening cost (select.h,
-// "Discrete parameters"). The points of one grid level are fitted in
-// parallel (OpenMP), each warm-started from the same fit (the current set's,
-// then the best point's of the level before), so the result does not depend
-// on the thread count.
-double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet& s_fitted, double prev_t,
-                         const SelectOptions& o) {
+// The step times profile_step_time searches, [lo, hi], and its coarse step.
+struct StepRange {
+  double lo = 0.0, hi = 0.0, coarse = 0.0;
+};
+StepRange step_range(const CrossValidator& cv, const SelectOptions& o) {
   // Earlier, a step is a radius_error: the first step_head_s of the track, or
   // its first window when that is shorter. Not the whole first window: with
   // sparse fixes the windows grow (selection_window_s) and an 80 s first
@@ -106,20 +104,23 @@ double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet
   // length) stays bounded and the search costs linear time.
   const double coarse = std::max(o.step_coarse_s > 0.0 ? o.step_coarse_s : 0.5 * head, span / kMaxCoarseSteps);
   const double hi = cv.windows().back().t_end_s - 0.5 * coarse;
-  if (!(hi > lo)) return kNaN;
+  return {lo, hi, coarse};
+}
+
+// The step times fitted so far, with their costs: what a step at t removes
+// from the windows' settled costs without one (negative), the current set
+// held at its fit.
+struct StepProfile {
+  CrossValidator& cv;
+  const EffectSet& s;
+  const std::vector<double>& settled;
+  const StepRange& range;
+  const SelectOptions& o;
   std::map<double, std::pair<double, EffectSet>> seen;  // t -> (cost, fitted)
-  // Each window's settled cost without a step (a no-op step at any time).
-  std::vector<double> settled;
-  try {
-    settled = cv.settled_costs(
-        start_from(with_effect(s, Effect::radius_step), s_fitted).set(Effect::radius_step, "t", lo),
-        Effect::radius_step);
-  } catch (const std::exception&) {
-    return kNaN;
-  }
+
   // Fits the times not seen yet, all from `warm`.
-  auto costs = [&](std::vector<double> ts, const EffectSet& warm) {
-    for (double& t : ts) t = std::clamp(t, lo, hi);
+  void fit(std::vector<double> ts, const EffectSet& warm) {
+    for (double& t : ts) t = std::clamp(t, range.lo, range.hi);
     std::sort(ts.begin(), ts.end());
     ts.erase(std::unique(ts.begin(), ts.end()), ts.end());
     std::erase_if(ts, [&](double t) { return seen.count(t) > 0; });
@@ -144,40 +145,67 @@ double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet
       }
     }
     for (std::size_t i = 0; i < ts.size(); ++i) seen[ts[i]] = std::move(res[i]);
-  };
-  auto best_t = [&]() {
+  }
+  // The time of the lowest cost so far (NaN when none is finite).
+  double best_t() const {
     double bt = kNaN, bc = kInf;
     for (const auto& [t, v] : seen)
       if (v.first < bc) bc = v.first, bt = t;
     return bt;
-  };
-  if (std::isfinite(prev_t)) {
-    costs({prev_t}, s_fitted);
-  } else {
-    std::vector<double> grid;  // every coarse step of covered time, a gap skipped to the next window
-    double t = lo;
-    for (const Window& w : cv.windows()) {
-      t = std::max(t, w.t_begin_s);
-      for (; t <= std::min(w.t_end_s, hi + 1e-9); t += coarse) grid.push_back(t);
-    }
-    costs(grid, s_fitted);
   }
+};
+
+// Every coarse step of covered time from lo to hi, a gap skipped to the next window.
+std::vector<double> coarse_grid(const CrossValidator& cv, const StepRange& r) {
+  std::vector<double> grid;
+  double t = r.lo;
+  for (const Window& w : cv.windows()) {
+    t = std::max(t, w.t_begin_s);
+    for (; t <= std::min(w.t_end_s, r.hi + 1e-9); t += r.coarse) grid.push_back(t);
+  }
+  return grid;
+}
+
+// radius_step.t by profile search of the screening cost (select.h,
+// "Discrete parameters"). The points of one grid level are fitted in
+// parallel (OpenMP), each warm-started from the same fit (the current set's,
+// then the best point's of the level before), so the result does not depend
+// on the thread count.
+double profile_step_time(CrossValidator& cv, const EffectSet& s, const EffectSet& s_fitted, double prev_t,
+                         const SelectOptions& o) {
+  const StepRange range = step_range(cv, o);
+  const double lo = range.lo, hi = range.hi, coarse = range.coarse;
+  if (!(hi > lo)) return kNaN;
+  // Each window's settled cost without a step (a no-op step at any time).
+  std::vector<double> settled;
+  try {
+    settled = cv.settled_costs(
+        start_from(with_effect(s, Effect::radius_step), s_fitted).set(Effect::radius_step, "t", lo),
+        Effect::radius_step);
+  } catch (const std::exception&) {
+    return kNaN;
+  }
+  StepProfile profile{cv, s, settled, range, o, {}};
+  if (std::isfinite(prev_t))
+    profile.fit({prev_t}, s_fitted);
+  else
+    profile.fit(coarse_grid(cv, range), s_fitted);
   // Refinement: steps of coarse/5 over +-0.6 coarse (+-0.4 from a previous
   // time), then each level a fifth of the last step (at least step_fine_s)
   // over +- the last step, down to step_fine_s.
   double step = coarse / 5.0, reach = std::isfinite(prev_t) ? 0.4 * coarse : 0.6 * coarse;
   for (;;) {
-    const double centre = best_t();
+    const double centre = profile.best_t();
     if (!std::isfinite(centre)) return kNaN;
     const int k = static_cast<int>(std::floor(reach / step + 1e-9));
     std::vector<double> ts;
     for (int i = -k; i <= k; ++i) ts.push_back(centre + i * step);
-    costs(ts, seen[centre].second);
+    profile.fit(ts, profile.seen[centre].second);
     if (step <= o.step_fine_s * (1.0 + 1e-9)) break;
     reach = step;
     step = std::max(o.step_fine_s, step / 5.0);
   }
-  return best_t();
+  return profile.best_t();
 }
 
 }  // namespace
@@ -207,16 +235,22 @@ std::string judge(Search& z, const EffectSet& st, const SetEval& cv, std::initia
   return no;
 }
 
-// One forward step; true when a candidate was accepted.
-bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
-  struct Cand {
-    Effect e;
-    EffectSet st;
-    SetEval cv;
-    SearchRecord rec;
-  };
+namespace {
+
+// A candidate of a forward step: its effect, the set with it, its
+// cross-validation and its record.
+struct Cand {
+  Effect e;
+  EffectSet st;
+  SetEval cv;
+  SearchRecord rec;
+};
+
+// The candidates not chosen yet, each with its discrete search done
+// (radius_step's time, slip_zone's box); `t_cand` gets each one's wall time.
+std::vector<Cand> candidates(Search& z, int step, const std::vector<Effect>& cands,
+                             std::vector<double>& t_cand) {
   std::vector<Cand> tried;
-  std::vector<double> t_cand;  // wall time of each candidate's discrete search
   for (Effect e : cands) {
     if (std::count(z.chosen.begin(), z.chosen.end(), e)) continue;
     const auto t0 = Clock::now();
@@ -239,9 +273,13 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
     if (e == Effect::radius_step || e == Effect::slip_zone) z.sel.timing.discrete_s += t_cand.back();
     tried.push_back(std::move(cd));
   }
-  // Every candidate's cross-validation at once: the (candidate, fold) fits
-  // run in parallel (CrossValidator::cross_validate_all); record times are
-  // the discrete search plus the candidate's share of the batch.
+  return tried;
+}
+
+// Every candidate's cross-validation at once: the (candidate, fold) fits
+// run in parallel (CrossValidator::cross_validate_all); record times are
+// the discrete search plus the candidate's share of the batch.
+void cross_validate_candidates(Search& z, std::vector<Cand>& tried, std::vector<double>& t_cand) {
   std::vector<EffectSet> sets;
   std::vector<std::size_t> which;
   for (std::size_t i = 0; i < tried.size(); ++i)
@@ -263,19 +301,21 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
     fill(tried[i].rec, tried[i].cv);
     tried[i].rec.time_s = t_cand[i];
   }
-  // Candidates by CV score; the best few are judged in turn (select.h,
-  // "Forward step"): the first that passes every rule is accepted.
+}
+
+// Candidates by CV score, in the order they are judged (select.h, "Forward
+// step"). radius_error goes first unless `rival`, ranked before it, beats it
+// by the size and paired-test rules (diagnosis-design.md "Model selection",
+// "Candidates"): a radius step is a radius error from a time on (nested: an
+// early step fits a constant error's noise, a step at 31 s behind 20 s
+// windows' head); without a reference heading a yaw-rate offset bends the
+// path as a wheel differential does.
+std::vector<Cand*> judging_order(Search& z, std::vector<Cand>& tried) {
   std::vector<Cand*> order;
   for (Cand& cd : tried)
     if (cd.cv.ok) order.push_back(&cd);
   std::stable_sort(order.begin(), order.end(),
                    [](const Cand* a, const Cand* b) { return a->cv.score < b->cv.score; });
-  // radius_error goes first unless `rival`, ranked before it, beats it by
-  // the size and paired-test rules (diagnosis-design.md "Model selection", "Candidates"): a radius step is a radius
-  // error from a time on (nested: an early step fits a constant error's
-  // noise, a step at 31 s behind 20 s windows' head); without a
-  // reference heading a yaw-rate offset bends the path as a wheel
-  // differential does.
   const auto radius_error_unless_beaten = [&](Effect rival) {
     const auto at = [&](Effect e) {
       return std::find_if(order.begin(), order.end(), [e](const Cand* c) { return c->e == e; });
@@ -287,6 +327,18 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
   };
   radius_error_unless_beaten(Effect::radius_step);
   if (!z.heading) radius_error_unless_beaten(Effect::odometry_bias);
+  return order;
+}
+
+}  // namespace
+
+// One forward step; true when a candidate was accepted.
+bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
+  std::vector<double> t_cand;  // wall time of each candidate's discrete search
+  std::vector<Cand> tried = candidates(z, step, cands, t_cand);
+  cross_validate_candidates(z, tried, t_cand);
+  // The best few are judged in turn: the first that passes every rule is accepted.
+  const std::vector<Cand*> order = judging_order(z, tried);
   bool accepted = false;
   for (std::size_t rank = 0; rank < order.size(); ++rank) {
     Cand* best = order[rank];

@@ -417,17 +417,15 @@ LagEstimate estimate_lag(const OdoSignal& sig, const ReferenceBins& rb, double s
   return out;
 }
 
-OdometryCheck check_odometry(const DiagInput& in, const ReferenceBins& rb, const SensorCheckOptions& o) {
-  OdometryCheck oc;
-  oc.speed_ratio.name = "speed_ratio", oc.speed_ratio.noop = 1.0;
-  oc.yaw_ratio.name = "yaw_ratio", oc.yaw_ratio.noop = 1.0;
-  OdoSignal odo;
+// The odometry's cumulative travel and heading: from the wheel angles and the
+// nominal radii and wheel base, or integrated from body velocities. Returns
+// why there is none, "" when there is.
+std::string odometry_signal(const DiagInput& in, OdoSignal& odo) {
   if (in.odometry == OdometryKind::wheel_angles) {
-    if (in.phi_l_rad.size() < 2 || in.phi_r_rad.size() < 2)
-      return oc.unavailable_reason = "no wheel angles", oc;
+    if (in.phi_l_rad.size() < 2 || in.phi_r_rad.size() < 2) return "no wheel angles";
     if (!finite_positive(in.radius_l_m) || !finite_positive(in.radius_r_m) ||
         !finite_positive(in.wheel_base_m)) {
-      return oc.unavailable_reason = "nominal radii / wheel base missing", oc;
+      return "nominal radii / wheel base missing";
     }
     std::vector<double> dist(in.odo_t_s.size()), head(in.odo_t_s.size());
     for (std::size_t i = 0; i < in.odo_t_s.size(); ++i) {
@@ -437,9 +435,22 @@ OdometryCheck check_odometry(const DiagInput& in, const ReferenceBins& rb, const
     odo = {Cumulative::of_values(in.odo_t_s, std::move(dist)),
            Cumulative::of_values(in.odo_t_s, std::move(head))};
   } else {
-    if (in.v_mps.size() < 2 || in.w_radps.size() < 2) return oc.unavailable_reason = "no body velocities", oc;
+    if (in.v_mps.size() < 2 || in.w_radps.size() < 2) return "no body velocities";
     odo = {Cumulative::of_rates(in.odo_t_s, in.v_mps), Cumulative::of_rates(in.odo_t_s, in.w_radps)};
   }
+  return "";
+}
+
+// The ratio fits' rows over the reference bins within the odometry's span:
+// Δs_ref = ratio·Δs_odo (rv) and Δθ_ref = ratio·Δψ_odo (rw), each bin's width,
+// and the mean odometry speed, turn rate and bin width (sums until
+// OdometryCheck::bins divides them).
+struct RatioRows {
+  Rows rv, rw;
+  std::vector<double> width;
+  double mean_abs_v = 0, mean_abs_w = 0, mean_width = 0;
+};
+RatioRows ratio_rows(const DiagInput& in, const OdoSignal& odo, const ReferenceBins& rb) {
   // Odometry noise per bin (regressor noise of the ratio fits): encoder
   // quantisation, one count = the smallest wheel-angle step seen.
   double var_s = 1e-12, var_h = 1e-12;
@@ -449,49 +460,48 @@ OdometryCheck check_odometry(const DiagInput& in, const ReferenceBins& rb, const
     var_s = std::max(var_s, R * R * tick * tick / 12.0);
     var_h = std::max(var_h, R * R * tick * tick / (3.0 * in.wheel_base_m * in.wheel_base_m));
   }
-  Rows rv, rw;  // Δs_ref = ratio·Δs_odo; Δθ_ref = ratio·Δψ_odo
-  rv.level_var = rb.position_noise_m * rb.position_noise_m;
-  rw.level_var = rb.heading_noise_rad * rb.heading_noise_rad;
-  std::vector<double> width;
-  double mean_abs_v = 0, mean_abs_w = 0, mean_width = 0;
+  RatioRows q;
+  q.rv.level_var = rb.position_noise_m * rb.position_noise_m;
+  q.rw.level_var = rb.heading_noise_rad * rb.heading_noise_rad;
   for (std::size_t i = 0; i < rb.t0_s.size(); ++i) {
     const double t0 = rb.t0_s[i], t1 = rb.t1_s[i], dt = t1 - t0;
     if (t0 < odo.dist.front_t() || t1 > odo.dist.back_t()) continue;
     const double ds = rb.heading ? odo.dist.at(t1) - odo.dist.at(t0) : odo.chord(t0, t1);
-    rv.add(t0, t1, ds, rb.v_mps[i] * dt, var_s);
-    width.push_back(dt);
-    mean_abs_v += std::abs(ds) / dt, mean_width += dt;
+    q.rv.add(t0, t1, ds, rb.v_mps[i] * dt, var_s);
+    q.width.push_back(dt);
+    q.mean_abs_v += std::abs(ds) / dt, q.mean_width += dt;
     if (rb.heading) {
       const double dh = odo.head.at(t1) - odo.head.at(t0);
-      rw.add(t0, t1, dh, rb.w_radps[i] * dt, var_h);
-      mean_abs_w += std::abs(dh) / dt;
+      q.rw.add(t0, t1, dh, rb.w_radps[i] * dt, var_h);
+      q.mean_abs_w += std::abs(dh) / dt;
     }
   }
-  oc.bins = static_cast<int>(rv.x.size());
-  if (oc.bins < kMinBins)
-    return oc.unavailable_reason = "too few reference bins within the odometry's span", oc;
-  const double nb = static_cast<double>(oc.bins);
-  mean_abs_v /= nb, mean_abs_w /= nb, mean_width /= nb;
+  return q;
+}
+
+// One ratio's verdict (value, bootstrap standard error, drift against the
+// residual noise's over a bin); returns the residual sigma, NaN when the fit
+// fails.
+double fit_ratio(const Rows& rows, Verdict& v, double mean_abs, double floor, std::uint64_t seed,
+                 const RatioRows& q, const ReferenceBins& rb, const SensorCheckOptions& o) {
   const double T = o.relevance_window_s;
+  const RobustFit f = gls_huber_fit(rows, o);
+  if (!f.ok) return kNaN;
+  v.value = f.a;
+  std::vector<double> reps;
+  bootstrap(f, block_rows(rb, o), seed, o, [&](const RobustFit& fb) { reps.push_back(fb.a); });
+  v.std_error = sample_sd(reps);
+  const double sigma = rate_residual_sigma(rows, q.width, f);
+  v.drift = std::abs(v.value - 1.0) * mean_abs * T;
+  v.noise_drift = sigma * q.mean_width;
+  finish_verdict(v, floor, o);
+  return sigma;
+}
 
-  auto ratio = [&](const Rows& rows, Verdict& v, double mean_abs, double floor, std::uint64_t seed) {
-    const RobustFit f = gls_huber_fit(rows, o);
-    if (!f.ok) return kNaN;
-    v.value = f.a;
-    std::vector<double> reps;
-    bootstrap(f, block_rows(rb, o), seed, o, [&](const RobustFit& fb) { reps.push_back(fb.a); });
-    v.std_error = sample_sd(reps);
-    const double sigma = rate_residual_sigma(rows, width, f);
-    v.drift = std::abs(v.value - 1.0) * mean_abs * T;
-    v.noise_drift = sigma * mean_width;
-    finish_verdict(v, floor, o);
-    return sigma;
-  };
-  oc.residual_sigma_mps = ratio(rv, oc.speed_ratio, mean_abs_v, o.min_drift_m, o.seed + 2);
-  if (rb.heading) ratio(rw, oc.yaw_ratio, mean_abs_w, o.min_drift_rad, o.seed + 3);
-  oc.available = std::isfinite(oc.speed_ratio.value);
-  if (!oc.available) return oc.unavailable_reason = "the odometry does not move", oc;
-
+// How late the odometry is against the reference, and with commands how far
+// the motion trails them.
+void set_lags(OdometryCheck& oc, const DiagInput& in, const OdoSignal& odo, const ReferenceBins& rb,
+              double mean_width, const SensorCheckOptions& o) {
   const double step = o.lag_step_s > 0 ? o.lag_step_s
                                        : std::max({1e-3, median_step(in.odo_t_s), mean_width / 25.0});
   oc.odometry_late = estimate_lag(odo, rb, step, o);
@@ -503,6 +513,25 @@ OdometryCheck check_odometry(const DiagInput& in, const ReferenceBins& rb, const
     l.lag_s = -l.lag_s;  // ref(t) ≈ cmd(t + τ)  ⇔  delay = −τ
     oc.command_delay = l;
   }
+}
+
+OdometryCheck check_odometry(const DiagInput& in, const ReferenceBins& rb, const SensorCheckOptions& o) {
+  OdometryCheck oc;
+  oc.speed_ratio.name = "speed_ratio", oc.speed_ratio.noop = 1.0;
+  oc.yaw_ratio.name = "yaw_ratio", oc.yaw_ratio.noop = 1.0;
+  OdoSignal odo;
+  if (std::string why = odometry_signal(in, odo); !why.empty()) return oc.unavailable_reason = why, oc;
+  RatioRows q = ratio_rows(in, odo, rb);
+  oc.bins = static_cast<int>(q.rv.x.size());
+  if (oc.bins < kMinBins)
+    return oc.unavailable_reason = "too few reference bins within the odometry's span", oc;
+  const double nb = static_cast<double>(oc.bins);
+  q.mean_abs_v /= nb, q.mean_abs_w /= nb, q.mean_width /= nb;
+  oc.residual_sigma_mps = fit_ratio(q.rv, oc.speed_ratio, q.mean_abs_v, o.min_drift_m, o.seed + 2, q, rb, o);
+  if (rb.heading) fit_ratio(q.rw, oc.yaw_ratio, q.mean_abs_w, o.min_drift_rad, o.seed + 3, q, rb, o);
+  oc.available = std::isfinite(oc.speed_ratio.value);
+  if (!oc.available) return oc.unavailable_reason = "the odometry does not move", oc;
+  set_lags(oc, in, odo, rb, q.mean_width, o);
   return oc;
 }
 

@@ -353,6 +353,168 @@ Problem make_problem(const DiagInput& in, const std::vector<Window>& windows, co
   return p;
 }
 
+// Throws unless every window of `train` and `heldout` exists.
+void check_window_lists(const std::vector<int>& train, const std::vector<int>& heldout,
+                        const std::vector<Window>& windows) {
+  for (const std::vector<int>* list : {&train, &heldout})
+    for (int w : *list)
+      if (w < 0 || static_cast<std::size_t>(w) >= windows.size())
+        throw std::invalid_argument(fmt::format("term search: window {} does not exist (the track has {})", w,
+                                                windows.size()));
+}
+
+// The problem linearised at zero coefficients on the training windows, the
+// columns scaled to unit norm (`scale`, 0 for a column that never moves a
+// residual): normal equations per fold and in total.
+struct Linearised {
+  Eigen::VectorXd scale;
+  std::vector<Normal> fold;
+  Normal total;
+};
+Linearised linearise(const Problem& p, const std::vector<int>& train, const Eigen::VectorXd& zero,
+                     const std::vector<Eigen::VectorXd>& r_train, const TermSearchOptions& o) {
+  const auto m = static_cast<Eigen::Index>(p.cols.size());
+  std::vector<int> all_cols(static_cast<std::size_t>(m));
+  for (Eigen::Index j = 0; j < m; ++j) all_cols[static_cast<std::size_t>(j)] = static_cast<int>(j);
+  std::vector<Eigen::MatrixXd> J = jacobians(p, train, zero, r_train, all_cols, o.fd_rel_step);
+  Eigen::VectorXd scale = Eigen::VectorXd::Zero(m);
+  for (const Eigen::MatrixXd& Jw : J) scale += Jw.colwise().squaredNorm().transpose();
+  for (Eigen::Index j = 0; j < m; ++j) scale(j) = scale(j) > 0.0 ? 1.0 / std::sqrt(scale(j)) : 0.0;
+  const int K = std::min<int>(o.folds, static_cast<int>(train.size()));
+  std::vector<Normal> fold(static_cast<std::size_t>(K),
+                           Normal{Eigen::MatrixXd::Zero(m, m), Eigen::VectorXd::Zero(m), 0.0, 0});
+  Normal total{Eigen::MatrixXd::Zero(m, m), Eigen::VectorXd::Zero(m), 0.0, 0};
+  for (std::size_t w = 0; w < train.size(); ++w) {
+    const Eigen::MatrixXd Js = J[w] * scale.asDiagonal();
+    Normal& f = fold[w * static_cast<std::size_t>(K) / train.size()];
+    f.G += Js.transpose() * Js, f.b += Js.transpose() * r_train[w];
+    f.e += r_train[w].squaredNorm(), f.n += r_train[w].size();
+  }
+  for (const Normal& f : fold) total.G += f.G, total.b += f.b, total.e += f.e, total.n += f.n;
+  return {std::move(scale), std::move(fold), std::move(total)};
+}
+
+// Forward stepwise selection by CV: the support, each step in `steps`.
+std::vector<int> forward_select(const Problem& p, const Linearised& lin, const TermSearchOptions& o,
+                                std::vector<TermStep>& steps) {
+  const auto m = static_cast<int>(p.cols.size());
+  const std::vector<Normal>& fold = lin.fold;
+  const Normal& total = lin.total;
+  const Eigen::VectorXd& scale = lin.scale;
+  std::vector<int> S;
+  double current = cv_score(fold, total, S);
+  steps.push_back({0, "", current, true});
+  for (int step = 1; step <= o.max_terms; ++step) {
+    int best = -1;
+    double best_cv = 0.0;
+    for (int j = 0; j < m; ++j) {
+      if (scale(j) == 0.0 || std::find(S.begin(), S.end(), j) != S.end()) continue;
+      std::vector<int> T = S;
+      T.push_back(j);
+      const double cv = cv_score(fold, total, T);
+      if (best < 0 || cv < best_cv) best = j, best_cv = cv;
+    }
+    if (best < 0) break;
+    // A term on one wheel needs evidence that the wheels differ: it must beat
+    // the same term on both wheels as clearly as a term must beat none.
+    const int pair = both_wheels_column(p, best);
+    if (pair >= 0 && scale(pair) != 0.0 && std::find(S.begin(), S.end(), pair) == S.end()) {
+      std::vector<int> T = S;
+      T.push_back(pair);
+      const double pair_cv = cv_score(fold, total, T);
+      if (!(best_cv <= pair_cv * (1.0 - o.min_rel_cv_gain))) best = pair, best_cv = pair_cv;
+    }
+    const bool accept = best_cv <= current * (1.0 - o.min_rel_cv_gain);
+    steps.push_back({step, label(p.cols[static_cast<std::size_t>(best)]), best_cv, accept});
+    if (!accept) break;
+    S.push_back(best);
+    current = best_cv;
+  }
+  return S;
+}
+
+// The support's coefficients fitted on all training windows, with J'J and
+// the residuals at them.
+struct SupportFit {
+  Eigen::VectorXd c;
+  Eigen::MatrixXd JtJ;
+  std::vector<Eigen::VectorXd> r;
+};
+
+// Final fit of the support S on all training windows: the linear solution,
+// then Gauss-Newton through the replay.
+SupportFit fit_support(const Problem& p, const std::vector<int>& train, const std::vector<int>& S,
+                       const Linearised& lin, const Eigen::VectorXd& zero, const TermSearchOptions& o) {
+  SupportFit fit;
+  Eigen::VectorXd& c = fit.c;
+  Eigen::MatrixXd& JtJ = fit.JtJ;
+  std::vector<Eigen::VectorXd>& r = fit.r;
+  c = zero;
+  const Eigen::VectorXd cs = solve_support(lin.total, S);
+  for (std::size_t i = 0; i < S.size(); ++i) c(S[i]) = cs(static_cast<Eigen::Index>(i)) * lin.scale(S[i]);
+  r = all_residuals(p, train, c);
+  for (int it = 0; it <= o.refine_iterations; ++it) {
+    const std::vector<Eigen::MatrixXd> Js = jacobians(p, train, c, r, S, o.fd_rel_step);
+    const auto k = static_cast<Eigen::Index>(S.size());
+    JtJ = Eigen::MatrixXd::Zero(k, k);
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(k);
+    for (std::size_t w = 0; w < train.size(); ++w)
+      JtJ += Js[w].transpose() * Js[w], g += Js[w].transpose() * r[w];
+    if (it == o.refine_iterations) break;
+    const Eigen::VectorXd d = -JtJ.ldlt().solve(g);
+    if (!d.allFinite()) break;
+    for (std::size_t i = 0; i < S.size(); ++i) c(S[i]) += d(static_cast<Eigen::Index>(i));
+    r = all_residuals(p, train, c);
+  }
+  return fit;
+}
+
+// The fitted coefficients' covariance: (J'J)^-1 times the residual variance
+// (3 anchor degrees of freedom per training window).
+Eigen::MatrixXd coefficient_covariance(const SupportFit& fit, std::size_t support_size, std::size_t n_train) {
+  double sse = 0.0;
+  long n_res = 0;
+  for (const Eigen::VectorXd& rw : fit.r) sse += rw.squaredNorm(), n_res += rw.size();
+  const double dof = static_cast<double>(n_res) - static_cast<double>(support_size) -
+                     3.0 * static_cast<double>(n_train);
+  const double s2 = dof > 0.0 ? sse / dof : std::nan("");
+  const Eigen::MatrixXd& JtJ = fit.JtJ;
+  return JtJ.ldlt().solve(Eigen::MatrixXd::Identity(JtJ.rows(), JtJ.cols())) * s2;
+}
+
+// The support's terms (a both-wheels column gives one per wheel), each also
+// in out.model.terms with its name and standard error.
+std::vector<sim::ModelTerm> support_terms(const Problem& p, const std::vector<int>& S, const Eigen::VectorXd& c,
+                                          const Eigen::MatrixXd& cov, TermSearchResult& out) {
+  std::vector<sim::ModelTerm> terms;
+  for (std::size_t i = 0; i < S.size(); ++i) {
+    const Column& col = p.cols[static_cast<std::size_t>(S[i])];
+    const double se = std::sqrt(cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i)));
+    for (TermTarget t : {col.target, TermTarget::v_r}) {
+      terms.push_back({t, col.basis, c(S[i])});
+      out.model.terms.push_back({terms.back(), sim::term_name(t, col.basis),
+                                 std::isfinite(se) ? se : std::nan("")});
+      if (!col.both) break;
+    }
+  }
+  return terms;
+}
+
+// Found when the held-out gain clears the floor; else the reason why not.
+void judge_heldout(TermSearchResult& out, const std::vector<int>& heldout, double floor_m) {
+  const TermScore& h = out.model.heldout;
+  const double gain = h.before_pos_rmse_m - h.after_pos_rmse_m;
+  if (heldout.empty()) {
+    out.reason = "no held-out window to prove the terms on";
+  } else if (!(std::isfinite(gain) && gain >= floor_m && gain > 0.0)) {
+    out.reason = fmt::format(
+        "held-out position error {:.4f} m -> {:.4f} m: the gain is below the floor of {:.4f} m",
+        h.before_pos_rmse_m, h.after_pos_rmse_m, floor_m);
+  } else {
+    out.found = true;
+  }
+}
+
 }  // namespace
 
 bool TermSearchOptions::IsValid(std::string* why) const {
@@ -376,11 +538,7 @@ TermSearchResult search_terms(const DiagInput& in, const EffectSet& chosen, cons
   std::string why;
   if (!o.IsValid(&why)) throw std::invalid_argument("term search: " + why);
   if (train.empty()) throw std::invalid_argument("term search: no training window");
-  for (const std::vector<int>* list : {&train, &heldout})
-    for (int w : *list)
-      if (w < 0 || static_cast<std::size_t>(w) >= windows.size())
-        throw std::invalid_argument(fmt::format("term search: window {} does not exist (the track has {})", w,
-                                                windows.size()));
+  check_window_lists(train, heldout, windows);
   const EffectSet wheel = wheel_only(chosen);
   const EffectModel model(in, wheel);
   Problem p = make_problem(in, windows, model, wheel, o);
@@ -403,114 +561,21 @@ TermSearchResult search_terms(const DiagInput& in, const EffectSet& chosen, cons
     return out;
   }
 
-  // Linearised problem on the training windows, columns scaled to unit norm.
-  std::vector<int> all_cols(static_cast<std::size_t>(m));
-  for (Eigen::Index j = 0; j < m; ++j) all_cols[static_cast<std::size_t>(j)] = static_cast<int>(j);
-  std::vector<Eigen::MatrixXd> J = jacobians(p, train, zero, r_train, all_cols, o.fd_rel_step);
-  Eigen::VectorXd scale = Eigen::VectorXd::Zero(m);
-  for (const Eigen::MatrixXd& Jw : J) scale += Jw.colwise().squaredNorm().transpose();
-  for (Eigen::Index j = 0; j < m; ++j) scale(j) = scale(j) > 0.0 ? 1.0 / std::sqrt(scale(j)) : 0.0;
-  const int K = std::min<int>(o.folds, static_cast<int>(train.size()));
-  std::vector<Normal> fold(static_cast<std::size_t>(K),
-                           Normal{Eigen::MatrixXd::Zero(m, m), Eigen::VectorXd::Zero(m), 0.0, 0});
-  Normal total{Eigen::MatrixXd::Zero(m, m), Eigen::VectorXd::Zero(m), 0.0, 0};
-  for (std::size_t w = 0; w < train.size(); ++w) {
-    const Eigen::MatrixXd Js = J[w] * scale.asDiagonal();
-    Normal& f = fold[w * static_cast<std::size_t>(K) / train.size()];
-    f.G += Js.transpose() * Js, f.b += Js.transpose() * r_train[w];
-    f.e += r_train[w].squaredNorm(), f.n += r_train[w].size();
-  }
-  for (const Normal& f : fold) total.G += f.G, total.b += f.b, total.e += f.e, total.n += f.n;
-
-  // Forward stepwise selection by CV.
-  std::vector<int> S;
-  double current = cv_score(fold, total, S);
-  out.steps.push_back({0, "", current, true});
-  for (int step = 1; step <= o.max_terms; ++step) {
-    int best = -1;
-    double best_cv = 0.0;
-    for (int j = 0; j < m; ++j) {
-      if (scale(j) == 0.0 || std::find(S.begin(), S.end(), j) != S.end()) continue;
-      std::vector<int> T = S;
-      T.push_back(j);
-      const double cv = cv_score(fold, total, T);
-      if (best < 0 || cv < best_cv) best = j, best_cv = cv;
-    }
-    if (best < 0) break;
-    // A term on one wheel needs evidence that the wheels differ: it must beat
-    // the same term on both wheels as clearly as a term must beat none.
-    const int pair = both_wheels_column(p, best);
-    if (pair >= 0 && scale(pair) != 0.0 && std::find(S.begin(), S.end(), pair) == S.end()) {
-      std::vector<int> T = S;
-      T.push_back(pair);
-      const double pair_cv = cv_score(fold, total, T);
-      if (!(best_cv <= pair_cv * (1.0 - o.min_rel_cv_gain))) best = pair, best_cv = pair_cv;
-    }
-    const bool accept = best_cv <= current * (1.0 - o.min_rel_cv_gain);
-    out.steps.push_back({step, label(p.cols[static_cast<std::size_t>(best)]), best_cv, accept});
-    if (!accept) break;
-    S.push_back(best);
-    current = best_cv;
-  }
+  const Linearised lin = linearise(p, train, zero, r_train, o);
+  const std::vector<int> S = forward_select(p, lin, o, out.steps);
   if (S.empty()) {
     out.reason = "no candidate term lowers the cross-validated error";
     return out;
   }
 
-  // Final fit of the support on all training windows: the linear solution,
-  // then Gauss-Newton through the replay.
-  Eigen::VectorXd c = zero;
-  const Eigen::VectorXd cs = solve_support(total, S);
-  for (std::size_t i = 0; i < S.size(); ++i) c(S[i]) = cs(static_cast<Eigen::Index>(i)) * scale(S[i]);
-  Eigen::MatrixXd JtJ;
-  std::vector<Eigen::VectorXd> r = all_residuals(p, train, c);
-  for (int it = 0; it <= o.refine_iterations; ++it) {
-    const std::vector<Eigen::MatrixXd> Js = jacobians(p, train, c, r, S, o.fd_rel_step);
-    const auto k = static_cast<Eigen::Index>(S.size());
-    JtJ = Eigen::MatrixXd::Zero(k, k);
-    Eigen::VectorXd g = Eigen::VectorXd::Zero(k);
-    for (std::size_t w = 0; w < train.size(); ++w)
-      JtJ += Js[w].transpose() * Js[w], g += Js[w].transpose() * r[w];
-    if (it == o.refine_iterations) break;
-    const Eigen::VectorXd d = -JtJ.ldlt().solve(g);
-    if (!d.allFinite()) break;
-    for (std::size_t i = 0; i < S.size(); ++i) c(S[i]) += d(static_cast<Eigen::Index>(i));
-    r = all_residuals(p, train, c);
-  }
-  double sse = 0.0;
-  long n_res = 0;
-  for (const Eigen::VectorXd& rw : r) sse += rw.squaredNorm(), n_res += rw.size();
-  const double dof = static_cast<double>(n_res) - static_cast<double>(S.size()) -
-                     3.0 * static_cast<double>(train.size());
-  const double s2 = dof > 0.0 ? sse / dof : std::nan("");
-  const Eigen::MatrixXd cov = JtJ.ldlt().solve(Eigen::MatrixXd::Identity(JtJ.rows(), JtJ.cols())) * s2;
-
-  std::vector<sim::ModelTerm> terms;
-  for (std::size_t i = 0; i < S.size(); ++i) {
-    const Column& col = p.cols[static_cast<std::size_t>(S[i])];
-    const double se = std::sqrt(cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i)));
-    for (TermTarget t : {col.target, TermTarget::v_r}) {
-      terms.push_back({t, col.basis, c(S[i])});
-      out.model.terms.push_back({terms.back(), sim::term_name(t, col.basis),
-                                 std::isfinite(se) ? se : std::nan("")});
-      if (!col.both) break;
-    }
-  }
+  const SupportFit fit = fit_support(p, train, S, lin, zero, o);
+  const Eigen::MatrixXd cov = coefficient_covariance(fit, S.size(), train.size());
+  const std::vector<sim::ModelTerm> terms = support_terms(p, S, fit.c, cov, out);
   out.model.formula = sim::term_formula(terms);
   out.model.conditions = conditions_of(terms);
-  out.model.train.after_pos_rmse_m = score(train, c);
-  out.model.heldout.after_pos_rmse_m = score(heldout, c);
-  const TermScore& h = out.model.heldout;
-  const double gain = h.before_pos_rmse_m - h.after_pos_rmse_m;
-  if (heldout.empty()) {
-    out.reason = "no held-out window to prove the terms on";
-  } else if (!(std::isfinite(gain) && gain >= floor_m && gain > 0.0)) {
-    out.reason = fmt::format(
-        "held-out position error {:.4f} m -> {:.4f} m: the gain is below the floor of {:.4f} m",
-        h.before_pos_rmse_m, h.after_pos_rmse_m, floor_m);
-  } else {
-    out.found = true;
-  }
+  out.model.train.after_pos_rmse_m = score(train, fit.c);
+  out.model.heldout.after_pos_rmse_m = score(heldout, fit.c);
+  judge_heldout(out, heldout, floor_m);
   return out;
 }
 

@@ -72,23 +72,32 @@ std::vector<ZoneBox> best_apart(std::vector<ZoneBox> boxes, int max_boxes) {
   return out;
 }
 
-// zone_candidates on one grid of cell_m (header comment).
-std::vector<ZoneBox> zone_candidates_at(const DiagInput& in, const std::vector<Window>& windows,
-                                        const std::vector<double>& pred_x_m,
-                                        const std::vector<double>& pred_y_m,
-                                        const std::vector<double>& pred_theta_rad, double cell_m, int max_boxes,
-                                        double min_score, int exhaustive_cells) {
-  const bool heading = in.has_ref_heading() && pred_theta_rad.size() == in.ref_t_s.size();
-  const double sm2 = in.ref_sigma_m * in.ref_sigma_m;
-  const double sh2 = heading ? in.ref_sigma_rad * in.ref_sigma_rad : 1.0;
-  struct Inc {
-    double x, y, a, h, len;
-    bool cont;  // continues the previous increment's run of samples
-    int cx = 0, cy = 0;
-  };
+// One step of a window's reference path, for the zone grid: its midpoint,
+// the growth of the along-track (a) and heading (h) residual over it, the
+// predicted travel `len`, and its grid cell.
+struct Inc {
+  double x, y, a, h, len;
+  bool cont;  // continues the previous increment's run of samples
+  int cx = 0, cy = 0;
+};
+
+// A box of grid cells.
+struct Rect {
+  int x0, x1, y0, y1;  // inclusive cell ranges
+};
+
+// The increments of every window's scored samples (those with finite
+// predictions), and their bounding box.
+struct Increments {
   std::vector<Inc> inc;
-  std::size_t last_g = 0;  // sample the previous increment ended at
   double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+};
+Increments increments(const DiagInput& in, const std::vector<Window>& windows,
+                      const std::vector<double>& pred_x_m, const std::vector<double>& pred_y_m,
+                      const std::vector<double>& pred_theta_rad, bool heading) {
+  Increments r;
+  std::vector<Inc>& inc = r.inc;
+  std::size_t last_g = 0;  // sample the previous increment ended at
   for (const Window& w : windows)
     for (std::size_t g = w.ref_begin + 1; g < w.ref_end; ++g) {
       const std::size_t p = g - 1;
@@ -113,37 +122,29 @@ std::vector<ZoneBox> zone_candidates_at(const DiagInput& in, const std::vector<W
             !inc.empty() && last_g == p};
       if (heading && std::isfinite(pred_theta_rad[g]) && std::isfinite(pred_theta_rad[p]))
         k.h = (pred_theta_rad[g] - in.ref_theta_rad[g]) - (pred_theta_rad[p] - in.ref_theta_rad[p]);
-      xmin = std::min(xmin, k.x), xmax = std::max(xmax, k.x);
-      ymin = std::min(ymin, k.y), ymax = std::max(ymax, k.y);
+      r.xmin = std::min(r.xmin, k.x), r.xmax = std::max(r.xmax, k.x);
+      r.ymin = std::min(r.ymin, k.y), r.ymax = std::max(r.ymax, k.y);
       inc.push_back(k);
       last_g = g;
     }
-  if (inc.empty() || max_boxes <= 0) return {};
-  const double cell = std::max({cell_m, (xmax - xmin) / 400.0, (ymax - ymin) / 400.0});
-  const int nx = static_cast<int>((xmax - xmin) / cell) + 1, ny = static_cast<int>((ymax - ymin) / cell) + 1;
-  for (Inc& k : inc) {
-    k.cx = std::min(nx - 1, static_cast<int>((k.x - xmin) / cell));
-    k.cy = std::min(ny - 1, static_cast<int>((k.y - ymin) / cell));
-  }
-  // Background growth per metre: median over cells with some travel.
-  std::vector<double> ca(static_cast<std::size_t>(nx * ny), 0.0), ch(ca), cl(ca);
-  for (const Inc& k : inc) {
-    const auto i = static_cast<std::size_t>(k.cy * nx + k.cx);
-    ca[i] += k.a, ch[i] += k.h, cl[i] += k.len;
-  }
-  std::vector<double> ra, rh;
-  for (std::size_t i = 0; i < cl.size(); ++i)
-    if (cl[i] > cell) ra.push_back(ca[i] / cl[i]), rh.push_back(ch[i] / cl[i]);
-  auto median = [](std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
-    return v[v.size() / 2];
-  };
-  const double bg_a = median(ra), bg_h = median(rh);
-  struct Rect {
-    int x0, x1, y0, y1;  // inclusive cell ranges
-  };
-  auto score = [&](const Rect& r) {
+  return r;
+}
+
+// The increments on a grid of nx × ny cells of `cell` metres from (xmin,
+// ymin), the travel and growth summed per cell, and the background growth
+// per metre; scores boxes of cells.
+struct ZoneGrid {
+  std::vector<Inc> inc;
+  double xmin = 0.0, ymin = 0.0, cell = 0.0;
+  int nx = 0, ny = 0;
+  std::vector<double> ca, ch, cl;  // per cell: along-track growth, heading growth, travel
+  double bg_a = 0.0, bg_h = 0.0;
+  bool heading = false;
+  double sm2 = 1.0, sh2 = 1.0;
+
+  // The growth inside r beyond the background, squared over its noise
+  // (2 × passes reference variances), along track plus heading.
+  double score(const Rect& r) const {
     double a = 0.0, h = 0.0;
     int passes = 0;
     bool prev_in = false;
@@ -158,36 +159,103 @@ std::vector<ZoneBox> zone_candidates_at(const DiagInput& in, const std::vector<W
     if (passes == 0) return 0.0;
     const double p2 = 2.0 * passes;
     return std::max(a, 0.0) * std::max(a, 0.0) / (p2 * sm2) + (heading ? h * h / (p2 * sh2) : 0.0);
-  };
-  if (exhaustive_cells > 0) {
-    // Every box of 1..exhaustive_cells cells per side that holds some
-    // travel, best first, none whose centre lies in a better one.
-    // Cells with travel, as 2D prefix counts: a box without any is skipped
-    // unscored (a large drive's area is mostly empty).
-    std::vector<int> pre(static_cast<std::size_t>((nx + 1) * (ny + 1)), 0);
-    const auto P = [&](int x, int y) -> int& { return pre[static_cast<std::size_t>(y * (nx + 1) + x)]; };
-    for (int y = 0; y < ny; ++y)
-      for (int x = 0; x < nx; ++x)
-        P(x + 1, y + 1) = P(x, y + 1) + P(x + 1, y) - P(x, y) +
-                          (cl[static_cast<std::size_t>(y * nx + x)] > 0.0);
-    std::vector<ZoneBox> all;
-    for (int y0 = 0; y0 < ny; ++y0)
-      for (int x0 = 0; x0 < nx; ++x0)
-        for (int h = 1; h <= exhaustive_cells && y0 + h <= ny; ++h)
-          for (int w = 1; w <= exhaustive_cells && x0 + w <= nx; ++w) {
-            if (P(x0 + w, y0 + h) - P(x0, y0 + h) - P(x0 + w, y0) + P(x0, y0) == 0) continue;
-            const Rect r{x0, x0 + w - 1, y0, y0 + h - 1};
-            const double v = score(r);
-            if (v >= min_score)
-              all.push_back({xmin + r.x0 * cell, xmin + (r.x1 + 1) * cell, ymin + r.y0 * cell,
-                             ymin + (r.y1 + 1) * cell, v, cell});
-          }
-    return best_apart(std::move(all), max_boxes);
   }
+  ZoneBox box(const Rect& r, double v) const {
+    return {
+        xmin + r.x0 * cell, xmin + (r.x1 + 1) * cell, ymin + r.y0 * cell, ymin + (r.y1 + 1) * cell, v, cell};
+  }
+};
+
+// The grid over `incs` (at least cell_m, at most 400 cells per side), each
+// increment's cell, the per-cell sums and the background growth per metre.
+ZoneGrid zone_grid(Increments incs, double cell_m) {
+  ZoneGrid z;
+  z.inc = std::move(incs.inc);
+  const double xmin = incs.xmin, xmax = incs.xmax, ymin = incs.ymin, ymax = incs.ymax;
+  z.xmin = xmin, z.ymin = ymin;
+  const double cell = std::max({cell_m, (xmax - xmin) / 400.0, (ymax - ymin) / 400.0});
+  z.cell = cell;
+  const int nx = static_cast<int>((xmax - xmin) / cell) + 1, ny = static_cast<int>((ymax - ymin) / cell) + 1;
+  z.nx = nx, z.ny = ny;
+  for (Inc& k : z.inc) {
+    k.cx = std::min(nx - 1, static_cast<int>((k.x - xmin) / cell));
+    k.cy = std::min(ny - 1, static_cast<int>((k.y - ymin) / cell));
+  }
+  // Background growth per metre: median over cells with some travel.
+  std::vector<double> ca(static_cast<std::size_t>(nx * ny), 0.0), ch(ca), cl(ca);
+  for (const Inc& k : z.inc) {
+    const auto i = static_cast<std::size_t>(k.cy * nx + k.cx);
+    ca[i] += k.a, ch[i] += k.h, cl[i] += k.len;
+  }
+  std::vector<double> ra, rh;
+  for (std::size_t i = 0; i < cl.size(); ++i)
+    if (cl[i] > cell) ra.push_back(ca[i] / cl[i]), rh.push_back(ch[i] / cl[i]);
+  auto median = [](std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  z.bg_a = median(ra), z.bg_h = median(rh);
+  z.ca = std::move(ca), z.ch = std::move(ch), z.cl = std::move(cl);
+  return z;
+}
+
+// Every box of 1..exhaustive_cells cells per side that holds some travel,
+// best first, none whose centre lies in a better one.
+std::vector<ZoneBox> exhaustive_boxes(const ZoneGrid& z, int exhaustive_cells, int max_boxes,
+                                      double min_score) {
+  const int nx = z.nx, ny = z.ny;
+  // Cells with travel, as 2D prefix counts: a box without any is skipped
+  // unscored (a large drive's area is mostly empty).
+  std::vector<int> pre(static_cast<std::size_t>((nx + 1) * (ny + 1)), 0);
+  const auto P = [&](int x, int y) -> int& { return pre[static_cast<std::size_t>(y * (nx + 1) + x)]; };
+  for (int y = 0; y < ny; ++y)
+    for (int x = 0; x < nx; ++x)
+      P(x + 1, y + 1) = P(x, y + 1) + P(x + 1, y) - P(x, y) +
+                        (z.cl[static_cast<std::size_t>(y * nx + x)] > 0.0);
+  std::vector<ZoneBox> all;
+  for (int y0 = 0; y0 < ny; ++y0)
+    for (int x0 = 0; x0 < nx; ++x0)
+      for (int h = 1; h <= exhaustive_cells && y0 + h <= ny; ++h)
+        for (int w = 1; w <= exhaustive_cells && x0 + w <= nx; ++w) {
+          if (P(x0 + w, y0 + h) - P(x0, y0 + h) - P(x0 + w, y0) + P(x0, y0) == 0) continue;
+          const Rect r{x0, x0 + w - 1, y0, y0 + h - 1};
+          const double v = z.score(r);
+          if (v >= min_score) all.push_back(z.box(r, v));
+        }
+  return best_apart(std::move(all), max_boxes);
+}
+
+// Grows r, of score sc, one side at a time by the best of the four one-cell
+// moves while sqrt(score) rises by at least one noise unit (a cell without
+// slip moves the sum by reference noise alone).
+void grow_rect(const ZoneGrid& z, Rect& r, double& sc) {
+  for (;;) {
+    const Rect tries[4] = {{r.x0 - 1, r.x1, r.y0, r.y1},
+                           {r.x0, r.x1 + 1, r.y0, r.y1},
+                           {r.x0, r.x1, r.y0 - 1, r.y1},
+                           {r.x0, r.x1, r.y0, r.y1 + 1}};
+    double bs = sc;
+    int bi = -1;
+    for (int t = 0; t < 4; ++t) {
+      const Rect& q = tries[t];
+      if (q.x0 < 0 || q.y0 < 0 || q.x1 >= z.nx || q.y1 >= z.ny) continue;
+      const double v = z.score(q);
+      if (v > bs) bs = v, bi = t;
+    }
+    if (bi < 0 || std::sqrt(bs) < std::sqrt(sc) + 1.0) break;
+    r = tries[bi], sc = bs;
+  }
+}
+
+// Boxes grown from the best-scoring cells (at most 10 × max_boxes seeds,
+// none inside a box already grown).
+std::vector<ZoneBox> grown_boxes(const ZoneGrid& z, int max_boxes, double min_score) {
+  const int nx = z.nx, ny = z.ny;
   std::vector<std::pair<double, int>> seeds;
   for (int i = 0; i < nx * ny; ++i)
-    if (cl[static_cast<std::size_t>(i)] > 0.0 || ch[static_cast<std::size_t>(i)] != 0.0)
-      seeds.push_back({score({i % nx, i % nx, i / nx, i / nx}), i});
+    if (z.cl[static_cast<std::size_t>(i)] > 0.0 || z.ch[static_cast<std::size_t>(i)] != 0.0)
+      seeds.push_back({z.score({i % nx, i % nx, i / nx, i / nx}), i});
   std::sort(seeds.begin(), seeds.end(), [](const auto& a, const auto& b) {
     return a.first > b.first || (a.first == b.first && a.second < b.second);
   });
@@ -203,30 +271,29 @@ std::vector<ZoneBox> zone_candidates_at(const DiagInput& in, const std::vector<W
     if (covered || seeds[si].first < 0.25 * min_score) continue;
     Rect r{cx, cx, cy, cy};
     double sc = seeds[si].first;
-    for (;;) {
-      const Rect tries[4] = {{r.x0 - 1, r.x1, r.y0, r.y1},
-                             {r.x0, r.x1 + 1, r.y0, r.y1},
-                             {r.x0, r.x1, r.y0 - 1, r.y1},
-                             {r.x0, r.x1, r.y0, r.y1 + 1}};
-      double bs = sc;
-      int bi = -1;
-      for (int t = 0; t < 4; ++t) {
-        const Rect& q = tries[t];
-        if (q.x0 < 0 || q.y0 < 0 || q.x1 >= nx || q.y1 >= ny) continue;
-        const double v = score(q);
-        if (v > bs) bs = v, bi = t;
-      }
-      // Grow only by at least one noise unit of sqrt(score) (a cell without
-      // slip moves the sum by reference noise alone).
-      if (bi < 0 || std::sqrt(bs) < std::sqrt(sc) + 1.0) break;
-      r = tries[bi], sc = bs;
-    }
+    grow_rect(z, r, sc);
     found.push_back(r);
     if (sc < min_score) continue;
-    out.push_back({xmin + r.x0 * cell, xmin + (r.x1 + 1) * cell, ymin + r.y0 * cell, ymin + (r.y1 + 1) * cell,
-                   sc, cell});
+    out.push_back(z.box(r, sc));
   }
   return out;
+}
+
+// zone_candidates on one grid of cell_m (header comment).
+std::vector<ZoneBox> zone_candidates_at(const DiagInput& in, const std::vector<Window>& windows,
+                                        const std::vector<double>& pred_x_m,
+                                        const std::vector<double>& pred_y_m,
+                                        const std::vector<double>& pred_theta_rad, double cell_m, int max_boxes,
+                                        double min_score, int exhaustive_cells) {
+  const bool heading = in.has_ref_heading() && pred_theta_rad.size() == in.ref_t_s.size();
+  const double sm2 = in.ref_sigma_m * in.ref_sigma_m;
+  const double sh2 = heading ? in.ref_sigma_rad * in.ref_sigma_rad : 1.0;
+  Increments incs = increments(in, windows, pred_x_m, pred_y_m, pred_theta_rad, heading);
+  if (incs.inc.empty() || max_boxes <= 0) return {};
+  ZoneGrid z = zone_grid(std::move(incs), cell_m);
+  z.heading = heading, z.sm2 = sm2, z.sh2 = sh2;
+  if (exhaustive_cells > 0) return exhaustive_boxes(z, exhaustive_cells, max_boxes, min_score);
+  return grown_boxes(z, max_boxes, min_score);
 }
 
 }  // namespace
@@ -277,43 +344,38 @@ double inside_share(const DiagInput& in, const std::vector<Window>& windows, con
   return all > 0 ? static_cast<double>(inside) / static_cast<double>(all) : 0.0;
 }
 
-}  // namespace
+// A place, not the whole drive (header comment): a box over most of the
+// path is a radius error by another name.
+bool too_wide(const CrossValidator& cv, const ZoneBox& b, const ZoneSearchOptions& o) {
+  return inside_share(cv.input(), cv.windows(), b) > o.max_share;
+}
 
-EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval& cur_full,
-                          const ZoneSearchOptions& o) {
-  std::vector<ZoneBox> boxes = zone_candidates(cv.input(), cv.windows(), cur_full.pred.x_m, cur_full.pred.y_m,
-                                               cur_full.pred.theta_rad, o.cell_m, o.max_boxes, o.min_score);
-  boxes.insert(boxes.end(), o.extra_boxes.begin(), o.extra_boxes.end());
-  // A place, not the whole drive (header comment): a box over most of the
-  // path is a radius error by another name.
-  const auto too_wide = [&](const ZoneBox& b) {
-    return inside_share(cv.input(), cv.windows(), b) > o.max_share;
-  };
-  boxes.erase(std::remove_if(boxes.begin(), boxes.end(), too_wide), boxes.end());
-  // A box's cost is measured from the windows' settled costs without slip
-  // (the same for every box: slips at no-op act nowhere), so that its fit
-  // may start from the best box's slips so far (`warm`).
-  const EffectSet& start = cur_full.fitted;
-  EffectSet warm = start;
-  std::vector<double> settled;
-  if (!boxes.empty()) {
-    EffectSet at = start_from(s, start).enable(Effect::slip_zone);
-    at.set(Effect::slip_zone, "x0", boxes[0].x0_m).set(Effect::slip_zone, "x1", boxes[0].x1_m);
-    at.set(Effect::slip_zone, "y0", boxes[0].y0_m).set(Effect::slip_zone, "y1", boxes[0].y1_m);
-    try {
-      settled = cv.settled_costs(at, Effect::slip_zone);
-    } catch (const std::exception&) {
-      return {};
-    }
-  }
-  // A box's cost: the current set's fit cost (0 here) minus what its slips
-  // remove, fitted alone on the windows that come near the box (elsewhere
-  // the slips act nowhere and no window's cost changes).
-  auto try_box = [&](const ZoneBox& b, double& cost, EffectSet& fitted) {
-    EffectSet st = s;
-    st.enable(Effect::slip_zone);
-    st.set(Effect::slip_zone, "x0", b.x0_m).set(Effect::slip_zone, "x1", b.x1_m);
-    st.set(Effect::slip_zone, "y0", b.y0_m).set(Effect::slip_zone, "y1", b.y1_m);
+// `s` with slip_zone on over box b (its slips as in `s`).
+EffectSet with_box(const EffectSet& s, const ZoneBox& b) {
+  EffectSet st = s;
+  st.enable(Effect::slip_zone);
+  st.set(Effect::slip_zone, "x0", b.x0_m).set(Effect::slip_zone, "x1", b.x1_m);
+  st.set(Effect::slip_zone, "y0", b.y0_m).set(Effect::slip_zone, "y1", b.y1_m);
+  return st;
+}
+
+// A box's cost: the current set's fit cost (0 here) minus what its slips
+// remove, fitted alone on the windows that come near the box (elsewhere
+// the slips act nowhere and no window's cost changes). A box's cost is
+// measured from the windows' settled costs without slip (`settled`, the same
+// for every box: slips at no-op act nowhere), so that its fit may start from
+// the best box's slips so far (`warm`).
+struct BoxTrial {
+  CrossValidator& cv;
+  const EffectSet& s;
+  const SetEval& cur_full;
+  const std::vector<double>& settled;
+  const ZoneSearchOptions& o;
+
+  // The set with box b; `cost` its cost (infinite when no window comes near
+  // or the fit fails), `fitted` its fitted effects.
+  EffectSet operator()(const ZoneBox& b, const EffectSet& warm, double& cost, EffectSet& fitted) const {
+    EffectSet st = with_box(s, b);
     cost = kInf;
     const std::vector<int> near = windows_near(cv, cur_full, b, kZoneReachM);
     if (near.empty()) return st;
@@ -325,28 +387,23 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
     } catch (const std::exception&) {
     }
     return st;
-  };
-  EffectSet best, best_fit;
+  }
+};
+
+// The box being refined: its set, fitted effects (the next fits' warm
+// start), box and cost.
+struct BoxState {
+  EffectSet best, warm;
   ZoneBox bb;
   double best_cost = kInf;
-  {  // every candidate box from the same start, in parallel; the first lowest cost wins
-    std::vector<double> costs(boxes.size(), kInf);
-    std::vector<EffectSet> sets(boxes.size()), fits(boxes.size());
-#pragma omp parallel for schedule(dynamic, 1) if (boxes.size() > 1)
-    for (std::size_t i = 0; i < boxes.size(); ++i) sets[i] = try_box(boxes[i], costs[i], fits[i]);
-    for (std::size_t i = 0; i < boxes.size(); ++i)
-      if (costs[i] < best_cost) best_cost = costs[i], best = sets[i], best_fit = fits[i], bb = boxes[i];
-  }
-  if (best.empty()) return best;
-  if (std::max(best_fit.get(Effect::slip_zone, "s_l"), best_fit.get(Effect::slip_zone, "s_r")) < kMinZoneSlip &&
-      !(-best_cost >= kRefineCost))
-    return best;
-  warm = best_fit;
-  // Coordinate search, first improvement in the order (edge, sign). The
-  // moves left in a round are fitted speculatively in parallel from the
-  // current box and warm start; the first that improves is taken and the
-  // moves after it are fitted again from the new box: the same boxes, starts
-  // and results as one move at a time, for any number of threads.
+};
+
+// Coordinate search, first improvement in the order (edge, sign). The
+// moves left in a round are fitted speculatively in parallel from the
+// current box and warm start; the first that improves is taken and the
+// moves after it are fitted again from the new box: the same boxes, starts
+// and results as one move at a time, for any number of threads.
+void refine_box(const BoxTrial& try_box, const ZoneSearchOptions& o, BoxState& st) {
   struct Move {
     int edge;
     double sign;
@@ -354,7 +411,7 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
   // Steps from half the cell the box was proposed on (coarser grids give
   // coarser boxes) down to a quarter of cell_m.
   std::vector<double> steps;
-  for (double step = 0.5 * std::max(bb.cell_m, o.cell_m); step > 0.2 * o.cell_m; step *= 0.5)
+  for (double step = 0.5 * std::max(st.bb.cell_m, o.cell_m); step > 0.2 * o.cell_m; step *= 0.5)
     steps.push_back(step);
   for (double step : steps)
     for (int round = 0, moved = 1; moved && round < 4; ++round) {
@@ -365,33 +422,37 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
       while (!left.empty()) {
         std::vector<ZoneBox> qs;
         for (const Move& m : left) {
-          ZoneBox q = bb;
+          ZoneBox q = st.bb;
           double* v[4] = {&q.x0_m, &q.x1_m, &q.y0_m, &q.y1_m};
           *v[m.edge] += m.sign * step;
           qs.push_back(q);
         }
         std::vector<double> costs(qs.size(), kInf);
         std::vector<EffectSet> sets(qs.size()), fits(qs.size());
-        // try_box reads `warm`, which no task writes.
+        // try_box reads `st.warm`, which no task writes.
 #pragma omp parallel for schedule(dynamic, 1) if (qs.size() > 1)
         for (std::size_t i = 0; i < qs.size(); ++i)
-          if (qs[i].x0_m < qs[i].x1_m && qs[i].y0_m < qs[i].y1_m && !too_wide(qs[i]))
-            sets[i] = try_box(qs[i], costs[i], fits[i]);
+          if (qs[i].x0_m < qs[i].x1_m && qs[i].y0_m < qs[i].y1_m && !too_wide(try_box.cv, qs[i], o))
+            sets[i] = try_box(qs[i], st.warm, costs[i], fits[i]);
         std::size_t taken = qs.size();
         for (std::size_t i = 0; i < qs.size() && taken == qs.size(); ++i)
-          if (costs[i] < best_cost - 1e-6 * std::abs(best_cost)) taken = i;
+          if (costs[i] < st.best_cost - 1e-6 * std::abs(st.best_cost)) taken = i;
         if (taken == qs.size()) break;
-        best_cost = costs[taken], best = sets[taken], bb = qs[taken], warm = fits[taken], moved = 1;
+        st.best_cost = costs[taken], st.best = sets[taken], st.bb = qs[taken], st.warm = fits[taken], moved = 1;
         left.erase(left.begin(), left.begin() + static_cast<long>(taken) + 1);
       }
     }
-  // Undetermined edges (select.h): each edge in turn is moved out to the
-  // isotropic patch, by the whole way, else half or a quarter of it, kept
-  // when the fit cost rises by less than kFlatCost.
+}
+
+// Undetermined edges (select.h): each edge in turn is moved out to the
+// isotropic patch, by the whole way, else half or a quarter of it, kept
+// when the fit cost rises by less than kFlatCost.
+void open_flat_edges(const BoxTrial& try_box, const ZoneSearchOptions& o, BoxState& st) {
+  ZoneBox& bb = st.bb;
   const double side = std::max(bb.x1_m - bb.x0_m, bb.y1_m - bb.y0_m);
-  const double ref_cost = best_cost;
+  const double ref_cost = st.best_cost;
   for (int edge = 0; edge < 4; ++edge) {
-    const double c = inside_centre(cv.input(), cv.windows(), bb, edge / 2);
+    const double c = inside_centre(try_box.cv.input(), try_box.cv.windows(), bb, edge / 2);
     if (!std::isfinite(c)) break;
     double* v[4] = {&bb.x0_m, &bb.x1_m, &bb.y0_m, &bb.y1_m};
     const double target = edge % 2 == 0 ? std::min(*v[edge], c - 0.5 * side)
@@ -409,16 +470,56 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
       *qv[edge] += fracs[i] * (target - *v[edge]);
     }
 #pragma omp parallel for schedule(dynamic, 1)
-    for (int i = 0; i < 2; ++i) sets[i] = try_box(qs[i], costs[i], fits[i]);
+    for (int i = 0; i < 2; ++i) sets[i] = try_box(qs[i], st.warm, costs[i], fits[i]);
     if (!(costs[0] <= ref_cost + kFlatCost || costs[1] <= ref_cost + kFlatCost))
-      sets[2] = try_box(qs[2], costs[2], fits[2]);
+      sets[2] = try_box(qs[2], st.warm, costs[2], fits[2]);
     for (int i = 0; i < 3; ++i)
       if (costs[i] <= ref_cost + kFlatCost) {
-        best = sets[i], bb = qs[i];
+        st.best = sets[i], bb = qs[i];
         break;
       }
   }
-  return best;
+}
+
+}  // namespace
+
+EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval& cur_full,
+                          const ZoneSearchOptions& o) {
+  std::vector<ZoneBox> boxes = zone_candidates(cv.input(), cv.windows(), cur_full.pred.x_m, cur_full.pred.y_m,
+                                               cur_full.pred.theta_rad, o.cell_m, o.max_boxes, o.min_score);
+  boxes.insert(boxes.end(), o.extra_boxes.begin(), o.extra_boxes.end());
+  boxes.erase(std::remove_if(boxes.begin(), boxes.end(), [&](const ZoneBox& b) { return too_wide(cv, b, o); }),
+              boxes.end());
+  const EffectSet& start = cur_full.fitted;
+  std::vector<double> settled;
+  if (!boxes.empty()) {
+    const EffectSet at = with_box(start_from(s, start), boxes[0]);
+    try {
+      settled = cv.settled_costs(at, Effect::slip_zone);
+    } catch (const std::exception&) {
+      return {};
+    }
+  }
+  const BoxTrial try_box{cv, s, cur_full, settled, o};
+  BoxState st;
+  EffectSet best_fit;
+  {  // every candidate box from the same start, in parallel; the first lowest cost wins
+    std::vector<double> costs(boxes.size(), kInf);
+    std::vector<EffectSet> sets(boxes.size()), fits(boxes.size());
+#pragma omp parallel for schedule(dynamic, 1) if (boxes.size() > 1)
+    for (std::size_t i = 0; i < boxes.size(); ++i) sets[i] = try_box(boxes[i], start, costs[i], fits[i]);
+    for (std::size_t i = 0; i < boxes.size(); ++i)
+      if (costs[i] < st.best_cost)
+        st.best_cost = costs[i], st.best = sets[i], best_fit = fits[i], st.bb = boxes[i];
+  }
+  if (st.best.empty()) return st.best;
+  if (std::max(best_fit.get(Effect::slip_zone, "s_l"), best_fit.get(Effect::slip_zone, "s_r")) < kMinZoneSlip &&
+      !(-st.best_cost >= kRefineCost))
+    return st.best;
+  st.warm = best_fit;
+  refine_box(try_box, o, st);
+  open_flat_edges(try_box, o, st);
+  return st.best;
 }
 
 }  // namespace odotune::diagnose

@@ -208,6 +208,93 @@ ODOTUNE_PF_HOT_LOOP void estimate_block(const EstimateInputs in, const double* _
   }
 }
 
+// Throws std::invalid_argument unless the sample's step, wheel rates,
+// measurement and its variances are usable.
+void check_sample(const CalibSample& s) {
+  if (!(std::isfinite(s.dt_s) && s.dt_s >= 0.0))
+    throw std::invalid_argument("CalibSample: dt_s = " + num(s.dt_s) + " must be finite and ≥ 0");
+  if (!std::isfinite(s.omega_l_rad_s) || !std::isfinite(s.omega_r_rad_s))
+    throw std::invalid_argument("CalibSample: wheel rates must be finite");
+  if (!std::isfinite(s.v_m_s) || !std::isfinite(s.w_rad_s))
+    throw std::invalid_argument("CalibSample: the measurement (v_m_s, w_rad_s) must be finite");
+  if (!(std::isfinite(s.v_var) && s.v_var > 0.0) || !(std::isfinite(s.w_var) && s.w_var > 0.0))
+    throw std::invalid_argument("CalibSample: v_var = " + num(s.v_var) + ", w_var = " + num(s.w_var) +
+                                " must be finite and > 0");
+}
+
+// §III: the random walk's σ, fixed, or eq. 11 for the adaptive variant
+// (floored), from the measurement's departure from the last estimate.
+double paper_sigma(const PfCalibratorParams& p, const CalibEstimate& estimate, const CalibSample& s,
+                   long iteration) {
+  double sd = p.random_walk_sigma_m;
+  if (p.adaptive && iteration > 0) {
+    const double dv = s.v_m_s - estimate.velocity.v_m_s;
+    const double dw = s.w_rad_s - estimate.velocity.w_rad_s;
+    sd = std::max(p.alpha * std::sqrt(dv * dv + dw * dw), p.min_random_walk_sigma_m);
+    // An absurd measurement (|V_m| ~ 1e200) must not scatter the particles to ∞.
+    if (!std::isfinite(sd)) sd = p.random_walk_sigma_m;
+  }
+  return sd;
+}
+
+// Evidence (pf_evolution.h): each parameter's posterior variance inflated by
+// `inflate` = e^{dt/M} − 1; the adaptive variant adds eq. 11's σ (unfloored).
+void evidence_sigmas(const PfCalibratorParams& p, const CalibEstimate& estimate, const CalibSample& s,
+                     long iteration, double inflate, double (&sigma)[3]) {
+  double extra = 0.0;
+  if (p.adaptive && iteration > 0) {
+    const double dv = s.v_m_s - estimate.velocity.v_m_s;
+    const double dw = s.w_rad_s - estimate.velocity.w_rad_s;
+    extra = p.alpha * std::sqrt(dv * dv + dw * dw);
+    if (!std::isfinite(extra)) extra = 0.0;
+  }
+  const double sds[3] = {estimate.sd_radius_right_m, estimate.sd_radius_left_m, estimate.sd_wheel_base_m};
+  const double values[3] = {estimate.params.wheel_radius_right_m, estimate.params.wheel_radius_left_m,
+                            estimate.params.wheel_base_m};
+  // Bounded forgetting (pf_evolution.h): a parameter's spread is never
+  // widened past its prior's (the initial range's uniform sd), so a
+  // direction the drive does not excite (D on a circle at one curvature)
+  // cannot wind up and wander off.
+  const PfCalibratorParams::Range ranges[3] = {p.wheel_radius_right_m, p.wheel_radius_left_m, p.wheel_base_m};
+  for (int k = 0; k < 3; ++k) {
+    // A cloud that has collapsed onto one value keeps a sliver of spread.
+    const double sd = std::max(sds[k], kMinRelativeSpread * values[k]);
+    const double prior_sd = (ranges[k].hi - ranges[k].lo) / std::sqrt(12.0);
+    const double room = std::max(0.0, prior_sd * prior_sd - sd * sd);
+    sigma[k] = std::sqrt(std::min(inflate * sd * sd, room) + extra * extra);
+    if (!std::isfinite(sigma[k])) sigma[k] = 0.0;
+  }
+}
+
+// Whether the policy resamples now, `n` particles with weights summing to
+// `weight_sum` (the largest weight is exp(0) = 1).
+bool resample_due(const PfCalibratorParams& p, const CalibEstimate& estimate, double n, double weight_sum) {
+  bool resample_now = false;
+  switch (p.policy) {
+    case ResamplePolicy::every_step: resample_now = true; break;
+    case ResamplePolicy::neff: resample_now = estimate.n_eff < p.neff_fraction * n; break;
+    case ResamplePolicy::max_weight:
+      // The largest weight is exp(0) = 1, so max ρ̃ = 1/Σρ.
+      resample_now = 1.0 / weight_sum < p.max_weight_ratio / n;
+      break;
+  }
+  return resample_now;
+}
+
+// The particle count after resampling: kept, or for the adaptive variant
+// set by the radii's dispersion (clamped to [min, max]_particles).
+int resample_count(const PfCalibratorParams& p, const CalibEstimate& estimate, int count) {
+  if (p.adaptive) {
+    const double dispersion = 4.0 * estimate.sd_radius_right_m + 4.0 * estimate.sd_radius_left_m;
+    const double wanted = dispersion / p.dispersion_per_particle_m;
+    count = std::isfinite(wanted)
+                ? static_cast<int>(std::clamp(std::round(wanted), static_cast<double>(p.min_particles),
+                                              static_cast<double>(p.max_particles)))
+                : p.max_particles;
+  }
+  return count;
+}
+
 }  // namespace
 
 PfCalibratorParams PfCalibratorParams::adaptive_defaults() {
@@ -295,58 +382,14 @@ PfCalibrator::PfCalibrator(const PfCalibratorParams& params) : params_(params), 
 int PfCalibrator::thread_count() const { return params_.threads > 0 ? params_.threads : omp_get_max_threads(); }
 
 const CalibEstimate& PfCalibrator::step(const CalibSample& s) {
-  if (!(std::isfinite(s.dt_s) && s.dt_s >= 0.0))
-    throw std::invalid_argument("CalibSample: dt_s = " + num(s.dt_s) + " must be finite and ≥ 0");
-  if (!std::isfinite(s.omega_l_rad_s) || !std::isfinite(s.omega_r_rad_s))
-    throw std::invalid_argument("CalibSample: wheel rates must be finite");
-  if (!std::isfinite(s.v_m_s) || !std::isfinite(s.w_rad_s))
-    throw std::invalid_argument("CalibSample: the measurement (v_m_s, w_rad_s) must be finite");
-  if (!(std::isfinite(s.v_var) && s.v_var > 0.0) || !(std::isfinite(s.w_var) && s.w_var > 0.0))
-    throw std::invalid_argument("CalibSample: v_var = " + num(s.v_var) + ", w_var = " + num(s.w_var) +
-                                " must be finite and > 0");
-
+  check_sample(s);
   // Step 1: σ of the random walk of R_R, R_L, D.
   double sigma[3];
   if (params_.evolution == PfEvolution::paper) {
-    // §III: fixed, or eq. 11 for the adaptive variant (floored).
-    double sd = params_.random_walk_sigma_m;
-    if (params_.adaptive && iteration_ > 0) {
-      const double dv = s.v_m_s - estimate_.velocity.v_m_s;
-      const double dw = s.w_rad_s - estimate_.velocity.w_rad_s;
-      sd = std::max(params_.alpha * std::sqrt(dv * dv + dw * dw), params_.min_random_walk_sigma_m);
-      // An absurd measurement (|V_m| ~ 1e200) must not scatter the particles to ∞.
-      if (!std::isfinite(sd)) sd = params_.random_walk_sigma_m;
-    }
-    sigma[0] = sigma[1] = sigma[2] = sd;
+    sigma[0] = sigma[1] = sigma[2] = paper_sigma(params_, estimate_, s, iteration_);
   } else {
-    // Evidence (pf_evolution.h): each parameter's posterior variance
-    // inflated by e^{dt/M} − 1; the adaptive variant adds eq. 11's σ
-    // (unfloored).
     const double inflate = iteration_ > 0 ? memory_.step(s.dt_s) : 0.0;
-    double extra = 0.0;
-    if (params_.adaptive && iteration_ > 0) {
-      const double dv = s.v_m_s - estimate_.velocity.v_m_s;
-      const double dw = s.w_rad_s - estimate_.velocity.w_rad_s;
-      extra = params_.alpha * std::sqrt(dv * dv + dw * dw);
-      if (!std::isfinite(extra)) extra = 0.0;
-    }
-    const double sds[3] = {estimate_.sd_radius_right_m, estimate_.sd_radius_left_m, estimate_.sd_wheel_base_m};
-    const double values[3] = {estimate_.params.wheel_radius_right_m, estimate_.params.wheel_radius_left_m,
-                              estimate_.params.wheel_base_m};
-    // Bounded forgetting (pf_evolution.h): a parameter's spread is never
-    // widened past its prior's (the initial range's uniform sd), so a
-    // direction the drive does not excite (D on a circle at one curvature)
-    // cannot wind up and wander off.
-    const PfCalibratorParams::Range ranges[3] = {params_.wheel_radius_right_m, params_.wheel_radius_left_m,
-                                                 params_.wheel_base_m};
-    for (int k = 0; k < 3; ++k) {
-      // A cloud that has collapsed onto one value keeps a sliver of spread.
-      const double sd = std::max(sds[k], kMinRelativeSpread * values[k]);
-      const double prior_sd = (ranges[k].hi - ranges[k].lo) / std::sqrt(12.0);
-      const double room = std::max(0.0, prior_sd * prior_sd - sd * sd);
-      sigma[k] = std::sqrt(std::min(inflate * sd * sd, room) + extra * extra);
-      if (!std::isfinite(sigma[k])) sigma[k] = 0.0;
-    }
+    evidence_sigmas(params_, estimate_, s, iteration_, inflate, sigma);
   }
   ++iteration_;
   const Shifts shifts{estimate_.params.wheel_radius_right_m, estimate_.params.wheel_radius_left_m,
@@ -372,27 +415,8 @@ const CalibEstimate& PfCalibrator::step(const CalibSample& s) {
   prev_weight_sum_ = block_sums_[kSumW];
 
   const double n = static_cast<double>(particle_count());
-  bool resample_now = false;
-  switch (params_.policy) {
-    case ResamplePolicy::every_step: resample_now = true; break;
-    case ResamplePolicy::neff: resample_now = estimate_.n_eff < params_.neff_fraction * n; break;
-    case ResamplePolicy::max_weight:
-      // The largest weight is exp(0) = 1, so max ρ̃ = 1/Σρ.
-      resample_now = 1.0 / block_sums_[kSumW] < params_.max_weight_ratio / n;
-      break;
-  }
-  if (resample_now) {
-    int count = particle_count();
-    if (params_.adaptive) {
-      const double dispersion = 4.0 * estimate_.sd_radius_right_m + 4.0 * estimate_.sd_radius_left_m;
-      const double wanted = dispersion / params_.dispersion_per_particle_m;
-      count = std::isfinite(wanted)
-                  ? static_cast<int>(std::clamp(std::round(wanted), static_cast<double>(params_.min_particles),
-                                                static_cast<double>(params_.max_particles)))
-                  : params_.max_particles;
-    }
-    resample_to(count);
-  }
+  const bool resample_now = resample_due(params_, estimate_, n, block_sums_[kSumW]);
+  if (resample_now) resample_to(resample_count(params_, estimate_, particle_count()));
   estimate_.resampled = resample_now;
   estimate_.particles = particle_count();
   return estimate_;

@@ -192,17 +192,10 @@ Experiment read_experiment(const std::filesystem::path& path) {
   return parse_experiment(ss.str(), path);
 }
 
-Experiment parse_experiment(const std::string& text, const std::filesystem::path& path) {
-  Experiment e;
-  e.file = path;
-  e.text = text;
-  YAML::Node root;
-  try {
-    root = YAML::Load(e.text);
-  } catch (const YAML::ParserException& ex) {
-    throw Failure(fmt::format("{}:{}: {}", path.string(), ex.mark.line + 1, ex.msg));
-  }
-  if (!root.IsMap()) fail_at(path, root, "expected a mapping (see experiments/smoke.yaml)");
+namespace {
+
+// Every top-level key known, and the format line right.
+void check_keys(const std::filesystem::path& path, const YAML::Node& root) {
   static const std::set<std::string> known = {"format",        "name",  "models",      "tracks",
                                               "modes",         "seeds", "solver",      "budget",
                                               "leave_one_out", "store", "calibration", "robot_localization"};
@@ -218,6 +211,54 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
   if (!root["format"] || root["format"].as<std::string>("") != kFormat)
     fail_at(path, root["format"] ? root["format"] : root,
             fmt::format("missing or unknown format, expected 'format: {}'", kFormat));
+}
+
+// seeds: a list, or {first, count}.
+void read_seeds(const std::filesystem::path& path, const YAML::Node& root, Experiment* e) {
+  const YAML::Node seeds = root["seeds"];
+  if (!seeds) fail_at(path, root, "missing 'seeds'");
+  if (seeds.IsMap()) {
+    const auto first = scalar<std::uint64_t>(path, seeds["first"], "seeds.first");
+    const auto count = scalar<int>(path, seeds["count"], "seeds.count");
+    if (count < 1 || count > 100000) fail_at(path, seeds, "seeds.count must be 1..100000");
+    for (int i = 0; i < count; ++i) e->seeds.push_back(first + static_cast<std::uint64_t>(i));
+  } else {
+    for (const auto& n : list(path, root, "seeds"))
+      e->seeds.push_back(scalar<std::uint64_t>(path, n, "a seed"));
+  }
+}
+
+// budget: {particles, iterations} or {evaluations}.
+void read_budget(const std::filesystem::path& path, const YAML::Node& b, Experiment* e) {
+  if (!b.IsMap()) fail_at(path, b, "budget must be a mapping {particles, iterations} or {evaluations}");
+  for (const auto& kv : b) {
+    const auto key = kv.first.as<std::string>("");
+    if (key == "particles")
+      e->particles = scalar<int>(path, kv.second, "budget.particles");
+    else if (key == "iterations")
+      e->iterations = scalar<int>(path, kv.second, "budget.iterations");
+    else if (key == "evaluations")
+      e->evaluations = scalar<long>(path, kv.second, "budget.evaluations");
+    else
+      fail_at(path, kv.first,
+              fmt::format("unknown budget key '{}', expected particles, iterations or evaluations", key));
+  }
+}
+
+}  // namespace
+
+Experiment parse_experiment(const std::string& text, const std::filesystem::path& path) {
+  Experiment e;
+  e.file = path;
+  e.text = text;
+  YAML::Node root;
+  try {
+    root = YAML::Load(e.text);
+  } catch (const YAML::ParserException& ex) {
+    throw Failure(fmt::format("{}:{}: {}", path.string(), ex.mark.line + 1, ex.msg));
+  }
+  if (!root.IsMap()) fail_at(path, root, "expected a mapping (see experiments/smoke.yaml)");
+  check_keys(path, root);
   const std::filesystem::path base = path.parent_path().empty() ? "." : path.parent_path();
   e.name = root["name"] ? scalar<std::string>(path, root["name"], "name") : path.stem().string();
 
@@ -242,32 +283,9 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
       e.modes.push_back(m);
     }
   }
-  const YAML::Node seeds = root["seeds"];
-  if (!seeds) fail_at(path, root, "missing 'seeds'");
-  if (seeds.IsMap()) {
-    const auto first = scalar<std::uint64_t>(path, seeds["first"], "seeds.first");
-    const auto count = scalar<int>(path, seeds["count"], "seeds.count");
-    if (count < 1 || count > 100000) fail_at(path, seeds, "seeds.count must be 1..100000");
-    for (int i = 0; i < count; ++i) e.seeds.push_back(first + static_cast<std::uint64_t>(i));
-  } else {
-    for (const auto& n : list(path, root, "seeds")) e.seeds.push_back(scalar<std::uint64_t>(path, n, "a seed"));
-  }
+  read_seeds(path, root, &e);
   if (root["solver"]) e.solver = scalar<std::string>(path, root["solver"], "solver");
-  if (const YAML::Node b = root["budget"]) {
-    if (!b.IsMap()) fail_at(path, b, "budget must be a mapping {particles, iterations} or {evaluations}");
-    for (const auto& kv : b) {
-      const auto key = kv.first.as<std::string>("");
-      if (key == "particles")
-        e.particles = scalar<int>(path, kv.second, "budget.particles");
-      else if (key == "iterations")
-        e.iterations = scalar<int>(path, kv.second, "budget.iterations");
-      else if (key == "evaluations")
-        e.evaluations = scalar<long>(path, kv.second, "budget.evaluations");
-      else
-        fail_at(path, kv.first,
-                fmt::format("unknown budget key '{}', expected particles, iterations or evaluations", key));
-    }
-  }
+  if (const YAML::Node b = root["budget"]) read_budget(path, b, &e);
   if (root["leave_one_out"]) e.leave_one_out = scalar<bool>(path, root["leave_one_out"], "leave_one_out");
   if (e.leave_one_out && e.tracks.size() < 2)
     fail_at(path, root["leave_one_out"], "leave_one_out needs at least two tracks");

@@ -143,6 +143,90 @@ std::string grid_fingerprint(const Experiment& e, const std::vector<PreparedTrac
   std::abort();  // MPI_Abort does not return
 }
 
+// Rank 0's shared state: the cells still to hand out, the runs written and
+// the first failure. `mu` guards all of it, the store and progress: the MPI
+// server thread and the local workers share them.
+struct Coordinator {
+  const MpiSession& mpi;
+  const std::vector<std::size_t>& pending;
+  results::Store& store;
+  const std::atomic<bool>* stop;
+  const std::function<void(long, long)>& progress;
+  long total;
+  std::mutex mu{};
+  std::size_t next = 0;
+  long done = 0, remote_ran = 0, remote_abandoned = 0;
+  std::string failure{};
+
+  // The next pending cell; none once failed, stopped or all handed out. Under mu.
+  std::optional<std::size_t> take() {
+    if (!failure.empty() || (stop && stop->load()) || next == pending.size()) return std::nullopt;
+    return pending[next++];
+  }
+  // Under mu.
+  void write(const results::RunRecord& r) {
+    store.add(r);
+    ++done;
+    if (progress) progress(done, total);
+  }
+  // Keeps the first failure. Under mu.
+  void fail(const std::string& line) {
+    if (failure.empty()) failure = line;
+  }
+
+  // One message of another rank; true when it says that rank is done. Under mu.
+  bool handle(const MPI_Status& st, const std::vector<char>& msg) {
+    const int from = st.MPI_SOURCE;
+    switch (st.MPI_TAG) {
+      case kRequest: {
+        const auto k = take();
+        const long long cell = k ? static_cast<long long>(*k) : -1;
+        MPI_Send(&cell, 1, MPI_LONG_LONG, from, kCell, kComm);
+        break;
+      }
+      case kRun:
+        try {
+          write(run_record_from_bytes(msg));
+          ++remote_ran;
+        } catch (const std::exception& ex) {
+          fail(ex.what());
+        }
+        break;
+      case kFailure: fail(fmt::format("rank {}: {}", from, std::string(msg.begin(), msg.end()))); break;
+      case kDone: {
+        long long abandoned = 0;
+        if (msg.size() == sizeof abandoned) std::memcpy(&abandoned, msg.data(), sizeof abandoned);
+        remote_abandoned += static_cast<long>(abandoned);
+        return true;
+      }
+      default: fail(fmt::format("rank {} sent an unknown message (tag {})", from, st.MPI_TAG));
+    }
+    return false;
+  }
+
+  // The server thread, which alone talks MPI on rank 0: answers the other
+  // ranks until every one is done.
+  void serve() {
+    try {
+      int working = mpi.size() - 1;
+      while (working > 0) {
+        MPI_Status st;
+        int flag = 0;
+        MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, kComm, &flag, &st);
+        if (!flag) {
+          std::this_thread::sleep_for(std::chrono::microseconds(500));
+          continue;
+        }
+        const std::vector<char> msg = recv_bytes(st);
+        std::lock_guard<std::mutex> lock(mu);
+        if (handle(st, msg)) --working;
+      }
+    } catch (const std::exception& ex) {
+      abort_job(0, ex.what());
+    }
+  }
+};
+
 // Rank 0: hands out the pending cells to its own threads and, through a
 // second thread that alone talks MPI here, to the other ranks; writes every
 // run to the store as it arrives.
@@ -155,86 +239,28 @@ GridOutcome coordinate(const MpiSession& mpi, const Experiment& e, const std::ve
   out.skipped = out.total - static_cast<long>(pending.size());
   if (progress) progress(out.skipped, out.total);
 
-  std::mutex mu;  // guards everything below, the store and progress
-  std::size_t next = 0;
-  long done = out.skipped, remote_ran = 0, remote_abandoned = 0;
-  std::string failure;
-  const auto take = [&]() -> std::optional<std::size_t> {
-    if (!failure.empty() || (stop && stop->load()) || next == pending.size()) return std::nullopt;
-    return pending[next++];
-  };
-  const auto write = [&](const results::RunRecord& r) {
-    store.add(r);
-    ++done;
-    if (progress) progress(done, out.total);
-  };
-  const auto fail = [&](const std::string& line) {
-    if (failure.empty()) failure = line;
-  };
-
-  std::thread server([&] {
-    try {
-      int working = mpi.size() - 1;
-      while (working > 0) {
-        MPI_Status st;
-        int flag = 0;
-        MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, kComm, &flag, &st);
-        if (!flag) {
-          std::this_thread::sleep_for(std::chrono::microseconds(500));
-          continue;
-        }
-        const std::vector<char> msg = recv_bytes(st);
-        const int from = st.MPI_SOURCE;
-        std::lock_guard<std::mutex> lock(mu);
-        switch (st.MPI_TAG) {
-          case kRequest: {
-            const auto k = take();
-            const long long cell = k ? static_cast<long long>(*k) : -1;
-            MPI_Send(&cell, 1, MPI_LONG_LONG, from, kCell, kComm);
-            break;
-          }
-          case kRun:
-            try {
-              write(run_record_from_bytes(msg));
-              ++remote_ran;
-            } catch (const std::exception& ex) {
-              fail(ex.what());
-            }
-            break;
-          case kFailure: fail(fmt::format("rank {}: {}", from, std::string(msg.begin(), msg.end()))); break;
-          case kDone: {
-            long long abandoned = 0;
-            if (msg.size() == sizeof abandoned) std::memcpy(&abandoned, msg.data(), sizeof abandoned);
-            remote_abandoned += static_cast<long>(abandoned);
-            --working;
-            break;
-          }
-          default: fail(fmt::format("rank {} sent an unknown message (tag {})", from, st.MPI_TAG));
-        }
-      }
-    } catch (const std::exception& ex) {
-      abort_job(0, ex.what());
-    }
-  });
+  Coordinator c{mpi, pending, store, stop, progress, out.total};
+  c.done = out.skipped;
+  std::thread server([&c] { c.serve(); });
 
   CellSource local;
-  local.next = [&] {
-    std::lock_guard<std::mutex> lock(mu);
-    return take();
+  local.next = [&c] {
+    std::lock_guard<std::mutex> lock(c.mu);
+    return c.take();
   };
-  local.finished = [&](results::RunRecord&& r) {
-    std::lock_guard<std::mutex> lock(mu);
-    write(r);
+  local.finished = [&c](results::RunRecord&& r) {
+    std::lock_guard<std::mutex> lock(c.mu);
+    c.write(r);
   };
-  local.failed = [&](const std::string& line) {  // stop handing out cells at once
-    std::lock_guard<std::mutex> lock(mu);
-    fail(line);
+  local.failed = [&c](const std::string& line) {  // stop handing out cells at once
+    std::lock_guard<std::mutex> lock(c.mu);
+    c.fail(line);
   };
   const WorkResult w = work_cells(e, tracks, cells, local, stop);
   server.join();
-  if (!failure.empty()) throw Failure(failure);
-  out.ran = w.ran + remote_ran;
-  out.abandoned = w.abandoned + remote_abandoned;
+  if (!c.failure.empty()) throw Failure(c.failure);
+  out.ran = w.ran + c.remote_ran;
+  out.abandoned = w.abandoned + c.remote_abandoned;
   return out;
 }
 

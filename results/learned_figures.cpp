@@ -39,9 +39,14 @@ std::string rows_of(const std::vector<double>& x, const std::vector<double>& y, 
 
 }  // namespace
 
-void shaded_time_panels(const fs::path& stem, const std::string& title, const std::vector<ShadedPanel>& panels,
-                        const std::vector<TimeShade>& shades, const std::string& shade_label,
-                        const std::vector<TimeMarker>& markers) {
+namespace {
+
+// Checks the panels, shades and markers (std::invalid_argument naming the
+// bad one) and returns the time range the plottable points span (widened by
+// ±0.5 s when empty).
+std::pair<double, double> checked_time_range(const std::vector<ShadedPanel>& panels,
+                                             const std::vector<TimeShade>& shades,
+                                             const std::vector<TimeMarker>& markers) {
   if (panels.empty()) bad("time panels: no panel");
   double t_min = INFINITY, t_max = -INFINITY;
   for (const ShadedPanel& p : panels) {
@@ -65,6 +70,61 @@ void shaded_time_panels(const fs::path& stem, const std::string& title, const st
   for (const TimeMarker& m : markers)
     if (!std::isfinite(m.t_s)) bad("a marker time is not finite");
   if (t_max <= t_min) t_min -= 0.5, t_max += 0.5;
+  return {t_min, t_max};
+}
+
+// Panel p of the stack: its margins, y axis, x labels on the last, marker
+// labels and the shade's key entry on the first, and its lines (their data
+// files into `files`).
+std::string panel_script(const std::vector<ShadedPanel>& panels, std::size_t p,
+                         const std::vector<TimeShade>& shades, const std::string& shade_label,
+                         const std::vector<TimeMarker>& markers,
+                         std::vector<std::pair<std::string, std::string>>& files) {
+  std::string body;
+  const ShadedPanel& panel = panels[p];
+  const auto [top, bottom] = stacked_panel_span(p, panels.size());
+  body += "set tmargin at screen " + num(top) + "\nset bmargin at screen " + num(bottom) + "\n";
+  body += "set ylabel " + q(panel.ylabel) + "\n";
+  body += panel.log_y ? "set logscale y\nset format y '%.0e'\n" : "unset logscale y\nset format y '%.3g'\n";
+  body += std::isfinite(panel.y_min) && (!panel.log_y || panel.y_min > 0.0)
+              ? "set yrange [" + num(panel.y_min) + ":*]\n"
+              : "set yrange [*:*]\n";
+  if (p + 1 == panels.size())
+    body += "set format x '%g'\nset xlabel 'time [s]'\n";
+  else
+    body += "set format x ''\nunset xlabel\n";
+  body += "unset label\n";
+  if (p == 0) {
+    int tag = 1;
+    for (const TimeMarker& m : markers)
+      if (!m.label.empty())
+        body += "set label " + std::to_string(tag++) + " " + q(m.label) + " at first " + num(m.t_s) +
+                ", graph 1 left offset 0.4,-1 front tc rgb '#404040' font ',9'\n";
+  }
+  std::string plot;
+  for (std::size_t i = 0; i < panel.lines.size(); ++i) {
+    const PanelLine& l = panel.lines[i];
+    std::string rows = rows_of(l.t_s, l.y, panel.log_y);
+    if (rows.empty()) continue;
+    const std::string file = "p" + std::to_string(p) + "l" + std::to_string(i) + ".dat";
+    files.emplace_back(file, std::move(rows));
+    plot += (plot.empty() ? "plot " : ", \\\n     ") +
+            ("'" + file + "' using 1:2 with " + (l.dashed ? "steps dt 2" : "lines") + " lw " +
+             (l.thin ? "1" : "1.8") + " lc rgb '" + series_colour(l.colour) + "' title " + q(l.name));
+  }
+  if (p == 0 && !shades.empty() && !shade_label.empty())
+    plot += ", \\\n     keyentry with boxes fs solid 1.0 noborder fc rgb '" + std::string(kShadeColour) +
+            "' title " + q(shade_label);
+  body += plot + "\n";
+  return body;
+}
+
+}  // namespace
+
+void shaded_time_panels(const fs::path& stem, const std::string& title, const std::vector<ShadedPanel>& panels,
+                        const std::vector<TimeShade>& shades, const std::string& shade_label,
+                        const std::vector<TimeMarker>& markers) {
+  const auto [t_min, t_max] = checked_time_range(panels, shades, markers);
 
   std::vector<std::pair<std::string, std::string>> files;
   std::string body = "reset\nset multiplot title " + q(title) + " font ',13'\n";
@@ -80,43 +140,8 @@ void shaded_time_panels(const fs::path& stem, const std::string& title, const st
   for (const TimeMarker& m : markers)
     body += "set arrow from first " + num(m.t_s) + ", graph 0 to first " + num(m.t_s) +
             ", graph 1 nohead back lw 1 dt 3 lc rgb '#606060'\n";
-  for (std::size_t p = 0; p < panels.size(); ++p) {
-    const ShadedPanel& panel = panels[p];
-    const auto [top, bottom] = stacked_panel_span(p, panels.size());
-    body += "set tmargin at screen " + num(top) + "\nset bmargin at screen " + num(bottom) + "\n";
-    body += "set ylabel " + q(panel.ylabel) + "\n";
-    body += panel.log_y ? "set logscale y\nset format y '%.0e'\n" : "unset logscale y\nset format y '%.3g'\n";
-    body += std::isfinite(panel.y_min) && (!panel.log_y || panel.y_min > 0.0)
-                ? "set yrange [" + num(panel.y_min) + ":*]\n"
-                : "set yrange [*:*]\n";
-    if (p + 1 == panels.size())
-      body += "set format x '%g'\nset xlabel 'time [s]'\n";
-    else
-      body += "set format x ''\nunset xlabel\n";
-    body += "unset label\n";
-    if (p == 0) {
-      int tag = 1;
-      for (const TimeMarker& m : markers)
-        if (!m.label.empty())
-          body += "set label " + std::to_string(tag++) + " " + q(m.label) + " at first " + num(m.t_s) +
-                  ", graph 1 left offset 0.4,-1 front tc rgb '#404040' font ',9'\n";
-    }
-    std::string plot;
-    for (std::size_t i = 0; i < panel.lines.size(); ++i) {
-      const PanelLine& l = panel.lines[i];
-      std::string rows = rows_of(l.t_s, l.y, panel.log_y);
-      if (rows.empty()) continue;
-      const std::string file = "p" + std::to_string(p) + "l" + std::to_string(i) + ".dat";
-      files.emplace_back(file, std::move(rows));
-      plot += (plot.empty() ? "plot " : ", \\\n     ") +
-              ("'" + file + "' using 1:2 with " + (l.dashed ? "steps dt 2" : "lines") + " lw " +
-               (l.thin ? "1" : "1.8") + " lc rgb '" + series_colour(l.colour) + "' title " + q(l.name));
-    }
-    if (p == 0 && !shades.empty() && !shade_label.empty())
-      plot += ", \\\n     keyentry with boxes fs solid 1.0 noborder fc rgb '" + std::string(kShadeColour) +
-              "' title " + q(shade_label);
-    body += plot + "\n";
-  }
+  for (std::size_t p = 0; p < panels.size(); ++p)
+    body += panel_script(panels, p, shades, shade_label, markers, files);
   body += "unset multiplot\n";
   render_png_svg(stem, std::move(files), body, 1150, 300 + 280 * static_cast<int>(panels.size()));
 }

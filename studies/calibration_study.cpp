@@ -351,20 +351,11 @@ std::vector<CalibrationMethod> table2_methods() {
   return {M::adaptive_pf, M::dkf, M::batch_velocity, M::none};
 }
 
-CalibrationStudy run_calibration_study(const sim::Scenario& constant, const sim::Scenario& step,
-                                       const StudyOptions& options, const StudyProgress& progress) {
-  std::string why;
-  if (!options.IsValid(&why)) throw std::invalid_argument("study: " + why);
-  check_study_scenario(constant, options);
-  check_study_scenario(step, options);
-  const auto t0 = std::chrono::steady_clock::now();
+namespace {
 
-  CalibrationStudy out;
-  out.scenario = constant.name;
-  out.step_scenario = step.name;
-  out.options = options;
-  out.threads_used = threads_for(options);
-  out.convergence_tolerance = CalibrationOptions{}.convergence_tolerance;
+// The study's Monte Carlo draws, one row per (track, method) of Table II with
+// a slot per run, and a slot per run for each online method's traces.
+void set_up_rows(CalibrationStudy& out, const sim::Scenario& constant, const StudyOptions& options) {
   for (int r = 0; r < options.runs; ++r) out.draws.push_back(mc_draw(options, constant, r));
   const auto methods = table2_methods();
   for (const char* track : {"constant", "step"})
@@ -378,62 +369,54 @@ CalibrationStudy run_calibration_study(const sim::Scenario& constant, const sim:
     }
   for (auto* traces : {&out.pf_constant, &out.pf_step, &out.dkf_constant, &out.dkf_step})
     traces->resize(static_cast<std::size_t>(options.runs));
+}
 
-  const long row_count = static_cast<long>(out.rows.size());
-  const long tasks = row_count * options.runs;
-  const long total = options.runs + tasks;
-  long done = 0;
-  if (progress) progress(0, total);
-  const std::vector<PreparedRun> runs = prepare_runs(constant, &step, out.draws, out.threads_used, &done, total,
-                                                     progress);
-  const std::vector<double> changes = runs.front().step.truth->change_times();
-  if (!changes.empty()) out.step_time_s = changes.front();
-  out.track_duration_s = runs.front().constant.t.back() - runs.front().constant.t.front();
-  for (MethodRow& row : out.rows)
-    row.has_step = row.track == "step" && !runs.front().step.truth->change_times().empty();
-
-  // Task k: row k % rows of run k / rows; the adaptive PF (the slowest) first in each run.
-  parallel_tasks(tasks, out.threads_used, &done, total, progress, [&](long k) {
-    const auto run = static_cast<std::size_t>(k / row_count);
-    MethodRow& row = out.rows[static_cast<std::size_t>(k % row_count)];
-    const bool is_step = row.track == "step";
-    const CalibrationInput& in = is_step ? runs[run].step : runs[run].constant;
-    CalibrationOptions o;
-    o.method = row.method;
-    o.pf = filters::PfCalibratorParams::adaptive_defaults();
-    if (options.adaptive_initial_particles > 0) o.pf.particles = options.adaptive_initial_particles;
-    o.pf.seed = out.draws[run].seed;
-    o.pf.threads = 1;
-    o.dkf.initial = out.draws[run].dkf_initial;
-    o.convergence_tolerance = out.convergence_tolerance;
-    const CalibrationResult res = run_calibration({&in}, o);
-    const TrackCalibrationScore& s = res.tracks.at(0);
-    const FinalErrors e = final_errors(s);
-    MethodRunResult& mr = row.runs[run];
-    mr.err_rr_m = e.rr;
-    mr.err_rl_m = e.rl;
-    mr.err_d_m = e.d;
-    mr.pose_rmse_m = s.pose_rmse_m;
-    mr.heading_rmse_rad = s.heading_rmse_rad;
-    mr.mean_particles = res.mean_particles;
-    mr.ms_per_iteration = res.ms_per_iteration;
-    if (row.online) {
-      ParamTrace trace = param_trace(res, in);
-      const std::vector<PieceConvergence> c = radius_convergence(trace, *in.truth, in.t.front(),
-                                                                 o.convergence_tolerance);
-      mr.convergence_s = c.at(0).settled_s;
-      mr.reached_s = c.at(0).reached_s;
-      if (c.size() > 1) {
-        mr.reconvergence_s = c[1].settled_s;
-        mr.rereached_s = c[1].reached_s;
-      }
-      const bool pf = row.method == CalibrationMethod::adaptive_pf;
-      auto& traces = pf ? (is_step ? out.pf_step : out.pf_constant)
-                        : (is_step ? out.dkf_step : out.dkf_constant);
-      traces[run] = std::move(trace);
+// Task k: row k % rows of run k / rows (the row's method on the run's
+// track): its final errors and costs, and for an online method its
+// convergence times and parameter trace.
+void run_table2_task(CalibrationStudy& out, const std::vector<PreparedRun>& runs, const StudyOptions& options,
+                     long row_count, long k) {
+  const auto run = static_cast<std::size_t>(k / row_count);
+  MethodRow& row = out.rows[static_cast<std::size_t>(k % row_count)];
+  const bool is_step = row.track == "step";
+  const CalibrationInput& in = is_step ? runs[run].step : runs[run].constant;
+  CalibrationOptions o;
+  o.method = row.method;
+  o.pf = filters::PfCalibratorParams::adaptive_defaults();
+  if (options.adaptive_initial_particles > 0) o.pf.particles = options.adaptive_initial_particles;
+  o.pf.seed = out.draws[run].seed;
+  o.pf.threads = 1;
+  o.dkf.initial = out.draws[run].dkf_initial;
+  o.convergence_tolerance = out.convergence_tolerance;
+  const CalibrationResult res = run_calibration({&in}, o);
+  const TrackCalibrationScore& s = res.tracks.at(0);
+  const FinalErrors e = final_errors(s);
+  MethodRunResult& mr = row.runs[run];
+  mr.err_rr_m = e.rr;
+  mr.err_rl_m = e.rl;
+  mr.err_d_m = e.d;
+  mr.pose_rmse_m = s.pose_rmse_m;
+  mr.heading_rmse_rad = s.heading_rmse_rad;
+  mr.mean_particles = res.mean_particles;
+  mr.ms_per_iteration = res.ms_per_iteration;
+  if (row.online) {
+    ParamTrace trace = param_trace(res, in);
+    const std::vector<PieceConvergence> c = radius_convergence(trace, *in.truth, in.t.front(),
+                                                               o.convergence_tolerance);
+    mr.convergence_s = c.at(0).settled_s;
+    mr.reached_s = c.at(0).reached_s;
+    if (c.size() > 1) {
+      mr.reconvergence_s = c[1].settled_s;
+      mr.rereached_s = c[1].reached_s;
     }
-  });
+    const bool pf = row.method == CalibrationMethod::adaptive_pf;
+    auto& traces = pf ? (is_step ? out.pf_step : out.pf_constant) : (is_step ? out.dkf_step : out.dkf_constant);
+    traces[run] = std::move(trace);
+  }
+}
 
+// Each row's mean and standard deviation over its runs.
+void summarise_rows(CalibrationStudy& out) {
   for (MethodRow& row : out.rows) {
     using R = MethodRunResult;
     row.err_rr_m = stat(row.runs, &R::err_rr_m);
@@ -448,6 +431,43 @@ CalibrationStudy run_calibration_study(const sim::Scenario& constant, const sim:
     row.mean_particles = stat(row.runs, &R::mean_particles);
     row.ms_per_iteration = stat(row.runs, &R::ms_per_iteration);
   }
+}
+
+}  // namespace
+
+CalibrationStudy run_calibration_study(const sim::Scenario& constant, const sim::Scenario& step,
+                                       const StudyOptions& options, const StudyProgress& progress) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("study: " + why);
+  check_study_scenario(constant, options);
+  check_study_scenario(step, options);
+  const auto t0 = std::chrono::steady_clock::now();
+
+  CalibrationStudy out;
+  out.scenario = constant.name;
+  out.step_scenario = step.name;
+  out.options = options;
+  out.threads_used = threads_for(options);
+  out.convergence_tolerance = CalibrationOptions{}.convergence_tolerance;
+  set_up_rows(out, constant, options);
+
+  const long row_count = static_cast<long>(out.rows.size());
+  const long tasks = row_count * options.runs;
+  const long total = options.runs + tasks;
+  long done = 0;
+  if (progress) progress(0, total);
+  const std::vector<PreparedRun> runs = prepare_runs(constant, &step, out.draws, out.threads_used, &done, total,
+                                                     progress);
+  const std::vector<double> changes = runs.front().step.truth->change_times();
+  if (!changes.empty()) out.step_time_s = changes.front();
+  out.track_duration_s = runs.front().constant.t.back() - runs.front().constant.t.front();
+  for (MethodRow& row : out.rows)
+    row.has_step = row.track == "step" && !runs.front().step.truth->change_times().empty();
+
+  // The adaptive PF (the slowest) first in each run.
+  parallel_tasks(tasks, out.threads_used, &done, total, progress,
+                 [&](long k) { run_table2_task(out, runs, options, row_count, k); });
+  summarise_rows(out);
   out.wall_s = seconds_since(t0);
   return out;
 }

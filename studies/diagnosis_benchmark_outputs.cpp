@@ -228,8 +228,10 @@ std::string confusion_csv(const Confusion& c) {
   return s;
 }
 
-std::string benchmark_summary_markdown(const DiagnosisBenchmark& b, const std::string& command) {
-  const BenchmarkSummary& s = b.summary;
+namespace {
+
+// The title and the run's settings.
+std::string intro_section(const DiagnosisBenchmark& b, const std::string& command) {
   const DiagnosisBenchmarkOptions& o = b.options;
   std::string md = "# Diagnosis benchmark\n\n";
   md += fmt::format(
@@ -239,11 +241,13 @@ std::string benchmark_summary_markdown(const DiagnosisBenchmark& b, const std::s
       command, o.cases, o.first, o.first + o.cases - 1, o.seed, o.draw.min_minutes, o.draw.max_minutes,
       o.draw.max_rate_hz, 100.0 * o.draw.null_share, 100.0 * o.draw.two_share, 100.0 * o.draw.multi_share,
       b.threads_used, b.wall_s);
+  return md;
+}
 
-  md += aims_section(b);
-  md += fmt::format("Refused tracks: {} (graded as failed).\n\n", s.refused);
-
-  md += "## Failures by kind\n\nA failed case may count under several kinds.\n\n| kind | cases |\n|---|---|\n";
+// Failures by kind and the per-effect table.
+std::string failures_and_effects_sections(const BenchmarkSummary& s) {
+  std::string md =
+      "## Failures by kind\n\nA failed case may count under several kinds.\n\n| kind | cases |\n|---|---|\n";
   for (const auto& [kind, n] : s.failures) md += fmt::format("| {} | {} |\n", kind, n);
 
   md += "\n## Per effect\n\nrecall: named when detectable; precision: detectable when named (tolerated, "
@@ -253,10 +257,14 @@ std::string benchmark_summary_markdown(const DiagnosisBenchmark& b, const std::s
     md += fmt::format("| {} | {} | {} | {} | {} |\n", e.effect, e.expected, percent(e.recall()),
                       percent(e.precision()),
                       e.expected > 0 ? percent(static_cast<double>(e.right) / e.expected) : "n/a");
+  return md;
+}
 
-  md += "\n## Confusion matrix\n\nRows: true detectable effects (none: nothing detectable); columns: what "
-        "the diagnosis named (none: nothing wrong). confusion.csv, confusion.png.\n\n| true \\ named |";
-  const Confusion& c = s.confusion;
+// The confusion matrix, rows and columns that hold nothing left out.
+std::string confusion_section(const Confusion& c) {
+  std::string md =
+      "\n## Confusion matrix\n\nRows: true detectable effects (none: nothing detectable); columns: what "
+      "the diagnosis named (none: nothing wrong). confusion.csv, confusion.png.\n\n| true \\ named |";
   std::vector<std::size_t> used_cols;
   for (std::size_t k = 0; k < c.cols.size(); ++k) {
     int total = 0;
@@ -275,11 +283,17 @@ std::string benchmark_summary_markdown(const DiagnosisBenchmark& b, const std::s
     for (std::size_t k : used_cols) md += c.counts[r][k] ? fmt::format(" {} |", c.counts[r][k]) : " |";
     md += "\n";
   }
+  return md;
+}
 
-  md += "\n## Parameter errors\n\nNormalised error = (found − truth) / (tolerance / 0.25), i.e. relative to "
-        "the parameter's departure from its no-op value (radius_step.t: error / 20 s; slip_zone.box: the "
-        "path rule's larger miss share); within tolerance means |error| <= 25 %.\n\n"
-        "| parameter | n | within | median | 90 % | max |\n|---|---|---|---|---|---|\n";
+// Parameter errors and the time per case.
+std::string params_and_time_sections(const DiagnosisBenchmark& b) {
+  const BenchmarkSummary& s = b.summary;
+  std::string md =
+      "\n## Parameter errors\n\nNormalised error = (found − truth) / (tolerance / 0.25), i.e. relative to "
+      "the parameter's departure from its no-op value (radius_step.t: error / 20 s; slip_zone.box: the "
+      "path rule's larger miss share); within tolerance means |error| <= 25 %.\n\n"
+      "| parameter | n | within | median | 90 % | max |\n|---|---|---|---|---|---|\n";
   for (const ParamStats& p : s.params)
     md += fmt::format("| {} | {} | {} | {} | {} | {} |\n", p.name, p.n, p.within, percent(p.median_abs),
                       percent(p.p90_abs), percent(p.max_abs));
@@ -288,10 +302,15 @@ std::string benchmark_summary_markdown(const DiagnosisBenchmark& b, const std::s
       "\n## Time per case\n\nSimulation, detectability and diagnosis: mean {:.1f} s, median {:.1f} s, "
       "max {:.1f} s; the diagnosis alone: mean {:.1f} s ({} threads sharing the machine).\n\n",
       s.time_mean_s, s.time_median_s, s.time_max_s, s.diagnose_mean_s, b.threads_used);
+  return md;
+}
 
-  md += "## By margin\n\nThe smallest margin of a case's detectable effects: its true gain over its floor (the "
-        "larger of position and heading), as the truth measures it with the true parameters; near 1 a "
-        "fitted model recovers about half the time.\n\n";
+// The pass rates by margin, reference shape, odometry and recordings.
+std::string breakdown_sections(const DiagnosisBenchmark& b) {
+  std::string md =
+      "## By margin\n\nThe smallest margin of a case's detectable effects: its true gain over its floor (the "
+      "larger of position and heading), as the truth measures it with the true parameters; near 1 a "
+      "fitted model recovers about half the time.\n\n";
   md += breakdown(b.cases, "category, margin", [](const CaseResult& r) {
     const char* kind = r.c.multi() ? "multi " : "";
     if (r.grade.category == CaseCategory::null_case) return fmt::format("{}null", kind);
@@ -309,8 +328,12 @@ std::string benchmark_summary_markdown(const DiagnosisBenchmark& b, const std::s
     if (!r.c.multi()) return std::string("1");
     return fmt::format("{} ({} held out)", r.c.recordings.size(), r.c.heldout_recordings());
   });
+  return md;
+}
 
-  md +=
+// The failed cases, with how to re-run one alone.
+std::string failed_cases_section(const DiagnosisBenchmark& b) {
+  std::string md =
       "\n## Failed cases\n\nRe-run one alone: `odotune study diagnosis --seed S --first I --cases 1 "
       "--keep-tracks --out DIR`, then `odotune diagnose DIR/tracks/case_IIII.csv` (a multi-recording case: "
       "`odotune diagnose DIR/tracks/case_IIII_r1.csv ... --heldout DIR/tracks/case_IIII_rN.csv`, the held-out "
@@ -325,6 +348,20 @@ std::string benchmark_summary_markdown(const DiagnosisBenchmark& b, const std::s
     md += fmt::format("| {} | {} | {} | {} | {} | {} |\n", r.c.index, to_string(r.grade.category),
                       recordings_text(r.c), r.c.effects_text(), found.empty() ? "none" : joined(found), why);
   }
+  return md;
+}
+
+}  // namespace
+
+std::string benchmark_summary_markdown(const DiagnosisBenchmark& b, const std::string& command) {
+  std::string md = intro_section(b, command);
+  md += aims_section(b);
+  md += fmt::format("Refused tracks: {} (graded as failed).\n\n", b.summary.refused);
+  md += failures_and_effects_sections(b.summary);
+  md += confusion_section(b.summary.confusion);
+  md += params_and_time_sections(b);
+  md += breakdown_sections(b);
+  md += failed_cases_section(b);
   return md;
 }
 

@@ -313,16 +313,11 @@ std::uint64_t recording_seed(std::uint64_t case_seed, int k) {
   return counter_hash(case_seed, static_cast<std::uint64_t>(k), 0, 0, kRecordingStream);
 }
 
-DiagnosisCase draw_case(std::uint64_t seed, int index, const CaseDrawOptions& o) {
-  std::string why;
-  if (!o.IsValid(&why)) throw std::invalid_argument("diagnosis benchmark: " + why);
-  CaseRng rng(seed, kDrawStream);
-  DiagnosisCase c;
-  c.index = index, c.seed = seed;
-  c.scenario.name = fmt::format("bench_case_{}", index);
-  c.scenario.seed = seed;
+namespace {
 
-  // Robot.
+// Robot: radii (one draw `z` of the robot's size, returned: the drive's scale
+// grows with it), wheel base, encoder, and the motion's limits and start.
+double draw_robot(CaseRng& rng, DiagnosisCase& c) {
   const double z = rng.uniform();
   sim::RobotParams& r = c.scenario.robot;
   r.wheel_radius_left_m = 0.03 * std::pow(0.20 / 0.03, z);
@@ -336,8 +331,13 @@ DiagnosisCase draw_case(std::uint64_t seed, int index, const CaseDrawOptions& o)
   m.max_angular_accel_rad_s2 = rng.uniform(1.0, 3.0);
   m.start_x_m = rng.uniform(-5.0, 5.0), m.start_y_m = rng.uniform(-5.0, 5.0);
   m.start_theta_rad = rng.uniform(-3.14159, 3.14159);
+  return z;
+}
 
-  // Drive.
+// Drive: its scale (from the robot's size draw `z`), family and duration, the
+// lap repeated over it; `lap_s` gets one lap's duration.
+DriveScale draw_drive_of(CaseRng& rng, DiagnosisCase& c, double z, const CaseDrawOptions& o, double& lap_s) {
+  sim::MotionParams& m = c.scenario.motion;
   DriveScale scale;
   scale.speed_m_s = 0.3 * std::pow(5.0, z) * rng.uniform(0.8, 1.2);
   scale.geometry_m = 1.0 * std::pow(3.0, z) * rng.uniform(0.8, 1.2);
@@ -347,13 +347,17 @@ DiagnosisCase draw_case(std::uint64_t seed, int index, const CaseDrawOptions& o)
   c.drive = drive.family;
   c.duration_s = 60.0 * rng.uniform(o.min_minutes, o.max_minutes);
   m.segments = repeat_lap(drive.lap, m, c.duration_s);
-  const double lap_s = [&] {
+  lap_s = [&] {
     sim::MotionParams one = m;
     one.segments = drive.lap;
     return sim::MotionProfile(one).duration_s();
   }();
+  return scale;
+}
 
-  // Sensors.
+// Sensors: the odometry's kind and rate, the gyro, the reference's shape,
+// rates and noise; then the scenario's sensors from them.
+void draw_sensors(CaseRng& rng, DiagnosisCase& c, const CaseDrawOptions& o) {
   const double kind = rng.uniform();
   c.odometry = kind < 0.5   ? BenchOdometry::ticks
                : kind < 0.7 ? BenchOdometry::wheel_rates
@@ -379,10 +383,11 @@ DiagnosisCase draw_case(std::uint64_t seed, int index, const CaseDrawOptions& o)
   }
   if (c.reference == BenchReference::gt_gaps) c.gt_gaps_s = draw_gaps(rng, c.duration_s);
   set_sensors(c);
-  CaseRng multi_rng(seed, kMultiStream);  // its own stream: the draws above do not depend on multi_share
-  const bool multi = multi_rng.uniform() < o.multi_share;
+}
 
-  // Effects.
+// Effects: none, one or two of those eligible, in the effect table's order,
+// applied to the scenario.
+void draw_effects(CaseRng& rng, DiagnosisCase& c, bool multi, double lap_s, const CaseDrawOptions& o) {
   const double count_draw = rng.uniform();
   const int count = count_draw < o.null_share ? 0 : count_draw < o.null_share + o.two_share ? 2 : 1;
   std::vector<std::string> pool = eligible_effects(c, multi);
@@ -398,6 +403,25 @@ DiagnosisCase draw_case(std::uint64_t seed, int index, const CaseDrawOptions& o)
   });
   for (const TrueEffect& e : c.effects)
     sim::apply_effect(c.scenario.effects, sim::EffectSpec{e.name, e.params});
+}
+
+}  // namespace
+
+DiagnosisCase draw_case(std::uint64_t seed, int index, const CaseDrawOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw std::invalid_argument("diagnosis benchmark: " + why);
+  CaseRng rng(seed, kDrawStream);
+  DiagnosisCase c;
+  c.index = index, c.seed = seed;
+  c.scenario.name = fmt::format("bench_case_{}", index);
+  c.scenario.seed = seed;
+  const double z = draw_robot(rng, c);
+  double lap_s = 0.0;
+  const DriveScale scale = draw_drive_of(rng, c, z, o, lap_s);
+  draw_sensors(rng, c, o);
+  CaseRng multi_rng(seed, kMultiStream);  // its own stream: the draws above do not depend on multi_share
+  const bool multi = multi_rng.uniform() < o.multi_share;
+  draw_effects(rng, c, multi, lap_s, o);
   if (!sim::validate_scenario(c.scenario, &why))
     throw std::invalid_argument(fmt::format("diagnosis benchmark case {}: {}", index, why));
   if (multi) add_recordings(c, scale, 2 + multi_rng.index(3), o);

@@ -131,9 +131,11 @@ BoxCoverage box_coverage(const TrueEffect& t, double x0, double x1, double y0, d
   return c;
 }
 
-CaseGrade grade_case(const std::vector<EffectTruth>& truth, const diagnose::Diagnosis& d, double wheel_base_m,
-                     const TruePath& path) {
-  CaseGrade g;
+namespace {
+
+// Which effects were expected (detectable), tolerated (true but not
+// detectable), found, missed and named extra; why a naming fails.
+void grade_naming(CaseGrade& g, const std::vector<EffectTruth>& truth, const diagnose::Diagnosis& d) {
   g.category = case_category(truth);
   for (const EffectTruth& t : truth) (t.detectable ? g.expected : g.tolerated).push_back(t.effect.name);
   for (const diagnose::Finding& f : d.findings)
@@ -146,7 +148,69 @@ CaseGrade grade_case(const std::vector<EffectTruth>& truth, const diagnose::Diag
   g.heldout_before_m = d.heldout.before_pos_rmse_m, g.heldout_after_m = d.heldout.after_pos_rmse_m;
   for (const std::string& e : g.missed) join(g.why, "missed " + e);
   for (const std::string& e : g.extra) join(g.why, "named " + e);
+}
 
+// The found slip_zone box against the true one: the larger of the share of
+// the true box's path it misses and the share it adds.
+ParamCheck box_check(const EffectTruth& t, const diagnose::Finding& f, const TruePath& path, CaseGrade& g) {
+  const BoxCoverage c = box_coverage(t.effect, f.param("x0"), f.param("x1"), f.param("y0"), f.param("y1"),
+                                     path);
+  ParamCheck p;
+  p.effect = "slip_zone", p.param = "box";
+  p.truth = 0.0, p.found = std::max(1.0 - c.covered, c.extra), p.tolerance = 0.25;
+  p.normalised = p.found;
+  p.ok = c.samples > 0 && p.found <= 0.25;
+  if (!p.ok)
+    join(g.why, fmt::format("slip_zone box covers {:.0f} % of the true box's path, {:.0f} % extra",
+                            100 * c.covered, 100 * c.extra));
+  return p;
+}
+
+// Each parameter of a named true effect against its finding `f` (box edges
+// ungraded: the box is graded whole), into g.params.
+void grade_params(CaseGrade& g, const EffectTruth& t, const diagnose::Finding& f, double wheel_base_m,
+                  const TruePath& path) {
+  for (const auto& [name, value] : t.effect.params) {
+    ParamCheck p;
+    p.effect = t.effect.name, p.param = name, p.truth = value, p.found = f.param(name);
+    if (is_box_edge(t.effect.name, name)) {
+      p.graded = false;
+      p.ok = std::isfinite(p.found);
+      p.normalised = (p.found - p.truth) / (t.effect.param(name[0] == 'x' ? "x1" : "y1") -
+                                            t.effect.param(name[0] == 'x' ? "x0" : "y0"));
+      g.params.push_back(p);
+      continue;
+    }
+    p.tolerance = param_tolerance(t.effect, name, wheel_base_m);
+    double miss = p.found - p.truth;
+    if (t.effect.name == "radius_step" && name == "t") {
+      for (const auto& [a, b] : path.ref_gaps_s)
+        if (p.truth > a && p.truth < b) miss = p.found < a ? p.found - a : p.found > b ? p.found - b : 0.0;
+      // Counted in driving time: standstills between the two do not count.
+      const double target = p.found - miss;
+      miss = (miss < 0.0 ? -1.0 : 1.0) * driving_time_between(target, p.found, path.standstills_s);
+    }
+    p.normalised = p.tolerance > 0.0 ? 0.25 * miss / p.tolerance : std::nan("");
+    p.ok = std::isfinite(p.found) && std::abs(miss) <= p.tolerance;
+    if (!p.ok)
+      join(g.why, fmt::format("{}.{} = {:.6g}, truth {:.6g} ± {:.3g}", p.effect, p.param, p.found, p.truth,
+                              p.tolerance));
+    g.params_ok = g.params_ok && p.ok;
+    g.params.push_back(p);
+  }
+  if (t.effect.name == "slip_zone") {
+    const ParamCheck p = box_check(t, f, path, g);
+    g.params_ok = g.params_ok && p.ok;
+    g.params.push_back(p);
+  }
+}
+
+}  // namespace
+
+CaseGrade grade_case(const std::vector<EffectTruth>& truth, const diagnose::Diagnosis& d, double wheel_base_m,
+                     const TruePath& path) {
+  CaseGrade g;
+  grade_naming(g, truth, d);
   g.params_ok = true;
   g.heldout_ok = true;
   bool wheel_expected = false;
@@ -161,48 +225,7 @@ CaseGrade grade_case(const std::vector<EffectTruth>& truth, const diagnose::Diag
       join(g.why, fmt::format("{} held-out {:.4g} -> {:.4g} m not improved", t.effect.name,
                               f->heldout.before_pos_rmse_m, f->heldout.after_pos_rmse_m));
     }
-    for (const auto& [name, value] : t.effect.params) {
-      ParamCheck p;
-      p.effect = t.effect.name, p.param = name, p.truth = value, p.found = f->param(name);
-      if (is_box_edge(t.effect.name, name)) {
-        p.graded = false;
-        p.ok = std::isfinite(p.found);
-        p.normalised = (p.found - p.truth) / (t.effect.param(name[0] == 'x' ? "x1" : "y1") -
-                                              t.effect.param(name[0] == 'x' ? "x0" : "y0"));
-        g.params.push_back(p);
-        continue;
-      }
-      p.tolerance = param_tolerance(t.effect, name, wheel_base_m);
-      double miss = p.found - p.truth;
-      if (t.effect.name == "radius_step" && name == "t") {
-        for (const auto& [a, b] : path.ref_gaps_s)
-          if (p.truth > a && p.truth < b) miss = p.found < a ? p.found - a : p.found > b ? p.found - b : 0.0;
-        // Counted in driving time: standstills between the two do not count.
-        const double target = p.found - miss;
-        miss = (miss < 0.0 ? -1.0 : 1.0) * driving_time_between(target, p.found, path.standstills_s);
-      }
-      p.normalised = p.tolerance > 0.0 ? 0.25 * miss / p.tolerance : std::nan("");
-      p.ok = std::isfinite(p.found) && std::abs(miss) <= p.tolerance;
-      if (!p.ok)
-        join(g.why, fmt::format("{}.{} = {:.6g}, truth {:.6g} ± {:.3g}", p.effect, p.param, p.found, p.truth,
-                                p.tolerance));
-      g.params_ok = g.params_ok && p.ok;
-      g.params.push_back(p);
-    }
-    if (t.effect.name == "slip_zone") {
-      const BoxCoverage c = box_coverage(t.effect, f->param("x0"), f->param("x1"), f->param("y0"),
-                                         f->param("y1"), path);
-      ParamCheck p;
-      p.effect = "slip_zone", p.param = "box";
-      p.truth = 0.0, p.found = std::max(1.0 - c.covered, c.extra), p.tolerance = 0.25;
-      p.normalised = p.found;
-      p.ok = c.samples > 0 && p.found <= 0.25;
-      if (!p.ok)
-        join(g.why, fmt::format("slip_zone box covers {:.0f} % of the true box's path, {:.0f} % extra",
-                                100 * c.covered, 100 * c.extra));
-      g.params_ok = g.params_ok && p.ok;
-      g.params.push_back(p);
-    }
+    grade_params(g, t, *f, wheel_base_m, path);
   }
   if (wheel_expected && !(d.heldout.after_pos_rmse_m < d.heldout.before_pos_rmse_m)) {
     g.heldout_ok = false;

@@ -65,6 +65,139 @@ EffectSet wheel_set(const std::vector<TrueEffect>& truth, const std::string& wit
   return set;
 }
 
+// Held out: the last windows holding >= heldout_fraction of the scored
+// reference samples (header comment); none with fewer than 2 windows.
+std::vector<int> heldout_tail(const diagnose::ReplayResult& all, double heldout_fraction) {
+  const auto n = static_cast<int>(all.windows.size());
+  std::size_t total = 0, tail = 0;
+  for (const diagnose::WindowError& w : all.windows) total += w.n_ref;
+  std::vector<int> held;
+  for (int i = n - 1; i >= 0 && static_cast<double>(tail) < heldout_fraction * static_cast<double>(total);
+       --i) {
+    held.insert(held.begin(), all.windows[static_cast<std::size_t>(i)].window);
+    tail += all.windows[static_cast<std::size_t>(i)].n_ref;
+  }
+  if (n < 2) held.clear();  // nothing to train on: no split
+  return held;
+}
+
+// The materiality rule's heading part (select.h).
+bool heading_material(double gain_rad, double floor_rad) {
+  return std::isfinite(gain_rad) && std::isfinite(floor_rad) && gain_rad > 0.0 && gain_rad >= floor_rad;
+}
+
+// What judging each true effect on one track needs: the scoring input, the
+// nominal all-window replay, the held-out windows, and the true model's
+// heading error and the heading floor (with a reference heading).
+struct TrackJudge {
+  const DiagInput& in;
+  const DiagInput& scoring;
+  const std::vector<TrueEffect>& truth;
+  const diagnose::ReplayResult& all;
+  const std::vector<int>& held;
+  double window_s;
+  const diagnose::MaterialityOptions& materiality;
+  bool heading = false;
+  double true_heading_rad = kNaN, heading_floor_rad = kNaN;
+
+  double heldout_rmse(const DiagInput& input, const EffectSet& set) const {
+    return diagnose::replay(input, set, window_s, held).pos_rmse_m;
+  }
+};
+
+// Gyro effects: the true corrections, each left out in turn, on the
+// gyro-heading replay (lateral_skid acts on it too).
+struct GyroTruth {
+  bool gyro = false;  // the track has a gyro
+  double bias = 0.0, scale = 1.0;
+  EffectSet body;
+  double floor_m = 0.0, after_m = 0.0;
+};
+GyroTruth gyro_truth(const TrackJudge& j) {
+  GyroTruth g;
+  g.gyro = !j.in.gyro_t_s.empty();
+  for (const TrueEffect& e : j.truth) {
+    if (e.name == "gyro_bias") g.bias = e.param("b");
+    if (e.name == "gyro_scale") g.scale = e.param("s");
+  }
+  for (const TrueEffect& e : j.truth)
+    if (e.name == "lateral_skid")
+      g.body.enable(Effect::lateral_skid).set(Effect::lateral_skid, "k", e.param("k"));
+  const bool any_gyro = std::any_of(j.truth.begin(), j.truth.end(),
+                                    [](const TrueEffect& e) { return is_gyro(e.name); });
+  if (g.gyro && any_gyro) {
+    g.floor_m = diagnose::materiality_floor_m(
+        j.in.ref_sigma_m, j.heldout_rmse(diagnose::gyro_heading_input(j.scoring, 0.0, 1.0), g.body),
+        j.materiality);
+    g.after_m = j.heldout_rmse(diagnose::gyro_heading_input(j.scoring, g.bias, g.scale), g.body);
+  }
+  return g;
+}
+
+// A slip_zone or radius_step is bound to a place or a time: judged on every
+// window but the one where it gains most (header comment: one window cannot
+// both fit it and prove it), whether or not the held-out tail shows it.
+void judge_on_all_windows(const TrackJudge& j, EffectTruth& t) {
+  const diagnose::ReplayResult wo = diagnose::replay(j.scoring, wheel_set(j.truth, t.effect.name), j.window_s);
+  const diagnose::ReplayResult wi = diagnose::replay(j.scoring, wheel_set(j.truth, ""), j.window_s);
+  std::vector<int> rest;
+  std::size_t top = 0;
+  double top_gain = -1.0;
+  for (std::size_t k = 0; k < wo.windows.size(); ++k) {
+    const double g = wo.windows[k].pos_rmse_m * wo.windows[k].pos_rmse_m -
+                     wi.windows[k].pos_rmse_m * wi.windows[k].pos_rmse_m;
+    const double gain = g * static_cast<double>(wo.windows[k].n_ref);
+    if (gain > top_gain) top_gain = gain, top = k;
+  }
+  for (std::size_t k = 0; k < wo.windows.size(); ++k)
+    if (k != top) rest.push_back(wo.windows[k].window);
+  bool rest_material = false;
+  double before = kNaN, after = kNaN, floor = kNaN;
+  if (!rest.empty()) {
+    const Pooled b = pooled(wo, rest), a = pooled(wi, rest), n0 = pooled(j.all, rest);
+    before = b.pos_m, after = a.pos_m;
+    floor = diagnose::materiality_floor_m(j.in.ref_sigma_m, n0.pos_m, j.materiality);
+    rest_material = diagnose::is_material(before, after, floor) ||
+                    (j.heading && heading_material(diagnose::removed_error_m(b.heading_rad, a.heading_rad),
+                                                   diagnose::materiality_floor_m(
+                                                       j.in.ref_sigma_rad, n0.heading_rad, j.materiality)));
+  }
+  if (!rest_material) {
+    t.detectable = false;  // seen in one window at most
+  } else if (!t.detectable) {
+    t.detectable = true, t.on_all_windows = true;
+    t.before_m = before, t.after_m = after, t.gain_m = diagnose::removed_error_m(before, after),
+    t.floor_m = floor;
+  }
+}
+
+// One true effect's held-out gain against its floor, and whether it is detectable.
+void judge_effect(const TrackJudge& j, const GyroTruth& g, const Detectability& out, EffectTruth& t) {
+  if (t.gyro) {
+    if (!g.gyro) return;
+    const bool b = t.effect.name == "gyro_bias";
+    t.before_m = j.heldout_rmse(diagnose::gyro_heading_input(j.scoring, b ? 0.0 : g.bias, b ? g.scale : 1.0),
+                                g.body);
+    t.after_m = g.after_m;
+    t.floor_m = g.floor_m;
+  } else {
+    const diagnose::ReplayResult without = diagnose::replay(j.scoring, wheel_set(j.truth, t.effect.name),
+                                                            j.window_s, j.held);
+    t.before_m = without.pos_rmse_m;
+    t.after_m = out.true_heldout_m;
+    t.floor_m = out.floor_m;
+    if (j.heading) {  // the materiality rule's heading part (select.h)
+      t.heading_gain_rad = diagnose::removed_error_m(without.heading_rmse_rad, j.true_heading_rad);
+      t.heading_floor_rad = j.heading_floor_rad;
+    }
+  }
+  t.gain_m = diagnose::removed_error_m(t.before_m, t.after_m);
+  t.detectable = !is_noop(t.effect) && (diagnose::is_material(t.before_m, t.after_m, t.floor_m) ||
+                                        heading_material(t.heading_gain_rad, t.heading_floor_rad));
+  if (!is_noop(t.effect) && (t.effect.name == "slip_zone" || t.effect.name == "radius_step"))
+    judge_on_all_windows(j, t);
+}
+
 }  // namespace
 
 int Detectability::detectable_count() const {
@@ -80,21 +213,9 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
   out.window_s = diagnose::selection_window_s(in, so);
   const diagnose::SelectionInput si = diagnose::selection_input(in, so);
   const DiagInput& scoring = si.stride > 1 ? si.input : in;
-  // Held out: the last windows holding >= heldout_fraction of the scored
-  // reference samples (header comment).
   const diagnose::ReplayResult all = diagnose::replay(scoring, EffectSet{}, out.window_s);
-  const auto n = static_cast<int>(all.windows.size());
-  std::size_t total = 0, tail = 0;
-  for (const diagnose::WindowError& w : all.windows) total += w.n_ref;
-  std::vector<int> held;
-  for (int i = n - 1; i >= 0 && static_cast<double>(tail) < so.heldout_fraction * static_cast<double>(total);
-       --i) {
-    held.insert(held.begin(), all.windows[static_cast<std::size_t>(i)].window);
-    tail += all.windows[static_cast<std::size_t>(i)].n_ref;
-  }
-  if (n < 2) held.clear();  // nothing to train on: no split
-  const auto n_held = static_cast<int>(held.size());
-  out.windows = n, out.heldout_windows = n_held;
+  const std::vector<int> held = heldout_tail(all, so.heldout_fraction);
+  out.windows = static_cast<int>(all.windows.size()), out.heldout_windows = static_cast<int>(held.size());
   for (const TrueEffect& e : truth) {
     EffectTruth t;
     t.effect = e;
@@ -102,106 +223,22 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
     out.effects.push_back(t);
   }
   if (held.empty()) return out;
-  auto heldout_rmse = [&](const DiagInput& input, const EffectSet& set) {
-    return diagnose::replay(input, set, out.window_s, held).pos_rmse_m;
-  };
+  TrackJudge j{in, scoring, truth, all, held, out.window_s, materiality};
 
   // Wheel-odometry effects.
-  out.nominal_heldout_m = heldout_rmse(scoring, EffectSet{});
-  out.true_heldout_m = heldout_rmse(scoring, wheel_set(truth, ""));
+  out.nominal_heldout_m = j.heldout_rmse(scoring, EffectSet{});
+  out.true_heldout_m = j.heldout_rmse(scoring, wheel_set(truth, ""));
   out.floor_m = diagnose::materiality_floor_m(in.ref_sigma_m, out.nominal_heldout_m, materiality);
   // With a reference heading, the materiality rule also accepts a material heading gain.
-  const bool heading = in.has_ref_heading();
-  double true_heading_rad = kNaN, heading_floor_rad = kNaN;
-  if (heading) {
-    true_heading_rad = diagnose::replay(scoring, wheel_set(truth, ""), out.window_s, held).heading_rmse_rad;
-    heading_floor_rad = diagnose::materiality_floor_m(
+  j.heading = in.has_ref_heading();
+  if (j.heading) {
+    j.true_heading_rad = diagnose::replay(scoring, wheel_set(truth, ""), out.window_s, held).heading_rmse_rad;
+    j.heading_floor_rad = diagnose::materiality_floor_m(
         in.ref_sigma_rad, diagnose::replay(scoring, EffectSet{}, out.window_s, held).heading_rmse_rad,
         materiality);
   }
-  const auto heading_material = [](double gain_rad, double floor_rad) {
-    return std::isfinite(gain_rad) && std::isfinite(floor_rad) && gain_rad > 0.0 && gain_rad >= floor_rad;
-  };
-
-  // Gyro effects: the true corrections, each left out in turn.
-  const bool gyro = !in.gyro_t_s.empty();
-  double bias = 0.0, scale = 1.0;
-  for (const TrueEffect& e : truth) {
-    if (e.name == "gyro_bias") bias = e.param("b");
-    if (e.name == "gyro_scale") scale = e.param("s");
-  }
-  EffectSet body;  // lateral_skid acts on the gyro-heading replay too
-  for (const TrueEffect& e : truth)
-    if (e.name == "lateral_skid")
-      body.enable(Effect::lateral_skid).set(Effect::lateral_skid, "k", e.param("k"));
-  double gyro_floor = 0.0, gyro_after = 0.0;
-  const bool any_gyro = std::any_of(truth.begin(), truth.end(),
-                                    [](const TrueEffect& e) { return is_gyro(e.name); });
-  if (gyro && any_gyro) {
-    gyro_floor = diagnose::materiality_floor_m(
-        in.ref_sigma_m, heldout_rmse(diagnose::gyro_heading_input(scoring, 0.0, 1.0), body), materiality);
-    gyro_after = heldout_rmse(diagnose::gyro_heading_input(scoring, bias, scale), body);
-  }
-
-  for (EffectTruth& t : out.effects) {
-    if (t.gyro) {
-      if (!gyro) continue;
-      const bool b = t.effect.name == "gyro_bias";
-      t.before_m = heldout_rmse(diagnose::gyro_heading_input(scoring, b ? 0.0 : bias, b ? scale : 1.0), body);
-      t.after_m = gyro_after;
-      t.floor_m = gyro_floor;
-    } else {
-      const diagnose::ReplayResult without = diagnose::replay(scoring, wheel_set(truth, t.effect.name),
-                                                              out.window_s, held);
-      t.before_m = without.pos_rmse_m;
-      t.after_m = out.true_heldout_m;
-      t.floor_m = out.floor_m;
-      if (heading) {  // the materiality rule's heading part (select.h)
-        t.heading_gain_rad = diagnose::removed_error_m(without.heading_rmse_rad, true_heading_rad);
-        t.heading_floor_rad = heading_floor_rad;
-      }
-    }
-    t.gain_m = diagnose::removed_error_m(t.before_m, t.after_m);
-    t.detectable = !is_noop(t.effect) && (diagnose::is_material(t.before_m, t.after_m, t.floor_m) ||
-                                          heading_material(t.heading_gain_rad, t.heading_floor_rad));
-    if (!is_noop(t.effect) && (t.effect.name == "slip_zone" || t.effect.name == "radius_step")) {
-      // Bound to a place or a time: judged on every window but the one
-      // where it gains most (header comment: one window cannot both fit it
-      // and prove it), whether or not the held-out tail shows it.
-      const diagnose::ReplayResult wo = diagnose::replay(scoring, wheel_set(truth, t.effect.name),
-                                                         out.window_s);
-      const diagnose::ReplayResult wi = diagnose::replay(scoring, wheel_set(truth, ""), out.window_s);
-      std::vector<int> rest;
-      std::size_t top = 0;
-      double top_gain = -1.0;
-      for (std::size_t k = 0; k < wo.windows.size(); ++k) {
-        const double g = wo.windows[k].pos_rmse_m * wo.windows[k].pos_rmse_m -
-                         wi.windows[k].pos_rmse_m * wi.windows[k].pos_rmse_m;
-        const double gain = g * static_cast<double>(wo.windows[k].n_ref);
-        if (gain > top_gain) top_gain = gain, top = k;
-      }
-      for (std::size_t k = 0; k < wo.windows.size(); ++k)
-        if (k != top) rest.push_back(wo.windows[k].window);
-      bool rest_material = false;
-      double before = kNaN, after = kNaN, floor = kNaN;
-      if (!rest.empty()) {
-        const Pooled b = pooled(wo, rest), a = pooled(wi, rest), n0 = pooled(all, rest);
-        before = b.pos_m, after = a.pos_m;
-        floor = diagnose::materiality_floor_m(in.ref_sigma_m, n0.pos_m, materiality);
-        rest_material = diagnose::is_material(before, after, floor) ||
-                        (heading && heading_material(diagnose::removed_error_m(b.heading_rad, a.heading_rad),
-                                                     diagnose::materiality_floor_m(
-                                                         in.ref_sigma_rad, n0.heading_rad, materiality)));
-      }
-      if (!rest_material) {
-        t.detectable = false;  // seen in one window at most
-      } else if (!t.detectable) {
-        t.detectable = true, t.on_all_windows = true;
-        t.before_m = before, t.after_m = after, t.gain_m = diagnose::removed_error_m(before, after),
-        t.floor_m = floor;
-      }
-    }
-  }
+  const GyroTruth g = gyro_truth(j);
+  for (EffectTruth& t : out.effects) judge_effect(j, g, out, t);
   return out;
 }
 

@@ -264,6 +264,68 @@ std::vector<std::string> learn_eval_lines(const LearnEvalOutcome& o) {
 
 // ---------------------------------------------------------------- retrain
 
+namespace {
+
+// The fusion of a retraining run: the model's nets, its slip detector or
+// static variances from the validation MAE, retraining every r.every samples.
+LearnedFusionOptions retrain_fusion_options(const LearnRetrainRequest& r, const LearnedModelFile& m,
+                                            bool detector) {
+  LearnedFusionOptions o;
+  o.odometry = LearnedFusionOptions::Odometry::learned;
+  o.detector = detector ? &*m.detector : nullptr;
+  // Without a detector: a Gaussian's variance from the validation MAE, σ = MAE·√(π/2).
+  o.static_var_v = std::max(1e-8,
+                            m.odometry.v_validation_mae * m.odometry.v_validation_mae * std::numbers::pi / 2);
+  o.static_var_w = std::max(1e-8,
+                            m.odometry.w_validation_mae * m.odometry.w_validation_mae * std::numbers::pi / 2);
+  o.retrain.samples_per_retrain = r.every;
+  o.retrain.training = learn_training_options(m.provenance.seed, r.iterations, r.threads,
+                                              default_retrain_training());
+  return o;
+}
+
+// The --json document: the run's settings, each retraining, and the errors
+// with and without retraining.
+nlohmann::json retrain_json(const LearnRetrainRequest& r, const FusionInput& in, bool detector,
+                            const LearnedFusionResult& with, const LearnedFusionResult& without) {
+  const auto block = [&](const LearnedFusionResult& f) {
+    PoseTrack pose{f.filter.x, f.filter.y, f.filter.theta};
+    return nlohmann::json{
+        {"odometry", flat_errors_json(odometry_only_errors(in, f.odometry))},
+        {"filter", flat_errors_json(odometry_errors(in, f.filter.v, f.filter.w, {}, {}, {}, &pose))},
+        {"filter_healthy", f.filter.healthy}};
+  };
+  nlohmann::json events = nlohmann::json::array();
+  for (const RetrainEvent& e : with.retrains)
+    events.push_back({{"step", e.step},
+                      {"t_s", e.t_s},
+                      {"ms", 1e3 * e.seconds},
+                      {"v", summary_json(e.v)},
+                      {"w", summary_json(e.w)}});
+  return {{"track", in.track_name},
+          {"file", r.track},
+          {"model", r.model},
+          {"covariance", detector ? "slip detector" : "static"},
+          {"every", r.every},
+          {"iterations", r.iterations},
+          {"retrains", events},
+          {"with_retraining", block(with)},
+          {"without_retraining", block(without)}};
+}
+
+// The model with its nets as retraining left them, and its provenance.
+void write_retrained_model(const LearnRetrainRequest& r, const LearnedModelFile& m, const FusionInput& in,
+                           const LearnedFusionResult& with) {
+  LearnedModelFile out = m;
+  out.odometry = with.final_model.value_or(m.odometry);
+  out.provenance.retrains += static_cast<int>(with.retrains.size());
+  out.provenance.retrain_tracks.push_back(in.track_name);
+  out.provenance.created_by = r.command;
+  results::write_learned_model(r.model_out, out);
+}
+
+}  // namespace
+
 LearnRetrainOutcome run_learn_retrain(const LearnRetrainRequest& r, const LearnProgress& progress) {
   check_output_file("--model-out", r.model_out);
   check_output_file("--json", r.json);
@@ -282,18 +344,7 @@ LearnRetrainOutcome run_learn_retrain(const LearnRetrainRequest& r, const LearnP
                     "retrains on its fused velocities",
                     r.track, in.track_name));
 
-  LearnedFusionOptions o;
-  o.odometry = LearnedFusionOptions::Odometry::learned;
-  o.detector = detector ? &*m.detector : nullptr;
-  // Without a detector: a Gaussian's variance from the validation MAE, σ = MAE·√(π/2).
-  o.static_var_v = std::max(1e-8,
-                            m.odometry.v_validation_mae * m.odometry.v_validation_mae * std::numbers::pi / 2);
-  o.static_var_w = std::max(1e-8,
-                            m.odometry.w_validation_mae * m.odometry.w_validation_mae * std::numbers::pi / 2);
-  o.retrain.samples_per_retrain = r.every;
-  o.retrain.training = learn_training_options(m.provenance.seed, r.iterations, r.threads,
-                                              default_retrain_training());
-
+  LearnedFusionOptions o = retrain_fusion_options(r, m, detector);
   report(progress, 0, 2);
   LearnedFusionResult with, without;
   try {
@@ -306,39 +357,8 @@ LearnRetrainOutcome run_learn_retrain(const LearnRetrainRequest& r, const LearnP
   } catch (const std::invalid_argument& e) {
     throw Failure(fmt::format("learn retrain: {}", e.what()));
   }
-
-  const auto block = [&](const LearnedFusionResult& f) {
-    PoseTrack pose{f.filter.x, f.filter.y, f.filter.theta};
-    return nlohmann::json{
-        {"odometry", flat_errors_json(odometry_only_errors(in, f.odometry))},
-        {"filter", flat_errors_json(odometry_errors(in, f.filter.v, f.filter.w, {}, {}, {}, &pose))},
-        {"filter_healthy", f.filter.healthy}};
-  };
-  nlohmann::json events = nlohmann::json::array();
-  for (const RetrainEvent& e : with.retrains)
-    events.push_back({{"step", e.step},
-                      {"t_s", e.t_s},
-                      {"ms", 1e3 * e.seconds},
-                      {"v", summary_json(e.v)},
-                      {"w", summary_json(e.w)}});
-  const nlohmann::json j = {{"track", in.track_name},
-                            {"file", r.track},
-                            {"model", r.model},
-                            {"covariance", detector ? "slip detector" : "static"},
-                            {"every", r.every},
-                            {"iterations", r.iterations},
-                            {"retrains", events},
-                            {"with_retraining", block(with)},
-                            {"without_retraining", block(without)}};
-
-  if (!r.model_out.empty()) {
-    LearnedModelFile out = m;
-    out.odometry = with.final_model.value_or(m.odometry);
-    out.provenance.retrains += static_cast<int>(with.retrains.size());
-    out.provenance.retrain_tracks.push_back(in.track_name);
-    out.provenance.created_by = r.command;
-    results::write_learned_model(r.model_out, out);
-  }
+  const nlohmann::json j = retrain_json(r, in, detector, with, without);
+  if (!r.model_out.empty()) write_retrained_model(r, m, in, with);
   if (!r.json.empty()) write_file_atomically(r.json, j.dump(2) + "\n");
 
   LearnRetrainOutcome out;

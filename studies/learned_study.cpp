@@ -123,6 +123,238 @@ void check_role(const sim::Scenario& s, const char* role, bool power, bool slip,
     throw std::invalid_argument(name + ": needs a radius change (effects.radius_step)");
 }
 
+// 1. Simulate: the five roles' tracks (seeds options.seed + 0..4) as fusion
+// inputs in kLearnedScenarioRoles order; `slip_eval_episodes` gets the
+// slip_eval track's episodes.
+std::vector<FusionInput> simulate_roles(const LearnedStudyScenarios& scenarios,
+                                        const LearnedStudyOptions& options, const FusionInputOptions& fo,
+                                        Stage& stage, LearnedStudy& out,
+                                        std::vector<sim::SlipEpisode>& slip_eval_episodes) {
+  const sim::Scenario* roles[] = {&scenarios.learn, &scenarios.eval, &scenarios.step, &scenarios.slip,
+                                  &scenarios.slip_eval};
+  std::vector<FusionInput> inputs;
+  for (std::size_t i = 0; i < 5; ++i) {
+    stage.next(fmt::format("simulating {}", roles[i]->name));
+    sim::Scenario s = *roles[i];
+    s.seed = options.seed + i;
+    const Track track = sim::simulate(s);
+    out.scenario_names.push_back(roles[i]->name);
+    out.track_names.push_back(track.name());
+    try {
+      inputs.push_back(build_fusion_input(track, fo));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(fmt::format("{} scenario '{}': {}", kLearnedScenarioRoles[i], roles[i]->name,
+                                              e.what()));
+    }
+    if (!inputs.back().has_gt)
+      throw std::invalid_argument(fmt::format("{} scenario '{}': the simulated track has no ground truth",
+                                              kLearnedScenarioRoles[i], roles[i]->name));
+    if (i == 4) slip_eval_episodes = sim::slip_episodes_from_metadata(track.meta());
+  }
+  return inputs;
+}
+
+// The extra drives of the slip route, with random episode layouts; records
+// every slip drive (the scenario's own first) in out.slip_drives.
+std::vector<FusionInput> simulate_extra_slip_drives(const LearnedStudyScenarios& scenarios,
+                                                    const LearnedStudyOptions& options,
+                                                    const FusionInputOptions& fo, Stage& stage,
+                                                    LearnedStudy& out) {
+  out.slip_drives.push_back({options.seed + 3, scenarios.slip.slip_episodes});
+  std::vector<FusionInput> extra;
+  const sim::MotionProfile route(scenarios.slip.motion);
+  for (int j = 1; j < options.slip_drives; ++j) {
+    sim::Scenario s = scenarios.slip;
+    s.seed = options.seed + 4 + static_cast<std::uint64_t>(j);
+    s.slip_episodes = sim::random_slip_episodes(route, s.seed);
+    s.name = fmt::format("{}_random{}", scenarios.slip.name, j);
+    stage.next(fmt::format("simulating {}", s.name));
+    if (s.slip_episodes.empty())
+      throw std::invalid_argument(
+          fmt::format("slip scenario '{}': its route has no stretch long and fast enough "
+                      "for a random slip episode (sim/random_slip.h)",
+                      scenarios.slip.name));
+    out.slip_drives.push_back({s.seed, s.slip_episodes});
+    extra.push_back(build_fusion_input(sim::simulate(s), fo));
+  }
+  return extra;
+}
+
+// 2. Train the velocity nets on `learn` (and the kinematic odometry's MAE
+// there, for comparison).
+void train_velocity_nets(const FusionInput& learn, const LearnedStudyOptions& options, Stage& stage,
+                         LearnedStudy& out) {
+  stage.next("training the velocity nets");
+  LearnedTrainingOptions lo;
+  lo.training = training_options(options, options.iterations);
+  lo.previous_noise_v = options.previous_noise_v;
+  lo.previous_noise_w = options.previous_noise_w;
+  out.model = train_learned_odometry({&learn}, lo, &out.training.odometry);
+  const OdometrySeries learn_kin = kinematic_odometry(learn);
+  out.training.kinematic_v_mae = series_errors(learn_kin.v, learn.v_true, {}).mae;
+  out.training.kinematic_w_mae = series_errors(learn_kin.w, learn.w_true, {}).mae;
+}
+
+// The slip detector, trained on the slip drives; fills the nets' and the
+// kinematic odometry on each drive.
+void train_detector(const std::vector<const FusionInput*>& slips, const LearnedStudyOptions& options,
+                    Stage& stage, LearnedStudy& out, std::vector<OdometrySeries>& slip_lstm,
+                    std::vector<OdometrySeries>& slip_kin) {
+  stage.next("training the slip detector");
+  for (const FusionInput* in : slips) {
+    slip_lstm.push_back(run_learned_odometry(*in, out.model));
+    slip_kin.push_back(kinematic_odometry(*in));
+  }
+  SlipTrainingOptions so;
+  so.training = training_options(options, options.iterations);
+  so.stride = options.slip_stride;
+  out.detector = train_slip_detector(slips, slip_lstm, so, &out.training.detector);
+}
+
+// 3. Static variances, pooled over the detector's training drives; throws
+// when one is not finite and > 0.
+void set_static_variances(const std::vector<const FusionInput*>& slips,
+                          const std::vector<OdometrySeries>& slip_lstm,
+                          const std::vector<OdometrySeries>& slip_kin, const std::string& slip_name,
+                          LearnedStudy& out) {
+  std::array<std::vector<const std::vector<double>*>, 6> series;  // lstm v, w; kin v, w; true v, w
+  std::vector<const std::vector<double>*> gyro, gyro_truth;
+  for (std::size_t i = 0; i < slips.size(); ++i) {
+    if (slips[i]->has_gyro) gyro.push_back(&slips[i]->gyro_z), gyro_truth.push_back(&slips[i]->w_true);
+    series[0].push_back(&slip_lstm[i].v);
+    series[1].push_back(&slip_lstm[i].w);
+    series[2].push_back(&slip_kin[i].v);
+    series[3].push_back(&slip_kin[i].w);
+    series[4].push_back(&slips[i]->v_true);
+    series[5].push_back(&slips[i]->w_true);
+  }
+  out.static_var_lstm_v = pooled_mean_squared_error(series[0], series[4]);
+  out.static_var_lstm_w = pooled_mean_squared_error(series[1], series[5]);
+  out.static_var_kin_v = pooled_mean_squared_error(series[2], series[4]);
+  out.static_var_kin_w = pooled_mean_squared_error(series[3], series[5]);
+  if (gyro.size() == slips.size()) out.static_var_gyro = pooled_mean_squared_error(gyro, gyro_truth);
+  for (double v : {out.static_var_lstm_v, out.static_var_lstm_w, out.static_var_kin_v, out.static_var_kin_w,
+                   out.static_var_gyro})
+    if (!(v > 0.0) || !std::isfinite(v))
+      throw std::invalid_argument(
+          fmt::format("slip scenario '{}': the odometry's mean squared error there is {}: "
+                      "expected a finite value > 0 for the static variance",
+                      slip_name, v));
+}
+
+// 4. Table 1: the nets' and the kinematic odometry on the evaluation track.
+void table1(const FusionInput& eval, Stage& stage, LearnedStudy& out) {
+  stage.next("Table 1: odometry on the evaluation track");
+  Table1Result& t = out.table1;
+  t.track = eval.track_name;
+  const OdometrySeries lstm = run_learned_odometry(eval, out.model);
+  const OdometrySeries kin = kinematic_odometry(eval);
+  t.rows = {{"LSTM odometry", odometry_only_errors(eval, lstm)},
+            {"Traditional odometry", odometry_only_errors(eval, kin)}};
+  t.truth = truth_path(eval);
+  t.lstm = path_of(dead_reckon(eval, lstm.v, lstm.w));
+  t.traditional = path_of(dead_reckon(eval, kin.v, kin.w));
+}
+
+// Table 2's record of one retraining of the nets.
+RetrainRecord retrain_record(const RetrainEvent& e) {
+  RetrainRecord rec;
+  rec.step = e.step;
+  rec.t_s = e.t_s;
+  rec.ms = 1e3 * e.seconds;
+  rec.v_cost_before = e.v.initial_cost;
+  rec.v_cost_after = e.v.final_cost;
+  rec.v_mae_after = e.v.train_mae;
+  rec.w_cost_before = e.w.initial_cost;
+  rec.w_cost_after = e.w.final_cost;
+  rec.w_mae_after = e.w.train_mae;
+  rec.v_iterations = e.v.iterations;
+  rec.w_iterations = e.w.iterations;
+  return rec;
+}
+
+// 5. Table 2: the nets with and without retraining, and the kinematic
+// odometry, on the step track (whole, and after the radius change).
+void table2(const FusionInput& step, const sim::Scenario& step_scenario, const LearnedStudyOptions& options,
+            Stage& stage, LearnedStudy& out) {
+  Table2Result& t = out.table2;
+  t.track = step.track_name;
+  t.t_s = step.t;
+  t.truth = truth_path(step);
+  t.change_t_s = step_scenario.effects.radius_step->t;
+  t.change_step = static_cast<std::size_t>(std::lower_bound(step.t.begin(), step.t.end(), t.change_t_s) -
+                                           step.t.begin());
+  if (t.change_step == 0) t.change_step = 1;
+  if (t.change_step + 2 > step.size())
+    throw std::invalid_argument(fmt::format("step scenario '{}': the radius change at {} s is not inside the "
+                                            "track (which ends at {} s)",
+                                            step_scenario.name, t.change_t_s, step.t.back()));
+  const FusionInput after = slice_fusion_input(step, t.change_step);
+  const SlipDetectorModel* det = step.has_power ? &out.detector : nullptr;
+  using Odo = LearnedFusionOptions::Odometry;
+
+  stage.next("Table 2: LSTM with retraining");
+  const LearnedFusionResult re = run_learned_fusion(
+      step, &out.model,
+      fusion_options(options, Odo::learned, det, out.static_var_lstm_v, out.static_var_lstm_w, true));
+  Table2Row r = table2_row("LSTM retraining", step, after, t.change_step, re.odometry);
+  r.retrains = static_cast<int>(re.retrains.size());
+  double ms = 0.0;
+  for (const RetrainEvent& e : re.retrains) {
+    const RetrainRecord rec = retrain_record(e);
+    ms += rec.ms;
+    t.retrains.push_back(rec);
+  }
+  if (!re.retrains.empty()) r.ms_per_retrain = ms / static_cast<double>(re.retrains.size());
+  t.rows.push_back(std::move(r));
+
+  stage.next("Table 2: LSTM without retraining");
+  const LearnedFusionResult no = run_learned_fusion(
+      step, &out.model,
+      fusion_options(options, Odo::learned, det, out.static_var_lstm_v, out.static_var_lstm_w, false));
+  t.rows.push_back(table2_row("LSTM no retraining", step, after, t.change_step, no.odometry));
+
+  stage.next("Table 2: traditional odometry");
+  // The kinematic odometry does not depend on the filter.
+  t.rows.push_back(table2_row("Traditional odometry", step, after, t.change_step, kinematic_odometry(step)));
+}
+
+// 6. Table 3: the UKF fusing the nets with variable or static covariance, and
+// the kinematic odometry with static covariance, on the slip evaluation track.
+void table3(const FusionInput& slip_eval, const std::vector<sim::SlipEpisode>& episodes,
+            const LearnedStudyOptions& options, Stage& stage, LearnedStudy& out) {
+  Table3Result& t = out.table3;
+  t.track = slip_eval.track_name;
+  t.t_s = slip_eval.t;
+  t.truth = truth_path(slip_eval);
+  t.episodes = episodes;
+  using Odo = LearnedFusionOptions::Odometry;
+  stage.next("Table 3: LSTM + variable covariance");
+  const LearnedFusionResult var = run_learned_fusion(
+      slip_eval, &out.model,
+      fusion_options(options, Odo::learned, &out.detector, out.static_var_lstm_v, out.static_var_lstm_w, false,
+                     out.static_var_gyro));
+  t.rows.push_back(table3_row("LSTM odometry + variable covariance", slip_eval, var));
+  t.lstm_sq_error_v = abs_errors(var.odometry.v, slip_eval.v_true);
+  t.lstm_sq_error_w = abs_errors(var.odometry.w, slip_eval.w_true);
+  for (double& e : t.lstm_sq_error_v) e *= e;
+  for (double& e : t.lstm_sq_error_w) e *= e;
+
+  stage.next("Table 3: traditional + static covariance");
+  const LearnedFusionResult kin = run_learned_fusion(slip_eval, nullptr,
+                                                     fusion_options(options, Odo::kinematic, nullptr,
+                                                                    out.static_var_kin_v, out.static_var_kin_w,
+                                                                    false, out.static_var_gyro));
+  t.rows.push_back(table3_row("Traditional odometry + static covariance", slip_eval, kin));
+
+  stage.next("Table 3: LSTM + static covariance");
+  const LearnedFusionResult fixed = run_learned_fusion(
+      slip_eval, &out.model,
+      fusion_options(options, Odo::learned, nullptr, out.static_var_lstm_v, out.static_var_lstm_w, false,
+                     out.static_var_gyro));
+  t.rows.push_back(table3_row("LSTM odometry + static covariance", slip_eval, fixed));
+}
+
 }  // namespace
 
 bool LearnedStudyOptions::IsValid(std::string* why) const {
@@ -210,202 +442,23 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
 
   LearnedStudy out;
   out.options = options;
-  // 1. Simulate.
-  const sim::Scenario* roles[] = {&scenarios.learn, &scenarios.eval, &scenarios.step, &scenarios.slip,
-                                  &scenarios.slip_eval};
-  std::vector<FusionInput> inputs;
-  std::vector<sim::SlipEpisode> slip_eval_episodes;
   FusionInputOptions fo;
   fo.rate_hz = options.rate_hz;
-  for (std::size_t i = 0; i < 5; ++i) {
-    stage.next(fmt::format("simulating {}", roles[i]->name));
-    sim::Scenario s = *roles[i];
-    s.seed = options.seed + i;
-    const Track track = sim::simulate(s);
-    out.scenario_names.push_back(roles[i]->name);
-    out.track_names.push_back(track.name());
-    try {
-      inputs.push_back(build_fusion_input(track, fo));
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument(fmt::format("{} scenario '{}': {}", kLearnedScenarioRoles[i], roles[i]->name,
-                                              e.what()));
-    }
-    if (!inputs.back().has_gt)
-      throw std::invalid_argument(fmt::format("{} scenario '{}': the simulated track has no ground truth",
-                                              kLearnedScenarioRoles[i], roles[i]->name));
-    if (i == 4) slip_eval_episodes = sim::slip_episodes_from_metadata(track.meta());
-  }
+  std::vector<sim::SlipEpisode> slip_eval_episodes;
+  const std::vector<FusionInput> inputs = simulate_roles(scenarios, options, fo, stage, out,
+                                                         slip_eval_episodes);
   const FusionInput &learn = inputs[0], &eval = inputs[1], &step = inputs[2], &slip_eval = inputs[4];
-  // The extra drives of the slip route, with random episode layouts.
-  out.slip_drives.push_back({options.seed + 3, scenarios.slip.slip_episodes});
-  std::vector<FusionInput> extra;
-  const sim::MotionProfile route(scenarios.slip.motion);
-  for (int j = 1; j < options.slip_drives; ++j) {
-    sim::Scenario s = scenarios.slip;
-    s.seed = options.seed + 4 + static_cast<std::uint64_t>(j);
-    s.slip_episodes = sim::random_slip_episodes(route, s.seed);
-    s.name = fmt::format("{}_random{}", scenarios.slip.name, j);
-    stage.next(fmt::format("simulating {}", s.name));
-    if (s.slip_episodes.empty())
-      throw std::invalid_argument(
-          fmt::format("slip scenario '{}': its route has no stretch long and fast enough "
-                      "for a random slip episode (sim/random_slip.h)",
-                      scenarios.slip.name));
-    out.slip_drives.push_back({s.seed, s.slip_episodes});
-    extra.push_back(build_fusion_input(sim::simulate(s), fo));
-  }
+  const std::vector<FusionInput> extra = simulate_extra_slip_drives(scenarios, options, fo, stage, out);
   std::vector<const FusionInput*> slips = {&inputs[3]};
   for (const FusionInput& in : extra) slips.push_back(&in);
 
-  // 2. Train.
-  stage.next("training the velocity nets");
-  LearnedTrainingOptions lo;
-  lo.training = training_options(options, options.iterations);
-  lo.previous_noise_v = options.previous_noise_v;
-  lo.previous_noise_w = options.previous_noise_w;
-  out.model = train_learned_odometry({&learn}, lo, &out.training.odometry);
-  const OdometrySeries learn_kin = kinematic_odometry(learn);
-  out.training.kinematic_v_mae = series_errors(learn_kin.v, learn.v_true, {}).mae;
-  out.training.kinematic_w_mae = series_errors(learn_kin.w, learn.w_true, {}).mae;
-
-  stage.next("training the slip detector");
+  train_velocity_nets(learn, options, stage, out);
   std::vector<OdometrySeries> slip_lstm, slip_kin;
-  for (const FusionInput* in : slips) {
-    slip_lstm.push_back(run_learned_odometry(*in, out.model));
-    slip_kin.push_back(kinematic_odometry(*in));
-  }
-  SlipTrainingOptions so;
-  so.training = training_options(options, options.iterations);
-  so.stride = options.slip_stride;
-  out.detector = train_slip_detector(slips, slip_lstm, so, &out.training.detector);
-
-  // 3. Static variances, pooled over the detector's training drives.
-  std::array<std::vector<const std::vector<double>*>, 6> series;  // lstm v, w; kin v, w; true v, w
-  std::vector<const std::vector<double>*> gyro, gyro_truth;
-  for (std::size_t i = 0; i < slips.size(); ++i) {
-    if (slips[i]->has_gyro) gyro.push_back(&slips[i]->gyro_z), gyro_truth.push_back(&slips[i]->w_true);
-    series[0].push_back(&slip_lstm[i].v);
-    series[1].push_back(&slip_lstm[i].w);
-    series[2].push_back(&slip_kin[i].v);
-    series[3].push_back(&slip_kin[i].w);
-    series[4].push_back(&slips[i]->v_true);
-    series[5].push_back(&slips[i]->w_true);
-  }
-  out.static_var_lstm_v = pooled_mean_squared_error(series[0], series[4]);
-  out.static_var_lstm_w = pooled_mean_squared_error(series[1], series[5]);
-  out.static_var_kin_v = pooled_mean_squared_error(series[2], series[4]);
-  out.static_var_kin_w = pooled_mean_squared_error(series[3], series[5]);
-  if (gyro.size() == slips.size()) out.static_var_gyro = pooled_mean_squared_error(gyro, gyro_truth);
-  for (double v : {out.static_var_lstm_v, out.static_var_lstm_w, out.static_var_kin_v, out.static_var_kin_w,
-                   out.static_var_gyro})
-    if (!(v > 0.0) || !std::isfinite(v))
-      throw std::invalid_argument(
-          fmt::format("slip scenario '{}': the odometry's mean squared error there is {}: "
-                      "expected a finite value > 0 for the static variance",
-                      scenarios.slip.name, v));
-
-  // 4. Table 1.
-  stage.next("Table 1: odometry on the evaluation track");
-  {
-    Table1Result& t = out.table1;
-    t.track = eval.track_name;
-    const OdometrySeries lstm = run_learned_odometry(eval, out.model);
-    const OdometrySeries kin = kinematic_odometry(eval);
-    t.rows = {{"LSTM odometry", odometry_only_errors(eval, lstm)},
-              {"Traditional odometry", odometry_only_errors(eval, kin)}};
-    t.truth = truth_path(eval);
-    t.lstm = path_of(dead_reckon(eval, lstm.v, lstm.w));
-    t.traditional = path_of(dead_reckon(eval, kin.v, kin.w));
-  }
-
-  // 5. Table 2.
-  {
-    Table2Result& t = out.table2;
-    t.track = step.track_name;
-    t.t_s = step.t;
-    t.truth = truth_path(step);
-    t.change_t_s = scenarios.step.effects.radius_step->t;
-    t.change_step = static_cast<std::size_t>(std::lower_bound(step.t.begin(), step.t.end(), t.change_t_s) -
-                                             step.t.begin());
-    if (t.change_step == 0) t.change_step = 1;
-    if (t.change_step + 2 > step.size())
-      throw std::invalid_argument(fmt::format("step scenario '{}': the radius change at {} s is not inside the "
-                                              "track (which ends at {} s)",
-                                              scenarios.step.name, t.change_t_s, step.t.back()));
-    const FusionInput after = slice_fusion_input(step, t.change_step);
-    const SlipDetectorModel* det = step.has_power ? &out.detector : nullptr;
-    using Odo = LearnedFusionOptions::Odometry;
-
-    stage.next("Table 2: LSTM with retraining");
-    const LearnedFusionResult re = run_learned_fusion(
-        step, &out.model,
-        fusion_options(options, Odo::learned, det, out.static_var_lstm_v, out.static_var_lstm_w, true));
-    Table2Row r = table2_row("LSTM retraining", step, after, t.change_step, re.odometry);
-    r.retrains = static_cast<int>(re.retrains.size());
-    double ms = 0.0;
-    for (const RetrainEvent& e : re.retrains) {
-      RetrainRecord rec;
-      rec.step = e.step;
-      rec.t_s = e.t_s;
-      rec.ms = 1e3 * e.seconds;
-      rec.v_cost_before = e.v.initial_cost;
-      rec.v_cost_after = e.v.final_cost;
-      rec.v_mae_after = e.v.train_mae;
-      rec.w_cost_before = e.w.initial_cost;
-      rec.w_cost_after = e.w.final_cost;
-      rec.w_mae_after = e.w.train_mae;
-      rec.v_iterations = e.v.iterations;
-      rec.w_iterations = e.w.iterations;
-      ms += rec.ms;
-      t.retrains.push_back(rec);
-    }
-    if (!re.retrains.empty()) r.ms_per_retrain = ms / static_cast<double>(re.retrains.size());
-    t.rows.push_back(std::move(r));
-
-    stage.next("Table 2: LSTM without retraining");
-    const LearnedFusionResult no = run_learned_fusion(
-        step, &out.model,
-        fusion_options(options, Odo::learned, det, out.static_var_lstm_v, out.static_var_lstm_w, false));
-    t.rows.push_back(table2_row("LSTM no retraining", step, after, t.change_step, no.odometry));
-
-    stage.next("Table 2: traditional odometry");
-    // The kinematic odometry does not depend on the filter.
-    t.rows.push_back(table2_row("Traditional odometry", step, after, t.change_step, kinematic_odometry(step)));
-  }
-
-  // 6. Table 3.
-  {
-    Table3Result& t = out.table3;
-    t.track = slip_eval.track_name;
-    t.t_s = slip_eval.t;
-    t.truth = truth_path(slip_eval);
-    t.episodes = slip_eval_episodes;
-    using Odo = LearnedFusionOptions::Odometry;
-    stage.next("Table 3: LSTM + variable covariance");
-    const LearnedFusionResult var = run_learned_fusion(
-        slip_eval, &out.model,
-        fusion_options(options, Odo::learned, &out.detector, out.static_var_lstm_v, out.static_var_lstm_w,
-                       false, out.static_var_gyro));
-    t.rows.push_back(table3_row("LSTM odometry + variable covariance", slip_eval, var));
-    t.lstm_sq_error_v = abs_errors(var.odometry.v, slip_eval.v_true);
-    t.lstm_sq_error_w = abs_errors(var.odometry.w, slip_eval.w_true);
-    for (double& e : t.lstm_sq_error_v) e *= e;
-    for (double& e : t.lstm_sq_error_w) e *= e;
-
-    stage.next("Table 3: traditional + static covariance");
-    const LearnedFusionResult kin = run_learned_fusion(
-        slip_eval, nullptr,
-        fusion_options(options, Odo::kinematic, nullptr, out.static_var_kin_v, out.static_var_kin_w, false,
-                       out.static_var_gyro));
-    t.rows.push_back(table3_row("Traditional odometry + static covariance", slip_eval, kin));
-
-    stage.next("Table 3: LSTM + static covariance");
-    const LearnedFusionResult fixed = run_learned_fusion(
-        slip_eval, &out.model,
-        fusion_options(options, Odo::learned, nullptr, out.static_var_lstm_v, out.static_var_lstm_w, false,
-                       out.static_var_gyro));
-    t.rows.push_back(table3_row("LSTM odometry + static covariance", slip_eval, fixed));
-  }
+  train_detector(slips, options, stage, out, slip_lstm, slip_kin);
+  set_static_variances(slips, slip_lstm, slip_kin, scenarios.slip.name, out);
+  table1(eval, stage, out);
+  table2(step, scenarios.step, options, stage, out);
+  table3(slip_eval, slip_eval_episodes, options, stage, out);
   stage.finish();
   out.wall_s = seconds_since(t0);
   return out;

@@ -26,6 +26,103 @@ enum Stream : std::uint64_t { kInitPosition = 0, kInitVelocity = 1, kR1 = 2, kR2
 // NaN never poisons a comparison.
 double sanitize(double f) { return std::isfinite(f) ? f : kInf; }
 
+// The swarm's state, row-major [particle][dimension], and its best.
+struct Swarm {
+  Swarm(int particles, std::size_t dimension)
+      : dim(dimension),
+        x(static_cast<std::size_t>(particles) * dimension),
+        v(static_cast<std::size_t>(particles) * dimension),
+        pbest_x(static_cast<std::size_t>(particles) * dimension),
+        fit(static_cast<std::size_t>(particles)),
+        pbest_f(static_cast<std::size_t>(particles), kInf),
+        errors(static_cast<std::size_t>(particles)),
+        gbest_x(dimension) {}
+  std::size_t dim;
+  std::vector<double> x, v, pbest_x;
+  std::vector<double> fit, pbest_f;
+  std::vector<std::exception_ptr> errors;
+  std::vector<double> gbest_x;
+  double gbest_f = kInf;
+};
+
+// What moving a particle reads: the box, its widths and velocity limits, the
+// options and the problem.
+struct Motion {
+  const Bounds& box;
+  const std::vector<double>& width;
+  const std::vector<double>& vmax;
+  const PsoOptions& options;
+  ProblemRef problem;
+
+  double uniform(int iteration, int particle, std::size_t d, Stream stream) const {
+    return counter_uniform01(options.seed, static_cast<std::uint64_t>(iteration),
+                             static_cast<std::uint64_t>(particle), d, stream);
+  }
+};
+
+// Moves particle i for iteration t (t >= 1) and evaluates it; or, for
+// t == 0, initialises and evaluates it. Runs inside the parallel loop: it
+// touches only particle i's rows and reads gbest_x, which is not written
+// during the loop.
+inline void step_particle(Swarm& s, const Motion& m, int t, int i) {
+  const std::size_t dim = s.dim;
+  const Bounds& box = m.box;
+  const PsoOptions& options = m.options;
+  double* xi = &s.x[static_cast<std::size_t>(i) * dim];
+  double* vi = &s.v[static_cast<std::size_t>(i) * dim];
+  const double* pi = &s.pbest_x[static_cast<std::size_t>(i) * dim];
+  for (std::size_t d = 0; d < dim; ++d) {
+    if (t == 0) {
+      xi[d] = box.lower[d] + m.uniform(0, i, d, kInitPosition) * m.width[d];
+      xi[d] = std::min(xi[d], box.upper[d]);
+      vi[d] = (2 * m.uniform(0, i, d, kInitVelocity) - 1) * options.initial_velocity_fraction * m.width[d];
+      continue;
+    }
+    const double r1 = m.uniform(t, i, d, kR1);
+    const double r2 = m.uniform(t, i, d, kR2);
+    double vel = options.inertia * vi[d] + options.cognitive * r1 * (pi[d] - xi[d]) +
+                 options.social * r2 * (s.gbest_x[d] - xi[d]);
+    vel = std::clamp(vel, -m.vmax[d], m.vmax[d]);
+    double pos = xi[d] + vel;
+    if (pos < box.lower[d]) {
+      pos = box.lower[d];
+      vel = 0;
+    } else if (pos > box.upper[d]) {
+      pos = box.upper[d];
+      vel = 0;
+    }
+    xi[d] = pos;
+    vi[d] = vel;
+  }
+  try {
+    s.fit[static_cast<std::size_t>(i)] = sanitize(m.problem.fitness(std::span<const double>(xi, dim)));
+  } catch (...) {
+    s.fit[static_cast<std::size_t>(i)] = kInf;
+    s.errors[static_cast<std::size_t>(i)] = std::current_exception();
+  }
+}
+
+// Sequential best update in particle index order; strict `<` keeps the
+// earlier (lower-index / older) record on ties. Returns the first particle
+// whose evaluation threw (its bests not updated), or -1.
+int update_bests(Swarm& s, int n, int t) {
+  const std::size_t dim = s.dim;
+  for (int i = 0; i < n; ++i) {
+    const std::size_t ui = static_cast<std::size_t>(i);
+    if (s.errors[ui]) return i;
+    const double* xi = &s.x[ui * dim];
+    if (t == 0 || s.fit[ui] < s.pbest_f[ui]) {
+      s.pbest_f[ui] = s.fit[ui];
+      std::copy(xi, xi + dim, s.pbest_x.begin() + static_cast<std::ptrdiff_t>(ui * dim));
+    }
+    if ((t == 0 && i == 0) || s.fit[ui] < s.gbest_f) {
+      s.gbest_f = s.fit[ui];
+      std::copy(xi, xi + dim, s.gbest_x.begin());
+    }
+  }
+  return -1;
+}
+
 }  // namespace
 
 bool PsoOptions::IsValid(std::string* why) const {
@@ -60,92 +157,28 @@ Summary pso_minimize(ProblemRef problem, const PsoOptions& options) {
 
   const int n = options.particles;
   const std::size_t dim = box.dimension();
-  const std::uint64_t seed = options.seed;
   const long total = options.evaluation_budget();
   std::vector<double> width(dim), vmax(dim);
   for (std::size_t d = 0; d < dim; ++d) {
     width[d] = box.upper[d] - box.lower[d];
     vmax[d] = options.max_velocity_fraction * width[d];
   }
-
-  // Swarm state, row-major [particle][dimension].
-  const std::size_t cells = static_cast<std::size_t>(n) * dim;
-  std::vector<double> x(cells), v(cells), pbest_x(cells);
-  std::vector<double> fit(static_cast<std::size_t>(n)), pbest_f(static_cast<std::size_t>(n), kInf);
-  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(n));
-  std::vector<double> gbest_x(dim);
-  double gbest_f = kInf;
-
-  auto uniform = [seed](int iteration, int particle, std::size_t d, Stream stream) {
-    return counter_uniform01(seed, static_cast<std::uint64_t>(iteration), static_cast<std::uint64_t>(particle),
-                             d, stream);
-  };
-
-  // Moves particle i for iteration t (t >= 1) and evaluates it; or, for
-  // t == 0, initialises and evaluates it. Runs inside the parallel loop: it
-  // touches only particle i's rows and reads gbest_x, which is not written
-  // during the loop.
-  auto step_particle = [&](int t, int i) {
-    double* xi = &x[static_cast<std::size_t>(i) * dim];
-    double* vi = &v[static_cast<std::size_t>(i) * dim];
-    const double* pi = &pbest_x[static_cast<std::size_t>(i) * dim];
-    for (std::size_t d = 0; d < dim; ++d) {
-      if (t == 0) {
-        xi[d] = box.lower[d] + uniform(0, i, d, kInitPosition) * width[d];
-        xi[d] = std::min(xi[d], box.upper[d]);
-        vi[d] = (2 * uniform(0, i, d, kInitVelocity) - 1) * options.initial_velocity_fraction * width[d];
-        continue;
-      }
-      const double r1 = uniform(t, i, d, kR1);
-      const double r2 = uniform(t, i, d, kR2);
-      double vel = options.inertia * vi[d] + options.cognitive * r1 * (pi[d] - xi[d]) +
-                   options.social * r2 * (gbest_x[d] - xi[d]);
-      vel = std::clamp(vel, -vmax[d], vmax[d]);
-      double pos = xi[d] + vel;
-      if (pos < box.lower[d]) {
-        pos = box.lower[d];
-        vel = 0;
-      } else if (pos > box.upper[d]) {
-        pos = box.upper[d];
-        vel = 0;
-      }
-      xi[d] = pos;
-      vi[d] = vel;
-    }
-    try {
-      fit[static_cast<std::size_t>(i)] = sanitize(problem.fitness(std::span<const double>(xi, dim)));
-    } catch (...) {
-      fit[static_cast<std::size_t>(i)] = kInf;
-      errors[static_cast<std::size_t>(i)] = std::current_exception();
-    }
-  };
+  Swarm s(n, dim);
+  const Motion m{box, width, vmax, options, problem};
 
   for (int t = 0; t <= options.iterations; ++t) {
     if (t > 0 && options.stop != nullptr && options.stop->load()) return finish(Termination::stopped);
 
 #pragma omp parallel for schedule(dynamic)
-    for (int i = 0; i < n; ++i) step_particle(t, i);
+    for (int i = 0; i < n; ++i) step_particle(s, m, t, i);
 
     summary.evaluations += n;
     summary.iterations = t;
-    // Sequential best update in particle index order; strict `<` keeps the
-    // earlier (lower-index / older) record on ties.
-    for (int i = 0; i < n; ++i) {
-      const std::size_t ui = static_cast<std::size_t>(i);
-      if (errors[ui]) return finish(Termination::failure, what_of(errors[ui]));
-      const double* xi = &x[ui * dim];
-      if (t == 0 || fit[ui] < pbest_f[ui]) {
-        pbest_f[ui] = fit[ui];
-        std::copy(xi, xi + dim, pbest_x.begin() + static_cast<std::ptrdiff_t>(ui * dim));
-      }
-      if ((t == 0 && i == 0) || fit[ui] < gbest_f) {
-        gbest_f = fit[ui];
-        std::copy(xi, xi + dim, gbest_x.begin());
-      }
-    }
-    summary.best_x = gbest_x;
-    summary.best_fitness = gbest_f;
-    summary.log.push_back({t, summary.evaluations, gbest_f});
+    if (const int bad = update_bests(s, n, t); bad >= 0)
+      return finish(Termination::failure, what_of(s.errors[static_cast<std::size_t>(bad)]));
+    summary.best_x = s.gbest_x;
+    summary.best_fitness = s.gbest_f;
+    summary.log.push_back({t, summary.evaluations, s.gbest_f});
     if (options.progress) {
       try {
         options.progress(summary.evaluations, total);
