@@ -37,36 +37,27 @@ void print_apply(const CalibrateRequest& a) {
   if (!a.json.empty()) fmt::print("json: {}\n", a.json);
 }
 
-// The options whose presence the request records (`*_given`): a default
-// the user did not ask for may be replaced by a method's own.
-struct TrackedOptions {
-  CLI::Option *method = nullptr, *resampler = nullptr, *policy = nullptr, *seed = nullptr, *particles = nullptr,
-              *evolution = nullptr, *memory = nullptr, *radius = nullptr, *base = nullptr, *tolerance = nullptr,
-              *segment = nullptr;
-};
-
 // The method and the particle filter's settings.
-void add_method_options(CLI::App* sub, CalibrateRequest& req, TrackedOptions& t) {
-  t.method = sub->add_option(
-      "--method", req.method,
-      "adaptive-pf | pf | dkf | batch-pose (alias batch) | batch-velocity | none (default "
-      "adaptive-pf)");
-  t.resampler = sub->add_option("--resampler", req.resampler,
-                                "PF resampling: multinomial | stratified | systematic | residual "
-                                "(default systematic)");
-  t.policy = sub->add_option("--policy", req.policy, "PF resampling policy: every | neff | max (default neff)");
-  t.seed = sub->add_option("--seed", req.seed, "PF random seed (same seed ⇒ same estimates)");
-  t.particles = sub->add_option("--particles", req.particles,
-                                "PF particles (adaptive-pf: the initial count; default 5000, adaptive 8000)")
-                    ->check(CLI::PositiveNumber);
-  t.evolution = sub->add_option("--pf-evolution", req.pf_evolution,
-                                "PF parameter evolution: evidence (default: a walk scaled to the "
-                                "posterior spread, whose memory grows until a fast-forgetting twin "
-                                "predicts better, a change) | paper (§III's fixed or eq. 11 walk)");
-  t.memory = sub->add_option("--pf-memory", req.pf_memory_s,
-                             "PF evidence evolution: the memory after a detected change [s] "
-                             "(default 10)")
-                 ->check(CLI::PositiveNumber);
+void add_method_options(CLI::App* sub, CalibrateRequest& req) {
+  sub->add_option("--method", req.method,
+                  "adaptive-pf | pf | dkf | batch-pose (alias batch) | batch-velocity | none (default "
+                  "adaptive-pf)");
+  sub->add_option("--resampler", req.resampler,
+                  "PF resampling: multinomial | stratified | systematic | residual "
+                  "(default systematic)");
+  sub->add_option("--policy", req.policy, "PF resampling policy: every | neff | max (default neff)");
+  sub->add_option("--seed", req.seed, "PF random seed (same seed ⇒ same estimates)");
+  sub->add_option("--particles", req.particles,
+                  "PF particles (adaptive-pf: the initial count; default 5000, adaptive 8000)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--pf-evolution", req.pf_evolution,
+                  "PF parameter evolution: evidence (default: a walk scaled to the "
+                  "posterior spread, whose memory grows until a fast-forgetting twin "
+                  "predicts better, a change) | paper (§III's fixed or eq. 11 walk)");
+  sub->add_option("--pf-memory", req.pf_memory_s,
+                  "PF evidence evolution: the memory after a detected change [s] "
+                  "(default 10)")
+      ->check(CLI::PositiveNumber);
 }
 
 // The external velocities: from the track, or derived from its ground truth.
@@ -86,17 +77,17 @@ void add_ext_options(CLI::App* sub, CalibrateRequest& req) {
 }
 
 // The initial ranges, the convergence tolerance and the batch fit's segments.
-void add_fit_options(CLI::App* sub, CalibrateRequest& req, TrackedOptions& t) {
-  t.radius = sub->add_option("--init-radius-range", req.init_radius_range,
-                             "LO,HI: initial range of both radii [m] (default nominal ±5 %)");
-  t.base = sub->add_option("--init-wheel-base-range", req.init_wheel_base_range,
-                           "LO,HI: initial range of the wheel base [m] (default nominal ±15 %)");
-  t.tolerance = sub->add_option("--tolerance", req.tolerance_pct,
-                                "convergence: within this % of the truth from then on (default 0.5)");
-  t.segment = sub->add_option("--segment", req.segment_s,
-                              "batch-pose: dead-reckon segments of this length [s] from a reference "
-                              "pose (default 0: whole runs)")
-                  ->check(CLI::NonNegativeNumber);
+void add_fit_options(CLI::App* sub, CalibrateRequest& req) {
+  sub->add_option("--init-radius-range", req.init_radius_range,
+                  "LO,HI: initial range of both radii [m] (default nominal ±5 %)");
+  sub->add_option("--init-wheel-base-range", req.init_wheel_base_range,
+                  "LO,HI: initial range of the wheel base [m] (default nominal ±15 %)");
+  sub->add_option("--tolerance", req.tolerance_pct,
+                  "convergence: within this % of the truth from then on (default 0.5)");
+  sub->add_option("--segment", req.segment_s,
+                  "batch-pose: dead-reckon segments of this length [s] from a reference "
+                  "pose (default 0: whole runs)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_flag("--fit-start-heading", req.fit_start_heading,
                 "batch-pose: fit each segment's start heading too (ground truth; with fixes the whole start "
                 "pose is always fitted)");
@@ -114,21 +105,6 @@ void add_output_options(CLI::App* sub, CalibrateRequest& req) {
   sub->add_option("--apply", req.apply,
                   "replay the tracks with this calibration file and with their nominal parameters, and "
                   "compare pose and heading RMSE (no calibration is run)");
-}
-
-void set_given(CalibrateRequest& req, const TrackedOptions& t) {
-  const auto given = [](const CLI::Option* o) { return o->count() > 0; };
-  req.method_given = given(t.method);
-  req.resampler_given = given(t.resampler);
-  req.policy_given = given(t.policy);
-  req.particles_given = given(t.particles);
-  req.seed_given = given(t.seed);
-  req.init_radius_range_given = given(t.radius);
-  req.init_wheel_base_range_given = given(t.base);
-  req.tolerance_given = given(t.tolerance);
-  req.segment_given = given(t.segment);
-  req.pf_evolution_given = given(t.evolution);
-  req.pf_memory_given = given(t.memory);
 }
 
 }  // namespace
@@ -151,14 +127,12 @@ void register_calibrate(CLI::App& app) {
       "default to the nominal radii ±5 % and wheel base ±15 % (the paper's wheelchair ranges);\n"
       "the DKF starts at the range centre with sd = width/√12.");
   sub->add_option("--track", req->tracks, "track file (repeat for several, calibrated in order)")->required();
-  TrackedOptions t;
-  add_method_options(sub, *req, t);
+  add_method_options(sub, *req);
   add_threads_option(sub, &req->threads);
   add_ext_options(sub, *req);
-  add_fit_options(sub, *req, t);
+  add_fit_options(sub, *req);
   add_output_options(sub, *req);
   sub->callback([=] {
-    set_given(*req, t);
     if (req->apply.empty())
       print_calibrate(*req);
     else

@@ -57,25 +57,27 @@ std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply
   // The pose fit needs no external velocity (it fits to the ground truth or
   // the fixes); nor do none and --apply, which score dead reckoning.
   CalibrationMethod method = CalibrationMethod::none;
-  const bool no_velocity_method = !apply && parse_calibration_method(a.method, &method) &&
+  const bool no_velocity_method = !apply && parse_calibration_method(a.method_name(), &method) &&
                                   (method == CalibrationMethod::batch_pose ||
                                    method == CalibrationMethod::none);
   const std::vector<Track> tracks = load_tracks(files);
   std::vector<CalibrationInput> inputs;
   for (std::size_t k = 0; k < tracks.size(); ++k) {
     CalibrationInputOptions o;
-    o.ext_from_gt_rate_hz = a.ext_from_gt_hz;
+    o.ext_from_gt_rate_hz = a.ext_from_gt_hz.value_or(0.0);
     // --ext-sigma-v/-w given: those, not the noise estimated from the ground truth's jitter.
-    o.estimate_ext_noise = !(a.ext_sigma_v > 0.0 || a.ext_sigma_w > 0.0);
-    if (a.ext_sigma_v > 0.0) o.default_v_var = a.ext_sigma_v * a.ext_sigma_v;
-    if (a.ext_sigma_w > 0.0) o.default_w_var = a.ext_sigma_w * a.ext_sigma_w;
+    const double sigma_v = a.ext_sigma_v.value_or(0.0), sigma_w = a.ext_sigma_w.value_or(0.0);
+    o.estimate_ext_noise = !(sigma_v > 0.0 || sigma_w > 0.0);
+    if (sigma_v > 0.0) o.default_v_var = sigma_v * sigma_v;
+    if (sigma_w > 0.0) o.default_w_var = sigma_w * sigma_w;
     const Track& tr = tracks[k];
     const bool has_ext = tr.has(Col::v_ext) && tr.has(Col::w_ext);
     if (apply && o.ext_from_gt_rate_hz <= 0.0 && !has_ext && tr.has_gt())
       o.ext_from_gt_rate_hz = kApplyExtRateHz;
     o.require_velocity_samples = !(no_velocity_method || apply);
     std::string why;
-    if (!o.IsValid(&why)) throw Failure(fmt::format("--ext-from-gt {}: {}", a.ext_from_gt_hz, why));
+    if (!o.IsValid(&why))
+      throw Failure(fmt::format("--ext-from-gt {}: {}", a.ext_from_gt_hz.value_or(0.0), why));
     if (o.ext_from_gt_rate_hz <= 0.0 && !has_ext && o.require_velocity_samples)
       throw Failure(tr.has_gt()
                         ? fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext); expected "
@@ -116,25 +118,27 @@ void check_same_robot(const std::vector<CalibrationInput>& inputs, const std::ve
 CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<CalibrationInput>& inputs) {
   CalibrationRunInfo info;
   info.track_files = a.tracks;
-  info.ext_from_gt_rate_hz = a.ext_from_gt_hz;
+  info.ext_from_gt_rate_hz = a.ext_from_gt_hz.value_or(0.0);
   CalibrationOptions& o = info.options;
-  if (!parse_calibration_method(a.method, &o.method))
+  const std::string method = a.method_name();
+  if (!parse_calibration_method(method, &o.method))
     throw Failure(fmt::format("--method '{}': unknown method, expected adaptive-pf, pf, dkf, batch-pose (or "
                               "batch), batch-velocity or none",
-                              a.method));
-  if ((a.segment_given || a.fit_start_heading) && o.method != CalibrationMethod::batch_pose)
+                              method));
+  if ((a.segment_s.has_value() || a.fit_start_heading) && o.method != CalibrationMethod::batch_pose)
     throw Failure(fmt::format(
-        "--segment and --fit-start-heading apply to --method batch-pose only (got --method {})", a.method));
-  o.pose.segment_s = a.segment_s;
+        "--segment and --fit-start-heading apply to --method batch-pose only (got --method {})", method));
+  o.pose.segment_s = a.segment_s.value_or(0.0);
   o.pose.fit_start_heading = a.fit_start_heading;
   const bool pf = o.method == CalibrationMethod::pf || o.method == CalibrationMethod::adaptive_pf;
   for (const auto& [flag, given] :
-       {std::pair{"--resampler", a.resampler_given}, std::pair{"--policy", a.policy_given},
-        std::pair{"--particles", a.particles_given}, std::pair{"--pf-evolution", a.pf_evolution_given},
-        std::pair{"--pf-memory", a.pf_memory_given}})
+       {std::pair{"--resampler", a.resampler.has_value()}, std::pair{"--policy", a.policy.has_value()},
+        std::pair{"--particles", a.particles.has_value()},
+        std::pair{"--pf-evolution", a.pf_evolution.has_value()},
+        std::pair{"--pf-memory", a.pf_memory_s.has_value()}})
     if (given && !pf)
       throw Failure(fmt::format("{} applies to --method pf and adaptive-pf only (got --method {})", flag,
-                                a.method));
+                                method));
   const OdometryParams& nom = inputs.front().nominal;
   const double r_nom = 0.5 * (nom.wheel_radius_left_m + nom.wheel_radius_right_m);
   const double r_scale = r_nom / kPaperRadiusM, d_scale = nom.wheel_base_m / kPaperWheelBaseM;
@@ -143,8 +147,10 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
   Range r_left = ranges.wheel_radius_left_m;
   Range r_right = ranges.wheel_radius_right_m;
   Range base = ranges.wheel_base_m;
-  if (!a.init_radius_range.empty()) r_left = r_right = parse_range("--init-radius-range", a.init_radius_range);
-  if (!a.init_wheel_base_range.empty()) base = parse_range("--init-wheel-base-range", a.init_wheel_base_range);
+  const std::string radius_range = a.init_radius_range.value_or(""),
+                    base_range = a.init_wheel_base_range.value_or("");
+  if (!radius_range.empty()) r_left = r_right = parse_range("--init-radius-range", radius_range);
+  if (!base_range.empty()) base = parse_range("--init-wheel-base-range", base_range);
   info.init_radius_m = {std::min(r_left.lo, r_right.lo), std::max(r_left.hi, r_right.hi)};
   info.init_wheel_base_m = base;
 
@@ -157,19 +163,22 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
   o.pf.alpha *= r_scale;
   o.pf.dispersion_per_particle_m *= r_scale;
   o.pf.min_random_walk_sigma_m *= r_scale;
-  if (!a.resampler.empty() && !filters::parse_resampler(a.resampler, &o.pf.resampler))
+  // An empty text flag (--resampler "") keeps the default, as not given.
+  const std::string resampler = a.resampler.value_or(""), policy = a.policy.value_or("");
+  const std::string evolution = a.pf_evolution.value_or("");
+  if (!resampler.empty() && !filters::parse_resampler(resampler, &o.pf.resampler))
     throw Failure(fmt::format("--resampler '{}': expected multinomial, stratified, systematic or residual",
-                              a.resampler));
-  if (!a.policy.empty() && !filters::parse_resample_policy(a.policy, &o.pf.policy))
-    throw Failure(fmt::format("--policy '{}': expected every, neff or max", a.policy));
-  if (a.particles > 0) o.pf.particles = a.particles;
-  if (!a.pf_evolution.empty() && !filters::parse_pf_evolution(a.pf_evolution, &o.pf.evolution))
-    throw Failure(fmt::format("--pf-evolution '{}': expected paper or evidence", a.pf_evolution));
-  if (a.pf_memory_s > 0.0) {
-    o.pf.evidence.min_memory_s = a.pf_memory_s;
-    o.pf.evidence.max_memory_s = std::max(o.pf.evidence.max_memory_s, a.pf_memory_s);
+                              resampler));
+  if (!policy.empty() && !filters::parse_resample_policy(policy, &o.pf.policy))
+    throw Failure(fmt::format("--policy '{}': expected every, neff or max", policy));
+  if (a.particles.value_or(0) > 0) o.pf.particles = *a.particles;
+  if (!evolution.empty() && !filters::parse_pf_evolution(evolution, &o.pf.evolution))
+    throw Failure(fmt::format("--pf-evolution '{}': expected paper or evidence", evolution));
+  if (a.pf_memory_s.value_or(0.0) > 0.0) {
+    o.pf.evidence.min_memory_s = *a.pf_memory_s;
+    o.pf.evidence.max_memory_s = std::max(o.pf.evidence.max_memory_s, *a.pf_memory_s);
   }
-  o.pf.seed = a.seed;
+  o.pf.seed = a.seed.value_or(1);
   o.pf.threads = a.threads;
 
   const auto centre = [](const Range& r) { return 0.5 * (r.lo + r.hi); };
@@ -180,11 +189,12 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
   o.dkf.radius_walk_m_per_sqrt_s *= r_scale;
   o.dkf.wheel_base_walk_m_per_sqrt_s *= d_scale;
 
-  if (!(std::isfinite(a.tolerance_pct) && a.tolerance_pct > 0.0 && a.tolerance_pct < 100.0))
-    throw Failure(fmt::format("--tolerance {}: expected a percentage in (0, 100)", a.tolerance_pct));
-  o.convergence_tolerance = a.tolerance_pct / 100.0;
+  const double tolerance_pct = a.tolerance_pct.value_or(0.5);
+  if (!(std::isfinite(tolerance_pct) && tolerance_pct > 0.0 && tolerance_pct < 100.0))
+    throw Failure(fmt::format("--tolerance {}: expected a percentage in (0, 100)", tolerance_pct));
+  o.convergence_tolerance = tolerance_pct / 100.0;
   std::string why;
-  if (!o.IsValid(&why)) throw Failure(fmt::format("--method {}: {}", a.method, why));
+  if (!o.IsValid(&why)) throw Failure(fmt::format("--method {}: {}", method, why));
   return info;
 }
 
@@ -218,7 +228,8 @@ CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& 
   std::size_t samples = 0;
   for (const auto& in : out.inputs) ptrs.push_back(&in), samples += in.samples.size();
 
-  if (hooks.on_start) hooks.on_start(fmt::format("calibrating with {} over {} samples…", a.method, samples));
+  if (hooks.on_start)
+    hooks.on_start(fmt::format("calibrating with {} over {} samples…", a.method_name(), samples));
   {
     const OnExit end{hooks.on_end};
     try {
@@ -244,7 +255,8 @@ CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& 
     for (const auto& in : out.inputs) names.push_back(in.track_name);
     try {
       results::calibration_estimates_figure(
-          a.figure, calibration_figure_data(table, fmt::format("{}: {} calibration", joined(names), a.method)));
+          a.figure,
+          calibration_figure_data(table, fmt::format("{}: {} calibration", joined(names), a.method_name())));
     } catch (const std::exception& e) {
       throw Failure(fmt::format("--figure {}: {}", a.figure, e.what()));
     }
@@ -255,8 +267,8 @@ CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& 
     file.params = out.result.final_params;
     const bool pf = out.result.method == CalibrationMethod::pf ||
                     out.result.method == CalibrationMethod::adaptive_pf;
-    file.comment = fmt::format("calibrated by odotune calibrate: method {}{}\ntracks: {}", a.method,
-                               pf ? fmt::format(", seed {}", a.seed) : "", joined(a.tracks));
+    file.comment = fmt::format("calibrated by odotune calibrate: method {}{}\ntracks: {}", a.method_name(),
+                               pf ? fmt::format(", seed {}", a.seed.value_or(1)) : "", joined(a.tracks));
     write_calibration_file(file, a.config_out);
   }
   if (!a.json.empty()) write_file_atomically(a.json, json_text);
@@ -265,11 +277,12 @@ CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& 
 
 ApplyOutcome run_calibrate_apply(const CalibrateRequest& a) {
   for (const auto& [flag, given] :
-       {std::pair{"--method", a.method_given}, std::pair{"--resampler", a.resampler_given},
-        std::pair{"--policy", a.policy_given}, std::pair{"--particles", a.particles_given},
-        std::pair{"--seed", a.seed_given}, std::pair{"--init-radius-range", a.init_radius_range_given},
-        std::pair{"--init-wheel-base-range", a.init_wheel_base_range_given},
-        std::pair{"--tolerance", a.tolerance_given}, std::pair{"--csv", !a.csv.empty()},
+       {std::pair{"--method", a.method.has_value()}, std::pair{"--resampler", a.resampler.has_value()},
+        std::pair{"--policy", a.policy.has_value()}, std::pair{"--particles", a.particles.has_value()},
+        std::pair{"--seed", a.seed.has_value()},
+        std::pair{"--init-radius-range", a.init_radius_range.has_value()},
+        std::pair{"--init-wheel-base-range", a.init_wheel_base_range.has_value()},
+        std::pair{"--tolerance", a.tolerance_pct.has_value()}, std::pair{"--csv", !a.csv.empty()},
         std::pair{"--figure", !a.figure.empty()}, std::pair{"--config-out", !a.config_out.empty()}})
     if (given)
       throw Failure(fmt::format("{} does not combine with --apply (which replays a calibration file)", flag));

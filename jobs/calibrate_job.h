@@ -35,23 +35,28 @@ namespace odotune {
 
 // The command's flags as plain values (names as the flags').
 struct CalibrateRequest {
-  std::vector<std::string> tracks;     // track files, calibrated in this order (one robot)
-  std::string method = "adaptive-pf";  // adaptive-pf | pf | dkf | batch-pose (batch) | batch-velocity | none
-  std::string resampler;               // PF: multinomial | stratified | systematic | residual ("": systematic)
-  std::string policy;                  // PF: every | neff | max ("": neff)
-  std::uint64_t seed = 1;              // PF random seed
-  int particles = 0;                   // PF particles (adaptive-pf: initial); ≤ 0: 5000 (adaptive 8000)
-  int threads = 0;                     // PF threads (0: OpenMP's default); results do not depend on it
-  double ext_from_gt_hz = 0.0;         // > 0: derive the external velocities from the ground truth [Hz]
-  double ext_sigma_v = 0.0;            // [m/s] σ of v_ext where the track gives none; 0: 0.02
-  double ext_sigma_w = 0.0;            // [rad/s] σ of w_ext where the track gives none; 0: 0.02
-  std::string init_radius_range;       // "LO,HI" [m], both radii; "": nominal ±5 %
-  std::string init_wheel_base_range;   // "LO,HI" [m]; "": nominal ±15 %
-  double tolerance_pct = 0.5;          // convergence tolerance [%], in (0, 100)
-  std::string pf_evolution;            // PF: paper | evidence ("": evidence)
-  double pf_memory_s = 0.0;            // PF evidence evolution: memory after a change [s]; ≤ 0: 10
-  double segment_s = 0.0;              // batch-pose: segment length [s]; 0: whole runs
-  bool fit_start_heading = false;      // batch-pose: fit each segment's start heading too
+  std::vector<std::string> tracks;  // track files, calibrated in this order (one robot)
+  // The calibration's flags: a flag not given is nullopt and takes the default
+  // named beside it. --resampler, --policy, --particles, --pf-evolution and
+  // --pf-memory apply to the PF methods only, --segment to batch-pose, and none
+  // of the calibration flags combines with --apply.
+  std::optional<std::string>
+      method;  // adaptive-pf (default) | pf | dkf | batch-pose (batch) | batch-velocity | none
+  std::optional<std::string> resampler;  // PF: multinomial | stratified | systematic (default) | residual
+  std::optional<std::string> policy;     // PF: every | neff (default) | max
+  std::optional<std::uint64_t> seed;     // PF random seed; default 1
+  std::optional<int> particles;          // PF particles (adaptive-pf: initial); default 5000 (adaptive 8000)
+  int threads = 0;                       // PF threads (0: OpenMP's default); results do not depend on it
+  std::optional<double> ext_from_gt_hz;  // derive the external velocities from the ground truth [Hz]
+  std::optional<double> ext_sigma_v;     // [m/s] σ of v_ext where the track gives none; default 0.02
+  std::optional<double> ext_sigma_w;     // [rad/s] σ of w_ext where the track gives none; default 0.02
+  std::optional<std::string> init_radius_range;      // "LO,HI" [m], both radii; default nominal ±5 %
+  std::optional<std::string> init_wheel_base_range;  // "LO,HI" [m]; default nominal ±15 %
+  std::optional<double> tolerance_pct;               // convergence tolerance [%], in (0, 100); default 0.5
+  std::optional<std::string> pf_evolution;           // PF: paper | evidence (default)
+  std::optional<double> pf_memory_s;  // PF evidence evolution: memory after a change [s]; default 10
+  std::optional<double> segment_s;    // batch-pose: segment length [s]; default 0, whole runs
+  bool fit_start_heading = false;     // batch-pose: fit each segment's start heading too
   // Output files ("": not written). calibrate: all four; --apply: json only.
   std::string json, csv, figure, config_out;
   std::string apply;  // the calibration file --apply replays
@@ -60,12 +65,8 @@ struct CalibrateRequest {
   // gt_y_m, nominal_x_m, nominal_y_m, calibrated_x_m, calibrated_y_m.
   std::string paths_csv;
 
-  // Which flags were given (even with a default or empty value): --resampler,
-  // --policy and --particles apply to the PF methods only, and none of these
-  // combines with --apply.
-  bool method_given = false, resampler_given = false, policy_given = false, particles_given = false,
-       seed_given = false, init_radius_range_given = false, init_wheel_base_range_given = false,
-       tolerance_given = false, segment_given = false, pf_evolution_given = false, pf_memory_given = false;
+  // The method's name, given or the default.
+  std::string method_name() const { return method.value_or("adaptive-pf"); }
 };
 
 // The calibration itself reports no progress. on_start (when set) gets
