@@ -37,7 +37,7 @@ struct FixCvOptions {
   int folds = 5;
   // [s] fixes of one block are held out together. 1 s (each fix of a 1 Hz
   // source its own block, folds interleaved) was chosen on seeds 101-102 of
-  // scripts/fix-cv-study.sh over 3 s and 10 s: longer blocks score the filter
+  // reproduce/fix-cv-study.sh over 3 s and 10 s: longer blocks score the filter
   // on long gaps it does not have in use, and picked noise up to 1.9× worse.
   double block_s = 1.0;
 

@@ -1,7 +1,11 @@
 #!/usr/bin/env bash
 # Installs the dependencies (if missing), configures and builds odotune into
-# build/ (Release; the CLI is build/odotune). Extra arguments go to CMake's
-# configure step, e.g. `bash scripts/build.sh -DODOTUNE_NATIVE=ON`.
+# build/ (Release; the CLI is build/odotune).
+#   bash scripts/build.sh [-DOPTION=VALUE …] [TARGET …]
+# Arguments that start with '-' go to CMake's configure step, e.g.
+# `bash scripts/build.sh -DODOTUNE_NATIVE=ON`; the others are the targets to
+# build (default: everything, i.e. the CLI, the tests and the benchmarks), e.g.
+# `bash scripts/build.sh odotune` builds only the CLI and the libraries it links.
 # ODOTUNE_WITH_MPI=1 also installs Open MPI and builds with MPI (README, "MPI");
 # without it build/ is configured without MPI.
 set -euo pipefail
@@ -16,5 +20,10 @@ if command -v ccache >/dev/null 2>&1; then
   launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
   export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
 fi
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DODOTUNE_WITH_MPI="$mpi" "${launcher[@]}" "$@" >/dev/null
-cmake --build build -j"$(nproc)"
+configure=()
+targets=()
+for a in "$@"; do
+  if [[ "$a" == -* ]]; then configure+=("$a"); else targets+=(--target "$a"); fi
+done
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DODOTUNE_WITH_MPI="$mpi" "${launcher[@]}" "${configure[@]}" >/dev/null
+cmake --build build -j"$(nproc)" "${targets[@]}"

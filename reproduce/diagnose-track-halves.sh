@@ -4,7 +4,7 @@
 # metadata kept, "-first-half"/"-second-half" appended to the name) and runs
 # `odotune diagnose FIRST --heldout SECOND`, writing OUT/NAME-halves.txt (the
 # summary and the wall time) and OUT/NAME-halves.json.
-#   bash scripts/diagnose-track-halves.sh TRACK.csv OUT NAME   (BIN: the odotune binary)
+#   bash reproduce/diagnose-track-halves.sh TRACK.csv OUT NAME   (BIN: the odotune binary)
 set -euo pipefail
 in=$1 out=$2 name=$3
 BIN=${BIN:-build/odotune}

@@ -6,7 +6,7 @@
 # The figure is the ratio of the ground-truth RMSE the no-ground-truth tune
 # reaches to the ground-truth tune's: issue 17 asks for ≤ 1.10.
 #
-#   bash scripts/fix-cv-study.sh [OUT_DIR] [SEEDS]   (default out/fix-cv-study, "201 202 203")
+#   bash reproduce/fix-cv-study.sh [OUT_DIR] [SEEDS]   (default out/fix-cv-study, "201 202 203")
 #
 # Robots and drives: the study's small robot on its five reference drives
 # (scenarios/track1-5.yaml: 1 Hz fixes, σ 60 mm), the wheelchair

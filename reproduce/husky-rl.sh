@@ -12,9 +12,9 @@
 #      OUT/ekf.yaml, the user's file with the tuned values;
 #   4. that file replayed as written: the second half's figures again;
 #   5. the trajectories over the fixes (figure, TUM files for evo).
-#   bash scripts/husky-rl.sh [OUT_DIR]        (default out/husky-rl)
+#   bash reproduce/husky-rl.sh [OUT_DIR]        (default out/husky-rl)
 # Needs build/odotune (bash scripts/build.sh) and gnuplot. BIN and REAL as in
-# scripts/husky-no-gt.sh. About 10 minutes on 2 cores (the tune).
+# reproduce/husky-no-gt.sh. About 10 minutes on 2 cores (the tune).
 #
 # The IMU's mounting is robot_localization's ROS 1 test's (the bag has no
 # /tf_static): x 0, y −0.3, z 0.52 m, roll π/2, pitch 0, yaw −π/2. The IMU's

@@ -6,7 +6,7 @@
 #   A  calibrate on three runs, replay four other runs with the result;
 #   B  leave one run out: for each of the seven runs, calibrate on the other
 #      six and replay it.
-#   bash scripts/calibrate-real.sh [OUT_DIR]      (default out/calibration-real)
+#   bash reproduce/calibrate-real.sh [OUT_DIR]      (default out/calibration-real)
 # Writes OUT_DIR/summary.md (the tables), OUT_DIR/heldout.csv (one row per
 # protocol, method and held-out run), OUT_DIR/heldout_paths.png/.svg (the
 # held-out trajectories of protocol A) and each run's JSON/YAML. Needs

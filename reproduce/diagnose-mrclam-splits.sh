@@ -4,7 +4,7 @@
 # split: two fitted and the third held out (three ways), one fitted and the
 # other two held out (three ways). Writes per split the summary (.txt), the
 # JSON and the wall time; docs/diagnosis/README.md reads them.
-#   bash scripts/diagnose-mrclam-splits.sh [OUT_DIR]   (default out/mrclam-splits)
+#   bash reproduce/diagnose-mrclam-splits.sh [OUT_DIR]   (default out/mrclam-splits)
 # Needs build/odotune (bash scripts/build.sh). About 30 minutes on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."

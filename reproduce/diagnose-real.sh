@@ -2,7 +2,7 @@
 # Diagnoses the real recordings of ../shared/data/real (see each SOURCE.md)
 # and writes what docs/diagnosis/README.md shows: per recording the summary
 # (stdout), the JSON (diagnosis-output.md) and the report folder.
-#   bash scripts/diagnose-real.sh [OUT_DIR]      (default out/diagnosis-real)
+#   bash reproduce/diagnose-real.sh [OUT_DIR]      (default out/diagnosis-real)
 # Needs build/odotune (bash scripts/build.sh). Single recordings: MRCLAM is cut
 # to its first 300 s (--to 300; the held-out check uses the last 30 % of
 # that); Lost in the Woods is diagnosed whole (21 min). Several recordings of

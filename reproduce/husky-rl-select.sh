@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# How scripts/husky-rl.sh's tune settings were chosen, on the first half of
+# How reproduce/husky-rl.sh's tune settings were chosen, on the first half of
 # the Husky drive alone (t < 197.65 s; the second half is the held-out data
 # of docs/husky.md and is never read here): each candidate is tuned on the
 # first quarter (t < 98.8 s) and scored on the second quarter (98.8–197.65 s)
@@ -10,7 +10,7 @@
 # block. Input-covariance factors are left out: the node reads covariances
 # from its messages, so the written file could not carry them and would not
 # replay to the tuned figures.
-#   bash scripts/husky-rl-select.sh [OUT_DIR]        (default out/husky-rl-select)
+#   bash reproduce/husky-rl-select.sh [OUT_DIR]        (default out/husky-rl-select)
 # About 3 minutes on 2 cores (PSO 30 × 40 per candidate).
 set -euo pipefail
 cd "$(dirname "$0")/.."

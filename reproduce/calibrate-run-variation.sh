@@ -10,8 +10,8 @@
 # OptiOdom runs show (D from 0.1943 to 0.2021 m). The draws are seeded
 # (python3's random, seed 777; noise seeds 401–412), so the study repeats.
 # Three splits, each calibrating on three runs and replaying four others,
-# like protocol A of scripts/calibrate-real.sh:
-#   bash scripts/calibrate-run-variation.sh [OUT_DIR]  (default out/calibration-run-variation)
+# like protocol A of reproduce/calibrate-real.sh:
+#   bash reproduce/calibrate-run-variation.sh [OUT_DIR]  (default out/calibration-run-variation)
 # Writes OUT_DIR/runs.csv (each run's true scales), OUT_DIR/heldout.csv (one
 # row per split, method and held-out run) and OUT_DIR/summary.md (the table).
 # Needs build/odotune (bash scripts/build.sh) and python3; about 6 s.

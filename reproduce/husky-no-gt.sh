@@ -12,7 +12,7 @@
 #      saw (its held-out fixes); the trajectories of the whole drive (TUM, for
 #      evo) and a figure;
 #   5. diagnose the recording with the fixes as the reference.
-#   bash scripts/husky-no-gt.sh [OUT_DIR]        (default out/husky)
+#   bash reproduce/husky-no-gt.sh [OUT_DIR]        (default out/husky)
 # Needs build/odotune (bash scripts/build.sh), python3 and gnuplot.
 #
 # The IMU's mounting rotation is robot_localization's ROS 1 test's

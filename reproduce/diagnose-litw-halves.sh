@@ -4,7 +4,7 @@
 # one robot: what the diagnosis of the first 10.5 minutes predicts about the
 # next 10.5. The halves are the imported track's rows before and after the
 # middle time (header kept, name suffixed).
-#   bash scripts/diagnose-litw-halves.sh [OUT_DIR]   (default out/litw-halves)
+#   bash reproduce/diagnose-litw-halves.sh [OUT_DIR]   (default out/litw-halves)
 # Needs build/odotune (bash scripts/build.sh). About a minute on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -14,4 +14,4 @@ BIN=${BIN:-build/odotune}
 mkdir -p "$OUT/tracks"
 T=$OUT/tracks
 "$BIN" import litw "$REAL/utias_lost_in_the_woods/derived/litw_series.csv" -o "$T/litw.csv" > /dev/null
-BIN=$BIN bash scripts/diagnose-track-halves.sh "$T/litw.csv" "$OUT" litw
+BIN=$BIN bash reproduce/diagnose-track-halves.sh "$T/litw.csv" "$OUT" litw

@@ -5,7 +5,7 @@
 # runs of the other days held out. Days by the recording's id (DDMMYYYYhhmm):
 # 23 Dec 2020 (square and circular, 2 runs each), 2 Jan 2021 23:54 (free,
 # 1 run), 3 Jan 2021 00:01 (free, 2 runs; minutes after the 2 Jan one).
-#   bash scripts/diagnose-optiodom-days.sh [OUT_DIR]   (default out/optiodom-days)
+#   bash reproduce/diagnose-optiodom-days.sh [OUT_DIR]   (default out/optiodom-days)
 # Needs build/odotune (bash scripts/build.sh). About a minute on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
