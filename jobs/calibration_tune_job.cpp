@@ -34,8 +34,9 @@ CalibrationMethod calibration_method(CalibratorModel model) {
 
 bool CalibrationTuneRequest::IsValid(std::string* why) const {
   if (!SolverSettings::IsValid(why)) return false;
-  if (pf_particles < 0) {
-    if (why) *why = fmt::format("pf particles = {} must be ≥ 1 (or 0 for the paper's count)", pf_particles);
+  if (pf_particles && *pf_particles < 1) {
+    if (why)
+      *why = fmt::format("pf particles = {} must be ≥ 1 (or not given, for the paper's count)", *pf_particles);
     return false;
   }
   return weights.IsValid(why);
@@ -52,7 +53,7 @@ filters::PfCalibratorParams default_calibrator(const CalibrationTuneRequest& r,
   p.wheel_base_m = ranges.wheel_base_m;
   p.resampler = r.resampler;
   p.policy = r.policy;
-  if (r.pf_particles > 0) p.particles = r.pf_particles;
+  if (r.pf_particles) p.particles = *r.pf_particles;
   p.seed = r.pf_seed;
   p.adaptive = r.model == CalibratorModel::adaptive_pf;
   p.threads = 1;  // results do not depend on it; a grid runs cells side by side

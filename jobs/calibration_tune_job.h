@@ -24,6 +24,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,8 +45,8 @@ struct CalibrationTuneRequest : SolverSettings {
   // Fixed parts of the calibrator (not tuned).
   filters::Resampler resampler = filters::Resampler::systematic;
   filters::ResamplePolicy policy = filters::ResamplePolicy::neff;
-  int pf_particles = 0;       // N (plain) / initial N (adaptive); 0 = the paper's 5000 / 8000
-  std::uint64_t pf_seed = 1;  // the calibrator's own seed (same for every evaluation)
+  std::optional<int> pf_particles;  // N (plain) / initial N (adaptive); not given: the paper's 5000 / 8000
+  std::uint64_t pf_seed = 1;        // the calibrator's own seed (same for every evaluation)
   CalibrationScoreWeights weights;
 
   bool IsValid(std::string* why) const;

@@ -165,7 +165,8 @@ std::optional<results::RunRecord> run_calibration_cell(const Experiment& e,
   req.model = c.model.calib();
   req.resampler = e.calibration.resampler;
   req.policy = e.calibration.policy;
-  req.pf_particles = e.calibration.particles;
+  // The experiment file's 0 is the paper's count.
+  if (e.calibration.particles > 0) req.pf_particles = e.calibration.particles;
   req.pf_seed = e.calibration.seed;
   static_cast<SolverSettings&>(req) = cell_solver(e, c, stop);
   std::vector<const CalibrationInput*> tune_on;

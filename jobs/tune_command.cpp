@@ -138,7 +138,7 @@ TuneCommandOutcome calibration_tune(const TuneCommandRequest& r, CalibratorModel
                               resampler));
   if (!filters::parse_resample_policy(policy, &req.policy))
     throw Failure(fmt::format("--policy '{}': expected every, neff or max", policy));
-  req.pf_particles = r.pf_particles.value_or(0);
+  req.pf_particles = r.pf_particles;
   req.pf_seed = r.pf_seed.value_or(1);
   std::string why;
   if (!req.IsValid(&why)) throw Failure(why);

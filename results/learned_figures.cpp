@@ -94,13 +94,7 @@ std::string panel_script(const std::vector<ShadedPanel>& panels, std::size_t p,
   else
     body += "set format x ''\nunset xlabel\n";
   body += "unset label\n";
-  if (p == 0) {
-    int tag = 1;
-    for (const TimeMarker& m : markers)
-      if (!m.label.empty())
-        body += "set label " + std::to_string(tag++) + " " + q(m.label) + " at first " + num(m.t_s) +
-                ", graph 1 left offset 0.4,-1 front tc rgb '#404040' font ',9'\n";
-  }
+  if (p == 0) body += time_marker_labels(markers);
   std::string plot;
   for (std::size_t i = 0; i < panel.lines.size(); ++i) {
     const PanelLine& l = panel.lines[i];

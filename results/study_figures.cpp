@@ -90,6 +90,16 @@ void grouped_bars(const fs::path& stem, const std::string& title, const std::vec
 
 // ---------------------------------------------------------------- time panels
 
+std::string time_marker_labels(const std::vector<TimeMarker>& markers) {
+  std::string out;
+  int tag = 1;
+  for (const TimeMarker& m : markers)
+    if (!m.label.empty())
+      out += "set label " + std::to_string(tag++) + " " + q(m.label) + " at first " + num(m.t_s) +
+             ", graph 1 left offset 0.4,-1 front tc rgb '#404040' font ',9'\n";
+  return out;
+}
+
 void time_panels(const fs::path& stem, const std::string& title, const std::vector<TimePanel>& panels,
                  const std::vector<TimeMarker>& markers) {
   if (panels.empty()) bad("time panels: no panel");
@@ -133,13 +143,7 @@ void time_panels(const fs::path& stem, const std::string& title, const std::vect
       body += "set format x ''\nunset xlabel\n";
     }
     body += "unset label\n";
-    if (p == 0) {
-      int tag = 1;
-      for (const TimeMarker& m : markers)
-        if (!m.label.empty())
-          body += "set label " + std::to_string(tag++) + " " + q(m.label) + " at first " + num(m.t_s) +
-                  ", graph 1 left offset 0.4,-1 front tc rgb '#404040' font ',9'\n";
-    }
+    if (p == 0) body += time_marker_labels(markers);
     std::string plot;
     for (std::size_t i = 0; i < panels[p].lines.size(); ++i) {
       const PanelLine& l = panels[p].lines[i];

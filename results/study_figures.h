@@ -54,6 +54,10 @@ struct TimeMarker {
   std::string label;
 };
 
+// The gnuplot `set label` commands that label the markers (drawn in the top
+// panel), numbered from 1; markers without a label are skipped.
+std::string time_marker_labels(const std::vector<TimeMarker>& markers);
+
 // Panels stacked top to bottom on a shared time axis ("time [s]"). Throws
 // std::invalid_argument when there is no panel, a line's t_s and y differ in
 // length (naming the panel and line), a panel has no finite point or a

@@ -59,7 +59,7 @@ with open(sys.argv[2], "w", newline="") as f:
 PY
 rm -rf "$out/diagnosis-all"
 
-BIN="$bin" bash "$root/scripts/calibrate-real.sh" "$out/calibration-real-all" > /dev/null
+BIN="$bin" bash "$root/reproduce/calibrate-real.sh" "$out/calibration-real-all" > /dev/null
 mkdir -p "$out/calibration-real"
 cp "$out/calibration-real-all/heldout.csv" "$out/calibration-real/"
 rm -rf "$out/calibration-real-all"

@@ -71,8 +71,8 @@ TEST(DefaultCalibrator, ThePapersSettingsAroundTheRobotsNominalValues) {
   EXPECT_NEAR(p.wheel_base_m.hi, 0.345, 1e-12);
   // The tuned settings are the paper's.
   EXPECT_EQ(calibration_params_of(p), calibration_params_of(filters::PfCalibratorParams::adaptive_defaults()));
-  // 0 particles: the paper's counts.
-  r.pf_particles = 0;
+  // No particle count given: the paper's counts.
+  r.pf_particles.reset();
   EXPECT_EQ(odotune::default_calibrator(r, {0.32, 0.32, 0.65}).particles, 8000);
   r.model = CalibratorModel::pf;
   EXPECT_EQ(odotune::default_calibrator(r, {0.32, 0.32, 0.65}).particles, 5000);
