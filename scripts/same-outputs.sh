@@ -14,8 +14,8 @@
 #   calibration/*.csv     odotune study calibration (Table II and its runs)
 #   diagnosis/cases.csv   odotune study diagnosis on the docs seed's first 30 cases
 #   calibration-real/     the real-data calibration (reproduce script), heldout.csv
-# Timing columns are removed where a file has them. Takes about 15 minutes on
-# 2 cores.
+# Timing columns (seconds a step took, ms per iteration) are removed. Takes
+# about 15 minutes on 2 cores.
 set -euo pipefail
 if [[ $# -ne 2 ]]; then
   sed -n '2,19p' "$0" | sed 's/^# \{0,1\}//'
@@ -47,20 +47,21 @@ done
 
 "$bin" study diagnosis --cases 30 --seed 20261128 --out "$out/diagnosis-all" > /dev/null 2>&1
 mkdir -p "$out/diagnosis"
-# The seconds each case took are the one column that differs from run to run.
-python3 - "$out/diagnosis-all/cases.csv" "$out/diagnosis/cases.csv" <<'PY'
-import csv, sys
-rows = list(csv.reader(open(sys.argv[1])))
-keep = [i for i, h in enumerate(rows[0]) if h not in ("simulate_s", "truth_s", "diagnose_s")]
-with open(sys.argv[2], "w", newline="") as f:
-    w = csv.writer(f)
-    for r in rows:
-        w.writerow([r[i] for i in keep])
-PY
+cp "$out/diagnosis-all/cases.csv" "$out/diagnosis/"
 rm -rf "$out/diagnosis-all"
 
 BIN="$bin" bash "$root/reproduce/calibrate-real.sh" "$out/calibration-real-all" > /dev/null
 mkdir -p "$out/calibration-real"
 cp "$out/calibration-real-all/heldout.csv" "$out/calibration-real/"
 rm -rf "$out/calibration-real-all"
+# Timing columns are the ones that differ from run to run: drop them.
+python3 - "$out" <<'PY'
+import csv, pathlib, sys
+timing = {"simulate_s", "truth_s", "diagnose_s", "calibration_wall_s"}
+for f in pathlib.Path(sys.argv[1]).rglob("*.csv"):
+    rows = list(csv.reader(f.open()))
+    keep = [i for i, h in enumerate(rows[0]) if h not in timing and not h.startswith("ms_per_iter")]
+    with f.open("w", newline="") as o:
+        csv.writer(o, lineterminator="\n").writerows([[r[i] for i in keep if i < len(r)] for r in rows])
+PY
 echo "same-outputs.sh: wrote $out"
