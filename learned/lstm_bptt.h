@@ -8,7 +8,7 @@
 // which reverse mode gives the whole row for about three forward passes —
 // what lets the nets retrain on the robot in milliseconds. The
 // forward-mode path (learned/lstm_training.h, LstmResidual) remains the
-// reference: tests/objectives/test_lstm_training.cpp checks this gradient
+// reference: tests/learned/test_lstm_training.cpp checks this gradient
 // against it and against central finite differences.
 //
 // Backward recursion (derivatives of the output y = d·h_T + d_0 w.r.t. every

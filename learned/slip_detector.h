@@ -75,7 +75,7 @@ struct SlipTrainingOptions {
   // input (the centred target window makes target[k−1] share all but one
   // squared error with target[k]) and ignores the power; run on its own
   // outputs it then never rises or latches high. Measured on held-out
-  // simulated drives (tests/objectives/test_learned_odometry.cpp): teacher
+  // simulated drives (tests/learned/test_learned_odometry.cpp): teacher
   // forcing gave inside/outside median ratios ≈ 1, holding it at the floor
   // ratios > 50. Its kernel row is zeroed after the first fit (it had no
   // gradient) so the refits below start from the first fit's function.

@@ -2,7 +2,7 @@
 // detector (learned/slip_detector.h). One drive with ten hand-placed
 // episodes teaches a 651-weight detector those ten episodes; a few drives
 // with episodes of random kind, wheel, strength, length and place teach it
-// slip (tests/objectives/test_learned_odometry.cpp measures the difference
+// slip (tests/learned/test_learned_odometry.cpp measures the difference
 // on held-out drives). Fariña et al. (Sensors 2023, 23, 961, §4.1) likewise
 // provoke slip many times, on either wheel, with worn tyres and with a hand.
 //
