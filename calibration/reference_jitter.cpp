@@ -14,7 +14,9 @@ constexpr double kMaxUnevenness = 0.1;
 constexpr double kMadPerSigma = 0.6745;
 
 // Median absolute deviation from the median, as a normal σ (0 for no data).
-double robust_sigma(std::vector<double> v) {
+// The upper middle element and /0.6745, not core/robust_stats.h (mean of the
+// two middle elements, ×1.4826): the calibration tables were made with this one.
+double upper_mad_sigma(std::vector<double> v) {
   if (v.empty()) return 0.0;
   const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
   std::nth_element(v.begin(), mid, v.end());
@@ -43,8 +45,8 @@ ReferenceJitter estimate_reference_jitter(const PoseSeries& ref) {
   out.triples = d_theta.size();
   // Var(x_{i+1} − 2x_i + x_{i−1}) = (1 + 4 + 1)σ² under white noise.
   const double per_sigma = std::sqrt(6.0);
-  out.sigma_xy_m = robust_sigma(std::move(d_xy)) / per_sigma;
-  out.sigma_theta_rad = robust_sigma(std::move(d_theta)) / per_sigma;
+  out.sigma_xy_m = upper_mad_sigma(std::move(d_xy)) / per_sigma;
+  out.sigma_theta_rad = upper_mad_sigma(std::move(d_theta)) / per_sigma;
   const auto mid = spacing.begin() + static_cast<std::ptrdiff_t>(spacing.size() / 2);
   std::nth_element(spacing.begin(), mid, spacing.end());
   out.median_dt_s = *mid;
