@@ -115,6 +115,43 @@ void check_same_robot(const std::vector<CalibrationInput>& inputs, const std::ve
   }
 }
 
+// The flags that apply to one kind of method only, refused for the others.
+void check_method_flags(const CalibrateRequest& a, CalibrationMethod m, const std::string& method) {
+  if ((a.segment_s.has_value() || a.fit_start_heading) && m != CalibrationMethod::batch_pose)
+    throw Failure(fmt::format(
+        "--segment and --fit-start-heading apply to --method batch-pose only (got --method {})", method));
+  const bool pf = m == CalibrationMethod::pf || m == CalibrationMethod::adaptive_pf;
+  for (const auto& [flag, given] :
+       {std::pair{"--resampler", a.resampler.has_value()}, std::pair{"--policy", a.policy.has_value()},
+        std::pair{"--particles", a.particles.has_value()},
+        std::pair{"--pf-evolution", a.pf_evolution.has_value()},
+        std::pair{"--pf-memory", a.pf_memory_s.has_value()}})
+    if (given && !pf)
+      throw Failure(fmt::format("{} applies to --method pf and adaptive-pf only (got --method {})", flag,
+                                method));
+}
+
+// The particle filter's flags over its defaults.
+void apply_pf_flags(const CalibrateRequest& a, filters::PfCalibratorParams& pf) {
+  // An empty text flag (--resampler "") keeps the default, as not given.
+  const std::string resampler = a.resampler.value_or(""), policy = a.policy.value_or("");
+  const std::string evolution = a.pf_evolution.value_or("");
+  if (!resampler.empty() && !filters::parse_resampler(resampler, &pf.resampler))
+    throw Failure(fmt::format("--resampler '{}': expected multinomial, stratified, systematic or residual",
+                              resampler));
+  if (!policy.empty() && !filters::parse_resample_policy(policy, &pf.policy))
+    throw Failure(fmt::format("--policy '{}': expected every, neff or max", policy));
+  if (a.particles.value_or(0) > 0) pf.particles = *a.particles;
+  if (!evolution.empty() && !filters::parse_pf_evolution(evolution, &pf.evolution))
+    throw Failure(fmt::format("--pf-evolution '{}': expected paper or evidence", evolution));
+  if (a.pf_memory_s.value_or(0.0) > 0.0) {
+    pf.evidence.min_memory_s = *a.pf_memory_s;
+    pf.evidence.max_memory_s = std::max(pf.evidence.max_memory_s, *a.pf_memory_s);
+  }
+  pf.seed = a.seed.value_or(1);
+  pf.threads = a.threads;
+}
+
 CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<CalibrationInput>& inputs) {
   CalibrationRunInfo info;
   info.track_files = a.tracks;
@@ -125,20 +162,9 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
     throw Failure(fmt::format("--method '{}': unknown method, expected adaptive-pf, pf, dkf, batch-pose (or "
                               "batch), batch-velocity or none",
                               method));
-  if ((a.segment_s.has_value() || a.fit_start_heading) && o.method != CalibrationMethod::batch_pose)
-    throw Failure(fmt::format(
-        "--segment and --fit-start-heading apply to --method batch-pose only (got --method {})", method));
+  check_method_flags(a, o.method, method);
   o.pose.segment_s = a.segment_s.value_or(0.0);
   o.pose.fit_start_heading = a.fit_start_heading;
-  const bool pf = o.method == CalibrationMethod::pf || o.method == CalibrationMethod::adaptive_pf;
-  for (const auto& [flag, given] :
-       {std::pair{"--resampler", a.resampler.has_value()}, std::pair{"--policy", a.policy.has_value()},
-        std::pair{"--particles", a.particles.has_value()},
-        std::pair{"--pf-evolution", a.pf_evolution.has_value()},
-        std::pair{"--pf-memory", a.pf_memory_s.has_value()}})
-    if (given && !pf)
-      throw Failure(fmt::format("{} applies to --method pf and adaptive-pf only (got --method {})", flag,
-                                method));
   const OdometryParams& nom = inputs.front().nominal;
   const double r_nom = 0.5 * (nom.wheel_radius_left_m + nom.wheel_radius_right_m);
   const double r_scale = r_nom / kPaperRadiusM, d_scale = nom.wheel_base_m / kPaperWheelBaseM;
@@ -163,23 +189,7 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
   o.pf.alpha *= r_scale;
   o.pf.dispersion_per_particle_m *= r_scale;
   o.pf.min_random_walk_sigma_m *= r_scale;
-  // An empty text flag (--resampler "") keeps the default, as not given.
-  const std::string resampler = a.resampler.value_or(""), policy = a.policy.value_or("");
-  const std::string evolution = a.pf_evolution.value_or("");
-  if (!resampler.empty() && !filters::parse_resampler(resampler, &o.pf.resampler))
-    throw Failure(fmt::format("--resampler '{}': expected multinomial, stratified, systematic or residual",
-                              resampler));
-  if (!policy.empty() && !filters::parse_resample_policy(policy, &o.pf.policy))
-    throw Failure(fmt::format("--policy '{}': expected every, neff or max", policy));
-  if (a.particles.value_or(0) > 0) o.pf.particles = *a.particles;
-  if (!evolution.empty() && !filters::parse_pf_evolution(evolution, &o.pf.evolution))
-    throw Failure(fmt::format("--pf-evolution '{}': expected paper or evidence", evolution));
-  if (a.pf_memory_s.value_or(0.0) > 0.0) {
-    o.pf.evidence.min_memory_s = *a.pf_memory_s;
-    o.pf.evidence.max_memory_s = std::max(o.pf.evidence.max_memory_s, *a.pf_memory_s);
-  }
-  o.pf.seed = a.seed.value_or(1);
-  o.pf.threads = a.threads;
+  apply_pf_flags(a, o.pf);
 
   const auto centre = [](const Range& r) { return 0.5 * (r.lo + r.hi); };
   const auto uniform_sd = [](const Range& r) { return (r.hi - r.lo) / std::sqrt(12.0); };
