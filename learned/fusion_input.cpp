@@ -56,34 +56,10 @@ std::optional<PlanarPose> gt_pose_at(const PoseSeries& gt, double t_s) {
   return interpolate_pose(gt, t_s, kMaxGtGapS);
 }
 
-}  // namespace
-
-bool FusionInputOptions::IsValid(std::string* why) const {
-  auto bad = [why](const std::string& msg) {
-    if (why) *why = msg;
-    return false;
-  };
-  if (!(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= kMaxRateHz))
-    return bad(fmt::format("rate_hz = {} must be in (0, {}] Hz", rate_hz, kMaxRateHz));
-  if (!(std::isfinite(default_ext_var_v) && default_ext_var_v > 0.0))
-    return bad(fmt::format("default_ext_var_v = {} must be a finite number > 0 [(m/s)^2]", default_ext_var_v));
-  if (!(std::isfinite(default_ext_var_w) && default_ext_var_w > 0.0))
-    return bad(fmt::format("default_ext_var_w = {} must be a finite number > 0 [(rad/s)^2]",
-                           default_ext_var_w));
-  return true;
-}
-
-FusionInput build_fusion_input(const Track& track, const FusionInputOptions& options) {
+// The robot's nominal geometry and ticks_per_rev from the metadata into `in`.
+void read_nominal(const Track& track, FusionInput& in) {
   const std::string& name = track.name();
   std::string why;
-  if (!options.IsValid(&why)) fail(name, "invalid fusion input options: " + why);
-
-  FusionInput in;
-  in.track_name = name;
-  const bool from_ticks = track.has_ticks();
-  if (!from_ticks && !track.has_wheel_rates())
-    fail(name, "no wheel odometry (ticks_l/ticks_r or omega_l/omega_r): fusion needs encoder increments");
-
   const TrackMeta& meta = track.meta();
   auto require = [&](const std::optional<double>& v, const char* key) {
     if (!v)
@@ -99,13 +75,21 @@ FusionInput build_fusion_input(const Track& track, const FusionInputOptions& opt
   if (!in.nominal.IsValid(&why)) fail(name, "nominal robot metadata: " + why);
   if (!(std::isfinite(in.ticks_per_rev) && in.ticks_per_rev > 0.0))
     fail(name, fmt::format("robot.ticks_per_rev = {} must be a finite number > 0", in.ticks_per_rev));
+}
 
-  // --- cumulative wheel counts at the odometry rows ---------------------------
-  // From ticks: the count itself (relative to the first row, so the doubles
-  // stay exact). From omega: the trapezoid integral of ω, in counts.
+// Cumulative wheel counts at the odometry rows.
+struct OdometryCounts {
+  std::vector<double> t, cum_l, cum_r;
+};
+
+// From ticks: the count itself (relative to the first row, so the doubles
+// stay exact). From omega: the trapezoid integral of ω, in counts.
+OdometryCounts odometry_counts(const Track& track, bool from_ticks, double counts_per_rad) {
   const auto& tt = track.t();
-  const double counts_per_rad = in.ticks_per_rev / (2.0 * std::numbers::pi);
-  std::vector<double> odo_t, cum_l, cum_r;
+  OdometryCounts oc;
+  std::vector<double>& odo_t = oc.t;
+  std::vector<double>& cum_l = oc.cum_l;
+  std::vector<double>& cum_r = oc.cum_r;
   std::vector<std::size_t> odo_row;  // the odometry rows' indices in the track
   std::int64_t first_l = 0, first_r = 0;
   for (std::size_t i = 0; i < track.size(); ++i) {
@@ -133,33 +117,21 @@ FusionInput build_fusion_input(const Track& track, const FusionInputOptions& opt
     odo_t.push_back(tt[i]);
     odo_row.push_back(i);
   }
-  if (odo_t.size() < 2) fail(name, "fewer than two odometry rows: no encoder increment to fuse");
+  return oc;
+}
 
-  // --- step times ----------------------------------------------------------
-  in.dt_s = 1.0 / options.rate_hz;
-  const double t0 = odo_t.front();
-  const double t_end = odo_t.back() + kSameInstantS;
-  for (std::size_t k = 0;; ++k) {
-    const double tk = t0 + static_cast<double>(k) * in.dt_s;
-    if (tk > t_end) break;
-    in.t.push_back(tk);
-  }
+// Increments and kinematic odometry (paper eqs. 1–2) per step.
+void increments_and_kinematics(const OdometryCounts& oc, double counts_per_rad, FusionInput& in) {
   const std::size_t n = in.t.size();
-  if (n < 2)
-    fail(name, fmt::format("fewer than 2 steps of {} s: the odometry spans {} s", in.dt_s,
-                           odo_t.back() - odo_t.front()));
-
-  // --- increments and kinematic odometry (paper eqs. 1–2) ---------------------
-  const double nan = std::numeric_limits<double>::quiet_NaN();
   in.dticks_l.assign(n, 0.0);
   in.dticks_r.assign(n, 0.0);
   in.v_kin.assign(n, 0.0);
   in.w_kin.assign(n, 0.0);
-  double prev_l = count_at(odo_t, cum_l, in.t[0]);
-  double prev_r = count_at(odo_t, cum_r, in.t[0]);
+  double prev_l = count_at(oc.t, oc.cum_l, in.t[0]);
+  double prev_r = count_at(oc.t, oc.cum_r, in.t[0]);
   for (std::size_t k = 1; k < n; ++k) {
-    const double cl = count_at(odo_t, cum_l, in.t[k]);
-    const double cr = count_at(odo_t, cum_r, in.t[k]);
+    const double cl = count_at(oc.t, oc.cum_l, in.t[k]);
+    const double cr = count_at(oc.t, oc.cum_r, in.t[k]);
     in.dticks_l[k] = cl - prev_l;
     in.dticks_r[k] = cr - prev_r;
     prev_l = cl;
@@ -171,8 +143,14 @@ FusionInput build_fusion_input(const Track& track, const FusionInputOptions& opt
     in.v_kin[k] = b.v_m_s;
     in.w_kin[k] = b.w_rad_s;
   }
+}
 
-  // --- sensors per step: rows in (t[k−1], t[k]] ---------------------------------
+// Sensors per step: power and gyro averaged over the rows in (t[k−1], t[k]],
+// the last external velocity among them.
+void sensors_per_step(const Track& track, const FusionInputOptions& options, FusionInput& in) {
+  const auto& tt = track.t();
+  const std::size_t n = in.t.size();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
   in.power_l.assign(n, nan);
   in.power_r.assign(n, nan);
   in.v_ext.assign(n, nan);
@@ -183,36 +161,39 @@ FusionInput build_fusion_input(const Track& track, const FusionInputOptions& opt
   const bool track_power = track.has(Col::power_l) && track.has(Col::power_r);
   const bool track_ext = track.has(Col::v_ext) && track.has(Col::w_ext);
   const bool track_gyro = track.has(Col::gyro_z);
-  {
-    std::size_t i = 0;  // first track row not yet assigned to a step
-    // Rows at or before t[0] belong to no step.
-    while (i < track.size() && tt[i] <= in.t[0] + kSameInstantS) ++i;
-    for (std::size_t k = 1; k < n; ++k) {
-      double sum_pl = 0.0, sum_pr = 0.0, sum_g = 0.0;
-      int n_pl = 0, n_pr = 0, n_g = 0;
-      for (; i < track.size() && tt[i] <= in.t[k] + kSameInstantS; ++i) {
-        if (track_power && track.at(Col::power_l, i)) sum_pl += track.col(Col::power_l)[i], ++n_pl;
-        if (track_power && track.at(Col::power_r, i)) sum_pr += track.col(Col::power_r)[i], ++n_pr;
-        if (track_gyro && track.at(Col::gyro_z, i)) sum_g += track.col(Col::gyro_z)[i], ++n_g;
-        if (track_ext && track.at(Col::v_ext, i) && track.at(Col::w_ext, i)) {
-          in.v_ext[k] = track.col(Col::v_ext)[i];
-          in.w_ext[k] = track.col(Col::w_ext)[i];
-          in.v_ext_var[k] = positive_or(track.col(Col::v_ext_var), i, options.default_ext_var_v);
-          in.w_ext_var[k] = positive_or(track.col(Col::w_ext_var), i, options.default_ext_var_w);
-          in.has_ext = true;
-        }
-      }
-      if (n_pl > 0) in.power_l[k] = sum_pl / n_pl;
-      if (n_pr > 0) in.power_r[k] = sum_pr / n_pr;
-      if (n_pl > 0 && n_pr > 0) in.has_power = true;
-      if (n_g > 0) {
-        in.gyro_z[k] = sum_g / n_g;
-        in.has_gyro = true;
+  std::size_t i = 0;  // first track row not yet assigned to a step
+  // Rows at or before t[0] belong to no step.
+  while (i < track.size() && tt[i] <= in.t[0] + kSameInstantS) ++i;
+  for (std::size_t k = 1; k < n; ++k) {
+    double sum_pl = 0.0, sum_pr = 0.0, sum_g = 0.0;
+    int n_pl = 0, n_pr = 0, n_g = 0;
+    for (; i < track.size() && tt[i] <= in.t[k] + kSameInstantS; ++i) {
+      if (track_power && track.at(Col::power_l, i)) sum_pl += track.col(Col::power_l)[i], ++n_pl;
+      if (track_power && track.at(Col::power_r, i)) sum_pr += track.col(Col::power_r)[i], ++n_pr;
+      if (track_gyro && track.at(Col::gyro_z, i)) sum_g += track.col(Col::gyro_z)[i], ++n_g;
+      if (track_ext && track.at(Col::v_ext, i) && track.at(Col::w_ext, i)) {
+        in.v_ext[k] = track.col(Col::v_ext)[i];
+        in.w_ext[k] = track.col(Col::w_ext)[i];
+        in.v_ext_var[k] = positive_or(track.col(Col::v_ext_var), i, options.default_ext_var_v);
+        in.w_ext_var[k] = positive_or(track.col(Col::w_ext_var), i, options.default_ext_var_w);
+        in.has_ext = true;
       }
     }
+    if (n_pl > 0) in.power_l[k] = sum_pl / n_pl;
+    if (n_pr > 0) in.power_r[k] = sum_pr / n_pr;
+    if (n_pl > 0 && n_pr > 0) in.has_power = true;
+    if (n_g > 0) {
+      in.gyro_z[k] = sum_g / n_g;
+      in.has_gyro = true;
+    }
   }
+}
 
-  // --- ground truth ----------------------------------------------------------
+// The ground-truth pose at each step and the true body velocities between
+// steps.
+void ground_truth_per_step(const Track& track, FusionInput& in) {
+  const std::size_t n = in.t.size();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
   in.gt_x.assign(n, nan);
   in.gt_y.assign(n, nan);
   in.gt_theta.assign(n, nan);
@@ -234,6 +215,59 @@ FusionInput build_fusion_input(const Track& track, const FusionInputOptions& opt
     in.v_true[k] = (dx * std::cos(mid) + dy * std::sin(mid)) / in.dt_s;
     if (std::isfinite(in.v_true[k]) && std::isfinite(in.w_true[k])) in.has_gt = true;
   }
+}
+
+}  // namespace
+
+bool FusionInputOptions::IsValid(std::string* why) const {
+  auto bad = [why](const std::string& msg) {
+    if (why) *why = msg;
+    return false;
+  };
+  if (!(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= kMaxRateHz))
+    return bad(fmt::format("rate_hz = {} must be in (0, {}] Hz", rate_hz, kMaxRateHz));
+  if (!(std::isfinite(default_ext_var_v) && default_ext_var_v > 0.0))
+    return bad(fmt::format("default_ext_var_v = {} must be a finite number > 0 [(m/s)^2]", default_ext_var_v));
+  if (!(std::isfinite(default_ext_var_w) && default_ext_var_w > 0.0))
+    return bad(fmt::format("default_ext_var_w = {} must be a finite number > 0 [(rad/s)^2]",
+                           default_ext_var_w));
+  return true;
+}
+
+FusionInput build_fusion_input(const Track& track, const FusionInputOptions& options) {
+  const std::string& name = track.name();
+  std::string why;
+  if (!options.IsValid(&why)) fail(name, "invalid fusion input options: " + why);
+
+  FusionInput in;
+  in.track_name = name;
+  const bool from_ticks = track.has_ticks();
+  if (!from_ticks && !track.has_wheel_rates())
+    fail(name, "no wheel odometry (ticks_l/ticks_r or omega_l/omega_r): fusion needs encoder increments");
+  read_nominal(track, in);
+
+  const double counts_per_rad = in.ticks_per_rev / (2.0 * std::numbers::pi);
+  const OdometryCounts oc = odometry_counts(track, from_ticks, counts_per_rad);
+  const std::vector<double>& odo_t = oc.t;
+  if (odo_t.size() < 2) fail(name, "fewer than two odometry rows: no encoder increment to fuse");
+
+  // --- step times ----------------------------------------------------------
+  in.dt_s = 1.0 / options.rate_hz;
+  const double t0 = odo_t.front();
+  const double t_end = odo_t.back() + kSameInstantS;
+  for (std::size_t k = 0;; ++k) {
+    const double tk = t0 + static_cast<double>(k) * in.dt_s;
+    if (tk > t_end) break;
+    in.t.push_back(tk);
+  }
+  const std::size_t n = in.t.size();
+  if (n < 2)
+    fail(name, fmt::format("fewer than 2 steps of {} s: the odometry spans {} s", in.dt_s,
+                           odo_t.back() - odo_t.front()));
+
+  increments_and_kinematics(oc, counts_per_rad, in);
+  sensors_per_step(track, options, in);
+  ground_truth_per_step(track, in);
   return in;
 }
 

@@ -13,6 +13,89 @@ bool positive_finite(double x) { return x > 0.0 && std::isfinite(x); }
 
 double nan() { return std::nan(""); }
 
+void check_inputs(const FusionInput& in, const LearnedOdometryModel* model,
+                  const LearnedFusionOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("learned fusion: " + why);
+  const bool learned = options.odometry == LearnedFusionOptions::Odometry::learned;
+  if (learned && model == nullptr)
+    throw std::invalid_argument("learned fusion: learned odometry needs a model");
+  if (learned && !model->IsValid(&why)) throw std::invalid_argument("learned fusion: model: " + why);
+  if (options.detector && !in.has_power)
+    throw std::invalid_argument(fmt::format(
+        "track '{}': no motor power (power_l, power_r): the slip detector needs it", in.track_name));
+}
+
+// The filter's state and the pose at step k into the trace.
+void record(const filters::VelocityUkf& ukf, const filters::PlanarPose& pose, std::size_t k, FusionTrace& f) {
+  f.v[k] = ukf.state()[filters::kV];
+  f.w[k] = ukf.state()[filters::kW];
+  f.var_v[k] = ukf.cov()(filters::kV, filters::kV);
+  f.var_w[k] = ukf.cov()(filters::kW, filters::kW);
+  f.cov_vw[k] = ukf.cov()(filters::kV, filters::kW);
+  f.x[k] = pose.x_m;
+  f.y[k] = pose.y_m;
+  f.theta[k] = pose.theta_rad;
+}
+
+// The odometry measurement of step k: the learned nets' velocities (fed the
+// filter's previous ones) or the kinematic ones, with the detector's
+// variances or the static ones.
+OdometryMeasurement odometry_measurement(const FusionInput& in, std::size_t k, double prev_v, double prev_w,
+                                         std::optional<LearnedOdometryStepper>& odo,
+                                         std::optional<SlipDetectorStepper>& detector,
+                                         const LearnedFusionOptions& options) {
+  OdometryMeasurement m;
+  if (odo) {
+    const auto vw = odo->step(in.dticks_l[k], in.dticks_r[k], in.v_kin[k], in.w_kin[k],
+                              std::isfinite(prev_v) ? prev_v : 0.0, std::isfinite(prev_w) ? prev_w : 0.0);
+    m.v_m_s = vw[0];
+    m.w_rad_s = vw[1];
+  } else {
+    m.v_m_s = in.v_kin[k];
+    m.w_rad_s = in.w_kin[k];
+  }
+  if (detector) {
+    const auto var = detector->step(in.power_l[k], in.power_r[k], in.dticks_l[k], in.dticks_r[k]);
+    m.var_v = var[0];
+    m.var_w = var[1];
+  } else {
+    m.var_v = options.static_var_v;
+    m.var_w = options.static_var_w;
+  }
+  return m;
+}
+
+// Retraining (paper §4.2): keeps step k's windows and the UKF's velocities
+// when both are confident, and refits the nets once enough are kept.
+void collect_and_retrain(const FusionInput& in, std::size_t k, const OdometryMeasurement& m,
+                         const FusionTrace& f, const LearnedOdometryStepper& odo, const RetrainOptions& ro,
+                         SequenceSet& v_samples, SequenceSet& w_samples, LearnedOdometryModel& current,
+                         LearnedFusionResult& r) {
+  if (f.var_v[k] < ro.max_filter_var_v && f.var_w[k] < ro.max_filter_var_w && m.var_v < ro.max_odometry_var_v &&
+      m.var_w < ro.max_odometry_var_w) {
+    v_samples.add(odo.v_window().data(), f.v[k]);
+    w_samples.add(odo.w_window().data(), f.w[k]);
+  }
+  if (static_cast<int>(v_samples.size()) < ro.samples_per_retrain) return;
+  RetrainEvent ev;
+  ev.step = k;
+  ev.t_s = in.t[k];
+  const auto start = std::chrono::steady_clock::now();
+  VelocityNet v_net = current.v_net, w_net = current.w_net;
+  ev.v = retrain_lstm(v_net, v_samples, ro.training);
+  ev.w = retrain_lstm(w_net, w_samples, ro.training);
+  ev.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  // A refit that failed keeps the previous nets (the robot keeps running).
+  if (ev.v.usable) current.v_net = v_net;
+  if (ev.w.usable) current.w_net = w_net;
+  r.retrains.push_back(ev);
+  v_samples.x.clear();
+  v_samples.y.clear();
+  w_samples.x.clear();
+  w_samples.y.clear();
+}
+
 }  // namespace
 
 bool RetrainOptions::IsValid(std::string* why) const {
@@ -49,15 +132,8 @@ bool LearnedFusionOptions::IsValid(std::string* why) const {
 
 LearnedFusionResult run_learned_fusion(const FusionInput& in, const LearnedOdometryModel* model,
                                        const LearnedFusionOptions& options) {
-  std::string why;
-  if (!options.IsValid(&why)) throw std::invalid_argument("learned fusion: " + why);
+  check_inputs(in, model, options);
   const bool learned = options.odometry == LearnedFusionOptions::Odometry::learned;
-  if (learned && model == nullptr)
-    throw std::invalid_argument("learned fusion: learned odometry needs a model");
-  if (learned && !model->IsValid(&why)) throw std::invalid_argument("learned fusion: model: " + why);
-  if (options.detector && !in.has_power)
-    throw std::invalid_argument(fmt::format(
-        "track '{}': no motor power (power_l, power_r): the slip detector needs it", in.track_name));
 
   const std::size_t n = in.size();
   LearnedFusionResult r;
@@ -79,17 +155,7 @@ LearnedFusionResult run_learned_fusion(const FusionInput& in, const LearnedOdome
   filters::PlanarPose pose;
   if (in.has_gt && std::isfinite(in.gt_x[0]) && std::isfinite(in.gt_theta[0]))
     pose = {in.gt_x[0], in.gt_y[0], in.gt_theta[0]};
-  auto record = [&](std::size_t k) {
-    f.v[k] = ukf.state()[filters::kV];
-    f.w[k] = ukf.state()[filters::kW];
-    f.var_v[k] = ukf.cov()(filters::kV, filters::kV);
-    f.var_w[k] = ukf.cov()(filters::kW, filters::kW);
-    f.cov_vw[k] = ukf.cov()(filters::kV, filters::kW);
-    f.x[k] = pose.x_m;
-    f.y[k] = pose.y_m;
-    f.theta[k] = pose.theta_rad;
-  };
-  if (n > 0) record(0);
+  if (n > 0) record(ukf, pose, 0, f);
 
   // Retraining samples (paper §4.2): windows and the UKF's velocities.
   SequenceSet v_samples, w_samples;
@@ -100,25 +166,7 @@ LearnedFusionResult run_learned_fusion(const FusionInput& in, const LearnedOdome
   }
 
   for (std::size_t k = 1; k < n; ++k) {
-    const double prev_v = f.v[k - 1], prev_w = f.w[k - 1];
-    OdometryMeasurement m;
-    if (learned) {
-      const auto vw = odo->step(in.dticks_l[k], in.dticks_r[k], in.v_kin[k], in.w_kin[k],
-                                std::isfinite(prev_v) ? prev_v : 0.0, std::isfinite(prev_w) ? prev_w : 0.0);
-      m.v_m_s = vw[0];
-      m.w_rad_s = vw[1];
-    } else {
-      m.v_m_s = in.v_kin[k];
-      m.w_rad_s = in.w_kin[k];
-    }
-    if (detector) {
-      const auto var = detector->step(in.power_l[k], in.power_r[k], in.dticks_l[k], in.dticks_r[k]);
-      m.var_v = var[0];
-      m.var_w = var[1];
-    } else {
-      m.var_v = options.static_var_v;
-      m.var_w = options.static_var_w;
-    }
+    const OdometryMeasurement m = odometry_measurement(in, k, f.v[k - 1], f.w[k - 1], odo, detector, options);
     r.odometry.v[k] = m.v_m_s;
     r.odometry.w[k] = m.w_rad_s;
     r.odo_var_v[k] = m.var_v;
@@ -130,32 +178,10 @@ LearnedFusionResult run_learned_fusion(const FusionInput& in, const LearnedOdome
       break;
     }
     pose = filters::integrate_pose(pose, ukf.state()[filters::kV], ukf.state()[filters::kW], in.dt_s);
-    record(k);
+    record(ukf, pose, k, f);
 
     if (!options.retrain.enabled || !odo->ready()) continue;
-    const RetrainOptions& ro = options.retrain;
-    if (f.var_v[k] < ro.max_filter_var_v && f.var_w[k] < ro.max_filter_var_w &&
-        m.var_v < ro.max_odometry_var_v && m.var_w < ro.max_odometry_var_w) {
-      v_samples.add(odo->v_window().data(), f.v[k]);
-      w_samples.add(odo->w_window().data(), f.w[k]);
-    }
-    if (static_cast<int>(v_samples.size()) < ro.samples_per_retrain) continue;
-    RetrainEvent ev;
-    ev.step = k;
-    ev.t_s = in.t[k];
-    const auto start = std::chrono::steady_clock::now();
-    VelocityNet v_net = current.v_net, w_net = current.w_net;
-    ev.v = retrain_lstm(v_net, v_samples, ro.training);
-    ev.w = retrain_lstm(w_net, w_samples, ro.training);
-    ev.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    // A refit that failed keeps the previous nets (the robot keeps running).
-    if (ev.v.usable) current.v_net = v_net;
-    if (ev.w.usable) current.w_net = w_net;
-    r.retrains.push_back(ev);
-    v_samples.x.clear();
-    v_samples.y.clear();
-    w_samples.x.clear();
-    w_samples.y.clear();
+    collect_and_retrain(in, k, m, f, *odo, options.retrain, v_samples, w_samples, current, r);
   }
   if (learned) r.final_model = current;
   return r;

@@ -91,19 +91,19 @@ void append_velocity_windows(const FusionInput& in, int window, double previous_
   }
 }
 
-LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*>& tracks,
-                                            const LearnedTrainingOptions& options,
-                                            LearnedTrainingSummary* summary) {
-  std::string why;
-  if (!options.IsValid(&why)) throw std::invalid_argument("learned odometry training: " + why);
-  if (tracks.empty()) throw std::invalid_argument("learned odometry training: no tracks given");
-  LearnedOdometryModel model;
-  const int window = model.v_net.window;
-  model.rate_hz = 1.0 / tracks.front()->dt_s;
-  model.ticks_per_rev = tracks.front()->ticks_per_rev;
+namespace {
 
+// The training and validation windows of the V and W nets.
+struct WindowSets {
   SequenceSet v_train, v_val, w_train, w_val;
-  for (SequenceSet* s : {&v_train, &v_val, &w_train, &w_val}) {
+};
+
+// Checks each track against the first (one robot, one step) and splits its
+// windows into training and validation.
+WindowSets training_windows(const std::vector<const FusionInput*>& tracks, const LearnedOdometryModel& model,
+                            int window, const LearnedTrainingOptions& options) {
+  WindowSets ws;
+  for (SequenceSet* s : {&ws.v_train, &ws.v_val, &ws.w_train, &ws.w_val}) {
     s->window = window;
     s->inputs = kFeatures;
   }
@@ -132,47 +132,67 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
                       in.track_name, v_all.size(), window));
     auto [vt, vv] = split_sequences(v_all, options.train_fraction);
     auto [wt, wv] = split_sequences(w_all, options.train_fraction);
-    v_train.append(vt);
-    v_val.append(vv);
-    w_train.append(wt);
-    w_val.append(wv);
+    ws.v_train.append(vt);
+    ws.v_val.append(vv);
+    ws.w_train.append(wt);
+    ws.w_val.append(wv);
   }
+  return ws;
+}
+
+// A restart's score, free-running: each net fed its own previous output, as
+// when it runs alone (run_learned_odometry), MAE over the last
+// (1 − train_fraction) of each track's steps. A net can have a small one-step
+// (teacher-forced) validation MAE and still drift on its own outputs. The V
+// and W nets do not feed each other, so a pair is scored in one run.
+std::array<double, 2> free_running_mae(const std::vector<const FusionInput*>& tracks,
+                                       const LearnedOdometryModel& m, const LearnedTrainingOptions& options) {
+  std::array<double, 2> sum{0.0, 0.0};
+  std::size_t count = 0;
+  for (const FusionInput* in : tracks) {
+    const OdometrySeries run = run_learned_odometry(*in, m);
+    const auto first = static_cast<std::size_t>(options.train_fraction * static_cast<double>(in->size()));
+    for (std::size_t k = std::max<std::size_t>(first, 1); k < in->size(); ++k)
+      if (finite_all({run.v[k], run.w[k], in->v_true[k], in->w_true[k]})) {
+        sum[0] += std::abs(run.v[k] - in->v_true[k]);
+        sum[1] += std::abs(run.w[k] - in->w_true[k]);
+        ++count;
+      }
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  return count > 0
+             ? std::array<double, 2>{sum[0] / static_cast<double>(count), sum[1] / static_cast<double>(count)}
+             : std::array<double, 2>{inf, inf};
+}
+
+}  // namespace
+
+LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*>& tracks,
+                                            const LearnedTrainingOptions& options,
+                                            LearnedTrainingSummary* summary) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("learned odometry training: " + why);
+  if (tracks.empty()) throw std::invalid_argument("learned odometry training: no tracks given");
+  LearnedOdometryModel model;
+  const int window = model.v_net.window;
+  model.rate_hz = 1.0 / tracks.front()->dt_s;
+  model.ticks_per_rev = tracks.front()->ticks_per_rev;
+  const WindowSets ws = training_windows(tracks, model, window, options);
+
   const auto start = std::chrono::steady_clock::now();
   LearnedTrainingSummary s;
   // Best of options.restarts starts (see LearnedTrainingOptions::restarts),
-  // scored free-running: each net fed its own previous output, as when it
-  // runs alone (run_learned_odometry), MAE over the last (1 − train_fraction)
-  // of each track's steps. A net can have a small one-step (teacher-forced)
-  // validation MAE and still drift on its own outputs. The V and W nets do
-  // not feed each other, so start r's pair is scored in one run.
-  auto free_running_mae = [&](const LearnedOdometryModel& m) {
-    std::array<double, 2> sum{0.0, 0.0};
-    std::size_t count = 0;
-    for (const FusionInput* in : tracks) {
-      const OdometrySeries run = run_learned_odometry(*in, m);
-      const auto first = static_cast<std::size_t>(options.train_fraction * static_cast<double>(in->size()));
-      for (std::size_t k = std::max<std::size_t>(first, 1); k < in->size(); ++k)
-        if (finite_all({run.v[k], run.w[k], in->v_true[k], in->w_true[k]})) {
-          sum[0] += std::abs(run.v[k] - in->v_true[k]);
-          sum[1] += std::abs(run.w[k] - in->w_true[k]);
-          ++count;
-        }
-    }
-    const double inf = std::numeric_limits<double>::infinity();
-    return count > 0
-               ? std::array<double, 2>{sum[0] / static_cast<double>(count), sum[1] / static_cast<double>(count)}
-               : std::array<double, 2>{inf, inf};
-  };
+  // scored free-running (free_running_mae).
   const LearnedOdometryModel fresh = model;
   std::array<double, 2> best_mae{0.0, 0.0};
   for (int r = 0; r < options.restarts; ++r) {
     LearnedOdometryModel candidate = fresh;
     LstmTrainingOptions o = options.training;
     o.seed = options.training.seed + 7919u * static_cast<std::uint64_t>(r);
-    const LstmTrainingSummary tv = train_lstm(candidate.v_net, v_train, v_val, o);
+    const LstmTrainingSummary tv = train_lstm(candidate.v_net, ws.v_train, ws.v_val, o);
     o.seed += 1000;  // a different initialisation for the W net
-    const LstmTrainingSummary tw = train_lstm(candidate.w_net, w_train, w_val, o);
-    std::array<double, 2> mae = free_running_mae(candidate);
+    const LstmTrainingSummary tw = train_lstm(candidate.w_net, ws.w_train, ws.w_val, o);
+    std::array<double, 2> mae = free_running_mae(tracks, candidate, options);
     if (!tv.usable) mae[0] = std::numeric_limits<double>::infinity();
     if (!tw.usable) mae[1] = std::numeric_limits<double>::infinity();
     s.v_restart_mae.push_back(mae[0]);
@@ -183,8 +203,8 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
       s.w = tw, best_mae[1] = mae[1], s.w_restart = r, model.w_net = candidate.w_net;
   }
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  s.train_windows = v_train.size();
-  s.validation_windows = v_val.size();
+  s.train_windows = ws.v_train.size();
+  s.validation_windows = ws.v_val.size();
   model.v_validation_mae = std::isfinite(s.v.validation_mae) ? s.v.validation_mae : s.v.train_mae;
   model.w_validation_mae = std::isfinite(s.w.validation_mae) ? s.w.validation_mae : s.w.train_mae;
   if (!model.IsValid(&why))

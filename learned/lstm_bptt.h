@@ -29,34 +29,47 @@
 
 namespace odotune {
 
-// Returns lstm_forward<I, H, double>(w, x, window, act) (the same operations
-// in the same order, so the same value) and, when grad != nullptr, writes
-// d output / d w into grad[0 .. kCount). Not allocating after the first call
-// on a thread (one thread_local buffer of about window × 7H doubles).
+namespace lstm_bptt_detail {
+
+// What the forward pass keeps for the backward one, in one thread_local
+// buffer per <I, H> (about window × 7H doubles).
+struct Tape {
+  double* gates;  // window × 4H: i, f, g, o after activation
+  double* cs;     // (window + 1) × H, cs[0..H) = c_0 = 0
+  double* hs;     // (window + 1) × H, hs[0..H) = h_0 = 0
+  double* tcs;    // window × H: tanh(c_t)
+};
+
 template <int I, int H>
-double lstm_value_and_gradient(const double* w, const double* x, int window, OutputActivation act,
-                               double* grad) {
-  using L = LstmLayout<I, H>;
-  constexpr int G = L::kGates;
+Tape tape_for(int window) {
+  constexpr int G = LstmLayout<I, H>::kGates;
   thread_local std::vector<double> buffer;
   const std::size_t need = static_cast<std::size_t>(window) * (G + H) +
                            static_cast<std::size_t>(window + 1) * 2 * H;
   if (buffer.size() < need) buffer.resize(need);
-  double* gates = buffer.data();                                // window × 4H: i, f, g, o after activation
-  double* cs = gates + static_cast<std::size_t>(window) * G;    // (window + 1) × H, cs[0..H) = c_0 = 0
-  double* hs = cs + static_cast<std::size_t>(window + 1) * H;   // (window + 1) × H, hs[0..H) = h_0 = 0
-  double* tcs = hs + static_cast<std::size_t>(window + 1) * H;  // window × H: tanh(c_t)
-  for (int j = 0; j < H; ++j) cs[j] = hs[j] = 0.0;
+  Tape tape;
+  tape.gates = buffer.data();
+  tape.cs = tape.gates + static_cast<std::size_t>(window) * G;
+  tape.hs = tape.cs + static_cast<std::size_t>(window + 1) * H;
+  tape.tcs = tape.hs + static_cast<std::size_t>(window + 1) * H;
+  return tape;
+}
 
+// The forward recursion over the window (learned/lstm.h), recorded on the tape.
+template <int I, int H>
+void forward(const double* w, const double* x, int window, const Tape& tape) {
+  using L = LstmLayout<I, H>;
+  constexpr int G = L::kGates;
+  for (int j = 0; j < H; ++j) tape.cs[j] = tape.hs[j] = 0.0;
   std::array<double, G> z;
   for (int t = 0; t < window; ++t) {
     const double* xt = x + static_cast<std::size_t>(t) * I;
-    const double* h_prev = hs + static_cast<std::size_t>(t) * H;
-    const double* c_prev = cs + static_cast<std::size_t>(t) * H;
-    double* g_t = gates + static_cast<std::size_t>(t) * G;
-    double* c_t = cs + static_cast<std::size_t>(t + 1) * H;
-    double* h_t = hs + static_cast<std::size_t>(t + 1) * H;
-    double* tc_t = tcs + static_cast<std::size_t>(t) * H;
+    const double* h_prev = tape.hs + static_cast<std::size_t>(t) * H;
+    const double* c_prev = tape.cs + static_cast<std::size_t>(t) * H;
+    double* g_t = tape.gates + static_cast<std::size_t>(t) * G;
+    double* c_t = tape.cs + static_cast<std::size_t>(t + 1) * H;
+    double* h_t = tape.hs + static_cast<std::size_t>(t + 1) * H;
+    double* tc_t = tape.tcs + static_cast<std::size_t>(t) * H;
     for (int n = 0; n < G; ++n) z[n] = w[L::kBias + n];
     for (int k = 0; k < I; ++k) {
       const double* wk = w + L::kKernel + k * G;
@@ -82,16 +95,13 @@ double lstm_value_and_gradient(const double* w, const double* x, int window, Out
       h_t[j] = o_gate * tanh_c;
     }
   }
-  const double* h_last = hs + static_cast<std::size_t>(window) * H;
-  double out = w[L::kDenseBias];
-  for (int j = 0; j < H; ++j) out += w[L::kDense + j] * h_last[j];
-  const bool floored = act == OutputActivation::relu && out < 0.0;
-  if (grad == nullptr) return floored ? 0.0 : out;
-  for (int n = 0; n < L::kCount; ++n) grad[n] = 0.0;
-  if (floored) return 0.0;
+}
 
-  for (int j = 0; j < H; ++j) grad[L::kDense + j] = h_last[j];
-  grad[L::kDenseBias] = 1.0;
+// The backward recursion (file comment) from δh_T = d, accumulated into grad.
+template <int I, int H>
+void backward(const double* w, const double* x, int window, const Tape& tape, double* grad) {
+  using L = LstmLayout<I, H>;
+  constexpr int G = L::kGates;
   std::array<double, H> dh, dc, dh_prev;
   for (int j = 0; j < H; ++j) {
     dh[j] = w[L::kDense + j];
@@ -100,10 +110,10 @@ double lstm_value_and_gradient(const double* w, const double* x, int window, Out
   std::array<double, G> dz;
   for (int t = window - 1; t >= 0; --t) {
     const double* xt = x + static_cast<std::size_t>(t) * I;
-    const double* g_t = gates + static_cast<std::size_t>(t) * G;
-    const double* tc_t = tcs + static_cast<std::size_t>(t) * H;
-    const double* c_prev = cs + static_cast<std::size_t>(t) * H;
-    const double* h_prev = hs + static_cast<std::size_t>(t) * H;
+    const double* g_t = tape.gates + static_cast<std::size_t>(t) * G;
+    const double* tc_t = tape.tcs + static_cast<std::size_t>(t) * H;
+    const double* c_prev = tape.cs + static_cast<std::size_t>(t) * H;
+    const double* h_prev = tape.hs + static_cast<std::size_t>(t) * H;
     for (int j = 0; j < H; ++j) {
       const double i_gate = g_t[j], f_gate = g_t[H + j], g_cand = g_t[2 * H + j], o_gate = g_t[3 * H + j];
       const double tc = tc_t[j];
@@ -131,6 +141,31 @@ double lstm_value_and_gradient(const double* w, const double* x, int window, Out
     }
     dh = dh_prev;
   }
+}
+
+}  // namespace lstm_bptt_detail
+
+// Returns lstm_forward<I, H, double>(w, x, window, act) (the same operations
+// in the same order, so the same value) and, when grad != nullptr, writes
+// d output / d w into grad[0 .. kCount). Not allocating after the first call
+// on a thread (one thread_local buffer of about window × 7H doubles).
+template <int I, int H>
+double lstm_value_and_gradient(const double* w, const double* x, int window, OutputActivation act,
+                               double* grad) {
+  using L = LstmLayout<I, H>;
+  const lstm_bptt_detail::Tape tape = lstm_bptt_detail::tape_for<I, H>(window);
+  lstm_bptt_detail::forward<I, H>(w, x, window, tape);
+  const double* h_last = tape.hs + static_cast<std::size_t>(window) * H;
+  double out = w[L::kDenseBias];
+  for (int j = 0; j < H; ++j) out += w[L::kDense + j] * h_last[j];
+  const bool floored = act == OutputActivation::relu && out < 0.0;
+  if (grad == nullptr) return floored ? 0.0 : out;
+  for (int n = 0; n < L::kCount; ++n) grad[n] = 0.0;
+  if (floored) return 0.0;
+
+  for (int j = 0; j < H; ++j) grad[L::kDense + j] = h_last[j];
+  grad[L::kDenseBias] = 1.0;
+  lstm_bptt_detail::backward<I, H>(w, x, window, tape, grad);
   return out;
 }
 

@@ -186,21 +186,31 @@ double robust_cost(WindowCache<K>& cache, const double* params, std::size_t n,
   return cost;
 }
 
-// The Ceres solve shared by train_lstm and retrain_lstm: standardises `train`
-// with net's standardisation and minimises from net.weights. Writes the
-// weights into `net` only when usable.
+// `train`'s windows standardised with net's standardisation (window after
+// window in *z) and their standardised targets.
 template <int I, int H>
-LstmTrainingSummary solve(LstmNet<I, H>& net, const SequenceSet& train, const LstmTrainingOptions& options) {
-  constexpr int K = LstmLayout<I, H>::kCount;
+void standardise_windows(const LstmNet<I, H>& net, const SequenceSet& train, std::vector<double>* z,
+                         std::vector<double>* target) {
   const std::size_t n = train.size();
   const std::size_t per_window = static_cast<std::size_t>(net.window) * I;
-  std::vector<double> z(n * per_window);
-  std::vector<double> target(n);
+  z->resize(n * per_window);
+  target->resize(n);
   for (std::size_t w = 0; w < n; ++w) {
-    net.standardise(train.window_data(w), z.data() + w * per_window);
-    target[w] = (train.y[w] - net.output_mean) / net.output_sd;
+    net.standardise(train.window_data(w), z->data() + w * per_window);
+    (*target)[w] = (train.y[w] - net.output_mean) / net.output_sd;
   }
+}
 
+// One residual per window (BPTT or automatic derivatives), reading its
+// inputs from z, which must outlive them.
+template <int I, int H>
+std::vector<std::unique_ptr<ceres::CostFunction>> window_costs(const LstmNet<I, H>& net,
+                                                               const std::vector<double>& z,
+                                                               const std::vector<double>& target,
+                                                               const LstmTrainingOptions& options) {
+  constexpr int K = LstmLayout<I, H>::kCount;
+  const std::size_t n = target.size();
+  const std::size_t per_window = static_cast<std::size_t>(net.window) * I;
   std::vector<std::unique_ptr<ceres::CostFunction>> inner;
   inner.reserve(n);
   for (std::size_t w = 0; w < n; ++w) {
@@ -212,11 +222,46 @@ LstmTrainingSummary solve(LstmNet<I, H>& net, const SequenceSet& train, const Ls
           new LstmResidual<I, H>{xw, net.window, target[w], net.activation}));
     }
   }
+  return inner;
+}
+
+ceres::Solver::Options solver_options_for(const LstmTrainingOptions& options) {
+  ceres::Solver::Options solver_options;
+  solver_options.minimizer_type = ceres::TRUST_REGION;
+  solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  // Normal equations: the Jacobian is tall (windows × K) and dense; JᵀJ
+  // (K × K) is cheaper to factor than QR of J and LM's damping keeps it
+  // positive definite.
+  solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  solver_options.function_tolerance = options.function_tolerance;
+  solver_options.num_threads = 1;  // see the header: parallelism is in WindowCache
+  solver_options.minimizer_progress_to_stdout = false;
+  solver_options.logging_type = ceres::SILENT;
+  return solver_options;
+}
+
+// Continuation scales: mae_scale_start, ÷10 per stage, ending at mae_scale.
+std::vector<double> continuation_scales(const LstmTrainingOptions& options) {
+  std::vector<double> scales;
+  for (double a = options.mae_scale_start; a > options.mae_scale; a /= 10.0) scales.push_back(a);
+  scales.push_back(options.mae_scale);
+  return scales;
+}
+
+// The Ceres solve shared by train_lstm and retrain_lstm: standardises `train`
+// with net's standardisation and minimises from net.weights. Writes the
+// weights into `net` only when usable.
+template <int I, int H>
+LstmTrainingSummary solve(LstmNet<I, H>& net, const SequenceSet& train, const LstmTrainingOptions& options) {
+  constexpr int K = LstmLayout<I, H>::kCount;
+  const std::size_t n = train.size();
+  std::vector<double> z, target;
+  standardise_windows(net, train, &z, &target);
 
   std::array<double, K> params = net.weights;
   std::array<double, K> centre{};  // the decay's centre w̄
   if (options.decay_to_start) centre = net.weights;
-  WindowCache<K> cache(params.data(), std::move(inner), options.num_threads);
+  WindowCache<K> cache(params.data(), window_costs(net, z, target, options), options.num_threads);
   // The loss is swapped between the continuation stages (ceres::LossFunctionWrapper
   // is Ceres' documented way to anneal a loss scale).
   ceres::LossFunctionWrapper loss(new ceres::SoftLOneLoss(options.mae_scale), ceres::TAKE_OWNERSHIP);
@@ -229,22 +274,8 @@ LstmTrainingSummary solve(LstmNet<I, H>& net, const SequenceSet& train, const Ls
   if (options.weight_decay > 0.0)
     problem.AddResidualBlock(new WeightDecay<K>(options.weight_decay, centre), nullptr, params.data());
 
-  ceres::Solver::Options solver_options;
-  solver_options.minimizer_type = ceres::TRUST_REGION;
-  solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  // Normal equations: the Jacobian is tall (windows × K) and dense; JᵀJ
-  // (K × K) is cheaper to factor than QR of J and LM's damping keeps it
-  // positive definite.
-  solver_options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
-  solver_options.function_tolerance = options.function_tolerance;
-  solver_options.num_threads = 1;  // see the header: parallelism is in WindowCache
-  solver_options.minimizer_progress_to_stdout = false;
-  solver_options.logging_type = ceres::SILENT;
-
-  // Continuation scales: mae_scale_start, ÷10 per stage, ending at mae_scale.
-  std::vector<double> scales;
-  for (double a = options.mae_scale_start; a > options.mae_scale; a /= 10.0) scales.push_back(a);
-  scales.push_back(options.mae_scale);
+  ceres::Solver::Options solver_options = solver_options_for(options);
+  const std::vector<double> scales = continuation_scales(options);
 
   LstmTrainingSummary summary;
   summary.initial_cost = robust_cost<K>(cache, params.data(), n, options, centre);

@@ -92,6 +92,189 @@ std::array<std::vector<double>, 2> slip_target_variances(const FusionInput& in, 
   return var;
 }
 
+namespace {
+
+using PerTrack = std::vector<std::array<std::vector<double>, 2>>;  // [track][v, w] series by step
+
+// Checks each track and computes its variance targets (NaN where unknown).
+PerTrack checked_targets(const std::vector<const FusionInput*>& tracks,
+                         const std::vector<OdometrySeries>& odometry, const SlipTrainingOptions& options) {
+  PerTrack targets(tracks.size());
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    const FusionInput& in = *tracks[i];
+    if (!in.has_power)
+      throw std::invalid_argument(
+          fmt::format("track '{}': no motor power (power_l, power_r): expected it to train the slip detector",
+                      in.track_name));
+    if (!in.has_gt)
+      throw std::invalid_argument(
+          fmt::format("track '{}': no ground truth: expected it to train the slip detector", in.track_name));
+    if (odometry[i].v.size() != in.size() || odometry[i].w.size() != in.size())
+      throw std::invalid_argument(fmt::format("track '{}': odometry series of {} steps for {} steps",
+                                              in.track_name, odometry[i].v.size(), in.size()));
+    targets[i] = slip_target_variances(in, odometry[i], options);
+  }
+  return targets;
+}
+
+// The floor: the configured one, raised to the `floor_quantile` of the
+// odometry's own target variances (with slip a minority of the steps, the
+// median is its variance while the wheels grip). A floor far below the
+// odometry's real grip-time error would make the fusion filter trust it
+// too much exactly where the detector sees nothing wrong.
+std::array<double, 2> variance_floors(const PerTrack& targets, const SlipTrainingOptions& options) {
+  std::array<double, 2> floors = {options.floor_var_v, options.floor_var_w};
+  if (options.floor_quantile > 0.0) {
+    for (int d = 0; d < 2; ++d) {
+      std::vector<double> all;
+      for (const auto& t : targets)
+        for (double v : t[d])
+          if (std::isfinite(v)) all.push_back(v);
+      if (all.empty()) continue;
+      const auto q = static_cast<std::size_t>(options.floor_quantile * static_cast<double>(all.size() - 1));
+      std::nth_element(all.begin(), all.begin() + static_cast<long>(q), all.end());
+      floors[d] = std::max(floors[d], all[q]);
+    }
+  }
+  return floors;
+}
+
+// The windows of one track and dimension: every `stride`-th window whose
+// inputs and target are finite; `prev` is the previous-variance series fed.
+SequenceSet track_windows(const FusionInput& in, const std::vector<double>& target,
+                          const std::vector<double>& prev, int window, std::size_t lag,
+                          const SlipTrainingOptions& options) {
+  const auto W = static_cast<std::size_t>(window);
+  std::vector<double> rows(W * kFeatures);
+  SequenceSet all;
+  all.window = window;
+  all.inputs = kFeatures;
+  std::size_t taken = 0;
+  for (std::size_t k = W + lag; k < in.size(); ++k) {
+    bool ok = std::isfinite(target[k]);
+    for (std::size_t j = k + 1 - W; ok && j <= k; ++j)
+      ok = finite_all({in.power_r[j], in.power_l[j], in.dticks_r[j], in.dticks_l[j], prev[j - lag]});
+    if (!ok) continue;
+    if (taken++ % static_cast<std::size_t>(options.stride) != 0) continue;
+    for (std::size_t r = 0; r < W; ++r) {
+      const std::size_t j = k + 1 - W + r;
+      double* row = &rows[r * kFeatures];
+      row[kSlipPowerR] = in.power_r[j];
+      row[kSlipPowerL] = in.power_l[j];
+      row[kSlipDticksR] = in.dticks_r[j];
+      row[kSlipDticksL] = in.dticks_l[j];
+      row[kSlipPrevious] = prev[j - lag];
+    }
+    all.add(rows.data(), target[k]);
+  }
+  return all;
+}
+
+// The windows of every track, split 70/30 per track; `previous[i][d]` is
+// the previous-variance series fed (log-ratio, by step).
+void build_windows(const std::vector<const FusionInput*>& tracks, const PerTrack& targets,
+                   const PerTrack& previous, int window, std::size_t lag, const SlipTrainingOptions& options,
+                   std::array<SequenceSet, 2>* train, std::array<SequenceSet, 2>* val) {
+  for (int d = 0; d < 2; ++d) {
+    (*train)[d] = (*val)[d] = SequenceSet{};
+    (*train)[d].window = (*val)[d].window = window;
+    (*train)[d].inputs = (*val)[d].inputs = kFeatures;
+  }
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    const FusionInput& in = *tracks[i];
+    for (int d = 0; d < 2; ++d) {
+      const SequenceSet all = track_windows(in, targets[i][d], previous[i][d], window, lag, options);
+      if (all.size() < 10)
+        throw std::invalid_argument(
+            fmt::format("track '{}': only {} usable windows for the slip detector: expected at least 10",
+                        in.track_name, all.size()));
+      auto [t, v] = split_sequences(all, options.train_fraction);
+      (*train)[d].append(t);
+      (*val)[d].append(v);
+    }
+  }
+}
+
+// One fit of `net` (fresh: train_lstm, else retrain_lstm from its weights),
+// in validation chunks when asked (see SlipTrainingOptions::validation_chunk).
+LstmTrainingSummary fit_slip_net(SlipNet& net, const SequenceSet& t, const SequenceSet& v,
+                                 LstmTrainingOptions opts, bool fresh, std::vector<double>* curve,
+                                 const SlipTrainingOptions& options) {
+  curve->clear();
+  if (options.validation_chunk <= 0 || v.size() == 0) {
+    LstmTrainingSummary r = fresh ? train_lstm(net, t, v, opts) : retrain_lstm(net, t, opts);
+    if (v.size() > 0) r.validation_mae = lstm_mae(net, v);
+    return r;
+  }
+  const int total = opts.max_iterations;
+  // The first chunk runs the loss continuation (lstm_training.h), one chunk
+  // per stage; later chunks stay at the final MAE scale.
+  int stages = 1;
+  for (double a = opts.mae_scale_start; a > opts.mae_scale; a /= 10.0) ++stages;
+  opts.max_iterations = std::min(total, stages * options.validation_chunk);
+  LstmTrainingSummary r = fresh ? train_lstm(net, t, v, opts) : retrain_lstm(net, t, opts);
+  int used = r.iterations;
+  double best = lstm_mae(net, v);
+  curve->push_back(best);
+  SlipNet best_net = net;
+  LstmTrainingSummary best_r = r;
+  best_r.validation_mae = best;
+  opts.mae_scale_start = opts.mae_scale;
+  int stale = 0;
+  while (used < total && stale < options.patience) {
+    opts.max_iterations = std::min(options.validation_chunk, total - used);
+    r = retrain_lstm(net, t, opts);
+    used += std::max(1, r.iterations);
+    const double mae = lstm_mae(net, v);
+    curve->push_back(mae);
+    if (r.usable && mae < best) {
+      best = mae, best_net = net, best_r = r, best_r.validation_mae = mae, stale = 0;
+    } else {
+      ++stale;
+    }
+    if (r.iterations < opts.max_iterations) break;  // converged
+  }
+  net = best_net;
+  best_r.iterations = used;
+  return best_r;
+}
+
+// The previous-variance input was held at 0 in the first fit, so its
+// kernel row never got a gradient: zero it and give it the targets'
+// scale, so the refits start from the first fit's function exactly.
+void reset_previous_input(SlipDetectorModel& model, const std::array<SequenceSet, 2>& train) {
+  for (auto [net, set] : {std::pair{&model.v_net, &train[0]}, std::pair{&model.w_net, &train[1]}}) {
+    using L = LstmLayout<kFeatures, SlipNet::kHidden>;
+    for (int n = 0; n < L::kGates; ++n)
+      net->weights[static_cast<std::size_t>(L::kKernel + kSlipPrevious * L::kGates + n)] = 0.0;
+    double sum = 0.0, sum2 = 0.0;
+    for (double y : set->y) sum += y, sum2 += y * y;
+    const double m = sum / static_cast<double>(set->size());
+    net->input_mean[kSlipPrevious] = m;
+    net->input_sd[kSlipPrevious] = std::max(
+        1e-3, std::sqrt(std::max(0.0, sum2 / static_cast<double>(set->size()) - m * m)));
+  }
+}
+
+// The detector's own outputs on every training track, as log-ratios.
+PerTrack own_log_ratios(const std::vector<const FusionInput*>& tracks, const SlipDetectorModel& model,
+                        const std::array<double, 2>& floors) {
+  PerTrack own(tracks.size());
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    const FusionInput& in = *tracks[i];
+    SlipDetectorStepper stepper(&model);
+    for (int d = 0; d < 2; ++d) own[i][d].assign(in.size(), 0.0);
+    for (std::size_t k = 1; k < in.size(); ++k) {
+      const auto var = stepper.step(in.power_l[k], in.power_r[k], in.dticks_l[k], in.dticks_r[k]);
+      own[i][0][k] = std::log(var[0] / floors[0]);
+      own[i][1][k] = std::log(var[1] / floors[1]);
+    }
+  }
+  return own;
+}
+
+}  // namespace
+
 SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tracks,
                                       const std::vector<OdometrySeries>& odometry,
                                       const SlipTrainingOptions& options, SlipTrainingSummary* summary) {
@@ -109,101 +292,22 @@ SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tra
   model.previous_lag = options.previous_lag;
   const auto lag = static_cast<std::size_t>(options.previous_lag);
   const int window = model.v_net.window;
-  const auto W = static_cast<std::size_t>(window);
 
-  // Variance targets per track and dimension (NaN where unknown).
-  std::vector<std::array<std::vector<double>, 2>> targets(tracks.size());
-  for (std::size_t i = 0; i < tracks.size(); ++i) {
-    const FusionInput& in = *tracks[i];
-    if (!in.has_power)
-      throw std::invalid_argument(
-          fmt::format("track '{}': no motor power (power_l, power_r): expected it to train the slip detector",
-                      in.track_name));
-    if (!in.has_gt)
-      throw std::invalid_argument(
-          fmt::format("track '{}': no ground truth: expected it to train the slip detector", in.track_name));
-    if (odometry[i].v.size() != in.size() || odometry[i].w.size() != in.size())
-      throw std::invalid_argument(fmt::format("track '{}': odometry series of {} steps for {} steps",
-                                              in.track_name, odometry[i].v.size(), in.size()));
-    targets[i] = slip_target_variances(in, odometry[i], options);
-  }
-  // The floor: the configured one, raised to the `floor_quantile` of the
-  // odometry's own target variances (with slip a minority of the steps, the
-  // median is its variance while the wheels grip). A floor far below the
-  // odometry's real grip-time error would make the fusion filter trust it
-  // too much exactly where the detector sees nothing wrong.
-  std::array<double, 2> floors = {options.floor_var_v, options.floor_var_w};
-  if (options.floor_quantile > 0.0) {
-    for (int d = 0; d < 2; ++d) {
-      std::vector<double> all;
-      for (const auto& t : targets)
-        for (double v : t[d])
-          if (std::isfinite(v)) all.push_back(v);
-      if (all.empty()) continue;
-      const auto q = static_cast<std::size_t>(options.floor_quantile * static_cast<double>(all.size() - 1));
-      std::nth_element(all.begin(), all.begin() + static_cast<long>(q), all.end());
-      floors[d] = std::max(floors[d], all[q]);
-    }
-  }
+  PerTrack targets = checked_targets(tracks, odometry, options);
+  const std::array<double, 2> floors = variance_floors(targets, options);
   model.floor_var_v = floors[0];
   model.floor_var_w = floors[1];
   for (auto& t : targets)
     for (int d = 0; d < 2; ++d)
       for (double& v : t[d]) v = std::log(std::max(v, floors[d]) / floors[d]);  // NaN stays NaN
-  // The windows of every track, split 70/30 per track; `previous[i][d]` is
-  // the previous-variance series fed (log-ratio, by step).
-  auto build = [&](const std::vector<std::array<std::vector<double>, 2>>& previous,
-                   std::array<SequenceSet, 2>* train, std::array<SequenceSet, 2>* val) {
-    for (int d = 0; d < 2; ++d) {
-      (*train)[d] = (*val)[d] = SequenceSet{};
-      (*train)[d].window = (*val)[d].window = window;
-      (*train)[d].inputs = (*val)[d].inputs = kFeatures;
-    }
-    std::vector<double> rows(W * kFeatures);
-    for (std::size_t i = 0; i < tracks.size(); ++i) {
-      const FusionInput& in = *tracks[i];
-      for (int d = 0; d < 2; ++d) {
-        const std::vector<double>& target = targets[i][d];
-        const std::vector<double>& prev = previous[i][d];
-        SequenceSet all;
-        all.window = window;
-        all.inputs = kFeatures;
-        std::size_t taken = 0;
-        for (std::size_t k = W + lag; k < in.size(); ++k) {
-          bool ok = std::isfinite(target[k]);
-          for (std::size_t j = k + 1 - W; ok && j <= k; ++j)
-            ok = finite_all({in.power_r[j], in.power_l[j], in.dticks_r[j], in.dticks_l[j], prev[j - lag]});
-          if (!ok) continue;
-          if (taken++ % static_cast<std::size_t>(options.stride) != 0) continue;
-          for (std::size_t r = 0; r < W; ++r) {
-            const std::size_t j = k + 1 - W + r;
-            double* row = &rows[r * kFeatures];
-            row[kSlipPowerR] = in.power_r[j];
-            row[kSlipPowerL] = in.power_l[j];
-            row[kSlipDticksR] = in.dticks_r[j];
-            row[kSlipDticksL] = in.dticks_l[j];
-            row[kSlipPrevious] = prev[j - lag];
-          }
-          all.add(rows.data(), target[k]);
-        }
-        if (all.size() < 10)
-          throw std::invalid_argument(
-              fmt::format("track '{}': only {} usable windows for the slip detector: expected at least 10",
-                          in.track_name, all.size()));
-        auto [t, v] = split_sequences(all, options.train_fraction);
-        (*train)[d].append(t);
-        (*val)[d].append(v);
-      }
-    }
-  };
   std::array<SequenceSet, 2> train, val;
   if (options.teacher_forcing) {
-    build(targets, &train, &val);
+    build_windows(tracks, targets, targets, window, lag, options, &train, &val);
   } else {
-    std::vector<std::array<std::vector<double>, 2>> held(tracks.size());
+    PerTrack held(tracks.size());
     for (std::size_t i = 0; i < tracks.size(); ++i)
       for (int d = 0; d < 2; ++d) held[i][d].assign(tracks[i]->size(), 0.0);
-    build(held, &train, &val);
+    build_windows(tracks, targets, held, window, lag, options, &train, &val);
   }
   double max_v = 0.0, max_w = 0.0;
   for (double y : train[0].y) max_v = std::max(max_v, y);
@@ -214,84 +318,16 @@ SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tra
   SlipTrainingSummary s;
   LstmTrainingOptions v_opts = options.training;
   v_opts.weight_decay = options.weight_decay;
-  // One fit of `net` (fresh: train_lstm, else retrain_lstm from its weights),
-  // in validation chunks when asked (see SlipTrainingOptions::validation_chunk).
-  auto fit = [&](SlipNet& net, const SequenceSet& t, const SequenceSet& v, LstmTrainingOptions opts, bool fresh,
-                 std::vector<double>* curve) {
-    curve->clear();
-    if (options.validation_chunk <= 0 || v.size() == 0) {
-      LstmTrainingSummary r = fresh ? train_lstm(net, t, v, opts) : retrain_lstm(net, t, opts);
-      if (v.size() > 0) r.validation_mae = lstm_mae(net, v);
-      return r;
-    }
-    const int total = opts.max_iterations;
-    // The first chunk runs the loss continuation (lstm_training.h), one chunk
-    // per stage; later chunks stay at the final MAE scale.
-    int stages = 1;
-    for (double a = opts.mae_scale_start; a > opts.mae_scale; a /= 10.0) ++stages;
-    opts.max_iterations = std::min(total, stages * options.validation_chunk);
-    LstmTrainingSummary r = fresh ? train_lstm(net, t, v, opts) : retrain_lstm(net, t, opts);
-    int used = r.iterations;
-    double best = lstm_mae(net, v);
-    curve->push_back(best);
-    SlipNet best_net = net;
-    LstmTrainingSummary best_r = r;
-    best_r.validation_mae = best;
-    opts.mae_scale_start = opts.mae_scale;
-    int stale = 0;
-    while (used < total && stale < options.patience) {
-      opts.max_iterations = std::min(options.validation_chunk, total - used);
-      r = retrain_lstm(net, t, opts);
-      used += std::max(1, r.iterations);
-      const double mae = lstm_mae(net, v);
-      curve->push_back(mae);
-      if (r.usable && mae < best) {
-        best = mae, best_net = net, best_r = r, best_r.validation_mae = mae, stale = 0;
-      } else {
-        ++stale;
-      }
-      if (r.iterations < opts.max_iterations) break;  // converged
-    }
-    net = best_net;
-    best_r.iterations = used;
-    return best_r;
-  };
-  s.v = fit(model.v_net, train[0], val[0], v_opts, true, &s.v_curve);
+  s.v = fit_slip_net(model.v_net, train[0], val[0], v_opts, true, &s.v_curve, options);
   LstmTrainingOptions w_opts = v_opts;
   w_opts.seed = options.training.seed + 1000;
-  s.w = fit(model.w_net, train[1], val[1], w_opts, true, &s.w_curve);
-  if (!options.teacher_forcing) {
-    // The previous-variance input was held at 0 in the first fit, so its
-    // kernel row never got a gradient: zero it and give it the targets'
-    // scale, so the refits start from the first fit's function exactly.
-    for (auto [net, set] : {std::pair{&model.v_net, &train[0]}, std::pair{&model.w_net, &train[1]}}) {
-      using L = LstmLayout<kFeatures, SlipNet::kHidden>;
-      for (int n = 0; n < L::kGates; ++n)
-        net->weights[static_cast<std::size_t>(L::kKernel + kSlipPrevious * L::kGates + n)] = 0.0;
-      double sum = 0.0, sum2 = 0.0;
-      for (double y : set->y) sum += y, sum2 += y * y;
-      const double m = sum / static_cast<double>(set->size());
-      net->input_mean[kSlipPrevious] = m;
-      net->input_sd[kSlipPrevious] = std::max(
-          1e-3, std::sqrt(std::max(0.0, sum2 / static_cast<double>(set->size()) - m * m)));
-    }
-  }
+  s.w = fit_slip_net(model.w_net, train[1], val[1], w_opts, true, &s.w_curve, options);
+  if (!options.teacher_forcing) reset_previous_input(model, train);
   for (int round = 0; round < options.feedback_rounds; ++round) {
-    // The detector's own outputs on every training track, as log-ratios.
-    std::vector<std::array<std::vector<double>, 2>> own(tracks.size());
-    for (std::size_t i = 0; i < tracks.size(); ++i) {
-      const FusionInput& in = *tracks[i];
-      SlipDetectorStepper stepper(&model);
-      for (int d = 0; d < 2; ++d) own[i][d].assign(in.size(), 0.0);
-      for (std::size_t k = 1; k < in.size(); ++k) {
-        const auto var = stepper.step(in.power_l[k], in.power_r[k], in.dticks_l[k], in.dticks_r[k]);
-        own[i][0][k] = std::log(var[0] / floors[0]);
-        own[i][1][k] = std::log(var[1] / floors[1]);
-      }
-    }
-    build(own, &train, &val);
-    s.v = fit(model.v_net, train[0], val[0], v_opts, false, &s.v_curve);
-    s.w = fit(model.w_net, train[1], val[1], w_opts, false, &s.w_curve);
+    const PerTrack own = own_log_ratios(tracks, model, floors);
+    build_windows(tracks, targets, own, window, lag, options, &train, &val);
+    s.v = fit_slip_net(model.v_net, train[0], val[0], v_opts, false, &s.v_curve, options);
+    s.w = fit_slip_net(model.w_net, train[1], val[1], w_opts, false, &s.w_curve, options);
   }
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   s.train_windows = train[0].size();

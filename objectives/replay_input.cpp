@@ -65,11 +65,146 @@ double initial_heading_from_fixes(const ReplayInput& in, double fix_var_m2, doub
   return theta;
 }
 
+// The wheels' geometry for turning odometry into wheel travel.
+struct WheelGeometry {
+  double Rl = 0.0, Rr = 0.0, tick_rev = 0.0;
+};
+
+// The odometry source (ticks, wheel rates or commands) and its geometry
+// from the metadata.
+WheelGeometry odometry_source(const Track& track, const ReplayInputOptions& options, ReplayInput& in) {
+  const auto& meta = track.meta();
+  WheelGeometry g;
+  if (track.has_ticks() || track.has_wheel_rates()) {
+    in.source = track.has_ticks() ? OdometrySource::ticks : OdometrySource::wheel_rates;
+    g.Rl = require(track, meta.wheel_radius_left_m, "robot.wheel_radius_left");
+    g.Rr = require(track, meta.wheel_radius_right_m, "robot.wheel_radius_right");
+    in.wheel_base_m = require(track, meta.wheel_base_m, "robot.wheel_base");
+    if (in.source == OdometrySource::ticks)
+      g.tick_rev = require(track, meta.ticks_per_rev, "robot.ticks_per_rev");
+  } else {
+    in.source = OdometrySource::commands;
+    in.wheel_base_m = meta.wheel_base_m.value_or(options.default_wheel_base_m);
+  }
+  return g;
+}
+
+bool has_fix(const Track& track, std::size_t i) { return track.at(Col::aps_x, i) && track.at(Col::aps_y, i); }
+
+// The start row (the first fix, or the first ground-truth position) and the
+// initial pose there (by fixes: its heading is fitted later).
+std::size_t start_row(const Track& track, bool by_fixes, const std::vector<double>& gx,
+                      const std::vector<double>& gy, ReplayInput& in) {
+  const std::size_t n = track.size();
+  const bool has_theta = track.has(Col::gt_theta);
+  std::size_t start = 0;
+  if (by_fixes) {
+    while (start < n && !has_fix(track, start)) ++start;
+    if (start == n) fail(track, "no row with a position fix");
+    in.initial_pose << track.col(Col::aps_x)[start], track.col(Col::aps_y)[start], 0.0;  // heading: below
+  } else {
+    while (start < n && (std::isnan(gx[start]) || std::isnan(gy[start]))) ++start;
+    if (start == n) fail(track, "no row with a ground-truth position");
+    if (has_theta && std::isnan(track.col(Col::gt_theta)[start]))
+      fail(track, fmt::format("the first ground-truth row (t = {} s) has no gt_theta", track.t()[start]));
+    in.initial_pose << gx[start], gy[start], has_theta ? track.col(Col::gt_theta)[start] : 0.0;
+  }
+  return start;
+}
+
+// Odometry sample presence at row i.
+bool odometry_at(const Track& track, OdometrySource source, std::size_t i) {
+  switch (source) {
+    case OdometrySource::ticks: return track.ticks_l()[i] != kNoTick && track.ticks_r()[i] != kNoTick;
+    case OdometrySource::wheel_rates: return track.at(Col::omega_l, i) && track.at(Col::omega_r, i);
+    case OdometrySource::commands: return track.at(Col::v_cmd, i) && track.at(Col::w_cmd, i);
+  }
+  return false;
+}
+
+// The wheels' travel between odometry rows p and i, dt apart.
+filters::WheelTravel wheel_travel(const Track& track, const ReplayInput& in, const WheelGeometry& g,
+                                  std::size_t p, std::size_t i, double dt) {
+  const double two_pi = 2.0 * std::numbers::pi;
+  const double Rl = g.Rl, Rr = g.Rr, tick_rev = g.tick_rev;
+  filters::WheelTravel u;
+  switch (in.source) {
+    case OdometrySource::ticks:
+      u.left_m = static_cast<double>(track.ticks_l()[i] - track.ticks_l()[p]) * two_pi * Rl / tick_rev;
+      u.right_m = static_cast<double>(track.ticks_r()[i] - track.ticks_r()[p]) * two_pi * Rr / tick_rev;
+      break;
+    case OdometrySource::wheel_rates:  // trapezoidal rule
+      u.left_m = 0.5 * (track.col(Col::omega_l)[p] + track.col(Col::omega_l)[i]) * Rl * dt;
+      u.right_m = 0.5 * (track.col(Col::omega_r)[p] + track.col(Col::omega_r)[i]) * Rr * dt;
+      break;
+    case OdometrySource::commands: {  // zero-order hold of the previous command
+      const double d = track.col(Col::v_cmd)[p] * dt;
+      const double dth = track.col(Col::w_cmd)[p] * dt;
+      u.left_m = d - 0.5 * dth * in.wheel_base_m;
+      u.right_m = d + 0.5 * dth * in.wheel_base_m;
+      break;
+    }
+  }
+  return u;
+}
+
+// The fix at row i (with its variances where usable) as the row's fix.
+void add_fix(const Track& track, std::size_t i, bool has_fix_var, ReplayInput& in, ReplayRow& row) {
+  row.fix = static_cast<std::int32_t>(in.fixes.size());
+  in.fixes.emplace_back(track.col(Col::aps_x)[i], track.col(Col::aps_y)[i]);
+  const double vx = has_fix_var ? track.col(Col::aps_var_x)[i] : std::nan("");
+  const double vy = has_fix_var ? track.col(Col::aps_var_y)[i] : std::nan("");
+  const bool usable = vx > 0.0 && vy > 0.0 && std::isfinite(vx) && std::isfinite(vy);
+  in.fix_var_x_m2.push_back(usable ? vx : std::nan(""));
+  in.fix_var_y_m2.push_back(usable ? vy : std::nan(""));
+}
+
+// The rows after the start: each one's odometry step, fix and ground truth.
+void read_rows(const Track& track, const WheelGeometry& geometry, std::size_t start,
+               const std::vector<double>& gx, const std::vector<double>& gy, ReplayInput& in) {
+  const std::size_t n = track.size();
+  const auto& t = track.t();
+  const bool has_theta = track.has(Col::gt_theta);
+  const bool has_fix_var = track.has(Col::aps_var_x) && track.has(Col::aps_var_y);
+  const bool has_gyro = track.has(Col::gyro_z);
+  // The last odometry sample at or before the start row.
+  std::ptrdiff_t last_odo = -1;
+  for (std::size_t i = 0; i <= start; ++i)
+    if (odometry_at(track, in.source, i)) last_odo = static_cast<std::ptrdiff_t>(i);
+  double last_gyro = std::nan("");
+  for (std::size_t i = 0; i <= start; ++i)
+    if (has_gyro && track.at(Col::gyro_z, i)) last_gyro = track.col(Col::gyro_z)[i];
+
+  for (std::size_t i = start + 1; i < n; ++i) {
+    ReplayRow row;
+    row.t_s = t[i];
+    if (has_gyro && track.at(Col::gyro_z, i)) last_gyro = track.col(Col::gyro_z)[i];
+    if (odometry_at(track, in.source, i)) {
+      if (last_odo >= 0) {
+        const auto p = static_cast<std::size_t>(last_odo);
+        const double dt = t[i] - t[p];
+        const filters::WheelTravel u = wheel_travel(track, in, geometry, p, i, dt);
+        const double yaw_rate = std::isnan(last_gyro) ? (u.right_m - u.left_m) / in.wheel_base_m / dt
+                                                      : last_gyro;
+        row.step = static_cast<std::int32_t>(in.steps.size());
+        in.steps.push_back(u);
+        in.abs_yaw_rate_rad_s.push_back(std::abs(yaw_rate));
+      }
+      last_odo = static_cast<std::ptrdiff_t>(i);
+    }
+    if (has_fix(track, i)) add_fix(track, i, has_fix_var, in, row);
+    if (!std::isnan(gx[i]) && !std::isnan(gy[i])) {
+      row.gt = static_cast<std::int32_t>(in.gt.size());
+      in.gt.emplace_back(gx[i], gy[i]);
+      in.gt_theta_rad.push_back(has_theta ? track.col(Col::gt_theta)[i] : std::nan(""));
+    }
+    if (row.step >= 0 || row.fix >= 0 || row.gt >= 0) in.rows.push_back(row);
+  }
+}
+
 }  // namespace
 
 ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& options) {
-  using filters::Position;
-  using filters::WheelTravel;
   ReplayInput in;
   in.track_name = track.name();
   if (!track.has_odometry()) fail(track, "no odometry columns (ticks_*, omega_* or v_cmd/w_cmd)");
@@ -80,113 +215,15 @@ ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& opt
                 "fixes is tuned with the fix cross-validation modes 8 and 9)");
   if (by_fixes && !track.has_aps())
     fail(track, "no position fixes (aps_x, aps_y) to start from and score against");
+  const WheelGeometry geometry = odometry_source(track, options, in);
 
-  const auto& meta = track.meta();
-  double Rl = 0.0, Rr = 0.0, tick_rev = 0.0;
-  if (track.has_ticks() || track.has_wheel_rates()) {
-    in.source = track.has_ticks() ? OdometrySource::ticks : OdometrySource::wheel_rates;
-    Rl = require(track, meta.wheel_radius_left_m, "robot.wheel_radius_left");
-    Rr = require(track, meta.wheel_radius_right_m, "robot.wheel_radius_right");
-    in.wheel_base_m = require(track, meta.wheel_base_m, "robot.wheel_base");
-    if (in.source == OdometrySource::ticks)
-      tick_rev = require(track, meta.ticks_per_rev, "robot.ticks_per_rev");
-  } else {
-    in.source = OdometrySource::commands;
-    in.wheel_base_m = meta.wheel_base_m.value_or(options.default_wheel_base_m);
-  }
-
-  const std::size_t n = track.size();
-  const auto& t = track.t();
-  const std::vector<double> none(n, std::nan(""));
+  const std::vector<double> none(track.size(), std::nan(""));
   const auto& gx = track.has(Col::gt_x) ? track.col(Col::gt_x) : none;
   const auto& gy = track.has(Col::gt_y) ? track.col(Col::gt_y) : none;
-  const bool has_theta = track.has(Col::gt_theta);
-  auto has_fix = [&](std::size_t i) { return track.at(Col::aps_x, i) && track.at(Col::aps_y, i); };
-  std::size_t start = 0;
-  if (by_fixes) {
-    while (start < n && !has_fix(start)) ++start;
-    if (start == n) fail(track, "no row with a position fix");
-    in.initial_pose << track.col(Col::aps_x)[start], track.col(Col::aps_y)[start], 0.0;  // heading: below
-  } else {
-    while (start < n && (std::isnan(gx[start]) || std::isnan(gy[start]))) ++start;
-    if (start == n) fail(track, "no row with a ground-truth position");
-    if (has_theta && std::isnan(track.col(Col::gt_theta)[start]))
-      fail(track, fmt::format("the first ground-truth row (t = {} s) has no gt_theta", t[start]));
-    in.initial_pose << gx[start], gy[start], has_theta ? track.col(Col::gt_theta)[start] : 0.0;
-  }
-  in.t0_s = t[start];
-  const bool has_fix_var = track.has(Col::aps_var_x) && track.has(Col::aps_var_y);
+  const std::size_t start = start_row(track, by_fixes, gx, gy, in);
+  in.t0_s = track.t()[start];
+  read_rows(track, geometry, start, gx, gy, in);
 
-  // Odometry sample presence at row i.
-  auto odo_at = [&](std::size_t i) {
-    switch (in.source) {
-      case OdometrySource::ticks: return track.ticks_l()[i] != kNoTick && track.ticks_r()[i] != kNoTick;
-      case OdometrySource::wheel_rates: return track.at(Col::omega_l, i) && track.at(Col::omega_r, i);
-      case OdometrySource::commands: return track.at(Col::v_cmd, i) && track.at(Col::w_cmd, i);
-    }
-    return false;
-  };
-  const bool has_gyro = track.has(Col::gyro_z);
-  const double two_pi = 2.0 * std::numbers::pi;
-
-  // The last odometry sample at or before the start row.
-  std::ptrdiff_t last_odo = -1;
-  for (std::size_t i = 0; i <= start; ++i)
-    if (odo_at(i)) last_odo = static_cast<std::ptrdiff_t>(i);
-  double last_gyro = std::nan("");
-  for (std::size_t i = 0; i <= start; ++i)
-    if (has_gyro && track.at(Col::gyro_z, i)) last_gyro = track.col(Col::gyro_z)[i];
-
-  for (std::size_t i = start + 1; i < n; ++i) {
-    ReplayRow row;
-    row.t_s = t[i];
-    if (has_gyro && track.at(Col::gyro_z, i)) last_gyro = track.col(Col::gyro_z)[i];
-    if (odo_at(i)) {
-      if (last_odo >= 0) {
-        const auto p = static_cast<std::size_t>(last_odo);
-        const double dt = t[i] - t[p];
-        WheelTravel u;
-        switch (in.source) {
-          case OdometrySource::ticks:
-            u.left_m = static_cast<double>(track.ticks_l()[i] - track.ticks_l()[p]) * two_pi * Rl / tick_rev;
-            u.right_m = static_cast<double>(track.ticks_r()[i] - track.ticks_r()[p]) * two_pi * Rr / tick_rev;
-            break;
-          case OdometrySource::wheel_rates:  // trapezoidal rule
-            u.left_m = 0.5 * (track.col(Col::omega_l)[p] + track.col(Col::omega_l)[i]) * Rl * dt;
-            u.right_m = 0.5 * (track.col(Col::omega_r)[p] + track.col(Col::omega_r)[i]) * Rr * dt;
-            break;
-          case OdometrySource::commands: {  // zero-order hold of the previous command
-            const double d = track.col(Col::v_cmd)[p] * dt;
-            const double dth = track.col(Col::w_cmd)[p] * dt;
-            u.left_m = d - 0.5 * dth * in.wheel_base_m;
-            u.right_m = d + 0.5 * dth * in.wheel_base_m;
-            break;
-          }
-        }
-        const double yaw_rate = std::isnan(last_gyro) ? (u.right_m - u.left_m) / in.wheel_base_m / dt
-                                                      : last_gyro;
-        row.step = static_cast<std::int32_t>(in.steps.size());
-        in.steps.push_back(u);
-        in.abs_yaw_rate_rad_s.push_back(std::abs(yaw_rate));
-      }
-      last_odo = static_cast<std::ptrdiff_t>(i);
-    }
-    if (has_fix(i)) {
-      row.fix = static_cast<std::int32_t>(in.fixes.size());
-      in.fixes.emplace_back(track.col(Col::aps_x)[i], track.col(Col::aps_y)[i]);
-      const double vx = has_fix_var ? track.col(Col::aps_var_x)[i] : std::nan("");
-      const double vy = has_fix_var ? track.col(Col::aps_var_y)[i] : std::nan("");
-      const bool usable = vx > 0.0 && vy > 0.0 && std::isfinite(vx) && std::isfinite(vy);
-      in.fix_var_x_m2.push_back(usable ? vx : std::nan(""));
-      in.fix_var_y_m2.push_back(usable ? vy : std::nan(""));
-    }
-    if (!std::isnan(gx[i]) && !std::isnan(gy[i])) {
-      row.gt = static_cast<std::int32_t>(in.gt.size());
-      in.gt.emplace_back(gx[i], gy[i]);
-      in.gt_theta_rad.push_back(has_theta ? track.col(Col::gt_theta)[i] : std::nan(""));
-    }
-    if (row.step >= 0 || row.fix >= 0 || row.gt >= 0) in.rows.push_back(row);
-  }
   if (!by_fixes && in.gt.empty()) fail(track, "only one ground-truth row: nothing to compare with");
   if (by_fixes) {
     if (in.fixes.empty()) fail(track, "only one position fix: nothing to compare with");

@@ -90,6 +90,111 @@ Cruise segment_cruise(const Segment& s, std::size_t i) {
   throw ProfileError(i, fmt::format("segment {}: unknown kind", i + 1));
 }
 
+namespace {
+
+// The segments' cruise commands, each scaled down where the segment is too
+// short for its transitions (file comment of motion_profile.h).
+class CruisePlan {
+ public:
+  CruisePlan(const std::vector<Segment>& segs, double acc, double ang)
+      : segs_(segs), n_(segs.size()), acc_(acc), ang_(ang), base_(n_), scale_(n_, 1.0) {
+    for (std::size_t i = 0; i < n_; ++i) base_[i] = segment_cruise(segs_[i], i);
+  }
+
+  std::size_t size() const { return n_; }
+  double scale(std::size_t i) const { return scale_[i]; }
+
+  Command cruise(std::ptrdiff_t i) const {  // rest outside [0, n)
+    if (i < 0 || i >= static_cast<std::ptrdiff_t>(n_)) return {};
+    const auto k = static_cast<std::size_t>(i);
+    return {base_[k].v_m_s * scale_[k], base_[k].w_rad_s * scale_[k]};
+  }
+  // Transition j is between segment j-1 and segment j (j = 0..n).
+  double ramp(std::size_t j) const {
+    const auto sj = static_cast<std::ptrdiff_t>(j);
+    return ramp_s(cruise(sj - 1), cruise(sj), acc_, ang_);
+  }
+
+  // Lowers the cruise of segments too short for their transitions.
+  void fit_scales() {
+    for (int sweep = 0; sweep < 50; ++sweep) {
+      bool changed = false;
+      for (std::size_t i = 0; i < n_; ++i) {
+        if (is_stop(i)) continue;
+        while (!fits(i)) {
+          scale_[i] *= kShrink;
+          changed = true;
+          if (scale_[i] < kMinScale)
+            throw ProfileError(i, fmt::format("segment {} ({}) is too short for the acceleration "
+                                              "limits even at {:.1f} % of its speed",
+                                              i + 1, kind_name(segs_[i].kind), 100.0 * kMinScale));
+        }
+      }
+      if (!changed) break;
+    }
+    for (std::size_t i = 0; i < n_; ++i)
+      if (!is_stop(i) && !fits(i))
+        throw ProfileError(i, fmt::format("segment {} ({}): no cruise speed fits the acceleration "
+                                          "limits between its neighbours",
+                                          i + 1, kind_name(segs_[i].kind)));
+  }
+
+  // Timeline of transition centres b_j (j = 0..n).
+  std::vector<double> transition_centres() const {
+    std::vector<double> b(n_ + 1);
+    b[0] = 0.5 * ramp(0);
+    for (std::size_t i = 0; i < n_; ++i) {
+      const double d = is_stop(i) ? base_[i].duration_s + 0.5 * (ramp(i) + ramp(i + 1))
+                                  : base_[i].duration_s / scale_[i];
+      b[i + 1] = b[i] + d;
+    }
+    return b;
+  }
+
+ private:
+  bool is_stop(std::size_t i) const { return segs_[i].kind == Segment::Kind::stop; }
+  bool fits(std::size_t i) const {
+    return base_[i].duration_s / scale_[i] + kTimeTol >= 0.5 * (ramp(i) + ramp(i + 1));
+  }
+
+  const std::vector<Segment>& segs_;
+  std::size_t n_;
+  double acc_, ang_;
+  std::vector<Cruise> base_;
+  std::vector<double> scale_;
+};
+
+void add_knot(std::vector<MotionProfile::Knot>& knots, double t, Command c) {
+  if (!knots.empty()) {
+    const MotionProfile::Knot& last = knots.back();
+    const bool same = last.v_m_s == c.v_m_s && last.w_rad_s == c.w_rad_s;
+    if (t <= last.t_s + kTimeTol && same) return;
+    if (same && knots.size() >= 2 && knots[knots.size() - 2].v_m_s == c.v_m_s &&
+        knots[knots.size() - 2].w_rad_s == c.w_rad_s) {
+      knots.back().t_s = t;  // extend a constant stretch instead of adding a knot
+      return;
+    }
+    t = std::max(t, last.t_s);
+  }
+  knots.push_back({t, c.v_m_s, c.w_rad_s});
+}
+
+// The knots: each transition's ramp, centred on b_j, from the cruise before
+// to the cruise after; starting at t = 0.
+std::vector<MotionProfile::Knot> plan_knots(const CruisePlan& plan, const std::vector<double>& b) {
+  std::vector<MotionProfile::Knot> knots;
+  for (std::size_t j = 0; j <= plan.size(); ++j) {
+    const auto sj = static_cast<std::ptrdiff_t>(j);
+    const double half = 0.5 * plan.ramp(j);
+    add_knot(knots, b[j] - half, plan.cruise(sj - 1));
+    add_knot(knots, b[j] + half, plan.cruise(sj));
+  }
+  if (knots.front().t_s != 0.0) knots.insert(knots.begin(), MotionProfile::Knot{0.0, 0.0, 0.0});
+  return knots;
+}
+
+}  // namespace
+
 MotionProfile::MotionProfile(const MotionParams& motion) {
   const double acc = motion.max_accel_m_s2;
   const double ang = motion.max_angular_accel_rad_s2;
@@ -106,84 +211,17 @@ MotionProfile::MotionProfile(const MotionParams& motion) {
     knots_ = checked_knots(motion.knots);
     return;
   }
-  const auto& segs = motion.segments;
-  const std::size_t n = segs.size();
+  const std::size_t n = motion.segments.size();
   if (n == 0) return;
 
-  std::vector<Cruise> base(n);
-  for (std::size_t i = 0; i < n; ++i) base[i] = segment_cruise(segs[i], i);
-  std::vector<double> scale(n, 1.0);
-  auto cruise = [&](std::ptrdiff_t i) -> Command {  // rest outside [0, n)
-    if (i < 0 || i >= static_cast<std::ptrdiff_t>(n)) return {};
-    const auto k = static_cast<std::size_t>(i);
-    return {base[k].v_m_s * scale[k], base[k].w_rad_s * scale[k]};
-  };
-  // Transition j is between segment j-1 and segment j (j = 0..n).
-  auto ramp = [&](std::size_t j) {
-    const auto sj = static_cast<std::ptrdiff_t>(j);
-    return ramp_s(cruise(sj - 1), cruise(sj), acc, ang);
-  };
-  auto is_stop = [&](std::size_t i) { return segs[i].kind == Segment::Kind::stop; };
-  auto fits = [&](std::size_t i) {
-    return base[i].duration_s / scale[i] + kTimeTol >= 0.5 * (ramp(i) + ramp(i + 1));
-  };
-
-  // Lower the cruise of segments too short for their transitions (file comment).
-  for (int sweep = 0; sweep < 50; ++sweep) {
-    bool changed = false;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (is_stop(i)) continue;
-      while (!fits(i)) {
-        scale[i] *= kShrink;
-        changed = true;
-        if (scale[i] < kMinScale)
-          throw ProfileError(i, fmt::format("segment {} ({}) is too short for the acceleration "
-                                            "limits even at {:.1f} % of its speed",
-                                            i + 1, kind_name(segs[i].kind), 100.0 * kMinScale));
-      }
-    }
-    if (!changed) break;
-  }
-  for (std::size_t i = 0; i < n; ++i)
-    if (!is_stop(i) && !fits(i))
-      throw ProfileError(i, fmt::format("segment {} ({}): no cruise speed fits the acceleration "
-                                        "limits between its neighbours",
-                                        i + 1, kind_name(segs[i].kind)));
-
-  // Timeline of transition centres b_j and knots.
-  std::vector<double> b(n + 1);
-  b[0] = 0.5 * ramp(0);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double d = is_stop(i) ? base[i].duration_s + 0.5 * (ramp(i) + ramp(i + 1))
-                                : base[i].duration_s / scale[i];
-    b[i + 1] = b[i] + d;
-  }
-  auto add_knot = [&](double t, Command c) {
-    if (!knots_.empty()) {
-      const Knot& last = knots_.back();
-      const bool same = last.v_m_s == c.v_m_s && last.w_rad_s == c.w_rad_s;
-      if (t <= last.t_s + kTimeTol && same) return;
-      if (same && knots_.size() >= 2 && knots_[knots_.size() - 2].v_m_s == c.v_m_s &&
-          knots_[knots_.size() - 2].w_rad_s == c.w_rad_s) {
-        knots_.back().t_s = t;  // extend a constant stretch instead of adding a knot
-        return;
-      }
-      t = std::max(t, last.t_s);
-    }
-    knots_.push_back({t, c.v_m_s, c.w_rad_s});
-  };
-  for (std::size_t j = 0; j <= n; ++j) {
-    const auto sj = static_cast<std::ptrdiff_t>(j);
-    const double half = 0.5 * ramp(j);
-    add_knot(b[j] - half, cruise(sj - 1));
-    add_knot(b[j] + half, cruise(sj));
-  }
-  if (knots_.front().t_s != 0.0) knots_.insert(knots_.begin(), Knot{0.0, 0.0, 0.0});
-
+  CruisePlan plan(motion.segments, acc, ang);
+  plan.fit_scales();
+  const std::vector<double> b = plan.transition_centres();
+  knots_ = plan_knots(plan, b);
   plan_.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const Command c = cruise(static_cast<std::ptrdiff_t>(i));
-    plan_[i] = {c.v_m_s, c.w_rad_s, scale[i], b[i], b[i + 1]};
+    const Command c = plan.cruise(static_cast<std::ptrdiff_t>(i));
+    plan_[i] = {c.v_m_s, c.w_rad_s, plan.scale(i), b[i], b[i + 1]};
   }
 }
 

@@ -108,35 +108,26 @@ struct Truth {
 // sin(x)/x, accurate near 0.
 double sinc(double x) { return std::abs(x) < 1e-4 ? 1.0 - x * x / 6.0 : std::sin(x) / x; }
 
-}  // namespace
+bool fail(std::string* why, std::string msg) {
+  if (why) *why = std::move(msg);
+  return false;
+}
+bool positive(double v) { return std::isfinite(v) && v > 0.0; }
+bool nonneg(double v) { return std::isfinite(v) && v >= 0.0; }
 
-bool validate_scenario(const Scenario& sc, std::string* why) {
-  auto fail = [why](std::string msg) {
-    if (why) *why = std::move(msg);
-    return false;
-  };
-  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
-  auto nonneg = [](double v) { return std::isfinite(v) && v >= 0.0; };
-
-  const std::int64_t sps = steps_per_second(sc.step_s);
-  if (sps == 0)
-    return fail(fmt::format("step_s = {}; expected a step in (0, 0.1] s whose inverse is a whole "
-                            "number of steps per second (e.g. 0.001)",
-                            sc.step_s));
-
-  const RobotParams& r = sc.robot;
+bool check_robot(const RobotParams& r, std::string* why) {
   const std::array<std::pair<const char*, double>, 4> pos = {
       {{"wheel_radius_left_m", r.wheel_radius_left_m},
        {"wheel_radius_right_m", r.wheel_radius_right_m},
        {"wheel_base_m", r.wheel_base_m},
        {"coulomb_smoothing_rad_s", r.coulomb_smoothing_rad_s}}};
   for (const auto& [name, v] : pos)
-    if (!positive(v)) return fail(fmt::format("robot.{} = {}; expected a number > 0", name, v));
+    if (!positive(v)) return fail(why, fmt::format("robot.{} = {}; expected a number > 0", name, v));
   if (!(std::isfinite(r.ticks_per_rev) && r.ticks_per_rev >= 1.0 && r.ticks_per_rev <= 1e9))
-    return fail(fmt::format("robot.ticks_per_rev = {}; expected a number in [1, 1e9]", r.ticks_per_rev));
+    return fail(why, fmt::format("robot.ticks_per_rev = {}; expected a number in [1, 1e9]", r.ticks_per_rev));
   if (!positive(r.torque_constant_nm_per_a))
-    return fail(fmt::format("robot.torque_constant_nm_per_a = {}; expected a number > 0",
-                            r.torque_constant_nm_per_a));
+    return fail(why, fmt::format("robot.torque_constant_nm_per_a = {}; expected a number > 0",
+                                 r.torque_constant_nm_per_a));
   const std::array<std::pair<const char*, double>, 6> nn = {{{"mass_kg", r.mass_kg},
                                                              {"yaw_inertia_kg_m2", r.yaw_inertia_kg_m2},
                                                              {"wheel_inertia_kg_m2", r.wheel_inertia_kg_m2},
@@ -144,21 +135,23 @@ bool validate_scenario(const Scenario& sc, std::string* why) {
                                                              {"coulomb_friction_nm", r.coulomb_friction_nm},
                                                              {"coil_resistance_ohm", r.coil_resistance_ohm}}};
   for (const auto& [name, v] : nn)
-    if (!nonneg(v)) return fail(fmt::format("robot.{} = {}; expected a number >= 0", name, v));
+    if (!nonneg(v)) return fail(why, fmt::format("robot.{} = {}; expected a number >= 0", name, v));
+  return true;
+}
 
-  const SensorParams& s = sc.sensors;
+bool check_sensors(const SensorParams& s, double step_s, std::int64_t sps, std::string* why) {
   for (const SensorView& v : sensor_views(s)) {
     if (!v.enabled) continue;
     if (!positive(v.rate_hz))
-      return fail(fmt::format("sensors.{}.rate_hz = {}; expected a number > 0", v.name, v.rate_hz));
+      return fail(why, fmt::format("sensors.{}.rate_hz = {}; expected a number > 0", v.name, v.rate_hz));
     if (period_steps(v.rate_hz, sps) == 0)
-      return fail(fmt::format("sensors.{}.rate_hz = {}: its period is not a whole number of "
-                              "{} s integration steps; expected a rate that divides {} Hz",
-                              v.name, v.rate_hz, sc.step_s, sps));
+      return fail(why, fmt::format("sensors.{}.rate_hz = {}: its period is not a whole number of "
+                                   "{} s integration steps; expected a rate that divides {} Hz",
+                                   v.name, v.rate_hz, step_s, sps));
   }
   if (!s.encoders.enabled && !s.commands.enabled)
-    return fail("sensors: neither encoders nor commands is enabled; a track needs an odometry "
-                "source (expected sensors.encoders or sensors.commands enabled)");
+    return fail(why, "sensors: neither encoders nor commands is enabled; a track needs an odometry "
+                     "source (expected sensors.encoders or sensors.commands enabled)");
   const std::array<std::pair<const char*, double>, 15> nn2 = {
       {{"encoders.omega_resolution_rad_s", s.encoders.omega_resolution_rad_s},
        {"commands.resolution", s.commands.resolution},
@@ -176,68 +169,72 @@ bool validate_scenario(const Scenario& sc, std::string* why) {
        {"ground_truth.resolution_m", s.ground_truth.resolution_m},
        {"ground_truth.resolution_rad", s.ground_truth.resolution_rad}}};
   for (const auto& [name, v] : nn2)
-    if (!nonneg(v)) return fail(fmt::format("sensors.{} = {}; expected a number >= 0", name, v));
+    if (!nonneg(v)) return fail(why, fmt::format("sensors.{} = {}; expected a number >= 0", name, v));
+  return true;
+}
 
-  const std::array<std::pair<const char*, double>, 3> start = {
-      {{"x_m", sc.motion.start_x_m}, {"y_m", sc.motion.start_y_m}, {"theta_rad", sc.motion.start_theta_rad}}};
-  for (const auto& [name, v] : start)
-    if (!std::isfinite(v)) return fail(fmt::format("motion.start.{} = {}; expected a finite number", name, v));
-
-  std::string ewhy;
-  if (!validate_effects(sc.effects, &ewhy)) return fail("effects: " + ewhy);
-  if (!validate_slip_episodes(sc.slip_episodes, &ewhy)) return fail(ewhy);
-  if (!validate_terms(sc.terms, &ewhy)) return fail("terms: " + ewhy);
-
+// The motion profile, the episodes' starts within it and speed_radius's
+// shrink at its fastest rim speed; sets *duration [s].
+bool check_motion(const Scenario& sc, double* duration_s, std::string* why) {
   double duration = 0.0;
   double max_rim_m_s = 0.0;  // fastest nominal rim speed |v| + |w|*D/2
   try {
     const MotionProfile profile(sc.motion);
     duration = profile.duration_s();
     for (const auto& k : profile.knots())
-      max_rim_m_s = std::max(max_rim_m_s, std::abs(k.v_m_s) + std::abs(k.w_rad_s) * r.wheel_base_m / 2);
+      max_rim_m_s = std::max(max_rim_m_s, std::abs(k.v_m_s) + std::abs(k.w_rad_s) * sc.robot.wheel_base_m / 2);
   } catch (const ProfileError& e) {
-    return fail(fmt::format("motion: {}", e.what()));
+    return fail(why, fmt::format("motion: {}", e.what()));
   }
   for (std::size_t i = 0; i < sc.slip_episodes.size(); ++i)
     if (!(sc.slip_episodes[i].t0_s < duration))
-      return fail(fmt::format("slip_episodes[{}]: t0_s = {} is not before the end of the motion at {} s; "
-                              "expected an episode that starts during the drive",
-                              i + 1, sc.slip_episodes[i].t0_s, duration));
+      return fail(why, fmt::format("slip_episodes[{}]: t0_s = {} is not before the end of the motion at {} s; "
+                                   "expected an episode that starts during the drive",
+                                   i + 1, sc.slip_episodes[i].t0_s, duration));
   if (sc.effects.speed_radius) {
     // Radius scales are at most 1.5 each (effects.h), so u < 2.25 * max_rim.
     const double u = 2.25 * max_rim_m_s, c = sc.effects.speed_radius->c;
     if (1.0 + c * u * u < 0.5)
-      return fail(fmt::format("effects: speed_radius.c = {} would shrink the effective radius "
-                              "R*(1 + c*u^2) below R/2 at rim speeds up to {:.3g} m/s; expected "
-                              "c > {:.3g}",
-                              c, u, -0.5 / (u * u)));
+      return fail(why, fmt::format("effects: speed_radius.c = {} would shrink the effective radius "
+                                   "R*(1 + c*u^2) below R/2 at rim speeds up to {:.3g} m/s; expected "
+                                   "c > {:.3g}",
+                                   c, u, -0.5 / (u * u)));
   }
-  const double steps = std::ceil(duration * static_cast<double>(sps) - 1e-6);
-  if (steps > kMaxSimSteps)
-    return fail(fmt::format("motion lasts {:.3g} s = {:.3g} steps; expected at most {:.3g} steps "
-                            "(shorten the motion or enlarge step_s)",
-                            duration, steps, kMaxSimSteps));
-  double rows = 0.0;
-  for (const SensorView& v : sensor_views(s))
-    if (v.enabled) rows += duration * v.rate_hz + 1.0;
-  if (rows > kMaxSimRows)
-    return fail(fmt::format("the track would have about {:.3g} rows; expected at most {:.3g} "
-                            "(lower the sensor rates or shorten the motion)",
-                            rows, kMaxSimRows));
+  *duration_s = duration;
   return true;
 }
 
-Track simulate(const Scenario& sc) {
-  std::string why;
-  if (!validate_scenario(sc, &why)) throw std::invalid_argument(why);
+// The run's size: its integration steps and its rows.
+bool check_size(const Scenario& sc, std::int64_t sps, double duration, std::string* why) {
+  const double steps = std::ceil(duration * static_cast<double>(sps) - 1e-6);
+  if (steps > kMaxSimSteps)
+    return fail(why, fmt::format("motion lasts {:.3g} s = {:.3g} steps; expected at most {:.3g} steps "
+                                 "(shorten the motion or enlarge step_s)",
+                                 duration, steps, kMaxSimSteps));
+  double rows = 0.0;
+  for (const SensorView& v : sensor_views(sc.sensors))
+    if (v.enabled) rows += duration * v.rate_hz + 1.0;
+  if (rows > kMaxSimRows)
+    return fail(why, fmt::format("the track would have about {:.3g} rows; expected at most {:.3g} "
+                                 "(lower the sensor rates or shorten the motion)",
+                                 rows, kMaxSimRows));
+  return true;
+}
 
-  const MotionProfile profile(sc.motion);
-  const std::int64_t sps = steps_per_second(sc.step_s);
+// The rows: the union of the sensor sample instants, on the grid of the
+// periods' greatest common divisor.
+struct RowGrid {
+  std::array<std::int64_t, 7> period{};  // sample period per sensor [steps] (0: off)
+  std::int64_t n_steps = 0;              // integration steps of the run
+  std::vector<std::int64_t> row_k;       // step index of each row
+  bool sampled(std::size_t r, SensorIndex s) const { return period[s] > 0 && row_k[r] % period[s] == 0; }
+};
+
+RowGrid row_grid(const SensorParams& sensors, const MotionProfile& profile, std::int64_t sps) {
   const double spsd = static_cast<double>(sps);
-  const double h = 1.0 / spsd;  // [s]
-  // --- rows: union of the sensor sample instants ---------------------------
-  const auto views = sensor_views(sc.sensors);
-  std::array<std::int64_t, 7> period{};
+  RowGrid grid;
+  auto& period = grid.period;
+  const auto views = sensor_views(sensors);
   std::int64_t g = 0, l = 1;
   for (std::size_t i = 0; i < views.size(); ++i) {
     period[i] = views[i].enabled ? period_steps(views[i].rate_hz, sps) : 0;
@@ -250,57 +247,74 @@ Track simulate(const Scenario& sc) {
   const std::int64_t end_multiple = l <= 10 * sps ? l : g;
   auto n_steps = static_cast<std::int64_t>(std::max(0.0, std::ceil(profile.duration_s() * spsd - 1e-6)));
   n_steps = (n_steps + end_multiple - 1) / end_multiple * end_multiple;
-  std::vector<std::int64_t> row_k;
   for (std::int64_t k = 0; k <= n_steps; k += g)
     for (std::int64_t p : period)
       if (p > 0 && k % p == 0) {
-        row_k.push_back(k);
+        grid.row_k.push_back(k);
         break;
       }
-  const std::size_t n_rows = row_k.size();
-  auto sampled = [&](std::size_t r, SensorIndex s) { return period[s] > 0 && row_k[r] % period[s] == 0; };
+  grid.n_steps = n_steps;
+  return grid;
+}
 
-  // Odometry query positions (fractional step index of t - dt), clamped.
-  const Effects& fx = sc.effects;
+// Odometry query positions (fractional step index of t - dt), clamped.
+std::vector<double> odometry_queries(const RowGrid& grid, const Effects& fx, double spsd) {
   const double dt_odo = fx.time_offset ? fx.time_offset->dt : 0.0;
+  const std::size_t n_rows = grid.row_k.size();
   std::vector<double> q(n_rows);
   for (std::size_t r = 0; r < n_rows; ++r) {
-    double f = static_cast<double>(row_k[r]) - dt_odo * spsd;
+    double f = static_cast<double>(grid.row_k[r]) - dt_odo * spsd;
     if (std::abs(f - std::round(f)) < 1e-6) f = std::round(f);
-    q[r] = std::clamp(f, 0.0, static_cast<double>(n_steps));
+    q[r] = std::clamp(f, 0.0, static_cast<double>(grid.n_steps));
   }
+  return q;
+}
 
-  // --- physics -------------------------------------------------------------
-  const RobotParams& rb = sc.robot;
-  const double R_l = rb.wheel_radius_left_m, R_r = rb.wheel_radius_right_m, D = rb.wheel_base_m;
-  const double D_true = D * (fx.wheel_base_error ? fx.wheel_base_error->scale : 1.0);
-  const double c_sr = fx.speed_radius ? fx.speed_radius->c : 0.0;
-  const double k_skid = fx.lateral_skid ? fx.lateral_skid->k : 0.0;
-  const double k_slip = fx.longitudinal_slip ? fx.longitudinal_slip->k : 0.0;
-  const double tau = fx.actuator_lag ? fx.actuator_lag->tau : 0.0;
+// The robot and the effects as the physics step uses them.
+struct Physics {
+  const RobotParams& rb;
+  const Effects& fx;
+  double h;  // step [s]
+  double R_l, R_r, D, D_true;
+  double c_sr, k_skid, k_slip, tau;
   // First-order-hold discretisation of d(om)/dt = (ref - om)/tau over one step:
   // om1 = e*om0 + (1-e)*ref0 + (ref1-ref0)*(1 - tau*(1-e)/h), e = exp(-h/tau).
-  const double one_minus_e = tau > 0.0 ? -std::expm1(-h / tau) : 1.0;
-  const double lag_e = 1.0 - one_minus_e;
-  const double lag_ramp = tau > 0.0 ? 1.0 - tau * one_minus_e / h : 1.0;
+  double one_minus_e, lag_e, lag_ramp;
+  SlipSchedule slips;
 
-  auto base_radius = [&](double t, bool right) {  // R_nom * scales [m]
+  Physics(const Scenario& sc, double step_h)
+      : rb(sc.robot),
+        fx(sc.effects),
+        h(step_h),
+        R_l(rb.wheel_radius_left_m),
+        R_r(rb.wheel_radius_right_m),
+        D(rb.wheel_base_m),
+        D_true(D * (fx.wheel_base_error ? fx.wheel_base_error->scale : 1.0)),
+        c_sr(fx.speed_radius ? fx.speed_radius->c : 0.0),
+        k_skid(fx.lateral_skid ? fx.lateral_skid->k : 0.0),
+        k_slip(fx.longitudinal_slip ? fx.longitudinal_slip->k : 0.0),
+        tau(fx.actuator_lag ? fx.actuator_lag->tau : 0.0),
+        one_minus_e(tau > 0.0 ? -std::expm1(-h / tau) : 1.0),
+        lag_e(1.0 - one_minus_e),
+        lag_ramp(tau > 0.0 ? 1.0 - tau * one_minus_e / h : 1.0),
+        slips(sc.slip_episodes) {}
+
+  double base_radius(double t, bool right) const {  // R_nom * scales [m]
     double R = right ? R_r : R_l;
     if (fx.radius_error) R *= right ? fx.radius_error->scale_r : fx.radius_error->scale_l;
     if (fx.radius_step && t >= fx.radius_step->t)
       R *= right ? fx.radius_step->scale_r : fx.radius_step->scale_l;
     return R;
-  };
-  auto eff_radius = [&](double om, double R) {  // speed_radius: R*(1 + c*u^2), u = R*om
+  }
+  double eff_radius(double om, double R) const {  // speed_radius: R*(1 + c*u^2), u = R*om
     const double u = R * om;
     return R * (1.0 + c_sr * u * u);
-  };
-  auto in_zone = [&](double x, double y) {
+  }
+  bool in_zone(double x, double y) const {
     const auto& z = fx.slip_zone;
     return z && x >= z->x0 && x <= z->x1 && y >= z->y0 && y <= z->y1;
-  };
-  const SlipSchedule slips(sc.slip_episodes);
-  auto wheel_slip = [&](double t, SlipEpisode::Wheel wheel) {
+  }
+  WheelSlip wheel_slip(double t, SlipEpisode::Wheel wheel) const {
     WheelSlip ws;
     const SlipSchedule::Active a = slips.at(t, wheel);
     if (!a.episode) return ws;
@@ -312,12 +326,12 @@ Track simulate(const Scenario& sc) {
       ws.brake_nm = full * a.strength / a.episode->s;
     }
     return ws;
-  };
+  }
   // om, dom: the wheel's rotation rate and its derivative; om_ctrl: the
   // controller's rate (the braking torque's sign). Outside episodes grip = 1
   // and brake_nm = 0, which leave every floating-point operation unchanged.
-  auto motor_power = [&](double om, double dom, double load_force, double R_eff, const WheelSlip& ws,
-                         double om_ctrl) {
+  double motor_power(double om, double dom, double load_force, double R_eff, const WheelSlip& ws,
+                     double om_ctrl) const {
     const double grip = 1.0 - ws.spin;
     double torque = rb.wheel_inertia_kg_m2 * dom + rb.viscous_friction_nm_s * om +
                     rb.coulomb_friction_nm * std::tanh(om / rb.coulomb_smoothing_rad_s) * grip +
@@ -325,130 +339,168 @@ Track simulate(const Scenario& sc) {
     if (ws.brake_nm != 0.0) torque += ws.brake_nm * std::tanh(om_ctrl / rb.coulomb_smoothing_rad_s);
     const double current = torque / rb.torque_constant_nm_per_a;
     return torque * om + current * current * rb.coil_resistance_ohm;
-  };
+  }
+};
 
-  std::vector<Truth> truth(n_rows);
-  std::vector<WheelState> odo(n_rows);
-  std::size_t next_row = 0, next_q = 0;
-  WheelState w0;                  // rotation
-  double c0_l = 0.0, c0_r = 0.0;  // controller rates omega_ctrl [rad/s]
-  WheelSlip sl0_l, sl0_r;         // no episode acts at t = 0 (strength 0 at t0_s)
-  double ref0_l = 0.0, ref0_r = 0.0;
-  const MotionParams& mo = sc.motion;
-  double x = mo.start_x_m, y = mo.start_y_m, th = mo.start_theta_rad, v_prev = 0.0, w_prev = 0.0;
-  if (n_rows > 0 && row_k[0] == 0) truth[next_row++] = Truth{x, y, th, 0.0, 0.0, 0.0, 0.0};
-  while (next_q < n_rows && q[next_q] <= 0.0) odo[next_q++] = w0;
+// The wheel-level state at one step's instant.
+struct WheelStep {
+  WheelState w;                 // rotation
+  double c_l = 0.0, c_r = 0.0;  // controller rates omega_ctrl [rad/s]
+  WheelSlip sl_l, sl_r;         // no episode acts at t = 0 (strength 0 at t0_s)
+  double ref_l = 0.0, ref_r = 0.0;
+};
 
-  for (std::int64_t k = 0; k < n_steps; ++k) {
-    const double t1 = static_cast<double>(k + 1) / spsd;
-    const Command cmd = profile.at(t1);
-    const double ref1_l = (cmd.v_m_s - cmd.w_rad_s * D / 2.0) / R_l;
-    const double ref1_r = (cmd.v_m_s + cmd.w_rad_s * D / 2.0) / R_r;
-    const double c1_l = lag_e * c0_l + one_minus_e * ref0_l + (ref1_l - ref0_l) * lag_ramp;
-    const double c1_r = lag_e * c0_r + one_minus_e * ref0_r + (ref1_r - ref0_r) * lag_ramp;
-    const WheelSlip sl1_l = wheel_slip(t1, SlipEpisode::Wheel::left);
-    const WheelSlip sl1_r = wheel_slip(t1, SlipEpisode::Wheel::right);
-    WheelState w1;
-    w1.om_l = c1_l * (1.0 - sl1_l.hold);
-    w1.om_r = c1_r * (1.0 - sl1_r.hold);
-    w1.phi_l = w0.phi_l + 0.5 * (w0.om_l + w1.om_l) * h;
-    w1.phi_r = w0.phi_r + 0.5 * (w0.om_r + w1.om_r) * h;
+// The state carried from one step to the next.
+struct StepState {
+  WheelStep wheels;
+  double x = 0, y = 0, th = 0, v_prev = 0.0, w_prev = 0.0;
+};
 
-    // Rim speeds of the unbraked rotation: a held wheel's contact is dragged
-    // along at them.
-    const double Rb_l = base_radius(t1, false), Rb_r = base_radius(t1, true);
-    const double u0_l = eff_radius(c0_l, Rb_l) * c0_l, u1_l = eff_radius(c1_l, Rb_l) * c1_l;
-    const double u0_r = eff_radius(c0_r, Rb_r) * c0_r, u1_r = eff_radius(c1_r, Rb_r) * c1_r;
-    const double s_long_l = std::min(0.5, k_slip * std::abs(u1_l - u0_l) / h);
-    const double s_long_r = std::min(0.5, k_slip * std::abs(u1_r - u0_r) / h);
-    const bool zone = in_zone(x, y);
-    const double s_zone_l = zone ? fx.slip_zone->s_l : 0.0;
-    const double s_zone_r = zone ? fx.slip_zone->s_r : 0.0;
-    double g_l = 0.5 * (u0_l + u1_l) * (1.0 - s_long_l) * (1.0 - s_zone_l) *
-                 (1.0 - 0.5 * (sl0_l.spin + sl1_l.spin));
-    double g_r = 0.5 * (u0_r + u1_r) * (1.0 - s_long_r) * (1.0 - s_zone_r) *
-                 (1.0 - 0.5 * (sl0_r.spin + sl1_r.spin));
-    if (!sc.terms.empty()) {  // model terms (header comment, step 5a); none: every bit as before
-      const TermState ts{g_l,
-                         g_r,
-                         (u1_l - u0_l) / h,
-                         (u1_r - u0_r) / h,
-                         0.5 * (g_r + g_l),
-                         (g_r - g_l) / D_true,
-                         0.5 * (w0.phi_l + w1.phi_l),
-                         0.5 * (w0.phi_r + w1.phi_r),
-                         x,
-                         y,
-                         t1 - 0.5 * h};
-      g_l += term_correction(sc.terms, TermTarget::v_l, ts);
-      g_r += term_correction(sc.terms, TermTarget::v_r, ts);
-    }
+// The wheels at t1: the controller (actuator lag), the slip episodes and the
+// rotation.
+WheelStep wheel_step(const Physics& ph, const WheelStep& s0, const Command& cmd, double t1) {
+  const double D = ph.D, h = ph.h;
+  WheelStep s1;
+  s1.ref_l = (cmd.v_m_s - cmd.w_rad_s * D / 2.0) / ph.R_l;
+  s1.ref_r = (cmd.v_m_s + cmd.w_rad_s * D / 2.0) / ph.R_r;
+  s1.c_l = ph.lag_e * s0.c_l + ph.one_minus_e * s0.ref_l + (s1.ref_l - s0.ref_l) * ph.lag_ramp;
+  s1.c_r = ph.lag_e * s0.c_r + ph.one_minus_e * s0.ref_r + (s1.ref_r - s0.ref_r) * ph.lag_ramp;
+  s1.sl_l = ph.wheel_slip(t1, SlipEpisode::Wheel::left);
+  s1.sl_r = ph.wheel_slip(t1, SlipEpisode::Wheel::right);
+  s1.w.om_l = s1.c_l * (1.0 - s1.sl_l.hold);
+  s1.w.om_r = s1.c_r * (1.0 - s1.sl_r.hold);
+  s1.w.phi_l = s0.w.phi_l + 0.5 * (s0.w.om_l + s1.w.om_l) * h;
+  s1.w.phi_r = s0.w.phi_r + 0.5 * (s0.w.om_r + s1.w.om_r) * h;
+  return s1;
+}
 
-    const double v = 0.5 * (g_r + g_l);
-    const double w = (g_r - g_l) / D_true;
-    const double vy = -k_skid * v * w;
-    const double half = 0.5 * w * h;
-    const double thm = th + half;
-    const double sc_h = sinc(half) * h;
-    x += sc_h * (v * std::cos(thm) - vy * std::sin(thm));
-    y += sc_h * (v * std::sin(thm) + vy * std::cos(thm));
-    th += w * h;
+// The wheels' ground speeds over the step [m/s] (g_l, g_r): the rim speeds of
+// the unbraked rotation (a held wheel's contact is dragged along at them),
+// less longitudinal, zone and spin slip, plus the model terms.
+std::pair<double, double> ground_speeds(const Scenario& sc, const Physics& ph, const StepState& s0,
+                                        const WheelStep& w1, double Rb_l, double Rb_r, double t1) {
+  const WheelStep& s = s0.wheels;
+  const double h = ph.h;
+  const double u0_l = ph.eff_radius(s.c_l, Rb_l) * s.c_l, u1_l = ph.eff_radius(w1.c_l, Rb_l) * w1.c_l;
+  const double u0_r = ph.eff_radius(s.c_r, Rb_r) * s.c_r, u1_r = ph.eff_radius(w1.c_r, Rb_r) * w1.c_r;
+  const double s_long_l = std::min(0.5, ph.k_slip * std::abs(u1_l - u0_l) / h);
+  const double s_long_r = std::min(0.5, ph.k_slip * std::abs(u1_r - u0_r) / h);
+  const bool zone = ph.in_zone(s0.x, s0.y);
+  const double s_zone_l = zone ? ph.fx.slip_zone->s_l : 0.0;
+  const double s_zone_r = zone ? ph.fx.slip_zone->s_r : 0.0;
+  double g_l = 0.5 * (u0_l + u1_l) * (1.0 - s_long_l) * (1.0 - s_zone_l) *
+               (1.0 - 0.5 * (s.sl_l.spin + w1.sl_l.spin));
+  double g_r = 0.5 * (u0_r + u1_r) * (1.0 - s_long_r) * (1.0 - s_zone_r) *
+               (1.0 - 0.5 * (s.sl_r.spin + w1.sl_r.spin));
+  if (!sc.terms.empty()) {  // model terms (header comment, step 5a); none: every bit as before
+    const TermState ts{g_l,
+                       g_r,
+                       (u1_l - u0_l) / h,
+                       (u1_r - u0_r) / h,
+                       0.5 * (g_r + g_l),
+                       (g_r - g_l) / ph.D_true,
+                       0.5 * (s.w.phi_l + w1.w.phi_l),
+                       0.5 * (s.w.phi_r + w1.w.phi_r),
+                       s0.x,
+                       s0.y,
+                       t1 - 0.5 * h};
+    g_l += term_correction(sc.terms, TermTarget::v_l, ts);
+    g_r += term_correction(sc.terms, TermTarget::v_r, ts);
+  }
+  return {g_l, g_r};
+}
 
-    if (next_row < n_rows && row_k[next_row] == k + 1) {
-      const double a = (v - v_prev) / h, alpha = (w - w_prev) / h;
-      const double f_lin = 0.5 * rb.mass_kg * a;                   // [N] per wheel
-      const double f_rot = rb.yaw_inertia_kg_m2 * alpha / D_true;  // [N], + right
-      Truth& tr = truth[next_row++];
-      tr = {
-          x,
-          y,
-          th,
+// Moves the pose over the step at body velocities (v, w) with lateral skid.
+void advance_pose(const Physics& ph, double v, double w, StepState& s) {
+  const double h = ph.h;
+  const double vy = -ph.k_skid * v * w;
+  const double half = 0.5 * w * h;
+  const double thm = s.th + half;
+  const double sc_h = sinc(half) * h;
+  s.x += sc_h * (v * std::cos(thm) - vy * std::sin(thm));
+  s.y += sc_h * (v * std::sin(thm) + vy * std::cos(thm));
+  s.th += w * h;
+}
+
+// The true state at the end of the step (pose already advanced in s).
+Truth truth_row(const Physics& ph, const StepState& s, const WheelStep& w1, double v, double w, double Rb_l,
+                double Rb_r) {
+  const RobotParams& rb = ph.rb;
+  const double h = ph.h;
+  const WheelState& w0 = s.wheels.w;
+  const double a = (v - s.v_prev) / h, alpha = (w - s.w_prev) / h;
+  const double f_lin = 0.5 * rb.mass_kg * a;                      // [N] per wheel
+  const double f_rot = rb.yaw_inertia_kg_m2 * alpha / ph.D_true;  // [N], + right
+  return {s.x,
+          s.y,
+          s.th,
           v,
           w,
-          motor_power(w1.om_l, (w1.om_l - w0.om_l) / h, f_lin - f_rot, eff_radius(w1.om_l, Rb_l), sl1_l, c1_l),
-          motor_power(w1.om_r, (w1.om_r - w0.om_r) / h, f_lin + f_rot, eff_radius(w1.om_r, Rb_r), sl1_r, c1_r)};
-    }
-    const double kd1 = static_cast<double>(k + 1);
-    while (next_q < n_rows && q[next_q] <= kd1) {
-      const double a = q[next_q] - static_cast<double>(k);  // in (0, 1]
-      WheelState& o = odo[next_q++];
-      o.phi_l = w0.phi_l + a * (w1.phi_l - w0.phi_l);
-      o.phi_r = w0.phi_r + a * (w1.phi_r - w0.phi_r);
-      o.om_l = w0.om_l + a * (w1.om_l - w0.om_l);
-      o.om_r = w0.om_r + a * (w1.om_r - w0.om_r);
-    }
-    w0 = w1;
-    c0_l = c1_l;
-    c0_r = c1_r;
-    sl0_l = sl1_l;
-    sl0_r = sl1_r;
-    ref0_l = ref1_l;
-    ref0_r = ref1_r;
-    v_prev = v;
-    w_prev = w;
+          ph.motor_power(w1.w.om_l, (w1.w.om_l - w0.om_l) / h, f_lin - f_rot, ph.eff_radius(w1.w.om_l, Rb_l),
+                         w1.sl_l, w1.c_l),
+          ph.motor_power(w1.w.om_r, (w1.w.om_r - w0.om_r) / h, f_lin + f_rot, ph.eff_radius(w1.w.om_r, Rb_r),
+                         w1.sl_r, w1.c_r)};
+}
+
+// The wheel state at every odometry query in (k, k+1], interpolated.
+void interpolate_odometry(const std::vector<double>& q, std::int64_t k, const WheelState& w0,
+                          const WheelState& w1, std::vector<WheelState>& odo, std::size_t& next_q) {
+  const std::size_t n_rows = q.size();
+  const double kd1 = static_cast<double>(k + 1);
+  while (next_q < n_rows && q[next_q] <= kd1) {
+    const double a = q[next_q] - static_cast<double>(k);  // in (0, 1]
+    WheelState& o = odo[next_q++];
+    o.phi_l = w0.phi_l + a * (w1.phi_l - w0.phi_l);
+    o.phi_r = w0.phi_r + a * (w1.phi_r - w0.phi_r);
+    o.om_l = w0.om_l + a * (w1.om_l - w0.om_l);
+    o.om_r = w0.om_r + a * (w1.om_r - w0.om_r);
   }
+}
 
-  // --- sensors -------------------------------------------------------------
-  const SensorParams& sp = sc.sensors;
-  TrackData d;
-  d.meta.name = sc.name;
-  d.meta.origin = "simulated";
-  d.meta.ticks_per_rev = rb.ticks_per_rev;
-  d.meta.wheel_radius_left_m = R_l;
-  d.meta.wheel_radius_right_m = R_r;
-  d.meta.wheel_base_m = D;
-  d.t.resize(n_rows);
-  for (std::size_t r = 0; r < n_rows; ++r) d.t[r] = static_cast<double>(row_k[r]) / spsd;
+// Integrates the run step by step: the true state at every row and the wheel
+// state at every odometry query.
+void integrate(const Scenario& sc, const MotionProfile& profile, const RowGrid& grid,
+               const std::vector<double>& q, double spsd, const Physics& ph, std::vector<Truth>& truth,
+               std::vector<WheelState>& odo) {
+  const std::size_t n_rows = grid.row_k.size();
+  std::size_t next_row = 0, next_q = 0;
+  StepState s;
+  const MotionParams& mo = sc.motion;
+  s.x = mo.start_x_m, s.y = mo.start_y_m, s.th = mo.start_theta_rad;
+  if (n_rows > 0 && grid.row_k[0] == 0) truth[next_row++] = Truth{s.x, s.y, s.th, 0.0, 0.0, 0.0, 0.0};
+  while (next_q < n_rows && q[next_q] <= 0.0) odo[next_q++] = s.wheels.w;
 
-  // odometry_bias (header comment, "Sensors"): the wheel-rate offsets whose
-  // NOMINAL forward kinematics are (b_v, b_w), added to the reported rates
-  // and, times the measurement time, to the counted rotation. Only when the
-  // effect is on, so tracks without it keep their bits.
-  const auto& ob = fx.odometry_bias;
-  const double bias_om_l = ob ? (ob->b_v - ob->b_w * D / 2.0) / R_l : 0.0;  // [rad/s]
-  const double bias_om_r = ob ? (ob->b_v + ob->b_w * D / 2.0) / R_r : 0.0;
+  for (std::int64_t k = 0; k < grid.n_steps; ++k) {
+    const double t1 = static_cast<double>(k + 1) / spsd;
+    const WheelStep w1 = wheel_step(ph, s.wheels, profile.at(t1), t1);
+    const double Rb_l = ph.base_radius(t1, false), Rb_r = ph.base_radius(t1, true);
+    const auto [g_l, g_r] = ground_speeds(sc, ph, s, w1, Rb_l, Rb_r, t1);
+
+    const double v = 0.5 * (g_r + g_l);
+    const double w = (g_r - g_l) / ph.D_true;
+    advance_pose(ph, v, w, s);
+
+    if (next_row < n_rows && grid.row_k[next_row] == k + 1)
+      truth[next_row++] = truth_row(ph, s, w1, v, w, Rb_l, Rb_r);
+    interpolate_odometry(q, k, s.wheels.w, w1.w, odo, next_q);
+    s.wheels = w1;
+    s.v_prev = v;
+    s.w_prev = w;
+  }
+}
+
+// odometry_bias (header comment, "Sensors"): the wheel-rate offsets whose
+// NOMINAL forward kinematics are (b_v, b_w), added to the reported rates
+// and, times the measurement time, to the counted rotation. Only when the
+// effect is on, so tracks without it keep their bits.
+void add_odometry_bias(const Physics& ph, const std::vector<double>& q, double spsd,
+                       std::vector<WheelState>& odo) {
+  const auto& ob = ph.fx.odometry_bias;
+  const double D = ph.D;
+  const double bias_om_l = ob ? (ob->b_v - ob->b_w * D / 2.0) / ph.R_l : 0.0;  // [rad/s]
+  const double bias_om_r = ob ? (ob->b_v + ob->b_w * D / 2.0) / ph.R_r : 0.0;
   if (ob) {
-    for (std::size_t r = 0; r < n_rows; ++r) {
+    for (std::size_t r = 0; r < q.size(); ++r) {
       const double t_meas = q[r] / spsd;  // t - dt, clamped to the run like the odometry
       odo[r].phi_l += bias_om_l * t_meas;
       odo[r].phi_r += bias_om_r * t_meas;
@@ -456,100 +508,124 @@ Track simulate(const Scenario& sc) {
       odo[r].om_r += bias_om_r;
     }
   }
-  if (period[kEnc] > 0) {
-    d.ticks_l.assign(n_rows, kNoTick);
-    d.ticks_r.assign(n_rows, kNoTick);
-    const bool om = sp.encoders.omega;
-    if (om) d.ensure(Col::omega_l), d.ensure(Col::omega_r);
-    const double per_rad = rb.ticks_per_rev / kTwoPi;
-    for (std::size_t r = 0; r < n_rows; ++r) {
-      if (!sampled(r, kEnc)) continue;
-      d.ticks_l[r] = static_cast<std::int64_t>(std::floor(odo[r].phi_l * per_rad));
-      d.ticks_r[r] = static_cast<std::int64_t>(std::floor(odo[r].phi_r * per_rad));
-      if (om) {
-        d.col(Col::omega_l)[r] = quantise(odo[r].om_l, sp.encoders.omega_resolution_rad_s);
-        d.col(Col::omega_r)[r] = quantise(odo[r].om_r, sp.encoders.omega_resolution_rad_s);
-      }
-    }
-  }
-  if (period[kCmd] > 0) {
-    auto& vc = d.ensure(Col::v_cmd);
-    auto& wc = d.ensure(Col::w_cmd);
-    for (std::size_t r = 0; r < n_rows; ++r) {
-      if (!sampled(r, kCmd)) continue;
-      Command c = profile.at(q[r] / spsd);
-      if (ob) c.v_m_s += ob->b_v, c.w_rad_s += ob->b_w;
-      vc[r] = quantise(c.v_m_s, sp.commands.resolution);
-      wc[r] = quantise(c.w_rad_s, sp.commands.resolution);
-    }
-  }
-  if (period[kGyro] > 0) {
-    Normal noise = make_stream(sc.seed, kGyroStream);
-    auto& gz = d.ensure(Col::gyro_z);
-    const double gs = fx.gyro_scale ? fx.gyro_scale->s : 1.0;
-    const double gb = fx.gyro_bias ? fx.gyro_bias->b : 0.0;
-    for (std::size_t r = 0; r < n_rows; ++r)
-      if (sampled(r, kGyro))
-        gz[r] = quantise(gs * truth[r].w + gb + sp.gyro.sigma_rad_s * noise(), sp.gyro.resolution_rad_s);
-  }
-  if (period[kPower] > 0) {
-    Normal noise = make_stream(sc.seed, kPowerStream);
-    auto& pl = d.ensure(Col::power_l);
-    auto& pr = d.ensure(Col::power_r);
-    for (std::size_t r = 0; r < n_rows; ++r) {
-      if (!sampled(r, kPower)) continue;
-      pl[r] = quantise(truth[r].p_l + sp.power.sigma_w * noise(), sp.power.resolution_w);
-      pr[r] = quantise(truth[r].p_r + sp.power.sigma_w * noise(), sp.power.resolution_w);
-    }
-  }
-  if (period[kExt] > 0) {
-    Normal noise = make_stream(sc.seed, kExtStream);
-    const auto& e = sp.ext_velocity;
-    auto& ve = d.ensure(Col::v_ext);
-    auto& we = d.ensure(Col::w_ext);
-    auto& vv = d.ensure(Col::v_ext_var);
-    auto& wv = d.ensure(Col::w_ext_var);
-    const double var_v = tidy_variance(e.sigma_v_m_s), var_w = tidy_variance(e.sigma_w_rad_s);
-    for (std::size_t r = 0; r < n_rows; ++r) {
-      if (!sampled(r, kExt)) continue;
-      ve[r] = quantise(truth[r].v + e.sigma_v_m_s * noise(), e.resolution);
-      we[r] = quantise(truth[r].w + e.sigma_w_rad_s * noise(), e.resolution);
-      vv[r] = var_v;
-      wv[r] = var_w;
-    }
-  }
-  if (period[kAps] > 0) {
-    Normal noise = make_stream(sc.seed, kApsStream);
-    auto& ax = d.ensure(Col::aps_x);
-    auto& ay = d.ensure(Col::aps_y);
-    for (std::size_t r = 0; r < n_rows; ++r) {
-      if (!sampled(r, kAps)) continue;
-      ax[r] = quantise(truth[r].x + sp.aps.sigma_m * noise(), sp.aps.resolution_m);
-      ay[r] = quantise(truth[r].y + sp.aps.sigma_m * noise(), sp.aps.resolution_m);
-    }
-  }
-  if (period[kGt] > 0) {
-    Normal noise = make_stream(sc.seed, kGtStream);
-    const auto& gt = sp.ground_truth;
-    auto& gx = d.ensure(Col::gt_x);
-    auto& gy = d.ensure(Col::gt_y);
-    auto& gth = d.ensure(Col::gt_theta);
-    for (std::size_t r = 0; r < n_rows; ++r) {
-      if (!sampled(r, kGt)) continue;
-      gx[r] = quantise(truth[r].x + gt.sigma_m * noise(), gt.resolution_m);
-      gy[r] = quantise(truth[r].y + gt.sigma_m * noise(), gt.resolution_m);
-      gth[r] = quantise(truth[r].theta + gt.sigma_rad * noise(), gt.resolution_rad);
-    }
-  }
+}
 
-  // --- metadata --------------------------------------------------------------
-  auto& ex = d.meta.extra;
+void write_encoders(const RowGrid& grid, const std::vector<WheelState>& odo, const Scenario& sc, TrackData& d) {
+  const SensorParams& sp = sc.sensors;
+  const std::size_t n_rows = grid.row_k.size();
+  d.ticks_l.assign(n_rows, kNoTick);
+  d.ticks_r.assign(n_rows, kNoTick);
+  const bool om = sp.encoders.omega;
+  if (om) d.ensure(Col::omega_l), d.ensure(Col::omega_r);
+  const double per_rad = sc.robot.ticks_per_rev / kTwoPi;
+  for (std::size_t r = 0; r < n_rows; ++r) {
+    if (!grid.sampled(r, kEnc)) continue;
+    d.ticks_l[r] = static_cast<std::int64_t>(std::floor(odo[r].phi_l * per_rad));
+    d.ticks_r[r] = static_cast<std::int64_t>(std::floor(odo[r].phi_r * per_rad));
+    if (om) {
+      d.col(Col::omega_l)[r] = quantise(odo[r].om_l, sp.encoders.omega_resolution_rad_s);
+      d.col(Col::omega_r)[r] = quantise(odo[r].om_r, sp.encoders.omega_resolution_rad_s);
+    }
+  }
+}
+
+void write_commands(const RowGrid& grid, const std::vector<double>& q, double spsd,
+                    const MotionProfile& profile, const Scenario& sc, TrackData& d) {
+  const SensorParams& sp = sc.sensors;
+  const auto& ob = sc.effects.odometry_bias;
+  auto& vc = d.ensure(Col::v_cmd);
+  auto& wc = d.ensure(Col::w_cmd);
+  for (std::size_t r = 0; r < grid.row_k.size(); ++r) {
+    if (!grid.sampled(r, kCmd)) continue;
+    Command c = profile.at(q[r] / spsd);
+    if (ob) c.v_m_s += ob->b_v, c.w_rad_s += ob->b_w;
+    vc[r] = quantise(c.v_m_s, sp.commands.resolution);
+    wc[r] = quantise(c.w_rad_s, sp.commands.resolution);
+  }
+}
+
+void write_gyro(const RowGrid& grid, const std::vector<Truth>& truth, const Scenario& sc, TrackData& d) {
+  const SensorParams& sp = sc.sensors;
+  const Effects& fx = sc.effects;
+  Normal noise = make_stream(sc.seed, kGyroStream);
+  auto& gz = d.ensure(Col::gyro_z);
+  const double gs = fx.gyro_scale ? fx.gyro_scale->s : 1.0;
+  const double gb = fx.gyro_bias ? fx.gyro_bias->b : 0.0;
+  for (std::size_t r = 0; r < grid.row_k.size(); ++r)
+    if (grid.sampled(r, kGyro))
+      gz[r] = quantise(gs * truth[r].w + gb + sp.gyro.sigma_rad_s * noise(), sp.gyro.resolution_rad_s);
+}
+
+void write_power(const RowGrid& grid, const std::vector<Truth>& truth, const Scenario& sc, TrackData& d) {
+  const SensorParams& sp = sc.sensors;
+  Normal noise = make_stream(sc.seed, kPowerStream);
+  auto& pl = d.ensure(Col::power_l);
+  auto& pr = d.ensure(Col::power_r);
+  for (std::size_t r = 0; r < grid.row_k.size(); ++r) {
+    if (!grid.sampled(r, kPower)) continue;
+    pl[r] = quantise(truth[r].p_l + sp.power.sigma_w * noise(), sp.power.resolution_w);
+    pr[r] = quantise(truth[r].p_r + sp.power.sigma_w * noise(), sp.power.resolution_w);
+  }
+}
+
+void write_ext_velocity(const RowGrid& grid, const std::vector<Truth>& truth, const Scenario& sc,
+                        TrackData& d) {
+  Normal noise = make_stream(sc.seed, kExtStream);
+  const auto& e = sc.sensors.ext_velocity;
+  auto& ve = d.ensure(Col::v_ext);
+  auto& we = d.ensure(Col::w_ext);
+  auto& vv = d.ensure(Col::v_ext_var);
+  auto& wv = d.ensure(Col::w_ext_var);
+  const double var_v = tidy_variance(e.sigma_v_m_s), var_w = tidy_variance(e.sigma_w_rad_s);
+  for (std::size_t r = 0; r < grid.row_k.size(); ++r) {
+    if (!grid.sampled(r, kExt)) continue;
+    ve[r] = quantise(truth[r].v + e.sigma_v_m_s * noise(), e.resolution);
+    we[r] = quantise(truth[r].w + e.sigma_w_rad_s * noise(), e.resolution);
+    vv[r] = var_v;
+    wv[r] = var_w;
+  }
+}
+
+void write_aps(const RowGrid& grid, const std::vector<Truth>& truth, const Scenario& sc, TrackData& d) {
+  const SensorParams& sp = sc.sensors;
+  Normal noise = make_stream(sc.seed, kApsStream);
+  auto& ax = d.ensure(Col::aps_x);
+  auto& ay = d.ensure(Col::aps_y);
+  for (std::size_t r = 0; r < grid.row_k.size(); ++r) {
+    if (!grid.sampled(r, kAps)) continue;
+    ax[r] = quantise(truth[r].x + sp.aps.sigma_m * noise(), sp.aps.resolution_m);
+    ay[r] = quantise(truth[r].y + sp.aps.sigma_m * noise(), sp.aps.resolution_m);
+  }
+}
+
+void write_ground_truth(const RowGrid& grid, const std::vector<Truth>& truth, const Scenario& sc,
+                        TrackData& d) {
+  Normal noise = make_stream(sc.seed, kGtStream);
+  const auto& gt = sc.sensors.ground_truth;
+  auto& gx = d.ensure(Col::gt_x);
+  auto& gy = d.ensure(Col::gt_y);
+  auto& gth = d.ensure(Col::gt_theta);
+  for (std::size_t r = 0; r < grid.row_k.size(); ++r) {
+    if (!grid.sampled(r, kGt)) continue;
+    gx[r] = quantise(truth[r].x + gt.sigma_m * noise(), gt.resolution_m);
+    gy[r] = quantise(truth[r].y + gt.sigma_m * noise(), gt.resolution_m);
+    gth[r] = quantise(truth[r].theta + gt.sigma_rad * noise(), gt.resolution_rad);
+  }
+}
+
+// The sim.* metadata: seed, scenario, effects, episodes, terms, robot and the
+// enabled sensors' rates and noise.
+void add_metadata(const Scenario& sc, const RowGrid& grid, TrackMeta& meta) {
+  const RobotParams& rb = sc.robot;
+  const SensorParams& sp = sc.sensors;
+  const auto& period = grid.period;
+  auto& ex = meta.extra;
   auto put = [&ex](std::string key, double value) {
     ex.emplace_back(std::move(key), fmt::format("{}", value));
   };
   ex.emplace_back("sim.seed", fmt::format("{}", sc.seed));
   if (!sc.source.empty()) ex.emplace_back("sim.scenario", sc.source);
-  ex.emplace_back("sim.effects", format_effects(fx));
+  ex.emplace_back("sim.effects", format_effects(sc.effects));
   // Only with episodes, so tracks without any keep their earlier bytes.
   if (!sc.slip_episodes.empty()) ex.emplace_back("sim.slip_episodes", format_slip_episodes(sc.slip_episodes));
   if (!sc.terms.empty()) ex.emplace_back("sim.terms", format_terms(sc.terms));  // likewise
@@ -588,6 +664,70 @@ Track simulate(const Scenario& sc) {
     put("sim.gt_sigma_m", sp.ground_truth.sigma_m);
     put("sim.gt_sigma_rad", sp.ground_truth.sigma_rad);
   }
+}
+
+}  // namespace
+
+bool validate_scenario(const Scenario& sc, std::string* why) {
+  const std::int64_t sps = steps_per_second(sc.step_s);
+  if (sps == 0)
+    return fail(why, fmt::format("step_s = {}; expected a step in (0, 0.1] s whose inverse is a whole "
+                                 "number of steps per second (e.g. 0.001)",
+                                 sc.step_s));
+  if (!check_robot(sc.robot, why) || !check_sensors(sc.sensors, sc.step_s, sps, why)) return false;
+
+  const std::array<std::pair<const char*, double>, 3> start = {
+      {{"x_m", sc.motion.start_x_m}, {"y_m", sc.motion.start_y_m}, {"theta_rad", sc.motion.start_theta_rad}}};
+  for (const auto& [name, v] : start)
+    if (!std::isfinite(v))
+      return fail(why, fmt::format("motion.start.{} = {}; expected a finite number", name, v));
+
+  std::string ewhy;
+  if (!validate_effects(sc.effects, &ewhy)) return fail(why, "effects: " + ewhy);
+  if (!validate_slip_episodes(sc.slip_episodes, &ewhy)) return fail(why, ewhy);
+  if (!validate_terms(sc.terms, &ewhy)) return fail(why, "terms: " + ewhy);
+
+  double duration = 0.0;
+  if (!check_motion(sc, &duration, why)) return false;
+  return check_size(sc, sps, duration, why);
+}
+
+Track simulate(const Scenario& sc) {
+  std::string why;
+  if (!validate_scenario(sc, &why)) throw std::invalid_argument(why);
+
+  const MotionProfile profile(sc.motion);
+  const std::int64_t sps = steps_per_second(sc.step_s);
+  const double spsd = static_cast<double>(sps);
+  const double h = 1.0 / spsd;  // [s]
+  const RowGrid grid = row_grid(sc.sensors, profile, sps);
+  const std::size_t n_rows = grid.row_k.size();
+  const std::vector<double> q = odometry_queries(grid, sc.effects, spsd);
+
+  const Physics ph(sc, h);
+  std::vector<Truth> truth(n_rows);
+  std::vector<WheelState> odo(n_rows);
+  integrate(sc, profile, grid, q, spsd, ph, truth, odo);
+
+  TrackData d;
+  d.meta.name = sc.name;
+  d.meta.origin = "simulated";
+  d.meta.ticks_per_rev = sc.robot.ticks_per_rev;
+  d.meta.wheel_radius_left_m = ph.R_l;
+  d.meta.wheel_radius_right_m = ph.R_r;
+  d.meta.wheel_base_m = ph.D;
+  d.t.resize(n_rows);
+  for (std::size_t r = 0; r < n_rows; ++r) d.t[r] = static_cast<double>(grid.row_k[r]) / spsd;
+
+  add_odometry_bias(ph, q, spsd, odo);
+  if (grid.period[kEnc] > 0) write_encoders(grid, odo, sc, d);
+  if (grid.period[kCmd] > 0) write_commands(grid, q, spsd, profile, sc, d);
+  if (grid.period[kGyro] > 0) write_gyro(grid, truth, sc, d);
+  if (grid.period[kPower] > 0) write_power(grid, truth, sc, d);
+  if (grid.period[kExt] > 0) write_ext_velocity(grid, truth, sc, d);
+  if (grid.period[kAps] > 0) write_aps(grid, truth, sc, d);
+  if (grid.period[kGt] > 0) write_ground_truth(grid, truth, sc, d);
+  add_metadata(sc, grid, d.meta);
   return Track(std::move(d));
 }
 

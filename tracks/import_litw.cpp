@@ -56,12 +56,9 @@ std::vector<std::pair<std::string, std::string>> read_scalars(const fs::path& pa
   return out;
 }
 
-}  // namespace
-
-Track import_litw(const fs::path& series_csv) {
-  LineReader r(series_csv, "LITW series file litw_series.csv");
-  const std::string expected = fmt::format("{}", fmt::join(kHeader, ","));
-
+// Reads the header line: each field's column, and the header's width.
+std::array<std::size_t, kNumFields> read_header(LineReader& r, const std::string& expected,
+                                                std::size_t* width) {
   std::string_view line;
   if (!r.next(line)) throw TrackError(r.file(), 0, fmt::format("empty file, expected the header {}", expected));
   std::array<std::size_t, kNumFields> pos{};
@@ -73,8 +70,14 @@ Track import_litw(const fs::path& series_csv) {
       r.fail(fmt::format("missing column '{}', expected the header {}", kHeader[f], expected));
     pos[f] = p;
   }
+  *width = head.size();
+  return pos;
+}
 
-  TrackData d;
+// Reads the data rows into d; returns the number of samples without a valid
+// ground-truth pose.
+std::size_t read_rows(LineReader& r, const std::array<std::size_t, kNumFields>& pos, std::size_t width,
+                      const std::string& expected, TrackData& d) {
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   auto& v = d.col(Col::v_cmd);
   auto& w = d.col(Col::w_cmd);
@@ -82,11 +85,11 @@ Track import_litw(const fs::path& series_csv) {
   auto& y = d.col(Col::gt_y);
   auto& th = d.col(Col::gt_theta);
   std::size_t invalid = 0;
+  std::string_view line;
   while (r.next(line)) {
     if (trim(line).empty()) continue;
     const auto f = split_csv(line);
-    if (f.size() != head.size())
-      r.fail(fmt::format("{} fields, expected {} ({})", f.size(), head.size(), expected));
+    if (f.size() != width) r.fail(fmt::format("{} fields, expected {} ({})", f.size(), width, expected));
     const auto num = [&](Field which) {
       const auto val = to_double(f[pos[which]]);
       if (!val) r.fail(fmt::format("{} {} is not a finite number", kHeader[which], quote(f[pos[which]])));
@@ -117,12 +120,12 @@ Track import_litw(const fs::path& series_csv) {
       th.push_back(kNaN);
     }
   }
-  if (d.t.empty()) throw TrackError(r.file(), r.line_no(), "no data rows after the header");
+  return invalid;
+}
 
+void add_metadata(const fs::path& series_csv, std::size_t invalid, TrackMeta& m) {
   const fs::path scalars_path = series_csv.parent_path() / "litw_scalars.csv";
   const bool have_scalars = is_file(scalars_path);
-
-  auto& m = d.meta;
   m.name = "utias-lost-in-the-woods";
   m.origin = "recorded";
   auto& e = m.extra;
@@ -138,6 +141,19 @@ Track import_litw(const fs::path& series_csv) {
                                 "gt cells are empty where true_valid = 0");
   if (have_scalars)
     for (auto& [name, value] : read_scalars(scalars_path)) e.emplace_back("litw." + name, value);
+}
+
+}  // namespace
+
+Track import_litw(const fs::path& series_csv) {
+  LineReader r(series_csv, "LITW series file litw_series.csv");
+  const std::string expected = fmt::format("{}", fmt::join(kHeader, ","));
+  std::size_t width = 0;
+  const std::array<std::size_t, kNumFields> pos = read_header(r, expected, &width);
+  TrackData d;
+  const std::size_t invalid = read_rows(r, pos, width, expected, d);
+  if (d.t.empty()) throw TrackError(r.file(), r.line_no(), "no data rows after the header");
+  add_metadata(series_csv, invalid, d.meta);
   return Track(std::move(d));
 }
 

@@ -94,27 +94,9 @@ std::string folder_name(const fs::path& dir) {
   return p.filename().string();
 }
 
-}  // namespace
-
-Track import_mrclam(const fs::path& dir, int robot) {
-  std::error_code ec;
-  if (!fs::exists(dir, ec))
-    throw TrackError(dir.string(), 0, "directory not found (expected an MRCLAM dataset folder)");
-  if (!fs::is_directory(dir, ec))
-    throw TrackError(dir.string(), 0, "not a directory (expected an MRCLAM dataset folder)");
-  if (robot < 1 || robot > kMaxRobot)
-    throw TrackError(dir.string(), 0,
-                     fmt::format("robot {} does not exist, expected 1 to {}", robot, kMaxRobot));
-
-  const std::string odo_name = fmt::format("Robot{}_Odometry.dat", robot);
-  const std::string gt_name = fmt::format("Robot{}_Groundtruth.dat", robot);
-  const Series odo = read_series(dir / odo_name, {"v", "omega"},
-                                 fmt::format("MRCLAM odometry file {}", odo_name));
-  const Series gt = read_series(dir / gt_name, {"x", "y", "theta"},
-                                fmt::format("MRCLAM ground-truth file {}", gt_name));
-
-  // Merge the two sorted streams on their exact integer stamps.
-  TrackData d;
+// Merges the two sorted streams on their exact integer stamps into d's rows
+// (time relative to the first stamp) and columns; returns the first stamp [ns].
+std::int64_t merge_streams(const Series& odo, const Series& gt, const fs::path& odo_path, TrackData& d) {
   const std::size_t cap = odo.samples.size() + gt.samples.size();
   d.t.reserve(cap);
   std::vector<std::int64_t> ns;
@@ -153,7 +135,7 @@ Track import_mrclam(const fs::path& dir, int robot) {
     // Exact integer difference, then one correctly rounded division.
     d.t.push_back(static_cast<double>(ns[k] - t0) / 1e9);
     if (k > 0 && !(d.t[k] > d.t[k - 1]))
-      throw TrackError((dir / odo_name).string(), 0,
+      throw TrackError(odo_path.string(), 0,
                        fmt::format("relative time not strictly increasing at {} s after {}", d.t[k],
                                    ns_to_decimal(t0)));
   }
@@ -162,9 +144,12 @@ Track import_mrclam(const fs::path& dir, int robot) {
   d.col(Col::gt_x) = std::move(x);
   d.col(Col::gt_y) = std::move(y);
   d.col(Col::gt_theta) = std::move(th);
+  return t0;
+}
 
+void add_metadata(const fs::path& dir, int robot, const std::string& odo_name, const std::string& gt_name,
+                  const Series& odo, const Series& gt, std::int64_t t0, TrackMeta& m) {
   const std::string folder = folder_name(dir);
-  auto& m = d.meta;
   m.name = folder.rfind("mrclam", 0) == 0 || folder.rfind("MRCLAM", 0) == 0
                ? fmt::format("{}-robot{}", folder, robot)
                : fmt::format("mrclam-{}-robot{}", folder, robot);
@@ -187,6 +172,30 @@ Track import_mrclam(const fs::path& dir, int robot) {
   e.emplace_back("source.note", "v_cmd/w_cmd are the logged velocity COMMANDS, not measured motion; a repeated "
                                 "time stamp within one file keeps its last sample (counts in "
                                 "source.*_duplicate_stamps); rows are the union of both files' stamps");
+}
+
+}  // namespace
+
+Track import_mrclam(const fs::path& dir, int robot) {
+  std::error_code ec;
+  if (!fs::exists(dir, ec))
+    throw TrackError(dir.string(), 0, "directory not found (expected an MRCLAM dataset folder)");
+  if (!fs::is_directory(dir, ec))
+    throw TrackError(dir.string(), 0, "not a directory (expected an MRCLAM dataset folder)");
+  if (robot < 1 || robot > kMaxRobot)
+    throw TrackError(dir.string(), 0,
+                     fmt::format("robot {} does not exist, expected 1 to {}", robot, kMaxRobot));
+
+  const std::string odo_name = fmt::format("Robot{}_Odometry.dat", robot);
+  const std::string gt_name = fmt::format("Robot{}_Groundtruth.dat", robot);
+  const Series odo = read_series(dir / odo_name, {"v", "omega"},
+                                 fmt::format("MRCLAM odometry file {}", odo_name));
+  const Series gt = read_series(dir / gt_name, {"x", "y", "theta"},
+                                fmt::format("MRCLAM ground-truth file {}", gt_name));
+
+  TrackData d;
+  const std::int64_t t0 = merge_streams(odo, gt, dir / odo_name, d);
+  add_metadata(dir, robot, odo_name, gt_name, odo, gt, t0, d.meta);
   return Track(std::move(d));
 }
 

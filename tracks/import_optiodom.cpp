@@ -258,47 +258,44 @@ bool parse_run_name(const std::string& name, std::string* id, int* k) {
   return *k >= 1;
 }
 
-}  // namespace
-
-Track import_optiodom(const fs::path& run_csv) {
+void check_run_file(const fs::path& run_csv) {
   const std::string file = run_csv.string();
-  {
-    std::error_code ec;
-    if (!fs::exists(run_csv, ec))
-      throw TrackError(file, 0, "file not found (expected an OptiOdom run file <id>_run-NN.csv)");
-    if (!fs::is_regular_file(run_csv, ec))
-      throw TrackError(file, 0, "not a regular file (expected an OptiOdom run file <id>_run-NN.csv)");
-  }
-  std::string id;
-  int k = 0;
-  if (!parse_run_name(run_csv.filename().string(), &id, &k))
-    throw TrackError(file, 0, "file name is not of the form <id>_run-NN.csv (an OptiOdom synchronised run)");
-  const fs::path dir = run_csv.parent_path();
-  const fs::path meta_path = dir / (id + "_metadata.csv");
-  const fs::path log_path = dir / (id + ".csv");
+  std::error_code ec;
+  if (!fs::exists(run_csv, ec))
+    throw TrackError(file, 0, "file not found (expected an OptiOdom run file <id>_run-NN.csv)");
+  if (!fs::is_regular_file(run_csv, ec))
+    throw TrackError(file, 0, "not a regular file (expected an OptiOdom run file <id>_run-NN.csv)");
+}
 
-  const RunMeta meta = read_meta(meta_path);
+// The robot's geometry from the metadata.
+struct Robot {
+  double ngear = 0, enc_res = 0, base_m = 0, dl_m = 0, dr_m = 0;
+  double tpr = 0;  // ticks per wheel revolution
+};
+
+Robot read_robot(const RunMeta& meta, int k, const std::string& file) {
   const MetaEntry& type = meta.need("type", "diff");
   if (type.values.front() != "diff")
     throw TrackError(meta.file, type.line,
                      fmt::format("robot type {} is not supported, expected 'diff' (differential drive)",
                                  quote(type.values.front())));
-  const double ngear = meta.positive("ngear", 0, "the gear ratio");
-  const double enc_res = meta.positive("encRes", 0, "encoder counts per motor revolution");
-  const double base_m = meta.positive("Li", 0, "the wheel separation [m]");
+  Robot rb;
+  rb.ngear = meta.positive("ngear", 0, "the gear ratio");
+  rb.enc_res = meta.positive("encRes", 0, "encoder counts per motor revolution");
+  rb.base_m = meta.positive("Li", 0, "the wheel separation [m]");
   // Di lists the left then the right diameter (the log header's dL0, dR0 order).
   const MetaEntry& di = meta.need("Di", "<left wheel diameter [m]>[,<right wheel diameter [m]>]");
-  const double dl_m = meta.positive("Di", 0, "the left wheel diameter [m]");
-  const double dr_m = di.values.size() > 1 ? meta.positive("Di", 1, "the right wheel diameter [m]") : dl_m;
+  rb.dl_m = meta.positive("Di", 0, "the left wheel diameter [m]");
+  rb.dr_m = di.values.size() > 1 ? meta.positive("Di", 1, "the right wheel diameter [m]") : rb.dl_m;
   if (const auto n = meta.optional_number("N", 0); n && k > *n)
     throw TrackError(file, 0, fmt::format("run {} but the metadata lists N = {} runs", k, *n));
-  const double tpr = ngear * enc_res;
+  rb.tpr = rb.ngear * rb.enc_res;
+  return rb;
+}
 
-  const RunRows run = read_run(run_csv);
+// The per-cycle counts summed into cumulative ticks.
+void cumulative_ticks(const RunRows& run, const std::string& file, TrackData& d) {
   const std::size_t n = run.t.size();
-
-  TrackData d;
-  d.t = run.t;
   d.ticks_l.resize(n);
   d.ticks_r.resize(n);
   std::int64_t cl = 0, cr = 0;
@@ -309,44 +306,56 @@ Track import_optiodom(const fs::path& run_csv) {
     d.ticks_l[i] = cl;
     d.ticks_r[i] = cr;
   }
-  d.col(Col::gt_x) = run.x;
-  d.col(Col::gt_y) = run.y;
-  d.col(Col::gt_theta) = run.th;
+}
 
-  // Velocity commands from the robot log, when they align unambiguously.
+// What became of the robot log's velocity commands.
+struct CommandsOutcome {
   std::string alignment;
   std::string method;
   bool have_cmd = false;
-  if (!is_file(log_path)) {
-    alignment = fmt::format("not added: robot log {} not found", log_path.filename().string());
-  } else {
-    try {
-      const RobotLog log = read_log(log_path, k);
-      method = log.method;
-      if (const auto off = align(log, run, meta, k, &alignment)) {
-        const double m_per_tick = std::numbers::pi * 0.5 * (dl_m + dr_m) / tpr;
-        auto& v = d.ensure(Col::v_cmd);
-        auto& w = d.ensure(Col::w_cmd);
-        for (std::size_t i = 0; i < n; ++i) {
-          v[i] = log.rows[*off + i].vlin * m_per_tick / kCycle_s;
-          w[i] = log.rows[*off + i].omega / kCycle_s;
-        }
-        have_cmd = true;
-      }
-    } catch (const TrackError& e) {
-      alignment = fmt::format("not added: robot log unreadable: {}", e.what());
-    }
-  }
+};
 
-  auto& m = d.meta;
+// Velocity commands from the robot log, when they align unambiguously.
+CommandsOutcome add_commands(const fs::path& log_path, const RunRows& run, const RunMeta& meta, int k,
+                             const Robot& rb, TrackData& d) {
+  CommandsOutcome out;
+  const std::size_t n = run.t.size();
+  if (!is_file(log_path)) {
+    out.alignment = fmt::format("not added: robot log {} not found", log_path.filename().string());
+    return out;
+  }
+  try {
+    const RobotLog log = read_log(log_path, k);
+    out.method = log.method;
+    if (const auto off = align(log, run, meta, k, &out.alignment)) {
+      const double m_per_tick = std::numbers::pi * 0.5 * (rb.dl_m + rb.dr_m) / rb.tpr;
+      auto& v = d.ensure(Col::v_cmd);
+      auto& w = d.ensure(Col::w_cmd);
+      for (std::size_t i = 0; i < n; ++i) {
+        v[i] = log.rows[*off + i].vlin * m_per_tick / kCycle_s;
+        w[i] = log.rows[*off + i].omega / kCycle_s;
+      }
+      out.have_cmd = true;
+    }
+  } catch (const TrackError& e) {
+    out.alignment = fmt::format("not added: robot log unreadable: {}", e.what());
+  }
+  return out;
+}
+
+void add_metadata(const fs::path& run_csv, const std::string& id, int k, const Robot& rb,
+                  const CommandsOutcome& cmd, TrackMeta& m) {
+  const fs::path dir = run_csv.parent_path();
+  const fs::path meta_path = dir / (id + "_metadata.csv");
+  const fs::path log_path = dir / (id + ".csv");
   const std::string experiment = dir.filename().string();
   const std::string kind = dir.parent_path().filename().string();
   m.name = fmt::format("optiodom-{}-run-{:02d}", id, k);
   m.origin = "recorded";
-  m.ticks_per_rev = tpr;
-  m.wheel_radius_left_m = dl_m / 2;
-  m.wheel_radius_right_m = dr_m / 2;
-  m.wheel_base_m = base_m;
+  m.ticks_per_rev = rb.tpr;
+  m.wheel_radius_left_m = rb.dl_m / 2;
+  m.wheel_radius_right_m = rb.dr_m / 2;
+  m.wheel_base_m = rb.base_m;
   auto& e = m.extra;
   e.emplace_back("source",
                  fmt::format("OptiOdom (github sousarbarb/optiodom, data/diff), experiment {}{}, run {}: "
@@ -354,18 +363,45 @@ Track import_optiodom(const fs::path& run_csv) {
                              "20 Hz, relative to the run start pose), {}{}",
                              kind.empty() ? "" : kind + "/", experiment, k, run_csv.filename().string(),
                              meta_path.filename().string(),
-                             have_cmd ? ", " + log_path.filename().string() + " (velocity commands)" : ""));
+                             cmd.have_cmd ? ", " + log_path.filename().string() + " (velocity commands)" : ""));
   e.emplace_back("citation", kCitation);
   e.emplace_back("licence", kLicence);
   e.emplace_back("source.run", std::to_string(k));
-  if (!method.empty()) e.emplace_back("source.method", method);
-  e.emplace_back("source.ngear", fmt_double(ngear));
-  e.emplace_back("source.encRes", fmt_double(enc_res));
-  e.emplace_back("source.cmd_alignment", alignment);
-  if (have_cmd)
+  if (!cmd.method.empty()) e.emplace_back("source.method", cmd.method);
+  e.emplace_back("source.ngear", fmt_double(rb.ngear));
+  e.emplace_back("source.encRes", fmt_double(rb.enc_res));
+  e.emplace_back("source.cmd_alignment", cmd.alignment);
+  if (cmd.have_cmd)
     e.emplace_back("source.cmd_note",
                    "v_cmd = vlin*(pi*D/ticks_per_rev)/0.05 s, w_cmd = omega/0.05 s, with the nominal D; "
                    "each command sits on the cycle row it was logged on (no lag correction)");
+}
+
+}  // namespace
+
+Track import_optiodom(const fs::path& run_csv) {
+  const std::string file = run_csv.string();
+  check_run_file(run_csv);
+  std::string id;
+  int k = 0;
+  if (!parse_run_name(run_csv.filename().string(), &id, &k))
+    throw TrackError(file, 0, "file name is not of the form <id>_run-NN.csv (an OptiOdom synchronised run)");
+  const fs::path dir = run_csv.parent_path();
+  const fs::path meta_path = dir / (id + "_metadata.csv");
+  const fs::path log_path = dir / (id + ".csv");
+
+  const RunMeta meta = read_meta(meta_path);
+  const Robot rb = read_robot(meta, k, file);
+  const RunRows run = read_run(run_csv);
+
+  TrackData d;
+  d.t = run.t;
+  cumulative_ticks(run, file, d);
+  d.col(Col::gt_x) = run.x;
+  d.col(Col::gt_y) = run.y;
+  d.col(Col::gt_theta) = run.th;
+  const CommandsOutcome cmd = add_commands(log_path, run, meta, k, rb, d);
+  add_metadata(run_csv, id, k, rb, cmd, d.meta);
   return Track(std::move(d));
 }
 

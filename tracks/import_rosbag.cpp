@@ -10,6 +10,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <tuple>
 
 #include "bags/bag.h"
 #include "bags/bag_error.h"
@@ -149,58 +150,51 @@ std::optional<Rotation> static_rotation(const std::vector<ros::TransformStamped>
   return std::nullopt;
 }
 
-}  // namespace
+// The topics of each role, chosen and checked against the options.
+struct Topics {
+  std::string odom, odom_type, imu, fix, gt, tf_topic;
+  bool joints = false;  // odometry from a sensor_msgs/JointState topic
+};
 
-std::vector<std::string> describe_bag_topics(const fs::path& bag) {
-  const bags::BagInfo info = bags::inspect_bag(bag);
-  std::vector<std::string> lines;
-  for (const auto& t : info.topics)
-    lines.push_back(fmt::format("  {:<40} {:<40} {:>8}", t.name, t.type, t.count));
-  return lines;
-}
-
-Track import_rosbag(const fs::path& bag, const RosbagImportOptions& o) {
-  const bags::BagInfo info = bags::inspect_bag(bag);
-  if (info.messages == 0) fail(bag, "the bag holds no messages");
-
-  // --- topics -----------------------------------------------------------------
+Topics choose_topics(const fs::path& bag, const bags::BagInfo& info, const RosbagImportOptions& o) {
+  Topics tp;
   // Odometry: a robot_localization output (/odometry/filtered, …) is not the base's.
   auto base_odometry = [](const bags::BagTopic& t) {
     return t.name.find("filtered") == std::string::npos && t.name.find("ekf") == std::string::npos &&
            t.name.find("ukf") == std::string::npos;
   };
-  std::string odom = choose(bag, info, o.odom_topic, "odometry", "--odom-topic", {kOdometry}, false,
-                            base_odometry);
-  if (odom.empty())
-    odom = choose(bag, info, o.odom_topic, "odometry", "--odom-topic", {kOdometry, kJointState}, true);
-  const std::string odom_type = find_topic(info, odom)->type;
-  const std::string imu = choose(bag, info, o.imu_topic, "IMU", "--imu-topic", {kImu}, false);
-  const std::string fix = choose(bag, info, o.fix_topic, "position fix", "--fix-topic",
-                                 {kNavSatFix, kPoseCov, kPose}, false);
-  const std::string gt = o.gt_topic.empty() ? std::string()
-                                            : choose(bag, info, o.gt_topic, "ground truth", "--gt-topic",
-                                                     {kOdometry, kPoseCov, kPose}, true);
-  if (!gt.empty() && gt == odom)
+  tp.odom = choose(bag, info, o.odom_topic, "odometry", "--odom-topic", {kOdometry}, false, base_odometry);
+  if (tp.odom.empty())
+    tp.odom = choose(bag, info, o.odom_topic, "odometry", "--odom-topic", {kOdometry, kJointState}, true);
+  tp.odom_type = find_topic(info, tp.odom)->type;
+  tp.imu = choose(bag, info, o.imu_topic, "IMU", "--imu-topic", {kImu}, false);
+  tp.fix = choose(bag, info, o.fix_topic, "position fix", "--fix-topic", {kNavSatFix, kPoseCov, kPose}, false);
+  tp.gt = o.gt_topic.empty()
+              ? std::string()
+              : choose(bag, info, o.gt_topic, "ground truth", "--gt-topic", {kOdometry, kPoseCov, kPose}, true);
+  if (!tp.gt.empty() && tp.gt == tp.odom)
     fail(bag, "--gt-topic is the odometry topic: a robot's own odometry is not ground truth");
-  const bool joints = odom_type == kJointState;
-  if (joints) {
+  tp.joints = tp.odom_type == kJointState;
+  if (tp.joints) {
     if (o.left_joint.empty() || o.right_joint.empty())
-      fail(bag,
-           fmt::format("odometry from {} (sensor_msgs/JointState) needs --left-joint and --right-joint", odom));
+      fail(bag, fmt::format("odometry from {} (sensor_msgs/JointState) needs --left-joint and --right-joint",
+                            tp.odom));
     if (!o.wheel_radius_m || !o.wheel_base_m || !(*o.wheel_radius_m > 0) || !(*o.wheel_base_m > 0))
       fail(bag, fmt::format("odometry from {} (sensor_msgs/JointState) needs --wheel-radius and --wheel-base "
                             "(> 0, in m)",
-                            odom));
+                            tp.odom));
   }
   if (o.imu_rpy_rad)
     for (double a : *o.imu_rpy_rad)
       if (!std::isfinite(a)) fail(bag, "--imu-rpy must be three finite angles in rad");
-  const std::string tf_topic = find_topic(info, "/tf_static") ? "/tf_static" : "";
+  tp.tf_topic = find_topic(info, "/tf_static") ? "/tf_static" : "";
+  return tp;
+}
 
-  // --- read -------------------------------------------------------------------
+// What reading the bag gathers: the streams and what the decoders learn on
+// the way.
+struct BagRead {
   std::map<std::string, Stream> streams;
-  for (const std::string& t : {odom, imu, fix, gt})
-    if (!t.empty()) streams[t] = Stream{t, find_topic(info, t)->type, {}, 0, 0, 0, 0};
   std::vector<ros::TransformStamped> tf_static;
   std::string imu_frame, base_frame;
   std::optional<ros::NavSatFix> origin_fix;
@@ -209,115 +203,154 @@ Track import_rosbag(const fs::path& bag, const RosbagImportOptions& o) {
   // JointState differencing state.
   std::optional<std::pair<std::int64_t, std::array<double, 2>>> last_joint_pos;
   bool joint_velocity_seen = false, joint_position_used = false;
+};
 
+void read_odometry_sample(const bags::BagMessage& m, BagRead& rd, Sample& x, std::int64_t& header_ns) {
+  const ros::Odometry od = ros::decode_odometry(m.data, m.encoding);
+  header_ns = od.header.stamp_ns;
+  if (rd.base_frame.empty()) rd.base_frame = od.child_frame_id;
+  x.v = {od.linear.x, od.angular.z, kNan, kNan};
+}
+
+// The two wheel joints' rates (their velocities, else their positions
+// differenced); false when the message is dropped.
+bool read_joint_sample(const bags::BagMessage& m, const RosbagImportOptions& o, BagRead& rd, Stream& s,
+                       Sample& x, std::int64_t& header_ns) {
+  const ros::JointState j = ros::decode_joint_state(m.data, m.encoding);
+  header_ns = j.header.stamp_ns;
+  const auto li = std::find(j.name.begin(), j.name.end(), o.left_joint);
+  const auto ri = std::find(j.name.begin(), j.name.end(), o.right_joint);
+  if (li == j.name.end() || ri == j.name.end()) {
+    ++s.dropped;  // a JointState of other joints
+    return false;
+  }
+  const auto a = static_cast<std::size_t>(li - j.name.begin());
+  const auto b = static_cast<std::size_t>(ri - j.name.begin());
+  const std::int64_t stamp = o.receive_time_stamps ? m.receive_time_ns : header_ns;
+  auto& last_joint_pos = rd.last_joint_pos;
+  if (j.velocity.size() == j.name.size()) {
+    rd.joint_velocity_seen = true;
+    x.v = {j.velocity[a], j.velocity[b], kNan, kNan};
+  } else if (j.position.size() == j.name.size()) {
+    rd.joint_position_used = true;
+    const std::array<double, 2> pos{j.position[a], j.position[b]};
+    if (!last_joint_pos || stamp <= last_joint_pos->first) {
+      last_joint_pos = std::make_pair(stamp, pos);
+      ++s.dropped;
+      return false;
+    }
+    const double dt = static_cast<double>(stamp - last_joint_pos->first) * 1e-9;
+    x.v = {(pos[0] - last_joint_pos->second[0]) / dt, (pos[1] - last_joint_pos->second[1]) / dt, kNan, kNan};
+    last_joint_pos = std::make_pair(stamp, pos);
+  } else {
+    ++s.dropped;
+    return false;
+  }
+  return true;
+}
+
+void read_imu_sample(const bags::BagMessage& m, BagRead& rd, Sample& x, std::int64_t& header_ns) {
+  const ros::Imu im = ros::decode_imu(m.data, m.encoding);
+  header_ns = im.header.stamp_ns;
+  if (rd.imu_frame.empty()) rd.imu_frame = im.header.frame_id;
+  x.v = {im.angular_velocity.x, im.angular_velocity.y, im.angular_velocity.z, kNan};
+}
+
+// A NavSatFix in local east, north [m] around the first fix; false when it
+// holds no fix.
+bool read_navsat_sample(const bags::BagMessage& m, BagRead& rd, Stream& s, Sample& x, std::int64_t& header_ns) {
+  const ros::NavSatFix f = ros::decode_navsatfix(m.data, m.encoding);
+  header_ns = f.header.stamp_ns;
+  if (f.status < 0 || !std::isfinite(f.latitude_deg) || !std::isfinite(f.longitude_deg)) {
+    ++s.dropped;  // no fix
+    return false;
+  }
+  if (!rd.origin_fix) {
+    rd.origin_fix = f;
+    rd.local.emplace(f.latitude_deg, f.longitude_deg, std::isfinite(f.altitude_m) ? f.altitude_m : 0.0);
+  }
+  double e = 0, n = 0, u = 0;
+  rd.local->Forward(f.latitude_deg, f.longitude_deg, std::isfinite(f.altitude_m) ? f.altitude_m : 0.0, e, n, u);
+  const bool known = f.covariance_type != 0;
+  x.v = {e, n, known ? f.position_covariance[0] : kNan, known ? f.position_covariance[4] : kNan};
+  return true;
+}
+
+// Pose topics (fixes or ground truth) and, for ground truth, Odometry.
+void read_pose_sample(const bags::BagMessage& m, const Stream& s, bool is_fix, Sample& x,
+                      std::int64_t& header_ns) {
+  ros::PoseStamped p;
+  if (s.type == kPose) {
+    p = ros::decode_pose_stamped(m.data, m.encoding);
+  } else if (s.type == kPoseCov) {
+    p = ros::decode_pose_with_covariance_stamped(m.data, m.encoding);
+  } else {
+    const ros::Odometry od = ros::decode_odometry(m.data, m.encoding);
+    p.header = od.header;
+    p.position = od.position;
+    p.orientation = od.orientation;
+  }
+  header_ns = p.header.stamp_ns;
+  if (is_fix)
+    x.v = {p.position.x, p.position.y, p.covariance ? (*p.covariance)[0] : kNan,
+           p.covariance ? (*p.covariance)[7] : kNan};
+  else
+    x.v = {p.position.x, p.position.y, yaw_of(p.orientation), kNan};
+}
+
+// One message of a chosen topic (or of /tf_static) into its stream; decoding
+// errors name the message and its topic.
+void read_message(const fs::path& bag, const Topics& tp, const RosbagImportOptions& o,
+                  const bags::BagMessage& m, BagRead& rd) {
+  const std::string topic(m.topic);
+  const std::size_t k = ++rd.message_counts[topic];
+  try {
+    if (topic == tp.tf_topic && rd.streams.count(topic) == 0) {
+      if (m.type == kTf)
+        for (auto& tr : ros::decode_tf_message(m.data, m.encoding).transforms)
+          rd.tf_static.push_back(std::move(tr));
+      return;
+    }
+    Stream& s = rd.streams.at(topic);
+    Sample x;
+    std::int64_t header_ns = 0;
+    if (topic == tp.odom && !tp.joints) {
+      read_odometry_sample(m, rd, x, header_ns);
+    } else if (topic == tp.odom) {
+      if (!read_joint_sample(m, o, rd, s, x, header_ns)) return;
+    } else if (topic == tp.imu) {
+      read_imu_sample(m, rd, x, header_ns);
+    } else if (topic == tp.fix && s.type == kNavSatFix) {
+      if (!read_navsat_sample(m, rd, s, x, header_ns)) return;
+    } else if (topic == tp.fix || topic == tp.gt) {
+      read_pose_sample(m, s, topic == tp.fix, x, header_ns);
+    }
+    if (!o.receive_time_stamps && header_ns == 0) ++s.zero_stamps;
+    x.stamp_ns = o.receive_time_stamps ? m.receive_time_ns : header_ns;
+    s.samples.push_back(x);
+  } catch (const bags::ByteReader::Short& e) {
+    throw bags::BagError(bag.string(), fmt::format("message {} of {}", k, topic),
+                         std::string("cut off: ") + e.what());
+  } catch (const std::runtime_error& e) {
+    if (dynamic_cast<const bags::BagError*>(&e)) throw;
+    throw bags::BagError(bag.string(), fmt::format("message {} of {}", k, topic), e.what());
+  }
+}
+
+// Reads the chosen topics' streams, each ordered by stamp, and checks them.
+BagRead read_streams(const fs::path& bag, const bags::BagInfo& info, const Topics& tp,
+                     const RosbagImportOptions& o) {
+  BagRead rd;
+  for (const std::string& t : {tp.odom, tp.imu, tp.fix, tp.gt})
+    if (!t.empty()) rd.streams[t] = Stream{t, find_topic(info, t)->type, {}, 0, 0, 0, 0};
   bags::read_bag(
       bag,
       [&](std::string_view t) {
-        return streams.count(std::string(t)) > 0 || (!tf_topic.empty() && t == tf_topic);
+        return rd.streams.count(std::string(t)) > 0 || (!tp.tf_topic.empty() && t == tp.tf_topic);
       },
-      [&](const bags::BagMessage& m) {
-        const std::string topic(m.topic);
-        const std::size_t k = ++message_counts[topic];
-        try {
-          if (topic == tf_topic && streams.count(topic) == 0) {
-            if (m.type == kTf)
-              for (auto& tr : ros::decode_tf_message(m.data, m.encoding).transforms)
-                tf_static.push_back(std::move(tr));
-            return;
-          }
-          Stream& s = streams.at(topic);
-          Sample x;
-          std::int64_t header_ns = 0;
-          if (topic == odom && !joints) {
-            const ros::Odometry od = ros::decode_odometry(m.data, m.encoding);
-            header_ns = od.header.stamp_ns;
-            if (base_frame.empty()) base_frame = od.child_frame_id;
-            x.v = {od.linear.x, od.angular.z, kNan, kNan};
-          } else if (topic == odom) {
-            const ros::JointState j = ros::decode_joint_state(m.data, m.encoding);
-            header_ns = j.header.stamp_ns;
-            const auto li = std::find(j.name.begin(), j.name.end(), o.left_joint);
-            const auto ri = std::find(j.name.begin(), j.name.end(), o.right_joint);
-            if (li == j.name.end() || ri == j.name.end()) {
-              ++s.dropped;  // a JointState of other joints
-              return;
-            }
-            const auto a = static_cast<std::size_t>(li - j.name.begin());
-            const auto b = static_cast<std::size_t>(ri - j.name.begin());
-            const std::int64_t stamp = o.receive_time_stamps ? m.receive_time_ns : header_ns;
-            if (j.velocity.size() == j.name.size()) {
-              joint_velocity_seen = true;
-              x.v = {j.velocity[a], j.velocity[b], kNan, kNan};
-            } else if (j.position.size() == j.name.size()) {
-              joint_position_used = true;
-              const std::array<double, 2> pos{j.position[a], j.position[b]};
-              if (!last_joint_pos || stamp <= last_joint_pos->first) {
-                last_joint_pos = std::make_pair(stamp, pos);
-                ++s.dropped;
-                return;
-              }
-              const double dt = static_cast<double>(stamp - last_joint_pos->first) * 1e-9;
-              x.v = {(pos[0] - last_joint_pos->second[0]) / dt, (pos[1] - last_joint_pos->second[1]) / dt, kNan,
-                     kNan};
-              last_joint_pos = std::make_pair(stamp, pos);
-            } else {
-              ++s.dropped;
-              return;
-            }
-          } else if (topic == imu) {
-            const ros::Imu im = ros::decode_imu(m.data, m.encoding);
-            header_ns = im.header.stamp_ns;
-            if (imu_frame.empty()) imu_frame = im.header.frame_id;
-            x.v = {im.angular_velocity.x, im.angular_velocity.y, im.angular_velocity.z, kNan};
-          } else if (topic == fix && s.type == kNavSatFix) {
-            const ros::NavSatFix f = ros::decode_navsatfix(m.data, m.encoding);
-            header_ns = f.header.stamp_ns;
-            if (f.status < 0 || !std::isfinite(f.latitude_deg) || !std::isfinite(f.longitude_deg)) {
-              ++s.dropped;  // no fix
-              return;
-            }
-            if (!origin_fix) {
-              origin_fix = f;
-              local.emplace(f.latitude_deg, f.longitude_deg, std::isfinite(f.altitude_m) ? f.altitude_m : 0.0);
-            }
-            double e = 0, n = 0, u = 0;
-            local->Forward(f.latitude_deg, f.longitude_deg, std::isfinite(f.altitude_m) ? f.altitude_m : 0.0, e,
-                           n, u);
-            const bool known = f.covariance_type != 0;
-            x.v = {e, n, known ? f.position_covariance[0] : kNan, known ? f.position_covariance[4] : kNan};
-          } else if (topic == fix || topic == gt) {
-            // Pose topics (fixes or ground truth) and, for ground truth, Odometry.
-            ros::PoseStamped p;
-            if (s.type == kPose) {
-              p = ros::decode_pose_stamped(m.data, m.encoding);
-            } else if (s.type == kPoseCov) {
-              p = ros::decode_pose_with_covariance_stamped(m.data, m.encoding);
-            } else {
-              const ros::Odometry od = ros::decode_odometry(m.data, m.encoding);
-              p.header = od.header;
-              p.position = od.position;
-              p.orientation = od.orientation;
-            }
-            header_ns = p.header.stamp_ns;
-            if (topic == fix)
-              x.v = {p.position.x, p.position.y, p.covariance ? (*p.covariance)[0] : kNan,
-                     p.covariance ? (*p.covariance)[7] : kNan};
-            else
-              x.v = {p.position.x, p.position.y, yaw_of(p.orientation), kNan};
-          }
-          if (!o.receive_time_stamps && header_ns == 0) ++s.zero_stamps;
-          x.stamp_ns = o.receive_time_stamps ? m.receive_time_ns : header_ns;
-          s.samples.push_back(x);
-        } catch (const bags::ByteReader::Short& e) {
-          throw bags::BagError(bag.string(), fmt::format("message {} of {}", k, topic),
-                               std::string("cut off: ") + e.what());
-        } catch (const std::runtime_error& e) {
-          if (dynamic_cast<const bags::BagError*>(&e)) throw;
-          throw bags::BagError(bag.string(), fmt::format("message {} of {}", k, topic), e.what());
-        }
-      });
+      [&](const bags::BagMessage& m) { read_message(bag, tp, o, m, rd); });
 
-  for (auto& [topic, s] : streams) {
+  for (auto& [topic, s] : rd.streams) {
     if (!s.samples.empty() && s.zero_stamps == s.samples.size())
       fail(bag,
            fmt::format("{}: every header stamp is zero (the driver does not stamp its messages); import with "
@@ -325,34 +358,43 @@ Track import_rosbag(const fs::path& bag, const RosbagImportOptions& o) {
                        topic));
     order(s);
   }
-  if (streams.at(odom).samples.empty())
-    fail(bag,
-         fmt::format("{}: no usable odometry message{}", odom,
-                     joints ? fmt::format(" (none names both {} and {})", o.left_joint, o.right_joint) : ""));
+  if (rd.streams.at(tp.odom).samples.empty())
+    fail(bag, fmt::format("{}: no usable odometry message{}", tp.odom,
+                          tp.joints ? fmt::format(" (none names both {} and {})", o.left_joint, o.right_joint)
+                                    : ""));
+  return rd;
+}
 
-  // --- IMU mounting -------------------------------------------------------------
+// The IMU's mounting in the base frame: given (--imu-rpy), from /tf_static,
+// or none; with the note that says which.
+std::pair<Rotation, std::string> imu_mounting(const RosbagImportOptions& o, const BagRead& rd) {
   Rotation imu_rot = Rotation::Identity();
   std::string imu_rot_note;
-  if (!imu.empty()) {
-    if (o.imu_rpy_rad) {
-      imu_rot = rotation_rpy(*o.imu_rpy_rad);
-      imu_rot_note = fmt::format("roll {:.6g}, pitch {:.6g}, yaw {:.6g} rad relative to the base frame (given)",
-                                 (*o.imu_rpy_rad)[0], (*o.imu_rpy_rad)[1], (*o.imu_rpy_rad)[2]);
-    } else if (const auto r = static_rotation(tf_static, base_frame.empty() ? "base_link" : base_frame,
-                                              imu_frame);
-               r && !imu_frame.empty()) {
-      imu_rot = *r;
-      imu_rot_note = fmt::format("from /tf_static, {} → {}", base_frame.empty() ? "base_link" : base_frame,
-                                 imu_frame);
-    } else {
-      imu_rot_note = fmt::format(
-          "none: the IMU frame '{}' is taken as the base frame (no --imu-rpy, no /tf_static "
-          "path from '{}')",
-          imu_frame, base_frame.empty() ? "base_link" : base_frame);
-    }
+  const std::string& imu_frame = rd.imu_frame;
+  const std::string& base_frame = rd.base_frame;
+  if (o.imu_rpy_rad) {
+    imu_rot = rotation_rpy(*o.imu_rpy_rad);
+    imu_rot_note = fmt::format("roll {:.6g}, pitch {:.6g}, yaw {:.6g} rad relative to the base frame (given)",
+                               (*o.imu_rpy_rad)[0], (*o.imu_rpy_rad)[1], (*o.imu_rpy_rad)[2]);
+  } else if (const auto r = static_rotation(rd.tf_static, base_frame.empty() ? "base_link" : base_frame,
+                                            imu_frame);
+             r && !imu_frame.empty()) {
+    imu_rot = *r;
+    imu_rot_note = fmt::format("from /tf_static, {} → {}", base_frame.empty() ? "base_link" : base_frame,
+                               imu_frame);
+  } else {
+    imu_rot_note = fmt::format(
+        "none: the IMU frame '{}' is taken as the base frame (no --imu-rpy, no /tf_static "
+        "path from '{}')",
+        imu_frame, base_frame.empty() ? "base_link" : base_frame);
   }
+  return {imu_rot, imu_rot_note};
+}
 
-  // --- rows ----------------------------------------------------------------------
+// The rows: one per distinct stamp of any stream, each stream's samples in
+// their columns; sets *t0_ns to the first stamp.
+TrackData fill_rows(const Topics& tp, const BagRead& rd, const Rotation& imu_rot, std::int64_t* t0_ns) {
+  const auto& streams = rd.streams;
   std::vector<std::int64_t> stamps;
   for (const auto& [topic, s] : streams)
     for (const Sample& x : s.samples) stamps.push_back(x.stamp_ns);
@@ -375,34 +417,41 @@ Track import_rosbag(const fs::path& bag, const RosbagImportOptions& o) {
       for (const auto& [c, k] : cols) d.col(c)[r] = x.v[static_cast<std::size_t>(k)];
     }
   };
-  if (joints)
-    fill(odom, {{Col::omega_l, 0}, {Col::omega_r, 1}});
+  if (tp.joints)
+    fill(tp.odom, {{Col::omega_l, 0}, {Col::omega_r, 1}});
   else
-    fill(odom, {{Col::v_cmd, 0}, {Col::w_cmd, 1}});
-  if (!imu.empty())
-    fill(imu, {{Col::gyro_z, 0}},
+    fill(tp.odom, {{Col::v_cmd, 0}, {Col::w_cmd, 1}});
+  if (!tp.imu.empty())
+    fill(tp.imu, {{Col::gyro_z, 0}},
          [&](std::array<double, 4>& v) { v[0] = imu_rot.row(2).dot(Eigen::Vector3d(v[0], v[1], v[2])); });
-  if (!fix.empty()) {
+  if (!tp.fix.empty()) {
     bool has_var = false;
-    for (const Sample& x : streams.at(fix).samples) has_var |= std::isfinite(x.v[2]) || std::isfinite(x.v[3]);
+    for (const Sample& x : streams.at(tp.fix).samples)
+      has_var |= std::isfinite(x.v[2]) || std::isfinite(x.v[3]);
     if (has_var)
-      fill(fix, {{Col::aps_x, 0}, {Col::aps_y, 1}, {Col::aps_var_x, 2}, {Col::aps_var_y, 3}});
+      fill(tp.fix, {{Col::aps_x, 0}, {Col::aps_y, 1}, {Col::aps_var_x, 2}, {Col::aps_var_y, 3}});
     else
-      fill(fix, {{Col::aps_x, 0}, {Col::aps_y, 1}});
+      fill(tp.fix, {{Col::aps_x, 0}, {Col::aps_y, 1}});
   }
-  if (!gt.empty()) fill(gt, {{Col::gt_x, 0}, {Col::gt_y, 1}, {Col::gt_theta, 2}});
+  if (!tp.gt.empty()) fill(tp.gt, {{Col::gt_x, 0}, {Col::gt_y, 1}, {Col::gt_theta, 2}});
+  *t0_ns = t0;
+  return d;
+}
 
-  // --- metadata ----------------------------------------------------------------------
-  d.meta.name = bag.filename().string();
-  d.meta.origin = "recorded";
-  if (joints) {
-    d.meta.wheel_radius_left_m = d.meta.wheel_radius_right_m = *o.wheel_radius_m;
-    d.meta.wheel_base_m = *o.wheel_base_m;
+// The track's metadata: name, geometry, and where each column came from.
+void add_metadata(const fs::path& bag, const bags::BagInfo& info, const RosbagImportOptions& o,
+                  const Topics& tp, const BagRead& rd, const std::string& imu_rot_note, std::int64_t t0,
+                  TrackMeta& meta) {
+  meta.name = bag.filename().string();
+  meta.origin = "recorded";
+  if (tp.joints) {
+    meta.wheel_radius_left_m = meta.wheel_radius_right_m = *o.wheel_radius_m;
+    meta.wheel_base_m = *o.wheel_base_m;
   } else {
-    if (o.wheel_radius_m) d.meta.wheel_radius_left_m = d.meta.wheel_radius_right_m = *o.wheel_radius_m;
-    if (o.wheel_base_m) d.meta.wheel_base_m = *o.wheel_base_m;
+    if (o.wheel_radius_m) meta.wheel_radius_left_m = meta.wheel_radius_right_m = *o.wheel_radius_m;
+    if (o.wheel_base_m) meta.wheel_base_m = *o.wheel_base_m;
   }
-  auto& x = d.meta.extra;
+  auto& x = meta.extra;
   x.emplace_back("source",
                  fmt::format("ROS bag {} ({}, {} messages over {:.3f} s, read by odotune import rosbag)",
                              bag.string(), bags::to_string(info.format), info.messages,
@@ -412,7 +461,7 @@ Track import_rosbag(const fs::path& bag, const RosbagImportOptions& o) {
                                                         : "message header stamps");
   x.emplace_back("source.t0_ns", std::to_string(t0));
   auto note = [&](const std::string& topic, const std::string& what) {
-    const Stream& s = streams.at(topic);
+    const Stream& s = rd.streams.at(topic);
     std::string extra;
     if (s.out_of_order) extra += fmt::format("; {} stamps went backwards (sorted)", s.out_of_order);
     if (s.duplicates) extra += fmt::format("; {} repeated stamps (first kept)", s.duplicates);
@@ -421,36 +470,62 @@ Track import_rosbag(const fs::path& bag, const RosbagImportOptions& o) {
   };
   x.emplace_back(
       "source.odometry",
-      note(odom, joints ? fmt::format(
-                              "joints {} and {} → omega_l, omega_r ({}){}", o.left_joint, o.right_joint,
-                              joint_velocity_seen ? "their velocities" : "their positions differenced",
-                              joint_position_used && joint_velocity_seen ? ", positions where no velocity" : "")
-                        : "twist.linear.x → v_cmd, twist.angular.z → w_cmd (base frame " +
-                              (base_frame.empty() ? std::string("?") : base_frame) + ")"));
-  if (!imu.empty())
-    x.emplace_back(
-        "source.gyro",
-        note(imu, "angular_velocity rotated into the base frame, its z → gyro_z; mounting " + imu_rot_note));
+      note(tp.odom,
+           tp.joints
+               ? fmt::format("joints {} and {} → omega_l, omega_r ({}){}", o.left_joint, o.right_joint,
+                             rd.joint_velocity_seen ? "their velocities" : "their positions differenced",
+                             rd.joint_position_used && rd.joint_velocity_seen ? ", positions where no velocity"
+                                                                              : "")
+               : "twist.linear.x → v_cmd, twist.angular.z → w_cmd (base frame " +
+                     (rd.base_frame.empty() ? std::string("?") : rd.base_frame) + ")"));
+  if (!tp.imu.empty())
+    x.emplace_back("source.gyro", note(tp.imu, "angular_velocity rotated into the base frame, its z → gyro_z; "
+                                               "mounting " +
+                                                   imu_rot_note));
   else
     x.emplace_back("source.gyro", "none (no sensor_msgs/Imu topic chosen)");
-  if (!fix.empty()) {
-    if (streams.at(fix).type == kNavSatFix && origin_fix)
-      x.emplace_back(
-          "source.fixes",
-          note(fix, fmt::format("WGS84 → local east, north [m] around the first fix (lat {:.9f}, lon "
-                                "{:.9f}, alt {:.3f} m; GeographicLib LocalCartesian) → aps_x, aps_y; "
-                                "position_covariance[0], [4] → aps_var_x, aps_var_y unless its type is "
-                                "unknown; status −1 dropped",
-                                origin_fix->latitude_deg, origin_fix->longitude_deg, origin_fix->altitude_m)));
+  if (!tp.fix.empty()) {
+    if (rd.streams.at(tp.fix).type == kNavSatFix && rd.origin_fix)
+      x.emplace_back("source.fixes",
+                     note(tp.fix,
+                          fmt::format("WGS84 → local east, north [m] around the first fix (lat {:.9f}, lon "
+                                      "{:.9f}, alt {:.3f} m; GeographicLib LocalCartesian) → aps_x, aps_y; "
+                                      "position_covariance[0], [4] → aps_var_x, aps_var_y unless its type "
+                                      "is unknown; status −1 dropped",
+                                      rd.origin_fix->latitude_deg, rd.origin_fix->longitude_deg,
+                                      rd.origin_fix->altitude_m)));
     else
-      x.emplace_back("source.fixes", note(fix, "position.x, position.y → aps_x, aps_y (covariance[0], [7] → "
-                                               "aps_var_x, aps_var_y when given)"));
+      x.emplace_back("source.fixes", note(tp.fix, "position.x, position.y → aps_x, aps_y (covariance[0], [7] → "
+                                                  "aps_var_x, aps_var_y when given)"));
   } else {
     x.emplace_back("source.fixes", "none");
   }
-  if (!gt.empty())
+  if (!tp.gt.empty())
     x.emplace_back("source.ground_truth",
-                   note(gt, "position.x, position.y, yaw of the orientation → gt_x, gt_y, gt_theta"));
+                   note(tp.gt, "position.x, position.y, yaw of the orientation → gt_x, gt_y, gt_theta"));
+}
+
+}  // namespace
+
+std::vector<std::string> describe_bag_topics(const fs::path& bag) {
+  const bags::BagInfo info = bags::inspect_bag(bag);
+  std::vector<std::string> lines;
+  for (const auto& t : info.topics)
+    lines.push_back(fmt::format("  {:<40} {:<40} {:>8}", t.name, t.type, t.count));
+  return lines;
+}
+
+Track import_rosbag(const fs::path& bag, const RosbagImportOptions& o) {
+  const bags::BagInfo info = bags::inspect_bag(bag);
+  if (info.messages == 0) fail(bag, "the bag holds no messages");
+  const Topics tp = choose_topics(bag, info, o);
+  const BagRead rd = read_streams(bag, info, tp, o);
+  Rotation imu_rot = Rotation::Identity();
+  std::string imu_rot_note;
+  if (!tp.imu.empty()) std::tie(imu_rot, imu_rot_note) = imu_mounting(o, rd);
+  std::int64_t t0 = 0;
+  TrackData d = fill_rows(tp, rd, imu_rot, &t0);
+  add_metadata(bag, info, o, tp, rd, imu_rot_note, t0, d.meta);
   try {
     return Track(std::move(d));
   } catch (const std::invalid_argument& e) {
