@@ -148,7 +148,7 @@ void apply_pf_flags(const CalibrateRequest& a, filters::PfCalibratorParams& pf) 
     pf.evidence.min_memory_s = *a.pf_memory_s;
     pf.evidence.max_memory_s = std::max(pf.evidence.max_memory_s, *a.pf_memory_s);
   }
-  pf.seed = a.seed.value_or(1);
+  if (a.seed) pf.seed = *a.seed;
   pf.threads = a.threads;
 }
 
@@ -199,10 +199,12 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
   o.dkf.radius_walk_m_per_sqrt_s *= r_scale;
   o.dkf.wheel_base_walk_m_per_sqrt_s *= d_scale;
 
-  const double tolerance_pct = a.tolerance_pct.value_or(0.5);
-  if (!(std::isfinite(tolerance_pct) && tolerance_pct > 0.0 && tolerance_pct < 100.0))
-    throw Failure(fmt::format("--tolerance {}: expected a percentage in (0, 100)", tolerance_pct));
-  o.convergence_tolerance = tolerance_pct / 100.0;
+  if (a.tolerance_pct) {
+    const double tolerance_pct = *a.tolerance_pct;
+    if (!(std::isfinite(tolerance_pct) && tolerance_pct > 0.0 && tolerance_pct < 100.0))
+      throw Failure(fmt::format("--tolerance {}: expected a percentage in (0, 100)", tolerance_pct));
+    o.convergence_tolerance = tolerance_pct / 100.0;
+  }
   std::string why;
   if (!o.IsValid(&why)) throw Failure(fmt::format("--method {}: {}", method, why));
   return info;
@@ -278,7 +280,7 @@ CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& 
     const bool pf = out.result.method == CalibrationMethod::pf ||
                     out.result.method == CalibrationMethod::adaptive_pf;
     file.comment = fmt::format("calibrated by odotune calibrate: method {}{}\ntracks: {}", a.method_name(),
-                               pf ? fmt::format(", seed {}", a.seed.value_or(1)) : "", joined(a.tracks));
+                               pf ? fmt::format(", seed {}", out.info.options.pf.seed) : "", joined(a.tracks));
     write_calibration_file(file, a.config_out);
   }
   if (!a.json.empty()) write_file_atomically(a.json, json_text);

@@ -132,14 +132,14 @@ TuneCommandOutcome ekf_tune(const TuneCommandRequest& r, filters::NoiseModel mod
 TuneCommandOutcome calibration_tune(const TuneCommandRequest& r, CalibratorModel model) {
   CalibrationTuneRequest req = with_solver<CalibrationTuneRequest>(r);
   req.model = model;
-  const std::string resampler = r.resampler.value_or("systematic"), policy = r.policy.value_or("neff");
-  if (!filters::parse_resampler(resampler, &req.resampler))
+  // Flags not given keep CalibrationTuneRequest's defaults.
+  if (r.resampler && !filters::parse_resampler(*r.resampler, &req.resampler))
     throw Failure(fmt::format("--resampler '{}': expected multinomial, stratified, systematic or residual",
-                              resampler));
-  if (!filters::parse_resample_policy(policy, &req.policy))
-    throw Failure(fmt::format("--policy '{}': expected every, neff or max", policy));
+                              *r.resampler));
+  if (r.policy && !filters::parse_resample_policy(*r.policy, &req.policy))
+    throw Failure(fmt::format("--policy '{}': expected every, neff or max", *r.policy));
   req.pf_particles = r.pf_particles;
-  req.pf_seed = r.pf_seed.value_or(1);
+  if (r.pf_seed) req.pf_seed = *r.pf_seed;
   std::string why;
   if (!req.IsValid(&why)) throw Failure(why);
   CalibrationInputOptions input_options;
