@@ -2,13 +2,14 @@
 // calibration score shares (calibration_run.h's TrackCalibrationScore and
 // dead_reckoned_path, calibrated_odometry_errors.h): from the first odometry
 // row with ground truth, at its pose, each later row r integrates its wheel
-// rates over (t[r−1], t[r]] with filters::diff_drive_step (l = ω_l R_L Δt,
+// rates over (t[r−1], t[r]] with core/planar_motion.h's midpoint_advance (l = ω_l R_L Δt,
 // r = ω_r R_R Δt), using the parameters params_at(t[r]).
 #pragma once
 
 #include <cstddef>
 
 #include "calibration/calibration_input.h"
+#include "core/planar_motion.h"
 #include "filters/diff_drive.h"
 #include "filters/odometry_params.h"
 
@@ -31,9 +32,9 @@ void dead_reckon(const CalibrationInput& in, ParamsAt&& params_at, Visit&& visit
   for (std::size_t r = start + 1; r < n; ++r) {
     const filters::OdometryParams& p = params_at(in.t[r]);
     const double dt = in.t[r] - in.t[r - 1];
-    const filters::WheelTravel u{in.omega_l[r] * p.wheel_radius_left_m * dt,
-                                 in.omega_r[r] * p.wheel_radius_right_m * dt};
-    pose = filters::diff_drive_step(pose, u, p.wheel_base_m).next;
+    const double l = in.omega_l[r] * p.wheel_radius_left_m * dt;
+    const double rr = in.omega_r[r] * p.wheel_radius_right_m * dt;
+    midpoint_advance(&pose(filters::kX), &pose(filters::kY), &pose(filters::kTheta), l, rr, p.wheel_base_m);
     visit(r, static_cast<const filters::Pose&>(pose));
   }
 }

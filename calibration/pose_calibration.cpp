@@ -12,7 +12,7 @@
 
 #include "calibration/ceres_fit.h"
 #include "core/ceres_options.h"
-#include "filters/diff_drive.h"
+#include "core/planar_motion.h"
 
 namespace odotune {
 
@@ -59,11 +59,11 @@ struct SegmentDeadReckoning {
       for (; k < refs.size() && refs[k].row == r; ++k) {
         T px = x, py = y, ph = h;
         const double f = refs[k].fraction;
-        if (f > 0.0) filters::diff_drive_advance(&px, &py, &ph, T(f) * l, T(f) * rr, th[kWheelBase]);
+        if (f > 0.0) midpoint_advance(&px, &py, &ph, T(f) * l, T(f) * rr, th[kWheelBase]);
         res[2 * k] = px - refs[k].x_m;
         res[2 * k + 1] = py - refs[k].y_m;
       }
-      filters::diff_drive_advance(&x, &y, &h, l, rr, th[kWheelBase]);
+      midpoint_advance(&x, &y, &h, l, rr, th[kWheelBase]);
     }
     return true;
   }

@@ -69,6 +69,7 @@
 
 #include <ceres/jet.h>
 
+#include "core/planar_motion.h"
 #include "diagnose/diag_input.h"
 
 namespace odotune::diagnose {
@@ -184,25 +185,11 @@ double scalar(const ceres::Jet<T, N>& v) {
   return v.a;
 }
 
-// sin(x)/x, smooth through 0.
-template <typename T>
-T sinc(const T& x) {
-  using std::sin;
-  return std::abs(scalar(x)) < 1e-4 ? T(1.0) - x * x / 6.0 : sin(x) / x;
-}
-
 // Arc update of `p` by one body step (exact for constant velocities).
 template <typename T>
 void advance(Pose<T>& p, const BodyStep<T>& s) {
-  using std::cos;
-  using std::sin;
   const T half = 0.5 * s.dth;
-  const T thm = p.th + half;
-  const T sc = sinc(half);
-  const T c = cos(thm), sn = sin(thm);
-  p.x += sc * (s.ds * c - s.dy * sn);
-  p.y += sc * (s.ds * sn + s.dy * c);
-  p.th += s.dth;
+  arc_advance(&p.x, &p.y, &p.th, half, sinc(half), s.ds, s.dy, s.dth);
 }
 
 class EffectModel {

@@ -37,23 +37,8 @@ struct MotionStep {
   ControlJacobian V;  // ∂next/∂(l, r)
 };
 
-// The motion model above on any scalar type, pose only (no Jacobians): for
-// fits that differentiate through the dead reckoning with ceres::Jet
-// (calibration/pose_calibration.h). Same operations in the same order as
-// diff_drive_step, so on doubles it gives the same pose.
-template <typename T>
-void diff_drive_advance(T* x, T* y, T* theta, const T& left_m, const T& right_m, const T& wheel_base_m) {
-  using std::cos;
-  using std::sin;
-  const T d = 0.5 * (left_m + right_m);
-  const T dtheta = (right_m - left_m) / wheel_base_m;
-  const T theta_m = *theta + 0.5 * dtheta;
-  *x = *x + d * cos(theta_m);
-  *y = *y + d * sin(theta_m);
-  *theta = *theta + dtheta;
-}
-
-// Applies the motion model to `pose`; `wheel_base_m` > 0.
+// Applies the motion model to `pose`; `wheel_base_m` > 0. The pose part is
+// core/planar_motion.h's midpoint_advance (same operations in the same order).
 inline MotionStep diff_drive_step(const Pose& pose, WheelTravel u, double wheel_base_m) {
   const double d = 0.5 * (u.left_m + u.right_m);
   const double dtheta = (u.right_m - u.left_m) / wheel_base_m;

@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "core/planar_motion.h"
+
 namespace odotune {
 
 std::string_view to_string(OdometrySource s) {
@@ -45,7 +47,7 @@ double initial_heading_from_fixes(const ReplayInput& in, double fix_var_m2, doub
   for (const ReplayRow& row : in.rows) {
     if (row.step >= 0) {
       const filters::WheelTravel& u = in.steps[static_cast<std::size_t>(row.step)];
-      filters::diff_drive_advance(&x, &y, &th, u.left_m, u.right_m, in.wheel_base_m);
+      midpoint_advance(&x, &y, &th, u.left_m, u.right_m, in.wheel_base_m);
       driven += std::abs(0.5 * (u.left_m + u.right_m));
     }
     if (row.fix < 0) continue;

@@ -14,6 +14,8 @@
 
 #include <fmt/format.h>
 
+#include "core/planar_motion.h"
+
 #include "sim/effects.h"
 #include "sim/motion_profile.h"
 #include "sim/slip_episodes.h"
@@ -104,9 +106,6 @@ struct Truth {
   double v = 0, w = 0;             // body velocities, mean over the last step [m/s, rad/s]
   double p_l = 0, p_r = 0;         // motor power [W]
 };
-
-// sin(x)/x, accurate near 0.
-double sinc(double x) { return std::abs(x) < 1e-4 ? 1.0 - x * x / 6.0 : std::sin(x) / x; }
 
 bool fail(std::string* why, std::string msg) {
   if (why) *why = std::move(msg);
@@ -415,11 +414,7 @@ void advance_pose(const Physics& ph, double v, double w, StepState& s) {
   const double h = ph.h;
   const double vy = -ph.k_skid * v * w;
   const double half = 0.5 * w * h;
-  const double thm = s.th + half;
-  const double sc_h = sinc(half) * h;
-  s.x += sc_h * (v * std::cos(thm) - vy * std::sin(thm));
-  s.y += sc_h * (v * std::sin(thm) + vy * std::cos(thm));
-  s.th += w * h;
+  arc_advance(&s.x, &s.y, &s.th, half, sinc(half) * h, v, vy, w * h);
 }
 
 // The true state at the end of the step (pose already advanced in s).

@@ -167,7 +167,9 @@ PathSamples commanded_path(const sim::MotionParams& motion, double step_s) {
   for (std::size_t i = 0; i < n; ++i) {
     const double t = static_cast<double>(i) * step_s;
     p.t_s.push_back(t), p.x_m.push_back(x), p.y_m.push_back(y), p.theta_rad.push_back(th);
-    // Midpoint command, arc update (exact for constant velocities).
+    // Midpoint command, arc update (exact for constant velocities). Not
+    // core/planar_motion.h's arc_advance: the benchmark's cases were drawn
+    // along this path, and that rounding moves their zones in the 16th digit.
     const sim::Command c = profile.at(t + 0.5 * step_s);
     const double dth = c.w_rad_s * step_s, half = 0.5 * dth;
     const double sc = std::abs(half) < 1e-6 ? 1.0 : std::sin(half) / half;

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/planar_motion.h"
 #include "filters/diff_drive.h"
 #include "filters/ekf.h"
 #include "filters/ekf_noise.h"
@@ -50,6 +51,45 @@ TEST(DiffDrive, StraightAndSpinGeometry) {
   const MotionStep spin = diff_drive_step(Pose(0, 0, 0), {-0.05, 0.05}, kBase);
   EXPECT_NEAR(spin.next(kTheta), 0.1 / kBase, 1e-12);
   EXPECT_NEAR(spin.next.head<2>().norm(), 0.0, 1e-12);
+}
+
+// The EKF's step and the one dead reckoning every fit walks
+// (core/planar_motion.h) give the same pose to the bit.
+TEST(DiffDrive, PoseIsCoreMidpointAdvanceBitForBit) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  for (int trial = 0; trial < 500; ++trial) {
+    const Pose x(U(rng) * 50, U(rng) * 50, U(rng) * 7);
+    const WheelTravel u{0.2 * U(rng), 0.2 * U(rng)};
+    const double base = 0.3 + 0.2 * U(rng);
+    const Pose next = diff_drive_step(x, u, base).next;
+    double px = x(kX), py = x(kY), th = x(kTheta);
+    midpoint_advance(&px, &py, &th, u.left_m, u.right_m, base);
+    EXPECT_EQ(next(kX), px);
+    EXPECT_EQ(next(kY), py);
+    EXPECT_EQ(next(kTheta), th);
+  }
+}
+
+// The arc step is exact for constant velocities: a full circle of radius
+// v/w comes back to its start, and straight travel moves along the heading.
+TEST(PlanarMotion, ArcStepClosesACircleAndSincIsSmooth) {
+  const double v = 0.7, w = 0.35, h = 0.5;
+  const int n = static_cast<int>(std::lround(2 * M_PI / (w * h)));
+  const double hh = 2 * M_PI / (w * n);  // steps that close the circle exactly
+  double x = 1, y = -2, th = 0.3;
+  for (int k = 0; k < n; ++k) {
+    const double half = 0.5 * w * hh;
+    arc_advance(&x, &y, &th, half, sinc(half) * hh, v, 0.0, w * hh);
+  }
+  EXPECT_NEAR(x, 1.0, 1e-9);
+  EXPECT_NEAR(y, -2.0, 1e-9);
+  double sx = 0, sy = 0, sth = M_PI / 2;
+  arc_advance(&sx, &sy, &sth, 0.0, 1.0, 2.0, 0.0, 0.0);
+  EXPECT_NEAR(sx, 0.0, 1e-15);
+  EXPECT_NEAR(sy, 2.0, 1e-15);
+  for (double u : {1e-6, 9.9e-5, 1.01e-4, 1e-3}) EXPECT_NEAR(sinc(u), std::sin(u) / u, 1e-15) << u;
+  EXPECT_EQ(sinc(0.0), 1.0);
 }
 
 TEST(EkfNoise, WheelVariancesFollowEquations3To7) {
