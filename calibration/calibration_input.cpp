@@ -255,6 +255,9 @@ void add_fixes(const Track& track, CalibrationInput& in) {
     in.fix_t.push_back(t[i]);
     in.fix_x.push_back(track.col(Col::aps_x)[i]);
     in.fix_y.push_back(track.col(Col::aps_y)[i]);
+    const bool var = track.at(Col::aps_var_x, i) && track.at(Col::aps_var_y, i);
+    in.fix_var_x.push_back(var ? track.col(Col::aps_var_x)[i] : std::nan(""));
+    in.fix_var_y.push_back(var ? track.col(Col::aps_var_y)[i] : std::nan(""));
   }
 }
 

@@ -95,6 +95,9 @@ struct CalibrationInput {
   // Absolute position fixes (aps_x, aps_y) stamped within the odometry's
   // time span [t.front(), t.back()], in time order.
   std::vector<double> fix_t, fix_x, fix_y;  // [s, m, m]
+  // Their variances (aps_var_x, aps_var_y) where the track gives both, NaN
+  // elsewhere.
+  std::vector<double> fix_var_x, fix_var_y;  // [m²]
 
   // One calibration sample per external measurement, in time order, with the
   // odometry row it belongs to (sample_row: index into t, the last odometry

@@ -41,10 +41,11 @@ bool within(double est, double truth, double tol) { return std::abs(est - truth)
 
 double nan() { return std::numeric_limits<double>::quiet_NaN(); }
 
-// Convergence per piece of the truth schedule (see TrackCalibrationScore).
-void score_convergence(const CalibrationInput& in, const ParamTimeline& tl, double tol,
-                       TrackCalibrationScore* out) {
-  if (!in.truth || in.sample_t.empty()) return;
+// Convergence per piece of the truth schedule (see TrackCalibrationScore),
+// judged at `times` (the velocity samples' times, or online-pose's fixes).
+void score_convergence(const CalibrationInput& in, const ParamTimeline& tl,
+                       const std::vector<double>& times_all, double tol, TrackCalibrationScore* out) {
+  if (!in.truth || times_all.empty()) return;
   const TruthSchedule& truth = *in.truth;
   const std::vector<double> changes = truth.change_times();
   const double t_start = in.t.front();
@@ -54,7 +55,7 @@ void score_convergence(const CalibrationInput& in, const ParamTimeline& tl, doub
     const double hi = p < changes.size() ? changes[p] : std::numeric_limits<double>::infinity();
     std::vector<double> times;
     std::vector<filters::OdometryParams> est;
-    for (double ts : in.sample_t)
+    for (double ts : times_all)
       if (ts >= lo && ts < hi) {
         times.push_back(ts);
         est.push_back(tl.at(ts));
@@ -114,12 +115,14 @@ void score_odometry(const CalibrationInput& in, const ParamTimeline& tl, TrackCa
   }
 }
 
-TrackCalibrationScore score_track(const CalibrationInput& in, const ParamTimeline& tl, double tol) {
+// Convergence judged at the velocity samples, or at `eval_times` when given.
+TrackCalibrationScore score_track(const CalibrationInput& in, const ParamTimeline& tl, double tol,
+                                  const std::vector<double>* eval_times = nullptr) {
   TrackCalibrationScore s;
   s.track = in.track_name;
   s.final_params = tl.last();
   if (in.truth) s.truth_final = in.truth->at(in.t.back());
-  score_convergence(in, tl, tol, &s);
+  score_convergence(in, tl, eval_times ? *eval_times : in.sample_t, tol, &s);
   score_odometry(in, tl, &s);
   return s;
 }
@@ -211,6 +214,44 @@ void run_online(Filter& filter, const std::vector<const CalibrationInput*>& inpu
   }
 }
 
+// Runs the online pose-domain calibrator over every track in turn: the
+// geometry carries over, the pose starts again on each track.
+void run_online_pose(filters::MemoryPair<filters::PoseCalibrator>& pair,
+                     const std::vector<const CalibrationInput*>& inputs, const OnlinePoseOptions& o, double tol,
+                     CalibrationResult* res) {
+  using Clock = std::chrono::steady_clock;
+  Clock::duration busy{0};
+  for (std::size_t k = 0; k < inputs.size(); ++k) {
+    const CalibrationInput& in = *inputs[k];
+    const OnlinePoseTrack track = online_pose_track(in, o);
+    pair.apply([&](filters::PoseCalibrator& f) {
+      if (track.start_pose)
+        f.start_at(*track.start_pose, o.known_start_sd_xy_m, o.known_start_sd_theta_rad);
+      else
+        f.start_from_fixes();
+    });
+    ParamTimeline tl;
+    tl.before = pair.estimate().params;
+    for (std::size_t i = 0; i < track.samples.size(); ++i) {
+      const Clock::time_point t0 = Clock::now();
+      const filters::CalibEstimate& e = pair.step(track.samples[i]);
+      busy += Clock::now() - t0;
+      ++res->iterations;
+      if (!track.samples[i].has_fix) continue;
+      tl.times.push_back(track.t_s[i]);
+      tl.params.push_back(e.params);
+      res->trace.t.push_back(track.t_s[i]);
+      res->trace.track.push_back(static_cast<int>(k));
+      res->trace.estimate.push_back(e);
+    }
+    res->tracks.push_back(score_track(in, tl, tol, &tl.times));
+  }
+  res->final_params = pair.estimate().params;
+  if (res->iterations > 0)
+    res->ms_per_iteration = std::chrono::duration<double, std::milli>(busy).count() /
+                            static_cast<double>(res->iterations);
+}
+
 }  // namespace
 
 std::string_view to_string(CalibrationMethod m) {
@@ -218,6 +259,7 @@ std::string_view to_string(CalibrationMethod m) {
     case CalibrationMethod::adaptive_pf: return "adaptive-pf";
     case CalibrationMethod::pf: return "pf";
     case CalibrationMethod::dkf: return "dkf";
+    case CalibrationMethod::online_pose: return "online-pose";
     case CalibrationMethod::batch_pose: return "batch-pose";
     case CalibrationMethod::batch_velocity: return "batch-velocity";
     case CalibrationMethod::none: return "none";
@@ -230,9 +272,9 @@ bool parse_calibration_method(std::string_view text, CalibrationMethod* out) {
     if (out) *out = CalibrationMethod::batch_pose;
     return true;
   }
-  for (CalibrationMethod m :
-       {CalibrationMethod::adaptive_pf, CalibrationMethod::pf, CalibrationMethod::dkf,
-        CalibrationMethod::batch_pose, CalibrationMethod::batch_velocity, CalibrationMethod::none})
+  for (CalibrationMethod m : {CalibrationMethod::adaptive_pf, CalibrationMethod::pf, CalibrationMethod::dkf,
+                              CalibrationMethod::online_pose, CalibrationMethod::batch_pose,
+                              CalibrationMethod::batch_velocity, CalibrationMethod::none})
     if (text == to_string(m)) {
       if (out) *out = m;
       return true;
@@ -271,6 +313,12 @@ bool CalibrationOptions::IsValid(std::string* why) const {
     case CalibrationMethod::dkf:
       if (!dkf.IsValid(&inner)) {
         if (why) *why = "dkf." + inner;
+        return false;
+      }
+      break;
+    case CalibrationMethod::online_pose:
+      if (!online_pose.IsValid(&inner)) {
+        if (why) *why = "online_pose." + inner;
         return false;
       }
       break;
@@ -371,6 +419,15 @@ CalibrationResult run_calibration(const std::vector<const CalibrationInput*>& in
         filters::DualKf dkf(options.dkf);
         run_online(dkf, inputs, tol, &res);
       }
+      break;
+    }
+    case CalibrationMethod::online_pose: {
+      const filters::PoseCalibratorParams& p = options.online_pose.filter;
+      filters::MemoryPair<filters::PoseCalibrator> pair(filters::PoseCalibrator(p), p.evidence,
+                                                        options.memory_pair);
+      run_online_pose(pair, inputs, options.online_pose, tol, &res);
+      res.memory_pair = true;
+      res.memory_restarts = pair.changes();
       break;
     }
     case CalibrationMethod::batch_pose:

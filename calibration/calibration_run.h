@@ -5,6 +5,8 @@
 // Methods (Fariña, Toledo & Acosta, RA-L 2026, Tables I–II):
 //   adaptive-pf, pf  filters/pf_calibrator.h (online)
 //   dkf              filters/dual_kf.h (online)
+//   online-pose      filters/pose_calibrator.h (online, from position fixes;
+//                    calibration/online_pose.h)
 //   batch-pose       calibration/pose_calibration.h (offline: dead reckoning
 //                    fitted to the reference positions; `batch` is its alias)
 //   batch-velocity   calibration/batch_calibration.h (offline least squares
@@ -21,6 +23,7 @@
 #include <vector>
 
 #include "calibration/calibration_input.h"
+#include "calibration/online_pose.h"
 #include "calibration/pose_calibration.h"
 #include "filters/dual_kf.h"
 #include "filters/memory_pair.h"
@@ -28,8 +31,9 @@
 
 namespace odotune {
 
-enum class CalibrationMethod { adaptive_pf, pf, dkf, batch_pose, batch_velocity, none };
-// "adaptive-pf", "pf", "dkf", "batch-pose", "batch-velocity", "none".
+enum class CalibrationMethod { adaptive_pf, pf, dkf, online_pose, batch_pose, batch_velocity, none };
+// "adaptive-pf", "pf", "dkf", "online-pose", "batch-pose", "batch-velocity",
+// "none".
 std::string_view to_string(CalibrationMethod m);
 // Also accepts "batch" for batch-pose (the pose fit beat the velocity fit on
 // the real OptiOdom runs, docs/calibration/real-data.md).
@@ -49,9 +53,10 @@ struct CalibrationOptions {
   // them around the robot's nominal values).
   filters::PfCalibratorParams pf;
   filters::DualKfParams dkf;
-  PoseCalibrationOptions pose;  // batch-pose
-  // pf/adaptive-pf with the evidence evolution and dkf with fading memory
-  // run as a slow/fast pair that finds changes (filters/memory_pair.h).
+  PoseCalibrationOptions pose;    // batch-pose
+  OnlinePoseOptions online_pose;  // online-pose
+  // pf/adaptive-pf with the evidence evolution, dkf with fading memory and
+  // online-pose run as a slow/fast pair that finds changes (filters/memory_pair.h).
   filters::MemoryPairParams memory_pair;
   // Convergence: the first time after which R_R, R_L and D all stay within
   // this fraction of the truth (the paper: 0.5 %; see TrackCalibrationScore).
@@ -66,7 +71,7 @@ struct CalibrationOptions {
 filters::PfCalibratorParams effective_pf_params(const CalibrationOptions& options);
 
 // Estimates over time: one row per iteration (per measurement) of an online
-// method. The fixed-parameter methods (batch, none) have one row per track,
+// method (online-pose: per position fix, where its geometry changes). The fixed-parameter methods (batch, none) have one row per track,
 // at the track's first sample, with the constants (batch: with its sds).
 struct CalibrationTrace {
   std::vector<double> t;   // [s], on the track's clock (per track)

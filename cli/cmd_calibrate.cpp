@@ -40,8 +40,8 @@ void print_apply(const CalibrateRequest& a) {
 // The method and the particle filter's settings.
 void add_method_options(CLI::App* sub, CalibrateRequest& req) {
   sub->add_option("--method", req.method,
-                  "adaptive-pf | pf | dkf | batch-pose (alias batch) | batch-velocity | none (default "
-                  "adaptive-pf)");
+                  "adaptive-pf | pf | dkf | online-pose | batch-pose (alias batch) | batch-velocity | none "
+                  "(default adaptive-pf)");
   sub->add_option("--resampler", req.resampler,
                   "PF resampling: multinomial | stratified | systematic | residual "
                   "(default systematic)");
@@ -91,6 +91,15 @@ void add_fit_options(CLI::App* sub, CalibrateRequest& req) {
   sub->add_flag("--fit-start-heading", req.fit_start_heading,
                 "batch-pose: fit each segment's start heading too (ground truth; with fixes the whole start "
                 "pose is always fitted)");
+  sub->add_option("--start", req.start,
+                  "online-pose: each run's start pose: fixes (default: acquired from the first fixes) | known "
+                  "(the run's first ground-truth pose)");
+  sub->add_option("--fix-sigma-m", req.fix_sigma_m,
+                  "online-pose: the fixes' sd [m] where a track gives no aps_var_x/aps_var_y")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--pose-memory", req.pose_memory_s,
+                  "online-pose: the geometry's memory after a detected change [s] (default 10)")
+      ->check(CLI::PositiveNumber);
 }
 
 // The outputs, and --apply.
@@ -112,15 +121,20 @@ void add_output_options(CLI::App* sub, CalibrateRequest& req) {
 void register_calibrate(CLI::App& app) {
   auto req = std::make_shared<CalibrateRequest>();
   auto* sub = app.add_subcommand(
-      "calibrate", "Calibrate the odometry (wheel radii, wheel base) online from external velocities");
+      "calibrate",
+      "Calibrate the odometry (wheel radii, wheel base) from external velocities or position fixes");
   sub->footer(
       "Examples:\n"
       "  odotune calibrate --track run_cw.csv --track run_ccw.csv --method adaptive-pf --seed 1 \\\n"
       "      --json cal.json --csv cal.csv --figure cal --config-out cal.yaml\n"
       "  odotune calibrate --apply cal.yaml --track held_out.csv --json held_out.json\n"
       "  odotune calibrate --track optiodom.csv --ext-from-gt 10 --method dkf\n"
+      "  odotune fixes optiodom.csv -o fixed.csv && odotune calibrate --track fixed.csv --method online-pose \\\n"
+      "      --fix-sigma-m 0.06\n"
       "Methods (Fariña, Toledo & Acosta, RA-L 2026): adaptive-pf and pf (particle filters), dkf (dual\n"
-      "Kalman filter), batch (offline least squares), none (the nominal parameters). Several tracks are\n"
+      "Kalman filter), batch (offline least squares), none (the nominal parameters); online-pose (an EKF\n"
+      "over pose and geometry corrected by position fixes, for robots with GPS, motion capture or a\n"
+      "localiser instead of a velocity sensor). Several tracks are\n"
       "calibrated one after another with the same filter (as UMBmark combines a clockwise and a\n"
       "counter-clockwise run). The truth, the convergence time and the % errors are known for simulated\n"
       "tracks (their sim.effects metadata); pose and heading RMSE need ground truth. Initial ranges\n"

@@ -56,7 +56,10 @@ class MemoryPair {
     fast_.set_memory(EvidenceMemoryParams{memory_.min_memory_s, memory_.min_memory_s});
   }
 
-  const CalibEstimate& step(const CalibSample& s) {
+  // Sample: what Filter::step takes (CalibSample, or PoseCalibSample for
+  // filters/pose_calibrator.h, whose log predictive is 0 between fixes).
+  template <class Sample>
+  const CalibEstimate& step(const Sample& s) {
     fast_.step(s);
     slow_.step(s);
     const double llr = fast_.last_log_predictive() - slow_.last_log_predictive();
@@ -76,6 +79,12 @@ class MemoryPair {
   double cusum() const { return cusum_; }
   const Filter& slow() const { return slow_; }
   const Filter& fast() const { return fast_; }
+  // Calls fn on both copies (e.g. to restart the pose of a new run).
+  template <class Fn>
+  void apply(Fn&& fn) {
+    fn(slow_);
+    fn(fast_);
+  }
 
  private:
   EvidenceMemoryParams memory_;

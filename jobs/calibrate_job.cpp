@@ -55,10 +55,12 @@ Range parse_range(const std::string& flag, const std::string& text) {
 std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply) {
   const std::vector<std::string>& files = a.tracks;
   // The pose fit needs no external velocity (it fits to the ground truth or
-  // the fixes); nor do none and --apply, which score dead reckoning.
+  // the fixes), nor does online-pose (the fixes); nor do none and --apply,
+  // which score dead reckoning.
   CalibrationMethod method = CalibrationMethod::none;
   const bool no_velocity_method = !apply && parse_calibration_method(a.method_name(), &method) &&
                                   (method == CalibrationMethod::batch_pose ||
+                                   method == CalibrationMethod::online_pose ||
                                    method == CalibrationMethod::none);
   const std::vector<Track> tracks = load_tracks(files);
   std::vector<CalibrationInput> inputs;
@@ -129,6 +131,30 @@ void check_method_flags(const CalibrateRequest& a, CalibrationMethod m, const st
     if (given && !pf)
       throw Failure(fmt::format("{} applies to --method pf and adaptive-pf only (got --method {})", flag,
                                 method));
+  for (const auto& [flag, given] :
+       {std::pair{"--start", a.start.has_value()}, std::pair{"--fix-sigma-m", a.fix_sigma_m.has_value()},
+        std::pair{"--pose-memory", a.pose_memory_s.has_value()}})
+    if (given && m != CalibrationMethod::online_pose)
+      throw Failure(fmt::format("{} applies to --method online-pose only (got --method {})", flag, method));
+}
+
+// The online pose-domain calibrator: starts at the nominal geometry; the
+// flags over its defaults.
+void make_online_pose_options(const CalibrateRequest& a, const OdometryParams& nominal, OnlinePoseOptions& o) {
+  o.filter.initial = nominal;
+  if (a.start && !parse_online_pose_start(*a.start, &o.start))
+    throw Failure(fmt::format("--start '{}': expected fixes or known", *a.start));
+  if (a.fix_sigma_m) {
+    if (!(std::isfinite(*a.fix_sigma_m) && *a.fix_sigma_m > 0.0))
+      throw Failure(fmt::format("--fix-sigma-m {}: expected a finite sd > 0 [m]", *a.fix_sigma_m));
+    o.fix_sd_m = *a.fix_sigma_m;
+  }
+  if (a.pose_memory_s) {
+    if (!(std::isfinite(*a.pose_memory_s) && *a.pose_memory_s > 0.0))
+      throw Failure(fmt::format("--pose-memory {}: expected a finite memory > 0 [s]", *a.pose_memory_s));
+    o.filter.evidence.min_memory_s = *a.pose_memory_s;
+    o.filter.evidence.max_memory_s = std::max(o.filter.evidence.max_memory_s, *a.pose_memory_s);
+  }
 }
 
 // The particle filter's flags over its defaults.
@@ -159,13 +185,14 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
   CalibrationOptions& o = info.options;
   const std::string method = a.method_name();
   if (!parse_calibration_method(method, &o.method))
-    throw Failure(fmt::format("--method '{}': unknown method, expected adaptive-pf, pf, dkf, batch-pose (or "
-                              "batch), batch-velocity or none",
+    throw Failure(fmt::format("--method '{}': unknown method, expected adaptive-pf, pf, dkf, online-pose, "
+                              "batch-pose (or batch), batch-velocity or none",
                               method));
   check_method_flags(a, o.method, method);
   o.pose.segment_s = a.segment_s.value_or(0.0);
   o.pose.fit_start_heading = a.fit_start_heading;
   const OdometryParams& nom = inputs.front().nominal;
+  make_online_pose_options(a, nom, o.online_pose);
   const double r_nom = 0.5 * (nom.wheel_radius_left_m + nom.wheel_radius_right_m);
   const double r_scale = r_nom / kPaperRadiusM, d_scale = nom.wheel_base_m / kPaperWheelBaseM;
 

@@ -38,10 +38,11 @@ struct CalibrateRequest {
   std::vector<std::string> tracks;  // track files, calibrated in this order (one robot)
   // The calibration's flags: a flag not given is nullopt and takes the default
   // named beside it. --resampler, --policy, --particles, --pf-evolution and
-  // --pf-memory apply to the PF methods only, --segment to batch-pose, and none
+  // --pf-memory apply to the PF methods only, --segment to batch-pose,
+  // --start, --fix-sigma-m and --pose-memory to online-pose, and none
   // of the calibration flags combines with --apply.
   std::optional<std::string>
-      method;  // adaptive-pf (default) | pf | dkf | batch-pose (batch) | batch-velocity | none
+      method;  // adaptive-pf (default) | pf | dkf | online-pose | batch-pose (batch) | batch-velocity | none
   std::optional<std::string> resampler;  // PF: multinomial | stratified | systematic (default) | residual
   std::optional<std::string> policy;     // PF: every | neff (default) | max
   std::optional<std::uint64_t> seed;     // PF random seed; default 1
@@ -54,9 +55,12 @@ struct CalibrateRequest {
   std::optional<std::string> init_wheel_base_range;  // "LO,HI" [m]; default nominal ±15 %
   std::optional<double> tolerance_pct;               // convergence tolerance [%], in (0, 100); default 0.5
   std::optional<std::string> pf_evolution;           // PF: paper | evidence (default)
-  std::optional<double> pf_memory_s;  // PF evidence evolution: memory after a change [s]; default 10
-  std::optional<double> segment_s;    // batch-pose: segment length [s]; default 0, whole runs
-  bool fit_start_heading = false;     // batch-pose: fit each segment's start heading too
+  std::optional<double> pf_memory_s;    // PF evidence evolution: memory after a change [s]; default 10
+  std::optional<double> segment_s;      // batch-pose: segment length [s]; default 0, whole runs
+  bool fit_start_heading = false;       // batch-pose: fit each segment's start heading too
+  std::optional<std::string> start;     // online-pose: fixes (default) | known
+  std::optional<double> fix_sigma_m;    // online-pose: the fixes' sd where a track gives no aps_var [m]
+  std::optional<double> pose_memory_s;  // online-pose: memory after a change [s]; default 10
   // Output files ("": not written). calibrate: all four; --apply: json only.
   std::string json, csv, figure, config_out;
   std::string apply;  // the calibration file --apply replays

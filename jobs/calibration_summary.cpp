@@ -34,6 +34,19 @@ std::string rmse_line(const char* what, double calibrated, double nominal, const
   return s;
 }
 
+// The position fixes online-pose used, and where their variances came from.
+std::string fixes_line(const CalibrationInput& in, const OnlinePoseOptions& o) {
+  std::size_t own = 0;
+  for (std::size_t i = 0; i < in.fix_var_x.size(); ++i)
+    own += std::isfinite(in.fix_var_x[i]) && std::isfinite(in.fix_var_y[i]) && in.fix_var_x[i] > 0.0 &&
+           in.fix_var_y[i] > 0.0;
+  std::string var = own == in.fix_t.size() ? "variances from the track (aps_var_x, aps_var_y)"
+                                           : fmt::format("σ {:g} m (--fix-sigma-m)", o.fix_sd_m.value_or(0.0));
+  if (own > 0 && own < in.fix_t.size())
+    var = fmt::format("{} with the track's variances, the others {}", own, var);
+  return fmt::format("    fixes         {} position fixes, {}", in.fix_t.size(), var);
+}
+
 }  // namespace
 
 std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
@@ -44,6 +57,16 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
   const bool pf = r.method == CalibrationMethod::pf || r.method == CalibrationMethod::adaptive_pf;
   std::string how = fmt::format("initial R {:.4f}–{:.4f} m, D {:.4f}–{:.4f} m", info.init_radius_m.lo,
                                 info.init_radius_m.hi, info.init_wheel_base_m.lo, info.init_wheel_base_m.hi);
+  if (r.method == CalibrationMethod::online_pose) {
+    const OnlinePoseOptions& o = info.options.online_pose;
+    how = fmt::format(
+        "initial R_L {:.5f} m, R_R {:.5f} m, D {:.5f} m, sd {:g} % / {:g} %; start from {}; memory "
+        "{:g}–{:g} s",
+        o.filter.initial.wheel_radius_left_m, o.filter.initial.wheel_radius_right_m,
+        o.filter.initial.wheel_base_m, 100 * o.filter.initial_sd_radius_frac,
+        100 * o.filter.initial_sd_wheel_base_frac, to_string(o.start), o.filter.evidence.min_memory_s,
+        o.filter.evidence.max_memory_s);
+  }
   if (pf) {
     const filters::PfCalibratorParams p = effective_pf_params(info.options);
     how += fmt::format("; {} resampling, policy {}, {} particles{}, seed {}", filters::to_string(p.resampler),
@@ -56,7 +79,10 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
   for (std::size_t k = 0; k < r.tracks.size() && k < inputs.size(); ++k) {
     const TrackCalibrationScore& s = r.tracks[k];
     out.push_back(fmt::format("  track {} ({}):", s.track, info.track_files[k]));
-    if (!inputs[k].ext_noise.empty()) out.push_back("    velocities    " + inputs[k].ext_noise);
+    if (r.method == CalibrationMethod::online_pose)
+      out.push_back(fixes_line(inputs[k], info.options.online_pose));
+    else if (!inputs[k].ext_noise.empty())
+      out.push_back("    velocities    " + inputs[k].ext_noise);
     out.push_back(param_line("R_R", s.final_params.wheel_radius_right_m, s.truth_final,
                              &OdometryParams::wheel_radius_right_m));
     out.push_back(param_line("R_L", s.final_params.wheel_radius_left_m, s.truth_final,

@@ -17,41 +17,68 @@
 # (--ext-from-gt 10), a stand-in for scan matching, whose noise odotune
 # estimates from the poses' own jitter (calibration/reference_jitter.h). The
 # pose fit (batch-pose, the default batch) uses the poses themselves.
+#
+# online-pose, the online filter of position fixes, runs on copies of the
+# runs with fixes made from the OptiTrack poses by `odotune fixes` at its
+# defaults (1 Hz, σ 60 mm), and starts from the fixes alone (the OptiTrack
+# poses only score it). batch-pose-fixes is the pose fit on the same fixes
+# with the OptiTrack columns removed: the offline optimum of that information.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REAL=${REAL:-../shared/data/real}
 OUT=${1:-out/calibration-real}
 BIN=${BIN:-build/odotune}
 OO=$REAL/optiodom_diff
-mkdir -p "$OUT/tracks" "$OUT/A" "$OUT/B"
+mkdir -p "$OUT/tracks" "$OUT/fixes" "$OUT/fixes-only" "$OUT/A" "$OUT/B"
 
-import() {  # relative run path without .csv → prints the imported track path
+import() {  # relative run path without .csv, run number → prints the imported track path
   local name
   name=optiodom-$(basename "$1" | tr '_' '-')
   "$BIN" import optiodom "$OO/$1.csv" -o "$OUT/tracks/$name.csv" > /dev/null
+  # The fixes' noise seed is the run's number (one draw per run, not the same on all).
+  "$BIN" fixes "$OUT/tracks/$name.csv" -o "$OUT/fixes/$name.csv" --seed "$2" > /dev/null
+  python3 - "$OUT/fixes/$name.csv" "$OUT/fixes-only/$name.csv" <<'PY'
+import csv, sys
+lines = open(sys.argv[1]).read().splitlines()
+rows = list(csv.reader(l for l in lines if not l.startswith("#")))
+keep = [i for i, h in enumerate(rows[0]) if not h.startswith("gt_")]
+with open(sys.argv[2], "w") as f:
+    f.write("".join(l + "\n" for l in lines if l.startswith("#")))
+    csv.writer(f, lineterminator="\n").writerows([[r[i] for i in keep] for r in rows])
+PY
   echo "$OUT/tracks/$name.csv"
 }
 
 CAL=()
+run=0
 for r in circular/231220200146/231220200146_run-01 square/231220200045/231220200045_run-01 \
          free/030120210001/030120210001_run-01; do
-  CAL+=("$(import "$r")")
+  run=$((run + 1))
+  CAL+=("$(import "$r" "$run")")
 done
 HELD=()
 for r in circular/231220200146/231220200146_run-02 square/231220200045/231220200045_run-02 \
          free/020120212354/020120212354_run-01 free/030120210001/030120210001_run-02; do
-  HELD+=("$(import "$r")")
+  run=$((run + 1))
+  HELD+=("$(import "$r" "$run")")
 done
 ALL=("${CAL[@]}" "${HELD[@]}")
 
-METHODS=(none batch-pose batch-velocity adaptive-pf pf dkf)
+METHODS=(none batch-pose batch-velocity adaptive-pf pf dkf online-pose batch-pose-fixes)
 calibrate() {  # OUT_STEM METHOD TRACK... → OUT_STEM.yaml, OUT_STEM.json, prints wall seconds
   local stem=$1 method=$2
   shift 2
-  local args=()
-  for t in "$@"; do args+=(--track "$t"); done
-  local extra=()
-  case $method in batch-pose | none) ;; *) extra=(--ext-from-gt 10) ;; esac
+  local args=() extra=() folder=""
+  case $method in
+    batch-pose | none) ;;
+    online-pose) folder=fixes extra=(--fix-sigma-m 0.06) ;;
+    batch-pose-fixes) folder=fixes-only method=batch-pose ;;
+    *) extra=(--ext-from-gt 10) ;;
+  esac
+  for t in "$@"; do
+    [ -n "$folder" ] && t=${t/\/tracks\//\/$folder\/}
+    args+=(--track "$t")
+  done
   local t0 t1
   t0=$(date +%s.%N)
   "$BIN" calibrate "${args[@]}" --method "$method" "${extra[@]}" --seed 1 --threads 1 \
@@ -145,7 +172,7 @@ if command -v gnuplot > /dev/null; then
     plot+="set title '${name#optiodom-} (held out)'; plot "
     plot+="'< grep ^$name, $OUT/A/none-paths.csv' using 3:4 with lines lw 2 lc rgb 'black' title 'OptiTrack', "
     plot+="'' using 5:6 with lines lc rgb 'gray50' dt 2 title 'nominal'"
-    for m in batch-pose batch-velocity adaptive-pf pf dkf; do
+    for m in batch-pose batch-velocity adaptive-pf pf dkf online-pose; do
       plot+=", '< grep ^$name, $OUT/A/$m-paths.csv' using 7:8 with lines title '$m'"
     done
     plot+=$'\n'

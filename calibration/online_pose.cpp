@@ -1,0 +1,115 @@
+#include "calibration/online_pose.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace odotune {
+
+namespace {
+
+bool fail(std::string* why, std::string msg) {
+  if (why) *why = std::move(msg);
+  return false;
+}
+
+bool non_negative(double v) { return std::isfinite(v) && v >= 0.0; }
+
+// The variances of fix i: the track's own, else fix_sd_m².
+std::pair<double, double> fix_variances(const CalibrationInput& in, std::size_t i, const OnlinePoseOptions& o) {
+  const double vx = in.fix_var_x.empty() ? std::nan("") : in.fix_var_x[i];
+  const double vy = in.fix_var_y.empty() ? std::nan("") : in.fix_var_y[i];
+  if (std::isfinite(vx) && std::isfinite(vy) && vx > 0.0 && vy > 0.0) return {vx, vy};
+  if (o.fix_sd_m) return {*o.fix_sd_m * *o.fix_sd_m, *o.fix_sd_m * *o.fix_sd_m};
+  throw std::invalid_argument(fmt::format(
+      "track '{}': the fix at t = {} s has no usable variance (aps_var_x, aps_var_y); give the fixes' sd "
+      "(--fix-sigma-m)",
+      in.track_name, in.fix_t[i]));
+}
+
+std::optional<filters::PlanarPose> known_start(const CalibrationInput& in) {
+  for (std::size_t r = 0; r < in.t.size(); ++r)
+    if (in.has_gt_row(r)) {
+      if (r > 0 && in.t[r] > in.t.front())
+        throw std::invalid_argument(fmt::format(
+            "track '{}': a known start needs a ground-truth pose at its first odometry row (the first is at "
+            "t = {} s, the odometry starts at {} s)",
+            in.track_name, in.t[r], in.t.front()));
+      return filters::PlanarPose{in.gt_x[r], in.gt_y[r], in.gt_theta[r]};
+    }
+  throw std::invalid_argument(fmt::format("track '{}': a known start needs a ground-truth pose; it has none",
+                                          in.track_name));
+}
+
+}  // namespace
+
+std::string_view to_string(OnlinePoseStart s) {
+  switch (s) {
+    case OnlinePoseStart::fixes: return "fixes";
+    case OnlinePoseStart::known: return "known";
+  }
+  return "?";
+}
+
+bool parse_online_pose_start(std::string_view text, OnlinePoseStart* out) {
+  for (OnlinePoseStart s : {OnlinePoseStart::fixes, OnlinePoseStart::known})
+    if (text == to_string(s)) {
+      *out = s;
+      return true;
+    }
+  return false;
+}
+
+bool OnlinePoseOptions::IsValid(std::string* why) const {
+  std::string sub;
+  if (!filter.IsValid(&sub)) return fail(why, "filter." + sub);
+  if (!non_negative(known_start_sd_xy_m))
+    return fail(why, fmt::format("known_start_sd_xy_m = {} must be ≥ 0", known_start_sd_xy_m));
+  if (!non_negative(known_start_sd_theta_rad))
+    return fail(why, fmt::format("known_start_sd_theta_rad = {} must be ≥ 0", known_start_sd_theta_rad));
+  if (fix_sd_m && !(std::isfinite(*fix_sd_m) && *fix_sd_m > 0.0))
+    return fail(why, fmt::format("fix_sd_m = {} must be > 0", *fix_sd_m));
+  return true;
+}
+
+OnlinePoseTrack online_pose_track(const CalibrationInput& in, const OnlinePoseOptions& options) {
+  if (in.fix_t.empty())
+    throw std::invalid_argument(fmt::format(
+        "track '{}': online-pose needs position fixes (aps_x, aps_y); `odotune fixes` makes them from ground "
+        "truth",
+        in.track_name));
+  OnlinePoseTrack out;
+  if (options.start == OnlinePoseStart::known) out.start_pose = known_start(in);
+  const std::size_t n = in.t.size();
+  std::size_t f = 0;
+  auto add = [&](double t_s, double dt_s, double dphi_l, double dphi_r, bool with_fix) {
+    filters::PoseCalibSample s{dt_s, dphi_l, dphi_r};
+    if (with_fix) {
+      const auto [vx, vy] = fix_variances(in, f, options);
+      s.has_fix = true;
+      s.fix_x_m = in.fix_x[f], s.fix_y_m = in.fix_y[f];
+      s.fix_var_x_m2 = vx, s.fix_var_y_m2 = vy;
+      ++f;
+    }
+    out.samples.push_back(s);
+    out.t_s.push_back(t_s);
+  };
+  while (f < in.fix_t.size() && in.fix_t[f] <= in.t.front()) add(in.t.front(), 0.0, 0.0, 0.0, true);
+  for (std::size_t r = 1; r < n; ++r) {
+    const double t0 = in.t[r - 1], dt = in.t[r] - t0;
+    const double phi_l = in.omega_l[r] * dt, phi_r = in.omega_r[r] * dt;
+    double done = 0.0;  // fraction of the interval already sampled
+    while (f < in.fix_t.size() && in.fix_t[f] <= in.t[r]) {
+      const double frac = dt > 0.0 ? (in.fix_t[f] - t0) / dt : 1.0;
+      const double part = frac - done;
+      add(in.fix_t[f], part * dt, part * phi_l, part * phi_r, true);
+      done = frac;
+    }
+    const double rest = 1.0 - done;
+    if (rest > 0.0) add(in.t[r], rest * dt, rest * phi_l, rest * phi_r, false);
+  }
+  return out;
+}
+
+}  // namespace odotune
