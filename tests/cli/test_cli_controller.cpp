@@ -307,5 +307,68 @@ TEST_F(CliController, RoundTripThroughTheControllerFileLeavesNothingToCorrect) {
     EXPECT_NEAR(p3.at(k), p1.at(k), tol) << k;
 }
 
+// diagnose: the nominal robot × the fitted radius_error and wheel_base_error
+// scales; a robot without them gets one line and no file.
+TEST(CliControllerDiagnose, WritesTheCorrectedGeometryOrSaysThereIsNone) {
+  TempDir tmp;
+  const std::string scenario = std::string(ODOTUNE_SOURCE_DIR) + "/scenarios/track2.yaml";  // R 0.05 m, D 0.3 m
+  const std::string bad = (tmp / "bad.csv").string(), ideal = (tmp / "ideal.csv").string();
+  ASSERT_EQ(run_cli("simulate " + scenario + " -o " + bad + " --no-effects --effect " +
+                    "radius_error:scale_l=0.99,scale_r=1.012 --effect wheel_base_error:scale=1.02")
+                .exit_code,
+            0);
+  const fs::path ddc = tmp / "ddc.yaml", dj = tmp / "d.json";
+  auto r = run_cli("diagnose " + bad + " --to 60 --json " + dj.string() + " --controller-out " + ddc.string() +
+                   " --controller ros1 --controller-name base_controller");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("controller: " + ddc.string() + " (ros1 base_controller"));
+  const YAML::Node c = YAML::LoadFile(ddc.string())["base_controller"];
+  ASSERT_TRUE(c.IsMap()) << slurp(ddc);
+  EXPECT_EQ(c["type"].as<std::string>(), "diff_drive_controller/DiffDriveController");
+  EXPECT_DOUBLE_EQ(c["wheel_radius"].as<double>(), 0.05);
+  EXPECT_DOUBLE_EQ(c["wheel_separation"].as<double>(), 0.3);
+  std::map<std::string, double> fitted, stderrs;
+  const json diagnosis = json::parse(slurp(dj));
+  for (const json& f : diagnosis["findings"])
+    for (const auto& [k, v] : f["params"].items()) {
+      const std::string name = f["effect"].get<std::string>() + "." + k;
+      fitted[name] = v.get<double>();
+      stderrs[name] = f["stderr"][k].get<double>();
+    }
+  ASSERT_TRUE(fitted.count("radius_error.scale_l") && fitted.count("wheel_base_error.scale")) << slurp(dj);
+  const std::vector<std::tuple<const char*, const char*, double>> checks = {
+      {"left_wheel_radius_multiplier", "radius_error.scale_l", kScaleL},
+      {"right_wheel_radius_multiplier", "radius_error.scale_r", kScaleR},
+      {"wheel_separation_multiplier", "wheel_base_error.scale", kScaleD}};
+  for (const auto& [key, param, truth] : checks) {
+    const double m = c[key].as<double>();
+    EXPECT_NEAR(m, fitted[param], 5e-7) << key;  // nominal × scale / nominal, 6 decimals
+    EXPECT_NEAR(m, truth, std::max(5.0 * stderrs[param], 1e-4)) << key;
+  }
+  const std::string text = slurp(ddc);
+  for (const char* line :
+       {"# corrected by odotune diagnose", "# radius_error: scale_l = ", "# wheel_base_error: scale = ",
+        "# held-out position error without → with radius_error",
+        "# held-out position error, nominal → the whole chosen model"})
+    EXPECT_THAT(text, HasSubstr(line));
+
+  // Nothing to correct: one line, exit 0, no file.
+  ASSERT_EQ(run_cli("simulate " + scenario + " -o " + ideal + " --no-effects").exit_code, 0);
+  const fs::path none = tmp / "none.yaml";
+  r = run_cli("diagnose " + ideal + " --to 60 --controller-out " + none.string() +
+              " --controller ros2_control");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("controller: no radius_error or wheel_base_error found; " + none.string() +
+                               " not written\n"));
+  EXPECT_FALSE(fs::exists(none));
+
+  // The flags are checked before the diagnosis, by name.
+  r = run_cli("diagnose " + ideal + " --controller-out " + none.string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("--controller-out needs --controller"));
+  EXPECT_FALSE(fs::exists(none));
+}
+
 }  // namespace
 }  // namespace odotune
