@@ -184,8 +184,10 @@ std::optional<ControllerGeometry> diagnosis_controller_geometry(
                     "({})",
                     d.heldout.before_pos_rmse_m, d.heldout.after_pos_rmse_m, pct(d.heldout)));
   if (pooled && pooled->heldout_recordings)
-    g.heldout.push_back("held-out recordings, nominal → the pooled model: " + describe(pooled->heldout_test) +
-                        (pooled->heldout_test.proven ? ", proven" : ", not proven"));
+    g.heldout.push_back(
+        fmt::format("held-out recordings, nominal → the pooled model: {:.4f} m → {:.4f} m; {}, {}",
+                    pooled->heldout_test.error.before_pos_rmse_m, pooled->heldout_test.error.after_pos_rmse_m,
+                    describe(pooled->heldout_test), pooled->heldout_test.proven ? "proven" : "not proven"));
   return g;
 }
 
