@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
+#include "cli/controller_options.h"
 #include "cli/output.h"
 #include "cli/progress.h"
 #include "jobs/calibrate_job.h"
@@ -28,6 +29,7 @@ void print_calibrate(const CalibrateRequest& a) {
   if (!a.config_out.empty())
     fmt::print("calibration: {} (check it on held-out runs: odotune calibrate --apply {} --track …)\n",
                a.config_out, a.config_out);
+  if (!o.controller_line.empty()) fmt::print("{}\n", o.controller_line);
   if (!a.json.empty()) fmt::print("json: {}\n", a.json);
 }
 
@@ -146,6 +148,7 @@ void register_calibrate(CLI::App& app) {
   add_ext_options(sub, *req);
   add_fit_options(sub, *req);
   add_output_options(sub, *req);
+  add_controller_options(sub, req->controller, true);
   sub->callback([=] {
     if (req->apply.empty())
       print_calibrate(*req);

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
+#include "cli/controller_options.h"
 #include "cli/output.h"
 #include "jobs/diagnose_job.h"
 
@@ -47,6 +48,7 @@ void register_diagnose(CLI::App& app) {
                   "... and this share of the nominal model's held-out error (the larger of the two)")
       ->default_val(req->materiality.min_gain_share)
       ->check(CLI::Range(0.0, 1.0));
+  add_controller_options(sub, req->controller, false);
   sub->callback([req] {
     const DiagnoseRequest& a = *req;
     const DiagnoseOutcome o = run_diagnose(a);
@@ -54,6 +56,7 @@ void register_diagnose(CLI::App& app) {
     if (!a.json.empty()) fmt::print("json: {}\n", a.json);
     if (!a.scenario_out.empty())
       fmt::print("scenario: {} (odotune simulate {} -o corrected.csv)\n", a.scenario_out, a.scenario_out);
+    if (!o.controller_line.empty()) fmt::print("{}\n", o.controller_line);
     if (!a.report.empty())
       fmt::print("report: {}\n", (std::filesystem::path(a.report) / "index.html").string());
   });

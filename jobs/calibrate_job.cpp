@@ -251,12 +251,25 @@ struct OnExit {
   }
 };
 
+// --controller-out: the final estimate as the controller's parameters.
+std::string write_calibrate_controller(const CalibrateRequest& a, const CalibrateOutcome& out,
+                                       const ControllerOptions& options) {
+  const bool pf = out.result.method == CalibrationMethod::pf ||
+                  out.result.method == CalibrationMethod::adaptive_pf;
+  const std::string method = fmt::format("calibrated by odotune calibrate: method {}{}", a.method_name(),
+                                         pf ? fmt::format(", seed {}", out.info.options.pf.seed) : "");
+  return write_controller_file(a.controller, options,
+                               calibration_controller_geometry(a.controller, out.result, out.nominal,
+                                                               out.inputs.front().nominal, method, a.tracks));
+}
+
 }  // namespace
 
 CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& hooks) {
   for (const auto& [flag, path] : {std::pair{"--json", &a.json}, std::pair{"--csv", &a.csv},
                                    std::pair{"--figure", &a.figure}, std::pair{"--config-out", &a.config_out}})
     check_output_dir(flag, *path);
+  const ControllerOptions controller = check_controller_request(a.controller, true);
   if (!a.paths_csv.empty())
     throw Failure("--paths-csv applies to --apply only (the paths of a calibration file)");
   CalibrateOutcome out;
@@ -310,6 +323,7 @@ CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& 
                                pf ? fmt::format(", seed {}", out.info.options.pf.seed) : "", joined(a.tracks));
     write_calibration_file(file, a.config_out);
   }
+  if (!a.controller.out.empty()) out.controller_line = write_calibrate_controller(a, out, controller);
   if (!a.json.empty()) write_file_atomically(a.json, json_text);
   return out;
 }
@@ -325,6 +339,8 @@ ApplyOutcome run_calibrate_apply(const CalibrateRequest& a) {
         std::pair{"--figure", !a.figure.empty()}, std::pair{"--config-out", !a.config_out.empty()}})
     if (given)
       throw Failure(fmt::format("{} does not combine with --apply (which replays a calibration file)", flag));
+  refuse_controller_flags(a.controller, "--apply (which replays a calibration file; the calibrate run that "
+                                        "makes one writes the controller file)");
   check_output_dir("--json", a.json);
   check_output_dir("--paths-csv", a.paths_csv);
   const CalibrationFile cal = read_calibration_file(a.apply);

@@ -30,6 +30,7 @@
 #include "calibration/calibration_run.h"
 #include "filters/odometry_params.h"
 #include "formats/calibration_json.h"
+#include "jobs/controller_export.h"
 
 namespace odotune {
 
@@ -68,6 +69,8 @@ struct CalibrateRequest {
   // truth of every track as CSV ("": not written): track, t_s, gt_x_m,
   // gt_y_m, nominal_x_m, nominal_y_m, calibrated_x_m, calibrated_y_m.
   std::string paths_csv;
+  // --controller-out and its flags (jobs/controller_export.h); not with --apply.
+  ControllerRequest controller;
 
   // The method's name, given or the default.
   std::string method_name() const { return method.value_or("adaptive-pf"); }
@@ -87,14 +90,18 @@ struct CalibrateOutcome {
   CalibrationResult result;
   std::vector<TrackCalibrationScore> nominal;  // the inputs' nominal parameters, scored
   std::vector<std::string> summary;            // calibration_summary_lines()
+  std::string controller_line;                 // --controller-out: what was written ("" without it)
 };
 
 // Checks the output folders, loads the tracks (one robot: equal nominal
 // radii and wheel base), builds the options, runs the calibration and
 // writes, in this order, the figure (STEM.png, STEM.svg; gnuplot is the
 // likeliest to fail), the CSV trace, the calibration YAML (--config-out, for
-// --apply) and the JSON (formats/calibration_json.h). Every file is written
-// atomically, after the run. Throws odotune::Failure.
+// --apply), the controller's parameters (--controller-out, the final
+// estimate as --config-out; jobs/controller_export.h, whose flags are checked
+// with the output folders before the run) and the JSON
+// (formats/calibration_json.h). Every file is written atomically, after the
+// run. Throws odotune::Failure.
 CalibrateOutcome run_calibrate(const CalibrateRequest& request, const CalibrateHooks& hooks = {});
 
 struct ApplyOutcome {
@@ -107,7 +114,8 @@ struct ApplyOutcome {
 // velocities are derived from it at 10 Hz for tracks without them) with the
 // calibration file request.apply and with their nominal parameters, and
 // writes request.json. Throws odotune::Failure when a calibration flag or
-// another output was given, or on bad files.
+// another output (--controller-out and its flags too) was given, or on bad
+// files.
 ApplyOutcome run_calibrate_apply(const CalibrateRequest& request);
 
 }  // namespace odotune

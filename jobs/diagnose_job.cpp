@@ -71,6 +71,7 @@ diagnose::DiagInput diag_input(const DiagnoseRequest& a, const std::string& file
 
 DiagnoseOutcome run_diagnose(const DiagnoseRequest& a) {
   if (a.tracks.empty()) throw Failure("diagnose: no track given");
+  const ControllerOptions controller = check_controller_request(a.controller, false);
   std::vector<std::string> files = a.tracks;
   files.insert(files.end(), a.heldout.begin(), a.heldout.end());
   const std::vector<Track> tracks = load_tracks(files);
@@ -78,6 +79,8 @@ DiagnoseOutcome run_diagnose(const DiagnoseRequest& a) {
   std::vector<diagnose::DiagInput> inputs;
   for (std::size_t k = 0; k < tracks.size(); ++k) inputs.push_back(diag_input(a, files[k], tracks[k]));
   diagnose::DiagInput in = inputs.front();
+  filters::OdometryParams nominal;
+  if (!a.controller.out.empty()) nominal = diagnosis_track_nominal(in, files.front());
   diagnose::DiagnoseOptions o;
   o.select.fit.window_s = a.window_s;
   o.select.materiality = a.materiality;
@@ -113,6 +116,14 @@ DiagnoseOutcome run_diagnose(const DiagnoseRequest& a) {
   }
   if (!a.scenario_out.empty())
     write_atomically(a.scenario_out, "scenario", corrected_scenario_yaml(track, files.front(), d));
+  if (!a.controller.out.empty()) {
+    const auto g = diagnosis_controller_geometry(d, out.several ? &out.pooled : nullptr, nominal, a.tracks,
+                                                 a.heldout);
+    out.controller_line = g ? write_controller_file(a.controller, controller, *g)
+                            : fmt::format(
+                                  "controller: no radius_error or wheel_base_error found; {} not written",
+                                  a.controller.out);
+  }
   if (!a.json.empty()) write_atomically(a.json, "diagnosis JSON", json_text);
   return out;
 }

@@ -10,6 +10,7 @@
 
 #include "diagnose/diagnosis.h"
 #include "diagnose/recordings.h"
+#include "jobs/controller_export.h"
 
 namespace odotune {
 
@@ -29,6 +30,10 @@ struct DiagnoseRequest {
   // Track-time interval to diagnose [s]. The track is cut (diagnose::crop)
   // only when one of them is given; neither: the whole track.
   std::optional<double> from_s, to_s;
+  // --controller-out and its flags (jobs/controller_export.h; no nominal
+  // overrides): the nominal robot × the fitted radius_error and
+  // wheel_base_error scales as the controller's parameters.
+  ControllerRequest controller;
 };
 
 struct DiagnoseOutcome {
@@ -37,6 +42,10 @@ struct DiagnoseOutcome {
   diagnose::PooledDiagnosis pooled;
   // diagnosis_summary(): the one-sentence first line, then the details.
   std::vector<std::string> summary;
+  // --controller-out: the line saying what was written, or that no
+  // radius_error or wheel_base_error was found and no file was written
+  // (an existing file is left as it is); "" without --controller-out.
+  std::string controller_line;
 };
 
 // Reads the track(s), diagnoses them (several: fitted pooled, proven on the
@@ -44,7 +53,9 @@ struct DiagnoseOutcome {
 // and the scenario are those of the pooled fit recordings, the scenario
 // driven along the first) and writes, in this order: the report folder
 // (results/diagnosis_report.h), the scenario (odotune simulate reads it), the
-// JSON; each file appears whole or not at all.
+// controller's parameters (only when radius_error or wheel_base_error was
+// found; the flags and the track's nominal geometry are checked before the
+// diagnosis), the JSON; each file appears whole or not at all.
 // Throws odotune::Failure (one line naming the track or the report folder)
 // when the track cannot be read, cut or diagnosed, the report cannot be
 // written or the corrected scenario cannot be built; std::runtime_error

@@ -1,0 +1,84 @@
+// `--controller-out` of `calibrate` and `diagnose`: the flags as plain
+// values, their checks (before the long work), the geometry each command
+// hands to formats/controller_config.h, and the line the command prints.
+//
+// Flags (docs/calibration/README.md, "Into the robot's controller"):
+//   --controller-out FILE and --controller ros2_control|ros1|gazebo go
+//   together; --controller-form multipliers|absolute (default multipliers)
+//   and --controller-name NAME (default diff_drive_controller) need them and
+//   apply to the ROS controllers only; --nominal-wheel-radius-m R and
+//   --nominal-wheel-base-m D (calibrate only) replace the nominal geometry
+//   the multipliers refer to (default: the first track's robot.* metadata).
+// Every refusal is an odotune::Failure naming the flag.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calibration/calibration_run.h"
+#include "diagnose/diagnosis.h"
+#include "diagnose/recordings.h"
+#include "filters/odometry_params.h"
+#include "formats/controller_config.h"
+
+namespace odotune {
+
+struct ControllerRequest {
+  std::string out;                               // --controller-out FILE; "" = no controller file
+  std::optional<std::string> kind;               // --controller: ros2_control | ros1 | gazebo
+  std::optional<std::string> form;               // --controller-form: multipliers (default) | absolute
+  std::optional<std::string> name;               // --controller-name; default diff_drive_controller
+  std::optional<double> nominal_wheel_radius_m;  // --nominal-wheel-radius-m [m] (calibrate)
+  std::optional<double> nominal_wheel_base_m;    // --nominal-wheel-base-m [m] (calibrate)
+
+  bool any_given() const;
+};
+
+// Checks the flags together and the output path (core/output_paths.h); call
+// it before the long work. Throws odotune::Failure naming the flag: one of
+// --controller-out and --controller without the other, an unknown kind or
+// form, a malformed name, --controller-form or --controller-name with
+// gazebo, a nominal override that is not a finite length > 0 [m], or (when
+// !nominal_flags_allowed) a nominal override at all.
+ControllerOptions check_controller_request(const ControllerRequest& request, bool nominal_flags_allowed);
+
+// Throws odotune::Failure "FLAG does not combine with CONTEXT" for the first
+// controller flag given (e.g. with calibrate --apply).
+void refuse_controller_flags(const ControllerRequest& request, const std::string& context);
+
+// What a calibration run found, as the controller file's input: the final
+// estimate (online methods: the estimate after the last track, as
+// --config-out), the nominal (the first input's, or the overrides), and the
+// provenance (method, seed of the PF methods, tracks, the estimate's sd, the
+// dead-reckoning pose RMSE on the calibrated tracks: not held out).
+ControllerGeometry calibration_controller_geometry(
+    const ControllerRequest& request, const CalibrationResult& result,
+    const std::vector<TrackCalibrationScore>& nominal_scores, const filters::OdometryParams& track_nominal,
+    const std::string& method_line, const std::vector<std::string>& track_files);
+
+// The corrected geometry of a diagnosis: the nominal robot × the fitted
+// scales of radius_error (scale_l, scale_r) and wheel_base_error (scale)
+// (../shared/specs/physics-effects.md); nullopt when neither was found.
+// Provenance: the effects, their fitted size ± stderr, the other findings
+// (not in the file) and, in `heldout`, each effect's held-out position error
+// without → with it, the held-out recordings' test when there are some.
+std::optional<ControllerGeometry> diagnosis_controller_geometry(const diagnose::Diagnosis& diagnosis,
+                                                                const diagnose::PooledDiagnosis* pooled,
+                                                                const filters::OdometryParams& track_nominal,
+                                                                const std::vector<std::string>& fit_files,
+                                                                const std::vector<std::string>& heldout_files);
+
+// The track's nominal robot as diagnose reads it (diagnose/diag_input.h);
+// throws odotune::Failure naming --controller-out and the track when it has
+// no positive radii and wheel base (body-velocity odometry without robot.*).
+filters::OdometryParams diagnosis_track_nominal(const diagnose::DiagInput& input, const std::string& file);
+
+// Writes the file (atomically) and returns the line the command prints:
+// "controller: FILE (ros2_control diff_drive_controller, multipliers form:
+// wheel_radius … m × left … right …, wheel_separation … m × …)". Throws
+// odotune::Failure.
+std::string write_controller_file(const ControllerRequest& request, const ControllerOptions& options,
+                                  const ControllerGeometry& geometry);
+
+}  // namespace odotune
