@@ -216,7 +216,7 @@ void run_online(Filter& filter, const std::vector<const CalibrationInput*>& inpu
 
 // Runs the online pose-domain calibrator over every track in turn: the
 // geometry carries over, the pose starts again on each track.
-void run_online_pose(filters::MemoryPair<filters::PoseCalibrator>& pair,
+void run_online_pose(filters::MemoryPair<filters::PoseCalibrator, filters::DistanceMemoryParams>& pair,
                      const std::vector<const CalibrationInput*>& inputs, const OnlinePoseOptions& o, double tol,
                      CalibrationResult* res) {
   using Clock = std::chrono::steady_clock;
@@ -423,8 +423,8 @@ CalibrationResult run_calibration(const std::vector<const CalibrationInput*>& in
     }
     case CalibrationMethod::online_pose: {
       const filters::PoseCalibratorParams& p = options.online_pose.filter;
-      filters::MemoryPair<filters::PoseCalibrator> pair(filters::PoseCalibrator(p), p.evidence,
-                                                        options.memory_pair);
+      filters::MemoryPair<filters::PoseCalibrator, filters::DistanceMemoryParams> pair(
+          filters::PoseCalibrator(p), online_pose_memory(inputs, options.online_pose), options.memory_pair);
       run_online_pose(pair, inputs, options.online_pose, tol, &res);
       res.memory_pair = true;
       res.memory_restarts = pair.changes();

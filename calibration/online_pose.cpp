@@ -1,5 +1,6 @@
 #include "calibration/online_pose.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -68,6 +69,10 @@ bool OnlinePoseOptions::IsValid(std::string* why) const {
     return fail(why, fmt::format("known_start_sd_xy_m = {} must be ≥ 0", known_start_sd_xy_m));
   if (!non_negative(known_start_sd_theta_rad))
     return fail(why, fmt::format("known_start_sd_theta_rad = {} must be ≥ 0", known_start_sd_theta_rad));
+  if (min_memory_m && !(std::isfinite(*min_memory_m) && *min_memory_m > 0.0))
+    return fail(why, fmt::format("min_memory_m = {} must be > 0", *min_memory_m));
+  if (!(std::isfinite(fix_sd_memory_factor) && fix_sd_memory_factor >= 0.0))
+    return fail(why, fmt::format("fix_sd_memory_factor = {} must be ≥ 0", fix_sd_memory_factor));
   if (fix_sd_m && !(std::isfinite(*fix_sd_m) && *fix_sd_m > 0.0))
     return fail(why, fmt::format("fix_sd_m = {} must be > 0", *fix_sd_m));
   return true;
@@ -110,6 +115,27 @@ OnlinePoseTrack online_pose_track(const CalibrationInput& in, const OnlinePoseOp
     if (rest > 0.0) add(in.t[r], rest * dt, rest * phi_l, rest * phi_r, false);
   }
   return out;
+}
+
+filters::DistanceMemoryParams online_pose_memory(const std::vector<const CalibrationInput*>& inputs,
+                                                 const OnlinePoseOptions& options) {
+  filters::DistanceMemoryParams m = options.filter.memory;
+  if (options.min_memory_m) {
+    m.min_memory_m = *options.min_memory_m;
+  } else {
+    std::vector<double> sd;
+    for (const CalibrationInput* in : inputs)
+      for (std::size_t i = 0; i < in->fix_t.size(); ++i) {
+        const auto [vx, vy] = fix_variances(*in, i, options);
+        sd.push_back(std::sqrt(0.5 * (vx + vy)));
+      }
+    if (!sd.empty()) {
+      std::nth_element(sd.begin(), sd.begin() + static_cast<std::ptrdiff_t>(sd.size() / 2), sd.end());
+      m.min_memory_m = std::max(m.min_memory_m, options.fix_sd_memory_factor * sd[sd.size() / 2]);
+    }
+  }
+  m.max_memory_m = std::max(m.max_memory_m, m.min_memory_m);
+  return m;
 }
 
 }  // namespace odotune

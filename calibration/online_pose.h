@@ -31,6 +31,13 @@ struct OnlinePoseOptions {
   // The fixes' sd [m] where a track gives no aps_var_x/aps_var_y; without
   // it such a fix is refused (its weight would be a guess).
   std::optional<double> fix_sd_m;
+  // The memory's minimum (filter.memory.min_memory_m, the fast twin's) when
+  // not given: at least fix_sd_memory_factor × the fixes' median sd, so that
+  // over the fast twin's memory a 1 % geometry change moves the dead
+  // reckoning by about one fix sd (GPS-grade fixes need a longer memory than
+  // motion capture, or the pair chases their noise).
+  std::optional<double> min_memory_m;
+  double fix_sd_memory_factor = 100.0;
 
   // True when usable; otherwise *why names the first bad value ("filter."
   // prefixed for the filter's).
@@ -52,5 +59,12 @@ struct OnlinePoseTrack {
 // track when it has no fix, a fix has no variance and options.fix_sd_m is
 // not set, or a known start finds no ground-truth pose.
 OnlinePoseTrack online_pose_track(const CalibrationInput& in, const OnlinePoseOptions& options);
+
+// The filter's memory for these tracks: options.min_memory_m when given,
+// else the larger of filter.memory.min_memory_m and fix_sd_memory_factor ×
+// the median fix sd (the tracks' own variances or fix_sd_m); the maximum
+// is raised to the minimum when below it.
+filters::DistanceMemoryParams online_pose_memory(const std::vector<const CalibrationInput*>& inputs,
+                                                 const OnlinePoseOptions& options);
 
 }  // namespace odotune

@@ -99,8 +99,10 @@ void add_fit_options(CLI::App* sub, CalibrateRequest& req) {
   sub->add_option("--fix-sigma-m", req.fix_sigma_m,
                   "online-pose: the fixes' sd [m] where a track gives no aps_var_x/aps_var_y")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--pose-memory", req.pose_memory_s,
-                  "online-pose: the geometry's memory after a detected change [s] (default 10)")
+  sub->add_option(
+         "--pose-memory-m", req.pose_memory_m,
+         "online-pose: the geometry's memory after a detected change, in metres rolled (default: 10, or 100 × "
+         "the fixes' median sd when longer)")
       ->check(CLI::PositiveNumber);
 }
 

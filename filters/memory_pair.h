@@ -46,14 +46,22 @@ struct MemoryPairParams {
   }
 };
 
-template <class Filter>
+// The fast twin's memory: fixed at the slow one's minimum.
+inline EvidenceMemoryParams fast_twin(const EvidenceMemoryParams& p) {
+  return {p.min_memory_s, p.min_memory_s};
+}
+
+// Memory: the filter's memory parameters (EvidenceMemoryParams, in seconds;
+// filters/pose_calibrator.h's DistanceMemoryParams, in metres), with a
+// fast_twin() overload.
+template <class Filter, class Memory = EvidenceMemoryParams>
 class MemoryPair {
  public:
   // `proto` is the filter as configured (its own memory is replaced).
-  MemoryPair(const Filter& proto, const EvidenceMemoryParams& memory, const MemoryPairParams& pair)
+  MemoryPair(const Filter& proto, const Memory& memory, const MemoryPairParams& pair)
       : memory_(memory), pair_(pair), slow_(proto), fast_(proto) {
     slow_.set_memory(memory_);
-    fast_.set_memory(EvidenceMemoryParams{memory_.min_memory_s, memory_.min_memory_s});
+    fast_.set_memory(fast_twin(memory_));
   }
 
   // Sample: what Filter::step takes (CalibSample, or PoseCalibSample for
@@ -87,7 +95,7 @@ class MemoryPair {
   }
 
  private:
-  EvidenceMemoryParams memory_;
+  Memory memory_;
   MemoryPairParams pair_;
   Filter slow_, fast_;
   double cusum_ = 0.0;

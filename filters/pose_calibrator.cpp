@@ -65,7 +65,7 @@ bool PoseCalibratorParams::IsValid(std::string* why) const {
     return fail(why, fmt::format("acquire_spread_sigmas = {} must be > 0", acquire_spread_sigmas));
   if (acquire_min_fixes < 2)
     return fail(why, fmt::format("acquire_min_fixes = {} must be ≥ 2", acquire_min_fixes));
-  if (!evidence.IsValid(&sub)) return fail(why, "evidence." + sub);
+  if (!memory.IsValid(&sub)) return fail(why, "memory." + sub);
   return true;
 }
 
@@ -93,7 +93,15 @@ PcPrediction pose_calibrator_predict(const PcState& s, double dphi_left_rad, dou
   return out;
 }
 
-PoseCalibrator::PoseCalibrator(const PoseCalibratorParams& params) : params_(params), memory_(params.evidence) {
+bool DistanceMemoryParams::IsValid(std::string* why) const {
+  if (!(positive(min_memory_m) && positive(max_memory_m) && min_memory_m <= max_memory_m))
+    return fail(why, fmt::format("memory {}–{} m: expected 0 < min_memory_m ≤ max_memory_m", min_memory_m,
+                                 max_memory_m));
+  return true;
+}
+
+PoseCalibrator::PoseCalibrator(const PoseCalibratorParams& params)
+    : params_(params), memory_(distance_memory(params.memory)) {
   std::string why;
   if (!params_.IsValid(&why)) throw std::invalid_argument("pose calibrator: " + why);
   const OdometryParams& g = params_.initial;
@@ -145,7 +153,6 @@ const CalibEstimate& PoseCalibrator::step(const PoseCalibSample& s) {
         "pose calibrator: bad sample (dt {} s, wheel angles {} / {} rad, fix {} {} var {} {})", s.dt_s,
         s.dphi_left_rad, s.dphi_right_rad, s.fix_x_m, s.fix_y_m, s.fix_var_x_m2, s.fix_var_y_m2));
   last_log_predictive_ = 0.0;
-  since_fix_s_ += s.dt_s;
   if (pose_known_) {
     predict(s);
     if (s.has_fix) fix_update(s);
@@ -162,12 +169,13 @@ void PoseCalibrator::predict(const PoseCalibSample& s) {
   const double l = std::abs(x_(kPcRadiusLeft) * s.dphi_left_rad);
   const double r = std::abs(x_(kPcRadiusRight) * s.dphi_right_rad);
   const Eigen::Vector2d q(params_.wheel_noise_m2_per_m * l, params_.wheel_noise_m2_per_m * r);
+  rolled_since_fix_m_ += 0.5 * (l + r);
   x_ = p.next;
   P_ = p.F * P_ * p.F.transpose() + p.G * q.asDiagonal() * p.G.transpose();
 }
 
-void PoseCalibrator::fade(double dt_s) {
-  const double inflate = memory_.step(dt_s);
+void PoseCalibrator::fade(double rolled_m) {
+  const double inflate = memory_.step(rolled_m);
   const double s = std::sqrt(1.0 + inflate);
   P_.bottomRows<3>() *= s;
   P_.rightCols<3>() *= s;
@@ -184,8 +192,8 @@ void PoseCalibrator::fade(double dt_s) {
 }
 
 void PoseCalibrator::fix_update(const PoseCalibSample& s) {
-  fade(since_fix_s_);
-  since_fix_s_ = 0.0;
+  fade(rolled_since_fix_m_);
+  rolled_since_fix_m_ = 0.0;
   const Eigen::Vector2d z(s.fix_x_m, s.fix_y_m);
   const Eigen::Matrix2d R = Eigen::Vector2d(s.fix_var_x_m2, s.fix_var_y_m2).asDiagonal();
   const Eigen::Vector2d nu = z - x_.head<2>();
@@ -225,7 +233,7 @@ void PoseCalibrator::acquire(const PoseCalibSample& s) {
   acq_.turn_rad += std::abs(acq_.odometry(kPcTheta) - theta0);
   acq_.distance_m += std::hypot(acq_.odometry(kPcX) - x0, acq_.odometry(kPcY) - y0);
   if (!s.has_fix) return;
-  since_fix_s_ = 0.0;
+  rolled_since_fix_m_ = 0.0;
   acq_.odo.emplace_back(acq_.odometry(kPcX), acq_.odometry(kPcY));
   acq_.fix.emplace_back(s.fix_x_m, s.fix_y_m);
   acq_.var_sum += 0.5 * (s.fix_var_x_m2 + s.fix_var_y_m2);

@@ -12,10 +12,13 @@
 //   geometry is constant; P⁻ = F P Fᵀ + G Q Gᵀ with F = ∂s'/∂s,
 //   G = ∂s'/∂(l, r) and Q = diag(k·|l|, k·|r|), k = wheel_noise_m2_per_m
 //   (random wheel error whose variance grows with the distance rolled).
-// Fade, before each fix dt seconds after the previous one: the geometry's
-//   share of P is widened, P ← S P S with S = diag(1, 1, 1, s, s, s),
-//   s² = e^{dt/M} (filters/pf_evolution.h's evidence memory, as DualKf's
-//   fading memory), no geometry variance past its initial one.
+// Fade, before each fix, after the wheels rolled Δs metres since the
+//   previous one (Δs = Σ(|l| + |r|)/2): the geometry's share of P is widened,
+//   P ← S P S with S = diag(1, 1, 1, s, s, s), s² = e^{Δs/M}, no geometry
+//   variance past its initial one. The memory M is a distance (a geometry
+//   error shows in proportion to the distance rolled, and a robot standing
+//   still forgets nothing); it grows like filters/pf_evolution.h's evidence
+//   memory, in metres instead of seconds.
 // Update with a fix z = (x, y), R = diag(var_x, var_y): H = [I₂ 0],
 //   Joseph form. Gate: a fix whose normalised innovation squared exceeds
 //   gate_nis is not applied (an outlier); after max_rejected_fixes in a row
@@ -54,6 +57,20 @@ using PcCov = Eigen::Matrix<double, kPcDim, kPcDim>;
 using PcJacobian = Eigen::Matrix<double, kPcDim, kPcDim>;
 using PcNoiseJacobian = Eigen::Matrix<double, kPcDim, 2>;
 
+// The geometry's memory, in metres rolled: M starts at min_memory_m after a
+// (re)start and grows with the distance up to max_memory_m.
+struct DistanceMemoryParams {
+  double min_memory_m = 10.0;    // M at the (re)start; the fast twin's fixed M
+  double max_memory_m = 1000.0;  // the longest memory
+
+  // True when usable; otherwise *why names the first bad value.
+  bool IsValid(std::string* why) const;
+};
+// The fast twin of filters/memory_pair.h: its memory stays at the minimum.
+inline DistanceMemoryParams fast_twin(const DistanceMemoryParams& p) {
+  return {p.min_memory_m, p.min_memory_m};
+}
+
 struct PoseCalibratorParams {
   OdometryParams initial;                    // geometry at the start (the robot's nominal values)
   double initial_sd_radius_frac = 0.02;      // prior sd of each radius, as a fraction of it
@@ -63,7 +80,7 @@ struct PoseCalibratorParams {
   int max_rejected_fixes = 5;                // in a row, then the pose is re-acquired
   double acquire_spread_sigmas = 4.0;        // start from fixes: their RMS spread, in fix sds
   int acquire_min_fixes = 3;                 // ... and at least this many fixes
-  EvidenceMemoryParams evidence;             // the geometry's fading memory
+  DistanceMemoryParams memory;               // the geometry's fading memory
 
   // True when usable; otherwise *why names the first bad value.
   bool IsValid(std::string* why) const;
@@ -118,14 +135,18 @@ class PoseCalibrator {
   // log p(fix | past) of the last step's fix (0 without one, and while the
   // pose is acquired): filters/memory_pair.h's change test.
   double last_log_predictive() const { return last_log_predictive_; }
-  void set_memory(const EvidenceMemoryParams& p) { memory_ = EvidenceMemory(p); }
-  double memory_s() const { return memory_.memory_s(); }
+  void set_memory(const DistanceMemoryParams& p) { memory_ = distance_memory(p); }
+  double memory_m() const { return memory_.memory_s(); }
 
  private:
   void predict(const PoseCalibSample& s);
   void fix_update(const PoseCalibSample& s);
   void acquire(const PoseCalibSample& s);
-  void fade(double dt_s);
+  void fade(double rolled_m);
+  // EvidenceMemory's clock, advanced here by metres rolled instead of seconds.
+  static EvidenceMemory distance_memory(const DistanceMemoryParams& p) {
+    return EvidenceMemory(EvidenceMemoryParams{p.min_memory_m, p.max_memory_m});
+  }
   void refresh_estimate(const PoseCalibSample& s);
 
   struct Acquisition {
@@ -142,7 +163,7 @@ class PoseCalibrator {
   bool pose_known_ = false;
   Acquisition acq_;
   EvidenceMemory memory_;
-  double since_fix_s_ = 0.0;
+  double rolled_since_fix_m_ = 0.0;
   int rejected_in_row_ = 0;
   CalibEstimate estimate_;
   long iteration_ = 0, fixes_applied_ = 0, fixes_rejected_ = 0, reacquisitions_ = 0;

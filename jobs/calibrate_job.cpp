@@ -133,7 +133,7 @@ void check_method_flags(const CalibrateRequest& a, CalibrationMethod m, const st
                                 method));
   for (const auto& [flag, given] :
        {std::pair{"--start", a.start.has_value()}, std::pair{"--fix-sigma-m", a.fix_sigma_m.has_value()},
-        std::pair{"--pose-memory", a.pose_memory_s.has_value()}})
+        std::pair{"--pose-memory-m", a.pose_memory_m.has_value()}})
     if (given && m != CalibrationMethod::online_pose)
       throw Failure(fmt::format("{} applies to --method online-pose only (got --method {})", flag, method));
 }
@@ -149,11 +149,10 @@ void make_online_pose_options(const CalibrateRequest& a, const OdometryParams& n
       throw Failure(fmt::format("--fix-sigma-m {}: expected a finite sd > 0 [m]", *a.fix_sigma_m));
     o.fix_sd_m = *a.fix_sigma_m;
   }
-  if (a.pose_memory_s) {
-    if (!(std::isfinite(*a.pose_memory_s) && *a.pose_memory_s > 0.0))
-      throw Failure(fmt::format("--pose-memory {}: expected a finite memory > 0 [s]", *a.pose_memory_s));
-    o.filter.evidence.min_memory_s = *a.pose_memory_s;
-    o.filter.evidence.max_memory_s = std::max(o.filter.evidence.max_memory_s, *a.pose_memory_s);
+  if (a.pose_memory_m) {
+    if (!(std::isfinite(*a.pose_memory_m) && *a.pose_memory_m > 0.0))
+      throw Failure(fmt::format("--pose-memory-m {}: expected a finite distance > 0 [m]", *a.pose_memory_m));
+    o.min_memory_m = *a.pose_memory_m;
   }
 }
 

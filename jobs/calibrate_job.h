@@ -40,7 +40,7 @@ struct CalibrateRequest {
   // The calibration's flags: a flag not given is nullopt and takes the default
   // named beside it. --resampler, --policy, --particles, --pf-evolution and
   // --pf-memory apply to the PF methods only, --segment to batch-pose,
-  // --start, --fix-sigma-m and --pose-memory to online-pose, and none
+  // --start, --fix-sigma-m and --pose-memory-m to online-pose, and none
   // of the calibration flags combines with --apply.
   std::optional<std::string>
       method;  // adaptive-pf (default) | pf | dkf | online-pose | batch-pose (batch) | batch-velocity | none
@@ -61,7 +61,7 @@ struct CalibrateRequest {
   bool fit_start_heading = false;       // batch-pose: fit each segment's start heading too
   std::optional<std::string> start;     // online-pose: fixes (default) | known
   std::optional<double> fix_sigma_m;    // online-pose: the fixes' sd where a track gives no aps_var [m]
-  std::optional<double> pose_memory_s;  // online-pose: memory after a change [s]; default 10
+  std::optional<double> pose_memory_m;  // online-pose: memory after a change [m rolled]; default 10
   // Output files ("": not written). calibrate: all four; --apply: json only.
   std::string json, csv, figure, config_out;
   std::string apply;  // the calibration file --apply replays

@@ -59,13 +59,16 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
                                 info.init_radius_m.hi, info.init_wheel_base_m.lo, info.init_wheel_base_m.hi);
   if (r.method == CalibrationMethod::online_pose) {
     const OnlinePoseOptions& o = info.options.online_pose;
+    std::vector<const CalibrationInput*> ptrs;
+    for (const auto& in : inputs) ptrs.push_back(&in);
+    const filters::DistanceMemoryParams memory = online_pose_memory(ptrs, o);
     how = fmt::format(
         "initial R_L {:.5f} m, R_R {:.5f} m, D {:.5f} m, sd {:g} % / {:g} %; start from {}; memory "
-        "{:g}–{:g} s",
+        "{:g}–{:g} m rolled",
         o.filter.initial.wheel_radius_left_m, o.filter.initial.wheel_radius_right_m,
         o.filter.initial.wheel_base_m, 100 * o.filter.initial_sd_radius_frac,
-        100 * o.filter.initial_sd_wheel_base_frac, to_string(o.start), o.filter.evidence.min_memory_s,
-        o.filter.evidence.max_memory_s);
+        100 * o.filter.initial_sd_wheel_base_frac, to_string(o.start), memory.min_memory_m,
+        memory.max_memory_m);
   }
   if (pf) {
     const filters::PfCalibratorParams p = effective_pf_params(info.options);

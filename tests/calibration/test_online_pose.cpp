@@ -86,6 +86,19 @@ TEST(OnlinePoseTrack, RefusesFixesWithoutVarianceNoFixesAndAKnownStartWithoutGro
   EXPECT_FALSE(parse_online_pose_start("gps", &s));
 }
 
+TEST(OnlinePoseTrack, MemoryLengthensWithTheFixesSdUnlessGiven) {
+  CalibrationInput in = tiny_input();
+  in.fix_var_x = in.fix_var_y = {0.81, 0.81};  // GPS-grade: σ 0.9 m
+  const std::vector<const CalibrationInput*> ptrs{&in};
+  OnlinePoseOptions o;
+  EXPECT_DOUBLE_EQ(online_pose_memory(ptrs, o).min_memory_m, 90.0);
+  in.fix_var_x = in.fix_var_y = {0.0036, 0.0036};  // motion capture grade: the default minimum
+  EXPECT_DOUBLE_EQ(online_pose_memory(ptrs, o).min_memory_m, o.filter.memory.min_memory_m);
+  o.min_memory_m = 2000.0;  // given: used as is, the maximum raised to it
+  EXPECT_DOUBLE_EQ(online_pose_memory(ptrs, o).min_memory_m, 2000.0);
+  EXPECT_DOUBLE_EQ(online_pose_memory(ptrs, o).max_memory_m, 2000.0);
+}
+
 // The misaligned wheelchair (radii × 0.99 / 1.012, base × 1.02) with 1 Hz
 // fixes of σ 60 mm, as `odotune fixes` makes them; ground truth only to score.
 CalibrationInput chair_with_fixes(double duration_s, std::uint64_t seed, std::vector<std::string> effects) {

@@ -145,7 +145,7 @@ TEST(PoseCalibrator, MemoryPairFollowsARadiusStep) {
   };
   const Drive d = drive(600.0, 1.0, 1.0, 0.06, 9, truth);
   const PoseCalibratorParams p = nominal_params();
-  MemoryPair<PoseCalibrator> pair(PoseCalibrator(p), p.evidence, MemoryPairParams{});
+  MemoryPair<PoseCalibrator, DistanceMemoryParams> pair(PoseCalibrator(p), p.memory, MemoryPairParams{});
   pair.apply([&](PoseCalibrator& f) { f.start_at(d.start, 0.01, 0.01); });
   double settled = -1.0;
   for (std::size_t i = 0; i < d.samples.size(); ++i) {
