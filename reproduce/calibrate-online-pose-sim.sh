@@ -7,7 +7,8 @@
 # seeds that the filter's design never used (its design seeds were 101-103).
 #   bash reproduce/calibrate-online-pose-sim.sh [OUT_DIR] [SEEDS…]
 # (default out/online-pose-sim, seeds 1 2 3 4 5). Writes OUT_DIR/runs.csv
-# (one row per scenario, fix setting and seed) and OUT_DIR/summary.md.
+# (one row per scenario, fix setting and seed), OUT_DIR/summary.md and
+# OUT_DIR/wheelchair_step.png/.svg (the estimates over time, first seed).
 # Needs build/odotune and python3.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -53,6 +54,10 @@ for s in "${SEEDS[@]}"; do
   run slow_robot_20min_step "$OUT/slow_robot_20min.yaml" 600 10 0.06 "$s"
   echo "  seed $s done" >&2
 done
+
+# The estimates over time on the passenger's step, first seed (calibrate --figure).
+f="$OUT/tracks/wheelchair_step-${SEEDS[0]}-fixes-1-0.06.csv"
+"$BIN" calibrate --track "$f" --method online-pose --fix-sigma-m 0.06 --figure "$OUT/wheelchair_step" > /dev/null
 
 python3 - "$OUT" <<'PY'
 import csv, sys, statistics as st
