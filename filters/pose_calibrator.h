@@ -75,7 +75,7 @@ struct PoseCalibratorParams {
   OdometryParams initial;                    // geometry at the start (the robot's nominal values)
   double initial_sd_radius_frac = 0.02;      // prior sd of each radius, as a fraction of it
   double initial_sd_wheel_base_frac = 0.05;  // prior sd of D, as a fraction of it
-  double wheel_noise_m2_per_m = 1e-5;        // k: variance of a wheel's travel per metre rolled [m²/m]
+  double wheel_noise_m2_per_m = 1e-6;        // k: variance of a wheel's travel per metre rolled [m²/m]
   double gate_nis = 25.0;                    // NIS above which a fix is an outlier (χ²₂: p ≈ 4·10⁻⁶)
   int max_rejected_fixes = 5;                // in a row, then the pose is re-acquired
   double acquire_spread_sigmas = 4.0;        // start from fixes: their RMS spread, in fix sds
