@@ -402,6 +402,41 @@ TEST_F(CliCalibrateSim, BadInputIsOneLineAndLeavesNoOutput) {
   expect_one_line_failure("--apply " + (tmp / "cal.yaml").string() + " --track " + track_a_, "cal.yaml:2");
 }
 
+// online-pose from the command line: fixes made by `odotune fixes`, their sd
+// required when the track has none, its flags refused for other methods,
+// and the calibrated odometry better than the nominal one.
+TEST_F(CliCalibrateSim, OnlinePoseFromFixesAndItsFlagsRefusedElsewhere) {
+  TempDir tmp;
+  const fs::path fixes = tmp / "fixes.csv", out = tmp / "op.json";
+  auto r = run_cli("fixes " + track_a_ + " -o " + fixes.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_cli("calibrate --track " + fixes.string() + " --method online-pose --json " + out.string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(lines_of(r.err).size(), 1u) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("--fix-sigma-m"));
+  EXPECT_FALSE(fs::exists(out));
+  r = run_cli("calibrate --track " + track_a_ + " --method online-pose --fix-sigma-m 0.06");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("odotune fixes"));
+  for (const std::string flag : {"--start known", "--fix-sigma-m 0.06", "--pose-memory-m 20"}) {
+    r = run_cli("calibrate --track " + fixes.string() + " --method dkf " + flag);
+    EXPECT_NE(r.exit_code, 0) << flag;
+    EXPECT_THAT(r.err, HasSubstr("applies to --method online-pose only")) << flag;
+  }
+  r = run_cli("calibrate --track " + fixes.string() + " --method online-pose --fix-sigma-m 0.06 --start lost");
+  EXPECT_THAT(r.err, HasSubstr("--start 'lost'"));
+
+  r = run_cli("calibrate --track " + fixes.string() + " --method online-pose --fix-sigma-m 0.06 --json " +
+              out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr(" position fixes, σ 0.06 m (--fix-sigma-m)"));
+  const json j = json::parse(slurp(out));
+  EXPECT_EQ(j["method"], "online-pose");
+  EXPECT_LT(j["pose_rmse_m"].get<double>(), j["nominal_pose_rmse_m"].get<double>());
+  for (const char* k : {"wheel_radius_left_m", "wheel_radius_right_m"})
+    EXPECT_LT(std::abs(j["error_pct"][k].get<double>()), 1.0) << k;
+}
+
 // A TurtleBot-sized robot (R = 0.05 m, D = 0.30 m): the default initial
 // ranges follow its nominal values, and the calibration finds its radii.
 TEST(CliCalibrate, SmallRobotUsesRangesAroundItsNominalValues) {
