@@ -2,71 +2,41 @@
 // sensor checks, model selection, location, and the findings of
 // ../shared/specs/diagnosis-output.md as a value. No I/O: the CLI
 // (cli/cmd_diagnose.cpp) prints, writes the JSON, the figures and the
-// scenario.
+// scenario. Why the findings and their numbers are defined as below:
+// docs/diagnosis-design.md, "A diagnosis's findings and their numbers".
 //
 // Findings, in order of importance (`explains`, largest first):
 //  * wheel-odometry effects chosen by select_effects (select.h), fitted on
-//    the training windows (the first 70 % of the track, or interleaved, see
-//    select.h); params/stderr from the fit (Ceres covariance; discrete
-//    parameters found by a profile search, radius_step.t and the slip_zone
-//    box, carry the search resolution as their stderr and are listed in
+//    its training windows; params/stderr from the fit (Ceres covariance; the
+//    discrete parameters radius_step.t and the slip_zone box carry the
+//    profile search's resolution as their stderr and are listed in
 //    `discrete`);
 //  * gyro effects (gyro_bias, gyro_scale) whose sensor check departs from the
-//    no-op value (sensor_checks.h Verdict::departs: significant AND relevant),
-//    judged against the reference heading (ground truth), or with position
-//    fixes only by gyro-heading dead reckoning against the fixes
-//    (gyro_fixes_check.h, its own 40 s windows, split and held-out test);
-// Every finding is material (materiality.h, options select.materiality):
-// wheel effects on the selection's cross-validated held-out predictions
-// (select.h the materiality rule and its backward pass: every fold's windows are held
-// out once, more evidence than the final split's last 30 %, whose numbers
-// are reported as they are); a gyro effect on its held-out replay below
-// (before - after against the floor of the gyro-heading replay without the
-// correction), else it is not reported but listed in `immaterial`.
+//    no-op value (sensor_checks.h Verdict::departs), judged against the
+//    reference heading, or with position fixes only by gyro_fixes_check.h;
+//  * `unexplained`: segments where the chosen model's residuals still grow
+//    faster than noise (locate.h), carrying at least unexplained_min_share of
+//    its squared error, at least unexplained_min_sigmas reference sigmas, and
+//    reproduced on held-out windows by the term search (term_search.h),
+//    whose terms it carries as `model`; growth no term reproduces is listed
+//    in `not_reproduced` instead.
+// Every finding is material (materiality.h, options select.materiality); one
+// that is not is listed in `immaterial`.
 //
-//  * `unexplained`: where the residual growth of the chosen model still
-//    exceeds what noise explains (locate.h on the final model's residuals) in
-//    segments that carry at least `unexplained_min_share` of its squared
-//    error, where its position RMSE is at least `unexplained_min_sigmas`
-//    reference sigmas (a growth far above a tiny noise floor can still be a
-//    sub-millimetre mismatch: not physics one can act on), and where the
-//    chosen model's held-out position RMSE is at least that many sigmas and
-//    the materiality floor (what is left is worth modelling); params empty.
-//    And only when something reproduces it on data the fit did not see: the
-//    term search (below) must find terms whose held-out gain passes the
-//    floor. Growth that no term predicts on held-out windows (a null track's
-//    random wheel slip makes dead reckoning drift faster than the reference
-//    noise, in no repeatable way) is listed in `not_reproduced`, not
-//    reported (4 of 61 null tracks of a development run of the benchmark).
-//    It carries `model` when the term search (term_search.h, run on every
-//    track unless options.terms.enabled is off) finds terms outside
-//    physics-effects.md whose held-out gain passes the materiality floor
-//    (materiality.h); such terms make an `unexplained` finding on their own
-//    when nothing was located (a residual periodic in a wheel's angle
-//    averages out of locate.h's noise estimate), with the terms' fit.
-//
-// Numbers of a finding (diagnosis-output.md), all position RMSEs of the
-// windowed replay. baseline/final: against the raw reference. train/heldout
-// before/after: against the selection's denoised reference (select.h,
-// cross_validate.h denoised_reference: thinned to ~10 Hz, local fits), as the
-// selection's own final fit, because a window is anchored on ONE reference
-// pose, and with e.g. 10 mrad heading noise that anchor alone moves a 20 s
-// window's end by decimetres, in every model alike, which would drown a
-// held-out comparison over a handful of windows (fixes below ~10 Hz are used
-// as they are):
-//  * wheel effect e: before = the chosen model without e (the other effects
-//    keep their fitted values), after = the chosen model; on the training and
-//    the held-out windows. With one effect, before is the nominal model.
-//    explains = select.h's share of the baseline training SSE.
-//  * gyro effect: dead reckoning with the chosen wheel model's travel and the
-//    gyro's heading (gyro_heading_replay), before = raw gyro, after =
-//    corrected by the finding's parameters; explains = the share of that
-//    replay's training SSE the correction removes.
-//  * where: segments = time spans in which the residuals of `before` grow
-//    faster than noise (locate.h); when none stand out (an effect that acts
-//    everywhere, a little), the windows where the effect reduces the error
-//    most (at least half the largest reduction); conditions = locate's
-//    phrase, else the effect's physical description.
+// Numbers of a finding (position RMSEs of the windowed replay, [m]):
+// baseline/final against the raw reference; train/heldout before/after
+// against the selection's denoised reference (cross_validate.h's
+// denoised_reference; a reference slower than about 10 Hz, e.g. fixes, as
+// it is).
+//  * wheel effect e: before = the chosen model without e, after = the chosen
+//    model; explains = select.h's share of the baseline training SSE.
+//  * gyro effect: gyro_heading_replay with the chosen wheel model's travel,
+//    before = raw gyro, after = corrected; explains = the share of its
+//    training SSE the correction removes.
+//  * where: the segments where `before`'s residuals grow faster than noise
+//    (locate.h), else the windows where the effect reduces the error most
+//    (at least half the largest reduction); conditions = locate's phrase,
+//    else the effect's physical description.
 //
 // Deterministic: same input and options, same numbers.
 #pragma once
