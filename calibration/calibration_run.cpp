@@ -252,6 +252,31 @@ void run_online_pose(filters::MemoryPair<filters::PoseCalibrator, filters::Dista
                             static_cast<double>(res->iterations);
 }
 
+// Runs batch-pose or batch-velocity: one fit of all inputs from the first
+// input's nominal values, scored per track without convergence.
+void run_offline(const std::vector<const CalibrationInput*>& inputs, const CalibrationOptions& options,
+                 CalibrationResult* res) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const OfflineFit fit = options.method == CalibrationMethod::batch_pose
+                             ? offline_fit(pose_calibrate(inputs, inputs.front()->nominal, options.pose))
+                             : offline_fit(batch_calibrate(inputs, inputs.front()->nominal));
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  res->iterations = fit.residuals;
+  res->ms_per_iteration = fit.residuals > 0 ? ms / static_cast<double>(fit.residuals) : 0.0;
+  res->batch_converged = fit.converged;
+  res->batch_residuals = fit.description;
+  res->final_params = fit.estimate.params;
+  for (std::size_t k = 0; k < inputs.size(); ++k) {
+    add_fixed_trace_row(*inputs[k], static_cast<int>(k), fit.estimate, &res->trace);
+    TrackCalibrationScore score = score_track(*inputs[k], constant_timeline(fit.estimate.params),
+                                              options.convergence_tolerance);
+    // An offline fit of the whole track has no convergence over time.
+    score.convergence_time_s.reset();
+    for (auto& r : score.reconvergence_s) r.reset();
+    res->tracks.push_back(std::move(score));
+  }
+}
+
 }  // namespace
 
 std::string_view to_string(CalibrationMethod m) {
@@ -431,28 +456,7 @@ CalibrationResult run_calibration(const std::vector<const CalibrationInput*>& in
       break;
     }
     case CalibrationMethod::batch_pose:
-    case CalibrationMethod::batch_velocity: {
-      const auto t0 = std::chrono::steady_clock::now();
-      const OfflineFit fit = options.method == CalibrationMethod::batch_pose
-                                 ? offline_fit(pose_calibrate(inputs, inputs.front()->nominal, options.pose))
-                                 : offline_fit(batch_calibrate(inputs, inputs.front()->nominal));
-      const double ms =
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      res.iterations = fit.residuals;
-      res.ms_per_iteration = fit.residuals > 0 ? ms / static_cast<double>(fit.residuals) : 0.0;
-      res.batch_converged = fit.converged;
-      res.batch_residuals = fit.description;
-      res.final_params = fit.estimate.params;
-      for (std::size_t k = 0; k < inputs.size(); ++k) {
-        add_fixed_trace_row(*inputs[k], static_cast<int>(k), fit.estimate, &res.trace);
-        TrackCalibrationScore score = score_track(*inputs[k], constant_timeline(fit.estimate.params), tol);
-        // An offline fit of the whole track has no convergence over time.
-        score.convergence_time_s.reset();
-        for (auto& r : score.reconvergence_s) r.reset();
-        res.tracks.push_back(std::move(score));
-      }
-      break;
-    }
+    case CalibrationMethod::batch_velocity: run_offline(inputs, options, &res); break;
     case CalibrationMethod::none: {
       for (std::size_t k = 0; k < inputs.size(); ++k) {
         filters::CalibEstimate proto;

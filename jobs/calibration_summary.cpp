@@ -47,13 +47,9 @@ std::string fixes_line(const CalibrationInput& in, const OnlinePoseOptions& o) {
   return fmt::format("    fixes         {} position fixes, {}", in.fix_t.size(), var);
 }
 
-}  // namespace
-
-std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
-                                                   const std::vector<CalibrationInput>& inputs,
-                                                   const std::vector<TrackCalibrationScore>& nominal,
-                                                   const CalibrationRunInfo& info) {
-  std::vector<std::string> out;
+// What the method started from and how it was set, for the first line.
+std::string how_it_ran(const CalibrationResult& r, const std::vector<CalibrationInput>& inputs,
+                       const CalibrationRunInfo& info) {
   const bool pf = r.method == CalibrationMethod::pf || r.method == CalibrationMethod::adaptive_pf;
   std::string how = fmt::format("initial R {:.4f}–{:.4f} m, D {:.4f}–{:.4f} m", info.init_radius_m.lo,
                                 info.init_radius_m.hi, info.init_wheel_base_m.lo, info.init_wheel_base_m.hi);
@@ -76,6 +72,17 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
                        filters::to_string(p.policy), p.particles,
                        r.method == CalibrationMethod::adaptive_pf ? " initially" : "", p.seed);
   }
+  return how;
+}
+
+}  // namespace
+
+std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
+                                                   const std::vector<CalibrationInput>& inputs,
+                                                   const std::vector<TrackCalibrationScore>& nominal,
+                                                   const CalibrationRunInfo& info) {
+  std::vector<std::string> out;
+  const std::string how = how_it_ran(r, inputs, info);
   out.push_back(fmt::format("{} calibration on {} track{} ({})", to_string(r.method), inputs.size(),
                             inputs.size() == 1 ? "" : "s", how));
   const double tol_pct = 100.0 * info.options.convergence_tolerance;
@@ -128,7 +135,8 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
   } else if (r.method != CalibrationMethod::none) {
     std::string cost = fmt::format("  cost: {} iterations, {:.3g} ms per iteration", r.iterations,
                                    r.ms_per_iteration);
-    if (pf) cost += fmt::format(", mean {:.0f} particles", r.mean_particles);
+    if (r.method == CalibrationMethod::pf || r.method == CalibrationMethod::adaptive_pf)
+      cost += fmt::format(", mean {:.0f} particles", r.mean_particles);
     if (r.memory_pair)
       cost += fmt::format("; memory restarted {} time(s) (a change found, filters/memory_pair.h)",
                           r.memory_restarts);
