@@ -24,15 +24,7 @@ for ((d = 0; d < DRAWS; d++)); do
   for r in "${CAL[@]}" "${HELD[@]}"; do
     k=$((k + 1))
     "$BIN" fixes "$TR/$r.csv" -o "$OUT/$r-fixes.csv" --seed $((100 * d + k)) > /dev/null
-    python3 - "$OUT/$r-fixes.csv" "$OUT/$r-fixes-only.csv" <<'PY'
-import csv, sys
-lines = open(sys.argv[1]).read().splitlines()
-rows = list(csv.reader(l for l in lines if not l.startswith("#")))
-keep = [i for i, h in enumerate(rows[0]) if not h.startswith("gt_")]
-with open(sys.argv[2], "w") as f:
-    f.write("".join(l + "\n" for l in lines if l.startswith("#")))
-    csv.writer(f, lineterminator="\n").writerows([[r[i] for i in keep] for r in rows])
-PY
+    python3 reproduce/strip_ground_truth.py "$OUT/$r-fixes.csv" "$OUT/$r-fixes-only.csv"
   done
   held=()
   for r in "${HELD[@]}"; do held+=(--track "$TR/$r.csv"); done

@@ -37,15 +37,7 @@ import() {  # relative run path without .csv, run number → prints the imported
   "$BIN" import optiodom "$OO/$1.csv" -o "$OUT/tracks/$name.csv" > /dev/null
   # The fixes' noise seed is the run's number (one draw per run, not the same on all).
   "$BIN" fixes "$OUT/tracks/$name.csv" -o "$OUT/fixes/$name.csv" --seed "$2" > /dev/null
-  python3 - "$OUT/fixes/$name.csv" "$OUT/fixes-only/$name.csv" <<'PY'
-import csv, sys
-lines = open(sys.argv[1]).read().splitlines()
-rows = list(csv.reader(l for l in lines if not l.startswith("#")))
-keep = [i for i, h in enumerate(rows[0]) if not h.startswith("gt_")]
-with open(sys.argv[2], "w") as f:
-    f.write("".join(l + "\n" for l in lines if l.startswith("#")))
-    csv.writer(f, lineterminator="\n").writerows([[r[i] for i in keep] for r in rows])
-PY
+  python3 reproduce/strip_ground_truth.py "$OUT/fixes/$name.csv" "$OUT/fixes-only/$name.csv"
   echo "$OUT/tracks/$name.csv"
 }
 
