@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 
 namespace odotune {
 
@@ -53,6 +54,49 @@ void arc_advance(T* x, T* y, T* theta, const T& half, const T& scale, const T& f
   *x += scale * (fwd * c - lat * s);
   *y += scale * (fwd * s + lat * c);
   *theta += dtheta;
+}
+
+// The rigid motion (rotation phi about the origin, then translation (tx, ty))
+// that maps the points p onto the points q in least squares (2-D Kabsch, no
+// scale); spread_m2 = Σ|q_i − q̄|². apply() maps a pose [m, m, rad].
+struct RigidMotion2d {
+  double phi = 0.0, tx = 0.0, ty = 0.0;
+  double spread_m2 = 0.0;
+
+  void apply(double* x, double* y, double* theta) const {
+    const double cp = std::cos(phi), sp = std::sin(phi);
+    const double x0 = *x;
+    *x = cp * x0 - sp * *y + tx;
+    *y = sp * x0 + cp * *y + ty;
+    *theta += phi;
+  }
+};
+
+// px(i), py(i) and qx(i), qy(i) give the coordinates [m] of point i of p
+// and of q, for i < n, n > 0.
+template <class Px, class Py, class Qx, class Qy>
+RigidMotion2d fit_rigid_2d(std::size_t n, Px&& px, Py&& py, Qx&& qx, Qy&& qy) {
+  double mx = 0, my = 0, fx = 0, fy = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    mx += px(i), my += py(i);
+    fx += qx(i), fy += qy(i);
+  }
+  const double nn = static_cast<double>(n);
+  mx /= nn, my /= nn, fx /= nn, fy /= nn;
+  double c = 0, s = 0;
+  RigidMotion2d m;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double ax = px(i) - mx, ay = py(i) - my;
+    const double bx = qx(i) - fx, by = qy(i) - fy;
+    c += ax * bx + ay * by;
+    s += ax * by - ay * bx;
+    m.spread_m2 += bx * bx + by * by;
+  }
+  m.phi = (c == 0.0 && s == 0.0) ? 0.0 : std::atan2(s, c);
+  const double cp = std::cos(m.phi), sp = std::sin(m.phi);
+  m.tx = fx - (cp * mx - sp * my);
+  m.ty = fy - (sp * mx + cp * my);
+  return m;
 }
 
 }  // namespace odotune

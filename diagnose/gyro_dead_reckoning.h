@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "core/planar_motion.h"
 #include "diagnose/diag_input.h"
 #include "diagnose/effect_model.h"
 #include "diagnose/window_replay.h"
@@ -71,25 +72,13 @@ void gyro_replay(const GyroDrSeries& d, const Window& w, const std::vector<doubl
 // reference positions in least squares (Kabsch/Umeyama without scale).
 inline Pose<double> align_rigid(const Pose<double>& a, const std::vector<double>& px,
                                 const std::vector<double>& py, const DiagInput& in, const Window& w) {
-  const std::size_t n = px.size();
-  double mx = 0, my = 0, fx = 0, fy = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    mx += px[i], my += py[i];
-    fx += in.ref_x_m[w.ref_begin + i], fy += in.ref_y_m[w.ref_begin + i];
-  }
-  const double nn = static_cast<double>(n);
-  mx /= nn, my /= nn, fx /= nn, fy /= nn;
-  double c = 0, s = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double ax = px[i] - mx, ay = py[i] - my;
-    const double bx = in.ref_x_m[w.ref_begin + i] - fx, by = in.ref_y_m[w.ref_begin + i] - fy;
-    c += ax * bx + ay * by;
-    s += ax * by - ay * bx;
-  }
-  const double phi = (c == 0.0 && s == 0.0) ? 0.0 : std::atan2(s, c);
-  const double cp = std::cos(phi), sp = std::sin(phi);
-  const double tx = fx - (cp * mx - sp * my), ty = fy - (sp * mx + cp * my);
-  return {cp * a.x - sp * a.y + tx, sp * a.x + cp * a.y + ty, a.th + phi};
+  const std::size_t b = w.ref_begin;
+  const RigidMotion2d m = fit_rigid_2d(
+      px.size(), [&](std::size_t i) { return px[i]; }, [&](std::size_t i) { return py[i]; },
+      [&](std::size_t i) { return in.ref_x_m[b + i]; }, [&](std::size_t i) { return in.ref_y_m[b + i]; });
+  Pose<double> out = a;
+  m.apply(&out.x, &out.y, &out.th);
+  return out;
 }
 
 }  // namespace odotune::diagnose

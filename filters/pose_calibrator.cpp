@@ -4,10 +4,10 @@
 #include <numbers>
 #include <stdexcept>
 
-#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <fmt/format.h>
 
+#include "core/planar_motion.h"
 #include "filters/diff_drive.h"
 
 namespace odotune::filters {
@@ -20,32 +20,6 @@ bool fail(std::string* why, std::string msg) {
 }
 
 bool positive(double v) { return std::isfinite(v) && v > 0.0; }
-
-// The rigid motion (rotation phi, then translation t) that maps the points
-// `from` onto `to` in least squares (2-D Kabsch), and the spread of `to`
-// about its mean, Σ|to_i − mean|² [m²].
-struct RigidFit {
-  double phi = 0.0;
-  Eigen::Vector2d t = Eigen::Vector2d::Zero();
-  double spread_m2 = 0.0;
-};
-RigidFit fit_rigid(const std::vector<Eigen::Vector2d>& from, const std::vector<Eigen::Vector2d>& to) {
-  Eigen::Vector2d mf = Eigen::Vector2d::Zero(), mt = Eigen::Vector2d::Zero();
-  for (std::size_t i = 0; i < from.size(); ++i) mf += from[i], mt += to[i];
-  mf /= static_cast<double>(from.size());
-  mt /= static_cast<double>(to.size());
-  double dot = 0.0, cross = 0.0;
-  RigidFit fit;
-  for (std::size_t i = 0; i < from.size(); ++i) {
-    const Eigen::Vector2d a = from[i] - mf, b = to[i] - mt;
-    dot += a.dot(b);
-    cross += a.x() * b.y() - a.y() * b.x();
-    fit.spread_m2 += b.squaredNorm();
-  }
-  fit.phi = std::atan2(cross, dot);
-  fit.t = mt - Eigen::Rotation2Dd(fit.phi) * mf;
-  return fit;
-}
 
 }  // namespace
 
@@ -198,7 +172,8 @@ void PoseCalibrator::fix_update(const PoseCalibSample& s) {
   const Eigen::Matrix2d R = Eigen::Vector2d(s.fix_var_x_m2, s.fix_var_y_m2).asDiagonal();
   const Eigen::Vector2d nu = z - x_.head<2>();
   Eigen::Matrix2d S = P_.topLeftCorner<2, 2>() + R;
-  const double nis = nu.dot(S.inverse() * nu);
+  Eigen::Matrix2d S_inv = S.inverse();
+  const double nis = nu.dot(S_inv * nu);
   last_log_predictive_ = -0.5 * nis - 0.5 * std::log(S.determinant()) - std::log(2.0 * std::numbers::pi);
   if (nis > params_.gate_nis) {
     ++fixes_rejected_;
@@ -209,10 +184,11 @@ void PoseCalibrator::fix_update(const PoseCalibSample& s) {
     P_(kPcY, kPcY) += nu.y() * nu.y();
     P_(kPcTheta, kPcTheta) += 0.25;  // (0.5 rad)²
     S = P_.topLeftCorner<2, 2>() + R;
+    S_inv = S.inverse();
     ++reacquisitions_;
   }
   rejected_in_row_ = 0;
-  const Eigen::Matrix<double, kPcDim, 2> K = P_.leftCols<2>() * S.inverse();
+  const Eigen::Matrix<double, kPcDim, 2> K = P_.leftCols<2>() * S_inv;
   const PcState next = x_ + K * nu;
   if (!(next(kPcRadiusLeft) > 0.0 && next(kPcRadiusRight) > 0.0 && next(kPcWheelBase) > 0.0)) return;
   x_ = next;
@@ -224,26 +200,28 @@ void PoseCalibrator::fix_update(const PoseCalibSample& s) {
 }
 
 void PoseCalibrator::acquire(const PoseCalibSample& s) {
-  acq_.odometry(kPcRadiusLeft) = x_(kPcRadiusLeft);
-  acq_.odometry(kPcRadiusRight) = x_(kPcRadiusRight);
-  acq_.odometry(kPcWheelBase) = x_(kPcWheelBase);
-  const double theta0 = acq_.odometry(kPcTheta);
-  const double x0 = acq_.odometry(kPcX), y0 = acq_.odometry(kPcY);
-  acq_.odometry = pose_calibrator_predict(acq_.odometry, s.dphi_left_rad, s.dphi_right_rad).next;
-  acq_.turn_rad += std::abs(acq_.odometry(kPcTheta) - theta0);
-  acq_.distance_m += std::hypot(acq_.odometry(kPcX) - x0, acq_.odometry(kPcY) - y0);
+  PlanarPose& o = acq_.odometry;
+  const PlanarPose before = o;
+  midpoint_advance(&o.x_m, &o.y_m, &o.theta_rad, x_(kPcRadiusLeft) * s.dphi_left_rad,
+                   x_(kPcRadiusRight) * s.dphi_right_rad, x_(kPcWheelBase));
+  acq_.turn_rad += std::abs(o.theta_rad - before.theta_rad);
+  acq_.distance_m += std::hypot(o.x_m - before.x_m, o.y_m - before.y_m);
   if (!s.has_fix) return;
   rolled_since_fix_m_ = 0.0;
-  acq_.odo.emplace_back(acq_.odometry(kPcX), acq_.odometry(kPcY));
+  acq_.odo.emplace_back(o.x_m, o.y_m);
   acq_.fix.emplace_back(s.fix_x_m, s.fix_y_m);
   acq_.var_sum += 0.5 * (s.fix_var_x_m2 + s.fix_var_y_m2);
   const auto n = static_cast<double>(acq_.fix.size());
   if (static_cast<int>(acq_.fix.size()) < params_.acquire_min_fixes) return;
-  const RigidFit fit = fit_rigid(acq_.odo, acq_.fix);
+  const RigidMotion2d fit = fit_rigid_2d(
+      acq_.fix.size(), [&](std::size_t i) { return acq_.odo[i].x(); },
+      [&](std::size_t i) { return acq_.odo[i].y(); }, [&](std::size_t i) { return acq_.fix[i].x(); },
+      [&](std::size_t i) { return acq_.fix[i].y(); });
   const double var = acq_.var_sum / n;
   const double k = params_.acquire_spread_sigmas;
   if (fit.spread_m2 / n < k * k * var) return;
-  const Eigen::Vector2d p = Eigen::Rotation2Dd(fit.phi) * acq_.odometry.head<2>() + fit.t;
+  PlanarPose start = acq_.odometry;
+  fit.apply(&start.x_m, &start.y_m, &start.theta_rad);
   // The heading's sd: the fit's own (σ²/Σ|q − q̄|²), plus what the initial
   // geometry's uncertainty does to the dead reckoning over the acquisition
   // (a wheel-base error scales the turns, a radius difference bends the
@@ -252,7 +230,7 @@ void PoseCalibrator::acquire(const PoseCalibSample& s) {
   const double sd_theta = std::sqrt(var / fit.spread_m2) + acq_.turn_rad * sd_base +
                           acq_.distance_m * std::sqrt(2.0) * sd_radius / x_(kPcWheelBase);
   const double sd_xy = std::sqrt(var) + acq_.distance_m * sd_radius;
-  start_at({p.x(), p.y(), acq_.odometry(kPcTheta) + fit.phi}, sd_xy, sd_theta);
+  start_at(start, sd_xy, sd_theta);
 }
 
 void PoseCalibrator::refresh_estimate(const PoseCalibSample& s) {

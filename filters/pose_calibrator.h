@@ -150,7 +150,7 @@ class PoseCalibrator {
   void refresh_estimate(const PoseCalibSample& s);
 
   struct Acquisition {
-    PcState odometry = PcState::Zero();  // pose in the filter's own frame, geometry as the state's
+    PlanarPose odometry;  // dead-reckoned in the filter's own frame with the state's geometry
     std::vector<Eigen::Vector2d> odo, fix;
     double var_sum = 0.0;
     double distance_m = 0.0, turn_rad = 0.0;  // rolled and turned (absolute) so far
