@@ -6,14 +6,11 @@
 
 #include <fmt/format.h>
 
+#include "core/why.h"
+
 namespace odotune {
 
 namespace {
-
-bool fail(std::string* why, std::string msg) {
-  if (why) *why = std::move(msg);
-  return false;
-}
 
 bool non_negative(double v) { return std::isfinite(v) && v >= 0.0; }
 
@@ -64,17 +61,17 @@ bool parse_online_pose_start(std::string_view text, OnlinePoseStart* out) {
 
 bool OnlinePoseOptions::IsValid(std::string* why) const {
   std::string sub;
-  if (!filter.IsValid(&sub)) return fail(why, "filter." + sub);
+  if (!filter.IsValid(&sub)) return invalid(why, "filter." + sub);
   if (!non_negative(known_start_sd_xy_m))
-    return fail(why, fmt::format("known_start_sd_xy_m = {} must be ≥ 0", known_start_sd_xy_m));
+    return invalid(why, fmt::format("known_start_sd_xy_m = {} must be ≥ 0", known_start_sd_xy_m));
   if (!non_negative(known_start_sd_theta_rad))
-    return fail(why, fmt::format("known_start_sd_theta_rad = {} must be ≥ 0", known_start_sd_theta_rad));
+    return invalid(why, fmt::format("known_start_sd_theta_rad = {} must be ≥ 0", known_start_sd_theta_rad));
   if (min_memory_m && !(std::isfinite(*min_memory_m) && *min_memory_m > 0.0))
-    return fail(why, fmt::format("min_memory_m = {} must be > 0", *min_memory_m));
+    return invalid(why, fmt::format("min_memory_m = {} must be > 0", *min_memory_m));
   if (!(std::isfinite(fix_sd_memory_factor) && fix_sd_memory_factor >= 0.0))
-    return fail(why, fmt::format("fix_sd_memory_factor = {} must be ≥ 0", fix_sd_memory_factor));
+    return invalid(why, fmt::format("fix_sd_memory_factor = {} must be ≥ 0", fix_sd_memory_factor));
   if (fix_sd_m && !(std::isfinite(*fix_sd_m) && *fix_sd_m > 0.0))
-    return fail(why, fmt::format("fix_sd_m = {} must be > 0", *fix_sd_m));
+    return invalid(why, fmt::format("fix_sd_m = {} must be > 0", *fix_sd_m));
   return true;
 }
 

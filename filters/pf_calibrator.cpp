@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "core/counter_rng.h"
+#include "core/why.h"
 #include "filters/pf_kernels.h"
 
 namespace odotune::filters {
@@ -66,20 +67,15 @@ std::string num(double x) {
   return os.str();
 }
 
-bool fail(std::string* why, const std::string& message) {
-  if (why) *why = message;
-  return false;
-}
-
 bool check_range(const char* name, const PfCalibratorParams::Range& r, std::string* why) {
   if (std::isfinite(r.lo) && std::isfinite(r.hi) && r.lo > 0.0 && r.lo < r.hi) return true;
-  return fail(why, std::string(name) + " = [" + num(r.lo) + ", " + num(r.hi) +
-                       "] must satisfy 0 < lo < hi (finite)");
+  return invalid(why, std::string(name) + " = [" + num(r.lo) + ", " + num(r.hi) +
+                          "] must satisfy 0 < lo < hi (finite)");
 }
 
 bool check_non_negative(const char* name, double x, std::string* why) {
   if (std::isfinite(x) && x >= 0.0) return true;
-  return fail(why, std::string(name) + " = " + num(x) + " must be a finite number ≥ 0");
+  return invalid(why, std::string(name) + " = " + num(x) + " must be a finite number ≥ 0");
 }
 
 // Everything one block of the prediction/update needs (step 1–2).
@@ -320,29 +316,30 @@ bool PfCalibratorParams::IsValid(std::string* why) const {
       !check_range("wheel_radius_left_m", wheel_radius_left_m, why) ||
       !check_range("wheel_base_m", wheel_base_m, why))
     return false;
-  if (particles < 1) return fail(why, "particles = " + std::to_string(particles) + " must be ≥ 1");
+  if (particles < 1) return invalid(why, "particles = " + std::to_string(particles) + " must be ≥ 1");
   if (!check_non_negative("random_walk_sigma_m", random_walk_sigma_m, why) ||
       !check_non_negative("v_perturbation_m_s", v_perturbation_m_s, why) ||
       !check_non_negative("w_perturbation_rad_s", w_perturbation_rad_s, why))
     return false;
   if (!(neff_fraction > 0.0 && neff_fraction <= 1.0))
-    return fail(why, "neff_fraction = " + num(neff_fraction) + " must be in (0, 1]");
+    return invalid(why, "neff_fraction = " + num(neff_fraction) + " must be in (0, 1]");
   if (!(std::isfinite(max_weight_ratio) && max_weight_ratio >= 1.0))
-    return fail(why, "max_weight_ratio = " + num(max_weight_ratio) +
-                         " must be a finite number ≥ 1 (max ρ ≥ 1/N always)");
+    return invalid(why, "max_weight_ratio = " + num(max_weight_ratio) +
+                            " must be a finite number ≥ 1 (max ρ ≥ 1/N always)");
   if (!check_non_negative("alpha", alpha, why)) return false;
   if (!(std::isfinite(dispersion_per_particle_m) && dispersion_per_particle_m > 0.0))
-    return fail(why, "dispersion_per_particle_m = " + num(dispersion_per_particle_m) +
-                         " must be a finite number > 0");
+    return invalid(why, "dispersion_per_particle_m = " + num(dispersion_per_particle_m) +
+                            " must be a finite number > 0");
   if (!check_non_negative("min_random_walk_sigma_m", min_random_walk_sigma_m, why)) return false;
   std::string inner;
-  if (!evidence.IsValid(&inner)) return fail(why, "evidence." + inner);
-  if (min_particles < 1) return fail(why, "min_particles = " + std::to_string(min_particles) + " must be ≥ 1");
+  if (!evidence.IsValid(&inner)) return invalid(why, "evidence." + inner);
+  if (min_particles < 1)
+    return invalid(why, "min_particles = " + std::to_string(min_particles) + " must be ≥ 1");
   if (max_particles < min_particles)
-    return fail(why, "max_particles = " + std::to_string(max_particles) +
-                         " must be ≥ min_particles = " + std::to_string(min_particles));
+    return invalid(why, "max_particles = " + std::to_string(max_particles) +
+                            " must be ≥ min_particles = " + std::to_string(min_particles));
   if (threads < 0)
-    return fail(why, "threads = " + std::to_string(threads) + " must be ≥ 0 (0: OpenMP's default)");
+    return invalid(why, "threads = " + std::to_string(threads) + " must be ≥ 0 (0: OpenMP's default)");
   return true;
 }
 

@@ -8,16 +8,12 @@
 #include <fmt/format.h>
 
 #include "core/planar_motion.h"
+#include "core/why.h"
 #include "filters/diff_drive.h"
 
 namespace odotune::filters {
 
 namespace {
-
-bool fail(std::string* why, std::string msg) {
-  if (why) *why = std::move(msg);
-  return false;
-}
 
 bool positive(double v) { return std::isfinite(v) && v > 0.0; }
 
@@ -25,21 +21,21 @@ bool positive(double v) { return std::isfinite(v) && v > 0.0; }
 
 bool PoseCalibratorParams::IsValid(std::string* why) const {
   std::string sub;
-  if (!initial.IsValid(&sub)) return fail(why, "initial." + sub);
+  if (!initial.IsValid(&sub)) return invalid(why, "initial." + sub);
   if (!positive(initial_sd_radius_frac))
-    return fail(why, fmt::format("initial_sd_radius_frac = {} must be > 0", initial_sd_radius_frac));
+    return invalid(why, fmt::format("initial_sd_radius_frac = {} must be > 0", initial_sd_radius_frac));
   if (!positive(initial_sd_wheel_base_frac))
-    return fail(why, fmt::format("initial_sd_wheel_base_frac = {} must be > 0", initial_sd_wheel_base_frac));
+    return invalid(why, fmt::format("initial_sd_wheel_base_frac = {} must be > 0", initial_sd_wheel_base_frac));
   if (!(std::isfinite(wheel_noise_m2_per_m) && wheel_noise_m2_per_m >= 0.0))
-    return fail(why, fmt::format("wheel_noise_m2_per_m = {} must be ≥ 0", wheel_noise_m2_per_m));
-  if (!positive(gate_nis)) return fail(why, fmt::format("gate_nis = {} must be > 0", gate_nis));
+    return invalid(why, fmt::format("wheel_noise_m2_per_m = {} must be ≥ 0", wheel_noise_m2_per_m));
+  if (!positive(gate_nis)) return invalid(why, fmt::format("gate_nis = {} must be > 0", gate_nis));
   if (max_rejected_fixes < 1)
-    return fail(why, fmt::format("max_rejected_fixes = {} must be ≥ 1", max_rejected_fixes));
+    return invalid(why, fmt::format("max_rejected_fixes = {} must be ≥ 1", max_rejected_fixes));
   if (!positive(acquire_spread_sigmas))
-    return fail(why, fmt::format("acquire_spread_sigmas = {} must be > 0", acquire_spread_sigmas));
+    return invalid(why, fmt::format("acquire_spread_sigmas = {} must be > 0", acquire_spread_sigmas));
   if (acquire_min_fixes < 2)
-    return fail(why, fmt::format("acquire_min_fixes = {} must be ≥ 2", acquire_min_fixes));
-  if (!memory.IsValid(&sub)) return fail(why, "memory." + sub);
+    return invalid(why, fmt::format("acquire_min_fixes = {} must be ≥ 2", acquire_min_fixes));
+  if (!memory.IsValid(&sub)) return invalid(why, "memory." + sub);
   return true;
 }
 
@@ -69,8 +65,8 @@ PcPrediction pose_calibrator_predict(const PcState& s, double dphi_left_rad, dou
 
 bool DistanceMemoryParams::IsValid(std::string* why) const {
   if (!(positive(min_memory_m) && positive(max_memory_m) && min_memory_m <= max_memory_m))
-    return fail(why, fmt::format("memory {}–{} m: expected 0 < min_memory_m ≤ max_memory_m", min_memory_m,
-                                 max_memory_m));
+    return invalid(why, fmt::format("memory {}–{} m: expected 0 < min_memory_m ≤ max_memory_m", min_memory_m,
+                                    max_memory_m));
   return true;
 }
 

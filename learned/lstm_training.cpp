@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "core/counter_rng.h"
+#include "core/why.h"
 
 namespace odotune {
 
@@ -21,11 +22,6 @@ namespace {
 // Stream id of the initial-weight draws in counter_uniform01 (any constant
 // distinct from other users of the seed).
 constexpr std::uint64_t kInitStream = 0x6c73746dULL;  // "lstm"
-
-bool fail(std::string* why, std::string msg) {
-  if (why) *why = std::move(msg);
-  return false;
-}
 
 void require(bool ok, const std::string& why) {
   if (!ok) throw std::invalid_argument(why);
@@ -311,17 +307,17 @@ LstmTrainingSummary solve(LstmNet<I, H>& net, const SequenceSet& train, const Ls
 }  // namespace
 
 bool SequenceSet::IsValid(std::string* why) const {
-  if (window < 1) return fail(why, "window = " + std::to_string(window) + ": expected ≥ 1");
-  if (inputs < 1) return fail(why, "inputs = " + std::to_string(inputs) + ": expected ≥ 1");
+  if (window < 1) return invalid(why, "window = " + std::to_string(window) + ": expected ≥ 1");
+  if (inputs < 1) return invalid(why, "inputs = " + std::to_string(inputs) + ": expected ≥ 1");
   const std::size_t per = static_cast<std::size_t>(window) * static_cast<std::size_t>(inputs);
   if (x.size() != y.size() * per)
-    return fail(why, "x has " + std::to_string(x.size()) +
-                         " values, expected size() × window × inputs = " + std::to_string(y.size() * per));
+    return invalid(why, "x has " + std::to_string(x.size()) +
+                            " values, expected size() × window × inputs = " + std::to_string(y.size() * per));
   for (std::size_t n = 0; n < y.size(); ++n) {
-    if (!std::isfinite(y[n])) return fail(why, "y[" + std::to_string(n) + "] is not finite");
+    if (!std::isfinite(y[n])) return invalid(why, "y[" + std::to_string(n) + "] is not finite");
     for (std::size_t i = 0; i < per; ++i)
       if (!std::isfinite(x[n * per + i]))
-        return fail(why, "window " + std::to_string(n) + " has a non-finite x value");
+        return invalid(why, "window " + std::to_string(n) + " has a non-finite x value");
   }
   return true;
 }
@@ -350,18 +346,18 @@ std::pair<SequenceSet, SequenceSet> split_sequences(const SequenceSet& all, doub
 
 bool LstmTrainingOptions::IsValid(std::string* why) const {
   if (max_iterations < 0)
-    return fail(why, "max_iterations = " + std::to_string(max_iterations) + ": expected ≥ 0");
+    return invalid(why, "max_iterations = " + std::to_string(max_iterations) + ": expected ≥ 0");
   if (!(mae_scale > 0.0) || !std::isfinite(mae_scale))
-    return fail(why, "mae_scale = " + fmt::format("{}", mae_scale) + ": expected a finite value > 0");
+    return invalid(why, "mae_scale = " + fmt::format("{}", mae_scale) + ": expected a finite value > 0");
   if (!(mae_scale_start > 0.0) || !std::isfinite(mae_scale_start))
-    return fail(why,
-                "mae_scale_start = " + fmt::format("{}", mae_scale_start) + ": expected a finite value > 0");
+    return invalid(why,
+                   "mae_scale_start = " + fmt::format("{}", mae_scale_start) + ": expected a finite value > 0");
   if (!(function_tolerance >= 0.0) || !std::isfinite(function_tolerance))
-    return fail(why, "function_tolerance = " + fmt::format("{}", function_tolerance) +
-                         ": expected a finite value ≥ 0");
+    return invalid(why, "function_tolerance = " + fmt::format("{}", function_tolerance) +
+                            ": expected a finite value ≥ 0");
   if (!(weight_decay >= 0.0) || !std::isfinite(weight_decay))
-    return fail(why, "weight_decay = " + fmt::format("{}", weight_decay) + ": expected a finite value ≥ 0");
-  if (num_threads < 1) return fail(why, "num_threads = " + std::to_string(num_threads) + ": expected ≥ 1");
+    return invalid(why, "weight_decay = " + fmt::format("{}", weight_decay) + ": expected a finite value ≥ 0");
+  if (num_threads < 1) return invalid(why, "num_threads = " + std::to_string(num_threads) + ": expected ≥ 1");
   return true;
 }
 

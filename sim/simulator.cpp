@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include "core/planar_motion.h"
+#include "core/why.h"
 
 #include "sim/effects.h"
 #include "sim/motion_profile.h"
@@ -107,10 +108,6 @@ struct Truth {
   double p_l = 0, p_r = 0;         // motor power [W]
 };
 
-bool fail(std::string* why, std::string msg) {
-  if (why) *why = std::move(msg);
-  return false;
-}
 bool positive(double v) { return std::isfinite(v) && v > 0.0; }
 bool nonneg(double v) { return std::isfinite(v) && v >= 0.0; }
 
@@ -121,12 +118,13 @@ bool check_robot(const RobotParams& r, std::string* why) {
        {"wheel_base_m", r.wheel_base_m},
        {"coulomb_smoothing_rad_s", r.coulomb_smoothing_rad_s}}};
   for (const auto& [name, v] : pos)
-    if (!positive(v)) return fail(why, fmt::format("robot.{} = {}; expected a number > 0", name, v));
+    if (!positive(v)) return invalid(why, fmt::format("robot.{} = {}; expected a number > 0", name, v));
   if (!(std::isfinite(r.ticks_per_rev) && r.ticks_per_rev >= 1.0 && r.ticks_per_rev <= 1e9))
-    return fail(why, fmt::format("robot.ticks_per_rev = {}; expected a number in [1, 1e9]", r.ticks_per_rev));
+    return invalid(why,
+                   fmt::format("robot.ticks_per_rev = {}; expected a number in [1, 1e9]", r.ticks_per_rev));
   if (!positive(r.torque_constant_nm_per_a))
-    return fail(why, fmt::format("robot.torque_constant_nm_per_a = {}; expected a number > 0",
-                                 r.torque_constant_nm_per_a));
+    return invalid(why, fmt::format("robot.torque_constant_nm_per_a = {}; expected a number > 0",
+                                    r.torque_constant_nm_per_a));
   const std::array<std::pair<const char*, double>, 6> nn = {{{"mass_kg", r.mass_kg},
                                                              {"yaw_inertia_kg_m2", r.yaw_inertia_kg_m2},
                                                              {"wheel_inertia_kg_m2", r.wheel_inertia_kg_m2},
@@ -134,7 +132,7 @@ bool check_robot(const RobotParams& r, std::string* why) {
                                                              {"coulomb_friction_nm", r.coulomb_friction_nm},
                                                              {"coil_resistance_ohm", r.coil_resistance_ohm}}};
   for (const auto& [name, v] : nn)
-    if (!nonneg(v)) return fail(why, fmt::format("robot.{} = {}; expected a number >= 0", name, v));
+    if (!nonneg(v)) return invalid(why, fmt::format("robot.{} = {}; expected a number >= 0", name, v));
   return true;
 }
 
@@ -142,15 +140,15 @@ bool check_sensors(const SensorParams& s, double step_s, std::int64_t sps, std::
   for (const SensorView& v : sensor_views(s)) {
     if (!v.enabled) continue;
     if (!positive(v.rate_hz))
-      return fail(why, fmt::format("sensors.{}.rate_hz = {}; expected a number > 0", v.name, v.rate_hz));
+      return invalid(why, fmt::format("sensors.{}.rate_hz = {}; expected a number > 0", v.name, v.rate_hz));
     if (period_steps(v.rate_hz, sps) == 0)
-      return fail(why, fmt::format("sensors.{}.rate_hz = {}: its period is not a whole number of "
-                                   "{} s integration steps; expected a rate that divides {} Hz",
-                                   v.name, v.rate_hz, step_s, sps));
+      return invalid(why, fmt::format("sensors.{}.rate_hz = {}: its period is not a whole number of "
+                                      "{} s integration steps; expected a rate that divides {} Hz",
+                                      v.name, v.rate_hz, step_s, sps));
   }
   if (!s.encoders.enabled && !s.commands.enabled)
-    return fail(why, "sensors: neither encoders nor commands is enabled; a track needs an odometry "
-                     "source (expected sensors.encoders or sensors.commands enabled)");
+    return invalid(why, "sensors: neither encoders nor commands is enabled; a track needs an odometry "
+                        "source (expected sensors.encoders or sensors.commands enabled)");
   const std::array<std::pair<const char*, double>, 15> nn2 = {
       {{"encoders.omega_resolution_rad_s", s.encoders.omega_resolution_rad_s},
        {"commands.resolution", s.commands.resolution},
@@ -168,7 +166,7 @@ bool check_sensors(const SensorParams& s, double step_s, std::int64_t sps, std::
        {"ground_truth.resolution_m", s.ground_truth.resolution_m},
        {"ground_truth.resolution_rad", s.ground_truth.resolution_rad}}};
   for (const auto& [name, v] : nn2)
-    if (!nonneg(v)) return fail(why, fmt::format("sensors.{} = {}; expected a number >= 0", name, v));
+    if (!nonneg(v)) return invalid(why, fmt::format("sensors.{} = {}; expected a number >= 0", name, v));
   return true;
 }
 
@@ -183,21 +181,22 @@ bool check_motion(const Scenario& sc, double* duration_s, std::string* why) {
     for (const auto& k : profile.knots())
       max_rim_m_s = std::max(max_rim_m_s, std::abs(k.v_m_s) + std::abs(k.w_rad_s) * sc.robot.wheel_base_m / 2);
   } catch (const ProfileError& e) {
-    return fail(why, fmt::format("motion: {}", e.what()));
+    return invalid(why, fmt::format("motion: {}", e.what()));
   }
   for (std::size_t i = 0; i < sc.slip_episodes.size(); ++i)
     if (!(sc.slip_episodes[i].t0_s < duration))
-      return fail(why, fmt::format("slip_episodes[{}]: t0_s = {} is not before the end of the motion at {} s; "
-                                   "expected an episode that starts during the drive",
-                                   i + 1, sc.slip_episodes[i].t0_s, duration));
+      return invalid(why,
+                     fmt::format("slip_episodes[{}]: t0_s = {} is not before the end of the motion at {} s; "
+                                 "expected an episode that starts during the drive",
+                                 i + 1, sc.slip_episodes[i].t0_s, duration));
   if (sc.effects.speed_radius) {
     // Radius scales are at most 1.5 each (effects.h), so u < 2.25 * max_rim.
     const double u = 2.25 * max_rim_m_s, c = sc.effects.speed_radius->c;
     if (1.0 + c * u * u < 0.5)
-      return fail(why, fmt::format("effects: speed_radius.c = {} would shrink the effective radius "
-                                   "R*(1 + c*u^2) below R/2 at rim speeds up to {:.3g} m/s; expected "
-                                   "c > {:.3g}",
-                                   c, u, -0.5 / (u * u)));
+      return invalid(why, fmt::format("effects: speed_radius.c = {} would shrink the effective radius "
+                                      "R*(1 + c*u^2) below R/2 at rim speeds up to {:.3g} m/s; expected "
+                                      "c > {:.3g}",
+                                      c, u, -0.5 / (u * u)));
   }
   *duration_s = duration;
   return true;
@@ -207,16 +206,16 @@ bool check_motion(const Scenario& sc, double* duration_s, std::string* why) {
 bool check_size(const Scenario& sc, std::int64_t sps, double duration, std::string* why) {
   const double steps = std::ceil(duration * static_cast<double>(sps) - 1e-6);
   if (steps > kMaxSimSteps)
-    return fail(why, fmt::format("motion lasts {:.3g} s = {:.3g} steps; expected at most {:.3g} steps "
-                                 "(shorten the motion or enlarge step_s)",
-                                 duration, steps, kMaxSimSteps));
+    return invalid(why, fmt::format("motion lasts {:.3g} s = {:.3g} steps; expected at most {:.3g} steps "
+                                    "(shorten the motion or enlarge step_s)",
+                                    duration, steps, kMaxSimSteps));
   double rows = 0.0;
   for (const SensorView& v : sensor_views(sc.sensors))
     if (v.enabled) rows += duration * v.rate_hz + 1.0;
   if (rows > kMaxSimRows)
-    return fail(why, fmt::format("the track would have about {:.3g} rows; expected at most {:.3g} "
-                                 "(lower the sensor rates or shorten the motion)",
-                                 rows, kMaxSimRows));
+    return invalid(why, fmt::format("the track would have about {:.3g} rows; expected at most {:.3g} "
+                                    "(lower the sensor rates or shorten the motion)",
+                                    rows, kMaxSimRows));
   return true;
 }
 
@@ -666,21 +665,21 @@ void add_metadata(const Scenario& sc, const RowGrid& grid, TrackMeta& meta) {
 bool validate_scenario(const Scenario& sc, std::string* why) {
   const std::int64_t sps = steps_per_second(sc.step_s);
   if (sps == 0)
-    return fail(why, fmt::format("step_s = {}; expected a step in (0, 0.1] s whose inverse is a whole "
-                                 "number of steps per second (e.g. 0.001)",
-                                 sc.step_s));
+    return invalid(why, fmt::format("step_s = {}; expected a step in (0, 0.1] s whose inverse is a whole "
+                                    "number of steps per second (e.g. 0.001)",
+                                    sc.step_s));
   if (!check_robot(sc.robot, why) || !check_sensors(sc.sensors, sc.step_s, sps, why)) return false;
 
   const std::array<std::pair<const char*, double>, 3> start = {
       {{"x_m", sc.motion.start_x_m}, {"y_m", sc.motion.start_y_m}, {"theta_rad", sc.motion.start_theta_rad}}};
   for (const auto& [name, v] : start)
     if (!std::isfinite(v))
-      return fail(why, fmt::format("motion.start.{} = {}; expected a finite number", name, v));
+      return invalid(why, fmt::format("motion.start.{} = {}; expected a finite number", name, v));
 
   std::string ewhy;
-  if (!validate_effects(sc.effects, &ewhy)) return fail(why, "effects: " + ewhy);
-  if (!validate_slip_episodes(sc.slip_episodes, &ewhy)) return fail(why, ewhy);
-  if (!validate_terms(sc.terms, &ewhy)) return fail(why, "terms: " + ewhy);
+  if (!validate_effects(sc.effects, &ewhy)) return invalid(why, "effects: " + ewhy);
+  if (!validate_slip_episodes(sc.slip_episodes, &ewhy)) return invalid(why, ewhy);
+  if (!validate_terms(sc.terms, &ewhy)) return invalid(why, "terms: " + ewhy);
 
   double duration = 0.0;
   if (!check_motion(sc, &duration, why)) return false;
