@@ -448,8 +448,9 @@ CalibrationResult run_calibration(const std::vector<const CalibrationInput*>& in
     }
     case CalibrationMethod::online_pose: {
       const filters::PoseCalibratorParams& p = options.online_pose.filter;
+      res.online_pose_memory = online_pose_memory(inputs, options.online_pose);
       filters::MemoryPair<filters::PoseCalibrator, filters::DistanceMemoryParams> pair(
-          filters::PoseCalibrator(p), online_pose_memory(inputs, options.online_pose), options.memory_pair);
+          filters::PoseCalibrator(p), *res.online_pose_memory, options.memory_pair);
       run_online_pose(pair, inputs, options.online_pose, tol, &res);
       res.memory_pair = true;
       res.memory_restarts = pair.changes();

@@ -129,6 +129,8 @@ struct CalibrationResult {
   double mean_particles = 0.0;  // PF: mean N over iterations (deterministic cost); else 0
   bool memory_pair = false;     // an online method run as a slow/fast memory pair (filters/memory_pair.h)
   long memory_restarts = 0;     // ... and the changes it found (else 0)
+  // online-pose: the memory it ran with (online_pose_memory of the inputs).
+  std::optional<filters::DistanceMemoryParams> online_pose_memory;
   // batch methods only: Ceres reported convergence (the fit's sds are in the
   // trace row), and which residuals the fit used.
   bool batch_converged = false;

@@ -48,16 +48,13 @@ std::string fixes_line(const CalibrationInput& in, const OnlinePoseOptions& o) {
 }
 
 // What the method started from and how it was set, for the first line.
-std::string how_it_ran(const CalibrationResult& r, const std::vector<CalibrationInput>& inputs,
-                       const CalibrationRunInfo& info) {
+std::string how_it_ran(const CalibrationResult& r, const CalibrationRunInfo& info) {
   const bool pf = r.method == CalibrationMethod::pf || r.method == CalibrationMethod::adaptive_pf;
   std::string how = fmt::format("initial R {:.4f}–{:.4f} m, D {:.4f}–{:.4f} m", info.init_radius_m.lo,
                                 info.init_radius_m.hi, info.init_wheel_base_m.lo, info.init_wheel_base_m.hi);
   if (r.method == CalibrationMethod::online_pose) {
     const OnlinePoseOptions& o = info.options.online_pose;
-    std::vector<const CalibrationInput*> ptrs;
-    for (const auto& in : inputs) ptrs.push_back(&in);
-    const filters::DistanceMemoryParams memory = online_pose_memory(ptrs, o);
+    const filters::DistanceMemoryParams memory = r.online_pose_memory.value_or(o.filter.memory);
     how = fmt::format(
         "initial R_L {:.5f} m, R_R {:.5f} m, D {:.5f} m, sd {:g} % / {:g} %; start from {}; memory "
         "{:g}–{:g} m rolled",
@@ -82,7 +79,7 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
                                                    const std::vector<TrackCalibrationScore>& nominal,
                                                    const CalibrationRunInfo& info) {
   std::vector<std::string> out;
-  const std::string how = how_it_ran(r, inputs, info);
+  const std::string how = how_it_ran(r, info);
   out.push_back(fmt::format("{} calibration on {} track{} ({})", to_string(r.method), inputs.size(),
                             inputs.size() == 1 ? "" : "s", how));
   const double tol_pct = 100.0 * info.options.convergence_tolerance;
