@@ -172,8 +172,10 @@ void PoseCalibrator::fix_update(const PoseCalibSample& s) {
   const double nis = nu.dot(S_inv * nu);
   last_log_predictive_ = -0.5 * nis - 0.5 * std::log(S.determinant()) - std::log(2.0 * std::numbers::pi);
   if (nis > params_.gate_nis) {
-    ++fixes_rejected_;
-    if (++rejected_in_row_ < params_.max_rejected_fixes) return;
+    if (++rejected_in_row_ < params_.max_rejected_fixes) {
+      ++fixes_rejected_;
+      return;
+    }
     // The pose is lost (the fixes jumped, the robot was carried): widen its
     // covariance to hold this fix, and apply it.
     P_(kPcX, kPcX) += nu.x() * nu.x();
@@ -196,6 +198,10 @@ void PoseCalibrator::fix_update(const PoseCalibSample& s) {
 }
 
 void PoseCalibrator::acquire(const PoseCalibSample& s) {
+  // Fixes that have not spread in this many samples place nothing (a robot
+  // standing still): the acquisition starts over from here.
+  if (acq_.samples.size() >= kMaxReplaySamples) acq_ = Acquisition{};
+  acq_.samples.push_back(s);
   PlanarPose& o = acq_.odometry;
   const PlanarPose before = o;
   midpoint_advance(&o.x_m, &o.y_m, &o.theta_rad, x_(kPcRadiusLeft) * s.dphi_left_rad,
@@ -204,19 +210,26 @@ void PoseCalibrator::acquire(const PoseCalibSample& s) {
   acq_.distance_m += std::hypot(o.x_m - before.x_m, o.y_m - before.y_m);
   if (!s.has_fix) return;
   rolled_since_fix_m_ = 0.0;
+  const Eigen::Vector2d q(s.fix_x_m, s.fix_y_m);
   acq_.odo.emplace_back(o.x_m, o.y_m);
-  acq_.fix.emplace_back(s.fix_x_m, s.fix_y_m);
+  acq_.fix.push_back(q);
   acq_.var_sum += 0.5 * (s.fix_var_x_m2 + s.fix_var_y_m2);
   const auto n = static_cast<double>(acq_.fix.size());
-  if (static_cast<int>(acq_.fix.size()) < params_.acquire_min_fixes) return;
+  // The fixes' spread Σ|q − q̄|², kept as it grows (Welford) so that waiting
+  // for it costs O(1) per fix; the rigid fit runs once, when it suffices.
+  const Eigen::Vector2d delta = q - acq_.fix_mean;
+  acq_.fix_mean += delta / n;
+  acq_.fix_spread_m2 += delta.dot(q - acq_.fix_mean);
+  const double var = acq_.var_sum / n;
+  const double k = params_.acquire_spread_sigmas;
+  if (static_cast<int>(acq_.fix.size()) < params_.acquire_min_fixes || acq_.fix_spread_m2 / n < k * k * var)
+    return;
   const RigidMotion2d fit = fit_rigid_2d(
       acq_.fix.size(), [&](std::size_t i) { return acq_.odo[i].x(); },
       [&](std::size_t i) { return acq_.odo[i].y(); }, [&](std::size_t i) { return acq_.fix[i].x(); },
       [&](std::size_t i) { return acq_.fix[i].y(); });
-  const double var = acq_.var_sum / n;
-  const double k = params_.acquire_spread_sigmas;
-  if (fit.spread_m2 / n < k * k * var) return;
-  PlanarPose start = acq_.odometry;
+  // The pose where the acquisition began: the origin of the filter's own frame.
+  PlanarPose start{0.0, 0.0, 0.0};
   fit.apply(&start.x_m, &start.y_m, &start.theta_rad);
   // The heading's sd: the fit's own (σ²/Σ|q − q̄|²), plus what the initial
   // geometry's uncertainty does to the dead reckoning over the acquisition
@@ -226,7 +239,22 @@ void PoseCalibrator::acquire(const PoseCalibSample& s) {
   const double sd_theta = std::sqrt(var / fit.spread_m2) + acq_.turn_rad * sd_base +
                           acq_.distance_m * std::sqrt(2.0) * sd_radius / x_(kPcWheelBase);
   const double sd_xy = std::sqrt(var) + acq_.distance_m * sd_radius;
-  start_at(start, sd_xy, sd_theta);
+  replay_from(start, sd_xy, sd_theta);
+}
+
+void PoseCalibrator::replay_from(const PlanarPose& start, double sd_xy_m, double sd_theta_rad) {
+  // The acquisition's fixes placed the pose; replaying its samples from
+  // there lets them inform the geometry too (on short runs they are a good
+  // share of all the fixes).
+  const std::vector<PoseCalibSample> samples = std::move(acq_.samples);
+  start_at(start, sd_xy_m, sd_theta_rad);
+  rolled_since_fix_m_ = 0.0;
+  for (const PoseCalibSample& s : samples) {
+    predict(s);
+    if (s.has_fix) fix_update(s);
+  }
+  // The change test compares the twins fix by fix from here on.
+  last_log_predictive_ = 0.0;
 }
 
 void PoseCalibrator::refresh_estimate(const PoseCalibSample& s) {

@@ -28,9 +28,12 @@
 //   dead-reckons with the initial geometry in its own frame and collects
 //   (odometry position, fix) pairs; once the fixes spread by
 //   acquire_spread_sigmas fix sds about their mean, the rigid motion that
-//   maps the odometry positions onto the fixes (2-D Kabsch) places the pose.
+//   maps the odometry positions onto the fixes (2-D Kabsch) places the pose
+//   where the acquisition began, and its samples are run through the filter
+//   from there, so that its fixes inform the geometry as well.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -142,6 +145,8 @@ class PoseCalibrator {
   void predict(const PoseCalibSample& s);
   void fix_update(const PoseCalibSample& s);
   void acquire(const PoseCalibSample& s);
+  // Starts at the acquisition's first pose and re-runs its samples.
+  void replay_from(const PlanarPose& start, double sd_xy_m, double sd_theta_rad);
   void fade(double rolled_m);
   // EvidenceMemory's clock, advanced here by metres rolled instead of seconds.
   static EvidenceMemory distance_memory(const DistanceMemoryParams& p) {
@@ -149,9 +154,15 @@ class PoseCalibrator {
   }
   void refresh_estimate(const PoseCalibSample& s);
 
+  // Samples an acquisition keeps at most (about 13 MB; 33 min at 100 Hz of
+  // fixes that do not spread), after which it starts over.
+  static constexpr std::size_t kMaxReplaySamples = 200000;
   struct Acquisition {
-    PlanarPose odometry;  // dead-reckoned in the filter's own frame with the state's geometry
+    PlanarPose odometry;                   // dead-reckoned in the filter's own frame with the state's geometry
+    std::vector<PoseCalibSample> samples;  // since the (re)start, for the replay
     std::vector<Eigen::Vector2d> odo, fix;
+    Eigen::Vector2d fix_mean = Eigen::Vector2d::Zero();  // the fixes' mean [m]
+    double fix_spread_m2 = 0.0;                          // Σ|fix − mean|² [m²]
     double var_sum = 0.0;
     double distance_m = 0.0, turn_rad = 0.0;  // rolled and turned (absolute) so far
   };

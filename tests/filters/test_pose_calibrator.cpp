@@ -137,6 +137,53 @@ TEST(PoseCalibrator, ConvergesFromAKnownStartAndFromFixesAlone) {
   }
 }
 
+TEST(PoseCalibrator, FixesThatPlacedThePoseAlsoInformTheGeometry) {
+  // A short drive: the acquisition's fixes are a good share of all of them.
+  const Drive d = drive(30.0, 0.5, 1.0, 0.06, 7, [](double) { return Truth{}; });
+  PoseCalibrator f(nominal_params());
+  long fixes = 0, acquired_at = -1;
+  for (const auto& s : d.samples) {
+    fixes += s.has_fix ? 1 : 0;
+    f.step(s);
+    if (f.pose_known() && acquired_at < 0) acquired_at = fixes;
+  }
+  ASSERT_GT(acquired_at, 2);
+  // Every fix went through the filter, those of the acquisition too.
+  EXPECT_EQ(f.fixes_applied() + f.fixes_rejected(), fixes);
+  // The replay starts where the drive did: the end pose matches the truth's
+  // dead reckoning as well as a known start's does.
+  PoseCalibrator known(nominal_params());
+  known.start_at(d.start, 0.06, 0.1);
+  for (const auto& s : d.samples) known.step(s);
+  EXPECT_NEAR(f.pose().x_m, known.pose().x_m, 0.05);
+  EXPECT_NEAR(f.pose().y_m, known.pose().y_m, 0.05);
+  EXPECT_LT(std::abs(f.estimate().params.wheel_base_m - known.estimate().params.wheel_base_m),
+            0.5 * std::abs(nominal_params().initial.wheel_base_m - known.estimate().params.wheel_base_m));
+}
+
+TEST(PoseCalibrator, ALongWaitForTheFixesToSpreadStartsTheAcquisitionOver) {
+  // Standing still with fixes for longer than an acquisition keeps samples:
+  // it starts over, and the fixes from before place nothing.
+  const Drive d = drive(30.0, 0.5, 1.0, 0.06, 7, [](double) { return Truth{}; });
+  PoseCalibrator f(nominal_params());
+  PoseCalibSample still{0.01, 0.0, 0.0};
+  still.has_fix = true;
+  still.fix_x_m = d.start.x_m, still.fix_y_m = d.start.y_m;
+  still.fix_var_x_m2 = still.fix_var_y_m2 = 0.0036;
+  const long standing = 200001;
+  for (long k = 0; k < standing; ++k) f.step(still);
+  EXPECT_FALSE(f.pose_known());
+  long fixes = 0;
+  for (const auto& s : d.samples) {
+    fixes += s.has_fix ? 1 : 0;
+    f.step(s);
+  }
+  ASSERT_TRUE(f.pose_known());
+  // The drive's fixes and the one standing fix since the acquisition restarted.
+  EXPECT_EQ(f.fixes_applied() + f.fixes_rejected(), fixes + (standing - 200000));
+  EXPECT_TRUE(std::isfinite(f.pose().x_m));
+}
+
 TEST(PoseCalibrator, MemoryPairFollowsARadiusStep) {
   const auto truth = [](double t) {
     Truth g;
