@@ -4,8 +4,9 @@
 #   bash scripts/build.sh [-DOPTION=VALUE …] [TARGET …]
 # Arguments that start with '-' go to CMake's configure step, e.g.
 # `bash scripts/build.sh -DODOTUNE_NATIVE=ON`; the others are the targets to
-# build (default: everything, i.e. the CLI, the tests and the benchmarks), e.g.
-# `bash scripts/build.sh odotune` builds only the CLI and the libraries it links.
+# build (default: the CLI and the tests), e.g. `bash scripts/build.sh odotune`
+# builds only the CLI and the libraries it links, `bash scripts/build.sh
+# benchmarks` the benchmarks (build/bench_*, not in the default build).
 # ODOTUNE_WITH_MPI=1 also installs Open MPI and builds with MPI (README, "MPI");
 # without it build/ is configured without MPI.
 set -euo pipefail

@@ -71,13 +71,29 @@ fi
 # The project's translation units in the database, as run-clang-tidy names them
 # (the entry's file made absolute against its directory), one per line;
 # with FILE arguments, only those (each must be in the database).
-units="$(python3 - "$root" "$db" "${files[@]}" <<'EOF'
-import json, os, sys
-root, db, wanted = os.path.realpath(sys.argv[1]), sys.argv[2], sys.argv[3:]
+# The test programs are unity builds (CMakeLists.txt): the database names
+# each program's generated unity file, not its test files. clang-tidy gets a
+# copy of the database in which every file a unity file includes has the
+# unity file's command.
+dbdir="$(mktemp -d)"
+log="$(mktemp)"
+trap 'rm -rf "$log" "$dbdir"' EXIT
+units="$(python3 - "$root" "$db" "$dbdir" "${files[@]}" <<'EOF'
+import json, os, re, sys
+root, db, dbdir, wanted = os.path.realpath(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[4:]
 modules = {"core", "bags", "tracks", "sim", "filters", "rlnode", "objectives", "calibration", "learned",
            "tuner", "results", "diagnose", "formats", "jobs", "studies", "cli", "tests", "bench"}
-units = {}
+entries = []
 for e in json.load(open(db)):
+    unity = e["file"] if os.path.isabs(e["file"]) else os.path.join(e["directory"], e["file"])
+    if not re.search(r"/Unity/unity_[^/]*\.cxx$", unity):
+        entries.append(e)
+        continue
+    for src in re.findall(r'^#include "([^"]+)"', open(unity).read(), re.M):
+        entries.append(dict(e, file=src, command=e["command"].replace(e["file"], src)))
+json.dump(entries, open(os.path.join(dbdir, "compile_commands.json"), "w"), indent=1)
+units = {}
+for e in entries:
     name = e["file"] if os.path.isabs(e["file"]) else os.path.normpath(os.path.join(e["directory"], e["file"]))
     rel = os.path.relpath(os.path.realpath(name), root)
     if rel.startswith("..") or rel.split(os.sep)[0] not in modules:
@@ -104,8 +120,6 @@ echo "tidy.sh: clang-tidy on ${#units[@]} translation unit(s) from $db (-j$jobs,
 
 # clang's per-file "N warnings generated." counts the diagnostics that .clang-tidy hides.
 noise='^[0-9]+ warnings? (and [0-9]+ errors? )?generated\.$'
-log="$(mktemp)"
-trap 'rm -f "$log"' EXIT
 set +e
 if [ -n "$runner" ]; then
   # run-clang-tidy takes regexes; anchor and escape each path so exactly these files run.
@@ -115,14 +129,14 @@ if [ -n "$runner" ]; then
   done
   # clang-tidy finds .clang-tidy by walking up from each source file. The runner
   # echoes each clang-tidy command line (left out here) and turns colours on (removed).
-  nice -n 19 "$runner" -clang-tidy-binary "$tidy" -p "$build_dir" -j "$jobs" -quiet "${regexes[@]}" 2>&1 |
+  nice -n 19 "$runner" -clang-tidy-binary "$tidy" -p "$dbdir" -j "$jobs" -quiet "${regexes[@]}" 2>&1 |
     grep --line-buffered -v -F "$tidy --use-color " | sed -u 's/\x1b\[[0-9;]*m//g' |
     grep --line-buffered -v -E "$noise" | tee "$log"
   status=${PIPESTATUS[0]}
 else
   # No run-clang-tidy: the same with xargs.
   printf '%s\0' "${units[@]}" |
-    xargs -0 -n 1 -P "$jobs" nice -n 19 "$tidy" -p "$build_dir" --quiet 2>&1 |
+    xargs -0 -n 1 -P "$jobs" nice -n 19 "$tidy" -p "$dbdir" --quiet 2>&1 |
     grep --line-buffered -v -E "$noise" | tee "$log"
   status=${PIPESTATUS[1]}
 fi

@@ -26,9 +26,9 @@ using testing_support::chair_truth;
 using testing_support::ChairTrackOptions;
 using filters::OdometryParams;
 
-constexpr double kPi = std::numbers::pi;
-constexpr double kScaleL = testing_support::kMisalignedScaleL, kScaleR = testing_support::kMisalignedScaleR,
-                 kScaleBase = testing_support::kMisalignedScaleBase;
+constexpr double kRunScaleL = testing_support::kMisalignedScaleL,
+                 kRunScaleR = testing_support::kMisalignedScaleR,
+                 kRunScaleBase = testing_support::kMisalignedScaleBase;
 
 const Track& track_120() {
   static const Track t = chair_track(testing_support::misaligned_chair(120.0, 21));
@@ -56,7 +56,7 @@ OdometryParams params(double rl, double rr, double d) {
 // Independent dead reckoning straight from the track's ticks and ground
 // truth (midpoint rule of track-format.md): RMSE of (x, y) and of θ.
 std::pair<double, double> reference_dead_reckoning(const Track& track, const OdometryParams& p) {
-  const double k = 2.0 * kPi / *track.meta().ticks_per_rev;
+  const double k = 2.0 * std::numbers::pi / *track.meta().ticks_per_rev;
   double x = track.col(Col::gt_x)[0], y = track.col(Col::gt_y)[0], th = track.col(Col::gt_theta)[0];
   double ss_pos = 0, ss_th = 0;
   int n = 0;
@@ -70,7 +70,7 @@ std::pair<double, double> reference_dead_reckoning(const Track& track, const Odo
     y += 0.5 * (l + r) * std::sin(th + 0.5 * dth);
     th += dth;
     const double ex = x - track.col(Col::gt_x)[i], ey = y - track.col(Col::gt_y)[i];
-    const double eth = std::remainder(th - track.col(Col::gt_theta)[i], 2.0 * kPi);
+    const double eth = std::remainder(th - track.col(Col::gt_theta)[i], 2.0 * std::numbers::pi);
     ss_pos += ex * ex + ey * ey;
     ss_th += eth * eth;
     ++n;
@@ -153,7 +153,7 @@ TEST(ConvergenceTime, HandMadeTraces) {
 TEST(CalibrationScore, NoneIsNominalDeadReckoningAndTruthIsFarBetter) {
   const Track& track = track_120();
   const CalibrationInput& in = input_120();
-  const OdometryParams truth = chair_truth(kScaleL, kScaleR, kScaleBase);
+  const OdometryParams truth = chair_truth(kRunScaleL, kRunScaleR, kRunScaleBase);
 
   CalibrationOptions o;
   o.method = CalibrationMethod::none;
@@ -199,8 +199,8 @@ TEST(CalibrationScore, RadiusStepSplitsConvergence) {
   o.effects.push_back("radius_step:t=20,scale_l=1.01,scale_r=0.985");
   const CalibrationInput in = build_calibration_input(chair_track(o), {});
   ASSERT_TRUE(in.truth.has_value());
-  const OdometryParams before = chair_truth(kScaleL, kScaleR, kScaleBase);
-  const OdometryParams after = chair_truth(kScaleL * 1.01, kScaleR * 0.985, kScaleBase);
+  const OdometryParams before = chair_truth(kRunScaleL, kRunScaleR, kRunScaleBase);
+  const OdometryParams after = chair_truth(kRunScaleL * 1.01, kRunScaleR * 0.985, kRunScaleBase);
   // Right before the step: converged at once, never re-converged after it.
   const TrackCalibrationScore s1 = score_fixed_params(in, before);
   ASSERT_TRUE(s1.convergence_time_s.has_value());
@@ -218,7 +218,7 @@ TEST(CalibrationScore, RadiusStepSplitsConvergence) {
 
 TEST(CalibrationRun, DualKfConvergesWithin120s) {
   const CalibrationInput& in = input_120();
-  const OdometryParams truth = chair_truth(kScaleL, kScaleR, kScaleBase);
+  const OdometryParams truth = chair_truth(kRunScaleL, kRunScaleR, kRunScaleBase);
   CalibrationOptions o;
   o.method = CalibrationMethod::dkf;
   const CalibrationResult r = run_calibration({&in}, o);
@@ -258,7 +258,7 @@ TEST(CalibrationRun, DualKfConvergesWithin120s) {
 // reckoning far better than the nominal one.
 TEST(CalibrationRun, AdaptivePfApproachesTheTruth) {
   const CalibrationInput& in = input_120();
-  const OdometryParams truth = chair_truth(kScaleL, kScaleR, kScaleBase);
+  const OdometryParams truth = chair_truth(kRunScaleL, kRunScaleR, kRunScaleBase);
   CalibrationOptions o;
   o.method = CalibrationMethod::adaptive_pf;
   o.pf.seed = 3;
@@ -301,7 +301,7 @@ TEST(CalibrationRun, BatchScoresAreThoseOfTheFittedConstants) {
   const CalibrationResult r = run_calibration({&in}, o);
   EXPECT_TRUE(r.batch_converged);
   EXPECT_EQ(r.iterations, static_cast<long>(in.samples.size()));
-  EXPECT_TRUE(within(r.final_params, chair_truth(kScaleL, kScaleR, kScaleBase), 0.005));
+  EXPECT_TRUE(within(r.final_params, chair_truth(kRunScaleL, kRunScaleR, kRunScaleBase), 0.005));
   ASSERT_EQ(r.trace.t.size(), 1u);
   EXPECT_GT(r.trace.estimate[0].sd_wheel_base_m, 0.0);
   const TrackCalibrationScore fixed = score_fixed_params(in, r.final_params);

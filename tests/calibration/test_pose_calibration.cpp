@@ -23,8 +23,9 @@ using testing_support::chair_scenario;
 using testing_support::chair_truth;
 using testing_support::ChairTrackOptions;
 
-constexpr double kScaleL = testing_support::kMisalignedScaleL, kScaleR = testing_support::kMisalignedScaleR,
-                 kScaleBase = testing_support::kMisalignedScaleBase;
+constexpr double kPoseScaleL = testing_support::kMisalignedScaleL,
+                 kPoseScaleR = testing_support::kMisalignedScaleR,
+                 kPoseScaleBase = testing_support::kMisalignedScaleBase;
 
 double worst_relative_error(const OdometryParams& p, const OdometryParams& truth) {
   return std::max({std::abs(p.wheel_radius_left_m / truth.wheel_radius_left_m - 1.0),
@@ -42,7 +43,7 @@ TEST(PoseCalibration, GroundTruthWholeRunRecoversTheGeometry) {
   const Track track = testing_support::chair_track(testing_support::misaligned_chair(120.0, 31));
   const CalibrationInput in = build_calibration_input(track, {});
   const PoseCalibrationSummary s = pose_calibrate({&in}, in.nominal);
-  const OdometryParams truth = chair_truth(kScaleL, kScaleR, kScaleBase);
+  const OdometryParams truth = chair_truth(kPoseScaleL, kPoseScaleR, kPoseScaleBase);
   EXPECT_TRUE(s.converged) << s.termination;
   EXPECT_LT(worst_relative_error(s.params, truth), 0.002);
   EXPECT_LT(worst_relative_error(in.nominal, truth), 0.03);  // the fit had work to do
@@ -83,7 +84,7 @@ TEST(PoseCalibration, TicksAndSparseFixesRecoverTheGeometryWithinAFifthOfAPercen
   EXPECT_EQ(s.ground_truth_runs, 0);
   EXPECT_GE(s.segments, 9);
   EXPECT_THAT(s.residuals, HasSubstr("position fixes"));
-  const OdometryParams truth = chair_truth(kScaleL, kScaleR, kScaleBase);
+  const OdometryParams truth = chair_truth(kPoseScaleL, kPoseScaleR, kPoseScaleBase);
   EXPECT_LT(worst_relative_error(s.params, truth), 0.002)
       << s.params.wheel_radius_left_m << " " << s.params.wheel_radius_right_m << " " << s.params.wheel_base_m;
   // The fit's residual is the fixes' own noise (σ 0.02 m per axis).
@@ -100,7 +101,7 @@ TEST(PoseCalibration, SegmentsCutTheRunAndStillRecoverTheGeometry) {
   // so the run is longer than the 120 s asked for).
   EXPECT_EQ(s.segments, static_cast<long>(std::ceil((in.t.back() - in.t.front()) / 20.0))) << s.residuals;
   EXPECT_THAT(s.residuals, HasSubstr("segments of 20 s"));
-  EXPECT_LT(worst_relative_error(s.params, chair_truth(kScaleL, kScaleR, kScaleBase)), 0.002);
+  EXPECT_LT(worst_relative_error(s.params, chair_truth(kPoseScaleL, kPoseScaleR, kPoseScaleBase)), 0.002);
 }
 
 TEST(PoseCalibration, FittedStartHeadingAbsorbsAWrongReferenceHeading) {
@@ -111,7 +112,7 @@ TEST(PoseCalibration, FittedStartHeadingAbsorbsAWrongReferenceHeading) {
   th[0] += 0.05;
   const Track track(std::move(d));
   const CalibrationInput in = build_calibration_input(track, {});
-  const OdometryParams truth = chair_truth(kScaleL, kScaleR, kScaleBase);
+  const OdometryParams truth = chair_truth(kPoseScaleL, kPoseScaleR, kPoseScaleBase);
   PoseCalibrationOptions po;
   const double fixed = worst_relative_error(pose_calibrate({&in}, in.nominal, po).params, truth);
   po.fit_start_heading = true;

@@ -37,7 +37,7 @@ using ::testing::HasSubstr;
 using ::testing::StartsWith;
 
 constexpr double kRNom = 0.32, kDNom = 0.65;
-constexpr double kScaleL = 0.99, kScaleR = 1.012, kScaleD = 1.02;
+constexpr double kControllerScaleL = 0.99, kControllerScaleR = 1.012, kScaleD = 1.02;
 
 // The misaligned wheelchair on the laps of diagnose/sim_track.h, ground truth
 // at 100 Hz with σ 1 mm (so the pose fit has a finite precision), 10 Hz
@@ -81,7 +81,7 @@ Effective effective(const std::map<std::string, double>& p) {
           p.at("wheel_separation") * p.at("wheel_separation_multiplier")};
 }
 
-std::size_t lines(const std::string& s) {
+std::size_t line_count(const std::string& s) {
   return static_cast<std::size_t>(std::count(s.begin(), s.end(), '\n'));
 }
 
@@ -208,7 +208,7 @@ TEST_F(CliController, InconsistentFlagsAreRefusedByNameBeforeAnyWork) {
       const auto r = run_cli("calibrate --track " + track + " --method batch --json " + json_out + " " +
                              c.flags);
       EXPECT_NE(r.exit_code, 0) << c.flags;
-      EXPECT_EQ(lines(r.err), 1u) << r.err;
+      EXPECT_EQ(line_count(r.err), 1u) << r.err;
       EXPECT_THAT(r.err, StartsWith("odotune: " + c.flag + " ")) << r.err;
       EXPECT_THAT(r.err, HasSubstr(c.needle)) << r.err;
       EXPECT_EQ(tmp.entries(), 0u) << c.flags;
@@ -220,7 +220,7 @@ TEST_F(CliController, InconsistentFlagsAreRefusedByNameBeforeAnyWork) {
   const auto r = run_cli("calibrate --apply " + cfg.string() + " --track " + track_ + " --controller-out " +
                          out + " --controller ros2_control");
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_EQ(line_count(r.err), 1u) << r.err;
   EXPECT_THAT(r.err, HasSubstr("--controller-out does not combine with --apply"));
   EXPECT_EQ(tmp.entries(), 0u);
 }
@@ -234,7 +234,7 @@ TEST_F(CliController, AFailedRunWritesNoControllerFile) {
   const auto r = run_cli("calibrate --track " + no_ext + " --method dkf --controller-out " +
                          (out_dir / "ddc.yaml").string() + " --controller ros2_control");
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_EQ(line_count(r.err), 1u) << r.err;
   EXPECT_THAT(r.err, HasSubstr("--ext-from-gt"));
   EXPECT_EQ(out_dir.entries(), 0u);
 }
@@ -259,8 +259,8 @@ TEST_F(CliController, RoundTripThroughTheControllerFileLeavesNothingToCorrect) {
   const auto p1 = ros2_params(first);
   const Effective e1 = effective(p1);
   // The fit found the misalignment (the calibration tests prove its accuracy).
-  EXPECT_NEAR(p1.at("left_wheel_radius_multiplier"), kScaleL, 2e-3);
-  EXPECT_NEAR(p1.at("right_wheel_radius_multiplier"), kScaleR, 2e-3);
+  EXPECT_NEAR(p1.at("left_wheel_radius_multiplier"), kControllerScaleL, 2e-3);
+  EXPECT_NEAR(p1.at("right_wheel_radius_multiplier"), kControllerScaleR, 2e-3);
   EXPECT_NEAR(p1.at("wheel_separation_multiplier"), kScaleD, 2e-3);
   const json j1 = json::parse(slurp(first_json));
   double rel_sd = 0.0;
@@ -337,8 +337,8 @@ TEST(CliControllerDiagnose, WritesTheCorrectedGeometryOrSaysThereIsNone) {
     }
   ASSERT_TRUE(fitted.count("radius_error.scale_l") && fitted.count("wheel_base_error.scale")) << slurp(dj);
   const std::vector<std::tuple<const char*, const char*, double>> checks = {
-      {"left_wheel_radius_multiplier", "radius_error.scale_l", kScaleL},
-      {"right_wheel_radius_multiplier", "radius_error.scale_r", kScaleR},
+      {"left_wheel_radius_multiplier", "radius_error.scale_l", kControllerScaleL},
+      {"right_wheel_radius_multiplier", "radius_error.scale_r", kControllerScaleR},
       {"wheel_separation_multiplier", "wheel_base_error.scale", kScaleD}};
   for (const auto& [key, param, truth] : checks) {
     const double m = c[key].as<double>();
@@ -365,7 +365,7 @@ TEST(CliControllerDiagnose, WritesTheCorrectedGeometryOrSaysThereIsNone) {
   // The flags are checked before the diagnosis, by name.
   r = run_cli("diagnose " + ideal + " --controller-out " + none.string());
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_EQ(lines(r.err), 1u) << r.err;
+  EXPECT_EQ(line_count(r.err), 1u) << r.err;
   EXPECT_THAT(r.err, HasSubstr("--controller-out needs --controller"));
   EXPECT_FALSE(fs::exists(none));
 }

@@ -113,11 +113,11 @@ TEST_F(CliExport, OdotuneFormatReplaysToTheStoredTunedRmse) {
 
       // eval --config on the same track: exactly the stored tuned RMSE.
       const int index = track == "track1" ? 1 : 5;
-      const fs::path json = tmp / (model + "-" + track + ".json");
+      const fs::path json_file = tmp / (model + "-" + track + ".json");
       const auto e = run_cli(fmt::format("eval --config {} --track {} --json {}", cfg.string(),
-                                         reference_track(index), json.string()));
+                                         reference_track(index), json_file.string()));
       ASSERT_EQ(e.exit_code, 0) << e.err;
-      const auto j = nlohmann::json::parse(slurp(json));
+      const auto j = nlohmann::json::parse(slurp(json_file));
       EXPECT_EQ(j["tracks"][0]["metrics"]["rmse_m"].get<double>(), want->tuned.rmse_m);
       EXPECT_EQ(j["tracks"][0]["baseline"]["rmse_m"].get<double>(), want->baseline.rmse_m);
     }

@@ -31,7 +31,7 @@ using testing_support::TempDir;
 // 2 models × 2 tracks × 2 modes × `seeds` seeds, plus the leave-one-out
 // cells (tuned on one track, scored on the other): 16 runs per seed, PSO with
 // 12 particles; 32 runs of 12 iterations take ~0.3 s.
-std::string experiment_text(int iterations, int seeds = 2) {
+std::string mpi_experiment_text(int iterations, int seeds = 2) {
   return fmt::format("format: odotune-experiment/1\nname: mpi-test\nmodels: [rq, alpha]\n"
                      "tracks: [{}, {}]\nmodes: [1, 7]\nseeds: {{first: 1, count: {}}}\nsolver: pso\n"
                      "budget: {{particles: 12, iterations: {}}}\nleave_one_out: true\nstore: s.sqlite\n",
@@ -67,7 +67,7 @@ std::size_t count(const std::string& text, const std::string& what) {
 
 TEST(CliGridMpi, TwoRanksWriteExactlyTheRowsOfOneProcess) {
   TempDir dir;
-  std::ofstream(dir / "e.yaml") << experiment_text(12);
+  std::ofstream(dir / "e.yaml") << mpi_experiment_text(12);
   const auto one = run_cli("grid " + (dir / "e.yaml").string() + " --store " + (dir / "one.sqlite").string());
   ASSERT_EQ(one.exit_code, 0) << one.err;
   const auto expected = store_rows(dir / "one.sqlite");
@@ -98,7 +98,7 @@ bool ended(const std::string& pid) {
 TEST(CliGridMpi, StoppedOrKilledAtRandomMomentsResumesToTheRowsOfOneProcess) {
   TempDir ref_dir, dir;
   // Long enough (~2 s on 2 ranks) to be stopped a few times at random moments.
-  for (const auto* d : {&ref_dir, &dir}) std::ofstream(*d / "e.yaml") << experiment_text(400, 4);
+  for (const auto* d : {&ref_dir, &dir}) std::ofstream(*d / "e.yaml") << mpi_experiment_text(400, 4);
   const auto ref = run_cli("grid " + (ref_dir / "e.yaml").string());
   ASSERT_EQ(ref.exit_code, 0) << ref.err;
   const auto expected = store_rows(ref_dir / "s.sqlite");
@@ -146,15 +146,15 @@ TEST(CliGridMpi, AFailureOnAnyRankIsToldOnceAndEndsTheJob) {
   EXPECT_EQ(count(bad.err, "bad.yaml:4:"), 1u) << bad.err;
 
   // A store of another experiment: only rank 0 opens it, the job still ends.
-  std::ofstream(dir / "a.yaml") << experiment_text(1);
-  std::ofstream(dir / "b.yaml") << experiment_text(2);
+  std::ofstream(dir / "a.yaml") << mpi_experiment_text(1);
+  std::ofstream(dir / "b.yaml") << mpi_experiment_text(2);
   ASSERT_EQ(run_cli("grid " + (dir / "a.yaml").string()).exit_code, 0);
   const auto other = run_mpi(2, "grid " + (dir / "b.yaml").string());
   EXPECT_NE(other.exit_code, 0);
   EXPECT_EQ(count(other.err, "another experiment"), 1u) << other.err;
 
   // A run that fails (here every run: an unknown solver) stops every rank.
-  std::ofstream(dir / "bogus.yaml") << std::regex_replace(experiment_text(1), std::regex("solver: pso"),
+  std::ofstream(dir / "bogus.yaml") << std::regex_replace(mpi_experiment_text(1), std::regex("solver: pso"),
                                                           "solver: nlopt:LN_BOGUS");
   const auto bogus = run_mpi(2, "grid " + (dir / "bogus.yaml").string() + " --store " +
                                     (dir / "bogus.sqlite").string());
@@ -166,8 +166,8 @@ TEST(CliGridMpi, AFailureOnAnyRankIsToldOnceAndEndsTheJob) {
   // Rank 1 reads another experiment file than rank 0 (as on a node whose
   // copy differs): refused before any run.
   TempDir node("node");
-  std::ofstream(node / "c.yaml") << experiment_text(1);
-  std::ofstream(node / "d.yaml") << experiment_text(1) << "# changed on one node\n";
+  std::ofstream(node / "c.yaml") << mpi_experiment_text(1);
+  std::ofstream(node / "d.yaml") << mpi_experiment_text(1) << "# changed on one node\n";
   std::ofstream(node / "by_rank.sh") << fmt::format(
       "#!/bin/sh\nif [ \"$OMPI_COMM_WORLD_RANK\" = 1 ]; then exec {0} grid {1}/d.yaml; fi\n"
       "exec {0} grid {1}/c.yaml\n",

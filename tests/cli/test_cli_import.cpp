@@ -13,6 +13,7 @@
 
 #include <fmt/format.h>
 
+#include "support/cli_runner.h"
 #include "tracks/track_io.h"
 
 namespace odotune {
@@ -27,12 +28,7 @@ struct ProcResult {
   std::string out, err;
 };
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using testing_support::slurp;
 
 class ImportCli : public ::testing::Test {
  protected:

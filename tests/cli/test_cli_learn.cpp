@@ -124,7 +124,7 @@ std::size_t lines(const std::string& s) {
 }
 
 // A failed command: non-zero exit, exactly one line on stderr mentioning `needle`.
-void expect_one_line_failure(const testing_support::CliResult& r, const std::string& needle) {
+void expect_one_line_error(const testing_support::CliResult& r, const std::string& needle) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_EQ(lines(r.err), 1u) << r.err;
   EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
@@ -204,32 +204,32 @@ TEST_F(LearnCli, RetrainWritesEventsAndAModel) {
 TEST_F(LearnCli, BadInputsFailWithOneLineAndNoOutput) {
   const fs::path out = *dir_ / "bad.json";
   // A missing track file.
-  expect_one_line_failure(run_cli("learn eval --track " + (*dir_ / "none.csv").string() + " --model " +
-                                  model() + " --json " + out.string()),
-                          "none.csv");
+  expect_one_line_error(run_cli("learn eval --track " + (*dir_ / "none.csv").string() + " --model " + model() +
+                                " --json " + out.string()),
+                        "none.csv");
   EXPECT_FALSE(fs::exists(out));
   // A model file that is not JSON, and one with a bad field.
   const fs::path garbage = *dir_ / "garbage.json";
   std::ofstream(garbage) << "{ not json";
-  expect_one_line_failure(run_cli("learn eval --track " + track("eval") + " --model " + garbage.string() +
-                                  " --json " + out.string()),
-                          "garbage.json");
+  expect_one_line_error(run_cli("learn eval --track " + track("eval") + " --model " + garbage.string() +
+                                " --json " + out.string()),
+                        "garbage.json");
   EXPECT_FALSE(fs::exists(out));
   json m = read_json(model());
   m["odometry"]["rate_hz"] = -10;
   const fs::path bad_model = *dir_ / "bad_model.json";
   std::ofstream(bad_model) << m.dump();
-  expect_one_line_failure(run_cli("learn eval --track " + track("eval") + " --model " + bad_model.string() +
-                                  " --json " + out.string()),
-                          "odometry.rate_hz");
+  expect_one_line_error(run_cli("learn eval --track " + track("eval") + " --model " + bad_model.string() +
+                                " --json " + out.string()),
+                        "odometry.rate_hz");
   EXPECT_FALSE(fs::exists(out));
   // A track without ground truth.
-  expect_one_line_failure(
+  expect_one_line_error(
       run_cli("learn eval --track " + track("nogt") + " --model " + model() + " --json " + out.string()),
       "ground truth");
   EXPECT_FALSE(fs::exists(out));
-  expect_one_line_failure(run_cli("learn train --track " + track("nogt") + " --model-out " + out.string()),
-                          "ground truth");
+  expect_one_line_error(run_cli("learn train --track " + track("nogt") + " --model-out " + out.string()),
+                        "ground truth");
   EXPECT_FALSE(fs::exists(out));
   // Retraining with the model's detector on a track without motor power.
   const fs::path nopower = *dir_ / "nopower.csv";
@@ -241,15 +241,15 @@ TEST_F(LearnCli, BadInputsFailWithOneLineAndNoOutput) {
     std::ofstream(y) << yaml;
     ASSERT_EQ(run_cli("simulate " + y.string() + " -o " + nopower.string()).exit_code, 0);
   }
-  expect_one_line_failure(run_cli("learn retrain --track " + nopower.string() + " --model " + model() +
-                                  " --json " + out.string() + " --model-out " + (*dir_ / "m3.json").string()),
-                          "motor power");
+  expect_one_line_error(run_cli("learn retrain --track " + nopower.string() + " --model " + model() +
+                                " --json " + out.string() + " --model-out " + (*dir_ / "m3.json").string()),
+                        "motor power");
   EXPECT_FALSE(fs::exists(out));
   EXPECT_FALSE(fs::exists(*dir_ / "m3.json"));
   // An output folder that does not exist.
-  expect_one_line_failure(run_cli("learn train --track " + track("learn") + " --model-out " +
-                                  (*dir_ / "no_dir" / "m.json").string()),
-                          "does not exist");
+  expect_one_line_error(run_cli("learn train --track " + track("learn") + " --model-out " +
+                                (*dir_ / "no_dir" / "m.json").string()),
+                        "does not exist");
 }
 
 // ---------------------------------------------------------------- study learned
@@ -358,7 +358,7 @@ TEST_F(LearnCli, StudyRejectsABadScenarioBeforeCreatingTheFolder) {
   // The step scenario without a radius change.
   std::string args = study_args(dir_->path(), out);
   args.replace(args.find("step.yaml"), 9, "eval.yaml");
-  expect_one_line_failure(run_cli(args), "radius_step");
+  expect_one_line_error(run_cli(args), "radius_step");
   EXPECT_FALSE(fs::exists(out));
 }
 

@@ -18,7 +18,7 @@ TEST(CliRealData, OptiOdomRunTunesAfterSyntheticFixes) {
   TempDir tmp;
   const std::string run = std::string(ODOTUNE_SHARED_DIR) +
                           "/data/real/optiodom_diff/free/020120212354/020120212354_run-01.csv";
-  const auto raw = tmp / "raw.csv", aps = tmp / "aps.csv", json = tmp / "t.json";
+  const auto raw = tmp / "raw.csv", aps = tmp / "aps.csv", json_file = tmp / "t.json";
   ASSERT_EQ(run_cli(fmt::format("import optiodom {} -o {}", run, raw.string())).exit_code, 0);
 
   // Without fixes there is nothing to tune: one clear line, non-zero exit.
@@ -29,9 +29,9 @@ TEST(CliRealData, OptiOdomRunTunesAfterSyntheticFixes) {
   ASSERT_EQ(run_cli(fmt::format("fixes {} -o {} --seed 7", raw.string(), aps.string())).exit_code, 0);
   const auto r = run_cli(
       fmt::format("tune --track {} --model alpha --mode 1 --particles 12 --iterations 15 --json {}",
-                  aps.string(), json.string()));
+                  aps.string(), json_file.string()));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const auto j = nlohmann::json::parse(testing_support::slurp(json));
+  const auto j = nlohmann::json::parse(testing_support::slurp(json_file));
   EXPECT_LT(j["tuned"]["rmse_m"].get<double>(), j["baseline"]["rmse_m"].get<double>());
   EXPECT_EQ(j["divergences"]["non_finite"], 0);
 }
@@ -57,14 +57,14 @@ TEST(CliRealData, OptiOdomCalibrationImprovesEveryHeldOutRun) {
                         "free/020120212354/020120212354_run-01", "free/030120210001/030120210001_run-02"})
     held += " --track " + import(r);
   for (const std::string method : {"batch", "adaptive-pf"}) {
-    const auto cfg = tmp / (method + ".yaml"), json = tmp / (method + ".json");
+    const auto cfg = tmp / (method + ".yaml"), json_file = tmp / (method + ".json");
     const auto r = run_cli(fmt::format("calibrate{} --method {} --ext-from-gt 10 --threads 1 --config-out {}",
                                        fit, method, cfg.string()));
     ASSERT_EQ(r.exit_code, 0) << method << ": " << r.err;
-    ASSERT_EQ(
-        run_cli(fmt::format("calibrate{} --apply {} --json {}", held, cfg.string(), json.string())).exit_code,
-        0);
-    const auto j = nlohmann::json::parse(testing_support::slurp(json));
+    ASSERT_EQ(run_cli(fmt::format("calibrate{} --apply {} --json {}", held, cfg.string(), json_file.string()))
+                  .exit_code,
+              0);
+    const auto j = nlohmann::json::parse(testing_support::slurp(json_file));
     ASSERT_EQ(j["tracks"].size(), 4u);
     for (const auto& t : j["tracks"])
       EXPECT_LT(t["calibrated"]["pose_rmse_m"].get<double>(), t["nominal"]["pose_rmse_m"].get<double>())

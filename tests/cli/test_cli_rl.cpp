@@ -27,9 +27,9 @@ const std::string kSource =
 
 TEST(CliRl, EvalReplaysTheUsersFileAndScoresTheSecondHalf) {
   TempDir dir("cli-rl-eval");
-  const auto json = dir.path() / "e.json", tum = dir.path() / "e.tum";
-  const auto r = run_cli("eval " + kSource + " --from 197.65 --json " + json.string() + " --trajectory-out " +
-                         tum.string());
+  const auto json_file = dir.path() / "e.json", tum = dir.path() / "e.tum";
+  const auto r = run_cli("eval " + kSource + " --from 197.65 --json " + json_file.string() +
+                         " --trajectory-out " + tum.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("GPS heading fitted"), std::string::npos) << r.out;
   // robot_localization's defaults on the held-out half: the outage error is
@@ -39,7 +39,7 @@ TEST(CliRl, EvalReplaysTheUsersFileAndScoresTheSecondHalf) {
   EXPECT_GT(outage, 5.0) << r.out;
   EXPECT_GT(fifth, 0.1) << r.out;
   EXPECT_LT(fifth, 1.5) << r.out;
-  EXPECT_NE(slurp(json).find("\"every_fifth_fix\""), std::string::npos);
+  EXPECT_NE(slurp(json_file).find("\"every_fifth_fix\""), std::string::npos);
   const std::string t = slurp(tum);
   EXPECT_GT(std::count(t.begin(), t.end(), '\n'), 10000);  // 30 Hz over 395 s
 }

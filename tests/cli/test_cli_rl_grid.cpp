@@ -18,14 +18,14 @@ using odotune::testing_support::TempDir;
 
 namespace {
 
-const std::string kBags = std::string(ODOTUNE_SHARED_DIR) + "/data/real/robot_localization_bags";
+const std::string kRlBags = std::string(ODOTUNE_SHARED_DIR) + "/data/real/robot_localization_bags";
 const std::string kTf = "imu_link=0,-0.3,0.52,1.5707963267948966,0,-1.5707963267948966";
 
 // An rl-ekf experiment on the ROS 2 form of test1, with `from` replaced by `to`.
 std::filesystem::path experiment(const TempDir& dir, const std::string& name, const std::string& from = "",
                                  const std::string& to = "") {
-  std::string text = "format: odotune-experiment/1\nname: " + name + "\nmodels: [rl-ekf]\ntracks: [" + kBags +
-                     "/ros2/test1.mcap]\nrobot_localization:\n  params: " + kBags +
+  std::string text = "format: odotune-experiment/1\nname: " + name + "\nmodels: [rl-ekf]\ntracks: [" + kRlBags +
+                     "/ros2/test1.mcap]\nrobot_localization:\n  params: " + kRlBags +
                      "/husky_ekf.yaml\n  tf: [\"" + kTf +
                      "\"]\n  gps_heading_fit_s: 60\n  until_s: 100\n  end_s: 160\n  fitness: [outage, both]\n"
                      "  space: blocks\n  input_covariances: false\n  outage_s: 30\nseeds: [1]\nsolver: pso\n"
@@ -83,7 +83,7 @@ TEST(CliRlGrid, GridReportAndExportTakeTheRobotLocalizationModel) {
   EXPECT_NE(text.find("yaw_offset"), std::string::npos) << text;  // navsat's fitted rotation
   const double stored = number_after(x.out, "held-out GPS-outage RMSE");
   ASSERT_GT(stored, 0.0) << x.out;
-  const auto e = run_cli("eval --rl-params " + out.string() + " --bag " + kBags + "/ros2/test1.mcap --tf " +
+  const auto e = run_cli("eval --rl-params " + out.string() + " --bag " + kRlBags + "/ros2/test1.mcap --tf " +
                          kTf + " --gps-heading-fit 60 --from 100 --until 160");
   ASSERT_EQ(e.exit_code, 0) << e.err;
   EXPECT_NEAR(number_after(e.out, "GPS outage RMSE"), stored, 0.0015) << e.out << x.out;

@@ -156,8 +156,8 @@ TEST(CliTune, WithoutGroundTruthTunesByFixCrossValidation) {
                           "/data/real/robot_localization_bags/ros2/test1.mcap";
   auto r = run_cli("import rosbag " + bag + " --imu-rpy 1.5707963267948966,0,-1.5707963267948966 -o " + track);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const std::string json = dir + "/odotune_cli_husky.json";
-  r = run_cli("tune --track " + track + " --model alpha --particles 8 --iterations 5 --json " + json);
+  const std::string json_file = dir + "/odotune_cli_husky.json";
+  r = run_cli("tune --track " + track + " --model alpha --particles 8 --iterations 5 --json " + json_file);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("no ground truth in"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("mode 8 (held-out fix RMSE)"), std::string::npos) << r.out;
@@ -204,7 +204,7 @@ TEST(CliTune, WithoutGroundTruthTunesByFixCrossValidation) {
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_NE(r.err.find("use --mode 8 or 9"), std::string::npos) << r.err;
   std::remove(track.c_str());
-  std::remove(json.c_str());
+  std::remove(json_file.c_str());
 }
 
 }  // namespace

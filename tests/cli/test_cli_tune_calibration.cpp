@@ -33,7 +33,7 @@ std::string smoke_experiment() {
   return std::string(ODOTUNE_SOURCE_DIR) + "/experiments/calibration_smoke.yaml";
 }
 
-long lines_of(const std::string& s) { return std::count(s.begin(), s.end(), '\n'); }
+long newlines_in(const std::string& s) { return std::count(s.begin(), s.end(), '\n'); }
 
 TEST(CliTuneCalibration, TheKeptTrackIsWhatItsScenarioSimulates) {
   TempDir tmp;
@@ -46,20 +46,20 @@ TEST(CliTuneCalibration, TheKeptTrackIsWhatItsScenarioSimulates) {
 }
 
 // One small adaptive-PF tune: 3 particles × (1 + 1) iterations.
-std::string adaptive_tune_args(const fs::path& json, int threads, int seed = 4) {
+std::string adaptive_tune_args(const fs::path& json_file, int threads, int seed = 4) {
   return fmt::format("tune --track {} --model adaptive-pf-calib --particles 3 --iterations 1 --seed {} "
                      "--pf-particles 400 --pf-seed 2 --resampler stratified --threads {} --json {}",
-                     wheelchair_track(), seed, threads, json.string());
+                     wheelchair_track(), seed, threads, json_file.string());
 }
 
 TEST(CliTuneCalibration, AdaptivePfJsonHasTheDocumentedKeysAndTunedNeverWorse) {
   TempDir tmp;
-  const auto json = tmp / "t.json", cfg = tmp / "pf.yaml";
-  const auto r = run_cli(adaptive_tune_args(json, 2) + " --config-out " + cfg.string());
+  const auto json_file = tmp / "t.json", cfg = tmp / "pf.yaml";
+  const auto r = run_cli(adaptive_tune_args(json_file, 2) + " --config-out " + cfg.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("score"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("RMSE"), std::string::npos) << r.out;
-  const auto j = nlohmann::json::parse(slurp(json));
+  const auto j = nlohmann::json::parse(slurp(json_file));
   for (const char* key :
        {"model",       "solver",           "seed",           "particles",    "iterations",    "calibrator",
         "params",      "param_units",      "default_params", "default_kept", "score_weights", "baseline_score",
@@ -118,10 +118,10 @@ TEST(CliTuneCalibration, SameSeedSameSettingsAnyThreadCount) {
   TempDir tmp;
   nlohmann::json runs[2];
   for (int k = 0; k < 2; ++k) {
-    const auto json = tmp / fmt::format("r{}.json", k);
-    const auto r = run_cli(adaptive_tune_args(json, 1 + k));
+    const auto json_file = tmp / fmt::format("r{}.json", k);
+    const auto r = run_cli(adaptive_tune_args(json_file, 1 + k));
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    runs[k] = nlohmann::json::parse(slurp(json));
+    runs[k] = nlohmann::json::parse(slurp(json_file));
     runs[k].erase("seconds");
   }
   EXPECT_EQ(runs[0]["params"], runs[1]["params"]);
@@ -131,20 +131,20 @@ TEST(CliTuneCalibration, SameSeedSameSettingsAnyThreadCount) {
 TEST(CliTuneCalibration, BadModelAndMisplacedOptionsAreOneLine) {
   auto r = run_cli("tune --track " + wheelchair_track() + " --model pf-calibrate");
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_EQ(lines_of(r.err), 1) << r.err;
+  EXPECT_EQ(newlines_in(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("pf-calibrate"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("adaptive-pf-calib"), std::string::npos) << r.err;
   r = run_cli("tune --track " + wheelchair_track() + " --model pf-calib --mode 3");
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_EQ(lines_of(r.err), 1) << r.err;
+  EXPECT_EQ(newlines_in(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("--mode"), std::string::npos) << r.err;
   r = run_cli("tune --track " + reference_track(1) + " --model rq --resampler residual");
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_EQ(lines_of(r.err), 1) << r.err;
+  EXPECT_EQ(newlines_in(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("--resampler"), std::string::npos) << r.err;
   r = run_cli("tune --track " + wheelchair_track() + " --model pf-calib --policy sometimes");
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_EQ(lines_of(r.err), 1) << r.err;
+  EXPECT_EQ(newlines_in(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("sometimes"), std::string::npos) << r.err;
 }
 
@@ -167,12 +167,12 @@ TEST(CliTuneCalibration, TrackWithoutExternalVelocitiesNeedsExtFromGt) {
                            " --model pf-calib --particles 2 --iterations 0 --pf-particles 200";
   const auto refused = run_cli(base);
   EXPECT_NE(refused.exit_code, 0);
-  EXPECT_EQ(lines_of(refused.err), 1) << refused.err;
+  EXPECT_EQ(newlines_in(refused.err), 1) << refused.err;
   EXPECT_NE(refused.err.find("no_ext"), std::string::npos) << refused.err;
-  const auto json = tmp / "j.json";
-  const auto ok = run_cli(base + " --ext-from-gt 10 --json " + json.string());
+  const auto json_file = tmp / "j.json";
+  const auto ok = run_cli(base + " --ext-from-gt 10 --json " + json_file.string());
   ASSERT_EQ(ok.exit_code, 0) << ok.err;
-  const auto j = nlohmann::json::parse(slurp(json));
+  const auto j = nlohmann::json::parse(slurp(json_file));
   EXPECT_EQ(j["calibrator"]["ext_from_gt_hz"], 10.0);
   EXPECT_EQ(j["model"], "pf-calib");
   EXPECT_EQ(j["calibrator"]["particles"], 200);
@@ -235,7 +235,7 @@ TEST(CliGridCalibration, SmokeExperimentStoresOneRunPerModelAndSeedAndReports) {
                           " --select model=adaptive-pf-calib --format odotune --out " +
                           (tmp / "x.yaml").string());
   EXPECT_NE(ex.exit_code, 0);
-  EXPECT_EQ(lines_of(ex.err), 1) << ex.err;
+  EXPECT_EQ(newlines_in(ex.err), 1) << ex.err;
   EXPECT_NE(ex.err.find("calibrator"), std::string::npos) << ex.err;
   EXPECT_FALSE(fs::exists(tmp / "x.yaml"));
 }
@@ -265,7 +265,7 @@ TEST(CliGridCalibration, TrackUnusableForAListedModelIsOneLineNamingIt) {
       wheelchair_track());
   auto g = run_cli("grid " + (tmp / "e.yaml").string());
   EXPECT_NE(g.exit_code, 0);
-  EXPECT_EQ(lines_of(g.err), 1) << g.err;
+  EXPECT_EQ(newlines_in(g.err), 1) << g.err;
   EXPECT_NE(g.err.find("wheelchair_short"), std::string::npos) << g.err;
   // A bad calibration key names file and line.
   std::ofstream(tmp / "b.yaml") << fmt::format(
@@ -274,7 +274,7 @@ TEST(CliGridCalibration, TrackUnusableForAListedModelIsOneLineNamingIt) {
       wheelchair_track());
   g = run_cli("grid " + (tmp / "b.yaml").string());
   EXPECT_NE(g.exit_code, 0);
-  EXPECT_EQ(lines_of(g.err), 1) << g.err;
+  EXPECT_EQ(newlines_in(g.err), 1) << g.err;
   EXPECT_NE(g.err.find("b.yaml:7:"), std::string::npos) << g.err;
   // An unknown model names the choices.
   std::ofstream(tmp / "m.yaml") << fmt::format(

@@ -34,22 +34,24 @@ using testing_support::TempDir;
 // 10 Hz σ 0.02, ground truth 100 Hz, radius_error 0.99 / 1.012, no gyro);
 // tests/cli/test_cli_tune_calibration.cpp checks it is what its scenario
 // simulates.
-std::string wheelchair_track() { return std::string(ODOTUNE_SOURCE_DIR) + "/data/sim/wheelchair_short.csv"; }
-std::string smoke_experiment() { return std::string(ODOTUNE_SOURCE_DIR) + "/experiments/ukf_smoke.yaml"; }
+std::string ukf_wheelchair_track() {
+  return std::string(ODOTUNE_SOURCE_DIR) + "/data/sim/wheelchair_short.csv";
+}
+std::string ukf_smoke_experiment() { return std::string(ODOTUNE_SOURCE_DIR) + "/experiments/ukf_smoke.yaml"; }
 
-long lines_of(const std::string& s) { return std::count(s.begin(), s.end(), '\n'); }
+long newline_count(const std::string& s) { return std::count(s.begin(), s.end(), '\n'); }
 
 TEST(CliTuneUkf, TuneBeatsTheDefaultsAndTheConfigRoundTrips) {
   TempDir tmp;
-  const auto json = tmp / "t.json", cfg = tmp / "ukf.yaml";
+  const auto json_file = tmp / "t.json", cfg = tmp / "ukf.yaml";
   const auto r = run_cli(
       fmt::format("tune --track {} --model ukf --mode 1 --particles 8 --iterations 5 --seed 3 --threads 2 "
                   "--json {} --config-out {}",
-                  wheelchair_track(), json.string(), cfg.string()));
+                  ukf_wheelchair_track(), json_file.string(), cfg.string()));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("fusion UKF"), std::string::npos) << r.out;
 
-  const auto j = nlohmann::json::parse(slurp(json));
+  const auto j = nlohmann::json::parse(slurp(json_file));
   EXPECT_EQ(j["model"], "ukf");
   EXPECT_EQ(j["mode"], 1);
   EXPECT_EQ(j["evaluations"], 8 * 6);
@@ -74,14 +76,14 @@ TEST(CliTuneUkf, TuneBeatsTheDefaultsAndTheConfigRoundTrips) {
   EXPECT_EQ(c.rate_hz, 10.0);
   for (std::size_t i = 0; i < space.dim(); ++i)
     EXPECT_EQ(c.params[i], j["params"][space.params()[i].name].get<double>()) << space.params()[i].name;
-  const FusionInput in = build_fusion_input(read_track(wheelchair_track()));
+  const FusionInput in = build_fusion_input(read_track(ukf_wheelchair_track()));
   EXPECT_NEAR(ukf_pose_errors(in, odotune::apply_ukf_config(c)).rmse_m, tuned, 1e-12);
 
   // Same seed, one thread: the same result.
   const auto json1 = tmp / "t1.json";
   const auto r1 = run_cli(fmt::format(
       "tune --track {} --model ukf --mode 1 --particles 8 --iterations 5 --seed 3 --threads 1 --json {}",
-      wheelchair_track(), json1.string()));
+      ukf_wheelchair_track(), json1.string()));
   ASSERT_EQ(r1.exit_code, 0) << r1.err;
   EXPECT_EQ(nlohmann::json::parse(slurp(json1))["params"], j["params"]);
 }
@@ -124,25 +126,25 @@ TEST(CliTuneUkf, BadInputIsOneLine) {
   TempDir tmp;
   // A track without ground truth: named, one line, nothing written.
   {
-    TrackData d = read_track(wheelchair_track()).data();
+    TrackData d = read_track(ukf_wheelchair_track()).data();
     d.meta.name = "blind";
     for (Col c : {Col::gt_x, Col::gt_y, Col::gt_theta}) d.col(c).clear();
     write_track(Track(std::move(d)), tmp / "blind.csv");
   }
-  const auto json = tmp / "x.json";
+  const auto json_file = tmp / "x.json";
   auto r = run_cli(fmt::format("tune --track {} --model ukf --particles 2 --iterations 1 --json {}",
-                               (tmp / "blind.csv").string(), json.string()));
+                               (tmp / "blind.csv").string(), json_file.string()));
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_EQ(lines_of(r.err), 1) << r.err;
+  EXPECT_EQ(newline_count(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("track 'blind': no ground truth"), std::string::npos) << r.err;
-  EXPECT_FALSE(fs::exists(json));
+  EXPECT_FALSE(fs::exists(json_file));
   // A calibrator's option.
-  r = run_cli(fmt::format("tune --track {} --model ukf --resampler stratified", wheelchair_track()));
+  r = run_cli(fmt::format("tune --track {} --model ukf --resampler stratified", ukf_wheelchair_track()));
   EXPECT_NE(r.exit_code, 0);
-  EXPECT_EQ(lines_of(r.err), 1) << r.err;
+  EXPECT_EQ(newline_count(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("--resampler"), std::string::npos) << r.err;
   // An unknown model lists ukf among the choices.
-  r = run_cli(fmt::format("tune --track {} --model ukff", wheelchair_track()));
+  r = run_cli(fmt::format("tune --track {} --model ukff", ukf_wheelchair_track()));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("ukf"), std::string::npos) << r.err;
 }
@@ -150,7 +152,7 @@ TEST(CliTuneUkf, BadInputIsOneLine) {
 TEST(CliGridUkf, SmokeExperimentRunsStoresReportsAndExports) {
   TempDir tmp;
   const auto store = tmp / "s.sqlite";
-  const auto g = run_cli("grid " + smoke_experiment() + " --store " + store.string() + " --threads 2");
+  const auto g = run_cli("grid " + ukf_smoke_experiment() + " --store " + store.string() + " --threads 2");
   ASSERT_EQ(g.exit_code, 0) << g.err;
   const std::vector<results::RunRecord> runs = results::Store(store).runs();
   // 1 model × 1 track × 2 modes × 2 seeds: the UKF has fitness modes.
@@ -176,7 +178,7 @@ TEST(CliGridUkf, SmokeExperimentRunsStoresReportsAndExports) {
   EXPECT_EQ(cells, (std::set<std::string>{"ukf 1 1", "ukf 1 2", "ukf 7 1", "ukf 7 2"}));
 
   // A second grid on the same store runs nothing more.
-  const auto again = run_cli("grid " + smoke_experiment() + " --store " + store.string());
+  const auto again = run_cli("grid " + ukf_smoke_experiment() + " --store " + store.string());
   ASSERT_EQ(again.exit_code, 0) << again.err;
   EXPECT_EQ(results::Store(store).runs().size(), 4u);
 
@@ -205,7 +207,7 @@ TEST(CliGridUkf, SmokeExperimentRunsStoresReportsAndExports) {
   const auto er = run_cli("export " + store.string() +
                           " --select model=ukf --format robot_localization --out " + y.string());
   EXPECT_NE(er.exit_code, 0);
-  EXPECT_EQ(lines_of(er.err), 1) << er.err;
+  EXPECT_EQ(newline_count(er.err), 1) << er.err;
   EXPECT_NE(er.err.find("no mapping for this model"), std::string::npos) << er.err;
   EXPECT_FALSE(fs::exists(y));
 }
@@ -213,7 +215,7 @@ TEST(CliGridUkf, SmokeExperimentRunsStoresReportsAndExports) {
 TEST(CliGridUkf, TrackWithoutGroundTruthIsOneLineNamingIt) {
   TempDir tmp;
   {
-    TrackData d = read_track(wheelchair_track()).data();
+    TrackData d = read_track(ukf_wheelchair_track()).data();
     d.meta.name = "blind";
     for (Col c : {Col::gt_x, Col::gt_y, Col::gt_theta}) d.col(c).clear();
     write_track(Track(std::move(d)), tmp / "blind.csv");
@@ -223,7 +225,7 @@ TEST(CliGridUkf, TrackWithoutGroundTruthIsOneLineNamingIt) {
                                    "store: s.sqlite\n";
   const auto g = run_cli("grid " + (tmp / "e.yaml").string());
   EXPECT_NE(g.exit_code, 0);
-  EXPECT_EQ(lines_of(g.err), 1) << g.err;
+  EXPECT_EQ(newline_count(g.err), 1) << g.err;
   EXPECT_NE(g.err.find("track 'blind': no ground truth"), std::string::npos) << g.err;
 }
 

@@ -45,7 +45,7 @@ SimTrackOptions sim_options(std::uint64_t seed, double duration_s, std::vector<s
   return o;
 }
 
-DiagInput simulated(const SimTrackOptions& o) { return build_diag_input(simulate_track(o)); }
+DiagInput simulated_input(const SimTrackOptions& o) { return build_diag_input(simulate_track(o)); }
 
 std::vector<Effect> found(const Selection& s) {
   std::vector<Effect> out;
@@ -178,13 +178,13 @@ std::vector<ZoneBox> boxes_of_nominal(const DiagInput& in) {
 }
 
 TEST(ZoneBoxes, FindThePatchWhereTheResidualGrows) {
-  const std::vector<ZoneBox> boxes = boxes_of_nominal(simulated(sim_options(41, 120.0, {kZone})));
+  const std::vector<ZoneBox> boxes = boxes_of_nominal(simulated_input(sim_options(41, 120.0, {kZone})));
   ASSERT_FALSE(boxes.empty());
   const ZoneBox& b = boxes.front();
   EXPECT_NEAR(b.x0_m, 1.8, 0.3);
   EXPECT_NEAR(b.x1_m, 2.6, 0.3);
   EXPECT_TRUE(b.y0_m < 0.0 && b.y1_m > 0.0) << b.y0_m << " .. " << b.y1_m;  // holds the path
-  EXPECT_TRUE(boxes_of_nominal(simulated(sim_options(41, 120.0, {}))).empty());
+  EXPECT_TRUE(boxes_of_nominal(simulated_input(sim_options(41, 120.0, {}))).empty());
 }
 
 // Sparse fixes (1 Hz, 30 mm): one noisy increment per 0.25 m cell and pass
@@ -193,7 +193,7 @@ TEST(ZoneBoxes, FindThePatchFromSparseFixes) {
   for (std::uint64_t seed : {43u, 44u}) {
     SimTrackOptions o = sim_options(seed, 240.0, {"slip_zone:x0=0.2,x1=2.8,y0=-1,y1=1,s_l=0.08,s_r=0.08"});
     o.gt_rate_hz = 0.0, o.aps_rate_hz = 1.0, o.aps_sigma_m = 0.03;
-    const DiagInput in = simulated(o);
+    const DiagInput in = simulated_input(o);
     ASSERT_EQ(in.reference, ReferenceKind::aps);
     const ReplayResult r = replay(in, EffectSet(), 40.0);
     const std::vector<ZoneBox> boxes = zone_candidates(in, make_windows(in, 40.0), r.pred_x_m, r.pred_y_m,
@@ -208,7 +208,7 @@ TEST(ZoneBoxes, FindThePatchFromSparseFixes) {
 }
 
 TEST(ZoneBoxes, MismatchedPredictionsAreAnError) {
-  const DiagInput in = simulated(sim_options(42, 30.0, {}));
+  const DiagInput in = simulated_input(sim_options(42, 30.0, {}));
   const std::vector<double> two(2, 0.0);
   EXPECT_THROW(zone_candidates(in, make_windows(in, 20.0), two, two, two, 0.25, 3, 16.0),
                std::invalid_argument);
@@ -237,7 +237,7 @@ TEST(SelectOptions, DefaultsAreValidAndBadValuesAreNamed) {
   bad([](SelectOptions& o) { o.heldout_fraction = 0.0; }, "heldout_fraction");
   SelectOptions o;
   o.folds = 0;
-  EXPECT_THROW(select_effects(simulated(sim_options(43, 30.0, {})), o), std::invalid_argument);
+  EXPECT_THROW(select_effects(simulated_input(sim_options(43, 30.0, {})), o), std::invalid_argument);
 }
 
 // Windows of sparse fixes are lengthened to hold min_window_samples fixes
@@ -246,15 +246,15 @@ TEST(SelectOptions, DefaultsAreValidAndBadValuesAreNamed) {
 TEST(SelectOptions, FixesWindowsHoldEnoughSamples) {
   SimTrackOptions o = sim_options(44, 200.0, {});
   const SelectOptions so;
-  EXPECT_DOUBLE_EQ(selection_window_s(simulated(o), so), 20.0);
+  EXPECT_DOUBLE_EQ(selection_window_s(simulated_input(o), so), 20.0);
   o.gt_rate_hz = 0.0, o.aps_rate_hz = 1.0;
-  EXPECT_NEAR(selection_window_s(simulated(o), so), 60.0, 1e-9);
+  EXPECT_NEAR(selection_window_s(simulated_input(o), so), 60.0, 1e-9);
   o.aps_rate_hz = 2.0;
-  EXPECT_NEAR(selection_window_s(simulated(o), so), 30.0, 1e-9);
+  EXPECT_NEAR(selection_window_s(simulated_input(o), so), 30.0, 1e-9);
   o.aps_rate_hz = 10.0;  // 60 fixes take 6 s: the 20 s windows stay
-  EXPECT_DOUBLE_EQ(selection_window_s(simulated(o), so), 20.0);
+  EXPECT_DOUBLE_EQ(selection_window_s(simulated_input(o), so), 20.0);
   o.aps_rate_hz = 1.0, o.duration_s = 90.0;
-  const DiagInput short_track = simulated(o);
+  const DiagInput short_track = simulated_input(o);
   const double span = short_track.ref_t_s.back() - short_track.ref_t_s.front();
   EXPECT_NEAR(selection_window_s(short_track, so), span / 3.0, 1.0);
   SelectOptions plain;
@@ -263,7 +263,7 @@ TEST(SelectOptions, FixesWindowsHoldEnoughSamples) {
 }
 
 TEST(SelectionInput, ThinnedReferenceWithDropoutsKeepsTheRawWindows) {
-  DiagInput in = simulated(sim_options(44, 200.0, {}));
+  DiagInput in = simulated_input(sim_options(44, 200.0, {}));
   // Dropouts as MRCLAM's Vicon has them: one where a window would start
   // (it moves that start), one longer than a quarter window (it cuts one).
   const auto drop = [&](double t0, double t1) {
@@ -301,7 +301,7 @@ TEST(SelectionInput, ThinnedReferenceWithDropoutsKeepsTheRawWindows) {
 
 TEST(Select, NoEffectGivesNoFindingOverSeeds) {
   for (std::uint64_t seed : {51u, 52u, 53u}) {
-    const Selection s = select_effects(simulated(sim_options(seed, 200.0, {})));
+    const Selection s = select_effects(simulated_input(sim_options(seed, 200.0, {})));
     SCOPED_TRACE(describe(s));
     EXPECT_TRUE(s.effects.empty()) << "seed " << seed;
     EXPECT_FALSE(s.fitted);
@@ -332,7 +332,7 @@ class SelectSingle : public ::testing::TestWithParam<SingleCase> {};
 
 TEST_P(SelectSingle, NamesExactlyTheSimulatedEffect) {
   const SingleCase& c = GetParam();
-  const Selection s = select_effects(simulated(sim_options(61, 200.0, {c.spec})));
+  const Selection s = select_effects(simulated_input(sim_options(61, 200.0, {c.spec})));
   SCOPED_TRACE(describe(s));
   EXPECT_THAT(found(s), ::testing::ElementsAre(c.effect));
   expect_proof(s);
@@ -363,7 +363,8 @@ INSTANTIATE_TEST_SUITE_P(
     [](const auto& p) { return p.param.name; });
 
 TEST(Select, LateRadiusStepIsFoundWithItsTime) {
-  const DiagInput in = simulated(sim_options(62, 200.0, {"radius_step:t=150,scale_l=0.992,scale_r=0.995"}));
+  const DiagInput in = simulated_input(sim_options(62, 200.0,
+                                                   {"radius_step:t=150,scale_l=0.992,scale_r=0.995"}));
   const Selection s = select_effects(in);
   SCOPED_TRACE(describe(s));
   EXPECT_THAT(found(s), ::testing::ElementsAre(Effect::radius_step));
@@ -383,7 +384,7 @@ TEST(Select, LateRadiusStepIsFoundWithItsTime) {
 TEST(Select, StepInsideALongFirstWindowKeepsItsTime) {
   SimTrackOptions o = sim_options(67, 240.0, {"radius_step:t=42,scale_l=0.99,scale_r=0.995"});
   o.gt_rate_hz = 0.0, o.aps_rate_hz = 1.0, o.aps_sigma_m = 0.02;
-  const DiagInput in = simulated(o);
+  const DiagInput in = simulated_input(o);
   const Selection s = select_effects(in);
   SCOPED_TRACE(describe(s));
   ASSERT_GT(s.window_s, 42.0);  // the step lies in the first window
@@ -394,7 +395,7 @@ TEST(Select, StepInsideALongFirstWindowKeepsItsTime) {
 }
 
 TEST(Select, SlipZoneIsFoundWithItsBox) {
-  const Selection s = select_effects(simulated(sim_options(63, 200.0, {kZone})));
+  const Selection s = select_effects(simulated_input(sim_options(63, 200.0, {kZone})));
   SCOPED_TRACE(describe(s));
   EXPECT_THAT(found(s), ::testing::ElementsAre(Effect::slip_zone));
   expect_proof(s);
@@ -415,7 +416,7 @@ TEST(Select, TwoEffectsOnFiveMinutesAt100HzAreBothFound) {
   o.seed = 64;
   o.gt_sigma_m = 0.005;
   o.effects = {"radius_error:scale_l=0.995,scale_r=1.004", "lateral_skid:k=0.03"};
-  const DiagInput in = simulated(o);
+  const DiagInput in = simulated_input(o);
   ASSERT_GE(in.ref_t_s.size(), 30000u);
   const Selection s = select_effects(in);
   SCOPED_TRACE(describe(s));
@@ -435,7 +436,7 @@ TEST(Select, TwoEffectsOnFiveMinutesAt100HzAreBothFound) {
 TEST(Select, LookAlikesOfALagAreWeighedAndNamedAsRivals) {
   SimTrackOptions o = sim_options(71, 120.0, {"actuator_lag:tau=0.25"});
   o.encoders = false;
-  const Selection s = select_effects(simulated(o));
+  const Selection s = select_effects(simulated_input(o));
   SCOPED_TRACE(describe(s));
   const std::vector<Effect> lag_like = {Effect::time_offset, Effect::actuator_lag, Effect::longitudinal_slip};
   std::vector<Effect> chosen;
@@ -460,7 +461,7 @@ TEST(Select, LookAlikesOfALagAreWeighedAndNamedAsRivals) {
 }
 
 TEST(Select, IsDeterministic) {
-  const DiagInput in = simulated(sim_options(65, 110.0, {"lateral_skid:k=0.03"}));
+  const DiagInput in = simulated_input(sim_options(65, 110.0, {"lateral_skid:k=0.03"}));
   const Selection a = select_effects(in), b = select_effects(in);
   ASSERT_EQ(a.records.size(), b.records.size());
   for (std::size_t i = 0; i < a.records.size(); ++i) {
@@ -474,7 +475,7 @@ TEST(Select, IsDeterministic) {
 }
 
 TEST(Select, TooFewWindowsGiveANoteNotAFinding) {
-  const Selection s = select_effects(simulated(sim_options(66, 30.0, {"lateral_skid:k=0.03"})));
+  const Selection s = select_effects(simulated_input(sim_options(66, 30.0, {"lateral_skid:k=0.03"})));
   EXPECT_TRUE(s.effects.empty());
   EXPECT_LT(s.num_windows, 3);
   EXPECT_THAT(s.note, ::testing::HasSubstr("too few"));

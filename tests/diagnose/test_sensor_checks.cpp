@@ -21,7 +21,7 @@
 namespace odotune::diagnose {
 namespace {
 
-struct Truth {
+struct SensorTruth {
   double gyro_s = 1.0, gyro_b = 0.0, gyro_sigma = 0.002;
   double scale_l = 1.0, scale_r = 1.0, base_scale = 1.0;  // true / nominal
   double time_offset_s = 0.0;                             // odometry stamped t measured at t − dt
@@ -59,7 +59,7 @@ double quantise(double phi_rad, double ticks_per_rev) {
   return std::floor(phi_rad / tick) * tick;
 }
 
-DiagInput make_input(const Truth& tr) {
+DiagInput make_input(const SensorTruth& tr) {
   const double h = 1e-3;
   const std::size_t n = static_cast<std::size_t>(std::round(tr.duration_s / h)) + 1;
   std::vector<double> x(n), y(n), th(n), w(n), pl(n), pr(n), cv(n), cw(n);
@@ -131,12 +131,12 @@ TEST(SensorChecks, OptionsValidation) {
   o = {};
   o.lag_step_s = 1e-6;
   EXPECT_FALSE(o.IsValid(&why));
-  DiagInput in = make_input(Truth{.duration_s = 20});
+  DiagInput in = make_input(SensorTruth{.duration_s = 20});
   EXPECT_THROW(check_sensors(in, o), std::invalid_argument);
 }
 
 TEST(SensorChecks, InconsistentInputIsOneClearError) {
-  DiagInput in = make_input(Truth{.duration_s = 20});
+  DiagInput in = make_input(SensorTruth{.duration_s = 20});
   in.gyro_z_radps.pop_back();
   try {
     check_sensors(in);
@@ -146,13 +146,13 @@ TEST(SensorChecks, InconsistentInputIsOneClearError) {
     EXPECT_NE(msg.find("synthetic"), std::string::npos) << msg;
     EXPECT_NE(msg.find("gyro"), std::string::npos) << msg;
   }
-  in = make_input(Truth{.duration_s = 20});
+  in = make_input(SensorTruth{.duration_s = 20});
   in.ref_t_s[10] = in.ref_t_s[9];
   EXPECT_THROW(check_sensors(in), std::invalid_argument);
 }
 
 TEST(SensorChecks, ReferenceRatesMatchTheTruth) {
-  const DiagInput in = make_input(Truth{.duration_s = 40});
+  const DiagInput in = make_input(SensorTruth{.duration_s = 40});
   const ReferenceBins rb = reference_bins(in, SensorCheckOptions{});
   ASSERT_GT(rb.t0_s.size(), 100u);
   ASSERT_TRUE(rb.heading);
@@ -179,7 +179,7 @@ TEST(SensorChecks, ReferenceRatesMatchTheTruth) {
 
 TEST(SensorChecks, GyroScaleAndBiasRecovered) {
   for (const bool noisy_gt : {false, true}) {
-    Truth tr{.gyro_s = 1.015, .gyro_b = 0.004, .seed = 7};
+    SensorTruth tr{.gyro_s = 1.015, .gyro_b = 0.004, .seed = 7};
     if (noisy_gt) tr.gt_sigma_m = 0.002, tr.gt_sigma_rad = 0.003;
     const SensorCheck sc = check_sensors(make_input(tr));
     const GyroCheck& g = sc.gyro;
@@ -203,7 +203,7 @@ TEST(SensorChecks, GyroScaleAndBiasRecovered) {
 // The gyro regression's own finer bins keep more reference headings: a
 // noisy heading reference pins the bias down better than with 0.25 s bins.
 TEST(SensorChecks, GyroBinsKeepMoreHeadingsAndShrinkTheBiasError) {
-  Truth tr{.gyro_b = 0.0005, .seed = 11};
+  SensorTruth tr{.gyro_b = 0.0005, .seed = 11};
   tr.gt_sigma_m = 0.002, tr.gt_sigma_rad = 0.015;
   const DiagInput in = make_input(tr);
   const SensorCheck fine = check_sensors(in);
@@ -223,7 +223,7 @@ TEST(SensorChecks, GyroBinsKeepMoreHeadingsAndShrinkTheBiasError) {
 }
 
 TEST(SensorChecks, RelevanceGateSeparatesSignificantFromRelevant) {
-  const DiagInput in = make_input(Truth{.gyro_b = 0.001, .seed = 3});
+  const DiagInput in = make_input(SensorTruth{.gyro_b = 0.001, .seed = 3});
   SensorCheckOptions o;
   const GyroCheck g = check_sensors(in, o).gyro;
   ASSERT_TRUE(g.available);
@@ -257,7 +257,7 @@ TEST(SensorChecks, NoEffectGivesNoVerdictOverSeeds) {
   // positives) nor so inflated that the test above could never fail.
   std::vector<double> s_val[2], s_se[2], b_val[2], b_se[2];
   for (std::uint64_t seed = 100; seed < 120; ++seed) {
-    Truth tr{.duration_s = 90, .seed = seed};
+    SensorTruth tr{.duration_s = 90, .seed = seed};
     if (seed % 2 == 1) tr.gt_sigma_m = 0.002, tr.gt_sigma_rad = 0.003;  // half with noisy GT
     SensorCheckOptions o;
     o.seed = seed;
@@ -290,7 +290,7 @@ TEST(SensorChecks, NoEffectGivesNoVerdictOverSeeds) {
 }
 
 TEST(SensorChecks, WheelRatiosReflectRadiusAndBase) {
-  const Truth tr{.scale_l = 1.012, .scale_r = 1.012, .base_scale = 1.05, .seed = 11};
+  const SensorTruth tr{.scale_l = 1.012, .scale_r = 1.012, .base_scale = 1.05, .seed = 11};
   const OdometryCheck oc = check_sensors(make_input(tr)).odometry;
   ASSERT_TRUE(oc.available) << oc.unavailable_reason;
   // True ground travel = R_true·φ = 1.012 × odometry; true yaw = 1.012/1.05 × odometry yaw.
@@ -303,7 +303,7 @@ TEST(SensorChecks, WheelRatiosReflectRadiusAndBase) {
 
 TEST(SensorChecks, OdometryTimeOffsetRecoveredAsLateOdometry) {
   for (const double dt : {0.06, -0.035}) {
-    const Truth tr{.time_offset_s = dt, .seed = 5};
+    const SensorTruth tr{.time_offset_s = dt, .seed = 5};
     const OdometryCheck oc = check_sensors(make_input(tr)).odometry;
     ASSERT_TRUE(oc.odometry_late.available);
     EXPECT_FALSE(oc.odometry_late.at_edge);
@@ -318,7 +318,7 @@ TEST(SensorChecks, OdometryTimeOffsetRecoveredAsLateOdometry) {
 }
 
 TEST(SensorChecks, ActuatorLagShowsAsCommandDelayNotLateOdometry) {
-  const Truth tr{.act_tau_s = 0.15, .seed = 9};
+  const SensorTruth tr{.act_tau_s = 0.15, .seed = 9};
   const OdometryCheck oc = check_sensors(make_input(tr)).odometry;
   ASSERT_TRUE(oc.command_delay.available);
   // A first-order lag delays these slow sinusoids by atan(ωτ)/ω ≈ 0.148 s.
@@ -328,13 +328,13 @@ TEST(SensorChecks, ActuatorLagShowsAsCommandDelayNotLateOdometry) {
 }
 
 TEST(SensorChecks, FixesOnlyReference) {
-  const Truth tr{.gyro_b = 0.01,
-                 .scale_l = 1.03,
-                 .scale_r = 1.03,
-                 .aps = true,
-                 .aps_sigma_m = 0.03,
-                 .duration_s = 240,
-                 .seed = 21};
+  const SensorTruth tr{.gyro_b = 0.01,
+                       .scale_l = 1.03,
+                       .scale_r = 1.03,
+                       .aps = true,
+                       .aps_sigma_m = 0.03,
+                       .duration_s = 240,
+                       .seed = 21};
   const SensorCheck sc = check_sensors(make_input(tr));
   EXPECT_FALSE(sc.gyro.available);
   EXPECT_NE(sc.gyro.unavailable_reason.find("heading"), std::string::npos);
@@ -356,7 +356,7 @@ TEST(SensorChecks, FixesOnlyReference) {
 TEST(SensorChecks, FixesOnlyNoEffectNoDeparture) {
   int fp = 0;
   for (std::uint64_t seed = 200; seed < 210; ++seed) {
-    const Truth tr{.aps = true, .aps_sigma_m = 0.06, .duration_s = 180, .seed = seed};
+    const SensorTruth tr{.aps = true, .aps_sigma_m = 0.06, .duration_s = 180, .seed = seed};
     SensorCheckOptions o;
     o.seed = seed;
     o.bootstrap_replicates = 100;
@@ -368,7 +368,7 @@ TEST(SensorChecks, FixesOnlyNoEffectNoDeparture) {
 }
 
 TEST(SensorChecks, MissingGyroAndRadiiAreReportedNotThrown) {
-  DiagInput in = make_input(Truth{.duration_s = 20});
+  DiagInput in = make_input(SensorTruth{.duration_s = 20});
   in.gyro_t_s.clear();
   in.gyro_z_radps.clear();
   in.radius_l_m = 0.0;
@@ -418,7 +418,7 @@ DiagInput from_track(const Track& tr, const concealed::CaseRobot& r) {
   return in;
 }
 
-const concealed::ConcealedCase& find_case(std::string_view name) {
+const concealed::ConcealedCase& find_sensor_case(std::string_view name) {
   for (const auto& c : concealed::concealed_cases()) {
     if (c.name == name) return c;
   }
@@ -426,7 +426,7 @@ const concealed::ConcealedCase& find_case(std::string_view name) {
 }
 
 SensorCheck check_case(std::string_view name) {
-  const auto& c = find_case(name);
+  const auto& c = find_sensor_case(name);
   return check_sensors(from_track(sim::simulate(concealed::base_scenario(c)), c.robot));
 }
 

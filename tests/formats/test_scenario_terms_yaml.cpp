@@ -14,10 +14,10 @@ namespace {
 
 using ::testing::HasSubstr;
 
-const std::string kMotion = "motion: {segments: [{straight: {distance_m: 2, speed_m_s: 0.5}}]}\n";
+const std::string kTermsMotion = "motion: {segments: [{straight: {distance_m: 2, speed_m_s: 0.5}}]}\n";
 
 TEST(ScenarioTermsYaml, ReadsBothFormsAndWritesThemBack) {
-  const sim::Scenario sc = parse_scenario(kMotion +
+  const sim::Scenario sc = parse_scenario(kTermsMotion +
                                               "terms:\n"
                                               "  - {target: v_l, term: \"v_l*sin(phi_l)\", coef: 0.0092}\n"
                                               "  - {target: v_r, term: \"|v·w|\", coef: -0.02}\n"
@@ -39,13 +39,14 @@ TEST(ScenarioTermsYaml, ReadsBothFormsAndWritesThemBack) {
     EXPECT_EQ(back.terms[i].basis, sc.terms[i].basis);
     EXPECT_EQ(back.terms[i].coef, sc.terms[i].coef);
   }
-  EXPECT_THAT(scenario_to_yaml(parse_scenario(kMotion, "none.yaml"), ""), ::testing::Not(HasSubstr("terms")));
+  EXPECT_THAT(scenario_to_yaml(parse_scenario(kTermsMotion, "none.yaml"), ""),
+              ::testing::Not(HasSubstr("terms")));
 }
 
 TEST(ScenarioTermsYaml, ErrorsNameFileLineAndField) {
   auto error = [](const std::string& terms) {
     try {
-      (void)parse_scenario(kMotion + terms, "bad.yaml");
+      (void)parse_scenario(kTermsMotion + terms, "bad.yaml");
     } catch (const ScenarioError& e) {
       return std::string(e.what());
     }

@@ -28,8 +28,10 @@ using ::testing::HasSubstr;
 using ::testing::Not;
 using ::testing::StartsWith;
 
-fs::path source_dir() { return fs::path(ODOTUNE_SOURCE_DIR); }
-fs::path scenario_file(int i) { return source_dir() / "scenarios" / ("track" + std::to_string(i) + ".yaml"); }
+fs::path source_root() { return fs::path(ODOTUNE_SOURCE_DIR); }
+fs::path bundled_scenario(int i) {
+  return source_root() / "scenarios" / ("track" + std::to_string(i) + ".yaml");
+}
 
 std::string track_text(const sim::Scenario& sc) {
   std::ostringstream out;
@@ -130,7 +132,7 @@ void expect_same(const sim::Scenario& a, const sim::Scenario& b) {
 TEST(ScenarioYamlWrite, ReferenceScenariosRoundTripAndSimulateIdentically) {
   for (int i = 1; i <= 5; ++i) {
     SCOPED_TRACE("track" + std::to_string(i));
-    const sim::Scenario sc = load_scenario(scenario_file(i));
+    const sim::Scenario sc = load_scenario(bundled_scenario(i));
     const std::string yaml = scenario_to_yaml(sc, "written back by the test\nsecond line");
     EXPECT_THAT(yaml, StartsWith("# written back by the test\n# second line\n\nname: \"track"));
     EXPECT_THAT(yaml, Not(HasSubstr("start")));  // at the origin: written as before the start pose existed
@@ -203,7 +205,7 @@ TEST(ScenarioYamlWrite, KnotsScenarioWithAllEffectsRoundTripsExactly) {
 
 TEST(ScenarioYamlWrite, TheCorrectedScenarioOfATrackRoundTrips) {
   // The diagnose flow: track -> scenario_from_track -> YAML -> simulate.
-  const Track tr = read_track(source_dir() / "data/tracks/track2.csv");
+  const Track tr = read_track(source_root() / "data/tracks/track2.csv");
   sim::Scenario sc = sim::scenario_from_track(tr, {"lateral_skid:k=0.021", "radius_error:scale_l=0.996"});
   sc.source = "track2-corrected.yaml";
   const std::string yaml = scenario_to_yaml(sc, "odotune diagnose: corrected model of track2\n\neffects: ...");
@@ -219,7 +221,7 @@ TEST(ScenarioYamlWrite, TheCorrectedScenarioOfATrackRoundTrips) {
 }
 
 TEST(ScenarioYamlWrite, RefusesWhatTheReaderWouldReject) {
-  auto error_of = [](const sim::Scenario& sc) -> std::string {
+  auto write_error_of = [](const sim::Scenario& sc) -> std::string {
     try {
       (void)scenario_to_yaml(sc, "x");
     } catch (const std::invalid_argument& e) {
@@ -231,26 +233,26 @@ TEST(ScenarioYamlWrite, RefusesWhatTheReaderWouldReject) {
   const sim::Scenario good = knots_scenario();
   sim::Scenario sc = good;
   sc.name = "";
-  EXPECT_THAT(error_of(sc), HasSubstr("name"));
+  EXPECT_THAT(write_error_of(sc), HasSubstr("name"));
   sc.name = "two\nlines";
-  EXPECT_THAT(error_of(sc), HasSubstr("one-line"));
+  EXPECT_THAT(write_error_of(sc), HasSubstr("one-line"));
   sc = good;
   sc.motion.knots.clear();
-  EXPECT_THAT(error_of(sc), HasSubstr("neither segments nor knots"));
+  EXPECT_THAT(write_error_of(sc), HasSubstr("neither segments nor knots"));
   sc = good;
   sc.motion.segments.resize(1);
-  EXPECT_THAT(error_of(sc), HasSubstr("segments and knots both given"));
+  EXPECT_THAT(write_error_of(sc), HasSubstr("segments and knots both given"));
   sc = good;
   sc.sensors.power.rate_hz = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_THAT(error_of(sc), HasSubstr("sensors.power.rate_hz = nan"));
+  EXPECT_THAT(write_error_of(sc), HasSubstr("sensors.power.rate_hz = nan"));
   sc = good;
   sc.robot.wheel_base_m = -1;
-  EXPECT_THAT(error_of(sc), HasSubstr("robot.wheel_base_m = -1"));
+  EXPECT_THAT(write_error_of(sc), HasSubstr("robot.wheel_base_m = -1"));
 }
 
 // --- motion.knots in the reader ------------------------------------------------------
 
-std::string error_of(const std::string& yaml) {
+std::string write_error_of(const std::string& yaml) {
   try {
     (void)parse_scenario(yaml, "s.yaml");
   } catch (const ScenarioError& e) {
@@ -276,25 +278,25 @@ TEST(ScenarioYamlKnots, ParsesTriples) {
 
 TEST(ScenarioYamlKnots, ErrorsNameFileLineAndKnot) {
   const std::string seg = "motion:\n  segments:\n    - stop: {duration_s: 1}\n";
-  EXPECT_THAT(error_of(seg + "  knots:\n    - [0, 0, 0]\n"),
+  EXPECT_THAT(write_error_of(seg + "  knots:\n    - [0, 0, 0]\n"),
               AllOf(StartsWith("s.yaml:4: motion: segments and knots both given"), HasSubstr("expected one")));
-  EXPECT_THAT(error_of("motion:\n  knots:\n    - [0, 0]\n"),
+  EXPECT_THAT(write_error_of("motion:\n  knots:\n    - [0, 0]\n"),
               AllOf(StartsWith("s.yaml:3: motion.knots[1]: expected a list [t_s, v_m_s, w_rad_s] of 3 numbers"),
                     HasSubstr("got 2 items")));
-  EXPECT_THAT(error_of("motion:\n  knots:\n    - [0, 0, 0]\n    - {t: 1}\n"),
+  EXPECT_THAT(write_error_of("motion:\n  knots:\n    - [0, 0, 0]\n    - {t: 1}\n"),
               StartsWith("s.yaml:4: motion.knots[2]: expected a list [t_s, v_m_s, w_rad_s]"));
-  EXPECT_THAT(error_of("motion:\n  knots:\n    - [0, fast, 0]\n"),
+  EXPECT_THAT(write_error_of("motion:\n  knots:\n    - [0, fast, 0]\n"),
               AllOf(StartsWith("s.yaml:3: motion.knots[1].v_m_s"), HasSubstr("'fast'")));
-  EXPECT_THAT(error_of("motion:\n  knots:\n    - [0, 0, 0]\n    - [1, 0.2, 0]\n    - [0.5, 0.2, 0]\n"),
+  EXPECT_THAT(write_error_of("motion:\n  knots:\n    - [0, 0, 0]\n    - [1, 0.2, 0]\n    - [0.5, 0.2, 0]\n"),
               AllOf(StartsWith("s.yaml:5: motion: knot 3: t_s = 0.5"), HasSubstr("strictly increasing")));
-  EXPECT_THAT(error_of("motion:\n  knots:\n    - [1, 0, 0]\n"),
+  EXPECT_THAT(write_error_of("motion:\n  knots:\n    - [1, 0, 0]\n"),
               AllOf(StartsWith("s.yaml:3: motion: knot 1: t_s = 1"), HasSubstr("0 for the first knot")));
-  EXPECT_THAT(error_of("motion:\n  knots: []\n"), AllOf(StartsWith("s.yaml:2: motion.knots: no knots")));
-  EXPECT_THAT(error_of("motion:\n  knots: {t_s: [0]}\n"),
+  EXPECT_THAT(write_error_of("motion:\n  knots: []\n"), AllOf(StartsWith("s.yaml:2: motion.knots: no knots")));
+  EXPECT_THAT(write_error_of("motion:\n  knots: {t_s: [0]}\n"),
               AllOf(StartsWith("s.yaml:2:"), HasSubstr("expected a list of [t_s, v_m_s, w_rad_s] triples")));
-  EXPECT_THAT(error_of("motion:\n  max_accel_m_s2: 1\n"),
+  EXPECT_THAT(write_error_of("motion:\n  max_accel_m_s2: 1\n"),
               AllOf(StartsWith("s.yaml:2:"), HasSubstr("no segments or knots")));
-  EXPECT_THAT(error_of("motion:\n  knot: []\n"), HasSubstr("did you mean 'knots'"));
+  EXPECT_THAT(write_error_of("motion:\n  knot: []\n"), HasSubstr("did you mean 'knots'"));
 }
 
 // --- motion.start in the reader ------------------------------------------------------
@@ -323,21 +325,22 @@ TEST(ScenarioYamlStart, ParsesTheStartPoseEachKeyOptional) {
 
 TEST(ScenarioYamlStart, ErrorsNameFileLineAndKey) {
   const std::string seg = "  segments:\n    - stop: {duration_s: 1}\n";
-  EXPECT_THAT(error_of("motion:\n" + seg + "  start:\n    x_m: .nan\n"),
+  EXPECT_THAT(write_error_of("motion:\n" + seg + "  start:\n    x_m: .nan\n"),
               AllOf(StartsWith("s.yaml:5: motion.start.x_m: expected a finite number"), HasSubstr("'.nan'")));
-  EXPECT_THAT(error_of("motion:\n  start: {y_m: 1e999}\n" + seg),
+  EXPECT_THAT(write_error_of("motion:\n  start: {y_m: 1e999}\n" + seg),
               StartsWith("s.yaml:2: motion.start.y_m: expected a finite number, got '1e999'"));
-  EXPECT_THAT(error_of("motion:\n  start: {theta_rad: north}\n" + seg),
+  EXPECT_THAT(write_error_of("motion:\n  start: {theta_rad: north}\n" + seg),
               StartsWith("s.yaml:2: motion.start.theta_rad: expected a finite number, got 'north'"));
-  EXPECT_THAT(error_of("motion:\n  start: {x: 1}\n" + seg),
+  EXPECT_THAT(write_error_of("motion:\n  start: {x: 1}\n" + seg),
               AllOf(StartsWith("s.yaml:2: unknown key 'x' in motion.start"),
                     HasSubstr("valid keys: x_m, y_m, theta_rad")));
-  EXPECT_THAT(error_of("motion:\n  start: {theta_deg: 90}\n" + seg), HasSubstr("did you mean 'theta_rad'"));
-  EXPECT_THAT(error_of("motion:\n  start: [1, 2, 0]\n" + seg),
+  EXPECT_THAT(write_error_of("motion:\n  start: {theta_deg: 90}\n" + seg),
+              HasSubstr("did you mean 'theta_rad'"));
+  EXPECT_THAT(write_error_of("motion:\n  start: [1, 2, 0]\n" + seg),
               AllOf(StartsWith("s.yaml:2: motion.start: expected a map"), HasSubstr("got a list")));
-  EXPECT_THAT(error_of("motion:\n  start: {x_m: 1, x_m: 2}\n" + seg),
+  EXPECT_THAT(write_error_of("motion:\n  start: {x_m: 1, x_m: 2}\n" + seg),
               HasSubstr("duplicate key 'motion.start.x_m'"));
-  EXPECT_THAT(error_of("motion:\n  starts: {x_m: 1}\n" + seg), HasSubstr("did you mean 'start'"));
+  EXPECT_THAT(write_error_of("motion:\n  starts: {x_m: 1}\n" + seg), HasSubstr("did you mean 'start'"));
 }
 
 }  // namespace

@@ -91,7 +91,7 @@ TEST(ReferenceScenarios, TracksAreWellFormedAndTrack5TurnsMost) {
 
 // --- YAML errors -------------------------------------------------------------
 
-std::string error_of(const std::string& yaml) {
+std::string scenario_error_of(const std::string& yaml) {
   try {
     (void)parse_scenario(yaml, "s.yaml");
   } catch (const ScenarioError& e) {
@@ -101,7 +101,7 @@ std::string error_of(const std::string& yaml) {
   return "(accepted)";
 }
 
-const std::string kMotion = "motion:\n  segments:\n    - straight: {distance_m: 1, speed_m_s: 0.5}\n";
+const std::string kStraightMotion = "motion:\n  segments:\n    - straight: {distance_m: 1, speed_m_s: 0.5}\n";
 
 TEST(ScenarioYaml, ParsesAFullScenario) {
   const sim::Scenario sc = parse_scenario(R"(name: demo
@@ -146,85 +146,87 @@ effects:
 }
 
 TEST(ScenarioYaml, UnknownKeysSuggestTheClosest) {
-  EXPECT_THAT(error_of("motion:\n  max_acel_m_s2: 0.5\n  segments: []\n"),
+  EXPECT_THAT(scenario_error_of("motion:\n  max_acel_m_s2: 0.5\n  segments: []\n"),
               AllOf(StartsWith("s.yaml:2: unknown key 'max_acel_m_s2' in motion"),
                     HasSubstr("did you mean 'max_accel_m_s2'")));
-  EXPECT_THAT(error_of(kMotion + "sensor:\n  aps: {rate_hz: 1}\n"),
+  EXPECT_THAT(scenario_error_of(kStraightMotion + "sensor:\n  aps: {rate_hz: 1}\n"),
               AllOf(StartsWith("s.yaml:4: unknown key 'sensor'"), HasSubstr("did you mean 'sensors'")));
-  EXPECT_THAT(error_of("motion:\n  segments:\n    - straight: {distance_m: 1, sped_m_s: 0.5}\n"),
+  EXPECT_THAT(scenario_error_of("motion:\n  segments:\n    - straight: {distance_m: 1, sped_m_s: 0.5}\n"),
               AllOf(StartsWith("s.yaml:3:"), HasSubstr("'sped_m_s'"), HasSubstr("did you mean 'speed_m_s'")));
-  EXPECT_THAT(error_of("motion:\n  segments:\n    - turn: {angle_deg: 90}\n"),
+  EXPECT_THAT(scenario_error_of("motion:\n  segments:\n    - turn: {angle_deg: 90}\n"),
               AllOf(StartsWith("s.yaml:3:"), HasSubstr("unknown key 'turn'"),
                     HasSubstr("straight, arc, spin")));
-  EXPECT_THAT(error_of(kMotion + "sensors:\n  gyro: {sigma: 0.1}\n"),
+  EXPECT_THAT(scenario_error_of(kStraightMotion + "sensors:\n  gyro: {sigma: 0.1}\n"),
               AllOf(StartsWith("s.yaml:5:"), HasSubstr("sensors.gyro"), HasSubstr("sigma_rad_s")));
 }
 
 TEST(ScenarioYaml, BadValuesNameKeyValueAndLine) {
-  EXPECT_THAT(error_of("seed: abc\n" + kMotion),
+  EXPECT_THAT(scenario_error_of("seed: abc\n" + kStraightMotion),
               AllOf(StartsWith("s.yaml:1: seed"), HasSubstr("non-negative integer"), HasSubstr("'abc'")));
-  EXPECT_THAT(error_of("seed: -3\n" + kMotion), StartsWith("s.yaml:1: seed"));
-  EXPECT_THAT(error_of("robot:\n  wheel_base_m: fast\n" + kMotion),
+  EXPECT_THAT(scenario_error_of("seed: -3\n" + kStraightMotion), StartsWith("s.yaml:1: seed"));
+  EXPECT_THAT(scenario_error_of("robot:\n  wheel_base_m: fast\n" + kStraightMotion),
               AllOf(StartsWith("s.yaml:2: robot.wheel_base_m"), HasSubstr("'fast'")));
-  EXPECT_THAT(error_of("robot:\n  wheel_base_m: -0.3\n" + kMotion),
+  EXPECT_THAT(scenario_error_of("robot:\n  wheel_base_m: -0.3\n" + kStraightMotion),
               AllOf(StartsWith("s.yaml:2: robot.wheel_base_m = -0.3"), HasSubstr("> 0")));
-  EXPECT_THAT(error_of(kMotion + "sensors:\n  gyro:\n    rate_hz: 300\n"),
+  EXPECT_THAT(scenario_error_of(kStraightMotion + "sensors:\n  gyro:\n    rate_hz: 300\n"),
               AllOf(StartsWith("s.yaml:6: sensors.gyro.rate_hz = 300"), HasSubstr("divides 1000 Hz")));
-  EXPECT_THAT(error_of(kMotion + "sensors:\n  aps: {enabled: maybe}\n"),
+  EXPECT_THAT(scenario_error_of(kStraightMotion + "sensors:\n  aps: {enabled: maybe}\n"),
               AllOf(StartsWith("s.yaml:5:"), HasSubstr("true or false")));
   EXPECT_THAT(
-      error_of(
+      scenario_error_of(
           "motion:\n  segments:\n    - stop: {duration_s: 1}\n    - arc: {radius_m: -1, angle_deg: 90, speed_m_s: 0.3}\n"),
       AllOf(StartsWith("s.yaml:4:"), HasSubstr("radius_m = -1"), HasSubstr("expected a number > 0")));
-  EXPECT_THAT(error_of("motion:\n  segments:\n    - straight: {distance_m: 1}\n"),
+  EXPECT_THAT(scenario_error_of("motion:\n  segments:\n    - straight: {distance_m: 1}\n"),
               AllOf(StartsWith("s.yaml:3:"), HasSubstr("missing 'speed_m_s'")));
-  EXPECT_THAT(error_of("motion:\n  segments:\n    - repeat: {count: 0, segments: []}\n"),
+  EXPECT_THAT(scenario_error_of("motion:\n  segments:\n    - repeat: {count: 0, segments: []}\n"),
               AllOf(StartsWith("s.yaml:3:"), HasSubstr("count = 0")));
   EXPECT_THAT(
-      error_of("motion:\n  max_accel_m_s2: 0\n  segments:\n    - straight: {distance_m: 1, speed_m_s: 0.5}\n"),
+      scenario_error_of(
+          "motion:\n  max_accel_m_s2: 0\n  segments:\n    - straight: {distance_m: 1, speed_m_s: 0.5}\n"),
       AllOf(StartsWith("s.yaml:2:"), HasSubstr("max_accel_m_s2 = 0")));
 }
 
 TEST(ScenarioYaml, EffectErrorsUseTheVocabulary) {
-  EXPECT_THAT(error_of(kMotion + "effects:\n  lateral_skd: {k: 0.1}\n"),
+  EXPECT_THAT(scenario_error_of(kStraightMotion + "effects:\n  lateral_skd: {k: 0.1}\n"),
               AllOf(StartsWith("s.yaml:5: unknown key 'lateral_skd' in effects"),
                     HasSubstr("did you mean 'lateral_skid'"), HasSubstr("radius_error")));
-  EXPECT_THAT(error_of(kMotion + "effects:\n  radius_error:\n    scale_l: 0.99\n    scale_r: 3\n"),
-              AllOf(StartsWith("s.yaml:7: radius_error.scale_r = 3"), HasSubstr("out of range [0.5, 1.5]")));
-  EXPECT_THAT(error_of(kMotion + "effects:\n  radius_error: {scale: 1.01}\n"),
+  EXPECT_THAT(
+      scenario_error_of(kStraightMotion + "effects:\n  radius_error:\n    scale_l: 0.99\n    scale_r: 3\n"),
+      AllOf(StartsWith("s.yaml:7: radius_error.scale_r = 3"), HasSubstr("out of range [0.5, 1.5]")));
+  EXPECT_THAT(scenario_error_of(kStraightMotion + "effects:\n  radius_error: {scale: 1.01}\n"),
               AllOf(StartsWith("s.yaml:5:"), HasSubstr("'scale'"), HasSubstr("scale_l, scale_r")));
-  EXPECT_THAT(error_of(kMotion + "effects:\n  gyro_bias: {}\n"),
+  EXPECT_THAT(scenario_error_of(kStraightMotion + "effects:\n  gyro_bias: {}\n"),
               AllOf(StartsWith("s.yaml:5:"), HasSubstr("needs parameter b")));
-  EXPECT_THAT(error_of(kMotion + "effects:\n  slip_zone: {x0: 1, x1: 0, y0: 0, y1: 1}\n"),
+  EXPECT_THAT(scenario_error_of(kStraightMotion + "effects:\n  slip_zone: {x0: 1, x1: 0, y0: 0, y1: 1}\n"),
               AllOf(StartsWith("s.yaml:5:"), HasSubstr("x0 < x1")));
 }
 
 TEST(ScenarioYaml, ReadsOdometryBiasThroughTheEffectTable) {
   // physics-effects.md's 12th effect; b_v, b_w are optional (0 = no offset).
   const sim::Scenario sc = parse_scenario(
-      kMotion + "effects:\n  odometry_bias: {b_w: -0.002}\n  gyro_bias: {b: 0.001}\n", "s.yaml");
+      kStraightMotion + "effects:\n  odometry_bias: {b_w: -0.002}\n  gyro_bias: {b: 0.001}\n", "s.yaml");
   ASSERT_TRUE(sc.effects.odometry_bias);
   EXPECT_EQ(sc.effects.odometry_bias->b_v, 0.0);
   EXPECT_EQ(sc.effects.odometry_bias->b_w, -0.002);
   EXPECT_EQ(sim::format_effects(sc.effects), "gyro_bias:b=0.001; odometry_bias:b_v=0,b_w=-0.002");
-  EXPECT_THAT(error_of(kMotion + "effects:\n  odometry_bias:\n    b_v: 0.7\n"),
+  EXPECT_THAT(scenario_error_of(kStraightMotion + "effects:\n  odometry_bias:\n    b_v: 0.7\n"),
               AllOf(StartsWith("s.yaml:6: odometry_bias.b_v = 0.7"),
                     HasSubstr("out of range [-0.5, 0.5] m/s")));
-  EXPECT_THAT(error_of(kMotion + "effects:\n  odometry_bias: {bw: 0.1}\n"),
+  EXPECT_THAT(scenario_error_of(kStraightMotion + "effects:\n  odometry_bias: {bw: 0.1}\n"),
               AllOf(StartsWith("s.yaml:5:"), HasSubstr("'bw'"), HasSubstr("b_v, b_w")));
 }
 
 TEST(ScenarioYaml, StructuralErrors) {
-  EXPECT_THAT(error_of("motion:\n  segments: [\n"),
+  EXPECT_THAT(scenario_error_of("motion:\n  segments: [\n"),
               AllOf(StartsWith("s.yaml:"), HasSubstr("YAML syntax error")));
-  EXPECT_THAT(error_of(""), HasSubstr("expected a scenario"));
-  EXPECT_THAT(error_of("- 1\n- 2\n"), StartsWith("s.yaml:1: expected a scenario"));
-  EXPECT_THAT(error_of("seed: 1\n"), HasSubstr("missing 'motion'"));
-  EXPECT_THAT(error_of("motion:\n  segments: []\n"), HasSubstr("no segments"));
-  EXPECT_THAT(error_of("seed: 1\nseed: 2\n" + kMotion),
+  EXPECT_THAT(scenario_error_of(""), HasSubstr("expected a scenario"));
+  EXPECT_THAT(scenario_error_of("- 1\n- 2\n"), StartsWith("s.yaml:1: expected a scenario"));
+  EXPECT_THAT(scenario_error_of("seed: 1\n"), HasSubstr("missing 'motion'"));
+  EXPECT_THAT(scenario_error_of("motion:\n  segments: []\n"), HasSubstr("no segments"));
+  EXPECT_THAT(scenario_error_of("seed: 1\nseed: 2\n" + kStraightMotion),
               AllOf(StartsWith("s.yaml:2:"), HasSubstr("duplicate key 'seed'")));
   EXPECT_THAT(
-      error_of(
+      scenario_error_of(
           "motion:\n  segments:\n    - {straight: {distance_m: 1, speed_m_s: 1}, stop: {duration_s: 1}}\n"),
       AllOf(StartsWith("s.yaml:3:"), HasSubstr("one-key map")));
 }

@@ -23,8 +23,6 @@ namespace {
 using testing_support::fusion_track;
 using testing_support::FusionTrackOptions;
 
-constexpr double kPi = std::numbers::pi;
-
 // ---------------------------------------------------------------------------
 // Consistency (NEES, paper eq. 10 per step; Bar-Shalom, Li & Kirubarajan,
 // "Estimation with Applications to Tracking and Navigation", §5.4).
@@ -53,7 +51,7 @@ constexpr double kPi = std::numbers::pi;
 struct CleanSetup {
   double tpr = 256.0, radius = 0.08, base = 0.42, dt = 0.1;
   double gyro_sigma = 0.02, a_max = 0.2, alpha_max = 0.5;
-  double c() const { return 2.0 * kPi * radius / (tpr * dt); }
+  double c() const { return 2.0 * std::numbers::pi * radius / (tpr * dt); }
   double var_v() const { return c() * c() / 12.0; }
   double var_w() const { return c() * c() / (3.0 * base * base); }
   filters::UkfParams params() const {

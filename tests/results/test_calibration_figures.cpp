@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "results/calibration_figures.h"
+#include "support/cli_runner.h"
 #include "support/temp_dir.h"
 
 namespace odotune::results {
@@ -22,12 +23,7 @@ using testing_support::TempDir;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using testing_support::slurp;
 
 bool is_png(const fs::path& p) {
   const std::string s = slurp(p);

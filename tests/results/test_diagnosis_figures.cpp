@@ -16,6 +16,7 @@
 #include "results/diagnosis_figures.h"
 #include "results/diagnosis_report.h"
 #include "results/gnuplot.h"
+#include "support/cli_runner.h"
 #include "support/temp_dir.h"
 
 namespace odotune::results {
@@ -23,15 +24,9 @@ namespace {
 namespace fs = std::filesystem;
 using testing_support::TempDir;
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 const std::string kFinding = "lateral_skid k = 0.021 ± 0.002";
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using testing_support::slurp;
 
 std::size_t count(const std::string& text, const std::string& what) {
   std::size_t n = 0;
@@ -65,7 +60,7 @@ DiagnosisFigureData synthetic(bool with_finding) {
     d.ref_y_m.push_back(-5.0 * std::sin(a));
     d.flagged.push_back(in_segment ? 1 : 0);
   }
-  d.before_pos_err_m[300] = kNaN;  // a gap in the line
+  d.before_pos_err_m[300] = std::numeric_limits<double>::quiet_NaN();  // a gap in the line
   d.segments = {{10.0, 20.0}, {35.0, 45.0}};
   for (double w = 0; w < 60; w += 5) d.window_starts_s.push_back(w);
 
@@ -78,7 +73,7 @@ DiagnosisFigureData synthetic(bool with_finding) {
     d.before_residual.push_back(0.05 * c + noise(rng));
     if (with_finding) d.after_residual.push_back(noise(rng));
   }
-  d.before_residual[17] = kNaN;  // skipped row
+  d.before_residual[17] = std::numeric_limits<double>::quiet_NaN();  // skipped row
   d.before_residual[100] = 4.0;  // two far outliers: the y axis shows the quantiles
   d.before_residual[200] = -3.0;
 
@@ -258,8 +253,8 @@ TEST(DiagnosisFiguresBinnedMedian, MediansOfQuantileGroups) {
   std::mt19937 rng(99);
   std::shuffle(x.begin(), x.end(), rng);
   for (int i = 0; i < 100; ++i) y[i] = 2.0 * x[i] + 1.0;
-  x.push_back(kNaN), y.push_back(1e9);  // rows with a NaN are left out
-  x.push_back(1e9), y.push_back(kNaN);
+  x.push_back(std::numeric_limits<double>::quiet_NaN()), y.push_back(1e9);  // rows with a NaN are left out
+  x.push_back(1e9), y.push_back(std::numeric_limits<double>::quiet_NaN());
   const BinnedMedian b = binned_median(x, y, 10);
   ASSERT_EQ(b.x.size(), 10u);
   for (int g = 0; g < 10; ++g) {
@@ -272,7 +267,7 @@ TEST(DiagnosisFiguresBinnedMedian, MediansOfQuantileGroups) {
   EXPECT_EQ(u.y, (std::vector<double>{10, 0, 0}));
   // Fewer rows than bins, no row, bad input.
   EXPECT_EQ(binned_median({1, 2}, {3, 4}, 15).x.size(), 2u);
-  EXPECT_TRUE(binned_median({kNaN}, {1}, 15).x.empty());
+  EXPECT_TRUE(binned_median({std::numeric_limits<double>::quiet_NaN()}, {1}, 15).x.empty());
   EXPECT_THROW(binned_median({1, 2}, {1}, 3), std::invalid_argument);
   EXPECT_THROW(binned_median({1}, {1}, 0), std::invalid_argument);
 }

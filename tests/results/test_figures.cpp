@@ -16,19 +16,13 @@
 #include <stdexcept>
 
 #include "results/gnuplot.h"
+#include "support/cli_runner.h"
 
 namespace odotune::results {
 namespace {
 namespace fs = std::filesystem;
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using testing_support::slurp;
 
 class FiguresTest : public ::testing::Test {
  protected:
@@ -84,10 +78,10 @@ std::vector<std::vector<double>> heat_values(std::size_t ncols) {
 TEST_F(FiguresTest, HeatmapRendersTitleLabelsTracksAndCellValues) {
   const std::vector<std::string> tracks = {"square_cw", "figure8", "corridor"};
   auto v = heat_values(tracks.size());
-  v[0][0] = 12.34;  // printed as 12.3
-  v[6][2] = -5.06;  // printed as -5.1
-  v[3][1] = kNaN;   // missing cell
-  v[2][2] = -0.01;  // printed as 0.0, not -0.0
+  v[0][0] = 12.34;                                     // printed as 12.3
+  v[6][2] = -5.06;                                     // printed as -5.1
+  v[3][1] = std::numeric_limits<double>::quiet_NaN();  // missing cell
+  v[2][2] = -0.01;                                     // printed as 0.0, not -0.0
   heatmap(dir_ / "heat", "RMSE improvement (%) — rq model", tracks, v);
   const std::string svg = expect_outputs("heat");
   expect_contains(svg, "RMSE improvement (%) — rq model");
@@ -107,7 +101,7 @@ TEST_F(FiguresTest, HeatmapRendersTitleLabelsTracksAndCellValues) {
 }
 
 TEST_F(FiguresTest, HeatmapAllMissingStillRenders) {
-  std::vector<std::vector<double>> v(7, std::vector<double>(2, kNaN));
+  std::vector<std::vector<double>> v(7, std::vector<double>(2, std::numeric_limits<double>::quiet_NaN()));
   heatmap(dir_ / "empty", "all missing", {"a", "b"}, v);
   const std::string svg = expect_outputs("empty");
   expect_contains(svg, "all missing");
@@ -192,15 +186,16 @@ TEST_F(FiguresTest, BoxplotsRenderModelsMetricsAndLegend) {
       for (int i = 0; i < 20; ++i) v.push_back(noise(rng));
     }
   }
-  data["gyro"]["MAXE"].push_back(kNaN);  // ignored
-  data["rq"]["MAE"].clear();             // no box
+  data["gyro"]["MAXE"].push_back(std::numeric_limits<double>::quiet_NaN());  // ignored
+  data["rq"]["MAE"].clear();                                                 // no box
   boxplots(dir_ / "box", "Improvement per model", data);
   const std::string svg = expect_outputs("box");
   expect_contains(svg, "Improvement per model");
   expect_contains(svg, "improvement [%]");
   expect_contains(svg, ">model<");
   for (const char* s : {"rq", "alpha", "gyro", "RMSE", "MAE", "MAXE"}) expect_contains(svg, s);
-  EXPECT_THROW(boxplots(dir_ / "b2", "t", {{"rq", {{"RMSE", {kNaN}}}}}), std::invalid_argument);
+  EXPECT_THROW(boxplots(dir_ / "b2", "t", {{"rq", {{"RMSE", {std::numeric_limits<double>::quiet_NaN()}}}}}),
+               std::invalid_argument);
 }
 
 TEST(FiguresResample, StepWiseOntoUnionGrid) {
@@ -259,7 +254,7 @@ TEST_F(FiguresTest, TrajectoriesRenderWithLegendAndGaps) {
     paths[1].xs_m.push_back(5.4 * std::cos(t) + 0.002 * i);
     paths[1].ys_m.push_back(3.3 * std::sin(t));
     paths[2].xs_m.push_back(5.1 * std::cos(t));
-    paths[2].ys_m.push_back(i == 50 ? kNaN : 3.05 * std::sin(t));
+    paths[2].ys_m.push_back(i == 50 ? std::numeric_limits<double>::quiet_NaN() : 3.05 * std::sin(t));
   }
   trajectories(dir_ / "traj", "Trajectories on track_a", paths);
   const std::string svg = expect_outputs("traj");

@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "support/cli_runner.h"
 #include "support/temp_dir.h"
 
 namespace odotune::results {
@@ -311,10 +312,7 @@ TEST(RosExportErrors, InvalidYamlAndWrongTypesGiveLineNumbers) {
   EXPECT_THROW(parse_robot_localization_yaml(""), std::runtime_error);
 }
 
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(f), {});
-}
+using testing_support::slurp;
 
 std::size_t entries(const fs::path& dir) {
   return static_cast<std::size_t>(std::distance(fs::directory_iterator(dir), fs::directory_iterator()));

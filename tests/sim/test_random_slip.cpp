@@ -20,20 +20,20 @@ using ::testing::HasSubstr;
 using Kind = SlipEpisode::Kind;
 using Wheel = SlipEpisode::Wheel;
 
-Segment straight(double distance_m, double speed_m_s) {
+Segment slip_straight(double distance_m, double speed_m_s) {
   Segment s;
   s.kind = Segment::Kind::straight;
   s.distance_m = distance_m;
   s.speed_m_s = speed_m_s;
   return s;
 }
-Segment stop(double duration_s) {
+Segment slip_stop(double duration_s) {
   Segment s;
   s.kind = Segment::Kind::stop;
   s.duration_s = duration_s;
   return s;
 }
-Segment spin(double angle_deg, double rate_deg_s) {
+Segment slip_spin(double angle_deg, double rate_deg_s) {
   Segment s;
   s.kind = Segment::Kind::spin;
   s.angle_deg = angle_deg;
@@ -42,21 +42,21 @@ Segment spin(double angle_deg, double rate_deg_s) {
 }
 
 // ~3 minutes: fast and slow straights, spins on the spot and stops between.
-MotionParams drive() {
+MotionParams slip_motion() {
   MotionParams m;
   m.max_accel_m_s2 = 0.45;
   m.max_angular_accel_rad_s2 = 1.2;
   for (int i = 0; i < 6; ++i) {
-    m.segments.push_back(straight(18.0, 0.9));
-    m.segments.push_back(stop(3.0));
-    m.segments.push_back(spin(90.0, 45.0));
-    m.segments.push_back(straight(3.0, 0.2));  // too slow for an episode
+    m.segments.push_back(slip_straight(18.0, 0.9));
+    m.segments.push_back(slip_stop(3.0));
+    m.segments.push_back(slip_spin(90.0, 45.0));
+    m.segments.push_back(slip_straight(3.0, 0.2));  // too slow for an episode
   }
   return m;
 }
 
 TEST(RandomSlip, EpisodesAreValidInsideMovingStretchesAndWithinTheRanges) {
-  const MotionProfile profile(drive());
+  const MotionProfile profile(slip_motion());
   const RandomSlipOptions o;
   for (std::uint64_t seed : {1u, 2u, 3u, 4u, 5u}) {
     SCOPED_TRACE(seed);
@@ -88,7 +88,7 @@ TEST(RandomSlip, EpisodesAreValidInsideMovingStretchesAndWithinTheRanges) {
 }
 
 TEST(RandomSlip, LayoutsMixKindsAndWheelsAndDependOnlyOnTheSeed) {
-  const MotionProfile profile(drive());
+  const MotionProfile profile(slip_motion());
   std::set<std::pair<int, int>> seen;  // (kind, wheel)
   for (std::uint64_t seed = 0; seed < 8; ++seed)
     for (const SlipEpisode& e : random_slip_episodes(profile, seed))
@@ -104,12 +104,13 @@ TEST(RandomSlip, LayoutsMixKindsAndWheelsAndDependOnlyOnTheSeed) {
 
 TEST(RandomSlip, ADriveWithoutAMovingStretchGetsNoEpisode) {
   MotionParams m;
-  m.segments = {stop(5.0), straight(2.0, 0.2), stop(5.0), spin(180.0, 45.0), stop(20.0)};
+  m.segments = {slip_stop(5.0), slip_straight(2.0, 0.2), slip_stop(5.0), slip_spin(180.0, 45.0),
+                slip_stop(20.0)};
   EXPECT_TRUE(random_slip_episodes(MotionProfile(m), 3).empty());
 }
 
 TEST(RandomSlip, BadOptionsAreRefusedNamingTheField) {
-  const MotionProfile profile(drive());
+  const MotionProfile profile(slip_motion());
   const auto message = [&](const RandomSlipOptions& o) {
     try {
       random_slip_episodes(profile, 1, o);

@@ -147,7 +147,7 @@ Scenario drive(const std::vector<std::string>& effects = {}) {
 }
 
 // Ground-truth path length [m].
-double path_length(const Track& tr) {
+double track_path_length(const Track& tr) {
   double len = 0;
   const auto& x = tr.col(Col::gt_x);
   const auto& y = tr.col(Col::gt_y);
@@ -289,7 +289,7 @@ TEST(ScenarioFromTrack, ReSimulationFollowsTheOriginalPathInItsFrame) {
   // headings within a degree, and the length within 1 % (the task asks 2 %).
   EXPECT_LT(max_position_gap(orig, re), 0.03);
   EXPECT_LT(diff(orig.col(Col::gt_theta), re.col(Col::gt_theta)).max, 0.015);
-  EXPECT_NEAR(path_length(re) / path_length(orig), 1.0, 0.01);
+  EXPECT_NEAR(track_path_length(re) / track_path_length(orig), 1.0, 0.01);
 }
 
 TEST(ScenarioFromTrack, ASlipZoneBoxInTheRecordingsCoordinatesIsWhereItWasFound) {
@@ -335,9 +335,9 @@ TEST(ScenarioFromTrack, EffectsShowInTheOdometryOverTheSameGroundPath) {
     const Track without = simulate(scenario_from_track(orig, {}));
     EXPECT_LT(max_position_gap(orig, with), 0.03);
     EXPECT_LT(max_position_gap(orig, without), 0.03);
-    const double ratio_orig = dead_reckoning(orig).distance / path_length(orig);
-    const double ratio_with = dead_reckoning(with).distance / path_length(with);
-    const double ratio_without = dead_reckoning(without).distance / path_length(without);
+    const double ratio_orig = dead_reckoning(orig).distance / track_path_length(orig);
+    const double ratio_with = dead_reckoning(with).distance / track_path_length(with);
+    const double ratio_without = dead_reckoning(without).distance / track_path_length(without);
     EXPECT_NEAR(ratio_orig, 1 / 0.99, 1e-3);  // the effect as simulated
     EXPECT_NEAR(ratio_with, ratio_orig, 1e-3);
     EXPECT_NEAR(ratio_without, 1.0, 1e-3);
@@ -399,7 +399,7 @@ TEST(ScenarioFromTrack, PositionFixesAloneGiveThePathInItsFrame) {
     // excess of the re-simulation varies with it (about 1-4 %); that is the
     // smoothing's property, not the frame's, so it is not checked there.
     if (c.x == 0 && c.y == 0 && c.theta == 0) {
-      EXPECT_NEAR(path_length(re) / path_length(truth), 1.0, 0.02);
+      EXPECT_NEAR(track_path_length(re) / track_path_length(truth), 1.0, 0.02);
     }
   }
 }

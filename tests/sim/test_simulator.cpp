@@ -21,7 +21,6 @@ namespace odotune::sim {
 namespace {
 
 using ::testing::HasSubstr;
-constexpr double kPi = std::numbers::pi;
 
 Segment straight(double d, double v) {
   Segment s;
@@ -83,13 +82,15 @@ std::string text_of(const Track& t) {
 }
 
 // Row index of time t (rows at 100 Hz in the quiet scenarios).
-std::size_t row_at(const Track& tr, double t) {
+std::size_t row_at_time(const Track& tr, double t) {
   std::size_t i = 0;
   while (i + 1 < tr.size() && tr.t()[i] < t - 1e-9) ++i;
   return i;
 }
 
-double tick_m(const Track& tr) { return 2 * kPi * *tr.meta().wheel_radius_left_m / *tr.meta().ticks_per_rev; }
+double tick_m(const Track& tr) {
+  return 2 * std::numbers::pi * *tr.meta().wheel_radius_left_m / *tr.meta().ticks_per_rev;
+}
 
 // Ground distance along gt and mean-wheel distance from the ticks between rows a and b.
 double gt_distance(const Track& tr, std::size_t a, std::size_t b) {
@@ -160,9 +161,9 @@ TEST(Simulator, WheelBaseErrorScalesTheTurnRate) {
   const Track a = simulate(nominal), b = simulate(wide);
   EXPECT_EQ(a.ticks_l(), b.ticks_l());
   const std::size_t n = a.size() - 1;
-  EXPECT_NEAR(a.col(Col::gt_theta)[n], 2 * kPi, 1e-5);
-  EXPECT_NEAR(b.col(Col::gt_theta)[n], 2 * kPi / 1.1, 1e-5);
-  const std::size_t mid = row_at(a, 2.0);  // cruise of the spin
+  EXPECT_NEAR(a.col(Col::gt_theta)[n], 2 * std::numbers::pi, 1e-5);
+  EXPECT_NEAR(b.col(Col::gt_theta)[n], 2 * std::numbers::pi / 1.1, 1e-5);
+  const std::size_t mid = row_at_time(a, 2.0);  // cruise of the spin
   EXPECT_NEAR(b.col(Col::gyro_z)[mid], a.col(Col::gyro_z)[mid] / 1.1, 1e-12);
 }
 
@@ -171,7 +172,7 @@ TEST(Simulator, RadiusStepActsFromItsTimeOn) {
   sc.effects.radius_step = Effects::RadiusStep{6.0, 1.02, 1.02};
   const Track tr = simulate(sc);
   const auto ratio = [&](double t0, double t1) {
-    const std::size_t a = row_at(tr, t0), b = row_at(tr, t1);
+    const std::size_t a = row_at_time(tr, t0), b = row_at_time(tr, t1);
     return gt_distance(tr, a, b) / tick_distance(tr, a, b);
   };
   EXPECT_NEAR(ratio(2.0, 5.9), 1.0, 1e-3);
@@ -183,7 +184,7 @@ TEST(Simulator, SpeedRadiusGrowsWithSpeed) {
     Scenario sc = quiet({straight(6 * v, v)});
     sc.effects.speed_radius = Effects::SpeedRadius{0.05};
     const Track tr = simulate(sc);
-    const std::size_t a = row_at(tr, 2.5), b = row_at(tr, 5.0);  // cruise
+    const std::size_t a = row_at_time(tr, 2.5), b = row_at_time(tr, 5.0);  // cruise
     return gt_distance(tr, a, b) / tick_distance(tr, a, b);
   };
   // R_eff = R(1 + c u^2), u = R*omega = v (nominal radii).
@@ -196,7 +197,7 @@ TEST(Simulator, LateralSkidGivesMinusKVW) {
     Scenario sc = quiet({arc(1.0, 180, 0.5)});
     if (k > 0) sc.effects.lateral_skid = Effects::LateralSkid{k};
     const Track tr = simulate(sc);
-    const std::size_t a = row_at(tr, 3.0), b = row_at(tr, 4.0);
+    const std::size_t a = row_at_time(tr, 3.0), b = row_at_time(tr, 4.0);
     double sum = 0;
     for (std::size_t i = a; i < b; ++i) {
       const double thm = 0.5 * (tr.col(Col::gt_theta)[i] + tr.col(Col::gt_theta)[i + 1]);
@@ -220,14 +221,14 @@ TEST(Simulator, LongitudinalSlipOnlyWhileAccelerating) {
   };
   const Track tr = run(0.2);
   const auto ratio = [&](double t0, double t1) {
-    const std::size_t a = row_at(tr, t0), b = row_at(tr, t1);
+    const std::size_t a = row_at_time(tr, t0), b = row_at_time(tr, t1);
     return gt_distance(tr, a, b) / tick_distance(tr, a, b);
   };
   EXPECT_NEAR(ratio(0.2, 0.8), 1 - 0.2 * 0.5, 2e-3);  // s = k*|du/dt|
   EXPECT_NEAR(ratio(2.0, 5.0), 1.0, 1e-3);            // cruise
   EXPECT_NEAR(ratio(6.2, 6.8), 1 - 0.2 * 0.5, 2e-3);  // braking
   const Track capped = run(10.0);
-  const std::size_t a = row_at(capped, 0.2), b = row_at(capped, 0.8);
+  const std::size_t a = row_at_time(capped, 0.2), b = row_at_time(capped, 0.8);
   EXPECT_NEAR(gt_distance(capped, a, b) / tick_distance(capped, a, b), 0.5, 2e-3);  // s <= 0.5
 }
 
@@ -580,7 +581,7 @@ TEST(Simulator, PowerFollowsTheMotorModel) {
   const Track tr = simulate(sc);
   const RobotParams r;
   // Cruise: tau = b_v*omega + tau_c*tanh(omega/omega_eps); P = tau*omega + (tau/k_t)^2*R.
-  const std::size_t i = row_at(tr, 4.0);
+  const std::size_t i = row_at_time(tr, 4.0);
   const double om = tr.col(Col::omega_l)[i];
   EXPECT_NEAR(om, 0.5 / 0.05, 1e-9);
   const double tau = r.viscous_friction_nm_s * om +
@@ -589,7 +590,7 @@ TEST(Simulator, PowerFollowsTheMotorModel) {
   EXPECT_NEAR(tr.col(Col::power_l)[i], p, 1e-9);
   EXPECT_NEAR(tr.col(Col::power_r)[i], p, 1e-9);
   // Accelerating costs more than cruising at the same speed; braking returns energy.
-  const std::size_t acc = row_at(tr, 0.9), brake = row_at(tr, 8.5);  // ramps: 0-1 s and 8-9 s
+  const std::size_t acc = row_at_time(tr, 0.9), brake = row_at_time(tr, 8.5);  // ramps: 0-1 s and 8-9 s
   EXPECT_GT(tr.col(Col::power_l)[acc], tr.col(Col::power_l)[i] * 1.5);
   EXPECT_LT(tr.col(Col::power_l)[brake], tr.col(Col::power_l)[i]);
 }
@@ -710,9 +711,9 @@ TEST(MotionProfile, RespectsLimitsAndMeetsTheGeometry) {
   double want_dist = 0, want_angle = 0;
   for (const auto& s : segs) {
     if (s.kind == Segment::Kind::straight) want_dist += s.distance_m;
-    if (s.kind == Segment::Kind::arc) want_dist += s.radius_m * std::abs(s.angle_deg) * kPi / 180;
+    if (s.kind == Segment::Kind::arc) want_dist += s.radius_m * std::abs(s.angle_deg) * std::numbers::pi / 180;
     if (s.kind != Segment::Kind::stop)
-      want_angle += s.kind == Segment::Kind::straight ? 0 : s.angle_deg * kPi / 180;
+      want_angle += s.kind == Segment::Kind::straight ? 0 : s.angle_deg * std::numbers::pi / 180;
   }
   EXPECT_NEAR(dist, want_dist, 1e-6);
   EXPECT_NEAR(angle, want_angle, 1e-6);

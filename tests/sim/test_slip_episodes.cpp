@@ -29,7 +29,6 @@ using ::testing::Not;
 using ::testing::StartsWith;
 using Kind = SlipEpisode::Kind;
 using Wheel = SlipEpisode::Wheel;
-constexpr double kPi = std::numbers::pi;
 
 // The chair's cruise in the scenarios below: 0.8 m/s on 0.32 m wheels.
 constexpr double kSpeed = 0.8, kRadius = 0.32, kOmega = kSpeed / kRadius;  // [m/s, m, rad/s]
@@ -184,7 +183,7 @@ TEST(SlipEpisodes, HoldLowersTicksRaisesPowerAndKeepsTheTruePath) {
   // The left rotation is slowed by s(t): the encoders miss
   // s*omega*(T - ramp) rad of rotation.
   const std::size_t last = tr.size() - 1;
-  const double missed_ticks = s * kOmega * (t1 - t0 - ramp) * 8800 / (2 * kPi);
+  const double missed_ticks = s * kOmega * (t1 - t0 - ramp) * 8800 / (2 * std::numbers::pi);
   EXPECT_NEAR(static_cast<double>(base.ticks_l()[last] - tr.ticks_l()[last]), missed_ticks, 2.0);
 
   const std::size_t mid = row_at(tr, 6.5);

@@ -25,10 +25,10 @@ using testing_support::TempDir;
 
 namespace fs = std::filesystem;
 
-const fs::path kReal = fs::path(ODOTUNE_SHARED_DIR) / "data" / "real";
-const fs::path kMrclam = kReal / "mrclam7";
-const fs::path kCircular = kReal / "optiodom_diff" / "circular" / "231220200146";
-const fs::path kLitwDir = kReal / "utias_lost_in_the_woods" / "derived";
+const fs::path kRealDataDir = fs::path(ODOTUNE_SHARED_DIR) / "data" / "real";
+const fs::path kMrclamDir = kRealDataDir / "mrclam7";
+const fs::path kCircular = kRealDataDir / "optiodom_diff" / "circular" / "231220200146";
+const fs::path kLitwDir = kRealDataDir / "utias_lost_in_the_woods" / "derived";
 
 // A fresh temporary folder, removed at the end of the test.
 
@@ -76,10 +76,10 @@ TEST(ImportErrors, MissingDirectoryAndFilesAreNamed) {
   EXPECT_TRUE(contains(e.what(), "no-such-folder")) << e.what();
   EXPECT_TRUE(contains(e.reason(), "not found")) << e.what();
 
-  e = expect_track_error([&] { import_mrclam(kMrclam, 9); });
+  e = expect_track_error([&] { import_mrclam(kMrclamDir, 9); });
   EXPECT_TRUE(contains(e.reason(), "robot 9")) << e.what();
   // Robots 4 and 5 of dataset 7 were not copied: the missing file is named.
-  e = expect_track_error([&] { import_mrclam(kMrclam, 4); });
+  e = expect_track_error([&] { import_mrclam(kMrclamDir, 4); });
   EXPECT_TRUE(contains(e.file(), "Robot4_Odometry.dat")) << e.what();
 
   e = expect_track_error([&] { import_optiodom(kCircular / "231220200146_run-07.csv"); });
@@ -105,8 +105,8 @@ TEST(ImportErrors, OptiOdomNeedsItsMetadata) {
 
 TEST(ImportErrors, MrclamTruncatedAndGarbledCopies) {
   TempDir dir("mrclam");
-  copy_into(kMrclam / "Robot1_Groundtruth.dat", dir.path());
-  const auto odo = read_lines(kMrclam / "Robot1_Odometry.dat");
+  copy_into(kMrclamDir / "Robot1_Groundtruth.dat", dir.path());
+  const auto odo = read_lines(kMrclamDir / "Robot1_Odometry.dat");
   // Truncated mid-line after 1000 complete lines: line 1001 is "1248446...".
   write_lines(dir.path() / "Robot1_Odometry.dat", odo, 1000, odo[1000].substr(0, 12));
   auto e = expect_track_error([&] { import_mrclam(dir.path(), 1); });
@@ -266,7 +266,7 @@ TEST(ImportErrors, BinaryGarbageIsOneCleanError) {
     for (int i = 0; i < 200000; ++i) out.put(static_cast<char>(byte(rng)));
   };
   garbage(dir.path() / "Robot1_Odometry.dat");
-  copy_into(kMrclam / "Robot1_Groundtruth.dat", dir.path());
+  copy_into(kMrclamDir / "Robot1_Groundtruth.dat", dir.path());
   auto e = expect_track_error([&] { import_mrclam(dir.path(), 1); });
   EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos);
   EXPECT_GE(e.line(), 1u);
@@ -308,7 +308,7 @@ void expect_same(const Track& a, const Track& b) {
 
 TEST(ImportRoundTrip, WriteThenReadGivesTheSameTrack) {
   TempDir dir("roundtrip");
-  const Track tracks[] = {import_mrclam(kMrclam, 2), import_optiodom(kCircular / "231220200146_run-01.csv"),
+  const Track tracks[] = {import_mrclam(kMrclamDir, 2), import_optiodom(kCircular / "231220200146_run-01.csv"),
                           import_litw(kLitwDir / "litw_series.csv")};
   const char* names[] = {"mrclam.csv", "optiodom.csv", "litw.csv"};
   for (std::size_t i = 0; i < 3; ++i) {
