@@ -1,4 +1,5 @@
 #include "calibration/calibration_run.h"
+#include "core/why.h"
 
 #include <algorithm>
 #include <chrono>
@@ -316,42 +317,25 @@ filters::PfCalibratorParams effective_pf_params(const CalibrationOptions& option
 }
 
 bool CalibrationOptions::IsValid(std::string* why) const {
-  if (!(convergence_tolerance > 0.0 && convergence_tolerance < 1.0)) {
-    if (why)
-      *why = fmt::format("convergence_tolerance = {} must be in (0, 1) (a fraction of the true value)",
-                         convergence_tolerance);
-    return false;
-  }
+  if (!(convergence_tolerance > 0.0 && convergence_tolerance < 1.0))
+    return invalid(why,
+                   fmt::format("convergence_tolerance = {} must be in (0, 1) (a fraction of the true value)",
+                               convergence_tolerance));
   std::string inner;
-  if (!memory_pair.IsValid(&inner)) {
-    if (why) *why = "memory_pair." + inner;
-    return false;
-  }
+  if (!memory_pair.IsValid(&inner)) return invalid(why, "memory_pair." + inner);
   switch (method) {
     case CalibrationMethod::adaptive_pf:
     case CalibrationMethod::pf:
-      if (!effective_pf_params(*this).IsValid(&inner)) {
-        if (why) *why = "pf." + inner;
-        return false;
-      }
+      if (!effective_pf_params(*this).IsValid(&inner)) return invalid(why, "pf." + inner);
       break;
     case CalibrationMethod::dkf:
-      if (!dkf.IsValid(&inner)) {
-        if (why) *why = "dkf." + inner;
-        return false;
-      }
+      if (!dkf.IsValid(&inner)) return invalid(why, "dkf." + inner);
       break;
     case CalibrationMethod::online_pose:
-      if (!online_pose.IsValid(&inner)) {
-        if (why) *why = "online_pose." + inner;
-        return false;
-      }
+      if (!online_pose.IsValid(&inner)) return invalid(why, "online_pose." + inner);
       break;
     case CalibrationMethod::batch_pose:
-      if (!pose.IsValid(&inner)) {
-        if (why) *why = "pose." + inner;
-        return false;
-      }
+      if (!pose.IsValid(&inner)) return invalid(why, "pose." + inner);
       break;
     case CalibrationMethod::batch_velocity:
     case CalibrationMethod::none: break;

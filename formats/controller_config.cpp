@@ -1,4 +1,5 @@
 #include "formats/controller_config.h"
+#include "core/why.h"
 
 #include <algorithm>
 #include <cctype>
@@ -198,33 +199,26 @@ bool parse_controller_form(std::string_view text, ControllerForm* out) {
 }
 
 bool ControllerOptions::IsValid(std::string* why) const {
-  const auto fail = [&](const std::string& w) {
-    if (why) *why = w;
-    return false;
-  };
   const std::string& n = controller_name;
   bool ok = !n.empty() && !std::isdigit(static_cast<unsigned char>(n.front()));
   for (char ch : n) ok = ok && (std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '/');
   if (!ok)
-    return fail(fmt::format("controller_name '{}' is not a ROS name: expected letters, digits, '_' and '/', "
-                            "not starting with a digit",
-                            n));
+    return invalid(why,
+                   fmt::format("controller_name '{}' is not a ROS name: expected letters, digits, '_' and '/', "
+                               "not starting with a digit",
+                               n));
   return true;
 }
 
 bool ControllerGeometry::IsValid(std::string* why) const {
-  const auto fail = [&](const std::string& w) {
-    if (why) *why = w;
-    return false;
-  };
   std::string bad;
-  if (!calibrated.IsValid(&bad)) return fail("calibrated " + bad);
-  if (!nominal.IsValid(&bad)) return fail("nominal " + bad + " (no nominal geometry given)");
+  if (!calibrated.IsValid(&bad)) return invalid(why, "calibrated " + bad);
+  if (!nominal.IsValid(&bad)) return invalid(why, "nominal " + bad + " (no nominal geometry given)");
   for (const auto* list : {&provenance, &heldout})
     for (const std::string& line : *list)
       if (line.find_first_of("\r\n") != std::string::npos)
-        return fail(fmt::format("a comment line holds a line break: '{}'",
-                                line.substr(0, line.find_first_of("\r\n"))));
+        return invalid(why, fmt::format("a comment line holds a line break: '{}'",
+                                        line.substr(0, line.find_first_of("\r\n"))));
   return true;
 }
 

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "calibration/calibration_ranges.h"
 #include "core/failure.h"
@@ -236,12 +237,6 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
   return info;
 }
 
-std::string joined(const std::vector<std::string>& names) {
-  std::string s;
-  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
-}
-
 // Calls `f` (when set) on leaving the scope, normally or by an exception.
 struct OnExit {
   const std::function<void()>& f;
@@ -250,16 +245,21 @@ struct OnExit {
   }
 };
 
+// Where a calibration file's numbers come from: the method, and the PF's seed.
+std::string provenance_line(const CalibrateRequest& a, const CalibrateOutcome& out) {
+  const bool pf = out.result.method == CalibrationMethod::pf ||
+                  out.result.method == CalibrationMethod::adaptive_pf;
+  return fmt::format("calibrated by odotune calibrate: method {}{}", a.method_name(),
+                     pf ? fmt::format(", seed {}", out.info.options.pf.seed) : "");
+}
+
 // --controller-out: the final estimate as the controller's parameters.
 std::string write_calibrate_controller(const CalibrateRequest& a, const CalibrateOutcome& out,
                                        const ControllerOptions& options) {
-  const bool pf = out.result.method == CalibrationMethod::pf ||
-                  out.result.method == CalibrationMethod::adaptive_pf;
-  const std::string method = fmt::format("calibrated by odotune calibrate: method {}{}", a.method_name(),
-                                         pf ? fmt::format(", seed {}", out.info.options.pf.seed) : "");
   return write_controller_file(a.controller, options,
                                calibration_controller_geometry(a.controller, out.result, out.nominal,
-                                                               out.inputs.front().nominal, method, a.tracks));
+                                                               out.inputs.front().nominal,
+                                                               provenance_line(a, out), a.tracks));
 }
 
 }  // namespace
@@ -306,8 +306,8 @@ CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& 
     for (const auto& in : out.inputs) names.push_back(in.track_name);
     try {
       results::calibration_estimates_figure(
-          a.figure,
-          calibration_figure_data(table, fmt::format("{}: {} calibration", joined(names), a.method_name())));
+          a.figure, calibration_figure_data(table, fmt::format("{}: {} calibration", fmt::join(names, ", "),
+                                                               a.method_name())));
     } catch (const std::exception& e) {
       throw Failure(fmt::format("--figure {}: {}", a.figure, e.what()));
     }
@@ -316,10 +316,7 @@ CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& 
   if (!a.config_out.empty()) {
     CalibrationFile file;
     file.params = out.result.final_params;
-    const bool pf = out.result.method == CalibrationMethod::pf ||
-                    out.result.method == CalibrationMethod::adaptive_pf;
-    file.comment = fmt::format("calibrated by odotune calibrate: method {}{}\ntracks: {}", a.method_name(),
-                               pf ? fmt::format(", seed {}", out.info.options.pf.seed) : "", joined(a.tracks));
+    file.comment = fmt::format("{}\ntracks: {}", provenance_line(a, out), fmt::join(a.tracks, ", "));
     write_calibration_file(file, a.config_out);
   }
   if (!a.controller.out.empty()) out.controller_line = write_calibrate_controller(a, out, controller);

@@ -4,6 +4,7 @@
 #include <utility>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include "core/failure.h"
 #include "core/output_paths.h"
@@ -14,12 +15,6 @@ namespace odotune {
 namespace {
 
 using filters::OdometryParams;
-
-std::string joined(const std::vector<std::string>& names) {
-  std::string s;
-  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
-}
 
 // The flags given, in the order a refusal names them.
 std::vector<std::pair<const char*, bool>> given_flags(const ControllerRequest& r) {
@@ -111,7 +106,7 @@ ControllerGeometry calibration_controller_geometry(const ControllerRequest& r, c
   ControllerGeometry g;
   g.calibrated = result.final_params;
   g.nominal = controller_nominal(r, track_nominal, &g.nominal_source);
-  g.provenance = {method_line, "tracks: " + joined(track_files)};
+  g.provenance = {method_line, fmt::format("tracks: {}", fmt::join(track_files, ", "))};
   if (!result.trace.estimate.empty()) {
     const filters::CalibEstimate& e = result.trace.estimate.back();
     if (e.sd_radius_left_m > 0.0 || e.sd_radius_right_m > 0.0 || e.sd_wheel_base_m > 0.0)
@@ -150,9 +145,10 @@ std::optional<ControllerGeometry> diagnosis_controller_geometry(
   g.nominal = g.calibrated = track_nominal;
   g.nominal_source = "the track's robot.* metadata";
   g.provenance = {"corrected by odotune diagnose: the nominal robot × the fitted scales",
-                  "tracks: " + joined(fit_files)};
+                  fmt::format("tracks: {}", fmt::join(fit_files, ", "))};
   if (!heldout_files.empty())
-    g.provenance.push_back("held-out recordings (never fitted): " + joined(heldout_files));
+    g.provenance.push_back(fmt::format("held-out recordings (never fitted): {}",
+                                       fmt::join(heldout_files, ", ")));
   std::vector<std::string> used, others;
   for (const diagnose::Finding& f : d.findings) {
     if (f.effect == "radius_error") {
@@ -177,7 +173,8 @@ std::optional<ControllerGeometry> diagnosis_controller_geometry(
                                       f.heldout_test->proven ? ", proven" : ", not proven"));
   }
   if (used.empty()) return std::nullopt;
-  if (!others.empty()) g.provenance.push_back("other findings, not in this file: " + joined(others));
+  if (!others.empty())
+    g.provenance.push_back(fmt::format("other findings, not in this file: {}", fmt::join(others, ", ")));
   if (has_numbers(d.heldout))
     g.heldout.push_back(
         fmt::format("held-out position error, nominal → the whole chosen model: {:.4f} m → {:.4f} m "

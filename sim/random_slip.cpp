@@ -1,4 +1,5 @@
 #include "sim/random_slip.h"
+#include "core/why.h"
 
 #include <algorithm>
 #include <cmath>
@@ -26,33 +27,32 @@ bool moving_throughout(const MotionProfile& p, double t0, double t1, double min_
 }  // namespace
 
 bool RandomSlipOptions::IsValid(std::string* why) const {
-  const auto fail = [why](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (!finite_nonneg(first_s)) return fail(fmt::format("first_s = {}: expected a finite value >= 0", first_s));
+  if (!finite_nonneg(first_s))
+    return invalid(why, fmt::format("first_s = {}: expected a finite value >= 0", first_s));
   if (!finite_nonneg(end_margin_s))
-    return fail(fmt::format("end_margin_s = {}: expected a finite value >= 0", end_margin_s));
+    return invalid(why, fmt::format("end_margin_s = {}: expected a finite value >= 0", end_margin_s));
   if (!(min_duration_s >= 0.5 && max_duration_s >= min_duration_s && std::isfinite(max_duration_s)))
-    return fail(fmt::format("min_duration_s = {}, max_duration_s = {}: expected 0.5 <= min <= max, finite",
-                            min_duration_s, max_duration_s));
+    return invalid(why,
+                   fmt::format("min_duration_s = {}, max_duration_s = {}: expected 0.5 <= min <= max, finite",
+                               min_duration_s, max_duration_s));
   if (!(min_gap_s >= 0.0 && max_gap_s >= min_gap_s && std::isfinite(max_gap_s)))
-    return fail(fmt::format("min_gap_s = {}, max_gap_s = {}: expected 0 <= min <= max, finite", min_gap_s,
-                            max_gap_s));
+    return invalid(why, fmt::format("min_gap_s = {}, max_gap_s = {}: expected 0 <= min <= max, finite",
+                                    min_gap_s, max_gap_s));
   if (!(min_strength > 0.0 && max_strength >= min_strength && max_strength <= 0.9))
-    return fail(fmt::format("min_strength = {}, max_strength = {}: expected 0 < min <= max <= 0.9",
-                            min_strength, max_strength));
+    return invalid(why, fmt::format("min_strength = {}, max_strength = {}: expected 0 < min <= max <= 0.9",
+                                    min_strength, max_strength));
   if (!finite_nonneg(min_speed_m_s))
-    return fail(fmt::format("min_speed_m_s = {}: expected a finite value >= 0", min_speed_m_s));
+    return invalid(why, fmt::format("min_speed_m_s = {}: expected a finite value >= 0", min_speed_m_s));
   if (!std::isfinite(hold_brake_per_s_nm) || !std::isfinite(hold_brake_offset_nm) ||
       hold_brake_per_s_nm * min_strength + hold_brake_offset_nm < 0.0 ||
       hold_brake_per_s_nm * max_strength + hold_brake_offset_nm < 0.0)
-    return fail(
-        fmt::format("hold_brake_per_s_nm = {}, hold_brake_offset_nm = {}: expected finite values giving a "
-                    "brake >= 0 N*m over the strength range",
-                    hold_brake_per_s_nm, hold_brake_offset_nm));
+    return invalid(
+        why, fmt::format("hold_brake_per_s_nm = {}, hold_brake_offset_nm = {}: expected finite values giving a "
+                         "brake >= 0 N*m over the strength range",
+                         hold_brake_per_s_nm, hold_brake_offset_nm));
   if (!finite_nonneg(ramp_per_strength_s))
-    return fail(fmt::format("ramp_per_strength_s = {}: expected a finite value >= 0", ramp_per_strength_s));
+    return invalid(why,
+                   fmt::format("ramp_per_strength_s = {}: expected a finite value >= 0", ramp_per_strength_s));
   return true;
 }
 

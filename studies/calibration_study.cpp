@@ -1,4 +1,5 @@
 #include "studies/calibration_study.h"
+#include "core/why.h"
 
 #include <omp.h>
 
@@ -157,20 +158,16 @@ MeanSd mean_sd(const std::vector<double>& values) {
 }
 
 bool StudyOptions::IsValid(std::string* why) const {
-  const auto fail = [why](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
-  if (runs < 1 || runs > 1000) return fail(fmt::format("runs = {} must be in 1..1000", runs));
-  if (threads < 0) return fail(fmt::format("threads = {} must be >= 0 (0 = all cores)", threads));
+  if (runs < 1 || runs > 1000) return invalid(why, fmt::format("runs = {} must be in 1..1000", runs));
+  if (threads < 0) return invalid(why, fmt::format("threads = {} must be >= 0 (0 = all cores)", threads));
   if (!(truth_radius_spread > 0.0 && truth_radius_spread <= 0.1))
-    return fail(fmt::format("truth_radius_spread = {} must be in (0, 0.1]", truth_radius_spread));
+    return invalid(why, fmt::format("truth_radius_spread = {} must be in (0, 0.1]", truth_radius_spread));
   if (pf_particles < 10 || pf_particles > 1000000)
-    return fail(fmt::format("pf_particles = {} must be in 10..1000000", pf_particles));
+    return invalid(why, fmt::format("pf_particles = {} must be in 10..1000000", pf_particles));
   if (adaptive_initial_particles != 0 &&
       (adaptive_initial_particles < 10 || adaptive_initial_particles > 1000000))
-    return fail(fmt::format("adaptive_initial_particles = {} must be 0 (default) or in 10..1000000",
-                            adaptive_initial_particles));
+    return invalid(why, fmt::format("adaptive_initial_particles = {} must be 0 (default) or in 10..1000000",
+                                    adaptive_initial_particles));
   return true;
 }
 

@@ -1,4 +1,5 @@
 #include "studies/learned_study.h"
+#include "core/why.h"
 
 #include <algorithm>
 #include <array>
@@ -358,25 +359,21 @@ void table3(const FusionInput& slip_eval, const std::vector<sim::SlipEpisode>& e
 }  // namespace
 
 bool LearnedStudyOptions::IsValid(std::string* why) const {
-  const auto fail = [why](const std::string& m) {
-    if (why) *why = m;
-    return false;
-  };
   if (iterations < 1 || iterations > 10000)
-    return fail(fmt::format("iterations = {} must be in 1..10000", iterations));
+    return invalid(why, fmt::format("iterations = {} must be in 1..10000", iterations));
   if (retrain_iterations < 1 || retrain_iterations > 10000)
-    return fail(fmt::format("retrain_iterations = {} must be in 1..10000", retrain_iterations));
+    return invalid(why, fmt::format("retrain_iterations = {} must be in 1..10000", retrain_iterations));
   if (samples_per_retrain < 20 || samples_per_retrain > 100000)
-    return fail(fmt::format("samples_per_retrain = {} must be in 20..100000", samples_per_retrain));
+    return invalid(why, fmt::format("samples_per_retrain = {} must be in 20..100000", samples_per_retrain));
   if (!(rate_hz > 0.0 && rate_hz <= 1000.0))
-    return fail(fmt::format("rate_hz = {} must be in (0, 1000]", rate_hz));
+    return invalid(why, fmt::format("rate_hz = {} must be in (0, 1000]", rate_hz));
   if (!(previous_noise_v >= 0.0 && std::isfinite(previous_noise_v)) ||
       !(previous_noise_w >= 0.0 && std::isfinite(previous_noise_w)))
-    return fail("previous_noise_v/_w must be finite and >= 0");
+    return invalid(why, "previous_noise_v/_w must be finite and >= 0");
   if (slip_drives < 1 || slip_drives > 20)
-    return fail(fmt::format("slip_drives = {} must be in 1..20", slip_drives));
-  if (slip_stride < 1) return fail(fmt::format("slip_stride = {} must be >= 1", slip_stride));
-  if (threads < 1) return fail(fmt::format("threads = {} must be >= 1", threads));
+    return invalid(why, fmt::format("slip_drives = {} must be in 1..20", slip_drives));
+  if (slip_stride < 1) return invalid(why, fmt::format("slip_stride = {} must be >= 1", slip_stride));
+  if (threads < 1) return invalid(why, fmt::format("threads = {} must be >= 1", threads));
   return true;
 }
 
