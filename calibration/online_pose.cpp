@@ -1,4 +1,5 @@
 #include "calibration/online_pose.h"
+#include "core/robust_stats.h"
 
 #include <algorithm>
 #include <cmath>
@@ -126,10 +127,8 @@ filters::DistanceMemoryParams online_pose_memory(const std::vector<const Calibra
         const auto [vx, vy] = fix_variances(*in, i, options);
         sd.push_back(std::sqrt(0.5 * (vx + vy)));
       }
-    if (!sd.empty()) {
-      std::nth_element(sd.begin(), sd.begin() + static_cast<std::ptrdiff_t>(sd.size() / 2), sd.end());
-      m.min_memory_m = std::max(m.min_memory_m, options.fix_sd_memory_factor * sd[sd.size() / 2]);
-    }
+    if (!sd.empty())
+      m.min_memory_m = std::max(m.min_memory_m, options.fix_sd_memory_factor * median(std::move(sd)));
   }
   m.max_memory_m = std::max(m.max_memory_m, m.min_memory_m);
   return m;
