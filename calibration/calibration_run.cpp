@@ -1,5 +1,4 @@
 #include "calibration/calibration_run.h"
-#include "core/why.h"
 
 #include <algorithm>
 #include <chrono>
@@ -11,6 +10,7 @@
 
 #include "calibration/batch_calibration.h"
 #include "calibration/dead_reckoning.h"
+#include "core/why.h"
 #include "filters/diff_drive.h"
 #include "objectives/pose_series.h"
 

@@ -1,5 +1,4 @@
 #include "calibration/online_pose.h"
-#include "core/robust_stats.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "core/robust_stats.h"
 #include "core/why.h"
 
 namespace odotune {

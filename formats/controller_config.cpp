@@ -1,5 +1,4 @@
 #include "formats/controller_config.h"
-#include "core/why.h"
 
 #include <algorithm>
 #include <cctype>
@@ -10,6 +9,7 @@
 
 #include "core/atomic_file.h"
 #include "core/failure.h"
+#include "core/why.h"
 
 namespace odotune {
 

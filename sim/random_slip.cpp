@@ -1,5 +1,4 @@
 #include "sim/random_slip.h"
-#include "core/why.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "core/counter_rng.h"
+#include "core/why.h"
 #include "sim/slip_episodes.h"
 
 namespace odotune::sim {

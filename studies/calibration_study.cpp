@@ -1,5 +1,4 @@
 #include "studies/calibration_study.h"
-#include "core/why.h"
 
 #include <omp.h>
 
@@ -12,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "core/counter_rng.h"
+#include "core/why.h"
 #include "filters/pf_calibrator.h"
 #include "sim/simulator.h"
 

@@ -1,5 +1,4 @@
 #include "studies/learned_study.h"
-#include "core/why.h"
 
 #include <algorithm>
 #include <array>
@@ -9,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "core/why.h"
 #include "sim/motion_profile.h"
 #include "sim/random_slip.h"
 #include "sim/simulator.h"
