@@ -116,16 +116,21 @@ void score_odometry(const CalibrationInput& in, const ParamTimeline& tl, TrackCa
   }
 }
 
-// Convergence judged at the velocity samples, or at `eval_times` when given.
+// Convergence judged at `times` (online-pose's fixes).
 TrackCalibrationScore score_track(const CalibrationInput& in, const ParamTimeline& tl, double tol,
-                                  const std::vector<double>* eval_times = nullptr) {
+                                  const std::vector<double>& times) {
   TrackCalibrationScore s;
   s.track = in.track_name;
   s.final_params = tl.last();
   if (in.truth) s.truth_final = in.truth->at(in.t.back());
-  score_convergence(in, tl, eval_times ? *eval_times : in.sample_t, tol, &s);
+  score_convergence(in, tl, times, tol, &s);
   score_odometry(in, tl, &s);
   return s;
+}
+
+// Convergence judged at the velocity samples.
+TrackCalibrationScore score_track(const CalibrationInput& in, const ParamTimeline& tl, double tol) {
+  return score_track(in, tl, tol, in.sample_t);
 }
 
 ParamTimeline constant_timeline(const filters::OdometryParams& p) {
@@ -245,7 +250,7 @@ void run_online_pose(filters::MemoryPair<filters::PoseCalibrator, filters::Dista
       res->trace.track.push_back(static_cast<int>(k));
       res->trace.estimate.push_back(e);
     }
-    res->tracks.push_back(score_track(in, tl, tol, &tl.times));
+    res->tracks.push_back(score_track(in, tl, tol, tl.times));
   }
   res->final_params = pair.estimate().params;
   if (res->iterations > 0)
