@@ -81,7 +81,7 @@ Schedule make_schedule(const Recording& rec, std::span<const FixRole> roles, std
       }
       if (in.stamp_ns >= until_ns) continue;
       const FixRole r = role(in);
-      if (needs_callback(in)) s.events.push_back({Event::callback, i, t});
+      if (needs_callback(in) && r != FixRole::absent) s.events.push_back({Event::callback, i, t});
       if (r == FixRole::fuse) queue.push({in.stamp_ns, i});
       if (r == FixRole::score) held_out.push({in.stamp_ns, i});
     }
@@ -118,78 +118,66 @@ Eigen::Vector3d fix_in_odom(const GpsFix& fix, const GpsTransform& t) {
 
 namespace {
 
-// One replay's mutable state.
-class Run {
- public:
-  Run(const Recording& rec, const ReplaySettings& settings)
-      : rec_(rec),
-        settings_(settings),
-        filter_(filter_params(rec, settings)),
-        adjust_(rec.inputs.size(), Eigen::Vector3d::Zero()) {
-    out_.gps_transform = rec.gps_transform;
-  }
+rl::RlEkfParams filter_params(const Recording& rec, const ReplaySettings& s) {
+  rl::RlEkfParams fp;
+  fp.process_noise = s.process_noise;
+  fp.initial_cov = s.initial_cov;
+  fp.dynamic_process_noise = s.dynamic_process_noise;
+  if (rec.params.initial_state) fp.initial_state = *rec.params.initial_state;
+  return fp;
+}
 
-  void callback(int i);
-  void datum(int i);
-  void process(int i);
-  void score(int i);
-  void tick(std::int64_t t_ns, bool keep);
-  void timeout_predict(std::int64_t t_ns) { filter_.predict_to(t_ns); }
-  ReplayOutput finish();
+}  // namespace
 
- private:
-  static rl::RlEkfParams filter_params(const Recording& rec, const ReplaySettings& s) {
-    rl::RlEkfParams fp;
-    fp.process_noise = s.process_noise;
-    fp.initial_cov = s.initial_cov;
-    fp.dynamic_process_noise = s.dynamic_process_noise;
-    if (rec.params.initial_state) fp.initial_state = *rec.params.initial_state;
-    return fp;
-  }
-  double threshold_of(const Input& in) const {
-    const auto& t = settings_.thresholds[in.sensor];
-    switch (in.kind) {
-      case InputKind::twist: return t[1];
-      case InputKind::acceleration: return t[2];
-      default: return t[0];
-    }
-  }
+Replayer::Replayer(const Recording& rec, const ReplaySettings& settings)
+    : rec_(&rec), settings_(&settings), filter_(filter_params(rec, settings)) {
+  out_.gps_transform = rec.gps_transform;
+}
 
-  const Recording& rec_;
-  const ReplaySettings& settings_;
-  rl::RlEkf filter_;
-  std::vector<Eigen::Vector3d> adjust_;  // per input: what its callback added
-  rl::Measurement m_;                    // scratch
-  Eigen::Vector3d last_rates_ = Eigen::Vector3d::Zero(), angular_acc_ = Eigen::Vector3d::Zero();
-  double last_diff_s_ = 0.0;
-  ReplayOutput out_;
-};
+double Replayer::threshold_of(const Input& in) const {
+  const auto& t = settings_->thresholds[in.sensor];
+  switch (in.kind) {
+    case InputKind::twist: return t[1];
+    case InputKind::acceleration: return t[2];
+    default: return t[0];
+  }
+}
+
+Eigen::Vector3d Replayer::take_adjust(int i) {
+  for (auto it = adjust_.begin(); it != adjust_.end(); ++it) {
+    if (it->first != i) continue;
+    const Eigen::Vector3d a = it->second;
+    adjust_.erase(it);
+    return a;
+  }
+  return Eigen::Vector3d::Zero();
+}
 
 // navsat_transform_node's datum (computeTransform): the filter's pose at this
 // fix against the fix, less the antenna's offset turned by the IMU's heading.
-void Run::datum(int i) {
-  const Input& in = rec_.inputs[i];
+void Replayer::datum(int i) {
+  const Input& in = rec_->inputs[i];
   const rl::State& x = filter_.state();
-  const GpsFix& f = rec_.fixes[in.fix];
+  const GpsFix& f = rec_->fixes[in.fix];
   GpsTransform& g = out_.gps_transform;
-  const double imu_yaw = rec_.navsat_imu_yaw_rad + f.convergence_rad;
+  const double imu_yaw = rec_->navsat_imu_yaw_rad + f.convergence_rad;
   g.grid_origin = f.p - rotation_rpy(0.0, 0.0, imu_yaw) * in.lever;
   g.odom_origin = x.segment<3>(rl::kX);
-  if (rec_.params.navsat.zero_altitude) g.odom_origin.z() = 0.0;
+  if (rec_->params.navsat.zero_altitude) g.odom_origin.z() = 0.0;
   g.rotation_rad = x[rl::kYaw] - imu_yaw;
 }
 
 // What the callback computes from the state when the message arrives
 // (prepareTwist's ω × r, prepareAcceleration's α × r − (ω × r) × ω and its
 // gravity without an orientation; the GPS antenna's offset).
-void Run::callback(int i) {
-  const Input& in = rec_.inputs[i];
+void Replayer::callback(int i) {
+  const Input& in = rec_->inputs[i];
   const rl::State& x = filter_.state();
   const Eigen::Vector3d w = x.segment<3>(rl::kVroll);
   if (in.kind == InputKind::gps) {
     // navsat_transform_node removes the antenna's offset turned by the
     // filter's attitude from each fix.
-    adjust_[i] = -(rotation_rpy(x[rl::kRoll], x[rl::kPitch], x[rl::kYaw]) * in.lever);
+    adjust_.emplace_back(i, -(rotation_rpy(x[rl::kRoll], x[rl::kPitch], x[rl::kYaw]) * in.lever));
     return;
   }
   Eigen::Vector3d a = Eigen::Vector3d::Zero();
@@ -199,16 +187,17 @@ void Run::callback(int i) {
     a = in.lever.cross(angular_acc_) - in.lever.cross(w).cross(w);
     if (in.gravity_from_state) {
       const Eigen::Matrix3d att = rotation_rpy(x[rl::kRoll], x[rl::kPitch], x[rl::kYaw]);
-      a -= att.transpose() * Eigen::Vector3d(0.0, 0.0, rec_.params.gravitational_acceleration);
+      a -= att.transpose() * Eigen::Vector3d(0.0, 0.0, rec_->params.gravitational_acceleration);
     }
   }
-  adjust_[i] = a;
+  adjust_.emplace_back(i, a);
 }
 
-void Run::process(int i) {
-  const Input& in = rec_.inputs[i];
-  const double* v = rec_.pool.data() + in.slot;
-  const double scale = settings_.covariance_scale[in.sensor];
+void Replayer::process(int i) {
+  const Input& in = rec_->inputs[i];
+  const double* v = rec_->pool.data() + in.slot;
+  const double scale = settings_->covariance_scale[in.sensor];
+  const Eigen::Vector3d adjust = needs_callback(in) ? take_adjust(i) : Eigen::Vector3d::Zero();
   m_.time_ns = in.stamp_ns;
   m_.mask.fill(false);
   for (int a = 0; a < in.n; ++a) {
@@ -219,15 +208,15 @@ void Run::process(int i) {
   }
   // two_d_mode's forced members (z, a_z, …) keep their zeros: the node forces
   // them after adding these terms.
-  const int components = rec_.params.two_d_mode ? 2 : 3;
+  const int components = rec_->params.two_d_mode ? 2 : 3;
   const int offset = in.kind == InputKind::acceleration ? rl::kAx : rl::kVx;
   if (in.kind == InputKind::twist || in.kind == InputKind::acceleration) {
-    m_.z.segment(offset, components) += adjust_[i].head(components);
+    m_.z.segment(offset, components) += adjust.head(components);
   } else if (in.kind == InputKind::gps) {
-    const GpsFix& f = rec_.fixes[in.fix];
+    const GpsFix& f = rec_->fixes[in.fix];
     const Eigen::Matrix3d rot = rotation_rpy(0.0, 0.0, out_.gps_transform.rotation_rad);
     const Eigen::Matrix3d cov = scale * rot * f.cov * rot.transpose();
-    const Eigen::Vector3d p = fix_in_odom(f, out_.gps_transform) + adjust_[i];
+    const Eigen::Vector3d p = fix_in_odom(f, out_.gps_transform) + adjust;
     for (int r = rl::kX; r < rl::kX + components; ++r) {
       if (!m_.mask[r]) continue;
       m_.z[r] = p[r];
@@ -241,10 +230,11 @@ void Run::process(int i) {
 
 // The filter's position at the held-out fix's stamp (predicted from its last
 // measurement, the filter itself unchanged) against the fix.
-void Run::score(int i) {
-  const Input& in = rec_.inputs[i];
+void Replayer::score(int i) {
+  const Input& in = rec_->inputs[i];
+  const Eigen::Vector3d adjust = needs_callback(in) ? take_adjust(i) : Eigen::Vector3d::Zero();
   if (!filter_.initialized()) return;
-  const GpsFix& f = rec_.fixes[in.fix];
+  const GpsFix& f = rec_->fixes[in.fix];
   ScoredFix s;
   s.fix = in.fix;
   s.stamp_ns = in.stamp_ns;
@@ -253,14 +243,14 @@ void Run::score(int i) {
   const rl::State at = dt > 0.0 ? rl::State(rl::transition(x, dt).A * x) : x;
   s.predicted = at.head<3>();
   s.predicted_yaw = at[rl::kYaw];
-  s.measured = fix_in_odom(f, out_.gps_transform) + adjust_[i];
+  s.measured = fix_in_odom(f, out_.gps_transform) + adjust;
   const Eigen::Matrix2d rot = rotation_rpy(0.0, 0.0, out_.gps_transform.rotation_rad).topLeftCorner<2, 2>();
   s.fix_cov = rot * f.cov.topLeftCorner<2, 2>() * rot.transpose();
   out_.scored.push_back(s);
 }
 
 // RosFilter::differentiateMeasurements, then the published state.
-void Run::tick(std::int64_t t_ns, bool keep) {
+void Replayer::tick(std::int64_t t_ns, bool keep) {
   if (!filter_.initialized()) return;
   const double now = static_cast<double>(t_ns) * 1e-9;
   const Eigen::Vector3d w = filter_.state().segment<3>(rl::kVroll);
@@ -270,29 +260,31 @@ void Run::tick(std::int64_t t_ns, bool keep) {
   if (keep) out_.trajectory.push_back({t_ns, filter_.state()});
 }
 
-ReplayOutput Run::finish() {
+ReplayOutput Replayer::finish() && {
   out_.final_state = filter_.state();
   out_.final_cov = filter_.cov();
   out_.finite = out_.final_state.allFinite() && out_.final_cov.allFinite();
   return std::move(out_);
 }
 
-}  // namespace
+void Replayer::run(std::span<const Event> events, bool keep_trajectory) {
+  for (const Event& e : events) {
+    switch (e.type) {
+      case Event::callback: callback(e.input); break;
+      case Event::datum: datum(e.input); break;
+      case Event::process: process(e.input); break;
+      case Event::score: score(e.input); break;
+      case Event::timeout_predict: filter_.predict_to(e.time_ns); break;
+      case Event::tick: tick(e.time_ns, keep_trajectory); break;
+    }
+  }
+}
 
 ReplayOutput replay(const Recording& rec, const Schedule& schedule, const ReplaySettings& settings,
                     bool keep_trajectory) {
-  Run run(rec, settings);
-  for (const Event& e : schedule.events) {
-    switch (e.type) {
-      case Event::callback: run.callback(e.input); break;
-      case Event::datum: run.datum(e.input); break;
-      case Event::process: run.process(e.input); break;
-      case Event::score: run.score(e.input); break;
-      case Event::timeout_predict: run.timeout_predict(e.time_ns); break;
-      case Event::tick: run.tick(e.time_ns, keep_trajectory); break;
-    }
-  }
-  return run.finish();
+  Replayer run(rec, settings);
+  run.run(schedule.events, keep_trajectory);
+  return std::move(run).finish();
 }
 
 }  // namespace odotune::rlnode

@@ -87,6 +87,43 @@ struct ReplayOutput {
 ReplayOutput replay(const Recording& rec, const Schedule& schedule, const ReplaySettings& settings,
                     bool keep_trajectory = false);
 
+// A replay advanced a stretch of events at a time. A copy is a checkpoint:
+// schedules that share their first events (the same fix roles up to some
+// tick) continue from one replay of those events instead of repeating them
+// (objectives/rl_objective.h replays many outage windows so). `rec` and
+// `settings` must outlive it and its copies.
+class Replayer {
+ public:
+  Replayer(const Recording& rec, const ReplaySettings& settings);
+
+  // Processes `events` (a stretch of a schedule, in order).
+  void run(std::span<const Event> events, bool keep_trajectory = false);
+  // The held-out fixes scored so far.
+  const std::vector<ScoredFix>& scored() const { return out_.scored; }
+  ReplayOutput finish() &&;
+
+ private:
+  void callback(int i);
+  void datum(int i);
+  void process(int i);
+  void score(int i);
+  void tick(std::int64_t t_ns, bool keep);
+  double threshold_of(const Input& in) const;
+  // What input i's callback added to its measurement, until it is processed.
+  Eigen::Vector3d take_adjust(int i);
+
+  const Recording* rec_;
+  const ReplaySettings* settings_;
+  filters::rl::RlEkf filter_;
+  // Per input whose callback ran and that is not yet processed: what the
+  // callback added (a few at a time, so a copy of the replay stays small).
+  std::vector<std::pair<int, Eigen::Vector3d>> adjust_;
+  filters::rl::Measurement m_;  // scratch
+  Eigen::Vector3d last_rates_ = Eigen::Vector3d::Zero(), angular_acc_ = Eigen::Vector3d::Zero();
+  double last_diff_s_ = 0.0;
+  ReplayOutput out_;
+};
+
 // A fix in the odom frame under a GPS transform.
 Eigen::Vector3d fix_in_odom(const GpsFix& fix, const GpsTransform& t);
 
