@@ -17,6 +17,15 @@ struct ConvergencePoint {
   double best_fitness = 0.0;
 };
 
+// How well the tuning data pin one tuned parameter: the range [lo, hi]
+// (physical units, as `params`) over which the tuning fitness stays within
+// 2 % of its best, and whether the recording determined it (false: its range
+// holds the file's own value, which the run then kept).
+struct ParamRange {
+  double lo = 0.0, hi = 0.0;
+  bool determined = true;
+};
+
 struct RunRecord {
   // The cell: model × track × mode × seed (× held-out track for leave-one-out).
   std::string model;          // "rq" | "alpha" | "gyro"
@@ -28,6 +37,9 @@ struct RunRecord {
   // The result.
   std::vector<std::string> param_names;
   std::vector<double> params;  // physical values (units as in ParamSpace)
+  // Per parameter (param_names' order), for runs whose tune profiles its
+  // parameters (model rl-ekf); empty otherwise.
+  std::vector<ParamRange> param_ranges;
   double best_fitness = 0.0;
   Metrics baseline, tuned;  // on `track` (or on the held-out track)
   long evaluations = 0;
