@@ -44,7 +44,22 @@ void register_eval(CLI::App& app) {
                   "--rl-params: take process_noise_covariance from this robot_localization file instead")
       ->check(CLI::ExistingFile);
   sub->add_option("--fixes-out", rl->fixes_out, "--rl-params: write the GPS fixes in the odom frame (t x y)");
-  sub->callback([req, rl] {
+  sub->add_option("--outages", rl->outages_s,
+                  "--rl-params: also simulate GPS outages of these lengths [s] (comma-separated), one of each "
+                  "starting every --outage-every seconds from --from (or 30 s after the first fix), the GPS "
+                  "fused before each; prints their RMSE")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--outage-every", rl->outage_every_s,
+                  "--rl-params: with --outages, their stride [s] (default 10)")
+      ->check(CLI::PositiveNumber);
+  sub->callback([req, rl, sub] {
+    if (rl->src.params_file.empty()) {
+      for (const char* flag : {"--bag", "--node", "--tf", "--gps-topic", "--gps-heading-fit", "--until",
+                               "--from", "--noise-from", "--fixes-out", "--outages", "--outage-every"}) {
+        if (sub->count(flag) > 0) throw Failure(fmt::format("eval: {} applies to --rl-params only", flag));
+      }
+    }
     if (!rl->src.params_file.empty()) {
       if (!req->tracks.empty() || !req->config.empty())
         throw Failure("eval: --rl-params replays a bag; expected no --track or --config with it");

@@ -22,9 +22,31 @@ namespace {
 
 // The --rl-params choices as given, turned into their kinds in one place.
 struct RlChoices {
-  std::string fitness = "outage", space = "diagonal", format = "ros2";
-  bool no_input_covariances = false;
+  std::string fitness = "both", space = "diagonal", format = "ros2";
+  std::string grid;  // "none" or levels in decades, comma-separated
+  bool no_input_covariances = false, allow_worse_heldout = false;
 };
+
+// --grid: "none" (no grid stage) or levels in decades, "-2,0,2".
+std::vector<double> parse_grid_levels(const std::string& text) {
+  if (text == "none") return {};
+  std::vector<double> levels;
+  std::size_t at = 0;
+  while (at <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', at), text.size());
+    const std::string item = text.substr(at, comma - at);
+    try {
+      std::size_t used = 0;
+      levels.push_back(std::stod(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw Failure(fmt::format("tune: --grid {}: expected none or decades separated by commas, e.g. -2,0,2",
+                                text));
+    }
+    at = comma + 1;
+  }
+  return levels;
+}
 
 // tune --rl-params: the EKF-model flags do not apply and are refused by name.
 void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const RlChoices& c,
@@ -36,7 +58,15 @@ void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const R
                                                  "--gps-topic",
                                                  "--gps-heading-fit",
                                                  "--until",
+                                                 "--from",
                                                  "--end",
+                                                 "--starts",
+                                                 "--starts-out",
+                                                 "--outage-every",
+                                                 "--grid",
+                                                 "--refine",
+                                                 "--prior",
+                                                 "--allow-worse-heldout",
                                                  "--fitness",
                                                  "--space",
                                                  "--no-input-covariances",
@@ -67,11 +97,11 @@ void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const R
   static_cast<SolverSettings&>(r) = req;
   r.options.folds = req.fix_cv.folds;
   r.options.block_s = req.fix_cv.block_s;
-  r.options.fitness = c.fitness == "both"            ? RlFitness::both
-                      : c.fitness == "heldout-fixes" ? RlFitness::heldout_fixes
-                                                     : RlFitness::outage;
-  r.options.space = c.space == "blocks" ? RlNoiseSpace::blocks : RlNoiseSpace::diagonal;
+  if (!parse_rl_fitness(c.fitness, &r.options.fitness) || !parse_rl_noise_space(c.space, &r.options.space))
+    throw Failure(fmt::format("tune: --fitness {} --space {}: not a fitness or space", c.fitness, c.space));
   r.options.input_covariances = !c.no_input_covariances;
+  r.options.keep_heldout = !c.allow_worse_heldout;
+  if (!c.grid.empty()) r.search.grid_levels = parse_grid_levels(c.grid);
   r.ros1_out = c.format == "ros1";
   r.json_out = req.json_out;
   r.config_out = req.config_out;
@@ -133,9 +163,37 @@ void add_rl_tune_options(CLI::App* sub, RlTuneRequest& rl, RlChoices& rl_names) 
       ->check(CLI::IsMember({"diagonal", "blocks"}));
   sub->add_flag("--no-input-covariances", rl_names.no_input_covariances,
                 "--rl-params: do not search factors on the inputs' message covariances");
-  sub->add_option("--outage", rl.options.outage_s,
-                  "--rl-params: length of the simulated GPS outages [s] (default 60)")
+  sub->add_option("--from", rl.from_s,
+                  "--rl-params: tune on the recording after this many seconds (the bag cut there) and judge "
+                  "before it: GPS fused for its first 60 s, then an outage; and every 5th fix held out")
       ->check(CLI::PositiveNumber);
+  sub->add_option("--outage", rl.options.outage_s,
+                  "--rl-params: lengths of the simulated GPS outages [s], comma-separated (default 60)")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--outage-every", rl.options.outage_stride_s,
+                  "--rl-params: an outage of each length starts every this many seconds (default 10)")
+      ->check(CLI::PositiveNumber);
+  sub->add_flag("--allow-worse-heldout", rl_names.allow_worse_heldout,
+                "--rl-params: let the tune make the held-out-fix error worse than the file's (by default a "
+                "candidate that does scores above the file's own values)");
+  sub->add_option("--starts", rl.starts,
+                  "--rl-params: refinements from seeds --seed, --seed + 1, …; the lowest tuning fitness is "
+                  "written, the spread printed (default 1)")
+      ->check(CLI::Range(1, 1000));
+  sub->add_option("--starts-out", rl.starts_out,
+                  "--rl-params: also write every start's file into this folder as ekf-seed<K>.yaml");
+  sub->add_option("--grid", rl_names.grid,
+                  "--rl-params: the first, deterministic stage: each block's factor one of 10^LEVEL, "
+                  "comma-separated decades (default -2,0,2), or none");
+  sub->add_option("--refine", rl.search.refine_decades,
+                  "--rl-params: the seeded refinement searches within this many decades of the grid's best "
+                  "(default 1; 0: none)")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--prior", rl.options.prior_weight,
+                  "--rl-params: weight of a prior toward the file's values, added as weight × mean (log10 "
+                  "factor)² (default 0)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("--format", rl_names.format, "--rl-params: --config-out as ros2 (default) or ros1 parameters")
       ->check(CLI::IsMember({"ros2", "ros1"}));
   sub->add_option("--end", rl.end_s,

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 namespace odotune::cli {
 namespace {
@@ -58,31 +59,55 @@ void print_rl_eval(const RlEvalOutcome& o) {
     fmt::print("  after --from: GPS outage RMSE {}; every 5th fix held out: RMSE {}\n",
                metres(o.protocols->outage), metres(o.protocols->every_fifth));
   }
+  if (o.outages)
+    fmt::print("  simulated GPS outages ({} windows): RMSE {}\n", o.outage_windows, metres(*o.outages));
   print_notes(o.notes, o.alignment);
 }
 
 void print_rl_tune(const RlTuneRequest& r, const RlTuneOutcome& o) {
-  fmt::print("{}: robot_localization EKF ({}), tuned on the first {:.1f} s of {:.1f} s; fitness {}, {} process "
-             "noise{}, {} seed {}\n",
-             o.bag.filename().string(), o.params_file.filename().string(), o.span_s, o.duration_s,
-             to_string(r.options.fitness), to_string(r.options.space),
-             r.options.input_covariances ? " and input covariances" : "", r.solver.name(), r.seed);
+  fmt::print("{}: robot_localization EKF ({}), tuned on {:.1f}-{:.1f} s of {:.1f} s; fitness {}, {} process "
+             "noise{}; outages of {} s ({} windows)\n",
+             o.bag.filename().string(), o.params_file.filename().string(), o.span_from_s, o.span_until_s,
+             o.duration_s, to_string(r.options.fitness), to_string(r.options.space),
+             r.options.input_covariances ? " and input covariances" : "", fmt::join(r.options.outage_s, ", "),
+             o.outage_windows);
+  fmt::print(
+      "  grid of block factors: {} combinations, best tuning fitness {:.4f} (the file's values {:.4f})\n",
+      o.grid.evaluations, o.grid.fitness, o.baseline_fitness);
+  if (o.starts.size() > 1 || o.judged) {
+    fmt::print("  {:>6} {:>10} {:>14} {:>14}{}\n", "seed", "tuning", "held-out fixes", "outages",
+               o.judged ? fmt::format(" {:>16} {:>16}", "judged: outage", "every 5th") : "");
+    for (std::size_t k = 0; k < o.starts.size(); ++k) {
+      const RlStartOutcome& st = o.starts[k];
+      fmt::print("  {:>6} {:>10.4f} {:>12.3f} m {:>12.3f} m{}{}\n", st.seed, st.fitness, st.heldout.rmse_m,
+                 st.outage.rmse_m,
+                 st.judged ? fmt::format(" {:>14.3f} m {:>14.3f} m", st.judged->outage.rmse_m,
+                                         st.judged->every_fifth.rmse_m)
+                           : "",
+                 k == o.written ? "   <- written" : "");
+    }
+  }
   fmt::print("  tuning span, held-out fixes:  {}\n", change(o.baseline_heldout, o.tuned_heldout));
-  fmt::print("  tuning span, {:.0f}-s outages:  {}\n", r.options.outage_s,
-             change(o.baseline_outage, o.tuned_outage));
-  if (o.baseline_after && o.tuned_after) {
-    fmt::print("  held out (after {:.1f} s, never seen by the tune):\n", o.span_s);
-    fmt::print("    GPS outage:            {}\n", change(o.baseline_after->outage, o.tuned_after->outage));
+  fmt::print("  tuning span, outages:  {}\n", change(o.baseline_outage, o.tuned_outage));
+  if (o.baseline_judged && o.tuned_judged) {
+    fmt::print("  judged on {:.1f}-{:.1f} s, never seen by the tune:\n", o.judged_from_s, o.judged_until_s);
+    fmt::print("    GPS outage:            {}\n", change(o.baseline_judged->outage, o.tuned_judged->outage));
     fmt::print("    every 5th fix held out: {}\n",
-               change(o.baseline_after->every_fifth, o.tuned_after->every_fifth));
+               change(o.baseline_judged->every_fifth, o.tuned_judged->every_fifth));
   }
-  std::string factors;
+  const RlStartOutcome& w = o.starts[o.written];
+  std::string determined, not_determined;
   for (std::size_t i = 0; i < o.param_names.size(); ++i) {
-    factors += fmt::format("{}{} ×{:.3g}", i == 0 ? "" : ", ", o.param_names[i], o.factors[i]);
+    const bool yes = w.profiles.empty() || w.profiles[i].determined;
+    std::string& list = yes ? determined : not_determined;
+    list += fmt::format("{}{} ×{:.3g}", list.empty() ? "" : ", ", o.param_names[i], o.factors[i]);
+    if (!w.profiles.empty()) list += fmt::format(" [{:.2g}, {:.2g}]", w.profiles[i].lo, w.profiles[i].hi);
   }
-  fmt::print("  factors: {}\n", factors);
-  fmt::print("  {} evaluations in {:.1f} s ({})\n", o.summary.evaluations, o.summary.seconds,
-             o.summary.termination_text());
+  fmt::print("  factors (range within {:g} % of the best tuning fitness):\n    {}\n",
+             100.0 * r.search.tolerance, determined.empty() ? "none" : determined);
+  if (!not_determined.empty())
+    fmt::print("  not determined by this recording (kept at the file's values):\n    {}\n", not_determined);
+  fmt::print("  {} evaluations in {:.1f} s\n", o.summary.evaluations, o.summary.seconds);
   print_notes(o.notes, o.alignment);
   if (!r.config_out.empty())
     fmt::print("  wrote {} ({})\n", r.config_out.string(), r.ros1_out ? "ROS 1" : "ROS 2");

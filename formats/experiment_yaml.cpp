@@ -134,12 +134,24 @@ ExperimentRl read_rl(const std::filesystem::path& path, const YAML::Node& c,
     } else if (key == "input_covariances") {
       rl.input_covariances = scalar<bool>(path, v, what.c_str());
     } else if (key == "outage_s") {
-      rl.outage_s = scalar<double>(path, v, what.c_str());
-      if (!(rl.outage_s > 0.0)) fail_at(path, v, "robot_localization.outage_s must be > 0");
+      rl.outage_s.clear();
+      if (v.IsSequence()) {
+        for (const auto& l : v) rl.outage_s.push_back(scalar<double>(path, l, "an outage length"));
+      } else {
+        rl.outage_s.push_back(scalar<double>(path, v, what.c_str()));
+      }
+      for (double l : rl.outage_s)
+        if (!(l > 0.0))
+          fail_at(path, v, "robot_localization.outage_s must be > 0 (seconds, or a list of them)");
+      if (rl.outage_s.empty()) fail_at(path, v, "robot_localization.outage_s must not be an empty list");
+    } else if (key == "outage_every_s") {
+      rl.outage_every_s = scalar<double>(path, v, what.c_str());
+      if (!(rl.outage_every_s > 0.0)) fail_at(path, v, "robot_localization.outage_every_s must be > 0");
     } else {
       fail_at(path, kv.first,
               fmt::format("unknown robot_localization key '{}', expected params, node_name, tf, gps_topic, "
-                          "gps_heading_fit_s, until_s, end_s, fitness, space, input_covariances or outage_s",
+                          "gps_heading_fit_s, until_s, end_s, fitness, space, input_covariances, outage_s or "
+                          "outage_every_s",
                           key));
     }
   }

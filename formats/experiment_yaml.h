@@ -26,7 +26,8 @@
 //     fitness: [outage, both]            # instead of modes: heldout-fixes, outage, both
 //     space: diagonal                    # or blocks
 //     input_covariances: false           # also search factors on the inputs' covariances
-//     outage_s: 60                       # the outage fitness's outages [s]
+//     outage_s: 60                       # the outages' lengths [s]: one, or a list
+//     outage_every_s: 10                 # an outage of each length starts every … [s]
 //
 // A calibrator model (pf-calib, adaptive-pf-calib) has no fitness mode: its
 // cells are made for the first listed mode only (the run records that mode),
@@ -68,10 +69,11 @@ struct ExperimentRl {
   double gps_heading_fit_s = 0.0;
   double until_s = 0.0;
   std::optional<double> end_s;
-  std::vector<RlFitness> fitness{RlFitness::outage};
+  std::vector<RlFitness> fitness{RlFitness::both};
   RlNoiseSpace space = RlNoiseSpace::diagonal;
   bool input_covariances = true;
-  double outage_s = 60.0;
+  std::vector<double> outage_s{60.0};
+  double outage_every_s = 10.0;
 };
 
 struct Experiment {

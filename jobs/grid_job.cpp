@@ -226,14 +226,17 @@ std::optional<results::RunRecord> run_rl_cell(const Experiment& e, const std::ve
   req.options.space = x.space;
   req.options.input_covariances = x.input_covariances;
   req.options.outage_s = x.outage_s;
+  req.options.outage_stride_s = x.outage_every_s;
   std::string why;
   if (!req.IsValid(&why)) throw Failure(why);
   const RlTuneOutcome o = tune_rl(*tracks[c.score_on].rl, req);
   if (o.summary.termination == tuner::Termination::stopped) return std::nullopt;
   set_solver_fields(r, o.param_names, o.factors, o.tuned_fitness, o.summary, o.diverged);
-  if (!o.baseline_after || !o.tuned_after) throw Failure("nothing to score after robot_localization.until_s");
-  r.baseline = to_metrics(o.baseline_after->outage);
-  r.tuned = to_metrics(o.tuned_after->outage);
+  for (const RlParamProfile& p : o.starts[o.written].profiles)
+    r.param_ranges.push_back({p.lo, p.hi, p.determined});
+  if (!o.baseline_judged || !o.tuned_judged) throw Failure("nothing to score after robot_localization.until_s");
+  r.baseline = to_metrics(o.baseline_judged->outage);
+  r.tuned = to_metrics(o.tuned_judged->outage);
   return r;
 }
 

@@ -21,7 +21,7 @@ using rlnode::FixRole;
 constexpr std::int64_t kEnd = std::numeric_limits<std::int64_t>::max();
 
 std::int64_t at_seconds(const rlnode::Recording& rec, const std::optional<double>& s) {
-  return s ? rec.start_ns + static_cast<std::int64_t>(std::llround(*s * 1e9)) : kEnd;
+  return s ? rl_time_ns(rec, *s) : kEnd;
 }
 
 nlohmann::json json_of(const FixScore& s) {
@@ -48,6 +48,14 @@ void write_trajectory(const std::filesystem::path& path, const std::vector<rlnod
 }
 
 }  // namespace
+
+std::int64_t rl_time_ns(const rlnode::Recording& rec, double seconds) {
+  return rec.origin_ns + static_cast<std::int64_t>(std::llround(seconds * 1e9));
+}
+
+double rl_seconds(const rlnode::Recording& rec, std::int64_t time_ns) {
+  return static_cast<double>(time_ns - rec.origin_ns) * 1e-9;
+}
 
 std::pair<std::string, rlnode::Pose3> parse_tf(const std::string& text) {
   const auto eq = text.find('=');
@@ -92,6 +100,7 @@ RlLoaded load_rl(const RlSource& src) {
   rlnode::RecordingOptions options;
   for (const std::string& t : src.tf) options.frames.insert(parse_tf(t));
   options.gps_topic = src.gps_topic;
+  options.from_s = src.from_s;
   RlLoaded out;
   try {
     const rlnode::RlParams params = rlnode::read_rl_params(src.params_file, src.node_name);
@@ -120,38 +129,20 @@ RlLoaded load_rl(const RlSource& src) {
   return out;
 }
 
-namespace {
-
-// The fixes' roles from `from_ns` to `until_ns`: each scored (every fifth
-// when `fifth`, the others fused); fused before, absent after.
-std::vector<FixRole> protocol_roles(const rlnode::Recording& rec, std::int64_t from_ns, std::int64_t until_ns,
-                                    bool fifth) {
-  std::vector<FixRole> roles(rec.fixes.size(), FixRole::fuse);
-  int k = 0;
-  for (std::size_t i = 0; i < rec.fixes.size(); ++i) {
-    const std::int64_t t = rec.fixes[i].stamp_ns;
-    if (t < from_ns) continue;
-    roles[i] = t >= until_ns ? FixRole::absent : !fifth || k++ % 5 == 0 ? FixRole::score : FixRole::fuse;
-  }
-  return roles;
-}
-
-}  // namespace
-
 rlnode::ReplayOutput outage_run(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
                                 std::int64_t from_ns, std::int64_t until_ns, bool trajectory) {
   // Scoring a fix leaves the filter as it is, so this is the trajectory of
   // GPS fused before `from_ns` only.
   return rlnode::replay(
-      rec, rlnode::make_schedule(rec, protocol_roles(rec, from_ns, until_ns, false), until_ns), s, trajectory);
+      rec, rlnode::make_schedule(rec, outage_protocol_roles(rec, from_ns, until_ns), until_ns), s, trajectory);
 }
 
 RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
-                                 std::int64_t from_ns, std::int64_t until_ns,
+                                 const RlJudgedSpan& span,
                                  std::vector<rlnode::TrajectoryPoint>* outage_trajectory) {
-  rlnode::ReplayOutput a = outage_run(rec, s, from_ns, until_ns, outage_trajectory != nullptr);
+  rlnode::ReplayOutput a = outage_run(rec, s, span.outage_from_ns, span.end_ns, outage_trajectory != nullptr);
   const rlnode::ReplayOutput b = rlnode::replay(
-      rec, rlnode::make_schedule(rec, protocol_roles(rec, from_ns, until_ns, true), until_ns), s);
+      rec, rlnode::make_schedule(rec, every_fifth_roles(rec, span.fifth_from_ns, span.end_ns), span.end_ns), s);
   if (outage_trajectory) *outage_trajectory = std::move(a.trajectory);
   return {score_of(std::span(&a, 1)), score_of(std::span(&b, 1))};
 }
@@ -182,7 +173,7 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
   out.rejected = run.rejected;
   out.alignment = loaded.alignment;
   out.notes = rec.notes;
-  out.duration_s = static_cast<double>(std::min(rec.end_ns, until) - rec.start_ns) * 1e-9;
+  out.duration_s = rl_seconds(rec, std::min(rec.end_ns, until));
   std::vector<rlnode::TrajectoryPoint> points = run.trajectory;
   std::string what = "all inputs";
   if (!rec.fixes.empty()) {
@@ -191,10 +182,18 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
       folds.push_back(rlnode::make_schedule(rec, roles, until));
     out.heldout = replay_score(rec, folds, s);
     if (request.from_s) {
-      out.protocols = score_protocols(rec, s, at_seconds(rec, request.from_s), until,
+      const std::int64_t from = at_seconds(rec, request.from_s);
+      out.protocols = score_protocols(rec, s, {from, from, until},
                                       request.trajectory_out.empty() ? nullptr : &points);
       what = fmt::format("GPS fused until {} s only", *request.from_s);
     }
+  }
+  if (!request.outages_s.empty() && !rec.fixes.empty()) {
+    const std::int64_t first = request.from_s ? at_seconds(rec, request.from_s) : after_warmup(rec, 30.0);
+    const std::vector<OutageWindow> w = outage_windows(rec, request.outages_s, request.outage_every_s, first,
+                                                       until);
+    out.outage_windows = w.size();
+    out.outages = OutageReplays(rec, w, until).score(s);
   }
   if (!request.trajectory_out.empty()) {
     write_trajectory(request.trajectory_out, points,
@@ -222,6 +221,12 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
         {"rejected", run.rejected}};
     if (out.heldout) j["heldout_fixes"] = json_of(*out.heldout);
     if (out.protocols) j["after_from"] = json_of(*out.protocols);
+    if (out.outages) {
+      j["simulated_outages"] = json_of(*out.outages);
+      j["simulated_outages"]["lengths_s"] = request.outages_s;
+      j["simulated_outages"]["every_s"] = request.outage_every_s;
+      j["simulated_outages"]["windows"] = out.outage_windows;
+    }
     write_atomically(request.json_out, "JSON", j.dump(2) + "\n");
   }
   return out;

@@ -18,8 +18,10 @@
 
 #include "formats/experiment_yaml.h"
 #include "jobs/report_job.h"
+#include "jobs/rl_search.h"
 #include "jobs/tune_job.h"
 #include "objectives/rl_objective.h"
+#include "objectives/rl_protocols.h"
 #include "results/run_record.h"
 #include "results/store.h"
 #include "rlnode/gps_alignment.h"
@@ -36,6 +38,7 @@ struct RlSource {
   std::vector<std::string> tf;   // "FRAME=x,y,z,roll,pitch,yaw": FRAME's pose in base_link [m, rad]
   std::string gps_topic;         // NavSatFix topic behind navsat's output (empty: the bag's one)
   double gps_heading_fit_s = 0;  // > 0: fit navsat's rotation on the first seconds instead of the IMU's heading
+  double from_s = 0;             // > 0: the bag as if recorded from this many seconds after its first message
 };
 
 struct RlLoaded {
@@ -47,21 +50,34 @@ RlLoaded load_rl(const RlSource& src);
 // An experiment's robot_localization section applied to one of its bags.
 RlSource rl_source_of(const ExperimentRl& x, const std::filesystem::path& bag);
 
+// A user's seconds (from the recording's first message) as a stamp, and back.
+std::int64_t rl_time_ns(const rlnode::Recording& rec, double seconds);
+double rl_seconds(const rlnode::Recording& rec, std::int64_t time_ns);
+
 // "FRAME=x,y,z,roll,pitch,yaw" → (FRAME, pose); throws Failure naming the flag.
 std::pair<std::string, rlnode::Pose3> parse_tf(const std::string& text);
 
 struct RlProtocolScores {
   FixScore outage, every_fifth;
 };
+// A held-out span and its two protocols (objectives/rl_protocols.h): a GPS
+// outage from `outage_from_ns` to `end_ns` (the GPS fused before), and every
+// 5th fix of [fifth_from_ns, end_ns) held out (the others fused). After a
+// tune's span both start where it ends; before it (tune --from), the outage
+// starts once the heading fit's fixes are fused, and every 5th fix of the
+// span is held out.
+struct RlJudgedSpan {
+  std::int64_t outage_from_ns = 0, fifth_from_ns = 0, end_ns = 0;
+};
 // The outage protocol's run: GPS fused before `from_ns` only, every fix from
 // there to `until_ns` scored (its `scored`: measured and predicted, odom
 // frame); with `trajectory`, the filter's trajectory too.
 rlnode::ReplayOutput outage_run(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
                                 std::int64_t from_ns, std::int64_t until_ns, bool trajectory = false);
-// Both protocols from `from_ns` to `until_ns`; with `outage_trajectory`,
-// also the outage run's trajectory.
+// Both protocols on `span`; with `outage_trajectory`, also the outage run's
+// trajectory.
 RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
-                                 std::int64_t from_ns, std::int64_t until_ns,
+                                 const RlJudgedSpan& span,
                                  std::vector<rlnode::TrajectoryPoint>* outage_trajectory = nullptr);
 
 struct RlEvalRequest {
@@ -72,6 +88,10 @@ struct RlEvalRequest {
   std::filesystem::path noise_from;
   std::filesystem::path trajectory_out, json_out;
   std::filesystem::path fixes_out;  // the GPS fixes in the odom frame (t x y), as navsat placed them
+  // Simulated outages of these lengths [s], one of each starting every
+  // outage_every_s from from_s (or 30 s after the first fix) to until_s.
+  std::vector<double> outages_s;
+  double outage_every_s = 10.0;
 };
 
 struct RlEvalOutcome {
@@ -81,6 +101,8 @@ struct RlEvalOutcome {
   long processed = 0, rejected = 0;
   std::optional<FixScore> heldout;            // 5 folds of 1 s blocks over the span
   std::optional<RlProtocolScores> protocols;  // with from_s
+  std::optional<FixScore> outages;            // with outages_s
+  std::size_t outage_windows = 0;
   std::optional<rlnode::GpsAlignment> alignment;
   std::vector<std::string> notes;
 };
@@ -88,31 +110,63 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request);
 
 struct RlTuneRequest : SolverSettings {
   RlSource src;
-  std::optional<double> until_s;  // tune on the recording before this [s]; the rest is held out
-  std::optional<double> end_s;    // ignore the recording after this [s] (the held-out span ends there)
+  // Tune on the recording before until_s and judge after it; or (from_s)
+  // tune on the recording after from_s, the bag cut there, and judge before it.
+  std::optional<double> until_s, from_s;  // [s] from the recording's first message
+  std::optional<double> end_s;            // ignore the recording after this [s]
+  // Judging before from_s: the GPS fused for this long before the outage.
+  double lead_in_s = 60.0;
   RlTuneOptions options;
+  RlSearchOptions search;
+  int starts = 1;  // refinements from seeds seed, seed + 1, …; the lowest tuning fitness is written
   std::filesystem::path config_out, json_out;
   bool ros1_out = false;                  // write the ROS 1 form (default ROS 2)
   std::filesystem::path config_out_ros1;  // also the ROS 1 form, here
+  std::filesystem::path starts_out;       // a folder: each start's file as ekf-seed<K>.yaml
   std::string command_line;               // for the file's provenance comment
 
   bool IsValid(std::string* why) const;
 };
 
+// One start of a tune: its seed's refinement and profile.
+struct RlStartOutcome {
+  std::uint64_t seed = 0;
+  std::vector<double> factors;  // per parameter: the tuned multiplier
+  rlnode::ReplaySettings tuned;
+  double fitness = 0.0;                    // tuning (data) fitness
+  FixScore heldout, outage;                // on the tuning span
+  std::optional<RlProtocolScores> judged;  // on the judged span: never seen by the tune
+  std::vector<RlParamProfile> profiles;    // per parameter (empty without a profile)
+  long evaluations = 0;
+  double seconds = 0.0;
+};
+
 struct RlTuneOutcome {
   std::filesystem::path bag, params_file;
-  double span_s = 0.0, duration_s = 0.0;
+  double duration_s = 0.0;
+  double span_from_s = 0.0, span_until_s = 0.0;  // the tuning span [s]
+  std::optional<RlJudgedSpan> judged;            // the judged span, when there is one
+  double judged_from_s = 0.0, judged_until_s = 0.0;
   std::vector<std::string> param_names;
-  std::vector<double> factors;  // per parameter: the tuned multiplier
+  std::vector<double> factors;  // the written start's
   rlnode::ReplaySettings baseline, tuned;
   double baseline_fitness = 0.0, tuned_fitness = 0.0;
   FixScore baseline_heldout, tuned_heldout, baseline_outage, tuned_outage;  // on the tuning span
-  std::optional<RlProtocolScores> baseline_after, tuned_after;              // after until_s: never seen
-  tuner::Summary summary;
-  long diverged = 0;  // evaluations whose replay diverged
+  std::optional<RlProtocolScores> baseline_judged, tuned_judged;            // never seen by the tune
+  std::size_t outage_windows = 0;
+  RlGridResult grid;
+  std::vector<RlStartOutcome> starts;
+  std::size_t written = 0;  // the start of lowest tuning fitness
+  tuner::Summary summary;   // the written start's run: all its stages' evaluations and time
+  long diverged = 0;        // evaluations whose replay diverged
   std::optional<rlnode::GpsAlignment> alignment;
   std::vector<std::string> notes;
 };
+// The comment at the top of start k's written file: where it came from, what
+// it scored, the starts' spread and what the recording did not determine.
+std::string rl_tune_header(const RlTuneRequest& r, const RlTuneOutcome& o, std::size_t k);
+// tune --json: the request, every start, the written one's factors with their ranges.
+void write_rl_tune_json(const std::filesystem::path& path, const RlTuneRequest& r, const RlTuneOutcome& o);
 // Validates the request, reads the file and the bag, tunes (tune_rl) and
 // writes the requested files. Throws Failure with one line.
 RlTuneOutcome run_rl_tune(const RlTuneRequest& request);
@@ -139,7 +193,9 @@ void write_rl_run(const Experiment& e, const results::RunRecord& run, const std:
 ReportOutcome write_rl_report(const ReportRequest& req, const results::ExperimentInfo& info,
                               const std::vector<results::RunRecord>& runs);
 // The search and its scores on an already loaded recording (no file read or
-// written; the request's output paths are not used). Throws Failure.
-RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request);
+// written; the request's output paths are not used); with from_s, `tuned_on`
+// is the recording cut there (load_rl with RlSource::from_s), `loaded` the
+// whole one it is judged on. Throws Failure.
+RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request, const RlLoaded* tuned_on = nullptr);
 
 }  // namespace odotune

@@ -1,4 +1,5 @@
-// run_rl_tune (jobs/rl_job.h): the search, its scores and the written file.
+// run_rl_tune (jobs/rl_job.h): the search, its scores and the written files
+// (their text: rl_tune_text.cpp).
 #include <cmath>
 #include <limits>
 
@@ -8,87 +9,10 @@
 #include "core/atomic_file.h"
 #include "core/failure.h"
 #include "core/output_paths.h"
+#include "core/why.h"
 #include "jobs/rl_job.h"
 
 namespace odotune {
-namespace {
-
-namespace rl = filters::rl;
-
-std::string score_text(const FixScore& s) { return s.finite ? fmt::format("{:.3f} m", s.rmse_m) : "diverged"; }
-
-std::string percent(double before, double after) {
-  return std::isfinite(before) && std::isfinite(after) && before > 0.0
-             ? fmt::format("{:+.0f} %", 100.0 * (after / before - 1.0))
-             : "n/a";
-}
-
-// The comment at the top of the written file: where it came from and what it
-// scored (write_tuned_params adds navsat's rotation and the advice).
-std::string provenance(const RlTuneRequest& r, const RlTuneOutcome& o) {
-  std::string c = fmt::format(
-      "Tuned by odotune (robot_localization's EKF replayed from the robot's bag).\n"
-      "Command: {}\n"
-      "Bag: {}; parameter file: {}\n"
-      "Tuned on the first {:.1f} s of {:.1f} s: fitness {}, {} process noise{}, solver {} seed {}, {} replays.\n"
-      "On the tuning span: held-out fixes {} -> {}; outages of {:.0f} s {} -> {}.\n",
-      r.command_line.empty() ? "odotune tune --rl-params ..." : r.command_line, o.bag.string(),
-      o.params_file.string(), o.span_s, o.duration_s, to_string(r.options.fitness), to_string(r.options.space),
-      r.options.input_covariances ? " and input covariances" : "", r.solver.name(), r.seed,
-      o.summary.evaluations, score_text(o.baseline_heldout), score_text(o.tuned_heldout), r.options.outage_s,
-      score_text(o.baseline_outage), score_text(o.tuned_outage));
-  if (o.baseline_after && o.tuned_after) {
-    c += fmt::format("Held out (after {:.1f} s, never seen by the tune), file's values -> tuned:\n"
-                     "  GPS outage from {:.1f} s: RMSE {} -> {} ({}); every 5th fix held out: {} -> {} ({}).\n",
-                     o.span_s, o.span_s, score_text(o.baseline_after->outage),
-                     score_text(o.tuned_after->outage),
-                     percent(o.baseline_after->outage.rmse_m, o.tuned_after->outage.rmse_m),
-                     score_text(o.baseline_after->every_fifth), score_text(o.tuned_after->every_fifth),
-                     percent(o.baseline_after->every_fifth.rmse_m, o.tuned_after->every_fifth.rmse_m));
-  }
-  return c;
-}
-
-nlohmann::json json_of(const FixScore& s) {
-  return {{"rmse_m", s.rmse_m}, {"fixes", s.fixes}, {"finite", s.finite}};
-}
-
-void write_json(const std::filesystem::path& path, const RlTuneRequest& r, const RlTuneOutcome& o) {
-  nlohmann::json params = nlohmann::json::object();
-  for (std::size_t i = 0; i < o.param_names.size(); ++i) params[o.param_names[i]] = o.factors[i];
-  nlohmann::json j = {
-      {"bag", o.bag.string()},
-      {"params", o.params_file.string()},
-      {"fitness", std::string(to_string(r.options.fitness))},
-      {"space", std::string(to_string(r.options.space))},
-      {"span_s", o.span_s},
-      {"solver", r.solver.name()},
-      {"seed", r.seed},
-      {"evaluations", o.summary.evaluations},
-      {"termination", o.summary.termination_text()},
-      {"seconds", o.summary.seconds},
-      {"factors", params},
-      {"baseline_fitness", o.baseline_fitness},
-      {"tuned_fitness", o.tuned_fitness},
-      {"tuning_span",
-       {{"baseline", {{"heldout_fixes", json_of(o.baseline_heldout)}, {"outage", json_of(o.baseline_outage)}}},
-        {"tuned", {{"heldout_fixes", json_of(o.tuned_heldout)}, {"outage", json_of(o.tuned_outage)}}}}}};
-  if (o.baseline_after) {
-    j["held_out"] = {{"from_s", o.span_s},
-                     {"baseline",
-                      {{"outage", json_of(o.baseline_after->outage)},
-                       {"every_fifth_fix", json_of(o.baseline_after->every_fifth)}}},
-                     {"tuned",
-                      {{"outage", json_of(o.tuned_after->outage)},
-                       {"every_fifth_fix", json_of(o.tuned_after->every_fifth)}}}};
-  }
-  std::vector<double> diag(o.tuned.process_noise.diagonal().data(),
-                           o.tuned.process_noise.diagonal().data() + 15);
-  j["process_noise_diagonal"] = diag;
-  write_atomically(path, "JSON", j.dump(2) + "\n");
-}
-
-}  // namespace
 
 void write_tuned_params(const std::filesystem::path& path, const rlnode::RlParams& params,
                         const rlnode::ReplaySettings& tuned,
@@ -124,59 +48,171 @@ void write_tuned_params(const std::filesystem::path& path, const rlnode::RlParam
 }
 
 bool RlTuneRequest::IsValid(std::string* why) const {
-  if (!SolverSettings::IsValid(why) || !options.IsValid(why)) return false;
-  if (until_s && !(*until_s > 0.0)) {
-    if (why) *why = fmt::format("--until {}: expected a positive number of seconds", *until_s);
-    return false;
-  }
-  if (end_s && !(*end_s > until_s.value_or(0.0))) {
-    if (why) *why = fmt::format("--end {}: expected more seconds than --until", *end_s);
-    return false;
-  }
+  if (!SolverSettings::IsValid(why) || !options.IsValid(why) || !search.IsValid(why)) return false;
+  if (until_s && from_s) return invalid(why, "--until and --from: expected one of them (tune before or after)");
+  if (until_s && !(*until_s > 0.0))
+    return invalid(why, fmt::format("--until {}: expected a positive number of seconds", *until_s));
+  if (from_s && !(*from_s > 0.0))
+    return invalid(why, fmt::format("--from {}: expected a positive number of seconds", *from_s));
+  if (end_s && !(*end_s > until_s.value_or(from_s.value_or(0.0))))
+    return invalid(why, fmt::format("--end {}: expected more seconds than --until or --from", *end_s));
+  if (starts < 1 || starts > 1000) return invalid(why, fmt::format("--starts {}: expected 1 to 1000", starts));
+  if (from_s && !(lead_in_s > 0.0 && lead_in_s < *from_s))
+    return invalid(why, fmt::format("judging before --from {} s: a lead-in of {} s, expected (0, {})", *from_s,
+                                    lead_in_s, *from_s));
   return true;
 }
 
-RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request) {
+namespace {
+
+constexpr std::int64_t kForever = std::numeric_limits<std::int64_t>::max();
+
+// The span the tune's objective uses, on the recording it replays.
+std::int64_t tuning_until_ns(const rlnode::Recording& rec, const RlTuneRequest& r) {
+  if (r.until_s) return rl_time_ns(rec, *r.until_s);
+  return r.end_s ? rl_time_ns(rec, *r.end_s) : kForever;
+}
+
+// The judged span on the whole recording: after --until, or before --from.
+std::optional<RlJudgedSpan> judged_span(const rlnode::Recording& rec, const RlTuneRequest& r) {
+  const std::int64_t end = r.end_s ? rl_time_ns(rec, *r.end_s) : kForever;
+  if (r.until_s) {
+    const std::int64_t until = rl_time_ns(rec, *r.until_s);
+    if (until >= std::min(rec.end_ns, end)) return std::nullopt;
+    return RlJudgedSpan{until, until, end};
+  }
+  if (r.from_s) return RlJudgedSpan{rl_time_ns(rec, r.lead_in_s), rec.start_ns, rl_time_ns(rec, *r.from_s)};
+  return std::nullopt;
+}
+
+RlObjective make_objective(const rlnode::Recording& rec, const RlTuneRequest& r) {
+  RlTuneOptions options = r.options;
+  options.until_ns = tuning_until_ns(rec, r);
+  try {
+    return RlObjective(rec, rlnode::settings_of(rec.params), options);
+  } catch (const std::invalid_argument& e) {
+    throw Failure(e.what());
+  }
+}
+
+// Progress over the whole search: each stage's count added to those before it.
+SolverSettings stage_settings(const RlTuneRequest& r, std::uint64_t seed, long before, long total) {
+  SolverSettings s = r;
+  s.seed = seed;
+  if (r.progress) s.progress = [p = r.progress, before, total](long done, long) { p(before + done, total); };
+  return s;
+}
+
+// The evaluations a start costs (for progress): the solver's budget, the profile's points, a few more.
+long start_budget(const RlObjective& objective, const RlTuneRequest& r) {
+  long n = r.search.refine_decades > 0.0
+               ? (r.solver.kind == tuner::SolverChoice::Kind::pso
+                      ? static_cast<long>(r.particles) * (r.iterations + 1)
+                      : (r.evaluations > 0 ? r.evaluations
+                                           : static_cast<long>(r.particles) * (r.iterations + 1)))
+               : 0;
+  if (r.search.profile) {
+    const auto [lo, hi] = objective.bounds();
+    for (std::size_t i = 0; i < lo.size(); ++i)
+      n += static_cast<long>((hi[i] - lo[i]) / r.search.profile_step_decades) + 2;
+  }
+  return n + 2;
+}
+
+RlStartOutcome start_outcome(const RlObjective& objective, const RlStartResult& s,
+                             const rlnode::Recording& judged_rec, const std::optional<RlJudgedSpan>& span) {
+  RlStartOutcome o;
+  o.seed = s.seed;
+  o.factors = objective.space().to_physical(s.x);
+  o.tuned = objective.settings_at(s.x);
+  o.fitness = s.fitness;
+  o.heldout = objective.heldout_score(o.tuned);
+  o.outage = objective.outage_score(o.tuned);
+  if (span) o.judged = score_protocols(judged_rec, o.tuned, *span);
+  o.profiles = s.profiles;
+  o.evaluations = s.evaluations;
+  o.seconds = s.seconds;
+  return o;
+}
+
+// The written start's run as one solver summary: the grid's result, then its
+// refinement's log; every stage's evaluations and time.
+tuner::Summary combined_summary(const RlGridResult& grid, const RlStartResult& s) {
+  tuner::Summary sum = s.refinement;
+  sum.log.clear();
+  sum.log.push_back({0, grid.evaluations, grid.fitness});
+  for (tuner::LogRecord rec : s.refinement.log) {
+    rec.evaluations += grid.evaluations;
+    rec.best_fitness = std::min(rec.best_fitness, grid.fitness);
+    sum.log.push_back(rec);
+  }
+  sum.evaluations = grid.evaluations + s.evaluations;
+  sum.seconds = grid.seconds + s.seconds;
+  if (s.refinement.log.empty()) sum.termination = tuner::Termination::max_evaluations;
+  sum.best_x = s.x;
+  sum.best_fitness = s.fitness;
+  return sum;
+}
+
+}  // namespace
+
+RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request, const RlLoaded* tuned_on) {
   const rlnode::Recording& rec = loaded.rec;
-  RlTuneOptions options = request.options;
-  options.until_ns = request.until_s
-                         ? rec.start_ns + static_cast<std::int64_t>(std::llround(*request.until_s * 1e9))
-                         : std::numeric_limits<std::int64_t>::max();
+  const rlnode::Recording& trec = tuned_on ? tuned_on->rec : rec;
+  const RlObjective objective = make_objective(trec, request);
   RlTuneOutcome o;
   o.bag = rec.bag;
   o.params_file = rec.params.file;
-  o.duration_s = static_cast<double>(rec.end_ns - rec.start_ns) * 1e-9;
-  o.span_s = request.until_s ? std::min(*request.until_s, o.duration_s) : o.duration_s;
+  o.duration_s = rl_seconds(rec, rec.end_ns);
+  o.span_from_s = rl_seconds(rec, trec.start_ns);
+  o.span_until_s = rl_seconds(rec, std::min(trec.end_ns, objective.options().until_ns));
+  o.judged = judged_span(rec, request);
+  if (o.judged) {
+    o.judged_from_s = rl_seconds(rec, std::min(o.judged->outage_from_ns, o.judged->fifth_from_ns));
+    o.judged_until_s = rl_seconds(rec, std::min(rec.end_ns, o.judged->end_ns));
+  }
   o.alignment = loaded.alignment;
-  o.notes = rec.notes;
-  o.baseline = rlnode::settings_of(rec.params);
-  const RlObjective objective = [&] {
-    try {
-      return RlObjective(rec, o.baseline, options);
-    } catch (const std::invalid_argument& e) {
-      throw Failure(e.what());
-    }
-  }();
-  const BoxProblem<RlObjective> problem{&objective};
-  o.summary = run_solver(problem, request);
-  o.diverged = objective.diverged();
-  o.tuned = objective.settings_at(o.summary.best_x);
+  o.notes = trec.notes;
+  if (tuned_on && tuned_on->alignment) {
+    o.notes.push_back(
+        fmt::format("the tune's replay (the bag from {:.1f} s) fitted navsat's rotation on its own "
+                    "first {:.0f} s: {:.4f} rad (residual {:.2f} m)",
+                    o.span_from_s, request.src.gps_heading_fit_s, tuned_on->alignment->transform.rotation_rad,
+                    tuned_on->alignment->rms_m));
+  }
+  o.baseline = rlnode::settings_of(trec.params);
   for (const ParamSpec& p : objective.space().params()) o.param_names.push_back(p.name);
-  o.factors = objective.space().to_physical(o.summary.best_x);
-  o.tuned_fitness = o.summary.best_fitness;
+  o.outage_windows = objective.window_count();
   o.baseline_fitness = objective.baseline_fitness();
   o.baseline_heldout = objective.baseline_heldout();
   o.baseline_outage = objective.baseline_outage();
-  o.tuned_heldout = objective.heldout_score(o.tuned);
-  o.tuned_outage = objective.outage_score(o.tuned);
-  // The held-out span: after --until, up to --end or the recording's end.
-  const std::int64_t end_ns = request.end_s
-                                  ? rec.start_ns + static_cast<std::int64_t>(std::llround(*request.end_s * 1e9))
-                                  : std::numeric_limits<std::int64_t>::max();
-  if (options.until_ns < std::min(rec.end_ns, end_ns)) {
-    o.baseline_after = score_protocols(rec, o.baseline, options.until_ns, end_ns);
-    o.tuned_after = score_protocols(rec, o.tuned, options.until_ns, end_ns);
+  if (o.judged) o.baseline_judged = score_protocols(rec, rlnode::settings_of(rec.params), *o.judged);
+
+  const long per_start = start_budget(objective, request);
+  const long grid_count = request.search.grid_levels.empty() ? 1 : 0;
+  long total = per_start * request.starts + grid_count;
+  o.grid = rl_grid_stage(objective, request.search, stage_settings(request, request.seed, 0, total));
+  total += o.grid.evaluations - grid_count;
+  std::vector<RlStartResult> runs;
+  for (int k = 0; k < request.starts; ++k) {
+    if (request.stop && request.stop->load()) break;
+    const SolverSettings s = stage_settings(request, request.seed + static_cast<std::uint64_t>(k),
+                                            o.grid.evaluations + k * per_start, total);
+    runs.push_back(rl_refine_and_profile(objective, o.grid, request.search, s));
+    o.starts.push_back(start_outcome(objective, runs.back(), rec, o.judged));
   }
+  if (o.starts.empty()) throw Failure("tune: stopped before the first start");
+  for (std::size_t k = 1; k < o.starts.size(); ++k)
+    if (o.starts[k].fitness < o.starts[o.written].fitness) o.written = k;
+  const RlStartOutcome& w = o.starts[o.written];
+  o.factors = w.factors;
+  o.tuned = w.tuned;
+  o.tuned_fitness = w.fitness;
+  o.tuned_heldout = w.heldout;
+  o.tuned_outage = w.outage;
+  o.tuned_judged = w.judged;
+  o.summary = combined_summary(o.grid, runs[o.written]);
+  o.diverged = objective.diverged();
   return o;
 }
 
@@ -186,16 +222,32 @@ RlTuneOutcome run_rl_tune(const RlTuneRequest& request) {
   check_output_file("--config-out", request.config_out.string());
   check_output_file("--json", request.json_out.string());
   check_output_file("--config-out-ros1", request.config_out_ros1.string());
+  if (!request.starts_out.empty()) check_output_dir("--starts-out", request.starts_out.string());
   const RlLoaded loaded = load_rl(request.src);
   const rlnode::Recording& rec = loaded.rec;
-  RlTuneOutcome o = tune_rl(loaded, request);
-  const std::string header = provenance(request, o);
+  std::optional<RlLoaded> after;
+  if (request.from_s) {
+    RlSource cut = request.src;
+    cut.from_s = *request.from_s;
+    after = load_rl(cut);
+  }
+  RlTuneOutcome o = tune_rl(loaded, request, after ? &*after : nullptr);
+  const double fit_s = request.src.gps_heading_fit_s;
   for (const auto& [path, ros2] :
        {std::pair{request.config_out, !request.ros1_out}, std::pair{request.config_out_ros1, false}}) {
     if (!path.empty())
-      write_tuned_params(path, rec.params, o.tuned, o.alignment, request.src.gps_heading_fit_s, ros2, header);
+      write_tuned_params(path, rec.params, o.tuned, o.alignment, fit_s, ros2,
+                         rl_tune_header(request, o, o.written));
   }
-  if (!request.json_out.empty()) write_json(request.json_out, request, o);
+  if (!request.starts_out.empty()) {
+    std::filesystem::create_directories(request.starts_out);
+    for (std::size_t k = 0; k < o.starts.size(); ++k) {
+      const auto path = request.starts_out / fmt::format("ekf-seed{}.yaml", o.starts[k].seed);
+      write_tuned_params(path, rec.params, o.starts[k].tuned, o.alignment, fit_s, !request.ros1_out,
+                         rl_tune_header(request, o, k));
+    }
+  }
+  if (!request.json_out.empty()) write_rl_tune_json(request.json_out, request, o);
   return o;
 }
 

@@ -6,6 +6,9 @@
 #include <stdexcept>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "core/why.h"
 
 namespace odotune {
 namespace {
@@ -136,16 +139,19 @@ std::string_view to_string(RlNoiseSpace s) {
 }
 
 bool RlTuneOptions::IsValid(std::string* why) const {
-  auto fail = [why](std::string s) {
-    if (why) *why = std::move(s);
-    return false;
-  };
-  if (folds < 2) return fail(fmt::format("folds = {}, expected at least 2", folds));
-  if (!(block_s > 0.0)) return fail(fmt::format("block_s = {}, expected > 0", block_s));
-  if (!(outage_s > 0.0)) return fail(fmt::format("outage_s = {}, expected > 0", outage_s));
+  if (folds < 2) return invalid(why, fmt::format("folds = {}, expected at least 2", folds));
+  if (!(block_s > 0.0)) return invalid(why, fmt::format("block_s = {}, expected > 0", block_s));
+  if (outage_s.empty()) return invalid(why, "no outage length; expected at least one");
+  for (double l : outage_s)
+    if (!(l > 0.0)) return invalid(why, fmt::format("outage length {} s, expected > 0", l));
+  if (!(outage_stride_s > 0.0))
+    return invalid(why, fmt::format("outage stride {} s, expected > 0", outage_stride_s));
+  if (!(warmup_s >= 0.0)) return invalid(why, fmt::format("warm-up {} s, expected ≥ 0", warmup_s));
+  if (!(prior_weight >= 0.0 && std::isfinite(prior_weight)))
+    return invalid(why, fmt::format("prior weight {}, expected a finite value ≥ 0", prior_weight));
   if (!(decades_down >= 0.0 && decades_up >= 0.0 && decades_down + decades_up > 0.0)) {
-    return fail(fmt::format("decades {} down, {} up: expected ≥ 0 and a non-empty range", decades_down,
-                            decades_up));
+    return invalid(why, fmt::format("decades {} down, {} up: expected ≥ 0 and a non-empty range", decades_down,
+                                    decades_up));
   }
   return true;
 }
@@ -178,30 +184,50 @@ FixScore replay_score(const rlnode::Recording& rec, std::span<const rlnode::Sche
   return score_of(outs);
 }
 
-std::vector<std::vector<FixRole>> heldout_fix_folds(const rlnode::Recording& rec, int folds, double block_s,
-                                                    std::int64_t until_ns) {
-  std::vector<std::vector<FixRole>> out(folds, std::vector<FixRole>(rec.fixes.size(), FixRole::fuse));
-  if (rec.fixes.empty()) return out;
-  const std::int64_t t0 = rec.fixes.front().stamp_ns;
-  for (std::size_t i = 0; i < rec.fixes.size(); ++i) {
-    if (rec.fixes[i].stamp_ns >= until_ns) continue;
-    const auto block = static_cast<long>(
-        std::floor(static_cast<double>(rec.fixes[i].stamp_ns - t0) * 1e-9 / block_s));
-    out[block % folds][i] = FixRole::score;
+OutageReplays::OutageReplays(const rlnode::Recording& rec, std::span<const OutageWindow> windows,
+                             std::int64_t until_ns)
+    : rec_(&rec), fused_(rlnode::make_schedule(rec, {}, until_ns)) {
+  for (const OutageWindow& w : windows) {
+    rlnode::Schedule own = rlnode::make_schedule(rec, outage_window_roles(rec, w),
+                                                 std::min(w.end_ns, until_ns));
+    const auto& a = fused_.events;
+    const auto& b = own.events;
+    std::size_t k = 0;
+    while (k < a.size() && k < b.size() && a[k].type == b[k].type && a[k].input == b[k].input &&
+           a[k].time_ns == b[k].time_ns)
+      ++k;
+    tails_.push_back({k, std::vector<rlnode::Event>(b.begin() + static_cast<std::ptrdiff_t>(k), b.end())});
   }
-  return out;
+  std::stable_sort(tails_.begin(), tails_.end(),
+                   [](const Tail& x, const Tail& y) { return x.shared < y.shared; });
 }
 
-std::vector<FixRole> outage_roles(const rlnode::Recording& rec, double outage_s, std::int64_t until_ns) {
-  std::vector<FixRole> roles(rec.fixes.size(), FixRole::fuse);
-  if (rec.fixes.empty()) return roles;
-  const double t0 = static_cast<double>(rec.fixes.front().stamp_ns) * 1e-9;
-  for (std::size_t i = 0; i < rec.fixes.size(); ++i) {
-    const double since = static_cast<double>(rec.fixes[i].stamp_ns) * 1e-9 - t0 - 0.5 * outage_s;
-    if (since < 0.0 || rec.fixes[i].stamp_ns >= until_ns) continue;
-    if (std::fmod(since, 1.5 * outage_s) < outage_s) roles[i] = FixRole::score;
+FixScore OutageReplays::score(const rlnode::ReplaySettings& s) const {
+  FixScore total;
+  if (tails_.empty()) return score_of({});
+  double sum = 0.0, sum_abs = 0.0;
+  rlnode::Replayer fused(*rec_, s);
+  std::size_t done = 0;
+  for (const Tail& t : tails_) {
+    fused.run(std::span(fused_.events).subspan(done, t.shared - done));
+    done = t.shared;
+    rlnode::Replayer window = fused;
+    window.run(t.events);
+    const rlnode::ReplayOutput out = std::move(window).finish();
+    total.finite = total.finite && out.finite;
+    for (const rlnode::ScoredFix& f : out.scored) {
+      const double e = (f.predicted - f.measured).head<2>().norm();
+      sum += e * e;
+      sum_abs += e;
+      total.maxe_m = std::max(total.maxe_m, e);
+    }
+    total.fixes += static_cast<long>(out.scored.size());
   }
-  return roles;
+  const double n = static_cast<double>(total.fixes);
+  total.rmse_m = total.fixes > 0 ? std::sqrt(sum / n) : std::numeric_limits<double>::quiet_NaN();
+  total.mae_m = total.fixes > 0 ? sum_abs / n : std::numeric_limits<double>::quiet_NaN();
+  if (!std::isfinite(total.rmse_m)) total.finite = false;
+  return total;
 }
 
 RlObjective::RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySettings& base,
@@ -238,17 +264,18 @@ RlObjective::RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySetti
   for (const auto& roles : heldout_fix_folds(rec, options.folds, options.block_s, options.until_ns)) {
     heldout_.push_back(rlnode::make_schedule(rec, roles, options.until_ns));
   }
-  outage_.push_back(rlnode::make_schedule(rec, outage_roles(rec, options.outage_s, options.until_ns),
-                                          options.until_ns));
+  const std::vector<OutageWindow> windows = outage_windows(
+      rec, options.outage_s, options.outage_stride_s, after_warmup(rec, options.warmup_s), options.until_ns);
+  outages_ = OutageReplays(rec, windows, options.until_ns);
   heldout_base_ = heldout_score(base_);
   outage_base_ = outage_score(base_);
   const bool heldout_used = options.fitness != RlFitness::outage;
   const bool outage_used = options.fitness != RlFitness::heldout_fixes;
   if ((heldout_used && !(heldout_base_.rmse_m > 0.0)) || (outage_used && !(outage_base_.rmse_m > 0.0))) {
     throw std::invalid_argument(
-        fmt::format("{}: no fix is scored before the tuning span ends (outages of {} s); "
+        fmt::format("{}: no fix is scored before the tuning span ends (outages of {} s after {} s of GPS); "
                     "expected a longer span or shorter outages",
-                    rec.bag.string(), options.outage_s));
+                    rec.bag.string(), fmt::join(options.outage_s, ", "), options.warmup_s));
   }
 }
 
@@ -278,12 +305,33 @@ double RlObjective::combine(const FixScore& heldout, const FixScore& outage) con
   return f;
 }
 
-double RlObjective::fitness(std::span<const double> x) const {
+double RlObjective::data_fitness(std::span<const double> x) const {
   const rlnode::ReplaySettings s = settings_at(x);
   const FixScore none;
-  const double f = combine(options_.fitness != RlFitness::outage ? heldout_score(s) : none,
-                           options_.fitness != RlFitness::heldout_fixes ? outage_score(s) : none);
-  if (f >= kDiverged) diverged_->fetch_add(1, std::memory_order_relaxed);
+  const bool heldout_needed = options_.fitness != RlFitness::outage || options_.keep_heldout;
+  const FixScore heldout = heldout_needed ? heldout_score(s) : none;
+  double f = combine(heldout, options_.fitness != RlFitness::heldout_fixes ? outage_score(s) : none);
+  if (f >= kDiverged) {
+    diverged_->fetch_add(1, std::memory_order_relaxed);
+    return f;
+  }
+  // Worse than the file at held-out fixes: ranked above the file's own
+  // fitness, by how much worse.
+  const double excess = heldout.rmse_m / heldout_base_.rmse_m - 1.0;
+  if (options_.keep_heldout && excess > 0.0) {
+    if (!heldout.finite) return kDiverged;
+    f = std::max(f, baseline_fitness()) * (1.0 + 10.0 * excess);
+  }
+  return f;
+}
+
+double RlObjective::fitness(std::span<const double> x) const {
+  double f = data_fitness(x);
+  if (options_.prior_weight > 0.0 && f < kDiverged) {
+    double sum = 0.0;
+    for (double v : space_.to_physical(x)) sum += std::log10(v) * std::log10(v);
+    f += options_.prior_weight * sum / static_cast<double>(x.size());
+  }
   return f;
 }
 

@@ -1,17 +1,20 @@
 // Tuning robot_localization's EKF on a robot's own recording, without ground
 // truth: the filter as the node runs it (rlnode/replay.h), scored by how well
-// it predicts GPS fixes it was not given.
+// it predicts GPS fixes it was not given (objectives/rl_protocols.h says which).
 //
-//   heldout_fixes  fitness mode 8 on this filter: K folds of time blocks
-//                  (fold = ⌊(t − t₀)/block⌋ mod K); per fold the other fixes
-//                  are fused and the filter's prediction at each held-out fix
-//                  is scored; RMSE over all folds [m].
-//   outage         simulated GPS outages of L s: the fixes inside each outage
-//                  are withheld and the filter's prediction at them scored
-//                  (RMSE [m]); the fixes between outages are fused. Outages
-//                  start L/2 after the first fix and repeat every 1.5·L.
+//   heldout_fixes  fitness mode 8 on this filter: K folds of time blocks; per
+//                  fold the other fixes are fused and the filter's prediction
+//                  at each held-out fix is scored; RMSE over all folds [m].
+//   outage         simulated GPS outages: windows of each length L starting
+//                  every few seconds across the span, each its own replay with
+//                  the GPS fused before it; RMSE over every window's fixes [m].
 //   both           the sum of the two RMSEs, each divided by its value for the
 //                  parameter file's own settings (so neither dominates by scale).
+//
+// With `keep_heldout`, normal operation is not traded for outages: a
+// candidate whose held-out-fix RMSE exceeds the file's scores above the file's
+// own fitness. A weak prior (`prior_weight`) pulls factors the data leave
+// free toward the file's values: it adds prior_weight · mean((log10 factor)²).
 //
 // The search space (BoxSpace, log10): multipliers of the file's process noise,
 // per diagonal entry that the configuration can move or per block (position,
@@ -33,6 +36,7 @@
 #include <vector>
 
 #include "objectives/box_space.h"
+#include "objectives/rl_protocols.h"
 #include "rlnode/recording.h"
 #include "rlnode/replay.h"
 
@@ -66,12 +70,16 @@ bool apply_rl_factors(const rlnode::RlParams& params, std::span<const std::strin
                       std::span<const double> factors, rlnode::ReplaySettings* s, std::string* why);
 
 struct RlTuneOptions {
-  RlFitness fitness = RlFitness::outage;
+  RlFitness fitness = RlFitness::both;
   RlNoiseSpace space = RlNoiseSpace::diagonal;
-  bool input_covariances = true;  // also search a factor on each input's message covariance
-  int folds = 5;                  // heldout_fixes
-  double block_s = 1.0;           // heldout_fixes: fixes of one block are held out together [s]
-  double outage_s = 60.0;         // outage: L [s]
+  bool input_covariances = true;          // also search a factor on each input's message covariance
+  int folds = 5;                          // heldout_fixes
+  double block_s = 1.0;                   // heldout_fixes: fixes of one block are held out together [s]
+  std::vector<double> outage_s = {60.0};  // outage: the windows' lengths L [s]
+  double outage_stride_s = 10.0;          // outage: a window of each length starts every … [s]
+  double warmup_s = 30.0;                 // outage: the GPS fused this long before the first window [s]
+  bool keep_heldout = true;               // a candidate worse at held-out fixes than the file scores above it
+  double prior_weight = 0.0;              // ≥ 0: the prior toward the file's values (above)
   // Multipliers in [10^−down, 10^up]. The Husky's first-half tune ended on
   // both edges of [1e-4, 1e2], so the box spans ten decades.
   double decades_down = 6.0, decades_up = 4.0;
@@ -92,10 +100,26 @@ FixScore score_of(std::span<const rlnode::ReplayOutput> outputs);
 FixScore replay_score(const rlnode::Recording& rec, std::span<const rlnode::Schedule> schedules,
                       const rlnode::ReplaySettings& s);
 
-// The roles of the fixes under each protocol.
-std::vector<std::vector<rlnode::FixRole>> heldout_fix_folds(const rlnode::Recording& rec, int folds,
-                                                            double block_s, std::int64_t until_ns);
-std::vector<rlnode::FixRole> outage_roles(const rlnode::Recording& rec, double outage_s, std::int64_t until_ns);
+// The outage fitness's windows, replayed from one run that fuses every fix:
+// each window's replay continues from a copy of that run taken where the
+// two schedules part.
+class OutageReplays {
+ public:
+  OutageReplays() = default;
+  OutageReplays(const rlnode::Recording& rec, std::span<const OutageWindow> windows, std::int64_t until_ns);
+  // Every window's scored fixes under `s`, together.
+  FixScore score(const rlnode::ReplaySettings& s) const;
+  std::size_t windows() const { return tails_.size(); }
+
+ private:
+  struct Tail {
+    std::size_t shared = 0;             // events of fused_ the window's replay shares
+    std::vector<rlnode::Event> events;  // its own events after them
+  };
+  const rlnode::Recording* rec_ = nullptr;
+  rlnode::Schedule fused_;
+  std::vector<Tail> tails_;  // by `shared`
+};
 
 class RlObjective {
  public:
@@ -104,7 +128,10 @@ class RlObjective {
   // or a part the fitness uses that scores no fix before `until_ns`.
   RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySettings& base, const RlTuneOptions& options);
 
+  // data_fitness(x) plus the prior.
   double fitness(std::span<const double> x) const;
+  // The fitness of the scores alone (what the tune reports and profiles).
+  double data_fitness(std::span<const double> x) const;
   std::pair<std::vector<double>, std::vector<double>> bounds() const { return space_.box(); }
 
   const BoxSpace& space() const { return space_; }
@@ -112,11 +139,14 @@ class RlObjective {
   // Per part: the held-out fixes' and the outages' scores, whether or not the
   // fitness uses them; the base settings' own, from the constructor.
   FixScore heldout_score(const rlnode::ReplaySettings& s) const { return replay_score(*rec_, heldout_, s); }
-  FixScore outage_score(const rlnode::ReplaySettings& s) const { return replay_score(*rec_, outage_, s); }
+  FixScore outage_score(const rlnode::ReplaySettings& s) const { return outages_.score(s); }
   const FixScore& baseline_heldout() const { return heldout_base_; }
   const FixScore& baseline_outage() const { return outage_base_; }
   double baseline_fitness() const { return combine(heldout_base_, outage_base_); }
+  // The fitness of a pair of scores (a large penalty when a used part is not finite).
+  double combine(const FixScore& heldout, const FixScore& outage) const;
   const RlTuneOptions& options() const { return options_; }
+  std::size_t window_count() const { return outages_.windows(); }
   // fitness() calls whose replay diverged (scored as a penalty), so far.
   long diverged() const { return diverged_->load(); }
 
@@ -127,11 +157,10 @@ class RlObjective {
   BoxSpace space_;
   std::vector<std::vector<int>> noise_members_;  // per noise parameter: the diagonal entries it scales
   std::vector<int> cov_sensors_;                 // per covariance parameter: the sensor
-  std::vector<rlnode::Schedule> heldout_, outage_;
+  std::vector<rlnode::Schedule> heldout_;
+  OutageReplays outages_;
   FixScore heldout_base_, outage_base_;
   std::unique_ptr<std::atomic<long>> diverged_ = std::make_unique<std::atomic<long>>(0);
-  // The fitness of the two parts' scores (kDiverged-like penalty when a used part is not finite).
-  double combine(const FixScore& heldout, const FixScore& outage) const;
 };
 
 }  // namespace odotune

@@ -1,6 +1,7 @@
 #include "rlnode/recording.h"
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 #include <stdexcept>
 
@@ -158,9 +159,14 @@ Recording load_recording(const std::filesystem::path& bag, const RlParams& param
   std::set<std::string, std::less<>> wanted;
   for (const auto& [topic, s] : plan.sensors_of) wanted.insert(topic);
   if (!plan.gps_topic.empty()) wanted.insert(plan.gps_topic);
+  const auto from_ns = static_cast<std::int64_t>(std::llround(options.from_s * 1e9));
+  bool first = true;
   bags::read_bag(
       bag, [&](std::string_view t) { return wanted.count(t) > 0; },
       [&](const bags::BagMessage& m) {
+        if (first) rec.origin_ns = m.receive_time_ns;
+        first = false;
+        if (m.receive_time_ns < rec.origin_ns + from_ns) return;
         const std::string topic(m.topic);
         if (topic == plan.gps_topic)
           loader.on_fix(ros::decode_navsatfix(m.data, m.encoding), m.receive_time_ns);

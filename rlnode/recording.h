@@ -88,13 +88,19 @@ struct Recording {
   bool navsat_imu_yaw_known = false;
   GpsTransform gps_transform;
   std::int64_t start_ns = 0, end_ns = 0;  // first and last receive time of an input
-  std::vector<std::string> notes;         // what was read and converted, for the user
+  // The receive time of the bag's first message of a configured topic: the
+  // clock a user's seconds count from (RecordingOptions::from_s too).
+  std::int64_t origin_ns = 0;
+  std::vector<std::string> notes;  // what was read and converted, for the user
 };
 
 struct RecordingOptions {
   // frame_id → its pose in base_link; takes precedence over /tf_static.
   std::map<std::string, Pose3> frames;
   std::string gps_topic;  // NavSatFix topic for navsat's output; empty: the bag's one
+  // > 0: the messages received in the first from_s seconds of the bag are left
+  // out, as if it had been recorded from there (the node and navsat start then).
+  double from_s = 0.0;
 };
 
 Recording load_recording(const std::filesystem::path& bag, const RlParams& params,

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "jobs/rl_search.h"
 #include "jobs/tune_job.h"
 #include "objectives/rl_objective.h"
 #include "rlnode/gps_alignment.h"
@@ -37,7 +38,7 @@ RlTuneOptions small_options(const rlnode::Recording& rec) {
   RlTuneOptions o;
   o.fitness = RlFitness::both;
   o.space = RlNoiseSpace::blocks;
-  o.outage_s = 15.0;
+  o.outage_s = {15.0};
   o.until_ns = rec.start_ns + 60'000'000'000LL;
   return o;
 }
@@ -148,4 +149,82 @@ TEST(RlTune, FitnessNamesAndStoredModesRoundTrip) {
   RlFitness untouched = RlFitness::both;
   EXPECT_FALSE(parse_rl_fitness("gt", &untouched));
   EXPECT_EQ(untouched, RlFitness::both);
+}
+
+// The staged search (jobs/rl_search.h): the grid is deterministic; a start's parameters either were determined
+// (their range leaves out the file's value) or were reset to the file's value,
+// and the reset costs less than the tolerance; same seed, same start with one
+// or two threads.
+TEST(RlTune, StagedSearchResetsWhatTheRecordingDoesNotDetermine) {
+  Fixture f;
+  RlTuneOptions o = small_options(f.rec);
+  o.space = RlNoiseSpace::diagonal;
+  o.input_covariances = false;
+  const RlObjective objective(f.rec, rlnode::settings_of(f.rec.params), o);
+  RlSearchOptions search;
+  search.grid_levels = {-1.0, 1.0};
+  search.refine_decades = 0.5;
+  search.profile_step_decades = 2.0;
+  SolverSettings s;
+  s.seed = 3;
+  s.particles = 6;
+  s.iterations = 3;
+  omp_set_num_threads(1);
+  const RlGridResult grid = rl_grid_stage(objective, search, s);
+  const RlStartResult a = rl_refine_and_profile(objective, grid, search, s);
+  omp_set_num_threads(2);
+  const RlGridResult grid2 = rl_grid_stage(objective, search, s);
+  const RlStartResult b = rl_refine_and_profile(objective, grid2, search, s);
+  EXPECT_EQ(grid.x, grid2.x);
+  EXPECT_EQ(a.x, b.x);
+  EXPECT_EQ(a.fitness, b.fitness);
+
+  EXPECT_EQ(grid.evaluations, 32);  // 2 levels ^ 5 blocks
+  ASSERT_EQ(a.profiles.size(), objective.space().dim());
+  const std::vector<double> factors = objective.space().to_physical(a.x);
+  int undetermined = 0;
+  for (std::size_t i = 0; i < factors.size(); ++i) {
+    const RlParamProfile& p = a.profiles[i];
+    EXPECT_LE(p.lo, p.hi);
+    if (!p.determined) {
+      ++undetermined;
+      EXPECT_EQ(factors[i], 1.0) << objective.space().params()[i].name;
+      EXPECT_LE(p.lo, 1.0);
+      EXPECT_GE(p.hi, 1.0);
+    } else {
+      EXPECT_GE(factors[i], p.lo * (1 - 1e-12)) << objective.space().params()[i].name;
+      EXPECT_LE(factors[i], p.hi * (1 + 1e-12)) << objective.space().params()[i].name;
+    }
+  }
+  // This drive measures no acceleration: its block cannot matter.
+  EXPECT_GT(undetermined, 0);
+  EXPECT_LE(a.fitness, a.refined_fitness * (1.0 + search.tolerance));
+  EXPECT_EQ(a.fitness, objective.data_fitness(a.x));
+}
+
+// Normal operation is not traded for outages: with keep_heldout, a
+// candidate worse than the file at held-out fixes scores above the file.
+TEST(RlTune, WorseAtHeldOutFixesScoresAboveTheFile) {
+  Fixture f;
+  RlTuneOptions o = small_options(f.rec);
+  o.fitness = RlFitness::outage;
+  o.input_covariances = false;
+  const RlObjective keep(f.rec, rlnode::settings_of(f.rec.params), o);
+  o.keep_heldout = false;
+  const RlObjective trade(f.rec, rlnode::settings_of(f.rec.params), o);
+  const auto [lo, hi] = keep.bounds();
+  int worse = 0;
+  for (int k = 0; k < 12; ++k) {
+    std::vector<double> x(lo.size());
+    for (std::size_t i = 0; i < x.size(); ++i)
+      x[i] = lo[i] + (hi[i] - lo[i]) * std::fmod(0.37 * static_cast<double>(k * 7 + i * 3) + 0.1, 1.0);
+    const FixScore h = keep.heldout_score(keep.settings_at(x));
+    if (h.rmse_m > keep.baseline_heldout().rmse_m) {
+      ++worse;
+      EXPECT_GT(keep.data_fitness(x), keep.baseline_fitness()) << k;
+    } else {
+      EXPECT_EQ(keep.data_fitness(x), trade.data_fitness(x)) << k;
+    }
+  }
+  EXPECT_GT(worse, 0);
 }

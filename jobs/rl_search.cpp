@@ -1,0 +1,215 @@
+#include "jobs/rl_search.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+#include <fmt/format.h>
+
+#include "core/why.h"
+#include "tuner/evaluate.h"
+
+namespace odotune {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The block (0 position … 4 acceleration) of each parameter of the space, or
+// −1 for a parameter on an input's covariance.
+std::vector<int> blocks_of(const RlObjective& objective) {
+  std::vector<int> out;
+  for (const ParamSpec& p : objective.space().params()) {
+    const std::vector<int> members = rl_noise_members(p.name, false);
+    out.push_back(members.empty() ? -1 : members.front() / 3);
+  }
+  return out;
+}
+
+// A problem over a smaller box of the objective's own coordinates.
+struct SubBox {
+  const RlObjective* objective;
+  std::vector<double> lo, hi;
+  double fitness(std::span<const double> x) const { return objective->fitness(x); }
+  tuner::Bounds bounds() const { return {lo, hi}; }
+};
+
+// The data fitness, for the profile (the prior is not the recording's).
+struct DataFitness {
+  const RlObjective* objective;
+  double fitness(std::span<const double> x) const { return objective->data_fitness(x); }
+  tuner::Bounds bounds() const {
+    auto [lo, hi] = objective->bounds();
+    return {lo, hi};
+  }
+};
+
+void report(const SolverSettings& s, long done, long total) {
+  if (s.progress) s.progress(done, total);
+}
+
+}  // namespace
+
+bool RlSearchOptions::IsValid(std::string* why) const {
+  for (double l : grid_levels)
+    if (!std::isfinite(l)) return invalid(why, "a grid level is not finite");
+  if (!(refine_decades >= 0.0))
+    return invalid(why, fmt::format("refine_decades {}, expected ≥ 0", refine_decades));
+  if (!(profile_step_decades > 0.0))
+    return invalid(why, fmt::format("profile step {} decades, expected > 0", profile_step_decades));
+  if (!(tolerance > 0.0 && tolerance < 1.0))
+    return invalid(why, fmt::format("tolerance {}, expected in (0, 1)", tolerance));
+  return true;
+}
+
+RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& options,
+                           const SolverSettings& settings) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto [lo, hi] = objective.bounds();
+  const std::vector<int> block = blocks_of(objective);
+  RlGridResult r;
+  r.x.assign(lo.size(), 0.0);
+  if (options.grid_levels.empty()) {
+    r.fitness = objective.fitness(r.x);
+    r.evaluations = 1;
+    r.seconds = seconds_since(t0);
+    return r;
+  }
+  const int nb = 1 + *std::max_element(block.begin(), block.end());
+  const auto nl = static_cast<long>(options.grid_levels.size());
+  long count = 1;
+  for (int b = 0; b < nb; ++b) count *= nl;
+  std::vector<std::vector<double>> points;
+  for (long k = 0; k < count; ++k) {
+    std::vector<double> x(lo.size(), 0.0);
+    long code = k;
+    std::vector<double> level(static_cast<std::size_t>(nb));
+    for (int b = 0; b < nb; ++b, code /= nl)
+      level[static_cast<std::size_t>(b)] = options.grid_levels[code % nl];
+    for (std::size_t i = 0; i < x.size(); ++i)
+      if (block[i] >= 0) x[i] = std::clamp(level[static_cast<std::size_t>(block[i])], lo[i], hi[i]);
+    points.push_back(std::move(x));
+  }
+  const BoxProblem<RlObjective> problem{&objective};
+  const std::vector<double> f = tuner::evaluate_all(problem, points, settings.stop);
+  // The lowest; on a tie, the first in the grid's order.
+  std::size_t best = 0;
+  for (std::size_t k = 1; k < f.size(); ++k)
+    if (f[k] < f[best]) best = k;
+  r.x = points[best];
+  r.fitness = f[best];
+  r.evaluations = count;
+  r.seconds = seconds_since(t0);
+  report(settings, count, count);
+  return r;
+}
+
+namespace {
+
+// Stage 3: each parameter's profile, then the reset of those the recording
+// did not determine.
+void profile_and_reset(const RlObjective& objective, const RlSearchOptions& options,
+                       const SolverSettings& settings, RlStartResult& r) {
+  const auto [lo, hi] = objective.bounds();
+  const std::size_t n = lo.size();
+  const DataFitness data{&objective};
+  std::vector<std::vector<double>> points;
+  std::vector<std::vector<double>> levels(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (double v = lo[i]; v < hi[i] + 1e-9; v += options.profile_step_decades) levels[i].push_back(v);
+    if (std::find(levels[i].begin(), levels[i].end(), 0.0) == levels[i].end() && lo[i] < 0.0 && hi[i] > 0.0)
+      levels[i].push_back(0.0);
+    std::sort(levels[i].begin(), levels[i].end());
+    for (double v : levels[i]) {
+      std::vector<double> x = r.x;
+      x[i] = v;
+      points.push_back(std::move(x));
+    }
+  }
+  const std::vector<double> f = tuner::evaluate_all(data, points, settings.stop);
+  r.evaluations += static_cast<long>(points.size());
+  const double best = r.fitness, bound = best * (1.0 + options.tolerance);
+  std::size_t k = 0;
+  r.profiles.assign(n, {});
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::vector<double>& v = levels[i];
+    const std::vector<double> fi(f.begin() + static_cast<std::ptrdiff_t>(k),
+                                 f.begin() + static_cast<std::ptrdiff_t>(k + v.size()));
+    k += v.size();
+    // Walk out from the tuned value while the fitness stays within the bound;
+    // the range's ends are where a straight line between grid points crosses it.
+    const double xi = r.x[i];
+    auto edge = [&](int dir) {
+      double last_x = xi, last_f = best;
+      for (std::size_t j = 0; j < v.size(); ++j) {
+        const std::size_t m = dir > 0 ? j : v.size() - 1 - j;
+        if ((dir > 0 && v[m] <= xi) || (dir < 0 && v[m] >= xi)) continue;
+        if (!(fi[m] <= bound)) {
+          const double t = std::isfinite(fi[m]) ? (bound - last_f) / (fi[m] - last_f) : 0.0;
+          return last_x + std::clamp(t, 0.0, 1.0) * (v[m] - last_x);
+        }
+        last_x = v[m];
+        last_f = std::max(fi[m], best);
+      }
+      return dir > 0 ? hi[i] : lo[i];
+    };
+    RlParamProfile& p = r.profiles[i];
+    p.lo = std::pow(10.0, edge(-1));
+    p.hi = std::pow(10.0, edge(+1));
+    const auto at0 = std::find(v.begin(), v.end(), 0.0);
+    p.at_file_value = at0 != v.end() ? fi[static_cast<std::size_t>(at0 - v.begin())] : best;
+    p.determined = !(p.lo <= 1.0 && 1.0 <= p.hi);
+  }
+  // Reset every undetermined parameter; while that costs more than the
+  // tolerance, keep tuned the one whose own reset costs most.
+  std::vector<std::size_t> reset;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!r.profiles[i].determined) reset.push_back(i);
+  std::sort(reset.begin(), reset.end(), [&](std::size_t a, std::size_t b) {
+    return r.profiles[a].at_file_value < r.profiles[b].at_file_value;
+  });
+  while (!reset.empty()) {
+    std::vector<double> x = r.x;
+    for (std::size_t i : reset) x[i] = 0.0;
+    const double fx = objective.data_fitness(x);
+    ++r.evaluations;
+    if (fx <= bound) {
+      r.x = x;
+      r.fitness = fx;
+      break;
+    }
+    r.profiles[reset.back()].determined = true;
+    reset.pop_back();
+  }
+}
+
+}  // namespace
+
+RlStartResult rl_refine_and_profile(const RlObjective& objective, const RlGridResult& grid,
+                                    const RlSearchOptions& options, const SolverSettings& settings) {
+  const auto t0 = std::chrono::steady_clock::now();
+  RlStartResult r;
+  r.seed = settings.seed;
+  r.x = grid.x;
+  if (options.refine_decades > 0.0) {
+    const auto [lo, hi] = objective.bounds();
+    SubBox box{&objective, lo, hi};
+    for (std::size_t i = 0; i < lo.size(); ++i) {
+      box.lo[i] = std::max(lo[i], grid.x[i] - options.refine_decades);
+      box.hi[i] = std::min(hi[i], grid.x[i] + options.refine_decades);
+    }
+    r.refinement = run_solver(box, settings, grid.x);
+    r.evaluations += r.refinement.evaluations;
+    // The grid's point stays the answer unless the refinement beat it.
+    if (r.refinement.best_fitness < grid.fitness) r.x = r.refinement.best_x;
+  }
+  r.refined_fitness = r.fitness = objective.data_fitness(r.x);
+  ++r.evaluations;
+  if (options.profile) profile_and_reset(objective, options, settings, r);
+  r.seconds = seconds_since(t0);
+  return r;
+}
+
+}  // namespace odotune

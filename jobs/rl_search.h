@@ -1,0 +1,68 @@
+// robot_localization's process noise searched in stages, so that the answer
+// depends on the recording rather than on the seed (docs/husky.md, "How the
+// tune searches"):
+//   1. grid (deterministic): every block of the noise (position, orientation,
+//      linear velocity, angular velocity, acceleration) scaled by one of
+//      10^levels, each combination scored;
+//   2. refinement (seeded): the solver within ± refine_decades of the grid's
+//      best, per parameter of the objective's space;
+//   3. profile (deterministic): per parameter, the range of factors over which
+//      the data fitness stays within `tolerance` of its best, the others held.
+//      Parameters whose range holds the file's value (factor 1) are reset to
+//      it: the recording did not determine them. If resetting all of them
+//      changes the fitness by `tolerance` or more, those that cost most are
+//      kept tuned until it does not.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "jobs/tune_job.h"
+#include "objectives/rl_objective.h"
+#include "tuner/summary.h"
+
+namespace odotune {
+
+struct RlSearchOptions {
+  std::vector<double> grid_levels = {-2.0, 0.0, 2.0};  // decades; empty: no grid (refine around the file)
+  double refine_decades = 1.0;                         // 0: no refinement
+  double profile_step_decades = 0.5;
+  double tolerance = 0.02;  // relative: "within 2 % of the best"
+  bool profile = true;
+
+  bool IsValid(std::string* why) const;
+};
+
+// One tuned parameter's profile.
+struct RlParamProfile {
+  double lo = 0.0, hi = 0.0;   // factors: the range within tolerance of the best
+  bool determined = true;      // false: the range holds 1 and the file's value was kept
+  double at_file_value = 0.0;  // the data fitness with this parameter at factor 1, the others held
+};
+
+// Stage 1, shared by every start.
+struct RlGridResult {
+  std::vector<double> x;  // box coordinates of the best combination
+  double fitness = 0.0;   // its fitness (with the prior)
+  long evaluations = 0;
+  double seconds = 0.0;
+};
+RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& options,
+                           const SolverSettings& settings);
+
+// Stages 2 and 3 for one start (its seed in `settings`).
+struct RlStartResult {
+  std::uint64_t seed = 0;
+  tuner::Summary refinement;             // the solver's run (best_x before the profile)
+  std::vector<double> x;                 // box coordinates after the profile's reset
+  double fitness = 0.0;                  // data fitness at x
+  double refined_fitness = 0.0;          // data fitness at the refinement's best
+  std::vector<RlParamProfile> profiles;  // per parameter (empty without a profile)
+  long evaluations = 0;                  // refinement and profile
+  double seconds = 0.0;
+};
+RlStartResult rl_refine_and_profile(const RlObjective& objective, const RlGridResult& grid,
+                                    const RlSearchOptions& options, const SolverSettings& settings);
+
+}  // namespace odotune

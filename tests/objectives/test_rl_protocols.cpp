@@ -1,0 +1,130 @@
+// Which fixes robot_localization's replay fuses, withholds and scores
+// (objectives/rl_protocols.h), and the outage windows replayed from one fused
+// run (OutageReplays) against each window replayed on its own, on a small
+// synthetic GPS drive (tests/support/rl_gps_bag.h: 80 s, fixes at 2 Hz).
+#include <cmath>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "objectives/rl_objective.h"
+#include "objectives/rl_protocols.h"
+#include "rlnode/gps_alignment.h"
+#include "rlnode/params.h"
+#include "support/rl_gps_bag.h"
+#include "support/temp_dir.h"
+
+namespace {
+
+using namespace odotune;
+using rlnode::FixRole;
+
+constexpr std::int64_t kSecond = 1'000'000'000;
+
+struct ProtocolDrive {
+  testing_support::TempDir dir{"rl-protocols"};
+  rlnode::Recording rec;
+  ProtocolDrive() {
+    const auto params = dir.path() / "p.yaml";
+    std::ofstream(params) << testing_support::kRlGpsParams;
+    rec = rlnode::load_recording(testing_support::rl_gps_bag(dir.path(), 0.4), rlnode::read_rl_params(params));
+    rec.gps_transform = rlnode::fit_gps_alignment(rec, rlnode::settings_of(rec.params), 30.0).transform;
+  }
+  std::int64_t t0() const { return rec.fixes.front().stamp_ns; }
+};
+
+}  // namespace
+
+TEST(RlProtocols, OutageWindowsStartEveryStrideAfterTheWarmUpAndEndInTheSpan) {
+  ProtocolDrive d;
+  const std::vector<double> lengths = {10.0, 20.0};
+  const std::int64_t until = d.t0() + 60 * kSecond;
+  const std::vector<OutageWindow> w = outage_windows(d.rec, lengths, 5.0, after_warmup(d.rec, 15.0), until);
+  // Starts at 15, 20, … s: 10-s windows up to a start of 50 s, 20-s ones up to 40 s.
+  ASSERT_EQ(w.size(), 8u + 6u);
+  int ten = 0, twenty = 0;
+  for (std::size_t k = 0; k < w.size(); ++k) {
+    const std::int64_t since = w[k].start_ns - d.t0();
+    EXPECT_GE(since, 15 * kSecond);
+    EXPECT_EQ(since % (5 * kSecond), 0);
+    EXPECT_LE(w[k].end_ns, until);
+    if (k > 0) {
+      EXPECT_GE(w[k].start_ns, w[k - 1].start_ns);
+    }
+    const std::int64_t length = w[k].end_ns - w[k].start_ns;
+    ten += length == 10 * kSecond;
+    twenty += length == 20 * kSecond;
+  }
+  EXPECT_EQ(ten, 8);
+  EXPECT_EQ(twenty, 6);
+  EXPECT_TRUE(outage_windows(d.rec, lengths, 5.0, after_warmup(d.rec, 55.0), until).empty());
+}
+
+TEST(RlProtocols, RolesFuseBeforeScoreInsideAndLeaveOutAfter) {
+  ProtocolDrive d;
+  const OutageWindow w{d.t0() + 20 * kSecond, d.t0() + 30 * kSecond};
+  const std::vector<FixRole> roles = outage_window_roles(d.rec, w);
+  const std::vector<FixRole> outage = outage_protocol_roles(d.rec, w.start_ns, w.end_ns);
+  EXPECT_EQ(roles, outage);
+  int scored = 0;
+  for (std::size_t i = 0; i < roles.size(); ++i) {
+    const std::int64_t t = d.rec.fixes[i].stamp_ns;
+    const FixRole want = t < w.start_ns ? FixRole::fuse : t < w.end_ns ? FixRole::score : FixRole::absent;
+    EXPECT_EQ(roles[i], want) << i;
+    scored += roles[i] == FixRole::score;
+  }
+  EXPECT_EQ(scored, 20);  // 2 Hz for 10 s
+
+  const std::vector<FixRole> fifth = every_fifth_roles(d.rec, w.start_ns, w.end_ns);
+  int k = 0, fifth_scored = 0;
+  for (std::size_t i = 0; i < fifth.size(); ++i) {
+    const std::int64_t t = d.rec.fixes[i].stamp_ns;
+    if (t < w.start_ns) {
+      EXPECT_EQ(fifth[i], FixRole::fuse);
+    } else if (t >= w.end_ns) {
+      EXPECT_EQ(fifth[i], FixRole::absent);
+    } else {
+      EXPECT_EQ(fifth[i], k++ % 5 == 0 ? FixRole::score : FixRole::fuse) << i;
+    }
+    fifth_scored += fifth[i] == FixRole::score;
+  }
+  EXPECT_EQ(fifth_scored, 4);
+}
+
+TEST(RlProtocols, EveryFixBeforeTheEndIsHeldOutInExactlyOneFold) {
+  ProtocolDrive d;
+  const std::int64_t until = d.t0() + 40 * kSecond;
+  const auto folds = heldout_fix_folds(d.rec, 5, 1.0, until);
+  ASSERT_EQ(folds.size(), 5u);
+  for (std::size_t i = 0; i < d.rec.fixes.size(); ++i) {
+    int scored = 0;
+    for (const auto& f : folds) scored += f[i] == FixRole::score;
+    EXPECT_EQ(scored, d.rec.fixes[i].stamp_ns < until ? 1 : 0) << i;
+  }
+}
+
+// The windows continue from copies of one fused run: the same scores, bit
+// for bit, as each window's own replay from the start.
+TEST(RlProtocols, WindowsFromOneFusedRunScoreAsTheirOwnReplays) {
+  ProtocolDrive d;
+  const std::int64_t until = d.t0() + 70 * kSecond;
+  const std::vector<double> lengths = {8.0, 16.0};
+  const std::vector<OutageWindow> windows = outage_windows(d.rec, lengths, 6.0, after_warmup(d.rec, 10.0),
+                                                           until);
+  ASSERT_GT(windows.size(), 10u);
+  const OutageReplays shared(d.rec, windows, until);
+  rlnode::ReplaySettings s = rlnode::settings_of(d.rec.params);
+  s.process_noise *= 3.0;
+  std::vector<rlnode::ReplayOutput> own;
+  for (const OutageWindow& w : windows) {
+    own.push_back(rlnode::replay(d.rec, rlnode::make_schedule(d.rec, outage_window_roles(d.rec, w), w.end_ns),
+                                 s));
+  }
+  const FixScore want = score_of(own), got = shared.score(s);
+  EXPECT_GT(want.fixes, 100);
+  EXPECT_EQ(got.fixes, want.fixes);
+  EXPECT_EQ(got.rmse_m, want.rmse_m);
+  EXPECT_EQ(got.mae_m, want.mae_m);
+  EXPECT_EQ(got.maxe_m, want.maxe_m);
+  EXPECT_TRUE(got.finite);
+}
