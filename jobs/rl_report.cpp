@@ -134,8 +134,9 @@ ReportOutcome write_rl_report(const ReportRequest& req, const results::Experimen
   w.text("table_rl.csv", "report table", results::to_csv(t));
   w.text("table_rl.md", "report table", results::to_markdown(tt));
   page.heading("Held-out GPS-outage RMSE per bag and fitness");
-  page.paragraph(fmt::format("Original = the file's own values; rl-ekf = the tuned values ({}). Modes: 8 "
-                             "heldout-fixes, 10 outage, 11 both. Also as table_rl.csv and table_rl.md.",
+  page.paragraph(fmt::format("Original = the file's own values; rl-ekf = the tuned values ({}); the lower "
+                             "(better) of the two in bold. Modes: 8 heldout-fixes, 10 outage, 11 both. Also as "
+                             "table_rl.csv and table_rl.md.",
                              seeds_phrase(runs)));
   page.table(tt);
 

@@ -156,12 +156,17 @@ TextTable text_table(const RmseTable& t) {
   out.numeric.assign(out.header.size(), true);
   out.numeric[0] = false;
   for (const auto& r : t.rows) {
-    double best = std::numeric_limits<double>::infinity();
+    // Lower error is better: the row's lowest value, the original included,
+    // is the best (a tuned value worse than the original is never marked).
+    double best = std::isfinite(r.original_m) ? r.original_m : std::numeric_limits<double>::infinity();
     for (double v : r.tuned_m)
       if (std::isfinite(v)) best = std::min(best, v);
-    std::vector<std::string> cells = {r.track, std::to_string(r.mode), mm(r.original_m)};
-    for (double v : r.tuned_m)
-      cells.push_back(!std::isfinite(v) ? "–" : v == best ? "**" + mm(v) + "**" : mm(v));
+    const auto cell = [best](double v) {
+      return !std::isfinite(v) ? std::string("–") : v == best ? "**" + mm(v) + "**" : mm(v);
+    };
+    std::vector<std::string> cells = {r.track, std::to_string(r.mode),
+                                      std::isfinite(r.original_m) ? cell(r.original_m) : mm(r.original_m)};
+    for (double v : r.tuned_m) cells.push_back(cell(v));
     out.rows.push_back(std::move(cells));
   }
   return out;

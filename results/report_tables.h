@@ -67,7 +67,8 @@ struct TextTable {
   std::vector<std::vector<std::string>> rows;
   std::vector<bool> numeric;  // per column: right-aligned
 };
-// Table 1 in mm, the best (lowest) tuned value of each row emphasised.
+// Table 1 in mm, the best (lowest) value of each row emphasised: the
+// original's when no tuned value is lower, every value equal to it on a tie.
 TextTable text_table(const RmseTable& t);
 // GitHub-flavoured Markdown.
 std::string to_markdown(const TextTable& t);
