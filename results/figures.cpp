@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 #include "results/gnuplot.h"
@@ -133,15 +134,26 @@ void heatmap(const fs::path& stem, const std::string& title, const std::vector<s
 
 // ---------------------------------------------------------------- boxplots
 
-// Outliers of a box as "x y" lines, one per distinct value (to 1e-6),
-// beyond 1.5 × IQR from the quartiles (linear interpolation between order
-// statistics, as gnuplot's boxplot); empty when there is none.
 namespace {
-std::string boxplot_outliers(const std::vector<double>& values, double x) {
+
+// Fewer values than this draw no gnuplot boxplot: gnuplot 5.4's `with
+// boxplot` under `nooutliers` draws nothing for 1–3 points and leaves them
+// out of the autoscaled range (a figure of one run per box came out empty,
+// on an axis of −1…1).
+constexpr std::size_t kMinBoxplotValues = 4;
+
+std::vector<double> finite_values(const std::vector<double>& values) {
   std::vector<double> v;
   for (double d : values)
     if (std::isfinite(d)) v.push_back(d);
-  if (v.size() < 4) return "";
+  return v;
+}
+
+// Outliers of a box as "x y" lines, one per distinct value (to 1e-6),
+// beyond 1.5 × IQR from the quartiles (linear interpolation between order
+// statistics, as gnuplot's boxplot); empty when there is none.
+std::string boxplot_outliers(std::vector<double> v, double x) {
+  if (v.size() < kMinBoxplotValues) return "";
   std::sort(v.begin(), v.end());
   const auto quantile = [&v](double p) {
     const double pos = p * static_cast<double>(v.size() - 1);
@@ -161,10 +173,34 @@ std::string boxplot_outliers(const std::vector<double>& values, double x) {
   return out;
 }
 
+// A box of fewer than kMinBoxplotValues values, as one line
+// "x y_median x_lo x_hi y_min y_max": drawn as a box from the minimum to the
+// maximum (a line for one value) and a line at the median.
+std::string small_box(std::vector<double> v, double x, double width) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  const double median = n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+  return num(x) + " " + num(median) + " " + num(x - width / 2) + " " + num(x + width / 2) + " " +
+         num(v.front()) + " " + num(v.back()) + "\n";
+}
+
+// Every value as "x y", in the given order, spread evenly across 60 % of the
+// box's width so that equal values stay apart.
+std::string value_points(const std::vector<double>& v, double x, double width) {
+  std::string out;
+  const auto n = static_cast<double>(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const double dx = v.size() == 1 ? 0.0 : 0.6 * width * ((static_cast<double>(i) + 0.5) / n - 0.5);
+    out += num(x + dx) + " " + num(v[i]) + "\n";
+  }
+  return out;
+}
+
 }  // namespace
 
 void boxplots(const fs::path& stem, const std::string& title,
-              const std::map<std::string, std::map<std::string, std::vector<double>>>& data) {
+              const std::map<std::string, std::map<std::string, std::vector<double>>>& data,
+              const BoxplotOptions& options) {
   // Metric order: RMSE, MAE, MAXE, then any other in alphabetical order.
   std::vector<std::string> metrics = {"RMSE", "MAE", "MAXE"};
   for (const auto& [model, by_metric] : data) {
@@ -190,27 +226,42 @@ void boxplots(const fs::path& stem, const std::string& title,
     for (std::size_t m = 0; m < metrics.size(); ++m) {
       auto it = by_metric.find(metrics[m]);
       if (it == by_metric.end()) continue;
-      std::string content;
-      for (double v : it->second) {
-        if (std::isfinite(v)) content += num(v) + "\n";
-      }
-      if (content.empty()) continue;
-      const std::string file = "box_" + std::to_string(g) + "_" + std::to_string(m) + ".dat";
-      files.emplace_back(file, content);
+      const std::vector<double> values = finite_values(it->second);
+      if (values.empty()) continue;
+      const std::string id = std::to_string(g) + "_" + std::to_string(m);
       const double x = static_cast<double>(g + 1) - 0.4 + slot * (static_cast<double>(m) + 0.5);
       const std::string colour = m < 3 ? metric_colours[m] : series_colour(m);
-      plot += ", \\\n     '" + file + "' using (" + num(x) + "):1:(" + num(slot * 0.8) +
-              ") with boxplot lc rgb '" + colour + "' fc rgb '" + colour + "' " +
-              (metric_in_legend[m] ? std::string("notitle") : "title " + q(metrics[m]));
+      const std::string colours = " lc rgb '" + colour + "' fc rgb '" + colour + "' ";
+      const std::string key = metric_in_legend[m] ? std::string("notitle") : "title " + q(metrics[m]);
       metric_in_legend[m] = true;
-      // Outliers (beyond 1.5 IQR of the quartiles) drawn here, one point per
-      // distinct value: gnuplot's own outliers spread many equal values
-      // sideways across neighbouring boxes (many seeds reach the same optimum).
-      const std::string outliers = boxplot_outliers(it->second, x);
-      if (!outliers.empty()) {
-        const std::string ofile = "out_" + std::to_string(g) + "_" + std::to_string(m) + ".dat";
-        files.emplace_back(ofile, outliers);
-        plot += ", \\\n     '" + ofile + "' using 1:2 with points pt 7 ps 0.5 lc rgb '" + colour + "' notitle";
+      const bool few = values.size() < kMinBoxplotValues;
+      if (!few) {
+        std::string content;
+        for (double v : values) content += num(v) + "\n";
+        files.emplace_back("box_" + id + ".dat", content);
+        plot += ", \\\n     'box_" + id + ".dat' using (" + num(x) + "):1:(" + num(slot * 0.8) +
+                ") with boxplot" + colours + key;
+      } else {
+        files.emplace_back("small_" + id + ".dat", small_box(values, x, slot * 0.8));
+        plot += ", \\\n     'small_" + id + ".dat' using 1:2:3:4:5:6 with boxxyerror" + colours + key +
+                ", \\\n     'small_" + id + ".dat' using 3:2:($4-$3):(0) with vectors nohead lw 2 lc rgb '" +
+                colour + "' notitle";
+      }
+      if (few || options.points) {
+        // Every value as a point over its box (for a small box, the values are the box).
+        files.emplace_back("values_" + id + ".dat", value_points(values, x, slot * 0.8));
+        plot += ", \\\n     'values_" + id + ".dat' using 1:2 with points pt 7 ps 0.6 lc rgb '" + colour +
+                "' notitle";
+      } else {
+        // Outliers (beyond 1.5 IQR of the quartiles) drawn here, one point per
+        // distinct value: gnuplot's own outliers spread many equal values
+        // sideways across neighbouring boxes (many seeds reach the same optimum).
+        const std::string outliers = boxplot_outliers(values, x);
+        if (!outliers.empty()) {
+          files.emplace_back("out_" + id + ".dat", outliers);
+          plot += ", \\\n     'out_" + id + ".dat' using 1:2 with points pt 7 ps 0.5 lc rgb '" + colour +
+                  "' notitle";
+        }
       }
     }
   }
@@ -218,7 +269,7 @@ void boxplots(const fs::path& stem, const std::string& title,
 
   std::string body;
   body += "set title " + q(title) + " font ',13'\n";
-  body += "set xlabel 'model'\nset ylabel 'improvement [%]'\n";
+  body += "set xlabel " + q(options.group_label) + "\nset ylabel 'improvement [%]'\n";
   body += "set xrange [0.5:" + num(static_cast<double>(models.size()) + 0.5) + "]\n";
   body += "set xtics " + category_tics(models, 1) + " scale 0\n";
   body += "set grid ytics lc rgb '#e0e0e0'\n";

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -196,6 +197,53 @@ TEST_F(FiguresTest, BoxplotsRenderModelsMetricsAndLegend) {
   for (const char* s : {"rq", "alpha", "gyro", "RMSE", "MAE", "MAXE"}) expect_contains(svg, s);
   EXPECT_THROW(boxplots(dir_ / "b2", "t", {{"rq", {{"RMSE", {std::numeric_limits<double>::quiet_NaN()}}}}}),
                std::invalid_argument);
+}
+
+// How many filled circles (gnuplot point type 7) of colour `rgb` ("r, g, b")
+// an SVG draws: the plotted points, plus one per legend sample of that colour.
+std::size_t svg_points(const std::string& svg, int r, int g, int b) {
+  char colour[64];
+  std::snprintf(colour, sizeof colour, "color='rgb(%3d, %3d, %3d)'", r, g, b);
+  std::size_t n = 0;
+  for (auto p = svg.find("<use xlink:href='#gpPt6' transform="); p != std::string::npos;
+       p = svg.find("<use xlink:href='#gpPt6' transform=", p + 1))
+    if (svg.compare(svg.find("color=", p), std::strlen(colour), colour) == 0) ++n;
+  return n;
+}
+
+// One run per box (a one-seed rl-ekf experiment: two fitnesses, three
+// metrics, every improvement negative): each value is drawn, and inside the
+// y range (gnuplot leaves out points outside it).
+TEST_F(FiguresTest, BoxplotsDrawEveryValueOfBoxesOfOneToThreeRuns) {
+  std::map<std::string, std::map<std::string, std::vector<double>>> data;
+  data["outage"] = {{"RMSE", {-176.3}}, {"MAE", {-150.2}}, {"MAXE", {-120.9}}};
+  data["both"] = {{"RMSE", {-190.8, -185.0, -60.0}}, {"MAE", {-170.0, -10.0}}, {"MAXE", {-140.0}}};
+  boxplots(dir_ / "small", "Held-out improvement", data, {"fitness", false});
+  const std::string svg = expect_outputs("small");
+  expect_contains(svg, ">fitness<");
+  EXPECT_EQ(svg_points(svg, 0, 114, 178), 1u + 3u);  // RMSE
+  EXPECT_EQ(svg_points(svg, 230, 159, 0), 1u + 2u);  // MAE
+  EXPECT_EQ(svg_points(svg, 0, 158, 115), 1u + 1u);  // MAXE
+  // The y axis holds the data: a tic at or below -190.8 is labelled (the
+  // defect drew an axis of -1…1).
+  expect_contains(svg, ">-200<");
+  EXPECT_EQ(svg.find(">-1<"), std::string::npos);
+}
+
+TEST_F(FiguresTest, BoxplotsWithPointsDrawOnePointPerValueOverTheBoxes) {
+  std::map<std::string, std::map<std::string, std::vector<double>>> data;
+  for (int i = 0; i < 6; ++i) {
+    data["outage"]["RMSE"].push_back(10.0 + i);
+    data["both"]["RMSE"].push_back(-5.0 * i);
+  }
+  data["both"]["RMSE"].push_back(std::numeric_limits<double>::quiet_NaN());  // not drawn
+  boxplots(dir_ / "pts", "t", data, {"fitness", true});
+  EXPECT_EQ(svg_points(expect_outputs("pts"), 0, 114, 178), 12u);
+  // Without points, boxes of 4 or more values draw only their outliers (none here).
+  boxplots(dir_ / "nopts", "t", data);
+  const std::string svg = expect_outputs("nopts");
+  EXPECT_EQ(svg_points(svg, 0, 114, 178), 0u);
+  expect_contains(svg, ">model<");
 }
 
 TEST(FiguresResample, StepWiseOntoUnionGrid) {
