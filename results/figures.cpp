@@ -365,11 +365,43 @@ void convergence(const fs::path& stem, const std::string& title,
 
 // ---------------------------------------------------------------- trajectories
 
+namespace {
+
+// The plot area of an x–y figure at equal scale: the data's bounding box
+// with a margin of 3 % of its larger side, widened (centred) where the area
+// would be lower than kMinSidePx or narrower than that or `min_width_px`,
+// and the area's size in pixels.
+struct EqualScaleFrame {
+  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+  int width_px = 0, height_px = 0;
+};
+EqualScaleFrame equal_scale_frame(double x_min, double x_max, double y_min, double y_max, double min_width_px) {
+  constexpr double kMaxWidthPx = 820, kMaxHeightPx = 680, kMinSidePx = 220;
+  double sx = x_max - x_min, sy = y_max - y_min;
+  const double margin = std::max(0.03 * std::max(sx, sy), 1e-3);
+  sx += 2 * margin;
+  sy += 2 * margin;
+  const double cx = 0.5 * (x_min + x_max), cy = 0.5 * (y_min + y_max);
+  // Pixels per metre: the largest that fits both maxima.
+  const double scale = std::min(kMaxWidthPx / sx, kMaxHeightPx / sy);
+  sx = std::max(sx, std::max(kMinSidePx, min_width_px) / scale);
+  sy = std::max(sy, kMinSidePx / scale);
+  return {cx - sx / 2,
+          cx + sx / 2,
+          cy - sy / 2,
+          cy + sy / 2,
+          static_cast<int>(std::lround(sx * scale)),
+          static_cast<int>(std::lround(sy * scale))};
+}
+
+}  // namespace
+
 void trajectories(const fs::path& stem, const std::string& title, const std::vector<TrajectoryPath>& paths) {
   if (paths.empty()) throw std::invalid_argument("trajectories: no paths");
   std::vector<std::pair<std::string, std::string>> files;
   std::string plot = "plot ";
-  bool any_point = false;
+  double x_min = HUGE_VAL, x_max = -HUGE_VAL, y_min = HUGE_VAL, y_max = -HUGE_VAL;
+  std::size_t longest_name = 0, drawn = 0;
   for (std::size_t i = 0; i < paths.size(); ++i) {
     const auto& p = paths[i];
     if (p.xs_m.size() != p.ys_m.size()) {
@@ -386,9 +418,14 @@ void trajectories(const fs::path& stem, const std::string& title, const std::vec
       }
       gap = false;
       content += num(p.xs_m[j]) + " " + num(p.ys_m[j]) + "\n";
+      x_min = std::min(x_min, p.xs_m[j]);
+      x_max = std::max(x_max, p.xs_m[j]);
+      y_min = std::min(y_min, p.ys_m[j]);
+      y_max = std::max(y_max, p.ys_m[j]);
     }
     if (content.empty()) continue;
-    any_point = true;
+    ++drawn;
+    longest_name = std::max(longest_name, p.name.size());
     const std::string file = "path_" + std::to_string(i) + ".dat";
     files.emplace_back(file, content);
     const std::string colour = i == 0 ? "#000000" : series_colour(i - 1);
@@ -396,16 +433,39 @@ void trajectories(const fs::path& stem, const std::string& title, const std::vec
     plot += "'" + file + "' using 1:2 with lines lw " + (i == 0 ? "2.5" : "1.5") + " lc rgb '" + colour +
             "' title " + q(p.name);
   }
-  if (!any_point) throw std::invalid_argument("trajectories: no finite point in any path");
+  if (drawn == 0) throw std::invalid_argument("trajectories: no finite point in any path");
+
+  // Equal scale with the plot area fitted to the data: explicit ranges (no
+  // widening to whole tics), the area placed in pixels, the canvas sized
+  // around it (title above, axis labels left and below, the legend on the
+  // right), and `size ratio -1` holding the scale exactly.
+  constexpr int kLeftPx = 90, kTopPx = 50, kBottomPx = 65, kKeyRowPx = 20;
+  // gnuplot's own estimate of the legend's width (its box) at the SVG's 12 pt.
+  const int key_px = 80 + static_cast<int>(9.5 * static_cast<double>(longest_name));
+  // The title is centred on the canvas, which is made wide enough for it.
+  const double title_px = 40 + 8.0 * static_cast<double>(title.size());
+  const EqualScaleFrame f = equal_scale_frame(x_min, x_max, y_min, y_max, title_px - kLeftPx - key_px);
+  const int width = kLeftPx + f.width_px + key_px;
+  const int height = std::max(kTopPx + f.height_px + kBottomPx,
+                              kTopPx + kKeyRowPx * static_cast<int>(drawn) + 30);
+  const auto at_x = [width](int px) { return num(static_cast<double>(px) / width); };
+  const auto at_y = [height](int px_from_top) { return num(1.0 - static_cast<double>(px_from_top) / height); };
 
   std::string body;
-  body += "set title " + q(title) + " font ',13'\n";
+  body += "set label 1 " + q(title) + " at screen 0.5, screen " + at_y(kTopPx / 2) + " center font ',13'\n";
   body += "set xlabel 'x [m]'\nset ylabel 'y [m]'\n";
+  body += "set xrange [" + num(f.x0) + ":" + num(f.x1) + "]\nset yrange [" + num(f.y0) + ":" + num(f.y1) +
+          "]\n";
+  body += "set lmargin at screen " + at_x(kLeftPx) + "\nset rmargin at screen " + at_x(kLeftPx + f.width_px) +
+          "\n";
+  body += "set tmargin at screen " + at_y(kTopPx) + "\nset bmargin at screen " + at_y(kTopPx + f.height_px) +
+          "\n";
   body += "set size ratio -1\n";
   body += "set grid lc rgb '#e0e0e0'\n";
-  body += "set key outside right top box Left reverse width 1\n";
+  body += "set key at screen " + at_x(kLeftPx + f.width_px + 15) + ", screen " + at_y(kTopPx) +
+          " left top box Left reverse width 1\n";
   body += plot + "\n";
-  render_png_svg(stem, std::move(files), body, 1000, 750);
+  render_png_svg(stem, std::move(files), body, width, height);
 }
 
 }  // namespace odotune::results

@@ -75,7 +75,10 @@ struct TrajectoryPath {
 };
 
 // Overlay of paths with equal axis scale and a legend (the study's
-// Figure 5). The first path is drawn in black (by convention the ground
+// Figure 5). The plot area is fitted to the paths (their bounding box with a
+// margin of 3 % of its larger side, at most 820 × 680 px, widened about its
+// centre to at least 220 px a side and to the title's width), the canvas
+// sized around it with the legend on the right. The first path is drawn in black (by convention the ground
 // truth), the others in distinct colours. Throws std::invalid_argument when
 // `paths` is empty, a path's xs/ys differ in length or nothing is finite.
 void trajectories(const std::filesystem::path& stem, const std::string& title,

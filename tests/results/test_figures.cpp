@@ -13,6 +13,7 @@
 #include <fstream>
 #include <limits>
 #include <random>
+#include <regex>
 #include <sstream>
 #include <stdexcept>
 
@@ -314,6 +315,74 @@ TEST_F(FiguresTest, TrajectoriesRenderWithLegendAndGaps) {
   paths[1].ys_m.pop_back();
   EXPECT_THROW(trajectories(dir_ / "t2", "t", paths), std::invalid_argument);
   EXPECT_THROW(trajectories(dir_ / "t3", "t", {}), std::invalid_argument);
+}
+
+// A path's points in SVG pixels: the coordinates of the SVG path drawn in
+// `stroke`, after its legend sample (the first two points).
+std::vector<std::pair<double, double>> svg_path_points(const std::string& svg, const std::string& stroke) {
+  const auto at = svg.find("<path stroke='" + stroke + "'  d='M", svg.find("</defs>"));
+  EXPECT_NE(at, std::string::npos) << stroke;
+  std::vector<std::pair<double, double>> out;
+  if (at == std::string::npos) return out;
+  const std::string d = svg.substr(at, svg.find("'/>", at) - at);
+  static const std::regex xy(R"(([0-9.]+),([0-9.]+))");
+  for (auto it = std::sregex_iterator(d.begin(), d.end(), xy); it != std::sregex_iterator(); ++it)
+    out.emplace_back(std::stod((*it)[1]), std::stod((*it)[2]));
+  out.erase(out.begin(), out.begin() + std::min<std::ptrdiff_t>(2, static_cast<std::ptrdiff_t>(out.size())));
+  return out;
+}
+
+// The plot border's size in SVG pixels: the largest closed black rectangle.
+std::pair<double, double> svg_plot_size(const std::string& svg) {
+  static const std::regex rect(
+      R"(d='M([0-9.]+),([0-9.]+) L([0-9.]+),([0-9.]+) L([0-9.]+),([0-9.]+) L([0-9.]+),([0-9.]+) L[0-9.]+,[0-9.]+ Z)");
+  std::pair<double, double> best{0, 0};
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), rect); it != std::sregex_iterator(); ++it) {
+    double w = 0, h = 0;
+    for (int k = 1; k <= 6; k += 2) {
+      w = std::max(w, std::abs(std::stod((*it)[k + 2]) - std::stod((*it)[k])));
+      h = std::max(h, std::abs(std::stod((*it)[k + 3]) - std::stod((*it)[k + 1])));
+    }
+    if (w * h > best.first * best.second) best = {w, h};
+  }
+  return best;
+}
+
+// A wide and a tall path: x and y at the same scale, and the plot area
+// fitted to the data (no blank band around a path, as a 1000 × 750 canvas
+// left around a 145 m × 30 m bag).
+TEST_F(FiguresTest, TrajectoriesAreAtEqualScaleAndFillThePlot) {
+  for (const auto& [sx_m, sy_m] : {std::pair{145.0, 30.0}, std::pair{12.0, 60.0}, std::pair{40.0, 40.0}}) {
+    TrajectoryPath p{"path", {}, {}};
+    for (int i = 0; i <= 100; ++i) {
+      const double t = i / 100.0;
+      p.xs_m.push_back(-20.0 + sx_m * t);
+      p.ys_m.push_back(5.0 + sy_m * (0.5 - 0.5 * std::cos(2.0 * M_PI * t)));
+    }
+    const std::string stem = "fit" + std::to_string(static_cast<int>(sx_m));
+    trajectories(dir_ / stem, "a title of sixty characters or so, as the reports' titles", {p});
+    const std::string svg = expect_outputs(stem);
+    const auto pts = svg_path_points(svg, "rgb(  0,   0,   0)");
+    ASSERT_EQ(pts.size(), 101u) << stem;
+    double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
+    for (const auto& [x, y] : pts) {
+      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    }
+    const double px_per_m_x = (x1 - x0) / sx_m, px_per_m_y = (y1 - y0) / sy_m;
+    EXPECT_NEAR(px_per_m_x / px_per_m_y, 1.0, 0.02) << stem;
+    const auto [w, h] = svg_plot_size(svg);
+    // The canvas holds the plot, its labels and the legend, and no blank band:
+    // 1000 × 750 around a 608 × 131 plot before.
+    std::smatch size;
+    ASSERT_TRUE(std::regex_search(svg, size, std::regex(R"re(width="([0-9]+)" height="([0-9]+)")re")));
+    EXPECT_LE(std::stod(size[1]) - w, 250.0) << stem << ": plot " << w << " wide on a canvas of " << size[1];
+    EXPECT_LE(std::stod(size[2]) - h, 130.0) << stem << ": plot " << h << " high on a canvas of " << size[2];
+    // The data span the plot in its longer direction, within the 3 % margins.
+    EXPECT_GT(std::max((x1 - x0) / w, (y1 - y0) / h), 0.9)
+        << stem << ": " << x1 - x0 << " of " << w << ", " << y1 - y0 << " of " << h;
+    EXPECT_LE((x1 - x0) / w, 1.0) << stem;
+    EXPECT_LE((y1 - y0) / h, 1.0) << stem;
+  }
 }
 
 }  // namespace
