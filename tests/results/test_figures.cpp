@@ -18,6 +18,7 @@
 #include <stdexcept>
 
 #include "results/gnuplot.h"
+#include "results/param_range_figure.h"
 #include "support/cli_runner.h"
 
 namespace odotune::results {
@@ -245,6 +246,24 @@ TEST_F(FiguresTest, BoxplotsWithPointsDrawOnePointPerValueOverTheBoxes) {
   const std::string svg = expect_outputs("nopts");
   EXPECT_EQ(svg_points(svg, 0, 114, 178), 0u);
   expect_contains(svg, ">model<");
+}
+
+TEST_F(FiguresTest, ParamRangesDrawABarPerSeedADotPerValueAndTheReference) {
+  const std::vector<std::string> params = {"q_x", "q_yaw", "q_vx"};
+  std::vector<ParamRangeSeries> series = {
+      {"seed 1", {2.0, 1.0, 0.05}, {{1.5, 3.0, true}, {0.01, 100.0, false}, {0.02, 0.2, true}}},
+      {"seed 2", {2.5, 1.0, 0.04}, {{1.2, 4.0, true}, {0.0, HUGE_VAL, false}, {0.01, 0.1, true}}},
+  };
+  param_ranges_figure(dir_ / "ranges", "test1, fitness outage: tuned factors", "factor (log scale)", params,
+                      series, 1.0, "the file's value (factor 1)");
+  const std::string svg = expect_outputs("ranges");
+  for (const char* s : {"test1, fitness outage: tuned factors", "factor (log scale)", "q_x", "q_yaw", "q_vx",
+                        "seed 1", "seed 2", "the file's value (factor 1)", "tuned value", "not determined"})
+    expect_contains(svg, s);
+  EXPECT_EQ(svg_points(svg, 0, 0, 0), 6u + 1u);  // every tuned value, and the legend's sample
+  series[1].ranges.pop_back();
+  EXPECT_THROW(param_ranges_figure(dir_ / "r2", "t", "x", params, series, 1.0, "ref"), std::invalid_argument);
+  EXPECT_THROW(param_ranges_figure(dir_ / "r3", "t", "x", {}, {}, 1.0, "ref"), std::invalid_argument);
 }
 
 TEST(FiguresResample, StepWiseOntoUnionGrid) {
