@@ -1,5 +1,6 @@
 // write_rl_report (jobs/rl_job.h): the report page of a store of rl-ekf runs.
 #include <algorithm>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <span>
@@ -11,6 +12,7 @@
 #include "jobs/report_writer.h"
 #include "jobs/rl_job.h"
 #include "results/figures.h"
+#include "results/param_range_figure.h"
 #include "results/report_html.h"
 #include "results/report_tables.h"
 
@@ -96,6 +98,132 @@ void trajectory_figures(const Experiment& e, const std::vector<RunRecord>& runs,
   page.figures(row);
 }
 
+// The seeds of the runs, ascending.
+std::vector<std::uint64_t> seeds_of(const std::vector<RunRecord>& runs) {
+  std::vector<std::uint64_t> seeds;
+  for (const RunRecord& r : runs)
+    if (std::find(seeds.begin(), seeds.end(), r.seed) == seeds.end()) seeds.push_back(r.seed);
+  std::sort(seeds.begin(), seeds.end());
+  return seeds;
+}
+
+// Per bag and fitness: the held-out improvement and tuned RMSE over seeds.
+void seed_spread_section(const std::vector<RunRecord>& runs, ReportWriter& w, results::HtmlPage& page) {
+  page.heading("Spread over seeds");
+  const std::vector<results::SeedSpreadRow> rows = results::seed_spread(runs, "rl-ekf");
+  const bool several = std::any_of(rows.begin(), rows.end(), [](const auto& r) { return r.runs > 1; });
+  if (!several) {
+    page.paragraph("One seed per bag and fitness: no spread over seeds to show (list more seeds in the "
+                   "experiment to see how much the tune depends on its seed).");
+    return;
+  }
+  const results::TextTable t = results::text_table(rows, [](int mode) { return fitness_name(mode); });
+  w.text("table_rl_seeds.md", "report table", results::to_markdown(t));
+  page.paragraph(fmt::format("Per bag and fitness, over its runs' seeds ({}): the held-out GPS-outage RMSE "
+                             "improvement and the tuned RMSE as min / median / max. Also as table_rl_seeds.md.",
+                             fmt::join(seeds_of(runs), ", ")));
+  page.table(t);
+}
+
+// A run whose ranges can be shown: one per parameter.
+bool has_ranges(const RunRecord& r) {
+  return !r.param_ranges.empty() && r.param_ranges.size() == r.param_names.size();
+}
+
+// "What the recording determined": per bag × fitness, each parameter's tuned
+// factor and range for every seed, as a table and a figure.
+void determined_section(const std::vector<RunRecord>& runs, ReportWriter& w, results::HtmlPage& page) {
+  page.heading("What the recording determined");
+  const bool any = std::any_of(runs.begin(), runs.end(), has_ranges);
+  if (!any) {
+    page.paragraph("No parameter ranges are stored for these runs (their tune did not profile its parameters, "
+                   "or they were stored before odotune kept ranges), so this section has nothing to show.");
+    return;
+  }
+  page.paragraph(
+      "Each tuned parameter is a factor on the file's value (1 = the file's own). Its range is where the tuning "
+      "fitness stays within 2 % of its best: a narrow range means the recording pins the parameter; a parameter "
+      "whose range holds the file's value and which the run therefore kept is not determined by this "
+      "recording. Per bag and fitness, a figure draws the ranges on a log axis, one bar per seed, the tuned "
+      "factor as a dot and the file's value as a dashed line, and a table gives the numbers. Also as "
+      "table_rl_ranges.md.");
+  const std::vector<std::uint64_t> seeds = seeds_of(runs);
+  results::TextTable t;  // every bag and fitness, for table_rl_ranges.md
+  t.header = {"Track", "Fitness", "Parameter"};
+  for (std::uint64_t s : seeds) t.header.push_back(fmt::format("seed {}", s));
+  t.numeric.assign(t.header.size(), false);
+  for (const std::string& bag : results::report_tracks(runs))
+    for (int mode : results::report_modes(runs)) {
+      std::vector<const RunRecord*> cell;  // by seed, ascending
+      for (std::uint64_t s : seeds)
+        for (const RunRecord& r : runs)
+          if (r.track == bag && r.mode == mode && r.seed == s) cell.push_back(&r);
+      if (cell.empty()) continue;
+      std::vector<std::string> params;  // in the order of the first run that names them
+      for (const RunRecord* r : cell)
+        for (const std::string& n : r->param_names)
+          if (std::find(params.begin(), params.end(), n) == params.end()) params.push_back(n);
+      std::vector<results::ParamRangeSeries> series;
+      for (const RunRecord* r : cell)
+        if (has_ranges(*r)) series.push_back({fmt::format("seed {}", r->seed), {}, {}});
+      const std::size_t first_row = t.rows.size();
+      for (const std::string& name : params) {
+        std::vector<std::string> cells = {bag, fitness_name(mode), name};
+        std::size_t k = 0;
+        for (std::uint64_t s : seeds) {
+          const auto it = std::find_if(cell.begin(), cell.end(),
+                                       [s](const RunRecord* r) { return r->seed == s; });
+          if (it == cell.end()) {
+            cells.push_back("–");
+            continue;
+          }
+          const RunRecord& r = **it;
+          const auto at = std::find(r.param_names.begin(), r.param_names.end(), name);
+          if (at == r.param_names.end()) {
+            cells.push_back("–");
+            if (has_ranges(r)) {
+              series[k].values.push_back(std::numeric_limits<double>::quiet_NaN());
+              series[k].ranges.push_back({std::numeric_limits<double>::quiet_NaN(),
+                                          std::numeric_limits<double>::quiet_NaN(), true});
+              ++k;
+            }
+            continue;
+          }
+          const auto i = static_cast<std::size_t>(at - r.param_names.begin());
+          const double value = i < r.params.size() ? r.params[i] : std::numeric_limits<double>::quiet_NaN();
+          if (!has_ranges(r)) {
+            cells.push_back(fmt::format("{:.3g}, no range stored", value));
+            continue;
+          }
+          cells.push_back(results::param_range_text(value, r.param_ranges[i]));
+          series[k].values.push_back(value);
+          series[k].ranges.push_back(r.param_ranges[i]);
+          ++k;
+        }
+        t.rows.push_back(std::move(cells));
+      }
+      // On the page: the figure, then this bag and fitness's rows without their first two columns.
+      if (!series.empty()) {
+        const std::string title = fmt::format("{}, fitness {}: tuned factors and their ranges", bag,
+                                              fitness_name(mode));
+        page.figures(
+            {w.figure(fmt::format("ranges_{}_{}", file_safe(bag), mode), title, [&](const fs::path& stem) {
+              results::param_ranges_figure(stem, title, "factor on the file's value (log scale)", params,
+                                           series, 1.0, "the file's value (factor 1)");
+            })});
+      }
+      results::TextTable part;
+      part.header.assign(t.header.begin() + 2, t.header.end());
+      part.numeric.assign(part.header.size(), false);
+      for (std::size_t i = first_row; i < t.rows.size(); ++i)
+        part.rows.emplace_back(t.rows[i].begin() + 2, t.rows[i].end());
+      page.paragraph(fmt::format("**{}, fitness {}**: per parameter and seed, the tuned factor [its range].",
+                                 bag, fitness_name(mode)));
+      page.table(part);
+    }
+  w.text("table_rl_ranges.md", "report table", results::to_markdown(t));
+}
+
 }  // namespace
 
 ReportOutcome write_rl_report(const ReportRequest& req, const results::ExperimentInfo& info,
@@ -108,15 +236,16 @@ ReportOutcome write_rl_report(const ReportRequest& req, const results::Experimen
   out.runs = static_cast<long>(runs.size());
   ReportWriter w(req.out_dir);
   results::HtmlPage page(fmt::format("odotune report: {}", info.name));
+  const std::vector<std::uint64_t> seeds = seeds_of(runs);
   page.paragraph(fmt::format(
       "Experiment **{}** (file hash {}, odotune {}): {} runs of robot_localization's EKF (model rl-ekf) with "
-      "the parameter file {}, on {}. Each run tunes the file's process noise on a bag before {} s and is "
-      "scored after it{}, on data the tune never saw: GPS fused until {} s and none after, the error of the "
-      "filter at every later fix (RMSE, MAE, MAXE). The baseline is the file's own values. Improvement % = "
+      "the parameter file {}, on {}, {} {} ({}). Each run tunes the file's process noise on a bag before {} s "
+      "and is scored after it{}, on data the tune never saw: GPS fused until {} s and none after, the error of "
+      "the filter at every later fix (RMSE, MAE, MAXE). The baseline is the file's own values. Improvement % = "
       "100 · (baseline − tuned) / baseline, positive is better.",
       info.name, info.hash, info.code_version, runs.size(), x.params.string(),
-      fmt::join(results::report_tracks(runs), ", "), x.until_s,
-      x.end_s ? fmt::format(" until {} s", *x.end_s) : "", x.until_s));
+      fmt::join(results::report_tracks(runs), ", "), seeds.size(), seeds.size() == 1 ? "seed" : "seeds",
+      fmt::join(seeds, ", "), x.until_s, x.end_s ? fmt::format(" until {} s", *x.end_s) : "", x.until_s));
   std::map<int, std::vector<double>> by_mode;
   for (const RunRecord& r : runs) by_mode[r.mode].push_back(r.improvement_rmse_pct());
   std::vector<std::string> parts;
@@ -134,10 +263,13 @@ ReportOutcome write_rl_report(const ReportRequest& req, const results::Experimen
   w.text("table_rl.csv", "report table", results::to_csv(t));
   w.text("table_rl.md", "report table", results::to_markdown(tt));
   page.heading("Held-out GPS-outage RMSE per bag and fitness");
-  page.paragraph(fmt::format("Original = the file's own values; rl-ekf = the tuned values ({}). Modes: 8 "
-                             "heldout-fixes, 10 outage, 11 both. Also as table_rl.csv and table_rl.md.",
+  page.paragraph(fmt::format("Original = the file's own values; rl-ekf = the tuned values ({}); the lower "
+                             "(better) of the two in bold. Modes: 8 heldout-fixes, 10 outage, 11 both. Also as "
+                             "table_rl.csv and table_rl.md.",
                              seeds_phrase(runs)));
   page.table(tt);
+
+  seed_spread_section(runs, w, page);
 
   page.heading("Improvement per fitness");
   std::map<std::string, std::map<std::string, std::vector<double>>> data;
@@ -146,8 +278,14 @@ ReportOutcome write_rl_report(const ReportRequest& req, const results::Experimen
       data[fitness_name(r.mode)][std::string(results::metric_name(metric))].push_back(
           results::improvement_pct(r, metric));
   const std::string box_title = fmt::format("Held-out improvement [%] per fitness, all {} runs", runs.size());
-  page.figures({w.figure("boxplots", box_title,
-                         [&](const fs::path& stem) { results::boxplots(stem, box_title, data); })});
+  const std::string box_caption =
+      box_title + "; one point per run (seed), over a box of the quartiles for 4 runs or more, else over the "
+                  "runs' range with a line at their median";
+  page.figures({w.figure("boxplots", box_caption, [&](const fs::path& stem) {
+    results::boxplots(stem, box_title, data, {"fitness", true});
+  })});
+
+  determined_section(runs, w, page);
 
   page.heading("Trajectories");
   trajectory_figures(e, runs, w, page, out);

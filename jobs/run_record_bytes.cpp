@@ -66,7 +66,7 @@ class Reader {
   std::size_t at_ = 0;
 };
 
-constexpr std::uint32_t kMagic = 0x6f647231;  // "odr1": this layout
+constexpr std::uint32_t kMagic = 0x6f647232;  // "odr2": this layout (odr1 had no param_ranges)
 
 }  // namespace
 
@@ -83,6 +83,12 @@ std::vector<char> to_bytes(const results::RunRecord& r) {
   for (const auto& n : r.param_names) w.put(n);
   w.put(static_cast<std::uint64_t>(r.params.size()));
   for (double p : r.params) w.put(p);
+  w.put(static_cast<std::uint64_t>(r.param_ranges.size()));
+  for (const auto& g : r.param_ranges) {
+    w.put(g.lo);
+    w.put(g.hi);
+    w.put(static_cast<std::uint8_t>(g.determined ? 1 : 0));
+  }
   w.put(r.best_fitness);
   for (const auto* m : {&r.baseline, &r.tuned}) {
     w.put(m->rmse_m);
@@ -116,6 +122,14 @@ results::RunRecord run_record_from_bytes(const std::vector<char>& bytes) {
   for (auto& n : r.param_names) n = in.text();
   r.params.resize(in.count(sizeof(double)));
   for (auto& p : r.params) p = in.get<double>();
+  r.param_ranges.resize(in.count(2 * sizeof(double) + sizeof(std::uint8_t)));
+  for (auto& g : r.param_ranges) {
+    g.lo = in.get<double>();
+    g.hi = in.get<double>();
+    const auto d = in.get<std::uint8_t>();
+    if (d > 1) throw std::runtime_error("a run sent between MPI ranks has a malformed parameter range");
+    g.determined = d == 1;
+  }
   r.best_fitness = in.get<double>();
   for (auto* m : {&r.baseline, &r.tuned}) {
     m->rmse_m = in.get<double>();

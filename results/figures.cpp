@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 #include "results/gnuplot.h"
@@ -133,15 +134,26 @@ void heatmap(const fs::path& stem, const std::string& title, const std::vector<s
 
 // ---------------------------------------------------------------- boxplots
 
-// Outliers of a box as "x y" lines, one per distinct value (to 1e-6),
-// beyond 1.5 × IQR from the quartiles (linear interpolation between order
-// statistics, as gnuplot's boxplot); empty when there is none.
 namespace {
-std::string boxplot_outliers(const std::vector<double>& values, double x) {
+
+// Fewer values than this draw no gnuplot boxplot: gnuplot 5.4's `with
+// boxplot` under `nooutliers` draws nothing for 1–3 points and leaves them
+// out of the autoscaled range (a figure of one run per box came out empty,
+// on an axis of −1…1).
+constexpr std::size_t kMinBoxplotValues = 4;
+
+std::vector<double> finite_values(const std::vector<double>& values) {
   std::vector<double> v;
   for (double d : values)
     if (std::isfinite(d)) v.push_back(d);
-  if (v.size() < 4) return "";
+  return v;
+}
+
+// Outliers of a box as "x y" lines, one per distinct value (to 1e-6),
+// beyond 1.5 × IQR from the quartiles (linear interpolation between order
+// statistics, as gnuplot's boxplot); empty when there is none.
+std::string boxplot_outliers(std::vector<double> v, double x) {
+  if (v.size() < kMinBoxplotValues) return "";
   std::sort(v.begin(), v.end());
   const auto quantile = [&v](double p) {
     const double pos = p * static_cast<double>(v.size() - 1);
@@ -161,10 +173,34 @@ std::string boxplot_outliers(const std::vector<double>& values, double x) {
   return out;
 }
 
+// A box of fewer than kMinBoxplotValues values, as one line
+// "x y_median x_lo x_hi y_min y_max": drawn as a box from the minimum to the
+// maximum (a line for one value) and a line at the median.
+std::string small_box(std::vector<double> v, double x, double width) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  const double median = n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+  return num(x) + " " + num(median) + " " + num(x - width / 2) + " " + num(x + width / 2) + " " +
+         num(v.front()) + " " + num(v.back()) + "\n";
+}
+
+// Every value as "x y", in the given order, spread evenly across 60 % of the
+// box's width so that equal values stay apart.
+std::string value_points(const std::vector<double>& v, double x, double width) {
+  std::string out;
+  const auto n = static_cast<double>(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const double dx = v.size() == 1 ? 0.0 : 0.6 * width * ((static_cast<double>(i) + 0.5) / n - 0.5);
+    out += num(x + dx) + " " + num(v[i]) + "\n";
+  }
+  return out;
+}
+
 }  // namespace
 
 void boxplots(const fs::path& stem, const std::string& title,
-              const std::map<std::string, std::map<std::string, std::vector<double>>>& data) {
+              const std::map<std::string, std::map<std::string, std::vector<double>>>& data,
+              const BoxplotOptions& options) {
   // Metric order: RMSE, MAE, MAXE, then any other in alphabetical order.
   std::vector<std::string> metrics = {"RMSE", "MAE", "MAXE"};
   for (const auto& [model, by_metric] : data) {
@@ -190,27 +226,42 @@ void boxplots(const fs::path& stem, const std::string& title,
     for (std::size_t m = 0; m < metrics.size(); ++m) {
       auto it = by_metric.find(metrics[m]);
       if (it == by_metric.end()) continue;
-      std::string content;
-      for (double v : it->second) {
-        if (std::isfinite(v)) content += num(v) + "\n";
-      }
-      if (content.empty()) continue;
-      const std::string file = "box_" + std::to_string(g) + "_" + std::to_string(m) + ".dat";
-      files.emplace_back(file, content);
+      const std::vector<double> values = finite_values(it->second);
+      if (values.empty()) continue;
+      const std::string id = std::to_string(g) + "_" + std::to_string(m);
       const double x = static_cast<double>(g + 1) - 0.4 + slot * (static_cast<double>(m) + 0.5);
       const std::string colour = m < 3 ? metric_colours[m] : series_colour(m);
-      plot += ", \\\n     '" + file + "' using (" + num(x) + "):1:(" + num(slot * 0.8) +
-              ") with boxplot lc rgb '" + colour + "' fc rgb '" + colour + "' " +
-              (metric_in_legend[m] ? std::string("notitle") : "title " + q(metrics[m]));
+      const std::string colours = " lc rgb '" + colour + "' fc rgb '" + colour + "' ";
+      const std::string key = metric_in_legend[m] ? std::string("notitle") : "title " + q(metrics[m]);
       metric_in_legend[m] = true;
-      // Outliers (beyond 1.5 IQR of the quartiles) drawn here, one point per
-      // distinct value: gnuplot's own outliers spread many equal values
-      // sideways across neighbouring boxes (many seeds reach the same optimum).
-      const std::string outliers = boxplot_outliers(it->second, x);
-      if (!outliers.empty()) {
-        const std::string ofile = "out_" + std::to_string(g) + "_" + std::to_string(m) + ".dat";
-        files.emplace_back(ofile, outliers);
-        plot += ", \\\n     '" + ofile + "' using 1:2 with points pt 7 ps 0.5 lc rgb '" + colour + "' notitle";
+      const bool few = values.size() < kMinBoxplotValues;
+      if (!few) {
+        std::string content;
+        for (double v : values) content += num(v) + "\n";
+        files.emplace_back("box_" + id + ".dat", content);
+        plot += ", \\\n     'box_" + id + ".dat' using (" + num(x) + "):1:(" + num(slot * 0.8) +
+                ") with boxplot" + colours + key;
+      } else {
+        files.emplace_back("small_" + id + ".dat", small_box(values, x, slot * 0.8));
+        plot += ", \\\n     'small_" + id + ".dat' using 1:2:3:4:5:6 with boxxyerror" + colours + key +
+                ", \\\n     'small_" + id + ".dat' using 3:2:($4-$3):(0) with vectors nohead lw 2 lc rgb '" +
+                colour + "' notitle";
+      }
+      if (few || options.points) {
+        // Every value as a point over its box (for a small box, the values are the box).
+        files.emplace_back("values_" + id + ".dat", value_points(values, x, slot * 0.8));
+        plot += ", \\\n     'values_" + id + ".dat' using 1:2 with points pt 7 ps 0.6 lc rgb '" + colour +
+                "' notitle";
+      } else {
+        // Outliers (beyond 1.5 IQR of the quartiles) drawn here, one point per
+        // distinct value: gnuplot's own outliers spread many equal values
+        // sideways across neighbouring boxes (many seeds reach the same optimum).
+        const std::string outliers = boxplot_outliers(values, x);
+        if (!outliers.empty()) {
+          files.emplace_back("out_" + id + ".dat", outliers);
+          plot += ", \\\n     'out_" + id + ".dat' using 1:2 with points pt 7 ps 0.5 lc rgb '" + colour +
+                  "' notitle";
+        }
       }
     }
   }
@@ -218,7 +269,7 @@ void boxplots(const fs::path& stem, const std::string& title,
 
   std::string body;
   body += "set title " + q(title) + " font ',13'\n";
-  body += "set xlabel 'model'\nset ylabel 'improvement [%]'\n";
+  body += "set xlabel " + q(options.group_label) + "\nset ylabel 'improvement [%]'\n";
   body += "set xrange [0.5:" + num(static_cast<double>(models.size()) + 0.5) + "]\n";
   body += "set xtics " + category_tics(models, 1) + " scale 0\n";
   body += "set grid ytics lc rgb '#e0e0e0'\n";
@@ -307,18 +358,54 @@ void convergence(const fs::path& stem, const std::string& title,
   body += "set xlabel 'evaluations'\nset ylabel 'best fitness [m]'\n";
   body += "set grid lc rgb '#e0e0e0'\n";
   body += "set style fill transparent solid 0.25 noborder\n";
-  body += "set key top right box opaque\n";
+  // The legend beside the plot, not over the curves (a flat curve at the top
+  // ran under it), and 5 % of the height above and below the data so no
+  // curve lies on the border.
+  body += "set key outside right top box Left reverse width 1\n";
+  body += "set offsets 0, 0, graph 0.05, graph 0.05\n";
   body += plot + "\n";
-  render_png_svg(stem, std::move(files), body, 900, 600);
+  render_png_svg(stem, std::move(files), body, 1000, 600);
 }
 
 // ---------------------------------------------------------------- trajectories
+
+namespace {
+
+// The plot area of an x–y figure at equal scale: the data's bounding box
+// with a margin of 3 % of its larger side, widened (centred) where the area
+// would be lower than kMinSidePx or narrower than that or `min_width_px`,
+// and the area's size in pixels.
+struct EqualScaleFrame {
+  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+  int width_px = 0, height_px = 0;
+};
+EqualScaleFrame equal_scale_frame(double x_min, double x_max, double y_min, double y_max, double min_width_px) {
+  constexpr double kMaxWidthPx = 820, kMaxHeightPx = 680, kMinSidePx = 220;
+  double sx = x_max - x_min, sy = y_max - y_min;
+  const double margin = std::max(0.03 * std::max(sx, sy), 1e-3);
+  sx += 2 * margin;
+  sy += 2 * margin;
+  const double cx = 0.5 * (x_min + x_max), cy = 0.5 * (y_min + y_max);
+  // Pixels per metre: the largest that fits both maxima.
+  const double scale = std::min(kMaxWidthPx / sx, kMaxHeightPx / sy);
+  sx = std::max(sx, std::max(kMinSidePx, min_width_px) / scale);
+  sy = std::max(sy, kMinSidePx / scale);
+  return {cx - sx / 2,
+          cx + sx / 2,
+          cy - sy / 2,
+          cy + sy / 2,
+          static_cast<int>(std::lround(sx * scale)),
+          static_cast<int>(std::lround(sy * scale))};
+}
+
+}  // namespace
 
 void trajectories(const fs::path& stem, const std::string& title, const std::vector<TrajectoryPath>& paths) {
   if (paths.empty()) throw std::invalid_argument("trajectories: no paths");
   std::vector<std::pair<std::string, std::string>> files;
   std::string plot = "plot ";
-  bool any_point = false;
+  double x_min = HUGE_VAL, x_max = -HUGE_VAL, y_min = HUGE_VAL, y_max = -HUGE_VAL;
+  std::size_t longest_name = 0, drawn = 0;
   for (std::size_t i = 0; i < paths.size(); ++i) {
     const auto& p = paths[i];
     if (p.xs_m.size() != p.ys_m.size()) {
@@ -335,9 +422,14 @@ void trajectories(const fs::path& stem, const std::string& title, const std::vec
       }
       gap = false;
       content += num(p.xs_m[j]) + " " + num(p.ys_m[j]) + "\n";
+      x_min = std::min(x_min, p.xs_m[j]);
+      x_max = std::max(x_max, p.xs_m[j]);
+      y_min = std::min(y_min, p.ys_m[j]);
+      y_max = std::max(y_max, p.ys_m[j]);
     }
     if (content.empty()) continue;
-    any_point = true;
+    ++drawn;
+    longest_name = std::max(longest_name, p.name.size());
     const std::string file = "path_" + std::to_string(i) + ".dat";
     files.emplace_back(file, content);
     const std::string colour = i == 0 ? "#000000" : series_colour(i - 1);
@@ -345,16 +437,39 @@ void trajectories(const fs::path& stem, const std::string& title, const std::vec
     plot += "'" + file + "' using 1:2 with lines lw " + (i == 0 ? "2.5" : "1.5") + " lc rgb '" + colour +
             "' title " + q(p.name);
   }
-  if (!any_point) throw std::invalid_argument("trajectories: no finite point in any path");
+  if (drawn == 0) throw std::invalid_argument("trajectories: no finite point in any path");
+
+  // Equal scale with the plot area fitted to the data: explicit ranges (no
+  // widening to whole tics), the area placed in pixels, the canvas sized
+  // around it (title above, axis labels left and below, the legend on the
+  // right), and `size ratio -1` holding the scale exactly.
+  constexpr int kLeftPx = 90, kTopPx = 50, kBottomPx = 65, kKeyRowPx = 20;
+  // gnuplot's own estimate of the legend's width (its box) at the SVG's 12 pt.
+  const int key_px = 80 + static_cast<int>(9.5 * static_cast<double>(longest_name));
+  // The title is centred on the canvas, which is made wide enough for it.
+  const double title_px = 40 + 8.0 * static_cast<double>(title.size());
+  const EqualScaleFrame f = equal_scale_frame(x_min, x_max, y_min, y_max, title_px - kLeftPx - key_px);
+  const int width = kLeftPx + f.width_px + key_px;
+  const int height = std::max(kTopPx + f.height_px + kBottomPx,
+                              kTopPx + kKeyRowPx * static_cast<int>(drawn) + 30);
+  const auto at_x = [width](int px) { return num(static_cast<double>(px) / width); };
+  const auto at_y = [height](int px_from_top) { return num(1.0 - static_cast<double>(px_from_top) / height); };
 
   std::string body;
-  body += "set title " + q(title) + " font ',13'\n";
+  body += "set label 1 " + q(title) + " at screen 0.5, screen " + at_y(kTopPx / 2) + " center font ',13'\n";
   body += "set xlabel 'x [m]'\nset ylabel 'y [m]'\n";
+  body += "set xrange [" + num(f.x0) + ":" + num(f.x1) + "]\nset yrange [" + num(f.y0) + ":" + num(f.y1) +
+          "]\n";
+  body += "set lmargin at screen " + at_x(kLeftPx) + "\nset rmargin at screen " + at_x(kLeftPx + f.width_px) +
+          "\n";
+  body += "set tmargin at screen " + at_y(kTopPx) + "\nset bmargin at screen " + at_y(kTopPx + f.height_px) +
+          "\n";
   body += "set size ratio -1\n";
   body += "set grid lc rgb '#e0e0e0'\n";
-  body += "set key outside right top box Left reverse width 1\n";
+  body += "set key at screen " + at_x(kLeftPx + f.width_px + 15) + ", screen " + at_y(kTopPx) +
+          " left top box Left reverse width 1\n";
   body += plot + "\n";
-  render_png_svg(stem, std::move(files), body, 1000, 750);
+  render_png_svg(stem, std::move(files), body, width, height);
 }
 
 }  // namespace odotune::results

@@ -29,13 +29,25 @@ std::string heatmap_mode_label(FitnessMode mode);
 void heatmap(const std::filesystem::path& stem, const std::string& title,
              const std::vector<std::string>& columns, const std::vector<std::vector<double>>& values);
 
+struct BoxplotOptions {
+  std::string group_label = "model";  // the x axis label: what the groups are
+  bool points = false;                // every value as a point over its box
+};
+
 // Improvement % per model (groups on the x axis) for each metric (one box
 // colour per metric, with a legend) — the study's Figure 4. Input:
 // model → metric ("RMSE", "MAE", "MAXE"; other names are appended in
 // alphabetical order) → values in %. NaN values are ignored; empty
-// vectors draw no box. Throws std::invalid_argument when there is no value.
+// vectors draw no box. A box of 4 or more values is a boxplot (quartiles,
+// whiskers to 1.5 IQR, the values beyond as points); one of 1 to 3 values
+// is drawn as a box from their minimum to their maximum (a line for one
+// value) with a thick line at the median and every value as a point, so
+// every value is drawn and inside the y range. With options.points every
+// value of every box is a point, in the order given, spread across the box.
+// Throws std::invalid_argument when there is no value.
 void boxplots(const std::filesystem::path& stem, const std::string& title,
-              const std::map<std::string, std::map<std::string, std::vector<double>>>& data);
+              const std::map<std::string, std::map<std::string, std::vector<double>>>& data,
+              const BoxplotOptions& options = {});
 
 // Statistics over several runs' convergence curves resampled onto the union
 // of their evaluation counts. A run is step-wise constant (its value at e is
@@ -63,7 +75,10 @@ struct TrajectoryPath {
 };
 
 // Overlay of paths with equal axis scale and a legend (the study's
-// Figure 5). The first path is drawn in black (by convention the ground
+// Figure 5). The plot area is fitted to the paths (their bounding box with a
+// margin of 3 % of its larger side, at most 820 × 680 px, widened about its
+// centre to at least 220 px a side and to the title's width), the canvas
+// sized around it with the legend on the right. The first path is drawn in black (by convention the ground
 // truth), the others in distinct colours. Throws std::invalid_argument when
 // `paths` is empty, a path's xs/ys differ in length or nothing is finite.
 void trajectories(const std::filesystem::path& stem, const std::string& title,

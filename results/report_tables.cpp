@@ -156,12 +156,17 @@ TextTable text_table(const RmseTable& t) {
   out.numeric.assign(out.header.size(), true);
   out.numeric[0] = false;
   for (const auto& r : t.rows) {
-    double best = std::numeric_limits<double>::infinity();
+    // Lower error is better: the row's lowest value, the original included,
+    // is the best (a tuned value worse than the original is never marked).
+    double best = std::isfinite(r.original_m) ? r.original_m : std::numeric_limits<double>::infinity();
     for (double v : r.tuned_m)
       if (std::isfinite(v)) best = std::min(best, v);
-    std::vector<std::string> cells = {r.track, std::to_string(r.mode), mm(r.original_m)};
-    for (double v : r.tuned_m)
-      cells.push_back(!std::isfinite(v) ? "–" : v == best ? "**" + mm(v) + "**" : mm(v));
+    const auto cell = [best](double v) {
+      return !std::isfinite(v) ? std::string("–") : v == best ? "**" + mm(v) + "**" : mm(v);
+    };
+    std::vector<std::string> cells = {r.track, std::to_string(r.mode),
+                                      std::isfinite(r.original_m) ? cell(r.original_m) : mm(r.original_m)};
+    for (double v : r.tuned_m) cells.push_back(cell(v));
     out.rows.push_back(std::move(cells));
   }
   return out;
@@ -180,6 +185,54 @@ std::string to_markdown(const TextTable& t) {
     s += "\n";
   }
   return s;
+}
+
+namespace {
+double median_of(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n == 0 ? kNaN : n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+}  // namespace
+
+std::vector<SeedSpreadRow> seed_spread(const std::vector<RunRecord>& runs, const std::string& model) {
+  std::map<std::pair<std::string, int>, std::pair<std::vector<double>, std::vector<double>>> acc;
+  for (const auto& r : runs)
+    if (r.model == model && !r.is_heldout()) {
+      auto& cell = acc[{r.track, r.mode}];
+      cell.first.push_back(r.improvement_rmse_pct());
+      cell.second.push_back(r.tuned.rmse_m);
+    }
+  std::vector<SeedSpreadRow> out;
+  for (const auto& track : report_tracks(runs))
+    for (int mode : report_modes(runs)) {
+      const auto it = acc.find({track, mode});
+      if (it == acc.end()) continue;
+      const auto& [pct_v, tuned_v] = it->second;
+      const auto [pmin, pmax] = std::minmax_element(pct_v.begin(), pct_v.end());
+      const auto [tmin, tmax] = std::minmax_element(tuned_v.begin(), tuned_v.end());
+      out.push_back({track, mode, static_cast<int>(pct_v.size()), *pmin, median_of(pct_v), *pmax, *tmin,
+                     median_of(tuned_v), *tmax});
+    }
+  return out;
+}
+
+TextTable text_table(const std::vector<SeedSpreadRow>& rows,
+                     const std::function<std::string(int)>& mode_label) {
+  TextTable t;
+  t.header = {"Track",       "Mode",    "Seeds", "RMSE improvement min", "median", "max", "Tuned RMSE min [mm]",
+              "median [mm]", "max [mm]"};
+  t.numeric = {false, false, true, true, true, true, true, true, true};
+  for (const auto& r : rows)
+    t.rows.push_back({r.track, mode_label ? mode_label(r.mode) : std::to_string(r.mode), std::to_string(r.runs),
+                      pct(r.improvement_min_pct), pct(r.improvement_median_pct), pct(r.improvement_max_pct),
+                      mm(r.tuned_min_m), mm(r.tuned_median_m), mm(r.tuned_max_m)});
+  return t;
+}
+
+std::string param_range_text(double value, const ParamRange& range) {
+  return fmt::format("{:.3g}{} [{:.3g}, {:.3g}]", value,
+                     range.determined ? "" : ", not determined by this recording", range.lo, range.hi);
 }
 
 std::vector<GeneralisationRow> generalisation(const std::vector<RunRecord>& runs, ReportMetric metric) {

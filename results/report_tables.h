@@ -10,6 +10,7 @@
 // Improvement % = 100·(baseline − tuned)/baseline (positive = better).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -67,10 +68,31 @@ struct TextTable {
   std::vector<std::vector<std::string>> rows;
   std::vector<bool> numeric;  // per column: right-aligned
 };
-// Table 1 in mm, the best (lowest) tuned value of each row emphasised.
+// Table 1 in mm, the best (lowest) value of each row emphasised: the
+// original's when no tuned value is lower, every value equal to it on a tie.
 TextTable text_table(const RmseTable& t);
 // GitHub-flavoured Markdown.
 std::string to_markdown(const TextTable& t);
+
+// The spread over seeds of `model`'s per-track runs, per track × mode
+// (tracks in report order, modes ascending): how many runs (seeds), and the
+// RMSE improvement % and the tuned RMSE as min / median / max over them.
+struct SeedSpreadRow {
+  std::string track;
+  int mode = 0;
+  int runs = 0;
+  double improvement_min_pct = 0.0, improvement_median_pct = 0.0, improvement_max_pct = 0.0;
+  double tuned_min_m = 0.0, tuned_median_m = 0.0, tuned_max_m = 0.0;
+};
+std::vector<SeedSpreadRow> seed_spread(const std::vector<RunRecord>& runs, const std::string& model);
+// Track, Mode (`mode_label(mode)`, or the number when empty), Seeds, the
+// improvement's min / median / max in % and the tuned RMSE's in mm.
+TextTable text_table(const std::vector<SeedSpreadRow>& rows,
+                     const std::function<std::string(int)>& mode_label = {});
+
+// A tuned factor with its range, for a table cell: "1.84 [0.912, 3.2]", or
+// "1, not determined by this recording [0.01, 100]" (3 significant digits).
+std::string param_range_text(double value, const ParamRange& range);
 
 struct GeneralisationRow {
   std::string model, track;

@@ -2,6 +2,7 @@
 
 #include <sqlite3.h>
 
+#include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
@@ -12,7 +13,9 @@ namespace odotune::results {
 
 namespace {
 
-constexpr int kSchemaVersion = 1;
+// 1: the first layout; 2: runs.param_ranges added (a store of version 1 is
+// upgraded when opened for writing and read as is, with empty ranges).
+constexpr int kSchemaVersion = 2;
 
 // A prepared statement that finalizes itself.
 class Stmt {
@@ -50,6 +53,46 @@ nlohmann::json convergence_json(const RunRecord& r) {
   nlohmann::json a = nlohmann::json::array();
   for (const auto& p : r.convergence) a.push_back({p.evaluations, p.best_fitness});
   return a;
+}
+
+// A double as JSON: finite values as numbers, exactly (nlohmann writes the
+// shortest text that reads back to the same double), the others as the
+// strings "inf", "-inf" and "nan" (JSON has no such numbers; a NaN's payload
+// is not kept).
+nlohmann::json exact_json(double v) {
+  if (std::isfinite(v)) return v;
+  if (std::isnan(v)) return "nan";
+  return v > 0 ? "inf" : "-inf";
+}
+double exact_double(const nlohmann::json& j) {
+  if (j.is_number()) return j.get<double>();
+  const std::string s = j.get<std::string>();
+  if (s == "inf") return HUGE_VAL;
+  if (s == "-inf") return -HUGE_VAL;
+  if (s == "nan") return std::nan("");
+  throw std::runtime_error("not a number: " + s);
+}
+
+// [[lo, hi, determined], …] in param_names' order; "[]" when not profiled.
+std::string ranges_json(const RunRecord& r) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const ParamRange& p : r.param_ranges) a.push_back({exact_json(p.lo), exact_json(p.hi), p.determined});
+  return a.dump();
+}
+std::vector<ParamRange> ranges_of(const std::string& text) {
+  std::vector<ParamRange> out;
+  if (text.empty()) return out;  // NULL: a run stored before the column existed
+  for (const auto& p : nlohmann::json::parse(text))
+    out.push_back({exact_double(p.at(0)), exact_double(p.at(1)), p.at(2).get<bool>()});
+  return out;
+}
+
+// Whether table `runs` has the column `name` (stores of schema 1 lack param_ranges).
+bool has_column(sqlite3* db, const std::string& path, const char* name) {
+  Stmt s(db, path, "SELECT name FROM pragma_table_info('runs')");
+  while (s.step())
+    if (s.col_text(0) == name) return true;
+  return false;
 }
 
 }  // namespace
@@ -95,9 +138,23 @@ Store::Store(const std::filesystem::path& path, const ExperimentInfo& info, bool
                      " baseline_rmse_m REAL, baseline_mae_m REAL, baseline_maxe_m REAL,"
                      " tuned_rmse_m REAL, tuned_mae_m REAL, tuned_maxe_m REAL,"
                      " evaluations INTEGER, seconds REAL, diverged INTEGER, termination TEXT,"
-                     " convergence TEXT);"
+                     " convergence TEXT, param_ranges TEXT);"
                      "INSERT OR IGNORE INTO experiment VALUES ('schema_version', '{}');",
                      kSchemaVersion));
+    // A store of schema 1 gets the column (NULL in its rows: empty ranges)
+    // in one transaction, so a crash leaves it either upgraded or as it was.
+    if (!has_column(db_, path_, "param_ranges")) {
+      exec("BEGIN IMMEDIATE");
+      try {
+        if (!has_column(db_, path_, "param_ranges")) exec("ALTER TABLE runs ADD COLUMN param_ranges TEXT");
+        exec(fmt::format("UPDATE experiment SET value = '{}' WHERE key = 'schema_version'", kSchemaVersion));
+      } catch (...) {
+        exec("ROLLBACK");
+        throw;
+      }
+      exec("COMMIT");
+    }
+    has_ranges_ = true;
     const ExperimentInfo have = experiment();
     if (have.hash.empty()) {
       exec("BEGIN IMMEDIATE");
@@ -135,6 +192,13 @@ Store::Store(const std::filesystem::path& path) : path_(path.string()) {
     throw std::runtime_error(fmt::format("{}: cannot open the results store: {}", path_, msg));
   }
   sqlite3_busy_timeout(db_, 10000);
+  try {
+    has_ranges_ = has_column(db_, path_, "param_ranges");
+  } catch (...) {
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw;
+  }
 }
 
 Store::~Store() { sqlite3_close(db_); }
@@ -161,6 +225,9 @@ std::set<std::string> Store::finished_keys() const {
 }
 
 void Store::add(const RunRecord& r) {
+  if (!r.param_ranges.empty() && r.param_ranges.size() != r.param_names.size())
+    throw std::invalid_argument(fmt::format("run {}: {} parameter ranges for {} parameters", run_key(r),
+                                            r.param_ranges.size(), r.param_names.size()));
   nlohmann::json params = nlohmann::json::array();
   for (std::size_t i = 0; i < r.params.size(); ++i) params.push_back({r.param_names[i], r.params[i]});
   exec("BEGIN IMMEDIATE");
@@ -168,8 +235,8 @@ void Store::add(const RunRecord& r) {
     Stmt s(db_, path_,
            "INSERT INTO runs (key, model, track, heldout_track, mode, seed, solver, params,"
            " best_fitness, baseline_rmse_m, baseline_mae_m, baseline_maxe_m, tuned_rmse_m,"
-           " tuned_mae_m, tuned_maxe_m, evaluations, seconds, diverged, termination, convergence)"
-           " VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+           " tuned_mae_m, tuned_maxe_m, evaluations, seconds, diverged, termination, convergence,"
+           " param_ranges) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
     int i = 1;
     s.text(i++, run_key(r));
     s.text(i++, r.model);
@@ -191,6 +258,7 @@ void Store::add(const RunRecord& r) {
     s.integer(i++, r.diverged);
     s.text(i++, r.termination);
     s.text(i++, convergence_json(r).dump());
+    s.text(i++, ranges_json(r));
     s.step();
   } catch (...) {
     exec("ROLLBACK");
@@ -202,10 +270,14 @@ void Store::add(const RunRecord& r) {
 std::vector<RunRecord> Store::runs() const {
   std::vector<RunRecord> out;
   Stmt s(db_, path_,
-         "SELECT model, track, heldout_track, mode, seed, solver, params, best_fitness,"
-         " baseline_rmse_m, baseline_mae_m, baseline_maxe_m, tuned_rmse_m, tuned_mae_m,"
-         " tuned_maxe_m, evaluations, seconds, diverged, termination, convergence"
-         " FROM runs ORDER BY id");
+         has_ranges_ ? "SELECT model, track, heldout_track, mode, seed, solver, params, best_fitness,"
+                       " baseline_rmse_m, baseline_mae_m, baseline_maxe_m, tuned_rmse_m, tuned_mae_m,"
+                       " tuned_maxe_m, evaluations, seconds, diverged, termination, convergence, param_ranges"
+                       " FROM runs ORDER BY id"
+                     : "SELECT model, track, heldout_track, mode, seed, solver, params, best_fitness,"
+                       " baseline_rmse_m, baseline_mae_m, baseline_maxe_m, tuned_rmse_m, tuned_mae_m,"
+                       " tuned_maxe_m, evaluations, seconds, diverged, termination, convergence, NULL"
+                       " FROM runs ORDER BY id");
   while (s.step()) {
     RunRecord r;
     int i = 0;
@@ -230,6 +302,7 @@ std::vector<RunRecord> Store::runs() const {
     r.termination = s.col_text(i++);
     for (const auto& p : nlohmann::json::parse(s.col_text(i++)))
       r.convergence.push_back({p[0].get<long>(), p[1].get<double>()});
+    r.param_ranges = ranges_of(s.col_text(i++));
     out.push_back(std::move(r));
   }
   return out;

@@ -9,6 +9,10 @@
 // a finished run and never loses one. A store is bound to one experiment
 // (by the hash of its file); opening it for another is refused unless asked.
 //
+// Each run's parameter ranges (RunRecord::param_ranges) are kept since schema
+// 2; a store of schema 1 (made before) is upgraded in one transaction when
+// opened for writing and read as it is otherwise, its runs with empty ranges.
+//
 // Not thread-safe: one Store per thread (the grid writes from one thread).
 #pragma once
 
@@ -58,7 +62,9 @@ class Store {
   ExperimentInfo experiment() const;
   std::set<std::string> finished_keys() const;
   // Writes one run in its own durable transaction. A run whose key is
-  // already stored is an error (the grid never repeats a run).
+  // already stored is an error (the grid never repeats a run); so are
+  // param_ranges that are neither empty nor one per parameter
+  // (std::invalid_argument, nothing written).
   void add(const RunRecord& run);
   // All runs, in the order they were written.
   std::vector<RunRecord> runs() const;
@@ -67,6 +73,7 @@ class Store {
   void exec(const std::string& sql) const;
   std::string path_;
   sqlite3* db_ = nullptr;
+  bool has_ranges_ = false;  // runs has the param_ranges column (schema 2)
 };
 
 }  // namespace odotune::results

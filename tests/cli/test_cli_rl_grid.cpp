@@ -4,10 +4,13 @@
 // which replays to the held-out figure the run stored.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <regex>
 #include <string>
 
+#include "results/store.h"
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 
@@ -37,6 +40,56 @@ std::filesystem::path experiment(const TempDir& dir, const std::string& name, co
   return path;
 }
 
+// How many filled circles of colour "rgb(r, g, b)" a gnuplot SVG draws.
+std::size_t rl_svg_points(const std::string& svg, int r, int g, int b) {
+  char colour[64];
+  std::snprintf(colour, sizeof colour, "color='rgb(%3d, %3d, %3d)'", r, g, b);
+  std::size_t n = 0;
+  for (auto p = svg.find("<use xlink:href='#gpPt6' transform="); p != std::string::npos;
+       p = svg.find("<use xlink:href='#gpPt6' transform=", p + 1))
+    if (svg.compare(svg.find("color=", p), std::strlen(colour), colour) == 0) ++n;
+  return n;
+}
+
+// The two numbers of a table_rl.md row "| test1 | MODE | original | tuned |"
+// and which of them is in bold.
+struct RlTableRow {
+  double original_mm = 0, tuned_mm = 0;
+  bool original_bold = false, tuned_bold = false;
+};
+RlTableRow rl_table_row(const std::string& md, int mode) {
+  const std::regex re("\\| test1 \\| " + std::to_string(mode) +
+                      R"( \| (\*\*)?([0-9.]+)(\*\*)? \| (\*\*)?([0-9.]+)(\*\*)? \|)");
+  std::smatch m;
+  if (!std::regex_search(md, m, re)) {
+    ADD_FAILURE() << "no row for mode " << mode << " in\n" << md;
+    return {};
+  }
+  return {std::stod(m[2]), std::stod(m[5]), m[1].matched, m[4].matched};
+}
+
+// A run of test1 as the grid would store it (space: blocks), with the given
+// held-out RMSE and, when `ranges`, every parameter's range.
+odotune::results::RunRecord rl_report_run(int mode, std::uint64_t seed, double baseline_m, double tuned_m,
+                                          bool ranges) {
+  odotune::results::RunRecord r;
+  r.model = "rl-ekf";
+  r.track = "test1";
+  r.mode = mode;
+  r.seed = seed;
+  r.param_names = {"q_position", "q_orientation", "q_linear_velocity", "q_angular_velocity", "q_acceleration"};
+  r.params = {2.0 + static_cast<double>(seed), 1.0, 0.5, 1.0, 0.25};
+  if (ranges)
+    r.param_ranges = {
+        {1.5, 6.0, true}, {0.01, 100.0, false}, {0.3, 0.9, true}, {0.2, 5.0, false}, {0.1, 0.4, true}};
+  r.best_fitness = tuned_m;
+  r.baseline = {baseline_m, 0.8 * baseline_m, 2.0 * baseline_m};
+  r.tuned = {tuned_m, 0.8 * tuned_m, 2.0 * tuned_m};
+  r.evaluations = 8;
+  r.convergence = {{4, 2.0 * tuned_m}, {8, tuned_m}};
+  return r;
+}
+
 }  // namespace
 
 TEST(CliRlGrid, GridReportAndExportTakeTheRobotLocalizationModel) {
@@ -60,7 +113,24 @@ TEST(CliRlGrid, GridReportAndExportTakeTheRobotLocalizationModel) {
   EXPECT_NE(table.find("| test1 | 11 |"), std::string::npos) << table;
   EXPECT_TRUE(std::filesystem::exists(report_dir / "trajectories_test1.png"));
   EXPECT_TRUE(std::filesystem::exists(report_dir / "convergence_test1.png"));
-  EXPECT_NE(slurp(report_dir / "index.html").find("rl-ekf"), std::string::npos);
+  const std::string html = slurp(report_dir / "index.html");
+  EXPECT_NE(html.find("rl-ekf"), std::string::npos);
+  // Every run is in the improvement figure: one point per run and metric
+  // (RMSE blue, MAE orange, MAXE green), though each box holds one run.
+  const std::string box = slurp(report_dir / "boxplots.svg");
+  EXPECT_EQ(rl_svg_points(box, 0, 114, 178), 2u) << "RMSE";
+  EXPECT_EQ(rl_svg_points(box, 230, 159, 0), 2u) << "MAE";
+  EXPECT_EQ(rl_svg_points(box, 0, 158, 115), 2u) << "MAXE";
+  // The lower (better) RMSE of each row is the bold one.
+  for (int mode : {10, 11}) {
+    const RlTableRow row = rl_table_row(table, mode);
+    EXPECT_EQ(row.original_bold, row.original_mm <= row.tuned_mm) << table;
+    EXPECT_EQ(row.tuned_bold, row.tuned_mm <= row.original_mm) << table;
+  }
+  // One seed, no ranges: each section says so in one line.
+  EXPECT_NE(html.find("One seed per bag and fitness: no spread over seeds to show"), std::string::npos);
+  EXPECT_NE(html.find("What the recording determined"), std::string::npos);
+  EXPECT_NE(html.find("No parameter ranges are stored for these runs"), std::string::npos);
 
   // Two fitnesses: export asks for one; then the file replays to the run's figure.
   const auto out = dir.path() / "ekf.yaml";
@@ -118,4 +188,76 @@ TEST(CliRlGrid, ExperimentMistakesAreOneLineNamingTheFile) {
   const auto t = run_cli("tune --model rl-ekf --track " + odotune::testing_support::reference_track(1));
   EXPECT_NE(t.exit_code, 0);
   EXPECT_NE(t.err.find("--rl-params"), std::string::npos) << t.err;
+}
+
+// Three seeds with parameter ranges, written into a store directly (the tune
+// does not fill ranges yet): the seeds' spread as min / median / max, one
+// point per seed in the improvement figure, and each parameter's range.
+TEST(CliRlGrid, ReportShowsTheSeedsSpreadAndWhatTheRecordingDetermined) {
+  TempDir dir("cli-rl-report-seeds");
+  const auto exp = experiment(dir, "rl3", "seeds: [1]", "seeds: [1, 2, 3]");
+  const auto store = dir.path() / "rl3.sqlite";
+  {
+    const std::string text = slurp(exp);
+    odotune::results::Store s(store,
+                              {"rl3", text, odotune::results::experiment_hash(text), "test", exp.string()});
+    // Outage: improvements -50, +10, +20 %; both: -100, -20, +40 % (baseline 2 m).
+    const double outage[] = {3.0, 1.8, 1.6}, both[] = {4.0, 2.4, 1.2};
+    for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+      s.add(rl_report_run(10, seed, 2.0, outage[seed - 1], true));
+      s.add(rl_report_run(11, seed, 2.0, both[seed - 1], seed != 2));  // seed 2 stored without ranges
+    }
+  }
+  const auto out = dir.path() / "report";
+  const auto rep = run_cli("report " + store.string() + " --out " + out.string());
+  ASSERT_EQ(rep.exit_code, 0) << rep.err;
+  const std::string html = slurp(out / "index.html");
+
+  // The spread over seeds.
+  const std::string seeds = slurp(out / "table_rl_seeds.md");
+  EXPECT_NE(seeds.find("| test1 | outage | 3 | -50.0 % | +10.0 % | +20.0 % | 1600.00 | 1800.00 | 3000.00 |"),
+            std::string::npos)
+      << seeds;
+  EXPECT_NE(seeds.find("| test1 | both | 3 | -100.0 % | -20.0 % | +40.0 % | 1200.00 | 2400.00 | 4000.00 |"),
+            std::string::npos)
+      << seeds;
+  EXPECT_NE(html.find("Spread over seeds"), std::string::npos);
+  EXPECT_NE(html.find("<td class=\"num\">+10.0 %</td>"), std::string::npos);
+  // One point per seed, fitness and metric in the improvement figure.
+  const std::string box = slurp(out / "boxplots.svg");
+  EXPECT_EQ(rl_svg_points(box, 0, 114, 178), 6u) << "RMSE";
+  EXPECT_EQ(rl_svg_points(box, 230, 159, 0), 6u) << "MAE";
+  EXPECT_EQ(rl_svg_points(box, 0, 158, 115), 6u) << "MAXE";
+  // Means in the table; the original (2000 mm) is better than both means, so bold.
+  const std::string table = slurp(out / "table_rl.md");
+  EXPECT_NE(table.find("| test1 | 10 | **2000.00** | 2133.33 |"), std::string::npos) << table;
+  EXPECT_NE(table.find("| test1 | 11 | **2000.00** | 2533.33 |"), std::string::npos) << table;
+
+  // What the recording determined: per bag × fitness × parameter, each seed's factor and range.
+  const std::string ranges = slurp(out / "table_rl_ranges.md");
+  EXPECT_NE(ranges.find("| Track | Fitness | Parameter | seed 1 | seed 2 | seed 3 |"), std::string::npos)
+      << ranges;
+  EXPECT_NE(ranges.find("| test1 | outage | q_position | 3 [1.5, 6] | 4 [1.5, 6] | 5 [1.5, 6] |"),
+            std::string::npos)
+      << ranges;
+  EXPECT_NE(ranges.find("| test1 | outage | q_orientation | 1, not determined by this recording [0.01, 100] |"),
+            std::string::npos)
+      << ranges;
+  EXPECT_NE(
+      ranges.find("| test1 | both | q_acceleration | 0.25 [0.1, 0.4] | 0.25, no range stored | 0.25 [0.1, "
+                  "0.4] |"),
+      std::string::npos)
+      << ranges;
+  EXPECT_NE(html.find("What the recording determined"), std::string::npos);
+  EXPECT_NE(html.find("not determined by this recording [0.2, 5]"), std::string::npos);
+  EXPECT_EQ(html.find("No parameter ranges are stored"), std::string::npos);
+  for (const std::string mode : {"10", "11"}) {
+    const std::string svg = slurp(out / ("ranges_test1_" + mode + ".svg"));
+    for (const std::string label : {"q_position", "q_acceleration", "seed 1", "seed 3", "not determined",
+                                    "the file's value (factor 1)", "tuned value"})
+      EXPECT_NE(svg.find(label), std::string::npos) << mode << " lacks " << label;
+    // A dot per parameter and seed with ranges (3 seeds for outage, 2 for both), and the legend's.
+    EXPECT_EQ(rl_svg_points(svg, 0, 0, 0), (mode == "10" ? 15u : 10u) + 1u) << mode;
+  }
+  EXPECT_EQ(html.find("<script"), std::string::npos);
 }

@@ -27,6 +27,10 @@ results::RunRecord awkward_record() {
   r.param_names = {"a1", "", "b2"};
   r.params = {-0.0, std::numeric_limits<double>::denorm_min(),
               std::bit_cast<double>(0x7ff8dead0000beefULL)};  // a NaN with a payload
+  r.param_ranges = {
+      {0.5, 2.0, true},
+      {-0.0, std::numeric_limits<double>::infinity(), false},
+      {std::numeric_limits<double>::denorm_min(), std::bit_cast<double>(0x7ff8dead0000beefULL), true}};
   r.best_fitness = std::numeric_limits<double>::infinity();
   r.baseline = {0.1, -std::numeric_limits<double>::infinity(), std::numeric_limits<double>::max()};
   r.tuned = {std::nextafter(0.1, 1.0), 1e-300, std::numeric_limits<double>::quiet_NaN()};
@@ -53,6 +57,12 @@ TEST(RunRecordBytes, RoundTripKeepsEveryBit) {
   EXPECT_EQ(b.param_names, a.param_names);
   ASSERT_EQ(b.params.size(), a.params.size());
   for (std::size_t i = 0; i < a.params.size(); ++i) EXPECT_EQ(bits(b.params[i]), bits(a.params[i])) << i;
+  ASSERT_EQ(b.param_ranges.size(), a.param_ranges.size());
+  for (std::size_t i = 0; i < a.param_ranges.size(); ++i) {
+    EXPECT_EQ(bits(b.param_ranges[i].lo), bits(a.param_ranges[i].lo)) << i;
+    EXPECT_EQ(bits(b.param_ranges[i].hi), bits(a.param_ranges[i].hi)) << i;
+    EXPECT_EQ(b.param_ranges[i].determined, a.param_ranges[i].determined) << i;
+  }
   EXPECT_EQ(bits(b.best_fitness), bits(a.best_fitness));
   for (auto [x, y] : {std::pair{&a.baseline, &b.baseline}, std::pair{&a.tuned, &b.tuned}}) {
     EXPECT_EQ(bits(y->rmse_m), bits(x->rmse_m));
@@ -71,6 +81,7 @@ TEST(RunRecordBytes, RoundTripKeepsEveryBit) {
   // An empty record too.
   const results::RunRecord empty = run_record_from_bytes(to_bytes(results::RunRecord{}));
   EXPECT_TRUE(empty.params.empty());
+  EXPECT_TRUE(empty.param_ranges.empty());
   EXPECT_TRUE(empty.convergence.empty());
   EXPECT_EQ(empty.solver, "pso");
 }
@@ -92,6 +103,17 @@ TEST(RunRecordBytes, RefusesEveryTruncationAndTrailingOrForeignBytes) {
   const std::size_t count_at = 4 + 8 + 8 + 8 + 8 + 8 + (8 + 3);  // magic, 3 strings, mode, seed, solver
   for (std::size_t i = 0; i < 8; ++i) huge[count_at + i] = static_cast<char>(0x7f);
   EXPECT_THROW(run_record_from_bytes(huge), std::runtime_error);
+  // A range's `determined` flag is one byte, 0 or 1.
+  results::RunRecord ranged;
+  ranged.param_names = {"q"};
+  ranged.params = {1.0};
+  ranged.param_ranges = {{0.5, 2.0, true}};
+  std::vector<char> flag = to_bytes(ranged);
+  const std::size_t flag_at = count_at + (8 + 9) + (8 + 8) + (8 + 16);  // names, params, ranges' count, lo, hi
+  ASSERT_EQ(flag[flag_at], 1);
+  EXPECT_TRUE(run_record_from_bytes(flag).param_ranges.at(0).determined);
+  flag[flag_at] = 2;
+  EXPECT_THROW(run_record_from_bytes(flag), std::runtime_error);
 }
 
 }  // namespace

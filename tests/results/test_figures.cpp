@@ -8,14 +8,17 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <random>
+#include <regex>
 #include <sstream>
 #include <stdexcept>
 
 #include "results/gnuplot.h"
+#include "results/param_range_figure.h"
 #include "support/cli_runner.h"
 
 namespace odotune::results {
@@ -198,6 +201,71 @@ TEST_F(FiguresTest, BoxplotsRenderModelsMetricsAndLegend) {
                std::invalid_argument);
 }
 
+// How many filled circles (gnuplot point type 7) of colour `rgb` ("r, g, b")
+// an SVG draws: the plotted points, plus one per legend sample of that colour.
+std::size_t svg_points(const std::string& svg, int r, int g, int b) {
+  char colour[64];
+  std::snprintf(colour, sizeof colour, "color='rgb(%3d, %3d, %3d)'", r, g, b);
+  std::size_t n = 0;
+  for (auto p = svg.find("<use xlink:href='#gpPt6' transform="); p != std::string::npos;
+       p = svg.find("<use xlink:href='#gpPt6' transform=", p + 1))
+    if (svg.compare(svg.find("color=", p), std::strlen(colour), colour) == 0) ++n;
+  return n;
+}
+
+// One run per box (a one-seed rl-ekf experiment: two fitnesses, three
+// metrics, every improvement negative): each value is drawn, and inside the
+// y range (gnuplot leaves out points outside it).
+TEST_F(FiguresTest, BoxplotsDrawEveryValueOfBoxesOfOneToThreeRuns) {
+  std::map<std::string, std::map<std::string, std::vector<double>>> data;
+  data["outage"] = {{"RMSE", {-176.3}}, {"MAE", {-150.2}}, {"MAXE", {-120.9}}};
+  data["both"] = {{"RMSE", {-190.8, -185.0, -60.0}}, {"MAE", {-170.0, -10.0}}, {"MAXE", {-140.0}}};
+  boxplots(dir_ / "small", "Held-out improvement", data, {"fitness", false});
+  const std::string svg = expect_outputs("small");
+  expect_contains(svg, ">fitness<");
+  EXPECT_EQ(svg_points(svg, 0, 114, 178), 1u + 3u);  // RMSE
+  EXPECT_EQ(svg_points(svg, 230, 159, 0), 1u + 2u);  // MAE
+  EXPECT_EQ(svg_points(svg, 0, 158, 115), 1u + 1u);  // MAXE
+  // The y axis holds the data: a tic at or below -190.8 is labelled (the
+  // defect drew an axis of -1…1).
+  expect_contains(svg, ">-200<");
+  EXPECT_EQ(svg.find(">-1<"), std::string::npos);
+}
+
+TEST_F(FiguresTest, BoxplotsWithPointsDrawOnePointPerValueOverTheBoxes) {
+  std::map<std::string, std::map<std::string, std::vector<double>>> data;
+  for (int i = 0; i < 6; ++i) {
+    data["outage"]["RMSE"].push_back(10.0 + i);
+    data["both"]["RMSE"].push_back(-5.0 * i);
+  }
+  data["both"]["RMSE"].push_back(std::numeric_limits<double>::quiet_NaN());  // not drawn
+  boxplots(dir_ / "pts", "t", data, {"fitness", true});
+  EXPECT_EQ(svg_points(expect_outputs("pts"), 0, 114, 178), 12u);
+  // Without points, boxes of 4 or more values draw only their outliers (none here).
+  boxplots(dir_ / "nopts", "t", data);
+  const std::string svg = expect_outputs("nopts");
+  EXPECT_EQ(svg_points(svg, 0, 114, 178), 0u);
+  expect_contains(svg, ">model<");
+}
+
+TEST_F(FiguresTest, ParamRangesDrawABarPerSeedADotPerValueAndTheReference) {
+  const std::vector<std::string> params = {"q_x", "q_yaw", "q_vx"};
+  std::vector<ParamRangeSeries> series = {
+      {"seed 1", {2.0, 1.0, 0.05}, {{1.5, 3.0, true}, {0.01, 100.0, false}, {0.02, 0.2, true}}},
+      {"seed 2", {2.5, 1.0, 0.04}, {{1.2, 4.0, true}, {0.0, HUGE_VAL, false}, {0.01, 0.1, true}}},
+  };
+  param_ranges_figure(dir_ / "ranges", "test1, fitness outage: tuned factors", "factor (log scale)", params,
+                      series, 1.0, "the file's value (factor 1)");
+  const std::string svg = expect_outputs("ranges");
+  for (const char* s : {"test1, fitness outage: tuned factors", "factor (log scale)", "q_x", "q_yaw", "q_vx",
+                        "seed 1", "seed 2", "the file's value (factor 1)", "tuned value", "not determined"})
+    expect_contains(svg, s);
+  EXPECT_EQ(svg_points(svg, 0, 0, 0), 6u + 1u);  // every tuned value, and the legend's sample
+  series[1].ranges.pop_back();
+  EXPECT_THROW(param_ranges_figure(dir_ / "r2", "t", "x", params, series, 1.0, "ref"), std::invalid_argument);
+  EXPECT_THROW(param_ranges_figure(dir_ / "r3", "t", "x", {}, {}, 1.0, "ref"), std::invalid_argument);
+}
+
 TEST(FiguresResample, StepWiseOntoUnionGrid) {
   // Run A: 10 → 5.0, 30 → 3.0; run B: 20 → 4.0, 40 → 1.0.
   const std::vector<std::vector<ConvergencePoint>> runs = {
@@ -266,6 +334,74 @@ TEST_F(FiguresTest, TrajectoriesRenderWithLegendAndGaps) {
   paths[1].ys_m.pop_back();
   EXPECT_THROW(trajectories(dir_ / "t2", "t", paths), std::invalid_argument);
   EXPECT_THROW(trajectories(dir_ / "t3", "t", {}), std::invalid_argument);
+}
+
+// A path's points in SVG pixels: the coordinates of the SVG path drawn in
+// `stroke`, after its legend sample (the first two points).
+std::vector<std::pair<double, double>> svg_path_points(const std::string& svg, const std::string& stroke) {
+  const auto at = svg.find("<path stroke='" + stroke + "'  d='M", svg.find("</defs>"));
+  EXPECT_NE(at, std::string::npos) << stroke;
+  std::vector<std::pair<double, double>> out;
+  if (at == std::string::npos) return out;
+  const std::string d = svg.substr(at, svg.find("'/>", at) - at);
+  static const std::regex xy(R"(([0-9.]+),([0-9.]+))");
+  for (auto it = std::sregex_iterator(d.begin(), d.end(), xy); it != std::sregex_iterator(); ++it)
+    out.emplace_back(std::stod((*it)[1]), std::stod((*it)[2]));
+  out.erase(out.begin(), out.begin() + std::min<std::ptrdiff_t>(2, static_cast<std::ptrdiff_t>(out.size())));
+  return out;
+}
+
+// The plot border's size in SVG pixels: the largest closed black rectangle.
+std::pair<double, double> svg_plot_size(const std::string& svg) {
+  static const std::regex rect(
+      R"(d='M([0-9.]+),([0-9.]+) L([0-9.]+),([0-9.]+) L([0-9.]+),([0-9.]+) L([0-9.]+),([0-9.]+) L[0-9.]+,[0-9.]+ Z)");
+  std::pair<double, double> best{0, 0};
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), rect); it != std::sregex_iterator(); ++it) {
+    double w = 0, h = 0;
+    for (int k = 1; k <= 6; k += 2) {
+      w = std::max(w, std::abs(std::stod((*it)[k + 2]) - std::stod((*it)[k])));
+      h = std::max(h, std::abs(std::stod((*it)[k + 3]) - std::stod((*it)[k + 1])));
+    }
+    if (w * h > best.first * best.second) best = {w, h};
+  }
+  return best;
+}
+
+// A wide and a tall path: x and y at the same scale, and the plot area
+// fitted to the data (no blank band around a path, as a 1000 × 750 canvas
+// left around a 145 m × 30 m bag).
+TEST_F(FiguresTest, TrajectoriesAreAtEqualScaleAndFillThePlot) {
+  for (const auto& [sx_m, sy_m] : {std::pair{145.0, 30.0}, std::pair{12.0, 60.0}, std::pair{40.0, 40.0}}) {
+    TrajectoryPath p{"path", {}, {}};
+    for (int i = 0; i <= 100; ++i) {
+      const double t = i / 100.0;
+      p.xs_m.push_back(-20.0 + sx_m * t);
+      p.ys_m.push_back(5.0 + sy_m * (0.5 - 0.5 * std::cos(2.0 * M_PI * t)));
+    }
+    const std::string stem = "fit" + std::to_string(static_cast<int>(sx_m));
+    trajectories(dir_ / stem, "a title of sixty characters or so, as the reports' titles", {p});
+    const std::string svg = expect_outputs(stem);
+    const auto pts = svg_path_points(svg, "rgb(  0,   0,   0)");
+    ASSERT_EQ(pts.size(), 101u) << stem;
+    double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
+    for (const auto& [x, y] : pts) {
+      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    }
+    const double px_per_m_x = (x1 - x0) / sx_m, px_per_m_y = (y1 - y0) / sy_m;
+    EXPECT_NEAR(px_per_m_x / px_per_m_y, 1.0, 0.02) << stem;
+    const auto [w, h] = svg_plot_size(svg);
+    // The canvas holds the plot, its labels and the legend, and no blank band:
+    // 1000 × 750 around a 608 × 131 plot before.
+    std::smatch size;
+    ASSERT_TRUE(std::regex_search(svg, size, std::regex(R"re(width="([0-9]+)" height="([0-9]+)")re")));
+    EXPECT_LE(std::stod(size[1]) - w, 250.0) << stem << ": plot " << w << " wide on a canvas of " << size[1];
+    EXPECT_LE(std::stod(size[2]) - h, 130.0) << stem << ": plot " << h << " high on a canvas of " << size[2];
+    // The data span the plot in its longer direction, within the 3 % margins.
+    EXPECT_GT(std::max((x1 - x0) / w, (y1 - y0) / h), 0.9)
+        << stem << ": " << x1 - x0 << " of " << w << ", " << y1 - y0 << " of " << h;
+    EXPECT_LE((x1 - x0) / w, 1.0) << stem;
+    EXPECT_LE((y1 - y0) / h, 1.0) << stem;
+  }
 }
 
 }  // namespace

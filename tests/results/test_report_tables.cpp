@@ -85,7 +85,38 @@ TEST(ReportTables, Table1HasOriginalAndMeanTunedRmsePerTrackAndMode) {
   const std::string md = to_markdown(text_table(t));
   EXPECT_NE(md.find("| t2 | 7 | 100.00 | 80.00 | **60.00** |"), std::string::npos) << md;
   EXPECT_NE(md.find("| t1 | 1 | 200.00 | **100.00** | – |"), std::string::npos) << md;
+  // Lower error is better: a tuned value worse than the original is not the
+  // row's best, the original is.
+  EXPECT_NE(md.find("| t1 | 7 | **200.00** | 300.00 | – |"), std::string::npos) << md;
   EXPECT_NE(md.find("|---|---:|---:|---:|---:|"), std::string::npos) << md;
+}
+
+TEST(ReportTables, SeedSpreadIsMinMedianMaxOverAModelsSeeds) {
+  auto runs = sample_runs();
+  runs.push_back(run("alpha", "t2", 7, 3, 0.100, 0.120));  // -20 %
+  const auto rows = seed_spread(runs, "alpha");
+  ASSERT_EQ(rows.size(), 1u);  // rq's runs and held-out runs are not mixed in
+  EXPECT_EQ(rows[0].track, "t2");
+  EXPECT_EQ(rows[0].mode, 7);
+  EXPECT_EQ(rows[0].runs, 3);
+  EXPECT_NEAR(rows[0].improvement_min_pct, -20.0, 1e-9);
+  EXPECT_NEAR(rows[0].improvement_median_pct, 30.0, 1e-9);
+  EXPECT_NEAR(rows[0].improvement_max_pct, 50.0, 1e-9);
+  EXPECT_NEAR(rows[0].tuned_min_m, 0.050, 1e-12);
+  EXPECT_NEAR(rows[0].tuned_median_m, 0.070, 1e-12);
+  EXPECT_NEAR(rows[0].tuned_max_m, 0.120, 1e-12);
+  const auto rq = seed_spread(runs, "rq");
+  ASSERT_EQ(rq.size(), 3u);  // t2/7, t1/1, t1/7
+  EXPECT_NEAR(rq[2].improvement_median_pct, -50.0, 1e-9);
+  const std::string md = to_markdown(text_table(rows, [](int m) { return "mode " + std::to_string(m); }));
+  EXPECT_NE(md.find("| t2 | mode 7 | 3 | -20.0 % | +30.0 % | +50.0 % | 50.00 | 70.00 | 120.00 |"),
+            std::string::npos)
+      << md;
+}
+
+TEST(ReportTables, ParamRangeTextSaysWhatTheRecordingDetermined) {
+  EXPECT_EQ(param_range_text(1.8412, {0.91234, 3.2, true}), "1.84 [0.912, 3.2]");
+  EXPECT_EQ(param_range_text(1.0, {0.01, 100.0, false}), "1, not determined by this recording [0.01, 100]");
 }
 
 TEST(ReportTables, GeneralisationPutsPerTrackAndHeldOutSideBySide) {
