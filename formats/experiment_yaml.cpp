@@ -144,14 +144,25 @@ ExperimentRl read_rl(const std::filesystem::path& path, const YAML::Node& c,
         if (!(l > 0.0))
           fail_at(path, v, "robot_localization.outage_s must be > 0 (seconds, or a list of them)");
       if (rl.outage_s.empty()) fail_at(path, v, "robot_localization.outage_s must not be an empty list");
+    } else if (key == "grid_levels") {
+      if (!v.IsSequence()) fail_at(path, v, "robot_localization.grid_levels must be a list of decades (or [])");
+      rl.search.grid_levels.clear();
+      for (const auto& l : v) rl.search.grid_levels.push_back(scalar<double>(path, l, "a grid level"));
+    } else if (key == "refine_decades") {
+      rl.search.refine_decades = scalar<double>(path, v, what.c_str());
+      if (!(rl.search.refine_decades >= 0.0)) fail_at(path, v, "robot_localization.refine_decades must be ≥ 0");
+    } else if (key == "profile_step_decades") {
+      rl.search.profile_step_decades = scalar<double>(path, v, what.c_str());
+      if (!(rl.search.profile_step_decades > 0.0))
+        fail_at(path, v, "robot_localization.profile_step_decades must be > 0");
     } else if (key == "outage_every_s") {
       rl.outage_every_s = scalar<double>(path, v, what.c_str());
       if (!(rl.outage_every_s > 0.0)) fail_at(path, v, "robot_localization.outage_every_s must be > 0");
     } else {
       fail_at(path, kv.first,
               fmt::format("unknown robot_localization key '{}', expected params, node_name, tf, gps_topic, "
-                          "gps_heading_fit_s, until_s, end_s, fitness, space, input_covariances, outage_s or "
-                          "outage_every_s",
+                          "gps_heading_fit_s, until_s, end_s, fitness, space, input_covariances, outage_s, "
+                          "outage_every_s, grid_levels, refine_decades or profile_step_decades",
                           key));
     }
   }

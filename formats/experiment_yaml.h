@@ -28,6 +28,9 @@
 //     input_covariances: false           # also search factors on the inputs' covariances
 //     outage_s: 60                       # the outages' lengths [s]: one, or a list
 //     outage_every_s: 10                 # an outage of each length starts every … [s]
+//     grid_levels: [-2, 0, 2]            # the search's grid of block factors [decades], or []
+//     refine_decades: 1                  # its seeded refinement around the grid's best (0: none)
+//     profile_step_decades: 0.5          # the profile's step
 //
 // A calibrator model (pf-calib, adaptive-pf-calib) has no fitness mode: its
 // cells are made for the first listed mode only (the run records that mode),
@@ -45,6 +48,7 @@
 #include "filters/resampling.h"
 #include "objectives/fitness_mode.h"
 #include "objectives/rl_objective.h"
+#include "objectives/rl_search_options.h"
 #include "objectives/tuned_model.h"
 
 namespace odotune {
@@ -74,6 +78,7 @@ struct ExperimentRl {
   bool input_covariances = true;
   std::vector<double> outage_s{60.0};
   double outage_every_s = 10.0;
+  RlSearchOptions search;  // grid_levels, refine_decades, profile_step_decades
 };
 
 struct Experiment {

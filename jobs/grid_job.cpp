@@ -227,6 +227,7 @@ std::optional<results::RunRecord> run_rl_cell(const Experiment& e, const std::ve
   req.options.input_covariances = x.input_covariances;
   req.options.outage_s = x.outage_s;
   req.options.outage_stride_s = x.outage_every_s;
+  req.search = x.search;
   std::string why;
   if (!req.IsValid(&why)) throw Failure(why);
   const RlTuneOutcome o = tune_rl(*tracks[c.score_on].rl, req);

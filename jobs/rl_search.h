@@ -20,19 +20,10 @@
 
 #include "jobs/tune_job.h"
 #include "objectives/rl_objective.h"
+#include "objectives/rl_search_options.h"
 #include "tuner/summary.h"
 
 namespace odotune {
-
-struct RlSearchOptions {
-  std::vector<double> grid_levels = {-2.0, 0.0, 2.0};  // decades; empty: no grid (refine around the file)
-  double refine_decades = 1.0;                         // 0: no refinement
-  double profile_step_decades = 0.5;
-  double tolerance = 0.02;  // relative: "within 2 % of the best"
-  bool profile = true;
-
-  bool IsValid(std::string* why) const;
-};
 
 // One tuned parameter's profile.
 struct RlParamProfile {

@@ -40,6 +40,14 @@ DESIGNS = {
     "grid-outage": ["--fitness", "outage", "--refine", "0", "--outage", "30"],
     "grid-refine": ["--fitness", "both", "--refine", "1", "--outage", "30", "--particles", "20",
                     "--iterations", "30"],
+    "grid-refine-half": ["--fitness", "both", "--refine", "0.5", "--outage", "30", "--particles", "20",
+                         "--iterations", "30"],
+    "grid-refine-blocks": ["--fitness", "both", "--space", "blocks", "--refine", "1", "--outage", "30",
+                           "--particles", "20", "--iterations", "30"],
+    "grid-refine-prior": ["--fitness", "both", "--refine", "1", "--prior", "0.05", "--outage", "30",
+                          "--particles", "20", "--iterations", "30"],
+    "grid-every5": ["--fitness", "both", "--refine", "0", "--outage", "30", "--outage-every", "5"],
+    "grid-blocks": ["--fitness", "both", "--space", "blocks", "--refine", "0", "--outage", "30"],
 }
 
 

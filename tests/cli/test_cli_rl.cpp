@@ -58,19 +58,28 @@ TEST(CliRl, RefusesFlagsThatBelongToTracks) {
   EXPECT_EQ(std::count(c.err.begin(), c.err.end(), '\n'), 1) << c.err;
 }
 
-// A small tune on the first 100 s: the written file is the user's file with
-// the tuned noise, it reads back, and replayed as written it gives the held-out
-// figure the tune printed.
+// A small tune on the first 100 s, two starts: the written file is the user's
+// file with the tuned noise and the start of lowest tuning fitness, it names
+// what the recording did not determine, it reads back, and replayed as
+// written it gives the held-out figure the tune printed; each start's file is
+// written too.
 TEST(CliRl, TunedFileReplaysToTheReportedFigures) {
   TempDir dir("cli-rl-tune");
-  const auto out = dir.path() / "ekf.yaml", ros1 = dir.path() / "ekf-ros1.yaml";
+  const auto out = dir.path() / "ekf.yaml", ros1 = dir.path() / "ekf-ros1.yaml", starts = dir.path() / "starts";
   const auto r = run_cli("tune " + kSource +
-                         " --until 100 --fitness both --space blocks --no-input-covariances --particles 4 "
-                         "--iterations 2 --seed 3 --config-out " +
-                         out.string() + " --config-out-ros1 " + ros1.string());
+                         " --until 100 --fitness both --space blocks --no-input-covariances --grid=-1,1 "
+                         "--refine 0.5 --particles 4 --iterations 2 --seed 3 --starts 2 --starts-out " +
+                         starts.string() + " --config-out " + out.string() + " --config-out-ros1 " +
+                         ros1.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string text = slurp(out);
   EXPECT_NE(text.find("# Tuned by odotune"), std::string::npos);
+  EXPECT_NE(text.find("of 2 starts, seeds 3-4"), std::string::npos) << text;
+  EXPECT_NE(text.find("# Not determined by this recording"), std::string::npos) << text;
+  EXPECT_NE(r.out.find("not determined by this recording"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("<- written"), std::string::npos) << r.out;
+  EXPECT_TRUE(std::filesystem::exists(starts / "ekf-seed3.yaml"));
+  EXPECT_TRUE(std::filesystem::exists(starts / "ekf-seed4.yaml"));
   EXPECT_NE(text.find("navsat_transform"), std::string::npos);  // the user's other section kept
   const auto p2 = odotune::rlnode::read_rl_params(out);
   const auto p1 = odotune::rlnode::read_rl_params(ros1);
@@ -86,4 +95,35 @@ TEST(CliRl, TunedFileReplaysToTheReportedFigures) {
   ASSERT_EQ(e.exit_code, 0) << e.err;
   const double replayed = number_after(e.out, "GPS outage RMSE");
   EXPECT_NEAR(replayed, tuned_outage, 0.001) << r.out << "\n" << e.out;
+}
+
+// The reverse fold: tuned on the recording after --from (the bag cut there),
+// judged before it (the GPS fused for the first 60 s, then an outage); the
+// written file replays to the judged outage figure. --until and --from
+// together are refused.
+TEST(CliRl, TuneFromJudgesTheSpanBefore) {
+  TempDir dir("cli-rl-from");
+  const auto out = dir.path() / "ekf.yaml", json_file = dir.path() / "t.json";
+  const auto r = run_cli("tune " + kSource +
+                         " --from 300 --space blocks --no-input-covariances --outage 30 --grid=-1,1 --refine 0 "
+                         "--config-out " +
+                         out.string() + " --json " + json_file.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("tuned on 300.0-395.3 s"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("judged on 0.0-300.0 s"), std::string::npos) << r.out;
+  const double judged = number_after(r.out, R"(GPS outage:\s+[0-9.]+ ->)");
+  const auto e = run_cli("eval --rl-params " + out.string() + " --bag " + kBags +
+                         "/ros2/test1.mcap --tf imu_link=0,-0.3,0.52,1.5707963267948966,0,-1.5707963267948966 "
+                         "--gps-heading-fit 60 --from 60 --until 300");
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_NEAR(number_after(e.out, "GPS outage RMSE"), judged, 0.001) << r.out << "\n" << e.out;
+  EXPECT_NE(slurp(json_file).find("\"held_out\""), std::string::npos);
+
+  const auto both = run_cli("tune " + kSource + " --until 100 --from 300");
+  EXPECT_NE(both.exit_code, 0);
+  EXPECT_NE(both.err.find("--until and --from"), std::string::npos) << both.err;
+  EXPECT_EQ(std::count(both.err.begin(), both.err.end(), '\n'), 1) << both.err;
+  const auto grid = run_cli("tune " + kSource + " --until 100 --grid=-1,x");
+  EXPECT_NE(grid.exit_code, 0);
+  EXPECT_NE(grid.err.find("--grid -1,x"), std::string::npos) << grid.err;
 }

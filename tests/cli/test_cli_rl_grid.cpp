@@ -31,7 +31,8 @@ std::filesystem::path experiment(const TempDir& dir, const std::string& name, co
                      "/ros2/test1.mcap]\nrobot_localization:\n  params: " + kRlBags +
                      "/husky_ekf.yaml\n  tf: [\"" + kTf +
                      "\"]\n  gps_heading_fit_s: 60\n  until_s: 100\n  end_s: 160\n  fitness: [outage, both]\n"
-                     "  space: blocks\n  input_covariances: false\n  outage_s: 30\nseeds: [1]\nsolver: pso\n"
+                     "  space: blocks\n  input_covariances: false\n  outage_s: 30\n  grid_levels: [-1, 1]\n"
+                     "  refine_decades: 0.5\n  profile_step_decades: 2\nseeds: [1]\nsolver: pso\n"
                      "budget: {particles: 4, iterations: 2}\nstore: " +
                      name + ".sqlite\n";
   if (!from.empty()) text.replace(text.find(from), from.size(), to);
@@ -127,10 +128,22 @@ TEST(CliRlGrid, GridReportAndExportTakeTheRobotLocalizationModel) {
     EXPECT_EQ(row.original_bold, row.original_mm <= row.tuned_mm) << table;
     EXPECT_EQ(row.tuned_bold, row.tuned_mm <= row.original_mm) << table;
   }
-  // One seed, no ranges: each section says so in one line.
+  // One seed: the spread section says so in one line. Each run profiled its
+  // parameters: their ranges are stored and drawn.
   EXPECT_NE(html.find("One seed per bag and fitness: no spread over seeds to show"), std::string::npos);
   EXPECT_NE(html.find("What the recording determined"), std::string::npos);
-  EXPECT_NE(html.find("No parameter ranges are stored for these runs"), std::string::npos);
+  EXPECT_EQ(html.find("No parameter ranges are stored for these runs"), std::string::npos);
+  for (int mode : {10, 11})
+    EXPECT_TRUE(std::filesystem::exists(report_dir / ("ranges_test1_" + std::to_string(mode) + ".svg")))
+        << mode;
+  for (const auto& run : odotune::results::Store(store).runs()) {
+    EXPECT_EQ(run.param_ranges.size(), run.param_names.size());
+    for (std::size_t i = 0; i < run.params.size(); ++i) {
+      if (!run.param_ranges[i].determined) {
+        EXPECT_EQ(run.params[i], 1.0) << run.param_names[i];
+      }
+    }
+  }
 
   // Two fitnesses: export asks for one; then the file replays to the run's figure.
   const auto out = dir.path() / "ekf.yaml";
