@@ -4,6 +4,9 @@
 #include <bit>
 #include <cassert>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <type_traits>
@@ -12,86 +15,188 @@
 #include <fmt/format.h>
 
 // The filter's arithmetic is written once, as templates over the type of one
-// number: double for RlEkf, Lanes (kLanes filters side by side) for
-// RlEkfLanes. Both instantiations perform the same IEEE operations in the same
-// order for every lane (no FMA contraction: -ffp-contract=off, CMakeLists.txt;
-// sums in source order), so a lane gives the bits its own RlEkf gives.
+// number: double for RlEkf, Pack<W> (kLanes filters side by side, held in
+// registers of W doubles) for RlEkfLanes. Every instantiation performs the
+// same IEEE operations in the same order for every lane (no FMA contraction:
+// -ffp-contract=off, CMakeLists.txt; sums in source order), so a lane gives
+// the bits its own RlEkf gives.
 //
-// ODOTUNE_RL_LANES marks the lane kernels compiled for x86-64-v4 (AVX-512),
-// AVX2 and baseline x86-64, the CPU picking one at load time (target_clones,
-// as filters/pf_kernels.h); elementwise arithmetic makes them bit-identical.
-#if defined(__x86_64__) && defined(__linux__) && !defined(__clang__)
-#define ODOTUNE_RL_LANES [[gnu::target_clones("arch=x86-64-v4", "avx2", "default")]]
-#else
-#define ODOTUNE_RL_LANES
-#endif
+// The lane kernels exist for x86-64-v4 (AVX-512, W = 8), AVX2 (W = 4) and
+// baseline x86-64 (SSE2, W = 2), the CPU picking one at load time (GCC's
+// function multiversioning, an ELF ifunc). Each uses registers its CPU has:
+// GCC turns comparisons of vectors wider than the target's into scalar code.
 #define ODOTUNE_RL_INLINE [[gnu::always_inline]] inline
 
 namespace odotune::filters::rl {
 namespace {
 
 constexpr int kN = kStateSize;
-// Lanes travel between functions of this file only, all compiled alike, and
-// mostly inlined: the ABI note on passing AVX-512-sized vectors by value does
-// not concern them.
+// Vectors travel between functions of this file only, all inlined into the
+// kernels that use them: the ABI note on passing them by value does not
+// concern them.
 #pragma GCC diagnostic ignored "-Wpsabi"
 using LaneMask = std::int64_t __attribute__((vector_size(kLanes * sizeof(double))));
 
+// W doubles and a W-lane mask (all bits set where true) as GCC vectors
+// (spelled out per W: GCC ignores vector_size with a dependent size).
+template <int W>
+struct Vector;
+template <>
+struct Vector<2> {
+  using V = double __attribute__((vector_size(16), may_alias));
+  using M = std::int64_t __attribute__((vector_size(16), may_alias));
+};
+template <>
+struct Vector<4> {
+  using V = double __attribute__((vector_size(32), may_alias));
+  using M = std::int64_t __attribute__((vector_size(32), may_alias));
+};
+template <>
+struct Vector<8> {
+  using V = double __attribute__((vector_size(64), may_alias));
+  using M = std::int64_t __attribute__((vector_size(64), may_alias));
+};
+
+// kLanes doubles as kLanes / W vectors of W, and a per-lane mask alike; they
+// view RlEkfLanes' Lanes arrays.
+template <int W>
+struct Pack {
+  using V = typename Vector<W>::V;
+  static constexpr int kParts = kLanes / W;
+  V p[kParts];
+  double lane(int l) const { return p[l / W][l % W]; }
+  static Pack of(const double (&lanes)[kLanes]) {
+    Pack r;
+    std::memcpy(&r, lanes, sizeof r);
+    return r;
+  }
+};
+template <int W>
+struct PackMask {
+  using M = typename Vector<W>::M;
+  M p[Pack<W>::kParts];
+};
+
+#define ODOTUNE_RL_PACK_ARITHMETIC(op)                                        \
+  template <int W>                                                            \
+  ODOTUNE_RL_INLINE Pack<W> operator op(const Pack<W>& a, const Pack<W>& b) { \
+    Pack<W> r;                                                                \
+    for (int k = 0; k < Pack<W>::kParts; ++k) r.p[k] = a.p[k] op b.p[k];      \
+    return r;                                                                 \
+  }                                                                           \
+  template <int W>                                                            \
+  ODOTUNE_RL_INLINE Pack<W> operator op(const Pack<W>& a, double b) {         \
+    Pack<W> r;                                                                \
+    for (int k = 0; k < Pack<W>::kParts; ++k) r.p[k] = a.p[k] op b;           \
+    return r;                                                                 \
+  }                                                                           \
+  template <int W>                                                            \
+  ODOTUNE_RL_INLINE Pack<W> operator op(double a, const Pack<W>& b) {         \
+    Pack<W> r;                                                                \
+    for (int k = 0; k < Pack<W>::kParts; ++k) r.p[k] = a op b.p[k];           \
+    return r;                                                                 \
+  }
+ODOTUNE_RL_PACK_ARITHMETIC(+)
+ODOTUNE_RL_PACK_ARITHMETIC(-)
+ODOTUNE_RL_PACK_ARITHMETIC(*)
+ODOTUNE_RL_PACK_ARITHMETIC(/)
+#undef ODOTUNE_RL_PACK_ARITHMETIC
+
+#define ODOTUNE_RL_PACK_COMPARISON(op)                                            \
+  template <int W>                                                                \
+  ODOTUNE_RL_INLINE PackMask<W> operator op(const Pack<W>& a, double b) {         \
+    PackMask<W> r;                                                                \
+    for (int k = 0; k < Pack<W>::kParts; ++k) r.p[k] = a.p[k] op b;               \
+    return r;                                                                     \
+  }                                                                               \
+  template <int W>                                                                \
+  ODOTUNE_RL_INLINE PackMask<W> operator op(const Pack<W>& a, const Pack<W>& b) { \
+    PackMask<W> r;                                                                \
+    for (int k = 0; k < Pack<W>::kParts; ++k) r.p[k] = a.p[k] op b.p[k];          \
+    return r;                                                                     \
+  }
+ODOTUNE_RL_PACK_COMPARISON(<)
+ODOTUNE_RL_PACK_COMPARISON(<=)
+ODOTUNE_RL_PACK_COMPARISON(>)
+ODOTUNE_RL_PACK_COMPARISON(>=)
+#undef ODOTUNE_RL_PACK_COMPARISON
+
+template <int W>
+ODOTUNE_RL_INLINE Pack<W> operator-(const Pack<W>& a) {
+  Pack<W> r;
+  for (int k = 0; k < Pack<W>::kParts; ++k) r.p[k] = -a.p[k];
+  return r;
+}
+template <int W>
+ODOTUNE_RL_INLINE PackMask<W> operator!(const PackMask<W>& a) {
+  PackMask<W> r;
+  for (int k = 0; k < Pack<W>::kParts; ++k) r.p[k] = a.p[k] == 0;
+  return r;
+}
+
 // ---------------------------------------------------------------------------
-// What differs between one filter and a lane pack: choosing per lane, |x|,
-// scalar library functions applied lane by lane.
+// What differs between one filter and a pack: choosing per lane, |x|, scalar
+// library functions applied lane by lane.
 ODOTUNE_RL_INLINE double pick(bool c, double a, double b) { return c ? a : b; }
-ODOTUNE_RL_INLINE Lanes pick(LaneMask c, Lanes a, Lanes b) {
-  return std::bit_cast<Lanes>((std::bit_cast<LaneMask>(a) & c) | (std::bit_cast<LaneMask>(b) & ~c));
+template <int W>
+ODOTUNE_RL_INLINE Pack<W> pick(const PackMask<W>& c, const Pack<W>& a, const Pack<W>& b) {
+  Pack<W> r;
+  for (int k = 0; k < Pack<W>::kParts; ++k) r.p[k] = c.p[k] ? a.p[k] : b.p[k];
+  return r;
 }
 ODOTUNE_RL_INLINE double magnitude(double a) { return std::abs(a); }
-ODOTUNE_RL_INLINE Lanes magnitude(Lanes a) {
-  return std::bit_cast<Lanes>(std::bit_cast<LaneMask>(a) & std::numeric_limits<std::int64_t>::max());
+template <int W>
+ODOTUNE_RL_INLINE Pack<W> magnitude(const Pack<W>& a) {
+  using M = typename PackMask<W>::M;
+  Pack<W> r;
+  for (int k = 0; k < Pack<W>::kParts; ++k) {
+    r.p[k] = std::bit_cast<typename Pack<W>::V>(std::bit_cast<M>(a.p[k]) &
+                                                std::numeric_limits<std::int64_t>::max());
+  }
+  return r;
 }
 ODOTUNE_RL_INLINE bool none(bool c) { return !c; }
-ODOTUNE_RL_INLINE bool none(LaneMask c) {
+template <int W>
+ODOTUNE_RL_INLINE bool none(const PackMask<W>& c) {
   for (int l = 0; l < kLanes; ++l) {
-    if (c[l] != 0) return false;
+    if (c.p[l / W][l % W] != 0) return false;
   }
   return true;
 }
-ODOTUNE_RL_INLINE bool accepted(bool c) { return c; }
-ODOTUNE_RL_INLINE LaneMask accepted(LaneMask c) { return c; }
 template <class T>
 ODOTUNE_RL_INLINE T splat(double v) {
   if constexpr (std::is_same_v<T, double>) {
     return v;
   } else {
-    T r;
-    for (int l = 0; l < kLanes; ++l) r[l] = v;
-    return r;
+    double lanes[kLanes];
+    std::fill(lanes, lanes + kLanes, v);
+    return T::of(lanes);
   }
 }
 template <class F>
 ODOTUNE_RL_INLINE double per_lane(double a, F f) {
   return f(a);
 }
-template <class F>
-ODOTUNE_RL_INLINE Lanes per_lane(Lanes a, F f) {
-  Lanes r;
-  for (int l = 0; l < kLanes; ++l) r[l] = f(a[l]);
-  return r;
+template <int W, class F>
+ODOTUNE_RL_INLINE Pack<W> per_lane(const Pack<W>& a, F f) {
+  double r[kLanes];
+  for (int l = 0; l < kLanes; ++l) r[l] = f(a.lane(l));
+  return Pack<W>::of(r);
 }
 
-// One out-of-line sin and cos for both instantiations (GCC may otherwise
-// fuse them into sincos in one and not the other).
+// One out-of-line sin and cos for every instantiation (GCC may otherwise
+// fuse them into sincos in one and not another).
 [[gnu::noinline]] void sin_cos(double a, double* s, double* c) {
   *s = std::sin(a);
   *c = std::cos(a);
 }
 ODOTUNE_RL_INLINE void sin_cos(double a, double& s, double& c) { sin_cos(a, &s, &c); }
-ODOTUNE_RL_INLINE void sin_cos(Lanes a, Lanes& s, Lanes& c) {
-  for (int l = 0; l < kLanes; ++l) {
-    double sl, cl;
-    sin_cos(a[l], &sl, &cl);
-    s[l] = sl;
-    c[l] = cl;
-  }
+template <int W>
+ODOTUNE_RL_INLINE void sin_cos(const Pack<W>& a, Pack<W>& s, Pack<W>& c) {
+  double sl[kLanes], cl[kLanes];
+  for (int l = 0; l < kLanes; ++l) sin_cos(a.lane(l), &sl[l], &cl[l]);
+  s = Pack<W>::of(sl);
+  c = Pack<W>::of(cl);
 }
 
 bool is_angle(int member) { return member == kRoll || member == kPitch || member == kYaw; }
@@ -362,7 +467,7 @@ template <int N, class T>
 ODOTUNE_RL_INLINE auto correct_kernel(T* x, T* P, int n_, const int* idx, const T* z, const T* R, T thr2) {
   const int n = N > 0 ? N : n_;
   T PHt[kN * kN], S[kN * kN], Si[kN * kN];
-  T nu[kN];
+  T nu[kN] = {};
   for (int a = 0; a < n; ++a) {
     std::copy(P + idx[a] * kN, P + idx[a] * kN + kN, PHt + a * kN);
     nu[a] = z[a] - x[idx[a]];
@@ -421,13 +526,52 @@ ODOTUNE_RL_INLINE auto correct_sized(T* x, T* P, int n, const int* idx, const T*
 
 namespace {
 
-// The lane kernels, one version per instruction set (ODOTUNE_RL_LANES).
-ODOTUNE_RL_LANES void predict_lanes(Lanes* x, Lanes* P, const Lanes* Q, const LaneMask* dynamic, double dt) {
-  predict_kernel(x, P, Q, *dynamic, dt);
+// The lane kernels, one version per instruction set (see the top of the file).
+template <int W>
+ODOTUNE_RL_INLINE void predict_pack(Lanes* x, Lanes* P, const Lanes* Q, const LaneMask* dynamic, double dt) {
+  predict_kernel(reinterpret_cast<Pack<W>*>(x), reinterpret_cast<Pack<W>*>(P),
+                 reinterpret_cast<const Pack<W>*>(Q), *reinterpret_cast<const PackMask<W>*>(dynamic), dt);
 }
-ODOTUNE_RL_LANES void correct_lanes(Lanes* x, Lanes* P, int n, const int* idx, const Lanes* z, const Lanes* R,
-                                    const Lanes* thr2, LaneMask* accepted) {
-  *accepted = correct_sized(x, P, n, idx, z, R, *thr2);
+// Returns the lanes that accepted, lane l as bit l.
+template <int W>
+ODOTUNE_RL_INLINE std::uint32_t correct_pack(Lanes* x, Lanes* P, int n, const int* idx, const Lanes* z,
+                                             const Lanes* R, const Lanes* thr2) {
+  const PackMask<W> accepted = correct_sized(reinterpret_cast<Pack<W>*>(x), reinterpret_cast<Pack<W>*>(P), n,
+                                             idx, reinterpret_cast<const Pack<W>*>(z),
+                                             reinterpret_cast<const Pack<W>*>(R),
+                                             *reinterpret_cast<const Pack<W>*>(thr2));
+  std::uint32_t bits = 0;
+  for (int l = 0; l < kLanes; ++l) bits |= accepted.p[l / W][l % W] != 0 ? 1u << l : 0u;
+  return bits;
+}
+
+#if defined(__x86_64__) && defined(__linux__) && !defined(__clang__)
+[[gnu::target("arch=x86-64-v4")]] void predict_lanes(Lanes* x, Lanes* P, const Lanes* Q,
+                                                     const LaneMask* dynamic, double dt) {
+  predict_pack<8>(x, P, Q, dynamic, dt);
+}
+[[gnu::target("avx2")]] void predict_lanes(Lanes* x, Lanes* P, const Lanes* Q, const LaneMask* dynamic,
+                                           double dt) {
+  predict_pack<4>(x, P, Q, dynamic, dt);
+}
+[[gnu::target("arch=x86-64-v4")]] std::uint32_t correct_lanes(
+    Lanes* x, Lanes* P, int n, const int* idx, const Lanes* z, const Lanes* R, const Lanes* thr2) {
+  return correct_pack<8>(x, P, n, idx, z, R, thr2);
+}
+[[gnu::target("avx2")]] std::uint32_t correct_lanes(Lanes* x, Lanes* P, int n, const int* idx, const Lanes* z,
+                                                    const Lanes* R, const Lanes* thr2) {
+  return correct_pack<4>(x, P, n, idx, z, R, thr2);
+}
+#define ODOTUNE_RL_BASELINE [[gnu::target("default")]]
+#else
+#define ODOTUNE_RL_BASELINE
+#endif
+ODOTUNE_RL_BASELINE void predict_lanes(Lanes* x, Lanes* P, const Lanes* Q, const LaneMask* dynamic, double dt) {
+  predict_pack<2>(x, P, Q, dynamic, dt);
+}
+ODOTUNE_RL_BASELINE std::uint32_t correct_lanes(Lanes* x, Lanes* P, int n, const int* idx, const Lanes* z,
+                                                const Lanes* R, const Lanes* thr2) {
+  return correct_pack<2>(x, P, n, idx, z, R, thr2);
 }
 
 // The members a measurement fuses: its mask less non-finite values (ekf.cpp
@@ -440,13 +584,16 @@ int fused_members(const Measurement& m, int* idx) {
   return n;
 }
 
-// z and R (n × n, column-major) of those members, R's diagonal as ekf.cpp
-// makes it: a negative variance taken by its magnitude, one below 1e-9 raised to it.
+// A measured variance as ekf.cpp takes it: a negative one by its magnitude,
+// one below 1e-9 raised to it.
+double positive_variance(double r) { return std::max(std::abs(r), 1e-9); }
+
+// z and R (n × n, column-major) of those members.
 void gather(const Measurement& m, int n, const int* idx, double* z, double* R) {
   for (int a = 0; a < n; ++a) {
     z[a] = m.z[idx[a]];
     for (int b = 0; b < n; ++b) R[b * n + a] = m.R(idx[a], idx[b]);
-    R[a * n + a] = std::max(std::abs(R[a * n + a]), 1e-9);
+    R[a * n + a] = positive_variance(R[a * n + a]);
   }
 }
 
@@ -618,18 +765,15 @@ std::uint32_t RlEkfLanes::correct(std::span<const Measurement> ms) {
     const Measurement& m = ms[l < lanes_ ? l : 0];
     for (int a = 0; a < n; ++a) {
       if (!std::isfinite(m.z[idx[a]])) return correct_lane_by_lane(ms);
+      z[a][l] = m.z[idx[a]];
     }
-    double zl[kN], Rl[kN * kN];
-    gather(m, n, idx, zl, Rl);
-    for (int a = 0; a < n; ++a) z[a][l] = zl[a];
-    for (int k = 0; k < n * n; ++k) R[k][l] = Rl[k];
+    for (int b = 0; b < n; ++b) {
+      for (int a = 0; a < n; ++a) R[b * n + a][l] = m.R(idx[a], idx[b]);
+    }
+    for (int a = 0; a < n; ++a) R[a * n + a][l] = positive_variance(R[a * n + a][l]);
     thr2[l] = m.mahalanobis_threshold * m.mahalanobis_threshold;
   }
-  LaneMask accepted;
-  correct_lanes(x_.data(), P_.data(), n, idx, z, R, &thr2, &accepted);
-  std::uint32_t bits = 0;
-  for (int l = 0; l < lanes_; ++l) bits |= accepted[l] != 0 ? 1u << l : 0u;
-  return bits;
+  return correct_lanes(x_.data(), P_.data(), n, idx, z, R, &thr2) & ((1u << lanes_) - 1u);
 }
 
 std::uint32_t RlEkfLanes::correct_lane_by_lane(std::span<const Measurement> ms) {
