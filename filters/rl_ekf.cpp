@@ -253,7 +253,7 @@ constexpr std::array<At, kTerms> kAt = [] {
   return at;
 }();
 
-// The terms of each row of J − I, in kAt's order: kRowTerms[kRowStart[r] … kRowStart[r + 1]).
+// The terms of each row r of J − I, in kAt's order: terms[start[r] … start[r + 1]).
 struct RowTerms {
   std::array<int, kN + 1> start{};
   std::array<int, kTerms> terms{};
@@ -297,8 +297,9 @@ ODOTUNE_RL_INLINE void model_terms(const T* x, double dt, T* v) {
       v[k++] = 0.5 * rot[i][j] * dt * dt;
     }
   }
-  for (T t : {splat<T>(dt), sr * tp * dt, cr * tp * dt, cr * dt, -sr * dt, sr * cpi * dt, cr * cpi * dt,
-              splat<T>(dt), splat<T>(dt), splat<T>(dt)}) {
+  const T dts = splat<T>(dt);
+  for (T t :
+       {dts, sr * tp * dt, cr * tp * dt, cr * dt, -sr * dt, sr * cpi * dt, cr * cpi * dt, dts, dts, dts}) {
     v[k++] = t;
   }
   // ∂(R·(v·dt + a·dt²/2))/∂(roll, pitch, yaw): each is a rotation derivative
@@ -375,10 +376,10 @@ ODOTUNE_RL_INLINE void predict_kernel(T* x, T* P, const T* Q, Flag dynamic, doub
   T B[kMoved * kN];
   project(v, P, B, std::make_integer_sequence<int, kMoved>{});
   for (int j = 0; j < kMoved; ++j) std::copy(B + j * kN + kMoved, B + j * kN + kN, P + j * kN + kMoved);
-  const T dq = dt * speed2;
+  const T dq = dt * speed2, dts = splat<T>(dt);
   for (int j = 0; j < kN; ++j) {
     for (int i = j; i < kN; ++i) {
-      P[j * kN + i] = P[j * kN + i] + (i < kVx && j < kVx ? dq : splat<T>(dt)) * Q[j * kN + i];
+      P[j * kN + i] = P[j * kN + i] + (i < kVx && j < kVx ? dq : dts) * Q[j * kN + i];
     }
   }
   for (int j = 0; j < kN; ++j) {
