@@ -211,7 +211,7 @@ void make_measurement(const Recording& rec, const ReplaySettings& s, int i, Node
   const int components = rec.params.two_d_mode ? 2 : 3;
   const int offset = in.kind == InputKind::acceleration ? rl::kAx : rl::kVx;
   if (in.kind == InputKind::twist || in.kind == InputKind::acceleration) {
-    m.z.segment(offset, components) += adjust.head(components);
+    for (int c = 0; c < components; ++c) m.z[offset + c] += adjust[c];
   } else if (in.kind == InputKind::gps) {
     const GpsFix& f = rec.fixes[in.fix];
     const Eigen::Matrix3d rot = rotation_rpy(0.0, 0.0, n.out.gps_transform.rotation_rad);
