@@ -10,9 +10,11 @@
 // Counters: measurements per replay and per second of wall time (one core).
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <vector>
 
 #include "rlnode/gps_alignment.h"
 #include "rlnode/params.h"
@@ -76,6 +78,29 @@ void run_replays(benchmark::State& state, const Recording& rec) {
 }
 
 void BM_RlReplayHusky(benchmark::State& state) { run_replays(state, husky()); }
+
+// kLanes settings around the file's (process noise and the inputs'
+// covariances scaled, as a tune's candidates are), replayed together.
+void BM_RlReplayHuskyBatch(benchmark::State& state) {
+  const Recording& rec = husky();
+  const Schedule schedule = make_schedule(rec);
+  std::vector<ReplaySettings> settings(odotune::filters::rl::kLanes, settings_of(rec.params));
+  for (std::size_t k = 0; k < settings.size(); ++k) {
+    settings[k].process_noise *= std::pow(10.0, 0.25 * static_cast<double>(k) - 1.0);
+    for (double& c : settings[k].covariance_scale) c = std::pow(2.0, static_cast<double>(k % 3) - 1.0);
+  }
+  long processed = 0;
+  for (auto _ : state) {
+    const std::vector<ReplayOutput> out = replay_batch(rec, schedule, settings);
+    processed = out.front().processed;
+    benchmark::DoNotOptimize(out.back().final_state.data());
+  }
+  const auto replays = static_cast<double>(settings.size());
+  state.counters["replays"] = replays;
+  state.counters["ms_per_replay"] = benchmark::Counter(
+      replays * 1e-3, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["measurements"] = static_cast<double>(processed);
+}
 void BM_RlReplayBag1(benchmark::State& state) { run_replays(state, bag1()); }
 
 void BM_RlSchedule(benchmark::State& state) {
@@ -86,6 +111,7 @@ void BM_RlSchedule(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(BM_RlReplayHusky)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_RlReplayHuskyBatch)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_RlReplayBag1)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 BENCHMARK(BM_RlSchedule)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

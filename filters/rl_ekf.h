@@ -13,11 +13,24 @@
 // The node's first measurement initialises the fused members and their
 // covariance block instead of correcting. Times are integer nanoseconds, as the
 // node's rclcpp::Time; no I/O and no allocation per step.
+//
+// P is kept exactly symmetric: each update computes its lower triangle and
+// mirrors it, so Q, the initial covariance and the first measurement's block
+// enter through their symmetric part ((A + Aᵀ)/2, which is A itself for the
+// symmetric matrices a covariance is). robot_localization updates all of P;
+// the two differ by rounding only.
+//
+// RlEkfLanes runs up to kLanes such filters in lock step, one per SIMD lane:
+// filters that see the same measurements at the same times (one replay
+// schedule) with different noise settings, as the candidates of a tune do.
+// Every lane computes exactly what an RlEkf with its settings computes, bit
+// for bit (the same operations in the same order, one template for both).
 #pragma once
 
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <string>
 
 #include <Eigen/Core>
@@ -108,6 +121,44 @@ class RlEkf {
   Cov P_;
   bool initialized_ = false;
   std::int64_t last_time_ns_ = 0;
+};
+
+// The lanes of RlEkfLanes: 8 doubles, one AVX-512 register (two AVX2 or four
+// SSE2 registers on CPUs without it; filters/rl_ekf.cpp picks the code for the
+// CPU at load time, every version giving the same bits).
+constexpr int kLanes = 8;
+using Lanes = double __attribute__((vector_size(kLanes * sizeof(double))));
+
+class RlEkfLanes {
+ public:
+  // One lane per entry of `params` (1 … kLanes); throws std::invalid_argument
+  // for another count or invalid parameters.
+  explicit RlEkfLanes(std::span<const RlEkfParams> params);
+
+  int lanes() const { return lanes_; }
+  // RlEkf::process in every lane: ms[l] is lane l's measurement (one per
+  // lane). All must have the same time and mask; their values, covariances
+  // and thresholds may differ. Bit l of the result is set when lane l
+  // accepted its measurement.
+  std::uint32_t process(std::span<const Measurement> ms);
+  void predict_to(std::int64_t time_ns);
+
+  bool initialized() const { return initialized_; }
+  std::int64_t last_time_ns() const { return last_time_ns_; }
+  State state(int lane) const;
+  Cov cov(int lane) const;
+
+ private:
+  std::uint32_t correct(std::span<const Measurement> ms);
+  std::uint32_t correct_lane_by_lane(std::span<const Measurement> ms);
+  void set_lane(int lane, const State& x, const Cov& P);
+
+  int lanes_;
+  bool initialized_ = false;
+  std::int64_t last_time_ns_ = 0;
+  std::array<Lanes, kStateSize> x_;
+  std::array<Lanes, kStateSize * kStateSize> P_, Q_;  // column-major, lane l of entry (i, j) at [j·15 + i][l]
+  std::int64_t __attribute__((vector_size(kLanes * sizeof(double)))) dynamic_q_;  // all bits set where dynamic
 };
 
 }  // namespace odotune::filters::rl

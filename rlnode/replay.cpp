@@ -129,13 +129,12 @@ rl::RlEkfParams filter_params(const Recording& rec, const ReplaySettings& s) {
 
 }  // namespace
 
-Replayer::Replayer(const Recording& rec, const ReplaySettings& settings)
-    : rec_(&rec), settings_(&settings), filter_(filter_params(rec, settings)) {
-  out_.gps_transform = rec.gps_transform;
-}
+namespace {
 
-double Replayer::threshold_of(const Input& in) const {
-  const auto& t = settings_->thresholds[in.sensor];
+using detail::NodeState;
+
+double threshold_of(const ReplaySettings& s, const Input& in) {
+  const auto& t = s.thresholds[in.sensor];
   switch (in.kind) {
     case InputKind::twist: return t[1];
     case InputKind::acceleration: return t[2];
@@ -143,11 +142,12 @@ double Replayer::threshold_of(const Input& in) const {
   }
 }
 
-Eigen::Vector3d Replayer::take_adjust(int i) {
-  for (auto it = adjust_.begin(); it != adjust_.end(); ++it) {
+// What input i's callback added to its measurement, until it is processed.
+Eigen::Vector3d take_adjust(NodeState& n, int i) {
+  for (auto it = n.adjust.begin(); it != n.adjust.end(); ++it) {
     if (it->first != i) continue;
     const Eigen::Vector3d a = it->second;
-    adjust_.erase(it);
+    n.adjust.erase(it);
     return a;
   }
   return Eigen::Vector3d::Zero();
@@ -155,127 +155,142 @@ Eigen::Vector3d Replayer::take_adjust(int i) {
 
 // navsat_transform_node's datum (computeTransform): the filter's pose at this
 // fix against the fix, less the antenna's offset turned by the IMU's heading.
-void Replayer::datum(int i) {
-  const Input& in = rec_->inputs[i];
-  const rl::State& x = filter_.state();
-  const GpsFix& f = rec_->fixes[in.fix];
-  GpsTransform& g = out_.gps_transform;
-  const double imu_yaw = rec_->navsat_imu_yaw_rad + f.convergence_rad;
+void take_datum(const Recording& rec, int i, const rl::State& x, NodeState& n) {
+  const Input& in = rec.inputs[i];
+  const GpsFix& f = rec.fixes[in.fix];
+  GpsTransform& g = n.out.gps_transform;
+  const double imu_yaw = rec.navsat_imu_yaw_rad + f.convergence_rad;
   g.grid_origin = f.p - rotation_rpy(0.0, 0.0, imu_yaw) * in.lever;
   g.odom_origin = x.segment<3>(rl::kX);
-  if (rec_->params.navsat.zero_altitude) g.odom_origin.z() = 0.0;
+  if (rec.params.navsat.zero_altitude) g.odom_origin.z() = 0.0;
   g.rotation_rad = x[rl::kYaw] - imu_yaw;
 }
 
 // What the callback computes from the state when the message arrives
 // (prepareTwist's ω × r, prepareAcceleration's α × r − (ω × r) × ω and its
 // gravity without an orientation; the GPS antenna's offset).
-void Replayer::callback(int i) {
-  const Input& in = rec_->inputs[i];
-  const rl::State& x = filter_.state();
+void run_callback(const Recording& rec, int i, const rl::State& x, NodeState& n) {
+  const Input& in = rec.inputs[i];
   const Eigen::Vector3d w = x.segment<3>(rl::kVroll);
   if (in.kind == InputKind::gps) {
     // navsat_transform_node removes the antenna's offset turned by the
     // filter's attitude from each fix.
-    adjust_.emplace_back(i, -(rotation_rpy(x[rl::kRoll], x[rl::kPitch], x[rl::kYaw]) * in.lever));
+    n.adjust.emplace_back(i, -(rotation_rpy(x[rl::kRoll], x[rl::kPitch], x[rl::kYaw]) * in.lever));
     return;
   }
   Eigen::Vector3d a = Eigen::Vector3d::Zero();
   if (in.kind == InputKind::twist) {
     a = in.lever.cross(w);
   } else if (in.kind == InputKind::acceleration) {
-    a = in.lever.cross(angular_acc_) - in.lever.cross(w).cross(w);
+    a = in.lever.cross(n.angular_acc) - in.lever.cross(w).cross(w);
     if (in.gravity_from_state) {
       const Eigen::Matrix3d att = rotation_rpy(x[rl::kRoll], x[rl::kPitch], x[rl::kYaw]);
-      a -= att.transpose() * Eigen::Vector3d(0.0, 0.0, rec_->params.gravitational_acceleration);
+      a -= att.transpose() * Eigen::Vector3d(0.0, 0.0, rec.params.gravitational_acceleration);
     }
   }
-  adjust_.emplace_back(i, a);
+  n.adjust.emplace_back(i, a);
 }
 
-void Replayer::process(int i) {
-  const Input& in = rec_->inputs[i];
-  const double* v = rec_->pool.data() + in.slot;
-  const double scale = settings_->covariance_scale[in.sensor];
-  const Eigen::Vector3d adjust = needs_callback(in) ? take_adjust(i) : Eigen::Vector3d::Zero();
-  m_.time_ns = in.stamp_ns;
-  m_.mask.fill(false);
+// Input i's measurement as the node enqueues it, into m (whose entries
+// outside the mask are left as they were).
+void make_measurement(const Recording& rec, const ReplaySettings& s, int i, NodeState& n, rl::Measurement& m) {
+  const Input& in = rec.inputs[i];
+  const double* v = rec.pool.data() + in.slot;
+  const double scale = s.covariance_scale[in.sensor];
+  const Eigen::Vector3d adjust = needs_callback(in) ? take_adjust(n, i) : Eigen::Vector3d::Zero();
+  m.time_ns = in.stamp_ns;
+  m.mask.fill(false);
   for (int a = 0; a < in.n; ++a) {
     const int r = in.idx[a];
-    m_.mask[r] = true;
-    m_.z[r] = v[a];
-    for (int b = 0; b < in.n; ++b) m_.R(r, in.idx[b]) = scale * v[in.n + a * in.n + b];
+    m.mask[r] = true;
+    m.z[r] = v[a];
+    for (int b = 0; b < in.n; ++b) m.R(r, in.idx[b]) = scale * v[in.n + a * in.n + b];
   }
   // two_d_mode's forced members (z, a_z, …) keep their zeros: the node forces
   // them after adding these terms.
-  const int components = rec_->params.two_d_mode ? 2 : 3;
+  const int components = rec.params.two_d_mode ? 2 : 3;
   const int offset = in.kind == InputKind::acceleration ? rl::kAx : rl::kVx;
   if (in.kind == InputKind::twist || in.kind == InputKind::acceleration) {
-    m_.z.segment(offset, components) += adjust.head(components);
+    for (int c = 0; c < components; ++c) m.z[offset + c] += adjust[c];
   } else if (in.kind == InputKind::gps) {
-    const GpsFix& f = rec_->fixes[in.fix];
-    const Eigen::Matrix3d rot = rotation_rpy(0.0, 0.0, out_.gps_transform.rotation_rad);
+    const GpsFix& f = rec.fixes[in.fix];
+    const Eigen::Matrix3d rot = rotation_rpy(0.0, 0.0, n.out.gps_transform.rotation_rad);
     const Eigen::Matrix3d cov = scale * rot * f.cov * rot.transpose();
-    const Eigen::Vector3d p = fix_in_odom(f, out_.gps_transform) + adjust;
+    const Eigen::Vector3d p = fix_in_odom(f, n.out.gps_transform) + adjust;
     for (int r = rl::kX; r < rl::kX + components; ++r) {
-      if (!m_.mask[r]) continue;
-      m_.z[r] = p[r];
-      for (int c = rl::kX; c < rl::kX + components; ++c) m_.R(r, c) = cov(r, c);
+      if (!m.mask[r]) continue;
+      m.z[r] = p[r];
+      for (int c = rl::kX; c < rl::kX + components; ++c) m.R(r, c) = cov(r, c);
     }
   }
-  m_.mahalanobis_threshold = threshold_of(in);
-  ++out_.processed;
-  if (!filter_.process(m_)) ++out_.rejected;
+  m.mahalanobis_threshold = threshold_of(s, in);
+  ++n.out.processed;
 }
 
 // The filter's position at the held-out fix's stamp (predicted from its last
 // measurement, the filter itself unchanged) against the fix.
-void Replayer::score(int i) {
-  const Input& in = rec_->inputs[i];
-  const Eigen::Vector3d adjust = needs_callback(in) ? take_adjust(i) : Eigen::Vector3d::Zero();
-  if (!filter_.initialized()) return;
-  const GpsFix& f = rec_->fixes[in.fix];
+void score_fix(const Recording& rec, int i, bool initialized, const rl::State& x, std::int64_t last_ns,
+               NodeState& n) {
+  const Input& in = rec.inputs[i];
+  const Eigen::Vector3d adjust = needs_callback(in) ? take_adjust(n, i) : Eigen::Vector3d::Zero();
+  if (!initialized) return;
+  const GpsFix& f = rec.fixes[in.fix];
   ScoredFix s;
   s.fix = in.fix;
   s.stamp_ns = in.stamp_ns;
-  const double dt = static_cast<double>(in.stamp_ns - filter_.last_time_ns()) * 1e-9;
-  const rl::State& x = filter_.state();
+  const double dt = static_cast<double>(in.stamp_ns - last_ns) * 1e-9;
   const rl::State at = dt > 0.0 ? rl::State(rl::transition(x, dt).A * x) : x;
   s.predicted = at.head<3>();
   s.predicted_yaw = at[rl::kYaw];
-  s.measured = fix_in_odom(f, out_.gps_transform) + adjust;
-  const Eigen::Matrix2d rot = rotation_rpy(0.0, 0.0, out_.gps_transform.rotation_rad).topLeftCorner<2, 2>();
+  const GpsTransform& g = n.out.gps_transform;
+  s.measured = fix_in_odom(f, g) + adjust;
+  const Eigen::Matrix2d rot = rotation_rpy(0.0, 0.0, g.rotation_rad).topLeftCorner<2, 2>();
   s.fix_cov = rot * f.cov.topLeftCorner<2, 2>() * rot.transpose();
-  out_.scored.push_back(s);
+  n.out.scored.push_back(s);
 }
 
 // RosFilter::differentiateMeasurements, then the published state.
-void Replayer::tick(std::int64_t t_ns, bool keep) {
-  if (!filter_.initialized()) return;
+void tick(std::int64_t t_ns, const rl::State& x, bool keep, NodeState& n) {
   const double now = static_cast<double>(t_ns) * 1e-9;
-  const Eigen::Vector3d w = filter_.state().segment<3>(rl::kVroll);
-  angular_acc_ = (w - last_rates_) / (now - last_diff_s_);
-  last_rates_ = w;
-  last_diff_s_ = now;
-  if (keep) out_.trajectory.push_back({t_ns, filter_.state()});
+  const Eigen::Vector3d w = x.segment<3>(rl::kVroll);
+  n.angular_acc = (w - n.last_rates) / (now - n.last_diff_s);
+  n.last_rates = w;
+  n.last_diff_s = now;
+  if (keep) n.out.trajectory.push_back({t_ns, x});
 }
 
-ReplayOutput Replayer::finish() && {
-  out_.final_state = filter_.state();
-  out_.final_cov = filter_.cov();
-  out_.finite = out_.final_state.allFinite() && out_.final_cov.allFinite();
-  return std::move(out_);
+ReplayOutput finish_output(NodeState&& n, const rl::State& x, const rl::Cov& P) {
+  n.out.final_state = x;
+  n.out.final_cov = P;
+  n.out.finite = x.allFinite() && P.allFinite();
+  return std::move(n.out);
 }
+
+}  // namespace
+
+Replayer::Replayer(const Recording& rec, const ReplaySettings& settings)
+    : rec_(&rec), settings_(&settings), filter_(filter_params(rec, settings)) {
+  node_.out.gps_transform = rec.gps_transform;
+}
+
+ReplayOutput Replayer::finish() && { return finish_output(std::move(node_), filter_.state(), filter_.cov()); }
 
 void Replayer::run(std::span<const Event> events, bool keep_trajectory) {
   for (const Event& e : events) {
     switch (e.type) {
-      case Event::callback: callback(e.input); break;
-      case Event::datum: datum(e.input); break;
-      case Event::process: process(e.input); break;
-      case Event::score: score(e.input); break;
+      case Event::callback: run_callback(*rec_, e.input, filter_.state(), node_); break;
+      case Event::datum: take_datum(*rec_, e.input, filter_.state(), node_); break;
+      case Event::process:
+        make_measurement(*rec_, *settings_, e.input, node_, m_);
+        if (!filter_.process(m_)) ++node_.out.rejected;
+        break;
+      case Event::score:
+        score_fix(*rec_, e.input, filter_.initialized(), filter_.state(), filter_.last_time_ns(), node_);
+        break;
       case Event::timeout_predict: filter_.predict_to(e.time_ns); break;
-      case Event::tick: tick(e.time_ns, keep_trajectory); break;
+      case Event::tick:
+        if (filter_.initialized()) tick(e.time_ns, filter_.state(), keep_trajectory, node_);
+        break;
     }
   }
 }
@@ -285,6 +300,93 @@ ReplayOutput replay(const Recording& rec, const Schedule& schedule, const Replay
   Replayer run(rec, settings);
   run.run(schedule.events, keep_trajectory);
   return std::move(run).finish();
+}
+
+namespace {
+
+// Up to kLanes replays in lock step: the filters in RlEkfLanes, the node's
+// bookkeeping per lane by the functions above, as Replayer does it.
+class LaneReplayer {
+ public:
+  LaneReplayer(const Recording& rec, std::span<const ReplaySettings> settings)
+      : rec_(&rec),
+        settings_(settings),
+        filter_(params(rec, settings)),
+        nodes_(settings.size()),
+        ms_(settings.size()) {
+    for (NodeState& n : nodes_) n.out.gps_transform = rec.gps_transform;
+  }
+
+  void run(std::span<const Event> events, bool keep) {
+    for (const Event& e : events) {
+      switch (e.type) {
+        case Event::callback:
+          each([&](int l, const rl::State& x) { run_callback(*rec_, e.input, x, nodes_[l]); });
+          break;
+        case Event::datum:
+          each([&](int l, const rl::State& x) { take_datum(*rec_, e.input, x, nodes_[l]); });
+          break;
+        case Event::process: process(e.input); break;
+        case Event::score:
+          each([&](int l, const rl::State& x) {
+            score_fix(*rec_, e.input, filter_.initialized(), x, filter_.last_time_ns(), nodes_[l]);
+          });
+          break;
+        case Event::timeout_predict: filter_.predict_to(e.time_ns); break;
+        case Event::tick:
+          if (filter_.initialized())
+            each([&](int l, const rl::State& x) { tick(e.time_ns, x, keep, nodes_[l]); });
+          break;
+      }
+    }
+  }
+
+  void finish(std::vector<ReplayOutput>& out) && {
+    for (int l = 0; l < filter_.lanes(); ++l) {
+      out.push_back(finish_output(std::move(nodes_[l]), filter_.state(l), filter_.cov(l)));
+    }
+  }
+
+ private:
+  static std::vector<rl::RlEkfParams> params(const Recording& rec, std::span<const ReplaySettings> settings) {
+    std::vector<rl::RlEkfParams> p;
+    for (const ReplaySettings& s : settings) p.push_back(filter_params(rec, s));
+    return p;
+  }
+
+  template <class F>
+  void each(F f) {
+    for (int l = 0; l < filter_.lanes(); ++l) f(l, filter_.state(l));
+  }
+
+  void process(int i) {
+    for (int l = 0; l < filter_.lanes(); ++l) make_measurement(*rec_, settings_[l], i, nodes_[l], ms_[l]);
+    const std::uint32_t accepted = filter_.process(ms_);
+    for (int l = 0; l < filter_.lanes(); ++l) {
+      if ((accepted >> l & 1u) == 0) ++nodes_[l].out.rejected;
+    }
+  }
+
+  const Recording* rec_;
+  std::span<const ReplaySettings> settings_;
+  rl::RlEkfLanes filter_;
+  std::vector<NodeState> nodes_;
+  std::vector<rl::Measurement> ms_;
+};
+
+}  // namespace
+
+std::vector<ReplayOutput> replay_batch(const Recording& rec, const Schedule& schedule,
+                                       std::span<const ReplaySettings> settings, bool keep_trajectory) {
+  std::vector<ReplayOutput> out;
+  out.reserve(settings.size());
+  for (std::size_t k = 0; k < settings.size(); k += rl::kLanes) {
+    const std::size_t lanes = std::min<std::size_t>(rl::kLanes, settings.size() - k);
+    LaneReplayer run(rec, settings.subspan(k, lanes));
+    run.run(schedule.events, keep_trajectory);
+    std::move(run).finish(out);
+  }
+  return out;
 }
 
 }  // namespace odotune::rlnode

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <limits>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "filters/rl_ekf.h"
@@ -87,6 +88,28 @@ struct ReplayOutput {
 ReplayOutput replay(const Recording& rec, const Schedule& schedule, const ReplaySettings& settings,
                     bool keep_trajectory = false);
 
+// One replay per entry of `settings` over one schedule, each output identical
+// to replay(rec, schedule, settings[k], keep_trajectory), bit for bit. The
+// settings are replayed filters::rl::kLanes at a time in lock step
+// (filters::rl::RlEkfLanes), so a batch of kLanes costs about as much as two
+// or three single replays.
+std::vector<ReplayOutput> replay_batch(const Recording& rec, const Schedule& schedule,
+                                       std::span<const ReplaySettings> settings, bool keep_trajectory = false);
+
+namespace detail {
+// What the node keeps besides its filter: each input's callback adjustment
+// until the input is processed, the angular rates it differentiates, the
+// output so far.
+struct NodeState {
+  // Per input whose callback ran and that is not yet processed: what the
+  // callback added (a few at a time, so a copy of the replay stays small).
+  std::vector<std::pair<int, Eigen::Vector3d>> adjust;
+  Eigen::Vector3d last_rates = Eigen::Vector3d::Zero(), angular_acc = Eigen::Vector3d::Zero();
+  double last_diff_s = 0.0;
+  ReplayOutput out;
+};
+}  // namespace detail
+
 // A replay advanced a stretch of events at a time. A copy is a checkpoint:
 // schedules that share their first events (the same fix roles up to some
 // tick) continue from one replay of those events instead of repeating them
@@ -99,29 +122,15 @@ class Replayer {
   // Processes `events` (a stretch of a schedule, in order).
   void run(std::span<const Event> events, bool keep_trajectory = false);
   // The held-out fixes scored so far.
-  const std::vector<ScoredFix>& scored() const { return out_.scored; }
+  const std::vector<ScoredFix>& scored() const { return node_.out.scored; }
   ReplayOutput finish() &&;
 
  private:
-  void callback(int i);
-  void datum(int i);
-  void process(int i);
-  void score(int i);
-  void tick(std::int64_t t_ns, bool keep);
-  double threshold_of(const Input& in) const;
-  // What input i's callback added to its measurement, until it is processed.
-  Eigen::Vector3d take_adjust(int i);
-
   const Recording* rec_;
   const ReplaySettings* settings_;
   filters::rl::RlEkf filter_;
-  // Per input whose callback ran and that is not yet processed: what the
-  // callback added (a few at a time, so a copy of the replay stays small).
-  std::vector<std::pair<int, Eigen::Vector3d>> adjust_;
+  detail::NodeState node_;
   filters::rl::Measurement m_;  // scratch
-  Eigen::Vector3d last_rates_ = Eigen::Vector3d::Zero(), angular_acc_ = Eigen::Vector3d::Zero();
-  double last_diff_s_ = 0.0;
-  ReplayOutput out_;
 };
 
 // A fix in the odom frame under a GPS transform.

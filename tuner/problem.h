@@ -19,6 +19,20 @@
 //   * It may throw; the solvers turn an exception into
 //     Termination::failure with message what() and never rethrow it.
 //
+// Optionally, a problem may also evaluate several points in one call (the
+// robot_localization objective replays a batch of noise settings in lock
+// step, rlnode::replay_batch):
+//
+//   void fitness_batch(std::span<const double> xs, std::span<double> out) const;
+//     // out.size() points of bounds().dimension() values each, one after the
+//     // other in xs; out[k] must be what fitness() gives for point k, to the
+//     // bit, so that a solver's result does not depend on how it groups points.
+//   int batch_size() const;  // how many points a call is best given (>= 1)
+//
+// The same contract as fitness() otherwise (thread-safe, points inside the
+// box, may throw). pso_minimize hands a batch problem up to batch_size()
+// particles per call; the other solvers call fitness().
+//
 // ProblemRef is a small non-owning, type-erased view of such a struct (like
 // std::function_ref): it stores a pointer to the problem, so the problem must
 // outlive every use of the ProblemRef. Passing a temporary directly to a
@@ -26,6 +40,7 @@
 // ProblemRef to a temporary is not.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <concepts>
 #include <span>
@@ -85,6 +100,13 @@ concept Problem = requires(const T& p, std::span<const double> x) {
   { p.bounds() } -> std::convertible_to<Bounds>;
 };
 
+// A problem that can also evaluate several points in one call (see the file comment).
+template <typename T>
+concept BatchProblem = Problem<T> && requires(const T& p, std::span<const double> xs, std::span<double> out) {
+  p.fitness_batch(xs, out);
+  { p.batch_size() } -> std::convertible_to<int>;
+};
+
 class ProblemRef {
  public:
   // Non-owning: `problem` must outlive this ProblemRef (see file comment).
@@ -95,15 +117,35 @@ class ProblemRef {
         fitness_([](const void* o, std::span<const double> x) -> double {
           return static_cast<const T*>(o)->fitness(x);
         }),
-        bounds_([](const void* o) -> Bounds { return static_cast<const T*>(o)->bounds(); }) {}
+        bounds_([](const void* o) -> Bounds { return static_cast<const T*>(o)->bounds(); }) {
+    if constexpr (BatchProblem<T>) {
+      fitness_batch_ = [](const void* o, std::span<const double> xs, std::span<double> out) {
+        static_cast<const T*>(o)->fitness_batch(xs, out);
+      };
+      batch_size_ = std::max(1, static_cast<int>(problem.batch_size()));
+    }
+  }
 
   double fitness(std::span<const double> x) const { return fitness_(object_, x); }
   Bounds bounds() const { return bounds_(object_); }
+  // 1 for a problem without fitness_batch.
+  int batch_size() const { return batch_size_; }
+  // out[k] = fitness(point k of xs), by the problem's fitness_batch when it has one.
+  void fitness_batch(std::span<const double> xs, std::span<double> out) const {
+    if (fitness_batch_ != nullptr) {
+      fitness_batch_(object_, xs, out);
+      return;
+    }
+    const std::size_t dim = xs.size() / std::max<std::size_t>(out.size(), 1);
+    for (std::size_t k = 0; k < out.size(); ++k) out[k] = fitness(xs.subspan(k * dim, dim));
+  }
 
  private:
   const void* object_;
   double (*fitness_)(const void*, std::span<const double>);
   Bounds (*bounds_)(const void*);
+  void (*fitness_batch_)(const void*, std::span<const double>, std::span<double>) = nullptr;
+  int batch_size_ = 1;
 };
 
 }  // namespace odotune::tuner

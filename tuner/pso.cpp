@@ -5,6 +5,7 @@
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <span>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -60,11 +61,10 @@ struct Motion {
   }
 };
 
-// Moves particle i for iteration t (t >= 1) and evaluates it; or, for
-// t == 0, initialises and evaluates it. Runs inside the parallel loop: it
-// touches only particle i's rows and reads gbest_x, which is not written
-// during the loop.
-inline void step_particle(Swarm& s, const Motion& m, int t, int i) {
+// Moves particle i for iteration t (t >= 1); or, for t == 0, initialises it.
+// Runs inside the parallel loop: it touches only particle i's rows and reads
+// gbest_x, which is not written during the loop.
+inline void move_particle(Swarm& s, const Motion& m, int t, int i) {
   const std::size_t dim = s.dim;
   const Bounds& box = m.box;
   const PsoOptions& options = m.options;
@@ -94,11 +94,30 @@ inline void step_particle(Swarm& s, const Motion& m, int t, int i) {
     xi[d] = pos;
     vi[d] = vel;
   }
+}
+
+// Moves and evaluates particles [first, last): one by one, or in one
+// fitness_batch call when the problem has one. A call that throws marks each
+// of its particles as failed.
+inline void step_particles(Swarm& s, const Motion& m, int t, int first, int last) {
+  const std::size_t dim = s.dim;
+  for (int i = first; i < last; ++i) move_particle(s, m, t, i);
+  const auto a = static_cast<std::size_t>(first), b = static_cast<std::size_t>(last);
   try {
-    s.fit[static_cast<std::size_t>(i)] = sanitize(m.problem.fitness(std::span<const double>(xi, dim)));
+    if (m.problem.batch_size() > 1) {
+      const std::span<double> out(&s.fit[a], b - a);
+      m.problem.fitness_batch(std::span<const double>(&s.x[a * dim], (b - a) * dim), out);
+      for (double& f : out) f = sanitize(f);
+    } else {
+      for (std::size_t i = a; i < b; ++i) {
+        s.fit[i] = sanitize(m.problem.fitness(std::span<const double>(&s.x[i * dim], dim)));
+      }
+    }
   } catch (...) {
-    s.fit[static_cast<std::size_t>(i)] = kInf;
-    s.errors[static_cast<std::size_t>(i)] = std::current_exception();
+    for (std::size_t i = a; i < b; ++i) {
+      s.fit[i] = kInf;
+      s.errors[i] = std::current_exception();
+    }
   }
 }
 
@@ -165,12 +184,15 @@ Summary pso_minimize(ProblemRef problem, const PsoOptions& options) {
   }
   Swarm s(n, dim);
   const Motion m{box, width, vmax, options, problem};
+  // The particles evaluated together: batch_size() of them for a batch problem.
+  const int group = std::min(n, problem.batch_size());
+  const int groups = (n + group - 1) / group;
 
   for (int t = 0; t <= options.iterations; ++t) {
     if (t > 0 && options.stop != nullptr && options.stop->load()) return finish(Termination::stopped);
 
 #pragma omp parallel for schedule(dynamic)
-    for (int i = 0; i < n; ++i) step_particle(s, m, t, i);
+    for (int g = 0; g < groups; ++g) step_particles(s, m, t, g * group, std::min(n, (g + 1) * group));
 
     summary.evaluations += n;
     summary.iterations = t;

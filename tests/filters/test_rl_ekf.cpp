@@ -1,11 +1,14 @@
 // robot_localization's EKF (filters/rl_ekf.h): the motion model's Jacobian
 // against finite differences, the sparse predict and the subset correction
-// against a literal dense implementation of ekf.cpp's equations, and the
+// against a literal dense implementation of ekf.cpp's equations, the
 // filter's behaviour on a standing robot, masks, gating, initialisation and
-// angles.
+// angles, and RlEkfLanes against one RlEkf per lane, to the bit.
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <numbers>
 #include <random>
+#include <vector>
 
 #include <Eigen/LU>
 #include <gtest/gtest.h>
@@ -237,4 +240,128 @@ TEST(RlEkf, NonFiniteMembersAreLeftOutAndLateMeasurementsDoNotRewindTime) {
   EXPECT_EQ(f.state()[rl::kX], 0.0);
   EXPECT_GT(f.state()[rl::kY], 0.0);
   EXPECT_EQ(f.last_time_ns(), 1'000'000'000);
+}
+
+// The bits of the fmod formula angles::normalize_angle is, for every kind of
+// input (the filter's shortcut computes fmod's exact remainder otherwise).
+TEST(RlEkf, NormalizeAngleGivesTheBitsOfFmod) {
+  auto by_fmod = [](double a) {
+    const double r = std::fmod(a + std::numbers::pi, 2.0 * std::numbers::pi);
+    return r <= 0.0 ? r + std::numbers::pi : r - std::numbers::pi;
+  };
+  std::vector<double> values = {0.0,
+                                -0.0,
+                                std::nan(""),
+                                std::numeric_limits<double>::infinity(),
+                                -std::numeric_limits<double>::infinity(),
+                                1e300,
+                                -1e300};
+  for (int k = -6; k <= 6; ++k) {
+    const double a = k * std::numbers::pi;
+    for (double b : {a, std::nextafter(a, 1e9), std::nextafter(a, -1e9), a - std::numbers::pi, a + 0.5}) {
+      values.push_back(b);
+    }
+  }
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-20.0, 20.0);
+  for (int k = 0; k < 10000; ++k) values.push_back(u(rng));
+  for (double a : values) {
+    const double got = rl::normalize_angle(a), want = by_fmod(a);
+    EXPECT_EQ(std::memcmp(&got, &want, sizeof got), 0) << a << ": " << got << " against " << want;
+  }
+}
+
+namespace {
+
+bool same_bits(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
+}
+
+// Lane l's filter of a lane test: its own noise, start and dynamic flag.
+rl::RlEkfParams lane_params(std::mt19937& rng, int l) {
+  rl::RlEkfParams p;
+  p.process_noise = default_q() * (0.5 + 0.3 * l);
+  p.process_noise(rl::kX, rl::kY) = p.process_noise(rl::kY, rl::kX) = 0.001 * l;
+  p.initial_cov = random_cov(rng);
+  p.initial_state = random_state(rng);
+  p.dynamic_process_noise = l % 3 == 1;
+  return p;
+}
+
+// A measurement of `mask` at `t_ns` with lane-dependent values.
+rl::Measurement lane_measurement(std::mt19937& rng, const rl::Mask& mask, std::int64_t t_ns) {
+  rl::Measurement m;
+  m.time_ns = t_ns;
+  m.mask = mask;
+  m.z = random_state(rng);
+  m.R = random_cov(rng) * 0.1;
+  m.R(0, 0) = -m.R(0, 0);  // taken by its magnitude
+  m.mahalanobis_threshold = std::uniform_real_distribution<double>(1.0, 6.0)(rng);
+  return m;
+}
+
+// Every lane of RlEkfLanes against an RlEkf with its parameters fed its
+// measurements, to the bit: masks of 1 to 15 members, repeated and earlier
+// stamps, gating that rejects in some lanes only, a value that is nan in one
+// lane only, timeout predictions.
+void expect_lanes_are_single_filters(int lanes, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::vector<rl::RlEkfParams> params;
+  for (int l = 0; l < lanes; ++l) params.push_back(lane_params(rng, l));
+  rl::RlEkfLanes batch(params);
+  std::vector<rl::RlEkf> single(params.begin(), params.end());
+  ASSERT_EQ(batch.lanes(), lanes);
+  std::int64_t t = 1'000'000'000;
+  int rejected = 0, accepted = 0;
+  for (int step = 0; step < 120; ++step) {
+    rl::Mask mask{};
+    const int members = 1 + step % rl::kStateSize;
+    for (int i = 0; i < members; ++i) mask[(i * 7 + step) % rl::kStateSize] = true;
+    t += step % 5 == 0 ? 0 : (step % 11 == 0 ? -20'000'000 : 30'000'000);
+    if (step % 13 == 7) {
+      t += 100'000'000;
+      batch.predict_to(t);
+      for (rl::RlEkf& f : single) f.predict_to(t);
+    }
+    std::vector<rl::Measurement> ms;
+    for (int l = 0; l < lanes; ++l) ms.push_back(lane_measurement(rng, mask, t));
+    if (step % 17 == 9) ms[lanes / 2].z[(step * 7) % rl::kStateSize] = std::nan("");
+    const std::uint32_t bits = batch.process(ms);
+    for (int l = 0; l < lanes; ++l) {
+      const bool ok = single[l].process(ms[l]);
+      EXPECT_EQ((bits >> l & 1u) != 0, ok) << "step " << step << " lane " << l;
+      (ok ? accepted : rejected) += 1;
+      ASSERT_TRUE(same_bits(batch.state(l), single[l].state())) << "step " << step << " lane " << l;
+      ASSERT_TRUE(same_bits(batch.cov(l), single[l].cov())) << "step " << step << " lane " << l;
+    }
+    EXPECT_EQ(batch.last_time_ns(), single[0].last_time_ns());
+  }
+  EXPECT_GT(accepted, 0);
+  EXPECT_GT(rejected, 0);
+}
+
+}  // namespace
+
+TEST(RlEkfLanes, EachLaneIsItsOwnRlEkf) {
+  expect_lanes_are_single_filters(rl::kLanes, 21);
+  expect_lanes_are_single_filters(3, 22);
+  expect_lanes_are_single_filters(1, 23);
+}
+
+TEST(RlEkf, CovarianceStaysExactlySymmetric) {
+  std::mt19937 rng(8);
+  rl::RlEkf f(lane_params(rng, 1));
+  for (int step = 0; step < 50; ++step) {
+    rl::Mask mask{};
+    for (int i = 0; i <= step % 6; ++i) mask[(i * 4 + step) % rl::kStateSize] = true;
+    f.process(lane_measurement(rng, mask, 1'000'000'000 + step * 25'000'000LL));
+    ASSERT_TRUE(same_bits(f.cov(), f.cov().transpose().eval())) << "step " << step;
+  }
+}
+
+TEST(RlEkfLanes, RefusesAnotherLaneCount) {
+  EXPECT_THROW(rl::RlEkfLanes(std::vector<rl::RlEkfParams>{}), std::invalid_argument);
+  EXPECT_THROW(rl::RlEkfLanes(std::vector<rl::RlEkfParams>(rl::kLanes + 1)), std::invalid_argument);
+  EXPECT_THROW(rl::RlEkfLanes(std::vector<rl::RlEkfParams>(2)).process(std::vector<rl::Measurement>(3)),
+               std::invalid_argument);
 }

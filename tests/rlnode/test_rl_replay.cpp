@@ -5,8 +5,12 @@
 // made here: differential and relative inputs, a standing robot with an IMU,
 // held-out fixes, refusals, the GPS heading fit.
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <numbers>
+#include <span>
+#include <string>
+#include <vector>
 
 #include <GeographicLib/LocalCartesian.hpp>
 #include <gtest/gtest.h>
@@ -133,6 +137,81 @@ TEST(RlReplay, SameInputsGiveTheSameBits) {
   for (const Input& in : rec.inputs) due += in.stamp_ns <= s.end_ns && in.receive_ns <= s.end_ns ? 1 : 0;
   EXPECT_EQ(a.processed, due);
   EXPECT_GT(due, static_cast<long>(rec.inputs.size()) - 5);
+}
+
+namespace {
+
+bool same_bits(const double* a, const double* b, std::size_t n) {
+  return std::memcmp(a, b, n * sizeof(double)) == 0;
+}
+
+// Two replay outputs to the bit (their doubles compared as bytes, so that
+// nan equals nan).
+void expect_same_output(const ReplayOutput& a, const ReplayOutput& b, const std::string& what) {
+  EXPECT_TRUE(same_bits(a.final_state.data(), b.final_state.data(), 15)) << what;
+  EXPECT_TRUE(same_bits(a.final_cov.data(), b.final_cov.data(), 225)) << what;
+  EXPECT_EQ(a.processed, b.processed) << what;
+  EXPECT_EQ(a.rejected, b.rejected) << what;
+  EXPECT_EQ(a.finite, b.finite) << what;
+  EXPECT_TRUE(same_bits(&a.gps_transform.rotation_rad, &b.gps_transform.rotation_rad, 1)) << what;
+  EXPECT_TRUE(same_bits(a.gps_transform.odom_origin.data(), b.gps_transform.odom_origin.data(), 3)) << what;
+  ASSERT_EQ(a.scored.size(), b.scored.size()) << what;
+  for (std::size_t k = 0; k < a.scored.size(); ++k) {
+    EXPECT_EQ(a.scored[k].fix, b.scored[k].fix) << what;
+    EXPECT_TRUE(same_bits(a.scored[k].predicted.data(), b.scored[k].predicted.data(), 3)) << what;
+    EXPECT_TRUE(same_bits(&a.scored[k].predicted_yaw, &b.scored[k].predicted_yaw, 1)) << what;
+    EXPECT_TRUE(same_bits(a.scored[k].measured.data(), b.scored[k].measured.data(), 3)) << what;
+  }
+  ASSERT_EQ(a.trajectory.size(), b.trajectory.size()) << what;
+  for (std::size_t k = 0; k < a.trajectory.size(); ++k) {
+    EXPECT_TRUE(same_bits(a.trajectory[k].state.data(), b.trajectory[k].state.data(), 15)) << what;
+  }
+}
+
+}  // namespace
+
+// replay_batch against one replay per setting, to the bit, on the Husky
+// recording with its GPS (datum, antenna-free fixes), the IMU's lever arm
+// (callbacks), held-out fixes and the trajectory: 11 settings (a full batch
+// and a partial one) of process noise, input covariances and thresholds that
+// make some lanes reject, one with dynamic process noise, one whose
+// covariance overflows.
+TEST(RlReplay, BatchGivesTheBitsOfOneReplayPerSetting) {
+  RecordingOptions o = bag1_mounting();
+  Recording rec = load_recording(kBags / "ros2/test1.mcap", read_rl_params(kBags / "husky_ekf.yaml"), o);
+  rec.gps_transform = fit_gps_alignment(rec, settings_of(rec.params), 60.0).transform;
+  std::vector<FixRole> roles(rec.fixes.size(), FixRole::fuse);
+  for (std::size_t i = 3; i < roles.size(); i += 7) roles[i] = FixRole::score;
+  const Schedule schedule = make_schedule(rec, roles);
+  std::vector<ReplaySettings> settings(11, settings_of(rec.params));
+  for (std::size_t k = 0; k < settings.size(); ++k) {
+    ReplaySettings& s = settings[k];
+    s.process_noise *= std::pow(10.0, 0.3 * (static_cast<double>(k) - 5.0));
+    for (double& c : s.covariance_scale) c = std::pow(3.0, static_cast<double>(k % 3) - 1.0);
+    if (k % 4 == 1) {
+      for (auto& t : s.thresholds) t = {3.0, 2.0, 2.5};
+    }
+  }
+  settings[6].dynamic_process_noise = true;
+  settings[9].process_noise *= 1e306;
+  settings[9].initial_cov *= 1e306;
+  const std::vector<ReplayOutput> batch = replay_batch(rec, schedule, settings, true);
+  ASSERT_EQ(batch.size(), settings.size());
+  long rejecting = 0, finite = 0;
+  for (std::size_t k = 0; k < settings.size(); ++k) {
+    const ReplayOutput one = replay(rec, schedule, settings[k], true);
+    expect_same_output(one, batch[k], "setting " + std::to_string(k));
+    rejecting += one.rejected > 0 ? 1 : 0;
+    finite += one.finite ? 1 : 0;
+  }
+  EXPECT_GE(rejecting, 2);
+  EXPECT_EQ(finite, 10);
+  EXPECT_FALSE(batch[0].scored.empty());
+  // A batch of one, and of the same setting twice.
+  expect_same_output(replay_batch(rec, schedule, std::span(settings).subspan(4, 1), true).front(), batch[4],
+                     "alone");
+  const std::vector<ReplaySettings> twice = {settings[2], settings[2]};
+  expect_same_output(replay_batch(rec, schedule, twice, true).back(), batch[2], "twice");
 }
 
 namespace {
