@@ -168,7 +168,7 @@ void add_rl_tune_options(CLI::App* sub, RlTuneRequest& rl, RlChoices& rl_names) 
                   "before it: GPS fused for its first 60 s, then an outage; and every 5th fix held out")
       ->check(CLI::PositiveNumber);
   sub->add_option("--outage", rl.options.outage_s,
-                  "--rl-params: lengths of the simulated GPS outages [s], comma-separated (default 60)")
+                  "--rl-params: lengths of the simulated GPS outages [s], comma-separated (default 30,60)")
       ->delimiter(',')
       ->check(CLI::PositiveNumber);
   sub->add_option("--outage-every", rl.options.outage_stride_s,
@@ -187,8 +187,8 @@ void add_rl_tune_options(CLI::App* sub, RlTuneRequest& rl, RlChoices& rl_names) 
                   "--rl-params: the first, deterministic stage: each block's factor one of 10^LEVEL, "
                   "comma-separated decades (default -2,0,2), or none");
   sub->add_option("--refine", rl.search.refine_decades,
-                  "--rl-params: the seeded refinement searches within this many decades of the grid's best "
-                  "(default 1; 0: none)")
+                  "--rl-params: a seeded refinement of the parameters the grid determined, within this many "
+                  "decades of its best (default 0: none, the tune is the same from every seed)")
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--prior", rl.options.prior_weight,
                   "--rl-params: weight of a prior toward the file's values, added as weight × mean (log10 "

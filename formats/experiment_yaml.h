@@ -26,10 +26,10 @@
 //     fitness: [outage, both]            # instead of modes: heldout-fixes, outage, both
 //     space: diagonal                    # or blocks
 //     input_covariances: false           # also search factors on the inputs' covariances
-//     outage_s: 60                       # the outages' lengths [s]: one, or a list
+//     outage_s: [30, 60]                 # the outages' lengths [s]: one, or a list
 //     outage_every_s: 10                 # an outage of each length starts every … [s]
 //     grid_levels: [-2, 0, 2]            # the search's grid of block factors [decades], or []
-//     refine_decades: 1                  # its seeded refinement around the grid's best (0: none)
+//     refine_decades: 0                  # its seeded refinement around the grid's best (0: none)
 //     profile_step_decades: 0.5          # the profile's step
 //
 // A calibrator model (pf-calib, adaptive-pf-calib) has no fitness mode: its
@@ -76,7 +76,7 @@ struct ExperimentRl {
   std::vector<RlFitness> fitness{RlFitness::both};
   RlNoiseSpace space = RlNoiseSpace::diagonal;
   bool input_covariances = true;
-  std::vector<double> outage_s{60.0};
+  std::vector<double> outage_s{30.0, 60.0};
   double outage_every_s = 10.0;
   RlSearchOptions search;  // grid_levels, refine_decades, profile_step_decades
 };

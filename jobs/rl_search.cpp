@@ -28,18 +28,14 @@ std::vector<int> blocks_of(const RlObjective& objective) {
   return out;
 }
 
-// A problem over a smaller box of the objective's own coordinates.
-struct SubBox {
-  const RlObjective* objective;
-  std::vector<double> lo, hi;
-  double fitness(std::span<const double> x) const { return objective->fitness(x); }
-  tuner::Bounds bounds() const { return {lo, hi}; }
-};
-
 // The data fitness, for the profile (the prior is not the recording's).
 struct DataFitness {
   const RlObjective* objective;
   double fitness(std::span<const double> x) const { return objective->data_fitness(x); }
+  void fitness_batch(std::span<const double> xs, std::span<double> out) const {
+    objective->data_fitness_batch(xs, out);
+  }
+  int batch_size() const { return objective->batch_size(); }
   tuner::Bounds bounds() const {
     auto [lo, hi] = objective->bounds();
     return {lo, hi};
@@ -52,54 +48,19 @@ void report(const SolverSettings& s, long done, long total) {
 
 }  // namespace
 
-RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& options,
-                           const SolverSettings& settings) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const auto [lo, hi] = objective.bounds();
-  const std::vector<int> block = blocks_of(objective);
-  RlGridResult r;
-  r.x.assign(lo.size(), 0.0);
-  if (options.grid_levels.empty()) {
-    r.fitness = objective.fitness(r.x);
-    r.evaluations = 1;
-    r.seconds = seconds_since(t0);
-    return r;
-  }
-  const int nb = 1 + *std::max_element(block.begin(), block.end());
-  const auto nl = static_cast<long>(options.grid_levels.size());
-  long count = 1;
-  for (int b = 0; b < nb; ++b) count *= nl;
-  std::vector<std::vector<double>> points;
-  for (long k = 0; k < count; ++k) {
-    std::vector<double> x(lo.size(), 0.0);
-    long code = k;
-    std::vector<double> level(static_cast<std::size_t>(nb));
-    for (int b = 0; b < nb; ++b, code /= nl)
-      level[static_cast<std::size_t>(b)] = options.grid_levels[code % nl];
-    for (std::size_t i = 0; i < x.size(); ++i)
-      if (block[i] >= 0) x[i] = std::clamp(level[static_cast<std::size_t>(block[i])], lo[i], hi[i]);
-    points.push_back(std::move(x));
-  }
-  const BoxProblem<RlObjective> problem{&objective};
-  const std::vector<double> f = tuner::evaluate_all(problem, points, settings.stop);
-  // The lowest; on a tie, the first in the grid's order.
-  std::size_t best = 0;
-  for (std::size_t k = 1; k < f.size(); ++k)
-    if (f[k] < f[best]) best = k;
-  r.x = points[best];
-  r.fitness = f[best];
-  r.evaluations = count;
-  r.seconds = seconds_since(t0);
-  report(settings, count, count);
-  return r;
-}
-
 namespace {
 
-// Stage 3: each parameter's profile, then the reset of those the recording
-// did not determine.
+// A point's profile, then the reset of what the recording did not determine:
+// r.x and r.fitness (the data fitness at r.x) in, the reset point out.
+struct Profiled {
+  std::vector<double> x;
+  double fitness = 0.0;
+  std::vector<RlParamProfile> profiles;
+  long evaluations = 0;
+};
+
 void profile_and_reset(const RlObjective& objective, const RlSearchOptions& options,
-                       const SolverSettings& settings, RlStartResult& r) {
+                       const SolverSettings& settings, Profiled& r) {
   const auto [lo, hi] = objective.bounds();
   const std::size_t n = lo.size();
   const DataFitness data{&objective};
@@ -175,27 +136,124 @@ void profile_and_reset(const RlObjective& objective, const RlSearchOptions& opti
 
 }  // namespace
 
+namespace {
+
+// The grid's best profiled and reset (when the options ask for a profile).
+void profile_grid(const RlObjective& objective, const RlSearchOptions& options, const SolverSettings& settings,
+                  RlGridResult& r) {
+  if (!options.profile || (settings.stop && settings.stop->load())) return;
+  Profiled p{r.x, objective.data_fitness(r.x), {}, 1};
+  profile_and_reset(objective, options, settings, p);
+  r.x = p.x;
+  r.fitness = objective.fitness(p.x);
+  r.profiles = p.profiles;
+  r.evaluations += p.evaluations + 1;
+}
+
+// The refinement's problem: the free parameters of `base`, in their box.
+struct Subset {
+  const RlObjective* objective;
+  std::vector<double> base;
+  std::vector<std::size_t> free;
+  std::vector<double> lo, hi;
+  std::vector<double> full(std::span<const double> x) const {
+    std::vector<double> out = base;
+    for (std::size_t k = 0; k < free.size(); ++k) out[free[k]] = x[k];
+    return out;
+  }
+  double fitness(std::span<const double> x) const { return objective->fitness(full(x)); }
+  void fitness_batch(std::span<const double> xs, std::span<double> out) const {
+    std::vector<double> all;
+    for (std::size_t k = 0; k < out.size(); ++k) {
+      const std::vector<double> x = full(xs.subspan(k * free.size(), free.size()));
+      all.insert(all.end(), x.begin(), x.end());
+    }
+    objective->fitness_batch(all, out);
+  }
+  int batch_size() const { return objective->batch_size(); }
+  tuner::Bounds bounds() const { return {lo, hi}; }
+};
+
+}  // namespace
+
+RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& options,
+                           const SolverSettings& settings) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto [lo, hi] = objective.bounds();
+  const std::vector<int> block = blocks_of(objective);
+  RlGridResult r;
+  r.x.assign(lo.size(), 0.0);
+  if (options.grid_levels.empty()) {
+    r.fitness = objective.fitness(r.x);
+    r.evaluations = 1;
+    profile_grid(objective, options, settings, r);
+    r.seconds = seconds_since(t0);
+    return r;
+  }
+  const int nb = 1 + *std::max_element(block.begin(), block.end());
+  const auto nl = static_cast<long>(options.grid_levels.size());
+  long count = 1;
+  for (int b = 0; b < nb; ++b) count *= nl;
+  std::vector<std::vector<double>> points;
+  for (long k = 0; k < count; ++k) {
+    std::vector<double> x(lo.size(), 0.0);
+    long code = k;
+    std::vector<double> level(static_cast<std::size_t>(nb));
+    for (int b = 0; b < nb; ++b, code /= nl)
+      level[static_cast<std::size_t>(b)] = options.grid_levels[code % nl];
+    for (std::size_t i = 0; i < x.size(); ++i)
+      if (block[i] >= 0) x[i] = std::clamp(level[static_cast<std::size_t>(block[i])], lo[i], hi[i]);
+    points.push_back(std::move(x));
+  }
+  const BoxProblem<RlObjective> problem{&objective};
+  const std::vector<double> f = tuner::evaluate_all(problem, points, settings.stop);
+  // The lowest; on a tie, the first in the grid's order.
+  std::size_t best = 0;
+  for (std::size_t k = 1; k < f.size(); ++k)
+    if (f[k] < f[best]) best = k;
+  r.x = points[best];
+  r.fitness = f[best];
+  r.evaluations = count;
+  report(settings, count, count);
+  profile_grid(objective, options, settings, r);
+  r.seconds = seconds_since(t0);
+  return r;
+}
+
 RlStartResult rl_refine_and_profile(const RlObjective& objective, const RlGridResult& grid,
                                     const RlSearchOptions& options, const SolverSettings& settings) {
   const auto t0 = std::chrono::steady_clock::now();
   RlStartResult r;
   r.seed = settings.seed;
   r.x = grid.x;
-  if (options.refine_decades > 0.0) {
-    const auto [lo, hi] = objective.bounds();
-    SubBox box{&objective, lo, hi};
-    for (std::size_t i = 0; i < lo.size(); ++i) {
-      box.lo[i] = std::max(lo[i], grid.x[i] - options.refine_decades);
-      box.hi[i] = std::min(hi[i], grid.x[i] + options.refine_decades);
-    }
-    r.refinement = run_solver(box, settings, grid.x);
-    r.evaluations += r.refinement.evaluations;
-    // The grid's point stays the answer unless the refinement beat it.
-    if (r.refinement.best_fitness < grid.fitness) r.x = r.refinement.best_x;
+  r.profiles = grid.profiles;
+  const auto [lo, hi] = objective.bounds();
+  Subset sub{&objective, grid.x, {}, {}, {}};
+  for (std::size_t i = 0; i < lo.size(); ++i) {
+    if (!grid.profiles.empty() && !grid.profiles[i].determined) continue;
+    sub.free.push_back(i);
+    sub.lo.push_back(std::max(lo[i], grid.x[i] - options.refine_decades));
+    sub.hi.push_back(std::min(hi[i], grid.x[i] + options.refine_decades));
   }
   r.refined_fitness = r.fitness = objective.data_fitness(r.x);
   ++r.evaluations;
-  if (options.profile) profile_and_reset(objective, options, settings, r);
+  if (options.refine_decades > 0.0 && !sub.free.empty()) {
+    std::vector<double> x0;
+    for (std::size_t i : sub.free) x0.push_back(grid.x[i]);
+    r.refinement = run_solver(sub, settings, x0);
+    r.evaluations += r.refinement.evaluations;
+    // The grid's point stays the answer unless the refinement beat it.
+    if (r.refinement.best_fitness < grid.fitness) {
+      for (std::size_t k = 0; k < sub.free.size(); ++k) r.x[sub.free[k]] = r.refinement.best_x[k];
+      Profiled p{r.x, objective.data_fitness(r.x), {}, 1};
+      r.refined_fitness = p.fitness;
+      if (options.profile && !(settings.stop && settings.stop->load())) profile_and_reset(objective, options, settings, p);
+      r.x = p.x;
+      r.fitness = p.fitness;
+      if (!p.profiles.empty()) r.profiles = p.profiles;
+      r.evaluations += p.evaluations;
+    }
+  }
   r.seconds = seconds_since(t0);
   return r;
 }

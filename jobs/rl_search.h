@@ -4,14 +4,15 @@
 //   1. grid (deterministic): every block of the noise (position, orientation,
 //      linear velocity, angular velocity, acceleration) scaled by one of
 //      10^levels, each combination scored;
-//   2. refinement (seeded): the solver within ± refine_decades of the grid's
-//      best, per parameter of the objective's space;
-//   3. profile (deterministic): per parameter, the range of factors over which
-//      the data fitness stays within `tolerance` of its best, the others held.
-//      Parameters whose range holds the file's value (factor 1) are reset to
-//      it: the recording did not determine them. If resetting all of them
-//      changes the fitness by `tolerance` or more, those that cost most are
-//      kept tuned until it does not.
+//   2. profile (deterministic): per parameter of the objective's space, the
+//      range of factors over which the data fitness stays within `tolerance`
+//      of its best, the others held. Parameters whose range holds the file's
+//      value (factor 1) are reset to it: the recording did not determine them.
+//      If resetting all of them changes the fitness by `tolerance` or more,
+//      those that cost most are kept tuned until it does not.
+//   3. refinement (seeded): the solver within ± refine_decades of that point,
+//      over the parameters the profile found determined; then their profile
+//      and reset again.
 #pragma once
 
 #include <cstdint>
@@ -32,17 +33,22 @@ struct RlParamProfile {
   double at_file_value = 0.0;  // the data fitness with this parameter at factor 1, the others held
 };
 
-// Stage 1, shared by every start.
+// The deterministic stages, shared by every start: the grid, then its best
+// profiled and reset.
 struct RlGridResult {
-  std::vector<double> x;  // box coordinates of the best combination
-  double fitness = 0.0;   // its fitness (with the prior)
+  std::vector<double> x;                 // box coordinates: the grid's best, after the reset
+  double fitness = 0.0;                  // the fitness there (with the prior)
+  std::vector<RlParamProfile> profiles;  // per parameter (empty without a profile)
   long evaluations = 0;
   double seconds = 0.0;
 };
 RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& options,
                            const SolverSettings& settings);
 
-// Stages 2 and 3 for one start (its seed in `settings`).
+// The seeded stage for one start (its seed in `settings`): the refinement of
+// the parameters the grid's profile found determined (all without a
+// profile), then their profile and reset again. Without a refinement, or when
+// it does not beat the grid, the start is the grid's result.
 struct RlStartResult {
   std::uint64_t seed = 0;
   tuner::Summary refinement;             // the solver's run (best_x before the profile)

@@ -115,6 +115,24 @@ struct BoxProblem {
   }
 };
 
+// The same for an objective that also evaluates a batch of points in one
+// call (tuner/problem.h's BatchProblem).
+template <typename Objective>
+  requires requires(const Objective& o, std::span<const double> xs, std::span<double> out) {
+    o.fitness_batch(xs, out);
+    o.batch_size();
+  }
+struct BoxProblem<Objective> {
+  const Objective* objective;
+  double fitness(std::span<const double> x) const { return objective->fitness(x); }
+  void fitness_batch(std::span<const double> xs, std::span<double> out) const { objective->fitness_batch(xs, out); }
+  int batch_size() const { return objective->batch_size(); }
+  tuner::Bounds bounds() const {
+    auto [lo, hi] = objective->bounds();
+    return {lo, hi};
+  }
+};
+
 // Minimises `problem` with PSO or NLopt as `s` says (NLopt from x0 when given,
 // else its default start). Throws std::runtime_error when the solver fails.
 tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s, std::vector<double> x0 = {});

@@ -156,10 +156,14 @@ bool RlTuneOptions::IsValid(std::string* why) const {
   return true;
 }
 
-FixScore score_of(std::span<const rlnode::ReplayOutput> outputs) {
+namespace {
+
+// The held-out fixes' errors added up, output by output (in one order, so
+// that a batch sums as its single replays do).
+struct ScoreSum {
   FixScore s;
   double sum = 0.0, sum_abs = 0.0;
-  for (const rlnode::ReplayOutput& o : outputs) {
+  void add(const rlnode::ReplayOutput& o) {
     s.finite = s.finite && o.finite;
     for (const rlnode::ScoredFix& f : o.scored) {
       const double e = (f.predicted - f.measured).head<2>().norm();
@@ -169,11 +173,22 @@ FixScore score_of(std::span<const rlnode::ReplayOutput> outputs) {
     }
     s.fixes += static_cast<long>(o.scored.size());
   }
-  const double n = static_cast<double>(s.fixes);
-  s.rmse_m = s.fixes > 0 ? std::sqrt(sum / n) : std::numeric_limits<double>::quiet_NaN();
-  s.mae_m = s.fixes > 0 ? sum_abs / n : std::numeric_limits<double>::quiet_NaN();
-  if (!std::isfinite(s.rmse_m)) s.finite = false;
-  return s;
+  FixScore done() const {
+    FixScore out = s;
+    const double n = static_cast<double>(s.fixes);
+    out.rmse_m = s.fixes > 0 ? std::sqrt(sum / n) : std::numeric_limits<double>::quiet_NaN();
+    out.mae_m = s.fixes > 0 ? sum_abs / n : std::numeric_limits<double>::quiet_NaN();
+    if (!std::isfinite(out.rmse_m)) out.finite = false;
+    return out;
+  }
+};
+
+}  // namespace
+
+FixScore score_of(std::span<const rlnode::ReplayOutput> outputs) {
+  ScoreSum sum;
+  for (const rlnode::ReplayOutput& o : outputs) sum.add(o);
+  return sum.done();
 }
 
 FixScore replay_score(const rlnode::Recording& rec, std::span<const rlnode::Schedule> schedules,
@@ -184,12 +199,23 @@ FixScore replay_score(const rlnode::Recording& rec, std::span<const rlnode::Sche
   return score_of(outs);
 }
 
+std::vector<FixScore> replay_score_batch(const rlnode::Recording& rec, std::span<const rlnode::Schedule> schedules,
+                                         std::span<const rlnode::ReplaySettings> settings) {
+  std::vector<ScoreSum> sums(settings.size());
+  for (const rlnode::Schedule& schedule : schedules) {
+    const std::vector<rlnode::ReplayOutput> outs = rlnode::replay_batch(rec, schedule, settings);
+    for (std::size_t k = 0; k < outs.size(); ++k) sums[k].add(outs[k]);
+  }
+  std::vector<FixScore> out;
+  for (const ScoreSum& s : sums) out.push_back(s.done());
+  return out;
+}
+
 OutageReplays::OutageReplays(const rlnode::Recording& rec, std::span<const OutageWindow> windows,
                              std::int64_t until_ns)
     : rec_(&rec), fused_(rlnode::make_schedule(rec, {}, until_ns)) {
   for (const OutageWindow& w : windows) {
-    rlnode::Schedule own = rlnode::make_schedule(rec, outage_window_roles(rec, w),
-                                                 std::min(w.end_ns, until_ns));
+    rlnode::Schedule own = rlnode::make_schedule(rec, outage_window_roles(rec, w), std::min(w.end_ns, until_ns));
     const auto& a = fused_.events;
     const auto& b = own.events;
     std::size_t k = 0;
@@ -198,14 +224,11 @@ OutageReplays::OutageReplays(const rlnode::Recording& rec, std::span<const Outag
       ++k;
     tails_.push_back({k, std::vector<rlnode::Event>(b.begin() + static_cast<std::ptrdiff_t>(k), b.end())});
   }
-  std::stable_sort(tails_.begin(), tails_.end(),
-                   [](const Tail& x, const Tail& y) { return x.shared < y.shared; });
+  std::stable_sort(tails_.begin(), tails_.end(), [](const Tail& x, const Tail& y) { return x.shared < y.shared; });
 }
 
 FixScore OutageReplays::score(const rlnode::ReplaySettings& s) const {
-  FixScore total;
-  if (tails_.empty()) return score_of({});
-  double sum = 0.0, sum_abs = 0.0;
+  ScoreSum sum;
   rlnode::Replayer fused(*rec_, s);
   std::size_t done = 0;
   for (const Tail& t : tails_) {
@@ -213,21 +236,30 @@ FixScore OutageReplays::score(const rlnode::ReplaySettings& s) const {
     done = t.shared;
     rlnode::Replayer window = fused;
     window.run(t.events);
-    const rlnode::ReplayOutput out = std::move(window).finish();
-    total.finite = total.finite && out.finite;
-    for (const rlnode::ScoredFix& f : out.scored) {
-      const double e = (f.predicted - f.measured).head<2>().norm();
-      sum += e * e;
-      sum_abs += e;
-      total.maxe_m = std::max(total.maxe_m, e);
-    }
-    total.fixes += static_cast<long>(out.scored.size());
+    sum.add(std::move(window).finish());
   }
-  const double n = static_cast<double>(total.fixes);
-  total.rmse_m = total.fixes > 0 ? std::sqrt(sum / n) : std::numeric_limits<double>::quiet_NaN();
-  total.mae_m = total.fixes > 0 ? sum_abs / n : std::numeric_limits<double>::quiet_NaN();
-  if (!std::isfinite(total.rmse_m)) total.finite = false;
-  return total;
+  return sum.done();
+}
+
+std::vector<FixScore> OutageReplays::score_batch(std::span<const rlnode::ReplaySettings> settings) const {
+  std::vector<ScoreSum> sums(settings.size());
+  for (std::size_t k0 = 0; k0 < settings.size(); k0 += filters::rl::kLanes) {
+    const std::size_t lanes = std::min<std::size_t>(filters::rl::kLanes, settings.size() - k0);
+    rlnode::BatchReplayer fused(*rec_, settings.subspan(k0, lanes));
+    std::size_t done = 0;
+    for (const Tail& t : tails_) {
+      fused.run(std::span(fused_.events).subspan(done, t.shared - done));
+      done = t.shared;
+      rlnode::BatchReplayer window = fused;
+      window.run(t.events);
+      std::vector<rlnode::ReplayOutput> outs;
+      std::move(window).finish(outs);
+      for (std::size_t l = 0; l < outs.size(); ++l) sums[k0 + l].add(outs[l]);
+    }
+  }
+  std::vector<FixScore> out;
+  for (const ScoreSum& s : sums) out.push_back(s.done());
+  return out;
 }
 
 RlObjective::RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySettings& base,
@@ -305,34 +337,61 @@ double RlObjective::combine(const FixScore& heldout, const FixScore& outage) con
   return f;
 }
 
-double RlObjective::data_fitness(std::span<const double> x) const {
-  const rlnode::ReplaySettings s = settings_at(x);
-  const FixScore none;
-  const bool heldout_needed = options_.fitness != RlFitness::outage || options_.keep_heldout;
-  const FixScore heldout = heldout_needed ? heldout_score(s) : none;
-  double f = combine(heldout, options_.fitness != RlFitness::heldout_fixes ? outage_score(s) : none);
-  if (f >= kDiverged) {
-    diverged_->fetch_add(1, std::memory_order_relaxed);
-    return f;
-  }
+bool RlObjective::heldout_needed() const {
+  return options_.fitness != RlFitness::outage || options_.keep_heldout;
+}
+
+bool RlObjective::outage_needed() const { return options_.fitness != RlFitness::heldout_fixes; }
+
+double RlObjective::fitness_of(const FixScore& heldout, const FixScore& outage) const {
+  double f = combine(heldout, outage);
   // Worse than the file at held-out fixes: ranked above the file's own
   // fitness, by how much worse.
-  const double excess = heldout.rmse_m / heldout_base_.rmse_m - 1.0;
-  if (options_.keep_heldout && excess > 0.0) {
-    if (!heldout.finite) return kDiverged;
-    f = std::max(f, baseline_fitness()) * (1.0 + 10.0 * excess);
+  if (f < kDiverged && options_.keep_heldout) {
+    const double excess = heldout.rmse_m / heldout_base_.rmse_m - 1.0;
+    if (!heldout.finite) {
+      f = kDiverged;
+    } else if (excess > 0.0) {
+      f = std::max(f, baseline_fitness()) * (1.0 + 10.0 * excess);
+    }
   }
+  if (f >= kDiverged) diverged_->fetch_add(1, std::memory_order_relaxed);
   return f;
 }
 
+double RlObjective::data_fitness(std::span<const double> x) const {
+  const rlnode::ReplaySettings s = settings_at(x);
+  const FixScore none;
+  return fitness_of(heldout_needed() ? heldout_score(s) : none, outage_needed() ? outage_score(s) : none);
+}
+
+void RlObjective::data_fitness_batch(std::span<const double> xs, std::span<double> out) const {
+  const std::size_t dim = space_.dim();
+  std::vector<rlnode::ReplaySettings> settings;
+  for (std::size_t k = 0; k < out.size(); ++k) settings.push_back(settings_at(xs.subspan(k * dim, dim)));
+  const std::vector<FixScore> none(out.size());
+  const std::vector<FixScore> heldout = heldout_needed() ? replay_score_batch(*rec_, heldout_, settings) : none;
+  const std::vector<FixScore> outage = outage_needed() ? outages_.score_batch(settings) : none;
+  for (std::size_t k = 0; k < out.size(); ++k) out[k] = fitness_of(heldout[k], outage[k]);
+}
+
+double RlObjective::prior(std::span<const double> x) const {
+  if (!(options_.prior_weight > 0.0)) return 0.0;
+  double sum = 0.0;
+  for (double v : space_.to_physical(x)) sum += std::log10(v) * std::log10(v);
+  return options_.prior_weight * sum / static_cast<double>(x.size());
+}
+
 double RlObjective::fitness(std::span<const double> x) const {
-  double f = data_fitness(x);
-  if (options_.prior_weight > 0.0 && f < kDiverged) {
-    double sum = 0.0;
-    for (double v : space_.to_physical(x)) sum += std::log10(v) * std::log10(v);
-    f += options_.prior_weight * sum / static_cast<double>(x.size());
-  }
-  return f;
+  const double f = data_fitness(x);
+  return f < kDiverged ? f + prior(x) : f;
+}
+
+void RlObjective::fitness_batch(std::span<const double> xs, std::span<double> out) const {
+  data_fitness_batch(xs, out);
+  const std::size_t dim = space_.dim();
+  for (std::size_t k = 0; k < out.size(); ++k)
+    if (out[k] < kDiverged) out[k] += prior(xs.subspan(k * dim, dim));
 }
 
 }  // namespace odotune

@@ -75,7 +75,7 @@ struct RlTuneOptions {
   bool input_covariances = true;          // also search a factor on each input's message covariance
   int folds = 5;                          // heldout_fixes
   double block_s = 1.0;                   // heldout_fixes: fixes of one block are held out together [s]
-  std::vector<double> outage_s = {60.0};  // outage: the windows' lengths L [s]
+  std::vector<double> outage_s = {30.0, 60.0};  // outage: the windows' lengths L [s]
   double outage_stride_s = 10.0;          // outage: a window of each length starts every … [s]
   double warmup_s = 30.0;                 // outage: the GPS fused this long before the first window [s]
   bool keep_heldout = true;               // a candidate worse at held-out fixes than the file scores above it
@@ -99,6 +99,10 @@ FixScore score_of(std::span<const rlnode::ReplayOutput> outputs);
 // `s` replayed over each schedule, its held-out fixes scored together.
 FixScore replay_score(const rlnode::Recording& rec, std::span<const rlnode::Schedule> schedules,
                       const rlnode::ReplaySettings& s);
+// The same for each of `settings`, replayed in lock step (rlnode::replay_batch):
+// each identical to its replay_score, bit for bit.
+std::vector<FixScore> replay_score_batch(const rlnode::Recording& rec, std::span<const rlnode::Schedule> schedules,
+                                         std::span<const rlnode::ReplaySettings> settings);
 
 // The outage fitness's windows, replayed from one run that fuses every fix:
 // each window's replay continues from a copy of that run taken where the
@@ -109,6 +113,8 @@ class OutageReplays {
   OutageReplays(const rlnode::Recording& rec, std::span<const OutageWindow> windows, std::int64_t until_ns);
   // Every window's scored fixes under `s`, together.
   FixScore score(const rlnode::ReplaySettings& s) const;
+  // score() of each of `settings`, in lock step (rlnode::BatchReplayer), bit for bit.
+  std::vector<FixScore> score_batch(std::span<const rlnode::ReplaySettings> settings) const;
   std::size_t windows() const { return tails_.size(); }
 
  private:
@@ -132,6 +138,12 @@ class RlObjective {
   double fitness(std::span<const double> x) const;
   // The fitness of the scores alone (what the tune reports and profiles).
   double data_fitness(std::span<const double> x) const;
+  // Both for out.size() points one after the other in xs, replayed in lock
+  // step: each value identical to the single call's, bit for bit
+  // (tuner/problem.h's batch contract).
+  void fitness_batch(std::span<const double> xs, std::span<double> out) const;
+  void data_fitness_batch(std::span<const double> xs, std::span<double> out) const;
+  int batch_size() const { return filters::rl::kLanes; }
   std::pair<std::vector<double>, std::vector<double>> bounds() const { return space_.box(); }
 
   const BoxSpace& space() const { return space_; }
@@ -145,6 +157,8 @@ class RlObjective {
   double baseline_fitness() const { return combine(heldout_base_, outage_base_); }
   // The fitness of a pair of scores (a large penalty when a used part is not finite).
   double combine(const FixScore& heldout, const FixScore& outage) const;
+  // combine() with the held-out-fix guard; counts a divergence.
+  double fitness_of(const FixScore& heldout, const FixScore& outage) const;
   const RlTuneOptions& options() const { return options_; }
   std::size_t window_count() const { return outages_.windows(); }
   // fitness() calls whose replay diverged (scored as a penalty), so far.
@@ -161,6 +175,10 @@ class RlObjective {
   OutageReplays outages_;
   FixScore heldout_base_, outage_base_;
   std::unique_ptr<std::atomic<long>> diverged_ = std::make_unique<std::atomic<long>>(0);
+
+  bool heldout_needed() const;
+  bool outage_needed() const;
+  double prior(std::span<const double> x) const;
 };
 
 }  // namespace odotune

@@ -9,7 +9,7 @@ namespace odotune {
 
 struct RlSearchOptions {
   std::vector<double> grid_levels = {-2.0, 0.0, 2.0};  // decades; empty: no grid (refine around the file)
-  double refine_decades = 1.0;                         // 0: no refinement
+  double refine_decades = 0.0;                         // the seeded refinement's reach; 0: none
   double profile_step_decades = 0.5;
   double tolerance = 0.02;  // relative: "within 2 % of the best"
   bool profile = true;

@@ -304,77 +304,62 @@ ReplayOutput replay(const Recording& rec, const Schedule& schedule, const Replay
 
 namespace {
 
-// Up to kLanes replays in lock step: the filters in RlEkfLanes, the node's
-// bookkeeping per lane by the functions above, as Replayer does it.
-class LaneReplayer {
- public:
-  LaneReplayer(const Recording& rec, std::span<const ReplaySettings> settings)
-      : rec_(&rec),
-        settings_(settings),
-        filter_(params(rec, settings)),
-        nodes_(settings.size()),
-        ms_(settings.size()) {
-    for (NodeState& n : nodes_) n.out.gps_transform = rec.gps_transform;
-  }
-
-  void run(std::span<const Event> events, bool keep) {
-    for (const Event& e : events) {
-      switch (e.type) {
-        case Event::callback:
-          each([&](int l, const rl::State& x) { run_callback(*rec_, e.input, x, nodes_[l]); });
-          break;
-        case Event::datum:
-          each([&](int l, const rl::State& x) { take_datum(*rec_, e.input, x, nodes_[l]); });
-          break;
-        case Event::process: process(e.input); break;
-        case Event::score:
-          each([&](int l, const rl::State& x) {
-            score_fix(*rec_, e.input, filter_.initialized(), x, filter_.last_time_ns(), nodes_[l]);
-          });
-          break;
-        case Event::timeout_predict: filter_.predict_to(e.time_ns); break;
-        case Event::tick:
-          if (filter_.initialized())
-            each([&](int l, const rl::State& x) { tick(e.time_ns, x, keep, nodes_[l]); });
-          break;
-      }
-    }
-  }
-
-  void finish(std::vector<ReplayOutput>& out) && {
-    for (int l = 0; l < filter_.lanes(); ++l) {
-      out.push_back(finish_output(std::move(nodes_[l]), filter_.state(l), filter_.cov(l)));
-    }
-  }
-
- private:
-  static std::vector<rl::RlEkfParams> params(const Recording& rec, std::span<const ReplaySettings> settings) {
-    std::vector<rl::RlEkfParams> p;
-    for (const ReplaySettings& s : settings) p.push_back(filter_params(rec, s));
-    return p;
-  }
-
-  template <class F>
-  void each(F f) {
-    for (int l = 0; l < filter_.lanes(); ++l) f(l, filter_.state(l));
-  }
-
-  void process(int i) {
-    for (int l = 0; l < filter_.lanes(); ++l) make_measurement(*rec_, settings_[l], i, nodes_[l], ms_[l]);
-    const std::uint32_t accepted = filter_.process(ms_);
-    for (int l = 0; l < filter_.lanes(); ++l) {
-      if ((accepted >> l & 1u) == 0) ++nodes_[l].out.rejected;
-    }
-  }
-
-  const Recording* rec_;
-  std::span<const ReplaySettings> settings_;
-  rl::RlEkfLanes filter_;
-  std::vector<NodeState> nodes_;
-  std::vector<rl::Measurement> ms_;
-};
+std::vector<rl::RlEkfParams> lane_params(const Recording& rec, std::span<const ReplaySettings> settings) {
+  std::vector<rl::RlEkfParams> p;
+  for (const ReplaySettings& s : settings) p.push_back(filter_params(rec, s));
+  return p;
+}
 
 }  // namespace
+
+// The filters in RlEkfLanes, the node's bookkeeping per lane by the functions
+// above, as Replayer does it.
+BatchReplayer::BatchReplayer(const Recording& rec, std::span<const ReplaySettings> settings)
+    : rec_(&rec),
+      settings_(settings),
+      filter_(lane_params(rec, settings)),
+      nodes_(settings.size()),
+      ms_(settings.size()) {
+  for (NodeState& n : nodes_) n.out.gps_transform = rec.gps_transform;
+}
+
+void BatchReplayer::run(std::span<const Event> events, bool keep) {
+  auto each = [&](auto f) {
+    for (int l = 0; l < filter_.lanes(); ++l) f(l, filter_.state(l));
+  };
+  for (const Event& e : events) {
+    switch (e.type) {
+      case Event::callback:
+        each([&](int l, const rl::State& x) { run_callback(*rec_, e.input, x, nodes_[l]); });
+        break;
+      case Event::datum: each([&](int l, const rl::State& x) { take_datum(*rec_, e.input, x, nodes_[l]); }); break;
+      case Event::process: process(e.input); break;
+      case Event::score:
+        each([&](int l, const rl::State& x) {
+          score_fix(*rec_, e.input, filter_.initialized(), x, filter_.last_time_ns(), nodes_[l]);
+        });
+        break;
+      case Event::timeout_predict: filter_.predict_to(e.time_ns); break;
+      case Event::tick:
+        if (filter_.initialized()) each([&](int l, const rl::State& x) { tick(e.time_ns, x, keep, nodes_[l]); });
+        break;
+    }
+  }
+}
+
+void BatchReplayer::finish(std::vector<ReplayOutput>& out) && {
+  for (int l = 0; l < filter_.lanes(); ++l) {
+    out.push_back(finish_output(std::move(nodes_[l]), filter_.state(l), filter_.cov(l)));
+  }
+}
+
+void BatchReplayer::process(int i) {
+  for (int l = 0; l < filter_.lanes(); ++l) make_measurement(*rec_, settings_[l], i, nodes_[l], ms_[l]);
+  const std::uint32_t accepted = filter_.process(ms_);
+  for (int l = 0; l < filter_.lanes(); ++l) {
+    if ((accepted >> l & 1u) == 0) ++nodes_[l].out.rejected;
+  }
+}
 
 std::vector<ReplayOutput> replay_batch(const Recording& rec, const Schedule& schedule,
                                        std::span<const ReplaySettings> settings, bool keep_trajectory) {
@@ -382,7 +367,7 @@ std::vector<ReplayOutput> replay_batch(const Recording& rec, const Schedule& sch
   out.reserve(settings.size());
   for (std::size_t k = 0; k < settings.size(); k += rl::kLanes) {
     const std::size_t lanes = std::min<std::size_t>(rl::kLanes, settings.size() - k);
-    LaneReplayer run(rec, settings.subspan(k, lanes));
+    BatchReplayer run(rec, settings.subspan(k, lanes));
     run.run(schedule.events, keep_trajectory);
     std::move(run).finish(out);
   }

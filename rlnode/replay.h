@@ -133,6 +133,29 @@ class Replayer {
   filters::rl::Measurement m_;  // scratch
 };
 
+// Up to filters::rl::kLanes replays advanced in lock step, a stretch of
+// events at a time (replay_batch runs it over whole schedules): each lane's
+// output is its own Replayer's, bit for bit. A copy is a checkpoint, as for
+// Replayer. `rec` and the settings must outlive it and its copies.
+class BatchReplayer {
+ public:
+  BatchReplayer(const Recording& rec, std::span<const ReplaySettings> settings);
+
+  int lanes() const { return filter_.lanes(); }
+  void run(std::span<const Event> events, bool keep_trajectory = false);
+  // Appends each lane's output to `out`, in the settings' order.
+  void finish(std::vector<ReplayOutput>& out) &&;
+
+ private:
+  void process(int i);
+
+  const Recording* rec_;
+  std::span<const ReplaySettings> settings_;
+  filters::rl::RlEkfLanes filter_;
+  std::vector<detail::NodeState> nodes_;
+  std::vector<filters::rl::Measurement> ms_;  // scratch, one per lane
+};
+
 // A fix in the odom frame under a GPS transform.
 Eigen::Vector3d fix_in_odom(const GpsFix& fix, const GpsTransform& t);
 

@@ -10,9 +10,10 @@
 
 namespace odotune::tuner {
 
-// fitness(points[i]) for every i. Rethrows the first exception a fitness
-// threw (in the points' order) once the loop is done. With `stop` raised, the
-// points not yet started are left as NaN.
+// fitness(points[i]) for every i, batch_size() points per call for a batch
+// problem. Rethrows the first exception a fitness threw (in the points'
+// order) once the loop is done. With `stop` raised, the points not yet
+// started are left as NaN. All points have the box's dimension.
 std::vector<double> evaluate_all(ProblemRef problem, const std::vector<std::vector<double>>& points,
                                  const std::atomic<bool>* stop = nullptr);
 

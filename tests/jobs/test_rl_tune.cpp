@@ -179,7 +179,7 @@ TEST(RlTune, StagedSearchResetsWhatTheRecordingDoesNotDetermine) {
   EXPECT_EQ(a.x, b.x);
   EXPECT_EQ(a.fitness, b.fitness);
 
-  EXPECT_EQ(grid.evaluations, 32);  // 2 levels ^ 5 blocks
+  EXPECT_GT(grid.evaluations, 32);  // 2 levels ^ 5 blocks, then the profile
   ASSERT_EQ(a.profiles.size(), objective.space().dim());
   const std::vector<double> factors = objective.space().to_physical(a.x);
   int undetermined = 0;
@@ -227,4 +227,30 @@ TEST(RlTune, WorseAtHeldOutFixesScoresAboveTheFile) {
     }
   }
   EXPECT_GT(worse, 0);
+}
+
+// The objective's batch (candidates replayed in lock step) gives each
+// candidate's single fitness, bit for bit, also for a part batch.
+TEST(RlTune, BatchFitnessIsEachCandidatesOwn) {
+  Fixture f;
+  RlTuneOptions o = small_options(f.rec);
+  o.prior_weight = 0.01;
+  const RlObjective objective(f.rec, rlnode::settings_of(f.rec.params), o);
+  const auto [lo, hi] = objective.bounds();
+  const std::size_t dim = lo.size();
+  for (std::size_t n : {std::size_t{3}, std::size_t{8}, std::size_t{11}}) {
+    std::vector<double> xs;
+    for (std::size_t k = 0; k < n; ++k)
+      for (std::size_t i = 0; i < dim; ++i)
+        xs.push_back(lo[i] + (hi[i] - lo[i]) * std::fmod(0.29 * static_cast<double>(k * 5 + i * 7) + 0.05, 1.0));
+    std::vector<double> out(n);
+    objective.fitness_batch(xs, out);
+    std::vector<double> data(n);
+    objective.data_fitness_batch(xs, data);
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::span<const double> x(&xs[k * dim], dim);
+      EXPECT_EQ(out[k], objective.fitness(x)) << n << " " << k;
+      EXPECT_EQ(data[k], objective.data_fitness(x)) << n << " " << k;
+    }
+  }
 }
