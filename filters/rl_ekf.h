@@ -136,10 +136,10 @@ class RlEkfLanes {
   explicit RlEkfLanes(std::span<const RlEkfParams> params);
 
   int lanes() const { return lanes_; }
-  // RlEkf::process in every lane: ms[l] is lane l's measurement (one per
-  // lane). All must have the same time and mask; their values, covariances
-  // and thresholds may differ. Bit l of the result is set when lane l
-  // accepted its measurement.
+  // RlEkf::process in every lane: ms[l] is lane l's measurement (throws
+  // std::invalid_argument unless there is one per lane). All must have the
+  // same time and mask (asserted); their values, covariances and thresholds
+  // may differ. Bit l of the result is set when lane l accepted its measurement.
   std::uint32_t process(std::span<const Measurement> ms);
   void predict_to(std::int64_t time_ns);
 
