@@ -154,10 +154,14 @@ void add_rl_tune_options(CLI::App* sub, RlTuneRequest& rl, RlChoices& rl_names) 
   sub->add_option("--until", rl.until_s,
                   "--rl-params: tune on the recording before this many seconds; the rest is scored as held out")
       ->check(CLI::PositiveNumber);
-  sub->add_option(
-         "--fitness", rl_names.fitness,
-         "--rl-params: outage (simulated GPS outages, default), heldout-fixes (mode 8 on this filter) or both")
-      ->check(CLI::IsMember({"outage", "heldout-fixes", "both"}));
+  sub->add_option("--fitness", rl_names.fitness,
+                  "--rl-params: both (held-out fixes and simulated GPS outages, each relative to the file's "
+                  "values; default), outage, heldout-fixes (mode 8 on this filter), or an innovation statistic "
+                  "(docs/husky.md, \"Methods tried\"): innovation-nll, nis, whiteness, heldout-nll")
+      ->check([](const std::string& text) {
+        RlFitness f{};
+        return parse_rl_fitness(text, &f) ? std::string() : "not a fitness: " + text;
+      });
   sub->add_option("--space", rl_names.space,
                   "--rl-params: search a factor per diagonal entry of the process noise (default) or per block")
       ->check(CLI::IsMember({"diagonal", "blocks"}));

@@ -72,8 +72,11 @@ void print_rl_tune(const RlTuneRequest& r, const RlTuneOutcome& o) {
              r.options.input_covariances ? " and input covariances" : "", fmt::join(r.options.outage_s, ", "),
              o.outage_windows);
   fmt::print(
-      "  grid of block factors: {} combinations, best tuning fitness {:.4f} (the file's values {:.4f})\n",
-      o.grid.evaluations, o.grid.fitness, o.baseline_fitness);
+      "  grid of block factors: {} combinations, then the profile: tuning fitness {:.4f} (the file's values "
+      "{:.4f})\n",
+      o.grid.points, o.grid.fitness, o.baseline_fitness);
+  if (o.starts.size() > 1 && !(r.search.refine_decades > 0.0))
+    fmt::print("  no seeded stage (--refine 0): every seed gives the same file\n");
   if (o.starts.size() > 1 || o.judged) {
     fmt::print("  {:>6} {:>10} {:>14} {:>14}{}\n", "seed", "tuning", "held-out fixes", "outages",
                o.judged ? fmt::format(" {:>16} {:>16}", "judged: outage", "every 5th") : "");

@@ -185,6 +185,7 @@ RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& 
   r.x.assign(lo.size(), 0.0);
   if (options.grid_levels.empty()) {
     r.fitness = objective.fitness(r.x);
+    r.points = 1;
     r.evaluations = 1;
     profile_grid(objective, options, settings, r);
     r.seconds = seconds_since(t0);
@@ -213,6 +214,7 @@ RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& 
     if (f[k] < f[best]) best = k;
   r.x = points[best];
   r.fitness = f[best];
+  r.points = count;
   r.evaluations = count;
   report(settings, count, count);
   profile_grid(objective, options, settings, r);
@@ -247,7 +249,8 @@ RlStartResult rl_refine_and_profile(const RlObjective& objective, const RlGridRe
       for (std::size_t k = 0; k < sub.free.size(); ++k) r.x[sub.free[k]] = r.refinement.best_x[k];
       Profiled p{r.x, objective.data_fitness(r.x), {}, 1};
       r.refined_fitness = p.fitness;
-      if (options.profile && !(settings.stop && settings.stop->load())) profile_and_reset(objective, options, settings, p);
+      if (options.profile && !(settings.stop && settings.stop->load()))
+        profile_and_reset(objective, options, settings, p);
       r.x = p.x;
       r.fitness = p.fitness;
       if (!p.profiles.empty()) r.profiles = p.profiles;

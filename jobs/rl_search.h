@@ -39,7 +39,8 @@ struct RlGridResult {
   std::vector<double> x;                 // box coordinates: the grid's best, after the reset
   double fitness = 0.0;                  // the fitness there (with the prior)
   std::vector<RlParamProfile> profiles;  // per parameter (empty without a profile)
-  long evaluations = 0;
+  long points = 0;                       // the grid's combinations
+  long evaluations = 0;                  // with the profile's
   double seconds = 0.0;
 };
 RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& options,

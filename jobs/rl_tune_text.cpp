@@ -33,9 +33,13 @@ std::string search_text(const RlTuneRequest& r, const RlTuneOutcome& o) {
   std::string s = r.search.grid_levels.empty()
                       ? std::string("no grid")
                       : fmt::format("a grid of block factors 10^({}) ({} combinations)",
-                                    fmt::join(r.search.grid_levels, ", "), o.grid.evaluations);
-  if (r.search.refine_decades > 0.0)
-    s += fmt::format(", then {} within {:g} decade(s) of its best", r.solver.name(), r.search.refine_decades);
+                                    fmt::join(r.search.grid_levels, ", "), o.grid.points);
+  if (r.search.refine_decades > 0.0) {
+    s += fmt::format(", then {} within {:g} decade(s) of the determined factors", r.solver.name(),
+                     r.search.refine_decades);
+  } else {
+    s += "; no seeded stage, so every seed gives this file";
+  }
   if (r.search.profile)
     s += fmt::format(", then each factor profiled (range within {:g} % of the best)",
                      100.0 * r.search.tolerance);
@@ -149,7 +153,10 @@ void write_rl_tune_json(const std::filesystem::path& path, const RlTuneRequest& 
       {"solver", r.solver.name()},
       {"seed", w.seed},
       {"grid",
-       {{"levels", r.search.grid_levels}, {"evaluations", o.grid.evaluations}, {"fitness", o.grid.fitness}}},
+       {{"levels", r.search.grid_levels},
+        {"points", o.grid.points},
+        {"evaluations", o.grid.evaluations},
+        {"fitness", o.grid.fitness}}},
       {"evaluations", o.summary.evaluations},
       {"termination", o.summary.termination_text()},
       {"seconds", o.summary.seconds},

@@ -125,7 +125,9 @@ template <typename Objective>
 struct BoxProblem<Objective> {
   const Objective* objective;
   double fitness(std::span<const double> x) const { return objective->fitness(x); }
-  void fitness_batch(std::span<const double> xs, std::span<double> out) const { objective->fitness_batch(xs, out); }
+  void fitness_batch(std::span<const double> xs, std::span<double> out) const {
+    objective->fitness_batch(xs, out);
+  }
   int batch_size() const { return objective->batch_size(); }
   tuner::Bounds bounds() const {
     auto [lo, hi] = objective->bounds();

@@ -9,6 +9,7 @@
 #include <fmt/ranges.h>
 
 #include "core/why.h"
+#include "objectives/rl_innovations.h"
 
 namespace odotune {
 namespace {
@@ -34,7 +35,8 @@ constexpr double kDiverged = 1e9;
 }  // namespace
 
 bool parse_rl_fitness(std::string_view text, RlFitness* out) {
-  for (RlFitness f : {RlFitness::heldout_fixes, RlFitness::outage, RlFitness::both}) {
+  for (RlFitness f : {RlFitness::heldout_fixes, RlFitness::outage, RlFitness::both, RlFitness::innovation_nll,
+                      RlFitness::nis, RlFitness::whiteness, RlFitness::heldout_nll}) {
     if (text == to_string(f)) {
       *out = f;
       return true;
@@ -58,12 +60,17 @@ int stored_mode(RlFitness f) {
     case RlFitness::heldout_fixes: return kRlHeldoutFixesMode;
     case RlFitness::outage: return kRlOutageMode;
     case RlFitness::both: return kRlBothMode;
+    case RlFitness::innovation_nll: return kRlInnovationNllMode;
+    case RlFitness::nis: return kRlNisMode;
+    case RlFitness::whiteness: return kRlWhitenessMode;
+    case RlFitness::heldout_nll: return kRlHeldoutNllMode;
   }
   return 0;
 }
 
 std::optional<RlFitness> rl_fitness_of_mode(int mode) {
-  for (RlFitness f : {RlFitness::heldout_fixes, RlFitness::outage, RlFitness::both})
+  for (RlFitness f : {RlFitness::heldout_fixes, RlFitness::outage, RlFitness::both, RlFitness::innovation_nll,
+                      RlFitness::nis, RlFitness::whiteness, RlFitness::heldout_nll})
     if (stored_mode(f) == mode) return f;
   return std::nullopt;
 }
@@ -126,6 +133,10 @@ std::string_view to_string(RlFitness f) {
     case RlFitness::heldout_fixes: return "heldout-fixes";
     case RlFitness::outage: return "outage";
     case RlFitness::both: return "both";
+    case RlFitness::innovation_nll: return "innovation-nll";
+    case RlFitness::nis: return "nis";
+    case RlFitness::whiteness: return "whiteness";
+    case RlFitness::heldout_nll: return "heldout-nll";
   }
   return "";
 }
@@ -199,7 +210,8 @@ FixScore replay_score(const rlnode::Recording& rec, std::span<const rlnode::Sche
   return score_of(outs);
 }
 
-std::vector<FixScore> replay_score_batch(const rlnode::Recording& rec, std::span<const rlnode::Schedule> schedules,
+std::vector<FixScore> replay_score_batch(const rlnode::Recording& rec,
+                                         std::span<const rlnode::Schedule> schedules,
                                          std::span<const rlnode::ReplaySettings> settings) {
   std::vector<ScoreSum> sums(settings.size());
   for (const rlnode::Schedule& schedule : schedules) {
@@ -215,7 +227,8 @@ OutageReplays::OutageReplays(const rlnode::Recording& rec, std::span<const Outag
                              std::int64_t until_ns)
     : rec_(&rec), fused_(rlnode::make_schedule(rec, {}, until_ns)) {
   for (const OutageWindow& w : windows) {
-    rlnode::Schedule own = rlnode::make_schedule(rec, outage_window_roles(rec, w), std::min(w.end_ns, until_ns));
+    rlnode::Schedule own = rlnode::make_schedule(rec, outage_window_roles(rec, w),
+                                                 std::min(w.end_ns, until_ns));
     const auto& a = fused_.events;
     const auto& b = own.events;
     std::size_t k = 0;
@@ -224,7 +237,8 @@ OutageReplays::OutageReplays(const rlnode::Recording& rec, std::span<const Outag
       ++k;
     tails_.push_back({k, std::vector<rlnode::Event>(b.begin() + static_cast<std::ptrdiff_t>(k), b.end())});
   }
-  std::stable_sort(tails_.begin(), tails_.end(), [](const Tail& x, const Tail& y) { return x.shared < y.shared; });
+  std::stable_sort(tails_.begin(), tails_.end(),
+                   [](const Tail& x, const Tail& y) { return x.shared < y.shared; });
 }
 
 FixScore OutageReplays::score(const rlnode::ReplaySettings& s) const {
@@ -299,11 +313,13 @@ RlObjective::RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySetti
   const std::vector<OutageWindow> windows = outage_windows(
       rec, options.outage_s, options.outage_stride_s, after_warmup(rec, options.warmup_s), options.until_ns);
   outages_ = OutageReplays(rec, windows, options.until_ns);
-  heldout_base_ = heldout_score(base_);
-  outage_base_ = outage_score(base_);
-  const bool heldout_used = options.fitness != RlFitness::outage;
-  const bool outage_used = options.fitness != RlFitness::heldout_fixes;
-  if ((heldout_used && !(heldout_base_.rmse_m > 0.0)) || (outage_used && !(outage_base_.rmse_m > 0.0))) {
+  fused_ = rlnode::make_schedule(rec, {}, options.until_ns);
+  base_parts_ = parts(base_);
+  base_parts_.heldout = heldout_score(base_);
+  base_parts_.outage = outage_score(base_);
+  const bool heldout_used = heldout_needed() || options.fitness == RlFitness::heldout_nll;
+  if ((heldout_used && !(base_parts_.heldout.rmse_m > 0.0)) ||
+      (outage_needed() && !(base_parts_.outage.rmse_m > 0.0))) {
     throw std::invalid_argument(
         fmt::format("{}: no fix is scored before the tuning span ends (outages of {} s after {} s of GPS); "
                     "expected a longer span or shorter outages",
@@ -323,56 +339,88 @@ rlnode::ReplaySettings RlObjective::settings_at(std::span<const double> x) const
   return s;
 }
 
-double RlObjective::combine(const FixScore& heldout, const FixScore& outage) const {
+bool RlObjective::heldout_needed() const {
+  return options_.fitness == RlFitness::heldout_fixes || options_.fitness == RlFitness::both ||
+         options_.keep_heldout;
+}
+
+bool RlObjective::outage_needed() const {
+  return options_.fitness == RlFitness::outage || options_.fitness == RlFitness::both;
+}
+
+bool RlObjective::statistic_kind() const {
+  return !outage_needed() && options_.fitness != RlFitness::heldout_fixes;
+}
+
+RlObjective::Parts RlObjective::parts(const rlnode::ReplaySettings& s) const {
+  Parts p;
+  if (heldout_needed() && options_.fitness != RlFitness::heldout_nll) p.heldout = heldout_score(s);
+  if (outage_needed()) p.outage = outage_score(s);
+  if (!statistic_kind()) return p;
+  rlnode::ReplaySettings with = s;
+  with.innovations = true;
+  if (options_.fitness == RlFitness::heldout_nll) {
+    std::vector<rlnode::ReplayOutput> outs;
+    for (const rlnode::Schedule& schedule : heldout_) outs.push_back(rlnode::replay(*rec_, schedule, with));
+    p.heldout = score_of(outs);
+    p.statistic = heldout_nll(outs);
+    return p;
+  }
+  const rlnode::ReplayOutput out = rlnode::replay(*rec_, fused_, with);
+  p.statistic = options_.fitness == RlFitness::innovation_nll ? innovation_nll(out.innovations)
+                : options_.fitness == RlFitness::nis          ? nis_cost(out.innovations)
+                                                              : whiteness_cost(out.innovations);
+  if (!out.finite) p.statistic = std::numeric_limits<double>::quiet_NaN();
+  return p;
+}
+
+double RlObjective::combine(const Parts& p) const {
+  if (statistic_kind()) return std::isfinite(p.statistic) ? p.statistic : kDiverged;
   const bool both = options_.fitness == RlFitness::both;
   double f = 0.0;
   if (options_.fitness != RlFitness::outage) {
-    if (!heldout.finite) return kDiverged;
-    f += both ? heldout.rmse_m / heldout_base_.rmse_m : heldout.rmse_m;
+    if (!p.heldout.finite) return kDiverged;
+    f += both ? p.heldout.rmse_m / base_parts_.heldout.rmse_m : p.heldout.rmse_m;
   }
   if (options_.fitness != RlFitness::heldout_fixes) {
-    if (!outage.finite) return kDiverged;
-    f += both ? outage.rmse_m / outage_base_.rmse_m : outage.rmse_m;
+    if (!p.outage.finite) return kDiverged;
+    f += both ? p.outage.rmse_m / base_parts_.outage.rmse_m : p.outage.rmse_m;
   }
   return f;
 }
 
-bool RlObjective::heldout_needed() const {
-  return options_.fitness != RlFitness::outage || options_.keep_heldout;
-}
-
-bool RlObjective::outage_needed() const { return options_.fitness != RlFitness::heldout_fixes; }
-
-double RlObjective::fitness_of(const FixScore& heldout, const FixScore& outage) const {
-  double f = combine(heldout, outage);
+double RlObjective::fitness_of(const Parts& p) const {
+  double f = combine(p);
   // Worse than the file at held-out fixes: ranked above the file's own
-  // fitness, by how much worse.
+  // fitness, by how much worse (an innovation statistic may be negative:
+  // then above it by the excess in its own scale).
   if (f < kDiverged && options_.keep_heldout) {
-    const double excess = heldout.rmse_m / heldout_base_.rmse_m - 1.0;
-    if (!heldout.finite) {
+    const double excess = p.heldout.rmse_m / base_parts_.heldout.rmse_m - 1.0;
+    if (!p.heldout.finite) {
       f = kDiverged;
     } else if (excess > 0.0) {
-      f = std::max(f, baseline_fitness()) * (1.0 + 10.0 * excess);
+      const double base = baseline_fitness();
+      f = std::max(f, base) + (std::abs(base) + 1.0) * 10.0 * excess;
     }
   }
   if (f >= kDiverged) diverged_->fetch_add(1, std::memory_order_relaxed);
   return f;
 }
 
-double RlObjective::data_fitness(std::span<const double> x) const {
-  const rlnode::ReplaySettings s = settings_at(x);
-  const FixScore none;
-  return fitness_of(heldout_needed() ? heldout_score(s) : none, outage_needed() ? outage_score(s) : none);
-}
+double RlObjective::data_fitness(std::span<const double> x) const { return fitness_of(parts(settings_at(x))); }
 
 void RlObjective::data_fitness_batch(std::span<const double> xs, std::span<double> out) const {
   const std::size_t dim = space_.dim();
+  if (statistic_kind()) {
+    for (std::size_t k = 0; k < out.size(); ++k) out[k] = data_fitness(xs.subspan(k * dim, dim));
+    return;
+  }
   std::vector<rlnode::ReplaySettings> settings;
   for (std::size_t k = 0; k < out.size(); ++k) settings.push_back(settings_at(xs.subspan(k * dim, dim)));
   const std::vector<FixScore> none(out.size());
   const std::vector<FixScore> heldout = heldout_needed() ? replay_score_batch(*rec_, heldout_, settings) : none;
   const std::vector<FixScore> outage = outage_needed() ? outages_.score_batch(settings) : none;
-  for (std::size_t k = 0; k < out.size(); ++k) out[k] = fitness_of(heldout[k], outage[k]);
+  for (std::size_t k = 0; k < out.size(); ++k) out[k] = fitness_of({heldout[k], outage[k], 0.0});
 }
 
 double RlObjective::prior(std::span<const double> x) const {

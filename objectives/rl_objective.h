@@ -42,13 +42,18 @@
 
 namespace odotune {
 
-enum class RlFitness { heldout_fixes, outage, both };
-std::string_view to_string(RlFitness f);                       // "heldout-fixes", "outage", "both"
+// heldout_fixes, outage and both as above; the others are the innovation
+// statistics of objectives/rl_innovations.h (innovation-nll, nis, whiteness:
+// of the fused fixes over the span; heldout-nll: of the held-out folds).
+enum class RlFitness { heldout_fixes, outage, both, innovation_nll, nis, whiteness, heldout_nll };
+// "heldout-fixes", "outage", "both", "innovation-nll", "nis", "whiteness", "heldout-nll"
+std::string_view to_string(RlFitness f);
 bool parse_rl_fitness(std::string_view text, RlFitness* out);  // false (out untouched) for other text
 
 // The fitness mode a results store records for each (results/run_record.h):
 // held-out fixes is mode 8 on this filter too; the others have numbers of their own.
-constexpr int kRlHeldoutFixesMode = 8, kRlOutageMode = 10, kRlBothMode = 11;
+constexpr int kRlHeldoutFixesMode = 8, kRlOutageMode = 10, kRlBothMode = 11, kRlInnovationNllMode = 12,
+              kRlNisMode = 13, kRlWhitenessMode = 14, kRlHeldoutNllMode = 15;
 int stored_mode(RlFitness f);
 std::optional<RlFitness> rl_fitness_of_mode(int mode);
 
@@ -72,14 +77,14 @@ bool apply_rl_factors(const rlnode::RlParams& params, std::span<const std::strin
 struct RlTuneOptions {
   RlFitness fitness = RlFitness::both;
   RlNoiseSpace space = RlNoiseSpace::diagonal;
-  bool input_covariances = true;          // also search a factor on each input's message covariance
-  int folds = 5;                          // heldout_fixes
-  double block_s = 1.0;                   // heldout_fixes: fixes of one block are held out together [s]
+  bool input_covariances = true;                // also search a factor on each input's message covariance
+  int folds = 5;                                // heldout_fixes
+  double block_s = 1.0;                         // heldout_fixes: fixes of one block are held out together [s]
   std::vector<double> outage_s = {30.0, 60.0};  // outage: the windows' lengths L [s]
-  double outage_stride_s = 10.0;          // outage: a window of each length starts every … [s]
-  double warmup_s = 30.0;                 // outage: the GPS fused this long before the first window [s]
-  bool keep_heldout = true;               // a candidate worse at held-out fixes than the file scores above it
-  double prior_weight = 0.0;              // ≥ 0: the prior toward the file's values (above)
+  double outage_stride_s = 10.0;                // outage: a window of each length starts every … [s]
+  double warmup_s = 30.0;                       // outage: the GPS fused this long before the first window [s]
+  bool keep_heldout = true;   // a candidate worse at held-out fixes than the file scores above it
+  double prior_weight = 0.0;  // ≥ 0: the prior toward the file's values (above)
   // Multipliers in [10^−down, 10^up]. The Husky's first-half tune ended on
   // both edges of [1e-4, 1e2], so the box spans ten decades.
   double decades_down = 6.0, decades_up = 4.0;
@@ -101,7 +106,8 @@ FixScore replay_score(const rlnode::Recording& rec, std::span<const rlnode::Sche
                       const rlnode::ReplaySettings& s);
 // The same for each of `settings`, replayed in lock step (rlnode::replay_batch):
 // each identical to its replay_score, bit for bit.
-std::vector<FixScore> replay_score_batch(const rlnode::Recording& rec, std::span<const rlnode::Schedule> schedules,
+std::vector<FixScore> replay_score_batch(const rlnode::Recording& rec,
+                                         std::span<const rlnode::Schedule> schedules,
                                          std::span<const rlnode::ReplaySettings> settings);
 
 // The outage fitness's windows, replayed from one run that fuses every fix:
@@ -143,7 +149,7 @@ class RlObjective {
   // (tuner/problem.h's batch contract).
   void fitness_batch(std::span<const double> xs, std::span<double> out) const;
   void data_fitness_batch(std::span<const double> xs, std::span<double> out) const;
-  int batch_size() const { return filters::rl::kLanes; }
+  int batch_size() const { return statistic_kind() ? 1 : filters::rl::kLanes; }
   std::pair<std::vector<double>, std::vector<double>> bounds() const { return space_.box(); }
 
   const BoxSpace& space() const { return space_; }
@@ -152,13 +158,20 @@ class RlObjective {
   // fitness uses them; the base settings' own, from the constructor.
   FixScore heldout_score(const rlnode::ReplaySettings& s) const { return replay_score(*rec_, heldout_, s); }
   FixScore outage_score(const rlnode::ReplaySettings& s) const { return outages_.score(s); }
-  const FixScore& baseline_heldout() const { return heldout_base_; }
-  const FixScore& baseline_outage() const { return outage_base_; }
-  double baseline_fitness() const { return combine(heldout_base_, outage_base_); }
-  // The fitness of a pair of scores (a large penalty when a used part is not finite).
-  double combine(const FixScore& heldout, const FixScore& outage) const;
+  const FixScore& baseline_heldout() const { return base_parts_.heldout; }
+  const FixScore& baseline_outage() const { return base_parts_.outage; }
+  double baseline_fitness() const { return combine(base_parts_); }
+  // What a candidate is scored by: the held-out fixes and the outages (each
+  // when the fitness or the guard uses it) and an innovation statistic.
+  struct Parts {
+    FixScore heldout, outage;
+    double statistic = 0.0;
+  };
+  Parts parts(const rlnode::ReplaySettings& s) const;
+  // The fitness of the parts (a large penalty when a used part is not finite).
+  double combine(const Parts& p) const;
   // combine() with the held-out-fix guard; counts a divergence.
-  double fitness_of(const FixScore& heldout, const FixScore& outage) const;
+  double fitness_of(const Parts& p) const;
   const RlTuneOptions& options() const { return options_; }
   std::size_t window_count() const { return outages_.windows(); }
   // fitness() calls whose replay diverged (scored as a penalty), so far.
@@ -172,12 +185,14 @@ class RlObjective {
   std::vector<std::vector<int>> noise_members_;  // per noise parameter: the diagonal entries it scales
   std::vector<int> cov_sensors_;                 // per covariance parameter: the sensor
   std::vector<rlnode::Schedule> heldout_;
+  rlnode::Schedule fused_;  // every fix fused over the span: the innovation statistics
   OutageReplays outages_;
-  FixScore heldout_base_, outage_base_;
+  Parts base_parts_;
   std::unique_ptr<std::atomic<long>> diverged_ = std::make_unique<std::atomic<long>>(0);
 
   bool heldout_needed() const;
   bool outage_needed() const;
+  bool statistic_kind() const;
   double prior(std::span<const double> x) const;
 };
 

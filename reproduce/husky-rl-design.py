@@ -55,6 +55,16 @@ DESIGNS = {
                                "--iterations", "20"],
     "grid-refine-determined-seed2": ["--fitness", "both", "--refine", "1", "--outage", "30", "--particles",
                                      "12", "--iterations", "20", "--seed", "2"],
+    # The field's criteria (objectives/rl_innovations.h) in the same search,
+    # with the held-out-fix guard and without it.
+    "innovation-nll": ["--fitness", "innovation-nll", "--outage", "30"],
+    "innovation-nll-free": ["--fitness", "innovation-nll", "--outage", "30", "--allow-worse-heldout"],
+    "nis": ["--fitness", "nis", "--outage", "30"],
+    "nis-free": ["--fitness", "nis", "--outage", "30", "--allow-worse-heldout"],
+    "whiteness": ["--fitness", "whiteness", "--outage", "30"],
+    "whiteness-free": ["--fitness", "whiteness", "--outage", "30", "--allow-worse-heldout"],
+    "heldout-nll": ["--fitness", "heldout-nll", "--outage", "30"],
+    "heldout-nll-free": ["--fitness", "heldout-nll", "--outage", "30", "--allow-worse-heldout"],
     "grid-every5": ["--fitness", "both", "--refine", "0", "--outage", "30", "--outage-every", "5"],
     "grid-blocks": ["--fitness", "both", "--space", "blocks", "--refine", "0", "--outage", "30"],
 }

@@ -273,6 +273,25 @@ Replayer::Replayer(const Recording& rec, const ReplaySettings& settings)
   node_.out.gps_transform = rec.gps_transform;
 }
 
+rl::RlEkf Replayer::predicted(std::int64_t stamp_ns) const {
+  rl::RlEkf f = filter_;
+  const std::int64_t delta = stamp_ns - f.last_time_ns();
+  if (delta > 0) f.predict(static_cast<double>(delta) * 1e-9);
+  return f;
+}
+
+// The innovation of the GPS measurement in m_, against the prediction its
+// correction starts from (RlEkf::process predicts over a positive Δt first).
+void Replayer::record_innovation() {
+  if (!filter_.initialized() || !m_.mask[rl::kX] || !m_.mask[rl::kY]) return;
+  const rl::RlEkf f = predicted(m_.time_ns);
+  Innovation v;
+  v.stamp_ns = m_.time_ns;
+  v.nu = m_.z.head<2>() - f.state().head<2>();
+  v.S = f.cov().topLeftCorner<2, 2>() + m_.R.topLeftCorner<2, 2>();
+  node_.out.innovations.push_back(v);
+}
+
 ReplayOutput Replayer::finish() && { return finish_output(std::move(node_), filter_.state(), filter_.cov()); }
 
 void Replayer::run(std::span<const Event> events, bool keep_trajectory) {
@@ -282,11 +301,17 @@ void Replayer::run(std::span<const Event> events, bool keep_trajectory) {
       case Event::datum: take_datum(*rec_, e.input, filter_.state(), node_); break;
       case Event::process:
         make_measurement(*rec_, *settings_, e.input, node_, m_);
+        if (settings_->innovations && rec_->inputs[e.input].kind == InputKind::gps) record_innovation();
         if (!filter_.process(m_)) ++node_.out.rejected;
         break;
-      case Event::score:
+      case Event::score: {
+        const std::size_t before = node_.out.scored.size();
         score_fix(*rec_, e.input, filter_.initialized(), filter_.state(), filter_.last_time_ns(), node_);
+        if (settings_->innovations && node_.out.scored.size() > before)
+          node_.out.scored.back().predicted_cov =
+              predicted(node_.out.scored.back().stamp_ns).cov().topLeftCorner<2, 2>();
         break;
+      }
       case Event::timeout_predict: filter_.predict_to(e.time_ns); break;
       case Event::tick:
         if (filter_.initialized()) tick(e.time_ns, filter_.state(), keep_trajectory, node_);
@@ -332,7 +357,9 @@ void BatchReplayer::run(std::span<const Event> events, bool keep) {
       case Event::callback:
         each([&](int l, const rl::State& x) { run_callback(*rec_, e.input, x, nodes_[l]); });
         break;
-      case Event::datum: each([&](int l, const rl::State& x) { take_datum(*rec_, e.input, x, nodes_[l]); }); break;
+      case Event::datum:
+        each([&](int l, const rl::State& x) { take_datum(*rec_, e.input, x, nodes_[l]); });
+        break;
       case Event::process: process(e.input); break;
       case Event::score:
         each([&](int l, const rl::State& x) {
@@ -341,7 +368,8 @@ void BatchReplayer::run(std::span<const Event> events, bool keep) {
         break;
       case Event::timeout_predict: filter_.predict_to(e.time_ns); break;
       case Event::tick:
-        if (filter_.initialized()) each([&](int l, const rl::State& x) { tick(e.time_ns, x, keep, nodes_[l]); });
+        if (filter_.initialized())
+          each([&](int l, const rl::State& x) { tick(e.time_ns, x, keep, nodes_[l]); });
         break;
     }
   }

@@ -39,6 +39,10 @@ struct ReplaySettings {
   // pose, twist and acceleration parts.
   std::vector<double> covariance_scale;
   std::vector<std::array<double, 3>> thresholds;
+  // Also record each fused GPS fix's innovation (ReplayOutput::innovations)
+  // and each held-out fix's predicted covariance (ScoredFix::predicted_cov);
+  // replay() and Replayer only, not the batch replays.
+  bool innovations = false;
 };
 ReplaySettings settings_of(const RlParams& params);
 
@@ -68,6 +72,16 @@ struct ScoredFix {
   double predicted_yaw = 0.0;
   Eigen::Vector3d measured = Eigen::Vector3d::Zero();  // the fix in the odom frame [m]
   Eigen::Matrix2d fix_cov = Eigen::Matrix2d::Zero();   // its x, y covariance in the odom frame [m²]
+  // With ReplaySettings::innovations: the filter's predicted x, y covariance there [m²].
+  Eigen::Matrix2d predicted_cov = Eigen::Matrix2d::Zero();
+};
+
+// A fused GPS fix against the filter's prediction at its stamp: the
+// innovation ν = z − H·x̂ [m] and its covariance S = H·P·Hᵀ + R [m²] (x, y).
+struct Innovation {
+  std::int64_t stamp_ns = 0;
+  Eigen::Vector2d nu = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d S = Eigen::Matrix2d::Zero();
 };
 
 struct TrajectoryPoint {
@@ -79,6 +93,7 @@ struct ReplayOutput {
   filters::rl::State final_state = filters::rl::State::Zero();
   filters::rl::Cov final_cov = filters::rl::Cov::Zero();
   std::vector<ScoredFix> scored;
+  std::vector<Innovation> innovations;      // with ReplaySettings::innovations
   std::vector<TrajectoryPoint> trajectory;  // after every tick, when asked
   GpsTransform gps_transform;               // as used (taken at the first fix unless fixed)
   long processed = 0, rejected = 0;
@@ -126,6 +141,10 @@ class Replayer {
   ReplayOutput finish() &&;
 
  private:
+  // The filter predicted to `stamp_ns` (a copy; this one unchanged).
+  filters::rl::RlEkf predicted(std::int64_t stamp_ns) const;
+  void record_innovation();
+
   const Recording* rec_;
   const ReplaySettings* settings_;
   filters::rl::RlEkf filter_;

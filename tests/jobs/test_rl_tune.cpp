@@ -138,13 +138,15 @@ TEST(RlTune, FactorsAppliedByNameGiveTheObjectivesSettings) {
 }
 
 TEST(RlTune, FitnessNamesAndStoredModesRoundTrip) {
-  for (RlFitness fit : {RlFitness::heldout_fixes, RlFitness::outage, RlFitness::both}) {
+  for (RlFitness fit : {RlFitness::heldout_fixes, RlFitness::outage, RlFitness::both, RlFitness::innovation_nll,
+                        RlFitness::nis, RlFitness::whiteness, RlFitness::heldout_nll}) {
     RlFitness back{};
     ASSERT_TRUE(parse_rl_fitness(to_string(fit), &back));
     EXPECT_EQ(back, fit);
     EXPECT_EQ(rl_fitness_of_mode(stored_mode(fit)), fit);
   }
   EXPECT_EQ(stored_mode(RlFitness::heldout_fixes), 8);  // mode 8 on this filter too
+  EXPECT_EQ(stored_mode(RlFitness::heldout_nll), 15);
   EXPECT_FALSE(rl_fitness_of_mode(7).has_value());
   RlFitness untouched = RlFitness::both;
   EXPECT_FALSE(parse_rl_fitness("gt", &untouched));
@@ -229,6 +231,36 @@ TEST(RlTune, WorseAtHeldOutFixesScoresAboveTheFile) {
   EXPECT_GT(worse, 0);
 }
 
+// The field's criteria (objectives/rl_innovations.h) as the tune's fitness:
+// finite at the file and across the box, and under the same guard: a
+// candidate worse than the file at held-out fixes scores above the file.
+TEST(RlTune, FieldCriteriaAreFiniteAndGuarded) {
+  Fixture f;
+  for (RlFitness fit :
+       {RlFitness::innovation_nll, RlFitness::nis, RlFitness::whiteness, RlFitness::heldout_nll}) {
+    RlTuneOptions o = small_options(f.rec);
+    o.fitness = fit;
+    o.input_covariances = false;
+    const RlObjective objective(f.rec, rlnode::settings_of(f.rec.params), o);
+    EXPECT_EQ(objective.batch_size(), 1) << to_string(fit);
+    ASSERT_TRUE(std::isfinite(objective.baseline_fitness())) << to_string(fit);
+    const auto [lo, hi] = objective.bounds();
+    int worse = 0;
+    for (int k = 0; k < 8; ++k) {
+      std::vector<double> x(lo.size());
+      for (std::size_t i = 0; i < x.size(); ++i)
+        x[i] = lo[i] + (hi[i] - lo[i]) * std::fmod(0.41 * static_cast<double>(k * 5 + i * 3) + 0.2, 1.0);
+      const double v = objective.data_fitness(x);
+      EXPECT_FALSE(std::isnan(v)) << to_string(fit) << " " << k;
+      if (objective.heldout_score(objective.settings_at(x)).rmse_m > objective.baseline_heldout().rmse_m) {
+        ++worse;
+        EXPECT_GT(v, objective.baseline_fitness()) << to_string(fit) << " " << k;
+      }
+    }
+    EXPECT_GT(worse, 0) << to_string(fit);
+  }
+}
+
 // The objective's batch (candidates replayed in lock step) gives each
 // candidate's single fitness, bit for bit, also for a part batch.
 TEST(RlTune, BatchFitnessIsEachCandidatesOwn) {
@@ -242,7 +274,8 @@ TEST(RlTune, BatchFitnessIsEachCandidatesOwn) {
     std::vector<double> xs;
     for (std::size_t k = 0; k < n; ++k)
       for (std::size_t i = 0; i < dim; ++i)
-        xs.push_back(lo[i] + (hi[i] - lo[i]) * std::fmod(0.29 * static_cast<double>(k * 5 + i * 7) + 0.05, 1.0));
+        xs.push_back(lo[i] +
+                     (hi[i] - lo[i]) * std::fmod(0.29 * static_cast<double>(k * 5 + i * 7) + 0.05, 1.0));
     std::vector<double> out(n);
     objective.fitness_batch(xs, out);
     std::vector<double> data(n);
