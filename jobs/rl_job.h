@@ -188,8 +188,9 @@ void write_rl_run(const Experiment& e, const results::RunRecord& run, const std:
                   bool ros2, const std::string& provenance);
 // `odotune report` for a store of rl-ekf runs (jobs/report_job.h calls it):
 // the held-out GPS-outage errors per bag and fitness, improvement per
-// fitness, the best run's outage trajectory per bag and fitness (the run of
-// lowest tuning fitness, replayed from the bag) and convergence curves.
+// fitness, the seeds' spread, each parameter's determined range per seed,
+// the best run's outage trajectory per bag and fitness (the run of lowest
+// tuning fitness, replayed from the bag) and convergence curves.
 ReportOutcome write_rl_report(const ReportRequest& req, const results::ExperimentInfo& info,
                               const std::vector<results::RunRecord>& runs);
 // The search and its scores on an already loaded recording (no file read or

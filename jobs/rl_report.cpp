@@ -61,9 +61,8 @@ void trajectory_figures(const Experiment& e, const std::vector<RunRecord>& runs,
     }
     const RlLoaded loaded = load_rl(rl_source_of(x, bag));
     const rlnode::Recording& rec = loaded.rec;
-    const std::int64_t from = rec.start_ns + static_cast<std::int64_t>(std::llround(x.until_s * 1e9));
-    const std::int64_t end = x.end_s ? rec.start_ns + static_cast<std::int64_t>(std::llround(*x.end_s * 1e9))
-                                     : std::numeric_limits<std::int64_t>::max();
+    const std::int64_t from = rl_time_ns(rec, x.until_s);
+    const std::int64_t end = x.end_s ? rl_time_ns(rec, *x.end_s) : std::numeric_limits<std::int64_t>::max();
     const rlnode::ReplaySettings base = rlnode::settings_of(rec.params);
     const rlnode::ReplayOutput b = outage_run(rec, base, from, end, true);
     std::vector<results::TrajectoryPath> paths;

@@ -107,7 +107,7 @@ echo "== the written file, replayed as written" >&2
 echo "== 5. figure" >&2
 if command -v gnuplot > /dev/null; then
   gnuplot <<GP
-set terminal pngcairo size 1100,800 noenhanced
+set terminal pngcairo size 1100,560 noenhanced
 set output "$OUT/trajectories.png"
 set title "Husky (robot_localization test1): robot_localization's EKF, GPS fused until $MID s only"
 set xlabel "x [m] (odom)"; set ylabel "y [m] (odom)"; set size ratio -1; set key outside bottom center horizontal
