@@ -129,6 +129,52 @@ bool has_ranges(const RunRecord& r) {
   return !r.param_ranges.empty() && r.param_ranges.size() == r.param_names.size();
 }
 
+// One bag and fitness (`cell`: its runs by seed): a row per parameter appended
+// to `t`, a cell per seed, and the figure's series, one per seed with ranges.
+std::vector<results::ParamRangeSeries> range_rows(const std::vector<const RunRecord*>& cell,
+                                                  const std::vector<std::uint64_t>& seeds,
+                                                  const std::vector<std::string>& params,
+                                                  const std::string& bag, int mode, results::TextTable& t) {
+  std::vector<results::ParamRangeSeries> series;
+  for (const RunRecord* r : cell)
+    if (has_ranges(*r)) series.push_back({fmt::format("seed {}", r->seed), {}, {}});
+  for (const std::string& name : params) {
+    std::vector<std::string> cells = {bag, fitness_name(mode), name};
+    std::size_t k = 0;
+    for (std::uint64_t s : seeds) {
+      const auto it = std::find_if(cell.begin(), cell.end(), [s](const RunRecord* r) { return r->seed == s; });
+      if (it == cell.end()) {
+        cells.push_back("–");
+        continue;
+      }
+      const RunRecord& r = **it;
+      const auto at = std::find(r.param_names.begin(), r.param_names.end(), name);
+      if (at == r.param_names.end()) {
+        cells.push_back("–");
+        if (has_ranges(r)) {
+          series[k].values.push_back(std::numeric_limits<double>::quiet_NaN());
+          series[k].ranges.push_back({std::numeric_limits<double>::quiet_NaN(),
+                                      std::numeric_limits<double>::quiet_NaN(), true});
+          ++k;
+        }
+        continue;
+      }
+      const auto i = static_cast<std::size_t>(at - r.param_names.begin());
+      const double value = i < r.params.size() ? r.params[i] : std::numeric_limits<double>::quiet_NaN();
+      if (!has_ranges(r)) {
+        cells.push_back(fmt::format("{:.3g}, no range stored", value));
+        continue;
+      }
+      cells.push_back(results::param_range_text(value, r.param_ranges[i]));
+      series[k].values.push_back(value);
+      series[k].ranges.push_back(r.param_ranges[i]);
+      ++k;
+    }
+    t.rows.push_back(std::move(cells));
+  }
+  return series;
+}
+
 // "What the recording determined": per bag × fitness, each parameter's tuned
 // factor and range for every seed, as a table and a figure.
 void determined_section(const std::vector<RunRecord>& runs, ReportWriter& w, results::HtmlPage& page) {
@@ -162,45 +208,8 @@ void determined_section(const std::vector<RunRecord>& runs, ReportWriter& w, res
       for (const RunRecord* r : cell)
         for (const std::string& n : r->param_names)
           if (std::find(params.begin(), params.end(), n) == params.end()) params.push_back(n);
-      std::vector<results::ParamRangeSeries> series;
-      for (const RunRecord* r : cell)
-        if (has_ranges(*r)) series.push_back({fmt::format("seed {}", r->seed), {}, {}});
       const std::size_t first_row = t.rows.size();
-      for (const std::string& name : params) {
-        std::vector<std::string> cells = {bag, fitness_name(mode), name};
-        std::size_t k = 0;
-        for (std::uint64_t s : seeds) {
-          const auto it = std::find_if(cell.begin(), cell.end(),
-                                       [s](const RunRecord* r) { return r->seed == s; });
-          if (it == cell.end()) {
-            cells.push_back("–");
-            continue;
-          }
-          const RunRecord& r = **it;
-          const auto at = std::find(r.param_names.begin(), r.param_names.end(), name);
-          if (at == r.param_names.end()) {
-            cells.push_back("–");
-            if (has_ranges(r)) {
-              series[k].values.push_back(std::numeric_limits<double>::quiet_NaN());
-              series[k].ranges.push_back({std::numeric_limits<double>::quiet_NaN(),
-                                          std::numeric_limits<double>::quiet_NaN(), true});
-              ++k;
-            }
-            continue;
-          }
-          const auto i = static_cast<std::size_t>(at - r.param_names.begin());
-          const double value = i < r.params.size() ? r.params[i] : std::numeric_limits<double>::quiet_NaN();
-          if (!has_ranges(r)) {
-            cells.push_back(fmt::format("{:.3g}, no range stored", value));
-            continue;
-          }
-          cells.push_back(results::param_range_text(value, r.param_ranges[i]));
-          series[k].values.push_back(value);
-          series[k].ranges.push_back(r.param_ranges[i]);
-          ++k;
-        }
-        t.rows.push_back(std::move(cells));
-      }
+      const std::vector<results::ParamRangeSeries> series = range_rows(cell, seeds, params, bag, mode, t);
       // On the page: the figure, then this bag and fitness's rows without their first two columns.
       if (!series.empty()) {
         const std::string title = fmt::format("{}, fitness {}: tuned factors and their ranges", bag,
