@@ -11,6 +11,10 @@ int run(int argc, char** argv) {
                "from recorded tracks"};
   app.set_version_flag("--version", std::string("odotune ") + ODOTUNE_VERSION);
   app.require_subcommand(1);
+  // One line per error (CLI11's default adds a second, "Run with --help …").
+  app.failure_message([](const CLI::App*, const CLI::Error& e) {
+    return std::string("odotune: ") + e.what() + " (see --help)\n";
+  });
   register_simulate(app);
   register_import(app);
   register_tune(app);

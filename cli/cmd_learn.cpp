@@ -61,9 +61,16 @@ void register_learn(CLI::App& app) {
                 "(default 0)")
       ->check(CLI::NonNegativeNumber);
   t->add_option("--rate-hz", train->rate_hz, "network rate [Hz] (paper: 10)")->default_val(train->rate_hz);
+  auto target = std::make_shared<std::string>("velocity");
+  t->add_option("--target", *target,
+                "what the nets output: velocity (the paper's) or correction (added to the nominal kinematic "
+                "velocity; an untrained net reproduces the kinematics)")
+      ->check(CLI::IsMember({"velocity", "correction"}))
+      ->default_val(*target);
   t->add_option("--threads", train->threads, "threads evaluating the windows (results do not depend on it)")
       ->check(CLI::PositiveNumber);
-  t->callback([train, t] {
+  t->callback([train, t, target] {
+    parse_learned_target(*target, &train->target);  // IsMember checked the name
     std::string& c = train->command;
     c = "odotune learn train";
     for (const auto& f : train->tracks) c += " --track " + f;
@@ -73,6 +80,7 @@ void register_learn(CLI::App& app) {
     if (train->slip_iterations > 0) c += fmt::format(" --slip-iterations {}", train->slip_iterations);
     if (train->previous_noise >= 0.0) c += fmt::format(" --previous-noise {}", train->previous_noise);
     if (t->count("--rate-hz") > 0) c += fmt::format(" --rate-hz {}", train->rate_hz);
+    if (t->count("--target") > 0) c += fmt::format(" --target {}", to_string(train->target));
     print_lines(learn_train_lines(with_progress("learn train", "nets", [&](const LearnProgress& p) {
       return run_learn_train(*train, p);
     })));

@@ -74,8 +74,10 @@ void collect_and_retrain(const FusionInput& in, std::size_t k, const OdometryMea
                          LearnedFusionResult& r) {
   if (f.var_v[k] < ro.max_filter_var_v && f.var_w[k] < ro.max_filter_var_w && m.var_v < ro.max_odometry_var_v &&
       m.var_w < ro.max_odometry_var_w) {
-    v_samples.add(odo.v_window().data(), f.v[k]);
-    w_samples.add(odo.w_window().data(), f.w[k]);
+    // A correction net's target is the filter's velocity less the kinematic one.
+    const bool correction = current.target == LearnedTarget::correction;
+    v_samples.add(odo.v_window().data(), f.v[k] - (correction ? in.v_kin[k] : 0.0));
+    w_samples.add(odo.w_window().data(), f.w[k] - (correction ? in.w_kin[k] : 0.0));
   }
   if (static_cast<int>(v_samples.size()) < ro.samples_per_retrain) return;
   RetrainEvent ev;

@@ -32,6 +32,19 @@ bool finite_all(std::initializer_list<double> xs) {
 
 }  // namespace
 
+std::string_view to_string(LearnedTarget t) {
+  return t == LearnedTarget::correction ? "correction" : "velocity";
+}
+
+bool parse_learned_target(std::string_view text, LearnedTarget* out) {
+  for (LearnedTarget t : {LearnedTarget::velocity, LearnedTarget::correction})
+    if (text == to_string(t)) {
+      *out = t;
+      return true;
+    }
+  return false;
+}
+
 bool LearnedOdometryModel::IsValid(std::string* why) const {
   auto fail = [why](std::string m) {
     if (why) *why = std::move(m);
@@ -66,14 +79,16 @@ bool LearnedTrainingOptions::IsValid(std::string* why) const {
 
 void append_velocity_windows(const FusionInput& in, int window, double previous_noise_v,
                              double previous_noise_w, std::uint64_t seed, SequenceSet* v_set,
-                             SequenceSet* w_set) {
+                             SequenceSet* w_set, LearnedTarget target) {
+  const bool correction = target == LearnedTarget::correction;
   const std::size_t n = in.size();
   const auto W = static_cast<std::size_t>(window);
   std::vector<double> v_rows(W * kFeatures), w_rows(W * kFeatures);
   // Step j's features need the increments over step j and the truth of step
   // j − 1; the window (k − W, k] therefore needs truth from k − W on.
   for (std::size_t k = W + 1; k < n; ++k) {
-    bool ok = finite_all({in.v_true[k], in.w_true[k]});
+    bool ok = finite_all({in.v_true[k], in.w_true[k]}) &&
+              (!correction || finite_all({in.v_kin[k], in.w_kin[k]}));
     for (std::size_t j = k + 1 - W; ok && j <= k; ++j)
       ok = finite_all({in.v_true[j - 1], in.w_true[j - 1], in.dticks_l[j], in.dticks_r[j]});
     if (!ok) continue;
@@ -86,8 +101,8 @@ void append_velocity_windows(const FusionInput& in, int window, double previous_
       vr[kFeatPrevious] = in.v_true[j - 1] + teacher_noise(previous_noise_v, seed, 0, j, 0);
       wr[kFeatPrevious] = in.w_true[j - 1] + teacher_noise(previous_noise_w, seed, 0, j, 1);
     }
-    v_set->add(v_rows.data(), in.v_true[k]);
-    w_set->add(w_rows.data(), in.w_true[k]);
+    v_set->add(v_rows.data(), in.v_true[k] - (correction ? in.v_kin[k] : 0.0));
+    w_set->add(w_rows.data(), in.w_true[k] - (correction ? in.w_kin[k] : 0.0));
   }
 }
 
@@ -125,7 +140,7 @@ WindowSets training_windows(const std::vector<const FusionInput*>& tracks, const
     v_all.window = w_all.window = window;
     v_all.inputs = w_all.inputs = kFeatures;
     append_velocity_windows(in, window, options.previous_noise_v, options.previous_noise_w,
-                            options.training.seed + i, &v_all, &w_all);
+                            options.training.seed + i, &v_all, &w_all, options.target);
     if (v_all.size() < 10)
       throw std::invalid_argument(
           fmt::format("track '{}': only {} windows of {} steps with ground truth: expected at least 10",
@@ -138,6 +153,32 @@ WindowSets training_windows(const std::vector<const FusionInput*>& tracks, const
     ws.w_val.append(wv);
   }
   return ws;
+}
+
+// The kinematic odometry's MAE on the steps free_running_mae scores.
+std::array<double, 2> kinematic_mae(const std::vector<const FusionInput*>& tracks,
+                                    const LearnedTrainingOptions& options) {
+  std::array<double, 2> sum{0.0, 0.0};
+  std::size_t count = 0;
+  for (const FusionInput* in : tracks) {
+    const auto first = static_cast<std::size_t>(options.train_fraction * static_cast<double>(in->size()));
+    for (std::size_t k = std::max<std::size_t>(first, 1); k < in->size(); ++k)
+      if (finite_all({in->v_kin[k], in->w_kin[k], in->v_true[k], in->w_true[k]})) {
+        sum[0] += std::abs(in->v_kin[k] - in->v_true[k]);
+        sum[1] += std::abs(in->w_kin[k] - in->w_true[k]);
+        ++count;
+      }
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  return count > 0
+             ? std::array<double, 2>{sum[0] / static_cast<double>(count), sum[1] / static_cast<double>(count)}
+             : std::array<double, 2>{inf, inf};
+}
+
+// A net that outputs exactly 0 (a correction that leaves the kinematics).
+void zero_output(VelocityNet& net) {
+  net.output_mean = 0.0;
+  for (int j = 0; j <= VelocityNet::kHidden; ++j) net.weights[LstmLayout<3, 5>::kDense + j] = 0.0;
 }
 
 // A restart's score, free-running: each net fed its own previous output, as
@@ -177,6 +218,7 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
   const int window = model.v_net.window;
   model.rate_hz = 1.0 / tracks.front()->dt_s;
   model.ticks_per_rev = tracks.front()->ticks_per_rev;
+  model.target = options.target;
   const WindowSets ws = training_windows(tracks, model, window, options);
 
   const auto start = std::chrono::steady_clock::now();
@@ -189,6 +231,7 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
     LearnedOdometryModel candidate = fresh;
     LstmTrainingOptions o = options.training;
     o.seed = options.training.seed + 7919u * static_cast<std::uint64_t>(r);
+    if (options.target == LearnedTarget::correction) o.zero_output_start = true;
     const LstmTrainingSummary tv = train_lstm(candidate.v_net, ws.v_train, ws.v_val, o);
     o.seed += 1000;  // a different initialisation for the W net
     const LstmTrainingSummary tw = train_lstm(candidate.w_net, ws.w_train, ws.w_val, o);
@@ -201,6 +244,15 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
       s.v = tv, best_mae[0] = mae[0], s.v_restart = r, model.v_net = candidate.v_net;
     if (r == 0 || (tw.usable && (!s.w.usable || mae[1] < best_mae[1])))
       s.w = tw, best_mae[1] = mae[1], s.w_restart = r, model.w_net = candidate.w_net;
+  }
+  const std::array<double, 2> kin = kinematic_mae(tracks, options);
+  s.v_kinematic_mae = kin[0];
+  s.w_kinematic_mae = kin[1];
+  if (options.target == LearnedTarget::correction) {
+    // Never worse than the kinematics on the validation steps: a correction
+    // that does not help is dropped.
+    if (!(best_mae[0] < kin[0])) zero_output(model.v_net), model.v_beats_kinematic = false;
+    if (!(best_mae[1] < kin[1])) zero_output(model.w_net), model.w_beats_kinematic = false;
   }
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   s.train_windows = ws.v_train.size();
@@ -233,7 +285,9 @@ std::array<double, 2> LearnedOdometryStepper::step(double dticks_l, double dtick
   push(w_rows_, previous_w);
   if (filled_ < model_->v_net.window) ++filled_;
   if (filled_ < model_->v_net.window) return {v_kin, w_kin};
-  return {model_->v_net.predict(v_rows_.data()), model_->w_net.predict(w_rows_.data())};
+  const double v = model_->v_net.predict(v_rows_.data()), w = model_->w_net.predict(w_rows_.data());
+  if (model_->target == LearnedTarget::correction) return {v_kin + v, w_kin + w};
+  return {v, w};
 }
 
 OdometrySeries run_learned_odometry(const FusionInput& in, const LearnedOdometryModel& model) {

@@ -15,6 +15,7 @@
 
 #include <array>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "learned/fusion_input.h"
@@ -23,6 +24,13 @@
 
 namespace odotune {
 
+// What the velocity nets output: the body velocity itself (the paper's
+// nets), or a correction added to the nominal kinematic velocity, so that a
+// net that has learnt nothing reproduces the kinematic odometry.
+enum class LearnedTarget { velocity, correction };
+std::string_view to_string(LearnedTarget t);  // "velocity", "correction"
+bool parse_learned_target(std::string_view text, LearnedTarget* out);
+
 // The features of one step, in network input order.
 enum LearnedFeature : int { kFeatDticksR = 0, kFeatDticksL = 1, kFeatPrevious = 2 };
 
@@ -30,6 +38,11 @@ struct LearnedOdometryModel {
   VelocityNet v_net, w_net;
   double rate_hz = 10.0;       // the step rate the nets were trained at
   double ticks_per_rev = 0.0;  // of the robot they were trained on (increments are in counts)
+  LearnedTarget target = LearnedTarget::velocity;  // what the nets output (see LearnedTarget)
+  // A correction net that did not beat the kinematic odometry on the
+  // training's validation steps is zeroed (it outputs the kinematics) and
+  // flagged false here; always true for velocity nets.
+  bool v_beats_kinematic = true, w_beats_kinematic = true;
   // Validation MAE of each net at training time [m/s, rad/s] (the static
   // odometry variance falls back on it when there is no slip detector).
   double v_validation_mae = 0.0, w_validation_mae = 0.0;
@@ -54,6 +67,9 @@ struct LearnedTrainingOptions {
   // kinematic model; and a small one-step (teacher-forced) validation MAE
   // did not guarantee a net that stays on track on its own outputs.
   int restarts = 4;
+  // correction: each net learns v_true − v_kin (w_true − w_kin) from a zero
+  // output start (LstmTrainingOptions::zero_output_start).
+  LearnedTarget target = LearnedTarget::velocity;
   bool IsValid(std::string* why) const;
 };
 
@@ -61,17 +77,22 @@ struct LearnedTrainingSummary {
   LstmTrainingSummary v, w;                          // of the kept start
   int v_restart = 0, w_restart = 0;                  // which start was kept (0-based)
   std::vector<double> v_restart_mae, w_restart_mae;  // each start's free-running MAE [m/s, rad/s]
+  // The kinematic odometry's MAE on the same validation steps [m/s, rad/s].
+  double v_kinematic_mae = 0.0, w_kinematic_mae = 0.0;
   std::size_t train_windows = 0, validation_windows = 0;
   double seconds = 0.0;  // both nets, wall time
 };
 
 // The windows of one track: every step k ≥ window with ground truth over the
-// whole window; target v_true[k] (resp. w_true[k]). Appends to v_set, w_set.
+// whole window; target v_true[k] (resp. w_true[k]), minus v_kin[k] (w_kin[k])
+// for a correction target. Appends to v_set, w_set.
 void append_velocity_windows(const FusionInput& in, int window, double previous_noise_v,
                              double previous_noise_w, std::uint64_t seed, SequenceSet* v_set,
-                             SequenceSet* w_set);
+                             SequenceSet* w_set, LearnedTarget target = LearnedTarget::velocity);
 
-// Trains both nets on the tracks (each split 70/30 chronologically). Throws
+// Trains both nets on the tracks (each split 70/30 chronologically). A
+// correction net whose free-running validation MAE is not below the kinematic
+// odometry's is zeroed (model.v/w_beats_kinematic false). Throws
 // std::invalid_argument (one line) when a track has no ground truth, the
 // tracks' ticks_per_rev differ or there are too few windows.
 LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*>& tracks,

@@ -422,6 +422,10 @@ LstmTrainingSummary train_lstm(LstmNet<I, H>& net, const SequenceSet& train, con
   if (candidate.activation == OutputActivation::relu)
     candidate.output_mean = *std::min_element(train.y.begin(), train.y.end());
   candidate.weights = lstm_initial_weights<I, H>(options.seed);
+  if (options.zero_output_start) {
+    candidate.output_mean = 0.0;
+    for (int j = 0; j <= H; ++j) candidate.weights[LstmLayout<I, H>::kDense + j] = 0.0;
+  }
 
   LstmTrainingSummary summary = solve(candidate, train, options);
   if (!summary.usable) return summary;

@@ -98,6 +98,11 @@ struct LstmTrainingOptions {
   // disagree with it ("elastic" refits; cf. Kirkpatrick et al., PNAS 2017,
   // with an isotropic weight).
   bool decay_to_start = false;
+  // Fresh training starts with the dense output's weights and bias at 0 and
+  // output_mean 0, so the untrained net outputs exactly 0: a net that learns
+  // a correction to a base model and knows nothing leaves the base unchanged
+  // (with decay_to_start, the decay pulls toward that).
+  bool zero_output_start = false;
   std::uint64_t seed = 1;  // initial weights (Glorot-uniform from core/counter_rng.h: thread-count independent)
   int num_threads = 1;     // OpenMP threads evaluating the windows (≥ 1); results do not depend on it
   bool IsValid(std::string* why) const;

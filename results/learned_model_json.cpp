@@ -144,6 +144,9 @@ json learned_model_json(const LearnedModelFile& m) {
   const LearnedOdometryModel& o = m.odometry;
   j["odometry"] = {{"rate_hz", o.rate_hz},
                    {"ticks_per_rev", o.ticks_per_rev},
+                   {"target", std::string(to_string(o.target))},
+                   {"v_beats_kinematic", o.v_beats_kinematic},
+                   {"w_beats_kinematic", o.w_beats_kinematic},
                    {"v_validation_mae", o.v_validation_mae},
                    {"w_validation_mae", o.w_validation_mae},
                    {"v_net", lstm_to_json(o.v_net)},
@@ -178,6 +181,18 @@ LearnedModelFile parse_learned_model(const json& j, const std::string& file) {
   const json& o = r.field(j, "", "odometry");
   m.odometry.rate_hz = r.number(o, "odometry", "rate_hz", true, false);
   m.odometry.ticks_per_rev = r.number(o, "odometry", "ticks_per_rev", true, false);
+  // Files written before the key existed hold the paper's velocity nets.
+  if (r.has(o, "target")) {
+    const std::string target = r.text(o, "odometry", "target");
+    if (!parse_learned_target(target, &m.odometry.target))
+      r.fail("odometry.target", fmt::format("'{}'; expected 'velocity' or 'correction'", target));
+  }
+  for (auto [key, flag] : {std::pair{"v_beats_kinematic", &m.odometry.v_beats_kinematic},
+                           std::pair{"w_beats_kinematic", &m.odometry.w_beats_kinematic}})
+    if (r.has(o, key)) {
+      if (!o[key].is_boolean()) r.fail(std::string("odometry.") + key, "not true or false; expected a boolean");
+      *flag = o[key].get<bool>();
+    }
   m.odometry.v_validation_mae = r.number(o, "odometry", "v_validation_mae", false, false);
   m.odometry.w_validation_mae = r.number(o, "odometry", "w_validation_mae", false, false);
   m.odometry.v_net = parse_net<VelocityNet>(r, o, "odometry", "v_net");

@@ -7,6 +7,8 @@
 //   {
 //     "format": "odotune-learned/1",
 //     "odometry": {"rate_hz": 10, "ticks_per_rev": 8800,
+//                  "target": "velocity" | "correction",     // absent: velocity
+//                  "v_beats_kinematic": true, "w_beats_kinematic": true,  // absent: true
 //                  "v_validation_mae": …, "w_validation_mae": …,
 //                  "v_net": {…}, "w_net": {…}},            // results/lstm_json.h
 //     "detector": {"floor_var_v": …, "floor_var_w": …, "previous_lag": 1,

@@ -141,6 +141,7 @@ LearnTrainOutcome run_learn_train(const LearnTrainRequest& r, const LearnProgres
   lo.training = learn_training_options(r.seed, r.iterations, r.threads);
   lo.previous_noise_v = r.previous_noise >= 0.0 ? r.previous_noise : LearnedStudyOptions{}.previous_noise_v;
   lo.previous_noise_w = r.previous_noise >= 0.0 ? r.previous_noise : LearnedStudyOptions{}.previous_noise_w;
+  lo.target = r.target;
   LearnTrainOutcome out;
   LearnedModelFile file;
   try {
@@ -190,6 +191,9 @@ LearnTrainOutcome run_learn_train(const LearnTrainRequest& r, const LearnProgres
   out.slip_tracks = slips.size();
   out.kinematic_v_mae = pooled_mae(kin_v);
   out.kinematic_w_mae = pooled_mae(kin_w);
+  out.target = file.odometry.target;
+  out.v_beats_kinematic = file.odometry.v_beats_kinematic;
+  out.w_beats_kinematic = file.odometry.w_beats_kinematic;
   out.model_out = r.model_out;
   return out;
 }
@@ -207,6 +211,14 @@ std::vector<std::string> learn_train_lines(const LearnTrainOutcome& o) {
                           s.w.train_mae, s.w.validation_mae, s.w.iterations));
   l.push_back(fmt::format("  kinematic odometry on the same tracks: MAE {:.4f} m/s, {:.4f} rad/s",
                           o.kinematic_v_mae, o.kinematic_w_mae));
+  if (o.target == LearnedTarget::correction)
+    l.push_back(
+        fmt::format("  free-running on the validation steps: V {:.4f} against kinematic {:.4f} m/s{}; W {:.4f} "
+                    "against {:.4f} rad/s{}",
+                    s.v_restart_mae[static_cast<std::size_t>(s.v_restart)], s.v_kinematic_mae,
+                    o.v_beats_kinematic ? "" : " (no gain: the V net is the kinematics)",
+                    s.w_restart_mae[static_cast<std::size_t>(s.w_restart)], s.w_kinematic_mae,
+                    o.w_beats_kinematic ? "" : " (no gain: the W net is the kinematics)"));
   if (o.detector)
     l.push_back(fmt::format(
         "slip detector trained on {} track{} ({} + {} windows; {:.1f} s): variance MAE V {:.3g}, W "
@@ -248,11 +260,29 @@ LearnEvalOutcome run_learn_eval(const LearnEvalRequest& r) {
   out.csv = r.csv;
   out.steps = in.size();
   out.rate_hz = m.odometry.rate_hz;
+  out.v_beats_kinematic = m.odometry.v_beats_kinematic;
+  out.w_beats_kinematic = m.odometry.w_beats_kinematic;
   return out;
 }
 
+namespace {
+
+// The first line of eval and retrain for a model with a net that is the kinematics.
+std::string no_gain_note(bool v_beats, bool w_beats) {
+  return fmt::format("note: the model's {} did not beat the kinematic odometry in its training; {} the "
+                     "kinematic odometry",
+                     !v_beats && !w_beats ? "V and W nets"
+                     : !v_beats           ? "V net"
+                                          : "W net",
+                     !v_beats && !w_beats ? "they are" : "it is");
+}
+
+}  // namespace
+
 std::vector<std::string> learn_eval_lines(const LearnEvalOutcome& o) {
   std::vector<std::string> l;
+  if (!o.v_beats_kinematic || !o.w_beats_kinematic)
+    l.push_back(no_gain_note(o.v_beats_kinematic, o.w_beats_kinematic));
   l.push_back(fmt::format("track {} ({}), {} steps at {:g} Hz, model {}:", o.track_name, o.file, o.steps,
                           o.rate_hz, o.model));
   l.push_back(errors_line("learned", o.learned));
@@ -369,6 +399,8 @@ LearnRetrainOutcome run_learn_retrain(const LearnRetrainRequest& r, const LearnP
   out.every = r.every;
   out.iterations = r.iterations;
   out.detector = detector;
+  out.v_beats_kinematic = m.odometry.v_beats_kinematic;
+  out.w_beats_kinematic = m.odometry.w_beats_kinematic;
   out.gate = o.retrain;
   out.retrains = with.retrains;
   out.retrained = odometry_only_errors(in, with.odometry);
@@ -379,6 +411,8 @@ LearnRetrainOutcome run_learn_retrain(const LearnRetrainRequest& r, const LearnP
 std::vector<std::string> learn_retrain_lines(const LearnRetrainOutcome& o) {
   const std::size_t n = o.retrains.size();
   std::vector<std::string> l;
+  if (!o.v_beats_kinematic || !o.w_beats_kinematic)
+    l.push_back(no_gain_note(o.v_beats_kinematic, o.w_beats_kinematic));
   l.push_back(fmt::format("track {} ({}): {} retrain{} every {} samples ({} iterations each), {} covariance",
                           o.track_name, o.file, n, n == 1 ? "" : "s", o.every, o.iterations,
                           o.detector ? "slip-detector" : "static"));

@@ -70,7 +70,8 @@ struct LearnTrainRequest {
   double rate_hz = 10.0;         // network rate [Hz], (0, 1000]
   double previous_noise = -1.0;  // σ on the teacher-forced previous V [m/s] and W [rad/s]; < 0 = the study's
   int threads = 1;               // OpenMP threads evaluating the windows; results do not depend on it
-  std::string command;           // the model's provenance.created_by
+  LearnedTarget target = LearnedTarget::velocity;  // --target: the nets' output (learned/learned_odometry.h)
+  std::string command;                             // the model's provenance.created_by
 };
 
 struct LearnTrainOutcome {
@@ -78,6 +79,8 @@ struct LearnTrainOutcome {
   LearnedTrainingSummary odometry;
   std::optional<SlipTrainingSummary> detector;          // when slip tracks were given
   double kinematic_v_mae = 0.0, kinematic_w_mae = 0.0;  // pooled over the training tracks
+  LearnedTarget target = LearnedTarget::velocity;
+  bool v_beats_kinematic = true, w_beats_kinematic = true;  // the model's (learned_odometry.h)
   std::string model_out;
 };
 
@@ -101,14 +104,17 @@ struct LearnEvalRequest {
 struct LearnEvalOutcome {
   std::string track_name, file, model, json, csv;
   std::size_t steps = 0;
-  double rate_hz = 0.0;  // the model's [Hz]
+  double rate_hz = 0.0;                                     // the model's [Hz]
+  bool v_beats_kinematic = true, w_beats_kinematic = true;  // the model's training verdict
   OdometryErrors learned, kinematic;
 };
 
 // Scores the learned and the kinematic odometry (pose dead-reckoned from each)
 // against the track's ground truth; writes the CSV, then the JSON.
 LearnEvalOutcome run_learn_eval(const LearnEvalRequest& request);
-// "track … model …:", the learned and the kinematic odometry's errors, the files.
+// A first line when a net of the model did not beat the kinematics in its
+// training; then "track … model …:", the learned and the kinematic
+// odometry's errors, the files.
 std::vector<std::string> learn_eval_lines(const LearnEvalOutcome& outcome);
 
 // ---------------------------------------------------------------- retrain
@@ -128,8 +134,9 @@ struct LearnRetrainRequest {
 struct LearnRetrainOutcome {
   std::string track_name, file, model_out, json;
   int every = 0, iterations = 0;
-  bool detector = false;  // slip-detector covariance (else static)
-  RetrainOptions gate;    // the retraining gate's thresholds
+  bool detector = false;                                    // slip-detector covariance (else static)
+  bool v_beats_kinematic = true, w_beats_kinematic = true;  // the starting model's training verdict
+  RetrainOptions gate;                                      // the retraining gate's thresholds
   std::vector<RetrainEvent> retrains;
   OdometryErrors retrained, fixed;  // the odometry fed to the UKF, with and without retraining
 };

@@ -175,6 +175,28 @@ TEST_F(LearnCli, EvalHasBothBlocksAndLearnedBeatsKinematic) {
   EXPECT_GT(lines(c), 100u);
 }
 
+// A model whose net did not beat the kinematics in its training says so on
+// eval's first line; an unknown --target is refused by name.
+TEST_F(LearnCli, ANetWithoutGainIsSaidFirst) {
+  json m = read_json(model());
+  EXPECT_EQ(m["odometry"]["target"], "velocity");
+  m["odometry"]["target"] = "correction";
+  m["odometry"]["w_beats_kinematic"] = false;
+  const fs::path flagged = *dir_ / "flagged.json";
+  std::ofstream(flagged) << m.dump();
+  const auto r = run_cli("learn eval --track " + track("eval") + " --model " + flagged.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.rfind("note: the model's W net did not beat the kinematic odometry", 0), 0u) << r.out;
+  const auto plain = run_cli("learn eval --track " + track("eval") + " --model " + model());
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_EQ(plain.out.find("note:"), std::string::npos) << plain.out;
+  const fs::path out = *dir_ / "target.json";
+  expect_one_line_error(
+      run_cli("learn train --track " + track("learn") + " --target residual --model-out " + out.string()),
+      "--target");
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST_F(LearnCli, RetrainWritesEventsAndAModel) {
   const fs::path out = *dir_ / "retrain.json", m2 = *dir_ / "model2.json";
   const auto r = run_cli("learn retrain --track " + track("step") + " --model " + model() + " --model-out " +

@@ -88,6 +88,54 @@ TEST(LearnedOdometry, BeatsTheKinematicModelOnHeldOutDataWithHiddenEffects) {
   EXPECT_LT(el.xy.rmse, ek.xy.rmse);
 }
 
+// A correction net learns what the kinematic model misses and is added to it;
+// on the held-out drive it beats the kinematics as the paper's nets do.
+TEST(LearnedOdometry, CorrectionNetsLearnWhatTheKinematicModelMisses) {
+  const FusionInput train = chair_input(150, 11);
+  const FusionInput test = chair_input(80, 12);
+  LearnedTrainingOptions o = quick_training();
+  o.target = LearnedTarget::correction;
+  LearnedTrainingSummary summary;
+  const LearnedOdometryModel model = train_learned_odometry({&train}, o, &summary);
+  EXPECT_EQ(model.target, LearnedTarget::correction);
+  EXPECT_TRUE(model.v_beats_kinematic);
+  EXPECT_TRUE(model.w_beats_kinematic);
+  EXPECT_LT(summary.v_restart_mae[static_cast<std::size_t>(summary.v_restart)], summary.v_kinematic_mae);
+  const OdometrySeries learned = run_learned_odometry(test, model);
+  const OdometrySeries kin = kinematic_odometry(test);
+  const OdometryErrors el = odometry_errors(test, learned.v, learned.w, {}, {}, {});
+  const OdometryErrors ek = odometry_errors(test, kin.v, kin.w, {}, {}, {});
+  EXPECT_LT(el.v.mae, 0.8 * ek.v.mae);
+  EXPECT_LT(el.w.mae, 0.8 * ek.w.mae);
+  EXPECT_LT(el.xy.rmse, ek.xy.rmse);
+}
+
+// A correction net that has learnt nothing (no iterations: its output starts
+// at exactly 0) does not beat the kinematics, is flagged so, and the odometry
+// it gives is the kinematic odometry, bit for bit.
+TEST(LearnedOdometry, ACorrectionWithoutGainIsTheKinematicOdometry) {
+  const FusionInput train = chair_input(60, 11);
+  LearnedTrainingOptions o = quick_training();
+  o.target = LearnedTarget::correction;
+  o.training.max_iterations = 0;
+  o.restarts = 1;
+  LearnedTrainingSummary summary;
+  const LearnedOdometryModel model = train_learned_odometry({&train}, o, &summary);
+  EXPECT_FALSE(model.v_beats_kinematic);
+  EXPECT_FALSE(model.w_beats_kinematic);
+  EXPECT_EQ(summary.v_restart_mae[0], summary.v_kinematic_mae);
+  const FusionInput test = chair_input(40, 12);
+  const OdometrySeries learned = run_learned_odometry(test, model);
+  for (std::size_t k = 1; k < test.size(); ++k) {
+    ASSERT_EQ(learned.v[k], test.v_kin[k]) << k;
+    ASSERT_EQ(learned.w[k], test.w_kin[k]) << k;
+  }
+  LearnedTarget t{};
+  EXPECT_TRUE(parse_learned_target("correction", &t));
+  EXPECT_EQ(t, LearnedTarget::correction);
+  EXPECT_FALSE(parse_learned_target("residual", &t));
+}
+
 TEST(LearnedOdometry, TrainingIsDeterministicAndRejectsTracksWithoutTruth) {
   const FusionInput train = chair_input(60, 11);
   LearnedTrainingOptions o = quick_training();

@@ -46,6 +46,8 @@ LearnedModelFile sample_model(bool detector) {
   m.odometry.ticks_per_rev = 8800.0;
   m.odometry.v_validation_mae = 0.1 + 0.2;  // not exactly 0.3
   m.odometry.w_validation_mae = 1.0 / 3.0;
+  m.odometry.target = LearnedTarget::correction;
+  m.odometry.w_beats_kinematic = false;
   if (detector) {
     SlipDetectorModel d;
     d.v_net = random_net<SlipNet>(rng, OutputActivation::linear);
@@ -107,6 +109,9 @@ TEST(LearnedModelJson, RoundTripIsExact) {
   EXPECT_EQ(r.odometry.ticks_per_rev, 8800.0);
   EXPECT_EQ(r.odometry.v_validation_mae, 0.1 + 0.2);
   EXPECT_EQ(r.odometry.w_validation_mae, 1.0 / 3.0);
+  EXPECT_EQ(r.odometry.target, LearnedTarget::correction);
+  EXPECT_TRUE(r.odometry.v_beats_kinematic);
+  EXPECT_FALSE(r.odometry.w_beats_kinematic);
   ASSERT_TRUE(r.detector.has_value());
   expect_same_net(m.detector->v_net, r.detector->v_net, "detector.v_net");
   expect_same_net(m.detector->w_net, r.detector->w_net, "detector.w_net");
@@ -149,6 +154,17 @@ TEST(LearnedModelJson, DetectorIsOptional) {
   expect_same_net(m.odometry.w_net, r.odometry.w_net, "odometry.w_net");
 }
 
+// A file written before the nets' target and verdict were recorded holds the
+// paper's velocity nets, which are taken as they are.
+TEST(LearnedModelJson, OlderFilesAreVelocityNets) {
+  json j = results::learned_model_json(sample_model(false));
+  for (const char* key : {"target", "v_beats_kinematic", "w_beats_kinematic"}) j["odometry"].erase(key);
+  const LearnedModelFile r = results::parse_learned_model(j, "m.json");
+  EXPECT_EQ(r.odometry.target, LearnedTarget::velocity);
+  EXPECT_TRUE(r.odometry.v_beats_kinematic);
+  EXPECT_TRUE(r.odometry.w_beats_kinematic);
+}
+
 struct BadCase {
   const char* name;
   std::function<void(json&)> mutate;
@@ -168,6 +184,9 @@ TEST(LearnedModelJson, BadFieldsAreOneLineErrorsNamingFileAndField) {
       {"short weights", [](json& j) { j["odometry"]["w_net"]["weights"].erase(0); }, "odometry.w_net"},
       {"slip net as velocity net", [](json& j) { j["odometry"]["v_net"] = j["detector"]["v_net"]; },
        "odometry.v_net"},
+      {"unknown target", [](json& j) { j["odometry"]["target"] = "residual"; }, "odometry.target"},
+      {"verdict not a boolean", [](json& j) { j["odometry"]["v_beats_kinematic"] = 1; },
+       "odometry.v_beats_kinematic"},
       {"relu velocity net", [](json& j) { j["odometry"]["v_net"]["activation"] = "relu"; }, "odometry.v_net"},
       {"zero floor", [](json& j) { j["detector"]["floor_var_w"] = 0; }, "detector.floor_var_w"},
       {"zero lag", [](json& j) { j["detector"]["previous_lag"] = 0; }, "detector.previous_lag"},
