@@ -155,43 +155,21 @@ WindowSets training_windows(const std::vector<const FusionInput*>& tracks, const
   return ws;
 }
 
-// The kinematic odometry's MAE on the steps free_running_mae scores.
-std::array<double, 2> kinematic_mae(const std::vector<const FusionInput*>& tracks,
-                                    const LearnedTrainingOptions& options) {
-  std::array<double, 2> sum{0.0, 0.0};
-  std::size_t count = 0;
-  for (const FusionInput* in : tracks) {
-    const auto first = static_cast<std::size_t>(options.train_fraction * static_cast<double>(in->size()));
-    for (std::size_t k = std::max<std::size_t>(first, 1); k < in->size(); ++k)
-      if (finite_all({in->v_kin[k], in->w_kin[k], in->v_true[k], in->w_true[k]})) {
-        sum[0] += std::abs(in->v_kin[k] - in->v_true[k]);
-        sum[1] += std::abs(in->w_kin[k] - in->w_true[k]);
-        ++count;
-      }
-  }
-  const double inf = std::numeric_limits<double>::infinity();
-  return count > 0
-             ? std::array<double, 2>{sum[0] / static_cast<double>(count), sum[1] / static_cast<double>(count)}
-             : std::array<double, 2>{inf, inf};
-}
-
 // A net that outputs exactly 0 (a correction that leaves the kinematics).
 void zero_output(VelocityNet& net) {
   net.output_mean = 0.0;
   for (int j = 0; j <= VelocityNet::kHidden; ++j) net.weights[LstmLayout<3, 5>::kDense + j] = 0.0;
 }
 
-// A restart's score, free-running: each net fed its own previous output, as
-// when it runs alone (run_learned_odometry), MAE over the last
-// (1 − train_fraction) of each track's steps. A net can have a small one-step
-// (teacher-forced) validation MAE and still drift on its own outputs. The V
-// and W nets do not feed each other, so a pair is scored in one run.
-std::array<double, 2> free_running_mae(const std::vector<const FusionInput*>& tracks,
-                                       const LearnedOdometryModel& m, const LearnedTrainingOptions& options) {
+// MAE of V and W over the validation steps, the last (1 − train_fraction) of
+// each track's steps, of the series `series_of(track)` gives.
+template <class SeriesOf>
+std::array<double, 2> validation_mae(const std::vector<const FusionInput*>& tracks,
+                                     const LearnedTrainingOptions& options, SeriesOf series_of) {
   std::array<double, 2> sum{0.0, 0.0};
   std::size_t count = 0;
   for (const FusionInput* in : tracks) {
-    const OdometrySeries run = run_learned_odometry(*in, m);
+    const OdometrySeries run = series_of(*in);
     const auto first = static_cast<std::size_t>(options.train_fraction * static_cast<double>(in->size()));
     for (std::size_t k = std::max<std::size_t>(first, 1); k < in->size(); ++k)
       if (finite_all({run.v[k], run.w[k], in->v_true[k], in->w_true[k]})) {
@@ -204,6 +182,15 @@ std::array<double, 2> free_running_mae(const std::vector<const FusionInput*>& tr
   return count > 0
              ? std::array<double, 2>{sum[0] / static_cast<double>(count), sum[1] / static_cast<double>(count)}
              : std::array<double, 2>{inf, inf};
+}
+
+// A restart's score, free-running: each net fed its own previous output, as
+// when it runs alone (run_learned_odometry). A net can have a small one-step
+// (teacher-forced) validation MAE and still drift on its own outputs. The V
+// and W nets do not feed each other, so a pair is scored in one run.
+std::array<double, 2> free_running_mae(const std::vector<const FusionInput*>& tracks,
+                                       const LearnedOdometryModel& m, const LearnedTrainingOptions& options) {
+  return validation_mae(tracks, options, [&m](const FusionInput& in) { return run_learned_odometry(in, m); });
 }
 
 }  // namespace
@@ -245,7 +232,9 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
     if (r == 0 || (tw.usable && (!s.w.usable || mae[1] < best_mae[1])))
       s.w = tw, best_mae[1] = mae[1], s.w_restart = r, model.w_net = candidate.w_net;
   }
-  const std::array<double, 2> kin = kinematic_mae(tracks, options);
+  const std::array<double, 2> kin = validation_mae(tracks, options, [](const FusionInput& in) {
+    return kinematic_odometry(in);
+  });
   s.v_kinematic_mae = kin[0];
   s.w_kinematic_mae = kin[1];
   if (options.target == LearnedTarget::correction) {
