@@ -67,10 +67,17 @@ void register_learn(CLI::App& app) {
                 "velocity; an untrained net reproduces the kinematics)")
       ->check(CLI::IsMember({"velocity", "correction"}))
       ->default_val(*target);
+  auto validation = std::make_shared<std::string>("chronological");
+  t->add_option("--validation", *validation,
+                "what the nets are validated on: chronological (the last 30 % of each track) or recordings "
+                "(the last 30 % of the tracks as given, held out whole)")
+      ->check(CLI::IsMember({"chronological", "recordings"}))
+      ->default_val(*validation);
   t->add_option("--threads", train->threads, "threads evaluating the windows (results do not depend on it)")
       ->check(CLI::PositiveNumber);
-  t->callback([train, t, target] {
-    parse_learned_target(*target, &train->target);  // IsMember checked the name
+  t->callback([train, t, target, validation] {
+    parse_learned_target(*target, &train->target);  // IsMember checked the names
+    parse_learned_validation(*validation, &train->validation);
     std::string& c = train->command;
     c = "odotune learn train";
     for (const auto& f : train->tracks) c += " --track " + f;
@@ -81,6 +88,7 @@ void register_learn(CLI::App& app) {
     if (train->previous_noise >= 0.0) c += fmt::format(" --previous-noise {}", train->previous_noise);
     if (t->count("--rate-hz") > 0) c += fmt::format(" --rate-hz {}", train->rate_hz);
     if (t->count("--target") > 0) c += fmt::format(" --target {}", to_string(train->target));
+    if (t->count("--validation") > 0) c += fmt::format(" --validation {}", to_string(train->validation));
     print_lines(learn_train_lines(with_progress("learn train", "nets", [&](const LearnProgress& p) {
       return run_learn_train(*train, p);
     })));

@@ -45,6 +45,19 @@ bool parse_learned_target(std::string_view text, LearnedTarget* out) {
   return false;
 }
 
+std::string_view to_string(LearnedValidation v) {
+  return v == LearnedValidation::recordings ? "recordings" : "chronological";
+}
+
+bool parse_learned_validation(std::string_view text, LearnedValidation* out) {
+  for (LearnedValidation v : {LearnedValidation::chronological, LearnedValidation::recordings})
+    if (text == to_string(v)) {
+      *out = v;
+      return true;
+    }
+  return false;
+}
+
 bool LearnedOdometryModel::IsValid(std::string* why) const {
   auto fail = [why](std::string m) {
     if (why) *why = std::move(m);
@@ -108,6 +121,16 @@ void append_velocity_windows(const FusionInput& in, int window, double previous_
 
 namespace {
 
+// The first validation step of track i of n (size() when it has none).
+std::size_t first_validation_step(std::size_t i, std::size_t n, std::size_t steps,
+                                  const LearnedTrainingOptions& options) {
+  if (options.validation == LearnedValidation::chronological)
+    return static_cast<std::size_t>(options.train_fraction * static_cast<double>(steps));
+  const auto held = std::max<std::size_t>(
+      1, static_cast<std::size_t>(std::llround(static_cast<double>(n) * (1.0 - options.train_fraction))));
+  return i + held >= n ? 0 : steps;
+}
+
 // The training and validation windows of the V and W nets.
 struct WindowSets {
   SequenceSet v_train, v_val, w_train, w_val;
@@ -145,8 +168,11 @@ WindowSets training_windows(const std::vector<const FusionInput*>& tracks, const
       throw std::invalid_argument(
           fmt::format("track '{}': only {} windows of {} steps with ground truth: expected at least 10",
                       in.track_name, v_all.size(), window));
-    auto [vt, vv] = split_sequences(v_all, options.train_fraction);
-    auto [wt, wv] = split_sequences(w_all, options.train_fraction);
+    const double keep = options.validation == LearnedValidation::chronological ? options.train_fraction
+                        : first_validation_step(i, tracks.size(), in.size(), options) == 0 ? 0.0
+                                                                                           : 1.0;
+    auto [vt, vv] = split_sequences(v_all, keep);
+    auto [wt, wv] = split_sequences(w_all, keep);
     ws.v_train.append(vt);
     ws.v_val.append(vv);
     ws.w_train.append(wt);
@@ -161,16 +187,18 @@ void zero_output(VelocityNet& net) {
   for (int j = 0; j <= VelocityNet::kHidden; ++j) net.weights[LstmLayout<3, 5>::kDense + j] = 0.0;
 }
 
-// MAE of V and W over the validation steps, the last (1 − train_fraction) of
-// each track's steps, of the series `series_of(track)` gives.
+// MAE of V and W over the validation steps (first_validation_step) of the
+// series `series_of(track)` gives.
 template <class SeriesOf>
 std::array<double, 2> validation_mae(const std::vector<const FusionInput*>& tracks,
                                      const LearnedTrainingOptions& options, SeriesOf series_of) {
   std::array<double, 2> sum{0.0, 0.0};
   std::size_t count = 0;
-  for (const FusionInput* in : tracks) {
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    const FusionInput* in = tracks[i];
+    const std::size_t first = first_validation_step(i, tracks.size(), in->size(), options);
+    if (first >= in->size()) continue;
     const OdometrySeries run = series_of(*in);
-    const auto first = static_cast<std::size_t>(options.train_fraction * static_cast<double>(in->size()));
     for (std::size_t k = std::max<std::size_t>(first, 1); k < in->size(); ++k)
       if (finite_all({run.v[k], run.w[k], in->v_true[k], in->w_true[k]})) {
         sum[0] += std::abs(run.v[k] - in->v_true[k]);
@@ -201,6 +229,9 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("learned odometry training: " + why);
   if (tracks.empty()) throw std::invalid_argument("learned odometry training: no tracks given");
+  if (options.validation == LearnedValidation::recordings && tracks.size() < 2)
+    throw std::invalid_argument(
+        "learned odometry training: validation on recordings needs at least 2 tracks (one to hold out)");
   LearnedOdometryModel model;
   const int window = model.v_net.window;
   model.rate_hz = 1.0 / tracks.front()->dt_s;

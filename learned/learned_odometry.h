@@ -31,6 +31,15 @@ enum class LearnedTarget { velocity, correction };
 std::string_view to_string(LearnedTarget t);  // "velocity", "correction"
 bool parse_learned_target(std::string_view text, LearnedTarget* out);
 
+// What the nets are validated on (the restarts' choice and the correction
+// nets' kinematic gate): the last (1 − train_fraction) of each track's steps
+// (the paper's split), or whole recordings: the last
+// max(1, round(N·(1 − train_fraction))) of the N tracks as given, which the
+// nets never train on.
+enum class LearnedValidation { chronological, recordings };
+std::string_view to_string(LearnedValidation v);  // "chronological", "recordings"
+bool parse_learned_validation(std::string_view text, LearnedValidation* out);
+
 // The features of one step, in network input order.
 enum LearnedFeature : int { kFeatDticksR = 0, kFeatDticksL = 1, kFeatPrevious = 2 };
 
@@ -70,6 +79,7 @@ struct LearnedTrainingOptions {
   // correction: each net learns v_true − v_kin (w_true − w_kin) from a zero
   // output start (LstmTrainingOptions::zero_output_start).
   LearnedTarget target = LearnedTarget::velocity;
+  LearnedValidation validation = LearnedValidation::chronological;
   bool IsValid(std::string* why) const;
 };
 
@@ -90,10 +100,12 @@ void append_velocity_windows(const FusionInput& in, int window, double previous_
                              double previous_noise_w, std::uint64_t seed, SequenceSet* v_set,
                              SequenceSet* w_set, LearnedTarget target = LearnedTarget::velocity);
 
-// Trains both nets on the tracks (each split 70/30 chronologically). A
+// Trains both nets on the tracks (each split 70/30 chronologically, or whole
+// recordings held out: LearnedValidation). A
 // correction net whose free-running validation MAE is not below the kinematic
 // odometry's is zeroed (model.v/w_beats_kinematic false). Throws
-// std::invalid_argument (one line) when a track has no ground truth, the
+// std::invalid_argument (one line) when a track has no ground truth, fewer
+// than 2 tracks are given for validation on recordings, the
 // tracks' ticks_per_rev differ or there are too few windows.
 LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*>& tracks,
                                             const LearnedTrainingOptions& options,

@@ -142,6 +142,7 @@ LearnTrainOutcome run_learn_train(const LearnTrainRequest& r, const LearnProgres
   lo.previous_noise_v = r.previous_noise >= 0.0 ? r.previous_noise : LearnedStudyOptions{}.previous_noise_v;
   lo.previous_noise_w = r.previous_noise >= 0.0 ? r.previous_noise : LearnedStudyOptions{}.previous_noise_w;
   lo.target = r.target;
+  lo.validation = r.validation;
   LearnTrainOutcome out;
   LearnedModelFile file;
   try {
@@ -192,6 +193,7 @@ LearnTrainOutcome run_learn_train(const LearnTrainRequest& r, const LearnProgres
   out.kinematic_v_mae = pooled_mae(kin_v);
   out.kinematic_w_mae = pooled_mae(kin_w);
   out.target = file.odometry.target;
+  out.validation = r.validation;
   out.v_beats_kinematic = file.odometry.v_beats_kinematic;
   out.w_beats_kinematic = file.odometry.w_beats_kinematic;
   out.model_out = r.model_out;
@@ -212,13 +214,14 @@ std::vector<std::string> learn_train_lines(const LearnTrainOutcome& o) {
   l.push_back(fmt::format("  kinematic odometry on the same tracks: MAE {:.4f} m/s, {:.4f} rad/s",
                           o.kinematic_v_mae, o.kinematic_w_mae));
   if (o.target == LearnedTarget::correction)
-    l.push_back(
-        fmt::format("  free-running on the validation steps: V {:.4f} against kinematic {:.4f} m/s{}; W {:.4f} "
-                    "against {:.4f} rad/s{}",
-                    s.v_restart_mae[static_cast<std::size_t>(s.v_restart)], s.v_kinematic_mae,
-                    o.v_beats_kinematic ? "" : " (no gain: the V net is the kinematics)",
-                    s.w_restart_mae[static_cast<std::size_t>(s.w_restart)], s.w_kinematic_mae,
-                    o.w_beats_kinematic ? "" : " (no gain: the W net is the kinematics)"));
+    l.push_back(fmt::format("  free-running on the {}: V {:.4f} against kinematic {:.4f} m/s{}; W {:.4f} "
+                            "against {:.4f} rad/s{}",
+                            o.validation == LearnedValidation::recordings ? "held-out recordings"
+                                                                          : "validation steps",
+                            s.v_restart_mae[static_cast<std::size_t>(s.v_restart)], s.v_kinematic_mae,
+                            o.v_beats_kinematic ? "" : " (no gain: the V net is the kinematics)",
+                            s.w_restart_mae[static_cast<std::size_t>(s.w_restart)], s.w_kinematic_mae,
+                            o.w_beats_kinematic ? "" : " (no gain: the W net is the kinematics)"));
   if (o.detector)
     l.push_back(fmt::format(
         "slip detector trained on {} track{} ({} + {} windows; {:.1f} s): variance MAE V {:.3g}, W "

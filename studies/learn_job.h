@@ -71,7 +71,8 @@ struct LearnTrainRequest {
   double previous_noise = -1.0;  // σ on the teacher-forced previous V [m/s] and W [rad/s]; < 0 = the study's
   int threads = 1;               // OpenMP threads evaluating the windows; results do not depend on it
   LearnedTarget target = LearnedTarget::velocity;  // --target: the nets' output (learned/learned_odometry.h)
-  std::string command;                             // the model's provenance.created_by
+  LearnedValidation validation = LearnedValidation::chronological;  // --validation
+  std::string command;                                              // the model's provenance.created_by
 };
 
 struct LearnTrainOutcome {
@@ -80,6 +81,7 @@ struct LearnTrainOutcome {
   std::optional<SlipTrainingSummary> detector;          // when slip tracks were given
   double kinematic_v_mae = 0.0, kinematic_w_mae = 0.0;  // pooled over the training tracks
   LearnedTarget target = LearnedTarget::velocity;
+  LearnedValidation validation = LearnedValidation::chronological;
   bool v_beats_kinematic = true, w_beats_kinematic = true;  // the model's (learned_odometry.h)
   std::string model_out;
 };

@@ -136,6 +136,37 @@ TEST(LearnedOdometry, ACorrectionWithoutGainIsTheKinematicOdometry) {
   EXPECT_FALSE(parse_learned_target("residual", &t));
 }
 
+// Validation on recordings holds the last tracks out whole: the nets train on
+// every window of the others and on none of theirs; one track is refused.
+TEST(LearnedOdometry, ValidationOnRecordingsHoldsWholeTracksOut) {
+  const FusionInput a = chair_input(40, 11), b = chair_input(30, 12);
+  auto windows = [](const FusionInput& in) {
+    SequenceSet v, w;
+    v.window = w.window = VelocityNet{}.window;
+    v.inputs = w.inputs = VelocityNet::kInputs;
+    append_velocity_windows(in, v.window, 0.0, 0.0, 1, &v, &w);
+    return v.size();
+  };
+  LearnedTrainingOptions o = quick_training();
+  o.training.max_iterations = 2;
+  o.restarts = 1;
+  o.validation = LearnedValidation::recordings;
+  LearnedTrainingSummary s;
+  train_learned_odometry({&a, &b}, o, &s);
+  EXPECT_EQ(s.train_windows, windows(a));
+  EXPECT_EQ(s.validation_windows, windows(b));
+  o.validation = LearnedValidation::chronological;
+  train_learned_odometry({&a, &b}, o, &s);
+  EXPECT_GT(s.validation_windows, 0u);
+  EXPECT_LT(s.validation_windows, windows(b));
+  o.validation = LearnedValidation::recordings;
+  EXPECT_THROW(train_learned_odometry({&a}, o, nullptr), std::invalid_argument);
+  LearnedValidation v{};
+  EXPECT_TRUE(parse_learned_validation("recordings", &v));
+  EXPECT_EQ(v, LearnedValidation::recordings);
+  EXPECT_FALSE(parse_learned_validation("random", &v));
+}
+
 TEST(LearnedOdometry, TrainingIsDeterministicAndRejectsTracksWithoutTruth) {
   const FusionInput train = chair_input(60, 11);
   LearnedTrainingOptions o = quick_training();
