@@ -43,6 +43,18 @@ LearnedTrainingOptions quick_training() {
   return o;
 }
 
+// The kinematic model misses a few % of V and W; a trained model learns it:
+// on the held-out drive it is at least 20 % better in V and W, and better in position.
+void expect_beats_kinematics(const FusionInput& test, const LearnedOdometryModel& model) {
+  const OdometrySeries learned = run_learned_odometry(test, model);
+  const OdometrySeries kin = kinematic_odometry(test);
+  const OdometryErrors el = odometry_errors(test, learned.v, learned.w, {}, {}, {});
+  const OdometryErrors ek = odometry_errors(test, kin.v, kin.w, {}, {}, {});
+  EXPECT_LT(el.v.mae, 0.8 * ek.v.mae);
+  EXPECT_LT(el.w.mae, 0.8 * ek.w.mae);
+  EXPECT_LT(el.xy.rmse, ek.xy.rmse);
+}
+
 TEST(OdometryMetrics, SeriesErrorsMatchTheirDefinitions) {
   // est − truth = (skip step 0) 0.1, −0.2, 0.3; truth 1, 2, 3 (mean 2).
   const std::vector<double> truth = {9, 1, 2, 3}, est = {0, 1.1, 1.8, 3.3}, var = {1, 0.01, 0.04, 0.09};
@@ -78,14 +90,7 @@ TEST(LearnedOdometry, BeatsTheKinematicModelOnHeldOutDataWithHiddenEffects) {
   EXPECT_TRUE(summary.v.usable);
   EXPECT_TRUE(summary.w.usable);
 
-  const OdometrySeries learned = run_learned_odometry(test, model);
-  const OdometrySeries kin = kinematic_odometry(test);
-  const OdometryErrors el = odometry_errors(test, learned.v, learned.w, {}, {}, {});
-  const OdometryErrors ek = odometry_errors(test, kin.v, kin.w, {}, {}, {});
-  // The kinematic model misses a few % of V and W; the nets learn it.
-  EXPECT_LT(el.v.mae, 0.8 * ek.v.mae);
-  EXPECT_LT(el.w.mae, 0.8 * ek.w.mae);
-  EXPECT_LT(el.xy.rmse, ek.xy.rmse);
+  expect_beats_kinematics(test, model);
 }
 
 // A correction net learns what the kinematic model misses and is added to it;
@@ -101,13 +106,7 @@ TEST(LearnedOdometry, CorrectionNetsLearnWhatTheKinematicModelMisses) {
   EXPECT_TRUE(model.v_beats_kinematic);
   EXPECT_TRUE(model.w_beats_kinematic);
   EXPECT_LT(summary.v_restart_mae[static_cast<std::size_t>(summary.v_restart)], summary.v_kinematic_mae);
-  const OdometrySeries learned = run_learned_odometry(test, model);
-  const OdometrySeries kin = kinematic_odometry(test);
-  const OdometryErrors el = odometry_errors(test, learned.v, learned.w, {}, {}, {});
-  const OdometryErrors ek = odometry_errors(test, kin.v, kin.w, {}, {}, {});
-  EXPECT_LT(el.v.mae, 0.8 * ek.v.mae);
-  EXPECT_LT(el.w.mae, 0.8 * ek.w.mae);
-  EXPECT_LT(el.xy.rmse, ek.xy.rmse);
+  expect_beats_kinematics(test, model);
 }
 
 // A correction net that has learnt nothing (no iterations: its output starts
