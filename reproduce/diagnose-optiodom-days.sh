@@ -12,15 +12,9 @@ cd "$(dirname "$0")/.."
 REAL=${REAL:-../shared/data/real}
 OUT=${1:-out/optiodom-days}
 BIN=${BIN:-build/odotune}
-OO=$REAL/optiodom_diff
 mkdir -p "$OUT/tracks"
 T=$OUT/tracks
-for run in square/231220200045/231220200045_run-01 square/231220200045/231220200045_run-02 \
-           circular/231220200146/231220200146_run-01 circular/231220200146/231220200146_run-02 \
-           free/020120212354/020120212354_run-01 \
-           free/030120210001/030120210001_run-01 free/030120210001/030120210001_run-02; do
-  "$BIN" import optiodom "$OO/$run.csv" -o "$T/$(basename "$run").csv" > /dev/null
-done
+REAL="$REAL" BIN="$BIN" bash reproduce/optiodom-days-tracks.sh "$T"
 DEC23=("$T/231220200045_run-01.csv" "$T/231220200045_run-02.csv" "$T/231220200146_run-01.csv" "$T/231220200146_run-02.csv")
 JAN02=("$T/020120212354_run-01.csv")
 JAN03=("$T/030120210001_run-01.csv" "$T/030120210001_run-02.csv")
