@@ -715,7 +715,10 @@ Track simulate(const Scenario& sc) {
 
   add_odometry_bias(ph, q, spsd, odo);
   if (grid.period[kEnc] > 0) write_encoders(grid, odo, sc, d);
-  if (grid.period[kCmd] > 0) write_commands(grid, q, spsd, profile, sc, d);
+  if (grid.period[kCmd] > 0) {
+    write_commands(grid, q, spsd, profile, sc, d);
+    d.meta.body_velocity = BodyVelocitySource::commanded;  // the motion profile's commands
+  }
   if (grid.period[kGyro] > 0) write_gyro(grid, truth, sc, d);
   if (grid.period[kPower] > 0) write_power(grid, truth, sc, d);
   if (grid.period[kExt] > 0) write_ext_velocity(grid, truth, sc, d);

@@ -128,6 +128,7 @@ void add_metadata(const fs::path& series_csv, std::size_t invalid, TrackMeta& m)
   const bool have_scalars = is_file(scalars_path);
   m.name = "utias-lost-in-the-woods";
   m.origin = "recorded";
+  m.body_velocity = BodyVelocitySource::measured;
   auto& e = m.extra;
   e.emplace_back("source",
                  fmt::format("UTIAS \"Lost in the Woods\" (AER1513 dataset2.mat, copied from github "

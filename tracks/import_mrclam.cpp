@@ -154,6 +154,7 @@ void add_metadata(const fs::path& dir, int robot, const std::string& odo_name, c
                ? fmt::format("{}-robot{}", folder, robot)
                : fmt::format("mrclam-{}-robot{}", folder, robot);
   m.origin = "recorded";
+  m.body_velocity = BodyVelocitySource::commanded;
   auto& e = m.extra;
   e.emplace_back("source", fmt::format("UTIAS Multi-Robot Cooperative Localization and Mapping Dataset "
                                        "(MRCLAM), folder {}, robot {} (iRobot Create): {} (commanded v, w), "

@@ -356,6 +356,7 @@ void add_metadata(const fs::path& run_csv, const std::string& id, int k, const R
   m.wheel_radius_left_m = rb.dl_m / 2;
   m.wheel_radius_right_m = rb.dr_m / 2;
   m.wheel_base_m = rb.base_m;
+  if (cmd.have_cmd) m.body_velocity = BodyVelocitySource::commanded;
   auto& e = m.extra;
   e.emplace_back("source",
                  fmt::format("OptiOdom (github sousarbarb/optiodom, data/diff), experiment {}{}, run {}: "

@@ -450,6 +450,7 @@ void add_metadata(const fs::path& bag, const bags::BagInfo& info, const RosbagIm
   } else {
     if (o.wheel_radius_m) meta.wheel_radius_left_m = meta.wheel_radius_right_m = *o.wheel_radius_m;
     if (o.wheel_base_m) meta.wheel_base_m = *o.wheel_base_m;
+    meta.body_velocity = BodyVelocitySource::measured;  // an Odometry message's twist
   }
   auto& x = meta.extra;
   x.emplace_back("source",

@@ -23,6 +23,19 @@ const std::vector<std::string_view>& known_column_names() {
   return names;
 }
 
+std::string_view to_string(BodyVelocitySource s) {
+  return s == BodyVelocitySource::commanded ? "commanded" : "measured";
+}
+
+bool parse_body_velocity_source(std::string_view text, BodyVelocitySource* out) {
+  for (BodyVelocitySource s : {BodyVelocitySource::commanded, BodyVelocitySource::measured})
+    if (text == to_string(s)) {
+      *out = s;
+      return true;
+    }
+  return false;
+}
+
 std::optional<std::string> TrackMeta::get(std::string_view key) const {
   for (const auto& [k, v] : extra)
     if (k == key) return v;

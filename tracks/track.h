@@ -56,6 +56,15 @@ const std::vector<std::string_view>& known_column_names();
 
 inline constexpr std::int64_t kNoTick = std::numeric_limits<std::int64_t>::min();
 
+// What a track's body velocities v_cmd, w_cmd are (metadata
+// `source.body_velocity`, docs/track-format.md): the velocities the robot was
+// commanded (they lead the motion, through its drive's delay and dynamics) or
+// the twist its drive controller measured and reported (encoders through the
+// controller's own kinematics).
+enum class BodyVelocitySource { commanded, measured };
+std::string_view to_string(BodyVelocitySource s);  // "commanded", "measured"
+bool parse_body_velocity_source(std::string_view text, BodyVelocitySource* out);
+
 // The robot's nominal parameters and any other metadata of a track.
 struct TrackMeta {
   std::string name;                     // short name; file stem by default
@@ -64,6 +73,9 @@ struct TrackMeta {
   std::optional<double> wheel_radius_left_m;
   std::optional<double> wheel_radius_right_m;
   std::optional<double> wheel_base_m;
+  // source.body_velocity: what v_cmd/w_cmd are; nullopt when the file does
+  // not say (the spec allows either).
+  std::optional<BodyVelocitySource> body_velocity;
   // Every other `# key: value` line, in file order (e.g. sim.seed, source).
   std::vector<std::pair<std::string, std::string>> extra;
 

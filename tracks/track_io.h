@@ -48,15 +48,17 @@
 
 namespace odotune {
 
-// The metadata keys track-format.md defines (TrackMeta's own fields); every
+// The metadata keys track-format.md defines, and odotune's
+// source.body_velocity (docs/track-format.md): TrackMeta's own fields; every
 // other key is kept verbatim in TrackMeta::extra. Read and write share it.
-inline constexpr std::array<std::string_view, 7> kStandardMetaKeys = {"format",
+inline constexpr std::array<std::string_view, 8> kStandardMetaKeys = {"format",
                                                                       "name",
                                                                       "origin",
                                                                       "robot.ticks_per_rev",
                                                                       "robot.wheel_radius_left",
                                                                       "robot.wheel_radius_right",
-                                                                      "robot.wheel_base"};
+                                                                      "robot.wheel_base",
+                                                                      "source.body_velocity"};
 
 class TrackError : public std::runtime_error {
  public:

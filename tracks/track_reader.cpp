@@ -281,6 +281,14 @@ class Parser {
       set_robot(m.wheel_radius_right_m, key, value, " [m]");
     else if (key == "robot.wheel_base")
       set_robot(m.wheel_base_m, key, value, " [m]");
+    else if (key == "source.body_velocity") {
+      BodyVelocitySource b{};
+      if (!parse_body_velocity_source(value, &b))
+        fail(fmt::format("metadata source.body_velocity is {}, expected 'commanded' or 'measured' (what v_cmd, "
+                         "w_cmd are)",
+                         quote(value)));
+      m.body_velocity = b;
+    }
   }
 
   void read_metadata_and_header() {

@@ -1,7 +1,7 @@
 // Writer of odotune-track/1 files (../shared/specs/track-format.md).
 //
 // Layout written: the format line; name and origin (each if non-empty); the
-// robot.* keys that are set; the extra keys in order; the header (t, ticks_l,
+// robot.* keys that are set; source.body_velocity if set; the extra keys in order; the header (t, ticks_l,
 // ticks_r if present, then the present real columns in Col order); one row per
 // sample. Numbers are the shortest decimal that reads back to the same double
 // (fmt "{}"), so write -> read is bit-identical; NaN and kNoTick are empty cells.
@@ -85,6 +85,7 @@ void format_track(const Track& track, std::ostream& out) {
   if (m.wheel_radius_left_m) fmt::format_to(it, "# robot.wheel_radius_left: {}\n", *m.wheel_radius_left_m);
   if (m.wheel_radius_right_m) fmt::format_to(it, "# robot.wheel_radius_right: {}\n", *m.wheel_radius_right_m);
   if (m.wheel_base_m) fmt::format_to(it, "# robot.wheel_base: {}\n", *m.wheel_base_m);
+  if (m.body_velocity) fmt::format_to(it, "# source.body_velocity: {}\n", to_string(*m.body_velocity));
   for (const auto& [key, value] : m.extra) fmt::format_to(it, "# {}: {}\n", key, value);
 
   const auto& tl = track.ticks_l();

@@ -1,0 +1,64 @@
+#include "tracks/odometry_input.h"
+
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace odotune {
+
+std::string_view to_string(OdometryInput s) {
+  switch (s) {
+    case OdometryInput::wheels: return "wheels";
+    case OdometryInput::twist: return "twist";
+    case OdometryInput::commands: return "commands";
+  }
+  return "wheels";
+}
+
+bool parse_odometry_input(std::string_view text, OdometryInput* out) {
+  for (OdometryInput s : {OdometryInput::wheels, OdometryInput::twist, OdometryInput::commands})
+    if (text == to_string(s)) {
+      *out = s;
+      return true;
+    }
+  return false;
+}
+
+namespace {
+
+[[noreturn]] void fail(const Track& track, const std::string& what) {
+  throw std::invalid_argument(fmt::format("track '{}': {}", track.name(), what));
+}
+
+OdometryInput body_source(BodyVelocitySource b) {
+  return b == BodyVelocitySource::measured ? OdometryInput::twist : OdometryInput::commands;
+}
+
+}  // namespace
+
+OdometryInput track_odometry_input(const Track& track, std::optional<OdometryInput> requested) {
+  const bool wheels = track.has_ticks() || track.has_wheel_rates();
+  const auto& said = track.meta().body_velocity;
+  if (!requested) {
+    if (wheels) return OdometryInput::wheels;
+    if (!track.has_cmd()) fail(track, "no odometry (ticks, wheel rates or v_cmd/w_cmd)");
+    if (!said)
+      fail(track,
+           "v_cmd/w_cmd are its only odometry, and the track does not say whether they are commanded or "
+           "measured: expected metadata '# source.body_velocity: commanded|measured' (docs/track-format.md) "
+           "or --input commands|twist");
+    return body_source(*said);
+  }
+  if (*requested == OdometryInput::wheels) {
+    if (!wheels) fail(track, "--input wheels: expected ticks_l/ticks_r or omega_l/omega_r, the track has none");
+    return *requested;
+  }
+  if (!track.has_cmd())
+    fail(track, fmt::format("--input {}: expected v_cmd/w_cmd, the track has none", to_string(*requested)));
+  if (said && body_source(*said) != *requested)
+    fail(track, fmt::format("--input {} contradicts the track's source.body_velocity: {}",
+                            to_string(*requested), to_string(*said)));
+  return *requested;
+}
+
+}  // namespace odotune
