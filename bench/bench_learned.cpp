@@ -124,14 +124,26 @@ BENCHMARK(BM_PredictSlipNet)->Unit(benchmark::kMicrosecond);
 void BM_LearnedOdometryStep(benchmark::State& state) {
   odotune::LearnedOdometryModel model;
   model.ticks_per_rev = 8800;
-  for (std::size_t i = 0; i < model.v_net.weights.size(); ++i) {
-    model.v_net.weights[i] = 0.05 * std::sin(1.3 * static_cast<double>(i));
-    model.w_net.weights[i] = 0.05 * std::cos(1.7 * static_cast<double>(i));
+  odotune::VelocityNet v_net, w_net;
+  for (std::size_t i = 0; i < v_net.weights.size(); ++i) {
+    v_net.weights[i] = 0.05 * std::sin(1.3 * static_cast<double>(i));
+    w_net.weights[i] = 0.05 * std::cos(1.7 * static_cast<double>(i));
   }
+  model.v_net = v_net;
+  model.w_net = w_net;
+  // One step of a track, its increments varied from call to call.
+  odotune::FusionInput in;
+  in.dticks_l = {40.0};
+  in.dticks_r = {41.0};
+  in.v_kin = {0.5};
+  in.w_kin = {0.1};
+  in.gyro_z = {0.0};
   odotune::LearnedOdometryStepper stepper(&model);
   double k = 0, v = 0, w = 0;
   for (auto _ : state) {
-    const auto vw = stepper.step(40.0 + std::sin(k), 41.0 + std::cos(k), 0.5, 0.1, v, w);
+    in.dticks_l[0] = 40.0 + std::sin(k);
+    in.dticks_r[0] = 41.0 + std::cos(k);
+    const auto vw = stepper.step(in, 0, v, w);
     v = vw[0];
     w = vw[1];
     k += 0.1;

@@ -13,45 +13,52 @@ namespace {
 // covariance is computed (below it a direction is unobservable).
 constexpr double kMinEigenRatio = 1e-12;
 
-// Whether the Jacobian columns of `theta` have full rank at the solution.
-bool full_rank(ceres::Problem& problem, double* theta) {
+// Whether the Jacobian columns of `theta` (n entries) have full rank at the solution.
+bool full_rank(ceres::Problem& problem, double* theta, int n) {
   ceres::Problem::EvaluateOptions eo;
   eo.parameter_blocks = {theta};  // the other blocks are held as they are
   ceres::CRSMatrix j;
   if (!problem.Evaluate(eo, nullptr, nullptr, nullptr, &j)) return false;
-  Eigen::Matrix3d jtj = Eigen::Matrix3d::Zero();
+  Eigen::MatrixXd jtj = Eigen::MatrixXd::Zero(n, n);
   for (int row = 0; row < j.num_rows; ++row) {
     const auto b = static_cast<std::size_t>(j.rows[static_cast<std::size_t>(row)]);
     const auto e = static_cast<std::size_t>(j.rows[static_cast<std::size_t>(row) + 1]);
     for (std::size_t a = b; a < e; ++a)
       for (std::size_t c = b; c < e; ++c) jtj(j.cols[a], j.cols[c]) += j.values[a] * j.values[c];
   }
-  const Eigen::Vector3d d = jtj.diagonal();
+  const Eigen::VectorXd d = jtj.diagonal();
   if (!(d.array() > 0.0).all() || !d.allFinite()) return false;
-  const Eigen::Vector3d inv = d.array().rsqrt();
-  const Eigen::Matrix3d scaled = inv.asDiagonal() * jtj * inv.asDiagonal();
-  const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scaled).eigenvalues();
+  const Eigen::VectorXd inv = d.array().rsqrt();
+  const Eigen::MatrixXd scaled = inv.asDiagonal() * jtj * inv.asDiagonal();
+  const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(scaled).eigenvalues();
   return ev.minCoeff() > kMinEigenRatio * ev.maxCoeff();
 }
 
 }  // namespace
 
-std::array<double, 3> scaled_standard_errors(ceres::Problem& problem, double* theta, double final_cost,
-                                             double dof) {
-  const double nan = std::nan("");
-  std::array<double, 3> out{nan, nan, nan};
-  if (!(dof > 0.0) || !full_rank(problem, theta)) return out;
+std::vector<double> scaled_standard_errors(ceres::Problem& problem, double* theta, int n, double final_cost,
+                                           double dof) {
+  std::vector<double> out(static_cast<std::size_t>(n), std::nan(""));
+  if (!(dof > 0.0) || !full_rank(problem, theta, n)) return out;
   ceres::Covariance::Options co;
   co.algorithm_type = ceres::DENSE_SVD;
   co.num_threads = 1;
   ceres::Covariance cov(co);
   const std::vector<std::pair<const double*, const double*>> blocks = {{theta, theta}};
-  double c[9];
-  if (!cov.Compute(blocks, &problem) || !cov.GetCovarianceBlock(theta, theta, c)) return out;
+  std::vector<double> c(static_cast<std::size_t>(n * n));
+  if (!cov.Compute(blocks, &problem) || !cov.GetCovarianceBlock(theta, theta, c.data())) return out;
   const double s2 = 2.0 * final_cost / dof;
-  for (int i = 0; i < 3; ++i)
-    if (c[i * 3 + i] > 0.0) out[static_cast<std::size_t>(i)] = std::sqrt(c[i * 3 + i] * s2);
+  for (int i = 0; i < n; ++i) {
+    const double v = c[static_cast<std::size_t>(i * n + i)];
+    if (v > 0.0) out[static_cast<std::size_t>(i)] = std::sqrt(v * s2);
+  }
   return out;
+}
+
+std::array<double, 3> scaled_standard_errors(ceres::Problem& problem, double* theta, double final_cost,
+                                             double dof) {
+  const std::vector<double> sd = scaled_standard_errors(problem, theta, 3, final_cost, dof);
+  return {sd[0], sd[1], sd[2]};
 }
 
 }  // namespace odotune

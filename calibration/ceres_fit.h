@@ -1,10 +1,11 @@
 // What the offline calibration fits (batch_calibration.h, pose_calibration.h)
 // share around Ceres: standard errors of a
-// 3-parameter block from ceres::Covariance scaled by the residual variance
+// parameter block (3 entries, or n) from ceres::Covariance scaled by the residual variance
 // per degree of freedom.
 #pragma once
 
 #include <array>
+#include <vector>
 
 #include <ceres/ceres.h>
 
@@ -19,5 +20,8 @@ namespace odotune {
 // never turns.
 std::array<double, 3> scaled_standard_errors(ceres::Problem& problem, double* theta, double final_cost,
                                              double dof);
+// The same for a block of n entries.
+std::vector<double> scaled_standard_errors(ceres::Problem& problem, double* theta, int n, double final_cost,
+                                           double dof);
 
 }  // namespace odotune

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "cli/choices.h"
 #include "cli/commands.h"
 #include "cli/controller_options.h"
 #include "cli/output.h"
@@ -43,7 +44,11 @@ void print_apply(const CalibrateRequest& a) {
 void add_method_options(CLI::App* sub, CalibrateRequest& req) {
   sub->add_option("--method", req.method,
                   "adaptive-pf | pf | dkf | online-pose | batch-pose (alias batch) | batch-velocity | none "
-                  "(default adaptive-pf)");
+                  "(default adaptive-pf; twist and command tracks: batch)");
+  add_enum_option(sub, "--input", req.input,
+                  {OdometryInput::wheels, OdometryInput::twist, OdometryInput::commands},
+                  "the odometry to calibrate: wheels (radii and base), twist (a measured v, w: scales) or "
+                  "commands (scales and a delay); default: each track's own (docs/track-format.md)");
   sub->add_option("--resampler", req.resampler,
                   "PF resampling: multinomial | stratified | systematic | residual "
                   "(default systematic)");
@@ -88,7 +93,7 @@ void add_fit_options(CLI::App* sub, CalibrateRequest& req) {
                   "convergence: within this % of the truth from then on (default 0.5)");
   sub->add_option("--segment", req.segment_s,
                   "batch-pose: dead-reckon segments of this length [s] from a reference "
-                  "pose (default 0: whole runs)")
+                  "pose (default 0: whole runs; twist and command tracks 10)")
       ->check(CLI::NonNegativeNumber);
   sub->add_flag("--fit-start-heading", req.fit_start_heading,
                 "batch-pose: fit each segment's start heading too (ground truth; with fixes the whole start "
@@ -133,6 +138,7 @@ void register_calibrate(CLI::App& app) {
       "      --json cal.json --csv cal.csv --figure cal --config-out cal.yaml\n"
       "  odotune calibrate --apply cal.yaml --track held_out.csv --json held_out.json\n"
       "  odotune calibrate --track optiodom.csv --ext-from-gt 10 --method dkf\n"
+      "  odotune calibrate --track mrclam-robot1.csv --method batch --config-out cmd.yaml   (commands: scales, delay)\n"
       "  odotune fixes optiodom.csv -o fixed.csv && odotune calibrate --track fixed.csv --method online-pose \\\n"
       "      --fix-sigma-m 0.06\n"
       "Methods (Fariña, Toledo & Acosta, RA-L 2026): adaptive-pf and pf (particle filters), dkf (dual\n"

@@ -9,7 +9,9 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
+#include "cli/choices.h"
 #include "cli/commands.h"
 #include "cli/output.h"
 #include "cli/progress.h"
@@ -32,6 +34,89 @@ auto with_progress(const char* label, const char* unit, Job job) {
   return outcome;
 }
 
+// The flags of `learn train`.
+void add_train_options(CLI::App* t, LearnTrainRequest& r) {
+  t->add_option("--track", r.tracks, "track with ground truth (repeat for several)")->required();
+  t->add_option("--slip-track", r.slip_tracks,
+                "track with motor power and slip, to train the slip detector on (repeat for several)");
+  t->add_option("--model-out", r.model_out, "model file to write (JSON, odotune-learned/1)")->required();
+  t->add_option("--seed", r.seed, "seed of the initial weights")->default_val(r.seed);
+  t->add_option("--iterations", r.iterations,
+                "Ceres iterations per net (correction nets: the most their early stopping allows)")
+      ->default_val(r.iterations);
+  t->add_option("--slip-iterations", r.slip_iterations,
+                "Ceres iterations per slip-detector net (default: --iterations)")
+      ->check(CLI::PositiveNumber);
+  t->add_option("--previous-noise", r.previous_noise,
+                "the paper's nets: σ of the noise on the teacher-forced previous V [m/s] and W [rad/s] while "
+                "training (default 0)")
+      ->check(CLI::NonNegativeNumber);
+  t->add_option("--rate-hz", r.rate_hz, "network rate [Hz] (paper: 10)")->default_val(r.rate_hz);
+  add_enum_option(t, "--input", r.input, {OdometryInput::wheels, OdometryInput::twist, OdometryInput::commands},
+                  "the odometry the nets read: wheels, twist (a measured v, w) or commands (default: each "
+                  "track's own, docs/track-format.md)");
+  add_enum_option(t, "--target", r.target, {LearnedTarget::correction, LearnedTarget::velocity},
+                  "what the nets output: correction (added to the kinematic odometry; an untrained net is the "
+                  "kinematics) or velocity (the paper's nets on wheel increments)")
+      ->default_str(std::string(to_string(r.target)));
+  add_enum_option(
+      t, "--validation", r.validation,
+      {LearnedValidation::recordings, LearnedValidation::blocks, LearnedValidation::chronological},
+      "what the nets are validated on: correction nets recordings (default with 2 tracks or more) or "
+      "blocks (of --block-s); the paper's chronological (default: the last 30 % of each track) or "
+      "recordings");
+  SelectionOptions& so = r.selection;
+  t->add_option("--block-s", so.block_s, "--validation blocks: the blocks' length [s]")
+      ->default_val(so.block_s)
+      ->check(CLI::PositiveNumber);
+  t->add_option("--folds", so.max_folds, "correction nets: most folds of the cross-validation")
+      ->default_val(so.max_folds)
+      ->check(CLI::Range(2, 100));
+  t->add_option("--patience", so.training.early_stopping_patience,
+                "correction nets: iterations without a better validation MAE before a fit stops")
+      ->default_val(so.training.early_stopping_patience)
+      ->check(CLI::PositiveNumber);
+  t->add_option("--units", so.units, "correction nets: the LSTM sizes to choose from (3, 5, 8)")
+      ->delimiter(',')
+      ->default_str("3,5")
+      ->check(CLI::IsMember({3, 5, 8}));
+  t->add_option("--windows", so.windows, "correction nets: the window lengths to choose from [steps]")
+      ->delimiter(',')
+      ->default_str("10,20")
+      ->check(CLI::Range(2, 256));
+  t->add_option("--decays", so.weight_decays, "correction nets: the L2 weight decays to choose from")
+      ->delimiter(',')
+      ->default_str("0,10")
+      ->check(CLI::NonNegativeNumber);
+  add_enum_list_option(t, "--features", so.features, {LearnedFeatures::channel, LearnedFeatures::both},
+                       "correction nets: the feature sets to choose from (channel: each net its own channel of "
+                       "the odometry; both: v and w for either)")
+      ->default_str("channel,both");
+  t->add_flag(
+      "--no-gyro", [&so](std::int64_t) { so.use_gyro = false; },
+      "correction nets: do not read the track's gyro");
+  t->add_option("--threads", r.threads, "threads evaluating the windows (results do not depend on it)")
+      ->check(CLI::PositiveNumber);
+}
+
+// The command line that regenerates the model (its provenance.created_by):
+// the tracks and output, and every flag given.
+std::string train_command(const LearnTrainRequest& r, const CLI::App& t) {
+  std::string c = "odotune learn train";
+  for (const auto& f : r.tracks) c += " --track " + f;
+  for (const auto& f : r.slip_tracks) c += " --slip-track " + f;
+  c += " --model-out " + r.model_out + fmt::format(" --seed {} --iterations {}", r.seed, r.iterations);
+  for (const CLI::Option* o : t.get_options()) {
+    const std::string name = o->get_name();
+    if (o->count() == 0 || name == "--track" || name == "--slip-track" || name == "--model-out" ||
+        name == "--seed" || name == "--iterations" || name == "--help")
+      continue;
+    c += " " + name;
+    if (o->get_type_size() != 0) c += " " + fmt::format("{}", fmt::join(o->results(), ","));
+  }
+  return c;
+}
+
 }  // namespace
 
 void register_learn(CLI::App& app) {
@@ -47,49 +132,10 @@ void register_learn(CLI::App& app) {
   auto train = std::make_shared<LearnTrainRequest>();
   auto* t = learn->add_subcommand("train",
                                   "Train the V and W nets (and the slip detector) on tracks with ground truth");
-  t->add_option("--track", train->tracks, "track with ground truth (repeat for several)")->required();
-  t->add_option("--slip-track", train->slip_tracks,
-                "track with motor power and slip, to train the slip detector on (repeat for several)");
-  t->add_option("--model-out", train->model_out, "model file to write (JSON, odotune-learned/1)")->required();
-  t->add_option("--seed", train->seed, "seed of the initial weights")->default_val(train->seed);
-  t->add_option("--iterations", train->iterations, "Ceres iterations per net")->default_val(train->iterations);
-  t->add_option("--slip-iterations", train->slip_iterations,
-                "Ceres iterations per slip-detector net (default: --iterations)")
-      ->check(CLI::PositiveNumber);
-  t->add_option("--previous-noise", train->previous_noise,
-                "σ of the noise on the teacher-forced previous V [m/s] and W [rad/s] while training "
-                "(default 0)")
-      ->check(CLI::NonNegativeNumber);
-  t->add_option("--rate-hz", train->rate_hz, "network rate [Hz] (paper: 10)")->default_val(train->rate_hz);
-  auto target = std::make_shared<std::string>("velocity");
-  t->add_option("--target", *target,
-                "what the nets output: velocity (the paper's) or correction (added to the nominal kinematic "
-                "velocity; an untrained net reproduces the kinematics)")
-      ->check(CLI::IsMember({"velocity", "correction"}))
-      ->default_val(*target);
-  auto validation = std::make_shared<std::string>("chronological");
-  t->add_option("--validation", *validation,
-                "what the nets are validated on: chronological (the last 30 % of each track) or recordings "
-                "(the last 30 % of the tracks as given, held out whole)")
-      ->check(CLI::IsMember({"chronological", "recordings"}))
-      ->default_val(*validation);
-  t->add_option("--threads", train->threads, "threads evaluating the windows (results do not depend on it)")
-      ->check(CLI::PositiveNumber);
-  t->callback([train, t, target, validation] {
-    parse_learned_target(*target, &train->target);  // IsMember checked the names
-    parse_learned_validation(*validation, &train->validation);
-    std::string& c = train->command;
-    c = "odotune learn train";
-    for (const auto& f : train->tracks) c += " --track " + f;
-    for (const auto& f : train->slip_tracks) c += " --slip-track " + f;
-    c += " --model-out " + train->model_out +
-         fmt::format(" --seed {} --iterations {}", train->seed, train->iterations);
-    if (train->slip_iterations > 0) c += fmt::format(" --slip-iterations {}", train->slip_iterations);
-    if (train->previous_noise >= 0.0) c += fmt::format(" --previous-noise {}", train->previous_noise);
-    if (t->count("--rate-hz") > 0) c += fmt::format(" --rate-hz {}", train->rate_hz);
-    if (t->count("--target") > 0) c += fmt::format(" --target {}", to_string(train->target));
-    if (t->count("--validation") > 0) c += fmt::format(" --validation {}", to_string(train->validation));
-    print_lines(learn_train_lines(with_progress("learn train", "nets", [&](const LearnProgress& p) {
+  add_train_options(t, *train);
+  t->callback([train, t] {
+    train->command = train_command(*train, *t);
+    print_lines(learn_train_lines(with_progress("learn train", "fits", [&](const LearnProgress& p) {
       return run_learn_train(*train, p);
     })));
   });
@@ -101,6 +147,9 @@ void register_learn(CLI::App& app) {
   e->add_option("--model", eval->model, "model file (odotune learn train --model-out)")->required();
   e->add_option("--json", eval->json, "write the errors as JSON (blocks learned and kinematic)");
   e->add_option("--csv", eval->csv, "write the velocities and dead-reckoned poses per step as CSV");
+  e->add_option("--calibration", eval->calibration,
+                "also score the kinematics calibrated by this file (odotune calibrate --method batch "
+                "--config-out) on the same track");
   e->callback([eval] { print_lines(learn_eval_lines(run_learn_eval(*eval))); });
 
   auto retrain = std::make_shared<LearnRetrainRequest>();

@@ -1,5 +1,6 @@
 #include "filters/odometry_params.h"
 
+#include <cmath>
 #include <sstream>
 
 namespace odotune::filters {
@@ -22,6 +23,19 @@ bool OdometryParams::IsValid(std::string* why) const {
   return check_positive("wheel_radius_left_m", wheel_radius_left_m, why) &&
          check_positive("wheel_radius_right_m", wheel_radius_right_m, why) &&
          check_positive("wheel_base_m", wheel_base_m, why);
+}
+
+bool TwistCorrection::IsValid(std::string* why) const {
+  if (!check_positive("scale_v", scale_v, why) || !check_positive("scale_w", scale_w, why)) return false;
+  if (!(std::isfinite(delay_s) && delay_s >= 0.0)) {
+    if (why) {
+      std::ostringstream os;
+      os << "delay_s = " << delay_s << " must be a finite number >= 0 [s]";
+      *why = os.str();
+    }
+    return false;
+  }
+  return true;
 }
 
 }  // namespace odotune::filters

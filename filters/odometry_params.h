@@ -24,6 +24,17 @@ struct OdometryParams {
   bool IsValid(std::string* why) const;
 };
 
+// The calibration of a body-velocity odometry (a twist the drive reports, or
+// the commands): v = scale_v · v_in(t − delay_s), w = scale_w · w_in(t −
+// delay_s). The identity by default.
+struct TwistCorrection {
+  double scale_v = 1.0;  // [-]
+  double scale_w = 1.0;  // [-]
+  double delay_s = 0.0;  // [s], ≥ 0: the motion lags its input by this much
+  // Finite scales > 0 and a finite delay ≥ 0; *why names the first bad value.
+  bool IsValid(std::string* why) const;
+};
+
 // A planar pose [m, m, rad] (theta unwrapped unless a caller says otherwise):
 // ground-truth samples (objectives/pose_series.h) and poses integrated from
 // body velocities (velocity_ukf.h's integrate_pose).

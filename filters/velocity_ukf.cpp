@@ -1,10 +1,13 @@
 #include "filters/velocity_ukf.h"
 
+#include "filters/unscented.h"
+
 #include <Eigen/Cholesky>
 #include <array>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace odotune::filters {
 namespace {
@@ -33,41 +36,8 @@ bool is_spd(const Eigen::Matrix2d& M) {
   return M(0, 0) > 0.0 && M(1, 1) > 0.0 && M(0, 0) * M(1, 1) - M(0, 1) * M(1, 0) > 0.0;
 }
 
-// Weights of the scaled unscented transform (Wan & van der Merwe 2000,
-// eq. 15): λ = α²(n + κ) − n,
-//   W₀^(m) = λ/(n + λ),  W₀^(c) = λ/(n + λ) + (1 − α² + β),
-//   W_i^(m) = W_i^(c) = 1/(2(n + λ)),  i = 1..2n.
-struct SigmaWeights {
-  double lambda = 0.0;
-  std::array<double, kSigma> wm{}, wc{};
-};
-
-SigmaWeights sigma_weights(const UkfParams& p) {
-  SigmaWeights w;
-  const double n = static_cast<double>(kN);
-  w.lambda = p.alpha * p.alpha * (n + p.kappa) - n;
-  const double n_lambda = n + w.lambda;
-  w.wm[0] = w.lambda / n_lambda;
-  w.wc[0] = w.wm[0] + (1.0 - p.alpha * p.alpha + p.beta);
-  for (int i = 1; i < kSigma; ++i)
-    w.wm[static_cast<std::size_t>(i)] = w.wc[static_cast<std::size_t>(i)] = 0.5 / n_lambda;
-  return w;
-}
-
-using SigmaPoints = Eigen::Matrix<double, kN, kSigma>;
-
-// χ₀ = x̄, χ_i = x̄ + (√((n+λ)P))_i, χ_{n+i} = x̄ − (√((n+λ)P))_i (columns
-// of the lower Cholesky factor). False when P is not positive definite.
-bool sigma_points(const Velocity& x, const VelocityCov& P, double lambda, SigmaPoints* chi) {
-  const Eigen::LLT<VelocityCov> llt((static_cast<double>(kN) + lambda) * P);
-  if (llt.info() != Eigen::Success) return false;
-  const VelocityCov L = llt.matrixL();
-  chi->col(0) = x;
-  for (int i = 0; i < kN; ++i) {
-    chi->col(1 + i) = x + L.col(i);
-    chi->col(1 + kN + i) = x - L.col(i);
-  }
-  return true;
+unscented::SigmaWeights<kN> sigma_weights(const UkfParams& p) {
+  return unscented::sigma_weights<kN>(p.alpha, p.beta, p.kappa);
 }
 
 }  // namespace
@@ -100,14 +70,14 @@ void VelocityUkf::predict(double dt_s) {
     healthy_ = false;
     return;
   }
-  const SigmaWeights w = sigma_weights(p_);
-  SigmaPoints chi;
-  if (!sigma_points(x_, P_, w.lambda, &chi)) {
+  const auto w = sigma_weights(p_);
+  unscented::SigmaPoints<kN> chi;
+  if (!unscented::sigma_points<kN>(x_, P_, w.lambda, &chi)) {
     healthy_ = false;
     return;
   }
   // f(χ) = χ: "uniform rectilinear motion", constant (V, W) (paper §1).
-  const SigmaPoints chi_pred = chi;
+  const unscented::SigmaPoints<kN> chi_pred = chi;
   Velocity x_pred = Velocity::Zero();
   for (int i = 0; i < kSigma; ++i) x_pred += w.wm[static_cast<std::size_t>(i)] * chi_pred.col(i);
   VelocityCov P_pred = VelocityCov::Zero();
@@ -125,40 +95,13 @@ void VelocityUkf::predict(double dt_s) {
 
 namespace {
 
-// The unscented measurement update for h(χ) = H χ with the rows of H picked
-// by `Rows` (a full (V, W) measurement or W alone), eqs. 17 of Wan & van der
-// Merwe 2000:
-//   Z_i = h(χ_i),  ẑ = Σ W^(m) Z_i,  S = Σ W^(c) (Z_i − ẑ)(Z_i − ẑ)ᵀ + R,
-//   P_xz = Σ W^(c) (χ_i − x̄)(Z_i − ẑ)ᵀ,  K = P_xz S⁻¹,
-//   x ← x + K (z − ẑ),  P ← P − K S Kᵀ.
+// The unscented update (filters/unscented.h) with h picking rows of the state
+// (a full (V, W) measurement or W alone); false unless the result is finite
+// and P positive definite.
 template <int M, typename Measure>
 bool unscented_update(const UkfParams& p, Velocity* x, VelocityCov* P, const Eigen::Matrix<double, M, 1>& z,
                       const Eigen::Matrix<double, M, M>& R, Measure&& h) {
-  using Vec = Eigen::Matrix<double, M, 1>;
-  using Mat = Eigen::Matrix<double, M, M>;
-  const SigmaWeights w = sigma_weights(p);
-  SigmaPoints chi;
-  if (!sigma_points(*x, *P, w.lambda, &chi)) return false;
-  Eigen::Matrix<double, M, kSigma> Z;
-  for (int i = 0; i < kSigma; ++i) Z.col(i) = h(Velocity(chi.col(i)));
-  Vec z_hat = Vec::Zero();
-  for (int i = 0; i < kSigma; ++i) z_hat += w.wm[static_cast<std::size_t>(i)] * Z.col(i);
-  Mat S = R;
-  Eigen::Matrix<double, kN, M> Pxz = Eigen::Matrix<double, kN, M>::Zero();
-  for (int i = 0; i < kSigma; ++i) {
-    const double wc = w.wc[static_cast<std::size_t>(i)];
-    const Vec dz = Z.col(i) - z_hat;
-    S += wc * dz * dz.transpose();
-    Pxz += wc * (chi.col(i) - *x) * dz.transpose();
-  }
-  const Eigen::LLT<Mat> llt(S);
-  if (llt.info() != Eigen::Success) return false;
-  // K = P_xz S⁻¹ = (S⁻¹ P_xzᵀ)ᵀ (S symmetric).
-  const Eigen::Matrix<double, kN, M> K = llt.solve(Pxz.transpose()).transpose();
-  *x += K * (z - z_hat);
-  const VelocityCov P_new = *P - K * S * K.transpose();
-  *P = 0.5 * (P_new + P_new.transpose());
-  return x->allFinite() && is_spd(*P);
+  return unscented::update<kN, M>(sigma_weights(p), x, P, z, R, std::forward<Measure>(h)) && is_spd(*P);
 }
 
 }  // namespace

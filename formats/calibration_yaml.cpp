@@ -28,10 +28,64 @@ const Key kKeys[] = {
     {"wheel_base_m", &filters::OdometryParams::wheel_base_m, "D [m], between the wheel contact points"},
 };
 
+struct TwistKey {
+  const char* name;
+  double filters::TwistCorrection::*field;
+  const char* meaning;
+  bool positive;  // else ≥ 0
+};
+const TwistKey kTwistKeys[] = {
+    {"scale_v", &filters::TwistCorrection::scale_v, "v = scale_v · v_cmd(t − delay_s)", true},
+    {"scale_w", &filters::TwistCorrection::scale_w, "w = scale_w · w_cmd(t − delay_s)", true},
+    {"delay_s", &filters::TwistCorrection::delay_s, "[s], the motion lags v_cmd, w_cmd by this much", false},
+};
+
 std::string expected_keys() {
   std::string s = "format";
   for (const Key& k : kKeys) s += std::string(", ") + k.name;
   return s;
+}
+
+std::string expected_twist_keys() {
+  std::string s = "format, odometry";
+  for (const TwistKey& k : kTwistKeys) s += std::string(", ") + k.name;
+  return s;
+}
+
+// A number under `key`, or a one-line error at its node.
+double number_at(const std::filesystem::path& path, const YAML::Node& node, const std::string& key,
+                 const char* unit) {
+  try {
+    if (!node.IsScalar()) throw YAML::Exception(node.Mark(), "not a scalar");
+    return node.as<double>();
+  } catch (const YAML::Exception&) {
+    fail_at(path, node, fmt::format("{} must be a number{}", key, unit));
+  }
+}
+
+// The body-velocity form (header comment).
+void read_twist_keys(const std::filesystem::path& path, const YAML::Node& root, CalibrationFile& file) {
+  bool seen[std::size(kTwistKeys)] = {};
+  for (const auto& kv : root) {
+    const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : std::string();
+    if (key == "format" || key == "odometry") continue;
+    std::size_t i = 0;
+    while (i < std::size(kTwistKeys) && key != kTwistKeys[i].name) ++i;
+    if (i == std::size(kTwistKeys))
+      fail_at(path, kv.first,
+              fmt::format("unknown key '{}' for odometry: {}, expected {}", key, to_string(file.odometry),
+                          expected_twist_keys()));
+    if (seen[i]) fail_at(path, kv.first, fmt::format("{} is given twice, expected it once", key));
+    const double value = number_at(path, kv.second, key, "");
+    if (!std::isfinite(value) || (kTwistKeys[i].positive ? value <= 0.0 : value < 0.0))
+      fail_at(path, kv.second,
+              fmt::format("{} = {} must be a finite number {}", key, value,
+                          kTwistKeys[i].positive ? "> 0" : ">= 0"));
+    file.twist.*kTwistKeys[i].field = value;
+    seen[i] = true;
+  }
+  for (std::size_t i = 0; i < std::size(kTwistKeys); ++i)
+    if (!seen[i]) fail_at(path, root, fmt::format("{} is missing", kTwistKeys[i].name));
 }
 
 }  // namespace
@@ -39,23 +93,25 @@ std::string expected_keys() {
 CalibrationFile read_calibration_file(const std::filesystem::path& path) {
   const YAML::Node root = load_format_file(path, "calibration file", kFormat,
                                            fmt::format("a mapping with {}", expected_keys()));
-  bool seen[std::size(kKeys)] = {};
   CalibrationFile file;
+  if (const YAML::Node odometry = root["odometry"]) {
+    if (!odometry.IsScalar() || !parse_odometry_input(odometry.Scalar(), &file.odometry))
+      fail_at(path, odometry, "odometry must be wheels, twist or commands");
+  }
+  if (file.odometry != OdometryInput::wheels) {
+    read_twist_keys(path, root, file);
+    return file;
+  }
+  bool seen[std::size(kKeys)] = {};
   for (const auto& kv : root) {
     const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : std::string();
-    if (key == "format") continue;
+    if (key == "format" || key == "odometry") continue;
     std::size_t i = 0;
     while (i < std::size(kKeys) && key != kKeys[i].name) ++i;
     if (i == std::size(kKeys))
       fail_at(path, kv.first, fmt::format("unknown key '{}', expected {}", key, expected_keys()));
     if (seen[i]) fail_at(path, kv.first, fmt::format("{} is given twice, expected it once", key));
-    double value = 0.0;
-    try {
-      if (!kv.second.IsScalar()) throw YAML::Exception(kv.second.Mark(), "not a scalar");
-      value = kv.second.as<double>();
-    } catch (const YAML::Exception&) {
-      fail_at(path, kv.second, fmt::format("{} must be a number in metres", key));
-    }
+    const double value = number_at(path, kv.second, key, " in metres");
     if (!std::isfinite(value) || value <= 0.0)
       fail_at(path, kv.second, fmt::format("{} = {} must be a finite number > 0 [m]", key, value));
     file.params.*kKeys[i].field = value;
@@ -73,13 +129,20 @@ std::string format_calibration_file(const CalibrationFile& file) {
     for (std::string line; std::getline(lines, line);) out << "# " << line << "\n";
   }
   out << "format: " << kFormat << "\n";
+  if (file.odometry != OdometryInput::wheels) {
+    out << "odometry: " << to_string(file.odometry) << "\n";
+    for (const TwistKey& k : kTwistKeys)
+      out << fmt::format("{}: {}  # {}\n", k.name, file.twist.*k.field, k.meaning);
+    return out.str();
+  }
   for (const Key& k : kKeys) out << fmt::format("{}: {}  # {}\n", k.name, file.params.*k.field, k.meaning);
   return out.str();
 }
 
 void write_calibration_file(const CalibrationFile& file, const std::filesystem::path& path) {
   std::string why;
-  if (!file.params.IsValid(&why)) throw Failure(fmt::format("{}: not written: {}", path.string(), why));
+  const bool ok = file.odometry == OdometryInput::wheels ? file.params.IsValid(&why) : file.twist.IsValid(&why);
+  if (!ok) throw Failure(fmt::format("{}: not written: {}", path.string(), why));
   write_file_atomically(path, format_calibration_file(file));
 }
 

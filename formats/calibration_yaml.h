@@ -7,6 +7,15 @@
 //   wheel_radius_right_m: 0.32379   # R_R [m]
 //   wheel_base_m: 0.65021           # D [m], between the wheel contact points
 //
+// or, for a body-velocity odometry (a twist the drive reports, or commands;
+// calibration/twist_calibration.h):
+//
+//   format: odotune-calibration/1
+//   odometry: commands              # twist | commands (absent: wheels, the keys above)
+//   scale_v: 0.9102                 # v = scale_v · v_cmd(t − delay_s)
+//   scale_w: 0.9871                 # w = scale_w · w_cmd(t − delay_s)
+//   delay_s: 0.25                   # [s]
+//
 // The leading comment lines record the provenance (method, tracks, seed);
 // the reader ignores them. Reading errors are one line:
 // "FILE:LINE: what is wrong, what was expected".
@@ -16,11 +25,14 @@
 #include <string>
 
 #include "filters/odometry_params.h"
+#include "tracks/odometry_input.h"
 
 namespace odotune {
 
 struct CalibrationFile {
-  filters::OdometryParams params;
+  OdometryInput odometry = OdometryInput::wheels;  // what the file calibrates
+  filters::OdometryParams params;                  // wheels
+  filters::TwistCorrection twist;                  // twist and commands
   std::string comment;  // written as leading YAML comment lines (provenance); not read back
 };
 

@@ -17,6 +17,7 @@
 #include "jobs/calibration_figure_data.h"
 #include "jobs/calibration_summary.h"
 #include "jobs/calibration_trace.h"
+#include "jobs/twist_calibrate_job.h"
 #include "results/calibration_figures.h"
 #include "tracks/track_io.h"
 
@@ -53,7 +54,8 @@ Range parse_range(const std::string& flag, const std::string& text) {
   return r;
 }
 
-std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply) {
+std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply,
+                                           const std::vector<Track>& tracks) {
   const std::vector<std::string>& files = a.tracks;
   // The pose fit needs no external velocity (it fits to the ground truth or
   // the fixes), nor does online-pose (the fixes); nor do none and --apply,
@@ -63,7 +65,6 @@ std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply
                                   (method == CalibrationMethod::batch_pose ||
                                    method == CalibrationMethod::online_pose ||
                                    method == CalibrationMethod::none);
-  const std::vector<Track> tracks = load_tracks(files);
   std::vector<CalibrationInput> inputs;
   for (std::size_t k = 0; k < tracks.size(); ++k) {
     CalibrationInputOptions o;
@@ -271,8 +272,12 @@ CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& 
   const ControllerOptions controller = check_controller_request(a.controller, true);
   if (!a.paths_csv.empty())
     throw Failure("--paths-csv applies to --apply only (the paths of a calibration file)");
+  const std::vector<Track> tracks = load_tracks(a.tracks);
+  if (const auto body = calibrate_body_input(a, tracks)) return run_twist_calibrate(a, tracks, *body);
+  if (a.input && *a.input != OdometryInput::wheels)
+    throw Failure(fmt::format("--input {}: the tracks have wheel odometry", to_string(*a.input)));
   CalibrateOutcome out;
-  out.inputs = build_inputs(a, false);
+  out.inputs = build_inputs(a, false, tracks);
   check_same_robot(out.inputs, a.tracks);
   out.info = make_options(a, out.inputs);
   std::vector<const CalibrationInput*> ptrs;
@@ -340,7 +345,9 @@ ApplyOutcome run_calibrate_apply(const CalibrateRequest& a) {
   check_output_dir("--json", a.json);
   check_output_dir("--paths-csv", a.paths_csv);
   const CalibrationFile cal = read_calibration_file(a.apply);
-  const std::vector<CalibrationInput> inputs = build_inputs(a, true);
+  const std::vector<Track> tracks = load_tracks(a.tracks);
+  if (cal.odometry != OdometryInput::wheels) return run_twist_apply(a, cal, tracks);
+  const std::vector<CalibrationInput> inputs = build_inputs(a, true, tracks);
   ApplyOutcome out;
   out.params = cal.params;
   for (std::size_t k = 0; k < inputs.size(); ++k) {

@@ -21,13 +21,16 @@
 // fails.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "calibration/calibration_input.h"
 #include "calibration/calibration_run.h"
+#include "calibration/twist_calibration.h"
 #include "filters/odometry_params.h"
 #include "formats/calibration_json.h"
 #include "jobs/controller_export.h"
@@ -44,6 +47,10 @@ struct CalibrateRequest {
   // of the calibration flags combines with --apply.
   std::optional<std::string>
       method;  // adaptive-pf (default) | pf | dkf | online-pose | batch-pose (batch) | batch-velocity | none
+  // --input: the odometry to calibrate (tracks/odometry_input.h); nullopt:
+  // each track's own. Twist and command tracks take --method batch only
+  // (jobs/twist_calibrate_job.h).
+  std::optional<OdometryInput> input;
   std::optional<std::string> resampler;  // PF: multinomial | stratified | systematic (default) | residual
   std::optional<std::string> policy;     // PF: every | neff (default) | max
   std::optional<std::uint64_t> seed;     // PF random seed; default 1
@@ -91,6 +98,11 @@ struct CalibrateOutcome {
   std::vector<TrackCalibrationScore> nominal;  // the inputs' nominal parameters, scored
   std::vector<std::string> summary;            // calibration_summary_lines()
   std::string controller_line;                 // --controller-out: what was written ("" without it)
+  // Twist and command tracks (jobs/twist_calibrate_job.h): the fit, and each
+  // track's dead reckoning at the identity and at the fit (the fields above
+  // stay empty).
+  std::optional<TwistCalibrationSummary> twist;
+  std::vector<std::array<TwistScore, 2>> twist_scores;
 };
 
 // Checks the output folders, loads the tracks (one robot: equal nominal
@@ -108,6 +120,10 @@ struct ApplyOutcome {
   filters::OdometryParams params;    // the calibration file's
   std::vector<AppliedTrack> tracks;  // per track: nominal and calibrated scores
   std::vector<std::string> summary;  // apply_summary_lines()
+  // A twist or commands file: its correction, and per track the scores at
+  // the identity and at the correction (tracks above stays empty).
+  std::optional<filters::TwistCorrection> twist;
+  std::vector<std::array<TwistScore, 2>> twist_scores;
 };
 
 // --apply: replays request.tracks (which need ground truth; external

@@ -12,6 +12,8 @@
 
 #include "objectives/pose_series.h"
 #include "objectives/track_samples.h"
+#include "tracks/body_velocity.h"
+#include "tracks/odometry_input.h"
 
 namespace odotune {
 
@@ -56,8 +58,9 @@ std::optional<PlanarPose> gt_pose_at(const PoseSeries& gt, double t_s) {
   return interpolate_pose(gt, t_s, kMaxGtGapS);
 }
 
-// The robot's nominal geometry and ticks_per_rev from the metadata into `in`.
-void read_nominal(const Track& track, FusionInput& in) {
+// The robot's nominal geometry (or the options' calibrated one) and
+// ticks_per_rev from the metadata into `in`.
+void read_nominal(const Track& track, FusionInput& in, const FusionInputOptions& options) {
   const std::string& name = track.name();
   std::string why;
   const TrackMeta& meta = track.meta();
@@ -73,6 +76,7 @@ void read_nominal(const Track& track, FusionInput& in) {
   in.nominal.wheel_base_m = require(meta.wheel_base_m, "robot.wheel_base");
   in.ticks_per_rev = require(meta.ticks_per_rev, "robot.ticks_per_rev");
   if (!in.nominal.IsValid(&why)) fail(name, "nominal robot metadata: " + why);
+  if (options.geometry) in.nominal = *options.geometry;
   if (!(std::isfinite(in.ticks_per_rev) && in.ticks_per_rev > 0.0))
     fail(name, fmt::format("robot.ticks_per_rev = {} must be a finite number > 0", in.ticks_per_rev));
 }
@@ -120,6 +124,23 @@ OdometryCounts odometry_counts(const Track& track, bool from_ticks, double count
   return oc;
 }
 
+// The mean body velocity over each step under the zero-order hold of
+// tracks/body_velocity.h (delayed by `delay_s`, scaled: FusionInputOptions);
+// no wheel increments (NaN).
+void body_velocity_per_step(const BodyVelocityIntegral& body, const FusionInputOptions& o, FusionInput& in) {
+  const std::size_t n = in.t.size();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  in.dticks_l.assign(n, nan);
+  in.dticks_r.assign(n, nan);
+  in.v_kin.assign(n, 0.0);
+  in.w_kin.assign(n, 0.0);
+  for (std::size_t k = 1; k < n; ++k) {
+    const auto vw = body.mean(in.t[k - 1], in.t[k], o.twist.delay_s);
+    in.v_kin[k] = o.twist.scale_v * vw[0];
+    in.w_kin[k] = o.twist.scale_w * vw[1];
+  }
+}
+
 // Increments and kinematic odometry (paper eqs. 1–2) per step.
 void increments_and_kinematics(const OdometryCounts& oc, double counts_per_rad, FusionInput& in) {
   const std::size_t n = in.t.size();
@@ -146,7 +167,7 @@ void increments_and_kinematics(const OdometryCounts& oc, double counts_per_rad, 
 }
 
 // Sensors per step: power and gyro averaged over the rows in (t[k−1], t[k]],
-// the last external velocity among them.
+// the last external velocity and the last position fix among them.
 void sensors_per_step(const Track& track, const FusionInputOptions& options, FusionInput& in) {
   const auto& tt = track.t();
   const std::size_t n = in.t.size();
@@ -158,6 +179,9 @@ void sensors_per_step(const Track& track, const FusionInputOptions& options, Fus
   in.v_ext_var.assign(n, nan);
   in.w_ext_var.assign(n, nan);
   in.gyro_z.assign(n, nan);
+  for (auto* v : {&in.fix_x, &in.fix_y, &in.fix_var_x, &in.fix_var_y}) v->assign(n, nan);
+  const bool track_fixes = track.has_aps();
+  const bool fix_vars = track.has(Col::aps_var_x) && track.has(Col::aps_var_y);
   const bool track_power = track.has(Col::power_l) && track.has(Col::power_r);
   const bool track_ext = track.has(Col::v_ext) && track.has(Col::w_ext);
   const bool track_gyro = track.has(Col::gyro_z);
@@ -171,6 +195,13 @@ void sensors_per_step(const Track& track, const FusionInputOptions& options, Fus
       if (track_power && track.at(Col::power_l, i)) sum_pl += track.col(Col::power_l)[i], ++n_pl;
       if (track_power && track.at(Col::power_r, i)) sum_pr += track.col(Col::power_r)[i], ++n_pr;
       if (track_gyro && track.at(Col::gyro_z, i)) sum_g += track.col(Col::gyro_z)[i], ++n_g;
+      if (track_fixes && track.at(Col::aps_x, i) && track.at(Col::aps_y, i)) {
+        in.fix_x[k] = track.col(Col::aps_x)[i];
+        in.fix_y[k] = track.col(Col::aps_y)[i];
+        in.fix_var_x[k] = fix_vars ? track.col(Col::aps_var_x)[i] : nan;
+        in.fix_var_y[k] = fix_vars ? track.col(Col::aps_var_y)[i] : nan;
+        in.has_fixes = true;
+      }
       if (track_ext && track.at(Col::v_ext, i) && track.at(Col::w_ext, i)) {
         in.v_ext[k] = track.col(Col::v_ext)[i];
         in.w_ext[k] = track.col(Col::w_ext)[i];
@@ -226,6 +257,9 @@ bool FusionInputOptions::IsValid(std::string* why) const {
   };
   if (!(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= kMaxRateHz))
     return bad(fmt::format("rate_hz = {} must be in (0, {}] Hz", rate_hz, kMaxRateHz));
+  std::string inner;
+  if (geometry && !geometry->IsValid(&inner)) return bad("geometry: " + inner);
+  if (!twist.IsValid(&inner)) return bad("twist: " + inner);
   if (!(std::isfinite(default_ext_var_v) && default_ext_var_v > 0.0))
     return bad(fmt::format("default_ext_var_v = {} must be a finite number > 0 [(m/s)^2]", default_ext_var_v));
   if (!(std::isfinite(default_ext_var_w) && default_ext_var_w > 0.0))
@@ -241,15 +275,21 @@ FusionInput build_fusion_input(const Track& track, const FusionInputOptions& opt
 
   FusionInput in;
   in.track_name = name;
-  const bool from_ticks = track.has_ticks();
-  if (!from_ticks && !track.has_wheel_rates())
-    fail(name, "no wheel odometry (ticks_l/ticks_r or omega_l/omega_r): fusion needs encoder increments");
-  read_nominal(track, in);
-
-  const double counts_per_rad = in.ticks_per_rev / (2.0 * std::numbers::pi);
-  const OdometryCounts oc = odometry_counts(track, from_ticks, counts_per_rad);
-  const std::vector<double>& odo_t = oc.t;
-  if (odo_t.size() < 2) fail(name, "fewer than two odometry rows: no encoder increment to fuse");
+  in.input = track_odometry_input(track, options.input);
+  const bool wheels = in.input == OdometryInput::wheels;
+  double counts_per_rad = 0.0;
+  OdometryCounts oc;
+  std::optional<BodyVelocityIntegral> body;
+  if (wheels) {
+    read_nominal(track, in, options);
+    counts_per_rad = in.ticks_per_rev / (2.0 * std::numbers::pi);
+    oc = odometry_counts(track, track.has_ticks(), counts_per_rad);
+  } else {
+    body.emplace(track);
+  }
+  const std::vector<double>& odo_t = wheels ? oc.t : body->t();
+  if (odo_t.size() < 2)
+    fail(name, fmt::format("fewer than two {} rows: no odometry interval to fuse", to_string(in.input)));
 
   // --- step times ----------------------------------------------------------
   in.dt_s = 1.0 / options.rate_hz;
@@ -265,7 +305,10 @@ FusionInput build_fusion_input(const Track& track, const FusionInputOptions& opt
     fail(name, fmt::format("fewer than 2 steps of {} s: the odometry spans {} s", in.dt_s,
                            odo_t.back() - odo_t.front()));
 
-  increments_and_kinematics(oc, counts_per_rad, in);
+  if (wheels)
+    increments_and_kinematics(oc, counts_per_rad, in);
+  else
+    body_velocity_per_step(*body, options, in);
   sensors_per_step(track, options, in);
   ground_truth_per_step(track, in);
   return in;

@@ -9,13 +9,23 @@
 #include <string>
 #include <vector>
 
+#include <optional>
+
 #include "filters/odometry_params.h"
+#include "tracks/odometry_input.h"
 #include "tracks/track.h"
 
 namespace odotune {
 
 struct FusionInputOptions {
   double rate_hz = 10.0;  // fusion / network rate (paper: 10 Hz); (0, 1000]
+  // The odometry to read (tracks/odometry_input.h); nullopt: the track's own.
+  std::optional<OdometryInput> input;
+  // Calibrated kinematics: wheels through this geometry instead of the
+  // track's nominal one; a twist or commands scaled and delayed
+  // (filters/odometry_params.h, TwistCorrection). Default: nominal.
+  std::optional<filters::OdometryParams> geometry;
+  filters::TwistCorrection twist;
   // Variances used where the track has external velocities but no
   // v_ext_var/w_ext_var [(m/s)², (rad/s)²].
   double default_ext_var_v = 4e-4;
@@ -25,8 +35,9 @@ struct FusionInputOptions {
 
 struct FusionInput {
   std::string track_name;
-  filters::OdometryParams nominal;  // the track's robot.* metadata
-  double ticks_per_rev = 0.0;       // encoder counts per wheel revolution
+  OdometryInput input = OdometryInput::wheels;  // what v_kin, w_kin come from
+  filters::OdometryParams nominal;  // the track's robot.* metadata, or options.geometry (wheels only)
+  double ticks_per_rev = 0.0;       // encoder counts per wheel revolution (wheels only; else 0)
   double dt_s = 0.1;                // 1 / rate_hz
   // Step times [s]: t[0] = the first odometry row's time, t[k] = t[0] + k·dt
   // while an odometry row exists at or after it (the last step ends at or
@@ -35,11 +46,15 @@ struct FusionInput {
   std::vector<double> t;
   // Wheel-rotation increments over the step in encoder counts (the paper's
   // Δct); from the tick columns (linear interpolation of the cumulative
-  // count at t[k]; a row stamped within 1 µs of t[k] gives its own count) or, without ticks, ∫ω dt · ticks_per_rev / 2π (trapezoid
-  // over the omega rows). Real-valued because of the interpolation.
+  // count at t[k]; a row stamped within 1 µs of t[k] gives its own count) or,
+  // without ticks, ∫ω dt · ticks_per_rev / 2π (trapezoid over the omega
+  // rows). Real-valued because of the interpolation. NaN for a twist or
+  // command input.
   std::vector<double> dticks_l, dticks_r;
-  // The nominal kinematic odometry over the step (paper eqs. 1–2 with the
-  // nominal radii and base) [m/s, rad/s].
+  // The nominal kinematic odometry over the step [m/s, rad/s]: wheels, paper
+  // eqs. 1–2 with the nominal radii and base; twist and commands, the mean of
+  // v_cmd, w_cmd over the step under tracks/body_velocity.h's zero-order
+  // hold. With FusionInputOptions::geometry or twist, the calibrated one.
   std::vector<double> v_kin, w_kin;
   // Mean motor power over the step [W] (mean of the power rows inside it);
   // NaN when none.
@@ -51,6 +66,9 @@ struct FusionInput {
   // Mean gyro yaw rate over the step [rad/s] (mean of the rows inside); NaN
   // when none.
   std::vector<double> gyro_z;
+  // The last position fix inside the step [m] and its variances [m²] (the
+  // track's aps_var_x/aps_var_y; NaN where it gives none); NaN when none.
+  std::vector<double> fix_x, fix_y, fix_var_x, fix_var_y;
   // Ground truth: the pose at t[k] (the gt row stamped within 1 µs of t[k],
   // else the linear interpolation of gt rows; theta unwrapped; NaN outside
   // the ground truth or across a gap > 0.5 s) and the mean body velocities
@@ -58,14 +76,16 @@ struct FusionInput {
   //   W = Δθ/Δt,  V = (Δx·cos θ̄ + Δy·sin θ̄)/Δt,  θ̄ = (θ_{k−1} + θ_k)/2.
   std::vector<double> gt_x, gt_y, gt_theta;
   std::vector<double> v_true, w_true;
-  bool has_gt = false, has_power = false, has_ext = false, has_gyro = false;
+  bool has_gt = false, has_power = false, has_ext = false, has_gyro = false, has_fixes = false;
 
   std::size_t size() const { return t.size(); }
 };
 
 // Throws std::invalid_argument with one line naming the track and what is
-// missing or wrong (no wheel odometry, nominal radii/base/ticks_per_rev
-// absent, fewer than 2 steps, invalid options).
+// missing or wrong (no odometry of the requested kind, a v_cmd/w_cmd track
+// that does not say what they are, tracks/odometry_input.h; for wheels the
+// nominal radii/base/ticks_per_rev absent; fewer than 2 steps, invalid
+// options).
 FusionInput build_fusion_input(const Track& track, const FusionInputOptions& options = {});
 
 }  // namespace odotune

@@ -21,6 +21,7 @@ void check_inputs(const FusionInput& in, const LearnedOdometryModel* model,
   if (learned && model == nullptr)
     throw std::invalid_argument("learned fusion: learned odometry needs a model");
   if (learned && !model->IsValid(&why)) throw std::invalid_argument("learned fusion: model: " + why);
+  if (learned && !model_fits(*model, in, &why)) throw std::invalid_argument("learned fusion: " + why);
   if (options.detector && !in.has_power)
     throw std::invalid_argument(fmt::format(
         "track '{}': no motor power (power_l, power_r): the slip detector needs it", in.track_name));
@@ -47,8 +48,8 @@ OdometryMeasurement odometry_measurement(const FusionInput& in, std::size_t k, d
                                          const LearnedFusionOptions& options) {
   OdometryMeasurement m;
   if (odo) {
-    const auto vw = odo->step(in.dticks_l[k], in.dticks_r[k], in.v_kin[k], in.w_kin[k],
-                              std::isfinite(prev_v) ? prev_v : 0.0, std::isfinite(prev_w) ? prev_w : 0.0);
+    const auto vw = odo->step(in, k, std::isfinite(prev_v) ? prev_v : 0.0,
+                              std::isfinite(prev_w) ? prev_w : 0.0);
     m.v_m_s = vw[0];
     m.w_rad_s = vw[1];
   } else {
@@ -84,9 +85,9 @@ void collect_and_retrain(const FusionInput& in, std::size_t k, const OdometryMea
   ev.step = k;
   ev.t_s = in.t[k];
   const auto start = std::chrono::steady_clock::now();
-  VelocityNet v_net = current.v_net, w_net = current.w_net;
-  ev.v = retrain_lstm(v_net, v_samples, ro.training);
-  ev.w = retrain_lstm(w_net, w_samples, ro.training);
+  OdometryNet v_net = current.v_net, w_net = current.w_net;
+  ev.v = v_net.retrain(v_samples, ro.training);
+  ev.w = w_net.retrain(w_samples, ro.training);
   ev.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   // A refit that failed keeps the previous nets (the robot keeps running).
   if (ev.v.usable) current.v_net = v_net;
@@ -162,9 +163,9 @@ LearnedFusionResult run_learned_fusion(const FusionInput& in, const LearnedOdome
   // Retraining samples (paper §4.2): windows and the UKF's velocities.
   SequenceSet v_samples, w_samples;
   if (learned) {
-    v_samples.window = current.v_net.window;
-    w_samples.window = current.w_net.window;
-    v_samples.inputs = w_samples.inputs = VelocityNet::kInputs;
+    v_samples.window = current.v_net.window();
+    w_samples.window = current.w_net.window();
+    v_samples.inputs = w_samples.inputs = OdometryNet::kInputs;
   }
 
   for (std::size_t k = 1; k < n; ++k) {

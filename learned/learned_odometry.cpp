@@ -9,12 +9,13 @@
 #include <fmt/format.h>
 
 #include "core/counter_rng.h"
+#include "core/why.h"
 
 namespace odotune {
 namespace {
 
-constexpr int kFeatures = VelocityNet::kInputs;
-static_assert(kFeatures == 3, "learned odometry features: Δct_r, Δct_l, previous");
+constexpr int kFeatures = OdometryNet::kInputs;
+static_assert(kFeatures == 3, "learned odometry features: three per step");
 
 // Uniform noise of standard deviation sd (±sd·√3), from the counter RNG so a
 // seeded training set is the same whatever the thread count.
@@ -30,27 +31,11 @@ bool finite_all(std::initializer_list<double> xs) {
   return true;
 }
 
-}  // namespace
+bool finite_row(const double* row) { return finite_all({row[0], row[1], row[2]}); }
 
-std::string_view to_string(LearnedTarget t) {
-  return t == LearnedTarget::correction ? "correction" : "velocity";
-}
-
-bool parse_learned_target(std::string_view text, LearnedTarget* out) {
-  for (LearnedTarget t : {LearnedTarget::velocity, LearnedTarget::correction})
-    if (text == to_string(t)) {
-      *out = t;
-      return true;
-    }
-  return false;
-}
-
-std::string_view to_string(LearnedValidation v) {
-  return v == LearnedValidation::recordings ? "recordings" : "chronological";
-}
-
-bool parse_learned_validation(std::string_view text, LearnedValidation* out) {
-  for (LearnedValidation v : {LearnedValidation::chronological, LearnedValidation::recordings})
+template <class E>
+bool parse_named(std::string_view text, std::initializer_list<E> values, E* out) {
+  for (E v : values)
     if (text == to_string(v)) {
       *out = v;
       return true;
@@ -58,65 +43,150 @@ bool parse_learned_validation(std::string_view text, LearnedValidation* out) {
   return false;
 }
 
+}  // namespace
+
+std::string_view to_string(LearnedTarget t) {
+  return t == LearnedTarget::correction ? "correction" : "velocity";
+}
+
+bool parse_learned_target(std::string_view text, LearnedTarget* out) {
+  return parse_named(text, {LearnedTarget::velocity, LearnedTarget::correction}, out);
+}
+
+std::string_view to_string(LearnedValidation v) {
+  switch (v) {
+    case LearnedValidation::chronological: return "chronological";
+    case LearnedValidation::recordings: return "recordings";
+    case LearnedValidation::blocks: return "blocks";
+  }
+  return "chronological";
+}
+
+bool parse_learned_validation(std::string_view text, LearnedValidation* out) {
+  return parse_named(
+      text, {LearnedValidation::chronological, LearnedValidation::recordings, LearnedValidation::blocks}, out);
+}
+
+std::string_view to_string(LearnedFeatures f) {
+  switch (f) {
+    case LearnedFeatures::paper: return "paper";
+    case LearnedFeatures::channel: return "channel";
+    case LearnedFeatures::both: return "both";
+  }
+  return "paper";
+}
+
+bool parse_learned_features(std::string_view text, LearnedFeatures* out) {
+  return parse_named(text, {LearnedFeatures::paper, LearnedFeatures::channel, LearnedFeatures::both}, out);
+}
+
 bool LearnedOdometryModel::IsValid(std::string* why) const {
-  auto fail = [why](std::string m) {
-    if (why) *why = std::move(m);
-    return false;
-  };
   std::string inner;
-  if (!v_net.IsValid(&inner)) return fail("v_net: " + inner);
-  if (!w_net.IsValid(&inner)) return fail("w_net: " + inner);
+  if (!v_net.IsValid(&inner)) return invalid(why, "v_net: " + inner);
+  if (!w_net.IsValid(&inner)) return invalid(why, "w_net: " + inner);
+  if (v_net.units() != w_net.units() || v_net.window() != w_net.window())
+    return invalid(why, fmt::format("v_net has {} units × {} steps, w_net {} × {}: expected one shape",
+                                    v_net.units(), v_net.window(), w_net.units(), w_net.window()));
   if (!(rate_hz > 0.0) || !std::isfinite(rate_hz))
-    return fail(fmt::format("rate_hz = {}: expected a finite value > 0", rate_hz));
-  if (!(ticks_per_rev > 0.0) || !std::isfinite(ticks_per_rev))
-    return fail(fmt::format("ticks_per_rev = {}: expected a finite value > 0", ticks_per_rev));
+    return invalid(why, fmt::format("rate_hz = {}: expected a finite value > 0", rate_hz));
+  const bool wheels = input == OdometryInput::wheels;
+  if (wheels && (!(ticks_per_rev > 0.0) || !std::isfinite(ticks_per_rev)))
+    return invalid(why, fmt::format("ticks_per_rev = {}: expected a finite value > 0", ticks_per_rev));
+  const bool paper = features == LearnedFeatures::paper;
+  if (paper != (target == LearnedTarget::velocity))
+    return invalid(why, fmt::format("features '{}' with target '{}': the paper's features are the velocity "
+                                    "nets', correction nets read channel or both",
+                                    to_string(features), to_string(target)));
+  if (paper && (!wheels || gyro))
+    return invalid(why, "the paper's velocity nets read wheel increments only (no twist, commands or gyro)");
   if (!(v_validation_mae >= 0.0) || !(w_validation_mae >= 0.0))
-    return fail("validation MAEs must be finite values >= 0");
+    return invalid(why, "validation MAEs must be finite values >= 0");
   return true;
 }
 
 bool LearnedTrainingOptions::IsValid(std::string* why) const {
   if (!training.IsValid(why)) return false;
-  auto fail = [why](std::string m) {
-    if (why) *why = std::move(m);
-    return false;
-  };
   if (!(train_fraction > 0.0 && train_fraction < 1.0))
-    return fail(fmt::format("train_fraction = {}: expected a value in (0, 1)", train_fraction));
+    return invalid(why, fmt::format("train_fraction = {}: expected a value in (0, 1)", train_fraction));
   if (!(previous_noise_v >= 0.0) || !(previous_noise_w >= 0.0) || !std::isfinite(previous_noise_v) ||
       !std::isfinite(previous_noise_w))
-    return fail("previous_noise_v/_w: expected finite values >= 0");
-  if (restarts < 1 || restarts > 100) return fail(fmt::format("restarts = {}: expected 1..100", restarts));
+    return invalid(why, "previous_noise_v/_w: expected finite values >= 0");
+  if (restarts < 1 || restarts > 100)
+    return invalid(why, fmt::format("restarts = {}: expected 1..100", restarts));
+  if (validation == LearnedValidation::blocks)
+    return invalid(why, "validation on blocks is the correction nets' (odometry_selection.h)");
   return true;
 }
 
-void append_velocity_windows(const FusionInput& in, int window, double previous_noise_v,
-                             double previous_noise_w, std::uint64_t seed, SequenceSet* v_set,
-                             SequenceSet* w_set, LearnedTarget target) {
-  const bool correction = target == LearnedTarget::correction;
-  const std::size_t n = in.size();
-  const auto W = static_cast<std::size_t>(window);
+void feature_row(const FusionInput& in, std::size_t k, LearnedFeatures features, double gyro_z, int which,
+                 double previous, double* row) {
+  switch (features) {
+    case LearnedFeatures::paper:
+      row[kFeatDticksR] = in.dticks_r[k];
+      row[kFeatDticksL] = in.dticks_l[k];
+      row[kFeatPrevious] = previous;
+      return;
+    case LearnedFeatures::channel:
+      row[0] = which == 0 ? in.v_kin[k] : in.w_kin[k];
+      row[1] = which == 0 ? 0.0 : gyro_z;
+      row[2] = 0.0;
+      return;
+    case LearnedFeatures::both:
+      row[0] = in.v_kin[k];
+      row[1] = in.w_kin[k];
+      row[2] = gyro_z;
+      return;
+  }
+}
+
+void append_velocity_windows(const FusionInput& in, const WindowSpec& spec, std::size_t first, std::size_t end,
+                             SequenceSet* v_set, SequenceSet* w_set) {
+  const bool correction = spec.target == LearnedTarget::correction;
+  const bool paper = spec.features == LearnedFeatures::paper;
+  end = std::min(end, in.size());
+  const auto W = static_cast<std::size_t>(spec.window);
   std::vector<double> v_rows(W * kFeatures), w_rows(W * kFeatures);
-  // Step j's features need the increments over step j and the truth of step
-  // j − 1; the window (k − W, k] therefore needs truth from k − W on.
-  for (std::size_t k = W + 1; k < n; ++k) {
+  // Step j's features need the increments over step j (step 0 has none)
+  // and, for the paper's layout, the truth of step j − 1: the window
+  // (k − W, k] needs steps from max(first, 1) on, and from max(first, 1) − 1
+  // for the previous velocity.
+  const std::size_t k0 = std::max<std::size_t>(first, 1) + (paper ? W : W - 1);
+  for (std::size_t k = k0; k < end; ++k) {
     bool ok = finite_all({in.v_true[k], in.w_true[k]}) &&
               (!correction || finite_all({in.v_kin[k], in.w_kin[k]}));
-    for (std::size_t j = k + 1 - W; ok && j <= k; ++j)
-      ok = finite_all({in.v_true[j - 1], in.w_true[j - 1], in.dticks_l[j], in.dticks_r[j]});
-    if (!ok) continue;
-    for (std::size_t r = 0; r < W; ++r) {
+    for (std::size_t r = 0; ok && r < W; ++r) {
       const std::size_t j = k + 1 - W + r;
-      double* vr = &v_rows[r * kFeatures];
-      double* wr = &w_rows[r * kFeatures];
-      vr[kFeatDticksR] = wr[kFeatDticksR] = in.dticks_r[j];
-      vr[kFeatDticksL] = wr[kFeatDticksL] = in.dticks_l[j];
-      vr[kFeatPrevious] = in.v_true[j - 1] + teacher_noise(previous_noise_v, seed, 0, j, 0);
-      wr[kFeatPrevious] = in.w_true[j - 1] + teacher_noise(previous_noise_w, seed, 0, j, 1);
+      const double g = spec.gyro ? in.gyro_z[j] : 0.0;
+      const double pv = paper ? in.v_true[j - 1] + teacher_noise(spec.previous_noise_v, spec.seed, 0, j, 0)
+                              : 0.0;
+      const double pw = paper ? in.w_true[j - 1] + teacher_noise(spec.previous_noise_w, spec.seed, 0, j, 1)
+                              : 0.0;
+      feature_row(in, j, spec.features, g, 0, pv, &v_rows[r * kFeatures]);
+      feature_row(in, j, spec.features, g, 1, pw, &w_rows[r * kFeatures]);
+      ok = finite_row(&v_rows[r * kFeatures]) && finite_row(&w_rows[r * kFeatures]);
     }
+    if (!ok) continue;
     v_set->add(v_rows.data(), in.v_true[k] - (correction ? in.v_kin[k] : 0.0));
     w_set->add(w_rows.data(), in.w_true[k] - (correction ? in.w_kin[k] : 0.0));
   }
+}
+
+bool model_fits(const LearnedOdometryModel& model, const FusionInput& in, std::string* why) {
+  if (in.input != model.input)
+    return invalid(why, fmt::format("track '{}' gives {} odometry, the model was trained on {}", in.track_name,
+                                    to_string(in.input), to_string(model.input)));
+  if (model.input == OdometryInput::wheels &&
+      std::abs(in.ticks_per_rev - model.ticks_per_rev) > 1e-9 * model.ticks_per_rev)
+    return invalid(why,
+                   fmt::format("track '{}' has ticks_per_rev = {}, the model was trained with {}; expected "
+                               "the same robot",
+                               in.track_name, in.ticks_per_rev, model.ticks_per_rev));
+  if (model.gyro && !in.has_gyro)
+    return invalid(why, fmt::format("track '{}' has no gyro (gyro_z); the model reads one", in.track_name));
+  if (std::abs(1.0 / in.dt_s - model.rate_hz) > 1e-9 * model.rate_hz)
+    return invalid(why, fmt::format("track '{}' is laid out at {} Hz, the model runs at {} Hz", in.track_name,
+                                    1.0 / in.dt_s, model.rate_hz));
+  return true;
 }
 
 namespace {
@@ -136,6 +206,24 @@ struct WindowSets {
   SequenceSet v_train, v_val, w_train, w_val;
 };
 
+void check_paper_track(const FusionInput& in, const LearnedOdometryModel& model, double dt_s) {
+  if (!in.has_gt)
+    throw std::invalid_argument(
+        fmt::format("track '{}': no ground truth (gt_x, gt_y, gt_theta): expected it to learn odometry from",
+                    in.track_name));
+  if (in.input != OdometryInput::wheels)
+    throw std::invalid_argument(fmt::format("track '{}': {} odometry; the paper's velocity nets read wheel "
+                                            "increments (train correction nets for this input)",
+                                            in.track_name, to_string(in.input)));
+  if (std::abs(in.ticks_per_rev - model.ticks_per_rev) > 1e-9 * model.ticks_per_rev)
+    throw std::invalid_argument(
+        fmt::format("track '{}': ticks_per_rev = {} differs from the first track's {}: expected one robot",
+                    in.track_name, in.ticks_per_rev, model.ticks_per_rev));
+  if (std::abs(in.dt_s - dt_s) > 1e-12)
+    throw std::invalid_argument(fmt::format("track '{}': fusion step {} s differs from the first track's {} s",
+                                            in.track_name, in.dt_s, dt_s));
+}
+
 // Checks each track against the first (one robot, one step) and splits its
 // windows into training and validation.
 WindowSets training_windows(const std::vector<const FusionInput*>& tracks, const LearnedOdometryModel& model,
@@ -147,23 +235,16 @@ WindowSets training_windows(const std::vector<const FusionInput*>& tracks, const
   }
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     const FusionInput& in = *tracks[i];
-    if (!in.has_gt)
-      throw std::invalid_argument(
-          fmt::format("track '{}': no ground truth (gt_x, gt_y, gt_theta): expected it to learn odometry from",
-                      in.track_name));
-    if (std::abs(in.ticks_per_rev - model.ticks_per_rev) > 1e-9 * model.ticks_per_rev)
-      throw std::invalid_argument(
-          fmt::format("track '{}': ticks_per_rev = {} differs from the first track's {}: expected one robot",
-                      in.track_name, in.ticks_per_rev, model.ticks_per_rev));
-    if (std::abs(in.dt_s - tracks.front()->dt_s) > 1e-12)
-      throw std::invalid_argument(
-          fmt::format("track '{}': fusion step {} s differs from the first track's {} s", in.track_name,
-                      in.dt_s, tracks.front()->dt_s));
+    check_paper_track(in, model, tracks.front()->dt_s);
     SequenceSet v_all, w_all;
     v_all.window = w_all.window = window;
     v_all.inputs = w_all.inputs = kFeatures;
-    append_velocity_windows(in, window, options.previous_noise_v, options.previous_noise_w,
-                            options.training.seed + i, &v_all, &w_all, options.target);
+    WindowSpec spec;
+    spec.window = window;
+    spec.previous_noise_v = options.previous_noise_v;
+    spec.previous_noise_w = options.previous_noise_w;
+    spec.seed = options.training.seed + i;
+    append_velocity_windows(in, spec, &v_all, &w_all);
     if (v_all.size() < 10)
       throw std::invalid_argument(
           fmt::format("track '{}': only {} windows of {} steps with ground truth: expected at least 10",
@@ -179,12 +260,6 @@ WindowSets training_windows(const std::vector<const FusionInput*>& tracks, const
     ws.w_val.append(wv);
   }
   return ws;
-}
-
-// A net that outputs exactly 0 (a correction that leaves the kinematics).
-void zero_output(VelocityNet& net) {
-  net.output_mean = 0.0;
-  for (int j = 0; j <= VelocityNet::kHidden; ++j) net.weights[LstmLayout<3, 5>::kDense + j] = 0.0;
 }
 
 // MAE of V and W over the validation steps (first_validation_step) of the
@@ -233,10 +308,9 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
     throw std::invalid_argument(
         "learned odometry training: validation on recordings needs at least 2 tracks (one to hold out)");
   LearnedOdometryModel model;
-  const int window = model.v_net.window;
+  const int window = model.v_net.window();
   model.rate_hz = 1.0 / tracks.front()->dt_s;
   model.ticks_per_rev = tracks.front()->ticks_per_rev;
-  model.target = options.target;
   const WindowSets ws = training_windows(tracks, model, window, options);
 
   const auto start = std::chrono::steady_clock::now();
@@ -249,10 +323,9 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
     LearnedOdometryModel candidate = fresh;
     LstmTrainingOptions o = options.training;
     o.seed = options.training.seed + 7919u * static_cast<std::uint64_t>(r);
-    if (options.target == LearnedTarget::correction) o.zero_output_start = true;
-    const LstmTrainingSummary tv = train_lstm(candidate.v_net, ws.v_train, ws.v_val, o);
+    const LstmTrainingSummary tv = candidate.v_net.train(ws.v_train, ws.v_val, o);
     o.seed += 1000;  // a different initialisation for the W net
-    const LstmTrainingSummary tw = train_lstm(candidate.w_net, ws.w_train, ws.w_val, o);
+    const LstmTrainingSummary tw = candidate.w_net.train(ws.w_train, ws.w_val, o);
     std::array<double, 2> mae = free_running_mae(tracks, candidate, options);
     if (!tv.usable) mae[0] = std::numeric_limits<double>::infinity();
     if (!tw.usable) mae[1] = std::numeric_limits<double>::infinity();
@@ -268,12 +341,6 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
   });
   s.v_kinematic_mae = kin[0];
   s.w_kinematic_mae = kin[1];
-  if (options.target == LearnedTarget::correction) {
-    // Never worse than the kinematics on the validation steps: a correction
-    // that does not help is dropped.
-    if (!(best_mae[0] < kin[0])) zero_output(model.v_net), model.v_beats_kinematic = false;
-    if (!(best_mae[1] < kin[1])) zero_output(model.w_net), model.w_beats_kinematic = false;
-  }
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   s.train_windows = ws.v_train.size();
   s.validation_windows = ws.v_val.size();
@@ -287,37 +354,40 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
 
 LearnedOdometryStepper::LearnedOdometryStepper(const LearnedOdometryModel* model)
     : model_(model),
-      v_rows_(static_cast<std::size_t>(model->v_net.window) * kFeatures, 0.0),
-      w_rows_(static_cast<std::size_t>(model->w_net.window) * kFeatures, 0.0) {}
+      v_rows_(static_cast<std::size_t>(model->v_net.window()) * kFeatures, 0.0),
+      w_rows_(static_cast<std::size_t>(model->w_net.window()) * kFeatures, 0.0) {}
 
-std::array<double, 2> LearnedOdometryStepper::step(double dticks_l, double dticks_r, double v_kin, double w_kin,
-                                                   double previous_v, double previous_w) {
-  auto push = [&](std::vector<double>& rows, double previous) {
+std::array<double, 2> LearnedOdometryStepper::step(const FusionInput& in, std::size_t k, double previous_v,
+                                                   double previous_w) {
+  const LearnedOdometryModel& m = *model_;
+  if (m.gyro && std::isfinite(in.gyro_z[k])) last_gyro_ = in.gyro_z[k];
+  const double g = m.gyro ? last_gyro_ : 0.0;
+  auto push = [&](std::vector<double>& rows, int which, double previous) {
     // Shift the window one row (20 × 3 doubles: cheaper than a ring's
     // index arithmetic in predict, which wants the rows contiguous).
     std::copy(rows.begin() + kFeatures, rows.end(), rows.begin());
-    double* last = &rows[rows.size() - kFeatures];
-    last[kFeatDticksR] = dticks_r;
-    last[kFeatDticksL] = dticks_l;
-    last[kFeatPrevious] = previous;
+    feature_row(in, k, m.features, g, which, previous, &rows[rows.size() - kFeatures]);
   };
-  push(v_rows_, previous_v);
-  push(w_rows_, previous_w);
-  if (filled_ < model_->v_net.window) ++filled_;
-  if (filled_ < model_->v_net.window) return {v_kin, w_kin};
-  const double v = model_->v_net.predict(v_rows_.data()), w = model_->w_net.predict(w_rows_.data());
-  if (model_->target == LearnedTarget::correction) return {v_kin + v, w_kin + w};
+  push(v_rows_, 0, previous_v);
+  push(w_rows_, 1, previous_w);
+  const int window = m.v_net.window();
+  if (filled_ < window) ++filled_;
+  if (filled_ < window) return {in.v_kin[k], in.w_kin[k]};
+  const double v = m.v_net.predict(v_rows_.data()), w = m.w_net.predict(w_rows_.data());
+  if (m.target == LearnedTarget::correction) return {in.v_kin[k] + v, in.w_kin[k] + w};
   return {v, w};
 }
 
-OdometrySeries run_learned_odometry(const FusionInput& in, const LearnedOdometryModel& model) {
+OdometrySeries run_learned_odometry(const FusionInput& in, const LearnedOdometryModel& model, std::size_t first,
+                                    std::size_t end) {
   OdometrySeries s;
   s.v.assign(in.size(), 0.0);
   s.w.assign(in.size(), 0.0);
+  end = std::min(end, in.size());
   LearnedOdometryStepper stepper(&model);
   double pv = 0.0, pw = 0.0;
-  for (std::size_t k = 1; k < in.size(); ++k) {
-    const auto vw = stepper.step(in.dticks_l[k], in.dticks_r[k], in.v_kin[k], in.w_kin[k], pv, pw);
+  for (std::size_t k = std::max<std::size_t>(first + 1, 1); k < end; ++k) {
+    const auto vw = stepper.step(in, k, pv, pw);
     s.v[k] = pv = vw[0];
     s.w[k] = pw = vw[1];
   }

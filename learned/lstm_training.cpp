@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -236,6 +237,79 @@ ceres::Solver::Options solver_options_for(const LstmTrainingOptions& options) {
   return solver_options;
 }
 
+// Early stopping (LstmTrainingOptions::early_stopping_patience): the
+// validation MAE of the weights Ceres holds after each iteration
+// (update_state_every_iteration), the best weights kept. Each window's error
+// lands in its own slot and the slots are summed in order, so the curve does
+// not depend on the thread count.
+template <int I, int H>
+class EarlyStopping final : public ceres::IterationCallback {
+ public:
+  static constexpr int K = LstmLayout<I, H>::kCount;
+  EarlyStopping(const LstmNet<I, H>& net, const SequenceSet& validation, const std::array<double, K>* params,
+                int patience, int num_threads)
+      : net_(net), y_(validation.y), params_(params), patience_(patience), num_threads_(num_threads) {
+    std::vector<double> target;
+    standardise_windows(net, validation, &z_, &target);
+    errors_.resize(y_.size());
+    record(0);
+  }
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    // Iteration 0 of a later continuation stage repeats the last point.
+    if (summary.iteration == 0) return ceres::SOLVER_CONTINUE;
+    ++iterations_;
+    record(iterations_);
+    return stopped() ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
+  }
+  // Patience counts from the last continuation stage on: the earlier ones
+  // (a coarse loss) can sit on a plateau before the fit moves.
+  void arm() {
+    armed_ = true;
+    since_best_ = 0;
+  }
+  bool stopped() const { return armed_ && since_best_ >= patience_; }
+  const std::array<double, K>& best() const { return best_; }
+  int best_iteration() const { return best_iteration_; }
+  const std::vector<double>& curve() const { return curve_; }
+
+ private:
+  void record(int iteration) {
+    const long n = static_cast<long>(y_.size());
+    const std::size_t per = static_cast<std::size_t>(net_.window) * I;
+    const double* w = params_->data();
+#pragma omp parallel for num_threads(num_threads_) schedule(static)
+    for (long i = 0; i < n; ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      const double out = net_.output_mean + net_.output_sd * lstm_forward<I, H, double>(w, z_.data() + u * per,
+                                                                                        net_.window,
+                                                                                        net_.activation);
+      errors_[u] = std::abs(out - y_[u]);
+    }
+    double sum = 0.0;
+    for (double e : errors_) sum += e;
+    const double mae = n > 0 ? sum / static_cast<double>(n) : 0.0;
+    curve_.push_back(mae);
+    if (curve_.size() == 1 || mae < best_mae_) {
+      best_mae_ = mae;
+      best_ = *params_;
+      best_iteration_ = iteration;
+      since_best_ = 0;
+    } else {
+      ++since_best_;
+    }
+  }
+  const LstmNet<I, H>& net_;
+  std::vector<double> z_, errors_;
+  const std::vector<double>& y_;
+  const std::array<double, K>* params_;
+  int patience_, num_threads_;
+  std::array<double, K> best_{};
+  double best_mae_ = 0.0;
+  int best_iteration_ = 0, since_best_ = 0, iterations_ = 0;
+  bool armed_ = false;
+  std::vector<double> curve_;
+};
+
 // Continuation scales: mae_scale_start, ÷10 per stage, ending at mae_scale.
 std::vector<double> continuation_scales(const LstmTrainingOptions& options) {
   std::vector<double> scales;
@@ -248,7 +322,8 @@ std::vector<double> continuation_scales(const LstmTrainingOptions& options) {
 // with net's standardisation and minimises from net.weights. Writes the
 // weights into `net` only when usable.
 template <int I, int H>
-LstmTrainingSummary solve(LstmNet<I, H>& net, const SequenceSet& train, const LstmTrainingOptions& options) {
+LstmTrainingSummary solve(LstmNet<I, H>& net, const SequenceSet& train, const LstmTrainingOptions& options,
+                          const SequenceSet* early_stopping = nullptr) {
   constexpr int K = LstmLayout<I, H>::kCount;
   const std::size_t n = train.size();
   std::vector<double> z, target;
@@ -272,25 +347,45 @@ LstmTrainingSummary solve(LstmNet<I, H>& net, const SequenceSet& train, const Ls
 
   ceres::Solver::Options solver_options = solver_options_for(options);
   const std::vector<double> scales = continuation_scales(options);
+  std::optional<EarlyStopping<I, H>> stopping;
+  if (early_stopping != nullptr) {
+    stopping.emplace(net, *early_stopping, &params, options.early_stopping_patience, options.num_threads);
+    solver_options.update_state_every_iteration = true;
+    solver_options.callbacks.push_back(&*stopping);
+  }
 
   LstmTrainingSummary summary;
   summary.initial_cost = robust_cost<K>(cache, params.data(), n, options, centre);
   ceres::Solver::Summary ceres_summary;
   bool failed = false;
   int budget = options.max_iterations;
+  int taken = 0;  // iterations run, iteration 0 of each solve (its start) not counted
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t stage = 0; stage < scales.size(); ++stage) {
     const int stages_left = static_cast<int>(scales.size() - stage);
     solver_options.max_num_iterations = stage + 1 == scales.size() ? budget : budget / stages_left;
+    if (options.stop_after_iterations > 0) {
+      const int left = options.stop_after_iterations - taken;
+      if (left <= 0) break;
+      solver_options.max_num_iterations = std::min(solver_options.max_num_iterations, left);
+    }
     loss.Reset(new ceres::SoftLOneLoss(scales[stage]), ceres::TAKE_OWNERSHIP);
+    if (stopping && stage + 1 == scales.size()) stopping->arm();
     ceres::Solve(solver_options, &problem, &ceres_summary);
     const int used = ceres_summary.num_successful_steps + ceres_summary.num_unsuccessful_steps;
+    taken += std::max(0, static_cast<int>(ceres_summary.iterations.size()) - 1);
     summary.iterations += used;
     budget = std::max(0, budget - used);
     if (ceres_summary.termination_type == ceres::FAILURE) {
       failed = true;
       break;
     }
+    if (stopping && stopping->stopped()) break;
+  }
+  if (stopping && !failed) {
+    params = stopping->best();
+    summary.best_iteration = stopping->best_iteration();
+    summary.validation_curve = stopping->curve();
   }
   const auto stop = std::chrono::steady_clock::now();
 
@@ -358,6 +453,11 @@ bool LstmTrainingOptions::IsValid(std::string* why) const {
   if (!(weight_decay >= 0.0) || !std::isfinite(weight_decay))
     return invalid(why, "weight_decay = " + fmt::format("{}", weight_decay) + ": expected a finite value ≥ 0");
   if (num_threads < 1) return invalid(why, "num_threads = " + std::to_string(num_threads) + ": expected ≥ 1");
+  if (early_stopping_patience < 0)
+    return invalid(why,
+                   "early_stopping_patience = " + std::to_string(early_stopping_patience) + ": expected ≥ 0");
+  if (stop_after_iterations < 0)
+    return invalid(why, "stop_after_iterations = " + std::to_string(stop_after_iterations) + ": expected ≥ 0");
   return true;
 }
 
@@ -427,7 +527,8 @@ LstmTrainingSummary train_lstm(LstmNet<I, H>& net, const SequenceSet& train, con
     for (int j = 0; j <= H; ++j) candidate.weights[LstmLayout<I, H>::kDense + j] = 0.0;
   }
 
-  LstmTrainingSummary summary = solve(candidate, train, options);
+  const bool stop_early = options.early_stopping_patience > 0 && validation.size() > 0;
+  LstmTrainingSummary summary = solve(candidate, train, options, stop_early ? &validation : nullptr);
   if (!summary.usable) return summary;
   summary.train_mae = lstm_mae(candidate, train);
   if (validation.size() > 0) summary.validation_mae = lstm_mae(candidate, validation);
@@ -461,7 +562,9 @@ LstmTrainingSummary retrain_lstm(LstmNet<I, H>& net, const SequenceSet& train,
   template LstmTrainingSummary retrain_lstm<I, H>(LstmNet<I, H>&, const SequenceSet&,                   \
                                                   const LstmTrainingOptions&);
 
+ODOTUNE_INSTANTIATE_LSTM_TRAINING(3, 3)
 ODOTUNE_INSTANTIATE_LSTM_TRAINING(3, 5)
+ODOTUNE_INSTANTIATE_LSTM_TRAINING(3, 8)
 ODOTUNE_INSTANTIATE_LSTM_TRAINING(5, 10)
 
 #undef ODOTUNE_INSTANTIATE_LSTM_TRAINING

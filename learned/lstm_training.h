@@ -105,6 +105,18 @@ struct LstmTrainingOptions {
   bool zero_output_start = false;
   std::uint64_t seed = 1;  // initial weights (Glorot-uniform from core/counter_rng.h: thread-count independent)
   int num_threads = 1;     // OpenMP threads evaluating the windows (≥ 1); results do not depend on it
+  // Early stopping (train_lstm with a validation set): when > 0, the
+  // validation MAE is taken after every iteration, the weights with the
+  // smallest are kept, and training stops once this many iterations in a
+  // row of the last continuation stage have not improved on it (the coarse
+  // stages before it can sit on a plateau first). 0: off, the last iterate
+  // is kept.
+  int early_stopping_patience = 0;
+  // > 0: stop once this many iterations have run in all (of the
+  // max_iterations the continuation stages share as usual; counted as early
+  // stopping counts them, a solve's start not included), to repeat an
+  // early-stopped run's length on more data. 0: off.
+  int stop_after_iterations = 0;
   bool IsValid(std::string* why) const;
 };
 
@@ -115,6 +127,11 @@ struct LstmTrainingSummary {
   double train_mae = 0, validation_mae = std::numeric_limits<double>::quiet_NaN();  // raw target units
   double seconds = 0;                                                               // wall time of the solve
   bool usable = false;  // finite weights and the solver did not fail
+  // Early stopping: the validation MAE before training and after each
+  // iteration [raw units], and the iteration whose weights were kept (0: the
+  // start); empty and −1 without it.
+  std::vector<double> validation_curve;
+  int best_iteration = -1;
 };
 
 // Residual r = net(z) − ỹ of one standardised window z (window × I) with

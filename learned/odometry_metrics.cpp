@@ -1,5 +1,6 @@
 #include "learned/odometry_metrics.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -66,6 +67,37 @@ PoseTrack dead_reckon(const FusionInput& in, const std::vector<double>& v, const
   return p;
 }
 
+double PoseErrorSum::rmse() const { return n > 0 ? std::sqrt(sum_sq / static_cast<double>(n)) : kNaN; }
+
+PoseErrorSum dead_reckoning_errors(const FusionInput& in, const std::vector<double>& v,
+                                   const std::vector<double>& w, double window_s, std::size_t first,
+                                   std::size_t end) {
+  PoseErrorSum out;
+  end = std::min(end, in.size());
+  const auto has_pose = [&in](std::size_t k) {
+    return std::isfinite(in.gt_x[k]) && std::isfinite(in.gt_y[k]) && std::isfinite(in.gt_theta[k]);
+  };
+  const auto steps = window_s > 0.0 ? static_cast<std::size_t>(std::llround(window_s / in.dt_s))
+                                    : std::numeric_limits<std::size_t>::max();
+  std::size_t k = first;
+  while (k < end) {
+    while (k < end && !has_pose(k)) ++k;  // the stretch starts at a ground-truth pose
+    if (k >= end) break;
+    const std::size_t stop = std::min(end, steps > end - k ? end : k + steps);
+    filters::PlanarPose pose{in.gt_x[k], in.gt_y[k], in.gt_theta[k]};
+    for (std::size_t j = k + 1; j < stop; ++j) {
+      pose = filters::integrate_pose(pose, v[j], w[j], in.dt_s);
+      if (!usable(in.gt_x[j], in.gt_y[j])) continue;
+      const double ex = pose.x_m - in.gt_x[j], ey = pose.y_m - in.gt_y[j];
+      if (!std::isfinite(ex) || !std::isfinite(ey)) continue;
+      out.sum_sq += ex * ex + ey * ey;
+      ++out.n;
+    }
+    k = stop;
+  }
+  return out;
+}
+
 OdometryErrors odometry_errors(const FusionInput& in, const std::vector<double>& v,
                                const std::vector<double>& w, const std::vector<double>& var_v,
                                const std::vector<double>& var_w, const std::vector<double>& cov_vw,
@@ -75,9 +107,12 @@ OdometryErrors odometry_errors(const FusionInput& in, const std::vector<double>&
   r.w = series_errors(w, in.w_true, var_w);
 
   PoseTrack own;
+  r.xy_rmse_10s = r.xy_rmse_60s = kNaN;
   if (pose == nullptr) {
     own = dead_reckon(in, v, w);
     pose = &own;
+    r.xy_rmse_10s = dead_reckoning_errors(in, v, w, 10.0).rmse();
+    r.xy_rmse_60s = dead_reckoning_errors(in, v, w, 60.0).rmse();
   }
   // Position: error norm; R² over X and Y stacked (paper eq. 9 on both axes).
   double sum_abs = 0, sum_sq = 0, sx = 0, sy = 0, sxx = 0, syy = 0;

@@ -125,6 +125,15 @@ Net parse_net(const Reader& r, const json& obj, const std::string& path, const c
   }
 }
 
+OdometryNet parse_odometry_net(const Reader& r, const json& obj, const std::string& path, const char* key) {
+  const json& j = r.field(obj, path, key);
+  try {
+    return odometry_net_from_json(j);
+  } catch (const std::exception& e) {
+    r.fail(Reader::join(path, key), e.what());
+  }
+}
+
 }  // namespace
 
 ModelTrainingRecord training_record(const LstmTrainingSummary& v, const LstmTrainingSummary& w,
@@ -145,12 +154,15 @@ json learned_model_json(const LearnedModelFile& m) {
   j["odometry"] = {{"rate_hz", o.rate_hz},
                    {"ticks_per_rev", o.ticks_per_rev},
                    {"target", std::string(to_string(o.target))},
+                   {"input", std::string(to_string(o.input))},
+                   {"features", std::string(to_string(o.features))},
+                   {"gyro", o.gyro},
                    {"v_beats_kinematic", o.v_beats_kinematic},
                    {"w_beats_kinematic", o.w_beats_kinematic},
                    {"v_validation_mae", o.v_validation_mae},
                    {"w_validation_mae", o.w_validation_mae},
-                   {"v_net", lstm_to_json(o.v_net)},
-                   {"w_net", lstm_to_json(o.w_net)}};
+                   {"v_net", odometry_net_to_json(o.v_net)},
+                   {"w_net", odometry_net_to_json(o.w_net)}};
   if (m.detector)
     j["detector"] = {
         {"floor_var_v", m.detector->floor_var_v},         {"floor_var_w", m.detector->floor_var_w},
@@ -166,6 +178,7 @@ json learned_model_json(const LearnedModelFile& m) {
                {"retrain_tracks", p.retrain_tracks},
                {"created_by", p.created_by}};
   if (p.detector) prov["detector"] = training_json(*p.detector);
+  if (p.selection) prov["selection"] = *p.selection;
   j["provenance"] = prov;
   return j;
 }
@@ -180,12 +193,30 @@ LearnedModelFile parse_learned_model(const json& j, const std::string& file) {
   LearnedModelFile m;
   const json& o = r.field(j, "", "odometry");
   m.odometry.rate_hz = r.number(o, "odometry", "rate_hz", true, false);
-  m.odometry.ticks_per_rev = r.number(o, "odometry", "ticks_per_rev", true, false);
-  // Files written before the key existed hold the paper's velocity nets.
+  // Files written before the keys existed hold the paper's velocity nets on wheels.
+  if (r.has(o, "input")) {
+    const std::string input = r.text(o, "odometry", "input");
+    if (!parse_odometry_input(input, &m.odometry.input))
+      r.fail("odometry.input", fmt::format("'{}'; expected 'wheels', 'twist' or 'commands'", input));
+  }
+  const bool wheels = m.odometry.input == OdometryInput::wheels;
+  m.odometry.ticks_per_rev = r.number(o, "odometry", "ticks_per_rev", wheels, false);
   if (r.has(o, "target")) {
     const std::string target = r.text(o, "odometry", "target");
     if (!parse_learned_target(target, &m.odometry.target))
       r.fail("odometry.target", fmt::format("'{}'; expected 'velocity' or 'correction'", target));
+  }
+  if (r.has(o, "features")) {
+    const std::string features = r.text(o, "odometry", "features");
+    if (!parse_learned_features(features, &m.odometry.features))
+      r.fail("odometry.features", fmt::format("'{}'; expected 'paper', 'channel' or 'both'", features));
+  } else if (m.odometry.target == LearnedTarget::correction) {
+    r.fail("odometry.features", "missing: a correction model written before the features were recorded; "
+                                "train it again (odotune learn train)");
+  }
+  if (r.has(o, "gyro")) {
+    if (!o["gyro"].is_boolean()) r.fail("odometry.gyro", "not true or false; expected a boolean");
+    m.odometry.gyro = o["gyro"].get<bool>();
   }
   for (auto [key, flag] : {std::pair{"v_beats_kinematic", &m.odometry.v_beats_kinematic},
                            std::pair{"w_beats_kinematic", &m.odometry.w_beats_kinematic}})
@@ -195,11 +226,13 @@ LearnedModelFile parse_learned_model(const json& j, const std::string& file) {
     }
   m.odometry.v_validation_mae = r.number(o, "odometry", "v_validation_mae", false, false);
   m.odometry.w_validation_mae = r.number(o, "odometry", "w_validation_mae", false, false);
-  m.odometry.v_net = parse_net<VelocityNet>(r, o, "odometry", "v_net");
-  m.odometry.w_net = parse_net<VelocityNet>(r, o, "odometry", "w_net");
-  if (m.odometry.v_net.activation != OutputActivation::linear ||
-      m.odometry.w_net.activation != OutputActivation::linear)
+  m.odometry.v_net = parse_odometry_net(r, o, "odometry", "v_net");
+  m.odometry.w_net = parse_odometry_net(r, o, "odometry", "w_net");
+  if (m.odometry.v_net.activation() != OutputActivation::linear ||
+      m.odometry.w_net.activation() != OutputActivation::linear)
     r.fail("odometry.v_net/w_net", "a ReLU output; expected the velocity nets' linear output (paper §4)");
+  std::string why;
+  if (!m.odometry.IsValid(&why)) r.fail("odometry", why);
 
   if (r.has(j, "detector") && !j["detector"].is_null()) {
     const json& d = j["detector"];
@@ -230,6 +263,10 @@ LearnedModelFile parse_learned_model(const json& j, const std::string& file) {
   prov.retrains = static_cast<int>(retrains);
   prov.retrain_tracks = r.texts(p, "provenance", "retrain_tracks");
   prov.created_by = r.text(p, "provenance", "created_by");
+  if (r.has(p, "selection") && !p["selection"].is_null()) {
+    if (!p["selection"].is_object()) r.fail("provenance.selection", "not an object; expected {…}");
+    prov.selection = p["selection"];
+  }
   return m;
 }
 

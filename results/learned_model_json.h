@@ -6,17 +6,21 @@
 //
 //   {
 //     "format": "odotune-learned/1",
-//     "odometry": {"rate_hz": 10, "ticks_per_rev": 8800,
+//     "odometry": {"rate_hz": 10, "ticks_per_rev": 8800,   // 0 for twist and commands
 //                  "target": "velocity" | "correction",     // absent: velocity
+//                  "input": "wheels" | "twist" | "commands", // absent: wheels
+//                  "features": "paper" | "channel" | "both", // absent: paper (velocity nets only)
+//                  "gyro": false,                           // absent: false
 //                  "v_beats_kinematic": true, "w_beats_kinematic": true,  // absent: true
 //                  "v_validation_mae": …, "w_validation_mae": …,
-//                  "v_net": {…}, "w_net": {…}},            // results/lstm_json.h
+//                  "v_net": {…}, "w_net": {…}},            // results/lstm_json.h (3, 5 or 8 units)
 //     "detector": {"floor_var_v": …, "floor_var_w": …, "previous_lag": 1,
 //                  "max_log_ratio_v": …, "max_log_ratio_w": …,
 //                  "v_net": {…}, "w_net": {…}},            // optional
 //     "provenance": {"tracks": [names], "slip_tracks": [names], "seed": 1,
 //                    "odometry": TRAINING, "detector": TRAINING (optional),
-//                    "retrains": 0, "retrain_tracks": [names], "created_by": "…"}
+//                    "retrains": 0, "retrain_tracks": [names], "created_by": "…",
+//                    "selection": {…}}   // correction nets: the cross-validation (studies/learn_job.h), kept as written
 //   }
 //   TRAINING = {"train_windows", "validation_windows", "seconds",
 //               "v": {"iterations", "train_mae", "validation_mae"}, "w": {…}}
@@ -66,6 +70,10 @@ struct LearnedModelProvenance {
   int retrains = 0;                         // online refits since training (`learn retrain`)
   std::vector<std::string> retrain_tracks;  // where they happened (names)
   std::string created_by;                   // the command line
+  // Correction nets: how their settings were chosen and what the
+  // cross-validation measured (written by studies/learn_job.cpp; read back
+  // as it is, an object).
+  std::optional<nlohmann::json> selection;
 };
 
 struct LearnedModelFile {

@@ -114,9 +114,27 @@ void from_json(const nlohmann::json& j, LstmNet<I, H>& net) {
   net = lstm_from_json<I, H>(j);
 }
 
+ODOTUNE_INSTANTIATE_LSTM_JSON(3, 3)
 ODOTUNE_INSTANTIATE_LSTM_JSON(3, 5)
+ODOTUNE_INSTANTIATE_LSTM_JSON(3, 8)
 ODOTUNE_INSTANTIATE_LSTM_JSON(5, 10)
 
 #undef ODOTUNE_INSTANTIATE_LSTM_JSON
+
+nlohmann::json odometry_net_to_json(const OdometryNet& net) {
+  return net.visit([](const auto& n) { return lstm_to_json(n); });
+}
+
+OdometryNet odometry_net_from_json(const nlohmann::json& j) {
+  if (!j.is_object()) throw std::invalid_argument("LSTM JSON: expected an object at the top level");
+  const int hidden = integer(field(j, "hidden"), "hidden");
+  switch (hidden) {
+    case 3: return lstm_from_json<OdometryNet::kInputs, 3>(j);
+    case 5: return lstm_from_json<OdometryNet::kInputs, 5>(j);
+    case 8: return lstm_from_json<OdometryNet::kInputs, 8>(j);
+    default:
+      bad("hidden", fmt::format("expected one of the velocity nets' unit counts 3, 5, 8, got {}", hidden));
+  }
+}
 
 }  // namespace odotune

@@ -22,6 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "learned/lstm.h"
+#include "learned/odometry_net.h"
 
 namespace odotune {
 
@@ -36,10 +37,16 @@ template <int I, int H>
 LstmNet<I, H> lstm_from_json(const nlohmann::json& j);
 
 // nlohmann's ADL hooks (`nlohmann::json j = net;`, `j.get<VelocityNet>()`),
-// forwarding to the functions above. Instantiated for <3, 5> and <5, 10>.
+// forwarding to the functions above. Instantiated for <3, 3>, <3, 5>, <3, 8>
+// and <5, 10>.
 template <int I, int H>
 void to_json(nlohmann::json& j, const LstmNet<I, H>& net);
 template <int I, int H>
 void from_json(const nlohmann::json& j, LstmNet<I, H>& net);
+
+// An OdometryNet: its net's JSON; reading picks the size from "hidden"
+// (one of kOdometryNetUnits, else std::invalid_argument naming the field).
+nlohmann::json odometry_net_to_json(const OdometryNet& net);
+OdometryNet odometry_net_from_json(const nlohmann::json& j);
 
 }  // namespace odotune

@@ -10,6 +10,7 @@
 
 #include "core/failure.h"
 #include "core/output_paths.h"
+#include "formats/calibration_yaml.h"
 #include "formats/config_yaml.h"
 #include "studies/learned_study.h"
 #include "studies/learned_study_outputs.h"
@@ -20,12 +21,6 @@ namespace odotune {
 namespace {
 
 using results::LearnedModelFile;
-
-std::vector<const FusionInput*> pointers(const std::vector<FusionInput>& v) {
-  std::vector<const FusionInput*> p;
-  for (const auto& in : v) p.push_back(&in);
-  return p;
-}
 
 void report(const LearnProgress& progress, long done, long total) {
   if (progress) progress(done, total);
@@ -47,10 +42,13 @@ std::string per_step_csv(const FusionInput& in, const OdometrySeries& lstm, cons
 
 // One line of errors: "  NAME  V MAE … θ RMSE … rad".
 std::string errors_line(const char* name, const OdometryErrors& e) {
+  std::string windows;
+  if (std::isfinite(e.xy_rmse_10s))
+    windows = fmt::format(" (10 s {:.3f}, 60 s {:.3f})", e.xy_rmse_10s, e.xy_rmse_60s);
   return fmt::format(
-      "  {:<10} V MAE {:.4f} RMSE {:.4f} m/s   W MAE {:.4f} RMSE {:.4f} rad/s   XY RMSE {:.3f} m   "
+      "  {:<10} V MAE {:.4f} RMSE {:.4f} m/s   W MAE {:.4f} RMSE {:.4f} rad/s   XY RMSE {:.3f} m{}   "
       "θ RMSE {:.4f} rad",
-      name, e.v.mae, e.v.rmse, e.w.mae, e.w.rmse, e.xy.rmse, e.theta.rmse);
+      name, e.v.mae, e.v.rmse, e.w.mae, e.w.rmse, e.xy.rmse, windows, e.theta.rmse);
 }
 
 nlohmann::json summary_json(const LstmTrainingSummary& s) {
@@ -66,11 +64,19 @@ nlohmann::json summary_json(const LstmTrainingSummary& s) {
 
 // ---------------------------------------------------------------- shared pieces
 
+std::vector<const FusionInput*> fusion_pointers(const std::vector<FusionInput>& v) {
+  std::vector<const FusionInput*> p;
+  for (const auto& in : v) p.push_back(&in);
+  return p;
+}
+
 std::vector<FusionInput> load_fusion_inputs(const std::vector<std::string>& files, double rate_hz,
-                                            bool need_power, const char* purpose) {
+                                            bool need_power, const char* purpose,
+                                            std::optional<OdometryInput> input) {
   const std::vector<Track> tracks = load_tracks(files);
   FusionInputOptions o;
   o.rate_hz = rate_hz;
+  o.input = input;
   std::string why;
   if (!o.IsValid(&why)) throw Failure(fmt::format("--rate-hz {}: {}", rate_hz, why));
   std::vector<FusionInput> out;
@@ -118,142 +124,64 @@ LearnedModelFile load_learned_model(const std::string& path) {
 
 void check_model_fits(const LearnedModelFile& m, const FusionInput& in, const std::string& file,
                       const std::string& model) {
-  if (std::abs(in.ticks_per_rev - m.odometry.ticks_per_rev) > 1e-9 * m.odometry.ticks_per_rev)
-    throw Failure(
-        fmt::format("{}: track '{}' has ticks_per_rev = {}, the model {} was trained with {}; expected the "
-                    "same robot",
-                    file, in.track_name, in.ticks_per_rev, model, m.odometry.ticks_per_rev));
-}
-
-// ---------------------------------------------------------------- train
-
-LearnTrainOutcome run_learn_train(const LearnTrainRequest& r, const LearnProgress& progress) {
-  check_output_file("--model-out", r.model_out);
-  if (r.iterations < 1) throw Failure(fmt::format("--iterations {}: expected >= 1", r.iterations));
-  const std::vector<FusionInput> tracks = load_fusion_inputs(r.tracks, r.rate_hz, false,
-                                                             "to learn odometry from");
-  const std::vector<FusionInput> slips = load_fusion_inputs(r.slip_tracks, r.rate_hz, true,
-                                                            "to train the slip detector on");
-
-  const long total = slips.empty() ? 1 : 2;
-  report(progress, 0, total);
-  LearnedTrainingOptions lo;
-  lo.training = learn_training_options(r.seed, r.iterations, r.threads);
-  lo.previous_noise_v = r.previous_noise >= 0.0 ? r.previous_noise : LearnedStudyOptions{}.previous_noise_v;
-  lo.previous_noise_w = r.previous_noise >= 0.0 ? r.previous_noise : LearnedStudyOptions{}.previous_noise_w;
-  lo.target = r.target;
-  lo.validation = r.validation;
-  LearnTrainOutcome out;
-  LearnedModelFile file;
-  try {
-    file.odometry = train_learned_odometry(pointers(tracks), lo, &out.odometry);
-  } catch (const std::invalid_argument& e) {
-    throw Failure(fmt::format("learn train: {}", e.what()));
-  }
-  report(progress, 1, total);
-  if (!slips.empty()) {
-    std::vector<OdometrySeries> odo;
-    for (const FusionInput& in : slips) {
-      check_model_fits(file, in, in.track_name, "being trained");
-      odo.push_back(run_learned_odometry(in, file.odometry));
-    }
-    SlipTrainingOptions so;
-    so.training = learn_training_options(r.seed, r.slip_iterations > 0 ? r.slip_iterations : r.iterations,
-                                         r.threads);
-    SlipTrainingSummary slip_summary;
-    try {
-      file.detector = train_slip_detector(pointers(slips), odo, so, &slip_summary);
-    } catch (const std::invalid_argument& e) {
-      throw Failure(fmt::format("learn train: slip detector: {}", e.what()));
-    }
-    out.detector = slip_summary;
-    report(progress, 2, total);
-  }
-
-  const LearnedTrainingSummary& summary = out.odometry;
-  results::LearnedModelProvenance& p = file.provenance;
-  for (const FusionInput& in : tracks) p.tracks.push_back(in.track_name);
-  for (const FusionInput& in : slips) p.slip_tracks.push_back(in.track_name);
-  p.seed = r.seed;
-  p.odometry = results::training_record(summary.v, summary.w, summary.train_windows, summary.validation_windows,
-                                        summary.seconds);
-  if (out.detector)
-    p.detector = results::training_record(out.detector->v, out.detector->w, out.detector->train_windows,
-                                          out.detector->validation_windows, out.detector->seconds);
-  p.created_by = r.command;
-  results::write_learned_model(r.model_out, file);
-
-  std::vector<SeriesErrors> kin_v, kin_w;
-  for (const FusionInput& in : tracks) {
-    kin_v.push_back(series_errors(in.v_kin, in.v_true, {}));
-    kin_w.push_back(series_errors(in.w_kin, in.w_true, {}));
-  }
-  out.tracks = tracks.size();
-  out.slip_tracks = slips.size();
-  out.kinematic_v_mae = pooled_mae(kin_v);
-  out.kinematic_w_mae = pooled_mae(kin_w);
-  out.target = file.odometry.target;
-  out.validation = r.validation;
-  out.v_beats_kinematic = file.odometry.v_beats_kinematic;
-  out.w_beats_kinematic = file.odometry.w_beats_kinematic;
-  out.model_out = r.model_out;
-  return out;
-}
-
-std::vector<std::string> learn_train_lines(const LearnTrainOutcome& o) {
-  const LearnedTrainingSummary& s = o.odometry;
-  std::vector<std::string> l;
-  l.push_back(fmt::format("learned odometry trained on {} track{} ({} windows for training, {} for validation; "
-                          "{:.1f} s)",
-                          o.tracks, o.tracks == 1 ? "" : "s", s.train_windows, s.validation_windows,
-                          s.seconds));
-  l.push_back(fmt::format("  V net: MAE {:.4f} m/s (training), {:.4f} m/s (validation), {} iterations",
-                          s.v.train_mae, s.v.validation_mae, s.v.iterations));
-  l.push_back(fmt::format("  W net: MAE {:.4f} rad/s (training), {:.4f} rad/s (validation), {} iterations",
-                          s.w.train_mae, s.w.validation_mae, s.w.iterations));
-  l.push_back(fmt::format("  kinematic odometry on the same tracks: MAE {:.4f} m/s, {:.4f} rad/s",
-                          o.kinematic_v_mae, o.kinematic_w_mae));
-  if (o.target == LearnedTarget::correction)
-    l.push_back(fmt::format("  free-running on the {}: V {:.4f} against kinematic {:.4f} m/s{}; W {:.4f} "
-                            "against {:.4f} rad/s{}",
-                            o.validation == LearnedValidation::recordings ? "held-out recordings"
-                                                                          : "validation steps",
-                            s.v_restart_mae[static_cast<std::size_t>(s.v_restart)], s.v_kinematic_mae,
-                            o.v_beats_kinematic ? "" : " (no gain: the V net is the kinematics)",
-                            s.w_restart_mae[static_cast<std::size_t>(s.w_restart)], s.w_kinematic_mae,
-                            o.w_beats_kinematic ? "" : " (no gain: the W net is the kinematics)"));
-  if (o.detector)
-    l.push_back(fmt::format(
-        "slip detector trained on {} track{} ({} + {} windows; {:.1f} s): variance MAE V {:.3g}, W "
-        "{:.3g} (validation)",
-        o.slip_tracks, o.slip_tracks == 1 ? "" : "s", o.detector->train_windows, o.detector->validation_windows,
-        o.detector->seconds, o.detector->v.validation_mae, o.detector->w.validation_mae));
-  l.push_back(fmt::format("model: {}", o.model_out));
-  return l;
+  std::string why;
+  if (!model_fits(m.odometry, in, &why)) throw Failure(fmt::format("{}: {} (model {})", file, why, model));
 }
 
 // ---------------------------------------------------------------- eval
+
+namespace {
+
+// The eval track laid out with the calibration file's kinematics.
+FusionInput calibrated_input(const LearnEvalRequest& r, const LearnedModelFile& m) {
+  const CalibrationFile cal = read_calibration_file(r.calibration);
+  if (cal.odometry != m.odometry.input)
+    throw Failure(fmt::format("--calibration {}: it calibrates {} odometry, the model reads {}", r.calibration,
+                              to_string(cal.odometry), to_string(m.odometry.input)));
+  FusionInputOptions o;
+  o.rate_hz = m.odometry.rate_hz;
+  o.input = m.odometry.input;
+  if (cal.odometry == OdometryInput::wheels)
+    o.geometry = cal.params;
+  else
+    o.twist = cal.twist;
+  try {
+    return build_fusion_input(load_tracks({r.track}).front(), o);
+  } catch (const std::invalid_argument& e) {
+    throw Failure(fmt::format("{}: {}", r.track, e.what()));
+  }
+}
+
+}  // namespace
 
 LearnEvalOutcome run_learn_eval(const LearnEvalRequest& r) {
   check_output_file("--json", r.json);
   check_output_file("--csv", r.csv);
   const LearnedModelFile m = load_learned_model(r.model);
+  if (!r.calibration.empty()) (void)read_calibration_file(r.calibration);  // a bad file fails before the work
   const std::vector<FusionInput> tracks = load_fusion_inputs({r.track}, m.odometry.rate_hz, false,
-                                                             "to score the odometry against");
+                                                             "to score the odometry against", m.odometry.input);
   const FusionInput& in = tracks.front();
   check_model_fits(m, in, r.track, r.model);
   const OdometrySeries lstm = run_learned_odometry(in, m.odometry);
   const OdometrySeries kin = kinematic_odometry(in);
   const PoseTrack pl = dead_reckon(in, lstm.v, lstm.w), pk = dead_reckon(in, kin.v, kin.w);
   LearnEvalOutcome out;
-  out.learned = odometry_errors(in, lstm.v, lstm.w, {}, {}, {}, &pl);
-  out.kinematic = odometry_errors(in, kin.v, kin.w, {}, {}, {}, &pk);
-  const nlohmann::json j = {{"track", in.track_name},
-                            {"file", r.track},
-                            {"model", r.model},
-                            {"rate_hz", m.odometry.rate_hz},
-                            {"learned", flat_errors_json(out.learned)},
-                            {"kinematic", flat_errors_json(out.kinematic)}};
+  out.learned = odometry_errors(in, lstm.v, lstm.w, {}, {}, {});
+  out.kinematic = odometry_errors(in, kin.v, kin.w, {}, {}, {});
+  nlohmann::json j = {{"track", in.track_name},
+                      {"file", r.track},
+                      {"model", r.model},
+                      {"rate_hz", m.odometry.rate_hz},
+                      {"input", std::string(to_string(m.odometry.input))},
+                      {"learned", flat_errors_json(out.learned)},
+                      {"kinematic", flat_errors_json(out.kinematic)}};
+  if (!r.calibration.empty()) {
+    const FusionInput cal = calibrated_input(r, m);
+    out.calibrated = odometry_errors(cal, cal.v_kin, cal.w_kin, {}, {}, {});
+    j["calibrated"] = flat_errors_json(*out.calibrated);
+    j["calibration"] = r.calibration;
+  }
   if (!r.csv.empty()) write_file_atomically(r.csv, per_step_csv(in, lstm, kin, pl, pk));
   if (!r.json.empty()) write_file_atomically(r.json, j.dump(2) + "\n");
   out.track_name = in.track_name;
@@ -290,6 +218,7 @@ std::vector<std::string> learn_eval_lines(const LearnEvalOutcome& o) {
                           o.rate_hz, o.model));
   l.push_back(errors_line("learned", o.learned));
   l.push_back(errors_line("kinematic", o.kinematic));
+  if (o.calibrated) l.push_back(errors_line("calibrated", *o.calibrated));
   if (!o.csv.empty()) l.push_back(fmt::format("csv: {}", o.csv));
   if (!o.json.empty()) l.push_back(fmt::format("json: {}", o.json));
   return l;
@@ -368,7 +297,8 @@ LearnRetrainOutcome run_learn_retrain(const LearnRetrainRequest& r, const LearnP
   const bool detector = m.detector && !r.static_covariance;
   const std::vector<FusionInput> tracks = load_fusion_inputs({r.track}, m.odometry.rate_hz, detector,
                                                              "(the model's slip detector reads it; or give "
-                                                             "--static-covariance)");
+                                                             "--static-covariance)",
+                                                             m.odometry.input);
   const FusionInput& in = tracks.front();
   check_model_fits(m, in, r.track, r.model);
   if (!in.has_ext)

@@ -26,6 +26,7 @@
 #include "learned/learned_odometry.h"
 #include "learned/lstm_training.h"
 #include "learned/odometry_metrics.h"
+#include "learned/odometry_selection.h"
 #include "learned/slip_detector.h"
 #include "results/learned_model_json.h"
 
@@ -36,11 +37,15 @@ using LearnProgress = std::function<void(long done, long total)>;
 
 // ---------------------------------------------------------------- shared pieces
 
-// Loads track files and lays them out for fusion at `rate_hz`; every track
-// must have ground truth, and motor power when `need_power`. `purpose` ends
-// the error line ("expected it " + purpose).
+// Loads track files and lays them out for fusion at `rate_hz` from their
+// `input` odometry (nullopt: each track's own); every track must have ground
+// truth, and motor power when `need_power`. `purpose` ends the error line
+// ("expected it " + purpose).
 std::vector<FusionInput> load_fusion_inputs(const std::vector<std::string>& files, double rate_hz,
-                                            bool need_power, const char* purpose);
+                                            bool need_power, const char* purpose,
+                                            std::optional<OdometryInput> input = std::nullopt);
+
+std::vector<const FusionInput*> fusion_pointers(const std::vector<FusionInput>& v);
 
 // `base`: a fresh training's defaults, or default_retrain_training() for refits.
 LstmTrainingOptions learn_training_options(std::uint64_t seed, int iterations, int threads,
@@ -53,8 +58,9 @@ double pooled_mae(const std::vector<SeriesErrors>& e);
 // results::read_learned_model with its one-line errors as Failure.
 results::LearnedModelFile load_learned_model(const std::string& path);
 
-// The model and the track must describe the same robot: equal ticks_per_rev.
-// `file` names the track, `model` the model in the error line.
+// The model and the track must describe the same robot and odometry
+// (learned/learned_odometry.h, model_fits). `file` names the track, `model`
+// the model in the error line.
 void check_model_fits(const results::LearnedModelFile& m, const FusionInput& in, const std::string& file,
                       const std::string& model);
 
@@ -65,19 +71,30 @@ struct LearnTrainRequest {
   std::vector<std::string> slip_tracks;  // with motor power: the slip detector (none: no detector)
   std::string model_out;                 // --model-out, required
   std::uint64_t seed = 1;
-  int iterations = 100;          // Ceres iterations per velocity net, ≥ 1
+  // Ceres iterations per velocity net, ≥ 1 (correction nets: the cap of
+  // their early stopping).
+  int iterations = 100;
   int slip_iterations = 0;       // per detector net (0 = iterations)
   double rate_hz = 10.0;         // network rate [Hz], (0, 1000]
   double previous_noise = -1.0;  // σ on the teacher-forced previous V [m/s] and W [rad/s]; < 0 = the study's
   int threads = 1;               // OpenMP threads evaluating the windows; results do not depend on it
-  LearnedTarget target = LearnedTarget::velocity;  // --target: the nets' output (learned/learned_odometry.h)
-  LearnedValidation validation = LearnedValidation::chronological;  // --validation
-  std::string command;                                              // the model's provenance.created_by
+  std::optional<OdometryInput> input;  // --input; nullopt: each track's own (tracks/odometry_input.h)
+  LearnedTarget target = LearnedTarget::correction;  // --target: the nets' output (learned/learned_odometry.h)
+  // --validation; nullopt: chronological for the paper's nets; for
+  // correction nets recordings with two tracks or more, else blocks.
+  std::optional<LearnedValidation> validation;
+  // Correction nets (learned/odometry_selection.h): the blocks' length, the
+  // folds, the early stopping's patience [iterations], the candidate
+  // settings and whether to read the gyro.
+  SelectionOptions selection;
+  std::string command;  // the model's provenance.created_by
 };
 
 struct LearnTrainOutcome {
   std::size_t tracks = 0, slip_tracks = 0;
-  LearnedTrainingSummary odometry;
+  OdometryInput input = OdometryInput::wheels;
+  LearnedTrainingSummary odometry;                      // the paper's nets
+  std::optional<SelectionSummary> selection;            // correction nets
   std::optional<SlipTrainingSummary> detector;          // when slip tracks were given
   double kinematic_v_mae = 0.0, kinematic_w_mae = 0.0;  // pooled over the training tracks
   LearnedTarget target = LearnedTarget::velocity;
@@ -86,9 +103,11 @@ struct LearnTrainOutcome {
   std::string model_out;
 };
 
-// Trains the velocity nets and, with slip tracks, the slip detector on the
-// learned odometry's errors there, then writes the model file. Progress: 0, 1
-// (and 2) of 1 net pair (2 with a detector).
+// Trains the velocity nets (the paper's, or correction nets chosen by
+// cross-validation) and, with slip tracks, the slip detector on the learned
+// odometry's errors there, then writes the model file
+// (studies/learn_train_job.cpp). Progress: the paper's nets 0, 1 (and 2) of
+// 1 (2 with a detector); correction nets the fits of the cross-validation.
 LearnTrainOutcome run_learn_train(const LearnTrainRequest& request, const LearnProgress& progress = {});
 // The lines the command prints (without newlines): "learned odometry trained
 // on …", the nets' MAEs, the kinematic odometry's, the detector's, "model: FILE".
@@ -99,8 +118,11 @@ std::vector<std::string> learn_train_lines(const LearnTrainOutcome& outcome);
 struct LearnEvalRequest {
   std::string track;  // with ground truth
   std::string model;  // model file
-  std::string json;   // optional: errors of the learned and the kinematic odometry
-  std::string csv;    // optional: velocities and dead-reckoned poses per step
+  // Optional: a calibration file (odotune calibrate --config-out) of the
+  // model's odometry; its calibrated kinematics are scored too.
+  std::string calibration;
+  std::string json;  // optional: errors of the learned and the kinematic odometry
+  std::string csv;   // optional: velocities and dead-reckoned poses per step
 };
 
 struct LearnEvalOutcome {
@@ -109,10 +131,12 @@ struct LearnEvalOutcome {
   double rate_hz = 0.0;                                     // the model's [Hz]
   bool v_beats_kinematic = true, w_beats_kinematic = true;  // the model's training verdict
   OdometryErrors learned, kinematic;
+  std::optional<OdometryErrors> calibrated;  // with --calibration
 };
 
-// Scores the learned and the kinematic odometry (pose dead-reckoned from each)
-// against the track's ground truth; writes the CSV, then the JSON.
+// Scores the learned and the kinematic odometry (pose dead-reckoned from each;
+// with --calibration also the calibrated kinematics) against the track's
+// ground truth; writes the CSV, then the JSON.
 LearnEvalOutcome run_learn_eval(const LearnEvalRequest& request);
 // A first line when a net of the model did not beat the kinematics in its
 // training; then "track … model …:", the learned and the kinematic

@@ -276,6 +276,8 @@ nlohmann::json flat_errors_json(const OdometryErrors& e) {
           {"pos_mae_m", num_json(e.xy.mae)},
           {"pos_rmse_m", num_json(e.xy.rmse)},
           {"pos_r2", num_json(e.xy.r2)},
+          {"pos_rmse_10s_m", num_json(e.xy_rmse_10s)},
+          {"pos_rmse_60s_m", num_json(e.xy_rmse_60s)},
           {"theta_mae_rad", num_json(e.theta.mae)},
           {"theta_rmse_rad", num_json(e.theta.rmse)},
           {"samples", e.v.samples}};

@@ -38,7 +38,9 @@ struct LearnedStudyContext {
 // (NaN → null).
 nlohmann::json errors_json(const OdometryErrors& e);
 // The flat block of `learn eval`: v_mae, w_mae, v_rmse, w_rmse, v_r2, w_r2,
-// pos_mae_m, pos_rmse_m, pos_r2, theta_mae_rad, theta_rmse_rad, samples.
+// pos_mae_m, pos_rmse_m, pos_r2, pos_rmse_10s_m, pos_rmse_60s_m (dead
+// reckoning restarted every 10 s and 60 s; null for a filter's pose),
+// theta_mae_rad, theta_rmse_rad, samples.
 nlohmann::json flat_errors_json(const OdometryErrors& e);
 
 // The tables as text (Markdown cells: best value per column and metric in

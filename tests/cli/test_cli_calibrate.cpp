@@ -402,6 +402,62 @@ TEST_F(CliCalibrateSim, BadInputIsOneLineAndLeavesNoOutput) {
   expect_one_line_failure("--apply " + (tmp / "cal.yaml").string() + " --track " + track_a_, "cal.yaml:2");
 }
 
+// A track whose only odometry is the simulator's commands (the wheels
+// dropped): batch fits scales and a delay and writes them as a commands
+// calibration, which --apply replays on a held-out run; the wheel methods and
+// their flags are refused by name.
+TEST_F(CliCalibrateSim, CommandTracksAreCalibratedByScalesAndADelay) {
+  TempDir tmp;
+  const auto commands_only = [&](const std::string& from, const std::string& name) {
+    TrackData d = read_track(from).data();
+    d.meta.name = name;
+    d.ticks_l.clear();
+    d.ticks_r.clear();
+    d.meta.ticks_per_rev.reset();
+    const std::string path = (tmp / (name + ".csv")).string();
+    write_track(Track(std::move(d)), path);
+    return path;
+  };
+  const std::string fit = commands_only(track_a_, "cmd_fit");
+  SimOptions other;
+  other.seed = 2;
+  other.duration_s = 60.0;
+  const std::string held = commands_only(write_sim_track(tmp, "other", other), "cmd_held");
+  const fs::path cal = tmp / "cmd.yaml", out = tmp / "cmd.json";
+  const auto r = run_cli("calibrate --track " + fit + " --method batch --config-out " + cal.string() +
+                         " --json " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("calibrated the commands odometry of 1 track"));
+  EXPECT_THAT(slurp(cal), HasSubstr("odometry: commands\n"));
+  const json j = json::parse(slurp(out));
+  EXPECT_EQ(j["calibration"]["odometry"], "commands");
+  // The simulated drive follows its commands through its dynamics: scales
+  // near 1 and a lag of a fraction of a second.
+  EXPECT_NEAR(j["calibration"]["scale_v"].get<double>(), 1.0, 0.05);
+  EXPECT_NEAR(j["calibration"]["scale_w"].get<double>(), 1.0, 0.05);
+  EXPECT_GE(j["calibration"]["delay_s"].get<double>(), 0.0);
+  EXPECT_LT(j["calibration"]["delay_s"].get<double>(), 0.5);
+  const auto a = run_cli("calibrate --apply " + cal.string() + " --track " + held);
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  EXPECT_THAT(a.out, HasSubstr("commands odometry"));
+  EXPECT_THAT(a.out, HasSubstr("cmd_held"));
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"--method dkf", "--method batch"},
+      {"", "--method batch"},
+      {"--method batch --csv " + (tmp / "c.csv").string(), "--csv"},
+      {"--method batch --input wheels", "--input wheels"}};
+  for (const auto& [args, needle] : refused) {
+    const auto bad = run_cli("calibrate --track " + fit + " " + args);
+    EXPECT_NE(bad.exit_code, 0) << args;
+    EXPECT_EQ(lines_of(bad.err).size(), 1u) << bad.err;
+    EXPECT_THAT(bad.err, HasSubstr(needle)) << args;
+  }
+  // A commands calibration on a wheel track's odometry is refused.
+  const auto wrong = run_cli("calibrate --apply " + cal.string() + " --track " + track_a_ + " --input wheels");
+  EXPECT_NE(wrong.exit_code, 0);
+  EXPECT_THAT(wrong.err, HasSubstr("corrects commands odometry"));
+}
+
 // online-pose from the command line: fixes made by `odotune fixes`, their sd
 // required when the track has none, its flags refused for other methods,
 // and the calibrated odometry better than the nominal one.

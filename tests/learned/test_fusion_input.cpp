@@ -14,6 +14,7 @@
 
 #include "learned/fusion_input.h"
 #include "support/fusion_track.h"
+#include "tracks/body_velocity.h"
 
 namespace odotune {
 namespace {
@@ -210,11 +211,20 @@ TEST(FusionInput, OneLineErrorsNameTheTrack) {
   const std::string no_tpr = error_of(without([](TrackData& d) { d.meta.ticks_per_rev.reset(); }));
   EXPECT_NE(no_tpr.find("robot.ticks_per_rev"), std::string::npos) << no_tpr;
 
+  // Without wheels, the commands (the simulator says what they are) are the
+  // odometry; without them too, there is none.
+  const Track commands = without([](TrackData& d) {
+    d.ticks_l.clear();
+    d.ticks_r.clear();
+  });
+  EXPECT_EQ(build_fusion_input(commands).input, OdometryInput::commands);
   const std::string no_odo = error_of(without([](TrackData& d) {
     d.ticks_l.clear();
     d.ticks_r.clear();
+    d.col(Col::v_cmd).clear();
+    d.col(Col::w_cmd).clear();
   }));
-  EXPECT_NE(no_odo.find("track 'broken_one': no wheel odometry"), std::string::npos) << no_odo;
+  EXPECT_NE(no_odo.find("track 'broken_one': no odometry"), std::string::npos) << no_odo;
 
   FusionInputOptions bad;
   bad.rate_hz = 0.0;
@@ -232,6 +242,45 @@ TEST(FusionInput, OneLineErrorsNameTheTrack) {
     d.ticks_r.resize(keep);
   }));
   EXPECT_NE(short_one.find("fewer than 2 steps"), std::string::npos) << short_one;
+}
+
+// The simulator's commands as the odometry: each step's mean of the held
+// command; with a scale and a delay (calibrated kinematics) the same means
+// scaled and taken that much earlier; a calibrated geometry for wheels.
+TEST(FusionInput, CommandsAndCalibratedKinematics) {
+  const Track& track = shared_track();
+  FusionInputOptions o;
+  o.input = OdometryInput::commands;
+  const FusionInput in = build_fusion_input(track, o);
+  EXPECT_EQ(in.input, OdometryInput::commands);
+  EXPECT_EQ(in.ticks_per_rev, 0.0);
+  EXPECT_TRUE(std::isnan(in.dticks_l[5]));
+  const BodyVelocityIntegral body(track);
+  for (std::size_t k = 1; k < in.size(); k += 37) {
+    const auto m = body.mean(in.t[k - 1], in.t[k]);
+    EXPECT_DOUBLE_EQ(in.v_kin[k], m[0]) << k;
+    EXPECT_DOUBLE_EQ(in.w_kin[k], m[1]) << k;
+  }
+  o.twist.scale_v = 0.9;
+  o.twist.scale_w = 1.1;
+  o.twist.delay_s = 0.25;
+  const FusionInput cal = build_fusion_input(track, o);
+  for (std::size_t k = 5; k < in.size(); k += 37) {
+    const auto m = body.mean(in.t[k - 1] - 0.25, in.t[k] - 0.25);
+    EXPECT_NEAR(cal.v_kin[k], 0.9 * m[0], 1e-12) << k;
+    EXPECT_NEAR(cal.w_kin[k], 1.1 * m[1], 1e-12) << k;
+  }
+  FusionInputOptions g;
+  g.geometry = shared_input().nominal;
+  g.geometry->wheel_base_m *= 2.0;
+  const FusionInput wide = build_fusion_input(track, g);
+  for (std::size_t k = 1; k < wide.size(); k += 37) {
+    EXPECT_DOUBLE_EQ(wide.v_kin[k], shared_input().v_kin[k]);
+    EXPECT_NEAR(wide.w_kin[k], 0.5 * shared_input().w_kin[k], 1e-12);
+  }
+  FusionInputOptions bad;
+  bad.twist.delay_s = -1.0;
+  EXPECT_THROW(build_fusion_input(track, bad), std::invalid_argument);
 }
 
 TEST(FusionInput, NoGroundTruthGivesNaNTruth) {

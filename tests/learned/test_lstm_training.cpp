@@ -175,6 +175,44 @@ TEST(LstmTraining, LowersMaeOnAMemoryTask) {
   EXPECT_EQ(net.window, 20);
 }
 
+// Early stopping keeps the weights of the iteration with the smallest
+// validation MAE (its curve is recorded, the kept net's MAE is its minimum);
+// a run stopped after that many iterations on the same data ends there.
+TEST(LstmTraining, EarlyStoppingKeepsTheBestValidationIterate) {
+  // Few training windows against many validation ones, so that the fit
+  // overtakes the validation optimum within the budget.
+  const SequenceSet train = memory_task(41, 60);
+  const SequenceSet validation = memory_task(42, 300);
+  LstmTrainingOptions o;
+  o.max_iterations = 60;
+  o.early_stopping_patience = 4;
+  VelocityNet net;
+  const auto s = train_lstm(net, train, validation, o);
+  ASSERT_TRUE(s.usable) << s.termination;
+  ASSERT_GE(s.validation_curve.size(), 2u);
+  ASSERT_GE(s.best_iteration, 0);
+  ASSERT_LT(static_cast<std::size_t>(s.best_iteration), s.validation_curve.size());
+  const double best = *std::min_element(s.validation_curve.begin(), s.validation_curve.end());
+  EXPECT_EQ(s.validation_curve[static_cast<std::size_t>(s.best_iteration)], best);
+  EXPECT_NEAR(lstm_mae(net, validation), best, 1e-12);
+  EXPECT_LE(static_cast<int>(s.validation_curve.size()) - 1, o.max_iterations);
+  // Without early stopping: no curve, the last iterate.
+  o.early_stopping_patience = 0;
+  VelocityNet plain;
+  const auto p = train_lstm(plain, train, validation, o);
+  EXPECT_TRUE(p.validation_curve.empty());
+  EXPECT_EQ(p.best_iteration, -1);
+  // Stopped after a given number of iterations (the curve counts them; the
+  // patience never ends this run).
+  o.stop_after_iterations = 7;
+  o.early_stopping_patience = 1000;
+  VelocityNet short_run;
+  const auto q = train_lstm(short_run, train, validation, o);
+  EXPECT_EQ(q.validation_curve.size(), 8u);
+  o.stop_after_iterations = -1;
+  EXPECT_THROW(train_lstm(short_run, train, validation, o), std::invalid_argument);
+}
+
 TEST(LstmTraining, RetrainingAdaptsToShiftedTargets) {
   const SequenceSet train = memory_task(31, 300);
   LstmTrainingOptions options;

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "results/learned_model_json.h"
+#include "results/lstm_json.h"
 #include "support/temp_dir.h"
 
 namespace odotune {
@@ -40,13 +41,17 @@ Net random_net(std::mt19937_64& rng, OutputActivation act) {
 LearnedModelFile sample_model(bool detector) {
   std::mt19937_64 rng(42);
   LearnedModelFile m;
-  m.odometry.v_net = random_net<VelocityNet>(rng, OutputActivation::linear);
-  m.odometry.w_net = random_net<VelocityNet>(rng, OutputActivation::linear);
+  // Correction nets of 3 units on wheels with the gyro (the other sizes and
+  // inputs: VelocityNetsAndOtherSizesAndInputs).
+  m.odometry.v_net = random_net<OdometryNet::Net3>(rng, OutputActivation::linear);
+  m.odometry.w_net = random_net<OdometryNet::Net3>(rng, OutputActivation::linear);
   m.odometry.rate_hz = 10.0;
   m.odometry.ticks_per_rev = 8800.0;
   m.odometry.v_validation_mae = 0.1 + 0.2;  // not exactly 0.3
   m.odometry.w_validation_mae = 1.0 / 3.0;
   m.odometry.target = LearnedTarget::correction;
+  m.odometry.features = LearnedFeatures::both;
+  m.odometry.gyro = true;
   m.odometry.w_beats_kinematic = false;
   if (detector) {
     SlipDetectorModel d;
@@ -72,6 +77,7 @@ LearnedModelFile sample_model(bool detector) {
   p.retrains = 4;
   p.retrain_tracks = {"wheelchair_learn_step"};
   p.created_by = "odotune learn train --track a.csv --model-out m.json";
+  p.selection = json{{"validation", "recordings"}, {"folds", 2}};
   return m;
 }
 
@@ -103,8 +109,14 @@ TEST(LearnedModelJson, RoundTripIsExact) {
   const LearnedModelFile m = sample_model(true);
   results::write_learned_model(dir / "m.json", m);
   const LearnedModelFile r = results::read_learned_model(dir / "m.json");
-  expect_same_net(m.odometry.v_net, r.odometry.v_net, "odometry.v_net");
-  expect_same_net(m.odometry.w_net, r.odometry.w_net, "odometry.w_net");
+  EXPECT_TRUE(m.odometry.v_net == r.odometry.v_net);
+  EXPECT_TRUE(m.odometry.w_net == r.odometry.w_net);
+  EXPECT_EQ(r.odometry.v_net.units(), 3);
+  EXPECT_EQ(r.odometry.features, LearnedFeatures::both);
+  EXPECT_EQ(r.odometry.input, OdometryInput::wheels);
+  EXPECT_TRUE(r.odometry.gyro);
+  ASSERT_TRUE(r.provenance.selection.has_value());
+  EXPECT_EQ(r.provenance.selection->at("folds"), 2);
   EXPECT_EQ(r.odometry.rate_hz, 10.0);
   EXPECT_EQ(r.odometry.ticks_per_rev, 8800.0);
   EXPECT_EQ(r.odometry.v_validation_mae, 0.1 + 0.2);
@@ -151,18 +163,61 @@ TEST(LearnedModelJson, DetectorIsOptional) {
   const LearnedModelFile r = results::parse_learned_model(j, "m.json");
   EXPECT_FALSE(r.detector.has_value());
   EXPECT_FALSE(r.provenance.detector.has_value());
-  expect_same_net(m.odometry.w_net, r.odometry.w_net, "odometry.w_net");
+  EXPECT_TRUE(m.odometry.w_net == r.odometry.w_net);
+}
+
+// The paper's velocity nets (5 units), and correction nets of 8 units on
+// commands (no ticks_per_rev), read back as written.
+TEST(LearnedModelJson, VelocityNetsAndOtherSizesAndInputs) {
+  std::mt19937_64 rng(7);
+  LearnedModelFile paper = sample_model(false);
+  paper.odometry.target = LearnedTarget::velocity;
+  paper.odometry.features = LearnedFeatures::paper;
+  paper.odometry.gyro = false;
+  paper.odometry.w_beats_kinematic = true;
+  paper.odometry.v_net = random_net<VelocityNet>(rng, OutputActivation::linear);
+  paper.odometry.w_net = random_net<VelocityNet>(rng, OutputActivation::linear);
+  LearnedModelFile r = results::parse_learned_model(results::learned_model_json(paper), "m.json");
+  EXPECT_EQ(r.odometry.target, LearnedTarget::velocity);
+  EXPECT_EQ(r.odometry.v_net.units(), 5);
+  EXPECT_TRUE(r.odometry.v_net == paper.odometry.v_net);
+
+  LearnedModelFile cmd = sample_model(false);
+  cmd.odometry.input = OdometryInput::commands;
+  cmd.odometry.ticks_per_rev = 0.0;
+  cmd.odometry.features = LearnedFeatures::channel;
+  cmd.odometry.v_net = random_net<OdometryNet::Net8>(rng, OutputActivation::linear);
+  cmd.odometry.w_net = random_net<OdometryNet::Net8>(rng, OutputActivation::linear);
+  r = results::parse_learned_model(results::learned_model_json(cmd), "m.json");
+  EXPECT_EQ(r.odometry.input, OdometryInput::commands);
+  EXPECT_EQ(r.odometry.features, LearnedFeatures::channel);
+  EXPECT_EQ(r.odometry.w_net.units(), 8);
+  EXPECT_TRUE(r.odometry.w_net == cmd.odometry.w_net);
 }
 
 // A file written before the nets' target and verdict were recorded holds the
 // paper's velocity nets, which are taken as they are.
 TEST(LearnedModelJson, OlderFilesAreVelocityNets) {
   json j = results::learned_model_json(sample_model(false));
-  for (const char* key : {"target", "v_beats_kinematic", "w_beats_kinematic"}) j["odometry"].erase(key);
+  std::mt19937_64 rng(3);
+  j["odometry"]["v_net"] = lstm_to_json(random_net<VelocityNet>(rng, OutputActivation::linear));
+  j["odometry"]["w_net"] = lstm_to_json(random_net<VelocityNet>(rng, OutputActivation::linear));
+  for (const char* key : {"target", "v_beats_kinematic", "w_beats_kinematic", "input", "features", "gyro"})
+    j["odometry"].erase(key);
   const LearnedModelFile r = results::parse_learned_model(j, "m.json");
   EXPECT_EQ(r.odometry.target, LearnedTarget::velocity);
+  EXPECT_EQ(r.odometry.features, LearnedFeatures::paper);
+  EXPECT_EQ(r.odometry.input, OdometryInput::wheels);
   EXPECT_TRUE(r.odometry.v_beats_kinematic);
   EXPECT_TRUE(r.odometry.w_beats_kinematic);
+  // A correction model written before the features were recorded is refused.
+  j["odometry"]["target"] = "correction";
+  try {
+    results::parse_learned_model(j, "m.json");
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("odometry.features"), std::string::npos) << e.what();
+  }
 }
 
 struct BadCase {
@@ -185,6 +240,24 @@ TEST(LearnedModelJson, BadFieldsAreOneLineErrorsNamingFileAndField) {
       {"slip net as velocity net", [](json& j) { j["odometry"]["v_net"] = j["detector"]["v_net"]; },
        "odometry.v_net"},
       {"unknown target", [](json& j) { j["odometry"]["target"] = "residual"; }, "odometry.target"},
+      {"unknown input", [](json& j) { j["odometry"]["input"] = "lidar"; }, "odometry.input"},
+      {"unknown features", [](json& j) { j["odometry"]["features"] = "all"; }, "odometry.features"},
+      {"gyro not a boolean", [](json& j) { j["odometry"]["gyro"] = "yes"; }, "odometry.gyro"},
+      {"four units", [](json& j) { j["odometry"]["v_net"]["hidden"] = 4; }, "odometry.v_net"},
+      {"nets of two sizes",
+       [](json& j) {
+         std::mt19937_64 rng(5);
+         j["odometry"]["w_net"] = lstm_to_json(random_net<VelocityNet>(rng, OutputActivation::linear));
+       },
+       "odometry"},
+      {"velocity nets on commands",
+       [](json& j) {
+         j["odometry"]["target"] = "velocity";
+         j["odometry"]["features"] = "paper";
+         j["odometry"]["gyro"] = false;
+         j["odometry"]["input"] = "commands";
+       },
+       "odometry"},
       {"verdict not a boolean", [](json& j) { j["odometry"]["v_beats_kinematic"] = 1; },
        "odometry.v_beats_kinematic"},
       {"relu velocity net", [](json& j) { j["odometry"]["v_net"]["activation"] = "relu"; }, "odometry.v_net"},

@@ -1,0 +1,34 @@
+// `odotune calibrate` on tracks whose odometry is a body velocity, a twist
+// the drive measured or the commands (tracks/odometry_input.h):
+// calibration/twist_calibration.h's pose-domain fit of scales (and a delay
+// for commands) by --method batch, its calibration file and JSON, and
+// --apply of such a file on held-out tracks. run_calibrate and
+// run_calibrate_apply (jobs/calibrate_job.h) hand such tracks here.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "formats/calibration_yaml.h"
+#include "jobs/calibrate_job.h"
+#include "tracks/track.h"
+
+namespace odotune {
+
+// The body-velocity input of the request's tracks (each track's own, or
+// --input), or nullopt for wheel tracks. Throws Failure (one line naming
+// the file) when a track's odometry cannot be told or the tracks mix kinds.
+std::optional<OdometryInput> calibrate_body_input(const CalibrateRequest& a, const std::vector<Track>& tracks);
+
+// Refuses the flags that do not apply to a body-velocity fit, fits, writes
+// --config-out and --json. Throws Failure.
+CalibrateOutcome run_twist_calibrate(const CalibrateRequest& a, const std::vector<Track>& tracks,
+                                     OdometryInput input);
+
+// --apply of a twist or commands calibration file: every track's dead
+// reckoning at the identity and at the file's correction; writes --json.
+// Throws Failure when the tracks' odometry is not the file's.
+ApplyOutcome run_twist_apply(const CalibrateRequest& a, const CalibrationFile& file,
+                             const std::vector<Track>& tracks);
+
+}  // namespace odotune
