@@ -147,6 +147,11 @@ void register_learn(CLI::App& app) {
   e->add_option("--model", eval->model, "model file (odotune learn train --model-out)")->required();
   e->add_option("--json", eval->json, "write the errors as JSON (blocks learned and kinematic)");
   e->add_option("--csv", eval->csv, "write the velocities and dead-reckoned poses per step as CSV");
+  e->add_option("--from", eval->from_s, "score only the steps from this time on [s, the track's clock]");
+  e->add_option("--until", eval->until_s, "score only the steps before this time [s]");
+  e->add_option("--fix-sigma-m", eval->fix_sigma_m,
+                "σ of the track's position fixes where they have no aps_var [m], for the fusion with them")
+      ->check(CLI::PositiveNumber);
   e->add_option("--calibration", eval->calibration,
                 "also score the kinematics calibrated by this file (odotune calibrate --method batch "
                 "--config-out) on the same track");
@@ -164,6 +169,14 @@ void register_learn(CLI::App& app) {
       ->default_val(retrain->every);
   r->add_option("--iterations", retrain->iterations, "Ceres iterations per refit")
       ->default_val(retrain->iterations);
+  r->add_option(
+       "--ext-from-gt", retrain->ext_from_gt_hz,
+       "derive the external velocities from the ground truth at this rate [Hz] (a reference such as the "
+       "paper's Velodyne, where a dataset has only a pose reference)")
+      ->check(CLI::Range(0.1, 100.0));
+  r->add_option(
+      "--until", retrain->until_s,
+      "run and retrain on the steps before this time only [s] (judge the rest with learn eval --from)");
   r->add_flag("--static-covariance", retrain->static_covariance,
               "ignore the model's slip detector: static odometry variances from the validation MAEs");
   r->add_option("--threads", retrain->threads, "threads evaluating the windows (results do not depend on it)")
@@ -171,6 +184,9 @@ void register_learn(CLI::App& app) {
   r->callback([retrain] {
     retrain->command = "odotune learn retrain --track " + retrain->track + " --model " + retrain->model +
                        fmt::format(" --every {} --iterations {}", retrain->every, retrain->iterations);
+    if (retrain->ext_from_gt_hz > 0)
+      retrain->command += fmt::format(" --ext-from-gt {}", retrain->ext_from_gt_hz);
+    if (retrain->until_s) retrain->command += fmt::format(" --until {}", *retrain->until_s);
     print_lines(learn_retrain_lines(with_progress("learn retrain", "runs", [&](const LearnProgress& p) {
       return run_learn_retrain(*retrain, p);
     })));

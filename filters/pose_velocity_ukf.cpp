@@ -49,7 +49,8 @@ bool PoseUkfParams::IsValid(std::string* why) const {
   for (const auto& [name, q] : {std::pair{"q_v_m2_s3", q_v_m2_s3}, std::pair{"q_w_rad2_s3", q_w_rad2_s3},
                                 std::pair{"q_xy_m2_s", q_xy_m2_s}})
     if (!(std::isfinite(q) && q >= 0.0)) return bad(why, describe(name, q, "a finite number >= 0"));
-  if (!(std::isfinite(alpha) && alpha > 0.0 && alpha <= 1.0)) return bad(why, describe("alpha", alpha, "in (0, 1]"));
+  if (!(std::isfinite(alpha) && alpha > 0.0 && alpha <= 1.0))
+    return bad(why, describe("alpha", alpha, "in (0, 1]"));
   if (!(std::isfinite(beta) && beta >= 0.0)) return bad(why, describe("beta", beta, "a finite number >= 0"));
   if (!(std::isfinite(kappa) && static_cast<double>(kN) + kappa > 0.0))
     return bad(why, describe("kappa", kappa, "finite with n + kappa > 0 (n = 5)"));
@@ -124,8 +125,8 @@ void PoseVelocityUkf::update_velocity(double v_m_s, double w_rad_s, const Eigen:
 
 void PoseVelocityUkf::update_yaw_rate(double w_rad_s, double var) {
   if (healthy_)
-    healthy_ = linear_update<1>(&x_, &P_, Eigen::Matrix<double, 1, 1>(w_rad_s), Eigen::Matrix<double, 1, 1>(var),
-                                {kPw});
+    healthy_ = linear_update<1>(&x_, &P_, Eigen::Matrix<double, 1, 1>(w_rad_s),
+                                Eigen::Matrix<double, 1, 1>(var), {kPw});
 }
 
 void PoseVelocityUkf::update_position(double x_m, double y_m, const Eigen::Matrix2d& R) {

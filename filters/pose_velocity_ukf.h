@@ -31,9 +31,9 @@ using PoseVelocity = Eigen::Matrix<double, 5, 1>;
 using PoseVelocityCov = Eigen::Matrix<double, 5, 5>;
 
 struct PoseUkfParams {
-  double q_v_m2_s3 = 0.05;    // process-noise rate of V [(m/s)²/s] (as UkfParams)
-  double q_w_rad2_s3 = 0.1;   // of W [(rad/s)²/s]
-  double q_xy_m2_s = 1e-4;    // of X and Y [m²/s]
+  double q_v_m2_s3 = 0.05;                      // process-noise rate of V [(m/s)²/s] (as UkfParams)
+  double q_w_rad2_s3 = 0.1;                     // of W [(rad/s)²/s]
+  double q_xy_m2_s = 1e-4;                      // of X and Y [m²/s]
   double alpha = 1.0, beta = 2.0, kappa = 0.0;  // scaled unscented transform
   PoseVelocity initial_state = PoseVelocity::Zero();
   PoseVelocityCov initial_cov = PoseVelocityCov::Identity() * 1e-2;
@@ -47,10 +47,10 @@ class PoseVelocityUkf {
   // Throws std::invalid_argument with IsValid's message.
   explicit PoseVelocityUkf(const PoseUkfParams& params);
 
-  void predict(double dt_s);  // dt_s ≥ 0
+  void predict(double dt_s);                                                     // dt_s ≥ 0
   void update_velocity(double v_m_s, double w_rad_s, const Eigen::Matrix2d& R);  // odometry or external
-  void update_yaw_rate(double w_rad_s, double var);                             // gyro
-  void update_position(double x_m, double y_m, const Eigen::Matrix2d& R);       // a fix
+  void update_yaw_rate(double w_rad_s, double var);                              // gyro
+  void update_position(double x_m, double y_m, const Eigen::Matrix2d& R);        // a fix
 
   const PoseVelocity& state() const { return x_; }
   const PoseVelocityCov& cov() const { return P_; }

@@ -248,7 +248,74 @@ void ground_truth_per_step(const Track& track, FusionInput& in) {
   }
 }
 
+// The track's commands per step (FusionInput::v_cmd), when it has any.
+void commands_per_step(const Track& track, FusionInput& in) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  in.v_cmd.assign(in.size(), nan);
+  in.w_cmd.assign(in.size(), nan);
+  in.has_cmd = false;
+  if (!track.has_cmd()) return;
+  const BodyVelocityIntegral body(track);
+  if (body.size() < 2) return;
+  for (std::size_t k = 1; k < in.size(); ++k) {
+    if (in.t[k] <= body.t().front() || in.t[k - 1] >= body.t().back()) continue;
+    const auto m = body.mean(in.t[k - 1], in.t[k]);
+    in.v_cmd[k] = m[0];
+    in.w_cmd[k] = m[1];
+    in.has_cmd = true;
+  }
+}
+
+// External velocities from the ground truth (FusionInputOptions::ext_from_gt_hz):
+// each reference instant's velocity goes to the step holding it.
+void ext_from_ground_truth(const Track& track, const FusionInputOptions& o, FusionInput& in) {
+  const PoseSeries gt = ground_truth_series(track);
+  const double period = 1.0 / o.ext_from_gt_hz;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (auto* v : {&in.v_ext, &in.w_ext, &in.v_ext_var, &in.w_ext_var}) v->assign(in.size(), nan);
+  in.has_ext = false;
+  if (gt.size() < 2) return;
+  for (std::size_t k = 1; k < in.size(); ++k) {
+    // The last reference instant inside (t[k−1], t[k]].
+    const double j = std::floor(in.t[k] / period + 1e-9);
+    const double tj = j * period;
+    if (tj <= in.t[k - 1]) continue;
+    const auto vw = central_difference_velocity(gt, tj, 0.5 * period, 2.0 * period);
+    if (!vw) continue;
+    in.v_ext[k] = vw->v_m_s;
+    in.w_ext[k] = vw->w_rad_s;
+    in.v_ext_var[k] = o.default_ext_var_v;
+    in.w_ext_var[k] = o.default_ext_var_w;
+    in.has_ext = true;
+  }
+}
+
 }  // namespace
+
+FusionInput slice_fusion_input(const FusionInput& in, std::size_t first, std::size_t end) {
+  end = std::min(end, in.size());
+  first = std::min(first, end);
+  FusionInput out = in;
+  const auto cut = [first, end](std::vector<double>& v) {
+    v = std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(first),
+                            v.begin() + static_cast<std::ptrdiff_t>(end));
+  };
+  for (auto* v : {&out.t,       &out.dticks_l, &out.dticks_r, &out.v_kin,     &out.w_kin,     &out.power_l,
+                  &out.power_r, &out.v_ext,    &out.w_ext,    &out.v_ext_var, &out.w_ext_var, &out.gyro_z,
+                  &out.v_cmd,   &out.w_cmd,    &out.fix_x,    &out.fix_y,     &out.fix_var_x, &out.fix_var_y,
+                  &out.gt_x,    &out.gt_y,     &out.gt_theta, &out.v_true,    &out.w_true})
+    cut(*v);
+  const auto any = [](const std::vector<double>& v) {
+    return std::any_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+  };
+  out.has_gt = any(out.v_true) && any(out.gt_x);
+  out.has_power = any(out.power_l) && any(out.power_r);
+  out.has_ext = any(out.v_ext);
+  out.has_gyro = any(out.gyro_z);
+  out.has_fixes = any(out.fix_x);
+  out.has_cmd = any(out.v_cmd);
+  return out;
+}
 
 bool FusionInputOptions::IsValid(std::string* why) const {
   auto bad = [why](const std::string& msg) {
@@ -258,6 +325,9 @@ bool FusionInputOptions::IsValid(std::string* why) const {
   if (!(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= kMaxRateHz))
     return bad(fmt::format("rate_hz = {} must be in (0, {}] Hz", rate_hz, kMaxRateHz));
   std::string inner;
+  if (!(std::isfinite(ext_from_gt_hz) && ext_from_gt_hz >= 0.0 && ext_from_gt_hz <= 100.0))
+    return bad(fmt::format("ext_from_gt_hz = {} must be in [0, 100] Hz (0: the track's v_ext)",
+                           ext_from_gt_hz));
   if (geometry && !geometry->IsValid(&inner)) return bad("geometry: " + inner);
   if (!twist.IsValid(&inner)) return bad("twist: " + inner);
   if (!(std::isfinite(default_ext_var_v) && default_ext_var_v > 0.0))
@@ -310,6 +380,8 @@ FusionInput build_fusion_input(const Track& track, const FusionInputOptions& opt
   else
     body_velocity_per_step(*body, options, in);
   sensors_per_step(track, options, in);
+  commands_per_step(track, in);
+  if (options.ext_from_gt_hz > 0.0) ext_from_ground_truth(track, options, in);
   ground_truth_per_step(track, in);
   return in;
 }

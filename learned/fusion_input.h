@@ -26,6 +26,12 @@ struct FusionInputOptions {
   // (filters/odometry_params.h, TwistCorrection). Default: nominal.
   std::optional<filters::OdometryParams> geometry;
   filters::TwistCorrection twist;
+  // > 0: external velocities derived from the ground truth at this rate
+  // [Hz] (a stand-in for the paper's Velodyne, where a dataset has only its
+  // reference pose): at each t = j / rate the central difference of the
+  // ground truth over one period (objectives/pose_series.h), variances
+  // default_ext_var_*; these replace the track's v_ext, w_ext. At most 100 Hz.
+  double ext_from_gt_hz = 0.0;
   // Variances used where the track has external velocities but no
   // v_ext_var/w_ext_var [(m/s)², (rad/s)²].
   double default_ext_var_v = 4e-4;
@@ -66,6 +72,10 @@ struct FusionInput {
   // Mean gyro yaw rate over the step [rad/s] (mean of the rows inside); NaN
   // when none.
   std::vector<double> gyro_z;
+  // The track's velocity commands (v_cmd, w_cmd) over the step, under
+  // tracks/body_velocity.h's hold, whatever the odometry is [m/s, rad/s];
+  // NaN without them. (For a commands input, v_kin before any calibration.)
+  std::vector<double> v_cmd, w_cmd;
   // The last position fix inside the step [m] and its variances [m²] (the
   // track's aps_var_x/aps_var_y; NaN where it gives none); NaN when none.
   std::vector<double> fix_x, fix_y, fix_var_x, fix_var_y;
@@ -76,10 +86,15 @@ struct FusionInput {
   //   W = Δθ/Δt,  V = (Δx·cos θ̄ + Δy·sin θ̄)/Δt,  θ̄ = (θ_{k−1} + θ_k)/2.
   std::vector<double> gt_x, gt_y, gt_theta;
   std::vector<double> v_true, w_true;
-  bool has_gt = false, has_power = false, has_ext = false, has_gyro = false, has_fixes = false;
+  bool has_gt = false, has_power = false, has_ext = false, has_gyro = false, has_fixes = false, has_cmd = false;
 
   std::size_t size() const { return t.size(); }
 };
+
+// Steps [first, end) of `in` as an input of their own (t, the per-step
+// series and the flags; end clamped to in.size()): a part of a recording to
+// score on its own.
+FusionInput slice_fusion_input(const FusionInput& in, std::size_t first, std::size_t end);
 
 // Throws std::invalid_argument with one line naming the track and what is
 // missing or wrong (no odometry of the requested kind, a v_cmd/w_cmd track

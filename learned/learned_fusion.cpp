@@ -22,9 +22,16 @@ void check_inputs(const FusionInput& in, const LearnedOdometryModel* model,
     throw std::invalid_argument("learned fusion: learned odometry needs a model");
   if (learned && !model->IsValid(&why)) throw std::invalid_argument("learned fusion: model: " + why);
   if (learned && !model_fits(*model, in, &why)) throw std::invalid_argument("learned fusion: " + why);
-  if (options.detector && !in.has_power)
+  if (options.detector && options.detector->drive == SlipDrive::power && !in.has_power)
     throw std::invalid_argument(fmt::format(
         "track '{}': no motor power (power_l, power_r): the slip detector needs it", in.track_name));
+  if (options.detector && options.detector->drive == SlipDrive::commands && !in.has_cmd)
+    throw std::invalid_argument(fmt::format(
+        "track '{}': no velocity commands (v_cmd, w_cmd): the slip detector reads them", in.track_name));
+  if (options.detector && options.detector->input != in.input)
+    throw std::invalid_argument(fmt::format("track '{}' gives {} odometry, the slip detector reads {}",
+                                            in.track_name, to_string(in.input),
+                                            to_string(options.detector->input)));
 }
 
 // The filter's state and the pose at step k into the trace.
@@ -57,7 +64,7 @@ OdometryMeasurement odometry_measurement(const FusionInput& in, std::size_t k, d
     m.w_rad_s = in.w_kin[k];
   }
   if (detector) {
-    const auto var = detector->step(in.power_l[k], in.power_r[k], in.dticks_l[k], in.dticks_r[k]);
+    const auto var = detector->step(in, k);
     m.var_v = var[0];
     m.var_w = var[1];
   } else {

@@ -99,7 +99,9 @@ bool LearnedOdometryModel::IsValid(std::string* why) const {
                                     to_string(features), to_string(target)));
   if (paper && (!wheels || gyro))
     return invalid(why, "the paper's velocity nets read wheel increments only (no twist, commands or gyro)");
-  if (!(v_validation_mae >= 0.0) || !(w_validation_mae >= 0.0))
+  if (!(v_validation_mae >= 0.0) || !(w_validation_mae >= 0.0) || !(v_kinematic_mae >= 0.0) ||
+      !(w_kinematic_mae >= 0.0) ||
+      !std::isfinite(v_validation_mae + w_validation_mae + v_kinematic_mae + w_kinematic_mae))
     return invalid(why, "validation MAEs must be finite values >= 0");
   return true;
 }
@@ -346,6 +348,8 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
   s.validation_windows = ws.v_val.size();
   model.v_validation_mae = std::isfinite(s.v.validation_mae) ? s.v.validation_mae : s.v.train_mae;
   model.w_validation_mae = std::isfinite(s.w.validation_mae) ? s.w.validation_mae : s.w.train_mae;
+  model.v_kinematic_mae = std::isfinite(kin[0]) ? kin[0] : 0.0;
+  model.w_kinematic_mae = std::isfinite(kin[1]) ? kin[1] : 0.0;
   if (!model.IsValid(&why))
     throw std::invalid_argument("learned odometry training produced an unusable model: " + why);
   if (summary) *summary = s;

@@ -81,6 +81,9 @@ struct LearnedOdometryModel {
   // Validation MAE of each net at training time [m/s, rad/s] (the static
   // odometry variance falls back on it when there is no slip detector).
   double v_validation_mae = 0.0, w_validation_mae = 0.0;
+  // The kinematic odometry's MAE on the same validation [m/s, rad/s] (for
+  // its variance in a fusion); 0 when unknown (files written before it).
+  double v_kinematic_mae = 0.0, w_kinematic_mae = 0.0;
   // Nets of one size and window; features consistent with target and input
   // (paper: velocity nets on wheels; else a correction); positive rate (and
   // ticks_per_rev for wheels).

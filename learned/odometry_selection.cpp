@@ -254,8 +254,6 @@ CandidateResult cross_validate(const std::vector<const FusionInput*>& tracks, co
     tw.seed += 1000;  // a different initialisation for the W net
     const LstmTrainingSummary sv = m.v_net.train(train[0], held[0], tv);
     const LstmTrainingSummary sw = m.w_net.train(train[1], held[1], tw);
-    fmt::print(stderr, "{} V best {} curve {:.4f}\nW best {} curve {:.4f}\n", s.label(), sv.best_iteration,
-               fmt::join(sv.validation_curve, " "), sw.best_iteration, fmt::join(sw.validation_curve, " "));
     if (!sv.usable) m.v_net.zero_output();
     if (!sw.usable) m.w_net.zero_output();
     FoldMeasures fm = measure(tracks, units, fold, m);
@@ -374,10 +372,16 @@ LearnedOdometryModel train_correction_odometry(const std::vector<const FusionInp
   model.v_beats_kinematic = keep_v;
   model.w_beats_kinematic = keep_w;
   // The folds' pooled MAE of the kept nets (the kinematics' where zeroed).
-  double v_sum = 0.0, w_sum = 0.0;
-  for (const FoldMeasures& f : c.folds) v_sum += f.v_mae[keep_v ? 1 : 0], w_sum += f.w_mae[keep_w ? 1 : 0];
-  model.v_validation_mae = v_sum / static_cast<double>(c.folds.size());
-  model.w_validation_mae = w_sum / static_cast<double>(c.folds.size());
+  double v_sum = 0.0, w_sum = 0.0, vk_sum = 0.0, wk_sum = 0.0;
+  for (const FoldMeasures& f : c.folds) {
+    v_sum += f.v_mae[keep_v ? 1 : 0], w_sum += f.w_mae[keep_w ? 1 : 0];
+    vk_sum += f.v_mae[0], wk_sum += f.w_mae[0];
+  }
+  const auto folds_n = static_cast<double>(c.folds.size());
+  model.v_validation_mae = v_sum / folds_n;
+  model.w_validation_mae = w_sum / folds_n;
+  model.v_kinematic_mae = vk_sum / folds_n;
+  model.w_kinematic_mae = wk_sum / folds_n;
   if (progress) progress(total, total);
   s.train_windows = train[0].size();
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

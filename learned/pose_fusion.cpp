@@ -49,7 +49,8 @@ void record(const filters::PoseVelocityUkf& f, std::size_t k, PoseFusionTrace& t
 bool PoseFusionOptions::IsValid(std::string* why) const {
   if (!(std::isfinite(fix_sigma_m) && fix_sigma_m >= 0.0))
     return invalid(why, fmt::format("fix_sigma_m = {}: expected a finite value >= 0 [m]", fix_sigma_m));
-  if (!(start_sigma_m > 0.0 && std::isfinite(start_sigma_m)) || !(start_sigma_rad > 0.0 && std::isfinite(start_sigma_rad)))
+  if (!(start_sigma_m > 0.0 && std::isfinite(start_sigma_m)) ||
+      !(start_sigma_rad > 0.0 && std::isfinite(start_sigma_rad)))
     return invalid(why, "start_sigma_m, start_sigma_rad: expected finite values > 0");
   std::string inner;
   if (!ukf.IsValid(&inner)) return invalid(why, "ukf: " + inner);
@@ -81,14 +82,17 @@ PoseFusionTrace replay_pose_fusion(const FusionInput& in, const std::vector<Odom
   for (std::size_t k = 1; k < n && f.healthy(); ++k) {
     f.predict(in.dt_s);
     f.update_velocity(odo[k].v_m_s, odo[k].w_rad_s, Eigen::Vector2d(odo[k].var_v, odo[k].var_w).asDiagonal());
-    if (options.noise.use_gyro && std::isfinite(in.gyro_z[k])) f.update_yaw_rate(in.gyro_z[k], options.noise.gyro_var);
+    if (options.noise.use_gyro && std::isfinite(in.gyro_z[k]))
+      f.update_yaw_rate(in.gyro_z[k], options.noise.gyro_var);
     if (options.noise.use_external && std::isfinite(in.v_ext[k]))
       f.update_velocity(in.v_ext[k], in.w_ext[k],
-                        Eigen::Vector2d(in.v_ext_var[k], in.w_ext_var[k]).asDiagonal() * options.noise.ext_var_scale);
+                        Eigen::Vector2d(in.v_ext_var[k], in.w_ext_var[k]).asDiagonal() *
+                            options.noise.ext_var_scale);
     if (std::isfinite(in.fix_x[k])) {
       const bool own = in.fix_var_x[k] > 0.0 && in.fix_var_y[k] > 0.0;
       f.update_position(in.fix_x[k], in.fix_y[k],
-                        Eigen::Vector2d(own ? in.fix_var_x[k] : default_var, own ? in.fix_var_y[k] : default_var)
+                        Eigen::Vector2d(own ? in.fix_var_x[k] : default_var,
+                                        own ? in.fix_var_y[k] : default_var)
                             .asDiagonal());
       ++t.fixes;
     }

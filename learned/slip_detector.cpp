@@ -21,7 +21,50 @@ bool finite_all(std::initializer_list<double> xs) {
 
 bool positive_finite(double x) { return x > 0.0 && std::isfinite(x); }
 
+// The drive channels of step k (SlipFeature), NaN where the step has none.
+std::array<double, 2> drive_at(const FusionInput& in, std::size_t k, SlipDrive d) {
+  switch (d) {
+    case SlipDrive::power: return {in.power_r[k], in.power_l[k]};
+    case SlipDrive::commands: return {in.v_cmd[k], in.w_cmd[k]};
+    case SlipDrive::none: return {0.0, 0.0};
+  }
+  return {0.0, 0.0};
+}
+
+// The odometry channels of step k.
+std::array<double, 2> odometry_at(const FusionInput& in, std::size_t k) {
+  if (in.input == OdometryInput::wheels) return {in.dticks_r[k], in.dticks_l[k]};
+  return {in.v_kin[k], in.w_kin[k]};
+}
+
 }  // namespace
+
+std::string_view to_string(SlipDrive d) {
+  switch (d) {
+    case SlipDrive::power: return "power";
+    case SlipDrive::commands: return "commands";
+    case SlipDrive::none: return "none";
+  }
+  return "power";
+}
+
+bool parse_slip_drive(std::string_view text, SlipDrive* out) {
+  for (SlipDrive d : {SlipDrive::power, SlipDrive::commands, SlipDrive::none})
+    if (text == to_string(d)) {
+      *out = d;
+      return true;
+    }
+  return false;
+}
+
+SlipDrive available_slip_drive(const std::vector<const FusionInput*>& tracks) {
+  bool power = !tracks.empty(), commands = !tracks.empty();
+  for (const FusionInput* in : tracks) {
+    power = power && in->has_power;
+    commands = commands && in->has_cmd && in->input == OdometryInput::wheels;
+  }
+  return power ? SlipDrive::power : commands ? SlipDrive::commands : SlipDrive::none;
+}
 
 bool SlipDetectorModel::IsValid(std::string* why) const {
   std::string inner;
@@ -57,6 +100,8 @@ bool SlipTrainingOptions::IsValid(std::string* why) const {
   if (!(weight_decay >= 0.0) || !std::isfinite(weight_decay))
     return fail(fmt::format("weight_decay = {}: expected a finite value >= 0", weight_decay));
   if (feedback_rounds < 0) return fail(fmt::format("feedback_rounds = {}: expected >= 0", feedback_rounds));
+  if (!(flag_quantile > 0.0 && flag_quantile < 1.0))
+    return fail(fmt::format("flag_quantile = {}: expected a value in (0, 1)", flag_quantile));
   if (validation_chunk < 0 || patience < 1)
     return fail(fmt::format("validation_chunk = {}, patience = {}: expected >= 0 and >= 1", validation_chunk,
                             patience));
@@ -102,10 +147,18 @@ PerTrack checked_targets(const std::vector<const FusionInput*>& tracks,
   PerTrack targets(tracks.size());
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     const FusionInput& in = *tracks[i];
-    if (!in.has_power)
+    if (options.drive == SlipDrive::power && !in.has_power)
       throw std::invalid_argument(
           fmt::format("track '{}': no motor power (power_l, power_r): expected it to train the slip detector",
                       in.track_name));
+    if (options.drive == SlipDrive::commands && !in.has_cmd)
+      throw std::invalid_argument(fmt::format(
+          "track '{}': no velocity commands (v_cmd, w_cmd): expected them to train the slip detector on",
+          in.track_name));
+    if (in.input != tracks.front()->input)
+      throw std::invalid_argument(fmt::format("track '{}' gives {} odometry, '{}' {}: expected one kind",
+                                              in.track_name, to_string(in.input), tracks.front()->track_name,
+                                              to_string(tracks.front()->input)));
     if (!in.has_gt)
       throw std::invalid_argument(
           fmt::format("track '{}': no ground truth: expected it to train the slip detector", in.track_name));
@@ -144,6 +197,7 @@ std::array<double, 2> variance_floors(const PerTrack& targets, const SlipTrainin
 SequenceSet track_windows(const FusionInput& in, const std::vector<double>& target,
                           const std::vector<double>& prev, int window, std::size_t lag,
                           const SlipTrainingOptions& options) {
+  const SlipDrive drive = options.drive;
   const auto W = static_cast<std::size_t>(window);
   std::vector<double> rows(W * kFeatures);
   SequenceSet all;
@@ -152,17 +206,20 @@ SequenceSet track_windows(const FusionInput& in, const std::vector<double>& targ
   std::size_t taken = 0;
   for (std::size_t k = W + lag; k < in.size(); ++k) {
     bool ok = std::isfinite(target[k]);
-    for (std::size_t j = k + 1 - W; ok && j <= k; ++j)
-      ok = finite_all({in.power_r[j], in.power_l[j], in.dticks_r[j], in.dticks_l[j], prev[j - lag]});
+    for (std::size_t j = k + 1 - W; ok && j <= k; ++j) {
+      const auto d = drive_at(in, j, drive), o = odometry_at(in, j);
+      ok = finite_all({d[0], d[1], o[0], o[1], prev[j - lag]});
+    }
     if (!ok) continue;
     if (taken++ % static_cast<std::size_t>(options.stride) != 0) continue;
     for (std::size_t r = 0; r < W; ++r) {
       const std::size_t j = k + 1 - W + r;
+      const auto d = drive_at(in, j, drive), o = odometry_at(in, j);
       double* row = &rows[r * kFeatures];
-      row[kSlipPowerR] = in.power_r[j];
-      row[kSlipPowerL] = in.power_l[j];
-      row[kSlipDticksR] = in.dticks_r[j];
-      row[kSlipDticksL] = in.dticks_l[j];
+      row[kSlipPowerR] = d[0];
+      row[kSlipPowerL] = d[1];
+      row[kSlipDticksR] = o[0];
+      row[kSlipDticksL] = o[1];
       row[kSlipPrevious] = prev[j - lag];
     }
     all.add(rows.data(), target[k]);
@@ -265,12 +322,32 @@ PerTrack own_log_ratios(const std::vector<const FusionInput*>& tracks, const Sli
     SlipDetectorStepper stepper(&model);
     for (int d = 0; d < 2; ++d) own[i][d].assign(in.size(), 0.0);
     for (std::size_t k = 1; k < in.size(); ++k) {
-      const auto var = stepper.step(in.power_l[k], in.power_r[k], in.dticks_l[k], in.dticks_r[k]);
+      const auto var = stepper.step(in, k);
       own[i][0][k] = std::log(var[0] / floors[0]);
       own[i][1][k] = std::log(var[1] / floors[1]);
     }
   }
   return own;
+}
+
+// The flag thresholds: the quantile of the detector's own variances over the
+// training tracks (SlipDetectorModel::flag_var_v).
+void set_flag_thresholds(const std::vector<const FusionInput*>& tracks, double quantile,
+                         SlipDetectorModel& model) {
+  std::array<std::vector<double>, 2> all;
+  for (const FusionInput* in : tracks) {
+    SlipDetectorStepper stepper(&model);
+    for (std::size_t k = 1; k < in->size(); ++k) {
+      const auto var = stepper.step(*in, k);
+      if (static_cast<int>(k) > model.v_net.window) all[0].push_back(var[0]), all[1].push_back(var[1]);
+    }
+  }
+  for (int d = 0; d < 2; ++d) {
+    if (all[d].empty()) continue;
+    const auto q = static_cast<std::size_t>(quantile * static_cast<double>(all[d].size() - 1));
+    std::nth_element(all[d].begin(), all[d].begin() + static_cast<long>(q), all[d].end());
+    (d == 0 ? model.flag_var_v : model.flag_var_w) = all[d][q];
+  }
 }
 
 }  // namespace
@@ -290,6 +367,8 @@ SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tra
   // below zero without a gradient, and most slip windows start there).
   model.v_net.activation = model.w_net.activation = OutputActivation::linear;
   model.previous_lag = options.previous_lag;
+  model.drive = options.drive;
+  model.input = tracks.front()->input;
   const auto lag = static_cast<std::size_t>(options.previous_lag);
   const int window = model.v_net.window;
 
@@ -329,6 +408,7 @@ SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tra
     s.v = fit_slip_net(model.v_net, train[0], val[0], v_opts, false, &s.v_curve, options);
     s.w = fit_slip_net(model.w_net, train[1], val[1], w_opts, false, &s.w_curve, options);
   }
+  set_flag_thresholds(tracks, options.flag_quantile, model);
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   s.train_windows = train[0].size();
   s.validation_windows = val[0].size();
@@ -345,18 +425,19 @@ SlipDetectorStepper::SlipDetectorStepper(const SlipDetectorModel* model)
       previous_{model->floor_var_v, model->floor_var_w},
       history_(static_cast<std::size_t>(model->previous_lag), std::array<double, 2>{0.0, 0.0}) {}
 
-std::array<double, 2> SlipDetectorStepper::step(double power_l, double power_r, double dticks_l,
-                                                double dticks_r) {
-  // A missing power sample (NaN) would poison 20 windows: hold the last one.
-  if (std::isfinite(power_l)) last_power_[0] = power_l;
-  if (std::isfinite(power_r)) last_power_[1] = power_r;
+std::array<double, 2> SlipDetectorStepper::step(const FusionInput& in, std::size_t k) {
+  // A missing drive sample (NaN) would poison 20 windows: hold the last one.
+  const auto d = drive_at(in, k, model_->drive);
+  if (std::isfinite(d[0])) last_drive_[0] = d[0];
+  if (std::isfinite(d[1])) last_drive_[1] = d[1];
+  const auto o = odometry_at(in, k);
   auto push = [&](std::vector<double>& rows, double previous) {
     std::copy(rows.begin() + kFeatures, rows.end(), rows.begin());
     double* last = &rows[rows.size() - kFeatures];
-    last[kSlipPowerR] = last_power_[1];
-    last[kSlipPowerL] = last_power_[0];
-    last[kSlipDticksR] = dticks_r;
-    last[kSlipDticksL] = dticks_l;
+    last[kSlipPowerR] = last_drive_[0];
+    last[kSlipPowerL] = last_drive_[1];
+    last[kSlipDticksR] = o[0];
+    last[kSlipDticksL] = o[1];
     last[kSlipPrevious] = previous;
   };
   // The log-ratio the detector gave previous_lag steps ago (0 = the floor).

@@ -39,16 +39,37 @@
 
 namespace odotune {
 
+// The detector's features per step: two "drive" channels, two odometry
+// channels and its previous output. The paper's drive is the motor power;
+// a robot that logs none (no real dataset of ours does) may have its
+// velocity commands instead, which also part from the wheel speeds when a
+// wheel slips or stalls, or nothing (the detector then reads the odometry
+// alone, learning where it tends to err). The odometry channels are the
+// encoder increments (Δct_r, Δct_l) for wheels, else (v_kin, w_kin).
 enum SlipFeature : int {
-  kSlipPowerR = 0,
+  kSlipPowerR = 0,  // drive channels: (P_r, P_l), (v_cmd, w_cmd) or (0, 0)
   kSlipPowerL = 1,
-  kSlipDticksR = 2,
+  kSlipDticksR = 2,  // odometry channels: (Δct_r, Δct_l) or (v_kin, w_kin)
   kSlipDticksL = 3,
   kSlipPrevious = 4
 };
 
+enum class SlipDrive { power, commands, none };
+std::string_view to_string(SlipDrive d);  // "power", "commands", "none"
+bool parse_slip_drive(std::string_view text, SlipDrive* out);
+
+// The drive the tracks allow: power when every track has it, else the
+// commands beside a wheel odometry when every track has them, else none.
+SlipDrive available_slip_drive(const std::vector<const FusionInput*>& tracks);
+
 struct SlipDetectorModel {
-  SlipNet v_net, w_net;                           // predict ln(var / floor) (see the file comment)
+  SlipNet v_net, w_net;                         // predict ln(var / floor) (see the file comment)
+  SlipDrive drive = SlipDrive::power;           // what its drive channels read
+  OdometryInput input = OdometryInput::wheels;  // what its odometry channels read
+  // A step is flagged when a variance exceeds these [(m/s)², (rad/s)²]: the
+  // flag_quantile of the detector's own outputs over its training tracks
+  // (0: no flag known, files written before it).
+  double flag_var_v = 0.0, flag_var_w = 0.0;
   double floor_var_v = 1e-5, floor_var_w = 1e-5;  // smallest variance it reports [(m/s)², (rad/s)²]
   int previous_lag = 1;                           // n of COV_{k−n} [steps]
   // Largest log-ratio ln(var/floor) seen in training per net; the stepper
@@ -59,6 +80,8 @@ struct SlipDetectorModel {
 
 struct SlipTrainingOptions {
   LstmTrainingOptions training;
+  SlipDrive drive = SlipDrive::power;  // the tracks must carry it (available_slip_drive)
+  double flag_quantile = 0.9;          // of the own outputs, for the flag thresholds; in (0, 1)
   double train_fraction = 0.7;
   int target_window = 5;  // steps, odd
   int previous_lag = 1;   // n of the previous-variance input COV_{k−n} [steps] ≥ 1
@@ -118,9 +141,10 @@ struct SlipTrainingSummary {
 std::array<std::vector<double>, 2> slip_target_variances(const FusionInput& in, const OdometrySeries& odometry,
                                                          const SlipTrainingOptions& options);
 
-// Trains both detectors on tracks with motor power and ground truth, against
-// the errors of `odometry[i]` on `tracks[i]`. Throws std::invalid_argument
-// (one line naming the track) without power or ground truth.
+// Trains both detectors on tracks with ground truth (and the drive of the
+// options), against the errors of `odometry[i]` on `tracks[i]`. Throws
+// std::invalid_argument (one line naming the track) without the drive or
+// ground truth, or for tracks of different odometry inputs.
 SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tracks,
                                       const std::vector<OdometrySeries>& odometry,
                                       const SlipTrainingOptions& options, SlipTrainingSummary* summary);
@@ -129,16 +153,16 @@ SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tra
 class SlipDetectorStepper {
  public:
   explicit SlipDetectorStepper(const SlipDetectorModel* model);
-  // Step k's powers and increments → (var_V, var_W) for this step's odometry.
-  // A NaN power (no sample in the step) repeats the last finite one.
-  std::array<double, 2> step(double power_l, double power_r, double dticks_l, double dticks_r);
+  // Step k of `in` → (var_V, var_W) for this step's odometry. A NaN drive
+  // value (no sample in the step) repeats the last finite one.
+  std::array<double, 2> step(const FusionInput& in, std::size_t k);
 
  private:
   const SlipDetectorModel* model_;
   std::vector<double> v_rows_, w_rows_;
   std::array<double, 2> previous_;
   std::vector<std::array<double, 2>> history_;  // the last previous_lag outputs, oldest first
-  std::array<double, 2> last_power_{0.0, 0.0};  // (P_l, P_r) last finite [W]
+  std::array<double, 2> last_drive_{0.0, 0.0};  // the drive channels' last finite values
   int filled_ = 0;
 };
 

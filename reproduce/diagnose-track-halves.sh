@@ -10,15 +10,7 @@ in=$1 out=$2 name=$3
 BIN=${BIN:-build/odotune}
 T=$out/tracks
 mkdir -p "$T"
-# The first and the last data row's time; rows split at their middle.
-read -r t0 t1 < <(awk -F, '!/^#/ && $1 ~ /^[0-9.]+$/ {if (!n++) a = $1; b = $1} END {print a, b}' "$in")
-mid=$(echo "$t0 $t1" | awk '{print ($1 + $2) / 2}')
-for half in first second; do
-  awk -F, -v mid="$mid" -v half=$half '
-    /^# name:/ {print $0 "-" half "-half"; next}
-    /^#/ || $1 !~ /^[0-9.]+$/ {print; next}
-    (half == "first" && $1 < mid) || (half == "second" && $1 >= mid) {print}' "$in" > "$T/$name-$half-half.csv"
-done
+bash "$(dirname "$0")/track-halves.sh" "$in" "$T" "$name" > /dev/null
 echo "== $name-halves (first half fitted, second half held out)" | tee "$out/$name-halves.txt"
 t=$SECONDS
 "$BIN" diagnose "$T/$name-first-half.csv" --heldout "$T/$name-second-half.csv" --json "$out/$name-halves.json" 2>&1 |

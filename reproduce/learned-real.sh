@@ -1,79 +1,106 @@
 #!/usr/bin/env bash
-# Learned odometry on a real robot, held out by recording (docs/learned/real.md):
-# OptiOdom (../shared/data/real/optiodom_diff, SOURCE.md there: a differential
-# robot with motion capture), trained on the 23 Dec runs and judged on the 2-3 Jan
-# runs, and the reverse. For each fold: the paper's nets (--target velocity) and
-# correction nets (--target correction, validated on the last training recording
-# held out whole, --validation recordings; they fall back to the kinematic
-# odometry when they do not beat it there), seed 1; the
-# correction nets' verdict again with seeds 2 and 3. Each judged against the
-# nominal kinematic odometry on every held-out run (learn eval).
+# Learned odometry on real robots, held out by recording (docs/learned/real.md).
+#   OptiOdom (wheel encoders, ../shared/data/real/optiodom_diff): trained on the
+#     four 23 Dec runs, judged on the three 2-3 Jan runs, and the reverse;
+#   MRCLAM robots 1-3 (commands, ../shared/data/real/mrclam7): trained on two,
+#     judged on the third, all three ways;
+#   Lost in the Woods (a measured twist, ../shared/data/real/utias_lost_in_the_woods):
+#     trained on the first half, judged on the second, and the reverse.
+# For each fold and seed (SEEDS, default 1 2 3): correction nets chosen by
+# cross-validation inside the training recordings (`learn train`, defaults),
+# with a slip detector trained on the same recordings; the kinematics
+# calibrated on the same recordings (`calibrate --method batch`); each
+# held-out recording scored (`learn eval`) for the learned, nominal and
+# calibrated kinematics, and fused with 1 Hz fixes (`odotune fixes`, σ 0.1 m,
+# seed 1). OptiOdom also with the paper's velocity nets (seed 1). One
+# held-out recording per dataset is retrained on its first half (reference:
+# velocities from its ground truth at 10 Hz) and judged on its second half.
+# The tables: OUT/tables.md (docs/learned/real.md reads them).
 #   bash reproduce/learned-real.sh [OUT_DIR]        (default out/learned-real)
-# Needs build/odotune. BIN and REAL as in the other scripts. MRCLAM and Lost in the
-# Woods have no wheel increments (commands, resp. a measured twist) and are not
-# yet taken by `learn train`.
+# Needs build/odotune. BIN, REAL and SEEDS as above. About an hour on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REAL=${REAL:-../shared/data/real}
 OUT=${1:-out/learned-real}
 BIN=${BIN:-build/odotune}
+SEEDS=${SEEDS:-"1 2 3"}
 T=$OUT/tracks
 mkdir -p "$T"
+start=$SECONDS
+
+# ---------------------------------------------------------------- tracks
 REAL="$REAL" BIN="$BIN" bash reproduce/optiodom-days-tracks.sh "$T"
+for r in 1 2 3; do "$BIN" import mrclam "$REAL/mrclam7" --robot $r -o "$T/robot$r.csv" > /dev/null; done
+"$BIN" import litw "$REAL/utias_lost_in_the_woods/derived/litw_series.csv" -o "$T/litw.csv" > /dev/null
+bash reproduce/track-halves.sh "$T/litw.csv" "$T" litw > /dev/null
 DEC=(231220200045_run-01 231220200045_run-02 231220200146_run-01 231220200146_run-02)
 JAN=(020120212354_run-01 030120210001_run-01 030120210001_run-02)
+for name in "${DEC[@]}" "${JAN[@]}" robot1 robot2 robot3 litw-first-half litw-second-half; do
+  "$BIN" fixes "$T/$name.csv" -o "$T/$name-fixes.csv" --rate-hz 1 --sigma-m 0.1 --seed 1 > /dev/null
+done
 
-fold() {  # name, target, seed, the training runs, "--", the held-out runs
-  local name=$1 target=$2 seed=$3
+# ---------------------------------------------------------------- folds
+# fold DATASET FOLD SEED TRAIN... -- HELD...: correction nets, their slip
+# detector, the calibration (once per fold) and every held-out recording.
+fold() {
+  local dataset=$1 name=$2 seed=$3
   shift 3
-  local train=()
-  while [ "$1" != "--" ]; do train+=(--track "$T/$1.csv"); shift; done
+  local train=() slips=()
+  while [ "$1" != "--" ]; do train+=(--track "$T/$1.csv"); slips+=(--slip-track "$T/$1.csv"); shift; done
   shift
-  local dir=$OUT/$name/$target-seed$seed
+  local base=$OUT/$dataset/$name dir=$OUT/$dataset/$name/seed$seed
   mkdir -p "$dir"
-  local validation=chronological
-  [ "$target" = correction ] && validation=recordings
-  "$BIN" learn train "${train[@]}" --iterations 50 --seed "$seed" --target "$target" --validation $validation \
-    --threads 2 --model-out "$dir/model.json" > "$dir/train.txt"
+  [ -f "$base/calibration.yaml" ] ||
+    "$BIN" calibrate "${train[@]}" --method batch --config-out "$base/calibration.yaml" > "$base/calibration.txt"
+  local t0=$SECONDS
+  "$BIN" learn train "${train[@]}" "${slips[@]}" --seed "$seed" --iterations 60 --threads 2 \
+    --model-out "$dir/model.json" > "$dir/train.txt"
+  echo "wall $((SECONDS - t0)) s" >> "$dir/train.txt"
   for r in "$@"; do
-    "$BIN" learn eval --track "$T/$r.csv" --model "$dir/model.json" --json "$dir/eval-$r.json" > "$dir/eval-$r.txt"
+    "$BIN" learn eval --track "$T/$r-fixes.csv" --model "$dir/model.json" --calibration "$base/calibration.yaml" \
+      --fix-sigma-m 0.1 --json "$dir/eval-$r.json" > "$dir/eval-$r.txt"
+  done
+  echo "$dataset $name seed $seed: $((SECONDS - t0)) s"
+}
+for seed in $SEEDS; do
+  fold optiodom train-dec23 "$seed" "${DEC[@]}" -- "${JAN[@]}"
+  fold optiodom train-jan "$seed" "${JAN[@]}" -- "${DEC[@]}"
+  fold mrclam train-12 "$seed" robot1 robot2 -- robot3
+  fold mrclam train-13 "$seed" robot1 robot3 -- robot2
+  fold mrclam train-23 "$seed" robot2 robot3 -- robot1
+  fold litw train-first "$seed" litw-first-half -- litw-second-half
+  fold litw train-second "$seed" litw-second-half -- litw-first-half
+done
+
+# The paper's velocity nets on OptiOdom (wheel increments only), seed 1.
+for f in "train-dec23:${DEC[*]}:${JAN[*]}" "train-jan:${JAN[*]}:${DEC[*]}"; do
+  IFS=: read -r name train held <<< "$f"
+  dir=$OUT/optiodom/$name/velocity
+  mkdir -p "$dir"
+  args=()
+  for r in $train; do args+=(--track "$T/$r.csv"); done
+  "$BIN" learn train "${args[@]}" --target velocity --iterations 50 --seed 1 --threads 2 \
+    --model-out "$dir/model.json" > "$dir/train.txt"
+  for r in $held; do "$BIN" learn eval --track "$T/$r.csv" --model "$dir/model.json" --json "$dir/eval-$r.json" > /dev/null; done
+done
+
+# ---------------------------------------------------------------- retraining
+# retrain DATASET FOLD HELD: seed 1's model retrained on the held-out
+# recording's first half, both models judged on its second half.
+retrain() {
+  local dataset=$1 name=$2 held=$3
+  local dir=$OUT/$dataset/$name/seed1 track=$T/$3.csv
+  local mid
+  mid=$(awk -F, '!/^#/ && $1 ~ /^[0-9.]+$/ {if (!n++) a = $1; b = $1} END {print (a + b) / 2}' "$track")
+  "$BIN" learn retrain --track "$track" --model "$dir/model.json" --static-covariance --ext-from-gt 10 \
+    --until "$mid" --model-out "$dir/retrained-$held.json" --json "$dir/retrain-$held.json" > "$dir/retrain-$held.txt"
+  for m in model "retrained-$held"; do
+    "$BIN" learn eval --track "$track" --model "$dir/$m.json" --from "$mid" --json "$dir/second-half-$m-$held.json" > /dev/null
   done
 }
-for target in velocity correction; do
-  fold train-dec23 "$target" 1 "${DEC[@]}" -- "${JAN[@]}"
-  fold train-jan "$target" 1 "${JAN[@]}" -- "${DEC[@]}"
-done
-for seed in 2 3; do
-  fold train-dec23 correction "$seed" "${DEC[@]}" -- "${JAN[@]}"
-  fold train-jan correction "$seed" "${JAN[@]}" -- "${DEC[@]}"
-done
+retrain optiodom train-dec23 020120212354_run-01
+retrain mrclam train-12 robot3
+retrain litw train-first litw-second-half
 
-python3 - "$OUT" <<'PY' | tee "$OUT/table.md"
-import glob, json, os, sys
-out = sys.argv[1]
-print("| fold | held-out run | odometry | V MAE [m/s] | W MAE [rad/s] | XY RMSE [m] | θ RMSE [rad] | XY ÷ kinematic |")
-print("|---|---|---|---:|---:|---:|---:|---:|")
-for fold in ("train-dec23", "train-jan"):
-    for path in sorted(glob.glob(f"{out}/{fold}/velocity-seed1/eval-*.json")):
-        run = os.path.basename(path)[5:-5]
-        rows = [("kinematic", json.load(open(path))["kinematic"])]
-        for target in ("velocity", "correction"):
-            rows.append((f"learned, {target}", json.load(open(f"{out}/{fold}/{target}-seed1/eval-{run}.json"))["learned"]))
-        k = rows[0][1]["pos_rmse_m"]
-        for name, e in rows:
-            print(f"| {fold} | {run} | {name} | {e['v_mae']:.4f} | {e['w_mae']:.4f} | {e['pos_rmse_m']:.3f} | "
-                  f"{e['theta_rmse_rad']:.3f} | {e['pos_rmse_m'] / k:.2f} |")
-print()
-print("Correction nets' verdict in training (free-running MAE on the held-out training recording against the kinematic odometry's):")
-print()
-for fold in ("train-dec23", "train-jan"):
-    for seed in (1, 2, 3):
-        d = f"{out}/{fold}/correction-seed{seed}"
-        line = [l for l in open(f"{d}/train.txt") if "free-running" in l]
-        ratios = []
-        for path in sorted(glob.glob(f"{d}/eval-*.json")):
-            e = json.load(open(path))
-            ratios.append(f"{e['learned']['pos_rmse_m'] / e['kinematic']['pos_rmse_m']:.2f}")
-        print(f"- {fold}, seed {seed}:{line[0].split(':', 1)[1].rstrip()}; held out, XY RMSE ÷ kinematic's: "
-              + ", ".join(ratios))
-PY
+python3 reproduce/learned-real-tables.py "$OUT" "$SEEDS" | tee "$OUT/tables.md"
+echo "wall $((SECONDS - start)) s"

@@ -161,14 +161,22 @@ json learned_model_json(const LearnedModelFile& m) {
                    {"w_beats_kinematic", o.w_beats_kinematic},
                    {"v_validation_mae", o.v_validation_mae},
                    {"w_validation_mae", o.w_validation_mae},
+                   {"v_kinematic_mae", o.v_kinematic_mae},
+                   {"w_kinematic_mae", o.w_kinematic_mae},
                    {"v_net", odometry_net_to_json(o.v_net)},
                    {"w_net", odometry_net_to_json(o.w_net)}};
   if (m.detector)
-    j["detector"] = {
-        {"floor_var_v", m.detector->floor_var_v},         {"floor_var_w", m.detector->floor_var_w},
-        {"previous_lag", m.detector->previous_lag},       {"max_log_ratio_v", m.detector->max_log_ratio_v},
-        {"max_log_ratio_w", m.detector->max_log_ratio_w}, {"v_net", lstm_to_json(m.detector->v_net)},
-        {"w_net", lstm_to_json(m.detector->w_net)}};
+    j["detector"] = {{"floor_var_v", m.detector->floor_var_v},
+                     {"floor_var_w", m.detector->floor_var_w},
+                     {"previous_lag", m.detector->previous_lag},
+                     {"max_log_ratio_v", m.detector->max_log_ratio_v},
+                     {"max_log_ratio_w", m.detector->max_log_ratio_w},
+                     {"v_net", lstm_to_json(m.detector->v_net)},
+                     {"w_net", lstm_to_json(m.detector->w_net)},
+                     {"drive", std::string(to_string(m.detector->drive))},
+                     {"input", std::string(to_string(m.detector->input))},
+                     {"flag_var_v", m.detector->flag_var_v},
+                     {"flag_var_w", m.detector->flag_var_w}};
   const LearnedModelProvenance& p = m.provenance;
   json prov = {{"tracks", p.tracks},
                {"slip_tracks", p.slip_tracks},
@@ -226,6 +234,10 @@ LearnedModelFile parse_learned_model(const json& j, const std::string& file) {
     }
   m.odometry.v_validation_mae = r.number(o, "odometry", "v_validation_mae", false, false);
   m.odometry.w_validation_mae = r.number(o, "odometry", "w_validation_mae", false, false);
+  if (r.has(o, "v_kinematic_mae"))
+    m.odometry.v_kinematic_mae = r.number(o, "odometry", "v_kinematic_mae", false, false);
+  if (r.has(o, "w_kinematic_mae"))
+    m.odometry.w_kinematic_mae = r.number(o, "odometry", "w_kinematic_mae", false, false);
   m.odometry.v_net = parse_odometry_net(r, o, "odometry", "v_net");
   m.odometry.w_net = parse_odometry_net(r, o, "odometry", "w_net");
   if (m.odometry.v_net.activation() != OutputActivation::linear ||
@@ -241,6 +253,19 @@ LearnedModelFile parse_learned_model(const json& j, const std::string& file) {
     det.floor_var_w = r.number(d, "detector", "floor_var_w", true, false);
     det.max_log_ratio_v = r.number(d, "detector", "max_log_ratio_v", true, false);
     det.max_log_ratio_w = r.number(d, "detector", "max_log_ratio_w", true, false);
+    // Files written before these keys: the paper's detector (power, wheels), no flag.
+    if (r.has(d, "drive")) {
+      const std::string drive = r.text(d, "detector", "drive");
+      if (!parse_slip_drive(drive, &det.drive))
+        r.fail("detector.drive", fmt::format("'{}'; expected 'power', 'commands' or 'none'", drive));
+    }
+    if (r.has(d, "input")) {
+      const std::string input = r.text(d, "detector", "input");
+      if (!parse_odometry_input(input, &det.input))
+        r.fail("detector.input", fmt::format("'{}'; expected 'wheels', 'twist' or 'commands'", input));
+    }
+    if (r.has(d, "flag_var_v")) det.flag_var_v = r.number(d, "detector", "flag_var_v", false, false);
+    if (r.has(d, "flag_var_w")) det.flag_var_w = r.number(d, "detector", "flag_var_w", false, false);
     det.v_net = parse_net<SlipNet>(r, d, "detector", "v_net");
     det.w_net = parse_net<SlipNet>(r, d, "detector", "w_net");
     const std::uint64_t lag = r.count(d, "detector", "previous_lag");

@@ -13,8 +13,11 @@
 //                  "gyro": false,                           // absent: false
 //                  "v_beats_kinematic": true, "w_beats_kinematic": true,  // absent: true
 //                  "v_validation_mae": …, "w_validation_mae": …,
+//                  "v_kinematic_mae": …, "w_kinematic_mae": …, // absent: 0 (unknown)
 //                  "v_net": {…}, "w_net": {…}},            // results/lstm_json.h (3, 5 or 8 units)
 //     "detector": {"floor_var_v": …, "floor_var_w": …, "previous_lag": 1,
+//                  "drive": "power" | "commands" | "none",   // absent: power
+//                  "input": "wheels" | …,  "flag_var_v": …, "flag_var_w": …,  // absent: wheels, 0
 //                  "max_log_ratio_v": …, "max_log_ratio_w": …,
 //                  "v_net": {…}, "w_net": {…}},            // optional
 //     "provenance": {"tracks": [names], "slip_tracks": [names], "seed": 1,

@@ -12,6 +12,7 @@
 #include "core/output_paths.h"
 #include "formats/calibration_yaml.h"
 #include "formats/config_yaml.h"
+#include "learned/pose_fusion.h"
 #include "studies/learned_study.h"
 #include "studies/learned_study_outputs.h"
 #include "tracks/track_io.h"
@@ -72,11 +73,12 @@ std::vector<const FusionInput*> fusion_pointers(const std::vector<FusionInput>& 
 
 std::vector<FusionInput> load_fusion_inputs(const std::vector<std::string>& files, double rate_hz,
                                             bool need_power, const char* purpose,
-                                            std::optional<OdometryInput> input) {
+                                            std::optional<OdometryInput> input, double ext_from_gt_hz) {
   const std::vector<Track> tracks = load_tracks(files);
   FusionInputOptions o;
   o.rate_hz = rate_hz;
   o.input = input;
+  o.ext_from_gt_hz = ext_from_gt_hz;
   std::string why;
   if (!o.IsValid(&why)) throw Failure(fmt::format("--rate-hz {}: {}", rate_hz, why));
   std::vector<FusionInput> out;
@@ -132,6 +134,105 @@ void check_model_fits(const LearnedModelFile& m, const FusionInput& in, const st
 
 namespace {
 
+// The steps --from and --until leave to score: [first, end).
+std::pair<std::size_t, std::size_t> scored_span(const LearnEvalRequest& r, const FusionInput& in) {
+  std::size_t first = 0, end = in.size();
+  while (r.from_s && first < end && in.t[first] < *r.from_s) ++first;
+  while (r.until_s && end > first && in.t[end - 1] >= *r.until_s) --end;
+  if (end - first < 2)
+    throw Failure(fmt::format("--from/--until: {} step{} of track '{}' left to score; expected at least 2",
+                              end - first, end - first == 1 ? "" : "s", in.track_name));
+  return {first, end};
+}
+
+OdometrySeries slice_series(const OdometrySeries& s, std::size_t first, std::size_t end) {
+  const auto cut = [&](const std::vector<double>& v) {
+    return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(first),
+                               v.begin() + static_cast<std::ptrdiff_t>(end));
+  };
+  return {cut(s.v), cut(s.w)};
+}
+
+// Static odometry variances from an MAE, as a Gaussian's: σ = MAE·√(π/2).
+std::vector<OdometryMeasurement> measured(const OdometrySeries& s, double mae_v, double mae_w) {
+  std::vector<OdometryMeasurement> m(s.v.size());
+  const double var_v = std::max(1e-8, mae_v * mae_v * std::numbers::pi / 2);
+  const double var_w = std::max(1e-8, mae_w * mae_w * std::numbers::pi / 2);
+  for (std::size_t k = 0; k < m.size(); ++k) m[k] = {s.v[k], s.w[k], var_v, var_w};
+  return m;
+}
+
+// What the slip detector flags on the scored steps, and the learned
+// odometry's error there and elsewhere (LearnEvalOutcome::Flags).
+LearnEvalOutcome::Flags slip_flags(const FusionInput& full, const SlipDetectorModel& d,
+                                   const OdometrySeries& odo, std::size_t first, std::size_t end,
+                                   nlohmann::json& j) {
+  LearnEvalOutcome::Flags f;
+  f.drive = d.drive;
+  SlipDetectorStepper stepper(&d);
+  std::size_t n_in = 0, n_out = 0;
+  for (std::size_t k = 1; k < end; ++k) {
+    const auto var = stepper.step(full, k);
+    if (k < first || !std::isfinite(full.v_true[k]) || !std::isfinite(full.w_true[k])) continue;
+    const bool flagged = var[0] > d.flag_var_v || var[1] > d.flag_var_w;
+    const double ev = std::abs(odo.v[k] - full.v_true[k]), ew = std::abs(odo.w[k] - full.w_true[k]);
+    ++f.steps;
+    if (flagged)
+      ++f.flagged, ++n_in, f.v_in += ev, f.w_in += ew;
+    else
+      ++n_out, f.v_out += ev, f.w_out += ew;
+  }
+  const auto mean = [](double sum, std::size_t n) {
+    return n > 0 ? sum / static_cast<double>(n) : std::nan("");
+  };
+  f.v_in = mean(f.v_in, n_in), f.w_in = mean(f.w_in, n_in);
+  f.v_out = mean(f.v_out, n_out), f.w_out = mean(f.w_out, n_out);
+  const auto n = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  j["slip_detector"] = {{"drive", std::string(to_string(d.drive))},
+                        {"steps", f.steps},
+                        {"flagged", f.flagged},
+                        {"v_abs_error_flagged", n(f.v_in)},
+                        {"v_abs_error_other", n(f.v_out)},
+                        {"w_abs_error_flagged", n(f.w_in)},
+                        {"w_abs_error_other", n(f.w_out)}};
+  return f;
+}
+
+// Each odometry fused with the track's fixes (learned/pose_fusion.h), the
+// kinematic ones with the kinematic MAE of the model's validation as their
+// variance (the learned ones' where the file has none).
+void fuse_with_fixes(const LearnEvalRequest& r, const LearnedModelFile& m, const FusionInput& in,
+                     const OdometrySeries& lstm, const FusionInput* cal, LearnEvalOutcome& out,
+                     nlohmann::json& j) {
+  PoseFusionOptions o;
+  o.fix_sigma_m = r.fix_sigma_m;
+  o.noise.use_external = false;  // the fixes are the other sensor here
+  const LearnedOdometryModel& mo = m.odometry;
+  const double kv = mo.v_kinematic_mae > 0 ? mo.v_kinematic_mae : mo.v_validation_mae;
+  const double kw = mo.w_kinematic_mae > 0 ? mo.w_kinematic_mae : mo.w_validation_mae;
+  LearnEvalOutcome::Fused f;
+  try {
+    const PoseFusionTrace tl = replay_pose_fusion(in, measured(lstm, mo.v_validation_mae, mo.w_validation_mae),
+                                                  o);
+    const PoseFusionTrace tk = replay_pose_fusion(in, measured(kinematic_odometry(in), kv, kw), o);
+    f.learned = pose_fusion_errors(in, tl);
+    f.kinematic = pose_fusion_errors(in, tk);
+    f.fixes = tl.fixes;
+    if (cal)
+      f.calibrated = pose_fusion_errors(
+          *cal, replay_pose_fusion(*cal, measured(kinematic_odometry(*cal), kv, kw), o));
+  } catch (const std::invalid_argument& e) {
+    out.not_fused = e.what();
+    return;
+  }
+  const auto block = [](const ErrorMetrics& e) {
+    return nlohmann::json{{"pos_rmse_m", e.rmse_m}, {"pos_mae_m", e.mae_m}, {"samples", e.samples}};
+  };
+  j["fused"] = {{"fixes", f.fixes}, {"learned", block(f.learned)}, {"kinematic", block(f.kinematic)}};
+  if (f.calibrated) j["fused"]["calibrated"] = block(*f.calibrated);
+  out.fused = f;
+}
+
 // The eval track laid out with the calibration file's kinematics.
 FusionInput calibrated_input(const LearnEvalRequest& r, const LearnedModelFile& m) {
   const CalibrationFile cal = read_calibration_file(r.calibration);
@@ -161,10 +262,11 @@ LearnEvalOutcome run_learn_eval(const LearnEvalRequest& r) {
   if (!r.calibration.empty()) (void)read_calibration_file(r.calibration);  // a bad file fails before the work
   const std::vector<FusionInput> tracks = load_fusion_inputs({r.track}, m.odometry.rate_hz, false,
                                                              "to score the odometry against", m.odometry.input);
-  const FusionInput& in = tracks.front();
-  check_model_fits(m, in, r.track, r.model);
-  const OdometrySeries lstm = run_learned_odometry(in, m.odometry);
-  const OdometrySeries kin = kinematic_odometry(in);
+  check_model_fits(m, tracks.front(), r.track, r.model);
+  const auto [first, end] = scored_span(r, tracks.front());
+  const OdometrySeries lstm_full = run_learned_odometry(tracks.front(), m.odometry);
+  const FusionInput in = slice_fusion_input(tracks.front(), first, end);
+  const OdometrySeries lstm = slice_series(lstm_full, first, end), kin = kinematic_odometry(in);
   const PoseTrack pl = dead_reckon(in, lstm.v, lstm.w), pk = dead_reckon(in, kin.v, kin.w);
   LearnEvalOutcome out;
   out.learned = odometry_errors(in, lstm.v, lstm.w, {}, {}, {});
@@ -176,12 +278,17 @@ LearnEvalOutcome run_learn_eval(const LearnEvalRequest& r) {
                       {"input", std::string(to_string(m.odometry.input))},
                       {"learned", flat_errors_json(out.learned)},
                       {"kinematic", flat_errors_json(out.kinematic)}};
+  std::optional<FusionInput> cal;
   if (!r.calibration.empty()) {
-    const FusionInput cal = calibrated_input(r, m);
-    out.calibrated = odometry_errors(cal, cal.v_kin, cal.w_kin, {}, {}, {});
+    cal = slice_fusion_input(calibrated_input(r, m), first, end);
+    out.calibrated = odometry_errors(*cal, cal->v_kin, cal->w_kin, {}, {}, {});
     j["calibrated"] = flat_errors_json(*out.calibrated);
     j["calibration"] = r.calibration;
   }
+  if (in.has_fixes) fuse_with_fixes(r, m, in, lstm, cal ? &*cal : nullptr, out, j);
+  if (m.detector && m.detector->flag_var_v > 0 && m.detector->input == in.input)
+    out.slip = slip_flags(tracks.front(), *m.detector, lstm_full, first, end, j);
+  if (first > 0 || end < tracks.front().size()) j["span_s"] = {in.t.front(), in.t.back()};
   if (!r.csv.empty()) write_file_atomically(r.csv, per_step_csv(in, lstm, kin, pl, pk));
   if (!r.json.empty()) write_file_atomically(r.json, j.dump(2) + "\n");
   out.track_name = in.track_name;
@@ -219,6 +326,21 @@ std::vector<std::string> learn_eval_lines(const LearnEvalOutcome& o) {
   l.push_back(errors_line("learned", o.learned));
   l.push_back(errors_line("kinematic", o.kinematic));
   if (o.calibrated) l.push_back(errors_line("calibrated", *o.calibrated));
+  if (o.fused)
+    l.push_back(fmt::format("  fused with {} position fixes: XY RMSE learned {:.3f} m, kinematic {:.3f} m{}",
+                            o.fused->fixes, o.fused->learned.rmse_m, o.fused->kinematic.rmse_m,
+                            o.fused->calibrated
+                                ? fmt::format(", calibrated {:.3f} m", o.fused->calibrated->rmse_m)
+                                : std::string()));
+  if (!o.not_fused.empty()) l.push_back("  not fused with the track's fixes: " + o.not_fused);
+  if (o.slip)
+    l.push_back(
+        fmt::format("  slip detector ({}): flags {} of {} steps ({:.1f} %); learned odometry's mean |error| "
+                    "there V {:.4f} m/s, W {:.4f} rad/s, elsewhere V {:.4f}, W {:.4f}",
+                    to_string(o.slip->drive), o.slip->flagged, o.slip->steps,
+                    100.0 * static_cast<double>(o.slip->flagged) /
+                        static_cast<double>(std::max<std::size_t>(1, o.slip->steps)),
+                    o.slip->v_in, o.slip->w_in, o.slip->v_out, o.slip->w_out));
   if (!o.csv.empty()) l.push_back(fmt::format("csv: {}", o.csv));
   if (!o.json.empty()) l.push_back(fmt::format("json: {}", o.json));
   return l;
@@ -295,17 +417,24 @@ LearnRetrainOutcome run_learn_retrain(const LearnRetrainRequest& r, const LearnP
   if (r.iterations < 1) throw Failure(fmt::format("--iterations {}: expected >= 1", r.iterations));
   const LearnedModelFile m = load_learned_model(r.model);
   const bool detector = m.detector && !r.static_covariance;
+  if (!(r.ext_from_gt_hz >= 0.0 && r.ext_from_gt_hz <= 100.0))
+    throw Failure(fmt::format("--ext-from-gt {}: expected a rate in (0, 100] Hz", r.ext_from_gt_hz));
   const std::vector<FusionInput> tracks = load_fusion_inputs({r.track}, m.odometry.rate_hz, detector,
                                                              "(the model's slip detector reads it; or give "
                                                              "--static-covariance)",
-                                                             m.odometry.input);
-  const FusionInput& in = tracks.front();
-  check_model_fits(m, in, r.track, r.model);
+                                                             m.odometry.input, r.ext_from_gt_hz);
+  check_model_fits(m, tracks.front(), r.track, r.model);
+  std::size_t end = tracks.front().size();
+  while (r.until_s && end > 0 && tracks.front().t[end - 1] >= *r.until_s) --end;
+  if (end < 2)
+    throw Failure(fmt::format("--until {}: no step of track '{}' before it", *r.until_s,
+                              tracks.front().track_name));
+  const FusionInput in = slice_fusion_input(tracks.front(), 0, end);
   if (!in.has_ext)
-    throw Failure(
-        fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext); expected them: the UKF "
-                    "retrains on its fused velocities",
-                    r.track, in.track_name));
+    throw Failure(fmt::format(
+        "{}: track '{}' has no external velocities (v_ext, w_ext); expected them, or --ext-from-gt HZ "
+        "to derive them from its ground truth: the UKF retrains on its fused velocities",
+        r.track, in.track_name));
 
   LearnedFusionOptions o = retrain_fusion_options(r, m, detector);
   report(progress, 0, 2);

@@ -38,12 +38,14 @@ using LearnProgress = std::function<void(long done, long total)>;
 // ---------------------------------------------------------------- shared pieces
 
 // Loads track files and lays them out for fusion at `rate_hz` from their
-// `input` odometry (nullopt: each track's own); every track must have ground
+// `input` odometry (nullopt: each track's own; ext_from_gt_hz as
+// FusionInputOptions); every track must have ground
 // truth, and motor power when `need_power`. `purpose` ends the error line
 // ("expected it " + purpose).
 std::vector<FusionInput> load_fusion_inputs(const std::vector<std::string>& files, double rate_hz,
                                             bool need_power, const char* purpose,
-                                            std::optional<OdometryInput> input = std::nullopt);
+                                            std::optional<OdometryInput> input = std::nullopt,
+                                            double ext_from_gt_hz = 0.0);
 
 std::vector<const FusionInput*> fusion_pointers(const std::vector<FusionInput>& v);
 
@@ -96,6 +98,7 @@ struct LearnTrainOutcome {
   LearnedTrainingSummary odometry;                      // the paper's nets
   std::optional<SelectionSummary> selection;            // correction nets
   std::optional<SlipTrainingSummary> detector;          // when slip tracks were given
+  SlipDrive detector_drive = SlipDrive::power;          // what its drive channels read
   double kinematic_v_mae = 0.0, kinematic_w_mae = 0.0;  // pooled over the training tracks
   LearnedTarget target = LearnedTarget::velocity;
   LearnedValidation validation = LearnedValidation::chronological;
@@ -121,6 +124,13 @@ struct LearnEvalRequest {
   // Optional: a calibration file (odotune calibrate --config-out) of the
   // model's odometry; its calibrated kinematics are scored too.
   std::string calibration;
+  // Score only the steps from from_s on and before until_s [s, on the
+  // track's clock] (the odometry still runs from the track's start).
+  std::optional<double> from_s, until_s;
+  // A track with position fixes: each odometry is also fused with them
+  // (learned/pose_fusion.h); this σ [m] where a fix has no variance (0: such
+  // fixes are not fused, and the lines say why).
+  double fix_sigma_m = 0.0;
   std::string json;  // optional: errors of the learned and the kinematic odometry
   std::string csv;   // optional: velocities and dead-reckoned poses per step
 };
@@ -132,6 +142,24 @@ struct LearnEvalOutcome {
   bool v_beats_kinematic = true, w_beats_kinematic = true;  // the model's training verdict
   OdometryErrors learned, kinematic;
   std::optional<OdometryErrors> calibrated;  // with --calibration
+  // Fused with the track's fixes: the position errors of each odometry's
+  // fusion (calibrated with --calibration), the fixes fused; or why not.
+  struct Fused {
+    ErrorMetrics learned, kinematic;
+    std::optional<ErrorMetrics> calibrated;
+    std::size_t fixes = 0;
+  };
+  std::optional<Fused> fused;
+  std::string not_fused;  // a track with fixes that could not be fused: why
+  // The model's slip detector on the track (when it has one with flag
+  // thresholds): the steps it flags, and the learned odometry's mean |error|
+  // inside and outside them [m/s, rad/s].
+  struct Flags {
+    SlipDrive drive = SlipDrive::power;
+    std::size_t steps = 0, flagged = 0;
+    double v_in = 0, v_out = 0, w_in = 0, w_out = 0;
+  };
+  std::optional<Flags> slip;
 };
 
 // Scores the learned and the kinematic odometry (pose dead-reckoned from each;
@@ -146,8 +174,13 @@ std::vector<std::string> learn_eval_lines(const LearnEvalOutcome& outcome);
 // ---------------------------------------------------------------- retrain
 
 struct LearnRetrainRequest {
-  std::string track;               // with ground truth and external velocities
-  std::string model;               // model file to start from
+  std::string track;  // with ground truth and external velocities (or --ext-from-gt)
+  std::string model;  // model file to start from
+  // > 0: the external velocities derived from the ground truth at this rate
+  // [Hz] (FusionInputOptions::ext_from_gt_hz), for datasets whose reference
+  // is a pose (motion capture), as the paper's Velodyne gave its velocities.
+  double ext_from_gt_hz = 0.0;
+  std::optional<double> until_s;   // retrain on the steps before this time only [s, the track's clock]
   std::string model_out;           // optional: the retrained model
   std::string json;                // optional: retrain events, errors with and without retraining
   int every = 300;                 // samples per retrain, ≥ 20

@@ -135,6 +135,7 @@ void train_detector(const LearnTrainRequest& r, const std::vector<FusionInput>& 
   SlipTrainingOptions so;
   so.training = learn_training_options(r.seed, r.slip_iterations > 0 ? r.slip_iterations : r.iterations,
                                        r.threads);
+  so.drive = available_slip_drive(fusion_pointers(slips));
   SlipTrainingSummary slip_summary;
   try {
     file.detector = train_slip_detector(fusion_pointers(slips), odo, so, &slip_summary);
@@ -145,6 +146,7 @@ void train_detector(const LearnTrainRequest& r, const std::vector<FusionInput>& 
                                                       slip_summary.train_windows,
                                                       slip_summary.validation_windows, slip_summary.seconds);
   out.detector = slip_summary;
+  out.detector_drive = so.drive;
 }
 
 }  // namespace
@@ -154,7 +156,7 @@ LearnTrainOutcome run_learn_train(const LearnTrainRequest& r, const LearnProgres
   check_request(r, validation);
   const std::vector<FusionInput> tracks = load_fusion_inputs(r.tracks, r.rate_hz, false,
                                                              "to learn odometry from", r.input);
-  const std::vector<FusionInput> slips = load_fusion_inputs(r.slip_tracks, r.rate_hz, true,
+  const std::vector<FusionInput> slips = load_fusion_inputs(r.slip_tracks, r.rate_hz, false,
                                                             "to train the slip detector on", r.input);
   LearnTrainOutcome out;
   LearnedModelFile file;
@@ -262,8 +264,11 @@ std::vector<std::string> learn_train_lines(const LearnTrainOutcome& o) {
                           o.kinematic_v_mae, o.kinematic_w_mae));
   if (o.detector)
     l.push_back(fmt::format(
-        "slip detector trained on {} track{} ({} + {} windows; {:.1f} s): variance MAE V {:.3g}, W "
-        "{:.3g} (validation)",
+        "slip detector ({} and the odometry) trained on {} track{} ({} + {} windows; {:.1f} s): variance MAE V "
+        "{:.3g}, W {:.3g} (validation)",
+        o.detector_drive == SlipDrive::power      ? "motor power"
+        : o.detector_drive == SlipDrive::commands ? "the commands"
+                                                  : "no drive signal",
         o.slip_tracks, o.slip_tracks == 1 ? "" : "s", o.detector->train_windows, o.detector->validation_windows,
         o.detector->seconds, o.detector->v.validation_mae, o.detector->w.validation_mae));
   l.push_back(fmt::format("model: {}", o.model_out));

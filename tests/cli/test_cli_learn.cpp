@@ -259,6 +259,74 @@ TEST_F(LearnCli, CorrectionNetsOnCommandsAreCrossValidatedAndRecorded) {
   expect_one_line_error(run_cli("learn eval --track " + wheels.string() + " --model " + cmd.string()), "v_cmd");
 }
 
+// With position fixes on the track, eval also fuses each odometry with them
+// (the fixes' σ given, as `odotune fixes` writes none); --from scores the
+// second part only.
+TEST_F(LearnCli, EvalFusesFixesAndScoresAPart) {
+  const fs::path fixed = *dir_ / "eval-fixes.csv", out = *dir_ / "fused.json";
+  ASSERT_EQ(
+      run_cli("fixes " + track("eval") + " -o " + fixed.string() + " --rate-hz 1 --sigma-m 0.1").exit_code, 0);
+  const auto r = run_cli("learn eval --track " + fixed.string() + " --model " + model() +
+                         " --fix-sigma-m 0.1 --from 10 --json " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("fused with "), std::string::npos) << r.out;
+  const json j = read_json(out);
+  ASSERT_TRUE(j.contains("fused")) << j.dump(1);
+  EXPECT_GT(j["fused"]["fixes"].get<int>(), 5);
+  EXPECT_LT(j["fused"]["kinematic"]["pos_rmse_m"].get<double>(), j["kinematic"]["pos_rmse_m"].get<double>());
+  EXPECT_GE(j.at("span_s")[0].get<double>(), 10.0);
+  const auto no_sigma = run_cli("learn eval --track " + fixed.string() + " --model " + model());
+  ASSERT_EQ(no_sigma.exit_code, 0) << no_sigma.err;
+  EXPECT_NE(no_sigma.out.find("not fused with the track's fixes"), std::string::npos) << no_sigma.out;
+  expect_one_line_error(
+      run_cli("learn eval --track " + fixed.string() + " --model " + model() + " --from 1000"),
+      "--from/--until");
+}
+
+// Retraining on a drive without external velocities takes them from its
+// ground truth (--ext-from-gt), and on its first part only (--until).
+TEST_F(LearnCli, RetrainTakesTheGroundTruthAsItsReference) {
+  const fs::path m2 = *dir_ / "ref-retrained.json", out = *dir_ / "ref-retrain.json";
+  std::ifstream in(track("step"));
+  const fs::path noext = *dir_ / "step-noext.csv";
+  {
+    // Drop the external velocity columns: empty their cells.
+    std::ofstream w(noext);
+    std::vector<int> drop;
+    bool header = true;
+    for (std::string line; std::getline(in, line);) {
+      if (line.rfind('#', 0) == 0) {
+        w << line << "\n";
+        continue;
+      }
+      std::vector<std::string> cells;
+      std::stringstream ss(line);
+      for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+      if (!line.empty() && line.back() == ',') cells.emplace_back();
+      if (header) {
+        for (int i = static_cast<int>(cells.size()) - 1; i >= 0; --i)
+          if (cells[static_cast<std::size_t>(i)].rfind("v_ext", 0) == 0 ||
+              cells[static_cast<std::size_t>(i)].rfind("w_ext", 0) == 0)
+            drop.push_back(i);
+        header = false;
+      }
+      for (int i : drop) cells.erase(cells.begin() + i);
+      for (std::size_t i = 0; i < cells.size(); ++i) w << (i ? "," : "") << cells[i];
+      w << "\n";
+    }
+  }
+  expect_one_line_error(
+      run_cli("learn retrain --track " + noext.string() + " --model " + model() + " --static-covariance"),
+      "--ext-from-gt");
+  const auto r = run_cli("learn retrain --track " + noext.string() + " --model " + model() +
+                         " --static-covariance --ext-from-gt 10 --until 60 --model-out " + m2.string() +
+                         " --json " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const json j = read_json(out);
+  for (const json& e : j.at("retrains")) EXPECT_LT(e.at("t_s").get<double>(), 60.0);
+  EXPECT_NE(results::read_learned_model(m2).provenance.created_by.find("--until 60"), std::string::npos);
+}
+
 TEST_F(LearnCli, RetrainWritesEventsAndAModel) {
   const fs::path out = *dir_ / "retrain.json", m2 = *dir_ / "model2.json";
   const auto r = run_cli("learn retrain --track " + track("step") + " --model " + model() + " --model-out " +

@@ -406,7 +406,7 @@ TEST(SlipDetector, VarianceRisesDuringSimulatedSlipAndStaysLowElsewhere) {
   SlipDetectorStepper stepper(&det);
   std::vector<double> inside, outside;
   for (std::size_t k = 1; k < test.size(); ++k) {
-    const auto var = stepper.step(test.power_l[k], test.power_r[k], test.dticks_l[k], test.dticks_r[k]);
+    const auto var = stepper.step(test, k);
     const double t = test.t[k];
     bool in = false, near = false;
     for (const auto& e : episodes) {

@@ -62,6 +62,9 @@ LearnedModelFile sample_model(bool detector) {
     d.previous_lag = 3;
     d.max_log_ratio_v = 9.87654321;
     d.max_log_ratio_w = 11.5;
+    d.drive = SlipDrive::commands;
+    d.flag_var_v = 3.25e-4;
+    d.flag_var_w = 1.0 / 7.0;
     m.detector = d;
   }
   auto& p = m.provenance;
@@ -132,6 +135,10 @@ TEST(LearnedModelJson, RoundTripIsExact) {
   EXPECT_EQ(r.detector->previous_lag, 3);
   EXPECT_EQ(r.detector->max_log_ratio_v, 9.87654321);
   EXPECT_EQ(r.detector->max_log_ratio_w, 11.5);
+  EXPECT_EQ(r.detector->drive, SlipDrive::commands);
+  EXPECT_EQ(r.detector->input, OdometryInput::wheels);
+  EXPECT_EQ(r.detector->flag_var_v, 3.25e-4);
+  EXPECT_EQ(r.detector->flag_var_w, 1.0 / 7.0);
   const auto& p = r.provenance;
   EXPECT_EQ(p.tracks, m.provenance.tracks);
   EXPECT_EQ(p.slip_tracks, m.provenance.slip_tracks);
@@ -262,6 +269,7 @@ TEST(LearnedModelJson, BadFieldsAreOneLineErrorsNamingFileAndField) {
        "odometry.v_beats_kinematic"},
       {"relu velocity net", [](json& j) { j["odometry"]["v_net"]["activation"] = "relu"; }, "odometry.v_net"},
       {"zero floor", [](json& j) { j["detector"]["floor_var_w"] = 0; }, "detector.floor_var_w"},
+      {"unknown drive", [](json& j) { j["detector"]["drive"] = "current"; }, "detector.drive"},
       {"zero lag", [](json& j) { j["detector"]["previous_lag"] = 0; }, "detector.previous_lag"},
       {"fractional lag", [](json& j) { j["detector"]["previous_lag"] = 1.5; }, "detector.previous_lag"},
       {"bad detector net", [](json& j) { j["detector"]["w_net"]["input_sd"][0] = -1; }, "detector.w_net"},
