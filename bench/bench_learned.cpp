@@ -13,6 +13,8 @@
 //   BM_LearnedOdometryStep: one step of the learned odometry (both V and W
 //       nets, window shift included).
 //   BM_UkfStep: one fusion step (predict + odometry + external + gyro).
+//   BM_PoseUkfStep: one step of the fusion with fixes (predict through the
+//       unicycle + odometry + a position fix), filters/pose_velocity_ukf.h.
 // The windows come from a fixed synthetic drive (a sum of sines, 10 Hz), so
 // the figures are the cost of the maths, not of a particular track.
 #include <benchmark/benchmark.h>
@@ -21,6 +23,7 @@
 #include <numbers>
 #include <vector>
 
+#include "filters/pose_velocity_ukf.h"
 #include "filters/velocity_ukf.h"
 #include "learned/learned_fusion.h"
 #include "learned/learned_odometry.h"
@@ -167,6 +170,21 @@ void BM_UkfStep(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_UkfStep)->Unit(benchmark::kMicrosecond);
+
+void BM_PoseUkfStep(benchmark::State& state) {
+  odotune::filters::PoseVelocityUkf ukf(odotune::filters::PoseUkfParams{});
+  const Eigen::Matrix2d R_odo = Eigen::Matrix2d::Identity() * 1e-3;
+  const Eigen::Matrix2d R_fix = Eigen::Matrix2d::Identity() * 0.01;
+  double k = 0;
+  for (auto _ : state) {
+    ukf.predict(0.1);
+    ukf.update_velocity(0.5 + 0.1 * std::sin(k), 0.2, R_odo);
+    ukf.update_position(0.05 * k, 0.0, R_fix);
+    k += 0.1;
+    benchmark::DoNotOptimize(ukf.state().data());
+  }
+}
+BENCHMARK(BM_PoseUkfStep)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

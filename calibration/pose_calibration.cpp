@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include "calibration/ceres_fit.h"
+#include "calibration/fix_groups.h"
 #include "core/ceres_options.h"
 #include "core/planar_motion.h"
 
@@ -112,21 +113,7 @@ void ground_truth_segments(const CalibrationInput& in, double segment_s, std::ve
 // Fix segments: groups of fixes spanning segment_s (0: all), each of at
 // least kMinFixesPerSegment fixes (a short tail joins the group before).
 void fix_segments(const CalibrationInput& in, double segment_s, std::vector<Segment>* out) {
-  const std::size_t m = in.fix_t.size();
-  std::vector<std::pair<std::size_t, std::size_t>> groups;  // [first, last] fix
-  std::size_t b = 0;
-  while (b < m) {
-    std::size_t e = b;
-    while (e + 1 < m && (segment_s <= 0.0 || in.fix_t[e + 1] - in.fix_t[b] < segment_s)) ++e;
-    while (e + 1 < m && e - b + 1 < kMinFixesPerSegment) ++e;
-    groups.emplace_back(b, e);
-    b = e + 1;
-  }
-  if (groups.size() > 1 && groups.back().second - groups.back().first + 1 < kMinFixesPerSegment) {
-    groups[groups.size() - 2].second = groups.back().second;
-    groups.pop_back();
-  }
-  for (const auto& [first, last] : groups) {
+  for (const auto& [first, last] : fix_groups(in.fix_t, segment_s, kMinFixesPerSegment)) {
     if (last - first + 1 < kMinFixesPerSegment) continue;
     Segment seg;
     seg.fixes = true;

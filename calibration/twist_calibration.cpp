@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "calibration/ceres_fit.h"
+#include "calibration/fix_groups.h"
 #include "core/ceres_options.h"
 #include "core/why.h"
 #include "tracks/body_velocity.h"
@@ -166,19 +167,9 @@ void fix_segments(const Track& track, const BodyVelocityIntegral& body, double s
       continue;
     fixes.push_back({t, track.col(Col::aps_x)[i], track.col(Col::aps_y)[i], 0.0});
   }
-  std::vector<std::pair<std::size_t, std::size_t>> groups;
-  for (std::size_t b = 0; b < fixes.size();) {
-    std::size_t e = b;
-    while (e + 1 < fixes.size() && (segment_s <= 0.0 || fixes[e + 1].t - fixes[b].t < segment_s)) ++e;
-    while (e + 1 < fixes.size() && e - b + 1 < kMinFixesPerSegment) ++e;
-    groups.emplace_back(b, e);
-    b = e + 1;
-  }
-  if (groups.size() > 1 && groups.back().second - groups.back().first + 1 < kMinFixesPerSegment) {
-    groups[groups.size() - 2].second = groups.back().second;
-    groups.pop_back();
-  }
-  for (const auto& [first, last] : groups) {
+  std::vector<double> fix_t;
+  for (const GtRow& f : fixes) fix_t.push_back(f.t);
+  for (const auto& [first, last] : fix_groups(fix_t, segment_s, kMinFixesPerSegment)) {
     if (last - first + 1 < kMinFixesPerSegment) continue;
     Segment seg;
     seg.body = &body;

@@ -70,6 +70,21 @@ void refuse_wheel_flags(const CalibrateRequest& a, OdometryInput input) {
                                 to_string(input), input == OdometryInput::commands ? " and a delay" : ""));
 }
 
+// One track's row of the JSON: its dead reckoning as recorded and calibrated.
+nlohmann::json track_json(const std::string& name, const std::string& file,
+                          const std::array<TwistScore, 2>& s) {
+  return {{"track", name}, {"file", file}, {"as_recorded", score_json(s[0])}, {"calibrated", score_json(s[1])}};
+}
+
+// Track k's odometry input (its own, or --input), or a Failure naming its file.
+OdometryInput input_of(const CalibrateRequest& a, const std::vector<Track>& tracks, std::size_t k) {
+  try {
+    return track_odometry_input(tracks[k], a.input);
+  } catch (const std::invalid_argument& e) {
+    throw Failure(fmt::format("{}: {}", a.tracks[k], e.what()));
+  }
+}
+
 std::vector<const Track*> pointers(const std::vector<Track>& tracks) {
   std::vector<const Track*> p;
   for (const Track& t : tracks) p.push_back(&t);
@@ -81,12 +96,7 @@ std::vector<const Track*> pointers(const std::vector<Track>& tracks) {
 std::optional<OdometryInput> calibrate_body_input(const CalibrateRequest& a, const std::vector<Track>& tracks) {
   std::optional<OdometryInput> kind;
   for (std::size_t k = 0; k < tracks.size(); ++k) {
-    OdometryInput in{};
-    try {
-      in = track_odometry_input(tracks[k], a.input);
-    } catch (const std::invalid_argument& e) {
-      throw Failure(fmt::format("{}: {}", a.tracks[k], e.what()));
-    }
+    const OdometryInput in = input_of(a, tracks, k);
     if (kind && *kind != in)
       throw Failure(fmt::format("{}: {} odometry, {} gives {}: expected one kind for one calibration",
                                 a.tracks[k], to_string(in), a.tracks[0], to_string(*kind)));
@@ -131,10 +141,7 @@ CalibrateOutcome run_twist_calibrate(const CalibrateRequest& a, const std::vecto
       fmt::join(a.tracks, ", "));
   nlohmann::json tracks_json = nlohmann::json::array();
   for (std::size_t k = 0; k < tracks.size(); ++k)
-    tracks_json.push_back({{"track", names[k]},
-                           {"file", a.tracks[k]},
-                           {"as_recorded", score_json(out.twist_scores[k][0])},
-                           {"calibrated", score_json(out.twist_scores[k][1])}});
+    tracks_json.push_back(track_json(names[k], a.tracks[k], out.twist_scores[k]));
   const nlohmann::json j = {{"method", "batch"},
                             {"calibration", correction_json(input, s.params)},
                             {"sd", {{"scale_v", num(s.sd_scale_v)}, {"scale_w", num(s.sd_scale_w)}}},
@@ -163,12 +170,7 @@ ApplyOutcome run_twist_apply(const CalibrateRequest& a, const CalibrationFile& f
                           correction_text(file.twist, nullptr), tracks.size(), tracks.size() == 1 ? "" : "s"));
   nlohmann::json tracks_json = nlohmann::json::array();
   for (std::size_t k = 0; k < tracks.size(); ++k) {
-    OdometryInput in{};
-    try {
-      in = track_odometry_input(tracks[k], a.input);
-    } catch (const std::invalid_argument& e) {
-      throw Failure(fmt::format("{}: {}", a.tracks[k], e.what()));
-    }
+    const OdometryInput in = input_of(a, tracks, k);
     if (in != file.odometry)
       throw Failure(fmt::format("{}: {} odometry; the calibration file {} corrects {} odometry", a.tracks[k],
                                 to_string(in), a.apply, to_string(file.odometry)));
@@ -179,10 +181,7 @@ ApplyOutcome run_twist_apply(const CalibrateRequest& a, const CalibrationFile& f
                       a.tracks[k], tracks[k].name()));
     out.twist_scores.push_back({score_twist(tracks[k], {}), score_twist(tracks[k], file.twist)});
     l.push_back(score_line(tracks[k].name(), out.twist_scores.back()));
-    tracks_json.push_back({{"track", tracks[k].name()},
-                           {"file", a.tracks[k]},
-                           {"as_recorded", score_json(out.twist_scores.back()[0])},
-                           {"calibrated", score_json(out.twist_scores.back()[1])}});
+    tracks_json.push_back(track_json(tracks[k].name(), a.tracks[k], out.twist_scores.back()));
   }
   const nlohmann::json j = {{"calibration_file", a.apply},
                             {"calibration", correction_json(file.odometry, file.twist)},

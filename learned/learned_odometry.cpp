@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "core/counter_rng.h"
+#include "core/enum_names.h"
 #include "core/why.h"
 
 namespace odotune {
@@ -33,16 +34,6 @@ bool finite_all(std::initializer_list<double> xs) {
 
 bool finite_row(const double* row) { return finite_all({row[0], row[1], row[2]}); }
 
-template <class E>
-bool parse_named(std::string_view text, std::initializer_list<E> values, E* out) {
-  for (E v : values)
-    if (text == to_string(v)) {
-      *out = v;
-      return true;
-    }
-  return false;
-}
-
 }  // namespace
 
 std::string_view to_string(LearnedTarget t) {
@@ -50,7 +41,7 @@ std::string_view to_string(LearnedTarget t) {
 }
 
 bool parse_learned_target(std::string_view text, LearnedTarget* out) {
-  return parse_named(text, {LearnedTarget::velocity, LearnedTarget::correction}, out);
+  return parse_by_name(text, {LearnedTarget::velocity, LearnedTarget::correction}, out);
 }
 
 std::string_view to_string(LearnedValidation v) {
@@ -63,7 +54,7 @@ std::string_view to_string(LearnedValidation v) {
 }
 
 bool parse_learned_validation(std::string_view text, LearnedValidation* out) {
-  return parse_named(
+  return parse_by_name(
       text, {LearnedValidation::chronological, LearnedValidation::recordings, LearnedValidation::blocks}, out);
 }
 
@@ -77,7 +68,7 @@ std::string_view to_string(LearnedFeatures f) {
 }
 
 bool parse_learned_features(std::string_view text, LearnedFeatures* out) {
-  return parse_named(text, {LearnedFeatures::paper, LearnedFeatures::channel, LearnedFeatures::both}, out);
+  return parse_by_name(text, {LearnedFeatures::paper, LearnedFeatures::channel, LearnedFeatures::both}, out);
 }
 
 bool LearnedOdometryModel::IsValid(std::string* why) const {

@@ -103,13 +103,7 @@ PoseFusionTrace replay_pose_fusion(const FusionInput& in, const std::vector<Odom
 }
 
 ErrorMetrics pose_fusion_errors(const FusionInput& in, const PoseFusionTrace& trace) {
-  ErrorAccumulator acc;
-  const std::size_t n = std::min(in.size(), trace.x.size());
-  for (std::size_t k = 1; k < n; ++k) {
-    if (std::isnan(in.gt_x[k]) || std::isnan(in.gt_y[k])) continue;
-    acc.add(std::hypot(trace.x[k] - in.gt_x[k], trace.y[k] - in.gt_y[k]));
-  }
-  return acc.metrics();
+  return position_errors(in, trace.x, trace.y);
 }
 
 }  // namespace odotune

@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "core/enum_names.h"
+
 namespace odotune {
 namespace {
 
@@ -49,12 +51,7 @@ std::string_view to_string(SlipDrive d) {
 }
 
 bool parse_slip_drive(std::string_view text, SlipDrive* out) {
-  for (SlipDrive d : {SlipDrive::power, SlipDrive::commands, SlipDrive::none})
-    if (text == to_string(d)) {
-      *out = d;
-      return true;
-    }
-  return false;
+  return parse_by_name(text, {SlipDrive::power, SlipDrive::commands, SlipDrive::none}, out);
 }
 
 SlipDrive available_slip_drive(const std::vector<const FusionInput*>& tracks) {

@@ -1,5 +1,6 @@
 #include "learned/ukf_fusion.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -94,14 +95,19 @@ FusionTrace replay_fusion(const FusionInput& in, const std::vector<OdometryMeasu
   return tr;
 }
 
-ErrorMetrics fusion_pose_errors(const FusionInput& in, const FusionTrace& trace) {
+ErrorMetrics position_errors(const FusionInput& in, const std::vector<double>& x,
+                             const std::vector<double>& y) {
   ErrorAccumulator acc;
-  const std::size_t n = std::min(in.size(), trace.x.size());
+  const std::size_t n = std::min({in.size(), x.size(), y.size()});
   for (std::size_t k = 1; k < n; ++k) {
     if (std::isnan(in.gt_x[k]) || std::isnan(in.gt_y[k])) continue;
-    acc.add(std::hypot(trace.x[k] - in.gt_x[k], trace.y[k] - in.gt_y[k]));
+    acc.add(std::hypot(x[k] - in.gt_x[k], y[k] - in.gt_y[k]));
   }
   return acc.metrics();
+}
+
+ErrorMetrics fusion_pose_errors(const FusionInput& in, const FusionTrace& trace) {
+  return position_errors(in, trace.x, trace.y);
 }
 
 }  // namespace odotune

@@ -70,5 +70,7 @@ FusionTrace replay_fusion(const FusionInput& in, const std::vector<OdometryMeasu
 // truth; NaN metrics when the trace holds non-finite positions (an unhealthy
 // trace: callers check `healthy` first).
 ErrorMetrics fusion_pose_errors(const FusionInput& in, const FusionTrace& trace);
+// The same for any per-step positions x, y [m].
+ErrorMetrics position_errors(const FusionInput& in, const std::vector<double>& x, const std::vector<double>& y);
 
 }  // namespace odotune

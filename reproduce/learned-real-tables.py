@@ -36,12 +36,13 @@ def ratio(a, b):
     return a / b if a is not None and b else float("nan")
 
 
-def span(values):
+def span(values, digits=2):
     values = [v for v in values if v == v]
     if not values:
         return "–"
     lo, hi = min(values), max(values)
-    return f"{lo:.2f}" if abs(hi - lo) < 0.005 else f"{lo:.2f}–{hi:.2f}"
+    half = 0.5 * 10 ** -digits
+    return f"{lo:.{digits}f}" if abs(hi - lo) < half else f"{lo:.{digits}f}–{hi:.{digits}f}"
 
 
 def selection(dataset, fold, seed):
@@ -76,7 +77,7 @@ def odometry_table(dataset, title, folds, summary):
                 if c:
                     summary[dataset].setdefault("cal_" + m, []).extend(
                         ratio(e["learned"][m], e["calibrated"][m]) for e in evals)
-            fused = span([f for f in fl if f is not None]) if any(fl) else "–"
+            fused = span([f for f in fl if f is not None], 3) if any(fl) else "–"
             print(f"| | | learned ÷ kinematic | " + " | ".join(cells) + f" | {fused} |")
             summary[dataset].setdefault("recordings", []).append(
                 (fold, run, [ratio(e["learned"]["pos_rmse_m"], e["kinematic"]["pos_rmse_m"]) for e in evals]))
@@ -179,6 +180,39 @@ def retraining():
     print()
 
 
+def mean_errors(path):
+    """Mean signed V and W errors (odometry − truth) of the learned and the
+    kinematic odometry from an eval CSV: their biases [m/s, rad/s]."""
+    sums = {k: [0.0, 0] for k in ("v_learned", "w_learned", "v_kinematic", "w_kinematic")}
+    with open(path) as f:
+        header = f.readline().strip().split(",")
+        for line in f:
+            c = dict(zip(header, line.rstrip("\n").split(",")))
+            if not c.get("v_true") or not c.get("w_true"):
+                continue
+            for k in sums:
+                truth = float(c[k[0] + "_true"])
+                sums[k][0] += float(c[k]) - truth
+                sums[k][1] += 1
+    return {k: s / n for k, (s, n) in sums.items() if n}
+
+
+def bias_table():
+    print("### MRCLAM: each held-out robot's mean errors (bias) over its 900 s, seed 1\n")
+    print("The whole-run position error of dead reckoning is set by the yaw-rate bias integrated over the run.\n")
+    print("| held-out | V bias kinematic [m/s] | V bias learned | W bias kinematic [rad/s] | W bias learned | "
+          "heading drift of the W bias over the run [rad] |")
+    print("|---|---:|---:|---:|---:|---:|")
+    for fold, run in (("train-12", "robot3"), ("train-13", "robot2"), ("train-23", "robot1")):
+        path = f"{OUT}/mrclam/{fold}/seed{SEEDS[0]}/eval-{run}.csv"
+        if not os.path.exists(path):
+            continue
+        b = mean_errors(path)
+        print(f"| {run} | {b['v_kinematic']:+.4f} | {b['v_learned']:+.4f} | {b['w_kinematic']:+.5f} | "
+              f"{b['w_learned']:+.5f} | {b['w_kinematic'] * 900:+.2f} → {b['w_learned'] * 900:+.2f} |")
+    print()
+
+
 def main():
     summary, contradictions = {}, []
     print("# Learned odometry on real recordings: the tables of reproduce/learned-real.sh\n")
@@ -186,6 +220,7 @@ def main():
         odometry_table(dataset, title, folds, summary)
         verdict_table(dataset, folds, contradictions)
         slip_table(dataset, folds)
+    bias_table()
     paper_nets()
     retraining()
     summary_section(summary, contradictions)

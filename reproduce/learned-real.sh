@@ -58,7 +58,7 @@ fold() {
   echo "wall $((SECONDS - t0)) s" >> "$dir/train.txt"
   for r in "$@"; do
     "$BIN" learn eval --track "$T/$r-fixes.csv" --model "$dir/model.json" --calibration "$base/calibration.yaml" \
-      --fix-sigma-m 0.1 --json "$dir/eval-$r.json" > "$dir/eval-$r.txt"
+      --fix-sigma-m 0.1 --json "$dir/eval-$r.json" --csv "$dir/eval-$r.csv" > "$dir/eval-$r.txt"
   done
   echo "$dataset $name seed $seed: $((SECONDS - t0)) s"
 }

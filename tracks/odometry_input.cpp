@@ -4,6 +4,8 @@
 
 #include <fmt/format.h>
 
+#include "core/enum_names.h"
+
 namespace odotune {
 
 std::string_view to_string(OdometryInput s) {
@@ -16,12 +18,7 @@ std::string_view to_string(OdometryInput s) {
 }
 
 bool parse_odometry_input(std::string_view text, OdometryInput* out) {
-  for (OdometryInput s : {OdometryInput::wheels, OdometryInput::twist, OdometryInput::commands})
-    if (text == to_string(s)) {
-      *out = s;
-      return true;
-    }
-  return false;
+  return parse_by_name(text, {OdometryInput::wheels, OdometryInput::twist, OdometryInput::commands}, out);
 }
 
 namespace {

@@ -4,6 +4,8 @@
 
 #include <fmt/format.h>
 
+#include "core/enum_names.h"
+
 namespace odotune {
 
 namespace {
@@ -28,12 +30,7 @@ std::string_view to_string(BodyVelocitySource s) {
 }
 
 bool parse_body_velocity_source(std::string_view text, BodyVelocitySource* out) {
-  for (BodyVelocitySource s : {BodyVelocitySource::commanded, BodyVelocitySource::measured})
-    if (text == to_string(s)) {
-      *out = s;
-      return true;
-    }
-  return false;
+  return parse_by_name(text, {BodyVelocitySource::commanded, BodyVelocitySource::measured}, out);
 }
 
 std::optional<std::string> TrackMeta::get(std::string_view key) const {

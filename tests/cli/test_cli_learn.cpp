@@ -3,6 +3,7 @@
 // few Ceres iterations, so that the whole file runs in seconds.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -125,6 +126,33 @@ std::size_t lines(const std::string& s) {
   return n;
 }
 
+// The track at `from` without the named columns (each must be there), written to `to`.
+void copy_track_without(const std::string& from, const fs::path& to, const std::vector<std::string>& columns) {
+  std::ifstream in(from);
+  std::ofstream out(to);
+  std::vector<std::size_t> drop;  // column indices, last first
+  bool header = true;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind('#', 0) == 0) {
+      out << line << "\n";
+      continue;
+    }
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+    if (!line.empty() && line.back() == ',') cells.emplace_back();
+    if (header) {
+      for (std::size_t i = cells.size(); i-- > 0;)
+        if (std::find(columns.begin(), columns.end(), cells[i]) != columns.end()) drop.push_back(i);
+      ASSERT_EQ(drop.size(), columns.size()) << line;
+      header = false;
+    }
+    for (std::size_t i : drop) cells.erase(cells.begin() + static_cast<std::ptrdiff_t>(i));
+    for (std::size_t i = 0; i < cells.size(); ++i) out << (i ? "," : "") << cells[i];
+    out << "\n";
+  }
+}
+
 // A failed command: non-zero exit, exactly one line on stderr mentioning `needle`.
 void expect_one_line_error(const testing_support::CliResult& r, const std::string& needle) {
   EXPECT_NE(r.exit_code, 0);
@@ -233,29 +261,8 @@ TEST_F(LearnCli, CorrectionNetsOnCommandsAreCrossValidatedAndRecorded) {
   EXPECT_EQ(j.at("input"), "commands");
   EXPECT_TRUE(j.at("learned").at("pos_rmse_60s_m").is_number());
   // The eval track without its commands.
-  std::ifstream in(track("eval"));
   const fs::path wheels = *dir_ / "wheels_only.csv";
-  std::ofstream w(wheels);
-  std::string header;
-  for (std::string line; std::getline(in, line);) {
-    if (line.rfind('#', 0) == 0) {
-      w << line << "\n";
-      continue;
-    }
-    // Drop the v_cmd and w_cmd cells (columns 4 and 5 of t,ticks_l,ticks_r,v_cmd,w_cmd,...).
-    std::vector<std::string> cells;
-    std::stringstream ss(line);
-    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
-    if (!line.empty() && line.back() == ',') cells.emplace_back();
-    if (header.empty()) header = line;
-    ASSERT_GE(cells.size(), 5u);
-    ASSERT_EQ(header.rfind("t,ticks_l,ticks_r,v_cmd,w_cmd", 0), 0u) << header;
-    cells.erase(cells.begin() + 3, cells.begin() + 5);
-    std::string joined;
-    for (std::size_t i = 0; i < cells.size(); ++i) joined += (i ? "," : "") + cells[i];
-    w << joined << "\n";
-  }
-  w.close();
+  copy_track_without(track("eval"), wheels, {"v_cmd", "w_cmd"});
   expect_one_line_error(run_cli("learn eval --track " + wheels.string() + " --model " + cmd.string()), "v_cmd");
 }
 
@@ -287,34 +294,8 @@ TEST_F(LearnCli, EvalFusesFixesAndScoresAPart) {
 // ground truth (--ext-from-gt), and on its first part only (--until).
 TEST_F(LearnCli, RetrainTakesTheGroundTruthAsItsReference) {
   const fs::path m2 = *dir_ / "ref-retrained.json", out = *dir_ / "ref-retrain.json";
-  std::ifstream in(track("step"));
   const fs::path noext = *dir_ / "step-noext.csv";
-  {
-    // Drop the external velocity columns: empty their cells.
-    std::ofstream w(noext);
-    std::vector<int> drop;
-    bool header = true;
-    for (std::string line; std::getline(in, line);) {
-      if (line.rfind('#', 0) == 0) {
-        w << line << "\n";
-        continue;
-      }
-      std::vector<std::string> cells;
-      std::stringstream ss(line);
-      for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
-      if (!line.empty() && line.back() == ',') cells.emplace_back();
-      if (header) {
-        for (int i = static_cast<int>(cells.size()) - 1; i >= 0; --i)
-          if (cells[static_cast<std::size_t>(i)].rfind("v_ext", 0) == 0 ||
-              cells[static_cast<std::size_t>(i)].rfind("w_ext", 0) == 0)
-            drop.push_back(i);
-        header = false;
-      }
-      for (int i : drop) cells.erase(cells.begin() + i);
-      for (std::size_t i = 0; i < cells.size(); ++i) w << (i ? "," : "") << cells[i];
-      w << "\n";
-    }
-  }
+  copy_track_without(track("step"), noext, {"v_ext", "w_ext", "v_ext_var", "w_ext_var"});
   expect_one_line_error(
       run_cli("learn retrain --track " + noext.string() + " --model " + model() + " --static-covariance"),
       "--ext-from-gt");

@@ -117,6 +117,8 @@ TEST(LearnedOdometry, CorrectionNetsLearnWhatTheKinematicModelMisses) {
   EXPECT_EQ(model.target, LearnedTarget::correction);
   EXPECT_EQ(model.features, LearnedFeatures::both);
   EXPECT_EQ(model.v_net.units(), 3);
+  EXPECT_TRUE(model.gyro);  // every drive has one: the features read it
+  EXPECT_TRUE(summary.gyro);
   EXPECT_EQ(summary.folds, 2);
   ASSERT_EQ(summary.units.size(), 2u);
   EXPECT_EQ(summary.combination, NetCombination::both);
