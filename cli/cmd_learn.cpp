@@ -37,8 +37,10 @@ auto with_progress(const char* label, const char* unit, Job job) {
 // The flags of `learn train`.
 void add_train_options(CLI::App* t, LearnTrainRequest& r) {
   t->add_option("--track", r.tracks, "track with ground truth (repeat for several)")->required();
-  t->add_option("--slip-track", r.slip_tracks,
-                "track with motor power and slip, to train the slip detector on (repeat for several)");
+  t->add_option(
+      "--slip-track", r.slip_tracks,
+      "track with ground truth to train the slip detector on: it reads the motor power, else the commands "
+      "beside the wheels, else the odometry alone (repeat for several)");
   t->add_option("--model-out", r.model_out, "model file to write (JSON, odotune-learned/1)")->required();
   t->add_option("--seed", r.seed, "seed of the initial weights")->default_val(r.seed);
   t->add_option("--iterations", r.iterations,
@@ -127,6 +129,8 @@ void register_learn(CLI::App& app) {
   learn->footer(
       "Examples:\n"
       "  odotune learn train --track a.csv --track b.csv --slip-track slip.csv --model-out model.json\n"
+      "  odotune learn train --track robot1.csv --track robot2.csv --input commands --model-out model.json\n"
+      "  odotune learn eval --track held_out.csv --model model.json --calibration cal.yaml --fix-sigma-m 0.1\n"
       "  odotune learn eval --track held_out.csv --model model.json --json eval.json\n"
       "  odotune learn retrain --track changed.csv --model model.json --model-out model2.json --json retrain.json");
   auto train = std::make_shared<LearnTrainRequest>();
