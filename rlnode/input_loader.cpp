@@ -320,6 +320,13 @@ void Loader::on_fix(const ros::NavSatFix& m, std::int64_t receive_ns) {
   }
   if (p_.navsat.zero_altitude) f.p.z() = 0.0;
   f.cov = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(m.position_covariance.data());
+  add_fix(f, m.header.frame_id);
+}
+
+void Loader::on_local_fix(const GpsFix& fix) { add_fix(fix, ""); }
+
+void Loader::add_fix(const GpsFix& f, const std::string& frame_id) {
+  const std::int64_t receive_ns = f.receive_ns;
   if (!in_order(sensor(rec_.gps_sensor).name + "_pose", f.stamp_ns)) return;
   if (rec_.fixes.empty() && imu_yaw_receive_ns_ >= 0) {
     rec_.navsat_imu_yaw_rad = imu_yaw_;
@@ -332,7 +339,7 @@ void Loader::on_fix(const ros::NavSatFix& m, std::int64_t receive_ns) {
   if (p_.two_d_mode) force_two_d(out);
   // The antenna's offset from base_link, when its frame is known (navsat uses
   // the identity when it cannot look the transform up).
-  const Pose3* antenna_frame = find_frame(m.header.frame_id);
+  const Pose3* antenna_frame = find_frame(frame_id);
   const Eigen::Vector3d antenna = antenna_frame ? antenna_frame->t : Eigen::Vector3d::Zero();
   store(out, InputKind::gps, rec_.gps_sensor, f.stamp_ns, receive_ns, sp.pose_rejection_threshold, antenna,
         false, static_cast<int>(rec_.fixes.size()) - 1);

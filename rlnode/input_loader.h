@@ -102,6 +102,9 @@ class Loader {
   void on_twist(const ros::TwistWithCovarianceStamped& m, int s, std::int64_t receive_ns);
   void on_imu(const ros::Imu& m, int s, std::int64_t receive_ns);
   void on_fix(const ros::NavSatFix& m, std::int64_t receive_ns);
+  // A fix already projected (in the odom frame under an identity transform),
+  // its antenna at base_link.
+  void on_local_fix(const GpsFix& fix);
   void note_imu_orientation(const ros::Imu& m, std::int64_t receive_ns);
   void finish();
 
@@ -113,6 +116,8 @@ class Loader {
   // The same, or a one-line refusal naming sensor `s`.
   Pose3 frame_in_base(const std::string& frame, int s) const;
   bool in_order(const std::string& callback, std::int64_t stamp_ns);
+  // navsat's output for a projected fix, from the antenna in frame `frame_id`.
+  void add_fix(const GpsFix& f, const std::string& frame_id);
   void store(const Prepared& m, InputKind kind, int s, std::int64_t stamp_ns, std::int64_t receive_ns,
              double threshold, const Eigen::Vector3d& lever = Eigen::Vector3d::Zero(),
              bool gravity_from_state = false, int fix = -1);
