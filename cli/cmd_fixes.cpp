@@ -23,6 +23,8 @@ void register_fixes(CLI::App& app) {
   sub->add_option("--rate-hz", req->options.rate_hz, "fix frequency [Hz]");
   sub->add_option("--sigma-m", req->options.sigma_m, "noise σ per axis [m]");
   sub->add_option("--seed", req->options.seed, "noise seed");
+  sub->add_flag("!--no-variances", req->options.variances,
+                "do not write the fixes' variances (aps_var_x, aps_var_y = σ², written by default)");
   sub->callback([req] { fmt::print("{}: {}\n", req->output, run_fixes(*req)); });
 }
 

@@ -235,7 +235,7 @@ OutageReplays::OutageReplays(const rlnode::Recording& rec, std::span<const Outag
     while (k < a.size() && k < b.size() && a[k].type == b[k].type && a[k].input == b[k].input &&
            a[k].time_ns == b[k].time_ns)
       ++k;
-    tails_.push_back({k, std::vector<rlnode::Event>(b.begin() + static_cast<std::ptrdiff_t>(k), b.end())});
+    tails_.push_back({k, std::vector<rlnode::Event>(b.begin() + static_cast<std::ptrdiff_t>(k), b.end()), w});
   }
   std::stable_sort(tails_.begin(), tails_.end(),
                    [](const Tail& x, const Tail& y) { return x.shared < y.shared; });
@@ -243,16 +243,23 @@ OutageReplays::OutageReplays(const rlnode::Recording& rec, std::span<const Outag
 
 FixScore OutageReplays::score(const rlnode::ReplaySettings& s) const {
   ScoreSum sum;
+  each_window(
+      s, [&](const OutageWindow&, const rlnode::ReplayOutput& o) { sum.add(o); }, false);
+  return sum.done();
+}
+
+void OutageReplays::each_window(const rlnode::ReplaySettings& s,
+                                const std::function<void(const OutageWindow&, const rlnode::ReplayOutput&)>& f,
+                                bool keep_trajectory) const {
   rlnode::Replayer fused(*rec_, s);
   std::size_t done = 0;
   for (const Tail& t : tails_) {
     fused.run(std::span(fused_.events).subspan(done, t.shared - done));
     done = t.shared;
     rlnode::Replayer window = fused;
-    window.run(t.events);
-    sum.add(std::move(window).finish());
+    window.run(t.events, keep_trajectory);
+    f(t.window, std::move(window).finish());
   }
-  return sum.done();
 }
 
 std::vector<FixScore> OutageReplays::score_batch(std::span<const rlnode::ReplaySettings> settings) const {
@@ -276,16 +283,61 @@ std::vector<FixScore> OutageReplays::score_batch(std::span<const rlnode::ReplayS
   return out;
 }
 
+namespace detail {
+
+RmsPart pooled_parts(std::span<const RmsPart> parts) {
+  RmsPart out;
+  double sq = 0.0, abs = 0.0;
+  for (const RmsPart& p : parts) {
+    if (p.n == 0) continue;
+    const auto n = static_cast<double>(p.n);
+    out.finite = out.finite && p.finite;
+    sq += p.rmse * p.rmse * n;
+    abs += p.mae * n;
+    out.max = std::max(out.max, p.max);
+    out.n += p.n;
+  }
+  const auto n = static_cast<double>(out.n);
+  out.rmse = out.n > 0 ? std::sqrt(sq / n) : std::numeric_limits<double>::quiet_NaN();
+  out.mae = out.n > 0 ? abs / n : std::numeric_limits<double>::quiet_NaN();
+  if (!std::isfinite(out.rmse)) out.finite = false;
+  return out;
+}
+
+}  // namespace detail
+
+FixScore pooled(std::span<const FixScore> scores) {
+  if (scores.size() == 1) return scores.front();
+  std::vector<detail::RmsPart> parts;
+  for (const FixScore& f : scores) parts.push_back({f.fixes, f.rmse_m, f.mae_m, f.maxe_m, f.finite});
+  const detail::RmsPart p = detail::pooled_parts(parts);
+  return {p.rmse, p.mae, p.max, p.n, p.finite};
+}
+
 RlObjective::RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySettings& base,
                          const RlTuneOptions& options)
-    : rec_(&rec), base_(base), options_(options) {
+    : RlObjective(std::vector<const rlnode::Recording*>{&rec}, base, options) {}
+
+RlObjective::RlObjective(std::span<const rlnode::Recording* const> recs, const rlnode::ReplaySettings& base,
+                         const RlTuneOptions& options)
+    : base_(base), options_(options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("rl tune: " + why);
-  if (rec.fixes.empty()) {
+  if (recs.empty()) throw std::invalid_argument("rl tune: no recording");
+  if (recs.size() > 1 && statistic_kind()) {
     throw std::invalid_argument(
-        fmt::format("{}: no GPS fixes to score the filter by; expected a NavSatFix topic "
-                    "fused through navsat_transform_node's output",
-                    rec.bag.string()));
+        fmt::format("rl tune: --fitness {} takes one recording; expected heldout-fixes, "
+                    "outage or both for {} recordings",
+                    to_string(options.fitness), recs.size()));
+  }
+  const rlnode::Recording& rec = *recs.front();
+  for (const rlnode::Recording* r : recs) {
+    if (r->fixes.empty()) {
+      throw std::invalid_argument(
+          fmt::format("{}: no GPS fixes to score the filter by; expected a NavSatFix topic "
+                      "fused through navsat_transform_node's output (or a track's position fixes)",
+                      r->bag.string()));
+    }
   }
   std::vector<ParamSpec> specs;
   const double lo = std::pow(10.0, -options.decades_down), hi = std::pow(10.0, options.decades_up);
@@ -307,13 +359,16 @@ RlObjective::RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySetti
   }
   space_ = BoxSpace(std::move(specs));
 
-  for (const auto& roles : heldout_fix_folds(rec, options.folds, options.block_s, options.until_ns)) {
-    heldout_.push_back(rlnode::make_schedule(rec, roles, options.until_ns));
+  for (const rlnode::Recording* r : recs) {
+    Replays& p = recs_.emplace_back();
+    p.rec = r;
+    for (const auto& roles : heldout_fix_folds(*r, options.folds, options.block_s, options.until_ns))
+      p.heldout.push_back(rlnode::make_schedule(*r, roles, options.until_ns));
+    const std::vector<OutageWindow> windows = outage_windows(
+        *r, options.outage_s, options.outage_stride_s, after_warmup(*r, options.warmup_s), options.until_ns);
+    p.outages = OutageReplays(*r, windows, options.until_ns);
+    p.fused = rlnode::make_schedule(*r, {}, options.until_ns);
   }
-  const std::vector<OutageWindow> windows = outage_windows(
-      rec, options.outage_s, options.outage_stride_s, after_warmup(rec, options.warmup_s), options.until_ns);
-  outages_ = OutageReplays(rec, windows, options.until_ns);
-  fused_ = rlnode::make_schedule(rec, {}, options.until_ns);
   base_parts_ = parts(base_);
   base_parts_.heldout = heldout_score(base_);
   base_parts_.outage = outage_score(base_);
@@ -325,6 +380,24 @@ RlObjective::RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySetti
                     "expected a longer span or shorter outages",
                     rec.bag.string(), fmt::join(options.outage_s, ", "), options.warmup_s));
   }
+}
+
+FixScore RlObjective::heldout_score(const rlnode::ReplaySettings& s) const {
+  std::vector<FixScore> each;
+  for (const Replays& p : recs_) each.push_back(replay_score(*p.rec, p.heldout, s));
+  return pooled(each);
+}
+
+FixScore RlObjective::outage_score(const rlnode::ReplaySettings& s) const {
+  std::vector<FixScore> each;
+  for (const Replays& p : recs_) each.push_back(p.outages.score(s));
+  return pooled(each);
+}
+
+std::size_t RlObjective::window_count() const {
+  std::size_t n = 0;
+  for (const Replays& p : recs_) n += p.outages.windows();
+  return n;
 }
 
 rlnode::ReplaySettings RlObjective::settings_at(std::span<const double> x) const {
@@ -359,14 +432,16 @@ RlObjective::Parts RlObjective::parts(const rlnode::ReplaySettings& s) const {
   if (!statistic_kind()) return p;
   rlnode::ReplaySettings with = s;
   with.innovations = true;
+  const Replays& one = recs_.front();
   if (options_.fitness == RlFitness::heldout_nll) {
     std::vector<rlnode::ReplayOutput> outs;
-    for (const rlnode::Schedule& schedule : heldout_) outs.push_back(rlnode::replay(*rec_, schedule, with));
+    for (const rlnode::Schedule& schedule : one.heldout)
+      outs.push_back(rlnode::replay(*one.rec, schedule, with));
     p.heldout = score_of(outs);
     p.statistic = heldout_nll(outs);
     return p;
   }
-  const rlnode::ReplayOutput out = rlnode::replay(*rec_, fused_, with);
+  const rlnode::ReplayOutput out = rlnode::replay(*one.rec, one.fused, with);
   p.statistic = options_.fitness == RlFitness::innovation_nll ? innovation_nll(out.innovations)
                 : options_.fitness == RlFitness::nis          ? nis_cost(out.innovations)
                                                               : whiteness_cost(out.innovations);
@@ -417,10 +492,20 @@ void RlObjective::data_fitness_batch(std::span<const double> xs, std::span<doubl
   }
   std::vector<rlnode::ReplaySettings> settings;
   for (std::size_t k = 0; k < out.size(); ++k) settings.push_back(settings_at(xs.subspan(k * dim, dim)));
-  const std::vector<FixScore> none(out.size());
-  const std::vector<FixScore> heldout = heldout_needed() ? replay_score_batch(*rec_, heldout_, settings) : none;
-  const std::vector<FixScore> outage = outage_needed() ? outages_.score_batch(settings) : none;
-  for (std::size_t k = 0; k < out.size(); ++k) out[k] = fitness_of({heldout[k], outage[k], 0.0});
+  // Per lane, each recording's score, then pooled as the single calls pool them.
+  std::vector<std::vector<FixScore>> heldout(out.size()), outage(out.size());
+  for (const Replays& p : recs_) {
+    const std::vector<FixScore> h = heldout_needed() ? replay_score_batch(*p.rec, p.heldout, settings)
+                                                     : std::vector<FixScore>(out.size());
+    const std::vector<FixScore> o = outage_needed() ? p.outages.score_batch(settings)
+                                                    : std::vector<FixScore>(out.size());
+    for (std::size_t k = 0; k < out.size(); ++k) {
+      heldout[k].push_back(h[k]);
+      outage[k].push_back(o[k]);
+    }
+  }
+  for (std::size_t k = 0; k < out.size(); ++k)
+    out[k] = fitness_of({pooled(heldout[k]), pooled(outage[k]), 0.0});
 }
 
 double RlObjective::prior(std::span<const double> x) const {

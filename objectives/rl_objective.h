@@ -26,6 +26,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -122,16 +123,36 @@ class OutageReplays {
   // score() of each of `settings`, in lock step (rlnode::BatchReplayer), bit for bit.
   std::vector<FixScore> score_batch(std::span<const rlnode::ReplaySettings> settings) const;
   std::size_t windows() const { return tails_.size(); }
+  // Each window's replay under `s`, its trajectory kept from where it parts
+  // from the fused run (the window's first withheld fix) to the window's end.
+  void each_window(const rlnode::ReplaySettings& s,
+                   const std::function<void(const OutageWindow&, const rlnode::ReplayOutput&)>& f,
+                   bool keep_trajectory = true) const;
 
  private:
   struct Tail {
     std::size_t shared = 0;             // events of fused_ the window's replay shares
     std::vector<rlnode::Event> events;  // its own events after them
+    OutageWindow window;
   };
   const rlnode::Recording* rec_ = nullptr;
   rlnode::Schedule fused_;
   std::vector<Tail> tails_;  // by `shared`
 };
+
+// Scores of several recordings as one: the RMSE and MAE over all their fixes
+// together, the largest error, finite when each recording that scored a fix is.
+// One score is returned as it is.
+FixScore pooled(std::span<const FixScore> scores);
+namespace detail {
+// An RMS score's parts (samples, RMSE, MAE, largest error, finite), pooled as above.
+struct RmsPart {
+  long n = 0;
+  double rmse = 0.0, mae = 0.0, max = 0.0;
+  bool finite = true;
+};
+RmsPart pooled_parts(std::span<const RmsPart> parts);
+}  // namespace detail
 
 class RlObjective {
  public:
@@ -139,6 +160,13 @@ class RlObjective {
   // std::invalid_argument for invalid options, a recording without GPS fixes,
   // or a part the fitness uses that scores no fix before `until_ns`.
   RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySettings& base, const RlTuneOptions& options);
+  // Several recordings of one robot under one parameter file (their
+  // RlParams alike but for the initial state), tuned jointly: each part's
+  // fixes pooled over all of them (pooled()). The innovation statistics take
+  // one recording only (std::invalid_argument otherwise). The recordings
+  // must outlive the objective.
+  RlObjective(std::span<const rlnode::Recording* const> recs, const rlnode::ReplaySettings& base,
+              const RlTuneOptions& options);
 
   // data_fitness(x) plus the prior.
   double fitness(std::span<const double> x) const;
@@ -156,8 +184,8 @@ class RlObjective {
   rlnode::ReplaySettings settings_at(std::span<const double> x) const;
   // Per part: the held-out fixes' and the outages' scores, whether or not the
   // fitness uses them; the base settings' own, from the constructor.
-  FixScore heldout_score(const rlnode::ReplaySettings& s) const { return replay_score(*rec_, heldout_, s); }
-  FixScore outage_score(const rlnode::ReplaySettings& s) const { return outages_.score(s); }
+  FixScore heldout_score(const rlnode::ReplaySettings& s) const;
+  FixScore outage_score(const rlnode::ReplaySettings& s) const;
   const FixScore& baseline_heldout() const { return base_parts_.heldout; }
   const FixScore& baseline_outage() const { return base_parts_.outage; }
   double baseline_fitness() const { return combine(base_parts_); }
@@ -173,20 +201,24 @@ class RlObjective {
   // combine() with the held-out-fix guard; counts a divergence.
   double fitness_of(const Parts& p) const;
   const RlTuneOptions& options() const { return options_; }
-  std::size_t window_count() const { return outages_.windows(); }
+  std::size_t window_count() const;
   // fitness() calls whose replay diverged (scored as a penalty), so far.
   long diverged() const { return diverged_->load(); }
 
  private:
-  const rlnode::Recording* rec_;
+  // One recording's schedules.
+  struct Replays {
+    const rlnode::Recording* rec = nullptr;
+    std::vector<rlnode::Schedule> heldout;
+    rlnode::Schedule fused;  // every fix fused over the span: the innovation statistics
+    OutageReplays outages;
+  };
+  std::vector<Replays> recs_;
   rlnode::ReplaySettings base_;
   RlTuneOptions options_;
   BoxSpace space_;
   std::vector<std::vector<int>> noise_members_;  // per noise parameter: the diagonal entries it scales
   std::vector<int> cov_sensors_;                 // per covariance parameter: the sensor
-  std::vector<rlnode::Schedule> heldout_;
-  rlnode::Schedule fused_;  // every fix fused over the span: the innovation statistics
-  OutageReplays outages_;
   Parts base_parts_;
   std::unique_ptr<std::atomic<long>> diverged_ = std::make_unique<std::atomic<long>>(0);
 

@@ -31,11 +31,11 @@ make_track() {  # NAME SEED → path
     track*) "$BIN" simulate "scenarios/$name.yaml" --seed "$seed" -o "$t" > /dev/null ;;
     wheelchair)
       "$BIN" simulate scenarios/wheelchair.yaml --seed "$seed" -o "$t.raw" > /dev/null
-      "$BIN" fixes "$t.raw" -o "$t" --rate-hz 1 --sigma-m 0.10 --seed "$seed" > /dev/null
+      "$BIN" fixes "$t.raw" -o "$t" --rate-hz 1 --sigma-m 0.10 --seed "$seed" --no-variances > /dev/null
       rm -f "$t.raw" ;;
     slow_robot)
       "$BIN" simulate scenarios/slow_robot.yaml --seed "$seed" -o "$t.raw" > /dev/null
-      "$BIN" fixes "$t.raw" -o "$t" --rate-hz 2 --sigma-m 0.02 --seed "$seed" > /dev/null
+      "$BIN" fixes "$t.raw" -o "$t" --rate-hz 2 --sigma-m 0.02 --seed "$seed" --no-variances > /dev/null
       rm -f "$t.raw" ;;
   esac
   echo "$t"

@@ -33,6 +33,10 @@ Track with_synthetic_fixes(const Track& track, const SyntheticFixOptions& option
   const double nan = std::numeric_limits<double>::quiet_NaN();
   d.col(Col::aps_x).assign(n, nan);
   d.col(Col::aps_y).assign(n, nan);
+  // The fixes' own variances (σ² per axis), replacing any the track had.
+  const bool variances = options.variances && options.sigma_m > 0.0;
+  d.col(Col::aps_var_x).assign(variances ? n : 0, nan);
+  d.col(Col::aps_var_y).assign(variances ? n : 0, nan);
   const auto& gx = d.cols[static_cast<int>(Col::gt_x)];
   const auto& gy = d.cols[static_cast<int>(Col::gt_y)];
 
@@ -52,14 +56,19 @@ Track with_synthetic_fixes(const Track& track, const SyntheticFixOptions& option
     const double ey = options.sigma_m * noise();
     d.col(Col::aps_x)[i] = gx[i] + ex;
     d.col(Col::aps_y)[i] = gy[i] + ey;
+    if (variances) {
+      d.col(Col::aps_var_x)[i] = options.sigma_m * options.sigma_m;
+      d.col(Col::aps_var_y)[i] = options.sigma_m * options.sigma_m;
+    }
     ++made;
     // The next multiple of the period after this row (gaps skip missed ones).
     k = static_cast<long>(std::floor((d.t[i] - t_first) / period + 1e-9)) + 1;
   }
   d.meta.extra.emplace_back("fixes.synthetic",
                             fmt::format("{} fixes from ground truth at {} Hz with sigma {} m, seed {} "
-                                        "(Kovacs et al. 2.1: selection then Gaussian perturbation)",
-                                        made, options.rate_hz, options.sigma_m, options.seed));
+                                        "(Kovacs et al. 2.1: selection then Gaussian perturbation){}",
+                                        made, options.rate_hz, options.sigma_m, options.seed,
+                                        variances ? "; aps_var_x, aps_var_y = sigma^2" : ""));
   return Track(std::move(d));
 }
 

@@ -16,11 +16,15 @@ struct SyntheticFixOptions {
   double rate_hz = 1.0;    // fix frequency
   double sigma_m = 0.060;  // noise σ per axis [m]
   std::uint64_t seed = 1;  // explicit seed of the noise
+  // Also write each fix's variances (aps_var_x, aps_var_y = σ²; none when
+  // σ = 0), as a positioning system reports them.
+  bool variances = true;
 
   bool IsValid(std::string* why) const;
 };
 
-// A copy of `track` whose aps_x/aps_y columns (replaced if present) hold a
+// A copy of `track` whose aps_x/aps_y columns (replaced if present, with
+// aps_var_x/aps_var_y) hold a
 // fix at the first ground-truth row at or after each multiple of 1/rate_hz
 // from the first ground-truth time (the first fix one period after it). The
 // metadata records how the fixes were made. Throws std::invalid_argument when

@@ -267,12 +267,14 @@ TEST_F(LearnCli, CorrectionNetsOnCommandsAreCrossValidatedAndRecorded) {
 }
 
 // With position fixes on the track, eval also fuses each odometry with them
-// (the fixes' σ given, as `odotune fixes` writes none); --from scores the
+// (the fixes' σ given for fixes without variances; with them, none needed); --from scores the
 // second part only.
 TEST_F(LearnCli, EvalFusesFixesAndScoresAPart) {
   const fs::path fixed = *dir_ / "eval-fixes.csv", out = *dir_ / "fused.json";
   ASSERT_EQ(
-      run_cli("fixes " + track("eval") + " -o " + fixed.string() + " --rate-hz 1 --sigma-m 0.1").exit_code, 0);
+      run_cli("fixes " + track("eval") + " -o " + fixed.string() + " --rate-hz 1 --sigma-m 0.1 --no-variances")
+          .exit_code,
+      0);
   const auto r = run_cli("learn eval --track " + fixed.string() + " --model " + model() +
                          " --fix-sigma-m 0.1 --from 10 --json " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -285,6 +287,14 @@ TEST_F(LearnCli, EvalFusesFixesAndScoresAPart) {
   const auto no_sigma = run_cli("learn eval --track " + fixed.string() + " --model " + model());
   ASSERT_EQ(no_sigma.exit_code, 0) << no_sigma.err;
   EXPECT_NE(no_sigma.out.find("not fused with the track's fixes"), std::string::npos) << no_sigma.out;
+  // Fixes with their variances (odotune fixes' default) are fused without --fix-sigma-m.
+  const fs::path with_var = *dir_ / "eval-fixes-var.csv";
+  ASSERT_EQ(
+      run_cli("fixes " + track("eval") + " -o " + with_var.string() + " --rate-hz 1 --sigma-m 0.1").exit_code,
+      0);
+  const auto own = run_cli("learn eval --track " + with_var.string() + " --model " + model());
+  ASSERT_EQ(own.exit_code, 0) << own.err;
+  EXPECT_NE(own.out.find("fused with "), std::string::npos) << own.out;
   expect_one_line_error(
       run_cli("learn eval --track " + fixed.string() + " --model " + model() + " --from 1000"),
       "--from/--until");

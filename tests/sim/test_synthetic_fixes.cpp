@@ -54,6 +54,31 @@ TEST(SyntheticFixes, OnePerPeriodWithTheRequestedNoise) {
   EXPECT_TRUE(out.meta().get("fixes.synthetic").has_value());
 }
 
+TEST(SyntheticFixes, EachFixCarriesItsVarianceUnlessAskedNot) {
+  const Track track = gt_track(10.0, 30.0);
+  SyntheticFixOptions o;
+  o.sigma_m = 0.1;
+  const Track out = with_synthetic_fixes(track, o);
+  ASSERT_TRUE(out.has(Col::aps_var_x) && out.has(Col::aps_var_y));
+  int fixes = 0;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    EXPECT_EQ(out.at(Col::aps_var_x, i), out.at(Col::aps_x, i));
+    if (!out.at(Col::aps_x, i)) continue;
+    EXPECT_DOUBLE_EQ(out.col(Col::aps_var_x)[i], 0.01);
+    EXPECT_DOUBLE_EQ(out.col(Col::aps_var_y)[i], 0.01);
+    ++fixes;
+  }
+  EXPECT_EQ(fixes, 30);
+  // Replaced fixes replace their variances too; without them, none are left.
+  o.variances = false;
+  const Track bare = with_synthetic_fixes(out, o);
+  EXPECT_FALSE(bare.has(Col::aps_var_x));
+  EXPECT_FALSE(bare.has(Col::aps_var_y));
+  o.variances = true;
+  o.sigma_m = 0.0;
+  EXPECT_FALSE(with_synthetic_fixes(track, o).has(Col::aps_var_x));
+}
+
 TEST(SyntheticFixes, SeededAndReplacingExistingFixes) {
   const Track track = gt_track(10.0, 30.0);
   SyntheticFixOptions o;

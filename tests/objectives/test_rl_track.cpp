@@ -1,0 +1,164 @@
+// robot_localization's EKF on a track (objectives/rl_track.h): where it
+// starts, what it is scored by against ground truth, the refusals, and
+// several tracks tuned as one objective (RlObjective over recordings).
+#include <cmath>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "objectives/rl_objective.h"
+#include "objectives/rl_track.h"
+#include "rlnode/params.h"
+#include "support/synthetic_track.h"
+#include "support/temp_dir.h"
+
+namespace {
+
+using namespace odotune;
+using testing::HasSubstr;
+
+constexpr const char* kTeamFile = R"(ekf_filter_node:
+  ros__parameters:
+    frequency: 20.0
+    two_d_mode: true
+    odom0: odom
+    odom0_config: [false, false, false, false, false, false, true, true, false, false, false, true, false, false, false]
+    odom1: odometry/fixes
+    odom1_config: [true, true, false, false, false, false, false, false, false, false, false, false, false, false, false]
+)";
+constexpr const char* kGyroLine =
+    "    imu0: imu/data\n"
+    "    imu0_config: [false, false, false, false, false, false, false, false, false, false, false, true, false, "
+    "false, false]\n";
+
+struct TeamFile {
+  testing_support::TempDir dir{"rl-track"};
+  rlnode::RlParams params(bool gyro = false) {
+    const auto path = dir.path() / (gyro ? "gyro.yaml" : "user.yaml");
+    std::ofstream(path) << kTeamFile << (gyro ? kGyroLine : "");
+    return rlnode::read_rl_params(path);
+  }
+};
+
+RlTrackOptions sigma(double s) {
+  RlTrackOptions o;
+  o.fix_sigma_m = s;
+  return o;
+}
+
+RlTuneOptions short_protocols() {
+  RlTuneOptions o;
+  o.outage_s = {10.0};
+  o.outage_stride_s = 5.0;
+  o.warmup_s = 10.0;
+  return o;
+}
+
+std::string refusal(const Track& track, const rlnode::RlParams& p, const RlTrackOptions& o) {
+  try {
+    load_rl_track(track, "drive.csv", p, o);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(RlTrack, StartsAtTheFirstFixWithTheFittedHeadingAndFollowsTheTruth) {
+  TeamFile f;
+  const Track track = testing_support::synthetic_track(1);
+  const RlTrack t = load_rl_track(track, "drive.csv", f.params(true), sigma(0.06));
+  EXPECT_EQ(t.odometry, OdometryInput::wheels);
+  EXPECT_EQ(t.rec.start_ns, 1'000'000'000);  // the first fix, at 1 s
+  ASSERT_TRUE(t.rec.params.initial_state.has_value());
+  EXPECT_NEAR((*t.rec.params.initial_state)[filters::rl::kX], track.col(Col::aps_x)[50], 1e-12);
+  EXPECT_LT(std::abs(t.initial_heading_error_rad), 0.15);  // fitted on 5 m of a wheel-biased path
+  EXPECT_THAT(t.start_note, HasSubstr("start at the first fix"));
+  const RlTrackScores s = score_rl_track(t, rlnode::settings_of(t.rec.params), short_protocols());
+  EXPECT_TRUE(s.run.finite);
+  EXPECT_GT(s.run.samples, 1000);
+  EXPECT_LT(s.run.rmse_m, 0.15);
+  // Without fixes the 1 % wheel error grows: the outages are worse than the fused run.
+  EXPECT_GT(s.windows, 5u);
+  EXPECT_GT(s.outages.rmse_m, s.run.rmse_m);
+  EXPECT_GT(s.heldout_fixes.fixes, 50);
+  EXPECT_GT(s.outage_fixes.fixes, 0);
+}
+
+TEST(RlTrack, TruthScoreInterpolatesAndSkipsWhereThereIsNoTruth) {
+  const std::vector<TruthSample> truth = {{0, 0.0, 0.0}, {1'000'000'000, 1.0, 0.0}, {2'000'000'000, 2.0, 0.0}};
+  std::vector<rlnode::TrajectoryPoint> path(3);
+  path[0].time_ns = 500'000'000;
+  path[0].state[filters::rl::kX] = 0.5;  // on the truth
+  path[1].time_ns = 1'500'000'000;
+  path[1].state[filters::rl::kX] = 1.5;
+  path[1].state[filters::rl::kY] = 1.0;  // 1 m off
+  path[2].time_ns = 5'000'000'000;       // after the truth: not scored
+  path[2].state[filters::rl::kX] = 9.0;
+  const TruthScore s = truth_score(truth, path);
+  EXPECT_EQ(s.samples, 2);
+  EXPECT_NEAR(s.rmse_m, std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(s.max_m, 1.0, 1e-12);
+  EXPECT_EQ(truth_score(truth, path, 1'000'000'000).samples, 1);
+  const std::vector<TruthScore> both = {s, truth_score(truth, path, 1'000'000'000)};
+  EXPECT_EQ(pooled(std::span<const TruthScore>(both)).samples, 3);
+  EXPECT_NEAR(pooled(std::span<const TruthScore>(both)).rmse_m, std::sqrt(2.0 / 3.0), 1e-12);
+}
+
+TEST(RlTrack, ATrackWithoutWhatTheFileFusesIsRefusedInOneLine) {
+  TeamFile f;
+  const Track track = testing_support::synthetic_track(2);
+  EXPECT_THAT(refusal(track, f.params(), RlTrackOptions{}),
+              AllOf(HasSubstr("drive.csv"), HasSubstr("no variances"), HasSubstr("--fix-sigma-m")));
+  TrackData no_gyro = track.data();
+  no_gyro.col(Col::gyro_z).clear();
+  EXPECT_THAT(refusal(Track(no_gyro), f.params(true), sigma(0.06)),
+              AllOf(HasSubstr("imu0"), HasSubstr("gyro_z")));
+  TrackData no_fixes = track.data();
+  no_fixes.col(Col::aps_x).clear();
+  no_fixes.col(Col::aps_y).clear();
+  EXPECT_THAT(refusal(Track(no_fixes), f.params(), sigma(0.06)), AllOf(HasSubstr("odom1"), HasSubstr("aps_x")));
+  RlTrackOptions bad = sigma(0.06);
+  bad.odometry_var_vx = -1.0;
+  EXPECT_THAT(refusal(track, f.params(), bad), HasSubstr("variance"));
+  const std::string line = refusal(Track(no_gyro), f.params(true), sigma(0.06));
+  EXPECT_EQ(line.find('\n'), std::string::npos);
+}
+
+TEST(RlTrack, SeveralTracksPoolTheirFixesInOneObjective) {
+  TeamFile f;
+  const rlnode::RlParams p = f.params(true);
+  const RlTrack a = load_rl_track(testing_support::synthetic_track(3), "a.csv", p, sigma(0.06));
+  const RlTrack b = load_rl_track(testing_support::synthetic_track(4, 50.0), "b.csv", p, sigma(0.06));
+  const RlTuneOptions o = short_protocols();
+  const rlnode::ReplaySettings base = rlnode::settings_of(p);
+  const RlObjective one_a(a.rec, base, o), one_b(b.rec, base, o);
+  const std::vector<const rlnode::Recording*> recs = {&a.rec, &b.rec};
+  const RlObjective joint(recs, base, o);
+  const FixScore ha = one_a.baseline_heldout(), hb = one_b.baseline_heldout(), h = joint.baseline_heldout();
+  EXPECT_EQ(h.fixes, ha.fixes + hb.fixes);
+  const double n = static_cast<double>(h.fixes);
+  EXPECT_NEAR(h.rmse_m,
+              std::sqrt((ha.rmse_m * ha.rmse_m * static_cast<double>(ha.fixes) +
+                         hb.rmse_m * hb.rmse_m * static_cast<double>(hb.fixes)) /
+                        n),
+              1e-12);
+  EXPECT_EQ(joint.window_count(), one_a.window_count() + one_b.window_count());
+  // The lock-step batch is the single calls, bit for bit.
+  const auto [lo, hi] = joint.bounds();
+  std::vector<double> xs;
+  for (int k = 0; k < 3; ++k)
+    for (std::size_t i = 0; i < lo.size(); ++i) xs.push_back(lo[i] + (hi[i] - lo[i]) * (0.3 + 0.2 * k));
+  std::vector<double> batch(3);
+  joint.fitness_batch(xs, batch);
+  for (std::size_t k = 0; k < 3; ++k)
+    EXPECT_EQ(batch[k], joint.fitness(std::span<const double>(xs).subspan(k * lo.size(), lo.size())));
+  // The innovation statistics take one recording.
+  RlTuneOptions nis = o;
+  nis.fitness = RlFitness::nis;
+  EXPECT_THROW(RlObjective(recs, base, nis), std::invalid_argument);
+}
