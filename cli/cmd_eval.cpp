@@ -24,7 +24,12 @@ void register_eval(CLI::App& app) {
       "robot_localization's EKF as the robot runs it, from its own bag and parameter file:\n"
       "  odotune eval --rl-params husky_ekf.yaml --bag test1.bag --tf imu_link=0,-0.3,0.52,1.5707963,0,-1.5707963 \\\n"
       "      --gps-heading-fit 60 --from 197.6 --trajectory-out husky.tum\n"
-      "  prints the final pose and the held-out fix errors (docs/husky.md).");
+      "  prints the final pose and the held-out fix errors (docs/husky.md).\n"
+      "robot_localization's EKF on tracks (odometry as odomN, gyro_z as imuN, the fixes as a pose input;\n"
+      "docs/robot-localization.md):\n"
+      "  odotune eval --rl-params user.yaml --track robot3-fixes.csv --trajectory-out robot3.tum\n"
+      "  prints the RMSE against the track's ground truth with every fix fused and through simulated fix\n"
+      "  outages, and the held-out fix errors a user without ground truth would see.");
   sub->add_option("--config", req->config, "configuration YAML (format odotune-ekf-config/1)");
   sub->add_option("--track", req->tracks, "track file (repeat for several)");
   sub->add_option("--json", req->json_out, "write the metrics as JSON to this file");
@@ -53,22 +58,48 @@ void register_eval(CLI::App& app) {
   sub->add_option("--outage-every", rl->outage_every_s,
                   "--rl-params: with --outages, their stride [s] (default 10)")
       ->check(CLI::PositiveNumber);
-  sub->callback([req, rl, sub] {
+  auto track_src = std::make_shared<RlTrackSource>();
+  add_rl_track_options(sub, *track_src);
+  sub->callback([req, rl, track_src, sub] {
     if (rl->src.params_file.empty()) {
       for (const char* flag : {"--bag", "--node", "--tf", "--gps-topic", "--gps-heading-fit", "--until",
                                "--from", "--noise-from", "--fixes-out", "--outages", "--outage-every"}) {
         if (sub->count(flag) > 0) throw Failure(fmt::format("eval: {} applies to --rl-params only", flag));
       }
     }
+    for (const char* flag : kRlTrackFlags) {
+      if (sub->count(flag) > 0 && (rl->src.params_file.empty() || req->tracks.empty()))
+        throw Failure(fmt::format("eval: {} applies to --rl-params with --track only", flag));
+    }
+    if (!rl->src.params_file.empty() && rl->src.bag.empty() && !req->tracks.empty()) {
+      for (const char* flag :
+           {"--tf", "--gps-topic", "--gps-heading-fit", "--until", "--from", "--fixes-out", "--config"}) {
+        if (sub->count(flag) > 0)
+          throw Failure(fmt::format("eval: {} applies to --rl-params with --bag, not with --track", flag));
+      }
+      RlTrackEvalRequest t;
+      t.src = *track_src;
+      t.src.params_file = rl->src.params_file;
+      t.src.node_name = rl->src.node_name;
+      t.src.tracks = {req->tracks.begin(), req->tracks.end()};
+      t.noise_from = rl->noise_from;
+      if (!rl->outages_s.empty()) t.protocols.outage_s = rl->outages_s;
+      t.protocols.outage_stride_s = rl->outage_every_s;
+      t.trajectory_out = req->trajectory_out;
+      t.json_out = req->json_out;
+      print_rl_track_eval(run_rl_track_eval(t));
+      return;
+    }
     if (!rl->src.params_file.empty()) {
       if (!req->tracks.empty() || !req->config.empty())
-        throw Failure("eval: --rl-params replays a bag; expected no --track or --config with it");
+        throw Failure(
+            "eval: --rl-params replays a bag or tracks; expected --bag or --track, not both, and no --config");
       rl->trajectory_out = req->trajectory_out;
       rl->json_out = req->json_out;
       print_rl_eval(run_rl_eval(*rl));
       return;
     }
-    if (req->tracks.empty()) throw Failure("eval: expected --track, or --rl-params with --bag");
+    if (req->tracks.empty()) throw Failure("eval: expected --track, or --rl-params with --bag or --track");
     run_eval(*req, [&](const EvalOutcome& o) {
       const EvalTrack& t = o.tracks.back();
       const ErrorMetrics& m = t.metrics;

@@ -1,6 +1,7 @@
 // odotune tune: tune one EKF noise model, one particle-filter calibrator's
 // settings, or the velocity-fusion UKF's noise, on one or more tracks (jobs/tune_command.h runs it and writes the
 // files; cli/tune_output.h prints the result).
+#include <algorithm>
 #include <cstdio>
 #include <map>
 #include <set>
@@ -25,6 +26,7 @@ struct RlChoices {
   std::string fitness = "both", space = "diagonal", format = "ros2";
   std::string grid;  // "none" or levels in decades, comma-separated
   bool no_input_covariances = false, allow_worse_heldout = false;
+  RlTrackSource track;  // --rl-params with --track: its options
 };
 
 // --grid: "none" (no grid stage) or levels in decades, "-2,0,2".
@@ -83,10 +85,21 @@ void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const R
                                                  "--cv-folds",
                                                  "--cv-block",
                                                  "--threads"};
+  // With --track instead of --bag: the track's inputs, not the bag's frames, topics or span.
+  static const std::set<std::string> kBagOnly = {"--bag",   "--tf",   "--gps-topic", "--gps-heading-fit",
+                                                 "--until", "--from", "--end"};
+  const bool on_tracks = r.src.bag.empty() && !req.tracks.empty();
   std::string command = "odotune tune";
   for (const CLI::Option* opt : sub.get_options()) {
     if (opt->count() == 0) continue;
-    if (kApplies.count(opt->get_name()) == 0) {
+    const std::string& name = opt->get_name();
+    const bool track_flag = name == "--track" || std::find(std::begin(kRlTrackFlags), std::end(kRlTrackFlags),
+                                                           name) != std::end(kRlTrackFlags);
+    if (on_tracks ? (kBagOnly.count(name) > 0) : track_flag) {
+      throw Failure(fmt::format("tune: {} does not apply to --rl-params with {}", name,
+                                on_tracks ? "--track" : "--bag"));
+    }
+    if (kApplies.count(name) == 0 && !track_flag) {
       throw Failure(fmt::format("tune: {} does not apply to --rl-params (robot_localization's EKF)",
                                 opt->get_name()));
     }
@@ -110,6 +123,18 @@ void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const R
   Progress progress("tune", "evaluations");
   r.progress = [&progress](long done, long total) { progress.update(done, total); };
   r.stop = interrupt.flag();
+  if (on_tracks) {
+    RlTrackSource src = c.track;
+    src.params_file = r.src.params_file;
+    src.node_name = r.src.node_name;
+    src.tracks = {req.tracks.begin(), req.tracks.end()};
+    const RlTrackTuneOutcome o = run_rl_track_tune(r, src);
+    progress.finish();
+    if (interrupt.raised()) std::fprintf(stderr, "odotune: interrupted; reporting the best so far\n");
+    print_rl_track_tune(r, o);
+    if (interrupt.raised()) throw Failure("interrupted", 130);
+    return;
+  }
   const RlTuneOutcome o = run_rl_tune(r);
   progress.finish();
   if (interrupt.raised()) std::fprintf(stderr, "odotune: interrupted; reporting the best so far\n");
@@ -263,7 +288,9 @@ void register_tune(CLI::App& app) {
       "each input's message covariance, by held-out GPS fixes and simulated GPS outages; --config-out\n"
       "writes the user's file with the tuned values and the held-out scores in comments:\n"
       "  odotune tune --rl-params husky_ekf.yaml --bag test1.bag --tf imu_link=0,-0.3,0.52,1.5707963,0,-1.5707963 \\\n"
-      "      --gps-heading-fit 60 --until 197.6 --fitness both --config-out ekf.yaml");
+      "      --gps-heading-fit 60 --until 197.6 --fitness both --config-out ekf.yaml\n"
+      "  or on tracks (several tuned together; their ground truth is not used; docs/robot-localization.md):\n"
+      "  odotune tune --rl-params user.yaml --track robot1-fixes.csv --track robot2-fixes.csv --config-out tuned.yaml");
   sub->add_option("--track", req->tracks, "track file (repeat for several; fitness = mean over tracks)");
   sub->add_option("--model", req->model, "rq | alpha | gyro | pf-calib | adaptive-pf-calib | ukf");
   add_fitness_mode_option(
@@ -293,6 +320,7 @@ void register_tune(CLI::App& app) {
   auto rl_names = std::make_shared<RlChoices>();
   add_rl_source_options(sub, rl->src);
   add_rl_tune_options(sub, *rl, *rl_names);
+  add_rl_track_options(sub, rl_names->track);
   add_threads_option(sub, threads.get());
 
   sub->callback([req, rl, rl_names, threads, sub] {

@@ -1,5 +1,7 @@
 #include "cli/rl_output.h"
 
+#include "cli/choices.h"
+
 #include <cmath>
 
 #include <fmt/format.h>
@@ -45,6 +47,87 @@ void add_rl_source_options(CLI::App* sub, RlSource& src) {
                   "--rl-params: fit navsat's GPS-to-odom rotation on the first SECONDS of fixes (for an IMU "
                   "whose absolute yaw cannot be trusted) instead of taking the IMU's heading")
       ->check(CLI::PositiveNumber);
+}
+
+void add_rl_track_options(CLI::App* sub, RlTrackSource& src) {
+  RlTrackOptions& o = src.options;
+  sub->add_option("--calibration", src.calibration,
+                  "--rl-params with --track: apply this odometry calibration (calibrate --config-out) to every "
+                  "track first: wheel radii and base as the track's geometry, or a twist's scales and delay")
+      ->check(CLI::ExistingFile);
+  add_enum_option(sub, "--odometry", o.odometry,
+                  {OdometryInput::wheels, OdometryInput::twist, OdometryInput::commands},
+                  "--rl-params with --track: the track's odometry input (default: its wheels, else its "
+                  "v_cmd/w_cmd as its source.body_velocity says)");
+  sub->add_option("--fix-sigma-m", o.fix_sigma_m,
+                  "--rl-params with --track: σ [m] of fixes whose track gives no aps_var_x/aps_var_y")
+      ->check(CLI::PositiveNumber);
+  sub->add_option_function<std::vector<double>>(
+         "--twist-variance",
+         [&o](const std::vector<double>& v) {
+           if (v.size() != 2)
+             throw CLI::ValidationError("--twist-variance", "expected VX,VYAW (two variances)");
+           o.odometry_var_vx = v[0];
+           o.odometry_var_vyaw = v[1];
+         },
+         "--rl-params with --track: the odometry twist's covariance diagonal, vx and vyaw [(m/s)², (rad/s)²], "
+         "as the drive controller publishes it (default 0.001,0.03: Clearpath's diff_drive_controller "
+         "twist_covariance_diagonal)")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--gyro-variance", o.gyro_var,
+                  "--rl-params with --track: the gyro's yaw-rate variance [(rad/s)²] (default (0.02 °/s)², the "
+                  "phidgets_spatial driver's)")
+      ->check(CLI::PositiveNumber);
+}
+
+namespace {
+
+std::string truth_text(const TruthScore& s) {
+  if (s.samples == 0) return "n/a";
+  return s.finite ? fmt::format("{:.3f} m", s.rmse_m) : "diverged";
+}
+
+std::string truth_change(const TruthScore& a, const TruthScore& b) {
+  const std::string pct = a.samples > 0 && b.samples > 0 && a.rmse_m > 0.0
+                              ? fmt::format(" ({:+.1f} %)", 100.0 * (b.rmse_m / a.rmse_m - 1.0))
+                              : "";
+  return fmt::format("{} -> {}{}", truth_text(a), truth_text(b), pct);
+}
+
+}  // namespace
+
+void print_rl_track_eval(const RlTrackEvalOutcome& o) {
+  for (const RlTrackRow& r : o.rows) {
+    const RlTrackScores& s = r.scores;
+    fmt::print("{}: robot_localization EKF ({}) over {:.1f} s, odometry {}: {} measurements, {} rejected\n",
+               r.track.filename().string(), o.params_file.filename().string(), r.duration_s,
+               to_string(r.odometry), s.processed, s.rejected);
+    fmt::print("  {}{}\n", r.start_note,
+               std::isfinite(r.initial_heading_error_rad)
+                   ? fmt::format(" (against gt_theta: {:+.3f} rad)", r.initial_heading_error_rad)
+                   : "");
+    fmt::print("  against ground truth: every fix fused RMSE {}; through {} simulated fix outages RMSE {}\n",
+               truth_text(s.run), s.windows, truth_text(s.outages));
+    fmt::print("  against the fixes: held-out fixes (5 folds of 1 s blocks) RMSE {}; outages RMSE {}\n",
+               metres(s.heldout_fixes), metres(s.outage_fixes));
+  }
+  if (o.rows.size() > 1) {
+    fmt::print("all {} tracks: ground truth, fixes fused {}, outages {}; held-out fixes {}, outages {}\n",
+               o.rows.size(), truth_text(o.run), truth_text(o.outages), metres(o.heldout_fixes),
+               metres(o.outage_fixes));
+  }
+}
+
+void print_rl_track_tune(const RlTuneRequest& r, const RlTrackTuneOutcome& o) {
+  print_rl_tune(r, o.tune);
+  fmt::print(
+      "  against ground truth on the tuned tracks (not used by the tune), the file's values -> tuned:\n");
+  for (std::size_t k = 0; k < o.before.size(); ++k) {
+    fmt::print("    {}: fixes fused {}; outages {}\n", o.before[k].track.filename().string(),
+               truth_change(o.before[k].scores.run, o.after[k].scores.run),
+               truth_change(o.before[k].scores.outages, o.after[k].scores.outages));
+  }
 }
 
 void print_rl_eval(const RlEvalOutcome& o) {

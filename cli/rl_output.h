@@ -5,13 +5,22 @@
 #include <CLI/CLI.hpp>
 
 #include "jobs/rl_job.h"
+#include "jobs/rl_track_job.h"
 
 namespace odotune::cli {
 
 // --rl-params, --bag, --node, --tf, --gps-topic, --gps-heading-fit.
 void add_rl_source_options(CLI::App* sub, RlSource& src);
 
+// A track's inputs: --odometry, --fix-sigma-m, --twist-variance, --gyro-variance, --calibration.
+void add_rl_track_options(CLI::App* sub, RlTrackSource& src);
+// The flags that apply to --rl-params with --track.
+inline constexpr const char* kRlTrackFlags[] = {"--odometry", "--fix-sigma-m", "--twist-variance",
+                                                "--gyro-variance", "--calibration"};
+
 void print_rl_eval(const RlEvalOutcome& o);
+void print_rl_track_eval(const RlTrackEvalOutcome& o);
+void print_rl_track_tune(const RlTuneRequest& r, const RlTrackTuneOutcome& o);
 void print_rl_tune(const RlTuneRequest& r, const RlTuneOutcome& o);
 
 }  // namespace odotune::cli

@@ -32,9 +32,10 @@ nlohmann::json json_of(const RlProtocolScores& p) {
   return {{"outage", json_of(p.outage)}, {"every_fifth_fix", json_of(p.every_fifth)}};
 }
 
-// The filter's trajectory in TUM format (t x y z qx qy qz qw) on the bag's clock.
-void write_trajectory(const std::filesystem::path& path, const std::vector<rlnode::TrajectoryPoint>& points,
-                      const std::string& comment) {
+}  // namespace
+
+void write_rl_trajectory(const std::filesystem::path& path, const std::vector<rlnode::TrajectoryPoint>& points,
+                         const std::string& comment) {
   std::ostringstream out;
   out << "# " << comment << "\n";
   for (const rlnode::TrajectoryPoint& p : points) {
@@ -46,8 +47,6 @@ void write_trajectory(const std::filesystem::path& path, const std::vector<rlnod
   }
   write_atomically(path, "trajectory", out.str());
 }
-
-}  // namespace
 
 std::int64_t rl_time_ns(const rlnode::Recording& rec, double seconds) {
   return rec.origin_ns + static_cast<std::int64_t>(std::llround(seconds * 1e9));
@@ -97,6 +96,8 @@ RlSource rl_source_of(const ExperimentRl& x, const std::filesystem::path& bag) {
 }
 
 RlLoaded load_rl(const RlSource& src) {
+  if (src.bag.empty())
+    throw Failure("--rl-params: expected the robot's recording, --bag BAG, or the project's tracks, --track T");
   rlnode::RecordingOptions options;
   for (const std::string& t : src.tf) options.frames.insert(parse_tf(t));
   options.gps_topic = src.gps_topic;
@@ -196,9 +197,9 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
     out.outages = OutageReplays(rec, w, until).score(s);
   }
   if (!request.trajectory_out.empty()) {
-    write_trajectory(request.trajectory_out, points,
-                     fmt::format("robot_localization EKF replayed by odotune: {} with {}, {}",
-                                 rec.bag.filename().string(), rec.params.file.filename().string(), what));
+    write_rl_trajectory(request.trajectory_out, points,
+                        fmt::format("robot_localization EKF replayed by odotune: {} with {}, {}",
+                                    rec.bag.filename().string(), rec.params.file.filename().string(), what));
   }
   if (!request.fixes_out.empty()) {
     std::ostringstream text;

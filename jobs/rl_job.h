@@ -12,6 +12,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -49,6 +50,11 @@ struct RlLoaded {
 RlLoaded load_rl(const RlSource& src);
 // An experiment's robot_localization section applied to one of its bags.
 RlSource rl_source_of(const ExperimentRl& x, const std::filesystem::path& bag);
+
+// The filter's trajectory in TUM format (t x y z qx qy qz qw) on the
+// recording's clock, `comment` as its first line; throws Failure.
+void write_rl_trajectory(const std::filesystem::path& path, const std::vector<rlnode::TrajectoryPoint>& points,
+                         const std::string& comment);
 
 // A user's seconds (from the recording's first message) as a stamp, and back.
 std::int64_t rl_time_ns(const rlnode::Recording& rec, double seconds);
@@ -143,6 +149,7 @@ struct RlStartOutcome {
 
 struct RlTuneOutcome {
   std::filesystem::path bag, params_file;
+  std::vector<std::filesystem::path> tracks;  // tuned on tracks (jobs/rl_track_job.h), not a bag
   double duration_s = 0.0;
   double span_from_s = 0.0, span_until_s = 0.0;  // the tuning span [s]
   std::optional<RlJudgedSpan> judged;            // the judged span, when there is one
@@ -193,6 +200,11 @@ void write_rl_run(const Experiment& e, const results::RunRecord& run, const std:
 // tuning fitness, replayed from the bag) and convergence curves.
 ReportOutcome write_rl_report(const ReportRequest& req, const results::ExperimentInfo& info,
                               const std::vector<results::RunRecord>& runs);
+// The grid, the starts and the written one on `objective`, into `o` (its
+// parameter names, baseline and tuned scores, starts, summary); `judge`
+// scores a start's settings on a span the tune never saw (nullopt: none).
+void search_rl(const RlObjective& objective, const RlTuneRequest& request, RlTuneOutcome& o,
+               const std::function<std::optional<RlProtocolScores>(const rlnode::ReplaySettings&)>& judge);
 // The search and its scores on an already loaded recording (no file read or
 // written; the request's output paths are not used); with from_s, `tuned_on`
 // is the recording cut there (load_rl with RlSource::from_s), `loaded` the

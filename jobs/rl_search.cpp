@@ -176,6 +176,15 @@ struct Subset {
 
 }  // namespace
 
+long rl_grid_points(const RlObjective& objective, const RlSearchOptions& options) {
+  if (options.grid_levels.empty()) return 1;
+  const std::vector<int> block = blocks_of(objective);
+  const int nb = 1 + *std::max_element(block.begin(), block.end());
+  long count = 1;
+  for (int b = 0; b < nb; ++b) count *= static_cast<long>(options.grid_levels.size());
+  return count;
+}
+
 RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& options,
                            const SolverSettings& settings) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -193,8 +202,7 @@ RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& 
   }
   const int nb = 1 + *std::max_element(block.begin(), block.end());
   const auto nl = static_cast<long>(options.grid_levels.size());
-  long count = 1;
-  for (int b = 0; b < nb; ++b) count *= nl;
+  const long count = rl_grid_points(objective, options);
   std::vector<std::vector<double>> points;
   for (long k = 0; k < count; ++k) {
     std::vector<double> x(lo.size(), 0.0);

@@ -43,6 +43,8 @@ struct RlGridResult {
   long evaluations = 0;                  // with the profile's
   double seconds = 0.0;
 };
+// The points rl_grid_stage evaluates before its profile (1 without a grid).
+long rl_grid_points(const RlObjective& objective, const RlSearchOptions& options);
 RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& options,
                            const SolverSettings& settings);
 

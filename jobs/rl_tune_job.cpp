@@ -1,6 +1,7 @@
 // run_rl_tune (jobs/rl_job.h): the search, its scores and the written files
 // (their text: rl_tune_text.cpp).
 #include <cmath>
+#include <functional>
 #include <limits>
 
 #include <fmt/format.h>
@@ -103,24 +104,30 @@ SolverSettings stage_settings(const RlTuneRequest& r, std::uint64_t seed, long b
   return s;
 }
 
-// The evaluations a start costs (for progress): the solver's budget, the profile's points, a few more.
-long start_budget(const RlObjective& objective, const RlTuneRequest& r) {
-  long n = r.search.refine_decades > 0.0
-               ? (r.solver.kind == tuner::SolverChoice::Kind::pso
-                      ? static_cast<long>(r.particles) * (r.iterations + 1)
-                      : (r.evaluations > 0 ? r.evaluations
-                                           : static_cast<long>(r.particles) * (r.iterations + 1)))
-               : 0;
-  if (r.search.profile) {
-    const auto [lo, hi] = objective.bounds();
-    for (std::size_t i = 0; i < lo.size(); ++i)
-      n += static_cast<long>((hi[i] - lo[i]) / r.search.profile_step_decades) + 2;
-  }
-  return n + 2;
+// The evaluations of one profile (for progress).
+long profile_budget(const RlObjective& objective, const RlTuneRequest& r) {
+  if (!r.search.profile) return 0;
+  long n = 0;
+  const auto [lo, hi] = objective.bounds();
+  for (std::size_t i = 0; i < lo.size(); ++i)
+    n += static_cast<long>((hi[i] - lo[i]) / r.search.profile_step_decades) + 2;
+  return n;
 }
 
-RlStartOutcome start_outcome(const RlObjective& objective, const RlStartResult& s,
-                             const rlnode::Recording& judged_rec, const std::optional<RlJudgedSpan>& span) {
+// The evaluations a start costs (for progress): the solver's budget, the profile's points, a few more.
+long start_budget(const RlObjective& objective, const RlTuneRequest& r) {
+  const long n = r.search.refine_decades > 0.0
+                     ? (r.solver.kind == tuner::SolverChoice::Kind::pso
+                            ? static_cast<long>(r.particles) * (r.iterations + 1)
+                            : (r.evaluations > 0 ? r.evaluations
+                                                 : static_cast<long>(r.particles) * (r.iterations + 1)))
+                     : 0;
+  return n + profile_budget(objective, r) + 2;
+}
+
+using Judge = std::function<std::optional<RlProtocolScores>(const rlnode::ReplaySettings&)>;
+
+RlStartOutcome start_outcome(const RlObjective& objective, const RlStartResult& s, const Judge& judge) {
   RlStartOutcome o;
   o.seed = s.seed;
   o.factors = objective.space().to_physical(s.x);
@@ -128,7 +135,7 @@ RlStartOutcome start_outcome(const RlObjective& objective, const RlStartResult& 
   o.fitness = s.fitness;
   o.heldout = objective.heldout_score(o.tuned);
   o.outage = objective.outage_score(o.tuned);
-  if (span) o.judged = score_protocols(judged_rec, o.tuned, *span);
+  o.judged = judge(o.tuned);
   o.profiles = s.profiles;
   o.evaluations = s.evaluations;
   o.seconds = s.seconds;
@@ -156,6 +163,41 @@ tuner::Summary combined_summary(const RlGridResult& grid, const RlStartResult& s
 
 }  // namespace
 
+void search_rl(const RlObjective& objective, const RlTuneRequest& request, RlTuneOutcome& o,
+               const std::function<std::optional<RlProtocolScores>(const rlnode::ReplaySettings&)>& judge) {
+  for (const ParamSpec& p : objective.space().params()) o.param_names.push_back(p.name);
+  o.outage_windows = objective.window_count();
+  o.baseline_fitness = objective.baseline_fitness();
+  o.baseline_heldout = objective.baseline_heldout();
+  o.baseline_outage = objective.baseline_outage();
+  const long per_start = start_budget(objective, request);
+  // The grid's points and its profile, then each start; corrected by what the grid took.
+  const long grid_count = rl_grid_points(objective, request.search) + profile_budget(objective, request);
+  long total = per_start * request.starts + grid_count;
+  o.grid = rl_grid_stage(objective, request.search, stage_settings(request, request.seed, 0, total));
+  total += o.grid.evaluations - grid_count;
+  std::vector<RlStartResult> runs;
+  for (int k = 0; k < request.starts; ++k) {
+    if (request.stop && request.stop->load()) break;
+    const SolverSettings s = stage_settings(request, request.seed + static_cast<std::uint64_t>(k),
+                                            o.grid.evaluations + k * per_start, total);
+    runs.push_back(rl_refine_and_profile(objective, o.grid, request.search, s));
+    o.starts.push_back(start_outcome(objective, runs.back(), judge));
+  }
+  if (o.starts.empty()) throw Failure("tune: stopped before the first start");
+  for (std::size_t k = 1; k < o.starts.size(); ++k)
+    if (o.starts[k].fitness < o.starts[o.written].fitness) o.written = k;
+  const RlStartOutcome& w = o.starts[o.written];
+  o.factors = w.factors;
+  o.tuned = w.tuned;
+  o.tuned_fitness = w.fitness;
+  o.tuned_heldout = w.heldout;
+  o.tuned_outage = w.outage;
+  o.tuned_judged = w.judged;
+  o.summary = combined_summary(o.grid, runs[o.written]);
+  o.diverged = objective.diverged();
+}
+
 RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request, const RlLoaded* tuned_on) {
   const rlnode::Recording& rec = loaded.rec;
   const rlnode::Recording& trec = tuned_on ? tuned_on->rec : rec;
@@ -181,38 +223,12 @@ RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request, cons
                     tuned_on->alignment->rms_m));
   }
   o.baseline = rlnode::settings_of(trec.params);
-  for (const ParamSpec& p : objective.space().params()) o.param_names.push_back(p.name);
-  o.outage_windows = objective.window_count();
-  o.baseline_fitness = objective.baseline_fitness();
-  o.baseline_heldout = objective.baseline_heldout();
-  o.baseline_outage = objective.baseline_outage();
   if (o.judged) o.baseline_judged = score_protocols(rec, rlnode::settings_of(rec.params), *o.judged);
 
-  const long per_start = start_budget(objective, request);
-  const long grid_count = request.search.grid_levels.empty() ? 1 : 0;
-  long total = per_start * request.starts + grid_count;
-  o.grid = rl_grid_stage(objective, request.search, stage_settings(request, request.seed, 0, total));
-  total += o.grid.evaluations - grid_count;
-  std::vector<RlStartResult> runs;
-  for (int k = 0; k < request.starts; ++k) {
-    if (request.stop && request.stop->load()) break;
-    const SolverSettings s = stage_settings(request, request.seed + static_cast<std::uint64_t>(k),
-                                            o.grid.evaluations + k * per_start, total);
-    runs.push_back(rl_refine_and_profile(objective, o.grid, request.search, s));
-    o.starts.push_back(start_outcome(objective, runs.back(), rec, o.judged));
-  }
-  if (o.starts.empty()) throw Failure("tune: stopped before the first start");
-  for (std::size_t k = 1; k < o.starts.size(); ++k)
-    if (o.starts[k].fitness < o.starts[o.written].fitness) o.written = k;
-  const RlStartOutcome& w = o.starts[o.written];
-  o.factors = w.factors;
-  o.tuned = w.tuned;
-  o.tuned_fitness = w.fitness;
-  o.tuned_heldout = w.heldout;
-  o.tuned_outage = w.outage;
-  o.tuned_judged = w.judged;
-  o.summary = combined_summary(o.grid, runs[o.written]);
-  o.diverged = objective.diverged();
+  search_rl(objective, request, o, [&](const rlnode::ReplaySettings& s) -> std::optional<RlProtocolScores> {
+    if (!o.judged) return std::nullopt;
+    return score_protocols(rec, s, *o.judged);
+  });
   return o;
 }
 

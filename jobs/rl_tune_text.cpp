@@ -26,6 +26,8 @@ std::string change(const FixScore& a, const FixScore& b) {
 }
 
 std::string span_text(const RlTuneOutcome& o) {
+  if (!o.tracks.empty())
+    return fmt::format("the whole of {} track(s), {:.1f} s", o.tracks.size(), o.duration_s);
   return fmt::format("{:.1f}-{:.1f} s of {:.1f} s", o.span_from_s, o.span_until_s, o.duration_s);
 }
 
@@ -97,14 +99,19 @@ std::string rl_tune_header(const RlTuneRequest& r, const RlTuneOutcome& o, std::
   const RlStartOutcome& st = o.starts[k];
   const auto [lo, hi] = std::minmax_element(o.starts.begin(), o.starts.end(),
                                             [](const auto& a, const auto& b) { return a.fitness < b.fitness; });
+  std::vector<std::string> tracks;
+  for (const auto& t : o.tracks) tracks.push_back(t.string());
+  const std::string source = tracks.empty() ? fmt::format("Bag: {}", o.bag.string())
+                                            : fmt::format("Tracks: {}", fmt::join(tracks, ", "));
   std::string c = fmt::format(
-      "Tuned by odotune (robot_localization's EKF replayed from the robot's bag).\n"
+      "Tuned by odotune (robot_localization's EKF replayed from the robot's {}).\n"
       "Command: {}\n"
-      "Bag: {}; parameter file: {}\n"
+      "{}; parameter file: {}\n"
       "Tuned on {}: fitness {}, {} process noise{}; GPS outages of {} s ({} windows, one every {:g} s).\n"
       "Search: {}.\n",
-      r.command_line.empty() ? "odotune tune --rl-params ..." : r.command_line, o.bag.string(),
-      o.params_file.string(), span_text(o), to_string(r.options.fitness), to_string(r.options.space),
+      tracks.empty() ? "bag" : "recordings, as tracks",
+      r.command_line.empty() ? "odotune tune --rl-params ..." : r.command_line, source, o.params_file.string(),
+      span_text(o), to_string(r.options.fitness), to_string(r.options.space),
       r.options.input_covariances ? " and input covariances" : "", fmt::join(r.options.outage_s, ", "),
       o.outage_windows, r.options.outage_stride_s, search_text(r, o));
   c += fmt::format(

@@ -1,0 +1,203 @@
+#include "jobs/rl_track_job.h"
+
+#include <cmath>
+#include <numbers>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "core/failure.h"
+#include "core/output_paths.h"
+#include "formats/calibration_yaml.h"
+#include "tracks/track_io.h"
+
+namespace odotune {
+
+RlTracksLoaded load_rl_tracks(const RlTrackSource& src) {
+  if (src.tracks.empty()) throw Failure("--rl-params with tracks: expected at least one --track");
+  std::string why;
+  if (!src.options.IsValid(&why)) throw Failure(why);
+  RlTracksLoaded out;
+  RlTrackOptions options = src.options;
+  if (!src.calibration.empty()) {
+    const CalibrationFile c = read_calibration_file(src.calibration);
+    if (c.odometry == OdometryInput::wheels) {
+      options.wheels = c.params;
+    } else {
+      options.twist = c.twist;
+    }
+  }
+  try {
+    out.params = rlnode::read_rl_params(src.params_file, src.node_name);
+    for (const std::filesystem::path& path : src.tracks)
+      out.tracks.push_back(load_rl_track(read_track(path), path, out.params, options));
+  } catch (const Failure&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw Failure(e.what());
+  }
+  return out;
+}
+
+std::vector<RlTrackRow> score_rl_tracks(const RlTracksLoaded& loaded, const rlnode::ReplaySettings& s,
+                                        const RlTuneOptions& protocols, bool keep_trajectory) {
+  std::vector<RlTrackRow> rows;
+  for (const RlTrack& t : loaded.tracks) {
+    RlTrackRow r;
+    r.track = t.file;
+    r.odometry = t.odometry;
+    r.start_note = t.start_note;
+    r.initial_heading_error_rad = t.initial_heading_error_rad;
+    r.duration_s = static_cast<double>(t.rec.end_ns - t.rec.start_ns) * 1e-9;
+    try {
+      r.scores = score_rl_track(t, s, protocols, keep_trajectory);
+    } catch (const std::exception& e) {
+      throw Failure(e.what());
+    }
+    rows.push_back(std::move(r));
+  }
+  return rows;
+}
+
+namespace {
+
+nlohmann::json json_of(const TruthScore& s) {
+  return {{"rmse_m", s.rmse_m},
+          {"mae_m", s.mae_m},
+          {"max_m", s.max_m},
+          {"samples", s.samples},
+          {"finite", s.finite}};
+}
+
+nlohmann::json json_of(const FixScore& s) {
+  return {{"rmse_m", s.rmse_m}, {"fixes", s.fixes}, {"finite", s.finite}};
+}
+
+nlohmann::json json_of(const RlTrackRow& r) {
+  return {
+      {"track", r.track.string()},
+      {"odometry", to_string(r.odometry)},
+      {"start", r.start_note},
+      {"initial_heading_error_rad", std::isfinite(r.initial_heading_error_rad)
+                                        ? nlohmann::json(r.initial_heading_error_rad)
+                                        : nlohmann::json()},
+      {"duration_s", r.duration_s},
+      {"truth", {{"run", json_of(r.scores.run)}, {"outages", json_of(r.scores.outages)}}},
+      {"fixes", {{"heldout", json_of(r.scores.heldout_fixes)}, {"outages", json_of(r.scores.outage_fixes)}}},
+      {"outage_windows", r.scores.windows},
+      {"processed", r.scores.processed},
+      {"rejected", r.scores.rejected}};
+}
+
+// The rows' scores over all tracks together.
+void pool_rows(const std::vector<RlTrackRow>& rows, RlTrackEvalOutcome& o) {
+  std::vector<TruthScore> run, out;
+  std::vector<FixScore> held, fix_out;
+  for (const RlTrackRow& r : rows) {
+    run.push_back(r.scores.run);
+    out.push_back(r.scores.outages);
+    held.push_back(r.scores.heldout_fixes);
+    fix_out.push_back(r.scores.outage_fixes);
+  }
+  o.run = pooled(std::span<const TruthScore>(run));
+  o.outages = pooled(std::span<const TruthScore>(out));
+  o.heldout_fixes = pooled(std::span<const FixScore>(held));
+  o.outage_fixes = pooled(std::span<const FixScore>(fix_out));
+}
+
+}  // namespace
+
+RlTrackEvalOutcome run_rl_track_eval(const RlTrackEvalRequest& request) {
+  std::string why;
+  if (!request.protocols.IsValid(&why)) throw Failure("eval: " + why);
+  if (!request.trajectory_out.empty()) {
+    if (request.src.tracks.size() != 1) throw Failure("eval: --trajectory-out takes one --track");
+    check_output_file("--trajectory-out", request.trajectory_out.string());
+  }
+  if (!request.json_out.empty()) check_output_file("--json", request.json_out.string());
+  const RlTracksLoaded loaded = load_rl_tracks(request.src);
+  rlnode::ReplaySettings s = rlnode::settings_of(loaded.params);
+  if (!request.noise_from.empty()) {
+    try {
+      s.process_noise =
+          rlnode::read_rl_params(request.noise_from, loaded.params.node_name).process_noise_covariance;
+    } catch (const std::exception& e) {
+      throw Failure(e.what());
+    }
+  }
+  RlTrackEvalOutcome o;
+  o.params_file = loaded.params.file;
+  o.rows = score_rl_tracks(loaded, s, request.protocols, !request.trajectory_out.empty());
+  pool_rows(o.rows, o);
+  if (!request.trajectory_out.empty()) {
+    write_rl_trajectory(request.trajectory_out, o.rows.front().scores.trajectory,
+                        fmt::format("robot_localization's EKF ({}) on {}, every fix fused; the track's clock",
+                                    o.params_file.string(), o.rows.front().track.string()));
+  }
+  if (!request.json_out.empty()) {
+    nlohmann::json j = {
+        {"params_file", o.params_file.string()},
+        {"truth", {{"run", json_of(o.run)}, {"outages", json_of(o.outages)}}},
+        {"fixes", {{"heldout", json_of(o.heldout_fixes)}, {"outages", json_of(o.outage_fixes)}}},
+        {"tracks", nlohmann::json::array()}};
+    for (const RlTrackRow& r : o.rows) j["tracks"].push_back(json_of(r));
+    write_atomically(request.json_out, "JSON", j.dump(2) + "\n");
+  }
+  return o;
+}
+
+RlTrackTuneOutcome run_rl_track_tune(const RlTuneRequest& request, const RlTrackSource& src) {
+  std::string why;
+  if (!request.IsValid(&why)) throw Failure("tune: " + why);
+  for (const auto& [flag, set] :
+       {std::pair{"--until", request.until_s.has_value()}, std::pair{"--from", request.from_s.has_value()},
+        std::pair{"--end", request.end_s.has_value()}}) {
+    if (set)
+      throw Failure(fmt::format("tune: {} cuts a bag; tracks are tuned whole (judge others with eval)", flag));
+  }
+  check_output_file("--config-out", request.config_out.string());
+  check_output_file("--json", request.json_out.string());
+  check_output_file("--config-out-ros1", request.config_out_ros1.string());
+  if (!request.starts_out.empty()) check_output_dir("--starts-out", request.starts_out.string());
+  const RlTracksLoaded loaded = load_rl_tracks(src);
+  std::vector<const rlnode::Recording*> recs;
+  for (const RlTrack& t : loaded.tracks) recs.push_back(&t.rec);
+  const rlnode::ReplaySettings base = rlnode::settings_of(loaded.params);
+  RlTrackTuneOutcome out;
+  RlTuneOutcome& o = out.tune;
+  o.params_file = loaded.params.file;
+  o.bag = src.tracks.front();
+  o.tracks = src.tracks;
+  for (const RlTrack& t : loaded.tracks) {
+    o.duration_s += static_cast<double>(t.rec.end_ns - t.rec.start_ns) * 1e-9;
+    for (const std::string& n : t.rec.notes) o.notes.push_back(t.file.string() + ": " + n);
+  }
+  o.baseline = base;
+  try {
+    const RlObjective objective(recs, base, request.options);
+    search_rl(objective, request, o, [](const rlnode::ReplaySettings&) { return std::nullopt; });
+  } catch (const std::invalid_argument& e) {
+    throw Failure(e.what());
+  }
+  out.before = score_rl_tracks(loaded, base, request.options);
+  out.after = score_rl_tracks(loaded, o.tuned, request.options);
+  for (const auto& [path, ros2] :
+       {std::pair{request.config_out, !request.ros1_out}, std::pair{request.config_out_ros1, false}}) {
+    if (!path.empty())
+      write_tuned_params(path, loaded.params, o.tuned, std::nullopt, 0.0, ros2,
+                         rl_tune_header(request, o, o.written));
+  }
+  if (!request.starts_out.empty()) {
+    std::filesystem::create_directories(request.starts_out);
+    for (std::size_t k = 0; k < o.starts.size(); ++k) {
+      const auto path = request.starts_out / fmt::format("ekf-seed{}.yaml", o.starts[k].seed);
+      write_tuned_params(path, loaded.params, o.starts[k].tuned, std::nullopt, 0.0, !request.ros1_out,
+                         rl_tune_header(request, o, k));
+    }
+  }
+  if (!request.json_out.empty()) write_rl_tune_json(request.json_out, request, o);
+  return out;
+}
+
+}  // namespace odotune
