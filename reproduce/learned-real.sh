@@ -29,10 +29,7 @@ mkdir -p "$T"
 start=$SECONDS
 
 # ---------------------------------------------------------------- tracks
-REAL="$REAL" BIN="$BIN" bash reproduce/optiodom-days-tracks.sh "$T"
-for r in 1 2 3; do "$BIN" import mrclam "$REAL/mrclam7" --robot $r -o "$T/robot$r.csv" > /dev/null; done
-"$BIN" import litw "$REAL/utias_lost_in_the_woods/derived/litw_series.csv" -o "$T/litw.csv" > /dev/null
-bash reproduce/track-halves.sh "$T/litw.csv" "$T" litw > /dev/null
+REAL="$REAL" BIN="$BIN" bash reproduce/real-tracks.sh "$T"
 DEC=(231220200045_run-01 231220200045_run-02 231220200146_run-01 231220200146_run-02)
 JAN=(020120212354_run-01 030120210001_run-01 030120210001_run-02)
 for name in "${DEC[@]}" "${JAN[@]}" robot1 robot2 robot3 litw-first-half litw-second-half; do
