@@ -9,6 +9,7 @@
 
 #include "rlnode/params.h"
 #include "support/cli_runner.h"
+#include "support/rl_team_file.h"
 #include "support/synthetic_track.h"
 #include "support/temp_dir.h"
 #include "tracks/track_io.h"
@@ -20,25 +21,12 @@ using odotune::testing_support::TempDir;
 
 namespace {
 
-constexpr const char* kUserFile = R"(# a team's file: wheel odometry, the gyro, the fixes
-ekf_filter_node:
-  ros__parameters:
-    frequency: 20.0
-    two_d_mode: true
-    odom0: odom
-    odom0_config: [false, false, false, false, false, false, true, true, false, false, false, true, false, false, false]
-    odom1: odometry/fixes
-    odom1_config: [true, true, false, false, false, false, false, false, false, false, false, false, false, false, false]
-    imu0: imu/data
-    imu0_config: [false, false, false, false, false, false, false, false, false, false, false, true, false, false, false]
-)";
-
 struct Drive {
   TempDir dir{"cli-rl-track"};
   std::string params = (dir.path() / "user.yaml").string();
   std::string a = (dir.path() / "a.csv").string(), b = (dir.path() / "b.csv").string();
   Drive() {
-    std::ofstream(params) << kUserFile;
+    std::ofstream(params) << odotune::testing_support::kRlTeamFile << odotune::testing_support::kRlGyroInput;
     odotune::write_track(odotune::testing_support::synthetic_track(11), a);
     odotune::write_track(odotune::testing_support::synthetic_track(12, 50.0), b);
   }

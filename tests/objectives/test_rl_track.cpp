@@ -12,6 +12,7 @@
 #include "objectives/rl_objective.h"
 #include "objectives/rl_track.h"
 #include "rlnode/params.h"
+#include "support/rl_team_file.h"
 #include "support/synthetic_track.h"
 #include "support/temp_dir.h"
 
@@ -20,25 +21,11 @@ namespace {
 using namespace odotune;
 using testing::HasSubstr;
 
-constexpr const char* kTeamFile = R"(ekf_filter_node:
-  ros__parameters:
-    frequency: 20.0
-    two_d_mode: true
-    odom0: odom
-    odom0_config: [false, false, false, false, false, false, true, true, false, false, false, true, false, false, false]
-    odom1: odometry/fixes
-    odom1_config: [true, true, false, false, false, false, false, false, false, false, false, false, false, false, false]
-)";
-constexpr const char* kGyroLine =
-    "    imu0: imu/data\n"
-    "    imu0_config: [false, false, false, false, false, false, false, false, false, false, false, true, false, "
-    "false, false]\n";
-
 struct TeamFile {
   testing_support::TempDir dir{"rl-track"};
   rlnode::RlParams params(bool gyro = false) {
     const auto path = dir.path() / (gyro ? "gyro.yaml" : "user.yaml");
-    std::ofstream(path) << kTeamFile << (gyro ? kGyroLine : "");
+    std::ofstream(path) << testing_support::kRlTeamFile << (gyro ? testing_support::kRlGyroInput : "");
     return rlnode::read_rl_params(path);
   }
 };
