@@ -48,6 +48,14 @@ void write_rl_trajectory(const std::filesystem::path& path, const std::vector<rl
   write_atomically(path, "trajectory", out.str());
 }
 
+rlnode::Matrix15 rl_noise_from(const std::filesystem::path& file, const std::string& node_name) {
+  try {
+    return rlnode::read_rl_params(file, node_name).process_noise_covariance;
+  } catch (const std::exception& e) {
+    throw Failure(e.what());
+  }
+}
+
 std::int64_t rl_time_ns(const rlnode::Recording& rec, double seconds) {
   return rec.origin_ns + static_cast<std::int64_t>(std::llround(seconds * 1e9));
 }
@@ -156,15 +164,7 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
   const rlnode::Recording& rec = loaded.rec;
   const std::int64_t until = at_seconds(rec, request.until_s);
   rlnode::ReplaySettings s = rlnode::settings_of(rec.params);
-  if (!request.noise_from.empty()) {
-    try {
-      // The same node's section in the other file (it need not configure inputs).
-      s.process_noise =
-          rlnode::read_rl_params(request.noise_from, rec.params.node_name).process_noise_covariance;
-    } catch (const std::exception& e) {
-      throw Failure(e.what());
-    }
-  }
+  if (!request.noise_from.empty()) s.process_noise = rl_noise_from(request.noise_from, rec.params.node_name);
   const rlnode::ReplayOutput run = rlnode::replay(rec, rlnode::make_schedule(rec, {}, until), s, true);
   RlEvalOutcome out;
   out.bag = rec.bag;

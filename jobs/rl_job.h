@@ -56,6 +56,10 @@ RlSource rl_source_of(const ExperimentRl& x, const std::filesystem::path& bag);
 void write_rl_trajectory(const std::filesystem::path& path, const std::vector<rlnode::TrajectoryPoint>& points,
                          const std::string& comment);
 
+// process_noise_covariance of another robot_localization file's `node_name`
+// section (it need not configure inputs): eval --noise-from. Throws Failure.
+rlnode::Matrix15 rl_noise_from(const std::filesystem::path& file, const std::string& node_name);
+
 // A user's seconds (from the recording's first message) as a stamp, and back.
 std::int64_t rl_time_ns(const rlnode::Recording& rec, double seconds);
 double rl_seconds(const rlnode::Recording& rec, std::int64_t time_ns);

@@ -118,14 +118,7 @@ RlTrackEvalOutcome run_rl_track_eval(const RlTrackEvalRequest& request) {
   if (!request.json_out.empty()) check_output_file("--json", request.json_out.string());
   const RlTracksLoaded loaded = load_rl_tracks(request.src);
   rlnode::ReplaySettings s = rlnode::settings_of(loaded.params);
-  if (!request.noise_from.empty()) {
-    try {
-      s.process_noise =
-          rlnode::read_rl_params(request.noise_from, loaded.params.node_name).process_noise_covariance;
-    } catch (const std::exception& e) {
-      throw Failure(e.what());
-    }
-  }
+  if (!request.noise_from.empty()) s.process_noise = rl_noise_from(request.noise_from, loaded.params.node_name);
   RlTrackEvalOutcome o;
   o.params_file = loaded.params.file;
   o.rows = score_rl_tracks(loaded, s, request.protocols, !request.trajectory_out.empty());

@@ -41,9 +41,8 @@ std::int64_t ns_of(double t_s) { return static_cast<std::int64_t>(std::llround(t
 // The track with aps_var_x, aps_var_y filled from σ where it gives none.
 Track with_fix_variances(const Track& track, const std::filesystem::path& file, const RlTrackOptions& o) {
   const bool has_var = track.has(Col::aps_var_x) && track.has(Col::aps_var_y);
-  if (!track.has_aps()) return track;
+  if (!track.has_aps() || has_var) return track;  // the track's own variances win over --fix-sigma-m
   if (!o.fix_sigma_m) {
-    if (has_var) return track;
     fail(file, "its fixes have no variances (aps_var_x, aps_var_y); expected them (odotune fixes writes them) "
                "or --fix-sigma-m");
   }
@@ -247,13 +246,18 @@ RlTrackScores score_rl_track(const RlTrack& track, const rlnode::ReplaySettings&
                                                            std::numeric_limits<std::int64_t>::max());
   const OutageReplays outages(rec, windows, std::numeric_limits<std::int64_t>::max());
   std::vector<TruthScore> each;
+  std::vector<rlnode::ReplayOutput> scored;  // each window's withheld fixes, without its path
   outages.each_window(settings, [&](const OutageWindow& w, const rlnode::ReplayOutput& o) {
     each.push_back(truth_score(track.truth, o.trajectory, w.start_ns, w.end_ns));
     if (!o.finite) each.back().finite = false;
+    rlnode::ReplayOutput& fixes = scored.emplace_back();
+    fixes.scored = o.scored;
+    fixes.finite = o.finite;
   });
   s.outages = pooled(each);
   s.windows = windows.size();
-  s.outage_fixes = outages.score(settings);
+  // The same windows' fixes, scored as OutageReplays::score scores them.
+  s.outage_fixes = score_of(scored);
   std::vector<rlnode::Schedule> folds;
   for (const auto& roles :
        heldout_fix_folds(rec, options.folds, options.block_s, std::numeric_limits<std::int64_t>::max()))
