@@ -69,6 +69,7 @@ void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const R
                                                  "--refine",
                                                  "--prior",
                                                  "--allow-worse-heldout",
+                                                 "--subtract-fix-variance",
                                                  "--fitness",
                                                  "--space",
                                                  "--no-input-covariances",
@@ -206,6 +207,11 @@ void add_rl_tune_options(CLI::App* sub, RlTuneRequest& rl, RlChoices& rl_names) 
   sub->add_flag("--allow-worse-heldout", rl_names.allow_worse_heldout,
                 "--rl-params: let the tune make the held-out-fix error worse than the file's (by default a "
                 "candidate that does scores above the file's own values)");
+  sub->add_flag(
+      "--subtract-fix-variance", rl.options.subtract_fix_variance,
+      "--rl-params: score the held-out fixes and the outages by the error with the fixes' own "
+      "variance taken out, sqrt(RMSE^2 - mean(var_x + var_y)), which estimates the error against "
+      "the true position; for fixes whose variances are their true ones (docs/robot-localization.md)");
   sub->add_option("--starts", rl.starts,
                   "--rl-params: refinements from seeds --seed, --seed + 1, …; the lowest tuning fitness is "
                   "written, the spread printed (default 1)")

@@ -107,11 +107,12 @@ std::string rl_tune_header(const RlTuneRequest& r, const RlTuneOutcome& o, std::
       "Tuned by odotune (robot_localization's EKF replayed from the robot's {}).\n"
       "Command: {}\n"
       "{}; parameter file: {}\n"
-      "Tuned on {}: fitness {}, {} process noise{}; GPS outages of {} s ({} windows, one every {:g} s).\n"
+      "Tuned on {}: fitness {}{}, {} process noise{}; GPS outages of {} s ({} windows, one every {:g} s).\n"
       "Search: {}.\n",
       tracks.empty() ? "bag" : "recordings, as tracks",
       r.command_line.empty() ? "odotune tune --rl-params ..." : r.command_line, source, o.params_file.string(),
-      span_text(o), to_string(r.options.fitness), to_string(r.options.space),
+      span_text(o), to_string(r.options.fitness),
+      r.options.subtract_fix_variance ? " (the fixes' own variance taken out)" : "", to_string(r.options.space),
       r.options.input_covariances ? " and input covariances" : "", fmt::join(r.options.outage_s, ", "),
       o.outage_windows, r.options.outage_stride_s, search_text(r, o));
   c += fmt::format(
@@ -154,6 +155,7 @@ void write_rl_tune_json(const std::filesystem::path& path, const RlTuneRequest& 
       {"params", o.params_file.string()},
       {"fitness", std::string(to_string(r.options.fitness))},
       {"space", std::string(to_string(r.options.space))},
+      {"subtract_fix_variance", r.options.subtract_fix_variance},
       {"span_s", {o.span_from_s, o.span_until_s}},
       {"outage_s", r.options.outage_s},
       {"outage_windows", o.outage_windows},

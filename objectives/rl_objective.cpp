@@ -173,13 +173,14 @@ namespace {
 // that a batch sums as its single replays do).
 struct ScoreSum {
   FixScore s;
-  double sum = 0.0, sum_abs = 0.0;
+  double sum = 0.0, sum_abs = 0.0, sum_var = 0.0;
   void add(const rlnode::ReplayOutput& o) {
     s.finite = s.finite && o.finite;
     for (const rlnode::ScoredFix& f : o.scored) {
       const double e = (f.predicted - f.measured).head<2>().norm();
       sum += e * e;
       sum_abs += e;
+      sum_var += f.fix_cov.trace();
       s.maxe_m = std::max(s.maxe_m, e);
     }
     s.fixes += static_cast<long>(o.scored.size());
@@ -189,12 +190,17 @@ struct ScoreSum {
     const double n = static_cast<double>(s.fixes);
     out.rmse_m = s.fixes > 0 ? std::sqrt(sum / n) : std::numeric_limits<double>::quiet_NaN();
     out.mae_m = s.fixes > 0 ? sum_abs / n : std::numeric_limits<double>::quiet_NaN();
+    out.fix_var_m2 = s.fixes > 0 ? sum_var / n : 0.0;
     if (!std::isfinite(out.rmse_m)) out.finite = false;
     return out;
   }
 };
 
 }  // namespace
+
+double error_without_fix_noise_m(const FixScore& s) {
+  return std::sqrt(std::max(s.rmse_m * s.rmse_m - s.fix_var_m2, 0.0));
+}
 
 FixScore score_of(std::span<const rlnode::ReplayOutput> outputs) {
   ScoreSum sum;
@@ -287,19 +293,21 @@ namespace detail {
 
 RmsPart pooled_parts(std::span<const RmsPart> parts) {
   RmsPart out;
-  double sq = 0.0, abs = 0.0;
+  double sq = 0.0, abs = 0.0, mean = 0.0;
   for (const RmsPart& p : parts) {
     if (p.n == 0) continue;
     const auto n = static_cast<double>(p.n);
     out.finite = out.finite && p.finite;
     sq += p.rmse * p.rmse * n;
     abs += p.mae * n;
+    mean += p.mean * n;
     out.max = std::max(out.max, p.max);
     out.n += p.n;
   }
   const auto n = static_cast<double>(out.n);
   out.rmse = out.n > 0 ? std::sqrt(sq / n) : std::numeric_limits<double>::quiet_NaN();
   out.mae = out.n > 0 ? abs / n : std::numeric_limits<double>::quiet_NaN();
+  out.mean = out.n > 0 ? mean / n : 0.0;
   if (!std::isfinite(out.rmse)) out.finite = false;
   return out;
 }
@@ -309,9 +317,21 @@ RmsPart pooled_parts(std::span<const RmsPart> parts) {
 FixScore pooled(std::span<const FixScore> scores) {
   if (scores.size() == 1) return scores.front();
   std::vector<detail::RmsPart> parts;
-  for (const FixScore& f : scores) parts.push_back({f.fixes, f.rmse_m, f.mae_m, f.maxe_m, f.finite});
+  for (const FixScore& f : scores) {
+    parts.push_back({.n = f.fixes,
+                     .rmse = f.rmse_m,
+                     .mae = f.mae_m,
+                     .max = f.maxe_m,
+                     .finite = f.finite,
+                     .mean = f.fix_var_m2});
+  }
   const detail::RmsPart p = detail::pooled_parts(parts);
-  return {p.rmse, p.mae, p.max, p.n, p.finite};
+  return {.rmse_m = p.rmse,
+          .mae_m = p.mae,
+          .maxe_m = p.max,
+          .fixes = p.n,
+          .finite = p.finite,
+          .fix_var_m2 = p.mean};
 }
 
 RlObjective::RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySettings& base,
@@ -379,6 +399,15 @@ RlObjective::RlObjective(std::span<const rlnode::Recording* const> recs, const r
         fmt::format("{}: no fix is scored before the tuning span ends (outages of {} s after {} s of GPS); "
                     "expected a longer span or shorter outages",
                     rec.bag.string(), fmt::join(options.outage_s, ", "), options.warmup_s));
+  }
+  if (options.subtract_fix_variance && ((heldout_used && !(error_m(base_parts_.heldout) > 0.0)) ||
+                                        (outage_needed() && !(error_m(base_parts_.outage) > 0.0)))) {
+    const FixScore& s = heldout_used && !(error_m(base_parts_.heldout) > 0.0) ? base_parts_.heldout
+                                                                              : base_parts_.outage;
+    throw std::invalid_argument(fmt::format(
+        "{}: the fixes' variances (mean var_x + var_y {:.4g} m²) exceed the file's squared error at them "
+        "({:.4g} m²); expected variances that describe the fixes, or a tune without --subtract-fix-variance",
+        rec.bag.string(), s.fix_var_m2, s.rmse_m * s.rmse_m));
   }
 }
 
@@ -455,13 +484,17 @@ double RlObjective::combine(const Parts& p) const {
   double f = 0.0;
   if (options_.fitness != RlFitness::outage) {
     if (!p.heldout.finite) return kDiverged;
-    f += both ? p.heldout.rmse_m / base_parts_.heldout.rmse_m : p.heldout.rmse_m;
+    f += both ? error_m(p.heldout) / error_m(base_parts_.heldout) : error_m(p.heldout);
   }
   if (options_.fitness != RlFitness::heldout_fixes) {
     if (!p.outage.finite) return kDiverged;
-    f += both ? p.outage.rmse_m / base_parts_.outage.rmse_m : p.outage.rmse_m;
+    f += both ? error_m(p.outage) / error_m(base_parts_.outage) : error_m(p.outage);
   }
   return f;
+}
+
+double RlObjective::error_m(const FixScore& s) const {
+  return options_.subtract_fix_variance ? error_without_fix_noise_m(s) : s.rmse_m;
 }
 
 double RlObjective::fitness_of(const Parts& p) const {
@@ -470,7 +503,7 @@ double RlObjective::fitness_of(const Parts& p) const {
   // fitness, by how much worse (an innovation statistic may be negative:
   // then above it by the excess in its own scale).
   if (f < kDiverged && options_.keep_heldout) {
-    const double excess = p.heldout.rmse_m / base_parts_.heldout.rmse_m - 1.0;
+    const double excess = error_m(p.heldout) / error_m(base_parts_.heldout) - 1.0;
     if (!p.heldout.finite) {
       f = kDiverged;
     } else if (excess > 0.0) {

@@ -84,7 +84,10 @@ struct RlTuneOptions {
   std::vector<double> outage_s = {30.0, 60.0};  // outage: the windows' lengths L [s]
   double outage_stride_s = 10.0;                // outage: a window of each length starts every … [s]
   double warmup_s = 30.0;                       // outage: the GPS fused this long before the first window [s]
-  bool keep_heldout = true;   // a candidate worse at held-out fixes than the file scores above it
+  bool keep_heldout = true;  // a candidate worse at held-out fixes than the file scores above it
+  // Score the held-out fixes and the outages by error_without_fix_noise_m
+  // (below) instead of their RMSE: for fixes whose variances describe them.
+  bool subtract_fix_variance = false;
   double prior_weight = 0.0;  // ≥ 0: the prior toward the file's values (above)
   // Multipliers in [10^−down, 10^up]. The Husky's first-half tune ended on
   // both edges of [1e-4, 1e2], so the box spans ten decades.
@@ -100,7 +103,14 @@ struct FixScore {
   double rmse_m = 0.0, mae_m = 0.0, maxe_m = 0.0;  // of the horizontal error at the scored fixes
   long fixes = 0;
   bool finite = true;
+  double fix_var_m2 = 0.0;  // the mean over the scored fixes of their var_x + var_y [m²]
 };
+// The filter's RMS error at the scored fixes with the fixes' own noise taken
+// out, √max(rmse² − fix_var, 0) [m]. A fix withheld from the filter has noise
+// independent of the prediction, so E|x̂ − z|² = E|x̂ − x|² + tr R: this
+// estimates the error against the true position, where the fixes'
+// covariances are their true ones.
+double error_without_fix_noise_m(const FixScore& s);
 FixScore score_of(std::span<const rlnode::ReplayOutput> outputs);
 // `s` replayed over each schedule, its held-out fixes scored together.
 FixScore replay_score(const rlnode::Recording& rec, std::span<const rlnode::Schedule> schedules,
@@ -150,6 +160,7 @@ struct RmsPart {
   long n = 0;
   double rmse = 0.0, mae = 0.0, max = 0.0;
   bool finite = true;
+  double mean = 0.0;  // a per-sample quantity averaged with them (FixScore::fix_var_m2)
 };
 RmsPart pooled_parts(std::span<const RmsPart> parts);
 }  // namespace detail
@@ -225,6 +236,7 @@ class RlObjective {
   bool heldout_needed() const;
   bool outage_needed() const;
   bool statistic_kind() const;
+  double error_m(const FixScore& s) const;  // the RMSE, or without the fixes' noise (the options)
   double prior(std::span<const double> x) const;
 };
 

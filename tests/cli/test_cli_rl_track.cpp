@@ -80,11 +80,29 @@ TEST(CliRlTrack, RefusesWhatDoesNotApplyInOneLine) {
   for (const std::string& args :
        {"eval " + src + " --fix-sigma-m 0.06 --tf imu=0,0,0,0,0,0",
         "tune " + src + " --fix-sigma-m 0.06 --until 30", "eval " + src + " --twist-variance 0.001",
-        "eval --track " + d.a + " --fix-sigma-m 0.06", "eval " + src}) {
+        "eval --track " + d.a + " --fix-sigma-m 0.06", "eval " + src,
+        "tune " + src + " --fix-sigma-m 10 --outage 10 --outage-every 5 --grid=-1,1 --subtract-fix-variance"}) {
     const auto r = run_cli(args);
     EXPECT_NE(r.exit_code, 0) << args;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << "\n" << r.err;
   }
   EXPECT_NE(run_cli("eval " + src).err.find("--fix-sigma-m"), std::string::npos);
   EXPECT_NE(run_cli("tune " + src + " --fix-sigma-m 0.06 --until 30").err.find("--until"), std::string::npos);
+  // Variances far above the fixes' scatter leave no error once taken out.
+  EXPECT_NE(run_cli("tune " + src + " --fix-sigma-m 10 --outage 10 --outage-every 5 --subtract-fix-variance")
+                .err.find("exceed the file's squared error"),
+            std::string::npos);
+}
+
+TEST(CliRlTrack, ATuneWithTheFixesVarianceTakenOutSaysSoInTheFile) {
+  Drive d;
+  const auto out = d.dir.path() / "tuned.yaml", json_file = d.dir.path() / "tune.json";
+  const auto r = run_cli(
+      "tune --rl-params " + d.params + " --track " + d.a + kShort +
+      " --space blocks --no-input-covariances --grid=-1,1 --subtract-fix-variance --config-out " +
+      out.string() + " --json " + json_file.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(slurp(out).find("fitness both (the fixes' own variance taken out)"), std::string::npos)
+      << slurp(out);
+  EXPECT_NE(slurp(json_file).find("\"subtract_fix_variance\": true"), std::string::npos);
 }

@@ -149,3 +149,50 @@ TEST(RlTrack, SeveralTracksPoolTheirFixesInOneObjective) {
   nis.fitness = RlFitness::nis;
   EXPECT_THROW(RlObjective(recs, base, nis), std::invalid_argument);
 }
+
+TEST(RlTrack, TheFixesOwnVarianceCanBeTakenOutOfTheScores) {
+  FixScore hand;
+  hand.rmse_m = 1.5;
+  hand.fix_var_m2 = 2.0;
+  EXPECT_NEAR(error_without_fix_noise_m(hand), 0.5, 1e-12);
+  hand.rmse_m = 1.0;  // noisier than the residuals: no error left, not a NaN
+  EXPECT_EQ(error_without_fix_noise_m(hand), 0.0);
+
+  TeamFile f;
+  const rlnode::RlParams p = f.params(true);
+  const RlTrack a = load_rl_track(testing_support::synthetic_track(3), "a.csv", p, sigma(0.06));
+  const RlTrack b = load_rl_track(testing_support::synthetic_track(4, 50.0), "b.csv", p, sigma(0.06));
+  const std::vector<const rlnode::Recording*> recs = {&a.rec, &b.rec};
+  const rlnode::ReplaySettings base = rlnode::settings_of(p);
+  RlTuneOptions o = short_protocols();
+  const RlObjective plain(recs, base, o);
+  o.subtract_fix_variance = true;
+  o.keep_heldout = false;  // the parts alone, without the guard's ranking
+  const RlObjective without_noise(recs, base, o);
+  // Every scored fix carries var_x + var_y = 2 σ².
+  EXPECT_NEAR(plain.baseline_heldout().fix_var_m2, 2 * 0.06 * 0.06, 1e-12);
+  EXPECT_NEAR(plain.baseline_outage().fix_var_m2, 2 * 0.06 * 0.06, 1e-12);
+  // The file's own values score 1 + 1 either way; elsewhere the parts are
+  // the errors without the fixes' noise, each relative to the file's.
+  const std::vector<double> at_file(plain.bounds().first.size(), 0.0);
+  EXPECT_NEAR(without_noise.data_fitness(at_file), 2.0, 1e-12);
+  std::vector<double> x = at_file;
+  x[0] = 1.0;
+  const rlnode::ReplaySettings s = without_noise.settings_at(x);
+  const double expected = error_without_fix_noise_m(without_noise.heldout_score(s)) /
+                              error_without_fix_noise_m(without_noise.baseline_heldout()) +
+                          error_without_fix_noise_m(without_noise.outage_score(s)) /
+                              error_without_fix_noise_m(without_noise.baseline_outage());
+  const double scored = without_noise.data_fitness(x);
+  EXPECT_NEAR(scored, expected, 1e-12);
+  EXPECT_NE(scored, plain.data_fitness(x));
+  // Variances far above the fixes' scatter leave no error to score: refused.
+  const RlTrack loud = load_rl_track(testing_support::synthetic_track(3), "loud.csv", p, sigma(10.0));
+  try {
+    RlObjective(loud.rec, base, o);
+    ADD_FAILURE() << "not refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("exceed the file's squared error"));
+    EXPECT_THAT(e.what(), HasSubstr("--subtract-fix-variance"));
+  }
+}
