@@ -400,14 +400,14 @@ RlObjective::RlObjective(std::span<const rlnode::Recording* const> recs, const r
                     "expected a longer span or shorter outages",
                     rec.bag.string(), fmt::join(options.outage_s, ", "), options.warmup_s));
   }
-  if (options.subtract_fix_variance && ((heldout_used && !(error_m(base_parts_.heldout) > 0.0)) ||
-                                        (outage_needed() && !(error_m(base_parts_.outage) > 0.0)))) {
-    const FixScore& s = heldout_used && !(error_m(base_parts_.heldout) > 0.0) ? base_parts_.heldout
-                                                                              : base_parts_.outage;
+  // With the fixes' variance taken out, each part used must keep some error to score.
+  for (const FixScore* s :
+       {heldout_used ? &base_parts_.heldout : nullptr, outage_needed() ? &base_parts_.outage : nullptr}) {
+    if (s == nullptr || !options.subtract_fix_variance || error_m(*s) > 0.0) continue;
     throw std::invalid_argument(fmt::format(
         "{}: the fixes' variances (mean var_x + var_y {:.4g} m²) exceed the file's squared error at them "
         "({:.4g} m²); expected variances that describe the fixes, or a tune without --subtract-fix-variance",
-        rec.bag.string(), s.fix_var_m2, s.rmse_m * s.rmse_m));
+        rec.bag.string(), s->fix_var_m2, s->rmse_m * s->rmse_m));
   }
 }
 
