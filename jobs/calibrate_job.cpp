@@ -10,6 +10,7 @@
 #include <fmt/ranges.h>
 
 #include "calibration/calibration_ranges.h"
+#include "calibration/plausible_fit.h"
 #include "core/failure.h"
 #include "core/output_paths.h"
 #include "formats/calibration_yaml.h"
@@ -294,6 +295,8 @@ CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& 
       throw Failure(fmt::format("calibrate: {}", e.what()));
     }
   }
+  if (const auto why = implausible_geometry(out.result.final_params, out.inputs.front().nominal))
+    throw Failure(implausible_fit_message(*why));
 
   for (const auto& in : out.inputs) out.nominal.push_back(score_fixed_params(in, in.nominal));
   out.summary = calibration_summary_lines(out.result, out.inputs, out.nominal, out.info);

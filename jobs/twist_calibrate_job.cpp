@@ -8,6 +8,7 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
+#include "calibration/plausible_fit.h"
 #include "core/failure.h"
 #include "core/output_paths.h"
 #include "formats/config_yaml.h"
@@ -118,6 +119,7 @@ CalibrateOutcome run_twist_calibrate(const CalibrateRequest& a, const std::vecto
     throw Failure(fmt::format("calibrate: {}", e.what()));
   }
   const TwistCalibrationSummary& s = *out.twist;
+  if (const auto why = implausible_twist(s.params)) throw Failure(implausible_fit_message(*why));
   std::vector<std::string> names;
   for (const Track& t : tracks) {
     names.push_back(t.name());

@@ -4,6 +4,12 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
 #include <fmt/format.h>
 
 #include "support/cli_runner.h"
@@ -72,6 +78,68 @@ TEST(CliRealData, OptiOdomCalibrationImprovesEveryHeldOutRun) {
     if (method == "batch") {
       EXPECT_LT(j["mean"]["calibrated"]["pose_rmse_m"].get<double>(), 0.025);
     }
+  }
+}
+
+// A copy of a track without its ground-truth columns (gt_*), so that a fit
+// can only use its fixes (as reproduce/strip_ground_truth.py).
+void strip_ground_truth(const std::filesystem::path& in, const std::filesystem::path& out) {
+  std::ifstream f(in);
+  std::ofstream o(out);
+  std::vector<bool> keep;
+  for (std::string line; std::getline(f, line);) {
+    if (line.starts_with("#")) {
+      o << line << "\n";
+      continue;
+    }
+    std::stringstream cells(line);
+    std::vector<std::string> row;
+    for (std::string c; std::getline(cells, c, ',');) row.push_back(c);
+    if (keep.empty())
+      for (const auto& h : row) keep.push_back(!h.starts_with("gt_"));
+    std::string kept;
+    for (std::size_t i = 0; i < row.size() && i < keep.size(); ++i)
+      if (keep[i]) kept += (kept.empty() ? "" : ",") + row[i];
+    o << kept << "\n";
+  }
+}
+
+// The pose fit from fixes alone, on OptiOdom's three 2-3 Jan runs (about
+// 200 s of driving): with 0.1-m fixes its file is written; with 1-m fixes it
+// shrinks the path towards a point (a wheel radius of under 1 mm), and
+// `calibrate` refuses that fit in one line and writes nothing.
+TEST(CliRealData, OptiOdomPoseFitFromFixesTooNoisyToCarryTheScaleIsRefused) {
+  TempDir tmp;
+  const std::string oo = std::string(ODOTUNE_SHARED_DIR) + "/data/real/optiodom_diff/free/";
+  for (const std::string sigma : {"0.1", "1"}) {
+    std::string tracks;
+    for (const char* run : {"020120212354/020120212354_run-01", "030120210001/030120210001_run-01",
+                            "030120210001/030120210001_run-02"}) {
+      const std::string name = std::string(run).substr(std::string(run).rfind('/') + 1);
+      const auto raw = tmp / (name + ".csv"), aps = tmp / (name + "-aps.csv"),
+                 only = tmp / (name + "-s" + sigma + ".csv");
+      ASSERT_EQ(run_cli(fmt::format("import optiodom {}{}.csv -o {}", oo, run, raw.string())).exit_code, 0);
+      ASSERT_EQ(run_cli(fmt::format("fixes {} -o {} --rate-hz 1 --sigma-m {} --seed 1", raw.string(),
+                                    aps.string(), sigma))
+                    .exit_code,
+                0);
+      strip_ground_truth(aps, only);
+      tracks += " --track " + only.string();
+    }
+    const auto cfg = tmp / ("cal-s" + sigma + ".yaml");
+    const auto r = run_cli(fmt::format("calibrate{} --method batch-pose --config-out {}", tracks,
+                                       cfg.string()));
+    if (sigma == "0.1") {
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+      EXPECT_TRUE(std::filesystem::exists(cfg));
+      continue;
+    }
+    EXPECT_NE(r.exit_code, 0);
+    EXPECT_NE(r.err.find("calibrate: the fit is not one this robot can have: wheel_radius_"), std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("nothing was written"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(cfg));
   }
 }
 
