@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The tables of reproduce/rl-ground-truth.sh (docs/robot-localization.md reads them).
 
-   python3 reproduce/rl-ground-truth-tables.py OUT "1 2 3" "0.1 1"
+   python3 reproduce/rl-ground-truth-tables.py OUT "1 2 3" "0.1 1" [FIX_SEED [TUNE_EXTRA]]
 """
 import json
 import statistics
@@ -11,6 +11,8 @@ from pathlib import Path
 out = Path(sys.argv[1])
 seeds = sys.argv[2].split()
 sigmas = sys.argv[3].split()
+fix_seed = sys.argv[4] if len(sys.argv) > 4 else "1"
+tune_extra = sys.argv[5] if len(sys.argv) > 5 else ""
 FOLDS = {
     "optiodom": ["tune-dec23", "tune-jan"],
     "mrclam": ["tune-12", "tune-13", "tune-23"],
@@ -49,7 +51,8 @@ def tune_text(dataset, fold, sigma):
 
 
 print("# robot_localization on held-out recordings, against ground truth\n")
-print(f"PSO seeds {', '.join(seeds)}; fixes at 1 Hz (odotune fixes, seed 1). Ratio: tuned / user file.\n")
+print(f"PSO seeds {', '.join(seeds)}; fixes at 1 Hz (odotune fixes, seed {fix_seed})"
+      + (f"; tuned with {tune_extra}" if tune_extra else "") + ". Ratio: tuned / user file.\n")
 summary = []
 for dataset, folds in FOLDS.items():
     for sigma in sigmas:
@@ -120,6 +123,13 @@ for dataset, folds in FOLDS.items():
             cal_summary.append((NAMES[dataset], sigma, [mean("run", i) for i in range(4)],
                                 [mean("outages", i) for i in range(4)]))
 print()
+refused = sorted(out.glob("*/*/s*/calibrated/calibration-refused.txt"))
+if refused:
+    print("Calibrations `calibrate` refused (no calibrated set-ups for these folds):\n")
+    for p in refused:
+        sigma, fold, dataset = p.parts[-3][1:], p.parts[-4], p.parts[-5]
+        print(f"- {NAMES[dataset]}, {fold}, σ {sigma} m: `{p.read_text().strip()}`")
+    print()
 if cal_summary:
     print("Means over the held-out recordings (whole run / outages) [m]:\n")
     print("| dataset | σ [m] | user file | tune alone | calibration alone | calibrate, then tune |")

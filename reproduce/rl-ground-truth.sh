@@ -5,7 +5,7 @@
 #     three 2-3 Jan runs, and the reverse;
 #   MRCLAM robots 1-3 (commands): tuned on two, judged on the third, all three ways;
 #   Lost in the Woods (a measured twist): tuned on the first half, judged on the second.
-# Each with 1 Hz fixes from `odotune fixes` (seed 1) at sigma 0.1 m (an indoor
+# Each with 1 Hz fixes from `odotune fixes` (seed FIX_SEED, default 1) at sigma 0.1 m (an indoor
 # positioning system) and 1 m (a GPS). The user's file, as a team writes it
 # (two_d_mode, the odometry's velocities, the fixes as x, y, robot_localization's
 # default noise; none of the three robots has a gyro): OUT/DATASET/user.yaml.
@@ -13,13 +13,18 @@
 # their ground truth unused): a grid, then PSO within 1 decade from seeds
 # SEEDS (default 1 2 3), each seed's file in OUT/DATASET/FOLD/sSIGMA/starts/;
 # the file of lowest tuning fitness is tuned.yaml there, and the first fold's
-# at sigma 0.1 m is also OUT/DATASET/tuned.yaml. Every held-out recording is
+# at the first sigma (0.1 m) is also OUT/DATASET/tuned.yaml. Every held-out recording is
 # scored (`eval`) with the user's file and each seed's: against ground truth
 # (the whole run with the fixes fused; simulated fix outages) and against the
 # fixes (held-out folds, outages), as a user without ground truth sees them.
 # The tables: OUT/tables.md.
 #   bash reproduce/rl-ground-truth.sh [OUT_DIR]        (default out/rl-ground-truth)
-# Needs build/odotune. BIN, REAL and SEEDS as above; SIGMAS (default 0.1 1).
+# Needs build/odotune. BIN, REAL and SEEDS as above; SIGMAS (default 0.1 1);
+# DATASETS (default "optiodom litw mrclam", the longest tunes last; a rerun
+# with more resumes). The tables cover the folds done so far. TUNE_EXTRA:
+# more tune flags (e.g. --subtract-fix-variance); FOLDS_ONLY=1 skips the
+# calibrate-then-tune and physics stages (other fix seeds and fitnesses:
+# docs/robot-localization.md, "Other fix seeds").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 REAL=${REAL:-../shared/data/real}
@@ -27,6 +32,15 @@ OUT=${1:-out/rl-ground-truth}
 BIN=${BIN:-build/odotune}
 SEEDS=${SEEDS:-"1 2 3"}
 SIGMAS=${SIGMAS:-"0.1 1"}
+DATASETS=${DATASETS:-"optiodom litw mrclam"}
+FIX_SEED=${FIX_SEED:-1}
+TUNE_EXTRA=${TUNE_EXTRA:-}
+FOLDS_ONLY=${FOLDS_ONLY:-0}
+for d in $DATASETS; do
+  case $d in optiodom | mrclam | litw) ;;
+    *) echo "rl-ground-truth.sh: DATASETS: unknown dataset '$d' (expected optiodom, mrclam or litw)" >&2; exit 2 ;;
+  esac
+done
 T=$OUT/tracks
 mkdir -p "$T"
 start=$SECONDS
@@ -40,7 +54,7 @@ if [ ! -f "$T/done" ]; then
   REAL="$REAL" BIN="$BIN" bash reproduce/real-tracks.sh "$T"
   for name in "${DEC[@]}" "${JAN[@]}" robot1 robot2 robot3 litw-first-half litw-second-half; do
     for s in $SIGMAS; do
-      "$BIN" fixes "$T/$name.csv" -o "$T/$name-s$s.csv" --rate-hz 1 --sigma-m "$s" --seed 1 > /dev/null
+      "$BIN" fixes "$T/$name.csv" -o "$T/$name-s$s.csv" --rate-hz 1 --sigma-m "$s" --seed "$FIX_SEED" > /dev/null
     done
   done
   touch "$T/done"
@@ -102,8 +116,9 @@ fold() {
   n=$(wc -w <<< "$SEEDS")
   # A fold already done (its tune's wall time written last) is kept: the script resumes.
   if ! grep -q '^wall' "$dir/tune.txt" 2> /dev/null; then
+    # shellcheck disable=SC2086 # TUNE_EXTRA: flags, split into words on purpose
     "$BIN" tune --rl-params "$OUT/$dataset/user.yaml" "${fit[@]}" --no-input-covariances --outage-every "$stride" \
-      --refine 1 --particles 8 --iterations 6 --seed "$first" --starts "$n" --threads 2 \
+      $TUNE_EXTRA --refine 1 --particles 8 --iterations 6 --seed "$first" --starts "$n" --threads 2 \
       --starts-out "$dir/starts" --config-out "$dir/tuned.yaml" --json "$dir/tune.json" > "$dir/tune.txt"
     echo "wall $((SECONDS - t0)) s" >> "$dir/tune.txt"
   fi
@@ -119,19 +134,28 @@ fold() {
   done
   echo "$dataset $name sigma $sigma: $((SECONDS - t0)) s"
 }
-for s in $SIGMAS; do
-  fold optiodom tune-dec23 "$s" 10 "${DEC[@]}" -- "${JAN[@]}"
-  fold optiodom tune-jan "$s" 10 "${JAN[@]}" -- "${DEC[@]}"
-  fold mrclam tune-12 "$s" 30 robot1 robot2 -- robot3
-  fold mrclam tune-13 "$s" 30 robot1 robot3 -- robot2
-  fold mrclam tune-23 "$s" 30 robot2 robot3 -- robot1
-  fold litw tune-first "$s" 30 litw-first-half -- litw-second-half
+# folds DATASET SIGMA: the dataset's folds (list above).
+folds() {
+  case $1 in
+    optiodom)
+      fold optiodom tune-dec23 "$2" 10 "${DEC[@]}" -- "${JAN[@]}"
+      fold optiodom tune-jan "$2" 10 "${JAN[@]}" -- "${DEC[@]}" ;;
+    mrclam)
+      fold mrclam tune-12 "$2" 30 robot1 robot2 -- robot3
+      fold mrclam tune-13 "$2" 30 robot1 robot3 -- robot2
+      fold mrclam tune-23 "$2" 30 robot2 robot3 -- robot1 ;;
+    litw) fold litw tune-first "$2" 30 litw-first-half -- litw-second-half ;;
+  esac
+}
+declare -A FIRST=([optiodom]=tune-dec23 [mrclam]=tune-12 [litw]=tune-first)
+for d in $DATASETS; do
+  for s in $SIGMAS; do folds "$d" "$s"; done
+  cp "$OUT/$d/${FIRST[$d]}/s${SIGMAS%% *}/tuned.yaml" "$OUT/$d/tuned.yaml"
 done
-cp "$OUT/optiodom/tune-dec23/s0.1/tuned.yaml" "$OUT/optiodom/tuned.yaml"
-cp "$OUT/mrclam/tune-12/s0.1/tuned.yaml" "$OUT/mrclam/tuned.yaml"
-cp "$OUT/litw/tune-first/s0.1/tuned.yaml" "$OUT/litw/tuned.yaml"
 
-BIN="$BIN" SEEDS="$SEEDS" SIGMAS="$SIGMAS" bash reproduce/rl-calibrate-then-tune.sh "$OUT"
-BIN="$BIN" bash reproduce/rl-physics-sim.sh "$OUT"
-python3 reproduce/rl-ground-truth-tables.py "$OUT" "$SEEDS" "$SIGMAS" | tee "$OUT/tables.md"
+if [ "$FOLDS_ONLY" != 1 ]; then
+  BIN="$BIN" SEEDS="$SEEDS" SIGMAS="$SIGMAS" DATASETS="$DATASETS" bash reproduce/rl-calibrate-then-tune.sh "$OUT"
+  BIN="$BIN" bash reproduce/rl-physics-sim.sh "$OUT"
+fi
+python3 reproduce/rl-ground-truth-tables.py "$OUT" "$SEEDS" "$SIGMAS" "$FIX_SEED" "$TUNE_EXTRA" | tee "$OUT/tables.md"
 echo "wall $((SECONDS - start)) s"
