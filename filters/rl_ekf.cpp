@@ -1,5 +1,7 @@
 #include "filters/rl_ekf.h"
 
+#include "filters/rl_filter_base.h"
+
 #include <algorithm>
 #include <bit>
 #include <cassert>
@@ -29,6 +31,12 @@
 
 namespace odotune::filters::rl {
 namespace {
+
+using detail::fused_members;
+using detail::gather;
+using detail::initialise;
+using detail::positive_variance;
+using detail::symmetric;
 
 constexpr int kN = kStateSize;
 // Vectors travel between functions of this file only, all inlined into the
@@ -575,46 +583,17 @@ ODOTUNE_RL_BASELINE std::uint32_t correct_lanes(Lanes* x, Lanes* P, int n, const
   return correct_pack<2>(x, P, n, idx, z, R, thr2);
 }
 
-// The members a measurement fuses: its mask less non-finite values (ekf.cpp
-// leaves nan and inf out). Returns their number.
-int fused_members(const Measurement& m, int* idx) {
-  int n = 0;
-  for (int i = 0; i < kN; ++i) {
-    if (m.mask[i] && std::isfinite(m.z[i])) idx[n++] = i;
-  }
-  return n;
-}
-
-// A measured variance as ekf.cpp takes it: a negative one by its magnitude,
-// one below 1e-9 raised to it.
-double positive_variance(double r) { return std::max(std::abs(r), 1e-9); }
-
-// z and R (n × n, column-major) of those members.
-void gather(const Measurement& m, int n, const int* idx, double* z, double* R) {
-  for (int a = 0; a < n; ++a) {
-    z[a] = m.z[idx[a]];
-    for (int b = 0; b < n; ++b) R[b * n + a] = m.R(idx[a], idx[b]);
-    R[a * n + a] = positive_variance(R[a * n + a]);
-  }
-}
-
-Cov symmetric(const Cov& a) { return (a + a.transpose()) * 0.5; }
-
-// FilterBase::processMeasurement's first measurement: the fused members and
-// their covariance block (its symmetric part) taken from it.
-void initialise(const Measurement& m, State& x, Cov& P) {
-  for (int i = 0; i < kN; ++i) {
-    if (!m.mask[i]) continue;
-    x[i] = m.z[i];
-    for (int j = 0; j < kN; ++j) {
-      if (m.mask[j]) P(i, j) = (m.R(i, j) + m.R(j, i)) * 0.5;
-    }
-  }
-}
-
 }  // namespace
 
 double normalize_angle(double a) { return wrapped(a); }
+
+State advance(const State& x, double dt_s) {
+  double v[kTerms];
+  model_terms(x.data(), dt_s, v);
+  State out = x;
+  for (int k = 0; k < kTransferTerms; ++k) out[kAt[k].row] += v[k] * x[kAt[k].col];
+  return out;
+}
 
 Transition transition(const State& x, double dt_s) {
   double v[kTerms];

@@ -87,6 +87,9 @@ struct Transition {
   Cov J;
 };
 Transition transition(const State& x, double dt_s);
+// f(x, Δt) = A(x, Δt)·x, the angles not wrapped: the projection of one state,
+// as ukf.cpp projects each sigma point (the same terms as transition's A).
+State advance(const State& x, double dt_s);
 
 // Wraps an angle to [−π, π] as ROS's angles::normalize_angle does (fmod), which
 // the node's replay must match bit for bit (core/angles.h is std::remainder).
