@@ -62,8 +62,9 @@ void register_eval(CLI::App& app) {
   add_rl_track_options(sub, *track_src);
   sub->callback([req, rl, track_src, sub] {
     if (rl->src.params_file.empty()) {
-      for (const char* flag : {"--bag", "--node", "--tf", "--gps-topic", "--gps-heading-fit", "--until",
-                               "--from", "--noise-from", "--fixes-out", "--outages", "--outage-every"}) {
+      for (const char* flag :
+           {"--bag", "--node", "--filter", "--tf", "--gps-topic", "--gps-heading-fit", "--until", "--from",
+            "--noise-from", "--fixes-out", "--outages", "--outage-every"}) {
         if (sub->count(flag) > 0) throw Failure(fmt::format("eval: {} applies to --rl-params only", flag));
       }
     }
@@ -81,6 +82,7 @@ void register_eval(CLI::App& app) {
       t.src = *track_src;
       t.src.params_file = rl->src.params_file;
       t.src.node_name = rl->src.node_name;
+      t.src.filter = rl->src.filter;
       t.src.tracks = {req->tracks.begin(), req->tracks.end()};
       t.noise_from = rl->noise_from;
       if (!rl->outages_s.empty()) t.protocols.outage_s = rl->outages_s;

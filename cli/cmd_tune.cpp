@@ -56,6 +56,7 @@ void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const R
   static const std::set<std::string> kApplies = {"--rl-params",
                                                  "--bag",
                                                  "--node",
+                                                 "--filter",
                                                  "--tf",
                                                  "--gps-topic",
                                                  "--gps-heading-fit",
@@ -128,6 +129,7 @@ void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const R
     RlTrackSource src = c.track;
     src.params_file = r.src.params_file;
     src.node_name = r.src.node_name;
+    src.filter = r.src.filter;
     src.tracks = {req.tracks.begin(), req.tracks.end()};
     const RlTrackTuneOutcome o = run_rl_track_tune(r, src);
     progress.finish();
@@ -216,8 +218,9 @@ void add_rl_tune_options(CLI::App* sub, RlTuneRequest& rl, RlChoices& rl_names) 
                   "--rl-params: refinements from seeds --seed, --seed + 1, …; the lowest tuning fitness is "
                   "written, the spread printed (default 1)")
       ->check(CLI::Range(1, 1000));
-  sub->add_option("--starts-out", rl.starts_out,
-                  "--rl-params: also write every start's file into this folder as ekf-seed<K>.yaml");
+  sub->add_option(
+      "--starts-out", rl.starts_out,
+      "--rl-params: also write every start's file into this folder as ekf-seed<K>.yaml (ukf-seed<K>.yaml for the UKF)");
   sub->add_option("--grid", rl_names.grid,
                   "--rl-params: the first, deterministic stage: each block's factor one of 10^LEVEL, "
                   "comma-separated decades (default -2,0,2), or none");

@@ -34,11 +34,15 @@ void print_notes(const std::vector<std::string>& notes, const std::optional<rlno
 }  // namespace
 
 void add_rl_source_options(CLI::App* sub, RlSource& src) {
-  sub->add_option("--rl-params", src.params_file,
-                  "robot_localization parameter file (ROS 1 or ROS 2 YAML): replay its ekf_node on --bag")
+  sub->add_option(
+         "--rl-params", src.params_file,
+         "robot_localization parameter file (ROS 1 or ROS 2 YAML): replay its ekf_node or ukf_node on --bag")
       ->check(CLI::ExistingFile);
   sub->add_option("--bag", src.bag, "--rl-params: the robot's bag (ROS 1 .bag, MCAP, rosbag2 .db3 or folder)");
-  sub->add_option("--node", src.node_name, "--rl-params: the EKF's section of the file when it has several");
+  sub->add_option("--node", src.node_name, "--rl-params: the filter's section of the file when it has several");
+  add_enum_option(sub, "--filter", src.filter, {filters::rl::RlFilterType::ekf, filters::rl::RlFilterType::ukf},
+                  "--rl-params: ekf_node or ukf_node, for a file that does not say (a section named *ukf*, or "
+                  "ukf_node's alpha, kappa or beta, is the UKF's)");
   sub->add_option("--tf", src.tf,
                   "--rl-params: FRAME=x,y,z,roll,pitch,yaw, a sensor frame's pose in base_link (repeat; "
                   "else /tf_static in the bag)");
@@ -95,14 +99,19 @@ std::string truth_change(const TruthScore& a, const TruthScore& b) {
   return fmt::format("{} -> {}{}", truth_text(a), truth_text(b), pct);
 }
 
+// "EKF" (ekf_node) or "UKF" (ukf_node).
+std::string filter_name(filters::rl::RlFilterType t) {
+  return t == filters::rl::RlFilterType::ekf ? "EKF" : "UKF";
+}
+
 }  // namespace
 
 void print_rl_track_eval(const RlTrackEvalOutcome& o) {
   for (const RlTrackRow& r : o.rows) {
     const RlTrackScores& s = r.scores;
-    fmt::print("{}: robot_localization EKF ({}) over {:.1f} s, odometry {}: {} measurements, {} rejected\n",
-               r.track.filename().string(), o.params_file.filename().string(), r.duration_s,
-               to_string(r.odometry), s.processed, s.rejected);
+    fmt::print("{}: robot_localization {} ({}) over {:.1f} s, odometry {}: {} measurements, {} rejected\n",
+               r.track.filename().string(), filter_name(o.filter), o.params_file.filename().string(),
+               r.duration_s, to_string(r.odometry), s.processed, s.rejected);
     fmt::print("  {}{}\n", r.start_note,
                std::isfinite(r.initial_heading_error_rad)
                    ? fmt::format(" (against gt_theta: {:+.3f} rad)", r.initial_heading_error_rad)
@@ -132,9 +141,9 @@ void print_rl_track_tune(const RlTuneRequest& r, const RlTrackTuneOutcome& o) {
 
 void print_rl_eval(const RlEvalOutcome& o) {
   const rl::State& x = o.final_state;
-  fmt::print("{}: robot_localization EKF ({}) over {:.1f} s: {} measurements, {} rejected\n",
-             o.bag.filename().string(), o.params_file.filename().string(), o.duration_s, o.processed,
-             o.rejected);
+  fmt::print("{}: robot_localization {} ({}) over {:.1f} s: {} measurements, {} rejected\n",
+             o.bag.filename().string(), filter_name(o.filter), o.params_file.filename().string(), o.duration_s,
+             o.processed, o.rejected);
   fmt::print("  final pose: x {:.4f} m, y {:.4f} m, z {:.4f} m, yaw {:.4f} rad\n", x[rl::kX], x[rl::kY],
              x[rl::kZ], x[rl::kYaw]);
   if (o.heldout) fmt::print("  held-out fixes (5 folds of 1 s blocks): RMSE {}\n", metres(*o.heldout));
@@ -148,10 +157,10 @@ void print_rl_eval(const RlEvalOutcome& o) {
 }
 
 void print_rl_tune(const RlTuneRequest& r, const RlTuneOutcome& o) {
-  fmt::print("{}: robot_localization EKF ({}), tuned on {:.1f}-{:.1f} s of {:.1f} s; fitness {}, {} process "
+  fmt::print("{}: robot_localization {} ({}), tuned on {:.1f}-{:.1f} s of {:.1f} s; fitness {}, {} process "
              "noise{}; outages of {} s ({} windows)\n",
-             o.bag.filename().string(), o.params_file.filename().string(), o.span_from_s, o.span_until_s,
-             o.duration_s, to_string(r.options.fitness), to_string(r.options.space),
+             o.bag.filename().string(), filter_name(o.filter), o.params_file.filename().string(), o.span_from_s,
+             o.span_until_s, o.duration_s, to_string(r.options.fitness), to_string(r.options.space),
              r.options.input_covariances ? " and input covariances" : "", fmt::join(r.options.outage_s, ", "),
              o.outage_windows);
   fmt::print(

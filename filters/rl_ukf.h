@@ -24,6 +24,10 @@
 //   the measured subset, of its angle members (state entries 0, 1, … rather
 //   than roll, pitch, yaw).
 // - Before the first prediction the sigma points are all zero.
+// - With a small α, W₀ ≈ −1/α²: once an angle's variance passes 2 rad² its
+//   weighted mean points the other way (the weighted cosines sum to about
+//   1 − var/2), and the filter diverges. A heading that nothing measures gets
+//   there (the Husky's file without its GPS, in about 30 s).
 // Times are integer nanoseconds; no I/O and no allocation per step.
 #pragma once
 
@@ -36,7 +40,7 @@
 namespace odotune::filters::rl {
 
 struct RlUkfParams {
-  RlEkfParams filter;  // Q, the initial covariance and state, dynamic Q
+  RlEkfParams filter;    // Q, the initial covariance and state, dynamic Q
   double alpha = 0.001;  // the sigma points' spread (ukf_node's ~alpha)
   double kappa = 0.0;    // secondary scaling (~kappa)
   double beta = 2.0;     // prior knowledge of the distribution; 2 for a Gaussian (~beta)

@@ -112,7 +112,7 @@ RlLoaded load_rl(const RlSource& src) {
   options.from_s = src.from_s;
   RlLoaded out;
   try {
-    const rlnode::RlParams params = rlnode::read_rl_params(src.params_file, src.node_name);
+    const rlnode::RlParams params = rlnode::read_rl_params(src.params_file, src.node_name, src.filter);
     out.rec = rlnode::load_recording(src.bag, params, options);
     if (src.gps_heading_fit_s > 0.0) {
       // With robot_localization's default noise, not the file's: the rotation
@@ -169,6 +169,7 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
   RlEvalOutcome out;
   out.bag = rec.bag;
   out.params_file = rec.params.file;
+  out.filter = rec.params.filter;
   out.final_state = run.final_state;
   out.processed = run.processed;
   out.rejected = run.rejected;
@@ -198,8 +199,9 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
   }
   if (!request.trajectory_out.empty()) {
     write_rl_trajectory(request.trajectory_out, points,
-                        fmt::format("robot_localization EKF replayed by odotune: {} with {}, {}",
-                                    rec.bag.filename().string(), rec.params.file.filename().string(), what));
+                        fmt::format("robot_localization {}_node replayed by odotune: {} with {}, {}",
+                                    filters::rl::to_string(rec.params.filter), rec.bag.filename().string(),
+                                    rec.params.file.filename().string(), what));
   }
   if (!request.fixes_out.empty()) {
     std::ostringstream text;

@@ -35,7 +35,8 @@ namespace odotune {
 
 struct RlSource {
   std::filesystem::path params_file, bag;
-  std::string node_name;         // the EKF's section of the file when it has several
+  std::string node_name;                            // the filter's section of the file when it has several
+  std::optional<filters::rl::RlFilterType> filter;  // --filter: for a file that does not say (rlnode/params.h)
   std::vector<std::string> tf;   // "FRAME=x,y,z,roll,pitch,yaw": FRAME's pose in base_link [m, rad]
   std::string gps_topic;         // NavSatFix topic behind navsat's output (empty: the bag's one)
   double gps_heading_fit_s = 0;  // > 0: fit navsat's rotation on the first seconds instead of the IMU's heading
@@ -106,6 +107,7 @@ struct RlEvalRequest {
 
 struct RlEvalOutcome {
   std::filesystem::path bag, params_file;
+  filters::rl::RlFilterType filter = filters::rl::RlFilterType::ekf;  // the file's (or --filter's)
   filters::rl::State final_state;
   double duration_s = 0.0;
   long processed = 0, rejected = 0;
@@ -153,6 +155,7 @@ struct RlStartOutcome {
 
 struct RlTuneOutcome {
   std::filesystem::path bag, params_file;
+  filters::rl::RlFilterType filter = filters::rl::RlFilterType::ekf;  // the file's (or --filter's)
   std::vector<std::filesystem::path> tracks;  // tuned on tracks (jobs/rl_track_job.h), not a bag
   double duration_s = 0.0;
   double span_from_s = 0.0, span_until_s = 0.0;  // the tuning span [s]

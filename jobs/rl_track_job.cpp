@@ -29,7 +29,7 @@ RlTracksLoaded load_rl_tracks(const RlTrackSource& src) {
     }
   }
   try {
-    out.params = rlnode::read_rl_params(src.params_file, src.node_name);
+    out.params = rlnode::read_rl_params(src.params_file, src.node_name, src.filter);
     for (const std::filesystem::path& path : src.tracks)
       out.tracks.push_back(load_rl_track(read_track(path), path, out.params, options));
   } catch (const Failure&) {
@@ -121,12 +121,14 @@ RlTrackEvalOutcome run_rl_track_eval(const RlTrackEvalRequest& request) {
   if (!request.noise_from.empty()) s.process_noise = rl_noise_from(request.noise_from, loaded.params.node_name);
   RlTrackEvalOutcome o;
   o.params_file = loaded.params.file;
+  o.filter = loaded.params.filter;
   o.rows = score_rl_tracks(loaded, s, request.protocols, !request.trajectory_out.empty());
   pool_rows(o.rows, o);
   if (!request.trajectory_out.empty()) {
-    write_rl_trajectory(request.trajectory_out, o.rows.front().scores.trajectory,
-                        fmt::format("robot_localization's EKF ({}) on {}, every fix fused; the track's clock",
-                                    o.params_file.string(), o.rows.front().track.string()));
+    write_rl_trajectory(
+        request.trajectory_out, o.rows.front().scores.trajectory,
+        fmt::format("robot_localization's {}_node ({}) on {}, every fix fused; the track's clock",
+                    filters::rl::to_string(o.filter), o.params_file.string(), o.rows.front().track.string()));
   }
   if (!request.json_out.empty()) {
     nlohmann::json j = {
@@ -160,6 +162,7 @@ RlTrackTuneOutcome run_rl_track_tune(const RlTuneRequest& request, const RlTrack
   RlTrackTuneOutcome out;
   RlTuneOutcome& o = out.tune;
   o.params_file = loaded.params.file;
+  o.filter = loaded.params.filter;
   o.bag = src.tracks.front();
   o.tracks = src.tracks;
   for (const RlTrack& t : loaded.tracks) {
@@ -184,7 +187,9 @@ RlTrackTuneOutcome run_rl_track_tune(const RlTuneRequest& request, const RlTrack
   if (!request.starts_out.empty()) {
     std::filesystem::create_directories(request.starts_out);
     for (std::size_t k = 0; k < o.starts.size(); ++k) {
-      const auto path = request.starts_out / fmt::format("ekf-seed{}.yaml", o.starts[k].seed);
+      const auto path = request.starts_out / fmt::format("{}-seed{}.yaml",
+                                                         filters::rl::to_string(o.starts[k].tuned.filter),
+                                                         o.starts[k].seed);
       write_tuned_params(path, loaded.params, o.starts[k].tuned, std::nullopt, 0.0, !request.ros1_out,
                          rl_tune_header(request, o, k));
     }

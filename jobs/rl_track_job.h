@@ -19,6 +19,7 @@ namespace odotune {
 struct RlTrackSource {
   std::filesystem::path params_file;
   std::string node_name;
+  std::optional<filters::rl::RlFilterType> filter;  // as RlSource::filter
   std::vector<std::filesystem::path> tracks;
   RlTrackOptions options;
   // A calibration file (calibrate --config-out) applied to every track's
@@ -55,6 +56,7 @@ struct RlTrackEvalRequest {
 };
 struct RlTrackEvalOutcome {
   std::filesystem::path params_file;
+  filters::rl::RlFilterType filter = filters::rl::RlFilterType::ekf;  // the file's (or --filter's)
   std::vector<RlTrackRow> rows;
   // Over all tracks together.
   TruthScore run, outages;

@@ -21,6 +21,7 @@ void write_tuned_params(const std::filesystem::path& path, const rlnode::RlParam
                         std::string header) {
   rlnode::RlParamsUpdate update;
   update.process_noise_covariance = tuned.process_noise;
+  if (tuned.filter == filters::rl::RlFilterType::ukf) update.ukf = tuned.ukf;
   if (alignment) {
     update.navsat_yaw_offset = alignment->yaw_offset_rad;
     header += fmt::format(
@@ -205,6 +206,7 @@ RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request, cons
   RlTuneOutcome o;
   o.bag = rec.bag;
   o.params_file = rec.params.file;
+  o.filter = rec.params.filter;
   o.duration_s = rl_seconds(rec, rec.end_ns);
   o.span_from_s = rl_seconds(rec, trec.start_ns);
   o.span_until_s = rl_seconds(rec, std::min(trec.end_ns, objective.options().until_ns));
@@ -258,7 +260,9 @@ RlTuneOutcome run_rl_tune(const RlTuneRequest& request) {
   if (!request.starts_out.empty()) {
     std::filesystem::create_directories(request.starts_out);
     for (std::size_t k = 0; k < o.starts.size(); ++k) {
-      const auto path = request.starts_out / fmt::format("ekf-seed{}.yaml", o.starts[k].seed);
+      const auto path = request.starts_out / fmt::format("{}-seed{}.yaml",
+                                                         filters::rl::to_string(o.starts[k].tuned.filter),
+                                                         o.starts[k].seed);
       write_tuned_params(path, rec.params, o.starts[k].tuned, o.alignment, fit_s, !request.ros1_out,
                          rl_tune_header(request, o, k));
     }

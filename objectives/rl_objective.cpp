@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 #include <limits>
 #include <stdexcept>
 
@@ -269,6 +270,14 @@ void OutageReplays::each_window(const rlnode::ReplaySettings& s,
 }
 
 std::vector<FixScore> OutageReplays::score_batch(std::span<const rlnode::ReplaySettings> settings) const {
+  const bool all_ekf = std::all_of(settings.begin(), settings.end(), [](const rlnode::ReplaySettings& s) {
+    return s.filter == filters::rl::RlFilterType::ekf;
+  });
+  if (!all_ekf) {  // the lanes run the EKF only: the UKF's settings one by one
+    std::vector<FixScore> out;
+    for (const rlnode::ReplaySettings& s : settings) out.push_back(score(s));
+    return out;
+  }
   std::vector<ScoreSum> sums(settings.size());
   for (std::size_t k0 = 0; k0 < settings.size(); k0 += filters::rl::kLanes) {
     const std::size_t lanes = std::min<std::size_t>(filters::rl::kLanes, settings.size() - k0);
@@ -393,6 +402,18 @@ RlObjective::RlObjective(std::span<const rlnode::Recording* const> recs, const r
   base_parts_.heldout = heldout_score(base_);
   base_parts_.outage = outage_score(base_);
   const bool heldout_used = heldout_needed() || options.fitness == RlFitness::heldout_nll;
+  for (const auto& [used, score, what] : {std::tuple{heldout_used, &base_parts_.heldout, "held-out fixes"},
+                                          std::tuple{outage_needed(), &base_parts_.outage, "outages"}}) {
+    if (used && std::isnan(score->rmse_m)) {
+      throw std::invalid_argument(fmt::format(
+          "{}: the file's own {}_node diverges on this recording (its state stops being finite in the {} "
+          "replays), so there is nothing to tune from; expected a filter that follows the recording{}",
+          rec.bag.string(), filters::rl::to_string(rec.params.filter), what,
+          rec.params.filter == filters::rl::RlFilterType::ukf
+              ? " (the UKF's heading mean fails once an unmeasured heading's variance passes 2 rad²)"
+              : ""));
+    }
+  }
   if ((heldout_used && !(base_parts_.heldout.rmse_m > 0.0)) ||
       (outage_needed() && !(base_parts_.outage.rmse_m > 0.0))) {
     throw std::invalid_argument(

@@ -19,7 +19,12 @@ GpsAlignment fit_gps_alignment(const Recording& rec, const ReplaySettings& setti
   for (std::size_t i = 0; i < rec.fixes.size(); ++i) {
     if (rec.fixes[i].stamp_ns < until) roles[i] = FixRole::score;
   }
-  const ReplayOutput out = replay(rec, make_schedule(rec, roles, until), settings);
+  // The dead reckoning runs ekf_node's filter whichever the file runs: the
+  // UKF's heading mean turns by π once the unmeasured heading's variance passes
+  // 2 rad² (filters/rl_ukf.h), within the seconds a fit needs.
+  ReplaySettings dead_reckoning = settings;
+  dead_reckoning.filter = filters::rl::RlFilterType::ekf;
+  const ReplayOutput out = replay(rec, make_schedule(rec, roles, until), dead_reckoning);
   GpsAlignment a;
   a.fixes = static_cast<int>(out.scored.size());
   Eigen::Vector2d mp = Eigen::Vector2d::Zero(), mq = Eigen::Vector2d::Zero();

@@ -68,6 +68,10 @@ constexpr Known kEkfKeys[] = {
     {"process_noise_covariance", Kind::numbers},
     {"initial_estimate_covariance", Kind::numbers},
     {"initial_state", Kind::numbers},
+    // ukf_node's only (a section with them is the UKF's)
+    {"alpha", Kind::number},
+    {"kappa", Kind::number},
+    {"beta", Kind::number},
     // refused unless false (refusal_reason), filter_type unless "ekf"
     {"smooth_lagged_data", Kind::boolean},
     {"use_control", Kind::boolean},
@@ -636,10 +640,43 @@ Source load(const fs::path& file) {
   return parse(file, text.str());
 }
 
-RlParams read_layout(const Source& src, const Layout& l) {
+constexpr std::string_view kUkfKeys[] = {"alpha", "kappa", "beta"};
+
+// ekf_node or ukf_node (RlParams::filter): the command line's choice, else
+// the section's name or ukf_node's keys; the UKF's constants.
+void read_filter_type(const Reader& r, const Keys& keys, const std::string& section,
+                      std::optional<filters::rl::RlFilterType> requested, RlParams& p) {
+  const Entry* ukf_key = nullptr;
+  for (const std::string_view k : kUkfKeys) {
+    if (!ukf_key) ukf_key = keys.find(std::string(k));
+  }
+  if (requested == filters::rl::RlFilterType::ekf && ukf_key) {
+    r.fail(ukf_key->key, fmt::format("{} is read by ukf_node only, and the filter asked for is ekf_node's "
+                                     "(--filter ekf); expected --filter ukf or the key removed",
+                                     ukf_key->key.Scalar()));
+  }
+  const bool named_ukf = section.find("ukf") != std::string::npos;
+  p.filter = requested
+                 ? *requested
+                 : (named_ukf || ukf_key ? filters::rl::RlFilterType::ukf : filters::rl::RlFilterType::ekf);
+  p.ukf.alpha = number(r, keys, "alpha", 0.001);
+  p.ukf.kappa = number(r, keys, "kappa", 0.0);
+  p.ukf.beta = number(r, keys, "beta", 2.0);
+  filters::rl::RlUkfParams check;
+  check.alpha = p.ukf.alpha;
+  check.kappa = p.ukf.kappa;
+  check.beta = p.ukf.beta;
+  std::string why;
+  if (p.filter == filters::rl::RlFilterType::ukf && !check.IsValid(&why))
+    r.fail(ukf_key ? ukf_key->key : YAML::Node(), fmt::format("ukf_node's {}", why));
+}
+
+RlParams read_layout(const Source& src, const Layout& l, std::optional<filters::rl::RlFilterType> filter) {
   const Section& ekf = l.sections[static_cast<std::size_t>(l.ekf)];
   const Reader r{src.file, ekf.ros2};
-  RlParams p = read_ekf(r, collect(r, ekf.params), ekf.name.empty() ? "ekf_node" : ekf.name);
+  const Keys keys = collect(r, ekf.params);
+  RlParams p = read_ekf(r, keys, ekf.name.empty() ? "ekf_node" : ekf.name);
+  read_filter_type(r, keys, ekf.name, filter, p);
   p.file = src.file;
   p.ros2 = ekf.ros2;
   p.node_name = ekf.name;
@@ -657,9 +694,10 @@ Layout locate(const Source& src, const std::string& node_name) {
 
 }  // namespace
 
-RlParams read_rl_params(const std::filesystem::path& file, const std::string& node_name) {
+RlParams read_rl_params(const std::filesystem::path& file, const std::string& node_name,
+                        std::optional<filters::rl::RlFilterType> filter) {
   const Source src = load(file);
-  return read_layout(src, locate(src, node_name));
+  return read_layout(src, locate(src, node_name), filter);
 }
 
 // ---- writing ----------------------------------------------------------------
@@ -892,6 +930,10 @@ RlParams updated(RlParams p, const RlParamsUpdate& u) {
                                               p.file.string()));
     p.navsat.yaw_offset = *u.navsat_yaw_offset;
   }
+  if (u.ukf) {
+    p.filter = filters::rl::RlFilterType::ukf;
+    p.ukf = *u.ukf;
+  }
   return p;
 }
 
@@ -923,12 +965,17 @@ std::vector<Change> ekf_changes(const Keys& keys, const RlParams& cur, const RlP
       out.push_back({names[i], thr[i] == kNoRejection ? nullptr : scalar(thr[i])});
     }
   }
+  if (u.ukf) {
+    out.push_back({"alpha", scalar(u.ukf->alpha)});
+    out.push_back({"kappa", scalar(u.ukf->kappa)});
+    out.push_back({"beta", scalar(u.ukf->beta)});
+  }
   return out;
 }
 
 // The source's text with the update applied in place.
 std::string edit_in_place(const Source& src, const Layout& l, const RlParamsUpdate& u, bool all_covariances) {
-  const RlParams cur = read_layout(src, l);
+  const RlParams cur = read_layout(src, l, std::nullopt);
   const Text t(src.text);
   std::vector<Edit> edits;
   const Section& ekf = l.sections[static_cast<std::size_t>(l.ekf)];
@@ -1039,7 +1086,11 @@ bool same_sensor(const SensorParams& a, const SensorParams& b) {
 // Whether `b` (the written file) holds the same parameters as `a`, the name and form aside.
 bool same_params(const RlParams& a, const RlParams& b) {
   const NavsatParams &n = a.navsat, &m = b.navsat;
-  return a.frequency_hz == b.frequency_hz && a.sensor_timeout_s == b.sensor_timeout_s &&
+  const auto same_ukf = [](const filters::rl::UkfConstants& x, const filters::rl::UkfConstants& y) {
+    return x.alpha == y.alpha && x.kappa == y.kappa && x.beta == y.beta;
+  };
+  return a.filter == b.filter && (a.filter == filters::rl::RlFilterType::ekf || same_ukf(a.ukf, b.ukf)) &&
+         a.frequency_hz == b.frequency_hz && a.sensor_timeout_s == b.sensor_timeout_s &&
          a.two_d_mode == b.two_d_mode && a.predict_to_current_time == b.predict_to_current_time &&
          a.dynamic_process_noise_covariance == b.dynamic_process_noise_covariance &&
          a.gravitational_acceleration == b.gravitational_acceleration && a.map_frame == b.map_frame &&
@@ -1066,7 +1117,7 @@ std::string write_rl_params(const std::filesystem::path& original, const RlParam
                             const RlParamsUpdate& update, bool ros2, const std::string& header_comment) {
   const Source src = load(original);
   const Layout l = locate(src, params.node_name);
-  const RlParams expected = updated(read_layout(src, l), update);
+  const RlParams expected = updated(read_layout(src, l, params.filter), update);
   const Section& ekf = l.sections[static_cast<std::size_t>(l.ekf)];
   const bool block = ekf.params.Style() != YAML::EmitterStyle::Flow &&
                      (l.navsat < 0 || l.sections[static_cast<std::size_t>(l.navsat)].params.Style() !=
@@ -1083,7 +1134,9 @@ std::string write_rl_params(const std::filesystem::path& original, const RlParam
                                           ekf.ros2 ? "ROS 2" : "ROS 1", original.filename().string());
   }
   const Source out = parse(original, text);
-  const RlParams back = read_layout(out, locate(out, name));
+  // With the UKF's constants written, the file must say it is the UKF's by itself.
+  const RlParams back = read_layout(out, locate(out, name),
+                                    update.ukf ? std::nullopt : std::optional(params.filter));
   if (!same_params(expected, back) || back.ros2 != ros2) {
     throw std::logic_error(fmt::format(
         "{}: the rewritten parameters do not read back as written (an odotune bug)", original.string()));

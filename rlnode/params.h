@@ -1,4 +1,4 @@
-// robot_localization's parameters as its ekf_node and navsat_transform_node
+// robot_localization's parameters as its ekf_node, ukf_node and navsat_transform_node
 // read them (robot_localization's src/ros_filter.cpp loadParams() and
 // navsat_transform.cpp, read for behaviour): the user's own parameter file,
 // ROS 1 rosparam YAML (`NODE: {key: value}` or the keys at the top level) or
@@ -15,6 +15,8 @@
 #include <vector>
 
 #include <Eigen/Core>
+
+#include "filters/rl_filter.h"
 
 namespace odotune::rlnode {
 
@@ -69,7 +71,12 @@ struct NavsatParams {
 struct RlParams {
   std::filesystem::path file;
   bool ros2 = true;       // the file's form: ROS 2 (ros__parameters) or ROS 1
-  std::string node_name;  // the EKF's section name ("" when keys are at the top level)
+  std::string node_name;  // the filter's section name ("" when keys are at the top level)
+  // ekf_node or ukf_node: a section whose name has "ukf" in it, or one with
+  // ukf_node's alpha, kappa or beta, is the UKF's; read_rl_params' `filter`
+  // decides for a file that does not say.
+  filters::rl::RlFilterType filter = filters::rl::RlFilterType::ekf;
+  filters::rl::UkfConstants ukf;  // alpha, kappa, beta (the UKF's only)
   double frequency_hz = 30.0;
   double sensor_timeout_s = 1.0 / 30.0;  // default 1/frequency
   bool two_d_mode = false;
@@ -94,8 +101,11 @@ struct RlParams {
 // supported key's value the replay does not reproduce, named:
 // smooth_lagged_data: true, use_control: true, odomN_pose_use_child_frame:
 // true, disabled_at_startup: true, reset_on_time_jump: true,
-// navsat use_odometry_yaw: true.
-RlParams read_rl_params(const std::filesystem::path& file, const std::string& node_name = "");
+// navsat use_odometry_yaw: true. `filter` (the command line's --filter) picks
+// the filter for a file that does not say which; ekf for a file with
+// ukf_node's alpha, kappa or beta is refused, naming the key.
+RlParams read_rl_params(const std::filesystem::path& file, const std::string& node_name = "",
+                        std::optional<filters::rl::RlFilterType> filter = std::nullopt);
 
 // What a tune changes in the file.
 struct RlParamsUpdate {
@@ -104,6 +114,9 @@ struct RlParamsUpdate {
   // per sensor name ("odom0"): new thresholds, kNoRejection leaves the key out
   std::vector<std::pair<std::string, std::array<double, 3>>> rejection_thresholds;  // pose, twist, accel
   std::optional<double> navsat_yaw_offset;
+  // ukf_node's constants, written as alpha, kappa and beta: the file then says
+  // that it is the UKF's, whatever its section's name.
+  std::optional<filters::rl::UkfConstants> ukf;
 };
 
 // The user's file with `update`'s values substituted (other keys, their order

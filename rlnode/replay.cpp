@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <queue>
+#include <stdexcept>
 
 #include "rlnode/frames.h"
 
@@ -43,6 +44,8 @@ struct Clock {
 
 ReplaySettings settings_of(const RlParams& params) {
   ReplaySettings s;
+  s.filter = params.filter;
+  s.ukf = params.ukf;
   s.process_noise = params.process_noise_covariance;
   s.initial_cov = params.initial_estimate_covariance;
   s.dynamic_process_noise = params.dynamic_process_noise_covariance;
@@ -269,12 +272,12 @@ ReplayOutput finish_output(NodeState&& n, const rl::State& x, const rl::Cov& P) 
 }  // namespace
 
 Replayer::Replayer(const Recording& rec, const ReplaySettings& settings)
-    : rec_(&rec), settings_(&settings), filter_(filter_params(rec, settings)) {
+    : rec_(&rec), settings_(&settings), filter_(settings.filter, filter_params(rec, settings), settings.ukf) {
   node_.out.gps_transform = rec.gps_transform;
 }
 
-rl::RlEkf Replayer::predicted(std::int64_t stamp_ns) const {
-  rl::RlEkf f = filter_;
+rl::RlFilter Replayer::predicted(std::int64_t stamp_ns) const {
+  rl::RlFilter f = filter_;
   const std::int64_t delta = stamp_ns - f.last_time_ns();
   if (delta > 0) f.predict(static_cast<double>(delta) * 1e-9);
   return f;
@@ -284,7 +287,7 @@ rl::RlEkf Replayer::predicted(std::int64_t stamp_ns) const {
 // correction starts from (RlEkf::process predicts over a positive Δt first).
 void Replayer::record_innovation() {
   if (!filter_.initialized() || !m_.mask[rl::kX] || !m_.mask[rl::kY]) return;
-  const rl::RlEkf f = predicted(m_.time_ns);
+  const rl::RlFilter f = predicted(m_.time_ns);
   Innovation v;
   v.stamp_ns = m_.time_ns;
   v.nu = m_.z.head<2>() - f.state().head<2>();
@@ -331,7 +334,11 @@ namespace {
 
 std::vector<rl::RlEkfParams> lane_params(const Recording& rec, std::span<const ReplaySettings> settings) {
   std::vector<rl::RlEkfParams> p;
-  for (const ReplaySettings& s : settings) p.push_back(filter_params(rec, s));
+  for (const ReplaySettings& s : settings) {
+    if (s.filter != rl::RlFilterType::ekf)
+      throw std::invalid_argument("BatchReplayer: the lanes run ekf_node's filter, not ukf_node's");
+    p.push_back(filter_params(rec, s));
+  }
   return p;
 }
 
@@ -393,11 +400,22 @@ std::vector<ReplayOutput> replay_batch(const Recording& rec, const Schedule& sch
                                        std::span<const ReplaySettings> settings, bool keep_trajectory) {
   std::vector<ReplayOutput> out;
   out.reserve(settings.size());
-  for (std::size_t k = 0; k < settings.size(); k += rl::kLanes) {
-    const std::size_t lanes = std::min<std::size_t>(rl::kLanes, settings.size() - k);
+  // EKF settings in runs of up to kLanes, in lock step; a UKF setting alone.
+  std::size_t k = 0;
+  while (k < settings.size()) {
+    if (settings[k].filter != rl::RlFilterType::ekf) {
+      out.push_back(replay(rec, schedule, settings[k], keep_trajectory));
+      ++k;
+      continue;
+    }
+    std::size_t lanes = 1;
+    while (lanes < static_cast<std::size_t>(rl::kLanes) && k + lanes < settings.size() &&
+           settings[k + lanes].filter == rl::RlFilterType::ekf)
+      ++lanes;
     BatchReplayer run(rec, settings.subspan(k, lanes));
     run.run(schedule.events, keep_trajectory);
     std::move(run).finish(out);
+    k += lanes;
   }
   return out;
 }

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "filters/rl_ekf.h"
+#include "filters/rl_filter.h"
 #include "rlnode/recording.h"
 
 namespace odotune::rlnode {
@@ -31,6 +32,8 @@ enum class FixRole : std::uint8_t {
 
 // What a tune changes; the file's own values by settings_of().
 struct ReplaySettings {
+  filters::rl::RlFilterType filter = filters::rl::RlFilterType::ekf;  // ekf_node or ukf_node
+  filters::rl::UkfConstants ukf;                                      // ukf_node's alpha, kappa, beta
   Matrix15 process_noise = default_process_noise();
   Matrix15 initial_cov = default_initial_estimate_covariance();
   bool dynamic_process_noise = false;
@@ -104,10 +107,10 @@ ReplayOutput replay(const Recording& rec, const Schedule& schedule, const Replay
                     bool keep_trajectory = false);
 
 // One replay per entry of `settings` over one schedule, each output identical
-// to replay(rec, schedule, settings[k], keep_trajectory), bit for bit. The
+// to replay(rec, schedule, settings[k], keep_trajectory), bit for bit. EKF
 // settings are replayed filters::rl::kLanes at a time in lock step
 // (filters::rl::RlEkfLanes), so a batch of kLanes costs about as much as two
-// or three single replays.
+// or three single replays; UKF settings one after the other.
 std::vector<ReplayOutput> replay_batch(const Recording& rec, const Schedule& schedule,
                                        std::span<const ReplaySettings> settings, bool keep_trajectory = false);
 
@@ -142,12 +145,12 @@ class Replayer {
 
  private:
   // The filter predicted to `stamp_ns` (a copy; this one unchanged).
-  filters::rl::RlEkf predicted(std::int64_t stamp_ns) const;
+  filters::rl::RlFilter predicted(std::int64_t stamp_ns) const;
   void record_innovation();
 
   const Recording* rec_;
   const ReplaySettings* settings_;
-  filters::rl::RlEkf filter_;
+  filters::rl::RlFilter filter_;
   detail::NodeState node_;
   filters::rl::Measurement m_;  // scratch
 };
@@ -158,6 +161,7 @@ class Replayer {
 // Replayer. `rec` and the settings must outlive it and its copies.
 class BatchReplayer {
  public:
+  // The settings must all be the EKF's (std::invalid_argument otherwise).
   BatchReplayer(const Recording& rec, std::span<const ReplaySettings> settings);
 
   int lanes() const { return filter_.lanes(); }

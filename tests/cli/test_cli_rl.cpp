@@ -127,3 +127,38 @@ TEST(CliRl, TuneFromJudgesTheSpanBefore) {
   EXPECT_NE(grid.exit_code, 0);
   EXPECT_NE(grid.err.find("--grid -1,x"), std::string::npos) << grid.err;
 }
+
+// The Husky's file run as ukf_node (--filter ukf): the tune says so, writes
+// ukf_node's alpha, kappa and beta so that the file says it is the UKF's by
+// itself, and the file replays to the judged figure it printed. With the
+// outages in the fitness the file's own UKF diverges (its unmeasured heading),
+// which the tune says in one line; --filter ekf with a UKF file is refused.
+TEST(CliRl, UkfTuneWritesAUkfFileThatReplaysToItsFigures) {
+  TempDir dir("cli-rl-ukf");
+  const auto out = dir.path() / "ukf.yaml";
+  const auto r = run_cli("tune " + kSource +
+                         " --filter ukf --until 100 --fitness heldout-fixes --space blocks --no-input-covariances "
+                         "--grid=-1,1 --refine 0 --seed 3 --config-out " +
+                         out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("robot_localization UKF (husky_ekf.yaml)"), std::string::npos) << r.out;
+  const auto p = odotune::rlnode::read_rl_params(out);
+  EXPECT_EQ(p.filter, odotune::filters::rl::RlFilterType::ukf);
+  EXPECT_EQ(p.ukf.alpha, 0.001);
+  const double judged = number_after(r.out, R"(every 5th fix held out:\s+[0-9.]+ ->)");
+  const std::string source = " --bag " + kBags +
+                             "/ros2/test1.mcap --tf imu_link=0,-0.3,0.52,1.5707963267948966,0,-1.5707963267948966 "
+                             "--gps-heading-fit 60 --from 100";
+  const auto e = run_cli("eval --rl-params " + out.string() + source);
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_NE(e.out.find("robot_localization UKF"), std::string::npos) << e.out;
+  EXPECT_NEAR(number_after(e.out, "every 5th fix held out: RMSE"), judged, 0.001) << r.out << "\n" << e.out;
+
+  const auto both = run_cli("tune " + kSource + " --filter ukf --until 100 --fitness both");
+  EXPECT_NE(both.exit_code, 0);
+  EXPECT_NE(both.err.find("ukf_node diverges on this recording"), std::string::npos) << both.err;
+  EXPECT_EQ(std::count(both.err.begin(), both.err.end(), '\n'), 1) << both.err;
+  const auto ekf = run_cli("eval --rl-params " + out.string() + " --filter ekf" + source);
+  EXPECT_NE(ekf.exit_code, 0);
+  EXPECT_NE(ekf.err.find("alpha is read by ukf_node only"), std::string::npos) << ekf.err;
+}

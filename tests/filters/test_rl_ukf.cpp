@@ -197,6 +197,29 @@ TEST(RlUkf, PredictedHeadingCrossesPi) {
   EXPECT_NEAR(ukf.cov()(rl::kYaw, rl::kYaw), 0.01 + 0.1 * 0.1 * 1e-4, 1e-9);
 }
 
+// ukf.cpp's heading mean, atan2 of the weighted sines and cosines with
+// W₀ ≈ −1/α², points the other way once the yaw variance passes 2 rad²: the
+// weighted cosines sum to about 1 − var/2. The filter then turns by π and its
+// yaw variance goes negative, as ukf_node's does with a heading nothing
+// measures (docs/robot-localization-ukf.md).
+TEST(RlUkf, HeadingMeanTurnsByPiOnceItsVarianceExceedsTwo) {
+  rl::State x = rl::State::Zero();
+  x[rl::kYaw] = 0.5;
+  for (double var : {1.9, 2.1}) {
+    rl::Cov P = rl::Cov::Identity() * 1e-4;
+    P(rl::kYaw, rl::kYaw) = var;
+    rl::RlUkf ukf(ukf_params(rl::Cov::Zero(), x, P));
+    ukf.predict(0.01);
+    if (var < 2.0) {
+      EXPECT_NEAR(ukf.state()[rl::kYaw], 0.5, 1e-6);
+      EXPECT_GT(ukf.cov()(rl::kYaw, rl::kYaw), 0.0);
+    } else {
+      EXPECT_NEAR(ukf.state()[rl::kYaw], rl::normalize_angle(0.5 + std::numbers::pi), 1e-6);
+      EXPECT_LT(ukf.cov()(rl::kYaw, rl::kYaw), -1.0);
+    }
+  }
+}
+
 TEST(RlUkf, YawInnovationIsWrapped) {
   rl::State x = rl::State::Zero();
   x[rl::kYaw] = 3.0;

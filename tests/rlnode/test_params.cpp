@@ -730,3 +730,40 @@ ekf:
   EXPECT_EQ(back.sensors.at(0).pose_rejection_threshold, 2.0);
   EXPECT_EQ(back.sensors.at(0).twist_rejection_threshold, 5.0);
 }
+
+// ekf_node or ukf_node: a ukf_filter_node section (as robot_localization's
+// ukf.yaml names it; the constants left at ukf_node's defaults), a section with
+// ukf_node's keys, a file that does not say (the caller's choice, else the
+// EKF), and the refusals.
+TEST(RlParams, PicksTheUkfFromTheSectionOrItsKeys) {
+  namespace rl = odotune::filters::rl;
+  TempDir dir;
+  const fs::path named = write_file(dir, "u.yaml", "ukf_filter_node:\n  ros__parameters:\n    odom0: /o\n");
+  const RlParams shipped = odotune::rlnode::read_rl_params(named);
+  EXPECT_EQ(shipped.filter, rl::RlFilterType::ukf);
+  EXPECT_EQ(shipped.ukf.alpha, 0.001);
+  EXPECT_EQ(shipped.ukf.kappa, 0.0);
+  EXPECT_EQ(shipped.ukf.beta, 2.0);
+
+  const fs::path keyed = write_file(dir, "k.yaml", "ekf:\n  odom0: /o\n  alpha: 0.3\n  kappa: 1.0\n");
+  const RlParams k = odotune::rlnode::read_rl_params(keyed);
+  EXPECT_EQ(k.filter, rl::RlFilterType::ukf);
+  EXPECT_EQ(k.ukf.alpha, 0.3);
+  EXPECT_EQ(k.ukf.kappa, 1.0);
+  EXPECT_EQ(k.ukf.beta, 2.0);
+
+  const fs::path flat = write_file(dir, "f.yaml", "frequency: 30.0\nodom0: /o\n");
+  EXPECT_EQ(odotune::rlnode::read_rl_params(flat).filter, rl::RlFilterType::ekf);
+  EXPECT_EQ(odotune::rlnode::read_rl_params(flat, "", rl::RlFilterType::ukf).filter, rl::RlFilterType::ukf);
+
+  try {
+    odotune::rlnode::read_rl_params(keyed, "", rl::RlFilterType::ekf);
+    ADD_FAILURE() << "alpha with --filter ekf was read";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(keyed.string() + ":3: alpha is read by ukf_node only", 0), 0U)
+        << e.what();
+  }
+  const fs::path bad = write_file(dir, "b.yaml", "ukf_filter_node:\n  odom0: /o\n  alpha: 0.0\n");
+  EXPECT_EQ(read_error(bad).rfind(bad.string() + ":3: ukf_node's alpha = 0, expected > 0", 0), 0U)
+      << read_error(bad);
+}

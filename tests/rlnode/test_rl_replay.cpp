@@ -5,6 +5,7 @@
 // made here: differential and relative inputs, a standing robot with an IMU,
 // held-out fixes, refusals, the GPS heading fit.
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <numbers>
@@ -82,6 +83,58 @@ const char* kBag2Params = R"(test_ekf_localization_node_bag2_ekf:
     process_noise_covariance: [0.03, 0.03, 0.04, 0.03, 0.03, 0.06, 0.025, 0.025, 0.05, 0.002, 0.002, 0.004, 0.01, 0.01, 0.01]
 )";
 
+// robot_localization's test_ukf_localization_node_bag{1,2}.test (noetic-devel),
+// in the ROS 1 form: its UKF on the same inputs, alpha 0.001, kappa 0, beta 2.
+const char* kUkfBag1Params = R"(test_ukf_localization_node_bag1_ukf:
+  frequency: 30
+  sensor_timeout: 0.1
+  two_d_mode: false
+  map_frame: map
+  odom_frame: odom
+  base_link_frame: base_link
+  world_frame: odom
+  transform_time_offset: 0.0
+  transform_timeout: 0.0
+  odom0: /husky_velocity_controller/odom
+  imu0: /imu/data
+  odom0_config: [false, false, false, false, false, false, true, true, true, false, false, false, false, false, false]
+  imu0_config: [false, false, false, true, true, true, false, false, false, true, true, false, true, true, true]
+  odom0_differential: false
+  imu0_differential: false
+  odom0_relative: false
+  imu0_relative: false
+  imu0_remove_gravitational_acceleration: true
+  print_diagnostics: true
+  debug: false
+  debug_out_file: debug_ukf_localization.txt
+  process_noise_covariance: [0.05, 0.05, 0.06, 0.03, 0.03, 0.06, 0.025, 0.025, 0.04, 0.01, 0.01, 0.02, 0.01, 0.01, 0.015]
+  initial_estimate_covariance: [1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9]
+  alpha: 0.001
+  kappa: 0
+  beta: 2
+)";
+
+const char* kUkfBag2Params = R"(test_ukf_localization_node_bag2_ukf:
+  frequency: 50
+  sensor_timeout: 0.1
+  odom0: /jackal_velocity_controller/odom
+  imu0: /imu/data
+  map_frame: map
+  odom_frame: odom
+  base_link_frame: base_link
+  world_frame: odom
+  odom0_config: [false, false, false, false, false, false, true, true, true, false, false, true, false, false, false]
+  imu0_config: [false, false, false, true, true, true, false, false, false, true, true, true, true, true, true]
+  odom0_queue_size: 10
+  imu0_queue_size: 10
+  imu0_remove_gravitational_acceleration: true
+  process_noise_covariance: [0.03, 0.03, 0.4, 0.03, 0.03, 0.06, 0.025, 0.025, 0.05, 0.002, 0.002, 0.004, 0.01, 0.01, 0.01]
+  initial_estimate_covariance: [1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9, 1e-9]
+  alpha: 0.001
+  kappa: 0
+  beta: 2
+)";
+
 double distance_to(const rl::State& x, double ex, double ey, double ez) {
   return std::sqrt(std::pow(x[rl::kX] - ex, 2) + std::pow(x[rl::kY] - ey, 2) + std::pow(x[rl::kZ] - ez, 2));
 }
@@ -122,6 +175,28 @@ TEST(RlReplay, Bag2EndsWhereRobotLocalizationsOwnTestExpects) {
   const RlParams p = read_rl_params(write_file(dir.path() / "bag2.yaml", kBag2Params));
   const rl::State x = final_state(kBags / "ros2/test2.mcap", p);
   EXPECT_LT(distance_to(x, 1.0206, 3.4292, 0.7419), 0.1383) << "final " << x.head<3>().transpose();
+}
+
+// robot_localization's test_ukf_localization_node_bag1: (−39.7333, −76.9820,
+// −2.4427) m within 1.2910 m (ours: 0.30 m).
+TEST(RlReplay, UkfBag1EndsWhereRobotLocalizationsOwnTestExpects) {
+  TempDir dir("rl-ukf-bag1");
+  const RlParams p = read_rl_params(write_file(dir.path() / "bag1.yaml", kUkfBag1Params));
+  ASSERT_EQ(p.filter, rl::RlFilterType::ukf);
+  const rl::State x = final_state(kBags / "ros2/test1.mcap", p, bag1_mounting());
+  const double d = distance_to(x, -39.7333, -76.9820, -2.4427);
+  EXPECT_LT(d, 1.2910) << "final " << x.head<3>().transpose();
+}
+
+// robot_localization's test_ukf_localization_node_bag2: (1.0438, 3.4940,
+// 0.7260) m within 0.2351 m (ours: 0.009 m).
+TEST(RlReplay, UkfBag2EndsWhereRobotLocalizationsOwnTestExpects) {
+  TempDir dir("rl-ukf-bag2");
+  const RlParams p = read_rl_params(write_file(dir.path() / "bag2.yaml", kUkfBag2Params));
+  ASSERT_EQ(p.filter, rl::RlFilterType::ukf);
+  const rl::State x = final_state(kBags / "ros2/test2.mcap", p);
+  const double d = distance_to(x, 1.0438, 3.4940, 0.7260);
+  EXPECT_LT(d, 0.2351) << "final " << x.head<3>().transpose();
 }
 
 TEST(RlReplay, SameInputsGiveTheSameBits) {
@@ -242,6 +317,26 @@ RlParams pose_params(const std::filesystem::path& dir, const std::string& extra)
 }  // namespace
 
 // An absolute pose input puts the filter where the odometry says.
+// UKF settings in a batch (between EKF ones) are replayed one by one, each
+// output that of its own replay; the UKF and the EKF differ.
+TEST(RlReplay, BatchWithUkfSettingsGivesEachItsOwnReplay) {
+  TempDir dir("rl-ukf-batch");
+  const RlParams p = read_rl_params(write_file(dir.path() / "bag2.yaml", kBag2Params));
+  const Recording rec = load_recording(kBags / "ros2/test2.mcap", p);
+  const Schedule schedule = make_schedule(rec);
+  std::vector<ReplaySettings> settings(4, settings_of(p));
+  settings[1].filter = settings[2].filter = rl::RlFilterType::ukf;
+  settings[2].ukf.alpha = 0.1;
+  settings[3].process_noise *= 2.0;
+  const std::vector<ReplayOutput> batch = replay_batch(rec, schedule, settings);
+  ASSERT_EQ(batch.size(), settings.size());
+  for (std::size_t k = 0; k < settings.size(); ++k)
+    expect_same_output(replay(rec, schedule, settings[k]), batch[k], "setting " + std::to_string(k));
+  EXPECT_GT((batch[0].final_state - batch[1].final_state).head<3>().norm(), 1e-4);
+  EXPECT_NE(batch[1].final_state, batch[2].final_state);  // alpha reaches the filter
+  EXPECT_THROW(BatchReplayer(rec, std::span(settings).subspan(1, 1)), std::invalid_argument);
+}
+
 TEST(RlReplay, AbsolutePoseIsFollowed) {
   TempDir dir("rl-abs");
   const rl::State x = final_state(driving_bag(dir.path()), pose_params(dir.path(), ""));

@@ -1,0 +1,49 @@
+// Either of robot_localization's filters, picked at run time as its nodes
+// are: ekf_node (filters/rl_ekf.h) or ukf_node (filters/rl_ukf.h), behind
+// the interface the node's plumbing (rlnode/replay.h) drives.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string_view>
+#include <variant>
+
+#include "filters/rl_ekf.h"
+#include "filters/rl_ukf.h"
+
+namespace odotune::filters::rl {
+
+enum class RlFilterType { ekf, ukf };
+std::string_view to_string(RlFilterType t);  // "ekf", "ukf"
+std::optional<RlFilterType> parse_rl_filter_type(std::string_view name);
+
+// The unscented transform's constants (ukf_node's ~alpha, ~kappa, ~beta).
+struct UkfConstants {
+  double alpha = 0.001;
+  double kappa = 0.0;
+  double beta = 2.0;
+};
+
+class RlFilter {
+ public:
+  // Throws std::invalid_argument for invalid parameters (RlEkfParams::IsValid,
+  // RlUkfParams::IsValid).
+  RlFilter(RlFilterType type, const RlEkfParams& params, const UkfConstants& ukf = {});
+
+  RlFilterType type() const {
+    return std::holds_alternative<RlEkf>(f_) ? RlFilterType::ekf : RlFilterType::ukf;
+  }
+  bool process(const Measurement& m);
+  void predict_to(std::int64_t time_ns);
+  void predict(double dt_s);
+
+  bool initialized() const;
+  std::int64_t last_time_ns() const;
+  const State& state() const;
+  const Cov& cov() const;
+
+ private:
+  std::variant<RlEkf, RlUkf> f_;
+};
+
+}  // namespace odotune::filters::rl
