@@ -25,7 +25,7 @@ namespace {
 struct RlChoices {
   std::string fitness = "both", space = "diagonal", format = "ros2";
   std::string grid;  // "none" or levels in decades, comma-separated
-  bool no_input_covariances = false, allow_worse_heldout = false;
+  bool no_input_covariances = false, allow_worse_heldout = false, ukf_constants = false;
   RlTrackSource track;  // --rl-params with --track: its options
 };
 
@@ -74,6 +74,7 @@ void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const R
                                                  "--fitness",
                                                  "--space",
                                                  "--no-input-covariances",
+                                                 "--ukf-constants",
                                                  "--outage",
                                                  "--format",
                                                  "--solver",
@@ -115,6 +116,7 @@ void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const R
   if (!parse_rl_fitness(c.fitness, &r.options.fitness) || !parse_rl_noise_space(c.space, &r.options.space))
     throw Failure(fmt::format("tune: --fitness {} --space {}: not a fitness or space", c.fitness, c.space));
   r.options.input_covariances = !c.no_input_covariances;
+  r.options.ukf_constants = c.ukf_constants;
   r.options.keep_heldout = !c.allow_worse_heldout;
   if (!c.grid.empty()) r.search.grid_levels = parse_grid_levels(c.grid);
   r.ros1_out = c.format == "ros1";
@@ -195,6 +197,8 @@ void add_rl_tune_options(CLI::App* sub, RlTuneRequest& rl, RlChoices& rl_names) 
       ->check(CLI::IsMember({"diagonal", "blocks"}));
   sub->add_flag("--no-input-covariances", rl_names.no_input_covariances,
                 "--rl-params: do not search factors on the inputs' message covariances");
+  sub->add_flag("--ukf-constants", rl_names.ukf_constants,
+                "--rl-params with ukf_node: also search factors on its alpha, 15 + kappa and beta");
   sub->add_option("--from", rl.from_s,
                   "--rl-params: tune on the recording after this many seconds (the bag cut there) and judge "
                   "before it: GPS fused for its first 60 s, then an outage; and every 5th fix held out")

@@ -16,6 +16,9 @@ std::string metres(const FixScore& s) {
   return s.finite ? fmt::format("{:.3f} m ({} fixes)", s.rmse_m, s.fixes) : "diverged";
 }
 
+// A table cell: "0.245 m", or "diverged".
+std::string column(const FixScore& s) { return s.finite ? fmt::format("{:.3f} m", s.rmse_m) : "diverged"; }
+
 std::string change(const FixScore& a, const FixScore& b) {
   if (!a.finite || !b.finite || !(a.rmse_m > 0.0)) return fmt::format("{} -> {}", metres(a), metres(b));
   return fmt::format("{:.3f} -> {:.3f} m  ({:+.1f} %, {} fixes)", a.rmse_m, b.rmse_m,
@@ -174,11 +177,11 @@ void print_rl_tune(const RlTuneRequest& r, const RlTuneOutcome& o) {
                o.judged ? fmt::format(" {:>16} {:>16}", "judged: outage", "every 5th") : "");
     for (std::size_t k = 0; k < o.starts.size(); ++k) {
       const RlStartOutcome& st = o.starts[k];
-      fmt::print("  {:>6} {:>10.4f} {:>12.3f} m {:>12.3f} m{}{}\n", st.seed, st.fitness, st.heldout.rmse_m,
-                 st.outage.rmse_m,
-                 st.judged ? fmt::format(" {:>14.3f} m {:>14.3f} m", st.judged->outage.rmse_m,
-                                         st.judged->every_fifth.rmse_m)
-                           : "",
+      fmt::print("  {:>6} {:>10.4f} {:>14} {:>14}{}{}\n", st.seed, st.fitness, column(st.heldout),
+                 column(st.outage),
+                 st.judged
+                     ? fmt::format(" {:>16} {:>16}", column(st.judged->outage), column(st.judged->every_fifth))
+                     : "",
                  k == o.written ? "   <- written" : "");
     }
   }

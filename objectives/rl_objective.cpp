@@ -100,13 +100,31 @@ std::vector<int> rl_noise_members(std::string_view name, bool two_d) {
   return {};
 }
 
+filters::rl::UkfConstants scaled_ukf_constants(const filters::rl::UkfConstants& base, double alpha_factor,
+                                               double n_plus_kappa_factor, double beta_factor) {
+  constexpr double n = filters::rl::kStateSize;
+  // A factor of 1 leaves kappa's bits alone ((n + κ)·1 − n may round).
+  const double kappa = n_plus_kappa_factor == 1.0 ? base.kappa : (n + base.kappa) * n_plus_kappa_factor - n;
+  return {base.alpha * alpha_factor, kappa, base.beta * beta_factor};
+}
+
 bool apply_rl_factors(const rlnode::RlParams& params, std::span<const std::string> names,
                       std::span<const double> factors, rlnode::ReplaySettings* s, std::string* why) {
   const rlnode::ReplaySettings base = *s;
+  std::array<double, 3> ukf_factors = {1.0, 1.0, 1.0};
   for (std::size_t i = 0; i < names.size() && i < factors.size(); ++i) {
     if (!(factors[i] > 0.0 && std::isfinite(factors[i]))) {
       if (why) *why = fmt::format("{} = {}: expected a positive factor", names[i], factors[i]);
       return false;
+    }
+    const auto ukf = std::find(kUkfFactorNames.begin(), kUkfFactorNames.end(), names[i]);
+    if (ukf != kUkfFactorNames.end()) {
+      if (params.filter != filters::rl::RlFilterType::ukf) {
+        if (why) *why = fmt::format("'{}' is ukf_node's, and this file runs ekf_node", names[i]);
+        return false;
+      }
+      ukf_factors[static_cast<std::size_t>(ukf - kUkfFactorNames.begin())] = factors[i];
+      continue;
     }
     const std::vector<int> members = rl_noise_members(names[i], params.two_d_mode);
     for (int m : members) s->process_noise(m, m) = base.process_noise(m, m) * factors[i];
@@ -126,6 +144,7 @@ bool apply_rl_factors(const rlnode::RlParams& params, std::span<const std::strin
     if (why) *why = fmt::format("{} names for {} factors", names.size(), factors.size());
     return false;
   }
+  s->ukf = scaled_ukf_constants(base.ukf, ukf_factors[0], ukf_factors[1], ukf_factors[2]);
   return true;
 }
 
@@ -386,6 +405,17 @@ RlObjective::RlObjective(std::span<const rlnode::Recording* const> recs, const r
       cov_sensors_.push_back(static_cast<int>(s));
     }
   }
+  if (options.ukf_constants) {
+    if (rec.params.filter != filters::rl::RlFilterType::ukf) {
+      throw std::invalid_argument(fmt::format(
+          "{}: alpha, kappa and beta are ukf_node's, and the file runs ekf_node; expected a UKF file or --filter ukf",
+          rec.params.file.string()));
+    }
+    // alpha in [1e-3, 1e3] × the file's, n + kappa and beta in [0.1, 10] ×.
+    specs.push_back({std::string(kUkfFactorNames[0]), "×", 1e-3, 1e3, true, "factor on ukf_node's alpha"});
+    specs.push_back({std::string(kUkfFactorNames[1]), "×", 0.1, 10.0, true, "factor on 15 + ukf_node's kappa"});
+    specs.push_back({std::string(kUkfFactorNames[2]), "×", 0.1, 10.0, true, "factor on ukf_node's beta"});
+  }
   space_ = BoxSpace(std::move(specs));
 
   for (const rlnode::Recording* r : recs) {
@@ -459,6 +489,7 @@ rlnode::ReplaySettings RlObjective::settings_at(std::span<const double> x) const
     ++k;
   }
   for (int sensor : cov_sensors_) s.covariance_scale[sensor] = base_.covariance_scale[sensor] * v[k++];
+  if (options_.ukf_constants) s.ukf = scaled_ukf_constants(base_.ukf, v[k], v[k + 1], v[k + 2]);
   return s;
 }
 

@@ -24,6 +24,7 @@
 // thread-safe; the schedules are laid out once.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -72,6 +73,13 @@ std::vector<int> rl_noise_members(std::string_view name, bool two_d);
 // "cov_<sensor>" on an input's message covariance) to *s, which holds the
 // file's own settings (rlnode::settings_of). False with *why for an unknown
 // name, a factor that is not positive and finite, or lists of unequal length.
+// The UKF constants' factors in a tune's space, in this order: alpha,
+// n + kappa (n = 15, so kappa stays above −n) and beta.
+inline constexpr std::array<std::string_view, 3> kUkfFactorNames = {"ukf_alpha", "ukf_n_plus_kappa", "ukf_beta"};
+// The constants with the factors applied to `base`.
+filters::rl::UkfConstants scaled_ukf_constants(const filters::rl::UkfConstants& base, double alpha_factor,
+                                               double n_plus_kappa_factor, double beta_factor);
+
 bool apply_rl_factors(const rlnode::RlParams& params, std::span<const std::string> names,
                       std::span<const double> factors, rlnode::ReplaySettings* s, std::string* why);
 
@@ -79,6 +87,9 @@ struct RlTuneOptions {
   RlFitness fitness = RlFitness::both;
   RlNoiseSpace space = RlNoiseSpace::diagonal;
   bool input_covariances = true;                // also search a factor on each input's message covariance
+  // Also search factors on ukf_node's alpha, n + kappa and beta (n = 15):
+  // kUkfFactorNames; a file that runs ekf_node is refused.
+  bool ukf_constants = false;
   int folds = 5;                                // heldout_fixes
   double block_s = 1.0;                         // heldout_fixes: fixes of one block are held out together [s]
   std::vector<double> outage_s = {30.0, 60.0};  // outage: the windows' lengths L [s]

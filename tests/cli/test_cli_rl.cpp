@@ -138,13 +138,15 @@ TEST(CliRl, UkfTuneWritesAUkfFileThatReplaysToItsFigures) {
   const auto out = dir.path() / "ukf.yaml";
   const auto r = run_cli("tune " + kSource +
                          " --filter ukf --until 100 --fitness heldout-fixes --space blocks --no-input-covariances "
-                         "--grid=-1,1 --refine 0 --seed 3 --config-out " +
+                         "--ukf-constants --grid=-1,1 --refine 0 --seed 3 --config-out " +
                          out.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("robot_localization UKF (husky_ekf.yaml)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("ukf_alpha ×"), std::string::npos) << r.out;  // searched, in the profile
+  EXPECT_NE(r.out.find("ukf_n_plus_kappa ×"), std::string::npos) << r.out;
   const auto p = odotune::rlnode::read_rl_params(out);
   EXPECT_EQ(p.filter, odotune::filters::rl::RlFilterType::ukf);
-  EXPECT_EQ(p.ukf.alpha, 0.001);
+  EXPECT_GT(p.ukf.alpha, 0.0);
   const double judged = number_after(r.out, R"(every 5th fix held out:\s+[0-9.]+ ->)");
   const std::string source = " --bag " + kBags +
                              "/ros2/test1.mcap --tf imu_link=0,-0.3,0.52,1.5707963267948966,0,-1.5707963267948966 "
@@ -161,4 +163,8 @@ TEST(CliRl, UkfTuneWritesAUkfFileThatReplaysToItsFigures) {
   const auto ekf = run_cli("eval --rl-params " + out.string() + " --filter ekf" + source);
   EXPECT_NE(ekf.exit_code, 0);
   EXPECT_NE(ekf.err.find("alpha is read by ukf_node only"), std::string::npos) << ekf.err;
+  const auto constants = run_cli("tune " + kSource + " --until 100 --ukf-constants");
+  EXPECT_NE(constants.exit_code, 0);
+  EXPECT_NE(constants.err.find("alpha, kappa and beta are ukf_node's"), std::string::npos) << constants.err;
+  EXPECT_EQ(std::count(constants.err.begin(), constants.err.end(), '\n'), 1) << constants.err;
 }
