@@ -76,9 +76,11 @@ constexpr Known kEkfKeys[] = {
     {"smooth_lagged_data", Kind::boolean},
     {"use_control", Kind::boolean},
     {"disabled_at_startup", Kind::boolean},
-    {"reset_on_time_jump", Kind::boolean},
     {"filter_type", Kind::text},
-    // no effect on the estimate (the control keys: while use_control is false)
+    // no effect on the estimate (the control keys: while use_control is false;
+    // reset_on_time_jump: a bag played once, as `rosbag play --clock` plays it,
+    // never moves the clock back)
+    {"reset_on_time_jump", Kind::boolean},
     {"use_sim_time", Kind::boolean},
     {"clear_params", Kind::boolean},
     {"publish_tf", Kind::boolean},
@@ -202,7 +204,6 @@ std::string_view refusal_reason(std::string_view key) {
   if (key == "smooth_lagged_data") return "ekf_node would re-filter from past states for late messages";
   if (key == "use_control") return "ekf_node would add a cmd_vel control term";
   if (key == "disabled_at_startup") return "ekf_node would wait for its enable service";
-  if (key == "reset_on_time_jump") return "ekf_node would reset when the clock jumps back";
   if (key.ends_with("_pose_use_child_frame"))
     return "ekf_node would take the pose in the message's child frame";
   if (key == "use_odometry_yaw")

@@ -100,7 +100,7 @@ struct RlParams {
 // 225 entries, a _config 15 booleans), a negative frequency or timeout, and a
 // supported key's value the replay does not reproduce, named:
 // smooth_lagged_data: true, use_control: true, odomN_pose_use_child_frame:
-// true, disabled_at_startup: true, reset_on_time_jump: true,
+// true, disabled_at_startup: true,
 // navsat use_odometry_yaw: true. `filter` (the command line's --filter) picks
 // the filter for a file that does not say which; ekf for a file with
 // ukf_node's alpha, kappa or beta is refused, naming the key.

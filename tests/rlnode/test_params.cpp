@@ -476,7 +476,6 @@ TEST(RlParams, RefusesValuesTheReplayDoesNotReproduce) {
       {"  smooth_lagged_data: true\n", "smooth_lagged_data: true is not reproduced"},
       {"  use_control: true\n", "use_control: true is not reproduced"},
       {"  disabled_at_startup: true\n", "disabled_at_startup: true is not reproduced"},
-      {"  reset_on_time_jump: true\n", "reset_on_time_jump: true is not reproduced"},
       {"  odom0_pose_use_child_frame: true\n", "odom0_pose_use_child_frame: true is not reproduced"},
       {"  filter_type: ukf\n", "filter_type: ukf is not reproduced"},
   };

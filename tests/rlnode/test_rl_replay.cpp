@@ -199,6 +199,17 @@ TEST(RlReplay, UkfBag2EndsWhereRobotLocalizationsOwnTestExpects) {
   EXPECT_LT(d, 0.2351) << "final " << x.head<3>().transpose();
 }
 
+// reset_on_time_jump resets the node when the clock moves back; a bag played
+// once never does that, so the key changes nothing in a replay.
+TEST(RlReplay, ResetOnTimeJumpChangesNothingInAReplay) {
+  TempDir dir("rl-time-jump");
+  const RlParams a = read_rl_params(write_file(dir.path() / "a.yaml", kBag2Params));
+  const RlParams b =
+      read_rl_params(write_file(dir.path() / "b.yaml", std::string(kBag2Params) + "    reset_on_time_jump: true\n"));
+  const rl::State xa = final_state(kBags / "ros2/test2.mcap", a), xb = final_state(kBags / "ros2/test2.mcap", b);
+  EXPECT_EQ(std::memcmp(xa.data(), xb.data(), sizeof(double) * rl::kStateSize), 0);
+}
+
 TEST(RlReplay, SameInputsGiveTheSameBits) {
   TempDir dir("rl-bits");
   const RlParams p = read_rl_params(write_file(dir.path() / "bag2.yaml", kBag2Params));
