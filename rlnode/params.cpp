@@ -231,6 +231,14 @@ std::string describe(const YAML::Node& v) {
 struct Reader {
   const fs::path& file;
   bool ros2 = false;
+  // Where note() writes (nullptr: nowhere), for what the reader leaves out.
+  std::vector<std::string>* notes = nullptr;
+
+  void note(const YAML::Node& at, const std::string& what) const {
+    if (!notes) return;
+    const YAML::Mark m = at.Mark();
+    notes->push_back(fmt::format("{}:{}: {}", file.string(), m.is_null() ? 1 : m.line + 1, what));
+  }
 
   [[noreturn]] void fail(const YAML::Node& at, const std::string& what) const {
     const YAML::Mark m = at.Mark();
@@ -312,8 +320,16 @@ Keys collect(const Reader& r, const YAML::Node& map) {
       r.fail(kv.first, fmt::format("a parameter name must be a string, got {}", describe(kv.first)));
     const std::string& name = kv.first.Scalar();
     if (const Entry* first = keys.find(name)) {
-      r.fail(kv.first, fmt::format("{} is given twice (first at line {}), expected each parameter once", name,
-                                   first->key.Mark().line + 1));
+      // Both values the same: whichever the node takes, it is that value.
+      if (YAML::Dump(first->value) == YAML::Dump(kv.second)) {
+        r.note(kv.first, fmt::format("{} is given twice with the same value (first at line {}); read once",
+                                     name, first->key.Mark().line + 1));
+        continue;
+      }
+      r.fail(kv.first,
+             fmt::format("{} is given twice with different values ({} at line {}, {} here), expected "
+                         "each parameter once",
+                         name, YAML::Dump(first->value), first->key.Mark().line + 1, YAML::Dump(kv.second)));
     }
     keys.index[name] = keys.order.size();
     keys.order.push_back({name, Entry{kv.first, kv.second}});
@@ -345,17 +361,18 @@ void check_ekf_key(const Reader& r, const std::string& name, const Entry& e, con
   }
   const auto in = split_input_key(name);
   if (!in || !in->rule) {
-    r.fail(e.key,
-           fmt::format("unknown parameter '{}' of {}, expected one of robot_localization's ekf_node parameters",
-                       name, section));
+    r.note(e.key, fmt::format("'{}' of {} is not one of robot_localization's parameters, which does not read "
+                              "it either (left out; check its spelling)",
+                              name, section));
+    return;
   }
   const int n = count[static_cast<std::size_t>(in->kind)];
   if (in->index >= n) {
     const std::string_view k = to_string(in->kind);
-    r.fail(e.key,
-           fmt::format("{} is never read: ekf_node reads {}0, {}1, ... up to the first missing number, and "
-                       "{}{} is missing",
-                       name, k, k, k, n));
+    r.note(e.key, fmt::format("{} is not read by robot_localization either: it reads {}0, {}1, ... up to the "
+                              "first missing number, and {}{} is missing (left out)",
+                              name, k, k, k, n));
+    return;
   }
   r.check(name, e.value, in->rule->kind);
   refuse_if_true(r, name, e);
@@ -479,9 +496,10 @@ NavsatParams read_navsat(const Reader& r, const Keys& keys, const std::string& s
   for (const auto& [name, e] : keys.order) {
     const Known* k = find_known(kNavsatKeys, name);
     if (!k) {
-      r.fail(e.key, fmt::format("unknown parameter '{}' of {}, expected one of robot_localization's "
-                                "navsat_transform_node parameters",
+      r.note(e.key, fmt::format("'{}' of {} is not one of navsat_transform_node's parameters, which does not "
+                                "read it either (left out; check its spelling)",
                                 name, section));
+      continue;
     }
     if (name != "datum") r.check(name, e.value, k->kind);
     refuse_if_true(r, name, e);
@@ -674,7 +692,8 @@ void read_filter_type(const Reader& r, const Keys& keys, const std::string& sect
 
 RlParams read_layout(const Source& src, const Layout& l, std::optional<filters::rl::RlFilterType> filter) {
   const Section& ekf = l.sections[static_cast<std::size_t>(l.ekf)];
-  const Reader r{src.file, ekf.ros2};
+  std::vector<std::string> notes;
+  const Reader r{src.file, ekf.ros2, &notes};
   const Keys keys = collect(r, ekf.params);
   RlParams p = read_ekf(r, keys, ekf.name.empty() ? "ekf_node" : ekf.name);
   read_filter_type(r, keys, ekf.name, filter, p);
@@ -683,9 +702,10 @@ RlParams read_layout(const Source& src, const Layout& l, std::optional<filters::
   p.node_name = ekf.name;
   if (l.navsat >= 0) {
     const Section& nav = l.sections[static_cast<std::size_t>(l.navsat)];
-    const Reader rn{src.file, nav.ros2};
+    const Reader rn{src.file, nav.ros2, &notes};
     p.navsat = read_navsat(rn, collect(rn, nav.params), nav.name);
   }
+  p.notes = std::move(notes);
   return p;
 }
 

@@ -4,7 +4,8 @@
 // ROS 1 rosparam YAML (`NODE: {key: value}` or the keys at the top level) or
 // ROS 2 (`NODE: {ros__parameters: {…}}`), with the node's defaults where a key
 // is missing. A parameter that would change the estimate and that the replay
-// does not reproduce is refused by name; so is a key the node does not know.
+// does not reproduce is refused by name; a key the node does not read is left
+// out and noted (RlParams::notes).
 #pragma once
 
 #include <array>
@@ -89,14 +90,18 @@ struct RlParams {
   std::optional<Vector15> initial_state;
   std::vector<SensorParams> sensors;  // odom0, odom1, …, then pose*, twist*, imu* (the node's order)
   NavsatParams navsat;
+  // "FILE:LINE: …" for each key left out because robot_localization does not
+  // read it either (not one of its parameters; an input past the first gap of
+  // its numbering) and each duplicate key with the same value, for the user.
+  std::vector<std::string> notes;
 };
 
 // Reads the file. `node_name` picks the EKF's section when the file has
 // several (empty: the one section that has odomN/imuN/poseN/twistN keys, or
 // the top level). Throws std::invalid_argument with one line
 // "FILE:LINE: what is wrong, what was expected" for: a file that is not
-// YAML, no EKF section or several without `node_name`, a key the node does
-// not know, a value of the wrong type or size (a covariance must have 15 or
+// YAML, no EKF section or several without `node_name`, a key given twice
+// with different values, a value of the wrong type or size (a covariance must have 15 or
 // 225 entries, a _config 15 booleans), a negative frequency or timeout, and a
 // supported key's value the replay does not reproduce, named:
 // smooth_lagged_data: true, use_control: true, odomN_pose_use_child_frame:

@@ -150,6 +150,7 @@ Recording load_recording(const std::filesystem::path& bag, const RlParams& param
   const TopicPlan plan = plan_topics(info, params, options);
   Recording rec;
   rec.params = params;
+  rec.notes = params.notes;
   rec.bag = bag;
   rec.gps_sensor = plan.gps_sensor;
   rec.gps_topic = plan.gps_topic;

@@ -162,6 +162,7 @@ Recording load_sample_recording(const RlParams& params, const SampleStreams& st,
   }
   Recording rec;
   rec.params = params;
+  rec.notes = params.notes;
   rec.bag = st.name;
   rec.gps_sensor = r.fixes;
   rec.gps_transform.fixed = true;  // identity: the fixes are in the world frame

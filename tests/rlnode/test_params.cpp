@@ -438,36 +438,64 @@ TEST(RlParams, DifferentialWinsOverRelative) {
   EXPECT_TRUE(p.sensors[1].relative);
 }
 
-TEST(RlParams, RefusesInputsPastTheFirstGap) {
+// Keys robot_localization does not read (not its parameters, or inputs past the
+// first gap of their numbering) are left out and noted with their line, as the
+// node ignores them; a key given twice with one value is read once and noted,
+// with two values refused.
+TEST(RlParams, NotesKeysTheNodeDoesNotReadAndLeavesThemOut) {
   TempDir dir;
-  const std::string text = "ekf:\n  odom0: /a\n  odom1: /b\n  odom3: /d\n  imu0: /imu\n";
-  const fs::path f = write_file(dir, "gap.yaml", text);
-  const std::string e = read_error(f);
-  EXPECT_EQ(e.rfind(f.string() + ":4: odom3 is never read", 0), 0U) << e;
-  EXPECT_NE(e.find("odom2 is missing"), std::string::npos) << e;
-  // a key of a missing input
-  const fs::path g = write_file(dir, "gap2.yaml", "ekf:\n  imu0: /imu\n  imu1_config: [true]\n");
-  EXPECT_EQ(read_error(g).rfind(g.string() + ":3: imu1_config is never read", 0), 0U) << read_error(g);
-}
+  const fs::path f = write_file(dir, "gap.yaml", "ekf:\n  odom0: /a\n  odom1: /b\n  odom3: /d\n  imu0: /imu\n");
+  const RlParams p = odotune::rlnode::read_rl_params(f);
+  EXPECT_EQ(p.sensors.size(), 3u);  // odom0, odom1, imu0
+  ASSERT_EQ(p.notes.size(), 1u);
+  EXPECT_EQ(p.notes[0].rfind(f.string() + ":4: odom3 is not read by robot_localization either", 0), 0U)
+      << p.notes[0];
+  EXPECT_NE(p.notes[0].find("odom2 is missing"), std::string::npos) << p.notes[0];
 
-TEST(RlParams, RefusesAnUnknownKeyWithItsLine) {
-  TempDir dir;
-  const fs::path f = write_file(dir, "p.yaml", R"(# comment
+  const fs::path g = write_file(dir, "p.yaml", R"(# comment
 ekf_filter_node:
   ros__parameters:
     odom0: /odom
     odom0_confg: [true]
+    silent_tf_failure: false
+    twist0: /t
+    twist0_differential: false
+nav:
+  yaw_offset: 0.0
+  zero_altitud: true
 )");
-  EXPECT_EQ(read_error(f), f.string() +
-                               ":5: unknown parameter 'odom0_confg' of ekf_filter_node, expected one of "
-                               "robot_localization's ekf_node parameters");
-  // twistN has no _differential in the node
-  const fs::path g = write_file(dir, "q.yaml", "ekf:\n  twist0: /t\n  twist0_differential: false\n");
-  EXPECT_NE(read_error(g).find(":3: unknown parameter 'twist0_differential' of ekf"), std::string::npos);
-  const fs::path h = write_file(dir, "n.yaml",
-                                "ekf:\n  odom0: /o\nnav:\n  yaw_offset: 0.0\n  zero_altitud: true\n");
-  EXPECT_NE(read_error(h).find(":5: unknown parameter 'zero_altitud' of nav"), std::string::npos)
-      << read_error(h);
+  const RlParams q = odotune::rlnode::read_rl_params(g);
+  ASSERT_EQ(q.notes.size(), 4u);
+  EXPECT_EQ(q.notes[0].rfind(g.string() + ":5: 'odom0_confg' of ekf_filter_node is not one of", 0), 0U)
+      << q.notes[0];
+  EXPECT_NE(q.notes[1].find(":6: 'silent_tf_failure'"), std::string::npos) << q.notes[1];
+  EXPECT_NE(q.notes[2].find(":8: 'twist0_differential'"), std::string::npos) << q.notes[2];
+  EXPECT_NE(q.notes[3].find(":11: 'zero_altitud' of nav"), std::string::npos) << q.notes[3];
+  EXPECT_EQ(q.sensors[0].config, UpdateMask{});  // the misspelt config is not read
+  // the same replay as without the keys the node does not read
+  const fs::path clean = write_file(dir, "clean.yaml",
+                                    "ekf_filter_node:\n  ros__parameters:\n    odom0: /odom\n"
+                                    "    twist0: /t\nnav:\n  yaw_offset: 0.0\n");
+  const RlParams c = odotune::rlnode::read_rl_params(clean);
+  EXPECT_EQ(c.sensors.size(), q.sensors.size());
+  EXPECT_EQ(c.process_noise_covariance, q.process_noise_covariance);
+
+  const fs::path same = write_file(dir, "same.yaml",
+                                   "ekf:\n  odom0: /o\n  two_d_mode: true\n  two_d_mode: true\n");
+  const RlParams s = odotune::rlnode::read_rl_params(same);
+  EXPECT_TRUE(s.two_d_mode);
+  ASSERT_EQ(s.notes.size(), 1u);
+  EXPECT_NE(s.notes[0].find(":4: two_d_mode is given twice with the same value (first at line 3)"),
+            std::string::npos)
+      << s.notes[0];
+  const fs::path differ = write_file(dir, "differ.yaml",
+                                     "ekf:\n  odom0: /o\n  two_d_mode: true\n  two_d_mode: false\n");
+  const std::string e = read_error(differ);
+  EXPECT_EQ(e.rfind(differ.string() +
+                        ":4: two_d_mode is given twice with different values (true at line 3, false here)",
+                    0),
+            0U)
+      << e;
 }
 
 TEST(RlParams, RefusesValuesTheReplayDoesNotReproduce) {
@@ -531,7 +559,7 @@ TEST(RlParams, RefusesWrongTypesOnOneLine) {
       {"  odom0_pose_rejection_threshold: -1\n", ":3: odom0_pose_rejection_threshold is -1, expected"},
       {"  frequency: \"30\"\n", ":3: frequency must be a number, got the quoted string \"30\""},
       {"  initial_state: [1.0, 2.0]\n", ":3: initial_state has 2 entries, expected 15"},
-      {"  odom0: /o\n", ":3: odom0 is given twice (first at line 2)"},
+      {"  odom0: /p\n", ":3: odom0 is given twice with different values (/o at line 2, /p here)"},
   };
   for (const auto& [line, message] : cases) {
     const fs::path f = write_file(dir, "p.yaml", "ekf:\n  odom0: /o\n" + line);
