@@ -75,7 +75,8 @@ std::vector<int> rl_noise_members(std::string_view name, bool two_d);
 // name, a factor that is not positive and finite, or lists of unequal length.
 // The UKF constants' factors in a tune's space, in this order: alpha,
 // n + kappa (n = 15, so kappa stays above −n) and beta.
-inline constexpr std::array<std::string_view, 3> kUkfFactorNames = {"ukf_alpha", "ukf_n_plus_kappa", "ukf_beta"};
+inline constexpr std::array<std::string_view, 3> kUkfFactorNames = {"ukf_alpha", "ukf_n_plus_kappa",
+                                                                    "ukf_beta"};
 // The constants with the factors applied to `base`.
 filters::rl::UkfConstants scaled_ukf_constants(const filters::rl::UkfConstants& base, double alpha_factor,
                                                double n_plus_kappa_factor, double beta_factor);
@@ -86,7 +87,7 @@ bool apply_rl_factors(const rlnode::RlParams& params, std::span<const std::strin
 struct RlTuneOptions {
   RlFitness fitness = RlFitness::both;
   RlNoiseSpace space = RlNoiseSpace::diagonal;
-  bool input_covariances = true;                // also search a factor on each input's message covariance
+  bool input_covariances = true;  // also search a factor on each input's message covariance
   // Also search factors on ukf_node's alpha, n + kappa and beta (n = 15):
   // kUkfFactorNames; a file that runs ekf_node is refused.
   bool ukf_constants = false;

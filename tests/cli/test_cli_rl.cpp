@@ -136,10 +136,11 @@ TEST(CliRl, TuneFromJudgesTheSpanBefore) {
 TEST(CliRl, UkfTuneWritesAUkfFileThatReplaysToItsFigures) {
   TempDir dir("cli-rl-ukf");
   const auto out = dir.path() / "ukf.yaml";
-  const auto r = run_cli("tune " + kSource +
-                         " --filter ukf --until 100 --fitness heldout-fixes --space blocks --no-input-covariances "
-                         "--ukf-constants --grid=-1,1 --refine 0 --seed 3 --config-out " +
-                         out.string());
+  const auto r = run_cli(
+      "tune " + kSource +
+      " --filter ukf --until 100 --fitness heldout-fixes --space blocks --no-input-covariances "
+      "--ukf-constants --grid=-1,1 --refine 0 --seed 3 --config-out " +
+      out.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("robot_localization UKF (husky_ekf.yaml)"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("ukf_alpha ×"), std::string::npos) << r.out;  // searched, in the profile
@@ -148,9 +149,10 @@ TEST(CliRl, UkfTuneWritesAUkfFileThatReplaysToItsFigures) {
   EXPECT_EQ(p.filter, odotune::filters::rl::RlFilterType::ukf);
   EXPECT_GT(p.ukf.alpha, 0.0);
   const double judged = number_after(r.out, R"(every 5th fix held out:\s+[0-9.]+ ->)");
-  const std::string source = " --bag " + kBags +
-                             "/ros2/test1.mcap --tf imu_link=0,-0.3,0.52,1.5707963267948966,0,-1.5707963267948966 "
-                             "--gps-heading-fit 60 --from 100";
+  const std::string source =
+      " --bag " + kBags +
+      "/ros2/test1.mcap --tf imu_link=0,-0.3,0.52,1.5707963267948966,0,-1.5707963267948966 "
+      "--gps-heading-fit 60 --from 100";
   const auto e = run_cli("eval --rl-params " + out.string() + source);
   ASSERT_EQ(e.exit_code, 0) << e.err;
   EXPECT_NE(e.out.find("robot_localization UKF"), std::string::npos) << e.out;

@@ -204,9 +204,10 @@ TEST(RlReplay, UkfBag2EndsWhereRobotLocalizationsOwnTestExpects) {
 TEST(RlReplay, ResetOnTimeJumpChangesNothingInAReplay) {
   TempDir dir("rl-time-jump");
   const RlParams a = read_rl_params(write_file(dir.path() / "a.yaml", kBag2Params));
-  const RlParams b =
-      read_rl_params(write_file(dir.path() / "b.yaml", std::string(kBag2Params) + "    reset_on_time_jump: true\n"));
-  const rl::State xa = final_state(kBags / "ros2/test2.mcap", a), xb = final_state(kBags / "ros2/test2.mcap", b);
+  const RlParams b = read_rl_params(write_file(dir.path() / "b.yaml",
+                                               std::string(kBag2Params) + "    reset_on_time_jump: true\n"));
+  const rl::State xa = final_state(kBags / "ros2/test2.mcap", a),
+                  xb = final_state(kBags / "ros2/test2.mcap", b);
   EXPECT_EQ(std::memcmp(xa.data(), xb.data(), sizeof(double) * rl::kStateSize), 0);
 }
 
