@@ -532,10 +532,11 @@ NavsatParams read_navsat(const Reader& r, const Keys& keys, const std::string& s
 // ---- sections ----------------------------------------------------------
 
 struct Section {
-  std::string name;   // "" for a flat ROS 1 file
-  YAML::Node key;     // the name's node (undefined for a flat file)
-  YAML::Node params;  // the parameter mapping
-  bool ros2 = false;  // NAME: {ros__parameters: {…}}
+  std::string name;     // "" for a flat ROS 1 file; "NAMESPACE/NODE" for a nested one
+  YAML::Node key;       // the name's node (undefined for a flat file)
+  YAML::Node params;    // the parameter mapping
+  bool ros2 = false;    // NAME: {ros__parameters: {…}}
+  bool nested = false;  // NAMESPACE: {NODE: {ros__parameters: {…}}} (ROS 2)
 };
 
 struct Layout {
@@ -566,17 +567,34 @@ bool has_navsat_key(const YAML::Node& map) {
 // A top-level entry that is a node's section, ROS 2 (only child ros__parameters) or ROS 1.
 std::optional<Section> section_of(const YAML::Node& key, const YAML::Node& value) {
   if (!key.IsScalar() || !value.IsMap()) return std::nullopt;
-  Section s{key.Scalar(), key, value, false};
-  if (value.size() == 1 && value.begin()->first.IsScalar() &&
-      value.begin()->first.Scalar() == "ros__parameters") {
-    s.params = value.begin()->second;
-    s.ros2 = true;
-    if (!s.params.IsMap()) return std::nullopt;
+  const bool ros2 = value.size() == 1 && value.begin()->first.IsScalar() &&
+                    value.begin()->first.Scalar() == "ros__parameters";
+  // Constructed, not assigned: assigning one YAML::Node to another that is
+  // bound rewrites the document it is bound into.
+  const YAML::Node params = ros2 ? value.begin()->second : value;
+  if (!params.IsMap()) return std::nullopt;
+  return Section{key.Scalar(), key, params, ros2};
+}
+
+// ROS 2's namespaced form, NAMESPACE: {NODE: {ros__parameters: {…}}, …}: every
+// entry of `value` a ROS 2 section.
+bool is_namespace(const YAML::Node& value) {
+  if (!value.IsMap() || value.size() == 0) return false;
+  for (const auto& kv : value) {
+    const auto s = section_of(kv.first, kv.second);
+    if (!s || !s->ros2) return false;
   }
-  return s;
+  return true;
 }
 
 std::string trim_slash(std::string_view s) { return std::string(s.starts_with('/') ? s.substr(1) : s); }
+
+// A section asked for by name: its whole name, or for a nested one its node's.
+bool named(const Section& s, const std::string& node_name) {
+  const std::string want = trim_slash(node_name);
+  if (trim_slash(s.name) == want) return true;
+  return s.nested && s.name.substr(s.name.rfind('/') + 1) == want;
+}
 
 std::string names_of(const std::vector<Section>& sections, const std::vector<int>& which) {
   std::string out;
@@ -589,8 +607,7 @@ int pick_ekf(const Reader& r, const YAML::Node& root, const Layout& l, const std
   for (int i = 0; i < static_cast<int>(l.sections.size()); ++i) {
     all.push_back(i);
     const Section& s = l.sections[static_cast<std::size_t>(i)];
-    if (node_name.empty() ? has_input_key(s.params) : trim_slash(s.name) == trim_slash(node_name))
-      candidates.push_back(i);
+    if (node_name.empty() ? has_input_key(s.params) : named(s, node_name)) candidates.push_back(i);
   }
   if (candidates.empty() && !node_name.empty())
     r.fail(root, fmt::format("no section '{}', expected one of {}", node_name, names_of(l.sections, all)));
@@ -620,8 +637,18 @@ Layout locate(const Reader& r, const YAML::Node& root, const std::string& node_n
     l.ekf = 0;
     return l;
   }
-  for (const auto& kv : root)
-    if (auto s = section_of(kv.first, kv.second)) l.sections.push_back(*s);
+  for (const auto& kv : root) {
+    if (kv.first.IsScalar() && is_namespace(kv.second)) {
+      for (const auto& node : kv.second) {
+        Section s = *section_of(node.first, node.second);
+        s.name = kv.first.Scalar() + "/" + s.name;
+        s.nested = true;
+        l.sections.push_back(s);
+      }
+    } else if (auto s = section_of(kv.first, kv.second)) {
+      l.sections.push_back(*s);
+    }
+  }
   l.ekf = pick_ekf(r, root, l, node_name);
   std::vector<int> navsat;
   for (int i = 0; i < static_cast<int>(l.sections.size()); ++i)
@@ -1146,6 +1173,11 @@ std::string write_rl_params(const std::filesystem::path& original, const RlParam
   std::string note, text, name = ekf.name;
   if (ros2 == ekf.ros2 && block) {
     text = edit_in_place(src, l, update, false);
+  } else if (ekf.nested) {
+    throw std::invalid_argument(fmt::format(
+        "{}: section {} is inside a namespace; odotune writes such a file only in its own form and block style "
+        "(expected the ROS 2 form)",
+        original.string(), ekf.name));
   } else {
     const Source rebuilt = parse(original, rebuild(src, l, ros2, &name));
     text = edit_in_place(rebuilt, locate(rebuilt, name), update, true);

@@ -794,3 +794,38 @@ TEST(RlParams, PicksTheUkfFromTheSectionOrItsKeys) {
   EXPECT_EQ(read_error(bad).rfind(bad.string() + ":3: ukf_node's alpha = 0, expected > 0", 0), 0U)
       << read_error(bad);
 }
+
+// ROS 2's namespaced form (NAMESPACE: {NODE: {ros__parameters: …}}), as
+// GISNav's and Locus Robotics' files have it: each node a section named
+// NAMESPACE/NODE, picked by either name; written back in place.
+TEST(RlParams, ReadsNodesInsideANamespace) {
+  const fs::path configs = fs::path(ODOTUNE_SHARED_DIR) / "data/real/robot_localization_configs";
+  const RlParams g = odotune::rlnode::read_rl_params(
+      configs / "hmakelin__gisnav__ros_gisnav_launch_params_ekf_local_node.yaml");
+  EXPECT_EQ(g.node_name, "robot_localization/ekf_local_node");
+  EXPECT_TRUE(g.ros2);
+  EXPECT_FALSE(g.sensors.empty());
+  const fs::path two = configs /
+                       "locusrobotics__roscon-uk-2025-se-workshop@answers__task4_config_two_tier_gps.yaml";
+  EXPECT_NE(read_error(two).find("several ekf_node sections (r2d2/ekf_node_tier1, r2d2/ekf_node_tier2)"),
+            std::string::npos)
+      << read_error(two);
+  // each tier found by either name (both use smooth_lagged_data, refused at their own line)
+  EXPECT_NE(read_error(two, "ekf_node_tier1").find(":10: smooth_lagged_data: true"), std::string::npos)
+      << read_error(two, "ekf_node_tier1");
+  EXPECT_NE(read_error(two, "r2d2/ekf_node_tier2").find(":51: smooth_lagged_data: true"), std::string::npos)
+      << read_error(two, "r2d2/ekf_node_tier2");
+
+  TempDir dir;
+  const fs::path f = write_file(dir, "ns.yaml",
+                                "/**:\n  ekf_filter:\n    ros__parameters:\n      odom0: /o\n"
+                                "      odom0_config: [true, true, false, false, false, false, "
+                                "false, false, false, false, false, false, false, false, false]\n");
+  const RlParams p = odotune::rlnode::read_rl_params(f);
+  EXPECT_EQ(p.node_name, "/**/ekf_filter");
+  RlParamsUpdate u;
+  u.process_noise_covariance = Matrix15::Identity() * 0.5;
+  const fs::path out = write_file(dir, "out.yaml", odotune::rlnode::write_rl_params(f, p, u, true, "tuned"));
+  EXPECT_EQ(odotune::rlnode::read_rl_params(out).process_noise_covariance, Matrix15::Identity() * 0.5);
+  EXPECT_THROW(odotune::rlnode::write_rl_params(f, p, u, false, "tuned"), std::invalid_argument);
+}
