@@ -644,23 +644,17 @@ bool RlEkf::correct(const Measurement& m) {
 }
 
 bool RlEkf::process(const Measurement& m) {
-  if (!initialized_) {
-    initialise(m, x_, P_);
-    initialized_ = true;
-    last_time_ns_ = m.time_ns;
-    return true;
-  }
-  const std::int64_t delta = m.time_ns - last_time_ns_;
-  if (delta > 0) predict(static_cast<double>(delta) * 1e-9);
-  const bool accepted = correct(m);
-  if (delta >= 0) last_time_ns_ = m.time_ns;
-  return accepted;
+  return detail::process_measurement(
+      initialized_, last_time_ns_, m.time_ns,
+      [&] {
+        initialise(m, x_, P_);
+        return true;
+      },
+      [&](double dt) { predict(dt); }, [&] { return correct(m); });
 }
 
 void RlEkf::predict_to(std::int64_t time_ns) {
-  const std::int64_t delta = time_ns - last_time_ns_;
-  if (delta > 0) predict(static_cast<double>(delta) * 1e-9);
-  last_time_ns_ = time_ns;
+  detail::predict_to(last_time_ns_, time_ns, [&](double dt) { predict(dt); });
 }
 
 // ---------------------------------------------------------------------------
@@ -707,29 +701,24 @@ std::uint32_t RlEkfLanes::process(std::span<const Measurement> ms) {
   }
   assert(std::all_of(ms.begin(), ms.end(),
                      [&](const Measurement& m) { return m.time_ns == ms[0].time_ns && m.mask == ms[0].mask; }));
-  const std::uint32_t all = (1u << lanes_) - 1u;
-  if (!initialized_) {
+  const auto init = [&] {
     for (int l = 0; l < kLanes; ++l) {
       State x = state(l);
       Cov P = cov(l);
       initialise(ms[l < lanes_ ? l : 0], x, P);
       set_lane(l, x, P);
     }
-    initialized_ = true;
-    last_time_ns_ = ms[0].time_ns;
-    return all;
-  }
-  const std::int64_t delta = ms[0].time_ns - last_time_ns_;
-  if (delta > 0) predict_lanes(x_.data(), P_.data(), Q_.data(), &dynamic_q_, static_cast<double>(delta) * 1e-9);
-  const std::uint32_t accepted = correct(ms);
-  if (delta >= 0) last_time_ns_ = ms[0].time_ns;
-  return accepted;
+    return (1u << lanes_) - 1u;
+  };
+  return detail::process_measurement(
+      initialized_, last_time_ns_, ms[0].time_ns, init,
+      [&](double dt) { predict_lanes(x_.data(), P_.data(), Q_.data(), &dynamic_q_, dt); },
+      [&] { return correct(ms); });
 }
 
 void RlEkfLanes::predict_to(std::int64_t time_ns) {
-  const std::int64_t delta = time_ns - last_time_ns_;
-  if (delta > 0) predict_lanes(x_.data(), P_.data(), Q_.data(), &dynamic_q_, static_cast<double>(delta) * 1e-9);
-  last_time_ns_ = time_ns;
+  detail::predict_to(last_time_ns_, time_ns,
+                     [&](double dt) { predict_lanes(x_.data(), P_.data(), Q_.data(), &dynamic_q_, dt); });
 }
 
 // The lanes fuse the members of the (common) mask unless a value is

@@ -5,6 +5,8 @@
 // filters/rl_ukf.cpp.
 #pragma once
 
+#include <cstdint>
+
 #include "filters/rl_ekf.h"
 
 namespace odotune::filters::rl::detail {
@@ -28,5 +30,32 @@ Cov symmetric(const Cov& a);
 // FilterBase::processMeasurement's first measurement: the fused members and
 // their covariance block (its symmetric part) taken from it.
 void initialise(const Measurement& m, State& x, Cov& P);
+
+// FilterBase::processMeasurement's clock, for every filter here: the first
+// measurement (at t_ns) initialises, init() giving the result; a later one
+// predicts over the time since the last when it is positive [s], then
+// corrects; the last measurement time moves only forward.
+template <class Init, class Predict, class Correct>
+auto process_measurement(bool& initialized, std::int64_t& last_ns, std::int64_t t_ns, Init init,
+                         Predict predict, Correct correct) -> decltype(correct()) {
+  if (!initialized) {
+    initialized = true;
+    last_ns = t_ns;
+    return init();
+  }
+  const std::int64_t delta = t_ns - last_ns;
+  if (delta > 0) predict(static_cast<double>(delta) * 1e-9);
+  const auto accepted = correct();
+  if (delta >= 0) last_ns = t_ns;
+  return accepted;
+}
+
+// The node's prediction to t_ns without a measurement; sets the last time.
+template <class Predict>
+void predict_to(std::int64_t& last_ns, std::int64_t t_ns, Predict predict) {
+  const std::int64_t delta = t_ns - last_ns;
+  if (delta > 0) predict(static_cast<double>(delta) * 1e-9);
+  last_ns = t_ns;
+}
 
 }  // namespace odotune::filters::rl::detail

@@ -175,23 +175,17 @@ bool RlUkf::correct(const Measurement& m) {
 }
 
 bool RlUkf::process(const Measurement& m) {
-  if (!initialized_) {
-    detail::initialise(m, x_, P_);
-    initialized_ = true;
-    last_time_ns_ = m.time_ns;
-    return true;
-  }
-  const std::int64_t delta = m.time_ns - last_time_ns_;
-  if (delta > 0) predict(static_cast<double>(delta) * 1e-9);
-  const bool accepted = correct(m);
-  if (delta >= 0) last_time_ns_ = m.time_ns;
-  return accepted;
+  return detail::process_measurement(
+      initialized_, last_time_ns_, m.time_ns,
+      [&] {
+        detail::initialise(m, x_, P_);
+        return true;
+      },
+      [&](double dt) { predict(dt); }, [&] { return correct(m); });
 }
 
 void RlUkf::predict_to(std::int64_t time_ns) {
-  const std::int64_t delta = time_ns - last_time_ns_;
-  if (delta > 0) predict(static_cast<double>(delta) * 1e-9);
-  last_time_ns_ = time_ns;
+  detail::predict_to(last_time_ns_, time_ns, [&](double dt) { predict(dt); });
 }
 
 }  // namespace odotune::filters::rl
