@@ -118,6 +118,23 @@ TwistWithCovarianceStamped decode_twist_with_covariance_stamped(std::span<const 
   return t;
 }
 
+TwistStamped decode_twist(std::span<const std::uint8_t> data, WireEncoding encoding) {
+  WireReader r(data, encoding);
+  TwistStamped t;
+  t.linear = vector3(r, "linear");
+  t.angular = vector3(r, "angular");
+  return t;
+}
+
+TwistStamped decode_twist_stamped(std::span<const std::uint8_t> data, WireEncoding encoding) {
+  WireReader r(data, encoding);
+  TwistStamped t;
+  t.header = header(r);
+  t.linear = vector3(r, "twist.linear");
+  t.angular = vector3(r, "twist.angular");
+  return t;
+}
+
 JointState decode_joint_state(std::span<const std::uint8_t> data, WireEncoding encoding) {
   WireReader r(data, encoding);
   JointState j;

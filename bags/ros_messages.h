@@ -84,6 +84,13 @@ struct TwistWithCovarianceStamped {
   std::array<double, 36> covariance{};
 };
 
+// geometry_msgs/Twist and TwistStamped (a command, e.g. cmd_vel; the header
+// only in the second).
+struct TwistStamped {
+  Header header;
+  Vector3 linear, angular;  // [m/s], [rad/s]
+};
+
 struct JointState {
   Header header;
   std::vector<std::string> name;
@@ -112,6 +119,8 @@ PoseStamped decode_pose_stamped(std::span<const std::uint8_t> data, WireEncoding
 PoseStamped decode_pose_with_covariance_stamped(std::span<const std::uint8_t> data, WireEncoding encoding);
 TwistWithCovarianceStamped decode_twist_with_covariance_stamped(std::span<const std::uint8_t> data,
                                                                 WireEncoding encoding);
+TwistStamped decode_twist(std::span<const std::uint8_t> data, WireEncoding encoding);
+TwistStamped decode_twist_stamped(std::span<const std::uint8_t> data, WireEncoding encoding);
 JointState decode_joint_state(std::span<const std::uint8_t> data, WireEncoding encoding);
 TFMessage decode_tf_message(std::span<const std::uint8_t> data, WireEncoding encoding);
 

@@ -365,14 +365,17 @@ ODOTUNE_RL_INLINE void project(const T* v, T* P, T* B, std::integer_sequence<int
 // operations; only the first 9 columns differ from P's, as D's rows below 9
 // are zero), then the lower triangle of J·B = B + D·B (whose rows from 9 on
 // are B's), mirrored.
-template <class T, class Flag>
-ODOTUNE_RL_INLINE void predict_kernel(T* x, T* P, const T* Q, Flag dynamic, double dt) {
+// `control(x)` applies the control term to x after A, J and the dynamic Q's
+// speed are taken (ekf.cpp's order); the lanes pass none.
+template <class T, class Flag, class Control>
+ODOTUNE_RL_INLINE void predict_kernel(T* x, T* P, const T* Q, Flag dynamic, double dt, Control control) {
   constexpr int kMoved = kVz + 1;  // the rows of J that are not the identity's
   T v[kTerms];
   model_terms(x, dt, v);
   T speed2 = x[kVx] * x[kVx];
   for (int i = kVx + 1; i <= kVyaw; ++i) speed2 = speed2 + x[i] * x[i];
   speed2 = pick(dynamic, speed2, splat<T>(1.0));
+  control(x);
 
   T x_next[kN];
   std::copy(x, x + kN, x_next);
@@ -539,7 +542,8 @@ namespace {
 template <int W>
 ODOTUNE_RL_INLINE void predict_pack(Lanes* x, Lanes* P, const Lanes* Q, const LaneMask* dynamic, double dt) {
   predict_kernel(reinterpret_cast<Pack<W>*>(x), reinterpret_cast<Pack<W>*>(P),
-                 reinterpret_cast<const Pack<W>*>(Q), *reinterpret_cast<const PackMask<W>*>(dynamic), dt);
+                 reinterpret_cast<const Pack<W>*>(Q), *reinterpret_cast<const PackMask<W>*>(dynamic), dt,
+                 [](Pack<W>*) {});
 }
 // Returns the lanes that accepted, lane l as bit l.
 template <int W>
@@ -620,19 +624,40 @@ bool RlEkfParams::IsValid(std::string* why) const {
     if (initial_cov(i, i) < 0.0)
       return fail(fmt::format("initial_cov({0},{0}) = {1} < 0", i, initial_cov(i, i)));
   }
+  if (control && !control->IsValid(why)) return false;
   return true;
 }
 
 RlEkf::RlEkf(const RlEkfParams& params)
     : Q_(symmetric(params.process_noise)),
       dynamic_q_(params.dynamic_process_noise),
+      control_(params.control),
       x_(params.initial_state),
       P_(symmetric(params.initial_cov)) {
   std::string why;
   if (!params.IsValid(&why)) throw std::invalid_argument("RlEkfParams: " + why);
 }
 
-void RlEkf::predict(double dt_s) { predict_kernel(x_.data(), P_.data(), Q_.data(), dynamic_q_, dt_s); }
+void RlEkf::predict(double dt_s) {
+  predict_at(dt_s, last_time_ns_ + static_cast<std::int64_t>(std::llround(dt_s * 1e9)));
+}
+
+void RlEkf::predict_at(double dt_s, std::int64_t reference_ns) {
+  if (!control_) {
+    predict_kernel(x_.data(), P_.data(), Q_.data(), dynamic_q_, dt_s, [](double*) {});
+    return;
+  }
+  // ekf.cpp's predict, step (1): the rates gain a·Δt, the controlled linear
+  // accelerations become a.
+  const ControlVector v{x_[kVx], x_[kVy], x_[kVz], x_[kVroll], x_[kVpitch], x_[kVyaw]};
+  const ControlVector a = control_accelerations(*control_, command_, v, reference_ns);
+  predict_kernel(x_.data(), P_.data(), Q_.data(), dynamic_q_, dt_s, [&](double* x) {
+    for (int i = kCVroll; i <= kCVyaw; ++i) x[kVx + i] += a[i] * dt_s;
+    for (int i = kCVx; i <= kCVz; ++i) {
+      if (control_->update[i]) x[kAx + i] = a[i];
+    }
+  });
+}
 
 bool RlEkf::correct(const Measurement& m) {
   int idx[kN];
@@ -650,11 +675,11 @@ bool RlEkf::process(const Measurement& m) {
         initialise(m, x_, P_);
         return true;
       },
-      [&](double dt) { predict(dt); }, [&] { return correct(m); });
+      [&](double dt) { predict_at(dt, m.time_ns); }, [&] { return correct(m); });
 }
 
 void RlEkf::predict_to(std::int64_t time_ns) {
-  detail::predict_to(last_time_ns_, time_ns, [&](double dt) { predict(dt); });
+  detail::predict_to(last_time_ns_, time_ns, [&](double dt) { predict_at(dt, time_ns); });
 }
 
 // ---------------------------------------------------------------------------
@@ -668,6 +693,8 @@ RlEkfLanes::RlEkfLanes(std::span<const RlEkfParams> params) : lanes_(static_cast
     const RlEkfParams& p = params[l < lanes_ ? l : 0];
     std::string why;
     if (!p.IsValid(&why)) throw std::invalid_argument(fmt::format("RlEkfParams of lane {}: {}", l, why));
+    if (p.control)
+      throw std::invalid_argument(fmt::format("RlEkfParams of lane {}: the lanes have no control term", l));
     const Cov Q = symmetric(p.process_noise), P = symmetric(p.initial_cov);
     for (int k = 0; k < kN * kN; ++k) {
       Q_[k][l] = Q.data()[k];

@@ -33,7 +33,11 @@
 #include <span>
 #include <string>
 
+#include <optional>
+
 #include <Eigen/Core>
+
+#include "filters/rl_control.h"
 
 namespace odotune::filters::rl {
 
@@ -76,6 +80,9 @@ struct RlEkfParams {
   Cov initial_cov = Cov::Identity() * 1e-9;  // P before the first measurement
   bool dynamic_process_noise = false;        // scale Q's pose block by |velocity|²
   State initial_state = State::Zero();
+  // use_control's term (filters/rl_control.h); none: the prediction has none.
+  // RlEkfLanes refuses it.
+  std::optional<RlControlParams> control;
 
   bool IsValid(std::string* why) const;
 };
@@ -108,18 +115,34 @@ class RlEkf {
   // timeout (or with predict_to_current_time); sets the last measurement time.
   void predict_to(std::int64_t time_ns);
 
+  // A prediction over dt_s from the last measurement time (its reference
+  // time for the control term).
   void predict(double dt_s);
   bool correct(const Measurement& m);
+  // FilterBase::setControl: the command the next predictions use (with
+  // RlEkfParams::control; ignored without).
+  void set_command(const Command& c) { command_ = c; }
 
   bool initialized() const { return initialized_; }
   std::int64_t last_time_ns() const { return last_time_ns_; }
   const State& state() const { return x_; }
   const Cov& cov() const { return P_; }
   void set_last_time_ns(std::int64_t t) { last_time_ns_ = t; }
+  // The node's revertTo (smooth_lagged_data): a saved state, covariance and
+  // last measurement time put back; the command is not.
+  void restore(const State& x, const Cov& P, std::int64_t last_ns) {
+    x_ = x;
+    P_ = P;
+    last_time_ns_ = last_ns;
+  }
 
  private:
+  void predict_at(double dt_s, std::int64_t reference_ns);
+
   Cov Q_;
   bool dynamic_q_;
+  std::optional<RlControlParams> control_;
+  Command command_;
   State x_;
   Cov P_;
   bool initialized_ = false;

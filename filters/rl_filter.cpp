@@ -35,6 +35,12 @@ void RlFilter::predict_to(std::int64_t time_ns) {
 void RlFilter::predict(double dt_s) {
   std::visit([&](auto& f) { f.predict(dt_s); }, f_);
 }
+void RlFilter::set_command(const Command& c) {
+  if (auto* ekf = std::get_if<RlEkf>(&f_)) ekf->set_command(c);
+}
+void RlFilter::restore(const State& x, const Cov& P, std::int64_t last_ns) {
+  std::visit([&](auto& f) { f.restore(x, P, last_ns); }, f_);
+}
 bool RlFilter::initialized() const {
   return std::visit([](const auto& f) { return f.initialized(); }, f_);
 }

@@ -36,6 +36,12 @@ class RlFilter {
   bool process(const Measurement& m);
   void predict_to(std::int64_t time_ns);
   void predict(double dt_s);
+  // The latest command (use_control). The EKF's prediction uses it;
+  // ukf_node's computes the control term but does not apply it (ukf.cpp's
+  // projection has no control), so the UKF ignores it.
+  void set_command(const Command& c);
+  // RlEkf::restore, RlUkf::restore.
+  void restore(const State& x, const Cov& P, std::int64_t last_ns);
 
   bool initialized() const;
   std::int64_t last_time_ns() const;

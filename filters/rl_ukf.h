@@ -81,6 +81,13 @@ class RlUkf {
   // FilterBase::setEstimateErrorCovariance.
   void set_cov(const Cov& P) { P_ = P; }
   void set_last_time_ns(std::int64_t t) { last_time_ns_ = t; }
+  // As RlEkf::restore. The sigma points and whether they are the last
+  // prediction's stay as they are, as the node's setState leaves them.
+  void restore(const State& x, const Cov& P, std::int64_t last_ns) {
+    x_ = x;
+    P_ = P;
+    last_time_ns_ = last_ns;
+  }
   const UkfWeights& weights() const { return w_; }
 
  private:

@@ -92,6 +92,16 @@ std::pair<std::string, rlnode::Pose3> parse_tf(const std::string& text) {
   return {text.substr(0, eq), p};
 }
 
+// "FROM=TO" (ROS's FROM:=TO remapping, as for rosrun or a launch file's <remap>).
+std::pair<std::string, std::string> parse_remap(const std::string& text) {
+  const std::size_t eq = text.find('=');
+  const std::string from = text.substr(0, eq), to = eq == std::string::npos ? "" : text.substr(eq + 1);
+  if (eq == std::string::npos || from.empty() || to.empty() || to.find('=') != std::string::npos)
+    throw Failure(fmt::format(
+        "--remap {}: expected FROM=TO, e.g. --remap odometry/wheel=/husky_velocity_controller/odom", text));
+  return {from, to};
+}
+
 RlSource rl_source_of(const ExperimentRl& x, const std::filesystem::path& bag) {
   RlSource src;
   src.params_file = x.params;
@@ -110,6 +120,7 @@ RlLoaded load_rl(const RlSource& src) {
   for (const std::string& t : src.tf) options.frames.insert(parse_tf(t));
   options.gps_topic = src.gps_topic;
   options.from_s = src.from_s;
+  for (const std::string& r : src.remap) options.remap.insert(parse_remap(r));
   RlLoaded out;
   try {
     const rlnode::RlParams params = rlnode::read_rl_params(src.params_file, src.node_name, src.filter);

@@ -37,8 +37,9 @@ struct RlSource {
   std::filesystem::path params_file, bag;
   std::string node_name;                            // the filter's section of the file when it has several
   std::optional<filters::rl::RlFilterType> filter;  // --filter: for a file that does not say (rlnode/params.h)
-  std::vector<std::string> tf;   // "FRAME=x,y,z,roll,pitch,yaw": FRAME's pose in base_link [m, rad]
-  std::string gps_topic;         // NavSatFix topic behind navsat's output (empty: the bag's one)
+  std::vector<std::string> tf;     // "FRAME=x,y,z,roll,pitch,yaw": FRAME's pose in base_link [m, rad]
+  std::string gps_topic;           // NavSatFix topic behind navsat's output (empty: the bag's one)
+  std::vector<std::string> remap;  // "FROM=TO": the node's subscription to FROM reads the bag's TO
   double gps_heading_fit_s = 0;  // > 0: fit navsat's rotation on the first seconds instead of the IMU's heading
   double from_s = 0;             // > 0: the bag as if recorded from this many seconds after its first message
 };
@@ -67,6 +68,8 @@ double rl_seconds(const rlnode::Recording& rec, std::int64_t time_ns);
 
 // "FRAME=x,y,z,roll,pitch,yaw" → (FRAME, pose); throws Failure naming the flag.
 std::pair<std::string, rlnode::Pose3> parse_tf(const std::string& text);
+// "FROM=TO" (--remap); throws Failure with one line otherwise.
+std::pair<std::string, std::string> parse_remap(const std::string& text);
 
 struct RlProtocolScores {
   FixScore outage, every_fifth;

@@ -289,10 +289,10 @@ void OutageReplays::each_window(const rlnode::ReplaySettings& s,
 }
 
 std::vector<FixScore> OutageReplays::score_batch(std::span<const rlnode::ReplaySettings> settings) const {
-  const bool all_ekf = std::all_of(settings.begin(), settings.end(), [](const rlnode::ReplaySettings& s) {
-    return s.filter == filters::rl::RlFilterType::ekf;
+  const bool all_lockstep = std::all_of(settings.begin(), settings.end(), [&](const rlnode::ReplaySettings& s) {
+    return rlnode::lockstep(*rec_, s);
   });
-  if (!all_ekf) {  // the lanes run the EKF only: the UKF's settings one by one
+  if (!all_lockstep) {  // the lanes run the EKF without use_control only: the others one by one
     std::vector<FixScore> out;
     for (const rlnode::ReplaySettings& s : settings) out.push_back(score(s));
     return out;

@@ -71,9 +71,10 @@ void Loader::on_odometry(const ros::Odometry& m, int s, std::int64_t receive_ns)
   const bool any_pose = std::any_of(pose_mask.begin(), pose_mask.end(), [](bool b) { return b; });
   const bool any_twist = std::any_of(twist_mask.begin(), twist_mask.end(), [](bool b) { return b; });
   if (any_pose) {
-    PoseInput in{m.header.stamp_ns, receive_ns, m.header.frame_id, {}, to_mat6(m.pose_covariance), false};
+    PoseInput in{m.header.stamp_ns, receive_ns, m.header.frame_id, {}, to_mat6(m.pose_covariance), false, ""};
     in.pose.t = {m.position.x, m.position.y, m.position.z};
     in.pose.R = rotation_of_quaternion(m.orientation.x, m.orientation.y, m.orientation.z, m.orientation.w);
+    if (sp.pose_use_child_frame && m.child_frame_id != p_.base_link_frame) in.source = m.child_frame_id;
     const std::string callback = sp.name + "_pose";
     if (in_order(callback, in.stamp_ns)) prepare_pose(in, s, pose_mask, callback);
   }
@@ -94,7 +95,7 @@ void Loader::on_pose(const ros::PoseStamped& m, int s, std::int64_t receive_ns) 
   const SensorParams& sp = sensor(s);
   rl::Mask mask = sp.config;
   std::fill(mask.begin() + rl::kVx, mask.end(), false);
-  PoseInput in{m.header.stamp_ns, receive_ns, m.header.frame_id, {}, Mat6::Zero(), false};
+  PoseInput in{m.header.stamp_ns, receive_ns, m.header.frame_id, {}, Mat6::Zero(), false, ""};
   if (m.covariance) in.cov = to_mat6(*m.covariance);
   in.pose.t = {m.position.x, m.position.y, m.position.z};
   in.pose.R = rotation_of_quaternion(m.orientation.x, m.orientation.y, m.orientation.z, m.orientation.w);
@@ -134,18 +135,29 @@ void Loader::prepare_pose(const PoseInput& in, int s, rl::Mask mask, const std::
   const Eigen::Matrix3d mask_rotation = in.imu ? yaw_rotation(offset.yaw) : target.R;
   rotate_mask(mask, rl::kX, mask_rotation);
   rotate_mask(mask, rl::kRoll, mask_rotation);
+  // The source frame's base_link pose, T_source←base, and the covariance
+  // turned by its rotation (post-multiplied: Rᵀ·Σ·R per block).
+  Pose3 source_to_base;
+  Mat6 cov = in.cov;
+  if (!in.source.empty()) {
+    const Pose3 b = frame_in_base(in.source, s);
+    source_to_base = {-(b.R.transpose() * b.t), b.R.transpose()};
+    const Mat6 src6 = block_rotation(source_to_base.R);
+    cov = src6.transpose() * in.cov * src6;
+  }
   const Mat6 rot6 = block_rotation(mask_rotation);
-  const Mat6 cov_rotated = rot6 * in.cov * rot6.transpose();
+  const Mat6 cov_rotated = rot6 * cov * rot6.transpose();
 
   Pose3 pose = in.pose;
   if (in.imu) {
     pose.R = imu_orientation_in_base(in.pose.R, target);
     target = {};
   }
-  if (sp.differential) {
-    prepare_differential(in, pose, cov_rotated, in.cov, rot6, s, mask, callback);
+  if (sp.differential) {  // the node turns the covariance only, not the pose
+    prepare_differential(in, pose, cov_rotated, cov, rot6, s, mask, callback);
     return;
   }
+  pose = {pose.R * source_to_base.t + pose.t, pose.R * source_to_base.R};
   if (sp.relative) {
     const Pose3& first = initial_.try_emplace(callback, pose).first->second;
     pose = {first.R.transpose() * (pose.t - first.t), first.R.transpose() * pose.R};
@@ -221,7 +233,7 @@ void Loader::on_imu(const ros::Imu& m, int s, std::int64_t receive_ns) {
   const bool rates = c[rl::kVroll] || c[rl::kVpitch] || c[rl::kVyaw];
   const bool accel = c[rl::kAx] || c[rl::kAy] || c[rl::kAz];
   if (orientation && std::abs(m.orientation_covariance[0] + 1.0) >= 1e-9) {
-    PoseInput in{m.header.stamp_ns, receive_ns, m.header.frame_id, {}, Mat6::Zero(), true};
+    PoseInput in{m.header.stamp_ns, receive_ns, m.header.frame_id, {}, Mat6::Zero(), true, ""};
     in.pose.R = rotation_of_quaternion(m.orientation.x, m.orientation.y, m.orientation.z, m.orientation.w);
     in.cov.bottomRightCorner<3, 3>() = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(
         m.orientation_covariance.data());
@@ -345,7 +357,35 @@ void Loader::add_fix(const GpsFix& f, const std::string& frame_id) {
         false, static_cast<int>(rec_.fixes.size()) - 1);
 }
 
+// controlCallback: a command in base_link (or without a frame) becomes the
+// node's latest control, at its header's stamp (TwistStamped) or at the time
+// the node receives it (Twist, stamped with now()); another frame is ignored.
+void Loader::on_command(const ros::TwistStamped& m, std::int64_t receive_ns) {
+  if (p_.control.stamped && !m.header.frame_id.empty() && m.header.frame_id != p_.base_link_frame) {
+    ++foreign_commands_;
+    return;
+  }
+  Input in;
+  in.stamp_ns = p_.control.stamped ? m.header.stamp_ns : receive_ns;
+  in.receive_ns = receive_ns;
+  in.kind = InputKind::command;
+  in.n = filters::rl::kControlSize;
+  in.slot = static_cast<std::uint32_t>(rec_.pool.size());
+  for (double v : {m.linear.x, m.linear.y, m.linear.z, m.angular.x, m.angular.y, m.angular.z})
+    rec_.pool.push_back(v);
+  rec_.inputs.push_back(in);
+  ++commands_;
+}
+
 void Loader::finish() {
+  if (p_.control.enabled) {
+    rec_.notes.push_back(fmt::format("use_control: {} commands read{}", commands_,
+                                     foreign_commands_ > 0
+                                         ? fmt::format("; {} in a frame other than {} ignored, as the node "
+                                                       "ignores them",
+                                                       foreign_commands_, p_.base_link_frame)
+                                         : ""));
+  }
   if (out_of_order_ > 0) {
     rec_.notes.push_back(
         fmt::format("{} messages stamped before their topic's previous one were dropped, as the "

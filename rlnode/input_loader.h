@@ -81,6 +81,9 @@ struct PoseInput {
   Pose3 pose;
   Mat6 cov = Mat6::Zero();
   bool imu = false;
+  // The frame whose pose this is (odomN_pose_use_child_frame: the child
+  // frame); empty: base_link.
+  std::string source;
 };
 
 struct TwistInput {
@@ -106,6 +109,7 @@ class Loader {
   // its antenna at base_link.
   void on_local_fix(const GpsFix& fix);
   void note_imu_orientation(const ros::Imu& m, std::int64_t receive_ns);
+  void on_command(const ros::TwistStamped& m, std::int64_t receive_ns);
   void finish();
 
  private:
@@ -139,7 +143,7 @@ class Loader {
   };
   std::map<std::string, Previous> previous_;
   std::map<std::string, Pose3> initial_;
-  long out_of_order_ = 0, no_fix_ = 0, repeated_differential_ = 0;
+  long out_of_order_ = 0, no_fix_ = 0, repeated_differential_ = 0, commands_ = 0, foreign_commands_ = 0;
   std::int64_t imu_yaw_receive_ns_ = -1;
   double imu_yaw_ = 0.0;
   std::unique_ptr<GeographicLib::LocalCartesian> local_;

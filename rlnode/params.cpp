@@ -72,14 +72,24 @@ constexpr Known kEkfKeys[] = {
     {"alpha", Kind::number},
     {"kappa", Kind::number},
     {"beta", Kind::number},
-    // refused unless false (refusal_reason), filter_type unless "ekf"
-    {"smooth_lagged_data", Kind::boolean},
+    // use_control and its keys (read_control; while use_control is false
+    // they have no effect)
     {"use_control", Kind::boolean},
+    {"control_timeout", Kind::number},
+    {"stamped_control", Kind::boolean},
+    {"control_config", Kind::any},
+    {"acceleration_limits", Kind::any},
+    {"acceleration_gains", Kind::any},
+    {"deceleration_limits", Kind::any},
+    {"deceleration_gains", Kind::any},
+    // smooth_lagged_data and its history_length
+    {"smooth_lagged_data", Kind::boolean},
+    {"history_length", Kind::number},
+    // refused unless false (refusal_reason), filter_type unless "ekf"
     {"disabled_at_startup", Kind::boolean},
     {"filter_type", Kind::text},
-    // no effect on the estimate (the control keys: while use_control is false;
-    // reset_on_time_jump: a bag played once, as `rosbag play --clock` plays it,
-    // never moves the clock back)
+    // no effect on the estimate (reset_on_time_jump: a bag played once, as
+    // `rosbag play --clock` plays it, never moves the clock back)
     {"reset_on_time_jump", Kind::boolean},
     {"use_sim_time", Kind::boolean},
     {"clear_params", Kind::boolean},
@@ -94,14 +104,6 @@ constexpr Known kEkfKeys[] = {
     {"tf_prefix", Kind::any},
     {"base_link_frame_output", Kind::text},
     {"invert_tf", Kind::boolean},
-    {"history_length", Kind::number},
-    {"control_timeout", Kind::number},
-    {"stamped_control", Kind::boolean},
-    {"control_config", Kind::any},
-    {"acceleration_limits", Kind::any},
-    {"acceleration_gains", Kind::any},
-    {"deceleration_limits", Kind::any},
-    {"deceleration_gains", Kind::any},
 };
 
 // navsat_transform_node's keys; `datum` is checked when read.
@@ -201,11 +203,7 @@ Kind navsat_kind(std::string_view key) {
 
 // Why a key's value is refused (the replay does not reproduce it); empty when it is not.
 std::string_view refusal_reason(std::string_view key) {
-  if (key == "smooth_lagged_data") return "ekf_node would re-filter from past states for late messages";
-  if (key == "use_control") return "ekf_node would add a cmd_vel control term";
   if (key == "disabled_at_startup") return "ekf_node would wait for its enable service";
-  if (key.ends_with("_pose_use_child_frame"))
-    return "ekf_node would take the pose in the message's child frame";
   if (key == "use_odometry_yaw")
     return "navsat_transform_node would take its heading from the filtered odometry";
   return "";
@@ -378,6 +376,52 @@ void check_ekf_key(const Reader& r, const std::string& name, const Entry& e, con
   refuse_if_true(r, name, e);
 }
 
+// Keys that change nothing in a replay: what the node publishes, queues, logs
+// and how it looks up transforms (the replay takes frames from --tf and
+// /tf_static), reset_on_time_jump (a bag played once never moves the clock
+// back).
+constexpr std::string_view kNoEffectKeys[] = {"reset_on_time_jump",     "use_sim_time",
+                                              "clear_params",           "publish_tf",
+                                              "publish_acceleration",   "permit_corrected_publication",
+                                              "print_diagnostics",      "debug",
+                                              "debug_out_file",         "transform_time_offset",
+                                              "transform_timeout",      "tf_prefix",
+                                              "base_link_frame_output", "invert_tf"};
+constexpr std::string_view kControlKeys[] = {"control_timeout",     "stamped_control",    "control_config",
+                                             "acceleration_limits", "acceleration_gains", "deceleration_limits",
+                                             "deceleration_gains"};
+
+template <std::size_t N>
+bool one_of(const std::string_view (&names)[N], std::string_view name) {
+  return std::find(std::begin(names), std::end(names), name) != std::end(names);
+}
+
+// One note listing the section's keys that change nothing in a replay.
+void note_no_effect(const Reader& r, const Keys& keys, bool use_control, bool smoothing) {
+  std::string names;
+  const YAML::Node* first = nullptr;
+  bool control = false;
+  for (const auto& [name, e] : keys.order) {
+    const auto in = split_input_key(name);
+    const bool input_only = in && in->rule &&
+                            (in->rule->suffix == "_queue_size" || in->rule->suffix == "_nodelay");
+    const bool idle_control = (!use_control && one_of(kControlKeys, name)) ||
+                              (name == "history_length" && !smoothing);
+    if (!one_of(kNoEffectKeys, name) && !input_only && !idle_control) continue;
+    control = control || idle_control;
+    names += (names.empty() ? "" : ", ") + name;
+    if (!first) first = &e.key;
+  }
+  if (!first) return;
+  r.note(*first,
+         fmt::format("{} change nothing in a replay (publishing, queues, logging, transform look-ups{}): "
+                     "accepted, no effect",
+                     names,
+                     control ? "; use_control's keys while it is false, history_length without "
+                               "smooth_lagged_data"
+                             : ""));
+}
+
 bool flag(const Reader& r, const Keys& keys, const std::string& name, bool fallback = false) {
   const Entry* e = keys.find(name);
   return e ? r.boolean(name, e->value) : fallback;
@@ -441,7 +485,8 @@ SensorParams read_input(const Reader& r, const Keys& keys, SensorKind kind, int 
     std::copy(v.begin(), v.end(), s.config.begin());
   }
   s.differential = flag(r, keys, s.name + "_differential");
-  s.relative = flag(r, keys, s.name + "_relative") && !s.differential;     // the node prefers differential
+  s.relative = flag(r, keys, s.name + "_relative") && !s.differential;  // the node prefers differential
+  if (kind == SensorKind::odom) s.pose_use_child_frame = flag(r, keys, s.name + "_pose_use_child_frame");
   const bool own = kind == SensorKind::pose || kind == SensorKind::twist;  // poseN_rejection_threshold…
   if (kind != SensorKind::twist)
     s.pose_rejection_threshold = threshold(
@@ -717,6 +762,148 @@ void read_filter_type(const Reader& r, const Keys& keys, const std::string& sect
     r.fail(ukf_key ? ukf_key->key : YAML::Node(), fmt::format("ukf_node's {}", why));
 }
 
+constexpr std::string_view kControlMembers = "vx, vy, vz, vroll, vpitch, vyaw";
+
+// A list of 6 for use_control (`name`); nullopt when missing. `bools`: each
+// entry true or false (ROS 1 also reads 0 and 1); else numbers.
+std::optional<std::vector<double>> control_list(const Reader& r, const Keys& keys, const std::string& name,
+                                                bool bools) {
+  const Entry* e = keys.find(name);
+  if (!e) return std::nullopt;
+  r.list(name, e->value, bools ? "booleans" : "numbers");
+  std::vector<double> v;
+  for (std::size_t i = 0; i < e->value.size(); ++i) {
+    const YAML::Node& x = e->value[i];
+    const std::string what = fmt::format("{} entry {}", name, i + 1);
+    if (!bools) {
+      v.push_back(r.number(what, x));
+    } else if (!r.ros2 && x.IsScalar() && (x.Scalar() == "0" || x.Scalar() == "1")) {
+      v.push_back(x.Scalar() == "1" ? 1.0 : 0.0);
+    } else {
+      v.push_back(r.boolean(what, x) ? 1.0 : 0.0);
+    }
+  }
+  return v;
+}
+
+filters::rl::ControlVector six(const std::vector<double>& v) {
+  filters::rl::ControlVector out{};
+  std::copy_n(v.begin(), std::min<std::size_t>(v.size(), out.size()), out.begin());
+  return out;
+}
+
+// use_control off, as the node turns it off, with the reason noted.
+void control_off(const Reader& r, const YAML::Node& at, RlParams& p, const std::string& why) {
+  p.control.enabled = false;
+  r.note(at, fmt::format("use_control: true, but {}: robot_localization then runs without a control term, "
+                         "and so does the replay",
+                         why));
+}
+
+// The limits and gains: both nodes default the limits to 1.0 and the
+// deceleration's to the acceleration's; a gain list of another size is all
+// 1.0. ROS 1 defaults the gains to 1.0; ROS 2 leaves a missing acceleration
+// gain list empty and reads past it (undefined), taken as 1.0 here with a note.
+bool read_control_limits(const Reader& r, const Keys& keys, RlParams& p) {
+  filters::rl::RlControlParams& c = p.control.filter;
+  const auto ones = std::vector<double>(6, 1.0);
+  auto limits = [&](const std::string& name,
+                    const std::vector<double>& fallback) -> std::optional<std::vector<double>> {
+    const auto v = control_list(r, keys, name, false);
+    if (!v) return fallback;
+    if (v->size() == 6) return *v;
+    control_off(r, keys.find(name)->key, p,
+                fmt::format("{} has {} entries, not 6 ({})", name, v->size(), kControlMembers));
+    return std::nullopt;
+  };
+  auto gains = [&](const std::string& name, const std::vector<double>& fallback) {
+    const auto v = control_list(r, keys, name, false);
+    if (!v) return fallback;
+    if (v->size() == 6) return *v;
+    r.note(keys.find(name)->key, fmt::format("{} has {} entries, not 6: robot_localization takes every gain as "
+                                             "1.0, and so does the replay",
+                                             name, v->size()));
+    return ones;
+  };
+  const auto accel = limits("acceleration_limits", ones);
+  if (!accel) return false;
+  const auto decel = limits("deceleration_limits", *accel);
+  if (!decel) return false;
+  if (r.ros2 && !keys.find("acceleration_gains")) {
+    r.note(keys.find("use_control")->key,
+           "use_control: true without acceleration_gains: ROS 2's node then reads gains from an empty list "
+           "(undefined); the replay takes 1.0 for each, ROS 1's default");
+  }
+  const std::vector<double> accel_gains = gains("acceleration_gains", ones);
+  c.acceleration_limits = six(*accel);
+  c.deceleration_limits = six(*decel);
+  c.acceleration_gains = six(accel_gains);
+  c.deceleration_gains = six(gains("deceleration_gains", accel_gains));
+  std::string why;
+  if (!c.IsValid(&why)) r.fail(keys.find("use_control")->value, "use_control: " + why);
+  return true;
+}
+
+// use_control and its keys (ros_filter.cpp loadParams), after the inputs are
+// read: an IMU's fused linear acceleration takes that axis from the control.
+void read_control(const Reader& r, const Keys& keys, RlParams& p) {
+  const Entry* use = keys.find("use_control");
+  if (!use || !r.boolean("use_control", use->value)) return;
+  ControlParams& c = p.control;
+  c.enabled = true;
+  const double timeout = positive(r, keys, "control_timeout", r.ros2 ? 0.0 : p.sensor_timeout_s, true,
+                                  "a time >= 0 [s]");
+  c.filter.timeout_ns = static_cast<std::int64_t>(std::llround(timeout * 1e9));
+  c.filter.timeout_rule = r.ros2 ? filters::rl::ControlTimeout::forward : filters::rl::ControlTimeout::absolute;
+  if (const Entry* e = keys.find("stamped_control")) {
+    if (r.ros2)
+      r.note(e->key,
+             "stamped_control is not read by ROS 2's node, which subscribes to geometry_msgs/Twist (left out)");
+    else
+      c.stamped = r.boolean("stamped_control", e->value);
+  }
+  const auto config = control_list(r, keys, "control_config", true);
+  if (!config) return control_off(r, use->key, p, "control_config is missing");
+  if (config->size() != 6)
+    return control_off(r, keys.find("control_config")->key, p,
+                       fmt::format("control_config has {} entries, not 6 ({})", config->size(),
+                                   kControlMembers));
+  for (int i = 0; i < 6; ++i) c.filter.update[i] = (*config)[i] != 0.0;
+  if (!read_control_limits(r, keys, p)) return;
+  for (const SensorParams& s : p.sensors) {
+    for (int a = 0; a < 3; ++a) {
+      if (s.kind != SensorKind::imu || !s.config[12 + a] || !c.filter.update[a]) continue;
+      c.filter.update[a] = false;
+      r.note(use->key, fmt::format(
+                           "{} measures the {} acceleration, so robot_localization (and the replay) "
+                           "takes {} out of control_config",
+                           s.name, "xyz" [a], std::array { "vx", "vy", "vz" }[a]));
+    }
+  }
+  if (std::none_of(c.filter.update.begin(), c.filter.update.end(), [](bool b) { return b; }))
+    return control_off(r, keys.find("control_config")->key, p, "control_config leaves no member controlled");
+  if (p.filter == filters::rl::RlFilterType::ukf) {
+    c.enabled = false;
+    r.note(use->key, "use_control: ukf_node computes the control term but its prediction does not apply it "
+                     "(ukf.cpp), so the commands change nothing in its estimate, nor in the replay");
+  }
+}
+
+// smooth_lagged_data and history_length (the node takes its magnitude; 0 by
+// default, which keeps no history).
+void read_smoothing(const Reader& r, const Keys& keys, RlParams& p) {
+  p.smooth_lagged_data = flag(r, keys, "smooth_lagged_data");
+  if (!p.smooth_lagged_data) return;
+  const double h = std::abs(number(r, keys, "history_length", 0.0));
+  if (!std::isfinite(h)) r.fail(keys.find("history_length")->value, "history_length must be finite [s]");
+  p.history_length_ns = static_cast<std::int64_t>(std::llround(h * 1e9));
+  if (p.control.enabled) {
+    r.fail(keys.find("smooth_lagged_data")->key,
+           "smooth_lagged_data: true with use_control: true is not reproduced by odotune's replay (the node "
+           "re-filters with each message's own command), expected one of them false");
+  }
+}
+
 RlParams read_layout(const Source& src, const Layout& l, std::optional<filters::rl::RlFilterType> filter) {
   const Section& ekf = l.sections[static_cast<std::size_t>(l.ekf)];
   std::vector<std::string> notes;
@@ -724,6 +911,9 @@ RlParams read_layout(const Source& src, const Layout& l, std::optional<filters::
   const Keys keys = collect(r, ekf.params);
   RlParams p = read_ekf(r, keys, ekf.name.empty() ? "ekf_node" : ekf.name);
   read_filter_type(r, keys, ekf.name, filter, p);
+  read_control(r, keys, p);
+  read_smoothing(r, keys, p);
+  note_no_effect(r, keys, p.control.enabled || flag(r, keys, "use_control"), p.smooth_lagged_data);
   p.file = src.file;
   p.ros2 = ekf.ros2;
   p.node_name = ekf.name;

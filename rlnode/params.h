@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <optional>
@@ -44,6 +45,9 @@ struct SensorParams {
   UpdateMask config{};  // odomN_config (15 booleans; all false when missing)
   bool differential = false;
   bool relative = false;  // false when differential is also true (the node's rule)
+  // odomN_pose_use_child_frame: the odometry's pose is its child frame's,
+  // turned into base_link's through that frame's pose in base_link.
+  bool pose_use_child_frame = false;
   // Mahalanobis thresholds [σ]: odomN_pose_/_twist_rejection_threshold,
   // poseN_/twistN_rejection_threshold (in pose/twist), imuN_pose_/_twist_/
   // _linear_acceleration_rejection_threshold. kNoRejection when not given.
@@ -69,6 +73,17 @@ struct NavsatParams {
   std::optional<std::array<double, 3>> datum;  // latitude [deg], longitude [deg], heading [rad]
 };
 
+// use_control as the node reads it (ros_filter.cpp loadParams): the commands
+// on `cmd_vel` turned into accelerations (filters/rl_control.h).
+struct ControlParams {
+  bool enabled = false;  // use_control, and a member left to control after the node's checks
+  // ROS 1's stamped_control: TwistStamped, at its header's stamp; otherwise
+  // Twist, at the time the node receives it (ROS 2 always so).
+  bool stamped = false;
+  std::string topic = "cmd_vel";
+  filters::rl::RlControlParams filter;
+};
+
 struct RlParams {
   std::filesystem::path file;
   bool ros2 = true;       // the file's form: ROS 2 (ros__parameters) or ROS 1
@@ -89,6 +104,11 @@ struct RlParams {
   Matrix15 initial_estimate_covariance = default_initial_estimate_covariance();
   std::optional<Vector15> initial_state;
   std::vector<SensorParams> sensors;  // odom0, odom1, …, then pose*, twist*, imu* (the node's order)
+  ControlParams control;
+  // smooth_lagged_data: a message older than the filter's last measurement
+  // re-filters from the state saved before it, over history_length.
+  bool smooth_lagged_data = false;
+  std::int64_t history_length_ns = 0;
   NavsatParams navsat;
   // "FILE:LINE: …" for each key left out because robot_localization does not
   // read it either (not one of its parameters; an input past the first gap of
@@ -104,8 +124,8 @@ struct RlParams {
 // with different values, a value of the wrong type or size (a covariance must have 15 or
 // 225 entries, a _config 15 booleans), a negative frequency or timeout, and a
 // supported key's value the replay does not reproduce, named:
-// smooth_lagged_data: true, use_control: true, odomN_pose_use_child_frame:
-// true, disabled_at_startup: true,
+// disabled_at_startup: true,
+// smooth_lagged_data with use_control,
 // navsat use_odometry_yaw: true. `filter` (the command line's --filter) picks
 // the filter for a file that does not say which; ekf for a file with
 // ukf_node's alpha, kappa or beta is refused, naming the key.

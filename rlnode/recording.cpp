@@ -39,7 +39,38 @@ struct TopicPlan {
   std::map<std::string, std::vector<int>> sensors_of;  // topic → sensor indices
   int gps_sensor = -1;
   std::string gps_topic, imu_topic;
+  std::string command_topic;  // use_control's cmd_vel, as remapped (empty: none)
 };
+
+// The topic the node's subscription to `topic` reads, under --remap.
+std::string resolved(const RecordingOptions& options, const std::string& topic) {
+  const std::string t = detail::with_slash(topic);
+  for (const auto& [from, to] : options.remap) {
+    if (detail::with_slash(from) == t) return detail::with_slash(to);
+  }
+  return t;
+}
+
+// use_control's commands: the bag's topic for cmd_vel, of the type the node subscribes to.
+std::string command_topic(const bags::BagInfo& info, const RlParams& params, const RecordingOptions& options,
+                          const std::map<std::string, std::string>& types) {
+  if (!params.control.enabled) return "";
+  const std::string topic = resolved(options, params.control.topic);
+  const std::string_view want = params.control.stamped ? "geometry_msgs/TwistStamped" : "geometry_msgs/Twist";
+  const auto it = types.find(topic);
+  if (it == types.end()) {
+    throw std::invalid_argument(fmt::format(
+        "{}: use_control: the node's commands ({}) are not in the bag (its topics: {}); expected them, or "
+        "--remap {}=TOPIC",
+        info.path.string(), topic, topic_list(info), params.control.topic));
+  }
+  if (it->second != want) {
+    throw std::invalid_argument(fmt::format("{}: use_control: {} is {}, expected {}{}", info.path.string(),
+                                            topic, it->second, want,
+                                            params.ros2 ? "" : " (stamped_control picks TwistStamped)"));
+  }
+  return topic;
+}
 
 TopicPlan plan_topics(const bags::BagInfo& info, const RlParams& params, const RecordingOptions& options) {
   std::map<std::string, std::string> types;
@@ -47,15 +78,17 @@ TopicPlan plan_topics(const bags::BagInfo& info, const RlParams& params, const R
   TopicPlan plan;
   for (std::size_t s = 0; s < params.sensors.size(); ++s) {
     const SensorParams& sp = params.sensors[s];
-    const std::string topic = detail::with_slash(sp.topic);
+    const std::string topic = resolved(options, sp.topic);
     auto it = types.find(topic);
     if (it == types.end() && sp.kind == SensorKind::odom && params.navsat.present && plan.gps_sensor < 0) {
       plan.gps_sensor = static_cast<int>(s);
       continue;
     }
     if (it == types.end()) {
-      throw std::invalid_argument(fmt::format("{}: {} topic {} is not in the bag (its topics: {})",
-                                              info.path.string(), sp.name, topic, topic_list(info)));
+      throw std::invalid_argument(
+          fmt::format("{}: {} topic {} is not in the bag (its topics: {}); expected one "
+                      "of them, or --remap {}=TOPIC",
+                      info.path.string(), sp.name, topic, topic_list(info), sp.topic));
     }
     if (it->second != expected_type(sp.kind)) {
       throw std::invalid_argument(fmt::format("{}: {} topic {} is {}, expected {}", info.path.string(), sp.name,
@@ -64,6 +97,7 @@ TopicPlan plan_topics(const bags::BagInfo& info, const RlParams& params, const R
     if (sp.kind == SensorKind::imu && plan.imu_topic.empty()) plan.imu_topic = topic;
     plan.sensors_of[topic].push_back(static_cast<int>(s));
   }
+  plan.command_topic = command_topic(info, params, options, types);
   if (plan.gps_sensor >= 0) {
     const SensorParams& sp = params.sensors[plan.gps_sensor];
     for (int i = 3; i < 15; ++i) {
@@ -160,6 +194,7 @@ Recording load_recording(const std::filesystem::path& bag, const RlParams& param
   std::set<std::string, std::less<>> wanted;
   for (const auto& [topic, s] : plan.sensors_of) wanted.insert(topic);
   if (!plan.gps_topic.empty()) wanted.insert(plan.gps_topic);
+  if (!plan.command_topic.empty()) wanted.insert(plan.command_topic);
   const auto from_ns = static_cast<std::int64_t>(std::llround(options.from_s * 1e9));
   bool first = true;
   bags::read_bag(
@@ -171,6 +206,11 @@ Recording load_recording(const std::filesystem::path& bag, const RlParams& param
         const std::string topic(m.topic);
         if (topic == plan.gps_topic)
           loader.on_fix(ros::decode_navsatfix(m.data, m.encoding), m.receive_time_ns);
+        if (topic == plan.command_topic) {
+          loader.on_command(params.control.stamped ? ros::decode_twist_stamped(m.data, m.encoding)
+                                                   : ros::decode_twist(m.data, m.encoding),
+                            m.receive_time_ns);
+        }
         auto it = plan.sensors_of.find(topic);
         if (it == plan.sensors_of.end()) return;
         const SensorKind kind = params.sensors[it->second.front()].kind;

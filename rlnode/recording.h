@@ -34,7 +34,9 @@
 
 namespace odotune::rlnode {
 
-enum class InputKind : std::uint8_t { twist, pose, imu_orientation, acceleration, gps };
+// command: a cmd_vel message for use_control (its 6 velocities in the pool
+// from `slot`, no covariance; `stamp_ns` the command's time).
+enum class InputKind : std::uint8_t { twist, pose, imu_orientation, acceleration, gps, command };
 
 // One measurement as the node enqueues it, in compact form: the fused members
 // `idx[0..n)`, their values and covariance block in Recording::pool from
@@ -98,6 +100,9 @@ struct RecordingOptions {
   // frame_id → its pose in base_link; takes precedence over /tf_static.
   std::map<std::string, Pose3> frames;
   std::string gps_topic;  // NavSatFix topic for navsat's output; empty: the bag's one
+  // Topic remappings (`rosrun … FROM:=TO`): a subscription to FROM (an input's
+  // topic, cmd_vel) reads TO. Names as the node resolves them: "cmd_vel" is "/cmd_vel".
+  std::map<std::string, std::string> remap;
   // > 0: the messages received in the first from_s seconds of the bag are left
   // out, as if it had been recorded from there (the node and navsat start then).
   double from_s = 0.0;

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <queue>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "rlnode/frames.h"
 
@@ -15,10 +17,12 @@ namespace rl = filters::rl;
 // Inputs whose measurement depends on the filter's state when they arrive.
 bool needs_callback(const Input& in) { return !in.lever.isZero(0.0) || in.gravity_from_state; }
 
-// The node's queue: earliest stamp first; equal stamps in arrival order.
+// The node's queue: earliest stamp first; equal stamps in arrival order. A
+// measurement put back by a revert (smooth_lagged_data) is re-filtered.
 struct Queued {
   std::int64_t stamp_ns;
   std::int32_t input;
+  bool again = false;
   bool operator>(const Queued& o) const {
     return stamp_ns != o.stamp_ns ? stamp_ns > o.stamp_ns : input > o.input;
   }
@@ -40,6 +44,151 @@ struct Clock {
   }
 };
 
+// RosFilter::periodicUpdate tick by tick, as events: the callbacks, the
+// revert of smooth_lagged_data (revertTo, saveFilterState,
+// clearExpiredHistory), the queue's measurements and the predictions.
+class Scheduler {
+ public:
+  Scheduler(const Recording& rec, std::span<const FixRole> roles, std::int64_t until_ns)
+      : rec_(rec),
+        roles_(roles),
+        until_ns_(until_ns),
+        timeout_ns_(static_cast<std::int64_t>(std::llround(rec.params.sensor_timeout_s * 1e9))),
+        datum_pending_(rec.gps_sensor >= 0 && !rec.gps_transform.fixed) {}
+
+  Schedule run() {
+    const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 / rec_.params.frequency_hz));
+    const std::int64_t last = std::min(rec_.end_ns, until_ns_);
+    for (std::int64_t t = rec_.start_ns; t <= last; t += period_ns) tick(t);
+    return std::move(s_);
+  }
+
+ private:
+  FixRole role(const Input& in) const {
+    if (in.kind != InputKind::gps || roles_.empty()) return FixRole::fuse;
+    return roles_[static_cast<std::size_t>(in.fix)];
+  }
+  void push(Event::Type type, std::int32_t input, std::int64_t t) { s_.events.push_back({type, input, t}); }
+
+  void tick(std::int64_t t) {
+    receive(t);
+    const bool smoothing = rec_.params.smooth_lagged_data;
+    if (smoothing && !queue_.empty() && queue_.top().stamp_ns < clock_.last_ns)
+      revert(queue_.top().stamp_ns - 1, t);
+    if (queue_.empty() && clock_.initialized && t - clock_.last_ns >= timeout_ns_) {
+      push(Event::timeout_predict, -1, t);
+      clock_.last_ns = t;
+    }
+    process_due(t);
+    if (rec_.params.predict_to_current_time && clock_.initialized) {
+      push(Event::timeout_predict, -1, t);
+      clock_.last_ns = t;
+    }
+    push(Event::tick, -1, t);
+    if (smoothing) expire(clock_.last_ns - rec_.params.history_length_ns, t);
+    s_.end_ns = t;
+  }
+
+  // The callbacks of the inputs received up to t.
+  void receive(std::int64_t t) {
+    for (; next_ < rec_.inputs.size() && rec_.inputs[next_].receive_ns <= t; ++next_) {
+      const Input& in = rec_.inputs[next_];
+      const auto i = static_cast<std::int32_t>(next_);
+      // navsat_transform_node takes its datum at the first fix after the
+      // filter has published, and publishes nothing before it.
+      if (in.kind == InputKind::gps && datum_pending_) {
+        if (!clock_.initialized) continue;
+        datum_pending_ = false;
+        push(Event::datum, i, t);
+      }
+      if (in.stamp_ns >= until_ns_) continue;
+      if (in.kind == InputKind::command) {
+        push(Event::command, i, t);
+        continue;
+      }
+      const FixRole r = role(in);
+      if (needs_callback(in) && r != FixRole::absent) push(Event::callback, i, t);
+      if (r == FixRole::fuse) queue_.push({in.stamp_ns, i});
+      if (r == FixRole::score) held_out_.push({in.stamp_ns, i});
+    }
+  }
+
+  // The queue's measurements stamped up to t, and the held-out fixes among them.
+  void process_due(std::int64_t t) {
+    while (true) {
+      const bool m = !queue_.empty() && queue_.top().stamp_ns <= t;
+      const bool h = !held_out_.empty() && held_out_.top().stamp_ns <= t;
+      if (!m && !h) break;
+      if (!m || (h && held_out_.top().stamp_ns < queue_.top().stamp_ns)) {
+        push(Event::score, held_out_.top().input, t);
+        held_out_.pop();
+        continue;
+      }
+      const Queued q = queue_.top();
+      queue_.pop();
+      push(q.again ? Event::reprocess : Event::process, q.input, t);
+      clock_.process(q.stamp_ns);
+      if (!rec_.params.smooth_lagged_data) continue;
+      measurements_.push_back({q.input, q.stamp_ns});
+      // saveFilterState, once per time stamp.
+      if (queue_.empty() || queue_.top().stamp_ns != clock_.last_ns) {
+        push(Event::save, -1, t);
+        states_.push_back(clock_.last_ns);
+      }
+    }
+  }
+
+  // revertTo(time): back to the last state saved at or before `time` (the
+  // oldest kept when none is), the measurements after it queued again.
+  void revert(std::int64_t time, std::int64_t t) {
+    std::int32_t popped = 0;
+    std::int64_t oldest = 0;
+    while (!states_.empty() && states_.back() > time) {
+      oldest = states_.back();
+      states_.pop_back();
+      ++popped;
+    }
+    if (states_.empty() && popped == 0) return;
+    const std::int64_t state_ns = states_.empty() ? oldest : states_.back();
+    push(states_.empty() ? Event::revert_oldest : Event::revert, popped, t);
+    clock_.last_ns = state_ns;
+    while (!measurements_.empty() && measurements_.back().second > time) {
+      const auto [input, stamp] = measurements_.back();
+      measurements_.pop_back();
+      if (state_ns <= stamp) {
+        queue_.push({stamp, input, true});
+      } else {
+        push(Event::forget, input, t);
+      }
+    }
+  }
+
+  // clearExpiredHistory(cutoff).
+  void expire(std::int64_t cutoff_ns, std::int64_t t) {
+    while (!measurements_.empty() && measurements_.front().second < cutoff_ns) {
+      push(Event::forget, measurements_.front().first, t);
+      measurements_.pop_front();
+    }
+    while (!states_.empty() && states_.front() < cutoff_ns) {
+      push(Event::forget_state, -1, t);
+      states_.pop_front();
+    }
+  }
+
+  const Recording& rec_;
+  std::span<const FixRole> roles_;
+  std::int64_t until_ns_, timeout_ns_;
+  bool datum_pending_;
+  Schedule s_;
+  Queue queue_, held_out_;
+  Clock clock_;
+  std::size_t next_ = 0;
+  // smooth_lagged_data's history: (input, stamp) of the measurements and the
+  // last measurement times of the saved states, oldest first.
+  std::deque<std::pair<std::int32_t, std::int64_t>> measurements_;
+  std::deque<std::int64_t> states_;
+};
+
 }  // namespace
 
 ReplaySettings settings_of(const RlParams& params) {
@@ -58,61 +207,7 @@ ReplaySettings settings_of(const RlParams& params) {
 }
 
 Schedule make_schedule(const Recording& rec, std::span<const FixRole> roles, std::int64_t until_ns) {
-  const RlParams& p = rec.params;
-  const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 / p.frequency_hz));
-  const auto timeout_ns = static_cast<std::int64_t>(std::llround(p.sensor_timeout_s * 1e9));
-  auto role = [&](const Input& in) {
-    if (in.kind != InputKind::gps || roles.empty()) return FixRole::fuse;
-    return roles[static_cast<std::size_t>(in.fix)];
-  };
-  Schedule s;
-  Queue queue, held_out;
-  Clock clock;
-  bool datum_pending = rec.gps_sensor >= 0 && !rec.gps_transform.fixed;
-  std::size_t next = 0;
-  const std::int64_t last = std::min(rec.end_ns, until_ns);
-  for (std::int64_t t = rec.start_ns; t <= last; t += period_ns) {
-    for (; next < rec.inputs.size() && rec.inputs[next].receive_ns <= t; ++next) {
-      const Input& in = rec.inputs[next];
-      const auto i = static_cast<std::int32_t>(next);
-      // navsat_transform_node takes its datum at the first fix after the
-      // filter has published, and publishes nothing before it.
-      if (in.kind == InputKind::gps && datum_pending) {
-        if (!clock.initialized) continue;
-        datum_pending = false;
-        s.events.push_back({Event::datum, i, t});
-      }
-      if (in.stamp_ns >= until_ns) continue;
-      const FixRole r = role(in);
-      if (needs_callback(in) && r != FixRole::absent) s.events.push_back({Event::callback, i, t});
-      if (r == FixRole::fuse) queue.push({in.stamp_ns, i});
-      if (r == FixRole::score) held_out.push({in.stamp_ns, i});
-    }
-    if (queue.empty() && clock.initialized && t - clock.last_ns >= timeout_ns) {
-      s.events.push_back({Event::timeout_predict, -1, t});
-      clock.last_ns = t;
-    }
-    while (true) {
-      const bool m = !queue.empty() && queue.top().stamp_ns <= t;
-      const bool h = !held_out.empty() && held_out.top().stamp_ns <= t;
-      if (!m && !h) break;
-      if (m && (!h || queue.top().stamp_ns <= held_out.top().stamp_ns)) {
-        s.events.push_back({Event::process, queue.top().input, t});
-        clock.process(queue.top().stamp_ns);
-        queue.pop();
-      } else {
-        s.events.push_back({Event::score, held_out.top().input, t});
-        held_out.pop();
-      }
-    }
-    if (p.predict_to_current_time && clock.initialized) {
-      s.events.push_back({Event::timeout_predict, -1, t});
-      clock.last_ns = t;
-    }
-    s.events.push_back({Event::tick, -1, t});
-    s.end_ns = t;
-  }
-  return s;
+  return Scheduler(rec, roles, until_ns).run();
 }
 
 Eigen::Vector3d fix_in_odom(const GpsFix& fix, const GpsTransform& t) {
@@ -127,7 +222,16 @@ rl::RlEkfParams filter_params(const Recording& rec, const ReplaySettings& s) {
   fp.initial_cov = s.initial_cov;
   fp.dynamic_process_noise = s.dynamic_process_noise;
   if (rec.params.initial_state) fp.initial_state = *rec.params.initial_state;
+  if (rec.params.control.enabled) fp.control = rec.params.control.filter;
   return fp;
+}
+
+rl::Command command_of(const Recording& rec, int i) {
+  const Input& in = rec.inputs[i];
+  rl::Command c;
+  std::copy_n(rec.pool.data() + in.slot, rl::kControlSize, c.u.begin());
+  c.time_ns = in.stamp_ns;
+  return c;
 }
 
 }  // namespace
@@ -230,10 +334,16 @@ void make_measurement(const Recording& rec, const ReplaySettings& s, int i, Node
   ++n.out.processed;
 }
 
-// The filter's position at the held-out fix's stamp (predicted from its last
-// measurement, the filter itself unchanged) against the fix.
-void score_fix(const Recording& rec, int i, bool initialized, const rl::State& x, std::int64_t last_ns,
-               NodeState& n) {
+// The state projected by the model from the last measurement time to
+// `stamp_ns` (the filter's prediction without its covariance or a control term).
+rl::State projected(const rl::State& x, std::int64_t last_ns, std::int64_t stamp_ns) {
+  const double dt = static_cast<double>(stamp_ns - last_ns) * 1e-9;
+  return dt > 0.0 ? rl::State(rl::transition(x, dt).A * x) : x;
+}
+
+// The filter's position at the held-out fix's stamp, `at` (predicted from its
+// last measurement, the filter itself unchanged), against the fix.
+void score_fix(const Recording& rec, int i, bool initialized, const rl::State& at, NodeState& n) {
   const Input& in = rec.inputs[i];
   const Eigen::Vector3d adjust = needs_callback(in) ? take_adjust(n, i) : Eigen::Vector3d::Zero();
   if (!initialized) return;
@@ -241,8 +351,6 @@ void score_fix(const Recording& rec, int i, bool initialized, const rl::State& x
   ScoredFix s;
   s.fix = in.fix;
   s.stamp_ns = in.stamp_ns;
-  const double dt = static_cast<double>(in.stamp_ns - last_ns) * 1e-9;
-  const rl::State at = dt > 0.0 ? rl::State(rl::transition(x, dt).A * x) : x;
   s.predicted = at.head<3>();
   s.predicted_yaw = at[rl::kYaw];
   const GpsTransform& g = n.out.gps_transform;
@@ -262,6 +370,17 @@ void tick(std::int64_t t_ns, const rl::State& x, bool keep, NodeState& n) {
   if (keep) n.out.trajectory.push_back({t_ns, x});
 }
 
+// revertTo's saved state for a revert event (the history's deque updated).
+NodeState::Saved revert(NodeState& n, const Event& e) {
+  NodeState::Saved s;
+  for (std::int32_t k = 0; k < e.input; ++k) {
+    s = std::move(n.saved.back());
+    n.saved.pop_back();
+  }
+  if (e.type == Event::revert) s = n.saved.back();
+  return s;
+}
+
 ReplayOutput finish_output(NodeState&& n, const rl::State& x, const rl::Cov& P) {
   n.out.final_state = x;
   n.out.final_cov = P;
@@ -278,8 +397,7 @@ Replayer::Replayer(const Recording& rec, const ReplaySettings& settings)
 
 rl::RlFilter Replayer::predicted(std::int64_t stamp_ns) const {
   rl::RlFilter f = filter_;
-  const std::int64_t delta = stamp_ns - f.last_time_ns();
-  if (delta > 0) f.predict(static_cast<double>(delta) * 1e-9);
+  if (stamp_ns > f.last_time_ns()) f.predict_to(stamp_ns);
   return f;
 }
 
@@ -306,10 +424,16 @@ void Replayer::run(std::span<const Event> events, bool keep_trajectory) {
         make_measurement(*rec_, *settings_, e.input, node_, m_);
         if (settings_->innovations && rec_->inputs[e.input].kind == InputKind::gps) record_innovation();
         if (!filter_.process(m_)) ++node_.out.rejected;
+        if (rec_->params.smooth_lagged_data) node_.history.insert_or_assign(e.input, m_);
         break;
       case Event::score: {
         const std::size_t before = node_.out.scored.size();
-        score_fix(*rec_, e.input, filter_.initialized(), filter_.state(), filter_.last_time_ns(), node_);
+        // With use_control the prediction also carries the commands.
+        const std::int64_t stamp = rec_->inputs[e.input].stamp_ns;
+        const rl::State at = rec_->params.control.enabled && filter_.initialized()
+                                 ? predicted(stamp).state()
+                                 : projected(filter_.state(), filter_.last_time_ns(), stamp);
+        score_fix(*rec_, e.input, filter_.initialized(), at, node_);
         if (settings_->innovations && node_.out.scored.size() > before)
           node_.out.scored.back().predicted_cov =
               predicted(node_.out.scored.back().stamp_ns).cov().topLeftCorner<2, 2>();
@@ -319,6 +443,19 @@ void Replayer::run(std::span<const Event> events, bool keep_trajectory) {
       case Event::tick:
         if (filter_.initialized()) tick(e.time_ns, filter_.state(), keep_trajectory, node_);
         break;
+      case Event::command: filter_.set_command(command_of(*rec_, e.input)); break;
+      case Event::reprocess:
+        if (!filter_.process(node_.history.at(e.input))) ++node_.out.rejected;
+        break;
+      case Event::save: node_.saved.push_back({filter_.state(), filter_.cov(), filter_.last_time_ns()}); break;
+      case Event::revert:
+      case Event::revert_oldest: {
+        const NodeState::Saved s = revert(node_, e);
+        filter_.restore(s.x, s.P, s.last_ns);
+        break;
+      }
+      case Event::forget: node_.history.erase(e.input); break;
+      case Event::forget_state: node_.saved.pop_front(); break;
     }
   }
 }
@@ -335,14 +472,18 @@ namespace {
 std::vector<rl::RlEkfParams> lane_params(const Recording& rec, std::span<const ReplaySettings> settings) {
   std::vector<rl::RlEkfParams> p;
   for (const ReplaySettings& s : settings) {
-    if (s.filter != rl::RlFilterType::ekf)
-      throw std::invalid_argument("BatchReplayer: the lanes run ekf_node's filter, not ukf_node's");
+    if (!lockstep(rec, s))
+      throw std::invalid_argument("BatchReplayer: the lanes run ekf_node's filter without use_control only");
     p.push_back(filter_params(rec, s));
   }
   return p;
 }
 
 }  // namespace
+
+bool lockstep(const Recording& rec, const ReplaySettings& s) {
+  return s.filter == rl::RlFilterType::ekf && !rec.params.control.enabled && !rec.params.smooth_lagged_data;
+}
 
 // The filters in RlEkfLanes, the node's bookkeeping per lane by the functions
 // above, as Replayer does it.
@@ -370,7 +511,8 @@ void BatchReplayer::run(std::span<const Event> events, bool keep) {
       case Event::process: process(e.input); break;
       case Event::score:
         each([&](int l, const rl::State& x) {
-          score_fix(*rec_, e.input, filter_.initialized(), x, filter_.last_time_ns(), nodes_[l]);
+          score_fix(*rec_, e.input, filter_.initialized(),
+                    projected(x, filter_.last_time_ns(), rec_->inputs[e.input].stamp_ns), nodes_[l]);
         });
         break;
       case Event::timeout_predict: filter_.predict_to(e.time_ns); break;
@@ -378,6 +520,14 @@ void BatchReplayer::run(std::span<const Event> events, bool keep) {
         if (filter_.initialized())
           each([&](int l, const rl::State& x) { tick(e.time_ns, x, keep, nodes_[l]); });
         break;
+      // no commands or history: the lanes run without use_control and smooth_lagged_data
+      case Event::command:
+      case Event::reprocess:
+      case Event::save:
+      case Event::revert:
+      case Event::revert_oldest:
+      case Event::forget:
+      case Event::forget_state: break;
     }
   }
 }
@@ -400,17 +550,17 @@ std::vector<ReplayOutput> replay_batch(const Recording& rec, const Schedule& sch
                                        std::span<const ReplaySettings> settings, bool keep_trajectory) {
   std::vector<ReplayOutput> out;
   out.reserve(settings.size());
-  // EKF settings in runs of up to kLanes, in lock step; a UKF setting alone.
+  // Lock-step settings in runs of up to kLanes; the others alone.
   std::size_t k = 0;
   while (k < settings.size()) {
-    if (settings[k].filter != rl::RlFilterType::ekf) {
+    if (!lockstep(rec, settings[k])) {
       out.push_back(replay(rec, schedule, settings[k], keep_trajectory));
       ++k;
       continue;
     }
     std::size_t lanes = 1;
     while (lanes < static_cast<std::size_t>(rl::kLanes) && k + lanes < settings.size() &&
-           settings[k + lanes].filter == rl::RlFilterType::ekf)
+           lockstep(rec, settings[k + lanes]))
       ++lanes;
     BatchReplayer run(rec, settings.subspan(k, lanes));
     run.run(schedule.events, keep_trajectory);

@@ -13,8 +13,10 @@
 
 #include <array>
 #include <cstdint>
+#include <deque>
 #include <limits>
 #include <span>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -50,7 +52,28 @@ struct ReplaySettings {
 ReplaySettings settings_of(const RlParams& params);
 
 struct Event {
-  enum Type : std::uint8_t { callback, datum, process, score, timeout_predict, tick };
+  // command: a cmd_vel message becomes the filter's latest control (use_control).
+  // smooth_lagged_data's history: save (the filter's state after a process),
+  // revert (`input` saved states dropped from the newest, then the newest
+  // left restored), revert_oldest (all `input` dropped, the oldest of them
+  // restored), reprocess (input's measurement as first built, filtered again),
+  // forget (input's measurement leaves the history), forget_state (the oldest
+  // saved state does).
+  enum Type : std::uint8_t {
+    callback,
+    datum,
+    process,
+    score,
+    timeout_predict,
+    tick,
+    command,
+    save,
+    revert,
+    revert_oldest,
+    reprocess,
+    forget,
+    forget_state
+  };
   Type type = tick;
   std::int32_t input = -1;
   std::int64_t time_ns = 0;  // tick time (timeout_predict, tick)
@@ -99,6 +122,8 @@ struct ReplayOutput {
   std::vector<Innovation> innovations;      // with ReplaySettings::innovations
   std::vector<TrajectoryPoint> trajectory;  // after every tick, when asked
   GpsTransform gps_transform;               // as used (taken at the first fix unless fixed)
+  // processed: measurements built (each once); rejected: corrections the
+  // Mahalanobis gate refused, re-filtered ones (smooth_lagged_data) included.
   long processed = 0, rejected = 0;
   bool finite = true;  // false when the state or covariance stopped being finite
 };
@@ -106,11 +131,15 @@ struct ReplayOutput {
 ReplayOutput replay(const Recording& rec, const Schedule& schedule, const ReplaySettings& settings,
                     bool keep_trajectory = false);
 
+// Whether replay_batch runs `s` in lock step with others (BatchReplayer): the
+// EKF's settings on a recording without use_control or smooth_lagged_data.
+bool lockstep(const Recording& rec, const ReplaySettings& s);
+
 // One replay per entry of `settings` over one schedule, each output identical
 // to replay(rec, schedule, settings[k], keep_trajectory), bit for bit. EKF
 // settings are replayed filters::rl::kLanes at a time in lock step
 // (filters::rl::RlEkfLanes), so a batch of kLanes costs about as much as two
-// or three single replays; UKF settings one after the other.
+// or three single replays; the others (lockstep() false) one after the other.
 std::vector<ReplayOutput> replay_batch(const Recording& rec, const Schedule& schedule,
                                        std::span<const ReplaySettings> settings, bool keep_trajectory = false);
 
@@ -122,6 +151,15 @@ struct NodeState {
   // Per input whose callback ran and that is not yet processed: what the
   // callback added (a few at a time, so a copy of the replay stays small).
   std::vector<std::pair<int, Eigen::Vector3d>> adjust;
+  // smooth_lagged_data: the saved states (oldest first) and the measurements
+  // in the history, by input, as first built.
+  struct Saved {
+    filters::rl::State x;
+    filters::rl::Cov P;
+    std::int64_t last_ns = 0;
+  };
+  std::deque<Saved> saved;
+  std::unordered_map<int, filters::rl::Measurement> history;
   Eigen::Vector3d last_rates = Eigen::Vector3d::Zero(), angular_acc = Eigen::Vector3d::Zero();
   double last_diff_s = 0.0;
   ReplayOutput out;
@@ -161,7 +199,7 @@ class Replayer {
 // Replayer. `rec` and the settings must outlive it and its copies.
 class BatchReplayer {
  public:
-  // The settings must all be the EKF's (std::invalid_argument otherwise).
+  // Every setting must be lockstep() (std::invalid_argument otherwise).
   BatchReplayer(const Recording& rec, std::span<const ReplaySettings> settings);
 
   int lanes() const { return filter_.lanes(); }

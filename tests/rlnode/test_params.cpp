@@ -501,10 +501,10 @@ nav:
 TEST(RlParams, RefusesValuesTheReplayDoesNotReproduce) {
   TempDir dir;
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {"  smooth_lagged_data: true\n", "smooth_lagged_data: true is not reproduced"},
-      {"  use_control: true\n", "use_control: true is not reproduced"},
+      {"  smooth_lagged_data: true\n  use_control: true\n  control_config: [true, false, false, false, false, "
+       "false]\n",
+       "smooth_lagged_data: true with use_control: true is not reproduced"},
       {"  disabled_at_startup: true\n", "disabled_at_startup: true is not reproduced"},
-      {"  odom0_pose_use_child_frame: true\n", "odom0_pose_use_child_frame: true is not reproduced"},
       {"  filter_type: ukf\n", "filter_type: ukf is not reproduced"},
   };
   for (const auto& [line, message] : cases) {
@@ -532,6 +532,86 @@ TEST(RlParams, RefusesValuesTheReplayDoesNotReproduce) {
   odom0_nodelay: true
 )");
   EXPECT_EQ(read_error(ok), "");
+}
+
+// use_control as ros_filter.cpp's loadParams reads it, ROS 1 and ROS 2.
+TEST(RlParams, ReadsUseControl) {
+  TempDir dir;
+  const RlParams r1 = odotune::rlnode::read_rl_params(write_file(dir, "r1.yaml", R"(ekf:
+  odom0: /o
+  sensor_timeout: 0.25
+  use_control: true
+  stamped_control: true
+  control_config: [true, false, false, false, false, true]
+  acceleration_limits: [1.3, 0.0, 0.0, 0.0, 0.0, 3.4]
+  acceleration_gains: [0.8, 0.0, 0.0, 0.0, 0.0, 0.9]
+)"));
+  ASSERT_TRUE(r1.control.enabled);
+  EXPECT_TRUE(r1.control.stamped);
+  EXPECT_EQ(r1.control.filter.timeout_ns, 250'000'000);  // ROS 1: sensor_timeout by default
+  EXPECT_EQ(r1.control.filter.timeout_rule, odotune::filters::rl::ControlTimeout::absolute);
+  EXPECT_TRUE(r1.control.filter.update[0] && r1.control.filter.update[5] && !r1.control.filter.update[1]);
+  EXPECT_DOUBLE_EQ(r1.control.filter.deceleration_limits[5], 3.4);  // the acceleration's when missing
+  EXPECT_DOUBLE_EQ(r1.control.filter.deceleration_gains[0], 0.8);
+  // ROS 2: control_timeout 0.0 by default, the forward rule, no stamped_control,
+  // missing gains taken as 1.0 with a note.
+  const RlParams r2 = odotune::rlnode::read_rl_params(write_file(dir, "r2.yaml", R"(ekf:
+  ros__parameters:
+    odom0: /o
+    use_control: true
+    stamped_control: true
+    control_config: [true, true, false, false, false, true]
+    acceleration_limits: [2.7, 1.5, 0.0, 0.0, 0.0, 5.7]
+)"));
+  ASSERT_TRUE(r2.control.enabled);
+  EXPECT_FALSE(r2.control.stamped);
+  EXPECT_EQ(r2.control.filter.timeout_ns, 0);
+  EXPECT_EQ(r2.control.filter.timeout_rule, odotune::filters::rl::ControlTimeout::forward);
+  EXPECT_DOUBLE_EQ(r2.control.filter.acceleration_gains[1], 1.0);
+  std::string notes;
+  for (const std::string& n : r2.notes) notes += n + "\n";
+  EXPECT_NE(notes.find("stamped_control is not read by ROS 2's node"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("without acceleration_gains"), std::string::npos) << notes;
+}
+
+// Where the node turns the control term off, the replay does too and says so.
+TEST(RlParams, UseControlTurnedOffAsTheNodeDoes) {
+  TempDir dir;
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"", "control_config is missing"},
+      {"  control_config: [true, false]\n", "control_config has 2 entries, not 6"},
+      {"  control_config: [true, false, false, false, false, false]\n  acceleration_limits: [1.0]\n",
+       "acceleration_limits has 1 entries, not 6"},
+      {"  control_config: [false, false, false, false, false, false]\n", "leaves no member controlled"},
+      // the IMU's fused x acceleration takes vx out
+      {"  control_config: [true, false, false, false, false, false]\n  imu0: /i\n  imu0_config: [false, false, "
+       "false, false, false, false, false, false, false, false, false, false, true, false, false]\n",
+       "leaves no member controlled"},
+  };
+  for (const auto& [keys, why] : cases) {
+    const RlParams p = odotune::rlnode::read_rl_params(
+        write_file(dir, "p.yaml", "ekf:\n  odom0: /o\n  use_control: true\n" + keys));
+    EXPECT_FALSE(p.control.enabled) << keys;
+    std::string notes;
+    for (const std::string& n : p.notes) notes += n + "\n";
+    EXPECT_NE(notes.find(why), std::string::npos) << notes;
+  }
+  // ukf_node: computed, never applied
+  const RlParams u = odotune::rlnode::read_rl_params(
+      write_file(dir, "u.yaml",
+                 "ukf:\n  odom0: /o\n  use_control: true\n  "
+                 "control_config: [true, false, false, false, false, true]\n"));
+  EXPECT_FALSE(u.control.enabled);
+  ASSERT_FALSE(u.notes.empty());
+  EXPECT_NE(u.notes.back().find("does not apply it"), std::string::npos) << u.notes.back();
+  // a negative gain is refused, in one line
+  const fs::path bad = write_file(dir, "bad.yaml",
+                                  "ekf:\n  odom0: /o\n  use_control: true\n  control_config: "
+                                  "[true, false, false, false, false, true]\n  acceleration_gains: "
+                                  "[-1.0, 0.0, 0.0, 0.0, 0.0, 1.0]\n");
+  const std::string e = read_error(bad);
+  EXPECT_NE(e.find("acceleration_gains[0] = -1"), std::string::npos) << e;
+  EXPECT_EQ(e.find('\n'), std::string::npos) << e;
 }
 
 TEST(RlParams, RefusesABadCovarianceSize) {
@@ -810,11 +890,12 @@ TEST(RlParams, ReadsNodesInsideANamespace) {
   EXPECT_NE(read_error(two).find("several ekf_node sections (r2d2/ekf_node_tier1, r2d2/ekf_node_tier2)"),
             std::string::npos)
       << read_error(two);
-  // each tier found by either name (both use smooth_lagged_data, refused at their own line)
-  EXPECT_NE(read_error(two, "ekf_node_tier1").find(":10: smooth_lagged_data: true"), std::string::npos)
-      << read_error(two, "ekf_node_tier1");
-  EXPECT_NE(read_error(two, "r2d2/ekf_node_tier2").find(":51: smooth_lagged_data: true"), std::string::npos)
-      << read_error(two, "r2d2/ekf_node_tier2");
+  // each tier found by either name, each with its own smooth_lagged_data history
+  const RlParams t1 = odotune::rlnode::read_rl_params(two, "ekf_node_tier1");
+  const RlParams t2 = odotune::rlnode::read_rl_params(two, "r2d2/ekf_node_tier2");
+  EXPECT_TRUE(t1.smooth_lagged_data && t2.smooth_lagged_data);
+  EXPECT_EQ(t1.history_length_ns, 1'000'000'000);
+  EXPECT_EQ(t2.history_length_ns, 400'000'000);
 
   TempDir dir;
   const fs::path f = write_file(dir, "ns.yaml",

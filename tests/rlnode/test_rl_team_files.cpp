@@ -1,0 +1,148 @@
+// Teams' own robot_localization files on robot_localization's own bags
+// (../shared/data/real/robot_localization_configs and _bags): Clearpath's
+// Husky files, ROS 1 and ROS 2, replayed on test1 (the ROS 2 one through
+// --remap), and the keys that change nothing, each shown to leave the
+// replay's output identical.
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "rlnode/params.h"
+#include "rlnode/recording.h"
+#include "rlnode/replay.h"
+#include "support/temp_dir.h"
+
+namespace rl = odotune::filters::rl;
+using namespace odotune::rlnode;
+
+namespace {
+
+const std::filesystem::path kTeamShared = std::filesystem::path(ODOTUNE_SHARED_DIR) / "data/real";
+const std::filesystem::path kTeamConfigs = kTeamShared / "robot_localization_configs";
+const std::filesystem::path kTeamBags = kTeamShared / "robot_localization_bags";
+
+// test1's IMU mounting (robot_localization's ROS 1 bag1 test; not in the bag).
+RecordingOptions team_husky_mounting() {
+  RecordingOptions o;
+  Pose3 mount;
+  mount.t = {0.0, -0.3, 0.52};
+  mount.R = rotation_rpy(1.570796327, 0.0, -1.570796327);
+  o.frames["imu_link"] = mount;
+  return o;
+}
+
+ReplayOutput team_replay(const RlParams& p, const std::filesystem::path& bag, const RecordingOptions& o) {
+  const Recording rec = load_recording(bag, p, o);
+  return replay(rec, make_schedule(rec), settings_of(rec.params));
+}
+
+}  // namespace
+
+// Clearpath's husky_control localization.yaml, ROS 1 (noetic) and ROS 2
+// (humble): the ROS 1 file's topics are test1's; the ROS 2 file subscribes to
+// `odom` and is refused without --remap odom=/husky_velocity_controller/odom.
+// Both fuse the wheels' velocities and the IMU's differential attitude, so
+// they dead-reckon the 395 s drive: the whole bag is processed, the estimate
+// stays finite, and the two forms differ only in predict_to_current_time.
+TEST(RlTeamFiles, ClearpathHuskyFilesReplayOnTest1) {
+  const RlParams ros1 = read_rl_params(kTeamConfigs / "husky__husky__husky_control_config_localization.yaml");
+  const RlParams ros2 = read_rl_params(kTeamConfigs /
+                                       "husky__husky@humble-devel__husky_control_config_localization.yaml");
+  EXPECT_FALSE(ros1.ros2);
+  EXPECT_TRUE(ros2.ros2);
+  EXPECT_TRUE(ros1.predict_to_current_time);
+  EXPECT_FALSE(ros2.predict_to_current_time);
+  const auto bag = kTeamBags / "test1.bag";
+  RecordingOptions o = team_husky_mounting();
+  try {
+    load_recording(bag, ros2, o);
+    ADD_FAILURE() << "the ROS 2 file's odom topic is not test1's";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("odom0 topic /odom is not in the bag"), std::string::npos) << e.what();
+  }
+  const ReplayOutput a = team_replay(ros1, bag, o);
+  o.remap["odom"] = "/husky_velocity_controller/odom";
+  const ReplayOutput b = team_replay(ros2, bag, o);
+  for (const ReplayOutput* out : {&a, &b}) {
+    EXPECT_TRUE(out->finite);
+    EXPECT_EQ(out->rejected, 0);
+    // 3 952 odometry and 11 865 IMU messages, the IMU's in two parts
+    // (attitude, rates) at most.
+    EXPECT_GT(out->processed, 3952 + 11865 - 10);
+    EXPECT_GT(out->final_state.head<2>().norm(), 10.0) << "the robot drove away from its start";
+  }
+  EXPECT_NE(a.final_state, b.final_state) << "predict_to_current_time must change the output";
+  // With predict_to_current_time added, the ROS 2 file is the ROS 1 one: the
+  // same replay, bit for bit.
+  odotune::testing_support::TempDir dir("rl-husky-forms");
+  std::ifstream in(kTeamConfigs / "husky__husky@humble-devel__husky_control_config_localization.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string at = "    two_d_mode: true\n";
+  ASSERT_NE(text.find(at), std::string::npos);
+  text.insert(text.find(at) + at.size(), "    predict_to_current_time: true\n");
+  std::ofstream(dir.path() / "husky.yaml") << text;
+  const ReplayOutput c = team_replay(read_rl_params(dir.path() / "husky.yaml"), bag, o);
+  EXPECT_EQ(a.final_state, c.final_state);
+  EXPECT_EQ(a.final_cov, c.final_cov);
+}
+
+// Each key that the node reads but that cannot change a replay is accepted,
+// listed in one note, and leaves the output of robot_localization's bag2
+// configuration on test2 bit for bit as it was.
+TEST(RlTeamFiles, KeysWithoutEffectLeaveTheReplayIdentical) {
+  odotune::testing_support::TempDir dir("rl-no-effect");
+  const std::string base = R"(bag2:
+  frequency: 50.0
+  sensor_timeout: 0.1
+  odom0: /jackal_velocity_controller/odom
+  imu0: /imu/data
+  odom0_config: [false, false, false, false, false, false, true, true, true, false, false, true, false, false, false]
+  imu0_config: [false, false, false, true, true, true, false, false, false, true, true, true, true, true, true]
+  imu0_remove_gravitational_acceleration: true
+)";
+  const std::vector<std::string> keys = {"reset_on_time_jump: true",
+                                         "use_sim_time: true",
+                                         "clear_params: true",
+                                         "publish_tf: false",
+                                         "publish_acceleration: true",
+                                         "permit_corrected_publication: true",
+                                         "print_diagnostics: true",
+                                         "debug: true",
+                                         "debug_out_file: /tmp/x.txt",
+                                         "transform_time_offset: 0.5",
+                                         "transform_timeout: 0.5",
+                                         "tf_prefix: robot",
+                                         "base_link_frame_output: base_footprint",
+                                         "invert_tf: true",
+                                         "history_length: 2.0",
+                                         "odom0_queue_size: 1",
+                                         "imu0_queue_size: 50",
+                                         "odom0_nodelay: true",
+                                         "control_timeout: 0.5",
+                                         "control_config: [true, false, false, false, false, true]",
+                                         "use_control: false"};
+  auto run = [&](const std::string& extra) {
+    const auto f = dir.path() / "p.yaml";
+    std::ofstream(f) << base << (extra.empty() ? "" : "  " + extra + "\n");
+    const RlParams p = read_rl_params(f);
+    return std::make_pair(p, team_replay(p, kTeamBags / "test2.bag", {}));
+  };
+  const auto [plain, reference] = run("");
+  for (const std::string& k : keys) {
+    const auto [p, out] = run(k);
+    EXPECT_EQ(out.final_state, reference.final_state) << k;
+    EXPECT_EQ(out.final_cov, reference.final_cov) << k;
+    EXPECT_EQ(out.processed, reference.processed) << k;
+    if (k == "use_control: false") continue;  // the default: not listed
+    const std::string name = k.substr(0, k.find(':'));
+    int listed = 0;
+    for (const std::string& n : p.notes)
+      listed += n.find(name + " change nothing in a replay") != std::string::npos;
+    EXPECT_EQ(listed, 1) << k;
+  }
+}
