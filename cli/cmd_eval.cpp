@@ -48,6 +48,10 @@ void register_eval(CLI::App& app) {
   sub->add_option("--noise-from", rl->noise_from,
                   "--rl-params: take process_noise_covariance from this robot_localization file instead")
       ->check(CLI::ExistingFile);
+  auto keys_only = std::make_shared<bool>(false);
+  sub->add_flag("--keys", *keys_only,
+                "--rl-params: list what the replay makes of each key of the file (reproduced, no effect, not "
+                "read, approximated) and stop; no bag needed");
   sub->add_option("--fixes-out", rl->fixes_out, "--rl-params: write the GPS fixes in the odom frame (t x y)");
   sub->add_option("--outages", rl->outages_s,
                   "--rl-params: also simulate GPS outages of these lengths [s] (comma-separated), one of each "
@@ -60,7 +64,13 @@ void register_eval(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   auto track_src = std::make_shared<RlTrackSource>();
   add_rl_track_options(sub, *track_src);
-  sub->callback([req, rl, track_src, sub] {
+  sub->callback([req, rl, track_src, sub, keys_only] {
+    if (*keys_only) {
+      if (rl->src.params_file.empty())
+        throw Failure("eval: --keys lists the keys of an --rl-params file; expected one");
+      print_rl_keys(read_rl_file(rl->src));
+      return;
+    }
     if (rl->src.params_file.empty()) {
       for (const char* flag :
            {"--bag", "--node", "--filter", "--tf", "--gps-topic", "--gps-heading-fit", "--until", "--from",

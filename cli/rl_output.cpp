@@ -36,6 +36,15 @@ void print_notes(const std::vector<std::string>& notes, const std::optional<rlno
 
 }  // namespace
 
+void print_rl_keys(const rlnode::RlParams& p) {
+  fmt::print("{}: robot_localization {} ({}, section {}), {} keys\n", p.file.filename().string(),
+             p.filter == filters::rl::RlFilterType::ekf ? "EKF" : "UKF", p.ros2 ? "ROS 2" : "ROS 1",
+             p.node_name.empty() ? "(top level)" : p.node_name, p.keys.size());
+  for (const rlnode::KeyReport& k : p.keys)
+    fmt::print("  {:>4}  {:<13} {:<36} {}\n", k.line, rlnode::to_string(k.use), k.key, k.section);
+  for (const std::string& n : p.notes) fmt::print("  note: {}\n", n);
+}
+
 void add_rl_source_options(CLI::App* sub, RlSource& src) {
   sub->add_option(
          "--rl-params", src.params_file,

@@ -10,6 +10,8 @@
 namespace odotune::cli {
 
 // --rl-params, --bag, --node, --tf, --gps-topic, --gps-heading-fit.
+// `eval --keys`: each key of the file with what the replay makes of it, then the notes.
+void print_rl_keys(const rlnode::RlParams& p);
 void add_rl_source_options(CLI::App* sub, RlSource& src);
 
 // A track's inputs: --odometry, --fix-sigma-m, --twist-variance, --gyro-variance, --calibration.

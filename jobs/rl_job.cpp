@@ -48,6 +48,14 @@ void write_rl_trajectory(const std::filesystem::path& path, const std::vector<rl
   write_atomically(path, "trajectory", out.str());
 }
 
+rlnode::RlParams read_rl_file(const RlSource& src) {
+  try {
+    return rlnode::read_rl_params(src.params_file, src.node_name, src.filter);
+  } catch (const std::exception& e) {
+    throw Failure(e.what());
+  }
+}
+
 rlnode::Matrix15 rl_noise_from(const std::filesystem::path& file, const std::string& node_name) {
   try {
     return rlnode::read_rl_params(file, node_name).process_noise_covariance;

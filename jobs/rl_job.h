@@ -68,6 +68,9 @@ double rl_seconds(const rlnode::Recording& rec, std::int64_t time_ns);
 
 // "FRAME=x,y,z,roll,pitch,yaw" → (FRAME, pose); throws Failure naming the flag.
 std::pair<std::string, rlnode::Pose3> parse_tf(const std::string& text);
+// The parameter file of `src` alone (its bag not read): its keys'
+// RlParams::keys and notes, for `eval --keys`; throws Failure with one line.
+rlnode::RlParams read_rl_file(const RlSource& src);
 // "FROM=TO" (--remap); throws Failure with one line otherwise.
 std::pair<std::string, std::string> parse_remap(const std::string& text);
 

@@ -30,6 +30,16 @@ Matrix15 default_process_noise() {
 
 Matrix15 default_initial_estimate_covariance() { return Matrix15::Identity() * 1e-9; }
 
+std::string_view to_string(KeyUse u) {
+  switch (u) {
+    case KeyUse::reproduced: return "reproduced";
+    case KeyUse::no_effect: return "no effect";
+    case KeyUse::not_read: return "not read";
+    case KeyUse::approximated: return "approximated";
+  }
+  return "";
+}
+
 std::string_view to_string(SensorKind k) {
   switch (k) {
     case SensorKind::odom: return "odom";
@@ -396,30 +406,57 @@ bool one_of(const std::string_view (&names)[N], std::string_view name) {
   return std::find(std::begin(names), std::end(names), name) != std::end(names);
 }
 
+// What the replay makes of one key of the filter's section (after read_ekf,
+// read_control and read_smoothing; refused keys never get here).
+KeyUse ekf_key_use(const std::string& name, const std::array<int, 4>& count, const RlParams& p, bool ros2) {
+  if (!find_known(kEkfKeys, name)) {
+    const auto in = split_input_key(name);
+    if (!in || !in->rule || in->index >= count[static_cast<std::size_t>(in->kind)]) return KeyUse::not_read;
+    return in->rule->suffix == "_queue_size" || in->rule->suffix == "_nodelay" ? KeyUse::no_effect
+                                                                               : KeyUse::reproduced;
+  }
+  if (one_of(kNoEffectKeys, name)) return KeyUse::no_effect;
+  if (name == "stamped_control" && ros2) return KeyUse::not_read;
+  if (name == "use_control" && p.filter == filters::rl::RlFilterType::ukf) return KeyUse::no_effect;
+  if (one_of(kControlKeys, name) && !p.control.enabled) return KeyUse::no_effect;
+  if (name == "history_length" && !p.smooth_lagged_data) return KeyUse::no_effect;
+  return KeyUse::reproduced;
+}
+
+// navsat_transform_node's keys: what it publishes and broadcasts changes
+// nothing; its timer (frequency, delay) is approximated by the fix's receive time.
+KeyUse navsat_key_use(const std::string& name) {
+  if (!find_known(kNavsatKeys, name)) return KeyUse::not_read;
+  if (name == "frequency" || name == "delay") return KeyUse::approximated;
+  constexpr std::string_view kReproduced[] = {"magnetic_declination_radians",
+                                              "yaw_offset",
+                                              "zero_altitude",
+                                              "use_local_cartesian",
+                                              "use_odometry_yaw",
+                                              "wait_for_datum",
+                                              "datum"};
+  return one_of(kReproduced, name) ? KeyUse::reproduced : KeyUse::no_effect;
+}
+
+void report_keys(const Keys& keys, const std::string& section,
+                 const std::function<KeyUse(const std::string&)>& use, std::vector<KeyReport>& out) {
+  for (const auto& [name, e] : keys.order) out.push_back({section, name, e.key.Mark().line + 1, use(name)});
+}
+
 // One note listing the section's keys that change nothing in a replay.
-void note_no_effect(const Reader& r, const Keys& keys, bool use_control, bool smoothing) {
+void note_no_effect(const Reader& r, const Keys& keys, const std::vector<KeyReport>& reports) {
   std::string names;
   const YAML::Node* first = nullptr;
-  bool control = false;
-  for (const auto& [name, e] : keys.order) {
-    const auto in = split_input_key(name);
-    const bool input_only = in && in->rule &&
-                            (in->rule->suffix == "_queue_size" || in->rule->suffix == "_nodelay");
-    const bool idle_control = (!use_control && one_of(kControlKeys, name)) ||
-                              (name == "history_length" && !smoothing);
-    if (!one_of(kNoEffectKeys, name) && !input_only && !idle_control) continue;
-    control = control || idle_control;
-    names += (names.empty() ? "" : ", ") + name;
-    if (!first) first = &e.key;
+  for (const KeyReport& k : reports) {
+    if (k.use != KeyUse::no_effect) continue;
+    names += (names.empty() ? "" : ", ") + k.key;
+    if (!first) first = &keys.find(k.key)->key;
   }
   if (!first) return;
-  r.note(*first,
-         fmt::format("{} change nothing in a replay (publishing, queues, logging, transform look-ups{}): "
-                     "accepted, no effect",
-                     names,
-                     control ? "; use_control's keys while it is false, history_length without "
-                               "smooth_lagged_data"
-                             : ""));
+  r.note(*first, fmt::format("{} change nothing in a replay (publishing, queues, logging, transform look-ups, "
+                             "use_control's keys while it is off, history_length without smoothing): "
+                             "accepted, no effect",
+                             names));
 }
 
 bool flag(const Reader& r, const Keys& keys, const std::string& name, bool fallback = false) {
@@ -501,12 +538,18 @@ SensorParams read_input(const Reader& r, const Keys& keys, SensorKind kind, int 
   return s;
 }
 
-RlParams read_ekf(const Reader& r, const Keys& keys, const std::string& section) {
+// How many inputs of each kind the node reads: odom0, odom1, ... up to the first gap.
+std::array<int, 4> input_counts(const Keys& keys) {
   std::array<int, 4> count{};
   for (const SensorKind k : kNodeOrder) {
     int& n = count[static_cast<std::size_t>(k)];
     while (keys.find(fmt::format("{}{}", to_string(k), n))) ++n;
   }
+  return count;
+}
+
+RlParams read_ekf(const Reader& r, const Keys& keys, const std::string& section) {
+  const std::array<int, 4> count = input_counts(keys);
   for (const auto& [name, e] : keys.order) check_ekf_key(r, name, e, count, section);
   RlParams p;
   p.frequency_hz = positive(r, keys, "frequency", 30.0, false, "a rate > 0 [Hz]");
@@ -913,14 +956,20 @@ RlParams read_layout(const Source& src, const Layout& l, std::optional<filters::
   read_filter_type(r, keys, ekf.name, filter, p);
   read_control(r, keys, p);
   read_smoothing(r, keys, p);
-  note_no_effect(r, keys, p.control.enabled || flag(r, keys, "use_control"), p.smooth_lagged_data);
+  const std::string section = ekf.name.empty() ? "ekf_node" : ekf.name;
+  const std::array<int, 4> count = input_counts(keys);
+  report_keys(
+      keys, section, [&](const std::string& k) { return ekf_key_use(k, count, p, ekf.ros2); }, p.keys);
+  note_no_effect(r, keys, p.keys);
   p.file = src.file;
   p.ros2 = ekf.ros2;
   p.node_name = ekf.name;
   if (l.navsat >= 0) {
     const Section& nav = l.sections[static_cast<std::size_t>(l.navsat)];
     const Reader rn{src.file, nav.ros2, &notes};
-    p.navsat = read_navsat(rn, collect(rn, nav.params), nav.name);
+    const Keys nav_keys = collect(rn, nav.params);
+    p.navsat = read_navsat(rn, nav_keys, nav.name);
+    report_keys(nav_keys, nav.name, navsat_key_use, p.keys);
   }
   p.notes = std::move(notes);
   return p;

@@ -84,6 +84,19 @@ struct ControlParams {
   filters::rl::RlControlParams filter;
 };
 
+// What the replay makes of a key of the file: reproduced (as the node uses
+// it), no effect on a replay (what the node publishes, queues, logs), not read
+// by robot_localization either (left out), or approximated (navsat's timer).
+enum class KeyUse { reproduced, no_effect, not_read, approximated };
+std::string_view to_string(KeyUse u);  // "reproduced", "no effect", "not read", "approximated"
+
+struct KeyReport {
+  std::string section;  // the filter's or navsat_transform_node's section ("ekf_node" for a flat file)
+  std::string key;
+  int line = 0;  // 1-based
+  KeyUse use = KeyUse::reproduced;
+};
+
 struct RlParams {
   std::filesystem::path file;
   bool ros2 = true;       // the file's form: ROS 2 (ros__parameters) or ROS 1
@@ -114,6 +127,9 @@ struct RlParams {
   // read it either (not one of its parameters; an input past the first gap of
   // its numbering) and each duplicate key with the same value, for the user.
   std::vector<std::string> notes;
+  // Every key of the filter's and navsat's sections, in file order (each
+  // duplicate once), with what the replay makes of it.
+  std::vector<KeyReport> keys;
 };
 
 // Reads the file. `node_name` picks the EKF's section when the file has

@@ -602,8 +602,9 @@ TEST(RlParams, UseControlTurnedOffAsTheNodeDoes) {
                  "ukf:\n  odom0: /o\n  use_control: true\n  "
                  "control_config: [true, false, false, false, false, true]\n"));
   EXPECT_FALSE(u.control.enabled);
-  ASSERT_FALSE(u.notes.empty());
-  EXPECT_NE(u.notes.back().find("does not apply it"), std::string::npos) << u.notes.back();
+  std::string u_notes;
+  for (const std::string& n : u.notes) u_notes += n + "\n";
+  EXPECT_NE(u_notes.find("does not apply it"), std::string::npos) << u_notes;
   // a negative gain is refused, in one line
   const fs::path bad = write_file(dir, "bad.yaml",
                                   "ekf:\n  odom0: /o\n  use_control: true\n  control_config: "
