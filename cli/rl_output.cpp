@@ -59,6 +59,9 @@ void add_rl_source_options(CLI::App* sub, RlSource& src) {
                   "--rl-params: FRAME=x,y,z,roll,pitch,yaw, a sensor frame's pose in base_link (repeat; "
                   "else /tf_static in the bag)");
   sub->add_option("--gps-topic", src.gps_topic, "--rl-params: the NavSatFix topic behind navsat's output");
+  sub->add_option("--navsat-params", src.navsat_params,
+                  "--rl-params: navsat_transform_node's parameters from a file of their own")
+      ->check(CLI::ExistingFile);
   sub->add_option("--remap", src.remap,
                   "--rl-params: FROM=TO, the node's topic FROM read from the bag's TO, as ROS's FROM:=TO "
                   "(repeat; an input's topic or use_control's cmd_vel)");

@@ -104,6 +104,12 @@ ExperimentRl read_rl(const std::filesystem::path& path, const YAML::Node& c,
       rl.node_name = scalar<std::string>(path, v, what.c_str());
     } else if (key == "gps_topic") {
       rl.gps_topic = scalar<std::string>(path, v, what.c_str());
+    } else if (key == "navsat_params") {
+      rl.navsat_params = base / scalar<std::string>(path, v, what.c_str());
+    } else if (key == "remap") {
+      if (!v.IsSequence()) fail_at(path, v, "robot_localization.remap must be a list of FROM=TO");
+      for (const auto& t : v)
+        rl.remap.push_back(scalar<std::string>(path, t, "a robot_localization.remap entry"));
     } else if (key == "tf") {
       if (!v.IsSequence())
         fail_at(path, v, "robot_localization.tf must be a list of FRAME=x,y,z,roll,pitch,yaw");
@@ -159,11 +165,13 @@ ExperimentRl read_rl(const std::filesystem::path& path, const YAML::Node& c,
       rl.outage_every_s = scalar<double>(path, v, what.c_str());
       if (!(rl.outage_every_s > 0.0)) fail_at(path, v, "robot_localization.outage_every_s must be > 0");
     } else {
-      fail_at(path, kv.first,
-              fmt::format("unknown robot_localization key '{}', expected params, node_name, tf, gps_topic, "
-                          "gps_heading_fit_s, until_s, end_s, fitness, space, input_covariances, outage_s, "
-                          "outage_every_s, grid_levels, refine_decades or profile_step_decades",
-                          key));
+      fail_at(
+          path, kv.first,
+          fmt::format(
+              "unknown robot_localization key '{}', expected params, node_name, navsat_params, tf, remap, gps_topic, "
+              "gps_heading_fit_s, until_s, end_s, fitness, space, input_covariances, outage_s, "
+              "outage_every_s, grid_levels, refine_decades or profile_step_decades",
+              key));
     }
   }
   if (!has_params) fail_at(path, c, "robot_localization: missing 'params' (the robot's parameter file)");
@@ -179,23 +187,31 @@ ExperimentRl read_rl(const std::filesystem::path& path, const YAML::Node& c,
 void check_rl(const std::filesystem::path& path, const YAML::Node& root, Experiment* e) {
   const YAML::Node section = root["robot_localization"];
   if (!e->has_rl_models()) {
-    if (section) fail_at(path, section, "a robot_localization section needs model rl-ekf in 'models'");
+    if (section)
+      fail_at(path, section, "a robot_localization section needs model rl-ekf or rl-ukf in 'models'");
     return;
   }
   if (root["leave_one_out"] && scalar<bool>(path, root["leave_one_out"], "leave_one_out"))
-    fail_at(path, root["leave_one_out"], "leave_one_out is not supported for rl-ekf (a run tunes one bag)");
+    fail_at(path, root["leave_one_out"],
+            "leave_one_out is not supported for rl-ekf and rl-ukf (a run tunes one bag)");
   if (e->models.size() != 1)
     fail_at(path, root["models"],
-            "rl-ekf tunes bags, not tracks: list it alone in 'models' (one experiment per kind)");
-  if (!section) fail_at(path, root, "model rl-ekf needs a robot_localization section (params, until_s, ...)");
+            fmt::format("{} tunes bags, not tracks: list it alone in 'models' (one experiment per kind)",
+                        to_string(*std::find_if(e->models.begin(), e->models.end(),
+                                                [](const TunedModel& m) { return m.is_rl(); }))));
+  if (!section)
+    fail_at(path, root,
+            fmt::format("model {} needs a robot_localization section (params, until_s, ...)",
+                        to_string(e->models[0])));
   if (root["modes"])
-    fail_at(path, root["modes"], "modes do not apply to rl-ekf; list robot_localization.fitness instead");
+    fail_at(path, root["modes"],
+            "modes do not apply to rl-ekf and rl-ukf; list robot_localization.fitness instead");
 }
 
 }  // namespace
 
 bool Experiment::has_rl_models() const {
-  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.is_rl_ekf(); });
+  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.is_rl(); });
 }
 bool Experiment::has_ekf_models() const {
   return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.is_ekf(); });

@@ -17,9 +17,11 @@
 //     seed: 1                            # the particle filter's own seed
 //     ext_from_gt_hz: 0                  # > 0: external velocities from the ground truth
 //
-//   robot_localization:                  # model rl-ekf only (its tracks are bags)
+//   robot_localization:                  # models rl-ekf and rl-ukf only (their tracks are bags)
 //     params: husky_ekf.yaml             # the robot's parameter file, relative to this file
 //     tf: ["imu_link=0,-0.3,0.52,1.5708,0,-1.5708"]   # FRAME=x,y,z,roll,pitch,yaw [m, rad], quoted
+//     navsat_params: navsat.yaml          # optional: navsat_transform_node's own file (--navsat-params)
+//     remap: ["odom=/husky_velocity_controller/odom"]   # optional: FROM=TO topic remappings (--remap)
 //     gps_heading_fit_s: 60              # fit navsat's rotation on the first seconds of fixes
 //     until_s: 197.65                    # required: tune before, score after (held out)
 //     end_s: 395                         # optional: the held-out span ends here
@@ -62,7 +64,7 @@ struct ExperimentCalibration {
   double ext_from_gt_hz = 0.0;  // 0: the tracks' v_ext/w_ext
 };
 
-// robot_localization's EKF (model rl-ekf, objectives/rl_objective.h): how its
+// robot_localization's EKF or UKF (models rl-ekf, rl-ukf; objectives/rl_objective.h): how its
 // bags are read and tuned. Its runs are scored by the GPS-outage protocol on
 // the span after until_s (jobs/rl_job.h), which the tune never sees.
 struct ExperimentRl {
@@ -70,6 +72,8 @@ struct ExperimentRl {
   std::string node_name;         // the EKF's section of the file when it has several
   std::vector<std::string> tf;
   std::string gps_topic;
+  std::filesystem::path navsat_params;  // resolved; empty: none (navsat's keys in params, if any)
+  std::vector<std::string> remap;       // FROM=TO, as --remap
   double gps_heading_fit_s = 0.0;
   double until_s = 0.0;
   std::optional<double> end_s;
@@ -87,7 +91,7 @@ struct Experiment {
   std::string name;
   std::vector<TunedModel> models;
   std::vector<std::string> tracks;  // resolved paths, sorted within each glob
-  std::vector<FitnessMode> modes;   // empty with rl-ekf, whose fitnesses are robot_localization.fitness
+  std::vector<FitnessMode> modes;   // empty with rl-ekf/rl-ukf, whose fitnesses are robot_localization.fitness
   std::vector<std::uint64_t> seeds;
   std::string solver = "pso";
   int particles = 50, iterations = 150;
@@ -95,12 +99,12 @@ struct Experiment {
   bool leave_one_out = false;
   std::filesystem::path store;
   ExperimentCalibration calibration;
-  std::optional<ExperimentRl> robot_localization;  // with model rl-ekf
+  std::optional<ExperimentRl> robot_localization;  // with model rl-ekf or rl-ukf
 
   bool has_ekf_models() const;         // rq, alpha, gyro
   bool has_calibrator_models() const;  // pf-calib, adaptive-pf-calib
   bool has_ukf_models() const;         // ukf
-  bool has_rl_models() const;          // rl-ekf
+  bool has_rl_models() const;          // rl-ekf, rl-ukf
 };
 
 // Throws odotune::Failure.

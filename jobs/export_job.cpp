@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <charconv>
+#include <cmath>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -205,16 +206,16 @@ RunSelection select_best_run(const std::vector<results::RunRecord>& all, const s
                               models.size(), values_of(runs, "model")));
   RunSelection s;
   s.matching = runs.size();
-  if (is_rl_ekf_model_name(*models.begin())) {
-    // An rl-ekf run's scores are on data its tune never saw: choosing by them
+  if (is_rl_model_name(*models.begin())) {
+    // An rl-ekf or rl-ukf run's scores are on data its tune never saw: choosing by them
     // would make them optimistic, so the runs of one fitness are compared by
     // their tuning fitness instead.
     std::set<int> modes;
     for (const auto* r : runs) modes.insert(r->mode);
     if (modes.size() > 1)
-      throw Failure(fmt::format("rl-ekf runs of {} fitnesses (modes {}); add --select mode=… to pick one (8 "
+      throw Failure(fmt::format("{} runs of {} fitnesses (modes {}); add --select mode=… to pick one (8 "
                                 "heldout-fixes, 10 outage, 11 both)",
-                                modes.size(), values_of(runs, "mode")));
+                                *models.begin(), modes.size(), values_of(runs, "mode")));
     for (const auto* r : runs)
       if (!s.run || r->best_fitness < s.run->best_fitness) s.run = r;
     return s;
@@ -249,23 +250,26 @@ ExportOutcome run_export(const ExportRequest& request) {
   const std::string origin = fmt::format("odotune export from {} (experiment {}, {}): run {}", request.store,
                                          store->experiment().name, store->experiment().hash, key);
 
-  if (is_rl_ekf_model_name(run.model)) {
+  if (is_rl_model_name(run.model)) {
     if (request.format != "robot_localization")
-      throw Failure(
-          fmt::format("run {} tuned robot_localization's EKF (model rl-ekf): it exports as the robot's "
-                      "own parameter file only; use --format robot_localization",
-                      key));
+      throw Failure(fmt::format("run {} tuned robot_localization's {} (model {}): it exports as the robot's "
+                                "own parameter file only; use --format robot_localization",
+                                key, run.model == "rl-ukf" ? "UKF" : "EKF", run.model));
     const results::ExperimentInfo info = store->experiment();
     write_rl_run(parse_experiment(info.text, info.file), run, request.out, !request.ros1,
                  origin + fmt::format("\nChosen as the lowest tuning fitness of {} matching run{}.",
                                       sel.matching, sel.matching == 1 ? "" : "s"));
+    auto metres = [](double v) {
+      return std::isfinite(v) ? fmt::format("{:.3f} m", v) : std::string("diverged");
+    };
     return {key,
-            fmt::format("held-out GPS-outage RMSE {:.3f} m vs {:.3f} m with the file's values on {}",
-                        run.tuned.rmse_m, run.baseline.rmse_m, run.track),
+            fmt::format("held-out GPS-outage RMSE {} vs {} with the file's values on {}",
+                        metres(run.tuned.rmse_m), metres(run.baseline.rmse_m), run.track),
             sel.matching};
   }
   if (request.ros1)
-    throw Failure(fmt::format("--ros1 applies to rl-ekf runs only; run {} is of model {}", key, run.model));
+    throw Failure(fmt::format("--ros1 applies to rl-ekf and rl-ukf runs only; run {} is of model {}", key,
+                              run.model));
   if (is_ukf_model_name(run.model)) {
     UkfConfig cfg = run_ukf_config(run);
     cfg.comment = origin + "\n" + scores + " (the fused pose; baseline: the default UKF noise)";

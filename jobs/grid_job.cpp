@@ -53,11 +53,13 @@ results::Metrics to_metrics(const ErrorMetrics& m) { return {m.rmse_m, m.mae_m, 
 std::vector<PreparedTrack> prepare_grid_tracks(const Experiment& e) {
   std::vector<PreparedTrack> tracks;
   if (e.robot_localization) {
-    // rl-ekf stands alone (experiment_yaml.h): its tracks are bags.
+    // rl-ekf and rl-ukf stand alone (experiment_yaml.h): their tracks are bags,
+    // read for the model's filter.
     for (const std::string& bag : e.tracks) {
       PreparedTrack p;
       p.name = std::filesystem::path(bag).stem().string();
-      p.rl = std::make_shared<const RlLoaded>(load_rl(rl_source_of(*e.robot_localization, bag)));
+      p.rl = std::make_shared<const RlLoaded>(
+          load_rl(rl_source_of(*e.robot_localization, bag, e.models.front().rl_filter())));
       const double duration_s = static_cast<double>(p.rl->rec.end_ns - p.rl->rec.start_ns) * 1e-9;
       if (!(e.robot_localization->until_s < duration_s))
         throw Failure(fmt::format("{}: robot_localization.until_s {} s leaves nothing to score (the bag lasts "
@@ -211,7 +213,7 @@ std::optional<results::RunRecord> run_ukf_cell(const Experiment& e, const std::v
 
 results::Metrics to_metrics(const FixScore& s) { return {s.rmse_m, s.mae_m, s.maxe_m}; }
 
-// robot_localization's EKF tuned on the bag before until_s; its scores are
+// robot_localization's EKF or UKF tuned on the bag before until_s; its scores are
 // the GPS-outage protocol's errors after it (GPS fused until until_s, none
 // after), with the file's own and the tuned settings.
 std::optional<results::RunRecord> run_rl_cell(const Experiment& e, const std::vector<PreparedTrack>& tracks,
@@ -247,7 +249,7 @@ std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vecto
                                            const GridCell& c, const std::atomic<bool>* stop) {
   if (c.model.is_calibrator()) return run_calibration_cell(e, tracks, c, stop);
   if (c.model.is_ukf()) return run_ukf_cell(e, tracks, c, stop);
-  if (c.model.is_rl_ekf()) return run_rl_cell(e, tracks, c, stop);
+  if (c.model.is_rl()) return run_rl_cell(e, tracks, c, stop);
   results::RunRecord r = cell_record(e, tracks, c);
   TuneRequest req;
   req.model = c.model.noise();

@@ -416,8 +416,8 @@ void write_convergence(const ReportInput& in, ReportWriter& w, results::HtmlPage
 ReportOutcome write_report(const ReportRequest& req) {
   const CheckedStore s = open_checked(req);
   if (std::find_if(s.models.begin(), s.models.end(),
-                   [](const std::string& m) { return is_rl_ekf_model_name(m); }) != s.models.end())
-    return write_rl_report(req, s.info, s.runs);  // rl-ekf stands alone in an experiment
+                   [](const std::string& m) { return is_rl_model_name(m); }) != s.models.end())
+    return write_rl_report(req, s.info, s.runs);  // rl-ekf and rl-ukf stand alone in an experiment
 
   const ReportInput in = split_runs(req, s);
   ReportOutcome out;

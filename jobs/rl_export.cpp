@@ -1,6 +1,7 @@
-// write_rl_run (jobs/rl_job.h): a stored rl-ekf run as the robot's own
-// parameter file.
+// write_rl_run (jobs/rl_job.h): a stored rl-ekf or rl-ukf run as the robot's
+// own parameter file.
 #include <algorithm>
+#include <cmath>
 
 #include <fmt/format.h>
 
@@ -20,18 +21,26 @@ void write_rl_run(const Experiment& e, const results::RunRecord& run, const std:
   if (bag == e.tracks.end())
     throw Failure(fmt::format("run's bag '{}' is not among the experiment's tracks", run.track));
   // Read again as the grid read it, for the file and for navsat's rotation.
-  const RlLoaded loaded = load_rl(rl_source_of(x, *bag));
+  TunedModel model;
+  if (!parse_tuned_model(run.model, &model) || !model.is_rl())
+    throw Failure(fmt::format("run of model '{}': expected rl-ekf or rl-ukf", run.model));
+  const RlLoaded loaded = load_rl(rl_source_of(x, *bag, model.rl_filter()));
   const rlnode::RlParams& params = loaded.rec.params;
   rlnode::ReplaySettings s = rlnode::settings_of(params);
   std::string why;
   if (!apply_rl_factors(params, run.param_names, run.params, &s, &why))
     throw Failure(fmt::format("{}: cannot apply the run's factors: {}", x.params.string(), why));
+  auto metres = [](double v) {
+    return std::isfinite(v) ? fmt::format("{:.3f} m", v) : std::string("diverged");
+  };
+  const double change = 100.0 * (run.tuned.rmse_m / run.baseline.rmse_m - 1.0);
   const std::string held_out = fmt::format(
       "Tuned on the first {} s of {} (fitness {}, {} process noise); scored after it{}, never seen by the tune:\n"
-      "  GPS fused until {} s, none after: RMSE {:.3f} m with the file's values -> {:.3f} m tuned ({:+.0f} %).\n",
+      "  GPS fused until {} s, none after: RMSE {} with the file's values -> {} tuned{}.\n",
       x.until_s, bag->c_str(), to_string(rl_fitness_of_mode(run.mode).value_or(RlFitness::outage)),
-      to_string(x.space), x.end_s ? fmt::format(" until {} s", *x.end_s) : "", x.until_s, run.baseline.rmse_m,
-      run.tuned.rmse_m, 100.0 * (run.tuned.rmse_m / run.baseline.rmse_m - 1.0));
+      to_string(x.space), x.end_s ? fmt::format(" until {} s", *x.end_s) : "", x.until_s,
+      metres(run.baseline.rmse_m), metres(run.tuned.rmse_m),
+      std::isfinite(change) ? fmt::format(" ({:+.0f} %)", change) : "");
   write_tuned_params(out, params, s, loaded.alignment, x.gps_heading_fit_s, ros2, provenance + "\n" + held_out);
 }
 

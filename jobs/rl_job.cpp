@@ -50,7 +50,7 @@ void write_rl_trajectory(const std::filesystem::path& path, const std::vector<rl
 
 rlnode::RlParams read_rl_file(const RlSource& src) {
   try {
-    return rlnode::read_rl_params(src.params_file, src.node_name, src.filter);
+    return rlnode::read_rl_params(src.params_file, src.node_name, src.filter, src.navsat_params);
   } catch (const std::exception& e) {
     throw Failure(e.what());
   }
@@ -110,13 +110,17 @@ std::pair<std::string, std::string> parse_remap(const std::string& text) {
   return {from, to};
 }
 
-RlSource rl_source_of(const ExperimentRl& x, const std::filesystem::path& bag) {
+RlSource rl_source_of(const ExperimentRl& x, const std::filesystem::path& bag,
+                      std::optional<filters::rl::RlFilterType> filter) {
   RlSource src;
+  src.filter = filter;
   src.params_file = x.params;
   src.bag = bag;
   src.node_name = x.node_name;
   src.tf = x.tf;
   src.gps_topic = x.gps_topic;
+  src.navsat_params = x.navsat_params;
+  src.remap = x.remap;
   src.gps_heading_fit_s = x.gps_heading_fit_s;
   return src;
 }
@@ -131,7 +135,8 @@ RlLoaded load_rl(const RlSource& src) {
   for (const std::string& r : src.remap) options.remap.insert(parse_remap(r));
   RlLoaded out;
   try {
-    const rlnode::RlParams params = rlnode::read_rl_params(src.params_file, src.node_name, src.filter);
+    const rlnode::RlParams params = rlnode::read_rl_params(src.params_file, src.node_name, src.filter,
+                                                           src.navsat_params);
     out.rec = rlnode::load_recording(src.bag, params, options);
     if (src.gps_heading_fit_s > 0.0) {
       // With robot_localization's default noise, not the file's: the rotation
@@ -149,7 +154,8 @@ RlLoaded load_rl(const RlSource& src) {
     throw Failure(e.what());
   }
   const rlnode::Recording& rec = out.rec;
-  if (rec.gps_sensor >= 0 && !rec.gps_transform.fixed && !rec.navsat_imu_yaw_known) {
+  if (rec.gps_sensor >= 0 && !rec.gps_transform.fixed && !rec.navsat_imu_yaw_known &&
+      !rec.params.navsat.use_odometry_yaw) {
     throw Failure(fmt::format("{}: navsat_transform_node needs the IMU's heading at the first fix, and no IMU "
                               "orientation came before it; expected --gps-heading-fit SECONDS",
                               src.bag.string()));

@@ -35,7 +35,8 @@ namespace odotune {
 
 struct RlSource {
   std::filesystem::path params_file, bag;
-  std::string node_name;                            // the filter's section of the file when it has several
+  std::filesystem::path navsat_params;  // --navsat-params: navsat_transform_node's own file (empty: none)
+  std::string node_name;                // the filter's section of the file when it has several
   std::optional<filters::rl::RlFilterType> filter;  // --filter: for a file that does not say (rlnode/params.h)
   std::vector<std::string> tf;     // "FRAME=x,y,z,roll,pitch,yaw": FRAME's pose in base_link [m, rad]
   std::string gps_topic;           // NavSatFix topic behind navsat's output (empty: the bag's one)
@@ -51,7 +52,8 @@ struct RlLoaded {
 // Reads the parameter file and the bag; throws Failure with one line.
 RlLoaded load_rl(const RlSource& src);
 // An experiment's robot_localization section applied to one of its bags.
-RlSource rl_source_of(const ExperimentRl& x, const std::filesystem::path& bag);
+RlSource rl_source_of(const ExperimentRl& x, const std::filesystem::path& bag,
+                      std::optional<filters::rl::RlFilterType> filter = std::nullopt);
 
 // The filter's trajectory in TUM format (t x y z qx qy qz qw) on the
 // recording's clock, `comment` as its first line; throws Failure.

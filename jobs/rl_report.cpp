@@ -1,5 +1,7 @@
-// write_rl_report (jobs/rl_job.h): the report page of a store of rl-ekf runs.
+// write_rl_report (jobs/rl_job.h): the report page of a store of rl-ekf or
+// rl-ukf runs.
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <map>
@@ -47,6 +49,14 @@ results::TrajectoryPath path_of(std::string name, const std::vector<rlnode::Traj
   return p;
 }
 
+// "1.23 m", or "diverged" for a non-finite error.
+std::string metres(double v) { return std::isfinite(v) ? fmt::format("{:.2f} m", v) : "diverged"; }
+
+// "EKF" or "UKF": the filter of the experiment's model.
+const char* filter_label(const Experiment& e) {
+  return e.models.front().rl_filter() == filters::rl::RlFilterType::ukf ? "UKF" : "EKF";
+}
+
 // The outage protocol's trajectories of each bag's best runs, replayed from the bag.
 void trajectory_figures(const Experiment& e, const std::vector<RunRecord>& runs, ReportWriter& w,
                         results::HtmlPage& page, ReportOutcome& out) {
@@ -59,7 +69,7 @@ void trajectory_figures(const Experiment& e, const std::vector<RunRecord>& runs,
       out.notes.push_back(fmt::format("trajectories of {} left out: {} was not found", name, bag));
       continue;
     }
-    const RlLoaded loaded = load_rl(rl_source_of(x, bag));
+    const RlLoaded loaded = load_rl(rl_source_of(x, bag, e.models.front().rl_filter()));
     const rlnode::Recording& rec = loaded.rec;
     const std::int64_t from = rl_time_ns(rec, x.until_s);
     const std::int64_t end = x.end_s ? rl_time_ns(rec, *x.end_s) : std::numeric_limits<std::int64_t>::max();
@@ -72,7 +82,7 @@ void trajectory_figures(const Experiment& e, const std::vector<RunRecord>& runs,
       held.ys_m.push_back(f.measured.y());
     }
     paths.push_back(std::move(held));
-    paths.push_back(path_of(fmt::format("the file's values ({:.2f} m)", score_of(std::span(&b, 1)).rmse_m),
+    paths.push_back(path_of(fmt::format("the file's values ({})", metres(score_of(std::span(&b, 1)).rmse_m)),
                             b.trajectory));
     for (const auto& [key, r] : best) {
       if (key.first != name) continue;
@@ -81,13 +91,13 @@ void trajectory_figures(const Experiment& e, const std::vector<RunRecord>& runs,
       if (!apply_rl_factors(rec.params, r->param_names, r->params, &s, &why))
         throw Failure(fmt::format("run {}: {}", results::run_key(*r), why));
       const rlnode::ReplayOutput t = outage_run(rec, s, from, end, true);
-      paths.push_back(path_of(fmt::format("tuned, {} seed {} ({:.2f} m)", fitness_name(r->mode), r->seed,
-                                          score_of(std::span(&t, 1)).rmse_m),
+      paths.push_back(path_of(fmt::format("tuned, {} seed {} ({})", fitness_name(r->mode), r->seed,
+                                          metres(score_of(std::span(&t, 1)).rmse_m)),
                               t.trajectory));
     }
     const std::string title = fmt::format(
-        "{}: GPS fused until {} s only; robot_localization's EKF, the file's and tuned values", name,
-        x.until_s);
+        "{}: GPS fused until {} s only; robot_localization's {}, the file's and tuned values", name, x.until_s,
+        filter_label(e));
     row.push_back(w.figure("trajectories_" + file_safe(name), title,
                            [&](const fs::path& stem) { results::trajectories(stem, title, paths); }));
   }
@@ -109,7 +119,7 @@ std::vector<std::uint64_t> seeds_of(const std::vector<RunRecord>& runs) {
 // Per bag and fitness: the held-out improvement and tuned RMSE over seeds.
 void seed_spread_section(const std::vector<RunRecord>& runs, ReportWriter& w, results::HtmlPage& page) {
   page.heading("Spread over seeds");
-  const std::vector<results::SeedSpreadRow> rows = results::seed_spread(runs, "rl-ekf");
+  const std::vector<results::SeedSpreadRow> rows = results::seed_spread(runs, runs.front().model);
   const bool several = std::any_of(rows.begin(), rows.end(), [](const auto& r) { return r.runs > 1; });
   if (!several) {
     page.paragraph("One seed per bag and fitness: no spread over seeds to show (list more seeds in the "
@@ -237,7 +247,9 @@ void determined_section(const std::vector<RunRecord>& runs, ReportWriter& w, res
 ReportOutcome write_rl_report(const ReportRequest& req, const results::ExperimentInfo& info,
                               const std::vector<RunRecord>& runs) {
   const Experiment e = parse_experiment(info.text, info.file);
-  if (!e.robot_localization) throw Failure(fmt::format("{}: not an rl-ekf experiment", req.store.string()));
+  if (!e.robot_localization)
+    throw Failure(fmt::format("{}: not an rl-ekf or rl-ukf experiment", req.store.string()));
+  const std::string model = to_string(e.models.front());
   const ExperimentRl& x = *e.robot_localization;
   ReportOutcome out;
   out.experiment = info.name;
@@ -246,12 +258,12 @@ ReportOutcome write_rl_report(const ReportRequest& req, const results::Experimen
   results::HtmlPage page(fmt::format("odotune report: {}", info.name));
   const std::vector<std::uint64_t> seeds = seeds_of(runs);
   page.paragraph(fmt::format(
-      "Experiment **{}** (file hash {}, odotune {}): {} runs of robot_localization's EKF (model rl-ekf) with "
+      "Experiment **{}** (file hash {}, odotune {}): {} runs of robot_localization's {} (model {}) with "
       "the parameter file {}, on {}, {} {} ({}). Each run tunes the file's process noise on a bag before {} s "
       "and is scored after it{}, on data the tune never saw: GPS fused until {} s and none after, the error of "
       "the filter at every later fix (RMSE, MAE, MAXE). The baseline is the file's own values. Improvement % = "
       "100 · (baseline − tuned) / baseline, positive is better.",
-      info.name, info.hash, info.code_version, runs.size(), x.params.string(),
+      info.name, info.hash, info.code_version, runs.size(), filter_label(e), model, x.params.string(),
       fmt::join(results::report_tracks(runs), ", "), seeds.size(), seeds.size() == 1 ? "seed" : "seeds",
       fmt::join(seeds, ", "), x.until_s, x.end_s ? fmt::format(" until {} s", *x.end_s) : "", x.until_s));
   std::map<int, std::vector<double>> by_mode;
@@ -259,8 +271,17 @@ ReportOutcome write_rl_report(const ReportRequest& req, const results::Experimen
   std::vector<std::string> parts;
   for (const auto& [mode, v] : by_mode) {
     double sum = 0.0;
-    for (double p : v) sum += p;
-    parts.push_back(fmt::format("{} {:+.1f} %", fitness_name(mode), sum / static_cast<double>(v.size())));
+    long finite = 0;
+    for (double p : v) {
+      if (!std::isfinite(p)) continue;
+      sum += p;
+      ++finite;
+    }
+    const long diverged = static_cast<long>(v.size()) - finite;
+    const std::string mean = finite > 0 ? fmt::format("{:+.1f} %", sum / static_cast<double>(finite)) : "n/a";
+    parts.push_back(fmt::format("{} {}{}", fitness_name(mode), mean,
+                                diverged > 0 ? fmt::format(" ({} of {} runs diverged)", diverged, v.size())
+                                             : ""));
   }
   out.headline = fmt::format("mean held-out GPS-outage RMSE improvement per fitness: {}",
                              fmt::join(parts, ", "));
@@ -271,10 +292,10 @@ ReportOutcome write_rl_report(const ReportRequest& req, const results::Experimen
   w.text("table_rl.csv", "report table", results::to_csv(t));
   w.text("table_rl.md", "report table", results::to_markdown(tt));
   page.heading("Held-out GPS-outage RMSE per bag and fitness");
-  page.paragraph(fmt::format("Original = the file's own values; rl-ekf = the tuned values ({}); the lower "
+  page.paragraph(fmt::format("Original = the file's own values; {} = the tuned values ({}); the lower "
                              "(better) of the two in bold. Modes: 8 heldout-fixes, 10 outage, 11 both. Also as "
                              "table_rl.csv and table_rl.md.",
-                             seeds_phrase(runs)));
+                             model, seeds_phrase(runs)));
   page.table(tt);
 
   seed_spread_section(runs, w, page);

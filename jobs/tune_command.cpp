@@ -208,9 +208,11 @@ TuneCommandOutcome run_tune_command(const TuneCommandRequest& request) {
   TunedModel model;
   if (!parse_tuned_model(request.model, &model))
     throw Failure(fmt::format("--model '{}': unknown model, expected {}", request.model, tuned_model_names()));
-  if (model.is_rl_ekf())
-    throw Failure("--model rl-ekf: robot_localization's EKF is tuned from its parameter file and bag: "
-                  "odotune tune --rl-params FILE --bag BAG");
+  if (model.is_rl())
+    throw Failure(
+        fmt::format("--model {}: robot_localization's filters are tuned from their parameter file and "
+                    "bag: odotune tune --rl-params FILE --bag BAG{}",
+                    request.model, model.rl_filter() == filters::rl::RlFilterType::ukf ? " --filter ukf" : ""));
   check_options(request, model);
   if (model.is_calibrator()) return calibration_tune(request, model.calib());
   if (model.is_ukf()) return ukf_tune(request);

@@ -7,6 +7,7 @@ constexpr std::string_view kPf = "pf-calib";
 constexpr std::string_view kAdaptivePf = "adaptive-pf-calib";
 constexpr std::string_view kUkf = "ukf";
 constexpr std::string_view kRlEkf = "rl-ekf";
+constexpr std::string_view kRlUkf = "rl-ukf";
 
 template <class... F>
 struct Overloaded : F... {
@@ -16,10 +17,11 @@ struct Overloaded : F... {
 
 std::string to_string(const TunedModel& m) {
   return std::visit(
-      Overloaded{[](filters::NoiseModel n) { return std::string(filters::to_string(n)); },
-                 [](CalibratorModel c) { return std::string(c == CalibratorModel::pf ? kPf : kAdaptivePf); },
-                 [](FusionUkfModel) { return std::string(kUkf); },
-                 [](RlEkfModel) { return std::string(kRlEkf); }},
+      Overloaded{
+          [](filters::NoiseModel n) { return std::string(filters::to_string(n)); },
+          [](CalibratorModel c) { return std::string(c == CalibratorModel::pf ? kPf : kAdaptivePf); },
+          [](FusionUkfModel) { return std::string(kUkf); },
+          [](RlModel r) { return std::string(r.filter == filters::rl::RlFilterType::ekf ? kRlEkf : kRlUkf); }},
       m.kind);
 }
 
@@ -27,7 +29,9 @@ bool parse_tuned_model(std::string_view text, TunedModel* out) {
   if (text == kUkf) {
     *out = TunedModel::fusion_ukf();
   } else if (text == kRlEkf) {
-    *out = TunedModel::rl_ekf();
+    *out = TunedModel::rl(filters::rl::RlFilterType::ekf);
+  } else if (text == kRlUkf) {
+    *out = TunedModel::rl(filters::rl::RlFilterType::ukf);
   } else if (text == kPf) {
     *out = TunedModel::calibration(CalibratorModel::pf);
   } else if (text == kAdaptivePf) {
@@ -44,8 +48,10 @@ bool is_calibrator_model_name(std::string_view text) { return text == kPf || tex
 
 bool is_ukf_model_name(std::string_view text) { return text == kUkf; }
 
-bool is_rl_ekf_model_name(std::string_view text) { return text == kRlEkf; }
+bool is_rl_model_name(std::string_view text) { return text == kRlEkf || text == kRlUkf; }
 
-const char* tuned_model_names() { return "rq, alpha, gyro, pf-calib, adaptive-pf-calib, ukf or rl-ekf"; }
+const char* tuned_model_names() {
+  return "rq, alpha, gyro, pf-calib, adaptive-pf-calib, ukf, rl-ekf or rl-ukf";
+}
 
 }  // namespace odotune

@@ -5,8 +5,8 @@
 //   pf-calib                plain PF calibrator's settings (calibration/calibration_objective.h)
 //   adaptive-pf-calib       adaptive PF calibrator's settings
 //   ukf                     the (V, W) fusion UKF's noise (learned/ukf_objective.h)
-//   rl-ekf                  robot_localization's EKF on a bag and its parameter file
-//                           (objectives/rl_objective.h; grid only, `tune --rl-params` otherwise)
+//   rl-ekf | rl-ukf         robot_localization's EKF or UKF on a bag and its parameter
+//                           file (objectives/rl_objective.h; grid only, `tune --rl-params` otherwise)
 //
 // Shared by `tune`, `grid` (experiment_yaml.h) and the commands that read a
 // store (report, export), so the names are spelt in one place.
@@ -17,6 +17,7 @@
 #include <variant>
 
 #include "filters/ekf_noise.h"
+#include "filters/rl_filter.h"
 
 namespace odotune {
 
@@ -24,29 +25,31 @@ enum class CalibratorModel { pf, adaptive_pf };
 struct FusionUkfModel {
   bool operator==(const FusionUkfModel&) const = default;
 };
-struct RlEkfModel {
-  bool operator==(const RlEkfModel&) const = default;
+struct RlModel {
+  filters::rl::RlFilterType filter = filters::rl::RlFilterType::ekf;  // ekf_node or ukf_node
+  bool operator==(const RlModel&) const = default;
 };
 
 // One of the kinds above; a value can only be one of them.
 struct TunedModel {
-  std::variant<filters::NoiseModel, CalibratorModel, FusionUkfModel, RlEkfModel> kind = filters::NoiseModel::rq;
+  std::variant<filters::NoiseModel, CalibratorModel, FusionUkfModel, RlModel> kind = filters::NoiseModel::rq;
 
   static TunedModel ekf(filters::NoiseModel m) { return {m}; }
   static TunedModel calibration(CalibratorModel c) { return {c}; }
   static TunedModel fusion_ukf() { return {FusionUkfModel{}}; }
-  static TunedModel rl_ekf() { return {RlEkfModel{}}; }
+  static TunedModel rl(filters::rl::RlFilterType f) { return {RlModel{f}}; }
   bool is_ekf() const { return std::holds_alternative<filters::NoiseModel>(kind); }  // rq, alpha, gyro
   bool is_calibrator() const { return std::holds_alternative<CalibratorModel>(kind); }
   bool is_ukf() const { return std::holds_alternative<FusionUkfModel>(kind); }
-  bool is_rl_ekf() const { return std::holds_alternative<RlEkfModel>(kind); }
-  // Preconditions: is_ekf(), is_calibrator() respectively.
+  bool is_rl() const { return std::holds_alternative<RlModel>(kind); }  // rl-ekf, rl-ukf
+  // Preconditions: is_ekf(), is_calibrator(), is_rl() respectively.
   filters::NoiseModel noise() const { return std::get<filters::NoiseModel>(kind); }
   CalibratorModel calib() const { return std::get<CalibratorModel>(kind); }
+  filters::rl::RlFilterType rl_filter() const { return std::get<RlModel>(kind).filter; }
   bool operator==(const TunedModel&) const = default;
 };
 
-// "rq", "alpha", "gyro", "pf-calib", "adaptive-pf-calib", "ukf", "rl-ekf".
+// "rq", "alpha", "gyro", "pf-calib", "adaptive-pf-calib", "ukf", "rl-ekf", "rl-ukf".
 std::string to_string(const TunedModel& m);
 // Parses the names above; false (and *out untouched) for anything else.
 bool parse_tuned_model(std::string_view text, TunedModel* out);
@@ -54,9 +57,9 @@ bool parse_tuned_model(std::string_view text, TunedModel* out);
 bool is_calibrator_model_name(std::string_view text);
 // True for "ukf".
 bool is_ukf_model_name(std::string_view text);
-// True for "rl-ekf".
-bool is_rl_ekf_model_name(std::string_view text);
-// "rq, alpha, gyro, pf-calib, adaptive-pf-calib, ukf or rl-ekf", for error messages.
+// True for "rl-ekf" and "rl-ukf".
+bool is_rl_model_name(std::string_view text);
+// "rq, alpha, gyro, pf-calib, adaptive-pf-calib, ukf, rl-ekf or rl-ukf", for error messages.
 const char* tuned_model_names();
 
 }  // namespace odotune

@@ -79,7 +79,7 @@ def main():
             if result is None:
                 refused.append(error)
     reasons = sorted({("navsat's use_odometry_yaw" if "use_odometry_yaw" in e else
-                       "a navsat_transform_node file alone (no filter section)" if "no ekf_node section" in e
+                       "a navsat_transform_node file alone (no filter section; it is read beside a filter file with --navsat-params)" if "no ekf_node section" in e
                        else e) for e in refused})
     print(f"{len(files)} files, {len(rows)} rows (one per filter section; a navsat-only file is one row): {len(rows) - len(refused)} load and replay; "
           f"{len(refused)} are refused by name, for: {'; '.join(reasons)}.\n")

@@ -41,7 +41,11 @@ class Stmt {
     const auto* p = sqlite3_column_text(s_, i);
     return p ? reinterpret_cast<const char*>(p) : "";
   }
-  double col_real(int i) { return sqlite3_column_double(s_, i); }
+  // SQLite stores a bound NaN as NULL: it reads back as NaN, not 0 (a
+  // diverged run's metrics).
+  double col_real(int i) {
+    return sqlite3_column_type(s_, i) == SQLITE_NULL ? std::nan("") : sqlite3_column_double(s_, i);
+  }
   long long col_int(int i) { return sqlite3_column_int64(s_, i); }
 
  private:

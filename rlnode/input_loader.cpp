@@ -5,8 +5,9 @@
 #include <numbers>
 #include <stdexcept>
 
-#include <GeographicLib/UTMUPS.hpp>
 #include <fmt/format.h>
+
+#include "rlnode/geodesy.h"
 
 namespace odotune::rlnode::detail {
 
@@ -323,12 +324,11 @@ void Loader::on_fix(const ros::NavSatFix& m, std::int64_t receive_ns) {
     if (!local_) local_ = std::make_unique<GeographicLib::LocalCartesian>(m.latitude_deg, m.longitude_deg, 0.0);
     local_->Forward(m.latitude_deg, m.longitude_deg, m.altitude_m, f.p.x(), f.p.y(), f.p.z());
   } else {
-    double k = 1.0, gamma_deg = 0.0;
-    if (utm_zone_ < 0) utm_zone_ = GeographicLib::UTMUPS::StandardZone(m.latitude_deg, m.longitude_deg);
-    GeographicLib::UTMUPS::Forward(m.latitude_deg, m.longitude_deg, utm_zone_, utm_north_, f.p.x(), f.p.y(),
-                                   gamma_deg, k, utm_zone_);
-    f.p.z() = m.altitude_m;
-    f.convergence_rad = gamma_deg * std::numbers::pi / 180.0;
+    // The datum's zone for every fix (the first fix's without a datum).
+    const UtmPoint g = utm_forward(m.latitude_deg, m.longitude_deg, utm_zone_);
+    utm_zone_ = g.zone;
+    f.p = {g.easting_m, g.northing_m, m.altitude_m};
+    f.convergence_rad = g.convergence_rad;
   }
   if (p_.navsat.zero_altitude) f.p.z() = 0.0;
   f.cov = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(m.position_covariance.data());
@@ -336,6 +336,27 @@ void Loader::on_fix(const ros::NavSatFix& m, std::int64_t receive_ns) {
 }
 
 void Loader::on_local_fix(const GpsFix& fix) { add_fix(fix, ""); }
+
+// navsat's datum (datumCallback): its grid point, in its own zone, which every
+// fix then takes; the local plane's origin with use_local_cartesian.
+GpsTransform Loader::set_datum(const std::array<double, 3>& datum) {
+  const NavsatParams& nv = p_.navsat;
+  GpsTransform t;
+  t.fixed = true;
+  double convergence = 0.0;
+  if (nv.use_local_cartesian) {
+    local_ = std::make_unique<GeographicLib::LocalCartesian>(datum[0], datum[1], 0.0);
+  } else {
+    const UtmPoint g = utm_forward(datum[0], datum[1]);
+    utm_zone_ = g.zone;
+    t.grid_origin = {g.easting_m, g.northing_m, 0.0};
+    convergence = g.convergence_rad;
+  }
+  // The datum's heading as the node's IMU heading there, the odom frame's
+  // origin and zero yaw at the datum.
+  t.rotation_rad = -(datum[2] + nv.magnetic_declination_radians + nv.yaw_offset + convergence);
+  return t;
+}
 
 void Loader::add_fix(const GpsFix& f, const std::string& frame_id) {
   const std::int64_t receive_ns = f.receive_ns;

@@ -108,6 +108,9 @@ class Loader {
   // A fix already projected (in the odom frame under an identity transform),
   // its antenna at base_link.
   void on_local_fix(const GpsFix& fix);
+  // navsat's manual datum (latitude, longitude [deg], heading [rad]): sets the
+  // grid every fix is projected on; returns the transform it fixes.
+  GpsTransform set_datum(const std::array<double, 3>& datum);
   void note_imu_orientation(const ros::Imu& m, std::int64_t receive_ns);
   void on_command(const ros::TwistStamped& m, std::int64_t receive_ns);
   void finish();
@@ -148,7 +151,6 @@ class Loader {
   double imu_yaw_ = 0.0;
   std::unique_ptr<GeographicLib::LocalCartesian> local_;
   int utm_zone_ = -1;
-  bool utm_north_ = true;
 };
 
 }  // namespace odotune::rlnode::detail

@@ -214,8 +214,6 @@ Kind navsat_kind(std::string_view key) {
 // Why a key's value is refused (the replay does not reproduce it); empty when it is not.
 std::string_view refusal_reason(std::string_view key) {
   if (key == "disabled_at_startup") return "ekf_node would wait for its enable service";
-  if (key == "use_odometry_yaw")
-    return "navsat_transform_node would take its heading from the filtered odometry";
   return "";
 }
 
@@ -614,6 +612,12 @@ NavsatParams read_navsat(const Reader& r, const Keys& keys, const std::string& s
     for (std::size_t i = 0; i < 3; ++i) d[i] = r.number(fmt::format("datum entry {}", i + 1), e->value[i]);
     if (n.wait_for_datum) n.datum = d;  // the node reads the datum only then
   }
+  if (n.wait_for_datum && !n.datum) {
+    r.fail(
+        keys.find("wait_for_datum")->key,
+        "wait_for_datum: true without a datum: navsat_transform_node then waits for a datum service call, "
+        "which a bag does not hold; expected datum: [latitude, longitude, heading] or wait_for_datum: false");
+  }
   return n;
 }
 
@@ -981,10 +985,60 @@ Layout locate(const Source& src, const std::string& node_name) {
 
 }  // namespace
 
-RlParams read_rl_params(const std::filesystem::path& file, const std::string& node_name,
-                        std::optional<filters::rl::RlFilterType> filter) {
+namespace {
+
+// navsat_transform_node's section of a file of its own: the keys at the top
+// level (ROS 1), or the one section (ROS 1 or 2, namespaced or not) that has
+// navsat's keys.
+void read_navsat_file(const fs::path& file, RlParams& p) {
   const Source src = load(file);
-  return read_layout(src, locate(src, node_name), filter);
+  const Reader r{src.file, false};
+  if (!src.root.IsMap())
+    r.fail(src.root, "expected navsat_transform_node's parameters, got " + describe(src.root));
+  std::vector<Section> found;
+  if (has_navsat_key(src.root)) {
+    found.push_back(Section{"navsat_transform_node", YAML::Node(), src.root, false});
+  } else {
+    for (const auto& kv : src.root) {
+      if (kv.first.IsScalar() && is_namespace(kv.second)) {
+        for (const auto& node : kv.second) {
+          Section s = *section_of(node.first, node.second);
+          s.name = kv.first.Scalar() + "/" + s.name;
+          if (has_navsat_key(s.params)) found.push_back(s);
+        }
+      } else if (auto s = section_of(kv.first, kv.second); s && has_navsat_key(s->params)) {
+        found.push_back(*s);
+      }
+    }
+  }
+  if (found.size() != 1) {
+    std::vector<int> all(found.size());
+    for (std::size_t i = 0; i < found.size(); ++i) all[i] = static_cast<int>(i);
+    r.fail(src.root, fmt::format("--navsat-params: expected one navsat_transform_node section, found {} ({})",
+                                 found.size(), names_of(found, all)));
+  }
+  const Reader rn{src.file, found[0].ros2, &p.notes};
+  const Keys keys = collect(rn, found[0].params);
+  p.navsat = read_navsat(rn, keys, found[0].name);
+  report_keys(keys, file.filename().string() + ": " + found[0].name, navsat_key_use, p.keys);
+}
+
+}  // namespace
+
+RlParams read_rl_params(const std::filesystem::path& file, const std::string& node_name,
+                        std::optional<filters::rl::RlFilterType> filter,
+                        const std::filesystem::path& navsat_file) {
+  const Source src = load(file);
+  RlParams p = read_layout(src, locate(src, node_name), filter);
+  if (navsat_file.empty()) return p;
+  if (p.navsat.present) {
+    throw std::invalid_argument(
+        fmt::format("{}: --navsat-params {}: this file has navsat_transform_node's section "
+                    "({}) already; expected one of the two",
+                    file.string(), navsat_file.string(), p.navsat.node_name));
+  }
+  read_navsat_file(navsat_file, p);
+  return p;
 }
 
 // ---- writing ----------------------------------------------------------------

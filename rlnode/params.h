@@ -145,8 +145,12 @@ struct RlParams {
 // navsat use_odometry_yaw: true. `filter` (the command line's --filter) picks
 // the filter for a file that does not say which; ekf for a file with
 // ukf_node's alpha, kappa or beta is refused, naming the key.
+// `navsat_file` (--navsat-params): navsat_transform_node's parameters from a
+// file of their own (Nav2's and Heron's teams keep them apart); refused when
+// `file` has a navsat section too.
 RlParams read_rl_params(const std::filesystem::path& file, const std::string& node_name = "",
-                        std::optional<filters::rl::RlFilterType> filter = std::nullopt);
+                        std::optional<filters::rl::RlFilterType> filter = std::nullopt,
+                        const std::filesystem::path& navsat_file = {});
 
 // What a tune changes in the file.
 struct RlParamsUpdate {

@@ -175,11 +175,6 @@ Recording load_recording(const std::filesystem::path& bag, const RlParams& param
                     "a timeout ≥ 0",
                     params.file.string(), params.frequency_hz, params.sensor_timeout_s));
   }
-  if (params.navsat.present && params.navsat.datum) {
-    throw std::invalid_argument(fmt::format("{}: navsat_transform_node's wait_for_datum with a datum is not "
-                                            "reproduced by the replay; expected wait_for_datum: false",
-                                            params.file.string()));
-  }
   const bags::BagInfo info = bags::inspect_bag(bag);
   const TopicPlan plan = plan_topics(info, params, options);
   Recording rec;
@@ -190,6 +185,7 @@ Recording load_recording(const std::filesystem::path& bag, const RlParams& param
   rec.gps_topic = plan.gps_topic;
   detail::Loader loader(params, options, rec);
   loader.set_static_frames(static_frames(bag, info, params.base_link_frame));
+  if (params.navsat.present && params.navsat.datum) rec.gps_transform = loader.set_datum(*params.navsat.datum);
 
   std::set<std::string, std::less<>> wanted;
   for (const auto& [topic, s] : plan.sensors_of) wanted.insert(topic);

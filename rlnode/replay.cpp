@@ -266,7 +266,12 @@ void take_datum(const Recording& rec, int i, const rl::State& x, NodeState& n) {
   const Input& in = rec.inputs[i];
   const GpsFix& f = rec.fixes[in.fix];
   GpsTransform& g = n.out.gps_transform;
-  const double imu_yaw = rec.navsat_imu_yaw_rad + f.convergence_rad;
+  // use_odometry_yaw: the filter's own yaw is the heading (navsat's
+  // odomCallback passes the filtered orientation on as its IMU's).
+  const NavsatParams& nv = rec.params.navsat;
+  const double heading = nv.use_odometry_yaw ? x[rl::kYaw] + nv.magnetic_declination_radians + nv.yaw_offset
+                                             : rec.navsat_imu_yaw_rad;
+  const double imu_yaw = heading + f.convergence_rad;
   g.grid_origin = f.p - rotation_rpy(0.0, 0.0, imu_yaw) * in.lever;
   g.odom_origin = x.segment<3>(rl::kX);
   if (rec.params.navsat.zero_altitude) g.odom_origin.z() = 0.0;

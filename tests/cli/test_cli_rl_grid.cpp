@@ -274,3 +274,43 @@ TEST(CliRlGrid, ReportShowsTheSeedsSpreadAndWhatTheRecordingDetermined) {
   }
   EXPECT_EQ(html.find("<script"), std::string::npos);
 }
+
+// Model rl-ukf: the same experiment run by ukf_node (the Husky's file read as
+// the UKF's; one grid level and a short span keep it to seconds, the UKF being
+// ~35× slower); the report names it, and the exported file says it is the
+// UKF's (alpha, kappa, beta written) and replays to the run's stored figure.
+TEST(CliRlGrid, UkfModelGoesThroughGridReportAndExport) {
+  TempDir dir("cli-rl-ukf-grid");
+  const auto exp = experiment(dir, "rlukf", "models: [rl-ekf]", "models: [rl-ukf]");
+  std::string text = slurp(exp);
+  for (const auto& [from, to] :
+       std::vector<std::pair<std::string, std::string>>{{"until_s: 100", "until_s: 60"},
+                                                        {"end_s: 160", "end_s: 90"},
+                                                        {"fitness: [outage, both]", "fitness: [heldout-fixes]"},
+                                                        {"grid_levels: [-1, 1]", "grid_levels: [0]"}})
+    text.replace(text.find(from), from.size(), to);
+  std::ofstream(exp) << text;
+  const auto store = dir.path() / "rlukf.sqlite";
+  const auto g = run_cli("grid " + exp.string());
+  ASSERT_EQ(g.exit_code, 0) << g.err;
+  const auto runs = odotune::results::Store(store).runs();
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_EQ(runs[0].model, "rl-ukf");
+  const auto report_dir = dir.path() / "report";
+  const auto rep = run_cli("report " + store.string() + " --out " + report_dir.string());
+  ASSERT_EQ(rep.exit_code, 0) << rep.err;
+  const std::string html = slurp(report_dir / "index.html");
+  EXPECT_NE(html.find("robot_localization's UKF (model rl-ukf)"), std::string::npos);
+  const auto out = dir.path() / "ukf.yaml";
+  const auto x = run_cli("export " + store.string() + " --format robot_localization --out " + out.string());
+  ASSERT_EQ(x.exit_code, 0) << x.err;
+  const std::string file = slurp(out);
+  EXPECT_NE(file.find("alpha:"), std::string::npos) << file;
+  const double stored = number_after(x.out, "held-out GPS-outage RMSE");
+  ASSERT_GT(stored, 0.0) << x.out;
+  const auto e = run_cli("eval --rl-params " + out.string() + " --bag " + kRlBags + "/ros2/test1.mcap --tf " +
+                         kTf + " --gps-heading-fit 60 --from 60 --until 90");
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_NE(e.out.find("robot_localization UKF"), std::string::npos) << e.out;
+  EXPECT_NEAR(number_after(e.out, "GPS outage RMSE"), stored, 0.0015) << e.out << x.out;
+}

@@ -244,6 +244,33 @@ TEST(RlEkf, NonFiniteMembersAreLeftOutAndLateMeasurementsDoNotRewindTime) {
 
 // The bits of the fmod formula angles::normalize_angle is, for every kind of
 // input (the filter's shortcut computes fmod's exact remainder otherwise).
+// robot_localization's test_ekf.cpp: a first measurement of every member
+// (mᵢ = 0.15·i, variances 1e-9) becomes the state and the covariance exactly;
+// with P = 0.5·I, a second one of 2m two seconds later leaves every member
+// within 0.001 of it.
+TEST(RlEkf, ReproducesRobotLocalizationsEkfTest) {
+  rl::RlEkfParams params;
+  params.process_noise = default_q();
+  params.initial_cov = rl::Cov::Identity() * 0.5;
+  rl::RlEkf ekf(params);
+  rl::Measurement m;
+  for (int i = 0; i < rl::kStateSize; ++i) {
+    m.z[i] = i * 0.01 * rl::kStateSize;
+    m.R(i, i) = 1e-9;
+    m.mask[i] = true;
+  }
+  m.time_ns = 1000'000'000'000;
+  ASSERT_TRUE(ekf.process(m));
+  EXPECT_EQ(ekf.state(), m.z);
+  EXPECT_EQ(ekf.cov(), m.R);
+  ekf.restore(ekf.state(), rl::Cov::Identity() * 0.5, ekf.last_time_ns());  // setEstimateErrorCovariance
+  rl::Measurement m2 = m;
+  m2.z *= 2.0;
+  m2.time_ns = 1002'000'000'000;
+  ASSERT_TRUE(ekf.process(m2));
+  for (int i = 0; i < rl::kStateSize; ++i) EXPECT_LT(std::abs(m2.z[i] - ekf.state()[i]), 0.001) << i;
+}
+
 TEST(RlEkf, NormalizeAngleGivesTheBitsOfFmod) {
   auto by_fmod = [](double a) {
     const double r = std::fmod(a + std::numbers::pi, 2.0 * std::numbers::pi);

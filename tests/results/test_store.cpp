@@ -192,4 +192,21 @@ TEST(ResultsStore, HashTellsFilesApart) {
 }
 
 }  // namespace
+// A diverged run's held-out metrics are NaN; SQLite keeps a bound NaN as
+// NULL, which must read back as NaN, not as 0 m.
+TEST(ResultsStore, NanMetricsReadBackAsNan) {
+  TempPath tmp;
+  RunRecord a = record("rl-ukf", 8, 1);
+  a.tuned = {std::nan(""), std::nan(""), std::nan("")};
+  {
+    Store s(tmp.p, info("models: [rl-ukf]"));
+    s.add(a);
+  }
+  const auto runs = Store(tmp.p).runs();
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_TRUE(std::isnan(runs[0].tuned.rmse_m));
+  EXPECT_TRUE(std::isnan(runs[0].tuned.maxe_m));
+  EXPECT_EQ(runs[0].baseline.rmse_m, a.baseline.rmse_m);
+}
+
 }  // namespace odotune::results

@@ -514,8 +514,9 @@ TEST(RlParams, RefusesValuesTheReplayDoesNotReproduce) {
     EXPECT_EQ(e.find('\n'), std::string::npos) << e;
   }
   const fs::path nav = write_file(dir, "nav.yaml",
-                                  "ekf:\n  odom0: /o\nnavsat:\n  yaw_offset: 0.0\n  use_odometry_yaw: true\n");
-  EXPECT_EQ(read_error(nav).rfind(nav.string() + ":5: use_odometry_yaw: true is not reproduced", 0), 0U);
+                                  "ekf:\n  odom0: /o\nnavsat:\n  yaw_offset: 0.0\n  wait_for_datum: true\n");
+  EXPECT_EQ(read_error(nav).rfind(nav.string() + ":5: wait_for_datum: true without a datum", 0), 0U)
+      << read_error(nav);
   // the same keys at their harmless values
   const fs::path ok = write_file(dir, "ok.yaml", R"(ekf:
   odom0: /o

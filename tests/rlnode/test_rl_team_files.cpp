@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -150,10 +151,9 @@ TEST(RlTeamFiles, KeysWithoutEffectLeaveTheReplayIdentical) {
 }
 
 // Every filter section of the 31 teams' files loads, each key reproduced, of
-// no effect or not read by robot_localization either, except where the file
-// asks for what the replay does not reproduce yet: navsat_transform_node's
-// use_odometry_yaw, or a navsat-only file (no filter section). The table of
-// docs/robot-localization/teams-files.md is this, key by key.
+// no effect, approximated or not read by robot_localization either; the four
+// navsat-only files have no filter section (they go with --navsat-params).
+// The table of docs/robot-localization/teams-files.md is this, key by key.
 TEST(RlTeamFiles, EveryTeamFileLoadsOrIsRefusedByName) {
   int files = 0, sections = 0, loaded = 0;
   for (const auto& entry : std::filesystem::directory_iterator(kTeamConfigs)) {
@@ -184,8 +184,7 @@ TEST(RlTeamFiles, EveryTeamFileLoadsOrIsRefusedByName) {
         for (const KeyReport& k : p.keys) EXPECT_GT(k.line, 0) << k.key;
       } catch (const std::invalid_argument& e) {
         const std::string what = e.what();
-        EXPECT_TRUE(what.find("use_odometry_yaw: true is not reproduced") != std::string::npos ||
-                    what.find("no ekf_node section") != std::string::npos)
+        EXPECT_NE(what.find("no ekf_node section"), std::string::npos)
             << entry.path().filename() << " " << node << ": " << what;
         EXPECT_EQ(what.find('\n'), std::string::npos) << what;
       }
@@ -193,5 +192,28 @@ TEST(RlTeamFiles, EveryTeamFileLoadsOrIsRefusedByName) {
   }
   EXPECT_EQ(files, 31);
   EXPECT_EQ(sections, 37);
-  EXPECT_EQ(loaded, 28);
+  EXPECT_EQ(loaded, 33);
+}
+
+// Heron's team keeps navsat_transform_node's parameters in a file of their
+// own: --navsat-params reads it beside the filter's (its keys reported with
+// that file's name); a filter file that has a navsat section already is refused.
+TEST(RlTeamFiles, NavsatParamsFromTheirOwnFile) {
+  const auto filter = kTeamConfigs / "heron__heron__heron_control_config_robot_localization.yaml";
+  const auto navsat = kTeamConfigs / "heron__heron__heron_control_config_navsat_config.yaml";
+  EXPECT_FALSE(read_rl_params(filter).navsat.present);
+  const RlParams p = read_rl_params(filter, "", std::nullopt, navsat);
+  ASSERT_TRUE(p.navsat.present);
+  EXPECT_EQ(p.navsat.frequency_hz, 20.0);  // ROS 1: an integer is a number
+  EXPECT_FALSE(p.navsat.zero_altitude);
+  int navsat_keys = 0;
+  for (const KeyReport& k : p.keys) navsat_keys += k.section.find("navsat_config.yaml") != std::string::npos;
+  EXPECT_EQ(navsat_keys, 8);
+  const auto dual = kTeamConfigs / "cra-ros-pkg__robot_localization__params_dual_ekf_navsat_example.yaml";
+  try {
+    read_rl_params(dual, "ekf_filter_node_map", std::nullopt, navsat);
+    ADD_FAILURE() << "two navsat sections must be refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--navsat-params"), std::string::npos) << e.what();
+  }
 }
