@@ -22,6 +22,7 @@
 #include "rlnode/recording.h"
 #include "rlnode/replay.h"
 #include "support/rl_gps_bag.h"
+#include "support/rl_test1.h"
 #include "support/ros2_bag.h"
 #include "support/temp_dir.h"
 
@@ -39,17 +40,6 @@ const std::filesystem::path kBags = std::filesystem::path(ODOTUNE_SHARED_DIR) /
 std::filesystem::path write_file(const std::filesystem::path& path, const std::string& text) {
   std::ofstream(path) << text;
   return path;
-}
-
-// The IMU mounting of robot_localization's ROS 1 bag1 test (static_transform_publisher
-// 0 -0.3 0.52 -1.570796327 0 1.570796327 base_link imu_link: x y z yaw pitch roll).
-RecordingOptions bag1_mounting() {
-  RecordingOptions o;
-  Pose3 mount;
-  mount.t = {0.0, -0.3, 0.52};
-  mount.R = rotation_rpy(1.570796327, 0.0, -1.570796327);
-  o.frames["imu_link"] = mount;
-  return o;
 }
 
 const char* kBag1Params = R"(test_ekf_localization_node_bag1_ekf:
@@ -151,7 +141,7 @@ rl::State final_state(const std::filesystem::path& bag, const RlParams& p, const
 TEST(RlReplay, Bag1EndsWhereRobotLocalizationsOwnTestExpects) {
   TempDir dir("rl-bag1");
   const RlParams p = read_rl_params(write_file(dir.path() / "bag1.yaml", kBag1Params));
-  const rl::State x = final_state(kBags / "ros2/test1.mcap", p, bag1_mounting());
+  const rl::State x = final_state(kBags / "ros2/test1.mcap", p, odotune::testing_support::test1_imu_mounting());
   const double d = distance_to(x, -40.0454, -76.9988, -2.6974);
   EXPECT_LT(d, 0.3) << "final " << x.head<3>().transpose();
 }
@@ -163,8 +153,8 @@ TEST(RlReplay, Bag1RosOneAndMcapFormsAgree) {
   if (!odotune::bags::ros1_supported()) GTEST_SKIP() << "this build does not read ROS 1 bags";
   TempDir dir("rl-bag1-forms");
   const RlParams p = read_rl_params(write_file(dir.path() / "bag1.yaml", kBag1Params));
-  const rl::State a = final_state(kBags / "test1.bag", p, bag1_mounting());
-  const rl::State b = final_state(kBags / "ros2/test1.mcap", p, bag1_mounting());
+  const rl::State a = final_state(kBags / "test1.bag", p, odotune::testing_support::test1_imu_mounting());
+  const rl::State b = final_state(kBags / "ros2/test1.mcap", p, odotune::testing_support::test1_imu_mounting());
   EXPECT_LT((a - b).head<3>().norm(), 1e-3);
 }
 
@@ -183,7 +173,7 @@ TEST(RlReplay, UkfBag1EndsWhereRobotLocalizationsOwnTestExpects) {
   TempDir dir("rl-ukf-bag1");
   const RlParams p = read_rl_params(write_file(dir.path() / "bag1.yaml", kUkfBag1Params));
   ASSERT_EQ(p.filter, rl::RlFilterType::ukf);
-  const rl::State x = final_state(kBags / "ros2/test1.mcap", p, bag1_mounting());
+  const rl::State x = final_state(kBags / "ros2/test1.mcap", p, odotune::testing_support::test1_imu_mounting());
   const double d = distance_to(x, -39.7333, -76.9820, -2.4427);
   EXPECT_LT(d, 1.2910) << "final " << x.head<3>().transpose();
 }
@@ -264,7 +254,7 @@ void expect_same_output(const ReplayOutput& a, const ReplayOutput& b, const std:
 // make some lanes reject, one with dynamic process noise, one whose
 // covariance overflows.
 TEST(RlReplay, BatchGivesTheBitsOfOneReplayPerSetting) {
-  RecordingOptions o = bag1_mounting();
+  RecordingOptions o = odotune::testing_support::test1_imu_mounting();
   Recording rec = load_recording(kBags / "ros2/test1.mcap", read_rl_params(kBags / "husky_ekf.yaml"), o);
   rec.gps_transform = fit_gps_alignment(rec, settings_of(rec.params), 60.0).transform;
   std::vector<FixRole> roles(rec.fixes.size(), FixRole::fuse);

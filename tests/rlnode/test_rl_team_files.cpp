@@ -18,6 +18,7 @@
 #include "rlnode/params.h"
 #include "rlnode/recording.h"
 #include "rlnode/replay.h"
+#include "support/rl_test1.h"
 #include "support/temp_dir.h"
 
 namespace rl = odotune::filters::rl;
@@ -28,16 +29,6 @@ namespace {
 const std::filesystem::path kTeamShared = std::filesystem::path(ODOTUNE_SHARED_DIR) / "data/real";
 const std::filesystem::path kTeamConfigs = kTeamShared / "robot_localization_configs";
 const std::filesystem::path kTeamBags = kTeamShared / "robot_localization_bags";
-
-// test1's IMU mounting (robot_localization's ROS 1 bag1 test; not in the bag).
-RecordingOptions team_husky_mounting() {
-  RecordingOptions o;
-  Pose3 mount;
-  mount.t = {0.0, -0.3, 0.52};
-  mount.R = rotation_rpy(1.570796327, 0.0, -1.570796327);
-  o.frames["imu_link"] = mount;
-  return o;
-}
 
 ReplayOutput team_replay(const RlParams& p, const std::filesystem::path& bag, const RecordingOptions& o) {
   const Recording rec = load_recording(bag, p, o);
@@ -61,7 +52,7 @@ TEST(RlTeamFiles, ClearpathHuskyFilesReplayOnTest1) {
   EXPECT_TRUE(ros1.predict_to_current_time);
   EXPECT_FALSE(ros2.predict_to_current_time);
   const auto bag = kTeamBags / "test1.bag";
-  RecordingOptions o = team_husky_mounting();
+  RecordingOptions o = odotune::testing_support::test1_imu_mounting();
   try {
     load_recording(bag, ros2, o);
     ADD_FAILURE() << "the ROS 2 file's odom topic is not test1's";
