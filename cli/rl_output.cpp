@@ -37,9 +37,16 @@ void print_notes(const std::vector<std::string>& notes, const std::optional<rlno
 }  // namespace
 
 void print_rl_keys(const rlnode::RlParams& p) {
-  fmt::print("{}: robot_localization {} ({}, section {}), {} keys\n", p.file.filename().string(),
-             p.filter == filters::rl::RlFilterType::ekf ? "EKF" : "UKF", p.ros2 ? "ROS 2" : "ROS 1",
-             p.node_name.empty() ? "(top level)" : p.node_name, p.keys.size());
+  if (p.sensors.empty() && p.navsat.present) {
+    fmt::print(
+        "{}: navsat_transform_node's parameters alone ({}), {} keys; give them with --navsat-params beside "
+        "the filter's file\n",
+        p.file.filename().string(), p.navsat.node_name, p.keys.size());
+  } else {
+    fmt::print("{}: robot_localization {} ({}, section {}), {} keys\n", p.file.filename().string(),
+               p.filter == filters::rl::RlFilterType::ekf ? "EKF" : "UKF", p.ros2 ? "ROS 2" : "ROS 1",
+               p.node_name.empty() ? "(top level)" : p.node_name, p.keys.size());
+  }
   for (const rlnode::KeyReport& k : p.keys)
     fmt::print("  {:>4}  {:<13} {:<36} {}\n", k.line, rlnode::to_string(k.use), k.key, k.section);
   for (const std::string& n : p.notes) fmt::print("  note: {}\n", n);

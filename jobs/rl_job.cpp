@@ -52,6 +52,12 @@ rlnode::RlParams read_rl_file(const RlSource& src) {
   try {
     return rlnode::read_rl_params(src.params_file, src.node_name, src.filter, src.navsat_params);
   } catch (const std::exception& e) {
+    // A navsat_transform_node file alone: its keys, if that is what it is.
+    try {
+      if (src.node_name.empty() && src.navsat_params.empty())
+        return rlnode::read_navsat_params(src.params_file);
+    } catch (const std::exception&) {  // not a navsat file either: the first reason stands
+    }
     throw Failure(e.what());
   }
 }

@@ -17,7 +17,7 @@ import sys
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 CONFIGS = ROOT.parent / "shared" / "data" / "real" / "robot_localization_configs"
 ODOTUNE = sys.argv[1] if len(sys.argv) > 1 else str(ROOT / "build" / "odotune")
-KEY = re.compile(r"^\s+(\d+)\s+(reproduced|no effect|not read|approximated)\s+(\S+)\s+(\S+)$")
+KEY = re.compile(r"^\s+(\d+)\s+(reproduced|no effect|not read|approximated)\s+(\S+)\s+(.+)$")
 
 
 def keys(path, node=None):
@@ -50,7 +50,7 @@ def row(name, node, result, error):
         return f"| {name} | {node or '–'} | refused: {error} | | | |"
     head, rows = result
     kind = re.search(r"robot_localization (EKF|UKF) \((ROS [12])", head)
-    filt = f"{kind[1]}, {kind[2]}" if kind else "?"
+    filt = f"{kind[1]}, {kind[2]}" if kind else "navsat_transform_node alone (`--navsat-params`)"
     counts = {u: sum(1 for r in rows if r[1] == u) for u in ("reproduced", "no effect", "not read", "approximated")}
     summary = f"{filt}: {counts['reproduced']} reproduced"
     return (f"| {name} | {node or '–'} | {summary} | {cell(rows, 'no effect')} | {cell(rows, 'not read')} | "
@@ -78,11 +78,11 @@ def main():
             rows.append(row(path.name, node, result, error))
             if result is None:
                 refused.append(error)
-    reasons = sorted({("navsat's use_odometry_yaw" if "use_odometry_yaw" in e else
-                       "a navsat_transform_node file alone (no filter section; it is read beside a filter file with --navsat-params)" if "no ekf_node section" in e
-                       else e) for e in refused})
-    print(f"{len(files)} files, {len(rows)} rows (one per filter section; a navsat-only file is one row): {len(rows) - len(refused)} load and replay; "
-          f"{len(refused)} are refused by name, for: {'; '.join(reasons)}.\n")
+    navsat_only = sum(1 for r in rows if "navsat_transform_node alone" in r)
+    print(f"{len(files)} files, {len(rows)} rows (one per filter section; a navsat_transform_node file alone is "
+          f"one row): {len(rows) - len(refused) - navsat_only} filter sections load and replay, "
+          f"{navsat_only} navsat files load beside a filter's file (`--navsat-params`), {len(refused)} are refused"
+          f"{': ' + '; '.join(sorted(set(refused))) if refused else ''}.\n")
     print("| file | section | filter: keys reproduced | no effect | not read | approximated |")
     print("|---|---|---|---|---|---|")
     print("\n".join(rows))

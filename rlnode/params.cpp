@@ -1025,6 +1025,30 @@ void read_navsat_file(const fs::path& file, RlParams& p) {
 
 }  // namespace
 
+RlParams read_navsat_params(const std::filesystem::path& file) {
+  const Source src = load(file);
+  bool filter = src.root.IsMap() && has_input_key(src.root);
+  for (const auto& kv : src.root.IsMap() ? src.root : YAML::Node()) {
+    if (!kv.first.IsScalar()) continue;
+    if (is_namespace(kv.second)) {
+      for (const auto& node : kv.second)
+        filter = filter || has_input_key(section_of(node.first, node.second)->params);
+    } else if (const auto s = section_of(kv.first, kv.second)) {
+      filter = filter || has_input_key(s->params);
+    }
+  }
+  if (filter) {
+    throw std::invalid_argument(
+        fmt::format("{}: has a filter section; expected navsat_transform_node's parameters "
+                    "alone",
+                    file.string()));
+  }
+  RlParams p;
+  p.file = file;
+  read_navsat_file(file, p);
+  return p;
+}
+
 RlParams read_rl_params(const std::filesystem::path& file, const std::string& node_name,
                         std::optional<filters::rl::RlFilterType> filter,
                         const std::filesystem::path& navsat_file) {

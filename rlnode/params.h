@@ -152,6 +152,11 @@ RlParams read_rl_params(const std::filesystem::path& file, const std::string& no
                         std::optional<filters::rl::RlFilterType> filter = std::nullopt,
                         const std::filesystem::path& navsat_file = {});
 
+// A navsat_transform_node file alone (for `eval --keys`): RlParams with only
+// `navsat`, `keys` and `notes` filled. Throws as read_rl_params, and for a file
+// that has a filter section.
+RlParams read_navsat_params(const std::filesystem::path& file);
+
 // What a tune changes in the file.
 struct RlParamsUpdate {
   std::optional<Matrix15> process_noise_covariance;

@@ -146,7 +146,7 @@ TEST(RlTeamFiles, KeysWithoutEffectLeaveTheReplayIdentical) {
 // navsat-only files have no filter section (they go with --navsat-params).
 // The table of docs/robot-localization/teams-files.md is this, key by key.
 TEST(RlTeamFiles, EveryTeamFileLoadsOrIsRefusedByName) {
-  int files = 0, sections = 0, loaded = 0;
+  int files = 0, sections = 0, loaded = 0, navsat_only = 0;
   for (const auto& entry : std::filesystem::directory_iterator(kTeamConfigs)) {
     if (entry.path().extension() != ".yaml") continue;
     ++files;
@@ -178,12 +178,17 @@ TEST(RlTeamFiles, EveryTeamFileLoadsOrIsRefusedByName) {
         EXPECT_NE(what.find("no ekf_node section"), std::string::npos)
             << entry.path().filename() << " " << node << ": " << what;
         EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+        const RlParams n = read_navsat_params(entry.path());
+        EXPECT_TRUE(n.navsat.present);
+        EXPECT_FALSE(n.keys.empty());
+        ++navsat_only;
       }
     }
   }
   EXPECT_EQ(files, 31);
   EXPECT_EQ(sections, 37);
   EXPECT_EQ(loaded, 33);
+  EXPECT_EQ(navsat_only, 4);
 }
 
 // Heron's team keeps navsat_transform_node's parameters in a file of their
