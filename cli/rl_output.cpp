@@ -44,7 +44,7 @@ void print_rl_keys(const rlnode::RlParams& p) {
         p.file.filename().string(), p.navsat.node_name, p.keys.size());
   } else {
     fmt::print("{}: robot_localization {} ({}, section {}), {} keys\n", p.file.filename().string(),
-               p.filter == filters::rl::RlFilterType::ekf ? "EKF" : "UKF", p.ros2 ? "ROS 2" : "ROS 1",
+               filters::rl::display_name(p.filter), p.ros2 ? "ROS 2" : "ROS 1",
                p.node_name.empty() ? "(top level)" : p.node_name, p.keys.size());
   }
   for (const rlnode::KeyReport& k : p.keys)
@@ -124,19 +124,14 @@ std::string truth_change(const TruthScore& a, const TruthScore& b) {
   return fmt::format("{} -> {}{}", truth_text(a), truth_text(b), pct);
 }
 
-// "EKF" (ekf_node) or "UKF" (ukf_node).
-std::string filter_name(filters::rl::RlFilterType t) {
-  return t == filters::rl::RlFilterType::ekf ? "EKF" : "UKF";
-}
-
 }  // namespace
 
 void print_rl_track_eval(const RlTrackEvalOutcome& o) {
   for (const RlTrackRow& r : o.rows) {
     const RlTrackScores& s = r.scores;
     fmt::print("{}: robot_localization {} ({}) over {:.1f} s, odometry {}: {} measurements, {} rejected\n",
-               r.track.filename().string(), filter_name(o.filter), o.params_file.filename().string(),
-               r.duration_s, to_string(r.odometry), s.processed, s.rejected);
+               r.track.filename().string(), filters::rl::display_name(o.filter),
+               o.params_file.filename().string(), r.duration_s, to_string(r.odometry), s.processed, s.rejected);
     fmt::print("  {}{}\n", r.start_note,
                std::isfinite(r.initial_heading_error_rad)
                    ? fmt::format(" (against gt_theta: {:+.3f} rad)", r.initial_heading_error_rad)
@@ -167,8 +162,8 @@ void print_rl_track_tune(const RlTuneRequest& r, const RlTrackTuneOutcome& o) {
 void print_rl_eval(const RlEvalOutcome& o) {
   const rl::State& x = o.final_state;
   fmt::print("{}: robot_localization {} ({}) over {:.1f} s: {} measurements, {} rejected\n",
-             o.bag.filename().string(), filter_name(o.filter), o.params_file.filename().string(), o.duration_s,
-             o.processed, o.rejected);
+             o.bag.filename().string(), filters::rl::display_name(o.filter), o.params_file.filename().string(),
+             o.duration_s, o.processed, o.rejected);
   fmt::print("  final pose: x {:.4f} m, y {:.4f} m, z {:.4f} m, yaw {:.4f} rad\n", x[rl::kX], x[rl::kY],
              x[rl::kZ], x[rl::kYaw]);
   if (o.heldout) fmt::print("  held-out fixes (5 folds of 1 s blocks): RMSE {}\n", metres(*o.heldout));
@@ -184,10 +179,10 @@ void print_rl_eval(const RlEvalOutcome& o) {
 void print_rl_tune(const RlTuneRequest& r, const RlTuneOutcome& o) {
   fmt::print("{}: robot_localization {} ({}), tuned on {:.1f}-{:.1f} s of {:.1f} s; fitness {}, {} process "
              "noise{}; outages of {} s ({} windows)\n",
-             o.bag.filename().string(), filter_name(o.filter), o.params_file.filename().string(), o.span_from_s,
-             o.span_until_s, o.duration_s, to_string(r.options.fitness), to_string(r.options.space),
-             r.options.input_covariances ? " and input covariances" : "", fmt::join(r.options.outage_s, ", "),
-             o.outage_windows);
+             o.bag.filename().string(), filters::rl::display_name(o.filter), o.params_file.filename().string(),
+             o.span_from_s, o.span_until_s, o.duration_s, to_string(r.options.fitness),
+             to_string(r.options.space), r.options.input_covariances ? " and input covariances" : "",
+             fmt::join(r.options.outage_s, ", "), o.outage_windows);
   fmt::print(
       "  grid of block factors: {} combinations, then the profile: tuning fitness {:.4f} (the file's values "
       "{:.4f})\n",

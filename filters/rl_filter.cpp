@@ -16,6 +16,7 @@ std::variant<RlEkf, RlUkf> make(RlFilterType type, const RlEkfParams& params, co
 }  // namespace
 
 std::string_view to_string(RlFilterType t) { return t == RlFilterType::ekf ? "ekf" : "ukf"; }
+std::string_view display_name(RlFilterType t) { return t == RlFilterType::ekf ? "EKF" : "UKF"; }
 
 std::optional<RlFilterType> parse_rl_filter_type(std::string_view name) {
   if (name == "ekf") return RlFilterType::ekf;

@@ -14,7 +14,8 @@
 namespace odotune::filters::rl {
 
 enum class RlFilterType { ekf, ukf };
-std::string_view to_string(RlFilterType t);  // "ekf", "ukf"
+std::string_view to_string(RlFilterType t);     // "ekf", "ukf"
+std::string_view display_name(RlFilterType t);  // "EKF", "UKF", for text a user reads
 std::optional<RlFilterType> parse_rl_filter_type(std::string_view name);
 
 // The unscented transform's constants (ukf_node's ~alpha, ~kappa, ~beta).

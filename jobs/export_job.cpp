@@ -250,21 +250,19 @@ ExportOutcome run_export(const ExportRequest& request) {
   const std::string origin = fmt::format("odotune export from {} (experiment {}, {}): run {}", request.store,
                                          store->experiment().name, store->experiment().hash, key);
 
-  if (is_rl_model_name(run.model)) {
+  TunedModel model;
+  if (parse_tuned_model(run.model, &model) && model.is_rl()) {
     if (request.format != "robot_localization")
       throw Failure(fmt::format("run {} tuned robot_localization's {} (model {}): it exports as the robot's "
                                 "own parameter file only; use --format robot_localization",
-                                key, run.model == "rl-ukf" ? "UKF" : "EKF", run.model));
+                                key, filters::rl::display_name(model.rl_filter()), run.model));
     const results::ExperimentInfo info = store->experiment();
     write_rl_run(parse_experiment(info.text, info.file), run, request.out, !request.ros1,
                  origin + fmt::format("\nChosen as the lowest tuning fitness of {} matching run{}.",
                                       sel.matching, sel.matching == 1 ? "" : "s"));
-    auto metres = [](double v) {
-      return std::isfinite(v) ? fmt::format("{:.3f} m", v) : std::string("diverged");
-    };
     return {key,
             fmt::format("held-out GPS-outage RMSE {} vs {} with the file's values on {}",
-                        metres(run.tuned.rmse_m), metres(run.baseline.rmse_m), run.track),
+                        rmse_text(3, run.tuned.rmse_m), rmse_text(3, run.baseline.rmse_m), run.track),
             sel.matching};
   }
   if (request.ros1)

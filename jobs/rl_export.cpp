@@ -30,16 +30,13 @@ void write_rl_run(const Experiment& e, const results::RunRecord& run, const std:
   std::string why;
   if (!apply_rl_factors(params, run.param_names, run.params, &s, &why))
     throw Failure(fmt::format("{}: cannot apply the run's factors: {}", x.params.string(), why));
-  auto metres = [](double v) {
-    return std::isfinite(v) ? fmt::format("{:.3f} m", v) : std::string("diverged");
-  };
   const double change = 100.0 * (run.tuned.rmse_m / run.baseline.rmse_m - 1.0);
   const std::string held_out = fmt::format(
       "Tuned on the first {} s of {} (fitness {}, {} process noise); scored after it{}, never seen by the tune:\n"
       "  GPS fused until {} s, none after: RMSE {} with the file's values -> {} tuned{}.\n",
       x.until_s, bag->c_str(), to_string(rl_fitness_of_mode(run.mode).value_or(RlFitness::outage)),
       to_string(x.space), x.end_s ? fmt::format(" until {} s", *x.end_s) : "", x.until_s,
-      metres(run.baseline.rmse_m), metres(run.tuned.rmse_m),
+      rmse_text(3, run.baseline.rmse_m), rmse_text(3, run.tuned.rmse_m),
       std::isfinite(change) ? fmt::format(" ({:+.0f} %)", change) : "");
   write_tuned_params(out, params, s, loaded.alignment, x.gps_heading_fit_s, ros2, provenance + "\n" + held_out);
 }

@@ -106,6 +106,10 @@ std::pair<std::string, rlnode::Pose3> parse_tf(const std::string& text) {
   return {text.substr(0, eq), p};
 }
 
+std::string rmse_text(int decimals, double v_m) {
+  return std::isfinite(v_m) ? fmt::format("{:.{}f} m", v_m, decimals) : "diverged";
+}
+
 // "FROM=TO" (ROS's FROM:=TO remapping, as for rosrun or a launch file's <remap>).
 std::pair<std::string, std::string> parse_remap(const std::string& text) {
   const std::size_t eq = text.find('=');

@@ -73,6 +73,9 @@ std::pair<std::string, rlnode::Pose3> parse_tf(const std::string& text);
 // The parameter file of `src` alone (its bag not read): its keys'
 // RlParams::keys and notes, for `eval --keys`; throws Failure with one line.
 rlnode::RlParams read_rl_file(const RlSource& src);
+// An error [m] for the user: "1.23 m" with `decimals` places, or "diverged"
+// when it is not finite (a diverged filter's NaN).
+std::string rmse_text(int decimals, double v_m);
 // "FROM=TO" (--remap); throws Failure with one line otherwise.
 std::pair<std::string, std::string> parse_remap(const std::string& text);
 

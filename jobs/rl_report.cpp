@@ -49,12 +49,9 @@ results::TrajectoryPath path_of(std::string name, const std::vector<rlnode::Traj
   return p;
 }
 
-// "1.23 m", or "diverged" for a non-finite error.
-std::string metres(double v) { return std::isfinite(v) ? fmt::format("{:.2f} m", v) : "diverged"; }
-
 // "EKF" or "UKF": the filter of the experiment's model.
-const char* filter_label(const Experiment& e) {
-  return e.models.front().rl_filter() == filters::rl::RlFilterType::ukf ? "UKF" : "EKF";
+std::string_view filter_label(const Experiment& e) {
+  return filters::rl::display_name(e.models.front().rl_filter());
 }
 
 // The outage protocol's trajectories of each bag's best runs, replayed from the bag.
@@ -82,8 +79,8 @@ void trajectory_figures(const Experiment& e, const std::vector<RunRecord>& runs,
       held.ys_m.push_back(f.measured.y());
     }
     paths.push_back(std::move(held));
-    paths.push_back(path_of(fmt::format("the file's values ({})", metres(score_of(std::span(&b, 1)).rmse_m)),
-                            b.trajectory));
+    paths.push_back(path_of(
+        fmt::format("the file's values ({})", rmse_text(2, score_of(std::span(&b, 1)).rmse_m)), b.trajectory));
     for (const auto& [key, r] : best) {
       if (key.first != name) continue;
       rlnode::ReplaySettings s = base;
@@ -92,7 +89,7 @@ void trajectory_figures(const Experiment& e, const std::vector<RunRecord>& runs,
         throw Failure(fmt::format("run {}: {}", results::run_key(*r), why));
       const rlnode::ReplayOutput t = outage_run(rec, s, from, end, true);
       paths.push_back(path_of(fmt::format("tuned, {} seed {} ({})", fitness_name(r->mode), r->seed,
-                                          metres(score_of(std::span(&t, 1)).rmse_m)),
+                                          rmse_text(2, score_of(std::span(&t, 1)).rmse_m)),
                               t.trajectory));
     }
     const std::string title = fmt::format(

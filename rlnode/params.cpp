@@ -57,9 +57,15 @@ namespace fs = std::filesystem;
 // The type the node gives a key's value.
 enum class Kind : std::uint8_t { boolean, number, integer, text, numbers, booleans, any };
 
+// A key that is reproduced only while another feature is on (use_control,
+// smooth_lagged_data), and changes nothing otherwise.
+enum class Needs : std::uint8_t { nothing, control, smoothing };
+
 struct Known {
   std::string_view name;
   Kind kind;
+  KeyUse use = KeyUse::reproduced;  // what the replay makes of it (RlParams::keys)
+  Needs needs = Needs::nothing;
 };
 
 // ekf_node's keys besides the inputs' (odomN…).
@@ -85,41 +91,42 @@ constexpr Known kEkfKeys[] = {
     // use_control and its keys (read_control; while use_control is false
     // they have no effect)
     {"use_control", Kind::boolean},
-    {"control_timeout", Kind::number},
-    {"stamped_control", Kind::boolean},
-    {"control_config", Kind::any},
-    {"acceleration_limits", Kind::any},
-    {"acceleration_gains", Kind::any},
-    {"deceleration_limits", Kind::any},
-    {"deceleration_gains", Kind::any},
+    {"control_timeout", Kind::number, KeyUse::reproduced, Needs::control},
+    {"stamped_control", Kind::boolean, KeyUse::reproduced, Needs::control},
+    {"control_config", Kind::any, KeyUse::reproduced, Needs::control},
+    {"acceleration_limits", Kind::any, KeyUse::reproduced, Needs::control},
+    {"acceleration_gains", Kind::any, KeyUse::reproduced, Needs::control},
+    {"deceleration_limits", Kind::any, KeyUse::reproduced, Needs::control},
+    {"deceleration_gains", Kind::any, KeyUse::reproduced, Needs::control},
     // smooth_lagged_data and its history_length
     {"smooth_lagged_data", Kind::boolean},
-    {"history_length", Kind::number},
+    {"history_length", Kind::number, KeyUse::reproduced, Needs::smoothing},
     // refused unless false (refusal_reason), filter_type unless "ekf"
     {"disabled_at_startup", Kind::boolean},
     {"filter_type", Kind::text},
     // no effect on the estimate (reset_on_time_jump: a bag played once, as
     // `rosbag play --clock` plays it, never moves the clock back)
-    {"reset_on_time_jump", Kind::boolean},
-    {"use_sim_time", Kind::boolean},
-    {"clear_params", Kind::boolean},
-    {"publish_tf", Kind::boolean},
-    {"publish_acceleration", Kind::boolean},
-    {"permit_corrected_publication", Kind::boolean},
-    {"print_diagnostics", Kind::boolean},
-    {"debug", Kind::boolean},
-    {"debug_out_file", Kind::text},
-    {"transform_time_offset", Kind::number},
-    {"transform_timeout", Kind::number},
-    {"tf_prefix", Kind::any},
-    {"base_link_frame_output", Kind::text},
-    {"invert_tf", Kind::boolean},
+    {"reset_on_time_jump", Kind::boolean, KeyUse::no_effect},
+    {"use_sim_time", Kind::boolean, KeyUse::no_effect},
+    {"clear_params", Kind::boolean, KeyUse::no_effect},
+    {"publish_tf", Kind::boolean, KeyUse::no_effect},
+    {"publish_acceleration", Kind::boolean, KeyUse::no_effect},
+    {"permit_corrected_publication", Kind::boolean, KeyUse::no_effect},
+    {"print_diagnostics", Kind::boolean, KeyUse::no_effect},
+    {"debug", Kind::boolean, KeyUse::no_effect},
+    {"debug_out_file", Kind::text, KeyUse::no_effect},
+    {"transform_time_offset", Kind::number, KeyUse::no_effect},
+    {"transform_timeout", Kind::number, KeyUse::no_effect},
+    {"tf_prefix", Kind::any, KeyUse::no_effect},
+    {"base_link_frame_output", Kind::text, KeyUse::no_effect},
+    {"invert_tf", Kind::boolean, KeyUse::no_effect},
 };
 
-// navsat_transform_node's keys; `datum` is checked when read.
+// navsat_transform_node's keys; `datum` is checked when read. Its timer
+// (frequency, delay) is approximated by each fix's receive time.
 constexpr Known kNavsatKeys[] = {
-    {"frequency", Kind::number},
-    {"delay", Kind::number},
+    {"frequency", Kind::number, KeyUse::approximated},
+    {"delay", Kind::number, KeyUse::approximated},
     {"magnetic_declination_radians", Kind::number},
     {"yaw_offset", Kind::number},
     {"zero_altitude", Kind::boolean},
@@ -127,17 +134,18 @@ constexpr Known kNavsatKeys[] = {
     {"use_odometry_yaw", Kind::boolean},
     {"wait_for_datum", Kind::boolean},
     {"datum", Kind::numbers},
-    {"publish_filtered_gps", Kind::boolean},
-    {"broadcast_cartesian_transform", Kind::boolean},
-    {"broadcast_utm_transform", Kind::boolean},
-    {"broadcast_cartesian_transform_as_parent_frame", Kind::boolean},
-    {"broadcast_utm_transform_as_parent_frame", Kind::boolean},
-    {"broadcast_utm_transform_as_parent_frame_", Kind::boolean},  // ROS 2 declares it with the underscore
-    {"cartesian_frame_id", Kind::text},
-    {"transform_timeout", Kind::number},
-    {"use_sim_time", Kind::boolean},
-    {"clear_params", Kind::boolean},
-    {"tf_prefix", Kind::any},
+    {"publish_filtered_gps", Kind::boolean, KeyUse::no_effect},
+    {"broadcast_cartesian_transform", Kind::boolean, KeyUse::no_effect},
+    {"broadcast_utm_transform", Kind::boolean, KeyUse::no_effect},
+    {"broadcast_cartesian_transform_as_parent_frame", Kind::boolean, KeyUse::no_effect},
+    {"broadcast_utm_transform_as_parent_frame", Kind::boolean, KeyUse::no_effect},
+    {"broadcast_utm_transform_as_parent_frame_", Kind::boolean,
+     KeyUse::no_effect},  // ROS 2 declares it with the underscore
+    {"cartesian_frame_id", Kind::text, KeyUse::no_effect},
+    {"transform_timeout", Kind::number, KeyUse::no_effect},
+    {"use_sim_time", Kind::boolean, KeyUse::no_effect},
+    {"clear_params", Kind::boolean, KeyUse::no_effect},
+    {"tf_prefix", Kind::any, KeyUse::no_effect},
 };
 // navsat keys ekf_node has too: they do not make a section navsat_transform's.
 constexpr std::string_view kSharedKeys[] = {"frequency", "transform_timeout", "use_sim_time", "clear_params",
@@ -153,12 +161,13 @@ struct InputRule {
   std::string_view suffix;
   Kind kind;
   std::uint8_t kinds;
+  KeyUse use = KeyUse::reproduced;
 };
 constexpr InputRule kInputKeys[] = {
     {"", Kind::text, kAll},
     {"_config", Kind::booleans, kAll},
-    {"_queue_size", Kind::integer, kAll},
-    {"_nodelay", Kind::boolean, kAll},
+    {"_queue_size", Kind::integer, kAll, KeyUse::no_effect},
+    {"_nodelay", Kind::boolean, kAll, KeyUse::no_effect},
     {"_differential", Kind::boolean, kOdom | kPose | kImu},
     {"_relative", Kind::boolean, kOdom | kPose | kImu},
     {"_pose_use_child_frame", Kind::boolean, kOdom},
@@ -384,56 +393,26 @@ void check_ekf_key(const Reader& r, const std::string& name, const Entry& e, con
   refuse_if_true(r, name, e);
 }
 
-// Keys that change nothing in a replay: what the node publishes, queues, logs
-// and how it looks up transforms (the replay takes frames from --tf and
-// /tf_static), reset_on_time_jump (a bag played once never moves the clock
-// back).
-constexpr std::string_view kNoEffectKeys[] = {"reset_on_time_jump",     "use_sim_time",
-                                              "clear_params",           "publish_tf",
-                                              "publish_acceleration",   "permit_corrected_publication",
-                                              "print_diagnostics",      "debug",
-                                              "debug_out_file",         "transform_time_offset",
-                                              "transform_timeout",      "tf_prefix",
-                                              "base_link_frame_output", "invert_tf"};
-constexpr std::string_view kControlKeys[] = {"control_timeout",     "stamped_control",    "control_config",
-                                             "acceleration_limits", "acceleration_gains", "deceleration_limits",
-                                             "deceleration_gains"};
-
-template <std::size_t N>
-bool one_of(const std::string_view (&names)[N], std::string_view name) {
-  return std::find(std::begin(names), std::end(names), name) != std::end(names);
-}
-
 // What the replay makes of one key of the filter's section (after read_ekf,
 // read_control and read_smoothing; refused keys never get here).
 KeyUse ekf_key_use(const std::string& name, const std::array<int, 4>& count, const RlParams& p, bool ros2) {
-  if (!find_known(kEkfKeys, name)) {
+  const Known* k = find_known(kEkfKeys, name);
+  if (!k) {
     const auto in = split_input_key(name);
     if (!in || !in->rule || in->index >= count[static_cast<std::size_t>(in->kind)]) return KeyUse::not_read;
-    return in->rule->suffix == "_queue_size" || in->rule->suffix == "_nodelay" ? KeyUse::no_effect
-                                                                               : KeyUse::reproduced;
+    return in->rule->use;
   }
-  if (one_of(kNoEffectKeys, name)) return KeyUse::no_effect;
-  if (name == "stamped_control" && ros2) return KeyUse::not_read;
+  if (name == "stamped_control" && ros2) return KeyUse::not_read;  // ROS 2's node does not declare it
   if (name == "use_control" && p.filter == filters::rl::RlFilterType::ukf) return KeyUse::no_effect;
-  if (one_of(kControlKeys, name) && !p.control.enabled) return KeyUse::no_effect;
-  if (name == "history_length" && !p.smooth_lagged_data) return KeyUse::no_effect;
-  return KeyUse::reproduced;
+  if ((k->needs == Needs::control && !p.control.enabled) ||
+      (k->needs == Needs::smoothing && !p.smooth_lagged_data))
+    return KeyUse::no_effect;
+  return k->use;
 }
 
-// navsat_transform_node's keys: what it publishes and broadcasts changes
-// nothing; its timer (frequency, delay) is approximated by the fix's receive time.
 KeyUse navsat_key_use(const std::string& name) {
-  if (!find_known(kNavsatKeys, name)) return KeyUse::not_read;
-  if (name == "frequency" || name == "delay") return KeyUse::approximated;
-  constexpr std::string_view kReproduced[] = {"magnetic_declination_radians",
-                                              "yaw_offset",
-                                              "zero_altitude",
-                                              "use_local_cartesian",
-                                              "use_odometry_yaw",
-                                              "wait_for_datum",
-                                              "datum"};
-  return one_of(kReproduced, name) ? KeyUse::reproduced : KeyUse::no_effect;
+  const Known* k = find_known(kNavsatKeys, name);
+  return k ? k->use : KeyUse::not_read;
 }
 
 void report_keys(const Keys& keys, const std::string& section,
@@ -715,6 +694,25 @@ int pick_ekf(const Reader& r, const YAML::Node& root, const Layout& l, const std
   return candidates[0];
 }
 
+// The node sections of a file's top level: NODE: {…} (ROS 1), NODE:
+// {ros__parameters: {…}} (ROS 2), and each node of a NAMESPACE: {NODE: …}.
+std::vector<Section> sections_of(const YAML::Node& root) {
+  std::vector<Section> out;
+  for (const auto& kv : root) {
+    if (kv.first.IsScalar() && is_namespace(kv.second)) {
+      for (const auto& node : kv.second) {
+        Section s = *section_of(node.first, node.second);
+        s.name = kv.first.Scalar() + "/" + s.name;
+        s.nested = true;
+        out.push_back(s);
+      }
+    } else if (auto s = section_of(kv.first, kv.second)) {
+      out.push_back(*s);
+    }
+  }
+  return out;
+}
+
 Layout locate(const Reader& r, const YAML::Node& root, const std::string& node_name) {
   if (root.IsNull()) r.fail(root, "the file is empty, expected robot_localization parameters");
   if (!root.IsMap()) {
@@ -729,18 +727,7 @@ Layout locate(const Reader& r, const YAML::Node& root, const std::string& node_n
     l.ekf = 0;
     return l;
   }
-  for (const auto& kv : root) {
-    if (kv.first.IsScalar() && is_namespace(kv.second)) {
-      for (const auto& node : kv.second) {
-        Section s = *section_of(node.first, node.second);
-        s.name = kv.first.Scalar() + "/" + s.name;
-        s.nested = true;
-        l.sections.push_back(s);
-      }
-    } else if (auto s = section_of(kv.first, kv.second)) {
-      l.sections.push_back(*s);
-    }
-  }
+  l.sections = sections_of(root);
   l.ekf = pick_ekf(r, root, l, node_name);
   std::vector<int> navsat;
   for (int i = 0; i < static_cast<int>(l.sections.size()); ++i)
@@ -988,10 +975,8 @@ Layout locate(const Source& src, const std::string& node_name) {
 namespace {
 
 // navsat_transform_node's section of a file of its own: the keys at the top
-// level (ROS 1), or the one section (ROS 1 or 2, namespaced or not) that has
-// navsat's keys.
-void read_navsat_file(const fs::path& file, RlParams& p) {
-  const Source src = load(file);
+// level (ROS 1), or the one section that has navsat's keys.
+void read_navsat_file(const Source& src, RlParams& p) {
   const Reader r{src.file, false};
   if (!src.root.IsMap())
     r.fail(src.root, "expected navsat_transform_node's parameters, got " + describe(src.root));
@@ -999,17 +984,8 @@ void read_navsat_file(const fs::path& file, RlParams& p) {
   if (has_navsat_key(src.root)) {
     found.push_back(Section{"navsat_transform_node", YAML::Node(), src.root, false});
   } else {
-    for (const auto& kv : src.root) {
-      if (kv.first.IsScalar() && is_namespace(kv.second)) {
-        for (const auto& node : kv.second) {
-          Section s = *section_of(node.first, node.second);
-          s.name = kv.first.Scalar() + "/" + s.name;
-          if (has_navsat_key(s.params)) found.push_back(s);
-        }
-      } else if (auto s = section_of(kv.first, kv.second); s && has_navsat_key(s->params)) {
-        found.push_back(*s);
-      }
-    }
+    for (const Section& s : sections_of(src.root))
+      if (has_navsat_key(s.params)) found.push_back(s);
   }
   if (found.size() != 1) {
     std::vector<int> all(found.size());
@@ -1020,32 +996,22 @@ void read_navsat_file(const fs::path& file, RlParams& p) {
   const Reader rn{src.file, found[0].ros2, &p.notes};
   const Keys keys = collect(rn, found[0].params);
   p.navsat = read_navsat(rn, keys, found[0].name);
-  report_keys(keys, file.filename().string() + ": " + found[0].name, navsat_key_use, p.keys);
+  report_keys(keys, src.file.filename().string() + ": " + found[0].name, navsat_key_use, p.keys);
 }
 
 }  // namespace
 
 RlParams read_navsat_params(const std::filesystem::path& file) {
   const Source src = load(file);
-  bool filter = src.root.IsMap() && has_input_key(src.root);
-  for (const auto& kv : src.root.IsMap() ? src.root : YAML::Node()) {
-    if (!kv.first.IsScalar()) continue;
-    if (is_namespace(kv.second)) {
-      for (const auto& node : kv.second)
-        filter = filter || has_input_key(section_of(node.first, node.second)->params);
-    } else if (const auto s = section_of(kv.first, kv.second)) {
-      filter = filter || has_input_key(s->params);
-    }
-  }
-  if (filter) {
-    throw std::invalid_argument(
-        fmt::format("{}: has a filter section; expected navsat_transform_node's parameters "
-                    "alone",
-                    file.string()));
+  const std::vector<Section> sections = src.root.IsMap() ? sections_of(src.root) : std::vector<Section>{};
+  if ((src.root.IsMap() && has_input_key(src.root)) ||
+      std::any_of(sections.begin(), sections.end(), [](const Section& s) { return has_input_key(s.params); })) {
+    throw std::invalid_argument(fmt::format(
+        "{}: has a filter section; expected navsat_transform_node's parameters alone", file.string()));
   }
   RlParams p;
   p.file = file;
-  read_navsat_file(file, p);
+  read_navsat_file(src, p);
   return p;
 }
 
@@ -1061,7 +1027,7 @@ RlParams read_rl_params(const std::filesystem::path& file, const std::string& no
                     "({}) already; expected one of the two",
                     file.string(), navsat_file.string(), p.navsat.node_name));
   }
-  read_navsat_file(navsat_file, p);
+  read_navsat_file(load(navsat_file), p);
   return p;
 }
 

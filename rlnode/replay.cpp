@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <optional>
 #include <queue>
 #include <stdexcept>
 #include <unordered_map>
@@ -433,15 +434,17 @@ void Replayer::run(std::span<const Event> events, bool keep_trajectory) {
         break;
       case Event::score: {
         const std::size_t before = node_.out.scored.size();
-        // With use_control the prediction also carries the commands.
         const std::int64_t stamp = rec_->inputs[e.input].stamp_ns;
-        const rl::State at = rec_->params.control.enabled && filter_.initialized()
-                                 ? predicted(stamp).state()
+        // The filter's own prediction when it is needed: with use_control (it
+        // carries the commands) or for the predicted covariance.
+        const bool own = filter_.initialized() && (rec_->params.control.enabled || settings_->innovations);
+        const std::optional<rl::RlFilter> f = own ? std::optional(predicted(stamp)) : std::nullopt;
+        const rl::State at = f && rec_->params.control.enabled
+                                 ? f->state()
                                  : projected(filter_.state(), filter_.last_time_ns(), stamp);
         score_fix(*rec_, e.input, filter_.initialized(), at, node_);
         if (settings_->innovations && node_.out.scored.size() > before)
-          node_.out.scored.back().predicted_cov =
-              predicted(node_.out.scored.back().stamp_ns).cov().topLeftCorner<2, 2>();
+          node_.out.scored.back().predicted_cov = f->cov().topLeftCorner<2, 2>();
         break;
       }
       case Event::timeout_predict: filter_.predict_to(e.time_ns); break;
@@ -478,7 +481,8 @@ std::vector<rl::RlEkfParams> lane_params(const Recording& rec, std::span<const R
   std::vector<rl::RlEkfParams> p;
   for (const ReplaySettings& s : settings) {
     if (!lockstep(rec, s))
-      throw std::invalid_argument("BatchReplayer: the lanes run ekf_node's filter without use_control only");
+      throw std::invalid_argument(
+          "BatchReplayer: the lanes run ekf_node's filter only, without use_control or smooth_lagged_data");
     p.push_back(filter_params(rec, s));
   }
   return p;
