@@ -164,11 +164,12 @@ RlLoaded load_rl(const RlSource& src) {
     throw Failure(e.what());
   }
   const rlnode::Recording& rec = out.rec;
-  if (rec.gps_sensor >= 0 && !rec.gps_transform.fixed && !rec.navsat_imu_yaw_known &&
+  if (rec.gps_sensor >= 0 && !rec.gps_transform.fixed && rec.navsat_headings.empty() &&
       !rec.params.navsat.use_odometry_yaw) {
-    throw Failure(fmt::format("{}: navsat_transform_node needs the IMU's heading at the first fix, and no IMU "
-                              "orientation came before it; expected --gps-heading-fit SECONDS",
-                              src.bag.string()));
+    throw Failure(
+        fmt::format("{}: navsat_transform_node needs the IMU's heading for its datum, and the bag has "
+                    "no IMU orientation; expected --gps-heading-fit SECONDS",
+                    src.bag.string()));
   }
   return out;
 }

@@ -24,7 +24,11 @@ GpsAlignment fit_gps_alignment(const Recording& rec, const ReplaySettings& setti
   // 2 rad² (filters/rl_ukf.h), within the seconds a fit needs.
   ReplaySettings dead_reckoning = settings;
   dead_reckoning.filter = filters::rl::RlFilterType::ekf;
-  const ReplayOutput out = replay(rec, make_schedule(rec, roles, until), dead_reckoning);
+  // The fit compares raw fixes with the dead reckoning: navsat need not wait
+  // for a datum (or an IMU heading) to pass them on.
+  Recording fit = rec;
+  fit.gps_transform.fixed = true;
+  const ReplayOutput out = replay(fit, make_schedule(fit, roles, until), dead_reckoning);
   GpsAlignment a;
   a.fixes = static_cast<int>(out.scored.size());
   Eigen::Vector2d mp = Eigen::Vector2d::Zero(), mq = Eigen::Vector2d::Zero();

@@ -295,17 +295,19 @@ void Loader::prepare_acceleration(const ros::Imu& m, int s, std::int64_t receive
         gravity && !has_orientation);
 }
 
-// The IMU heading navsat_transform_node would take at its datum: the last
-// orientation before the first fix, corrected for the mounting as the filter
-// corrects it, plus declination and yaw_offset (the grid's convergence is
-// added per fix).
+// The IMU heading navsat_transform_node would take at its datum: the
+// orientation corrected for the mounting as the filter corrects it, plus
+// declination and yaw_offset (the grid's convergence is added per fix).
 void Loader::note_imu_orientation(const ros::Imu& m, std::int64_t receive_ns) {
-  if (!rec_.fixes.empty() || std::abs(m.orientation_covariance[0] + 1.0) < 1e-9) return;
+  if (std::abs(m.orientation_covariance[0] + 1.0) < 1e-9) return;
   const Pose3* mount = find_frame(m.header.frame_id);
   if (!mount) return;
   const Eigen::Matrix3d R = imu_orientation_in_base(
       rotation_of_quaternion(m.orientation.x, m.orientation.y, m.orientation.z, m.orientation.w), *mount);
-  imu_yaw_ = rpy_of(R).yaw + p_.navsat.magnetic_declination_radians + p_.navsat.yaw_offset;
+  const double yaw = rpy_of(R).yaw + p_.navsat.magnetic_declination_radians + p_.navsat.yaw_offset;
+  rec_.navsat_headings.emplace_back(receive_ns, yaw);
+  if (!rec_.fixes.empty()) return;
+  imu_yaw_ = yaw;
   imu_yaw_receive_ns_ = receive_ns;
 }
 

@@ -35,7 +35,6 @@ std::string_view to_string(KeyUse u) {
     case KeyUse::reproduced: return "reproduced";
     case KeyUse::no_effect: return "no effect";
     case KeyUse::not_read: return "not read";
-    case KeyUse::approximated: return "approximated";
   }
   return "";
 }
@@ -122,11 +121,10 @@ constexpr Known kEkfKeys[] = {
     {"invert_tf", Kind::boolean, KeyUse::no_effect},
 };
 
-// navsat_transform_node's keys; `datum` is checked when read. Its timer
-// (frequency, delay) is approximated by each fix's receive time.
+// navsat_transform_node's keys; `datum` is checked when read.
 constexpr Known kNavsatKeys[] = {
-    {"frequency", Kind::number, KeyUse::approximated},
-    {"delay", Kind::number, KeyUse::approximated},
+    {"frequency", Kind::number},
+    {"delay", Kind::number},
     {"magnetic_declination_radians", Kind::number},
     {"yaw_offset", Kind::number},
     {"zero_altitude", Kind::boolean},
@@ -574,6 +572,7 @@ NavsatParams read_navsat(const Reader& r, const Keys& keys, const std::string& s
   n.node_name = section;
   n.frequency_hz = positive(r, keys, "frequency", 10.0, false, "a rate > 0 [Hz]");
   n.delay_s = positive(r, keys, "delay", 0.0, true, "a time >= 0 [s]");
+  n.ros2 = r.ros2;
   n.magnetic_declination_radians = number(r, keys, "magnetic_declination_radians", 0.0);
   n.yaw_offset = number(r, keys, "yaw_offset", 0.0);
   n.zero_altitude = flag(r, keys, "zero_altitude");

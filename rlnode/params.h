@@ -61,9 +61,10 @@ struct SensorParams {
 // navsat_transform_node's keys (its section of the file, when present).
 struct NavsatParams {
   bool present = false;
-  std::string node_name;  // the section's name in the file
-  double frequency_hz = 10.0;
-  double delay_s = 0.0;
+  std::string node_name;       // the section's name in the file
+  double frequency_hz = 10.0;  // its timer's rate
+  double delay_s = 0.0;        // its timer starts this long after the node [s]
+  bool ros2 = false;           // the form of the file it came from: ROS 2 sleeps whole seconds of delay_s
   double magnetic_declination_radians = 0.0;
   double yaw_offset = 0.0;  // [rad]
   bool zero_altitude = false;
@@ -86,9 +87,9 @@ struct ControlParams {
 
 // What the replay makes of a key of the file: reproduced (as the node uses
 // it), no effect on a replay (what the node publishes, queues, logs), not read
-// by robot_localization either (left out), or approximated (navsat's timer).
-enum class KeyUse { reproduced, no_effect, not_read, approximated };
-std::string_view to_string(KeyUse u);  // "reproduced", "no effect", "not read", "approximated"
+// by robot_localization either (left out).
+enum class KeyUse { reproduced, no_effect, not_read };
+std::string_view to_string(KeyUse u);  // "reproduced", "no effect", "not read"
 
 struct KeyReport {
   std::string section;  // the filter's or navsat_transform_node's section ("ekf_node" for a flat file)
@@ -142,7 +143,7 @@ struct RlParams {
 // supported key's value the replay does not reproduce, named:
 // disabled_at_startup: true,
 // smooth_lagged_data with use_control,
-// navsat use_odometry_yaw: true. `filter` (the command line's --filter) picks
+// navsat wait_for_datum: true without a datum. `filter` (the command line's --filter) picks
 // the filter for a file that does not say which; ekf for a file with
 // ukf_node's alpha, kappa or beta is refused, naming the key.
 // `navsat_file` (--navsat-params): navsat_transform_node's parameters from a

@@ -183,6 +183,7 @@ Recording load_recording(const std::filesystem::path& bag, const RlParams& param
   rec.bag = bag;
   rec.gps_sensor = plan.gps_sensor;
   rec.gps_topic = plan.gps_topic;
+  rec.through_navsat = plan.gps_sensor >= 0;
   detail::Loader loader(params, options, rec);
   loader.set_static_frames(static_frames(bag, info, params.base_link_frame));
   if (params.navsat.present && params.navsat.datum) rec.gps_transform = loader.set_datum(*params.navsat.datum);
@@ -230,6 +231,8 @@ Recording load_recording(const std::filesystem::path& bag, const RlParams& param
   loader.finish();
   std::stable_sort(rec.inputs.begin(), rec.inputs.end(),
                    [](const Input& a, const Input& b) { return a.receive_ns < b.receive_ns; });
+  std::stable_sort(rec.navsat_headings.begin(), rec.navsat_headings.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
   if (rec.inputs.empty()) {
     throw std::invalid_argument(fmt::format("{}: none of the configured inputs has a message in the bag",
                                             bag.string()));

@@ -26,6 +26,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "filters/rl_ekf.h"
@@ -83,9 +84,15 @@ struct Recording {
   std::vector<GpsFix> fixes;
   int gps_sensor = -1;    // the odomN that is navsat_transform_node's output, or −1
   std::string gps_topic;  // the NavSatFix topic read for it
+  // The fixes reach the filter through navsat_transform_node and its timer
+  // (a bag); false: they are in the world frame already (a track).
+  bool through_navsat = false;
   // The IMU's yaw (in base_link, as navsat_transform_node corrects it with its
-  // mounting, declination and yaw_offset) from the last orientation before the
-  // first fix; navsat's heading at the datum.
+  // mounting, declination and yaw_offset) from every orientation of navsat's
+  // IMU, (receive time, yaw [rad]) in receive order: navsat's heading at its
+  // datum is the last one before the timer's tick that takes it.
+  std::vector<std::pair<std::int64_t, double>> navsat_headings;
+  // The last of them before the first fix.
   double navsat_imu_yaw_rad = 0.0;
   bool navsat_imu_yaw_known = false;
   GpsTransform gps_transform;

@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <iterator>
+#include <limits>
 #include <optional>
 #include <queue>
 #include <stdexcept>
 #include <unordered_map>
+#include <utility>
 
 #include "rlnode/frames.h"
 
@@ -17,6 +20,14 @@ namespace rl = filters::rl;
 
 // Inputs whose measurement depends on the filter's state when they arrive.
 bool needs_callback(const Input& in) { return !in.lever.isZero(0.0) || in.gravity_from_state; }
+
+// navsat's IMU heading at time `at` (receive time, yaw): its last
+// orientation received by then; null when none was.
+const std::pair<std::int64_t, double>* last_heading(const Recording& rec, std::int64_t at) {
+  const auto& h = rec.navsat_headings;
+  auto it = std::upper_bound(h.begin(), h.end(), at, [](std::int64_t v, const auto& e) { return v < e.first; });
+  return it == h.begin() ? nullptr : &*std::prev(it);
+}
 
 // The node's queue: earliest stamp first; equal stamps in arrival order. A
 // measurement put back by a revert (smooth_lagged_data) is re-filtered.
@@ -55,7 +66,17 @@ class Scheduler {
         roles_(roles),
         until_ns_(until_ns),
         timeout_ns_(static_cast<std::int64_t>(std::llround(rec.params.sensor_timeout_s * 1e9))),
-        datum_pending_(rec.gps_sensor >= 0 && !rec.gps_transform.fixed) {}
+        datum_pending_(rec.through_navsat && !rec.gps_transform.fixed) {
+    const NavsatParams& nv = rec.params.navsat;
+    navsat_.period_ns = static_cast<std::int64_t>(std::llround(1e9 / nv.frequency_hz));
+    // The node sleeps `delay` (ROS 2: its whole seconds) before it starts the
+    // timer, which first fires a period later.
+    const double delay_s = nv.ros2 ? std::floor(nv.delay_s) : nv.delay_s;
+    navsat_.next_ns = rec.through_navsat
+                          ? rec.start_ns + static_cast<std::int64_t>(std::llround(delay_s * 1e9)) +
+                                navsat_.period_ns
+                          : kNever;
+  }
 
   Schedule run() {
     const auto period_ns = static_cast<std::int64_t>(std::llround(1e9 / rec_.params.frequency_hz));
@@ -86,32 +107,84 @@ class Scheduler {
       clock_.last_ns = t;
     }
     push(Event::tick, -1, t);
+    if (clock_.initialized && first_publish_ns_ == kNever) first_publish_ns_ = t;
     if (smoothing) expire(clock_.last_ns - rec_.params.history_length_ns, t);
     s_.end_ns = t;
   }
 
-  // The callbacks of the inputs received up to t.
+  // The callbacks of the inputs received up to t, and navsat's ticks up to t
+  // in time order (an input received at a tick's time first).
   void receive(std::int64_t t) {
-    for (; next_ < rec_.inputs.size() && rec_.inputs[next_].receive_ns <= t; ++next_) {
-      const Input& in = rec_.inputs[next_];
-      const auto i = static_cast<std::int32_t>(next_);
-      // navsat_transform_node takes its datum at the first fix after the
-      // filter has published, and publishes nothing before it.
-      if (in.kind == InputKind::gps && datum_pending_) {
-        if (!clock_.initialized) continue;
-        datum_pending_ = false;
-        push(Event::datum, i, t);
-      }
-      if (in.stamp_ns >= until_ns_) continue;
-      if (in.kind == InputKind::command) {
-        push(Event::command, i, t);
+    while (true) {
+      const std::int64_t r = next_ < rec_.inputs.size() ? rec_.inputs[next_].receive_ns : kNever;
+      if (std::min(r, navsat_.next_ns) > t) break;
+      if (navsat_.next_ns < r) {
+        navsat_tick(navsat_.next_ns, t);
+        navsat_.next_ns += navsat_.period_ns;
         continue;
       }
-      const FixRole r = role(in);
-      if (needs_callback(in) && r != FixRole::absent) push(Event::callback, i, t);
-      if (r == FixRole::fuse) queue_.push({in.stamp_ns, i});
-      if (r == FixRole::score) held_out_.push({in.stamp_ns, i});
+      const auto i = static_cast<std::int32_t>(next_++);
+      const Input& in = rec_.inputs[static_cast<std::size_t>(i)];
+      if (in.kind == InputKind::gps && rec_.through_navsat) {
+        navsat_fix(in, i, t);
+      } else {
+        enqueue(in, i, t);
+      }
     }
+  }
+
+  void enqueue(const Input& in, std::int32_t i, std::int64_t t) {
+    if (in.stamp_ns >= until_ns_) return;
+    if (in.kind == InputKind::command) {
+      push(Event::command, i, t);
+      return;
+    }
+    const FixRole r = role(in);
+    if (needs_callback(in) && r != FixRole::absent) push(Event::callback, i, t);
+    if (r == FixRole::fuse) queue_.push({in.stamp_ns, i});
+    if (r == FixRole::score) held_out_.push({in.stamp_ns, i});
+  }
+
+  // navsat_transform_node's gpsFixCallback: a fused fix is its latest (and,
+  // until it has its transform, the datum's). Held-out and absent fixes never
+  // reach it; a held-out one is scored at its stamp once the transform that
+  // places it is known.
+  void navsat_fix(const Input& in, std::int32_t i, std::int64_t t) {
+    const FixRole r = role(in);
+    if (r == FixRole::fuse) navsat_.latest = i;
+    if (r == FixRole::score && !datum_pending_) enqueue(in, i, t);
+  }
+
+  // Its periodicUpdate at time `at`, handled at the filter's tick t: the
+  // transform computed once the filter has published and navsat has a fix
+  // and a heading (computeTransform), or else the latest fix published
+  // (prepareGpsOdometry) when one came since the last.
+  void navsat_tick(std::int64_t at, std::int64_t t) {
+    const bool odom = first_publish_ns_ != kNever;  // has_transform_odom_, odom_updated_
+    if (!navsat_.good) {
+      if (!datum_pending_) {
+        // The manual datum (or a fitted transform): ROS 2 sets it once the
+        // filter has published, ROS 1 at its first tick.
+        navsat_.good = odom || !rec_.params.navsat.ros2;
+      } else if (odom && navsat_.latest >= 0 && heading_after(first_publish_ns_, at)) {
+        datum_pending_ = false;
+        navsat_.good = true;
+        push(Event::datum, navsat_.latest, at);
+      }
+      return;
+    }
+    if (navsat_.latest < 0 || !odom) return;
+    const std::int32_t i = std::exchange(navsat_.latest, -1);
+    enqueue(rec_.inputs[static_cast<std::size_t>(i)], i, t);
+  }
+
+  // Whether navsat has the heading its transform needs at `at`: an IMU
+  // orientation received after the filter's first output (imuCallback waits
+  // for odometry), or the filter's own yaw with use_odometry_yaw.
+  bool heading_after(std::int64_t odom_ns, std::int64_t at) const {
+    if (rec_.params.navsat.use_odometry_yaw) return true;
+    const auto* h = last_heading(rec_, at);
+    return h && h->first > odom_ns;
   }
 
   // The queue's measurements stamped up to t, and the held-out fixes among them.
@@ -179,7 +252,16 @@ class Scheduler {
   const Recording& rec_;
   std::span<const FixRole> roles_;
   std::int64_t until_ns_, timeout_ns_;
+  static constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::max();
   bool datum_pending_;
+  // navsat_transform_node's timer: its next tick, the latest fix not yet
+  // published (gps_updated_), whether it has its transform (transform_good_).
+  struct Navsat {
+    std::int64_t next_ns = kNever, period_ns = 0;
+    std::int32_t latest = -1;
+    bool good = false;
+  } navsat_;
+  std::int64_t first_publish_ns_ = kNever;  // the filter's first output (tick)
   Schedule s_;
   Queue queue_, held_out_;
   Clock clock_;
@@ -261,9 +343,10 @@ Eigen::Vector3d take_adjust(NodeState& n, int i) {
   return Eigen::Vector3d::Zero();
 }
 
-// navsat_transform_node's datum (computeTransform): the filter's pose at this
-// fix against the fix, less the antenna's offset turned by the IMU's heading.
-void take_datum(const Recording& rec, int i, const rl::State& x, NodeState& n) {
+// navsat_transform_node's datum (computeTransform at its tick `at`): the
+// filter's pose (its last output) against the fix, less the antenna's offset
+// turned by the IMU's heading.
+void take_datum(const Recording& rec, int i, std::int64_t at, const rl::State& x, NodeState& n) {
   const Input& in = rec.inputs[i];
   const GpsFix& f = rec.fixes[in.fix];
   GpsTransform& g = n.out.gps_transform;
@@ -271,7 +354,7 @@ void take_datum(const Recording& rec, int i, const rl::State& x, NodeState& n) {
   // odomCallback passes the filtered orientation on as its IMU's).
   const NavsatParams& nv = rec.params.navsat;
   const double heading = nv.use_odometry_yaw ? x[rl::kYaw] + nv.magnetic_declination_radians + nv.yaw_offset
-                                             : rec.navsat_imu_yaw_rad;
+                                             : last_heading(rec, at)->second;
   const double imu_yaw = heading + f.convergence_rad;
   g.grid_origin = f.p - rotation_rpy(0.0, 0.0, imu_yaw) * in.lever;
   g.odom_origin = x.segment<3>(rl::kX);
@@ -425,7 +508,7 @@ void Replayer::run(std::span<const Event> events, bool keep_trajectory) {
   for (const Event& e : events) {
     switch (e.type) {
       case Event::callback: run_callback(*rec_, e.input, filter_.state(), node_); break;
-      case Event::datum: take_datum(*rec_, e.input, filter_.state(), node_); break;
+      case Event::datum: take_datum(*rec_, e.input, e.time_ns, filter_.state(), node_); break;
       case Event::process:
         make_measurement(*rec_, *settings_, e.input, node_, m_);
         if (settings_->innovations && rec_->inputs[e.input].kind == InputKind::gps) record_innovation();
@@ -515,7 +598,7 @@ void BatchReplayer::run(std::span<const Event> events, bool keep) {
         each([&](int l, const rl::State& x) { run_callback(*rec_, e.input, x, nodes_[l]); });
         break;
       case Event::datum:
-        each([&](int l, const rl::State& x) { take_datum(*rec_, e.input, x, nodes_[l]); });
+        each([&](int l, const rl::State& x) { take_datum(*rec_, e.input, e.time_ns, x, nodes_[l]); });
         break;
       case Event::process: process(e.input); break;
       case Event::score:

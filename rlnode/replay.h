@@ -4,6 +4,11 @@
 // stamped up to the tick in stamp order (RosFilter::periodicUpdate and
 // integrateMeasurements), the sensor-timeout prediction when the queue is
 // empty, and the angular acceleration differenced from tick to tick.
+// navsat_transform_node runs beside it on its own timer (periodicUpdate at its
+// `frequency`, after `delay`): it takes its datum at the first tick after the
+// filter has published, with its latest fix and IMU heading, and from the next
+// tick on publishes its latest fix, stamped with the fix's stamp, whenever a
+// new one came (navsat_transform.cpp, read for behaviour).
 //
 // Which message is processed when does not depend on the filter's numbers, so
 // it is laid out once (Schedule) and replayed for any noise setting. Held-out
@@ -76,7 +81,9 @@ struct Event {
   };
   Type type = tick;
   std::int32_t input = -1;
-  std::int64_t time_ns = 0;  // tick time (timeout_predict, tick)
+  // tick time (timeout_predict, tick); datum: navsat's tick, whose heading is
+  // the IMU's last before it
+  std::int64_t time_ns = 0;
 };
 
 struct Schedule {

@@ -1,9 +1,11 @@
 // navsat_transform_node as it runs: robot_localization's test_navsat_conversions
 // (LLtoUTM, UTMtoLL) and test_navsat_transform (a datum's UTM zone kept across a
-// zone boundary) reproduced, the manual datum (wait_for_datum with datum), and
-// use_odometry_yaw (the filter's own yaw as navsat's heading).
+// zone boundary) reproduced, the manual datum (wait_for_datum with datum),
+// use_odometry_yaw (the filter's own yaw as navsat's heading), and navsat's
+// timer (frequency, delay).
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -131,4 +133,79 @@ TEST(RlNavsat, OdometryYawIsTheHeading) {
   EXPECT_NEAR(out.gps_transform.rotation_rad, -0.3, 1e-9);
   // the square closes where it began
   EXPECT_LT(out.final_state.head<2>().norm(), 0.2);
+}
+
+namespace {
+
+// The GPS inputs of a schedule: (event, fix index, event time [ns]).
+struct FixEvent {
+  Event::Type type;
+  int fix;
+  std::int64_t time_ns;
+};
+
+std::vector<FixEvent> fix_events(const Recording& rec, const Schedule& s) {
+  std::vector<FixEvent> out;
+  for (const Event& e : s.events) {
+    if ((e.type != Event::datum && e.type != Event::process) || rec.inputs[e.input].kind != InputKind::gps)
+      continue;
+    out.push_back({e.type, rec.inputs[e.input].fix, e.time_ns});
+  }
+  return out;
+}
+
+}  // namespace
+
+// navsat_transform_node's timer: at 1 Hz after a 0.25 s delay it ticks at
+// 1.25 s, 2.25 s, … after the bag's start (the fixes come at 2 Hz from 0 s;
+// the filter publishes from 0 s). Its first tick takes the datum with the
+// latest fix (1.0 s: fix 2); every later tick publishes the latest fix, the
+// one of the last whole second (fix 4 at 2.25 s, …), so the half-second fixes
+// never reach the filter (yaw_offset turns the fixes back onto the odometry), and the filter fuses each at the tick of 20 Hz that
+// falls on navsat's, 0.25 s after the fix's stamp. A ROS 2 node sleeps whole
+// seconds of its delay (none here): its ticks fall on the fixes.
+TEST(RlNavsat, TimerPublishesTheLatestFixAtEachTick) {
+  TempDir dir("rl-navsat-timer");
+  const auto bag = odotune::testing_support::rl_gps_bag(dir.path(), 0.3);
+  const std::string navsat =
+      "    use_local_cartesian: true\n    use_odometry_yaw: true\n    yaw_offset: 0.3\n    frequency: 1.0\n"
+      "    delay: 0.25\n";
+  // the same keys in a ROS 1 file of their own (--navsat-params)
+  const auto ros1 = dir.path() / "navsat1.yaml";
+  std::ofstream(ros1)
+      << "zero_altitude: true\nuse_local_cartesian: true\nuse_odometry_yaw: true\nyaw_offset: 0.3\n"
+         "frequency: 1.0\ndelay: 0.25\n";
+  const auto ekf_only = dir.path() / "ekf.yaml";
+  {
+    std::ifstream in(navsat_file(dir, navsat));
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream(ekf_only) << text.substr(0, text.find("navsat:"));
+  }
+  const std::int64_t start = 1'000'000'000, s = 1'000'000'000, quarter = 250'000'000;
+  for (const bool ros2 : {false, true}) {
+    SCOPED_TRACE(ros2 ? "ROS 2" : "ROS 1");
+    const RlParams p = ros2 ? read_rl_params(navsat_file(dir, navsat))
+                            : read_rl_params(ekf_only, "", std::nullopt, ros1);
+    ASSERT_EQ(p.navsat.ros2, ros2);
+    const Recording rec = load_recording(bag, p);
+    ASSERT_TRUE(rec.through_navsat);
+    const std::int64_t lag = ros2 ? 0 : quarter;
+    const std::vector<FixEvent> ev = fix_events(rec, make_schedule(rec));
+    ASSERT_GT(ev.size(), 30u);
+    EXPECT_EQ(ev[0].type, Event::datum);
+    EXPECT_EQ(ev[0].fix, 2);
+    EXPECT_EQ(ev[0].time_ns, start + s + lag);
+    for (std::size_t k = 1; k < ev.size(); ++k) {
+      SCOPED_TRACE(k);
+      EXPECT_EQ(ev[k].type, Event::process);
+      EXPECT_EQ(ev[k].fix, 2 * static_cast<int>(k) + 2);
+      const GpsFix& f = rec.fixes[static_cast<std::size_t>(ev[k].fix)];
+      EXPECT_EQ(f.stamp_ns, start + static_cast<std::int64_t>(k + 1) * s);
+      EXPECT_EQ(ev[k].time_ns, f.stamp_ns + lag);
+    }
+    // the drive closes its square with the fixes it was given
+    const ReplayOutput out = replay(rec, make_schedule(rec), settings_of(rec.params));
+    EXPECT_NEAR(out.gps_transform.rotation_rad, -0.3, 1e-9);
+    EXPECT_LT(out.final_state.head<2>().norm(), 0.3);
+  }
 }

@@ -142,7 +142,7 @@ TEST(RlTeamFiles, KeysWithoutEffectLeaveTheReplayIdentical) {
 }
 
 // Every filter section of the 31 teams' files loads, each key reproduced, of
-// no effect, approximated or not read by robot_localization either; the four
+// no effect or not read by robot_localization either; the four
 // navsat-only files have no filter section (they go with --navsat-params).
 // The table of docs/robot-localization/teams-files.md is this, key by key.
 TEST(RlTeamFiles, EveryTeamFileLoadsOrIsRefusedByName) {
