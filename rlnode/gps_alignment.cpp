@@ -68,10 +68,11 @@ GpsAlignment fit_gps_alignment(const Recording& rec, const ReplaySettings& setti
   a.rms_m = std::sqrt(sum / a.fixes);
   // navsat's rotation is yaw_odom − (imu_yaw + declination + yaw_offset + convergence)
   // at the datum (the first fix; here the filter's yaw there without GPS).
-  if (rec.navsat_imu_yaw_known) {
+  // The IMU's heading is its last before the first fix.
+  if (const auto* heading = navsat_heading_at(rec, rec.fixes.front().receive_ns)) {
     const ScoredFix& first = out.scored.front();
     a.yaw_offset_rad = filters::rl::normalize_angle(first.predicted_yaw - phi -
-                                                    (rec.navsat_imu_yaw_rad - rec.params.navsat.yaw_offset) -
+                                                    (heading->second - rec.params.navsat.yaw_offset) -
                                                     rec.fixes[first.fix].convergence_rad);
   }
   return a;

@@ -306,9 +306,6 @@ void Loader::note_imu_orientation(const ros::Imu& m, std::int64_t receive_ns) {
       rotation_of_quaternion(m.orientation.x, m.orientation.y, m.orientation.z, m.orientation.w), *mount);
   const double yaw = rpy_of(R).yaw + p_.navsat.magnetic_declination_radians + p_.navsat.yaw_offset;
   rec_.navsat_headings.emplace_back(receive_ns, yaw);
-  if (!rec_.fixes.empty()) return;
-  imu_yaw_ = yaw;
-  imu_yaw_receive_ns_ = receive_ns;
 }
 
 // navsat_transform_node's input: good fixes projected on the UTM grid (or a
@@ -363,10 +360,6 @@ GpsTransform Loader::set_datum(const std::array<double, 3>& datum) {
 void Loader::add_fix(const GpsFix& f, const std::string& frame_id) {
   const std::int64_t receive_ns = f.receive_ns;
   if (!in_order(sensor(rec_.gps_sensor).name + "_pose", f.stamp_ns)) return;
-  if (rec_.fixes.empty() && imu_yaw_receive_ns_ >= 0) {
-    rec_.navsat_imu_yaw_rad = imu_yaw_;
-    rec_.navsat_imu_yaw_known = true;
-  }
   rec_.fixes.push_back(f);
   const SensorParams& sp = sensor(rec_.gps_sensor);
   Prepared out;  // the position is filled in by the replay, from the fix and the datum

@@ -147,8 +147,6 @@ class Loader {
   std::map<std::string, Previous> previous_;
   std::map<std::string, Pose3> initial_;
   long out_of_order_ = 0, no_fix_ = 0, repeated_differential_ = 0, commands_ = 0, foreign_commands_ = 0;
-  std::int64_t imu_yaw_receive_ns_ = -1;
-  double imu_yaw_ = 0.0;
   std::unique_ptr<GeographicLib::LocalCartesian> local_;
   int utm_zone_ = -1;
 };

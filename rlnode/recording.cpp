@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <set>
 #include <stdexcept>
 
@@ -167,6 +168,12 @@ std::map<std::string, Pose3> static_frames(const std::filesystem::path& bag, con
 
 }  // namespace
 
+const std::pair<std::int64_t, double>* navsat_heading_at(const Recording& rec, std::int64_t at) {
+  const auto& h = rec.navsat_headings;
+  auto it = std::upper_bound(h.begin(), h.end(), at, [](std::int64_t v, const auto& e) { return v < e.first; });
+  return it == h.begin() ? nullptr : &*std::prev(it);
+}
+
 Recording load_recording(const std::filesystem::path& bag, const RlParams& params,
                          const RecordingOptions& options) {
   if (!(params.frequency_hz >= 1e-3 && params.frequency_hz <= 1e5) || !(params.sensor_timeout_s >= 0.0)) {
@@ -183,7 +190,6 @@ Recording load_recording(const std::filesystem::path& bag, const RlParams& param
   rec.bag = bag;
   rec.gps_sensor = plan.gps_sensor;
   rec.gps_topic = plan.gps_topic;
-  rec.through_navsat = plan.gps_sensor >= 0;
   detail::Loader loader(params, options, rec);
   loader.set_static_frames(static_frames(bag, info, params.base_link_frame));
   if (params.navsat.present && params.navsat.datum) rec.gps_transform = loader.set_datum(*params.navsat.datum);

@@ -84,24 +84,26 @@ struct Recording {
   std::vector<GpsFix> fixes;
   int gps_sensor = -1;    // the odomN that is navsat_transform_node's output, or −1
   std::string gps_topic;  // the NavSatFix topic read for it
-  // The fixes reach the filter through navsat_transform_node and its timer
-  // (a bag); false: they are in the world frame already (a track).
-  bool through_navsat = false;
   // The IMU's yaw (in base_link, as navsat_transform_node corrects it with its
   // mounting, declination and yaw_offset) from every orientation of navsat's
   // IMU, (receive time, yaw [rad]) in receive order: navsat's heading at its
   // datum is the last one before the timer's tick that takes it.
   std::vector<std::pair<std::int64_t, double>> navsat_headings;
-  // The last of them before the first fix.
-  double navsat_imu_yaw_rad = 0.0;
-  bool navsat_imu_yaw_known = false;
   GpsTransform gps_transform;
   std::int64_t start_ns = 0, end_ns = 0;  // first and last receive time of an input
   // The receive time of the bag's first message of a configured topic: the
   // clock a user's seconds count from (RecordingOptions::from_s too).
   std::int64_t origin_ns = 0;
   std::vector<std::string> notes;  // what was read and converted, for the user
+
+  // The fixes reach the filter through navsat_transform_node and its timer (a
+  // bag's NavSatFix topic); false: they are in the world frame already (a track).
+  bool through_navsat() const { return !gps_topic.empty(); }
 };
+
+// navsat's IMU heading at time `at` (receive time, yaw): its last orientation
+// received by then; null when none was.
+const std::pair<std::int64_t, double>* navsat_heading_at(const Recording& rec, std::int64_t at);
 
 struct RecordingOptions {
   // frame_id → its pose in base_link; takes precedence over /tf_static.

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
-#include <iterator>
 #include <limits>
 #include <optional>
 #include <queue>
@@ -20,14 +19,6 @@ namespace rl = filters::rl;
 
 // Inputs whose measurement depends on the filter's state when they arrive.
 bool needs_callback(const Input& in) { return !in.lever.isZero(0.0) || in.gravity_from_state; }
-
-// navsat's IMU heading at time `at` (receive time, yaw): its last
-// orientation received by then; null when none was.
-const std::pair<std::int64_t, double>* last_heading(const Recording& rec, std::int64_t at) {
-  const auto& h = rec.navsat_headings;
-  auto it = std::upper_bound(h.begin(), h.end(), at, [](std::int64_t v, const auto& e) { return v < e.first; });
-  return it == h.begin() ? nullptr : &*std::prev(it);
-}
 
 // The node's queue: earliest stamp first; equal stamps in arrival order. A
 // measurement put back by a revert (smooth_lagged_data) is re-filtered.
@@ -66,13 +57,13 @@ class Scheduler {
         roles_(roles),
         until_ns_(until_ns),
         timeout_ns_(static_cast<std::int64_t>(std::llround(rec.params.sensor_timeout_s * 1e9))),
-        datum_pending_(rec.through_navsat && !rec.gps_transform.fixed) {
+        datum_pending_(rec.through_navsat() && !rec.gps_transform.fixed) {
     const NavsatParams& nv = rec.params.navsat;
     navsat_.period_ns = static_cast<std::int64_t>(std::llround(1e9 / nv.frequency_hz));
     // The node sleeps `delay` (ROS 2: its whole seconds) before it starts the
     // timer, which first fires a period later.
     const double delay_s = nv.ros2 ? std::floor(nv.delay_s) : nv.delay_s;
-    navsat_.next_ns = rec.through_navsat
+    navsat_.next_ns = rec.through_navsat()
                           ? rec.start_ns + static_cast<std::int64_t>(std::llround(delay_s * 1e9)) +
                                 navsat_.period_ns
                           : kNever;
@@ -125,7 +116,7 @@ class Scheduler {
       }
       const auto i = static_cast<std::int32_t>(next_++);
       const Input& in = rec_.inputs[static_cast<std::size_t>(i)];
-      if (in.kind == InputKind::gps && rec_.through_navsat) {
+      if (in.kind == InputKind::gps && rec_.through_navsat()) {
         navsat_fix(in, i, t);
       } else {
         enqueue(in, i, t);
@@ -183,7 +174,7 @@ class Scheduler {
   // for odometry), or the filter's own yaw with use_odometry_yaw.
   bool heading_after(std::int64_t odom_ns, std::int64_t at) const {
     if (rec_.params.navsat.use_odometry_yaw) return true;
-    const auto* h = last_heading(rec_, at);
+    const auto* h = navsat_heading_at(rec_, at);
     return h && h->first > odom_ns;
   }
 
@@ -354,7 +345,7 @@ void take_datum(const Recording& rec, int i, std::int64_t at, const rl::State& x
   // odomCallback passes the filtered orientation on as its IMU's).
   const NavsatParams& nv = rec.params.navsat;
   const double heading = nv.use_odometry_yaw ? x[rl::kYaw] + nv.magnetic_declination_radians + nv.yaw_offset
-                                             : last_heading(rec, at)->second;
+                                             : navsat_heading_at(rec, at)->second;
   const double imu_yaw = heading + f.convergence_rad;
   g.grid_origin = f.p - rotation_rpy(0.0, 0.0, imu_yaw) * in.lever;
   g.odom_origin = x.segment<3>(rl::kX);

@@ -128,7 +128,7 @@ TEST(RlNavsat, OdometryYawIsTheHeading) {
   const Recording rec = load_recording(
       bag, read_rl_params(navsat_file(
                dir, "    use_local_cartesian: true\n    use_odometry_yaw: true\n    yaw_offset: 0.3\n")));
-  EXPECT_FALSE(rec.navsat_imu_yaw_known);
+  EXPECT_TRUE(rec.navsat_headings.empty());
   const ReplayOutput out = replay(rec, make_schedule(rec), settings_of(rec.params));
   EXPECT_NEAR(out.gps_transform.rotation_rad, -0.3, 1e-9);
   // the square closes where it began
@@ -188,7 +188,7 @@ TEST(RlNavsat, TimerPublishesTheLatestFixAtEachTick) {
                             : read_rl_params(ekf_only, "", std::nullopt, ros1);
     ASSERT_EQ(p.navsat.ros2, ros2);
     const Recording rec = load_recording(bag, p);
-    ASSERT_TRUE(rec.through_navsat);
+    ASSERT_TRUE(rec.through_navsat());
     const std::int64_t lag = ros2 ? 0 : quarter;
     const std::vector<FixEvent> ev = fix_events(rec, make_schedule(rec));
     ASSERT_GT(ev.size(), 30u);
