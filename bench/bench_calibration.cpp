@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
-#include "filters/dual_kf.h"
-#include "filters/pf_calibrator.h"
-#include "filters/resampling.h"
+#include <odotune/filters/dual_kf.h>
+#include <odotune/filters/pf_calibrator.h>
+#include <odotune/filters/resampling.h>
 
 namespace {
 

@@ -33,15 +33,16 @@
 
 #include <fmt/format.h>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/diagnosis.h"
-#include "diagnose/diagnosis_summary.h"
-#include "diagnose/recordings.h"
-#include "formats/scenario_yaml.h"
-#include "sim/motion_profile.h"
-#include "sim/simulator.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/diagnosis.h>
+#include <odotune/diagnose/diagnosis_summary.h>
+#include <odotune/diagnose/recordings.h>
+#include <odotune/formats/scenario_yaml.h>
+#include <odotune/sim/motion_profile.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/tracks/track_io.h>
+
 #include "tests/diagnose/sim_track.h"
-#include "tracks/track_io.h"
 
 namespace {
 

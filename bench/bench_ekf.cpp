@@ -1,8 +1,8 @@
 // EKF replay speed (docs/benchmarks.md).
-//   BM_EkfStep:   the straightforward fixed-size-Eigen EKF (filters/ekf.h),
+//   BM_EkfStep:   the straightforward fixed-size-Eigen EKF (odotune/filters/ekf.h),
 //                 one predict per odometry step — the reference.
 //   BM_FastReplay: the segment-batched replay the tuner uses
-//                 (objectives/replay.h), same numbers.
+//                 (odotune/objectives/replay.h), same numbers.
 //   BM_PsoTune:   one full PSO tune (50 particles × 150 iterations) on
 //                 Track 1, end to end, swarm evaluated on all threads.
 // Counters: ns_per_step is wall time per filter step on one core.
@@ -10,10 +10,10 @@
 
 #include <string>
 
-#include "jobs/tune_job.h"
-#include "objectives/param_space.h"
-#include "objectives/replay.h"
-#include "tracks/track_io.h"
+#include <odotune/jobs/tune_job.h>
+#include <odotune/objectives/param_space.h>
+#include <odotune/objectives/replay.h>
+#include <odotune/tracks/track_io.h>
 
 namespace {
 

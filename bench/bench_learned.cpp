@@ -14,7 +14,7 @@
 //       nets, window shift included).
 //   BM_UkfStep: one fusion step (predict + odometry + external + gyro).
 //   BM_PoseUkfStep: one step of the fusion with fixes (predict through the
-//       unicycle + odometry + a position fix), filters/pose_velocity_ukf.h.
+//       unicycle + odometry + a position fix), odotune/filters/pose_velocity_ukf.h.
 // The windows come from a fixed synthetic drive (a sum of sines, 10 Hz), so
 // the figures are the cost of the maths, not of a particular track.
 #include <benchmark/benchmark.h>
@@ -23,12 +23,12 @@
 #include <numbers>
 #include <vector>
 
-#include "filters/pose_velocity_ukf.h"
-#include "filters/velocity_ukf.h"
-#include "learned/learned_fusion.h"
-#include "learned/learned_odometry.h"
-#include "learned/lstm.h"
-#include "learned/lstm_training.h"
+#include <odotune/filters/pose_velocity_ukf.h>
+#include <odotune/filters/velocity_ukf.h>
+#include <odotune/learned/learned_fusion.h>
+#include <odotune/learned/learned_odometry.h>
+#include <odotune/learned/lstm.h>
+#include <odotune/learned/lstm_training.h>
 
 namespace {
 

@@ -26,10 +26,10 @@
 #include <numbers>
 #include <vector>
 
-#include "rlnode/gps_alignment.h"
-#include "rlnode/params.h"
-#include "rlnode/recording.h"
-#include "rlnode/replay.h"
+#include <odotune/rlnode/gps_alignment.h>
+#include <odotune/rlnode/params.h>
+#include <odotune/rlnode/recording.h>
+#include <odotune/rlnode/replay.h>
 
 namespace {
 

@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <string>
 
-#include "results/store.h"
+#include <odotune/results/store.h>
 
 namespace {
 

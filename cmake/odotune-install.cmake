@@ -1,7 +1,7 @@
 # `cmake --install build [--prefix P]` installs odotune as a CMake package:
 #   P/bin/odotune
 #   P/lib/libodotune_<module>.a              every module in ODOTUNE_MODULES
-#   P/include/odotune/<module>/*.h           consumers include "tracks/track.h"
+#   P/include/odotune/<module>/*.h           consumers include <odotune/tracks/track.h>
 #   P/lib/cmake/odotune/odotune{Config,ConfigVersion,Targets*}.cmake
 #   P/share/doc/odotune/                     README, CHANGELOG, LICENSE
 # A consumer calls find_package(odotune REQUIRED) and links odotune::<module>
@@ -16,7 +16,7 @@ set(_odotune_export "")
 foreach(m ${ODOTUNE_MODULES})
   set_target_properties(odotune_${m} PROPERTIES EXPORT_NAME ${m})
   list(APPEND _odotune_export odotune_${m})
-  file(GLOB _hdrs CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/${m}/*.h)
+  file(GLOB _hdrs CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/odotune/${m}/*.h)
   install(FILES ${_hdrs} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/odotune/${m})
 endforeach()
 # bags/ links the ROS 1 helper target publicly when it was found: its include

@@ -15,7 +15,7 @@
 # The robot has no velocity sensor: the online methods and batch-velocity
 # use body velocities derived from the OptiTrack poses at 10 Hz
 # (--ext-from-gt 10), a stand-in for scan matching, whose noise odotune
-# estimates from the poses' own jitter (calibration/reference_jitter.h). The
+# estimates from the poses' own jitter (odotune/calibration/reference_jitter.h). The
 # pose fit (batch-pose, the default batch) uses the poses themselves.
 #
 # online-pose, the online filter of position fixes, runs on copies of the

@@ -73,7 +73,7 @@ name: husky-no-ground-truth
 # robot_localization's Husky (test1), the first half of the drive: odometry
 # twist, IMU yaw rate, GPS fixes.
 # Mode 8 scores each noise by the prediction error of held-out fixes
-# (objectives/fix_cv_replay.h): the recording has no ground truth.
+# (odotune/objectives/fix_cv_replay.h): the recording has no ground truth.
 models: [rq, alpha, gyro]
 tracks: [$track_abs]
 modes: [8]

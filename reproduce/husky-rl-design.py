@@ -55,7 +55,7 @@ DESIGNS = {
                                "--iterations", "20"],
     "grid-refine-determined-seed2": ["--fitness", "both", "--refine", "1", "--outage", "30", "--particles",
                                      "12", "--iterations", "20", "--seed", "2"],
-    # The field's criteria (objectives/rl_innovations.h) in the same search,
+    # The field's criteria (odotune/objectives/rl_innovations.h) in the same search,
     # with the held-out-fix guard and without it.
     "innovation-nll": ["--fitness", "innovation-nll", "--outage", "30"],
     "innovation-nll-free": ["--fitness", "innovation-nll", "--outage", "30", "--allow-worse-heldout"],

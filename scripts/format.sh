@@ -6,9 +6,8 @@
 #   bash scripts/format.sh --check   change nothing; list the files that are not
 #                                    formatted and exit 1 if there are any
 #
-# Project files are the *.h / *.cpp files in the module folders (core/ bags/ tracks/ sim/
-# filters/ rlnode/ objectives/ calibration/ learned/ tuner/ results/ diagnose/ formats/ jobs/ studies/ cli/), in tests/ and
-# bench/. build*/, cmake/ and everything
+# Project files are the *.h / *.cpp files in the module folders (odotune/<module>/), in
+# tests/ and bench/. build*/, cmake/ and everything
 # else are skipped. The list comes from `git ls-files` (tracked files, and new files
 # that are not ignored); outside a git checkout, find(1) is used instead.
 # Works from any directory.
@@ -44,7 +43,7 @@ if ! "$CLANG_FORMAT" --style=file --dump-config >/dev/null; then
 fi
 
 dirs=()
-for d in core bags tracks sim filters rlnode objectives calibration learned tuner results diagnose formats jobs studies cli tests bench; do
+for d in odotune tests bench; do
   [ -d "$d" ] && dirs+=("$d")
 done
 if [ ${#dirs[@]} -eq 0 ]; then

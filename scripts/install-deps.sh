@@ -7,7 +7,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake git pkg-config
   libeigen3-dev          # fixed-size linear algebra for the filters
-  libnlopt-cxx-dev       # derivative-free solvers (tuner/nlopt_solver.h)
+  libnlopt-cxx-dev       # derivative-free solvers (odotune/tuner/nlopt_solver.h)
   libceres-dev           # robust least squares (diagnose/, batch calibration)
   libfmt-dev             # formatting of tables and messages
   libgtest-dev libgmock-dev

@@ -7,8 +7,7 @@
 #   bash scripts/tidy.sh [BUILD_DIR] FILE…  only these .cpp files (they must be in the database)
 #
 # Project translation units are the database entries under the module folders
-# (core/ bags/ tracks/ sim/ filters/ rlnode/ objectives/ calibration/ learned/ tuner/ results/
-# diagnose/ formats/ jobs/ studies/ cli/), tests/ or bench/; any other entry (for example a
+# (odotune/<module>/), tests/ or bench/; any other entry (for example a
 # dependency built with FetchContent) is skipped. Project headers are checked through the
 # files that include them (HeaderFilterRegex in .clang-tidy).
 # clang-tidy runs under `nice -n 19`, as many at a time as nproc says (set TIDY_JOBS to
@@ -81,8 +80,7 @@ trap 'rm -rf "$log" "$dbdir"' EXIT
 units="$(python3 - "$root" "$db" "$dbdir" "${files[@]}" <<'EOF'
 import json, os, re, sys
 root, db, dbdir, wanted = os.path.realpath(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[4:]
-modules = {"core", "bags", "tracks", "sim", "filters", "rlnode", "objectives", "calibration", "learned",
-           "tuner", "results", "diagnose", "formats", "jobs", "studies", "cli", "tests", "bench"}
+modules = {"odotune", "tests", "bench"}
 entries = []
 for e in json.load(open(db)):
     unity = e["file"] if os.path.isabs(e["file"]) else os.path.join(e["directory"], e["file"])

@@ -1,4 +1,4 @@
-#include "bags/bag.h"
+#include <odotune/bags/bag.h>
 
 #include <yaml-cpp/yaml.h>
 
@@ -7,8 +7,8 @@
 #include <fstream>
 #include <map>
 
-#include "bags/bag_error.h"
-#include "bags/bag_readers.h"
+#include <odotune/bags/bag_error.h>
+#include <odotune/bags/bag_readers.h>
 
 namespace odotune::bags {
 namespace {

@@ -1,12 +1,12 @@
 // One way to read any bag odotune imports: ROS 1 bags (.bag, format 2.0,
 // through Debian's librosbag_storage when the build has it), MCAP files
-// (ROS 2's default storage, bags/mcap.h) and rosbag2 SQLite bags (.db3), or a
+// (ROS 2's default storage, odotune/bags/mcap.h) and rosbag2 SQLite bags (.db3), or a
 // rosbag2 folder (metadata.yaml beside its .db3 or .mcap files).
 //
 // The format is found from the content (magic bytes), not the name.
 // Messages come in file order with their receive time (ROS 1 bag time,
 // MCAP log_time, rosbag2 timestamp) and their raw bytes and wire encoding,
-// for bags/ros_messages.h to decode. Errors: BagError naming the bag.
+// for odotune/bags/ros_messages.h to decode. Errors: BagError naming the bag.
 #pragma once
 
 #include <cstdint>
@@ -17,7 +17,7 @@
 #include <string_view>
 #include <vector>
 
-#include "bags/wire.h"
+#include <odotune/bags/wire.h>
 
 namespace odotune::bags {
 

@@ -1,4 +1,4 @@
-// The storage readers behind bags/bag.h (one per format), for bag.cpp.
+// The storage readers behind odotune/bags/bag.h (one per format), for bag.cpp.
 #pragma once
 
 #include <filesystem>
@@ -6,14 +6,14 @@
 #include <string>
 #include <string_view>
 
-#include "bags/bag.h"
+#include <odotune/bags/bag.h>
 
 namespace odotune::bags::detail {
 
 using Want = std::function<bool(std::string_view topic)>;
 using OnMessage = std::function<void(const BagMessage&)>;
 
-// An MCAP file (bags/mcap.h): channel topics, schema names as types,
+// An MCAP file (odotune/bags/mcap.h): channel topics, schema names as types,
 // message_encoding "cdr" or "ros1".
 void read_mcap_bag(const std::filesystem::path& file, const Want& want, const OnMessage& on_message);
 // One rosbag2 SQLite file (tables topics and messages), in timestamp order.

@@ -1,4 +1,4 @@
-#include "bags/compression.h"
+#include <odotune/bags/compression.h>
 
 #include <lz4frame.h>
 #include <zlib.h>

@@ -1,13 +1,13 @@
-#include "bags/mcap.h"
+#include <odotune/bags/mcap.h>
 
 #include <array>
 #include <cstring>
 #include <span>
 #include <system_error>
 
-#include "bags/bag_error.h"
-#include "bags/byte_reader.h"
-#include "bags/compression.h"
+#include <odotune/bags/bag_error.h>
+#include <odotune/bags/byte_reader.h>
+#include <odotune/bags/compression.h>
 
 namespace odotune::bags::mcap {
 namespace {

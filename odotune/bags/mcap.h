@@ -22,7 +22,7 @@
 // with Debian's libzstd and liblz4; a chunk declaring more than 1 GiB
 // uncompressed is refused (a decompression bomb is not a bag).
 //
-// Errors: BagError (bags/bag_error.h) naming the file and the byte offset.
+// Errors: BagError (odotune/bags/bag_error.h) naming the file and the byte offset.
 #pragma once
 
 #include <cstdint>

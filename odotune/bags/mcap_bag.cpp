@@ -1,11 +1,11 @@
-// MCAP as a bag (bags/bag_readers.h): messages in file order with their
+// MCAP as a bag (odotune/bags/bag_readers.h): messages in file order with their
 // channel's topic and schema name.
 #include <map>
 
-#include "bags/bag_error.h"
-#include "bags/bag_readers.h"
-#include "bags/mcap.h"
-#include "bags/ros_messages.h"
+#include <odotune/bags/bag_error.h>
+#include <odotune/bags/bag_readers.h>
+#include <odotune/bags/mcap.h>
+#include <odotune/bags/ros_messages.h>
 
 namespace odotune::bags::detail {
 

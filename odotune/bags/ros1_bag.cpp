@@ -1,12 +1,12 @@
-// A ROS 1 bag (format 2.0) as a bag (bags/bag_readers.h), read with Debian's
+// A ROS 1 bag (format 2.0) as a bag (odotune/bags/bag_readers.h), read with Debian's
 // librosbag_storage (rosbag::Bag and rosbag::View decompress the bz2 and lz4
 // chunks and keep the connection table); each message's serialised bytes
-// are copied out and decoded by bags/ros_messages.h like ROS 2's, so the two
+// are copied out and decoded by odotune/bags/ros_messages.h like ROS 2's, so the two
 // share one decoder. Without librosbag in the build (ODOTUNE_WITH_ROS1 unset)
 // a ROS 1 bag is refused with that reason.
-#include "bags/bag_error.h"
-#include "bags/bag_readers.h"
-#include "bags/ros_messages.h"
+#include <odotune/bags/bag_error.h>
+#include <odotune/bags/bag_readers.h>
+#include <odotune/bags/ros_messages.h>
 
 #ifdef ODOTUNE_WITH_ROS1
 #include <ros/serialization.h>

@@ -1,4 +1,4 @@
-#include "bags/ros_messages.h"
+#include <odotune/bags/ros_messages.h>
 
 namespace odotune::bags::ros {
 namespace {

@@ -1,5 +1,5 @@
 // The ROS messages odotune imports, decoded from either wire encoding
-// (bags/wire.h): the same struct whether the bag is ROS 1 or ROS 2.
+// (odotune/bags/wire.h): the same struct whether the bag is ROS 1 or ROS 2.
 //
 // Field order and types are the message definitions (ROS 1 noetic / ROS 2
 // humble common_interfaces, identical for these messages apart from the
@@ -18,7 +18,7 @@
 #include <string_view>
 #include <vector>
 
-#include "bags/wire.h"
+#include <odotune/bags/wire.h>
 
 namespace odotune::bags::ros {
 

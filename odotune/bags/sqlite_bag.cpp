@@ -1,4 +1,4 @@
-// A rosbag2 SQLite storage file as a bag (bags/bag_readers.h): the Humble
+// A rosbag2 SQLite storage file as a bag (odotune/bags/bag_readers.h): the Humble
 // layout (tables topics(id, name, type, serialization_format, ...) and
 // messages(id, topic_id, timestamp, data), timestamps in ns), read with
 // Debian's SQLite, in timestamp order (ties by row id, the insertion order).
@@ -7,9 +7,9 @@
 #include <map>
 #include <memory>
 
-#include "bags/bag_error.h"
-#include "bags/bag_readers.h"
-#include "bags/ros_messages.h"
+#include <odotune/bags/bag_error.h>
+#include <odotune/bags/bag_readers.h>
+#include <odotune/bags/ros_messages.h>
 
 namespace odotune::bags::detail {
 namespace {

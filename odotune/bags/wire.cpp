@@ -1,4 +1,4 @@
-#include "bags/wire.h"
+#include <odotune/bags/wire.h>
 
 #include <algorithm>
 #include <array>

@@ -11,7 +11,7 @@
 //         = int32 sec + uint32 nanosec; std_msgs/Header = time + string.
 //
 // Why our own reader: Debian packages no ROS 2 serialisation library, and
-// the messages odotune reads (bags/ros_messages.h) need a dozen primitive
+// the messages odotune reads (odotune/bags/ros_messages.h) need a dozen primitive
 // reads. Big-endian CDR is read too (byte-swapped), though rosbag2 writes
 // little-endian. Every read is bounds-checked (ByteReader::Short).
 #pragma once
@@ -20,7 +20,7 @@
 #include <span>
 #include <string>
 
-#include "bags/byte_reader.h"
+#include <odotune/bags/byte_reader.h>
 
 namespace odotune::bags {
 

@@ -1,4 +1,4 @@
-#include "calibration/batch_calibration.h"
+#include <odotune/calibration/batch_calibration.h>
 
 #include <array>
 #include <cmath>
@@ -7,14 +7,14 @@
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 
-#include "calibration/ceres_fit.h"
-#include "core/ceres_options.h"
+#include <odotune/calibration/ceres_fit.h>
+#include <odotune/core/ceres_options.h>
 
 namespace odotune {
 
 namespace {
 
-// Parameter block layout: θ = (R_R, R_L, D) [m], as in filters/dual_kf.h.
+// Parameter block layout: θ = (R_R, R_L, D) [m], as in odotune/filters/dual_kf.h.
 enum BatchParam : int { kRadiusRight = 0, kRadiusLeft = 1, kWheelBase = 2, kBatchParams = 3 };
 
 // Huber scale in units of the measurement's σ (the residuals are whitened).

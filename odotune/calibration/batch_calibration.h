@@ -3,7 +3,7 @@
 // compared with).
 //
 // Residuals, one pair per calibration sample (wheel rates + external
-// velocity, calibration/calibration_input.h), whitened by the measurement's σ:
+// velocity, odotune/calibration/calibration_input.h), whitened by the measurement's σ:
 //   (V_odo(θ, ω) − V_m)/σ_v,  (W_odo(θ, ω) − W_m)/σ_w,
 // with a Huber loss (scale 3σ, on the pair's norm) against outliers; the
 // parameters are bounded below by 1 % of their initial values (positivity
@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "calibration/calibration_input.h"
-#include "filters/odometry_params.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/filters/odometry_params.h>
 
 namespace odotune {
 

@@ -1,11 +1,11 @@
-#include "calibration/calibrated_odometry_errors.h"
+#include <odotune/calibration/calibrated_odometry_errors.h>
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
-#include "calibration/dead_reckoning.h"
-#include "filters/diff_drive.h"
+#include <odotune/calibration/dead_reckoning.h>
+#include <odotune/filters/diff_drive.h>
 
 namespace odotune {
 

@@ -11,9 +11,9 @@
 // TrackCalibrationScore::pose_rmse_m for the same parameters (up to rounding).
 #pragma once
 
-#include "calibration/calibration_input.h"
-#include "calibration/calibration_run.h"
-#include "objectives/metrics.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/calibration/calibration_run.h>
+#include <odotune/objectives/metrics.h>
 
 namespace odotune {
 

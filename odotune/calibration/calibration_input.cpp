@@ -1,4 +1,4 @@
-#include "calibration/calibration_input.h"
+#include <odotune/calibration/calibration_input.h>
 
 #include <algorithm>
 #include <cmath>
@@ -9,10 +9,10 @@
 
 #include <fmt/format.h>
 
-#include "calibration/reference_jitter.h"
-#include "objectives/pose_series.h"
-#include "objectives/track_samples.h"
-#include "sim/effects.h"
+#include <odotune/calibration/reference_jitter.h>
+#include <odotune/objectives/pose_series.h>
+#include <odotune/objectives/track_samples.h>
+#include <odotune/sim/effects.h>
 
 namespace odotune {
 

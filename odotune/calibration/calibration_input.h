@@ -1,6 +1,6 @@
 // A track laid out for odometry calibration: the wheel rates of every
 // odometry row (for dead reckoning), the calibration samples (wheel rates at
-// each external velocity measurement, filters/odometry_params.h), the ground
+// each external velocity measurement, odotune/filters/odometry_params.h), the ground
 // truth, the robot's nominal parameters and, for a simulated track, the true
 // parameters over time (from its `sim.effects` metadata).
 #pragma once
@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "filters/odometry_params.h"
-#include "tracks/track.h"
+#include <odotune/filters/odometry_params.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 
@@ -136,7 +136,7 @@ CalibrationInput build_calibration_input(const Track& track, const CalibrationIn
 
 // The truth of a simulated track (nullopt when it has no sim.effects or the
 // nominal radii/base metadata is missing). sim.effects is the "; "-separated
-// list of sim/effects.h (parse_effect_spec per part, "none" for no
+// list of odotune/sim/effects.h (parse_effect_spec per part, "none" for no
 // effect). Only the geometric effects enter the truth (radius_error,
 // wheel_base_error, radius_step); the others (speed_radius, slips, ...) are
 // ignored, so under them the truth is the static geometry. Throws

@@ -1,4 +1,4 @@
-#include "calibration/calibration_objective.h"
+#include <odotune/calibration/calibration_objective.h>
 
 #include <cmath>
 #include <stdexcept>
@@ -58,7 +58,7 @@ filters::PfCalibratorParams apply_calibration_params(const filters::PfCalibrator
   filters::PfCalibratorParams p = base;
   // The space is the paper's PF settings (its walk σ, α, ...): tuned under
   // the paper's evolution, which they drive (the evidence evolution has no
-  // walk σ to tune, filters/pf_evolution.h).
+  // walk σ to tune, odotune/filters/pf_evolution.h).
   p.evolution = filters::PfEvolution::paper;
   p.neff_fraction = v[kNeffFraction];
   p.max_weight_ratio = v[kMaxWeightRatio];

@@ -30,9 +30,9 @@
 #include <utility>
 #include <vector>
 
-#include "calibration/calibration_input.h"
-#include "calibration/calibration_run.h"
-#include "objectives/box_space.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/calibration/calibration_run.h>
+#include <odotune/objectives/box_space.h>
 
 namespace odotune {
 

@@ -7,8 +7,8 @@
 // carry over to the command.
 #pragma once
 
-#include "filters/odometry_params.h"
-#include "filters/pf_calibrator.h"
+#include <odotune/filters/odometry_params.h>
+#include <odotune/filters/pf_calibrator.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "calibration/calibration_run.h"
+#include <odotune/calibration/calibration_run.h>
 
 #include <algorithm>
 #include <chrono>
@@ -8,11 +8,11 @@
 
 #include <fmt/format.h>
 
-#include "calibration/batch_calibration.h"
-#include "calibration/dead_reckoning.h"
-#include "core/why.h"
-#include "filters/diff_drive.h"
-#include "objectives/pose_series.h"
+#include <odotune/calibration/batch_calibration.h>
+#include <odotune/calibration/dead_reckoning.h>
+#include <odotune/core/why.h>
+#include <odotune/filters/diff_drive.h>
+#include <odotune/objectives/pose_series.h>
 
 namespace odotune {
 

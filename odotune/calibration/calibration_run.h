@@ -3,13 +3,13 @@
 // the calibrated odometry against ground truth, and cost per iteration.
 //
 // Methods (Fariña, Toledo & Acosta, RA-L 2026, Tables I–II):
-//   adaptive-pf, pf  filters/pf_calibrator.h (online)
-//   dkf              filters/dual_kf.h (online)
-//   online-pose      filters/pose_calibrator.h (online, from position fixes;
-//                    calibration/online_pose.h)
-//   batch-pose       calibration/pose_calibration.h (offline: dead reckoning
+//   adaptive-pf, pf  odotune/filters/pf_calibrator.h (online)
+//   dkf              odotune/filters/dual_kf.h (online)
+//   online-pose      odotune/filters/pose_calibrator.h (online, from position fixes;
+//                    odotune/calibration/online_pose.h)
+//   batch-pose       odotune/calibration/pose_calibration.h (offline: dead reckoning
 //                    fitted to the reference positions; `batch` is its alias)
-//   batch-velocity   calibration/batch_calibration.h (offline least squares
+//   batch-velocity   odotune/calibration/batch_calibration.h (offline least squares
 //                    on body velocities)
 //   none             the track's nominal parameters
 // Online methods run the tracks one after another with the same filter (as
@@ -22,12 +22,12 @@
 #include <string_view>
 #include <vector>
 
-#include "calibration/calibration_input.h"
-#include "calibration/online_pose.h"
-#include "calibration/pose_calibration.h"
-#include "filters/dual_kf.h"
-#include "filters/memory_pair.h"
-#include "filters/pf_calibrator.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/calibration/online_pose.h>
+#include <odotune/calibration/pose_calibration.h>
+#include <odotune/filters/dual_kf.h>
+#include <odotune/filters/memory_pair.h>
+#include <odotune/filters/pf_calibrator.h>
 
 namespace odotune {
 
@@ -56,7 +56,7 @@ struct CalibrationOptions {
   PoseCalibrationOptions pose;    // batch-pose
   OnlinePoseOptions online_pose;  // online-pose
   // pf/adaptive-pf with the evidence evolution, dkf with fading memory and
-  // online-pose run as a slow/fast pair that finds changes (filters/memory_pair.h).
+  // online-pose run as a slow/fast pair that finds changes (odotune/filters/memory_pair.h).
   filters::MemoryPairParams memory_pair;
   // Convergence: the first time after which R_R, R_L and D all stay within
   // this fraction of the truth (the paper: 0.5 %; see TrackCalibrationScore).
@@ -127,8 +127,8 @@ struct CalibrationResult {
   long iterations = 0;
   double ms_per_iteration = 0.0;
   double mean_particles = 0.0;  // PF: mean N over iterations (deterministic cost); else 0
-  bool memory_pair = false;     // an online method run as a slow/fast memory pair (filters/memory_pair.h)
-  long memory_restarts = 0;     // ... and the changes it found (else 0)
+  bool memory_pair = false;  // an online method run as a slow/fast memory pair (odotune/filters/memory_pair.h)
+  long memory_restarts = 0;  // ... and the changes it found (else 0)
   // online-pose: the memory it ran with (online_pose_memory of the inputs).
   std::optional<filters::DistanceMemoryParams> online_pose_memory;
   // batch methods only: Ceres reported convergence (the fit's sds are in the

@@ -1,4 +1,4 @@
-#include "calibration/ceres_fit.h"
+#include <odotune/calibration/ceres_fit.h>
 
 #include <cmath>
 #include <vector>

@@ -2,16 +2,16 @@
 // calibration score shares (calibration_run.h's TrackCalibrationScore and
 // dead_reckoned_path, calibrated_odometry_errors.h): from the first odometry
 // row with ground truth, at its pose, each later row r integrates its wheel
-// rates over (t[r−1], t[r]] with core/planar_motion.h's midpoint_advance (l = ω_l R_L Δt,
+// rates over (t[r−1], t[r]] with odotune/core/planar_motion.h's midpoint_advance (l = ω_l R_L Δt,
 // r = ω_r R_R Δt), using the parameters params_at(t[r]).
 #pragma once
 
 #include <cstddef>
 
-#include "calibration/calibration_input.h"
-#include "core/planar_motion.h"
-#include "filters/diff_drive.h"
-#include "filters/odometry_params.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/core/planar_motion.h>
+#include <odotune/filters/diff_drive.h>
+#include <odotune/filters/odometry_params.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "calibration/online_pose.h"
+#include <odotune/calibration/online_pose.h>
 
 #include <algorithm>
 #include <cmath>
@@ -6,8 +6,8 @@
 
 #include <fmt/format.h>
 
-#include "core/robust_stats.h"
-#include "core/why.h"
+#include <odotune/core/robust_stats.h>
+#include <odotune/core/why.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-// The online pose-domain calibration (filters/pose_calibrator.h) run over a
+// The online pose-domain calibration (odotune/filters/pose_calibrator.h) run over a
 // calibration input: its odometry rows' encoder intervals, each split at the
 // position fixes stamped inside it, become the filter's samples, and each
 // track starts at its known pose or from its fixes.
@@ -9,8 +9,8 @@
 #include <string_view>
 #include <vector>
 
-#include "calibration/calibration_input.h"
-#include "filters/pose_calibrator.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/filters/pose_calibrator.h>
 
 namespace odotune {
 

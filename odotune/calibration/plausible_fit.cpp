@@ -1,4 +1,4 @@
-#include "calibration/plausible_fit.h"
+#include <odotune/calibration/plausible_fit.h>
 
 #include <array>
 #include <cmath>

@@ -12,7 +12,7 @@
 #include <optional>
 #include <string>
 
-#include "filters/odometry_params.h"
+#include <odotune/filters/odometry_params.h>
 
 namespace odotune {
 

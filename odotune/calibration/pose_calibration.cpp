@@ -1,4 +1,4 @@
-#include "calibration/pose_calibration.h"
+#include <odotune/calibration/pose_calibration.h>
 
 #include <algorithm>
 #include <array>
@@ -10,10 +10,10 @@
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 
-#include "calibration/ceres_fit.h"
-#include "calibration/fix_groups.h"
-#include "core/ceres_options.h"
-#include "core/planar_motion.h"
+#include <odotune/calibration/ceres_fit.h>
+#include <odotune/calibration/fix_groups.h>
+#include <odotune/core/ceres_options.h>
+#include <odotune/core/planar_motion.h>
 
 namespace odotune {
 

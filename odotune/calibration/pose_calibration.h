@@ -38,8 +38,8 @@
 #include <string>
 #include <vector>
 
-#include "calibration/calibration_input.h"
-#include "filters/odometry_params.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/filters/odometry_params.h>
 
 namespace odotune {
 

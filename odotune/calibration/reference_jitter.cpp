@@ -1,4 +1,4 @@
-#include "calibration/reference_jitter.h"
+#include <odotune/calibration/reference_jitter.h>
 
 #include <algorithm>
 #include <cmath>
@@ -14,7 +14,7 @@ constexpr double kMaxUnevenness = 0.1;
 constexpr double kMadPerSigma = 0.6745;
 
 // Median absolute deviation from the median, as a normal σ (0 for no data).
-// The upper middle element and /0.6745, not core/robust_stats.h (mean of the
+// The upper middle element and /0.6745, not odotune/core/robust_stats.h (mean of the
 // two middle elements, ×1.4826): the calibration tables were made with this one.
 double upper_mad_sigma(std::vector<double> v) {
   if (v.empty()) return 0.0;

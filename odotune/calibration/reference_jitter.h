@@ -10,7 +10,7 @@
 
 #include <cstddef>
 
-#include "objectives/pose_series.h"
+#include <odotune/objectives/pose_series.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "calibration/twist_calibration.h"
+#include <odotune/calibration/twist_calibration.h>
 
 #include <algorithm>
 #include <array>
@@ -11,11 +11,11 @@
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 
-#include "calibration/ceres_fit.h"
-#include "calibration/fix_groups.h"
-#include "core/ceres_options.h"
-#include "core/why.h"
-#include "tracks/body_velocity.h"
+#include <odotune/calibration/ceres_fit.h>
+#include <odotune/calibration/fix_groups.h>
+#include <odotune/core/ceres_options.h>
+#include <odotune/core/why.h>
+#include <odotune/tracks/body_velocity.h>
 
 namespace odotune {
 

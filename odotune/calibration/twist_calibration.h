@@ -1,8 +1,8 @@
 // Offline calibration of a body-velocity odometry: the twist a drive
-// controller reports, or the velocity commands (tracks/odometry_input.h),
+// controller reports, or the velocity commands (odotune/tracks/odometry_input.h),
 //   v(t) = scale_v · v_in(t − delay),   w(t) = scale_w · w_in(t − delay)
-// with v_in, w_in the track's v_cmd, w_cmd under tracks/body_velocity.h's
-// zero-order hold (filters/odometry_params.h, TwistCorrection). The delay is
+// with v_in, w_in the track's v_cmd, w_cmd under odotune/tracks/body_velocity.h's
+// zero-order hold (odotune/filters/odometry_params.h, TwistCorrection). The delay is
 // fitted for commands only: a command leads the motion by the drive's
 // response, a measured twist does not (0).
 //
@@ -29,9 +29,9 @@
 #include <string>
 #include <vector>
 
-#include "filters/odometry_params.h"
-#include "tracks/odometry_input.h"
-#include "tracks/track.h"
+#include <odotune/filters/odometry_params.h>
+#include <odotune/tracks/odometry_input.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 

@@ -1,8 +1,8 @@
 #include <exception>
 #include <iostream>
 
-#include "cli/commands.h"
-#include "core/failure.h"
+#include <odotune/cli/commands.h>
+#include <odotune/core/failure.h>
 
 namespace odotune::cli {
 

@@ -1,19 +1,19 @@
 // odotune calibrate: online (or batch) calibration of the odometry
 // parameters R_R, R_L and D from wheel rates and external body velocities,
 // and the replay of a calibration on held-out tracks (--apply); the work is
-// jobs/calibrate_job.h, the summary text jobs/calibration_summary.h.
+// odotune/jobs/calibrate_job.h, the summary text odotune/jobs/calibration_summary.h.
 #include <memory>
 #include <optional>
 #include <string>
 
 #include <fmt/format.h>
 
-#include "cli/choices.h"
-#include "cli/commands.h"
-#include "cli/controller_options.h"
-#include "cli/output.h"
-#include "cli/progress.h"
-#include "jobs/calibrate_job.h"
+#include <odotune/cli/choices.h>
+#include <odotune/cli/commands.h>
+#include <odotune/cli/controller_options.h>
+#include <odotune/cli/output.h>
+#include <odotune/cli/progress.h>
+#include <odotune/jobs/calibrate_job.h>
 
 namespace odotune::cli {
 

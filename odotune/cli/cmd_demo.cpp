@@ -1,15 +1,15 @@
 // odotune demo: the README's main job. The five bundled reference tracks ×
 // the three noise models, tuned by PSO for fitness mode 7, as a table of
-// baseline vs tuned errors (jobs/demo_job.h).
+// baseline vs tuned errors (odotune/jobs/demo_job.h).
 #include <cstdio>
 #include <optional>
 
 #include <fmt/format.h>
 
-#include "cli/commands.h"
-#include "cli/output.h"
-#include "cli/progress.h"
-#include "jobs/demo_job.h"
+#include <odotune/cli/commands.h>
+#include <odotune/cli/output.h>
+#include <odotune/cli/progress.h>
+#include <odotune/jobs/demo_job.h>
 
 namespace odotune::cli {
 

@@ -1,14 +1,14 @@
 // odotune diagnose: where a nominal robot model and a recording disagree,
 // which physics of ../shared/specs/physics-effects.md was left out, its
-// fitted size, and the held-out proof (jobs/diagnose_job.h).
+// fitted size, and the held-out proof (odotune/jobs/diagnose_job.h).
 #include <filesystem>
 
 #include <fmt/format.h>
 
-#include "cli/commands.h"
-#include "cli/controller_options.h"
-#include "cli/output.h"
-#include "jobs/diagnose_job.h"
+#include <odotune/cli/commands.h>
+#include <odotune/cli/controller_options.h>
+#include <odotune/cli/output.h>
+#include <odotune/jobs/diagnose_job.h>
 
 namespace odotune::cli {
 

@@ -1,13 +1,13 @@
 // odotune eval: replay a configuration (or the baseline) over tracks
-// (jobs/eval_job.h).
+// (odotune/jobs/eval_job.h).
 #include <fmt/format.h>
 
-#include "cli/commands.h"
-#include "cli/output.h"
-#include "cli/rl_output.h"
-#include "core/failure.h"
-#include "jobs/eval_job.h"
-#include "jobs/rl_job.h"
+#include <odotune/cli/commands.h>
+#include <odotune/cli/output.h>
+#include <odotune/cli/rl_output.h>
+#include <odotune/core/failure.h>
+#include <odotune/jobs/eval_job.h>
+#include <odotune/jobs/rl_job.h>
 
 namespace odotune::cli {
 

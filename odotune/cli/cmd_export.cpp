@@ -1,9 +1,9 @@
 // odotune export: the best run of a results store as an odotune or
-// robot_localization configuration (jobs/export_job.h selects and writes).
+// robot_localization configuration (odotune/jobs/export_job.h selects and writes).
 #include <fmt/format.h>
 
-#include "cli/commands.h"
-#include "jobs/export_job.h"
+#include <odotune/cli/commands.h>
+#include <odotune/jobs/export_job.h>
 
 namespace odotune::cli {
 

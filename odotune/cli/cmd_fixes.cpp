@@ -1,11 +1,11 @@
 // odotune fixes: add synthetic absolute position fixes to a track
-// (jobs/fixes_job.h); this file reads the flags and prints.
+// (odotune/jobs/fixes_job.h); this file reads the flags and prints.
 #include <memory>
 
 #include <fmt/format.h>
 
-#include "cli/commands.h"
-#include "jobs/fixes_job.h"
+#include <odotune/cli/commands.h>
+#include <odotune/jobs/fixes_job.h>
 
 namespace odotune::cli {
 

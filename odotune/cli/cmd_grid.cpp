@@ -1,14 +1,14 @@
 // odotune grid: run an experiment grid into a crash-safe results store
-// (jobs/grid_mpi.h, run_grid_job).
+// (odotune/jobs/grid_mpi.h, run_grid_job).
 #include <optional>
 
 #include <fmt/format.h>
 
-#include "cli/commands.h"
-#include "cli/output.h"
-#include "cli/progress.h"
-#include "core/failure.h"
-#include "jobs/grid_mpi.h"
+#include <odotune/cli/commands.h>
+#include <odotune/cli/output.h>
+#include <odotune/cli/progress.h>
+#include <odotune/core/failure.h>
+#include <odotune/jobs/grid_mpi.h>
 
 namespace odotune::cli {
 

@@ -1,5 +1,5 @@
 // `odotune import <dataset> ...`: converts a third-party recording to an
-// odotune track file (jobs/import_job.h over tracks/importers.h); this file
+// odotune track file (odotune/jobs/import_job.h over odotune/tracks/importers.h); this file
 // only reads flags and prints the one-line summary.
 #include <array>
 #include <memory>
@@ -8,11 +8,11 @@
 
 #include <fmt/format.h>
 
-#include "bags/bag.h"
-#include "cli/commands.h"
-#include "core/failure.h"
-#include "jobs/import_job.h"
-#include "tracks/import_rosbag.h"
+#include <odotune/bags/bag.h>
+#include <odotune/cli/commands.h>
+#include <odotune/core/failure.h>
+#include <odotune/jobs/import_job.h>
+#include <odotune/tracks/import_rosbag.h>
 
 namespace odotune::cli {
 

@@ -2,7 +2,7 @@
 // Toledo & Acosta, "Improving Odometric Model Performance Based on LSTM
 // Networks", Sensors 2023, 23, 961, on recorded or simulated tracks. This
 // file reads the flags, shows the progress and prints; the work (training,
-// scoring, retraining, the model file, JSON and CSV) is studies/learn_job.h.
+// scoring, retraining, the model file, JSON and CSV) is odotune/studies/learn_job.h.
 #include <memory>
 #include <optional>
 #include <string>
@@ -11,11 +11,11 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "cli/choices.h"
-#include "cli/commands.h"
-#include "cli/output.h"
-#include "cli/progress.h"
-#include "studies/learn_job.h"
+#include <odotune/cli/choices.h>
+#include <odotune/cli/commands.h>
+#include <odotune/cli/output.h>
+#include <odotune/cli/progress.h>
+#include <odotune/studies/learn_job.h>
 
 namespace odotune::cli {
 

@@ -1,9 +1,9 @@
 // odotune report: the figures, tables and HTML page of a results store.
 #include <fmt/format.h>
 
-#include "cli/commands.h"
-#include "cli/output.h"
-#include "jobs/report_job.h"
+#include <odotune/cli/commands.h>
+#include <odotune/cli/output.h>
+#include <odotune/jobs/report_job.h>
 
 namespace odotune::cli {
 

@@ -5,17 +5,17 @@
 //                    [--random-slip N]
 //   odotune simulate --list-effects
 //
-// The overrides and the simulation are jobs/simulate_job.h; this file reads
+// The overrides and the simulation are odotune/jobs/simulate_job.h; this file reads
 // the flags, prints the effect table and the summary line.
 #include <memory>
 #include <string>
 
 #include <fmt/format.h>
 
-#include "cli/commands.h"
-#include "core/failure.h"
-#include "jobs/simulate_job.h"
-#include "sim/effects.h"
+#include <odotune/cli/commands.h>
+#include <odotune/core/failure.h>
+#include <odotune/jobs/simulate_job.h>
+#include <odotune/sim/effects.h>
 
 namespace odotune::cli {
 

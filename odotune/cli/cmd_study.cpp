@@ -2,7 +2,7 @@
 // studies of Tables I and II of Fariña, Toledo & Acosta (RA-L 2026) and
 // Tables 1-3 of Fariña et al. (Sensors 2023) on simulated wheelchair tracks,
 // and the random benchmark of the diagnosis (docs/diagnosis/benchmark.md).
-// The work is studies/study_runs.h and studies/diagnosis_benchmark_outputs.h;
+// The work is odotune/studies/study_runs.h and odotune/studies/diagnosis_benchmark_outputs.h;
 // this command reads the flags, shows progress and prints the tables and the
 // files written.
 #include <memory>
@@ -10,11 +10,11 @@
 
 #include <fmt/format.h>
 
-#include "cli/commands.h"
-#include "cli/output.h"
-#include "cli/progress.h"
-#include "studies/diagnosis_benchmark_outputs.h"
-#include "studies/study_runs.h"
+#include <odotune/cli/commands.h>
+#include <odotune/cli/output.h>
+#include <odotune/cli/progress.h>
+#include <odotune/studies/diagnosis_benchmark_outputs.h>
+#include <odotune/studies/study_runs.h>
 
 namespace odotune::cli {
 

@@ -1,6 +1,6 @@
 // odotune tune: tune one EKF noise model, one particle-filter calibrator's
-// settings, or the velocity-fusion UKF's noise, on one or more tracks (jobs/tune_command.h runs it and writes the
-// files; cli/tune_output.h prints the result).
+// settings, or the velocity-fusion UKF's noise, on one or more tracks (odotune/jobs/tune_command.h runs it and writes the
+// files; odotune/cli/tune_output.h prints the result).
 #include <algorithm>
 #include <cstdio>
 #include <map>
@@ -9,14 +9,14 @@
 #include <fmt/format.h>
 #include <variant>
 
-#include "cli/commands.h"
-#include "cli/output.h"
-#include "cli/progress.h"
-#include "cli/rl_output.h"
-#include "cli/tune_output.h"
-#include "core/failure.h"
-#include "jobs/tune_command.h"
-#include "tuner/nlopt_solver.h"
+#include <odotune/cli/commands.h>
+#include <odotune/cli/output.h>
+#include <odotune/cli/progress.h>
+#include <odotune/cli/rl_output.h>
+#include <odotune/cli/tune_output.h>
+#include <odotune/core/failure.h>
+#include <odotune/jobs/tune_command.h>
+#include <odotune/tuner/nlopt_solver.h>
 
 namespace odotune::cli {
 namespace {
@@ -288,14 +288,14 @@ void register_tune(CLI::App& app) {
       "Calibrators (pf-calib, adaptive-pf-calib): tunes N_eff fraction, max-weight ratio, α,\n"
       "dispersion per particle and random-walk σ; the score weighs the final radius error,\n"
       "convergence time, the calibrated odometry's pose RMSE and the particle count\n"
-      "(calibration/calibration_objective.h). The baseline is the paper's default settings;\n"
+      "(odotune/calibration/calibration_objective.h). The baseline is the paper's default settings;\n"
       "if they score better than the solver's best they are kept. Tracks need external velocities\n"
       "(v_ext, w_ext, or --ext-from-gt HZ) and ground truth, all of one robot. --config-out writes\n"
-      "an odotune-pf-config/1 file (formats/pf_config_yaml.h).\n"
+      "an odotune-pf-config/1 file (odotune/formats/pf_config_yaml.h).\n"
       "UKF (ukf): tunes the (V, W) fusion filter's process noise, static odometry variances, gyro\n"
-      "variance and external-variance scale (learned/ukf_objective.h) for --mode's error of\n"
+      "variance and external-variance scale (odotune/learned/ukf_objective.h) for --mode's error of\n"
       "the fused pose against ground truth (tracks need it); the baseline is the default noise.\n"
-      "--config-out writes an odotune-ukf-config/1 file (formats/ukf_config_yaml.h).\n"
+      "--config-out writes an odotune-ukf-config/1 file (odotune/formats/ukf_config_yaml.h).\n"
       "robot_localization (--rl-params FILE --bag BAG): tunes the process noise of the robot's own ekf_node\n"
       "(factors on its process_noise_covariance, per diagonal entry or per block) and, as advice, factors on\n"
       "each input's message covariance, by held-out GPS fixes and simulated GPS outages; --config-out\n"

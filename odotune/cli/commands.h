@@ -1,7 +1,7 @@
 // Registration of the odotune subcommands. Each command lives in its own
 // cmd_*.cpp and adds itself to the CLI11 app here; the CLI layer is the only
 // one that reads flags: a command fills a request, calls one function of
-// jobs/ or studies/ and prints its result (cli/README.md).
+// jobs/ or studies/ and prints its result (odotune/cli/README.md).
 #pragma once
 
 #include <CLI/CLI.hpp>

@@ -1,4 +1,4 @@
-#include "cli/controller_options.h"
+#include <odotune/cli/controller_options.h>
 
 namespace odotune::cli {
 

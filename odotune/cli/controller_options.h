@@ -1,10 +1,10 @@
 // The --controller-out flags that calibrate and diagnose share
-// (jobs/controller_export.h checks them together and writes the file).
+// (odotune/jobs/controller_export.h checks them together and writes the file).
 #pragma once
 
 #include <CLI/CLI.hpp>
 
-#include "jobs/controller_export.h"
+#include <odotune/jobs/controller_export.h>
 
 namespace odotune::cli {
 

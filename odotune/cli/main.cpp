@@ -1,6 +1,6 @@
 #include <glog/logging.h>
 
-#include "cli/commands.h"
+#include <odotune/cli/commands.h>
 
 int main(int argc, char** argv) {
   // Ceres logs through glog (e.g. a rank-deficient covariance, which odotune

@@ -1,4 +1,4 @@
-#include "cli/output.h"
+#include <odotune/cli/output.h>
 
 #include <omp.h>
 
@@ -6,8 +6,8 @@
 
 #include <fmt/format.h>
 
-#include "core/failure.h"
-#include "tracks/track_io.h"
+#include <odotune/core/failure.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune::cli {
 

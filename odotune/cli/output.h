@@ -1,6 +1,6 @@
 // Shared pieces of the commands' output: metric changes and tune results as
 // text, the OpenMP thread option, Ctrl-C. (The JSON of a tune is
-// jobs/tune_json.h; loading tracks with one-line errors, tracks/track_io.h.)
+// odotune/jobs/tune_json.h; loading tracks with one-line errors, odotune/tracks/track_io.h.)
 #pragma once
 
 #include <atomic>
@@ -10,10 +10,10 @@
 
 #include <CLI/CLI.hpp>
 
-#include "jobs/tune_job.h"
-#include "objectives/fitness_mode.h"
-#include "objectives/metrics.h"
-#include "tracks/track.h"
+#include <odotune/jobs/tune_job.h>
+#include <odotune/objectives/fitness_mode.h>
+#include <odotune/objectives/metrics.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune::cli {
 

@@ -1,4 +1,4 @@
-#include "cli/progress.h"
+#include <odotune/cli/progress.h>
 
 #include <unistd.h>
 

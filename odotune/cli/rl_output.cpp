@@ -1,6 +1,6 @@
-#include "cli/rl_output.h"
+#include <odotune/cli/rl_output.h>
 
-#include "cli/choices.h"
+#include <odotune/cli/choices.h>
 
 #include <cmath>
 

@@ -4,8 +4,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "jobs/rl_job.h"
-#include "jobs/rl_track_job.h"
+#include <odotune/jobs/rl_job.h>
+#include <odotune/jobs/rl_track_job.h>
 
 namespace odotune::cli {
 

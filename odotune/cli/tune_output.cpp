@@ -1,9 +1,9 @@
-#include "cli/tune_output.h"
+#include <odotune/cli/tune_output.h>
 
 #include <fmt/format.h>
 
-#include "cli/output.h"
-#include "jobs/calibration_tune_json.h"
+#include <odotune/cli/output.h>
+#include <odotune/jobs/calibration_tune_json.h>
 
 namespace odotune::cli {
 

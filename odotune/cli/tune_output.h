@@ -1,11 +1,11 @@
 // What `tune` prints on stdout: a heading naming the model, tracks, fitness
 // mode and solver, then the result (the EKF models and the UKF with
-// print_tune_result, cli/output.h).
+// print_tune_result, odotune/cli/output.h).
 #pragma once
 
-#include "jobs/calibration_tune_job.h"
-#include "jobs/tune_job.h"
-#include "jobs/ukf_tune_job.h"
+#include <odotune/jobs/calibration_tune_job.h>
+#include <odotune/jobs/tune_job.h>
+#include <odotune/jobs/ukf_tune_job.h>
 
 namespace odotune::cli {
 

@@ -12,7 +12,7 @@
 //
 // Lives in core/ (header-only, below every layer) because both the tuner (PSO)
 // and the filters (particle-filter calibrator) draw from it, and the tracks
-// layer's seeded normals (sim/normal_rng.h) use its mixer.
+// layer's seeded normals (odotune/sim/normal_rng.h) use its mixer.
 #pragma once
 
 #include <cstdint>

@@ -1,11 +1,11 @@
-#include "core/output_paths.h"
+#include <odotune/core/output_paths.h>
 
 #include <filesystem>
 #include <system_error>
 
 #include <fmt/format.h>
 
-#include "core/failure.h"
+#include <odotune/core/failure.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "diagnose/cross_validate.h"
+#include <odotune/diagnose/cross_validate.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
-#include "diagnose/paired_test.h"
+#include <odotune/diagnose/paired_test.h>
 
 namespace odotune::diagnose {
 

@@ -32,11 +32,11 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/effect_model.h"
-#include "diagnose/fit.h"
-#include "diagnose/paired_test.h"
-#include "diagnose/window_replay.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/effect_model.h>
+#include <odotune/diagnose/fit.h>
+#include <odotune/diagnose/paired_test.h>
+#include <odotune/diagnose/window_replay.h>
 
 namespace odotune::diagnose {
 

@@ -1,8 +1,8 @@
-#include "diagnose/diag_input.h"
+#include <odotune/diagnose/diag_input.h>
 
-#include "core/robust_stats.h"
+#include <odotune/core/robust_stats.h>
 
-#include "diagnose/series_interp.h"
+#include <odotune/diagnose/series_interp.h>
 
 #include <algorithm>
 #include <charconv>

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "tracks/track.h"
+#include <odotune/tracks/track.h>
 
 namespace odotune::diagnose {
 

@@ -1,4 +1,4 @@
-#include "diagnose/diagnosis.h"
+#include <odotune/diagnose/diagnosis.h>
 
 #include <algorithm>
 #include <chrono>
@@ -9,13 +9,13 @@
 
 #include <fmt/format.h>
 
-#include "diagnose/gyro_heading_input.h"
-#include "diagnose/materiality.h"
-#include "diagnose/option_rules.h"
-#include "diagnose/reconcile.h"
-#include "diagnose/residual_series.h"
-#include "diagnose/series_interp.h"
-#include "diagnose/window_replay.h"
+#include <odotune/diagnose/gyro_heading_input.h>
+#include <odotune/diagnose/materiality.h>
+#include <odotune/diagnose/option_rules.h>
+#include <odotune/diagnose/reconcile.h>
+#include <odotune/diagnose/residual_series.h>
+#include <odotune/diagnose/series_interp.h>
+#include <odotune/diagnose/window_replay.h>
 
 namespace odotune::diagnose {
 namespace {

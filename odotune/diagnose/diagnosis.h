@@ -1,7 +1,7 @@
 // The sim-to-real diagnosis of one track (docs/diagnosis-design.md step 8):
 // sensor checks, model selection, location, and the findings of
 // ../shared/specs/diagnosis-output.md as a value. No I/O: the CLI
-// (cli/cmd_diagnose.cpp) prints, writes the JSON, the figures and the
+// (odotune/cli/cmd_diagnose.cpp) prints, writes the JSON, the figures and the
 // scenario. Why the findings and their numbers are defined as below:
 // docs/diagnosis-design.md, "A diagnosis's findings and their numbers".
 //
@@ -46,14 +46,14 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/effect_model.h"
-#include "diagnose/gyro_fixes_check.h"
-#include "diagnose/locate.h"
-#include "diagnose/paired_test.h"
-#include "diagnose/select.h"
-#include "diagnose/sensor_checks.h"
-#include "diagnose/term_search.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/effect_model.h>
+#include <odotune/diagnose/gyro_fixes_check.h>
+#include <odotune/diagnose/locate.h>
+#include <odotune/diagnose/paired_test.h>
+#include <odotune/diagnose/select.h>
+#include <odotune/diagnose/sensor_checks.h>
+#include <odotune/diagnose/term_search.h>
 
 namespace odotune::diagnose {
 

@@ -1,12 +1,12 @@
-#include "diagnose/diagnosis_summary.h"
+#include <odotune/diagnose/diagnosis_summary.h>
 
 #include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
 
-#include "sim/effects.h"
-#include "sim/model_terms.h"
+#include <odotune/sim/effects.h>
+#include <odotune/sim/model_terms.h>
 
 namespace odotune {
 namespace {

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/diagnosis.h"
-#include "diagnose/recordings.h"
+#include <odotune/diagnose/diagnosis.h>
+#include <odotune/diagnose/recordings.h>
 
 namespace odotune {
 

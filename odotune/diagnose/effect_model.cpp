@@ -1,4 +1,4 @@
-#include "diagnose/effect_model.h"
+#include <odotune/diagnose/effect_model.h>
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
-#include "sim/effects.h"
+#include <odotune/sim/effects.h>
 
 namespace odotune::diagnose {
 

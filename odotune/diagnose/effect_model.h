@@ -53,7 +53,7 @@
 //  * gyro_bias, gyro_scale act on the gyro only (corrected_gyro_rate).
 //
 // Parameters travel as one flat vector: every parameter of every active effect,
-// effects in the table order of sim/effects.h and parameters in each
+// effects in the table order of odotune/sim/effects.h and parameters in each
 // effect's order (param_layout() names them "effect.param"). radius_step.t and
 // the slip_zone box enter as fixed numbers (their value is read, they are not
 // differentiated); gyro parameters do not enter dead reckoning at all.
@@ -69,8 +69,8 @@
 
 #include <ceres/jet.h>
 
-#include "core/planar_motion.h"
-#include "diagnose/diag_input.h"
+#include <odotune/core/planar_motion.h>
+#include <odotune/diagnose/diag_input.h>
 
 namespace odotune::diagnose {
 
@@ -106,7 +106,7 @@ inline bool noop_differs_from_absence(Effect e) { return e == Effect::actuator_l
 // Which effects are active and their parameter values.
 class EffectSet {
  public:
-  // Specs in the command-line form of sim/effects.h ("lateral_skid:k=0.03");
+  // Specs in the command-line form of odotune/sim/effects.h ("lateral_skid:k=0.03");
   // parameters not given take their no-op values. Throws std::invalid_argument.
   static EffectSet parse(const std::vector<std::string>& specs);
 

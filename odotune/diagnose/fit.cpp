@@ -1,6 +1,6 @@
-#include "diagnose/fit.h"
+#include <odotune/diagnose/fit.h>
 
-#include "core/ceres_options.h"
+#include <odotune/core/ceres_options.h>
 
 #include <algorithm>
 #include <array>
@@ -217,7 +217,7 @@ class AnchorComposedCost : public ceres::CostFunction {
 
   const CostShared* s_;
   Window w_;
-  mutable std::vector<double> memo_key_, memo_res_;  // one problem, one thread (core/ceres_options.h)
+  mutable std::vector<double> memo_key_, memo_res_;  // one problem, one thread (odotune/core/ceres_options.h)
 };
 
 template <int Stride>

@@ -54,9 +54,9 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/effect_model.h"
-#include "diagnose/window_replay.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/effect_model.h>
+#include <odotune/diagnose/window_replay.h>
 
 namespace odotune::diagnose {
 

@@ -9,10 +9,10 @@
 #include <cstddef>
 #include <vector>
 
-#include "core/planar_motion.h"
-#include "diagnose/diag_input.h"
-#include "diagnose/effect_model.h"
-#include "diagnose/window_replay.h"
+#include <odotune/core/planar_motion.h>
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/effect_model.h>
+#include <odotune/diagnose/window_replay.h>
 
 namespace odotune::diagnose {
 

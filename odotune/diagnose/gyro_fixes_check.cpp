@@ -1,4 +1,4 @@
-#include "diagnose/gyro_fixes_check.h"
+#include <odotune/diagnose/gyro_fixes_check.h>
 
 #include <algorithm>
 #include <array>
@@ -16,13 +16,13 @@
 #include <ceres/ceres.h>
 #include <fmt/format.h>
 
-#include "core/ceres_options.h"
-#include "core/robust_stats.h"
-#include "diagnose/gyro_dead_reckoning.h"
-#include "diagnose/option_rules.h"
-#include "diagnose/paired_test.h"
-#include "diagnose/series_interp.h"
-#include "diagnose/window_replay.h"
+#include <odotune/core/ceres_options.h>
+#include <odotune/core/robust_stats.h>
+#include <odotune/diagnose/gyro_dead_reckoning.h>
+#include <odotune/diagnose/option_rules.h>
+#include <odotune/diagnose/paired_test.h>
+#include <odotune/diagnose/series_interp.h>
+#include <odotune/diagnose/window_replay.h>
 
 namespace odotune::diagnose {
 namespace {

@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/effect_model.h"
-#include "diagnose/fit.h"
-#include "diagnose/sensor_checks.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/effect_model.h>
+#include <odotune/diagnose/fit.h>
+#include <odotune/diagnose/sensor_checks.h>
 
 namespace odotune::diagnose {
 

@@ -1,10 +1,10 @@
-#include "diagnose/gyro_heading_input.h"
+#include <odotune/diagnose/gyro_heading_input.h>
 
 #include <algorithm>
 #include <vector>
 
-#include "diagnose/effect_model.h"
-#include "diagnose/series_interp.h"
+#include <odotune/diagnose/effect_model.h>
+#include <odotune/diagnose/series_interp.h>
 
 namespace odotune::diagnose {
 

@@ -5,10 +5,10 @@
 // of effect_model.h; the gyro held constant outside its span). Replaying it
 // with the nominal model is dead reckoning with the wheels' travel and the
 // gyro's heading: how diagnosis.cpp proves a gyro finding, and how the
-// random benchmark (studies/diagnosis_truth.h) judges a true gyro effect.
+// random benchmark (odotune/studies/diagnosis_truth.h) judges a true gyro effect.
 #pragma once
 
-#include "diagnose/diag_input.h"
+#include <odotune/diagnose/diag_input.h>
 
 namespace odotune::diagnose {
 

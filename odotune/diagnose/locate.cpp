@@ -1,6 +1,6 @@
-#include "diagnose/locate.h"
-#include "core/robust_stats.h"
-#include "diagnose/option_rules.h"
+#include <odotune/core/robust_stats.h>
+#include <odotune/diagnose/locate.h>
+#include <odotune/diagnose/option_rules.h>
 
 #include <algorithm>
 #include <array>

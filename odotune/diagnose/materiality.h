@@ -39,7 +39,7 @@
 #include <cmath>
 #include <string>
 
-#include "diagnose/option_rules.h"
+#include <odotune/diagnose/option_rules.h>
 
 namespace odotune::diagnose {
 

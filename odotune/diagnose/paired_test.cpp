@@ -1,4 +1,4 @@
-#include "diagnose/paired_test.h"
+#include <odotune/diagnose/paired_test.h>
 
 #include <algorithm>
 #include <cmath>

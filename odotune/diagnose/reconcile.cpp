@@ -1,4 +1,4 @@
-#include "diagnose/reconcile.h"
+#include <odotune/diagnose/reconcile.h>
 
 #include <cmath>
 #include <initializer_list>

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/diagnosis.h"
+#include <odotune/diagnose/diagnosis.h>
 
 namespace odotune::diagnose {
 

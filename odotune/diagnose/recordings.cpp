@@ -1,4 +1,4 @@
-#include "diagnose/recordings.h"
+#include <odotune/diagnose/recordings.h>
 
 #include <algorithm>
 #include <cmath>
@@ -6,13 +6,13 @@
 
 #include <fmt/format.h>
 
-#include "diagnose/fit.h"
-#include "diagnose/materiality.h"
-#include "diagnose/paired_test.h"
-#include "diagnose/select.h"
-#include "diagnose/sensor_checks.h"
-#include "diagnose/term_search.h"
-#include "diagnose/window_replay.h"
+#include <odotune/diagnose/fit.h>
+#include <odotune/diagnose/materiality.h>
+#include <odotune/diagnose/paired_test.h>
+#include <odotune/diagnose/select.h>
+#include <odotune/diagnose/sensor_checks.h>
+#include <odotune/diagnose/term_search.h>
+#include <odotune/diagnose/window_replay.h>
 
 namespace odotune::diagnose {
 namespace {

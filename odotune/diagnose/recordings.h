@@ -39,8 +39,8 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/diagnosis.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/diagnosis.h>
 
 namespace odotune::diagnose {
 

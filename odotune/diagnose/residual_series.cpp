@@ -1,7 +1,7 @@
-#include "diagnose/residual_series.h"
+#include <odotune/diagnose/residual_series.h>
 
-#include "core/angles.h"
-#include "diagnose/series_interp.h"
+#include <odotune/core/angles.h>
+#include <odotune/diagnose/series_interp.h>
 
 #include <algorithm>
 #include <cmath>

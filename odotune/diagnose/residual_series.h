@@ -17,9 +17,9 @@
 
 #include <vector>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/locate.h"
-#include "diagnose/window_replay.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/locate.h>
+#include <odotune/diagnose/window_replay.h>
 
 namespace odotune::diagnose {
 

@@ -1,4 +1,4 @@
-#include "diagnose/select.h"
+#include <odotune/diagnose/select.h>
 
 #include <algorithm>
 #include <chrono>
@@ -10,11 +10,11 @@
 
 #include <fmt/format.h>
 
-#include "diagnose/cross_validate.h"
-#include "diagnose/materiality.h"
-#include "diagnose/select_search.h"
-#include "diagnose/window_replay.h"
-#include "diagnose/zone_boxes.h"
+#include <odotune/diagnose/cross_validate.h>
+#include <odotune/diagnose/materiality.h>
+#include <odotune/diagnose/select_search.h>
+#include <odotune/diagnose/window_replay.h>
+#include <odotune/diagnose/zone_boxes.h>
 
 namespace odotune::diagnose {
 

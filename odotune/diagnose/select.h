@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/effect_model.h"
-#include "diagnose/fit.h"
-#include "diagnose/materiality.h"
-#include "diagnose/zone_boxes.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/effect_model.h>
+#include <odotune/diagnose/fit.h>
+#include <odotune/diagnose/materiality.h>
+#include <odotune/diagnose/zone_boxes.h>
 
 namespace odotune::diagnose {
 

@@ -5,7 +5,7 @@
 
 #include <fmt/format.h>
 
-#include "diagnose/select_search.h"
+#include <odotune/diagnose/select_search.h>
 
 namespace odotune::diagnose::select_detail {
 

@@ -1,4 +1,4 @@
-#include "diagnose/select_search.h"
+#include <odotune/diagnose/select_search.h>
 
 #include <algorithm>
 #include <chrono>
@@ -9,8 +9,8 @@
 
 #include <fmt/format.h>
 
-#include "diagnose/materiality.h"
-#include "diagnose/zone_boxes.h"
+#include <odotune/diagnose/materiality.h>
+#include <odotune/diagnose/zone_boxes.h>
 
 namespace odotune::diagnose::select_detail {
 

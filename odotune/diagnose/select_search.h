@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/cross_validate.h"
-#include "diagnose/select.h"
+#include <odotune/diagnose/cross_validate.h>
+#include <odotune/diagnose/select.h>
 
 namespace odotune::diagnose::select_detail {
 

@@ -1,8 +1,8 @@
-#include "diagnose/sensor_checks.h"
+#include <odotune/diagnose/sensor_checks.h>
 
-#include "core/robust_stats.h"
-#include "diagnose/option_rules.h"
-#include "diagnose/series_interp.h"
+#include <odotune/core/robust_stats.h>
+#include <odotune/diagnose/option_rules.h>
+#include <odotune/diagnose/series_interp.h>
 
 #include <algorithm>
 #include <cmath>

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/diag_input.h"
+#include <odotune/diagnose/diag_input.h>
 
 namespace odotune::diagnose {
 

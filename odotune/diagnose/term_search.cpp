@@ -1,4 +1,4 @@
-#include "diagnose/term_search.h"
+#include <odotune/diagnose/term_search.h>
 
 #include <algorithm>
 #include <cmath>
@@ -7,8 +7,8 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
-#include "diagnose/option_rules.h"
-#include "diagnose/series_interp.h"
+#include <odotune/diagnose/option_rules.h>
+#include <odotune/diagnose/series_interp.h>
 
 namespace odotune::diagnose {
 

@@ -1,7 +1,7 @@
 // Physics outside the list (docs/diagnosis-design.md, "Physics outside the
 // list: term search"): when the chosen model of a track
 // still leaves a mismatch, search a library of candidate terms
-// (sim/model_terms.h: corrections of a wheel's ground speed by functions
+// (odotune/sim/model_terms.h: corrections of a wheel's ground speed by functions
 // of v, w, their changes, |v·w|, sin/cos harmonics of each wheel's rotation
 // angle, position and time) by sparse regression, choose the terms by
 // cross-validated error, prove them on the held-out windows, and report them
@@ -46,7 +46,7 @@
 //
 // Proof. Position RMSE of the aligned replay (as a finding's `fit`) without
 // and with the terms on the training and the held-out windows; the model is
-// found only if the held-out gain passes `floor_m` (diagnose/materiality.h,
+// found only if the held-out gain passes `floor_m` (odotune/diagnose/materiality.h,
 // the caller's floor) and the CV chose at least one term. Why hand-written
 // least squares instead of a Ceres problem: the anchors are eliminated in
 // closed form per window and the stepwise search needs thousands of small
@@ -62,10 +62,10 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/effect_model.h"
-#include "diagnose/window_replay.h"
-#include "sim/model_terms.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/effect_model.h>
+#include <odotune/diagnose/window_replay.h>
+#include <odotune/sim/model_terms.h>
 
 namespace odotune::diagnose {
 

@@ -1,6 +1,6 @@
-#include "diagnose/window_replay.h"
+#include <odotune/diagnose/window_replay.h>
 
-#include "diagnose/series_interp.h"
+#include <odotune/diagnose/series_interp.h>
 
 #include <algorithm>
 #include <cmath>

@@ -51,8 +51,8 @@
 #include <cstddef>
 #include <vector>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/effect_model.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/effect_model.h>
 
 namespace odotune::diagnose {
 

@@ -1,4 +1,4 @@
-#include "diagnose/zone_boxes.h"
+#include <odotune/diagnose/zone_boxes.h>
 
 #include <algorithm>
 #include <cmath>

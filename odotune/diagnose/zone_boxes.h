@@ -7,10 +7,10 @@
 
 #include <vector>
 
-#include "diagnose/cross_validate.h"
-#include "diagnose/diag_input.h"
-#include "diagnose/effect_model.h"
-#include "diagnose/window_replay.h"
+#include <odotune/diagnose/cross_validate.h>
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/effect_model.h>
+#include <odotune/diagnose/window_replay.h>
 
 namespace odotune::diagnose {
 

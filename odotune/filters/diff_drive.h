@@ -38,7 +38,7 @@ struct MotionStep {
 };
 
 // Applies the motion model to `pose`; `wheel_base_m` > 0. The pose part is
-// core/planar_motion.h's midpoint_advance (same operations in the same order).
+// odotune/core/planar_motion.h's midpoint_advance (same operations in the same order).
 inline MotionStep diff_drive_step(const Pose& pose, WheelTravel u, double wheel_base_m) {
   const double d = 0.5 * (u.left_m + u.right_m);
   const double dtheta = (u.right_m - u.left_m) / wheel_base_m;

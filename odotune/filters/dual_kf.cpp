@@ -1,4 +1,4 @@
-#include "filters/dual_kf.h"
+#include <odotune/filters/dual_kf.h>
 
 #include <Eigen/LU>  // fixed-size closed-form inverse()
 #include <cmath>

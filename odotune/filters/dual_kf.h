@@ -25,8 +25,8 @@
 
 #include <Eigen/Core>
 
-#include "filters/odometry_params.h"
-#include "filters/pf_evolution.h"
+#include <odotune/filters/odometry_params.h>
+#include <odotune/filters/pf_evolution.h>
 
 namespace odotune::filters {
 
@@ -51,7 +51,7 @@ struct DualKfParams {
   // false: the random walk above (the paper's baseline). true: no walk; the
   // parameter covariance fades instead, P_θ⁻ = e^{dt/M}·P_θ bounded by the
   // initial covariance, with the memory M and its change test of
-  // filters/pf_evolution.h (the PF's evidence evolution).
+  // odotune/filters/pf_evolution.h (the PF's evidence evolution).
   bool fading_memory = true;
   EvidenceMemoryParams evidence;
 
@@ -73,7 +73,7 @@ class DualKf {
   const CalibEstimate& estimate() const { return estimate_; }
   const DkfParamCov& param_covariance() const { return P_theta_; }
   long iterations() const { return iteration_; }
-  // As PfCalibrator's (filters/memory_pair.h).
+  // As PfCalibrator's (odotune/filters/memory_pair.h).
   double last_log_predictive() const { return last_log_predictive_; }
   void set_memory(const EvidenceMemoryParams& p) { memory_ = EvidenceMemory(p); }
   double memory_s() const { return memory_.memory_s(); }

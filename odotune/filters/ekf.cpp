@@ -1,4 +1,4 @@
-#include "filters/ekf.h"
+#include <odotune/filters/ekf.h>
 
 #include <cmath>
 #include <stdexcept>

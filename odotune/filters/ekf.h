@@ -4,7 +4,7 @@
 //
 // This is the straightforward one-step-at-a-time filter: the form a robot runs
 // online, and the reference that the segment-batched replay used by the tuner
-// (filters/ekf_segments.h) must reproduce. It takes samples, never a track,
+// (odotune/filters/ekf_segments.h) must reproduce. It takes samples, never a track,
 // and does no I/O.
 #pragma once
 
@@ -13,8 +13,8 @@
 #include <Eigen/Core>
 #include <Eigen/LU>  // fixed-size closed-form inverse() and determinant()
 
-#include "filters/diff_drive.h"
-#include "filters/ekf_noise.h"
+#include <odotune/filters/diff_drive.h>
+#include <odotune/filters/ekf_noise.h>
 
 namespace odotune::filters {
 
@@ -43,7 +43,7 @@ class Ekf {
   explicit Ekf(const EkfParams& params);
 
   // Prediction: x ← f(x, u), P ← F·P·Fᵀ + R(u, |ω_z|). Returns the process
-  // noise R it added (for reports such as objectives/process_noise_rate.h).
+  // noise R it added (for reports such as odotune/objectives/process_noise_rate.h).
   StateCov predict(WheelTravel u, double abs_yaw_rate_rad_s);
   // Correction by a position fix z = (x, y) [m]:
   //   S = H·P·Hᵀ + Q, K = P·Hᵀ·S⁻¹, x ← x + K·(z − H·x), P ← P − K·S·Kᵀ.

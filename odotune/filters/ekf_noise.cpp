@@ -1,4 +1,4 @@
-#include "filters/ekf_noise.h"
+#include <odotune/filters/ekf_noise.h>
 
 #include <cmath>
 #include <string>

@@ -16,7 +16,7 @@
 #include <string>
 #include <string_view>
 
-#include "filters/diff_drive.h"
+#include <odotune/filters/diff_drive.h>
 
 namespace odotune::filters {
 

@@ -1,4 +1,4 @@
-#include "filters/ekf_segments.h"
+#include <odotune/filters/ekf_segments.h>
 
 #include <cmath>
 #include <vector>

@@ -1,4 +1,4 @@
-// The pose EKF of filters/ekf.h, rewritten to advance a whole segment (the
+// The pose EKF of odotune/filters/ekf.h, rewritten to advance a whole segment (the
 // odometry steps between two position fixes) in O(1) per noise setting.
 //
 // Why this is exact. Between two fixes the EKF mean is pure dead reckoning, so
@@ -15,7 +15,7 @@
 // r_x, r_y, r_θ for rq), so Σ̃ is a fixed linear combination of matrices that
 // depend only on the odometry and are summed once per track. What remains per
 // noise setting and step is evaluating the error against ground truth, a
-// rotation and a norm that vectorise (see objectives/replay.h).
+// rotation and a norm that vectorise (see odotune/objectives/replay.h).
 //
 // The equivalence with the step-by-step Ekf is a test (tests/filters).
 #pragma once
@@ -23,9 +23,9 @@
 #include <array>
 #include <span>
 
-#include "filters/diff_drive.h"
-#include "filters/ekf.h"
-#include "filters/ekf_noise.h"
+#include <odotune/filters/diff_drive.h>
+#include <odotune/filters/ekf.h>
+#include <odotune/filters/ekf_noise.h>
 
 namespace odotune::filters {
 

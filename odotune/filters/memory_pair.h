@@ -1,6 +1,6 @@
 // Two copies of one online calibrator (PfCalibrator with the evidence
 // evolution, DualKf with fading memory) that differ only in their memory
-// (filters/pf_evolution.h): `slow`, whose memory grows from min_memory_s to
+// (odotune/filters/pf_evolution.h): `slow`, whose memory grows from min_memory_s to
 // max_memory_s (the running mean of all the evidence since the last change:
 // a static robot's estimate keeps sharpening), and `fast`, whose memory stays
 // at min_memory_s (it follows a change within about that time, and is
@@ -27,8 +27,8 @@
 #include <cmath>
 #include <string>
 
-#include "filters/odometry_params.h"
-#include "filters/pf_evolution.h"
+#include <odotune/filters/odometry_params.h>
+#include <odotune/filters/pf_evolution.h>
 
 namespace odotune::filters {
 
@@ -52,7 +52,7 @@ inline EvidenceMemoryParams fast_twin(const EvidenceMemoryParams& p) {
 }
 
 // Memory: the filter's memory parameters (EvidenceMemoryParams, in seconds;
-// filters/pose_calibrator.h's DistanceMemoryParams, in metres), with a
+// odotune/filters/pose_calibrator.h's DistanceMemoryParams, in metres), with a
 // fast_twin() overload.
 template <class Filter, class Memory = EvidenceMemoryParams>
 class MemoryPair {
@@ -65,7 +65,7 @@ class MemoryPair {
   }
 
   // Sample: what Filter::step takes (CalibSample, or PoseCalibSample for
-  // filters/pose_calibrator.h, whose log predictive is 0 between fixes).
+  // odotune/filters/pose_calibrator.h, whose log predictive is 0 between fixes).
   template <class Sample>
   const CalibEstimate& step(const Sample& s) {
     fast_.step(s);

@@ -1,4 +1,4 @@
-#include "filters/odometry_params.h"
+#include <odotune/filters/odometry_params.h>
 
 #include <cmath>
 #include <sstream>

@@ -36,7 +36,7 @@ struct TwistCorrection {
 };
 
 // A planar pose [m, m, rad] (theta unwrapped unless a caller says otherwise):
-// ground-truth samples (objectives/pose_series.h) and poses integrated from
+// ground-truth samples (odotune/objectives/pose_series.h) and poses integrated from
 // body velocities (velocity_ukf.h's integrate_pose).
 struct PlanarPose {
   double x_m = 0.0;

@@ -1,4 +1,4 @@
-#include "filters/pf_calibrator.h"
+#include <odotune/filters/pf_calibrator.h>
 
 #include <omp.h>
 
@@ -9,9 +9,9 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "core/counter_rng.h"
-#include "core/why.h"
-#include "filters/pf_kernels.h"
+#include <odotune/core/counter_rng.h>
+#include <odotune/core/why.h>
+#include <odotune/filters/pf_kernels.h>
 
 namespace odotune::filters {
 

@@ -47,7 +47,7 @@
 // carries little information (a slow robot: OptiOdom):
 //   - the walk of R_R, R_L, D is each parameter's posterior spread (the
 //     cloud's weighted sd) times √(e^{dt/M} − 1), M the memory of
-//     filters/pf_evolution.h (the time since the last change, 10 s to
+//     odotune/filters/pf_evolution.h (the time since the last change, 10 s to
 //     1000 s), never widening a parameter past its prior's sd (bounded
 //     forgetting); the adaptive variant adds eq. 11's σ, without the floor;
 //   - V and W are not perturbed by a draw: the uniform perturbation is
@@ -55,14 +55,14 @@
 //     to the measurement's (a Rao–Blackwellised weight: a draw of ±a_v on a
 //     robot moving at 0.1 m/s swamps the radii's effect on V);
 //   - run_calibration runs it as a slow/fast pair that finds changes
-//     (filters/memory_pair.h); last_log_predictive() is the pair's evidence.
+//     (odotune/filters/memory_pair.h); last_log_predictive() is the pair's evidence.
 // The wheelchair studies (docs/calibration/README.md) keep their
 // convergence and step tracking under it.
 //
 // Particles live in structure-of-arrays form and are updated in parallel
-// (OpenMP). Random numbers are counter-based (core/counter_rng.h: one
+// (OpenMP). Random numbers are counter-based (odotune/core/counter_rng.h: one
 // counter_hash per iteration and stream, then one SplitMix64 mix per particle;
-// normals by Box–Muller, filters/pf_kernels.h), and every reduction is summed
+// normals by Box–Muller, odotune/filters/pf_kernels.h), and every reduction is summed
 // in fixed blocks of particles combined in block order, so a seeded filter
 // gives bit-identical estimates with any thread count.
 #pragma once
@@ -73,9 +73,9 @@
 #include <string_view>
 #include <vector>
 
-#include "filters/odometry_params.h"
-#include "filters/pf_evolution.h"
-#include "filters/resampling.h"
+#include <odotune/filters/odometry_params.h>
+#include <odotune/filters/pf_evolution.h>
+#include <odotune/filters/resampling.h>
 
 namespace odotune::filters {
 
@@ -102,8 +102,8 @@ struct PfCalibratorParams {
   double w_perturbation_rad_s = 0.01;   // a_w: half-width of W's uniform perturbation [rad/s]
   // How the parameters evolve between measurements (header, "Evolution").
   PfEvolution evolution = PfEvolution::evidence;
-  // evidence: its memory (filters/pf_evolution.h; run as a pair with a fast
-  // twin to find changes, filters/memory_pair.h).
+  // evidence: its memory (odotune/filters/pf_evolution.h; run as a pair with a fast
+  // twin to find changes, odotune/filters/memory_pair.h).
   EvidenceMemoryParams evidence;
 
   Resampler resampler = Resampler::systematic;
@@ -153,7 +153,7 @@ class PfCalibrator {
   // Iterations whose weights were all degenerate and were reset to uniform.
   long degenerate_resets() const { return degenerate_resets_; }
   // Evidence evolution: the current memory [s], and a new memory (starting
-  // from its min_memory_s) for the next steps (filters/memory_pair.h).
+  // from its min_memory_s) for the next steps (odotune/filters/memory_pair.h).
   double memory_s() const { return memory_.memory_s(); }
   void set_memory(const EvidenceMemoryParams& p) { memory_ = EvidenceMemory(p); }
   // log p(y_k | y_1..k−1) of the last step's measurement under the filter's

@@ -1,4 +1,4 @@
-#include "filters/pf_evolution.h"
+#include <odotune/filters/pf_evolution.h>
 
 #include <algorithm>
 #include <cmath>

@@ -15,7 +15,7 @@
 // forgetting at rate 1/t is the running mean of all the evidence so far, so a
 // robot whose parameters do not change gets an ever sharper estimate. A
 // change (a passenger boards, a tyre loses pressure) is found by comparing
-// this filter with a twin that always forgets fast (filters/memory_pair.h).
+// this filter with a twin that always forgets fast (odotune/filters/memory_pair.h).
 // The filters also never widen a parameter past its prior (bounded
 // forgetting: a direction the drive does not excite cannot wind up).
 #pragma once

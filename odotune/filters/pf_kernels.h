@@ -1,5 +1,5 @@
 // Branch-free elementary functions and counter-based random deviates for the
-// particle calibrator's hot loop (filters/pf_calibrator.cpp).
+// particle calibrator's hot loop (odotune/filters/pf_calibrator.cpp).
 //
 // Why not <cmath> and std::normal_distribution: glibc's scalar exp/log/sin
 // cost 5–8 ns each and are not vectorised without -ffast-math, which would

@@ -1,4 +1,4 @@
-#include "filters/pose_calibrator.h"
+#include <odotune/filters/pose_calibrator.h>
 
 #include <cmath>
 #include <numbers>
@@ -7,9 +7,9 @@
 #include <Eigen/LU>
 #include <fmt/format.h>
 
-#include "core/planar_motion.h"
-#include "core/why.h"
-#include "filters/diff_drive.h"
+#include <odotune/core/planar_motion.h>
+#include <odotune/core/why.h>
+#include <odotune/filters/diff_drive.h>
 
 namespace odotune::filters {
 

@@ -2,13 +2,13 @@
 // pose and the geometry, s = (x, y, θ, R_L, R_R, D), driven by the wheel
 // encoders and corrected by absolute position fixes (GNSS, motion capture,
 // UWB, a localiser's pose) with their variances. The online counterpart of
-// calibration/pose_calibration.h: its information is where the dead
+// odotune/calibration/pose_calibration.h: its information is where the dead
 // reckoning lands, not derived body velocities. Design: docs/calibration/
 // online-pose.md.
 //
 // Predict, over an encoder interval with wheel angles Δφ_L, Δφ_R [rad]:
 //   l = R_L·Δφ_L, r = R_R·Δφ_R; the pose by the midpoint step of
-//   core/planar_motion.h (filters/diff_drive.h with its Jacobians); the
+//   odotune/core/planar_motion.h (odotune/filters/diff_drive.h with its Jacobians); the
 //   geometry is constant; P⁻ = F P Fᵀ + G Q Gᵀ with F = ∂s'/∂s,
 //   G = ∂s'/∂(l, r) and Q = diag(k·|l|, k·|r|), k = wheel_noise_m2_per_m
 //   (random wheel error whose variance grows with the distance rolled).
@@ -17,7 +17,7 @@
 //   P ← S P S with S = diag(1, 1, 1, s, s, s), s² = e^{Δs/M}, no geometry
 //   variance past its initial one. The memory M is a distance (a geometry
 //   error shows in proportion to the distance rolled, and a robot standing
-//   still forgets nothing); it grows like filters/pf_evolution.h's evidence
+//   still forgets nothing); it grows like odotune/filters/pf_evolution.h's evidence
 //   memory, in metres instead of seconds.
 // Update with a fix z = (x, y), R = diag(var_x, var_y): H = [I₂ 0],
 //   Joseph form. Gate: a fix whose normalised innovation squared exceeds
@@ -39,8 +39,8 @@
 
 #include <Eigen/Core>
 
-#include "filters/odometry_params.h"
-#include "filters/pf_evolution.h"
+#include <odotune/filters/odometry_params.h>
+#include <odotune/filters/pf_evolution.h>
 
 namespace odotune::filters {
 
@@ -69,7 +69,7 @@ struct DistanceMemoryParams {
   // True when usable; otherwise *why names the first bad value.
   bool IsValid(std::string* why) const;
 };
-// The fast twin of filters/memory_pair.h: its memory stays at the minimum.
+// The fast twin of odotune/filters/memory_pair.h: its memory stays at the minimum.
 inline DistanceMemoryParams fast_twin(const DistanceMemoryParams& p) {
   return {p.min_memory_m, p.min_memory_m};
 }
@@ -136,7 +136,7 @@ class PoseCalibrator {
   long fixes_rejected() const { return fixes_rejected_; }
   long reacquisitions() const { return reacquisitions_; }
   // log p(fix | past) of the last step's fix (0 without one, and while the
-  // pose is acquired): filters/memory_pair.h's change test.
+  // pose is acquired): odotune/filters/memory_pair.h's change test.
   double last_log_predictive() const { return last_log_predictive_; }
   void set_memory(const DistanceMemoryParams& p) { memory_ = distance_memory(p); }
   double memory_m() const { return memory_.memory_s(); }

@@ -1,4 +1,4 @@
-#include "filters/pose_velocity_ukf.h"
+#include <odotune/filters/pose_velocity_ukf.h>
 
 #include <Eigen/Cholesky>
 #include <array>
@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "filters/unscented.h"
+#include <odotune/filters/unscented.h>
 
 namespace odotune::filters {
 namespace {

@@ -10,7 +10,7 @@
 //   measure    odometry or external z = (V, W), R;  gyro z = W, σ²;
 //              position fix z = (X, Y), R_fix.
 //
-// The prediction is the scaled unscented transform (filters/unscented.h)
+// The prediction is the scaled unscented transform (odotune/filters/unscented.h)
 // through the unicycle model above; every measurement is linear in the
 // state, for which the unscented update is the Kalman update (velocity_ukf.h
 // says the same). θ is kept unwrapped; no measurement observes it, so no

@@ -1,12 +1,12 @@
-#include "filters/resampling.h"
+#include <odotune/filters/resampling.h>
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
 
-#include "core/counter_rng.h"
-#include "filters/pf_kernels.h"
+#include <odotune/core/counter_rng.h>
+#include <odotune/filters/pf_kernels.h>
 
 namespace odotune::filters {
 namespace {

@@ -2,7 +2,7 @@
 // Fariña, Toledo & Acosta (RA-L 2026, §IV.B–C, Table I) compare, after Li,
 // Bolić & Djurić, "Resampling methods for particle filtering", IEEE SPM 2015.
 //
-// All draws come from the counter-based generator (core/counter_rng.h) keyed
+// All draws come from the counter-based generator (odotune/core/counter_rng.h) keyed
 // by (seed, iteration): a resampling is a pure function of its weights and
 // key, so a seeded filter is reproducible whatever the thread count.
 #pragma once

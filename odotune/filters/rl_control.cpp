@@ -1,4 +1,4 @@
-#include "filters/rl_control.h"
+#include <odotune/filters/rl_control.h>
 
 #include <algorithm>
 #include <cmath>

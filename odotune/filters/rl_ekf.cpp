@@ -1,6 +1,6 @@
-#include "filters/rl_ekf.h"
+#include <odotune/filters/rl_ekf.h>
 
-#include "filters/rl_filter_base.h"
+#include <odotune/filters/rl_filter_base.h>
 
 #include <algorithm>
 #include <bit>

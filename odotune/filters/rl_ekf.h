@@ -37,7 +37,7 @@
 
 #include <Eigen/Core>
 
-#include "filters/rl_control.h"
+#include <odotune/filters/rl_control.h>
 
 namespace odotune::filters::rl {
 
@@ -80,7 +80,7 @@ struct RlEkfParams {
   Cov initial_cov = Cov::Identity() * 1e-9;  // P before the first measurement
   bool dynamic_process_noise = false;        // scale Q's pose block by |velocity|²
   State initial_state = State::Zero();
-  // use_control's term (filters/rl_control.h); none: the prediction has none.
+  // use_control's term (odotune/filters/rl_control.h); none: the prediction has none.
   // RlEkfLanes refuses it.
   std::optional<RlControlParams> control;
 
@@ -99,7 +99,7 @@ Transition transition(const State& x, double dt_s);
 State advance(const State& x, double dt_s);
 
 // Wraps an angle to [−π, π] as ROS's angles::normalize_angle does (fmod), which
-// the node's replay must match bit for bit (core/angles.h is std::remainder).
+// the node's replay must match bit for bit (odotune/core/angles.h is std::remainder).
 double normalize_angle(double a);
 
 class RlEkf {
@@ -150,7 +150,7 @@ class RlEkf {
 };
 
 // The lanes of RlEkfLanes: 8 doubles, one AVX-512 register (two AVX2 or four
-// SSE2 registers on CPUs without it; filters/rl_ekf.cpp picks the code for the
+// SSE2 registers on CPUs without it; odotune/filters/rl_ekf.cpp picks the code for the
 // CPU at load time, every version giving the same bits).
 constexpr int kLanes = 8;
 using Lanes = double __attribute__((vector_size(kLanes * sizeof(double))));

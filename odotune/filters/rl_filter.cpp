@@ -1,4 +1,4 @@
-#include "filters/rl_filter.h"
+#include <odotune/filters/rl_filter.h>
 
 namespace odotune::filters::rl {
 namespace {

@@ -1,6 +1,6 @@
 // Either of robot_localization's filters, picked at run time as its nodes
-// are: ekf_node (filters/rl_ekf.h) or ukf_node (filters/rl_ukf.h), behind
-// the interface the node's plumbing (rlnode/replay.h) drives.
+// are: ekf_node (odotune/filters/rl_ekf.h) or ukf_node (odotune/filters/rl_ukf.h), behind
+// the interface the node's plumbing (odotune/rlnode/replay.h) drives.
 #pragma once
 
 #include <cstdint>
@@ -8,8 +8,8 @@
 #include <string_view>
 #include <variant>
 
-#include "filters/rl_ekf.h"
-#include "filters/rl_ukf.h"
+#include <odotune/filters/rl_ekf.h>
+#include <odotune/filters/rl_ukf.h>
 
 namespace odotune::filters::rl {
 

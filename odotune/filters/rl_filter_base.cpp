@@ -1,4 +1,4 @@
-#include "filters/rl_filter_base.h"
+#include <odotune/filters/rl_filter_base.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,13 +1,13 @@
 // What robot_localization's EKF and UKF share (its FilterBase,
 // filter_base.cpp, and the measurement handling both corrections repeat):
 // the members a measurement fuses, its covariance as the filters repair it,
-// and the first measurement's initialisation. Used by filters/rl_ekf.cpp and
-// filters/rl_ukf.cpp.
+// and the first measurement's initialisation. Used by odotune/filters/rl_ekf.cpp and
+// odotune/filters/rl_ukf.cpp.
 #pragma once
 
 #include <cstdint>
 
-#include "filters/rl_ekf.h"
+#include <odotune/filters/rl_ekf.h>
 
 namespace odotune::filters::rl::detail {
 

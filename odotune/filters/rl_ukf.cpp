@@ -1,4 +1,4 @@
-#include "filters/rl_ukf.h"
+#include <odotune/filters/rl_ukf.h>
 
 #include <cmath>
 #include <stdexcept>
@@ -7,8 +7,8 @@
 #include <Eigen/LU>
 #include <fmt/format.h>
 
-#include "core/why.h"
-#include "filters/rl_filter_base.h"
+#include <odotune/core/why.h>
+#include <odotune/filters/rl_filter_base.h>
 
 namespace odotune::filters::rl {
 namespace {

@@ -1,6 +1,6 @@
 // robot_localization's unscented Kalman filter (ukf_node; behaviour read from
 // cra-ros-pkg/robot_localization's ukf.cpp and filter_base.cpp, noetic-devel):
-// the state, motion model and measurements of filters/rl_ekf.h through the
+// the state, motion model and measurements of odotune/filters/rl_ekf.h through the
 // scaled unscented transform (Wan & van der Merwe, "The Unscented Kalman
 // Filter for Nonlinear Estimation", 2000) with n = 15 and 2n + 1 sigma points.
 //
@@ -35,7 +35,7 @@
 #include <cstdint>
 #include <string>
 
-#include "filters/rl_ekf.h"
+#include <odotune/filters/rl_ekf.h>
 
 namespace odotune::filters::rl {
 

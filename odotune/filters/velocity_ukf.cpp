@@ -1,6 +1,6 @@
-#include "filters/velocity_ukf.h"
+#include <odotune/filters/velocity_ukf.h>
 
-#include "filters/unscented.h"
+#include <odotune/filters/unscented.h>
 
 #include <Eigen/Cholesky>
 #include <array>
@@ -95,7 +95,7 @@ void VelocityUkf::predict(double dt_s) {
 
 namespace {
 
-// The unscented update (filters/unscented.h) with h picking rows of the state
+// The unscented update (odotune/filters/unscented.h) with h picking rows of the state
 // (a full (V, W) measurement or W alone); false unless the result is finite
 // and P positive definite.
 template <int M, typename Measure>

@@ -26,7 +26,7 @@
 
 #include <Eigen/Core>
 
-#include "filters/odometry_params.h"
+#include <odotune/filters/odometry_params.h>
 
 namespace odotune::filters {
 
@@ -81,7 +81,7 @@ class VelocityUkf {
 // Planar pose integrated from body velocities, paper eq. 3 (Euler: the
 // heading at the start of the step):
 //   θ ← θ + W·Δt,  X ← X + V·cos θ_k·Δt,  Y ← Y + V·sin θ_k·Δt.
-// (PlanarPose: filters/odometry_params.h.)
+// (PlanarPose: odotune/filters/odometry_params.h.)
 PlanarPose integrate_pose(const PlanarPose& pose, double v_m_s, double w_rad_s, double dt_s);
 
 // Normalised estimation error squared e ᵀ P⁻¹ e of one estimate (paper

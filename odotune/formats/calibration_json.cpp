@@ -1,4 +1,4 @@
-#include "formats/calibration_json.h"
+#include <odotune/formats/calibration_json.h>
 
 #include <cmath>
 #include <optional>

@@ -31,8 +31,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "calibration/calibration_input.h"
-#include "calibration/calibration_run.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/calibration/calibration_run.h>
 
 namespace odotune {
 

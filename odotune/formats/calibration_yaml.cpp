@@ -1,4 +1,4 @@
-#include "formats/calibration_yaml.h"
+#include <odotune/formats/calibration_yaml.h>
 
 #include <cmath>
 #include <iterator>
@@ -7,9 +7,9 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "core/failure.h"
-#include "formats/config_yaml.h"
-#include "formats/yaml_error.h"
+#include <odotune/core/failure.h>
+#include <odotune/formats/config_yaml.h>
+#include <odotune/formats/yaml_error.h>
 
 namespace odotune {
 

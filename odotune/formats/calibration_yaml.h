@@ -8,7 +8,7 @@
 //   wheel_base_m: 0.65021           # D [m], between the wheel contact points
 //
 // or, for a body-velocity odometry (a twist the drive reports, or commands;
-// calibration/twist_calibration.h):
+// odotune/calibration/twist_calibration.h):
 //
 //   format: odotune-calibration/1
 //   odometry: commands              # twist | commands (absent: wheels, the keys above)
@@ -24,8 +24,8 @@
 #include <filesystem>
 #include <string>
 
-#include "filters/odometry_params.h"
-#include "tracks/odometry_input.h"
+#include <odotune/filters/odometry_params.h>
+#include <odotune/tracks/odometry_input.h>
 
 namespace odotune {
 

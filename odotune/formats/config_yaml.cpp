@@ -1,4 +1,4 @@
-#include "formats/config_yaml.h"
+#include <odotune/formats/config_yaml.h>
 
 #include <cstdio>
 #include <set>
@@ -7,10 +7,10 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "core/atomic_file.h"
-#include "core/failure.h"
-#include "formats/yaml_error.h"
-#include "objectives/param_space.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/core/failure.h>
+#include <odotune/formats/yaml_error.h>
+#include <odotune/objectives/param_space.h>
 
 namespace odotune {
 

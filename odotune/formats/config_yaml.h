@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "filters/ekf_noise.h"
+#include <odotune/filters/ekf_noise.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "formats/controller_config.h"
+#include <odotune/formats/controller_config.h>
 
 #include <algorithm>
 #include <cctype>
@@ -7,9 +7,9 @@
 
 #include <fmt/format.h>
 
-#include "core/atomic_file.h"
-#include "core/failure.h"
-#include "core/why.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/core/failure.h>
+#include <odotune/core/why.h>
 
 namespace odotune {
 

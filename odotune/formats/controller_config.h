@@ -30,7 +30,7 @@
 //    <wheel_radius> for the left and right wheels, <wheel_separation>, no
 //    multipliers. A left/right radius difference cannot be represented: the
 //    mean radius is written and a comment gives the difference's size.
-// These controllers' kinematics are odotune's (filters/odometry_params.h):
+// These controllers' kinematics are odotune's (odotune/filters/odometry_params.h):
 // V = (ω_r R_R + ω_l R_L)/2, W = (ω_r R_R − ω_l R_L)/D.
 //
 // Forms (ROS controllers; Gazebo always gets the absolute geometry):
@@ -60,7 +60,7 @@
 #include <string_view>
 #include <vector>
 
-#include "filters/odometry_params.h"
+#include <odotune/filters/odometry_params.h>
 
 namespace odotune {
 
@@ -124,7 +124,7 @@ ControllerValues controller_values(const ControllerGeometry& geometry, Controlle
 // invalid.
 std::string controller_config_text(const ControllerGeometry& geometry, const ControllerOptions& options);
 
-// Writes controller_config_text atomically (core/atomic_file.h). Throws
+// Writes controller_config_text atomically (odotune/core/atomic_file.h). Throws
 // odotune::Failure ("PATH: not written: why", or the writer's
 // "cannot write controller parameters 'PATH': reason").
 void write_controller_config(const ControllerGeometry& geometry, const ControllerOptions& options,

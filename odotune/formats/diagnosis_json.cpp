@@ -1,8 +1,8 @@
-#include "formats/diagnosis_json.h"
+#include <odotune/formats/diagnosis_json.h>
 
 #include <cmath>
 
-#include "sim/model_terms.h"
+#include <odotune/sim/model_terms.h>
 
 namespace odotune {
 namespace {

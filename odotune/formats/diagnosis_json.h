@@ -13,14 +13,14 @@
 
 #include <nlohmann/json.hpp>
 
-#include "diagnose/diagnosis.h"
-#include "diagnose/recordings.h"
+#include <odotune/diagnose/diagnosis.h>
+#include <odotune/diagnose/recordings.h>
 
 namespace odotune {
 
 nlohmann::json diagnosis_json(const diagnose::Diagnosis& d);
 
-// Several recordings (diagnose/recordings.h): ONE document whose spec keys
+// Several recordings (odotune/diagnose/recordings.h): ONE document whose spec keys
 // are the pooled result's (diagnosis_json of p.pooled; with held-out
 // recordings, fit.heldout and "heldout" come from them), plus "tracks": one
 // entry per recording {"track", "role": "fit" | "heldout", "duration_s",

@@ -1,4 +1,4 @@
-#include "formats/experiment_yaml.h"
+#include <odotune/formats/experiment_yaml.h>
 
 #include <glob.h>
 
@@ -10,9 +10,9 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "core/failure.h"
-#include "formats/yaml_error.h"
-#include "objectives/metrics.h"
+#include <odotune/core/failure.h>
+#include <odotune/formats/yaml_error.h>
+#include <odotune/objectives/metrics.h>
 
 namespace odotune {
 

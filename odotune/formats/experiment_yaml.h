@@ -2,7 +2,7 @@
 //
 //   format: odotune-experiment/1
 //   name: study
-//   models: [rq, alpha, gyro]            # also pf-calib, adaptive-pf-calib, ukf (objectives/tuned_model.h)
+//   models: [rq, alpha, gyro]            # also pf-calib, adaptive-pf-calib, ukf (odotune/objectives/tuned_model.h)
 //   tracks: [../data/tracks/track*.csv]   # paths or globs, relative to this file
 //   modes: [1, 2, 3, 4, 5, 6, 7]         # numbers or names (rmse, …, rmse+mae+maxe, fix-rmse, fix-nll)
 //   seeds: {first: 1, count: 20}         # or a list: [1, 2, 3]
@@ -47,11 +47,11 @@
 #include <string>
 #include <vector>
 
-#include "filters/resampling.h"
-#include "objectives/fitness_mode.h"
-#include "objectives/rl_objective.h"
-#include "objectives/rl_search_options.h"
-#include "objectives/tuned_model.h"
+#include <odotune/filters/resampling.h>
+#include <odotune/objectives/fitness_mode.h>
+#include <odotune/objectives/rl_objective.h>
+#include <odotune/objectives/rl_search_options.h>
+#include <odotune/objectives/tuned_model.h>
 
 namespace odotune {
 
@@ -64,9 +64,9 @@ struct ExperimentCalibration {
   double ext_from_gt_hz = 0.0;  // 0: the tracks' v_ext/w_ext
 };
 
-// robot_localization's EKF or UKF (models rl-ekf, rl-ukf; objectives/rl_objective.h): how its
+// robot_localization's EKF or UKF (models rl-ekf, rl-ukf; odotune/objectives/rl_objective.h): how its
 // bags are read and tuned. Its runs are scored by the GPS-outage protocol on
-// the span after until_s (jobs/rl_job.h), which the tune never sees.
+// the span after until_s (odotune/jobs/rl_job.h), which the tune never sees.
 struct ExperimentRl {
   std::filesystem::path params;  // resolved
   std::string node_name;         // the EKF's section of the file when it has several

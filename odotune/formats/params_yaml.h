@@ -16,8 +16,8 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "formats/yaml_error.h"
-#include "objectives/box_space.h"
+#include <odotune/formats/yaml_error.h>
+#include <odotune/objectives/box_space.h>
 
 namespace odotune {
 

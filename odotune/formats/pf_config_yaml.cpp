@@ -1,4 +1,4 @@
-#include "formats/pf_config_yaml.h"
+#include <odotune/formats/pf_config_yaml.h>
 
 #include <cmath>
 #include <set>
@@ -7,11 +7,11 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "calibration/calibration_objective.h"
-#include "core/failure.h"
-#include "formats/config_yaml.h"
-#include "formats/params_yaml.h"
-#include "formats/yaml_error.h"
+#include <odotune/calibration/calibration_objective.h>
+#include <odotune/core/failure.h>
+#include <odotune/formats/config_yaml.h>
+#include <odotune/formats/params_yaml.h>
+#include <odotune/formats/yaml_error.h>
 
 namespace odotune {
 

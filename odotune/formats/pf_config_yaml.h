@@ -25,8 +25,8 @@
 #include <string>
 #include <vector>
 
-#include "calibration/calibration_run.h"
-#include "filters/pf_calibrator.h"
+#include <odotune/calibration/calibration_run.h>
+#include <odotune/filters/pf_calibrator.h>
 
 namespace odotune {
 

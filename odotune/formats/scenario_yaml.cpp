@@ -1,4 +1,4 @@
-#include "formats/scenario_yaml.h"
+#include <odotune/formats/scenario_yaml.h>
 
 #include <charconv>
 #include <cmath>
@@ -12,11 +12,11 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "sim/effects.h"
-#include "sim/model_terms.h"
-#include "sim/motion_profile.h"
-#include "sim/simulator.h"
-#include "sim/slip_episodes.h"
+#include <odotune/sim/effects.h>
+#include <odotune/sim/model_terms.h>
+#include <odotune/sim/motion_profile.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/sim/slip_episodes.h>
 
 namespace odotune {
 
@@ -510,7 +510,7 @@ class Parser {
   }
 
   // terms: a list of {target: v_l|v_r, term: NAME, coef: NUMBER} maps
-  // (sim/model_terms.h; NAME in either form, e.g. "v_l*sin(phi_l)").
+  // (odotune/sim/model_terms.h; NAME in either form, e.g. "v_l*sin(phi_l)").
   void read_terms(const YAML::Node& n, const YAML::Node& key, std::vector<sim::ModelTerm>& out) {
     if (n.IsNull()) return;
     const std::string form = "{target: v_l|v_r, term: NAME, coef: NUMBER} maps";

@@ -1,4 +1,4 @@
-// Reading a simulation scenario (sim/scenario.h) from YAML, and writing
+// Reading a simulation scenario (odotune/sim/scenario.h) from YAML, and writing
 // one (scenario_to_yaml, in scenario_yaml_write.cpp).
 //
 // Schema (every key optional unless marked; see scenarios/README.md and the
@@ -39,7 +39,7 @@
 //                                 # 0 < s <= 0.9, 2*ramp_s <= t1_s - t0_s, no overlap
 //                                 # on one wheel, t0_s before the motion's end
 //   terms:                        # ground-speed corrections outside the effects
-//     - {target: v_l, term: "v_l*sin(phi_l)", coef: 0.01}   # (sim/model_terms.h;
+//     - {target: v_l, term: "v_l*sin(phi_l)", coef: 0.01}   # (odotune/sim/model_terms.h;
 //                                 # names ASCII or as diagnose prints them, each
 //                                 # (target, term) once, coef finite)
 //
@@ -54,7 +54,7 @@
 #include <string>
 #include <string_view>
 
-#include "sim/scenario.h"
+#include <odotune/sim/scenario.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-// scenario_to_yaml (declared in formats/scenario_yaml.h): a Scenario as YAML text
+// scenario_to_yaml (declared in odotune/formats/scenario_yaml.h): a Scenario as YAML text
 // that parse_scenario reads back to the same fields.
 //
 // Written as careful text rather than with YAML::Emitter so that the layout is
@@ -16,10 +16,10 @@
 
 #include <fmt/format.h>
 
-#include "formats/scenario_yaml.h"
-#include "sim/effects.h"
-#include "sim/simulator.h"
-#include "sim/slip_episodes.h"
+#include <odotune/formats/scenario_yaml.h>
+#include <odotune/sim/effects.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/sim/slip_episodes.h>
 
 namespace odotune {
 
@@ -208,7 +208,7 @@ void write_slip_episodes(std::string& out, const std::vector<sim::SlipEpisode>& 
   }
 }
 
-// terms: one flow map per term, ASCII names (sim/model_terms.h).
+// terms: one flow map per term, ASCII names (odotune/sim/model_terms.h).
 void write_terms(std::string& out, const std::vector<sim::ModelTerm>& terms) {
   if (terms.empty()) return;
   out += "terms:\n";

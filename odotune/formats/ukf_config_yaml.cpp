@@ -1,4 +1,4 @@
-#include "formats/ukf_config_yaml.h"
+#include <odotune/formats/ukf_config_yaml.h>
 
 #include <cmath>
 #include <set>
@@ -7,10 +7,10 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "core/failure.h"
-#include "formats/config_yaml.h"
-#include "formats/params_yaml.h"
-#include "formats/yaml_error.h"
+#include <odotune/core/failure.h>
+#include <odotune/formats/config_yaml.h>
+#include <odotune/formats/params_yaml.h>
+#include <odotune/formats/yaml_error.h>
 
 namespace odotune {
 
@@ -22,7 +22,7 @@ constexpr const char* kFormat = "odotune-ukf-config/1";
 constexpr const char* kExplanation =
     "The velocity-fusion UKF of Farina, Acosta, Toledo & Acosta, \"Improving Odometric Model\n"
     "Performance Based on LSTM Networks\", Sensors 2023, 23, 961, section 1 (odotune:\n"
-    "filters/velocity_ukf.h, learned/ukf_fusion.h):\n"
+    "odotune/filters/velocity_ukf.h, odotune/learned/ukf_fusion.h):\n"
     "  state       x = (V, W), body velocities [m/s, rad/s]\n"
     "  model       constant velocity, x_k = x_(k-1) + n with n ~ N(0, diag(q_v, q_w) * dt)\n"
     "  measures    every step: the kinematic wheel odometry (V, W) with the static variances\n"

@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "learned/ukf_objective.h"
+#include <odotune/learned/ukf_objective.h>
 
 namespace odotune {
 

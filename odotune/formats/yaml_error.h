@@ -9,7 +9,7 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
-#include "core/failure.h"
+#include <odotune/core/failure.h>
 
 namespace odotune {
 

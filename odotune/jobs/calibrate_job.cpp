@@ -1,4 +1,4 @@
-#include "jobs/calibrate_job.h"
+#include <odotune/jobs/calibrate_job.h>
 
 #include <algorithm>
 #include <cmath>
@@ -9,18 +9,18 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "calibration/calibration_ranges.h"
-#include "calibration/plausible_fit.h"
-#include "core/failure.h"
-#include "core/output_paths.h"
-#include "formats/calibration_yaml.h"
-#include "formats/config_yaml.h"
-#include "jobs/calibration_figure_data.h"
-#include "jobs/calibration_summary.h"
-#include "jobs/calibration_trace.h"
-#include "jobs/twist_calibrate_job.h"
-#include "results/calibration_figures.h"
-#include "tracks/track_io.h"
+#include <odotune/calibration/calibration_ranges.h>
+#include <odotune/calibration/plausible_fit.h>
+#include <odotune/core/failure.h>
+#include <odotune/core/output_paths.h>
+#include <odotune/formats/calibration_yaml.h>
+#include <odotune/formats/config_yaml.h>
+#include <odotune/jobs/calibration_figure_data.h>
+#include <odotune/jobs/calibration_summary.h>
+#include <odotune/jobs/calibration_trace.h>
+#include <odotune/jobs/twist_calibrate_job.h>
+#include <odotune/results/calibration_figures.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 

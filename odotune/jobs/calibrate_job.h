@@ -1,6 +1,6 @@
 // `odotune calibrate`: an online (or batch) calibration of the odometry
 // parameters R_R, R_L and D from wheel rates and external body velocities
-// (Fariña, Toledo & Acosta, RA-L 2026; calibration/calibration_run.h) over
+// (Fariña, Toledo & Acosta, RA-L 2026; odotune/calibration/calibration_run.h) over
 // track files, with its output files; and the replay of a calibration file
 // on held-out tracks (`--apply`). Checking, loading, computing and file
 // output only: the command parses the flags and prints the summary lines.
@@ -28,12 +28,12 @@
 #include <string>
 #include <vector>
 
-#include "calibration/calibration_input.h"
-#include "calibration/calibration_run.h"
-#include "calibration/twist_calibration.h"
-#include "filters/odometry_params.h"
-#include "formats/calibration_json.h"
-#include "jobs/controller_export.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/calibration/calibration_run.h>
+#include <odotune/calibration/twist_calibration.h>
+#include <odotune/filters/odometry_params.h>
+#include <odotune/formats/calibration_json.h>
+#include <odotune/jobs/controller_export.h>
 
 namespace odotune {
 
@@ -47,9 +47,9 @@ struct CalibrateRequest {
   // of the calibration flags combines with --apply.
   std::optional<std::string>
       method;  // adaptive-pf (default) | pf | dkf | online-pose | batch-pose (batch) | batch-velocity | none
-  // --input: the odometry to calibrate (tracks/odometry_input.h); nullopt:
+  // --input: the odometry to calibrate (odotune/tracks/odometry_input.h); nullopt:
   // each track's own. Twist and command tracks take --method batch only
-  // (jobs/twist_calibrate_job.h).
+  // (odotune/jobs/twist_calibrate_job.h).
   std::optional<OdometryInput> input;
   std::optional<std::string> resampler;  // PF: multinomial | stratified | systematic (default) | residual
   std::optional<std::string> policy;     // PF: every | neff (default) | max
@@ -76,7 +76,7 @@ struct CalibrateRequest {
   // truth of every track as CSV ("": not written): track, t_s, gt_x_m,
   // gt_y_m, nominal_x_m, nominal_y_m, calibrated_x_m, calibrated_y_m.
   std::string paths_csv;
-  // --controller-out and its flags (jobs/controller_export.h); not with --apply.
+  // --controller-out and its flags (odotune/jobs/controller_export.h); not with --apply.
   ControllerRequest controller;
 
   // The method's name, given or the default.
@@ -98,7 +98,7 @@ struct CalibrateOutcome {
   std::vector<TrackCalibrationScore> nominal;  // the inputs' nominal parameters, scored
   std::vector<std::string> summary;            // calibration_summary_lines()
   std::string controller_line;                 // --controller-out: what was written ("" without it)
-  // Twist and command tracks (jobs/twist_calibrate_job.h): the fit, and each
+  // Twist and command tracks (odotune/jobs/twist_calibrate_job.h): the fit, and each
   // track's dead reckoning at the identity and at the fit (the fields above
   // stay empty).
   std::optional<TwistCalibrationSummary> twist;
@@ -110,9 +110,9 @@ struct CalibrateOutcome {
 // writes, in this order, the figure (STEM.png, STEM.svg; gnuplot is the
 // likeliest to fail), the CSV trace, the calibration YAML (--config-out, for
 // --apply), the controller's parameters (--controller-out, the final
-// estimate as --config-out; jobs/controller_export.h, whose flags are checked
+// estimate as --config-out; odotune/jobs/controller_export.h, whose flags are checked
 // with the output folders before the run) and the JSON
-// (formats/calibration_json.h). Every file is written atomically, after the
+// (odotune/formats/calibration_json.h). Every file is written atomically, after the
 // run. Throws odotune::Failure.
 CalibrateOutcome run_calibrate(const CalibrateRequest& request, const CalibrateHooks& hooks = {});
 

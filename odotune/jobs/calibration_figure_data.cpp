@@ -1,4 +1,4 @@
-#include "jobs/calibration_figure_data.h"
+#include <odotune/jobs/calibration_figure_data.h>
 
 #include <cmath>
 #include <limits>

@@ -1,5 +1,5 @@
-// From a calibration run's table (jobs/calibration_trace.h) to the plain data
-// of the estimates-over-time figure (results/calibration_figures.h): the
+// From a calibration run's table (odotune/jobs/calibration_trace.h) to the plain data
+// of the estimates-over-time figure (odotune/results/calibration_figures.h): the
 // figure of `calibrate --figure`, and the series the study command combines
 // into "radii over time, several methods or runs" figures.
 #pragma once
@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "jobs/calibration_trace.h"
-#include "results/calibration_figures.h"
+#include <odotune/jobs/calibration_trace.h>
+#include <odotune/results/calibration_figures.h>
 
 namespace odotune {
 

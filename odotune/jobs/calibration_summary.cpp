@@ -1,4 +1,4 @@
-#include "jobs/calibration_summary.h"
+#include <odotune/jobs/calibration_summary.h>
 
 #include <cmath>
 #include <optional>
@@ -135,7 +135,7 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
     if (r.method == CalibrationMethod::pf || r.method == CalibrationMethod::adaptive_pf)
       cost += fmt::format(", mean {:.0f} particles", r.mean_particles);
     if (r.memory_pair)
-      cost += fmt::format("; memory restarted {} time(s) (a change found, filters/memory_pair.h)",
+      cost += fmt::format("; memory restarted {} time(s) (a change found, odotune/filters/memory_pair.h)",
                           r.memory_restarts);
     out.push_back(cost);
   }

@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "calibration/calibration_input.h"
-#include "calibration/calibration_run.h"
-#include "filters/odometry_params.h"
-#include "formats/calibration_json.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/calibration/calibration_run.h>
+#include <odotune/filters/odometry_params.h>
+#include <odotune/formats/calibration_json.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "jobs/calibration_trace.h"
+#include <odotune/jobs/calibration_trace.h>
 
 #include <stdexcept>
 

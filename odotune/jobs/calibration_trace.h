@@ -1,7 +1,7 @@
 // The estimates of a calibration run over time as one table: the run's
-// trace (calibration/calibration_run.h) with, per row, the time elapsed since
+// trace (odotune/calibration/calibration_run.h) with, per row, the time elapsed since
 // the calibration began and the truth where the track knows it. This is what
-// `calibrate --csv` writes and what its figure (jobs/calibration_figure_data.h)
+// `calibrate --csv` writes and what its figure (odotune/jobs/calibration_figure_data.h)
 // and the study's figures draw.
 //
 // Elapsed time puts the tracks end to end: track k's rows are at
@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "calibration/calibration_input.h"
-#include "calibration/calibration_run.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/calibration/calibration_run.h>
 
 namespace odotune {
 

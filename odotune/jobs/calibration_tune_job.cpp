@@ -1,15 +1,15 @@
-#include "jobs/calibration_tune_job.h"
+#include <odotune/jobs/calibration_tune_job.h>
 
 #include <stdexcept>
 
 #include <fmt/format.h>
 
-#include "calibration/calibrated_odometry_errors.h"
-#include "calibration/calibration_ranges.h"
-#include "jobs/tune_job.h"
-#include "tuner/nlopt_solver.h"
-#include "tuner/problem.h"
-#include "tuner/pso.h"
+#include <odotune/calibration/calibrated_odometry_errors.h>
+#include <odotune/calibration/calibration_ranges.h>
+#include <odotune/jobs/tune_job.h>
+#include <odotune/tuner/nlopt_solver.h>
+#include <odotune/tuner/problem.h>
+#include <odotune/tuner/pso.h>
 
 namespace odotune {
 

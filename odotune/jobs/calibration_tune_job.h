@@ -1,6 +1,6 @@
 // One tuning run of a particle-filter calibrator's settings: calibrator kind × tracks × solver × seed → the tuned settings (N_eff
 // fraction, max-weight ratio, α, dispersion per particle, random-walk σ;
-// calibration/calibration_objective.h), scored against the paper's default
+// odotune/calibration/calibration_objective.h), scored against the paper's default
 // settings. The mirror of tune_job.h for calibrators; computation only (the
 // commands parse and print), so `tune` and `grid` share it.
 //
@@ -28,14 +28,14 @@
 #include <string>
 #include <vector>
 
-#include "calibration/calibration_input.h"
-#include "calibration/calibration_objective.h"
-#include "calibration/calibration_run.h"
-#include "filters/pf_calibrator.h"
-#include "jobs/tune_job.h"
-#include "objectives/metrics.h"
-#include "objectives/tuned_model.h"
-#include "tuner/summary.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/calibration/calibration_objective.h>
+#include <odotune/calibration/calibration_run.h>
+#include <odotune/filters/pf_calibrator.h>
+#include <odotune/jobs/tune_job.h>
+#include <odotune/objectives/metrics.h>
+#include <odotune/objectives/tuned_model.h>
+#include <odotune/tuner/summary.h>
 
 namespace odotune {
 

@@ -1,11 +1,11 @@
-#include "jobs/calibration_tune_json.h"
+#include <odotune/jobs/calibration_tune_json.h>
 
 #include <cmath>
 #include <optional>
 
 #include <fmt/format.h>
 
-#include "jobs/tune_json.h"
+#include <odotune/jobs/tune_json.h>
 
 namespace odotune {
 

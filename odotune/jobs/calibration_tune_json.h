@@ -1,5 +1,5 @@
 // The --json document of `tune --model pf-calib|adaptive-pf-calib`
-// (cli/tune_output.h prints the result).
+// (odotune/cli/tune_output.h prints the result).
 //
 // --json keys (like the EKF tune JSON where it makes sense; lengths in metres):
 //   model             "pf-calib" | "adaptive-pf-calib"
@@ -33,7 +33,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "jobs/calibration_tune_job.h"
+#include <odotune/jobs/calibration_tune_job.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "jobs/controller_export.h"
+#include <odotune/jobs/controller_export.h>
 
 #include <cmath>
 #include <utility>
@@ -6,9 +6,9 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "core/failure.h"
-#include "core/output_paths.h"
-#include "diagnose/diagnosis_summary.h"
+#include <odotune/core/failure.h>
+#include <odotune/core/output_paths.h>
+#include <odotune/diagnose/diagnosis_summary.h>
 
 namespace odotune {
 

@@ -1,6 +1,6 @@
 // `--controller-out` of `calibrate` and `diagnose`: the flags as plain
 // values, their checks (before the long work), the geometry each command
-// hands to formats/controller_config.h, and the line the command prints.
+// hands to odotune/formats/controller_config.h, and the line the command prints.
 //
 // Flags (docs/calibration/README.md, "Into the robot's controller"):
 //   --controller-out FILE and --controller ros2_control|ros1|gazebo go
@@ -16,11 +16,11 @@
 #include <string>
 #include <vector>
 
-#include "calibration/calibration_run.h"
-#include "diagnose/diagnosis.h"
-#include "diagnose/recordings.h"
-#include "filters/odometry_params.h"
-#include "formats/controller_config.h"
+#include <odotune/calibration/calibration_run.h>
+#include <odotune/diagnose/diagnosis.h>
+#include <odotune/diagnose/recordings.h>
+#include <odotune/filters/odometry_params.h>
+#include <odotune/formats/controller_config.h>
 
 namespace odotune {
 
@@ -35,7 +35,7 @@ struct ControllerRequest {
   bool any_given() const;
 };
 
-// Checks the flags together and the output path (core/output_paths.h); call
+// Checks the flags together and the output path (odotune/core/output_paths.h); call
 // it before the long work. Throws odotune::Failure naming the flag: one of
 // --controller-out and --controller without the other, an unknown kind or
 // form, a malformed name, --controller-form or --controller-name with
@@ -69,7 +69,7 @@ std::optional<ControllerGeometry> diagnosis_controller_geometry(const diagnose::
                                                                 const std::vector<std::string>& fit_files,
                                                                 const std::vector<std::string>& heldout_files);
 
-// The track's nominal robot as diagnose reads it (diagnose/diag_input.h);
+// The track's nominal robot as diagnose reads it (odotune/diagnose/diag_input.h);
 // throws odotune::Failure naming --controller-out and the track when it has
 // no positive radii and wheel base (body-velocity odometry without robot.*).
 filters::OdometryParams diagnosis_track_nominal(const diagnose::DiagInput& input, const std::string& file);

@@ -1,14 +1,14 @@
-#include "jobs/demo_job.h"
+#include <odotune/jobs/demo_job.h>
 
 #include <filesystem>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "core/failure.h"
-#include "formats/config_yaml.h"
-#include "jobs/tune_json.h"
-#include "tracks/track_io.h"
+#include <odotune/core/failure.h>
+#include <odotune/formats/config_yaml.h>
+#include <odotune/jobs/tune_json.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 

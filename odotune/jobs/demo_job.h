@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "filters/ekf_noise.h"
-#include "jobs/tune_job.h"
+#include <odotune/filters/ekf_noise.h>
+#include <odotune/jobs/tune_job.h>
 
 namespace odotune {
 

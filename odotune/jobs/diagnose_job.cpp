@@ -1,20 +1,20 @@
-#include "jobs/diagnose_job.h"
+#include <odotune/jobs/diagnose_job.h>
 
 #include <exception>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
-#include "core/atomic_file.h"
-#include "core/failure.h"
-#include "diagnose/diag_input.h"
-#include "diagnose/diagnosis_summary.h"
-#include "formats/diagnosis_json.h"
-#include "formats/scenario_yaml.h"
-#include "jobs/diagnosis_figure_data.h"
-#include "results/diagnosis_report.h"
-#include "sim/scenario_from_track.h"
-#include "tracks/track_io.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/core/failure.h>
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/diagnosis_summary.h>
+#include <odotune/formats/diagnosis_json.h>
+#include <odotune/formats/scenario_yaml.h>
+#include <odotune/jobs/diagnosis_figure_data.h>
+#include <odotune/results/diagnosis_report.h>
+#include <odotune/sim/scenario_from_track.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 
@@ -29,7 +29,7 @@ std::string corrected_scenario_yaml(const Track& track, const std::string& track
   for (const diagnose::Finding& f : d.findings)
     if (!f.spec().empty()) specs.push_back(f.spec()), names += (names.empty() ? "" : ", ") + f.effect;
   // Terms outside physics-effects.md (an unexplained finding's model): the
-  // simulator replays them (sim/model_terms.h).
+  // simulator replays them (odotune/sim/model_terms.h).
   std::vector<sim::ModelTerm> terms;
   for (const diagnose::Finding& f : d.findings)
     if (f.model) {

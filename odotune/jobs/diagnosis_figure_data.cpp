@@ -1,8 +1,8 @@
-#include "jobs/diagnosis_figure_data.h"
+#include <odotune/jobs/diagnosis_figure_data.h>
 
 #include <cmath>
 
-#include "diagnose/window_replay.h"
+#include <odotune/diagnose/window_replay.h>
 
 namespace odotune {
 namespace {

@@ -1,5 +1,5 @@
 // What the --report figures of `odotune diagnose` show, taken from a
-// Diagnosis (results/diagnosis_figures.h takes plain data only):
+// Diagnosis (odotune/results/diagnosis_figures.h takes plain data only):
 //  1. residual vs time: |position error| of the windowed replay, nominal and
 //     chosen model, per reference sample; the segments located on the
 //     nominal residuals (else those of the first finding) shaded; window
@@ -13,9 +13,9 @@
 //     whole track from one anchor (window 0: drift shows as it builds up).
 #pragma once
 
-#include "diagnose/diag_input.h"
-#include "diagnose/diagnosis.h"
-#include "results/diagnosis_figures.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/diagnosis.h>
+#include <odotune/results/diagnosis_figures.h>
 
 namespace odotune {
 

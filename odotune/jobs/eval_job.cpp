@@ -1,18 +1,18 @@
-#include "jobs/eval_job.h"
+#include <odotune/jobs/eval_job.h>
 
-#include "objectives/fix_cv_replay.h"
-#include "results/tum.h"
+#include <odotune/objectives/fix_cv_replay.h>
+#include <odotune/results/tum.h>
 
 #include <stdexcept>
 
 #include <fmt/format.h>
 
-#include "core/failure.h"
-#include "formats/config_yaml.h"
-#include "jobs/tune_json.h"
-#include "objectives/param_space.h"
-#include "objectives/replay.h"
-#include "tracks/track_io.h"
+#include <odotune/core/failure.h>
+#include <odotune/formats/config_yaml.h>
+#include <odotune/jobs/tune_json.h>
+#include <odotune/objectives/param_space.h>
+#include <odotune/objectives/replay.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 

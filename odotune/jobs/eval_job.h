@@ -9,9 +9,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "filters/ekf.h"
-#include "filters/ekf_noise.h"
-#include "objectives/metrics.h"
+#include <odotune/filters/ekf.h>
+#include <odotune/filters/ekf_noise.h>
+#include <odotune/objectives/metrics.h>
 
 namespace odotune {
 
@@ -19,7 +19,7 @@ struct EvalRequest {
   std::string config;               // odotune-ekf-config/1 YAML; empty = the baseline noise
   std::vector<std::string> tracks;  // track files, replayed in this order
   std::string json_out;             // the metrics as JSON (eval_json); empty = not written
-  // The configured filter's trajectory in TUM format (results/tum.h), one
+  // The configured filter's trajectory in TUM format (odotune/results/tum.h), one
   // track only; on the recording's clock when the track has source.t0_ns.
   std::string trajectory_out;
 };
@@ -29,7 +29,7 @@ struct EvalTrack {
   ErrorMetrics metrics;   // with the configuration's noise
   ErrorMetrics baseline;  // with baseline_noise()
   // A track without ground truth: the metrics are of its held-out fixes
-  // (objectives/fix_cv_replay.h, default folds), not of ground truth.
+  // (odotune/objectives/fix_cv_replay.h, default folds), not of ground truth.
   bool against_fixes = false;
   filters::Divergence divergence = filters::Divergence::none;  // of the configuration's replay
 };
@@ -41,7 +41,7 @@ struct EvalOutcome {
 };
 
 // {"config": label, "model", "tracks": [{"track", "metrics", "baseline",
-// "divergence"}]} (metrics as jobs/tune_json.h's metrics_json).
+// "divergence"}]} (metrics as odotune/jobs/tune_json.h's metrics_json).
 nlohmann::json eval_json(const EvalOutcome& o);
 
 // Reads the configuration and all tracks, then replays each track with the

@@ -1,4 +1,4 @@
-#include "jobs/export_job.h"
+#include <odotune/jobs/export_job.h>
 
 #include <algorithm>
 #include <array>
@@ -10,15 +10,15 @@
 
 #include <fmt/format.h>
 
-#include "core/failure.h"
-#include "formats/config_yaml.h"
-#include "formats/ukf_config_yaml.h"
-#include "jobs/rl_job.h"
-#include "jobs/store_access.h"
-#include "objectives/process_noise_rate.h"
-#include "objectives/replay_input.h"
-#include "objectives/tuned_model.h"
-#include "results/ros_export.h"
+#include <odotune/core/failure.h>
+#include <odotune/formats/config_yaml.h>
+#include <odotune/formats/ukf_config_yaml.h>
+#include <odotune/jobs/rl_job.h>
+#include <odotune/jobs/store_access.h>
+#include <odotune/objectives/process_noise_rate.h>
+#include <odotune/objectives/replay_input.h>
+#include <odotune/objectives/tuned_model.h>
+#include <odotune/results/ros_export.h>
 
 namespace odotune {
 

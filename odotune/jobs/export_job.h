@@ -1,19 +1,19 @@
-// `odotune export` without its flags (cli/cmd_export.cpp reads those and
+// `odotune export` without its flags (odotune/cli/cmd_export.cpp reads those and
 // prints): one run of a results store as a configuration file, either
 // odotune's own (what `eval --config` reads) or a ROS 2 parameter file for
-// robot_localization's ekf_node (results/ros_export.h; alpha/gyro mapped by
-// objectives/process_noise_rate.h).
+// robot_localization's ekf_node (odotune/results/ros_export.h; alpha/gyro mapped by
+// odotune/objectives/process_noise_rate.h).
 //
 // Selection: --select key=value filters (model, track, mode, seed, heldout)
 // must leave runs of exactly one model; of those the run with the lowest tuned
 // RMSE on its scored track is exported (ties: the first stored). An rl-ekf
 // run (robot_localization's EKF) is scored on data its tune never saw, so its
 // runs must be of one fitness and are compared by their tuning fitness; it
-// exports as the robot's own parameter file (jobs/rl_job.h, write_rl_run). A run of a
+// exports as the robot's own parameter file (odotune/jobs/rl_job.h, write_rl_run). A run of a
 // calibrator model (pf-calib, adaptive-pf-calib) is refused with one line:
 // it holds PF settings, not EKF noise (tune --config-out writes those). A run
 // of the fusion UKF (ukf) exports as odotune's own format only (an
-// odotune-ukf-config/1 file, formats/ukf_config_yaml.h); robot_localization has
+// odotune-ukf-config/1 file, odotune/formats/ukf_config_yaml.h); robot_localization has
 // no mapping for it (its filters estimate the pose, not a (V, W) fusion of
 // this form), which is refused with one line.
 #pragma once
@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "results/run_record.h"
+#include <odotune/results/run_record.h>
 
 namespace odotune {
 

@@ -1,9 +1,9 @@
-#include "jobs/fixes_job.h"
+#include <odotune/jobs/fixes_job.h>
 
 #include <stdexcept>
 
-#include "core/failure.h"
-#include "tracks/track_io.h"
+#include <odotune/core/failure.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 

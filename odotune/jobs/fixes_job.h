@@ -1,11 +1,11 @@
 // `odotune fixes`: a track file given synthetic absolute position fixes made
-// from its ground truth (sim/synthetic_fixes.h), written to another file.
+// from its ground truth (odotune/sim/synthetic_fixes.h), written to another file.
 // The command reads the flags and prints.
 #pragma once
 
 #include <string>
 
-#include "sim/synthetic_fixes.h"
+#include <odotune/sim/synthetic_fixes.h>
 
 namespace odotune {
 

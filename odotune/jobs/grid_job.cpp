@@ -1,4 +1,4 @@
-#include "jobs/grid_job.h"
+#include <odotune/jobs/grid_job.h>
 
 #include <algorithm>
 
@@ -7,12 +7,12 @@
 
 #include <fmt/format.h>
 
-#include "core/failure.h"
-#include "jobs/calibration_tune_job.h"
-#include "jobs/rl_job.h"
-#include "jobs/tune_job.h"
-#include "jobs/ukf_tune_job.h"
-#include "tracks/track_io.h"
+#include <odotune/core/failure.h>
+#include <odotune/jobs/calibration_tune_job.h>
+#include <odotune/jobs/rl_job.h>
+#include <odotune/jobs/tune_job.h>
+#include <odotune/jobs/ukf_tune_job.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 

@@ -5,7 +5,7 @@
 // Computation only (the grid command prints). Cells run in parallel with
 // OpenMP (each tune then runs its swarm on one thread); results do not depend
 // on the thread count, so a resumed grid ends identical to an uninterrupted one.
-// Under MPI, jobs/grid_mpi.h shares the cells over processes with the same
+// Under MPI, odotune/jobs/grid_mpi.h shares the cells over processes with the same
 // pieces (run_cell, work_cells).
 #pragma once
 
@@ -18,17 +18,17 @@
 #include <variant>
 #include <vector>
 
-#include "formats/experiment_yaml.h"
-#include "jobs/tune_job.h"
-#include "results/run_record.h"
-#include "results/store.h"
+#include <odotune/formats/experiment_yaml.h>
+#include <odotune/jobs/tune_job.h>
+#include <odotune/results/run_record.h>
+#include <odotune/results/store.h>
 
 namespace odotune {
 
 // What a cell minimises: a fitness mode, or (model rl-ekf) one of
 // robot_localization's fitnesses.
 using CellFitness = std::variant<FitnessMode, RlFitness>;
-// The mode number a results store records for it (results/run_record.h).
+// The mode number a results store records for it (odotune/results/run_record.h).
 int stored_mode(const CellFitness& f);
 
 struct GridCell {

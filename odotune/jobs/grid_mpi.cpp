@@ -1,4 +1,4 @@
-#include "jobs/grid_mpi.h"
+#include <odotune/jobs/grid_mpi.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -9,7 +9,7 @@
 
 #include <fmt/format.h>
 
-#include "core/failure.h"
+#include <odotune/core/failure.h>
 
 #if defined(ODOTUNE_WITH_MPI) && ODOTUNE_WITH_MPI
 #define ODOTUNE_MPI_ENABLED 1
@@ -20,7 +20,7 @@
 #include <mutex>
 #include <thread>
 
-#include "jobs/run_record_bytes.h"
+#include <odotune/jobs/run_record_bytes.h>
 #else
 #define ODOTUNE_MPI_ENABLED 0
 #endif

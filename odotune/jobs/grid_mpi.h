@@ -24,9 +24,9 @@
 #include <optional>
 #include <string>
 
-#include "formats/experiment_yaml.h"
-#include "jobs/grid_job.h"
-#include "results/store.h"
+#include <odotune/formats/experiment_yaml.h>
+#include <odotune/jobs/grid_job.h>
+#include <odotune/results/store.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "jobs/import_job.h"
+#include <odotune/jobs/import_job.h>
 
 #include <stdexcept>
 #include <string_view>
@@ -6,9 +6,9 @@
 
 #include <fmt/format.h>
 
-#include "core/failure.h"
-#include "tracks/importers.h"
-#include "tracks/track_io.h"
+#include <odotune/core/failure.h>
+#include <odotune/tracks/importers.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 

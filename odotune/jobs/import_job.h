@@ -1,5 +1,5 @@
 // `odotune import <dataset>`: a third-party recording converted to a track
-// file by one importer of tracks/importers.h, and the numbers of the summary
+// file by one importer of odotune/tracks/importers.h, and the numbers of the summary
 // line. The command reads the flags and prints.
 #pragma once
 
@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "tracks/import_rosbag.h"
-#include "tracks/track.h"
+#include <odotune/tracks/import_rosbag.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 

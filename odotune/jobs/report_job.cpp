@@ -1,4 +1,4 @@
-#include "jobs/report_job.h"
+#include <odotune/jobs/report_job.h>
 
 #include <algorithm>
 #include <cmath>
@@ -9,18 +9,18 @@
 
 #include <fmt/format.h>
 
-#include "core/atomic_file.h"
-#include "core/failure.h"
-#include "jobs/report_writer.h"
-#include "jobs/rl_job.h"
-#include "jobs/store_access.h"
-#include "objectives/metrics.h"
-#include "objectives/param_space.h"
-#include "objectives/replay.h"
-#include "objectives/tuned_model.h"
-#include "results/figures.h"
-#include "results/report_html.h"
-#include "results/report_tables.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/core/failure.h>
+#include <odotune/jobs/report_writer.h>
+#include <odotune/jobs/rl_job.h>
+#include <odotune/jobs/store_access.h>
+#include <odotune/objectives/metrics.h>
+#include <odotune/objectives/param_space.h>
+#include <odotune/objectives/replay.h>
+#include <odotune/objectives/tuned_model.h>
+#include <odotune/results/figures.h>
+#include <odotune/results/report_html.h>
+#include <odotune/results/report_tables.h>
 
 namespace odotune {
 
@@ -105,7 +105,7 @@ struct ReportInput {
   const ReportRequest& req;
   const CheckedStore& s;
   std::vector<RunRecord> own, held;
-  // Calibrator runs (pf-calib, adaptive-pf-calib; objectives/tuned_model.h) enter
+  // Calibrator runs (pf-calib, adaptive-pf-calib; odotune/objectives/tuned_model.h) enter
   // the generic heatmaps, boxplots and tables; their baseline is the paper's
   // default PF settings and their metrics the calibrated odometry's dead
   // reckoning, so Table 1 and the convergence curves keep them apart from
@@ -405,7 +405,7 @@ void write_convergence(const ReportInput& in, ReportWriter& w, results::HtmlPage
       row.push_back(w.figure(stem, title, [&](const fs::path& p) { results::convergence(p, title, series); }));
     }
     if (calibrator && !row.empty())
-      page.paragraph("Calibrator models: best calibration score (calibration/calibration_objective.h, "
+      page.paragraph("Calibrator models: best calibration score (odotune/calibration/calibration_objective.h, "
                      "lower is better) against evaluations, whatever the fitness mode.");
     page.figures(row);
   }

@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "objectives/fitness_mode.h"
+#include <odotune/objectives/fitness_mode.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "jobs/report_writer.h"
+#include <odotune/jobs/report_writer.h>
 
 #include <algorithm>
 #include <cctype>

@@ -1,4 +1,4 @@
-// Pieces every report page uses (jobs/report_job.cpp, jobs/rl_report.cpp):
+// Pieces every report page uses (odotune/jobs/report_job.cpp, odotune/jobs/rl_report.cpp):
 // the folder writer that collects files and HTML figures, and small text
 // helpers. Internal to jobs/.
 #pragma once
@@ -10,10 +10,10 @@
 
 #include <fmt/format.h>
 
-#include "core/atomic_file.h"
-#include "core/failure.h"
-#include "results/report_html.h"
-#include "results/run_record.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/core/failure.h>
+#include <odotune/results/report_html.h>
+#include <odotune/results/run_record.h>
 
 namespace odotune {
 

@@ -1,12 +1,12 @@
-// write_rl_run (jobs/rl_job.h): a stored rl-ekf or rl-ukf run as the robot's
+// write_rl_run (odotune/jobs/rl_job.h): a stored rl-ekf or rl-ukf run as the robot's
 // own parameter file.
 #include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
 
-#include "core/failure.h"
-#include "jobs/rl_job.h"
+#include <odotune/core/failure.h>
+#include <odotune/jobs/rl_job.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "jobs/rl_job.h"
+#include <odotune/jobs/rl_job.h>
 
 #include <cmath>
 #include <limits>
@@ -8,9 +8,9 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "core/atomic_file.h"
-#include "core/failure.h"
-#include "core/output_paths.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/core/failure.h>
+#include <odotune/core/output_paths.h>
 
 namespace odotune {
 namespace {

@@ -2,7 +2,7 @@
 // `odotune eval --rl-params P --bag B` replays and scores it,
 // `odotune tune --rl-params P --bag B` tunes its process noise (and advises
 // its inputs' covariances) and writes the user's file back with the tuned
-// values (rlnode/ replays the node, objectives/rl_objective.h scores it).
+// values (rlnode/ replays the node, odotune/objectives/rl_objective.h scores it).
 //
 // Scores without ground truth, in the odom frame, by the GPS fixes as
 // navsat_transform_node turns them into odometry:
@@ -17,19 +17,19 @@
 #include <string>
 #include <vector>
 
-#include "formats/experiment_yaml.h"
-#include "jobs/report_job.h"
-#include "jobs/rl_search.h"
-#include "jobs/tune_job.h"
-#include "objectives/rl_objective.h"
-#include "objectives/rl_protocols.h"
-#include "results/run_record.h"
-#include "results/store.h"
-#include "rlnode/gps_alignment.h"
-#include "rlnode/params.h"
-#include "rlnode/recording.h"
-#include "rlnode/replay.h"
-#include "tuner/summary.h"
+#include <odotune/formats/experiment_yaml.h>
+#include <odotune/jobs/report_job.h>
+#include <odotune/jobs/rl_search.h>
+#include <odotune/jobs/tune_job.h>
+#include <odotune/objectives/rl_objective.h>
+#include <odotune/objectives/rl_protocols.h>
+#include <odotune/results/run_record.h>
+#include <odotune/results/store.h>
+#include <odotune/rlnode/gps_alignment.h>
+#include <odotune/rlnode/params.h>
+#include <odotune/rlnode/recording.h>
+#include <odotune/rlnode/replay.h>
+#include <odotune/tuner/summary.h>
 
 namespace odotune {
 
@@ -37,7 +37,8 @@ struct RlSource {
   std::filesystem::path params_file, bag;
   std::filesystem::path navsat_params;  // --navsat-params: navsat_transform_node's own file (empty: none)
   std::string node_name;                // the filter's section of the file when it has several
-  std::optional<filters::rl::RlFilterType> filter;  // --filter: for a file that does not say (rlnode/params.h)
+  std::optional<filters::rl::RlFilterType>
+      filter;                      // --filter: for a file that does not say (odotune/rlnode/params.h)
   std::vector<std::string> tf;     // "FRAME=x,y,z,roll,pitch,yaw": FRAME's pose in base_link [m, rad]
   std::string gps_topic;           // NavSatFix topic behind navsat's output (empty: the bag's one)
   std::vector<std::string> remap;  // "FROM=TO": the node's subscription to FROM reads the bag's TO
@@ -82,7 +83,7 @@ std::pair<std::string, std::string> parse_remap(const std::string& text);
 struct RlProtocolScores {
   FixScore outage, every_fifth;
 };
-// A held-out span and its two protocols (objectives/rl_protocols.h): a GPS
+// A held-out span and its two protocols (odotune/objectives/rl_protocols.h): a GPS
 // outage from `outage_from_ns` to `end_ns` (the GPS fused before), and every
 // 5th fix of [fifth_from_ns, end_ns) held out (the others fused). After a
 // tune's span both start where it ends; before it (tune --from), the outage
@@ -167,7 +168,7 @@ struct RlStartOutcome {
 struct RlTuneOutcome {
   std::filesystem::path bag, params_file;
   filters::rl::RlFilterType filter = filters::rl::RlFilterType::ekf;  // the file's (or --filter's)
-  std::vector<std::filesystem::path> tracks;  // tuned on tracks (jobs/rl_track_job.h), not a bag
+  std::vector<std::filesystem::path> tracks;  // tuned on tracks (odotune/jobs/rl_track_job.h), not a bag
   double duration_s = 0.0;
   double span_from_s = 0.0, span_until_s = 0.0;  // the tuning span [s]
   std::optional<RlJudgedSpan> judged;            // the judged span, when there is one
@@ -211,7 +212,7 @@ void write_tuned_params(const std::filesystem::path& path, const rlnode::RlParam
 // Throws Failure with one line; nothing is written then.
 void write_rl_run(const Experiment& e, const results::RunRecord& run, const std::filesystem::path& out,
                   bool ros2, const std::string& provenance);
-// `odotune report` for a store of rl-ekf runs (jobs/report_job.h calls it):
+// `odotune report` for a store of rl-ekf runs (odotune/jobs/report_job.h calls it):
 // the held-out GPS-outage errors per bag and fitness, improvement per
 // fitness, the seeds' spread, each parameter's determined range per seed,
 // the best run's outage trajectory per bag and fitness (the run of lowest

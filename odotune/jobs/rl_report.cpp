@@ -1,4 +1,4 @@
-// write_rl_report (jobs/rl_job.h): the report page of a store of rl-ekf or
+// write_rl_report (odotune/jobs/rl_job.h): the report page of a store of rl-ekf or
 // rl-ukf runs.
 #include <algorithm>
 #include <cmath>
@@ -10,13 +10,13 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "core/failure.h"
-#include "jobs/report_writer.h"
-#include "jobs/rl_job.h"
-#include "results/figures.h"
-#include "results/param_range_figure.h"
-#include "results/report_html.h"
-#include "results/report_tables.h"
+#include <odotune/core/failure.h>
+#include <odotune/jobs/report_writer.h>
+#include <odotune/jobs/rl_job.h>
+#include <odotune/results/figures.h>
+#include <odotune/results/param_range_figure.h>
+#include <odotune/results/report_html.h>
+#include <odotune/results/report_tables.h>
 
 namespace odotune {
 namespace {

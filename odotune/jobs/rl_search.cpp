@@ -1,4 +1,4 @@
-#include "jobs/rl_search.h"
+#include <odotune/jobs/rl_search.h>
 
 #include <algorithm>
 #include <chrono>
@@ -7,8 +7,8 @@
 
 #include <fmt/format.h>
 
-#include "core/why.h"
-#include "tuner/evaluate.h"
+#include <odotune/core/why.h>
+#include <odotune/tuner/evaluate.h>
 
 namespace odotune {
 namespace {

@@ -19,10 +19,10 @@
 #include <string>
 #include <vector>
 
-#include "jobs/tune_job.h"
-#include "objectives/rl_objective.h"
-#include "objectives/rl_search_options.h"
-#include "tuner/summary.h"
+#include <odotune/jobs/tune_job.h>
+#include <odotune/objectives/rl_objective.h>
+#include <odotune/objectives/rl_search_options.h>
+#include <odotune/tuner/summary.h>
 
 namespace odotune {
 

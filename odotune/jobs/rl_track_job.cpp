@@ -1,4 +1,4 @@
-#include "jobs/rl_track_job.h"
+#include <odotune/jobs/rl_track_job.h>
 
 #include <cmath>
 #include <numbers>
@@ -6,11 +6,11 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "core/atomic_file.h"
-#include "core/failure.h"
-#include "core/output_paths.h"
-#include "formats/calibration_yaml.h"
-#include "tracks/track_io.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/core/failure.h>
+#include <odotune/core/output_paths.h>
+#include <odotune/formats/calibration_yaml.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 

@@ -1,9 +1,9 @@
-// robot_localization's EKF on the project's tracks (objectives/rl_track.h):
+// robot_localization's EKF on the project's tracks (odotune/objectives/rl_track.h):
 // `odotune eval --rl-params P --track T…` replays each track and scores the
 // filter against its ground truth (the run with every fix fused, simulated
 // fix outages) and against its fixes (the tune's protocols);
 // `odotune tune --rl-params P --track T…` tunes one file on all the tracks
-// together, without their ground truth (jobs/rl_job.h's search), and writes
+// together, without their ground truth (odotune/jobs/rl_job.h's search), and writes
 // the user's file with the tuned values.
 #pragma once
 
@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "jobs/rl_job.h"
-#include "objectives/rl_track.h"
+#include <odotune/jobs/rl_job.h>
+#include <odotune/objectives/rl_track.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-// run_rl_tune (jobs/rl_job.h): the search, its scores and the written files
+// run_rl_tune (odotune/jobs/rl_job.h): the search, its scores and the written files
 // (their text: rl_tune_text.cpp).
 #include <cmath>
 #include <functional>
@@ -7,11 +7,11 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "core/atomic_file.h"
-#include "core/failure.h"
-#include "core/output_paths.h"
-#include "core/why.h"
-#include "jobs/rl_job.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/core/failure.h>
+#include <odotune/core/output_paths.h>
+#include <odotune/core/why.h>
+#include <odotune/jobs/rl_job.h>
 
 namespace odotune {
 

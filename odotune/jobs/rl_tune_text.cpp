@@ -1,5 +1,5 @@
 // What a robot_localization tune writes besides the parameter values
-// (jobs/rl_job.h): the written file's header comment and tune --json.
+// (odotune/jobs/rl_job.h): the written file's header comment and tune --json.
 #include <algorithm>
 #include <cmath>
 
@@ -7,8 +7,8 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
-#include "core/atomic_file.h"
-#include "jobs/rl_job.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/jobs/rl_job.h>
 
 namespace odotune {
 namespace {

@@ -1,4 +1,4 @@
-#include "jobs/run_record_bytes.h"
+#include <odotune/jobs/run_record_bytes.h>
 
 #include <cstdint>
 #include <cstring>

@@ -1,5 +1,5 @@
 // A finished run as bytes, for sending it from one MPI rank of a grid to the
-// rank that writes the store (jobs/grid_mpi.h). Exact: every double travels as
+// rank that writes the store (odotune/jobs/grid_mpi.h). Exact: every double travels as
 // its 8 bytes (NaN payloads, infinities and -0 included), so a run computed on
 // another rank is stored bit-identical to one computed in-process. Both ends
 // are the same odotune binary on machines of the same byte order; the bytes
@@ -8,7 +8,7 @@
 
 #include <vector>
 
-#include "results/run_record.h"
+#include <odotune/results/run_record.h>
 
 namespace odotune {
 

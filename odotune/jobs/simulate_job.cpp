@@ -1,4 +1,4 @@
-#include "jobs/simulate_job.h"
+#include <odotune/jobs/simulate_job.h>
 
 #include <charconv>
 #include <cmath>
@@ -7,13 +7,13 @@
 
 #include <fmt/format.h>
 
-#include "core/failure.h"
-#include "formats/scenario_yaml.h"
-#include "sim/effects.h"
-#include "sim/motion_profile.h"
-#include "sim/random_slip.h"
-#include "sim/simulator.h"
-#include "tracks/track_io.h"
+#include <odotune/core/failure.h>
+#include <odotune/formats/scenario_yaml.h>
+#include <odotune/sim/effects.h>
+#include <odotune/sim/motion_profile.h>
+#include <odotune/sim/random_slip.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 

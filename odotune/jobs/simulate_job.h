@@ -1,17 +1,17 @@
-// `odotune simulate`: a scenario YAML (formats/scenario_yaml.h), changed by
-// the command's overrides, simulated (sim/simulator.h) and written as a
+// `odotune simulate`: a scenario YAML (odotune/formats/scenario_yaml.h), changed by
+// the command's overrides, simulated (odotune/sim/simulator.h) and written as a
 // track file. The command reads the flags and prints the summary line.
 //
 // Overrides, in this order:
 //   seed         replaces the scenario's noise seed;
 //   random_slip  replaces the scenario's slip episodes with a random layout
-//                drawn with that seed (sim/random_slip.h): training drives
+//                drawn with that seed (odotune/sim/random_slip.h): training drives
 //                for the slip detector;
 //   no_effects   drops the file's effects;
 //   effects      "NAME:param=value,..." applied after the file's effects: a
 //                new effect is switched on (unset optional parameters take
 //                their defaults), an effect the file already has keeps its
-//                parameters except those given (sim/effects.h).
+//                parameters except those given (odotune/sim/effects.h).
 #pragma once
 
 #include <cstddef>
@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "tracks/track.h"
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 

@@ -1,12 +1,12 @@
-#include "jobs/store_access.h"
+#include <odotune/jobs/store_access.h>
 
 #include <fmt/format.h>
 
-#include "core/failure.h"
-#include "formats/experiment_yaml.h"
-#include "objectives/param_space.h"
-#include "objectives/tuned_model.h"
-#include "tracks/track_io.h"
+#include <odotune/core/failure.h>
+#include <odotune/formats/experiment_yaml.h>
+#include <odotune/objectives/param_space.h>
+#include <odotune/objectives/tuned_model.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 

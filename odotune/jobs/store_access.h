@@ -10,11 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "filters/ekf_noise.h"
-#include "formats/ukf_config_yaml.h"
-#include "results/run_record.h"
-#include "results/store.h"
-#include "tracks/track.h"
+#include <odotune/filters/ekf_noise.h>
+#include <odotune/formats/ukf_config_yaml.h>
+#include <odotune/results/run_record.h>
+#include <odotune/results/store.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "jobs/tune_command.h"
+#include <odotune/jobs/tune_command.h>
 
 #include <algorithm>
 #include <exception>
@@ -6,15 +6,15 @@
 
 #include <fmt/format.h>
 
-#include "core/failure.h"
-#include "formats/config_yaml.h"
-#include "formats/pf_config_yaml.h"
-#include "formats/ukf_config_yaml.h"
-#include "jobs/calibration_tune_json.h"
-#include "jobs/tune_json.h"
-#include "jobs/ukf_tune_json.h"
-#include "objectives/tuned_model.h"
-#include "tracks/track_io.h"
+#include <odotune/core/failure.h>
+#include <odotune/formats/config_yaml.h>
+#include <odotune/formats/pf_config_yaml.h>
+#include <odotune/formats/ukf_config_yaml.h>
+#include <odotune/jobs/calibration_tune_json.h>
+#include <odotune/jobs/tune_json.h>
+#include <odotune/jobs/ukf_tune_json.h>
+#include <odotune/objectives/tuned_model.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 

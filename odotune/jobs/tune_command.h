@@ -1,4 +1,4 @@
-// `odotune tune` without its flags (cli/cmd_tune.cpp reads those and prints):
+// `odotune tune` without its flags (odotune/cli/cmd_tune.cpp reads those and prints):
 // which model, which options apply to it, the tracks loaded and prepared for
 // it, the EKF, calibrator or UKF tune (tune_job.h, calibration_tune_job.h,
 // ukf_tune_job.h) and its --json and --config-out files:
@@ -15,9 +15,9 @@
 #include <variant>
 #include <vector>
 
-#include "jobs/calibration_tune_job.h"
-#include "jobs/tune_job.h"
-#include "jobs/ukf_tune_job.h"
+#include <odotune/jobs/calibration_tune_job.h>
+#include <odotune/jobs/tune_job.h>
+#include <odotune/jobs/ukf_tune_job.h>
 
 namespace odotune {
 
@@ -32,7 +32,7 @@ struct TuneCommandRequest : SolverSettings {
   // EKF: any fitness mode; UKF: 1..7. Not given: the default (7), or 8 for
   // an EKF tune on a track without ground truth.
   std::optional<FitnessMode> mode;
-  FixCvOptions fix_cv;  // EKF modes 8, 9: the folds (objectives/fix_cv_replay.h)
+  FixCvOptions fix_cv;  // EKF modes 8, 9: the folds (odotune/objectives/fix_cv_replay.h)
   // Calibrators only: the calibrator's fixed parts (calibration_tune_job.h);
   // given for another model, a Failure names the flag (as --mode for a
   // calibrator).

@@ -1,10 +1,10 @@
-#include "jobs/tune_job.h"
+#include <odotune/jobs/tune_job.h>
 
 #include <stdexcept>
 
-#include "tuner/nlopt_solver.h"
-#include "tuner/problem.h"
-#include "tuner/pso.h"
+#include <odotune/tuner/nlopt_solver.h>
+#include <odotune/tuner/problem.h>
+#include <odotune/tuner/pso.h>
 
 namespace odotune {
 

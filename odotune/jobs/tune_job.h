@@ -13,21 +13,21 @@
 #include <string>
 #include <vector>
 
-#include "calibration/calibration_input.h"
-#include "filters/ekf_noise.h"
-#include "learned/fusion_input.h"
-#include "objectives/box_space.h"
-#include "objectives/ekf_objective.h"
-#include "objectives/metrics.h"
-#include "objectives/replay.h"
-#include "tracks/track.h"
-#include "tuner/problem.h"
-#include "tuner/solver_choice.h"
-#include "tuner/summary.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/filters/ekf_noise.h>
+#include <odotune/learned/fusion_input.h>
+#include <odotune/objectives/box_space.h>
+#include <odotune/objectives/ekf_objective.h>
+#include <odotune/objectives/metrics.h>
+#include <odotune/objectives/replay.h>
+#include <odotune/tracks/track.h>
+#include <odotune/tuner/problem.h>
+#include <odotune/tuner/solver_choice.h>
+#include <odotune/tuner/summary.h>
 
 namespace odotune {
 
-struct RlLoaded;  // jobs/rl_job.h
+struct RlLoaded;  // odotune/jobs/rl_job.h
 
 // A track prepared for replay: the reference input and its fast form; and,
 // when a calibrator model is tuned on it (grid), its calibration input; when
@@ -44,7 +44,7 @@ struct PreparedTrack {
   std::unique_ptr<FixCvReplay> cv;
   std::optional<CalibrationInput> calibration;
   std::optional<FusionInput> fusion;
-  // A bag with robot_localization's parameter file (model rl-ekf, grid; jobs/rl_job.h).
+  // A bag with robot_localization's parameter file (model rl-ekf, grid; odotune/jobs/rl_job.h).
   std::shared_ptr<const RlLoaded> rl;
 };
 // Throws std::invalid_argument (one line naming the track) when it cannot be
@@ -116,7 +116,7 @@ struct BoxProblem {
 };
 
 // The same for an objective that also evaluates a batch of points in one
-// call (tuner/problem.h's BatchProblem).
+// call (odotune/tuner/problem.h's BatchProblem).
 template <typename Objective>
   requires requires(const Objective& o, std::span<const double> xs, std::span<double> out) {
     o.fitness_batch(xs, out);

@@ -1,4 +1,4 @@
-#include "jobs/tune_json.h"
+#include <odotune/jobs/tune_json.h>
 
 namespace odotune {
 

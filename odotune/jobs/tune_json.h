@@ -9,9 +9,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "jobs/tune_job.h"
-#include "objectives/metrics.h"
-#include "tuner/summary.h"
+#include <odotune/jobs/tune_job.h>
+#include <odotune/objectives/metrics.h>
+#include <odotune/tuner/summary.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "jobs/twist_calibrate_job.h"
+#include <odotune/jobs/twist_calibrate_job.h>
 
 #include <cmath>
 #include <stdexcept>
@@ -8,10 +8,10 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
-#include "calibration/plausible_fit.h"
-#include "core/failure.h"
-#include "core/output_paths.h"
-#include "formats/config_yaml.h"
+#include <odotune/calibration/plausible_fit.h>
+#include <odotune/core/failure.h>
+#include <odotune/core/output_paths.h>
+#include <odotune/formats/config_yaml.h>
 
 namespace odotune {
 

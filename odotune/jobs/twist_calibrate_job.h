@@ -1,17 +1,17 @@
 // `odotune calibrate` on tracks whose odometry is a body velocity, a twist
-// the drive measured or the commands (tracks/odometry_input.h):
-// calibration/twist_calibration.h's pose-domain fit of scales (and a delay
+// the drive measured or the commands (odotune/tracks/odometry_input.h):
+// odotune/calibration/twist_calibration.h's pose-domain fit of scales (and a delay
 // for commands) by --method batch, its calibration file and JSON, and
 // --apply of such a file on held-out tracks. run_calibrate and
-// run_calibrate_apply (jobs/calibrate_job.h) hand such tracks here.
+// run_calibrate_apply (odotune/jobs/calibrate_job.h) hand such tracks here.
 #pragma once
 
 #include <optional>
 #include <vector>
 
-#include "formats/calibration_yaml.h"
-#include "jobs/calibrate_job.h"
-#include "tracks/track.h"
+#include <odotune/formats/calibration_yaml.h>
+#include <odotune/jobs/calibrate_job.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 

@@ -1,11 +1,11 @@
-#include "jobs/ukf_tune_job.h"
+#include <odotune/jobs/ukf_tune_job.h>
 
 #include <stdexcept>
 
 #include <fmt/format.h>
 
-#include "objectives/ekf_objective.h"  // kDivergencePenalty
-#include "tuner/problem.h"
+#include <odotune/objectives/ekf_objective.h>  // kDivergencePenalty
+#include <odotune/tuner/problem.h>
 
 namespace odotune {
 

@@ -1,7 +1,7 @@
 // One tuning run of the velocity-fusion UKF's noise:
 // tracks × fitness mode × solver × seed → the tuned process-noise rates,
 // static odometry variances, gyro variance and external-variance scale
-// (learned/ukf_objective.h), scored against the default settings. The
+// (odotune/learned/ukf_objective.h), scored against the default settings. The
 // mirror of tune_job.h for the UKF; computation only (the commands parse and
 // print), so `tune` and `grid` share it.
 //
@@ -18,11 +18,11 @@
 #include <string>
 #include <vector>
 
-#include "jobs/tune_job.h"
-#include "learned/fusion_input.h"
-#include "learned/ukf_objective.h"
-#include "objectives/metrics.h"
-#include "tuner/summary.h"
+#include <odotune/jobs/tune_job.h>
+#include <odotune/learned/fusion_input.h>
+#include <odotune/learned/ukf_objective.h>
+#include <odotune/objectives/metrics.h>
+#include <odotune/tuner/summary.h>
 
 namespace odotune {
 

@@ -1,8 +1,8 @@
-#include "jobs/ukf_tune_json.h"
+#include <odotune/jobs/ukf_tune_json.h>
 
 #include <fmt/format.h>
 
-#include "jobs/tune_json.h"
+#include <odotune/jobs/tune_json.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-// The --json document of `tune --model ukf` (cli/tune_output.h prints it).
+// The --json document of `tune --model ukf` (odotune/cli/tune_output.h prints it).
 //
 // --json keys (as the EKF tune JSON; lengths in metres):
 //   model             "ukf"
@@ -20,7 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "jobs/ukf_tune_job.h"
+#include <odotune/jobs/ukf_tune_job.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "learned/fusion_input.h"
+#include <odotune/learned/fusion_input.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,10 +10,10 @@
 
 #include <fmt/format.h>
 
-#include "objectives/pose_series.h"
-#include "objectives/track_samples.h"
-#include "tracks/body_velocity.h"
-#include "tracks/odometry_input.h"
+#include <odotune/objectives/pose_series.h>
+#include <odotune/objectives/track_samples.h>
+#include <odotune/tracks/body_velocity.h>
+#include <odotune/tracks/odometry_input.h>
 
 namespace odotune {
 
@@ -125,7 +125,7 @@ OdometryCounts odometry_counts(const Track& track, bool from_ticks, double count
 }
 
 // The mean body velocity over each step under the zero-order hold of
-// tracks/body_velocity.h (delayed by `delay_s`, scaled: FusionInputOptions);
+// odotune/tracks/body_velocity.h (delayed by `delay_s`, scaled: FusionInputOptions);
 // no wheel increments (NaN).
 void body_velocity_per_step(const BodyVelocityIntegral& body, const FusionInputOptions& o, FusionInput& in) {
   const std::size_t n = in.t.size();

@@ -11,25 +11,25 @@
 
 #include <optional>
 
-#include "filters/odometry_params.h"
-#include "tracks/odometry_input.h"
-#include "tracks/track.h"
+#include <odotune/filters/odometry_params.h>
+#include <odotune/tracks/odometry_input.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 
 struct FusionInputOptions {
   double rate_hz = 10.0;  // fusion / network rate (paper: 10 Hz); (0, 1000]
-  // The odometry to read (tracks/odometry_input.h); nullopt: the track's own.
+  // The odometry to read (odotune/tracks/odometry_input.h); nullopt: the track's own.
   std::optional<OdometryInput> input;
   // Calibrated kinematics: wheels through this geometry instead of the
   // track's nominal one; a twist or commands scaled and delayed
-  // (filters/odometry_params.h, TwistCorrection). Default: nominal.
+  // (odotune/filters/odometry_params.h, TwistCorrection). Default: nominal.
   std::optional<filters::OdometryParams> geometry;
   filters::TwistCorrection twist;
   // > 0: external velocities derived from the ground truth at this rate
   // [Hz] (a stand-in for the paper's Velodyne, where a dataset has only its
   // reference pose): at each t = j / rate the central difference of the
-  // ground truth over one period (objectives/pose_series.h), variances
+  // ground truth over one period (odotune/objectives/pose_series.h), variances
   // default_ext_var_*; these replace the track's v_ext, w_ext. At most 100 Hz.
   double ext_from_gt_hz = 0.0;
   // Variances used where the track has external velocities but no
@@ -59,7 +59,7 @@ struct FusionInput {
   std::vector<double> dticks_l, dticks_r;
   // The nominal kinematic odometry over the step [m/s, rad/s]: wheels, paper
   // eqs. 1–2 with the nominal radii and base; twist and commands, the mean of
-  // v_cmd, w_cmd over the step under tracks/body_velocity.h's zero-order
+  // v_cmd, w_cmd over the step under odotune/tracks/body_velocity.h's zero-order
   // hold. With FusionInputOptions::geometry or twist, the calibrated one.
   std::vector<double> v_kin, w_kin;
   // Mean motor power over the step [W] (mean of the power rows inside it);
@@ -73,7 +73,7 @@ struct FusionInput {
   // when none.
   std::vector<double> gyro_z;
   // The track's velocity commands (v_cmd, w_cmd) over the step, under
-  // tracks/body_velocity.h's hold, whatever the odometry is [m/s, rad/s];
+  // odotune/tracks/body_velocity.h's hold, whatever the odometry is [m/s, rad/s];
   // NaN without them. (For a commands input, v_kin before any calibration.)
   std::vector<double> v_cmd, w_cmd;
   // The last position fix inside the step [m] and its variances [m²] (the
@@ -98,7 +98,7 @@ FusionInput slice_fusion_input(const FusionInput& in, std::size_t first, std::si
 
 // Throws std::invalid_argument with one line naming the track and what is
 // missing or wrong (no odometry of the requested kind, a v_cmd/w_cmd track
-// that does not say what they are, tracks/odometry_input.h; for wheels the
+// that does not say what they are, odotune/tracks/odometry_input.h; for wheels the
 // nominal radii/base/ticks_per_rev absent; fewer than 2 steps, invalid
 // options).
 FusionInput build_fusion_input(const Track& track, const FusionInputOptions& options = {});

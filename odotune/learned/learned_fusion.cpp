@@ -1,4 +1,4 @@
-#include "learned/learned_fusion.h"
+#include <odotune/learned/learned_fusion.h>
 
 #include <chrono>
 #include <cmath>

@@ -1,7 +1,7 @@
 // The whole localisation system of Fariña et al., Sensors 2023, 23, 961
 // (Figs. 1, 6, 7): odometry (learned or kinematic) with a variance (the slip
 // detector's, or static), fused with the external (lidar) and gyro
-// velocities by the (V, W) UKF (learned/ukf_fusion.h), with optional
+// velocities by the (V, W) UKF (odotune/learned/ukf_fusion.h), with optional
 // online retraining of the velocity nets (§4.2):
 //
 //   a step's window and the UKF's filtered (V, W) are kept as a retraining
@@ -14,10 +14,10 @@
 #include <optional>
 #include <vector>
 
-#include "filters/velocity_ukf.h"
-#include "learned/learned_odometry.h"
-#include "learned/slip_detector.h"
-#include "learned/ukf_fusion.h"
+#include <odotune/filters/velocity_ukf.h>
+#include <odotune/learned/learned_odometry.h>
+#include <odotune/learned/slip_detector.h>
+#include <odotune/learned/ukf_fusion.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "learned/learned_odometry.h"
+#include <odotune/learned/learned_odometry.h>
 
 #include <algorithm>
 #include <chrono>
@@ -8,9 +8,9 @@
 
 #include <fmt/format.h>
 
-#include "core/counter_rng.h"
-#include "core/enum_names.h"
-#include "core/why.h"
+#include <odotune/core/counter_rng.h>
+#include <odotune/core/enum_names.h>
+#include <odotune/core/why.h>
 
 namespace odotune {
 namespace {

@@ -14,12 +14,12 @@
 //    previous output, or the fusion filter's estimate (learned_fusion.h).
 //  - correction nets: each outputs a correction added to the nominal
 //    kinematic velocity of its track's odometry (wheels, a measured twist or
-//    commands, tracks/odometry_input.h), from a zero output start, so that a
+//    commands, odotune/tracks/odometry_input.h), from a zero output start, so that a
 //    net that has learnt nothing is the kinematic odometry. They read the
 //    odometry itself (and the gyro where the model has one), never their own
 //    output: a net fed what it produced drifts on its own errors. Their
 //    settings are chosen, and each is kept or dropped, by cross-validation
-//    over the training recordings (learned/odometry_selection.h).
+//    over the training recordings (odotune/learned/odometry_selection.h).
 #pragma once
 
 #include <array>
@@ -29,9 +29,9 @@
 #include <string_view>
 #include <vector>
 
-#include "learned/fusion_input.h"
-#include "learned/lstm_training.h"
-#include "learned/odometry_net.h"
+#include <odotune/learned/fusion_input.h>
+#include <odotune/learned/lstm_training.h>
+#include <odotune/learned/odometry_net.h>
 
 namespace odotune {
 

@@ -18,8 +18,8 @@
 // back to raw units (paper eq. 4 inverted, "de-normalisation", §4.1).
 //
 // Header-only: lstm_forward is templated on the scalar type so that
-// ceres::Jet flows through it (learned/lstm_training.h). No I/O here
-// (results/lstm_json.h reads and writes the weights).
+// ceres::Jet flows through it (odotune/learned/lstm_training.h). No I/O here
+// (odotune/results/lstm_json.h reads and writes the weights).
 #pragma once
 
 #include <array>

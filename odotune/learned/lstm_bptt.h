@@ -7,12 +7,12 @@
 // reverse mode. The network here is one scalar output of ~200 weights, for
 // which reverse mode gives the whole row for about three forward passes —
 // what lets the nets retrain on the robot in milliseconds. The
-// forward-mode path (learned/lstm_training.h, LstmResidual) remains the
+// forward-mode path (odotune/learned/lstm_training.h, LstmResidual) remains the
 // reference: tests/learned/test_lstm_training.cpp checks this gradient
 // against it and against central finite differences.
 //
 // Backward recursion (derivatives of the output y = d·h_T + d_0 w.r.t. every
-// quantity, written δ·; forward quantities as in learned/lstm.h):
+// quantity, written δ·; forward quantities as in odotune/learned/lstm.h):
 //   δh_T = d,  δc_{T+1}·f_{T+1} := 0
 //   δc_t  = δc_{t+1}·f_{t+1} + δh_t · o_t · (1 − tanh²c_t)
 //   δz_i = δc_t · g_t · i_t(1 − i_t)        δz_f = δc_t · c_{t−1} · f_t(1 − f_t)
@@ -25,7 +25,7 @@
 #include <cmath>
 #include <vector>
 
-#include "learned/lstm.h"
+#include <odotune/learned/lstm.h>
 
 namespace odotune {
 
@@ -55,7 +55,7 @@ Tape tape_for(int window) {
   return tape;
 }
 
-// The forward recursion over the window (learned/lstm.h), recorded on the tape.
+// The forward recursion over the window (odotune/learned/lstm.h), recorded on the tape.
 template <int I, int H>
 void forward(const double* w, const double* x, int window, const Tape& tape) {
   using L = LstmLayout<I, H>;

@@ -1,6 +1,6 @@
-// LSTM training with Ceres (learned/lstm_training.h). All Jet-heavy code
+// LSTM training with Ceres (odotune/learned/lstm_training.h). All Jet-heavy code
 // (AutoDiffCostFunction over LstmResidual) is instantiated in this one TU.
-#include "learned/lstm_training.h"
+#include <odotune/learned/lstm_training.h>
 
 #include <omp.h>
 
@@ -13,8 +13,8 @@
 
 #include <fmt/format.h>
 
-#include "core/counter_rng.h"
-#include "core/why.h"
+#include <odotune/core/counter_rng.h>
+#include <odotune/core/why.h>
 
 namespace odotune {
 

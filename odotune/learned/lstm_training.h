@@ -1,4 +1,4 @@
-// Training of the LSTM nets (learned/lstm.h) with Ceres.
+// Training of the LSTM nets (odotune/learned/lstm.h) with Ceres.
 //
 // Fariña et al., "Improving Odometric Model Performance Based on LSTM
 // Networks", Sensors 2023, 23, 961, train with ADAM on the MAE (§4, §4.1) and
@@ -21,7 +21,7 @@
 // ceres::AutoDiffCostFunction ("automatic differentiation through the
 // unrolled window"; forward mode, ≈ kCount forward passes per row) and
 // LstmBpttCost the same residual with its Jacobian row by backpropagation
-// through time (learned/lstm_bptt.h, ≈ 3 forward passes). Options select
+// through time (odotune/learned/lstm_bptt.h, ≈ 3 forward passes). Options select
 // which one trains; tests check both against each other and against finite
 // differences.
 //
@@ -42,8 +42,8 @@
 #include <utility>
 #include <vector>
 
-#include "learned/lstm.h"
-#include "learned/lstm_bptt.h"
+#include <odotune/learned/lstm.h>
+#include <odotune/learned/lstm_bptt.h>
 
 namespace odotune {
 
@@ -103,8 +103,9 @@ struct LstmTrainingOptions {
   // a correction to a base model and knows nothing leaves the base unchanged
   // (with decay_to_start, the decay pulls toward that).
   bool zero_output_start = false;
-  std::uint64_t seed = 1;  // initial weights (Glorot-uniform from core/counter_rng.h: thread-count independent)
-  int num_threads = 1;     // OpenMP threads evaluating the windows (≥ 1); results do not depend on it
+  std::uint64_t seed =
+      1;  // initial weights (Glorot-uniform from odotune/core/counter_rng.h: thread-count independent)
+  int num_threads = 1;  // OpenMP threads evaluating the windows (≥ 1); results do not depend on it
   // Early stopping (train_lstm with a validation set): when > 0, the
   // validation MAE is taken after every iteration, the weights with the
   // smallest are kept, and training stops once this many iterations in a
@@ -152,7 +153,7 @@ struct LstmResidual {
 };
 
 // The same residual with its Jacobian row by backpropagation through time
-// (learned/lstm_bptt.h explains why hand-written). Returns false (an
+// (odotune/learned/lstm_bptt.h explains why hand-written). Returns false (an
 // evaluation failure Ceres handles) on a non-finite residual or Jacobian;
 // never throws. Does not own x.
 template <int I, int H>

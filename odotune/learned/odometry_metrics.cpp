@@ -1,11 +1,11 @@
-#include "learned/odometry_metrics.h"
+#include <odotune/learned/odometry_metrics.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "filters/velocity_ukf.h"
-#include "objectives/pose_series.h"
+#include <odotune/filters/velocity_ukf.h>
+#include <odotune/objectives/pose_series.h>
 
 namespace odotune {
 namespace {

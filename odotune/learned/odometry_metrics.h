@@ -8,7 +8,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "learned/fusion_input.h"
+#include <odotune/learned/fusion_input.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "learned/odometry_net.h"
+#include <odotune/learned/odometry_net.h>
 
 #include <stdexcept>
 #include <type_traits>

@@ -1,17 +1,17 @@
-// One velocity net of the learned odometry (learned/learned_odometry.h):
+// One velocity net of the learned odometry (odotune/learned/learned_odometry.h):
 // three inputs per step and one of the unit counts training can choose
 // (kOdometryNetUnits; the paper's is 5, §4), behind one value type so that
 // the model, its training, retraining and its file do not depend on the size.
-// Each size is an LstmNet<3, H> (learned/lstm.h) with its own compiled
-// kernels; the choice among them is learned/odometry_selection.h's.
+// Each size is an LstmNet<3, H> (odotune/learned/lstm.h) with its own compiled
+// kernels; the choice among them is odotune/learned/odometry_selection.h's.
 #pragma once
 
 #include <array>
 #include <string>
 #include <variant>
 
-#include "learned/lstm.h"
-#include "learned/lstm_training.h"
+#include <odotune/learned/lstm.h>
+#include <odotune/learned/lstm_training.h>
 
 namespace odotune {
 
@@ -49,13 +49,13 @@ class OdometryNet {
   // outputs exactly 0 (a correction that leaves its base unchanged).
   void zero_output();
 
-  // train_lstm, retrain_lstm and lstm_mae (learned/lstm_training.h) on this net.
+  // train_lstm, retrain_lstm and lstm_mae (odotune/learned/lstm_training.h) on this net.
   LstmTrainingSummary train(const SequenceSet& train, const SequenceSet& validation,
                             const LstmTrainingOptions& options);
   LstmTrainingSummary retrain(const SequenceSet& train, const LstmTrainingOptions& options);
   double mae(const SequenceSet& set) const;
 
-  // The net itself, for its file (results/lstm_json.h).
+  // The net itself, for its file (odotune/results/lstm_json.h).
   template <class F>
   decltype(auto) visit(F&& f) const {
     return std::visit(std::forward<F>(f), net_);

@@ -1,4 +1,4 @@
-#include "learned/odometry_selection.h"
+#include <odotune/learned/odometry_selection.h>
 
 #include <algorithm>
 #include <chrono>
@@ -8,9 +8,9 @@
 
 #include <fmt/format.h>
 
-#include "core/robust_stats.h"
-#include "core/why.h"
-#include "learned/odometry_metrics.h"
+#include <odotune/core/robust_stats.h>
+#include <odotune/core/why.h>
+#include <odotune/learned/odometry_metrics.h>
 
 namespace odotune {
 namespace {

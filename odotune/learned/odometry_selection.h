@@ -1,4 +1,4 @@
-// Correction nets (learned/learned_odometry.h) whose settings are chosen by
+// Correction nets (odotune/learned/learned_odometry.h) whose settings are chosen by
 // cross-validation inside the training recordings, and which are kept only
 // where they beat the kinematic odometry on data they never saw.
 //
@@ -42,7 +42,7 @@
 #include <string>
 #include <vector>
 
-#include "learned/learned_odometry.h"
+#include <odotune/learned/learned_odometry.h>
 
 namespace odotune {
 

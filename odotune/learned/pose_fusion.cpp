@@ -1,4 +1,4 @@
-#include "learned/pose_fusion.h"
+#include <odotune/learned/pose_fusion.h>
 
 #include <cmath>
 #include <limits>
@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "core/why.h"
+#include <odotune/core/why.h>
 
 namespace odotune {
 namespace {

@@ -1,7 +1,7 @@
 // Odometry (learned or kinematic) fused with absolute position fixes: the
-// learned-odometry paper's fusion (learned/ukf_fusion.h; Fariña et al.,
+// learned-odometry paper's fusion (odotune/learned/ukf_fusion.h; Fariña et al.,
 // Sensors 2023, 23, 961, Fig. 1) with the pose in the filter's state
-// (filters/pose_velocity_ukf.h), so that the fixes of a GNSS, UWB or
+// (odotune/filters/pose_velocity_ukf.h), so that the fixes of a GNSS, UWB or
 // motion-capture system correct the dead-reckoned path. Per step k ≥ 1 of a
 // FusionInput: predict over Δt, update with the odometry's (V, W) and its
 // variances, with the gyro (noise.use_gyro) and the external velocity
@@ -17,10 +17,10 @@
 #include <string>
 #include <vector>
 
-#include "filters/pose_velocity_ukf.h"
-#include "learned/fusion_input.h"
-#include "learned/ukf_fusion.h"
-#include "objectives/metrics.h"
+#include <odotune/filters/pose_velocity_ukf.h>
+#include <odotune/learned/fusion_input.h>
+#include <odotune/learned/ukf_fusion.h>
+#include <odotune/objectives/metrics.h>
 
 namespace odotune {
 

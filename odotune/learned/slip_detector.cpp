@@ -1,4 +1,4 @@
-#include "learned/slip_detector.h"
+#include <odotune/learned/slip_detector.h>
 
 #include <algorithm>
 #include <chrono>
@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "core/enum_names.h"
+#include <odotune/core/enum_names.h>
 
 namespace odotune {
 namespace {

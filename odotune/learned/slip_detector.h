@@ -6,7 +6,7 @@
 // spins or is held back they decorrelate, the detector's variance rises and
 // the fusion filter leans on the other sensors.
 //
-// One detector per velocity (V and W), each a SlipNet (learned/lstm.h) with
+// One detector per velocity (V and W), each a SlipNet (odotune/learned/lstm.h) with
 // inputs (P_r, P_l, Δct_r, Δct_l, previous variance). Training target: the
 // variance of the odometry the detector guards, estimated from its errors
 // against ground truth,
@@ -32,10 +32,10 @@
 #include <array>
 #include <vector>
 
-#include "learned/fusion_input.h"
-#include "learned/learned_odometry.h"
-#include "learned/lstm.h"
-#include "learned/lstm_training.h"
+#include <odotune/learned/fusion_input.h>
+#include <odotune/learned/learned_odometry.h>
+#include <odotune/learned/lstm.h>
+#include <odotune/learned/lstm_training.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "learned/ukf_fusion.h"
+#include <odotune/learned/ukf_fusion.h>
 
 #include <algorithm>
 #include <cmath>

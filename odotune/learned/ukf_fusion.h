@@ -1,19 +1,19 @@
-// Velocity fusion over a FusionInput: the UKF of filters/velocity_ukf.h fed,
+// Velocity fusion over a FusionInput: the UKF of odotune/filters/velocity_ukf.h fed,
 // at the input's fixed rate, with the wheel odometry (v, w and its
 // variances), the external body velocities (lidar scan matching) and the
 // gyro, as in Fariña et al., "Improving Odometric Model Performance Based on
 // LSTM Networks", Sensors 2023, 23, 961 (../shared/papers/002_*.txt, §1,
 // Fig. 1); the pose is integrated from the filtered (V, W) by eq. 3 and scored
-// against the ground truth by the position metrics of objectives/metrics.h.
+// against the ground truth by the position metrics of odotune/objectives/metrics.h.
 #pragma once
 
 #include <cstddef>
 #include <string>
 #include <vector>
 
-#include "filters/velocity_ukf.h"
-#include "learned/fusion_input.h"
-#include "objectives/metrics.h"
+#include <odotune/filters/velocity_ukf.h>
+#include <odotune/learned/fusion_input.h>
+#include <odotune/objectives/metrics.h>
 
 namespace odotune {
 
@@ -40,7 +40,7 @@ std::vector<OdometryMeasurement> static_odometry(const FusionInput& in, double v
 // (R = diag(var_v, var_w)); with the external velocity if present at k (and
 // noise.use_external; R = diag(v_ext_var, w_ext_var)·ext_var_scale); with the
 // gyro if present at k (and noise.use_gyro; variance gyro_var). A non-finite
-// or non-positive input makes the filter unhealthy (filters/velocity_ukf.h);
+// or non-positive input makes the filter unhealthy (odotune/filters/velocity_ukf.h);
 // nothing is thrown for it.
 void fuse_step(filters::VelocityUkf& ukf, const FusionInput& in, std::size_t k, const OdometryMeasurement& odo,
                const UkfSensorNoise& noise);

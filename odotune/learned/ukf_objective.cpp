@@ -1,11 +1,11 @@
-#include "learned/ukf_objective.h"
+#include <odotune/learned/ukf_objective.h>
 
 #include <cmath>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
-#include "objectives/ekf_objective.h"  // kDivergencePenalty
+#include <odotune/objectives/ekf_objective.h>  // kDivergencePenalty
 
 namespace odotune {
 

@@ -22,11 +22,11 @@
 #include <utility>
 #include <vector>
 
-#include "filters/velocity_ukf.h"
-#include "learned/fusion_input.h"
-#include "learned/ukf_fusion.h"
-#include "objectives/box_space.h"
-#include "objectives/metrics.h"
+#include <odotune/filters/velocity_ukf.h>
+#include <odotune/learned/fusion_input.h>
+#include <odotune/learned/ukf_fusion.h>
+#include <odotune/objectives/box_space.h>
+#include <odotune/objectives/metrics.h>
 
 namespace odotune {
 

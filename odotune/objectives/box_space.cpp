@@ -1,4 +1,4 @@
-#include "objectives/box_space.h"
+#include <odotune/objectives/box_space.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "objectives/ekf_objective.h"
+#include <odotune/objectives/ekf_objective.h>
 
 #include <cmath>
 #include <stdexcept>

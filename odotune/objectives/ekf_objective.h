@@ -18,9 +18,9 @@
 #include <utility>
 #include <vector>
 
-#include "objectives/fix_cv_replay.h"
-#include "objectives/param_space.h"
-#include "objectives/replay.h"
+#include <odotune/objectives/fix_cv_replay.h>
+#include <odotune/objectives/param_space.h>
+#include <odotune/objectives/replay.h>
 
 namespace odotune {
 

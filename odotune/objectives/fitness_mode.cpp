@@ -1,4 +1,4 @@
-#include "objectives/fitness_mode.h"
+#include <odotune/objectives/fitness_mode.h>
 
 #include <charconv>
 

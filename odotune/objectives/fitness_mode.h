@@ -1,8 +1,8 @@
 // The fitness modes an EKF or UKF tune minimises. Modes 1..7 are the seven of
 // Kovacs et al. §2.3.4 and score against ground truth; modes 8 and 9 need
 // none: they cross-validate over the position fixes
-// (objectives/fix_cv_replay.h). Each mode keeps the paper's number, which is
-// also the number a results store records (results/run_record.h) and the
+// (odotune/objectives/fix_cv_replay.h). Each mode keeps the paper's number, which is
+// also the number a results store records (odotune/results/run_record.h) and the
 // command line takes, beside a name.
 #pragma once
 

@@ -1,4 +1,4 @@
-#include "objectives/fix_cv_replay.h"
+#include <odotune/objectives/fix_cv_replay.h>
 
 #include <cmath>
 #include <stdexcept>

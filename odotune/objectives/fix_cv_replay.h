@@ -1,5 +1,5 @@
 // Scoring an EKF without ground truth: cross-validation over the position
-// fixes (fitness modes 8 and 9, objectives/metrics.h).
+// fixes (fitness modes 8 and 9, odotune/objectives/metrics.h).
 //
 // The fixes are split into K folds by time block: a fix at time t belongs to
 // fold ⌊(t − t₀)/block⌋ mod K (with the default 1 s blocks, interleaved), so
@@ -26,10 +26,10 @@
 #include <string>
 #include <vector>
 
-#include "filters/ekf.h"
-#include "filters/ekf_segments.h"
-#include "objectives/metrics.h"
-#include "objectives/replay_input.h"
+#include <odotune/filters/ekf.h>
+#include <odotune/filters/ekf_segments.h>
+#include <odotune/objectives/metrics.h>
+#include <odotune/objectives/replay_input.h>
 
 namespace odotune {
 

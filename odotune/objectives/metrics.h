@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "objectives/fitness_mode.h"
+#include <odotune/objectives/fitness_mode.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "objectives/param_space.h"
+#include <odotune/objectives/param_space.h>
 
 #include <algorithm>
 #include <cmath>

@@ -12,8 +12,8 @@
 #include <utility>
 #include <vector>
 
-#include "filters/ekf_noise.h"
-#include "objectives/box_space.h"
+#include <odotune/filters/ekf_noise.h>
+#include <odotune/objectives/box_space.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "objectives/pose_series.h"
+#include <odotune/objectives/pose_series.h>
 
 #include <algorithm>
 #include <cmath>

@@ -7,8 +7,8 @@
 #include <optional>
 #include <vector>
 
-#include "core/angles.h"
-#include "filters/odometry_params.h"
+#include <odotune/core/angles.h>
+#include <odotune/filters/odometry_params.h>
 
 namespace odotune {
 

@@ -1,12 +1,12 @@
-#include "objectives/process_noise_rate.h"
+#include <odotune/objectives/process_noise_rate.h>
 
 #include <stdexcept>
 #include <string>
 
 #include <fmt/format.h>
 
-#include "filters/ekf.h"
-#include "objectives/replay.h"
+#include <odotune/filters/ekf.h>
+#include <odotune/objectives/replay.h>
 
 namespace odotune {
 

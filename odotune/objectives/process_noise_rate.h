@@ -1,9 +1,9 @@
 // The constant process-noise *rate* that stands for odotune's per-step process
 // noise R over recorded tracks: what `odotune export --format
 // robot_localization` writes into robot_localization's
-// process_noise_covariance (a variance per second, see results/ros_export.h).
+// process_noise_covariance (a variance per second, see odotune/results/ros_export.h).
 //
-// odotune adds R_k once per odometry step k (filters/ekf_noise.h):
+// odotune adds R_k once per odometry step k (odotune/filters/ekf_noise.h):
 //   rq:          R_k = diag(r_x, r_y, r_θ), the same at every step;
 //   alpha, gyro: R_k = V_k·diag(σl², σr²)·V_kᵀ (Kovacs et al. eq. 3–5; α1, α2
 //                from eq. 6–7 with the step's |ω_z| for gyro), which depends
@@ -35,8 +35,8 @@
 
 #include <span>
 
-#include "filters/ekf_noise.h"
-#include "objectives/replay_input.h"
+#include <odotune/filters/ekf_noise.h>
+#include <odotune/objectives/replay_input.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "objectives/replay.h"
+#include <odotune/objectives/replay.h>
 
 #include <cmath>
 #include <stdexcept>

@@ -2,17 +2,17 @@
 // numbers:
 //  - replay_ekf(): the reference, one Ekf::predict per odometry step, with the
 //    estimated trajectory kept for reports and exports;
-//  - FastReplay: the segment-batched form (filters/ekf_segments.h) the tuner
+//  - FastReplay: the segment-batched form (odotune/filters/ekf_segments.h) the tuner
 //    calls millions of times. Built once per track; evaluate() is const,
 //    allocation-free and safe to call from many threads at once.
 #pragma once
 
 #include <vector>
 
-#include "filters/ekf.h"
-#include "filters/ekf_segments.h"
-#include "objectives/metrics.h"
-#include "objectives/replay_input.h"
+#include <odotune/filters/ekf.h>
+#include <odotune/filters/ekf_segments.h>
+#include <odotune/objectives/metrics.h>
+#include <odotune/objectives/replay_input.h>
 
 namespace odotune {
 
@@ -40,7 +40,7 @@ ReplayResult replay_ekf(const ReplayInput& in, const filters::NoiseParams& noise
 
 // The filter's pose at the start row and after every later row (odometry
 // step, fix or ground truth), on the track's clock; stops at a divergence.
-// For trajectories written out (results/tum.h).
+// For trajectories written out (odotune/results/tum.h).
 std::vector<TrajectoryPoint> ekf_trajectory(const ReplayInput& in, const filters::NoiseParams& noise);
 
 class FastReplay {

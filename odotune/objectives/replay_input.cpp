@@ -1,4 +1,4 @@
-#include "objectives/replay_input.h"
+#include <odotune/objectives/replay_input.h>
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "core/planar_motion.h"
+#include <odotune/core/planar_motion.h>
 
 namespace odotune {
 

@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "filters/diff_drive.h"
-#include "filters/ekf.h"
-#include "tracks/track.h"
+#include <odotune/filters/diff_drive.h>
+#include <odotune/filters/ekf.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "objectives/rl_innovations.h"
+#include <odotune/objectives/rl_innovations.h>
 
 #include <cmath>
 #include <limits>

@@ -21,7 +21,7 @@
 
 #include <span>
 
-#include "rlnode/replay.h"
+#include <odotune/rlnode/replay.h>
 
 namespace odotune {
 

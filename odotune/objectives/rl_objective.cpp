@@ -1,4 +1,4 @@
-#include "objectives/rl_objective.h"
+#include <odotune/objectives/rl_objective.h>
 
 #include <algorithm>
 #include <cmath>
@@ -9,8 +9,8 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "core/why.h"
-#include "objectives/rl_innovations.h"
+#include <odotune/core/why.h>
+#include <odotune/objectives/rl_innovations.h>
 
 namespace odotune {
 namespace {

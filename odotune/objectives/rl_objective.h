@@ -1,6 +1,6 @@
 // Tuning robot_localization's EKF on a robot's own recording, without ground
-// truth: the filter as the node runs it (rlnode/replay.h), scored by how well
-// it predicts GPS fixes it was not given (objectives/rl_protocols.h says which).
+// truth: the filter as the node runs it (odotune/rlnode/replay.h), scored by how well
+// it predicts GPS fixes it was not given (odotune/objectives/rl_protocols.h says which).
 //
 //   heldout_fixes  fitness mode 8 on this filter: K folds of time blocks; per
 //                  fold the other fixes are fused and the filter's prediction
@@ -37,22 +37,22 @@
 #include <utility>
 #include <vector>
 
-#include "objectives/box_space.h"
-#include "objectives/rl_protocols.h"
-#include "rlnode/recording.h"
-#include "rlnode/replay.h"
+#include <odotune/objectives/box_space.h>
+#include <odotune/objectives/rl_protocols.h>
+#include <odotune/rlnode/recording.h>
+#include <odotune/rlnode/replay.h>
 
 namespace odotune {
 
 // heldout_fixes, outage and both as above; the others are the innovation
-// statistics of objectives/rl_innovations.h (innovation-nll, nis, whiteness:
+// statistics of odotune/objectives/rl_innovations.h (innovation-nll, nis, whiteness:
 // of the fused fixes over the span; heldout-nll: of the held-out folds).
 enum class RlFitness { heldout_fixes, outage, both, innovation_nll, nis, whiteness, heldout_nll };
 // "heldout-fixes", "outage", "both", "innovation-nll", "nis", "whiteness", "heldout-nll"
 std::string_view to_string(RlFitness f);
 bool parse_rl_fitness(std::string_view text, RlFitness* out);  // false (out untouched) for other text
 
-// The fitness mode a results store records for each (results/run_record.h):
+// The fitness mode a results store records for each (odotune/results/run_record.h):
 // held-out fixes is mode 8 on this filter too; the others have numbers of their own.
 constexpr int kRlHeldoutFixesMode = 8, kRlOutageMode = 10, kRlBothMode = 11, kRlInnovationNllMode = 12,
               kRlNisMode = 13, kRlWhitenessMode = 14, kRlHeldoutNllMode = 15;
@@ -197,7 +197,7 @@ class RlObjective {
   double data_fitness(std::span<const double> x) const;
   // Both for out.size() points one after the other in xs, replayed in lock
   // step: each value identical to the single call's, bit for bit
-  // (tuner/problem.h's batch contract).
+  // (odotune/tuner/problem.h's batch contract).
   void fitness_batch(std::span<const double> xs, std::span<double> out) const;
   void data_fitness_batch(std::span<const double> xs, std::span<double> out) const;
   int batch_size() const { return statistic_kind() ? 1 : filters::rl::kLanes; }

@@ -1,4 +1,4 @@
-#include "objectives/rl_protocols.h"
+#include <odotune/objectives/rl_protocols.h>
 
 #include <algorithm>
 #include <cmath>

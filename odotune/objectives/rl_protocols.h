@@ -18,8 +18,8 @@
 #include <span>
 #include <vector>
 
-#include "rlnode/recording.h"
-#include "rlnode/replay.h"
+#include <odotune/rlnode/recording.h>
+#include <odotune/rlnode/replay.h>
 
 namespace odotune {
 

@@ -1,10 +1,10 @@
-#include "objectives/rl_search_options.h"
+#include <odotune/objectives/rl_search_options.h>
 
 #include <cmath>
 
 #include <fmt/format.h>
 
-#include "core/why.h"
+#include <odotune/core/why.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-// How the robot_localization tune searches its objective (jobs/rl_search.h
+// How the robot_localization tune searches its objective (odotune/jobs/rl_search.h
 // runs the stages): read by the command line and by experiment files.
 #pragma once
 

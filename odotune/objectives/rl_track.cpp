@@ -1,4 +1,4 @@
-#include "objectives/rl_track.h"
+#include <odotune/objectives/rl_track.h>
 
 #include <algorithm>
 #include <cmath>
@@ -7,11 +7,11 @@
 
 #include <fmt/format.h>
 
-#include "core/why.h"
-#include "filters/rl_ekf.h"
-#include "objectives/replay_input.h"
-#include "objectives/rl_protocols.h"
-#include "rlnode/sample_recording.h"
+#include <odotune/core/why.h>
+#include <odotune/filters/rl_ekf.h>
+#include <odotune/objectives/replay_input.h>
+#include <odotune/objectives/rl_protocols.h>
+#include <odotune/rlnode/sample_recording.h>
 
 namespace odotune {
 

@@ -1,9 +1,9 @@
 // A track (docs/track-format.md) as a recording robot_localization's node
-// can replay (rlnode/sample_recording.h), and the filter's path scored
+// can replay (odotune/rlnode/sample_recording.h), and the filter's path scored
 // against the track's ground truth.
 //
 // What the node is given, as a team's drivers would publish it:
-//   odometry  the track's odometry input (tracks/odometry_input.h): encoder
+//   odometry  the track's odometry input (odotune/tracks/odometry_input.h): encoder
 //             travel through the nominal geometry, differenced per sample (as
 //             a drive controller publishes it), or the measured twist or the
 //             commands as they stand; with a diagonal twist covariance;
@@ -11,7 +11,7 @@
 //   fixes     aps_x, aps_y with aps_var_x, aps_var_y (or --fix-sigma-m²).
 // The filter starts at the first fix (initial_state: its x, y, and the
 // heading that aligns the dead-reckoned odometry with the first fixes,
-// objectives/replay_input.h's fit), since a track's ground truth is in a
+// odotune/objectives/replay_input.h's fit), since a track's ground truth is in a
 // world frame, not in one that starts at the robot. The clock is the track's t.
 #pragma once
 
@@ -22,13 +22,13 @@
 #include <string>
 #include <vector>
 
-#include "filters/odometry_params.h"
-#include "objectives/rl_objective.h"
-#include "rlnode/params.h"
-#include "rlnode/recording.h"
-#include "rlnode/replay.h"
-#include "tracks/odometry_input.h"
-#include "tracks/track.h"
+#include <odotune/filters/odometry_params.h>
+#include <odotune/objectives/rl_objective.h>
+#include <odotune/rlnode/params.h>
+#include <odotune/rlnode/recording.h>
+#include <odotune/rlnode/replay.h>
+#include <odotune/tracks/odometry_input.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "objectives/track_samples.h"
+#include <odotune/objectives/track_samples.h>
 
 #include <cmath>
 

@@ -6,8 +6,8 @@
 #include <cstddef>
 #include <vector>
 
-#include "objectives/pose_series.h"
-#include "tracks/track.h"
+#include <odotune/objectives/pose_series.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 

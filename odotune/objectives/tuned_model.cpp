@@ -1,4 +1,4 @@
-#include "objectives/tuned_model.h"
+#include <odotune/objectives/tuned_model.h>
 
 namespace odotune {
 

@@ -1,12 +1,12 @@
 // What one tuning run (`tune --model`, an experiment's `models:` entry, a
 // stored run's `model`) tunes:
 //
-//   rq | alpha | gyro       EKF noise model (filters/ekf_noise.h)
-//   pf-calib                plain PF calibrator's settings (calibration/calibration_objective.h)
+//   rq | alpha | gyro       EKF noise model (odotune/filters/ekf_noise.h)
+//   pf-calib                plain PF calibrator's settings (odotune/calibration/calibration_objective.h)
 //   adaptive-pf-calib       adaptive PF calibrator's settings
-//   ukf                     the (V, W) fusion UKF's noise (learned/ukf_objective.h)
+//   ukf                     the (V, W) fusion UKF's noise (odotune/learned/ukf_objective.h)
 //   rl-ekf | rl-ukf         robot_localization's EKF or UKF on a bag and its parameter
-//                           file (objectives/rl_objective.h; grid only, `tune --rl-params` otherwise)
+//                           file (odotune/objectives/rl_objective.h; grid only, `tune --rl-params` otherwise)
 //
 // Shared by `tune`, `grid` (experiment_yaml.h) and the commands that read a
 // store (report, export), so the names are spelt in one place.
@@ -16,8 +16,8 @@
 #include <string_view>
 #include <variant>
 
-#include "filters/ekf_noise.h"
-#include "filters/rl_filter.h"
+#include <odotune/filters/ekf_noise.h>
+#include <odotune/filters/rl_filter.h>
 
 namespace odotune {
 

@@ -1,11 +1,11 @@
-#include "results/calibration_figures.h"
+#include <odotune/results/calibration_figures.h>
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
 
-#include "results/gnuplot.h"
+#include <odotune/results/gnuplot.h>
 
 namespace odotune::results {
 namespace fs = std::filesystem;

@@ -5,7 +5,7 @@
 //
 // Plain data only (the results layer does not see the calibrators): each
 // panel holds named series of (t, value) with an optional ±sd band; a truth
-// series is drawn dashed. Conventions of results/figures.h: STEM.png
+// series is drawn dashed. Conventions of odotune/results/figures.h: STEM.png
 // (pngcairo) + STEM.svg, both or neither; the stem's directory must exist;
 // texts verbatim (`noenhanced`); axes labelled with units.
 #pragma once

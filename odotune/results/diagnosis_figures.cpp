@@ -1,13 +1,13 @@
-#include "results/diagnosis_figures.h"
+#include <odotune/results/diagnosis_figures.h>
 
-#include "core/robust_stats.h"
+#include <odotune/core/robust_stats.h>
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
 
-#include "results/gnuplot.h"
+#include <odotune/results/gnuplot.h>
 
 namespace odotune::results {
 namespace fs = std::filesystem;

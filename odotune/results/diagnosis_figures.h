@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "results/figures.h"
+#include <odotune/results/figures.h>
 
 namespace odotune::results {
 

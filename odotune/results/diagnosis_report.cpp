@@ -1,4 +1,4 @@
-#include "results/diagnosis_report.h"
+#include <odotune/results/diagnosis_report.h>
 
 #include <stdlib.h>  // mkdtemp
 
@@ -11,8 +11,8 @@
 
 #include <fmt/format.h>
 
-#include "core/atomic_file.h"
-#include "results/report_html.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/results/report_html.h>
 
 namespace odotune::results {
 namespace fs = std::filesystem;

@@ -1,5 +1,5 @@
 // The report folder of `odotune diagnose TRACK --report DIR`: the diagnosis
-// figures (results/diagnosis_figures.h) and one self-contained page
+// figures (odotune/results/diagnosis_figures.h) and one self-contained page
 // DIR/index.html (figures inlined as SVG, no scripts, no links). Builds and
 // writes files only; the command prints.
 #pragma once
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "results/diagnosis_figures.h"
+#include <odotune/results/diagnosis_figures.h>
 
 namespace odotune::results {
 

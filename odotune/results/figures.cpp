@@ -1,4 +1,4 @@
-#include "results/figures.h"
+#include <odotune/results/figures.h>
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "results/gnuplot.h"
+#include <odotune/results/gnuplot.h>
 
 namespace odotune::results {
 namespace fs = std::filesystem;

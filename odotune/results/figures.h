@@ -1,4 +1,4 @@
-// The report's figures, rendered with gnuplot (see results/gnuplot.h).
+// The report's figures, rendered with gnuplot (see odotune/results/gnuplot.h).
 //
 // Every function takes plain data and an output path stem and writes
 // STEM.png (pngcairo) and STEM.svg, both or neither; the stem's directory
@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "objectives/fitness_mode.h"
-#include "results/run_record.h"
+#include <odotune/objectives/fitness_mode.h>
+#include <odotune/results/run_record.h>
 
 namespace odotune::results {
 

@@ -1,4 +1,4 @@
-#include "results/gnuplot.h"
+#include <odotune/results/gnuplot.h>
 
 #include <cstdio>
 

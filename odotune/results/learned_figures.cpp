@@ -1,11 +1,11 @@
-#include "results/learned_figures.h"
+#include <odotune/results/learned_figures.h>
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <utility>
 
-#include "results/gnuplot.h"
+#include <odotune/results/gnuplot.h>
 
 namespace odotune::results {
 namespace fs = std::filesystem;

@@ -9,7 +9,7 @@
 //   * XY path panels side by side, equal axis scales (Figs. 8, 10).
 //
 // Plain data only (the results layer does not see the filters). Conventions of
-// results/figures.h: STEM.png (pngcairo) + STEM.svg, both or neither; the
+// odotune/results/figures.h: STEM.png (pngcairo) + STEM.svg, both or neither; the
 // stem's directory must exist; texts verbatim (`noenhanced`); axes labelled
 // with units by the caller's labels. Throws std::invalid_argument on malformed
 // input (before drawing) and std::runtime_error when gnuplot is missing or
@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "results/study_figures.h"
+#include <odotune/results/study_figures.h>
 
 namespace odotune::results {
 

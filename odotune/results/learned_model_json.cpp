@@ -1,4 +1,4 @@
-#include "results/learned_model_json.h"
+#include <odotune/results/learned_model_json.h>
 
 #include <cmath>
 #include <fstream>
@@ -7,8 +7,8 @@
 
 #include <fmt/format.h>
 
-#include "core/atomic_file.h"
-#include "results/lstm_json.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/results/lstm_json.h>
 
 namespace odotune::results {
 

@@ -1,8 +1,8 @@
 // The learned-odometry model file, format "odotune-learned/1", written by
 // `odotune learn train|retrain` and `odotune study learned` and read by
 // `odotune learn eval|retrain`: the velocity nets of Fariña et al., Sensors
-// 2023, 23, 961 (learned/learned_odometry.h), optionally the slip detector
-// (learned/slip_detector.h), and where they came from.
+// 2023, 23, 961 (odotune/learned/learned_odometry.h), optionally the slip detector
+// (odotune/learned/slip_detector.h), and where they came from.
 //
 //   {
 //     "format": "odotune-learned/1",
@@ -14,7 +14,7 @@
 //                  "v_beats_kinematic": true, "w_beats_kinematic": true,  // absent: true
 //                  "v_validation_mae": …, "w_validation_mae": …,
 //                  "v_kinematic_mae": …, "w_kinematic_mae": …, // absent: 0 (unknown)
-//                  "v_net": {…}, "w_net": {…}},            // results/lstm_json.h (3, 5 or 8 units)
+//                  "v_net": {…}, "w_net": {…}},            // odotune/results/lstm_json.h (3, 5 or 8 units)
 //     "detector": {"floor_var_v": …, "floor_var_w": …, "previous_lag": 1,
 //                  "drive": "power" | "commands" | "none",   // absent: power
 //                  "input": "wheels" | …,  "flag_var_v": …, "flag_var_w": …,  // absent: wheels, 0
@@ -23,7 +23,7 @@
 //     "provenance": {"tracks": [names], "slip_tracks": [names], "seed": 1,
 //                    "odometry": TRAINING, "detector": TRAINING (optional),
 //                    "retrains": 0, "retrain_tracks": [names], "created_by": "…",
-//                    "selection": {…}}   // correction nets: the cross-validation (studies/learn_job.h), kept as written
+//                    "selection": {…}}   // correction nets: the cross-validation (odotune/studies/learn_job.h), kept as written
 //   }
 //   TRAINING = {"train_windows", "validation_windows", "seconds",
 //               "v": {"iterations", "train_mae", "validation_mae"}, "w": {…}}
@@ -42,9 +42,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "learned/learned_odometry.h"
-#include "learned/lstm_training.h"
-#include "learned/slip_detector.h"
+#include <odotune/learned/learned_odometry.h>
+#include <odotune/learned/lstm_training.h>
+#include <odotune/learned/slip_detector.h>
 
 namespace odotune::results {
 
@@ -74,7 +74,7 @@ struct LearnedModelProvenance {
   std::vector<std::string> retrain_tracks;  // where they happened (names)
   std::string created_by;                   // the command line
   // Correction nets: how their settings were chosen and what the
-  // cross-validation measured (written by studies/learn_job.cpp; read back
+  // cross-validation measured (written by odotune/studies/learn_job.cpp; read back
   // as it is, an object).
   std::optional<nlohmann::json> selection;
 };
@@ -95,7 +95,7 @@ nlohmann::json learned_model_json(const LearnedModelFile& model);
 // odometry.v_net.weights[3] or provenance.seed).
 LearnedModelFile parse_learned_model(const nlohmann::json& j, const std::string& file);
 
-// Writes the file atomically (core/atomic_file.h); std::runtime_error on failure.
+// Writes the file atomically (odotune/core/atomic_file.h); std::runtime_error on failure.
 void write_learned_model(const std::filesystem::path& path, const LearnedModelFile& model);
 // Reads and parses; std::invalid_argument (one line naming the file) for a
 // missing or unreadable file, bad JSON or a bad field.

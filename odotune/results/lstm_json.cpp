@@ -1,4 +1,4 @@
-#include "results/lstm_json.h"
+#include <odotune/results/lstm_json.h>
 
 #include <fmt/format.h>
 

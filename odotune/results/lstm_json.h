@@ -1,5 +1,5 @@
-// JSON form of the LSTM nets (learned/lstm.h): weights, standardisation and
-// shape, so that a net trained offline (learned/lstm_training.h) is saved
+// JSON form of the LSTM nets (odotune/learned/lstm.h): weights, standardisation and
+// shape, so that a net trained offline (odotune/learned/lstm_training.h) is saved
 // and loaded on the robot.
 //
 //   {
@@ -9,7 +9,7 @@
 //     "window": 20,                        // samples per window, 1..LstmNet::kMaxWindow
 //     "input_mean": [I numbers], "input_sd": [I numbers > 0],
 //     "output_mean": number, "output_sd": number > 0,
-//     "weights": [LstmLayout<I, H>::kCount numbers]   // layout: learned/lstm.h (Keras order)
+//     "weights": [LstmLayout<I, H>::kCount numbers]   // layout: odotune/learned/lstm.h (Keras order)
 //   }
 //
 // Doubles are written in nlohmann's shortest round-trip form, so weights read
@@ -21,8 +21,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "learned/lstm.h"
-#include "learned/odometry_net.h"
+#include <odotune/learned/lstm.h>
+#include <odotune/learned/odometry_net.h>
 
 namespace odotune {
 

@@ -1,11 +1,11 @@
-#include "results/param_range_figure.h"
+#include <odotune/results/param_range_figure.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-#include "results/gnuplot.h"
+#include <odotune/results/gnuplot.h>
 
 namespace odotune::results {
 namespace fs = std::filesystem;

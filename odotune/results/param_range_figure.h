@@ -2,7 +2,7 @@
 // parameter, each series' (e.g. each seed's) range and tuned value on a
 // log10 axis, against the reference value the factors multiply (the
 // parameter file's own value, factor 1). Rendered with gnuplot like the
-// report's other figures (results/figures.h): STEM.png + STEM.svg or
+// report's other figures (odotune/results/figures.h): STEM.png + STEM.svg or
 // nothing, texts verbatim.
 #pragma once
 
@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "results/run_record.h"
+#include <odotune/results/run_record.h>
 
 namespace odotune::results {
 
@@ -31,7 +31,7 @@ struct ParamRangeSeries {
 // value that is not is left out. Throws std::invalid_argument when `params`
 // or `series` is empty, a series' values or ranges are not one per
 // parameter, or no value, bound or reference is positive and finite;
-// otherwise as results/figures.h.
+// otherwise as odotune/results/figures.h.
 void param_ranges_figure(const std::filesystem::path& stem, const std::string& title,
                          const std::string& x_label, const std::vector<std::string>& params,
                          const std::vector<ParamRangeSeries>& series, double reference,

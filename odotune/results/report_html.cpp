@@ -1,4 +1,4 @@
-#include "results/report_html.h"
+#include <odotune/results/report_html.h>
 
 #include <regex>
 #include <stdexcept>

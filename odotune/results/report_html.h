@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "results/report_tables.h"
+#include <odotune/results/report_tables.h>
 
 namespace odotune::results {
 

@@ -1,4 +1,4 @@
-#include "results/report_tables.h"
+#include <odotune/results/report_tables.h>
 
 #include <algorithm>
 #include <cmath>

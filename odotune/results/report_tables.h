@@ -15,8 +15,8 @@
 #include <string_view>
 #include <vector>
 
-#include "objectives/fitness_mode.h"
-#include "results/run_record.h"
+#include <odotune/objectives/fitness_mode.h>
+#include <odotune/results/run_record.h>
 
 namespace odotune::results {
 

@@ -1,5 +1,5 @@
-#include "results/ros_export.h"
-#include "core/atomic_file.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/results/ros_export.h>
 
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>

@@ -69,7 +69,7 @@ struct RosExportInput {
   // as comment lines (one per '\n'-separated line) in place of the rq
   // mapping explanation; empty = the rq explanation (ros_input_from_rq). Used
   // for the alpha/gyro models, whose process noise is not constant (see
-  // objectives/process_noise_rate.h).
+  // odotune/objectives/process_noise_rate.h).
   std::string mapping_note;
 
   // False (with the offending field in *why) on a bad value as described

@@ -1,4 +1,4 @@
-#include "results/store.h"
+#include <odotune/results/store.h>
 
 #include <sqlite3.h>
 

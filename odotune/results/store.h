@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "results/run_record.h"
+#include <odotune/results/run_record.h>
 
 struct sqlite3;
 

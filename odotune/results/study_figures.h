@@ -1,10 +1,10 @@
 // Figures of the calibration studies (`odotune study resampling|calibration`,
 // analogues of Figures 3–6 of Fariña, Toledo & Acosta, RA-L 2026) that the
-// single-run estimate figure (results/calibration_figures.h) does not cover:
+// single-run estimate figure (odotune/results/calibration_figures.h) does not cover:
 // grouped bars with error bars, and stacked time-series panels with many
 // runs (one colour per run, its truth dashed in the same colour).
 //
-// Plain data only. Conventions of results/figures.h: STEM.png (pngcairo) +
+// Plain data only. Conventions of odotune/results/figures.h: STEM.png (pngcairo) +
 // STEM.svg, both or neither; the stem's directory must exist; texts verbatim
 // (`noenhanced`); axes labelled with units by the caller's labels. Throws
 // std::invalid_argument on malformed input (before drawing) and

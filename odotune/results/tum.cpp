@@ -1,11 +1,11 @@
-#include "results/tum.h"
+#include <odotune/results/tum.h>
 
 #include <cmath>
 #include <ostream>
 
 #include <fmt/format.h>
 
-#include "core/atomic_file.h"
+#include <odotune/core/atomic_file.h>
 
 namespace odotune::results {
 

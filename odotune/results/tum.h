@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "objectives/replay.h"
+#include <odotune/objectives/replay.h>
 
 namespace odotune::results {
 

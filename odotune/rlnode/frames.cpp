@@ -1,4 +1,4 @@
-#include "rlnode/frames.h"
+#include <odotune/rlnode/frames.h>
 
 #include <cmath>
 #include <numbers>

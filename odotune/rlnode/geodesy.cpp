@@ -1,4 +1,4 @@
-#include "rlnode/geodesy.h"
+#include <odotune/rlnode/geodesy.h>
 
 #include <numbers>
 #include <stdexcept>

@@ -1,4 +1,4 @@
-#include "rlnode/gps_alignment.h"
+#include <odotune/rlnode/gps_alignment.h>
 
 #include <cmath>
 #include <stdexcept>
@@ -21,7 +21,7 @@ GpsAlignment fit_gps_alignment(const Recording& rec, const ReplaySettings& setti
   }
   // The dead reckoning runs ekf_node's filter whichever the file runs: the
   // UKF's heading mean turns by π once the unmeasured heading's variance passes
-  // 2 rad² (filters/rl_ukf.h), within the seconds a fit needs.
+  // 2 rad² (odotune/filters/rl_ukf.h), within the seconds a fit needs.
   ReplaySettings dead_reckoning = settings;
   dead_reckoning.filter = filters::rl::RlFilterType::ekf;
   // The fit compares raw fixes with the dead reckoning: navsat need not wait

@@ -6,8 +6,8 @@
 // Umeyama's closed form without scale) become a fixed GpsTransform.
 #pragma once
 
-#include "rlnode/recording.h"
-#include "rlnode/replay.h"
+#include <odotune/rlnode/recording.h>
+#include <odotune/rlnode/replay.h>
 
 namespace odotune::rlnode {
 

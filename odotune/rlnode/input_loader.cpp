@@ -1,4 +1,4 @@
-#include "rlnode/input_loader.h"
+#include <odotune/rlnode/input_loader.h>
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "rlnode/geodesy.h"
+#include <odotune/rlnode/geodesy.h>
 
 namespace odotune::rlnode::detail {
 

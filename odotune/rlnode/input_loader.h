@@ -11,9 +11,9 @@
 
 #include <GeographicLib/LocalCartesian.hpp>
 
-#include "bags/ros_messages.h"
-#include "filters/rl_ekf.h"
-#include "rlnode/recording.h"
+#include <odotune/bags/ros_messages.h>
+#include <odotune/filters/rl_ekf.h>
+#include <odotune/rlnode/recording.h>
 
 namespace odotune::rlnode::detail {
 

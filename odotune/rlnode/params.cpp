@@ -1,10 +1,10 @@
-// Reads and rewrites robot_localization parameter files (rlnode/params.h).
+// Reads and rewrites robot_localization parameter files (odotune/rlnode/params.h).
 // Key names, types and defaults: robot_localization's src/ros_filter.cpp
 // loadParams() and src/navsat_transform.cpp, ROS 1 (noetic-devel) and ROS 2,
 // read for behaviour. A ROS 2 node declares its parameters with a type and
 // refuses a file whose value has another: an integer literal for a double
 // parameter (`frequency: 30`) stops the node, so it is refused here too.
-#include "rlnode/params.h"
+#include <odotune/rlnode/params.h>
 
 #include <algorithm>
 #include <cmath>

@@ -18,7 +18,7 @@
 
 #include <Eigen/Core>
 
-#include "filters/rl_filter.h"
+#include <odotune/filters/rl_filter.h>
 
 namespace odotune::rlnode {
 
@@ -75,7 +75,7 @@ struct NavsatParams {
 };
 
 // use_control as the node reads it (ros_filter.cpp loadParams): the commands
-// on `cmd_vel` turned into accelerations (filters/rl_control.h).
+// on `cmd_vel` turned into accelerations (odotune/filters/rl_control.h).
 struct ControlParams {
   bool enabled = false;  // use_control, and a member left to control after the node's checks
   // ROS 1's stamped_control: TwistStamped, at its header's stamp; otherwise

@@ -1,4 +1,4 @@
-#include "rlnode/recording.h"
+#include <odotune/rlnode/recording.h>
 
 #include <algorithm>
 #include <cmath>
@@ -8,9 +8,9 @@
 
 #include <fmt/format.h>
 
-#include "bags/bag.h"
-#include "bags/ros_messages.h"
-#include "rlnode/input_loader.h"
+#include <odotune/bags/bag.h>
+#include <odotune/bags/ros_messages.h>
+#include <odotune/rlnode/input_loader.h>
 
 namespace odotune::rlnode {
 namespace {

@@ -5,7 +5,7 @@
 // the GPS fixes as navsat_transform_node turns them into odometry.
 //
 // What depends on the filter's state when a message arrives is left for the
-// replay (rlnode/replay.h): the lever-arm terms of twists and accelerations
+// replay (odotune/rlnode/replay.h): the lever-arm terms of twists and accelerations
 // measured away from base_link, gravity removed with the filter's attitude
 // when the IMU gives no orientation, and the GPS datum (the filter's pose at
 // the first fix). Everything else is done once here.
@@ -29,9 +29,9 @@
 #include <utility>
 #include <vector>
 
-#include "filters/rl_ekf.h"
-#include "rlnode/frames.h"
-#include "rlnode/params.h"
+#include <odotune/filters/rl_ekf.h>
+#include <odotune/rlnode/frames.h>
+#include <odotune/rlnode/params.h>
 
 namespace odotune::rlnode {
 

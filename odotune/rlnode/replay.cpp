@@ -1,4 +1,4 @@
-#include "rlnode/replay.h"
+#include <odotune/rlnode/replay.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 #include <unordered_map>
 #include <utility>
 
-#include "rlnode/frames.h"
+#include <odotune/rlnode/frames.h>
 
 namespace odotune::rlnode {
 namespace {

@@ -25,9 +25,9 @@
 #include <utility>
 #include <vector>
 
-#include "filters/rl_ekf.h"
-#include "filters/rl_filter.h"
-#include "rlnode/recording.h"
+#include <odotune/filters/rl_ekf.h>
+#include <odotune/filters/rl_filter.h>
+#include <odotune/rlnode/recording.h>
 
 namespace odotune::rlnode {
 
@@ -176,7 +176,7 @@ struct NodeState {
 // A replay advanced a stretch of events at a time. A copy is a checkpoint:
 // schedules that share their first events (the same fix roles up to some
 // tick) continue from one replay of those events instead of repeating them
-// (objectives/rl_objective.h replays many outage windows so). `rec` and
+// (odotune/objectives/rl_objective.h replays many outage windows so). `rec` and
 // `settings` must outlive it and its copies.
 class Replayer {
  public:

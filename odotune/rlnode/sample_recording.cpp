@@ -1,4 +1,4 @@
-#include "rlnode/sample_recording.h"
+#include <odotune/rlnode/sample_recording.h>
 
 #include <algorithm>
 #include <limits>
@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "rlnode/input_loader.h"
+#include <odotune/rlnode/input_loader.h>
 
 namespace odotune::rlnode {
 

@@ -1,6 +1,6 @@
 // A recording that is not a bag: plain time-stamped samples, as a robot's
 // drivers would publish them, turned into the messages the node's callbacks
-// take (rlnode/recording.h prepares them alike). What each stream is to the
+// take (odotune/rlnode/recording.h prepares them alike). What each stream is to the
 // filter follows from the parameter file's inputs (sample_roles):
 //   odometry  the one odomN or twistN that fuses velocities only: a
 //             nav_msgs/Odometry (or TwistWithCovarianceStamped) in base_link
@@ -19,8 +19,8 @@
 #include <string>
 #include <vector>
 
-#include "rlnode/params.h"
-#include "rlnode/recording.h"
+#include <odotune/rlnode/params.h>
+#include <odotune/rlnode/recording.h>
 
 namespace odotune::rlnode {
 

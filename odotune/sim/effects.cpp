@@ -1,4 +1,4 @@
-#include "sim/effects.h"
+#include <odotune/sim/effects.h>
 
 #include <algorithm>
 #include <charconv>

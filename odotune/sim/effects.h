@@ -17,7 +17,7 @@
 #include <utility>
 #include <vector>
 
-#include "sim/scenario.h"
+#include <odotune/sim/scenario.h>
 
 namespace odotune::sim {
 

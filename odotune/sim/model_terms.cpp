@@ -1,4 +1,4 @@
-#include "sim/model_terms.h"
+#include <odotune/sim/model_terms.h>
 
 #include <algorithm>
 #include <cmath>

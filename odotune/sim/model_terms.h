@@ -1,8 +1,8 @@
 // Model terms: corrections of a wheel's ground speed that are NOT physics
 // effects of ../shared/specs/physics-effects.md (docs/diagnosis-design.md,
-// "Physics outside the list: term search"). One vocabulary for the simulator (sim/simulator.h,
-// Scenario::terms), the scenario YAML (`terms:`, formats/scenario_yaml.h) and
-// the diagnosis's term search (diagnose/term_search.h), which finds such
+// "Physics outside the list: term search"). One vocabulary for the simulator (odotune/sim/simulator.h,
+// Scenario::terms), the scenario YAML (`terms:`, odotune/formats/scenario_yaml.h) and
+// the diagnosis's term search (odotune/diagnose/term_search.h), which finds such
 // terms in a recording and reports them as a formula.
 //
 // A term is coef x basis(state) added to ONE wheel's ground speed (the

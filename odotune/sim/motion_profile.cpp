@@ -1,4 +1,4 @@
-#include "sim/motion_profile.h"
+#include <odotune/sim/motion_profile.h>
 
 #include <algorithm>
 #include <cmath>

@@ -43,7 +43,7 @@
 #include <string>
 #include <vector>
 
-#include "sim/scenario.h"
+#include <odotune/sim/scenario.h>
 
 namespace odotune::sim {
 

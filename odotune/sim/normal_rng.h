@@ -7,7 +7,7 @@
 #include <numbers>
 #include <random>
 
-#include "core/counter_rng.h"
+#include <odotune/core/counter_rng.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "sim/random_slip.h"
+#include <odotune/sim/random_slip.h>
 
 #include <algorithm>
 #include <cmath>
@@ -6,9 +6,9 @@
 
 #include <fmt/format.h>
 
-#include "core/counter_rng.h"
-#include "core/why.h"
-#include "sim/slip_episodes.h"
+#include <odotune/core/counter_rng.h>
+#include <odotune/core/why.h>
+#include <odotune/sim/slip_episodes.h>
 
 namespace odotune::sim {
 

@@ -1,5 +1,5 @@
 // Random slip-episode layouts for a drive: training material for the slip
-// detector (learned/slip_detector.h). One drive with ten hand-placed
+// detector (odotune/learned/slip_detector.h). One drive with ten hand-placed
 // episodes teaches a 651-weight detector those ten episodes; a few drives
 // with episodes of random kind, wheel, strength, length and place teach it
 // slip (tests/learned/test_learned_odometry.cpp measures the difference
@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "sim/motion_profile.h"
-#include "sim/scenario.h"
+#include <odotune/sim/motion_profile.h>
+#include <odotune/sim/scenario.h>
 
 namespace odotune::sim {
 

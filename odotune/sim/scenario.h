@@ -1,6 +1,6 @@
 // A simulation scenario: everything the simulator needs to produce one track
 // (robot, commanded motion, sensors, physics effects, slip episodes, seed). Plain data only;
-// reading it from YAML is the CLI layer's job (formats/scenario_yaml.h),
+// reading it from YAML is the CLI layer's job (odotune/formats/scenario_yaml.h),
 // checking it is validate_scenario() in simulator.h, and the effect vocabulary
 // (names, parameter ranges, command-line specs) is effects.h.
 //
@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "sim/model_terms.h"
+#include <odotune/sim/model_terms.h>
 
 namespace odotune::sim {
 

@@ -1,4 +1,4 @@
-#include "sim/scenario_from_track.h"
+#include <odotune/sim/scenario_from_track.h>
 
 #include <algorithm>
 #include <array>
@@ -16,8 +16,8 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
-#include "sim/effects.h"
-#include "sim/simulator.h"
+#include <odotune/sim/effects.h>
+#include <odotune/sim/simulator.h>
 
 namespace odotune::sim {
 
@@ -25,7 +25,7 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// To [−π, π) by floor, not core/angles.h wrap_angle: the two can differ in the
+// To [−π, π) by floor, not odotune/core/angles.h wrap_angle: the two can differ in the
 // last bit after a wrap, and re-driven scenarios must stay as they were written.
 double wrap_pi(double a) { return a - 2.0 * kPi * std::floor((a + kPi) / (2.0 * kPi)); }
 

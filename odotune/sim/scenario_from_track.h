@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "sim/scenario.h"
-#include "tracks/track.h"
+#include <odotune/sim/scenario.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune::sim {
 

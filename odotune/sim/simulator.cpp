@@ -1,5 +1,5 @@
-#include "sim/simulator.h"
-#include "sim/normal_rng.h"
+#include <odotune/sim/normal_rng.h>
+#include <odotune/sim/simulator.h>
 
 #include <algorithm>
 #include <array>
@@ -14,12 +14,12 @@
 
 #include <fmt/format.h>
 
-#include "core/planar_motion.h"
-#include "core/why.h"
+#include <odotune/core/planar_motion.h>
+#include <odotune/core/why.h>
 
-#include "sim/effects.h"
-#include "sim/motion_profile.h"
-#include "sim/slip_episodes.h"
+#include <odotune/sim/effects.h>
+#include <odotune/sim/motion_profile.h>
+#include <odotune/sim/slip_episodes.h>
 
 namespace odotune::sim {
 

@@ -1,4 +1,4 @@
-#include "sim/slip_episodes.h"
+#include <odotune/sim/slip_episodes.h>
 
 #include <algorithm>
 #include <charconv>

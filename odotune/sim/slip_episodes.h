@@ -20,8 +20,8 @@
 #include <string_view>
 #include <vector>
 
-#include "sim/scenario.h"
-#include "tracks/track.h"
+#include <odotune/sim/scenario.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune::sim {
 

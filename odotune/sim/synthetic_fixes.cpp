@@ -1,4 +1,4 @@
-#include "sim/synthetic_fixes.h"
+#include <odotune/sim/synthetic_fixes.h>
 
 #include <cmath>
 #include <limits>
@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "sim/normal_rng.h"
+#include <odotune/sim/normal_rng.h>
 
 namespace odotune {
 

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <string>
 
-#include "tracks/track.h"
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "studies/calibration_study.h"
+#include <odotune/studies/calibration_study.h>
 
 #include <omp.h>
 
@@ -10,10 +10,10 @@
 
 #include <fmt/format.h>
 
-#include "core/counter_rng.h"
-#include "core/why.h"
-#include "filters/pf_calibrator.h"
-#include "sim/simulator.h"
+#include <odotune/core/counter_rng.h>
+#include <odotune/core/why.h>
+#include <odotune/filters/pf_calibrator.h>
+#include <odotune/sim/simulator.h>
 
 namespace odotune {
 
@@ -21,7 +21,7 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// Counter-RNG streams of the per-run draws (core/counter_rng.h); any fixed,
+// Counter-RNG streams of the per-run draws (odotune/core/counter_rng.h); any fixed,
 // distinct values do.
 constexpr std::uint64_t kTruthStream = 0x7472757468ULL;  // "truth"
 constexpr std::uint64_t kDkfStream = 0x646b66ULL;        // "dkf"

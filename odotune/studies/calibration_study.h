@@ -4,7 +4,7 @@
 // Filter Design" (RA-L 2026, ../shared/papers/000_*.txt, §IV–VI), on
 // simulated wheelchair tracks (scenarios/wheelchair*.yaml). Computation only:
 // scenarios and options in, plain numbers out; `study_runs.h` reads the
-// scenario files and writes the outputs, `cli/cmd_study.cpp` prints, `study_tables.h` and `results/study_figures.h` format.
+// scenario files and writes the outputs, `odotune/cli/cmd_study.cpp` prints, `study_tables.h` and `odotune/results/study_figures.h` format.
 //
 // Monte-Carlo run r (0-based) uses seed s_r = options.seed + r for
 //   * the simulated track's sensor noise (Scenario::seed = s_r);
@@ -30,11 +30,11 @@
 #include <string>
 #include <vector>
 
-#include "calibration/calibration_input.h"
-#include "calibration/calibration_run.h"
-#include "filters/odometry_params.h"
-#include "filters/resampling.h"
-#include "sim/scenario.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/calibration/calibration_run.h>
+#include <odotune/filters/odometry_params.h>
+#include <odotune/filters/resampling.h>
+#include <odotune/sim/scenario.h>
 
 namespace odotune {
 

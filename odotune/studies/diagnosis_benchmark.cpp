@@ -1,4 +1,4 @@
-#include "studies/diagnosis_benchmark.h"
+#include <odotune/studies/diagnosis_benchmark.h>
 
 #include <omp.h>
 
@@ -11,12 +11,12 @@
 
 #include <fmt/format.h>
 
-#include "core/failure.h"
-#include "diagnose/diag_input.h"
-#include "diagnose/diagnosis.h"
-#include "diagnose/recordings.h"
-#include "sim/effects.h"
-#include "tracks/track_io.h"
+#include <odotune/core/failure.h>
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/diagnosis.h>
+#include <odotune/diagnose/recordings.h>
+#include <odotune/sim/effects.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 

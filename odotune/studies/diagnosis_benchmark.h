@@ -9,7 +9,7 @@
 // --heldout HELD...` does (diagnose::diagnose_recordings at default options
 // on each recording's build_diag_input), judged on its held-out recordings
 // (assess_recordings_detectability) and graded by the same rules, with the
-// held-out recordings' numbers (diagnose/recordings.h). Then summarised: pass rates per category
+// held-out recordings' numbers (odotune/diagnose/recordings.h). Then summarised: pass rates per category
 // against the aims (docs/diagnosis/benchmark.md), a confusion matrix of true × named effects,
 // per-effect recall and precision, parameter errors and time per case.
 //
@@ -43,10 +43,10 @@
 #include <string_view>
 #include <vector>
 
-#include "diagnose/materiality.h"
-#include "studies/diagnosis_cases.h"
-#include "studies/diagnosis_grading.h"
-#include "studies/diagnosis_truth.h"
+#include <odotune/diagnose/materiality.h>
+#include <odotune/studies/diagnosis_cases.h>
+#include <odotune/studies/diagnosis_grading.h>
+#include <odotune/studies/diagnosis_truth.h>
 
 namespace odotune {
 
@@ -70,7 +70,7 @@ struct DiagnosisBenchmarkOptions {
 
 struct CaseFinding {
   std::string effect;  // or "unexplained"
-  std::string spec;    // sim/effects.h form ("" for unexplained)
+  std::string spec;    // odotune/sim/effects.h form ("" for unexplained)
   double heldout_before_m = std::numeric_limits<double>::quiet_NaN();
   double heldout_after_m = std::numeric_limits<double>::quiet_NaN();
 };

@@ -1,4 +1,4 @@
-#include "studies/diagnosis_benchmark_outputs.h"
+#include <odotune/studies/diagnosis_benchmark_outputs.h>
 
 #include <algorithm>
 #include <cmath>
@@ -7,9 +7,9 @@
 
 #include <fmt/format.h>
 
-#include "core/atomic_file.h"
-#include "core/failure.h"
-#include "results/gnuplot.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/core/failure.h>
+#include <odotune/results/gnuplot.h>
 
 namespace odotune {
 

@@ -5,7 +5,7 @@
 //                  and floor per effect), findings, verdict and why, timing;
 //   confusion.csv  true (detectable) effect × named effect (Confusion in
 //                  diagnosis_benchmark.h), with "none" and "unexplained";
-//   confusion.png  and .svg: the same as a heat map (gnuplot, results/gnuplot.h),
+//   confusion.png  and .svg: the same as a heat map (gnuplot, odotune/results/gnuplot.h),
 //                  each row coloured by its share of the row's cases;
 //   summary.md     rates per category against the aims (docs/diagnosis/benchmark.md), failures by
 //                  kind, per-effect recall and precision, parameter errors,
@@ -15,7 +15,7 @@
 //                  `odotune diagnose`; case_IIII_rK.csv (K from 1) for the
 //                  recordings of a multi-recording case, the held-out ones
 //                  last (`odotune diagnose r1 ... --heldout rN`).
-// Every file is written atomically (core/atomic_file.h; figures through a
+// Every file is written atomically (odotune/core/atomic_file.h; figures through a
 // temporary and a rename), the figure first, then the CSVs, then summary.md.
 #pragma once
 
@@ -23,8 +23,8 @@
 #include <string>
 #include <vector>
 
-#include "studies/diagnosis_benchmark.h"
-#include "studies/study_runs.h"
+#include <odotune/studies/diagnosis_benchmark.h>
+#include <odotune/studies/study_runs.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "studies/diagnosis_cases.h"
+#include <odotune/studies/diagnosis_cases.h>
 
 #include <algorithm>
 #include <cmath>
@@ -8,17 +8,17 @@
 
 #include <fmt/format.h>
 
-#include "core/counter_rng.h"
-#include "sim/effects.h"
-#include "sim/motion_profile.h"
-#include "sim/simulator.h"
-#include "studies/diagnosis_drives.h"
+#include <odotune/core/counter_rng.h>
+#include <odotune/sim/effects.h>
+#include <odotune/sim/motion_profile.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/studies/diagnosis_drives.h>
 
 namespace odotune {
 
 namespace {
 
-// Counter-RNG streams (core/counter_rng.h); any fixed, distinct values do.
+// Counter-RNG streams (odotune/core/counter_rng.h); any fixed, distinct values do.
 constexpr std::uint64_t kCaseStream = 0x6469616763617365ULL;   // "diagcase"
 constexpr std::uint64_t kDrawStream = 0x64726177ULL;           // "draw"
 constexpr std::uint64_t kFixStream = 0x6669786573ULL;          // "fixes"

@@ -1,11 +1,11 @@
 // The random cases of the diagnosis benchmark (`odotune study diagnosis`;
 // method in docs/diagnosis/benchmark.md): what case i of a
-// run with seed S draws, and the track it simulates (sim/simulator.h),
+// run with seed S draws, and the track it simulates (odotune/sim/simulator.h),
 // shaped to one of the reference shapes of docs/diagnosis-design.md ("Any
 // reference").
 //
 // Case i draws everything from its own seed case_seed(S, i) (a SplitMix64
-// hash of S and i, core/counter_rng.h), so a case is reproducible alone and
+// hash of S and i, odotune/core/counter_rng.h), so a case is reproducible alone and
 // the same for any thread count or case count. What it draws (uniform unless
 // said; "log" = log-uniform):
 //  * robot: a size z in [0, 1] sets the wheel radius 0.03-0.20 m (log), the
@@ -66,8 +66,8 @@
 #include <utility>
 #include <vector>
 
-#include "sim/scenario.h"
-#include "tracks/track.h"
+#include <odotune/sim/scenario.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 
@@ -92,7 +92,7 @@ struct TrueEffect {
   std::string name;
   std::vector<std::pair<std::string, double>> params;
   double param(std::string_view name) const;  // NaN when absent
-  std::string spec() const;                   // "lateral_skid:k=0.021" (sim/effects.h form)
+  std::string spec() const;                   // "lateral_skid:k=0.021" (odotune/sim/effects.h form)
 };
 
 // One recording of a multi-recording case (file comment).

@@ -1,10 +1,10 @@
-#include "studies/diagnosis_drives.h"
+#include <odotune/studies/diagnosis_drives.h>
 
 #include <cmath>
 #include <stdexcept>
 
-#include "core/counter_rng.h"
-#include "sim/motion_profile.h"
+#include <odotune/core/counter_rng.h>
+#include <odotune/sim/motion_profile.h>
 
 namespace odotune {
 
@@ -168,7 +168,7 @@ PathSamples commanded_path(const sim::MotionParams& motion, double step_s) {
     const double t = static_cast<double>(i) * step_s;
     p.t_s.push_back(t), p.x_m.push_back(x), p.y_m.push_back(y), p.theta_rad.push_back(th);
     // Midpoint command, arc update (exact for constant velocities). Not
-    // core/planar_motion.h's arc_advance: the benchmark's cases were drawn
+    // odotune/core/planar_motion.h's arc_advance: the benchmark's cases were drawn
     // along this path, and that rounding moves their zones in the 16th digit.
     const sim::Command c = profile.at(t + 0.5 * step_s);
     const double dth = c.w_rad_s * step_s, half = 0.5 * dth;

@@ -1,6 +1,6 @@
 // Random drives of the diagnosis benchmark (`odotune study diagnosis`,
 // docs/diagnosis/benchmark.md): a closed lap of motion segments
-// (sim/scenario.h) drawn from one of three families and repeated until the
+// (odotune/sim/scenario.h) drawn from one of three families and repeated until the
 // drive lasts long enough, and the commanded path of a motion (for placing a
 // slip_zone box where the drive passes and for grading a found box).
 //
@@ -26,7 +26,7 @@
 // turns occur as well. Laps close only ideally; a robot under effects drifts,
 // as it would.
 //
-// Draws come from CaseRng (core/counter_rng.h keyed by the case seed and a
+// Draws come from CaseRng (odotune/core/counter_rng.h keyed by the case seed and a
 // stream), so a drive depends on its seed only.
 #pragma once
 
@@ -34,7 +34,7 @@
 #include <string>
 #include <vector>
 
-#include "sim/scenario.h"
+#include <odotune/sim/scenario.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "studies/diagnosis_grading.h"
+#include <odotune/studies/diagnosis_grading.h>
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include "sim/effects.h"
+#include <odotune/sim/effects.h>
 
 namespace odotune {
 

@@ -53,8 +53,8 @@
 #include <utility>
 #include <vector>
 
-#include "diagnose/diagnosis.h"
-#include "studies/diagnosis_truth.h"
+#include <odotune/diagnose/diagnosis.h>
+#include <odotune/studies/diagnosis_truth.h>
 
 namespace odotune {
 

@@ -1,17 +1,17 @@
-#include "studies/diagnosis_truth.h"
+#include <odotune/studies/diagnosis_truth.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-#include "diagnose/effect_model.h"
-#include "diagnose/gyro_heading_input.h"
-#include "diagnose/recordings.h"
-#include "diagnose/select.h"
-#include "diagnose/series_interp.h"
-#include "diagnose/window_replay.h"
-#include "sim/effects.h"
+#include <odotune/diagnose/effect_model.h>
+#include <odotune/diagnose/gyro_heading_input.h>
+#include <odotune/diagnose/recordings.h>
+#include <odotune/diagnose/select.h>
+#include <odotune/diagnose/series_interp.h>
+#include <odotune/diagnose/window_replay.h>
+#include <odotune/sim/effects.h>
 
 namespace odotune {
 

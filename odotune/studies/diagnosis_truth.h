@@ -1,10 +1,10 @@
 // Whether a benchmark case's true effects are detectable at all, decided from
 // the truth (docs/diagnosis/benchmark.md, "Detectable"):
 // the true model's held-out gain must be material against the reference
-// noise, by the same floor that a finding must pass (diagnose/materiality.h).
+// noise, by the same floor that a finding must pass (odotune/diagnose/materiality.h).
 //
 // Setting (the diagnosis's own, at default options): the selection input
-// (diagnose/select.h selection_input: the reference thinned to ~10 Hz and
+// (odotune/diagnose/select.h selection_input: the reference thinned to ~10 Hz and
 // denoised, when that keeps the windows), windows of selection_window_s, and
 // the default held-out share (SelectOptions::heldout_fraction, 0.3) taken
 // from the end: the last windows that hold at least 30 % of the scored
@@ -22,7 +22,7 @@
 //  * A gyro effect e: the same difference for gyro-heading dead reckoning
 //    (the wheels' nominal travel, the gyro's yaw rate corrected by the true
 //    gyro_bias/gyro_scale, with e's correction left out; lateral_skid's true
-//    k when the case has it), which is how diagnose/diagnosis.cpp proves a
+//    k when the case has it), which is how odotune/diagnose/diagnosis.cpp proves a
 //    gyro finding against a reference heading; its floor uses the raw
 //    gyro-heading replay's held-out RMSE as the nominal one. (With fixes only
 //    the diagnosis proves gyro effects with its own 40 s windows,
@@ -56,9 +56,9 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/materiality.h"
-#include "studies/diagnosis_cases.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/materiality.h>
+#include <odotune/studies/diagnosis_cases.h>
 
 namespace odotune {
 
@@ -96,7 +96,7 @@ Detectability assess_detectability(const diagnose::DiagInput& in, const std::vec
 
 // A multi-recording case (diagnosis_cases.h): several recordings of one
 // robot, diagnosed on `fit` pooled and proven on `heldout`, as
-// diagnose::diagnose_recordings does (diagnose/recordings.h).
+// diagnose::diagnose_recordings does (odotune/diagnose/recordings.h).
 //  * Wheel-odometry effects are judged on the held-out recordings, where the
 //    diagnosis proves them: each held-out recording replayed on its own
 //    windows (window_replay.h, raw reference) with the window length the

@@ -1,4 +1,4 @@
-#include "studies/learn_job.h"
+#include <odotune/studies/learn_job.h>
 
 #include <algorithm>
 #include <cmath>
@@ -8,14 +8,14 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "core/failure.h"
-#include "core/output_paths.h"
-#include "formats/calibration_yaml.h"
-#include "formats/config_yaml.h"
-#include "learned/pose_fusion.h"
-#include "studies/learned_study.h"
-#include "studies/learned_study_outputs.h"
-#include "tracks/track_io.h"
+#include <odotune/core/failure.h>
+#include <odotune/core/output_paths.h>
+#include <odotune/formats/calibration_yaml.h>
+#include <odotune/formats/config_yaml.h>
+#include <odotune/learned/pose_fusion.h>
+#include <odotune/studies/learned_study.h>
+#include <odotune/studies/learned_study_outputs.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 
@@ -198,7 +198,7 @@ LearnEvalOutcome::Flags slip_flags(const FusionInput& full, const SlipDetectorMo
   return f;
 }
 
-// Each odometry fused with the track's fixes (learned/pose_fusion.h), the
+// Each odometry fused with the track's fixes (odotune/learned/pose_fusion.h), the
 // kinematic ones with the kinematic MAE of the model's validation as their
 // variance (the learned ones' where the file has none).
 void fuse_with_fixes(const LearnEvalRequest& r, const LearnedModelFile& m, const FusionInput& in,

@@ -1,11 +1,11 @@
 // The work of `odotune learn train|eval|retrain`: the learned odometry of
 // Fariña, Acosta, Toledo & Acosta, "Improving Odometric Model Performance
-// Based on LSTM Networks", Sensors 2023, 23, 961 (learned/learned_odometry.h,
-// the slip detector of learned/slip_detector.h, the UKF fusion with online
-// retraining of learned/learned_fusion.h), on recorded or simulated tracks.
+// Based on LSTM Networks", Sensors 2023, 23, 961 (odotune/learned/learned_odometry.h,
+// the slip detector of odotune/learned/slip_detector.h, the UKF fusion with online
+// retraining of odotune/learned/learned_fusion.h), on recorded or simulated tracks.
 // Request in, files written, outcome and its lines of text out; the command
 // reads the flags, shows the progress and prints the lines. The model file is
-// results/learned_model_json.h, the JSON blocks studies/learned_study_outputs.h.
+// odotune/results/learned_model_json.h, the JSON blocks odotune/studies/learned_study_outputs.h.
 //
 // Every function throws odotune::Failure with one line (naming the flag or
 // the file) on bad requests or inputs, before long work where it can: an
@@ -21,14 +21,14 @@
 #include <string>
 #include <vector>
 
-#include "learned/fusion_input.h"
-#include "learned/learned_fusion.h"
-#include "learned/learned_odometry.h"
-#include "learned/lstm_training.h"
-#include "learned/odometry_metrics.h"
-#include "learned/odometry_selection.h"
-#include "learned/slip_detector.h"
-#include "results/learned_model_json.h"
+#include <odotune/learned/fusion_input.h>
+#include <odotune/learned/learned_fusion.h>
+#include <odotune/learned/learned_odometry.h>
+#include <odotune/learned/lstm_training.h>
+#include <odotune/learned/odometry_metrics.h>
+#include <odotune/learned/odometry_selection.h>
+#include <odotune/learned/slip_detector.h>
+#include <odotune/results/learned_model_json.h>
 
 namespace odotune {
 
@@ -61,7 +61,7 @@ double pooled_mae(const std::vector<SeriesErrors>& e);
 results::LearnedModelFile load_learned_model(const std::string& path);
 
 // The model and the track must describe the same robot and odometry
-// (learned/learned_odometry.h, model_fits). `file` names the track, `model`
+// (odotune/learned/learned_odometry.h, model_fits). `file` names the track, `model`
 // the model in the error line.
 void check_model_fits(const results::LearnedModelFile& m, const FusionInput& in, const std::string& file,
                       const std::string& model);
@@ -80,12 +80,13 @@ struct LearnTrainRequest {
   double rate_hz = 10.0;         // network rate [Hz], (0, 1000]
   double previous_noise = -1.0;  // σ on the teacher-forced previous V [m/s] and W [rad/s]; < 0 = the study's
   int threads = 1;               // OpenMP threads evaluating the windows; results do not depend on it
-  std::optional<OdometryInput> input;  // --input; nullopt: each track's own (tracks/odometry_input.h)
-  LearnedTarget target = LearnedTarget::correction;  // --target: the nets' output (learned/learned_odometry.h)
+  std::optional<OdometryInput> input;  // --input; nullopt: each track's own (odotune/tracks/odometry_input.h)
+  LearnedTarget target =
+      LearnedTarget::correction;  // --target: the nets' output (odotune/learned/learned_odometry.h)
   // --validation; nullopt: chronological for the paper's nets; for
   // correction nets recordings with two tracks or more, else blocks.
   std::optional<LearnedValidation> validation;
-  // Correction nets (learned/odometry_selection.h): the blocks' length, the
+  // Correction nets (odotune/learned/odometry_selection.h): the blocks' length, the
   // folds, the early stopping's patience [iterations], the candidate
   // settings and whether to read the gyro.
   SelectionOptions selection;
@@ -109,7 +110,7 @@ struct LearnTrainOutcome {
 // Trains the velocity nets (the paper's, or correction nets chosen by
 // cross-validation) and, with slip tracks, the slip detector on the learned
 // odometry's errors there, then writes the model file
-// (studies/learn_train_job.cpp). Progress: the paper's nets 0, 1 (and 2) of
+// (odotune/studies/learn_train_job.cpp). Progress: the paper's nets 0, 1 (and 2) of
 // 1 (2 with a detector); correction nets the fits of the cross-validation.
 LearnTrainOutcome run_learn_train(const LearnTrainRequest& request, const LearnProgress& progress = {});
 // The lines the command prints (without newlines): "learned odometry trained
@@ -128,7 +129,7 @@ struct LearnEvalRequest {
   // track's clock] (the odometry still runs from the track's start).
   std::optional<double> from_s, until_s;
   // A track with position fixes: each odometry is also fused with them
-  // (learned/pose_fusion.h); this σ [m] where a fix has no variance (0: such
+  // (odotune/learned/pose_fusion.h); this σ [m] where a fix has no variance (0: such
   // fixes are not fused, and the lines say why).
   double fix_sigma_m = 0.0;
   std::string json;  // optional: errors of the learned and the kinematic odometry

@@ -1,4 +1,4 @@
-// `odotune learn train` (studies/learn_job.h): the paper's velocity nets or
+// `odotune learn train` (odotune/studies/learn_job.h): the paper's velocity nets or
 // correction nets chosen by cross-validation, the optional slip detector,
 // the model file and the lines the command prints.
 #include <cmath>
@@ -7,10 +7,10 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "core/failure.h"
-#include "core/output_paths.h"
-#include "studies/learn_job.h"
-#include "studies/learned_study.h"
+#include <odotune/core/failure.h>
+#include <odotune/core/output_paths.h>
+#include <odotune/studies/learn_job.h>
+#include <odotune/studies/learned_study.h>
 
 namespace odotune {
 
@@ -43,7 +43,7 @@ void check_request(const LearnTrainRequest& r, LearnedValidation validation) {
                               to_string(*r.input), to_string(*r.input)));
 }
 
-// The paper's nets (learned/learned_odometry.h).
+// The paper's nets (odotune/learned/learned_odometry.h).
 void train_paper_nets(const LearnTrainRequest& r, const std::vector<FusionInput>& tracks,
                       LearnedValidation validation, LearnedModelFile& file, LearnTrainOutcome& out) {
   LearnedTrainingOptions lo;
@@ -104,7 +104,7 @@ nlohmann::json selection_json(const SelectionSummary& s, LearnedValidation valid
   return j;
 }
 
-// Correction nets (learned/odometry_selection.h).
+// Correction nets (odotune/learned/odometry_selection.h).
 void train_correction_nets(const LearnTrainRequest& r, const std::vector<FusionInput>& tracks,
                            LearnedValidation validation, const LearnProgress& progress, LearnedModelFile& file,
                            LearnTrainOutcome& out) {

@@ -1,4 +1,4 @@
-#include "studies/learned_study.h"
+#include <odotune/studies/learned_study.h>
 
 #include <algorithm>
 #include <array>
@@ -8,11 +8,11 @@
 
 #include <fmt/format.h>
 
-#include "core/why.h"
-#include "sim/motion_profile.h"
-#include "sim/random_slip.h"
-#include "sim/simulator.h"
-#include "sim/slip_episodes.h"
+#include <odotune/core/why.h>
+#include <odotune/sim/motion_profile.h>
+#include <odotune/sim/random_slip.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/sim/slip_episodes.h>
 
 namespace odotune {
 
@@ -173,7 +173,7 @@ std::vector<FusionInput> simulate_extra_slip_drives(const LearnedStudyScenarios&
     if (s.slip_episodes.empty())
       throw std::invalid_argument(
           fmt::format("slip scenario '{}': its route has no stretch long and fast enough "
-                      "for a random slip episode (sim/random_slip.h)",
+                      "for a random slip episode (odotune/sim/random_slip.h)",
                       scenarios.slip.name));
     out.slip_drives.push_back({s.seed, s.slip_episodes});
     extra.push_back(build_fusion_input(sim::simulate(s), fo));

@@ -4,14 +4,14 @@
 // simulated wheelchair tracks (scenarios/wheelchair_learn*.yaml,
 // wheelchair_slip*.yaml). Computation only: scenarios and options in, plain
 // numbers and series out; `study_runs.h` reads the scenario files,
-// `cli/cmd_study.cpp` prints,
+// `odotune/cli/cmd_study.cpp` prints,
 // `learned_study_outputs.h` writes tables, JSON and figures.
 //
 // Steps (every one seeded; the same seed gives the same numbers):
 //   1. Simulate the five scenarios, scenario i with seed options.seed + i
 //      (i = 0 learn, 1 eval, 2 step, 3 slip, 4 slip_eval), so that training
 //      and evaluation tracks never share sensor noise; lay each out at
-//      options.rate_hz (learned/fusion_input.h).
+//      options.rate_hz (odotune/learned/fusion_input.h).
 //      Then options.slip_drives − 1 more drives of the `slip` route, drive j
 //      (1-based) with seed options.seed + 4 + j and the random episode
 //      layout random_slip_episodes(route, seed + 4 + j) in place of the
@@ -44,12 +44,12 @@
 #include <string>
 #include <vector>
 
-#include "learned/fusion_input.h"
-#include "learned/learned_fusion.h"
-#include "learned/learned_odometry.h"
-#include "learned/odometry_metrics.h"
-#include "learned/slip_detector.h"
-#include "sim/scenario.h"
+#include <odotune/learned/fusion_input.h>
+#include <odotune/learned/learned_fusion.h>
+#include <odotune/learned/learned_odometry.h>
+#include <odotune/learned/odometry_metrics.h>
+#include <odotune/learned/slip_detector.h>
+#include <odotune/sim/scenario.h>
 
 namespace odotune {
 
@@ -65,7 +65,7 @@ struct LearnedStudyOptions {
   // --previous-noise`).
   double previous_noise_v = 0.0, previous_noise_w = 0.0;
   // Drives the slip detector trains on: `slip` as written, and slip_drives − 1
-  // more of the same route with random episode layouts (sim/random_slip.h),
+  // more of the same route with random episode layouts (odotune/sim/random_slip.h),
   // 1..20. One drive teaches the detector its ten episodes, not slip: trained
   // on wheelchair_slip alone it missed episodes of the held-out drive.
   int slip_drives = 4;

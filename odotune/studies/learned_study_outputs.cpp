@@ -1,4 +1,4 @@
-#include "studies/learned_study_outputs.h"
+#include <odotune/studies/learned_study_outputs.h>
 
 #include <algorithm>
 #include <cmath>
@@ -6,10 +6,10 @@
 
 #include <fmt/format.h>
 
-#include "core/atomic_file.h"
-#include "results/learned_figures.h"
-#include "results/learned_model_json.h"
-#include "sim/slip_episodes.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/results/learned_figures.h>
+#include <odotune/results/learned_model_json.h>
+#include <odotune/sim/slip_episodes.h>
 
 namespace odotune {
 namespace fs = std::filesystem;

@@ -1,7 +1,7 @@
 // What `odotune study learned` writes into its --out folder, and the JSON
 // blocks `odotune learn eval|retrain` share with it. Plain study results in,
-// text and files out; every file written atomically (core/atomic_file.h;
-// figures: results/gnuplot.h, PNG + SVG both or neither).
+// text and files out; every file written atomically (odotune/core/atomic_file.h;
+// figures: odotune/results/gnuplot.h, PNG + SVG both or neither).
 //
 //   table1.md/.csv   learned vs traditional odometry (paper Table 1 layout)
 //   table2.md/.csv   odometry with / without retraining after a radius change
@@ -12,7 +12,7 @@
 //   results.json     every number of the study except timing (so that two runs
 //                    with one seed give identical files)
 //   timing.json      wall times (study, trainings, each retrain)
-//   model.json       the trained model (results/learned_model_json.h)
+//   model.json       the trained model (odotune/results/learned_model_json.h)
 //   fig_slip_variance, fig_retraining_error, fig_paths (.png + .svg)
 #pragma once
 
@@ -22,9 +22,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "learned/odometry_metrics.h"
-#include "results/report_tables.h"
-#include "studies/learned_study.h"
+#include <odotune/learned/odometry_metrics.h>
+#include <odotune/results/report_tables.h>
+#include <odotune/studies/learned_study.h>
 
 namespace odotune {
 

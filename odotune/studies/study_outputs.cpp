@@ -1,4 +1,4 @@
-#include "studies/study_outputs.h"
+#include <odotune/studies/study_outputs.h>
 
 #include <algorithm>
 #include <cmath>
@@ -6,8 +6,8 @@
 
 #include <fmt/format.h>
 
-#include "core/atomic_file.h"
-#include "results/calibration_figures.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/results/calibration_figures.h>
 
 namespace odotune {
 namespace fs = std::filesystem;

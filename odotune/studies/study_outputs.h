@@ -1,7 +1,7 @@
 // What `odotune study resampling|calibration` writes into its --out folder:
 // the tables (study_tables.h) and the figures, built here from the plain
-// study results. Every file is written atomically (core/atomic_file.h;
-// figures: results/gnuplot.h, PNG + SVG both or neither).
+// study results. Every file is written atomically (odotune/core/atomic_file.h;
+// figures: odotune/results/gnuplot.h, PNG + SVG both or neither).
 //
 //   resampling:  table1.md, table1.csv, table1_runs.csv,
 //                fig3_4_resampling.{png,svg}
@@ -14,9 +14,9 @@
 #include <filesystem>
 #include <vector>
 
-#include "results/study_figures.h"
-#include "studies/calibration_study.h"
-#include "studies/study_tables.h"
+#include <odotune/results/study_figures.h>
+#include <odotune/studies/calibration_study.h>
+#include <odotune/studies/study_tables.h>
 
 namespace odotune {
 

@@ -1,16 +1,16 @@
-#include "studies/study_runs.h"
+#include <odotune/studies/study_runs.h>
 
 #include <stdexcept>
 #include <thread>
 
 #include <fmt/format.h>
 
-#include "core/failure.h"
-#include "formats/scenario_yaml.h"
-#include "results/gnuplot.h"
-#include "studies/learned_study_outputs.h"
-#include "studies/study_outputs.h"
-#include "studies/study_tables.h"
+#include <odotune/core/failure.h>
+#include <odotune/formats/scenario_yaml.h>
+#include <odotune/results/gnuplot.h>
+#include <odotune/studies/learned_study_outputs.h>
+#include <odotune/studies/study_outputs.h>
+#include <odotune/studies/study_tables.h>
 
 namespace odotune {
 

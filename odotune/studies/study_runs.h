@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "studies/calibration_study.h"
-#include "studies/learned_study.h"
+#include <odotune/studies/calibration_study.h>
+#include <odotune/studies/learned_study.h>
 
 namespace odotune {
 

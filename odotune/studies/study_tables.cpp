@@ -1,11 +1,11 @@
-#include "studies/study_tables.h"
+#include <odotune/studies/study_tables.h>
 
 #include <cmath>
 #include <string_view>
 
 #include <fmt/format.h>
 
-#include "filters/pf_calibrator.h"
+#include <odotune/filters/pf_calibrator.h>
 
 namespace odotune {
 
@@ -143,16 +143,17 @@ std::string table1_markdown(const ResamplingStudy& s, const StudyContext& c) {
   md += fmt::format("- Scenario: `{}` (`{}`), {:.1f} s, {:.0f} PF iterations per run (one per external "
                     "velocity measurement).\n",
                     s.scenario, c.scenario_file, s.track_duration_s, s.iterations_per_run);
-  md += fmt::format("- PF: N = {} particles, uniform initial R_R, R_L in [{}, {}] m and D in [{}, {}] m "
-                    "(seed = the run's seed, so every cell of a run starts from the same particles); "
-                    "the evidence evolution (`filters/pf_evolution.h`: a walk of each parameter's posterior "
-                    "spread times √(e^{{dt/M}} − 1), M growing from {} s to {} s, bounded by the prior; V, W's "
-                    "U(±{}) perturbation integrated out of the weight), run as a slow/fast memory pair that "
-                    "finds changes (`filters/memory_pair.h`), the default since issue 16; the paper's fixed "
-                    "σ = {} m walk is `--pf-evolution paper`.\n",
-                    s.options.pf_particles, pf.wheel_radius_right_m.lo, pf.wheel_radius_right_m.hi,
-                    pf.wheel_base_m.lo, pf.wheel_base_m.hi, pf.evidence.min_memory_s, pf.evidence.max_memory_s,
-                    pf.v_perturbation_m_s, pf.random_walk_sigma_m);
+  md += fmt::format(
+      "- PF: N = {} particles, uniform initial R_R, R_L in [{}, {}] m and D in [{}, {}] m "
+      "(seed = the run's seed, so every cell of a run starts from the same particles); "
+      "the evidence evolution (`odotune/filters/pf_evolution.h`: a walk of each parameter's posterior "
+      "spread times √(e^{{dt/M}} − 1), M growing from {} s to {} s, bounded by the prior; V, W's "
+      "U(±{}) perturbation integrated out of the weight), run as a slow/fast memory pair that "
+      "finds changes (`odotune/filters/memory_pair.h`), the default since issue 16; the paper's fixed "
+      "σ = {} m walk is `--pf-evolution paper`.\n",
+      s.options.pf_particles, pf.wheel_radius_right_m.lo, pf.wheel_radius_right_m.hi, pf.wheel_base_m.lo,
+      pf.wheel_base_m.hi, pf.evidence.min_memory_s, pf.evidence.max_memory_s, pf.v_perturbation_m_s,
+      pf.random_walk_sigma_m);
   md += fmt::format("- Policies: `neff` resamples when N_eff < {}·N; `max` when the largest normalised "
                     "weight < {}/N; `every` at every iteration.\n",
                     pf.neff_fraction, pf.max_weight_ratio);
@@ -286,9 +287,9 @@ std::string table2_markdown(const CalibrationStudy& s, const StudyContext& c) {
   md += fmt::format(
       "- adaptive-pf: initial N = {}, particles uniform in the paper's ranges with the run's "
       "seed; at each resampling N = (4·sd(R_R) + 4·sd(R_L)) / {} m, clamped to [{}, {}] "
-      "(§V); the evidence evolution of `filters/pf_evolution.h` (walk = posterior spread × "
+      "(§V); the evidence evolution of `odotune/filters/pf_evolution.h` (walk = posterior spread × "
       "√(e^{{dt/M}} − 1), bounded by the prior, plus eq. 11's α·√((V_m − V_O)² + (W_m − W_O)²) with "
-      "α = {}), run as a slow/fast memory pair whose CUSUM finds changes (`filters/memory_pair.h`). "
+      "α = {}), run as a slow/fast memory pair whose CUSUM finds changes (`odotune/filters/memory_pair.h`). "
       "The paper's walk (`--pf-evolution paper`) floors eq. 11 at {} m, without which its particles "
       "collapse.\n",
       s.options.adaptive_initial_particles > 0 ? s.options.adaptive_initial_particles : a.particles,

@@ -7,8 +7,8 @@
 
 #include <string>
 
-#include "results/report_tables.h"
-#include "studies/calibration_study.h"
+#include <odotune/results/report_tables.h>
+#include <odotune/studies/calibration_study.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "tracks/body_velocity.h"
+#include <odotune/tracks/body_velocity.h>
 
 #include <algorithm>
 

@@ -9,7 +9,7 @@
 #include <array>
 #include <vector>
 
-#include "tracks/track.h"
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 

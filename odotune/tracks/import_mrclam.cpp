@@ -9,9 +9,9 @@
 
 #include <fmt/format.h>
 
-#include "tracks/import_text.h"
-#include "tracks/importers.h"
-#include "tracks/track_io.h"
+#include <odotune/tracks/import_text.h>
+#include <odotune/tracks/importers.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "tracks/import_rosbag.h"
+#include <odotune/tracks/import_rosbag.h>
 
 #include <Eigen/Geometry>
 #include <GeographicLib/LocalCartesian.hpp>
@@ -12,10 +12,10 @@
 #include <set>
 #include <tuple>
 
-#include "bags/bag.h"
-#include "bags/bag_error.h"
-#include "bags/ros_messages.h"
-#include "tracks/track_io.h"
+#include <odotune/bags/bag.h>
+#include <odotune/bags/bag_error.h>
+#include <odotune/bags/ros_messages.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 namespace {

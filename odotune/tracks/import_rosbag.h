@@ -1,5 +1,5 @@
 // A robot's own recording, a ROS bag (ROS 1 .bag, MCAP, rosbag2 SQLite or a
-// rosbag2 folder; bags/bag.h), converted to a track (odotune-track/1,
+// rosbag2 folder; odotune/bags/bag.h), converted to a track (odotune-track/1,
 // ../shared/specs/track-format.md).
 //
 // What becomes which column:
@@ -40,7 +40,7 @@
 //
 // Errors: bags::BagError for a bag that cannot be read, TrackError (the bag
 // as the file, line 0) for a missing or ambiguous topic, a wrong type, bad
-// options or nothing to import. Nothing is written here (jobs/import_job.h
+// options or nothing to import. Nothing is written here (odotune/jobs/import_job.h
 // writes the track atomically).
 #pragma once
 
@@ -50,7 +50,7 @@
 #include <string>
 #include <vector>
 
-#include "tracks/track.h"
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "tracks/import_text.h"
+#include <odotune/tracks/import_text.h>
 
 #include <charconv>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "tracks/track_io.h"
+#include <odotune/tracks/track_io.h>
 
 namespace odotune::import_text {
 

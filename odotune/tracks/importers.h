@@ -11,7 +11,7 @@
 
 #include <filesystem>
 
-#include "tracks/track.h"
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 

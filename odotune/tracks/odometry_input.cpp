@@ -1,10 +1,10 @@
-#include "tracks/odometry_input.h"
+#include <odotune/tracks/odometry_input.h>
 
 #include <stdexcept>
 
 #include <fmt/format.h>
 
-#include "core/enum_names.h"
+#include <odotune/core/enum_names.h>
 
 namespace odotune {
 

@@ -9,7 +9,7 @@
 #include <optional>
 #include <string_view>
 
-#include "tracks/track.h"
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 

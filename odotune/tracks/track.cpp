@@ -1,10 +1,10 @@
-#include "tracks/track.h"
+#include <odotune/tracks/track.h>
 
 #include <stdexcept>
 
 #include <fmt/format.h>
 
-#include "core/enum_names.h"
+#include <odotune/core/enum_names.h>
 
 namespace odotune {
 

@@ -44,7 +44,7 @@
 #include <string_view>
 #include <vector>
 
-#include "tracks/track.h"
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 

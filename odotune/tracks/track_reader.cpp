@@ -25,9 +25,9 @@
 
 #include <fmt/format.h>
 
-#include "core/failure.h"
-#include "tracks/import_text.h"
-#include "tracks/track_io.h"
+#include <odotune/core/failure.h>
+#include <odotune/tracks/import_text.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 

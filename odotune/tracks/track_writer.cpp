@@ -22,8 +22,8 @@
 
 #include <fmt/format.h>
 
-#include "core/atomic_file.h"
-#include "tracks/track_io.h"
+#include <odotune/core/atomic_file.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 

@@ -1,4 +1,4 @@
-#include "tuner/evaluate.h"
+#include <odotune/tuner/evaluate.h>
 
 #include <algorithm>
 #include <exception>

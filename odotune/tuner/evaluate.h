@@ -6,7 +6,7 @@
 #include <atomic>
 #include <vector>
 
-#include "tuner/problem.h"
+#include <odotune/tuner/problem.h>
 
 namespace odotune::tuner {
 

@@ -1,5 +1,5 @@
-#include "tuner/nlopt_solver.h"
-#include "tuner/solver_run.h"
+#include <odotune/tuner/nlopt_solver.h>
+#include <odotune/tuner/solver_run.h>
 
 // The C API is used on purpose: the adapter needs full control over what
 // crosses NLopt's C frames (its callback is noexcept and catches everything)

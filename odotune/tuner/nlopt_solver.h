@@ -51,8 +51,8 @@
 #include <string_view>
 #include <vector>
 
-#include "tuner/problem.h"
-#include "tuner/summary.h"
+#include <odotune/tuner/problem.h>
+#include <odotune/tuner/summary.h>
 
 namespace odotune::tuner {
 

@@ -1,4 +1,4 @@
-#include "tuner/pso.h"
+#include <odotune/tuner/pso.h>
 
 #include <algorithm>
 #include <chrono>
@@ -10,8 +10,8 @@
 #include <utility>
 #include <vector>
 
-#include "core/counter_rng.h"
-#include "tuner/solver_run.h"
+#include <odotune/core/counter_rng.h>
+#include <odotune/tuner/solver_run.h>
 
 namespace odotune::tuner {
 namespace {

@@ -46,8 +46,8 @@
 #include <functional>
 #include <string>
 
-#include "tuner/problem.h"
-#include "tuner/summary.h"
+#include <odotune/tuner/problem.h>
+#include <odotune/tuner/summary.h>
 
 namespace odotune::tuner {
 

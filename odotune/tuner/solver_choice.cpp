@@ -1,6 +1,6 @@
-#include "tuner/solver_choice.h"
+#include <odotune/tuner/solver_choice.h>
 
-#include "tuner/nlopt_solver.h"
+#include <odotune/tuner/nlopt_solver.h>
 
 namespace odotune::tuner {
 

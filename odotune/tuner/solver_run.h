@@ -12,8 +12,8 @@
 #include <string>
 #include <utility>
 
-#include "tuner/problem.h"
-#include "tuner/summary.h"
+#include <odotune/tuner/problem.h>
+#include <odotune/tuner/summary.h>
 
 namespace odotune::tuner::detail {
 

@@ -1,4 +1,4 @@
-#include "tuner/summary.h"
+#include <odotune/tuner/summary.h>
 
 namespace odotune::tuner {
 

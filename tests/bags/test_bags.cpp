@@ -1,4 +1,4 @@
-// Bags (bags/bag.h) on robot_localization's own recordings
+// Bags (odotune/bags/bag.h) on robot_localization's own recordings
 // (../shared/data/real/robot_localization_bags, SOURCE.md there): each bag
 // as a ROS 1 bag, an MCAP file and a rosbag2 SQLite folder written by
 // independent tools must list the same topics and counts and decode, message
@@ -14,9 +14,10 @@
 #include <string>
 #include <vector>
 
-#include "bags/bag.h"
-#include "bags/bag_error.h"
-#include "bags/ros_messages.h"
+#include <odotune/bags/bag.h>
+#include <odotune/bags/bag_error.h>
+#include <odotune/bags/ros_messages.h>
+
 #include "support/ros2_bag.h"
 
 namespace odotune::bags {

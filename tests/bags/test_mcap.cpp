@@ -1,4 +1,4 @@
-// The MCAP reader (bags/mcap.h) against the MCAP project's conformance files
+// The MCAP reader (odotune/bags/mcap.h) against the MCAP project's conformance files
 // (../shared/data/mcap-conformance, SOURCE.md there): every file reads to the
 // records of its .json, in order, field by field. The .mcap files there are
 // Git LFS pointers, so each is rebuilt from its .json and name
@@ -16,8 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "bags/bag_error.h"
-#include "bags/mcap.h"
+#include <odotune/bags/bag_error.h>
+#include <odotune/bags/mcap.h>
+
 #include "support/mcap_writer.h"
 
 namespace odotune::bags::mcap {

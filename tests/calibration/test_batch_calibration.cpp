@@ -1,4 +1,4 @@
-// Offline batch calibration (calibration/batch_calibration.h): on
+// Offline batch calibration (odotune/calibration/batch_calibration.h): on
 // simulated wheelchair tracks with known radius and wheel-base errors the
 // least-squares fit recovers the truth within the paper's 0.5 %, its standard
 // errors cover the actual error and shrink with more data, and gross outliers
@@ -11,8 +11,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "calibration/batch_calibration.h"
-#include "calibration/calibration_input.h"
+#include <odotune/calibration/batch_calibration.h>
+#include <odotune/calibration/calibration_input.h>
+
 #include "support/calibration_track.h"
 
 namespace odotune {

@@ -1,4 +1,4 @@
-// Calibration input (calibration/calibration_input.h): the truth schedule
+// Calibration input (odotune/calibration/calibration_input.h): the truth schedule
 // from sim.effects, odometry rows and calibration samples of a simulated
 // wheelchair track against the simulated truth, external velocities derived
 // from the ground truth, ground truth interpolated to odometry rows, and the
@@ -13,8 +13,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "calibration/calibration_input.h"
-#include "objectives/pose_series.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/objectives/pose_series.h>
+
 #include "support/calibration_track.h"
 
 namespace odotune {

@@ -1,8 +1,8 @@
 // The particle-filter calibrator's settings as a tuning problem
-// (calibration/calibration_objective.h): the space, applying a point,
+// (odotune/calibration/calibration_objective.h): the space, applying a point,
 // the score's terms on hand-built results, and the objective on a short
 // simulated wheelchair drive.
-#include "calibration/calibration_objective.h"
+#include <odotune/calibration/calibration_objective.h>
 
 #include <omp.h>
 
@@ -13,9 +13,10 @@
 
 #include <gtest/gtest.h>
 
-#include "calibration/calibrated_odometry_errors.h"
-#include "calibration/calibration_input.h"
-#include "calibration/calibration_run.h"
+#include <odotune/calibration/calibrated_odometry_errors.h>
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/calibration/calibration_run.h>
+
 #include "diagnose/sim_track.h"
 
 namespace odotune {

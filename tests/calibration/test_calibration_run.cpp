@@ -1,4 +1,4 @@
-// Running and scoring odometry calibration (calibration/calibration_run.h):
+// Running and scoring odometry calibration (odotune/calibration/calibration_run.h):
 // method names, the convergence-time rule on hand-made traces, dead-reckoning
 // scores of fixed parameters against an independent integration of the
 // ticks, and the online calibrators (DKF, adaptive PF) and the batch fit on
@@ -13,8 +13,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "calibration/calibration_input.h"
-#include "calibration/calibration_run.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/calibration/calibration_run.h>
+
 #include "support/calibration_track.h"
 
 namespace odotune {
@@ -248,7 +249,7 @@ TEST(CalibrationRun, DualKfConvergesWithin120s) {
   EXPECT_LT(s.heading_rmse_rad, 0.5 * nominal.heading_rmse_rad);
 }
 
-// The adaptive PF (filters/pf_calibrator.h) gets within ~1 % in seconds and
+// The adaptive PF (odotune/filters/pf_calibrator.h) gets within ~1 % in seconds and
 // then wanders around the truth with its particle spread (~0.3 %), so on a
 // 120 s track its "stays within 0.5 %" convergence is not reliably reached;
 // checked instead: every estimate from 30 s on within 1.5 % (the nominal

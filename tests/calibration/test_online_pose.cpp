@@ -1,5 +1,5 @@
 // Online pose-domain calibration over calibration inputs
-// (calibration/online_pose.h, run_calibration's online-pose): the encoder
+// (odotune/calibration/online_pose.h, run_calibration's online-pose): the encoder
 // intervals split at the fixes, the fixes' variances, the starts, and the
 // simulated wheelchair calibrated from 1 Hz fixes alone, with and without a
 // radius step.
@@ -11,9 +11,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "calibration/calibration_input.h"
-#include "calibration/calibration_run.h"
-#include "calibration/online_pose.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/calibration/calibration_run.h>
+#include <odotune/calibration/online_pose.h>
+
 #include "support/calibration_track.h"
 
 namespace odotune {

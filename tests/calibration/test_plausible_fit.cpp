@@ -1,4 +1,4 @@
-// Plausibility of a fitted calibration (calibration/plausible_fit.h): within
+// Plausibility of a fitted calibration (odotune/calibration/plausible_fit.h): within
 // a factor of 2 of the nominal geometry, or of the identity for a twist's
 // scales, at both edges and beyond, and the first implausible value named.
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "calibration/plausible_fit.h"
+#include <odotune/calibration/plausible_fit.h>
 
 namespace odotune {
 namespace {

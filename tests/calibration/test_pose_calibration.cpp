@@ -1,4 +1,4 @@
-// Pose-domain batch calibration (calibration/pose_calibration.h) on simulated
+// Pose-domain batch calibration (odotune/calibration/pose_calibration.h) on simulated
 // wheelchair tracks with known radius and wheel-base errors: from ticks and
 // ground truth, from ticks and sparse position fixes only, by segments, with
 // a wrong start heading, and its refusals.
@@ -10,8 +10,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "calibration/calibration_input.h"
-#include "calibration/pose_calibration.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/calibration/pose_calibration.h>
+
 #include "support/calibration_track.h"
 
 namespace odotune {

@@ -1,4 +1,4 @@
-// The reference's own jitter (calibration/reference_jitter.h) and the noise
+// The reference's own jitter (odotune/calibration/reference_jitter.h) and the noise
 // of velocities derived from it (calibration_input.h, --ext-from-gt): a
 // simulated ground truth with known white noise is read back within 15 %,
 // an exact one as (nearly) none, and the derived samples carry the
@@ -9,9 +9,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "calibration/calibration_input.h"
-#include "calibration/reference_jitter.h"
-#include "objectives/track_samples.h"
+#include <odotune/calibration/calibration_input.h>
+#include <odotune/calibration/reference_jitter.h>
+#include <odotune/objectives/track_samples.h>
+
 #include "support/calibration_track.h"
 
 namespace odotune {

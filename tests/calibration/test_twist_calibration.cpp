@@ -1,4 +1,4 @@
-// The calibration of a body-velocity odometry (calibration/twist_calibration.h):
+// The calibration of a body-velocity odometry (odotune/calibration/twist_calibration.h):
 // on a drive whose motion is its commands scaled and delayed, the fit finds
 // the scales and the delay from the ground truth, and the scales from 1 Hz
 // fixes alone; a measured twist gets no delay; bad inputs are one-line errors.
@@ -8,8 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "calibration/twist_calibration.h"
-#include "tracks/body_velocity.h"
+#include <odotune/calibration/twist_calibration.h>
+#include <odotune/tracks/body_velocity.h>
 
 namespace odotune {
 namespace {

@@ -15,10 +15,11 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <odotune/tracks/track_io.h>
+
 #include "diagnose/sim_track.h"
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
-#include "tracks/track_io.h"
 
 namespace odotune {
 namespace {

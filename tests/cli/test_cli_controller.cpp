@@ -20,10 +20,11 @@
 #include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include <odotune/tracks/track_io.h>
+
 #include "diagnose/sim_track.h"
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
-#include "tracks/track_io.h"
 
 namespace odotune {
 namespace {

@@ -10,7 +10,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "sim/effects.h"
+#include <odotune/sim/effects.h>
+
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 

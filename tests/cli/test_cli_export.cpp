@@ -11,12 +11,13 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "formats/config_yaml.h"
-#include "objectives/param_space.h"
-#include "results/ros_export.h"
-#include "results/store.h"
+#include <odotune/formats/config_yaml.h>
+#include <odotune/objectives/param_space.h>
+#include <odotune/results/ros_export.h>
+#include <odotune/results/store.h>
+#include <odotune/tracks/track_io.h>
+
 #include "support/cli_runner.h"
-#include "tracks/track_io.h"
 
 namespace odotune {
 namespace {

@@ -9,7 +9,8 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "results/store.h"
+#include <odotune/results/store.h>
+
 #include "support/cli_runner.h"
 #include "support/store_rows.h"
 

@@ -13,8 +13,9 @@
 
 #include <fmt/format.h>
 
+#include <odotune/tracks/track_io.h>
+
 #include "support/cli_runner.h"
-#include "tracks/track_io.h"
 
 namespace odotune {
 namespace {

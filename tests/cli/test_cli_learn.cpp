@@ -15,10 +15,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "results/learned_model_json.h"
+#include <odotune/results/learned_model_json.h>
+#include <odotune/tracks/odometry_input.h>
+
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
-#include "tracks/odometry_input.h"
 
 namespace odotune {
 namespace {

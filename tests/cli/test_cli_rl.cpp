@@ -6,7 +6,8 @@
 #include <regex>
 #include <string>
 
-#include "rlnode/params.h"
+#include <odotune/rlnode/params.h>
+
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 

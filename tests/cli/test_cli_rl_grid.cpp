@@ -10,7 +10,8 @@
 #include <regex>
 #include <string>
 
-#include "results/store.h"
+#include <odotune/results/store.h>
+
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 

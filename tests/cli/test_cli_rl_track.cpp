@@ -7,12 +7,13 @@
 #include <fstream>
 #include <string>
 
-#include "rlnode/params.h"
+#include <odotune/rlnode/params.h>
+#include <odotune/tracks/track_io.h>
+
 #include "support/cli_runner.h"
 #include "support/rl_team_file.h"
 #include "support/synthetic_track.h"
 #include "support/temp_dir.h"
-#include "tracks/track_io.h"
 
 using odotune::testing_support::number_after;
 using odotune::testing_support::run_cli;

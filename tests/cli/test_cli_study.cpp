@@ -12,10 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "formats/scenario_yaml.h"
-#include "studies/calibration_study.h"
-#include "studies/study_outputs.h"
-#include "studies/study_tables.h"
+#include <odotune/formats/scenario_yaml.h>
+#include <odotune/studies/calibration_study.h>
+#include <odotune/studies/study_outputs.h>
+#include <odotune/studies/study_tables.h>
+
 #include "support/cli_runner.h"
 #include "support/study_fixtures.h"
 #include "support/temp_dir.h"

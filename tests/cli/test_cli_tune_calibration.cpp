@@ -11,9 +11,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "calibration/calibration_objective.h"
-#include "formats/pf_config_yaml.h"
-#include "results/store.h"
+#include <odotune/calibration/calibration_objective.h>
+#include <odotune/formats/pf_config_yaml.h>
+#include <odotune/results/store.h>
+
 #include "support/cli_runner.h"
 
 namespace odotune {

@@ -13,13 +13,14 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "core/failure.h"
-#include "formats/ukf_config_yaml.h"
-#include "learned/fusion_input.h"
-#include "learned/ukf_objective.h"
-#include "results/store.h"
+#include <odotune/core/failure.h>
+#include <odotune/formats/ukf_config_yaml.h>
+#include <odotune/learned/fusion_input.h>
+#include <odotune/learned/ukf_objective.h>
+#include <odotune/results/store.h>
+#include <odotune/tracks/track_io.h>
+
 #include "support/cli_runner.h"
-#include "tracks/track_io.h"
 
 namespace odotune {
 namespace {

@@ -5,7 +5,7 @@
 // Each case: simulated track = base motion (below) driven by one of four
 // robots, sensors and a reference (ground truth or sparse fixes only), the
 // effects of ../shared/specs/physics-effects.md switched on in the
-// simulator's command-line form (sim/effects.h), a seed, a duration, and
+// simulator's command-line form (odotune/sim/effects.h), a seed, a duration, and
 // the findings a correct diagnosis must report (none for the no-effect
 // cases). Pass rule (design note): the right effects named (and no other),
 // each parameter within expected_tolerance() of its truth, and the held-out
@@ -30,9 +30,9 @@
 #include <string_view>
 #include <vector>
 
-#include "sim/effects.h"
-#include "sim/motion_profile.h"
-#include "sim/scenario.h"
+#include <odotune/sim/effects.h>
+#include <odotune/sim/motion_profile.h>
+#include <odotune/sim/scenario.h>
 
 namespace odotune::concealed {
 

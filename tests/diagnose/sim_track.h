@@ -1,6 +1,6 @@
 // Test helper: a simulated Track built in memory (no files) from a built-in
 // base motion, a robot, sensor rates/noise, effect specs and a seed, through
-// the project's simulator (sim/simulator.h).
+// the project's simulator (odotune/sim/simulator.h).
 //
 // Base motion: 1 s at rest, then laps of a closed ~5.6 m x 3.4 m circuit
 // repeated until the motion lasts at least duration_s, then 1 s at rest. One
@@ -19,11 +19,11 @@
 #include <string>
 #include <vector>
 
-#include "sim/effects.h"
-#include "sim/motion_profile.h"
-#include "sim/scenario.h"
-#include "sim/simulator.h"
-#include "tracks/track.h"
+#include <odotune/sim/effects.h>
+#include <odotune/sim/motion_profile.h>
+#include <odotune/sim/scenario.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune::testing_support {
 
@@ -37,7 +37,7 @@ struct SimTrackOptions {
   double gyro_rate_hz = 100.0, gyro_sigma_rad_s = 0.002;  // rate 0 = no gyro
   double gt_rate_hz = 100.0, gt_sigma_m = 0.0;            // rate 0 = no ground truth
   double aps_rate_hz = 0.0, aps_sigma_m = 0.05;           // rate 0 = no fixes
-  std::vector<std::string> effects;                       // "lateral_skid:k=0.03" (sim/effects.h syntax)
+  std::vector<std::string> effects;  // "lateral_skid:k=0.03" (odotune/sim/effects.h syntax)
   std::uint64_t seed = 1;
 };
 

@@ -16,10 +16,11 @@
 #include <string>
 #include <vector>
 
+#include <odotune/sim/effects.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/tracks/track.h>
+
 #include "concealed_cases.h"
-#include "sim/effects.h"
-#include "sim/simulator.h"
-#include "tracks/track.h"
 
 namespace odotune::concealed {
 namespace {

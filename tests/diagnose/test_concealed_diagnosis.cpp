@@ -4,7 +4,7 @@
 // the expected effects named (no other finding, `unexplained` included), each
 // parameter within expected_tolerance() of the truth (±25 % of the departure,
 // ±5 s for a step time; a slip zone's box by the path as the benchmark grades
-// it, studies/diagnosis_grading.h, not edge by edge, since an edge the robot
+// it, odotune/studies/diagnosis_grading.h, not edge by edge, since an edge the robot
 // never crosses is not determined by the data), and the held-out error improved: the chosen wheel
 // model against the nominal one (Diagnosis::heldout) when a wheel effect is
 // expected, and each gyro finding's own held-out replay. (A finding's
@@ -13,8 +13,8 @@
 // error by less than the fixes' noise, either way.)
 // No-effect cases must give no finding at all.
 // Findings that matter: an expected effect whose true model is not
-// material (studies/diagnosis_truth.h assess_detectability: the true model's
-// held-out gain against diagnose/materiality.h's floor, the random
+// material (odotune/studies/diagnosis_truth.h assess_detectability: the true model's
+// held-out gain against odotune/diagnose/materiality.h's floor, the random
 // benchmark's rule) is tolerated, named or not, and so is a borderline one
 // (true gain below 1.5 floors: what a fit on noisy data recovers scatters
 // around the truth's); the clearly material ones are graded as above. The suite's deliberately small effects (2-10 sigma of
@@ -33,12 +33,13 @@
 
 #include <gtest/gtest.h>
 
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/diagnosis.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/studies/diagnosis_grading.h>
+#include <odotune/studies/diagnosis_truth.h>
+
 #include "concealed_cases.h"
-#include "diagnose/diag_input.h"
-#include "diagnose/diagnosis.h"
-#include "sim/simulator.h"
-#include "studies/diagnosis_grading.h"
-#include "studies/diagnosis_truth.h"
 
 namespace odotune::diagnose {
 namespace {
@@ -67,7 +68,7 @@ struct Verdict {
   bool pass() const { return named_right && params_right && heldout_improved; }
 };
 
-// The case's expected findings as the benchmark's truth (studies/diagnosis_truth.h).
+// The case's expected findings as the benchmark's truth (odotune/studies/diagnosis_truth.h).
 std::vector<TrueEffect> truth_of(const ConcealedCase& c) {
   std::vector<TrueEffect> out;
   for (const concealed::ExpectedFinding& e : c.expected) {

@@ -1,4 +1,4 @@
-// build_diag_input (diagnose/diag_input.h): odometry from ticks, wheel
+// build_diag_input (odotune/diagnose/diag_input.h): odometry from ticks, wheel
 // rates or commands; gyro; ground truth or fixes as reference; the reference
 // sigma from metadata or estimated; never sim.effects; one-line errors.
 #include <algorithm>
@@ -11,9 +11,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "diagnose/diag_input.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/tracks/importers.h>
+
 #include "diagnose/sim_track.h"
-#include "tracks/importers.h"
 
 namespace odotune::diagnose {
 namespace {

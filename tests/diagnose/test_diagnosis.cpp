@@ -1,6 +1,6 @@
 // diagnose() end to end on simulated tracks (sim_track.h), and the residual
 // series it locates on.
-#include "diagnose/diagnosis.h"
+#include <odotune/diagnose/diagnosis.h>
 
 #include <cmath>
 #include <numbers>
@@ -10,9 +10,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "diagnose/residual_series.h"
+#include <odotune/diagnose/residual_series.h>
+#include <odotune/diagnose/window_replay.h>
+
 #include "diagnose/sim_track.h"
-#include "diagnose/window_replay.h"
 
 namespace odotune::diagnose {
 namespace {

@@ -1,4 +1,4 @@
-// The augmented odometry model (diagnose/effect_model.h) and the windowed
+// The augmented odometry model (odotune/diagnose/effect_model.h) and the windowed
 // replay (window_replay.h): names from the effect table, no-op parameters give
 // exactly the nominal kinematics (checked against an independent dead
 // reckoning), Jet derivatives match central differences, and the model with
@@ -12,11 +12,12 @@
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/effect_model.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/effect_model.h>
+#include <odotune/diagnose/window_replay.h>
+#include <odotune/sim/effects.h>
+
 #include "diagnose/sim_track.h"
-#include "diagnose/window_replay.h"
-#include "sim/effects.h"
 
 namespace odotune::diagnose {
 namespace {

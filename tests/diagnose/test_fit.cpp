@@ -1,4 +1,4 @@
-// fit_effects (diagnose/fit.h): for each effect that wheel dead reckoning
+// fit_effects (odotune/diagnose/fit.h): for each effect that wheel dead reckoning
 // sees, a track simulated WITH that effect (ground truth, 120 s, fixed seed)
 // gives back the simulated parameters within 10 % of their size, finite
 // standard errors, and a lower error on held-out windows; with 1 Hz fixes only
@@ -18,11 +18,12 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/effect_model.h"
-#include "diagnose/fit.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/effect_model.h>
+#include <odotune/diagnose/fit.h>
+#include <odotune/diagnose/window_replay.h>
+
 #include "diagnose/sim_track.h"
-#include "diagnose/window_replay.h"
 
 namespace odotune::diagnose {
 namespace {

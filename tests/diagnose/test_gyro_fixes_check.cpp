@@ -1,4 +1,4 @@
-// check_gyro_with_fixes (diagnose/gyro_fixes_check.h): the gyro judged
+// check_gyro_with_fixes (odotune/diagnose/gyro_fixes_check.h): the gyro judged
 // against sparse position fixes by gyro-heading dead reckoning.
 //  * concealed suite: gyro_scale_fixes_only names the gyro scale within 25 %
 //    of its departure; wheel_base_error_fixes_only (the confounded mirror)
@@ -22,11 +22,12 @@
 #include <string>
 #include <string_view>
 
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/gyro_fixes_check.h>
+#include <odotune/sim/simulator.h>
+
 #include "concealed_cases.h"
-#include "diagnose/diag_input.h"
-#include "diagnose/gyro_fixes_check.h"
 #include "diagnose/sim_track.h"
-#include "sim/simulator.h"
 
 namespace odotune::diagnose {
 namespace {

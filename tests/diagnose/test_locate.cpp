@@ -1,4 +1,4 @@
-// Locating residual growth (diagnose/locate.h) on synthetic residual
+// Locating residual growth (odotune/diagnose/locate.h) on synthetic residual
 // series: a robot on a figure-eight with a time-varying pace, dead-reckoning
 // residuals re-anchored every 20 s, built from an injected growth (known
 // segment, region or condition) plus reference noise and an odometry random
@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/locate.h"
-#include "sim/normal_rng.h"
+#include <odotune/diagnose/locate.h>
+#include <odotune/sim/normal_rng.h>
 
 namespace odotune::diagnose {
 namespace {

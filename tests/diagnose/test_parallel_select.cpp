@@ -10,9 +10,10 @@
 
 #include <gtest/gtest.h>
 
-#include "diagnose/cross_validate.h"
-#include "diagnose/diag_input.h"
-#include "diagnose/select.h"
+#include <odotune/diagnose/cross_validate.h>
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/select.h>
+
 #include "diagnose/sim_track.h"
 
 namespace odotune::diagnose {

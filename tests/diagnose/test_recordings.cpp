@@ -1,4 +1,4 @@
-// Several recordings of one robot (diagnose/recordings.h):
+// Several recordings of one robot (odotune/diagnose/recordings.h):
 // pooled fit on some recordings, proof on others, per-recording results, and
 // recordings of another robot refused in one line.
 #include <cmath>
@@ -9,11 +9,12 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "diagnose/cross_validate.h"
-#include "diagnose/diag_input.h"
-#include "diagnose/recordings.h"
+#include <odotune/diagnose/cross_validate.h>
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/recordings.h>
+#include <odotune/diagnose/window_replay.h>
+
 #include "diagnose/sim_track.h"
-#include "diagnose/window_replay.h"
 
 namespace odotune::diagnose {
 namespace {

@@ -10,12 +10,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/diagnosis.h"
-#include "diagnose/sensor_checks.h"
-#include "diagnose/series_interp.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/diagnosis.h>
+#include <odotune/diagnose/sensor_checks.h>
+#include <odotune/diagnose/series_interp.h>
+#include <odotune/diagnose/window_replay.h>
+
 #include "diagnose/sim_track.h"
-#include "diagnose/window_replay.h"
 
 namespace odotune::diagnose {
 namespace {

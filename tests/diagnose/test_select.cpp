@@ -1,4 +1,4 @@
-// Model selection of the diagnosis (diagnose/select.h) and its parts
+// Model selection of the diagnosis (odotune/diagnose/select.h) and its parts
 // (paired_test.h, zone_boxes.h), on tracks simulated in memory
 // (sim_track.h) with sensor noise: ground truth with 5 mm white noise, a
 // robot of 60/60.5 mm wheels on a 0.36 m base with 4000 counts per
@@ -21,12 +21,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "diagnose/diag_input.h"
-#include "diagnose/paired_test.h"
-#include "diagnose/select.h"
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/paired_test.h>
+#include <odotune/diagnose/select.h>
+#include <odotune/diagnose/window_replay.h>
+#include <odotune/diagnose/zone_boxes.h>
+
 #include "diagnose/sim_track.h"
-#include "diagnose/window_replay.h"
-#include "diagnose/zone_boxes.h"
 
 namespace odotune::diagnose {
 namespace {

@@ -1,4 +1,4 @@
-// Sensor checks (diagnose/sensor_checks.h) on synthetic recordings whose
+// Sensor checks (odotune/diagnose/sensor_checks.h) on synthetic recordings whose
 // truth is known: a robot driven by smooth commands, integrated at 1 ms,
 // with a gyro of known scale/bias, wheels of known true radii / base, an
 // optional odometry time offset and actuator lag, and ground truth or fixes.
@@ -13,10 +13,11 @@
 #include <string_view>
 #include <vector>
 
+#include <odotune/diagnose/sensor_checks.h>
+#include <odotune/sim/normal_rng.h>
+#include <odotune/sim/simulator.h>
+
 #include "concealed_cases.h"
-#include "diagnose/sensor_checks.h"
-#include "sim/normal_rng.h"
-#include "sim/simulator.h"
 
 namespace odotune::diagnose {
 namespace {

@@ -1,7 +1,7 @@
-// The term search (diagnose/term_search.h): a planted out-of-round wheel is
+// The term search (odotune/diagnose/term_search.h): a planted out-of-round wheel is
 // recovered as its two harmonic terms, a clean track gives none, and
 // diagnose() reports the terms as the `model` of an unexplained finding.
-#include "diagnose/term_search.h"
+#include <odotune/diagnose/term_search.h>
 
 #include <cmath>
 #include <stdexcept>
@@ -11,12 +11,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "diagnose/diagnosis.h"
-#include "diagnose/diagnosis_summary.h"
-#include "diagnose/materiality.h"
-#include "diagnose/recordings.h"
+#include <odotune/diagnose/diagnosis.h>
+#include <odotune/diagnose/diagnosis_summary.h>
+#include <odotune/diagnose/materiality.h>
+#include <odotune/diagnose/recordings.h>
+#include <odotune/diagnose/window_replay.h>
+
 #include "diagnose/sim_track.h"
-#include "diagnose/window_replay.h"
 
 namespace odotune::diagnose {
 namespace {

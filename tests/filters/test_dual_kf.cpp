@@ -1,4 +1,4 @@
-// Dual Kalman filter calibration (filters/dual_kf.h): the parameter filter's
+// Dual Kalman filter calibration (odotune/filters/dual_kf.h): the parameter filter's
 // Jacobian against central differences, convergence on the synthetic stream
 // (0.5 % of the true radii), covariance properties, parameter checks.
 #include <gtest/gtest.h>
@@ -10,7 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "filters/dual_kf.h"
+#include <odotune/filters/dual_kf.h>
+
 #include "support/calib_stream.h"
 
 namespace odotune::filters {

@@ -7,11 +7,11 @@
 
 #include <gtest/gtest.h>
 
-#include "core/planar_motion.h"
-#include "filters/diff_drive.h"
-#include "filters/ekf.h"
-#include "filters/ekf_noise.h"
-#include "filters/ekf_segments.h"
+#include <odotune/core/planar_motion.h>
+#include <odotune/filters/diff_drive.h>
+#include <odotune/filters/ekf.h>
+#include <odotune/filters/ekf_noise.h>
+#include <odotune/filters/ekf_segments.h>
 
 namespace odotune::filters {
 namespace {
@@ -54,7 +54,7 @@ TEST(DiffDrive, StraightAndSpinGeometry) {
 }
 
 // The EKF's step and the one dead reckoning every fit walks
-// (core/planar_motion.h) give the same pose to the bit.
+// (odotune/core/planar_motion.h) give the same pose to the bit.
 TEST(DiffDrive, PoseIsCoreMidpointAdvanceBitForBit) {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> U(-1.0, 1.0);

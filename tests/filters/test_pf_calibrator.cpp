@@ -1,5 +1,5 @@
-// Particle-filter calibration (filters/pf_calibrator.h) and its hot-loop
-// kernels (filters/pf_kernels.h): accuracy of the branch-free log/exp and of
+// Particle-filter calibration (odotune/filters/pf_calibrator.h) and its hot-loop
+// kernels (odotune/filters/pf_kernels.h): accuracy of the branch-free log/exp and of
 // the Box–Muller deviates, convergence of the plain and adaptive PF on a
 // synthetic stream (Fariña, Toledo & Acosta, RA-L 2026: 0.5 % of the true
 // radii), tracking of a radius step, adaptive particle count, bit-identical
@@ -14,10 +14,11 @@
 #include <string>
 #include <vector>
 
-#include "core/counter_rng.h"
-#include "filters/memory_pair.h"
-#include "filters/pf_calibrator.h"
-#include "filters/pf_kernels.h"
+#include <odotune/core/counter_rng.h>
+#include <odotune/filters/memory_pair.h>
+#include <odotune/filters/pf_calibrator.h>
+#include <odotune/filters/pf_kernels.h>
+
 #include "support/calib_stream.h"
 
 namespace odotune::filters {
@@ -253,7 +254,7 @@ TEST(PfCalibrator, PlainPfConvergesToTheTrueRadii) {
 // converges from the uniform ranges, drops far below 8000 particles, and
 // follows a 1 % step of both radii at 55 s (the paper's Figure 6b scenario):
 // alone with the paper's evolution, and with the evidence evolution run as a
-// slow/fast pair (filters/memory_pair.h), which finds the step.
+// slow/fast pair (odotune/filters/memory_pair.h), which finds the step.
 template <class Filter>
 std::vector<CalibEstimate> run_any(Filter& f, const Stream& s) {
   std::vector<CalibEstimate> out;

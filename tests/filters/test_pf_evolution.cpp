@@ -1,5 +1,5 @@
-// Fading memory (filters/pf_evolution.h) and the slow/fast memory pair that
-// finds changes (filters/memory_pair.h), on the DKF with synthetic samples:
+// Fading memory (odotune/filters/pf_evolution.h) and the slow/fast memory pair that
+// finds changes (odotune/filters/memory_pair.h), on the DKF with synthetic samples:
 // a static robot gets no false change in 20 minutes and a sharper estimate
 // than the fast twin's; a 1 % radius step is found within seconds and
 // tracked; the memory's inflation and growth follow the header.
@@ -10,9 +10,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "filters/dual_kf.h"
-#include "filters/memory_pair.h"
-#include "filters/pf_evolution.h"
+#include <odotune/filters/dual_kf.h>
+#include <odotune/filters/memory_pair.h>
+#include <odotune/filters/pf_evolution.h>
 
 namespace odotune::filters {
 namespace {

@@ -1,4 +1,4 @@
-// The online pose-domain calibrator (filters/pose_calibrator.h): its
+// The online pose-domain calibrator (odotune/filters/pose_calibrator.h): its
 // Jacobians against finite differences, a robot standing still, convergence
 // from a known start and from fixes alone, a radius step followed by the
 // memory pair, outlier fixes, and refused input.
@@ -9,9 +9,9 @@
 
 #include <gtest/gtest.h>
 
-#include "core/planar_motion.h"
-#include "filters/memory_pair.h"
-#include "filters/pose_calibrator.h"
+#include <odotune/core/planar_motion.h>
+#include <odotune/filters/memory_pair.h>
+#include <odotune/filters/pose_calibrator.h>
 
 namespace odotune::filters {
 namespace {

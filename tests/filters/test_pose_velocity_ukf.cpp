@@ -1,4 +1,4 @@
-// The pose-velocity UKF (filters/pose_velocity_ukf.h): the prediction's mean
+// The pose-velocity UKF (odotune/filters/pose_velocity_ukf.h): the prediction's mean
 // against the unicycle model and, for a small covariance, its covariance
 // against the model's Jacobian propagated by hand (P' = F P Fᵀ + Q); a
 // measurement update against the Kalman update written here; fixes pulling
@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "filters/pose_velocity_ukf.h"
+#include <odotune/filters/pose_velocity_ukf.h>
 
 namespace odotune::filters {
 namespace {

@@ -1,4 +1,4 @@
-// Resampling (filters/resampling.h): every scheme unbiased, the low-variance
+// Resampling (odotune/filters/resampling.h): every scheme unbiased, the low-variance
 // schemes below multinomial's copy-count variance, output contract (sorted,
 // any output size, zero weights never drawn, reproducible), N_eff, parsing.
 #include <gtest/gtest.h>
@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "filters/odometry_params.h"
-#include "filters/resampling.h"
+#include <odotune/filters/odometry_params.h>
+#include <odotune/filters/resampling.h>
 
 namespace odotune::filters {
 namespace {

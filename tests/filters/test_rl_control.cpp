@@ -1,4 +1,4 @@
-// robot_localization's control term (filters/rl_control.h) and the EKF's
+// robot_localization's control term (odotune/filters/rl_control.h) and the EKF's
 // prediction with it: computeControlAcceleration's cases worked by hand, the
 // two timeout rules, and ekf.cpp's order (the term applied after the
 // transition and its Jacobian are taken from the state before it).
@@ -9,9 +9,9 @@
 
 #include <gtest/gtest.h>
 
-#include "filters/rl_control.h"
-#include "filters/rl_ekf.h"
-#include "filters/rl_filter.h"
+#include <odotune/filters/rl_control.h>
+#include <odotune/filters/rl_ekf.h>
+#include <odotune/filters/rl_filter.h>
 
 namespace rl = odotune::filters::rl;
 

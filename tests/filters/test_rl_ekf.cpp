@@ -1,4 +1,4 @@
-// robot_localization's EKF (filters/rl_ekf.h): the motion model's Jacobian
+// robot_localization's EKF (odotune/filters/rl_ekf.h): the motion model's Jacobian
 // against finite differences, the sparse predict and the subset correction
 // against a literal dense implementation of ekf.cpp's equations, the
 // filter's behaviour on a standing robot, masks, gating, initialisation and
@@ -13,7 +13,7 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
-#include "filters/rl_ekf.h"
+#include <odotune/filters/rl_ekf.h>
 
 namespace rl = odotune::filters::rl;
 

@@ -1,4 +1,4 @@
-// robot_localization's UKF (filters/rl_ukf.h): its own unit test
+// robot_localization's UKF (odotune/filters/rl_ukf.h): its own unit test
 // (test/test_ukf.cpp, noetic-devel), the prediction against the EKF's where
 // the model is near linear over the points, the correction against the
 // Kalman update with ukf.cpp's covariance update, the places it differs from
@@ -12,8 +12,8 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
-#include "filters/rl_ekf.h"
-#include "filters/rl_ukf.h"
+#include <odotune/filters/rl_ekf.h>
+#include <odotune/filters/rl_ukf.h>
 
 namespace rl = odotune::filters::rl;
 

@@ -1,4 +1,4 @@
-// Velocity UKF (filters/velocity_ukf.h): equals a linear Kalman filter written
+// Velocity UKF (odotune/filters/velocity_ukf.h): equals a linear Kalman filter written
 // independently here (both models are linear, so the unscented transform is
 // exact) on random sequences, parameter checks naming the bad value, health
 // on non-finite input, the eq. 3 pose integration on a circle and NEES.
@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "filters/velocity_ukf.h"
+#include <odotune/filters/velocity_ukf.h>
 
 namespace odotune::filters {
 namespace {

@@ -1,8 +1,8 @@
-// The controller parameter files (formats/controller_config.h): for a known
+// The controller parameter files (odotune/formats/controller_config.h): for a known
 // geometry, every kind's keys and values read back (YAML through yaml-cpp,
 // the SDF element by a regex), both forms, the provenance comments at the
 // top, and invalid input refused with nothing written.
-#include "formats/controller_config.h"
+#include <odotune/formats/controller_config.h>
 
 #include <cmath>
 #include <filesystem>
@@ -18,7 +18,8 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
-#include "core/failure.h"
+#include <odotune/core/failure.h>
+
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 

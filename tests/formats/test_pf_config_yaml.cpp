@@ -1,7 +1,7 @@
-// The tuned PF settings file (odotune-pf-config/1, formats/pf_config_yaml.h):
+// The tuned PF settings file (odotune-pf-config/1, odotune/formats/pf_config_yaml.h):
 // written and read back bit for bit, applied to a calibrator's parameters,
 // and every reading error one line with file and line.
-#include "formats/pf_config_yaml.h"
+#include <odotune/formats/pf_config_yaml.h>
 
 #include <fstream>
 #include <string>
@@ -9,8 +9,9 @@
 
 #include <gtest/gtest.h>
 
-#include "calibration/calibration_objective.h"
-#include "core/failure.h"
+#include <odotune/calibration/calibration_objective.h>
+#include <odotune/core/failure.h>
+
 #include "support/temp_dir.h"
 
 namespace odotune {

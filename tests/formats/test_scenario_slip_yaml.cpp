@@ -1,4 +1,4 @@
-// The slip_episodes list of the scenario YAML (formats/scenario_yaml.h):
+// The slip_episodes list of the scenario YAML (odotune/formats/scenario_yaml.h):
 // parsing, FILE:LINE one-line errors, the write -> read round trip, and the
 // wheelchair learning/slip scenarios (parse and validate; only the short
 // round-trip scenario is simulated).
@@ -13,13 +13,14 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "formats/scenario_yaml.h"
-#include "sim/motion_profile.h"
-#include "sim/random_slip.h"
-#include "sim/simulator.h"
-#include "sim/slip_episodes.h"
+#include <odotune/formats/scenario_yaml.h>
+#include <odotune/sim/motion_profile.h>
+#include <odotune/sim/random_slip.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/sim/slip_episodes.h>
+#include <odotune/tracks/track_io.h>
+
 #include "support/cli_runner.h"
-#include "tracks/track_io.h"
 
 namespace odotune::cli {
 namespace {

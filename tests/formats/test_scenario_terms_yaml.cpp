@@ -1,5 +1,5 @@
-// The `terms:` section of scenario YAML (formats/scenario_yaml.h,
-// sim/model_terms.h): read in both name forms, written back to the same
+// The `terms:` section of scenario YAML (odotune/formats/scenario_yaml.h,
+// odotune/sim/model_terms.h): read in both name forms, written back to the same
 // terms, errors naming file, line and field.
 #include <stdexcept>
 #include <string>
@@ -7,7 +7,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "formats/scenario_yaml.h"
+#include <odotune/formats/scenario_yaml.h>
 
 namespace odotune {
 namespace {

@@ -1,4 +1,4 @@
-// scenario_to_yaml (formats/scenario_yaml.h) and the motion.knots form of the
+// scenario_to_yaml (odotune/formats/scenario_yaml.h) and the motion.knots form of the
 // scenario reader: a written scenario parses back to the same fields and
 // simulates to a byte-identical track; knots errors name file and line.
 #include <cmath>
@@ -13,11 +13,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "formats/scenario_yaml.h"
-#include "sim/effects.h"
-#include "sim/scenario_from_track.h"
-#include "sim/simulator.h"
-#include "tracks/track_io.h"
+#include <odotune/formats/scenario_yaml.h>
+#include <odotune/sim/effects.h>
+#include <odotune/sim/scenario_from_track.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune::cli {
 namespace {

@@ -1,4 +1,4 @@
-// Scenario YAML (formats/scenario_yaml.h), the bundled reference scenarios and
+// Scenario YAML (odotune/formats/scenario_yaml.h), the bundled reference scenarios and
 // tracks, and the `odotune simulate` command end to end.
 #include <cmath>
 #include <filesystem>
@@ -11,11 +11,12 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "formats/scenario_yaml.h"
-#include "sim/effects.h"
-#include "sim/simulator.h"
+#include <odotune/formats/scenario_yaml.h>
+#include <odotune/sim/effects.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/tracks/track_io.h>
+
 #include "support/cli_runner.h"
-#include "tracks/track_io.h"
 
 namespace odotune::cli {
 namespace {

@@ -1,12 +1,14 @@
 // Uses odotune from its installed package: a PSO minimisation (tuner/) and an
-// EKF step (filters/). Exits 1 with a line on stderr when a result is wrong, so
+// EKF step (filters/), beside a header of its own named filters/ekf.h. Exits 1 with a line on stderr when a result is wrong, so
 // the ctest Install.OutsideProjectFindsOdotune fails on a broken install.
 #include <cmath>
 #include <cstdio>
 #include <span>
 
-#include "filters/ekf.h"
-#include "tuner/pso.h"
+#include <odotune/filters/ekf.h>
+#include <odotune/tuner/pso.h>
+
+#include "filters/ekf.h"  // the consumer's own header of the same name
 
 namespace {
 
@@ -53,6 +55,8 @@ int main() {
               "the fix did not pull x between the prediction (1.0) and the fix (1.02)");
   ok &= check(ekf.cov()(0, 0) < var_x_after_predict, "the fix did not shrink the x variance");
   ok &= check(ekf.check() == odotune::filters::Divergence::none, "the filter diverged");
+  ok &= check(consumer::smooth(1.0, 3.0, 0.5) == 2.0,
+              "the consumer's own filters/ekf.h was not the one included");
   if (!ok) return 1;
   std::printf("consumer: ok\n");
   return 0;

@@ -29,6 +29,20 @@ foreach(f ${_targets})
   endif()
 endforeach()
 
+# Every installed header includes odotune's others as <odotune/MODULE/…>,
+# never as "MODULE/…", which would find a consumer's own folder first.
+file(GLOB_RECURSE _headers ${prefix}/include/odotune/*.h)
+list(LENGTH _headers _n)
+if(_n EQUAL 0)
+  message(FATAL_ERROR "install test: no headers under ${prefix}/include/odotune")
+endif()
+foreach(h ${_headers})
+  file(STRINGS ${h} _bad REGEX "^[ \t]*#[ \t]*include[ \t]*\"[a-z_]+/")
+  if(_bad)
+    message(FATAL_ERROR "install test: ${h} includes ${_bad} without the odotune/ prefix")
+  endif()
+endforeach()
+
 set(launcher "")
 if(LAUNCHER)
   set(launcher -DCMAKE_CXX_COMPILER_LAUNCHER=${LAUNCHER})

@@ -1,15 +1,16 @@
-// One calibrator tuning run (jobs/calibration_tune_job.h) on a short
+// One calibrator tuning run (odotune/jobs/calibration_tune_job.h) on a short
 // simulated wheelchair drive, in process: the default calibrator, the
 // never-worse-than-the-defaults rule, NLopt starting from the defaults, and
 // tracks of different robots refused.
-#include "jobs/calibration_tune_job.h"
+#include <odotune/jobs/calibration_tune_job.h>
 
 #include <cmath>
 #include <stdexcept>
 
 #include <gtest/gtest.h>
 
-#include "calibration/calibration_objective.h"
+#include <odotune/calibration/calibration_objective.h>
+
 #include "diagnose/sim_track.h"
 
 namespace odotune {

@@ -3,9 +3,10 @@
 // full 50 × 150 is the demo's and the benchmark's).
 #include <gtest/gtest.h>
 
-#include "jobs/tune_job.h"
+#include <odotune/jobs/tune_job.h>
+#include <odotune/tracks/track_io.h>
+
 #include "support/cli_runner.h"
-#include "tracks/track_io.h"
 
 namespace odotune {
 namespace {

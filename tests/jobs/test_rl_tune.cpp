@@ -1,5 +1,5 @@
 // Every solver the tuner offers (PSO and each NLopt algorithm) on the
-// robot_localization objective (objectives/rl_objective.h) of a small
+// robot_localization objective (odotune/objectives/rl_objective.h) of a small
 // synthetic GPS drive: the run ends well, stays in the box, reports a best
 // point whose fitness it is, and a local start is never made worse.
 #include <cmath>
@@ -9,15 +9,16 @@
 
 #include <gtest/gtest.h>
 
-#include "jobs/rl_search.h"
-#include "jobs/tune_job.h"
-#include "objectives/rl_objective.h"
-#include "rlnode/gps_alignment.h"
-#include "rlnode/params.h"
-#include "rlnode/recording.h"
+#include <odotune/jobs/rl_search.h>
+#include <odotune/jobs/tune_job.h>
+#include <odotune/objectives/rl_objective.h>
+#include <odotune/rlnode/gps_alignment.h>
+#include <odotune/rlnode/params.h>
+#include <odotune/rlnode/recording.h>
+#include <odotune/tuner/nlopt_solver.h>
+
 #include "support/rl_gps_bag.h"
 #include "support/temp_dir.h"
-#include "tuner/nlopt_solver.h"
 
 namespace {
 
@@ -153,7 +154,7 @@ TEST(RlTune, FitnessNamesAndStoredModesRoundTrip) {
   EXPECT_EQ(untouched, RlFitness::both);
 }
 
-// The staged search (jobs/rl_search.h): the grid is deterministic; a start's parameters either were determined
+// The staged search (odotune/jobs/rl_search.h): the grid is deterministic; a start's parameters either were determined
 // (their range leaves out the file's value) or were reset to the file's value,
 // and the reset costs less than the tolerance; same seed, same start with one
 // or two threads.
@@ -231,7 +232,7 @@ TEST(RlTune, WorseAtHeldOutFixesScoresAboveTheFile) {
   EXPECT_GT(worse, 0);
 }
 
-// The field's criteria (objectives/rl_innovations.h) as the tune's fitness:
+// The field's criteria (odotune/objectives/rl_innovations.h) as the tune's fitness:
 // finite at the file and across the box, and under the same guard: a
 // candidate worse than the file at held-out fixes scores above the file.
 TEST(RlTune, FieldCriteriaAreFiniteAndGuarded) {

@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "jobs/run_record_bytes.h"
+#include <odotune/jobs/run_record_bytes.h>
 
 namespace odotune::cli {
 namespace {

@@ -1,4 +1,4 @@
-// Fusion input (learned/fusion_input.h) on a small simulated drive
+// Fusion input (odotune/learned/fusion_input.h) on a small simulated drive
 // (fusion_track.h: straight, arc, spin): step times, encoder increments
 // against the tick column, ground-truth velocities against the commanded
 // cruise velocities, the kinematic odometry against the ground truth within
@@ -12,9 +12,10 @@
 
 #include <gtest/gtest.h>
 
-#include "learned/fusion_input.h"
+#include <odotune/learned/fusion_input.h>
+#include <odotune/tracks/body_velocity.h>
+
 #include "support/fusion_track.h"
-#include "tracks/body_velocity.h"
 
 namespace odotune {
 namespace {

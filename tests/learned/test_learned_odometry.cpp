@@ -1,4 +1,4 @@
-// Learned odometry (learned/learned_odometry.h), the slip detector
+// Learned odometry (odotune/learned/learned_odometry.h), the slip detector
 // (slip_detector.h), the fused system with online retraining
 // (learned_fusion.h) and the Table 1–3 metrics (odometry_metrics.h), on
 // wheelchair-like tracks simulated in memory (calibration_track.h).
@@ -7,13 +7,14 @@
 #include <cmath>
 #include <numeric>
 
-#include "learned/fusion_input.h"
-#include "learned/learned_fusion.h"
-#include "learned/learned_odometry.h"
-#include "learned/odometry_metrics.h"
-#include "learned/odometry_selection.h"
-#include "learned/slip_detector.h"
-#include "sim/slip_episodes.h"
+#include <odotune/learned/fusion_input.h>
+#include <odotune/learned/learned_fusion.h>
+#include <odotune/learned/learned_odometry.h>
+#include <odotune/learned/odometry_metrics.h>
+#include <odotune/learned/odometry_selection.h>
+#include <odotune/learned/slip_detector.h>
+#include <odotune/sim/slip_episodes.h>
+
 #include "support/calibration_track.h"
 
 namespace odotune {

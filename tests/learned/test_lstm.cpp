@@ -1,4 +1,4 @@
-// LSTM forward pass (learned/lstm.h) against an independent Eigen matrix
+// LSTM forward pass (odotune/learned/lstm.h) against an independent Eigen matrix
 // formulation of Fariña et al. (Sensors 2023) eqs. 5–8, the ReLU floor,
 // predict's standardisation / de-normalisation, the zero-weight net and IsValid.
 #include <gtest/gtest.h>
@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "core/counter_rng.h"
-#include "learned/lstm.h"
+#include <odotune/core/counter_rng.h>
+#include <odotune/learned/lstm.h>
 
 namespace odotune::filters {
 namespace {

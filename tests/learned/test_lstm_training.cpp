@@ -1,4 +1,4 @@
-// LSTM training (learned/lstm_training.h, lstm_bptt.h): BPTT Jacobian vs
+// LSTM training (odotune/learned/lstm_training.h, lstm_bptt.h): BPTT Jacobian vs
 // Ceres autodiff vs central finite differences, training lowers the MAE on a
 // task that needs memory, retraining adapts, thread-count determinism,
 // split_sequences and the bad-input messages.
@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "core/counter_rng.h"
-#include "learned/lstm_training.h"
+#include <odotune/core/counter_rng.h>
+#include <odotune/learned/lstm_training.h>
 
 namespace odotune {
 namespace {

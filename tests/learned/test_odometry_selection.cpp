@@ -1,12 +1,12 @@
 // The choice of correction nets by cross-validation
-// (learned/odometry_selection.h): the gate on every fold and the
+// (odotune/learned/odometry_selection.h): the gate on every fold and the
 // one-standard-error rule, on measures written by hand.
 #include <cmath>
 #include <vector>
 
 #include <gtest/gtest.h>
 
-#include "learned/odometry_selection.h"
+#include <odotune/learned/odometry_selection.h>
 
 namespace odotune {
 namespace {

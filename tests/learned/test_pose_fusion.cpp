@@ -1,7 +1,7 @@
-// Odometry fused with position fixes (learned/pose_fusion.h), the slip
-// detector without motor power (learned/slip_detector.h: drives commands
+// Odometry fused with position fixes (odotune/learned/pose_fusion.h), the slip
+// detector without motor power (odotune/learned/slip_detector.h: drives commands
 // and none), and the fusion input's reference velocities from the ground
-// truth and its slices (learned/fusion_input.h), on simulated chair drives.
+// truth and its slices (odotune/learned/fusion_input.h), on simulated chair drives.
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -9,11 +9,12 @@
 
 #include <gtest/gtest.h>
 
-#include "learned/fusion_input.h"
-#include "learned/learned_odometry.h"
-#include "learned/odometry_metrics.h"
-#include "learned/pose_fusion.h"
-#include "learned/slip_detector.h"
+#include <odotune/learned/fusion_input.h>
+#include <odotune/learned/learned_odometry.h>
+#include <odotune/learned/odometry_metrics.h>
+#include <odotune/learned/pose_fusion.h>
+#include <odotune/learned/slip_detector.h>
+
 #include "support/calibration_track.h"
 
 namespace odotune {

@@ -1,4 +1,4 @@
-// Velocity fusion (learned/ukf_fusion.h) on small simulated drives
+// Velocity fusion (odotune/learned/ukf_fusion.h) on small simulated drives
 // (fusion_track.h): the UKF's consistency (NEES within χ² bounds on a clean
 // track, and a mis-set filter failing the same bounds), fusion with the
 // external velocities beating the odometry alone under a radius error, the
@@ -12,9 +12,10 @@
 
 #include <gtest/gtest.h>
 
-#include "filters/velocity_ukf.h"
-#include "learned/fusion_input.h"
-#include "learned/ukf_fusion.h"
+#include <odotune/filters/velocity_ukf.h>
+#include <odotune/learned/fusion_input.h>
+#include <odotune/learned/ukf_fusion.h>
+
 #include "support/fusion_track.h"
 
 namespace odotune {

@@ -1,4 +1,4 @@
-// The UKF as a tunable model (learned/ukf_objective.h): its named,
+// The UKF as a tunable model (odotune/learned/ukf_objective.h): its named,
 // bounded, log-scaled space, the fitness against a direct replay, PSO
 // lowering the fitness below the defaults' on a track with a radius error,
 // determinism over seeds and thread counts, divergence as a counted penalty,
@@ -12,11 +12,12 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
-#include "learned/fusion_input.h"
-#include "learned/ukf_objective.h"
-#include "objectives/ekf_objective.h"  // kDivergencePenalty
+#include <odotune/learned/fusion_input.h>
+#include <odotune/learned/ukf_objective.h>
+#include <odotune/objectives/ekf_objective.h>  // kDivergencePenalty
+#include <odotune/tuner/pso.h>
+
 #include "support/fusion_track.h"
-#include "tuner/pso.h"
 
 namespace odotune {
 namespace {

@@ -1,14 +1,14 @@
 // The fitness modes: numbers and names both ways, what the command line and
 // experiment files accept, and that each mode's scalar is the one it names.
-#include "objectives/fitness_mode.h"
+#include <odotune/objectives/fitness_mode.h>
 
 #include <stdexcept>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "objectives/fix_cv_replay.h"
-#include "objectives/metrics.h"
+#include <odotune/objectives/fix_cv_replay.h>
+#include <odotune/objectives/metrics.h>
 
 namespace odotune {
 namespace {

@@ -1,4 +1,4 @@
-// Fix cross-validation (objectives/fix_cv_replay.h) and the replay from the
+// Fix cross-validation (odotune/objectives/fix_cv_replay.h) and the replay from the
 // first fix (ReplayReference::fixes): the held-out prediction equals the
 // one-step EKF's; the heading fit; per-fix variances; the scores rank noise
 // settings as ground truth does; refusals.
@@ -7,12 +7,13 @@
 #include <cmath>
 #include <numbers>
 
-#include "filters/ekf.h"
-#include "objectives/ekf_objective.h"
-#include "objectives/fix_cv_replay.h"
-#include "objectives/param_space.h"
-#include "objectives/replay.h"
-#include "objectives/replay_input.h"
+#include <odotune/filters/ekf.h>
+#include <odotune/objectives/ekf_objective.h>
+#include <odotune/objectives/fix_cv_replay.h>
+#include <odotune/objectives/param_space.h>
+#include <odotune/objectives/replay.h>
+#include <odotune/objectives/replay_input.h>
+
 #include "support/synthetic_track.h"
 
 namespace odotune {
@@ -34,7 +35,7 @@ filters::NoiseParams alpha(double a1, double a2) {
   return n;
 }
 
-// The held-out scores recomputed with the one-step filter (filters/ekf.h):
+// The held-out scores recomputed with the one-step filter (odotune/filters/ekf.h):
 // for each fold, predict over every step, apply the fixes of other folds,
 // and compare the prediction with each held-out fix.
 FixCvOutcome reference_cv(const ReplayInput& in, const FixCvOptions& cv, const filters::NoiseParams& noise) {

@@ -1,6 +1,6 @@
 // The equivalent constant process-noise rate of the alpha/gyro models against
 // closed forms on motions where R_k is known by hand, and the rq case.
-#include "objectives/process_noise_rate.h"
+#include <odotune/objectives/process_noise_rate.h>
 
 #include <cmath>
 #include <numbers>
@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "results/ros_export.h"
+#include <odotune/results/ros_export.h>
 
 namespace odotune {
 namespace {

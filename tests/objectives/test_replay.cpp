@@ -3,10 +3,11 @@
 
 #include <gtest/gtest.h>
 
-#include "objectives/ekf_objective.h"
-#include "objectives/param_space.h"
-#include "objectives/replay.h"
-#include "objectives/replay_input.h"
+#include <odotune/objectives/ekf_objective.h>
+#include <odotune/objectives/param_space.h>
+#include <odotune/objectives/replay.h>
+#include <odotune/objectives/replay_input.h>
+
 #include "support/synthetic_track.h"
 
 namespace odotune {

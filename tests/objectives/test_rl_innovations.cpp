@@ -1,4 +1,4 @@
-// The innovation statistics of objectives/rl_innovations.h on sequences whose
+// The innovation statistics of odotune/objectives/rl_innovations.h on sequences whose
 // answer is known (consistent and white, covariance mis-scaled, correlated),
 // and the replay's recording of innovations on a synthetic GPS drive
 // (tests/support/rl_gps_bag.h).
@@ -9,10 +9,11 @@
 
 #include <gtest/gtest.h>
 
-#include "objectives/rl_innovations.h"
-#include "objectives/rl_protocols.h"
-#include "rlnode/gps_alignment.h"
-#include "rlnode/params.h"
+#include <odotune/objectives/rl_innovations.h>
+#include <odotune/objectives/rl_protocols.h>
+#include <odotune/rlnode/gps_alignment.h>
+#include <odotune/rlnode/params.h>
+
 #include "support/rl_gps_bag.h"
 #include "support/temp_dir.h"
 

@@ -1,5 +1,5 @@
 // Which fixes robot_localization's replay fuses, withholds and scores
-// (objectives/rl_protocols.h), and the outage windows replayed from one fused
+// (odotune/objectives/rl_protocols.h), and the outage windows replayed from one fused
 // run (OutageReplays) against each window replayed on its own, on a small
 // synthetic GPS drive (tests/support/rl_gps_bag.h: 80 s, fixes at 2 Hz).
 #include <cmath>
@@ -7,10 +7,11 @@
 
 #include <gtest/gtest.h>
 
-#include "objectives/rl_objective.h"
-#include "objectives/rl_protocols.h"
-#include "rlnode/gps_alignment.h"
-#include "rlnode/params.h"
+#include <odotune/objectives/rl_objective.h>
+#include <odotune/objectives/rl_protocols.h>
+#include <odotune/rlnode/gps_alignment.h>
+#include <odotune/rlnode/params.h>
+
 #include "support/rl_gps_bag.h"
 #include "support/temp_dir.h"
 

@@ -1,4 +1,4 @@
-// robot_localization's EKF on a track (objectives/rl_track.h): where it
+// robot_localization's EKF on a track (odotune/objectives/rl_track.h): where it
 // starts, what it is scored by against ground truth, the refusals, and
 // several tracks tuned as one objective (RlObjective over recordings).
 #include <cmath>
@@ -9,9 +9,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "objectives/rl_objective.h"
-#include "objectives/rl_track.h"
-#include "rlnode/params.h"
+#include <odotune/objectives/rl_objective.h>
+#include <odotune/objectives/rl_track.h>
+#include <odotune/rlnode/params.h>
+
 #include "support/rl_team_file.h"
 #include "support/synthetic_track.h"
 #include "support/temp_dir.h"

@@ -1,4 +1,4 @@
-// The estimates-over-time figure (results/calibration_figures.h). gnuplot is
+// The estimates-over-time figure (odotune/results/calibration_figures.h). gnuplot is
 // a build dependency (scripts/install-deps.sh): when it is missing these
 // tests FAIL on purpose, as the study's figure tests do.
 #include <gtest/gtest.h>
@@ -12,7 +12,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "results/calibration_figures.h"
+#include <odotune/results/calibration_figures.h>
+
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 

@@ -13,9 +13,10 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "results/diagnosis_figures.h"
-#include "results/diagnosis_report.h"
-#include "results/gnuplot.h"
+#include <odotune/results/diagnosis_figures.h>
+#include <odotune/results/diagnosis_report.h>
+#include <odotune/results/gnuplot.h>
+
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 

@@ -1,7 +1,7 @@
 // Figures: each figure renders a PNG and an SVG through gnuplot. gnuplot is a
 // build dependency (scripts/install-deps.sh installs gnuplot-nox): when it is
 // missing these tests FAIL on purpose.
-#include "results/figures.h"
+#include <odotune/results/figures.h>
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -17,8 +17,9 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "results/gnuplot.h"
-#include "results/param_range_figure.h"
+#include <odotune/results/gnuplot.h>
+#include <odotune/results/param_range_figure.h>
+
 #include "support/cli_runner.h"
 
 namespace odotune::results {

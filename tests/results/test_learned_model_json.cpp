@@ -1,4 +1,4 @@
-// The learned-model file "odotune-learned/1" (results/learned_model_json.h):
+// The learned-model file "odotune-learned/1" (odotune/results/learned_model_json.h):
 // an exact round trip, and one-line errors naming the file and the JSON field
 // for every kind of bad field.
 #include <gtest/gtest.h>
@@ -10,8 +10,9 @@
 #include <random>
 #include <string>
 
-#include "results/learned_model_json.h"
-#include "results/lstm_json.h"
+#include <odotune/results/learned_model_json.h>
+#include <odotune/results/lstm_json.h>
+
 #include "support/temp_dir.h"
 
 namespace odotune {

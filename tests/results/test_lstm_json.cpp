@@ -1,4 +1,4 @@
-// LSTM nets as JSON (results/lstm_json.h): exact round trip, and every bad
+// LSTM nets as JSON (odotune/results/lstm_json.h): exact round trip, and every bad
 // field rejected with a one-line message naming it.
 #include <gtest/gtest.h>
 
@@ -8,8 +8,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/counter_rng.h"
-#include "results/lstm_json.h"
+#include <odotune/core/counter_rng.h>
+#include <odotune/results/lstm_json.h>
 
 namespace odotune {
 namespace {

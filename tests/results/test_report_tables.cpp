@@ -1,12 +1,12 @@
 // The report's numbers from hand-made runs whose means are worked out here,
 // and the HTML page's SVG inlining.
-#include "results/report_tables.h"
+#include <odotune/results/report_tables.h>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "results/report_html.h"
+#include <odotune/results/report_html.h>
 
 namespace odotune::results {
 namespace {

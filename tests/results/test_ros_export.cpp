@@ -1,5 +1,5 @@
 // Tests of the robot_localization (ROS 2 ekf_node) parameter-file export.
-#include "results/ros_export.h"
+#include <odotune/results/ros_export.h>
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>

@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "results/store.h"
+#include <odotune/results/store.h>
 
 namespace odotune::results {
 namespace {

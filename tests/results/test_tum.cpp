@@ -1,4 +1,4 @@
-// TUM trajectories (results/tum.h): the lines evo reads, read back to the
+// TUM trajectories (odotune/results/tum.h): the lines evo reads, read back to the
 // poses (heading from the quaternion), the time offset, and an atomic write.
 #include <gtest/gtest.h>
 
@@ -8,7 +8,8 @@
 #include <sstream>
 #include <string>
 
-#include "results/tum.h"
+#include <odotune/results/tum.h>
+
 #include "support/temp_dir.h"
 
 namespace odotune::results {

@@ -1,9 +1,9 @@
-// robot_localization parameter files (rlnode/params.h): the Husky file and
+// robot_localization parameter files (odotune/rlnode/params.h): the Husky file and
 // robot_localization's own ROS 2 test files read as ekf_node reads them, ROS 1
 // files (sections and flat), the covariance forms, the input numbering rule,
 // each refusal as one line with its line number, and the writer: in place with
 // the user's comments kept, or converted to the other form, always reading back.
-#include "rlnode/params.h"
+#include <odotune/rlnode/params.h>
 
 #include <filesystem>
 #include <fstream>

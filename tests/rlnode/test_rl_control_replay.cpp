@@ -10,9 +10,10 @@
 
 #include <gtest/gtest.h>
 
-#include "rlnode/params.h"
-#include "rlnode/recording.h"
-#include "rlnode/replay.h"
+#include <odotune/rlnode/params.h>
+#include <odotune/rlnode/recording.h>
+#include <odotune/rlnode/replay.h>
+
 #include "support/ros2_bag.h"
 #include "support/temp_dir.h"
 

@@ -13,10 +13,11 @@
 #include <GeographicLib/LocalCartesian.hpp>
 #include <gtest/gtest.h>
 
-#include "rlnode/geodesy.h"
-#include "rlnode/params.h"
-#include "rlnode/recording.h"
-#include "rlnode/replay.h"
+#include <odotune/rlnode/geodesy.h>
+#include <odotune/rlnode/params.h>
+#include <odotune/rlnode/recording.h>
+#include <odotune/rlnode/replay.h>
+
 #include "support/rl_gps_bag.h"
 #include "support/ros2_bag.h"
 #include "support/temp_dir.h"

@@ -16,11 +16,12 @@
 #include <GeographicLib/LocalCartesian.hpp>
 #include <gtest/gtest.h>
 
-#include "bags/bag.h"
-#include "rlnode/gps_alignment.h"
-#include "rlnode/params.h"
-#include "rlnode/recording.h"
-#include "rlnode/replay.h"
+#include <odotune/bags/bag.h>
+#include <odotune/rlnode/gps_alignment.h>
+#include <odotune/rlnode/params.h>
+#include <odotune/rlnode/recording.h>
+#include <odotune/rlnode/replay.h>
+
 #include "support/rl_gps_bag.h"
 #include "support/rl_test1.h"
 #include "support/ros2_bag.h"

@@ -1,4 +1,4 @@
-// A recording made of plain samples (rlnode/sample_recording.h): which of the
+// A recording made of plain samples (odotune/rlnode/sample_recording.h): which of the
 // file's inputs each stream is, the refusals, and the messages as the node's
 // callbacks prepare them.
 #include <fstream>
@@ -7,9 +7,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "rlnode/params.h"
-#include "rlnode/replay.h"
-#include "rlnode/sample_recording.h"
+#include <odotune/rlnode/params.h>
+#include <odotune/rlnode/replay.h>
+#include <odotune/rlnode/sample_recording.h>
+
 #include "support/temp_dir.h"
 
 namespace {

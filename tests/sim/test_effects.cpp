@@ -1,4 +1,4 @@
-// The effect vocabulary (sim/effects.h): names verbatim from the spec,
+// The effect vocabulary (odotune/sim/effects.h): names verbatim from the spec,
 // command-line specs, validation messages, override semantics.
 #include <filesystem>
 #include <fstream>
@@ -12,7 +12,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "sim/effects.h"
+#include <odotune/sim/effects.h>
 
 namespace odotune::sim {
 namespace {

@@ -1,6 +1,6 @@
-// Model terms (sim/model_terms.h): names in both forms, evaluation, the
+// Model terms (odotune/sim/model_terms.h): names in both forms, evaluation, the
 // formula, validation, and the simulator applying them (docs/simulator.md step 5a).
-#include "sim/model_terms.h"
+#include <odotune/sim/model_terms.h>
 
 #include <cmath>
 #include <numbers>
@@ -12,8 +12,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "sim/effects.h"
-#include "sim/simulator.h"
+#include <odotune/sim/effects.h>
+#include <odotune/sim/simulator.h>
 
 namespace odotune::sim {
 namespace {

@@ -1,4 +1,4 @@
-// Random slip-episode layouts (sim/random_slip.h): valid, inside moving
+// Random slip-episode layouts (odotune/sim/random_slip.h): valid, inside moving
 // stretches, within the option ranges, both kinds and wheels, seeded, and
 // bad options refused with the field named.
 #include <cmath>
@@ -9,9 +9,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "sim/motion_profile.h"
-#include "sim/random_slip.h"
-#include "sim/slip_episodes.h"
+#include <odotune/sim/motion_profile.h>
+#include <odotune/sim/random_slip.h>
+#include <odotune/sim/slip_episodes.h>
 
 namespace odotune::sim {
 namespace {

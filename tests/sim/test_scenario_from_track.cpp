@@ -1,4 +1,4 @@
-// scenario_from_track (sim/scenario_from_track.h) and the explicit
+// scenario_from_track (odotune/sim/scenario_from_track.h) and the explicit
 // velocity knots of the motion profile (motion_profile.h): a track simulated
 // with an effect, turned back into a scenario with the same effect and
 // simulated again, drives the same ground path; the effect then shows in the
@@ -16,10 +16,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "sim/effects.h"
-#include "sim/motion_profile.h"
-#include "sim/scenario_from_track.h"
-#include "sim/simulator.h"
+#include <odotune/sim/effects.h>
+#include <odotune/sim/motion_profile.h>
+#include <odotune/sim/scenario_from_track.h>
+#include <odotune/sim/simulator.h>
 
 namespace odotune::sim {
 namespace {

@@ -1,4 +1,4 @@
-// The simulator (sim/simulator.h) and the motion profile: each physics
+// The simulator (odotune/sim/simulator.h) and the motion profile: each physics
 // effect changes exactly what physics-effects.md says and nothing else; the
 // nominal kinematics of track-format.md reproduce the ground truth from the
 // ticks; noise is seeded and has the configured size; commands respect the
@@ -12,10 +12,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "sim/effects.h"
-#include "sim/motion_profile.h"
-#include "sim/simulator.h"
-#include "tracks/track_io.h"
+#include <odotune/sim/effects.h>
+#include <odotune/sim/motion_profile.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune::sim {
 namespace {

@@ -16,9 +16,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "sim/simulator.h"
-#include "sim/slip_episodes.h"
-#include "tracks/track_io.h"
+#include <odotune/sim/simulator.h>
+#include <odotune/sim/slip_episodes.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune::sim {
 namespace {

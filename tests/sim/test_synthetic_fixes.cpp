@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "sim/synthetic_fixes.h"
+#include <odotune/sim/synthetic_fixes.h>
 
 namespace odotune {
 namespace {

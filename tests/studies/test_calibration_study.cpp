@@ -1,5 +1,5 @@
-// The calibration study's computation helpers (studies/calibration_study.h),
-// its tables and figure data (studies/study_tables.h, studies/study_outputs.h)
+// The calibration study's computation helpers (odotune/studies/calibration_study.h),
+// its tables and figure data (odotune/studies/study_tables.h, odotune/studies/study_outputs.h)
 // on a short wheelchair drive; `odotune study` end to end is
 // tests/cli/test_cli_study.cpp.
 #include <gtest/gtest.h>
@@ -9,9 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "studies/calibration_study.h"
-#include "studies/study_outputs.h"
-#include "studies/study_tables.h"
+#include <odotune/studies/calibration_study.h>
+#include <odotune/studies/study_outputs.h>
+#include <odotune/studies/study_tables.h>
+
 #include "support/study_fixtures.h"
 
 namespace odotune {

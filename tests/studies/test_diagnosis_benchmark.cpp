@@ -20,15 +20,16 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "core/failure.h"
-#include "diagnose/diag_input.h"
-#include "diagnose/recordings.h"
-#include "sim/effects.h"
-#include "sim/motion_profile.h"
-#include "sim/simulator.h"
-#include "studies/diagnosis_benchmark.h"
-#include "studies/diagnosis_benchmark_outputs.h"
-#include "studies/diagnosis_drives.h"
+#include <odotune/core/failure.h>
+#include <odotune/diagnose/diag_input.h>
+#include <odotune/diagnose/recordings.h>
+#include <odotune/sim/effects.h>
+#include <odotune/sim/motion_profile.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/studies/diagnosis_benchmark.h>
+#include <odotune/studies/diagnosis_benchmark_outputs.h>
+#include <odotune/studies/diagnosis_drives.h>
+
 #include "support/temp_dir.h"
 
 namespace odotune {

@@ -10,8 +10,8 @@
 #include <numbers>
 #include <vector>
 
-#include "filters/odometry_params.h"
-#include "sim/normal_rng.h"
+#include <odotune/filters/odometry_params.h>
+#include <odotune/sim/normal_rng.h>
 
 namespace odotune::filters::testing {
 

@@ -9,8 +9,9 @@
 #include <string>
 #include <vector>
 
+#include <odotune/filters/odometry_params.h>
+
 #include "diagnose/sim_track.h"
-#include "filters/odometry_params.h"
 
 namespace odotune::testing_support {
 
@@ -19,7 +20,7 @@ inline constexpr double kChairBaseM = 0.65;
 
 struct ChairTrackOptions {
   double duration_s = 120.0;
-  std::vector<std::string> effects;  // sim/effects.h syntax
+  std::vector<std::string> effects;  // odotune/sim/effects.h syntax
   double ext_sigma_v_m_s = 0.02;
   double ext_sigma_w_rad_s = 0.02;
   bool ext = true;  // external velocity sensor on

@@ -1,6 +1,6 @@
 // Test helper for the velocity-fusion tests (fusion_input.h, ukf_fusion.h,
 // ukf_objective.h): a small simulated drive built in memory through the
-// project's simulator (sim/simulator.h): 1 s at rest, a straight, a left
+// project's simulator (odotune/sim/simulator.h): 1 s at rest, a straight, a left
 // arc, a spin on the spot, a second straight, 1 s at rest. Default robot
 // (80 mm wheels, 0.42 m base, 2048 counts/rev), every sensor on: encoders,
 // commands, gyro and power at 100 Hz, the external velocity sensor at 10 Hz
@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "sim/effects.h"
-#include "sim/scenario.h"
-#include "sim/simulator.h"
-#include "tracks/track.h"
+#include <odotune/sim/effects.h>
+#include <odotune/sim/scenario.h>
+#include <odotune/sim/simulator.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune::testing_support {
 
@@ -32,7 +32,7 @@ struct FusionTrackOptions {
   double gyro_sigma_rad_s = 0.002;
   double ext_sigma_v_m_s = 0.02, ext_sigma_w_rad_s = 0.02;
   bool ext = true, gyro = true, power = true, gt = true;
-  std::vector<std::string> effects;  // sim/effects.h syntax
+  std::vector<std::string> effects;  // odotune/sim/effects.h syntax
 };
 
 inline sim::Scenario fusion_scenario(const FusionTrackOptions& o) {

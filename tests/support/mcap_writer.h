@@ -26,8 +26,8 @@
 #include <utility>
 #include <vector>
 
-#include "bags/compression.h"
-#include "bags/mcap.h"
+#include <odotune/bags/compression.h>
+#include <odotune/bags/mcap.h>
 
 namespace odotune::bags::mcap::testing {
 

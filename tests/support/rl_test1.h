@@ -2,8 +2,8 @@
 // bag1 test plays it.
 #pragma once
 
-#include "rlnode/frames.h"
-#include "rlnode/recording.h"
+#include <odotune/rlnode/frames.h>
+#include <odotune/rlnode/recording.h>
 
 namespace odotune::testing_support {
 

@@ -10,7 +10,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "results/store.h"
+#include <odotune/results/store.h>
 
 namespace odotune::testing_support {
 

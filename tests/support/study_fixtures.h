@@ -11,7 +11,7 @@
 
 #include <gtest/gtest.h>
 
-#include "formats/scenario_yaml.h"
+#include <odotune/formats/scenario_yaml.h>
 
 namespace odotune::study_fixtures {
 

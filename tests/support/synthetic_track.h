@@ -7,7 +7,7 @@
 #include <cmath>
 #include <random>
 
-#include "tracks/track.h"
+#include <odotune/tracks/track.h>
 
 namespace odotune::testing_support {
 

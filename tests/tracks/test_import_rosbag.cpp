@@ -1,4 +1,4 @@
-// import_rosbag (tracks/import_rosbag.h): robot_localization's Husky
+// import_rosbag (odotune/tracks/import_rosbag.h): robot_localization's Husky
 // recording imported from its ROS 1, MCAP and SQLite forms gives one track;
 // the IMU mounting rotation makes the gyro agree with the odometry; the fixes'
 // local frame; and, on small bags made here, JointState wheels, the stamp
@@ -10,11 +10,12 @@
 #include <numbers>
 #include <string>
 
-#include "bags/bag.h"
+#include <odotune/bags/bag.h>
+#include <odotune/tracks/import_rosbag.h>
+#include <odotune/tracks/track_io.h>
+
 #include "support/ros2_bag.h"
 #include "support/temp_dir.h"
-#include "tracks/import_rosbag.h"
-#include "tracks/track_io.h"
 
 namespace odotune {
 namespace {

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "tracks/importers.h"
-#include "tracks/track.h"
+#include <odotune/tracks/importers.h>
+#include <odotune/tracks/track.h>
 
 namespace odotune {
 namespace {

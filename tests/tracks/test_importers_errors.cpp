@@ -13,8 +13,8 @@
 
 #include <unistd.h>
 
-#include "tracks/importers.h"
-#include "tracks/track_io.h"
+#include <odotune/tracks/importers.h>
+#include <odotune/tracks/track_io.h>
 
 #include "support/temp_dir.h"
 

@@ -1,6 +1,6 @@
-// What a track's odometry is (tracks/odometry_input.h, docs/track-format.md's
+// What a track's odometry is (odotune/tracks/odometry_input.h, docs/track-format.md's
 // source.body_velocity) and its body velocities under the zero-order hold
-// (tracks/body_velocity.h).
+// (odotune/tracks/body_velocity.h).
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -8,9 +8,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "tracks/body_velocity.h"
-#include "tracks/odometry_input.h"
-#include "tracks/track_io.h"
+#include <odotune/tracks/body_velocity.h>
+#include <odotune/tracks/odometry_input.h>
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 namespace {

@@ -19,7 +19,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "tracks/track_io.h"
+#include <odotune/tracks/track_io.h>
 
 #include "support/temp_dir.h"
 

@@ -20,7 +20,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "tracks/track_io.h"
+#include <odotune/tracks/track_io.h>
 
 namespace odotune {
 namespace {

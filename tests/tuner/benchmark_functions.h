@@ -1,4 +1,4 @@
-// Classic test functions as plain tuner problems (see tuner/problem.h).
+// Classic test functions as plain tuner problems (see odotune/tuner/problem.h).
 // Each has global minimum value 0 at a known point `optimum`, which is NOT the
 // box centre, so that a local solver started at the centre gets no free win.
 // All are pure functions of x, hence safe to call concurrently.
@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "tuner/problem.h"
+#include <odotune/tuner/problem.h>
 
 namespace odotune::tuner::testing {
 

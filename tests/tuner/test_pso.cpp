@@ -15,11 +15,12 @@
 #include <thread>
 #include <vector>
 
+#include <odotune/core/counter_rng.h>
+#include <odotune/tuner/nlopt_solver.h>
+#include <odotune/tuner/pso.h>
+#include <odotune/tuner/solver_choice.h>
+
 #include "benchmark_functions.h"
-#include "core/counter_rng.h"
-#include "tuner/nlopt_solver.h"
-#include "tuner/pso.h"
-#include "tuner/solver_choice.h"
 
 namespace odotune::tuner {
 namespace {

@@ -1,4 +1,4 @@
-// pso_minimize on a batch problem (tuner/problem.h, fitness_batch): the same
+// pso_minimize on a batch problem (odotune/tuner/problem.h, fitness_batch): the same
 // run, to the bit, as one evaluation at a time, for any batch size and thread
 // count; batches never larger than batch_size(); a throwing batch fails the
 // run.
@@ -10,8 +10,9 @@
 #include <stdexcept>
 #include <vector>
 
+#include <odotune/tuner/pso.h>
+
 #include "benchmark_functions.h"
-#include "tuner/pso.h"
 
 namespace odotune::tuner {
 namespace {

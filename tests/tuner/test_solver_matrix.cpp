@@ -34,9 +34,10 @@
 #include <string>
 #include <vector>
 
+#include <odotune/tuner/nlopt_solver.h>
+#include <odotune/tuner/pso.h>
+
 #include "benchmark_functions.h"
-#include "tuner/nlopt_solver.h"
-#include "tuner/pso.h"
 
 namespace odotune::tuner {
 namespace {

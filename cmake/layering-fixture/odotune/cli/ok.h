@@ -1,3 +1,3 @@
 // A fixture for the LayeringCatchesUpwardInclude test: a downward include.
 #pragma once
-#include "tracks/track.h"
+#include <odotune/tracks/track.h>

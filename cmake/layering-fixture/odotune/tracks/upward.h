@@ -1,5 +1,5 @@
 // A fixture for the LayeringCatchesUpwardInclude test: tracks/ (a low module)
 // including the CLI, which the layering check must refuse.
 #pragma once
-#include "tracks/track.h"
-#include "cli/commands.h"
+#include <odotune/tracks/track.h>
+#include <odotune/cli/commands.h>
