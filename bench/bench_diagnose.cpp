@@ -48,8 +48,9 @@ namespace {
 
 using namespace odotune;
 
-Track five_minutes_at_100hz() {
-  sim::Scenario sc = odotune::load_scenario(std::string(ODOTUNE_SOURCE_DIR) + "/scenarios/track3.yaml");
+tracks::Track five_minutes_at_100hz() {
+  sim::Scenario sc = odotune::formats::load_scenario(std::string(ODOTUNE_SOURCE_DIR) +
+                                                     "/scenarios/track3.yaml");
   sc.sensors.encoders.rate_hz = 100.0;
   sc.sensors.commands.rate_hz = 100.0;
   sc.sensors.gyro.rate_hz = 100.0;
@@ -60,8 +61,8 @@ Track five_minutes_at_100hz() {
   return sim::simulate(sc);
 }
 
-const Track& track() {
-  static const Track t = five_minutes_at_100hz();
+const tracks::Track& track() {
+  static const tracks::Track t = five_minutes_at_100hz();
   return t;
 }
 
@@ -129,7 +130,7 @@ BENCHMARK(BM_DiagnoseScaling)
 int breakdown(const std::vector<std::string>& paths, double from_s, double to_s, double window_s) {
   std::vector<diagnose::DiagInput> parts;
   for (const std::string& path : paths) {
-    parts.push_back(diagnose::build_diag_input(read_track(path)));
+    parts.push_back(diagnose::build_diag_input(tracks::read_track(path)));
     if (from_s > -1e299 || to_s < 1e299) parts.back() = diagnose::crop(parts.back(), from_s, to_s);
   }
   diagnose::DiagnoseOptions o;
@@ -139,7 +140,7 @@ int breakdown(const std::vector<std::string>& paths, double from_s, double to_s,
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const diagnose::Diagnosis& d = pd.pooled;
   const diagnose::DiagInput& in = pd.input;
-  const auto lines = diagnosis_summary(d);
+  const auto lines = diagnose::diagnosis_summary(d);
   fmt::print("{}\n", lines.empty() ? "" : lines.front());
   const auto& st = d.selection.timing;
   fmt::print(

@@ -19,16 +19,16 @@ namespace {
 
 using odotune::filters::NoiseModel;
 
-const odotune::PreparedTrack& track1() {
-  static const odotune::Track track = odotune::read_track(std::string(ODOTUNE_SOURCE_DIR) +
-                                                          "/data/tracks/track1.csv");
-  static const odotune::PreparedTrack prepared = odotune::prepare_track(track);
+const odotune::jobs::PreparedTrack& track1() {
+  static const odotune::tracks::Track track = odotune::tracks::read_track(std::string(ODOTUNE_SOURCE_DIR) +
+                                                                          "/data/tracks/track1.csv");
+  static const odotune::jobs::PreparedTrack prepared = odotune::jobs::prepare_track(track);
   return prepared;
 }
 
 // A mid-box configuration of each model.
 odotune::filters::NoiseParams mid_noise(NoiseModel model) {
-  const auto space = odotune::ParamSpace::for_model(model);
+  const auto space = odotune::objectives::ParamSpace::for_model(model);
   auto [lo, hi] = space.box();
   std::vector<double> x(lo.size());
   for (std::size_t i = 0; i < x.size(); ++i) x[i] = lo[i] + 0.3 * (hi[i] - lo[i]);
@@ -39,7 +39,7 @@ void BM_EkfStep(benchmark::State& state) {
   const auto model = static_cast<NoiseModel>(state.range(0));
   const auto& t = track1();
   const auto noise = mid_noise(model);
-  for (auto _ : state) benchmark::DoNotOptimize(odotune::replay_ekf(t.input, noise));
+  for (auto _ : state) benchmark::DoNotOptimize(odotune::objectives::replay_ekf(t.input, noise));
   const double steps = static_cast<double>(t.input.steps.size());
   state.counters["ns_per_step"] = benchmark::Counter(steps * static_cast<double>(state.iterations()),
                                                      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
@@ -60,13 +60,13 @@ void BM_FastReplay(benchmark::State& state) {
 void BM_PsoTune(benchmark::State& state) {
   const auto model = static_cast<NoiseModel>(state.range(0));
   const auto& t = track1();
-  odotune::TuneRequest req;
+  odotune::jobs::TuneRequest req;
   req.model = model;
-  req.mode = odotune::FitnessMode::rmse_mae_maxe;
+  req.mode = odotune::objectives::FitnessMode::rmse_mae_maxe;
   req.seed = 1;
   long evals = 0;
   for (auto _ : state) {
-    auto out = odotune::run_tune({&t}, req);
+    auto out = odotune::jobs::run_tune({&t}, req);
     evals = out.summary.evaluations;
     benchmark::DoNotOptimize(out);
   }

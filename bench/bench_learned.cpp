@@ -32,8 +32,8 @@
 
 namespace {
 
-using odotune::LstmTrainingOptions;
-using odotune::SequenceSet;
+using odotune::learned::LstmTrainingOptions;
+using odotune::learned::SequenceSet;
 
 // Windows of (Δct_r, Δct_l, previous V) → V of a drive with V, W sums of sines
 // (8800 counts per rev, 0.32 m wheels, D 0.65 m, right tyre 1 % small).
@@ -68,8 +68,8 @@ void BM_TrainVelocityNet(benchmark::State& state) {
                                    : LstmTrainingOptions::Jacobian::autodiff;
   int iterations = 0;
   for (auto _ : state) {
-    odotune::VelocityNet net;
-    const auto s = odotune::train_lstm(net, train, SequenceSet{}, o);
+    odotune::learned::VelocityNet net;
+    const auto s = odotune::learned::train_lstm(net, train, SequenceSet{}, o);
     iterations = s.iterations;
     benchmark::DoNotOptimize(net.weights.data());
   }
@@ -79,16 +79,16 @@ BENCHMARK(BM_TrainVelocityNet)->Args({800, 0})->Args({800, 1})->Unit(benchmark::
 
 void BM_RetrainVelocityNet(benchmark::State& state) {
   const SequenceSet train = velocity_windows(800);
-  odotune::VelocityNet trained;
-  odotune::train_lstm(trained, train, SequenceSet{}, LstmTrainingOptions{});
+  odotune::learned::VelocityNet trained;
+  odotune::learned::train_lstm(trained, train, SequenceSet{}, LstmTrainingOptions{});
   SequenceSet fresh = velocity_windows(300);
-  for (double& y : fresh.y) y *= 0.97;                          // a tyre change
-  LstmTrainingOptions o = odotune::default_retrain_training();  // what the online refit runs
+  for (double& y : fresh.y) y *= 0.97;                                   // a tyre change
+  LstmTrainingOptions o = odotune::learned::default_retrain_training();  // what the online refit runs
   o.jacobian = state.range(0) == 0 ? LstmTrainingOptions::Jacobian::bptt
                                    : LstmTrainingOptions::Jacobian::autodiff;
   for (auto _ : state) {
-    odotune::VelocityNet net = trained;
-    odotune::retrain_lstm(net, fresh, o);
+    odotune::learned::VelocityNet net = trained;
+    odotune::learned::retrain_lstm(net, fresh, o);
     benchmark::DoNotOptimize(net.weights.data());
   }
 }
@@ -99,9 +99,9 @@ void BM_TrainSlipNet(benchmark::State& state) {
   LstmTrainingOptions o;
   o.max_iterations = 30;
   for (auto _ : state) {
-    odotune::SlipNet net;
-    net.activation = odotune::OutputActivation::relu;
-    odotune::train_lstm(net, train, SequenceSet{}, o);
+    odotune::learned::SlipNet net;
+    net.activation = odotune::learned::OutputActivation::relu;
+    odotune::learned::train_lstm(net, train, SequenceSet{}, o);
     benchmark::DoNotOptimize(net.weights.data());
   }
 }
@@ -119,15 +119,15 @@ void predict_bench(benchmark::State& state, int inputs) {
     w = (w + 1) % s.size();
   }
 }
-void BM_PredictVelocityNet(benchmark::State& state) { predict_bench<odotune::VelocityNet>(state, 3); }
-void BM_PredictSlipNet(benchmark::State& state) { predict_bench<odotune::SlipNet>(state, 5); }
+void BM_PredictVelocityNet(benchmark::State& state) { predict_bench<odotune::learned::VelocityNet>(state, 3); }
+void BM_PredictSlipNet(benchmark::State& state) { predict_bench<odotune::learned::SlipNet>(state, 5); }
 BENCHMARK(BM_PredictVelocityNet)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_PredictSlipNet)->Unit(benchmark::kMicrosecond);
 
 void BM_LearnedOdometryStep(benchmark::State& state) {
-  odotune::LearnedOdometryModel model;
+  odotune::learned::LearnedOdometryModel model;
   model.ticks_per_rev = 8800;
-  odotune::VelocityNet v_net, w_net;
+  odotune::learned::VelocityNet v_net, w_net;
   for (std::size_t i = 0; i < v_net.weights.size(); ++i) {
     v_net.weights[i] = 0.05 * std::sin(1.3 * static_cast<double>(i));
     w_net.weights[i] = 0.05 * std::cos(1.7 * static_cast<double>(i));
@@ -135,13 +135,13 @@ void BM_LearnedOdometryStep(benchmark::State& state) {
   model.v_net = v_net;
   model.w_net = w_net;
   // One step of a track, its increments varied from call to call.
-  odotune::FusionInput in;
+  odotune::learned::FusionInput in;
   in.dticks_l = {40.0};
   in.dticks_r = {41.0};
   in.v_kin = {0.5};
   in.w_kin = {0.1};
   in.gyro_z = {0.0};
-  odotune::LearnedOdometryStepper stepper(&model);
+  odotune::learned::LearnedOdometryStepper stepper(&model);
   double k = 0, v = 0, w = 0;
   for (auto _ : state) {
     in.dticks_l[0] = 40.0 + std::sin(k);

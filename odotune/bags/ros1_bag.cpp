@@ -43,7 +43,7 @@ void read_ros1_bag(const std::filesystem::path& file, const Want& want, const On
       ::ros::serialization::OStream out(buf.data(), static_cast<std::uint32_t>(buf.size()));
       m.write(out);
       topic = m.getTopic();
-      type = bags::ros::normalise_type(m.getDataType());
+      type = bags::ros::normalise_type(m.getDataType());  // odotune's, not ROS 1's ::ros
       BagMessage msg;
       msg.topic = topic;
       msg.type = type;

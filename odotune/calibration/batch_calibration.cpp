@@ -10,7 +10,7 @@
 #include <odotune/calibration/ceres_fit.h>
 #include <odotune/core/ceres_options.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 namespace {
 
@@ -77,7 +77,7 @@ BatchCalibrationSummary batch_calibrate(const std::vector<const CalibrationInput
   for (int i = 0; i < kBatchParams; ++i)
     problem.SetParameterLowerBound(theta, i, kLowerBoundFraction * theta[i]);
 
-  const ceres::Solver::Options so = deterministic_solver_options(100, FitTolerance::calibration);
+  const ceres::Solver::Options so = core::deterministic_solver_options(100, core::FitTolerance::calibration);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
   out.converged = summary.termination_type == ceres::CONVERGENCE;
@@ -99,4 +99,4 @@ BatchCalibrationSummary batch_calibrate(const std::vector<const CalibrationInput
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -18,7 +18,7 @@
 #include <odotune/calibration/calibration_input.h>
 #include <odotune/filters/odometry_params.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 struct BatchCalibrationSummary {
   filters::OdometryParams params;
@@ -34,4 +34,4 @@ struct BatchCalibrationSummary {
 BatchCalibrationSummary batch_calibrate(const std::vector<const CalibrationInput*>& inputs,
                                         const filters::OdometryParams& initial);
 
-}  // namespace odotune
+}  // namespace odotune::calibration

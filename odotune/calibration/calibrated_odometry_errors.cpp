@@ -7,14 +7,14 @@
 #include <odotune/calibration/dead_reckoning.h>
 #include <odotune/filters/diff_drive.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 namespace {
 
 // Dead-reckoning errors (dead_reckoning.h) with the parameters `params_at(t)`.
 template <typename ParamsAt>
-ErrorMetrics dead_reckoning_errors(const CalibrationInput& in, ParamsAt&& params_at) {
-  ErrorAccumulator acc;
+objectives::ErrorMetrics dead_reckoning_errors(const CalibrationInput& in, ParamsAt&& params_at) {
+  objectives::ErrorAccumulator acc;
   if (!in.has_gt) return acc.metrics();
   bool start = true;  // the first visit is the start row, not scored
   dead_reckon(in, params_at, [&](std::size_t r, const filters::Pose& pose) {
@@ -27,8 +27,8 @@ ErrorMetrics dead_reckoning_errors(const CalibrationInput& in, ParamsAt&& params
 
 }  // namespace
 
-ErrorMetrics calibrated_odometry_errors(const CalibrationInput& in, const CalibrationTrace& trace,
-                                        int track_index, const filters::OdometryParams& before) {
+objectives::ErrorMetrics calibrated_odometry_errors(const CalibrationInput& in, const CalibrationTrace& trace,
+                                                    int track_index, const filters::OdometryParams& before) {
   // This track's estimates, in time order (the trace is in iteration order).
   const std::size_t n = std::min({trace.track.size(), trace.t.size(), trace.estimate.size()});
   std::vector<std::size_t> rows;
@@ -43,8 +43,9 @@ ErrorMetrics calibrated_odometry_errors(const CalibrationInput& in, const Calibr
   });
 }
 
-ErrorMetrics fixed_odometry_errors(const CalibrationInput& in, const filters::OdometryParams& params) {
+objectives::ErrorMetrics fixed_odometry_errors(const CalibrationInput& in,
+                                               const filters::OdometryParams& params) {
   return dead_reckoning_errors(in, [&](double) -> const filters::OdometryParams& { return params; });
 }
 
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -15,7 +15,7 @@
 #include <odotune/calibration/calibration_run.h>
 #include <odotune/objectives/metrics.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 // Dead reckoning with the estimates of `trace` that belong to track
 // `track_index` (trace.track[k] == track_index; times on the track's clock).
@@ -23,10 +23,12 @@ namespace odotune {
 // online filter's estimate at the track's start (on the first track its
 // initial estimate, e.g. filters::PfCalibrator(p).estimate().params; on a
 // later track the previous track's last estimate).
-ErrorMetrics calibrated_odometry_errors(const CalibrationInput& input, const CalibrationTrace& trace,
-                                        int track_index, const filters::OdometryParams& before);
+objectives::ErrorMetrics calibrated_odometry_errors(const CalibrationInput& input,
+                                                    const CalibrationTrace& trace, int track_index,
+                                                    const filters::OdometryParams& before);
 
 // Dead reckoning with fixed parameters (e.g. the nominal ones).
-ErrorMetrics fixed_odometry_errors(const CalibrationInput& input, const filters::OdometryParams& params);
+objectives::ErrorMetrics fixed_odometry_errors(const CalibrationInput& input,
+                                               const filters::OdometryParams& params);
 
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -14,7 +14,7 @@
 #include <odotune/objectives/track_samples.h>
 #include <odotune/sim/effects.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 namespace {
 
@@ -38,10 +38,10 @@ std::string_view trim(std::string_view s) {
 
 // The robot's nominal geometry from the metadata into in.nominal; returns
 // ticks_per_rev (0 without ticks).
-double read_nominal(const Track& track, bool from_ticks, CalibrationInput& in) {
+double read_nominal(const tracks::Track& track, bool from_ticks, CalibrationInput& in) {
   const std::string& name = track.name();
   std::string why;
-  const TrackMeta& meta = track.meta();
+  const tracks::TrackMeta& meta = track.meta();
   auto require = [&](const std::optional<double>& v, const char* key) {
     if (!v)
       fail(name, fmt::format("metadata '{}' is missing: calibration needs the robot's nominal "
@@ -61,13 +61,13 @@ double read_nominal(const Track& track, bool from_ticks, CalibrationInput& in) {
 
 // The odometry rows: their times and wheel rates into `in` (from ticks, the
 // rate over the interval ending at the row); returns each one's track row.
-std::vector<std::size_t> read_odometry_rows(const Track& track, bool from_ticks, double ticks_per_rev,
+std::vector<std::size_t> read_odometry_rows(const tracks::Track& track, bool from_ticks, double ticks_per_rev,
                                             CalibrationInput& in) {
   const auto& t = track.t();
   std::vector<std::size_t> track_row;  // per odometry row: its row in the track
   for (std::size_t i = 0; i < track.size(); ++i) {
-    const bool odo = from_ticks ? track.ticks_l()[i] != kNoTick && track.ticks_r()[i] != kNoTick
-                                : track.at(Col::omega_l, i) && track.at(Col::omega_r, i);
+    const bool odo = from_ticks ? track.ticks_l()[i] != tracks::kNoTick && track.ticks_r()[i] != tracks::kNoTick
+                                : track.at(tracks::Col::omega_l, i) && track.at(tracks::Col::omega_r, i);
     if (!odo) continue;
     double wl = 0.0, wr = 0.0;
     if (from_ticks) {
@@ -78,8 +78,8 @@ std::vector<std::size_t> read_odometry_rows(const Track& track, bool from_ticks,
         wr = static_cast<double>(track.ticks_r()[i] - track.ticks_r()[p]) * k;
       }
     } else {
-      wl = track.col(Col::omega_l)[i];
-      wr = track.col(Col::omega_r)[i];
+      wl = track.col(tracks::Col::omega_l)[i];
+      wr = track.col(tracks::Col::omega_r)[i];
     }
     track_row.push_back(i);
     in.t.push_back(t[i]);
@@ -90,13 +90,13 @@ std::vector<std::size_t> read_odometry_rows(const Track& track, bool from_ticks,
 }
 
 // The ground-truth pose at each odometry row (NaN where none within kMaxGtGapS).
-void ground_truth_at_rows(const PoseSeries& gt, CalibrationInput& in) {
+void ground_truth_at_rows(const objectives::PoseSeries& gt, CalibrationInput& in) {
   const std::size_t n_rows = in.t.size();
   in.gt_x.assign(n_rows, std::nan(""));
   in.gt_y.assign(n_rows, std::nan(""));
   in.gt_theta.assign(n_rows, std::nan(""));
   for (std::size_t r = 0; r < n_rows; ++r) {
-    const auto p = interpolate_pose(gt, in.t[r], kMaxGtGapS);
+    const auto p = objectives::interpolate_pose(gt, in.t[r], objectives::kMaxGtGapS);
     if (!p) continue;
     in.gt_x[r] = p->x_m;
     in.gt_y[r] = p->y_m;
@@ -160,8 +160,9 @@ class SampleAdder {
 // The variances of velocities derived from the ground truth at `rate` Hz
 // (from its jitter and the encoders' quantisation, or as given), with the
 // note in in.ext_noise.
-std::pair<double, double> derived_variances(const PoseSeries& gt, const CalibrationInputOptions& options,
-                                            bool from_ticks, double ticks_per_rev, CalibrationInput& in) {
+std::pair<double, double> derived_variances(const objectives::PoseSeries& gt,
+                                            const CalibrationInputOptions& options, bool from_ticks,
+                                            double ticks_per_rev, CalibrationInput& in) {
   const double rate = options.ext_from_gt_rate_hz;
   const double period = 1.0 / rate;
   double v_var = options.default_v_var, w_var = options.default_w_var;
@@ -195,8 +196,8 @@ std::pair<double, double> derived_variances(const PoseSeries& gt, const Calibrat
 
 // Samples of velocities derived from the ground truth by central
 // differences at ext_from_gt_rate_hz.
-void add_derived_samples(const PoseSeries& gt, const CalibrationInputOptions& options, bool from_ticks,
-                         double ticks_per_rev, std::size_t first_rated, CalibrationInput& in,
+void add_derived_samples(const objectives::PoseSeries& gt, const CalibrationInputOptions& options,
+                         bool from_ticks, double ticks_per_rev, std::size_t first_rated, CalibrationInput& in,
                          SampleAdder& adder) {
   const double rate = options.ext_from_gt_rate_hz;
   const double period = 1.0 / rate;
@@ -210,7 +211,7 @@ void add_derived_samples(const PoseSeries& gt, const CalibrationInputOptions& op
     const double tk = k / rate;
     const std::size_t row = adder.row_at(tk + kSameInstantS);
     if (row == adder.n_rows() || row < first_rated) continue;
-    const auto vel = central_difference_velocity(gt, tk, half, 2.0 * period);
+    const auto vel = objectives::central_difference_velocity(gt, tk, half, 2.0 * period);
     if (!vel) continue;
     filters::CalibSample s;
     s.v_m_s = vel->v_m_s;
@@ -222,14 +223,14 @@ void add_derived_samples(const PoseSeries& gt, const CalibrationInputOptions& op
 }
 
 // Samples of the track's own external velocities (v_ext, w_ext).
-void add_track_samples(const Track& track, const CalibrationInputOptions& options,
+void add_track_samples(const tracks::Track& track, const CalibrationInputOptions& options,
                        const std::vector<std::size_t>& track_row, std::size_t first_rated, CalibrationInput& in,
                        SampleAdder& adder) {
   const std::size_t n_rows = adder.n_rows();
-  const auto& v_ext = track.col(Col::v_ext);
-  const auto& w_ext = track.col(Col::w_ext);
-  const auto& v_var = track.col(Col::v_ext_var);
-  const auto& w_var = track.col(Col::w_ext_var);
+  const auto& v_ext = track.col(tracks::Col::v_ext);
+  const auto& w_ext = track.col(tracks::Col::w_ext);
+  const auto& v_var = track.col(tracks::Col::v_ext_var);
+  const auto& w_var = track.col(tracks::Col::w_ext_var);
   std::size_t row = n_rows;  // odometry row at or before track row i
   std::size_t next = 0;      // next odometry row to pass
   for (std::size_t i = 0; i < track.size(); ++i) {
@@ -239,25 +240,25 @@ void add_track_samples(const Track& track, const CalibrationInputOptions& option
     filters::CalibSample s;
     s.v_m_s = v_ext[i];
     s.w_rad_s = w_ext[i];
-    s.v_var = positive_or(v_var, i, options.default_v_var);
-    s.w_var = positive_or(w_var, i, options.default_w_var);
+    s.v_var = objectives::positive_or(v_var, i, options.default_v_var);
+    s.w_var = objectives::positive_or(w_var, i, options.default_w_var);
     adder.add(track.t()[i], row, s);
   }
   in.ext_noise = "the track's v_ext/w_ext (variances from v_ext_var/w_ext_var where given, else the defaults)";
 }
 
 // The position fixes (aps_x, aps_y) within the odometry's time span.
-void add_fixes(const Track& track, CalibrationInput& in) {
+void add_fixes(const tracks::Track& track, CalibrationInput& in) {
   const auto& t = track.t();
   for (std::size_t i = 0; track.has_aps() && i < track.size(); ++i) {
-    if (!track.at(Col::aps_x, i) || !track.at(Col::aps_y, i)) continue;
+    if (!track.at(tracks::Col::aps_x, i) || !track.at(tracks::Col::aps_y, i)) continue;
     if (t[i] < in.t.front() || t[i] > in.t.back()) continue;
     in.fix_t.push_back(t[i]);
-    in.fix_x.push_back(track.col(Col::aps_x)[i]);
-    in.fix_y.push_back(track.col(Col::aps_y)[i]);
-    const bool var = track.at(Col::aps_var_x, i) && track.at(Col::aps_var_y, i);
-    in.fix_var_x.push_back(var ? track.col(Col::aps_var_x)[i] : std::nan(""));
-    in.fix_var_y.push_back(var ? track.col(Col::aps_var_y)[i] : std::nan(""));
+    in.fix_x.push_back(track.col(tracks::Col::aps_x)[i]);
+    in.fix_y.push_back(track.col(tracks::Col::aps_y)[i]);
+    const bool var = track.at(tracks::Col::aps_var_x, i) && track.at(tracks::Col::aps_var_y, i);
+    in.fix_var_x.push_back(var ? track.col(tracks::Col::aps_var_x)[i] : std::nan(""));
+    in.fix_var_y.push_back(var ? track.col(tracks::Col::aps_var_y)[i] : std::nan(""));
   }
 }
 
@@ -293,7 +294,7 @@ bool CalibrationInputOptions::IsValid(std::string* why) const {
   return true;
 }
 
-std::optional<TruthSchedule> truth_from_metadata(const TrackMeta& meta) {
+std::optional<TruthSchedule> truth_from_metadata(const tracks::TrackMeta& meta) {
   const std::optional<std::string> text = meta.get("sim.effects");
   if (!text || !meta.wheel_radius_left_m || !meta.wheel_radius_right_m || !meta.wheel_base_m)
     return std::nullopt;
@@ -342,7 +343,7 @@ std::optional<TruthSchedule> truth_from_metadata(const TrackMeta& meta) {
   return out;
 }
 
-CalibrationInput build_calibration_input(const Track& track, const CalibrationInputOptions& options) {
+CalibrationInput build_calibration_input(const tracks::Track& track, const CalibrationInputOptions& options) {
   const std::string& name = track.name();
   std::string why;
   if (!options.IsValid(&why)) fail(name, "invalid calibration input options: " + why);
@@ -356,11 +357,11 @@ CalibrationInput build_calibration_input(const Track& track, const CalibrationIn
   in.truth = truth_from_metadata(track.meta());
 
   // --- ground truth ------------------------------------------------------------
-  const PoseSeries gt = ground_truth_series(track);
+  const objectives::PoseSeries gt = objectives::ground_truth_series(track);
   in.has_gt = gt.size() >= 2;
 
   const bool derive = options.ext_from_gt_rate_hz > 0.0;
-  const bool has_ext = track.has(Col::v_ext) && track.has(Col::w_ext);
+  const bool has_ext = track.has(tracks::Col::v_ext) && track.has(tracks::Col::w_ext);
   if (derive && !in.has_gt)
     fail(name, fmt::format("no ground truth (gt_x, gt_y, gt_theta in at least two rows) to derive "
                            "external velocities from at {} Hz",
@@ -392,4 +393,4 @@ CalibrationInput build_calibration_input(const Track& track, const CalibrationIn
   return in;
 }
 
-}  // namespace odotune
+}  // namespace odotune::calibration

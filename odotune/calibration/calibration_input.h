@@ -14,7 +14,7 @@
 #include <odotune/filters/odometry_params.h>
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 // The true odometry parameters as a piecewise-constant function of time.
 // Built from nominal metadata and the sim.effects of ../shared/specs/
@@ -132,7 +132,7 @@ struct CalibrationInput {
 // last two only with require_velocity_samples, or when velocities are
 // available but none is usable) and for
 // invalid options or a malformed sim.effects.
-CalibrationInput build_calibration_input(const Track& track, const CalibrationInputOptions& options);
+CalibrationInput build_calibration_input(const tracks::Track& track, const CalibrationInputOptions& options);
 
 // The truth of a simulated track (nullopt when it has no sim.effects or the
 // nominal radii/base metadata is missing). sim.effects is the "; "-separated
@@ -141,6 +141,6 @@ CalibrationInput build_calibration_input(const Track& track, const CalibrationIn
 // wheel_base_error, radius_step); the others (speed_radius, slips, ...) are
 // ignored, so under them the truth is the static geometry. Throws
 // std::invalid_argument naming the track on a malformed sim.effects.
-std::optional<TruthSchedule> truth_from_metadata(const TrackMeta& meta);
+std::optional<TruthSchedule> truth_from_metadata(const tracks::TrackMeta& meta);
 
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace odotune {
+namespace odotune::calibration {
 
 namespace {
 
@@ -38,10 +38,10 @@ double gt_path_length_m(const CalibrationInput& in) {
 
 }  // namespace
 
-BoxSpace calibration_space() {
+objectives::BoxSpace calibration_space() {
   // Bounds: a decade or more either side of the paper's values (N_th = 0.5·N,
   // α = 1e-4, one particle per 0.01 mm, σ = 0.5 mm).
-  return BoxSpace({
+  return objectives::BoxSpace({
       {"neff_fraction", "-", 0.05, 1.0, false, "resample when N_eff < fraction·N (policy neff)"},
       {"max_weight_ratio", "-", 1.0, 1000.0, true, "resample when the largest weight < ratio/N (policy max)"},
       {"alpha", "m/(m/s)", 1e-6, 1e-1, true,
@@ -150,4 +150,4 @@ double CalibrationObjective::fitness(std::span<const double> x) const {
   return kCalibrationPenalty;
 }
 
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -34,14 +34,14 @@
 #include <odotune/calibration/calibration_run.h>
 #include <odotune/objectives/box_space.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 inline constexpr double kCalibrationPenalty = 1e3;
 
 // The tuned settings, in the space's order and units:
 //   neff_fraction (-), max_weight_ratio (-), alpha (m per m/s),
 //   dispersion_per_particle_mm (mm), random_walk_sigma_mm (mm).
-BoxSpace calibration_space();
+objectives::BoxSpace calibration_space();
 // Physical values (calibration_space() order and units) applied to `base`.
 filters::PfCalibratorParams apply_calibration_params(const filters::PfCalibratorParams& base,
                                                      std::span<const double> physical);
@@ -69,7 +69,7 @@ class CalibrationObjective {
   double fitness(std::span<const double> x) const;
   std::pair<std::vector<double>, std::vector<double>> bounds() const { return space_.box(); }
 
-  const BoxSpace& space() const { return space_; }
+  const objectives::BoxSpace& space() const { return space_; }
   // The full calibration run at box point x (what fitness() scores).
   CalibrationResult run(std::span<const double> x) const;
   long evaluations() const { return counters_->evaluations.load(); }
@@ -84,8 +84,8 @@ class CalibrationObjective {
   filters::PfCalibratorParams base_;
   bool adaptive_;
   CalibrationScoreWeights weights_;
-  BoxSpace space_;
+  objectives::BoxSpace space_;
   std::shared_ptr<Counters> counters_ = std::make_shared<Counters>();
 };
 
-}  // namespace odotune
+}  // namespace odotune::calibration

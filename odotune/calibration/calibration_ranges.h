@@ -10,7 +10,7 @@
 #include <odotune/filters/odometry_params.h>
 #include <odotune/filters/pf_calibrator.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 struct CalibrationRanges {
   filters::PfCalibratorParams::Range wheel_radius_left_m, wheel_radius_right_m, wheel_base_m;
@@ -26,4 +26,4 @@ inline CalibrationRanges default_calibration_ranges(const filters::OdometryParam
           around(nominal.wheel_base_m, kWheelBaseFraction)};
 }
 
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -14,7 +14,7 @@
 #include <odotune/filters/diff_drive.h>
 #include <odotune/objectives/pose_series.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 namespace {
 
@@ -86,7 +86,7 @@ void score_odometry(const CalibrationInput& in, const ParamTimeline& tl, TrackCa
         if (r == start || !in.has_gt_row(r)) return;
         const double dx = pose(filters::kX) - in.gt_x[r];
         const double dy = pose(filters::kY) - in.gt_y[r];
-        const double dh = wrap_angle(pose(filters::kTheta) - in.gt_theta[r]);
+        const double dh = core::wrap_angle(pose(filters::kTheta) - in.gt_theta[r]);
         sum_pos += dx * dx + dy * dy;
         sum_head += dh * dh;
         ++poses;
@@ -96,13 +96,14 @@ void score_odometry(const CalibrationInput& in, const ParamTimeline& tl, TrackCa
     out->heading_rmse_rad = std::sqrt(sum_head / static_cast<double>(poses));
   }
 
-  PoseSeries gt;
+  objectives::PoseSeries gt;
   for (std::size_t r = 0; r < n; ++r)
-    if (in.has_gt_row(r)) gt.push_back(in.t[r], PlanarPose{in.gt_x[r], in.gt_y[r], in.gt_theta[r]});
+    if (in.has_gt_row(r)) gt.push_back(in.t[r], objectives::PlanarPose{in.gt_x[r], in.gt_y[r], in.gt_theta[r]});
   double sum_v = 0.0, sum_w = 0.0;
   long count = 0;
   for (std::size_t i = 0; i < in.samples.size(); ++i) {
-    const auto ref = central_difference_velocity(gt, in.sample_t[i], kScoreHalfWindowS, kScoreMaxGapS);
+    const auto ref = objectives::central_difference_velocity(gt, in.sample_t[i], kScoreHalfWindowS,
+                                                             kScoreMaxGapS);
     if (!ref) continue;
     const filters::BodyVelocity odo = filters::body_velocity(tl.at(in.sample_t[i]), in.samples[i].omega_l_rad_s,
                                                              in.samples[i].omega_r_rad_s);
@@ -323,24 +324,24 @@ filters::PfCalibratorParams effective_pf_params(const CalibrationOptions& option
 
 bool CalibrationOptions::IsValid(std::string* why) const {
   if (!(convergence_tolerance > 0.0 && convergence_tolerance < 1.0))
-    return invalid(why,
-                   fmt::format("convergence_tolerance = {} must be in (0, 1) (a fraction of the true value)",
-                               convergence_tolerance));
+    return core::invalid(
+        why, fmt::format("convergence_tolerance = {} must be in (0, 1) (a fraction of the true value)",
+                         convergence_tolerance));
   std::string inner;
-  if (!memory_pair.IsValid(&inner)) return invalid(why, "memory_pair." + inner);
+  if (!memory_pair.IsValid(&inner)) return core::invalid(why, "memory_pair." + inner);
   switch (method) {
     case CalibrationMethod::adaptive_pf:
     case CalibrationMethod::pf:
-      if (!effective_pf_params(*this).IsValid(&inner)) return invalid(why, "pf." + inner);
+      if (!effective_pf_params(*this).IsValid(&inner)) return core::invalid(why, "pf." + inner);
       break;
     case CalibrationMethod::dkf:
-      if (!dkf.IsValid(&inner)) return invalid(why, "dkf." + inner);
+      if (!dkf.IsValid(&inner)) return core::invalid(why, "dkf." + inner);
       break;
     case CalibrationMethod::online_pose:
-      if (!online_pose.IsValid(&inner)) return invalid(why, "online_pose." + inner);
+      if (!online_pose.IsValid(&inner)) return core::invalid(why, "online_pose." + inner);
       break;
     case CalibrationMethod::batch_pose:
-      if (!pose.IsValid(&inner)) return invalid(why, "pose." + inner);
+      if (!pose.IsValid(&inner)) return core::invalid(why, "pose." + inner);
       break;
     case CalibrationMethod::batch_velocity:
     case CalibrationMethod::none: break;
@@ -461,4 +462,4 @@ CalibrationResult run_calibration(const std::vector<const CalibrationInput*>& in
   return res;
 }
 
-}  // namespace odotune
+}  // namespace odotune::calibration

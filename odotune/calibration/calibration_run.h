@@ -29,7 +29,7 @@
 #include <odotune/filters/memory_pair.h>
 #include <odotune/filters/pf_calibrator.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 enum class CalibrationMethod { adaptive_pf, pf, dkf, online_pose, batch_pose, batch_velocity, none };
 // "adaptive-pf", "pf", "dkf", "online-pose", "batch-pose", "batch-velocity",
@@ -172,4 +172,4 @@ std::optional<double> convergence_time(const std::vector<double>& times,
                                        const std::vector<filters::OdometryParams>& estimates,
                                        const filters::OdometryParams& truth, double tolerance);
 
-}  // namespace odotune
+}  // namespace odotune::calibration

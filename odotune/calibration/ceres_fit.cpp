@@ -5,7 +5,7 @@
 
 #include <Eigen/Dense>
 
-namespace odotune {
+namespace odotune::calibration {
 
 namespace {
 
@@ -61,4 +61,4 @@ std::array<double, 3> scaled_standard_errors(ceres::Problem& problem, double* th
   return {sd[0], sd[1], sd[2]};
 }
 
-}  // namespace odotune
+}  // namespace odotune::calibration

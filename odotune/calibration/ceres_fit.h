@@ -9,7 +9,7 @@
 
 #include <ceres/ceres.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 // The sds of the 3-vector parameter block `theta` after a solve: the
 // covariance of the (whitened) problem scaled by s² = 2·final_cost/dof, so
@@ -24,4 +24,4 @@ std::array<double, 3> scaled_standard_errors(ceres::Problem& problem, double* th
 std::vector<double> scaled_standard_errors(ceres::Problem& problem, double* theta, int n, double final_cost,
                                            double dof);
 
-}  // namespace odotune
+}  // namespace odotune::calibration

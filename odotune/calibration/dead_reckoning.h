@@ -13,7 +13,7 @@
 #include <odotune/filters/diff_drive.h>
 #include <odotune/filters/odometry_params.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 // Calls visit(row, pose) for the start row (its ground-truth pose) and then
 // for every later odometry row with the dead-reckoned pose there (whether or
@@ -34,9 +34,10 @@ void dead_reckon(const CalibrationInput& in, ParamsAt&& params_at, Visit&& visit
     const double dt = in.t[r] - in.t[r - 1];
     const double l = in.omega_l[r] * p.wheel_radius_left_m * dt;
     const double rr = in.omega_r[r] * p.wheel_radius_right_m * dt;
-    midpoint_advance(&pose(filters::kX), &pose(filters::kY), &pose(filters::kTheta), l, rr, p.wheel_base_m);
+    core::midpoint_advance(&pose(filters::kX), &pose(filters::kY), &pose(filters::kTheta), l, rr,
+                           p.wheel_base_m);
     visit(r, static_cast<const filters::Pose&>(pose));
   }
 }
 
-}  // namespace odotune
+}  // namespace odotune::calibration

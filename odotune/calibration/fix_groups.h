@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-namespace odotune {
+namespace odotune::calibration {
 
 // [first, last] indices into fix_t (increasing times [s]); a group shorter
 // than min_fixes remains only when all the fixes are fewer (callers skip it).
@@ -30,4 +30,4 @@ inline std::vector<std::pair<std::size_t, std::size_t>> fix_groups(const std::ve
   return groups;
 }
 
-}  // namespace odotune
+}  // namespace odotune::calibration

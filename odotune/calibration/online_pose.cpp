@@ -9,7 +9,7 @@
 #include <odotune/core/robust_stats.h>
 #include <odotune/core/why.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 namespace {
 
@@ -62,17 +62,18 @@ bool parse_online_pose_start(std::string_view text, OnlinePoseStart* out) {
 
 bool OnlinePoseOptions::IsValid(std::string* why) const {
   std::string sub;
-  if (!filter.IsValid(&sub)) return invalid(why, "filter." + sub);
+  if (!filter.IsValid(&sub)) return core::invalid(why, "filter." + sub);
   if (!non_negative(known_start_sd_xy_m))
-    return invalid(why, fmt::format("known_start_sd_xy_m = {} must be ≥ 0", known_start_sd_xy_m));
+    return core::invalid(why, fmt::format("known_start_sd_xy_m = {} must be ≥ 0", known_start_sd_xy_m));
   if (!non_negative(known_start_sd_theta_rad))
-    return invalid(why, fmt::format("known_start_sd_theta_rad = {} must be ≥ 0", known_start_sd_theta_rad));
+    return core::invalid(why,
+                         fmt::format("known_start_sd_theta_rad = {} must be ≥ 0", known_start_sd_theta_rad));
   if (min_memory_m && !(std::isfinite(*min_memory_m) && *min_memory_m > 0.0))
-    return invalid(why, fmt::format("min_memory_m = {} must be > 0", *min_memory_m));
+    return core::invalid(why, fmt::format("min_memory_m = {} must be > 0", *min_memory_m));
   if (!(std::isfinite(fix_sd_memory_factor) && fix_sd_memory_factor >= 0.0))
-    return invalid(why, fmt::format("fix_sd_memory_factor = {} must be ≥ 0", fix_sd_memory_factor));
+    return core::invalid(why, fmt::format("fix_sd_memory_factor = {} must be ≥ 0", fix_sd_memory_factor));
   if (fix_sd_m && !(std::isfinite(*fix_sd_m) && *fix_sd_m > 0.0))
-    return invalid(why, fmt::format("fix_sd_m = {} must be > 0", *fix_sd_m));
+    return core::invalid(why, fmt::format("fix_sd_m = {} must be > 0", *fix_sd_m));
   return true;
 }
 
@@ -128,10 +129,10 @@ filters::DistanceMemoryParams online_pose_memory(const std::vector<const Calibra
         sd.push_back(std::sqrt(0.5 * (vx + vy)));
       }
     if (!sd.empty())
-      m.min_memory_m = std::max(m.min_memory_m, options.fix_sd_memory_factor * median(std::move(sd)));
+      m.min_memory_m = std::max(m.min_memory_m, options.fix_sd_memory_factor * core::median(std::move(sd)));
   }
   m.max_memory_m = std::max(m.max_memory_m, m.min_memory_m);
   return m;
 }
 
-}  // namespace odotune
+}  // namespace odotune::calibration

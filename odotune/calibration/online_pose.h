@@ -12,7 +12,7 @@
 #include <odotune/calibration/calibration_input.h>
 #include <odotune/filters/pose_calibrator.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 // How each track's pose starts: acquired from the fixes (nothing assumed),
 // or known (the track's first ground-truth pose, e.g. a docking station).
@@ -67,4 +67,4 @@ OnlinePoseTrack online_pose_track(const CalibrationInput& in, const OnlinePoseOp
 filters::DistanceMemoryParams online_pose_memory(const std::vector<const CalibrationInput*>& inputs,
                                                  const OnlinePoseOptions& options);
 
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 namespace {
 
@@ -44,4 +44,4 @@ std::string implausible_fit_message(const std::string& why) {
       why);
 }
 
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -14,7 +14,7 @@
 
 #include <odotune/filters/odometry_params.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 // A fitted value is plausible within [1/kPlausibleFactor, kPlausibleFactor]
 // times its nominal value (a scale: times 1).
@@ -31,4 +31,4 @@ std::optional<std::string> implausible_twist(const filters::TwistCorrection& fit
 // being one of the sentences above.
 std::string implausible_fit_message(const std::string& why);
 
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -15,7 +15,7 @@
 #include <odotune/core/ceres_options.h>
 #include <odotune/core/planar_motion.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 namespace {
 
@@ -60,11 +60,11 @@ struct SegmentDeadReckoning {
       for (; k < refs.size() && refs[k].row == r; ++k) {
         T px = x, py = y, ph = h;
         const double f = refs[k].fraction;
-        if (f > 0.0) midpoint_advance(&px, &py, &ph, T(f) * l, T(f) * rr, th[kWheelBase]);
+        if (f > 0.0) core::midpoint_advance(&px, &py, &ph, T(f) * l, T(f) * rr, th[kWheelBase]);
         res[2 * k] = px - refs[k].x_m;
         res[2 * k + 1] = py - refs[k].y_m;
       }
-      midpoint_advance(&x, &y, &h, l, rr, th[kWheelBase]);
+      core::midpoint_advance(&x, &y, &h, l, rr, th[kWheelBase]);
     }
     return true;
   }
@@ -238,8 +238,8 @@ Solved solve(std::vector<Segment>& segs, double* theta, const PoseCalibrationOpt
   }
   for (int i = 0; i < kPoseParams; ++i) problem.SetParameterLowerBound(theta, i, lower[i]);
 
-  const ceres::Solver::Options so = deterministic_solver_options(options.max_iterations,
-                                                                 FitTolerance::calibration);
+  const ceres::Solver::Options so = core::deterministic_solver_options(options.max_iterations,
+                                                                       core::FitTolerance::calibration);
   ceres::Solve(so, &problem, &out.summary);
 
   const double nan = std::nan("");
@@ -313,4 +313,4 @@ PoseCalibrationSummary pose_calibrate(const std::vector<const CalibrationInput*>
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::calibration

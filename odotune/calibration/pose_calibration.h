@@ -41,7 +41,7 @@
 #include <odotune/calibration/calibration_input.h>
 #include <odotune/filters/odometry_params.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 struct PoseCalibrationOptions {
   double segment_s = 0.0;          // segment length [s]; 0: whole runs (each reference stretch)
@@ -88,4 +88,4 @@ PoseCalibrationSummary pose_calibrate(const std::vector<const CalibrationInput*>
                                       const filters::OdometryParams& initial,
                                       const PoseCalibrationOptions& options = {});
 
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <vector>
 
-namespace odotune {
+namespace odotune::calibration {
 
 namespace {
 
@@ -28,7 +28,7 @@ double upper_mad_sigma(std::vector<double> v) {
 
 }  // namespace
 
-ReferenceJitter estimate_reference_jitter(const PoseSeries& ref) {
+ReferenceJitter estimate_reference_jitter(const objectives::PoseSeries& ref) {
   ReferenceJitter out;
   const std::size_t n = ref.size();
   if (n < 3) return out;
@@ -53,4 +53,4 @@ ReferenceJitter estimate_reference_jitter(const PoseSeries& ref) {
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -12,7 +12,7 @@
 
 #include <odotune/objectives/pose_series.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 struct ReferenceJitter {
   double sigma_xy_m = 0.0;       // per axis [m] (x and y pooled)
@@ -24,6 +24,6 @@ struct ReferenceJitter {
 // Second differences over triples of consecutive samples whose two spacings
 // differ by at most 10 % (an uneven triple's second difference is not a pure
 // noise term) and are at most 0.5 s.
-ReferenceJitter estimate_reference_jitter(const PoseSeries& reference);
+ReferenceJitter estimate_reference_jitter(const objectives::PoseSeries& reference);
 
-}  // namespace odotune
+}  // namespace odotune::calibration

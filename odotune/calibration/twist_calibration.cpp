@@ -17,7 +17,7 @@
 #include <odotune/core/why.h>
 #include <odotune/tracks/body_velocity.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 namespace {
 
@@ -37,7 +37,7 @@ struct Ref {
 };
 
 struct Segment {
-  const BodyVelocityIntegral* body = nullptr;
+  const tracks::BodyVelocityIntegral* body = nullptr;
   double t0 = 0.0;
   std::vector<double> t;       // step ends [s]
   std::vector<double> dv, dw;  // ∫v [m], ∫w [rad] over each step at the current delay, unscaled
@@ -119,16 +119,17 @@ struct GtRow {
 };
 
 // Ground-truth segments inside the body velocities' span (header comment).
-void ground_truth_segments(const Track& track, const BodyVelocityIntegral& body, double segment_s,
-                           const TwistCalibrationOptions& o, std::vector<Segment>* out) {
+void ground_truth_segments(const tracks::Track& track, const tracks::BodyVelocityIntegral& body,
+                           double segment_s, const TwistCalibrationOptions& o, std::vector<Segment>* out) {
   std::vector<GtRow> gt;
   const double t_lo = body.t().front(), t_hi = body.t().back();
   for (std::size_t i = 0; i < track.size(); ++i) {
     const double t = track.t()[i];
-    if (t < t_lo || t > t_hi || !track.at(Col::gt_x, i) || !track.at(Col::gt_y, i) ||
-        !track.at(Col::gt_theta, i))
+    if (t < t_lo || t > t_hi || !track.at(tracks::Col::gt_x, i) || !track.at(tracks::Col::gt_y, i) ||
+        !track.at(tracks::Col::gt_theta, i))
       continue;
-    gt.push_back({t, track.col(Col::gt_x)[i], track.col(Col::gt_y)[i], track.col(Col::gt_theta)[i]});
+    gt.push_back({t, track.col(tracks::Col::gt_x)[i], track.col(tracks::Col::gt_y)[i],
+                  track.col(tracks::Col::gt_theta)[i]});
   }
   std::size_t a = 0;
   while (a + 1 < gt.size()) {
@@ -158,14 +159,15 @@ void ground_truth_segments(const Track& track, const BodyVelocityIntegral& body,
 
 // Fix segments: groups of fixes spanning segment_s (0: all), each of at
 // least kMinFixesPerSegment fixes (a short tail joins the group before).
-void fix_segments(const Track& track, const BodyVelocityIntegral& body, double segment_s,
+void fix_segments(const tracks::Track& track, const tracks::BodyVelocityIntegral& body, double segment_s,
                   const TwistCalibrationOptions& o, std::vector<Segment>* out) {
   std::vector<GtRow> fixes;
   for (std::size_t i = 0; i < track.size(); ++i) {
     const double t = track.t()[i];
-    if (t < body.t().front() || t > body.t().back() || !track.at(Col::aps_x, i) || !track.at(Col::aps_y, i))
+    if (t < body.t().front() || t > body.t().back() || !track.at(tracks::Col::aps_x, i) ||
+        !track.at(tracks::Col::aps_y, i))
       continue;
-    fixes.push_back({t, track.col(Col::aps_x)[i], track.col(Col::aps_y)[i], 0.0});
+    fixes.push_back({t, track.col(tracks::Col::aps_x)[i], track.col(tracks::Col::aps_y)[i], 0.0});
   }
   std::vector<double> fix_t;
   for (const GtRow& f : fixes) fix_t.push_back(f.t);
@@ -187,17 +189,17 @@ void fix_segments(const Track& track, const BodyVelocityIntegral& body, double s
 }
 
 struct Runs {
-  std::vector<BodyVelocityIntegral> bodies;  // one per track, stable (reserved)
+  std::vector<tracks::BodyVelocityIntegral> bodies;  // one per track, stable (reserved)
   long ground_truth_runs = 0, fix_runs = 0;
 };
 
-std::vector<Segment> build_segments(const std::vector<const Track*>& tracks, Runs& runs, double segment_s,
-                                    const TwistCalibrationOptions& o) {
+std::vector<Segment> build_segments(const std::vector<const tracks::Track*>& tracks, Runs& runs,
+                                    double segment_s, const TwistCalibrationOptions& o) {
   std::vector<Segment> segs;
   runs.ground_truth_runs = runs.fix_runs = 0;
   for (std::size_t i = 0; i < tracks.size(); ++i) {
-    const Track& track = *tracks[i];
-    const BodyVelocityIntegral& body = runs.bodies[i];
+    const tracks::Track& track = *tracks[i];
+    const tracks::BodyVelocityIntegral& body = runs.bodies[i];
     const std::size_t before = segs.size();
     if (track.has_gt()) {
       ground_truth_segments(track, body, segment_s, o, &segs);
@@ -257,7 +259,7 @@ Fit solve(std::vector<Segment>& segs, double* scales, const TwistCalibrationOpti
   }
   for (int i = 0; i < kScaleParams; ++i) problem.SetParameterLowerBound(scales, i, kLowerBoundFraction);
   Fit fit;
-  ceres::Solve(deterministic_solver_options(o.max_iterations, FitTolerance::calibration), &problem,
+  ceres::Solve(core::deterministic_solver_options(o.max_iterations, core::FitTolerance::calibration), &problem,
                &fit.summary);
   fit.cost = fit.summary.final_cost;
   fit.sd.fill(std::nan(""));
@@ -301,8 +303,8 @@ double search_delay(std::vector<Segment>& warm, double* scales, const TwistCalib
 
 }  // namespace
 
-TwistScore score_twist(const Track& track, const filters::TwistCorrection& c) {
-  const BodyVelocityIntegral body(track);
+TwistScore score_twist(const tracks::Track& track, const filters::TwistCorrection& c) {
+  const tracks::BodyVelocityIntegral body(track);
   TwistScore out;
   out.pose_rmse_m = out.heading_rmse_rad = std::nan("");
   if (body.size() < 2) return out;
@@ -341,34 +343,36 @@ TwistScore score_twist(const Track& track, const filters::TwistCorrection& c) {
 bool TwistCalibrationOptions::IsValid(std::string* why) const {
   const auto positive = [](double x) { return std::isfinite(x) && x > 0.0; };
   if (!(std::isfinite(segment_s) && segment_s >= 0.0))
-    return invalid(why,
-                   fmt::format("segment_s = {} must be a finite number >= 0 [s] (0: whole runs)", segment_s));
+    return core::invalid(why, fmt::format("segment_s = {} must be a finite number >= 0 [s] (0: whole runs)",
+                                          segment_s));
   if (!positive(warm_start_segment_s))
-    return invalid(why, fmt::format("warm_start_segment_s = {} must be > 0 [s]", warm_start_segment_s));
+    return core::invalid(why, fmt::format("warm_start_segment_s = {} must be > 0 [s]", warm_start_segment_s));
   if (!positive(step_s) || !positive(reference_step_s))
-    return invalid(why, fmt::format("step_s = {}, reference_step_s = {}: expected > 0 [s]", step_s,
-                                    reference_step_s));
+    return core::invalid(why, fmt::format("step_s = {}, reference_step_s = {}: expected > 0 [s]", step_s,
+                                          reference_step_s));
   if (!(std::isfinite(max_delay_s) && max_delay_s >= 0.0))
-    return invalid(why, fmt::format("max_delay_s = {} must be a finite number >= 0 [s]", max_delay_s));
+    return core::invalid(why, fmt::format("max_delay_s = {} must be a finite number >= 0 [s]", max_delay_s));
   if (!positive(delay_step_s) || !positive(fine_delay_step_s) || fine_delay_step_s > delay_step_s)
-    return invalid(why,
-                   fmt::format("delay_step_s = {}, fine_delay_step_s = {}: expected 0 < fine <= coarse [s]",
-                               delay_step_s, fine_delay_step_s));
+    return core::invalid(
+        why, fmt::format("delay_step_s = {}, fine_delay_step_s = {}: expected 0 < fine <= coarse [s]",
+                         delay_step_s, fine_delay_step_s));
   if (!positive(loss_scale_m))
-    return invalid(why, fmt::format("loss_scale_m = {} must be > 0 [m]", loss_scale_m));
-  if (max_iterations < 1) return invalid(why, fmt::format("max_iterations = {} must be >= 1", max_iterations));
+    return core::invalid(why, fmt::format("loss_scale_m = {} must be > 0 [m]", loss_scale_m));
+  if (max_iterations < 1)
+    return core::invalid(why, fmt::format("max_iterations = {} must be >= 1", max_iterations));
   return true;
 }
 
-TwistCalibrationSummary calibrate_twist(const std::vector<const Track*>& tracks, OdometryInput input,
-                                        const TwistCalibrationOptions& options) {
+TwistCalibrationSummary calibrate_twist(const std::vector<const tracks::Track*>& tracks,
+                                        tracks::OdometryInput input, const TwistCalibrationOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) fail(why);
-  if (input == OdometryInput::wheels) fail("wheel odometry is calibrated by its geometry (pose_calibration.h)");
+  if (input == tracks::OdometryInput::wheels)
+    fail("wheel odometry is calibrated by its geometry (pose_calibration.h)");
   if (tracks.empty()) fail("no track given");
   Runs runs;
   runs.bodies.reserve(tracks.size());
-  for (const Track* t : tracks) {
+  for (const tracks::Track* t : tracks) {
     if (t == nullptr) fail("null track");
     runs.bodies.emplace_back(*t);
     if (runs.bodies.back().size() < 2)
@@ -377,7 +381,7 @@ TwistCalibrationSummary calibrate_twist(const std::vector<const Track*>& tracks,
   TwistCalibrationSummary out;
   out.input = input;
   std::array<double, kScaleParams> scales{1.0, 1.0};
-  const bool delay = options.fit_delay && input == OdometryInput::commands;
+  const bool delay = options.fit_delay && input == tracks::OdometryInput::commands;
   if (delay) {
     std::vector<Segment> warm = build_segments(tracks, runs, options.warm_start_segment_s, options);
     out.params.delay_s = search_delay(warm, scales.data(), options);
@@ -421,4 +425,4 @@ TwistCalibrationSummary calibrate_twist(const std::vector<const Track*>& tracks,
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -33,7 +33,7 @@
 #include <odotune/tracks/odometry_input.h>
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::calibration {
 
 struct TwistCalibrationOptions {
   // Segment length [s]; 0: whole runs. Short by default: over whole runs a
@@ -53,7 +53,7 @@ struct TwistCalibrationOptions {
 };
 
 struct TwistCalibrationSummary {
-  OdometryInput input = OdometryInput::twist;
+  tracks::OdometryInput input = tracks::OdometryInput::twist;
   filters::TwistCorrection params;
   double sd_scale_v = 0.0, sd_scale_w = 0.0;  // standard errors [-]
   long segments = 0, reference_points = 0;
@@ -74,13 +74,14 @@ struct TwistScore {
   double pose_rmse_m = 0.0, heading_rmse_rad = 0.0;
   std::size_t samples = 0;
 };
-TwistScore score_twist(const Track& track, const filters::TwistCorrection& c);
+TwistScore score_twist(const tracks::Track& track, const filters::TwistCorrection& c);
 
 // Fits all tracks together; each track's odometry must be `input` (twist or
 // commands). Throws std::invalid_argument (one line naming the track) for
 // invalid options, a wheel input, a track without body velocities or without
 // a reference (ground truth or at least 3 fixes within its body velocities).
-TwistCalibrationSummary calibrate_twist(const std::vector<const Track*>& tracks, OdometryInput input,
+TwistCalibrationSummary calibrate_twist(const std::vector<const tracks::Track*>& tracks,
+                                        tracks::OdometryInput input,
                                         const TwistCalibrationOptions& options = {});
 
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -32,7 +32,7 @@ int run(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
-  } catch (const Failure& e) {
+  } catch (const core::Failure& e) {
     std::cerr << "odotune: " << e.what() << "\n";
     return e.exit_code;
   } catch (const std::exception& e) {

@@ -16,7 +16,7 @@ namespace odotune::cli {
 template <class E>
 std::vector<std::pair<std::string, E>> enum_names(std::initializer_list<E> values) {
   std::vector<std::pair<std::string, E>> names;
-  for (E v : values) names.emplace_back(std::string(to_string(v)), v);
+  for (E v : values) names.emplace_back(std::string(to_string(v)), v);  // to_string found by ADL
   return names;
 }
 

@@ -19,11 +19,11 @@ namespace odotune::cli {
 
 namespace {
 
-void print_calibrate(const CalibrateRequest& a) {
+void print_calibrate(const jobs::CalibrateRequest& a) {
   apply_threads(a.threads);
   std::optional<StatusLine> status;
-  const CalibrateOutcome o = run_calibrate(a, {[&](const std::string& text) { status.emplace(text); },
-                                               [&] { status.reset(); }});
+  const jobs::CalibrateOutcome o = jobs::run_calibrate(
+      a, {[&](const std::string& text) { status.emplace(text); }, [&] { status.reset(); }});
   print_lines(o.summary);
   if (!a.figure.empty()) fmt::print("figure: {}.png, {}.svg\n", a.figure, a.figure);
   if (!a.csv.empty()) fmt::print("csv: {}\n", a.csv);
@@ -34,19 +34,20 @@ void print_calibrate(const CalibrateRequest& a) {
   if (!a.json.empty()) fmt::print("json: {}\n", a.json);
 }
 
-void print_apply(const CalibrateRequest& a) {
-  const ApplyOutcome o = run_calibrate_apply(a);
+void print_apply(const jobs::CalibrateRequest& a) {
+  const jobs::ApplyOutcome o = jobs::run_calibrate_apply(a);
   print_lines(o.summary);
   if (!a.json.empty()) fmt::print("json: {}\n", a.json);
 }
 
 // The method and the particle filter's settings.
-void add_method_options(CLI::App* sub, CalibrateRequest& req) {
+void add_method_options(CLI::App* sub, jobs::CalibrateRequest& req) {
   sub->add_option("--method", req.method,
                   "adaptive-pf | pf | dkf | online-pose | batch-pose (alias batch) | batch-velocity | none "
                   "(default adaptive-pf; twist and command tracks: batch)");
   add_enum_option(sub, "--input", req.input,
-                  {OdometryInput::wheels, OdometryInput::twist, OdometryInput::commands},
+                  {tracks::OdometryInput::wheels, tracks::OdometryInput::twist,
+                   tracks::OdometryInput::commands},
                   "the odometry to calibrate: wheels (radii and base), twist (a measured v, w: scales) or "
                   "commands (scales and a delay); default: each track's own (docs/track-format.md)");
   sub->add_option("--resampler", req.resampler,
@@ -68,7 +69,7 @@ void add_method_options(CLI::App* sub, CalibrateRequest& req) {
 }
 
 // The external velocities: from the track, or derived from its ground truth.
-void add_ext_options(CLI::App* sub, CalibrateRequest& req) {
+void add_ext_options(CLI::App* sub, jobs::CalibrateRequest& req) {
   sub->add_option("--ext-from-gt", req.ext_from_gt_hz,
                   "derive the external velocities from the ground truth at this rate [Hz] (for tracks "
                   "without v_ext/w_ext, e.g. OptiOdom)")
@@ -84,7 +85,7 @@ void add_ext_options(CLI::App* sub, CalibrateRequest& req) {
 }
 
 // The initial ranges, the convergence tolerance and the batch fit's segments.
-void add_fit_options(CLI::App* sub, CalibrateRequest& req) {
+void add_fit_options(CLI::App* sub, jobs::CalibrateRequest& req) {
   sub->add_option("--init-radius-range", req.init_radius_range,
                   "LO,HI: initial range of both radii [m] (default nominal ±5 %)");
   sub->add_option("--init-wheel-base-range", req.init_wheel_base_range,
@@ -112,7 +113,7 @@ void add_fit_options(CLI::App* sub, CalibrateRequest& req) {
 }
 
 // The outputs, and --apply.
-void add_output_options(CLI::App* sub, CalibrateRequest& req) {
+void add_output_options(CLI::App* sub, jobs::CalibrateRequest& req) {
   sub->add_option("--json", req.json, "write the result as JSON to this file");
   sub->add_option("--csv", req.csv, "write the estimates over time as CSV to this file");
   sub->add_option("--figure", req.figure, "write the estimates over time as STEM.png and STEM.svg");
@@ -128,7 +129,7 @@ void add_output_options(CLI::App* sub, CalibrateRequest& req) {
 }  // namespace
 
 void register_calibrate(CLI::App& app) {
-  auto req = std::make_shared<CalibrateRequest>();
+  auto req = std::make_shared<jobs::CalibrateRequest>();
   auto* sub = app.add_subcommand(
       "calibrate",
       "Calibrate the odometry (wheel radii, wheel base) from external velocities or position fixes");

@@ -14,7 +14,7 @@
 namespace odotune::cli {
 
 void register_demo(CLI::App& app) {
-  auto req = std::make_shared<DemoRequest>();
+  auto req = std::make_shared<jobs::DemoRequest>();
   req->data_dir = std::string(ODOTUNE_SOURCE_DIR) + "/data/tracks";
   auto threads = std::make_shared<int>(0);
   auto* sub = app.add_subcommand("demo",
@@ -26,7 +26,7 @@ void register_demo(CLI::App& app) {
   sub->add_option("--particles", req->particles, "PSO swarm size")->check(CLI::PositiveNumber);
   sub->add_option("--iterations", req->iterations, "PSO iterations")->check(CLI::NonNegativeNumber);
   add_fitness_mode_option(
-      sub, [req](FitnessMode m) { req->mode = m; },
+      sub, [req](objectives::FitnessMode m) { req->mode = m; },
       "fitness mode 1..7, number or name (default 7, rmse+mae+maxe)",
       /*ground_truth_only=*/true);
   sub->add_option("--seed", req->seed, "random seed");
@@ -36,11 +36,12 @@ void register_demo(CLI::App& app) {
     apply_threads(*threads);
     std::optional<InterruptGuard> interrupt;
     std::optional<Progress> progress;
-    DemoCallbacks cb;
+    jobs::DemoCallbacks cb;
     cb.started = [&] {
       fmt::print("odotune demo: EKF noise tuned by PSO ({} particles × {} iterations, seed {}), "
                  "fitness mode {} ({})\n",
-                 req->particles, req->iterations, req->seed, number(req->mode), fitness_mode_name(req->mode));
+                 req->particles, req->iterations, req->seed, objectives::number(req->mode),
+                 objectives::fitness_mode_name(req->mode));
       fmt::print("baseline: alpha noise α1 = α2 = 0.01, fixes σ = 60 mm (see README)\n\n");
       fmt::print("{:<8} {:<6} {:>33} {:>33} {:>33}\n", "track", "model", "RMSE baseline → tuned",
                  "MAE baseline → tuned", "MAXE baseline → tuned");
@@ -52,21 +53,21 @@ void register_demo(CLI::App& app) {
       progress->set_label(label);
       progress->update(done, total);
     };
-    cb.row = [&](const DemoRow& r, long done, long total) {
+    cb.row = [&](const jobs::DemoRow& r, long done, long total) {
       progress->finish();
-      const ErrorMetrics &b = r.outcome.baseline_mean, &t = r.outcome.tuned_mean;
+      const objectives::ErrorMetrics &b = r.outcome.baseline_mean, &t = r.outcome.tuned_mean;
       fmt::print("{:<8} {:<6} {:>33} {:>33} {:>33}\n", r.track, filters::to_string(r.model),
                  metric_change(b.rmse_m, t.rmse_m), metric_change(b.mae_m, t.mae_m),
                  metric_change(b.maxe_m, t.maxe_m));
       std::fflush(stdout);
       progress->update(done, total);
     };
-    cb.finished = [&](const DemoOutcome& o) {
+    cb.finished = [&](const jobs::DemoOutcome& o) {
       progress->finish();
       fmt::print("\n{} tunes, {} evaluations each, {:.1f} s of optimisation in all\n", o.rows.size(),
                  o.evaluations_per_tune, o.seconds);
     };
-    run_demo(*req, cb);
+    jobs::run_demo(*req, cb);
   });
 }
 

@@ -13,7 +13,7 @@
 namespace odotune::cli {
 
 void register_diagnose(CLI::App& app) {
-  auto req = std::make_shared<DiagnoseRequest>();
+  auto req = std::make_shared<jobs::DiagnoseRequest>();
   auto* sub = app.add_subcommand(
       "diagnose", "Where the nominal model and a recording disagree, which physics was left out, and proof");
   sub->footer("Example:\n"
@@ -50,8 +50,8 @@ void register_diagnose(CLI::App& app) {
       ->check(CLI::Range(0.0, 1.0));
   add_controller_options(sub, req->controller, false);
   sub->callback([req] {
-    const DiagnoseRequest& a = *req;
-    const DiagnoseOutcome o = run_diagnose(a);
+    const jobs::DiagnoseRequest& a = *req;
+    const jobs::DiagnoseOutcome o = jobs::run_diagnose(a);
     print_lines(o.summary);
     if (!a.json.empty()) fmt::print("json: {}\n", a.json);
     if (!a.scenario_out.empty())

@@ -12,7 +12,7 @@
 namespace odotune::cli {
 
 void register_eval(CLI::App& app) {
-  auto req = std::make_shared<EvalRequest>();
+  auto req = std::make_shared<jobs::EvalRequest>();
   auto* sub = app.add_subcommand("eval", "Replay the EKF with a configuration and report its errors");
   sub->footer(
       "Example:\n"
@@ -37,7 +37,7 @@ void register_eval(CLI::App& app) {
       "--trajectory-out", req->trajectory_out,
       "write the filter's trajectory in TUM format (t x y z qx qy qz qw; evo reads it); one track; with "
       "--rl-params and --from, the run with GPS fused before --from only");
-  auto rl = std::make_shared<RlEvalRequest>();
+  auto rl = std::make_shared<jobs::RlEvalRequest>();
   add_rl_source_options(sub, rl->src);
   sub->add_option("--until", rl->until_s, "--rl-params: use the recording before this many seconds")
       ->check(CLI::PositiveNumber);
@@ -62,33 +62,35 @@ void register_eval(CLI::App& app) {
   sub->add_option("--outage-every", rl->outage_every_s,
                   "--rl-params: with --outages, their stride [s] (default 10)")
       ->check(CLI::PositiveNumber);
-  auto track_src = std::make_shared<RlTrackSource>();
+  auto track_src = std::make_shared<jobs::RlTrackSource>();
   add_rl_track_options(sub, *track_src);
   sub->callback([req, rl, track_src, sub, keys_only] {
     if (*keys_only) {
       if (rl->src.params_file.empty())
-        throw Failure("eval: --keys lists the keys of an --rl-params file; expected one");
-      print_rl_keys(read_rl_file(rl->src));
+        throw core::Failure("eval: --keys lists the keys of an --rl-params file; expected one");
+      print_rl_keys(jobs::read_rl_file(rl->src));
       return;
     }
     if (rl->src.params_file.empty()) {
       for (const char* flag :
            {"--bag", "--node", "--filter", "--tf", "--gps-topic", "--gps-heading-fit", "--until", "--from",
             "--noise-from", "--fixes-out", "--outages", "--outage-every"}) {
-        if (sub->count(flag) > 0) throw Failure(fmt::format("eval: {} applies to --rl-params only", flag));
+        if (sub->count(flag) > 0)
+          throw core::Failure(fmt::format("eval: {} applies to --rl-params only", flag));
       }
     }
     for (const char* flag : kRlTrackFlags) {
       if (sub->count(flag) > 0 && (rl->src.params_file.empty() || req->tracks.empty()))
-        throw Failure(fmt::format("eval: {} applies to --rl-params with --track only", flag));
+        throw core::Failure(fmt::format("eval: {} applies to --rl-params with --track only", flag));
     }
     if (!rl->src.params_file.empty() && rl->src.bag.empty() && !req->tracks.empty()) {
       for (const char* flag :
            {"--tf", "--gps-topic", "--gps-heading-fit", "--until", "--from", "--fixes-out", "--config"}) {
         if (sub->count(flag) > 0)
-          throw Failure(fmt::format("eval: {} applies to --rl-params with --bag, not with --track", flag));
+          throw core::Failure(fmt::format("eval: {} applies to --rl-params with --bag, not with --track",
+                                          flag));
       }
-      RlTrackEvalRequest t;
+      jobs::RlTrackEvalRequest t;
       t.src = *track_src;
       t.src.params_file = rl->src.params_file;
       t.src.node_name = rl->src.node_name;
@@ -99,22 +101,23 @@ void register_eval(CLI::App& app) {
       t.protocols.outage_stride_s = rl->outage_every_s;
       t.trajectory_out = req->trajectory_out;
       t.json_out = req->json_out;
-      print_rl_track_eval(run_rl_track_eval(t));
+      print_rl_track_eval(jobs::run_rl_track_eval(t));
       return;
     }
     if (!rl->src.params_file.empty()) {
       if (!req->tracks.empty() || !req->config.empty())
-        throw Failure(
+        throw core::Failure(
             "eval: --rl-params replays a bag or tracks; expected --bag or --track, not both, and no --config");
       rl->trajectory_out = req->trajectory_out;
       rl->json_out = req->json_out;
-      print_rl_eval(run_rl_eval(*rl));
+      print_rl_eval(jobs::run_rl_eval(*rl));
       return;
     }
-    if (req->tracks.empty()) throw Failure("eval: expected --track, or --rl-params with --bag or --track");
-    run_eval(*req, [&](const EvalOutcome& o) {
-      const EvalTrack& t = o.tracks.back();
-      const ErrorMetrics& m = t.metrics;
+    if (req->tracks.empty())
+      throw core::Failure("eval: expected --track, or --rl-params with --bag or --track");
+    jobs::run_eval(*req, [&](const jobs::EvalOutcome& o) {
+      const jobs::EvalTrack& t = o.tracks.back();
+      const objectives::ErrorMetrics& m = t.metrics;
       fmt::print("{}: {} — {}RMSE {:.2f} mm, MAE {:.2f} mm, MAXE {:.2f} mm ({} samples){}\n", t.track, o.label,
                  t.against_fixes ? "held-out fixes (no ground truth): " : "", m.rmse_m * 1e3, m.mae_m * 1e3,
                  m.maxe_m * 1e3, m.samples,

@@ -8,7 +8,7 @@
 namespace odotune::cli {
 
 void register_export(CLI::App& app) {
-  auto req = std::make_shared<ExportRequest>();
+  auto req = std::make_shared<jobs::ExportRequest>();
   auto* sub = app.add_subcommand(
       "export", "Write the best run of a results store as an odotune or robot_localization configuration");
   sub->footer(
@@ -39,7 +39,7 @@ void register_export(CLI::App& app) {
       ->default_val("ekf_filter_node");
   sub->add_flag("--ros1", req->ros1, "rl-ekf runs: write the ROS 1 form of the robot's file (default ROS 2)");
   sub->callback([req] {
-    const ExportOutcome o = run_export(*req);
+    const jobs::ExportOutcome o = jobs::run_export(*req);
     fmt::print("exported run {} ({}; best of {} matching run{}) as {} to {}\n", o.run_key, o.scores, o.matching,
                o.matching == 1 ? "" : "s", req->format, req->out);
   });

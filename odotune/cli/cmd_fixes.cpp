@@ -10,7 +10,7 @@
 namespace odotune::cli {
 
 void register_fixes(CLI::App& app) {
-  auto req = std::make_shared<FixesRequest>();
+  auto req = std::make_shared<jobs::FixesRequest>();
   auto* sub = app.add_subcommand("fixes",
                                  "Add position fixes made from ground truth (the study's APS: 1 Hz, σ 60 mm)");
   sub->footer("Example:\n"
@@ -25,7 +25,7 @@ void register_fixes(CLI::App& app) {
   sub->add_option("--seed", req->options.seed, "noise seed");
   sub->add_flag("!--no-variances", req->options.variances,
                 "do not write the fixes' variances (aps_var_x, aps_var_y = σ², written by default)");
-  sub->callback([req] { fmt::print("{}: {}\n", req->output, run_fixes(*req)); });
+  sub->callback([req] { fmt::print("{}: {}\n", req->output, jobs::run_fixes(*req)); });
 }
 
 }  // namespace odotune::cli

@@ -13,7 +13,7 @@
 namespace odotune::cli {
 
 void register_grid(CLI::App& app) {
-  auto req = std::make_shared<GridRequest>();
+  auto req = std::make_shared<jobs::GridRequest>();
   req->code_version = ODOTUNE_VERSION;
   auto threads = std::make_shared<int>(0);
   auto* sub = app.add_subcommand(
@@ -23,7 +23,7 @@ void register_grid(CLI::App& app) {
               "  odotune grid experiments/study.yaml --store night.sqlite\n"
               "Killed or interrupted, the same command continues where it stopped: finished runs are\n"
               "never repeated or lost, and the results equal an uninterrupted run's.\n" +
-              std::string(mpi_built()
+              std::string(jobs::mpi_built()
                               ? "MPI: built in. `mpirun -np N odotune grid ...` shares the runs over N ranks\n"
                                 "(rank 0 writes the store); the results equal a one-process run's."
                               : "MPI: not built in (configure with -DODOTUNE_WITH_MPI=ON to share a grid over\n"
@@ -37,22 +37,22 @@ void register_grid(CLI::App& app) {
     apply_threads(*threads);
     std::optional<InterruptGuard> interrupt;
     std::optional<Progress> progress;
-    GridCallbacks cb;
-    cb.started = [&](const Experiment& e) {
+    jobs::GridCallbacks cb;
+    cb.started = [&](const formats::Experiment& e) {
       interrupt.emplace();
       progress.emplace("grid " + e.name, "runs");
       return interrupt->flag();
     };
     cb.progress = [&](long done, long total) { progress->update(done, total); };
-    const std::optional<GridReport> r = run_grid_job(*req, cb);
+    const std::optional<jobs::GridReport> r = jobs::run_grid_job(*req, cb);
     if (!r) return;  // not rank 0 (MPI): rank 0 reports
     progress->finish();
-    const GridOutcome& o = r->outcome;
+    const jobs::GridOutcome& o = r->outcome;
     fmt::print("{}: {} runs in the experiment, {} already stored, {} run now{}{}\n", r->store.string(), o.total,
                o.skipped, o.ran, o.abandoned ? fmt::format(", {} abandoned", o.abandoned) : "",
                r->ranks > 1 ? fmt::format(" (on {} MPI ranks)", r->ranks) : "");
     if (interrupt->raised())
-      throw Failure("interrupted; run the same command to continue where it stopped", 130);
+      throw core::Failure("interrupted; run the same command to continue where it stopped", 130);
   });
 }
 

@@ -19,24 +19,24 @@ namespace odotune::cli {
 namespace {
 
 struct Dataset {
-  ImportDataset id;
+  jobs::ImportDataset id;
   const char *name, *description, *example, *input_name, *input_help;
 };
 
 const Dataset kDatasets[] = {
-    {ImportDataset::mrclam, "mrclam",
+    {jobs::ImportDataset::mrclam, "mrclam",
      "UTIAS MRCLAM (Leung et al., IJRR 2011): one robot's commanded v, w (RobotN_Odometry.dat) "
      "and Vicon pose (RobotN_Groundtruth.dat), merged on their common Unix clock",
      "odotune import mrclam ../shared/data/real/mrclam7 --robot 1 -o mrclam7-robot1.csv", "DIR",
      "MRCLAM dataset folder holding RobotN_Odometry.dat and RobotN_Groundtruth.dat"},
-    {ImportDataset::optiodom, "optiodom",
+    {jobs::ImportDataset::optiodom, "optiodom",
      "OptiOdom (Sousa et al., JIRS 2022): one synchronised run <id>_run-NN.csv (encoder "
      "ticks, OptiTrack ground truth); robot geometry from <id>_metadata.csv beside it, "
      "velocity commands from the robot log <id>.csv when they align with the run",
      "odotune import optiodom "
      "../shared/data/real/optiodom_diff/circular/231220200146/231220200146_run-01.csv -o circular-run01.csv",
      "RUN.csv", "synchronised run file <id>_run-NN.csv"},
-    {ImportDataset::litw, "litw",
+    {jobs::ImportDataset::litw, "litw",
      "UTIAS Lost in the Woods (AER1513 dataset2.mat) from its CSV export litw_series.csv: "
      "odometry v, w and ground truth where valid; the noise variances of litw_scalars.csv "
      "beside it become metadata",
@@ -49,8 +49,8 @@ const Dataset kDatasets[] = {
 namespace {
 
 void register_import_rosbag(CLI::App& imp) {
-  auto req = std::make_shared<ImportRequest>();
-  req->dataset = ImportDataset::rosbag;
+  auto req = std::make_shared<jobs::ImportRequest>();
+  req->dataset = jobs::ImportDataset::rosbag;
   auto list = std::make_shared<bool>(false);
   auto stamps = std::make_shared<std::string>("header");
   auto rpy = std::make_shared<std::vector<double>>();
@@ -104,15 +104,16 @@ void register_import_rosbag(CLI::App& imp) {
   sub->callback([req, list, stamps, rpy, radius, base] {
     if (*list) {
       fmt::print("{}:\n", req->input);
-      for (const std::string& line : describe_bag_topics(req->input)) fmt::print("{}\n", line);
+      for (const std::string& line : tracks::describe_bag_topics(req->input)) fmt::print("{}\n", line);
       return;
     }
-    if (req->output.empty()) throw Failure("import rosbag: no output file given (-o TRACK.csv, or --list)");
+    if (req->output.empty())
+      throw core::Failure("import rosbag: no output file given (-o TRACK.csv, or --list)");
     if (!rpy->empty()) req->rosbag.imu_rpy_rad = std::array<double, 3>{(*rpy)[0], (*rpy)[1], (*rpy)[2]};
     req->rosbag.receive_time_stamps = *stamps == "receive";
     if (*radius > 0.0) req->rosbag.wheel_radius_m = *radius;
     if (*base > 0.0) req->rosbag.wheel_base_m = *base;
-    const ImportOutcome o = run_import(*req);
+    const jobs::ImportOutcome o = jobs::run_import(*req);
     fmt::print("{}: {} rows, {:.3f} s, columns {}\n", req->output, o.rows, o.duration_s, o.columns);
     for (const std::string& n : o.notes) fmt::print("  {}\n", n);
   });
@@ -129,7 +130,7 @@ void register_import(CLI::App& app) {
               "Example:\n  odotune import optiodom ../shared/data/real/optiodom_diff/square/231220200045/"
               "231220200045_run-01.csv -o square-run01.csv");
   for (const Dataset& d : kDatasets) {
-    auto req = std::make_shared<ImportRequest>();
+    auto req = std::make_shared<jobs::ImportRequest>();
     req->dataset = d.id;
     auto* sub = imp->add_subcommand(d.name, d.description);
     sub->add_option(d.input_name, req->input, d.input_help)->required();
@@ -137,10 +138,10 @@ void register_import(CLI::App& app) {
         ->required()
         ->option_text("TRACK.csv REQUIRED");
     sub->footer(std::string("Example:\n  ") + d.example);
-    if (d.id == ImportDataset::mrclam)
+    if (d.id == jobs::ImportDataset::mrclam)
       sub->add_option("--robot", req->robot, "robot number N (1 to 5)")->required();
     sub->callback([req] {
-      const ImportOutcome o = run_import(*req);
+      const jobs::ImportOutcome o = jobs::run_import(*req);
       fmt::print("{}: {} rows, {:.3f} s, columns {}{}\n", req->output, o.rows, o.duration_s, o.columns,
                  o.no_commands_why ? "; velocity commands " + *o.no_commands_why : "");
     });

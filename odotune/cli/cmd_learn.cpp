@@ -35,7 +35,7 @@ auto with_progress(const char* label, const char* unit, Job job) {
 }
 
 // The flags of `learn train`.
-void add_train_options(CLI::App* t, LearnTrainRequest& r) {
+void add_train_options(CLI::App* t, studies::LearnTrainRequest& r) {
   t->add_option("--track", r.tracks, "track with ground truth (repeat for several)")->required();
   t->add_option(
       "--slip-track", r.slip_tracks,
@@ -54,20 +54,24 @@ void add_train_options(CLI::App* t, LearnTrainRequest& r) {
                 "training (default 0)")
       ->check(CLI::NonNegativeNumber);
   t->add_option("--rate-hz", r.rate_hz, "network rate [Hz] (paper: 10)")->default_val(r.rate_hz);
-  add_enum_option(t, "--input", r.input, {OdometryInput::wheels, OdometryInput::twist, OdometryInput::commands},
+  add_enum_option(t, "--input", r.input,
+                  {tracks::OdometryInput::wheels, tracks::OdometryInput::twist,
+                   tracks::OdometryInput::commands},
                   "the odometry the nets read: wheels, twist (a measured v, w) or commands (default: each "
                   "track's own, docs/track-format.md)");
-  add_enum_option(t, "--target", r.target, {LearnedTarget::correction, LearnedTarget::velocity},
+  add_enum_option(t, "--target", r.target,
+                  {learned::LearnedTarget::correction, learned::LearnedTarget::velocity},
                   "what the nets output: correction (added to the kinematic odometry; an untrained net is the "
                   "kinematics) or velocity (the paper's nets on wheel increments)")
-      ->default_str(std::string(to_string(r.target)));
+      ->default_str(std::string(learned::to_string(r.target)));
   add_enum_option(
       t, "--validation", r.validation,
-      {LearnedValidation::recordings, LearnedValidation::blocks, LearnedValidation::chronological},
+      {learned::LearnedValidation::recordings, learned::LearnedValidation::blocks,
+       learned::LearnedValidation::chronological},
       "what the nets are validated on: correction nets recordings (default with 2 tracks or more) or "
       "blocks (of --block-s); the paper's chronological (default: the last 30 % of each track) or "
       "recordings");
-  SelectionOptions& so = r.selection;
+  learned::SelectionOptions& so = r.selection;
   t->add_option("--block-s", so.block_s, "--validation blocks: the blocks' length [s]")
       ->default_val(so.block_s)
       ->check(CLI::PositiveNumber);
@@ -90,7 +94,8 @@ void add_train_options(CLI::App* t, LearnTrainRequest& r) {
       ->delimiter(',')
       ->default_str("0,10")
       ->check(CLI::NonNegativeNumber);
-  add_enum_list_option(t, "--features", so.features, {LearnedFeatures::channel, LearnedFeatures::both},
+  add_enum_list_option(t, "--features", so.features,
+                       {learned::LearnedFeatures::channel, learned::LearnedFeatures::both},
                        "correction nets: the feature sets to choose from (channel: each net its own channel of "
                        "the odometry; both: v and w for either)")
       ->default_str("channel,both");
@@ -103,7 +108,7 @@ void add_train_options(CLI::App* t, LearnTrainRequest& r) {
 
 // The command line that regenerates the model (its provenance.created_by):
 // the tracks and output, and every flag given.
-std::string train_command(const LearnTrainRequest& r, const CLI::App& t) {
+std::string train_command(const studies::LearnTrainRequest& r, const CLI::App& t) {
   std::string c = "odotune learn train";
   for (const auto& f : r.tracks) c += " --track " + f;
   for (const auto& f : r.slip_tracks) c += " --slip-track " + f;
@@ -133,18 +138,19 @@ void register_learn(CLI::App& app) {
       "  odotune learn eval --track held_out.csv --model model.json --calibration cal.yaml --fix-sigma-m 0.1\n"
       "  odotune learn eval --track held_out.csv --model model.json --json eval.json\n"
       "  odotune learn retrain --track changed.csv --model model.json --model-out model2.json --json retrain.json");
-  auto train = std::make_shared<LearnTrainRequest>();
+  auto train = std::make_shared<studies::LearnTrainRequest>();
   auto* t = learn->add_subcommand("train",
                                   "Train the V and W nets (and the slip detector) on tracks with ground truth");
   add_train_options(t, *train);
   t->callback([train, t] {
     train->command = train_command(*train, *t);
-    print_lines(learn_train_lines(with_progress("learn train", "fits", [&](const LearnProgress& p) {
-      return run_learn_train(*train, p);
-    })));
+    print_lines(
+        studies::learn_train_lines(with_progress("learn train", "fits", [&](const studies::LearnProgress& p) {
+          return studies::run_learn_train(*train, p);
+        })));
   });
 
-  auto eval = std::make_shared<LearnEvalRequest>();
+  auto eval = std::make_shared<studies::LearnEvalRequest>();
   auto* e = learn->add_subcommand(
       "eval", "Score the learned and the kinematic odometry against a track's ground truth");
   e->add_option("--track", eval->track, "track with ground truth")->required();
@@ -159,9 +165,9 @@ void register_learn(CLI::App& app) {
   e->add_option("--calibration", eval->calibration,
                 "also score the kinematics calibrated by this file (odotune calibrate --method batch "
                 "--config-out) on the same track");
-  e->callback([eval] { print_lines(learn_eval_lines(run_learn_eval(*eval))); });
+  e->callback([eval] { print_lines(studies::learn_eval_lines(studies::run_learn_eval(*eval))); });
 
-  auto retrain = std::make_shared<LearnRetrainRequest>();
+  auto retrain = std::make_shared<studies::LearnRetrainRequest>();
   auto* r = learn->add_subcommand(
       "retrain",
       "Run the UKF with online retraining over a track (and without), compare, save the retrained model");
@@ -191,9 +197,10 @@ void register_learn(CLI::App& app) {
     if (retrain->ext_from_gt_hz > 0)
       retrain->command += fmt::format(" --ext-from-gt {}", retrain->ext_from_gt_hz);
     if (retrain->until_s) retrain->command += fmt::format(" --until {}", *retrain->until_s);
-    print_lines(learn_retrain_lines(with_progress("learn retrain", "runs", [&](const LearnProgress& p) {
-      return run_learn_retrain(*retrain, p);
-    })));
+    print_lines(studies::learn_retrain_lines(with_progress("learn retrain", "runs",
+                                                           [&](const studies::LearnProgress& p) {
+                                                             return studies::run_learn_retrain(*retrain, p);
+                                                           })));
   });
 }
 

@@ -8,7 +8,7 @@
 namespace odotune::cli {
 
 void register_report(CLI::App& app) {
-  auto req = std::make_shared<ReportRequest>();
+  auto req = std::make_shared<jobs::ReportRequest>();
   auto* sub = app.add_subcommand(
       "report", "Heatmaps, boxplots, Table 1, trajectories, convergence and one HTML page from a store");
   sub->footer("Example:\n"
@@ -20,13 +20,13 @@ void register_report(CLI::App& app) {
   sub->add_option("--track-name", req->trajectory_track,
                   "draw the trajectory overlay for this track only (default: every track)");
   add_fitness_mode_option(
-      sub, [req](FitnessMode m) { req->mode = m; },
+      sub, [req](objectives::FitnessMode m) { req->mode = m; },
       "fitness mode of the trajectory and convergence figures, number or name")
       ->default_str("7");
   sub->add_option("--track", req->track_files,
                   "track file to use instead of the experiment's (if its files have moved)");
   sub->callback([req] {
-    const ReportOutcome o = write_report(*req);
+    const jobs::ReportOutcome o = jobs::write_report(*req);
     fmt::print("{}: {} runs ({} leave-one-track-out) → {} files in {}\n", o.experiment, o.runs, o.heldout_runs,
                o.files.size(), req->out_dir.string());
     fmt::print("{}\n", o.headline);

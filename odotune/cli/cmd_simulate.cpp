@@ -35,7 +35,7 @@ void print_effect_table() {
 }  // namespace
 
 void register_simulate(CLI::App& app) {
-  auto req = std::make_shared<SimulateRequest>();
+  auto req = std::make_shared<jobs::SimulateRequest>();
   auto list_effects = std::make_shared<bool>(false);
   auto* sub = app.add_subcommand(
       "simulate",
@@ -58,9 +58,9 @@ void register_simulate(CLI::App& app) {
   sub->callback([req, list_effects] {
     if (*list_effects) return print_effect_table();
     const char* const usage = "expected: odotune simulate SCENARIO.yaml -o TRACK.csv";
-    if (req->scenario.empty()) throw Failure(fmt::format("simulate: missing SCENARIO.yaml; {}", usage));
-    if (req->output.empty()) throw Failure(fmt::format("simulate: missing -o TRACK.csv; {}", usage));
-    const SimulateOutcome o = run_simulate(*req);
+    if (req->scenario.empty()) throw core::Failure(fmt::format("simulate: missing SCENARIO.yaml; {}", usage));
+    if (req->output.empty()) throw core::Failure(fmt::format("simulate: missing -o TRACK.csv; {}", usage));
+    const jobs::SimulateOutcome o = jobs::run_simulate(*req);
     fmt::print("wrote {}: track '{}', {} rows over {:.1f} s, path {:.1f} m, seed {}, effects: {}", req->output,
                o.track_name, o.rows, o.duration_s, o.path_length_m, o.seed, o.effects);
     if (o.slip_episodes > 0)

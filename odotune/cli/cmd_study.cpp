@@ -21,14 +21,14 @@ namespace odotune::cli {
 namespace {
 
 // SOURCE_DIR/scenarios/FILE of this build.
-std::string source_scenario(const char* file) { return default_scenario(ODOTUNE_SOURCE_DIR, file); }
+std::string source_scenario(const char* file) { return studies::default_scenario(ODOTUNE_SOURCE_DIR, file); }
 
 // Runs one study with progress on stderr, then prints its tables and files.
 template <class Request, class Run>
 void run_and_print(const std::string& label, const std::string& unit, Request request, Run run) {
   if constexpr (requires { request.source_dir; }) request.source_dir = ODOTUNE_SOURCE_DIR;
   Progress progress(label, unit);
-  StudyHooks hooks;
+  studies::StudyHooks hooks;
   hooks.progress = [&](long done, long total, const std::string& stage) {
     if (!stage.empty()) progress.set_label(label + ": " + stage);
     progress.update(done, total);
@@ -37,7 +37,7 @@ void run_and_print(const std::string& label, const std::string& unit, Request re
     progress.finish();
     fmt::print("{}", tables);
   };
-  const StudyRun r = run(request, hooks);
+  const studies::StudyRun r = run(request, hooks);
   std::string names;
   for (const auto& f : r.files) names += (names.empty() ? "" : ", ") + f.filename().string();
   fmt::print("\nwrote {} files to {} ({}); the study took {:.1f} s\n", r.files.size(), request.out, names,
@@ -45,7 +45,8 @@ void run_and_print(const std::string& label, const std::string& unit, Request re
 }
 
 // Adds the options resampling and calibration share.
-CLI::App* add_study(CLI::App* study, const std::string& name, const std::string& help, StudyRequest* r) {
+CLI::App* add_study(CLI::App* study, const std::string& name, const std::string& help,
+                    studies::StudyRequest* r) {
   auto* sub = study->add_subcommand(name, help);
   sub->add_option("--out", r->out, "folder for the tables (Markdown, CSV) and figures (PNG, SVG)")->required();
   sub->add_option("--runs", r->options.runs, "Monte-Carlo runs (run r: seed + r)")
@@ -56,13 +57,13 @@ CLI::App* add_study(CLI::App* study, const std::string& name, const std::string&
                   "except timing")
       ->check(CLI::NonNegativeNumber);
   sub->add_option("--scenario", r->scenario, "scenario of the track (constant conditions)")
-      ->default_val(source_scenario(kStudyScenarioFile));
+      ->default_val(source_scenario(studies::kStudyScenarioFile));
   return sub;
 }
 
 void register_learned_study(CLI::App* study) {
-  auto r = std::make_shared<LearnedStudyRequest>();
-  LearnedStudyOptions& o = r->options;
+  auto r = std::make_shared<studies::LearnedStudyRequest>();
+  studies::LearnedStudyOptions& o = r->options;
   auto* sub = study->add_subcommand(
       "learned",
       "Tables 1-3 of Fariña et al. (Sensors 2023): LSTM vs traditional odometry, online retraining after a "
@@ -92,14 +93,14 @@ void register_learned_study(CLI::App* study) {
                                 "scenario with slip episodes the detector is trained on",
                                 "held-out scenario with slip episodes of Table 3"};
   for (int i = 0; i < 5; ++i)
-    sub->add_option(kLearnedScenarioFlags[i], r->scenarios[i], helps[i])
-        ->default_val(source_scenario(kLearnedScenarioFiles[i]));
-  sub->callback([r] { run_and_print("study learned", "stages", *r, run_learned_to_folder); });
+    sub->add_option(studies::kLearnedScenarioFlags[i], r->scenarios[i], helps[i])
+        ->default_val(source_scenario(studies::kLearnedScenarioFiles[i]));
+  sub->callback([r] { run_and_print("study learned", "stages", *r, studies::run_learned_to_folder); });
 }
 
 void register_diagnosis_study(CLI::App* study) {
-  auto r = std::make_shared<DiagnosisBenchmarkRequest>();
-  DiagnosisBenchmarkOptions& o = r->options;
+  auto r = std::make_shared<studies::DiagnosisBenchmarkRequest>();
+  studies::DiagnosisBenchmarkOptions& o = r->options;
   auto* sub = study->add_subcommand(
       "diagnosis",
       "random benchmark of `odotune diagnose`: random robots, drives, odometry, references and 0-2 effects; "
@@ -133,7 +134,7 @@ void register_diagnosis_study(CLI::App* study) {
     apply_threads(r->options.threads);
     InterruptGuard guard;
     r->stop = guard.flag();
-    run_and_print("study diagnosis", "cases", *r, run_diagnosis_benchmark_to_folder);
+    run_and_print("study diagnosis", "cases", *r, studies::run_diagnosis_benchmark_to_folder);
   });
 }
 
@@ -149,7 +150,7 @@ void register_study(CLI::App& app) {
                 "  odotune study learned --out docs/learned\n"
                 "Each run simulates the wheelchair scenario with its own seed and random true radii.");
 
-  auto resampling = std::make_shared<StudyRequest>();
+  auto resampling = std::make_shared<studies::StudyRequest>();
   auto* rs = add_study(study, "resampling",
                        "Table I: 4 resamplers × 3 resampling policies of the plain PF (final radius "
                        "errors, V/W RMSE, ms per iteration)",
@@ -157,22 +158,22 @@ void register_study(CLI::App& app) {
   rs->add_option("--particles", resampling->options.pf_particles, "N of the plain PF (the paper's 5000)")
       ->default_val(resampling->options.pf_particles);
   rs->callback([resampling] {
-    run_and_print("study resampling", "tasks", *resampling, run_resampling_to_folder);
+    run_and_print("study resampling", "tasks", *resampling, studies::run_resampling_to_folder);
   });
 
-  auto calibration = std::make_shared<StudyRequest>();
+  auto calibration = std::make_shared<studies::StudyRequest>();
   auto* cs = add_study(study, "calibration",
                        "Table II: adaptive PF vs DKF vs batch vs none, constant and changing "
                        "conditions (radius errors, pose RMSE, convergence)",
                        calibration.get());
   cs->add_option("--step-scenario", calibration->step_scenario,
                  "scenario of the changing-conditions track (radius_step)")
-      ->default_val(source_scenario(kStudyStepScenarioFile));
+      ->default_val(source_scenario(studies::kStudyStepScenarioFile));
   cs->add_option("--particles", calibration->options.adaptive_initial_particles,
                  "initial N of the adaptive PF (0 = the paper's 8000)")
       ->check(CLI::NonNegativeNumber);
   cs->callback([calibration] {
-    run_and_print("study calibration", "tasks", *calibration, run_calibration_to_folder);
+    run_and_print("study calibration", "tasks", *calibration, studies::run_calibration_to_folder);
   });
 
   register_learned_study(study);

@@ -26,7 +26,7 @@ struct RlChoices {
   std::string fitness = "both", space = "diagonal", format = "ros2";
   std::string grid;  // "none" or levels in decades, comma-separated
   bool no_input_covariances = false, allow_worse_heldout = false, ukf_constants = false;
-  RlTrackSource track;  // --rl-params with --track: its options
+  jobs::RlTrackSource track;  // --rl-params with --track: its options
 };
 
 // --grid: "none" (no grid stage) or levels in decades, "-2,0,2".
@@ -42,8 +42,8 @@ std::vector<double> parse_grid_levels(const std::string& text) {
       levels.push_back(std::stod(item, &used));
       if (used != item.size()) throw std::invalid_argument(item);
     } catch (const std::exception&) {
-      throw Failure(fmt::format("tune: --grid {}: expected none or decades separated by commas, e.g. -2,0,2",
-                                text));
+      throw core::Failure(
+          fmt::format("tune: --grid {}: expected none or decades separated by commas, e.g. -2,0,2", text));
     }
     at = comma + 1;
   }
@@ -51,7 +51,7 @@ std::vector<double> parse_grid_levels(const std::string& text) {
 }
 
 // tune --rl-params: the EKF-model flags do not apply and are refused by name.
-void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const RlChoices& c,
+void run_rl_tune_command(const jobs::TuneCommandRequest& req, jobs::RlTuneRequest r, const RlChoices& c,
                          const CLI::App& sub) {
   static const std::set<std::string> kApplies = {"--rl-params",
                                                  "--bag",
@@ -99,22 +99,24 @@ void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const R
     const bool track_flag = name == "--track" || std::find(std::begin(kRlTrackFlags), std::end(kRlTrackFlags),
                                                            name) != std::end(kRlTrackFlags);
     if (on_tracks ? (kBagOnly.count(name) > 0) : track_flag) {
-      throw Failure(fmt::format("tune: {} does not apply to --rl-params with {}", name,
-                                on_tracks ? "--track" : "--bag"));
+      throw core::Failure(fmt::format("tune: {} does not apply to --rl-params with {}", name,
+                                      on_tracks ? "--track" : "--bag"));
     }
     if (kApplies.count(name) == 0 && !track_flag) {
-      throw Failure(fmt::format("tune: {} does not apply to --rl-params (robot_localization's EKF)",
-                                opt->get_name()));
+      throw core::Failure(fmt::format("tune: {} does not apply to --rl-params (robot_localization's EKF)",
+                                      opt->get_name()));
     }
     command += " " + opt->get_name();
     if (opt->get_expected_min() == 0) continue;  // a flag: its name says it
     for (const std::string& v : opt->results()) command += " " + v;
   }
-  static_cast<SolverSettings&>(r) = req;
+  static_cast<jobs::SolverSettings&>(r) = req;
   r.options.folds = req.fix_cv.folds;
   r.options.block_s = req.fix_cv.block_s;
-  if (!parse_rl_fitness(c.fitness, &r.options.fitness) || !parse_rl_noise_space(c.space, &r.options.space))
-    throw Failure(fmt::format("tune: --fitness {} --space {}: not a fitness or space", c.fitness, c.space));
+  if (!objectives::parse_rl_fitness(c.fitness, &r.options.fitness) ||
+      !objectives::parse_rl_noise_space(c.space, &r.options.space))
+    throw core::Failure(fmt::format("tune: --fitness {} --space {}: not a fitness or space", c.fitness,
+                                    c.space));
   r.options.input_covariances = !c.no_input_covariances;
   r.options.ukf_constants = c.ukf_constants;
   r.options.keep_heldout = !c.allow_worse_heldout;
@@ -128,27 +130,27 @@ void run_rl_tune_command(const TuneCommandRequest& req, RlTuneRequest r, const R
   r.progress = [&progress](long done, long total) { progress.update(done, total); };
   r.stop = interrupt.flag();
   if (on_tracks) {
-    RlTrackSource src = c.track;
+    jobs::RlTrackSource src = c.track;
     src.params_file = r.src.params_file;
     src.node_name = r.src.node_name;
     src.filter = r.src.filter;
     src.tracks = {req.tracks.begin(), req.tracks.end()};
-    const RlTrackTuneOutcome o = run_rl_track_tune(r, src);
+    const jobs::RlTrackTuneOutcome o = jobs::run_rl_track_tune(r, src);
     progress.finish();
     if (interrupt.raised()) std::fprintf(stderr, "odotune: interrupted; reporting the best so far\n");
     print_rl_track_tune(r, o);
-    if (interrupt.raised()) throw Failure("interrupted", 130);
+    if (interrupt.raised()) throw core::Failure("interrupted", 130);
     return;
   }
-  const RlTuneOutcome o = run_rl_tune(r);
+  const jobs::RlTuneOutcome o = jobs::run_rl_tune(r);
   progress.finish();
   if (interrupt.raised()) std::fprintf(stderr, "odotune: interrupted; reporting the best so far\n");
   print_rl_tune(r, o);
-  if (interrupt.raised()) throw Failure("interrupted", 130);
+  if (interrupt.raised()) throw core::Failure("interrupted", 130);
 }
 
 // --solver: pso or nlopt:NAME, parsed into req->solver.
-void add_solver_option(CLI::App* sub, const std::shared_ptr<TuneCommandRequest>& req) {
+void add_solver_option(CLI::App* sub, const std::shared_ptr<jobs::TuneCommandRequest>& req) {
   std::string algos;
   for (const auto& a : tuner::nlopt_algorithm_names()) algos += " " + a;
   sub->add_option_function<std::string>(
@@ -164,7 +166,7 @@ void add_solver_option(CLI::App* sub, const std::shared_ptr<TuneCommandRequest>&
 }
 
 // The calibrators' particle filter and external velocities.
-void add_calibrator_options(CLI::App* sub, TuneCommandRequest& req) {
+void add_calibrator_options(CLI::App* sub, jobs::TuneCommandRequest& req) {
   sub->add_option("--resampler", req.resampler,
                   "calibrators: multinomial | stratified | systematic | residual (default systematic)");
   sub->add_option("--policy", req.policy, "calibrators: resampling policy every | neff | max (default neff)");
@@ -180,7 +182,7 @@ void add_calibrator_options(CLI::App* sub, TuneCommandRequest& req) {
 }
 
 // robot_localization tuning (--rl-params): the span, fitness, search space and outputs.
-void add_rl_tune_options(CLI::App* sub, RlTuneRequest& rl, RlChoices& rl_names) {
+void add_rl_tune_options(CLI::App* sub, jobs::RlTuneRequest& rl, RlChoices& rl_names) {
   sub->add_option("--until", rl.until_s,
                   "--rl-params: tune on the recording before this many seconds; the rest is scored as held out")
       ->check(CLI::PositiveNumber);
@@ -189,8 +191,8 @@ void add_rl_tune_options(CLI::App* sub, RlTuneRequest& rl, RlChoices& rl_names) 
                   "values; default), outage, heldout-fixes (mode 8 on this filter), or an innovation statistic "
                   "(docs/husky.md, \"Methods tried\"): innovation-nll, nis, whiteness, heldout-nll")
       ->check([](const std::string& text) {
-        RlFitness f{};
-        return parse_rl_fitness(text, &f) ? std::string() : "not a fitness: " + text;
+        objectives::RlFitness f{};
+        return objectives::parse_rl_fitness(text, &f) ? std::string() : "not a fitness: " + text;
       });
   sub->add_option("--space", rl_names.space,
                   "--rl-params: search a factor per diagonal entry of the process noise (default) or per block")
@@ -247,32 +249,32 @@ void add_rl_tune_options(CLI::App* sub, RlTuneRequest& rl, RlChoices& rl_names) 
 
 // The tune command itself: robot_localization tuning with --rl-params, else
 // the tracks' tune, printed (the best so far after Ctrl-C).
-void run_tune_subcommand(const TuneCommandRequest& req, const RlTuneRequest& rl, const RlChoices& rl_names,
-                         int threads, const CLI::App& sub) {
+void run_tune_subcommand(const jobs::TuneCommandRequest& req, const jobs::RlTuneRequest& rl,
+                         const RlChoices& rl_names, int threads, const CLI::App& sub) {
   apply_threads(threads);
   if (!rl.src.params_file.empty()) {
     run_rl_tune_command(req, rl, rl_names, sub);
     return;
   }
-  if (req.tracks.empty()) throw Failure("tune: expected --track, or --rl-params with --bag");
-  TuneCommandRequest r = req;
+  if (req.tracks.empty()) throw core::Failure("tune: expected --track, or --rl-params with --bag");
+  jobs::TuneCommandRequest r = req;
   InterruptGuard interrupt;  // Ctrl-C stops the tune: the best so far is printed and written
   Progress progress("tune", "evaluations");
   r.progress = [&progress](long done, long total) { progress.update(done, total); };
   r.stop = interrupt.flag();
-  r.report = [&](const TuneCommandOutcome& outcome) {
+  r.report = [&](const jobs::TuneCommandOutcome& outcome) {
     progress.finish();
     if (interrupt.raised()) std::fprintf(stderr, "odotune: interrupted; reporting the best so far\n");
     std::visit([](const auto& o) { print_tune_outcome(o); }, outcome);
   };
-  run_tune_command(r);
-  if (interrupt.raised()) throw Failure("interrupted", 130);
+  jobs::run_tune_command(r);
+  if (interrupt.raised()) throw core::Failure("interrupted", 130);
 }
 
 }  // namespace
 
 void register_tune(CLI::App& app) {
-  auto req = std::make_shared<TuneCommandRequest>();
+  auto req = std::make_shared<jobs::TuneCommandRequest>();
   auto threads = std::make_shared<int>(0);
   auto* sub = app.add_subcommand(
       "tune", "Tune the EKF noise of one model, a particle-filter calibrator's settings, or the fusion UKF's "
@@ -307,7 +309,7 @@ void register_tune(CLI::App& app) {
   sub->add_option("--track", req->tracks, "track file (repeat for several; fitness = mean over tracks)");
   sub->add_option("--model", req->model, "rq | alpha | gyro | pf-calib | adaptive-pf-calib | ukf");
   add_fitness_mode_option(
-      sub, [req](FitnessMode m) { req->mode = m; },
+      sub, [req](objectives::FitnessMode m) { req->mode = m; },
       "EKF/UKF fitness mode (number or name) against ground truth: 1 rmse, 2 mae, 3 maxe, 4 rmse+mae, "
       "5 rmse+maxe, 6 mae+maxe, 7 rmse+mae+maxe (default); EKF without ground truth, cross-validating over the "
       "position fixes: 8 fix-rmse, held-out fix RMSE (the default when a track has no ground truth), 9 fix-nll, "
@@ -329,7 +331,7 @@ void register_tune(CLI::App& app) {
                   "write the tuned configuration (YAML: EKF models for eval --config, calibrators "
                   "odotune-pf-config/1, ukf odotune-ukf-config/1)");
   add_calibrator_options(sub, *req);
-  auto rl = std::make_shared<RlTuneRequest>();
+  auto rl = std::make_shared<jobs::RlTuneRequest>();
   auto rl_names = std::make_shared<RlChoices>();
   add_rl_source_options(sub, rl->src);
   add_rl_tune_options(sub, *rl, *rl_names);

@@ -9,7 +9,7 @@
 namespace odotune::cli {
 
 // Each register_* adds one subcommand (with --help text and an example) and
-// sets its callback. Callbacks report failure by throwing odotune::Failure
+// sets its callback. Callbacks report failure by throwing core::Failure
 // (one clear line, non-zero exit) or any std::exception.
 void register_simulate(CLI::App& app);
 void register_import(CLI::App& app);

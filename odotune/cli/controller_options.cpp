@@ -2,7 +2,7 @@
 
 namespace odotune::cli {
 
-void add_controller_options(CLI::App* sub, ControllerRequest& r, bool nominal_flags) {
+void add_controller_options(CLI::App* sub, jobs::ControllerRequest& r, bool nominal_flags) {
   sub->add_option("--controller-out", r.out,
                   "write the calibrated wheel geometry as the robot controller's parameters to this file "
                   "(with --controller)");

@@ -10,6 +10,6 @@ namespace odotune::cli {
 
 // --controller-out, --controller, --controller-form, --controller-name; with
 // `nominal_flags` also --nominal-wheel-radius-m and --nominal-wheel-base-m.
-void add_controller_options(CLI::App* sub, ControllerRequest& request, bool nominal_flags);
+void add_controller_options(CLI::App* sub, jobs::ControllerRequest& request, bool nominal_flags);
 
 }  // namespace odotune::cli

@@ -11,9 +11,10 @@
 
 namespace odotune::cli {
 
-void print_tune_result(const ErrorMetrics& baseline_mean, const ErrorMetrics& tuned_mean,
-                       const std::vector<TrackScore>& tracks, const std::vector<std::string>& param_names,
-                       const std::vector<double>& params, const tuner::Summary& summary, long diverged) {
+void print_tune_result(const objectives::ErrorMetrics& baseline_mean,
+                       const objectives::ErrorMetrics& tuned_mean, const std::vector<jobs::TrackScore>& tracks,
+                       const std::vector<std::string>& param_names, const std::vector<double>& params,
+                       const tuner::Summary& summary, long diverged) {
   fmt::print("  RMSE {}\n", metric_change(baseline_mean.rmse_m, tuned_mean.rmse_m));
   fmt::print("  MAE  {}\n", metric_change(baseline_mean.mae_m, tuned_mean.mae_m));
   fmt::print("  MAXE {}\n", metric_change(baseline_mean.maxe_m, tuned_mean.maxe_m));
@@ -32,18 +33,18 @@ void print_lines(const std::vector<std::string>& lines) {
 
 std::string metric_change(double baseline_m, double tuned_m) {
   return fmt::format("{:7.2f} → {:7.2f} mm  ({:+5.1f} %)", baseline_m * 1e3, tuned_m * 1e3,
-                     improvement_pct(baseline_m, tuned_m));
+                     objectives::improvement_pct(baseline_m, tuned_m));
 }
 
-CLI::Option* add_fitness_mode_option(CLI::App* sub, std::function<void(FitnessMode)> set,
+CLI::Option* add_fitness_mode_option(CLI::App* sub, std::function<void(objectives::FitnessMode)> set,
                                      const std::string& help, bool ground_truth_only) {
   return sub->add_option_function<std::string>(
       "--mode",
       [set = std::move(set), ground_truth_only](const std::string& text) {
-        FitnessMode m{};
-        if (!parse_fitness_mode(text, &m) || (ground_truth_only && is_fix_cv(m)))
+        objectives::FitnessMode m{};
+        if (!objectives::parse_fitness_mode(text, &m) || (ground_truth_only && objectives::is_fix_cv(m)))
           throw CLI::ValidationError(fmt::format("--mode {} is out of range, expected {}", text,
-                                                 fitness_mode_choices(ground_truth_only)));
+                                                 objectives::fitness_mode_choices(ground_truth_only)));
         set(m);
       },
       help);

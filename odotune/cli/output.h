@@ -26,14 +26,15 @@ std::string metric_change(double baseline_m, double tuned_m);
 // The lines `tune` prints under its heading for a noise model (EKF or UKF):
 // RMSE/MAE/MAXE change, per track when several, the tuned parameters and the
 // solver's evaluations, time, termination and diverged evaluations.
-void print_tune_result(const ErrorMetrics& baseline_mean, const ErrorMetrics& tuned_mean,
-                       const std::vector<TrackScore>& tracks, const std::vector<std::string>& param_names,
-                       const std::vector<double>& params, const tuner::Summary& summary, long diverged);
+void print_tune_result(const objectives::ErrorMetrics& baseline_mean,
+                       const objectives::ErrorMetrics& tuned_mean, const std::vector<jobs::TrackScore>& tracks,
+                       const std::vector<std::string>& param_names, const std::vector<double>& params,
+                       const tuner::Summary& summary, long diverged);
 
 // Adds --mode, which takes a fitness mode's number or key ("7",
 // "rmse+mae+maxe"); with `ground_truth_only` modes 8 and 9 are refused at the
 // flag. `set` receives the parsed mode.
-CLI::Option* add_fitness_mode_option(CLI::App* sub, std::function<void(FitnessMode)> set,
+CLI::Option* add_fitness_mode_option(CLI::App* sub, std::function<void(objectives::FitnessMode)> set,
                                      const std::string& help, bool ground_truth_only = false);
 
 // Adds --threads to a command; apply_threads() sets OpenMP's thread count

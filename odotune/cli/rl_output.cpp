@@ -12,14 +12,16 @@ namespace {
 
 namespace rl = filters::rl;
 
-std::string metres(const FixScore& s) {
+std::string metres(const objectives::FixScore& s) {
   return s.finite ? fmt::format("{:.3f} m ({} fixes)", s.rmse_m, s.fixes) : "diverged";
 }
 
 // A table cell: "0.245 m", or "diverged".
-std::string column(const FixScore& s) { return s.finite ? fmt::format("{:.3f} m", s.rmse_m) : "diverged"; }
+std::string column(const objectives::FixScore& s) {
+  return s.finite ? fmt::format("{:.3f} m", s.rmse_m) : "diverged";
+}
 
-std::string change(const FixScore& a, const FixScore& b) {
+std::string change(const objectives::FixScore& a, const objectives::FixScore& b) {
   if (!a.finite || !b.finite || !(a.rmse_m > 0.0)) return fmt::format("{} -> {}", metres(a), metres(b));
   return fmt::format("{:.3f} -> {:.3f} m  ({:+.1f} %, {} fixes)", a.rmse_m, b.rmse_m,
                      100.0 * (b.rmse_m / a.rmse_m - 1.0), b.fixes);
@@ -52,7 +54,7 @@ void print_rl_keys(const rlnode::RlParams& p) {
   for (const std::string& n : p.notes) fmt::print("  note: {}\n", n);
 }
 
-void add_rl_source_options(CLI::App* sub, RlSource& src) {
+void add_rl_source_options(CLI::App* sub, jobs::RlSource& src) {
   sub->add_option(
          "--rl-params", src.params_file,
          "robot_localization parameter file (ROS 1 or ROS 2 YAML): replay its ekf_node or ukf_node on --bag")
@@ -78,14 +80,15 @@ void add_rl_source_options(CLI::App* sub, RlSource& src) {
       ->check(CLI::PositiveNumber);
 }
 
-void add_rl_track_options(CLI::App* sub, RlTrackSource& src) {
-  RlTrackOptions& o = src.options;
+void add_rl_track_options(CLI::App* sub, jobs::RlTrackSource& src) {
+  objectives::RlTrackOptions& o = src.options;
   sub->add_option("--calibration", src.calibration,
                   "--rl-params with --track: apply this odometry calibration (calibrate --config-out) to every "
                   "track first: wheel radii and base as the track's geometry, or a twist's scales and delay")
       ->check(CLI::ExistingFile);
   add_enum_option(sub, "--odometry", o.odometry,
-                  {OdometryInput::wheels, OdometryInput::twist, OdometryInput::commands},
+                  {tracks::OdometryInput::wheels, tracks::OdometryInput::twist,
+                   tracks::OdometryInput::commands},
                   "--rl-params with --track: the track's odometry input (default: its wheels, else its "
                   "v_cmd/w_cmd as its source.body_velocity says)");
   sub->add_option("--fix-sigma-m", o.fix_sigma_m,
@@ -112,12 +115,12 @@ void add_rl_track_options(CLI::App* sub, RlTrackSource& src) {
 
 namespace {
 
-std::string truth_text(const TruthScore& s) {
+std::string truth_text(const objectives::TruthScore& s) {
   if (s.samples == 0) return "n/a";
   return s.finite ? fmt::format("{:.3f} m", s.rmse_m) : "diverged";
 }
 
-std::string truth_change(const TruthScore& a, const TruthScore& b) {
+std::string truth_change(const objectives::TruthScore& a, const objectives::TruthScore& b) {
   const std::string pct = a.samples > 0 && b.samples > 0 && a.rmse_m > 0.0
                               ? fmt::format(" ({:+.1f} %)", 100.0 * (b.rmse_m / a.rmse_m - 1.0))
                               : "";
@@ -126,12 +129,13 @@ std::string truth_change(const TruthScore& a, const TruthScore& b) {
 
 }  // namespace
 
-void print_rl_track_eval(const RlTrackEvalOutcome& o) {
-  for (const RlTrackRow& r : o.rows) {
-    const RlTrackScores& s = r.scores;
+void print_rl_track_eval(const jobs::RlTrackEvalOutcome& o) {
+  for (const jobs::RlTrackRow& r : o.rows) {
+    const objectives::RlTrackScores& s = r.scores;
     fmt::print("{}: robot_localization {} ({}) over {:.1f} s, odometry {}: {} measurements, {} rejected\n",
                r.track.filename().string(), filters::rl::display_name(o.filter),
-               o.params_file.filename().string(), r.duration_s, to_string(r.odometry), s.processed, s.rejected);
+               o.params_file.filename().string(), r.duration_s, tracks::to_string(r.odometry), s.processed,
+               s.rejected);
     fmt::print("  {}{}\n", r.start_note,
                std::isfinite(r.initial_heading_error_rad)
                    ? fmt::format(" (against gt_theta: {:+.3f} rad)", r.initial_heading_error_rad)
@@ -148,7 +152,7 @@ void print_rl_track_eval(const RlTrackEvalOutcome& o) {
   }
 }
 
-void print_rl_track_tune(const RlTuneRequest& r, const RlTrackTuneOutcome& o) {
+void print_rl_track_tune(const jobs::RlTuneRequest& r, const jobs::RlTrackTuneOutcome& o) {
   print_rl_tune(r, o.tune);
   fmt::print(
       "  against ground truth on the tuned tracks (not used by the tune), the file's values -> tuned:\n");
@@ -159,7 +163,7 @@ void print_rl_track_tune(const RlTuneRequest& r, const RlTrackTuneOutcome& o) {
   }
 }
 
-void print_rl_eval(const RlEvalOutcome& o) {
+void print_rl_eval(const jobs::RlEvalOutcome& o) {
   const rl::State& x = o.final_state;
   fmt::print("{}: robot_localization {} ({}) over {:.1f} s: {} measurements, {} rejected\n",
              o.bag.filename().string(), filters::rl::display_name(o.filter), o.params_file.filename().string(),
@@ -176,13 +180,14 @@ void print_rl_eval(const RlEvalOutcome& o) {
   print_notes(o.notes, o.alignment);
 }
 
-void print_rl_tune(const RlTuneRequest& r, const RlTuneOutcome& o) {
+void print_rl_tune(const jobs::RlTuneRequest& r, const jobs::RlTuneOutcome& o) {
   fmt::print("{}: robot_localization {} ({}), tuned on {:.1f}-{:.1f} s of {:.1f} s; fitness {}, {} process "
              "noise{}; outages of {} s ({} windows)\n",
              o.bag.filename().string(), filters::rl::display_name(o.filter), o.params_file.filename().string(),
-             o.span_from_s, o.span_until_s, o.duration_s, to_string(r.options.fitness),
-             to_string(r.options.space), r.options.input_covariances ? " and input covariances" : "",
-             fmt::join(r.options.outage_s, ", "), o.outage_windows);
+             o.span_from_s, o.span_until_s, o.duration_s, objectives::to_string(r.options.fitness),
+             objectives::to_string(r.options.space),
+             r.options.input_covariances ? " and input covariances" : "", fmt::join(r.options.outage_s, ", "),
+             o.outage_windows);
   fmt::print(
       "  grid of block factors: {} combinations, then the profile: tuning fitness {:.4f} (the file's values "
       "{:.4f})\n",
@@ -193,7 +198,7 @@ void print_rl_tune(const RlTuneRequest& r, const RlTuneOutcome& o) {
     fmt::print("  {:>6} {:>10} {:>14} {:>14}{}\n", "seed", "tuning", "held-out fixes", "outages",
                o.judged ? fmt::format(" {:>16} {:>16}", "judged: outage", "every 5th") : "");
     for (std::size_t k = 0; k < o.starts.size(); ++k) {
-      const RlStartOutcome& st = o.starts[k];
+      const jobs::RlStartOutcome& st = o.starts[k];
       fmt::print("  {:>6} {:>10.4f} {:>14} {:>14}{}{}\n", st.seed, st.fitness, column(st.heldout),
                  column(st.outage),
                  st.judged
@@ -210,7 +215,7 @@ void print_rl_tune(const RlTuneRequest& r, const RlTuneOutcome& o) {
     fmt::print("    every 5th fix held out: {}\n",
                change(o.baseline_judged->every_fifth, o.tuned_judged->every_fifth));
   }
-  const RlStartOutcome& w = o.starts[o.written];
+  const jobs::RlStartOutcome& w = o.starts[o.written];
   std::string determined, not_determined;
   for (std::size_t i = 0; i < o.param_names.size(); ++i) {
     const bool yes = w.profiles.empty() || w.profiles[i].determined;

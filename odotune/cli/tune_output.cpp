@@ -19,14 +19,14 @@ std::string track_names(const Scores& tracks) {
 
 }  // namespace
 
-void print_tune_outcome(const TuneOutcome& o) {
+void print_tune_outcome(const jobs::TuneOutcome& o) {
   const std::string names = track_names(o.tracks);
   if (!o.note.empty()) fmt::print("{}\n", o.note);
   fmt::print("tuned {} noise on {} for mode {} ({}) with {} (seed {})\n", filters::to_string(o.request.model),
-             names, number(o.request.mode), fitness_mode_name(o.request.mode), o.request.solver.name(),
-             o.request.seed);
+             names, objectives::number(o.request.mode), objectives::fitness_mode_name(o.request.mode),
+             o.request.solver.name(), o.request.seed);
   if (o.against_fixes) {
-    const FixCvOptions& cv = o.fix_cv;
+    const objectives::FixCvOptions& cv = o.fix_cv;
     fmt::print("  held-out fixes ({} folds of {:g} s blocks), baseline → tuned:\n", cv.folds, cv.block_s);
     for (const auto& t : o.tracks)
       fmt::print("    {}: NLL {:.3f} → {:.3f} nats per fix; NIS {:.2f} → {:.2f} (2 when consistent)\n", t.track,
@@ -41,13 +41,13 @@ void print_tune_outcome(const TuneOutcome& o) {
                    metric_change(t.gt_baseline->rmse_m, t.gt_tuned->rmse_m));
 }
 
-void print_tune_outcome(const CalibrationTuneOutcome& o) {
-  const CalibrationTuneRequest& r = o.request;
+void print_tune_outcome(const jobs::CalibrationTuneOutcome& o) {
+  const jobs::CalibrationTuneRequest& r = o.request;
   const std::string names = track_names(o.baseline.tracks);
   fmt::print("tuned the {} calibrator's settings on {} with {} (seed {}); resampler {}, policy {}, "
              "calibrator seed {}\n",
-             to_string(TunedModel::calibration(r.model)), names, r.solver.name(), r.seed,
-             filters::to_string(o.default_pf.resampler), filters::to_string(o.default_pf.policy),
+             objectives::to_string(objectives::TunedModel::calibration(r.model)), names, r.solver.name(),
+             r.seed, filters::to_string(o.default_pf.resampler), filters::to_string(o.default_pf.policy),
              o.default_pf.seed);
   fmt::print("  score (lower is better): {:.4g} with the paper's defaults → {:.4g} tuned{}\n", o.baseline_score,
              o.tuned_score, o.default_kept ? " (the defaults scored best: kept)" : "");
@@ -58,9 +58,9 @@ void print_tune_outcome(const CalibrationTuneOutcome& o) {
   for (std::size_t k = 0; k < o.baseline.tracks.size() && k < o.tuned.tracks.size(); ++k) {
     const auto& b = o.baseline.tracks[k];
     const auto& t = o.tuned.tracks[k];
-    const auto eb = radius_error_pct(b.calibration), et = radius_error_pct(t.calibration);
+    const auto eb = jobs::radius_error_pct(b.calibration), et = jobs::radius_error_pct(t.calibration);
     fmt::print("    {}: RMSE {}; {} → {}", b.track, metric_change(b.errors.rmse_m, t.errors.rmse_m),
-               convergence_text(b.calibration), convergence_text(t.calibration));
+               jobs::convergence_text(b.calibration), jobs::convergence_text(t.calibration));
     if (eb && et) fmt::print("; final radius error {:.3f} → {:.3f} %", *eb, *et);
     fmt::print("\n");
   }
@@ -74,11 +74,11 @@ void print_tune_outcome(const CalibrationTuneOutcome& o) {
              o.summary.seconds, o.summary.termination_text(), o.failures);
 }
 
-void print_tune_outcome(const UkfTuneOutcome& o) {
-  const UkfTuneRequest& r = o.request;
+void print_tune_outcome(const jobs::UkfTuneOutcome& o) {
+  const jobs::UkfTuneRequest& r = o.request;
   const std::string names = track_names(o.tracks);
-  fmt::print("tuned the fusion UKF's noise on {} for mode {} ({}) with {} (seed {})\n", names, number(r.mode),
-             fitness_mode_name(r.mode), r.solver.name(), r.seed);
+  fmt::print("tuned the fusion UKF's noise on {} for mode {} ({}) with {} (seed {})\n", names,
+             objectives::number(r.mode), objectives::fitness_mode_name(r.mode), r.solver.name(), r.seed);
   fmt::print("  fused pose vs ground truth, defaults → tuned{}\n",
              o.default_kept ? " (the defaults scored best and are kept)" : "");
   print_tune_result(o.baseline_mean, o.tuned_mean, o.tracks, o.param_names, o.params, o.summary, o.failures);

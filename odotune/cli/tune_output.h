@@ -11,12 +11,12 @@ namespace odotune::cli {
 
 // EKF models: errors before/after (mean and per track), the tuned values, the
 // solver's evaluations and diverged evaluations.
-void print_tune_outcome(const TuneOutcome& o);
+void print_tune_outcome(const jobs::TuneOutcome& o);
 // Calibrators: settings (names, units), score before/after, pose errors
 // before/after per track.
-void print_tune_outcome(const CalibrationTuneOutcome& o);
+void print_tune_outcome(const jobs::CalibrationTuneOutcome& o);
 // UKF: errors before/after (mean and per track), the tuned values, the
 // solver's evaluations.
-void print_tune_outcome(const UkfTuneOutcome& o);
+void print_tune_outcome(const jobs::UkfTuneOutcome& o);
 
 }  // namespace odotune::cli

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numbers>
 
-namespace odotune {
+namespace odotune::core {
 
 // a_rad wrapped to (−π, π] [rad] (std::remainder, exact).
 inline double wrap_angle(double a_rad) {
@@ -14,4 +14,4 @@ inline double wrap_angle(double a_rad) {
   return w;
 }
 
-}  // namespace odotune
+}  // namespace odotune::core

@@ -10,7 +10,7 @@
 
 #include <fmt/format.h>
 
-namespace odotune {
+namespace odotune::core {
 
 void write_atomically(const std::filesystem::path& path, std::string_view what,
                       const std::function<void(std::ostream&)>& fill) {
@@ -48,4 +48,4 @@ void write_atomically(const std::filesystem::path& path, std::string_view what, 
   });
 }
 
-}  // namespace odotune
+}  // namespace odotune::core

@@ -10,7 +10,7 @@
 #include <iosfwd>
 #include <string_view>
 
-namespace odotune {
+namespace odotune::core {
 
 // `fill` writes the content to the stream. On any failure (cannot create the
 // temporary, `fill` throws, write error, rename fails) the temporary is
@@ -19,4 +19,4 @@ void write_atomically(const std::filesystem::path& path, std::string_view what,
                       const std::function<void(std::ostream&)>& fill);
 void write_atomically(const std::filesystem::path& path, std::string_view what, std::string_view text);
 
-}  // namespace odotune
+}  // namespace odotune::core

@@ -6,7 +6,7 @@
 
 #include <ceres/ceres.h>
 
-namespace odotune {
+namespace odotune::core {
 
 // Function and parameter tolerance; the gradient tolerance is a hundredth.
 enum class FitTolerance {
@@ -36,4 +36,4 @@ inline ceres::Solver::Options deterministic_solver_options(int max_iterations, F
   return so;
 }
 
-}  // namespace odotune
+}  // namespace odotune::core

@@ -17,7 +17,7 @@
 
 #include <cstdint>
 
-namespace odotune {
+namespace odotune::core {
 
 // SplitMix64 output function: a bijective 64-bit mixer.
 constexpr std::uint64_t splitmix64_mix(std::uint64_t z) {
@@ -45,4 +45,4 @@ constexpr double counter_uniform01(std::uint64_t seed, std::uint64_t iteration, 
   return static_cast<double>(bits >> 11) * 0x1.0p-53;
 }
 
-}  // namespace odotune
+}  // namespace odotune::core

@@ -5,18 +5,18 @@
 #include <initializer_list>
 #include <string_view>
 
-namespace odotune {
+namespace odotune::core {
 
 // Sets *out to the value of `values` whose to_string(value) is `text`;
 // false (and *out unchanged) when none is.
 template <class E>
 bool parse_by_name(std::string_view text, std::initializer_list<E> values, E* out) {
   for (E v : values)
-    if (text == to_string(v)) {
+    if (text == to_string(v)) {  // found by argument-dependent lookup in E's namespace
       *out = v;
       return true;
     }
   return false;
 }
 
-}  // namespace odotune
+}  // namespace odotune::core

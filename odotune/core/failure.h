@@ -4,11 +4,11 @@
 #include <stdexcept>
 #include <string>
 
-namespace odotune {
+namespace odotune::core {
 
 struct Failure : std::runtime_error {
   explicit Failure(const std::string& line, int code = 1) : std::runtime_error(line), exit_code(code) {}
   int exit_code;
 };
 
-}  // namespace odotune
+}  // namespace odotune::core

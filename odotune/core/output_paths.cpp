@@ -7,7 +7,7 @@
 
 #include <odotune/core/failure.h>
 
-namespace odotune {
+namespace odotune::core {
 
 namespace fs = std::filesystem;
 
@@ -27,4 +27,4 @@ void check_output_file(const std::string& flag, const std::string& path) {
   check_output_dir(flag, path);
 }
 
-}  // namespace odotune
+}  // namespace odotune::core

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstddef>
 
-namespace odotune {
+namespace odotune::core {
 
 // sin(x)/x, accurate near 0 (the series 1 − x²/6 below |x| = 1e-4, where
 // sin(x)/x loses digits).
@@ -99,4 +99,4 @@ RigidMotion2d fit_rigid_2d(std::size_t n, Px&& px, Py&& py, Qx&& qx, Qy&& qy) {
   return m;
 }
 
-}  // namespace odotune
+}  // namespace odotune::core

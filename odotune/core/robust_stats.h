@@ -7,7 +7,7 @@
 #include <limits>
 #include <vector>
 
-namespace odotune {
+namespace odotune::core {
 
 // The median (mean of the two middle values for an even count); NaN when empty.
 inline double median(std::vector<double> v) {
@@ -30,4 +30,4 @@ inline double robust_sigma(const std::vector<double>& v) {
   return 1.4826 * median(std::move(dev));
 }
 
-}  // namespace odotune
+}  // namespace odotune::core

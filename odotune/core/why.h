@@ -6,11 +6,11 @@
 #include <string>
 #include <utility>
 
-namespace odotune {
+namespace odotune::core {
 
 inline bool invalid(std::string* why, std::string message) {
   if (why) *why = std::move(message);
   return false;
 }
 
-}  // namespace odotune
+}  // namespace odotune::core

@@ -25,12 +25,12 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr double kMinSigmaM = 1e-3;    // floor of ref_sigma_m [m]
 constexpr double kMinSigmaRad = 1e-3;  // floor of ref_sigma_rad [rad]
 
-[[noreturn]] void fail(const Track& track, const std::string& what) {
+[[noreturn]] void fail(const tracks::Track& track, const std::string& what) {
   throw std::invalid_argument(fmt::format("track '{}': {}", track.name(), what));
 }
 
 // A finite number >= 0 from metadata key `key`, if present and well-formed.
-std::optional<double> meta_number(const Track& track, std::string_view key) {
+std::optional<double> meta_number(const tracks::Track& track, std::string_view key) {
   const auto text = track.meta().get(key);
   if (!text) return std::nullopt;
   double v = 0.0;
@@ -43,7 +43,7 @@ std::optional<double> meta_number(const Track& track, std::string_view key) {
 // The robot's nominal kinematics and the odometry's kind: wheel angles
 // (which need the radii and wheel base) or body velocities (commanded, or
 // measured as the source note says).
-void fill_kinematics(const Track& track, bool wheels, DiagInput& in) {
+void fill_kinematics(const tracks::Track& track, bool wheels, DiagInput& in) {
   const auto& meta = track.meta();
   if (wheels) {
     if (!meta.wheel_radius_left_m || !meta.wheel_radius_right_m || !meta.wheel_base_m)
@@ -72,7 +72,7 @@ void fill_kinematics(const Track& track, bool wheels, DiagInput& in) {
 
 // The wheel angles from the first tick counts on, or integrated from the
 // wheel rates (trapezoids); nothing when the track has neither.
-void fill_wheel_angles(const Track& track, DiagInput& in) {
+void fill_wheel_angles(const tracks::Track& track, DiagInput& in) {
   const auto& t = track.t();
   const auto& meta = track.meta();
   if (track.has_ticks()) {
@@ -83,7 +83,7 @@ void fill_wheel_angles(const Track& track, DiagInput& in) {
     const auto& tr = track.ticks_r();
     std::int64_t l0 = 0, r0 = 0;
     for (std::size_t i = 0; i < t.size(); ++i) {
-      if (tl[i] == kNoTick || tr[i] == kNoTick) continue;
+      if (tl[i] == tracks::kNoTick || tr[i] == tracks::kNoTick) continue;
       if (in.odo_t_s.empty()) l0 = tl[i], r0 = tr[i];
       in.odo_t_s.push_back(t[i]);
       in.phi_l_rad.push_back(static_cast<double>(tl[i] - l0) * per_tick);
@@ -92,8 +92,8 @@ void fill_wheel_angles(const Track& track, DiagInput& in) {
   } else if (track.has_wheel_rates()) {
     double pl = 0.0, pr = 0.0, ol = 0.0, orr = 0.0;
     for (std::size_t i = 0; i < t.size(); ++i) {
-      if (!track.at(Col::omega_l, i) || !track.at(Col::omega_r, i)) continue;
-      const double wl = track.col(Col::omega_l)[i], wr = track.col(Col::omega_r)[i];
+      if (!track.at(tracks::Col::omega_l, i) || !track.at(tracks::Col::omega_r, i)) continue;
+      const double wl = track.col(tracks::Col::omega_l)[i], wr = track.col(tracks::Col::omega_r)[i];
       if (!in.odo_t_s.empty()) {
         const double h = t[i] - in.odo_t_s.back();
         pl += 0.5 * (ol + wl) * h;
@@ -109,14 +109,14 @@ void fill_wheel_angles(const Track& track, DiagInput& in) {
 
 // The commands: the odometry itself without wheels, else held at each
 // odometry time.
-void fill_commands(const Track& track, bool wheels, DiagInput& in) {
+void fill_commands(const tracks::Track& track, bool wheels, DiagInput& in) {
   const auto& t = track.t();
   std::vector<double> ct, cv, cw;
   for (std::size_t i = 0; i < t.size(); ++i) {
-    if (!track.at(Col::v_cmd, i) || !track.at(Col::w_cmd, i)) continue;
+    if (!track.at(tracks::Col::v_cmd, i) || !track.at(tracks::Col::w_cmd, i)) continue;
     ct.push_back(t[i]);
-    cv.push_back(track.col(Col::v_cmd)[i]);
-    cw.push_back(track.col(Col::w_cmd)[i]);
+    cv.push_back(track.col(tracks::Col::v_cmd)[i]);
+    cw.push_back(track.col(tracks::Col::w_cmd)[i]);
   }
   if (!wheels) {
     in.odo_t_s = std::move(ct);
@@ -132,7 +132,7 @@ void fill_commands(const Track& track, bool wheels, DiagInput& in) {
   }
 }
 
-void fill_odometry(const Track& track, DiagInput& in) {
+void fill_odometry(const tracks::Track& track, DiagInput& in) {
   const bool wheels = track.has_ticks() || track.has_wheel_rates();
   fill_kinematics(track, wheels, in);
   fill_wheel_angles(track, in);
@@ -149,7 +149,8 @@ struct RefSource {
   double sigma_m = 0.0, sigma_rad = 0.0;  // NaN = not stated (estimated later)
 };
 
-RefSource read_source(const Track& track, Col cx, Col cy, bool with_heading, double t_lo, double t_hi) {
+RefSource read_source(const tracks::Track& track, tracks::Col cx, tracks::Col cy, bool with_heading,
+                      double t_lo, double t_hi) {
   RefSource s;
   const auto& t = track.t();
   s.heading = with_heading;
@@ -159,8 +160,8 @@ RefSource read_source(const Track& track, Col cx, Col cy, bool with_heading, dou
     s.x.push_back(track.col(cx)[i]);
     s.y.push_back(track.col(cy)[i]);
     if (s.heading) {
-      if (track.at(Col::gt_theta, i))
-        s.theta.push_back(track.col(Col::gt_theta)[i]);
+      if (track.at(tracks::Col::gt_theta, i))
+        s.theta.push_back(track.col(tracks::Col::gt_theta)[i]);
       else
         s.heading = false;
     }
@@ -174,7 +175,7 @@ double median_interval(const std::vector<double>& t) {
   if (t.size() < 2) return std::numeric_limits<double>::infinity();
   std::vector<double> d(t.size() - 1);
   for (std::size_t i = 0; i + 1 < t.size(); ++i) d[i] = t[i + 1] - t[i];
-  return median(std::move(d));
+  return core::median(std::move(d));
 }
 
 // Fixes that ground truth does not already cover: those with no ground-truth
@@ -266,7 +267,7 @@ void estimate_sigmas(const DiagInput& in, const NominalPath& p, RefSource& s) {
       std::vector<double> d;
       for (std::size_t i = 0; i < diff.size(); ++i)
         if (chord[i] > min_chord) d.push_back(diff[i]);
-      return std::pair{d.size(), d.size() >= 3 ? robust_sigma(d) / std::sqrt(2.0) : 0.0};
+      return std::pair{d.size(), d.size() >= 3 ? core::robust_sigma(d) / std::sqrt(2.0) : 0.0};
     };
     auto [n0, s0] = sigma_above(0.0);
     const auto [n1, s1] = sigma_above(3.0 * s0);
@@ -276,7 +277,7 @@ void estimate_sigmas(const DiagInput& in, const NominalPath& p, RefSource& s) {
   if (s.heading && std::isnan(s.sigma_rad)) {
     std::vector<double> d(m - 1);
     for (std::size_t i = 0; i + 1 < m; ++i) d[i] = (s.theta[i + 1] - s.theta[i]) - (oth[i + 1] - oth[i]);
-    s.sigma_rad = robust_sigma(d) / std::sqrt(2.0);
+    s.sigma_rad = core::robust_sigma(d) / std::sqrt(2.0);
   }
 }
 
@@ -333,17 +334,17 @@ void assemble_reference(RefSource gt, RefSource fixes, DiagInput& in) {
 
 }  // namespace
 
-DiagInput build_diag_input(const Track& track) {
+DiagInput build_diag_input(const tracks::Track& track) {
   if (!track.has_odometry())
     fail(track, "no odometry; expected ticks_l/ticks_r, omega_l/omega_r or v_cmd/w_cmd columns");
   DiagInput in;
   in.track_name = track.name();
   fill_odometry(track, in);
-  if (track.has(Col::gyro_z))
+  if (track.has(tracks::Col::gyro_z))
     for (std::size_t i = 0; i < track.size(); ++i)
-      if (track.at(Col::gyro_z, i)) {
+      if (track.at(tracks::Col::gyro_z, i)) {
         in.gyro_t_s.push_back(track.t()[i]);
-        in.gyro_z_radps.push_back(track.col(Col::gyro_z)[i]);
+        in.gyro_z_radps.push_back(track.col(tracks::Col::gyro_z)[i]);
       }
   if (!track.has_gt() && !track.has_aps())
     fail(track, "no reference; expected gt_x, gt_y (ground truth) or aps_x, aps_y (position fixes)");
@@ -352,12 +353,12 @@ DiagInput build_diag_input(const Track& track) {
   // NaN = not stated: estimate_sigmas() estimates it.
   const double nan = std::nan("");
   if (track.has_gt()) {
-    gt = read_source(track, Col::gt_x, Col::gt_y, track.has(Col::gt_theta), t_lo, t_hi);
+    gt = read_source(track, tracks::Col::gt_x, tracks::Col::gt_y, track.has(tracks::Col::gt_theta), t_lo, t_hi);
     gt.sigma_m = meta_number(track, "sim.gt_sigma_m").value_or(nan);
     gt.sigma_rad = meta_number(track, "sim.gt_sigma_rad").value_or(nan);
   }
   if (track.has_aps()) {
-    fixes = uncovered(read_source(track, Col::aps_x, Col::aps_y, false, t_lo, t_hi), gt);
+    fixes = uncovered(read_source(track, tracks::Col::aps_x, tracks::Col::aps_y, false, t_lo, t_hi), gt);
     fixes.sigma_m = meta_number(track, "sim.aps_sigma_m").value_or(nan);
   }
   if (gt.t.empty() && fixes.t.empty())

@@ -108,7 +108,7 @@ struct DiagInput {
 // Throws only when the track has no reference column or no reference sample
 // within the odometry's time span (one line saying so).
 // sim.effects is never read: the diagnosis must find effects from the data.
-DiagInput build_diag_input(const Track& track);
+DiagInput build_diag_input(const tracks::Track& track);
 
 // The samples of `in` with t_s in [t0_s, t1_s] (odometry, commands, gyro,
 // reference); wheel angles re-zeroed at the first kept odometry sample;

@@ -8,7 +8,7 @@
 #include <odotune/sim/effects.h>
 #include <odotune/sim/model_terms.h>
 
-namespace odotune {
+namespace odotune::diagnose {
 namespace {
 
 using namespace odotune::diagnose;
@@ -224,7 +224,7 @@ namespace {
 // A recording's own sensor checks in the odometry's terms: how far and how
 // much it turns against what the odometry (or the command) says, and how
 // late the motion is; "" when none was measured.
-std::string own_terms(const diagnose::RecordingResult& r, const std::string& src) {
+std::string own_terms(const RecordingResult& r, const std::string& src) {
   std::vector<std::string> parts;
   const std::string what = src.empty() ? "odometry" : src;
   if (std::isfinite(r.speed_ratio))
@@ -274,4 +274,4 @@ std::vector<std::string> pooled_summary(const PooledDiagnosis& p) {
   return lines;
 }
 
-}  // namespace odotune
+}  // namespace odotune::diagnose

@@ -12,16 +12,16 @@
 #include <odotune/diagnose/diagnosis.h>
 #include <odotune/diagnose/recordings.h>
 
-namespace odotune {
+namespace odotune::diagnose {
 
-std::vector<std::string> diagnosis_summary(const diagnose::Diagnosis& d);
+std::vector<std::string> diagnosis_summary(const Diagnosis& d);
 
 // Several recordings: the pooled summary, then one line per recording
 // (role, nominal -> pooled-model error) and what holds across recordings.
-std::vector<std::string> pooled_summary(const diagnose::PooledDiagnosis& p);
+std::vector<std::string> pooled_summary(const PooledDiagnosis& p);
 
 // "k = 0.0212 ± 0.0018" / "scale_l = 0.99400 ± 0.00021, scale_r = ..." with
 // the units of physics-effects.md; significant digits follow the uncertainty.
-std::string finding_size(const diagnose::Finding& f);
+std::string finding_size(const Finding& f);
 
-}  // namespace odotune
+}  // namespace odotune::diagnose

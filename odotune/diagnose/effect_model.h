@@ -189,7 +189,7 @@ double scalar(const ceres::Jet<T, N>& v) {
 template <typename T>
 void advance(Pose<T>& p, const BodyStep<T>& s) {
   const T half = 0.5 * s.dth;
-  arc_advance(&p.x, &p.y, &p.th, half, sinc(half), s.ds, s.dy, s.dth);
+  core::arc_advance(&p.x, &p.y, &p.th, half, core::sinc(half), s.ds, s.dy, s.dth);
 }
 
 class EffectModel {

@@ -372,7 +372,7 @@ double settled_cost(const CostShared& sh, int active, const Window& w, std::vect
   if (sh.free_anchor) {
     alone.AddResidualBlock(make_cost(active, &sh, w, fixed), nullptr, free_values.data(), anchor.data());
     alone.SetParameterBlockConstant(free_values.data());
-    ceres::Solver::Options so = deterministic_solver_options(5, FitTolerance::diagnosis);
+    ceres::Solver::Options so = core::deterministic_solver_options(5, core::FitTolerance::diagnosis);
     so.function_tolerance = 1e-8;
     ceres::Solver::Summary summary;
     ceres::Solve(so, &alone, &summary);
@@ -389,7 +389,8 @@ double settled_cost(const CostShared& sh, int active, const Window& w, std::vect
 ceres::Solver::Options fit_solver_options(const FitOptions& options, bool free_anchor,
                                           std::vector<std::array<double, 3>>& anchors,
                                           std::vector<double>& free_values) {
-  ceres::Solver::Options so = deterministic_solver_options(options.max_iterations, FitTolerance::diagnosis);
+  ceres::Solver::Options so = core::deterministic_solver_options(options.max_iterations,
+                                                                 core::FitTolerance::diagnosis);
   // The bounds make Ceres run a projected Armijo line search on every trust
   // region step; with cubic interpolation (the default) its first trial
   // evaluates the Jacobian too, a second Jacobian per iteration. Quadratic

@@ -52,7 +52,7 @@ void gyro_replay(const GyroDrSeries& d, const Window& w, const std::vector<doubl
     // Heading at node k+1 in closed form (no accumulated rounding).
     const T th1 = anchor.th + (d.g[k + 1] - g0 - gp.b * (d.t[k + 1] - t0)) * inv_s;
     const T half = 0.5 * (th1 - th);
-    const T chord = gp.q * (d.s[k + 1] - d.s[k]) * sinc(half);
+    const T chord = gp.q * (d.s[k + 1] - d.s[k]) * core::sinc(half);
     const T mid = th + half;
     const T x1 = x + chord * cos(mid), y1 = y + chord * sin(mid);
     const double h = d.t[k + 1] - d.t[k];
@@ -73,7 +73,7 @@ void gyro_replay(const GyroDrSeries& d, const Window& w, const std::vector<doubl
 inline Pose<double> align_rigid(const Pose<double>& a, const std::vector<double>& px,
                                 const std::vector<double>& py, const DiagInput& in, const Window& w) {
   const std::size_t b = w.ref_begin;
-  const RigidMotion2d m = fit_rigid_2d(
+  const core::RigidMotion2d m = core::fit_rigid_2d(
       px.size(), [&](std::size_t i) { return px[i]; }, [&](std::size_t i) { return py[i]; },
       [&](std::size_t i) { return in.ref_x_m[b + i]; }, [&](std::size_t i) { return in.ref_y_m[b + i]; });
   Pose<double> out = a;

@@ -214,7 +214,8 @@ Solution solve(const Context& c, const std::vector<int>& which, const Solution& 
     g[2] = 1.0;
     problem.SetManifold(g, new ceres::SubsetManifold(3, {2}));
   }
-  const ceres::Solver::Options so = deterministic_solver_options(o.max_iterations, FitTolerance::diagnosis);
+  const ceres::Solver::Options so = core::deterministic_solver_options(o.max_iterations,
+                                                                       core::FitTolerance::diagnosis);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
   sol.converged = summary.termination_type == ceres::CONVERGENCE;
@@ -247,7 +248,7 @@ void check_times(std::string_view track, std::string_view what, const std::vecto
 double second_difference_sigma(const std::vector<double>& v) {
   std::vector<double> d2;
   for (std::size_t k = 1; k + 1 < v.size(); ++k) d2.push_back(v[k + 1] - 2.0 * v[k] + v[k - 1]);
-  return d2.empty() ? 0.0 : robust_sigma(d2) / std::sqrt(6.0);
+  return d2.empty() ? 0.0 : core::robust_sigma(d2) / std::sqrt(6.0);
 }
 
 // Held-out comparison of `alt` against `ref` (header comment).
@@ -477,7 +478,7 @@ double gyro_noise_and_standstill(const DiagInput& in, const GyroFixesOptions& o,
   g.noise_sigma_radps = second_difference_sigma(in.gyro_z_radps);
   std::vector<double> steps(in.gyro_t_s.size() - 1);
   for (std::size_t i = 0; i + 1 < in.gyro_t_s.size(); ++i) steps[i] = in.gyro_t_s[i + 1] - in.gyro_t_s[i];
-  const double dt_gyro = median(std::move(steps));
+  const double dt_gyro = core::median(std::move(steps));
   if (o.use_standstill && in.odometry == OdometryKind::wheel_angles)
     c.still = standstill_runs(c, o, still_interval, used, g.noise_sigma_radps, dt_gyro);
   out.standstill_runs = static_cast<int>(c.still.size());

@@ -141,7 +141,7 @@ Growth growth(const ResidualSeries& s, double span) {
   std::vector<double> finite_dt;
   for (double d : used)
     if (std::isfinite(d)) finite_dt.push_back(d);
-  const double ref = median(finite_dt);
+  const double ref = core::median(finite_dt);
   for (std::size_t i = 0; i < n; ++i) {
     if (!std::isfinite(used[i])) continue;
     const double f = used[i] / ref;
@@ -161,7 +161,7 @@ double growth_sigma(const Growth& g, const std::vector<const std::vector<double>
       diffs.push_back((*c)[j] - (*c)[i]);
     }
   }
-  return diffs.size() < 4 ? kNaN : robust_sigma(diffs) / std::sqrt(2.0);
+  return diffs.size() < 4 ? kNaN : core::robust_sigma(diffs) / std::sqrt(2.0);
 }
 
 std::vector<TimeSegment> segments(const ResidualSeries& s, const Location& loc, const LocateOptions& o) {
@@ -426,7 +426,7 @@ Location locate(const ResidualSeries& s, double sigma_m, const LocateOptions& o)
   std::vector<double> steps;
   for (std::size_t i = 1; i < n; ++i)
     if (s.window[i] == s.window[i - 1]) steps.push_back(s.t_s[i] - s.t_s[i - 1]);
-  const double dt = steps.empty() ? 0.0 : median(std::move(steps));
+  const double dt = steps.empty() ? 0.0 : core::median(std::move(steps));
   Location loc;
   loc.span_s = std::max(o.growth_span_s, (o.min_span_samples - 1) * dt);
   const Growth g = growth(s, loc.span_s);

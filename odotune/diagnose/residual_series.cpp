@@ -68,7 +68,7 @@ ResidualSeries residual_series(const DiagInput& in, const std::vector<Window>& w
       s.t_s.push_back(in.ref_t_s[i]);
       s.ex_m.push_back(r.pred_x_m[i] - in.ref_x_m[i]);
       s.ey_m.push_back(r.pred_y_m[i] - in.ref_y_m[i]);
-      if (heading) s.e_theta_rad.push_back(wrap_angle(r.pred_theta_rad[i] - in.ref_theta_rad[i]));
+      if (heading) s.e_theta_rad.push_back(core::wrap_angle(r.pred_theta_rad[i] - in.ref_theta_rad[i]));
       s.window.push_back(w.index);
       s.x_m.push_back(in.ref_x_m[i]);
       s.y_m.push_back(in.ref_y_m[i]);

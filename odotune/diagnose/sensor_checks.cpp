@@ -27,7 +27,7 @@ double median_step(const std::vector<double>& t) {
   if (t.size() < 2) return kNaN;
   std::vector<double> d(t.size() - 1);
   for (std::size_t i = 0; i + 1 < t.size(); ++i) d[i] = t[i + 1] - t[i];
-  return median(std::move(d));
+  return core::median(std::move(d));
 }
 
 // Smallest positive step between consecutive samples (an encoder's count
@@ -188,7 +188,7 @@ void huber_irls(RobustFit& f, const SensorCheckOptions& o) {
     a = na, b = nb;
     for (std::size_t k = 0; k < n; ++k) f.res[k] = f.yw[k] - a * f.xw[k] - (two ? b * f.uw[k] : 0.0);
     if (converged) break;
-    const double c = o.huber_k * std::max(robust_sigma(f.res), 1e-300);
+    const double c = o.huber_k * std::max(core::robust_sigma(f.res), 1e-300);
     for (std::size_t k = 0; k < n; ++k) w[k] = std::abs(f.res[k]) <= c ? 1.0 : c / std::abs(f.res[k]);
   }
   f.ok = std::isfinite(a) && std::isfinite(b);
@@ -243,7 +243,7 @@ double rate_residual_sigma(const Rows& r, const std::vector<double>& width, cons
   for (std::size_t k = 0; k < res.size(); ++k) {
     res[k] = (r.y[k] - f.a * r.x[k] - (r.u.empty() ? 0.0 : f.b * r.u[k])) / width[k];
   }
-  return robust_sigma(res);
+  return core::robust_sigma(res);
 }
 
 // Robust σ of white noise on a sampled signal from its second differences
@@ -251,7 +251,7 @@ double rate_residual_sigma(const Rows& r, const std::vector<double>& width, cons
 double second_difference_sigma(const std::vector<double>& v) {
   std::vector<double> d2;
   for (std::size_t k = 1; k + 1 < v.size(); ++k) d2.push_back(v[k + 1] - 2.0 * v[k] + v[k - 1]);
-  return d2.empty() ? 0.0 : robust_sigma(d2) / std::sqrt(6.0);
+  return d2.empty() ? 0.0 : core::robust_sigma(d2) / std::sqrt(6.0);
 }
 
 double sample_sd(const std::vector<double>& v) {

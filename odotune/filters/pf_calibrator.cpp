@@ -69,13 +69,13 @@ std::string num(double x) {
 
 bool check_range(const char* name, const PfCalibratorParams::Range& r, std::string* why) {
   if (std::isfinite(r.lo) && std::isfinite(r.hi) && r.lo > 0.0 && r.lo < r.hi) return true;
-  return invalid(why, std::string(name) + " = [" + num(r.lo) + ", " + num(r.hi) +
-                          "] must satisfy 0 < lo < hi (finite)");
+  return core::invalid(why, std::string(name) + " = [" + num(r.lo) + ", " + num(r.hi) +
+                                "] must satisfy 0 < lo < hi (finite)");
 }
 
 bool check_non_negative(const char* name, double x, std::string* why) {
   if (std::isfinite(x) && x >= 0.0) return true;
-  return invalid(why, std::string(name) + " = " + num(x) + " must be a finite number ≥ 0");
+  return core::invalid(why, std::string(name) + " = " + num(x) + " must be a finite number ≥ 0");
 }
 
 // Everything one block of the prediction/update needs (step 1–2).
@@ -112,8 +112,10 @@ ODOTUNE_PF_HOT_LOOP double predict_block(const PredictInputs in, double* __restr
 #pragma omp simd reduction(max : block_max)
   for (std::size_t i = i0; i < i1; ++i) {
     const std::uint64_t n = static_cast<std::uint64_t>(i) * kGolden;
-    const pf_kernels::NormalPair z_radii = pf_kernels::normal_pair_from_bits(splitmix64_mix(in.key_radii + n));
-    const pf_kernels::NormalPair z_base = pf_kernels::normal_pair_from_bits(splitmix64_mix(in.key_base + n));
+    const pf_kernels::NormalPair z_radii = pf_kernels::normal_pair_from_bits(
+        core::splitmix64_mix(in.key_radii + n));
+    const pf_kernels::NormalPair z_base = pf_kernels::normal_pair_from_bits(
+        core::splitmix64_mix(in.key_base + n));
     const double rr = r_right[i] + in.sigma_rr * z_radii.first;
     const double rl = r_left[i] + in.sigma_rl * z_radii.second;
     const double d = base[i] + in.sigma_d * z_base.first;
@@ -122,7 +124,7 @@ ODOTUNE_PF_HOT_LOOP double predict_block(const PredictInputs in, double* __restr
     if constexpr (kPerturb) {
       // The paper's uniform perturbation of V and W (no draw when it is
       // integrated out of the weight instead, the evidence evolution).
-      const std::uint64_t u_bits = splitmix64_mix(in.key_velocity + n);
+      const std::uint64_t u_bits = core::splitmix64_mix(in.key_velocity + n);
       vi += in.a_v * (2.0 * pf_kernels::uniform_high32(u_bits) - 1.0);
       wi += in.a_w * (2.0 * pf_kernels::uniform_low32(u_bits) - 1.0);
     }
@@ -316,30 +318,30 @@ bool PfCalibratorParams::IsValid(std::string* why) const {
       !check_range("wheel_radius_left_m", wheel_radius_left_m, why) ||
       !check_range("wheel_base_m", wheel_base_m, why))
     return false;
-  if (particles < 1) return invalid(why, "particles = " + std::to_string(particles) + " must be ≥ 1");
+  if (particles < 1) return core::invalid(why, "particles = " + std::to_string(particles) + " must be ≥ 1");
   if (!check_non_negative("random_walk_sigma_m", random_walk_sigma_m, why) ||
       !check_non_negative("v_perturbation_m_s", v_perturbation_m_s, why) ||
       !check_non_negative("w_perturbation_rad_s", w_perturbation_rad_s, why))
     return false;
   if (!(neff_fraction > 0.0 && neff_fraction <= 1.0))
-    return invalid(why, "neff_fraction = " + num(neff_fraction) + " must be in (0, 1]");
+    return core::invalid(why, "neff_fraction = " + num(neff_fraction) + " must be in (0, 1]");
   if (!(std::isfinite(max_weight_ratio) && max_weight_ratio >= 1.0))
-    return invalid(why, "max_weight_ratio = " + num(max_weight_ratio) +
-                            " must be a finite number ≥ 1 (max ρ ≥ 1/N always)");
+    return core::invalid(why, "max_weight_ratio = " + num(max_weight_ratio) +
+                                  " must be a finite number ≥ 1 (max ρ ≥ 1/N always)");
   if (!check_non_negative("alpha", alpha, why)) return false;
   if (!(std::isfinite(dispersion_per_particle_m) && dispersion_per_particle_m > 0.0))
-    return invalid(why, "dispersion_per_particle_m = " + num(dispersion_per_particle_m) +
-                            " must be a finite number > 0");
+    return core::invalid(why, "dispersion_per_particle_m = " + num(dispersion_per_particle_m) +
+                                  " must be a finite number > 0");
   if (!check_non_negative("min_random_walk_sigma_m", min_random_walk_sigma_m, why)) return false;
   std::string inner;
-  if (!evidence.IsValid(&inner)) return invalid(why, "evidence." + inner);
+  if (!evidence.IsValid(&inner)) return core::invalid(why, "evidence." + inner);
   if (min_particles < 1)
-    return invalid(why, "min_particles = " + std::to_string(min_particles) + " must be ≥ 1");
+    return core::invalid(why, "min_particles = " + std::to_string(min_particles) + " must be ≥ 1");
   if (max_particles < min_particles)
-    return invalid(why, "max_particles = " + std::to_string(max_particles) +
-                            " must be ≥ min_particles = " + std::to_string(min_particles));
+    return core::invalid(why, "max_particles = " + std::to_string(max_particles) +
+                                  " must be ≥ min_particles = " + std::to_string(min_particles));
   if (threads < 0)
-    return invalid(why, "threads = " + std::to_string(threads) + " must be ≥ 0 (0: OpenMP's default)");
+    return core::invalid(why, "threads = " + std::to_string(threads) + " must be ≥ 0 (0: OpenMP's default)");
   return true;
 }
 
@@ -360,11 +362,11 @@ PfCalibrator::PfCalibrator(const PfCalibratorParams& params) : params_(params), 
                                               params.wheel_base_m};
   std::vector<double>* arrays[] = {&r_right_, &r_left_, &base_};
   for (std::size_t d = 0; d < 3; ++d) {
-    const std::uint64_t key = counter_hash(params.seed, 0, 0, d, kStreamInit);
+    const std::uint64_t key = core::counter_hash(params.seed, 0, 0, d, kStreamInit);
     const double lo = ranges[d].lo;
     const double width = ranges[d].hi - ranges[d].lo;
     for (std::size_t i = 0; i < n; ++i) {
-      const std::uint64_t bits = splitmix64_mix(key + static_cast<std::uint64_t>(i) * kGolden);
+      const std::uint64_t bits = core::splitmix64_mix(key + static_cast<std::uint64_t>(i) * kGolden);
       (*arrays[d])[i] = lo + width * (static_cast<double>(bits >> 11) + 0.5) * 0x1.0p-53;
     }
   }
@@ -425,9 +427,9 @@ double PfCalibrator::predict_and_weigh(const CalibSample& s, const double (&sigm
   block_sums_.assign(blocks * kSumCount, 0.0);
   const auto it = static_cast<std::uint64_t>(iteration_);
   PredictInputs in{};
-  in.key_radii = counter_hash(params_.seed, it, 0, 0, kStreamWalkRadii);
-  in.key_base = counter_hash(params_.seed, it, 0, 0, kStreamWalkBase);
-  in.key_velocity = counter_hash(params_.seed, it, 0, 0, kStreamVelocity);
+  in.key_radii = core::counter_hash(params_.seed, it, 0, 0, kStreamWalkRadii);
+  in.key_base = core::counter_hash(params_.seed, it, 0, 0, kStreamWalkBase);
+  in.key_velocity = core::counter_hash(params_.seed, it, 0, 0, kStreamVelocity);
   in.sigma_rr = sigma_m[0];
   in.sigma_rl = sigma_m[1];
   in.sigma_d = sigma_m[2];

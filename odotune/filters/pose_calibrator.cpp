@@ -21,21 +21,22 @@ bool positive(double v) { return std::isfinite(v) && v > 0.0; }
 
 bool PoseCalibratorParams::IsValid(std::string* why) const {
   std::string sub;
-  if (!initial.IsValid(&sub)) return invalid(why, "initial." + sub);
+  if (!initial.IsValid(&sub)) return core::invalid(why, "initial." + sub);
   if (!positive(initial_sd_radius_frac))
-    return invalid(why, fmt::format("initial_sd_radius_frac = {} must be > 0", initial_sd_radius_frac));
+    return core::invalid(why, fmt::format("initial_sd_radius_frac = {} must be > 0", initial_sd_radius_frac));
   if (!positive(initial_sd_wheel_base_frac))
-    return invalid(why, fmt::format("initial_sd_wheel_base_frac = {} must be > 0", initial_sd_wheel_base_frac));
+    return core::invalid(why, fmt::format("initial_sd_wheel_base_frac = {} must be > 0",
+                                          initial_sd_wheel_base_frac));
   if (!(std::isfinite(wheel_noise_m2_per_m) && wheel_noise_m2_per_m >= 0.0))
-    return invalid(why, fmt::format("wheel_noise_m2_per_m = {} must be ≥ 0", wheel_noise_m2_per_m));
-  if (!positive(gate_nis)) return invalid(why, fmt::format("gate_nis = {} must be > 0", gate_nis));
+    return core::invalid(why, fmt::format("wheel_noise_m2_per_m = {} must be ≥ 0", wheel_noise_m2_per_m));
+  if (!positive(gate_nis)) return core::invalid(why, fmt::format("gate_nis = {} must be > 0", gate_nis));
   if (max_rejected_fixes < 1)
-    return invalid(why, fmt::format("max_rejected_fixes = {} must be ≥ 1", max_rejected_fixes));
+    return core::invalid(why, fmt::format("max_rejected_fixes = {} must be ≥ 1", max_rejected_fixes));
   if (!positive(acquire_spread_sigmas))
-    return invalid(why, fmt::format("acquire_spread_sigmas = {} must be > 0", acquire_spread_sigmas));
+    return core::invalid(why, fmt::format("acquire_spread_sigmas = {} must be > 0", acquire_spread_sigmas));
   if (acquire_min_fixes < 2)
-    return invalid(why, fmt::format("acquire_min_fixes = {} must be ≥ 2", acquire_min_fixes));
-  if (!memory.IsValid(&sub)) return invalid(why, "memory." + sub);
+    return core::invalid(why, fmt::format("acquire_min_fixes = {} must be ≥ 2", acquire_min_fixes));
+  if (!memory.IsValid(&sub)) return core::invalid(why, "memory." + sub);
   return true;
 }
 
@@ -65,8 +66,8 @@ PcPrediction pose_calibrator_predict(const PcState& s, double dphi_left_rad, dou
 
 bool DistanceMemoryParams::IsValid(std::string* why) const {
   if (!(positive(min_memory_m) && positive(max_memory_m) && min_memory_m <= max_memory_m))
-    return invalid(why, fmt::format("memory {}–{} m: expected 0 < min_memory_m ≤ max_memory_m", min_memory_m,
-                                    max_memory_m));
+    return core::invalid(why, fmt::format("memory {}–{} m: expected 0 < min_memory_m ≤ max_memory_m",
+                                          min_memory_m, max_memory_m));
   return true;
 }
 
@@ -204,8 +205,8 @@ void PoseCalibrator::acquire(const PoseCalibSample& s) {
   acq_.samples.push_back(s);
   PlanarPose& o = acq_.odometry;
   const PlanarPose before = o;
-  midpoint_advance(&o.x_m, &o.y_m, &o.theta_rad, x_(kPcRadiusLeft) * s.dphi_left_rad,
-                   x_(kPcRadiusRight) * s.dphi_right_rad, x_(kPcWheelBase));
+  core::midpoint_advance(&o.x_m, &o.y_m, &o.theta_rad, x_(kPcRadiusLeft) * s.dphi_left_rad,
+                         x_(kPcRadiusRight) * s.dphi_right_rad, x_(kPcWheelBase));
   acq_.turn_rad += std::abs(o.theta_rad - before.theta_rad);
   acq_.distance_m += std::hypot(o.x_m - before.x_m, o.y_m - before.y_m);
   if (!s.has_fix) return;
@@ -224,7 +225,7 @@ void PoseCalibrator::acquire(const PoseCalibSample& s) {
   const double k = params_.acquire_spread_sigmas;
   if (static_cast<int>(acq_.fix.size()) < params_.acquire_min_fixes || acq_.fix_spread_m2 / n < k * k * var)
     return;
-  const RigidMotion2d fit = fit_rigid_2d(
+  const core::RigidMotion2d fit = core::fit_rigid_2d(
       acq_.fix.size(), [&](std::size_t i) { return acq_.odo[i].x(); },
       [&](std::size_t i) { return acq_.odo[i].y(); }, [&](std::size_t i) { return acq_.fix[i].x(); },
       [&](std::size_t i) { return acq_.fix[i].y(); });

@@ -22,7 +22,9 @@ constexpr std::uint64_t kGolden = 0x9e3779b97f4a7c15ULL;
 // The n-th 64 random bits of the sequence keyed by `key`: SplitMix64's n-th
 // output for the seed `key` (one mix per draw; the key itself comes from the
 // full counter_hash of (seed, iteration, stream)).
-inline std::uint64_t draw_bits(std::uint64_t key, std::uint64_t n) { return splitmix64_mix(key + n * kGolden); }
+inline std::uint64_t draw_bits(std::uint64_t key, std::uint64_t n) {
+  return core::splitmix64_mix(key + n * kGolden);
+}
 // Uniform in the open interval (0, 1) (53 bits, never 0 or 1).
 inline double open01(std::uint64_t bits) { return (static_cast<double>(bits >> 11) + 0.5) * 0x1.0p-53; }
 
@@ -301,17 +303,18 @@ void resample(Resampler scheme, std::span<const double> normalised_weights, std:
   s.cum.resize(normalised_weights.size());
   switch (scheme) {
     case Resampler::multinomial:
-      multinomial_counts(s.cdf, total, counter_hash(seed, iteration, 0, 0, kStreamMultinomial), m, s, s.cum);
+      multinomial_counts(s.cdf, total, core::counter_hash(seed, iteration, 0, 0, kStreamMultinomial), m, s,
+                         s.cum);
       break;
     case Resampler::stratified:
-      stratified_counts(s.cdf, total, counter_hash(seed, iteration, 0, 0, kStreamStratified), m, s.cum);
+      stratified_counts(s.cdf, total, core::counter_hash(seed, iteration, 0, 0, kStreamStratified), m, s.cum);
       break;
     case Resampler::systematic:
-      systematic_counts(s.cdf, total, counter_hash(seed, iteration, 0, 0, kStreamSystematic), m, s.cum);
+      systematic_counts(s.cdf, total, core::counter_hash(seed, iteration, 0, 0, kStreamSystematic), m, s.cum);
       break;
     case Resampler::residual:
-      residual_counts(normalised_weights, total, counter_hash(seed, iteration, 0, 0, kStreamResidual), m, s,
-                      s.cum);
+      residual_counts(normalised_weights, total, core::counter_hash(seed, iteration, 0, 0, kStreamResidual), m,
+                      s, s.cum);
       break;
   }
   close_counts(normalised_weights, m, s.cum);

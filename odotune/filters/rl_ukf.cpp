@@ -64,10 +64,10 @@ UkfWeights ukf_weights(double alpha, double kappa, double beta) {
 bool RlUkfParams::IsValid(std::string* why) const {
   if (!filter.IsValid(why)) return false;
   if (!std::isfinite(alpha) || !(alpha > 0.0))
-    return invalid(why, fmt::format("alpha = {}, expected > 0", alpha));
+    return core::invalid(why, fmt::format("alpha = {}, expected > 0", alpha));
   if (!std::isfinite(kappa) || !(kN + kappa > 0.0))
-    return invalid(why, fmt::format("kappa = {}, expected > -15 (n + kappa > 0)", kappa));
-  if (!std::isfinite(beta)) return invalid(why, fmt::format("beta = {}, expected a finite number", beta));
+    return core::invalid(why, fmt::format("kappa = {}, expected > -15 (n + kappa > 0)", kappa));
+  if (!std::isfinite(beta)) return core::invalid(why, fmt::format("beta = {}, expected a finite number", beta));
   return true;
 }
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <optional>
 
-namespace odotune {
+namespace odotune::formats {
 
 namespace {
 
@@ -40,32 +40,32 @@ double finite_mean(const std::vector<double>& v) {
   return n > 0 ? sum / n : NAN;
 }
 
-json options_json(const CalibrationRunInfo& info, CalibrationMethod method) {
+json options_json(const CalibrationRunInfo& info, calibration::CalibrationMethod method) {
   json o;
   o["init_radius_range_m"] = range_json(info.init_radius_m);
   o["init_wheel_base_range_m"] = range_json(info.init_wheel_base_m);
   o["ext_from_gt_hz"] = info.ext_from_gt_rate_hz > 0 ? json(info.ext_from_gt_rate_hz) : json(nullptr);
   o["convergence_tolerance"] = info.options.convergence_tolerance;
-  if (method == CalibrationMethod::pf || method == CalibrationMethod::adaptive_pf) {
-    const filters::PfCalibratorParams pf = effective_pf_params(info.options);
+  if (method == calibration::CalibrationMethod::pf || method == calibration::CalibrationMethod::adaptive_pf) {
+    const filters::PfCalibratorParams pf = calibration::effective_pf_params(info.options);
     o["resampler"] = std::string(filters::to_string(pf.resampler));
     o["policy"] = std::string(filters::to_string(pf.policy));
     o["seed"] = pf.seed;
     o["particles"] = pf.particles;
     o["random_walk_sigma_m"] = pf.random_walk_sigma_m;
-    if (method == CalibrationMethod::adaptive_pf) {
+    if (method == calibration::CalibrationMethod::adaptive_pf) {
       o["alpha_m_per_m_s"] = pf.alpha;
       o["dispersion_per_particle_m"] = pf.dispersion_per_particle_m;
       o["particles_range"] = json::array({pf.min_particles, pf.max_particles});
     }
   }
-  if (method == CalibrationMethod::batch_pose) {
-    const PoseCalibrationOptions& p = info.options.pose;
+  if (method == calibration::CalibrationMethod::batch_pose) {
+    const calibration::PoseCalibrationOptions& p = info.options.pose;
     o["segment_s"] = p.segment_s > 0.0 ? json(p.segment_s) : json(nullptr);  // null: whole runs
     o["fit_start_heading"] = p.fit_start_heading;
     o["loss_scale_m"] = p.loss_scale_m;
   }
-  if (method == CalibrationMethod::dkf) {
+  if (method == calibration::CalibrationMethod::dkf) {
     const filters::DualKfParams& k = info.options.dkf;
     o["initial"] = params_json(k.initial);
     o["initial_sd_radius_m"] = k.initial_sd_radius_m;
@@ -83,12 +83,14 @@ double rmse_improvement_pct(double a, double b) {
   return 100.0 * (a - b) / a;
 }
 
-json calibration_json(const CalibrationResult& result, const std::vector<const CalibrationInput*>& inputs,
-                      const std::vector<TrackCalibrationScore>& nominal, const CalibrationRunInfo& info) {
+json calibration_json(const calibration::CalibrationResult& result,
+                      const std::vector<const calibration::CalibrationInput*>& inputs,
+                      const std::vector<calibration::TrackCalibrationScore>& nominal,
+                      const CalibrationRunInfo& info) {
   json j;
   j["format"] = "odotune-calibration-result/1";
   j["mode"] = "calibrate";
-  j["method"] = std::string(to_string(result.method));
+  j["method"] = std::string(calibration::to_string(result.method));
   j["final"] = params_json(result.final_params);
   if (!result.trace.estimate.empty()) {
     const filters::CalibEstimate& e = result.trace.estimate.back();
@@ -112,7 +114,7 @@ json calibration_json(const CalibrationResult& result, const std::vector<const C
     if (k >= 0 && static_cast<std::size_t>(k) < iterations.size()) ++iterations[static_cast<std::size_t>(k)];
   json tracks = json::array();
   for (std::size_t k = 0; k < result.tracks.size(); ++k) {
-    const TrackCalibrationScore& s = result.tracks[k];
+    const calibration::TrackCalibrationScore& s = result.tracks[k];
     json t;
     t["track"] = s.track;
     t["file"] = k < info.track_files.size() ? json(info.track_files[k]) : json(nullptr);
@@ -154,7 +156,7 @@ json calibration_json(const CalibrationResult& result, const std::vector<const C
   j["iterations"] = result.iterations;
   j["mean_particles"] = number_or_null(result.mean_particles);
   j["memory_restarts"] = result.memory_restarts;
-  if (is_offline(result.method)) {
+  if (calibration::is_offline(result.method)) {
     j["batch_converged"] = result.batch_converged;
     j["batch_residuals"] = result.batch_residuals;
   }
@@ -200,4 +202,4 @@ json apply_json(const std::string& calibration_file, const filters::OdometryPara
   return j;
 }
 
-}  // namespace odotune
+}  // namespace odotune::formats

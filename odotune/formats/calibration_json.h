@@ -34,27 +34,27 @@
 #include <odotune/calibration/calibration_input.h>
 #include <odotune/calibration/calibration_run.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 // What `calibrate` ran, beyond the result itself.
 struct CalibrationRunInfo {
   std::vector<std::string> track_files;  // as given, in input order
-  CalibrationOptions options;
+  calibration::CalibrationOptions options;
   filters::PfCalibratorParams::Range init_radius_m, init_wheel_base_m;  // initial ranges
   double ext_from_gt_rate_hz = 0.0;                                     // 0: the tracks' v_ext/w_ext
 };
 
 // `nominal[k]` scores inputs[k]'s nominal parameters (score_fixed_params).
-nlohmann::json calibration_json(const CalibrationResult& result,
-                                const std::vector<const CalibrationInput*>& inputs,
-                                const std::vector<TrackCalibrationScore>& nominal,
+nlohmann::json calibration_json(const calibration::CalibrationResult& result,
+                                const std::vector<const calibration::CalibrationInput*>& inputs,
+                                const std::vector<calibration::TrackCalibrationScore>& nominal,
                                 const CalibrationRunInfo& info);
 
 // One held-out track of `--apply`.
 struct AppliedTrack {
   std::string file;
   filters::OdometryParams nominal_params;
-  TrackCalibrationScore nominal, calibrated;
+  calibration::TrackCalibrationScore nominal, calibrated;
 };
 
 nlohmann::json apply_json(const std::string& calibration_file, const filters::OdometryParams& params,
@@ -64,4 +64,4 @@ nlohmann::json apply_json(const std::string& calibration_file, const filters::Od
 // smaller); NaN when a is not a positive number or either is not finite.
 double rmse_improvement_pct(double a, double b);
 
-}  // namespace odotune
+}  // namespace odotune::formats

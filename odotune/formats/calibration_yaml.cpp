@@ -11,7 +11,7 @@
 #include <odotune/formats/config_yaml.h>
 #include <odotune/formats/yaml_error.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 namespace {
 
@@ -73,8 +73,8 @@ void read_twist_keys(const std::filesystem::path& path, const YAML::Node& root, 
     while (i < std::size(kTwistKeys) && key != kTwistKeys[i].name) ++i;
     if (i == std::size(kTwistKeys))
       fail_at(path, kv.first,
-              fmt::format("unknown key '{}' for odometry: {}, expected {}", key, to_string(file.odometry),
-                          expected_twist_keys()));
+              fmt::format("unknown key '{}' for odometry: {}, expected {}", key,
+                          tracks::to_string(file.odometry), expected_twist_keys()));
     if (seen[i]) fail_at(path, kv.first, fmt::format("{} is given twice, expected it once", key));
     const double value = number_at(path, kv.second, key, "");
     if (!std::isfinite(value) || (kTwistKeys[i].positive ? value <= 0.0 : value < 0.0))
@@ -95,10 +95,10 @@ CalibrationFile read_calibration_file(const std::filesystem::path& path) {
                                            fmt::format("a mapping with {}", expected_keys()));
   CalibrationFile file;
   if (const YAML::Node odometry = root["odometry"]) {
-    if (!odometry.IsScalar() || !parse_odometry_input(odometry.Scalar(), &file.odometry))
+    if (!odometry.IsScalar() || !tracks::parse_odometry_input(odometry.Scalar(), &file.odometry))
       fail_at(path, odometry, "odometry must be wheels, twist or commands");
   }
-  if (file.odometry != OdometryInput::wheels) {
+  if (file.odometry != tracks::OdometryInput::wheels) {
     read_twist_keys(path, root, file);
     return file;
   }
@@ -129,8 +129,8 @@ std::string format_calibration_file(const CalibrationFile& file) {
     for (std::string line; std::getline(lines, line);) out << "# " << line << "\n";
   }
   out << "format: " << kFormat << "\n";
-  if (file.odometry != OdometryInput::wheels) {
-    out << "odometry: " << to_string(file.odometry) << "\n";
+  if (file.odometry != tracks::OdometryInput::wheels) {
+    out << "odometry: " << tracks::to_string(file.odometry) << "\n";
     for (const TwistKey& k : kTwistKeys)
       out << fmt::format("{}: {}  # {}\n", k.name, file.twist.*k.field, k.meaning);
     return out.str();
@@ -141,9 +141,10 @@ std::string format_calibration_file(const CalibrationFile& file) {
 
 void write_calibration_file(const CalibrationFile& file, const std::filesystem::path& path) {
   std::string why;
-  const bool ok = file.odometry == OdometryInput::wheels ? file.params.IsValid(&why) : file.twist.IsValid(&why);
-  if (!ok) throw Failure(fmt::format("{}: not written: {}", path.string(), why));
+  const bool ok = file.odometry == tracks::OdometryInput::wheels ? file.params.IsValid(&why)
+                                                                 : file.twist.IsValid(&why);
+  if (!ok) throw core::Failure(fmt::format("{}: not written: {}", path.string(), why));
   write_file_atomically(path, format_calibration_file(file));
 }
 
-}  // namespace odotune
+}  // namespace odotune::formats

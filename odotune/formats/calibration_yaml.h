@@ -27,20 +27,20 @@
 #include <odotune/filters/odometry_params.h>
 #include <odotune/tracks/odometry_input.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 struct CalibrationFile {
-  OdometryInput odometry = OdometryInput::wheels;  // what the file calibrates
-  filters::OdometryParams params;                  // wheels
-  filters::TwistCorrection twist;                  // twist and commands
+  tracks::OdometryInput odometry = tracks::OdometryInput::wheels;  // what the file calibrates
+  filters::OdometryParams params;                                  // wheels
+  filters::TwistCorrection twist;                                  // twist and commands
   std::string comment;  // written as leading YAML comment lines (provenance); not read back
 };
 
-// Throws odotune::Failure (FILE:LINE: reason).
+// Throws core::Failure (FILE:LINE: reason).
 CalibrationFile read_calibration_file(const std::filesystem::path& path);
 // The file's text (what write_calibration_file writes).
 std::string format_calibration_file(const CalibrationFile& file);
-// Writes atomically (temporary + rename). Throws odotune::Failure.
+// Writes atomically (temporary + rename). Throws core::Failure.
 void write_calibration_file(const CalibrationFile& file, const std::filesystem::path& path);
 
-}  // namespace odotune
+}  // namespace odotune::formats

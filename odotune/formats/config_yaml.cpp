@@ -12,7 +12,7 @@
 #include <odotune/formats/yaml_error.h>
 #include <odotune/objectives/param_space.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 namespace {
 constexpr const char* kFormat = "odotune-ekf-config/1";
@@ -21,9 +21,9 @@ constexpr const char* kFormat = "odotune-ekf-config/1";
 
 void write_file_atomically(const std::filesystem::path& path, const std::string& text) {
   try {
-    write_atomically(path, "file", text);
+    core::write_atomically(path, "file", text);
   } catch (const std::runtime_error& e) {
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
 }
 
@@ -39,7 +39,7 @@ EkfConfig read_ekf_config(const std::filesystem::path& path) {
   const YAML::Node model = root["model"];
   if (!model || !filters::parse_noise_model(model.as<std::string>(""), &cfg.model))
     fail_at(path, model ? model : root, "model must be rq, alpha or gyro");
-  const ParamSpace space = ParamSpace::for_model(cfg.model);
+  const objectives::ParamSpace space = objectives::ParamSpace::for_model(cfg.model);
   const YAML::Node params = root["params"];
   if (!params || !params.IsMap()) fail_at(path, params ? params : root, "expected a 'params' mapping");
   std::vector<double> values(space.dim());
@@ -68,7 +68,7 @@ EkfConfig read_ekf_config(const std::filesystem::path& path) {
 }
 
 void write_ekf_config(const EkfConfig& config, const std::filesystem::path& path) {
-  const ParamSpace space = ParamSpace::for_model(config.model);
+  const objectives::ParamSpace space = objectives::ParamSpace::for_model(config.model);
   const std::vector<double> values = space.from_noise(config.noise);
   std::ostringstream out;
   if (!config.comment.empty()) {
@@ -86,4 +86,4 @@ void write_ekf_config(const EkfConfig& config, const std::filesystem::path& path
   write_file_atomically(path, out.str());
 }
 
-}  // namespace odotune
+}  // namespace odotune::formats

@@ -16,7 +16,7 @@
 
 #include <odotune/filters/ekf_noise.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 struct EkfConfig {
   filters::NoiseModel model = filters::NoiseModel::rq;
@@ -24,12 +24,12 @@ struct EkfConfig {
   std::string comment;  // written as a leading YAML comment (provenance)
 };
 
-// Throws odotune::Failure.
+// Throws core::Failure.
 EkfConfig read_ekf_config(const std::filesystem::path& path);
-// Writes atomically (temporary + rename). Throws odotune::Failure.
+// Writes atomically (temporary + rename). Throws core::Failure.
 void write_ekf_config(const EkfConfig& config, const std::filesystem::path& path);
 
-// Writes `text` to `path` atomically; throws odotune::Failure.
+// Writes `text` to `path` atomically; throws core::Failure.
 void write_file_atomically(const std::filesystem::path& path, const std::string& text);
 
-}  // namespace odotune
+}  // namespace odotune::formats

@@ -11,7 +11,7 @@
 #include <odotune/core/failure.h>
 #include <odotune/core/why.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 namespace {
 
@@ -203,22 +203,22 @@ bool ControllerOptions::IsValid(std::string* why) const {
   bool ok = !n.empty() && !std::isdigit(static_cast<unsigned char>(n.front()));
   for (char ch : n) ok = ok && (std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '/');
   if (!ok)
-    return invalid(why,
-                   fmt::format("controller_name '{}' is not a ROS name: expected letters, digits, '_' and '/', "
-                               "not starting with a digit",
-                               n));
+    return core::invalid(
+        why, fmt::format("controller_name '{}' is not a ROS name: expected letters, digits, '_' and '/', "
+                         "not starting with a digit",
+                         n));
   return true;
 }
 
 bool ControllerGeometry::IsValid(std::string* why) const {
   std::string bad;
-  if (!calibrated.IsValid(&bad)) return invalid(why, "calibrated " + bad);
-  if (!nominal.IsValid(&bad)) return invalid(why, "nominal " + bad + " (no nominal geometry given)");
+  if (!calibrated.IsValid(&bad)) return core::invalid(why, "calibrated " + bad);
+  if (!nominal.IsValid(&bad)) return core::invalid(why, "nominal " + bad + " (no nominal geometry given)");
   for (const auto* list : {&provenance, &heldout})
     for (const std::string& line : *list)
       if (line.find_first_of("\r\n") != std::string::npos)
-        return invalid(why, fmt::format("a comment line holds a line break: '{}'",
-                                        line.substr(0, line.find_first_of("\r\n"))));
+        return core::invalid(why, fmt::format("a comment line holds a line break: '{}'",
+                                              line.substr(0, line.find_first_of("\r\n"))));
   return true;
 }
 
@@ -241,7 +241,7 @@ ControllerValues controller_values(const ControllerGeometry& g, ControllerForm f
 
 std::string controller_config_text(const ControllerGeometry& geometry, const ControllerOptions& options) {
   std::string why;
-  if (!geometry.IsValid(&why) || !options.IsValid(&why)) throw Failure("controller file: " + why);
+  if (!geometry.IsValid(&why) || !options.IsValid(&why)) throw core::Failure("controller file: " + why);
   return options.kind == ControllerKind::gazebo ? gazebo_text(geometry, options) : ros_text(geometry, options);
 }
 
@@ -250,14 +250,14 @@ void write_controller_config(const ControllerGeometry& geometry, const Controlle
   std::string text;
   try {
     text = controller_config_text(geometry, options);
-  } catch (const Failure& e) {
-    throw Failure(fmt::format("{}: not written: {}", path.string(), e.what()));
+  } catch (const core::Failure& e) {
+    throw core::Failure(fmt::format("{}: not written: {}", path.string(), e.what()));
   }
   try {
-    write_atomically(path, "controller parameters", text);
+    core::write_atomically(path, "controller parameters", text);
   } catch (const std::runtime_error& e) {
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
 }
 
-}  // namespace odotune
+}  // namespace odotune::formats

@@ -62,7 +62,7 @@
 
 #include <odotune/filters/odometry_params.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 enum class ControllerKind { ros2_control, ros1, gazebo };
 // "ros2_control", "ros1", "gazebo".
@@ -120,14 +120,14 @@ ControllerValues controller_values(const ControllerGeometry& geometry, Controlle
 
 // The file's text (ROS: YAML; gazebo: an SDF <plugin> element after XML
 // comments, whose "--" sequences are written as "- -"). Throws
-// odotune::Failure ("controller file: why") when geometry or options are
+// core::Failure ("controller file: why") when geometry or options are
 // invalid.
 std::string controller_config_text(const ControllerGeometry& geometry, const ControllerOptions& options);
 
 // Writes controller_config_text atomically (odotune/core/atomic_file.h). Throws
-// odotune::Failure ("PATH: not written: why", or the writer's
+// core::Failure ("PATH: not written: why", or the writer's
 // "cannot write controller parameters 'PATH': reason").
 void write_controller_config(const ControllerGeometry& geometry, const ControllerOptions& options,
                              const std::filesystem::path& path);
 
-}  // namespace odotune
+}  // namespace odotune::formats

@@ -4,7 +4,7 @@
 
 #include <odotune/sim/model_terms.h>
 
-namespace odotune {
+namespace odotune::formats {
 namespace {
 
 using nlohmann::json;
@@ -279,4 +279,4 @@ json pooled_diagnosis_json(const diagnose::PooledDiagnosis& p) {
   return j;
 }
 
-}  // namespace odotune
+}  // namespace odotune::formats

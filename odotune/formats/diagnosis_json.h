@@ -16,7 +16,7 @@
 #include <odotune/diagnose/diagnosis.h>
 #include <odotune/diagnose/recordings.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 nlohmann::json diagnosis_json(const diagnose::Diagnosis& d);
 
@@ -30,4 +30,4 @@ nlohmann::json diagnosis_json(const diagnose::Diagnosis& d);
 // "consistency" (what holds across recordings, sentences).
 nlohmann::json pooled_diagnosis_json(const diagnose::PooledDiagnosis& p);
 
-}  // namespace odotune
+}  // namespace odotune::formats

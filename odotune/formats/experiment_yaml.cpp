@@ -14,7 +14,7 @@
 #include <odotune/formats/yaml_error.h>
 #include <odotune/objectives/metrics.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 namespace {
 
@@ -129,13 +129,13 @@ ExperimentRl read_rl(const std::filesystem::path& path, const YAML::Node& c,
         fail_at(path, v, "robot_localization.fitness must be a non-empty list of heldout-fixes, outage, both");
       rl.fitness.clear();
       for (const auto& f : v) {
-        RlFitness fit;
-        if (!parse_rl_fitness(scalar<std::string>(path, f, "a fitness"), &fit))
+        objectives::RlFitness fit;
+        if (!objectives::parse_rl_fitness(scalar<std::string>(path, f, "a fitness"), &fit))
           fail_at(path, f, "unknown fitness, expected heldout-fixes, outage or both");
         rl.fitness.push_back(fit);
       }
     } else if (key == "space") {
-      if (!parse_rl_noise_space(scalar<std::string>(path, v, what.c_str()), &rl.space))
+      if (!objectives::parse_rl_noise_space(scalar<std::string>(path, v, what.c_str()), &rl.space))
         fail_at(path, v, "robot_localization.space must be diagonal or blocks");
     } else if (key == "input_covariances") {
       rl.input_covariances = scalar<bool>(path, v, what.c_str());
@@ -197,12 +197,13 @@ void check_rl(const std::filesystem::path& path, const YAML::Node& root, Experim
   if (e->models.size() != 1)
     fail_at(path, root["models"],
             fmt::format("{} tunes bags, not tracks: list it alone in 'models' (one experiment per kind)",
-                        to_string(*std::find_if(e->models.begin(), e->models.end(),
-                                                [](const TunedModel& m) { return m.is_rl(); }))));
+                        objectives::to_string(
+                            *std::find_if(e->models.begin(), e->models.end(),
+                                          [](const objectives::TunedModel& m) { return m.is_rl(); }))));
   if (!section)
     fail_at(path, root,
             fmt::format("model {} needs a robot_localization section (params, until_s, ...)",
-                        to_string(e->models[0])));
+                        objectives::to_string(e->models[0])));
   if (root["modes"])
     fail_at(path, root["modes"],
             "modes do not apply to rl-ekf and rl-ukf; list robot_localization.fitness instead");
@@ -211,21 +212,22 @@ void check_rl(const std::filesystem::path& path, const YAML::Node& root, Experim
 }  // namespace
 
 bool Experiment::has_rl_models() const {
-  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.is_rl(); });
+  return std::any_of(models.begin(), models.end(), [](const objectives::TunedModel& m) { return m.is_rl(); });
 }
 bool Experiment::has_ekf_models() const {
-  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.is_ekf(); });
+  return std::any_of(models.begin(), models.end(), [](const objectives::TunedModel& m) { return m.is_ekf(); });
 }
 bool Experiment::has_calibrator_models() const {
-  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.is_calibrator(); });
+  return std::any_of(models.begin(), models.end(),
+                     [](const objectives::TunedModel& m) { return m.is_calibrator(); });
 }
 bool Experiment::has_ukf_models() const {
-  return std::any_of(models.begin(), models.end(), [](const TunedModel& m) { return m.is_ukf(); });
+  return std::any_of(models.begin(), models.end(), [](const objectives::TunedModel& m) { return m.is_ukf(); });
 }
 
 Experiment read_experiment(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw Failure(fmt::format("{}: cannot open the experiment file", path.string()));
+  if (!in) throw core::Failure(fmt::format("{}: cannot open the experiment file", path.string()));
   std::stringstream ss;
   ss << in.rdbuf();
   return parse_experiment(ss.str(), path);
@@ -294,7 +296,7 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
   try {
     root = YAML::Load(e.text);
   } catch (const YAML::ParserException& ex) {
-    throw Failure(fmt::format("{}:{}: {}", path.string(), ex.mark.line + 1, ex.msg));
+    throw core::Failure(fmt::format("{}:{}: {}", path.string(), ex.mark.line + 1, ex.msg));
   }
   if (!root.IsMap()) fail_at(path, root, "expected a mapping (see experiments/smoke.yaml)");
   check_keys(path, root);
@@ -302,9 +304,9 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
   e.name = root["name"] ? scalar<std::string>(path, root["name"], "name") : path.stem().string();
 
   for (const auto& n : list(path, root, "models")) {
-    TunedModel m;
-    if (!parse_tuned_model(scalar<std::string>(path, n, "a model"), &m))
-      fail_at(path, n, fmt::format("unknown model, expected {}", tuned_model_names()));
+    objectives::TunedModel m;
+    if (!objectives::parse_tuned_model(scalar<std::string>(path, n, "a model"), &m))
+      fail_at(path, n, fmt::format("unknown model, expected {}", objectives::tuned_model_names()));
     e.models.push_back(m);
   }
   check_rl(path, root, &e);
@@ -315,10 +317,11 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
   } else {
     for (const auto& n : list(path, root, "modes")) {
       const auto mode_text = scalar<std::string>(path, n, "a mode");
-      FitnessMode m{};
-      if (!parse_fitness_mode(mode_text, &m))
+      objectives::FitnessMode m{};
+      if (!objectives::parse_fitness_mode(mode_text, &m))
         fail_at(path, n,
-                fmt::format("mode {} is out of range, expected {}", mode_text, fitness_mode_choices()));
+                fmt::format("mode {} is out of range, expected {}", mode_text,
+                            objectives::fitness_mode_choices()));
       e.modes.push_back(m);
     }
   }
@@ -334,4 +337,4 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
   return e;
 }
 
-}  // namespace odotune
+}  // namespace odotune::formats

@@ -53,7 +53,7 @@
 #include <odotune/objectives/rl_search_options.h>
 #include <odotune/objectives/tuned_model.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 // The fixed parts of the calibrator models (not tuned; calibration_tune_job.h).
 struct ExperimentCalibration {
@@ -77,21 +77,22 @@ struct ExperimentRl {
   double gps_heading_fit_s = 0.0;
   double until_s = 0.0;
   std::optional<double> end_s;
-  std::vector<RlFitness> fitness{RlFitness::both};
-  RlNoiseSpace space = RlNoiseSpace::diagonal;
+  std::vector<objectives::RlFitness> fitness{objectives::RlFitness::both};
+  objectives::RlNoiseSpace space = objectives::RlNoiseSpace::diagonal;
   bool input_covariances = true;
   std::vector<double> outage_s{30.0, 60.0};
   double outage_every_s = 10.0;
-  RlSearchOptions search;  // grid_levels, refine_decades, profile_step_decades
+  objectives::RlSearchOptions search;  // grid_levels, refine_decades, profile_step_decades
 };
 
 struct Experiment {
   std::filesystem::path file;
   std::string text;  // the file verbatim (hashed into the store)
   std::string name;
-  std::vector<TunedModel> models;
+  std::vector<objectives::TunedModel> models;
   std::vector<std::string> tracks;  // resolved paths, sorted within each glob
-  std::vector<FitnessMode> modes;   // empty with rl-ekf/rl-ukf, whose fitnesses are robot_localization.fitness
+  std::vector<objectives::FitnessMode>
+      modes;  // empty with rl-ekf/rl-ukf, whose fitnesses are robot_localization.fitness
   std::vector<std::uint64_t> seeds;
   std::string solver = "pso";
   int particles = 50, iterations = 150;
@@ -107,11 +108,11 @@ struct Experiment {
   bool has_rl_models() const;          // rl-ekf, rl-ukf
 };
 
-// Throws odotune::Failure.
+// Throws core::Failure.
 Experiment read_experiment(const std::filesystem::path& path);
 // The same for an experiment's text as if read from `path` (relative paths
 // in it resolve against path's folder), e.g. the text kept in a results
-// store. Throws odotune::Failure.
+// store. Throws core::Failure.
 Experiment parse_experiment(const std::string& text, const std::filesystem::path& path);
 
-}  // namespace odotune
+}  // namespace odotune::formats

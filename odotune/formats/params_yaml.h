@@ -19,12 +19,12 @@
 #include <odotune/formats/yaml_error.h>
 #include <odotune/objectives/box_space.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 // Reads `params` (the node of key `params` in `path`): a mapping naming every
 // parameter of `space` exactly once. One-line errors (FILE:LINE) otherwise.
 inline std::vector<double> read_params_block(const std::filesystem::path& path, const YAML::Node& params,
-                                             const BoxSpace& space) {
+                                             const objectives::BoxSpace& space) {
   if (!params.IsMap()) fail_at(path, params, "expected a 'params' mapping");
   std::vector<double> values(space.dim(), 0.0);
   std::set<std::string> seen;
@@ -49,7 +49,8 @@ inline std::vector<double> read_params_block(const std::filesystem::path& path, 
 
 // Writes "params:" and one commented line per parameter; {:.17g} reads back
 // bit for bit. `values` has space.dim() entries.
-inline void write_params_block(std::ostream& out, const BoxSpace& space, const std::vector<double>& values) {
+inline void write_params_block(std::ostream& out, const objectives::BoxSpace& space,
+                               const std::vector<double>& values) {
   out << "params:\n";
   for (std::size_t i = 0; i < space.dim(); ++i) {
     const auto& p = space.params()[i];
@@ -72,4 +73,4 @@ inline void write_comment_lines(std::ostream& out, const std::string& text) {
   if (!line.empty()) out << "# " << line << "\n";
 }
 
-}  // namespace odotune
+}  // namespace odotune::formats

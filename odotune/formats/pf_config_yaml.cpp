@@ -13,7 +13,7 @@
 #include <odotune/formats/params_yaml.h>
 #include <odotune/formats/yaml_error.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 namespace {
 
@@ -27,11 +27,11 @@ std::string text_of(const std::filesystem::path& path, const YAML::Node& node, c
 }  // namespace
 
 filters::PfCalibratorParams apply_pf_config(const PfConfig& c, const filters::PfCalibratorParams& base) {
-  filters::PfCalibratorParams p = apply_calibration_params(base, c.params);
+  filters::PfCalibratorParams p = calibration::apply_calibration_params(base, c.params);
   p.resampler = c.resampler;
   p.policy = c.policy;
   p.particles = c.particles;
-  p.adaptive = c.method == CalibrationMethod::adaptive_pf;
+  p.adaptive = c.method == calibration::CalibrationMethod::adaptive_pf;
   return p;
 }
 
@@ -52,8 +52,9 @@ PfConfig read_pf_config(const std::filesystem::path& path) {
 
   PfConfig cfg;
   const YAML::Node method = root["method"];
-  if (!parse_calibration_method(text_of(path, method, "method"), &cfg.method) ||
-      (cfg.method != CalibrationMethod::pf && cfg.method != CalibrationMethod::adaptive_pf))
+  if (!calibration::parse_calibration_method(text_of(path, method, "method"), &cfg.method) ||
+      (cfg.method != calibration::CalibrationMethod::pf &&
+       cfg.method != calibration::CalibrationMethod::adaptive_pf))
     fail_at(path, method, "method must be pf or adaptive-pf");
   const YAML::Node resampler = root["resampler"];
   if (!filters::parse_resampler(text_of(path, resampler, "resampler"), &cfg.resampler))
@@ -70,7 +71,7 @@ PfConfig read_pf_config(const std::filesystem::path& path) {
   if (cfg.particles < 1) fail_at(path, particles, "particles must be a whole number ≥ 1");
 
   const YAML::Node params = root["params"];
-  cfg.params = read_params_block(path, params, calibration_space());
+  cfg.params = read_params_block(path, params, calibration::calibration_space());
   std::string why;
   if (!apply_pf_config(cfg, filters::PfCalibratorParams{}).IsValid(&why))
     fail_at(path, params, "invalid settings: " + why);
@@ -78,16 +79,16 @@ PfConfig read_pf_config(const std::filesystem::path& path) {
 }
 
 void write_pf_config(const PfConfig& config, const std::filesystem::path& path) {
-  const BoxSpace space = calibration_space();
+  const objectives::BoxSpace space = calibration::calibration_space();
   if (config.params.size() != space.dim())
-    throw Failure(fmt::format("{}: {} PF settings given, expected {}", path.string(), config.params.size(),
-                              space.dim()));
+    throw core::Failure(fmt::format("{}: {} PF settings given, expected {}", path.string(),
+                                    config.params.size(), space.dim()));
   std::ostringstream out;
   if (!config.comment.empty()) {
     write_comment_lines(out, config.comment);
   }
   out << "format: " << kFormat << "\n";
-  out << "method: " << to_string(config.method) << "  # pf | adaptive-pf\n";
+  out << "method: " << calibration::to_string(config.method) << "  # pf | adaptive-pf\n";
   out << "resampler: " << filters::to_string(config.resampler)
       << "  # multinomial | stratified | systematic | residual\n";
   out << "policy: " << filters::to_string(config.policy) << "  # every | neff | max\n";
@@ -96,4 +97,4 @@ void write_pf_config(const PfConfig& config, const std::filesystem::path& path) 
   write_file_atomically(path, out.str());
 }
 
-}  // namespace odotune
+}  // namespace odotune::formats

@@ -28,10 +28,10 @@
 #include <odotune/calibration/calibration_run.h>
 #include <odotune/filters/pf_calibrator.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 struct PfConfig {
-  CalibrationMethod method = CalibrationMethod::adaptive_pf;  // pf or adaptive_pf
+  calibration::CalibrationMethod method = calibration::CalibrationMethod::adaptive_pf;  // pf or adaptive_pf
   filters::Resampler resampler = filters::Resampler::systematic;
   filters::ResamplePolicy policy = filters::ResamplePolicy::neff;
   int particles = 8000;
@@ -44,9 +44,9 @@ struct PfConfig {
 // adaptive (from the method) and the five tuned values (SI inside).
 filters::PfCalibratorParams apply_pf_config(const PfConfig& config, const filters::PfCalibratorParams& base);
 
-// Throws odotune::Failure ("FILE:LINE: ...").
+// Throws core::Failure ("FILE:LINE: ...").
 PfConfig read_pf_config(const std::filesystem::path& path);
-// Writes atomically (temporary + rename). Throws odotune::Failure.
+// Writes atomically (temporary + rename). Throws core::Failure.
 void write_pf_config(const PfConfig& config, const std::filesystem::path& path);
 
-}  // namespace odotune
+}  // namespace odotune::formats

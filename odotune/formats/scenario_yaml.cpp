@@ -18,7 +18,7 @@
 #include <odotune/sim/simulator.h>
 #include <odotune/sim/slip_episodes.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 namespace {
 
@@ -614,4 +614,4 @@ sim::Scenario load_scenario(const std::filesystem::path& file) {
   return parse_scenario(text.str(), name);
 }
 
-}  // namespace odotune
+}  // namespace odotune::formats

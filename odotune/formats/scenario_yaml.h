@@ -56,7 +56,7 @@
 
 #include <odotune/sim/scenario.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 class ScenarioError : public std::runtime_error {
  public:
@@ -94,4 +94,4 @@ sim::Scenario parse_scenario(std::string_view yaml_text, const std::string& file
 // no segments and no knots, an empty or multi-line name, a non-finite number.
 std::string scenario_to_yaml(const sim::Scenario& scenario, const std::string& header_comment);
 
-}  // namespace odotune
+}  // namespace odotune::formats

@@ -21,7 +21,7 @@
 #include <odotune/sim/simulator.h>
 #include <odotune/sim/slip_episodes.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 namespace {
 
@@ -247,4 +247,4 @@ std::string scenario_to_yaml(const sim::Scenario& sc, const std::string& header_
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::formats

@@ -12,7 +12,7 @@
 #include <odotune/formats/params_yaml.h>
 #include <odotune/formats/yaml_error.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 namespace {
 
@@ -47,8 +47,8 @@ double number_of(const std::filesystem::path& path, const YAML::Node& node, cons
 
 }  // namespace
 
-UkfSettings apply_ukf_config(const UkfConfig& config, const UkfSettings& base) {
-  return apply_ukf_params(base, config.params);
+learned::UkfSettings apply_ukf_config(const UkfConfig& config, const learned::UkfSettings& base) {
+  return learned::apply_ukf_params(base, config.params);
 }
 
 UkfConfig read_ukf_config(const std::filesystem::path& path) {
@@ -65,23 +65,23 @@ UkfConfig read_ukf_config(const std::filesystem::path& path) {
 
   UkfConfig cfg;
   cfg.rate_hz = number_of(path, root["rate_hz"], "rate_hz");
-  FusionInputOptions rate_check;
+  learned::FusionInputOptions rate_check;
   rate_check.rate_hz = cfg.rate_hz;
   std::string why;
   if (!rate_check.IsValid(&why)) fail_at(path, root["rate_hz"], why);
 
-  const BoxSpace space = ukf_space();
+  const objectives::BoxSpace space = learned::ukf_space();
   const YAML::Node params = root["params"];
-  cfg.params = read_params_block(path, params, ukf_space());
+  cfg.params = read_params_block(path, params, learned::ukf_space());
   if (!apply_ukf_config(cfg).IsValid(&why)) fail_at(path, params, "invalid settings: " + why);
   return cfg;
 }
 
 void write_ukf_config(const UkfConfig& config, const std::filesystem::path& path) {
-  const BoxSpace space = ukf_space();
+  const objectives::BoxSpace space = learned::ukf_space();
   if (config.params.size() != space.dim())
-    throw Failure(fmt::format("{}: {} UKF values given, expected {}", path.string(), config.params.size(),
-                              space.dim()));
+    throw core::Failure(fmt::format("{}: {} UKF values given, expected {}", path.string(), config.params.size(),
+                                    space.dim()));
   std::ostringstream out;
   if (!config.comment.empty()) {
     write_comment_lines(out, config.comment);
@@ -95,4 +95,4 @@ void write_ukf_config(const UkfConfig& config, const std::filesystem::path& path
   write_file_atomically(path, out.str());
 }
 
-}  // namespace odotune
+}  // namespace odotune::formats

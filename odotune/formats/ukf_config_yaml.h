@@ -28,7 +28,7 @@
 
 #include <odotune/learned/ukf_objective.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 struct UkfConfig {
   double rate_hz = 10.0;       // fusion rate [Hz]
@@ -37,11 +37,11 @@ struct UkfConfig {
 };
 
 // The file's values applied to `base` (apply_ukf_params).
-UkfSettings apply_ukf_config(const UkfConfig& config, const UkfSettings& base = {});
+learned::UkfSettings apply_ukf_config(const UkfConfig& config, const learned::UkfSettings& base = {});
 
-// Throws odotune::Failure ("FILE:LINE: ...").
+// Throws core::Failure ("FILE:LINE: ...").
 UkfConfig read_ukf_config(const std::filesystem::path& path);
-// Writes atomically (temporary + rename). Throws odotune::Failure.
+// Writes atomically (temporary + rename). Throws core::Failure.
 void write_ukf_config(const UkfConfig& config, const std::filesystem::path& path);
 
-}  // namespace odotune
+}  // namespace odotune::formats

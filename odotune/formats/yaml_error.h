@@ -11,27 +11,27 @@
 
 #include <odotune/core/failure.h>
 
-namespace odotune {
+namespace odotune::formats {
 
 [[noreturn]] inline void fail_at(const std::filesystem::path& path, const YAML::Node& node,
                                  const std::string& what) {
   const auto mark = node.Mark();
-  if (mark.is_null()) throw Failure(fmt::format("{}: {}", path.string(), what));
-  throw Failure(fmt::format("{}:{}: {}", path.string(), mark.line + 1, what));
+  if (mark.is_null()) throw core::Failure(fmt::format("{}: {}", path.string(), what));
+  throw core::Failure(fmt::format("{}:{}: {}", path.string(), mark.line + 1, what));
 }
 
 // Loads `path` ("cannot open the WHAT" when unreadable, the parser's line on a
 // syntax error) and checks it is a mapping (else "expected " + mapping_hint)
-// whose `format` is `format`. Throws odotune::Failure.
+// whose `format` is `format`. Throws core::Failure.
 inline YAML::Node load_format_file(const std::filesystem::path& path, const std::string& what,
                                    const std::string& format, const std::string& mapping_hint) {
   YAML::Node root;
   try {
     root = YAML::LoadFile(path.string());
   } catch (const YAML::BadFile&) {
-    throw Failure(fmt::format("{}: cannot open the {}", path.string(), what));
+    throw core::Failure(fmt::format("{}: cannot open the {}", path.string(), what));
   } catch (const YAML::ParserException& e) {
-    throw Failure(fmt::format("{}:{}: {}", path.string(), e.mark.line + 1, e.msg));
+    throw core::Failure(fmt::format("{}:{}: {}", path.string(), e.mark.line + 1, e.msg));
   }
   if (!root.IsMap()) fail_at(path, root, "expected " + mapping_hint);
   const YAML::Node f = root["format"];
@@ -40,4 +40,4 @@ inline YAML::Node load_format_file(const std::filesystem::path& path, const std:
   return root;
 }
 
-}  // namespace odotune
+}  // namespace odotune::formats

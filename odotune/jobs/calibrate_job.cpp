@@ -22,7 +22,7 @@
 #include <odotune/results/calibration_figures.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 namespace {
 
@@ -48,64 +48,66 @@ Range parse_range(const std::string& flag, const std::string& text) {
     r.hi = std::stod(hi, &used_hi);
     if (used_lo != lo.size() || used_hi != hi.size()) throw std::invalid_argument("trailing text");
   } catch (const std::exception&) {
-    throw Failure(fmt::format("{} '{}': expected LO,HI in metres, e.g. 0.30,0.34", flag, text));
+    throw core::Failure(fmt::format("{} '{}': expected LO,HI in metres, e.g. 0.30,0.34", flag, text));
   }
   if (!(std::isfinite(r.lo) && std::isfinite(r.hi) && r.lo > 0.0 && r.lo < r.hi))
-    throw Failure(fmt::format("{} '{}': expected 0 < LO < HI [m]", flag, text));
+    throw core::Failure(fmt::format("{} '{}': expected 0 < LO < HI [m]", flag, text));
   return r;
 }
 
-std::vector<CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply,
-                                           const std::vector<Track>& tracks) {
+std::vector<calibration::CalibrationInput> build_inputs(const CalibrateRequest& a, bool apply,
+                                                        const std::vector<tracks::Track>& tracks) {
   const std::vector<std::string>& files = a.tracks;
   // The pose fit needs no external velocity (it fits to the ground truth or
   // the fixes), nor does online-pose (the fixes); nor do none and --apply,
   // which score dead reckoning.
-  CalibrationMethod method = CalibrationMethod::none;
-  const bool no_velocity_method = !apply && parse_calibration_method(a.method_name(), &method) &&
-                                  (method == CalibrationMethod::batch_pose ||
-                                   method == CalibrationMethod::online_pose ||
-                                   method == CalibrationMethod::none);
-  std::vector<CalibrationInput> inputs;
+  calibration::CalibrationMethod method = calibration::CalibrationMethod::none;
+  const bool no_velocity_method = !apply && calibration::parse_calibration_method(a.method_name(), &method) &&
+                                  (method == calibration::CalibrationMethod::batch_pose ||
+                                   method == calibration::CalibrationMethod::online_pose ||
+                                   method == calibration::CalibrationMethod::none);
+  std::vector<calibration::CalibrationInput> inputs;
   for (std::size_t k = 0; k < tracks.size(); ++k) {
-    CalibrationInputOptions o;
+    calibration::CalibrationInputOptions o;
     o.ext_from_gt_rate_hz = a.ext_from_gt_hz.value_or(0.0);
     // --ext-sigma-v/-w given: those, not the noise estimated from the ground truth's jitter.
     const double sigma_v = a.ext_sigma_v.value_or(0.0), sigma_w = a.ext_sigma_w.value_or(0.0);
     o.estimate_ext_noise = !(sigma_v > 0.0 || sigma_w > 0.0);
     if (sigma_v > 0.0) o.default_v_var = sigma_v * sigma_v;
     if (sigma_w > 0.0) o.default_w_var = sigma_w * sigma_w;
-    const Track& tr = tracks[k];
-    const bool has_ext = tr.has(Col::v_ext) && tr.has(Col::w_ext);
+    const tracks::Track& tr = tracks[k];
+    const bool has_ext = tr.has(tracks::Col::v_ext) && tr.has(tracks::Col::w_ext);
     if (apply && o.ext_from_gt_rate_hz <= 0.0 && !has_ext && tr.has_gt())
       o.ext_from_gt_rate_hz = kApplyExtRateHz;
     o.require_velocity_samples = !(no_velocity_method || apply);
     std::string why;
     if (!o.IsValid(&why))
-      throw Failure(fmt::format("--ext-from-gt {}: {}", a.ext_from_gt_hz.value_or(0.0), why));
+      throw core::Failure(fmt::format("--ext-from-gt {}: {}", a.ext_from_gt_hz.value_or(0.0), why));
     if (o.ext_from_gt_rate_hz <= 0.0 && !has_ext && o.require_velocity_samples)
-      throw Failure(tr.has_gt()
-                        ? fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext); expected "
-                                      "them, or --ext-from-gt HZ to derive them from its ground truth",
-                                      files[k], tr.name())
-                        : fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext) and no "
-                                      "ground truth (gt_x, gt_y) to derive them from; expected either",
-                                      files[k], tr.name()));
+      throw core::Failure(
+          tr.has_gt() ? fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext); expected "
+                                    "them, or --ext-from-gt HZ to derive them from its ground truth",
+                                    files[k], tr.name())
+                      : fmt::format("{}: track '{}' has no external velocities (v_ext, w_ext) and no "
+                                    "ground truth (gt_x, gt_y) to derive them from; expected either",
+                                    files[k], tr.name()));
     try {
-      inputs.push_back(build_calibration_input(tracks[k], o));
+      inputs.push_back(calibration::build_calibration_input(tracks[k], o));
     } catch (const std::invalid_argument& e) {
-      throw Failure(fmt::format("{}: {}", files[k], e.what()));
+      throw core::Failure(fmt::format("{}: {}", files[k], e.what()));
     }
     if (apply && !inputs.back().has_gt)
-      throw Failure(fmt::format("{}: track '{}' has no ground truth (gt_x, gt_y, gt_theta); --apply scores "
-                                "dead reckoning against it",
-                                files[k], inputs.back().track_name));
+      throw core::Failure(
+          fmt::format("{}: track '{}' has no ground truth (gt_x, gt_y, gt_theta); --apply scores "
+                      "dead reckoning against it",
+                      files[k], inputs.back().track_name));
   }
   return inputs;
 }
 
 // Several tracks are calibrated as one robot: their nominal parameters must agree.
-void check_same_robot(const std::vector<CalibrationInput>& inputs, const std::vector<std::string>& files) {
+void check_same_robot(const std::vector<calibration::CalibrationInput>& inputs,
+                      const std::vector<std::string>& files) {
   const auto differs = [](double a, double b) {
     return std::abs(a - b) > 1e-9 * std::max(std::abs(a), std::abs(b));
   };
@@ -113,7 +115,7 @@ void check_same_robot(const std::vector<CalibrationInput>& inputs, const std::ve
     const OdometryParams &a = inputs[0].nominal, &b = inputs[k].nominal;
     if (differs(a.wheel_radius_left_m, b.wheel_radius_left_m) ||
         differs(a.wheel_radius_right_m, b.wheel_radius_right_m) || differs(a.wheel_base_m, b.wheel_base_m))
-      throw Failure(fmt::format(
+      throw core::Failure(fmt::format(
           "{}: nominal R_L/R_R/D = {}/{}/{} m differ from {}'s {}/{}/{} m; expected tracks of one robot",
           files[k], b.wheel_radius_left_m, b.wheel_radius_right_m, b.wheel_base_m, files[0],
           a.wheel_radius_left_m, a.wheel_radius_right_m, a.wheel_base_m));
@@ -121,40 +123,44 @@ void check_same_robot(const std::vector<CalibrationInput>& inputs, const std::ve
 }
 
 // The flags that apply to one kind of method only, refused for the others.
-void check_method_flags(const CalibrateRequest& a, CalibrationMethod m, const std::string& method) {
-  if ((a.segment_s.has_value() || a.fit_start_heading) && m != CalibrationMethod::batch_pose)
-    throw Failure(fmt::format(
+void check_method_flags(const CalibrateRequest& a, calibration::CalibrationMethod m,
+                        const std::string& method) {
+  if ((a.segment_s.has_value() || a.fit_start_heading) && m != calibration::CalibrationMethod::batch_pose)
+    throw core::Failure(fmt::format(
         "--segment and --fit-start-heading apply to --method batch-pose only (got --method {})", method));
-  const bool pf = m == CalibrationMethod::pf || m == CalibrationMethod::adaptive_pf;
+  const bool pf = m == calibration::CalibrationMethod::pf || m == calibration::CalibrationMethod::adaptive_pf;
   for (const auto& [flag, given] :
        {std::pair{"--resampler", a.resampler.has_value()}, std::pair{"--policy", a.policy.has_value()},
         std::pair{"--particles", a.particles.has_value()},
         std::pair{"--pf-evolution", a.pf_evolution.has_value()},
         std::pair{"--pf-memory", a.pf_memory_s.has_value()}})
     if (given && !pf)
-      throw Failure(fmt::format("{} applies to --method pf and adaptive-pf only (got --method {})", flag,
-                                method));
+      throw core::Failure(fmt::format("{} applies to --method pf and adaptive-pf only (got --method {})", flag,
+                                      method));
   for (const auto& [flag, given] :
        {std::pair{"--start", a.start.has_value()}, std::pair{"--fix-sigma-m", a.fix_sigma_m.has_value()},
         std::pair{"--pose-memory-m", a.pose_memory_m.has_value()}})
-    if (given && m != CalibrationMethod::online_pose)
-      throw Failure(fmt::format("{} applies to --method online-pose only (got --method {})", flag, method));
+    if (given && m != calibration::CalibrationMethod::online_pose)
+      throw core::Failure(fmt::format("{} applies to --method online-pose only (got --method {})", flag,
+                                      method));
 }
 
 // The online pose-domain calibrator: starts at the nominal geometry; the
 // flags over its defaults.
-void make_online_pose_options(const CalibrateRequest& a, const OdometryParams& nominal, OnlinePoseOptions& o) {
+void make_online_pose_options(const CalibrateRequest& a, const OdometryParams& nominal,
+                              calibration::OnlinePoseOptions& o) {
   o.filter.initial = nominal;
-  if (a.start && !parse_online_pose_start(*a.start, &o.start))
-    throw Failure(fmt::format("--start '{}': expected fixes or known", *a.start));
+  if (a.start && !calibration::parse_online_pose_start(*a.start, &o.start))
+    throw core::Failure(fmt::format("--start '{}': expected fixes or known", *a.start));
   if (a.fix_sigma_m) {
     if (!(std::isfinite(*a.fix_sigma_m) && *a.fix_sigma_m > 0.0))
-      throw Failure(fmt::format("--fix-sigma-m {}: expected a finite sd > 0 [m]", *a.fix_sigma_m));
+      throw core::Failure(fmt::format("--fix-sigma-m {}: expected a finite sd > 0 [m]", *a.fix_sigma_m));
     o.fix_sd_m = *a.fix_sigma_m;
   }
   if (a.pose_memory_m) {
     if (!(std::isfinite(*a.pose_memory_m) && *a.pose_memory_m > 0.0))
-      throw Failure(fmt::format("--pose-memory-m {}: expected a finite distance > 0 [m]", *a.pose_memory_m));
+      throw core::Failure(fmt::format("--pose-memory-m {}: expected a finite distance > 0 [m]",
+                                      *a.pose_memory_m));
     o.min_memory_m = *a.pose_memory_m;
   }
 }
@@ -165,13 +171,13 @@ void apply_pf_flags(const CalibrateRequest& a, filters::PfCalibratorParams& pf) 
   const std::string resampler = a.resampler.value_or(""), policy = a.policy.value_or("");
   const std::string evolution = a.pf_evolution.value_or("");
   if (!resampler.empty() && !filters::parse_resampler(resampler, &pf.resampler))
-    throw Failure(fmt::format("--resampler '{}': expected multinomial, stratified, systematic or residual",
-                              resampler));
+    throw core::Failure(
+        fmt::format("--resampler '{}': expected multinomial, stratified, systematic or residual", resampler));
   if (!policy.empty() && !filters::parse_resample_policy(policy, &pf.policy))
-    throw Failure(fmt::format("--policy '{}': expected every, neff or max", policy));
+    throw core::Failure(fmt::format("--policy '{}': expected every, neff or max", policy));
   if (a.particles.value_or(0) > 0) pf.particles = *a.particles;
   if (!evolution.empty() && !filters::parse_pf_evolution(evolution, &pf.evolution))
-    throw Failure(fmt::format("--pf-evolution '{}': expected paper or evidence", evolution));
+    throw core::Failure(fmt::format("--pf-evolution '{}': expected paper or evidence", evolution));
   if (a.pf_memory_s.value_or(0.0) > 0.0) {
     pf.evidence.min_memory_s = *a.pf_memory_s;
     pf.evidence.max_memory_s = std::max(pf.evidence.max_memory_s, *a.pf_memory_s);
@@ -180,16 +186,18 @@ void apply_pf_flags(const CalibrateRequest& a, filters::PfCalibratorParams& pf) 
   pf.threads = a.threads;
 }
 
-CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<CalibrationInput>& inputs) {
-  CalibrationRunInfo info;
+formats::CalibrationRunInfo make_options(const CalibrateRequest& a,
+                                         const std::vector<calibration::CalibrationInput>& inputs) {
+  formats::CalibrationRunInfo info;
   info.track_files = a.tracks;
   info.ext_from_gt_rate_hz = a.ext_from_gt_hz.value_or(0.0);
-  CalibrationOptions& o = info.options;
+  calibration::CalibrationOptions& o = info.options;
   const std::string method = a.method_name();
-  if (!parse_calibration_method(method, &o.method))
-    throw Failure(fmt::format("--method '{}': unknown method, expected adaptive-pf, pf, dkf, online-pose, "
-                              "batch-pose (or batch), batch-velocity or none",
-                              method));
+  if (!calibration::parse_calibration_method(method, &o.method))
+    throw core::Failure(
+        fmt::format("--method '{}': unknown method, expected adaptive-pf, pf, dkf, online-pose, "
+                    "batch-pose (or batch), batch-velocity or none",
+                    method));
   check_method_flags(a, o.method, method);
   o.pose.segment_s = a.segment_s.value_or(0.0);
   o.pose.fit_start_heading = a.fit_start_heading;
@@ -198,7 +206,7 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
   const double r_nom = 0.5 * (nom.wheel_radius_left_m + nom.wheel_radius_right_m);
   const double r_scale = r_nom / kPaperRadiusM, d_scale = nom.wheel_base_m / kPaperWheelBaseM;
 
-  const CalibrationRanges ranges = default_calibration_ranges(nom);
+  const calibration::CalibrationRanges ranges = calibration::default_calibration_ranges(nom);
   Range r_left = ranges.wheel_radius_left_m;
   Range r_right = ranges.wheel_radius_right_m;
   Range base = ranges.wheel_base_m;
@@ -209,8 +217,9 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
   info.init_radius_m = {std::min(r_left.lo, r_right.lo), std::max(r_left.hi, r_right.hi)};
   info.init_wheel_base_m = base;
 
-  o.pf = o.method == CalibrationMethod::adaptive_pf ? filters::PfCalibratorParams::adaptive_defaults()
-                                                    : filters::PfCalibratorParams{};
+  o.pf = o.method == calibration::CalibrationMethod::adaptive_pf
+             ? filters::PfCalibratorParams::adaptive_defaults()
+             : filters::PfCalibratorParams{};
   o.pf.wheel_radius_left_m = r_left;
   o.pf.wheel_radius_right_m = r_right;
   o.pf.wheel_base_m = base;
@@ -231,11 +240,11 @@ CalibrationRunInfo make_options(const CalibrateRequest& a, const std::vector<Cal
   if (a.tolerance_pct) {
     const double tolerance_pct = *a.tolerance_pct;
     if (!(std::isfinite(tolerance_pct) && tolerance_pct > 0.0 && tolerance_pct < 100.0))
-      throw Failure(fmt::format("--tolerance {}: expected a percentage in (0, 100)", tolerance_pct));
+      throw core::Failure(fmt::format("--tolerance {}: expected a percentage in (0, 100)", tolerance_pct));
     o.convergence_tolerance = tolerance_pct / 100.0;
   }
   std::string why;
-  if (!o.IsValid(&why)) throw Failure(fmt::format("--method {}: {}", method, why));
+  if (!o.IsValid(&why)) throw core::Failure(fmt::format("--method {}: {}", method, why));
   return info;
 }
 
@@ -249,15 +258,15 @@ struct OnExit {
 
 // Where a calibration file's numbers come from: the method, and the PF's seed.
 std::string provenance_line(const CalibrateRequest& a, const CalibrateOutcome& out) {
-  const bool pf = out.result.method == CalibrationMethod::pf ||
-                  out.result.method == CalibrationMethod::adaptive_pf;
+  const bool pf = out.result.method == calibration::CalibrationMethod::pf ||
+                  out.result.method == calibration::CalibrationMethod::adaptive_pf;
   return fmt::format("calibrated by odotune calibrate: method {}{}", a.method_name(),
                      pf ? fmt::format(", seed {}", out.info.options.pf.seed) : "");
 }
 
 // --controller-out: the final estimate as the controller's parameters.
 std::string write_calibrate_controller(const CalibrateRequest& a, const CalibrateOutcome& out,
-                                       const ControllerOptions& options) {
+                                       const formats::ControllerOptions& options) {
   return write_controller_file(a.controller, options,
                                calibration_controller_geometry(a.controller, out.result, out.nominal,
                                                                out.inputs.front().nominal,
@@ -269,19 +278,19 @@ std::string write_calibrate_controller(const CalibrateRequest& a, const Calibrat
 CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& hooks) {
   for (const auto& [flag, path] : {std::pair{"--json", &a.json}, std::pair{"--csv", &a.csv},
                                    std::pair{"--figure", &a.figure}, std::pair{"--config-out", &a.config_out}})
-    check_output_dir(flag, *path);
-  const ControllerOptions controller = check_controller_request(a.controller, true);
+    core::check_output_dir(flag, *path);
+  const formats::ControllerOptions controller = check_controller_request(a.controller, true);
   if (!a.paths_csv.empty())
-    throw Failure("--paths-csv applies to --apply only (the paths of a calibration file)");
-  const std::vector<Track> tracks = load_tracks(a.tracks);
+    throw core::Failure("--paths-csv applies to --apply only (the paths of a calibration file)");
+  const std::vector<tracks::Track> tracks = tracks::load_tracks(a.tracks);
   if (const auto body = calibrate_body_input(a, tracks)) return run_twist_calibrate(a, tracks, *body);
-  if (a.input && *a.input != OdometryInput::wheels)
-    throw Failure(fmt::format("--input {}: the tracks have wheel odometry", to_string(*a.input)));
+  if (a.input && *a.input != tracks::OdometryInput::wheels)
+    throw core::Failure(fmt::format("--input {}: the tracks have wheel odometry", tracks::to_string(*a.input)));
   CalibrateOutcome out;
   out.inputs = build_inputs(a, false, tracks);
   check_same_robot(out.inputs, a.tracks);
   out.info = make_options(a, out.inputs);
-  std::vector<const CalibrationInput*> ptrs;
+  std::vector<const calibration::CalibrationInput*> ptrs;
   std::size_t samples = 0;
   for (const auto& in : out.inputs) ptrs.push_back(&in), samples += in.samples.size();
 
@@ -290,22 +299,23 @@ CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& 
   {
     const OnExit end{hooks.on_end};
     try {
-      out.result = run_calibration(ptrs, out.info.options);
+      out.result = calibration::run_calibration(ptrs, out.info.options);
     } catch (const std::invalid_argument& e) {
-      throw Failure(fmt::format("calibrate: {}", e.what()));
+      throw core::Failure(fmt::format("calibrate: {}", e.what()));
     }
   }
-  if (const auto why = implausible_geometry(out.result.final_params, out.inputs.front().nominal))
-    throw Failure(implausible_fit_message(*why));
+  if (const auto why = calibration::implausible_geometry(out.result.final_params, out.inputs.front().nominal))
+    throw core::Failure(calibration::implausible_fit_message(*why));
 
-  for (const auto& in : out.inputs) out.nominal.push_back(score_fixed_params(in, in.nominal));
+  for (const auto& in : out.inputs) out.nominal.push_back(calibration::score_fixed_params(in, in.nominal));
   out.summary = calibration_summary_lines(out.result, out.inputs, out.nominal, out.info);
-  const std::string json_text = calibration_json(out.result, ptrs, out.nominal, out.info).dump(2) + "\n";
+  const std::string json_text = formats::calibration_json(out.result, ptrs, out.nominal, out.info).dump(2) +
+                                "\n";
   CalibrationTraceTable table;
   try {
     table = build_trace_table(out.result, ptrs);
   } catch (const std::invalid_argument& e) {
-    throw Failure(fmt::format("calibrate: {}", e.what()));
+    throw core::Failure(fmt::format("calibrate: {}", e.what()));
   }
 
   // Outputs: the figure first (gnuplot is the likeliest to fail), the JSON last.
@@ -317,18 +327,18 @@ CalibrateOutcome run_calibrate(const CalibrateRequest& a, const CalibrateHooks& 
           a.figure, calibration_figure_data(table, fmt::format("{}: {} calibration", fmt::join(names, ", "),
                                                                a.method_name())));
     } catch (const std::exception& e) {
-      throw Failure(fmt::format("--figure {}: {}", a.figure, e.what()));
+      throw core::Failure(fmt::format("--figure {}: {}", a.figure, e.what()));
     }
   }
-  if (!a.csv.empty()) write_file_atomically(a.csv, trace_csv(table));
+  if (!a.csv.empty()) formats::write_file_atomically(a.csv, trace_csv(table));
   if (!a.config_out.empty()) {
-    CalibrationFile file;
+    formats::CalibrationFile file;
     file.params = out.result.final_params;
     file.comment = fmt::format("{}\ntracks: {}", provenance_line(a, out), fmt::join(a.tracks, ", "));
-    write_calibration_file(file, a.config_out);
+    formats::write_calibration_file(file, a.config_out);
   }
   if (!a.controller.out.empty()) out.controller_line = write_calibrate_controller(a, out, controller);
-  if (!a.json.empty()) write_file_atomically(a.json, json_text);
+  if (!a.json.empty()) formats::write_file_atomically(a.json, json_text);
   return out;
 }
 
@@ -342,40 +352,41 @@ ApplyOutcome run_calibrate_apply(const CalibrateRequest& a) {
         std::pair{"--tolerance", a.tolerance_pct.has_value()}, std::pair{"--csv", !a.csv.empty()},
         std::pair{"--figure", !a.figure.empty()}, std::pair{"--config-out", !a.config_out.empty()}})
     if (given)
-      throw Failure(fmt::format("{} does not combine with --apply (which replays a calibration file)", flag));
+      throw core::Failure(fmt::format("{} does not combine with --apply (which replays a calibration file)",
+                                      flag));
   refuse_controller_flags(a.controller, "--apply (which replays a calibration file; the calibrate run that "
                                         "makes one writes the controller file)");
-  check_output_dir("--json", a.json);
-  check_output_dir("--paths-csv", a.paths_csv);
-  const CalibrationFile cal = read_calibration_file(a.apply);
-  const std::vector<Track> tracks = load_tracks(a.tracks);
-  if (cal.odometry != OdometryInput::wheels) return run_twist_apply(a, cal, tracks);
-  const std::vector<CalibrationInput> inputs = build_inputs(a, true, tracks);
+  core::check_output_dir("--json", a.json);
+  core::check_output_dir("--paths-csv", a.paths_csv);
+  const formats::CalibrationFile cal = formats::read_calibration_file(a.apply);
+  const std::vector<tracks::Track> tracks = tracks::load_tracks(a.tracks);
+  if (cal.odometry != tracks::OdometryInput::wheels) return run_twist_apply(a, cal, tracks);
+  const std::vector<calibration::CalibrationInput> inputs = build_inputs(a, true, tracks);
   ApplyOutcome out;
   out.params = cal.params;
   for (std::size_t k = 0; k < inputs.size(); ++k) {
-    AppliedTrack t;
+    formats::AppliedTrack t;
     t.file = a.tracks[k];
     t.nominal_params = inputs[k].nominal;
-    t.nominal = score_fixed_params(inputs[k], inputs[k].nominal);
-    t.calibrated = score_fixed_params(inputs[k], cal.params);
+    t.nominal = calibration::score_fixed_params(inputs[k], inputs[k].nominal);
+    t.calibrated = calibration::score_fixed_params(inputs[k], cal.params);
     out.tracks.push_back(std::move(t));
   }
-  const std::string json_text = apply_json(a.apply, cal.params, out.tracks).dump(2) + "\n";
+  const std::string json_text = formats::apply_json(a.apply, cal.params, out.tracks).dump(2) + "\n";
   if (!a.paths_csv.empty()) {
     std::string csv = "track,t_s,gt_x_m,gt_y_m,nominal_x_m,nominal_y_m,calibrated_x_m,calibrated_y_m\n";
-    for (const CalibrationInput& in : inputs) {
-      const DeadReckonedPath nom = dead_reckoned_path(in, in.nominal);
-      const DeadReckonedPath calp = dead_reckoned_path(in, cal.params);
+    for (const calibration::CalibrationInput& in : inputs) {
+      const calibration::DeadReckonedPath nom = calibration::dead_reckoned_path(in, in.nominal);
+      const calibration::DeadReckonedPath calp = calibration::dead_reckoned_path(in, cal.params);
       for (std::size_t i = 0; i < nom.t.size(); ++i)
         csv += fmt::format("{},{:.4f},{:.5f},{:.5f},{:.5f},{:.5f},{:.5f},{:.5f}\n", in.track_name, nom.t[i],
                            nom.gt_x[i], nom.gt_y[i], nom.x[i], nom.y[i], calp.x[i], calp.y[i]);
     }
-    write_file_atomically(a.paths_csv, csv);
+    formats::write_file_atomically(a.paths_csv, csv);
   }
-  if (!a.json.empty()) write_file_atomically(a.json, json_text);
+  if (!a.json.empty()) formats::write_file_atomically(a.json, json_text);
   out.summary = apply_summary_lines(a.apply, cal.params, out.tracks);
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

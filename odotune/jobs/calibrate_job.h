@@ -16,7 +16,7 @@
 // values scaled by R_nom/0.32 m (and D_nom/0.65 m for the DKF's wheel-base
 // walk), so a robot with 5 cm wheels gets the same relative noise.
 //
-// Errors are odotune::Failure with one line naming the flag or file at
+// Errors are core::Failure with one line naming the flag or file at
 // fault (the command's error messages); nothing is written when a check
 // fails.
 #pragma once
@@ -35,7 +35,7 @@
 #include <odotune/formats/calibration_json.h>
 #include <odotune/jobs/controller_export.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 // The command's flags as plain values (names as the flags').
 struct CalibrateRequest {
@@ -50,7 +50,7 @@ struct CalibrateRequest {
   // --input: the odometry to calibrate (odotune/tracks/odometry_input.h); nullopt:
   // each track's own. Twist and command tracks take --method batch only
   // (odotune/jobs/twist_calibrate_job.h).
-  std::optional<OdometryInput> input;
+  std::optional<tracks::OdometryInput> input;
   std::optional<std::string> resampler;  // PF: multinomial | stratified | systematic (default) | residual
   std::optional<std::string> policy;     // PF: every | neff (default) | max
   std::optional<std::uint64_t> seed;     // PF random seed; default 1
@@ -92,17 +92,17 @@ struct CalibrateHooks {
 };
 
 struct CalibrateOutcome {
-  CalibrationRunInfo info;               // the options that ran, the track files
-  std::vector<CalibrationInput> inputs;  // one per track file, in order
-  CalibrationResult result;
-  std::vector<TrackCalibrationScore> nominal;  // the inputs' nominal parameters, scored
-  std::vector<std::string> summary;            // calibration_summary_lines()
-  std::string controller_line;                 // --controller-out: what was written ("" without it)
+  formats::CalibrationRunInfo info;                   // the options that ran, the track files
+  std::vector<calibration::CalibrationInput> inputs;  // one per track file, in order
+  calibration::CalibrationResult result;
+  std::vector<calibration::TrackCalibrationScore> nominal;  // the inputs' nominal parameters, scored
+  std::vector<std::string> summary;                         // calibration_summary_lines()
+  std::string controller_line;  // --controller-out: what was written ("" without it)
   // Twist and command tracks (odotune/jobs/twist_calibrate_job.h): the fit, and each
   // track's dead reckoning at the identity and at the fit (the fields above
   // stay empty).
-  std::optional<TwistCalibrationSummary> twist;
-  std::vector<std::array<TwistScore, 2>> twist_scores;
+  std::optional<calibration::TwistCalibrationSummary> twist;
+  std::vector<std::array<calibration::TwistScore, 2>> twist_scores;
 };
 
 // Checks the output folders, loads the tracks (one robot: equal nominal
@@ -113,25 +113,25 @@ struct CalibrateOutcome {
 // estimate as --config-out; odotune/jobs/controller_export.h, whose flags are checked
 // with the output folders before the run) and the JSON
 // (odotune/formats/calibration_json.h). Every file is written atomically, after the
-// run. Throws odotune::Failure.
+// run. Throws core::Failure.
 CalibrateOutcome run_calibrate(const CalibrateRequest& request, const CalibrateHooks& hooks = {});
 
 struct ApplyOutcome {
-  filters::OdometryParams params;    // the calibration file's
-  std::vector<AppliedTrack> tracks;  // per track: nominal and calibrated scores
-  std::vector<std::string> summary;  // apply_summary_lines()
+  filters::OdometryParams params;             // the calibration file's
+  std::vector<formats::AppliedTrack> tracks;  // per track: nominal and calibrated scores
+  std::vector<std::string> summary;           // apply_summary_lines()
   // A twist or commands file: its correction, and per track the scores at
   // the identity and at the correction (tracks above stays empty).
   std::optional<filters::TwistCorrection> twist;
-  std::vector<std::array<TwistScore, 2>> twist_scores;
+  std::vector<std::array<calibration::TwistScore, 2>> twist_scores;
 };
 
 // --apply: replays request.tracks (which need ground truth; external
 // velocities are derived from it at 10 Hz for tracks without them) with the
 // calibration file request.apply and with their nominal parameters, and
-// writes request.json. Throws odotune::Failure when a calibration flag or
+// writes request.json. Throws core::Failure when a calibration flag or
 // another output (--controller-out and its flags too) was given, or on bad
 // files.
 ApplyOutcome run_calibrate_apply(const CalibrateRequest& request);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <limits>
 
-namespace odotune {
+namespace odotune::jobs {
 
 namespace {
 
@@ -120,4 +120,4 @@ results::CalibrationFigureData calibration_figure_data(const CalibrationTraceTab
   return d;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

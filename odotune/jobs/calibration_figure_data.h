@@ -10,7 +10,7 @@
 #include <odotune/jobs/calibration_trace.h>
 #include <odotune/results/calibration_figures.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 // The lines of one run on the elapsed-time axis: R_R and R_L in `radii`
 // ("R_R LABEL", "R_L LABEL"; "R_R", "R_L" when label is empty), D in
@@ -38,4 +38,4 @@ std::vector<results::CalibrationFigureData::Marker> run_markers(const Calibratio
 results::CalibrationFigureData calibration_figure_data(const CalibrationTraceTable& table,
                                                        const std::string& title);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

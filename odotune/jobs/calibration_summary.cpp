@@ -5,7 +5,7 @@
 
 #include <fmt/format.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 namespace {
 
@@ -27,7 +27,7 @@ std::string rmse_line(const char* what, double calibrated, double nominal, const
   std::string s = fmt::format("    {:<13} {:.4f} {}", what, calibrated, unit);
   if (std::isfinite(nominal)) {
     s += fmt::format("   (nominal {:.4f} {}", nominal, unit);
-    const double imp = rmse_improvement_pct(nominal, calibrated);
+    const double imp = formats::rmse_improvement_pct(nominal, calibrated);
     if (std::isfinite(imp)) s += fmt::format(", {:.1f} % {}", std::abs(imp), imp >= 0.0 ? "better" : "worse");
     s += ")";
   }
@@ -35,7 +35,7 @@ std::string rmse_line(const char* what, double calibrated, double nominal, const
 }
 
 // The position fixes online-pose used, and where their variances came from.
-std::string fixes_line(const CalibrationInput& in, const OnlinePoseOptions& o) {
+std::string fixes_line(const calibration::CalibrationInput& in, const calibration::OnlinePoseOptions& o) {
   std::size_t own = 0;
   for (std::size_t i = 0; i < in.fix_var_x.size(); ++i)
     own += std::isfinite(in.fix_var_x[i]) && std::isfinite(in.fix_var_y[i]) && in.fix_var_x[i] > 0.0 &&
@@ -48,45 +48,45 @@ std::string fixes_line(const CalibrationInput& in, const OnlinePoseOptions& o) {
 }
 
 // What the method started from and how it was set, for the first line.
-std::string how_it_ran(const CalibrationResult& r, const CalibrationRunInfo& info) {
-  const bool pf = r.method == CalibrationMethod::pf || r.method == CalibrationMethod::adaptive_pf;
+std::string how_it_ran(const calibration::CalibrationResult& r, const formats::CalibrationRunInfo& info) {
+  const bool pf = r.method == calibration::CalibrationMethod::pf ||
+                  r.method == calibration::CalibrationMethod::adaptive_pf;
   std::string how = fmt::format("initial R {:.4f}–{:.4f} m, D {:.4f}–{:.4f} m", info.init_radius_m.lo,
                                 info.init_radius_m.hi, info.init_wheel_base_m.lo, info.init_wheel_base_m.hi);
-  if (r.method == CalibrationMethod::online_pose) {
-    const OnlinePoseOptions& o = info.options.online_pose;
+  if (r.method == calibration::CalibrationMethod::online_pose) {
+    const calibration::OnlinePoseOptions& o = info.options.online_pose;
     const filters::DistanceMemoryParams memory = r.online_pose_memory.value_or(o.filter.memory);
     how = fmt::format(
         "initial R_L {:.5f} m, R_R {:.5f} m, D {:.5f} m, sd {:g} % / {:g} %; start from {}; memory "
         "{:g}–{:g} m rolled",
         o.filter.initial.wheel_radius_left_m, o.filter.initial.wheel_radius_right_m,
         o.filter.initial.wheel_base_m, 100 * o.filter.initial_sd_radius_frac,
-        100 * o.filter.initial_sd_wheel_base_frac, to_string(o.start), memory.min_memory_m,
+        100 * o.filter.initial_sd_wheel_base_frac, calibration::to_string(o.start), memory.min_memory_m,
         memory.max_memory_m);
   }
   if (pf) {
-    const filters::PfCalibratorParams p = effective_pf_params(info.options);
+    const filters::PfCalibratorParams p = calibration::effective_pf_params(info.options);
     how += fmt::format("; {} resampling, policy {}, {} particles{}, seed {}", filters::to_string(p.resampler),
                        filters::to_string(p.policy), p.particles,
-                       r.method == CalibrationMethod::adaptive_pf ? " initially" : "", p.seed);
+                       r.method == calibration::CalibrationMethod::adaptive_pf ? " initially" : "", p.seed);
   }
   return how;
 }
 
 }  // namespace
 
-std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
-                                                   const std::vector<CalibrationInput>& inputs,
-                                                   const std::vector<TrackCalibrationScore>& nominal,
-                                                   const CalibrationRunInfo& info) {
+std::vector<std::string> calibration_summary_lines(
+    const calibration::CalibrationResult& r, const std::vector<calibration::CalibrationInput>& inputs,
+    const std::vector<calibration::TrackCalibrationScore>& nominal, const formats::CalibrationRunInfo& info) {
   std::vector<std::string> out;
   const std::string how = how_it_ran(r, info);
-  out.push_back(fmt::format("{} calibration on {} track{} ({})", to_string(r.method), inputs.size(),
-                            inputs.size() == 1 ? "" : "s", how));
+  out.push_back(fmt::format("{} calibration on {} track{} ({})", calibration::to_string(r.method),
+                            inputs.size(), inputs.size() == 1 ? "" : "s", how));
   const double tol_pct = 100.0 * info.options.convergence_tolerance;
   for (std::size_t k = 0; k < r.tracks.size() && k < inputs.size(); ++k) {
-    const TrackCalibrationScore& s = r.tracks[k];
+    const calibration::TrackCalibrationScore& s = r.tracks[k];
     out.push_back(fmt::format("  track {} ({}):", s.track, info.track_files[k]));
-    if (r.method == CalibrationMethod::online_pose)
+    if (r.method == calibration::CalibrationMethod::online_pose)
       out.push_back(fixes_line(inputs[k], info.options.online_pose));
     else if (!inputs[k].ext_noise.empty())
       out.push_back("    velocities    " + inputs[k].ext_noise);
@@ -97,7 +97,7 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
     out.push_back(param_line("D", s.final_params.wheel_base_m, s.truth_final, &OdometryParams::wheel_base_m));
     if (!inputs[k].truth)
       out.push_back("    convergence   unknown (the track has no truth: no sim.effects metadata)");
-    else if (is_offline(r.method))
+    else if (calibration::is_offline(r.method))
       out.push_back("    convergence   n/a (an offline fit of the whole track)");
     else if (s.convergence_time_s)
       out.push_back(
@@ -108,7 +108,7 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
                                 tol_pct));
     const std::vector<double> changes = inputs[k].truth ? inputs[k].truth->change_times()
                                                         : std::vector<double>{};
-    for (std::size_t c = 0; !is_offline(r.method) && c < s.reconvergence_s.size(); ++c) {
+    for (std::size_t c = 0; !calibration::is_offline(r.method) && c < s.reconvergence_s.size(); ++c) {
       const std::string at = c < changes.size() ? fmt::format(" at {:.2f} s", changes[c]) : "";
       out.push_back(s.reconvergence_s[c]
                         ? fmt::format("    re-convergence after the radius step{}: {:.2f} s", at,
@@ -123,16 +123,17 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
   const OdometryParams& f = r.final_params;
   out.push_back(fmt::format("  final: R_L = {:.5f} m, R_R = {:.5f} m, D = {:.5f} m", f.wheel_radius_left_m,
                             f.wheel_radius_right_m, f.wheel_base_m));
-  if (is_offline(r.method)) {
+  if (calibration::is_offline(r.method)) {
     out.push_back("  fit: " + r.batch_residuals);
     out.push_back(fmt::format("  cost: {} residual {}, {:.3g} ms each (fit {:.3g} s){}", r.iterations,
-                              r.method == CalibrationMethod::batch_pose ? "positions" : "pairs",
+                              r.method == calibration::CalibrationMethod::batch_pose ? "positions" : "pairs",
                               r.ms_per_iteration, 1e-3 * r.ms_per_iteration * static_cast<double>(r.iterations),
                               r.batch_converged ? "" : "; Ceres did NOT report convergence"));
-  } else if (r.method != CalibrationMethod::none) {
+  } else if (r.method != calibration::CalibrationMethod::none) {
     std::string cost = fmt::format("  cost: {} iterations, {:.3g} ms per iteration", r.iterations,
                                    r.ms_per_iteration);
-    if (r.method == CalibrationMethod::pf || r.method == CalibrationMethod::adaptive_pf)
+    if (r.method == calibration::CalibrationMethod::pf ||
+        r.method == calibration::CalibrationMethod::adaptive_pf)
       cost += fmt::format(", mean {:.0f} particles", r.mean_particles);
     if (r.memory_pair)
       cost += fmt::format("; memory restarted {} time(s) (a change found, odotune/filters/memory_pair.h)",
@@ -143,13 +144,13 @@ std::vector<std::string> calibration_summary_lines(const CalibrationResult& r,
 }
 
 std::vector<std::string> apply_summary_lines(const std::string& calibration_file, const OdometryParams& p,
-                                             const std::vector<AppliedTrack>& tracks) {
+                                             const std::vector<formats::AppliedTrack>& tracks) {
   std::vector<std::string> out;
   out.push_back(fmt::format(
       "applied {} (R_L = {:.5f} m, R_R = {:.5f} m, D = {:.5f} m) to {} track{}, against the nominal parameters:",
       calibration_file, p.wheel_radius_left_m, p.wheel_radius_right_m, p.wheel_base_m, tracks.size(),
       tracks.size() == 1 ? "" : "s"));
-  for (const AppliedTrack& t : tracks) {
+  for (const formats::AppliedTrack& t : tracks) {
     out.push_back(fmt::format("  track {} ({}):", t.calibrated.track, t.file));
     out.push_back(rmse_line("pose RMSE", t.calibrated.pose_rmse_m, t.nominal.pose_rmse_m, "m"));
     out.push_back(rmse_line("heading RMSE", t.calibrated.heading_rmse_rad, t.nominal.heading_rmse_rad, "rad"));
@@ -157,4 +158,4 @@ std::vector<std::string> apply_summary_lines(const std::string& calibration_file
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

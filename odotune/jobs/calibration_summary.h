@@ -13,17 +13,16 @@
 #include <odotune/filters/odometry_params.h>
 #include <odotune/formats/calibration_json.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 // `nominal[k]` scores inputs[k]'s nominal parameters; `info` says what ran.
-std::vector<std::string> calibration_summary_lines(const CalibrationResult& result,
-                                                   const std::vector<CalibrationInput>& inputs,
-                                                   const std::vector<TrackCalibrationScore>& nominal,
-                                                   const CalibrationRunInfo& info);
+std::vector<std::string> calibration_summary_lines(
+    const calibration::CalibrationResult& result, const std::vector<calibration::CalibrationInput>& inputs,
+    const std::vector<calibration::TrackCalibrationScore>& nominal, const formats::CalibrationRunInfo& info);
 
 // "applied FILE (R_L = …) to N tracks, …:" and each track's pose and heading RMSE.
 std::vector<std::string> apply_summary_lines(const std::string& calibration_file,
                                              const filters::OdometryParams& params,
-                                             const std::vector<AppliedTrack>& tracks);
+                                             const std::vector<formats::AppliedTrack>& tracks);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -4,7 +4,7 @@
 
 #include <fmt/format.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 namespace {
 
@@ -17,9 +17,9 @@ std::string csv_cell(const std::string& text) {
 
 }  // namespace
 
-CalibrationTraceTable build_trace_table(const CalibrationResult& result,
-                                        const std::vector<const CalibrationInput*>& inputs) {
-  const CalibrationTrace& tr = result.trace;
+CalibrationTraceTable build_trace_table(const calibration::CalibrationResult& result,
+                                        const std::vector<const calibration::CalibrationInput*>& inputs) {
+  const calibration::CalibrationTrace& tr = result.trace;
   if (tr.track.size() != tr.t.size() || tr.estimate.size() != tr.t.size())
     throw std::invalid_argument(
         fmt::format("calibration trace: t has {} rows, track {}, estimate {} (expected equal lengths)",
@@ -27,7 +27,7 @@ CalibrationTraceTable build_trace_table(const CalibrationResult& result,
   CalibrationTraceTable table;
   double offset = 0.0;
   for (std::size_t k = 0; k < inputs.size(); ++k) {
-    const CalibrationInput& in = *inputs[k];
+    const calibration::CalibrationInput& in = *inputs[k];
     table.track_names.push_back(in.track_name);
     const double first = in.t.empty() ? 0.0 : in.t.front();
     const double duration = in.t.empty() ? 0.0 : in.t.back() - first;
@@ -54,7 +54,7 @@ CalibrationTraceTable build_trace_table(const CalibrationResult& result,
     if (k < 0 || static_cast<std::size_t>(k) >= inputs.size())
       throw std::invalid_argument(fmt::format("calibration trace: row {} refers to track {} of {}", i, k,
                                               inputs.size()));
-    const CalibrationInput& in = *inputs[static_cast<std::size_t>(k)];
+    const calibration::CalibrationInput& in = *inputs[static_cast<std::size_t>(k)];
     const double first = in.t.empty() ? 0.0 : in.t.front();
     table.t_s.push_back(tr.t[i]);
     table.elapsed_s.push_back(table.track_start_elapsed_s[static_cast<std::size_t>(k)] + (tr.t[i] - first));
@@ -67,7 +67,8 @@ CalibrationTraceTable build_trace_table(const CalibrationResult& result,
       table.truth.emplace_back(std::nullopt);
     }
   }
-  const bool fixed = is_offline(result.method) || result.method == CalibrationMethod::none;
+  const bool fixed = calibration::is_offline(result.method) ||
+                     result.method == calibration::CalibrationMethod::none;
   if (fixed || tr.t.empty())
     for (std::size_t k = 0; k < inputs.size(); ++k)
       table.fixed_params.push_back(k < result.tracks.size() ? result.tracks[k].final_params
@@ -101,4 +102,4 @@ std::string trace_csv(const CalibrationTraceTable& table) {
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

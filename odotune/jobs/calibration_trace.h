@@ -17,7 +17,7 @@
 #include <odotune/calibration/calibration_input.h>
 #include <odotune/calibration/calibration_run.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 struct CalibrationTraceTable {
   std::vector<std::string> track_names;       // per input, in order
@@ -52,8 +52,8 @@ struct CalibrationTraceTable {
 
 // Throws std::invalid_argument when the trace refers to a track index
 // outside `inputs` or its columns differ in length.
-CalibrationTraceTable build_trace_table(const CalibrationResult& result,
-                                        const std::vector<const CalibrationInput*>& inputs);
+CalibrationTraceTable build_trace_table(const calibration::CalibrationResult& result,
+                                        const std::vector<const calibration::CalibrationInput*>& inputs);
 
 // The table as CSV text, header first:
 //   t_s, elapsed_s, track, r_right_m, r_left_m, wheel_base_m,
@@ -63,4 +63,4 @@ CalibrationTraceTable build_trace_table(const CalibrationResult& result,
 // precision; a track name with a comma or quote is quoted (RFC 4180).
 std::string trace_csv(const CalibrationTraceTable& table);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -37,17 +37,17 @@
 #include <odotune/objectives/tuned_model.h>
 #include <odotune/tuner/summary.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 // The solver settings (SolverSettings, tune_job.h) and the calibrator's fixed parts.
 struct CalibrationTuneRequest : SolverSettings {
-  CalibratorModel model = CalibratorModel::adaptive_pf;
+  objectives::CalibratorModel model = objectives::CalibratorModel::adaptive_pf;
   // Fixed parts of the calibrator (not tuned).
   filters::Resampler resampler = filters::Resampler::systematic;
   filters::ResamplePolicy policy = filters::ResamplePolicy::neff;
   std::optional<int> pf_particles;  // N (plain) / initial N (adaptive); not given: the paper's 5000 / 8000
   std::uint64_t pf_seed = 1;        // the calibrator's own seed (same for every evaluation)
-  CalibrationScoreWeights weights;
+  calibration::CalibrationScoreWeights weights;
 
   bool IsValid(std::string* why) const;
 };
@@ -57,13 +57,13 @@ struct CalibrationTuneRequest : SolverSettings {
 filters::PfCalibratorParams default_calibrator(const CalibrationTuneRequest& request,
                                                const filters::OdometryParams& nominal);
 // The calibration method that runs `model`.
-CalibrationMethod calibration_method(CalibratorModel model);
+calibration::CalibrationMethod calibration_method(objectives::CalibratorModel model);
 
 // A calibrator's run over tracks (one after another), scored per track.
 struct CalibrationTrackScore {
   std::string track;
-  ErrorMetrics errors;                // dead-reckoning position errors of the calibrated odometry [m]
-  TrackCalibrationScore calibration;  // final estimate, convergence, RMSEs (calibration_run.h)
+  objectives::ErrorMetrics errors;  // dead-reckoning position errors of the calibrated odometry [m]
+  calibration::TrackCalibrationScore calibration;  // final estimate, convergence, RMSEs (calibration_run.h)
 };
 struct CalibrationEvaluation {
   std::vector<CalibrationTrackScore> tracks;
@@ -71,28 +71,29 @@ struct CalibrationEvaluation {
   long iterations = 0;
 };
 // Throws std::invalid_argument for invalid settings or inputs.
-CalibrationEvaluation evaluate_calibrator(const std::vector<const CalibrationInput*>& inputs,
-                                          CalibratorModel model, const filters::PfCalibratorParams& pf);
+CalibrationEvaluation evaluate_calibrator(const std::vector<const calibration::CalibrationInput*>& inputs,
+                                          objectives::CalibratorModel model,
+                                          const filters::PfCalibratorParams& pf);
 
 struct CalibrationTuneOutcome {
   CalibrationTuneRequest request;
   std::vector<std::string> param_names;  // calibration_space() order
   std::vector<std::string> param_units;
-  std::vector<double> default_params;                // physical, in param_units
-  std::vector<double> params;                        // tuned, physical
-  filters::PfCalibratorParams default_pf, tuned_pf;  // full settings (SI)
-  double baseline_score = 0.0, tuned_score = 0.0;    // objective score, lower is better
-  bool default_kept = false;                         // the default scored better than the solver's best
-  CalibrationEvaluation baseline, tuned;             // per-track scores with either setting
-  ErrorMetrics baseline_mean, tuned_mean;            // means over tracks
-  long failures = 0;                                 // evaluations that scored the penalty
-  tuner::Summary summary;                            // evaluations, seconds, termination, log
+  std::vector<double> default_params;                  // physical, in param_units
+  std::vector<double> params;                          // tuned, physical
+  filters::PfCalibratorParams default_pf, tuned_pf;    // full settings (SI)
+  double baseline_score = 0.0, tuned_score = 0.0;      // objective score, lower is better
+  bool default_kept = false;                           // the default scored better than the solver's best
+  CalibrationEvaluation baseline, tuned;               // per-track scores with either setting
+  objectives::ErrorMetrics baseline_mean, tuned_mean;  // means over tracks
+  long failures = 0;                                   // evaluations that scored the penalty
+  tuner::Summary summary;                              // evaluations, seconds, termination, log
 };
 
 // Runs the solver; throws std::invalid_argument for an invalid request, no
 // tracks or tracks of different robots, and std::runtime_error when the
 // solver fails.
-CalibrationTuneOutcome run_calibration_tune(const std::vector<const CalibrationInput*>& inputs,
+CalibrationTuneOutcome run_calibration_tune(const std::vector<const calibration::CalibrationInput*>& inputs,
                                             const CalibrationTuneRequest& request);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -7,7 +7,7 @@
 
 #include <odotune/jobs/tune_json.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 namespace {
 
@@ -27,16 +27,16 @@ nlohmann::json side_json(const CalibrationTrackScore& s, double mean_particles) 
 
 // The particle count the calibrator runs with (calibration_run.h's rule for
 // the adaptive PF's initial count applied).
-int effective_particles(const filters::PfCalibratorParams& pf, CalibratorModel model) {
-  CalibrationOptions o;
+int effective_particles(const filters::PfCalibratorParams& pf, objectives::CalibratorModel model) {
+  calibration::CalibrationOptions o;
   o.method = calibration_method(model);
   o.pf = pf;
-  return effective_pf_params(o).particles;
+  return calibration::effective_pf_params(o).particles;
 }
 
 }  // namespace
 
-std::optional<double> radius_error_pct(const TrackCalibrationScore& s) {
+std::optional<double> radius_error_pct(const calibration::TrackCalibrationScore& s) {
   if (!s.truth_final) return std::nullopt;
   const auto& e = s.final_params;
   const auto& t = *s.truth_final;
@@ -44,7 +44,7 @@ std::optional<double> radius_error_pct(const TrackCalibrationScore& s) {
                  std::abs(e.wheel_radius_right_m - t.wheel_radius_right_m) / t.wheel_radius_right_m);
 }
 
-std::string convergence_text(const TrackCalibrationScore& s) {
+std::string convergence_text(const calibration::TrackCalibrationScore& s) {
   if (!s.truth_final) return "no truth";
   return s.convergence_time_s ? fmt::format("converged at {:.1f} s", *s.convergence_time_s) : "never converged";
 }
@@ -52,9 +52,9 @@ std::string convergence_text(const TrackCalibrationScore& s) {
 nlohmann::json calibration_tune_json(const CalibrationTuneOutcome& o, const CalibrationTuneContext& c) {
   const CalibrationTuneRequest& r = o.request;
   nlohmann::json j;
-  j["model"] = to_string(TunedModel::calibration(r.model));
+  j["model"] = objectives::to_string(objectives::TunedModel::calibration(r.model));
   put_solver_json(j, r);
-  j["calibrator"] = {{"method", std::string(to_string(calibration_method(r.model)))},
+  j["calibrator"] = {{"method", std::string(calibration::to_string(jobs::calibration_method(r.model)))},
                      {"resampler", std::string(filters::to_string(o.default_pf.resampler))},
                      {"policy", std::string(filters::to_string(o.default_pf.policy))},
                      {"particles", effective_particles(o.default_pf, r.model)},
@@ -78,4 +78,4 @@ nlohmann::json calibration_tune_json(const CalibrationTuneOutcome& o, const Cali
   return j;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

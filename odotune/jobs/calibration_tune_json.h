@@ -35,7 +35,7 @@
 
 #include <odotune/jobs/calibration_tune_job.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 // The fixed parts the JSON records besides the request.
 struct CalibrationTuneContext {
@@ -44,8 +44,8 @@ struct CalibrationTuneContext {
 
 nlohmann::json calibration_tune_json(const CalibrationTuneOutcome& o, const CalibrationTuneContext& c);
 // Mean |R̂ − R|/R of both radii at the track's end [%]; nothing without truth.
-std::optional<double> radius_error_pct(const TrackCalibrationScore& s);
+std::optional<double> radius_error_pct(const calibration::TrackCalibrationScore& s);
 // "converged at 12.3 s", "never converged" or "no truth".
-std::string convergence_text(const TrackCalibrationScore& s);
+std::string convergence_text(const calibration::TrackCalibrationScore& s);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -10,7 +10,7 @@
 #include <odotune/core/output_paths.h>
 #include <odotune/diagnose/diagnosis_summary.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 namespace {
 
@@ -28,7 +28,7 @@ std::vector<std::pair<const char*, bool>> given_flags(const ControllerRequest& r
 
 void check_length(const char* flag, const std::optional<double>& v) {
   if (v && !(std::isfinite(*v) && *v > 0.0))
-    throw Failure(fmt::format("{} {}: expected a finite length > 0 [m]", flag, *v));
+    throw core::Failure(fmt::format("{} {}: expected a finite length > 0 [m]", flag, *v));
 }
 
 // The nominal the multipliers refer to: the track's, with the overrides.
@@ -61,49 +61,48 @@ bool ControllerRequest::any_given() const {
   return false;
 }
 
-ControllerOptions check_controller_request(const ControllerRequest& r, bool nominal_flags_allowed) {
-  ControllerOptions o;
+formats::ControllerOptions check_controller_request(const ControllerRequest& r, bool nominal_flags_allowed) {
+  formats::ControllerOptions o;
   if (!r.any_given()) return o;
   if (!nominal_flags_allowed && (r.nominal_wheel_radius_m || r.nominal_wheel_base_m))
-    throw Failure(fmt::format("{} applies to calibrate only (diagnose corrects the track's own nominal robot)",
-                              r.nominal_wheel_radius_m ? "--nominal-wheel-radius-m"
-                                                       : "--nominal-wheel-base-m"));
+    throw core::Failure(
+        fmt::format("{} applies to calibrate only (diagnose corrects the track's own nominal robot)",
+                    r.nominal_wheel_radius_m ? "--nominal-wheel-radius-m" : "--nominal-wheel-base-m"));
   if (r.out.empty())
     for (const auto& [flag, given] : given_flags(r))
-      if (given) throw Failure(fmt::format("{} needs --controller-out FILE (the file to write)", flag));
-  if (!r.kind) throw Failure("--controller-out needs --controller ros2_control, ros1 or gazebo");
-  if (!parse_controller_kind(*r.kind, &o.kind))
-    throw Failure(fmt::format("--controller '{}': expected ros2_control, ros1 or gazebo", *r.kind));
-  if (o.kind == ControllerKind::gazebo && (r.form || r.name))
-    throw Failure(
+      if (given) throw core::Failure(fmt::format("{} needs --controller-out FILE (the file to write)", flag));
+  if (!r.kind) throw core::Failure("--controller-out needs --controller ros2_control, ros1 or gazebo");
+  if (!formats::parse_controller_kind(*r.kind, &o.kind))
+    throw core::Failure(fmt::format("--controller '{}': expected ros2_control, ros1 or gazebo", *r.kind));
+  if (o.kind == formats::ControllerKind::gazebo && (r.form || r.name))
+    throw core::Failure(
         fmt::format("{} applies to --controller ros2_control and ros1 only (Gazebo's DiffDrive has no "
                     "multipliers and no controller name; it gets the absolute geometry)",
                     r.form ? "--controller-form" : "--controller-name"));
-  if (r.form && !parse_controller_form(*r.form, &o.form))
-    throw Failure(fmt::format("--controller-form '{}': expected multipliers or absolute", *r.form));
+  if (r.form && !formats::parse_controller_form(*r.form, &o.form))
+    throw core::Failure(fmt::format("--controller-form '{}': expected multipliers or absolute", *r.form));
   if (r.name) o.controller_name = *r.name;
   if (!o.IsValid(nullptr))
-    throw Failure(
+    throw core::Failure(
         fmt::format("--controller-name '{}': not a ROS name, expected letters, digits, '_' and '/', not "
                     "starting with a digit",
                     o.controller_name));
   check_length("--nominal-wheel-radius-m", r.nominal_wheel_radius_m);
   check_length("--nominal-wheel-base-m", r.nominal_wheel_base_m);
-  check_output_file("--controller-out", r.out);
+  core::check_output_file("--controller-out", r.out);
   return o;
 }
 
 void refuse_controller_flags(const ControllerRequest& r, const std::string& context) {
   for (const auto& [flag, given] : given_flags(r))
-    if (given) throw Failure(fmt::format("{} does not combine with {}", flag, context));
+    if (given) throw core::Failure(fmt::format("{} does not combine with {}", flag, context));
 }
 
-ControllerGeometry calibration_controller_geometry(const ControllerRequest& r, const CalibrationResult& result,
-                                                   const std::vector<TrackCalibrationScore>& nominal_scores,
-                                                   const OdometryParams& track_nominal,
-                                                   const std::string& method_line,
-                                                   const std::vector<std::string>& track_files) {
-  ControllerGeometry g;
+formats::ControllerGeometry calibration_controller_geometry(
+    const ControllerRequest& r, const calibration::CalibrationResult& result,
+    const std::vector<calibration::TrackCalibrationScore>& nominal_scores, const OdometryParams& track_nominal,
+    const std::string& method_line, const std::vector<std::string>& track_files) {
+  formats::ControllerGeometry g;
   g.calibrated = result.final_params;
   g.nominal = controller_nominal(r, track_nominal, &g.nominal_source);
   g.provenance = {method_line, fmt::format("tracks: {}", fmt::join(track_files, ", "))};
@@ -132,16 +131,17 @@ filters::OdometryParams diagnosis_track_nominal(const diagnose::DiagInput& in, c
   n.wheel_base_m = in.wheel_base_m;
   std::string why;
   if (!n.IsValid(&why))
-    throw Failure(fmt::format("--controller-out: {}: track '{}' states no nominal wheel geometry (robot.* "
-                              "metadata: {}); a controller file needs it",
-                              file, in.track_name, why));
+    throw core::Failure(
+        fmt::format("--controller-out: {}: track '{}' states no nominal wheel geometry (robot.* "
+                    "metadata: {}); a controller file needs it",
+                    file, in.track_name, why));
   return n;
 }
 
-std::optional<ControllerGeometry> diagnosis_controller_geometry(
+std::optional<formats::ControllerGeometry> diagnosis_controller_geometry(
     const diagnose::Diagnosis& d, const diagnose::PooledDiagnosis* pooled, const OdometryParams& track_nominal,
     const std::vector<std::string>& fit_files, const std::vector<std::string>& heldout_files) {
-  ControllerGeometry g;
+  formats::ControllerGeometry g;
   g.nominal = g.calibrated = track_nominal;
   g.nominal_source = "the track's robot.* metadata";
   g.provenance = {"corrected by odotune diagnose: the nominal robot × the fitted scales",
@@ -162,7 +162,7 @@ std::optional<ControllerGeometry> diagnosis_controller_geometry(
     }
     used.push_back(f.effect);
     g.provenance.push_back(fmt::format("{}: {} (explains {:.0f} % of the nominal error)", f.effect,
-                                       finding_size(f), 100.0 * f.explains));
+                                       diagnose::finding_size(f), 100.0 * f.explains));
     if (has_numbers(f.heldout))
       g.heldout.push_back(fmt::format("held-out position error without → with {}: {:.4f} m → {:.4f} m ({})",
                                       f.effect, f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m,
@@ -188,23 +188,23 @@ std::optional<ControllerGeometry> diagnosis_controller_geometry(
   return g;
 }
 
-std::string write_controller_file(const ControllerRequest& r, const ControllerOptions& o,
-                                  const ControllerGeometry& g) {
-  write_controller_config(g, o, r.out);
-  if (o.kind == ControllerKind::gazebo) {
-    const ControllerValues v = controller_values(g, ControllerForm::absolute);
+std::string write_controller_file(const ControllerRequest& r, const formats::ControllerOptions& o,
+                                  const formats::ControllerGeometry& g) {
+  formats::write_controller_config(g, o, r.out);
+  if (o.kind == formats::ControllerKind::gazebo) {
+    const formats::ControllerValues v = formats::controller_values(g, formats::ControllerForm::absolute);
     const double diff = g.calibrated.wheel_radius_right_m - g.calibrated.wheel_radius_left_m;
     return fmt::format(
         "controller: {} (gazebo DiffDrive: wheel_radius {:.7f} m, the mean; R_R - R_L = {:+.7f} m "
         "cannot be represented; wheel_separation {:.7f} m)",
         r.out, v.wheel_radius_m, diff, v.wheel_separation_m);
   }
-  const ControllerValues v = controller_values(g, o.form);
+  const formats::ControllerValues v = formats::controller_values(g, o.form);
   return fmt::format("controller: {} ({} {}, {} form: wheel_radius {:.7f} m × left {:.6f}, right {:.6f}; "
                      "wheel_separation {:.7f} m × {:.6f})",
-                     r.out, to_string(o.kind), o.controller_name, to_string(o.form), v.wheel_radius_m,
-                     v.left_wheel_radius_multiplier, v.right_wheel_radius_multiplier, v.wheel_separation_m,
-                     v.wheel_separation_multiplier);
+                     r.out, formats::to_string(o.kind), o.controller_name, formats::to_string(o.form),
+                     v.wheel_radius_m, v.left_wheel_radius_multiplier, v.right_wheel_radius_multiplier,
+                     v.wheel_separation_m, v.wheel_separation_multiplier);
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

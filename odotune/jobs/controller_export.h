@@ -9,7 +9,7 @@
 //   apply to the ROS controllers only; --nominal-wheel-radius-m R and
 //   --nominal-wheel-base-m D (calibrate only) replace the nominal geometry
 //   the multipliers refer to (default: the first track's robot.* metadata).
-// Every refusal is an odotune::Failure naming the flag.
+// Every refusal is an core::Failure naming the flag.
 #pragma once
 
 #include <optional>
@@ -22,7 +22,7 @@
 #include <odotune/filters/odometry_params.h>
 #include <odotune/formats/controller_config.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 struct ControllerRequest {
   std::string out;                               // --controller-out FILE; "" = no controller file
@@ -36,14 +36,15 @@ struct ControllerRequest {
 };
 
 // Checks the flags together and the output path (odotune/core/output_paths.h); call
-// it before the long work. Throws odotune::Failure naming the flag: one of
+// it before the long work. Throws core::Failure naming the flag: one of
 // --controller-out and --controller without the other, an unknown kind or
 // form, a malformed name, --controller-form or --controller-name with
 // gazebo, a nominal override that is not a finite length > 0 [m], or (when
 // !nominal_flags_allowed) a nominal override at all.
-ControllerOptions check_controller_request(const ControllerRequest& request, bool nominal_flags_allowed);
+formats::ControllerOptions check_controller_request(const ControllerRequest& request,
+                                                    bool nominal_flags_allowed);
 
-// Throws odotune::Failure "FLAG does not combine with CONTEXT" for the first
+// Throws core::Failure "FLAG does not combine with CONTEXT" for the first
 // controller flag given (e.g. with calibrate --apply).
 void refuse_controller_flags(const ControllerRequest& request, const std::string& context);
 
@@ -52,10 +53,11 @@ void refuse_controller_flags(const ControllerRequest& request, const std::string
 // --config-out), the nominal (the first input's, or the overrides), and the
 // provenance (method, seed of the PF methods, tracks, the estimate's sd, the
 // dead-reckoning pose RMSE on the calibrated tracks: not held out).
-ControllerGeometry calibration_controller_geometry(
-    const ControllerRequest& request, const CalibrationResult& result,
-    const std::vector<TrackCalibrationScore>& nominal_scores, const filters::OdometryParams& track_nominal,
-    const std::string& method_line, const std::vector<std::string>& track_files);
+formats::ControllerGeometry calibration_controller_geometry(
+    const ControllerRequest& request, const calibration::CalibrationResult& result,
+    const std::vector<calibration::TrackCalibrationScore>& nominal_scores,
+    const filters::OdometryParams& track_nominal, const std::string& method_line,
+    const std::vector<std::string>& track_files);
 
 // The corrected geometry of a diagnosis: the nominal robot × the fitted
 // scales of radius_error (scale_l, scale_r) and wheel_base_error (scale)
@@ -63,22 +65,21 @@ ControllerGeometry calibration_controller_geometry(
 // Provenance: the effects, their fitted size ± stderr, the other findings
 // (not in the file) and, in `heldout`, each effect's held-out position error
 // without → with it, the held-out recordings' test when there are some.
-std::optional<ControllerGeometry> diagnosis_controller_geometry(const diagnose::Diagnosis& diagnosis,
-                                                                const diagnose::PooledDiagnosis* pooled,
-                                                                const filters::OdometryParams& track_nominal,
-                                                                const std::vector<std::string>& fit_files,
-                                                                const std::vector<std::string>& heldout_files);
+std::optional<formats::ControllerGeometry> diagnosis_controller_geometry(
+    const diagnose::Diagnosis& diagnosis, const diagnose::PooledDiagnosis* pooled,
+    const filters::OdometryParams& track_nominal, const std::vector<std::string>& fit_files,
+    const std::vector<std::string>& heldout_files);
 
 // The track's nominal robot as diagnose reads it (odotune/diagnose/diag_input.h);
-// throws odotune::Failure naming --controller-out and the track when it has
+// throws core::Failure naming --controller-out and the track when it has
 // no positive radii and wheel base (body-velocity odometry without robot.*).
 filters::OdometryParams diagnosis_track_nominal(const diagnose::DiagInput& input, const std::string& file);
 
 // Writes the file (atomically) and returns the line the command prints:
 // "controller: FILE (ros2_control diff_drive_controller, multipliers form:
 // wheel_radius … m × left … right …, wheel_separation … m × …)". Throws
-// odotune::Failure.
-std::string write_controller_file(const ControllerRequest& request, const ControllerOptions& options,
-                                  const ControllerGeometry& geometry);
+// core::Failure.
+std::string write_controller_file(const ControllerRequest& request, const formats::ControllerOptions& options,
+                                  const formats::ControllerGeometry& geometry);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

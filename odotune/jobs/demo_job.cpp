@@ -10,17 +10,17 @@
 #include <odotune/jobs/tune_json.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 DemoOutcome run_demo(const DemoRequest& request, const DemoCallbacks& cb) {
   std::vector<std::string> paths;
   for (int i = 1; i <= 5; ++i) {
     const auto p = std::filesystem::path(request.data_dir) / fmt::format("track{}.csv", i);
     if (!std::filesystem::exists(p))
-      throw Failure(fmt::format("{}: reference track not found (use --data DIR)", p.string()));
+      throw core::Failure(fmt::format("{}: reference track not found (use --data DIR)", p.string()));
     paths.push_back(p.string());
   }
-  const std::vector<Track> tracks = load_tracks(paths);
+  const std::vector<tracks::Track> tracks = tracks::load_tracks(paths);
   std::vector<PreparedTrack> prepared;
   for (const auto& t : tracks) prepared.push_back(prepare_track(t));
 
@@ -44,7 +44,7 @@ DemoOutcome run_demo(const DemoRequest& request, const DemoCallbacks& cb) {
       req.iterations = request.iterations;
       req.stop = stop;
       TuneOutcome o = run_tune({&p}, req);
-      if (stop && stop->load()) throw Failure("interrupted", 130);
+      if (stop && stop->load()) throw core::Failure("interrupted", 130);
       out.seconds += o.summary.seconds;
       all.push_back(tune_json(o));
       out.rows.push_back({p.name, model, std::move(o)});
@@ -53,8 +53,8 @@ DemoOutcome run_demo(const DemoRequest& request, const DemoCallbacks& cb) {
     }
   }
   if (cb.finished) cb.finished(out);
-  if (!request.json_out.empty()) write_file_atomically(request.json_out, all.dump(2) + "\n");
+  if (!request.json_out.empty()) formats::write_file_atomically(request.json_out, all.dump(2) + "\n");
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

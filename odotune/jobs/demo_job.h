@@ -13,12 +13,12 @@
 #include <odotune/filters/ekf_noise.h>
 #include <odotune/jobs/tune_job.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 struct DemoRequest {
-  std::string data_dir;                    // folder with track1.csv … track5.csv
-  int particles = 50, iterations = 150;    // PSO budget of each tune
-  FitnessMode mode = kDefaultFitnessMode;  // against ground truth (1..7)
+  std::string data_dir;                                            // folder with track1.csv … track5.csv
+  int particles = 50, iterations = 150;                            // PSO budget of each tune
+  objectives::FitnessMode mode = objectives::kDefaultFitnessMode;  // against ground truth (1..7)
   std::uint64_t seed = 1;
   std::string json_out;  // every tune's tune_json() as one JSON array; empty = not written
 };
@@ -50,7 +50,7 @@ struct DemoCallbacks {
 };
 
 // Runs the 15 tunes one after another (each on all OpenMP threads).
-// Throws odotune::Failure when a track file is missing ("PATH: reference
+// Throws core::Failure when a track file is missing ("PATH: reference
 // track not found (use --data DIR)") or unreadable, Failure("interrupted",
 // 130) when the stop flag was raised during a tune (that tune has no row),
 // and Failure when the JSON cannot be written; std::invalid_argument when a
@@ -58,4 +58,4 @@ struct DemoCallbacks {
 // solver fails.
 DemoOutcome run_demo(const DemoRequest& request, const DemoCallbacks& callbacks);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

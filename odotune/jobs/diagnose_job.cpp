@@ -16,13 +16,13 @@
 #include <odotune/sim/scenario_from_track.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 namespace {
 
 // The scenario of --scenario-out: the track's robot with the findings'
 // effects, driven along its reference path.
-std::string corrected_scenario_yaml(const Track& track, const std::string& track_file,
+std::string corrected_scenario_yaml(const tracks::Track& track, const std::string& track_file,
                                     const diagnose::Diagnosis& d) {
   std::vector<std::string> specs;
   std::string names;
@@ -39,7 +39,7 @@ std::string corrected_scenario_yaml(const Track& track, const std::string& track
   try {
     sim::Scenario sc = sim::scenario_from_track(track, specs);
     sc.terms = terms;
-    return scenario_to_yaml(
+    return formats::scenario_to_yaml(
         sc, fmt::format("The robot of track '{}' ({}) with the physics `odotune diagnose` found:\n"
                         "  {}\n"
                         "driven along the recording's reference path (motion.knots: its body\n"
@@ -47,7 +47,7 @@ std::string corrected_scenario_yaml(const Track& track, const std::string& track
                         "Reproduce the corrected model:  odotune simulate THIS_FILE -o corrected.csv",
                         d.track, track_file, names.empty() ? "none (the nominal model explains it)" : names));
   } catch (const std::exception& e) {
-    throw Failure(fmt::format("{}: cannot build the corrected scenario: {}", track_file, e.what()));
+    throw core::Failure(fmt::format("{}: cannot build the corrected scenario: {}", track_file, e.what()));
   }
 }
 
@@ -56,26 +56,26 @@ std::string corrected_scenario_yaml(const Track& track, const std::string& track
 namespace {
 
 // One recording as the diagnosis reads it, cut to [from_s, to_s] when asked.
-diagnose::DiagInput diag_input(const DiagnoseRequest& a, const std::string& file, const Track& track) {
+diagnose::DiagInput diag_input(const DiagnoseRequest& a, const std::string& file, const tracks::Track& track) {
   try {
     diagnose::DiagInput in = diagnose::build_diag_input(track);
     // An open end of the interval is ±1e300 s, beyond any track's time.
     if (a.from_s || a.to_s) in = diagnose::crop(in, a.from_s.value_or(-1e300), a.to_s.value_or(1e300));
     return in;
   } catch (const std::invalid_argument& e) {
-    throw Failure(fmt::format("{}: {}", file, e.what()));
+    throw core::Failure(fmt::format("{}: {}", file, e.what()));
   }
 }
 
 }  // namespace
 
 DiagnoseOutcome run_diagnose(const DiagnoseRequest& a) {
-  if (a.tracks.empty()) throw Failure("diagnose: no track given");
-  const ControllerOptions controller = check_controller_request(a.controller, false);
+  if (a.tracks.empty()) throw core::Failure("diagnose: no track given");
+  const formats::ControllerOptions controller = check_controller_request(a.controller, false);
   std::vector<std::string> files = a.tracks;
   files.insert(files.end(), a.heldout.begin(), a.heldout.end());
-  const std::vector<Track> tracks = load_tracks(files);
-  const Track& track = tracks.front();
+  const std::vector<tracks::Track> tracks = tracks::load_tracks(files);
+  const tracks::Track& track = tracks.front();
   std::vector<diagnose::DiagInput> inputs;
   for (std::size_t k = 0; k < tracks.size(); ++k) inputs.push_back(diag_input(a, files[k], tracks[k]));
   diagnose::DiagInput in = inputs.front();
@@ -100,22 +100,22 @@ DiagnoseOutcome run_diagnose(const DiagnoseRequest& a) {
       out.diagnosis = diagnose::diagnose(in, o);
     }
   } catch (const std::invalid_argument& e) {
-    throw Failure(fmt::format("{}: cannot diagnose: {}", files.front(), e.what()));
+    throw core::Failure(fmt::format("{}: cannot diagnose: {}", files.front(), e.what()));
   }
-  out.summary = out.several ? pooled_summary(out.pooled) : diagnosis_summary(d);
-  const std::string json_text = (out.several ? pooled_diagnosis_json(out.pooled) : diagnosis_json(d)).dump(2) +
-                                "\n";
+  out.summary = out.several ? diagnose::pooled_summary(out.pooled) : diagnose::diagnosis_summary(d);
+  const std::string json_text =
+      (out.several ? formats::pooled_diagnosis_json(out.pooled) : formats::diagnosis_json(d)).dump(2) + "\n";
   if (!a.report.empty()) {
     std::string finding;  // the effects' names (the titles have room for no more)
     for (const diagnose::Finding& f : d.findings) finding += (finding.empty() ? "" : ", ") + f.effect;
     try {
       results::write_diagnosis_report(a.report, diagnosis_figure_data(in, d, finding), out.summary, json_text);
     } catch (const std::exception& e) {
-      throw Failure(fmt::format("{}: report: {}", a.report, e.what()));
+      throw core::Failure(fmt::format("{}: report: {}", a.report, e.what()));
     }
   }
   if (!a.scenario_out.empty())
-    write_atomically(a.scenario_out, "scenario", corrected_scenario_yaml(track, files.front(), d));
+    core::write_atomically(a.scenario_out, "scenario", corrected_scenario_yaml(track, files.front(), d));
   if (!a.controller.out.empty()) {
     const auto g = diagnosis_controller_geometry(d, out.several ? &out.pooled : nullptr, nominal, a.tracks,
                                                  a.heldout);
@@ -124,8 +124,8 @@ DiagnoseOutcome run_diagnose(const DiagnoseRequest& a) {
                                   "controller: no radius_error or wheel_base_error found; {} not written",
                                   a.controller.out);
   }
-  if (!a.json.empty()) write_atomically(a.json, "diagnosis JSON", json_text);
+  if (!a.json.empty()) core::write_atomically(a.json, "diagnosis JSON", json_text);
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

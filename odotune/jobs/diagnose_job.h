@@ -12,7 +12,7 @@
 #include <odotune/diagnose/recordings.h>
 #include <odotune/jobs/controller_export.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 struct DiagnoseRequest {
   // Track files (../shared/specs/track-format.md): one recording, or several
@@ -56,11 +56,11 @@ struct DiagnoseOutcome {
 // controller's parameters (only when radius_error or wheel_base_error was
 // found; the flags and the track's nominal geometry are checked before the
 // diagnosis), the JSON; each file appears whole or not at all.
-// Throws odotune::Failure (one line naming the track or the report folder)
+// Throws core::Failure (one line naming the track or the report folder)
 // when the track cannot be read, cut or diagnosed, the report cannot be
 // written or the corrected scenario cannot be built; std::runtime_error
 // ("cannot write scenario|diagnosis JSON 'PATH': ...") when a file cannot be
 // written.
 DiagnoseOutcome run_diagnose(const DiagnoseRequest& request);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

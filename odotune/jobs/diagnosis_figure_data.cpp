@@ -4,7 +4,7 @@
 
 #include <odotune/diagnose/window_replay.h>
 
-namespace odotune {
+namespace odotune::jobs {
 namespace {
 
 using namespace odotune::diagnose;
@@ -78,4 +78,4 @@ results::DiagnosisFigureData diagnosis_figure_data(const DiagInput& in, const Di
   return f;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

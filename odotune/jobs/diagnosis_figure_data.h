@@ -17,9 +17,9 @@
 #include <odotune/diagnose/diagnosis.h>
 #include <odotune/results/diagnosis_figures.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 results::DiagnosisFigureData diagnosis_figure_data(const diagnose::DiagInput& in, const diagnose::Diagnosis& d,
                                                    const std::string& finding_text);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -13,7 +13,7 @@
 #include <odotune/filters/ekf_noise.h>
 #include <odotune/objectives/metrics.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 struct EvalRequest {
   std::string config;               // odotune-ekf-config/1 YAML; empty = the baseline noise
@@ -25,9 +25,9 @@ struct EvalRequest {
 };
 
 struct EvalTrack {
-  std::string track;      // the track's name
-  ErrorMetrics metrics;   // with the configuration's noise
-  ErrorMetrics baseline;  // with baseline_noise()
+  std::string track;                  // the track's name
+  objectives::ErrorMetrics metrics;   // with the configuration's noise
+  objectives::ErrorMetrics baseline;  // with baseline_noise()
   // A track without ground truth: the metrics are of its held-out fixes
   // (odotune/objectives/fix_cv_replay.h, default folds), not of ground truth.
   bool against_fixes = false;
@@ -47,10 +47,10 @@ nlohmann::json eval_json(const EvalOutcome& o);
 // Reads the configuration and all tracks, then replays each track with the
 // baseline and the configuration's noise; `track_done` (if set) is told the
 // outcome so far after each track (the one just replayed last). Writes the
-// JSON last, atomically. Throws odotune::Failure (one line) on an unreadable
+// JSON last, atomically. Throws core::Failure (one line) on an unreadable
 // configuration or track, a track that cannot be replayed, or an unwritable
 // JSON file.
 EvalOutcome run_eval(const EvalRequest& request,
                      const std::function<void(const EvalOutcome&)>& track_done = {});
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -20,7 +20,7 @@
 #include <odotune/objectives/tuned_model.h>
 #include <odotune/results/ros_export.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 namespace {
 
@@ -69,34 +69,35 @@ std::vector<std::string> tuning_track_names(const results::RunRecord& run,
   return {names.begin(), names.end()};
 }
 
-std::vector<ReplayInput> tuning_inputs(const results::Store& store, const results::RunRecord& run,
-                                       const std::vector<results::RunRecord>& all,
-                                       const std::vector<std::string>& extra_files) {
-  const std::map<std::string, Track> tracks = experiment_tracks(store.experiment(), extra_files);
-  std::vector<ReplayInput> inputs;
+std::vector<objectives::ReplayInput> tuning_inputs(const results::Store& store, const results::RunRecord& run,
+                                                   const std::vector<results::RunRecord>& all,
+                                                   const std::vector<std::string>& extra_files) {
+  const std::map<std::string, tracks::Track> tracks = experiment_tracks(store.experiment(), extra_files);
+  std::vector<objectives::ReplayInput> inputs;
   for (const std::string& name : tuning_track_names(run, all)) {
     const auto it = tracks.find(name);
     if (it == tracks.end())
-      throw Failure(fmt::format("run {}: track '{}' (needed for its odometry rate) is not where the experiment "
-                                "file said; pass it with --track FILE",
-                                results::run_key(run), name));
+      throw core::Failure(
+          fmt::format("run {}: track '{}' (needed for its odometry rate) is not where the experiment "
+                      "file said; pass it with --track FILE",
+                      results::run_key(run), name));
     try {
-      inputs.push_back(build_replay_input_any(it->second));
+      inputs.push_back(objectives::build_replay_input_any(it->second));
     } catch (const std::invalid_argument& e) {
-      throw Failure(e.what());
+      throw core::Failure(e.what());
     }
   }
   return inputs;
 }
 
-std::string join_names(const std::vector<ReplayInput>& inputs) {
+std::string join_names(const std::vector<objectives::ReplayInput>& inputs) {
   std::string out;
   for (const auto& in : inputs) out += (out.empty() ? "" : ", ") + in.track_name;
   return out;
 }
 
-std::string alpha_mapping_note(const results::RunRecord& run, const ProcessNoiseRate& q,
-                               const std::vector<ReplayInput>& inputs) {
+std::string alpha_mapping_note(const results::RunRecord& run, const objectives::ProcessNoiseRate& q,
+                               const std::vector<objectives::ReplayInput>& inputs) {
   const bool gyro = run.model == "gyro";
   return fmt::format(
       "Mapping from odotune's {} model (Kovacs et al. eq. 3-5{}) to robot_localization:\n"
@@ -125,17 +126,17 @@ std::string alpha_mapping_note(const results::RunRecord& run, const ProcessNoise
 results::RosExportInput ros_input(const results::Store& store, const results::RunRecord& run,
                                   const std::vector<results::RunRecord>& all, const ExportRequest& request) {
   const filters::NoiseParams noise = run_noise(run);
-  const std::vector<ReplayInput> inputs = tuning_inputs(store, run, all, request.track_files);
+  const std::vector<objectives::ReplayInput> inputs = tuning_inputs(store, run, all, request.track_files);
   results::RosExportInput in;
   try {
     if (noise.model == filters::NoiseModel::rq) {
-      const double rate = odometry_rate_hz(inputs);
+      const double rate = objectives::odometry_rate_hz(inputs);
       in = results::ros_input_from_rq(run_param(run, "r1_mm2"), run_param(run, "r2_mm2"),
                                       run_param(run, "r3_rad2"), run_param(run, "q1_mm2"),
                                       run_param(run, "q2_mm2"), rate);
       in.provenance = fmt::format("odometry rate {:.6g} Hz measured on {}", rate, join_names(inputs));
     } else {
-      const ProcessNoiseRate q = equivalent_process_noise_rate(noise, inputs);
+      const objectives::ProcessNoiseRate q = objectives::equivalent_process_noise_rate(noise, inputs);
       in.process_var_x_m2_per_s = q.x_m2_per_s;
       in.process_var_y_m2_per_s = q.y_m2_per_s;
       in.process_var_yaw_rad2_per_s = q.theta_rad2_per_s;
@@ -147,8 +148,8 @@ results::RosExportInput ros_input(const results::Store& store, const results::Ru
       in.mapping_note = alpha_mapping_note(run, q, inputs);
     }
   } catch (const std::exception& e) {
-    if (dynamic_cast<const Failure*>(&e)) throw;
-    throw Failure(fmt::format("run {}: {}", results::run_key(run), e.what()));
+    if (dynamic_cast<const core::Failure*>(&e)) throw;
+    throw core::Failure(fmt::format("run {}: {}", results::run_key(run), e.what()));
   }
   in.node_name = request.node_name;
   return in;
@@ -161,22 +162,23 @@ std::vector<RunFilter> parse_run_filters(const std::vector<std::string>& items) 
   for (const std::string& item : items) {
     const auto eq = item.find('=');
     if (eq == std::string::npos || eq == 0 || eq + 1 == item.size())
-      throw Failure(fmt::format("--select '{}': expected key=value with key one of {}", item, kKeyList));
+      throw core::Failure(fmt::format("--select '{}': expected key=value with key one of {}", item, kKeyList));
     RunFilter f{item.substr(0, eq), item.substr(eq + 1)};
     if (std::find(kKeys.begin(), kKeys.end(), f.key) == kKeys.end())
-      throw Failure(fmt::format("--select '{}': unknown key '{}', expected one of {}", item, f.key, kKeyList));
+      throw core::Failure(fmt::format("--select '{}': unknown key '{}', expected one of {}", item, f.key,
+                                      kKeyList));
     if (is_integer_key(f.key)) {
       std::uint64_t v = 0;
       const char* end = f.value.data() + f.value.size();
       const auto [ptr, ec] = std::from_chars(f.value.data(), end, v);
       if (ec != std::errc() || ptr != end)
-        throw Failure(fmt::format("--select '{}': {} must be a non-negative integer", item, f.key));
+        throw core::Failure(fmt::format("--select '{}': {} must be a non-negative integer", item, f.key));
       f.value = std::to_string(v);
     }
     for (const RunFilter& g : filters)
       if (g.key == f.key && g.value != f.value)
-        throw Failure(fmt::format("--select gives {} twice ({} and {}); give it once", f.key, g.value,
-                                  f.value));
+        throw core::Failure(fmt::format("--select gives {} twice ({} and {}); give it once", f.key, g.value,
+                                        f.value));
     filters.push_back(std::move(f));
   }
   return filters;
@@ -184,7 +186,7 @@ std::vector<RunFilter> parse_run_filters(const std::vector<std::string>& items) 
 
 RunSelection select_best_run(const std::vector<results::RunRecord>& all, const std::vector<RunFilter>& filters,
                              const std::string& store) {
-  if (all.empty()) throw Failure(fmt::format("{}: the store holds no finished runs yet", store));
+  if (all.empty()) throw core::Failure(fmt::format("{}: the store holds no finished runs yet", store));
   std::vector<const results::RunRecord*> runs;
   for (const auto& r : all) runs.push_back(&r);
   for (std::size_t i = 0; i < filters.size(); ++i) {
@@ -192,30 +194,30 @@ RunSelection select_best_run(const std::vector<results::RunRecord>& all, const s
     for (const auto* r : runs)
       if (field(*r, filters[i].key) == filters[i].value) kept.push_back(r);
     if (kept.empty())
-      throw Failure(fmt::format("--select {}: no run matches{}; {} is one of: {}", filters[i].text(),
-                                i == 0 ? "" : " (with " + describe(filters, i) + ")", filters[i].key,
-                                values_of(runs, filters[i].key)));
+      throw core::Failure(fmt::format("--select {}: no run matches{}; {} is one of: {}", filters[i].text(),
+                                      i == 0 ? "" : " (with " + describe(filters, i) + ")", filters[i].key,
+                                      values_of(runs, filters[i].key)));
     runs = std::move(kept);
   }
   std::set<std::string> models;
   for (const auto* r : runs) models.insert(r->model);
   if (models.size() > 1)
-    throw Failure(fmt::format("{} runs of {} models ({}); add --select model=… to pick one",
-                              filters.empty() ? "the store holds"
-                                              : "--select " + describe(filters, filters.size()) + " matches",
-                              models.size(), values_of(runs, "model")));
+    throw core::Failure(fmt::format(
+        "{} runs of {} models ({}); add --select model=… to pick one",
+        filters.empty() ? "the store holds" : "--select " + describe(filters, filters.size()) + " matches",
+        models.size(), values_of(runs, "model")));
   RunSelection s;
   s.matching = runs.size();
-  if (is_rl_model_name(*models.begin())) {
+  if (objectives::is_rl_model_name(*models.begin())) {
     // An rl-ekf or rl-ukf run's scores are on data its tune never saw: choosing by them
     // would make them optimistic, so the runs of one fitness are compared by
     // their tuning fitness instead.
     std::set<int> modes;
     for (const auto* r : runs) modes.insert(r->mode);
     if (modes.size() > 1)
-      throw Failure(fmt::format("{} runs of {} fitnesses (modes {}); add --select mode=… to pick one (8 "
-                                "heldout-fixes, 10 outage, 11 both)",
-                                *models.begin(), modes.size(), values_of(runs, "mode")));
+      throw core::Failure(fmt::format("{} runs of {} fitnesses (modes {}); add --select mode=… to pick one (8 "
+                                      "heldout-fixes, 10 outage, 11 both)",
+                                      *models.begin(), modes.size(), values_of(runs, "mode")));
     for (const auto* r : runs)
       if (!s.run || r->best_fitness < s.run->best_fitness) s.run = r;
     return s;
@@ -227,21 +229,21 @@ RunSelection select_best_run(const std::vector<results::RunRecord>& all, const s
 
 ExportOutcome run_export(const ExportRequest& request) {
   if (request.format != "odotune" && request.format != "robot_localization")
-    throw Failure(fmt::format("--format '{}': expected odotune or robot_localization", request.format));
+    throw core::Failure(fmt::format("--format '{}': expected odotune or robot_localization", request.format));
   const std::vector<RunFilter> filters = parse_run_filters(request.select);
   const auto store = open_store_for_reading(request.store);
   const std::vector<results::RunRecord> all = store->runs();
   const RunSelection sel = select_best_run(all, filters, request.store);
   const results::RunRecord& run = *sel.run;
   const std::string key = results::run_key(run);
-  if (is_calibrator_model_name(run.model))
-    throw Failure(
+  if (objectives::is_calibrator_model_name(run.model))
+    throw core::Failure(
         fmt::format("run {} tuned the {} calibrator's settings, not EKF noise: export writes EKF "
                     "configurations only; write a calibrator's settings with `odotune tune --model {} ... "
                     "--config-out FILE` (odotune-pf-config/1)",
                     key, run.model, run.model));
-  if (is_ukf_model_name(run.model) && request.format != "odotune")
-    throw Failure(
+  if (objectives::is_ukf_model_name(run.model) && request.format != "odotune")
+    throw core::Failure(
         fmt::format("run {} tuned the velocity-fusion UKF (model ukf): {} has no mapping for this model; "
                     "export it with --format odotune (odotune-ukf-config/1)",
                     key, request.format));
@@ -250,14 +252,15 @@ ExportOutcome run_export(const ExportRequest& request) {
   const std::string origin = fmt::format("odotune export from {} (experiment {}, {}): run {}", request.store,
                                          store->experiment().name, store->experiment().hash, key);
 
-  TunedModel model;
-  if (parse_tuned_model(run.model, &model) && model.is_rl()) {
+  objectives::TunedModel model;
+  if (objectives::parse_tuned_model(run.model, &model) && model.is_rl()) {
     if (request.format != "robot_localization")
-      throw Failure(fmt::format("run {} tuned robot_localization's {} (model {}): it exports as the robot's "
-                                "own parameter file only; use --format robot_localization",
-                                key, filters::rl::display_name(model.rl_filter()), run.model));
+      throw core::Failure(
+          fmt::format("run {} tuned robot_localization's {} (model {}): it exports as the robot's "
+                      "own parameter file only; use --format robot_localization",
+                      key, filters::rl::display_name(model.rl_filter()), run.model));
     const results::ExperimentInfo info = store->experiment();
-    write_rl_run(parse_experiment(info.text, info.file), run, request.out, !request.ros1,
+    write_rl_run(formats::parse_experiment(info.text, info.file), run, request.out, !request.ros1,
                  origin + fmt::format("\nChosen as the lowest tuning fitness of {} matching run{}.",
                                       sel.matching, sel.matching == 1 ? "" : "s"));
     return {key,
@@ -266,30 +269,30 @@ ExportOutcome run_export(const ExportRequest& request) {
             sel.matching};
   }
   if (request.ros1)
-    throw Failure(fmt::format("--ros1 applies to rl-ekf and rl-ukf runs only; run {} is of model {}", key,
-                              run.model));
-  if (is_ukf_model_name(run.model)) {
-    UkfConfig cfg = run_ukf_config(run);
+    throw core::Failure(fmt::format("--ros1 applies to rl-ekf and rl-ukf runs only; run {} is of model {}", key,
+                                    run.model));
+  if (objectives::is_ukf_model_name(run.model)) {
+    formats::UkfConfig cfg = run_ukf_config(run);
     cfg.comment = origin + "\n" + scores + " (the fused pose; baseline: the default UKF noise)";
-    write_ukf_config(cfg, request.out);
+    formats::write_ukf_config(cfg, request.out);
   } else if (request.format == "odotune") {
-    EkfConfig cfg;
+    formats::EkfConfig cfg;
     cfg.noise = run_noise(run);
     cfg.model = cfg.noise.model;
     cfg.comment = origin + "\n" + scores;
-    write_ekf_config(cfg, request.out);
+    formats::write_ekf_config(cfg, request.out);
   } else {
     results::RosExportInput in = ros_input(*store, run, all, request);
     in.provenance = origin + "; " + scores + (in.provenance.empty() ? "" : "; " + in.provenance);
     std::string why;
-    if (!in.IsValid(&why)) throw Failure(fmt::format("run {}: cannot export: {}", key, why));
+    if (!in.IsValid(&why)) throw core::Failure(fmt::format("run {}: cannot export: {}", key, why));
     try {
       results::write_robot_localization_yaml(in, request.out);
     } catch (const std::exception& e) {
-      throw Failure(e.what());
+      throw core::Failure(e.what());
     }
   }
   return {key, scores, sel.matching};
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -24,7 +24,7 @@
 
 #include <odotune/results/run_record.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 // One --select filter: a run's `key` (model, track, mode, seed, heldout)
 // must equal `value`.
@@ -34,7 +34,7 @@ struct RunFilter {
 };
 
 // Parses key=value items (each --select item, commas already split). Throws
-// odotune::Failure (one line naming the item) for a malformed item, an unknown
+// core::Failure (one line naming the item) for a malformed item, an unknown
 // key, a mode or seed that is not a non-negative integer, or one key given
 // twice with different values.
 std::vector<RunFilter> parse_run_filters(const std::vector<std::string>& items);
@@ -47,7 +47,7 @@ struct RunSelection {
 // Applies the filters in order (so a failure names the filter that left
 // nothing and the values that key has), checks that the runs left are of one
 // model and picks the lowest tuned RMSE (ties: the first). Throws
-// odotune::Failure for no runs (naming `store`), a filter that leaves none, or
+// core::Failure for no runs (naming `store`), a filter that leaves none, or
 // runs of several models.
 RunSelection select_best_run(const std::vector<results::RunRecord>& runs, const std::vector<RunFilter>& filters,
                              const std::string& store);
@@ -73,9 +73,9 @@ struct ExportOutcome {
 // "odotune", a robot_localization parameter file otherwise (which needs the
 // run's tuning tracks, from the experiment or `track_files`, for the
 // odometry rate and, for alpha/gyro, the time-averaged process noise).
-// Throws odotune::Failure (one line) for a bad selection or store, a
+// Throws core::Failure (one line) for a bad selection or store, a
 // calibrator run, a ukf run to robot_localization, a missing track or a run
 // that cannot be mapped; nothing is written then.
 ExportOutcome run_export(const ExportRequest& request);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

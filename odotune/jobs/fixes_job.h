@@ -7,17 +7,17 @@
 
 #include <odotune/sim/synthetic_fixes.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 struct FixesRequest {
   std::string track;   // input track file
   std::string output;  // track file to write (existing aps_x/aps_y replaced)
-  SyntheticFixOptions options;
+  sim::SyntheticFixOptions options;
 };
 
 // Returns how the fixes were made (the written track's fixes.synthetic
-// metadata). Throws odotune::Failure (one line) on invalid options, an
+// metadata). Throws core::Failure (one line) on invalid options, an
 // unreadable track or one without ground truth, or a failed write.
 std::string run_fixes(const FixesRequest& request);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

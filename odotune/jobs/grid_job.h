@@ -23,16 +23,16 @@
 #include <odotune/results/run_record.h>
 #include <odotune/results/store.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 // What a cell minimises: a fitness mode, or (model rl-ekf) one of
 // robot_localization's fitnesses.
-using CellFitness = std::variant<FitnessMode, RlFitness>;
+using CellFitness = std::variant<objectives::FitnessMode, objectives::RlFitness>;
 // The mode number a results store records for it (odotune/results/run_record.h).
 int stored_mode(const CellFitness& f);
 
 struct GridCell {
-  TunedModel model;
+  objectives::TunedModel model;
   std::vector<std::size_t> tune_on;  // indices into the experiment's tracks
   std::size_t score_on;              // index of the track the scores are for
   bool heldout = false;              // leave-one-track-out cell
@@ -41,7 +41,7 @@ struct GridCell {
 };
 
 // The cells of an experiment, in a fixed order.
-std::vector<GridCell> grid_cells(const Experiment& e);
+std::vector<GridCell> grid_cells(const formats::Experiment& e);
 
 struct GridOutcome {
   long total = 0;      // cells in the experiment
@@ -54,18 +54,18 @@ struct GridOutcome {
 // replay when an EKF model is listed, as calibration input (with the
 // experiment's calibration.ext_from_gt_hz) when a calibrator model is, as
 // fusion input (ukf_tune_job.h) when the ukf model is.
-// Throws odotune::Failure (one line naming the track) when a track is
+// Throws core::Failure (one line naming the track) when a track is
 // unusable for a listed model.
-std::vector<PreparedTrack> prepare_grid_tracks(const Experiment& e);
+std::vector<PreparedTrack> prepare_grid_tracks(const formats::Experiment& e);
 
 // The record of a cell without its results: what identifies it in the store
 // (results::run_key).
-results::RunRecord cell_record(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+results::RunRecord cell_record(const formats::Experiment& e, const std::vector<PreparedTrack>& tracks,
                                const GridCell& c);
 
 // Indices (into `cells`) of the cells whose run the store does not have yet,
 // in cell order.
-std::vector<std::size_t> pending_cells(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+std::vector<std::size_t> pending_cells(const formats::Experiment& e, const std::vector<PreparedTrack>& tracks,
                                        const std::vector<GridCell>& cells, const results::Store& store);
 
 // Tunes one cell and scores it. An EKF cell's scores are the reference
@@ -78,8 +78,9 @@ std::vector<std::size_t> pending_cells(const Experiment& e, const std::vector<Pr
 // the tracks and the cell (not on the thread, process or machine that runs it).
 // Returns nothing when `stop` ended the run early (there is nothing to keep).
 // Throws std::exception when the solver fails.
-std::optional<results::RunRecord> run_cell(const Experiment& e, const std::vector<PreparedTrack>& tracks,
-                                           const GridCell& c, const std::atomic<bool>* stop);
+std::optional<results::RunRecord> run_cell(const formats::Experiment& e,
+                                           const std::vector<PreparedTrack>& tracks, const GridCell& c,
+                                           const std::atomic<bool>* stop);
 
 // Where a worker gets cells and leaves finished runs. Both functions are
 // called by one thread at a time. `next` returns an index into the cells, or
@@ -101,21 +102,21 @@ struct WorkResult {
 // Runs cells from `source` on all OpenMP threads (one cell per thread at a
 // time) until it has no more, `stop` is raised, or a run fails; then waits for
 // the runs in flight. Never throws: a failure is returned.
-WorkResult work_cells(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+WorkResult work_cells(const formats::Experiment& e, const std::vector<PreparedTrack>& tracks,
                       const std::vector<GridCell>& cells, const CellSource& source,
                       const std::atomic<bool>* stop);
 
 // Opens the experiment's results store at `path`, or creates it (and its
 // folder) recording the experiment's name, text, hash, absolute file path and
 // `code_version` (the odotune version). A store made from another experiment
-// is refused unless `allow_other`. Throws odotune::Failure (one line).
-std::unique_ptr<results::Store> open_grid_store(const Experiment& e, const std::filesystem::path& path,
+// is refused unless `allow_other`. Throws core::Failure (one line).
+std::unique_ptr<results::Store> open_grid_store(const formats::Experiment& e, const std::filesystem::path& path,
                                                 bool allow_other, const std::string& code_version);
 
 // Runs the cells the store does not have yet. `progress(done, total)` is
-// called from one thread at a time. Throws odotune::Failure on a bad
+// called from one thread at a time. Throws core::Failure on a bad
 // track or a solver failure.
-GridOutcome run_grid(const Experiment& e, results::Store& store, const std::atomic<bool>* stop,
+GridOutcome run_grid(const formats::Experiment& e, results::Store& store, const std::atomic<bool>* stop,
                      const std::function<void(long, long)>& progress);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -25,7 +25,7 @@
 #define ODOTUNE_MPI_ENABLED 0
 #endif
 
-namespace odotune {
+namespace odotune::jobs {
 
 namespace {
 
@@ -61,7 +61,7 @@ long launched_ranks() {
 
 MpiSession::MpiSession() {
   if (launched_by_mpi() && launched_ranks() > 1)
-    throw Failure(
+    throw core::Failure(
         fmt::format("started as one of {} MPI ranks, but this odotune was built without MPI (each rank would "
                     "run the whole grid); build with -DODOTUNE_WITH_MPI=ON, or run it without mpirun",
                     launched_ranks()));
@@ -73,7 +73,7 @@ bool MpiSession::agree(const std::function<void()>& step) const {
   return true;
 }
 
-std::optional<GridOutcome> run_grid_mpi(const MpiSession&, const Experiment&, results::Store*,
+std::optional<GridOutcome> run_grid_mpi(const MpiSession&, const formats::Experiment&, results::Store*,
                                         const std::atomic<bool>*, const std::function<void(long, long)>&) {
   throw std::logic_error("run_grid_mpi: this odotune was built without MPI");
 }
@@ -391,8 +391,8 @@ std::optional<GridReport> run_grid_job(const GridRequest& request, const GridCal
   // Under mpirun/srun (MPI build): the ranks share the cells, rank 0 alone
   // writes the store and reports; a failure anywhere is told once, by rank 0.
   const MpiSession mpi;
-  Experiment e;
-  if (!mpi.agree([&] { e = read_experiment(request.experiment); })) return std::nullopt;
+  formats::Experiment e;
+  if (!mpi.agree([&] { e = formats::read_experiment(request.experiment); })) return std::nullopt;
   GridReport report;
   report.store = request.store.empty() ? e.store : std::filesystem::path(request.store);
   report.ranks = mpi.size();
@@ -412,7 +412,7 @@ std::optional<GridReport> run_grid_job(const GridRequest& request, const GridCal
     } else {
       report.outcome = run_grid(e, *store, stop, callbacks.progress);
     }
-  } catch (const Failure&) {
+  } catch (const core::Failure&) {
     // A store this command created and left without a run (e.g. a bad track)
     // is not left behind.
     if (store && created && store->finished_keys().empty()) {
@@ -427,4 +427,4 @@ std::optional<GridReport> run_grid_job(const GridRequest& request, const GridCal
   return report;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

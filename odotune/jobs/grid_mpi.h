@@ -28,7 +28,7 @@
 #include <odotune/jobs/grid_job.h>
 #include <odotune/results/store.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 // Whether this binary was built with MPI.
 bool mpi_built();
@@ -62,8 +62,8 @@ class MpiSession {
 // is used on rank 0 only (null elsewhere); `progress(done, total)` is called on
 // rank 0 only, one call at a time. Returns the outcome on rank 0 and nothing on
 // the other ranks. Throws Failure on rank 0 when any rank failed.
-std::optional<GridOutcome> run_grid_mpi(const MpiSession& mpi, const Experiment& e, results::Store* store,
-                                        const std::atomic<bool>* stop,
+std::optional<GridOutcome> run_grid_mpi(const MpiSession& mpi, const formats::Experiment& e,
+                                        results::Store* store, const std::atomic<bool>* stop,
                                         const std::function<void(long, long)>& progress);
 
 // `odotune grid` as one call, with or without MPI.
@@ -79,7 +79,7 @@ struct GridCallbacks {
   // On every rank, once the experiment is read and the store opened, before
   // the first cell. Returns the flag that stops the grid when raised (null:
   // never stopped).
-  std::function<const std::atomic<bool>*(const Experiment&)> started;
+  std::function<const std::atomic<bool>*(const formats::Experiment&)> started;
   // progress(done, total): rank 0 only, one call at a time.
   std::function<void(long, long)> progress;
 };
@@ -97,9 +97,9 @@ struct GridReport {
 // stopped grid returns normally (the outcome counts the runs abandoned).
 // Returns the report on rank 0 and nothing on the other ranks (rank 0
 // reports, a failure included).
-// Throws odotune::Failure (one line) when MPI cannot be started (MpiSession),
+// Throws core::Failure (one line) when MPI cannot be started (MpiSession),
 // and on rank 0 on an unreadable experiment, a store that cannot be opened, a
 // bad track or a solver failure.
 std::optional<GridReport> run_grid_job(const GridRequest& request, const GridCallbacks& callbacks);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -11,7 +11,7 @@
 #include <odotune/tracks/import_rosbag.h>
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 enum class ImportDataset { mrclam, optiodom, litw, rosbag };
 
@@ -20,8 +20,8 @@ struct ImportRequest {
   std::string
       input;      // dataset folder (mrclam) or file (optiodom: the run, litw: litw_series.csv; rosbag: the bag)
   int robot = 0;  // mrclam only: robot N, 1..5
-  std::string output;          // track file to write
-  RosbagImportOptions rosbag;  // rosbag only
+  std::string output;                  // track file to write
+  tracks::RosbagImportOptions rosbag;  // rosbag only
 };
 
 struct ImportOutcome {
@@ -36,10 +36,10 @@ struct ImportOutcome {
 };
 
 // Throws on an unreadable recording (TrackError naming the file), an empty
-// output (odotune::Failure) or a track that cannot be written.
+// output (core::Failure) or a track that cannot be written.
 ImportOutcome run_import(const ImportRequest& request);
 
 // "t,ticks_l,ticks_r,v_cmd,..." in the order the track writer uses.
-std::string column_list(const Track& track);
+std::string column_list(const tracks::Track& track);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -22,7 +22,7 @@
 #include <odotune/results/report_html.h>
 #include <odotune/results/report_tables.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 namespace {
 
@@ -42,7 +42,7 @@ const RunRecord* best_run(const std::vector<RunRecord>& runs, const std::string&
   return best;
 }
 
-results::TrajectoryPath path_of(const std::string& name, const std::vector<TrajectoryPoint>& pts) {
+results::TrajectoryPath path_of(const std::string& name, const std::vector<objectives::TrajectoryPoint>& pts) {
   results::TrajectoryPath p{name, {}, {}};
   for (const auto& q : pts) {
     p.xs_m.push_back(q.x_m);
@@ -68,22 +68,22 @@ CheckedStore open_checked(const ReportRequest& req) {
   try {
     s.runs = s.store->runs();
   } catch (const std::exception& ex) {
-    throw Failure(ex.what());
+    throw core::Failure(ex.what());
   }
   if (s.runs.empty())
-    throw Failure(fmt::format("{}: no finished runs yet (run odotune grid first)", req.store.string()));
+    throw core::Failure(fmt::format("{}: no finished runs yet (run odotune grid first)", req.store.string()));
   s.models = results::report_models(s.runs);
   s.tracks = results::report_tracks(s.runs);
   for (const auto& t : s.tracks)
     if (req.trajectory_track.empty() || t == req.trajectory_track) s.overlay_tracks.push_back(t);
   if (s.overlay_tracks.empty())
-    throw Failure(fmt::format("--track-name '{}' is not a track of this store, expected one of {}",
-                              req.trajectory_track, fmt::join(s.tracks, ", ")));
+    throw core::Failure(fmt::format("--track-name '{}' is not a track of this store, expected one of {}",
+                                    req.trajectory_track, fmt::join(s.tracks, ", ")));
   std::error_code ec;
   fs::create_directories(req.out_dir, ec);
   if (ec || !fs::is_directory(req.out_dir))
-    throw Failure(fmt::format("{}: cannot create the report folder: {}", req.out_dir.string(),
-                              ec ? ec.message() : "not a folder"));
+    throw core::Failure(fmt::format("{}: cannot create the report folder: {}", req.out_dir.string(),
+                                    ec ? ec.message() : "not a folder"));
   return s;
 }
 
@@ -93,8 +93,8 @@ std::vector<RunRecord> runs_of(const std::vector<RunRecord>& from, bool calibrat
                                bool ukf = false) {
   std::vector<RunRecord> out_runs;
   for (const auto& r : from)
-    if (is_calibrator_model_name(r.model) == calibrator && is_ukf_model_name(r.model) == ukf &&
-        (model.empty() || r.model == model))
+    if (objectives::is_calibrator_model_name(r.model) == calibrator &&
+        objectives::is_ukf_model_name(r.model) == ukf && (model.empty() || r.model == model))
       out_runs.push_back(r);
   return out_runs;
 }
@@ -120,9 +120,9 @@ ReportInput split_runs(const ReportRequest& req, const CheckedStore& s) {
   ReportInput in{req, s, {}, {}, {}, {}, {}};
   for (const auto& r : s.runs) (r.is_heldout() ? in.held : in.own).push_back(r);
   for (const auto& m : s.models)
-    (is_calibrator_model_name(m) ? in.calibrator_models
-     : is_ukf_model_name(m)      ? in.ukf_models
-                                 : in.ekf_models)
+    (objectives::is_calibrator_model_name(m) ? in.calibrator_models
+     : objectives::is_ukf_model_name(m)      ? in.ukf_models
+                                             : in.ekf_models)
         .push_back(m);
   return in;
 }
@@ -289,7 +289,7 @@ void write_generalisation(const ReportInput& in, ReportWriter& w, results::HtmlP
 // The fitness mode of the trajectories and convergence curves: the requested
 // one, or the last mode with runs (with a note) when it has none.
 int shown_mode(const ReportInput& in, std::vector<std::string>& notes) {
-  int mode = number(in.req.mode);
+  int mode = objectives::number(in.req.mode);
   const auto modes = results::report_modes(in.own);
   if (!modes.empty() && std::find(modes.begin(), modes.end(), mode) == modes.end()) {
     notes.push_back(fmt::format("mode {} has no runs; trajectories and convergence use mode {}", mode,
@@ -303,13 +303,13 @@ int shown_mode(const ReportInput& in, std::vector<std::string>& notes) {
 // position fixes when there is none), the baseline EKF and each EKF model's
 // best run in `mode`.
 results::HtmlFigure trajectory_figure(const ReportInput& in, ReportWriter& w, const std::string& name,
-                                      const Track& track, int mode) {
+                                      const tracks::Track& track, int mode) {
   const std::vector<RunRecord>& runs = in.s.runs;
-  ReplayInput rin;
+  objectives::ReplayInput rin;
   try {
-    rin = build_replay_input_any(track);
+    rin = objectives::build_replay_input_any(track);
   } catch (const std::invalid_argument& ex) {
-    throw Failure(ex.what());
+    throw core::Failure(ex.what());
   }
   std::vector<results::TrajectoryPath> paths;
   if (rin.reference_is_fixes) {
@@ -320,11 +320,11 @@ results::HtmlFigure trajectory_figure(const ReportInput& in, ReportWriter& w, co
       fixes.ys_m.push_back(p.y());
     }
     paths.push_back(std::move(fixes));
-    paths.push_back(path_of("baseline EKF", ekf_trajectory(rin, baseline_noise())));
+    paths.push_back(path_of("baseline EKF", objectives::ekf_trajectory(rin, objectives::baseline_noise())));
     for (const auto& model : in.ekf_models)
       if (const RunRecord* r = best_run(runs, model, name, mode))
         paths.push_back(path_of(fmt::format("{} tuned (mode {})", model, mode),
-                                ekf_trajectory(rin, run_noise(*r))));
+                                objectives::ekf_trajectory(rin, run_noise(*r))));
     const std::string title = fmt::format("{}: position fixes, baseline and tuned EKF (mode {})", name, mode);
     return w.figure("trajectories_" + file_safe(name), title,
                     [&](const fs::path& stem) { results::trajectories(stem, title, paths); });
@@ -335,13 +335,13 @@ results::HtmlFigure trajectory_figure(const ReportInput& in, ReportWriter& w, co
     gt.ys_m.push_back(p.y());
   }
   paths.push_back(std::move(gt));
-  const ReplayResult base = replay_ekf(rin, baseline_noise(), true);
+  const objectives::ReplayResult base = objectives::replay_ekf(rin, objectives::baseline_noise(), true);
   paths.push_back(path_of(fmt::format("baseline EKF (RMSE {:.1f} mm)", base.outcome.metrics.rmse_m * 1e3),
                           base.trajectory));
   for (const auto& model : in.ekf_models) {
     const RunRecord* r = best_run(runs, model, name, mode);
     if (!r) continue;
-    const ReplayResult got = replay_ekf(rin, run_noise(*r), true);
+    const objectives::ReplayResult got = objectives::replay_ekf(rin, run_noise(*r), true);
     paths.push_back(path_of(fmt::format("{} tuned, seed {} (RMSE {:.1f} mm)", model, r->seed,
                                         got.outcome.metrics.rmse_m * 1e3),
                             got.trajectory));
@@ -363,7 +363,7 @@ void write_trajectories(const ReportInput& in, ReportWriter& w, results::HtmlPag
     notes.push_back(
         fmt::format("trajectory overlays replay the EKF: the fusion UKF runs ({}) are left out of them",
                     fmt::join(in.ukf_models, ", ")));
-  const auto track_data = in.ekf_models.empty() ? std::map<std::string, Track>{}
+  const auto track_data = in.ekf_models.empty() ? std::map<std::string, tracks::Track>{}
                                                 : experiment_tracks(in.s.info, in.req.track_files);
   if (in.ekf_models.empty()) {
     page.paragraph("No EKF runs in this store: no trajectory overlays.");
@@ -394,7 +394,7 @@ void write_convergence(const ReportInput& in, ReportWriter& w, results::HtmlPage
     for (const auto& name : in.s.tracks) {
       std::map<std::string, std::vector<std::vector<results::ConvergencePoint>>> series;
       for (const auto& r : in.own)
-        if (is_calibrator_model_name(r.model) == calibrator && r.track == name &&
+        if (objectives::is_calibrator_model_name(r.model) == calibrator && r.track == name &&
             (calibrator || r.mode == mode) && !r.convergence.empty())
           series[r.model].push_back(r.convergence);
       if (series.empty()) continue;
@@ -416,7 +416,7 @@ void write_convergence(const ReportInput& in, ReportWriter& w, results::HtmlPage
 ReportOutcome write_report(const ReportRequest& req) {
   const CheckedStore s = open_checked(req);
   if (std::find_if(s.models.begin(), s.models.end(),
-                   [](const std::string& m) { return is_rl_model_name(m); }) != s.models.end())
+                   [](const std::string& m) { return objectives::is_rl_model_name(m); }) != s.models.end())
     return write_rl_report(req, s.info, s.runs);  // rl-ekf and rl-ukf stand alone in an experiment
 
   const ReportInput in = split_runs(req, s);
@@ -441,4 +441,4 @@ ReportOutcome write_report(const ReportRequest& req) {
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

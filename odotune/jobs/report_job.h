@@ -20,7 +20,7 @@
 
 #include <odotune/objectives/fitness_mode.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 struct ReportRequest {
   std::filesystem::path store;
@@ -28,7 +28,7 @@ struct ReportRequest {
   // Track of the trajectory overlay (empty = every track of the experiment).
   std::string trajectory_track;
   // Fitness mode of the trajectory and convergence figures (the heatmaps show 1..7).
-  FitnessMode mode = kDefaultFitnessMode;
+  objectives::FitnessMode mode = objectives::kDefaultFitnessMode;
   // Track files that take precedence over those the experiment names
   // (for a store whose experiment's tracks have moved).
   std::vector<std::string> track_files;
@@ -42,8 +42,8 @@ struct ReportOutcome {
   std::string headline;                      // one line: mean RMSE improvement per model
 };
 
-// Throws odotune::Failure (one line) on a missing or empty store, an
+// Throws core::Failure (one line) on a missing or empty store, an
 // unwritable folder, gnuplot failing or an unknown trajectory track.
 ReportOutcome write_report(const ReportRequest& request);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

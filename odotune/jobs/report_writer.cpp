@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-namespace odotune {
+namespace odotune::jobs {
 
 std::string file_safe(const std::string& s) {
   std::string out;
@@ -30,9 +30,9 @@ std::string seeds_phrase(const std::vector<results::RunRecord>& runs) {
 void ReportWriter::text(const std::string& name, const std::string& what, const std::string& content) {
   const std::filesystem::path p = dir_ / name;
   try {
-    write_atomically(p, what, content);
+    core::write_atomically(p, what, content);
   } catch (const std::exception& ex) {
-    throw Failure(ex.what());
+    throw core::Failure(ex.what());
   }
   files.push_back(p);
 }
@@ -51,4 +51,4 @@ std::string ReportWriter::svg_of(const std::filesystem::path& p) {
   return ss.str();
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -15,7 +15,7 @@
 #include <odotune/results/report_html.h>
 #include <odotune/results/run_record.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 // A name usable in a file name: letters, digits, '-', '_', '.' kept.
 std::string file_safe(const std::string& s);
@@ -36,7 +36,7 @@ class ReportWriter {
     try {
       draw(stem);
     } catch (const std::exception& ex) {
-      throw Failure(fmt::format("{}: cannot draw the figure: {}", stem.string(), ex.what()));
+      throw core::Failure(fmt::format("{}: cannot draw the figure: {}", stem.string(), ex.what()));
     }
     files.push_back(stem.string() + ".png");
     files.push_back(stem.string() + ".svg");
@@ -55,4 +55,4 @@ class ReportWriter {
   std::filesystem::path dir_;
 };
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -12,7 +12,7 @@
 #include <odotune/core/failure.h>
 #include <odotune/core/output_paths.h>
 
-namespace odotune {
+namespace odotune::jobs {
 namespace {
 
 namespace rl = filters::rl;
@@ -24,7 +24,7 @@ std::int64_t at_seconds(const rlnode::Recording& rec, const std::optional<double
   return s ? rl_time_ns(rec, *s) : kEnd;
 }
 
-nlohmann::json json_of(const FixScore& s) {
+nlohmann::json json_of(const objectives::FixScore& s) {
   return {{"rmse_m", s.rmse_m}, {"fixes", s.fixes}, {"finite", s.finite}};
 }
 
@@ -45,7 +45,7 @@ void write_rl_trajectory(const std::filesystem::path& path, const std::vector<rl
                        static_cast<double>(p.time_ns) * 1e-9, p.state[rl::kX], p.state[rl::kY], p.state[rl::kZ],
                        q.x(), q.y(), q.z(), q.w());
   }
-  write_atomically(path, "trajectory", out.str());
+  core::write_atomically(path, "trajectory", out.str());
 }
 
 rlnode::RlParams read_rl_file(const RlSource& src) {
@@ -58,7 +58,7 @@ rlnode::RlParams read_rl_file(const RlSource& src) {
         return rlnode::read_navsat_params(src.params_file);
     } catch (const std::exception&) {  // not a navsat file either: the first reason stands
     }
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
 }
 
@@ -66,7 +66,7 @@ rlnode::Matrix15 rl_noise_from(const std::filesystem::path& file, const std::str
   try {
     return rlnode::read_rl_params(file, node_name).process_noise_covariance;
   } catch (const std::exception& e) {
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
 }
 
@@ -96,9 +96,10 @@ std::pair<std::string, rlnode::Pose3> parse_tf(const std::string& text) {
     }
   }
   if (eq == std::string::npos || eq == 0 || v.size() != 6) {
-    throw Failure(fmt::format("--tf {}: expected FRAME=x,y,z,roll,pitch,yaw (the frame's pose in base_link, "
-                              "metres and radians)",
-                              text));
+    throw core::Failure(
+        fmt::format("--tf {}: expected FRAME=x,y,z,roll,pitch,yaw (the frame's pose in base_link, "
+                    "metres and radians)",
+                    text));
   }
   rlnode::Pose3 p;
   p.t = {v[0], v[1], v[2]};
@@ -115,12 +116,12 @@ std::pair<std::string, std::string> parse_remap(const std::string& text) {
   const std::size_t eq = text.find('=');
   const std::string from = text.substr(0, eq), to = eq == std::string::npos ? "" : text.substr(eq + 1);
   if (eq == std::string::npos || from.empty() || to.empty() || to.find('=') != std::string::npos)
-    throw Failure(fmt::format(
+    throw core::Failure(fmt::format(
         "--remap {}: expected FROM=TO, e.g. --remap odometry/wheel=/husky_velocity_controller/odom", text));
   return {from, to};
 }
 
-RlSource rl_source_of(const ExperimentRl& x, const std::filesystem::path& bag,
+RlSource rl_source_of(const formats::ExperimentRl& x, const std::filesystem::path& bag,
                       std::optional<filters::rl::RlFilterType> filter) {
   RlSource src;
   src.filter = filter;
@@ -137,7 +138,8 @@ RlSource rl_source_of(const ExperimentRl& x, const std::filesystem::path& bag,
 
 RlLoaded load_rl(const RlSource& src) {
   if (src.bag.empty())
-    throw Failure("--rl-params: expected the robot's recording, --bag BAG, or the project's tracks, --track T");
+    throw core::Failure(
+        "--rl-params: expected the robot's recording, --bag BAG, or the project's tracks, --track T");
   rlnode::RecordingOptions options;
   for (const std::string& t : src.tf) options.frames.insert(parse_tf(t));
   options.gps_topic = src.gps_topic;
@@ -158,15 +160,15 @@ RlLoaded load_rl(const RlSource& src) {
       out.alignment = rlnode::fit_gps_alignment(out.rec, reference, src.gps_heading_fit_s);
       out.rec.gps_transform = out.alignment->transform;
     }
-  } catch (const Failure&) {
+  } catch (const core::Failure&) {
     throw;
   } catch (const std::exception& e) {
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
   const rlnode::Recording& rec = out.rec;
   if (rec.gps_sensor >= 0 && !rec.gps_transform.fixed && rec.navsat_headings.empty() &&
       !rec.params.navsat.use_odometry_yaw) {
-    throw Failure(
+    throw core::Failure(
         fmt::format("{}: navsat_transform_node needs the IMU's heading for its datum, and the bag has "
                     "no IMU orientation; expected --gps-heading-fit SECONDS",
                     src.bag.string()));
@@ -179,7 +181,8 @@ rlnode::ReplayOutput outage_run(const rlnode::Recording& rec, const rlnode::Repl
   // Scoring a fix leaves the filter as it is, so this is the trajectory of
   // GPS fused before `from_ns` only.
   return rlnode::replay(
-      rec, rlnode::make_schedule(rec, outage_protocol_roles(rec, from_ns, until_ns), until_ns), s, trajectory);
+      rec, rlnode::make_schedule(rec, objectives::outage_protocol_roles(rec, from_ns, until_ns), until_ns), s,
+      trajectory);
 }
 
 RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
@@ -187,15 +190,19 @@ RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::Rep
                                  std::vector<rlnode::TrajectoryPoint>* outage_trajectory) {
   rlnode::ReplayOutput a = outage_run(rec, s, span.outage_from_ns, span.end_ns, outage_trajectory != nullptr);
   const rlnode::ReplayOutput b = rlnode::replay(
-      rec, rlnode::make_schedule(rec, every_fifth_roles(rec, span.fifth_from_ns, span.end_ns), span.end_ns), s);
+      rec,
+      rlnode::make_schedule(rec, objectives::every_fifth_roles(rec, span.fifth_from_ns, span.end_ns),
+                            span.end_ns),
+      s);
   if (outage_trajectory) *outage_trajectory = std::move(a.trajectory);
-  return {score_of(std::span(&a, 1)), score_of(std::span(&b, 1))};
+  return {objectives::score_of(std::span(&a, 1)), objectives::score_of(std::span(&b, 1))};
 }
 
 RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
-  if (!request.trajectory_out.empty()) check_output_file("--trajectory-out", request.trajectory_out.string());
-  if (!request.json_out.empty()) check_output_file("--json", request.json_out.string());
-  if (!request.fixes_out.empty()) check_output_file("--fixes-out", request.fixes_out.string());
+  if (!request.trajectory_out.empty())
+    core::check_output_file("--trajectory-out", request.trajectory_out.string());
+  if (!request.json_out.empty()) core::check_output_file("--json", request.json_out.string());
+  if (!request.fixes_out.empty()) core::check_output_file("--fixes-out", request.fixes_out.string());
   const RlLoaded loaded = load_rl(request.src);
   const rlnode::Recording& rec = loaded.rec;
   const std::int64_t until = at_seconds(rec, request.until_s);
@@ -216,9 +223,9 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
   std::string what = "all inputs";
   if (!rec.fixes.empty()) {
     std::vector<rlnode::Schedule> folds;
-    for (const auto& roles : heldout_fix_folds(rec, 5, 1.0, until))
+    for (const auto& roles : objectives::heldout_fix_folds(rec, 5, 1.0, until))
       folds.push_back(rlnode::make_schedule(rec, roles, until));
-    out.heldout = replay_score(rec, folds, s);
+    out.heldout = objectives::replay_score(rec, folds, s);
     if (request.from_s) {
       const std::int64_t from = at_seconds(rec, request.from_s);
       out.protocols = score_protocols(rec, s, {from, from, until},
@@ -227,11 +234,12 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
     }
   }
   if (!request.outages_s.empty() && !rec.fixes.empty()) {
-    const std::int64_t first = request.from_s ? at_seconds(rec, request.from_s) : after_warmup(rec, 30.0);
-    const std::vector<OutageWindow> w = outage_windows(rec, request.outages_s, request.outage_every_s, first,
-                                                       until);
+    const std::int64_t first = request.from_s ? at_seconds(rec, request.from_s)
+                                              : objectives::after_warmup(rec, 30.0);
+    const std::vector<objectives::OutageWindow> w = objectives::outage_windows(
+        rec, request.outages_s, request.outage_every_s, first, until);
     out.outage_windows = w.size();
-    out.outages = OutageReplays(rec, w, until).score(s);
+    out.outages = objectives::OutageReplays(rec, w, until).score(s);
   }
   if (!request.trajectory_out.empty()) {
     write_rl_trajectory(request.trajectory_out, points,
@@ -246,7 +254,7 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
       const Eigen::Vector3d p = rlnode::fix_in_odom(f, run.gps_transform);
       text << fmt::format("{:.9f} {:.4f} {:.4f}\n", static_cast<double>(f.stamp_ns) * 1e-9, p.x(), p.y());
     }
-    write_atomically(request.fixes_out, "fixes", text.str());
+    core::write_atomically(request.fixes_out, "fixes", text.str());
   }
   if (!request.json_out.empty()) {
     nlohmann::json j = {
@@ -266,9 +274,9 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
       j["simulated_outages"]["every_s"] = request.outage_every_s;
       j["simulated_outages"]["windows"] = out.outage_windows;
     }
-    write_atomically(request.json_out, "JSON", j.dump(2) + "\n");
+    core::write_atomically(request.json_out, "JSON", j.dump(2) + "\n");
   }
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

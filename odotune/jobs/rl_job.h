@@ -31,7 +31,7 @@
 #include <odotune/rlnode/replay.h>
 #include <odotune/tuner/summary.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 struct RlSource {
   std::filesystem::path params_file, bag;
@@ -53,7 +53,7 @@ struct RlLoaded {
 // Reads the parameter file and the bag; throws Failure with one line.
 RlLoaded load_rl(const RlSource& src);
 // An experiment's robot_localization section applied to one of its bags.
-RlSource rl_source_of(const ExperimentRl& x, const std::filesystem::path& bag,
+RlSource rl_source_of(const formats::ExperimentRl& x, const std::filesystem::path& bag,
                       std::optional<filters::rl::RlFilterType> filter = std::nullopt);
 
 // The filter's trajectory in TUM format (t x y z qx qy qz qw) on the
@@ -81,7 +81,7 @@ std::string rmse_text(int decimals, double v_m);
 std::pair<std::string, std::string> parse_remap(const std::string& text);
 
 struct RlProtocolScores {
-  FixScore outage, every_fifth;
+  objectives::FixScore outage, every_fifth;
 };
 // A held-out span and its two protocols (odotune/objectives/rl_protocols.h): a GPS
 // outage from `outage_from_ns` to `end_ns` (the GPS fused before), and every
@@ -123,9 +123,9 @@ struct RlEvalOutcome {
   filters::rl::State final_state;
   double duration_s = 0.0;
   long processed = 0, rejected = 0;
-  std::optional<FixScore> heldout;            // 5 folds of 1 s blocks over the span
-  std::optional<RlProtocolScores> protocols;  // with from_s
-  std::optional<FixScore> outages;            // with outages_s
+  std::optional<objectives::FixScore> heldout;  // 5 folds of 1 s blocks over the span
+  std::optional<RlProtocolScores> protocols;    // with from_s
+  std::optional<objectives::FixScore> outages;  // with outages_s
   std::size_t outage_windows = 0;
   std::optional<rlnode::GpsAlignment> alignment;
   std::vector<std::string> notes;
@@ -140,8 +140,8 @@ struct RlTuneRequest : SolverSettings {
   std::optional<double> end_s;            // ignore the recording after this [s]
   // Judging before from_s: the GPS fused for this long before the outage.
   double lead_in_s = 60.0;
-  RlTuneOptions options;
-  RlSearchOptions search;
+  objectives::RlTuneOptions options;
+  objectives::RlSearchOptions search;
   int starts = 1;  // refinements from seeds seed, seed + 1, …; the lowest tuning fitness is written
   std::filesystem::path config_out, json_out;
   bool ros1_out = false;                  // write the ROS 1 form (default ROS 2)
@@ -158,7 +158,7 @@ struct RlStartOutcome {
   std::vector<double> factors;  // per parameter: the tuned multiplier
   rlnode::ReplaySettings tuned;
   double fitness = 0.0;                    // tuning (data) fitness
-  FixScore heldout, outage;                // on the tuning span
+  objectives::FixScore heldout, outage;    // on the tuning span
   std::optional<RlProtocolScores> judged;  // on the judged span: never seen by the tune
   std::vector<RlParamProfile> profiles;    // per parameter (empty without a profile)
   long evaluations = 0;
@@ -177,8 +177,8 @@ struct RlTuneOutcome {
   std::vector<double> factors;  // the written start's
   rlnode::ReplaySettings baseline, tuned;
   double baseline_fitness = 0.0, tuned_fitness = 0.0;
-  FixScore baseline_heldout, tuned_heldout, baseline_outage, tuned_outage;  // on the tuning span
-  std::optional<RlProtocolScores> baseline_judged, tuned_judged;            // never seen by the tune
+  objectives::FixScore baseline_heldout, tuned_heldout, baseline_outage, tuned_outage;  // on the tuning span
+  std::optional<RlProtocolScores> baseline_judged, tuned_judged;  // never seen by the tune
   std::size_t outage_windows = 0;
   RlGridResult grid;
   std::vector<RlStartOutcome> starts;
@@ -210,7 +210,7 @@ void write_tuned_params(const std::filesystem::path& path, const rlnode::RlParam
 // applied, navsat's yaw_offset when the experiment fits the GPS heading, the
 // held-out scores and `provenance` in comments. Reads the run's bag again.
 // Throws Failure with one line; nothing is written then.
-void write_rl_run(const Experiment& e, const results::RunRecord& run, const std::filesystem::path& out,
+void write_rl_run(const formats::Experiment& e, const results::RunRecord& run, const std::filesystem::path& out,
                   bool ros2, const std::string& provenance);
 // `odotune report` for a store of rl-ekf runs (odotune/jobs/report_job.h calls it):
 // the held-out GPS-outage errors per bag and fitness, improvement per
@@ -222,7 +222,7 @@ ReportOutcome write_rl_report(const ReportRequest& req, const results::Experimen
 // The grid, the starts and the written one on `objective`, into `o` (its
 // parameter names, baseline and tuned scores, starts, summary); `judge`
 // scores a start's settings on a span the tune never saw (nullopt: none).
-void search_rl(const RlObjective& objective, const RlTuneRequest& request, RlTuneOutcome& o,
+void search_rl(const objectives::RlObjective& objective, const RlTuneRequest& request, RlTuneOutcome& o,
                const std::function<std::optional<RlProtocolScores>(const rlnode::ReplaySettings&)>& judge);
 // The search and its scores on an already loaded recording (no file read or
 // written; the request's output paths are not used); with from_s, `tuned_on`
@@ -230,4 +230,4 @@ void search_rl(const RlObjective& objective, const RlTuneRequest& request, RlTun
 // whole one it is judged on. Throws Failure.
 RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request, const RlLoaded* tuned_on = nullptr);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -18,15 +18,15 @@
 #include <odotune/results/report_html.h>
 #include <odotune/results/report_tables.h>
 
-namespace odotune {
+namespace odotune::jobs {
 namespace {
 
 namespace fs = std::filesystem;
 using results::RunRecord;
 
 std::string fitness_name(int mode) {
-  const std::optional<RlFitness> f = rl_fitness_of_mode(mode);
-  return f ? std::string(to_string(*f)) : fmt::format("mode {}", mode);
+  const std::optional<objectives::RlFitness> f = objectives::rl_fitness_of_mode(mode);
+  return f ? std::string(objectives::to_string(*f)) : fmt::format("mode {}", mode);
 }
 
 // Per bag and fitness, the run of lowest tuning fitness (its held-out scores
@@ -50,14 +50,14 @@ results::TrajectoryPath path_of(std::string name, const std::vector<rlnode::Traj
 }
 
 // "EKF" or "UKF": the filter of the experiment's model.
-std::string_view filter_label(const Experiment& e) {
+std::string_view filter_label(const formats::Experiment& e) {
   return filters::rl::display_name(e.models.front().rl_filter());
 }
 
 // The outage protocol's trajectories of each bag's best runs, replayed from the bag.
-void trajectory_figures(const Experiment& e, const std::vector<RunRecord>& runs, ReportWriter& w,
+void trajectory_figures(const formats::Experiment& e, const std::vector<RunRecord>& runs, ReportWriter& w,
                         results::HtmlPage& page, ReportOutcome& out) {
-  const ExperimentRl& x = *e.robot_localization;
+  const formats::ExperimentRl& x = *e.robot_localization;
   const auto best = best_runs(runs);
   std::vector<results::HtmlFigure> row;
   for (const std::string& bag : e.tracks) {
@@ -79,17 +79,18 @@ void trajectory_figures(const Experiment& e, const std::vector<RunRecord>& runs,
       held.ys_m.push_back(f.measured.y());
     }
     paths.push_back(std::move(held));
-    paths.push_back(path_of(
-        fmt::format("the file's values ({})", rmse_text(2, score_of(std::span(&b, 1)).rmse_m)), b.trajectory));
+    paths.push_back(path_of(fmt::format("the file's values ({})",
+                                        rmse_text(2, objectives::score_of(std::span(&b, 1)).rmse_m)),
+                            b.trajectory));
     for (const auto& [key, r] : best) {
       if (key.first != name) continue;
       rlnode::ReplaySettings s = base;
       std::string why;
-      if (!apply_rl_factors(rec.params, r->param_names, r->params, &s, &why))
-        throw Failure(fmt::format("run {}: {}", results::run_key(*r), why));
+      if (!objectives::apply_rl_factors(rec.params, r->param_names, r->params, &s, &why))
+        throw core::Failure(fmt::format("run {}: {}", results::run_key(*r), why));
       const rlnode::ReplayOutput t = outage_run(rec, s, from, end, true);
       paths.push_back(path_of(fmt::format("tuned, {} seed {} ({})", fitness_name(r->mode), r->seed,
-                                          rmse_text(2, score_of(std::span(&t, 1)).rmse_m)),
+                                          rmse_text(2, objectives::score_of(std::span(&t, 1)).rmse_m)),
                               t.trajectory));
     }
     const std::string title = fmt::format(
@@ -243,11 +244,11 @@ void determined_section(const std::vector<RunRecord>& runs, ReportWriter& w, res
 
 ReportOutcome write_rl_report(const ReportRequest& req, const results::ExperimentInfo& info,
                               const std::vector<RunRecord>& runs) {
-  const Experiment e = parse_experiment(info.text, info.file);
+  const formats::Experiment e = formats::parse_experiment(info.text, info.file);
   if (!e.robot_localization)
-    throw Failure(fmt::format("{}: not an rl-ekf or rl-ukf experiment", req.store.string()));
-  const std::string model = to_string(e.models.front());
-  const ExperimentRl& x = *e.robot_localization;
+    throw core::Failure(fmt::format("{}: not an rl-ekf or rl-ukf experiment", req.store.string()));
+  const std::string model = objectives::to_string(e.models.front());
+  const formats::ExperimentRl& x = *e.robot_localization;
   ReportOutcome out;
   out.experiment = info.name;
   out.runs = static_cast<long>(runs.size());
@@ -335,4 +336,4 @@ ReportOutcome write_rl_report(const ReportRequest& req, const results::Experimen
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -10,7 +10,7 @@
 #include <odotune/core/why.h>
 #include <odotune/tuner/evaluate.h>
 
-namespace odotune {
+namespace odotune::jobs {
 namespace {
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -19,10 +19,10 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 // The block (0 position … 4 acceleration) of each parameter of the space, or
 // −1 for a parameter on an input's covariance.
-std::vector<int> blocks_of(const RlObjective& objective) {
+std::vector<int> blocks_of(const objectives::RlObjective& objective) {
   std::vector<int> out;
-  for (const ParamSpec& p : objective.space().params()) {
-    const std::vector<int> members = rl_noise_members(p.name, false);
+  for (const objectives::ParamSpec& p : objective.space().params()) {
+    const std::vector<int> members = objectives::rl_noise_members(p.name, false);
     out.push_back(members.empty() ? -1 : members.front() / 3);
   }
   return out;
@@ -30,7 +30,7 @@ std::vector<int> blocks_of(const RlObjective& objective) {
 
 // The data fitness, for the profile (the prior is not the recording's).
 struct DataFitness {
-  const RlObjective* objective;
+  const objectives::RlObjective* objective;
   double fitness(std::span<const double> x) const { return objective->data_fitness(x); }
   void fitness_batch(std::span<const double> xs, std::span<double> out) const {
     objective->data_fitness_batch(xs, out);
@@ -59,7 +59,7 @@ struct Profiled {
   long evaluations = 0;
 };
 
-void profile_and_reset(const RlObjective& objective, const RlSearchOptions& options,
+void profile_and_reset(const objectives::RlObjective& objective, const objectives::RlSearchOptions& options,
                        const SolverSettings& settings, Profiled& r) {
   const auto [lo, hi] = objective.bounds();
   const std::size_t n = lo.size();
@@ -139,8 +139,8 @@ void profile_and_reset(const RlObjective& objective, const RlSearchOptions& opti
 namespace {
 
 // The grid's best profiled and reset (when the options ask for a profile).
-void profile_grid(const RlObjective& objective, const RlSearchOptions& options, const SolverSettings& settings,
-                  RlGridResult& r) {
+void profile_grid(const objectives::RlObjective& objective, const objectives::RlSearchOptions& options,
+                  const SolverSettings& settings, RlGridResult& r) {
   if (!options.profile || (settings.stop && settings.stop->load())) return;
   Profiled p{r.x, objective.data_fitness(r.x), {}, 1};
   profile_and_reset(objective, options, settings, p);
@@ -152,7 +152,7 @@ void profile_grid(const RlObjective& objective, const RlSearchOptions& options, 
 
 // The refinement's problem: the free parameters of `base`, in their box.
 struct Subset {
-  const RlObjective* objective;
+  const objectives::RlObjective* objective;
   std::vector<double> base;
   std::vector<std::size_t> free;
   std::vector<double> lo, hi;
@@ -176,7 +176,7 @@ struct Subset {
 
 }  // namespace
 
-long rl_grid_points(const RlObjective& objective, const RlSearchOptions& options) {
+long rl_grid_points(const objectives::RlObjective& objective, const objectives::RlSearchOptions& options) {
   if (options.grid_levels.empty()) return 1;
   const std::vector<int> block = blocks_of(objective);
   const int nb = 1 + *std::max_element(block.begin(), block.end());
@@ -185,7 +185,7 @@ long rl_grid_points(const RlObjective& objective, const RlSearchOptions& options
   return count;
 }
 
-RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& options,
+RlGridResult rl_grid_stage(const objectives::RlObjective& objective, const objectives::RlSearchOptions& options,
                            const SolverSettings& settings) {
   const auto t0 = std::chrono::steady_clock::now();
   const auto [lo, hi] = objective.bounds();
@@ -214,7 +214,7 @@ RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& 
       if (block[i] >= 0) x[i] = std::clamp(level[static_cast<std::size_t>(block[i])], lo[i], hi[i]);
     points.push_back(std::move(x));
   }
-  const BoxProblem<RlObjective> problem{&objective};
+  const BoxProblem<objectives::RlObjective> problem{&objective};
   const std::vector<double> f = tuner::evaluate_all(problem, points, settings.stop);
   // The lowest; on a tie, the first in the grid's order.
   std::size_t best = 0;
@@ -230,8 +230,9 @@ RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& 
   return r;
 }
 
-RlStartResult rl_refine_and_profile(const RlObjective& objective, const RlGridResult& grid,
-                                    const RlSearchOptions& options, const SolverSettings& settings) {
+RlStartResult rl_refine_and_profile(const objectives::RlObjective& objective, const RlGridResult& grid,
+                                    const objectives::RlSearchOptions& options,
+                                    const SolverSettings& settings) {
   const auto t0 = std::chrono::steady_clock::now();
   RlStartResult r;
   r.seed = settings.seed;
@@ -269,4 +270,4 @@ RlStartResult rl_refine_and_profile(const RlObjective& objective, const RlGridRe
   return r;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

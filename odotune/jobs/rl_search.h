@@ -24,7 +24,7 @@
 #include <odotune/objectives/rl_search_options.h>
 #include <odotune/tuner/summary.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 // One tuned parameter's profile.
 struct RlParamProfile {
@@ -44,8 +44,8 @@ struct RlGridResult {
   double seconds = 0.0;
 };
 // The points rl_grid_stage evaluates before its profile (1 without a grid).
-long rl_grid_points(const RlObjective& objective, const RlSearchOptions& options);
-RlGridResult rl_grid_stage(const RlObjective& objective, const RlSearchOptions& options,
+long rl_grid_points(const objectives::RlObjective& objective, const objectives::RlSearchOptions& options);
+RlGridResult rl_grid_stage(const objectives::RlObjective& objective, const objectives::RlSearchOptions& options,
                            const SolverSettings& settings);
 
 // The seeded stage for one start (its seed in `settings`): the refinement of
@@ -62,7 +62,7 @@ struct RlStartResult {
   long evaluations = 0;                  // refinement and profile
   double seconds = 0.0;
 };
-RlStartResult rl_refine_and_profile(const RlObjective& objective, const RlGridResult& grid,
-                                    const RlSearchOptions& options, const SolverSettings& settings);
+RlStartResult rl_refine_and_profile(const objectives::RlObjective& objective, const RlGridResult& grid,
+                                    const objectives::RlSearchOptions& options, const SolverSettings& settings);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -12,17 +12,17 @@
 #include <odotune/formats/calibration_yaml.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 RlTracksLoaded load_rl_tracks(const RlTrackSource& src) {
-  if (src.tracks.empty()) throw Failure("--rl-params with tracks: expected at least one --track");
+  if (src.tracks.empty()) throw core::Failure("--rl-params with tracks: expected at least one --track");
   std::string why;
-  if (!src.options.IsValid(&why)) throw Failure(why);
+  if (!src.options.IsValid(&why)) throw core::Failure(why);
   RlTracksLoaded out;
-  RlTrackOptions options = src.options;
+  objectives::RlTrackOptions options = src.options;
   if (!src.calibration.empty()) {
-    const CalibrationFile c = read_calibration_file(src.calibration);
-    if (c.odometry == OdometryInput::wheels) {
+    const formats::CalibrationFile c = formats::read_calibration_file(src.calibration);
+    if (c.odometry == tracks::OdometryInput::wheels) {
       options.wheels = c.params;
     } else {
       options.twist = c.twist;
@@ -31,19 +31,19 @@ RlTracksLoaded load_rl_tracks(const RlTrackSource& src) {
   try {
     out.params = rlnode::read_rl_params(src.params_file, src.node_name, src.filter);
     for (const std::filesystem::path& path : src.tracks)
-      out.tracks.push_back(load_rl_track(read_track(path), path, out.params, options));
-  } catch (const Failure&) {
+      out.tracks.push_back(objectives::load_rl_track(tracks::read_track(path), path, out.params, options));
+  } catch (const core::Failure&) {
     throw;
   } catch (const std::exception& e) {
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
   return out;
 }
 
 std::vector<RlTrackRow> score_rl_tracks(const RlTracksLoaded& loaded, const rlnode::ReplaySettings& s,
-                                        const RlTuneOptions& protocols, bool keep_trajectory) {
+                                        const objectives::RlTuneOptions& protocols, bool keep_trajectory) {
   std::vector<RlTrackRow> rows;
-  for (const RlTrack& t : loaded.tracks) {
+  for (const objectives::RlTrack& t : loaded.tracks) {
     RlTrackRow r;
     r.track = t.file;
     r.odometry = t.odometry;
@@ -51,9 +51,9 @@ std::vector<RlTrackRow> score_rl_tracks(const RlTracksLoaded& loaded, const rlno
     r.initial_heading_error_rad = t.initial_heading_error_rad;
     r.duration_s = static_cast<double>(t.rec.end_ns - t.rec.start_ns) * 1e-9;
     try {
-      r.scores = score_rl_track(t, s, protocols, keep_trajectory);
+      r.scores = objectives::score_rl_track(t, s, protocols, keep_trajectory);
     } catch (const std::exception& e) {
-      throw Failure(e.what());
+      throw core::Failure(e.what());
     }
     rows.push_back(std::move(r));
   }
@@ -62,7 +62,7 @@ std::vector<RlTrackRow> score_rl_tracks(const RlTracksLoaded& loaded, const rlno
 
 namespace {
 
-nlohmann::json json_of(const TruthScore& s) {
+nlohmann::json json_of(const objectives::TruthScore& s) {
   return {{"rmse_m", s.rmse_m},
           {"mae_m", s.mae_m},
           {"max_m", s.max_m},
@@ -70,14 +70,14 @@ nlohmann::json json_of(const TruthScore& s) {
           {"finite", s.finite}};
 }
 
-nlohmann::json json_of(const FixScore& s) {
+nlohmann::json json_of(const objectives::FixScore& s) {
   return {{"rmse_m", s.rmse_m}, {"fixes", s.fixes}, {"finite", s.finite}};
 }
 
 nlohmann::json json_of(const RlTrackRow& r) {
   return {
       {"track", r.track.string()},
-      {"odometry", to_string(r.odometry)},
+      {"odometry", tracks::to_string(r.odometry)},
       {"start", r.start_note},
       {"initial_heading_error_rad", std::isfinite(r.initial_heading_error_rad)
                                         ? nlohmann::json(r.initial_heading_error_rad)
@@ -92,30 +92,30 @@ nlohmann::json json_of(const RlTrackRow& r) {
 
 // The rows' scores over all tracks together.
 void pool_rows(const std::vector<RlTrackRow>& rows, RlTrackEvalOutcome& o) {
-  std::vector<TruthScore> run, out;
-  std::vector<FixScore> held, fix_out;
+  std::vector<objectives::TruthScore> run, out;
+  std::vector<objectives::FixScore> held, fix_out;
   for (const RlTrackRow& r : rows) {
     run.push_back(r.scores.run);
     out.push_back(r.scores.outages);
     held.push_back(r.scores.heldout_fixes);
     fix_out.push_back(r.scores.outage_fixes);
   }
-  o.run = pooled(std::span<const TruthScore>(run));
-  o.outages = pooled(std::span<const TruthScore>(out));
-  o.heldout_fixes = pooled(std::span<const FixScore>(held));
-  o.outage_fixes = pooled(std::span<const FixScore>(fix_out));
+  o.run = objectives::pooled(std::span<const objectives::TruthScore>(run));
+  o.outages = objectives::pooled(std::span<const objectives::TruthScore>(out));
+  o.heldout_fixes = objectives::pooled(std::span<const objectives::FixScore>(held));
+  o.outage_fixes = objectives::pooled(std::span<const objectives::FixScore>(fix_out));
 }
 
 }  // namespace
 
 RlTrackEvalOutcome run_rl_track_eval(const RlTrackEvalRequest& request) {
   std::string why;
-  if (!request.protocols.IsValid(&why)) throw Failure("eval: " + why);
+  if (!request.protocols.IsValid(&why)) throw core::Failure("eval: " + why);
   if (!request.trajectory_out.empty()) {
-    if (request.src.tracks.size() != 1) throw Failure("eval: --trajectory-out takes one --track");
-    check_output_file("--trajectory-out", request.trajectory_out.string());
+    if (request.src.tracks.size() != 1) throw core::Failure("eval: --trajectory-out takes one --track");
+    core::check_output_file("--trajectory-out", request.trajectory_out.string());
   }
-  if (!request.json_out.empty()) check_output_file("--json", request.json_out.string());
+  if (!request.json_out.empty()) core::check_output_file("--json", request.json_out.string());
   const RlTracksLoaded loaded = load_rl_tracks(request.src);
   rlnode::ReplaySettings s = rlnode::settings_of(loaded.params);
   if (!request.noise_from.empty()) s.process_noise = rl_noise_from(request.noise_from, loaded.params.node_name);
@@ -137,27 +137,28 @@ RlTrackEvalOutcome run_rl_track_eval(const RlTrackEvalRequest& request) {
         {"fixes", {{"heldout", json_of(o.heldout_fixes)}, {"outages", json_of(o.outage_fixes)}}},
         {"tracks", nlohmann::json::array()}};
     for (const RlTrackRow& r : o.rows) j["tracks"].push_back(json_of(r));
-    write_atomically(request.json_out, "JSON", j.dump(2) + "\n");
+    core::write_atomically(request.json_out, "JSON", j.dump(2) + "\n");
   }
   return o;
 }
 
 RlTrackTuneOutcome run_rl_track_tune(const RlTuneRequest& request, const RlTrackSource& src) {
   std::string why;
-  if (!request.IsValid(&why)) throw Failure("tune: " + why);
+  if (!request.IsValid(&why)) throw core::Failure("tune: " + why);
   for (const auto& [flag, set] :
        {std::pair{"--until", request.until_s.has_value()}, std::pair{"--from", request.from_s.has_value()},
         std::pair{"--end", request.end_s.has_value()}}) {
     if (set)
-      throw Failure(fmt::format("tune: {} cuts a bag; tracks are tuned whole (judge others with eval)", flag));
+      throw core::Failure(fmt::format("tune: {} cuts a bag; tracks are tuned whole (judge others with eval)",
+                                      flag));
   }
-  check_output_file("--config-out", request.config_out.string());
-  check_output_file("--json", request.json_out.string());
-  check_output_file("--config-out-ros1", request.config_out_ros1.string());
-  if (!request.starts_out.empty()) check_output_dir("--starts-out", request.starts_out.string());
+  core::check_output_file("--config-out", request.config_out.string());
+  core::check_output_file("--json", request.json_out.string());
+  core::check_output_file("--config-out-ros1", request.config_out_ros1.string());
+  if (!request.starts_out.empty()) core::check_output_dir("--starts-out", request.starts_out.string());
   const RlTracksLoaded loaded = load_rl_tracks(src);
   std::vector<const rlnode::Recording*> recs;
-  for (const RlTrack& t : loaded.tracks) recs.push_back(&t.rec);
+  for (const objectives::RlTrack& t : loaded.tracks) recs.push_back(&t.rec);
   const rlnode::ReplaySettings base = rlnode::settings_of(loaded.params);
   RlTrackTuneOutcome out;
   RlTuneOutcome& o = out.tune;
@@ -165,16 +166,16 @@ RlTrackTuneOutcome run_rl_track_tune(const RlTuneRequest& request, const RlTrack
   o.filter = loaded.params.filter;
   o.bag = src.tracks.front();
   o.tracks = src.tracks;
-  for (const RlTrack& t : loaded.tracks) {
+  for (const objectives::RlTrack& t : loaded.tracks) {
     o.duration_s += static_cast<double>(t.rec.end_ns - t.rec.start_ns) * 1e-9;
     for (const std::string& n : t.rec.notes) o.notes.push_back(t.file.string() + ": " + n);
   }
   o.baseline = base;
   try {
-    const RlObjective objective(recs, base, request.options);
+    const objectives::RlObjective objective(recs, base, request.options);
     search_rl(objective, request, o, [](const rlnode::ReplaySettings&) { return std::nullopt; });
   } catch (const std::invalid_argument& e) {
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
   out.before = score_rl_tracks(loaded, base, request.options);
   out.after = score_rl_tracks(loaded, o.tuned, request.options);
@@ -198,4 +199,4 @@ RlTrackTuneOutcome run_rl_track_tune(const RlTuneRequest& request, const RlTrack
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -14,14 +14,14 @@
 #include <odotune/jobs/rl_job.h>
 #include <odotune/objectives/rl_track.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 struct RlTrackSource {
   std::filesystem::path params_file;
   std::string node_name;
   std::optional<filters::rl::RlFilterType> filter;  // as RlSource::filter
   std::vector<std::filesystem::path> tracks;
-  RlTrackOptions options;
+  objectives::RlTrackOptions options;
   // A calibration file (calibrate --config-out) applied to every track's
   // odometry (RlTrackOptions::wheels or twist); empty: none.
   std::filesystem::path calibration;
@@ -29,7 +29,7 @@ struct RlTrackSource {
 
 struct RlTracksLoaded {
   rlnode::RlParams params;
-  std::vector<RlTrack> tracks;
+  std::vector<objectives::RlTrack> tracks;
 };
 // Reads the file and every track; throws Failure with one line.
 RlTracksLoaded load_rl_tracks(const RlTrackSource& src);
@@ -37,21 +37,22 @@ RlTracksLoaded load_rl_tracks(const RlTrackSource& src);
 // One track under one setting.
 struct RlTrackRow {
   std::filesystem::path track;
-  OdometryInput odometry = OdometryInput::wheels;
+  tracks::OdometryInput odometry = tracks::OdometryInput::wheels;
   std::string start_note;
   double initial_heading_error_rad = 0.0;  // NaN without gt_theta
   double duration_s = 0.0;
-  RlTrackScores scores;
+  objectives::RlTrackScores scores;
 };
 std::vector<RlTrackRow> score_rl_tracks(const RlTracksLoaded& loaded, const rlnode::ReplaySettings& s,
-                                        const RlTuneOptions& protocols, bool keep_trajectory = false);
+                                        const objectives::RlTuneOptions& protocols,
+                                        bool keep_trajectory = false);
 
 struct RlTrackEvalRequest {
   RlTrackSource src;
   // Another robot_localization file whose process_noise_covariance replaces
   // this file's; empty: none.
   std::filesystem::path noise_from;
-  RlTuneOptions protocols;                         // the outage windows and held-out folds scored
+  objectives::RlTuneOptions protocols;             // the outage windows and held-out folds scored
   std::filesystem::path trajectory_out, json_out;  // trajectory: one track only
 };
 struct RlTrackEvalOutcome {
@@ -59,8 +60,8 @@ struct RlTrackEvalOutcome {
   filters::rl::RlFilterType filter = filters::rl::RlFilterType::ekf;  // the file's (or --filter's)
   std::vector<RlTrackRow> rows;
   // Over all tracks together.
-  TruthScore run, outages;
-  FixScore heldout_fixes, outage_fixes;
+  objectives::TruthScore run, outages;
+  objectives::FixScore heldout_fixes, outage_fixes;
 };
 // Throws Failure with one line; nothing is written then.
 RlTrackEvalOutcome run_rl_track_eval(const RlTrackEvalRequest& request);
@@ -75,4 +76,4 @@ struct RlTrackTuneOutcome {
 };
 RlTrackTuneOutcome run_rl_track_tune(const RlTuneRequest& request, const RlTrackSource& src);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

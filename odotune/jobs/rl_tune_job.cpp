@@ -13,7 +13,7 @@
 #include <odotune/core/why.h>
 #include <odotune/jobs/rl_job.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 void write_tuned_params(const std::filesystem::path& path, const rlnode::RlParams& params,
                         const rlnode::ReplaySettings& tuned,
@@ -42,26 +42,28 @@ void write_tuned_params(const std::filesystem::path& path, const rlnode::RlParam
         params.sensors[s].name, params.sensors[s].topic, f, std::sqrt(f));
   }
   try {
-    write_atomically(path, "parameter file",
-                     rlnode::write_rl_params(params.file, params, update, ros2, header));
+    core::write_atomically(path, "parameter file",
+                           rlnode::write_rl_params(params.file, params, update, ros2, header));
   } catch (const std::invalid_argument& e) {
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
 }
 
 bool RlTuneRequest::IsValid(std::string* why) const {
   if (!SolverSettings::IsValid(why) || !options.IsValid(why) || !search.IsValid(why)) return false;
-  if (until_s && from_s) return invalid(why, "--until and --from: expected one of them (tune before or after)");
+  if (until_s && from_s)
+    return core::invalid(why, "--until and --from: expected one of them (tune before or after)");
   if (until_s && !(*until_s > 0.0))
-    return invalid(why, fmt::format("--until {}: expected a positive number of seconds", *until_s));
+    return core::invalid(why, fmt::format("--until {}: expected a positive number of seconds", *until_s));
   if (from_s && !(*from_s > 0.0))
-    return invalid(why, fmt::format("--from {}: expected a positive number of seconds", *from_s));
+    return core::invalid(why, fmt::format("--from {}: expected a positive number of seconds", *from_s));
   if (end_s && !(*end_s > until_s.value_or(from_s.value_or(0.0))))
-    return invalid(why, fmt::format("--end {}: expected more seconds than --until or --from", *end_s));
-  if (starts < 1 || starts > 1000) return invalid(why, fmt::format("--starts {}: expected 1 to 1000", starts));
+    return core::invalid(why, fmt::format("--end {}: expected more seconds than --until or --from", *end_s));
+  if (starts < 1 || starts > 1000)
+    return core::invalid(why, fmt::format("--starts {}: expected 1 to 1000", starts));
   if (from_s && !(lead_in_s > 0.0 && lead_in_s < *from_s))
-    return invalid(why, fmt::format("judging before --from {} s: a lead-in of {} s, expected (0, {})", *from_s,
-                                    lead_in_s, *from_s));
+    return core::invalid(why, fmt::format("judging before --from {} s: a lead-in of {} s, expected (0, {})",
+                                          *from_s, lead_in_s, *from_s));
   return true;
 }
 
@@ -87,13 +89,13 @@ std::optional<RlJudgedSpan> judged_span(const rlnode::Recording& rec, const RlTu
   return std::nullopt;
 }
 
-RlObjective make_objective(const rlnode::Recording& rec, const RlTuneRequest& r) {
-  RlTuneOptions options = r.options;
+objectives::RlObjective make_objective(const rlnode::Recording& rec, const RlTuneRequest& r) {
+  objectives::RlTuneOptions options = r.options;
   options.until_ns = tuning_until_ns(rec, r);
   try {
-    return RlObjective(rec, rlnode::settings_of(rec.params), options);
+    return objectives::RlObjective(rec, rlnode::settings_of(rec.params), options);
   } catch (const std::invalid_argument& e) {
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
 }
 
@@ -106,7 +108,7 @@ SolverSettings stage_settings(const RlTuneRequest& r, std::uint64_t seed, long b
 }
 
 // The evaluations of one profile (for progress).
-long profile_budget(const RlObjective& objective, const RlTuneRequest& r) {
+long profile_budget(const objectives::RlObjective& objective, const RlTuneRequest& r) {
   if (!r.search.profile) return 0;
   long n = 0;
   const auto [lo, hi] = objective.bounds();
@@ -116,7 +118,7 @@ long profile_budget(const RlObjective& objective, const RlTuneRequest& r) {
 }
 
 // The evaluations a start costs (for progress): the solver's budget, the profile's points, a few more.
-long start_budget(const RlObjective& objective, const RlTuneRequest& r) {
+long start_budget(const objectives::RlObjective& objective, const RlTuneRequest& r) {
   const long n = r.search.refine_decades > 0.0
                      ? (r.solver.kind == tuner::SolverChoice::Kind::pso
                             ? static_cast<long>(r.particles) * (r.iterations + 1)
@@ -128,7 +130,8 @@ long start_budget(const RlObjective& objective, const RlTuneRequest& r) {
 
 using Judge = std::function<std::optional<RlProtocolScores>(const rlnode::ReplaySettings&)>;
 
-RlStartOutcome start_outcome(const RlObjective& objective, const RlStartResult& s, const Judge& judge) {
+RlStartOutcome start_outcome(const objectives::RlObjective& objective, const RlStartResult& s,
+                             const Judge& judge) {
   RlStartOutcome o;
   o.seed = s.seed;
   o.factors = objective.space().to_physical(s.x);
@@ -164,9 +167,9 @@ tuner::Summary combined_summary(const RlGridResult& grid, const RlStartResult& s
 
 }  // namespace
 
-void search_rl(const RlObjective& objective, const RlTuneRequest& request, RlTuneOutcome& o,
+void search_rl(const objectives::RlObjective& objective, const RlTuneRequest& request, RlTuneOutcome& o,
                const std::function<std::optional<RlProtocolScores>(const rlnode::ReplaySettings&)>& judge) {
-  for (const ParamSpec& p : objective.space().params()) o.param_names.push_back(p.name);
+  for (const objectives::ParamSpec& p : objective.space().params()) o.param_names.push_back(p.name);
   o.outage_windows = objective.window_count();
   o.baseline_fitness = objective.baseline_fitness();
   o.baseline_heldout = objective.baseline_heldout();
@@ -185,7 +188,7 @@ void search_rl(const RlObjective& objective, const RlTuneRequest& request, RlTun
     runs.push_back(rl_refine_and_profile(objective, o.grid, request.search, s));
     o.starts.push_back(start_outcome(objective, runs.back(), judge));
   }
-  if (o.starts.empty()) throw Failure("tune: stopped before the first start");
+  if (o.starts.empty()) throw core::Failure("tune: stopped before the first start");
   for (std::size_t k = 1; k < o.starts.size(); ++k)
     if (o.starts[k].fitness < o.starts[o.written].fitness) o.written = k;
   const RlStartOutcome& w = o.starts[o.written];
@@ -202,7 +205,7 @@ void search_rl(const RlObjective& objective, const RlTuneRequest& request, RlTun
 RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request, const RlLoaded* tuned_on) {
   const rlnode::Recording& rec = loaded.rec;
   const rlnode::Recording& trec = tuned_on ? tuned_on->rec : rec;
-  const RlObjective objective = make_objective(trec, request);
+  const objectives::RlObjective objective = make_objective(trec, request);
   RlTuneOutcome o;
   o.bag = rec.bag;
   o.params_file = rec.params.file;
@@ -236,11 +239,11 @@ RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request, cons
 
 RlTuneOutcome run_rl_tune(const RlTuneRequest& request) {
   std::string why;
-  if (!request.IsValid(&why)) throw Failure("tune: " + why);
-  check_output_file("--config-out", request.config_out.string());
-  check_output_file("--json", request.json_out.string());
-  check_output_file("--config-out-ros1", request.config_out_ros1.string());
-  if (!request.starts_out.empty()) check_output_dir("--starts-out", request.starts_out.string());
+  if (!request.IsValid(&why)) throw core::Failure("tune: " + why);
+  core::check_output_file("--config-out", request.config_out.string());
+  core::check_output_file("--json", request.json_out.string());
+  core::check_output_file("--config-out-ros1", request.config_out_ros1.string());
+  if (!request.starts_out.empty()) core::check_output_dir("--starts-out", request.starts_out.string());
   const RlLoaded loaded = load_rl(request.src);
   const rlnode::Recording& rec = loaded.rec;
   std::optional<RlLoaded> after;
@@ -271,4 +274,4 @@ RlTuneOutcome run_rl_tune(const RlTuneRequest& request) {
   return o;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -10,10 +10,12 @@
 #include <odotune/core/atomic_file.h>
 #include <odotune/jobs/rl_job.h>
 
-namespace odotune {
+namespace odotune::jobs {
 namespace {
 
-std::string score_text(const FixScore& s) { return s.finite ? fmt::format("{:.3f} m", s.rmse_m) : "diverged"; }
+std::string score_text(const objectives::FixScore& s) {
+  return s.finite ? fmt::format("{:.3f} m", s.rmse_m) : "diverged";
+}
 
 std::string percent(double before, double after) {
   return std::isfinite(before) && std::isfinite(after) && before > 0.0
@@ -21,7 +23,7 @@ std::string percent(double before, double after) {
              : "n/a";
 }
 
-std::string change(const FixScore& a, const FixScore& b) {
+std::string change(const objectives::FixScore& a, const objectives::FixScore& b) {
   return fmt::format("{} -> {} ({})", score_text(a), score_text(b), percent(a.rmse_m, b.rmse_m));
 }
 
@@ -64,7 +66,7 @@ std::pair<std::string, std::string> determined_lists(const RlTuneOutcome& o, con
   return {yes, no};
 }
 
-nlohmann::json json_of(const FixScore& s) {
+nlohmann::json json_of(const objectives::FixScore& s) {
   return {{"rmse_m", s.rmse_m}, {"fixes", s.fixes}, {"finite", s.finite}};
 }
 
@@ -111,10 +113,10 @@ std::string rl_tune_header(const RlTuneRequest& r, const RlTuneOutcome& o, std::
       "Search: {}.\n",
       tracks.empty() ? "bag" : "recordings, as tracks",
       r.command_line.empty() ? "odotune tune --rl-params ..." : r.command_line, source, o.params_file.string(),
-      span_text(o), to_string(r.options.fitness),
-      r.options.subtract_fix_variance ? " (the fixes' own variance taken out)" : "", to_string(r.options.space),
-      r.options.input_covariances ? " and input covariances" : "", fmt::join(r.options.outage_s, ", "),
-      o.outage_windows, r.options.outage_stride_s, search_text(r, o));
+      span_text(o), objectives::to_string(r.options.fitness),
+      r.options.subtract_fix_variance ? " (the fixes' own variance taken out)" : "",
+      objectives::to_string(r.options.space), r.options.input_covariances ? " and input covariances" : "",
+      fmt::join(r.options.outage_s, ", "), o.outage_windows, r.options.outage_stride_s, search_text(r, o));
   c += fmt::format(
       "This file is seed {}'s ({} replays){}; tuning fitness {:.4f} (the file's own values: {:.4f}).\n",
       st.seed, st.evaluations + o.grid.evaluations,
@@ -153,8 +155,8 @@ void write_rl_tune_json(const std::filesystem::path& path, const RlTuneRequest& 
   nlohmann::json j = {
       {"bag", o.bag.string()},
       {"params", o.params_file.string()},
-      {"fitness", std::string(to_string(r.options.fitness))},
-      {"space", std::string(to_string(r.options.space))},
+      {"fitness", std::string(objectives::to_string(r.options.fitness))},
+      {"space", std::string(objectives::to_string(r.options.space))},
       {"subtract_fix_variance", r.options.subtract_fix_variance},
       {"span_s", {o.span_from_s, o.span_until_s}},
       {"outage_s", r.options.outage_s},
@@ -185,7 +187,7 @@ void write_rl_tune_json(const std::filesystem::path& path, const RlTuneRequest& 
   std::vector<double> diag(o.tuned.process_noise.diagonal().data(),
                            o.tuned.process_noise.diagonal().data() + 15);
   j["process_noise_diagonal"] = diag;
-  write_atomically(path, "JSON", j.dump(2) + "\n");
+  core::write_atomically(path, "JSON", j.dump(2) + "\n");
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

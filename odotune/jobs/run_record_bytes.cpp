@@ -6,7 +6,7 @@
 #include <string>
 #include <type_traits>
 
-namespace odotune {
+namespace odotune::jobs {
 
 namespace {
 
@@ -149,4 +149,4 @@ results::RunRecord run_record_from_bytes(const std::vector<char>& bytes) {
   return r;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

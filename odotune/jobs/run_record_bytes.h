@@ -10,11 +10,11 @@
 
 #include <odotune/results/run_record.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 std::vector<char> to_bytes(const results::RunRecord& r);
 
 // Throws std::runtime_error when `bytes` are not exactly one record.
 results::RunRecord run_record_from_bytes(const std::vector<char>& bytes);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

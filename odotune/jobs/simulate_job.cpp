@@ -15,7 +15,7 @@
 #include <odotune/sim/simulator.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 namespace {
 
@@ -24,7 +24,7 @@ std::uint64_t parse_seed(const char* flag, const std::string& text) {
   const char* end = text.data() + text.size();
   const auto [p, ec] = std::from_chars(text.data(), end, seed);
   if (ec != std::errc() || p != end)
-    throw Failure(fmt::format("{} {}: expected a non-negative integer below 2^64", flag, text));
+    throw core::Failure(fmt::format("{} {}: expected a non-negative integer below 2^64", flag, text));
   return seed;
 }
 
@@ -32,15 +32,15 @@ std::uint64_t parse_seed(const char* flag, const std::string& text) {
 sim::Scenario scenario_of(const SimulateRequest& r) {
   sim::Scenario sc;
   try {
-    sc = load_scenario(r.scenario);
-  } catch (const ScenarioError& e) {
-    throw Failure(e.what());
+    sc = formats::load_scenario(r.scenario);
+  } catch (const formats::ScenarioError& e) {
+    throw core::Failure(e.what());
   }
   {
     std::error_code ec;
     if (std::filesystem::exists(r.output, ec) && std::filesystem::equivalent(r.output, r.scenario, ec))
-      throw Failure(fmt::format("simulate: -o {} is the scenario file itself; expected a track file name",
-                                r.output));
+      throw core::Failure(fmt::format("simulate: -o {} is the scenario file itself; expected a track file name",
+                                      r.output));
   }
   if (!r.seed.empty()) sc.seed = parse_seed("--seed", r.seed);
   if (!r.random_slip.empty()) {
@@ -48,10 +48,10 @@ sim::Scenario scenario_of(const SimulateRequest& r) {
     try {
       sc.slip_episodes = sim::random_slip_episodes(sim::MotionProfile(sc.motion), layout);
     } catch (const std::exception& e) {  // the profile was validated with the scenario
-      throw Failure(fmt::format("{}: --random-slip: {}", r.scenario, e.what()));
+      throw core::Failure(fmt::format("{}: --random-slip: {}", r.scenario, e.what()));
     }
     if (sc.slip_episodes.empty())
-      throw Failure(
+      throw core::Failure(
           fmt::format("{}: --random-slip {}: the drive has no stretch long and fast enough for a slip "
                       "episode (>= 2 s at >= 0.3 m/s); expected a longer drive",
                       r.scenario, r.random_slip));
@@ -62,12 +62,12 @@ sim::Scenario scenario_of(const SimulateRequest& r) {
     try {
       spec = sim::parse_effect_spec(text);
     } catch (const std::invalid_argument& e) {
-      throw Failure(fmt::format("--{}", e.what()));  // "--effect 'TEXT': ..."
+      throw core::Failure(fmt::format("--{}", e.what()));  // "--effect 'TEXT': ..."
     }
     try {
       sim::apply_effect(sc.effects, spec);
     } catch (const std::invalid_argument& e) {
-      throw Failure(fmt::format("--effect '{}': {}", text, e.what()));
+      throw core::Failure(fmt::format("--effect '{}': {}", text, e.what()));
     }
   }
   return sc;
@@ -75,10 +75,10 @@ sim::Scenario scenario_of(const SimulateRequest& r) {
 
 }  // namespace
 
-double path_length_m(const Track& track) {
+double path_length_m(const tracks::Track& track) {
   if (!track.has_gt()) return 0.0;
-  const auto& x = track.col(Col::gt_x);
-  const auto& y = track.col(Col::gt_y);
+  const auto& x = track.col(tracks::Col::gt_x);
+  const auto& y = track.col(tracks::Col::gt_y);
   double len = 0.0, px = 0.0, py = 0.0;
   bool have = false;
   for (std::size_t i = 0; i < track.size(); ++i) {
@@ -91,21 +91,21 @@ double path_length_m(const Track& track) {
 
 SimulateOutcome run_simulate(const SimulateRequest& r) {
   const sim::Scenario sc = scenario_of(r);
-  const Track track = [&] {
+  const tracks::Track track = [&] {
     try {
       return sim::simulate(sc);
     } catch (const std::invalid_argument& e) {
-      throw Failure(fmt::format("{}: {}", r.scenario, e.what()));
+      throw core::Failure(fmt::format("{}: {}", r.scenario, e.what()));
     }
   }();
   try {
-    write_track(track, r.output);
+    tracks::write_track(track, r.output);
   } catch (const std::exception& e) {
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
   return {track.name(),           track.size(), track.duration_s(),
           path_length_m(track),   sc.seed,      sim::format_effects(sc.effects),
           sc.slip_episodes.size()};
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

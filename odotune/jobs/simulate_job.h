@@ -21,7 +21,7 @@
 
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 struct SimulateRequest {
   std::string scenario;  // scenario YAML file
@@ -45,12 +45,12 @@ struct SimulateOutcome {
   std::size_t slip_episodes = 0;
 };
 
-// Throws odotune::Failure (one line) on an unreadable or invalid scenario, an
+// Throws core::Failure (one line) on an unreadable or invalid scenario, an
 // output that is the scenario file itself, a bad seed or effect, a drive with
 // no room for a random slip episode, or a track that cannot be written.
 SimulateOutcome run_simulate(const SimulateRequest& request);
 
 // Path length [m] along the ground truth (0 without it); NaN rows skipped.
-double path_length_m(const Track& track);
+double path_length_m(const tracks::Track& track);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -8,74 +8,75 @@
 #include <odotune/objectives/tuned_model.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 std::unique_ptr<results::Store> open_store_for_reading(const std::filesystem::path& path) {
   try {
     auto store = std::make_unique<results::Store>(path);
     if (store->experiment().hash.empty())
-      throw Failure(fmt::format("{}: not a results store of odotune grid (no experiment recorded)",
-                                path.string()));
+      throw core::Failure(fmt::format("{}: not a results store of odotune grid (no experiment recorded)",
+                                      path.string()));
     return store;
   } catch (const std::runtime_error& ex) {
-    if (dynamic_cast<const Failure*>(&ex)) throw;
-    throw Failure(ex.what());
+    if (dynamic_cast<const core::Failure*>(&ex)) throw;
+    throw core::Failure(ex.what());
   }
 }
 
-std::map<std::string, Track> experiment_tracks(const results::ExperimentInfo& info,
-                                               const std::vector<std::string>& extra_files) {
+std::map<std::string, tracks::Track> experiment_tracks(const results::ExperimentInfo& info,
+                                                       const std::vector<std::string>& extra_files) {
   std::vector<std::string> files;
   if (!info.file.empty()) {
     try {
-      files = parse_experiment(info.text, info.file).tracks;
-    } catch (const Failure&) {
+      files = formats::parse_experiment(info.text, info.file).tracks;
+    } catch (const core::Failure&) {
       // The tracks moved since the grid ran: only --track files are used.
     }
   }
-  std::map<std::string, Track> out;
-  for (auto& t : load_tracks(files)) out.insert_or_assign(t.name(), std::move(t));
-  for (auto& t : load_tracks(extra_files)) out.insert_or_assign(t.name(), std::move(t));
+  std::map<std::string, tracks::Track> out;
+  for (auto& t : tracks::load_tracks(files)) out.insert_or_assign(t.name(), std::move(t));
+  for (auto& t : tracks::load_tracks(extra_files)) out.insert_or_assign(t.name(), std::move(t));
   return out;
 }
 
 double run_param(const results::RunRecord& run, const std::string& name) {
   for (std::size_t i = 0; i < run.param_names.size() && i < run.params.size(); ++i)
     if (run.param_names[i] == name) return run.params[i];
-  throw Failure(fmt::format("run {}: parameter {} is missing", results::run_key(run), name));
+  throw core::Failure(fmt::format("run {}: parameter {} is missing", results::run_key(run), name));
 }
 
 filters::NoiseParams run_noise(const results::RunRecord& run) {
   filters::NoiseModel model;
-  if (is_calibrator_model_name(run.model))
-    throw Failure(fmt::format("run {}: model {} tuned a calibrator's settings, not EKF noise",
-                              results::run_key(run), run.model));
-  if (is_ukf_model_name(run.model))
-    throw Failure(fmt::format("run {}: model {} tuned the velocity-fusion UKF's noise, not EKF noise",
-                              results::run_key(run), run.model));
+  if (objectives::is_calibrator_model_name(run.model))
+    throw core::Failure(fmt::format("run {}: model {} tuned a calibrator's settings, not EKF noise",
+                                    results::run_key(run), run.model));
+  if (objectives::is_ukf_model_name(run.model))
+    throw core::Failure(fmt::format("run {}: model {} tuned the velocity-fusion UKF's noise, not EKF noise",
+                                    results::run_key(run), run.model));
   if (!filters::parse_noise_model(run.model, &model))
-    throw Failure(fmt::format("run {}: unknown model '{}'", results::run_key(run), run.model));
-  const ParamSpace space = ParamSpace::for_model(model);
+    throw core::Failure(fmt::format("run {}: unknown model '{}'", results::run_key(run), run.model));
+  const objectives::ParamSpace space = objectives::ParamSpace::for_model(model);
   std::vector<double> physical(space.dim());
   for (std::size_t i = 0; i < space.dim(); ++i) physical[i] = run_param(run, space.params()[i].name);
   filters::NoiseParams noise = space.to_noise(physical);
   std::string why;
   if (!noise.IsValid(&why))
-    throw Failure(fmt::format("run {}: invalid parameters: {}", results::run_key(run), why));
+    throw core::Failure(fmt::format("run {}: invalid parameters: {}", results::run_key(run), why));
   return noise;
 }
 
-UkfConfig run_ukf_config(const results::RunRecord& run) {
-  if (!is_ukf_model_name(run.model))
-    throw Failure(fmt::format("run {}: model {} is not the fusion UKF", results::run_key(run), run.model));
-  const BoxSpace space = ukf_space();
-  UkfConfig cfg;
-  cfg.rate_hz = FusionInputOptions{}.rate_hz;  // what ukf_fusion_input (grid) fuses at
+formats::UkfConfig run_ukf_config(const results::RunRecord& run) {
+  if (!objectives::is_ukf_model_name(run.model))
+    throw core::Failure(fmt::format("run {}: model {} is not the fusion UKF", results::run_key(run),
+                                    run.model));
+  const objectives::BoxSpace space = learned::ukf_space();
+  formats::UkfConfig cfg;
+  cfg.rate_hz = learned::FusionInputOptions{}.rate_hz;  // what ukf_fusion_input (grid) fuses at
   for (const auto& p : space.params()) cfg.params.push_back(run_param(run, p.name));
   std::string why;
-  if (!apply_ukf_config(cfg).IsValid(&why))
-    throw Failure(fmt::format("run {}: invalid parameters: {}", results::run_key(run), why));
+  if (!formats::apply_ukf_config(cfg).IsValid(&why))
+    throw core::Failure(fmt::format("run {}: invalid parameters: {}", results::run_key(run), why));
   return cfg;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -16,9 +16,9 @@
 #include <odotune/results/store.h>
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
-// Opens `path` read-only; throws odotune::Failure (one line) when it
+// Opens `path` read-only; throws core::Failure (one line) when it
 // does not exist or is not a results store.
 std::unique_ptr<results::Store> open_store_for_reading(const std::filesystem::path& path);
 
@@ -27,22 +27,22 @@ std::unique_ptr<results::Store> open_store_for_reading(const std::filesystem::pa
 // from `extra_files` (--track), which take precedence for the same name.
 // A track file that no longer exists is skipped; a file that exists but is
 // bad is a Failure line. Returns an empty map when nothing can be found.
-std::map<std::string, Track> experiment_tracks(const results::ExperimentInfo& info,
-                                               const std::vector<std::string>& extra_files);
+std::map<std::string, tracks::Track> experiment_tracks(const results::ExperimentInfo& info,
+                                                       const std::vector<std::string>& extra_files);
 
 // A stored run's physical parameter `name` (e.g. "r1_mm2"). Throws
-// odotune::Failure naming the run when it has no such parameter.
+// core::Failure naming the run when it has no such parameter.
 double run_param(const results::RunRecord& run, const std::string& name);
 
 // The filter noise of a stored run (its model and physical parameters, by
-// name). Throws odotune::Failure naming the run when the model or a
+// name). Throws core::Failure naming the run when the model or a
 // parameter is unknown, the run is a calibrator's (pf-calib,
 // adaptive-pf-calib: no EKF noise) or the UKF's, or the values are invalid.
 filters::NoiseParams run_noise(const results::RunRecord& run);
 
 // The tuned UKF noise of a stored ukf run (ukf_space() values by name, at the
-// grid's fusion rate, 10 Hz). Throws odotune::Failure naming the run
+// grid's fusion rate, 10 Hz). Throws core::Failure naming the run
 // when it is not a ukf run, a parameter is missing or the values are invalid.
-UkfConfig run_ukf_config(const results::RunRecord& run);
+formats::UkfConfig run_ukf_config(const results::RunRecord& run);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -16,12 +16,12 @@
 #include <odotune/objectives/tuned_model.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 namespace {
 
 // Options that belong to one kind of model only, by flag, and whether given.
-void check_options(const TuneCommandRequest& r, const TunedModel& model) {
+void check_options(const TuneCommandRequest& r, const objectives::TunedModel& model) {
   const std::vector<std::pair<const char*, bool>> ekf_only = {{"--mode", r.mode.has_value()}};
   const std::vector<std::pair<const char*, bool>> calibrator_only = {
       {"--resampler", r.resampler.has_value()},
@@ -31,20 +31,20 @@ void check_options(const TuneCommandRequest& r, const TunedModel& model) {
       {"--ext-from-gt", r.ext_from_gt_hz.has_value()}};
   for (const auto& [opt, given] : model.is_calibrator() ? ekf_only : calibrator_only)
     if (given)
-      throw Failure(fmt::format(
+      throw core::Failure(fmt::format(
           "{} applies to {} models only, not to --model {}", opt,
           model.is_calibrator() ? "the EKF and UKF (rq, alpha, gyro, ukf)" : "the calibrator", r.model));
 }
 
 // `prepare(track)` for each loaded track, its std::invalid_argument a Failure.
 template <class Prepare>
-auto prepare_tracks(const std::vector<Track>& tracks, Prepare prepare) {
+auto prepare_tracks(const std::vector<tracks::Track>& tracks, Prepare prepare) {
   std::vector<decltype(prepare(tracks.front()))> out;
   for (const auto& t : tracks) {
     try {
       out.push_back(prepare(t));
     } catch (const std::invalid_argument& e) {
-      throw Failure(e.what());
+      throw core::Failure(e.what());
     }
   }
   return out;
@@ -73,43 +73,44 @@ TuneCommandOutcome run_and_report(const TuneCommandRequest& r, Run run) {
   try {
     out = run();
   } catch (const std::exception& e) {
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
   if (r.report) r.report(out);
   return out;
 }
 
 void write_json(const TuneCommandRequest& r, const nlohmann::json& j) {
-  if (!r.json_out.empty()) write_file_atomically(r.json_out, j.dump(2) + "\n");
+  if (!r.json_out.empty()) formats::write_file_atomically(r.json_out, j.dump(2) + "\n");
 }
 
 TuneCommandOutcome ekf_tune(const TuneCommandRequest& r, filters::NoiseModel model) {
   TuneRequest req = with_solver<TuneRequest>(r);
   req.model = model;
-  const std::vector<Track> tracks = load_tracks(r.tracks);
+  const std::vector<tracks::Track> tracks = tracks::load_tracks(r.tracks);
   std::string no_gt;
-  for (const Track& t : tracks)
+  for (const tracks::Track& t : tracks)
     if (!t.has_gt()) no_gt += (no_gt.empty() ? "" : ", ") + t.name();
   std::string note;
   if (r.mode) {
     req.mode = *r.mode;
-    if (!no_gt.empty() && !is_fix_cv(req.mode))
-      throw Failure(fmt::format("--mode {} scores against ground truth, which {} has not; use --mode 8 or 9 "
-                                "(cross-validation over the position fixes), or leave --mode out",
-                                number(req.mode), no_gt));
+    if (!no_gt.empty() && !objectives::is_fix_cv(req.mode))
+      throw core::Failure(
+          fmt::format("--mode {} scores against ground truth, which {} has not; use --mode 8 or 9 "
+                      "(cross-validation over the position fixes), or leave --mode out",
+                      objectives::number(req.mode), no_gt));
   } else {
-    req.mode = no_gt.empty() ? kDefaultFitnessMode : FitnessMode::fix_rmse;
+    req.mode = no_gt.empty() ? objectives::kDefaultFitnessMode : objectives::FitnessMode::fix_rmse;
     if (!no_gt.empty())
       note = fmt::format("no ground truth in {}: tuning by cross-validation over the position fixes, mode 8 "
                          "({}; mode 9 scores their predictive likelihood instead)",
-                         no_gt, fitness_mode_name(FitnessMode::fix_rmse));
+                         no_gt, objectives::fitness_mode_name(objectives::FitnessMode::fix_rmse));
   }
   std::string why;
-  if (!req.IsValid(&why)) throw Failure(why);
+  if (!req.IsValid(&why)) throw core::Failure(why);
 
   const std::vector<PreparedTrack> prepared =
-      is_fix_cv(req.mode)
-          ? prepare_tracks(tracks, [&](const Track& t) { return prepare_track_fix_cv(t, r.fix_cv); })
+      objectives::is_fix_cv(req.mode)
+          ? prepare_tracks(tracks, [&](const tracks::Track& t) { return prepare_track_fix_cv(t, r.fix_cv); })
           : prepare_tracks(tracks, prepare_track);
   TuneCommandOutcome result = run_and_report(r, [&] {
     TuneOutcome o = run_tune(pointers(prepared), req);
@@ -119,50 +120,51 @@ TuneCommandOutcome ekf_tune(const TuneCommandRequest& r, filters::NoiseModel mod
   const auto& out = std::get<TuneOutcome>(result);
   write_json(r, tune_json(out));
   if (!r.config_out.empty()) {
-    EkfConfig cfg;
+    formats::EkfConfig cfg;
     cfg.model = req.model;
     cfg.noise = out.noise;
     cfg.comment = fmt::format("tuned by odotune tune: model {}, mode {}, solver {}, seed {}", r.model,
-                              number(req.mode), req.solver.name(), req.seed);
-    write_ekf_config(cfg, r.config_out);
+                              objectives::number(req.mode), req.solver.name(), req.seed);
+    formats::write_ekf_config(cfg, r.config_out);
   }
   return result;
 }
 
-TuneCommandOutcome calibration_tune(const TuneCommandRequest& r, CalibratorModel model) {
+TuneCommandOutcome calibration_tune(const TuneCommandRequest& r, objectives::CalibratorModel model) {
   CalibrationTuneRequest req = with_solver<CalibrationTuneRequest>(r);
   req.model = model;
   // Flags not given keep CalibrationTuneRequest's defaults.
   if (r.resampler && !filters::parse_resampler(*r.resampler, &req.resampler))
-    throw Failure(fmt::format("--resampler '{}': expected multinomial, stratified, systematic or residual",
-                              *r.resampler));
+    throw core::Failure(fmt::format(
+        "--resampler '{}': expected multinomial, stratified, systematic or residual", *r.resampler));
   if (r.policy && !filters::parse_resample_policy(*r.policy, &req.policy))
-    throw Failure(fmt::format("--policy '{}': expected every, neff or max", *r.policy));
+    throw core::Failure(fmt::format("--policy '{}': expected every, neff or max", *r.policy));
   req.pf_particles = r.pf_particles;
   if (r.pf_seed) req.pf_seed = *r.pf_seed;
   std::string why;
-  if (!req.IsValid(&why)) throw Failure(why);
-  CalibrationInputOptions input_options;
+  if (!req.IsValid(&why)) throw core::Failure(why);
+  calibration::CalibrationInputOptions input_options;
   input_options.ext_from_gt_rate_hz = r.ext_from_gt_hz.value_or(0.0);
-  if (!input_options.IsValid(&why)) throw Failure("--ext-from-gt: " + why);
+  if (!input_options.IsValid(&why)) throw core::Failure("--ext-from-gt: " + why);
 
-  const std::vector<CalibrationInput> inputs = prepare_tracks(load_tracks(r.tracks), [&](const Track& t) {
-    CalibrationInput in = build_calibration_input(t, input_options);
-    if (!in.has_gt)
-      throw Failure(fmt::format("track '{}': no ground truth (gt_x, gt_y, gt_theta): a calibrator's "
-                                "settings are scored by its calibrated odometry against it",
-                                t.name()));
-    return in;
-  });
+  const std::vector<calibration::CalibrationInput> inputs = prepare_tracks(
+      tracks::load_tracks(r.tracks), [&](const tracks::Track& t) {
+        calibration::CalibrationInput in = calibration::build_calibration_input(t, input_options);
+        if (!in.has_gt)
+          throw core::Failure(fmt::format("track '{}': no ground truth (gt_x, gt_y, gt_theta): a calibrator's "
+                                          "settings are scored by its calibrated odometry against it",
+                                          t.name()));
+        return in;
+      });
   TuneCommandOutcome result = run_and_report(r, [&] { return run_calibration_tune(pointers(inputs), req); });
   const auto& out = std::get<CalibrationTuneOutcome>(result);
   write_json(r, calibration_tune_json(out, {input_options.ext_from_gt_rate_hz}));
   if (!r.config_out.empty()) {
-    CalibrationOptions effective;
+    calibration::CalibrationOptions effective;
     effective.method = calibration_method(model);
     effective.pf = out.tuned_pf;
-    const filters::PfCalibratorParams run_with = effective_pf_params(effective);
-    PfConfig cfg;
+    const filters::PfCalibratorParams run_with = calibration::effective_pf_params(effective);
+    formats::PfConfig cfg;
     cfg.method = effective.method;
     cfg.resampler = run_with.resampler;
     cfg.policy = run_with.policy;
@@ -172,32 +174,34 @@ TuneCommandOutcome calibration_tune(const TuneCommandRequest& r, CalibratorModel
         "tuned by odotune tune: model {}, solver {}, seed {}, calibrator seed {}; score {:.6g} "
         "(paper's defaults {:.6g})",
         r.model, req.solver.name(), req.seed, req.pf_seed, out.tuned_score, out.baseline_score);
-    write_pf_config(cfg, r.config_out);
+    formats::write_pf_config(cfg, r.config_out);
   }
   return result;
 }
 
 TuneCommandOutcome ukf_tune(const TuneCommandRequest& r) {
   UkfTuneRequest req = with_solver<UkfTuneRequest>(r);
-  req.mode = r.mode.value_or(kDefaultFitnessMode);
+  req.mode = r.mode.value_or(objectives::kDefaultFitnessMode);
   std::string why;
-  if (!req.IsValid(&why)) throw Failure(why);
+  if (!req.IsValid(&why)) throw core::Failure(why);
 
-  const std::vector<FusionInput> inputs = prepare_tracks(load_tracks(r.tracks), ukf_fusion_input);
+  const std::vector<learned::FusionInput> inputs = prepare_tracks(tracks::load_tracks(r.tracks),
+                                                                  ukf_fusion_input);
   TuneCommandOutcome result = run_and_report(r, [&] { return run_ukf_tune(pointers(inputs), req); });
   const auto& out = std::get<UkfTuneOutcome>(result);
   const double rate_hz = 1.0 / inputs.front().dt_s;
   write_json(r, ukf_tune_json(out, rate_hz));
   if (!r.config_out.empty()) {
-    UkfConfig cfg;
+    formats::UkfConfig cfg;
     cfg.rate_hz = rate_hz;
     cfg.params = out.params;
     cfg.comment = fmt::format(
         "tuned by odotune tune: model ukf, mode {} ({}), solver {}, seed {}\n"
         "fused pose RMSE {:.2f} mm tuned vs {:.2f} mm with the defaults (mean over {} track{})",
-        number(req.mode), fitness_mode_name(req.mode), req.solver.name(), req.seed, out.tuned_mean.rmse_m * 1e3,
-        out.baseline_mean.rmse_m * 1e3, inputs.size(), inputs.size() == 1 ? "" : "s");
-    write_ukf_config(cfg, r.config_out);
+        objectives::number(req.mode), objectives::fitness_mode_name(req.mode), req.solver.name(), req.seed,
+        out.tuned_mean.rmse_m * 1e3, out.baseline_mean.rmse_m * 1e3, inputs.size(),
+        inputs.size() == 1 ? "" : "s");
+    formats::write_ukf_config(cfg, r.config_out);
   }
   return result;
 }
@@ -205,11 +209,12 @@ TuneCommandOutcome ukf_tune(const TuneCommandRequest& r) {
 }  // namespace
 
 TuneCommandOutcome run_tune_command(const TuneCommandRequest& request) {
-  TunedModel model;
-  if (!parse_tuned_model(request.model, &model))
-    throw Failure(fmt::format("--model '{}': unknown model, expected {}", request.model, tuned_model_names()));
+  objectives::TunedModel model;
+  if (!objectives::parse_tuned_model(request.model, &model))
+    throw core::Failure(fmt::format("--model '{}': unknown model, expected {}", request.model,
+                                    objectives::tuned_model_names()));
   if (model.is_rl())
-    throw Failure(
+    throw core::Failure(
         fmt::format("--model {}: robot_localization's filters are tuned from their parameter file and "
                     "bag: odotune tune --rl-params FILE --bag BAG{}",
                     request.model, model.rl_filter() == filters::rl::RlFilterType::ukf ? " --filter ukf" : ""));
@@ -219,4 +224,4 @@ TuneCommandOutcome run_tune_command(const TuneCommandRequest& request) {
   return ekf_tune(request, model.noise());
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

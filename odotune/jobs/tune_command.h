@@ -19,7 +19,7 @@
 #include <odotune/jobs/tune_job.h>
 #include <odotune/jobs/ukf_tune_job.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 // The result of one of the three tunes.
 using TuneCommandOutcome = std::variant<TuneOutcome, CalibrationTuneOutcome, UkfTuneOutcome>;
@@ -31,8 +31,8 @@ struct TuneCommandRequest : SolverSettings {
   std::string model = "rq";         // one of tuned_model_names()
   // EKF: any fitness mode; UKF: 1..7. Not given: the default (7), or 8 for
   // an EKF tune on a track without ground truth.
-  std::optional<FitnessMode> mode;
-  FixCvOptions fix_cv;  // EKF modes 8, 9: the folds (odotune/objectives/fix_cv_replay.h)
+  std::optional<objectives::FitnessMode> mode;
+  objectives::FixCvOptions fix_cv;  // EKF modes 8, 9: the folds (odotune/objectives/fix_cv_replay.h)
   // Calibrators only: the calibrator's fixed parts (calibration_tune_job.h);
   // given for another model, a Failure names the flag (as --mode for a
   // calibrator).
@@ -51,10 +51,10 @@ struct TuneCommandRequest : SolverSettings {
 // tune, calls `report`, then writes --json and --config-out (in that order).
 // A raised `stop` ends the tune early with the best found so far, which is
 // reported and written as a finished tune's (the caller tells the user).
-// Throws odotune::Failure (one line) for an unknown model, an option of
+// Throws core::Failure (one line) for an unknown model, an option of
 // another model, invalid settings, an unusable track or a solver failure
 // (nothing is reported or written then), and for a file that cannot be
 // written (after `report`; --json's failure leaves --config-out unwritten).
 TuneCommandOutcome run_tune_command(const TuneCommandRequest& request);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -6,25 +6,25 @@
 #include <odotune/tuner/problem.h>
 #include <odotune/tuner/pso.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
-PreparedTrack prepare_track(const Track& track) {
+PreparedTrack prepare_track(const tracks::Track& track) {
   PreparedTrack p;
   p.name = track.name();
-  p.input = build_replay_input(track);
+  p.input = objectives::build_replay_input(track);
   if (p.input.fixes.empty())
     throw std::invalid_argument(
         "track '" + track.name() +
         "': no position fixes (aps_x, aps_y), so the EKF has nothing to correct with and its "
         "noise cannot matter; add fixes made from ground truth with `odotune fixes`");
-  p.fast = std::make_unique<FastReplay>(p.input);
+  p.fast = std::make_unique<objectives::FastReplay>(p.input);
   return p;
 }
 
-PreparedTrack prepare_track_fix_cv(const Track& track, const FixCvOptions& cv) {
-  ReplayInputOptions o;
-  o.reference = ReplayReference::fixes;
-  ReplayInput from_fix = build_replay_input(track, o);
+PreparedTrack prepare_track_fix_cv(const tracks::Track& track, const objectives::FixCvOptions& cv) {
+  objectives::ReplayInputOptions o;
+  o.reference = objectives::ReplayReference::fixes;
+  objectives::ReplayInput from_fix = objectives::build_replay_input(track, o);
   PreparedTrack p;
   if (track.has_gt()) {
     p = prepare_track(track);
@@ -32,7 +32,7 @@ PreparedTrack prepare_track_fix_cv(const Track& track, const FixCvOptions& cv) {
     p.name = track.name();
     p.input = from_fix;
   }
-  p.cv = std::make_unique<FixCvReplay>(from_fix, cv);
+  p.cv = std::make_unique<objectives::FixCvReplay>(from_fix, cv);
   return p;
 }
 
@@ -49,8 +49,8 @@ bool SolverSettings::IsValid(std::string* why) const {
   return o.IsValid(why);
 }
 
-ErrorMetrics mean_metrics(const std::vector<ErrorMetrics>& per_track) {
-  ErrorMetrics m;
+objectives::ErrorMetrics mean_metrics(const std::vector<objectives::ErrorMetrics>& per_track) {
+  objectives::ErrorMetrics m;
   for (const auto& t : per_track) {
     m.rmse_m += t.rmse_m;
     m.mae_m += t.mae_m;
@@ -89,7 +89,8 @@ tuner::Summary run_solver(tuner::ProblemRef problem, const SolverSettings& s, st
   return summary;
 }
 
-DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSettings& s, const BoxSpace& space,
+DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSettings& s,
+                                      const objectives::BoxSpace& space,
                                       const std::vector<double>& default_params) {
   DefaultsTune t;
   for (const auto& p : space.params()) {
@@ -111,12 +112,12 @@ namespace {
 
 // Runs the solver on `objective` and fills the outcome's request, summary,
 // tuned parameters (names, units, physical values, noise) and divergences.
-TuneOutcome solve(const EkfObjective& objective, const TuneRequest& request) {
-  const BoxProblem<EkfObjective> problem{&objective};
+TuneOutcome solve(const objectives::EkfObjective& objective, const TuneRequest& request) {
+  const BoxProblem<objectives::EkfObjective> problem{&objective};
   TuneOutcome out;
   out.request = request;
   out.summary = run_solver(problem, request);
-  const ParamSpace& space = objective.space();
+  const objectives::ParamSpace& space = objective.space();
   for (const auto& p : space.params()) {
     out.param_names.push_back(p.name);
     out.param_units.push_back(p.unit);
@@ -130,21 +131,22 @@ TuneOutcome solve(const EkfObjective& objective, const TuneRequest& request) {
 // Modes 8 and 9: the same tune over the fix cross-validation replays; scores
 // are the held-out fixes' (and, where the track has it, ground truth's).
 TuneOutcome run_tune_fix_cv(const std::vector<const PreparedTrack*>& tracks, const TuneRequest& request) {
-  std::vector<const FixCvReplay*> cv;
+  std::vector<const objectives::FixCvReplay*> cv;
   for (const auto* t : tracks) {
     if (!t->cv)
       throw std::invalid_argument("track '" + t->name +
                                   "': not prepared for fix cross-validation (modes 8, 9)");
     cv.push_back(t->cv.get());
   }
-  TuneOutcome out = solve(EkfObjective::over_fixes(cv, request.model, request.mode), request);
+  TuneOutcome out = solve(objectives::EkfObjective::over_fixes(cv, request.model, request.mode), request);
   out.against_fixes = true;
   out.fix_cv = tracks.front()->cv->options();
-  std::vector<ErrorMetrics> base, tuned;
+  std::vector<objectives::ErrorMetrics> base, tuned;
   for (const auto* t : tracks) {
     TrackScore s;
     s.track = t->name;
-    const FixCvOutcome b = t->cv->evaluate(baseline_noise()), u = t->cv->evaluate(out.noise);
+    const objectives::FixCvOutcome b = t->cv->evaluate(objectives::baseline_noise()),
+                                   u = t->cv->evaluate(out.noise);
     s.baseline = b.heldout;
     s.tuned = u.heldout;
     s.baseline_nll = b.nll;
@@ -152,12 +154,12 @@ TuneOutcome run_tune_fix_cv(const std::vector<const PreparedTrack*>& tracks, con
     s.baseline_nis = b.nis;
     s.tuned_nis = u.nis;
     if (!t->input.reference_is_fixes) {
-      s.gt_baseline = replay_ekf(t->input, baseline_noise()).outcome.metrics;
-      s.gt_tuned = replay_ekf(t->input, out.noise).outcome.metrics;
+      s.gt_baseline = objectives::replay_ekf(t->input, objectives::baseline_noise()).outcome.metrics;
+      s.gt_tuned = objectives::replay_ekf(t->input, out.noise).outcome.metrics;
     }
     const double n = static_cast<double>(tracks.size());
-    out.baseline_fitness += fix_cv_fitness(b, request.mode) / n;
-    out.tuned_fitness += fix_cv_fitness(u, request.mode) / n;
+    out.baseline_fitness += objectives::fix_cv_fitness(b, request.mode) / n;
+    out.tuned_fitness += objectives::fix_cv_fitness(u, request.mode) / n;
     base.push_back(s.baseline);
     tuned.push_back(s.tuned);
     out.tracks.push_back(std::move(s));
@@ -173,23 +175,24 @@ TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const Tune
   std::string why;
   if (!request.IsValid(&why)) throw std::invalid_argument(why);
   if (tracks.empty()) throw std::invalid_argument("no tracks to tune on");
-  if (is_fix_cv(request.mode)) return run_tune_fix_cv(tracks, request);
-  std::vector<const FastReplay*> fast;
+  if (objectives::is_fix_cv(request.mode)) return run_tune_fix_cv(tracks, request);
+  std::vector<const objectives::FastReplay*> fast;
   for (const auto* t : tracks) {
     if (!t->fast || t->input.reference_is_fixes)
-      throw std::invalid_argument("track '" + t->name + "': mode " + std::to_string(number(request.mode)) +
+      throw std::invalid_argument("track '" + t->name + "': mode " +
+                                  std::to_string(objectives::number(request.mode)) +
                                   " needs ground truth; tracks without it are tuned with modes 8 and 9");
     fast.push_back(t->fast.get());
   }
-  TuneOutcome out = solve(EkfObjective(fast, request.model, request.mode), request);
+  TuneOutcome out = solve(objectives::EkfObjective(fast, request.model, request.mode), request);
 
   // Scores from the reference replay, independent of the fast path.
-  std::vector<ErrorMetrics> base, tuned;
+  std::vector<objectives::ErrorMetrics> base, tuned;
   for (const auto* t : tracks) {
     TrackScore s;
     s.track = t->name;
-    s.baseline = replay_ekf(t->input, baseline_noise()).outcome.metrics;
-    s.tuned = replay_ekf(t->input, out.noise).outcome.metrics;
+    s.baseline = objectives::replay_ekf(t->input, objectives::baseline_noise()).outcome.metrics;
+    s.tuned = objectives::replay_ekf(t->input, out.noise).outcome.metrics;
     base.push_back(s.baseline);
     tuned.push_back(s.tuned);
     out.tracks.push_back(s);
@@ -197,10 +200,10 @@ TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const Tune
   out.baseline_mean = mean_metrics(base);
   out.tuned_mean = mean_metrics(tuned);
   for (std::size_t i = 0; i < tracks.size(); ++i) {
-    out.baseline_fitness += fitness_of(base[i], request.mode) / static_cast<double>(tracks.size());
-    out.tuned_fitness += fitness_of(tuned[i], request.mode) / static_cast<double>(tracks.size());
+    out.baseline_fitness += objectives::fitness_of(base[i], request.mode) / static_cast<double>(tracks.size());
+    out.tuned_fitness += objectives::fitness_of(tuned[i], request.mode) / static_cast<double>(tracks.size());
   }
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -25,7 +25,7 @@
 #include <odotune/tuner/solver_choice.h>
 #include <odotune/tuner/summary.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 struct RlLoaded;  // odotune/jobs/rl_job.h
 
@@ -36,26 +36,26 @@ struct RlLoaded;  // odotune/jobs/rl_job.h
 // UKF only.
 struct PreparedTrack {
   std::string name;
-  ReplayInput input;
-  std::unique_ptr<FastReplay> fast;
+  objectives::ReplayInput input;
+  std::unique_ptr<objectives::FastReplay> fast;
   // Fix cross-validation (modes 8 and 9): its folds, replayed from the first
   // fix. For a track without ground truth `input` is that replay's (from the
   // first fix) and `fast` is null.
-  std::unique_ptr<FixCvReplay> cv;
-  std::optional<CalibrationInput> calibration;
-  std::optional<FusionInput> fusion;
+  std::unique_ptr<objectives::FixCvReplay> cv;
+  std::optional<calibration::CalibrationInput> calibration;
+  std::optional<learned::FusionInput> fusion;
   // A bag with robot_localization's parameter file (model rl-ekf, grid; odotune/jobs/rl_job.h).
   std::shared_ptr<const RlLoaded> rl;
 };
 // Throws std::invalid_argument (one line naming the track) when it cannot be
 // replayed or has no position fixes (nothing to tune).
-PreparedTrack prepare_track(const Track& track);
+PreparedTrack prepare_track(const tracks::Track& track);
 // The same, ready for fix cross-validation (modes 8 and 9) too: `cv` holds
 // its folds (from the first fix, ReplayReference::fixes); a track with ground
 // truth keeps its ground-truth `input` and `fast` (for modes 1..7 and to
 // report the error a fix-tuned noise makes), one without gets the
 // first-fix input and no `fast`.
-PreparedTrack prepare_track_fix_cv(const Track& track, const FixCvOptions& cv = {});
+PreparedTrack prepare_track_fix_cv(const tracks::Track& track, const objectives::FixCvOptions& cv = {});
 
 // The solver part of a tuning request, shared by the EKF (TuneRequest) and
 // the calibrator tunes (calibration_tune_job.h), which both extend it.
@@ -74,16 +74,17 @@ struct SolverSettings {
 
 struct TuneRequest : SolverSettings {
   filters::NoiseModel model = filters::NoiseModel::rq;
-  FitnessMode mode = kDefaultFitnessMode;  // 1..7 against ground truth, 8 and 9 by fix cross-validation
+  objectives::FitnessMode mode =
+      objectives::kDefaultFitnessMode;  // 1..7 against ground truth, 8 and 9 by fix cross-validation
 };
 
 struct TrackScore {
   std::string track;
-  ErrorMetrics baseline, tuned;  // against ground truth, or (modes 8, 9) the held-out fixes
+  objectives::ErrorMetrics baseline, tuned;  // against ground truth, or (modes 8, 9) the held-out fixes
   // Modes 8 and 9: the held-out fixes' mean −log likelihood and NIS, and the
   // errors against ground truth when the track has it (never seen by the tune).
   double baseline_nll = 0.0, tuned_nll = 0.0, baseline_nis = 0.0, tuned_nis = 0.0;
-  std::optional<ErrorMetrics> gt_baseline, gt_tuned;
+  std::optional<objectives::ErrorMetrics> gt_baseline, gt_tuned;
 };
 
 struct TuneOutcome {
@@ -93,13 +94,13 @@ struct TuneOutcome {
   std::vector<double> params;  // physical values, in param_units
   filters::NoiseParams noise;  // the same, as filter noise (SI)
   std::vector<TrackScore> tracks;
-  ErrorMetrics baseline_mean, tuned_mean;  // means over tracks
+  objectives::ErrorMetrics baseline_mean, tuned_mean;  // means over tracks
   double baseline_fitness = 0, tuned_fitness = 0;
-  DivergenceCounts divergences;
-  tuner::Summary summary;      // evaluations, seconds, termination, log
-  bool against_fixes = false;  // modes 8, 9: the metrics are of the held-out fixes
-  FixCvOptions fix_cv;         // ... and their folds
-  std::string note;            // how the mode was chosen, when the command chose it
+  objectives::DivergenceCounts divergences;
+  tuner::Summary summary;           // evaluations, seconds, termination, log
+  bool against_fixes = false;       // modes 8, 9: the metrics are of the held-out fixes
+  objectives::FixCvOptions fix_cv;  // ... and their folds
+  std::string note;                 // how the mode was chosen, when the command chose it
 };
 
 // An objective as the tuner sees it: a box and a function (objectives/ does
@@ -151,7 +152,8 @@ struct DefaultsTune {
   std::vector<double> params;                         // tuned physical values (or the defaults)
   std::vector<std::string> param_names, param_units;  // the space's
 };
-DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSettings& s, const BoxSpace& space,
+DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSettings& s,
+                                      const objectives::BoxSpace& space,
                                       const std::vector<double>& default_params);
 
 // Runs the solver; throws std::invalid_argument for an invalid request and
@@ -159,6 +161,6 @@ DefaultsTune run_solver_from_defaults(tuner::ProblemRef problem, const SolverSet
 TuneOutcome run_tune(const std::vector<const PreparedTrack*>& tracks, const TuneRequest& request);
 
 // Mean of per-track metrics (each track weighs the same).
-ErrorMetrics mean_metrics(const std::vector<ErrorMetrics>& per_track);
+objectives::ErrorMetrics mean_metrics(const std::vector<objectives::ErrorMetrics>& per_track);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -1,16 +1,16 @@
 #include <odotune/jobs/tune_json.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
-nlohmann::json metrics_json(const ErrorMetrics& m) {
+nlohmann::json metrics_json(const objectives::ErrorMetrics& m) {
   return {{"rmse_m", m.rmse_m}, {"mae_m", m.mae_m}, {"maxe_m", m.maxe_m}, {"samples", m.samples}};
 }
 
 nlohmann::json tune_json(const TuneOutcome& o) {
   nlohmann::json j;
   j["model"] = std::string(filters::to_string(o.request.model));
-  j["mode"] = number(o.request.mode);
-  j["mode_name"] = fitness_mode_name(o.request.mode);
+  j["mode"] = objectives::number(o.request.mode);
+  j["mode_name"] = objectives::fitness_mode_name(o.request.mode);
   put_solver_json(j, o.request);
   nlohmann::json params = nlohmann::json::object(), units = nlohmann::json::object();
   for (std::size_t i = 0; i < o.params.size(); ++i) {
@@ -25,7 +25,7 @@ nlohmann::json tune_json(const TuneOutcome& o) {
   j["tracks"] = track_scores_json(o.tracks);
   j["scored_against"] = o.against_fixes ? "held-out position fixes" : "ground truth";
   if (o.against_fixes) {
-    const FixCvOptions& cv = o.fix_cv;
+    const objectives::FixCvOptions& cv = o.fix_cv;
     j["fix_cv"] = {{"folds", cv.folds}, {"block_s", cv.block_s}};
     for (std::size_t i = 0; i < o.tracks.size(); ++i) {
       const TrackScore& t = o.tracks[i];
@@ -53,8 +53,9 @@ void put_solver_json(nlohmann::json& j, const SolverSettings& s) {
   }
 }
 
-void put_scores_json(nlohmann::json& j, const ErrorMetrics& baseline, const ErrorMetrics& tuned,
-                     double baseline_fitness, double tuned_fitness, const tuner::Summary& summary) {
+void put_scores_json(nlohmann::json& j, const objectives::ErrorMetrics& baseline,
+                     const objectives::ErrorMetrics& tuned, double baseline_fitness, double tuned_fitness,
+                     const tuner::Summary& summary) {
   j["baseline"] = metrics_json(baseline);
   j["tuned"] = metrics_json(tuned);
   j["improvement_pct"] = improvement_json(baseline, tuned);
@@ -82,10 +83,11 @@ void put_tuned_params_json(nlohmann::json& j, const std::vector<std::string>& na
   j["default_kept"] = default_kept;
 }
 
-nlohmann::json improvement_json(const ErrorMetrics& baseline, const ErrorMetrics& tuned) {
-  return {{"rmse", improvement_pct(baseline.rmse_m, tuned.rmse_m)},
-          {"mae", improvement_pct(baseline.mae_m, tuned.mae_m)},
-          {"maxe", improvement_pct(baseline.maxe_m, tuned.maxe_m)}};
+nlohmann::json improvement_json(const objectives::ErrorMetrics& baseline,
+                                const objectives::ErrorMetrics& tuned) {
+  return {{"rmse", objectives::improvement_pct(baseline.rmse_m, tuned.rmse_m)},
+          {"mae", objectives::improvement_pct(baseline.mae_m, tuned.mae_m)},
+          {"maxe", objectives::improvement_pct(baseline.maxe_m, tuned.maxe_m)}};
 }
 
 nlohmann::json track_scores_json(const std::vector<TrackScore>& tracks) {
@@ -104,4 +106,4 @@ nlohmann::json convergence_json(const tuner::Summary& summary) {
   return log;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -13,33 +13,33 @@
 #include <odotune/core/output_paths.h>
 #include <odotune/formats/config_yaml.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 namespace {
 
 nlohmann::json num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
-nlohmann::json score_json(const TwistScore& s) {
+nlohmann::json score_json(const calibration::TwistScore& s) {
   return {{"pose_rmse_m", num(s.pose_rmse_m)},
           {"heading_rmse_rad", num(s.heading_rmse_rad)},
           {"samples", s.samples}};
 }
 
-nlohmann::json correction_json(OdometryInput input, const filters::TwistCorrection& c) {
-  return {{"odometry", std::string(to_string(input))},
+nlohmann::json correction_json(tracks::OdometryInput input, const filters::TwistCorrection& c) {
+  return {{"odometry", std::string(tracks::to_string(input))},
           {"scale_v", c.scale_v},
           {"scale_w", c.scale_w},
           {"delay_s", c.delay_s}};
 }
 
-std::string correction_text(const filters::TwistCorrection& c, const TwistCalibrationSummary* s) {
+std::string correction_text(const filters::TwistCorrection& c, const calibration::TwistCalibrationSummary* s) {
   const auto sd = [](double v) { return std::isfinite(v) ? fmt::format(" (± {:.4f})", v) : std::string(); };
   const std::string at = c.delay_s > 0.0 ? fmt::format("(t − {:.3f} s)", c.delay_s) : std::string("(t)");
   return fmt::format("v = {:.4f}{} · v_cmd{},  w = {:.4f}{} · w_cmd{}", c.scale_v, s ? sd(s->sd_scale_v) : "",
                      at, c.scale_w, s ? sd(s->sd_scale_w) : "", at);
 }
 
-std::string score_line(const std::string& name, const std::array<TwistScore, 2>& s) {
+std::string score_line(const std::string& name, const std::array<calibration::TwistScore, 2>& s) {
   const double gain = 100.0 * (s[0].pose_rmse_m - s[1].pose_rmse_m) / s[0].pose_rmse_m;
   return fmt::format("  {:<32} pose RMSE {:8.3f} → {:8.3f} m ({:+.1f} %)   heading RMSE {:.3f} → {:.3f} rad",
                      name, s[0].pose_rmse_m, s[1].pose_rmse_m, gain, s[0].heading_rmse_rad,
@@ -47,14 +47,15 @@ std::string score_line(const std::string& name, const std::array<TwistScore, 2>&
 }
 
 // The calibration flags a body-velocity fit does not take, refused by name.
-void refuse_wheel_flags(const CalibrateRequest& a, OdometryInput input) {
-  CalibrationMethod m{};
+void refuse_wheel_flags(const CalibrateRequest& a, tracks::OdometryInput input) {
+  calibration::CalibrationMethod m{};
   const std::string method = a.method_name();
-  if (!a.method || !parse_calibration_method(method, &m) || m != CalibrationMethod::batch_pose)
-    throw Failure(fmt::format("--method {}: {} tracks are calibrated by --method batch (scales{} fitted to the "
-                              "ground truth or fixes); the online methods need wheel odometry",
-                              method, to_string(input),
-                              input == OdometryInput::commands ? " and a delay" : ""));
+  if (!a.method || !calibration::parse_calibration_method(method, &m) ||
+      m != calibration::CalibrationMethod::batch_pose)
+    throw core::Failure(fmt::format(
+        "--method {}: {} tracks are calibrated by --method batch (scales{} fitted to the "
+        "ground truth or fixes); the online methods need wheel odometry",
+        method, tracks::to_string(input), input == tracks::OdometryInput::commands ? " and a delay" : ""));
   for (const auto& [flag, given] :
        {std::pair{"--ext-from-gt", a.ext_from_gt_hz.has_value()},
         std::pair{"--ext-sigma-v", a.ext_sigma_v.has_value()},
@@ -67,67 +68,72 @@ void refuse_wheel_flags(const CalibrateRequest& a, OdometryInput input) {
         std::pair{"--controller-out", !a.controller.out.empty()},
         std::pair{"--paths-csv", !a.paths_csv.empty()}})
     if (given)
-      throw Failure(fmt::format("{} does not apply to {} tracks (a fit of scales{}; wheel geometry only)", flag,
-                                to_string(input), input == OdometryInput::commands ? " and a delay" : ""));
+      throw core::Failure(fmt::format("{} does not apply to {} tracks (a fit of scales{}; wheel geometry only)",
+                                      flag, tracks::to_string(input),
+                                      input == tracks::OdometryInput::commands ? " and a delay" : ""));
 }
 
 // One track's row of the JSON: its dead reckoning as recorded and calibrated.
 nlohmann::json track_json(const std::string& name, const std::string& file,
-                          const std::array<TwistScore, 2>& s) {
+                          const std::array<calibration::TwistScore, 2>& s) {
   return {{"track", name}, {"file", file}, {"as_recorded", score_json(s[0])}, {"calibrated", score_json(s[1])}};
 }
 
 // Track k's odometry input (its own, or --input), or a Failure naming its file.
-OdometryInput input_of(const CalibrateRequest& a, const std::vector<Track>& tracks, std::size_t k) {
+tracks::OdometryInput input_of(const CalibrateRequest& a, const std::vector<tracks::Track>& tracks,
+                               std::size_t k) {
   try {
-    return track_odometry_input(tracks[k], a.input);
+    return tracks::track_odometry_input(tracks[k], a.input);
   } catch (const std::invalid_argument& e) {
-    throw Failure(fmt::format("{}: {}", a.tracks[k], e.what()));
+    throw core::Failure(fmt::format("{}: {}", a.tracks[k], e.what()));
   }
 }
 
-std::vector<const Track*> pointers(const std::vector<Track>& tracks) {
-  std::vector<const Track*> p;
-  for (const Track& t : tracks) p.push_back(&t);
+std::vector<const tracks::Track*> pointers(const std::vector<tracks::Track>& tracks) {
+  std::vector<const tracks::Track*> p;
+  for (const tracks::Track& t : tracks) p.push_back(&t);
   return p;
 }
 
 }  // namespace
 
-std::optional<OdometryInput> calibrate_body_input(const CalibrateRequest& a, const std::vector<Track>& tracks) {
-  std::optional<OdometryInput> kind;
+std::optional<tracks::OdometryInput> calibrate_body_input(const CalibrateRequest& a,
+                                                          const std::vector<tracks::Track>& tracks) {
+  std::optional<tracks::OdometryInput> kind;
   for (std::size_t k = 0; k < tracks.size(); ++k) {
-    const OdometryInput in = input_of(a, tracks, k);
+    const tracks::OdometryInput in = input_of(a, tracks, k);
     if (kind && *kind != in)
-      throw Failure(fmt::format("{}: {} odometry, {} gives {}: expected one kind for one calibration",
-                                a.tracks[k], to_string(in), a.tracks[0], to_string(*kind)));
+      throw core::Failure(fmt::format("{}: {} odometry, {} gives {}: expected one kind for one calibration",
+                                      a.tracks[k], tracks::to_string(in), a.tracks[0],
+                                      tracks::to_string(*kind)));
     kind = in;
   }
-  if (!kind || *kind == OdometryInput::wheels) return std::nullopt;
+  if (!kind || *kind == tracks::OdometryInput::wheels) return std::nullopt;
   return kind;
 }
 
-CalibrateOutcome run_twist_calibrate(const CalibrateRequest& a, const std::vector<Track>& tracks,
-                                     OdometryInput input) {
+CalibrateOutcome run_twist_calibrate(const CalibrateRequest& a, const std::vector<tracks::Track>& tracks,
+                                     tracks::OdometryInput input) {
   refuse_wheel_flags(a, input);
-  TwistCalibrationOptions o;
+  calibration::TwistCalibrationOptions o;
   o.segment_s = a.segment_s.value_or(o.segment_s);
   CalibrateOutcome out;
   try {
-    out.twist = calibrate_twist(pointers(tracks), input, o);
+    out.twist = calibration::calibrate_twist(pointers(tracks), input, o);
   } catch (const std::invalid_argument& e) {
-    throw Failure(fmt::format("calibrate: {}", e.what()));
+    throw core::Failure(fmt::format("calibrate: {}", e.what()));
   }
-  const TwistCalibrationSummary& s = *out.twist;
-  if (const auto why = implausible_twist(s.params)) throw Failure(implausible_fit_message(*why));
+  const calibration::TwistCalibrationSummary& s = *out.twist;
+  if (const auto why = calibration::implausible_twist(s.params))
+    throw core::Failure(calibration::implausible_fit_message(*why));
   std::vector<std::string> names;
-  for (const Track& t : tracks) {
+  for (const tracks::Track& t : tracks) {
     names.push_back(t.name());
-    out.twist_scores.push_back({score_twist(t, {}), score_twist(t, s.params)});
+    out.twist_scores.push_back({calibration::score_twist(t, {}), calibration::score_twist(t, s.params)});
   }
   std::vector<std::string>& l = out.summary;
   l.push_back(fmt::format(
-      "calibrated the {} odometry of {} track{} ({}) by batch, in the pose domain:", to_string(input),
+      "calibrated the {} odometry of {} track{} ({}) by batch, in the pose domain:", tracks::to_string(input),
       tracks.size(), tracks.size() == 1 ? "" : "s", fmt::join(names, ", ")));
   l.push_back("  " + correction_text(s.params, &s));
   l.push_back("  " + s.residuals);
@@ -139,7 +145,7 @@ CalibrateOutcome run_twist_calibrate(const CalibrateRequest& a, const std::vecto
     if (out.twist_scores[k][0].samples > 0) l.push_back(score_line(names[k], out.twist_scores[k]));
 
   const std::string provenance = fmt::format(
-      "calibrated by odotune calibrate: method batch ({} odometry)\ntracks: {}", to_string(input),
+      "calibrated by odotune calibrate: method batch ({} odometry)\ntracks: {}", tracks::to_string(input),
       fmt::join(a.tracks, ", "));
   nlohmann::json tracks_json = nlohmann::json::array();
   for (std::size_t k = 0; k < tracks.size(); ++k)
@@ -153,43 +159,46 @@ CalibrateOutcome run_twist_calibrate(const CalibrateRequest& a, const std::vecto
                             {"converged", s.converged},
                             {"tracks", tracks_json}};
   if (!a.config_out.empty()) {
-    CalibrationFile file;
+    formats::CalibrationFile file;
     file.odometry = input;
     file.twist = s.params;
     file.comment = provenance;
-    write_calibration_file(file, a.config_out);
+    formats::write_calibration_file(file, a.config_out);
   }
-  if (!a.json.empty()) write_file_atomically(a.json, j.dump(2) + "\n");
+  if (!a.json.empty()) formats::write_file_atomically(a.json, j.dump(2) + "\n");
   return out;
 }
 
-ApplyOutcome run_twist_apply(const CalibrateRequest& a, const CalibrationFile& file,
-                             const std::vector<Track>& tracks) {
+ApplyOutcome run_twist_apply(const CalibrateRequest& a, const formats::CalibrationFile& file,
+                             const std::vector<tracks::Track>& tracks) {
   ApplyOutcome out;
   out.twist = file.twist;
   std::vector<std::string>& l = out.summary;
-  l.push_back(fmt::format("applied {} ({} odometry: {}) to {} track{}:", a.apply, to_string(file.odometry),
-                          correction_text(file.twist, nullptr), tracks.size(), tracks.size() == 1 ? "" : "s"));
+  l.push_back(fmt::format("applied {} ({} odometry: {}) to {} track{}:", a.apply,
+                          tracks::to_string(file.odometry), correction_text(file.twist, nullptr), tracks.size(),
+                          tracks.size() == 1 ? "" : "s"));
   nlohmann::json tracks_json = nlohmann::json::array();
   for (std::size_t k = 0; k < tracks.size(); ++k) {
-    const OdometryInput in = input_of(a, tracks, k);
+    const tracks::OdometryInput in = input_of(a, tracks, k);
     if (in != file.odometry)
-      throw Failure(fmt::format("{}: {} odometry; the calibration file {} corrects {} odometry", a.tracks[k],
-                                to_string(in), a.apply, to_string(file.odometry)));
+      throw core::Failure(fmt::format("{}: {} odometry; the calibration file {} corrects {} odometry",
+                                      a.tracks[k], tracks::to_string(in), a.apply,
+                                      tracks::to_string(file.odometry)));
     if (!tracks[k].has_gt())
-      throw Failure(
+      throw core::Failure(
           fmt::format("{}: track '{}' has no ground truth (gt_x, gt_y, gt_theta); --apply scores dead "
                       "reckoning against it",
                       a.tracks[k], tracks[k].name()));
-    out.twist_scores.push_back({score_twist(tracks[k], {}), score_twist(tracks[k], file.twist)});
+    out.twist_scores.push_back({calibration::score_twist(tracks[k], {}),
+                                calibration::score_twist(tracks[k], file.twist)});
     l.push_back(score_line(tracks[k].name(), out.twist_scores.back()));
     tracks_json.push_back(track_json(tracks[k].name(), a.tracks[k], out.twist_scores.back()));
   }
   const nlohmann::json j = {{"calibration_file", a.apply},
                             {"calibration", correction_json(file.odometry, file.twist)},
                             {"tracks", tracks_json}};
-  if (!a.json.empty()) write_file_atomically(a.json, j.dump(2) + "\n");
+  if (!a.json.empty()) formats::write_file_atomically(a.json, j.dump(2) + "\n");
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

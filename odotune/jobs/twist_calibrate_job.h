@@ -13,22 +13,23 @@
 #include <odotune/jobs/calibrate_job.h>
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 // The body-velocity input of the request's tracks (each track's own, or
 // --input), or nullopt for wheel tracks. Throws Failure (one line naming
 // the file) when a track's odometry cannot be told or the tracks mix kinds.
-std::optional<OdometryInput> calibrate_body_input(const CalibrateRequest& a, const std::vector<Track>& tracks);
+std::optional<tracks::OdometryInput> calibrate_body_input(const CalibrateRequest& a,
+                                                          const std::vector<tracks::Track>& tracks);
 
 // Refuses the flags that do not apply to a body-velocity fit, fits, writes
 // --config-out and --json. Throws Failure.
-CalibrateOutcome run_twist_calibrate(const CalibrateRequest& a, const std::vector<Track>& tracks,
-                                     OdometryInput input);
+CalibrateOutcome run_twist_calibrate(const CalibrateRequest& a, const std::vector<tracks::Track>& tracks,
+                                     tracks::OdometryInput input);
 
 // --apply of a twist or commands calibration file: every track's dead
 // reckoning at the identity and at the file's correction; writes --json.
 // Throws Failure when the tracks' odometry is not the file's.
-ApplyOutcome run_twist_apply(const CalibrateRequest& a, const CalibrationFile& file,
-                             const std::vector<Track>& tracks);
+ApplyOutcome run_twist_apply(const CalibrateRequest& a, const formats::CalibrationFile& file,
+                             const std::vector<tracks::Track>& tracks);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -24,10 +24,10 @@
 #include <odotune/objectives/metrics.h>
 #include <odotune/tuner/summary.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 struct UkfTuneRequest : SolverSettings {
-  FitnessMode mode = kDefaultFitnessMode;  // against ground truth (1..7)
+  objectives::FitnessMode mode = objectives::kDefaultFitnessMode;  // against ground truth (1..7)
   bool IsValid(std::string* why) const;
 };
 
@@ -37,28 +37,29 @@ struct UkfTuneOutcome {
   std::vector<std::string> param_units;
   std::vector<double> default_params;  // physical, in param_units
   std::vector<double> params;          // tuned, physical
-  UkfSettings default_settings, tuned_settings;
+  learned::UkfSettings default_settings, tuned_settings;
   double baseline_fitness = 0.0, tuned_fitness = 0.0;  // the objective's, lower is better
   bool default_kept = false;
-  std::vector<TrackScore> tracks;          // per track: default vs tuned position errors
-  ErrorMetrics baseline_mean, tuned_mean;  // means over tracks
-  long failures = 0;                       // evaluations that scored the divergence penalty
+  std::vector<TrackScore> tracks;                      // per track: default vs tuned position errors
+  objectives::ErrorMetrics baseline_mean, tuned_mean;  // means over tracks
+  long failures = 0;                                   // evaluations that scored the divergence penalty
   tuner::Summary summary;
 };
 
 // The fusion input `tune` and `grid` use for a track (10 Hz, the paper's
 // rate). Throws std::invalid_argument with one line naming the track when it
 // cannot be fused or has no ground truth to score against.
-FusionInput ukf_fusion_input(const Track& track);
+learned::FusionInput ukf_fusion_input(const tracks::Track& track);
 
 // Position errors of `settings` on each input (the metrics are the
 // divergence penalty for a run whose filter turned unhealthy).
-std::vector<ErrorMetrics> ukf_track_errors(const std::vector<const FusionInput*>& inputs,
-                                           const UkfSettings& settings);
+std::vector<objectives::ErrorMetrics> ukf_track_errors(const std::vector<const learned::FusionInput*>& inputs,
+                                                       const learned::UkfSettings& settings);
 
 // Runs the solver; throws std::invalid_argument for an invalid request or no
 // tracks (or a track without ground truth) and std::runtime_error when the
 // solver fails.
-UkfTuneOutcome run_ukf_tune(const std::vector<const FusionInput*>& inputs, const UkfTuneRequest& request);
+UkfTuneOutcome run_ukf_tune(const std::vector<const learned::FusionInput*>& inputs,
+                            const UkfTuneRequest& request);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

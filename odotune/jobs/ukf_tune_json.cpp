@@ -4,14 +4,14 @@
 
 #include <odotune/jobs/tune_json.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 nlohmann::json ukf_tune_json(const UkfTuneOutcome& o, double fusion_rate_hz) {
   const UkfTuneRequest& r = o.request;
   nlohmann::json j;
   j["model"] = "ukf";
-  j["mode"] = number(r.mode);
-  j["mode_name"] = fitness_mode_name(r.mode);
+  j["mode"] = objectives::number(r.mode);
+  j["mode_name"] = objectives::fitness_mode_name(r.mode);
   put_solver_json(j, r);
   j["fusion_rate_hz"] = fusion_rate_hz;
   put_tuned_params_json(j, o.param_names, o.param_units, o.params, o.default_params, o.default_kept);
@@ -21,4 +21,4 @@ nlohmann::json ukf_tune_json(const UkfTuneOutcome& o, double fusion_rate_hz) {
   return j;
 }
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -22,8 +22,8 @@
 
 #include <odotune/jobs/ukf_tune_job.h>
 
-namespace odotune {
+namespace odotune::jobs {
 
 nlohmann::json ukf_tune_json(const UkfTuneOutcome& o, double fusion_rate_hz);
 
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -15,7 +15,7 @@
 #include <odotune/tracks/body_velocity.h>
 #include <odotune/tracks/odometry_input.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 namespace {
 
@@ -48,22 +48,22 @@ double count_at(const std::vector<double>& t, const std::vector<double>& c, doub
 
 // The ground-truth pose at t_s: a sample stamped within kSameInstantS of t_s
 // itself, else the linear interpolation (pose_series.h).
-std::optional<PlanarPose> gt_pose_at(const PoseSeries& gt, double t_s) {
+std::optional<objectives::PlanarPose> gt_pose_at(const objectives::PoseSeries& gt, double t_s) {
   if (gt.size() == 0) return std::nullopt;
   const auto it = std::lower_bound(gt.t.begin(), gt.t.end(), t_s - kSameInstantS);
   if (it != gt.t.end() && std::abs(*it - t_s) <= kSameInstantS) {
     const auto i = static_cast<std::size_t>(it - gt.t.begin());
-    return PlanarPose{gt.x[i], gt.y[i], gt.theta[i]};
+    return objectives::PlanarPose{gt.x[i], gt.y[i], gt.theta[i]};
   }
-  return interpolate_pose(gt, t_s, kMaxGtGapS);
+  return objectives::interpolate_pose(gt, t_s, objectives::kMaxGtGapS);
 }
 
 // The robot's nominal geometry (or the options' calibrated one) and
 // ticks_per_rev from the metadata into `in`.
-void read_nominal(const Track& track, FusionInput& in, const FusionInputOptions& options) {
+void read_nominal(const tracks::Track& track, FusionInput& in, const FusionInputOptions& options) {
   const std::string& name = track.name();
   std::string why;
-  const TrackMeta& meta = track.meta();
+  const tracks::TrackMeta& meta = track.meta();
   auto require = [&](const std::optional<double>& v, const char* key) {
     if (!v)
       fail(name, fmt::format("metadata '{}' is missing: fusion needs the robot's nominal wheel "
@@ -88,7 +88,7 @@ struct OdometryCounts {
 
 // From ticks: the count itself (relative to the first row, so the doubles
 // stay exact). From omega: the trapezoid integral of ω, in counts.
-OdometryCounts odometry_counts(const Track& track, bool from_ticks, double counts_per_rad) {
+OdometryCounts odometry_counts(const tracks::Track& track, bool from_ticks, double counts_per_rad) {
   const auto& tt = track.t();
   OdometryCounts oc;
   std::vector<double>& odo_t = oc.t;
@@ -98,12 +98,12 @@ OdometryCounts odometry_counts(const Track& track, bool from_ticks, double count
   std::int64_t first_l = 0, first_r = 0;
   for (std::size_t i = 0; i < track.size(); ++i) {
     if (from_ticks) {
-      if (track.ticks_l()[i] == kNoTick || track.ticks_r()[i] == kNoTick) continue;
+      if (track.ticks_l()[i] == tracks::kNoTick || track.ticks_r()[i] == tracks::kNoTick) continue;
       if (odo_t.empty()) first_l = track.ticks_l()[i], first_r = track.ticks_r()[i];
       cum_l.push_back(static_cast<double>(track.ticks_l()[i] - first_l));
       cum_r.push_back(static_cast<double>(track.ticks_r()[i] - first_r));
     } else {
-      if (!track.at(Col::omega_l, i) || !track.at(Col::omega_r, i)) continue;
+      if (!track.at(tracks::Col::omega_l, i) || !track.at(tracks::Col::omega_r, i)) continue;
       // Trapezoid over the omega rows: φ_i = φ_{i−1} + (ω_{i−1} + ω_i)/2 · Δt.
       if (odo_t.empty()) {
         cum_l.push_back(0.0);
@@ -113,9 +113,11 @@ OdometryCounts odometry_counts(const Track& track, bool from_ticks, double count
         const std::size_t pi = odo_row.back();   // ... and in the track
         const double dt = tt[i] - tt[pi];
         cum_l.push_back(cum_l[p] +
-                        0.5 * (track.col(Col::omega_l)[pi] + track.col(Col::omega_l)[i]) * dt * counts_per_rad);
+                        0.5 * (track.col(tracks::Col::omega_l)[pi] + track.col(tracks::Col::omega_l)[i]) * dt *
+                            counts_per_rad);
         cum_r.push_back(cum_r[p] +
-                        0.5 * (track.col(Col::omega_r)[pi] + track.col(Col::omega_r)[i]) * dt * counts_per_rad);
+                        0.5 * (track.col(tracks::Col::omega_r)[pi] + track.col(tracks::Col::omega_r)[i]) * dt *
+                            counts_per_rad);
       }
     }
     odo_t.push_back(tt[i]);
@@ -127,7 +129,8 @@ OdometryCounts odometry_counts(const Track& track, bool from_ticks, double count
 // The mean body velocity over each step under the zero-order hold of
 // odotune/tracks/body_velocity.h (delayed by `delay_s`, scaled: FusionInputOptions);
 // no wheel increments (NaN).
-void body_velocity_per_step(const BodyVelocityIntegral& body, const FusionInputOptions& o, FusionInput& in) {
+void body_velocity_per_step(const tracks::BodyVelocityIntegral& body, const FusionInputOptions& o,
+                            FusionInput& in) {
   const std::size_t n = in.t.size();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   in.dticks_l.assign(n, nan);
@@ -168,7 +171,7 @@ void increments_and_kinematics(const OdometryCounts& oc, double counts_per_rad, 
 
 // Sensors per step: power and gyro averaged over the rows in (t[k−1], t[k]],
 // the last external velocity and the last position fix among them.
-void sensors_per_step(const Track& track, const FusionInputOptions& options, FusionInput& in) {
+void sensors_per_step(const tracks::Track& track, const FusionInputOptions& options, FusionInput& in) {
   const auto& tt = track.t();
   const std::size_t n = in.t.size();
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -181,10 +184,10 @@ void sensors_per_step(const Track& track, const FusionInputOptions& options, Fus
   in.gyro_z.assign(n, nan);
   for (auto* v : {&in.fix_x, &in.fix_y, &in.fix_var_x, &in.fix_var_y}) v->assign(n, nan);
   const bool track_fixes = track.has_aps();
-  const bool fix_vars = track.has(Col::aps_var_x) && track.has(Col::aps_var_y);
-  const bool track_power = track.has(Col::power_l) && track.has(Col::power_r);
-  const bool track_ext = track.has(Col::v_ext) && track.has(Col::w_ext);
-  const bool track_gyro = track.has(Col::gyro_z);
+  const bool fix_vars = track.has(tracks::Col::aps_var_x) && track.has(tracks::Col::aps_var_y);
+  const bool track_power = track.has(tracks::Col::power_l) && track.has(tracks::Col::power_r);
+  const bool track_ext = track.has(tracks::Col::v_ext) && track.has(tracks::Col::w_ext);
+  const bool track_gyro = track.has(tracks::Col::gyro_z);
   std::size_t i = 0;  // first track row not yet assigned to a step
   // Rows at or before t[0] belong to no step.
   while (i < track.size() && tt[i] <= in.t[0] + kSameInstantS) ++i;
@@ -192,21 +195,25 @@ void sensors_per_step(const Track& track, const FusionInputOptions& options, Fus
     double sum_pl = 0.0, sum_pr = 0.0, sum_g = 0.0;
     int n_pl = 0, n_pr = 0, n_g = 0;
     for (; i < track.size() && tt[i] <= in.t[k] + kSameInstantS; ++i) {
-      if (track_power && track.at(Col::power_l, i)) sum_pl += track.col(Col::power_l)[i], ++n_pl;
-      if (track_power && track.at(Col::power_r, i)) sum_pr += track.col(Col::power_r)[i], ++n_pr;
-      if (track_gyro && track.at(Col::gyro_z, i)) sum_g += track.col(Col::gyro_z)[i], ++n_g;
-      if (track_fixes && track.at(Col::aps_x, i) && track.at(Col::aps_y, i)) {
-        in.fix_x[k] = track.col(Col::aps_x)[i];
-        in.fix_y[k] = track.col(Col::aps_y)[i];
-        in.fix_var_x[k] = fix_vars ? track.col(Col::aps_var_x)[i] : nan;
-        in.fix_var_y[k] = fix_vars ? track.col(Col::aps_var_y)[i] : nan;
+      if (track_power && track.at(tracks::Col::power_l, i))
+        sum_pl += track.col(tracks::Col::power_l)[i], ++n_pl;
+      if (track_power && track.at(tracks::Col::power_r, i))
+        sum_pr += track.col(tracks::Col::power_r)[i], ++n_pr;
+      if (track_gyro && track.at(tracks::Col::gyro_z, i)) sum_g += track.col(tracks::Col::gyro_z)[i], ++n_g;
+      if (track_fixes && track.at(tracks::Col::aps_x, i) && track.at(tracks::Col::aps_y, i)) {
+        in.fix_x[k] = track.col(tracks::Col::aps_x)[i];
+        in.fix_y[k] = track.col(tracks::Col::aps_y)[i];
+        in.fix_var_x[k] = fix_vars ? track.col(tracks::Col::aps_var_x)[i] : nan;
+        in.fix_var_y[k] = fix_vars ? track.col(tracks::Col::aps_var_y)[i] : nan;
         in.has_fixes = true;
       }
-      if (track_ext && track.at(Col::v_ext, i) && track.at(Col::w_ext, i)) {
-        in.v_ext[k] = track.col(Col::v_ext)[i];
-        in.w_ext[k] = track.col(Col::w_ext)[i];
-        in.v_ext_var[k] = positive_or(track.col(Col::v_ext_var), i, options.default_ext_var_v);
-        in.w_ext_var[k] = positive_or(track.col(Col::w_ext_var), i, options.default_ext_var_w);
+      if (track_ext && track.at(tracks::Col::v_ext, i) && track.at(tracks::Col::w_ext, i)) {
+        in.v_ext[k] = track.col(tracks::Col::v_ext)[i];
+        in.w_ext[k] = track.col(tracks::Col::w_ext)[i];
+        in.v_ext_var[k] = objectives::positive_or(track.col(tracks::Col::v_ext_var), i,
+                                                  options.default_ext_var_v);
+        in.w_ext_var[k] = objectives::positive_or(track.col(tracks::Col::w_ext_var), i,
+                                                  options.default_ext_var_w);
         in.has_ext = true;
       }
     }
@@ -222,7 +229,7 @@ void sensors_per_step(const Track& track, const FusionInputOptions& options, Fus
 
 // The ground-truth pose at each step and the true body velocities between
 // steps.
-void ground_truth_per_step(const Track& track, FusionInput& in) {
+void ground_truth_per_step(const tracks::Track& track, FusionInput& in) {
   const std::size_t n = in.t.size();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   in.gt_x.assign(n, nan);
@@ -230,7 +237,7 @@ void ground_truth_per_step(const Track& track, FusionInput& in) {
   in.gt_theta.assign(n, nan);
   in.v_true.assign(n, 0.0);
   in.w_true.assign(n, 0.0);
-  const PoseSeries gt = ground_truth_series(track);
+  const objectives::PoseSeries gt = objectives::ground_truth_series(track);
   for (std::size_t k = 0; k < n; ++k) {
     const auto p = gt_pose_at(gt, in.t[k]);
     if (!p) continue;
@@ -249,13 +256,13 @@ void ground_truth_per_step(const Track& track, FusionInput& in) {
 }
 
 // The track's commands per step (FusionInput::v_cmd), when it has any.
-void commands_per_step(const Track& track, FusionInput& in) {
+void commands_per_step(const tracks::Track& track, FusionInput& in) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   in.v_cmd.assign(in.size(), nan);
   in.w_cmd.assign(in.size(), nan);
   in.has_cmd = false;
   if (!track.has_cmd()) return;
-  const BodyVelocityIntegral body(track);
+  const tracks::BodyVelocityIntegral body(track);
   if (body.size() < 2) return;
   for (std::size_t k = 1; k < in.size(); ++k) {
     if (in.t[k] <= body.t().front() || in.t[k - 1] >= body.t().back()) continue;
@@ -268,8 +275,8 @@ void commands_per_step(const Track& track, FusionInput& in) {
 
 // External velocities from the ground truth (FusionInputOptions::ext_from_gt_hz):
 // each reference instant's velocity goes to the step holding it.
-void ext_from_ground_truth(const Track& track, const FusionInputOptions& o, FusionInput& in) {
-  const PoseSeries gt = ground_truth_series(track);
+void ext_from_ground_truth(const tracks::Track& track, const FusionInputOptions& o, FusionInput& in) {
+  const objectives::PoseSeries gt = objectives::ground_truth_series(track);
   const double period = 1.0 / o.ext_from_gt_hz;
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (auto* v : {&in.v_ext, &in.w_ext, &in.v_ext_var, &in.w_ext_var}) v->assign(in.size(), nan);
@@ -280,7 +287,7 @@ void ext_from_ground_truth(const Track& track, const FusionInputOptions& o, Fusi
     const double j = std::floor(in.t[k] / period + 1e-9);
     const double tj = j * period;
     if (tj <= in.t[k - 1]) continue;
-    const auto vw = central_difference_velocity(gt, tj, 0.5 * period, 2.0 * period);
+    const auto vw = objectives::central_difference_velocity(gt, tj, 0.5 * period, 2.0 * period);
     if (!vw) continue;
     in.v_ext[k] = vw->v_m_s;
     in.w_ext[k] = vw->w_rad_s;
@@ -338,18 +345,18 @@ bool FusionInputOptions::IsValid(std::string* why) const {
   return true;
 }
 
-FusionInput build_fusion_input(const Track& track, const FusionInputOptions& options) {
+FusionInput build_fusion_input(const tracks::Track& track, const FusionInputOptions& options) {
   const std::string& name = track.name();
   std::string why;
   if (!options.IsValid(&why)) fail(name, "invalid fusion input options: " + why);
 
   FusionInput in;
   in.track_name = name;
-  in.input = track_odometry_input(track, options.input);
-  const bool wheels = in.input == OdometryInput::wheels;
+  in.input = tracks::track_odometry_input(track, options.input);
+  const bool wheels = in.input == tracks::OdometryInput::wheels;
   double counts_per_rad = 0.0;
   OdometryCounts oc;
-  std::optional<BodyVelocityIntegral> body;
+  std::optional<tracks::BodyVelocityIntegral> body;
   if (wheels) {
     read_nominal(track, in, options);
     counts_per_rad = in.ticks_per_rev / (2.0 * std::numbers::pi);
@@ -359,7 +366,8 @@ FusionInput build_fusion_input(const Track& track, const FusionInputOptions& opt
   }
   const std::vector<double>& odo_t = wheels ? oc.t : body->t();
   if (odo_t.size() < 2)
-    fail(name, fmt::format("fewer than two {} rows: no odometry interval to fuse", to_string(in.input)));
+    fail(name,
+         fmt::format("fewer than two {} rows: no odometry interval to fuse", tracks::to_string(in.input)));
 
   // --- step times ----------------------------------------------------------
   in.dt_s = 1.0 / options.rate_hz;
@@ -386,4 +394,4 @@ FusionInput build_fusion_input(const Track& track, const FusionInputOptions& opt
   return in;
 }
 
-}  // namespace odotune
+}  // namespace odotune::learned

@@ -15,12 +15,12 @@
 #include <odotune/tracks/odometry_input.h>
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 struct FusionInputOptions {
   double rate_hz = 10.0;  // fusion / network rate (paper: 10 Hz); (0, 1000]
   // The odometry to read (odotune/tracks/odometry_input.h); nullopt: the track's own.
-  std::optional<OdometryInput> input;
+  std::optional<tracks::OdometryInput> input;
   // Calibrated kinematics: wheels through this geometry instead of the
   // track's nominal one; a twist or commands scaled and delayed
   // (odotune/filters/odometry_params.h, TwistCorrection). Default: nominal.
@@ -41,7 +41,7 @@ struct FusionInputOptions {
 
 struct FusionInput {
   std::string track_name;
-  OdometryInput input = OdometryInput::wheels;  // what v_kin, w_kin come from
+  tracks::OdometryInput input = tracks::OdometryInput::wheels;  // what v_kin, w_kin come from
   filters::OdometryParams nominal;  // the track's robot.* metadata, or options.geometry (wheels only)
   double ticks_per_rev = 0.0;       // encoder counts per wheel revolution (wheels only; else 0)
   double dt_s = 0.1;                // 1 / rate_hz
@@ -101,6 +101,6 @@ FusionInput slice_fusion_input(const FusionInput& in, std::size_t first, std::si
 // that does not say what they are, odotune/tracks/odometry_input.h; for wheels the
 // nominal radii/base/ticks_per_rev absent; fewer than 2 steps, invalid
 // options).
-FusionInput build_fusion_input(const Track& track, const FusionInputOptions& options = {});
+FusionInput build_fusion_input(const tracks::Track& track, const FusionInputOptions& options = {});
 
-}  // namespace odotune
+}  // namespace odotune::learned

@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-namespace odotune {
+namespace odotune::learned {
 namespace {
 
 bool positive_finite(double x) { return x > 0.0 && std::isfinite(x); }
@@ -30,8 +30,8 @@ void check_inputs(const FusionInput& in, const LearnedOdometryModel* model,
         "track '{}': no velocity commands (v_cmd, w_cmd): the slip detector reads them", in.track_name));
   if (options.detector && options.detector->input != in.input)
     throw std::invalid_argument(fmt::format("track '{}' gives {} odometry, the slip detector reads {}",
-                                            in.track_name, to_string(in.input),
-                                            to_string(options.detector->input)));
+                                            in.track_name, tracks::to_string(in.input),
+                                            tracks::to_string(options.detector->input)));
 }
 
 // The filter's state and the pose at step k into the trace.
@@ -197,4 +197,4 @@ LearnedFusionResult run_learned_fusion(const FusionInput& in, const LearnedOdome
   return r;
 }
 
-}  // namespace odotune
+}  // namespace odotune::learned

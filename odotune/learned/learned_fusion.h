@@ -19,7 +19,7 @@
 #include <odotune/learned/slip_detector.h>
 #include <odotune/learned/ukf_fusion.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 // The refit's solver settings: a few LM iterations at the final MAE scale
 // from the current weights, with weight decay λ = 1 toward those weights
@@ -85,4 +85,4 @@ struct LearnedFusionResult {
 LearnedFusionResult run_learned_fusion(const FusionInput& in, const LearnedOdometryModel* model,
                                        const LearnedFusionOptions& options);
 
-}  // namespace odotune
+}  // namespace odotune::learned

@@ -12,7 +12,7 @@
 #include <odotune/core/enum_names.h>
 #include <odotune/core/why.h>
 
-namespace odotune {
+namespace odotune::learned {
 namespace {
 
 constexpr int kFeatures = OdometryNet::kInputs;
@@ -22,7 +22,7 @@ static_assert(kFeatures == 3, "learned odometry features: three per step");
 // seeded training set is the same whatever the thread count.
 double teacher_noise(double sd, std::uint64_t seed, std::size_t track, std::size_t step, int which) {
   if (sd <= 0.0) return 0.0;
-  const double u = counter_uniform01(seed, track, step, static_cast<std::uint64_t>(which), 0x7ea);
+  const double u = core::counter_uniform01(seed, track, step, static_cast<std::uint64_t>(which), 0x7ea);
   return sd * std::sqrt(3.0) * (2.0 * u - 1.0);
 }
 
@@ -41,7 +41,7 @@ std::string_view to_string(LearnedTarget t) {
 }
 
 bool parse_learned_target(std::string_view text, LearnedTarget* out) {
-  return parse_by_name(text, {LearnedTarget::velocity, LearnedTarget::correction}, out);
+  return core::parse_by_name(text, {LearnedTarget::velocity, LearnedTarget::correction}, out);
 }
 
 std::string_view to_string(LearnedValidation v) {
@@ -54,7 +54,7 @@ std::string_view to_string(LearnedValidation v) {
 }
 
 bool parse_learned_validation(std::string_view text, LearnedValidation* out) {
-  return parse_by_name(
+  return core::parse_by_name(
       text, {LearnedValidation::chronological, LearnedValidation::recordings, LearnedValidation::blocks}, out);
 }
 
@@ -68,46 +68,49 @@ std::string_view to_string(LearnedFeatures f) {
 }
 
 bool parse_learned_features(std::string_view text, LearnedFeatures* out) {
-  return parse_by_name(text, {LearnedFeatures::paper, LearnedFeatures::channel, LearnedFeatures::both}, out);
+  return core::parse_by_name(text, {LearnedFeatures::paper, LearnedFeatures::channel, LearnedFeatures::both},
+                             out);
 }
 
 bool LearnedOdometryModel::IsValid(std::string* why) const {
   std::string inner;
-  if (!v_net.IsValid(&inner)) return invalid(why, "v_net: " + inner);
-  if (!w_net.IsValid(&inner)) return invalid(why, "w_net: " + inner);
+  if (!v_net.IsValid(&inner)) return core::invalid(why, "v_net: " + inner);
+  if (!w_net.IsValid(&inner)) return core::invalid(why, "w_net: " + inner);
   if (v_net.units() != w_net.units() || v_net.window() != w_net.window())
-    return invalid(why, fmt::format("v_net has {} units × {} steps, w_net {} × {}: expected one shape",
-                                    v_net.units(), v_net.window(), w_net.units(), w_net.window()));
+    return core::invalid(why, fmt::format("v_net has {} units × {} steps, w_net {} × {}: expected one shape",
+                                          v_net.units(), v_net.window(), w_net.units(), w_net.window()));
   if (!(rate_hz > 0.0) || !std::isfinite(rate_hz))
-    return invalid(why, fmt::format("rate_hz = {}: expected a finite value > 0", rate_hz));
-  const bool wheels = input == OdometryInput::wheels;
+    return core::invalid(why, fmt::format("rate_hz = {}: expected a finite value > 0", rate_hz));
+  const bool wheels = input == tracks::OdometryInput::wheels;
   if (wheels && (!(ticks_per_rev > 0.0) || !std::isfinite(ticks_per_rev)))
-    return invalid(why, fmt::format("ticks_per_rev = {}: expected a finite value > 0", ticks_per_rev));
+    return core::invalid(why, fmt::format("ticks_per_rev = {}: expected a finite value > 0", ticks_per_rev));
   const bool paper = features == LearnedFeatures::paper;
   if (paper != (target == LearnedTarget::velocity))
-    return invalid(why, fmt::format("features '{}' with target '{}': the paper's features are the velocity "
-                                    "nets', correction nets read channel or both",
-                                    to_string(features), to_string(target)));
+    return core::invalid(why,
+                         fmt::format("features '{}' with target '{}': the paper's features are the velocity "
+                                     "nets', correction nets read channel or both",
+                                     to_string(features), to_string(target)));
   if (paper && (!wheels || gyro))
-    return invalid(why, "the paper's velocity nets read wheel increments only (no twist, commands or gyro)");
+    return core::invalid(why,
+                         "the paper's velocity nets read wheel increments only (no twist, commands or gyro)");
   if (!(v_validation_mae >= 0.0) || !(w_validation_mae >= 0.0) || !(v_kinematic_mae >= 0.0) ||
       !(w_kinematic_mae >= 0.0) ||
       !std::isfinite(v_validation_mae + w_validation_mae + v_kinematic_mae + w_kinematic_mae))
-    return invalid(why, "validation MAEs must be finite values >= 0");
+    return core::invalid(why, "validation MAEs must be finite values >= 0");
   return true;
 }
 
 bool LearnedTrainingOptions::IsValid(std::string* why) const {
   if (!training.IsValid(why)) return false;
   if (!(train_fraction > 0.0 && train_fraction < 1.0))
-    return invalid(why, fmt::format("train_fraction = {}: expected a value in (0, 1)", train_fraction));
+    return core::invalid(why, fmt::format("train_fraction = {}: expected a value in (0, 1)", train_fraction));
   if (!(previous_noise_v >= 0.0) || !(previous_noise_w >= 0.0) || !std::isfinite(previous_noise_v) ||
       !std::isfinite(previous_noise_w))
-    return invalid(why, "previous_noise_v/_w: expected finite values >= 0");
+    return core::invalid(why, "previous_noise_v/_w: expected finite values >= 0");
   if (restarts < 1 || restarts > 100)
-    return invalid(why, fmt::format("restarts = {}: expected 1..100", restarts));
+    return core::invalid(why, fmt::format("restarts = {}: expected 1..100", restarts));
   if (validation == LearnedValidation::blocks)
-    return invalid(why, "validation on blocks is the correction nets' (odometry_selection.h)");
+    return core::invalid(why, "validation on blocks is the correction nets' (odometry_selection.h)");
   return true;
 }
 
@@ -166,19 +169,21 @@ void append_velocity_windows(const FusionInput& in, const WindowSpec& spec, std:
 
 bool model_fits(const LearnedOdometryModel& model, const FusionInput& in, std::string* why) {
   if (in.input != model.input)
-    return invalid(why, fmt::format("track '{}' gives {} odometry, the model was trained on {}", in.track_name,
-                                    to_string(in.input), to_string(model.input)));
-  if (model.input == OdometryInput::wheels &&
+    return core::invalid(why,
+                         fmt::format("track '{}' gives {} odometry, the model was trained on {}", in.track_name,
+                                     tracks::to_string(in.input), tracks::to_string(model.input)));
+  if (model.input == tracks::OdometryInput::wheels &&
       std::abs(in.ticks_per_rev - model.ticks_per_rev) > 1e-9 * model.ticks_per_rev)
-    return invalid(why,
-                   fmt::format("track '{}' has ticks_per_rev = {}, the model was trained with {}; expected "
-                               "the same robot",
-                               in.track_name, in.ticks_per_rev, model.ticks_per_rev));
+    return core::invalid(
+        why, fmt::format("track '{}' has ticks_per_rev = {}, the model was trained with {}; expected "
+                         "the same robot",
+                         in.track_name, in.ticks_per_rev, model.ticks_per_rev));
   if (model.gyro && !in.has_gyro)
-    return invalid(why, fmt::format("track '{}' has no gyro (gyro_z); the model reads one", in.track_name));
+    return core::invalid(why,
+                         fmt::format("track '{}' has no gyro (gyro_z); the model reads one", in.track_name));
   if (std::abs(1.0 / in.dt_s - model.rate_hz) > 1e-9 * model.rate_hz)
-    return invalid(why, fmt::format("track '{}' is laid out at {} Hz, the model runs at {} Hz", in.track_name,
-                                    1.0 / in.dt_s, model.rate_hz));
+    return core::invalid(why, fmt::format("track '{}' is laid out at {} Hz, the model runs at {} Hz",
+                                          in.track_name, 1.0 / in.dt_s, model.rate_hz));
   return true;
 }
 
@@ -204,10 +209,10 @@ void check_paper_track(const FusionInput& in, const LearnedOdometryModel& model,
     throw std::invalid_argument(
         fmt::format("track '{}': no ground truth (gt_x, gt_y, gt_theta): expected it to learn odometry from",
                     in.track_name));
-  if (in.input != OdometryInput::wheels)
+  if (in.input != tracks::OdometryInput::wheels)
     throw std::invalid_argument(fmt::format("track '{}': {} odometry; the paper's velocity nets read wheel "
                                             "increments (train correction nets for this input)",
-                                            in.track_name, to_string(in.input)));
+                                            in.track_name, tracks::to_string(in.input)));
   if (std::abs(in.ticks_per_rev - model.ticks_per_rev) > 1e-9 * model.ticks_per_rev)
     throw std::invalid_argument(
         fmt::format("track '{}': ticks_per_rev = {} differs from the first track's {}: expected one robot",
@@ -391,4 +396,4 @@ OdometrySeries run_learned_odometry(const FusionInput& in, const LearnedOdometry
 
 OdometrySeries kinematic_odometry(const FusionInput& in) { return {in.v_kin, in.w_kin}; }
 
-}  // namespace odotune
+}  // namespace odotune::learned

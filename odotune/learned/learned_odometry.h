@@ -33,7 +33,7 @@
 #include <odotune/learned/lstm_training.h>
 #include <odotune/learned/odometry_net.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 enum class LearnedTarget { velocity, correction };
 std::string_view to_string(LearnedTarget t);  // "velocity", "correction"
@@ -70,8 +70,8 @@ struct LearnedOdometryModel {
   // Of the robot they were trained on (increments are in counts); wheel
   // input only (0 otherwise).
   double ticks_per_rev = 0.0;
-  LearnedTarget target = LearnedTarget::velocity;  // what the nets output (see the file comment)
-  OdometryInput input = OdometryInput::wheels;     // the odometry they read
+  LearnedTarget target = LearnedTarget::velocity;               // what the nets output (see the file comment)
+  tracks::OdometryInput input = tracks::OdometryInput::wheels;  // the odometry they read
   LearnedFeatures features = LearnedFeatures::paper;
   bool gyro = false;  // the features hold gyro_z: a track must have a gyro
   // A correction net that did not beat the kinematic odometry in its
@@ -208,4 +208,4 @@ OdometrySeries run_learned_odometry(const FusionInput& in, const LearnedOdometry
                                     std::size_t first = 0, std::size_t end = static_cast<std::size_t>(-1));
 OdometrySeries kinematic_odometry(const FusionInput& in);
 
-}  // namespace odotune
+}  // namespace odotune::learned

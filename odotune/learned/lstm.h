@@ -29,7 +29,7 @@
 #include <string>
 #include <utility>
 
-namespace odotune {
+namespace odotune::learned {
 
 enum class OutputActivation { linear, relu };
 
@@ -203,4 +203,4 @@ struct LstmNet {
 using VelocityNet = LstmNet<3, 5>;  // (Δct_r, Δct_l, previous V or W) → V or W  [paper §4, Fig. 4]
 using SlipNet = LstmNet<5, 10>;     // (P_r, P_l, Δct_r, Δct_l, previous variance) → variance [§4.1]
 
-}  // namespace odotune
+}  // namespace odotune::learned

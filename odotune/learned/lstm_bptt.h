@@ -27,7 +27,7 @@
 
 #include <odotune/learned/lstm.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 namespace lstm_bptt_detail {
 
@@ -169,4 +169,4 @@ double lstm_value_and_gradient(const double* w, const double* x, int window, Out
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::learned

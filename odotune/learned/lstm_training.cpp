@@ -16,7 +16,7 @@
 #include <odotune/core/counter_rng.h>
 #include <odotune/core/why.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 namespace {
 
@@ -402,17 +402,18 @@ LstmTrainingSummary solve(LstmNet<I, H>& net, const SequenceSet& train, const Ls
 }  // namespace
 
 bool SequenceSet::IsValid(std::string* why) const {
-  if (window < 1) return invalid(why, "window = " + std::to_string(window) + ": expected ≥ 1");
-  if (inputs < 1) return invalid(why, "inputs = " + std::to_string(inputs) + ": expected ≥ 1");
+  if (window < 1) return core::invalid(why, "window = " + std::to_string(window) + ": expected ≥ 1");
+  if (inputs < 1) return core::invalid(why, "inputs = " + std::to_string(inputs) + ": expected ≥ 1");
   const std::size_t per = static_cast<std::size_t>(window) * static_cast<std::size_t>(inputs);
   if (x.size() != y.size() * per)
-    return invalid(why, "x has " + std::to_string(x.size()) +
-                            " values, expected size() × window × inputs = " + std::to_string(y.size() * per));
+    return core::invalid(why,
+                         "x has " + std::to_string(x.size()) +
+                             " values, expected size() × window × inputs = " + std::to_string(y.size() * per));
   for (std::size_t n = 0; n < y.size(); ++n) {
-    if (!std::isfinite(y[n])) return invalid(why, "y[" + std::to_string(n) + "] is not finite");
+    if (!std::isfinite(y[n])) return core::invalid(why, "y[" + std::to_string(n) + "] is not finite");
     for (std::size_t i = 0; i < per; ++i)
       if (!std::isfinite(x[n * per + i]))
-        return invalid(why, "window " + std::to_string(n) + " has a non-finite x value");
+        return core::invalid(why, "window " + std::to_string(n) + " has a non-finite x value");
   }
   return true;
 }
@@ -441,23 +442,26 @@ std::pair<SequenceSet, SequenceSet> split_sequences(const SequenceSet& all, doub
 
 bool LstmTrainingOptions::IsValid(std::string* why) const {
   if (max_iterations < 0)
-    return invalid(why, "max_iterations = " + std::to_string(max_iterations) + ": expected ≥ 0");
+    return core::invalid(why, "max_iterations = " + std::to_string(max_iterations) + ": expected ≥ 0");
   if (!(mae_scale > 0.0) || !std::isfinite(mae_scale))
-    return invalid(why, "mae_scale = " + fmt::format("{}", mae_scale) + ": expected a finite value > 0");
+    return core::invalid(why, "mae_scale = " + fmt::format("{}", mae_scale) + ": expected a finite value > 0");
   if (!(mae_scale_start > 0.0) || !std::isfinite(mae_scale_start))
-    return invalid(why,
-                   "mae_scale_start = " + fmt::format("{}", mae_scale_start) + ": expected a finite value > 0");
+    return core::invalid(why, "mae_scale_start = " + fmt::format("{}", mae_scale_start) +
+                                  ": expected a finite value > 0");
   if (!(function_tolerance >= 0.0) || !std::isfinite(function_tolerance))
-    return invalid(why, "function_tolerance = " + fmt::format("{}", function_tolerance) +
-                            ": expected a finite value ≥ 0");
+    return core::invalid(why, "function_tolerance = " + fmt::format("{}", function_tolerance) +
+                                  ": expected a finite value ≥ 0");
   if (!(weight_decay >= 0.0) || !std::isfinite(weight_decay))
-    return invalid(why, "weight_decay = " + fmt::format("{}", weight_decay) + ": expected a finite value ≥ 0");
-  if (num_threads < 1) return invalid(why, "num_threads = " + std::to_string(num_threads) + ": expected ≥ 1");
+    return core::invalid(why,
+                         "weight_decay = " + fmt::format("{}", weight_decay) + ": expected a finite value ≥ 0");
+  if (num_threads < 1)
+    return core::invalid(why, "num_threads = " + std::to_string(num_threads) + ": expected ≥ 1");
   if (early_stopping_patience < 0)
-    return invalid(why,
-                   "early_stopping_patience = " + std::to_string(early_stopping_patience) + ": expected ≥ 0");
+    return core::invalid(why, "early_stopping_patience = " + std::to_string(early_stopping_patience) +
+                                  ": expected ≥ 0");
   if (stop_after_iterations < 0)
-    return invalid(why, "stop_after_iterations = " + std::to_string(stop_after_iterations) + ": expected ≥ 0");
+    return core::invalid(why,
+                         "stop_after_iterations = " + std::to_string(stop_after_iterations) + ": expected ≥ 0");
   return true;
 }
 
@@ -466,7 +470,8 @@ std::array<double, LstmLayout<I, H>::kCount> lstm_initial_weights(std::uint64_t 
   using L = LstmLayout<I, H>;
   std::array<double, L::kCount> w{};
   auto uniform = [seed](int n, double limit) {
-    return limit * (2.0 * counter_uniform01(seed, 0, static_cast<std::uint64_t>(n), 0, kInitStream) - 1.0);
+    return limit *
+           (2.0 * core::counter_uniform01(seed, 0, static_cast<std::uint64_t>(n), 0, kInitStream) - 1.0);
   };
   const double kernel = std::sqrt(6.0 / (I + L::kGates));
   const double recurrent = std::sqrt(6.0 / (H + L::kGates));
@@ -569,4 +574,4 @@ ODOTUNE_INSTANTIATE_LSTM_TRAINING(5, 10)
 
 #undef ODOTUNE_INSTANTIATE_LSTM_TRAINING
 
-}  // namespace odotune
+}  // namespace odotune::learned

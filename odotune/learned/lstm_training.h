@@ -45,7 +45,7 @@
 #include <odotune/learned/lstm.h>
 #include <odotune/learned/lstm_bptt.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 // Windows of raw samples and their raw targets.
 struct SequenceSet {
@@ -210,4 +210,4 @@ LstmTrainingSummary retrain_lstm(LstmNet<I, H>& net, const SequenceSet& train,
 template <int I, int H>
 double lstm_mae(const LstmNet<I, H>& net, const SequenceSet& set);
 
-}  // namespace odotune
+}  // namespace odotune::learned

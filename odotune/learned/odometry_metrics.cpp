@@ -7,7 +7,7 @@
 #include <odotune/filters/velocity_ukf.h>
 #include <odotune/objectives/pose_series.h>
 
-namespace odotune {
+namespace odotune::learned {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -128,7 +128,7 @@ OdometryErrors odometry_errors(const FusionInput& in, const std::vector<double>&
     sy += in.gt_y[k];
     sxx += in.gt_x[k] * in.gt_x[k];
     syy += in.gt_y[k] * in.gt_y[k];
-    const double eth = wrap_angle(pose->theta[k] - in.gt_theta[k]);
+    const double eth = core::wrap_angle(pose->theta[k] - in.gt_theta[k]);
     th_abs += std::abs(eth);
     th_sq += eth * eth;
     ++n;
@@ -162,4 +162,4 @@ OdometryErrors odometry_errors(const FusionInput& in, const std::vector<double>&
   return r;
 }
 
-}  // namespace odotune
+}  // namespace odotune::learned

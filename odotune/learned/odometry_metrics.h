@@ -10,7 +10,7 @@
 
 #include <odotune/learned/fusion_input.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 struct SeriesErrors {
   double mae = 0.0, rmse = 0.0, r2 = 0.0;
@@ -65,4 +65,4 @@ OdometryErrors odometry_errors(const FusionInput& in, const std::vector<double>&
                                const std::vector<double>& var_w, const std::vector<double>& cov_vw,
                                const PoseTrack* pose = nullptr);
 
-}  // namespace odotune
+}  // namespace odotune::learned

@@ -6,7 +6,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 OdometryNet OdometryNet::with_units(int units, int window) {
   OdometryNet out;
@@ -85,4 +85,4 @@ double OdometryNet::mae(const SequenceSet& set) const {
   return std::visit([&set](const auto& n) { return lstm_mae(n, set); }, net_);
 }
 
-}  // namespace odotune
+}  // namespace odotune::learned

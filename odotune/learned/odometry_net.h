@@ -13,7 +13,7 @@
 #include <odotune/learned/lstm.h>
 #include <odotune/learned/lstm_training.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 // The unit counts an OdometryNet can have. Above 8 a Levenberg–Marquardt
 // step (the normal equations of ~4H(H + 4) weights over every window)
@@ -65,4 +65,4 @@ class OdometryNet {
   std::variant<Net3, Net5, Net8> net_;
 };
 
-}  // namespace odotune
+}  // namespace odotune::learned

@@ -12,7 +12,7 @@
 #include <odotune/core/why.h>
 #include <odotune/learned/odometry_metrics.h>
 
-namespace odotune {
+namespace odotune::learned {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -38,11 +38,11 @@ void check_tracks(const std::vector<const FusionInput*>& tracks) {
                        in->track_name));
     if (in->input != a.input)
       fail(fmt::format("track '{}' gives {} odometry, track '{}' {}: expected one kind", in->track_name,
-                       to_string(in->input), a.track_name, to_string(a.input)));
+                       tracks::to_string(in->input), a.track_name, tracks::to_string(a.input)));
     if (std::abs(in->dt_s - a.dt_s) > 1e-12)
       fail(fmt::format("track '{}': step {} s differs from the first track's {} s", in->track_name, in->dt_s,
                        a.dt_s));
-    if (a.input == OdometryInput::wheels &&
+    if (a.input == tracks::OdometryInput::wheels &&
         std::abs(in->ticks_per_rev - a.ticks_per_rev) > 1e-9 * a.ticks_per_rev)
       fail(fmt::format("track '{}': ticks_per_rev = {} differs from the first track's {}: expected one robot",
                        in->track_name, in->ticks_per_rev, a.ticks_per_rev));
@@ -87,7 +87,7 @@ LearnedOdometryModel fresh_model(const CorrectionSettings& s, const FusionInput&
   m.v_net = OdometryNet::with_units(s.units, s.window);
   m.w_net = OdometryNet::with_units(s.units, s.window);
   m.rate_hz = 1.0 / first.dt_s;
-  m.ticks_per_rev = first.input == OdometryInput::wheels ? first.ticks_per_rev : 0.0;
+  m.ticks_per_rev = first.input == tracks::OdometryInput::wheels ? first.ticks_per_rev : 0.0;
   m.target = LearnedTarget::correction;
   m.input = first.input;
   m.features = s.features;
@@ -269,7 +269,7 @@ CandidateResult cross_validate(const std::vector<const FusionInput*>& tracks, co
 int median_iterations(const std::vector<FoldMeasures>& folds, bool v) {
   std::vector<double> its;
   for (const FoldMeasures& f : folds) its.push_back(v ? f.v_iteration : f.w_iteration);
-  return std::max(1, static_cast<int>(std::lround(median(its))));
+  return std::max(1, static_cast<int>(std::lround(core::median(its))));
 }
 
 }  // namespace
@@ -291,25 +291,27 @@ std::string_view to_string(NetCombination c) {
 bool SelectionOptions::IsValid(std::string* why) const {
   if (!training.IsValid(why)) return false;
   if (training.early_stopping_patience < 1)
-    return invalid(why, fmt::format("early_stopping_patience = {}: expected >= 1",
-                                    training.early_stopping_patience));
+    return core::invalid(why, fmt::format("early_stopping_patience = {}: expected >= 1",
+                                          training.early_stopping_patience));
   if (validation != LearnedValidation::recordings && validation != LearnedValidation::blocks)
-    return invalid(why, fmt::format("validation '{}': expected recordings or blocks", to_string(validation)));
-  if (max_folds < 2) return invalid(why, fmt::format("max_folds = {}: expected >= 2", max_folds));
+    return core::invalid(why,
+                         fmt::format("validation '{}': expected recordings or blocks", to_string(validation)));
+  if (max_folds < 2) return core::invalid(why, fmt::format("max_folds = {}: expected >= 2", max_folds));
   if (units.empty() || windows.empty() || weight_decays.empty() || features.empty())
-    return invalid(why, "every list of candidate settings needs at least one value");
+    return core::invalid(why, "every list of candidate settings needs at least one value");
   for (int u : units)
     if (std::find(kOdometryNetUnits.begin(), kOdometryNetUnits.end(), u) == kOdometryNetUnits.end())
-      return invalid(why, fmt::format("units {}: expected one of 3, 5, 8", u));
+      return core::invalid(why, fmt::format("units {}: expected one of 3, 5, 8", u));
   for (int w : windows)
-    if (w < 2 || w > 256) return invalid(why, fmt::format("window {}: expected 2..256 steps", w));
+    if (w < 2 || w > 256) return core::invalid(why, fmt::format("window {}: expected 2..256 steps", w));
   for (double d : weight_decays)
-    if (!(d >= 0.0) || !std::isfinite(d)) return invalid(why, fmt::format("weight decay {}: expected >= 0", d));
+    if (!(d >= 0.0) || !std::isfinite(d))
+      return core::invalid(why, fmt::format("weight decay {}: expected >= 0", d));
   for (LearnedFeatures f : features)
     if (f == LearnedFeatures::paper)
-      return invalid(why, "features 'paper': correction nets read channel or both");
+      return core::invalid(why, "features 'paper': correction nets read channel or both");
   if (validation == LearnedValidation::blocks && !(block_s > 0.0 && std::isfinite(block_s)))
-    return invalid(why, fmt::format("block_s = {}: expected a finite length > 0 s", block_s));
+    return core::invalid(why, fmt::format("block_s = {}: expected a finite length > 0 s", block_s));
   return true;
 }
 
@@ -390,4 +392,4 @@ LearnedOdometryModel train_correction_odometry(const std::vector<const FusionInp
   return model;
 }
 
-}  // namespace odotune
+}  // namespace odotune::learned

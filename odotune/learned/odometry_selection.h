@@ -44,7 +44,7 @@
 
 #include <odotune/learned/learned_odometry.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 struct CorrectionSettings {
   int units = 5;              // LSTM units (kOdometryNetUnits)
@@ -130,4 +130,4 @@ LearnedOdometryModel train_correction_odometry(const std::vector<const FusionInp
                                                const SelectionOptions& options, SelectionSummary* summary,
                                                const SelectionProgress& progress = {});
 
-}  // namespace odotune
+}  // namespace odotune::learned

@@ -9,7 +9,7 @@
 
 #include <odotune/core/why.h>
 
-namespace odotune {
+namespace odotune::learned {
 namespace {
 
 [[noreturn]] void fail(const FusionInput& in, const std::string& what) {
@@ -48,13 +48,13 @@ void record(const filters::PoseVelocityUkf& f, std::size_t k, PoseFusionTrace& t
 
 bool PoseFusionOptions::IsValid(std::string* why) const {
   if (!(std::isfinite(fix_sigma_m) && fix_sigma_m >= 0.0))
-    return invalid(why, fmt::format("fix_sigma_m = {}: expected a finite value >= 0 [m]", fix_sigma_m));
+    return core::invalid(why, fmt::format("fix_sigma_m = {}: expected a finite value >= 0 [m]", fix_sigma_m));
   if (!(start_sigma_m > 0.0 && std::isfinite(start_sigma_m)) ||
       !(start_sigma_rad > 0.0 && std::isfinite(start_sigma_rad)))
-    return invalid(why, "start_sigma_m, start_sigma_rad: expected finite values > 0");
+    return core::invalid(why, "start_sigma_m, start_sigma_rad: expected finite values > 0");
   std::string inner;
-  if (!ukf.IsValid(&inner)) return invalid(why, "ukf: " + inner);
-  if (!noise.IsValid(&inner)) return invalid(why, "noise: " + inner);
+  if (!ukf.IsValid(&inner)) return core::invalid(why, "ukf: " + inner);
+  if (!noise.IsValid(&inner)) return core::invalid(why, "noise: " + inner);
   return true;
 }
 
@@ -102,8 +102,8 @@ PoseFusionTrace replay_pose_fusion(const FusionInput& in, const std::vector<Odom
   return t;
 }
 
-ErrorMetrics pose_fusion_errors(const FusionInput& in, const PoseFusionTrace& trace) {
+objectives::ErrorMetrics pose_fusion_errors(const FusionInput& in, const PoseFusionTrace& trace) {
   return position_errors(in, trace.x, trace.y);
 }
 
-}  // namespace odotune
+}  // namespace odotune::learned

@@ -22,7 +22,7 @@
 #include <odotune/learned/ukf_fusion.h>
 #include <odotune/objectives/metrics.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 struct PoseFusionOptions {
   filters::PoseUkfParams ukf;  // its initial state and covariance are set as the header says
@@ -47,6 +47,6 @@ PoseFusionTrace replay_pose_fusion(const FusionInput& in, const std::vector<Odom
                                    const PoseFusionOptions& options);
 
 // Position error of the trace against the ground truth at steps k ≥ 1 [m].
-ErrorMetrics pose_fusion_errors(const FusionInput& in, const PoseFusionTrace& trace);
+objectives::ErrorMetrics pose_fusion_errors(const FusionInput& in, const PoseFusionTrace& trace);
 
-}  // namespace odotune
+}  // namespace odotune::learned

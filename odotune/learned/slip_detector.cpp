@@ -9,7 +9,7 @@
 
 #include <odotune/core/enum_names.h>
 
-namespace odotune {
+namespace odotune::learned {
 namespace {
 
 constexpr int kFeatures = SlipNet::kInputs;
@@ -35,7 +35,7 @@ std::array<double, 2> drive_at(const FusionInput& in, std::size_t k, SlipDrive d
 
 // The odometry channels of step k.
 std::array<double, 2> odometry_at(const FusionInput& in, std::size_t k) {
-  if (in.input == OdometryInput::wheels) return {in.dticks_r[k], in.dticks_l[k]};
+  if (in.input == tracks::OdometryInput::wheels) return {in.dticks_r[k], in.dticks_l[k]};
   return {in.v_kin[k], in.w_kin[k]};
 }
 
@@ -51,14 +51,14 @@ std::string_view to_string(SlipDrive d) {
 }
 
 bool parse_slip_drive(std::string_view text, SlipDrive* out) {
-  return parse_by_name(text, {SlipDrive::power, SlipDrive::commands, SlipDrive::none}, out);
+  return core::parse_by_name(text, {SlipDrive::power, SlipDrive::commands, SlipDrive::none}, out);
 }
 
 SlipDrive available_slip_drive(const std::vector<const FusionInput*>& tracks) {
   bool power = !tracks.empty(), commands = !tracks.empty();
   for (const FusionInput* in : tracks) {
     power = power && in->has_power;
-    commands = commands && in->has_cmd && in->input == OdometryInput::wheels;
+    commands = commands && in->has_cmd && in->input == tracks::OdometryInput::wheels;
   }
   return power ? SlipDrive::power : commands ? SlipDrive::commands : SlipDrive::none;
 }
@@ -153,9 +153,9 @@ PerTrack checked_targets(const std::vector<const FusionInput*>& tracks,
           "track '{}': no velocity commands (v_cmd, w_cmd): expected them to train the slip detector on",
           in.track_name));
     if (in.input != tracks.front()->input)
-      throw std::invalid_argument(fmt::format("track '{}' gives {} odometry, '{}' {}: expected one kind",
-                                              in.track_name, to_string(in.input), tracks.front()->track_name,
-                                              to_string(tracks.front()->input)));
+      throw std::invalid_argument(fmt::format(
+          "track '{}' gives {} odometry, '{}' {}: expected one kind", in.track_name,
+          tracks::to_string(in.input), tracks.front()->track_name, tracks::to_string(tracks.front()->input)));
     if (!in.has_gt)
       throw std::invalid_argument(
           fmt::format("track '{}': no ground truth: expected it to train the slip detector", in.track_name));
@@ -456,4 +456,4 @@ std::array<double, 2> SlipDetectorStepper::step(const FusionInput& in, std::size
   return previous_;
 }
 
-}  // namespace odotune
+}  // namespace odotune::learned

@@ -37,7 +37,7 @@
 #include <odotune/learned/lstm.h>
 #include <odotune/learned/lstm_training.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 // The detector's features per step: two "drive" channels, two odometry
 // channels and its previous output. The paper's drive is the motor power;
@@ -63,9 +63,9 @@ bool parse_slip_drive(std::string_view text, SlipDrive* out);
 SlipDrive available_slip_drive(const std::vector<const FusionInput*>& tracks);
 
 struct SlipDetectorModel {
-  SlipNet v_net, w_net;                         // predict ln(var / floor) (see the file comment)
-  SlipDrive drive = SlipDrive::power;           // what its drive channels read
-  OdometryInput input = OdometryInput::wheels;  // what its odometry channels read
+  SlipNet v_net, w_net;                // predict ln(var / floor) (see the file comment)
+  SlipDrive drive = SlipDrive::power;  // what its drive channels read
+  tracks::OdometryInput input = tracks::OdometryInput::wheels;  // what its odometry channels read
   // A step is flagged when a variance exceeds these [(m/s)², (rad/s)²]: the
   // flag_quantile of the detector's own outputs over its training tracks
   // (0: no flag known, files written before it).
@@ -166,4 +166,4 @@ class SlipDetectorStepper {
   int filled_ = 0;
 };
 
-}  // namespace odotune
+}  // namespace odotune::learned

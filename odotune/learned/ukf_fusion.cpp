@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 bool UkfSensorNoise::IsValid(std::string* why) const {
   auto bad = [why](const std::string& msg) {
@@ -95,9 +95,9 @@ FusionTrace replay_fusion(const FusionInput& in, const std::vector<OdometryMeasu
   return tr;
 }
 
-ErrorMetrics position_errors(const FusionInput& in, const std::vector<double>& x,
-                             const std::vector<double>& y) {
-  ErrorAccumulator acc;
+objectives::ErrorMetrics position_errors(const FusionInput& in, const std::vector<double>& x,
+                                         const std::vector<double>& y) {
+  objectives::ErrorAccumulator acc;
   const std::size_t n = std::min({in.size(), x.size(), y.size()});
   for (std::size_t k = 1; k < n; ++k) {
     if (std::isnan(in.gt_x[k]) || std::isnan(in.gt_y[k])) continue;
@@ -106,8 +106,8 @@ ErrorMetrics position_errors(const FusionInput& in, const std::vector<double>& x
   return acc.metrics();
 }
 
-ErrorMetrics fusion_pose_errors(const FusionInput& in, const FusionTrace& trace) {
+objectives::ErrorMetrics fusion_pose_errors(const FusionInput& in, const FusionTrace& trace) {
   return position_errors(in, trace.x, trace.y);
 }
 
-}  // namespace odotune
+}  // namespace odotune::learned

@@ -15,7 +15,7 @@
 #include <odotune/learned/fusion_input.h>
 #include <odotune/objectives/metrics.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 // Sensor variances of the fusion other than the odometry's.
 struct UkfSensorNoise {
@@ -69,8 +69,9 @@ FusionTrace replay_fusion(const FusionInput& in, const std::vector<OdometryMeasu
 // position (step 0 is the start pose) [m]. Zero samples without ground
 // truth; NaN metrics when the trace holds non-finite positions (an unhealthy
 // trace: callers check `healthy` first).
-ErrorMetrics fusion_pose_errors(const FusionInput& in, const FusionTrace& trace);
+objectives::ErrorMetrics fusion_pose_errors(const FusionInput& in, const FusionTrace& trace);
 // The same for any per-step positions x, y [m].
-ErrorMetrics position_errors(const FusionInput& in, const std::vector<double>& x, const std::vector<double>& y);
+objectives::ErrorMetrics position_errors(const FusionInput& in, const std::vector<double>& x,
+                                         const std::vector<double>& y);
 
-}  // namespace odotune
+}  // namespace odotune::learned

@@ -7,7 +7,7 @@
 
 #include <odotune/objectives/ekf_objective.h>  // kDivergencePenalty
 
-namespace odotune {
+namespace odotune::learned {
 
 namespace {
 
@@ -44,14 +44,14 @@ bool UkfSettings::IsValid(std::string* why) const {
   return true;
 }
 
-BoxSpace ukf_space() {
+objectives::BoxSpace ukf_space() {
   // Bounds: at least two decades either side of the defaults (UkfParams,
   // UkfSensorNoise, UkfSettings) and of the physical values of the
   // reference robots: a wheelchair accelerating at 0.5 m/s² over 0.1 s steps
   // needs q_v ≈ a²·Δt = 0.025; encoder quantisation of a few mm/s per step
   // gives odometry variances ~1e-5, a slipping wheel ~1e-1; MEMS gyros have
   // σ 0.001–0.05 rad/s.
-  return BoxSpace({
+  return objectives::BoxSpace({
       {"q_v_m2_s3", "(m/s)²/s", 1e-6, 10.0, true, "process-noise rate of V: P_VV grows by q·Δt"},
       {"q_w_rad2_s3", "(rad/s)²/s", 1e-6, 10.0, true, "process-noise rate of W: P_WW grows by q·Δt"},
       {"odo_var_v", "(m/s)²", 1e-8, 1.0, true, "static variance of the kinematic odometry's V"},
@@ -85,7 +85,7 @@ std::vector<double> ukf_params_of(const UkfSettings& s) {
   return v;
 }
 
-ErrorMetrics ukf_pose_errors(const FusionInput& in, const UkfSettings& s, bool* healthy) {
+objectives::ErrorMetrics ukf_pose_errors(const FusionInput& in, const UkfSettings& s, bool* healthy) {
   std::string why;
   if (!s.IsValid(&why)) throw std::invalid_argument("UKF settings: " + why);
   const FusionTrace trace = replay_fusion(in, static_odometry(in, s.odo_var_v, s.odo_var_w), s.params, s.noise);
@@ -93,9 +93,10 @@ ErrorMetrics ukf_pose_errors(const FusionInput& in, const UkfSettings& s, bool* 
   return fusion_pose_errors(in, trace);
 }
 
-UkfObjective::UkfObjective(std::vector<const FusionInput*> inputs, FitnessMode mode, UkfSettings base)
+UkfObjective::UkfObjective(std::vector<const FusionInput*> inputs, objectives::FitnessMode mode,
+                           UkfSettings base)
     : inputs_(std::move(inputs)), mode_(mode), base_(std::move(base)), space_(ukf_space()) {
-  if (is_fix_cv(mode)) throw std::invalid_argument("UkfObjective: mode must be 1..7");
+  if (objectives::is_fix_cv(mode)) throw std::invalid_argument("UkfObjective: mode must be 1..7");
   if (inputs_.empty()) throw std::invalid_argument("UkfObjective: no track");
   std::string why;
   if (!base_.IsValid(&why)) throw std::invalid_argument("UkfObjective: " + why);
@@ -122,18 +123,18 @@ double UkfObjective::fitness(std::span<const double> x) const {
     double sum = 0.0;
     for (const FusionInput* in : inputs_) {
       bool healthy = true;
-      const double f = fitness_of(ukf_pose_errors(*in, s, &healthy), mode_);
+      const double f = objectives::fitness_of(ukf_pose_errors(*in, s, &healthy), mode_);
       if (!healthy || !std::isfinite(f)) {
         counters_->failures.fetch_add(1, std::memory_order_relaxed);
-        return kDivergencePenalty;
+        return objectives::kDivergencePenalty;
       }
       sum += f;
     }
     return sum / static_cast<double>(inputs_.size());
   } catch (const std::invalid_argument&) {
     counters_->failures.fetch_add(1, std::memory_order_relaxed);
-    return kDivergencePenalty;
+    return objectives::kDivergencePenalty;
   }
 }
 
-}  // namespace odotune
+}  // namespace odotune::learned

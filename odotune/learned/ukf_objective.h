@@ -28,7 +28,7 @@
 #include <odotune/objectives/box_space.h>
 #include <odotune/objectives/metrics.h>
 
-namespace odotune {
+namespace odotune::learned {
 
 // Everything a fusion replay needs besides the input: the filter's
 // parameters, the sensors' noise and the odometry's static variances.
@@ -45,7 +45,7 @@ struct UkfSettings {
 // The tuned values, in this order and in these units (all log-scaled):
 //   q_v_m2_s3 [(m/s)²/s], q_w_rad2_s3 [(rad/s)²/s], odo_var_v [(m/s)²],
 //   odo_var_w [(rad/s)²], gyro_var [(rad/s)²], ext_var_scale [-].
-BoxSpace ukf_space();
+objectives::BoxSpace ukf_space();
 // Physical values (ukf_space() order and units) applied to `base`. Throws
 // std::invalid_argument on a wrong dimension.
 UkfSettings apply_ukf_params(const UkfSettings& base, std::span<const double> physical);
@@ -56,7 +56,7 @@ std::vector<double> ukf_params_of(const UkfSettings& s);
 // errors against the ground truth; *healthy (if not null) tells whether the
 // filter stayed healthy (the metrics are NaN otherwise). Throws
 // std::invalid_argument for invalid settings.
-ErrorMetrics ukf_pose_errors(const FusionInput& in, const UkfSettings& s, bool* healthy = nullptr);
+objectives::ErrorMetrics ukf_pose_errors(const FusionInput& in, const UkfSettings& s, bool* healthy = nullptr);
 
 class UkfObjective {
  public:
@@ -64,13 +64,13 @@ class UkfObjective {
   // 1..7. `base` carries the fixed parts (UT parameters, initial state,
   // which sensors are used). Throws std::invalid_argument naming a track
   // without ground truth, or for a bad mode or base.
-  UkfObjective(std::vector<const FusionInput*> inputs, FitnessMode mode, UkfSettings base = {});
+  UkfObjective(std::vector<const FusionInput*> inputs, objectives::FitnessMode mode, UkfSettings base = {});
 
   double fitness(std::span<const double> x) const;
   std::pair<std::vector<double>, std::vector<double>> bounds() const { return space_.box(); }
 
-  const BoxSpace& space() const { return space_; }
-  FitnessMode mode() const { return mode_; }
+  const objectives::BoxSpace& space() const { return space_; }
+  objectives::FitnessMode mode() const { return mode_; }
   // The settings at box point x (what fitness() replays).
   UkfSettings settings_at(std::span<const double> x) const;
   long evaluations() const { return counters_->evaluations.load(); }
@@ -82,10 +82,10 @@ class UkfObjective {
     std::atomic<long> failures{0};
   };
   std::vector<const FusionInput*> inputs_;
-  FitnessMode mode_;
+  objectives::FitnessMode mode_;
   UkfSettings base_;
-  BoxSpace space_;
+  objectives::BoxSpace space_;
   std::shared_ptr<Counters> counters_ = std::make_shared<Counters>();
 };
 
-}  // namespace odotune
+}  // namespace odotune::learned

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace odotune {
+namespace odotune::objectives {
 
 BoxSpace::BoxSpace(std::vector<ParamSpec> params) : params_(std::move(params)) {
   for (const auto& p : params_) {
@@ -48,4 +48,4 @@ std::vector<double> BoxSpace::to_box(std::span<const double> physical) const {
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

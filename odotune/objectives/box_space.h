@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-namespace odotune {
+namespace odotune::objectives {
 
 struct ParamSpec {
   std::string name;     // e.g. "r1_mm2"
@@ -46,4 +46,4 @@ class BoxSpace {
   std::vector<double> box_lo_, box_hi_;  // computed once: to_physical runs per evaluation
 };
 
-}  // namespace odotune
+}  // namespace odotune::objectives

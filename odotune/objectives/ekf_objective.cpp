@@ -3,7 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace odotune {
+namespace odotune::objectives {
 
 EkfObjective::EkfObjective(std::vector<const FastReplay*> tracks, filters::NoiseModel model, FitnessMode mode)
     : tracks_(std::move(tracks)), space_(ParamSpace::for_model(model)), mode_(mode) {
@@ -53,4 +53,4 @@ DivergenceCounts EkfObjective::divergences() const {
   return {counters_->non_finite.load(), counters_->covariance_not_pd.load()};
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

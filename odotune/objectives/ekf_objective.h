@@ -22,7 +22,7 @@
 #include <odotune/objectives/param_space.h>
 #include <odotune/objectives/replay.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 inline constexpr double kDivergencePenalty = 1e6;  // [m], far above any real error
 
@@ -64,4 +64,4 @@ class EkfObjective {
   std::shared_ptr<Counters> counters_ = std::make_shared<Counters>();
 };
 
-}  // namespace odotune
+}  // namespace odotune::objectives

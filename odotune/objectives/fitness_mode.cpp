@@ -4,7 +4,7 @@
 
 #include <fmt/format.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 std::vector<int> ground_truth_mode_numbers() {
   std::vector<int> out;
@@ -90,4 +90,4 @@ std::string fitness_mode_choices(bool ground_truth_only) {
   return fmt::format("1..{} or {}", last, keys);
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -12,7 +12,7 @@
 #include <string_view>
 #include <vector>
 
-namespace odotune {
+namespace odotune::objectives {
 
 enum class FitnessMode : int {
   rmse = 1,           // 1: RMSE [m]
@@ -61,4 +61,4 @@ bool parse_fitness_mode(std::string_view text, FitnessMode* out);
 // fix-nll"; with `ground_truth_only`, "1..7 or rmse, …, rmse+mae+maxe".
 std::string fitness_mode_choices(bool ground_truth_only = false);
 
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -5,7 +5,7 @@
 
 #include <fmt/format.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 using filters::Divergence;
 using filters::Pose;
@@ -101,4 +101,4 @@ FixCvOutcome FixCvReplay::evaluate(const filters::NoiseParams& noise) const {
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -31,7 +31,7 @@
 #include <odotune/objectives/metrics.h>
 #include <odotune/objectives/replay_input.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 struct FixCvOptions {
   int folds = 5;
@@ -88,4 +88,4 @@ class FixCvReplay {
   long heldout_ = 0;
 };
 
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -10,7 +10,7 @@
 
 #include <odotune/objectives/fitness_mode.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 struct ErrorMetrics {
   double rmse_m = 0.0;  // sqrt(mean e²)
@@ -65,4 +65,4 @@ inline double improvement_pct(double baseline, double tuned) {
   return baseline > 0.0 ? 100.0 * (baseline - tuned) / baseline : 0.0;
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

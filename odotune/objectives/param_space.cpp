@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace odotune {
+namespace odotune::objectives {
 
 using filters::NoiseModel;
 using filters::NoiseParams;
@@ -85,4 +85,4 @@ NoiseParams baseline_noise() {
   return n;
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

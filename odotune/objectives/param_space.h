@@ -15,7 +15,7 @@
 #include <odotune/filters/ekf_noise.h>
 #include <odotune/objectives/box_space.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 // The box mapping (params, box, to_physical, to_box) is BoxSpace's.
 class ParamSpace : public BoxSpace {
@@ -45,4 +45,4 @@ class ParamSpace : public BoxSpace {
 // travel difference in turns (α1 = α2 = 0.01). The same for all three models.
 filters::NoiseParams baseline_noise();
 
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numbers>
 
-namespace odotune {
+namespace odotune::objectives {
 
 std::optional<PlanarPose> interpolate_pose(const PoseSeries& s, double t_s, double max_gap_s) {
   const std::size_t n = s.size();
@@ -37,4 +37,4 @@ std::optional<filters::BodyVelocity> central_difference_velocity(const PoseSerie
   return filters::BodyVelocity{along / period / sinc, dtheta / period};
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

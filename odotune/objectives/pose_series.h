@@ -10,7 +10,7 @@
 #include <odotune/core/angles.h>
 #include <odotune/filters/odometry_params.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 using PlanarPose = filters::PlanarPose;  // one pose type for filters and objectives
 
@@ -46,4 +46,4 @@ std::optional<PlanarPose> interpolate_pose(const PoseSeries& s, double t_s, doub
 std::optional<filters::BodyVelocity> central_difference_velocity(const PoseSeries& s, double t_s,
                                                                  double half_window_s, double max_gap_s);
 
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -8,7 +8,7 @@
 #include <odotune/filters/ekf.h>
 #include <odotune/objectives/replay.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 namespace {
 
@@ -89,4 +89,4 @@ ProcessNoiseRate equivalent_process_noise_rate(const filters::NoiseParams& noise
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

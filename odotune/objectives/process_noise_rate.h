@@ -38,7 +38,7 @@
 #include <odotune/filters/ekf_noise.h>
 #include <odotune/objectives/replay_input.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 struct ProcessNoiseRate {
   double x_m2_per_s = 0.0;        // Q_xx
@@ -62,4 +62,4 @@ double odometry_rate_hz(std::span<const ReplayInput> inputs);
 ProcessNoiseRate equivalent_process_noise_rate(const filters::NoiseParams& noise,
                                                std::span<const ReplayInput> inputs);
 
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace odotune {
+namespace odotune::objectives {
 
 using filters::Divergence;
 using filters::Pose;
@@ -173,4 +173,4 @@ ReplayOutcome FastReplay::evaluate(const filters::NoiseParams& noise) const {
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -14,7 +14,7 @@
 #include <odotune/objectives/metrics.h>
 #include <odotune/objectives/replay_input.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 struct ReplayOutcome {
   ErrorMetrics metrics;
@@ -74,4 +74,4 @@ class FastReplay {
   std::vector<double> ox_, oy_, gx_, gy_;
 };
 
-}  // namespace odotune
+}  // namespace odotune::objectives

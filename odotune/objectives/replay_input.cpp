@@ -9,7 +9,7 @@
 
 #include <odotune/core/planar_motion.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 std::string_view to_string(OdometrySource s) {
   switch (s) {
@@ -22,11 +22,11 @@ std::string_view to_string(OdometrySource s) {
 
 namespace {
 
-[[noreturn]] void fail(const Track& track, const std::string& what) {
+[[noreturn]] void fail(const tracks::Track& track, const std::string& what) {
   throw std::invalid_argument(fmt::format("track '{}': {}", track.name(), what));
 }
 
-double require(const Track& track, const std::optional<double>& v, const char* key) {
+double require(const tracks::Track& track, const std::optional<double>& v, const char* key) {
   if (!v) fail(track, fmt::format("metadata '{}' is needed for its wheel odometry", key));
   return *v;
 }
@@ -47,7 +47,7 @@ double initial_heading_from_fixes(const ReplayInput& in, double fix_var_m2, doub
   for (const ReplayRow& row : in.rows) {
     if (row.step >= 0) {
       const filters::WheelTravel& u = in.steps[static_cast<std::size_t>(row.step)];
-      midpoint_advance(&x, &y, &th, u.left_m, u.right_m, in.wheel_base_m);
+      core::midpoint_advance(&x, &y, &th, u.left_m, u.right_m, in.wheel_base_m);
       driven += std::abs(0.5 * (u.left_m + u.right_m));
     }
     if (row.fix < 0) continue;
@@ -74,7 +74,7 @@ struct WheelGeometry {
 
 // The odometry source (ticks, wheel rates or commands) and its geometry
 // from the metadata.
-WheelGeometry odometry_source(const Track& track, const ReplayInputOptions& options, ReplayInput& in) {
+WheelGeometry odometry_source(const tracks::Track& track, const ReplayInputOptions& options, ReplayInput& in) {
   const auto& meta = track.meta();
   WheelGeometry g;
   if (track.has_ticks() || track.has_wheel_rates()) {
@@ -91,41 +91,46 @@ WheelGeometry odometry_source(const Track& track, const ReplayInputOptions& opti
   return g;
 }
 
-bool has_fix(const Track& track, std::size_t i) { return track.at(Col::aps_x, i) && track.at(Col::aps_y, i); }
+bool has_fix(const tracks::Track& track, std::size_t i) {
+  return track.at(tracks::Col::aps_x, i) && track.at(tracks::Col::aps_y, i);
+}
 
 // The start row (the first fix, or the first ground-truth position) and the
 // initial pose there (by fixes: its heading is fitted later).
-std::size_t start_row(const Track& track, bool by_fixes, const std::vector<double>& gx,
+std::size_t start_row(const tracks::Track& track, bool by_fixes, const std::vector<double>& gx,
                       const std::vector<double>& gy, ReplayInput& in) {
   const std::size_t n = track.size();
-  const bool has_theta = track.has(Col::gt_theta);
+  const bool has_theta = track.has(tracks::Col::gt_theta);
   std::size_t start = 0;
   if (by_fixes) {
     while (start < n && !has_fix(track, start)) ++start;
     if (start == n) fail(track, "no row with a position fix");
-    in.initial_pose << track.col(Col::aps_x)[start], track.col(Col::aps_y)[start], 0.0;  // heading: below
+    in.initial_pose << track.col(tracks::Col::aps_x)[start], track.col(tracks::Col::aps_y)[start],
+        0.0;  // heading: below
   } else {
     while (start < n && (std::isnan(gx[start]) || std::isnan(gy[start]))) ++start;
     if (start == n) fail(track, "no row with a ground-truth position");
-    if (has_theta && std::isnan(track.col(Col::gt_theta)[start]))
+    if (has_theta && std::isnan(track.col(tracks::Col::gt_theta)[start]))
       fail(track, fmt::format("the first ground-truth row (t = {} s) has no gt_theta", track.t()[start]));
-    in.initial_pose << gx[start], gy[start], has_theta ? track.col(Col::gt_theta)[start] : 0.0;
+    in.initial_pose << gx[start], gy[start], has_theta ? track.col(tracks::Col::gt_theta)[start] : 0.0;
   }
   return start;
 }
 
 // Odometry sample presence at row i.
-bool odometry_at(const Track& track, OdometrySource source, std::size_t i) {
+bool odometry_at(const tracks::Track& track, OdometrySource source, std::size_t i) {
   switch (source) {
-    case OdometrySource::ticks: return track.ticks_l()[i] != kNoTick && track.ticks_r()[i] != kNoTick;
-    case OdometrySource::wheel_rates: return track.at(Col::omega_l, i) && track.at(Col::omega_r, i);
-    case OdometrySource::commands: return track.at(Col::v_cmd, i) && track.at(Col::w_cmd, i);
+    case OdometrySource::ticks:
+      return track.ticks_l()[i] != tracks::kNoTick && track.ticks_r()[i] != tracks::kNoTick;
+    case OdometrySource::wheel_rates:
+      return track.at(tracks::Col::omega_l, i) && track.at(tracks::Col::omega_r, i);
+    case OdometrySource::commands: return track.at(tracks::Col::v_cmd, i) && track.at(tracks::Col::w_cmd, i);
   }
   return false;
 }
 
 // The wheels' travel between odometry rows p and i, dt apart.
-filters::WheelTravel wheel_travel(const Track& track, const ReplayInput& in, const WheelGeometry& g,
+filters::WheelTravel wheel_travel(const tracks::Track& track, const ReplayInput& in, const WheelGeometry& g,
                                   std::size_t p, std::size_t i, double dt) {
   const double two_pi = 2.0 * std::numbers::pi;
   const double Rl = g.Rl, Rr = g.Rr, tick_rev = g.tick_rev;
@@ -136,12 +141,12 @@ filters::WheelTravel wheel_travel(const Track& track, const ReplayInput& in, con
       u.right_m = static_cast<double>(track.ticks_r()[i] - track.ticks_r()[p]) * two_pi * Rr / tick_rev;
       break;
     case OdometrySource::wheel_rates:  // trapezoidal rule
-      u.left_m = 0.5 * (track.col(Col::omega_l)[p] + track.col(Col::omega_l)[i]) * Rl * dt;
-      u.right_m = 0.5 * (track.col(Col::omega_r)[p] + track.col(Col::omega_r)[i]) * Rr * dt;
+      u.left_m = 0.5 * (track.col(tracks::Col::omega_l)[p] + track.col(tracks::Col::omega_l)[i]) * Rl * dt;
+      u.right_m = 0.5 * (track.col(tracks::Col::omega_r)[p] + track.col(tracks::Col::omega_r)[i]) * Rr * dt;
       break;
     case OdometrySource::commands: {  // zero-order hold of the previous command
-      const double d = track.col(Col::v_cmd)[p] * dt;
-      const double dth = track.col(Col::w_cmd)[p] * dt;
+      const double d = track.col(tracks::Col::v_cmd)[p] * dt;
+      const double dth = track.col(tracks::Col::w_cmd)[p] * dt;
       u.left_m = d - 0.5 * dth * in.wheel_base_m;
       u.right_m = d + 0.5 * dth * in.wheel_base_m;
       break;
@@ -151,36 +156,36 @@ filters::WheelTravel wheel_travel(const Track& track, const ReplayInput& in, con
 }
 
 // The fix at row i (with its variances where usable) as the row's fix.
-void add_fix(const Track& track, std::size_t i, bool has_fix_var, ReplayInput& in, ReplayRow& row) {
+void add_fix(const tracks::Track& track, std::size_t i, bool has_fix_var, ReplayInput& in, ReplayRow& row) {
   row.fix = static_cast<std::int32_t>(in.fixes.size());
-  in.fixes.emplace_back(track.col(Col::aps_x)[i], track.col(Col::aps_y)[i]);
-  const double vx = has_fix_var ? track.col(Col::aps_var_x)[i] : std::nan("");
-  const double vy = has_fix_var ? track.col(Col::aps_var_y)[i] : std::nan("");
+  in.fixes.emplace_back(track.col(tracks::Col::aps_x)[i], track.col(tracks::Col::aps_y)[i]);
+  const double vx = has_fix_var ? track.col(tracks::Col::aps_var_x)[i] : std::nan("");
+  const double vy = has_fix_var ? track.col(tracks::Col::aps_var_y)[i] : std::nan("");
   const bool usable = vx > 0.0 && vy > 0.0 && std::isfinite(vx) && std::isfinite(vy);
   in.fix_var_x_m2.push_back(usable ? vx : std::nan(""));
   in.fix_var_y_m2.push_back(usable ? vy : std::nan(""));
 }
 
 // The rows after the start: each one's odometry step, fix and ground truth.
-void read_rows(const Track& track, const WheelGeometry& geometry, std::size_t start,
+void read_rows(const tracks::Track& track, const WheelGeometry& geometry, std::size_t start,
                const std::vector<double>& gx, const std::vector<double>& gy, ReplayInput& in) {
   const std::size_t n = track.size();
   const auto& t = track.t();
-  const bool has_theta = track.has(Col::gt_theta);
-  const bool has_fix_var = track.has(Col::aps_var_x) && track.has(Col::aps_var_y);
-  const bool has_gyro = track.has(Col::gyro_z);
+  const bool has_theta = track.has(tracks::Col::gt_theta);
+  const bool has_fix_var = track.has(tracks::Col::aps_var_x) && track.has(tracks::Col::aps_var_y);
+  const bool has_gyro = track.has(tracks::Col::gyro_z);
   // The last odometry sample at or before the start row.
   std::ptrdiff_t last_odo = -1;
   for (std::size_t i = 0; i <= start; ++i)
     if (odometry_at(track, in.source, i)) last_odo = static_cast<std::ptrdiff_t>(i);
   double last_gyro = std::nan("");
   for (std::size_t i = 0; i <= start; ++i)
-    if (has_gyro && track.at(Col::gyro_z, i)) last_gyro = track.col(Col::gyro_z)[i];
+    if (has_gyro && track.at(tracks::Col::gyro_z, i)) last_gyro = track.col(tracks::Col::gyro_z)[i];
 
   for (std::size_t i = start + 1; i < n; ++i) {
     ReplayRow row;
     row.t_s = t[i];
-    if (has_gyro && track.at(Col::gyro_z, i)) last_gyro = track.col(Col::gyro_z)[i];
+    if (has_gyro && track.at(tracks::Col::gyro_z, i)) last_gyro = track.col(tracks::Col::gyro_z)[i];
     if (odometry_at(track, in.source, i)) {
       if (last_odo >= 0) {
         const auto p = static_cast<std::size_t>(last_odo);
@@ -198,7 +203,7 @@ void read_rows(const Track& track, const WheelGeometry& geometry, std::size_t st
     if (!std::isnan(gx[i]) && !std::isnan(gy[i])) {
       row.gt = static_cast<std::int32_t>(in.gt.size());
       in.gt.emplace_back(gx[i], gy[i]);
-      in.gt_theta_rad.push_back(has_theta ? track.col(Col::gt_theta)[i] : std::nan(""));
+      in.gt_theta_rad.push_back(has_theta ? track.col(tracks::Col::gt_theta)[i] : std::nan(""));
     }
     if (row.step >= 0 || row.fix >= 0 || row.gt >= 0) in.rows.push_back(row);
   }
@@ -206,7 +211,7 @@ void read_rows(const Track& track, const WheelGeometry& geometry, std::size_t st
 
 }  // namespace
 
-ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& options) {
+ReplayInput build_replay_input(const tracks::Track& track, const ReplayInputOptions& options) {
   ReplayInput in;
   in.track_name = track.name();
   if (!track.has_odometry()) fail(track, "no odometry columns (ticks_*, omega_* or v_cmd/w_cmd)");
@@ -220,8 +225,8 @@ ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& opt
   const WheelGeometry geometry = odometry_source(track, options, in);
 
   const std::vector<double> none(track.size(), std::nan(""));
-  const auto& gx = track.has(Col::gt_x) ? track.col(Col::gt_x) : none;
-  const auto& gy = track.has(Col::gt_y) ? track.col(Col::gt_y) : none;
+  const auto& gx = track.has(tracks::Col::gt_x) ? track.col(tracks::Col::gt_x) : none;
+  const auto& gy = track.has(tracks::Col::gt_y) ? track.col(tracks::Col::gt_y) : none;
   const std::size_t start = start_row(track, by_fixes, gx, gy, in);
   in.t0_s = track.t()[start];
   read_rows(track, geometry, start, gx, gy, in);
@@ -240,11 +245,11 @@ ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& opt
   return in;
 }
 
-ReplayInput build_replay_input_any(const Track& track) {
+ReplayInput build_replay_input_any(const tracks::Track& track) {
   if (track.has_gt()) return build_replay_input(track);
   ReplayInputOptions o;
   o.reference = ReplayReference::fixes;
   return build_replay_input(track, o);
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -17,7 +17,7 @@
 #include <odotune/filters/ekf.h>
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 enum class OdometrySource { ticks, wheel_rates, commands };
 std::string_view to_string(OdometrySource s);
@@ -76,11 +76,11 @@ struct ReplayInputOptions {
 // Throws std::invalid_argument with one line naming the track and the problem
 // when the track cannot be replayed (no odometry, no ground truth, missing
 // robot metadata).
-ReplayInput build_replay_input(const Track& track, const ReplayInputOptions& options = {});
+ReplayInput build_replay_input(const tracks::Track& track, const ReplayInputOptions& options = {});
 
 // The replay input a track supports: from ground truth when it has it, else
 // from its first fix (ReplayReference::fixes). For exports and figures that
 // need the odometry and a start, not ground-truth metrics.
-ReplayInput build_replay_input_any(const Track& track);
+ReplayInput build_replay_input_any(const tracks::Track& track);
 
-}  // namespace odotune
+}  // namespace odotune::objectives

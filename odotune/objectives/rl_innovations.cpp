@@ -6,7 +6,7 @@
 
 #include <Eigen/Cholesky>
 
-namespace odotune {
+namespace odotune::objectives {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -80,4 +80,4 @@ double heldout_nll(std::span<const rlnode::ReplayOutput> outputs) {
   return n > 0 ? sum / static_cast<double>(n) : kNaN;
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

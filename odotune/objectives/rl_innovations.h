@@ -23,11 +23,11 @@
 
 #include <odotune/rlnode/replay.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 double innovation_nll(std::span<const rlnode::Innovation> v);
 double nis_cost(std::span<const rlnode::Innovation> v);
 double whiteness_cost(std::span<const rlnode::Innovation> v, int lags = 10);
 double heldout_nll(std::span<const rlnode::ReplayOutput> outputs);
 
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -12,7 +12,7 @@
 #include <odotune/core/why.h>
 #include <odotune/objectives/rl_innovations.h>
 
-namespace odotune {
+namespace odotune::objectives {
 namespace {
 
 namespace rl = filters::rl;
@@ -170,19 +170,19 @@ std::string_view to_string(RlNoiseSpace s) {
 }
 
 bool RlTuneOptions::IsValid(std::string* why) const {
-  if (folds < 2) return invalid(why, fmt::format("folds = {}, expected at least 2", folds));
-  if (!(block_s > 0.0)) return invalid(why, fmt::format("block_s = {}, expected > 0", block_s));
-  if (outage_s.empty()) return invalid(why, "no outage length; expected at least one");
+  if (folds < 2) return core::invalid(why, fmt::format("folds = {}, expected at least 2", folds));
+  if (!(block_s > 0.0)) return core::invalid(why, fmt::format("block_s = {}, expected > 0", block_s));
+  if (outage_s.empty()) return core::invalid(why, "no outage length; expected at least one");
   for (double l : outage_s)
-    if (!(l > 0.0)) return invalid(why, fmt::format("outage length {} s, expected > 0", l));
+    if (!(l > 0.0)) return core::invalid(why, fmt::format("outage length {} s, expected > 0", l));
   if (!(outage_stride_s > 0.0))
-    return invalid(why, fmt::format("outage stride {} s, expected > 0", outage_stride_s));
-  if (!(warmup_s >= 0.0)) return invalid(why, fmt::format("warm-up {} s, expected ≥ 0", warmup_s));
+    return core::invalid(why, fmt::format("outage stride {} s, expected > 0", outage_stride_s));
+  if (!(warmup_s >= 0.0)) return core::invalid(why, fmt::format("warm-up {} s, expected ≥ 0", warmup_s));
   if (!(prior_weight >= 0.0 && std::isfinite(prior_weight)))
-    return invalid(why, fmt::format("prior weight {}, expected a finite value ≥ 0", prior_weight));
+    return core::invalid(why, fmt::format("prior weight {}, expected a finite value ≥ 0", prior_weight));
   if (!(decades_down >= 0.0 && decades_up >= 0.0 && decades_down + decades_up > 0.0)) {
-    return invalid(why, fmt::format("decades {} down, {} up: expected ≥ 0 and a non-empty range", decades_down,
-                                    decades_up));
+    return core::invalid(why, fmt::format("decades {} down, {} up: expected ≥ 0 and a non-empty range",
+                                          decades_down, decades_up));
   }
   return true;
 }
@@ -612,4 +612,4 @@ void RlObjective::fitness_batch(std::span<const double> xs, std::span<double> ou
     if (out[k] < kDiverged) out[k] += prior(xs.subspan(k * dim, dim));
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -42,7 +42,7 @@
 #include <odotune/rlnode/recording.h>
 #include <odotune/rlnode/replay.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 // heldout_fixes, outage and both as above; the others are the innovation
 // statistics of odotune/objectives/rl_innovations.h (innovation-nll, nis, whiteness:
@@ -252,4 +252,4 @@ class RlObjective {
   double prior(std::span<const double> x) const;
 };
 
-}  // namespace odotune
+}  // namespace odotune::objectives

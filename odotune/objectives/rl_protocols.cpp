@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace odotune {
+namespace odotune::objectives {
 
 using rlnode::FixRole;
 
@@ -86,4 +86,4 @@ std::vector<FixRole> every_fifth_roles(const rlnode::Recording& rec, std::int64_
   return roles;
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

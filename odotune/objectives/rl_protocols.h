@@ -21,7 +21,7 @@
 #include <odotune/rlnode/recording.h>
 #include <odotune/rlnode/replay.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 std::vector<std::vector<rlnode::FixRole>> heldout_fix_folds(const rlnode::Recording& rec, int folds,
                                                             double block_s, std::int64_t until_ns);
@@ -43,4 +43,4 @@ std::vector<rlnode::FixRole> outage_protocol_roles(const rlnode::Recording& rec,
 std::vector<rlnode::FixRole> every_fifth_roles(const rlnode::Recording& rec, std::int64_t from_ns,
                                                std::int64_t end_ns);
 
-}  // namespace odotune
+}  // namespace odotune::objectives

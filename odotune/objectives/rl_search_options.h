@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-namespace odotune {
+namespace odotune::objectives {
 
 struct RlSearchOptions {
   std::vector<double> grid_levels = {-2.0, 0.0, 2.0};  // decades; empty: no grid (refine around the file)
@@ -17,4 +17,4 @@ struct RlSearchOptions {
   bool IsValid(std::string* why) const;
 };
 
-}  // namespace odotune
+}  // namespace odotune::objectives

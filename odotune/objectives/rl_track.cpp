@@ -13,18 +13,18 @@
 #include <odotune/objectives/rl_protocols.h>
 #include <odotune/rlnode/sample_recording.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 bool RlTrackOptions::IsValid(std::string* why) const {
   for (double v : {odometry_var_vx, odometry_var_vyaw, gyro_var}) {
     if (!(v > 0.0 && std::isfinite(v)))
-      return invalid(why, fmt::format("an input variance of {}, expected a finite value > 0", v));
+      return core::invalid(why, fmt::format("an input variance of {}, expected a finite value > 0", v));
   }
   if (fix_sigma_m && !(*fix_sigma_m > 0.0 && std::isfinite(*fix_sigma_m)))
-    return invalid(why, fmt::format("--fix-sigma-m {}, expected a finite value > 0", *fix_sigma_m));
+    return core::invalid(why, fmt::format("--fix-sigma-m {}, expected a finite value > 0", *fix_sigma_m));
   if (!(heading_window_s > 0.0))
-    return invalid(why, fmt::format("heading window {} s, expected > 0", heading_window_s));
-  if (wheels && twist) return invalid(why, "a wheel and a twist calibration; expected one");
+    return core::invalid(why, fmt::format("heading window {} s, expected > 0", heading_window_s));
+  if (wheels && twist) return core::invalid(why, "a wheel and a twist calibration; expected one");
   if (wheels && !wheels->IsValid(why)) return false;
   if (twist && !twist->IsValid(why)) return false;
   return true;
@@ -39,31 +39,33 @@ std::int64_t ns_of(double t_s) { return static_cast<std::int64_t>(std::llround(t
 }
 
 // The track with aps_var_x, aps_var_y filled from σ where it gives none.
-Track with_fix_variances(const Track& track, const std::filesystem::path& file, const RlTrackOptions& o) {
-  const bool has_var = track.has(Col::aps_var_x) && track.has(Col::aps_var_y);
+tracks::Track with_fix_variances(const tracks::Track& track, const std::filesystem::path& file,
+                                 const RlTrackOptions& o) {
+  const bool has_var = track.has(tracks::Col::aps_var_x) && track.has(tracks::Col::aps_var_y);
   if (!track.has_aps() || has_var) return track;  // the track's own variances win over --fix-sigma-m
   if (!o.fix_sigma_m) {
     fail(file, "its fixes have no variances (aps_var_x, aps_var_y); expected them (odotune fixes writes them) "
                "or --fix-sigma-m");
   }
-  TrackData d = track.data();
-  std::vector<double>& vx = d.ensure(Col::aps_var_x);
-  std::vector<double>& vy = d.ensure(Col::aps_var_y);
+  tracks::TrackData d = track.data();
+  std::vector<double>& vx = d.ensure(tracks::Col::aps_var_x);
+  std::vector<double>& vy = d.ensure(tracks::Col::aps_var_y);
   const double var = *o.fix_sigma_m * *o.fix_sigma_m;
   for (std::size_t i = 0; i < d.t.size(); ++i) {
-    const bool fix = !std::isnan(d.col(Col::aps_x)[i]) && !std::isnan(d.col(Col::aps_y)[i]);
+    const bool fix = !std::isnan(d.col(tracks::Col::aps_x)[i]) && !std::isnan(d.col(tracks::Col::aps_y)[i]);
     vx[i] = fix ? var : std::nan("");
     vy[i] = fix ? var : std::nan("");
   }
-  return Track(std::move(d));
+  return tracks::Track(std::move(d));
 }
 
 // The odometry twist per sample: encoder travel differenced per step, or the
 // body velocities as they stand.
-std::vector<rlnode::TwistSample> odometry_of(const Track& track, OdometryInput input, const ReplayInput& in,
+std::vector<rlnode::TwistSample> odometry_of(const tracks::Track& track, tracks::OdometryInput input,
+                                             const ReplayInput& in,
                                              const std::optional<filters::TwistCorrection>& correction) {
   std::vector<rlnode::TwistSample> out;
-  if (input == OdometryInput::wheels) {
+  if (input == tracks::OdometryInput::wheels) {
     double prev_t = std::nan("");
     for (const ReplayRow& row : in.rows) {
       if (row.step < 0) continue;
@@ -79,25 +81,25 @@ std::vector<rlnode::TwistSample> odometry_of(const Track& track, OdometryInput i
   }
   const filters::TwistCorrection c = correction.value_or(filters::TwistCorrection{});
   for (std::size_t i = 0; i < track.size(); ++i) {
-    if (track.at(Col::v_cmd, i) && track.at(Col::w_cmd, i)) {
-      out.push_back({ns_of(track.t()[i] + c.delay_s), c.scale_v * track.col(Col::v_cmd)[i],
-                     c.scale_w * track.col(Col::w_cmd)[i]});
+    if (track.at(tracks::Col::v_cmd, i) && track.at(tracks::Col::w_cmd, i)) {
+      out.push_back({ns_of(track.t()[i] + c.delay_s), c.scale_v * track.col(tracks::Col::v_cmd)[i],
+                     c.scale_w * track.col(tracks::Col::w_cmd)[i]});
     }
   }
   return out;
 }
 
 // The track with a wheel calibration written into its geometry.
-Track with_geometry(const Track& track, const filters::OdometryParams& p) {
-  TrackData d = track.data();
+tracks::Track with_geometry(const tracks::Track& track, const filters::OdometryParams& p) {
+  tracks::TrackData d = track.data();
   d.meta.wheel_radius_left_m = p.wheel_radius_left_m;
   d.meta.wheel_radius_right_m = p.wheel_radius_right_m;
   d.meta.wheel_base_m = p.wheel_base_m;
-  return Track(std::move(d));
+  return tracks::Track(std::move(d));
 }
 
-rlnode::SampleStreams streams_of(const Track& track, const std::filesystem::path& file, OdometryInput input,
-                                 const ReplayInput& in, const RlTrackOptions& o) {
+rlnode::SampleStreams streams_of(const tracks::Track& track, const std::filesystem::path& file,
+                                 tracks::OdometryInput input, const ReplayInput& in, const RlTrackOptions& o) {
   rlnode::SampleStreams st;
   st.name = file.string();
   st.odometry = odometry_of(track, input, in, o.twist);
@@ -106,49 +108,49 @@ rlnode::SampleStreams streams_of(const Track& track, const std::filesystem::path
   st.gyro_var = o.gyro_var;
   for (std::size_t i = 0; i < track.size(); ++i) {
     const double t = track.t()[i];
-    if (track.at(Col::gyro_z, i)) st.gyro.push_back({ns_of(t), track.col(Col::gyro_z)[i]});
-    if (track.at(Col::aps_x, i) && track.at(Col::aps_y, i)) {
-      st.fixes.push_back({ns_of(t), track.col(Col::aps_x)[i], track.col(Col::aps_y)[i],
-                          track.col(Col::aps_var_x)[i], track.col(Col::aps_var_y)[i]});
+    if (track.at(tracks::Col::gyro_z, i)) st.gyro.push_back({ns_of(t), track.col(tracks::Col::gyro_z)[i]});
+    if (track.at(tracks::Col::aps_x, i) && track.at(tracks::Col::aps_y, i)) {
+      st.fixes.push_back({ns_of(t), track.col(tracks::Col::aps_x)[i], track.col(tracks::Col::aps_y)[i],
+                          track.col(tracks::Col::aps_var_x)[i], track.col(tracks::Col::aps_var_y)[i]});
     }
   }
   return st;
 }
 
-std::vector<TruthSample> truth_of(const Track& track) {
+std::vector<TruthSample> truth_of(const tracks::Track& track) {
   std::vector<TruthSample> out;
   if (!track.has_gt()) return out;
   for (std::size_t i = 0; i < track.size(); ++i) {
-    if (track.at(Col::gt_x, i) && track.at(Col::gt_y, i))
-      out.push_back({ns_of(track.t()[i]), track.col(Col::gt_x)[i], track.col(Col::gt_y)[i]});
+    if (track.at(tracks::Col::gt_x, i) && track.at(tracks::Col::gt_y, i))
+      out.push_back({ns_of(track.t()[i]), track.col(tracks::Col::gt_x)[i], track.col(tracks::Col::gt_y)[i]});
   }
   return out;
 }
 
 // gt_theta at the first row at or after t_s (NaN without one).
-double truth_heading(const Track& track, double t_s) {
-  if (!track.has(Col::gt_theta)) return std::nan("");
+double truth_heading(const tracks::Track& track, double t_s) {
+  if (!track.has(tracks::Col::gt_theta)) return std::nan("");
   for (std::size_t i = 0; i < track.size(); ++i)
-    if (track.t()[i] >= t_s && track.at(Col::gt_theta, i)) return track.col(Col::gt_theta)[i];
+    if (track.t()[i] >= t_s && track.at(tracks::Col::gt_theta, i)) return track.col(tracks::Col::gt_theta)[i];
   return std::nan("");
 }
 
 }  // namespace
 
-RlTrack load_rl_track(const Track& original, const std::filesystem::path& file, const rlnode::RlParams& params,
-                      const RlTrackOptions& options) {
+RlTrack load_rl_track(const tracks::Track& original, const std::filesystem::path& file,
+                      const rlnode::RlParams& params, const RlTrackOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) fail(file, why);
   const rlnode::SampleRoles roles = rlnode::sample_roles(params, file.string());
-  const Track fixed = with_fix_variances(original, file, options);
-  const Track track = options.wheels ? with_geometry(fixed, *options.wheels) : fixed;
+  const tracks::Track fixed = with_fix_variances(original, file, options);
+  const tracks::Track track = options.wheels ? with_geometry(fixed, *options.wheels) : fixed;
   RlTrack out;
   out.file = file;
-  out.odometry = track_odometry_input(track, options.odometry);
-  if ((options.wheels && out.odometry != OdometryInput::wheels) ||
-      (options.twist && out.odometry == OdometryInput::wheels)) {
+  out.odometry = tracks::track_odometry_input(track, options.odometry);
+  if ((options.wheels && out.odometry != tracks::OdometryInput::wheels) ||
+      (options.twist && out.odometry == tracks::OdometryInput::wheels)) {
     fail(file, fmt::format("a calibration of the {} for its {} odometry; expected a calibration of its input",
-                           options.wheels ? "wheels" : "body velocity", to_string(out.odometry)));
+                           options.wheels ? "wheels" : "body velocity", tracks::to_string(out.odometry)));
   }
   ReplayInputOptions ro;
   ro.heading_window_s = options.heading_window_s;
@@ -266,4 +268,4 @@ RlTrackScores score_rl_track(const RlTrack& track, const rlnode::ReplaySettings&
   return s;
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -30,10 +30,10 @@
 #include <odotune/tracks/odometry_input.h>
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 struct RlTrackOptions {
-  std::optional<OdometryInput> odometry;  // nullopt: the track's own (track_odometry_input)
+  std::optional<tracks::OdometryInput> odometry;  // nullopt: the track's own (track_odometry_input)
   // The odometry twist's covariance diagonal [(m/s)², (rad/s)²]: Clearpath's
   // diff_drive_controller setting (twist_covariance_diagonal [0.001, 0.001,
   // 0.001, 1e6, 1e6, 0.03], ../shared/data/real/robot_localization_configs
@@ -65,7 +65,7 @@ struct RlTrack {
   std::filesystem::path file;
   rlnode::Recording rec;
   std::vector<TruthSample> truth;  // empty without gt_x, gt_y
-  OdometryInput odometry = OdometryInput::wheels;
+  tracks::OdometryInput odometry = tracks::OdometryInput::wheels;
   std::string start_note;                  // where the filter starts and how its heading was found
   double initial_heading_error_rad = 0.0;  // against gt_theta at the first fix (NaN without it)
 };
@@ -74,8 +74,8 @@ struct RlTrack {
 // file's input): invalid options, a track without the odometry input or
 // without what the file fuses (rlnode::load_sample_recording), fixes without
 // variances and no fix_sigma_m, fewer than two fixes.
-RlTrack load_rl_track(const Track& track, const std::filesystem::path& file, const rlnode::RlParams& params,
-                      const RlTrackOptions& options);
+RlTrack load_rl_track(const tracks::Track& track, const std::filesystem::path& file,
+                      const rlnode::RlParams& params, const RlTrackOptions& options);
 
 // The horizontal error of the filter's position against the ground truth,
 // linearly interpolated at each trajectory point in [from_ns, until_ns)
@@ -108,4 +108,4 @@ struct RlTrackScores {
 RlTrackScores score_rl_track(const RlTrack& track, const rlnode::ReplaySettings& settings,
                              const RlTuneOptions& options, bool keep_trajectory = false);
 
-}  // namespace odotune
+}  // namespace odotune::objectives

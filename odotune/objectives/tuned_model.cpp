@@ -1,6 +1,6 @@
 #include <odotune/objectives/tuned_model.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 namespace {
 constexpr std::string_view kPf = "pf-calib";
@@ -54,4 +54,4 @@ const char* tuned_model_names() {
   return "rq, alpha, gyro, pf-calib, adaptive-pf-calib, ukf, rl-ekf or rl-ukf";
 }
 
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -19,7 +19,7 @@
 #include <odotune/filters/ekf_noise.h>
 #include <odotune/filters/rl_filter.h>
 
-namespace odotune {
+namespace odotune::objectives {
 
 enum class CalibratorModel { pf, adaptive_pf };
 struct FusionUkfModel {
@@ -62,4 +62,4 @@ bool is_rl_model_name(std::string_view text);
 // "rq, alpha, gyro, pf-calib, adaptive-pf-calib, ukf, rl-ekf or rl-ukf", for error messages.
 const char* tuned_model_names();
 
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -342,8 +342,8 @@ BinnedMedian binned_median(const std::vector<double>& x, const std::vector<doubl
       gx.push_back(x[rows[j]]);
       gy.push_back(y[rows[j]]);
     }
-    out.x.push_back(median(gx));
-    out.y.push_back(median(gy));
+    out.x.push_back(core::median(gx));
+    out.y.push_back(core::median(gy));
     begin += count;
   }
   return out;

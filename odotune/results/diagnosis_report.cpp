@@ -160,7 +160,7 @@ void write_diagnosis_report(const fs::path& dir, const DiagnosisFigureData& data
     if (written) continue;
     for (const char* ext : {".png", ".svg"}) fs::remove(dir / (std::string(stem) + ext), ec);
   }
-  write_atomically(dir / "index.html", "diagnosis report page", html);
+  core::write_atomically(dir / "index.html", "diagnosis report page", html);
 }
 
 }  // namespace odotune::results

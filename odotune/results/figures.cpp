@@ -48,13 +48,13 @@ std::string category_tics(const std::vector<std::string>& names, int first) {
 
 // ---------------------------------------------------------------- heatmap
 
-std::string heatmap_mode_label(FitnessMode mode) {
-  return std::to_string(number(mode)) + " " + fitness_mode_name(mode);
+std::string heatmap_mode_label(objectives::FitnessMode mode) {
+  return std::to_string(objectives::number(mode)) + " " + objectives::fitness_mode_name(mode);
 }
 
 void heatmap(const fs::path& stem, const std::string& title, const std::vector<std::string>& columns,
              const std::vector<std::vector<double>>& values) {
-  constexpr auto kModes = static_cast<int>(kGroundTruthModes.size());
+  constexpr auto kModes = static_cast<int>(objectives::kGroundTruthModes.size());
   if (columns.empty()) throw std::invalid_argument("heatmap: no columns (tracks)");
   if (values.size() != kModes) {
     throw std::invalid_argument("heatmap: expected 7 rows (fitness modes 1..7), got " +
@@ -90,7 +90,7 @@ void heatmap(const fs::path& stem, const std::string& title, const std::vector<s
   }
 
   std::vector<std::string> mode_names;
-  for (FitnessMode m : kGroundTruthModes) mode_names.push_back(heatmap_mode_label(m));
+  for (objectives::FitnessMode m : objectives::kGroundTruthModes) mode_names.push_back(heatmap_mode_label(m));
   std::size_t longest = 0;
   for (const auto& c : columns) longest = std::max(longest, c.size());
   const int ncols = static_cast<int>(columns.size());

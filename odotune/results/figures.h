@@ -19,7 +19,7 @@
 namespace odotune::results {
 
 // Row labels of the heatmap: "1 RMSE", "2 MAE", …, "7 RMSE+MAE+MAXE".
-std::string heatmap_mode_label(FitnessMode mode);
+std::string heatmap_mode_label(objectives::FitnessMode mode);
 
 // Improvement % over the baseline per fitness mode × track (the study's
 // Figure 3): rows = modes 1..7 (top to bottom), columns = `columns`, each

@@ -125,7 +125,8 @@ Net parse_net(const Reader& r, const json& obj, const std::string& path, const c
   }
 }
 
-OdometryNet parse_odometry_net(const Reader& r, const json& obj, const std::string& path, const char* key) {
+learned::OdometryNet parse_odometry_net(const Reader& r, const json& obj, const std::string& path,
+                                        const char* key) {
   const json& j = r.field(obj, path, key);
   try {
     return odometry_net_from_json(j);
@@ -136,8 +137,9 @@ OdometryNet parse_odometry_net(const Reader& r, const json& obj, const std::stri
 
 }  // namespace
 
-ModelTrainingRecord training_record(const LstmTrainingSummary& v, const LstmTrainingSummary& w,
-                                    std::size_t train_windows, std::size_t validation_windows, double seconds) {
+ModelTrainingRecord training_record(const learned::LstmTrainingSummary& v,
+                                    const learned::LstmTrainingSummary& w, std::size_t train_windows,
+                                    std::size_t validation_windows, double seconds) {
   ModelTrainingRecord t;
   t.v = {v.iterations, v.train_mae, v.validation_mae};
   t.w = {w.iterations, w.train_mae, w.validation_mae};
@@ -150,12 +152,12 @@ ModelTrainingRecord training_record(const LstmTrainingSummary& v, const LstmTrai
 json learned_model_json(const LearnedModelFile& m) {
   json j;
   j["format"] = kLearnedModelFormat;
-  const LearnedOdometryModel& o = m.odometry;
+  const learned::LearnedOdometryModel& o = m.odometry;
   j["odometry"] = {{"rate_hz", o.rate_hz},
                    {"ticks_per_rev", o.ticks_per_rev},
-                   {"target", std::string(to_string(o.target))},
-                   {"input", std::string(to_string(o.input))},
-                   {"features", std::string(to_string(o.features))},
+                   {"target", std::string(learned::to_string(o.target))},
+                   {"input", std::string(tracks::to_string(o.input))},
+                   {"features", std::string(learned::to_string(o.features))},
                    {"gyro", o.gyro},
                    {"v_beats_kinematic", o.v_beats_kinematic},
                    {"w_beats_kinematic", o.w_beats_kinematic},
@@ -173,8 +175,8 @@ json learned_model_json(const LearnedModelFile& m) {
                      {"max_log_ratio_w", m.detector->max_log_ratio_w},
                      {"v_net", lstm_to_json(m.detector->v_net)},
                      {"w_net", lstm_to_json(m.detector->w_net)},
-                     {"drive", std::string(to_string(m.detector->drive))},
-                     {"input", std::string(to_string(m.detector->input))},
+                     {"drive", std::string(learned::to_string(m.detector->drive))},
+                     {"input", std::string(tracks::to_string(m.detector->input))},
                      {"flag_var_v", m.detector->flag_var_v},
                      {"flag_var_w", m.detector->flag_var_w}};
   const LearnedModelProvenance& p = m.provenance;
@@ -204,21 +206,21 @@ LearnedModelFile parse_learned_model(const json& j, const std::string& file) {
   // Files written before the keys existed hold the paper's velocity nets on wheels.
   if (r.has(o, "input")) {
     const std::string input = r.text(o, "odometry", "input");
-    if (!parse_odometry_input(input, &m.odometry.input))
+    if (!tracks::parse_odometry_input(input, &m.odometry.input))
       r.fail("odometry.input", fmt::format("'{}'; expected 'wheels', 'twist' or 'commands'", input));
   }
-  const bool wheels = m.odometry.input == OdometryInput::wheels;
+  const bool wheels = m.odometry.input == tracks::OdometryInput::wheels;
   m.odometry.ticks_per_rev = r.number(o, "odometry", "ticks_per_rev", wheels, false);
   if (r.has(o, "target")) {
     const std::string target = r.text(o, "odometry", "target");
-    if (!parse_learned_target(target, &m.odometry.target))
+    if (!learned::parse_learned_target(target, &m.odometry.target))
       r.fail("odometry.target", fmt::format("'{}'; expected 'velocity' or 'correction'", target));
   }
   if (r.has(o, "features")) {
     const std::string features = r.text(o, "odometry", "features");
-    if (!parse_learned_features(features, &m.odometry.features))
+    if (!learned::parse_learned_features(features, &m.odometry.features))
       r.fail("odometry.features", fmt::format("'{}'; expected 'paper', 'channel' or 'both'", features));
-  } else if (m.odometry.target == LearnedTarget::correction) {
+  } else if (m.odometry.target == learned::LearnedTarget::correction) {
     r.fail("odometry.features", "missing: a correction model written before the features were recorded; "
                                 "train it again (odotune learn train)");
   }
@@ -240,15 +242,15 @@ LearnedModelFile parse_learned_model(const json& j, const std::string& file) {
     m.odometry.w_kinematic_mae = r.number(o, "odometry", "w_kinematic_mae", false, false);
   m.odometry.v_net = parse_odometry_net(r, o, "odometry", "v_net");
   m.odometry.w_net = parse_odometry_net(r, o, "odometry", "w_net");
-  if (m.odometry.v_net.activation() != OutputActivation::linear ||
-      m.odometry.w_net.activation() != OutputActivation::linear)
+  if (m.odometry.v_net.activation() != learned::OutputActivation::linear ||
+      m.odometry.w_net.activation() != learned::OutputActivation::linear)
     r.fail("odometry.v_net/w_net", "a ReLU output; expected the velocity nets' linear output (paper §4)");
   std::string why;
   if (!m.odometry.IsValid(&why)) r.fail("odometry", why);
 
   if (r.has(j, "detector") && !j["detector"].is_null()) {
     const json& d = j["detector"];
-    SlipDetectorModel det;
+    learned::SlipDetectorModel det;
     det.floor_var_v = r.number(d, "detector", "floor_var_v", true, false);
     det.floor_var_w = r.number(d, "detector", "floor_var_w", true, false);
     det.max_log_ratio_v = r.number(d, "detector", "max_log_ratio_v", true, false);
@@ -256,18 +258,18 @@ LearnedModelFile parse_learned_model(const json& j, const std::string& file) {
     // Files written before these keys: the paper's detector (power, wheels), no flag.
     if (r.has(d, "drive")) {
       const std::string drive = r.text(d, "detector", "drive");
-      if (!parse_slip_drive(drive, &det.drive))
+      if (!learned::parse_slip_drive(drive, &det.drive))
         r.fail("detector.drive", fmt::format("'{}'; expected 'power', 'commands' or 'none'", drive));
     }
     if (r.has(d, "input")) {
       const std::string input = r.text(d, "detector", "input");
-      if (!parse_odometry_input(input, &det.input))
+      if (!tracks::parse_odometry_input(input, &det.input))
         r.fail("detector.input", fmt::format("'{}'; expected 'wheels', 'twist' or 'commands'", input));
     }
     if (r.has(d, "flag_var_v")) det.flag_var_v = r.number(d, "detector", "flag_var_v", false, false);
     if (r.has(d, "flag_var_w")) det.flag_var_w = r.number(d, "detector", "flag_var_w", false, false);
-    det.v_net = parse_net<SlipNet>(r, d, "detector", "v_net");
-    det.w_net = parse_net<SlipNet>(r, d, "detector", "w_net");
+    det.v_net = parse_net<learned::SlipNet>(r, d, "detector", "v_net");
+    det.w_net = parse_net<learned::SlipNet>(r, d, "detector", "w_net");
     const std::uint64_t lag = r.count(d, "detector", "previous_lag");
     if (lag < 1 || lag > static_cast<std::uint64_t>(det.v_net.window))
       r.fail("detector.previous_lag", fmt::format("{}; expected 1..{} (the window)", lag, det.v_net.window));
@@ -296,7 +298,7 @@ LearnedModelFile parse_learned_model(const json& j, const std::string& file) {
 }
 
 void write_learned_model(const std::filesystem::path& path, const LearnedModelFile& model) {
-  write_atomically(path, "learned model", learned_model_json(model).dump(2) + "\n");
+  core::write_atomically(path, "learned model", learned_model_json(model).dump(2) + "\n");
 }
 
 LearnedModelFile read_learned_model(const std::filesystem::path& path) {

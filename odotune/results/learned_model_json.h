@@ -80,13 +80,14 @@ struct LearnedModelProvenance {
 };
 
 struct LearnedModelFile {
-  LearnedOdometryModel odometry;
-  std::optional<SlipDetectorModel> detector;
+  learned::LearnedOdometryModel odometry;
+  std::optional<learned::SlipDetectorModel> detector;
   LearnedModelProvenance provenance;
 };
 
-ModelTrainingRecord training_record(const LstmTrainingSummary& v, const LstmTrainingSummary& w,
-                                    std::size_t train_windows, std::size_t validation_windows, double seconds);
+ModelTrainingRecord training_record(const learned::LstmTrainingSummary& v,
+                                    const learned::LstmTrainingSummary& w, std::size_t train_windows,
+                                    std::size_t validation_windows, double seconds);
 
 nlohmann::json learned_model_json(const LearnedModelFile& model);
 

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace odotune {
+namespace odotune::results {
 
 namespace {
 
@@ -45,14 +45,14 @@ void numbers(const nlohmann::json& j, const char* name, int n, double* out) {
 }  // namespace
 
 template <int I, int H>
-nlohmann::json lstm_to_json(const LstmNet<I, H>& net) {
+nlohmann::json lstm_to_json(const learned::LstmNet<I, H>& net) {
   std::string why;
   if (!net.IsValid(&why)) throw std::invalid_argument("LSTM JSON: cannot write an invalid net: " + why);
   nlohmann::json j;
   j["format"] = kLstmJsonFormat;
   j["inputs"] = I;
   j["hidden"] = H;
-  j["activation"] = net.activation == OutputActivation::relu ? "relu" : "linear";
+  j["activation"] = net.activation == learned::OutputActivation::relu ? "relu" : "linear";
   j["window"] = net.window;
   j["input_mean"] = net.input_mean;
   j["input_sd"] = net.input_sd;
@@ -63,7 +63,7 @@ nlohmann::json lstm_to_json(const LstmNet<I, H>& net) {
 }
 
 template <int I, int H>
-LstmNet<I, H> lstm_from_json(const nlohmann::json& j) {
+learned::LstmNet<I, H> lstm_from_json(const nlohmann::json& j) {
   if (!j.is_object()) throw std::invalid_argument("LSTM JSON: expected an object at the top level");
   const nlohmann::json& format = field(j, "format");
   if (!format.is_string() || format.get<std::string>() != kLstmJsonFormat)
@@ -73,12 +73,12 @@ LstmNet<I, H> lstm_from_json(const nlohmann::json& j) {
   if (const int hidden = integer(field(j, "hidden"), "hidden"); hidden != H)
     bad("hidden", fmt::format("expected {} (this net's unit count), got {}", H, hidden));
 
-  LstmNet<I, H> net;
+  learned::LstmNet<I, H> net;
   const nlohmann::json& act = field(j, "activation");
   if (act == "linear") {
-    net.activation = OutputActivation::linear;
+    net.activation = learned::OutputActivation::linear;
   } else if (act == "relu") {
-    net.activation = OutputActivation::relu;
+    net.activation = learned::OutputActivation::relu;
   } else {
     bad("activation", fmt::format("expected \"linear\" or \"relu\", got {}", act.dump()));
   }
@@ -98,21 +98,9 @@ LstmNet<I, H> lstm_from_json(const nlohmann::json& j) {
   return net;
 }
 
-#define ODOTUNE_INSTANTIATE_LSTM_JSON(I, H)                           \
-  template nlohmann::json lstm_to_json<I, H>(const LstmNet<I, H>&);   \
-  template LstmNet<I, H> lstm_from_json<I, H>(const nlohmann::json&); \
-  template void to_json<I, H>(nlohmann::json&, const LstmNet<I, H>&); \
-  template void from_json<I, H>(const nlohmann::json&, LstmNet<I, H>&);
-
-template <int I, int H>
-void to_json(nlohmann::json& j, const LstmNet<I, H>& net) {
-  j = lstm_to_json(net);
-}
-
-template <int I, int H>
-void from_json(const nlohmann::json& j, LstmNet<I, H>& net) {
-  net = lstm_from_json<I, H>(j);
-}
+#define ODOTUNE_INSTANTIATE_LSTM_JSON(I, H)                                  \
+  template nlohmann::json lstm_to_json<I, H>(const learned::LstmNet<I, H>&); \
+  template learned::LstmNet<I, H> lstm_from_json<I, H>(const nlohmann::json&);
 
 ODOTUNE_INSTANTIATE_LSTM_JSON(3, 3)
 ODOTUNE_INSTANTIATE_LSTM_JSON(3, 5)
@@ -121,20 +109,20 @@ ODOTUNE_INSTANTIATE_LSTM_JSON(5, 10)
 
 #undef ODOTUNE_INSTANTIATE_LSTM_JSON
 
-nlohmann::json odometry_net_to_json(const OdometryNet& net) {
+nlohmann::json odometry_net_to_json(const learned::OdometryNet& net) {
   return net.visit([](const auto& n) { return lstm_to_json(n); });
 }
 
-OdometryNet odometry_net_from_json(const nlohmann::json& j) {
+learned::OdometryNet odometry_net_from_json(const nlohmann::json& j) {
   if (!j.is_object()) throw std::invalid_argument("LSTM JSON: expected an object at the top level");
   const int hidden = integer(field(j, "hidden"), "hidden");
   switch (hidden) {
-    case 3: return lstm_from_json<OdometryNet::kInputs, 3>(j);
-    case 5: return lstm_from_json<OdometryNet::kInputs, 5>(j);
-    case 8: return lstm_from_json<OdometryNet::kInputs, 8>(j);
+    case 3: return lstm_from_json<learned::OdometryNet::kInputs, 3>(j);
+    case 5: return lstm_from_json<learned::OdometryNet::kInputs, 5>(j);
+    case 8: return lstm_from_json<learned::OdometryNet::kInputs, 8>(j);
     default:
       bad("hidden", fmt::format("expected one of the velocity nets' unit counts 3, 5, 8, got {}", hidden));
   }
 }
 
-}  // namespace odotune
+}  // namespace odotune::results

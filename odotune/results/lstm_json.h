@@ -24,29 +24,35 @@
 #include <odotune/learned/lstm.h>
 #include <odotune/learned/odometry_net.h>
 
-namespace odotune {
+namespace odotune::results {
 
 inline constexpr const char* kLstmJsonFormat = "odotune-lstm/1";
 
 // Throws std::invalid_argument when !net.IsValid() (a non-finite value would
 // otherwise be written as null).
 template <int I, int H>
-nlohmann::json lstm_to_json(const LstmNet<I, H>& net);
+nlohmann::json lstm_to_json(const learned::LstmNet<I, H>& net);
 
 template <int I, int H>
-LstmNet<I, H> lstm_from_json(const nlohmann::json& j);
-
-// nlohmann's ADL hooks (`nlohmann::json j = net;`, `j.get<VelocityNet>()`),
-// forwarding to the functions above. Instantiated for <3, 3>, <3, 5>, <3, 8>
-// and <5, 10>.
-template <int I, int H>
-void to_json(nlohmann::json& j, const LstmNet<I, H>& net);
-template <int I, int H>
-void from_json(const nlohmann::json& j, LstmNet<I, H>& net);
+learned::LstmNet<I, H> lstm_from_json(const nlohmann::json& j);
 
 // An OdometryNet: its net's JSON; reading picks the size from "hidden"
 // (one of kOdometryNetUnits, else std::invalid_argument naming the field).
-nlohmann::json odometry_net_to_json(const OdometryNet& net);
-OdometryNet odometry_net_from_json(const nlohmann::json& j);
+nlohmann::json odometry_net_to_json(const learned::OdometryNet& net);
+learned::OdometryNet odometry_net_from_json(const nlohmann::json& j);
 
-}  // namespace odotune
+}  // namespace odotune::results
+
+// nlohmann's conversion hooks (`nlohmann::json j = net;`, `j.get<VelocityNet>()`),
+// forwarding to the functions above (instantiated for <3, 3>, <3, 5>, <3, 8> and
+// <5, 10>). A serializer specialisation rather than to_json/from_json found by
+// argument-dependent lookup, which would have to live in learned's namespace.
+template <int I, int H>
+struct nlohmann::adl_serializer<odotune::learned::LstmNet<I, H>> {
+  static void to_json(json& j, const odotune::learned::LstmNet<I, H>& net) {
+    j = odotune::results::lstm_to_json(net);
+  }
+  static void from_json(const json& j, odotune::learned::LstmNet<I, H>& net) {
+    net = odotune::results::lstm_from_json<I, H>(j);
+  }
+};

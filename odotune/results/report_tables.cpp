@@ -12,13 +12,13 @@ namespace odotune::results {
 
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr std::size_t kModes = kGroundTruthModes.size();
+constexpr std::size_t kModes = objectives::kGroundTruthModes.size();
 
 // The grid row of a stored mode number: modes against ground truth only.
 std::optional<std::size_t> grid_row(int stored_mode) {
-  const std::optional<FitnessMode> m = fitness_mode_of_number(stored_mode);
-  if (!m || is_fix_cv(*m)) return std::nullopt;
-  return static_cast<std::size_t>(number(*m) - 1);
+  const std::optional<objectives::FitnessMode> m = objectives::fitness_mode_of_number(stored_mode);
+  if (!m || objectives::is_fix_cv(*m)) return std::nullopt;
+  return static_cast<std::size_t>(objectives::number(*m) - 1);
 }
 
 struct Mean {

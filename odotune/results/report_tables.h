@@ -56,7 +56,7 @@ struct RmseTable {
 // From per-track runs only (leave-one-out runs are in the generalisation table).
 // Rows for `modes` only (default: the paper's modes 1..7), in that order.
 RmseTable rmse_table(const std::vector<RunRecord>& runs,
-                     const std::vector<int>& modes = ground_truth_mode_numbers());
+                     const std::vector<int>& modes = objectives::ground_truth_mode_numbers());
 // RMSE in mm with 2 decimals; header "track,mode,original_mm,<model>_mm…";
 // a missing value is an empty field.
 std::string to_csv(const RmseTable& t);

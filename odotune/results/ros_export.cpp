@@ -335,7 +335,7 @@ RosExportParsed parse_robot_localization_yaml(const std::string& text, const std
 
 void write_robot_localization_yaml(const RosExportInput& in, const std::filesystem::path& path) {
   // Builds (and validates) the text before touching the disk.
-  write_atomically(path, "robot_localization parameters", robot_localization_yaml(in));
+  core::write_atomically(path, "robot_localization parameters", robot_localization_yaml(in));
 }
 
 }  // namespace odotune::results

@@ -9,11 +9,11 @@
 
 namespace odotune::results {
 
-void write_tum(const std::filesystem::path& path, const std::vector<TrajectoryPoint>& points,
+void write_tum(const std::filesystem::path& path, const std::vector<objectives::TrajectoryPoint>& points,
                const std::string& comment, double time_offset_s) {
-  write_atomically(path, "trajectory", [&](std::ostream& out) {
+  core::write_atomically(path, "trajectory", [&](std::ostream& out) {
     out << "# " << comment << "\n# t x y z qx qy qz qw (TUM format; z = 0, rotation about z by the heading)\n";
-    for (const TrajectoryPoint& p : points)
+    for (const objectives::TrajectoryPoint& p : points)
       out << fmt::format("{:.9f} {:.6f} {:.6f} 0 0 0 {:.9f} {:.9f}\n", p.t_s + time_offset_s, p.x_m, p.y_m,
                          std::sin(0.5 * p.theta_rad), std::cos(0.5 * p.theta_rad));
   });

@@ -15,7 +15,7 @@ namespace odotune::results {
 
 // `time_offset_s` is added to every t (e.g. a track's absolute start,
 // source.t0_ns, so that the file shares the recording's clock).
-void write_tum(const std::filesystem::path& path, const std::vector<TrajectoryPoint>& points,
+void write_tum(const std::filesystem::path& path, const std::vector<objectives::TrajectoryPoint>& points,
                const std::string& comment, double time_offset_s = 0.0);
 
 }  // namespace odotune::results

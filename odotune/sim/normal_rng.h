@@ -9,10 +9,10 @@
 
 #include <odotune/core/counter_rng.h>
 
-namespace odotune {
+namespace odotune::sim {
 
 // SplitMix64 (Steele, Lea, Flood 2014): decorrelates the per-stream seeds.
-inline std::uint64_t splitmix64(std::uint64_t x) { return splitmix64_mix(x); }
+inline std::uint64_t splitmix64(std::uint64_t x) { return core::splitmix64_mix(x); }
 
 // Standard normal deviates: std::mt19937_64 (output fixed by the standard)
 // and the Box-Muller transform written out here, because
@@ -41,4 +41,4 @@ class Normal {
   double spare_ = 0.0;
 };
 
-}  // namespace odotune
+}  // namespace odotune::sim

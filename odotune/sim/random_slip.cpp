@@ -28,31 +28,32 @@ bool moving_throughout(const MotionProfile& p, double t0, double t1, double min_
 
 bool RandomSlipOptions::IsValid(std::string* why) const {
   if (!finite_nonneg(first_s))
-    return invalid(why, fmt::format("first_s = {}: expected a finite value >= 0", first_s));
+    return core::invalid(why, fmt::format("first_s = {}: expected a finite value >= 0", first_s));
   if (!finite_nonneg(end_margin_s))
-    return invalid(why, fmt::format("end_margin_s = {}: expected a finite value >= 0", end_margin_s));
+    return core::invalid(why, fmt::format("end_margin_s = {}: expected a finite value >= 0", end_margin_s));
   if (!(min_duration_s >= 0.5 && max_duration_s >= min_duration_s && std::isfinite(max_duration_s)))
-    return invalid(why,
-                   fmt::format("min_duration_s = {}, max_duration_s = {}: expected 0.5 <= min <= max, finite",
-                               min_duration_s, max_duration_s));
+    return core::invalid(
+        why, fmt::format("min_duration_s = {}, max_duration_s = {}: expected 0.5 <= min <= max, finite",
+                         min_duration_s, max_duration_s));
   if (!(min_gap_s >= 0.0 && max_gap_s >= min_gap_s && std::isfinite(max_gap_s)))
-    return invalid(why, fmt::format("min_gap_s = {}, max_gap_s = {}: expected 0 <= min <= max, finite",
-                                    min_gap_s, max_gap_s));
+    return core::invalid(why, fmt::format("min_gap_s = {}, max_gap_s = {}: expected 0 <= min <= max, finite",
+                                          min_gap_s, max_gap_s));
   if (!(min_strength > 0.0 && max_strength >= min_strength && max_strength <= 0.9))
-    return invalid(why, fmt::format("min_strength = {}, max_strength = {}: expected 0 < min <= max <= 0.9",
-                                    min_strength, max_strength));
+    return core::invalid(why,
+                         fmt::format("min_strength = {}, max_strength = {}: expected 0 < min <= max <= 0.9",
+                                     min_strength, max_strength));
   if (!finite_nonneg(min_speed_m_s))
-    return invalid(why, fmt::format("min_speed_m_s = {}: expected a finite value >= 0", min_speed_m_s));
+    return core::invalid(why, fmt::format("min_speed_m_s = {}: expected a finite value >= 0", min_speed_m_s));
   if (!std::isfinite(hold_brake_per_s_nm) || !std::isfinite(hold_brake_offset_nm) ||
       hold_brake_per_s_nm * min_strength + hold_brake_offset_nm < 0.0 ||
       hold_brake_per_s_nm * max_strength + hold_brake_offset_nm < 0.0)
-    return invalid(
+    return core::invalid(
         why, fmt::format("hold_brake_per_s_nm = {}, hold_brake_offset_nm = {}: expected finite values giving a "
                          "brake >= 0 N*m over the strength range",
                          hold_brake_per_s_nm, hold_brake_offset_nm));
   if (!finite_nonneg(ramp_per_strength_s))
-    return invalid(why,
-                   fmt::format("ramp_per_strength_s = {}: expected a finite value >= 0", ramp_per_strength_s));
+    return core::invalid(why, fmt::format("ramp_per_strength_s = {}: expected a finite value >= 0",
+                                          ramp_per_strength_s));
   return true;
 }
 
@@ -62,7 +63,7 @@ std::vector<SlipEpisode> random_slip_episodes(const MotionProfile& profile, std:
   if (!o.IsValid(&why)) throw std::invalid_argument("random slip episodes: " + why);
   std::uint64_t draw = 0;
   const auto uniform = [&](double lo, double hi) {
-    return lo + (hi - lo) * counter_uniform01(seed, draw++, 0, 0, 0x51ED);
+    return lo + (hi - lo) * core::counter_uniform01(seed, draw++, 0, 0, 0x51ED);
   };
   const double end = profile.duration_s() - o.end_margin_s;
   std::vector<SlipEpisode> out;

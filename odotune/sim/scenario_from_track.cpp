@@ -36,7 +36,7 @@ struct Reference {
   bool fixes = false;               // position fixes (noisy, sparse) rather than ground truth
 };
 
-Reference reference_of(const Track& track) {
+Reference reference_of(const tracks::Track& track) {
   Reference ref;
   const bool gt = track.has_gt();
   if (!gt && !track.has_aps())
@@ -44,7 +44,8 @@ Reference reference_of(const Track& track) {
         "track '{}': no reference path (neither gt_x/gt_y nor aps_x/aps_y columns); expected a track "
         "with ground truth or position fixes",
         track.name()));
-  const Col cx = gt ? Col::gt_x : Col::aps_x, cy = gt ? Col::gt_y : Col::aps_y;
+  const tracks::Col cx = gt ? tracks::Col::gt_x : tracks::Col::aps_x,
+                    cy = gt ? tracks::Col::gt_y : tracks::Col::aps_y;
   ref.what = gt ? "ground truth" : "position fixes";
   ref.fixes = !gt;
   auto collect = [&](bool with_theta) {
@@ -52,18 +53,18 @@ Reference reference_of(const Track& track) {
     double prev_raw = 0.0;
     for (std::size_t i = 0; i < track.size(); ++i) {
       if (!track.at(cx, i) || !track.at(cy, i)) continue;
-      if (with_theta && !track.at(Col::gt_theta, i)) continue;
+      if (with_theta && !track.at(tracks::Col::gt_theta, i)) continue;
       ref.t.push_back(track.t()[i]);
       ref.x.push_back(track.col(cx)[i]);
       ref.y.push_back(track.col(cy)[i]);
       if (with_theta) {
-        const double raw = track.col(Col::gt_theta)[i];
+        const double raw = track.col(tracks::Col::gt_theta)[i];
         ref.th.push_back(ref.th.empty() ? raw : ref.th.back() + wrap_pi(raw - prev_raw));
         prev_raw = raw;
       }
     }
   };
-  collect(gt && track.has(Col::gt_theta));
+  collect(gt && track.has(tracks::Col::gt_theta));
   if (!ref.th.empty() && ref.t.size() < 3) collect(false);
   if (ref.t.size() < 3)
     throw std::invalid_argument(fmt::format("track '{}': {} reference samples ({}); expected at least 3",
@@ -293,7 +294,7 @@ std::vector<VelocityKnot> invert_effects(const Motion& m, const RobotParams& r, 
 }
 
 // A finite metadata number (> 0 or >= 0), else nullopt.
-std::optional<double> meta_number(const TrackMeta& meta, std::string_view key, bool positive) {
+std::optional<double> meta_number(const tracks::TrackMeta& meta, std::string_view key, bool positive) {
   const auto text = meta.get(key);
   if (!text) return std::nullopt;
   std::string_view s = *text;
@@ -304,8 +305,8 @@ std::optional<double> meta_number(const TrackMeta& meta, std::string_view key, b
   return x;
 }
 
-RobotParams robot_of(const Track& track) {
-  const TrackMeta& meta = track.meta();
+RobotParams robot_of(const tracks::Track& track) {
+  const tracks::TrackMeta& meta = track.meta();
   RobotParams r;
   if (meta.wheel_radius_left_m) r.wheel_radius_left_m = *meta.wheel_radius_left_m;
   if (meta.wheel_radius_right_m) r.wheel_radius_right_m = *meta.wheel_radius_right_m;
@@ -328,14 +329,14 @@ RobotParams robot_of(const Track& track) {
 // Sensor rates and noise (header comment).
 class SensorBuilder {
  public:
-  SensorBuilder(const Track& track, double step_s) : track_(track), sps_(std::round(1.0 / step_s)) {}
+  SensorBuilder(const tracks::Track& track, double step_s) : track_(track), sps_(std::round(1.0 / step_s)) {}
 
   // Times of the rows where any of `cols` (or the ticks) has a sample.
-  std::vector<double> rows(std::initializer_list<Col> cols, bool ticks = false) const {
+  std::vector<double> rows(std::initializer_list<tracks::Col> cols, bool ticks = false) const {
     std::vector<double> t;
     for (std::size_t i = 0; i < track_.size(); ++i) {
-      bool any = ticks && track_.has_ticks() && track_.ticks_l()[i] != kNoTick;
-      for (Col c : cols) any = any || track_.at(c, i);
+      bool any = ticks && track_.has_ticks() && track_.ticks_l()[i] != tracks::kNoTick;
+      for (tracks::Col c : cols) any = any || track_.at(c, i);
       if (any) t.push_back(track_.t()[i]);
     }
     return t;
@@ -361,7 +362,7 @@ class SensorBuilder {
   }
 
   // sqrt(median) of a variance column's non-negative samples, else fallback.
-  double sigma_from_variance(Col c, double fallback) const {
+  double sigma_from_variance(tracks::Col c, double fallback) const {
     std::vector<double> v;
     for (double x : track_.col(c))
       if (std::isfinite(x) && x >= 0.0) v.push_back(x);
@@ -372,34 +373,39 @@ class SensorBuilder {
   }
 
   SensorParams build() const {
-    const Track& tr = track_;
+    const tracks::Track& tr = track_;
     SensorParams s;
     const SensorParams def;
     s.encoders.enabled = tr.has_ticks() || tr.has_wheel_rates();
     s.encoders.omega = tr.has_wheel_rates();
     if (s.encoders.enabled)
-      s.encoders.rate_hz = rate_hz(rows({Col::omega_l, Col::omega_r}, true), def.encoders.rate_hz);
-    s.commands.enabled = tr.has(Col::v_cmd) || tr.has(Col::w_cmd);
-    if (s.commands.enabled) s.commands.rate_hz = rate_hz(rows({Col::v_cmd, Col::w_cmd}), def.commands.rate_hz);
-    s.gyro.enabled = tr.has(Col::gyro_z);
-    if (s.gyro.enabled) s.gyro.rate_hz = rate_hz(rows({Col::gyro_z}), def.gyro.rate_hz);
+      s.encoders.rate_hz = rate_hz(rows({tracks::Col::omega_l, tracks::Col::omega_r}, true),
+                                   def.encoders.rate_hz);
+    s.commands.enabled = tr.has(tracks::Col::v_cmd) || tr.has(tracks::Col::w_cmd);
+    if (s.commands.enabled)
+      s.commands.rate_hz = rate_hz(rows({tracks::Col::v_cmd, tracks::Col::w_cmd}), def.commands.rate_hz);
+    s.gyro.enabled = tr.has(tracks::Col::gyro_z);
+    if (s.gyro.enabled) s.gyro.rate_hz = rate_hz(rows({tracks::Col::gyro_z}), def.gyro.rate_hz);
     s.gyro.sigma_rad_s = sigma("sim.gyro_sigma_rad_s", def.gyro.sigma_rad_s);
-    s.power.enabled = tr.has(Col::power_l) || tr.has(Col::power_r);
-    if (s.power.enabled) s.power.rate_hz = rate_hz(rows({Col::power_l, Col::power_r}), def.power.rate_hz);
+    s.power.enabled = tr.has(tracks::Col::power_l) || tr.has(tracks::Col::power_r);
+    if (s.power.enabled)
+      s.power.rate_hz = rate_hz(rows({tracks::Col::power_l, tracks::Col::power_r}), def.power.rate_hz);
     s.power.sigma_w = sigma("sim.power_sigma_w", def.power.sigma_w);
-    s.ext_velocity.enabled = tr.has(Col::v_ext) || tr.has(Col::w_ext);
+    s.ext_velocity.enabled = tr.has(tracks::Col::v_ext) || tr.has(tracks::Col::w_ext);
     if (s.ext_velocity.enabled)
-      s.ext_velocity.rate_hz = rate_hz(rows({Col::v_ext, Col::w_ext}), def.ext_velocity.rate_hz);
-    s.ext_velocity.sigma_v_m_s = sigma("sim.ext_sigma_v_m_s",
-                                       sigma_from_variance(Col::v_ext_var, def.ext_velocity.sigma_v_m_s));
-    s.ext_velocity.sigma_w_rad_s = sigma("sim.ext_sigma_w_rad_s",
-                                         sigma_from_variance(Col::w_ext_var, def.ext_velocity.sigma_w_rad_s));
-    s.aps.enabled = tr.has(Col::aps_x) || tr.has(Col::aps_y);
-    if (s.aps.enabled) s.aps.rate_hz = rate_hz(rows({Col::aps_x, Col::aps_y}), def.aps.rate_hz);
+      s.ext_velocity.rate_hz = rate_hz(rows({tracks::Col::v_ext, tracks::Col::w_ext}),
+                                       def.ext_velocity.rate_hz);
+    s.ext_velocity.sigma_v_m_s = sigma(
+        "sim.ext_sigma_v_m_s", sigma_from_variance(tracks::Col::v_ext_var, def.ext_velocity.sigma_v_m_s));
+    s.ext_velocity.sigma_w_rad_s = sigma(
+        "sim.ext_sigma_w_rad_s", sigma_from_variance(tracks::Col::w_ext_var, def.ext_velocity.sigma_w_rad_s));
+    s.aps.enabled = tr.has(tracks::Col::aps_x) || tr.has(tracks::Col::aps_y);
+    if (s.aps.enabled) s.aps.rate_hz = rate_hz(rows({tracks::Col::aps_x, tracks::Col::aps_y}), def.aps.rate_hz);
     s.aps.sigma_m = sigma("sim.aps_sigma_m", def.aps.sigma_m);
     s.ground_truth.enabled = true;
-    if (tr.has(Col::gt_x) || tr.has(Col::gt_y) || tr.has(Col::gt_theta)) {
-      s.ground_truth.rate_hz = rate_hz(rows({Col::gt_x, Col::gt_y, Col::gt_theta}), def.ground_truth.rate_hz);
+    if (tr.has(tracks::Col::gt_x) || tr.has(tracks::Col::gt_y) || tr.has(tracks::Col::gt_theta)) {
+      s.ground_truth.rate_hz = rate_hz(rows({tracks::Col::gt_x, tracks::Col::gt_y, tracks::Col::gt_theta}),
+                                       def.ground_truth.rate_hz);
     } else {
       double fastest = 0.0;
       for (const auto& [on, rate] :
@@ -416,7 +422,7 @@ class SensorBuilder {
   }
 
  private:
-  const Track& track_;
+  const tracks::Track& track_;
   double sps_;  // steps per second
 };
 
@@ -444,7 +450,7 @@ bool ScenarioFromTrackOptions::IsValid(std::string* why) const {
   return true;
 }
 
-Scenario scenario_from_track(const Track& track, const std::vector<std::string>& effect_specs,
+Scenario scenario_from_track(const tracks::Track& track, const std::vector<std::string>& effect_specs,
                              const ScenarioFromTrackOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("scenario_from_track: " + why);

@@ -36,7 +36,7 @@ struct ScenarioFromTrackOptions {
 // samples or longer than the simulator accepts (naming the track), invalid
 // options, or a scenario the simulator would reject (validate_scenario's
 // message).
-Scenario scenario_from_track(const Track& track, const std::vector<std::string>& effect_specs,
+Scenario scenario_from_track(const tracks::Track& track, const std::vector<std::string>& effect_specs,
                              const ScenarioFromTrackOptions& options = {});
 
 }  // namespace odotune::sim

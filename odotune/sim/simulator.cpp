@@ -118,13 +118,13 @@ bool check_robot(const RobotParams& r, std::string* why) {
        {"wheel_base_m", r.wheel_base_m},
        {"coulomb_smoothing_rad_s", r.coulomb_smoothing_rad_s}}};
   for (const auto& [name, v] : pos)
-    if (!positive(v)) return invalid(why, fmt::format("robot.{} = {}; expected a number > 0", name, v));
+    if (!positive(v)) return core::invalid(why, fmt::format("robot.{} = {}; expected a number > 0", name, v));
   if (!(std::isfinite(r.ticks_per_rev) && r.ticks_per_rev >= 1.0 && r.ticks_per_rev <= 1e9))
-    return invalid(why,
-                   fmt::format("robot.ticks_per_rev = {}; expected a number in [1, 1e9]", r.ticks_per_rev));
+    return core::invalid(why, fmt::format("robot.ticks_per_rev = {}; expected a number in [1, 1e9]",
+                                          r.ticks_per_rev));
   if (!positive(r.torque_constant_nm_per_a))
-    return invalid(why, fmt::format("robot.torque_constant_nm_per_a = {}; expected a number > 0",
-                                    r.torque_constant_nm_per_a));
+    return core::invalid(why, fmt::format("robot.torque_constant_nm_per_a = {}; expected a number > 0",
+                                          r.torque_constant_nm_per_a));
   const std::array<std::pair<const char*, double>, 6> nn = {{{"mass_kg", r.mass_kg},
                                                              {"yaw_inertia_kg_m2", r.yaw_inertia_kg_m2},
                                                              {"wheel_inertia_kg_m2", r.wheel_inertia_kg_m2},
@@ -132,7 +132,7 @@ bool check_robot(const RobotParams& r, std::string* why) {
                                                              {"coulomb_friction_nm", r.coulomb_friction_nm},
                                                              {"coil_resistance_ohm", r.coil_resistance_ohm}}};
   for (const auto& [name, v] : nn)
-    if (!nonneg(v)) return invalid(why, fmt::format("robot.{} = {}; expected a number >= 0", name, v));
+    if (!nonneg(v)) return core::invalid(why, fmt::format("robot.{} = {}; expected a number >= 0", name, v));
   return true;
 }
 
@@ -140,15 +140,16 @@ bool check_sensors(const SensorParams& s, double step_s, std::int64_t sps, std::
   for (const SensorView& v : sensor_views(s)) {
     if (!v.enabled) continue;
     if (!positive(v.rate_hz))
-      return invalid(why, fmt::format("sensors.{}.rate_hz = {}; expected a number > 0", v.name, v.rate_hz));
+      return core::invalid(why,
+                           fmt::format("sensors.{}.rate_hz = {}; expected a number > 0", v.name, v.rate_hz));
     if (period_steps(v.rate_hz, sps) == 0)
-      return invalid(why, fmt::format("sensors.{}.rate_hz = {}: its period is not a whole number of "
-                                      "{} s integration steps; expected a rate that divides {} Hz",
-                                      v.name, v.rate_hz, step_s, sps));
+      return core::invalid(why, fmt::format("sensors.{}.rate_hz = {}: its period is not a whole number of "
+                                            "{} s integration steps; expected a rate that divides {} Hz",
+                                            v.name, v.rate_hz, step_s, sps));
   }
   if (!s.encoders.enabled && !s.commands.enabled)
-    return invalid(why, "sensors: neither encoders nor commands is enabled; a track needs an odometry "
-                        "source (expected sensors.encoders or sensors.commands enabled)");
+    return core::invalid(why, "sensors: neither encoders nor commands is enabled; a track needs an odometry "
+                              "source (expected sensors.encoders or sensors.commands enabled)");
   const std::array<std::pair<const char*, double>, 15> nn2 = {
       {{"encoders.omega_resolution_rad_s", s.encoders.omega_resolution_rad_s},
        {"commands.resolution", s.commands.resolution},
@@ -166,7 +167,7 @@ bool check_sensors(const SensorParams& s, double step_s, std::int64_t sps, std::
        {"ground_truth.resolution_m", s.ground_truth.resolution_m},
        {"ground_truth.resolution_rad", s.ground_truth.resolution_rad}}};
   for (const auto& [name, v] : nn2)
-    if (!nonneg(v)) return invalid(why, fmt::format("sensors.{} = {}; expected a number >= 0", name, v));
+    if (!nonneg(v)) return core::invalid(why, fmt::format("sensors.{} = {}; expected a number >= 0", name, v));
   return true;
 }
 
@@ -181,22 +182,22 @@ bool check_motion(const Scenario& sc, double* duration_s, std::string* why) {
     for (const auto& k : profile.knots())
       max_rim_m_s = std::max(max_rim_m_s, std::abs(k.v_m_s) + std::abs(k.w_rad_s) * sc.robot.wheel_base_m / 2);
   } catch (const ProfileError& e) {
-    return invalid(why, fmt::format("motion: {}", e.what()));
+    return core::invalid(why, fmt::format("motion: {}", e.what()));
   }
   for (std::size_t i = 0; i < sc.slip_episodes.size(); ++i)
     if (!(sc.slip_episodes[i].t0_s < duration))
-      return invalid(why,
-                     fmt::format("slip_episodes[{}]: t0_s = {} is not before the end of the motion at {} s; "
-                                 "expected an episode that starts during the drive",
-                                 i + 1, sc.slip_episodes[i].t0_s, duration));
+      return core::invalid(
+          why, fmt::format("slip_episodes[{}]: t0_s = {} is not before the end of the motion at {} s; "
+                           "expected an episode that starts during the drive",
+                           i + 1, sc.slip_episodes[i].t0_s, duration));
   if (sc.effects.speed_radius) {
     // Radius scales are at most 1.5 each (effects.h), so u < 2.25 * max_rim.
     const double u = 2.25 * max_rim_m_s, c = sc.effects.speed_radius->c;
     if (1.0 + c * u * u < 0.5)
-      return invalid(why, fmt::format("effects: speed_radius.c = {} would shrink the effective radius "
-                                      "R*(1 + c*u^2) below R/2 at rim speeds up to {:.3g} m/s; expected "
-                                      "c > {:.3g}",
-                                      c, u, -0.5 / (u * u)));
+      return core::invalid(why, fmt::format("effects: speed_radius.c = {} would shrink the effective radius "
+                                            "R*(1 + c*u^2) below R/2 at rim speeds up to {:.3g} m/s; expected "
+                                            "c > {:.3g}",
+                                            c, u, -0.5 / (u * u)));
   }
   *duration_s = duration;
   return true;
@@ -206,16 +207,16 @@ bool check_motion(const Scenario& sc, double* duration_s, std::string* why) {
 bool check_size(const Scenario& sc, std::int64_t sps, double duration, std::string* why) {
   const double steps = std::ceil(duration * static_cast<double>(sps) - 1e-6);
   if (steps > kMaxSimSteps)
-    return invalid(why, fmt::format("motion lasts {:.3g} s = {:.3g} steps; expected at most {:.3g} steps "
-                                    "(shorten the motion or enlarge step_s)",
-                                    duration, steps, kMaxSimSteps));
+    return core::invalid(why, fmt::format("motion lasts {:.3g} s = {:.3g} steps; expected at most {:.3g} steps "
+                                          "(shorten the motion or enlarge step_s)",
+                                          duration, steps, kMaxSimSteps));
   double rows = 0.0;
   for (const SensorView& v : sensor_views(sc.sensors))
     if (v.enabled) rows += duration * v.rate_hz + 1.0;
   if (rows > kMaxSimRows)
-    return invalid(why, fmt::format("the track would have about {:.3g} rows; expected at most {:.3g} "
-                                    "(lower the sensor rates or shorten the motion)",
-                                    rows, kMaxSimRows));
+    return core::invalid(why, fmt::format("the track would have about {:.3g} rows; expected at most {:.3g} "
+                                          "(lower the sensor rates or shorten the motion)",
+                                          rows, kMaxSimRows));
   return true;
 }
 
@@ -413,7 +414,7 @@ void advance_pose(const Physics& ph, double v, double w, StepState& s) {
   const double h = ph.h;
   const double vy = -ph.k_skid * v * w;
   const double half = 0.5 * w * h;
-  arc_advance(&s.x, &s.y, &s.th, half, sinc(half) * h, v, vy, w * h);
+  core::arc_advance(&s.x, &s.y, &s.th, half, core::sinc(half) * h, v, vy, w * h);
 }
 
 // The true state at the end of the step (pose already advanced in s).
@@ -504,31 +505,32 @@ void add_odometry_bias(const Physics& ph, const std::vector<double>& q, double s
   }
 }
 
-void write_encoders(const RowGrid& grid, const std::vector<WheelState>& odo, const Scenario& sc, TrackData& d) {
+void write_encoders(const RowGrid& grid, const std::vector<WheelState>& odo, const Scenario& sc,
+                    tracks::TrackData& d) {
   const SensorParams& sp = sc.sensors;
   const std::size_t n_rows = grid.row_k.size();
-  d.ticks_l.assign(n_rows, kNoTick);
-  d.ticks_r.assign(n_rows, kNoTick);
+  d.ticks_l.assign(n_rows, tracks::kNoTick);
+  d.ticks_r.assign(n_rows, tracks::kNoTick);
   const bool om = sp.encoders.omega;
-  if (om) d.ensure(Col::omega_l), d.ensure(Col::omega_r);
+  if (om) d.ensure(tracks::Col::omega_l), d.ensure(tracks::Col::omega_r);
   const double per_rad = sc.robot.ticks_per_rev / kTwoPi;
   for (std::size_t r = 0; r < n_rows; ++r) {
     if (!grid.sampled(r, kEnc)) continue;
     d.ticks_l[r] = static_cast<std::int64_t>(std::floor(odo[r].phi_l * per_rad));
     d.ticks_r[r] = static_cast<std::int64_t>(std::floor(odo[r].phi_r * per_rad));
     if (om) {
-      d.col(Col::omega_l)[r] = quantise(odo[r].om_l, sp.encoders.omega_resolution_rad_s);
-      d.col(Col::omega_r)[r] = quantise(odo[r].om_r, sp.encoders.omega_resolution_rad_s);
+      d.col(tracks::Col::omega_l)[r] = quantise(odo[r].om_l, sp.encoders.omega_resolution_rad_s);
+      d.col(tracks::Col::omega_r)[r] = quantise(odo[r].om_r, sp.encoders.omega_resolution_rad_s);
     }
   }
 }
 
 void write_commands(const RowGrid& grid, const std::vector<double>& q, double spsd,
-                    const MotionProfile& profile, const Scenario& sc, TrackData& d) {
+                    const MotionProfile& profile, const Scenario& sc, tracks::TrackData& d) {
   const SensorParams& sp = sc.sensors;
   const auto& ob = sc.effects.odometry_bias;
-  auto& vc = d.ensure(Col::v_cmd);
-  auto& wc = d.ensure(Col::w_cmd);
+  auto& vc = d.ensure(tracks::Col::v_cmd);
+  auto& wc = d.ensure(tracks::Col::w_cmd);
   for (std::size_t r = 0; r < grid.row_k.size(); ++r) {
     if (!grid.sampled(r, kCmd)) continue;
     Command c = profile.at(q[r] / spsd);
@@ -538,11 +540,12 @@ void write_commands(const RowGrid& grid, const std::vector<double>& q, double sp
   }
 }
 
-void write_gyro(const RowGrid& grid, const std::vector<Truth>& truth, const Scenario& sc, TrackData& d) {
+void write_gyro(const RowGrid& grid, const std::vector<Truth>& truth, const Scenario& sc,
+                tracks::TrackData& d) {
   const SensorParams& sp = sc.sensors;
   const Effects& fx = sc.effects;
   Normal noise = make_stream(sc.seed, kGyroStream);
-  auto& gz = d.ensure(Col::gyro_z);
+  auto& gz = d.ensure(tracks::Col::gyro_z);
   const double gs = fx.gyro_scale ? fx.gyro_scale->s : 1.0;
   const double gb = fx.gyro_bias ? fx.gyro_bias->b : 0.0;
   for (std::size_t r = 0; r < grid.row_k.size(); ++r)
@@ -550,11 +553,12 @@ void write_gyro(const RowGrid& grid, const std::vector<Truth>& truth, const Scen
       gz[r] = quantise(gs * truth[r].w + gb + sp.gyro.sigma_rad_s * noise(), sp.gyro.resolution_rad_s);
 }
 
-void write_power(const RowGrid& grid, const std::vector<Truth>& truth, const Scenario& sc, TrackData& d) {
+void write_power(const RowGrid& grid, const std::vector<Truth>& truth, const Scenario& sc,
+                 tracks::TrackData& d) {
   const SensorParams& sp = sc.sensors;
   Normal noise = make_stream(sc.seed, kPowerStream);
-  auto& pl = d.ensure(Col::power_l);
-  auto& pr = d.ensure(Col::power_r);
+  auto& pl = d.ensure(tracks::Col::power_l);
+  auto& pr = d.ensure(tracks::Col::power_r);
   for (std::size_t r = 0; r < grid.row_k.size(); ++r) {
     if (!grid.sampled(r, kPower)) continue;
     pl[r] = quantise(truth[r].p_l + sp.power.sigma_w * noise(), sp.power.resolution_w);
@@ -563,13 +567,13 @@ void write_power(const RowGrid& grid, const std::vector<Truth>& truth, const Sce
 }
 
 void write_ext_velocity(const RowGrid& grid, const std::vector<Truth>& truth, const Scenario& sc,
-                        TrackData& d) {
+                        tracks::TrackData& d) {
   Normal noise = make_stream(sc.seed, kExtStream);
   const auto& e = sc.sensors.ext_velocity;
-  auto& ve = d.ensure(Col::v_ext);
-  auto& we = d.ensure(Col::w_ext);
-  auto& vv = d.ensure(Col::v_ext_var);
-  auto& wv = d.ensure(Col::w_ext_var);
+  auto& ve = d.ensure(tracks::Col::v_ext);
+  auto& we = d.ensure(tracks::Col::w_ext);
+  auto& vv = d.ensure(tracks::Col::v_ext_var);
+  auto& wv = d.ensure(tracks::Col::w_ext_var);
   const double var_v = tidy_variance(e.sigma_v_m_s), var_w = tidy_variance(e.sigma_w_rad_s);
   for (std::size_t r = 0; r < grid.row_k.size(); ++r) {
     if (!grid.sampled(r, kExt)) continue;
@@ -580,11 +584,11 @@ void write_ext_velocity(const RowGrid& grid, const std::vector<Truth>& truth, co
   }
 }
 
-void write_aps(const RowGrid& grid, const std::vector<Truth>& truth, const Scenario& sc, TrackData& d) {
+void write_aps(const RowGrid& grid, const std::vector<Truth>& truth, const Scenario& sc, tracks::TrackData& d) {
   const SensorParams& sp = sc.sensors;
   Normal noise = make_stream(sc.seed, kApsStream);
-  auto& ax = d.ensure(Col::aps_x);
-  auto& ay = d.ensure(Col::aps_y);
+  auto& ax = d.ensure(tracks::Col::aps_x);
+  auto& ay = d.ensure(tracks::Col::aps_y);
   for (std::size_t r = 0; r < grid.row_k.size(); ++r) {
     if (!grid.sampled(r, kAps)) continue;
     ax[r] = quantise(truth[r].x + sp.aps.sigma_m * noise(), sp.aps.resolution_m);
@@ -593,12 +597,12 @@ void write_aps(const RowGrid& grid, const std::vector<Truth>& truth, const Scena
 }
 
 void write_ground_truth(const RowGrid& grid, const std::vector<Truth>& truth, const Scenario& sc,
-                        TrackData& d) {
+                        tracks::TrackData& d) {
   Normal noise = make_stream(sc.seed, kGtStream);
   const auto& gt = sc.sensors.ground_truth;
-  auto& gx = d.ensure(Col::gt_x);
-  auto& gy = d.ensure(Col::gt_y);
-  auto& gth = d.ensure(Col::gt_theta);
+  auto& gx = d.ensure(tracks::Col::gt_x);
+  auto& gy = d.ensure(tracks::Col::gt_y);
+  auto& gth = d.ensure(tracks::Col::gt_theta);
   for (std::size_t r = 0; r < grid.row_k.size(); ++r) {
     if (!grid.sampled(r, kGt)) continue;
     gx[r] = quantise(truth[r].x + gt.sigma_m * noise(), gt.resolution_m);
@@ -609,7 +613,7 @@ void write_ground_truth(const RowGrid& grid, const std::vector<Truth>& truth, co
 
 // The sim.* metadata: seed, scenario, effects, episodes, terms, robot and the
 // enabled sensors' rates and noise.
-void add_metadata(const Scenario& sc, const RowGrid& grid, TrackMeta& meta) {
+void add_metadata(const Scenario& sc, const RowGrid& grid, tracks::TrackMeta& meta) {
   const RobotParams& rb = sc.robot;
   const SensorParams& sp = sc.sensors;
   const auto& period = grid.period;
@@ -665,28 +669,28 @@ void add_metadata(const Scenario& sc, const RowGrid& grid, TrackMeta& meta) {
 bool validate_scenario(const Scenario& sc, std::string* why) {
   const std::int64_t sps = steps_per_second(sc.step_s);
   if (sps == 0)
-    return invalid(why, fmt::format("step_s = {}; expected a step in (0, 0.1] s whose inverse is a whole "
-                                    "number of steps per second (e.g. 0.001)",
-                                    sc.step_s));
+    return core::invalid(why, fmt::format("step_s = {}; expected a step in (0, 0.1] s whose inverse is a whole "
+                                          "number of steps per second (e.g. 0.001)",
+                                          sc.step_s));
   if (!check_robot(sc.robot, why) || !check_sensors(sc.sensors, sc.step_s, sps, why)) return false;
 
   const std::array<std::pair<const char*, double>, 3> start = {
       {{"x_m", sc.motion.start_x_m}, {"y_m", sc.motion.start_y_m}, {"theta_rad", sc.motion.start_theta_rad}}};
   for (const auto& [name, v] : start)
     if (!std::isfinite(v))
-      return invalid(why, fmt::format("motion.start.{} = {}; expected a finite number", name, v));
+      return core::invalid(why, fmt::format("motion.start.{} = {}; expected a finite number", name, v));
 
   std::string ewhy;
-  if (!validate_effects(sc.effects, &ewhy)) return invalid(why, "effects: " + ewhy);
-  if (!validate_slip_episodes(sc.slip_episodes, &ewhy)) return invalid(why, ewhy);
-  if (!validate_terms(sc.terms, &ewhy)) return invalid(why, "terms: " + ewhy);
+  if (!validate_effects(sc.effects, &ewhy)) return core::invalid(why, "effects: " + ewhy);
+  if (!validate_slip_episodes(sc.slip_episodes, &ewhy)) return core::invalid(why, ewhy);
+  if (!validate_terms(sc.terms, &ewhy)) return core::invalid(why, "terms: " + ewhy);
 
   double duration = 0.0;
   if (!check_motion(sc, &duration, why)) return false;
   return check_size(sc, sps, duration, why);
 }
 
-Track simulate(const Scenario& sc) {
+tracks::Track simulate(const Scenario& sc) {
   std::string why;
   if (!validate_scenario(sc, &why)) throw std::invalid_argument(why);
 
@@ -703,7 +707,7 @@ Track simulate(const Scenario& sc) {
   std::vector<WheelState> odo(n_rows);
   integrate(sc, profile, grid, q, spsd, ph, truth, odo);
 
-  TrackData d;
+  tracks::TrackData d;
   d.meta.name = sc.name;
   d.meta.origin = "simulated";
   d.meta.ticks_per_rev = sc.robot.ticks_per_rev;
@@ -717,7 +721,7 @@ Track simulate(const Scenario& sc) {
   if (grid.period[kEnc] > 0) write_encoders(grid, odo, sc, d);
   if (grid.period[kCmd] > 0) {
     write_commands(grid, q, spsd, profile, sc, d);
-    d.meta.body_velocity = BodyVelocitySource::commanded;  // the motion profile's commands
+    d.meta.body_velocity = tracks::BodyVelocitySource::commanded;  // the motion profile's commands
   }
   if (grid.period[kGyro] > 0) write_gyro(grid, truth, sc, d);
   if (grid.period[kPower] > 0) write_power(grid, truth, sc, d);
@@ -725,7 +729,7 @@ Track simulate(const Scenario& sc) {
   if (grid.period[kAps] > 0) write_aps(grid, truth, sc, d);
   if (grid.period[kGt] > 0) write_ground_truth(grid, truth, sc, d);
   add_metadata(sc, grid, d.meta);
-  return Track(std::move(d));
+  return tracks::Track(std::move(d));
 }
 
 }  // namespace odotune::sim

@@ -20,7 +20,7 @@ bool validate_scenario(const Scenario& scenario, std::string* why);
 
 // Runs the simulation. Throws std::invalid_argument with validate_scenario's
 // message for an invalid scenario.
-Track simulate(const Scenario& scenario);
+tracks::Track simulate(const Scenario& scenario);
 
 // Upper bounds enforced by validate_scenario (no unbounded allocation).
 inline constexpr double kMaxSimSteps = 2e8;

@@ -233,7 +233,7 @@ std::vector<SlipEpisode> parse_slip_episodes(std::string_view text) {
   return out;
 }
 
-std::vector<SlipEpisode> slip_episodes_from_metadata(const TrackMeta& meta) {
+std::vector<SlipEpisode> slip_episodes_from_metadata(const tracks::TrackMeta& meta) {
   const auto text = meta.get("sim.slip_episodes");
   if (!text) return {};
   try {

@@ -65,7 +65,7 @@ std::vector<SlipEpisode> parse_slip_episodes(std::string_view text);
 // The episodes of a simulated track (its sim.slip_episodes); empty when the
 // key is absent or "none". Throws std::invalid_argument ("sim.slip_episodes:
 // ...") on bad text.
-std::vector<SlipEpisode> slip_episodes_from_metadata(const TrackMeta& meta);
+std::vector<SlipEpisode> slip_episodes_from_metadata(const tracks::TrackMeta& meta);
 
 // The episodes by wheel and start time, for the simulator's per-step look-up
 // (a binary search instead of a scan of the whole list at every 1 ms step).

@@ -8,7 +8,7 @@
 
 #include <odotune/sim/normal_rng.h>
 
-namespace odotune {
+namespace odotune::sim {
 
 bool SyntheticFixOptions::IsValid(std::string* why) const {
   if (!(std::isfinite(rate_hz) && rate_hz > 0.0)) {
@@ -22,23 +22,23 @@ bool SyntheticFixOptions::IsValid(std::string* why) const {
   return true;
 }
 
-Track with_synthetic_fixes(const Track& track, const SyntheticFixOptions& options) {
+tracks::Track with_synthetic_fixes(const tracks::Track& track, const SyntheticFixOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("synthetic fixes: " + why);
   if (!track.has_gt())
     throw std::invalid_argument(
         fmt::format("track '{}': no ground truth (gt_x, gt_y) to make position fixes from", track.name()));
-  TrackData d = track.data();
+  tracks::TrackData d = track.data();
   const std::size_t n = d.t.size();
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  d.col(Col::aps_x).assign(n, nan);
-  d.col(Col::aps_y).assign(n, nan);
+  d.col(tracks::Col::aps_x).assign(n, nan);
+  d.col(tracks::Col::aps_y).assign(n, nan);
   // The fixes' own variances (σ² per axis), replacing any the track had.
   const bool variances = options.variances && options.sigma_m > 0.0;
-  d.col(Col::aps_var_x).assign(variances ? n : 0, nan);
-  d.col(Col::aps_var_y).assign(variances ? n : 0, nan);
-  const auto& gx = d.cols[static_cast<int>(Col::gt_x)];
-  const auto& gy = d.cols[static_cast<int>(Col::gt_y)];
+  d.col(tracks::Col::aps_var_x).assign(variances ? n : 0, nan);
+  d.col(tracks::Col::aps_var_y).assign(variances ? n : 0, nan);
+  const auto& gx = d.cols[static_cast<int>(tracks::Col::gt_x)];
+  const auto& gy = d.cols[static_cast<int>(tracks::Col::gt_y)];
 
   Normal noise(splitmix64(options.seed));
   const double period = 1.0 / options.rate_hz;
@@ -54,11 +54,11 @@ Track with_synthetic_fixes(const Track& track, const SyntheticFixOptions& option
     if (d.t[i] + 1e-9 < t_first + static_cast<double>(k) * period) continue;
     const double ex = options.sigma_m * noise();
     const double ey = options.sigma_m * noise();
-    d.col(Col::aps_x)[i] = gx[i] + ex;
-    d.col(Col::aps_y)[i] = gy[i] + ey;
+    d.col(tracks::Col::aps_x)[i] = gx[i] + ex;
+    d.col(tracks::Col::aps_y)[i] = gy[i] + ey;
     if (variances) {
-      d.col(Col::aps_var_x)[i] = options.sigma_m * options.sigma_m;
-      d.col(Col::aps_var_y)[i] = options.sigma_m * options.sigma_m;
+      d.col(tracks::Col::aps_var_x)[i] = options.sigma_m * options.sigma_m;
+      d.col(tracks::Col::aps_var_y)[i] = options.sigma_m * options.sigma_m;
     }
     ++made;
     // The next multiple of the period after this row (gaps skip missed ones).
@@ -69,7 +69,7 @@ Track with_synthetic_fixes(const Track& track, const SyntheticFixOptions& option
                                         "(Kovacs et al. 2.1: selection then Gaussian perturbation){}",
                                         made, options.rate_hz, options.sigma_m, options.seed,
                                         variances ? "; aps_var_x, aps_var_y = sigma^2" : ""));
-  return Track(std::move(d));
+  return tracks::Track(std::move(d));
 }
 
-}  // namespace odotune
+}  // namespace odotune::sim

@@ -10,7 +10,7 @@
 
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::sim {
 
 struct SyntheticFixOptions {
   double rate_hz = 1.0;    // fix frequency
@@ -29,6 +29,6 @@ struct SyntheticFixOptions {
 // from the first ground-truth time (the first fix one period after it). The
 // metadata records how the fixes were made. Throws std::invalid_argument when
 // the options are invalid or the track has no ground truth.
-Track with_synthetic_fixes(const Track& track, const SyntheticFixOptions& options);
+tracks::Track with_synthetic_fixes(const tracks::Track& track, const SyntheticFixOptions& options);
 
-}  // namespace odotune
+}  // namespace odotune::sim

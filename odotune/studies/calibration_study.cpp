@@ -15,7 +15,7 @@
 #include <odotune/filters/pf_calibrator.h>
 #include <odotune/sim/simulator.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 namespace {
 
@@ -27,7 +27,7 @@ constexpr std::uint64_t kTruthStream = 0x7472757468ULL;  // "truth"
 constexpr std::uint64_t kDkfStream = 0x646b66ULL;        // "dkf"
 
 double uniform_in(double lo, double hi, std::uint64_t seed, std::uint64_t dim, std::uint64_t stream) {
-  return lo + (hi - lo) * counter_uniform01(seed, 0, 0, dim, stream);
+  return lo + (hi - lo) * core::counter_uniform01(seed, 0, 0, dim, stream);
 }
 
 int threads_for(const StudyOptions& o) { return o.threads > 0 ? o.threads : omp_get_max_threads(); }
@@ -38,12 +38,13 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 // A simulated run prepared for calibration.
 struct PreparedRun {
-  CalibrationInput constant, step;
+  calibration::CalibrationInput constant, step;
 };
 
-CalibrationInput simulate_input(const sim::Scenario& scenario, const McDraw& draw) {
-  const Track track = sim::simulate(run_scenario(scenario, draw));
-  CalibrationInput in = build_calibration_input(track, CalibrationInputOptions{});
+calibration::CalibrationInput simulate_input(const sim::Scenario& scenario, const McDraw& draw) {
+  const tracks::Track track = sim::simulate(run_scenario(scenario, draw));
+  calibration::CalibrationInput in = calibration::build_calibration_input(
+      track, calibration::CalibrationInputOptions{});
   if (!in.truth)
     throw std::invalid_argument("scenario '" + scenario.name + "': the simulated track has no truth");
   if (in.samples.empty() || in.t.empty())
@@ -89,7 +90,7 @@ void parallel_tasks(long count, int threads, long* done, long total, const Study
   }
 }
 
-ParamTrace param_trace(const CalibrationResult& r, const CalibrationInput& in) {
+ParamTrace param_trace(const calibration::CalibrationResult& r, const calibration::CalibrationInput& in) {
   ParamTrace p;
   const std::size_t n = r.trace.t.size();
   p.t_s = r.trace.t;
@@ -115,7 +116,7 @@ ParamTrace param_trace(const CalibrationResult& r, const CalibrationInput& in) {
 struct FinalErrors {
   double rr = kNaN, rl = kNaN, d = kNaN;
 };
-FinalErrors final_errors(const TrackCalibrationScore& s) {
+FinalErrors final_errors(const calibration::TrackCalibrationScore& s) {
   if (!s.truth_final) return {};
   return {std::abs(s.final_params.wheel_radius_right_m - s.truth_final->wheel_radius_right_m),
           std::abs(s.final_params.wheel_radius_left_m - s.truth_final->wheel_radius_left_m),
@@ -158,16 +159,17 @@ MeanSd mean_sd(const std::vector<double>& values) {
 }
 
 bool StudyOptions::IsValid(std::string* why) const {
-  if (runs < 1 || runs > 1000) return invalid(why, fmt::format("runs = {} must be in 1..1000", runs));
-  if (threads < 0) return invalid(why, fmt::format("threads = {} must be >= 0 (0 = all cores)", threads));
+  if (runs < 1 || runs > 1000) return core::invalid(why, fmt::format("runs = {} must be in 1..1000", runs));
+  if (threads < 0) return core::invalid(why, fmt::format("threads = {} must be >= 0 (0 = all cores)", threads));
   if (!(truth_radius_spread > 0.0 && truth_radius_spread <= 0.1))
-    return invalid(why, fmt::format("truth_radius_spread = {} must be in (0, 0.1]", truth_radius_spread));
+    return core::invalid(why, fmt::format("truth_radius_spread = {} must be in (0, 0.1]", truth_radius_spread));
   if (pf_particles < 10 || pf_particles > 1000000)
-    return invalid(why, fmt::format("pf_particles = {} must be in 10..1000000", pf_particles));
+    return core::invalid(why, fmt::format("pf_particles = {} must be in 10..1000000", pf_particles));
   if (adaptive_initial_particles != 0 &&
       (adaptive_initial_particles < 10 || adaptive_initial_particles > 1000000))
-    return invalid(why, fmt::format("adaptive_initial_particles = {} must be 0 (default) or in 10..1000000",
-                                    adaptive_initial_particles));
+    return core::invalid(why,
+                         fmt::format("adaptive_initial_particles = {} must be 0 (default) or in 10..1000000",
+                                     adaptive_initial_particles));
   return true;
 }
 
@@ -229,8 +231,8 @@ void check_study_scenario(const sim::Scenario& scenario, const StudyOptions& opt
                                             name, base, pf.wheel_base_m.lo, pf.wheel_base_m.hi));
 }
 
-std::vector<PieceConvergence> radius_convergence(const ParamTrace& trace, const TruthSchedule& truth,
-                                                 double start_s, double tolerance) {
+std::vector<PieceConvergence> radius_convergence(
+    const ParamTrace& trace, const calibration::TruthSchedule& truth, double start_s, double tolerance) {
   std::vector<PieceConvergence> out(truth.from_s.size());
   for (std::size_t k = 0; k < truth.from_s.size(); ++k) {
     const double from = truth.from_s[k];
@@ -249,7 +251,7 @@ std::vector<PieceConvergence> radius_convergence(const ParamTrace& trace, const 
           std::abs(trace.r_right_m[i] - t.wheel_radius_right_m) <= tolerance * t.wheel_radius_right_m;
       if (within && std::isnan(out[k].reached_s)) out[k].reached_s = trace.t_s[i] - origin;
     }
-    const std::optional<double> c = convergence_time(times, est, t, tolerance);
+    const std::optional<double> c = calibration::convergence_time(times, est, t, tolerance);
     if (c) out[k].settled_s = *c - origin;
   }
   return out;
@@ -304,16 +306,16 @@ ResamplingStudy run_resampling_study(const sim::Scenario& scenario, const StudyO
   parallel_tasks(tasks, out.threads_used, &done, total, progress, [&](long k) {
     const auto run = static_cast<std::size_t>(k / cells);
     ResamplingCell& cell = out.cells[static_cast<std::size_t>(k % cells)];
-    CalibrationOptions o;
-    o.method = CalibrationMethod::pf;
+    calibration::CalibrationOptions o;
+    o.method = calibration::CalibrationMethod::pf;
     o.pf.particles = options.pf_particles;
     o.pf.resampler = cell.resampler;
     o.pf.policy = cell.policy;
     o.pf.seed = out.draws[run].seed;
     o.pf.threads = 1;  // the study parallelises over tasks
-    const CalibrationInput& in = runs[run].constant;
-    const CalibrationResult res = run_calibration({&in}, o);
-    const TrackCalibrationScore& s = res.tracks.at(0);
+    const calibration::CalibrationInput& in = runs[run].constant;
+    const calibration::CalibrationResult res = calibration::run_calibration({&in}, o);
+    const calibration::TrackCalibrationScore& s = res.tracks.at(0);
     const FinalErrors e = final_errors(s);
     ResamplingRunResult& rr = cell.runs[run];
     rr.err_rr_m = e.rr;
@@ -343,8 +345,8 @@ ResamplingStudy run_resampling_study(const sim::Scenario& scenario, const StudyO
 
 // ---------------------------------------------------------------- Table II
 
-std::vector<CalibrationMethod> table2_methods() {
-  using M = CalibrationMethod;
+std::vector<calibration::CalibrationMethod> table2_methods() {
+  using M = calibration::CalibrationMethod;
   return {M::adaptive_pf, M::dkf, M::batch_velocity, M::none};
 }
 
@@ -356,11 +358,11 @@ void set_up_rows(CalibrationStudy& out, const sim::Scenario& constant, const Stu
   for (int r = 0; r < options.runs; ++r) out.draws.push_back(mc_draw(options, constant, r));
   const auto methods = table2_methods();
   for (const char* track : {"constant", "step"})
-    for (CalibrationMethod m : methods) {
+    for (calibration::CalibrationMethod m : methods) {
       MethodRow row;
       row.track = track;
       row.method = m;
-      row.online = m == CalibrationMethod::adaptive_pf || m == CalibrationMethod::dkf;
+      row.online = m == calibration::CalibrationMethod::adaptive_pf || m == calibration::CalibrationMethod::dkf;
       row.runs.resize(static_cast<std::size_t>(options.runs));
       out.rows.push_back(std::move(row));
     }
@@ -376,8 +378,8 @@ void run_table2_task(CalibrationStudy& out, const std::vector<PreparedRun>& runs
   const auto run = static_cast<std::size_t>(k / row_count);
   MethodRow& row = out.rows[static_cast<std::size_t>(k % row_count)];
   const bool is_step = row.track == "step";
-  const CalibrationInput& in = is_step ? runs[run].step : runs[run].constant;
-  CalibrationOptions o;
+  const calibration::CalibrationInput& in = is_step ? runs[run].step : runs[run].constant;
+  calibration::CalibrationOptions o;
   o.method = row.method;
   o.pf = filters::PfCalibratorParams::adaptive_defaults();
   if (options.adaptive_initial_particles > 0) o.pf.particles = options.adaptive_initial_particles;
@@ -385,8 +387,8 @@ void run_table2_task(CalibrationStudy& out, const std::vector<PreparedRun>& runs
   o.pf.threads = 1;
   o.dkf.initial = out.draws[run].dkf_initial;
   o.convergence_tolerance = out.convergence_tolerance;
-  const CalibrationResult res = run_calibration({&in}, o);
-  const TrackCalibrationScore& s = res.tracks.at(0);
+  const calibration::CalibrationResult res = calibration::run_calibration({&in}, o);
+  const calibration::TrackCalibrationScore& s = res.tracks.at(0);
   const FinalErrors e = final_errors(s);
   MethodRunResult& mr = row.runs[run];
   mr.err_rr_m = e.rr;
@@ -406,7 +408,7 @@ void run_table2_task(CalibrationStudy& out, const std::vector<PreparedRun>& runs
       mr.reconvergence_s = c[1].settled_s;
       mr.rereached_s = c[1].reached_s;
     }
-    const bool pf = row.method == CalibrationMethod::adaptive_pf;
+    const bool pf = row.method == calibration::CalibrationMethod::adaptive_pf;
     auto& traces = pf ? (is_step ? out.pf_step : out.pf_constant) : (is_step ? out.dkf_step : out.dkf_constant);
     traces[run] = std::move(trace);
   }
@@ -445,7 +447,7 @@ CalibrationStudy run_calibration_study(const sim::Scenario& constant, const sim:
   out.step_scenario = step.name;
   out.options = options;
   out.threads_used = threads_for(options);
-  out.convergence_tolerance = CalibrationOptions{}.convergence_tolerance;
+  out.convergence_tolerance = calibration::CalibrationOptions{}.convergence_tolerance;
   set_up_rows(out, constant, options);
 
   const long row_count = static_cast<long>(out.rows.size());
@@ -469,4 +471,4 @@ CalibrationStudy run_calibration_study(const sim::Scenario& constant, const sim:
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -36,7 +36,7 @@
 #include <odotune/filters/resampling.h>
 #include <odotune/sim/scenario.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 // Mean and sample standard deviation (n − 1 in the denominator) of the
 // finite values; NaN values are skipped (they count neither in n nor in the
@@ -152,8 +152,8 @@ struct PieceConvergence {
   double reached_s = std::numeric_limits<double>::quiet_NaN();
   double settled_s = std::numeric_limits<double>::quiet_NaN();
 };
-std::vector<PieceConvergence> radius_convergence(const ParamTrace& trace, const TruthSchedule& truth,
-                                                 double start_s, double tolerance);
+std::vector<PieceConvergence> radius_convergence(
+    const ParamTrace& trace, const calibration::TruthSchedule& truth, double start_s, double tolerance);
 
 struct MethodRunResult {
   double err_rr_m = 0.0, err_rl_m = 0.0;  // |final − true| at the track's end [m]
@@ -173,7 +173,7 @@ struct MethodRunResult {
 
 struct MethodRow {
   std::string track;  // "constant" or "step"
-  CalibrationMethod method = CalibrationMethod::none;
+  calibration::CalibrationMethod method = calibration::CalibrationMethod::none;
   std::vector<MethodRunResult> runs;  // index = Monte-Carlo run
   MeanSd err_rr_m, err_rl_m, err_d_m, pose_rmse_m, heading_rmse_rad, convergence_s, reached_s, reconvergence_s,
       rereached_s, mean_particles, ms_per_iteration;
@@ -197,10 +197,10 @@ struct CalibrationStudy {
 };
 
 // The methods of Table II, in its column order.
-std::vector<CalibrationMethod> table2_methods();
+std::vector<calibration::CalibrationMethod> table2_methods();
 
 // Throws std::invalid_argument for invalid options or scenarios.
 CalibrationStudy run_calibration_study(const sim::Scenario& constant, const sim::Scenario& step,
                                        const StudyOptions& options, const StudyProgress& progress = {});
 
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -18,7 +18,7 @@
 #include <odotune/sim/effects.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 namespace {
 
@@ -145,7 +145,8 @@ CaseResult run_single_case(const DiagnosisBenchmarkOptions& o, DiagnosisCase c) 
   r.track_rows = static_cast<int>(ct.track.size());
   r.track_duration_s = ct.track.duration_s();
   if (!o.tracks_dir.empty())
-    write_track(ct.track, std::filesystem::path(o.tracks_dir) / fmt::format("case_{:04d}.csv", r.c.index));
+    tracks::write_track(ct.track,
+                        std::filesystem::path(o.tracks_dir) / fmt::format("case_{:04d}.csv", r.c.index));
   r.simulate_s = seconds_since(t0);
 
   t0 = Clock::now();
@@ -192,7 +193,7 @@ CaseResult run_single_case(const DiagnosisBenchmarkOptions& o, DiagnosisCase c) 
 // The recordings' diagnosis inputs, fit recordings in `fit`, held-out ones in
 // `held` (without ground truth when `fixes_only`). Throws what
 // build_diag_input throws.
-void recording_inputs(const DiagnosisCase& c, const std::vector<Track>& tracks, bool fixes_only,
+void recording_inputs(const DiagnosisCase& c, const std::vector<tracks::Track>& tracks, bool fixes_only,
                       std::vector<diagnose::DiagInput>& fit, std::vector<diagnose::DiagInput>& held) {
   fit.clear(), held.clear();
   for (std::size_t k = 0; k < tracks.size(); ++k)
@@ -207,14 +208,14 @@ CaseResult run_multi_case(const DiagnosisBenchmarkOptions& o, DiagnosisCase c) {
   CaseResult r;
   r.c = std::move(c);
   auto t0 = Clock::now();
-  std::vector<Track> tracks;
+  std::vector<tracks::Track> tracks;
   for (std::size_t k = 0; k < r.c.recordings.size(); ++k) {
     CaseTrack ct = make_recording_track(r.c, k);
     r.track_rows += static_cast<int>(ct.track.size());
     r.track_duration_s += ct.track.duration_s();
     if (!o.tracks_dir.empty())
-      write_track(ct.track,
-                  std::filesystem::path(o.tracks_dir) / fmt::format("case_{:04d}_r{}.csv", r.c.index, k + 1));
+      tracks::write_track(ct.track, std::filesystem::path(o.tracks_dir) /
+                                        fmt::format("case_{:04d}_r{}.csv", r.c.index, k + 1));
     tracks.push_back(std::move(ct.track));
   }
   r.simulate_s = seconds_since(t0);
@@ -306,7 +307,7 @@ DiagnosisBenchmark run_diagnosis_benchmark(const DiagnosisBenchmarkOptions& o,
     if (invalid) throw std::invalid_argument(failure);
     throw std::runtime_error(failure);
   }
-  if (stopped) throw Failure("study diagnosis: interrupted", 130);
+  if (stopped) throw core::Failure("study diagnosis: interrupted", 130);
   b.summary = summarise(b.cases);
   b.wall_s = seconds_since(t0);
   return b;
@@ -392,4 +393,4 @@ BenchmarkSummary summarise(const std::vector<CaseResult>& cases) {
   return s;
 }
 
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -29,7 +29,7 @@
 // Cases run in parallel over OpenMP threads (one case per task, dynamic
 // schedule); each task is single-threaded. Progress through a callback (from
 // one thread at a time); the stop flag ends the run before the next case
-// starts (odotune::Failure "interrupted", exit code 130). No output here:
+// starts (core::Failure "interrupted", exit code 130). No output here:
 // diagnosis_benchmark_outputs.h writes the files.
 #pragma once
 
@@ -48,7 +48,7 @@
 #include <odotune/studies/diagnosis_grading.h>
 #include <odotune/studies/diagnosis_truth.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 // The docs run's seed (never used while developing; development: 1001-1004).
 // 20261125, 20261126 and 20261127 were earlier docs seeds, retired once their
@@ -185,7 +185,7 @@ CaseResult run_benchmark_case(const DiagnosisBenchmarkOptions& options, int inde
 
 // The whole run. Throws std::invalid_argument for invalid options, and what
 // run_benchmark_case throws (the first such error, after the running cases
-// finish); odotune::Failure (code 130) when stopped.
+// finish); core::Failure (code 130) when stopped.
 DiagnosisBenchmark run_diagnosis_benchmark(const DiagnosisBenchmarkOptions& options,
                                            const BenchmarkProgress& progress = {},
                                            const std::atomic<bool>* stop = nullptr);
@@ -193,4 +193,4 @@ DiagnosisBenchmark run_diagnosis_benchmark(const DiagnosisBenchmarkOptions& opti
 // The summary of graded cases (the fields' comments).
 BenchmarkSummary summarise(const std::vector<CaseResult>& cases);
 
-}  // namespace odotune
+}  // namespace odotune::studies

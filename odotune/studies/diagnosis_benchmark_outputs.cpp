@@ -11,7 +11,7 @@
 #include <odotune/core/failure.h>
 #include <odotune/results/gnuplot.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 namespace {
 namespace fs = std::filesystem;
@@ -371,11 +371,11 @@ std::vector<fs::path> write_benchmark_outputs(const DiagnosisBenchmark& b, const
   confusion_figure(b.summary.confusion, out / "confusion", b.options.cases);
   files.push_back(out / "confusion.png");
   files.push_back(out / "confusion.svg");
-  write_atomically(out / "cases.csv", "benchmark cases", cases_csv(b));
+  core::write_atomically(out / "cases.csv", "benchmark cases", cases_csv(b));
   files.push_back(out / "cases.csv");
-  write_atomically(out / "confusion.csv", "confusion matrix", confusion_csv(b.summary.confusion));
+  core::write_atomically(out / "confusion.csv", "confusion matrix", confusion_csv(b.summary.confusion));
   files.push_back(out / "confusion.csv");
-  write_atomically(out / "summary.md", "benchmark summary", benchmark_summary_markdown(b, command));
+  core::write_atomically(out / "summary.md", "benchmark summary", benchmark_summary_markdown(b, command));
   files.push_back(out / "summary.md");
   return files;
 }
@@ -400,15 +400,16 @@ StudyRun run_diagnosis_benchmark_to_folder(const DiagnosisBenchmarkRequest& requ
   const fs::path out(request.out);
   o.tracks_dir = request.keep_tracks ? (out / "tracks").string() : std::string();
   std::string why;
-  if (!o.IsValid(&why)) throw Failure("study diagnosis: " + why);
+  if (!o.IsValid(&why)) throw core::Failure("study diagnosis: " + why);
   if (!results::gnuplot_available())
-    throw Failure("study diagnosis: gnuplot not found on PATH (needed for the figure); install it "
-                  "(apt-get install gnuplot)");
+    throw core::Failure("study diagnosis: gnuplot not found on PATH (needed for the figure); install it "
+                        "(apt-get install gnuplot)");
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
-    throw Failure(fmt::format("{}: --out exists and is not a folder", request.out));
+    throw core::Failure(fmt::format("{}: --out exists and is not a folder", request.out));
   fs::create_directories(request.keep_tracks ? out / "tracks" : out, ec);
-  if (ec) throw Failure(fmt::format("{}: cannot create the output folder: {}", request.out, ec.message()));
+  if (ec)
+    throw core::Failure(fmt::format("{}: cannot create the output folder: {}", request.out, ec.message()));
 
   BenchmarkProgress progress;
   if (hooks.progress) progress = [&hooks](long done, long total) { hooks.progress(done, total, ""); };
@@ -416,7 +417,7 @@ StudyRun run_diagnosis_benchmark_to_folder(const DiagnosisBenchmarkRequest& requ
   try {
     b = run_diagnosis_benchmark(o, progress, request.stop);
   } catch (const std::invalid_argument& e) {
-    throw Failure(std::string("study diagnosis: ") + e.what());
+    throw core::Failure(std::string("study diagnosis: ") + e.what());
   }
   const std::string command = benchmark_command_line(request);
   if (hooks.tables) {
@@ -430,4 +431,4 @@ StudyRun run_diagnosis_benchmark_to_folder(const DiagnosisBenchmarkRequest& requ
   return run;
 }
 
-}  // namespace odotune
+}  // namespace odotune::studies

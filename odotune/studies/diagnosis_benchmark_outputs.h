@@ -26,7 +26,7 @@
 #include <odotune/studies/diagnosis_benchmark.h>
 #include <odotune/studies/study_runs.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 std::string cases_csv(const DiagnosisBenchmark& b);
 std::string confusion_csv(const Confusion& c);
@@ -42,7 +42,7 @@ std::vector<std::filesystem::path> write_benchmark_outputs(
 // What the command runs: checks the options, gnuplot and the --out folder
 // (created when missing; OUT/tracks too with keep_tracks) before the long
 // work, runs the benchmark with progress, hands the summary to hooks.tables,
-// then writes the files. Throws odotune::Failure (one line) for bad options,
+// then writes the files. Throws core::Failure (one line) for bad options,
 // a missing gnuplot, an unusable --out, an interrupted run or a case that
 // cannot be simulated; std::runtime_error when a file cannot be written.
 struct DiagnosisBenchmarkRequest {
@@ -57,4 +57,4 @@ StudyRun run_diagnosis_benchmark_to_folder(const DiagnosisBenchmarkRequest& requ
 // The command line of a request (defaults left out).
 std::string benchmark_command_line(const DiagnosisBenchmarkRequest& request);
 
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -14,7 +14,7 @@
 #include <odotune/sim/simulator.h>
 #include <odotune/studies/diagnosis_drives.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 namespace {
 
@@ -306,11 +306,11 @@ std::string DiagnosisCase::effects_text() const {
 }
 
 std::uint64_t case_seed(std::uint64_t seed, int index) {
-  return counter_hash(seed, static_cast<std::uint64_t>(index), 0, 0, kCaseStream);
+  return core::counter_hash(seed, static_cast<std::uint64_t>(index), 0, 0, kCaseStream);
 }
 
 std::uint64_t recording_seed(std::uint64_t case_seed, int k) {
-  return counter_hash(case_seed, static_cast<std::uint64_t>(k), 0, 0, kRecordingStream);
+  return core::counter_hash(case_seed, static_cast<std::uint64_t>(k), 0, 0, kRecordingStream);
 }
 
 namespace {
@@ -431,13 +431,13 @@ DiagnosisCase draw_case(std::uint64_t seed, int index, const CaseDrawOptions& o)
 namespace {
 
 // Rows of `d` for which keep(i), columns without any sample left removed.
-TrackData keep_rows(const TrackData& d, const std::vector<bool>& keep) {
-  TrackData out;
+tracks::TrackData keep_rows(const tracks::TrackData& d, const std::vector<bool>& keep) {
+  tracks::TrackData out;
   out.meta = d.meta;
   for (std::size_t i = 0; i < d.t.size(); ++i) {
     if (!keep[i]) continue;
     out.t.push_back(d.t[i]);
-    for (int k = 0; k < kNumCols; ++k)
+    for (int k = 0; k < tracks::kNumCols; ++k)
       if (!d.cols[k].empty()) out.cols[k].push_back(d.cols[k][i]);
     if (!d.ticks_l.empty()) out.ticks_l.push_back(d.ticks_l[i]), out.ticks_r.push_back(d.ticks_r[i]);
   }
@@ -447,17 +447,17 @@ TrackData keep_rows(const TrackData& d, const std::vector<bool>& keep) {
 }
 
 // Rows holding at least one sample.
-std::vector<bool> non_empty_rows(const TrackData& d) {
+std::vector<bool> non_empty_rows(const tracks::TrackData& d) {
   std::vector<bool> keep(d.t.size(), false);
   for (std::size_t i = 0; i < d.t.size(); ++i) {
-    bool any = !d.ticks_l.empty() && d.ticks_l[i] != kNoTick;
-    for (int k = 0; k < kNumCols && !any; ++k) any = !d.cols[k].empty() && !std::isnan(d.cols[k][i]);
+    bool any = !d.ticks_l.empty() && d.ticks_l[i] != tracks::kNoTick;
+    for (int k = 0; k < tracks::kNumCols && !any; ++k) any = !d.cols[k].empty() && !std::isnan(d.cols[k][i]);
     keep[i] = any;
   }
   return keep;
 }
 
-void erase_meta(TrackMeta& meta, std::string_view prefix) {
+void erase_meta(tracks::TrackMeta& meta, std::string_view prefix) {
   std::erase_if(meta.extra, [&](const auto& kv) { return kv.first.rfind(prefix, 0) == 0; });
 }
 
@@ -465,19 +465,21 @@ void erase_meta(TrackMeta& meta, std::string_view prefix) {
 // the ground-truth gaps, `seed` the seed of the irregular fixes' times.
 CaseTrack shape_track(const DiagnosisCase& c, const sim::Scenario& sc,
                       const std::vector<std::pair<double, double>>& gaps, std::uint64_t seed) {
-  TrackData d = sim::simulate(sc).data();
+  tracks::TrackData d = sim::simulate(sc).data();
   const std::size_t n = d.t.size();
   std::vector<double> path_t, path_x, path_y;
-  const auto& gx = d.col(Col::gt_x);
+  const auto& gx = d.col(tracks::Col::gt_x);
   for (std::size_t i = 0; i < n; ++i)
     if (!std::isnan(gx[i]) && (path_t.empty() || d.t[i] >= path_t.back() + 0.1 - 1e-9)) {
       path_t.push_back(d.t[i]);
       path_x.push_back(gx[i]);
-      path_y.push_back(d.col(Col::gt_y)[i]);
+      path_y.push_back(d.col(tracks::Col::gt_y)[i]);
     }
   auto clear_gt_if = [&](auto&& pred) {
     for (std::size_t i = 0; i < n; ++i)
-      if (pred(i)) d.col(Col::gt_x)[i] = d.col(Col::gt_y)[i] = d.col(Col::gt_theta)[i] = std::nan("");
+      if (pred(i))
+        d.col(tracks::Col::gt_x)[i] = d.col(tracks::Col::gt_y)[i] = d.col(tracks::Col::gt_theta)[i] = std::nan(
+            "");
   };
   switch (c.reference) {
     case BenchReference::gt_full: break;
@@ -505,8 +507,8 @@ CaseTrack shape_track(const DiagnosisCase& c, const sim::Scenario& sc,
     // so that the mean gap is P = 1/fix_rate_hz.
     CaseRng rng(seed, kFixStream);
     const double period = 1.0 / c.fix_rate_hz, mean_factor = std::sinh(1.2) / 1.2;
-    auto& ax = d.col(Col::aps_x);
-    auto& ay = d.col(Col::aps_y);
+    auto& ax = d.col(tracks::Col::aps_x);
+    auto& ay = d.col(tracks::Col::aps_y);
     double next = -1.0;
     for (std::size_t i = 0; i < n; ++i) {
       if (std::isnan(ax[i])) continue;
@@ -519,10 +521,10 @@ CaseTrack shape_track(const DiagnosisCase& c, const sim::Scenario& sc,
     }
   }
   if (c.odometry == BenchOdometry::wheel_rates) d.ticks_l.clear(), d.ticks_r.clear();
-  TrackData shaped = keep_rows(d, non_empty_rows(d));
-  TrackMeta& meta = shaped.meta;
-  if (shaped.col(Col::gt_x).empty()) erase_meta(meta, "sim.gt_");
-  if (shaped.col(Col::aps_x).empty()) erase_meta(meta, "sim.aps_");
+  tracks::TrackData shaped = keep_rows(d, non_empty_rows(d));
+  tracks::TrackMeta& meta = shaped.meta;
+  if (shaped.col(tracks::Col::gt_x).empty()) erase_meta(meta, "sim.gt_");
+  if (shaped.col(tracks::Col::aps_x).empty()) erase_meta(meta, "sim.aps_");
   if (c.reference == BenchReference::fixes_irregular) {
     erase_meta(meta, "sim.aps_rate_hz");
     meta.extra.emplace_back("bench.fix_mean_rate_hz", fmt::format("{:g}", c.fix_rate_hz));
@@ -531,7 +533,7 @@ CaseTrack shape_track(const DiagnosisCase& c, const sim::Scenario& sc,
   meta.extra.emplace_back("bench.case_seed", std::to_string(c.seed));
   meta.extra.emplace_back("bench.odometry", std::string(to_string(c.odometry)));
   meta.extra.emplace_back("bench.reference", std::string(to_string(c.reference)));
-  return CaseTrack{Track(std::move(shaped)), std::move(path_t), std::move(path_x), std::move(path_y)};
+  return CaseTrack{tracks::Track(std::move(shaped)), std::move(path_t), std::move(path_x), std::move(path_y)};
 }
 
 }  // namespace
@@ -541,9 +543,9 @@ CaseTrack make_case_track(const DiagnosisCase& c) {
     throw std::invalid_argument(fmt::format("case {} is a multi-recording case: make_recording_track",
                                             c.index));
   CaseTrack ct = shape_track(c, c.scenario, c.gt_gaps_s, c.seed);
-  TrackData d = ct.track.data();
+  tracks::TrackData d = ct.track.data();
   d.meta.extra.emplace_back("bench.drive", c.drive);
-  ct.track = Track(std::move(d));
+  ct.track = tracks::Track(std::move(d));
   return ct;
 }
 
@@ -553,7 +555,7 @@ CaseTrack make_recording_track(const DiagnosisCase& c, std::size_t k) {
                                             c.recordings.size(), k + 1));
   const CaseRecording& rec = c.recordings[k];
   CaseTrack ct = shape_track(c, rec.scenario, rec.gt_gaps_s, rec.seed);
-  TrackData d = ct.track.data();
+  tracks::TrackData d = ct.track.data();
   // The nominal geometry: the recording was simulated with its true one.
   const sim::RobotParams& nominal = c.scenario.robot;
   d.meta.wheel_radius_left_m = nominal.wheel_radius_left_m;
@@ -564,16 +566,16 @@ CaseTrack make_recording_track(const DiagnosisCase& c, std::size_t k) {
   d.meta.extra.emplace_back("bench.recordings", std::to_string(c.recordings.size()));
   d.meta.extra.emplace_back("bench.heldout", rec.heldout ? "1" : "0");
   d.meta.extra.emplace_back("bench.recording_seed", std::to_string(rec.seed));
-  ct.track = Track(std::move(d));
+  ct.track = tracks::Track(std::move(d));
   return ct;
 }
 
-Track without_ground_truth(const Track& track) {
-  TrackData d = track.data();
-  for (Col c : {Col::gt_x, Col::gt_y, Col::gt_theta}) d.col(c).clear();
-  TrackData out = keep_rows(d, non_empty_rows(d));
+tracks::Track without_ground_truth(const tracks::Track& track) {
+  tracks::TrackData d = track.data();
+  for (tracks::Col c : {tracks::Col::gt_x, tracks::Col::gt_y, tracks::Col::gt_theta}) d.col(c).clear();
+  tracks::TrackData out = keep_rows(d, non_empty_rows(d));
   erase_meta(out.meta, "sim.gt_");
-  return Track(std::move(out));
+  return tracks::Track(std::move(out));
 }
 
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -69,7 +69,7 @@
 #include <odotune/sim/scenario.h>
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 enum class BenchOdometry { ticks, wheel_rates, commands };
 enum class BenchReference { gt_full, gt_gaps, start_fixes, fixes, fixes_irregular };
@@ -151,7 +151,7 @@ std::uint64_t recording_seed(std::uint64_t case_seed, int k);
 DiagnosisCase draw_case(std::uint64_t seed, int index, const CaseDrawOptions& options);
 
 struct CaseTrack {
-  Track track;  // what the diagnosis sees
+  tracks::Track track;  // what the diagnosis sees
   // The true path (the simulation's ground truth, thinned to about 10 Hz),
   // for grading a slip_zone box.
   std::vector<double> path_t_s, path_x_m, path_y_m;
@@ -171,6 +171,6 @@ CaseTrack make_recording_track(const DiagnosisCase& c, std::size_t k);
 
 // `track` without its ground-truth columns (rows left empty dropped, sim.gt_*
 // metadata removed): what a known-start track's fixes give alone.
-Track without_ground_truth(const Track& track);
+tracks::Track without_ground_truth(const tracks::Track& track);
 
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -6,9 +6,9 @@
 #include <odotune/core/counter_rng.h>
 #include <odotune/sim/motion_profile.h>
 
-namespace odotune {
+namespace odotune::studies {
 
-double CaseRng::uniform() { return counter_uniform01(seed_, k_++, 0, 0, stream_); }
+double CaseRng::uniform() { return core::counter_uniform01(seed_, k_++, 0, 0, stream_); }
 double CaseRng::uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
 double CaseRng::log_uniform(double lo, double hi) { return lo * std::exp(std::log(hi / lo) * uniform()); }
 int CaseRng::index(int n) {
@@ -180,4 +180,4 @@ PathSamples commanded_path(const sim::MotionParams& motion, double step_s) {
   return p;
 }
 
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -36,7 +36,7 @@
 
 #include <odotune/sim/scenario.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 // Seeded uniform draws: the k-th draw of (seed, stream) is
 // counter_uniform01(seed, k, 0, 0, stream), so a sequence depends on its seed
@@ -89,4 +89,4 @@ struct PathSamples {
 };
 PathSamples commanded_path(const sim::MotionParams& motion, double step_s);
 
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -8,7 +8,7 @@
 
 #include <odotune/sim/effects.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 namespace {
 
@@ -246,4 +246,4 @@ CaseGrade grade_refusal(const std::vector<EffectTruth>& truth, const std::string
   return g;
 }
 
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -56,7 +56,7 @@
 #include <odotune/diagnose/diagnosis.h>
 #include <odotune/studies/diagnosis_truth.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 enum class CaseCategory { null_case, undetectable, single, two };
 std::string_view to_string(CaseCategory c);  // "null", "undetectable", "single", "two"
@@ -125,4 +125,4 @@ CaseGrade grade_case(const std::vector<EffectTruth>& truth, const diagnose::Diag
                      const TruePath& path);
 CaseGrade grade_refusal(const std::vector<EffectTruth>& truth, const std::string& message);
 
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -13,7 +13,7 @@
 #include <odotune/diagnose/window_replay.h>
 #include <odotune/sim/effects.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 namespace {
 
@@ -292,4 +292,4 @@ Detectability assess_recordings_detectability(const std::vector<DiagInput>& fit,
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::studies

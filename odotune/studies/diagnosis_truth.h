@@ -60,7 +60,7 @@
 #include <odotune/diagnose/materiality.h>
 #include <odotune/studies/diagnosis_cases.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 struct EffectTruth {
   TrueEffect effect;
@@ -118,4 +118,4 @@ Detectability assess_recordings_detectability(const std::vector<diagnose::DiagIn
                                               const std::vector<TrueEffect>& truth,
                                               const diagnose::MaterialityOptions& materiality = {});
 
-}  // namespace odotune
+}  // namespace odotune::studies

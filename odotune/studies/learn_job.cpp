@@ -17,7 +17,7 @@
 #include <odotune/studies/learned_study_outputs.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 namespace {
 
@@ -27,8 +27,9 @@ void report(const LearnProgress& progress, long done, long total) {
   if (progress) progress(done, total);
 }
 
-std::string per_step_csv(const FusionInput& in, const OdometrySeries& lstm, const OdometrySeries& kin,
-                         const PoseTrack& pl, const PoseTrack& pk) {
+std::string per_step_csv(const learned::FusionInput& in, const learned::OdometrySeries& lstm,
+                         const learned::OdometrySeries& kin, const learned::PoseTrack& pl,
+                         const learned::PoseTrack& pk) {
   const auto n = [](double v) { return std::isfinite(v) ? fmt::format("{}", v) : std::string(); };
   std::string s =
       "t_s,v_true,w_true,v_learned,w_learned,v_kinematic,w_kinematic,x_true,y_true,theta_true,x_learned,y_learned,"
@@ -42,7 +43,7 @@ std::string per_step_csv(const FusionInput& in, const OdometrySeries& lstm, cons
 }
 
 // One line of errors: "  NAME  V MAE … θ RMSE … rad".
-std::string errors_line(const char* name, const OdometryErrors& e) {
+std::string errors_line(const char* name, const learned::OdometryErrors& e) {
   std::string windows;
   if (std::isfinite(e.xy_rmse_10s))
     windows = fmt::format(" (10 s {:.3f}, 60 s {:.3f})", e.xy_rmse_10s, e.xy_rmse_60s);
@@ -52,7 +53,7 @@ std::string errors_line(const char* name, const OdometryErrors& e) {
       name, e.v.mae, e.v.rmse, e.w.mae, e.w.rmse, e.xy.rmse, windows, e.theta.rmse);
 }
 
-nlohmann::json summary_json(const LstmTrainingSummary& s) {
+nlohmann::json summary_json(const learned::LstmTrainingSummary& s) {
   const auto n = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   return {{"cost_before", n(s.initial_cost)},
           {"cost_after", n(s.final_cost)},
@@ -65,53 +66,55 @@ nlohmann::json summary_json(const LstmTrainingSummary& s) {
 
 // ---------------------------------------------------------------- shared pieces
 
-std::vector<const FusionInput*> fusion_pointers(const std::vector<FusionInput>& v) {
-  std::vector<const FusionInput*> p;
+std::vector<const learned::FusionInput*> fusion_pointers(const std::vector<learned::FusionInput>& v) {
+  std::vector<const learned::FusionInput*> p;
   for (const auto& in : v) p.push_back(&in);
   return p;
 }
 
-std::vector<FusionInput> load_fusion_inputs(const std::vector<std::string>& files, double rate_hz,
-                                            bool need_power, const char* purpose,
-                                            std::optional<OdometryInput> input, double ext_from_gt_hz) {
-  const std::vector<Track> tracks = load_tracks(files);
-  FusionInputOptions o;
+std::vector<learned::FusionInput> load_fusion_inputs(const std::vector<std::string>& files, double rate_hz,
+                                                     bool need_power, const char* purpose,
+                                                     std::optional<tracks::OdometryInput> input,
+                                                     double ext_from_gt_hz) {
+  const std::vector<tracks::Track> tracks = tracks::load_tracks(files);
+  learned::FusionInputOptions o;
   o.rate_hz = rate_hz;
   o.input = input;
   o.ext_from_gt_hz = ext_from_gt_hz;
   std::string why;
-  if (!o.IsValid(&why)) throw Failure(fmt::format("--rate-hz {}: {}", rate_hz, why));
-  std::vector<FusionInput> out;
+  if (!o.IsValid(&why)) throw core::Failure(fmt::format("--rate-hz {}: {}", rate_hz, why));
+  std::vector<learned::FusionInput> out;
   for (std::size_t k = 0; k < tracks.size(); ++k) {
     try {
-      out.push_back(build_fusion_input(tracks[k], o));
+      out.push_back(learned::build_fusion_input(tracks[k], o));
     } catch (const std::invalid_argument& e) {
-      throw Failure(fmt::format("{}: {}", files[k], e.what()));
+      throw core::Failure(fmt::format("{}: {}", files[k], e.what()));
     }
-    const FusionInput& in = out.back();
+    const learned::FusionInput& in = out.back();
     if (!in.has_gt)
-      throw Failure(fmt::format("{}: track '{}' has no ground truth (gt_x, gt_y, gt_theta); expected it {}",
-                                files[k], in.track_name, purpose));
+      throw core::Failure(
+          fmt::format("{}: track '{}' has no ground truth (gt_x, gt_y, gt_theta); expected it {}", files[k],
+                      in.track_name, purpose));
     if (need_power && !in.has_power)
-      throw Failure(fmt::format("{}: track '{}' has no motor power (power_l, power_r); expected it {}",
-                                files[k], in.track_name, purpose));
+      throw core::Failure(fmt::format("{}: track '{}' has no motor power (power_l, power_r); expected it {}",
+                                      files[k], in.track_name, purpose));
   }
   return out;
 }
 
-LstmTrainingOptions learn_training_options(std::uint64_t seed, int iterations, int threads,
-                                           LstmTrainingOptions base) {
-  LstmTrainingOptions t = base;
+learned::LstmTrainingOptions learn_training_options(std::uint64_t seed, int iterations, int threads,
+                                                    learned::LstmTrainingOptions base) {
+  learned::LstmTrainingOptions t = base;
   t.seed = seed;
   t.max_iterations = iterations;
   t.num_threads = threads;
   return t;
 }
 
-double pooled_mae(const std::vector<SeriesErrors>& e) {
+double pooled_mae(const std::vector<learned::SeriesErrors>& e) {
   double sum = 0.0;
   std::size_t n = 0;
-  for (const SeriesErrors& s : e)
+  for (const learned::SeriesErrors& s : e)
     if (s.samples > 0) sum += s.mae * static_cast<double>(s.samples), n += s.samples;
   return n > 0 ? sum / static_cast<double>(n) : NAN;
 }
@@ -120,14 +123,15 @@ LearnedModelFile load_learned_model(const std::string& path) {
   try {
     return results::read_learned_model(path);
   } catch (const std::invalid_argument& e) {
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
 }
 
-void check_model_fits(const LearnedModelFile& m, const FusionInput& in, const std::string& file,
+void check_model_fits(const LearnedModelFile& m, const learned::FusionInput& in, const std::string& file,
                       const std::string& model) {
   std::string why;
-  if (!model_fits(m.odometry, in, &why)) throw Failure(fmt::format("{}: {} (model {})", file, why, model));
+  if (!learned::model_fits(m.odometry, in, &why))
+    throw core::Failure(fmt::format("{}: {} (model {})", file, why, model));
 }
 
 // ---------------------------------------------------------------- eval
@@ -135,17 +139,18 @@ void check_model_fits(const LearnedModelFile& m, const FusionInput& in, const st
 namespace {
 
 // The steps --from and --until leave to score: [first, end).
-std::pair<std::size_t, std::size_t> scored_span(const LearnEvalRequest& r, const FusionInput& in) {
+std::pair<std::size_t, std::size_t> scored_span(const LearnEvalRequest& r, const learned::FusionInput& in) {
   std::size_t first = 0, end = in.size();
   while (r.from_s && first < end && in.t[first] < *r.from_s) ++first;
   while (r.until_s && end > first && in.t[end - 1] >= *r.until_s) --end;
   if (end - first < 2)
-    throw Failure(fmt::format("--from/--until: {} step{} of track '{}' left to score; expected at least 2",
-                              end - first, end - first == 1 ? "" : "s", in.track_name));
+    throw core::Failure(
+        fmt::format("--from/--until: {} step{} of track '{}' left to score; expected at least 2", end - first,
+                    end - first == 1 ? "" : "s", in.track_name));
   return {first, end};
 }
 
-OdometrySeries slice_series(const OdometrySeries& s, std::size_t first, std::size_t end) {
+learned::OdometrySeries slice_series(const learned::OdometrySeries& s, std::size_t first, std::size_t end) {
   const auto cut = [&](const std::vector<double>& v) {
     return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(first),
                                v.begin() + static_cast<std::ptrdiff_t>(end));
@@ -154,8 +159,9 @@ OdometrySeries slice_series(const OdometrySeries& s, std::size_t first, std::siz
 }
 
 // Static odometry variances from an MAE, as a Gaussian's: σ = MAE·√(π/2).
-std::vector<OdometryMeasurement> measured(const OdometrySeries& s, double mae_v, double mae_w) {
-  std::vector<OdometryMeasurement> m(s.v.size());
+std::vector<learned::OdometryMeasurement> measured(const learned::OdometrySeries& s, double mae_v,
+                                                   double mae_w) {
+  std::vector<learned::OdometryMeasurement> m(s.v.size());
   const double var_v = std::max(1e-8, mae_v * mae_v * std::numbers::pi / 2);
   const double var_w = std::max(1e-8, mae_w * mae_w * std::numbers::pi / 2);
   for (std::size_t k = 0; k < m.size(); ++k) m[k] = {s.v[k], s.w[k], var_v, var_w};
@@ -164,12 +170,12 @@ std::vector<OdometryMeasurement> measured(const OdometrySeries& s, double mae_v,
 
 // What the slip detector flags on the scored steps, and the learned
 // odometry's error there and elsewhere (LearnEvalOutcome::Flags).
-LearnEvalOutcome::Flags slip_flags(const FusionInput& full, const SlipDetectorModel& d,
-                                   const OdometrySeries& odo, std::size_t first, std::size_t end,
+LearnEvalOutcome::Flags slip_flags(const learned::FusionInput& full, const learned::SlipDetectorModel& d,
+                                   const learned::OdometrySeries& odo, std::size_t first, std::size_t end,
                                    nlohmann::json& j) {
   LearnEvalOutcome::Flags f;
   f.drive = d.drive;
-  SlipDetectorStepper stepper(&d);
+  learned::SlipDetectorStepper stepper(&d);
   std::size_t n_in = 0, n_out = 0;
   for (std::size_t k = 1; k < end; ++k) {
     const auto var = stepper.step(full, k);
@@ -188,7 +194,7 @@ LearnEvalOutcome::Flags slip_flags(const FusionInput& full, const SlipDetectorMo
   f.v_in = mean(f.v_in, n_in), f.w_in = mean(f.w_in, n_in);
   f.v_out = mean(f.v_out, n_out), f.w_out = mean(f.w_out, n_out);
   const auto n = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
-  j["slip_detector"] = {{"drive", std::string(to_string(d.drive))},
+  j["slip_detector"] = {{"drive", std::string(learned::to_string(d.drive))},
                         {"steps", f.steps},
                         {"flagged", f.flagged},
                         {"v_abs_error_flagged", n(f.v_in)},
@@ -201,31 +207,32 @@ LearnEvalOutcome::Flags slip_flags(const FusionInput& full, const SlipDetectorMo
 // Each odometry fused with the track's fixes (odotune/learned/pose_fusion.h), the
 // kinematic ones with the kinematic MAE of the model's validation as their
 // variance (the learned ones' where the file has none).
-void fuse_with_fixes(const LearnEvalRequest& r, const LearnedModelFile& m, const FusionInput& in,
-                     const OdometrySeries& lstm, const FusionInput* cal, LearnEvalOutcome& out,
-                     nlohmann::json& j) {
-  PoseFusionOptions o;
+void fuse_with_fixes(const LearnEvalRequest& r, const LearnedModelFile& m, const learned::FusionInput& in,
+                     const learned::OdometrySeries& lstm, const learned::FusionInput* cal,
+                     LearnEvalOutcome& out, nlohmann::json& j) {
+  learned::PoseFusionOptions o;
   o.fix_sigma_m = r.fix_sigma_m;
   o.noise.use_external = false;  // the fixes are the other sensor here
-  const LearnedOdometryModel& mo = m.odometry;
+  const learned::LearnedOdometryModel& mo = m.odometry;
   const double kv = mo.v_kinematic_mae > 0 ? mo.v_kinematic_mae : mo.v_validation_mae;
   const double kw = mo.w_kinematic_mae > 0 ? mo.w_kinematic_mae : mo.w_validation_mae;
   LearnEvalOutcome::Fused f;
   try {
-    const PoseFusionTrace tl = replay_pose_fusion(in, measured(lstm, mo.v_validation_mae, mo.w_validation_mae),
-                                                  o);
-    const PoseFusionTrace tk = replay_pose_fusion(in, measured(kinematic_odometry(in), kv, kw), o);
-    f.learned = pose_fusion_errors(in, tl);
-    f.kinematic = pose_fusion_errors(in, tk);
+    const learned::PoseFusionTrace tl = learned::replay_pose_fusion(
+        in, measured(lstm, mo.v_validation_mae, mo.w_validation_mae), o);
+    const learned::PoseFusionTrace tk = learned::replay_pose_fusion(
+        in, measured(learned::kinematic_odometry(in), kv, kw), o);
+    f.learned = learned::pose_fusion_errors(in, tl);
+    f.kinematic = learned::pose_fusion_errors(in, tk);
     f.fixes = tl.fixes;
     if (cal)
-      f.calibrated = pose_fusion_errors(
-          *cal, replay_pose_fusion(*cal, measured(kinematic_odometry(*cal), kv, kw), o));
+      f.calibrated = learned::pose_fusion_errors(
+          *cal, learned::replay_pose_fusion(*cal, measured(learned::kinematic_odometry(*cal), kv, kw), o));
   } catch (const std::invalid_argument& e) {
     out.not_fused = e.what();
     return;
   }
-  const auto block = [](const ErrorMetrics& e) {
+  const auto block = [](const objectives::ErrorMetrics& e) {
     return nlohmann::json{{"pos_rmse_m", e.rmse_m}, {"pos_mae_m", e.mae_m}, {"samples", e.samples}};
   };
   j["fused"] = {{"fixes", f.fixes}, {"learned", block(f.learned)}, {"kinematic", block(f.kinematic)}};
@@ -234,54 +241,58 @@ void fuse_with_fixes(const LearnEvalRequest& r, const LearnedModelFile& m, const
 }
 
 // The eval track laid out with the calibration file's kinematics.
-FusionInput calibrated_input(const LearnEvalRequest& r, const LearnedModelFile& m) {
-  const CalibrationFile cal = read_calibration_file(r.calibration);
+learned::FusionInput calibrated_input(const LearnEvalRequest& r, const LearnedModelFile& m) {
+  const formats::CalibrationFile cal = formats::read_calibration_file(r.calibration);
   if (cal.odometry != m.odometry.input)
-    throw Failure(fmt::format("--calibration {}: it calibrates {} odometry, the model reads {}", r.calibration,
-                              to_string(cal.odometry), to_string(m.odometry.input)));
-  FusionInputOptions o;
+    throw core::Failure(fmt::format("--calibration {}: it calibrates {} odometry, the model reads {}",
+                                    r.calibration, tracks::to_string(cal.odometry),
+                                    tracks::to_string(m.odometry.input)));
+  learned::FusionInputOptions o;
   o.rate_hz = m.odometry.rate_hz;
   o.input = m.odometry.input;
-  if (cal.odometry == OdometryInput::wheels)
+  if (cal.odometry == tracks::OdometryInput::wheels)
     o.geometry = cal.params;
   else
     o.twist = cal.twist;
   try {
-    return build_fusion_input(load_tracks({r.track}).front(), o);
+    return learned::build_fusion_input(tracks::load_tracks({r.track}).front(), o);
   } catch (const std::invalid_argument& e) {
-    throw Failure(fmt::format("{}: {}", r.track, e.what()));
+    throw core::Failure(fmt::format("{}: {}", r.track, e.what()));
   }
 }
 
 }  // namespace
 
 LearnEvalOutcome run_learn_eval(const LearnEvalRequest& r) {
-  check_output_file("--json", r.json);
-  check_output_file("--csv", r.csv);
+  core::check_output_file("--json", r.json);
+  core::check_output_file("--csv", r.csv);
   const LearnedModelFile m = load_learned_model(r.model);
-  if (!r.calibration.empty()) (void)read_calibration_file(r.calibration);  // a bad file fails before the work
-  const std::vector<FusionInput> tracks = load_fusion_inputs({r.track}, m.odometry.rate_hz, false,
-                                                             "to score the odometry against", m.odometry.input);
+  if (!r.calibration.empty())
+    (void)formats::read_calibration_file(r.calibration);  // a bad file fails before the work
+  const std::vector<learned::FusionInput> tracks = load_fusion_inputs(
+      {r.track}, m.odometry.rate_hz, false, "to score the odometry against", m.odometry.input);
   check_model_fits(m, tracks.front(), r.track, r.model);
   const auto [first, end] = scored_span(r, tracks.front());
-  const OdometrySeries lstm_full = run_learned_odometry(tracks.front(), m.odometry);
-  const FusionInput in = slice_fusion_input(tracks.front(), first, end);
-  const OdometrySeries lstm = slice_series(lstm_full, first, end), kin = kinematic_odometry(in);
-  const PoseTrack pl = dead_reckon(in, lstm.v, lstm.w), pk = dead_reckon(in, kin.v, kin.w);
+  const learned::OdometrySeries lstm_full = learned::run_learned_odometry(tracks.front(), m.odometry);
+  const learned::FusionInput in = learned::slice_fusion_input(tracks.front(), first, end);
+  const learned::OdometrySeries lstm = slice_series(lstm_full, first, end),
+                                kin = learned::kinematic_odometry(in);
+  const learned::PoseTrack pl = learned::dead_reckon(in, lstm.v, lstm.w),
+                           pk = learned::dead_reckon(in, kin.v, kin.w);
   LearnEvalOutcome out;
-  out.learned = odometry_errors(in, lstm.v, lstm.w, {}, {}, {});
-  out.kinematic = odometry_errors(in, kin.v, kin.w, {}, {}, {});
+  out.learned = learned::odometry_errors(in, lstm.v, lstm.w, {}, {}, {});
+  out.kinematic = learned::odometry_errors(in, kin.v, kin.w, {}, {}, {});
   nlohmann::json j = {{"track", in.track_name},
                       {"file", r.track},
                       {"model", r.model},
                       {"rate_hz", m.odometry.rate_hz},
-                      {"input", std::string(to_string(m.odometry.input))},
+                      {"input", std::string(tracks::to_string(m.odometry.input))},
                       {"learned", flat_errors_json(out.learned)},
                       {"kinematic", flat_errors_json(out.kinematic)}};
-  std::optional<FusionInput> cal;
+  std::optional<learned::FusionInput> cal;
   if (!r.calibration.empty()) {
-    cal = slice_fusion_input(calibrated_input(r, m), first, end);
-    out.calibrated = odometry_errors(*cal, cal->v_kin, cal->w_kin, {}, {}, {});
+    cal = learned::slice_fusion_input(calibrated_input(r, m), first, end);
+    out.calibrated = learned::odometry_errors(*cal, cal->v_kin, cal->w_kin, {}, {}, {});
     j["calibrated"] = flat_errors_json(*out.calibrated);
     j["calibration"] = r.calibration;
   }
@@ -289,8 +300,8 @@ LearnEvalOutcome run_learn_eval(const LearnEvalRequest& r) {
   if (m.detector && m.detector->flag_var_v > 0 && m.detector->input == in.input)
     out.slip = slip_flags(tracks.front(), *m.detector, lstm_full, first, end, j);
   if (first > 0 || end < tracks.front().size()) j["span_s"] = {in.t.front(), in.t.back()};
-  if (!r.csv.empty()) write_file_atomically(r.csv, per_step_csv(in, lstm, kin, pl, pk));
-  if (!r.json.empty()) write_file_atomically(r.json, j.dump(2) + "\n");
+  if (!r.csv.empty()) formats::write_file_atomically(r.csv, per_step_csv(in, lstm, kin, pl, pk));
+  if (!r.json.empty()) formats::write_file_atomically(r.json, j.dump(2) + "\n");
   out.track_name = in.track_name;
   out.file = r.track;
   out.model = r.model;
@@ -337,7 +348,7 @@ std::vector<std::string> learn_eval_lines(const LearnEvalOutcome& o) {
     l.push_back(
         fmt::format("  slip detector ({}): flags {} of {} steps ({:.1f} %); learned odometry's mean |error| "
                     "there V {:.4f} m/s, W {:.4f} rad/s, elsewhere V {:.4f}, W {:.4f}",
-                    to_string(o.slip->drive), o.slip->flagged, o.slip->steps,
+                    learned::to_string(o.slip->drive), o.slip->flagged, o.slip->steps,
                     100.0 * static_cast<double>(o.slip->flagged) /
                         static_cast<double>(std::max<std::size_t>(1, o.slip->steps)),
                     o.slip->v_in, o.slip->w_in, o.slip->v_out, o.slip->w_out));
@@ -352,10 +363,10 @@ namespace {
 
 // The fusion of a retraining run: the model's nets, its slip detector or
 // static variances from the validation MAE, retraining every r.every samples.
-LearnedFusionOptions retrain_fusion_options(const LearnRetrainRequest& r, const LearnedModelFile& m,
-                                            bool detector) {
-  LearnedFusionOptions o;
-  o.odometry = LearnedFusionOptions::Odometry::learned;
+learned::LearnedFusionOptions retrain_fusion_options(const LearnRetrainRequest& r, const LearnedModelFile& m,
+                                                     bool detector) {
+  learned::LearnedFusionOptions o;
+  o.odometry = learned::LearnedFusionOptions::Odometry::learned;
   o.detector = detector ? &*m.detector : nullptr;
   // Without a detector: a Gaussian's variance from the validation MAE, σ = MAE·√(π/2).
   o.static_var_v = std::max(1e-8,
@@ -364,23 +375,24 @@ LearnedFusionOptions retrain_fusion_options(const LearnRetrainRequest& r, const 
                             m.odometry.w_validation_mae * m.odometry.w_validation_mae * std::numbers::pi / 2);
   o.retrain.samples_per_retrain = r.every;
   o.retrain.training = learn_training_options(m.provenance.seed, r.iterations, r.threads,
-                                              default_retrain_training());
+                                              learned::default_retrain_training());
   return o;
 }
 
 // The --json document: the run's settings, each retraining, and the errors
 // with and without retraining.
-nlohmann::json retrain_json(const LearnRetrainRequest& r, const FusionInput& in, bool detector,
-                            const LearnedFusionResult& with, const LearnedFusionResult& without) {
-  const auto block = [&](const LearnedFusionResult& f) {
-    PoseTrack pose{f.filter.x, f.filter.y, f.filter.theta};
+nlohmann::json retrain_json(const LearnRetrainRequest& r, const learned::FusionInput& in, bool detector,
+                            const learned::LearnedFusionResult& with,
+                            const learned::LearnedFusionResult& without) {
+  const auto block = [&](const learned::LearnedFusionResult& f) {
+    learned::PoseTrack pose{f.filter.x, f.filter.y, f.filter.theta};
     return nlohmann::json{
-        {"odometry", flat_errors_json(odometry_only_errors(in, f.odometry))},
-        {"filter", flat_errors_json(odometry_errors(in, f.filter.v, f.filter.w, {}, {}, {}, &pose))},
+        {"odometry", flat_errors_json(studies::odometry_only_errors(in, f.odometry))},
+        {"filter", flat_errors_json(learned::odometry_errors(in, f.filter.v, f.filter.w, {}, {}, {}, &pose))},
         {"filter_healthy", f.filter.healthy}};
   };
   nlohmann::json events = nlohmann::json::array();
-  for (const RetrainEvent& e : with.retrains)
+  for (const learned::RetrainEvent& e : with.retrains)
     events.push_back({{"step", e.step},
                       {"t_s", e.t_s},
                       {"ms", 1e3 * e.seconds},
@@ -398,8 +410,8 @@ nlohmann::json retrain_json(const LearnRetrainRequest& r, const FusionInput& in,
 }
 
 // The model with its nets as retraining left them, and its provenance.
-void write_retrained_model(const LearnRetrainRequest& r, const LearnedModelFile& m, const FusionInput& in,
-                           const LearnedFusionResult& with) {
+void write_retrained_model(const LearnRetrainRequest& r, const LearnedModelFile& m,
+                           const learned::FusionInput& in, const learned::LearnedFusionResult& with) {
   LearnedModelFile out = m;
   out.odometry = with.final_model.value_or(m.odometry);
   out.provenance.retrains += static_cast<int>(with.retrains.size());
@@ -411,47 +423,48 @@ void write_retrained_model(const LearnRetrainRequest& r, const LearnedModelFile&
 }  // namespace
 
 LearnRetrainOutcome run_learn_retrain(const LearnRetrainRequest& r, const LearnProgress& progress) {
-  check_output_file("--model-out", r.model_out);
-  check_output_file("--json", r.json);
-  if (r.every < 20) throw Failure(fmt::format("--every {}: expected >= 20 samples", r.every));
-  if (r.iterations < 1) throw Failure(fmt::format("--iterations {}: expected >= 1", r.iterations));
+  core::check_output_file("--model-out", r.model_out);
+  core::check_output_file("--json", r.json);
+  if (r.every < 20) throw core::Failure(fmt::format("--every {}: expected >= 20 samples", r.every));
+  if (r.iterations < 1) throw core::Failure(fmt::format("--iterations {}: expected >= 1", r.iterations));
   const LearnedModelFile m = load_learned_model(r.model);
   const bool detector = m.detector && !r.static_covariance;
   if (!(r.ext_from_gt_hz >= 0.0 && r.ext_from_gt_hz <= 100.0))
-    throw Failure(fmt::format("--ext-from-gt {}: expected a rate in (0, 100] Hz", r.ext_from_gt_hz));
-  const std::vector<FusionInput> tracks = load_fusion_inputs({r.track}, m.odometry.rate_hz, detector,
-                                                             "(the model's slip detector reads it; or give "
-                                                             "--static-covariance)",
-                                                             m.odometry.input, r.ext_from_gt_hz);
+    throw core::Failure(fmt::format("--ext-from-gt {}: expected a rate in (0, 100] Hz", r.ext_from_gt_hz));
+  const std::vector<learned::FusionInput> tracks = load_fusion_inputs(
+      {r.track}, m.odometry.rate_hz, detector,
+      "(the model's slip detector reads it; or give "
+      "--static-covariance)",
+      m.odometry.input, r.ext_from_gt_hz);
   check_model_fits(m, tracks.front(), r.track, r.model);
   std::size_t end = tracks.front().size();
   while (r.until_s && end > 0 && tracks.front().t[end - 1] >= *r.until_s) --end;
   if (end < 2)
-    throw Failure(fmt::format("--until {}: no step of track '{}' before it", *r.until_s,
-                              tracks.front().track_name));
-  const FusionInput in = slice_fusion_input(tracks.front(), 0, end);
+    throw core::Failure(fmt::format("--until {}: no step of track '{}' before it", *r.until_s,
+                                    tracks.front().track_name));
+  const learned::FusionInput in = learned::slice_fusion_input(tracks.front(), 0, end);
   if (!in.has_ext)
-    throw Failure(fmt::format(
+    throw core::Failure(fmt::format(
         "{}: track '{}' has no external velocities (v_ext, w_ext); expected them, or --ext-from-gt HZ "
         "to derive them from its ground truth: the UKF retrains on its fused velocities",
         r.track, in.track_name));
 
-  LearnedFusionOptions o = retrain_fusion_options(r, m, detector);
+  learned::LearnedFusionOptions o = retrain_fusion_options(r, m, detector);
   report(progress, 0, 2);
-  LearnedFusionResult with, without;
+  learned::LearnedFusionResult with, without;
   try {
     o.retrain.enabled = true;
-    with = run_learned_fusion(in, &m.odometry, o);
+    with = learned::run_learned_fusion(in, &m.odometry, o);
     report(progress, 1, 2);
     o.retrain.enabled = false;
-    without = run_learned_fusion(in, &m.odometry, o);
+    without = learned::run_learned_fusion(in, &m.odometry, o);
     report(progress, 2, 2);
   } catch (const std::invalid_argument& e) {
-    throw Failure(fmt::format("learn retrain: {}", e.what()));
+    throw core::Failure(fmt::format("learn retrain: {}", e.what()));
   }
   const nlohmann::json j = retrain_json(r, in, detector, with, without);
   if (!r.model_out.empty()) write_retrained_model(r, m, in, with);
-  if (!r.json.empty()) write_file_atomically(r.json, j.dump(2) + "\n");
+  if (!r.json.empty()) formats::write_file_atomically(r.json, j.dump(2) + "\n");
 
   LearnRetrainOutcome out;
   out.track_name = in.track_name;
@@ -484,7 +497,7 @@ std::vector<std::string> learn_retrain_lines(const LearnRetrainOutcome& o) {
                     "variances below {:g}/{:g} (V/W) — the retraining gate of paper §4.2",
                     o.every, o.gate.max_filter_var_v, o.gate.max_filter_var_w, o.gate.max_odometry_var_v,
                     o.gate.max_odometry_var_w));
-  for (const RetrainEvent& e : o.retrains)
+  for (const learned::RetrainEvent& e : o.retrains)
     l.push_back(
         fmt::format("  t = {:8.2f} s (step {:5}): {:7.1f} ms; V cost {:.4g} → {:.4g} (MAE {:.4f} m/s), W cost "
                     "{:.4g} → {:.4g} (MAE {:.4f} rad/s)",
@@ -498,4 +511,4 @@ std::vector<std::string> learn_retrain_lines(const LearnRetrainOutcome& o) {
   return l;
 }
 
-}  // namespace odotune
+}  // namespace odotune::studies

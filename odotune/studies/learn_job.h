@@ -7,7 +7,7 @@
 // reads the flags, shows the progress and prints the lines. The model file is
 // odotune/results/learned_model_json.h, the JSON blocks odotune/studies/learned_study_outputs.h.
 //
-// Every function throws odotune::Failure with one line (naming the flag or
+// Every function throws core::Failure with one line (naming the flag or
 // the file) on bad requests or inputs, before long work where it can: an
 // output path whose folder does not exist, too few iterations, a track
 // without ground truth (or motor power / external velocities where needed),
@@ -30,7 +30,7 @@
 #include <odotune/learned/slip_detector.h>
 #include <odotune/results/learned_model_json.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 // Progress of a job in steps (nets trained, fusion runs).
 using LearnProgress = std::function<void(long done, long total)>;
@@ -42,20 +42,20 @@ using LearnProgress = std::function<void(long done, long total)>;
 // FusionInputOptions); every track must have ground
 // truth, and motor power when `need_power`. `purpose` ends the error line
 // ("expected it " + purpose).
-std::vector<FusionInput> load_fusion_inputs(const std::vector<std::string>& files, double rate_hz,
-                                            bool need_power, const char* purpose,
-                                            std::optional<OdometryInput> input = std::nullopt,
-                                            double ext_from_gt_hz = 0.0);
+std::vector<learned::FusionInput> load_fusion_inputs(const std::vector<std::string>& files, double rate_hz,
+                                                     bool need_power, const char* purpose,
+                                                     std::optional<tracks::OdometryInput> input = std::nullopt,
+                                                     double ext_from_gt_hz = 0.0);
 
-std::vector<const FusionInput*> fusion_pointers(const std::vector<FusionInput>& v);
+std::vector<const learned::FusionInput*> fusion_pointers(const std::vector<learned::FusionInput>& v);
 
 // `base`: a fresh training's defaults, or default_retrain_training() for refits.
-LstmTrainingOptions learn_training_options(std::uint64_t seed, int iterations, int threads,
-                                           LstmTrainingOptions base = {});
+learned::LstmTrainingOptions learn_training_options(std::uint64_t seed, int iterations, int threads,
+                                                    learned::LstmTrainingOptions base = {});
 
 // Pooled MAE of a series over several tracks (weighted by samples); NaN
 // without samples.
-double pooled_mae(const std::vector<SeriesErrors>& e);
+double pooled_mae(const std::vector<learned::SeriesErrors>& e);
 
 // results::read_learned_model with its one-line errors as Failure.
 results::LearnedModelFile load_learned_model(const std::string& path);
@@ -63,8 +63,8 @@ results::LearnedModelFile load_learned_model(const std::string& path);
 // The model and the track must describe the same robot and odometry
 // (odotune/learned/learned_odometry.h, model_fits). `file` names the track, `model`
 // the model in the error line.
-void check_model_fits(const results::LearnedModelFile& m, const FusionInput& in, const std::string& file,
-                      const std::string& model);
+void check_model_fits(const results::LearnedModelFile& m, const learned::FusionInput& in,
+                      const std::string& file, const std::string& model);
 
 // ---------------------------------------------------------------- train
 
@@ -80,29 +80,30 @@ struct LearnTrainRequest {
   double rate_hz = 10.0;         // network rate [Hz], (0, 1000]
   double previous_noise = -1.0;  // σ on the teacher-forced previous V [m/s] and W [rad/s]; < 0 = the study's
   int threads = 1;               // OpenMP threads evaluating the windows; results do not depend on it
-  std::optional<OdometryInput> input;  // --input; nullopt: each track's own (odotune/tracks/odometry_input.h)
-  LearnedTarget target =
-      LearnedTarget::correction;  // --target: the nets' output (odotune/learned/learned_odometry.h)
+  std::optional<tracks::OdometryInput>
+      input;  // --input; nullopt: each track's own (odotune/tracks/odometry_input.h)
+  learned::LearnedTarget target =
+      learned::LearnedTarget::correction;  // --target: the nets' output (odotune/learned/learned_odometry.h)
   // --validation; nullopt: chronological for the paper's nets; for
   // correction nets recordings with two tracks or more, else blocks.
-  std::optional<LearnedValidation> validation;
+  std::optional<learned::LearnedValidation> validation;
   // Correction nets (odotune/learned/odometry_selection.h): the blocks' length, the
   // folds, the early stopping's patience [iterations], the candidate
   // settings and whether to read the gyro.
-  SelectionOptions selection;
+  learned::SelectionOptions selection;
   std::string command;  // the model's provenance.created_by
 };
 
 struct LearnTrainOutcome {
   std::size_t tracks = 0, slip_tracks = 0;
-  OdometryInput input = OdometryInput::wheels;
-  LearnedTrainingSummary odometry;                      // the paper's nets
-  std::optional<SelectionSummary> selection;            // correction nets
-  std::optional<SlipTrainingSummary> detector;          // when slip tracks were given
-  SlipDrive detector_drive = SlipDrive::power;          // what its drive channels read
-  double kinematic_v_mae = 0.0, kinematic_w_mae = 0.0;  // pooled over the training tracks
-  LearnedTarget target = LearnedTarget::velocity;
-  LearnedValidation validation = LearnedValidation::chronological;
+  tracks::OdometryInput input = tracks::OdometryInput::wheels;
+  learned::LearnedTrainingSummary odometry;                       // the paper's nets
+  std::optional<learned::SelectionSummary> selection;             // correction nets
+  std::optional<learned::SlipTrainingSummary> detector;           // when slip tracks were given
+  learned::SlipDrive detector_drive = learned::SlipDrive::power;  // what its drive channels read
+  double kinematic_v_mae = 0.0, kinematic_w_mae = 0.0;            // pooled over the training tracks
+  learned::LearnedTarget target = learned::LearnedTarget::velocity;
+  learned::LearnedValidation validation = learned::LearnedValidation::chronological;
   bool v_beats_kinematic = true, w_beats_kinematic = true;  // the model's (learned_odometry.h)
   std::string model_out;
 };
@@ -141,13 +142,13 @@ struct LearnEvalOutcome {
   std::size_t steps = 0;
   double rate_hz = 0.0;                                     // the model's [Hz]
   bool v_beats_kinematic = true, w_beats_kinematic = true;  // the model's training verdict
-  OdometryErrors learned, kinematic;
-  std::optional<OdometryErrors> calibrated;  // with --calibration
+  learned::OdometryErrors learned, kinematic;
+  std::optional<learned::OdometryErrors> calibrated;  // with --calibration
   // Fused with the track's fixes: the position errors of each odometry's
   // fusion (calibrated with --calibration), the fixes fused; or why not.
   struct Fused {
-    ErrorMetrics learned, kinematic;
-    std::optional<ErrorMetrics> calibrated;
+    objectives::ErrorMetrics learned, kinematic;
+    std::optional<objectives::ErrorMetrics> calibrated;
     std::size_t fixes = 0;
   };
   std::optional<Fused> fused;
@@ -156,7 +157,7 @@ struct LearnEvalOutcome {
   // thresholds): the steps it flags, and the learned odometry's mean |error|
   // inside and outside them [m/s, rad/s].
   struct Flags {
-    SlipDrive drive = SlipDrive::power;
+    learned::SlipDrive drive = learned::SlipDrive::power;
     std::size_t steps = 0, flagged = 0;
     double v_in = 0, v_out = 0, w_in = 0, w_out = 0;
   };
@@ -196,9 +197,9 @@ struct LearnRetrainOutcome {
   int every = 0, iterations = 0;
   bool detector = false;                                    // slip-detector covariance (else static)
   bool v_beats_kinematic = true, w_beats_kinematic = true;  // the starting model's training verdict
-  RetrainOptions gate;                                      // the retraining gate's thresholds
-  std::vector<RetrainEvent> retrains;
-  OdometryErrors retrained, fixed;  // the odometry fed to the UKF, with and without retraining
+  learned::RetrainOptions gate;                             // the retraining gate's thresholds
+  std::vector<learned::RetrainEvent> retrains;
+  learned::OdometryErrors retrained, fixed;  // the odometry fed to the UKF, with and without retraining
 };
 
 // Runs the UKF over the track with online retraining, then without (progress:
@@ -209,4 +210,4 @@ LearnRetrainOutcome run_learn_retrain(const LearnRetrainRequest& request, const 
 // without retraining, the files.
 std::vector<std::string> learn_retrain_lines(const LearnRetrainOutcome& outcome);
 
-}  // namespace odotune
+}  // namespace odotune::studies

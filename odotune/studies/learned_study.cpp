@@ -14,7 +14,7 @@
 #include <odotune/sim/simulator.h>
 #include <odotune/sim/slip_episodes.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 namespace {
 
@@ -50,13 +50,13 @@ double pooled_mean_squared_error(const std::vector<const std::vector<double>*>& 
   return mean_squared_error(e, t);
 }
 
-PathSeries path_of(const PoseTrack& p) { return {p.x, p.y, p.theta}; }
-PathSeries truth_path(const FusionInput& in) { return {in.gt_x, in.gt_y, in.gt_theta}; }
+PathSeries path_of(const learned::PoseTrack& p) { return {p.x, p.y, p.theta}; }
+PathSeries truth_path(const learned::FusionInput& in) { return {in.gt_x, in.gt_y, in.gt_theta}; }
 
 // `base`: a fresh training's defaults, or default_retrain_training() for refits.
-LstmTrainingOptions training_options(const LearnedStudyOptions& o, int iterations,
-                                     LstmTrainingOptions base = {}) {
-  LstmTrainingOptions t = base;
+learned::LstmTrainingOptions training_options(const LearnedStudyOptions& o, int iterations,
+                                              learned::LstmTrainingOptions base = {}) {
+  learned::LstmTrainingOptions t = base;
   t.max_iterations = iterations;
   t.seed = o.seed;
   t.num_threads = o.threads;
@@ -64,10 +64,12 @@ LstmTrainingOptions training_options(const LearnedStudyOptions& o, int iteration
 }
 
 // The fusion of the study: UKF defaults, the given odometry and variance.
-LearnedFusionOptions fusion_options(const LearnedStudyOptions& o, LearnedFusionOptions::Odometry odometry,
-                                    const SlipDetectorModel* detector, double static_var_v, double static_var_w,
-                                    bool retrain, double gyro_var = UkfSensorNoise{}.gyro_var) {
-  LearnedFusionOptions f;
+learned::LearnedFusionOptions fusion_options(const LearnedStudyOptions& o,
+                                             learned::LearnedFusionOptions::Odometry odometry,
+                                             const learned::SlipDetectorModel* detector, double static_var_v,
+                                             double static_var_w, bool retrain,
+                                             double gyro_var = learned::UkfSensorNoise{}.gyro_var) {
+  learned::LearnedFusionOptions f;
   f.noise.gyro_var = gyro_var;
   f.odometry = odometry;
   f.detector = detector;
@@ -75,26 +77,27 @@ LearnedFusionOptions fusion_options(const LearnedStudyOptions& o, LearnedFusionO
   f.static_var_w = static_var_w;
   f.retrain.enabled = retrain;
   f.retrain.samples_per_retrain = o.samples_per_retrain;
-  f.retrain.training = training_options(o, o.retrain_iterations, default_retrain_training());
+  f.retrain.training = training_options(o, o.retrain_iterations, learned::default_retrain_training());
   return f;
 }
 
-Table3Row table3_row(const std::string& name, const FusionInput& in, const LearnedFusionResult& r) {
+Table3Row table3_row(const std::string& name, const learned::FusionInput& in,
+                     const learned::LearnedFusionResult& r) {
   Table3Row row;
   row.name = name;
   row.healthy = r.filter.healthy;
-  PoseTrack pose{r.filter.x, r.filter.y, r.filter.theta};
-  row.filter = odometry_errors(in, r.filter.v, r.filter.w, r.filter.var_v, r.filter.var_w, r.filter.cov_vw,
-                               &pose);
-  row.odometry = odometry_errors(in, r.odometry.v, r.odometry.w, r.odo_var_v, r.odo_var_w, {});
+  learned::PoseTrack pose{r.filter.x, r.filter.y, r.filter.theta};
+  row.filter = learned::odometry_errors(in, r.filter.v, r.filter.w, r.filter.var_v, r.filter.var_w,
+                                        r.filter.cov_vw, &pose);
+  row.odometry = learned::odometry_errors(in, r.odometry.v, r.odometry.w, r.odo_var_v, r.odo_var_w, {});
   row.path = path_of(pose);
   row.odo_var_v = r.odo_var_v;
   row.odo_var_w = r.odo_var_w;
   return row;
 }
 
-Table2Row table2_row(const std::string& name, const FusionInput& in, const FusionInput& after,
-                     std::size_t change_step, const OdometrySeries& odo) {
+Table2Row table2_row(const std::string& name, const learned::FusionInput& in, const learned::FusionInput& after,
+                     std::size_t change_step, const learned::OdometrySeries& odo) {
   Table2Row row;
   row.name = name;
   row.whole = odometry_only_errors(in, odo);
@@ -127,22 +130,23 @@ void check_role(const sim::Scenario& s, const char* role, bool power, bool slip,
 // 1. Simulate: the five roles' tracks (seeds options.seed + 0..4) as fusion
 // inputs in kLearnedScenarioRoles order; `slip_eval_episodes` gets the
 // slip_eval track's episodes.
-std::vector<FusionInput> simulate_roles(const LearnedStudyScenarios& scenarios,
-                                        const LearnedStudyOptions& options, const FusionInputOptions& fo,
-                                        Stage& stage, LearnedStudy& out,
-                                        std::vector<sim::SlipEpisode>& slip_eval_episodes) {
+std::vector<learned::FusionInput> simulate_roles(const LearnedStudyScenarios& scenarios,
+                                                 const LearnedStudyOptions& options,
+                                                 const learned::FusionInputOptions& fo, Stage& stage,
+                                                 LearnedStudy& out,
+                                                 std::vector<sim::SlipEpisode>& slip_eval_episodes) {
   const sim::Scenario* roles[] = {&scenarios.learn, &scenarios.eval, &scenarios.step, &scenarios.slip,
                                   &scenarios.slip_eval};
-  std::vector<FusionInput> inputs;
+  std::vector<learned::FusionInput> inputs;
   for (std::size_t i = 0; i < 5; ++i) {
     stage.next(fmt::format("simulating {}", roles[i]->name));
     sim::Scenario s = *roles[i];
     s.seed = options.seed + i;
-    const Track track = sim::simulate(s);
+    const tracks::Track track = sim::simulate(s);
     out.scenario_names.push_back(roles[i]->name);
     out.track_names.push_back(track.name());
     try {
-      inputs.push_back(build_fusion_input(track, fo));
+      inputs.push_back(learned::build_fusion_input(track, fo));
     } catch (const std::invalid_argument& e) {
       throw std::invalid_argument(fmt::format("{} scenario '{}': {}", kLearnedScenarioRoles[i], roles[i]->name,
                                               e.what()));
@@ -157,12 +161,12 @@ std::vector<FusionInput> simulate_roles(const LearnedStudyScenarios& scenarios,
 
 // The extra drives of the slip route, with random episode layouts; records
 // every slip drive (the scenario's own first) in out.slip_drives.
-std::vector<FusionInput> simulate_extra_slip_drives(const LearnedStudyScenarios& scenarios,
-                                                    const LearnedStudyOptions& options,
-                                                    const FusionInputOptions& fo, Stage& stage,
-                                                    LearnedStudy& out) {
+std::vector<learned::FusionInput> simulate_extra_slip_drives(const LearnedStudyScenarios& scenarios,
+                                                             const LearnedStudyOptions& options,
+                                                             const learned::FusionInputOptions& fo,
+                                                             Stage& stage, LearnedStudy& out) {
   out.slip_drives.push_back({options.seed + 3, scenarios.slip.slip_episodes});
-  std::vector<FusionInput> extra;
+  std::vector<learned::FusionInput> extra;
   const sim::MotionProfile route(scenarios.slip.motion);
   for (int j = 1; j < options.slip_drives; ++j) {
     sim::Scenario s = scenarios.slip;
@@ -176,47 +180,47 @@ std::vector<FusionInput> simulate_extra_slip_drives(const LearnedStudyScenarios&
                       "for a random slip episode (odotune/sim/random_slip.h)",
                       scenarios.slip.name));
     out.slip_drives.push_back({s.seed, s.slip_episodes});
-    extra.push_back(build_fusion_input(sim::simulate(s), fo));
+    extra.push_back(learned::build_fusion_input(sim::simulate(s), fo));
   }
   return extra;
 }
 
 // 2. Train the velocity nets on `learn` (and the kinematic odometry's MAE
 // there, for comparison).
-void train_velocity_nets(const FusionInput& learn, const LearnedStudyOptions& options, Stage& stage,
+void train_velocity_nets(const learned::FusionInput& learn, const LearnedStudyOptions& options, Stage& stage,
                          LearnedStudy& out) {
   stage.next("training the velocity nets");
-  LearnedTrainingOptions lo;
+  learned::LearnedTrainingOptions lo;
   lo.training = training_options(options, options.iterations);
   lo.previous_noise_v = options.previous_noise_v;
   lo.previous_noise_w = options.previous_noise_w;
-  out.model = train_learned_odometry({&learn}, lo, &out.training.odometry);
-  const OdometrySeries learn_kin = kinematic_odometry(learn);
-  out.training.kinematic_v_mae = series_errors(learn_kin.v, learn.v_true, {}).mae;
-  out.training.kinematic_w_mae = series_errors(learn_kin.w, learn.w_true, {}).mae;
+  out.model = learned::train_learned_odometry({&learn}, lo, &out.training.odometry);
+  const learned::OdometrySeries learn_kin = learned::kinematic_odometry(learn);
+  out.training.kinematic_v_mae = learned::series_errors(learn_kin.v, learn.v_true, {}).mae;
+  out.training.kinematic_w_mae = learned::series_errors(learn_kin.w, learn.w_true, {}).mae;
 }
 
 // The slip detector, trained on the slip drives; fills the nets' and the
 // kinematic odometry on each drive.
-void train_detector(const std::vector<const FusionInput*>& slips, const LearnedStudyOptions& options,
-                    Stage& stage, LearnedStudy& out, std::vector<OdometrySeries>& slip_lstm,
-                    std::vector<OdometrySeries>& slip_kin) {
+void train_detector(const std::vector<const learned::FusionInput*>& slips, const LearnedStudyOptions& options,
+                    Stage& stage, LearnedStudy& out, std::vector<learned::OdometrySeries>& slip_lstm,
+                    std::vector<learned::OdometrySeries>& slip_kin) {
   stage.next("training the slip detector");
-  for (const FusionInput* in : slips) {
-    slip_lstm.push_back(run_learned_odometry(*in, out.model));
-    slip_kin.push_back(kinematic_odometry(*in));
+  for (const learned::FusionInput* in : slips) {
+    slip_lstm.push_back(learned::run_learned_odometry(*in, out.model));
+    slip_kin.push_back(learned::kinematic_odometry(*in));
   }
-  SlipTrainingOptions so;
+  learned::SlipTrainingOptions so;
   so.training = training_options(options, options.iterations);
   so.stride = options.slip_stride;
-  out.detector = train_slip_detector(slips, slip_lstm, so, &out.training.detector);
+  out.detector = learned::train_slip_detector(slips, slip_lstm, so, &out.training.detector);
 }
 
 // 3. Static variances, pooled over the detector's training drives; throws
 // when one is not finite and > 0.
-void set_static_variances(const std::vector<const FusionInput*>& slips,
-                          const std::vector<OdometrySeries>& slip_lstm,
-                          const std::vector<OdometrySeries>& slip_kin, const std::string& slip_name,
+void set_static_variances(const std::vector<const learned::FusionInput*>& slips,
+                          const std::vector<learned::OdometrySeries>& slip_lstm,
+                          const std::vector<learned::OdometrySeries>& slip_kin, const std::string& slip_name,
                           LearnedStudy& out) {
   std::array<std::vector<const std::vector<double>*>, 6> series;  // lstm v, w; kin v, w; true v, w
   std::vector<const std::vector<double>*> gyro, gyro_truth;
@@ -244,21 +248,21 @@ void set_static_variances(const std::vector<const FusionInput*>& slips,
 }
 
 // 4. Table 1: the nets' and the kinematic odometry on the evaluation track.
-void table1(const FusionInput& eval, Stage& stage, LearnedStudy& out) {
+void table1(const learned::FusionInput& eval, Stage& stage, LearnedStudy& out) {
   stage.next("Table 1: odometry on the evaluation track");
   Table1Result& t = out.table1;
   t.track = eval.track_name;
-  const OdometrySeries lstm = run_learned_odometry(eval, out.model);
-  const OdometrySeries kin = kinematic_odometry(eval);
-  t.rows = {{"LSTM odometry", odometry_only_errors(eval, lstm)},
+  const learned::OdometrySeries lstm = learned::run_learned_odometry(eval, out.model);
+  const learned::OdometrySeries kin = learned::kinematic_odometry(eval);
+  t.rows = {{"LSTM odometry", studies::odometry_only_errors(eval, lstm)},
             {"Traditional odometry", odometry_only_errors(eval, kin)}};
   t.truth = truth_path(eval);
-  t.lstm = path_of(dead_reckon(eval, lstm.v, lstm.w));
-  t.traditional = path_of(dead_reckon(eval, kin.v, kin.w));
+  t.lstm = path_of(learned::dead_reckon(eval, lstm.v, lstm.w));
+  t.traditional = path_of(learned::dead_reckon(eval, kin.v, kin.w));
 }
 
 // Table 2's record of one retraining of the nets.
-RetrainRecord retrain_record(const RetrainEvent& e) {
+RetrainRecord retrain_record(const learned::RetrainEvent& e) {
   RetrainRecord rec;
   rec.step = e.step;
   rec.t_s = e.t_s;
@@ -276,8 +280,8 @@ RetrainRecord retrain_record(const RetrainEvent& e) {
 
 // 5. Table 2: the nets with and without retraining, and the kinematic
 // odometry, on the step track (whole, and after the radius change).
-void table2(const FusionInput& step, const sim::Scenario& step_scenario, const LearnedStudyOptions& options,
-            Stage& stage, LearnedStudy& out) {
+void table2(const learned::FusionInput& step, const sim::Scenario& step_scenario,
+            const LearnedStudyOptions& options, Stage& stage, LearnedStudy& out) {
   Table2Result& t = out.table2;
   t.track = step.track_name;
   t.t_s = step.t;
@@ -290,18 +294,18 @@ void table2(const FusionInput& step, const sim::Scenario& step_scenario, const L
     throw std::invalid_argument(fmt::format("step scenario '{}': the radius change at {} s is not inside the "
                                             "track (which ends at {} s)",
                                             step_scenario.name, t.change_t_s, step.t.back()));
-  const FusionInput after = slice_fusion_input(step, t.change_step);
-  const SlipDetectorModel* det = step.has_power ? &out.detector : nullptr;
-  using Odo = LearnedFusionOptions::Odometry;
+  const learned::FusionInput after = slice_fusion_input(step, t.change_step);
+  const learned::SlipDetectorModel* det = step.has_power ? &out.detector : nullptr;
+  using Odo = learned::LearnedFusionOptions::Odometry;
 
   stage.next("Table 2: LSTM with retraining");
-  const LearnedFusionResult re = run_learned_fusion(
+  const learned::LearnedFusionResult re = learned::run_learned_fusion(
       step, &out.model,
       fusion_options(options, Odo::learned, det, out.static_var_lstm_v, out.static_var_lstm_w, true));
   Table2Row r = table2_row("LSTM retraining", step, after, t.change_step, re.odometry);
   r.retrains = static_cast<int>(re.retrains.size());
   double ms = 0.0;
-  for (const RetrainEvent& e : re.retrains) {
+  for (const learned::RetrainEvent& e : re.retrains) {
     const RetrainRecord rec = retrain_record(e);
     ms += rec.ms;
     t.retrains.push_back(rec);
@@ -310,28 +314,29 @@ void table2(const FusionInput& step, const sim::Scenario& step_scenario, const L
   t.rows.push_back(std::move(r));
 
   stage.next("Table 2: LSTM without retraining");
-  const LearnedFusionResult no = run_learned_fusion(
+  const learned::LearnedFusionResult no = learned::run_learned_fusion(
       step, &out.model,
       fusion_options(options, Odo::learned, det, out.static_var_lstm_v, out.static_var_lstm_w, false));
   t.rows.push_back(table2_row("LSTM no retraining", step, after, t.change_step, no.odometry));
 
   stage.next("Table 2: traditional odometry");
   // The kinematic odometry does not depend on the filter.
-  t.rows.push_back(table2_row("Traditional odometry", step, after, t.change_step, kinematic_odometry(step)));
+  t.rows.push_back(table2_row("Traditional odometry", step, after, t.change_step,
+                              learned::kinematic_odometry(step)));
 }
 
 // 6. Table 3: the UKF fusing the nets with variable or static covariance, and
 // the kinematic odometry with static covariance, on the slip evaluation track.
-void table3(const FusionInput& slip_eval, const std::vector<sim::SlipEpisode>& episodes,
+void table3(const learned::FusionInput& slip_eval, const std::vector<sim::SlipEpisode>& episodes,
             const LearnedStudyOptions& options, Stage& stage, LearnedStudy& out) {
   Table3Result& t = out.table3;
   t.track = slip_eval.track_name;
   t.t_s = slip_eval.t;
   t.truth = truth_path(slip_eval);
   t.episodes = episodes;
-  using Odo = LearnedFusionOptions::Odometry;
+  using Odo = learned::LearnedFusionOptions::Odometry;
   stage.next("Table 3: LSTM + variable covariance");
-  const LearnedFusionResult var = run_learned_fusion(
+  const learned::LearnedFusionResult var = learned::run_learned_fusion(
       slip_eval, &out.model,
       fusion_options(options, Odo::learned, &out.detector, out.static_var_lstm_v, out.static_var_lstm_w, false,
                      out.static_var_gyro));
@@ -342,14 +347,14 @@ void table3(const FusionInput& slip_eval, const std::vector<sim::SlipEpisode>& e
   for (double& e : t.lstm_sq_error_w) e *= e;
 
   stage.next("Table 3: traditional + static covariance");
-  const LearnedFusionResult kin = run_learned_fusion(slip_eval, nullptr,
-                                                     fusion_options(options, Odo::kinematic, nullptr,
-                                                                    out.static_var_kin_v, out.static_var_kin_w,
-                                                                    false, out.static_var_gyro));
+  const learned::LearnedFusionResult kin = learned::run_learned_fusion(
+      slip_eval, nullptr,
+      fusion_options(options, Odo::kinematic, nullptr, out.static_var_kin_v, out.static_var_kin_w, false,
+                     out.static_var_gyro));
   t.rows.push_back(table3_row("Traditional odometry + static covariance", slip_eval, kin));
 
   stage.next("Table 3: LSTM + static covariance");
-  const LearnedFusionResult fixed = run_learned_fusion(
+  const learned::LearnedFusionResult fixed = learned::run_learned_fusion(
       slip_eval, &out.model,
       fusion_options(options, Odo::learned, nullptr, out.static_var_lstm_v, out.static_var_lstm_w, false,
                      out.static_var_gyro));
@@ -360,20 +365,21 @@ void table3(const FusionInput& slip_eval, const std::vector<sim::SlipEpisode>& e
 
 bool LearnedStudyOptions::IsValid(std::string* why) const {
   if (iterations < 1 || iterations > 10000)
-    return invalid(why, fmt::format("iterations = {} must be in 1..10000", iterations));
+    return core::invalid(why, fmt::format("iterations = {} must be in 1..10000", iterations));
   if (retrain_iterations < 1 || retrain_iterations > 10000)
-    return invalid(why, fmt::format("retrain_iterations = {} must be in 1..10000", retrain_iterations));
+    return core::invalid(why, fmt::format("retrain_iterations = {} must be in 1..10000", retrain_iterations));
   if (samples_per_retrain < 20 || samples_per_retrain > 100000)
-    return invalid(why, fmt::format("samples_per_retrain = {} must be in 20..100000", samples_per_retrain));
+    return core::invalid(why,
+                         fmt::format("samples_per_retrain = {} must be in 20..100000", samples_per_retrain));
   if (!(rate_hz > 0.0 && rate_hz <= 1000.0))
-    return invalid(why, fmt::format("rate_hz = {} must be in (0, 1000]", rate_hz));
+    return core::invalid(why, fmt::format("rate_hz = {} must be in (0, 1000]", rate_hz));
   if (!(previous_noise_v >= 0.0 && std::isfinite(previous_noise_v)) ||
       !(previous_noise_w >= 0.0 && std::isfinite(previous_noise_w)))
-    return invalid(why, "previous_noise_v/_w must be finite and >= 0");
+    return core::invalid(why, "previous_noise_v/_w must be finite and >= 0");
   if (slip_drives < 1 || slip_drives > 20)
-    return invalid(why, fmt::format("slip_drives = {} must be in 1..20", slip_drives));
-  if (slip_stride < 1) return invalid(why, fmt::format("slip_stride = {} must be >= 1", slip_stride));
-  if (threads < 1) return invalid(why, fmt::format("threads = {} must be >= 1", threads));
+    return core::invalid(why, fmt::format("slip_drives = {} must be in 1..20", slip_drives));
+  if (slip_stride < 1) return core::invalid(why, fmt::format("slip_stride = {} must be >= 1", slip_stride));
+  if (threads < 1) return core::invalid(why, fmt::format("threads = {} must be >= 1", threads));
   return true;
 }
 
@@ -385,12 +391,12 @@ void check_learned_scenarios(const LearnedStudyScenarios& s) {
   check_role(s.slip_eval, "slip_eval", true, true, true, false);
 }
 
-FusionInput slice_fusion_input(const FusionInput& in, std::size_t first) {
+learned::FusionInput slice_fusion_input(const learned::FusionInput& in, std::size_t first) {
   if (first == 0 || first + 1 > in.size())
     throw std::invalid_argument(
         fmt::format("track '{}': cannot take steps {}.. of {}: fewer than 2 steps remain", in.track_name, first,
                     in.size()));
-  FusionInput out = in;
+  learned::FusionInput out = in;
   const std::size_t from = first - 1;
   for (std::vector<double>* v : {&out.t, &out.dticks_l, &out.dticks_r, &out.v_kin, &out.w_kin, &out.power_l,
                                  &out.power_r, &out.v_ext, &out.w_ext, &out.v_ext_var, &out.w_ext_var,
@@ -413,8 +419,9 @@ std::vector<double> slice_series(const std::vector<double>& v, std::size_t first
   return out;
 }
 
-OdometryErrors odometry_only_errors(const FusionInput& in, const OdometrySeries& odo) {
-  return odometry_errors(in, odo.v, odo.w, {}, {}, {});
+learned::OdometryErrors odometry_only_errors(const learned::FusionInput& in,
+                                             const learned::OdometrySeries& odo) {
+  return learned::odometry_errors(in, odo.v, odo.w, {}, {}, {});
 }
 
 std::vector<double> abs_errors(const std::vector<double>& est, const std::vector<double>& truth) {
@@ -425,7 +432,7 @@ std::vector<double> abs_errors(const std::vector<double>& est, const std::vector
 }
 
 double mean_squared_error(const std::vector<double>& est, const std::vector<double>& truth) {
-  const SeriesErrors e = series_errors(est, truth, {});
+  const learned::SeriesErrors e = learned::series_errors(est, truth, {});
   return e.samples > 0 ? e.rmse * e.rmse : kNaN;
 }
 
@@ -439,18 +446,19 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
 
   LearnedStudy out;
   out.options = options;
-  FusionInputOptions fo;
+  learned::FusionInputOptions fo;
   fo.rate_hz = options.rate_hz;
   std::vector<sim::SlipEpisode> slip_eval_episodes;
-  const std::vector<FusionInput> inputs = simulate_roles(scenarios, options, fo, stage, out,
-                                                         slip_eval_episodes);
-  const FusionInput &learn = inputs[0], &eval = inputs[1], &step = inputs[2], &slip_eval = inputs[4];
-  const std::vector<FusionInput> extra = simulate_extra_slip_drives(scenarios, options, fo, stage, out);
-  std::vector<const FusionInput*> slips = {&inputs[3]};
-  for (const FusionInput& in : extra) slips.push_back(&in);
+  const std::vector<learned::FusionInput> inputs = simulate_roles(scenarios, options, fo, stage, out,
+                                                                  slip_eval_episodes);
+  const learned::FusionInput &learn = inputs[0], &eval = inputs[1], &step = inputs[2], &slip_eval = inputs[4];
+  const std::vector<learned::FusionInput> extra = simulate_extra_slip_drives(scenarios, options, fo, stage,
+                                                                             out);
+  std::vector<const learned::FusionInput*> slips = {&inputs[3]};
+  for (const learned::FusionInput& in : extra) slips.push_back(&in);
 
   train_velocity_nets(learn, options, stage, out);
-  std::vector<OdometrySeries> slip_lstm, slip_kin;
+  std::vector<learned::OdometrySeries> slip_lstm, slip_kin;
   train_detector(slips, options, stage, out, slip_lstm, slip_kin);
   set_static_variances(slips, slip_lstm, slip_kin, scenarios.slip.name, out);
   table1(eval, stage, out);
@@ -461,4 +469,4 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
   return out;
 }
 
-}  // namespace odotune
+}  // namespace odotune::studies

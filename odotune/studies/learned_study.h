@@ -51,7 +51,7 @@
 #include <odotune/learned/slip_detector.h>
 #include <odotune/sim/scenario.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 struct LearnedStudyOptions {
   std::uint64_t seed = 1;       // scenario i simulated with seed + i; Ceres initial weights
@@ -94,7 +94,7 @@ struct PathSeries {
 
 struct ErrorRow {
   std::string name;  // the paper's row label
-  OdometryErrors errors;
+  learned::OdometryErrors errors;
 };
 
 // ---------------------------------------------------------------- Table 1
@@ -106,10 +106,10 @@ struct Table1Result {
 
 // ---------------------------------------------------------------- Table 2
 struct Table2Row {
-  std::string name;      // "LSTM retraining", "LSTM no retraining", "Traditional odometry"
-  OdometryErrors whole;  // the whole track
-  OdometryErrors after;  // from the radius change on (pose re-reckoned from the true pose there)
-  int retrains = 0;      // online refits
+  std::string name;               // "LSTM retraining", "LSTM no retraining", "Traditional odometry"
+  learned::OdometryErrors whole;  // the whole track
+  learned::OdometryErrors after;  // from the radius change on (pose re-reckoned from the true pose there)
+  int retrains = 0;               // online refits
   double ms_per_retrain = std::numeric_limits<double>::quiet_NaN();  // mean wall time of one refit (timing)
   std::vector<double> v_abs_error, w_abs_error;  // |odometry − truth| per step (NaN without truth)
 };
@@ -137,9 +137,9 @@ struct Table2Result {
 
 // ---------------------------------------------------------------- Table 3
 struct Table3Row {
-  std::string name;         // "LSTM odometry + variable covariance", ...
-  OdometryErrors filter;    // UKF output (V, W and its integrated pose); v/w.nees = NEES_Filter
-  OdometryErrors odometry;  // the odometry fed to it with its variance; v/w.nees = NEES_Odom
+  std::string name;                  // "LSTM odometry + variable covariance", ...
+  learned::OdometryErrors filter;    // UKF output (V, W and its integrated pose); v/w.nees = NEES_Filter
+  learned::OdometryErrors odometry;  // the odometry fed to it with its variance; v/w.nees = NEES_Odom
   bool healthy = true;
   PathSeries path;                           // UKF pose
   std::vector<double> odo_var_v, odo_var_w;  // the odometry variance fed [(m/s)², (rad/s)²]
@@ -155,8 +155,8 @@ struct Table3Result {
 };
 
 struct TrainingRecord {
-  LearnedTrainingSummary odometry;
-  SlipTrainingSummary detector;
+  learned::LearnedTrainingSummary odometry;
+  learned::SlipTrainingSummary detector;
   double kinematic_v_mae = 0.0, kinematic_w_mae = 0.0;  // on the learn track, for comparison
 };
 
@@ -170,15 +170,15 @@ struct LearnedStudy {
     std::vector<sim::SlipEpisode> episodes;
   };
   std::vector<SlipDrive> slip_drives;
-  LearnedOdometryModel model;
-  SlipDetectorModel detector;
+  learned::LearnedOdometryModel model;
+  learned::SlipDetectorModel detector;
   TrainingRecord training;
   double static_var_lstm_v = 0.0, static_var_lstm_w = 0.0;  // step 3 [(m/s)², (rad/s)²]
   double static_var_kin_v = 0.0, static_var_kin_w = 0.0;
   // The gyro's static variance in Table 3's fusion: its mean squared error
   // (gyro_z − true W) over the detector's training drives; the UKF default
   // (UkfSensorNoise::gyro_var) when they have no gyro [(rad/s)²].
-  double static_var_gyro = UkfSensorNoise{}.gyro_var;
+  double static_var_gyro = learned::UkfSensorNoise{}.gyro_var;
   Table1Result table1;
   Table2Result table2;
   Table3Result table3;
@@ -198,12 +198,13 @@ LearnedStudy run_learned_study(const LearnedStudyScenarios& scenarios, const Lea
 // slice = step first − 1 of `in`, its per-step values zeroed as build_fusion_input
 // does for step 0), so that odometry_errors re-reckons the pose from the true
 // pose there. Throws std::invalid_argument when fewer than 2 steps remain.
-FusionInput slice_fusion_input(const FusionInput& in, std::size_t first);
+learned::FusionInput slice_fusion_input(const learned::FusionInput& in, std::size_t first);
 // The same slice of a per-step series.
 std::vector<double> slice_series(const std::vector<double>& v, std::size_t first);
 
 // Errors of an odometry series alone (pose dead-reckoned from it).
-OdometryErrors odometry_only_errors(const FusionInput& in, const OdometrySeries& odo);
+learned::OdometryErrors odometry_only_errors(const learned::FusionInput& in,
+                                             const learned::OdometrySeries& odo);
 
 // |est − truth| per step; NaN where either is not finite.
 std::vector<double> abs_errors(const std::vector<double>& est, const std::vector<double>& truth);
@@ -212,4 +213,4 @@ std::vector<double> abs_errors(const std::vector<double>& est, const std::vector
 // NaN without samples.
 double mean_squared_error(const std::vector<double>& est, const std::vector<double>& truth);
 
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -11,7 +11,7 @@
 #include <odotune/results/learned_model_json.h>
 #include <odotune/sim/slip_episodes.h>
 
-namespace odotune {
+namespace odotune::studies {
 namespace fs = std::filesystem;
 
 namespace {
@@ -49,7 +49,7 @@ const char* metric_csv(Metric m) {
 // One method's values of one metric per column (NaN: does not apply).
 using Values = std::array<double, kColumns>;
 
-Values values_of(const OdometryErrors& e, Metric m) {
+Values values_of(const learned::OdometryErrors& e, Metric m) {
   switch (m) {
     case Metric::mae: return {e.v.mae, e.w.mae, e.xy.mae, e.theta.mae};
     case Metric::rmse: return {e.v.rmse, e.w.rmse, e.xy.rmse, e.theta.rmse};
@@ -124,7 +124,7 @@ MethodValues table1_method(const ErrorRow& r) {
 }
 
 MethodValues table2_method(const Table2Row& r, bool after) {
-  const OdometryErrors& e = after ? r.after : r.whole;
+  const learned::OdometryErrors& e = after ? r.after : r.whole;
   return {r.name,
           {{Metric::mae, values_of(e, Metric::mae)},
            {Metric::rmse, values_of(e, Metric::rmse)},
@@ -144,7 +144,7 @@ MethodValues table3_method(const Table3Row& r) {
 
 nlohmann::json num_json(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
-nlohmann::json series_json(const SeriesErrors& s) {
+nlohmann::json series_json(const learned::SeriesErrors& s) {
   return {{"mae", num_json(s.mae)},
           {"rmse", num_json(s.rmse)},
           {"r2", num_json(s.r2)},
@@ -152,7 +152,7 @@ nlohmann::json series_json(const SeriesErrors& s) {
           {"samples", s.samples}};
 }
 
-nlohmann::json net_summary_json(const LstmTrainingSummary& s) {
+nlohmann::json net_summary_json(const learned::LstmTrainingSummary& s) {
   return {{"iterations", s.iterations},
           {"train_mae", num_json(s.train_mae)},
           {"validation_mae", num_json(s.validation_mae)},
@@ -258,7 +258,7 @@ void paths_figure(const LearnedStudy& s, const fs::path& stem) {
 
 }  // namespace
 
-nlohmann::json errors_json(const OdometryErrors& e) {
+nlohmann::json errors_json(const learned::OdometryErrors& e) {
   return {{"v", series_json(e.v)},
           {"w", series_json(e.w)},
           {"xy", series_json(e.xy)},
@@ -266,7 +266,7 @@ nlohmann::json errors_json(const OdometryErrors& e) {
           {"nees_vw", num_json(e.nees_vw)}};
 }
 
-nlohmann::json flat_errors_json(const OdometryErrors& e) {
+nlohmann::json flat_errors_json(const learned::OdometryErrors& e) {
   return {{"v_mae", num_json(e.v.mae)},
           {"w_mae", num_json(e.w.mae)},
           {"v_rmse", num_json(e.v.rmse)},
@@ -415,7 +415,7 @@ std::vector<fs::path> write_learned_outputs(const LearnedStudy& s, const Learned
                                             const fs::path& dir) {
   std::vector<fs::path> files;
   const auto text = [&](const std::string& name, const std::string& content) {
-    write_atomically(dir / name, "study output", content);
+    core::write_atomically(dir / name, "study output", content);
     files.push_back(dir / name);
   };
   std::string setup = fmt::format(
@@ -481,4 +481,4 @@ std::vector<fs::path> write_learned_outputs(const LearnedStudy& s, const Learned
   return files;
 }
 
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -26,7 +26,7 @@
 #include <odotune/results/report_tables.h>
 #include <odotune/studies/learned_study.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 // What the command knows beyond the results, for the Markdown's setup.
 struct LearnedStudyContext {
@@ -36,12 +36,12 @@ struct LearnedStudyContext {
 
 // {"v": {mae, rmse, r2, nees, samples}, "w": …, "xy": …, "theta": …, "nees_vw"}
 // (NaN → null).
-nlohmann::json errors_json(const OdometryErrors& e);
+nlohmann::json errors_json(const learned::OdometryErrors& e);
 // The flat block of `learn eval`: v_mae, w_mae, v_rmse, w_rmse, v_r2, w_r2,
 // pos_mae_m, pos_rmse_m, pos_r2, pos_rmse_10s_m, pos_rmse_60s_m (dead
 // reckoning restarted every 10 s and 60 s; null for a filter's pose),
 // theta_mae_rad, theta_rmse_rad, samples.
-nlohmann::json flat_errors_json(const OdometryErrors& e);
+nlohmann::json flat_errors_json(const learned::OdometryErrors& e);
 
 // The tables as text (Markdown cells: best value per column and metric in
 // bold; "–" where a metric does not apply).
@@ -66,4 +66,4 @@ nlohmann::json learned_results_json(const LearnedStudy& s, const LearnedStudyCon
 std::vector<std::filesystem::path> write_learned_outputs(const LearnedStudy& s, const LearnedStudyContext& c,
                                                          const std::filesystem::path& dir);
 
-}  // namespace odotune
+}  // namespace odotune::studies

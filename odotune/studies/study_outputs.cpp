@@ -9,7 +9,7 @@
 #include <odotune/core/atomic_file.h>
 #include <odotune/results/calibration_figures.h>
 
-namespace odotune {
+namespace odotune::studies {
 namespace fs = std::filesystem;
 
 namespace {
@@ -55,7 +55,7 @@ Steps change_points(const std::vector<double>& t, const std::vector<double>& v) 
 
 void write_text(const fs::path& p, std::string_view what, const std::string& text,
                 std::vector<fs::path>* files) {
-  write_atomically(p, what, text);
+  core::write_atomically(p, what, text);
   files->push_back(p);
 }
 
@@ -235,4 +235,4 @@ std::vector<fs::path> write_calibration_outputs(const CalibrationStudy& s, const
   return files;
 }
 
-}  // namespace odotune
+}  // namespace odotune::studies

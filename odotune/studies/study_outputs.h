@@ -18,7 +18,7 @@
 #include <odotune/studies/calibration_study.h>
 #include <odotune/studies/study_tables.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 // The Figure 3/4 analogue's data: groups = resamplers, series = policies
 // (the study's order). Panel 0: radius error per run, (|err R_R| + |err R_L|)/2,
@@ -39,4 +39,4 @@ std::vector<std::filesystem::path> write_resampling_outputs(const ResamplingStud
 std::vector<std::filesystem::path> write_calibration_outputs(const CalibrationStudy& s, const StudyContext& c,
                                                              const std::filesystem::path& dir);
 
-}  // namespace odotune
+}  // namespace odotune::studies

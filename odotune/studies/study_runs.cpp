@@ -12,16 +12,16 @@
 #include <odotune/studies/study_outputs.h>
 #include <odotune/studies/study_tables.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 namespace {
 namespace fs = std::filesystem;
 
 sim::Scenario read_scenario(const std::string& path) {
   try {
-    return load_scenario(path);
-  } catch (const ScenarioError& e) {
-    throw Failure(e.what());
+    return formats::load_scenario(path);
+  } catch (const formats::ScenarioError& e) {
+    throw core::Failure(e.what());
   }
 }
 
@@ -29,19 +29,19 @@ sim::Scenario read_scenario(const std::string& path) {
 // made, before the long computation.
 void prepare_output(const std::string& out_dir) {
   if (!results::gnuplot_available())
-    throw Failure(
+    throw core::Failure(
         "study: gnuplot not found on PATH (needed for the figures); install it (apt-get install gnuplot)");
   const fs::path out(out_dir);
   std::error_code ec;
   if (fs::exists(out, ec) && !fs::is_directory(out, ec))
-    throw Failure(fmt::format("{}: --out exists and is not a folder", out_dir));
+    throw core::Failure(fmt::format("{}: --out exists and is not a folder", out_dir));
   fs::create_directories(out, ec);
-  if (ec) throw Failure(fmt::format("{}: cannot create the output folder: {}", out_dir, ec.message()));
+  if (ec) throw core::Failure(fmt::format("{}: cannot create the output folder: {}", out_dir, ec.message()));
 }
 
 void prepare(const StudyRequest& r) {
   std::string why;
-  if (!r.options.IsValid(&why)) throw Failure("study: " + why);
+  if (!r.options.IsValid(&why)) throw core::Failure("study: " + why);
   prepare_output(r.out);
 }
 
@@ -121,7 +121,7 @@ StudyRun run_resampling_to_folder(const StudyRequest& r, const StudyHooks& hooks
   try {
     s = run_resampling_study(scenario, r.options, task_progress(hooks));
   } catch (const std::invalid_argument& e) {
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
   show_tables(hooks, results::to_markdown(table1_text(s)));
   return {write_resampling_outputs(s, context("resampling", r), r.out), s.wall_s};
@@ -135,7 +135,7 @@ StudyRun run_calibration_to_folder(const StudyRequest& r, const StudyHooks& hook
   try {
     s = run_calibration_study(constant, step, r.options, task_progress(hooks));
   } catch (const std::invalid_argument& e) {
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
   show_tables(hooks, results::to_markdown(table2_text(s)));
   return {write_calibration_outputs(s, context("calibration", r), r.out), s.wall_s};
@@ -146,11 +146,11 @@ StudyRun run_learned_to_folder(const LearnedStudyRequest& r, const StudyHooks& h
                                  read_scenario(r.scenarios[2]), read_scenario(r.scenarios[3]),
                                  read_scenario(r.scenarios[4])};
   std::string why;
-  if (!r.options.IsValid(&why)) throw Failure("study learned: " + why);
+  if (!r.options.IsValid(&why)) throw core::Failure("study learned: " + why);
   try {
     check_learned_scenarios(sc);
   } catch (const std::invalid_argument& e) {
-    throw Failure("study learned: " + std::string(e.what()));
+    throw core::Failure("study learned: " + std::string(e.what()));
   }
   prepare_output(r.out);
 
@@ -158,7 +158,7 @@ StudyRun run_learned_to_folder(const LearnedStudyRequest& r, const StudyHooks& h
   try {
     s = run_learned_study(sc, r.options, hooks.progress);
   } catch (const std::invalid_argument& e) {
-    throw Failure(e.what());
+    throw core::Failure(e.what());
   }
   LearnedStudyContext c;
   c.command = learned_command(r);
@@ -173,8 +173,8 @@ StudyRun run_learned_to_folder(const LearnedStudyRequest& r, const StudyHooks& h
   try {
     return {write_learned_outputs(s, c, r.out), s.wall_s};
   } catch (const std::exception& e) {
-    throw Failure(fmt::format("{}: {}", r.out, e.what()));
+    throw core::Failure(fmt::format("{}: {}", r.out, e.what()));
   }
 }
 
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -6,13 +6,13 @@
 // (study_outputs.h, learned_study_outputs.h). The command shows progress and
 // prints the tables and the list of files.
 //
-// Errors. Before the long computation, odotune::Failure (one line) on a
+// Errors. Before the long computation, core::Failure (one line) on a
 // missing or invalid scenario file, invalid options, gnuplot missing, an
 // --out that is not or cannot be made a folder, or a scenario the study
 // cannot use (checked after the folder is created for resampling and
 // calibration, before it for learned). After it, on a file that cannot be
 // written: std::runtime_error from study_outputs.h (resampling, calibration),
-// odotune::Failure "OUT: reason" (learned).
+// core::Failure "OUT: reason" (learned).
 #pragma once
 
 #include <filesystem>
@@ -23,7 +23,7 @@
 #include <odotune/studies/calibration_study.h>
 #include <odotune/studies/learned_study.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 // The default scenarios, files under SOURCE_DIR/scenarios/.
 inline constexpr const char* kStudyScenarioFile = "wheelchair.yaml";           // resampling, calibration
@@ -76,4 +76,4 @@ StudyRun run_resampling_to_folder(const StudyRequest& request, const StudyHooks&
 StudyRun run_calibration_to_folder(const StudyRequest& request, const StudyHooks& hooks = {});
 StudyRun run_learned_to_folder(const LearnedStudyRequest& request, const StudyHooks& hooks = {});
 
-}  // namespace odotune
+}  // namespace odotune::studies

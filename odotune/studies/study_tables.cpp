@@ -7,7 +7,7 @@
 
 #include <odotune/filters/pf_calibrator.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 namespace {
 
@@ -194,9 +194,10 @@ std::string table2_csv(const CalibrationStudy& s) {
       return defined ? std::to_string(m.n) : std::string();
     };
     const bool re = r.online && r.has_step;
-    out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.track, to_string(r.method),
-                       r.runs.size(), pair_csv(r.err_rr_m), pair_csv(r.err_rl_m), pair_csv(r.err_d_m),
-                       pair_csv(r.pose_rmse_m), pair_csv(r.heading_rmse_rad), pair_csv(r.convergence_s),
+    out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.track,
+                       calibration::to_string(r.method), r.runs.size(), pair_csv(r.err_rr_m),
+                       pair_csv(r.err_rl_m), pair_csv(r.err_d_m), pair_csv(r.pose_rmse_m),
+                       pair_csv(r.heading_rmse_rad), pair_csv(r.convergence_s),
                        count(r.online, r.convergence_s), pair_csv(r.reached_s), count(r.online, r.reached_s),
                        pair_csv(r.reconvergence_s), count(re, r.reconvergence_s), pair_csv(r.rereached_s),
                        count(re, r.rereached_s), pair_csv(r.mean_particles), pair_csv(r.ms_per_iteration));
@@ -213,7 +214,7 @@ std::string table2_runs_csv(const CalibrationStudy& s) {
       const MethodRunResult& x = row.runs[r];
       const McDraw& d = s.draws.at(r);
       out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", row.track,
-                         to_string(row.method), r, d.seed, csv_number(d.truth_scale_l),
+                         calibration::to_string(row.method), r, d.seed, csv_number(d.truth_scale_l),
                          csv_number(d.truth_scale_r), csv_number(x.err_rr_m), csv_number(x.err_rl_m),
                          csv_number(x.err_d_m), csv_number(x.pose_rmse_m), csv_number(x.heading_rmse_rad),
                          csv_number(x.convergence_s), csv_number(x.reached_s), csv_number(x.reconvergence_s),
@@ -230,13 +231,14 @@ results::TextTable table2_text(const CalibrationStudy& s) {
   t.numeric = {false, false, true, true, true, true, true, true, true, true};
   for (const MethodRow& r : s.rows) {
     const std::size_t n = r.runs.size();
-    t.rows.push_back({r.track, std::string(to_string(r.method)), mean_sd_text(r.err_rr_m),
+    t.rows.push_back({r.track, std::string(calibration::to_string(r.method)), mean_sd_text(r.err_rr_m),
                       mean_sd_text(r.err_rl_m), mean_sd_text(r.pose_rmse_m), mean_sd_text(r.heading_rmse_rad),
-                      r.method == CalibrationMethod::none ? "–" : mean_sd_text(r.ms_per_iteration),
+                      r.method == calibration::CalibrationMethod::none ? "–" : mean_sd_text(r.ms_per_iteration),
                       r.online ? count_text(r.convergence_s, n) : "–",
                       r.online && r.has_step ? count_text(r.reconvergence_s, n) : "–",
-                      r.method == CalibrationMethod::adaptive_pf ? fmt::format("{:.0f}", r.mean_particles.mean)
-                                                                 : "–"});
+                      r.method == calibration::CalibrationMethod::adaptive_pf
+                          ? fmt::format("{:.0f}", r.mean_particles.mean)
+                          : "–"});
   }
   return t;
 }
@@ -250,7 +252,7 @@ results::TextTable table2_convergence_text(const CalibrationStudy& s) {
     if (!r.online) continue;
     const std::size_t n = r.runs.size();
     const bool re = r.has_step;
-    t.rows.push_back({r.track, std::string(to_string(r.method)), count_text(r.reached_s, n),
+    t.rows.push_back({r.track, std::string(calibration::to_string(r.method)), count_text(r.reached_s, n),
                       count_text(r.convergence_s, n), re ? count_text(r.rereached_s, n) : "–",
                       re ? count_text(r.reconvergence_s, n) : "–", mean_sd_text(r.err_d_m)});
   }
@@ -335,4 +337,4 @@ std::string table2_markdown(const CalibrationStudy& s, const StudyContext& c) {
   return md;
 }
 
-}  // namespace odotune
+}  // namespace odotune::studies

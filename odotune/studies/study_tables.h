@@ -10,7 +10,7 @@
 #include <odotune/results/report_tables.h>
 #include <odotune/studies/calibration_study.h>
 
-namespace odotune {
+namespace odotune::studies {
 
 // What the command knows beyond the results, for the Markdown's setup.
 struct StudyContext {
@@ -57,4 +57,4 @@ results::TextTable table2_convergence_text(const CalibrationStudy& s);
 results::TextTable table2_paper();
 std::string table2_markdown(const CalibrationStudy& s, const StudyContext& c);
 
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-namespace odotune {
+namespace odotune::tracks {
 
 BodyVelocityIntegral::BodyVelocityIntegral(const Track& track) {
   for (std::size_t i = 0; i < track.size(); ++i) {
@@ -36,4 +36,4 @@ std::array<double, 2> BodyVelocityIntegral::mean(double t0_s, double t1_s, doubl
   return {(b[0] - a[0]) / dt, (b[1] - a[1]) / dt};
 }
 
-}  // namespace odotune
+}  // namespace odotune::tracks

@@ -11,7 +11,7 @@
 
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::tracks {
 
 class BodyVelocityIntegral {
  public:
@@ -34,4 +34,4 @@ class BodyVelocityIntegral {
   std::vector<double> t_, v_, w_, cum_v_, cum_w_;
 };
 
-}  // namespace odotune
+}  // namespace odotune::tracks

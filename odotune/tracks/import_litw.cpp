@@ -12,7 +12,7 @@
 #include <odotune/tracks/importers.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::tracks {
 
 namespace {
 
@@ -158,4 +158,4 @@ Track import_litw(const fs::path& series_csv) {
   return Track(std::move(d));
 }
 
-}  // namespace odotune
+}  // namespace odotune::tracks

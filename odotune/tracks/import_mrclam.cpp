@@ -13,7 +13,7 @@
 #include <odotune/tracks/importers.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::tracks {
 
 namespace {
 
@@ -200,4 +200,4 @@ Track import_mrclam(const fs::path& dir, int robot) {
   return Track(std::move(d));
 }
 
-}  // namespace odotune
+}  // namespace odotune::tracks

@@ -14,7 +14,7 @@
 #include <odotune/tracks/importers.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::tracks {
 
 namespace {
 
@@ -406,4 +406,4 @@ Track import_optiodom(const fs::path& run_csv) {
   return Track(std::move(d));
 }
 
-}  // namespace odotune
+}  // namespace odotune::tracks

@@ -17,7 +17,7 @@
 #include <odotune/bags/ros_messages.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::tracks {
 namespace {
 
 namespace fs = std::filesystem;
@@ -534,4 +534,4 @@ Track import_rosbag(const fs::path& bag, const RosbagImportOptions& o) {
   }
 }
 
-}  // namespace odotune
+}  // namespace odotune::tracks

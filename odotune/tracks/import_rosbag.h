@@ -52,7 +52,7 @@
 
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::tracks {
 
 struct RosbagImportOptions {
   std::string odom_topic;                            // empty: found from the types
@@ -71,4 +71,4 @@ Track import_rosbag(const std::filesystem::path& bag, const RosbagImportOptions&
 // The bag's topics as lines "  NAME  TYPE  COUNT", for listings.
 std::vector<std::string> describe_bag_topics(const std::filesystem::path& bag);
 
-}  // namespace odotune
+}  // namespace odotune::tracks

@@ -9,7 +9,7 @@
 
 #include <odotune/tracks/track_io.h>
 
-namespace odotune::import_text {
+namespace odotune::tracks::import_text {
 
 bool is_file(const std::filesystem::path& path) {
   std::error_code ec;
@@ -173,4 +173,4 @@ std::string quote(std::string_view s) {
 
 std::string fmt_double(double v) { return fmt::format("{}", v); }
 
-}  // namespace odotune::import_text
+}  // namespace odotune::tracks::import_text

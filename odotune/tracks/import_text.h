@@ -15,7 +15,7 @@
 #include <string_view>
 #include <vector>
 
-namespace odotune::import_text {
+namespace odotune::tracks::import_text {
 
 inline constexpr std::size_t kMaxLineBytes = 64 * 1024;
 
@@ -78,4 +78,4 @@ std::string quote(std::string_view s);
 // Shortest decimal that reads back to the same double ("0.042", "2796.8").
 std::string fmt_double(double v);
 
-}  // namespace odotune::import_text
+}  // namespace odotune::tracks::import_text

@@ -13,7 +13,7 @@
 
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::tracks {
 
 // UTIAS MRCLAM (Leung et al., IJRR 2011), one robot of one dataset folder
 // `dir` holding RobotN_Odometry.dat and RobotN_Groundtruth.dat (robot = N,
@@ -48,4 +48,4 @@ Track import_optiodom(const std::filesystem::path& run_csv);
 // om_var, r_var, b_var), when present, become `litw.<name>` metadata keys.
 Track import_litw(const std::filesystem::path& series_csv);
 
-}  // namespace odotune
+}  // namespace odotune::tracks

@@ -6,7 +6,7 @@
 
 #include <odotune/core/enum_names.h>
 
-namespace odotune {
+namespace odotune::tracks {
 
 std::string_view to_string(OdometryInput s) {
   switch (s) {
@@ -18,7 +18,7 @@ std::string_view to_string(OdometryInput s) {
 }
 
 bool parse_odometry_input(std::string_view text, OdometryInput* out) {
-  return parse_by_name(text, {OdometryInput::wheels, OdometryInput::twist, OdometryInput::commands}, out);
+  return core::parse_by_name(text, {OdometryInput::wheels, OdometryInput::twist, OdometryInput::commands}, out);
 }
 
 namespace {
@@ -58,4 +58,4 @@ OdometryInput track_odometry_input(const Track& track, std::optional<OdometryInp
   return *requested;
 }
 
-}  // namespace odotune
+}  // namespace odotune::tracks

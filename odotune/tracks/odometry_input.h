@@ -11,7 +11,7 @@
 
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::tracks {
 
 enum class OdometryInput { wheels, twist, commands };
 std::string_view to_string(OdometryInput s);  // "wheels", "twist", "commands"
@@ -26,4 +26,4 @@ bool parse_odometry_input(std::string_view text, OdometryInput* out);
 // the track's source.body_velocity.
 OdometryInput track_odometry_input(const Track& track, std::optional<OdometryInput> requested = std::nullopt);
 
-}  // namespace odotune
+}  // namespace odotune::tracks

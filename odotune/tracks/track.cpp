@@ -6,7 +6,7 @@
 
 #include <odotune/core/enum_names.h>
 
-namespace odotune {
+namespace odotune::tracks {
 
 namespace {
 constexpr std::array<std::string_view, kNumCols> kNames = {
@@ -30,7 +30,7 @@ std::string_view to_string(BodyVelocitySource s) {
 }
 
 bool parse_body_velocity_source(std::string_view text, BodyVelocitySource* out) {
-  return parse_by_name(text, {BodyVelocitySource::commanded, BodyVelocitySource::measured}, out);
+  return core::parse_by_name(text, {BodyVelocitySource::commanded, BodyVelocitySource::measured}, out);
 }
 
 std::optional<std::string> TrackMeta::get(std::string_view key) const {
@@ -61,4 +61,4 @@ Track::Track(TrackData data) : d_(std::move(data)) {
                                               i));
 }
 
-}  // namespace odotune
+}  // namespace odotune::tracks

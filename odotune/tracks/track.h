@@ -22,7 +22,7 @@
 #include <utility>
 #include <vector>
 
-namespace odotune {
+namespace odotune::tracks {
 
 // Real-valued columns of the format, in the order of the spec's table
 // (t and the integer tick columns are held separately).
@@ -131,4 +131,4 @@ class Track {
   TrackData d_;
 };
 
-}  // namespace odotune
+}  // namespace odotune::tracks

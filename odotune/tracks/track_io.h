@@ -46,7 +46,7 @@
 
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::tracks {
 
 // The metadata keys track-format.md defines, and odotune's
 // source.body_velocity (docs/track-format.md): TrackMeta's own fields; every
@@ -77,7 +77,7 @@ class TrackError : public std::runtime_error {
 // Reads a track file. Throws TrackError.
 Track read_track(const std::filesystem::path& path);
 // Reads several track files, for the commands and jobs: a bad file becomes
-// one odotune::Failure line (file:line: reason) instead of a TrackError.
+// one core::Failure line (file:line: reason) instead of a TrackError.
 std::vector<Track> load_tracks(const std::vector<std::string>& paths);
 // Parses a track from a stream; `filename` is used in error messages and as
 // the default name (its stem). Throws TrackError.
@@ -90,4 +90,4 @@ void write_track(const Track& track, const std::filesystem::path& path);
 // an unwritable track, std::runtime_error if the stream fails.
 void format_track(const Track& track, std::ostream& out);
 
-}  // namespace odotune
+}  // namespace odotune::tracks

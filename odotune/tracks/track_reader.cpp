@@ -29,7 +29,7 @@
 #include <odotune/tracks/import_text.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::tracks {
 
 TrackError::TrackError(std::string file, std::size_t line, std::string reason)
     : std::runtime_error(line == 0 ? fmt::format("{}: {}", file, reason)
@@ -481,10 +481,10 @@ std::vector<Track> load_tracks(const std::vector<std::string>& paths) {
     try {
       tracks.push_back(read_track(p));
     } catch (const TrackError& e) {
-      throw Failure(e.what());
+      throw core::Failure(e.what());
     }
   }
   return tracks;
 }
 
-}  // namespace odotune
+}  // namespace odotune::tracks

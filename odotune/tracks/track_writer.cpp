@@ -25,7 +25,7 @@
 #include <odotune/core/atomic_file.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::tracks {
 
 namespace {
 
@@ -125,7 +125,7 @@ void format_track(const Track& track, std::ostream& out) {
 }
 
 void write_track(const Track& track, const std::filesystem::path& path) {
-  write_atomically(path, "track", [&track](std::ostream& out) { format_track(track, out); });
+  core::write_atomically(path, "track", [&track](std::ostream& out) { format_track(track, out); });
 }
 
-}  // namespace odotune
+}  // namespace odotune::tracks

@@ -56,8 +56,8 @@ struct Motion {
   ProblemRef problem;
 
   double uniform(int iteration, int particle, std::size_t d, Stream stream) const {
-    return counter_uniform01(options.seed, static_cast<std::uint64_t>(iteration),
-                             static_cast<std::uint64_t>(particle), d, stream);
+    return core::counter_uniform01(options.seed, static_cast<std::uint64_t>(iteration),
+                                   static_cast<std::uint64_t>(particle), d, stream);
   }
 };
 

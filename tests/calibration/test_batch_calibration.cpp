@@ -16,7 +16,7 @@
 
 #include "support/calibration_track.h"
 
-namespace odotune {
+namespace odotune::calibration {
 namespace {
 
 using ::testing::HasSubstr;
@@ -124,4 +124,4 @@ TEST(BatchCalibration, NoSamplesOrBadStartThrow) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -18,7 +18,7 @@
 
 #include "support/calibration_track.h"
 
-namespace odotune {
+namespace odotune::calibration {
 namespace {
 
 using ::testing::AllOf;
@@ -28,8 +28,8 @@ using testing_support::ChairTrackOptions;
 
 constexpr double kPi = std::numbers::pi;
 
-TrackMeta chair_meta(const std::string& effects) {
-  TrackMeta m;
+tracks::TrackMeta chair_meta(const std::string& effects) {
+  tracks::TrackMeta m;
   m.name = "meta_only";
   m.wheel_radius_left_m = 0.32;
   m.wheel_radius_right_m = 0.30;
@@ -42,8 +42,8 @@ TrackMeta chair_meta(const std::string& effects) {
 // The simulated wheelchair track most tests here share (60 s, 1 % / 1.2 %
 // radius errors, 2 % wheel-base error, ext σ 0.03 so that its variance
 // column differs from the default variances).
-const Track& shared_track() {
-  static const Track track = [] {
+const tracks::Track& shared_track() {
+  static const tracks::Track track = [] {
     ChairTrackOptions o;
     o.duration_s = 60.0;
     o.effects = {"radius_error:scale_l=0.99,scale_r=1.012", "wheel_base_error:scale=1.02"};
@@ -82,10 +82,10 @@ TEST(CalibrationTruth, NoneNominalMissingAndMalformed) {
   EXPECT_DOUBLE_EQ(none->at(5.0).wheel_radius_right_m, 0.30);
   EXPECT_DOUBLE_EQ(none->at(5.0).wheel_base_m, 0.65);
 
-  TrackMeta recorded = chair_meta("none");
+  tracks::TrackMeta recorded = chair_meta("none");
   recorded.extra.clear();
   EXPECT_FALSE(truth_from_metadata(recorded).has_value());
-  TrackMeta no_base = chair_meta("radius_error:scale_l=0.99");
+  tracks::TrackMeta no_base = chair_meta("radius_error:scale_l=0.99");
   no_base.wheel_base_m.reset();
   EXPECT_FALSE(truth_from_metadata(no_base).has_value());
 
@@ -116,7 +116,7 @@ TEST(CalibrationInputOptions, Validation) {
 }
 
 TEST(CalibrationInput, RowsAndSamplesMatchTheSimulatedTruth) {
-  const Track& track = shared_track();
+  const tracks::Track& track = shared_track();
   const CalibrationInput in = build_calibration_input(track, {});
   EXPECT_EQ(in.track_name, track.name());
   EXPECT_DOUBLE_EQ(in.nominal.wheel_radius_left_m, 0.32);
@@ -130,8 +130,8 @@ TEST(CalibrationInput, RowsAndSamplesMatchTheSimulatedTruth) {
   EXPECT_EQ(in.omega_l[0], 0.0);
   ASSERT_TRUE(in.has_gt);
   for (std::size_t r = 0; r < in.t.size(); r += 97) {
-    EXPECT_EQ(in.gt_x[r], track.col(Col::gt_x)[r]);
-    EXPECT_EQ(in.gt_theta[r], track.col(Col::gt_theta)[r]);
+    EXPECT_EQ(in.gt_x[r], track.col(tracks::Col::gt_x)[r]);
+    EXPECT_EQ(in.gt_theta[r], track.col(tracks::Col::gt_theta)[r]);
   }
   // Rates from ticks: Δticks·2π/8800/Δt over each row.
   const std::size_t r = in.t.size() / 2;
@@ -141,7 +141,7 @@ TEST(CalibrationInput, RowsAndSamplesMatchTheSimulatedTruth) {
 
   // One sample per ext row except the one at t = 0 (no rate before it).
   std::size_t ext_rows = 0;
-  for (std::size_t i = 0; i < track.size(); ++i) ext_rows += track.at(Col::v_ext, i) ? 1 : 0;
+  for (std::size_t i = 0; i < track.size(); ++i) ext_rows += track.at(tracks::Col::v_ext, i) ? 1 : 0;
   ASSERT_EQ(in.samples.size(), ext_rows - 1);
   ASSERT_EQ(in.sample_row.size(), in.samples.size());
   ASSERT_EQ(in.sample_t.size(), in.samples.size());
@@ -186,7 +186,7 @@ TEST(CalibrationInput, ExtFromGroundTruthReproducesTheExternalSensor) {
   o.duration_s = 40.0;
   o.ext_sigma_v_m_s = 0.0;
   o.ext_sigma_w_rad_s = 0.0;
-  const Track track = chair_track(o);
+  const tracks::Track track = chair_track(o);
   CalibrationInputOptions opt;
   opt.ext_from_gt_rate_hz = 10.0;
   opt.estimate_ext_noise = false;  // the given variances
@@ -225,34 +225,36 @@ TEST(CalibrationInput, ExtFromGroundTruthReproducesTheExternalSensor) {
 TEST(CalibrationInput, OmegaColumnsAndGroundTruthOnOtherRows) {
   // Hand-made: omega on even rows (every 0.1 s), GT on odd rows (0.05 s
   // later), x = 0.5 t, y = 0.1 t, θ = 0.2 t; ext on every fourth row.
-  TrackData d;
+  tracks::TrackData d;
   d.meta.name = "handmade";
   d.meta.wheel_radius_left_m = 0.1;
   d.meta.wheel_radius_right_m = 0.1;
   d.meta.wheel_base_m = 0.5;
   const std::size_t n = 40;
-  for (Col c : {Col::omega_l, Col::omega_r, Col::gt_x, Col::gt_y, Col::gt_theta, Col::v_ext, Col::w_ext})
+  for (tracks::Col c : {tracks::Col::omega_l, tracks::Col::omega_r, tracks::Col::gt_x, tracks::Col::gt_y,
+                        tracks::Col::gt_theta, tracks::Col::v_ext, tracks::Col::w_ext})
     d.ensure(c);
   for (std::size_t i = 0; i < n; ++i) {
     const double t = 0.05 * static_cast<double>(i);
     d.t.push_back(t);
-    for (auto* c : {&d.col(Col::omega_l), &d.col(Col::omega_r), &d.col(Col::gt_x), &d.col(Col::gt_y),
-                    &d.col(Col::gt_theta), &d.col(Col::v_ext), &d.col(Col::w_ext)})
+    for (auto* c : {&d.col(tracks::Col::omega_l), &d.col(tracks::Col::omega_r), &d.col(tracks::Col::gt_x),
+                    &d.col(tracks::Col::gt_y), &d.col(tracks::Col::gt_theta), &d.col(tracks::Col::v_ext),
+                    &d.col(tracks::Col::w_ext)})
       c->push_back(std::nan(""));
     if (i % 2 == 0) {
-      d.col(Col::omega_l).back() = 4.0 + t;
-      d.col(Col::omega_r).back() = 5.0 - t;
+      d.col(tracks::Col::omega_l).back() = 4.0 + t;
+      d.col(tracks::Col::omega_r).back() = 5.0 - t;
     } else {
-      d.col(Col::gt_x).back() = 0.5 * t;
-      d.col(Col::gt_y).back() = 0.1 * t;
-      d.col(Col::gt_theta).back() = 0.2 * t;
+      d.col(tracks::Col::gt_x).back() = 0.5 * t;
+      d.col(tracks::Col::gt_y).back() = 0.1 * t;
+      d.col(tracks::Col::gt_theta).back() = 0.2 * t;
     }
     if (i % 4 == 1) {  // between two omega rows
-      d.col(Col::v_ext).back() = 0.45;
-      d.col(Col::w_ext).back() = 0.2;
+      d.col(tracks::Col::v_ext).back() = 0.45;
+      d.col(tracks::Col::w_ext).back() = 0.2;
     }
   }
-  const Track track(std::move(d));
+  const tracks::Track track(std::move(d));
   const CalibrationInput in = build_calibration_input(track, {});
   ASSERT_EQ(in.t.size(), n / 2);
   EXPECT_EQ(in.omega_l[0], 4.0);  // omega rows keep their own sample, row 0 included
@@ -285,21 +287,23 @@ TEST(CalibrationInput, OmegaColumnsAndGroundTruthOnOtherRows) {
 
 TEST(CalibrationInput, UnwrapsAWrappedGroundTruthHeading) {
   // A spin in place whose GT heading is wrapped to (−π, π].
-  TrackData d;
+  tracks::TrackData d;
   d.meta.name = "spin";
   d.meta.wheel_radius_left_m = d.meta.wheel_radius_right_m = 0.1;
   d.meta.wheel_base_m = 0.5;
-  for (Col c : {Col::omega_l, Col::omega_r, Col::gt_x, Col::gt_y, Col::gt_theta}) d.ensure(c);
+  for (tracks::Col c : {tracks::Col::omega_l, tracks::Col::omega_r, tracks::Col::gt_x, tracks::Col::gt_y,
+                        tracks::Col::gt_theta})
+    d.ensure(c);
   for (int i = 0; i < 200; ++i) {
     const double t = 0.01 * i;
     d.t.push_back(t);
-    d.col(Col::omega_l).push_back(-10.0);
-    d.col(Col::omega_r).push_back(10.0);
-    d.col(Col::gt_x).push_back(0.0);
-    d.col(Col::gt_y).push_back(0.0);
-    d.col(Col::gt_theta).push_back(wrap_angle(4.0 * t));
+    d.col(tracks::Col::omega_l).push_back(-10.0);
+    d.col(tracks::Col::omega_r).push_back(10.0);
+    d.col(tracks::Col::gt_x).push_back(0.0);
+    d.col(tracks::Col::gt_y).push_back(0.0);
+    d.col(tracks::Col::gt_theta).push_back(core::wrap_angle(4.0 * t));
   }
-  const Track track(std::move(d));
+  const tracks::Track track(std::move(d));
   CalibrationInputOptions o;
   o.ext_from_gt_rate_hz = 20.0;
   const CalibrationInput in = build_calibration_input(track, o);
@@ -308,7 +312,7 @@ TEST(CalibrationInput, UnwrapsAWrappedGroundTruthHeading) {
 }
 
 TEST(CalibrationInput, BadTracksGiveOneLineNamingTheTrack) {
-  auto message = [](const Track& track, const CalibrationInputOptions& o) -> std::string {
+  auto message = [](const tracks::Track& track, const CalibrationInputOptions& o) -> std::string {
     try {
       build_calibration_input(track, o);
     } catch (const std::invalid_argument& e) {
@@ -320,7 +324,7 @@ TEST(CalibrationInput, BadTracksGiveOneLineNamingTheTrack) {
   no_ext_no_gt.duration_s = 5.0;
   no_ext_no_gt.ext = false;
   no_ext_no_gt.gt = false;
-  const Track bare = chair_track(no_ext_no_gt);
+  const tracks::Track bare = chair_track(no_ext_no_gt);
   const std::string m1 = message(bare, {});
   EXPECT_THAT(m1, AllOf(HasSubstr("'chair'"), HasSubstr("v_ext"), HasSubstr("ground truth")));
   EXPECT_EQ(m1.find('\n'), std::string::npos);
@@ -331,22 +335,22 @@ TEST(CalibrationInput, BadTracksGiveOneLineNamingTheTrack) {
   ChairTrackOptions no_ext;
   no_ext.duration_s = 5.0;
   no_ext.ext = false;
-  const Track gt_only = chair_track(no_ext);
+  const tracks::Track gt_only = chair_track(no_ext);
   EXPECT_THAT(message(gt_only, {}), AllOf(HasSubstr("'chair'"), HasSubstr("ext_from_gt_rate_hz")));
   EXPECT_NO_THROW(build_calibration_input(gt_only, derive));
 
-  TrackData d = shared_track().data();
+  tracks::TrackData d = shared_track().data();
   d.meta.name = "anonymous_robot";
   d.meta.wheel_radius_left_m.reset();
-  EXPECT_THAT(message(Track(d), {}),
+  EXPECT_THAT(message(tracks::Track(d), {}),
               AllOf(HasSubstr("'anonymous_robot'"), HasSubstr("robot.wheel_radius_left")));
   d = shared_track().data();
   d.meta.ticks_per_rev.reset();
-  EXPECT_THAT(message(Track(d), {}), HasSubstr("robot.ticks_per_rev"));
+  EXPECT_THAT(message(tracks::Track(d), {}), HasSubstr("robot.ticks_per_rev"));
   d = shared_track().data();
   for (auto& kv : d.meta.extra)
     if (kv.first == "sim.effects") kv.second = "radius_error:scale_l=7";
-  EXPECT_THAT(message(Track(d), {}), AllOf(HasSubstr("'chair'"), HasSubstr("sim.effects")));
+  EXPECT_THAT(message(tracks::Track(d), {}), AllOf(HasSubstr("'chair'"), HasSubstr("sim.effects")));
 
   CalibrationInputOptions bad;
   bad.default_v_var = -1.0;
@@ -354,29 +358,29 @@ TEST(CalibrationInput, BadTracksGiveOneLineNamingTheTrack) {
 }
 
 TEST(PoseSeries, WrapInterpolateAndCentralDifferenceOnAnArc) {
-  EXPECT_DOUBLE_EQ(wrap_angle(kPi), kPi);
-  EXPECT_DOUBLE_EQ(wrap_angle(-kPi), kPi);
-  EXPECT_NEAR(wrap_angle(3.0 * kPi / 2.0), -kPi / 2.0, 1e-15);
-  EXPECT_NEAR(wrap_angle(-7.0), -7.0 + 2.0 * kPi, 1e-15);
+  EXPECT_DOUBLE_EQ(core::wrap_angle(kPi), kPi);
+  EXPECT_DOUBLE_EQ(core::wrap_angle(-kPi), kPi);
+  EXPECT_NEAR(core::wrap_angle(3.0 * kPi / 2.0), -kPi / 2.0, 1e-15);
+  EXPECT_NEAR(core::wrap_angle(-7.0), -7.0 + 2.0 * kPi, 1e-15);
 
   // A constant-velocity arc: V = 0.8 m/s, W = 1.5 rad/s, sampled at 20 Hz.
   const double V = 0.8, W = 1.5, rho = V / W;
-  PoseSeries s;
+  objectives::PoseSeries s;
   for (int i = 0; i <= 40; ++i) {
     const double t = 0.05 * i;
-    s.push_back(t, PlanarPose{rho * std::sin(W * t), rho * (1.0 - std::cos(W * t)), W * t});
+    s.push_back(t, objectives::PlanarPose{rho * std::sin(W * t), rho * (1.0 - std::cos(W * t)), W * t});
   }
-  const auto mid = interpolate_pose(s, 0.125, 0.06);
+  const auto mid = objectives::interpolate_pose(s, 0.125, 0.06);
   ASSERT_TRUE(mid.has_value());
   EXPECT_NEAR(mid->theta_rad, W * 0.125, 1e-12);
-  EXPECT_FALSE(interpolate_pose(s, 0.125, 0.04).has_value());  // gap too long
-  EXPECT_FALSE(interpolate_pose(s, 2.01, 1.0).has_value());    // outside
-  const auto v = central_difference_velocity(s, 1.0, 0.05, 0.06);
+  EXPECT_FALSE(objectives::interpolate_pose(s, 0.125, 0.04).has_value());  // gap too long
+  EXPECT_FALSE(objectives::interpolate_pose(s, 2.01, 1.0).has_value());    // outside
+  const auto v = objectives::central_difference_velocity(s, 1.0, 0.05, 0.06);
   ASSERT_TRUE(v.has_value());
   EXPECT_NEAR(v->v_m_s, V, 1e-12);  // the chord correction makes an arc exact
   EXPECT_NEAR(v->w_rad_s, W, 1e-12);
-  EXPECT_FALSE(central_difference_velocity(s, 1.98, 0.05, 0.06).has_value());
+  EXPECT_FALSE(objectives::central_difference_velocity(s, 1.98, 0.05, 0.06).has_value());
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -19,14 +19,14 @@
 
 #include "diagnose/sim_track.h"
 
-namespace odotune {
+namespace odotune::calibration {
 namespace {
 
 // ---------------------------------------------------------------------------
 // The space.
 
 TEST(CalibrationSpace, NamesUnitsBoundsAndScalesAsDocumented) {
-  const BoxSpace s = calibration_space();
+  const objectives::BoxSpace s = calibration_space();
   ASSERT_EQ(s.dim(), 5u);
   const char* names[] = {"neff_fraction", "max_weight_ratio", "alpha", "dispersion_per_particle_mm",
                          "random_walk_sigma_mm"};
@@ -35,7 +35,7 @@ TEST(CalibrationSpace, NamesUnitsBoundsAndScalesAsDocumented) {
   const double upper[] = {1.0, 1000.0, 1e-1, 1.0, 5.0};
   const bool log_scale[] = {false, true, true, true, true};
   for (std::size_t i = 0; i < 5; ++i) {
-    const ParamSpec& p = s.params()[i];
+    const objectives::ParamSpec& p = s.params()[i];
     EXPECT_EQ(p.name, names[i]);
     EXPECT_EQ(p.unit, units[i]) << p.name;
     EXPECT_DOUBLE_EQ(p.lower, lower[i]) << p.name;
@@ -58,7 +58,7 @@ TEST(CalibrationSpace, NamesUnitsBoundsAndScalesAsDocumented) {
 }
 
 TEST(CalibrationSpace, BoxAndPhysicalRoundTrip) {
-  const BoxSpace s = calibration_space();
+  const objectives::BoxSpace s = calibration_space();
   const std::vector<double> physical = {0.3, 25.0, 3e-4, 0.02, 0.7};
   const std::vector<double> box = s.to_box(physical);
   EXPECT_DOUBLE_EQ(box[0], 0.3);  // linear
@@ -75,7 +75,7 @@ TEST(CalibrationSpace, BoxAndPhysicalRoundTrip) {
 }
 
 TEST(CalibrationSpace, ThePapersDefaultsLieInsideTheBounds) {
-  const BoxSpace s = calibration_space();
+  const objectives::BoxSpace s = calibration_space();
   for (const auto& p : {filters::PfCalibratorParams{}, filters::PfCalibratorParams::adaptive_defaults()}) {
     const std::vector<double> v = calibration_params_of(p);
     ASSERT_EQ(v.size(), 5u);
@@ -255,7 +255,7 @@ TEST(CalibrationScoreWeights, RejectsNegativeAndNonFiniteWeightsByName) {
 // 8800 counts/rev, encoders 100 Hz, external velocities 10 Hz σ 0.02, ground
 // truth 100 Hz; true radii 0.99 / 1.012 × nominal.
 
-Track wheelchair_track() {
+tracks::Track wheelchair_track() {
   testing_support::SimTrackOptions o;
   o.duration_s = 30.0;
   o.wheel_radius_left_m = o.wheel_radius_right_m = 0.32;
@@ -300,7 +300,7 @@ TEST(CalibrationObjective, TheSimulatedTrackHasWhatTheObjectiveNeeds) {
 
 TEST(CalibrationObjective, FitnessIsDeterministicAcrossCallsAndThreads) {
   const CalibrationObjective obj({&wheelchair_input()}, small_base(), /*adaptive=*/true);
-  const BoxSpace& s = obj.space();
+  const objectives::BoxSpace& s = obj.space();
   const std::vector<double> x = s.to_box(std::vector<double>{0.4, 20.0, 3e-4, 0.02, 0.3});
   const double f1 = obj.fitness(x);
   const double f2 = obj.fitness(x);
@@ -327,7 +327,7 @@ TEST(CalibrationObjective, FitnessIsDeterministicAcrossCallsAndThreads) {
 
 TEST(CalibrationObjective, ThePapersSettingsScoreBetterThanAnAbsurdRandomWalk) {
   const CalibrationObjective obj({&wheelchair_input()}, small_base(), /*adaptive=*/false);
-  const BoxSpace& s = obj.space();
+  const objectives::BoxSpace& s = obj.space();
   std::vector<double> paper = calibration_params_of(filters::PfCalibratorParams{});
   std::vector<double> absurd = paper;
   absurd[4] = s.params()[4].upper;  // random-walk σ 5 mm per iteration
@@ -379,15 +379,15 @@ TEST(CalibratedOdometryErrors, RmseMatchesCalibrationRunAndMetricsAreOrdered) {
   o.pf = small_base();
   const CalibrationResult r = run_calibration({&in}, o);
   const filters::OdometryParams before = filters::PfCalibrator(effective_pf_params(o)).estimate().params;
-  const ErrorMetrics e = calibrated_odometry_errors(in, r.trace, 0, before);
+  const objectives::ErrorMetrics e = calibrated_odometry_errors(in, r.trace, 0, before);
   EXPECT_GT(e.samples, 1000);
   EXPECT_NEAR(e.rmse_m, r.tracks[0].pose_rmse_m, 1e-9 * r.tracks[0].pose_rmse_m);
   EXPECT_LE(e.mae_m, e.rmse_m);
   EXPECT_LE(e.rmse_m, e.maxe_m);
   // Fixed parameters: the same as score_fixed_params; the truth beats the nominal.
   const filters::OdometryParams truth_now = in.truth->at(0.0);
-  const ErrorMetrics fixed_truth = fixed_odometry_errors(in, truth_now);
-  const ErrorMetrics fixed_nominal = fixed_odometry_errors(in, in.nominal);
+  const objectives::ErrorMetrics fixed_truth = fixed_odometry_errors(in, truth_now);
+  const objectives::ErrorMetrics fixed_nominal = fixed_odometry_errors(in, in.nominal);
   EXPECT_NEAR(fixed_nominal.rmse_m, score_fixed_params(in, in.nominal).pose_rmse_m, 1e-9);
   EXPECT_LT(fixed_truth.maxe_m, fixed_nominal.maxe_m);
   EXPECT_LT(fixed_truth.rmse_m, 0.2 * fixed_nominal.rmse_m);
@@ -396,4 +396,4 @@ TEST(CalibratedOdometryErrors, RmseMatchesCalibrationRunAndMetricsAreOrdered) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -18,7 +18,7 @@
 
 #include "support/calibration_track.h"
 
-namespace odotune {
+namespace odotune::calibration {
 namespace {
 
 using ::testing::HasSubstr;
@@ -31,8 +31,8 @@ constexpr double kRunScaleL = testing_support::kMisalignedScaleL,
                  kRunScaleR = testing_support::kMisalignedScaleR,
                  kRunScaleBase = testing_support::kMisalignedScaleBase;
 
-const Track& track_120() {
-  static const Track t = chair_track(testing_support::misaligned_chair(120.0, 21));
+const tracks::Track& track_120() {
+  static const tracks::Track t = chair_track(testing_support::misaligned_chair(120.0, 21));
   return t;
 }
 const CalibrationInput& input_120() {
@@ -56,9 +56,10 @@ OdometryParams params(double rl, double rr, double d) {
 
 // Independent dead reckoning straight from the track's ticks and ground
 // truth (midpoint rule of track-format.md): RMSE of (x, y) and of θ.
-std::pair<double, double> reference_dead_reckoning(const Track& track, const OdometryParams& p) {
+std::pair<double, double> reference_dead_reckoning(const tracks::Track& track, const OdometryParams& p) {
   const double k = 2.0 * std::numbers::pi / *track.meta().ticks_per_rev;
-  double x = track.col(Col::gt_x)[0], y = track.col(Col::gt_y)[0], th = track.col(Col::gt_theta)[0];
+  double x = track.col(tracks::Col::gt_x)[0], y = track.col(tracks::Col::gt_y)[0],
+         th = track.col(tracks::Col::gt_theta)[0];
   double ss_pos = 0, ss_th = 0;
   int n = 0;
   for (std::size_t i = 1; i < track.size(); ++i) {
@@ -70,8 +71,8 @@ std::pair<double, double> reference_dead_reckoning(const Track& track, const Odo
     x += 0.5 * (l + r) * std::cos(th + 0.5 * dth);
     y += 0.5 * (l + r) * std::sin(th + 0.5 * dth);
     th += dth;
-    const double ex = x - track.col(Col::gt_x)[i], ey = y - track.col(Col::gt_y)[i];
-    const double eth = std::remainder(th - track.col(Col::gt_theta)[i], 2.0 * std::numbers::pi);
+    const double ex = x - track.col(tracks::Col::gt_x)[i], ey = y - track.col(tracks::Col::gt_y)[i];
+    const double eth = std::remainder(th - track.col(tracks::Col::gt_theta)[i], 2.0 * std::numbers::pi);
     ss_pos += ex * ex + ey * ey;
     ss_th += eth * eth;
     ++n;
@@ -152,7 +153,7 @@ TEST(ConvergenceTime, HandMadeTraces) {
 }
 
 TEST(CalibrationScore, NoneIsNominalDeadReckoningAndTruthIsFarBetter) {
-  const Track& track = track_120();
+  const tracks::Track& track = track_120();
   const CalibrationInput& in = input_120();
   const OdometryParams truth = chair_truth(kRunScaleL, kRunScaleR, kRunScaleBase);
 
@@ -343,4 +344,4 @@ TEST(CalibrationRun, BadOptionsAndInputsThrow) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::calibration

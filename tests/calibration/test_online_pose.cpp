@@ -17,7 +17,7 @@
 
 #include "support/calibration_track.h"
 
-namespace odotune {
+namespace odotune::calibration {
 namespace {
 
 using ::testing::HasSubstr;
@@ -164,4 +164,4 @@ TEST(OnlinePoseCalibration, WheelchairFollowsARadiusStep) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -10,7 +10,7 @@
 
 #include <odotune/calibration/plausible_fit.h>
 
-namespace odotune {
+namespace odotune::calibration {
 namespace {
 
 using ::testing::HasSubstr;
@@ -53,4 +53,4 @@ TEST(PlausibleFit, TheRefusalIsOneLineThatSaysNothingWasWritten) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::calibration

@@ -15,7 +15,7 @@
 
 #include "support/calibration_track.h"
 
-namespace odotune {
+namespace odotune::calibration {
 namespace {
 
 using ::testing::HasSubstr;
@@ -34,14 +34,14 @@ double worst_relative_error(const OdometryParams& p, const OdometryParams& truth
                    std::abs(p.wheel_base_m / truth.wheel_base_m - 1.0)});
 }
 
-CalibrationInput pose_input(const Track& track) {
+CalibrationInput pose_input(const tracks::Track& track) {
   CalibrationInputOptions o;
   o.require_velocity_samples = false;
   return build_calibration_input(track, o);
 }
 
 TEST(PoseCalibration, GroundTruthWholeRunRecoversTheGeometry) {
-  const Track track = testing_support::chair_track(testing_support::misaligned_chair(120.0, 31));
+  const tracks::Track track = testing_support::chair_track(testing_support::misaligned_chair(120.0, 31));
   const CalibrationInput in = build_calibration_input(track, {});
   const PoseCalibrationSummary s = pose_calibrate({&in}, in.nominal);
   const OdometryParams truth = chair_truth(kPoseScaleL, kPoseScaleR, kPoseScaleBase);
@@ -70,9 +70,9 @@ TEST(PoseCalibration, TicksAndSparseFixesRecoverTheGeometryWithinAFifthOfAPercen
   sc.sensors.aps.enabled = true;
   sc.sensors.aps.rate_hz = 1.0;
   sc.sensors.aps.sigma_m = 0.02;
-  const Track track = sim::simulate(sc);
+  const tracks::Track track = sim::simulate(sc);
   ASSERT_FALSE(track.has_gt());
-  ASSERT_FALSE(track.has(Col::v_ext));
+  ASSERT_FALSE(track.has(tracks::Col::v_ext));
   const CalibrationInput in = pose_input(track);
   EXPECT_TRUE(in.samples.empty());
   ASSERT_GT(in.fix_t.size(), 500u);
@@ -93,7 +93,7 @@ TEST(PoseCalibration, TicksAndSparseFixesRecoverTheGeometryWithinAFifthOfAPercen
 }
 
 TEST(PoseCalibration, SegmentsCutTheRunAndStillRecoverTheGeometry) {
-  const Track track = testing_support::chair_track(testing_support::misaligned_chair(120.0, 33));
+  const tracks::Track track = testing_support::chair_track(testing_support::misaligned_chair(120.0, 33));
   const CalibrationInput in = build_calibration_input(track, {});
   PoseCalibrationOptions po;
   po.segment_s = 20.0;
@@ -108,10 +108,10 @@ TEST(PoseCalibration, SegmentsCutTheRunAndStillRecoverTheGeometry) {
 TEST(PoseCalibration, FittedStartHeadingAbsorbsAWrongReferenceHeading) {
   // The first ground-truth heading is off by 0.05 rad (a mis-set mocap
   // frame): held fixed it biases the wheel base; fitted, it does not.
-  TrackData d = testing_support::chair_track(testing_support::misaligned_chair(120.0, 34)).data();
-  std::vector<double>& th = d.col(Col::gt_theta);
+  tracks::TrackData d = testing_support::chair_track(testing_support::misaligned_chair(120.0, 34)).data();
+  std::vector<double>& th = d.col(tracks::Col::gt_theta);
   th[0] += 0.05;
-  const Track track(std::move(d));
+  const tracks::Track track(std::move(d));
   const CalibrationInput in = build_calibration_input(track, {});
   const OdometryParams truth = chair_truth(kPoseScaleL, kPoseScaleR, kPoseScaleBase);
   PoseCalibrationOptions po;
@@ -128,7 +128,7 @@ TEST(PoseCalibration, RefusesARunWithoutReferenceAndBadOptions) {
   o.gt = false;
   sim::Scenario sc = chair_scenario(o);
   sc.sensors.aps.enabled = false;
-  const Track track = sim::simulate(sc);
+  const tracks::Track track = sim::simulate(sc);
   const CalibrationInput in = build_calibration_input(track, {});  // has v_ext
   try {
     pose_calibrate({&in}, in.nominal);
@@ -151,4 +151,4 @@ TEST(PoseCalibration, RefusesARunWithoutReferenceAndBadOptions) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::calibration

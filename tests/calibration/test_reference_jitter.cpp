@@ -15,14 +15,14 @@
 
 #include "support/calibration_track.h"
 
-namespace odotune {
+namespace odotune::calibration {
 namespace {
 
 using ::testing::HasSubstr;
 using testing_support::chair_scenario;
 using testing_support::ChairTrackOptions;
 
-Track noisy_chair(double sigma_m, double sigma_rad) {
+tracks::Track noisy_chair(double sigma_m, double sigma_rad) {
   ChairTrackOptions o;
   o.duration_s = 60.0;
   o.seed = 41;
@@ -34,7 +34,8 @@ Track noisy_chair(double sigma_m, double sigma_rad) {
 }
 
 TEST(ReferenceJitter, ReadsBackTheSimulatedNoise) {
-  const ReferenceJitter j = estimate_reference_jitter(ground_truth_series(noisy_chair(0.002, 0.004)));
+  const ReferenceJitter j = estimate_reference_jitter(
+      objectives::ground_truth_series(noisy_chair(0.002, 0.004)));
   EXPECT_GT(j.triples, 5000u);
   EXPECT_NEAR(j.sigma_xy_m, 0.002, 0.15 * 0.002);
   EXPECT_NEAR(j.sigma_theta_rad, 0.004, 0.15 * 0.004);
@@ -42,20 +43,20 @@ TEST(ReferenceJitter, ReadsBackTheSimulatedNoise) {
 }
 
 TEST(ReferenceJitter, AnExactReferenceHasAlmostNone) {
-  const ReferenceJitter j = estimate_reference_jitter(ground_truth_series(noisy_chair(0.0, 0.0)));
+  const ReferenceJitter j = estimate_reference_jitter(objectives::ground_truth_series(noisy_chair(0.0, 0.0)));
   // Only the motion's own a·Δt² (and the 1e-5 m rounding) remain.
   EXPECT_LT(j.sigma_xy_m, 5e-5);
   EXPECT_LT(j.sigma_theta_rad, 1e-4);
-  EXPECT_EQ(estimate_reference_jitter(PoseSeries{}).triples, 0u);
+  EXPECT_EQ(estimate_reference_jitter(objectives::PoseSeries{}).triples, 0u);
 }
 
 TEST(ReferenceJitter, DerivedVelocitiesCarryTheEstimatedNoise) {
-  const Track track = noisy_chair(0.002, 0.004);
+  const tracks::Track track = noisy_chair(0.002, 0.004);
   CalibrationInputOptions o;
   o.ext_from_gt_rate_hz = 10.0;
   const CalibrationInput in = build_calibration_input(track, o);
   ASSERT_FALSE(in.samples.empty());
-  const ReferenceJitter j = estimate_reference_jitter(ground_truth_series(track));
+  const ReferenceJitter j = estimate_reference_jitter(objectives::ground_truth_series(track));
   const double period = 0.1;
   const double q = 2.0 * std::numbers::pi / 8800.0 / o.wheel_rate_window_s;  // chair encoders
   const double var_omega = q * q / 6.0;
@@ -81,4 +82,4 @@ TEST(ReferenceJitter, DerivedVelocitiesCarryTheEstimatedNoise) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::calibration

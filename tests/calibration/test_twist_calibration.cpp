@@ -11,32 +11,32 @@
 #include <odotune/calibration/twist_calibration.h>
 #include <odotune/tracks/body_velocity.h>
 
-namespace odotune {
+namespace odotune::calibration {
 namespace {
 
 // Commands at 20 Hz changing every 2 s (a smooth random tour), the robot's
 // motion v = 0.9·v_cmd(t − 0.3), w = 1.1·w_cmd(t − 0.3), ground truth at
 // 50 Hz (or fixes at 1 Hz, without ground truth).
-Track twist_drive(BodyVelocitySource source, bool fixes_only, double delay_s = 0.3) {
-  TrackData d;
+tracks::Track twist_drive(tracks::BodyVelocitySource source, bool fixes_only, double delay_s = 0.3) {
+  tracks::TrackData d;
   d.meta.name = fixes_only ? "fixes" : "drive";
   d.meta.body_velocity = source;
   const double duration = 240.0, step = 0.02;
   const auto n = static_cast<std::size_t>(duration / step) + 1;
   for (std::size_t i = 0; i < n; ++i) d.t.push_back(static_cast<double>(i) * step);
-  auto& v = d.ensure(Col::v_cmd);
-  auto& w = d.ensure(Col::w_cmd);
+  auto& v = d.ensure(tracks::Col::v_cmd);
+  auto& w = d.ensure(tracks::Col::w_cmd);
   for (std::size_t i = 0; i < n; i += 2) {  // 20 Hz commands, held between
     const double seg = std::floor(d.t[i] / 2.0);
     v[i] = 0.3 + 0.2 * std::sin(1.7 * seg);
     w[i] = 0.6 * std::sin(2.3 * seg + 0.4);
   }
-  const Track commands(d);
-  const BodyVelocityIntegral body(commands);
+  const tracks::Track commands(d);
+  const tracks::BodyVelocityIntegral body(commands);
   double x = 0, y = 0, h = 0;
-  auto& gx = d.ensure(fixes_only ? Col::aps_x : Col::gt_x);
-  auto& gy = d.ensure(fixes_only ? Col::aps_y : Col::gt_y);
-  if (!fixes_only) d.ensure(Col::gt_theta);
+  auto& gx = d.ensure(fixes_only ? tracks::Col::aps_x : tracks::Col::gt_x);
+  auto& gy = d.ensure(fixes_only ? tracks::Col::aps_y : tracks::Col::gt_y);
+  if (!fixes_only) d.ensure(tracks::Col::gt_theta);
   for (std::size_t i = 0; i < n; ++i) {
     if (i > 0) {
       const auto m = body.mean(d.t[i - 1], d.t[i], delay_s);
@@ -48,14 +48,14 @@ Track twist_drive(BodyVelocitySource source, bool fixes_only, double delay_s = 0
     if (fixes_only && i % 50 != 0) continue;
     gx[i] = x;
     gy[i] = y;
-    if (!fixes_only) d.col(Col::gt_theta)[i] = h;
+    if (!fixes_only) d.col(tracks::Col::gt_theta)[i] = h;
   }
-  return Track(std::move(d));
+  return tracks::Track(std::move(d));
 }
 
 TEST(TwistCalibration, CommandsGiveScalesAndDelayFromGroundTruth) {
-  const Track t = twist_drive(BodyVelocitySource::commanded, false);
-  const TwistCalibrationSummary s = calibrate_twist({&t}, OdometryInput::commands);
+  const tracks::Track t = twist_drive(tracks::BodyVelocitySource::commanded, false);
+  const TwistCalibrationSummary s = calibrate_twist({&t}, tracks::OdometryInput::commands);
   EXPECT_NEAR(s.params.scale_v, 0.9, 0.005);
   EXPECT_NEAR(s.params.scale_w, 1.1, 0.005);
   EXPECT_NEAR(s.params.delay_s, 0.3, 0.011);
@@ -72,8 +72,8 @@ TEST(TwistCalibration, CommandsGiveScalesAndDelayFromGroundTruth) {
 }
 
 TEST(TwistCalibration, FixesAloneGiveTheScales) {
-  const Track t = twist_drive(BodyVelocitySource::measured, true, 0.0);
-  const TwistCalibrationSummary s = calibrate_twist({&t}, OdometryInput::twist);
+  const tracks::Track t = twist_drive(tracks::BodyVelocitySource::measured, true, 0.0);
+  const TwistCalibrationSummary s = calibrate_twist({&t}, tracks::OdometryInput::twist);
   EXPECT_EQ(s.params.delay_s, 0.0);  // a measured twist has no delay to fit
   EXPECT_NEAR(s.params.scale_v, 0.9, 0.01);
   EXPECT_NEAR(s.params.scale_w, 1.1, 0.01);
@@ -82,25 +82,25 @@ TEST(TwistCalibration, FixesAloneGiveTheScales) {
 }
 
 TEST(TwistCalibration, BadInputsAreOneLineErrors) {
-  const Track t = twist_drive(BodyVelocitySource::commanded, false);
-  EXPECT_THROW(calibrate_twist({&t}, OdometryInput::wheels), std::invalid_argument);
-  EXPECT_THROW(calibrate_twist({}, OdometryInput::commands), std::invalid_argument);
+  const tracks::Track t = twist_drive(tracks::BodyVelocitySource::commanded, false);
+  EXPECT_THROW(calibrate_twist({&t}, tracks::OdometryInput::wheels), std::invalid_argument);
+  EXPECT_THROW(calibrate_twist({}, tracks::OdometryInput::commands), std::invalid_argument);
   TwistCalibrationOptions o;
   o.fine_delay_step_s = 1.0;  // coarser than the coarse grid
   try {
-    calibrate_twist({&t}, OdometryInput::commands, o);
+    calibrate_twist({&t}, tracks::OdometryInput::commands, o);
     FAIL() << "expected an error";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("fine_delay_step_s"), std::string::npos) << e.what();
   }
-  TrackData d = t.data();
+  tracks::TrackData d = t.data();
   d.meta.name = "blind";
-  d.col(Col::gt_x).clear();
-  d.col(Col::gt_y).clear();
-  d.col(Col::gt_theta).clear();
-  const Track blind(std::move(d));
+  d.col(tracks::Col::gt_x).clear();
+  d.col(tracks::Col::gt_y).clear();
+  d.col(tracks::Col::gt_theta).clear();
+  const tracks::Track blind(std::move(d));
   try {
-    calibrate_twist({&blind}, OdometryInput::commands);
+    calibrate_twist({&blind}, tracks::OdometryInput::commands);
     FAIL() << "expected an error";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("track 'blind'"), std::string::npos) << e.what();
@@ -108,4 +108,4 @@ TEST(TwistCalibration, BadInputsAreOneLineErrors) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::calibration

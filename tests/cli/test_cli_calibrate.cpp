@@ -21,7 +21,7 @@
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -64,7 +64,7 @@ std::string write_sim_track(const TempDir& dir, const std::string& name, const S
   sc.sensors.ext_velocity.enabled = o.ext_velocity;
   sc.sensors.ext_velocity.rate_hz = 10.0;
   const std::string path = (dir.path() / (name + ".csv")).string();
-  write_track(sim::simulate(sc), path);
+  tracks::write_track(sim::simulate(sc), path);
   return path;
 }
 
@@ -410,13 +410,13 @@ TEST_F(CliCalibrateSim, BadInputIsOneLineAndLeavesNoOutput) {
 TEST_F(CliCalibrateSim, CommandTracksAreCalibratedByScalesAndADelay) {
   TempDir tmp;
   const auto commands_only = [&](const std::string& from, const std::string& name) {
-    TrackData d = read_track(from).data();
+    tracks::TrackData d = tracks::read_track(from).data();
     d.meta.name = name;
     d.ticks_l.clear();
     d.ticks_r.clear();
     d.meta.ticks_per_rev.reset();
     const std::string path = (tmp / (name + ".csv")).string();
-    write_track(Track(std::move(d)), path);
+    tracks::write_track(tracks::Track(std::move(d)), path);
     return path;
   };
   const std::string fit = commands_only(track_a_, "cmd_fit");
@@ -593,4 +593,4 @@ TEST(CliCalibrate, SlowRobotEveryOnlineMethodEndsNearerThanNominal) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli

@@ -26,7 +26,7 @@
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -58,7 +58,7 @@ std::string write_chair(const TempDir& dir, const std::string& name, double dura
   sc.sensors.ext_velocity.enabled = ext;
   sc.sensors.ext_velocity.rate_hz = 10.0;
   const std::string path = (dir.path() / (name + ".csv")).string();
-  write_track(sim::simulate(sc), path);
+  tracks::write_track(sim::simulate(sc), path);
   return path;
 }
 
@@ -272,13 +272,13 @@ TEST_F(CliController, RoundTripThroughTheControllerFileLeavesNothingToCorrect) {
   const double tol = 3.0 * rel_sd + 2 * 0.5e-6 + 0.16e-6;
 
   // The robot with the new parameters: the same recording, its nominal the applied geometry.
-  TrackData data = read_track(track_).data();
+  tracks::TrackData data = tracks::read_track(track_).data();
   data.meta.wheel_radius_left_m = e1.left_m;
   data.meta.wheel_radius_right_m = e1.right_m;
   data.meta.wheel_base_m = e1.base_m;
   std::erase_if(data.meta.extra, [](const auto& kv) { return kv.first.rfind("sim.", 0) == 0; });
   const std::string applied = (tmp / "applied.csv").string();
-  write_track(Track(std::move(data)), applied);
+  tracks::write_track(tracks::Track(std::move(data)), applied);
 
   const fs::path second = tmp / "second.yaml";
   r = run_cli("calibrate --track " + applied + " --method batch --controller-out " + second.string() +
@@ -372,4 +372,4 @@ TEST(CliControllerDiagnose, WritesTheCorrectedGeometryOrSaysThereIsNone) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli

@@ -15,7 +15,7 @@
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 using nlohmann::json;
@@ -188,9 +188,9 @@ TEST(CliDiagnose, BadInputIsOneLineAndNoFile) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 // A real recording (OptiOdom free run 030120210001 run-01, Sousa et al., JINT
@@ -249,4 +249,4 @@ TEST(CliDiagnose, SeveralRecordingsFitOneProveOnAnotherInOneDocument) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli

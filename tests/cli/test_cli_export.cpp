@@ -19,7 +19,7 @@
 
 #include "support/cli_runner.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 using results::RunRecord;
@@ -97,8 +97,8 @@ TEST_F(CliExport, OdotuneFormatReplaysToTheStoredTunedRmse) {
       EXPECT_NE(slurp(cfg).find(results::run_key(*want)), std::string::npos);  // provenance
 
       // read_ekf_config gives back the stored parameters.
-      const odotune::EkfConfig got = odotune::read_ekf_config(cfg);
-      const ParamSpace space = ParamSpace::for_model(got.model);
+      const odotune::formats::EkfConfig got = odotune::formats::read_ekf_config(cfg);
+      const objectives::ParamSpace space = objectives::ParamSpace::for_model(got.model);
       EXPECT_EQ(filters::to_string(got.model), model);
       const filters::NoiseParams stored = space.to_noise(want->params);
       EXPECT_EQ(got.noise.r_x_m2, stored.r_x_m2);
@@ -164,7 +164,7 @@ TEST_F(CliExport, RobotLocalizationRqIsRTimesTheOdometryRate) {
                                    [](const RunRecord& r) { return r.model == "rq" && r.track == "track5"; });
   ASSERT_NE(want, nullptr);
   // The odometry rate as the simulator recorded it in the track's metadata.
-  const Track t5 = read_track(reference_track(5));
+  const tracks::Track t5 = tracks::read_track(reference_track(5));
   const auto rate_text = t5.meta().get("sim.encoders_rate_hz");
   ASSERT_TRUE(rate_text.has_value());
   const double rate = std::stod(*rate_text);
@@ -250,8 +250,8 @@ struct Line {
 // Straight at heading theta0; wheel rates every row, a gyro that reads a
 // constant kGyro (bias; it only feeds the gyro model's |ω_z|), a fix on the
 // true position every second and exact ground truth.
-Track line_track(const Line& l) {
-  TrackData d;
+tracks::Track line_track(const Line& l) {
+  tracks::TrackData d;
   d.meta.name = l.name;
   d.meta.wheel_radius_left_m = kWheelRadius;
   d.meta.wheel_radius_right_m = kWheelRadius;
@@ -263,16 +263,16 @@ Track line_track(const Line& l) {
     const double x = 0.5 + l.v_true * t * std::cos(l.theta0), y = -1.0 + l.v_true * t * std::sin(l.theta0);
     const bool fix = i > 0 && i % fix_every == 0;
     d.t.push_back(t);
-    d.col(Col::omega_l).push_back(w);
-    d.col(Col::omega_r).push_back(w);
-    d.col(Col::gyro_z).push_back(kGyro);
-    d.col(Col::aps_x).push_back(fix ? x : std::nan(""));
-    d.col(Col::aps_y).push_back(fix ? y : std::nan(""));
-    d.col(Col::gt_x).push_back(x);
-    d.col(Col::gt_y).push_back(y);
-    d.col(Col::gt_theta).push_back(l.theta0);
+    d.col(tracks::Col::omega_l).push_back(w);
+    d.col(tracks::Col::omega_r).push_back(w);
+    d.col(tracks::Col::gyro_z).push_back(kGyro);
+    d.col(tracks::Col::aps_x).push_back(fix ? x : std::nan(""));
+    d.col(tracks::Col::aps_y).push_back(fix ? y : std::nan(""));
+    d.col(tracks::Col::gt_x).push_back(x);
+    d.col(tracks::Col::gt_y).push_back(y);
+    d.col(tracks::Col::gt_theta).push_back(l.theta0);
   }
-  return Track(std::move(d));
+  return tracks::Track(std::move(d));
 }
 
 // Σ over the counted steps (2..N) of diag(R) for a straight line: N = rows − 1
@@ -299,7 +299,7 @@ TEST(CliExportLines, AlphaAndGyroExportTheTimeAveragedProcessNoise) {
   TempDir tmp;
   const std::vector<Line> lines = {
       {"line_a", 0.5, 0.5, 0.02, 20.0}, {"line_b", -1.0, 0.3, 0.04, 20.0}, {"line_c", 2.0, 0.8, 0.02, 10.0}};
-  for (const auto& l : lines) write_track(line_track(l), tmp / (l.name + ".csv"));
+  for (const auto& l : lines) tracks::write_track(line_track(l), tmp / (l.name + ".csv"));
   std::ofstream(tmp / "lines.yaml")
       << "format: odotune-experiment/1\nname: lines\nmodels: [alpha, gyro]\n"
          "tracks: [line_a.csv, line_b.csv, line_c.csv]\nmodes: [1]\nseeds: [1]\nsolver: pso\n"
@@ -378,4 +378,4 @@ TEST(CliExportLines, AlphaAndGyroExportTheTimeAveragedProcessNoise) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli

@@ -14,7 +14,7 @@
 #include "support/cli_runner.h"
 #include "support/store_rows.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 using testing_support::reference_track;
@@ -86,4 +86,4 @@ TEST(CliGrid, BadExperimentFileNamesFileAndLine) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli

@@ -18,7 +18,7 @@
 #include "support/cli_runner.h"
 #include "support/store_rows.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 using testing_support::CliResult;
@@ -179,6 +179,6 @@ TEST(CliGridMpi, AFailureOnAnyRankIsToldOnceAndEndsTheJob) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli
 
 #endif  // ODOTUNE_WITH_MPI

@@ -17,7 +17,7 @@
 
 #include "support/cli_runner.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -72,7 +72,7 @@ TEST_F(ImportCli, OptiOdomRunWritesTrackAndSummary) {
   EXPECT_TRUE(contains(r.out, "2066 rows")) << r.out;
   EXPECT_TRUE(contains(r.out, "103.250 s")) << r.out;
   EXPECT_TRUE(contains(r.out, "ticks_l")) << r.out;
-  const Track tr = read_track(track);
+  const tracks::Track tr = tracks::read_track(track);
   EXPECT_EQ(tr.size(), 2066u);
   EXPECT_TRUE(tr.has_ticks());
   EXPECT_TRUE(tr.has_cmd());
@@ -83,7 +83,7 @@ TEST_F(ImportCli, MrclamAndLitw) {
   const fs::path m = dir_ / "m1.csv";
   auto r = odotune(fmt::format("import mrclam {} --robot 1 -o {}", q(kReal / "mrclam7"), q(m)));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const Track tm = read_track(m);
+  const tracks::Track tm = tracks::read_track(m);
   EXPECT_TRUE(contains(r.out, fmt::format("{} rows", tm.size()))) << r.out;
   EXPECT_TRUE(contains(r.out, "v_cmd")) << r.out;
   EXPECT_EQ(tm.meta().get("source.t0_unix"), "1248446182.116");
@@ -95,7 +95,7 @@ TEST_F(ImportCli, MrclamAndLitw) {
   // SOURCE.md: 12 609 samples over 1260.8 s.
   EXPECT_TRUE(contains(r.out, "12609 rows")) << r.out;
   EXPECT_TRUE(contains(r.out, "1260.800 s")) << r.out;
-  EXPECT_EQ(read_track(l).size(), 12609u);
+  EXPECT_EQ(tracks::read_track(l).size(), 12609u);
 }
 
 TEST_F(ImportCli, MissingInputIsOneLineAndNoOutput) {
@@ -140,8 +140,8 @@ TEST_F(ImportCli, RosbagListsImportsAndRefusesInOneLine) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(contains(r.out, "16806 rows")) << r.out;
   EXPECT_TRUE(contains(r.out, "fixes: /fix")) << r.out;
-  const Track tr = read_track(track);
-  EXPECT_TRUE(tr.has(Col::aps_var_x));
+  const tracks::Track tr = tracks::read_track(track);
+  EXPECT_TRUE(tr.has(tracks::Col::aps_var_x));
   EXPECT_NE(tr.meta().get("source.gyro")->find("roll 1.5708"), std::string::npos);
 
   // A wrong topic: one line, non-zero, nothing written.
@@ -180,4 +180,4 @@ TEST_F(ImportCli, RosbagListsImportsAndRefusesInOneLine) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli

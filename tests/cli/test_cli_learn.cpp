@@ -21,7 +21,7 @@
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -247,8 +247,8 @@ TEST_F(LearnCli, CorrectionNetsOnCommandsAreCrossValidatedAndRecorded) {
       << r.out;
   EXPECT_NE(r.out.find("each fold judged by nets trained without it"), std::string::npos) << r.out;
   const results::LearnedModelFile m = results::read_learned_model(cmd);
-  EXPECT_EQ(m.odometry.input, OdometryInput::commands);
-  EXPECT_EQ(m.odometry.target, LearnedTarget::correction);
+  EXPECT_EQ(m.odometry.input, tracks::OdometryInput::commands);
+  EXPECT_EQ(m.odometry.target, learned::LearnedTarget::correction);
   EXPECT_EQ(m.odometry.v_net.units(), 3);
   ASSERT_TRUE(m.provenance.selection.has_value());
   EXPECT_EQ(m.provenance.selection->at("folds"), 2);
@@ -515,4 +515,4 @@ TEST_F(LearnCli, StudyRejectsABadScenarioBeforeCreatingTheFolder) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli

@@ -14,7 +14,7 @@
 
 #include "support/cli_runner.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 using testing_support::run_cli;
@@ -144,4 +144,4 @@ TEST(CliRealData, OptiOdomPoseFitFromFixesTooNoisyToCarryTheScaleIsRefused) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli

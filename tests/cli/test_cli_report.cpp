@@ -14,7 +14,7 @@
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -191,4 +191,4 @@ TEST(CliReportErrors, OneLineAndNoOutput) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli

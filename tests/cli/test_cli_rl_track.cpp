@@ -28,8 +28,8 @@ struct Drive {
   std::string a = (dir.path() / "a.csv").string(), b = (dir.path() / "b.csv").string();
   Drive() {
     std::ofstream(params) << odotune::testing_support::kRlTeamFile << odotune::testing_support::kRlGyroInput;
-    odotune::write_track(odotune::testing_support::synthetic_track(11), a);
-    odotune::write_track(odotune::testing_support::synthetic_track(12, 50.0), b);
+    odotune::tracks::write_track(odotune::testing_support::synthetic_track(11), a);
+    odotune::tracks::write_track(odotune::testing_support::synthetic_track(12, 50.0), b);
   }
 };
 

@@ -21,7 +21,7 @@
 #include "support/study_fixtures.h"
 #include "support/temp_dir.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -194,4 +194,4 @@ TEST_F(CliStudy, BadInputIsOneLineAndNonZeroExit) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli

@@ -16,7 +16,7 @@
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 using nlohmann::json;
@@ -99,4 +99,4 @@ TEST(CliTerms, BadTermInAScenarioIsOneLineWithItsLine) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli

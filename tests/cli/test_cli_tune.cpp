@@ -10,7 +10,7 @@
 
 #include "support/cli_runner.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 using testing_support::reference_track;
@@ -208,4 +208,4 @@ TEST(CliTune, WithoutGroundTruthTunesByFixCrossValidation) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli

@@ -17,7 +17,7 @@
 
 #include "support/cli_runner.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -76,7 +76,7 @@ TEST(CliTuneCalibration, AdaptivePfJsonHasTheDocumentedKeysAndTunedNeverWorse) {
   EXPECT_EQ(j["evaluations"], 3 * 2);  // PSO: particles × (iterations + 1)
   EXPECT_EQ(j["failures"], 0);
   // The five settings with their units; the defaults are the paper's.
-  const BoxSpace space = calibration_space();
+  const objectives::BoxSpace space = calibration::calibration_space();
   ASSERT_EQ(j["params"].size(), space.dim());
   for (const auto& p : space.params()) {
     ASSERT_TRUE(j["params"].contains(p.name)) << p.name;
@@ -106,8 +106,8 @@ TEST(CliTuneCalibration, AdaptivePfJsonHasTheDocumentedKeysAndTunedNeverWorse) {
   EXPECT_TRUE(j["tracks"][0]["tuned"]["radius_error_pct"].is_number());  // a simulated track has truth
 
   // --config-out: the tuned settings, read back exactly by the reader.
-  const odotune::PfConfig c = odotune::read_pf_config(cfg);
-  EXPECT_EQ(c.method, CalibrationMethod::adaptive_pf);
+  const odotune::formats::PfConfig c = odotune::formats::read_pf_config(cfg);
+  EXPECT_EQ(c.method, calibration::CalibrationMethod::adaptive_pf);
   EXPECT_EQ(c.resampler, filters::Resampler::stratified);
   EXPECT_EQ(c.policy, filters::ResamplePolicy::neff);
   EXPECT_EQ(c.particles, 400);
@@ -191,7 +191,7 @@ TEST(CliGridCalibration, SmokeExperimentStoresOneRunPerModelAndSeedAndReports) {
   // 2 models × 1 track × 1 mode (calibrators: the first listed) × 2 seeds.
   ASSERT_EQ(runs.size(), 4u);
   std::set<std::string> cells;
-  const BoxSpace space = calibration_space();
+  const objectives::BoxSpace space = calibration::calibration_space();
   for (const auto& r : runs) {
     cells.insert(fmt::format("{} {}", r.model, r.seed));
     EXPECT_EQ(r.track, "wheelchair_short");
@@ -287,4 +287,4 @@ TEST(CliGridCalibration, TrackUnusableForAListedModelIsOneLineNamingIt) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli

@@ -22,7 +22,7 @@
 
 #include "support/cli_runner.h"
 
-namespace odotune {
+namespace odotune::cli {
 namespace {
 
 namespace fs = std::filesystem;
@@ -65,7 +65,7 @@ TEST(CliTuneUkf, TuneBeatsTheDefaultsAndTheConfigRoundTrips) {
   EXPECT_LT(tuned, base) << "tuned " << tuned << " vs defaults " << base;
   EXPECT_EQ(j["tuned_fitness"].get<double>(), tuned);  // mode 1: the fitness is the RMSE
   EXPECT_EQ(j["baseline_fitness"].get<double>(), base);
-  const BoxSpace space = ukf_space();
+  const objectives::BoxSpace space = learned::ukf_space();
   ASSERT_EQ(j["params"].size(), space.dim());
 
   // The config: heavily commented, the tuned values bit for bit, and it
@@ -73,12 +73,12 @@ TEST(CliTuneUkf, TuneBeatsTheDefaultsAndTheConfigRoundTrips) {
   const std::string text = slurp(cfg);
   EXPECT_NE(text.find("format: odotune-ukf-config/1"), std::string::npos);
   EXPECT_GE(std::count(text.begin(), text.end(), '#'), 15) << text;
-  const odotune::UkfConfig c = odotune::read_ukf_config(cfg);
+  const odotune::formats::UkfConfig c = odotune::formats::read_ukf_config(cfg);
   EXPECT_EQ(c.rate_hz, 10.0);
   for (std::size_t i = 0; i < space.dim(); ++i)
     EXPECT_EQ(c.params[i], j["params"][space.params()[i].name].get<double>()) << space.params()[i].name;
-  const FusionInput in = build_fusion_input(read_track(ukf_wheelchair_track()));
-  EXPECT_NEAR(ukf_pose_errors(in, odotune::apply_ukf_config(c)).rmse_m, tuned, 1e-12);
+  const learned::FusionInput in = learned::build_fusion_input(tracks::read_track(ukf_wheelchair_track()));
+  EXPECT_NEAR(learned::ukf_pose_errors(in, odotune::formats::apply_ukf_config(c)).rmse_m, tuned, 1e-12);
 
   // Same seed, one thread: the same result.
   const auto json1 = tmp / "t1.json";
@@ -92,16 +92,16 @@ TEST(CliTuneUkf, TuneBeatsTheDefaultsAndTheConfigRoundTrips) {
 TEST(CliTuneUkf, ConfigReaderErrorsAreOneLineWithFileAndLine) {
   TempDir tmp;
   const auto path = tmp / "c.yaml";
-  odotune::UkfConfig good;
-  good.params = ukf_params_of(UkfSettings{});
-  odotune::write_ukf_config(good, path);
-  EXPECT_EQ(odotune::read_ukf_config(path).params, good.params);
+  odotune::formats::UkfConfig good;
+  good.params = learned::ukf_params_of(learned::UkfSettings{});
+  odotune::formats::write_ukf_config(good, path);
+  EXPECT_EQ(odotune::formats::read_ukf_config(path).params, good.params);
 
   auto error_of = [&](const std::string& text) {
     std::ofstream(path) << text;
     try {
-      odotune::read_ukf_config(path);
-    } catch (const odotune::Failure& e) {
+      odotune::formats::read_ukf_config(path);
+    } catch (const odotune::core::Failure& e) {
       return std::string(e.what());
     }
     return std::string("(no error)");
@@ -127,10 +127,10 @@ TEST(CliTuneUkf, BadInputIsOneLine) {
   TempDir tmp;
   // A track without ground truth: named, one line, nothing written.
   {
-    TrackData d = read_track(ukf_wheelchair_track()).data();
+    tracks::TrackData d = tracks::read_track(ukf_wheelchair_track()).data();
     d.meta.name = "blind";
-    for (Col c : {Col::gt_x, Col::gt_y, Col::gt_theta}) d.col(c).clear();
-    write_track(Track(std::move(d)), tmp / "blind.csv");
+    for (tracks::Col c : {tracks::Col::gt_x, tracks::Col::gt_y, tracks::Col::gt_theta}) d.col(c).clear();
+    tracks::write_track(tracks::Track(std::move(d)), tmp / "blind.csv");
   }
   const auto json_file = tmp / "x.json";
   auto r = run_cli(fmt::format("tune --track {} --model ukf --particles 2 --iterations 1 --json {}",
@@ -159,7 +159,7 @@ TEST(CliGridUkf, SmokeExperimentRunsStoresReportsAndExports) {
   // 1 model × 1 track × 2 modes × 2 seeds: the UKF has fitness modes.
   ASSERT_EQ(runs.size(), 4u);
   std::set<std::string> cells;
-  const BoxSpace space = ukf_space();
+  const objectives::BoxSpace space = learned::ukf_space();
   for (const auto& r : runs) {
     cells.insert(fmt::format("{} {} {}", r.model, r.mode, r.seed));
     EXPECT_EQ(r.track, "wheelchair_short");
@@ -198,7 +198,7 @@ TEST(CliGridUkf, SmokeExperimentRunsStoresReportsAndExports) {
   const auto ex = run_cli("export " + store.string() + " --select model=ukf,mode=1 --format odotune --out " +
                           x.string());
   ASSERT_EQ(ex.exit_code, 0) << ex.err;
-  const odotune::UkfConfig c = odotune::read_ukf_config(x);
+  const odotune::formats::UkfConfig c = odotune::formats::read_ukf_config(x);
   const auto best = std::min_element(runs.begin(), runs.end(), [](const auto& a, const auto& b) {
     return (a.mode == 1 ? a.tuned.rmse_m : 1e9) < (b.mode == 1 ? b.tuned.rmse_m : 1e9);
   });
@@ -216,10 +216,10 @@ TEST(CliGridUkf, SmokeExperimentRunsStoresReportsAndExports) {
 TEST(CliGridUkf, TrackWithoutGroundTruthIsOneLineNamingIt) {
   TempDir tmp;
   {
-    TrackData d = read_track(ukf_wheelchair_track()).data();
+    tracks::TrackData d = tracks::read_track(ukf_wheelchair_track()).data();
     d.meta.name = "blind";
-    for (Col c : {Col::gt_x, Col::gt_y, Col::gt_theta}) d.col(c).clear();
-    write_track(Track(std::move(d)), tmp / "blind.csv");
+    for (tracks::Col c : {tracks::Col::gt_x, tracks::Col::gt_y, tracks::Col::gt_theta}) d.col(c).clear();
+    tracks::write_track(tracks::Track(std::move(d)), tmp / "blind.csv");
   }
   std::ofstream(tmp / "e.yaml") << "format: odotune-experiment/1\nmodels: [ukf]\ntracks: [blind.csv]\n"
                                    "modes: [1]\nseeds: [1]\nbudget: {particles: 2, iterations: 1}\n"
@@ -231,4 +231,4 @@ TEST(CliGridUkf, TrackWithoutGroundTruthIsOneLineNamingIt) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::cli

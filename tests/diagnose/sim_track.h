@@ -103,6 +103,6 @@ inline sim::Scenario sim_scenario(const SimTrackOptions& o) {
   return sc;
 }
 
-inline Track simulate_track(const SimTrackOptions& o) { return sim::simulate(sim_scenario(o)); }
+inline tracks::Track simulate_track(const SimTrackOptions& o) { return sim::simulate(sim_scenario(o)); }
 
 }  // namespace odotune::testing_support

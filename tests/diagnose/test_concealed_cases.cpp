@@ -189,19 +189,19 @@ struct Xy {
 // Dead-reckoning error (DR − truth) at the end of each 20 s window, anchored
 // on the true pose at the window's start: wheel (or command) odometry alone,
 // and with the heading from the gyro instead.
-void window_errors(const Track& tr, const CaseRobot& r, std::vector<Xy>* wheel, std::vector<Xy>* gyro) {
+void window_errors(const tracks::Track& tr, const CaseRobot& r, std::vector<Xy>* wheel, std::vector<Xy>* gyro) {
   const auto& t = tr.t();
   const bool ticks = tr.has_ticks();
   std::vector<std::size_t> odo;
   for (std::size_t i = 0; i < t.size(); ++i) {
-    if (ticks ? tr.ticks_l()[i] != kNoTick : tr.at(Col::v_cmd, i)) odo.push_back(i);
+    if (ticks ? tr.ticks_l()[i] != tracks::kNoTick : tr.at(tracks::Col::v_cmd, i)) odo.push_back(i);
   }
   // Cumulative gyro heading (trapezoid) at the gyro rows.
   std::vector<double> gt_t, gc;
-  const auto& gz = tr.col(Col::gyro_z);
+  const auto& gz = tr.col(tracks::Col::gyro_z);
   std::size_t prev = 0;
   for (std::size_t i = 0; i < t.size(); ++i) {
-    if (!tr.at(Col::gyro_z, i)) continue;
+    if (!tr.at(tracks::Col::gyro_z, i)) continue;
     gc.push_back(gt_t.empty() ? 0.0 : gc.back() + 0.5 * (gz[i] + gz[prev]) * (t[i] - t[prev]));
     gt_t.push_back(t[i]);
     prev = i;
@@ -214,8 +214,9 @@ void window_errors(const Track& tr, const CaseRobot& r, std::vector<Xy>* wheel, 
     return gc[j - 1] + (gc[j] - gc[j - 1]) * (tq - gt_t[j - 1]) / (gt_t[j] - gt_t[j - 1]);
   };
   const double tick = 2 * std::numbers::pi / r.ticks_per_rev;
-  const auto &gx = tr.col(Col::gt_x), &gy = tr.col(Col::gt_y), &gth = tr.col(Col::gt_theta);
-  const auto &vc = tr.col(Col::v_cmd), &wc = tr.col(Col::w_cmd);
+  const auto &gx = tr.col(tracks::Col::gt_x), &gy = tr.col(tracks::Col::gt_y),
+             &gth = tr.col(tracks::Col::gt_theta);
+  const auto &vc = tr.col(tracks::Col::v_cmd), &wc = tr.col(tracks::Col::w_cmd);
   for (double t0 = 0.0; t0 + 20.0 <= t.back(); t0 += 20.0) {
     const auto a = std::lower_bound(odo.begin(), odo.end(), t0,
                                     [&](std::size_t i, double v) { return t[i] < v; });
@@ -290,10 +291,10 @@ TEST(ConcealedCases, BaseLapClosesForEveryRobot) {
     sc.motion.segments = base_lap(r);
     sc.sensors.power.enabled = sc.sensors.ext_velocity.enabled = sc.sensors.aps.enabled = false;
     sc.sensors.ground_truth.rate_hz = 10;
-    const Track tr = sim::simulate(sc);
+    const tracks::Track tr = sim::simulate(sc);
     const std::size_t last = tr.size() - 1;
-    const double dx = tr.col(Col::gt_x)[last], dy = tr.col(Col::gt_y)[last];
-    const double dth = std::remainder(tr.col(Col::gt_theta)[last], 2 * std::numbers::pi);
+    const double dx = tr.col(tracks::Col::gt_x)[last], dy = tr.col(tracks::Col::gt_y)[last];
+    const double dth = std::remainder(tr.col(tracks::Col::gt_theta)[last], 2 * std::numbers::pi);
     EXPECT_LT(std::hypot(dx, dy), 0.1 * r.geometry_m) << r.kind;
     EXPECT_LT(std::abs(dth), 1e-3) << r.kind;
   }
@@ -319,12 +320,12 @@ TEST(ConcealedCases, SlipZonesAreCrossedOnEveryLapAndStepsFallLate) {
       // robot's true path moves with them).
       sim::Scenario sc = measuring(c, c.effects);
       sc.sensors.ground_truth.rate_hz = 20;
-      const Track tr = sim::simulate(sc);
+      const tracks::Track tr = sim::simulate(sc);
       int passes = 0;
       bool inside = false;
       for (std::size_t i = 0; i < tr.size(); ++i) {
-        if (!tr.at(Col::gt_x, i)) continue;
-        const double x = tr.col(Col::gt_x)[i], y = tr.col(Col::gt_y)[i];
+        if (!tr.at(tracks::Col::gt_x, i)) continue;
+        const double x = tr.col(tracks::Col::gt_x)[i], y = tr.col(tracks::Col::gt_y)[i];
         const bool now = x >= p["x0"] && x <= p["x1"] && y >= p["y0"] && y <= p["y1"];
         passes += (now && !inside) ? 1 : 0;
         inside = now;

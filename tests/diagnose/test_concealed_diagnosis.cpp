@@ -45,10 +45,10 @@ namespace odotune::diagnose {
 namespace {
 
 using concealed::ConcealedCase;
-using odotune::assess_detectability;
-using odotune::Detectability;
-using odotune::EffectTruth;
-using odotune::TrueEffect;
+using odotune::studies::assess_detectability;
+using odotune::studies::Detectability;
+using odotune::studies::EffectTruth;
+using odotune::studies::TrueEffect;
 
 // Case name -> why the diagnosis misses it today.
 const std::map<std::string, std::string>& known_misses() {
@@ -121,8 +121,9 @@ Verdict judge(const ConcealedCase& c, const Diagnosis& d, const Detectability& t
       TrueEffect t;
       t.name = "slip_zone";
       for (const concealed::ExpectedParam& p : e.params) t.params.emplace_back(std::string(p.name), p.value);
-      const BoxCoverage b = box_coverage(t, f->param("x0"), f->param("x1"), f->param("y0"), f->param("y1"),
-                                         TruePath{in.ref_x_m, in.ref_y_m, {}, {}});
+      const studies::BoxCoverage b = studies::box_coverage(t, f->param("x0"), f->param("x1"), f->param("y0"),
+                                                           f->param("y1"),
+                                                           studies::TruePath{in.ref_x_m, in.ref_y_m, {}, {}});
       const bool ok = b.samples > 0 && b.covered >= 0.75 && b.extra <= 0.25;
       v.params_right = v.params_right && ok;
       v.detail += "slip_zone box [" + std::to_string(f->param("x0")) + ", " + std::to_string(f->param("x1")) +
@@ -157,7 +158,7 @@ TEST_P(ConcealedDiagnosis, NamesTheEffectsWithinToleranceAndProvesThemHeldOut) {
   const DiagInput in = build_diag_input(sim::simulate(concealed::base_scenario(c)));
   const Diagnosis d = diagnose(in);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const Verdict v = judge(c, d, assess_detectability(in, truth_of(c)), in);
+  const Verdict v = judge(c, d, studies::assess_detectability(in, truth_of(c)), in);
   std::cout << "[ concealed ] " << c.name << ": found {" << set_text(v.found) << "} expected {"
             << set_text(v.expected) << "} " << v.detail << secs << " s\n";
   SCOPED_TRACE(std::string(c.name) + ": " + std::string(c.why_hard));

@@ -30,12 +30,12 @@ SimTrackOptions short_run() {
   return o;
 }
 
-void drop_meta(TrackData& d, const std::string& key) {
+void drop_meta(tracks::TrackData& d, const std::string& key) {
   std::erase_if(d.meta.extra, [&](const auto& kv) { return kv.first == key; });
 }
 
 TEST(DiagInput, WheelTicksCommandsGyroAndGroundTruth) {
-  const Track tr = simulate_track(short_run());
+  const tracks::Track tr = simulate_track(short_run());
   const DiagInput in = build_diag_input(tr);
   EXPECT_EQ(in.track_name, "sim_track");
   EXPECT_EQ(in.odometry, OdometryKind::wheel_angles);
@@ -46,8 +46,8 @@ TEST(DiagInput, WheelTicksCommandsGyroAndGroundTruth) {
   for (std::size_t i = 0; i < tr.size(); i += 97) {
     EXPECT_DOUBLE_EQ(in.phi_l_rad[i], static_cast<double>(tr.ticks_l()[i] - tr.ticks_l()[0]) * per_tick);
     EXPECT_DOUBLE_EQ(in.phi_r_rad[i], static_cast<double>(tr.ticks_r()[i] - tr.ticks_r()[0]) * per_tick);
-    EXPECT_EQ(in.cmd_v_mps[i], tr.col(Col::v_cmd)[i]);
-    EXPECT_EQ(in.cmd_w_radps[i], tr.col(Col::w_cmd)[i]);
+    EXPECT_EQ(in.cmd_v_mps[i], tr.col(tracks::Col::v_cmd)[i]);
+    EXPECT_EQ(in.cmd_w_radps[i], tr.col(tracks::Col::w_cmd)[i]);
   }
   EXPECT_GT(in.phi_r_rad.back(), 100.0);  // the robot moved
   EXPECT_TRUE(in.v_mps.empty());
@@ -55,7 +55,7 @@ TEST(DiagInput, WheelTicksCommandsGyroAndGroundTruth) {
   EXPECT_EQ(in.reference, ReferenceKind::gt);
   ASSERT_EQ(in.ref_t_s.size(), tr.size());
   EXPECT_TRUE(in.has_ref_heading());
-  EXPECT_EQ(in.ref_theta_rad[500], tr.col(Col::gt_theta)[500]);
+  EXPECT_EQ(in.ref_theta_rad[500], tr.col(tracks::Col::gt_theta)[500]);
   // sim.gt_sigma_m = 0 (noise-free ground truth): floored at 1 mm / 1 mrad.
   EXPECT_EQ(in.ref_sigma_m, 1e-3);
   EXPECT_EQ(in.ref_sigma_rad, 1e-3);
@@ -64,11 +64,11 @@ TEST(DiagInput, WheelTicksCommandsGyroAndGroundTruth) {
 TEST(DiagInput, WheelRatesAreIntegratedLikeTheTicks) {
   SimTrackOptions o = short_run();
   o.omega = true;
-  const Track with_ticks = simulate_track(o);
-  TrackData d = with_ticks.data();
+  const tracks::Track with_ticks = simulate_track(o);
+  tracks::TrackData d = with_ticks.data();
   d.ticks_l.clear();
   d.ticks_r.clear();
-  const DiagInput from_rates = build_diag_input(Track(std::move(d)));
+  const DiagInput from_rates = build_diag_input(tracks::Track(std::move(d)));
   const DiagInput from_ticks = build_diag_input(with_ticks);
   ASSERT_EQ(from_rates.odo_t_s, from_ticks.odo_t_s);
   double worst = 0.0;
@@ -83,12 +83,12 @@ TEST(DiagInput, WheelRatesAreIntegratedLikeTheTicks) {
 TEST(DiagInput, CommandsAloneAreBodyVelocityOdometry) {
   SimTrackOptions o = short_run();
   o.encoders = false;
-  const Track tr = simulate_track(o);
+  const tracks::Track tr = simulate_track(o);
   const DiagInput in = build_diag_input(tr);
   EXPECT_EQ(in.odometry, OdometryKind::body_velocity);
   ASSERT_EQ(in.v_mps.size(), tr.size());
-  EXPECT_EQ(in.v_mps[700], tr.col(Col::v_cmd)[700]);
-  EXPECT_EQ(in.w_radps[700], tr.col(Col::w_cmd)[700]);
+  EXPECT_EQ(in.v_mps[700], tr.col(tracks::Col::v_cmd)[700]);
+  EXPECT_EQ(in.w_radps[700], tr.col(tracks::Col::w_cmd)[700]);
   EXPECT_TRUE(in.phi_l_rad.empty());
   EXPECT_TRUE(in.cmd_v_mps.empty());
   EXPECT_EQ(in.wheel_base_m, 0.42);  // kept from the metadata
@@ -100,7 +100,7 @@ TEST(DiagInput, FixesAsReferenceWithStatedOrEstimatedSigma) {
   o.gt_rate_hz = 0.0;
   o.aps_rate_hz = 2.0;
   o.aps_sigma_m = 0.04;
-  const Track tr = simulate_track(o);
+  const tracks::Track tr = simulate_track(o);
   const DiagInput in = build_diag_input(tr);
   EXPECT_EQ(in.reference, ReferenceKind::aps);
   EXPECT_FALSE(in.has_ref_heading());
@@ -108,28 +108,28 @@ TEST(DiagInput, FixesAsReferenceWithStatedOrEstimatedSigma) {
   EXPECT_EQ(in.ref_sigma_m, 0.04);
   EXPECT_NEAR(static_cast<double>(in.ref_t_s.size()), 2.0 * tr.duration_s(), 2.0);
 
-  TrackData d = tr.data();
+  tracks::TrackData d = tr.data();
   drop_meta(d, "sim.aps_sigma_m");
-  const DiagInput est = build_diag_input(Track(std::move(d)));
+  const DiagInput est = build_diag_input(tracks::Track(std::move(d)));
   EXPECT_GT(est.ref_sigma_m, 0.7 * 0.04);
   EXPECT_LT(est.ref_sigma_m, 1.4 * 0.04);
 }
 
 TEST(DiagInput, GroundTruthWithoutHeadingOrWrapped) {
-  const Track tr = simulate_track(short_run());
+  const tracks::Track tr = simulate_track(short_run());
   const DiagInput base = build_diag_input(tr);
 
-  TrackData no_theta = tr.data();
-  no_theta.col(Col::gt_theta).clear();
-  const DiagInput a = build_diag_input(Track(std::move(no_theta)));
+  tracks::TrackData no_theta = tr.data();
+  no_theta.col(tracks::Col::gt_theta).clear();
+  const DiagInput a = build_diag_input(tracks::Track(std::move(no_theta)));
   EXPECT_EQ(a.reference, ReferenceKind::gt);
   EXPECT_FALSE(a.has_ref_heading());
   EXPECT_TRUE(std::isnan(a.ref_sigma_rad));
   EXPECT_EQ(a.ref_x_m, base.ref_x_m);
 
-  TrackData wrapped = tr.data();
-  for (double& th : wrapped.col(Col::gt_theta)) th = std::atan2(std::sin(th), std::cos(th));
-  const DiagInput b = build_diag_input(Track(std::move(wrapped)));
+  tracks::TrackData wrapped = tr.data();
+  for (double& th : wrapped.col(tracks::Col::gt_theta)) th = std::atan2(std::sin(th), std::cos(th));
+  const DiagInput b = build_diag_input(tracks::Track(std::move(wrapped)));
   ASSERT_EQ(b.ref_theta_rad.size(), base.ref_theta_rad.size());
   double max_th = 0.0;
   for (double th : base.ref_theta_rad) max_th = std::max(max_th, std::abs(th));
@@ -139,11 +139,11 @@ TEST(DiagInput, GroundTruthWithoutHeadingOrWrapped) {
 }
 
 TEST(DiagInput, NeverReadsTheSimulatedEffects) {
-  const Track tr = simulate_track(short_run());
-  TrackData d = tr.data();
+  const tracks::Track tr = simulate_track(short_run());
+  tracks::TrackData d = tr.data();
   for (auto& [k, v] : d.meta.extra)
     if (k == "sim.effects") v = "this is not an effect list";
-  const DiagInput a = build_diag_input(tr), b = build_diag_input(Track(std::move(d)));
+  const DiagInput a = build_diag_input(tr), b = build_diag_input(tracks::Track(std::move(d)));
   EXPECT_EQ(a.phi_l_rad, b.phi_l_rad);
   EXPECT_EQ(a.ref_x_m, b.ref_x_m);
   EXPECT_EQ(a.ref_sigma_m, b.ref_sigma_m);
@@ -151,19 +151,19 @@ TEST(DiagInput, NeverReadsTheSimulatedEffects) {
 }
 
 TEST(DiagInput, ReferenceOutsideTheOdometrySpanIsDropped) {
-  TrackData d;
+  tracks::TrackData d;
   d.meta.name = "hand";
   d.meta.ticks_per_rev = 1000;
   d.meta.wheel_radius_left_m = d.meta.wheel_radius_right_m = 0.1;
   d.meta.wheel_base_m = 0.5;
   for (int i = 0; i < 10; ++i) d.t.push_back(0.1 * i);
-  d.ticks_l = {kNoTick, 0, 10, 20, 30, 40, 50, 60, kNoTick, kNoTick};
+  d.ticks_l = {tracks::kNoTick, 0, 10, 20, 30, 40, 50, 60, tracks::kNoTick, tracks::kNoTick};
   d.ticks_r = d.ticks_l;
-  auto& gx = d.ensure(Col::gt_x);
-  auto& gy = d.ensure(Col::gt_y);
+  auto& gx = d.ensure(tracks::Col::gt_x);
+  auto& gy = d.ensure(tracks::Col::gt_y);
   for (int i = 0; i < 10; ++i)
     gx[static_cast<std::size_t>(i)] = 0.01 * i, gy[static_cast<std::size_t>(i)] = 0.0;
-  const DiagInput in = build_diag_input(Track(std::move(d)));
+  const DiagInput in = build_diag_input(tracks::Track(std::move(d)));
   ASSERT_EQ(in.odo_t_s.size(), 7u);
   EXPECT_DOUBLE_EQ(in.odo_t_s.front(), 0.1);
   EXPECT_EQ(in.phi_l_rad.front(), 0.0);
@@ -174,8 +174,8 @@ TEST(DiagInput, ReferenceOutsideTheOdometrySpanIsDropped) {
 }
 
 TEST(DiagInput, ErrorsAreOneLineNamingTheTrack) {
-  const Track tr = simulate_track(short_run());
-  auto message = [](const Track& t) {
+  const tracks::Track tr = simulate_track(short_run());
+  auto message = [](const tracks::Track& t) {
     try {
       build_diag_input(t);
     } catch (const std::invalid_argument& e) {
@@ -183,48 +183,48 @@ TEST(DiagInput, ErrorsAreOneLineNamingTheTrack) {
     }
     return std::string("no error");
   };
-  TrackData no_ref = tr.data();
-  no_ref.col(Col::gt_x).clear();
-  no_ref.col(Col::gt_y).clear();
-  no_ref.col(Col::gt_theta).clear();
-  const std::string m1 = message(Track(std::move(no_ref)));
+  tracks::TrackData no_ref = tr.data();
+  no_ref.col(tracks::Col::gt_x).clear();
+  no_ref.col(tracks::Col::gt_y).clear();
+  no_ref.col(tracks::Col::gt_theta).clear();
+  const std::string m1 = message(tracks::Track(std::move(no_ref)));
   EXPECT_THAT(m1, HasSubstr("track 'sim_track'"));
   EXPECT_THAT(m1, HasSubstr("no reference"));
   EXPECT_EQ(m1.find('\n'), std::string::npos);
 
-  TrackData no_radius = tr.data();
+  tracks::TrackData no_radius = tr.data();
   no_radius.meta.wheel_radius_left_m.reset();
-  EXPECT_THAT(message(Track(std::move(no_radius))), HasSubstr("robot.wheel_radius_left"));
+  EXPECT_THAT(message(tracks::Track(std::move(no_radius))), HasSubstr("robot.wheel_radius_left"));
 
-  TrackData one_row;
+  tracks::TrackData one_row;
   one_row.meta.name = "tiny";
   one_row.meta.ticks_per_rev = 100;
   one_row.meta.wheel_radius_left_m = one_row.meta.wheel_radius_right_m = 0.1;
   one_row.meta.wheel_base_m = 0.3;
   one_row.t = {0.0};
   one_row.ticks_l = one_row.ticks_r = {0};
-  one_row.ensure(Col::gt_x)[0] = 0.0;
-  one_row.ensure(Col::gt_y)[0] = 0.0;
-  EXPECT_THAT(message(Track(std::move(one_row))), HasSubstr("no usable odometry"));
+  one_row.ensure(tracks::Col::gt_x)[0] = 0.0;
+  one_row.ensure(tracks::Col::gt_y)[0] = 0.0;
+  EXPECT_THAT(message(tracks::Track(std::move(one_row))), HasSubstr("no usable odometry"));
 
-  TrackData few_fixes;
+  tracks::TrackData few_fixes;
   few_fixes.meta.name = "few";
   few_fixes.t = {0.0, 1.0, 2.0};
-  few_fixes.col(Col::v_cmd) = {0.1, 0.1, 0.1};
-  few_fixes.col(Col::w_cmd) = {0.0, 0.0, 0.0};
-  few_fixes.col(Col::aps_x) = {0.0, std::nan(""), 0.2};
-  few_fixes.col(Col::aps_y) = {0.0, std::nan(""), 0.0};
+  few_fixes.col(tracks::Col::v_cmd) = {0.1, 0.1, 0.1};
+  few_fixes.col(tracks::Col::w_cmd) = {0.0, 0.0, 0.0};
+  few_fixes.col(tracks::Col::aps_x) = {0.0, std::nan(""), 0.2};
+  few_fixes.col(tracks::Col::aps_y) = {0.0, std::nan(""), 0.0};
   // Two fixes are accepted (only a track without any reference
   // sample is refused; diagnose() says when too few leave nothing to fit) ...
-  TrackData outside = few_fixes;
-  EXPECT_EQ(message(Track(std::move(few_fixes))), "no error");
+  tracks::TrackData outside = few_fixes;
+  EXPECT_EQ(message(tracks::Track(std::move(few_fixes))), "no error");
   // ... but none within the odometry's time span is refused.
   outside.t = {0.0, 1.0, 2.0, 3.0};
-  outside.col(Col::v_cmd) = {0.1, 0.1, std::nan(""), std::nan("")};
-  outside.col(Col::w_cmd) = {0.0, 0.0, std::nan(""), std::nan("")};
-  outside.col(Col::aps_x) = {std::nan(""), std::nan(""), 0.2, 0.3};
-  outside.col(Col::aps_y) = {std::nan(""), std::nan(""), 0.0, 0.0};
-  const std::string m2 = message(Track(std::move(outside)));
+  outside.col(tracks::Col::v_cmd) = {0.1, 0.1, std::nan(""), std::nan("")};
+  outside.col(tracks::Col::w_cmd) = {0.0, 0.0, std::nan(""), std::nan("")};
+  outside.col(tracks::Col::aps_x) = {std::nan(""), std::nan(""), 0.2, 0.3};
+  outside.col(tracks::Col::aps_y) = {std::nan(""), std::nan(""), 0.0, 0.0};
+  const std::string m2 = message(tracks::Track(std::move(outside)));
   EXPECT_THAT(m2, HasSubstr("no reference sample within the odometry's time span"));
   EXPECT_EQ(m2.find('\n'), std::string::npos);
 }
@@ -232,7 +232,8 @@ TEST(DiagInput, ErrorsAreOneLineNamingTheTrack) {
 // A real recording: UTIAS MRCLAM robot 1 (commanded body velocities, Vicon
 // ground truth at irregular stamps, no sim.* metadata, no wheel base).
 TEST(DiagInput, RealMrclamTrack) {
-  const Track tr = import_mrclam(std::filesystem::path(ODOTUNE_SHARED_DIR) / "data" / "real" / "mrclam7", 1);
+  const tracks::Track tr = tracks::import_mrclam(
+      std::filesystem::path(ODOTUNE_SHARED_DIR) / "data" / "real" / "mrclam7", 1);
   const DiagInput in = build_diag_input(tr);
   EXPECT_EQ(in.odometry, OdometryKind::body_velocity);
   EXPECT_EQ(in.wheel_base_m, 0.0);

@@ -206,16 +206,16 @@ TEST(Fit, RobustLossResistsReferenceOutliers) {
   o.duration_s = 100.0;
   o.seed = 5;
   o.effects = {"radius_error:scale_l=0.99,scale_r=1.012"};
-  const Track clean = simulate_track(o);
-  TrackData d = clean.data();
+  const tracks::Track clean = simulate_track(o);
+  tracks::TrackData d = clean.data();
   for (std::size_t i = 0; i < d.t.size(); ++i) {
     const double in_window = std::fmod(d.t[i], 20.0);
     if (in_window < 12.0 || in_window >= 13.0) continue;
-    const double th = d.col(Col::gt_theta)[i];
-    d.col(Col::gt_x)[i] -= 0.3 * std::sin(th);
-    d.col(Col::gt_y)[i] += 0.3 * std::cos(th);
+    const double th = d.col(tracks::Col::gt_theta)[i];
+    d.col(tracks::Col::gt_x)[i] -= 0.3 * std::sin(th);
+    d.col(tracks::Col::gt_y)[i] += 0.3 * std::cos(th);
   }
-  const DiagInput in = build_diag_input(Track(std::move(d)));
+  const DiagInput in = build_diag_input(tracks::Track(std::move(d)));
   const EffectSet start = EffectSet::parse({"radius_error"});
   auto error = [&](RobustLoss loss) {
     FitOptions opt;
@@ -243,19 +243,19 @@ TEST(Fit, FreeAnchorsWithHeadingIgnoreABadAnchorSample) {
   o.duration_s = 100.0;
   o.seed = 7;
   o.effects = {"radius_error:scale_l=0.997,scale_r=1.002"};
-  const Track clean = simulate_track(o);
+  const tracks::Track clean = simulate_track(o);
   const DiagInput good = build_diag_input(clean);
   const auto windows = make_windows(good, 20.0);
-  TrackData d = clean.data();
+  tracks::TrackData d = clean.data();
   for (const Window& w : windows)
     for (std::size_t i = 0; i < d.t.size(); ++i)
-      if (std::abs(d.t[i] - w.t_begin_s) < 1e-9 && !std::isnan(d.col(Col::gt_x)[i])) {
-        const double th = d.col(Col::gt_theta)[i];
-        d.col(Col::gt_x)[i] -= 0.02 * std::sin(th);
-        d.col(Col::gt_y)[i] += 0.02 * std::cos(th);
-        d.col(Col::gt_theta)[i] += 0.02;
+      if (std::abs(d.t[i] - w.t_begin_s) < 1e-9 && !std::isnan(d.col(tracks::Col::gt_x)[i])) {
+        const double th = d.col(tracks::Col::gt_theta)[i];
+        d.col(tracks::Col::gt_x)[i] -= 0.02 * std::sin(th);
+        d.col(tracks::Col::gt_y)[i] += 0.02 * std::cos(th);
+        d.col(tracks::Col::gt_theta)[i] += 0.02;
       }
-  const DiagInput in = build_diag_input(Track(std::move(d)));
+  const DiagInput in = build_diag_input(tracks::Track(std::move(d)));
   ASSERT_EQ(make_windows(in, 20.0).size(), windows.size());
   auto error = [&](bool free_anchor) {
     FitOptions opt;

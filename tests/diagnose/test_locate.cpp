@@ -63,7 +63,7 @@ struct SeriesSpec {
 };
 
 ResidualSeries make_series(const SeriesSpec& sp, const Injection& inject) {
-  Normal ref(splitmix64(sp.seed)), walk(splitmix64(sp.seed + 7));
+  sim::Normal ref(sim::splitmix64(sp.seed)), walk(sim::splitmix64(sp.seed + 7));
   ResidualSeries s;
   const double dt = 1.0 / sp.rate_hz;
   const int n = static_cast<int>(std::round(sp.duration_s * sp.rate_hz));

@@ -40,24 +40,24 @@ SimTrackOptions run(double duration_s, double gt_rate_hz, double aps_rate_hz) {
 
 // Clears ground truth (x, y, theta) on the rows where drop(i, t) holds.
 template <class Drop>
-Track without_gt(const Track& tr, Drop drop) {
-  TrackData d = tr.data();
+tracks::Track without_gt(const tracks::Track& tr, Drop drop) {
+  tracks::TrackData d = tr.data();
   const double nan = std::nan("");
   for (std::size_t i = 0; i < d.t.size(); ++i)
     if (drop(i, d.t[i]))
-      for (Col c : {Col::gt_x, Col::gt_y, Col::gt_theta}) d.col(c)[i] = nan;
-  return Track(std::move(d));
+      for (tracks::Col c : {tracks::Col::gt_x, tracks::Col::gt_y, tracks::Col::gt_theta}) d.col(c)[i] = nan;
+  return tracks::Track(std::move(d));
 }
 
 // Clears fixes on the rows where drop(i) holds.
 template <class Drop>
-Track without_fixes(const Track& tr, Drop drop) {
-  TrackData d = tr.data();
+tracks::Track without_fixes(const tracks::Track& tr, Drop drop) {
+  tracks::TrackData d = tr.data();
   const double nan = std::nan("");
   for (std::size_t i = 0; i < d.t.size(); ++i)
     if (drop(i))
-      for (Col c : {Col::aps_x, Col::aps_y}) d.col(c)[i] = nan;
-  return Track(std::move(d));
+      for (tracks::Col c : {tracks::Col::aps_x, tracks::Col::aps_y}) d.col(c)[i] = nan;
+  return tracks::Track(std::move(d));
 }
 
 bool strictly_increasing(const std::vector<double>& t) {
@@ -76,8 +76,8 @@ TEST(ReferenceShapes, DenseGroundTruthMakesFixesRedundant) {
 }
 
 TEST(ReferenceShapes, KnownStartPlusFixesIsAMixedPositionReference) {
-  const Track full = simulate_track(run(120, 50, 2));
-  const Track tr = without_gt(full, [](std::size_t i, double) { return i > 0; });
+  const tracks::Track full = simulate_track(run(120, 50, 2));
+  const tracks::Track tr = without_gt(full, [](std::size_t i, double) { return i > 0; });
   const DiagInput in = build_diag_input(tr);
   EXPECT_EQ(in.reference, ReferenceKind::aps);  // most samples are fixes
   EXPECT_EQ(in.ref_gt_samples, 1u);
@@ -93,8 +93,9 @@ TEST(ReferenceShapes, KnownStartPlusFixesIsAMixedPositionReference) {
 }
 
 TEST(ReferenceShapes, GroundTruthWithGapsKeepsItsHeadingAndAnchorsAfterAGap) {
-  const Track tr = without_gt(simulate_track(run(120, 50, 0)),
-                              [](std::size_t, double t) { return (t >= 20 && t < 47) || (t >= 70 && t < 80); });
+  const tracks::Track tr = without_gt(simulate_track(run(120, 50, 0)), [](std::size_t, double t) {
+    return (t >= 20 && t < 47) || (t >= 70 && t < 80);
+  });
   const DiagInput in = build_diag_input(tr);
   EXPECT_EQ(in.reference, ReferenceKind::gt);
   EXPECT_TRUE(in.has_ref_heading());
@@ -116,7 +117,7 @@ TEST(ReferenceShapes, GroundTruthWithGapsKeepsItsHeadingAndAnchorsAfterAGap) {
 TEST(ReferenceShapes, HeadingIsUnwrappedThroughAGapInWhichTheRobotTurns) {
   SimTrackOptions o = run(120, 50, 0);
   o.effects = {"gyro_bias:b=0.003"};
-  const Track full = simulate_track(o);
+  const tracks::Track full = simulate_track(o);
   const DiagInput whole = build_diag_input(full);
   // The first 20 s stretch after 10 s over which the true heading turns by 3.6-5.5 rad.
   const auto& t = whole.ref_t_s;
@@ -127,7 +128,8 @@ TEST(ReferenceShapes, HeadingIsUnwrappedThroughAGapInWhichTheRobotTurns) {
     if (turn > 3.6 && turn < 5.5) gap0 = t[i];
   }
   ASSERT_GT(gap0, 0.0) << "the drive has no such turn";
-  const Track gappy = without_gt(full, [&](std::size_t, double ti) { return ti > gap0 && ti < gap0 + 20.0; });
+  const tracks::Track gappy = without_gt(full,
+                                         [&](std::size_t, double ti) { return ti > gap0 && ti < gap0 + 20.0; });
   const DiagInput in = build_diag_input(gappy);
   ASSERT_TRUE(in.has_ref_heading());
   ASSERT_LT(in.ref_t_s.size(), t.size());
@@ -146,8 +148,8 @@ TEST(ReferenceShapes, HeadingIsUnwrappedThroughAGapInWhichTheRobotTurns) {
 }
 
 TEST(ReferenceShapes, FixesFillTheGroundTruthGapsWithTheirOwnWeight) {
-  const Track tr = without_gt(simulate_track(run(120, 50, 2)),
-                              [](std::size_t, double t) { return t >= 30 && t < 60; });
+  const tracks::Track tr = without_gt(simulate_track(run(120, 50, 2)),
+                                      [](std::size_t, double t) { return t >= 30 && t < 60; });
   const DiagInput in = build_diag_input(tr);
   EXPECT_FALSE(in.has_ref_heading());
   EXPECT_NEAR(static_cast<double>(in.ref_fix_samples), 60.0, 2.0);  // 30 s of 2 Hz fixes in the gap
@@ -162,7 +164,7 @@ TEST(ReferenceShapes, FixesFillTheGroundTruthGapsWithTheirOwnWeight) {
 
 TEST(ReferenceShapes, IrregularFixesAreUsedAsTheyCome) {
   SimTrackOptions o = run(120, 0, 5);
-  const Track tr = without_fixes(simulate_track(o), [](std::size_t i) { return (i * 7919) % 13 < 8; });
+  const tracks::Track tr = without_fixes(simulate_track(o), [](std::size_t i) { return (i * 7919) % 13 < 8; });
   const DiagInput in = build_diag_input(tr);
   EXPECT_EQ(in.reference, ReferenceKind::aps);
   EXPECT_GT(in.ref_t_s.size(), 150u);
@@ -171,7 +173,7 @@ TEST(ReferenceShapes, IrregularFixesAreUsedAsTheyCome) {
 }
 
 TEST(ReferenceShapes, OnlyATrackWithoutAnyReferenceSampleIsRefused) {
-  const Track tr = without_gt(simulate_track(run(30, 50, 0)), [](std::size_t, double) { return true; });
+  const tracks::Track tr = without_gt(simulate_track(run(30, 50, 0)), [](std::size_t, double) { return true; });
   try {
     (void)build_diag_input(tr);
     FAIL() << "expected a refusal";
@@ -183,7 +185,8 @@ TEST(ReferenceShapes, OnlyATrackWithoutAnyReferenceSampleIsRefused) {
 }
 
 TEST(ReferenceShapes, KnownStartPlusFixesIsDiagnosed) {
-  const Track tr = without_gt(simulate_track(run(160, 50, 2)), [](std::size_t i, double) { return i > 0; });
+  const tracks::Track tr = without_gt(simulate_track(run(160, 50, 2)),
+                                      [](std::size_t i, double) { return i > 0; });
   const Diagnosis d = diagnose(build_diag_input(tr));
   ASSERT_FALSE(d.findings.empty()) << d.note;
   EXPECT_EQ(d.findings.front().effect, "radius_error");
@@ -191,7 +194,8 @@ TEST(ReferenceShapes, KnownStartPlusFixesIsDiagnosed) {
 }
 
 TEST(ReferenceShapes, ASinglePoseGivesNoFindingAndSaysWhy) {
-  const Track tr = without_gt(simulate_track(run(30, 50, 0)), [](std::size_t i, double) { return i > 0; });
+  const tracks::Track tr = without_gt(simulate_track(run(30, 50, 0)),
+                                      [](std::size_t i, double) { return i > 0; });
   const DiagInput in = build_diag_input(tr);
   ASSERT_EQ(in.ref_t_s.size(), 1u);
   const Diagnosis d = diagnose(in);

@@ -82,7 +82,7 @@ DiagInput make_input(const SensorTruth& tr) {
       pr[k + 1] = pr[k] + (v_true + w_true * D / 2) / Rr * h;
     }
   }
-  Normal gyro_noise(splitmix64(tr.seed)), ref_noise(splitmix64(tr.seed + 100));
+  sim::Normal gyro_noise(sim::splitmix64(tr.seed)), ref_noise(sim::splitmix64(tr.seed + 100));
   DiagInput in;
   in.track_name = "synthetic";
   in.radius_l_m = in.radius_r_m = kR;
@@ -384,7 +384,7 @@ TEST(SensorChecks, MissingGyroAndRadiiAreReportedNotThrown) {
 
 // A DiagInput read straight off a simulated Track (wheel angles from ticks,
 // or the commands as body velocities; gyro; ground truth or fixes).
-DiagInput from_track(const Track& tr, const concealed::CaseRobot& r) {
+DiagInput from_track(const tracks::Track& tr, const concealed::CaseRobot& r) {
   DiagInput in;
   in.track_name = tr.name();
   in.radius_l_m = r.radius_l_m, in.radius_r_m = r.radius_r_m, in.wheel_base_m = r.wheel_base_m;
@@ -392,28 +392,29 @@ DiagInput from_track(const Track& tr, const concealed::CaseRobot& r) {
   const auto& t = tr.t();
   const double tick = 2 * std::numbers::pi / r.ticks_per_rev;
   for (std::size_t i = 0; i < t.size(); ++i) {
-    const bool odo = tr.has_ticks() ? tr.ticks_l()[i] != kNoTick : tr.at(Col::v_cmd, i);
+    const bool odo = tr.has_ticks() ? tr.ticks_l()[i] != tracks::kNoTick : tr.at(tracks::Col::v_cmd, i);
     if (odo) {
       in.odo_t_s.push_back(t[i]);
       if (tr.has_ticks()) {
         in.phi_l_rad.push_back(tick * static_cast<double>(tr.ticks_l()[i] - tr.ticks_l()[0]));
         in.phi_r_rad.push_back(tick * static_cast<double>(tr.ticks_r()[i] - tr.ticks_r()[0]));
-        in.cmd_v_mps.push_back(tr.col(Col::v_cmd)[i]);
-        in.cmd_w_radps.push_back(tr.col(Col::w_cmd)[i]);
+        in.cmd_v_mps.push_back(tr.col(tracks::Col::v_cmd)[i]);
+        in.cmd_w_radps.push_back(tr.col(tracks::Col::w_cmd)[i]);
       } else {
-        in.v_mps.push_back(tr.col(Col::v_cmd)[i]);
-        in.w_radps.push_back(tr.col(Col::w_cmd)[i]);
+        in.v_mps.push_back(tr.col(tracks::Col::v_cmd)[i]);
+        in.w_radps.push_back(tr.col(tracks::Col::w_cmd)[i]);
       }
     }
-    if (tr.at(Col::gyro_z, i)) in.gyro_t_s.push_back(t[i]), in.gyro_z_radps.push_back(tr.col(Col::gyro_z)[i]);
-    if (tr.at(Col::gt_x, i)) {
+    if (tr.at(tracks::Col::gyro_z, i))
+      in.gyro_t_s.push_back(t[i]), in.gyro_z_radps.push_back(tr.col(tracks::Col::gyro_z)[i]);
+    if (tr.at(tracks::Col::gt_x, i)) {
       in.ref_t_s.push_back(t[i]);
-      in.ref_x_m.push_back(tr.col(Col::gt_x)[i]), in.ref_y_m.push_back(tr.col(Col::gt_y)[i]);
-      in.ref_theta_rad.push_back(tr.col(Col::gt_theta)[i]);
-    } else if (tr.at(Col::aps_x, i)) {
+      in.ref_x_m.push_back(tr.col(tracks::Col::gt_x)[i]), in.ref_y_m.push_back(tr.col(tracks::Col::gt_y)[i]);
+      in.ref_theta_rad.push_back(tr.col(tracks::Col::gt_theta)[i]);
+    } else if (tr.at(tracks::Col::aps_x, i)) {
       in.reference = ReferenceKind::aps;
       in.ref_t_s.push_back(t[i]);
-      in.ref_x_m.push_back(tr.col(Col::aps_x)[i]), in.ref_y_m.push_back(tr.col(Col::aps_y)[i]);
+      in.ref_x_m.push_back(tr.col(tracks::Col::aps_x)[i]), in.ref_y_m.push_back(tr.col(tracks::Col::aps_y)[i]);
     }
   }
   return in;

@@ -29,7 +29,7 @@ constexpr double kAmp = 0.01, kPhase = 0.4;  // radius ±1 % once per turn
 
 // A 90 s drive of sim_track.h's circuit by a robot with 0.15 m wheels,
 // ground truth at 50 Hz (1 mm), with `terms` planted.
-Track track_with_terms(const std::vector<sim::ModelTerm>& terms, std::uint64_t seed) {
+tracks::Track track_with_terms(const std::vector<sim::ModelTerm>& terms, std::uint64_t seed) {
   testing_support::SimTrackOptions o;
   o.duration_s = 90.0, o.seed = seed;
   o.wheel_radius_left_m = o.wheel_radius_right_m = 0.15;
@@ -42,7 +42,7 @@ Track track_with_terms(const std::vector<sim::ModelTerm>& terms, std::uint64_t s
 }
 
 // The same drive, the left wheel out of round when asked.
-Track out_of_round_track(bool planted, std::uint64_t seed) {
+tracks::Track out_of_round_track(bool planted, std::uint64_t seed) {
   if (!planted) return track_with_terms({}, seed);
   return track_with_terms({{TermTarget::v_l, TermBasis::sin_1, kAmp * std::cos(kPhase)},
                            {TermTarget::v_l, TermBasis::cos_1, kAmp * std::sin(kPhase)}},

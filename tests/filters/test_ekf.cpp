@@ -64,7 +64,7 @@ TEST(DiffDrive, PoseIsCoreMidpointAdvanceBitForBit) {
     const double base = 0.3 + 0.2 * U(rng);
     const Pose next = diff_drive_step(x, u, base).next;
     double px = x(kX), py = x(kY), th = x(kTheta);
-    midpoint_advance(&px, &py, &th, u.left_m, u.right_m, base);
+    core::midpoint_advance(&px, &py, &th, u.left_m, u.right_m, base);
     EXPECT_EQ(next(kX), px);
     EXPECT_EQ(next(kY), py);
     EXPECT_EQ(next(kTheta), th);
@@ -80,16 +80,16 @@ TEST(PlanarMotion, ArcStepClosesACircleAndSincIsSmooth) {
   double x = 1, y = -2, th = 0.3;
   for (int k = 0; k < n; ++k) {
     const double half = 0.5 * w * hh;
-    arc_advance(&x, &y, &th, half, sinc(half) * hh, v, 0.0, w * hh);
+    core::arc_advance(&x, &y, &th, half, core::sinc(half) * hh, v, 0.0, w * hh);
   }
   EXPECT_NEAR(x, 1.0, 1e-9);
   EXPECT_NEAR(y, -2.0, 1e-9);
   double sx = 0, sy = 0, sth = M_PI / 2;
-  arc_advance(&sx, &sy, &sth, 0.0, 1.0, 2.0, 0.0, 0.0);
+  core::arc_advance(&sx, &sy, &sth, 0.0, 1.0, 2.0, 0.0, 0.0);
   EXPECT_NEAR(sx, 0.0, 1e-15);
   EXPECT_NEAR(sy, 2.0, 1e-15);
-  for (double u : {1e-6, 9.9e-5, 1.01e-4, 1e-3}) EXPECT_NEAR(sinc(u), std::sin(u) / u, 1e-15) << u;
-  EXPECT_EQ(sinc(0.0), 1.0);
+  for (double u : {1e-6, 9.9e-5, 1.01e-4, 1e-3}) EXPECT_NEAR(core::sinc(u), std::sin(u) / u, 1e-15) << u;
+  EXPECT_EQ(core::sinc(0.0), 1.0);
 }
 
 TEST(EkfNoise, WheelVariancesFollowEquations3To7) {

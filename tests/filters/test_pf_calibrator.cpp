@@ -41,7 +41,7 @@ TEST(PfKernels, LogMatchesStdLog) {
   }
   // Random mantissas and exponents over the whole normal range.
   for (std::uint64_t k = 0; k < 100000; ++k) {
-    const std::uint64_t bits = splitmix64_mix(k);
+    const std::uint64_t bits = core::splitmix64_mix(k);
     const double m = 1.0 + static_cast<double>(bits >> 12) * 0x1.0p-52;
     const double x = std::ldexp(m, static_cast<int>(bits % 2040) - 1020);
     const double err = std::abs(pf_kernels::fast_log_positive(x) - std::log(x));
@@ -76,10 +76,10 @@ TEST(PfKernels, BoxMullerDeviatesAreStandardNormal) {
   constexpr long kPairs = 1000000;
   const double n = 2.0 * kPairs;
   double s1 = 0, s2 = 0, s4 = 0, cross = 0, beyond2 = 0, largest = 0;
-  const std::uint64_t key = counter_hash(5, 1, 0, 0, 77);
+  const std::uint64_t key = core::counter_hash(5, 1, 0, 0, 77);
   for (long k = 0; k < kPairs; ++k) {
     const auto z = pf_kernels::normal_pair_from_bits(
-        splitmix64_mix(key + static_cast<std::uint64_t>(k) * pf_kernels::kGolden));
+        core::splitmix64_mix(key + static_cast<std::uint64_t>(k) * pf_kernels::kGolden));
     for (const double x : {z.first, z.second}) {
       s1 += x;
       s2 += x * x;
@@ -104,7 +104,7 @@ TEST(PfKernels, UniformHalvesAreUniform) {
   constexpr long kDraws = 200000;
   double s_hi = 0, s_lo = 0, q_hi = 0, cross = 0;
   for (long k = 0; k < kDraws; ++k) {
-    const std::uint64_t bits = splitmix64_mix(static_cast<std::uint64_t>(k) * pf_kernels::kGolden);
+    const std::uint64_t bits = core::splitmix64_mix(static_cast<std::uint64_t>(k) * pf_kernels::kGolden);
     const double hi = pf_kernels::uniform_high32(bits);
     const double lo = pf_kernels::uniform_low32(bits);
     ASSERT_GT(hi, 0.0);

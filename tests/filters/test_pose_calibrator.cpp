@@ -73,7 +73,7 @@ Drive drive(double duration_s, double speed, double fix_hz, double fix_sd, std::
     // The wheels' angles from the true radii; the ground rolls with noise.
     const double lr = l + std::sqrt(1e-6 * std::abs(l)) * N(rng),
                  rr = r + std::sqrt(1e-6 * std::abs(r)) * N(rng);
-    midpoint_advance(&x, &y, &th, lr, rr, g.base);
+    core::midpoint_advance(&x, &y, &th, lr, rr, g.base);
     PoseCalibSample s{dt, l / g.r_left, r / g.r_right};
     if (t + 1e-9 >= next_fix) {
       s.has_fix = true;

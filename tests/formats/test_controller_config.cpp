@@ -23,7 +23,7 @@
 #include "support/cli_runner.h"
 #include "support/temp_dir.h"
 
-namespace odotune {
+namespace odotune::formats {
 namespace {
 
 using ::testing::HasSubstr;
@@ -242,7 +242,7 @@ TEST(ControllerConfig, InvalidInputIsRefusedAndNothingIsWritten) {
     try {
       write_controller_config(g, o, path);
       ADD_FAILURE() << "accepted: " << needle;
-    } catch (const Failure& e) {
+    } catch (const core::Failure& e) {
       EXPECT_THAT(e.what(), HasSubstr(needle));
       EXPECT_THAT(e.what(), HasSubstr("ddc.yaml: not written"));
       EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << "one line";
@@ -281,4 +281,4 @@ TEST(ControllerConfig, InvalidInputIsRefusedAndNothingIsWritten) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::formats

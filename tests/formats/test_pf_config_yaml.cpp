@@ -14,14 +14,14 @@
 
 #include "support/temp_dir.h"
 
-namespace odotune {
+namespace odotune::formats {
 namespace {
 
 using testing_support::TempDir;
 
-odotune::PfConfig sample() {
-  odotune::PfConfig c;
-  c.method = CalibrationMethod::pf;
+odotune::formats::PfConfig sample() {
+  odotune::formats::PfConfig c;
+  c.method = calibration::CalibrationMethod::pf;
   c.resampler = filters::Resampler::residual;
   c.policy = filters::ResamplePolicy::max_weight;
   c.particles = 1234;
@@ -33,9 +33,9 @@ odotune::PfConfig sample() {
 TEST(PfConfigYaml, RoundTripsBitForBit) {
   TempDir tmp;
   const auto path = tmp / "pf.yaml";
-  odotune::write_pf_config(sample(), path);
-  const odotune::PfConfig back = odotune::read_pf_config(path);
-  EXPECT_EQ(back.method, CalibrationMethod::pf);
+  odotune::formats::write_pf_config(sample(), path);
+  const odotune::formats::PfConfig back = odotune::formats::read_pf_config(path);
+  EXPECT_EQ(back.method, calibration::CalibrationMethod::pf);
   EXPECT_EQ(back.resampler, filters::Resampler::residual);
   EXPECT_EQ(back.policy, filters::ResamplePolicy::max_weight);
   EXPECT_EQ(back.particles, 1234);
@@ -51,7 +51,7 @@ TEST(PfConfigYaml, AppliesTheFileAndKeepsTheRobotsRangesAndSeed) {
   base.wheel_radius_left_m = {0.04, 0.06};
   base.seed = 99;
   base.adaptive = true;
-  const filters::PfCalibratorParams p = odotune::apply_pf_config(sample(), base);
+  const filters::PfCalibratorParams p = odotune::formats::apply_pf_config(sample(), base);
   EXPECT_FALSE(p.adaptive);  // method pf
   EXPECT_EQ(p.resampler, filters::Resampler::residual);
   EXPECT_EQ(p.policy, filters::ResamplePolicy::max_weight);
@@ -68,9 +68,9 @@ void expect_error(const std::string& text, int line, const std::string& what) {
   const auto path = tmp / "bad.yaml";
   std::ofstream(path) << text;
   try {
-    odotune::read_pf_config(path);
+    odotune::formats::read_pf_config(path);
     ADD_FAILURE() << "no error for:\n" << text;
-  } catch (const odotune::Failure& e) {
+  } catch (const odotune::core::Failure& e) {
     const std::string msg = e.what();
     EXPECT_NE(msg.find(path.string() + ":" + std::to_string(line) + ":"), std::string::npos) << msg;
     EXPECT_NE(msg.find(what), std::string::npos) << msg;
@@ -91,10 +91,11 @@ std::string replaced(std::string s, const std::string& from, const std::string& 
 TEST(PfConfigYaml, ReadsTheDocumentedExample) {
   TempDir tmp;
   std::ofstream(tmp / "ok.yaml") << kGood;
-  const odotune::PfConfig c = odotune::read_pf_config(tmp / "ok.yaml");
-  EXPECT_EQ(c.method, CalibrationMethod::adaptive_pf);
+  const odotune::formats::PfConfig c = odotune::formats::read_pf_config(tmp / "ok.yaml");
+  EXPECT_EQ(c.method, calibration::CalibrationMethod::adaptive_pf);
   EXPECT_EQ(c.particles, 8000);
-  const std::vector<double> paper = calibration_params_of(filters::PfCalibratorParams::adaptive_defaults());
+  const std::vector<double> paper = calibration::calibration_params_of(
+      filters::PfCalibratorParams::adaptive_defaults());
   ASSERT_EQ(c.params.size(), paper.size());
   for (std::size_t i = 0; i < paper.size(); ++i) EXPECT_NEAR(c.params[i], paper[i], 1e-12 * paper[i]) << i;
 }
@@ -114,8 +115,8 @@ TEST(PfConfigYaml, ErrorsNameFileAndLine) {
 
 TEST(PfConfigYaml, MissingFileIsOneLine) {
   TempDir tmp;
-  EXPECT_THROW(odotune::read_pf_config(tmp / "none.yaml"), odotune::Failure);
+  EXPECT_THROW(odotune::formats::read_pf_config(tmp / "none.yaml"), odotune::core::Failure);
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::formats

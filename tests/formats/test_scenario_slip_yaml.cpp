@@ -40,25 +40,25 @@ const std::string kMotion = "motion:\n"
 
 std::string error_of(const std::string& yaml) {
   try {
-    (void)parse_scenario(yaml, "s.yaml");
-  } catch (const ScenarioError& e) {
+    (void)formats::parse_scenario(yaml, "s.yaml");
+  } catch (const formats::ScenarioError& e) {
     return e.what();
   }
   return "no error";
 }
 
 TEST(ScenarioSlipYaml, ParsesAListOfEpisodes) {
-  const sim::Scenario sc = parse_scenario(kMotion +
-                                              "slip_episodes:\n"                                           // 4
-                                              "  - {kind: spin, wheel: left, t0_s: 2, t1_s: 4, s: 0.6}\n"  // 5
-                                              "  - kind: hold\n"                                           // 6
-                                              "    wheel: right\n"
-                                              "    t0_s: 3.5\n"
-                                              "    t1_s: 7\n"
-                                              "    s: 0.45\n"
-                                              "    ramp_s: 0.5\n"
-                                              "    brake_nm: 12.5\n",
-                                          "s.yaml");
+  const sim::Scenario sc = formats::parse_scenario(
+      kMotion + "slip_episodes:\n"                                           // 4
+                "  - {kind: spin, wheel: left, t0_s: 2, t1_s: 4, s: 0.6}\n"  // 5
+                "  - kind: hold\n"                                           // 6
+                "    wheel: right\n"
+                "    t0_s: 3.5\n"
+                "    t1_s: 7\n"
+                "    s: 0.45\n"
+                "    ramp_s: 0.5\n"
+                "    brake_nm: 12.5\n",
+      "s.yaml");
   ASSERT_EQ(sc.slip_episodes.size(), 2u);
   const sim::SlipEpisode& a = sc.slip_episodes[0];
   EXPECT_EQ(a.kind, Kind::spin);
@@ -79,9 +79,9 @@ TEST(ScenarioSlipYaml, ParsesAListOfEpisodes) {
   EXPECT_EQ(b.brake_nm, 12.5);
   EXPECT_EQ(b.line, 6);
   // An empty list or none at all.
-  EXPECT_TRUE(parse_scenario(kMotion + "slip_episodes: []\n", "s.yaml").slip_episodes.empty());
-  EXPECT_TRUE(parse_scenario(kMotion + "slip_episodes:\n", "s.yaml").slip_episodes.empty());
-  EXPECT_TRUE(parse_scenario(kMotion, "s.yaml").slip_episodes.empty());
+  EXPECT_TRUE(formats::parse_scenario(kMotion + "slip_episodes: []\n", "s.yaml").slip_episodes.empty());
+  EXPECT_TRUE(formats::parse_scenario(kMotion + "slip_episodes:\n", "s.yaml").slip_episodes.empty());
+  EXPECT_TRUE(formats::parse_scenario(kMotion, "s.yaml").slip_episodes.empty());
 }
 
 TEST(ScenarioSlipYaml, ErrorsNameFileLineAndField) {
@@ -144,7 +144,7 @@ TEST(ScenarioSlipYaml, ErrorsNameFileLineAndField) {
 }
 
 TEST(ScenarioSlipYaml, WriteThenReadGivesTheSameEpisodesAndTrack) {
-  sim::Scenario sc = parse_scenario(kMotion, "s.yaml");
+  sim::Scenario sc = formats::parse_scenario(kMotion, "s.yaml");
   sc.sensors.power.sigma_w = 0.5;
   sim::SlipEpisode a;
   a.kind = Kind::hold;
@@ -161,10 +161,10 @@ TEST(ScenarioSlipYaml, WriteThenReadGivesTheSameEpisodesAndTrack) {
   b.t1_s = 9.5;
   b.s = 0.9;
   sc.slip_episodes = {a, b};
-  const std::string yaml = scenario_to_yaml(sc, "slip round trip");
+  const std::string yaml = formats::scenario_to_yaml(sc, "slip round trip");
   EXPECT_THAT(yaml, HasSubstr("slip_episodes:\n  - {kind: hold, wheel: right, t0_s: 0.30000000000000004, "));
   EXPECT_THAT(yaml, HasSubstr("  - {kind: spin, wheel: right, t0_s: 5, t1_s: 9.5, s: 0.9, ramp_s: 0.2}\n"));
-  const sim::Scenario back = parse_scenario(yaml, "s.yaml");
+  const sim::Scenario back = formats::parse_scenario(yaml, "s.yaml");
   ASSERT_EQ(back.slip_episodes.size(), 2u);
   for (std::size_t i = 0; i < 2; ++i) {
     const auto &x = sc.slip_episodes[i], &y = back.slip_episodes[i];
@@ -178,13 +178,13 @@ TEST(ScenarioSlipYaml, WriteThenReadGivesTheSameEpisodesAndTrack) {
   }
   auto text = [](const sim::Scenario& s) {
     std::ostringstream out;
-    format_track(sim::simulate(s), out);
+    tracks::format_track(sim::simulate(s), out);
     return out.str();
   };
   EXPECT_EQ(text(back), text(sc));
   // No episodes: no key written.
   sc.slip_episodes.clear();
-  EXPECT_THAT(scenario_to_yaml(sc, ""), Not(HasSubstr("slip_episodes")));
+  EXPECT_THAT(formats::scenario_to_yaml(sc, ""), Not(HasSubstr("slip_episodes")));
 }
 
 fs::path scenario(const std::string& stem) {
@@ -223,9 +223,9 @@ std::string route_of(const sim::Scenario& sc) {
 }
 
 TEST(ScenarioSlipYaml, WheelchairLearningScenariosParseAndValidate) {
-  const sim::Scenario learn = load_scenario(scenario("wheelchair_learn"));
-  const sim::Scenario eval = load_scenario(scenario("wheelchair_learn_eval"));
-  const sim::Scenario step = load_scenario(scenario("wheelchair_learn_step"));
+  const sim::Scenario learn = formats::load_scenario(scenario("wheelchair_learn"));
+  const sim::Scenario eval = formats::load_scenario(scenario("wheelchair_learn_eval"));
+  const sim::Scenario step = formats::load_scenario(scenario("wheelchair_learn_step"));
   for (const sim::Scenario* sc : {&learn, &eval, &step}) {
     expect_learning_setup(*sc);
     EXPECT_TRUE(sc->slip_episodes.empty());
@@ -240,7 +240,7 @@ TEST(ScenarioSlipYaml, WheelchairLearningScenariosParseAndValidate) {
   sim::Scenario same = step;
   same.effects.radius_step.reset();
   same.name = eval.name;
-  EXPECT_EQ(scenario_to_yaml(same, ""), scenario_to_yaml(eval, ""));
+  EXPECT_EQ(formats::scenario_to_yaml(same, ""), formats::scenario_to_yaml(eval, ""));
   // The step at about 40 % of the drive.
   const double duration = sim::MotionProfile(step.motion).duration_s();
   EXPECT_GT(step.effects.radius_step->t, 0.3 * duration);
@@ -248,8 +248,8 @@ TEST(ScenarioSlipYaml, WheelchairLearningScenariosParseAndValidate) {
 }
 
 TEST(ScenarioSlipYaml, WheelchairSlipScenariosHaveEpisodesOfBothKindsOnBothWheels) {
-  const sim::Scenario train = load_scenario(scenario("wheelchair_slip"));
-  const sim::Scenario eval = load_scenario(scenario("wheelchair_slip_eval"));
+  const sim::Scenario train = formats::load_scenario(scenario("wheelchair_slip"));
+  const sim::Scenario eval = formats::load_scenario(scenario("wheelchair_slip_eval"));
   expect_learning_setup(train);
   expect_learning_setup(eval);
   EXPECT_NE(route_of(train), route_of(eval));
@@ -286,10 +286,11 @@ TEST(ScenarioSlipYaml, SimulateRandomSlipWritesTheSeededLayoutInPlaceOfTheScenar
   const auto r = testing_support::run_cli(fmt::format("simulate {} --random-slip 5 -o {}", file, out));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("(random layout 5)"));
-  const sim::Scenario sc = load_scenario(file);
+  const sim::Scenario sc = formats::load_scenario(file);
   const auto expected = sim::random_slip_episodes(sim::MotionProfile(sc.motion), 5);
   ASSERT_FALSE(expected.empty());
-  const std::vector<sim::SlipEpisode> written = sim::slip_episodes_from_metadata(read_track(out).meta());
+  const std::vector<sim::SlipEpisode> written = sim::slip_episodes_from_metadata(
+      tracks::read_track(out).meta());
   EXPECT_EQ(sim::format_slip_episodes(written), sim::format_slip_episodes(expected));
   EXPECT_NE(sim::format_slip_episodes(written), sim::format_slip_episodes(sc.slip_episodes));
 

@@ -9,7 +9,7 @@
 
 #include <odotune/formats/scenario_yaml.h>
 
-namespace odotune {
+namespace odotune::formats {
 namespace {
 
 using ::testing::HasSubstr;
@@ -67,4 +67,4 @@ TEST(ScenarioTermsYaml, ErrorsNameFileLineAndField) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::formats

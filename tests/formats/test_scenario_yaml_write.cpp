@@ -35,7 +35,7 @@ fs::path bundled_scenario(int i) {
 
 std::string track_text(const sim::Scenario& sc) {
   std::ostringstream out;
-  format_track(sim::simulate(sc), out);
+  tracks::format_track(sim::simulate(sc), out);
   return out.str();
 }
 
@@ -132,11 +132,11 @@ void expect_same(const sim::Scenario& a, const sim::Scenario& b) {
 TEST(ScenarioYamlWrite, ReferenceScenariosRoundTripAndSimulateIdentically) {
   for (int i = 1; i <= 5; ++i) {
     SCOPED_TRACE("track" + std::to_string(i));
-    const sim::Scenario sc = load_scenario(bundled_scenario(i));
-    const std::string yaml = scenario_to_yaml(sc, "written back by the test\nsecond line");
+    const sim::Scenario sc = formats::load_scenario(bundled_scenario(i));
+    const std::string yaml = formats::scenario_to_yaml(sc, "written back by the test\nsecond line");
     EXPECT_THAT(yaml, StartsWith("# written back by the test\n# second line\n\nname: \"track"));
     EXPECT_THAT(yaml, Not(HasSubstr("start")));  // at the origin: written as before the start pose existed
-    const sim::Scenario back = parse_scenario(yaml, sc.source);
+    const sim::Scenario back = formats::parse_scenario(yaml, sc.source);
     expect_same(sc, back);
     EXPECT_EQ(back.source, sc.source);
     EXPECT_TRUE(track_text(back) == track_text(sc)) << "re-simulated track differs";
@@ -186,44 +186,45 @@ sim::Scenario knots_scenario() {
 TEST(ScenarioYamlWrite, KnotsScenarioWithAllEffectsRoundTripsExactly) {
   const sim::Scenario sc = knots_scenario();
   ASSERT_EQ(sim::active_effects(sc.effects).size(), sim::effect_table().size());
-  const std::string yaml = scenario_to_yaml(sc, "");
+  const std::string yaml = formats::scenario_to_yaml(sc, "");
   EXPECT_THAT(yaml, StartsWith("name: "));  // no header
   EXPECT_THAT(yaml, HasSubstr("\n    - [0.1, 0.30000000000000004, 0.3333333333333333]\n"));
   EXPECT_THAT(yaml, HasSubstr("\n    - [0, -0, 0]\n"));
   EXPECT_THAT(yaml, HasSubstr("\nmotion:\n  start: {x_m: 0.30000000000000004, y_m: -0.001, "
                               "theta_rad: -0.6666666666666666}\n"));
-  const sim::Scenario back = parse_scenario(yaml, "knots.yaml");
+  const sim::Scenario back = formats::parse_scenario(yaml, "knots.yaml");
   expect_same(sc, back);
   EXPECT_TRUE(track_text(back) == track_text(sc)) << "re-simulated track differs";
   // One non-zero coordinate is enough for all three to be written.
   sim::Scenario only_theta = sc;
   only_theta.motion.start_x_m = only_theta.motion.start_y_m = 0;
-  const std::string yaml2 = scenario_to_yaml(only_theta, "");
+  const std::string yaml2 = formats::scenario_to_yaml(only_theta, "");
   EXPECT_THAT(yaml2, HasSubstr("\n  start: {x_m: 0, y_m: 0, theta_rad: -0.6666666666666666}\n"));
-  expect_same(only_theta, parse_scenario(yaml2, "knots.yaml"));
+  expect_same(only_theta, formats::parse_scenario(yaml2, "knots.yaml"));
 }
 
 TEST(ScenarioYamlWrite, TheCorrectedScenarioOfATrackRoundTrips) {
   // The diagnose flow: track -> scenario_from_track -> YAML -> simulate.
-  const Track tr = read_track(source_root() / "data/tracks/track2.csv");
+  const tracks::Track tr = tracks::read_track(source_root() / "data/tracks/track2.csv");
   sim::Scenario sc = sim::scenario_from_track(tr, {"lateral_skid:k=0.021", "radius_error:scale_l=0.996"});
   sc.source = "track2-corrected.yaml";
-  const std::string yaml = scenario_to_yaml(sc, "odotune diagnose: corrected model of track2\n\neffects: ...");
+  const std::string yaml = formats::scenario_to_yaml(
+      sc, "odotune diagnose: corrected model of track2\n\neffects: ...");
   EXPECT_THAT(yaml, StartsWith("# odotune diagnose: corrected model of track2\n#\n# effects: ...\n\n"));
-  const sim::Scenario back = parse_scenario(yaml, "track2-corrected.yaml");
+  const sim::Scenario back = formats::parse_scenario(yaml, "track2-corrected.yaml");
   expect_same(sc, back);
   EXPECT_TRUE(track_text(back) == track_text(sc)) << "re-simulated track differs";
   // Its start is the recording's first ground-truth pose (track2 starts at
   // the origin; the fit reproduces it to the columns' 1e-5 m / 1e-6 rad).
-  EXPECT_NEAR(back.motion.start_x_m, tr.col(Col::gt_x).front(), 1e-4);
-  EXPECT_NEAR(back.motion.start_y_m, tr.col(Col::gt_y).front(), 1e-4);
-  EXPECT_NEAR(back.motion.start_theta_rad, tr.col(Col::gt_theta).front(), 1e-4);
+  EXPECT_NEAR(back.motion.start_x_m, tr.col(tracks::Col::gt_x).front(), 1e-4);
+  EXPECT_NEAR(back.motion.start_y_m, tr.col(tracks::Col::gt_y).front(), 1e-4);
+  EXPECT_NEAR(back.motion.start_theta_rad, tr.col(tracks::Col::gt_theta).front(), 1e-4);
 }
 
 TEST(ScenarioYamlWrite, RefusesWhatTheReaderWouldReject) {
   auto write_error_of = [](const sim::Scenario& sc) -> std::string {
     try {
-      (void)scenario_to_yaml(sc, "x");
+      (void)formats::scenario_to_yaml(sc, "x");
     } catch (const std::invalid_argument& e) {
       EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
       return e.what();
@@ -254,8 +255,8 @@ TEST(ScenarioYamlWrite, RefusesWhatTheReaderWouldReject) {
 
 std::string write_error_of(const std::string& yaml) {
   try {
-    (void)parse_scenario(yaml, "s.yaml");
-  } catch (const ScenarioError& e) {
+    (void)formats::parse_scenario(yaml, "s.yaml");
+  } catch (const formats::ScenarioError& e) {
     EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
     return e.what();
   }
@@ -263,7 +264,7 @@ std::string write_error_of(const std::string& yaml) {
 }
 
 TEST(ScenarioYamlKnots, ParsesTriples) {
-  const sim::Scenario sc = parse_scenario(
+  const sim::Scenario sc = formats::parse_scenario(
       "motion:\n  max_accel_m_s2: 0.3\n  knots:\n    - [0, 0, 0]\n    - [1.5, 0.5, -0.25]\n"
       "    - [2, +0, 1e-3]\n",
       "k.yaml");
@@ -303,24 +304,25 @@ TEST(ScenarioYamlKnots, ErrorsNameFileLineAndKnot) {
 
 TEST(ScenarioYamlStart, ParsesTheStartPoseEachKeyOptional) {
   const std::string seg = "  segments:\n    - stop: {duration_s: 1}\n";
-  sim::Scenario sc = parse_scenario("motion:\n  start: {x_m: 1.5, y_m: -2, theta_rad: 0.7}\n" + seg, "a.yaml");
+  sim::Scenario sc = formats::parse_scenario("motion:\n  start: {x_m: 1.5, y_m: -2, theta_rad: 0.7}\n" + seg,
+                                             "a.yaml");
   EXPECT_EQ(sc.motion.start_x_m, 1.5);
   EXPECT_EQ(sc.motion.start_y_m, -2.0);
   EXPECT_EQ(sc.motion.start_theta_rad, 0.7);
-  sc = parse_scenario("motion:\n  start:\n    theta_rad: -3\n" + seg, "a.yaml");
+  sc = formats::parse_scenario("motion:\n  start:\n    theta_rad: -3\n" + seg, "a.yaml");
   EXPECT_EQ(sc.motion.start_x_m, 0.0);
   EXPECT_EQ(sc.motion.start_y_m, 0.0);
   EXPECT_EQ(sc.motion.start_theta_rad, -3.0);
-  sc = parse_scenario("motion:\n  start: {}\n" + seg, "a.yaml");
+  sc = formats::parse_scenario("motion:\n  start: {}\n" + seg, "a.yaml");
   EXPECT_EQ(sc.motion.start_x_m, 0.0);
-  sc = parse_scenario("motion:\n" + seg, "a.yaml");
+  sc = formats::parse_scenario("motion:\n" + seg, "a.yaml");
   EXPECT_EQ(sc.motion.start_theta_rad, 0.0);
   // ... and the simulated ground truth starts there.
-  sc = parse_scenario("motion:\n  start: {x_m: 1.5, y_m: -2, theta_rad: 0.7}\n" + seg, "a.yaml");
-  const Track tr = sim::simulate(sc);
-  EXPECT_EQ(tr.col(Col::gt_x).front(), 1.5);
-  EXPECT_EQ(tr.col(Col::gt_y).front(), -2.0);
-  EXPECT_EQ(tr.col(Col::gt_theta).front(), 0.7);
+  sc = formats::parse_scenario("motion:\n  start: {x_m: 1.5, y_m: -2, theta_rad: 0.7}\n" + seg, "a.yaml");
+  const tracks::Track tr = sim::simulate(sc);
+  EXPECT_EQ(tr.col(tracks::Col::gt_x).front(), 1.5);
+  EXPECT_EQ(tr.col(tracks::Col::gt_y).front(), -2.0);
+  EXPECT_EQ(tr.col(tracks::Col::gt_theta).front(), 0.7);
 }
 
 TEST(ScenarioYamlStart, ErrorsNameFileLineAndKey) {

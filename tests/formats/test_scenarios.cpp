@@ -50,10 +50,10 @@ std::string first_difference(const std::string& a, const std::string& b) {
 TEST(ReferenceScenarios, RegenerateTheCommittedTracksByteForByte) {
   for (int i = 1; i <= 5; ++i) {
     SCOPED_TRACE("track" + std::to_string(i));
-    const sim::Scenario sc = load_scenario(scenario_file(i));
+    const sim::Scenario sc = formats::load_scenario(scenario_file(i));
     EXPECT_EQ(sc.source, "track" + std::to_string(i) + ".yaml");
     std::ostringstream out;
-    format_track(sim::simulate(sc), out);
+    tracks::format_track(sim::simulate(sc), out);
     const std::string committed = slurp(track_file(i));
     ASSERT_FALSE(committed.empty()) << "missing " << track_file(i);
     EXPECT_TRUE(out.str() == committed)
@@ -62,8 +62,8 @@ TEST(ReferenceScenarios, RegenerateTheCommittedTracksByteForByte) {
 }
 
 // Mean |heading rate| [rad/s] from the ground truth.
-double mean_turn_rate(const Track& tr) {
-  const auto& th = tr.col(Col::gt_theta);
+double mean_turn_rate(const tracks::Track& tr) {
+  const auto& th = tr.col(tracks::Col::gt_theta);
   double sum = 0;
   for (std::size_t i = 1; i < tr.size(); ++i) sum += std::abs(th[i] - th[i - 1]);
   return sum / tr.duration_s();
@@ -73,15 +73,17 @@ TEST(ReferenceScenarios, TracksAreWellFormedAndTrack5TurnsMost) {
   std::vector<double> rate;
   for (int i = 1; i <= 5; ++i) {
     SCOPED_TRACE("track" + std::to_string(i));
-    const Track tr = read_track(track_file(i));
+    const tracks::Track tr = tracks::read_track(track_file(i));
     EXPECT_EQ(tr.meta().origin, "simulated");
     EXPECT_GE(tr.duration_s(), 120.0);
     EXPECT_LE(tr.duration_s(), 240.0);
     EXPECT_LT(fs::file_size(track_file(i)), 1'500'000u);
     EXPECT_TRUE(tr.has_ticks());
-    for (Col c : {Col::gyro_z, Col::power_l, Col::power_r, Col::v_cmd, Col::w_cmd, Col::v_ext, Col::w_ext,
-                  Col::v_ext_var, Col::w_ext_var, Col::aps_x, Col::aps_y, Col::gt_x, Col::gt_y, Col::gt_theta})
-      EXPECT_TRUE(tr.has(c)) << column_name(c);
+    for (tracks::Col c : {tracks::Col::gyro_z, tracks::Col::power_l, tracks::Col::power_r, tracks::Col::v_cmd,
+                          tracks::Col::w_cmd, tracks::Col::v_ext, tracks::Col::w_ext, tracks::Col::v_ext_var,
+                          tracks::Col::w_ext_var, tracks::Col::aps_x, tracks::Col::aps_y, tracks::Col::gt_x,
+                          tracks::Col::gt_y, tracks::Col::gt_theta})
+      EXPECT_TRUE(tr.has(c)) << tracks::column_name(c);
     EXPECT_EQ(tr.meta().get("sim.aps_rate_hz"), "1");
     EXPECT_EQ(tr.meta().get("sim.aps_sigma_m"), "0.06");
     EXPECT_NE(tr.meta().get("sim.effects"), "none");
@@ -94,8 +96,8 @@ TEST(ReferenceScenarios, TracksAreWellFormedAndTrack5TurnsMost) {
 
 std::string scenario_error_of(const std::string& yaml) {
   try {
-    (void)parse_scenario(yaml, "s.yaml");
-  } catch (const ScenarioError& e) {
+    (void)formats::parse_scenario(yaml, "s.yaml");
+  } catch (const formats::ScenarioError& e) {
     EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
     return e.what();
   }
@@ -105,7 +107,7 @@ std::string scenario_error_of(const std::string& yaml) {
 const std::string kStraightMotion = "motion:\n  segments:\n    - straight: {distance_m: 1, speed_m_s: 0.5}\n";
 
 TEST(ScenarioYaml, ParsesAFullScenario) {
-  const sim::Scenario sc = parse_scenario(R"(name: demo
+  const sim::Scenario sc = formats::parse_scenario(R"(name: demo
 seed: 17
 robot: {wheel_base_m: 0.4, ticks_per_rev: 1000}
 motion:
@@ -126,7 +128,7 @@ effects:
   radius_error: {scale_r: 1.01}
   time_offset: {dt: 0.02}
 )",
-                                          "dir/demo.yaml");
+                                                   "dir/demo.yaml");
   EXPECT_EQ(sc.name, "demo");
   EXPECT_EQ(sc.source, "demo.yaml");
   EXPECT_EQ(sc.seed, 17u);
@@ -204,7 +206,7 @@ TEST(ScenarioYaml, EffectErrorsUseTheVocabulary) {
 
 TEST(ScenarioYaml, ReadsOdometryBiasThroughTheEffectTable) {
   // physics-effects.md's 12th effect; b_v, b_w are optional (0 = no offset).
-  const sim::Scenario sc = parse_scenario(
+  const sim::Scenario sc = formats::parse_scenario(
       kStraightMotion + "effects:\n  odometry_bias: {b_w: -0.002}\n  gyro_bias: {b: 0.001}\n", "s.yaml");
   ASSERT_TRUE(sc.effects.odometry_bias);
   EXPECT_EQ(sc.effects.odometry_bias->b_v, 0.0);
@@ -234,9 +236,9 @@ TEST(ScenarioYaml, StructuralErrors) {
 
 TEST(ScenarioYaml, MissingFileIsOneLine) {
   try {
-    (void)load_scenario("/nonexistent/x.yaml");
+    (void)formats::load_scenario("/nonexistent/x.yaml");
     FAIL();
-  } catch (const ScenarioError& e) {
+  } catch (const formats::ScenarioError& e) {
     EXPECT_THAT(e.what(), AllOf(StartsWith("/nonexistent/x.yaml: "), HasSubstr("no such file")));
   }
 }
@@ -251,7 +253,7 @@ TEST(SimulateCommand, WritesATrackWithCommandLineEffects) {
                          " --effect radius_error:scale_r=1.01 --effect radius_error:scale_l=0.99");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("wrote"));
-  const Track tr = read_track(out);
+  const tracks::Track tr = tracks::read_track(out);
   EXPECT_EQ(tr.meta().get("sim.seed"), "9");
   EXPECT_EQ(tr.meta().get("sim.scenario"), "track1.yaml");
   EXPECT_EQ(tr.meta().get("sim.effects"), "radius_error:scale_l=0.99,scale_r=1.01; lateral_skid:k=0.05");
@@ -260,7 +262,7 @@ TEST(SimulateCommand, WritesATrackWithCommandLineEffects) {
                           " --effect time_offset:dt=0.01");
   ASSERT_EQ(r2.exit_code, 0) << r2.err;
   EXPECT_EQ(
-      read_track(out).meta().get("sim.effects"),
+      tracks::read_track(out).meta().get("sim.effects"),
       "radius_error:scale_l=0.997,scale_r=1.003; lateral_skid:k=0.02; gyro_bias:b=0.0015; time_offset:dt=0.01");
 }
 

@@ -13,15 +13,15 @@
 
 #include "diagnose/sim_track.h"
 
-namespace odotune {
+namespace odotune::jobs {
 namespace {
 
-using odotune::CalibrationTuneRequest;
-using odotune::CalibratorModel;
+using odotune::jobs::CalibrationTuneRequest;
+using odotune::objectives::CalibratorModel;
 
 // 20 s of the wheelchair (R = 0.32 m, D = 0.65 m, 8800 counts/rev, encoders
 // 100 Hz, v_ext/w_ext 10 Hz σ 0.02, ground truth 100 Hz, radii 0.99 / 1.012).
-CalibrationInput wheelchair(const std::string& name, double radius_m = 0.32) {
+calibration::CalibrationInput wheelchair(const std::string& name, double radius_m = 0.32) {
   testing_support::SimTrackOptions o;
   o.duration_s = 20.0;
   o.wheel_radius_left_m = o.wheel_radius_right_m = radius_m;
@@ -36,11 +36,11 @@ CalibrationInput wheelchair(const std::string& name, double radius_m = 0.32) {
   sc.sensors.ext_velocity.rate_hz = 10.0;
   sc.sensors.ext_velocity.sigma_v_m_s = 0.02;
   sc.sensors.ext_velocity.sigma_w_rad_s = 0.02;
-  return build_calibration_input(sim::simulate(sc), {});
+  return calibration::build_calibration_input(sim::simulate(sc), {});
 }
 
-const CalibrationInput& track() {
-  static const CalibrationInput in = wheelchair("chair");
+const calibration::CalibrationInput& track() {
+  static const calibration::CalibrationInput in = wheelchair("chair");
   return in;
 }
 
@@ -58,7 +58,7 @@ TEST(DefaultCalibrator, ThePapersSettingsAroundTheRobotsNominalValues) {
   CalibrationTuneRequest r = small_request(CalibratorModel::adaptive_pf);
   r.resampler = filters::Resampler::multinomial;
   r.policy = filters::ResamplePolicy::every_step;
-  const filters::PfCalibratorParams p = odotune::default_calibrator(r, {0.05, 0.06, 0.3});
+  const filters::PfCalibratorParams p = odotune::jobs::default_calibrator(r, {0.05, 0.06, 0.3});
   EXPECT_TRUE(p.adaptive);
   EXPECT_EQ(p.particles, 300);
   EXPECT_EQ(p.seed, 4u);
@@ -71,13 +71,14 @@ TEST(DefaultCalibrator, ThePapersSettingsAroundTheRobotsNominalValues) {
   EXPECT_NEAR(p.wheel_base_m.lo, 0.255, 1e-12);
   EXPECT_NEAR(p.wheel_base_m.hi, 0.345, 1e-12);
   // The tuned settings are the paper's.
-  EXPECT_EQ(calibration_params_of(p), calibration_params_of(filters::PfCalibratorParams::adaptive_defaults()));
+  EXPECT_EQ(calibration::calibration_params_of(p),
+            calibration::calibration_params_of(filters::PfCalibratorParams::adaptive_defaults()));
   // No particle count given: the paper's counts.
   r.pf_particles.reset();
-  EXPECT_EQ(odotune::default_calibrator(r, {0.32, 0.32, 0.65}).particles, 8000);
+  EXPECT_EQ(odotune::jobs::default_calibrator(r, {0.32, 0.32, 0.65}).particles, 8000);
   r.model = CalibratorModel::pf;
-  EXPECT_EQ(odotune::default_calibrator(r, {0.32, 0.32, 0.65}).particles, 5000);
-  EXPECT_FALSE(odotune::default_calibrator(r, {0.32, 0.32, 0.65}).adaptive);
+  EXPECT_EQ(odotune::jobs::default_calibrator(r, {0.32, 0.32, 0.65}).particles, 5000);
+  EXPECT_FALSE(odotune::jobs::default_calibrator(r, {0.32, 0.32, 0.65}).adaptive);
 }
 
 // With one random PSO point the solver often does worse than the defaults:
@@ -88,7 +89,7 @@ TEST(CalibrationTune, TunedIsTheBetterOfTheSolversBestAndTheDefaults) {
   for (std::uint64_t seed = 1; seed <= 40 && (kept == 0 || improved == 0); ++seed) {
     CalibrationTuneRequest r = small_request(CalibratorModel::pf);
     r.seed = seed;
-    const odotune::CalibrationTuneOutcome o = odotune::run_calibration_tune({&track()}, r);
+    const odotune::jobs::CalibrationTuneOutcome o = odotune::jobs::run_calibration_tune({&track()}, r);
     ASSERT_EQ(o.summary.evaluations, 1);
     EXPECT_EQ(o.tuned_score, std::min(o.baseline_score, o.summary.best_fitness)) << seed;
     EXPECT_EQ(o.default_kept, o.baseline_score < o.summary.best_fitness) << seed;
@@ -112,7 +113,7 @@ TEST(CalibrationTune, NloptStartsFromTheDefaults) {
   CalibrationTuneRequest r = small_request(CalibratorModel::adaptive_pf);
   r.solver = {odotune::tuner::SolverChoice::Kind::nlopt, "SBPLX"};
   r.evaluations = 4;
-  const odotune::CalibrationTuneOutcome o = odotune::run_calibration_tune({&track()}, r);
+  const odotune::jobs::CalibrationTuneOutcome o = odotune::jobs::run_calibration_tune({&track()}, r);
   EXPECT_LE(o.summary.evaluations, 4);
   ASSERT_FALSE(o.summary.log.empty());
   // The first evaluation is the default point: its score is the baseline's.
@@ -123,7 +124,7 @@ TEST(CalibrationTune, NloptStartsFromTheDefaults) {
 }
 
 TEST(CalibrationTune, ScoresAndErrorsAreConsistent) {
-  const odotune::CalibrationTuneOutcome o = odotune::run_calibration_tune(
+  const odotune::jobs::CalibrationTuneOutcome o = odotune::jobs::run_calibration_tune(
       {&track()}, small_request(CalibratorModel::adaptive_pf));
   ASSERT_EQ(o.baseline.tracks.size(), 1u);
   ASSERT_EQ(o.tuned.tracks.size(), 1u);
@@ -143,23 +144,24 @@ TEST(CalibrationTune, ScoresAndErrorsAreConsistent) {
 }
 
 TEST(CalibrationTune, RefusesTracksOfDifferentRobotsAndBadRequests) {
-  const CalibrationInput other = wheelchair("small", 0.30);
-  EXPECT_THROW(odotune::run_calibration_tune({&track(), &other}, small_request(CalibratorModel::pf)),
+  const calibration::CalibrationInput other = wheelchair("small", 0.30);
+  EXPECT_THROW(odotune::jobs::run_calibration_tune({&track(), &other}, small_request(CalibratorModel::pf)),
                std::invalid_argument);
-  EXPECT_THROW(odotune::run_calibration_tune({}, small_request(CalibratorModel::pf)), std::invalid_argument);
+  EXPECT_THROW(odotune::jobs::run_calibration_tune({}, small_request(CalibratorModel::pf)),
+               std::invalid_argument);
   CalibrationTuneRequest bad = small_request(CalibratorModel::pf);
   bad.solver = {odotune::tuner::SolverChoice::Kind::nlopt, "ANNEALING"};
   std::string why;
   EXPECT_FALSE(bad.IsValid(&why));
   EXPECT_NE(why.find("ANNEALING"), std::string::npos) << why;
-  EXPECT_THROW(odotune::run_calibration_tune({&track()}, bad), std::invalid_argument);
+  EXPECT_THROW(odotune::jobs::run_calibration_tune({&track()}, bad), std::invalid_argument);
   bad = small_request(CalibratorModel::pf);
   bad.weights.pose = -1;
-  EXPECT_THROW(odotune::run_calibration_tune({&track()}, bad), std::invalid_argument);
+  EXPECT_THROW(odotune::jobs::run_calibration_tune({&track()}, bad), std::invalid_argument);
   bad = small_request(CalibratorModel::pf);
   bad.pf_particles = -5;
   EXPECT_FALSE(bad.IsValid(&why));
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::jobs

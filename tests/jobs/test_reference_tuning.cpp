@@ -8,7 +8,7 @@
 
 #include "support/cli_runner.h"
 
-namespace odotune {
+namespace odotune::jobs {
 namespace {
 
 using filters::NoiseModel;
@@ -17,15 +17,15 @@ class ReferenceTuning : public ::testing::TestWithParam<std::tuple<int, NoiseMod
 
 TEST_P(ReferenceTuning, PsoBeatsBaselineRmse) {
   const auto [index, model] = GetParam();
-  const Track track = read_track(testing_support::reference_track(index));
-  const odotune::PreparedTrack prepared = odotune::prepare_track(track);
-  odotune::TuneRequest req;
+  const tracks::Track track = tracks::read_track(testing_support::reference_track(index));
+  const odotune::jobs::PreparedTrack prepared = odotune::jobs::prepare_track(track);
+  odotune::jobs::TuneRequest req;
   req.model = model;
-  req.mode = odotune::FitnessMode::rmse;
+  req.mode = odotune::objectives::FitnessMode::rmse;
   req.seed = 42;
   req.particles = 16;
   req.iterations = 20;
-  const odotune::TuneOutcome out = odotune::run_tune({&prepared}, req);
+  const odotune::jobs::TuneOutcome out = odotune::jobs::run_tune({&prepared}, req);
   EXPECT_LT(out.tuned_mean.rmse_m, out.baseline_mean.rmse_m)
       << "track" << index << " " << filters::to_string(model);
   EXPECT_EQ(out.summary.evaluations, 16 * 21);
@@ -41,4 +41,4 @@ INSTANTIATE_TEST_SUITE_P(
     });
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::jobs

@@ -35,10 +35,10 @@ struct Fixture {
   }
 };
 
-RlTuneOptions small_options(const rlnode::Recording& rec) {
-  RlTuneOptions o;
-  o.fitness = RlFitness::both;
-  o.space = RlNoiseSpace::blocks;
+objectives::RlTuneOptions small_options(const rlnode::Recording& rec) {
+  objectives::RlTuneOptions o;
+  o.fitness = objectives::RlFitness::both;
+  o.space = objectives::RlNoiseSpace::blocks;
   o.outage_s = {15.0};
   o.until_ns = rec.start_ns + 60'000'000'000LL;
   return o;
@@ -48,9 +48,9 @@ RlTuneOptions small_options(const rlnode::Recording& rec) {
 
 TEST(RlTune, EverySolverRunsOnTheRobotLocalizationObjective) {
   Fixture f;
-  const RlObjective objective(f.rec, rlnode::settings_of(f.rec.params), small_options(f.rec));
+  const objectives::RlObjective objective(f.rec, rlnode::settings_of(f.rec.params), small_options(f.rec));
   ASSERT_EQ(objective.space().dim(), 5u + 2u);  // 5 noise blocks, 2 inputs' covariances
-  const BoxProblem<RlObjective> problem{&objective};
+  const jobs::BoxProblem<objectives::RlObjective> problem{&objective};
   const auto [lo, hi] = objective.bounds();
   std::vector<double> centre(lo.size());
   for (std::size_t i = 0; i < lo.size(); ++i) centre[i] = 0.5 * (lo[i] + hi[i]);
@@ -60,12 +60,12 @@ TEST(RlTune, EverySolverRunsOnTheRobotLocalizationObjective) {
   std::vector<std::string> solvers = {"pso"};
   for (const std::string& n : tuner::nlopt_algorithm_names()) solvers.push_back("nlopt:" + n);
   for (const std::string& solver : solvers) {
-    SolverSettings s;
+    jobs::SolverSettings s;
     s.solver = tuner::SolverChoice::parse(solver, nullptr).value();
     s.seed = 2;
     s.particles = 5;
     s.iterations = 4;  // 25 evaluations, as the NLopt budget
-    const tuner::Summary sum = run_solver(problem, s);
+    const tuner::Summary sum = jobs::run_solver(problem, s);
     EXPECT_TRUE(sum.ok()) << solver << ": " << sum.termination_text();
     EXPECT_GT(sum.evaluations, 0) << solver;
     EXPECT_LE(sum.evaluations, 25) << solver;
@@ -84,16 +84,16 @@ TEST(RlTune, EverySolverRunsOnTheRobotLocalizationObjective) {
 
 TEST(RlTune, SameSeedGivesTheSameTuneWithOneOrTwoThreads) {
   Fixture f;
-  const RlObjective objective(f.rec, rlnode::settings_of(f.rec.params), small_options(f.rec));
-  const BoxProblem<RlObjective> problem{&objective};
-  SolverSettings s;
+  const objectives::RlObjective objective(f.rec, rlnode::settings_of(f.rec.params), small_options(f.rec));
+  const jobs::BoxProblem<objectives::RlObjective> problem{&objective};
+  jobs::SolverSettings s;
   s.seed = 7;
   s.particles = 6;
   s.iterations = 3;
   omp_set_num_threads(1);
-  const tuner::Summary a = run_solver(problem, s);
+  const tuner::Summary a = jobs::run_solver(problem, s);
   omp_set_num_threads(2);
-  const tuner::Summary b = run_solver(problem, s);
+  const tuner::Summary b = jobs::run_solver(problem, s);
   EXPECT_EQ(a.best_x, b.best_x);
   EXPECT_EQ(a.best_fitness, b.best_fitness);
   EXPECT_EQ(a.log, b.log);
@@ -105,53 +105,56 @@ TEST(RlTune, SameSeedGivesTheSameTuneWithOneOrTwoThreads) {
 TEST(RlTune, FactorsAppliedByNameGiveTheObjectivesSettings) {
   Fixture f;
   const rlnode::ReplaySettings base = rlnode::settings_of(f.rec.params);
-  for (RlNoiseSpace space : {RlNoiseSpace::diagonal, RlNoiseSpace::blocks}) {
-    RlTuneOptions o = small_options(f.rec);
+  for (objectives::RlNoiseSpace space :
+       {objectives::RlNoiseSpace::diagonal, objectives::RlNoiseSpace::blocks}) {
+    objectives::RlTuneOptions o = small_options(f.rec);
     o.space = space;
-    const RlObjective objective(f.rec, base, o);
+    const objectives::RlObjective objective(f.rec, base, o);
     const auto [lo, hi] = objective.bounds();
     std::vector<double> x(lo.size());
     for (std::size_t i = 0; i < x.size(); ++i)
       x[i] = lo[i] + (hi[i] - lo[i]) * (0.1 + 0.8 * static_cast<double>(i) / static_cast<double>(x.size()));
     std::vector<std::string> names;
-    for (const ParamSpec& p : objective.space().params()) names.push_back(p.name);
+    for (const objectives::ParamSpec& p : objective.space().params()) names.push_back(p.name);
     const std::vector<double> factors = objective.space().to_physical(x);
     rlnode::ReplaySettings s = base;
     std::string why;
-    ASSERT_TRUE(apply_rl_factors(f.rec.params, names, factors, &s, &why)) << why;
+    ASSERT_TRUE(objectives::apply_rl_factors(f.rec.params, names, factors, &s, &why)) << why;
     const rlnode::ReplaySettings want = objective.settings_at(x);
-    EXPECT_EQ(s.process_noise, want.process_noise) << to_string(space);
-    EXPECT_EQ(s.covariance_scale, want.covariance_scale) << to_string(space);
+    EXPECT_EQ(s.process_noise, want.process_noise) << objectives::to_string(space);
+    EXPECT_EQ(s.covariance_scale, want.covariance_scale) << objectives::to_string(space);
     EXPECT_NE(s.process_noise, base.process_noise);
   }
   rlnode::ReplaySettings s = base;
   std::string why;
   const std::vector<std::string> bad = {"q_warp"};
   const std::vector<double> one = {2.0};
-  EXPECT_FALSE(apply_rl_factors(f.rec.params, bad, one, &s, &why));
+  EXPECT_FALSE(objectives::apply_rl_factors(f.rec.params, bad, one, &s, &why));
   EXPECT_NE(why.find("q_warp"), std::string::npos) << why;
   const std::vector<std::string> good = {"q_x"};
   const std::vector<double> negative = {-1.0};
-  EXPECT_FALSE(apply_rl_factors(f.rec.params, good, negative, &s, &why));
+  EXPECT_FALSE(objectives::apply_rl_factors(f.rec.params, good, negative, &s, &why));
   // two_d_mode: a block leaves the entries the mode forces alone.
-  EXPECT_EQ(rl_noise_members("q_position", true), std::vector<int>({0, 1}));
-  EXPECT_EQ(rl_noise_members("q_position", false), std::vector<int>({0, 1, 2}));
+  EXPECT_EQ(objectives::rl_noise_members("q_position", true), std::vector<int>({0, 1}));
+  EXPECT_EQ(objectives::rl_noise_members("q_position", false), std::vector<int>({0, 1, 2}));
 }
 
 TEST(RlTune, FitnessNamesAndStoredModesRoundTrip) {
-  for (RlFitness fit : {RlFitness::heldout_fixes, RlFitness::outage, RlFitness::both, RlFitness::innovation_nll,
-                        RlFitness::nis, RlFitness::whiteness, RlFitness::heldout_nll}) {
-    RlFitness back{};
-    ASSERT_TRUE(parse_rl_fitness(to_string(fit), &back));
+  for (objectives::RlFitness fit :
+       {objectives::RlFitness::heldout_fixes, objectives::RlFitness::outage, objectives::RlFitness::both,
+        objectives::RlFitness::innovation_nll, objectives::RlFitness::nis, objectives::RlFitness::whiteness,
+        objectives::RlFitness::heldout_nll}) {
+    objectives::RlFitness back{};
+    ASSERT_TRUE(objectives::parse_rl_fitness(objectives::to_string(fit), &back));
     EXPECT_EQ(back, fit);
-    EXPECT_EQ(rl_fitness_of_mode(stored_mode(fit)), fit);
+    EXPECT_EQ(objectives::rl_fitness_of_mode(objectives::stored_mode(fit)), fit);
   }
-  EXPECT_EQ(stored_mode(RlFitness::heldout_fixes), 8);  // mode 8 on this filter too
-  EXPECT_EQ(stored_mode(RlFitness::heldout_nll), 15);
-  EXPECT_FALSE(rl_fitness_of_mode(7).has_value());
-  RlFitness untouched = RlFitness::both;
-  EXPECT_FALSE(parse_rl_fitness("gt", &untouched));
-  EXPECT_EQ(untouched, RlFitness::both);
+  EXPECT_EQ(objectives::stored_mode(objectives::RlFitness::heldout_fixes), 8);  // mode 8 on this filter too
+  EXPECT_EQ(objectives::stored_mode(objectives::RlFitness::heldout_nll), 15);
+  EXPECT_FALSE(objectives::rl_fitness_of_mode(7).has_value());
+  objectives::RlFitness untouched = objectives::RlFitness::both;
+  EXPECT_FALSE(objectives::parse_rl_fitness("gt", &untouched));
+  EXPECT_EQ(untouched, objectives::RlFitness::both);
 }
 
 // The staged search (odotune/jobs/rl_search.h): the grid is deterministic; a start's parameters either were determined
@@ -160,24 +163,24 @@ TEST(RlTune, FitnessNamesAndStoredModesRoundTrip) {
 // or two threads.
 TEST(RlTune, StagedSearchResetsWhatTheRecordingDoesNotDetermine) {
   Fixture f;
-  RlTuneOptions o = small_options(f.rec);
-  o.space = RlNoiseSpace::diagonal;
+  objectives::RlTuneOptions o = small_options(f.rec);
+  o.space = objectives::RlNoiseSpace::diagonal;
   o.input_covariances = false;
-  const RlObjective objective(f.rec, rlnode::settings_of(f.rec.params), o);
-  RlSearchOptions search;
+  const objectives::RlObjective objective(f.rec, rlnode::settings_of(f.rec.params), o);
+  objectives::RlSearchOptions search;
   search.grid_levels = {-1.0, 1.0};
   search.refine_decades = 0.5;
   search.profile_step_decades = 2.0;
-  SolverSettings s;
+  jobs::SolverSettings s;
   s.seed = 3;
   s.particles = 6;
   s.iterations = 3;
   omp_set_num_threads(1);
-  const RlGridResult grid = rl_grid_stage(objective, search, s);
-  const RlStartResult a = rl_refine_and_profile(objective, grid, search, s);
+  const jobs::RlGridResult grid = jobs::rl_grid_stage(objective, search, s);
+  const jobs::RlStartResult a = jobs::rl_refine_and_profile(objective, grid, search, s);
   omp_set_num_threads(2);
-  const RlGridResult grid2 = rl_grid_stage(objective, search, s);
-  const RlStartResult b = rl_refine_and_profile(objective, grid2, search, s);
+  const jobs::RlGridResult grid2 = jobs::rl_grid_stage(objective, search, s);
+  const jobs::RlStartResult b = jobs::rl_refine_and_profile(objective, grid2, search, s);
   EXPECT_EQ(grid.x, grid2.x);
   EXPECT_EQ(a.x, b.x);
   EXPECT_EQ(a.fitness, b.fitness);
@@ -187,7 +190,7 @@ TEST(RlTune, StagedSearchResetsWhatTheRecordingDoesNotDetermine) {
   const std::vector<double> factors = objective.space().to_physical(a.x);
   int undetermined = 0;
   for (std::size_t i = 0; i < factors.size(); ++i) {
-    const RlParamProfile& p = a.profiles[i];
+    const jobs::RlParamProfile& p = a.profiles[i];
     EXPECT_LE(p.lo, p.hi);
     if (!p.determined) {
       ++undetermined;
@@ -209,19 +212,19 @@ TEST(RlTune, StagedSearchResetsWhatTheRecordingDoesNotDetermine) {
 // candidate worse than the file at held-out fixes scores above the file.
 TEST(RlTune, WorseAtHeldOutFixesScoresAboveTheFile) {
   Fixture f;
-  RlTuneOptions o = small_options(f.rec);
-  o.fitness = RlFitness::outage;
+  objectives::RlTuneOptions o = small_options(f.rec);
+  o.fitness = objectives::RlFitness::outage;
   o.input_covariances = false;
-  const RlObjective keep(f.rec, rlnode::settings_of(f.rec.params), o);
+  const objectives::RlObjective keep(f.rec, rlnode::settings_of(f.rec.params), o);
   o.keep_heldout = false;
-  const RlObjective trade(f.rec, rlnode::settings_of(f.rec.params), o);
+  const objectives::RlObjective trade(f.rec, rlnode::settings_of(f.rec.params), o);
   const auto [lo, hi] = keep.bounds();
   int worse = 0;
   for (int k = 0; k < 12; ++k) {
     std::vector<double> x(lo.size());
     for (std::size_t i = 0; i < x.size(); ++i)
       x[i] = lo[i] + (hi[i] - lo[i]) * std::fmod(0.37 * static_cast<double>(k * 7 + i * 3) + 0.1, 1.0);
-    const FixScore h = keep.heldout_score(keep.settings_at(x));
+    const objectives::FixScore h = keep.heldout_score(keep.settings_at(x));
     if (h.rmse_m > keep.baseline_heldout().rmse_m) {
       ++worse;
       EXPECT_GT(keep.data_fitness(x), keep.baseline_fitness()) << k;
@@ -237,14 +240,14 @@ TEST(RlTune, WorseAtHeldOutFixesScoresAboveTheFile) {
 // candidate worse than the file at held-out fixes scores above the file.
 TEST(RlTune, FieldCriteriaAreFiniteAndGuarded) {
   Fixture f;
-  for (RlFitness fit :
-       {RlFitness::innovation_nll, RlFitness::nis, RlFitness::whiteness, RlFitness::heldout_nll}) {
-    RlTuneOptions o = small_options(f.rec);
+  for (objectives::RlFitness fit : {objectives::RlFitness::innovation_nll, objectives::RlFitness::nis,
+                                    objectives::RlFitness::whiteness, objectives::RlFitness::heldout_nll}) {
+    objectives::RlTuneOptions o = small_options(f.rec);
     o.fitness = fit;
     o.input_covariances = false;
-    const RlObjective objective(f.rec, rlnode::settings_of(f.rec.params), o);
-    EXPECT_EQ(objective.batch_size(), 1) << to_string(fit);
-    ASSERT_TRUE(std::isfinite(objective.baseline_fitness())) << to_string(fit);
+    const objectives::RlObjective objective(f.rec, rlnode::settings_of(f.rec.params), o);
+    EXPECT_EQ(objective.batch_size(), 1) << objectives::to_string(fit);
+    ASSERT_TRUE(std::isfinite(objective.baseline_fitness())) << objectives::to_string(fit);
     const auto [lo, hi] = objective.bounds();
     int worse = 0;
     for (int k = 0; k < 8; ++k) {
@@ -252,13 +255,13 @@ TEST(RlTune, FieldCriteriaAreFiniteAndGuarded) {
       for (std::size_t i = 0; i < x.size(); ++i)
         x[i] = lo[i] + (hi[i] - lo[i]) * std::fmod(0.41 * static_cast<double>(k * 5 + i * 3) + 0.2, 1.0);
       const double v = objective.data_fitness(x);
-      EXPECT_FALSE(std::isnan(v)) << to_string(fit) << " " << k;
+      EXPECT_FALSE(std::isnan(v)) << objectives::to_string(fit) << " " << k;
       if (objective.heldout_score(objective.settings_at(x)).rmse_m > objective.baseline_heldout().rmse_m) {
         ++worse;
-        EXPECT_GT(v, objective.baseline_fitness()) << to_string(fit) << " " << k;
+        EXPECT_GT(v, objective.baseline_fitness()) << objectives::to_string(fit) << " " << k;
       }
     }
-    EXPECT_GT(worse, 0) << to_string(fit);
+    EXPECT_GT(worse, 0) << objectives::to_string(fit);
   }
 }
 
@@ -266,9 +269,9 @@ TEST(RlTune, FieldCriteriaAreFiniteAndGuarded) {
 // candidate's single fitness, bit for bit, also for a part batch.
 TEST(RlTune, BatchFitnessIsEachCandidatesOwn) {
   Fixture f;
-  RlTuneOptions o = small_options(f.rec);
+  objectives::RlTuneOptions o = small_options(f.rec);
   o.prior_weight = 0.01;
-  const RlObjective objective(f.rec, rlnode::settings_of(f.rec.params), o);
+  const objectives::RlObjective objective(f.rec, rlnode::settings_of(f.rec.params), o);
   const auto [lo, hi] = objective.bounds();
   const std::size_t dim = lo.size();
   for (std::size_t n : {std::size_t{3}, std::size_t{8}, std::size_t{11}}) {

@@ -46,7 +46,7 @@ results::RunRecord awkward_record() {
 
 TEST(RunRecordBytes, RoundTripKeepsEveryBit) {
   const results::RunRecord a = awkward_record();
-  const results::RunRecord b = run_record_from_bytes(to_bytes(a));
+  const results::RunRecord b = jobs::run_record_from_bytes(jobs::to_bytes(a));
   EXPECT_EQ(b.model, a.model);
   EXPECT_EQ(b.track, a.track);
   EXPECT_EQ(b.track.size(), a.track.size());
@@ -79,7 +79,7 @@ TEST(RunRecordBytes, RoundTripKeepsEveryBit) {
     EXPECT_EQ(bits(b.convergence[i].best_fitness), bits(a.convergence[i].best_fitness));
   }
   // An empty record too.
-  const results::RunRecord empty = run_record_from_bytes(to_bytes(results::RunRecord{}));
+  const results::RunRecord empty = jobs::run_record_from_bytes(jobs::to_bytes(results::RunRecord{}));
   EXPECT_TRUE(empty.params.empty());
   EXPECT_TRUE(empty.param_ranges.empty());
   EXPECT_TRUE(empty.convergence.empty());
@@ -87,33 +87,34 @@ TEST(RunRecordBytes, RoundTripKeepsEveryBit) {
 }
 
 TEST(RunRecordBytes, RefusesEveryTruncationAndTrailingOrForeignBytes) {
-  const std::vector<char> whole = to_bytes(awkward_record());
+  const std::vector<char> whole = jobs::to_bytes(awkward_record());
   for (std::size_t n = 0; n < whole.size(); ++n)
-    EXPECT_THROW(run_record_from_bytes(std::vector<char>(whole.begin(), whole.begin() + static_cast<long>(n))),
-                 std::runtime_error)
+    EXPECT_THROW(
+        jobs::run_record_from_bytes(std::vector<char>(whole.begin(), whole.begin() + static_cast<long>(n))),
+        std::runtime_error)
         << n << " of " << whole.size() << " bytes";
   std::vector<char> longer = whole;
   longer.push_back('x');
-  EXPECT_THROW(run_record_from_bytes(longer), std::runtime_error);
+  EXPECT_THROW(jobs::run_record_from_bytes(longer), std::runtime_error);
   std::vector<char> foreign = whole;
   foreign[0] = static_cast<char>(foreign[0] ^ 1);
-  EXPECT_THROW(run_record_from_bytes(foreign), std::runtime_error);
+  EXPECT_THROW(jobs::run_record_from_bytes(foreign), std::runtime_error);
   // A count far beyond the bytes (a corrupt length) is refused before allocating.
-  std::vector<char> huge = to_bytes(results::RunRecord{});
+  std::vector<char> huge = jobs::to_bytes(results::RunRecord{});
   const std::size_t count_at = 4 + 8 + 8 + 8 + 8 + 8 + (8 + 3);  // magic, 3 strings, mode, seed, solver
   for (std::size_t i = 0; i < 8; ++i) huge[count_at + i] = static_cast<char>(0x7f);
-  EXPECT_THROW(run_record_from_bytes(huge), std::runtime_error);
+  EXPECT_THROW(jobs::run_record_from_bytes(huge), std::runtime_error);
   // A range's `determined` flag is one byte, 0 or 1.
   results::RunRecord ranged;
   ranged.param_names = {"q"};
   ranged.params = {1.0};
   ranged.param_ranges = {{0.5, 2.0, true}};
-  std::vector<char> flag = to_bytes(ranged);
+  std::vector<char> flag = jobs::to_bytes(ranged);
   const std::size_t flag_at = count_at + (8 + 9) + (8 + 8) + (8 + 16);  // names, params, ranges' count, lo, hi
   ASSERT_EQ(flag[flag_at], 1);
-  EXPECT_TRUE(run_record_from_bytes(flag).param_ranges.at(0).determined);
+  EXPECT_TRUE(jobs::run_record_from_bytes(flag).param_ranges.at(0).determined);
   flag[flag_at] = 2;
-  EXPECT_THROW(run_record_from_bytes(flag), std::runtime_error);
+  EXPECT_THROW(jobs::run_record_from_bytes(flag), std::runtime_error);
 }
 
 }  // namespace

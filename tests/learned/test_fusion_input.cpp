@@ -17,7 +17,7 @@
 
 #include "support/fusion_track.h"
 
-namespace odotune {
+namespace odotune::learned {
 namespace {
 
 using testing_support::fusion_track;
@@ -25,8 +25,8 @@ using testing_support::FusionTrackOptions;
 
 constexpr double kPi = std::numbers::pi;
 
-const Track& shared_track() {
-  static const Track track = fusion_track(FusionTrackOptions{});
+const tracks::Track& shared_track() {
+  static const tracks::Track track = fusion_track(FusionTrackOptions{});
   return track;
 }
 const FusionInput& shared_input() {
@@ -35,14 +35,14 @@ const FusionInput& shared_input() {
 }
 
 // The track row stamped t_s (within 1 µs); track.size() when none.
-std::size_t row_at(const Track& track, double t_s) {
+std::size_t row_at(const tracks::Track& track, double t_s) {
   for (std::size_t i = 0; i < track.size(); ++i)
     if (std::abs(track.t()[i] - t_s) < 1e-6) return i;
   return track.size();
 }
 
 TEST(FusionInput, StepTimesAtTheFusionRate) {
-  const Track& track = shared_track();
+  const tracks::Track& track = shared_track();
   const FusionInput& in = shared_input();
   EXPECT_EQ(in.track_name, "fusion");
   EXPECT_DOUBLE_EQ(in.dt_s, 0.1);
@@ -66,7 +66,7 @@ TEST(FusionInput, StepTimesAtTheFusionRate) {
 TEST(FusionInput, IncrementsAreTheTickDifferences) {
   // The 100 Hz tick rows fall on every 10 Hz step: no interpolation, the
   // increment is the tick column's difference exactly.
-  const Track& track = shared_track();
+  const tracks::Track& track = shared_track();
   const FusionInput& in = shared_input();
   double total_l = 0.0;
   for (std::size_t k = 1; k < in.size(); ++k) {
@@ -84,7 +84,7 @@ TEST(FusionInput, GroundTruthVelocitiesMatchTheCommandedCruise) {
   // the commanded values of fusion_track.h): straight (0.5, 0), arc (0.4,
   // 0.4 rad/s), spin (0, π/4 rad/s). Tolerance: the ground truth's 10 µm /
   // 1 µrad resolution over 0.1 s and the chord of the arc (< 1e-4).
-  const Track& track = shared_track();
+  const tracks::Track& track = shared_track();
   const FusionInput& in = shared_input();
   const FusionTrackOptions o;
   struct Cruise {
@@ -94,8 +94,8 @@ TEST(FusionInput, GroundTruthVelocitiesMatchTheCommandedCruise) {
   std::vector<Cruise> cruises = {{o.straight_speed_m_s, 0.0},
                                  {o.arc_speed_m_s, o.arc_speed_m_s / o.arc_radius_m},
                                  {0.0, o.spin_rate_deg_s * kPi / 180.0}};
-  const auto& vc = track.col(Col::v_cmd);
-  const auto& wc = track.col(Col::w_cmd);
+  const auto& vc = track.col(tracks::Col::v_cmd);
+  const auto& wc = track.col(tracks::Col::w_cmd);
   for (std::size_t k = 1; k < in.size(); ++k) {
     const std::size_t a = row_at(track, in.t[k - 1]), b = row_at(track, in.t[k]);
     for (auto& c : cruises) {
@@ -130,7 +130,7 @@ TEST(FusionInput, KinematicOdometryEqualsTruthWithinQuantisation) {
 }
 
 TEST(FusionInput, PowerExternalAndGyroPerStep) {
-  const Track& track = shared_track();
+  const tracks::Track& track = shared_track();
   const FusionInput& in = shared_input();
   int checked = 0;
   for (std::size_t k = 1; k < in.size(); ++k) {
@@ -139,16 +139,16 @@ TEST(FusionInput, PowerExternalAndGyroPerStep) {
     ASSERT_EQ(b - a, 10u);
     double pl = 0.0, pr = 0.0, g = 0.0;
     for (std::size_t i = a + 1; i <= b; ++i) {
-      pl += track.col(Col::power_l)[i];
-      pr += track.col(Col::power_r)[i];
-      g += track.col(Col::gyro_z)[i];
+      pl += track.col(tracks::Col::power_l)[i];
+      pr += track.col(tracks::Col::power_r)[i];
+      g += track.col(tracks::Col::gyro_z)[i];
     }
     EXPECT_NEAR(in.power_l[k], pl / 10.0, 1e-12);
     EXPECT_NEAR(in.power_r[k], pr / 10.0, 1e-12);
     EXPECT_NEAR(in.gyro_z[k], g / 10.0, 1e-12);
     // The 10 Hz external sensor samples at t[k] itself.
-    EXPECT_EQ(in.v_ext[k], track.col(Col::v_ext)[b]);
-    EXPECT_EQ(in.w_ext[k], track.col(Col::w_ext)[b]);
+    EXPECT_EQ(in.v_ext[k], track.col(tracks::Col::v_ext)[b]);
+    EXPECT_EQ(in.w_ext[k], track.col(tracks::Col::w_ext)[b]);
     EXPECT_NEAR(in.v_ext_var[k], 0.02 * 0.02, 1e-12);  // the sensor's σ² from v_ext_var
     EXPECT_NEAR(in.w_ext_var[k], 0.02 * 0.02, 1e-12);
     // The gyro mean is the mean yaw rate up to its noise (σ 0.002/√10) and the
@@ -166,10 +166,10 @@ TEST(FusionInput, OmegaColumnsGiveTheSameIncrements) {
   FusionTrackOptions o;
   sim::Scenario sc = testing_support::fusion_scenario(o);
   sc.sensors.encoders.omega = true;
-  TrackData d = sim::simulate(sc).data();
+  tracks::TrackData d = sim::simulate(sc).data();
   d.ticks_l.clear();
   d.ticks_r.clear();
-  const Track omega_track(std::move(d));
+  const tracks::Track omega_track(std::move(d));
   const FusionInput a = shared_input();
   const FusionInput b = build_fusion_input(omega_track);
   ASSERT_EQ(a.size(), b.size());
@@ -188,7 +188,7 @@ TEST(FusionInput, RateOptionChangesTheSteps) {
   EXPECT_NEAR(static_cast<double>(in.size()), 2.0 * static_cast<double>(shared_input().size()), 2.0);
 }
 
-std::string error_of(const Track& track, const FusionInputOptions& opt = {}) {
+std::string error_of(const tracks::Track& track, const FusionInputOptions& opt = {}) {
   try {
     build_fusion_input(track, opt);
   } catch (const std::invalid_argument& e) {
@@ -199,31 +199,31 @@ std::string error_of(const Track& track, const FusionInputOptions& opt = {}) {
 
 TEST(FusionInput, OneLineErrorsNameTheTrack) {
   auto without = [](auto&& edit) {
-    TrackData d = shared_track().data();
+    tracks::TrackData d = shared_track().data();
     d.meta.name = "broken_one";
     edit(d);
-    return Track(std::move(d));
+    return tracks::Track(std::move(d));
   };
-  const std::string no_base = error_of(without([](TrackData& d) { d.meta.wheel_base_m.reset(); }));
+  const std::string no_base = error_of(without([](tracks::TrackData& d) { d.meta.wheel_base_m.reset(); }));
   EXPECT_NE(no_base.find("track 'broken_one'"), std::string::npos) << no_base;
   EXPECT_NE(no_base.find("robot.wheel_base"), std::string::npos) << no_base;
   EXPECT_EQ(no_base.find('\n'), std::string::npos);
 
-  const std::string no_tpr = error_of(without([](TrackData& d) { d.meta.ticks_per_rev.reset(); }));
+  const std::string no_tpr = error_of(without([](tracks::TrackData& d) { d.meta.ticks_per_rev.reset(); }));
   EXPECT_NE(no_tpr.find("robot.ticks_per_rev"), std::string::npos) << no_tpr;
 
   // Without wheels, the commands (the simulator says what they are) are the
   // odometry; without them too, there is none.
-  const Track commands = without([](TrackData& d) {
+  const tracks::Track commands = without([](tracks::TrackData& d) {
     d.ticks_l.clear();
     d.ticks_r.clear();
   });
-  EXPECT_EQ(build_fusion_input(commands).input, OdometryInput::commands);
-  const std::string no_odo = error_of(without([](TrackData& d) {
+  EXPECT_EQ(build_fusion_input(commands).input, tracks::OdometryInput::commands);
+  const std::string no_odo = error_of(without([](tracks::TrackData& d) {
     d.ticks_l.clear();
     d.ticks_r.clear();
-    d.col(Col::v_cmd).clear();
-    d.col(Col::w_cmd).clear();
+    d.col(tracks::Col::v_cmd).clear();
+    d.col(tracks::Col::w_cmd).clear();
   }));
   EXPECT_NE(no_odo.find("track 'broken_one': no odometry"), std::string::npos) << no_odo;
 
@@ -234,7 +234,7 @@ TEST(FusionInput, OneLineErrorsNameTheTrack) {
   EXPECT_NE(bad_rate.find("track 'fusion'"), std::string::npos) << bad_rate;
 
   // A recording shorter than one step.
-  const std::string short_one = error_of(without([](TrackData& d) {
+  const std::string short_one = error_of(without([](tracks::TrackData& d) {
     const std::size_t keep = 5;  // 40 ms of 100 Hz rows
     d.t.resize(keep);
     for (auto& c : d.cols)
@@ -249,14 +249,14 @@ TEST(FusionInput, OneLineErrorsNameTheTrack) {
 // command; with a scale and a delay (calibrated kinematics) the same means
 // scaled and taken that much earlier; a calibrated geometry for wheels.
 TEST(FusionInput, CommandsAndCalibratedKinematics) {
-  const Track& track = shared_track();
+  const tracks::Track& track = shared_track();
   FusionInputOptions o;
-  o.input = OdometryInput::commands;
+  o.input = tracks::OdometryInput::commands;
   const FusionInput in = build_fusion_input(track, o);
-  EXPECT_EQ(in.input, OdometryInput::commands);
+  EXPECT_EQ(in.input, tracks::OdometryInput::commands);
   EXPECT_EQ(in.ticks_per_rev, 0.0);
   EXPECT_TRUE(std::isnan(in.dticks_l[5]));
-  const BodyVelocityIntegral body(track);
+  const tracks::BodyVelocityIntegral body(track);
   for (std::size_t k = 1; k < in.size(); k += 37) {
     const auto m = body.mean(in.t[k - 1], in.t[k]);
     EXPECT_DOUBLE_EQ(in.v_kin[k], m[0]) << k;
@@ -294,4 +294,4 @@ TEST(FusionInput, NoGroundTruthGivesNaNTruth) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::learned

@@ -17,7 +17,7 @@
 
 #include "support/calibration_track.h"
 
-namespace odotune {
+namespace odotune::learned {
 namespace {
 
 using testing_support::ChairTrackOptions;
@@ -176,11 +176,11 @@ TEST(LearnedOdometry, AModelRefusesATrackWithoutItsInput) {
   LearnedOdometryModel m;
   m.target = LearnedTarget::correction;
   m.features = LearnedFeatures::channel;
-  m.input = OdometryInput::commands;
+  m.input = tracks::OdometryInput::commands;
   std::string why;
   EXPECT_FALSE(model_fits(m, wheels, &why));
   EXPECT_NE(why.find("gives wheels odometry, the model was trained on commands"), std::string::npos) << why;
-  m.input = OdometryInput::wheels;
+  m.input = tracks::OdometryInput::wheels;
   m.ticks_per_rev = wheels.ticks_per_rev;
   EXPECT_TRUE(model_fits(m, wheels, &why)) << why;
   m.gyro = true;
@@ -330,9 +330,9 @@ TEST(LearnedFusion, InvalidOptionsAreOneLineErrors) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::learned
 
-namespace odotune {
+namespace odotune::learned {
 namespace {
 
 // A chair track with motor power (the wheelchair's drive train of
@@ -436,4 +436,4 @@ TEST(SlipDetector, VarianceRisesDuringSimulatedSlipAndStaysLowElsewhere) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::learned

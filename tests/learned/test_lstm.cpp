@@ -17,12 +17,12 @@ namespace {
 
 // Uniform in [lo, hi), seeded, independent of the code under test's init.
 double draw(std::uint64_t seed, std::uint64_t n, double lo, double hi) {
-  return lo + (hi - lo) * counter_uniform01(seed, 7, n, 0, 99);
+  return lo + (hi - lo) * core::counter_uniform01(seed, 7, n, 0, 99);
 }
 
 template <int I, int H>
-LstmNet<I, H> random_net(std::uint64_t seed, double scale) {
-  LstmNet<I, H> net;
+learned::LstmNet<I, H> random_net(std::uint64_t seed, double scale) {
+  learned::LstmNet<I, H> net;
   for (int n = 0; n < net.kWeights; ++n)
     net.weights[n] = draw(seed, static_cast<std::uint64_t>(n), -scale, scale);
   return net;
@@ -38,8 +38,8 @@ std::vector<double> random_window(std::uint64_t seed, int window, int inputs, do
 // (Keras' kernel (I, 4H), recurrent kernel (H, 4H), bias (4H), dense (H), bias),
 // gates split as column blocks i, f, c, o.
 template <int I, int H>
-double reference_lstm(const std::array<double, LstmLayout<I, H>::kCount>& w, const std::vector<double>& x,
-                      int window, bool relu) {
+double reference_lstm(const std::array<double, learned::LstmLayout<I, H>::kCount>& w,
+                      const std::vector<double>& x, int window, bool relu) {
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   const Eigen::Map<const RowMajor> W(w.data(), I, 4 * H);
   const Eigen::Map<const RowMajor> U(w.data() + I * 4 * H, H, 4 * H);
@@ -65,12 +65,12 @@ double reference_lstm(const std::array<double, LstmLayout<I, H>::kCount>& w, con
 }
 
 TEST(LstmLayout, CountsAndOffsets) {
-  EXPECT_EQ((LstmLayout<3, 5>::kCount), 186);
-  EXPECT_EQ((LstmLayout<5, 10>::kCount), 651);
-  EXPECT_EQ((LstmLayout<3, 5>::kRecurrent), 3 * 20);
-  EXPECT_EQ((LstmLayout<3, 5>::kBias), 3 * 20 + 5 * 20);
-  EXPECT_EQ((LstmLayout<3, 5>::kDense), 3 * 20 + 5 * 20 + 20);
-  EXPECT_EQ((LstmLayout<3, 5>::kDenseBias), 185);
+  EXPECT_EQ((learned::LstmLayout<3, 5>::kCount), 186);
+  EXPECT_EQ((learned::LstmLayout<5, 10>::kCount), 651);
+  EXPECT_EQ((learned::LstmLayout<3, 5>::kRecurrent), 3 * 20);
+  EXPECT_EQ((learned::LstmLayout<3, 5>::kBias), 3 * 20 + 5 * 20);
+  EXPECT_EQ((learned::LstmLayout<3, 5>::kDense), 3 * 20 + 5 * 20 + 20);
+  EXPECT_EQ((learned::LstmLayout<3, 5>::kDenseBias), 185);
 }
 
 template <int I, int H>
@@ -78,8 +78,8 @@ void check_against_reference(std::uint64_t seed) {
   const auto net = random_net<I, H>(seed, 0.8);
   for (int window : {1, 2, 20}) {
     const auto x = random_window(seed, window, I, 2.0);
-    const double ours = lstm_forward<I, H, double>(net.weights.data(), x.data(), window,
-                                                   OutputActivation::linear);
+    const double ours = learned::lstm_forward<I, H, double>(net.weights.data(), x.data(), window,
+                                                            learned::OutputActivation::linear);
     const double ref = reference_lstm<I, H>(net.weights, x, window, false);
     EXPECT_NEAR(ours, ref, 1e-12 * (1.0 + std::abs(ref))) << "window " << window << " seed " << seed;
   }
@@ -97,34 +97,42 @@ TEST(LstmForward, OutputDependsOnOldSamples) {
   // Memory: changing the oldest sample of a 20-window changes the output.
   const auto net = random_net<3, 5>(11, 0.8);
   auto x = random_window(11, 20, 3, 1.0);
-  const double a = lstm_forward<3, 5, double>(net.weights.data(), x.data(), 20, OutputActivation::linear);
+  const double a = learned::lstm_forward<3, 5, double>(net.weights.data(), x.data(), 20,
+                                                       learned::OutputActivation::linear);
   x[0] += 1.0;
-  const double b = lstm_forward<3, 5, double>(net.weights.data(), x.data(), 20, OutputActivation::linear);
+  const double b = learned::lstm_forward<3, 5, double>(net.weights.data(), x.data(), 20,
+                                                       learned::OutputActivation::linear);
   EXPECT_NE(a, b);
 }
 
 TEST(LstmForward, ReluFloorsAtZeroAndPassesPositive) {
   auto net = random_net<5, 10>(3, 0.5);
   const auto x = random_window(3, 20, 5, 1.0);
-  const double base = lstm_forward<5, 10, double>(net.weights.data(), x.data(), 20, OutputActivation::linear);
+  const double base = learned::lstm_forward<5, 10, double>(net.weights.data(), x.data(), 20,
+                                                           learned::OutputActivation::linear);
   // Shift the dense bias so that the linear output is −0.7, then +0.7.
-  const int bias = LstmLayout<5, 10>::kDenseBias;
+  const int bias = learned::LstmLayout<5, 10>::kDenseBias;
   net.weights[bias] += -0.7 - base;
-  const double neg_lin = lstm_forward<5, 10, double>(net.weights.data(), x.data(), 20,
-                                                     OutputActivation::linear);
+  const double neg_lin = learned::lstm_forward<5, 10, double>(net.weights.data(), x.data(), 20,
+                                                              learned::OutputActivation::linear);
   EXPECT_NEAR(neg_lin, -0.7, 1e-12);
-  EXPECT_EQ((lstm_forward<5, 10, double>(net.weights.data(), x.data(), 20, OutputActivation::relu)), 0.0);
+  EXPECT_EQ(
+      (learned::lstm_forward<5, 10, double>(net.weights.data(), x.data(), 20, learned::OutputActivation::relu)),
+      0.0);
   net.weights[bias] += 1.4;
-  const double pos = lstm_forward<5, 10, double>(net.weights.data(), x.data(), 20, OutputActivation::relu);
+  const double pos = learned::lstm_forward<5, 10, double>(net.weights.data(), x.data(), 20,
+                                                          learned::OutputActivation::relu);
   EXPECT_NEAR(pos, 0.7, 1e-12);
   EXPECT_NEAR(pos, (reference_lstm<5, 10>(net.weights, x, 20, true)), 1e-12);
 }
 
 TEST(LstmForward, ZeroWeightsGiveOutputBias) {
-  LstmNet<3, 5> net;
-  net.weights[LstmLayout<3, 5>::kDenseBias] = 0.37;
+  learned::LstmNet<3, 5> net;
+  net.weights[learned::LstmLayout<3, 5>::kDenseBias] = 0.37;
   const auto x = random_window(5, 20, 3, 3.0);
-  EXPECT_EQ((lstm_forward<3, 5, double>(net.weights.data(), x.data(), 20, OutputActivation::linear)), 0.37);
+  EXPECT_EQ((learned::lstm_forward<3, 5, double>(net.weights.data(), x.data(), 20,
+                                                 learned::OutputActivation::linear)),
+            0.37);
   // Zero weights: every gate is σ(0) = 1/2, the candidate tanh(0) = 0, so c = h = 0.
   net.output_mean = 2.0;
   net.output_sd = 3.0;
@@ -150,14 +158,14 @@ TEST(LstmNetPredict, StandardisesInputsAndDenormalisesOutput) {
   for (std::size_t n = 0; n < z.size(); ++n) EXPECT_NEAR(back[n], z[n], 1e-12);
 
   // The ReLU's zero maps to output_mean (the floor).
-  net.activation = OutputActivation::relu;
-  net.weights[LstmLayout<3, 5>::kDenseBias] -= 1e3;
+  net.activation = learned::OutputActivation::relu;
+  net.weights[learned::LstmLayout<3, 5>::kDenseBias] -= 1e3;
   EXPECT_EQ(net.predict(raw.data()), 1.5);
 }
 
 TEST(LstmNetIsValid, NamesTheBadValue) {
   std::string why;
-  LstmNet<3, 5> net;
+  learned::LstmNet<3, 5> net;
   EXPECT_TRUE(net.IsValid(&why)) << why;
   auto bad = net;
   bad.window = 0;

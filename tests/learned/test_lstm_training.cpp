@@ -15,11 +15,11 @@
 #include <odotune/core/counter_rng.h>
 #include <odotune/learned/lstm_training.h>
 
-namespace odotune {
+namespace odotune::learned {
 namespace {
 
 double draw(std::uint64_t seed, std::uint64_t n, double lo, double hi) {
-  return lo + (hi - lo) * counter_uniform01(seed, 3, n, 0, 4242);
+  return lo + (hi - lo) * core::counter_uniform01(seed, 3, n, 0, 4242);
 }
 
 // ---------------------------------------------------------------- gradients
@@ -452,4 +452,4 @@ TEST(LstmTraining, DecayToStartKeepsARefitNearTheCurrentWeights) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::learned

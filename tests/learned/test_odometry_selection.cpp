@@ -8,7 +8,7 @@
 
 #include <odotune/learned/odometry_selection.h>
 
-namespace odotune {
+namespace odotune::learned {
 namespace {
 
 // A fold where the nets take the given fractions of the kinematic MAEs, and
@@ -95,4 +95,4 @@ TEST(OdometrySelection, OptionsAreCheckedByName) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::learned

@@ -17,7 +17,7 @@
 
 #include "support/calibration_track.h"
 
-namespace odotune {
+namespace odotune::learned {
 namespace {
 
 using testing_support::ChairTrackOptions;
@@ -49,7 +49,7 @@ TEST(PoseFusion, FixesKeepTheFusedPathNearTheTruth) {
   const PoseFusionTrace t = replay_pose_fusion(in, kinematic_measurements(in), o);
   ASSERT_TRUE(t.healthy);
   EXPECT_GT(t.fixes, 100u);
-  const ErrorMetrics fused = pose_fusion_errors(in, t);
+  const objectives::ErrorMetrics fused = pose_fusion_errors(in, t);
   const double dead = dead_reckoning_errors(in, in.v_kin, in.w_kin, 0.0).rmse();
   EXPECT_LT(fused.rmse_m, 0.1);
   EXPECT_LT(fused.rmse_m, 0.25 * dead) << "dead reckoning " << dead;
@@ -73,7 +73,7 @@ TEST(FusionInput, ReferenceVelocitiesFromTheGroundTruthAndSlices) {
   ChairTrackOptions c;
   c.duration_s = 60;
   c.ext = false;
-  const Track track = testing_support::chair_track(c);
+  const tracks::Track track = testing_support::chair_track(c);
   FusionInputOptions o;
   o.ext_from_gt_hz = 10.0;
   const FusionInput in = build_fusion_input(track, o);
@@ -110,7 +110,7 @@ TEST(SlipDetector, TrainsWithoutMotorPower) {
     const SlipDetectorModel d = train_slip_detector({&a, &b}, {kinematic_odometry(a), kinematic_odometry(b)}, o,
                                                     nullptr);
     EXPECT_EQ(d.drive, drive);
-    EXPECT_EQ(d.input, OdometryInput::wheels);
+    EXPECT_EQ(d.input, tracks::OdometryInput::wheels);
     EXPECT_GT(d.flag_var_v, 0.0);
     EXPECT_GE(d.flag_var_v, d.floor_var_v);
     SlipDetectorStepper s(&d);
@@ -128,4 +128,4 @@ TEST(SlipDetector, TrainsWithoutMotorPower) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::learned

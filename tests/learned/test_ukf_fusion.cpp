@@ -18,7 +18,7 @@
 
 #include "support/fusion_track.h"
 
-namespace odotune {
+namespace odotune::learned {
 namespace {
 
 using testing_support::fusion_track;
@@ -238,8 +238,8 @@ TEST(UkfFusion, ExternalVelocitiesBeatOdometryAloneUnderARadiusError) {
   const FusionTrace fused = replay_fusion(in, odo, p, with_ext);
   const FusionTrace odo_only = replay_fusion(in, odo, p, without_ext);
   ASSERT_TRUE(fused.healthy && odo_only.healthy);
-  const ErrorMetrics e_fused = fusion_pose_errors(in, fused);
-  const ErrorMetrics e_odo = fusion_pose_errors(in, odo_only);
+  const objectives::ErrorMetrics e_fused = fusion_pose_errors(in, fused);
+  const objectives::ErrorMetrics e_odo = fusion_pose_errors(in, odo_only);
   EXPECT_EQ(e_fused.samples, static_cast<long>(in.size()) - 1);
   EXPECT_GT(e_odo.rmse_m, 0.05);  // the radius error shows
   EXPECT_LT(e_fused.rmse_m, 0.5 * e_odo.rmse_m) << e_fused.rmse_m << " vs " << e_odo.rmse_m;
@@ -264,7 +264,7 @@ TEST(UkfFusion, TraceStartsAtTheGroundTruthAndIntegratesEq3) {
     ASSERT_GT(tr.var_w[k], 0.0);
   }
   // Clean track, precise odometry: the fused pose ends close to the truth.
-  const ErrorMetrics e = fusion_pose_errors(in, tr);
+  const objectives::ErrorMetrics e = fusion_pose_errors(in, tr);
   EXPECT_LT(e.maxe_m, 0.05);
   EXPECT_LE(e.mae_m, e.rmse_m);
   EXPECT_LE(e.rmse_m, e.maxe_m);
@@ -313,4 +313,4 @@ TEST(UkfFusion, BadInputThrowsNamingTheValue) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::learned

@@ -19,7 +19,7 @@
 
 #include "support/fusion_track.h"
 
-namespace odotune {
+namespace odotune::learned {
 namespace {
 
 using testing_support::fusion_track;
@@ -39,13 +39,13 @@ const FusionInput& biased_input() {
 }
 
 TEST(UkfSpace, NamedBoundedLogScaledAroundTheDefaults) {
-  const BoxSpace space = ukf_space();
+  const objectives::BoxSpace space = ukf_space();
   ASSERT_EQ(space.dim(), 6u);
   const std::vector<std::string> names = {"q_v_m2_s3", "q_w_rad2_s3", "odo_var_v",
                                           "odo_var_w", "gyro_var",    "ext_var_scale"};
   const std::vector<double> defaults = ukf_params_of(UkfSettings{});
   for (std::size_t i = 0; i < names.size(); ++i) {
-    const ParamSpec& p = space.params()[i];
+    const objectives::ParamSpec& p = space.params()[i];
     EXPECT_EQ(p.name, names[i]);
     EXPECT_TRUE(p.log_scale) << p.name;
     EXPECT_GE(std::log10(p.upper / p.lower), 4.0) << p.name << ": spans decades";
@@ -67,15 +67,15 @@ TEST(UkfSpace, NamedBoundedLogScaledAroundTheDefaults) {
 
 TEST(UkfObjective, FitnessIsTheModeOfTheReplaysErrors) {
   const FusionInput& in = biased_input();
-  const UkfObjective obj({&in}, FitnessMode::rmse);
+  const UkfObjective obj({&in}, objectives::FitnessMode::rmse);
   const UkfSettings defaults;
   const std::vector<double> x = ukf_space().to_box(ukf_params_of(defaults));
   bool healthy = false;
-  const ErrorMetrics e = ukf_pose_errors(in, defaults, &healthy);
+  const objectives::ErrorMetrics e = ukf_pose_errors(in, defaults, &healthy);
   ASSERT_TRUE(healthy);
   EXPECT_GT(e.samples, 100);
   EXPECT_NEAR(obj.fitness(x), e.rmse_m, 1e-12 * e.rmse_m);
-  const UkfObjective obj7({&in, &in}, FitnessMode::rmse_mae_maxe);
+  const UkfObjective obj7({&in, &in}, objectives::FitnessMode::rmse_mae_maxe);
   EXPECT_NEAR(obj7.fitness(x), e.rmse_m + e.mae_m + e.maxe_m, 1e-12);  // mean of two equal tracks
   EXPECT_EQ(obj.evaluations(), 1);
   EXPECT_EQ(obj.failures(), 0);
@@ -102,7 +102,7 @@ tuner::Summary small_pso(const UkfObjective& obj, std::uint64_t seed) {
 
 TEST(UkfObjective, PsoBeatsTheDefaultsAndIsDeterministic) {
   const FusionInput& in = biased_input();
-  const UkfObjective obj({&in}, FitnessMode::rmse);
+  const UkfObjective obj({&in}, objectives::FitnessMode::rmse);
   const double at_defaults = obj.fitness(ukf_space().to_box(ukf_params_of(UkfSettings{})));
 
   const int threads_before = omp_get_max_threads();
@@ -124,14 +124,14 @@ TEST(UkfObjective, PsoBeatsTheDefaultsAndIsDeterministic) {
 TEST(UkfObjective, DivergenceIsACountedPenalty) {
   FusionInput broken = biased_input();
   broken.v_kin[30] = std::nan("");  // the odometry breaks mid-way: the filter turns unhealthy
-  const UkfObjective obj({&broken}, FitnessMode::rmse);
+  const UkfObjective obj({&broken}, objectives::FitnessMode::rmse);
   const std::vector<double> x = ukf_space().to_box(ukf_params_of(UkfSettings{}));
-  EXPECT_EQ(obj.fitness(x), kDivergencePenalty);
+  EXPECT_EQ(obj.fitness(x), objectives::kDivergencePenalty);
   EXPECT_EQ(obj.failures(), 1);
   // A non-finite box coordinate: a penalty too, never an exception.
   std::vector<double> bad = x;
   bad[2] = std::nan("");
-  EXPECT_EQ(obj.fitness(bad), kDivergencePenalty);
+  EXPECT_EQ(obj.fitness(bad), objectives::kDivergencePenalty);
   EXPECT_EQ(obj.failures(), 2);
   EXPECT_EQ(obj.evaluations(), 2);
 }
@@ -142,15 +142,15 @@ TEST(UkfObjective, OneLineErrors) {
   o.gt = false;
   const FusionInput no_gt = build_fusion_input(fusion_track(o));
   try {
-    UkfObjective obj({&no_gt}, FitnessMode::rmse);
+    UkfObjective obj({&no_gt}, objectives::FitnessMode::rmse);
     FAIL() << "expected std::invalid_argument";
   } catch (const std::invalid_argument& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("track 'no_truth': no ground truth"), std::string::npos) << what;
     EXPECT_EQ(what.find('\n'), std::string::npos);
   }
-  EXPECT_THROW(UkfObjective({&biased_input()}, FitnessMode::fix_rmse), std::invalid_argument);
-  EXPECT_THROW(UkfObjective({}, FitnessMode::rmse), std::invalid_argument);
+  EXPECT_THROW(UkfObjective({&biased_input()}, objectives::FitnessMode::fix_rmse), std::invalid_argument);
+  EXPECT_THROW(UkfObjective({}, objectives::FitnessMode::rmse), std::invalid_argument);
   UkfSettings bad;
   bad.odo_var_w = 0.0;
   std::string why;
@@ -159,4 +159,4 @@ TEST(UkfObjective, OneLineErrors) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::learned

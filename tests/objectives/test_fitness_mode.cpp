@@ -10,7 +10,7 @@
 #include <odotune/objectives/fix_cv_replay.h>
 #include <odotune/objectives/metrics.h>
 
-namespace odotune {
+namespace odotune::objectives {
 namespace {
 
 using ::testing::HasSubstr;
@@ -61,4 +61,4 @@ TEST(FitnessMode, GroundTruthAndFixModesScoreTheirOwnScalars) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -16,12 +16,12 @@
 
 #include "support/synthetic_track.h"
 
-namespace odotune {
+namespace odotune::objectives {
 namespace {
 
 using filters::NoiseModel;
 
-ReplayInput by_fixes(const Track& t) {
+ReplayInput by_fixes(const tracks::Track& t) {
   ReplayInputOptions o;
   o.reference = ReplayReference::fixes;
   return build_replay_input(t, o);
@@ -68,7 +68,7 @@ FixCvOutcome reference_cv(const ReplayInput& in, const FixCvOptions& cv, const f
 }
 
 TEST(FixCvReplay, EqualsTheOneStepFilter) {
-  const Track tr = testing_support::synthetic_track(3, 120.0);
+  const tracks::Track tr = testing_support::synthetic_track(3, 120.0);
   const ReplayInput in = by_fixes(tr);
   const FixCvOptions cv;
   const FixCvReplay replay(in, cv);
@@ -86,25 +86,25 @@ TEST(FixCvReplay, EqualsTheOneStepFilter) {
 TEST(FixCvReplay, HeadingFittedFromTheFixes) {
   // The same drive turned by 1 rad about the origin: its ground truth starts
   // at heading 1; the fit must find it from odometry and noisy fixes alone.
-  const Track base = testing_support::synthetic_track(5, 120.0);
-  TrackData d;
+  const tracks::Track base = testing_support::synthetic_track(5, 120.0);
+  tracks::TrackData d;
   d.meta = base.meta();
   d.t = base.t();
   d.ticks_l = base.ticks_l();
   d.ticks_r = base.ticks_r();
   const double c = std::cos(1.0), s = std::sin(1.0);
-  for (Col k : {Col::aps_x, Col::aps_y}) d.ensure(k);
+  for (tracks::Col k : {tracks::Col::aps_x, tracks::Col::aps_y}) d.ensure(k);
   for (std::size_t i = 0; i < base.size(); ++i) {
-    const double x = base.col(Col::aps_x)[i], y = base.col(Col::aps_y)[i];
-    d.col(Col::aps_x)[i] = 5.0 + c * x - s * y;
-    d.col(Col::aps_y)[i] = -2.0 + s * x + c * y;
+    const double x = base.col(tracks::Col::aps_x)[i], y = base.col(tracks::Col::aps_y)[i];
+    d.col(tracks::Col::aps_x)[i] = 5.0 + c * x - s * y;
+    d.col(tracks::Col::aps_y)[i] = -2.0 + s * x + c * y;
   }
-  const ReplayInput in = by_fixes(Track(std::move(d)));
+  const ReplayInput in = by_fixes(tracks::Track(std::move(d)));
   std::size_t first = 0;
-  while (std::isnan(base.col(Col::aps_x)[first])) ++first;
+  while (std::isnan(base.col(tracks::Col::aps_x)[first])) ++first;
   // Within the (10°)² the replay then assumes: this odometry's right wheel is
   // 1 % off, so its own heading drifts 0.013 rad/s while the fit runs.
-  EXPECT_NEAR(in.initial_pose(2), 1.0 + base.col(Col::gt_theta)[first], 0.1);
+  EXPECT_NEAR(in.initial_pose(2), 1.0 + base.col(tracks::Col::gt_theta)[first], 0.1);
   EXPECT_NE(in.initial_pose_note.find("heading"), std::string::npos);
   EXPECT_GT(in.initial_cov(2, 2), 0.01);  // (10°)²
 }
@@ -112,7 +112,7 @@ TEST(FixCvReplay, HeadingFittedFromTheFixes) {
 TEST(FixCvReplay, RanksNoiseAsGroundTruthDoes) {
   // On simulated drives, the noise that scores best held out is near the
   // one that scores best against ground truth, and both beat a bad one.
-  const Track tr = testing_support::synthetic_track(11, 300.0);
+  const tracks::Track tr = testing_support::synthetic_track(11, 300.0);
   const FixCvReplay cv(by_fixes(tr), {});
   const FastReplay gt(build_replay_input(tr));
   double best_cv = 1e300, best_gt = 1e300;
@@ -129,18 +129,19 @@ TEST(FixCvReplay, RanksNoiseAsGroundTruthDoes) {
 }
 
 TEST(FixCvReplay, PerFixVariancesReplaceTheModelsQ) {
-  const Track base = testing_support::synthetic_track(4, 60.0);
-  TrackData d;
+  const tracks::Track base = testing_support::synthetic_track(4, 60.0);
+  tracks::TrackData d;
   d.meta = base.meta();
   d.t = base.t();
   d.ticks_l = base.ticks_l();
   d.ticks_r = base.ticks_r();
-  for (int c = 0; c < kNumCols; ++c) d.cols[c] = base.col(static_cast<Col>(c));
-  d.ensure(Col::aps_var_x);
-  d.ensure(Col::aps_var_y);
+  for (int c = 0; c < tracks::kNumCols; ++c) d.cols[c] = base.col(static_cast<tracks::Col>(c));
+  d.ensure(tracks::Col::aps_var_x);
+  d.ensure(tracks::Col::aps_var_y);
   for (std::size_t i = 0; i < base.size(); ++i)
-    if (!std::isnan(base.col(Col::aps_x)[i])) d.col(Col::aps_var_x)[i] = d.col(Col::aps_var_y)[i] = 0.25;
-  const Track tr(std::move(d));
+    if (!std::isnan(base.col(tracks::Col::aps_x)[i]))
+      d.col(tracks::Col::aps_var_x)[i] = d.col(tracks::Col::aps_var_y)[i] = 0.25;
+  const tracks::Track tr(std::move(d));
   const ReplayInput with = build_replay_input(tr), without = build_replay_input(base);
   auto noise = alpha(0.02, 0.02);
   // The fast replay agrees with the reference with per-fix variances too.
@@ -154,7 +155,7 @@ TEST(FixCvReplay, PerFixVariancesReplaceTheModelsQ) {
 }
 
 TEST(FixCvReplay, Refusals) {
-  const Track tr = testing_support::synthetic_track(2, 60.0);
+  const tracks::Track tr = testing_support::synthetic_track(2, 60.0);
   FixCvOptions o;
   o.folds = 1;
   EXPECT_THROW(FixCvReplay(by_fixes(tr), o), std::invalid_argument);
@@ -168,15 +169,15 @@ TEST(FixCvReplay, Refusals) {
   const EkfObjective obj = EkfObjective::over_fixes({&cv}, NoiseModel::alpha, FitnessMode::fix_rmse);
   EXPECT_NEAR(obj.fitness(std::vector<double>{0.01, 0.01}), cv.evaluate(alpha(0.01, 0.01)).heldout.rmse_m,
               1e-15);
-  TrackData d;
+  tracks::TrackData d;
   d.meta = tr.meta();
   d.t = tr.t();
   d.ticks_l = tr.ticks_l();
   d.ticks_r = tr.ticks_r();
-  d.col(Col::gt_x) = tr.col(Col::gt_x);
-  d.col(Col::gt_y) = tr.col(Col::gt_y);
-  EXPECT_THROW(by_fixes(Track(std::move(d))), std::invalid_argument);  // no fixes
+  d.col(tracks::Col::gt_x) = tr.col(tracks::Col::gt_x);
+  d.col(tracks::Col::gt_y) = tr.col(tracks::Col::gt_y);
+  EXPECT_THROW(by_fixes(tracks::Track(std::move(d))), std::invalid_argument);  // no fixes
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -10,7 +10,7 @@
 
 #include <odotune/results/ros_export.h>
 
-namespace odotune {
+namespace odotune::objectives {
 namespace {
 
 constexpr double kD = 0.3;  // wheel base [m]
@@ -203,4 +203,4 @@ TEST(ProcessNoiseRate, BadInputsAreRejected) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::objectives

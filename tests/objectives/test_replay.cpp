@@ -10,7 +10,7 @@
 
 #include "support/synthetic_track.h"
 
-namespace odotune {
+namespace odotune::objectives {
 namespace {
 
 using filters::NoiseModel;
@@ -68,7 +68,7 @@ TEST(ParamSpace, StudyBoundsAndLogScaling) {
 }
 
 TEST(ReplayInput, StartsAtFirstGroundTruthAndConvertsTicks) {
-  const Track track = testing_support::synthetic_track(1, 10.0);
+  const tracks::Track track = testing_support::synthetic_track(1, 10.0);
   const ReplayInput in = build_replay_input(track);
   EXPECT_EQ(in.source, OdometrySource::ticks);
   EXPECT_EQ(in.steps.size(), track.size() - 1);
@@ -81,13 +81,13 @@ TEST(ReplayInput, StartsAtFirstGroundTruthAndConvertsTicks) {
 }
 
 TEST(ReplayInput, RejectsTrackWithoutGroundTruth) {
-  TrackData d;
+  tracks::TrackData d;
   d.meta.name = "nogt";
   d.t = {0, 1};
-  d.col(Col::v_cmd) = {0, 0};
-  d.col(Col::w_cmd) = {0, 0};
+  d.col(tracks::Col::v_cmd) = {0, 0};
+  d.col(tracks::Col::w_cmd) = {0, 0};
   try {
-    build_replay_input(Track(std::move(d)));
+    build_replay_input(tracks::Track(std::move(d)));
     FAIL() << "expected an error";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("nogt"), std::string::npos);
@@ -99,7 +99,7 @@ class FastVsStep : public ::testing::TestWithParam<NoiseModel> {};
 
 // The tuner's fast replay reproduces the reference replay's metrics.
 TEST_P(FastVsStep, SameMetrics) {
-  const Track track = testing_support::synthetic_track(2);
+  const tracks::Track track = testing_support::synthetic_track(2);
   const ReplayInput in = build_replay_input(track);
   const FastReplay fast(in);
   const ParamSpace space = ParamSpace::for_model(GetParam());
@@ -124,7 +124,7 @@ INSTANTIATE_TEST_SUITE_P(AllModels, FastVsStep,
                          [](const auto& p) { return std::string(filters::to_string(p.param)); });
 
 TEST(Replay, FixesBoundTheErrorThatDeadReckoningAccumulates) {
-  const Track track = testing_support::synthetic_track(4);
+  const tracks::Track track = testing_support::synthetic_track(4);
   const ReplayInput in = build_replay_input(track);
   NoiseParams trust_odometry = baseline_noise();
   trust_odometry.a1 = trust_odometry.a2 = 0.0;  // R = 0: the fixes can never pull the pose
@@ -140,7 +140,7 @@ TEST(Replay, FixesBoundTheErrorThatDeadReckoningAccumulates) {
 TEST(EkfObjective, PenalisesAndCountsDivergence) {
   // A track whose fix is absurdly far away with tiny measurement noise and
   // huge odometry noise drives the covariance update into cancellation.
-  const Track track = testing_support::synthetic_track(5, 5.0);
+  const tracks::Track track = testing_support::synthetic_track(5, 5.0);
   ReplayInput in = build_replay_input(track);
   for (auto& z : in.fixes) z = filters::Position(std::nan(""), 0.0);
   const FastReplay fast(in);
@@ -152,7 +152,7 @@ TEST(EkfObjective, PenalisesAndCountsDivergence) {
 }
 
 TEST(EkfObjective, MeanOverTracksAndBaselineIsBeatable) {
-  const Track a = testing_support::synthetic_track(6), b = testing_support::synthetic_track(7);
+  const tracks::Track a = testing_support::synthetic_track(6), b = testing_support::synthetic_track(7);
   const FastReplay fa(build_replay_input(a)), fb(build_replay_input(b));
   const EkfObjective both({&fa, &fb}, NoiseModel::alpha, FitnessMode::rmse_mae_maxe);
   const EkfObjective only_a({&fa}, NoiseModel::alpha, FitnessMode::rmse_mae_maxe);
@@ -164,4 +164,4 @@ TEST(EkfObjective, MeanOverTracksAndBaselineIsBeatable) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::objectives

@@ -53,43 +53,43 @@ double mean_logdet(const std::vector<Innovation>& v) {
 
 TEST(RlInnovations, ConsistentWhiteInnovationsScoreNearTheirIdeal) {
   const std::vector<Innovation> v = sequence(20000, 0.0, 1.0, 7);
-  EXPECT_LT(nis_cost(v), 0.03);         // mean NIS ≈ 2 (two dimensions)
-  EXPECT_LT(whiteness_cost(v), 0.005);  // 10 lags of ≈ 1/√20000 each, squared
-  EXPECT_NEAR(innovation_nll(v), 2.0 + mean_logdet(v), 0.05);
+  EXPECT_LT(objectives::nis_cost(v), 0.03);         // mean NIS ≈ 2 (two dimensions)
+  EXPECT_LT(objectives::whiteness_cost(v), 0.005);  // 10 lags of ≈ 1/√20000 each, squared
+  EXPECT_NEAR(objectives::innovation_nll(v), 2.0 + mean_logdet(v), 0.05);
 }
 
 TEST(RlInnovations, AMisScaledCovarianceShowsInNisAndLikelihood) {
   const std::vector<Innovation> right = sequence(20000, 0.0, 1.0, 3);
   const std::vector<Innovation> over = sequence(20000, 0.0, 4.0, 3);
   const std::vector<Innovation> under = sequence(20000, 0.0, 0.25, 3);
-  EXPECT_NEAR(nis_cost(over), std::log(4.0), 0.03);
-  EXPECT_NEAR(nis_cost(under), std::log(4.0), 0.03);
+  EXPECT_NEAR(objectives::nis_cost(over), std::log(4.0), 0.03);
+  EXPECT_NEAR(objectives::nis_cost(under), std::log(4.0), 0.03);
   // The likelihood is least at the true scale: 2/k + 2 ln k is least at k = 1.
-  EXPECT_LT(innovation_nll(right), innovation_nll(over));
-  EXPECT_LT(innovation_nll(right), innovation_nll(under));
-  EXPECT_GT(whiteness_cost(over), 0.5);  // its lag-0 term is ln(4)² ≈ 1.9
+  EXPECT_LT(objectives::innovation_nll(right), objectives::innovation_nll(over));
+  EXPECT_LT(objectives::innovation_nll(right), objectives::innovation_nll(under));
+  EXPECT_GT(objectives::whiteness_cost(over), 0.5);  // its lag-0 term is ln(4)² ≈ 1.9
 }
 
 TEST(RlInnovations, CorrelatedInnovationsAreNotWhite) {
   const std::vector<Innovation> white = sequence(5000, 0.0, 1.0, 11);
   const std::vector<Innovation> red = sequence(5000, 0.8, 1.0, 11);
-  EXPECT_LT(nis_cost(red), 0.1);  // consistent at lag 0 …
+  EXPECT_LT(objectives::nis_cost(red), 0.1);  // consistent at lag 0 …
   // … but ρ_j ≈ 0.8^j: Σ_{j=1..10} 0.64^j ≈ 1.7.
-  EXPECT_GT(whiteness_cost(red), 1.0);
-  EXPECT_LT(whiteness_cost(white), 0.02);
-  EXPECT_LT(whiteness_cost(red, 1), whiteness_cost(red, 10));
+  EXPECT_GT(objectives::whiteness_cost(red), 1.0);
+  EXPECT_LT(objectives::whiteness_cost(white), 0.02);
+  EXPECT_LT(objectives::whiteness_cost(red, 1), objectives::whiteness_cost(red, 10));
 }
 
 TEST(RlInnovations, UndefinedCasesAreNaN) {
-  EXPECT_TRUE(std::isnan(innovation_nll({})));
-  EXPECT_TRUE(std::isnan(nis_cost({})));
-  EXPECT_TRUE(std::isnan(whiteness_cost(sequence(5, 0.0, 1.0, 1))));  // fewer than lags + 2
+  EXPECT_TRUE(std::isnan(objectives::innovation_nll({})));
+  EXPECT_TRUE(std::isnan(objectives::nis_cost({})));
+  EXPECT_TRUE(std::isnan(objectives::whiteness_cost(sequence(5, 0.0, 1.0, 1))));  // fewer than lags + 2
   std::vector<Innovation> v = sequence(100, 0.0, 1.0, 1);
   v[40].S(1, 1) = -1.0;
-  EXPECT_TRUE(std::isnan(innovation_nll(v)));
-  EXPECT_TRUE(std::isnan(nis_cost(v)));
-  EXPECT_TRUE(std::isnan(whiteness_cost(v)));
-  EXPECT_TRUE(std::isnan(heldout_nll({})));
+  EXPECT_TRUE(std::isnan(objectives::innovation_nll(v)));
+  EXPECT_TRUE(std::isnan(objectives::nis_cost(v)));
+  EXPECT_TRUE(std::isnan(objectives::whiteness_cost(v)));
+  EXPECT_TRUE(std::isnan(objectives::heldout_nll({})));
 }
 
 TEST(RlInnovations, HeldOutLikelihoodAddsThePredictedAndTheFixCovariance) {
@@ -102,11 +102,11 @@ TEST(RlInnovations, HeldOutLikelihoodAddsThePredictedAndTheFixCovariance) {
   o.scored.push_back(f);
   // C = 2·I, e = (1, 0): eᵀC⁻¹e = 0.5, ln det C = 2 ln 2.
   const std::vector<rlnode::ReplayOutput> one = {o};
-  EXPECT_NEAR(heldout_nll(one), 0.5 + 2.0 * std::log(2.0), 1e-12);
+  EXPECT_NEAR(objectives::heldout_nll(one), 0.5 + 2.0 * std::log(2.0), 1e-12);
   o.scored.push_back(f);
   o.scored.back().measured.x() = 1.0;  // e = 0: ln det C only
   const std::vector<rlnode::ReplayOutput> two = {o};
-  EXPECT_NEAR(heldout_nll(two), 0.25 + 2.0 * std::log(2.0), 1e-12);
+  EXPECT_NEAR(objectives::heldout_nll(two), 0.25 + 2.0 * std::log(2.0), 1e-12);
 }
 
 TEST(RlInnovations, TheReplayRecordsOneInnovationPerFusedFixOnlyWhenAsked) {
@@ -117,7 +117,8 @@ TEST(RlInnovations, TheReplayRecordsOneInnovationPerFusedFixOnlyWhenAsked) {
                                                  rlnode::read_rl_params(params));
   rec.gps_transform = rlnode::fit_gps_alignment(rec, rlnode::settings_of(rec.params), 30.0).transform;
   const std::int64_t t0 = rec.fixes.front().stamp_ns;
-  const std::vector<rlnode::FixRole> roles = every_fifth_roles(rec, t0, rec.fixes.back().stamp_ns + 1);
+  const std::vector<rlnode::FixRole> roles = objectives::every_fifth_roles(rec, t0,
+                                                                           rec.fixes.back().stamp_ns + 1);
   const rlnode::Schedule schedule = rlnode::make_schedule(rec, roles);
   rlnode::ReplaySettings settings = rlnode::settings_of(rec.params);
   EXPECT_TRUE(rlnode::replay(rec, schedule, settings).innovations.empty());
@@ -136,6 +137,6 @@ TEST(RlInnovations, TheReplayRecordsOneInnovationPerFusedFixOnlyWhenAsked) {
   }
   ASSERT_FALSE(out.scored.empty());
   for (const rlnode::ScoredFix& f : out.scored) EXPECT_GT(f.predicted_cov.determinant(), 0.0);
-  EXPECT_TRUE(std::isfinite(innovation_nll(out.innovations)));
-  EXPECT_TRUE(std::isfinite(heldout_nll(std::vector<rlnode::ReplayOutput>{out})));
+  EXPECT_TRUE(std::isfinite(objectives::innovation_nll(out.innovations)));
+  EXPECT_TRUE(std::isfinite(objectives::heldout_nll(std::vector<rlnode::ReplayOutput>{out})));
 }

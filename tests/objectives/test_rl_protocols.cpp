@@ -40,7 +40,8 @@ TEST(RlProtocols, OutageWindowsStartEveryStrideAfterTheWarmUpAndEndInTheSpan) {
   ProtocolDrive d;
   const std::vector<double> lengths = {10.0, 20.0};
   const std::int64_t until = d.t0() + 60 * kSecond;
-  const std::vector<OutageWindow> w = outage_windows(d.rec, lengths, 5.0, after_warmup(d.rec, 15.0), until);
+  const std::vector<objectives::OutageWindow> w = objectives::outage_windows(
+      d.rec, lengths, 5.0, objectives::after_warmup(d.rec, 15.0), until);
   // Starts at 15, 20, … s: 10-s windows up to a start of 50 s, 20-s ones up to 40 s.
   ASSERT_EQ(w.size(), 8u + 6u);
   int ten = 0, twenty = 0;
@@ -58,14 +59,15 @@ TEST(RlProtocols, OutageWindowsStartEveryStrideAfterTheWarmUpAndEndInTheSpan) {
   }
   EXPECT_EQ(ten, 8);
   EXPECT_EQ(twenty, 6);
-  EXPECT_TRUE(outage_windows(d.rec, lengths, 5.0, after_warmup(d.rec, 55.0), until).empty());
+  EXPECT_TRUE(
+      objectives::outage_windows(d.rec, lengths, 5.0, objectives::after_warmup(d.rec, 55.0), until).empty());
 }
 
 TEST(RlProtocols, RolesFuseBeforeScoreInsideAndLeaveOutAfter) {
   ProtocolDrive d;
-  const OutageWindow w{d.t0() + 20 * kSecond, d.t0() + 30 * kSecond};
-  const std::vector<FixRole> roles = outage_window_roles(d.rec, w);
-  const std::vector<FixRole> outage = outage_protocol_roles(d.rec, w.start_ns, w.end_ns);
+  const objectives::OutageWindow w{d.t0() + 20 * kSecond, d.t0() + 30 * kSecond};
+  const std::vector<FixRole> roles = objectives::outage_window_roles(d.rec, w);
+  const std::vector<FixRole> outage = objectives::outage_protocol_roles(d.rec, w.start_ns, w.end_ns);
   EXPECT_EQ(roles, outage);
   int scored = 0;
   for (std::size_t i = 0; i < roles.size(); ++i) {
@@ -76,7 +78,7 @@ TEST(RlProtocols, RolesFuseBeforeScoreInsideAndLeaveOutAfter) {
   }
   EXPECT_EQ(scored, 20);  // 2 Hz for 10 s
 
-  const std::vector<FixRole> fifth = every_fifth_roles(d.rec, w.start_ns, w.end_ns);
+  const std::vector<FixRole> fifth = objectives::every_fifth_roles(d.rec, w.start_ns, w.end_ns);
   int k = 0, fifth_scored = 0;
   for (std::size_t i = 0; i < fifth.size(); ++i) {
     const std::int64_t t = d.rec.fixes[i].stamp_ns;
@@ -95,7 +97,7 @@ TEST(RlProtocols, RolesFuseBeforeScoreInsideAndLeaveOutAfter) {
 TEST(RlProtocols, EveryFixBeforeTheEndIsHeldOutInExactlyOneFold) {
   ProtocolDrive d;
   const std::int64_t until = d.t0() + 40 * kSecond;
-  const auto folds = heldout_fix_folds(d.rec, 5, 1.0, until);
+  const auto folds = objectives::heldout_fix_folds(d.rec, 5, 1.0, until);
   ASSERT_EQ(folds.size(), 5u);
   for (std::size_t i = 0; i < d.rec.fixes.size(); ++i) {
     int scored = 0;
@@ -110,18 +112,18 @@ TEST(RlProtocols, WindowsFromOneFusedRunScoreAsTheirOwnReplays) {
   ProtocolDrive d;
   const std::int64_t until = d.t0() + 70 * kSecond;
   const std::vector<double> lengths = {8.0, 16.0};
-  const std::vector<OutageWindow> windows = outage_windows(d.rec, lengths, 6.0, after_warmup(d.rec, 10.0),
-                                                           until);
+  const std::vector<objectives::OutageWindow> windows = objectives::outage_windows(
+      d.rec, lengths, 6.0, objectives::after_warmup(d.rec, 10.0), until);
   ASSERT_GT(windows.size(), 10u);
-  const OutageReplays shared(d.rec, windows, until);
+  const objectives::OutageReplays shared(d.rec, windows, until);
   rlnode::ReplaySettings s = rlnode::settings_of(d.rec.params);
   s.process_noise *= 3.0;
   std::vector<rlnode::ReplayOutput> own;
-  for (const OutageWindow& w : windows) {
-    own.push_back(rlnode::replay(d.rec, rlnode::make_schedule(d.rec, outage_window_roles(d.rec, w), w.end_ns),
-                                 s));
+  for (const objectives::OutageWindow& w : windows) {
+    own.push_back(rlnode::replay(
+        d.rec, rlnode::make_schedule(d.rec, objectives::outage_window_roles(d.rec, w), w.end_ns), s));
   }
-  const FixScore want = score_of(own), got = shared.score(s);
+  const objectives::FixScore want = objectives::score_of(own), got = shared.score(s);
   EXPECT_GT(want.fixes, 100);
   EXPECT_EQ(got.fixes, want.fixes);
   EXPECT_EQ(got.rmse_m, want.rmse_m);

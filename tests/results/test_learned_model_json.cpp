@@ -15,18 +15,17 @@
 
 #include "support/temp_dir.h"
 
-namespace odotune {
+namespace odotune::results {
 namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-using results::LearnedModelFile;
 using testing_support::TempDir;
 
 // Seeded random values spanning magnitudes, so that a lossy number format
 // would show.
 template <class Net>
-Net random_net(std::mt19937_64& rng, OutputActivation act) {
+Net random_net(std::mt19937_64& rng, learned::OutputActivation act) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   Net n;
   for (double& w : n.weights) w = u(rng) * std::pow(10.0, 3.0 * u(rng));
@@ -44,26 +43,26 @@ LearnedModelFile sample_model(bool detector) {
   LearnedModelFile m;
   // Correction nets of 3 units on wheels with the gyro (the other sizes and
   // inputs: VelocityNetsAndOtherSizesAndInputs).
-  m.odometry.v_net = random_net<OdometryNet::Net3>(rng, OutputActivation::linear);
-  m.odometry.w_net = random_net<OdometryNet::Net3>(rng, OutputActivation::linear);
+  m.odometry.v_net = random_net<learned::OdometryNet::Net3>(rng, learned::OutputActivation::linear);
+  m.odometry.w_net = random_net<learned::OdometryNet::Net3>(rng, learned::OutputActivation::linear);
   m.odometry.rate_hz = 10.0;
   m.odometry.ticks_per_rev = 8800.0;
   m.odometry.v_validation_mae = 0.1 + 0.2;  // not exactly 0.3
   m.odometry.w_validation_mae = 1.0 / 3.0;
-  m.odometry.target = LearnedTarget::correction;
-  m.odometry.features = LearnedFeatures::both;
+  m.odometry.target = learned::LearnedTarget::correction;
+  m.odometry.features = learned::LearnedFeatures::both;
   m.odometry.gyro = true;
   m.odometry.w_beats_kinematic = false;
   if (detector) {
-    SlipDetectorModel d;
-    d.v_net = random_net<SlipNet>(rng, OutputActivation::linear);
-    d.w_net = random_net<SlipNet>(rng, OutputActivation::relu);
+    learned::SlipDetectorModel d;
+    d.v_net = random_net<learned::SlipNet>(rng, learned::OutputActivation::linear);
+    d.w_net = random_net<learned::SlipNet>(rng, learned::OutputActivation::relu);
     d.floor_var_v = 1.234567890123e-5;
     d.floor_var_w = 2e-300;
     d.previous_lag = 3;
     d.max_log_ratio_v = 9.87654321;
     d.max_log_ratio_w = 11.5;
-    d.drive = SlipDrive::commands;
+    d.drive = learned::SlipDrive::commands;
     d.flag_var_v = 3.25e-4;
     d.flag_var_w = 1.0 / 7.0;
     m.detector = d;
@@ -77,7 +76,7 @@ LearnedModelFile sample_model(bool detector) {
   p.odometry.train_windows = 700;
   p.odometry.validation_windows = 300;
   p.odometry.seconds = 1.5;
-  if (detector) p.detector = results::ModelTrainingRecord{{5, 0.5, 0.6}, {6, 0.7, 0.8}, 90, 40, 2.25};
+  if (detector) p.detector = ModelTrainingRecord{{5, 0.5, 0.6}, {6, 0.7, 0.8}, 90, 40, 2.25};
   p.retrains = 4;
   p.retrain_tracks = {"wheelchair_learn_step"};
   p.created_by = "odotune learn train --track a.csv --model-out m.json";
@@ -96,7 +95,7 @@ void expect_same_net(const Net& a, const Net& b, const char* what) {
   EXPECT_EQ(a.window, b.window) << what;
 }
 
-void expect_same_net_record(const results::NetTrainingRecord& a, const results::NetTrainingRecord& b) {
+void expect_same_net_record(const NetTrainingRecord& a, const NetTrainingRecord& b) {
   EXPECT_EQ(a.iterations, b.iterations);
   EXPECT_EQ(std::isnan(a.train_mae), std::isnan(b.train_mae));
   if (!std::isnan(a.train_mae)) {
@@ -116,8 +115,8 @@ TEST(LearnedModelJson, RoundTripIsExact) {
   EXPECT_TRUE(m.odometry.v_net == r.odometry.v_net);
   EXPECT_TRUE(m.odometry.w_net == r.odometry.w_net);
   EXPECT_EQ(r.odometry.v_net.units(), 3);
-  EXPECT_EQ(r.odometry.features, LearnedFeatures::both);
-  EXPECT_EQ(r.odometry.input, OdometryInput::wheels);
+  EXPECT_EQ(r.odometry.features, learned::LearnedFeatures::both);
+  EXPECT_EQ(r.odometry.input, tracks::OdometryInput::wheels);
   EXPECT_TRUE(r.odometry.gyro);
   ASSERT_TRUE(r.provenance.selection.has_value());
   EXPECT_EQ(r.provenance.selection->at("folds"), 2);
@@ -125,7 +124,7 @@ TEST(LearnedModelJson, RoundTripIsExact) {
   EXPECT_EQ(r.odometry.ticks_per_rev, 8800.0);
   EXPECT_EQ(r.odometry.v_validation_mae, 0.1 + 0.2);
   EXPECT_EQ(r.odometry.w_validation_mae, 1.0 / 3.0);
-  EXPECT_EQ(r.odometry.target, LearnedTarget::correction);
+  EXPECT_EQ(r.odometry.target, learned::LearnedTarget::correction);
   EXPECT_TRUE(r.odometry.v_beats_kinematic);
   EXPECT_FALSE(r.odometry.w_beats_kinematic);
   ASSERT_TRUE(r.detector.has_value());
@@ -136,8 +135,8 @@ TEST(LearnedModelJson, RoundTripIsExact) {
   EXPECT_EQ(r.detector->previous_lag, 3);
   EXPECT_EQ(r.detector->max_log_ratio_v, 9.87654321);
   EXPECT_EQ(r.detector->max_log_ratio_w, 11.5);
-  EXPECT_EQ(r.detector->drive, SlipDrive::commands);
-  EXPECT_EQ(r.detector->input, OdometryInput::wheels);
+  EXPECT_EQ(r.detector->drive, learned::SlipDrive::commands);
+  EXPECT_EQ(r.detector->input, tracks::OdometryInput::wheels);
   EXPECT_EQ(r.detector->flag_var_v, 3.25e-4);
   EXPECT_EQ(r.detector->flag_var_w, 1.0 / 7.0);
   const auto& p = r.provenance;
@@ -164,7 +163,7 @@ TEST(LearnedModelJson, RoundTripIsExact) {
 
 TEST(LearnedModelJson, DetectorIsOptional) {
   const LearnedModelFile m = sample_model(false);
-  const json j = results::learned_model_json(m);
+  const json j = learned_model_json(m);
   EXPECT_EQ(j.at("format"), "odotune-learned/1");
   EXPECT_FALSE(j.contains("detector"));
   EXPECT_FALSE(j.at("provenance").contains("detector"));
@@ -179,26 +178,26 @@ TEST(LearnedModelJson, DetectorIsOptional) {
 TEST(LearnedModelJson, VelocityNetsAndOtherSizesAndInputs) {
   std::mt19937_64 rng(7);
   LearnedModelFile paper = sample_model(false);
-  paper.odometry.target = LearnedTarget::velocity;
-  paper.odometry.features = LearnedFeatures::paper;
+  paper.odometry.target = learned::LearnedTarget::velocity;
+  paper.odometry.features = learned::LearnedFeatures::paper;
   paper.odometry.gyro = false;
   paper.odometry.w_beats_kinematic = true;
-  paper.odometry.v_net = random_net<VelocityNet>(rng, OutputActivation::linear);
-  paper.odometry.w_net = random_net<VelocityNet>(rng, OutputActivation::linear);
+  paper.odometry.v_net = random_net<learned::VelocityNet>(rng, learned::OutputActivation::linear);
+  paper.odometry.w_net = random_net<learned::VelocityNet>(rng, learned::OutputActivation::linear);
   LearnedModelFile r = results::parse_learned_model(results::learned_model_json(paper), "m.json");
-  EXPECT_EQ(r.odometry.target, LearnedTarget::velocity);
+  EXPECT_EQ(r.odometry.target, learned::LearnedTarget::velocity);
   EXPECT_EQ(r.odometry.v_net.units(), 5);
   EXPECT_TRUE(r.odometry.v_net == paper.odometry.v_net);
 
   LearnedModelFile cmd = sample_model(false);
-  cmd.odometry.input = OdometryInput::commands;
+  cmd.odometry.input = tracks::OdometryInput::commands;
   cmd.odometry.ticks_per_rev = 0.0;
-  cmd.odometry.features = LearnedFeatures::channel;
-  cmd.odometry.v_net = random_net<OdometryNet::Net8>(rng, OutputActivation::linear);
-  cmd.odometry.w_net = random_net<OdometryNet::Net8>(rng, OutputActivation::linear);
+  cmd.odometry.features = learned::LearnedFeatures::channel;
+  cmd.odometry.v_net = random_net<learned::OdometryNet::Net8>(rng, learned::OutputActivation::linear);
+  cmd.odometry.w_net = random_net<learned::OdometryNet::Net8>(rng, learned::OutputActivation::linear);
   r = results::parse_learned_model(results::learned_model_json(cmd), "m.json");
-  EXPECT_EQ(r.odometry.input, OdometryInput::commands);
-  EXPECT_EQ(r.odometry.features, LearnedFeatures::channel);
+  EXPECT_EQ(r.odometry.input, tracks::OdometryInput::commands);
+  EXPECT_EQ(r.odometry.features, learned::LearnedFeatures::channel);
   EXPECT_EQ(r.odometry.w_net.units(), 8);
   EXPECT_TRUE(r.odometry.w_net == cmd.odometry.w_net);
 }
@@ -206,16 +205,18 @@ TEST(LearnedModelJson, VelocityNetsAndOtherSizesAndInputs) {
 // A file written before the nets' target and verdict were recorded holds the
 // paper's velocity nets, which are taken as they are.
 TEST(LearnedModelJson, OlderFilesAreVelocityNets) {
-  json j = results::learned_model_json(sample_model(false));
+  json j = learned_model_json(sample_model(false));
   std::mt19937_64 rng(3);
-  j["odometry"]["v_net"] = lstm_to_json(random_net<VelocityNet>(rng, OutputActivation::linear));
-  j["odometry"]["w_net"] = lstm_to_json(random_net<VelocityNet>(rng, OutputActivation::linear));
+  j["odometry"]["v_net"] = lstm_to_json(random_net<learned::VelocityNet>(rng,
+                                                                         learned::OutputActivation::linear));
+  j["odometry"]["w_net"] = lstm_to_json(random_net<learned::VelocityNet>(rng,
+                                                                         learned::OutputActivation::linear));
   for (const char* key : {"target", "v_beats_kinematic", "w_beats_kinematic", "input", "features", "gyro"})
     j["odometry"].erase(key);
   const LearnedModelFile r = results::parse_learned_model(j, "m.json");
-  EXPECT_EQ(r.odometry.target, LearnedTarget::velocity);
-  EXPECT_EQ(r.odometry.features, LearnedFeatures::paper);
-  EXPECT_EQ(r.odometry.input, OdometryInput::wheels);
+  EXPECT_EQ(r.odometry.target, learned::LearnedTarget::velocity);
+  EXPECT_EQ(r.odometry.features, learned::LearnedFeatures::paper);
+  EXPECT_EQ(r.odometry.input, tracks::OdometryInput::wheels);
   EXPECT_TRUE(r.odometry.v_beats_kinematic);
   EXPECT_TRUE(r.odometry.w_beats_kinematic);
   // A correction model written before the features were recorded is refused.
@@ -235,7 +236,7 @@ struct BadCase {
 };
 
 TEST(LearnedModelJson, BadFieldsAreOneLineErrorsNamingFileAndField) {
-  const json good = results::learned_model_json(sample_model(true));
+  const json good = learned_model_json(sample_model(true));
   const std::vector<BadCase> cases = {
       {"wrong format", [](json& j) { j["format"] = "odotune-learned/2"; }, "format"},
       {"no format", [](json& j) { j.erase("format"); }, "format"},
@@ -255,7 +256,8 @@ TEST(LearnedModelJson, BadFieldsAreOneLineErrorsNamingFileAndField) {
       {"nets of two sizes",
        [](json& j) {
          std::mt19937_64 rng(5);
-         j["odometry"]["w_net"] = lstm_to_json(random_net<VelocityNet>(rng, OutputActivation::linear));
+         j["odometry"]["w_net"] = lstm_to_json(
+             random_net<learned::VelocityNet>(rng, learned::OutputActivation::linear));
        },
        "odometry"},
       {"velocity nets on commands",
@@ -322,4 +324,4 @@ TEST(LearnedModelJson, UnreadableFilesAreOneLineErrors) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::results

@@ -11,20 +11,20 @@
 #include <odotune/core/counter_rng.h>
 #include <odotune/results/lstm_json.h>
 
-namespace odotune {
+namespace odotune::results {
 namespace {
 
 template <int I, int H>
-LstmNet<I, H> random_net(std::uint64_t seed) {
-  LstmNet<I, H> net;
+learned::LstmNet<I, H> random_net(std::uint64_t seed) {
+  learned::LstmNet<I, H> net;
   // Awkward doubles (full 53-bit mantissas, tiny and huge magnitudes) so that
   // a lossy writer would show.
   for (int n = 0; n < net.kWeights; ++n)
-    net.weights[n] = (counter_uniform01(seed, 1, static_cast<std::uint64_t>(n), 0, 5) - 0.5) *
+    net.weights[n] = (core::counter_uniform01(seed, 1, static_cast<std::uint64_t>(n), 0, 5) - 0.5) *
                      std::pow(10.0, (n % 7) - 3);
   for (int k = 0; k < I; ++k) {
-    net.input_mean[k] = counter_uniform01(seed, 2, static_cast<std::uint64_t>(k), 0, 5) * 100.0 - 50.0;
-    net.input_sd[k] = counter_uniform01(seed, 3, static_cast<std::uint64_t>(k), 0, 5) + 1e-9;
+    net.input_mean[k] = core::counter_uniform01(seed, 2, static_cast<std::uint64_t>(k), 0, 5) * 100.0 - 50.0;
+    net.input_sd[k] = core::counter_uniform01(seed, 3, static_cast<std::uint64_t>(k), 0, 5) + 1e-9;
   }
   net.output_mean = 1.0 / 3.0;
   net.output_sd = 0.1;
@@ -33,7 +33,7 @@ LstmNet<I, H> random_net(std::uint64_t seed) {
 }
 
 template <int I, int H>
-void expect_identical(const LstmNet<I, H>& a, const LstmNet<I, H>& b) {
+void expect_identical(const learned::LstmNet<I, H>& a, const learned::LstmNet<I, H>& b) {
   EXPECT_EQ(0, std::memcmp(a.weights.data(), b.weights.data(), sizeof(a.weights)));
   EXPECT_EQ(0, std::memcmp(a.input_mean.data(), b.input_mean.data(), sizeof(a.input_mean)));
   EXPECT_EQ(0, std::memcmp(a.input_sd.data(), b.input_sd.data(), sizeof(a.input_sd)));
@@ -49,9 +49,9 @@ TEST(LstmJson, RoundTripIsExactThroughText) {
   expect_identical(v, lstm_from_json<3, 5>(nlohmann::json::parse(text)));
 
   auto s = random_net<5, 10>(2);
-  s.activation = OutputActivation::relu;
+  s.activation = learned::OutputActivation::relu;
   const nlohmann::json j = s;  // ADL hook
-  const auto back = nlohmann::json::parse(j.dump(2)).get<SlipNet>();
+  const auto back = nlohmann::json::parse(j.dump(2)).get<learned::SlipNet>();
   expect_identical(s, back);
   EXPECT_EQ(j.at("format"), "odotune-lstm/1");
   EXPECT_EQ(j.at("inputs"), 5);
@@ -60,7 +60,7 @@ TEST(LstmJson, RoundTripIsExactThroughText) {
   EXPECT_EQ(j.at("weights").size(), 651u);
 }
 
-std::string message_of(const nlohmann::json& j) {
+std::string lstm_read_error(const nlohmann::json& j) {
   try {
     lstm_from_json<3, 5>(j);
   } catch (const std::invalid_argument& e) {
@@ -73,7 +73,7 @@ std::string message_of(const nlohmann::json& j) {
 }
 
 void expect_rejected(const nlohmann::json& j, const std::string& names) {
-  const std::string msg = message_of(j);
+  const std::string msg = lstm_read_error(j);
   EXPECT_NE(msg.find(names), std::string::npos) << "message '" << msg << "' should name " << names;
 }
 
@@ -114,7 +114,7 @@ TEST(LstmJson, EveryBadFieldIsNamed) {
                           "output_mean", "output_sd", "weights"})
     expect_rejected(without(key), std::string("'") + key + "'");
   EXPECT_NO_THROW((lstm_from_json<3, 5>(good)));
-  EXPECT_NE(message_of(nlohmann::json::array()).find("object"), std::string::npos);
+  EXPECT_NE(lstm_read_error(nlohmann::json::array()).find("object"), std::string::npos);
 }
 
 TEST(LstmJson, WritingAnInvalidNetThrows) {
@@ -124,4 +124,4 @@ TEST(LstmJson, WritingAnInvalidNetThrows) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::results

@@ -18,7 +18,7 @@ namespace {
 TEST(Tum, LinesReadBackToThePoses) {
   testing_support::TempDir dir;
   const auto path = dir.path() / "traj.tum";
-  const std::vector<TrajectoryPoint> pts = {
+  const std::vector<objectives::TrajectoryPoint> pts = {
       {0.0, 1.0, 2.0, 0.0}, {0.5, 1.5, 2.25, 2.5}, {1.0, -3.0, 0.5, -3.0}};
   write_tum(path, pts, "a test", 100.0);
   std::ifstream in(path);

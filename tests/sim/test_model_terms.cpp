@@ -115,8 +115,8 @@ TEST(ModelTerms, SimulatorAppliesAnOutOfRoundWheel) {
   Scenario sc = straight_drive();
   const double a = 0.01, R = 0.1, D = 0.4;
   sc.terms = {{TermTarget::v_l, TermBasis::sin_1, a}};
-  const Track tr = simulate(sc);
-  ASSERT_TRUE(tr.has(Col::gt_theta));
+  const tracks::Track tr = simulate(sc);
+  ASSERT_TRUE(tr.has(tracks::Col::gt_theta));
   int checked = 0;
   double max_theta = 0.0;
   for (std::size_t i = 0; i < tr.size(); ++i) {
@@ -126,8 +126,8 @@ TEST(ModelTerms, SimulatorAppliesAnOutOfRoundWheel) {
     const double tick = 2.0 * std::numbers::pi / sc.robot.ticks_per_rev;
     const double phi = (static_cast<double>(tr.ticks_l()[i]) + 0.5) * tick;
     const double expected = -(a * R / D) * (1.0 - std::cos(phi));
-    EXPECT_NEAR(tr.col(Col::gt_theta)[i], expected, (a * R / D) * 0.5 * tick + 1e-7) << "row " << i;
-    max_theta = std::max(max_theta, std::abs(tr.col(Col::gt_theta)[i]));
+    EXPECT_NEAR(tr.col(tracks::Col::gt_theta)[i], expected, (a * R / D) * 0.5 * tick + 1e-7) << "row " << i;
+    max_theta = std::max(max_theta, std::abs(tr.col(tracks::Col::gt_theta)[i]));
     ++checked;
   }
   EXPECT_GT(checked, 500);
@@ -142,13 +142,13 @@ TEST(ModelTerms, ASpeedTermOnBothWheelsIsARadiusScale) {
   Scenario with_terms = straight_drive(), with_effect = straight_drive();
   with_terms.terms = {{TermTarget::v_l, TermBasis::speed, 0.01}, {TermTarget::v_r, TermBasis::speed, 0.01}};
   apply_effect(with_effect.effects, parse_effect_spec("radius_error:scale_l=1.01,scale_r=1.01"));
-  const Track a = simulate(with_terms), b = simulate(with_effect);
+  const tracks::Track a = simulate(with_terms), b = simulate(with_effect);
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < a.size(); ++i) {
-    EXPECT_NEAR(a.col(Col::gt_x)[i], b.col(Col::gt_x)[i], 1e-12);
+    EXPECT_NEAR(a.col(tracks::Col::gt_x)[i], b.col(tracks::Col::gt_x)[i], 1e-12);
     EXPECT_EQ(a.ticks_l()[i], b.ticks_l()[i]);
   }
-  EXPECT_NEAR(a.col(Col::gt_x).back(), 3.03, 1e-9);
+  EXPECT_NEAR(a.col(tracks::Col::gt_x).back(), 3.03, 1e-9);
 }
 
 }  // namespace

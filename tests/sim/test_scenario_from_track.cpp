@@ -97,15 +97,15 @@ TEST(KnotProfile, TheSimulatorDrivesTheKnots) {
   sc.sensors.commands.resolution = 0;
   sc.sensors.ground_truth.resolution_m = 0;
   sc.sensors.ground_truth.resolution_rad = 0;
-  const Track tr = simulate(sc);
+  const tracks::Track tr = simulate(sc);
   // 0.25 m ramping up, 2 m cruising, 0.25 m down; then a quarter turn on the spot.
-  EXPECT_NEAR(tr.col(Col::gt_x).back(), 2.5, 1e-9);
-  EXPECT_NEAR(tr.col(Col::gt_y).back(), 0.0, 1e-12);
-  EXPECT_NEAR(tr.col(Col::gt_theta).back(), kPi / 2, 1e-9);  // a triangle of height pi/2 rad/s over 2 s
+  EXPECT_NEAR(tr.col(tracks::Col::gt_x).back(), 2.5, 1e-9);
+  EXPECT_NEAR(tr.col(tracks::Col::gt_y).back(), 0.0, 1e-12);
+  EXPECT_NEAR(tr.col(tracks::Col::gt_theta).back(), kPi / 2, 1e-9);  // a triangle of height pi/2 rad/s over 2 s
   const MotionProfile p(sc.motion);
   for (std::size_t i = 0; i < tr.size(); ++i) {
-    EXPECT_EQ(tr.col(Col::v_cmd)[i], p.at(tr.t()[i]).v_m_s);
-    EXPECT_EQ(tr.col(Col::w_cmd)[i], p.at(tr.t()[i]).w_rad_s);
+    EXPECT_EQ(tr.col(tracks::Col::v_cmd)[i], p.at(tr.t()[i]).v_m_s);
+    EXPECT_EQ(tr.col(tracks::Col::w_cmd)[i], p.at(tr.t()[i]).w_rad_s);
   }
 }
 
@@ -147,10 +147,10 @@ Scenario drive(const std::vector<std::string>& effects = {}) {
 }
 
 // Ground-truth path length [m].
-double track_path_length(const Track& tr) {
+double track_path_length(const tracks::Track& tr) {
   double len = 0;
-  const auto& x = tr.col(Col::gt_x);
-  const auto& y = tr.col(Col::gt_y);
+  const auto& x = tr.col(tracks::Col::gt_x);
+  const auto& y = tr.col(tracks::Col::gt_y);
   for (std::size_t i = 1; i < tr.size(); ++i) len += std::hypot(x[i] - x[i - 1], y[i] - y[i - 1]);
   return len;
 }
@@ -160,11 +160,11 @@ double track_path_length(const Track& tr) {
 struct Rates {
   std::vector<double> v, w;
 };
-Rates rates(const Track& tr) {
+Rates rates(const tracks::Track& tr) {
   Rates r;
-  const auto& x = tr.col(Col::gt_x);
-  const auto& y = tr.col(Col::gt_y);
-  const auto& th = tr.col(Col::gt_theta);
+  const auto& x = tr.col(tracks::Col::gt_x);
+  const auto& y = tr.col(tracks::Col::gt_y);
+  const auto& th = tr.col(tracks::Col::gt_theta);
   for (std::size_t i = 5; i < tr.size(); i += 5) {
     const double dt = tr.t()[i] - tr.t()[i - 5];
     r.v.push_back(std::hypot(x[i] - x[i - 5], y[i] - y[i - 5]) / dt);
@@ -189,12 +189,12 @@ Diff diff(const std::vector<double>& a, const std::vector<double>& b) {
 }
 
 // Largest distance [m] between the two ground-truth paths at equal times.
-double max_position_gap(const Track& a, const Track& b) {
+double max_position_gap(const tracks::Track& a, const tracks::Track& b) {
   double gap = 0;
   for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
     EXPECT_DOUBLE_EQ(a.t()[i], b.t()[i]);
-    gap = std::max(gap, std::hypot(a.col(Col::gt_x)[i] - b.col(Col::gt_x)[i],
-                                   a.col(Col::gt_y)[i] - b.col(Col::gt_y)[i]));
+    gap = std::max(gap, std::hypot(a.col(tracks::Col::gt_x)[i] - b.col(tracks::Col::gt_x)[i],
+                                   a.col(tracks::Col::gt_y)[i] - b.col(tracks::Col::gt_y)[i]));
   }
   return gap;
 }
@@ -202,9 +202,10 @@ double max_position_gap(const Track& a, const Track& b) {
 // The same after the best rigid 2-D alignment of b onto a (least squares,
 // Umeyama without scale): for a re-simulation whose frame starts at an
 // ESTIMATED initial pose (position fixes only).
-double max_aligned_gap(const Track& a, const Track& b) {
+double max_aligned_gap(const tracks::Track& a, const tracks::Track& b) {
   const std::size_t n = std::min(a.size(), b.size());
-  const auto &ax = a.col(Col::gt_x), &ay = a.col(Col::gt_y), &bx = b.col(Col::gt_x), &by = b.col(Col::gt_y);
+  const auto &ax = a.col(tracks::Col::gt_x), &ay = a.col(tracks::Col::gt_y), &bx = b.col(tracks::Col::gt_x),
+             &by = b.col(tracks::Col::gt_y);
   double max = 0, may = 0, mbx = 0, mby = 0;
   for (std::size_t i = 0; i < n; ++i) max += ax[i], may += ay[i], mbx += bx[i], mby += by[i];
   const double dn = static_cast<double>(n);
@@ -229,7 +230,7 @@ double max_aligned_gap(const Track& a, const Track& b) {
 struct Odometry {
   double distance = 0, heading = 0;
 };
-Odometry dead_reckoning(const Track& tr) {
+Odometry dead_reckoning(const tracks::Track& tr) {
   Odometry o;
   const double per_tick = 2 * kPi / *tr.meta().ticks_per_rev;
   const double Rl = *tr.meta().wheel_radius_left_m, Rr = *tr.meta().wheel_radius_right_m;
@@ -243,8 +244,8 @@ Odometry dead_reckoning(const Track& tr) {
   return o;
 }
 
-double gt_heading_change(const Track& tr) {
-  return tr.col(Col::gt_theta).back() - tr.col(Col::gt_theta).front();
+double gt_heading_change(const tracks::Track& tr) {
+  return tr.col(tracks::Col::gt_theta).back() - tr.col(tracks::Col::gt_theta).front();
 }
 
 // --- re-simulation ------------------------------------------------------------------
@@ -255,8 +256,8 @@ TEST(ScenarioFromTrack, ReSimulationFollowsTheOriginalPathInItsFrame) {
   const std::vector<std::string> fx = {"lateral_skid:k=0.05", "radius_error:scale_l=0.99,scale_r=0.995"};
   Scenario s = drive(fx);
   s.motion.start_x_m = 2, s.motion.start_y_m = 1, s.motion.start_theta_rad = 0.5;
-  const Track orig = simulate(s);
-  ASSERT_EQ(orig.col(Col::gt_x)[0], 2.0);
+  const tracks::Track orig = simulate(s);
+  ASSERT_EQ(orig.col(tracks::Col::gt_x)[0], 2.0);
   const Scenario sc = scenario_from_track(orig, fx);
   EXPECT_EQ(format_effects(sc.effects), "radius_error:scale_l=0.99,scale_r=0.995; lateral_skid:k=0.05");
   ASSERT_TRUE(sc.motion.segments.empty());
@@ -269,7 +270,7 @@ TEST(ScenarioFromTrack, ReSimulationFollowsTheOriginalPathInItsFrame) {
   EXPECT_NEAR(sc.motion.start_x_m, 2.0, 1e-5);
   EXPECT_NEAR(sc.motion.start_y_m, 1.0, 1e-5);
   EXPECT_NEAR(sc.motion.start_theta_rad, 0.5, 1e-5);
-  const Track re = simulate(sc);
+  const tracks::Track re = simulate(sc);
   ASSERT_EQ(re.size(), orig.size());
 
   // Speed and yaw-rate profiles. The +-0.5 s smoothing rounds the corners of
@@ -288,7 +289,7 @@ TEST(ScenarioFromTrack, ReSimulationFollowsTheOriginalPathInItsFrame) {
   // the paths stay within a few cm (the skid's sideways slide included), the
   // headings within a degree, and the length within 1 % (the task asks 2 %).
   EXPECT_LT(max_position_gap(orig, re), 0.03);
-  EXPECT_LT(diff(orig.col(Col::gt_theta), re.col(Col::gt_theta)).max, 0.015);
+  EXPECT_LT(diff(orig.col(tracks::Col::gt_theta), re.col(tracks::Col::gt_theta)).max, 0.015);
   EXPECT_NEAR(track_path_length(re) / track_path_length(orig), 1.0, 0.01);
 }
 
@@ -302,17 +303,17 @@ TEST(ScenarioFromTrack, ASlipZoneBoxInTheRecordingsCoordinatesIsWhereItWasFound)
                                        2 + 2.4 * c, 1 + 1.2 * sn - 0.3, 1 + 2.4 * sn + 0.3);
   Scenario s = drive({zone});
   s.motion.start_x_m = 2, s.motion.start_y_m = 1, s.motion.start_theta_rad = 0.5;
-  const Track orig = simulate(s);
-  const Track with = simulate(scenario_from_track(orig, {zone}));
-  const Track without = simulate(scenario_from_track(orig, {}));
+  const tracks::Track orig = simulate(s);
+  const tracks::Track with = simulate(scenario_from_track(orig, {zone}));
+  const tracks::Track without = simulate(scenario_from_track(orig, {}));
   // The inversion compensates the slip where the simulator applies it: the
   // re-simulated ground path is the recorded one, in its frame.
   EXPECT_LT(max_position_gap(orig, with), 0.03);
   EXPECT_LT(max_position_gap(orig, without), 0.03);
   // Ground travelled inside the box (the pose at a row's start in it) costs
   // 1/0.7 of its length in wheel travel, against 1 without the zone.
-  const auto& gx = orig.col(Col::gt_x);
-  const auto& gy = orig.col(Col::gt_y);
+  const auto& gx = orig.col(tracks::Col::gt_x);
+  const auto& gy = orig.col(tracks::Col::gt_y);
   const auto& z = *s.effects.slip_zone;
   double inside = 0;
   for (std::size_t i = 1; i < orig.size(); ++i)
@@ -330,9 +331,9 @@ TEST(ScenarioFromTrack, EffectsShowInTheOdometryOverTheSameGroundPath) {
     // 1/0.99 times as far, so the encoder distance per ground metre is
     // 1/0.99 = 1.0101 with the effect and 1 without it.
     const std::vector<std::string> fx = {"radius_error:scale_l=0.99,scale_r=0.99"};
-    const Track orig = simulate(drive(fx));
-    const Track with = simulate(scenario_from_track(orig, fx));
-    const Track without = simulate(scenario_from_track(orig, {}));
+    const tracks::Track orig = simulate(drive(fx));
+    const tracks::Track with = simulate(scenario_from_track(orig, fx));
+    const tracks::Track without = simulate(scenario_from_track(orig, {}));
     EXPECT_LT(max_position_gap(orig, with), 0.03);
     EXPECT_LT(max_position_gap(orig, without), 0.03);
     const double ratio_orig = dead_reckoning(orig).distance / track_path_length(orig);
@@ -348,9 +349,9 @@ TEST(ScenarioFromTrack, EffectsShowInTheOdometryOverTheSameGroundPath) {
     // more wheel difference, so the encoders report a 1.05 times larger net
     // heading change (the drive commands 260 deg of net turning).
     const std::vector<std::string> fx = {"wheel_base_error:scale=1.05"};
-    const Track orig = simulate(drive(fx));
-    const Track with = simulate(scenario_from_track(orig, fx));
-    const Track without = simulate(scenario_from_track(orig, {}));
+    const tracks::Track orig = simulate(drive(fx));
+    const tracks::Track with = simulate(scenario_from_track(orig, fx));
+    const tracks::Track without = simulate(scenario_from_track(orig, {}));
     EXPECT_LT(max_position_gap(orig, with), 0.03);
     EXPECT_LT(max_position_gap(orig, without), 0.03);
     const double turn = gt_heading_change(orig);
@@ -380,12 +381,13 @@ TEST(ScenarioFromTrack, PositionFixesAloneGiveThePathInItsFrame) {
     s.sensors.aps.rate_hz = c.rate_hz;
     s.sensors.aps.sigma_m = c.sigma_m;
     s.motion.start_x_m = c.x, s.motion.start_y_m = c.y, s.motion.start_theta_rad = c.theta;
-    const Track truth = simulate(s);  // the same run with its ground truth (noise streams are per sensor)
+    const tracks::Track truth = simulate(
+        s);  // the same run with its ground truth (noise streams are per sensor)
     s.sensors.ground_truth.enabled = false;
-    const Track fixes_only = simulate(s);
+    const tracks::Track fixes_only = simulate(s);
     ASSERT_FALSE(fixes_only.has_gt());
     const Scenario sc = scenario_from_track(fixes_only, {"lateral_skid:k=0.02"});
-    const Track re = simulate(sc);
+    const tracks::Track re = simulate(sc);
     // Within 2 % of the 14.5 m drive in the recording's frame, without any
     // alignment (the estimated initial pose's error is part of the gap).
     EXPECT_LT(max_position_gap(truth, re), 0.3);
@@ -416,18 +418,18 @@ struct DriftingFixes {
     return (is_x ? 1.0 : 2.0) + drift * (is_x ? std::cos(2.5) : std::sin(2.5)) +
            drive * (is_x ? std::cos(kHeading) : std::sin(kHeading));
   }
-  static Track track() {
-    TrackData d;
+  static tracks::Track track() {
+    tracks::TrackData d;
     d.meta.name = "settling fixes";
     for (int i = 0; i <= 150; ++i) {
       const double t = 0.2 * i;
       d.t.push_back(t);
       d.ticks_l.push_back(0);  // some odometry source (the simulator needs one); unused here
       d.ticks_r.push_back(0);
-      d.col(Col::aps_x).push_back(x(t));
-      d.col(Col::aps_y).push_back(y(t));
+      d.col(tracks::Col::aps_x).push_back(x(t));
+      d.col(tracks::Col::aps_y).push_back(y(t));
     }
-    return Track(std::move(d));
+    return tracks::Track(std::move(d));
   }
 };
 
@@ -441,15 +443,16 @@ TEST(ScenarioFromTrack, AStartHeadingFromASettlingFixDoesNotTurnThePath) {
   EXPECT_NEAR(sc.motion.start_x_m, 1.0, 0.02);
   EXPECT_NEAR(sc.motion.start_y_m, 2.0, 0.02);
   EXPECT_NEAR(sc.motion.start_theta_rad, DriftingFixes::kHeading, 0.05);
-  const Track re = simulate(sc);
-  EXPECT_NEAR(re.col(Col::gt_theta).back(), DriftingFixes::kHeading, 0.02);  // drove the straight along 0.3
+  const tracks::Track re = simulate(sc);
+  EXPECT_NEAR(re.col(tracks::Col::gt_theta).back(), DriftingFixes::kHeading,
+              0.02);  // drove the straight along 0.3
   // Only the 0.1 m drift is driven in the wrong direction, which moves the
   // rest by 0.1 * |e^(2.5i) - e^(0.3i)| = 0.18 m; the +-2 s smoothing of the
   // abrupt start of the drive adds up to about 0.1 m around it.
   double gap = 0, end_gap = 0;
   for (std::size_t i = 0; i < re.size(); ++i) {
-    end_gap = std::hypot(re.col(Col::gt_x)[i] - DriftingFixes::x(re.t()[i]),
-                         re.col(Col::gt_y)[i] - DriftingFixes::y(re.t()[i]));
+    end_gap = std::hypot(re.col(tracks::Col::gt_x)[i] - DriftingFixes::x(re.t()[i]),
+                         re.col(tracks::Col::gt_y)[i] - DriftingFixes::y(re.t()[i]));
     gap = std::max(gap, end_gap);
   }
   EXPECT_LT(gap, 0.3);
@@ -480,7 +483,7 @@ TEST(ScenarioFromTrack, RobotAndSensorsComeFromASimulatedTrack) {
   ss.aps.sigma_m = 0.1;
   ss.ground_truth.rate_hz = 40;
   ss.ground_truth.sigma_m = 0.001;
-  const Track tr = simulate(s);
+  const tracks::Track tr = simulate(s);
   ScenarioFromTrackOptions o;
   o.seed = 9;
   const Scenario sc = scenario_from_track(tr, {}, o);
@@ -509,8 +512,9 @@ TEST(ScenarioFromTrack, RobotAndSensorsComeFromASimulatedTrack) {
   EXPECT_EQ(r.ground_truth.rate_hz, 40);
   EXPECT_EQ(r.ground_truth.sigma_m, 0.001);
   // The re-simulated track has the same columns and sample instants.
-  const Track re = simulate(sc);
-  for (int c = 0; c < kNumCols; ++c) EXPECT_EQ(re.has(static_cast<Col>(c)), tr.has(static_cast<Col>(c))) << c;
+  const tracks::Track re = simulate(sc);
+  for (int c = 0; c < tracks::kNumCols; ++c)
+    EXPECT_EQ(re.has(static_cast<tracks::Col>(c)), tr.has(static_cast<tracks::Col>(c))) << c;
   ASSERT_GE(re.size(), tr.size());
   for (std::size_t i = 0; i < tr.size(); ++i) ASSERT_DOUBLE_EQ(re.t()[i], tr.t()[i]);
 }
@@ -518,8 +522,8 @@ TEST(ScenarioFromTrack, RobotAndSensorsComeFromASimulatedTrack) {
 // A hand-made "recorded" track: clock starting at 12.3 s, encoders at ~100 Hz
 // with +-0.4 ms jitter, fixes at 1 Hz, external velocity with its variances,
 // no sim.* metadata.
-Track recorded_track() {
-  TrackData d;
+tracks::Track recorded_track() {
+  tracks::TrackData d;
   d.meta.name = "lab run";
   d.meta.origin = "recorded";
   d.meta.ticks_per_rev = 1000;
@@ -539,19 +543,19 @@ Track recorded_track() {
     d.ticks_r.push_back(static_cast<std::int64_t>(std::floor(s * (1 + 0.25 / 2) / (2 * kPi * 0.1) * 1000)));
     const bool fix = i % 100 == 0;
     const double nan = std::numeric_limits<double>::quiet_NaN();
-    d.col(Col::aps_x).push_back(fix ? 2 * std::sin(a) : nan);
-    d.col(Col::aps_y).push_back(fix ? 2 * (1 - std::cos(a)) : nan);
+    d.col(tracks::Col::aps_x).push_back(fix ? 2 * std::sin(a) : nan);
+    d.col(tracks::Col::aps_y).push_back(fix ? 2 * (1 - std::cos(a)) : nan);
     const bool ext = i % 10 == 0;
-    d.col(Col::v_ext).push_back(ext ? 0.3 : nan);
-    d.col(Col::w_ext).push_back(ext ? 0.15 : nan);
-    d.col(Col::v_ext_var).push_back(ext ? 0.0009 : nan);
-    d.col(Col::w_ext_var).push_back(ext ? 0.0016 : nan);
+    d.col(tracks::Col::v_ext).push_back(ext ? 0.3 : nan);
+    d.col(tracks::Col::w_ext).push_back(ext ? 0.15 : nan);
+    d.col(tracks::Col::v_ext_var).push_back(ext ? 0.0009 : nan);
+    d.col(tracks::Col::w_ext_var).push_back(ext ? 0.0016 : nan);
   }
-  return Track(std::move(d));
+  return tracks::Track(std::move(d));
 }
 
 TEST(ScenarioFromTrack, ARecordedTrackGetsRatesFromItsRowsAndDocumentedDefaults) {
-  const Track tr = recorded_track();
+  const tracks::Track tr = recorded_track();
   const Scenario sc = scenario_from_track(tr, {"radius_step:t=20,scale_l=0.9"});
   EXPECT_EQ(sc.name, "lab run-corrected");
   EXPECT_EQ(sc.seed, 1u);
@@ -594,13 +598,13 @@ TEST(ScenarioFromTrack, ARecordedTrackGetsRatesFromItsRowsAndDocumentedDefaults)
 }
 
 TEST(ScenarioFromTrack, BadInputIsOneClearError) {
-  TrackData d;
+  tracks::TrackData d;
   d.meta.name = "odo-only";
   d.t = {0, 0.1, 0.2, 0.3};
-  d.ensure(Col::v_cmd) = {0, 0.1, 0.1, 0};
-  d.ensure(Col::w_cmd) = {0, 0, 0, 0};
-  const Track no_ref(std::move(d));
-  auto error_of = [](const Track& tr, const std::vector<std::string>& fx,
+  d.ensure(tracks::Col::v_cmd) = {0, 0.1, 0.1, 0};
+  d.ensure(tracks::Col::w_cmd) = {0, 0, 0, 0};
+  const tracks::Track no_ref(std::move(d));
+  auto error_of = [](const tracks::Track& tr, const std::vector<std::string>& fx,
                      const ScenarioFromTrackOptions& o = {}) -> std::string {
     try {
       (void)scenario_from_track(tr, fx, o);
@@ -612,7 +616,7 @@ TEST(ScenarioFromTrack, BadInputIsOneClearError) {
   };
   EXPECT_THAT(error_of(no_ref, {}), AllOf(HasSubstr("'odo-only'"), HasSubstr("no reference path"),
                                           HasSubstr("gt_x/gt_y"), HasSubstr("aps_x/aps_y")));
-  const Track tr = recorded_track();
+  const tracks::Track tr = recorded_track();
   EXPECT_THAT(error_of(tr, {"lateral_skd:k=0.02"}),
               AllOf(HasSubstr("lateral_skd:k=0.02"), HasSubstr("did you mean 'lateral_skid'")));
   EXPECT_THAT(error_of(tr, {"radius_error:scale_l=7"}),

@@ -75,32 +75,32 @@ Scenario quiet(std::vector<Segment> segs) {
   return sc;
 }
 
-std::string text_of(const Track& t) {
+std::string text_of(const tracks::Track& t) {
   std::ostringstream out;
-  format_track(t, out);
+  tracks::format_track(t, out);
   return out.str();
 }
 
 // Row index of time t (rows at 100 Hz in the quiet scenarios).
-std::size_t row_at_time(const Track& tr, double t) {
+std::size_t row_at_time(const tracks::Track& tr, double t) {
   std::size_t i = 0;
   while (i + 1 < tr.size() && tr.t()[i] < t - 1e-9) ++i;
   return i;
 }
 
-double tick_m(const Track& tr) {
+double tick_m(const tracks::Track& tr) {
   return 2 * std::numbers::pi * *tr.meta().wheel_radius_left_m / *tr.meta().ticks_per_rev;
 }
 
 // Ground distance along gt and mean-wheel distance from the ticks between rows a and b.
-double gt_distance(const Track& tr, std::size_t a, std::size_t b) {
+double gt_distance(const tracks::Track& tr, std::size_t a, std::size_t b) {
   double d = 0;
   for (std::size_t i = a; i < b; ++i)
-    d += std::hypot(tr.col(Col::gt_x)[i + 1] - tr.col(Col::gt_x)[i],
-                    tr.col(Col::gt_y)[i + 1] - tr.col(Col::gt_y)[i]);
+    d += std::hypot(tr.col(tracks::Col::gt_x)[i + 1] - tr.col(tracks::Col::gt_x)[i],
+                    tr.col(tracks::Col::gt_y)[i + 1] - tr.col(tracks::Col::gt_y)[i]);
   return d;
 }
-double tick_distance(const Track& tr, std::size_t a, std::size_t b) {
+double tick_distance(const tracks::Track& tr, std::size_t a, std::size_t b) {
   const double dl = static_cast<double>(tr.ticks_l()[b] - tr.ticks_l()[a]);
   const double dr = static_cast<double>(tr.ticks_r()[b] - tr.ticks_r()[a]);
   return 0.5 * (dl + dr) * tick_m(tr);
@@ -109,7 +109,7 @@ double tick_distance(const Track& tr, std::size_t a, std::size_t b) {
 TEST(Simulator, NominalKinematicsReproduceGroundTruthFromTicks) {
   Scenario sc = quiet({stop(1), straight(3, 0.6), arc(0.8, 120, 0.4), spin(-200, 90), arc(1.5, -90, 0.5),
                        straight(-1, 0.3), arc(0.4, 360, 0.3), stop(1)});
-  const Track tr = simulate(sc);
+  const tracks::Track tr = simulate(sc);
   ASSERT_TRUE(tr.has_ticks());
   const double D = 0.30, q = tick_m(tr);
   // track-format.md kinematics, exact arc per row step.
@@ -123,8 +123,8 @@ TEST(Simulator, NominalKinematicsReproduceGroundTruthFromTicks) {
     y += ds * sinc * std::sin(th + half);
     th += dth;
     path += std::abs(ds);
-    max_th = std::max(max_th, std::abs(th - tr.col(Col::gt_theta)[i]));
-    max_pos = std::max(max_pos, std::hypot(x - tr.col(Col::gt_x)[i], y - tr.col(Col::gt_y)[i]));
+    max_th = std::max(max_th, std::abs(th - tr.col(tracks::Col::gt_theta)[i]));
+    max_pos = std::max(max_pos, std::hypot(x - tr.col(tracks::Col::gt_x)[i], y - tr.col(tracks::Col::gt_y)[i]));
   }
   // Heading from cumulative ticks is off by at most one count per wheel.
   const double th_bound = 2 * q / D + 1e-9;
@@ -139,38 +139,38 @@ TEST(Simulator, RadiusErrorCurvesTheTruePathButNotTheTicks) {
   Scenario nominal = quiet({straight(4, 0.5), stop(0.5)});
   Scenario bigger = nominal;
   bigger.effects.radius_error = Effects::RadiusError{1.0, 1.01};
-  const Track a = simulate(nominal), b = simulate(bigger);
+  const tracks::Track a = simulate(nominal), b = simulate(bigger);
   EXPECT_EQ(a.ticks_l(), b.ticks_l());
   EXPECT_EQ(a.ticks_r(), b.ticks_r());
   const std::size_t n = a.size() - 1;
-  EXPECT_NEAR(a.col(Col::gt_theta)[n], 0.0, 1e-12);
-  EXPECT_NEAR(a.col(Col::gt_y)[n], 0.0, 1e-12);
+  EXPECT_NEAR(a.col(tracks::Col::gt_theta)[n], 0.0, 1e-12);
+  EXPECT_NEAR(a.col(tracks::Col::gt_y)[n], 0.0, 1e-12);
   // True heading change = (R_r_true*phi_r - R_l*phi_l)/D, phi from the ticks (+-1 count).
   const double q = tick_m(b);
   const double expect = (1.01 * static_cast<double>(b.ticks_r()[n]) - static_cast<double>(b.ticks_l()[n])) * q /
                         0.30;
-  EXPECT_NEAR(b.col(Col::gt_theta)[n], expect, 2 * q / 0.30);
+  EXPECT_NEAR(b.col(tracks::Col::gt_theta)[n], expect, 2 * q / 0.30);
   EXPECT_GT(expect, 0.1);
-  EXPECT_GT(b.col(Col::gt_y)[n], 0.1);  // curves left
+  EXPECT_GT(b.col(tracks::Col::gt_y)[n], 0.1);  // curves left
 }
 
 TEST(Simulator, WheelBaseErrorScalesTheTurnRate) {
   Scenario nominal = quiet({spin(360, 90), stop(0.5)});
   Scenario wide = nominal;
   wide.effects.wheel_base_error = Effects::WheelBaseError{1.1};
-  const Track a = simulate(nominal), b = simulate(wide);
+  const tracks::Track a = simulate(nominal), b = simulate(wide);
   EXPECT_EQ(a.ticks_l(), b.ticks_l());
   const std::size_t n = a.size() - 1;
-  EXPECT_NEAR(a.col(Col::gt_theta)[n], 2 * std::numbers::pi, 1e-5);
-  EXPECT_NEAR(b.col(Col::gt_theta)[n], 2 * std::numbers::pi / 1.1, 1e-5);
+  EXPECT_NEAR(a.col(tracks::Col::gt_theta)[n], 2 * std::numbers::pi, 1e-5);
+  EXPECT_NEAR(b.col(tracks::Col::gt_theta)[n], 2 * std::numbers::pi / 1.1, 1e-5);
   const std::size_t mid = row_at_time(a, 2.0);  // cruise of the spin
-  EXPECT_NEAR(b.col(Col::gyro_z)[mid], a.col(Col::gyro_z)[mid] / 1.1, 1e-12);
+  EXPECT_NEAR(b.col(tracks::Col::gyro_z)[mid], a.col(tracks::Col::gyro_z)[mid] / 1.1, 1e-12);
 }
 
 TEST(Simulator, RadiusStepActsFromItsTimeOn) {
   Scenario sc = quiet({straight(8, 0.5)});
   sc.effects.radius_step = Effects::RadiusStep{6.0, 1.02, 1.02};
-  const Track tr = simulate(sc);
+  const tracks::Track tr = simulate(sc);
   const auto ratio = [&](double t0, double t1) {
     const std::size_t a = row_at_time(tr, t0), b = row_at_time(tr, t1);
     return gt_distance(tr, a, b) / tick_distance(tr, a, b);
@@ -183,7 +183,7 @@ TEST(Simulator, SpeedRadiusGrowsWithSpeed) {
   const auto ratio_at = [](double v) {
     Scenario sc = quiet({straight(6 * v, v)});
     sc.effects.speed_radius = Effects::SpeedRadius{0.05};
-    const Track tr = simulate(sc);
+    const tracks::Track tr = simulate(sc);
     const std::size_t a = row_at_time(tr, 2.5), b = row_at_time(tr, 5.0);  // cruise
     return gt_distance(tr, a, b) / tick_distance(tr, a, b);
   };
@@ -196,13 +196,13 @@ TEST(Simulator, LateralSkidGivesMinusKVW) {
   const auto lateral = [](double k) {
     Scenario sc = quiet({arc(1.0, 180, 0.5)});
     if (k > 0) sc.effects.lateral_skid = Effects::LateralSkid{k};
-    const Track tr = simulate(sc);
+    const tracks::Track tr = simulate(sc);
     const std::size_t a = row_at_time(tr, 3.0), b = row_at_time(tr, 4.0);
     double sum = 0;
     for (std::size_t i = a; i < b; ++i) {
-      const double thm = 0.5 * (tr.col(Col::gt_theta)[i] + tr.col(Col::gt_theta)[i + 1]);
-      const double dx = tr.col(Col::gt_x)[i + 1] - tr.col(Col::gt_x)[i];
-      const double dy = tr.col(Col::gt_y)[i + 1] - tr.col(Col::gt_y)[i];
+      const double thm = 0.5 * (tr.col(tracks::Col::gt_theta)[i] + tr.col(tracks::Col::gt_theta)[i + 1]);
+      const double dx = tr.col(tracks::Col::gt_x)[i + 1] - tr.col(tracks::Col::gt_x)[i];
+      const double dy = tr.col(tracks::Col::gt_y)[i + 1] - tr.col(tracks::Col::gt_y)[i];
       sum += (-std::sin(thm) * dx + std::cos(thm) * dy) / (tr.t()[i + 1] - tr.t()[i]);
     }
     return sum / static_cast<double>(b - a);
@@ -219,7 +219,7 @@ TEST(Simulator, LongitudinalSlipOnlyWhileAccelerating) {
     sc.effects.longitudinal_slip = Effects::LongitudinalSlip{k};
     return simulate(sc);
   };
-  const Track tr = run(0.2);
+  const tracks::Track tr = run(0.2);
   const auto ratio = [&](double t0, double t1) {
     const std::size_t a = row_at_time(tr, t0), b = row_at_time(tr, t1);
     return gt_distance(tr, a, b) / tick_distance(tr, a, b);
@@ -227,7 +227,7 @@ TEST(Simulator, LongitudinalSlipOnlyWhileAccelerating) {
   EXPECT_NEAR(ratio(0.2, 0.8), 1 - 0.2 * 0.5, 2e-3);  // s = k*|du/dt|
   EXPECT_NEAR(ratio(2.0, 5.0), 1.0, 1e-3);            // cruise
   EXPECT_NEAR(ratio(6.2, 6.8), 1 - 0.2 * 0.5, 2e-3);  // braking
-  const Track capped = run(10.0);
+  const tracks::Track capped = run(10.0);
   const std::size_t a = row_at_time(capped, 0.2), b = row_at_time(capped, 0.8);
   EXPECT_NEAR(gt_distance(capped, a, b) / tick_distance(capped, a, b), 0.5, 2e-3);  // s <= 0.5
 }
@@ -235,10 +235,10 @@ TEST(Simulator, LongitudinalSlipOnlyWhileAccelerating) {
 TEST(Simulator, SlipZoneOnlyInsideTheBox) {
   Scenario sc = quiet({straight(5, 0.5)});
   sc.effects.slip_zone = Effects::SlipZone{2.0, 3.0, -1.0, 1.0, 0.2, 0.2};
-  const Track tr = simulate(sc);
+  const tracks::Track tr = simulate(sc);
   std::size_t in0 = 0, in1 = 0, out0 = 0, out1 = 0;
   for (std::size_t i = 0; i < tr.size(); ++i) {
-    const double x = tr.col(Col::gt_x)[i];
+    const double x = tr.col(tracks::Col::gt_x)[i];
     if (!in0 && x > 2.05) in0 = i;
     if (!in1 && x > 2.95) in1 = i;
     if (!out0 && x > 0.5) out0 = i;
@@ -250,20 +250,21 @@ TEST(Simulator, SlipZoneOnlyInsideTheBox) {
 
   // One-sided slip turns the robot only while inside.
   sc.effects.slip_zone->s_l = 0.0;
-  const Track one = simulate(sc);
+  const tracks::Track one = simulate(sc);
   double th_before = 0, th_after = 0;
   for (std::size_t i = 0; i < one.size(); ++i) {
-    if (one.col(Col::gt_x)[i] < 1.99) th_before = std::max(th_before, std::abs(one.col(Col::gt_theta)[i]));
+    if (one.col(tracks::Col::gt_x)[i] < 1.99)
+      th_before = std::max(th_before, std::abs(one.col(tracks::Col::gt_theta)[i]));
   }
   EXPECT_EQ(th_before, 0.0);
   const std::size_t last = one.size() - 1;
-  th_after = one.col(Col::gt_theta)[last];
+  th_after = one.col(tracks::Col::gt_theta)[last];
   EXPECT_LT(th_after, -0.05);  // right wheel slips: turns right
-  EXPECT_GT(one.col(Col::gt_x)[last], 3.5);
+  EXPECT_GT(one.col(tracks::Col::gt_x)[last], 3.5);
   std::size_t left_box = 0;
   for (std::size_t i = 0; i < one.size(); ++i)
-    if (!left_box && one.col(Col::gt_x)[i] > 3.1) left_box = i;
-  EXPECT_NEAR(one.col(Col::gt_theta)[left_box], th_after, 1e-12);  // no turning after the box
+    if (!left_box && one.col(tracks::Col::gt_x)[i] > 3.1) left_box = i;
+  EXPECT_NEAR(one.col(tracks::Col::gt_theta)[left_box], th_after, 1e-12);  // no turning after the box
 }
 
 TEST(Simulator, GyroBiasShiftsTheGyroByB) {
@@ -272,25 +273,25 @@ TEST(Simulator, GyroBiasShiftsTheGyroByB) {
   sc.sensors.gyro.resolution_rad_s = 1e-5;
   Scenario biased = sc;
   biased.effects.gyro_bias = Effects::GyroBias{0.01};
-  const Track a = simulate(sc), b = simulate(biased);
+  const tracks::Track a = simulate(sc), b = simulate(biased);
   double mean = 0;
   for (std::size_t i = 0; i < a.size(); ++i) {
-    const double d = b.col(Col::gyro_z)[i] - a.col(Col::gyro_z)[i];
+    const double d = b.col(tracks::Col::gyro_z)[i] - a.col(tracks::Col::gyro_z)[i];
     EXPECT_NEAR(d, 0.01, 1.01e-5) << i;
     mean += d;
   }
   EXPECT_NEAR(mean / static_cast<double>(a.size()), 0.01, 1e-6);
-  EXPECT_EQ(a.col(Col::gt_theta), b.col(Col::gt_theta));
+  EXPECT_EQ(a.col(tracks::Col::gt_theta), b.col(tracks::Col::gt_theta));
 }
 
 TEST(Simulator, GyroScaleScalesTheGyro) {
   Scenario sc = quiet({arc(0.5, -270, 0.4), spin(90, 120)});
   sc.effects.gyro_scale = Effects::GyroScale{1.05};
-  const Track tr = simulate(sc);
+  const tracks::Track tr = simulate(sc);
   double max_w = 0;
   for (std::size_t i = 0; i < tr.size(); ++i) {
-    EXPECT_NEAR(tr.col(Col::gyro_z)[i], 1.05 * tr.col(Col::w_ext)[i], 1e-12);
-    max_w = std::max(max_w, std::abs(tr.col(Col::w_ext)[i]));
+    EXPECT_NEAR(tr.col(tracks::Col::gyro_z)[i], 1.05 * tr.col(tracks::Col::w_ext)[i], 1e-12);
+    max_w = std::max(max_w, std::abs(tr.col(tracks::Col::w_ext)[i]));
   }
   EXPECT_GT(max_w, 0.7);
 }
@@ -301,9 +302,10 @@ TEST(Simulator, ActuatorLagMakesTrueVelocityLagTheCommand) {
     sc.motion.max_accel_m_s2 = 1000;  // a step, 0.5 ms ramp
     sc.sensors.ext_velocity.rate_hz = 1000;
     if (tau > 0) sc.effects.actuator_lag = Effects::ActuatorLag{tau};
-    const Track tr = simulate(sc);
+    const tracks::Track tr = simulate(sc);
     for (std::size_t i = 0; i < tr.size(); ++i)
-      if (tr.at(Col::v_ext, i) && tr.col(Col::v_ext)[i] >= (1 - std::exp(-1.0)) * 0.5) return tr.t()[i];
+      if (tr.at(tracks::Col::v_ext, i) && tr.col(tracks::Col::v_ext)[i] >= (1 - std::exp(-1.0)) * 0.5)
+        return tr.t()[i];
     return -1.0;
   };
   EXPECT_LE(rise(0.0), 0.002);
@@ -316,22 +318,22 @@ TEST(Simulator, TimeOffsetShiftsOnlyTheOdometryColumns) {
   Scenario late = sc, early = sc;
   late.effects.time_offset = Effects::TimeOffset{0.05};    // 5 rows at 100 Hz
   early.effects.time_offset = Effects::TimeOffset{-0.03};  // 3 rows
-  const Track a = simulate(sc), b = simulate(late), c = simulate(early);
+  const tracks::Track a = simulate(sc), b = simulate(late), c = simulate(early);
   ASSERT_EQ(a.size(), b.size());
   const std::size_t n = a.size();
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t from = i >= 5 ? i - 5 : 0;  // first value held before t = 0
     EXPECT_EQ(b.ticks_l()[i], a.ticks_l()[from]) << i;
     EXPECT_EQ(b.ticks_r()[i], a.ticks_r()[from]) << i;
-    EXPECT_EQ(b.col(Col::v_cmd)[i], a.col(Col::v_cmd)[from]) << i;
-    EXPECT_EQ(b.col(Col::w_cmd)[i], a.col(Col::w_cmd)[from]) << i;
-    EXPECT_NEAR(b.col(Col::omega_r)[i], a.col(Col::omega_r)[from], 1e-12) << i;
+    EXPECT_EQ(b.col(tracks::Col::v_cmd)[i], a.col(tracks::Col::v_cmd)[from]) << i;
+    EXPECT_EQ(b.col(tracks::Col::w_cmd)[i], a.col(tracks::Col::w_cmd)[from]) << i;
+    EXPECT_NEAR(b.col(tracks::Col::omega_r)[i], a.col(tracks::Col::omega_r)[from], 1e-12) << i;
     const std::size_t ahead = std::min(i + 3, n - 1);  // last value held after the end
     EXPECT_EQ(c.ticks_l()[i], a.ticks_l()[ahead]) << i;
   }
-  EXPECT_EQ(a.col(Col::gt_x), b.col(Col::gt_x));
-  EXPECT_EQ(a.col(Col::gyro_z), b.col(Col::gyro_z));
-  EXPECT_EQ(a.col(Col::power_l), b.col(Col::power_l));
+  EXPECT_EQ(a.col(tracks::Col::gt_x), b.col(tracks::Col::gt_x));
+  EXPECT_EQ(a.col(tracks::Col::gyro_z), b.col(tracks::Col::gyro_z));
+  EXPECT_EQ(a.col(tracks::Col::power_l), b.col(tracks::Col::power_l));
 }
 
 // Nominal dead reckoning (track-format.md kinematics, nominal radii and base)
@@ -339,7 +341,7 @@ TEST(Simulator, TimeOffsetShiftsOnlyTheOdometryColumns) {
 struct DeadReckoned {
   std::vector<double> x, y, th;
 };
-DeadReckoned dead_reckon_ticks(const Track& tr) {
+DeadReckoned dead_reckon_ticks(const tracks::Track& tr) {
   const double q = tick_m(tr), D = *tr.meta().wheel_base_m;
   DeadReckoned dr{{0.0}, {0.0}, {0.0}};
   for (std::size_t i = 1; i < tr.size(); ++i) {
@@ -359,26 +361,26 @@ DeadReckoned dead_reckon_ticks(const Track& tr) {
 TEST(Simulator, OdometryBiasBvMakesAStandingRobotsOdometryDriftByBvT) {
   Scenario sc = quiet({stop(10)});
   sc.effects.odometry_bias = Effects::OdometryBias{0.02, 0.0};
-  const Track tr = simulate(sc);
+  const tracks::Track tr = simulate(sc);
   ASSERT_GT(tr.duration_s(), 9.99);
   const double q = tick_m(tr), R = 0.05;
   const DeadReckoned dr = dead_reckon_ticks(tr);
   for (std::size_t i = 0; i < tr.size(); ++i) {
     const double t = tr.t()[i];
     // The world stands still; the gyro and the other sensors see it.
-    ASSERT_EQ(tr.col(Col::gt_x)[i], 0.0) << i;
-    ASSERT_EQ(tr.col(Col::gt_y)[i], 0.0) << i;
-    ASSERT_EQ(tr.col(Col::gt_theta)[i], 0.0) << i;
-    ASSERT_EQ(tr.col(Col::gyro_z)[i], 0.0) << i;
-    ASSERT_EQ(tr.col(Col::v_ext)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(tracks::Col::gt_x)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(tracks::Col::gt_y)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(tracks::Col::gt_theta)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(tracks::Col::gyro_z)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(tracks::Col::v_ext)[i], 0.0) << i;
     // The odometry moves: b_v*t, within one count per wheel, straight ahead.
     ASSERT_NEAR(dr.x[i], 0.02 * t, q + 1e-12) << i;
     ASSERT_NEAR(dr.y[i], 0.0, 1e-12) << i;
     ASSERT_NEAR(dr.th[i], 0.0, 2 * q / 0.30 + 1e-12) << i;
-    ASSERT_NEAR(tr.col(Col::omega_l)[i], 0.02 / R, 1e-12) << i;
-    ASSERT_NEAR(tr.col(Col::omega_r)[i], 0.02 / R, 1e-12) << i;
-    ASSERT_EQ(tr.col(Col::v_cmd)[i], 0.02) << i;
-    ASSERT_EQ(tr.col(Col::w_cmd)[i], 0.0) << i;
+    ASSERT_NEAR(tr.col(tracks::Col::omega_l)[i], 0.02 / R, 1e-12) << i;
+    ASSERT_NEAR(tr.col(tracks::Col::omega_r)[i], 0.02 / R, 1e-12) << i;
+    ASSERT_EQ(tr.col(tracks::Col::v_cmd)[i], 0.02) << i;
+    ASSERT_EQ(tr.col(tracks::Col::w_cmd)[i], 0.0) << i;
   }
   EXPECT_NEAR(dr.x.back(), 0.2, q);      // 20 cm in 10 s at rest
   EXPECT_GT(tr.ticks_l().back(), 2000);  // 0.2 m / (2 pi 0.05 m / 4096) = 2608 counts
@@ -388,35 +390,35 @@ TEST(Simulator, OdometryBiasBvMakesAStandingRobotsOdometryDriftByBvT) {
   Scenario moving = quiet({stop(1), straight(2, 0.5), arc(0.8, 90, 0.4), stop(1)});
   Scenario biased = moving;
   biased.effects.odometry_bias = Effects::OdometryBias{-0.03, 0.0};
-  const Track a = simulate(moving), b = simulate(biased);
+  const tracks::Track a = simulate(moving), b = simulate(biased);
   ASSERT_EQ(a.t(), b.t());
   for (std::size_t i = 0; i < a.size(); ++i) {
     ASSERT_NEAR(tick_distance(b, 0, i) - tick_distance(a, 0, i), -0.03 * a.t()[i], 2 * q) << i;
-    ASSERT_NEAR(b.col(Col::v_cmd)[i] - a.col(Col::v_cmd)[i], -0.03, 1e-12) << i;
+    ASSERT_NEAR(b.col(tracks::Col::v_cmd)[i] - a.col(tracks::Col::v_cmd)[i], -0.03, 1e-12) << i;
   }
-  EXPECT_EQ(a.col(Col::gt_x), b.col(Col::gt_x));
-  EXPECT_EQ(a.col(Col::gyro_z), b.col(Col::gyro_z));
-  EXPECT_EQ(a.col(Col::power_l), b.col(Col::power_l));
+  EXPECT_EQ(a.col(tracks::Col::gt_x), b.col(tracks::Col::gt_x));
+  EXPECT_EQ(a.col(tracks::Col::gyro_z), b.col(tracks::Col::gyro_z));
+  EXPECT_EQ(a.col(tracks::Col::power_l), b.col(tracks::Col::power_l));
 }
 
 TEST(Simulator, OdometryBiasBwMakesTheOdometrysHeadingDriftByBwT) {
   Scenario sc = quiet({stop(10)});
   sc.effects.odometry_bias = Effects::OdometryBias{0.0, 0.05};
-  const Track tr = simulate(sc);
+  const tracks::Track tr = simulate(sc);
   const double q = tick_m(tr), R = 0.05, D = 0.30;
   const DeadReckoned dr = dead_reckon_ticks(tr);
   for (std::size_t i = 0; i < tr.size(); ++i) {
     const double t = tr.t()[i];
-    ASSERT_EQ(tr.col(Col::gt_theta)[i], 0.0) << i;
-    ASSERT_EQ(tr.col(Col::gyro_z)[i], 0.0) << i;
-    ASSERT_EQ(tr.col(Col::w_ext)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(tracks::Col::gt_theta)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(tracks::Col::gyro_z)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(tracks::Col::w_ext)[i], 0.0) << i;
     // A spin on the spot in the odometry: heading b_w*t, no travel.
     ASSERT_NEAR(dr.th[i], 0.05 * t, 2 * q / D + 1e-12) << i;
     ASSERT_NEAR(std::hypot(dr.x[i], dr.y[i]), 0.0, q) << i;
-    ASSERT_NEAR(tr.col(Col::omega_l)[i], -0.05 * D / 2 / R, 1e-12) << i;
-    ASSERT_NEAR(tr.col(Col::omega_r)[i], 0.05 * D / 2 / R, 1e-12) << i;
-    ASSERT_EQ(tr.col(Col::v_cmd)[i], 0.0) << i;
-    ASSERT_EQ(tr.col(Col::w_cmd)[i], 0.05) << i;
+    ASSERT_NEAR(tr.col(tracks::Col::omega_l)[i], -0.05 * D / 2 / R, 1e-12) << i;
+    ASSERT_NEAR(tr.col(tracks::Col::omega_r)[i], 0.05 * D / 2 / R, 1e-12) << i;
+    ASSERT_EQ(tr.col(tracks::Col::v_cmd)[i], 0.0) << i;
+    ASSERT_EQ(tr.col(tracks::Col::w_cmd)[i], 0.05) << i;
   }
   EXPECT_NEAR(dr.th.back(), 0.5, 2 * q / D);
 
@@ -430,9 +432,9 @@ TEST(Simulator, OdometryBiasBwMakesTheOdometrysHeadingDriftByBwT) {
   odd.effects.radius_error = Effects::RadiusError{0.99, 1.02};  // the world differs; the offset does not
   Scenario odd_biased = odd;
   odd_biased.effects.odometry_bias = Effects::OdometryBias{0.01, -0.04};
-  const Track a = simulate(odd), b = simulate(odd_biased);
-  auto body = [](const Track& t, std::size_t i) {
-    const double ul = t.col(Col::omega_l)[i] * 0.049, ur = t.col(Col::omega_r)[i] * 0.052;
+  const tracks::Track a = simulate(odd), b = simulate(odd_biased);
+  auto body = [](const tracks::Track& t, std::size_t i) {
+    const double ul = t.col(tracks::Col::omega_l)[i] * 0.049, ur = t.col(tracks::Col::omega_r)[i] * 0.052;
     return std::pair<double, double>{0.5 * (ur + ul), (ur - ul) / 0.33};
   };
   for (std::size_t i = 0; i < a.size(); ++i) {
@@ -441,7 +443,7 @@ TEST(Simulator, OdometryBiasBwMakesTheOdometrysHeadingDriftByBwT) {
     ASSERT_NEAR(vb - va, 0.01, 1e-12) << i;
     ASSERT_NEAR(wb - wa, -0.04, 1e-12) << i;
   }
-  EXPECT_EQ(a.col(Col::gt_theta), b.col(Col::gt_theta));
+  EXPECT_EQ(a.col(tracks::Col::gt_theta), b.col(tracks::Col::gt_theta));
 }
 
 TEST(Simulator, OdometryBiasAtZeroIsANoOp) {
@@ -458,7 +460,7 @@ TEST(Simulator, OdometryBiasAtZeroIsANoOp) {
   ASSERT_TRUE(zero.effects.odometry_bias);
   EXPECT_EQ(zero.effects.odometry_bias->b_v, 0.0);
   EXPECT_EQ(zero.effects.odometry_bias->b_w, 0.0);
-  const Track a = simulate(sc), b = simulate(zero);
+  const tracks::Track a = simulate(sc), b = simulate(zero);
   EXPECT_EQ(b.meta().get("sim.effects"), "time_offset:dt=0.02; odometry_bias:b_v=0,b_w=0");
   std::string ta = text_of(a), tb = text_of(b);
   const std::string from = "time_offset:dt=0.02\n", to = "time_offset:dt=0.02; odometry_bias:b_v=0,b_w=0\n";
@@ -476,21 +478,22 @@ TEST(Simulator, EachEffectChangesExactlyItsColumns) {
   sc.sensors.encoders.omega = true;
   sc.motion.segments = {stop(0.5),    straight(2, 0.5), arc(0.8, 90, 0.4),
                         spin(90, 60), straight(1, 0.4), stop(0.5)};
-  const Track base = simulate(sc);
+  const tracks::Track base = simulate(sc);
   struct Group {
     const char* name;
-    std::vector<Col> cols;
+    std::vector<tracks::Col> cols;
     bool ticks;
   };
-  const std::vector<Group> groups = {{"ticks", {}, true},
-                                     {"omega", {Col::omega_l, Col::omega_r}, false},
-                                     {"cmd", {Col::v_cmd, Col::w_cmd}, false},
-                                     {"gyro", {Col::gyro_z}, false},
-                                     {"power", {Col::power_l, Col::power_r}, false},
-                                     {"v_ext", {Col::v_ext}, false},
-                                     {"w_ext", {Col::w_ext}, false},
-                                     {"aps", {Col::aps_x, Col::aps_y}, false},
-                                     {"gt", {Col::gt_x, Col::gt_y, Col::gt_theta}, false}};
+  const std::vector<Group> groups = {
+      {"ticks", {}, true},
+      {"omega", {tracks::Col::omega_l, tracks::Col::omega_r}, false},
+      {"cmd", {tracks::Col::v_cmd, tracks::Col::w_cmd}, false},
+      {"gyro", {tracks::Col::gyro_z}, false},
+      {"power", {tracks::Col::power_l, tracks::Col::power_r}, false},
+      {"v_ext", {tracks::Col::v_ext}, false},
+      {"w_ext", {tracks::Col::w_ext}, false},
+      {"aps", {tracks::Col::aps_x, tracks::Col::aps_y}, false},
+      {"gt", {tracks::Col::gt_x, tracks::Col::gt_y, tracks::Col::gt_theta}, false}};
   const std::string wheels_and_world = "gyro power v_ext w_ext aps gt";
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"radius_error:scale_l=0.99,scale_r=1.01", wheels_and_world},
@@ -513,13 +516,13 @@ TEST(Simulator, EachEffectChangesExactlyItsColumns) {
   for (const auto& [spec, expected] : cases) {
     Scenario with = sc;
     apply_effect(with.effects, parse_effect_spec(spec));
-    const Track tr = simulate(with);
+    const tracks::Track tr = simulate(with);
     ASSERT_EQ(tr.t(), base.t()) << spec;
     std::string changed;
     for (const Group& g : groups) {
       if (spec.rfind("slip_zone", 0) == 0 && std::string(g.name) == "power") continue;
       bool differs = g.ticks ? (tr.ticks_l() != base.ticks_l() || tr.ticks_r() != base.ticks_r()) : false;
-      for (Col c : g.cols)
+      for (tracks::Col c : g.cols)
         for (std::size_t i = 0; i < tr.size(); ++i)
           differs = differs || (tr.at(c, i) && tr.col(c)[i] != base.col(c)[i]);
       if (!differs) continue;
@@ -538,14 +541,15 @@ TEST(Simulator, SameSeedSameTrackDifferentSeedDifferentNoise) {
   EXPECT_EQ(one, text_of(simulate(sc)));
   Scenario other = sc;
   other.seed = sc.seed + 1;
-  const Track a = simulate(sc), b = simulate(other);
+  const tracks::Track a = simulate(sc), b = simulate(other);
   EXPECT_NE(one, text_of(b));
   EXPECT_EQ(a.ticks_l(), b.ticks_l());
-  EXPECT_EQ(a.col(Col::gt_x), b.col(Col::gt_x));
-  EXPECT_NE(a.col(Col::gyro_z), b.col(Col::gyro_z));
+  EXPECT_EQ(a.col(tracks::Col::gt_x), b.col(tracks::Col::gt_x));
+  EXPECT_NE(a.col(tracks::Col::gyro_z), b.col(tracks::Col::gyro_z));
   std::size_t differ = 0, fixes = 0;
   for (std::size_t i = 0; i < a.size(); ++i)
-    if (a.at(Col::aps_x, i)) ++fixes, differ += a.col(Col::aps_x)[i] != b.col(Col::aps_x)[i];
+    if (a.at(tracks::Col::aps_x, i))
+      ++fixes, differ += a.col(tracks::Col::aps_x)[i] != b.col(tracks::Col::aps_x)[i];
   EXPECT_EQ(differ, fixes);
   EXPECT_GE(fixes, 5u);
 }
@@ -559,13 +563,13 @@ TEST(Simulator, NoiseHasTheConfiguredSize) {
   const double tol = 0.04;  // > 3 sigma of a sample std over ~4000 samples
   for (std::uint64_t seed : {1u, 2u, 3u}) {
     sc.seed = seed;
-    const Track tr = simulate(sc);
+    const tracks::Track tr = simulate(sc);
     double sx = 0, sy = 0, sxx = 0, syy = 0, sg = 0, sgg = 0;
     double n = 0;
     for (std::size_t i = 0; i < tr.size(); ++i) {
-      const double ex = tr.col(Col::aps_x)[i] - tr.col(Col::gt_x)[i];
-      const double ey = tr.col(Col::aps_y)[i] - tr.col(Col::gt_y)[i];
-      const double eg = tr.col(Col::gyro_z)[i] - tr.col(Col::w_ext)[i];
+      const double ex = tr.col(tracks::Col::aps_x)[i] - tr.col(tracks::Col::gt_x)[i];
+      const double ey = tr.col(tracks::Col::aps_y)[i] - tr.col(tracks::Col::gt_y)[i];
+      const double eg = tr.col(tracks::Col::gyro_z)[i] - tr.col(tracks::Col::w_ext)[i];
       sx += ex, sy += ey, sxx += ex * ex, syy += ey * ey, sg += eg, sgg += eg * eg, n += 1;
     }
     ASSERT_GT(n, 3000);
@@ -578,21 +582,21 @@ TEST(Simulator, NoiseHasTheConfiguredSize) {
 
 TEST(Simulator, PowerFollowsTheMotorModel) {
   Scenario sc = quiet({straight(4, 0.5)});
-  const Track tr = simulate(sc);
+  const tracks::Track tr = simulate(sc);
   const RobotParams r;
   // Cruise: tau = b_v*omega + tau_c*tanh(omega/omega_eps); P = tau*omega + (tau/k_t)^2*R.
   const std::size_t i = row_at_time(tr, 4.0);
-  const double om = tr.col(Col::omega_l)[i];
+  const double om = tr.col(tracks::Col::omega_l)[i];
   EXPECT_NEAR(om, 0.5 / 0.05, 1e-9);
   const double tau = r.viscous_friction_nm_s * om +
                      r.coulomb_friction_nm * std::tanh(om / r.coulomb_smoothing_rad_s);
   const double p = tau * om + std::pow(tau / r.torque_constant_nm_per_a, 2) * r.coil_resistance_ohm;
-  EXPECT_NEAR(tr.col(Col::power_l)[i], p, 1e-9);
-  EXPECT_NEAR(tr.col(Col::power_r)[i], p, 1e-9);
+  EXPECT_NEAR(tr.col(tracks::Col::power_l)[i], p, 1e-9);
+  EXPECT_NEAR(tr.col(tracks::Col::power_r)[i], p, 1e-9);
   // Accelerating costs more than cruising at the same speed; braking returns energy.
   const std::size_t acc = row_at_time(tr, 0.9), brake = row_at_time(tr, 8.5);  // ramps: 0-1 s and 8-9 s
-  EXPECT_GT(tr.col(Col::power_l)[acc], tr.col(Col::power_l)[i] * 1.5);
-  EXPECT_LT(tr.col(Col::power_l)[brake], tr.col(Col::power_l)[i]);
+  EXPECT_GT(tr.col(tracks::Col::power_l)[acc], tr.col(tracks::Col::power_l)[i] * 1.5);
+  EXPECT_LT(tr.col(tracks::Col::power_l)[brake], tr.col(tracks::Col::power_l)[i]);
 }
 
 TEST(Simulator, StartPoseMovesTheWorldPathRigidlyAndNothingElse) {
@@ -600,30 +604,32 @@ TEST(Simulator, StartPoseMovesTheWorldPathRigidlyAndNothingElse) {
                                  straight(-1, 0.3)});
   Scenario moved = origin;
   moved.motion.start_x_m = 1, moved.motion.start_y_m = -2, moved.motion.start_theta_rad = 0.7;
-  const Track a = simulate(origin), b = simulate(moved);
+  const tracks::Track a = simulate(origin), b = simulate(moved);
   ASSERT_EQ(a.size(), b.size());
-  EXPECT_EQ(b.col(Col::gt_x)[0], 1.0);
-  EXPECT_EQ(b.col(Col::gt_y)[0], -2.0);
-  EXPECT_EQ(b.col(Col::gt_theta)[0], 0.7);
+  EXPECT_EQ(b.col(tracks::Col::gt_x)[0], 1.0);
+  EXPECT_EQ(b.col(tracks::Col::gt_y)[0], -2.0);
+  EXPECT_EQ(b.col(tracks::Col::gt_theta)[0], 0.7);
   const double c = std::cos(0.7), s = std::sin(0.7);
   double max_pos = 0, max_th = 0, max_aps = 0;
   for (std::size_t i = 0; i < a.size(); ++i) {
-    const double x = a.col(Col::gt_x)[i], y = a.col(Col::gt_y)[i];
-    max_pos = std::max(max_pos, std::hypot(b.col(Col::gt_x)[i] - (1 + c * x - s * y),
-                                           b.col(Col::gt_y)[i] - (-2 + s * x + c * y)));
-    max_th = std::max(max_th, std::abs(b.col(Col::gt_theta)[i] - (a.col(Col::gt_theta)[i] + 0.7)));
-    if (a.at(Col::aps_x, i))  // the same fix noise, added to the moved truth
-      max_aps = std::max(max_aps, std::abs((b.col(Col::aps_x)[i] - b.col(Col::gt_x)[i]) -
-                                           (a.col(Col::aps_x)[i] - a.col(Col::gt_x)[i])));
+    const double x = a.col(tracks::Col::gt_x)[i], y = a.col(tracks::Col::gt_y)[i];
+    max_pos = std::max(max_pos, std::hypot(b.col(tracks::Col::gt_x)[i] - (1 + c * x - s * y),
+                                           b.col(tracks::Col::gt_y)[i] - (-2 + s * x + c * y)));
+    max_th = std::max(max_th,
+                      std::abs(b.col(tracks::Col::gt_theta)[i] - (a.col(tracks::Col::gt_theta)[i] + 0.7)));
+    if (a.at(tracks::Col::aps_x, i))  // the same fix noise, added to the moved truth
+      max_aps = std::max(max_aps, std::abs((b.col(tracks::Col::aps_x)[i] - b.col(tracks::Col::gt_x)[i]) -
+                                           (a.col(tracks::Col::aps_x)[i] - a.col(tracks::Col::gt_x)[i])));
   }
-  EXPECT_GT(std::abs(a.col(Col::gt_theta).back()), 0.5);  // the path turns, so the rotation matters
+  EXPECT_GT(std::abs(a.col(tracks::Col::gt_theta).back()), 0.5);  // the path turns, so the rotation matters
   EXPECT_LT(max_pos, 1e-9);
   EXPECT_LT(max_th, 1e-10);
   EXPECT_LT(max_aps, 1e-9);
   EXPECT_EQ(a.ticks_l(), b.ticks_l());
   EXPECT_EQ(a.ticks_r(), b.ticks_r());
-  for (Col col : {Col::omega_l, Col::omega_r, Col::v_cmd, Col::w_cmd, Col::gyro_z, Col::power_l, Col::power_r,
-                  Col::v_ext, Col::w_ext})
+  for (tracks::Col col :
+       {tracks::Col::omega_l, tracks::Col::omega_r, tracks::Col::v_cmd, tracks::Col::w_cmd, tracks::Col::gyro_z,
+        tracks::Col::power_l, tracks::Col::power_r, tracks::Col::v_ext, tracks::Col::w_ext})
     EXPECT_EQ(a.col(col), b.col(col)) << static_cast<int>(col);
   moved.motion.start_theta_rad = std::nan("");
   std::string why;
@@ -634,11 +640,11 @@ TEST(Simulator, StartPoseMovesTheWorldPathRigidlyAndNothingElse) {
 TEST(Simulator, LastRowIsCompleteAndAtRest) {
   Scenario sc;
   sc.motion.segments = {straight(1.234, 0.5)};
-  const Track tr = simulate(sc);
+  const tracks::Track tr = simulate(sc);
   const std::size_t n = tr.size() - 1;
-  EXPECT_TRUE(tr.at(Col::aps_x, n));
-  EXPECT_TRUE(tr.at(Col::v_ext, n));
-  EXPECT_EQ(tr.col(Col::v_cmd)[n], 0.0);
+  EXPECT_TRUE(tr.at(tracks::Col::aps_x, n));
+  EXPECT_TRUE(tr.at(tracks::Col::v_ext, n));
+  EXPECT_EQ(tr.col(tracks::Col::v_cmd)[n], 0.0);
   EXPECT_EQ(tr.meta().origin, "simulated");
   EXPECT_EQ(tr.meta().get("sim.seed"), "1");
   EXPECT_EQ(tr.meta().get("sim.aps_sigma_m"), "0.06");

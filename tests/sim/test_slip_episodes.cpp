@@ -93,7 +93,7 @@ SlipEpisode episode(Kind kind, Wheel wheel, double t0, double t1, double s, doub
   return e;
 }
 
-std::size_t row_at(const Track& tr, double t) {
+std::size_t row_at(const tracks::Track& tr, double t) {
   std::size_t i = 0;
   while (i + 1 < tr.size() && tr.t()[i] < t - 1e-9) ++i;
   return i;
@@ -107,15 +107,15 @@ double power_of(const RobotParams& r, double torque, double omega) {
 }
 
 // Every column, the ticks and the time of rows [0, end) are bit-identical.
-void expect_rows_identical(const Track& a, const Track& b, std::size_t end) {
+void expect_rows_identical(const tracks::Track& a, const tracks::Track& b, std::size_t end) {
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < end; ++i) {
     ASSERT_EQ(a.t()[i], b.t()[i]);
     ASSERT_EQ(a.ticks_l()[i], b.ticks_l()[i]) << "row " << i;
     ASSERT_EQ(a.ticks_r()[i], b.ticks_r()[i]) << "row " << i;
-    for (int c = 0; c < kNumCols; ++c) {
-      const auto& ca = a.col(static_cast<Col>(c));
-      const auto& cb = b.col(static_cast<Col>(c));
+    for (int c = 0; c < tracks::kNumCols; ++c) {
+      const auto& ca = a.col(static_cast<tracks::Col>(c));
+      const auto& cb = b.col(static_cast<tracks::Col>(c));
       ASSERT_EQ(ca.size(), cb.size());
       if (ca.empty() || std::isnan(ca[i])) continue;
       ASSERT_EQ(ca[i], cb[i]) << "column " << c << " row " << i;
@@ -123,10 +123,10 @@ void expect_rows_identical(const Track& a, const Track& b, std::size_t end) {
   }
 }
 
-double path_length(const Track& tr) {
+double path_length(const tracks::Track& tr) {
   double d = 0;
-  const auto& x = tr.col(Col::gt_x);
-  const auto& y = tr.col(Col::gt_y);
+  const auto& x = tr.col(tracks::Col::gt_x);
+  const auto& y = tr.col(tracks::Col::gt_y);
   for (std::size_t i = 0; i + 1 < tr.size(); ++i) d += std::hypot(x[i + 1] - x[i], y[i + 1] - y[i]);
   return d;
 }
@@ -136,12 +136,12 @@ TEST(SlipEpisodes, SpinKeepsTicksLowersPowerAndShortensTravel) {
   Scenario sc = base_sc;
   const double s = 0.5, t0 = 5, t1 = 8, ramp = 0.2;
   sc.slip_episodes = {episode(Kind::spin, Wheel::left, t0, t1, s, ramp)};
-  const Track base = simulate(base_sc), tr = simulate(sc);
+  const tracks::Track base = simulate(base_sc), tr = simulate(sc);
 
   // Encoders count the rotation, which the spin does not touch.
   EXPECT_EQ(tr.ticks_l(), base.ticks_l());
   EXPECT_EQ(tr.ticks_r(), base.ticks_r());
-  EXPECT_EQ(tr.col(Col::omega_l), base.col(Col::omega_l));
+  EXPECT_EQ(tr.col(tracks::Col::omega_l), base.col(tracks::Col::omega_l));
   // Everything up to the episode's start is the run without it.
   expect_rows_identical(base, tr, row_at(base, t0) + 1);
 
@@ -151,10 +151,10 @@ TEST(SlipEpisodes, SpinKeepsTicksLowersPowerAndShortensTravel) {
   const double coulomb = r.coulomb_friction_nm * std::tanh(kOmega / r.coulomb_smoothing_rad_s);
   const double viscous = r.viscous_friction_nm_s * kOmega;
   const std::size_t mid = row_at(tr, 6.5);
-  EXPECT_NEAR(base.col(Col::power_l)[mid], power_of(r, viscous + coulomb, kOmega), 1e-6);
-  EXPECT_NEAR(tr.col(Col::power_l)[mid], power_of(r, viscous + (1 - s) * coulomb, kOmega), 1e-6);
-  EXPECT_LT(tr.col(Col::power_l)[mid], 0.75 * base.col(Col::power_l)[mid]);
-  EXPECT_NEAR(tr.col(Col::power_r)[mid], base.col(Col::power_r)[mid], 1e-6);  // the other wheel
+  EXPECT_NEAR(base.col(tracks::Col::power_l)[mid], power_of(r, viscous + coulomb, kOmega), 1e-6);
+  EXPECT_NEAR(tr.col(tracks::Col::power_l)[mid], power_of(r, viscous + (1 - s) * coulomb, kOmega), 1e-6);
+  EXPECT_LT(tr.col(tracks::Col::power_l)[mid], 0.75 * base.col(tracks::Col::power_l)[mid]);
+  EXPECT_NEAR(tr.col(tracks::Col::power_r)[mid], base.col(tracks::Col::power_r)[mid], 1e-6);  // the other wheel
 
   // The left ground speed is (1 - s(t))*u: the body covers
   // u/2 * integral of s(t) = u/2 * s*(T - ramp) less, and turns left by
@@ -162,8 +162,8 @@ TEST(SlipEpisodes, SpinKeepsTicksLowersPowerAndShortensTravel) {
   const double lost = kSpeed * s * (t1 - t0 - ramp);
   EXPECT_NEAR(path_length(base) - path_length(tr), lost / 2, 2e-3);
   const std::size_t last = tr.size() - 1;
-  EXPECT_NEAR(tr.col(Col::gt_theta)[last] - base.col(Col::gt_theta)[last], lost / 0.65, 2e-3);
-  EXPECT_NEAR(base.col(Col::gt_theta)[last], 0.0, 1e-12);
+  EXPECT_NEAR(tr.col(tracks::Col::gt_theta)[last] - base.col(tracks::Col::gt_theta)[last], lost / 0.65, 2e-3);
+  EXPECT_NEAR(base.col(tracks::Col::gt_theta)[last], 0.0, 1e-12);
 }
 
 TEST(SlipEpisodes, HoldLowersTicksRaisesPowerAndKeepsTheTruePath) {
@@ -171,12 +171,13 @@ TEST(SlipEpisodes, HoldLowersTicksRaisesPowerAndKeepsTheTruePath) {
   Scenario sc = base_sc;
   const double s = 0.4, t0 = 5, t1 = 8, ramp = 0.2, brake = 20;
   sc.slip_episodes = {episode(Kind::hold, Wheel::left, t0, t1, s, ramp, brake)};
-  const Track base = simulate(base_sc), tr = simulate(sc);
+  const tracks::Track base = simulate(base_sc), tr = simulate(sc);
 
   expect_rows_identical(base, tr, row_at(base, t0) + 1);
   // The contact is dragged along: the true path, gyro and external velocity
   // are those of the run without the episode, everywhere.
-  for (Col c : {Col::gt_x, Col::gt_y, Col::gt_theta, Col::gyro_z, Col::v_ext, Col::w_ext, Col::aps_x})
+  for (tracks::Col c : {tracks::Col::gt_x, tracks::Col::gt_y, tracks::Col::gt_theta, tracks::Col::gyro_z,
+                        tracks::Col::v_ext, tracks::Col::w_ext, tracks::Col::aps_x})
     EXPECT_EQ(tr.col(c), base.col(c)) << static_cast<int>(c);
   EXPECT_EQ(tr.ticks_r(), base.ticks_r());
 
@@ -188,14 +189,14 @@ TEST(SlipEpisodes, HoldLowersTicksRaisesPowerAndKeepsTheTruePath) {
 
   const std::size_t mid = row_at(tr, 6.5);
   const double om = (1 - s) * kOmega;
-  EXPECT_NEAR(tr.col(Col::omega_l)[mid], om, 1e-9);
+  EXPECT_NEAR(tr.col(tracks::Col::omega_l)[mid], om, 1e-9);
   const RobotParams& r = sc.robot;
   const double torque = r.viscous_friction_nm_s * om +
                         r.coulomb_friction_nm * std::tanh(om / r.coulomb_smoothing_rad_s) +
                         brake * std::tanh(kOmega / r.coulomb_smoothing_rad_s);
-  EXPECT_NEAR(tr.col(Col::power_l)[mid], power_of(r, torque, om), 1e-6);
-  EXPECT_GT(tr.col(Col::power_l)[mid], 1.3 * base.col(Col::power_l)[mid]);
-  EXPECT_NEAR(tr.col(Col::power_r)[mid], base.col(Col::power_r)[mid], 1e-6);
+  EXPECT_NEAR(tr.col(tracks::Col::power_l)[mid], power_of(r, torque, om), 1e-6);
+  EXPECT_GT(tr.col(tracks::Col::power_l)[mid], 1.3 * base.col(tracks::Col::power_l)[mid]);
+  EXPECT_NEAR(tr.col(tracks::Col::power_r)[mid], base.col(tracks::Col::power_r)[mid], 1e-6);
 }
 
 TEST(SlipEpisodes, StrengthRampsUpHoldsAndRampsDown) {
@@ -226,10 +227,10 @@ TEST(SlipEpisodes, StrengthRampsUpHoldsAndRampsDown) {
   // In the simulation: the hold's wheel rate follows the ramp (rows at 100 Hz).
   Scenario sc = chair();
   sc.slip_episodes = {episode(Kind::hold, Wheel::right, 5, 8, 0.6, 0.4, 10)};
-  const Track tr = simulate(sc);
+  const tracks::Track tr = simulate(sc);
   for (double t : {5.0, 5.1, 5.2, 5.3, 6.0, 7.7, 8.0, 8.5})
-    EXPECT_NEAR(tr.col(Col::omega_r)[row_at(tr, t)], kOmega * (1 - episode_strength(sc.slip_episodes[0], t)),
-                1e-9)
+    EXPECT_NEAR(tr.col(tracks::Col::omega_r)[row_at(tr, t)],
+                kOmega * (1 - episode_strength(sc.slip_episodes[0], t)), 1e-9)
         << t;
 }
 
@@ -237,11 +238,11 @@ TEST(SlipEpisodes, DefaultBrakeIsTwiceTheCoulombTorque) {
   Scenario a = chair(), b = chair();
   a.slip_episodes = {episode(Kind::hold, Wheel::left, 5, 8, 0.5)};
   b.slip_episodes = {episode(Kind::hold, Wheel::left, 5, 8, 0.5, 0.2, 2 * b.robot.coulomb_friction_nm)};
-  const Track ta = simulate(a), tb = simulate(b);
-  EXPECT_EQ(ta.col(Col::power_l), tb.col(Col::power_l));
+  const tracks::Track ta = simulate(a), tb = simulate(b);
+  EXPECT_EQ(ta.col(tracks::Col::power_l), tb.col(tracks::Col::power_l));
   EXPECT_EQ(ta.ticks_l(), tb.ticks_l());
   Scenario none = chair();
-  EXPECT_NE(ta.col(Col::power_l), simulate(none).col(Col::power_l));
+  EXPECT_NE(ta.col(tracks::Col::power_l), simulate(none).col(tracks::Col::power_l));
 }
 
 TEST(SlipEpisodes, EpisodesOnBothWheelsMayOverlap) {
@@ -250,12 +251,12 @@ TEST(SlipEpisodes, EpisodesOnBothWheelsMayOverlap) {
                       episode(Kind::spin, Wheel::left, 5, 8, 0.5)};
   std::string why;
   ASSERT_TRUE(validate_scenario(sc, &why)) << why;
-  const Track base = simulate(chair()), tr = simulate(sc);
+  const tracks::Track base = simulate(chair()), tr = simulate(sc);
   EXPECT_EQ(tr.ticks_l(), base.ticks_l());                       // spin: rotation untouched
   EXPECT_LT(tr.ticks_r().back() + 1000, base.ticks_r().back());  // hold: counts missed
   const std::size_t both = row_at(tr, 7);
-  EXPECT_LT(tr.col(Col::power_l)[both], base.col(Col::power_l)[both]);
-  EXPECT_GT(tr.col(Col::power_r)[both], base.col(Col::power_r)[both]);
+  EXPECT_LT(tr.col(tracks::Col::power_l)[both], base.col(tracks::Col::power_l)[both]);
+  EXPECT_GT(tr.col(tracks::Col::power_r)[both], base.col(tracks::Col::power_r)[both]);
 }
 
 TEST(SlipEpisodes, MetadataTextIsExactAndRoundTrips) {
@@ -293,17 +294,17 @@ TEST(SlipEpisodes, MetadataTextIsExactAndRoundTrips) {
   sc.slip_episodes = {episode(Kind::spin, Wheel::left, 5, 8, 0.5),
                       episode(Kind::hold, Wheel::right, 2.5, 4.25, 0.3)};
   std::ostringstream file;
-  format_track(simulate(sc), file);
+  tracks::format_track(simulate(sc), file);
   EXPECT_THAT(file.str(), HasSubstr("sim.slip_episodes: spin:wheel=left,t0_s=5,t1_s=8,s=0.5,ramp_s=0.2; "
                                     "hold:wheel=right,t0_s=2.5,t1_s=4.25,s=0.3,ramp_s=0.2,brake_nm=0\n"));
   std::istringstream in(file.str());
-  const Track read = parse_track(in, "t.csv");
+  const tracks::Track read = tracks::parse_track(in, "t.csv");
   const auto from_meta = slip_episodes_from_metadata(read.meta());
   ASSERT_EQ(from_meta.size(), 2u);
   EXPECT_EQ(format_slip_episodes(from_meta), format_slip_episodes(sc.slip_episodes));
   // Without episodes the key is not written (older tracks keep their bytes).
   std::ostringstream plain;
-  format_track(simulate(chair()), plain);
+  tracks::format_track(simulate(chair()), plain);
   EXPECT_THAT(plain.str(), Not(HasSubstr("slip_episodes")));
   EXPECT_TRUE(slip_episodes_from_metadata(simulate(chair()).meta()).empty());
 }
@@ -339,7 +340,7 @@ TEST(SlipEpisodes, BadTextGivesOneLineErrors) {
        std::vector<std::string>{"slide:" + ok, "spin:" + ok + ",s=0.4", "spin:wheel=left,t0_s=1,t1_s=2,s=2"})
     EXPECT_THAT(error_of(bad), Not(HasSubstr("\n")));
 
-  TrackMeta meta;
+  tracks::TrackMeta meta;
   meta.extra = {{"sim.slip_episodes", "spin:wheel=up"}};
   try {
     (void)slip_episodes_from_metadata(meta);
@@ -410,7 +411,7 @@ TEST(SlipEpisodes, SameSeedSameTrack) {
                       episode(Kind::hold, Wheel::right, 7, 10, 0.4, 0.3, 12)};
   auto text = [](const Scenario& s) {
     std::ostringstream out;
-    format_track(simulate(s), out);
+    tracks::format_track(simulate(s), out);
     return out.str();
   };
   const std::string a = text(sc);

@@ -15,33 +15,33 @@
 
 #include "support/study_fixtures.h"
 
-namespace odotune {
+namespace odotune::studies {
 namespace {
 
-using odotune::MeanSd;
+using odotune::studies::MeanSd;
 using namespace odotune::study_fixtures;
 
 TEST(StudyMeanSd, SampleStatisticsOverFiniteValues) {
-  const MeanSd m = odotune::mean_sd({1.0, 2.0, 3.0, 4.0});
+  const MeanSd m = odotune::studies::mean_sd({1.0, 2.0, 3.0, 4.0});
   EXPECT_EQ(m.n, 4);
   EXPECT_DOUBLE_EQ(m.mean, 2.5);
   EXPECT_NEAR(m.sd, std::sqrt(5.0 / 3.0), 1e-15);  // Σ(x − 2.5)² = 5, n − 1 = 3
-  const MeanSd with_nan = odotune::mean_sd({NAN, 2.0, NAN, 4.0});
+  const MeanSd with_nan = odotune::studies::mean_sd({NAN, 2.0, NAN, 4.0});
   EXPECT_EQ(with_nan.n, 2);
   EXPECT_DOUBLE_EQ(with_nan.mean, 3.0);
   EXPECT_NEAR(with_nan.sd, std::sqrt(2.0), 1e-15);
-  const MeanSd one = odotune::mean_sd({7.0});
+  const MeanSd one = odotune::studies::mean_sd({7.0});
   EXPECT_EQ(one.n, 1);
   EXPECT_DOUBLE_EQ(one.sd, 0.0);
-  const MeanSd none = odotune::mean_sd({NAN});
+  const MeanSd none = odotune::studies::mean_sd({NAN});
   EXPECT_EQ(none.n, 0);
   EXPECT_TRUE(std::isnan(none.mean) && std::isnan(none.sd));
-  EXPECT_EQ(odotune::mean_sd_text(none), "–");
-  EXPECT_EQ(odotune::mean_sd_text(m), "2.5 ± 1.3");
+  EXPECT_EQ(odotune::studies::mean_sd_text(none), "–");
+  EXPECT_EQ(odotune::studies::mean_sd_text(m), "2.5 ± 1.3");
 }
 
 TEST(StudyOptions, IsValidNamesTheBadValue) {
-  odotune::StudyOptions o;
+  odotune::studies::StudyOptions o;
   std::string why;
   EXPECT_TRUE(o.IsValid(&why)) << why;
   o.runs = 0;
@@ -58,13 +58,13 @@ TEST(StudyOptions, IsValidNamesTheBadValue) {
 }
 
 TEST(StudyDraws, SeedPerRunTruthWithinSpreadDkfWithinThePfRanges) {
-  odotune::StudyOptions o;
+  odotune::studies::StudyOptions o;
   o.seed = 40;
   o.truth_radius_spread = 0.02;
   const sim::Scenario sc = parsed(10.0);
   std::map<double, int> seen;
   for (int r = 0; r < 20; ++r) {
-    const odotune::McDraw d = odotune::mc_draw(o, sc, r);
+    const odotune::studies::McDraw d = odotune::studies::mc_draw(o, sc, r);
     EXPECT_EQ(d.seed, 40u + static_cast<unsigned>(r));
     for (double s : {d.truth_scale_l, d.truth_scale_r}) {
       EXPECT_GE(s, 0.98);
@@ -78,11 +78,11 @@ TEST(StudyDraws, SeedPerRunTruthWithinSpreadDkfWithinThePfRanges) {
     EXPECT_LE(d.dkf_initial.wheel_radius_left_m, ranges.wheel_radius_left_m.hi);
     EXPECT_DOUBLE_EQ(d.dkf_initial.wheel_base_m, 0.65);
     // Deterministic.
-    const odotune::McDraw again = odotune::mc_draw(o, sc, r);
+    const odotune::studies::McDraw again = odotune::studies::mc_draw(o, sc, r);
     EXPECT_EQ(again.truth_scale_l, d.truth_scale_l);
     EXPECT_EQ(again.dkf_initial.wheel_radius_left_m, d.dkf_initial.wheel_radius_left_m);
     // The run's scenario: its seed and truth, other effects kept.
-    const sim::Scenario rs = odotune::run_scenario(sc, d);
+    const sim::Scenario rs = odotune::studies::run_scenario(sc, d);
     EXPECT_EQ(rs.seed, d.seed);
     ASSERT_TRUE(rs.effects.radius_error.has_value());
     EXPECT_EQ(rs.effects.radius_error->scale_l, d.truth_scale_l);
@@ -94,12 +94,12 @@ TEST(StudyDraws, SeedPerRunTruthWithinSpreadDkfWithinThePfRanges) {
 }
 
 TEST(StudyScenarioCheck, RejectsRobotsOutsideThePfRangesAndMissingSensors) {
-  const odotune::StudyOptions o;
-  EXPECT_NO_THROW(odotune::check_study_scenario(parsed(), o));
+  const odotune::studies::StudyOptions o;
+  EXPECT_NO_THROW(odotune::studies::check_study_scenario(parsed(), o));
   sim::Scenario small = parsed();
   small.robot.wheel_radius_left_m = small.robot.wheel_radius_right_m = 0.05;
   try {
-    odotune::check_study_scenario(small, o);
+    odotune::studies::check_study_scenario(small, o);
     ADD_FAILURE() << "accepted 0.05 m wheels";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("short_chair"), std::string::npos) << e.what();
@@ -107,16 +107,16 @@ TEST(StudyScenarioCheck, RejectsRobotsOutsideThePfRangesAndMissingSensors) {
   }
   sim::Scenario blind = parsed();
   blind.sensors.ext_velocity.enabled = false;
-  EXPECT_THROW(odotune::check_study_scenario(blind, o), std::invalid_argument);
+  EXPECT_THROW(odotune::studies::check_study_scenario(blind, o), std::invalid_argument);
 }
 
 TEST(StudyConvergence, ReachedAndSettledPerPieceOfTheTruth) {
   // Truth 0.32 m both wheels until t = 10 s, then 0.31 m. Tolerance 0.5 %:
   // 1.6 mm before, 1.55 mm after.
-  TruthSchedule truth;
+  calibration::TruthSchedule truth;
   truth.from_s = {-INFINITY, 10.0};
   truth.params = {{0.32, 0.32, 0.65}, {0.31, 0.31, 0.65}};
-  odotune::ParamTrace tr;
+  odotune::studies::ParamTrace tr;
   // Estimates at t = 0.5, 1.0, ..., 20: R_R enters the band at 2 s, leaves at
   // 3 s, re-enters at 4 s for good; R_L is within from the start. After the
   // step both are off until 13 s (3 s after the change), then within.
@@ -130,7 +130,7 @@ TEST(StudyConvergence, ReachedAndSettledPerPieceOfTheTruth) {
     tr.r_left_m.push_back(rl);
     tr.wheel_base_m.push_back(0.9);  // far off: must not matter
   }
-  const auto c = odotune::radius_convergence(tr, truth, 0.5, 0.005);
+  const auto c = odotune::studies::radius_convergence(tr, truth, 0.5, 0.005);
   ASSERT_EQ(c.size(), 2u);
   EXPECT_DOUBLE_EQ(c[0].reached_s, 2.0 - 0.5);
   EXPECT_DOUBLE_EQ(c[0].settled_s, 4.0 - 0.5);
@@ -139,16 +139,16 @@ TEST(StudyConvergence, ReachedAndSettledPerPieceOfTheTruth) {
   // Never within after the change → NaN.
   for (std::size_t i = 0; i < tr.t_s.size(); ++i)
     if (tr.t_s[i] >= 10.0) tr.r_left_m[i] = 0.33;
-  const auto never = odotune::radius_convergence(tr, truth, 0.5, 0.005);
+  const auto never = odotune::studies::radius_convergence(tr, truth, 0.5, 0.005);
   EXPECT_TRUE(std::isnan(never[1].reached_s));
   EXPECT_TRUE(std::isnan(never[1].settled_s));
 }
 
 TEST(StudyFigureData, ResamplingBarsAreNormalisedByTheLargestMean) {
-  odotune::ResamplingStudy s;
-  for (auto r : odotune::table1_resamplers())
-    for (auto p : odotune::table1_policies()) {
-      odotune::ResamplingCell c;
+  odotune::studies::ResamplingStudy s;
+  for (auto r : odotune::studies::table1_resamplers())
+    for (auto p : odotune::studies::table1_policies()) {
+      odotune::studies::ResamplingCell c;
       c.resampler = r;
       c.policy = p;
       s.cells.push_back(c);
@@ -159,7 +159,7 @@ TEST(StudyFigureData, ResamplingBarsAreNormalisedByTheLargestMean) {
   s.cells[5].runs = {{0.004, 0.004}, {0.003, 0.005}};
   for (auto& c : s.cells) c.ms_per_iteration = {1.0, 0.1, 2};
   s.cells[7].ms_per_iteration = {2.0, 0.5, 2};
-  const odotune::ResamplingBars b = odotune::resampling_bars(s);
+  const odotune::studies::ResamplingBars b = odotune::studies::resampling_bars(s);
   ASSERT_EQ(b.groups.size(), 4u);
   ASSERT_EQ(b.series.size(), 3u);
   ASSERT_EQ(b.panels.size(), 2u);
@@ -178,17 +178,18 @@ TEST(StudyFigureData, ResamplingBarsAreNormalisedByTheLargestMean) {
 
 // The computation in-process: the numbers do not depend on the thread count.
 TEST(StudyResampling, SameNumbersForOneAndTwoThreads) {
-  odotune::StudyOptions o;
+  odotune::studies::StudyOptions o;
   o.runs = 2;
   o.seed = 11;
   o.pf_particles = 300;
   const sim::Scenario sc = parsed();
   o.threads = 1;
-  const odotune::ResamplingStudy a = odotune::run_resampling_study(sc, o);
+  const odotune::studies::ResamplingStudy a = odotune::studies::run_resampling_study(sc, o);
   o.threads = 2;
-  const odotune::ResamplingStudy b = odotune::run_resampling_study(sc, o);
+  const odotune::studies::ResamplingStudy b = odotune::studies::run_resampling_study(sc, o);
   ASSERT_EQ(a.cells.size(), 12u);
-  EXPECT_EQ(without_timing(odotune::table1_runs_csv(a)), without_timing(odotune::table1_runs_csv(b)));
+  EXPECT_EQ(without_timing(odotune::studies::table1_runs_csv(a)),
+            without_timing(odotune::studies::table1_runs_csv(b)));
   EXPECT_EQ(a.threads_used, 1);
   EXPECT_EQ(b.threads_used, 2);
   // The every-step policy resamples at every iteration; N_eff less often.
@@ -203,4 +204,4 @@ TEST(StudyResampling, SameNumbersForOneAndTwoThreads) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -32,7 +32,7 @@
 
 #include "support/temp_dir.h"
 
-namespace odotune {
+namespace odotune::studies {
 namespace {
 
 // Short single-recording cases (the multi-recording tests ask for theirs).
@@ -43,10 +43,10 @@ CaseDrawOptions short_draws() {
   return o;
 }
 
-bool same_track(const Track& a, const Track& b) {
-  const TrackData &x = a.data(), &y = b.data();
+bool same_track(const tracks::Track& a, const tracks::Track& b) {
+  const tracks::TrackData &x = a.data(), &y = b.data();
   if (x.t != y.t || x.ticks_l != y.ticks_l || x.ticks_r != y.ticks_r) return false;
-  for (int k = 0; k < kNumCols; ++k) {
+  for (int k = 0; k < tracks::kNumCols; ++k) {
     if (x.cols[k].size() != y.cols[k].size()) return false;
     for (std::size_t i = 0; i < x.cols[k].size(); ++i) {
       const double u = x.cols[k][i], v = y.cols[k][i];
@@ -62,10 +62,10 @@ TEST(DiagnosisCases, SameSeedSameCaseAndTrackForAnyThreadCount) {
   const CaseDrawOptions o = short_draws();
   constexpr int kCases = 4;
   std::vector<std::string> text[2];
-  std::vector<Track> tracks[2];
+  std::vector<tracks::Track> tracks[2];
   for (int run = 0; run < 2; ++run) {
     text[run].resize(kCases);
-    std::vector<std::optional<Track>> t(kCases);
+    std::vector<std::optional<tracks::Track>> t(kCases);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(run == 0 ? 1 : 2)
     for (int i = 0; i < kCases; ++i) {
       const DiagnosisCase c = draw_case(case_seed(77, i), i, o);
@@ -146,13 +146,13 @@ TEST(DiagnosisCases, TracksHaveTheirReferenceShape) {
     if (seen.count(c.reference) && (wheel_rates || c.odometry != BenchOdometry::wheel_rates)) continue;
     seen.insert(c.reference);
     const CaseTrack ct = make_case_track(c);
-    const Track& t = ct.track;
+    const tracks::Track& t = ct.track;
     SCOPED_TRACE(std::string(to_string(c.reference)));
     EXPECT_FALSE(ct.path_x_m.empty());
     std::vector<double> gt_t, fix_t;
     for (std::size_t k = 0; k < t.size(); ++k) {
-      if (t.at(Col::gt_x, k)) gt_t.push_back(t.t()[k]);
-      if (t.at(Col::aps_x, k)) fix_t.push_back(t.t()[k]);
+      if (t.at(tracks::Col::gt_x, k)) gt_t.push_back(t.t()[k]);
+      if (t.at(tracks::Col::aps_x, k)) fix_t.push_back(t.t()[k]);
     }
     if (c.odometry == BenchOdometry::wheel_rates) {
       wheel_rates = true;
@@ -636,7 +636,7 @@ TEST(DiagnosisBenchmarkRun, BadOptionsFailBeforeWork) {
     try {
       run_diagnosis_benchmark_to_folder(r);
       ADD_FAILURE() << "--multi-share 2 was accepted";
-    } catch (const Failure& e) {
+    } catch (const core::Failure& e) {
       EXPECT_NE(std::string(e.what()).find("multi_share = 2"), std::string::npos) << e.what();
     }
     EXPECT_FALSE(std::filesystem::exists(r.out));
@@ -648,7 +648,7 @@ TEST(DiagnosisBenchmarkRun, BadOptionsFailBeforeWork) {
   DiagnosisBenchmarkRequest r;
   r.out = (dir.path() / "out").string();
   r.options = o;
-  EXPECT_THROW(run_diagnosis_benchmark_to_folder(r), Failure);
+  EXPECT_THROW(run_diagnosis_benchmark_to_folder(r), core::Failure);
   EXPECT_FALSE(std::filesystem::exists(r.out));
   r.options = {};
   r.out = (dir.path() / "file.txt").string();
@@ -656,7 +656,7 @@ TEST(DiagnosisBenchmarkRun, BadOptionsFailBeforeWork) {
   try {
     run_diagnosis_benchmark_to_folder(r);
     ADD_FAILURE() << "an --out that is a file was accepted";
-  } catch (const Failure& e) {
+  } catch (const core::Failure& e) {
     EXPECT_NE(std::string(e.what()).find("not a folder"), std::string::npos) << e.what();
   }
 }
@@ -745,9 +745,9 @@ TEST(DiagnosisMultiCases, OneRobotSameEffectsOwnDrives) {
 TEST(DiagnosisMultiCases, RecordingsAreOfOneRobotAndDeterministic) {
   const CaseDrawOptions o = multi_draws();
   constexpr int kCases = 3;
-  std::vector<Track> tracks[2];
+  std::vector<tracks::Track> tracks[2];
   for (int run = 0; run < 2; ++run) {
-    std::vector<std::vector<Track>> per_case(kCases);
+    std::vector<std::vector<tracks::Track>> per_case(kCases);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(run == 0 ? 1 : 2)
     for (int i = 0; i < kCases; ++i) {
       const DiagnosisCase c = draw_case(case_seed(9, i), i, o);
@@ -766,7 +766,7 @@ TEST(DiagnosisMultiCases, RecordingsAreOfOneRobotAndDeterministic) {
     EXPECT_THROW(make_recording_track(c, c.recordings.size()), std::invalid_argument);
     std::vector<diagnose::DiagInput> inputs;
     for (std::size_t k = 0; k < c.recordings.size(); ++k) {
-      const Track t = make_recording_track(c, k).track;
+      const tracks::Track t = make_recording_track(c, k).track;
       // The nominal geometry, whatever the recording's true one.
       EXPECT_EQ(t.meta().wheel_radius_left_m, c.scenario.robot.wheel_radius_left_m);
       EXPECT_EQ(t.meta().wheel_base_m, c.scenario.robot.wheel_base_m);
@@ -887,4 +887,4 @@ TEST(DiagnosisMultiCases, ShortRunGradesAndWritesTheirRows) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::studies

@@ -48,7 +48,7 @@ inline BodyVelocity drive_profile(double t) {
 
 inline Stream make_stream(const StreamSpec& spec) {
   Stream out;
-  Normal normal(spec.seed);
+  sim::Normal normal(spec.seed);
   const double dt = 1.0 / spec.rate_hz;
   const auto count = static_cast<long>(std::floor(spec.duration_s * spec.rate_hz));
   for (long k = 0; k < count; ++k) {

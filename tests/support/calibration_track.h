@@ -47,7 +47,7 @@ inline sim::Scenario chair_scenario(const ChairTrackOptions& o) {
   return sc;
 }
 
-inline Track chair_track(const ChairTrackOptions& o) { return sim::simulate(chair_scenario(o)); }
+inline tracks::Track chair_track(const ChairTrackOptions& o) { return sim::simulate(chair_scenario(o)); }
 
 // The misaligned chair the calibration tests recover: left radius × 0.99,
 // right × 1.012, wheel base × 1.02.

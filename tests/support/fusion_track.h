@@ -92,6 +92,6 @@ inline sim::Scenario fusion_scenario(const FusionTrackOptions& o) {
   return sc;
 }
 
-inline Track fusion_track(const FusionTrackOptions& o) { return sim::simulate(fusion_scenario(o)); }
+inline tracks::Track fusion_track(const FusionTrackOptions& o) { return sim::simulate(fusion_scenario(o)); }
 
 }  // namespace odotune::testing_support

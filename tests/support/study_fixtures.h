@@ -39,7 +39,8 @@ inline std::string short_scenario(double step_at_s = 0.0) {
 }
 
 inline sim::Scenario parsed(double step_at_s = 0.0) {
-  return odotune::parse_scenario(short_scenario(step_at_s), step_at_s > 0 ? "short_step.yaml" : "short.yaml");
+  return odotune::formats::parse_scenario(short_scenario(step_at_s),
+                                          step_at_s > 0 ? "short_step.yaml" : "short.yaml");
 }
 
 // CSV text → header and rows of fields.

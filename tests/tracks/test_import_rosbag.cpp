@@ -17,7 +17,7 @@
 #include "support/ros2_bag.h"
 #include "support/temp_dir.h"
 
-namespace odotune {
+namespace odotune::tracks {
 namespace {
 
 namespace fs = std::filesystem;
@@ -278,4 +278,4 @@ TEST(ImportRosbag, RefusalsNameTheProblem) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::tracks

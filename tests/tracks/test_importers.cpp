@@ -16,7 +16,7 @@
 #include <odotune/tracks/importers.h>
 #include <odotune/tracks/track.h>
 
-namespace odotune {
+namespace odotune::tracks {
 namespace {
 
 namespace fs = std::filesystem;
@@ -353,4 +353,4 @@ TEST(ImportLitw, MatchesSource) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::tracks

@@ -18,7 +18,7 @@
 
 #include "support/temp_dir.h"
 
-namespace odotune {
+namespace odotune::tracks {
 namespace {
 
 using testing_support::TempDir;
@@ -321,4 +321,4 @@ TEST(ImportRoundTrip, WriteThenReadGivesTheSameTrack) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::tracks

@@ -12,7 +12,7 @@
 #include <odotune/tracks/odometry_input.h>
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::tracks {
 namespace {
 
 using ::testing::HasSubstr;
@@ -99,4 +99,4 @@ TEST(BodyVelocityIntegral, ZeroOrderHoldIntegralsAndDelayedMeans) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::tracks

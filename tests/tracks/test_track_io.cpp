@@ -23,7 +23,7 @@
 
 #include "support/temp_dir.h"
 
-namespace odotune {
+namespace odotune::tracks {
 namespace {
 
 using testing_support::TempDir;
@@ -503,4 +503,4 @@ TEST(TrackIoWrite, RefusesTracksTheReaderWouldReject) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::tracks

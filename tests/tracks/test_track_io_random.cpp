@@ -22,7 +22,7 @@
 
 #include <odotune/tracks/track_io.h>
 
-namespace odotune {
+namespace odotune::tracks {
 namespace {
 
 namespace fs = std::filesystem;
@@ -302,4 +302,4 @@ TEST(TrackIoRobustness, RandomMutationsParseOrRaiseTrackError) {
 }
 
 }  // namespace
-}  // namespace odotune
+}  // namespace odotune::tracks

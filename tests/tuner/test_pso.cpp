@@ -313,7 +313,7 @@ TEST(CounterRng, UniformInUnitIntervalAndKeyedOnEveryWord) {
   int bins[10] = {};
   double sum = 0;
   for (int i = 0; i < n; ++i) {
-    const double u = counter_uniform01(42, 3, static_cast<std::uint64_t>(i), 1, 2);
+    const double u = core::counter_uniform01(42, 3, static_cast<std::uint64_t>(i), 1, 2);
     ASSERT_GE(u, 0.0);
     ASSERT_LT(u, 1.0);
     sum += u;
@@ -323,15 +323,15 @@ TEST(CounterRng, UniformInUnitIntervalAndKeyedOnEveryWord) {
   double chi2 = 0;
   for (int b : bins) chi2 += (b - n / 10.0) * (b - n / 10.0) / (n / 10.0);
   EXPECT_LT(chi2, 27.9);  // 9 dof, p = 0.001
-  const double base = counter_uniform01(1, 2, 3, 4, 5);
-  EXPECT_EQ(base, counter_uniform01(1, 2, 3, 4, 5));
-  EXPECT_NE(base, counter_uniform01(9, 2, 3, 4, 5));
-  EXPECT_NE(base, counter_uniform01(1, 9, 3, 4, 5));
-  EXPECT_NE(base, counter_uniform01(1, 2, 9, 4, 5));
-  EXPECT_NE(base, counter_uniform01(1, 2, 3, 9, 5));
-  EXPECT_NE(base, counter_uniform01(1, 2, 3, 4, 9));
+  const double base = core::counter_uniform01(1, 2, 3, 4, 5);
+  EXPECT_EQ(base, core::counter_uniform01(1, 2, 3, 4, 5));
+  EXPECT_NE(base, core::counter_uniform01(9, 2, 3, 4, 5));
+  EXPECT_NE(base, core::counter_uniform01(1, 9, 3, 4, 5));
+  EXPECT_NE(base, core::counter_uniform01(1, 2, 9, 4, 5));
+  EXPECT_NE(base, core::counter_uniform01(1, 2, 3, 9, 5));
+  EXPECT_NE(base, core::counter_uniform01(1, 2, 3, 4, 9));
   // Swapping key words changes the value (the hash is order-sensitive).
-  EXPECT_NE(counter_uniform01(1, 2, 3, 4, 5), counter_uniform01(1, 3, 2, 4, 5));
+  EXPECT_NE(core::counter_uniform01(1, 2, 3, 4, 5), core::counter_uniform01(1, 3, 2, 4, 5));
 }
 
 // -------------------------------------------------------------- NLopt ----
