@@ -122,7 +122,7 @@ std::string broadcast(std::string s, int rank) {
 
 // What a rank must agree on with rank 0 to compute the same runs: the
 // experiment file, the cells' keys and the tracks' bytes.
-std::string grid_fingerprint(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+std::string grid_fingerprint(const formats::Experiment& e, const std::vector<PreparedTrack>& tracks,
                              const std::vector<GridCell>& cells) {
   std::string all = e.text;
   for (const auto& c : cells) all += "\n" + results::run_key(cell_record(e, tracks, c));
@@ -230,10 +230,10 @@ struct Coordinator {
 // Rank 0: hands out the pending cells to its own threads and, through a
 // second thread that alone talks MPI here, to the other ranks; writes every
 // run to the store as it arrives.
-GridOutcome coordinate(const MpiSession& mpi, const Experiment& e, const std::vector<PreparedTrack>& tracks,
-                       const std::vector<GridCell>& cells, const std::vector<std::size_t>& pending,
-                       results::Store& store, const std::atomic<bool>* stop,
-                       const std::function<void(long, long)>& progress) {
+GridOutcome coordinate(const MpiSession& mpi, const formats::Experiment& e,
+                       const std::vector<PreparedTrack>& tracks, const std::vector<GridCell>& cells,
+                       const std::vector<std::size_t>& pending, results::Store& store,
+                       const std::atomic<bool>* stop, const std::function<void(long, long)>& progress) {
   GridOutcome out;
   out.total = static_cast<long>(cells.size());
   out.skipped = out.total - static_cast<long>(pending.size());
@@ -258,7 +258,7 @@ GridOutcome coordinate(const MpiSession& mpi, const Experiment& e, const std::ve
   };
   const WorkResult w = work_cells(e, tracks, cells, local, stop);
   server.join();
-  if (!c.failure.empty()) throw Failure(c.failure);
+  if (!c.failure.empty()) throw core::Failure(c.failure);
   out.ran = w.ran + c.remote_ran;
   out.abandoned = w.abandoned + c.remote_abandoned;
   return out;
@@ -267,7 +267,7 @@ GridOutcome coordinate(const MpiSession& mpi, const Experiment& e, const std::ve
 // Any other rank: asks rank 0 for cells until there are none, and sends it
 // every finished run. MPI calls come from one OpenMP thread at a time (they
 // are made inside work_cells' lock).
-void work_for_rank0(const Experiment& e, const std::vector<PreparedTrack>& tracks,
+void work_for_rank0(const formats::Experiment& e, const std::vector<PreparedTrack>& tracks,
                     const std::vector<GridCell>& cells, const std::atomic<bool>* stop) {
   CellSource remote;
   remote.next = [&]() -> std::optional<std::size_t> {
@@ -292,11 +292,11 @@ MpiSession::MpiSession() {
   if (!launched_by_mpi()) return;
   int provided = 0;
   if (MPI_Init_thread(nullptr, nullptr, MPI_THREAD_SERIALIZED, &provided) != MPI_SUCCESS)
-    throw Failure("MPI could not be started (MPI_Init_thread failed)");
+    throw core::Failure("MPI could not be started (MPI_Init_thread failed)");
   if (provided < MPI_THREAD_SERIALIZED) {
     MPI_Finalize();
-    throw Failure("this MPI library does not allow calls from several threads "
-                  "(MPI_THREAD_SERIALIZED), which the grid needs");
+    throw core::Failure("this MPI library does not allow calls from several threads "
+                        "(MPI_THREAD_SERIALIZED), which the grid needs");
   }
   initialised_ = true;
   MPI_Comm_rank(kComm, &rank_);
@@ -320,7 +320,7 @@ bool MpiSession::agree(const std::function<void()>& step) const {
   std::string line;
   try {
     step();
-  } catch (const Failure& f) {
+  } catch (const core::Failure& f) {
     failed = true;
     code = f.exit_code;
     line = f.what();
@@ -348,12 +348,12 @@ bool MpiSession::agree(const std::function<void()>& step) const {
   int any = failed ? 1 : 0;
   MPI_Bcast(&any, 1, MPI_INT, 0, kComm);
   if (!any) return true;
-  if (rank_ == 0) throw Failure(line, code);
+  if (rank_ == 0) throw core::Failure(line, code);
   return false;
 }
 
-std::optional<GridOutcome> run_grid_mpi(const MpiSession& mpi, const Experiment& e, results::Store* store,
-                                        const std::atomic<bool>* stop,
+std::optional<GridOutcome> run_grid_mpi(const MpiSession& mpi, const formats::Experiment& e,
+                                        results::Store* store, const std::atomic<bool>* stop,
                                         const std::function<void(long, long)>& progress) {
   std::vector<PreparedTrack> tracks;
   std::vector<GridCell> cells;
@@ -369,8 +369,9 @@ std::optional<GridOutcome> run_grid_mpi(const MpiSession& mpi, const Experiment&
   const std::string rank0_fingerprint = broadcast(fingerprint, mpi.rank());
   if (!mpi.agree([&] {
         if (fingerprint != rank0_fingerprint)
-          throw Failure("it reads another experiment than rank 0 (the experiment file, the track files or "
-                        "their contents differ): every rank must see the same files");
+          throw core::Failure(
+              "it reads another experiment than rank 0 (the experiment file, the track files or "
+              "their contents differ): every rank must see the same files");
       }))
     return std::nullopt;
 
@@ -378,7 +379,7 @@ std::optional<GridOutcome> run_grid_mpi(const MpiSession& mpi, const Experiment&
     if (mpi.rank() == 0) return coordinate(mpi, e, tracks, cells, pending, *store, stop, progress);
     work_for_rank0(e, tracks, cells, stop);
     return std::nullopt;
-  } catch (const Failure&) {
+  } catch (const core::Failure&) {
     throw;  // rank 0, after every rank has finished: an orderly failure
   } catch (const std::exception& ex) {
     abort_job(mpi.rank(), ex.what());
