@@ -8,6 +8,7 @@
 #include <cmath>
 #include <memory>
 #include <set>
+#include <span>
 #include <stdexcept>
 
 #include <Eigen/Dense>
@@ -385,10 +386,9 @@ double settled_cost(const CostShared& sh, int active, const Window& w, std::vect
 }
 
 // The solver's options: bounded, and with free anchors over several windows
-// the anchors eliminated first.
+// the anchors eliminated first (`anchors`: 3 values per window).
 ceres::Solver::Options fit_solver_options(const FitOptions& options, bool free_anchor,
-                                          std::vector<std::array<double, 3>>& anchors,
-                                          std::vector<double>& free_values) {
+                                          std::span<double> anchors, std::span<double> free_values) {
   ceres::Solver::Options so = core::deterministic_solver_options(options.max_iterations,
                                                                  core::FitTolerance::diagnosis);
   // The bounds make Ceres run a projected Armijo line search on every trust
@@ -397,13 +397,13 @@ ceres::Solver::Options fit_solver_options(const FitOptions& options, bool free_a
   // interpolation needs the cost only (the step is the same whenever the
   // full step satisfies Armijo, as it mostly does).
   so.line_search_interpolation_type = ceres::QUADRATIC;
-  if (free_anchor && anchors.size() > 1) {
+  if (free_anchor && anchors.size() > 3) {
     // Each window's anchor meets only its own residuals: eliminate them
     // (Schur complement) and solve densely for the effect parameters; a
     // dense QR of the whole Jacobian costs O(rows * (3 windows)^2).
     so.linear_solver_type = ceres::DENSE_SCHUR;
     auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-    for (auto& a : anchors) ordering->AddElementToGroup(a.data(), 0);
+    for (std::size_t i = 0; i < anchors.size(); i += 3) ordering->AddElementToGroup(&anchors[i], 0);
     ordering->AddElementToGroup(free_values.data(), 1);
     so.linear_solver_ordering = ordering;
   }
@@ -413,7 +413,7 @@ ceres::Solver::Options fit_solver_options(const FitOptions& options, bool free_a
 // The free parameters' variances (their covariance's diagonal scaled by
 // `s2`), NaN without standard errors; sets out.rank_deficient when the
 // covariance cannot be computed.
-std::vector<double> free_variances(ceres::Problem& problem, std::vector<double>& free_values, double s2,
+std::vector<double> free_variances(ceres::Problem& problem, std::span<double> free_values, double s2,
                                    const FitOptions& options, FitSummary& out) {
   std::vector<double> var(free_values.size(), std::nan(""));
   if (options.standard_errors) {
@@ -483,19 +483,19 @@ void choose_windows(const CostShared& sh, int active, const std::vector<Window>&
 }
 
 // One residual block per fitted window (its free anchor a parameter block
-// of its own), and the free parameters' bounds.
+// of its own: 3 values of `anchors`), and the free parameters' bounds.
 void add_residual_blocks(ceres::Problem& problem, const CostShared& sh, int active,
-                         const std::vector<Window>& windows, std::vector<double>& free_values,
-                         std::vector<std::array<double, 3>>& anchors, FitSummary& out) {
+                         const std::vector<Window>& windows, std::span<double> free_values,
+                         std::span<double> anchors, FitSummary& out) {
   const DiagInput& in = *sh.in;
   const auto& layout = sh.model->layout();
   for (std::size_t i = 0; i < out.fitted_windows.size(); ++i) {
     const Window& w = windows[static_cast<std::size_t>(out.fitted_windows[i])];
-    const Pose<double> a = sh.free_anchor ? Pose<double>{anchors[i][0], anchors[i][1], anchors[i][2]}
+    const Pose<double> a = sh.free_anchor ? Pose<double>{anchors[3 * i], anchors[3 * i + 1], anchors[3 * i + 2]}
                                           : reference_pose_at(in, w.t_begin_s);
     ceres::CostFunction* cost = make_cost(active, &sh, w, a);
     if (sh.free_anchor)
-      problem.AddResidualBlock(cost, nullptr, free_values.data(), anchors[i].data());
+      problem.AddResidualBlock(cost, nullptr, free_values.data(), &anchors[3 * i]);
     else
       problem.AddResidualBlock(cost, nullptr, free_values.data());
     out.num_residuals += static_cast<std::size_t>(cost->num_residuals());
@@ -582,8 +582,13 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
   choose_windows(sh, active, windows, train, train_before, options, free_values, anchors, out);
   if (out.fitted_windows.empty())
     throw std::invalid_argument("fit: every training window is too short a motion to fit");
-  add_residual_blocks(problem, sh, active, windows, free_values, anchors, out);
-  const ceres::Solver::Options so = fit_solver_options(options, sh.free_anchor, anchors, free_values);
+  // ceres::Covariance orders blocks by address: one buffer, so the same numbers with any thread count.
+  std::vector<double> blocks = free_values;
+  for (const auto& a : anchors) blocks.insert(blocks.end(), a.begin(), a.end());
+  const std::span<double> values = std::span<double>(blocks).first(free_values.size()),
+                          anchor_values = std::span<double>(blocks).subspan(free_values.size());
+  add_residual_blocks(problem, sh, active, windows, values, anchor_values, out);
+  const ceres::Solver::Options so = fit_solver_options(options, sh.free_anchor, anchor_values, values);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
   out.converged = summary.termination_type == ceres::CONVERGENCE;
@@ -597,15 +602,16 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
   out.residual_scale = std::sqrt(s2);
 
   // Standard errors.
-  const std::vector<double> var = free_variances(problem, free_values, s2, options, out);
+  const std::vector<double> var = free_variances(problem, values, s2, options, out);
 
   std::vector<double> fitted = init;
   for (std::size_t j = 0; j < sh.free_pos.size(); ++j)
-    fitted[static_cast<std::size_t>(sh.free_pos[j])] = free_values[j];
+    fitted[static_cast<std::size_t>(sh.free_pos[j])] = values[j];
   out.effects = unpack(which, fitted);
   add_fitted_params(out, layout, which, init, fitted, var, options);
   if (sh.free_anchor)
-    for (const auto& a : anchors) out.anchors.push_back({a[0], a[1], a[2]});
+    for (std::size_t i = 0; i < anchor_values.size(); i += 3)
+      out.anchors.push_back({anchor_values[i], anchor_values[i + 1], anchor_values[i + 2]});
 
   score_fit(model, in, windows, train, held, train_before, init, fitted, mode, options, out);
   out.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
