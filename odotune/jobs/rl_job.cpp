@@ -11,6 +11,7 @@
 #include <odotune/core/atomic_file.h>
 #include <odotune/core/failure.h>
 #include <odotune/core/output_paths.h>
+#include <odotune/rlnode/prepared_recording.h>
 
 namespace odotune::jobs {
 namespace {
@@ -136,44 +137,36 @@ RlSource rl_source_of(const formats::ExperimentRl& x, const std::filesystem::pat
   return src;
 }
 
-RlLoaded load_rl(const RlSource& src) {
-  if (src.bag.empty())
-    throw core::Failure(
-        "--rl-params: expected the robot's recording, --bag BAG, or the project's tracks, --track T");
+namespace {
+
+// The bag's options from the flags (--tf, --gps-topic, --remap); throws
+// Failure naming a flag.
+rlnode::RecordingOptions recording_options(const RlSource& src) {
   rlnode::RecordingOptions options;
   for (const std::string& t : src.tf) options.frames.insert(parse_tf(t));
   options.gps_topic = src.gps_topic;
   options.from_s = src.from_s;
   for (const std::string& r : src.remap) options.remap.insert(parse_remap(r));
-  RlLoaded out;
+  return options;
+}
+
+}  // namespace
+
+RlLoaded load_rl(const RlSource& src) {
+  if (src.bag.empty())
+    throw core::Failure(
+        "--rl-params: expected the robot's recording, --bag BAG, or the project's tracks, --track T");
+  const rlnode::RecordingOptions options = recording_options(src);
   try {
     const rlnode::RlParams params = rlnode::read_rl_params(src.params_file, src.node_name, src.filter,
                                                            src.navsat_params);
-    out.rec = rlnode::load_recording(src.bag, params, options);
-    if (src.gps_heading_fit_s > 0.0) {
-      // With robot_localization's default noise, not the file's: the rotation
-      // must not change with the noise being tuned, so that a tuned file
-      // replays to the figures its tune reported.
-      rlnode::ReplaySettings reference = rlnode::settings_of(params);
-      reference.process_noise = rlnode::default_process_noise();
-      reference.initial_cov = rlnode::default_initial_estimate_covariance();
-      out.alignment = rlnode::fit_gps_alignment(out.rec, reference, src.gps_heading_fit_s);
-      out.rec.gps_transform = out.alignment->transform;
-    }
+    rlnode::PreparedRecording p = rlnode::prepare_recording(src.bag, params, options, src.gps_heading_fit_s);
+    return {std::move(p.rec), std::move(p.alignment)};
   } catch (const core::Failure&) {
     throw;
   } catch (const std::exception& e) {
     throw core::Failure(e.what());
   }
-  const rlnode::Recording& rec = out.rec;
-  if (rec.gps_sensor >= 0 && !rec.gps_transform.fixed && rec.navsat_headings.empty() &&
-      !rec.params.navsat.use_odometry_yaw) {
-    throw core::Failure(
-        fmt::format("{}: navsat_transform_node needs the IMU's heading for its datum, and the bag has "
-                    "no IMU orientation; expected --gps-heading-fit SECONDS",
-                    src.bag.string()));
-  }
-  return out;
 }
 
 rlnode::ReplayOutput outage_run(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
