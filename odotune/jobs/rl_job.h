@@ -21,6 +21,7 @@
 #include <odotune/jobs/report_job.h>
 #include <odotune/jobs/rl_search.h>
 #include <odotune/jobs/tune_job.h>
+#include <odotune/objectives/rl_bag_scores.h>
 #include <odotune/objectives/rl_objective.h>
 #include <odotune/objectives/rl_protocols.h>
 #include <odotune/results/run_record.h>
@@ -80,28 +81,12 @@ std::string rmse_text(int decimals, double v_m);
 // "FROM=TO" (--remap); throws Failure with one line otherwise.
 std::pair<std::string, std::string> parse_remap(const std::string& text);
 
-struct RlProtocolScores {
-  objectives::FixScore outage, every_fifth;
-};
-// A held-out span and its two protocols (odotune/objectives/rl_protocols.h): a GPS
-// outage from `outage_from_ns` to `end_ns` (the GPS fused before), and every
-// 5th fix of [fifth_from_ns, end_ns) held out (the others fused). After a
-// tune's span both start where it ends; before it (tune --from), the outage
-// starts once the heading fit's fixes are fused, and every 5th fix of the
-// span is held out.
-struct RlJudgedSpan {
-  std::int64_t outage_from_ns = 0, fifth_from_ns = 0, end_ns = 0;
-};
-// The outage protocol's run: GPS fused before `from_ns` only, every fix from
-// there to `until_ns` scored (its `scored`: measured and predicted, odom
-// frame); with `trajectory`, the filter's trajectory too.
-rlnode::ReplayOutput outage_run(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
-                                std::int64_t from_ns, std::int64_t until_ns, bool trajectory = false);
-// Both protocols on `span`; with `outage_trajectory`, also the outage run's
-// trajectory.
-RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
-                                 const RlJudgedSpan& span,
-                                 std::vector<rlnode::TrajectoryPoint>* outage_trajectory = nullptr);
+// The protocols' scores and a judged span (odotune/objectives/rl_bag_scores.h):
+// after a tune's span both protocols start where it ends; before it (tune
+// --from), the outage starts once the heading fit's fixes are fused, and every
+// 5th fix of the span is held out.
+using RlProtocolScores = objectives::RlProtocolScores;
+using RlJudgedSpan = objectives::RlJudgedSpan;
 
 struct RlEvalRequest {
   RlSource src;

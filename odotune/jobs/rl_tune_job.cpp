@@ -228,11 +228,12 @@ RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request, cons
                     tuned_on->alignment->rms_m));
   }
   o.baseline = rlnode::settings_of(trec.params);
-  if (o.judged) o.baseline_judged = score_protocols(rec, rlnode::settings_of(rec.params), *o.judged);
+  if (o.judged)
+    o.baseline_judged = objectives::score_protocols(rec, rlnode::settings_of(rec.params), *o.judged);
 
   search_rl(objective, request, o, [&](const rlnode::ReplaySettings& s) -> std::optional<RlProtocolScores> {
     if (!o.judged) return std::nullopt;
-    return score_protocols(rec, s, *o.judged);
+    return objectives::score_protocols(rec, s, *o.judged);
   });
   return o;
 }
