@@ -12,7 +12,6 @@
 #pragma once
 
 #include <filesystem>
-#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -204,11 +203,13 @@ void write_rl_run(const formats::Experiment& e, const results::RunRecord& run, c
 // tuning fitness, replayed from the bag) and convergence curves.
 ReportOutcome write_rl_report(const ReportRequest& req, const results::ExperimentInfo& info,
                               const std::vector<results::RunRecord>& runs);
-// The grid, the starts and the written one on `objective`, into `o` (its
-// parameter names, baseline and tuned scores, starts, summary); `judge`
-// scores a start's settings on a span the tune never saw (nullopt: none).
-void search_rl(const objectives::RlObjective& objective, const RlTuneRequest& request, RlTuneOutcome& o,
-               const std::function<std::optional<RlProtocolScores>(const rlnode::ReplaySettings&)>& judge);
+// The grid, the starts and the written one on `objective`: an outcome with
+// the search's fields (param_names, outage_windows, the baseline's and each
+// start's scores on the tuning span, grid, starts, written, factors, tuned,
+// tuned_fitness, tuned_heldout, tuned_outage, summary, diverged); the others,
+// the judged scores among them, are left for the caller. Throws Failure when
+// stopped before the first start.
+RlTuneOutcome search_rl(const objectives::RlObjective& objective, const RlTuneRequest& request);
 // The search and its scores on an already loaded recording (no file read or
 // written; the request's output paths are not used); with from_s, `tuned_on`
 // is the recording cut there (load_rl with RlSource::from_s), `loaded` the
