@@ -13,16 +13,16 @@
 namespace odotune::filters {
 namespace {
 
-constexpr int kN = 5;
+constexpr int kPvN = 5;
 
-std::string describe(const char* name, double x, const char* expected) {
+std::string describe_pv(const char* name, double x, const char* expected) {
   std::ostringstream os;
   os << name << " = " << x << " must be " << expected;
   return os.str();
 }
 
 template <int N>
-bool is_spd(const Eigen::Matrix<double, N, N>& M) {
+bool is_spd_pv(const Eigen::Matrix<double, N, N>& M) {
   if (!M.allFinite()) return false;
   if (!M.isApprox(M.transpose(), 1e-12)) return false;
   const Eigen::LLT<Eigen::Matrix<double, N, N>> llt(M);
@@ -44,15 +44,17 @@ PoseVelocity motion(const PoseVelocity& s, double dt) {
 bool PoseUkfParams::IsValid(std::string* why) const {
   for (const auto& [name, q] : {std::pair{"q_v_m2_s3", q_v_m2_s3}, std::pair{"q_w_rad2_s3", q_w_rad2_s3},
                                 std::pair{"q_xy_m2_s", q_xy_m2_s}})
-    if (!(std::isfinite(q) && q >= 0.0)) return core::invalid(why, describe(name, q, "a finite number >= 0"));
+    if (!(std::isfinite(q) && q >= 0.0))
+      return core::invalid(why, describe_pv(name, q, "a finite number >= 0"));
   if (!(std::isfinite(alpha) && alpha > 0.0 && alpha <= 1.0))
-    return core::invalid(why, describe("alpha", alpha, "in (0, 1]"));
+    return core::invalid(why, describe_pv("alpha", alpha, "in (0, 1]"));
   if (!(std::isfinite(beta) && beta >= 0.0))
-    return core::invalid(why, describe("beta", beta, "a finite number >= 0"));
-  if (!(std::isfinite(kappa) && static_cast<double>(kN) + kappa > 0.0))
-    return core::invalid(why, describe("kappa", kappa, "finite with n + kappa > 0 (n = 5)"));
+    return core::invalid(why, describe_pv("beta", beta, "a finite number >= 0"));
+  if (!(std::isfinite(kappa) && static_cast<double>(kPvN) + kappa > 0.0))
+    return core::invalid(why, describe_pv("kappa", kappa, "finite with n + kappa > 0 (n = 5)"));
   if (!initial_state.allFinite()) return core::invalid(why, "initial_state must be finite");
-  if (!is_spd<kN>(initial_cov)) return core::invalid(why, "initial_cov must be symmetric positive definite");
+  if (!is_spd_pv<kPvN>(initial_cov))
+    return core::invalid(why, "initial_cov must be symmetric positive definite");
   return true;
 }
 
@@ -69,13 +71,13 @@ void PoseVelocityUkf::predict(double dt_s) {
     healthy_ = false;
     return;
   }
-  const auto w = unscented::sigma_weights<kN>(p_.alpha, p_.beta, p_.kappa);
-  unscented::SigmaPoints<kN> chi;
-  if (!unscented::sigma_points<kN>(x_, P_, w.lambda, &chi)) {
+  const auto w = unscented::sigma_weights<kPvN>(p_.alpha, p_.beta, p_.kappa);
+  unscented::SigmaPoints<kPvN> chi;
+  if (!unscented::sigma_points<kPvN>(x_, P_, w.lambda, &chi)) {
     healthy_ = false;
     return;
   }
-  constexpr int kSigma = unscented::SigmaWeights<kN>::kSigma;
+  constexpr int kSigma = unscented::SigmaWeights<kPvN>::kSigma;
   for (int i = 0; i < kSigma; ++i) chi.col(i) = motion(chi.col(i), dt_s);
   PoseVelocity x = PoseVelocity::Zero();
   for (int i = 0; i < kSigma; ++i) x += w.wm[static_cast<std::size_t>(i)] * chi.col(i);
@@ -90,7 +92,7 @@ void PoseVelocityUkf::predict(double dt_s) {
   P(kPy, kPy) += p_.q_xy_m2_s * dt_s;
   x_ = x;
   P_ = 0.5 * (P + P.transpose());
-  if (!x_.allFinite() || !is_spd<kN>(P_)) healthy_ = false;
+  if (!x_.allFinite() || !is_spd_pv<kPvN>(P_)) healthy_ = false;
 }
 
 namespace {
@@ -99,19 +101,19 @@ namespace {
 template <int M>
 bool linear_update(PoseVelocity* x, PoseVelocityCov* P, const Eigen::Matrix<double, M, 1>& z,
                    const Eigen::Matrix<double, M, M>& R, const std::array<int, M>& rows) {
-  if (!z.allFinite() || !is_spd<M>(R)) return false;
-  Eigen::Matrix<double, M, kN> H = Eigen::Matrix<double, M, kN>::Zero();
+  if (!z.allFinite() || !is_spd_pv<M>(R)) return false;
+  Eigen::Matrix<double, M, kPvN> H = Eigen::Matrix<double, M, kPvN>::Zero();
   for (int r = 0; r < M; ++r) H(r, rows[static_cast<std::size_t>(r)]) = 1.0;
   const Eigen::Matrix<double, M, M> S = H * *P * H.transpose() + R;
   const Eigen::LLT<Eigen::Matrix<double, M, M>> llt(S);
   if (llt.info() != Eigen::Success) return false;
-  const Eigen::Matrix<double, kN, M> K = llt.solve(H * *P).transpose();  // P Hᵀ S⁻¹ (P, S symmetric)
+  const Eigen::Matrix<double, kPvN, M> K = llt.solve(H * *P).transpose();  // P Hᵀ S⁻¹ (P, S symmetric)
   *x += K * (z - H * *x);
   // Joseph form: (I − KH) P (I − KH)ᵀ + K R Kᵀ, symmetric and positive by construction.
   const PoseVelocityCov I_KH = PoseVelocityCov::Identity() - K * H;
   const PoseVelocityCov P_new = I_KH * *P * I_KH.transpose() + K * R * K.transpose();
   *P = 0.5 * (P_new + P_new.transpose());
-  return x->allFinite() && is_spd<kN>(*P);
+  return x->allFinite() && is_spd_pv<kPvN>(*P);
 }
 
 }  // namespace

@@ -13,15 +13,15 @@
 namespace odotune::filters::rl {
 namespace {
 
-constexpr int kN = kStateSize;
+constexpr int kUkfN = kStateSize;
 
 // The measured subset's vectors and matrices: dynamic sizes up to 15, held
 // in place (no allocation per step).
-using SubVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kN, 1>;
-using SubMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kN, kN>;
-using CrossMat = Eigen::Matrix<double, kN, Eigen::Dynamic, 0, kN, kN>;
+using SubVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kUkfN, 1>;
+using SubMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kUkfN, kUkfN>;
+using CrossMat = Eigen::Matrix<double, kUkfN, Eigen::Dynamic, 0, kUkfN, kUkfN>;
 
-bool is_angle(int member) { return member == kRoll || member == kPitch || member == kYaw; }
+bool is_angle_member(int member) { return member == kRoll || member == kPitch || member == kYaw; }
 
 // The weighted mean of an angle over the points: atan2(Σ Wᵢ sin, Σ Wᵢ cos).
 struct AngleMean {
@@ -33,7 +33,7 @@ struct AngleMean {
   double value() const { return std::atan2(sin_sum, cos_sum); }
 };
 
-void wrap_angles(State& x) {
+void wrap_state_angles(State& x) {
   for (int m : {kRoll, kPitch, kYaw}) x[m] = normalize_angle(x[m]);
 }
 
@@ -51,11 +51,11 @@ Cov process_noise(const Cov& Q, bool dynamic, const State& x) {
 
 UkfWeights ukf_weights(double alpha, double kappa, double beta) {
   UkfWeights w;
-  w.lambda = alpha * alpha * (kN + kappa) - kN;
-  w.state[0] = w.lambda / (kN + w.lambda);
+  w.lambda = alpha * alpha * (kUkfN + kappa) - kUkfN;
+  w.state[0] = w.lambda / (kUkfN + w.lambda);
   w.covariance[0] = w.state[0] + (1.0 - alpha * alpha + beta);
   for (int i = 1; i < kSigmaPoints; ++i) {
-    w.state[i] = 1.0 / (2.0 * (kN + w.lambda));
+    w.state[i] = 1.0 / (2.0 * (kUkfN + w.lambda));
     w.covariance[i] = w.state[i];
   }
   return w;
@@ -65,7 +65,7 @@ bool RlUkfParams::IsValid(std::string* why) const {
   if (!filter.IsValid(why)) return false;
   if (!std::isfinite(alpha) || !(alpha > 0.0))
     return core::invalid(why, fmt::format("alpha = {}, expected > 0", alpha));
-  if (!std::isfinite(kappa) || !(kN + kappa > 0.0))
+  if (!std::isfinite(kappa) || !(kUkfN + kappa > 0.0))
     return core::invalid(why, fmt::format("kappa = {}, expected > -15 (n + kappa > 0)", kappa));
   if (!std::isfinite(beta)) return core::invalid(why, fmt::format("beta = {}, expected a finite number", beta));
   return true;
@@ -84,12 +84,12 @@ RlUkf::RlUkf(const RlUkfParams& params)
 
 void RlUkf::draw_sigma_points() {
   // LLᵀ = (n + λ)P; Eigen's LLT, as ukf.cpp takes it (not checked for success).
-  const Cov L = (static_cast<double>(kN) + w_.lambda) * P_;
+  const Cov L = (static_cast<double>(kUkfN) + w_.lambda) * P_;
   const Cov root = L.llt().matrixL();
   sigma_[0] = x_;
-  for (int i = 0; i < kN; ++i) {
+  for (int i = 0; i < kUkfN; ++i) {
     sigma_[1 + i] = x_ + root.col(i);
-    sigma_[1 + kN + i] = x_ - root.col(i);
+    sigma_[1 + kUkfN + i] = x_ - root.col(i);
   }
 }
 
@@ -110,20 +110,20 @@ void RlUkf::predict(double dt_s) {
     P_ += w_.covariance[s] * (d * d.transpose());
   }
   P_ += dt_s * process_noise(Q_, dynamic_q_, x_);
-  wrap_angles(x_);
+  wrap_state_angles(x_);
   uncorrected_ = true;
 }
 
 bool RlUkf::correct(const Measurement& m) {
   if (!uncorrected_) draw_sigma_points();
-  int idx[kN];
+  int idx[kUkfN];
   const int n = detail::fused_members(m, idx);
   if (n == 0) {  // ukf.cpp's update with an empty subset changes nothing but this
-    wrap_angles(x_);
+    wrap_state_angles(x_);
     uncorrected_ = false;
     return true;
   }
-  double zr[kN], Rr[kN * kN];
+  double zr[kUkfN], Rr[kUkfN * kUkfN];
   detail::gather(m, n, idx, zr, Rr);
   const SubVec z = Eigen::Map<const SubVec>(zr, n);
   const SubMat R = Eigen::Map<const SubMat>(Rr, n, n);
@@ -137,20 +137,20 @@ bool RlUkf::correct(const Measurement& m) {
     for (int a = 0; a < n; ++a) Z[s][a] = sigma_[s][idx[a]];
     z_hat += w_.state[s] * Z[s];
     for (int a = 0; a < n; ++a) {
-      if (is_angle(idx[a])) angle[idx[a] - kRoll].add(w_.state[s], Z[s][a]);
+      if (is_angle_member(idx[a])) angle[idx[a] - kRoll].add(w_.state[s], Z[s][a]);
     }
   }
   for (int a = 0; a < n; ++a) {
-    if (is_angle(idx[a])) z_hat[a] = angle[idx[a] - kRoll].value();
+    if (is_angle_member(idx[a])) z_hat[a] = angle[idx[a] - kRoll].value();
   }
   // (2) P_zz and P_xz.
   SubMat Pzz = SubMat::Zero(n, n);
-  CrossMat Pxz = CrossMat::Zero(kN, n);
+  CrossMat Pxz = CrossMat::Zero(kUkfN, n);
   for (int s = 0; s < kSigmaPoints; ++s) {
     SubVec dz = Z[s] - z_hat;
     State dx = sigma_[s] - x_;
     for (int a = 0; a < n; ++a) {
-      if (!is_angle(idx[a])) continue;
+      if (!is_angle_member(idx[a])) continue;
       dz[a] = normalize_angle(dz[a]);
       dx[a] = normalize_angle(dx[a]);  // position a, not idx[a]: as ukf.cpp does
     }
@@ -162,14 +162,14 @@ bool RlUkf::correct(const Measurement& m) {
   const CrossMat K = Pxz * S_inv;
   SubVec nu = z - z_hat;
   for (int a = 0; a < n; ++a) {
-    if (is_angle(idx[a])) nu[a] = normalize_angle(nu[a]);
+    if (is_angle_member(idx[a])) nu[a] = normalize_angle(nu[a]);
   }
   const double thr = m.mahalanobis_threshold;
   if (nu.dot(S_inv * nu) >= thr * thr) return false;
   // (6) The update, P less K·P_zz·Kᵀ.
   x_ += K * nu;
   P_ -= K * Pzz * K.transpose();
-  wrap_angles(x_);
+  wrap_state_angles(x_);
   uncorrected_ = false;
   return true;
 }

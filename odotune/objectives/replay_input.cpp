@@ -22,12 +22,12 @@ std::string_view to_string(OdometrySource s) {
 
 namespace {
 
-[[noreturn]] void fail(const tracks::Track& track, const std::string& what) {
+[[noreturn]] void fail_replay(const tracks::Track& track, const std::string& what) {
   throw std::invalid_argument(fmt::format("track '{}': {}", track.name(), what));
 }
 
 double require(const tracks::Track& track, const std::optional<double>& v, const char* key) {
-  if (!v) fail(track, fmt::format("metadata '{}' is needed for its wheel odometry", key));
+  if (!v) fail_replay(track, fmt::format("metadata '{}' is needed for its wheel odometry", key));
   return *v;
 }
 
@@ -104,14 +104,15 @@ std::size_t start_row(const tracks::Track& track, bool by_fixes, const std::vect
   std::size_t start = 0;
   if (by_fixes) {
     while (start < n && !has_fix(track, start)) ++start;
-    if (start == n) fail(track, "no row with a position fix");
+    if (start == n) fail_replay(track, "no row with a position fix");
     in.initial_pose << track.col(tracks::Col::aps_x)[start], track.col(tracks::Col::aps_y)[start],
         0.0;  // heading: below
   } else {
     while (start < n && (std::isnan(gx[start]) || std::isnan(gy[start]))) ++start;
-    if (start == n) fail(track, "no row with a ground-truth position");
+    if (start == n) fail_replay(track, "no row with a ground-truth position");
     if (has_theta && std::isnan(track.col(tracks::Col::gt_theta)[start]))
-      fail(track, fmt::format("the first ground-truth row (t = {} s) has no gt_theta", track.t()[start]));
+      fail_replay(track,
+                  fmt::format("the first ground-truth row (t = {} s) has no gt_theta", track.t()[start]));
     in.initial_pose << gx[start], gy[start], has_theta ? track.col(tracks::Col::gt_theta)[start] : 0.0;
   }
   return start;
@@ -214,14 +215,15 @@ void read_rows(const tracks::Track& track, const WheelGeometry& geometry, std::s
 ReplayInput build_replay_input(const tracks::Track& track, const ReplayInputOptions& options) {
   ReplayInput in;
   in.track_name = track.name();
-  if (!track.has_odometry()) fail(track, "no odometry columns (ticks_*, omega_* or v_cmd/w_cmd)");
+  if (!track.has_odometry()) fail_replay(track, "no odometry columns (ticks_*, omega_* or v_cmd/w_cmd)");
   const bool by_fixes = options.reference == ReplayReference::fixes;
   in.reference_is_fixes = by_fixes;
   if (!by_fixes && !track.has_gt())
-    fail(track, "no ground truth (gt_x, gt_y): metrics need it (a track whose only reference is its position "
+    fail_replay(track,
+                "no ground truth (gt_x, gt_y): metrics need it (a track whose only reference is its position "
                 "fixes is tuned with the fix cross-validation modes 8 and 9)");
   if (by_fixes && !track.has_aps())
-    fail(track, "no position fixes (aps_x, aps_y) to start from and score against");
+    fail_replay(track, "no position fixes (aps_x, aps_y) to start from and score against");
   const WheelGeometry geometry = odometry_source(track, options, in);
 
   const std::vector<double> none(track.size(), std::nan(""));
@@ -231,9 +233,9 @@ ReplayInput build_replay_input(const tracks::Track& track, const ReplayInputOpti
   in.t0_s = track.t()[start];
   read_rows(track, geometry, start, gx, gy, in);
 
-  if (!by_fixes && in.gt.empty()) fail(track, "only one ground-truth row: nothing to compare with");
+  if (!by_fixes && in.gt.empty()) fail_replay(track, "only one ground-truth row: nothing to compare with");
   if (by_fixes) {
-    if (in.fixes.empty()) fail(track, "only one position fix: nothing to compare with");
+    if (in.fixes.empty()) fail_replay(track, "only one position fix: nothing to compare with");
     // The fixes' variance: the first fix's own, else the noise model's default.
     const double var = std::isnan(in.fix_var_x_m2.front())
                            ? filters::NoiseParams{}.q_x_m2

@@ -34,7 +34,7 @@ namespace {
 
 std::int64_t ns_of(double t_s) { return static_cast<std::int64_t>(std::llround(t_s * 1e9)); }
 
-[[noreturn]] void fail(const std::filesystem::path& file, const std::string& what) {
+[[noreturn]] void fail_rl_track(const std::filesystem::path& file, const std::string& what) {
   throw std::invalid_argument(fmt::format("{}: {}", file.string(), what));
 }
 
@@ -44,8 +44,9 @@ tracks::Track with_fix_variances(const tracks::Track& track, const std::filesyst
   const bool has_var = track.has(tracks::Col::aps_var_x) && track.has(tracks::Col::aps_var_y);
   if (!track.has_aps() || has_var) return track;  // the track's own variances win over --fix-sigma-m
   if (!o.fix_sigma_m) {
-    fail(file, "its fixes have no variances (aps_var_x, aps_var_y); expected them (odotune fixes writes them) "
-               "or --fix-sigma-m");
+    fail_rl_track(
+        file, "its fixes have no variances (aps_var_x, aps_var_y); expected them (odotune fixes writes them) "
+              "or --fix-sigma-m");
   }
   tracks::TrackData d = track.data();
   std::vector<double>& vx = d.ensure(tracks::Col::aps_var_x);
@@ -140,7 +141,7 @@ double truth_heading(const tracks::Track& track, double t_s) {
 RlTrack load_rl_track(const tracks::Track& original, const std::filesystem::path& file,
                       const rlnode::RlParams& params, const RlTrackOptions& options) {
   std::string why;
-  if (!options.IsValid(&why)) fail(file, why);
+  if (!options.IsValid(&why)) fail_rl_track(file, why);
   const rlnode::SampleRoles roles = rlnode::sample_roles(params, file.string());
   const tracks::Track fixed = with_fix_variances(original, file, options);
   const tracks::Track track = options.wheels ? with_geometry(fixed, *options.wheels) : fixed;
@@ -149,16 +150,17 @@ RlTrack load_rl_track(const tracks::Track& original, const std::filesystem::path
   out.odometry = tracks::track_odometry_input(track, options.odometry);
   if ((options.wheels && out.odometry != tracks::OdometryInput::wheels) ||
       (options.twist && out.odometry == tracks::OdometryInput::wheels)) {
-    fail(file, fmt::format("a calibration of the {} for its {} odometry; expected a calibration of its input",
-                           options.wheels ? "wheels" : "body velocity", tracks::to_string(out.odometry)));
+    fail_rl_track(
+        file, fmt::format("a calibration of the {} for its {} odometry; expected a calibration of its input",
+                          options.wheels ? "wheels" : "body velocity", tracks::to_string(out.odometry)));
   }
   ReplayInputOptions ro;
   ro.heading_window_s = options.heading_window_s;
   if (roles.fixes >= 0) {
     if (!track.has_aps())
-      fail(file, fmt::format("{} fuses position fixes, which the track does not have (aps_x, aps_y); "
-                             "expected them (odotune fixes makes them)",
-                             params.sensors[roles.fixes].name));
+      fail_rl_track(file, fmt::format("{} fuses position fixes, which the track does not have (aps_x, aps_y); "
+                                      "expected them (odotune fixes makes them)",
+                                      params.sensors[roles.fixes].name));
     ro.reference = ReplayReference::fixes;
   }
   const ReplayInput in = build_replay_input(track, ro);

@@ -138,7 +138,7 @@ void switch_off(Effects& e, std::size_t index) {
 
 std::size_t index_of(const EffectInfo& info) { return static_cast<std::size_t>(&info - kTable.data()); }
 
-std::string_view trim(std::string_view s) {
+std::string_view trim_blank(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
   while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
   return s;
@@ -233,9 +233,9 @@ bool check_param(const EffectInfo& effect, const EffectParamInfo& param, double 
 }
 
 EffectSpec parse_effect_spec(std::string_view text) {
-  const std::string_view whole = trim(text);
+  const std::string_view whole = trim_blank(text);
   const auto colon = whole.find(':');
-  const std::string_view name = trim(whole.substr(0, colon));
+  const std::string_view name = trim_blank(whole.substr(0, colon));
   auto fail = [&](const std::string& msg) {
     throw std::invalid_argument(fmt::format("effect '{}': {}", whole, msg));
   };
@@ -246,15 +246,15 @@ EffectSpec parse_effect_spec(std::string_view text) {
   EffectSpec spec{std::string(name), {}};
   if (colon == std::string_view::npos) return spec;
   std::string_view rest = whole.substr(colon + 1);
-  while (!trim(rest).empty()) {
+  while (!trim_blank(rest).empty()) {
     const auto comma = rest.find(',');
-    const std::string_view item = trim(rest.substr(0, comma));
+    const std::string_view item = trim_blank(rest.substr(0, comma));
     rest = comma == std::string_view::npos ? std::string_view() : rest.substr(comma + 1);
     const auto eq = item.find('=');
     if (eq == std::string_view::npos)
       fail(fmt::format("'{}' is not PARAM=VALUE; parameters of {}: {}", item, info->name, param_names(*info)));
-    const std::string_view pname = trim(item.substr(0, eq));
-    const std::string_view vtext = trim(item.substr(eq + 1));
+    const std::string_view pname = trim_blank(item.substr(0, eq));
+    const std::string_view vtext = trim_blank(item.substr(eq + 1));
     const EffectParamInfo* p = find_param(*info, pname);
     if (!p) fail(unknown_param_message(*info, pname));
     double value = 0.0;

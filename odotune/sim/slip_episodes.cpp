@@ -25,7 +25,7 @@ bool valid_wheel(SlipEpisode::Wheel w) {
   return w == SlipEpisode::Wheel::left || w == SlipEpisode::Wheel::right;
 }
 
-std::string_view trim(std::string_view s) {
+std::string_view trim_space(std::string_view s) {
   const auto b = s.find_first_not_of(" \t");
   if (b == std::string_view::npos) return {};
   const auto e = s.find_last_not_of(" \t");
@@ -46,7 +46,7 @@ SlipEpisode parse_part(std::string_view part, std::size_t index) {
     throw std::invalid_argument(fmt::format("slip episode {} '{}': {}", index, part, msg));
   };
   const auto colon = part.find(':');
-  const std::string_view kind = trim(part.substr(0, colon));
+  const std::string_view kind = trim_space(part.substr(0, colon));
   SlipEpisode e;
   if (kind == "spin") {
     e.kind = SlipEpisode::Kind::spin;
@@ -61,11 +61,11 @@ SlipEpisode parse_part(std::string_view part, std::size_t index) {
   std::string_view rest = part.substr(colon + 1);
   while (true) {
     const auto comma = rest.find(',');
-    const std::string_view item = trim(rest.substr(0, comma));
+    const std::string_view item = trim_space(rest.substr(0, comma));
     const auto eq = item.find('=');
     if (eq == std::string_view::npos) return fail(fmt::format("'{}' is not KEY=VALUE", item));
-    const std::string key(trim(item.substr(0, eq)));
-    const std::string_view value = trim(item.substr(eq + 1));
+    const std::string key(trim_space(item.substr(0, eq)));
+    const std::string_view value = trim_space(item.substr(eq + 1));
     if (std::find(seen.begin(), seen.end(), key) != seen.end()) return fail(fmt::format("{} given twice", key));
     seen.push_back(key);
     if (key == "wheel") {
@@ -210,13 +210,13 @@ std::string format_slip_episodes(const std::vector<SlipEpisode>& episodes) {
 }
 
 std::vector<SlipEpisode> parse_slip_episodes(std::string_view text) {
-  text = trim(text);
+  text = trim_space(text);
   std::vector<SlipEpisode> out;
   if (text.empty() || text == "none") return out;
   std::size_t index = 1;
   while (true) {
     const auto semi = text.find(';');
-    const std::string_view part = trim(text.substr(0, semi));
+    const std::string_view part = trim_space(text.substr(0, semi));
     if (part.empty())
       throw std::invalid_argument(
           fmt::format("slip episode {}: empty; expected KIND:wheel=..,t0_s=..,t1_s=..,s=.. "

@@ -19,12 +19,12 @@ namespace {
 namespace fs = std::filesystem;
 using namespace import_text;
 
-constexpr const char* kCitation =
+constexpr const char* kLitwCitation =
     "UTIAS \"Lost in the Woods\" dataset (dataset2.mat), course AER1513 State Estimation for "
     "Aerospace Vehicles, Prof. T. D. Barfoot, University of Toronto Institute for Aerospace "
     "Studies; course text: T. D. Barfoot, State Estimation for Robotics, Cambridge University "
     "Press, 2017";
-constexpr const char* kLicence =
+constexpr const char* kLitwLicence =
     "none stated (UTIAS AER1513 course data); check the terms before redistributing";
 
 enum Field { kK, kT, kV, kOm, kX, kY, kTh, kValid, kNumFields };
@@ -123,7 +123,7 @@ std::size_t read_rows(LineReader& r, const std::array<std::size_t, kNumFields>& 
   return invalid;
 }
 
-void add_metadata(const fs::path& series_csv, std::size_t invalid, TrackMeta& m) {
+void add_litw_metadata(const fs::path& series_csv, std::size_t invalid, TrackMeta& m) {
   const fs::path scalars_path = series_csv.parent_path() / "litw_scalars.csv";
   const bool have_scalars = is_file(scalars_path);
   m.name = "utias-lost-in-the-woods";
@@ -135,8 +135,8 @@ void add_metadata(const fs::path& series_csv, std::size_t invalid, TrackMeta& m)
                              "samberg96/2D-ekf-example), CSV export {}{}: odometry v, om (10 Hz) and "
                              "ground-truth pose where true_valid = 1",
                              series_csv.filename().string(), have_scalars ? " and litw_scalars.csv" : ""));
-  e.emplace_back("citation", kCitation);
-  e.emplace_back("licence", kLicence);
+  e.emplace_back("citation", kLitwCitation);
+  e.emplace_back("licence", kLitwLicence);
   e.emplace_back("source.gt_invalid_samples", std::to_string(invalid));
   e.emplace_back("source.note", "v_cmd/w_cmd hold the base's odometry v, om (measured, biased), not commands; "
                                 "gt cells are empty where true_valid = 0");
@@ -154,7 +154,7 @@ Track import_litw(const fs::path& series_csv) {
   TrackData d;
   const std::size_t invalid = read_rows(r, pos, width, expected, d);
   if (d.t.empty()) throw TrackError(r.file(), r.line_no(), "no data rows after the header");
-  add_metadata(series_csv, invalid, d.meta);
+  add_litw_metadata(series_csv, invalid, d.meta);
   return Track(std::move(d));
 }
 

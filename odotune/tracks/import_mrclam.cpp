@@ -22,24 +22,24 @@ using namespace import_text;
 
 constexpr int kMaxRobot = 5;  // MRCLAM: five robots per dataset (subjects 1-5)
 
-constexpr const char* kCitation =
+constexpr const char* kMrclamCitation =
     "K. Y. K. Leung, Y. Halpern, T. D. Barfoot, H. H. T. Liu, \"The UTIAS Multi-Robot "
     "Cooperative Localization and Mapping Dataset\", International Journal of Robotics "
     "Research, 30(8):969-974, 2011";
-constexpr const char* kLicence = "none stated; research data whose authors ask to be cited "
-                                 "(http://asrl.utias.utoronto.ca/datasets/mrclam/)";
+constexpr const char* kMrclamLicence = "none stated; research data whose authors ask to be cited "
+                                       "(http://asrl.utias.utoronto.ca/datasets/mrclam/)";
 
 // One time-stamped line of a .dat file: time [ns since the epoch], values.
-struct Sample {
+struct MrclamSample {
   std::int64_t ns;
   std::array<double, 3> v;
 };
 
 struct Series {
-  std::vector<Sample> samples;   // sorted by time, one per stamp (last one kept)
-  std::size_t lines = 0;         // data lines read
-  std::size_t duplicates = 0;    // samples dropped because their stamp repeated
-  std::size_t out_of_order = 0;  // lines whose stamp was earlier than the line before
+  std::vector<MrclamSample> samples;  // sorted by time, one per stamp (last one kept)
+  std::size_t lines = 0;              // data lines read
+  std::size_t duplicates = 0;         // samples dropped because their stamp repeated
+  std::size_t out_of_order = 0;       // lines whose stamp was earlier than the line before
 };
 
 // Reads a whitespace-separated MRCLAM file: '#' comment lines, then lines of
@@ -60,7 +60,7 @@ Series read_series(const fs::path& path, const std::vector<const char*>& names, 
       r.fail(fmt::format("time {} is not a plain decimal number of Unix seconds "
                          "(expected e.g. 1248446188.323)",
                          quote(f[0])));
-    Sample s{*ns, {}};
+    MrclamSample s{*ns, {}};
     for (std::size_t i = 0; i < names.size(); ++i) {
       const auto v = to_double(f[i + 1]);
       if (!v) r.fail(fmt::format("{} {} is not a finite number", names[i], quote(f[i + 1])));
@@ -74,7 +74,7 @@ Series read_series(const fs::path& path, const std::vector<const char*>& names, 
     throw TrackError(r.file(), r.line_no(), fmt::format("no data lines, expected lines of: {}", expected));
   // Time order; a repeated stamp keeps the sample that came last in the file.
   std::stable_sort(out.samples.begin(), out.samples.end(),
-                   [](const Sample& a, const Sample& b) { return a.ns < b.ns; });
+                   [](const MrclamSample& a, const MrclamSample& b) { return a.ns < b.ns; });
   std::size_t k = 0;
   for (std::size_t i = 1; i < out.samples.size(); ++i) {
     if (out.samples[i].ns == out.samples[k].ns) {
@@ -147,8 +147,9 @@ std::int64_t merge_streams(const Series& odo, const Series& gt, const fs::path& 
   return t0;
 }
 
-void add_metadata(const fs::path& dir, int robot, const std::string& odo_name, const std::string& gt_name,
-                  const Series& odo, const Series& gt, std::int64_t t0, TrackMeta& m) {
+void add_mrclam_metadata(const fs::path& dir, int robot, const std::string& odo_name,
+                         const std::string& gt_name, const Series& odo, const Series& gt, std::int64_t t0,
+                         TrackMeta& m) {
   const std::string folder = folder_name(dir);
   m.name = folder.rfind("mrclam", 0) == 0 || folder.rfind("MRCLAM", 0) == 0
                ? fmt::format("{}-robot{}", folder, robot)
@@ -160,8 +161,8 @@ void add_metadata(const fs::path& dir, int robot, const std::string& odo_name, c
                                        "(MRCLAM), folder {}, robot {} (iRobot Create): {} (commanded v, w), "
                                        "{} (Vicon pose)",
                                        folder, robot, odo_name, gt_name));
-  e.emplace_back("citation", kCitation);
-  e.emplace_back("licence", kLicence);
+  e.emplace_back("citation", kMrclamCitation);
+  e.emplace_back("licence", kMrclamLicence);
   e.emplace_back("source.t0_unix", ns_to_decimal(t0));
   e.emplace_back("source.odometry_samples", std::to_string(odo.samples.size()));
   e.emplace_back("source.groundtruth_samples", std::to_string(gt.samples.size()));
@@ -196,7 +197,7 @@ Track import_mrclam(const fs::path& dir, int robot) {
 
   TrackData d;
   const std::int64_t t0 = merge_streams(odo, gt, dir / odo_name, d);
-  add_metadata(dir, robot, odo_name, gt_name, odo, gt, t0, d.meta);
+  add_mrclam_metadata(dir, robot, odo_name, gt_name, odo, gt, t0, d.meta);
   return Track(std::move(d));
 }
 

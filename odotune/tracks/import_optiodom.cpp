@@ -23,11 +23,11 @@ using namespace import_text;
 
 constexpr double kCycle_s = 0.05;  // robot control cycle (SOURCE.md: 20 Hz)
 
-constexpr const char* kCitation =
+constexpr const char* kOptiodomCitation =
     "R. B. Sousa, M. R. Petry, P. G. Costa, A. P. Moreira, \"OptiOdom: a Generic Approach for "
     "Odometry Calibration of Wheeled Mobile Robots\", Journal of Intelligent & Robotic Systems "
     "105, 39 (2022), https://doi.org/10.1007/s10846-022-01630-3";
-constexpr const char* kLicence =
+constexpr const char* kOptiodomLicence =
     "MIT, Copyright (c) 2021 Ricardo Sousa, Marcelo Petry, António Moreira, Paulo Costa "
     "(the LICENSE file must stay with the data)";
 
@@ -343,8 +343,8 @@ CommandsOutcome add_commands(const fs::path& log_path, const RunRows& run, const
   return out;
 }
 
-void add_metadata(const fs::path& run_csv, const std::string& id, int k, const Robot& rb,
-                  const CommandsOutcome& cmd, TrackMeta& m) {
+void add_optiodom_metadata(const fs::path& run_csv, const std::string& id, int k, const Robot& rb,
+                           const CommandsOutcome& cmd, TrackMeta& m) {
   const fs::path dir = run_csv.parent_path();
   const fs::path meta_path = dir / (id + "_metadata.csv");
   const fs::path log_path = dir / (id + ".csv");
@@ -365,8 +365,8 @@ void add_metadata(const fs::path& run_csv, const std::string& id, int k, const R
                              kind.empty() ? "" : kind + "/", experiment, k, run_csv.filename().string(),
                              meta_path.filename().string(),
                              cmd.have_cmd ? ", " + log_path.filename().string() + " (velocity commands)" : ""));
-  e.emplace_back("citation", kCitation);
-  e.emplace_back("licence", kLicence);
+  e.emplace_back("citation", kOptiodomCitation);
+  e.emplace_back("licence", kOptiodomLicence);
   e.emplace_back("source.run", std::to_string(k));
   if (!cmd.method.empty()) e.emplace_back("source.method", cmd.method);
   e.emplace_back("source.ngear", fmt_double(rb.ngear));
@@ -402,7 +402,7 @@ Track import_optiodom(const fs::path& run_csv) {
   d.col(Col::gt_y) = run.y;
   d.col(Col::gt_theta) = run.th;
   const CommandsOutcome cmd = add_commands(log_path, run, meta, k, rb, d);
-  add_metadata(run_csv, id, k, rb, cmd, d.meta);
+  add_optiodom_metadata(run_csv, id, k, rb, cmd, d.meta);
   return Track(std::move(d));
 }
 

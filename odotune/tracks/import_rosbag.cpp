@@ -32,7 +32,7 @@ constexpr const char* kPose = "geometry_msgs/PoseStamped";
 constexpr const char* kPoseCov = "geometry_msgs/PoseWithCovarianceStamped";
 constexpr const char* kTf = "tf2_msgs/TFMessage";
 
-[[noreturn]] void fail(const fs::path& bag, const std::string& reason) {
+[[noreturn]] void fail_import(const fs::path& bag, const std::string& reason) {
   throw TrackError(bag.string(), 0, reason);
 }
 
@@ -60,15 +60,16 @@ std::string choose(const fs::path& bag, const bags::BagInfo& info, const std::st
   };
   const std::string wanted = fmt::format("{}", fmt::join(types, " or "));
   if (given == "none") {
-    if (required) fail(bag, fmt::format("{} cannot be none", flag));
+    if (required) fail_import(bag, fmt::format("{} cannot be none", flag));
     return "";
   }
   if (!given.empty()) {
     const bags::BagTopic* t = find_topic(info, given);
     if (!t)
-      fail(bag, fmt::format("{} {}: no such topic in the bag (its topics: {})", flag, given,
-                            topic_list(info.topics)));
-    if (!typed(*t)) fail(bag, fmt::format("{} {} is a {} topic (expected {})", flag, given, t->type, wanted));
+      fail_import(bag, fmt::format("{} {}: no such topic in the bag (its topics: {})", flag, given,
+                                   topic_list(info.topics)));
+    if (!typed(*t))
+      fail_import(bag, fmt::format("{} {} is a {} topic (expected {})", flag, given, t->type, wanted));
     return given;
   }
   std::vector<bags::BagTopic> candidates;
@@ -77,11 +78,12 @@ std::string choose(const fs::path& bag, const bags::BagInfo& info, const std::st
   if (candidates.size() == 1) return candidates.front().name;
   if (candidates.empty()) {
     if (required)
-      fail(bag,
-           fmt::format("no {} topic ({}) in the bag; its topics: {}", role, wanted, topic_list(info.topics)));
+      fail_import(bag, fmt::format("no {} topic ({}) in the bag; its topics: {}", role, wanted,
+                                   topic_list(info.topics)));
     return "";
   }
-  fail(bag, fmt::format("several {} topics: {}; choose one with {} TOPIC", role, topic_list(candidates), flag));
+  fail_import(bag, fmt::format("several {} topics: {}; choose one with {} TOPIC", role, topic_list(candidates),
+                               flag));
 }
 
 // One decoded sample on the track's clock.
@@ -173,20 +175,22 @@ Topics choose_topics(const fs::path& bag, const bags::BagInfo& info, const Rosba
               ? std::string()
               : choose(bag, info, o.gt_topic, "ground truth", "--gt-topic", {kOdometry, kPoseCov, kPose}, true);
   if (!tp.gt.empty() && tp.gt == tp.odom)
-    fail(bag, "--gt-topic is the odometry topic: a robot's own odometry is not ground truth");
+    fail_import(bag, "--gt-topic is the odometry topic: a robot's own odometry is not ground truth");
   tp.joints = tp.odom_type == kJointState;
   if (tp.joints) {
     if (o.left_joint.empty() || o.right_joint.empty())
-      fail(bag, fmt::format("odometry from {} (sensor_msgs/JointState) needs --left-joint and --right-joint",
-                            tp.odom));
+      fail_import(bag,
+                  fmt::format("odometry from {} (sensor_msgs/JointState) needs --left-joint and --right-joint",
+                              tp.odom));
     if (!o.wheel_radius_m || !o.wheel_base_m || !(*o.wheel_radius_m > 0) || !(*o.wheel_base_m > 0))
-      fail(bag, fmt::format("odometry from {} (sensor_msgs/JointState) needs --wheel-radius and --wheel-base "
-                            "(> 0, in m)",
-                            tp.odom));
+      fail_import(bag,
+                  fmt::format("odometry from {} (sensor_msgs/JointState) needs --wheel-radius and --wheel-base "
+                              "(> 0, in m)",
+                              tp.odom));
   }
   if (o.imu_rpy_rad)
     for (double a : *o.imu_rpy_rad)
-      if (!std::isfinite(a)) fail(bag, "--imu-rpy must be three finite angles in rad");
+      if (!std::isfinite(a)) fail_import(bag, "--imu-rpy must be three finite angles in rad");
   tp.tf_topic = find_topic(info, "/tf_static") ? "/tf_static" : "";
   return tp;
 }
@@ -352,16 +356,18 @@ BagRead read_streams(const fs::path& bag, const bags::BagInfo& info, const Topic
 
   for (auto& [topic, s] : rd.streams) {
     if (!s.samples.empty() && s.zero_stamps == s.samples.size())
-      fail(bag,
-           fmt::format("{}: every header stamp is zero (the driver does not stamp its messages); import with "
-                       "--stamps receive",
-                       topic));
+      fail_import(
+          bag,
+          fmt::format("{}: every header stamp is zero (the driver does not stamp its messages); import with "
+                      "--stamps receive",
+                      topic));
     order(s);
   }
   if (rd.streams.at(tp.odom).samples.empty())
-    fail(bag, fmt::format("{}: no usable odometry message{}", tp.odom,
-                          tp.joints ? fmt::format(" (none names both {} and {})", o.left_joint, o.right_joint)
-                                    : ""));
+    fail_import(bag,
+                fmt::format("{}: no usable odometry message{}", tp.odom,
+                            tp.joints ? fmt::format(" (none names both {} and {})", o.left_joint, o.right_joint)
+                                      : ""));
   return rd;
 }
 
@@ -439,9 +445,9 @@ TrackData fill_rows(const Topics& tp, const BagRead& rd, const Rotation& imu_rot
 }
 
 // The track's metadata: name, geometry, and where each column came from.
-void add_metadata(const fs::path& bag, const bags::BagInfo& info, const RosbagImportOptions& o,
-                  const Topics& tp, const BagRead& rd, const std::string& imu_rot_note, std::int64_t t0,
-                  TrackMeta& meta) {
+void add_rosbag_metadata(const fs::path& bag, const bags::BagInfo& info, const RosbagImportOptions& o,
+                         const Topics& tp, const BagRead& rd, const std::string& imu_rot_note, std::int64_t t0,
+                         TrackMeta& meta) {
   meta.name = bag.filename().string();
   meta.origin = "recorded";
   if (tp.joints) {
@@ -518,7 +524,7 @@ std::vector<std::string> describe_bag_topics(const fs::path& bag) {
 
 Track import_rosbag(const fs::path& bag, const RosbagImportOptions& o) {
   const bags::BagInfo info = bags::inspect_bag(bag);
-  if (info.messages == 0) fail(bag, "the bag holds no messages");
+  if (info.messages == 0) fail_import(bag, "the bag holds no messages");
   const Topics tp = choose_topics(bag, info, o);
   const BagRead rd = read_streams(bag, info, tp, o);
   Rotation imu_rot = Rotation::Identity();
@@ -526,11 +532,11 @@ Track import_rosbag(const fs::path& bag, const RosbagImportOptions& o) {
   if (!tp.imu.empty()) std::tie(imu_rot, imu_rot_note) = imu_mounting(o, rd);
   std::int64_t t0 = 0;
   TrackData d = fill_rows(tp, rd, imu_rot, &t0);
-  add_metadata(bag, info, o, tp, rd, imu_rot_note, t0, d.meta);
+  add_rosbag_metadata(bag, info, o, tp, rd, imu_rot_note, t0, d.meta);
   try {
     return Track(std::move(d));
   } catch (const std::invalid_argument& e) {
-    fail(bag, std::string("the imported track is invalid: ") + e.what());
+    fail_import(bag, std::string("the imported track is invalid: ") + e.what());
   }
 }
 

@@ -23,7 +23,7 @@ bool parse_odometry_input(std::string_view text, OdometryInput* out) {
 
 namespace {
 
-[[noreturn]] void fail(const Track& track, const std::string& what) {
+[[noreturn]] void fail_odometry(const Track& track, const std::string& what) {
   throw std::invalid_argument(fmt::format("track '{}': {}", track.name(), what));
 }
 
@@ -38,23 +38,26 @@ OdometryInput track_odometry_input(const Track& track, std::optional<OdometryInp
   const auto& said = track.meta().body_velocity;
   if (!requested) {
     if (wheels) return OdometryInput::wheels;
-    if (!track.has_cmd()) fail(track, "no odometry (ticks, wheel rates or v_cmd/w_cmd)");
+    if (!track.has_cmd()) fail_odometry(track, "no odometry (ticks, wheel rates or v_cmd/w_cmd)");
     if (!said)
-      fail(track,
-           "v_cmd/w_cmd are its only odometry, and the track does not say whether they are commanded or "
-           "measured: expected metadata '# source.body_velocity: commanded|measured' (docs/track-format.md) "
-           "or --input commands|twist");
+      fail_odometry(
+          track,
+          "v_cmd/w_cmd are its only odometry, and the track does not say whether they are commanded or "
+          "measured: expected metadata '# source.body_velocity: commanded|measured' (docs/track-format.md) "
+          "or --input commands|twist");
     return body_source(*said);
   }
   if (*requested == OdometryInput::wheels) {
-    if (!wheels) fail(track, "--input wheels: expected ticks_l/ticks_r or omega_l/omega_r, the track has none");
+    if (!wheels)
+      fail_odometry(track, "--input wheels: expected ticks_l/ticks_r or omega_l/omega_r, the track has none");
     return *requested;
   }
   if (!track.has_cmd())
-    fail(track, fmt::format("--input {}: expected v_cmd/w_cmd, the track has none", to_string(*requested)));
+    fail_odometry(track,
+                  fmt::format("--input {}: expected v_cmd/w_cmd, the track has none", to_string(*requested)));
   if (said && body_source(*said) != *requested)
-    fail(track, fmt::format("--input {} contradicts the track's source.body_velocity: {}",
-                            to_string(*requested), to_string(*said)));
+    fail_odometry(track, fmt::format("--input {} contradicts the track's source.body_velocity: {}",
+                                     to_string(*requested), to_string(*said)));
   return *requested;
 }
 
