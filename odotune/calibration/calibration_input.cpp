@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include <odotune/calibration/reference_jitter.h>
+#include <odotune/core/why.h>
 #include <odotune/objectives/pose_series.h>
 #include <odotune/objectives/track_samples.h>
 #include <odotune/sim/effects.h>
@@ -278,19 +279,18 @@ std::vector<double> TruthSchedule::change_times() const {
 }
 
 bool CalibrationInputOptions::IsValid(std::string* why) const {
-  auto bad = [why](const std::string& msg) {
-    if (why) *why = msg;
-    return false;
-  };
   if (!(wheel_rate_window_s >= 0.0 && wheel_rate_window_s <= 10.0))
-    return bad(fmt::format("wheel_rate_window_s = {} must be in [0, 10] s", wheel_rate_window_s));
+    return core::invalid(why,
+                         fmt::format("wheel_rate_window_s = {} must be in [0, 10] s", wheel_rate_window_s));
   if (!(ext_from_gt_rate_hz >= 0.0 && ext_from_gt_rate_hz <= kMaxExtFromGtRateHz))
-    return bad(fmt::format("ext_from_gt_rate_hz = {} must be in [0, {}] Hz (0: use v_ext/w_ext)",
-                           ext_from_gt_rate_hz, kMaxExtFromGtRateHz));
+    return core::invalid(why, fmt::format("ext_from_gt_rate_hz = {} must be in [0, {}] Hz (0: use v_ext/w_ext)",
+                                          ext_from_gt_rate_hz, kMaxExtFromGtRateHz));
   if (!std::isfinite(default_v_var) || default_v_var <= 0.0)
-    return bad(fmt::format("default_v_var = {} must be a finite number > 0 [(m/s)^2]", default_v_var));
+    return core::invalid(why, fmt::format("default_v_var = {} must be a finite number > 0 [(m/s)^2]",
+                                          default_v_var));
   if (!std::isfinite(default_w_var) || default_w_var <= 0.0)
-    return bad(fmt::format("default_w_var = {} must be a finite number > 0 [(rad/s)^2]", default_w_var));
+    return core::invalid(why, fmt::format("default_w_var = {} must be a finite number > 0 [(rad/s)^2]",
+                                          default_w_var));
   return true;
 }
 

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <odotune/core/why.h>
+
 namespace odotune::calibration {
 
 namespace {
@@ -78,9 +80,8 @@ bool CalibrationScoreWeights::IsValid(std::string* why) const {
       {"radius", radius}, {"convergence", convergence}, {"pose", pose}, {"cost", cost}};
   for (const auto& [name, w] : all)
     if (!std::isfinite(w) || w < 0.0) {
-      if (why)
-        *why = std::string("score weight ") + name + " = " + std::to_string(w) + " must be a finite number ≥ 0";
-      return false;
+      return core::invalid(why, std::string("score weight ") + name + " = " + std::to_string(w) +
+                                    " must be a finite number ≥ 0");
     }
   return true;
 }

@@ -14,6 +14,7 @@
 #include <odotune/calibration/fix_groups.h>
 #include <odotune/core/ceres_options.h>
 #include <odotune/core/planar_motion.h>
+#include <odotune/core/why.h>
 
 namespace odotune::calibration {
 
@@ -158,18 +159,17 @@ double rmse(const std::vector<Segment>& segs, const double* theta, long points) 
 }  // namespace
 
 bool PoseCalibrationOptions::IsValid(std::string* why) const {
-  auto bad = [why](const std::string& msg) {
-    if (why) *why = msg;
-    return false;
-  };
   if (!(std::isfinite(segment_s) && segment_s >= 0.0))
-    return bad(fmt::format("segment_s = {} must be a finite number ≥ 0 [s] (0: whole runs)", segment_s));
+    return core::invalid(why, fmt::format("segment_s = {} must be a finite number ≥ 0 [s] (0: whole runs)",
+                                          segment_s));
   if (!(std::isfinite(loss_scale_m) && loss_scale_m > 0.0))
-    return bad(fmt::format("loss_scale_m = {} must be a finite number > 0 [m]", loss_scale_m));
+    return core::invalid(why, fmt::format("loss_scale_m = {} must be a finite number > 0 [m]", loss_scale_m));
   if (!(std::isfinite(warm_start_segment_s) && warm_start_segment_s >= 0.0))
-    return bad(fmt::format("warm_start_segment_s = {} must be a finite number ≥ 0 [s] (0: no warm start)",
-                           warm_start_segment_s));
-  if (max_iterations < 1) return bad(fmt::format("max_iterations = {} must be ≥ 1", max_iterations));
+    return core::invalid(
+        why, fmt::format("warm_start_segment_s = {} must be a finite number ≥ 0 [s] (0: no warm start)",
+                         warm_start_segment_s));
+  if (max_iterations < 1)
+    return core::invalid(why, fmt::format("max_iterations = {} must be ≥ 1", max_iterations));
   return true;
 }
 

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include <odotune/core/robust_stats.h>
+
 namespace odotune::calibration {
 
 namespace {
@@ -13,17 +15,11 @@ constexpr double kMaxUnevenness = 0.1;
 // The MAD of a normal sample over its σ.
 constexpr double kMadPerSigma = 0.6745;
 
-// Median absolute deviation from the median, as a normal σ (0 for no data).
-// The upper middle element and /0.6745, not odotune/core/robust_stats.h (mean of the
-// two middle elements, ×1.4826): the calibration tables were made with this one.
-double upper_mad_sigma(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  const double median = *mid;
-  for (double& x : v) x = std::abs(x - median);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid / kMadPerSigma;
+// Median absolute deviation from the median, as a normal σ (0 for no data):
+// upper medians and /0.6745, not core::robust_sigma (mean of the two middle
+// values, ×1.4826): the calibration tables were made with this one.
+double mad_sigma(std::vector<double> v) {
+  return v.empty() ? 0.0 : core::mad(std::move(v), core::MedianRule::upper_middle) / kMadPerSigma;
 }
 
 }  // namespace
@@ -45,11 +41,9 @@ ReferenceJitter estimate_reference_jitter(const objectives::PoseSeries& ref) {
   out.triples = d_theta.size();
   // Var(x_{i+1} − 2x_i + x_{i−1}) = (1 + 4 + 1)σ² under white noise.
   const double per_sigma = std::sqrt(6.0);
-  out.sigma_xy_m = upper_mad_sigma(std::move(d_xy)) / per_sigma;
-  out.sigma_theta_rad = upper_mad_sigma(std::move(d_theta)) / per_sigma;
-  const auto mid = spacing.begin() + static_cast<std::ptrdiff_t>(spacing.size() / 2);
-  std::nth_element(spacing.begin(), mid, spacing.end());
-  out.median_dt_s = *mid;
+  out.sigma_xy_m = mad_sigma(std::move(d_xy)) / per_sigma;
+  out.sigma_theta_rad = mad_sigma(std::move(d_theta)) / per_sigma;
+  out.median_dt_s = core::median_period_s(ref.t, core::MedianRule::upper_middle);
   return out;
 }
 

@@ -10,6 +10,7 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
+#include <odotune/core/robust_stats.h>
 #include <odotune/diagnose/paired_test.h>
 
 namespace odotune::diagnose {
@@ -47,10 +48,7 @@ int denoised_reference(const DiagInput& in, double rate_hz, double half_s, doubl
   // are sparse (a known start plus fixes, fixes filling ground-truth gaps).
   if (!(rate_hz > 0.0) || in.ref_t_s.size() < 3 || !in.ref_w.empty()) return 1;
   const auto& t = in.ref_t_s;
-  std::vector<double> dt;
-  for (std::size_t i = 1; i < t.size(); ++i) dt.push_back(t[i] - t[i - 1]);
-  std::nth_element(dt.begin(), dt.begin() + static_cast<long>(dt.size() / 2), dt.end());
-  const double period = dt[dt.size() / 2];
+  const double period = core::median_period_s(t, core::MedianRule::upper_middle);
   const int stride = static_cast<int>(std::floor(1.0 / period / rate_hz + 1e-9));
   if (stride <= 1) return 1;
   const bool heading = in.has_ref_heading();
@@ -98,12 +96,11 @@ int denoised_reference(const DiagInput& in, double rate_hz, double half_s, doubl
     out.ref_theta_rad.push_back(in.ref_theta_rad[k] - dth[k] + h.first);
     fh.push_back(h.second);
   }
-  auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
-    return v[v.size() / 2];
-  };
-  out.ref_sigma_m = std::max(in.ref_sigma_m * median(fp), 1e-3);
-  if (heading) out.ref_sigma_rad = std::max(in.ref_sigma_rad * median(fh), 1e-3);
+  out.ref_sigma_m = std::max(in.ref_sigma_m * core::median(std::move(fp), core::MedianRule::upper_middle),
+                             1e-3);
+  if (heading)
+    out.ref_sigma_rad = std::max(in.ref_sigma_rad * core::median(std::move(fh), core::MedianRule::upper_middle),
+                                 1e-3);
   return stride;
 }
 

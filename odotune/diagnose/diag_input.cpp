@@ -172,10 +172,7 @@ RefSource read_source(const tracks::Track& track, tracks::Col cx, tracks::Col cy
 
 // Median interval between consecutive samples [s]; +inf with fewer than 2.
 double median_interval(const std::vector<double>& t) {
-  if (t.size() < 2) return std::numeric_limits<double>::infinity();
-  std::vector<double> d(t.size() - 1);
-  for (std::size_t i = 0; i + 1 < t.size(); ++i) d[i] = t[i + 1] - t[i];
-  return core::median(std::move(d));
+  return t.size() < 2 ? std::numeric_limits<double>::infinity() : core::median_period_s(t);
 }
 
 // Fixes that ground truth does not already cover: those with no ground-truth

@@ -358,10 +358,7 @@ std::optional<Finding> located_unexplained(const Diagnosis& d, const DiagInput& 
 
 bool DiagnoseOptions::IsValid(std::string* why) const {
   std::string w;
-  auto part = [&](bool ok, const char* name) {
-    if (!ok && why) *why = std::string(name) + ": " + w;
-    return ok;
-  };
+  auto part = [&](bool ok, const char* name) { return ok || core::invalid(why, std::string(name) + ": " + w); };
   if (!part(select.IsValid(&w), "select") || !part(sensors.IsValid(&w), "sensors") ||
       !part(gyro_fixes.IsValid(&w), "gyro_fixes") || !part(locate.IsValid(&w), "locate") ||
       !part(terms.IsValid(&w), "terms"))

@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
+#include <odotune/core/why.h>
 #include <odotune/sim/effects.h>
 
 namespace odotune::diagnose {
@@ -217,14 +218,12 @@ double corrected_gyro_rate(const EffectSet& set, double gyro_radps) {
 }
 
 bool ModelOptions::IsValid(std::string* why) const {
-  auto fail = [why](std::string msg) {
-    if (why) *why = std::move(msg);
-    return false;
-  };
   if (!(std::isfinite(accel_half_window_s) && accel_half_window_s > 0.0 && accel_half_window_s <= 10.0))
-    return fail(fmt::format("accel_half_window_s = {}; expected a number in (0, 10] s", accel_half_window_s));
+    return core::invalid(why, fmt::format("accel_half_window_s = {}; expected a number in (0, 10] s",
+                                          accel_half_window_s));
   if (!(std::isfinite(lag_lead_in_s) && lag_lead_in_s >= 0.0 && lag_lead_in_s <= 600.0))
-    return fail(fmt::format("lag_lead_in_s = {}; expected a number in [0, 600] s", lag_lead_in_s));
+    return core::invalid(why,
+                         fmt::format("lag_lead_in_s = {}; expected a number in [0, 600] s", lag_lead_in_s));
   return true;
 }
 

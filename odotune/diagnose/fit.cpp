@@ -1,6 +1,7 @@
 #include <odotune/diagnose/fit.h>
 
 #include <odotune/core/ceres_options.h>
+#include <odotune/core/why.h>
 
 #include <algorithm>
 #include <array>
@@ -528,20 +529,18 @@ void score_fit(const EffectModel& model, const DiagInput& in, const std::vector<
 }  // namespace
 
 bool FitOptions::IsValid(std::string* why) const {
-  auto fail = [why](std::string msg) {
-    if (why) *why = std::move(msg);
-    return false;
-  };
   if (!(std::isfinite(window_s) && window_s >= 0.0))
-    return fail(fmt::format("window_s = {}; expected a number >= 0 s (0 = one window)", window_s));
+    return core::invalid(why,
+                         fmt::format("window_s = {}; expected a number >= 0 s (0 = one window)", window_s));
   if (!(std::isfinite(loss_scale) && loss_scale > 0.0))
-    return fail(fmt::format("loss_scale = {}; expected a number > 0 (reference sigmas)", loss_scale));
+    return core::invalid(why,
+                         fmt::format("loss_scale = {}; expected a number > 0 (reference sigmas)", loss_scale));
   if (max_iterations < 1 || max_iterations > 100000)
-    return fail(fmt::format("max_iterations = {}; expected 1 to 100000", max_iterations));
+    return core::invalid(why, fmt::format("max_iterations = {}; expected 1 to 100000", max_iterations));
   if (!(std::isfinite(min_spread_sigmas) && min_spread_sigmas >= 0.0))
-    return fail(fmt::format("min_spread_sigmas = {}; expected a number >= 0", min_spread_sigmas));
+    return core::invalid(why, fmt::format("min_spread_sigmas = {}; expected a number >= 0", min_spread_sigmas));
   std::string w;
-  if (!model.IsValid(&w)) return fail("model: " + w);
+  if (!model.IsValid(&w)) return core::invalid(why, "model: " + w);
   return true;
 }
 

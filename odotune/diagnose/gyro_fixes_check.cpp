@@ -18,6 +18,7 @@
 
 #include <odotune/core/ceres_options.h>
 #include <odotune/core/robust_stats.h>
+#include <odotune/core/why.h>
 #include <odotune/diagnose/gyro_dead_reckoning.h>
 #include <odotune/diagnose/option_rules.h>
 #include <odotune/diagnose/paired_test.h>
@@ -476,9 +477,7 @@ double gyro_noise_and_standstill(const DiagInput& in, const GyroFixesOptions& o,
                                  GyroFixesCheck& out) {
   GyroCheck& g = out.gyro;
   g.noise_sigma_radps = second_difference_sigma(in.gyro_z_radps);
-  std::vector<double> steps(in.gyro_t_s.size() - 1);
-  for (std::size_t i = 0; i + 1 < in.gyro_t_s.size(); ++i) steps[i] = in.gyro_t_s[i + 1] - in.gyro_t_s[i];
-  const double dt_gyro = core::median(std::move(steps));
+  const double dt_gyro = core::median_period_s(in.gyro_t_s);
   if (o.use_standstill && in.odometry == OdometryKind::wheel_angles)
     c.still = standstill_runs(c, o, still_interval, used, g.noise_sigma_radps, dt_gyro);
   out.standstill_runs = static_cast<int>(c.still.size());
@@ -601,8 +600,7 @@ bool GyroFixesOptions::IsValid(std::string* why) const {
     return false;
   std::string w;
   if (!model.IsValid(&w)) {
-    if (why) *why = "model: " + w;
-    return false;
+    return core::invalid(why, "model: " + w);
   }
   return true;
 }

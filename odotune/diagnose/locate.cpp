@@ -1,6 +1,4 @@
-#include <odotune/core/robust_stats.h>
 #include <odotune/diagnose/locate.h>
-#include <odotune/diagnose/option_rules.h>
 
 #include <algorithm>
 #include <array>
@@ -11,6 +9,10 @@
 #include <utility>
 
 #include <fmt/format.h>
+
+#include <odotune/core/robust_stats.h>
+#include <odotune/core/why.h>
+#include <odotune/diagnose/option_rules.h>
 
 namespace odotune::diagnose {
 namespace {
@@ -347,12 +349,8 @@ std::string_view condition_name(Condition c) {
 }
 
 bool ResidualSeries::IsValid(std::string* why) const {
-  auto fail = [&](std::string msg) {
-    if (why) *why = std::move(msg);
-    return false;
-  };
   const std::size_t n = t_s.size();
-  if (n == 0) return fail("no rows (expected at least one residual sample)");
+  if (n == 0) return core::invalid(why, "no rows (expected at least one residual sample)");
   const std::pair<const char*, const std::vector<double>*> cols[] = {{"ex_m", &ex_m},
                                                                      {"ey_m", &ey_m},
                                                                      {"x_m", &x_m},
@@ -366,25 +364,28 @@ bool ResidualSeries::IsValid(std::string* why) const {
   for (const auto& [name, col] : cols) {
     if (col == &e_theta_rad && col->empty()) continue;
     if (col->size() != n) {
-      return fail(fmt::format("{} has {} values for {} rows (expected equal lengths)", name, col->size(), n));
+      return core::invalid(why, fmt::format("{} has {} values for {} rows (expected equal lengths)", name,
+                                            col->size(), n));
     }
     for (std::size_t i = 0; i < n; ++i) {
       if (!std::isfinite((*col)[i]))
-        return fail(fmt::format("{}[{}] is not finite (expected a number)", name, i));
+        return core::invalid(why, fmt::format("{}[{}] is not finite (expected a number)", name, i));
     }
   }
   if (window.size() != n) {
-    return fail(fmt::format("window has {} values for {} rows (expected equal lengths)", window.size(), n));
+    return core::invalid(why, fmt::format("window has {} values for {} rows (expected equal lengths)",
+                                          window.size(), n));
   }
   for (std::size_t i = 1; i < n; ++i) {
     if (window[i] < window[i - 1]) {
-      return fail(fmt::format("window[{}] = {} after {} (expected non-decreasing)", i, window[i],
-                              window[i - 1]));
+      return core::invalid(why, fmt::format("window[{}] = {} after {} (expected non-decreasing)", i, window[i],
+                                            window[i - 1]));
     }
     const bool same = window[i] == window[i - 1];
     if (same ? !(t_s[i] > t_s[i - 1]) : !(t_s[i] >= t_s[i - 1])) {
-      return fail(fmt::format("t_s[{}] = {} after {} (expected increasing time, strictly within a window)", i,
-                              t_s[i], t_s[i - 1]));
+      return core::invalid(
+          why, fmt::format("t_s[{}] = {} after {} (expected increasing time, strictly within a window)", i,
+                           t_s[i], t_s[i - 1]));
     }
   }
   return true;

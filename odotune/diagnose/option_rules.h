@@ -9,6 +9,8 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/why.h>
+
 namespace odotune::diagnose {
 
 struct OptionRule {
@@ -22,8 +24,7 @@ struct OptionRule {
 inline bool check_option_rules(std::initializer_list<OptionRule> rules, std::string* why) {
   for (const OptionRule& r : rules) {
     if (r.ok) continue;
-    if (why) *why = fmt::format("{} = {} must be {}", r.name, r.value, r.expected);
-    return false;
+    return core::invalid(why, fmt::format("{} = {} must be {}", r.name, r.value, r.expected));
   }
   return true;
 }

@@ -10,6 +10,8 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/robust_stats.h>
+#include <odotune/core/why.h>
 #include <odotune/diagnose/cross_validate.h>
 #include <odotune/diagnose/materiality.h>
 #include <odotune/diagnose/select_search.h>
@@ -261,25 +263,23 @@ void add_rivals(Selection& sel, const Search& z) {
 }  // namespace
 
 bool SelectOptions::IsValid(std::string* why) const {
-  auto fail = [why](std::string msg) {
-    if (why) *why = std::move(msg);
-    return false;
-  };
   std::string w;
-  if (!fit.IsValid(&w)) return fail("fit: " + w);
-  if (!materiality.IsValid(&w)) return fail("materiality: " + w);
+  if (!fit.IsValid(&w)) return core::invalid(why, "fit: " + w);
+  if (!materiality.IsValid(&w)) return core::invalid(why, "materiality: " + w);
   if (!(pair_above_floor >= 1.0))
-    return fail(fmt::format("pair_above_floor = {}; expected >= 1", pair_above_floor));
+    return core::invalid(why, fmt::format("pair_above_floor = {}; expected >= 1", pair_above_floor));
   if (!(fit.window_s > 0.0))
-    return fail(fmt::format("fit.window_s = {}; selection needs windows: expected > 0 s", fit.window_s));
+    return core::invalid(why, fmt::format("fit.window_s = {}; selection needs windows: expected > 0 s",
+                                          fit.window_s));
   for (std::size_t i = 0; i < candidates.size(); ++i) {
     const Effect e = candidates[i];
     if (static_cast<int>(e) < 0 || static_cast<int>(e) >= kNumEffects)
-      return fail(fmt::format("candidates[{}] is not an effect", i));
+      return core::invalid(why, fmt::format("candidates[{}] is not an effect", i));
     if (e == Effect::gyro_bias || e == Effect::gyro_scale)
-      return fail(fmt::format("candidate {} acts on the gyro, not on dead reckoning", effect_name(e)));
+      return core::invalid(why,
+                           fmt::format("candidate {} acts on the gyro, not on dead reckoning", effect_name(e)));
     if (std::count(candidates.begin(), candidates.end(), e) > 1)
-      return fail(fmt::format("candidate {} listed twice", effect_name(e)));
+      return core::invalid(why, fmt::format("candidate {} listed twice", effect_name(e)));
   }
   const double coarse = step_coarse_s > 0.0 ? step_coarse_s : 0.5 * std::min(step_head_s, fit.window_s);
   // name, value, lower, upper, lower/upper included
@@ -310,16 +310,18 @@ bool SelectOptions::IsValid(std::string* why) const {
     const bool ok = std::isfinite(r.v) && (r.lo_in ? r.v >= r.lo : r.v > r.lo) &&
                     (r.hi_in ? r.v <= r.hi : r.v < r.hi);
     if (!ok)
-      return fail(fmt::format("{} = {}; expected a number in {}{}, {}{}", r.name, r.v, r.lo_in ? "[" : "(",
-                              r.lo, r.hi >= 1e300 ? "inf" : fmt::format("{}", r.hi),
-                              r.hi_in && r.hi < 1e300 ? "]" : ")"));
+      return core::invalid(why, fmt::format("{} = {}; expected a number in {}{}, {}{}", r.name, r.v,
+                                            r.lo_in ? "[" : "(", r.lo,
+                                            r.hi >= 1e300 ? "inf" : fmt::format("{}", r.hi),
+                                            r.hi_in && r.hi < 1e300 ? "]" : ")"));
   }
   for (std::size_t i = 0; i < zone_boxes.size(); ++i) {
     const ZoneBox& b = zone_boxes[i];
     if (!(std::isfinite(b.x0_m) && std::isfinite(b.x1_m) && std::isfinite(b.y0_m) && std::isfinite(b.y1_m) &&
           b.x0_m < b.x1_m && b.y0_m < b.y1_m))
-      return fail(fmt::format("zone_boxes[{}] = [{}, {}] x [{}, {}]; expected finite x0 < x1, y0 < y1", i,
-                              b.x0_m, b.x1_m, b.y0_m, b.y1_m));
+      return core::invalid(why,
+                           fmt::format("zone_boxes[{}] = [{}, {}] x [{}, {}]; expected finite x0 < x1, y0 < y1",
+                                       i, b.x0_m, b.x1_m, b.y0_m, b.y1_m));
   }
   return true;
 }
@@ -327,10 +329,7 @@ bool SelectOptions::IsValid(std::string* why) const {
 double selection_window_s(const DiagInput& in, const SelectOptions& o) {
   if (in.has_ref_heading() || o.min_window_samples <= 0 || in.ref_t_s.size() < 3 || in.odo_t_s.empty())
     return o.fit.window_s;
-  std::vector<double> dt;
-  for (std::size_t i = 1; i < in.ref_t_s.size(); ++i) dt.push_back(in.ref_t_s[i] - in.ref_t_s[i - 1]);
-  std::nth_element(dt.begin(), dt.begin() + static_cast<long>(dt.size() / 2), dt.end());
-  const double period = dt[dt.size() / 2];
+  const double period = core::median_period_s(in.ref_t_s, core::MedianRule::upper_middle);
   const double span = in.ref_t_s.back() - std::max(in.ref_t_s.front(), in.odo_t_s.front());
   const double want = o.min_window_samples * period;
   return std::max(o.fit.window_s, std::min(want, span / 3.0));

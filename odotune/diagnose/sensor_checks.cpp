@@ -23,12 +23,7 @@ constexpr int kMinBins = 10;  // fewer bins: a check is not attempted
 
 bool finite_positive(double x) { return std::isfinite(x) && x > 0.0; }
 
-double median_step(const std::vector<double>& t) {
-  if (t.size() < 2) return kNaN;
-  std::vector<double> d(t.size() - 1);
-  for (std::size_t i = 0; i + 1 < t.size(); ++i) d[i] = t[i + 1] - t[i];
-  return core::median(std::move(d));
-}
+double median_step(const std::vector<double>& t) { return core::median_period_s(t); }
 
 // Smallest positive step between consecutive samples (an encoder's count
 // when the angles are quantised); 0 when the signal never moves.

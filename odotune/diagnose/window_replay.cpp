@@ -1,5 +1,6 @@
 #include <odotune/diagnose/window_replay.h>
 
+#include <odotune/core/robust_stats.h>
 #include <odotune/diagnose/series_interp.h>
 
 #include <algorithm>
@@ -101,12 +102,7 @@ std::vector<double> window_starts(const DiagInput& in, double window_s) {
   // interpolated across the gap. Window boundaries: the nominal starts t0 +
   // j*window_s plus the first sample after each gap.
   double gap_s = std::numeric_limits<double>::infinity();
-  if (heading && rt.size() >= 2) {
-    std::vector<double> dt(rt.size() - 1);
-    for (std::size_t i = 0; i + 1 < rt.size(); ++i) dt[i] = rt[i + 1] - rt[i];
-    std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
-    gap_s = 2.0 * dt[dt.size() / 2];
-  }
+  if (heading && rt.size() >= 2) gap_s = 2.0 * core::median_period_s(rt, core::MedianRule::upper_middle);
   std::vector<double> starts;
   for (std::size_t j = 0; j < n_win; ++j) starts.push_back(t0 + static_cast<double>(j) * window_s);
   if (std::isfinite(gap_s)) {

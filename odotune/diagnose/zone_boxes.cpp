@@ -9,6 +9,8 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/robust_stats.h>
+
 namespace odotune::diagnose {
 
 namespace {
@@ -190,12 +192,9 @@ ZoneGrid zone_grid(Increments incs, double cell_m) {
   std::vector<double> ra, rh;
   for (std::size_t i = 0; i < cl.size(); ++i)
     if (cl[i] > cell) ra.push_back(ca[i] / cl[i]), rh.push_back(ch[i] / cl[i]);
-  auto median = [](std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
-    return v[v.size() / 2];
-  };
-  z.bg_a = median(ra), z.bg_h = median(rh);
+  // The background: the median cell (0 without cells).
+  z.bg_a = ra.empty() ? 0.0 : core::median(std::move(ra), core::MedianRule::upper_middle);
+  z.bg_h = rh.empty() ? 0.0 : core::median(std::move(rh), core::MedianRule::upper_middle);
   z.ca = std::move(ca), z.ch = std::move(ch), z.cl = std::move(cl);
   return z;
 }

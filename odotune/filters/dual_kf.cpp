@@ -6,17 +6,16 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <odotune/core/why.h>
+
 namespace odotune::filters {
 namespace {
 
 bool check(const char* name, double x, bool allow_zero, std::string* why) {
   if (std::isfinite(x) && (x > 0.0 || (allow_zero && x == 0.0))) return true;
-  if (why) {
-    std::ostringstream os;
-    os << name << " = " << x << " must be a finite number " << (allow_zero ? "≥ 0" : "> 0");
-    *why = os.str();
-  }
-  return false;
+  std::ostringstream os;
+  os << name << " = " << x << " must be a finite number " << (allow_zero ? "≥ 0" : "> 0");
+  return core::invalid(why, os.str());
 }
 
 // h(θ, ω): the odometry velocities (V, W) of parameters θ.
@@ -31,12 +30,10 @@ DkfVelocity odometry_velocity(const DkfParams& theta, double omega_l, double ome
 bool DualKfParams::IsValid(std::string* why) const {
   std::string inner;
   if (!initial.IsValid(&inner)) {
-    if (why) *why = "initial." + inner;
-    return false;
+    return core::invalid(why, "initial." + inner);
   }
   if (!evidence.IsValid(&inner)) {
-    if (why) *why = "evidence." + inner;
-    return false;
+    return core::invalid(why, "evidence." + inner);
   }
   return check("initial_sd_radius_m", initial_sd_radius_m, false, why) &&
          check("initial_sd_wheel_base_m", initial_sd_wheel_base_m, false, why) &&

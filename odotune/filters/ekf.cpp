@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <odotune/core/why.h>
+
 namespace odotune::filters {
 
 std::string_view to_string(Divergence d) {
@@ -17,16 +19,13 @@ std::string_view to_string(Divergence d) {
 bool EkfParams::IsValid(std::string* why) const {
   if (!noise.IsValid(why)) return false;
   if (!std::isfinite(wheel_base_m) || wheel_base_m <= 0.0) {
-    if (why) *why = "wheel_base_m = " + std::to_string(wheel_base_m) + ": expected > 0";
-    return false;
+    return core::invalid(why, "wheel_base_m = " + std::to_string(wheel_base_m) + ": expected > 0");
   }
   if (!initial_pose.allFinite()) {
-    if (why) *why = "initial_pose: expected finite values";
-    return false;
+    return core::invalid(why, "initial_pose: expected finite values");
   }
   if (!is_positive_definite(initial_cov)) {
-    if (why) *why = "initial_cov: expected a positive definite matrix";
-    return false;
+    return core::invalid(why, "initial_cov: expected a positive definite matrix");
   }
   return true;
 }

@@ -4,6 +4,7 @@
 #include <string>
 
 #include <odotune/core/enum_names.h>
+#include <odotune/core/why.h>
 
 namespace odotune::filters {
 
@@ -21,9 +22,8 @@ bool parse_noise_model(std::string_view text, NoiseModel* out) {
 }
 
 bool NoiseParams::IsValid(std::string* why) const {
-  auto fail = [&](const char* name, double v, const char* expected) {
-    if (why) *why = std::string(name) + " = " + std::to_string(v) + ": expected " + expected;
-    return false;
+  auto out_of_range = [&](const char* name, double v, const char* expected) {
+    return core::invalid(why, std::string(name) + " = " + std::to_string(v) + ": expected " + expected);
   };
   const struct {
     const char* name;
@@ -31,11 +31,11 @@ bool NoiseParams::IsValid(std::string* why) const {
   } nonneg[] = {{"r_x_m2", r_x_m2}, {"r_y_m2", r_y_m2}, {"r_theta_rad2", r_theta_rad2}, {"a1", a1}, {"a2", a2},
                 {"b1", b1},         {"b2", b2}};
   for (const auto& f : nonneg)
-    if (!std::isfinite(f.v) || f.v < 0.0) return fail(f.name, f.v, "a finite value >= 0");
-  if (!std::isfinite(q_x_m2) || q_x_m2 <= 0.0) return fail("q_x_m2", q_x_m2, "a finite value > 0");
-  if (!std::isfinite(q_y_m2) || q_y_m2 <= 0.0) return fail("q_y_m2", q_y_m2, "a finite value > 0");
+    if (!std::isfinite(f.v) || f.v < 0.0) return out_of_range(f.name, f.v, "a finite value >= 0");
+  if (!std::isfinite(q_x_m2) || q_x_m2 <= 0.0) return out_of_range("q_x_m2", q_x_m2, "a finite value > 0");
+  if (!std::isfinite(q_y_m2) || q_y_m2 <= 0.0) return out_of_range("q_y_m2", q_y_m2, "a finite value > 0");
   if (model == NoiseModel::alpha && (b1 != 0.0 || b2 != 0.0))
-    return fail(b1 != 0.0 ? "b1" : "b2", b1 != 0.0 ? b1 : b2, "0 for the alpha model (use gyro)");
+    return out_of_range(b1 != 0.0 ? "b1" : "b2", b1 != 0.0 ? b1 : b2, "0 for the alpha model (use gyro)");
   return true;
 }
 

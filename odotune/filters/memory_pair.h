@@ -27,6 +27,7 @@
 #include <cmath>
 #include <string>
 
+#include <odotune/core/why.h>
 #include <odotune/filters/odometry_params.h>
 #include <odotune/filters/pf_evolution.h>
 
@@ -41,8 +42,7 @@ struct MemoryPairParams {
 
   bool IsValid(std::string* why) const {
     if (cusum_threshold > 0.0) return true;  // +inf: never a change
-    if (why) *why = "cusum_threshold = " + std::to_string(cusum_threshold) + " must be > 0";
-    return false;
+    return core::invalid(why, "cusum_threshold = " + std::to_string(cusum_threshold) + " must be > 0");
   }
 };
 

@@ -3,18 +3,17 @@
 #include <cmath>
 #include <sstream>
 
+#include <odotune/core/why.h>
+
 namespace odotune::filters {
 namespace {
 
 // "name = value must be a finite number > 0" when value is not; true otherwise.
 bool check_positive(const char* name, double value, std::string* why) {
   if (std::isfinite(value) && value > 0.0) return true;
-  if (why) {
-    std::ostringstream os;
-    os << name << " = " << value << " must be a finite number > 0";
-    *why = os.str();
-  }
-  return false;
+  std::ostringstream os;
+  os << name << " = " << value << " must be a finite number > 0";
+  return core::invalid(why, os.str());
 }
 
 }  // namespace
@@ -28,12 +27,9 @@ bool OdometryParams::IsValid(std::string* why) const {
 bool TwistCorrection::IsValid(std::string* why) const {
   if (!check_positive("scale_v", scale_v, why) || !check_positive("scale_w", scale_w, why)) return false;
   if (!(std::isfinite(delay_s) && delay_s >= 0.0)) {
-    if (why) {
-      std::ostringstream os;
-      os << "delay_s = " << delay_s << " must be a finite number >= 0 [s]";
-      *why = os.str();
-    }
-    return false;
+    std::ostringstream os;
+    os << "delay_s = " << delay_s << " must be a finite number >= 0 [s]";
+    return core::invalid(why, os.str());
   }
   return true;
 }

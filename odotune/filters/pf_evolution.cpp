@@ -3,15 +3,15 @@
 #include <algorithm>
 #include <cmath>
 
+#include <odotune/core/why.h>
+
 namespace odotune::filters {
 
 bool EvidenceMemoryParams::IsValid(std::string* why) const {
   auto positive = [](double x) { return std::isfinite(x) && x > 0.0; };
   if (positive(min_memory_s) && positive(max_memory_s) && max_memory_s >= min_memory_s) return true;
-  if (why)
-    *why = "min_memory_s = " + std::to_string(min_memory_s) +
-           ", max_memory_s = " + std::to_string(max_memory_s) + " must be finite with 0 < min ≤ max [s]";
-  return false;
+  return core::invalid(why, "min_memory_s = " + std::to_string(min_memory_s) + ", max_memory_s = " +
+                                std::to_string(max_memory_s) + " must be finite with 0 < min ≤ max [s]");
 }
 
 double EvidenceMemory::step(double dt_s) {

@@ -7,17 +7,13 @@
 #include <stdexcept>
 #include <utility>
 
+#include <odotune/core/why.h>
 #include <odotune/filters/unscented.h>
 
 namespace odotune::filters {
 namespace {
 
 constexpr int kN = 5;
-
-bool bad(std::string* why, const std::string& what) {
-  if (why) *why = what;
-  return false;
-}
 
 std::string describe(const char* name, double x, const char* expected) {
   std::ostringstream os;
@@ -48,14 +44,15 @@ PoseVelocity motion(const PoseVelocity& s, double dt) {
 bool PoseUkfParams::IsValid(std::string* why) const {
   for (const auto& [name, q] : {std::pair{"q_v_m2_s3", q_v_m2_s3}, std::pair{"q_w_rad2_s3", q_w_rad2_s3},
                                 std::pair{"q_xy_m2_s", q_xy_m2_s}})
-    if (!(std::isfinite(q) && q >= 0.0)) return bad(why, describe(name, q, "a finite number >= 0"));
+    if (!(std::isfinite(q) && q >= 0.0)) return core::invalid(why, describe(name, q, "a finite number >= 0"));
   if (!(std::isfinite(alpha) && alpha > 0.0 && alpha <= 1.0))
-    return bad(why, describe("alpha", alpha, "in (0, 1]"));
-  if (!(std::isfinite(beta) && beta >= 0.0)) return bad(why, describe("beta", beta, "a finite number >= 0"));
+    return core::invalid(why, describe("alpha", alpha, "in (0, 1]"));
+  if (!(std::isfinite(beta) && beta >= 0.0))
+    return core::invalid(why, describe("beta", beta, "a finite number >= 0"));
   if (!(std::isfinite(kappa) && static_cast<double>(kN) + kappa > 0.0))
-    return bad(why, describe("kappa", kappa, "finite with n + kappa > 0 (n = 5)"));
-  if (!initial_state.allFinite()) return bad(why, "initial_state must be finite");
-  if (!is_spd<kN>(initial_cov)) return bad(why, "initial_cov must be symmetric positive definite");
+    return core::invalid(why, describe("kappa", kappa, "finite with n + kappa > 0 (n = 5)"));
+  if (!initial_state.allFinite()) return core::invalid(why, "initial_state must be finite");
+  if (!is_spd<kN>(initial_cov)) return core::invalid(why, "initial_cov must be symmetric positive definite");
   return true;
 }
 

@@ -5,14 +5,12 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/why.h>
+
 namespace odotune::filters::rl {
 
 bool RlControlParams::IsValid(std::string* why) const {
-  auto fail = [why](const std::string& s) {
-    if (why) *why = s;
-    return false;
-  };
-  if (timeout_ns < 0) return fail(fmt::format("control timeout {} ns < 0", timeout_ns));
+  if (timeout_ns < 0) return core::invalid(why, fmt::format("control timeout {} ns < 0", timeout_ns));
   const std::pair<const char*, const ControlVector*> lists[] = {{"acceleration_limits", &acceleration_limits},
                                                                 {"acceleration_gains", &acceleration_gains},
                                                                 {"deceleration_limits", &deceleration_limits},
@@ -21,7 +19,7 @@ bool RlControlParams::IsValid(std::string* why) const {
     for (int i = 0; i < kControlSize; ++i) {
       const double v = (*list)[i];
       if (!std::isfinite(v) || v < 0.0)
-        return fail(fmt::format("{}[{}] = {}: expected a finite value ≥ 0", name, i, v));
+        return core::invalid(why, fmt::format("{}[{}] = {}: expected a finite value ≥ 0", name, i, v));
     }
   }
   return true;

@@ -1,5 +1,6 @@
 #include <odotune/filters/rl_ekf.h>
 
+#include <odotune/core/why.h>
 #include <odotune/filters/rl_filter_base.h>
 
 #include <algorithm>
@@ -611,18 +612,14 @@ Transition transition(const State& x, double dt_s) {
 }
 
 bool RlEkfParams::IsValid(std::string* why) const {
-  auto fail = [why](const std::string& s) {
-    if (why) *why = s;
-    return false;
-  };
-  if (!process_noise.allFinite()) return fail("process_noise has a non-finite entry");
-  if (!initial_cov.allFinite()) return fail("initial_cov has a non-finite entry");
-  if (!initial_state.allFinite()) return fail("initial_state has a non-finite entry");
+  if (!process_noise.allFinite()) return core::invalid(why, "process_noise has a non-finite entry");
+  if (!initial_cov.allFinite()) return core::invalid(why, "initial_cov has a non-finite entry");
+  if (!initial_state.allFinite()) return core::invalid(why, "initial_state has a non-finite entry");
   for (int i = 0; i < kStateSize; ++i) {
     if (process_noise(i, i) < 0.0)
-      return fail(fmt::format("process_noise({0},{0}) = {1} < 0", i, process_noise(i, i)));
+      return core::invalid(why, fmt::format("process_noise({0},{0}) = {1} < 0", i, process_noise(i, i)));
     if (initial_cov(i, i) < 0.0)
-      return fail(fmt::format("initial_cov({0},{0}) = {1} < 0", i, initial_cov(i, i)));
+      return core::invalid(why, fmt::format("initial_cov({0},{0}) = {1} < 0", i, initial_cov(i, i)));
   }
   if (control && !control->IsValid(why)) return false;
   return true;

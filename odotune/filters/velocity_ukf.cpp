@@ -1,5 +1,6 @@
 #include <odotune/filters/velocity_ukf.h>
 
+#include <odotune/core/why.h>
 #include <odotune/filters/unscented.h>
 
 #include <Eigen/Cholesky>
@@ -21,11 +22,6 @@ std::string describe(const char* name, double x, const char* expected) {
   return os.str();
 }
 
-bool bad(std::string* why, const std::string& msg) {
-  if (why) *why = msg;
-  return false;
-}
-
 bool is_spd(const Eigen::Matrix2d& M) {
   if (!M.allFinite()) return false;
   if (M(0, 1) != M(1, 0)) {
@@ -44,16 +40,17 @@ unscented::SigmaWeights<kN> sigma_weights(const UkfParams& p) {
 
 bool UkfParams::IsValid(std::string* why) const {
   if (!(std::isfinite(q_v_m2_s3) && q_v_m2_s3 >= 0.0))
-    return bad(why, describe("q_v_m2_s3", q_v_m2_s3, "a finite number >= 0 [(m/s)^2/s]"));
+    return core::invalid(why, describe("q_v_m2_s3", q_v_m2_s3, "a finite number >= 0 [(m/s)^2/s]"));
   if (!(std::isfinite(q_w_rad2_s3) && q_w_rad2_s3 >= 0.0))
-    return bad(why, describe("q_w_rad2_s3", q_w_rad2_s3, "a finite number >= 0 [(rad/s)^2/s]"));
+    return core::invalid(why, describe("q_w_rad2_s3", q_w_rad2_s3, "a finite number >= 0 [(rad/s)^2/s]"));
   if (!(std::isfinite(alpha) && alpha > 0.0 && alpha <= 1.0))
-    return bad(why, describe("alpha", alpha, "in (0, 1]"));
-  if (!(std::isfinite(beta) && beta >= 0.0)) return bad(why, describe("beta", beta, "a finite number >= 0"));
+    return core::invalid(why, describe("alpha", alpha, "in (0, 1]"));
+  if (!(std::isfinite(beta) && beta >= 0.0))
+    return core::invalid(why, describe("beta", beta, "a finite number >= 0"));
   if (!(std::isfinite(kappa) && static_cast<double>(kN) + kappa > 0.0))
-    return bad(why, describe("kappa", kappa, "finite with n + kappa > 0 (n = 2)"));
-  if (!initial_state.allFinite()) return bad(why, "initial_state must be finite");
-  if (!is_spd(initial_cov)) return bad(why, "initial_cov must be symmetric positive definite");
+    return core::invalid(why, describe("kappa", kappa, "finite with n + kappa > 0 (n = 2)"));
+  if (!initial_state.allFinite()) return core::invalid(why, "initial_state must be finite");
+  if (!is_spd(initial_cov)) return core::invalid(why, "initial_cov must be symmetric positive definite");
   return true;
 }
 

@@ -6,6 +6,7 @@
 
 #include <odotune/calibration/calibrated_odometry_errors.h>
 #include <odotune/calibration/calibration_ranges.h>
+#include <odotune/core/why.h>
 #include <odotune/jobs/tune_job.h>
 #include <odotune/tuner/nlopt_solver.h>
 #include <odotune/tuner/problem.h>
@@ -36,9 +37,8 @@ calibration::CalibrationMethod calibration_method(objectives::CalibratorModel mo
 bool CalibrationTuneRequest::IsValid(std::string* why) const {
   if (!SolverSettings::IsValid(why)) return false;
   if (pf_particles && *pf_particles < 1) {
-    if (why)
-      *why = fmt::format("pf particles = {} must be ≥ 1 (or not given, for the paper's count)", *pf_particles);
-    return false;
+    return core::invalid(why, fmt::format("pf particles = {} must be ≥ 1 (or not given, for the paper's count)",
+                                          *pf_particles));
   }
   return weights.IsValid(why);
 }

@@ -1,5 +1,6 @@
 #include <odotune/jobs/rl_job.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -11,12 +12,12 @@
 #include <odotune/core/atomic_file.h>
 #include <odotune/core/failure.h>
 #include <odotune/core/output_paths.h>
+#include <odotune/rlnode/prepared_recording.h>
 
 namespace odotune::jobs {
 namespace {
 
 namespace rl = filters::rl;
-using rlnode::FixRole;
 
 constexpr std::int64_t kEnd = std::numeric_limits<std::int64_t>::max();
 
@@ -136,67 +137,103 @@ RlSource rl_source_of(const formats::ExperimentRl& x, const std::filesystem::pat
   return src;
 }
 
-RlLoaded load_rl(const RlSource& src) {
-  if (src.bag.empty())
-    throw core::Failure(
-        "--rl-params: expected the robot's recording, --bag BAG, or the project's tracks, --track T");
+namespace {
+
+// The bag's options from the flags (--tf, --gps-topic, --remap); throws
+// Failure naming a flag.
+rlnode::RecordingOptions recording_options(const RlSource& src) {
   rlnode::RecordingOptions options;
   for (const std::string& t : src.tf) options.frames.insert(parse_tf(t));
   options.gps_topic = src.gps_topic;
   options.from_s = src.from_s;
   for (const std::string& r : src.remap) options.remap.insert(parse_remap(r));
-  RlLoaded out;
+  return options;
+}
+
+}  // namespace
+
+RlLoaded load_rl(const RlSource& src) {
+  if (src.bag.empty())
+    throw core::Failure(
+        "--rl-params: expected the robot's recording, --bag BAG, or the project's tracks, --track T");
+  const rlnode::RecordingOptions options = recording_options(src);
   try {
     const rlnode::RlParams params = rlnode::read_rl_params(src.params_file, src.node_name, src.filter,
                                                            src.navsat_params);
-    out.rec = rlnode::load_recording(src.bag, params, options);
-    if (src.gps_heading_fit_s > 0.0) {
-      // With robot_localization's default noise, not the file's: the rotation
-      // must not change with the noise being tuned, so that a tuned file
-      // replays to the figures its tune reported.
-      rlnode::ReplaySettings reference = rlnode::settings_of(params);
-      reference.process_noise = rlnode::default_process_noise();
-      reference.initial_cov = rlnode::default_initial_estimate_covariance();
-      out.alignment = rlnode::fit_gps_alignment(out.rec, reference, src.gps_heading_fit_s);
-      out.rec.gps_transform = out.alignment->transform;
-    }
+    rlnode::PreparedRecording p = rlnode::prepare_recording(src.bag, params, options, src.gps_heading_fit_s);
+    return {std::move(p.rec), std::move(p.alignment)};
   } catch (const core::Failure&) {
     throw;
   } catch (const std::exception& e) {
     throw core::Failure(e.what());
   }
-  const rlnode::Recording& rec = out.rec;
-  if (rec.gps_sensor >= 0 && !rec.gps_transform.fixed && rec.navsat_headings.empty() &&
-      !rec.params.navsat.use_odometry_yaw) {
-    throw core::Failure(
-        fmt::format("{}: navsat_transform_node needs the IMU's heading for its datum, and the bag has "
-                    "no IMU orientation; expected --gps-heading-fit SECONDS",
-                    src.bag.string()));
-  }
+}
+
+namespace {
+
+// The eval's replays and scores: the span and the protocols of the request.
+objectives::RlBagEvalOptions bag_eval_options(const rlnode::Recording& rec, const RlEvalRequest& request) {
+  objectives::RlBagEvalOptions o;
+  o.until_ns = at_seconds(rec, request.until_s);
+  if (request.from_s) o.from_ns = at_seconds(rec, request.from_s);
+  o.outage_s = request.outages_s;
+  o.outage_every_s = request.outage_every_s;
+  o.keep_trajectory = !request.trajectory_out.empty();
+  return o;
+}
+
+RlEvalOutcome eval_outcome(const RlLoaded& loaded, const objectives::RlBagScores& scores,
+                           std::int64_t until_ns) {
+  const rlnode::Recording& rec = loaded.rec;
+  RlEvalOutcome out;
+  out.bag = rec.bag;
+  out.params_file = rec.params.file;
+  out.filter = rec.params.filter;
+  out.final_state = scores.run.final_state;
+  out.processed = scores.run.processed;
+  out.rejected = scores.run.rejected;
+  out.alignment = loaded.alignment;
+  out.notes = rec.notes;
+  out.duration_s = rl_seconds(rec, std::min(rec.end_ns, until_ns));
+  out.heldout = scores.heldout;
+  out.protocols = scores.protocols;
+  out.outages = scores.outages;
+  out.outage_windows = scores.outage_windows;
   return out;
 }
 
-rlnode::ReplayOutput outage_run(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
-                                std::int64_t from_ns, std::int64_t until_ns, bool trajectory) {
-  // Scoring a fix leaves the filter as it is, so this is the trajectory of
-  // GPS fused before `from_ns` only.
-  return rlnode::replay(
-      rec, rlnode::make_schedule(rec, objectives::outage_protocol_roles(rec, from_ns, until_ns), until_ns), s,
-      trajectory);
+void write_rl_fixes(const std::filesystem::path& path, const std::vector<objectives::RlPlacedFix>& fixes) {
+  std::ostringstream text;
+  text << "# GPS fixes in the odom frame as navsat_transform_node placed them: t [s] x [m] y [m]\n";
+  for (const objectives::RlPlacedFix& f : fixes)
+    text << fmt::format("{:.9f} {:.4f} {:.4f}\n", static_cast<double>(f.stamp_ns) * 1e-9, f.odom.x(),
+                        f.odom.y());
+  core::write_atomically(path, "fixes", text.str());
 }
 
-RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
-                                 const RlJudgedSpan& span,
-                                 std::vector<rlnode::TrajectoryPoint>* outage_trajectory) {
-  rlnode::ReplayOutput a = outage_run(rec, s, span.outage_from_ns, span.end_ns, outage_trajectory != nullptr);
-  const rlnode::ReplayOutput b = rlnode::replay(
-      rec,
-      rlnode::make_schedule(rec, objectives::every_fifth_roles(rec, span.fifth_from_ns, span.end_ns),
-                            span.end_ns),
-      s);
-  if (outage_trajectory) *outage_trajectory = std::move(a.trajectory);
-  return {objectives::score_of(std::span(&a, 1)), objectives::score_of(std::span(&b, 1))};
+void write_rl_eval_json(const std::filesystem::path& path, const RlEvalRequest& request,
+                        const RlEvalOutcome& out) {
+  nlohmann::json j = {
+      {"bag", out.bag.string()},
+      {"params", out.params_file.string()},
+      {"noise_from", request.noise_from.string()},
+      {"duration_s", out.duration_s},
+      {"final_position_m", {out.final_state[rl::kX], out.final_state[rl::kY], out.final_state[rl::kZ]}},
+      {"final_yaw_rad", out.final_state[rl::kYaw]},
+      {"processed", out.processed},
+      {"rejected", out.rejected}};
+  if (out.heldout) j["heldout_fixes"] = json_of(*out.heldout);
+  if (out.protocols) j["after_from"] = json_of(*out.protocols);
+  if (out.outages) {
+    j["simulated_outages"] = json_of(*out.outages);
+    j["simulated_outages"]["lengths_s"] = request.outages_s;
+    j["simulated_outages"]["every_s"] = request.outage_every_s;
+    j["simulated_outages"]["windows"] = out.outage_windows;
+  }
+  core::write_atomically(path, "JSON", j.dump(2) + "\n");
 }
+
+}  // namespace
 
 RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
   if (!request.trajectory_out.empty())
@@ -205,77 +242,23 @@ RlEvalOutcome run_rl_eval(const RlEvalRequest& request) {
   if (!request.fixes_out.empty()) core::check_output_file("--fixes-out", request.fixes_out.string());
   const RlLoaded loaded = load_rl(request.src);
   const rlnode::Recording& rec = loaded.rec;
-  const std::int64_t until = at_seconds(rec, request.until_s);
   rlnode::ReplaySettings s = rlnode::settings_of(rec.params);
   if (!request.noise_from.empty()) s.process_noise = rl_noise_from(request.noise_from, rec.params.node_name);
-  const rlnode::ReplayOutput run = rlnode::replay(rec, rlnode::make_schedule(rec, {}, until), s, true);
-  RlEvalOutcome out;
-  out.bag = rec.bag;
-  out.params_file = rec.params.file;
-  out.filter = rec.params.filter;
-  out.final_state = run.final_state;
-  out.processed = run.processed;
-  out.rejected = run.rejected;
-  out.alignment = loaded.alignment;
-  out.notes = rec.notes;
-  out.duration_s = rl_seconds(rec, std::min(rec.end_ns, until));
-  std::vector<rlnode::TrajectoryPoint> points = run.trajectory;
-  std::string what = "all inputs";
-  if (!rec.fixes.empty()) {
-    std::vector<rlnode::Schedule> folds;
-    for (const auto& roles : objectives::heldout_fix_folds(rec, 5, 1.0, until))
-      folds.push_back(rlnode::make_schedule(rec, roles, until));
-    out.heldout = objectives::replay_score(rec, folds, s);
-    if (request.from_s) {
-      const std::int64_t from = at_seconds(rec, request.from_s);
-      out.protocols = score_protocols(rec, s, {from, from, until},
-                                      request.trajectory_out.empty() ? nullptr : &points);
-      what = fmt::format("GPS fused until {} s only", *request.from_s);
-    }
-  }
-  if (!request.outages_s.empty() && !rec.fixes.empty()) {
-    const std::int64_t first = request.from_s ? at_seconds(rec, request.from_s)
-                                              : objectives::after_warmup(rec, 30.0);
-    const std::vector<objectives::OutageWindow> w = objectives::outage_windows(
-        rec, request.outages_s, request.outage_every_s, first, until);
-    out.outage_windows = w.size();
-    out.outages = objectives::OutageReplays(rec, w, until).score(s);
-  }
+  const objectives::RlBagEvalOptions options = bag_eval_options(rec, request);
+  const objectives::RlBagScores scores = objectives::score_rl_bag(rec, s, options);
+  RlEvalOutcome out = eval_outcome(loaded, scores, options.until_ns);
   if (!request.trajectory_out.empty()) {
-    write_rl_trajectory(request.trajectory_out, points,
+    // With the protocols, the outage protocol's run: GPS fused until from_s only.
+    const std::string what = scores.protocols ? fmt::format("GPS fused until {} s only", *request.from_s)
+                                              : std::string("all inputs");
+    write_rl_trajectory(request.trajectory_out,
+                        scores.protocols ? scores.outage_trajectory : scores.run.trajectory,
                         fmt::format("robot_localization {}_node replayed by odotune: {} with {}, {}",
                                     filters::rl::to_string(rec.params.filter), rec.bag.filename().string(),
                                     rec.params.file.filename().string(), what));
   }
-  if (!request.fixes_out.empty()) {
-    std::ostringstream text;
-    text << "# GPS fixes in the odom frame as navsat_transform_node placed them: t [s] x [m] y [m]\n";
-    for (const rlnode::GpsFix& f : rec.fixes) {
-      const Eigen::Vector3d p = rlnode::fix_in_odom(f, run.gps_transform);
-      text << fmt::format("{:.9f} {:.4f} {:.4f}\n", static_cast<double>(f.stamp_ns) * 1e-9, p.x(), p.y());
-    }
-    core::write_atomically(request.fixes_out, "fixes", text.str());
-  }
-  if (!request.json_out.empty()) {
-    nlohmann::json j = {
-        {"bag", rec.bag.string()},
-        {"params", rec.params.file.string()},
-        {"noise_from", request.noise_from.string()},
-        {"duration_s", out.duration_s},
-        {"final_position_m", {run.final_state[rl::kX], run.final_state[rl::kY], run.final_state[rl::kZ]}},
-        {"final_yaw_rad", run.final_state[rl::kYaw]},
-        {"processed", run.processed},
-        {"rejected", run.rejected}};
-    if (out.heldout) j["heldout_fixes"] = json_of(*out.heldout);
-    if (out.protocols) j["after_from"] = json_of(*out.protocols);
-    if (out.outages) {
-      j["simulated_outages"] = json_of(*out.outages);
-      j["simulated_outages"]["lengths_s"] = request.outages_s;
-      j["simulated_outages"]["every_s"] = request.outage_every_s;
-      j["simulated_outages"]["windows"] = out.outage_windows;
-    }
-    core::write_atomically(request.json_out, "JSON", j.dump(2) + "\n");
-  }
+  if (!request.fixes_out.empty()) write_rl_fixes(request.fixes_out, scores.fixes);
+  if (!request.json_out.empty()) write_rl_eval_json(request.json_out, request, out);
   return out;
 }
 

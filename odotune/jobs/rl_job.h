@@ -12,7 +12,6 @@
 #pragma once
 
 #include <filesystem>
-#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,6 +20,7 @@
 #include <odotune/jobs/report_job.h>
 #include <odotune/jobs/rl_search.h>
 #include <odotune/jobs/tune_job.h>
+#include <odotune/objectives/rl_bag_scores.h>
 #include <odotune/objectives/rl_objective.h>
 #include <odotune/objectives/rl_protocols.h>
 #include <odotune/results/run_record.h>
@@ -80,28 +80,12 @@ std::string rmse_text(int decimals, double v_m);
 // "FROM=TO" (--remap); throws Failure with one line otherwise.
 std::pair<std::string, std::string> parse_remap(const std::string& text);
 
-struct RlProtocolScores {
-  objectives::FixScore outage, every_fifth;
-};
-// A held-out span and its two protocols (odotune/objectives/rl_protocols.h): a GPS
-// outage from `outage_from_ns` to `end_ns` (the GPS fused before), and every
-// 5th fix of [fifth_from_ns, end_ns) held out (the others fused). After a
-// tune's span both start where it ends; before it (tune --from), the outage
-// starts once the heading fit's fixes are fused, and every 5th fix of the
-// span is held out.
-struct RlJudgedSpan {
-  std::int64_t outage_from_ns = 0, fifth_from_ns = 0, end_ns = 0;
-};
-// The outage protocol's run: GPS fused before `from_ns` only, every fix from
-// there to `until_ns` scored (its `scored`: measured and predicted, odom
-// frame); with `trajectory`, the filter's trajectory too.
-rlnode::ReplayOutput outage_run(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
-                                std::int64_t from_ns, std::int64_t until_ns, bool trajectory = false);
-// Both protocols on `span`; with `outage_trajectory`, also the outage run's
-// trajectory.
-RlProtocolScores score_protocols(const rlnode::Recording& rec, const rlnode::ReplaySettings& s,
-                                 const RlJudgedSpan& span,
-                                 std::vector<rlnode::TrajectoryPoint>* outage_trajectory = nullptr);
+// The protocols' scores and a judged span (odotune/objectives/rl_bag_scores.h):
+// after a tune's span both protocols start where it ends; before it (tune
+// --from), the outage starts once the heading fit's fixes are fused, and every
+// 5th fix of the span is held out.
+using RlProtocolScores = objectives::RlProtocolScores;
+using RlJudgedSpan = objectives::RlJudgedSpan;
 
 struct RlEvalRequest {
   RlSource src;
@@ -219,11 +203,13 @@ void write_rl_run(const formats::Experiment& e, const results::RunRecord& run, c
 // tuning fitness, replayed from the bag) and convergence curves.
 ReportOutcome write_rl_report(const ReportRequest& req, const results::ExperimentInfo& info,
                               const std::vector<results::RunRecord>& runs);
-// The grid, the starts and the written one on `objective`, into `o` (its
-// parameter names, baseline and tuned scores, starts, summary); `judge`
-// scores a start's settings on a span the tune never saw (nullopt: none).
-void search_rl(const objectives::RlObjective& objective, const RlTuneRequest& request, RlTuneOutcome& o,
-               const std::function<std::optional<RlProtocolScores>(const rlnode::ReplaySettings&)>& judge);
+// The grid, the starts and the written one on `objective`: an outcome with
+// the search's fields (param_names, outage_windows, the baseline's and each
+// start's scores on the tuning span, grid, starts, written, factors, tuned,
+// tuned_fitness, tuned_heldout, tuned_outage, summary, diverged); the others,
+// the judged scores among them, are left for the caller. Throws Failure when
+// stopped before the first start.
+RlTuneOutcome search_rl(const objectives::RlObjective& objective, const RlTuneRequest& request);
 // The search and its scores on an already loaded recording (no file read or
 // written; the request's output paths are not used); with from_s, `tuned_on`
 // is the recording cut there (load_rl with RlSource::from_s), `loaded` the

@@ -71,7 +71,7 @@ void trajectory_figures(const formats::Experiment& e, const std::vector<RunRecor
     const std::int64_t from = rl_time_ns(rec, x.until_s);
     const std::int64_t end = x.end_s ? rl_time_ns(rec, *x.end_s) : std::numeric_limits<std::int64_t>::max();
     const rlnode::ReplaySettings base = rlnode::settings_of(rec.params);
-    const rlnode::ReplayOutput b = outage_run(rec, base, from, end, true);
+    const rlnode::ReplayOutput b = objectives::outage_run(rec, base, from, end, true);
     std::vector<results::TrajectoryPath> paths;
     results::TrajectoryPath held{"held-out GPS fixes", {}, {}};
     for (const rlnode::ScoredFix& f : b.scored) {
@@ -88,7 +88,7 @@ void trajectory_figures(const formats::Experiment& e, const std::vector<RunRecor
       std::string why;
       if (!objectives::apply_rl_factors(rec.params, r->param_names, r->params, &s, &why))
         throw core::Failure(fmt::format("run {}: {}", results::run_key(*r), why));
-      const rlnode::ReplayOutput t = outage_run(rec, s, from, end, true);
+      const rlnode::ReplayOutput t = objectives::outage_run(rec, s, from, end, true);
       paths.push_back(path_of(fmt::format("tuned, {} seed {} ({})", fitness_name(r->mode), r->seed,
                                           rmse_text(2, objectives::score_of(std::span(&t, 1)).rmse_m)),
                               t.trajectory));

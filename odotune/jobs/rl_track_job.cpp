@@ -161,6 +161,12 @@ RlTrackTuneOutcome run_rl_track_tune(const RlTuneRequest& request, const RlTrack
   for (const objectives::RlTrack& t : loaded.tracks) recs.push_back(&t.rec);
   const rlnode::ReplaySettings base = rlnode::settings_of(loaded.params);
   RlTrackTuneOutcome out;
+  try {
+    const objectives::RlObjective objective(recs, base, request.options);
+    out.tune = search_rl(objective, request);
+  } catch (const std::invalid_argument& e) {
+    throw core::Failure(e.what());
+  }
   RlTuneOutcome& o = out.tune;
   o.params_file = loaded.params.file;
   o.filter = loaded.params.filter;
@@ -171,12 +177,6 @@ RlTrackTuneOutcome run_rl_track_tune(const RlTuneRequest& request, const RlTrack
     for (const std::string& n : t.rec.notes) o.notes.push_back(t.file.string() + ": " + n);
   }
   o.baseline = base;
-  try {
-    const objectives::RlObjective objective(recs, base, request.options);
-    search_rl(objective, request, o, [](const rlnode::ReplaySettings&) { return std::nullopt; });
-  } catch (const std::invalid_argument& e) {
-    throw core::Failure(e.what());
-  }
   out.before = score_rl_tracks(loaded, base, request.options);
   out.after = score_rl_tracks(loaded, o.tuned, request.options);
   for (const auto& [path, ros2] :

@@ -1,7 +1,6 @@
 // run_rl_tune (odotune/jobs/rl_job.h): the search, its scores and the written files
 // (their text: rl_tune_text.cpp).
 #include <cmath>
-#include <functional>
 #include <limits>
 
 #include <fmt/format.h>
@@ -128,10 +127,7 @@ long start_budget(const objectives::RlObjective& objective, const RlTuneRequest&
   return n + profile_budget(objective, r) + 2;
 }
 
-using Judge = std::function<std::optional<RlProtocolScores>(const rlnode::ReplaySettings&)>;
-
-RlStartOutcome start_outcome(const objectives::RlObjective& objective, const RlStartResult& s,
-                             const Judge& judge) {
+RlStartOutcome start_outcome(const objectives::RlObjective& objective, const RlStartResult& s) {
   RlStartOutcome o;
   o.seed = s.seed;
   o.factors = objective.space().to_physical(s.x);
@@ -139,7 +135,6 @@ RlStartOutcome start_outcome(const objectives::RlObjective& objective, const RlS
   o.fitness = s.fitness;
   o.heldout = objective.heldout_score(o.tuned);
   o.outage = objective.outage_score(o.tuned);
-  o.judged = judge(o.tuned);
   o.profiles = s.profiles;
   o.evaluations = s.evaluations;
   o.seconds = s.seconds;
@@ -167,8 +162,8 @@ tuner::Summary combined_summary(const RlGridResult& grid, const RlStartResult& s
 
 }  // namespace
 
-void search_rl(const objectives::RlObjective& objective, const RlTuneRequest& request, RlTuneOutcome& o,
-               const std::function<std::optional<RlProtocolScores>(const rlnode::ReplaySettings&)>& judge) {
+RlTuneOutcome search_rl(const objectives::RlObjective& objective, const RlTuneRequest& request) {
+  RlTuneOutcome o;
   for (const objectives::ParamSpec& p : objective.space().params()) o.param_names.push_back(p.name);
   o.outage_windows = objective.window_count();
   o.baseline_fitness = objective.baseline_fitness();
@@ -186,7 +181,7 @@ void search_rl(const objectives::RlObjective& objective, const RlTuneRequest& re
     const SolverSettings s = stage_settings(request, request.seed + static_cast<std::uint64_t>(k),
                                             o.grid.evaluations + k * per_start, total);
     runs.push_back(rl_refine_and_profile(objective, o.grid, request.search, s));
-    o.starts.push_back(start_outcome(objective, runs.back(), judge));
+    o.starts.push_back(start_outcome(objective, runs.back()));
   }
   if (o.starts.empty()) throw core::Failure("tune: stopped before the first start");
   for (std::size_t k = 1; k < o.starts.size(); ++k)
@@ -197,27 +192,22 @@ void search_rl(const objectives::RlObjective& objective, const RlTuneRequest& re
   o.tuned_fitness = w.fitness;
   o.tuned_heldout = w.heldout;
   o.tuned_outage = w.outage;
-  o.tuned_judged = w.judged;
   o.summary = combined_summary(o.grid, runs[o.written]);
   o.diverged = objective.diverged();
+  return o;
 }
 
 RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request, const RlLoaded* tuned_on) {
   const rlnode::Recording& rec = loaded.rec;
   const rlnode::Recording& trec = tuned_on ? tuned_on->rec : rec;
   const objectives::RlObjective objective = make_objective(trec, request);
-  RlTuneOutcome o;
+  RlTuneOutcome o = search_rl(objective, request);
   o.bag = rec.bag;
   o.params_file = rec.params.file;
   o.filter = rec.params.filter;
   o.duration_s = rl_seconds(rec, rec.end_ns);
   o.span_from_s = rl_seconds(rec, trec.start_ns);
   o.span_until_s = rl_seconds(rec, std::min(trec.end_ns, objective.options().until_ns));
-  o.judged = judged_span(rec, request);
-  if (o.judged) {
-    o.judged_from_s = rl_seconds(rec, std::min(o.judged->outage_from_ns, o.judged->fifth_from_ns));
-    o.judged_until_s = rl_seconds(rec, std::min(rec.end_ns, o.judged->end_ns));
-  }
   o.alignment = loaded.alignment;
   o.notes = trec.notes;
   if (tuned_on && tuned_on->alignment) {
@@ -228,12 +218,17 @@ RlTuneOutcome tune_rl(const RlLoaded& loaded, const RlTuneRequest& request, cons
                     tuned_on->alignment->rms_m));
   }
   o.baseline = rlnode::settings_of(trec.params);
-  if (o.judged) o.baseline_judged = score_protocols(rec, rlnode::settings_of(rec.params), *o.judged);
-
-  search_rl(objective, request, o, [&](const rlnode::ReplaySettings& s) -> std::optional<RlProtocolScores> {
-    if (!o.judged) return std::nullopt;
-    return score_protocols(rec, s, *o.judged);
-  });
+  o.judged = judged_span(rec, request);
+  if (o.judged) {
+    // The file's and every start's settings on the whole recording's judged
+    // span, which the tune never saw.
+    o.judged_from_s = rl_seconds(rec, std::min(o.judged->outage_from_ns, o.judged->fifth_from_ns));
+    o.judged_until_s = rl_seconds(rec, std::min(rec.end_ns, o.judged->end_ns));
+    o.baseline_judged = objectives::score_protocols(rec, rlnode::settings_of(rec.params), *o.judged);
+    for (RlStartOutcome& start : o.starts)
+      start.judged = objectives::score_protocols(rec, start.tuned, *o.judged);
+    o.tuned_judged = o.starts[o.written].judged;
+  }
   return o;
 }
 

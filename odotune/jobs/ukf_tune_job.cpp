@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/why.h>
 #include <odotune/objectives/ekf_objective.h>  // kDivergencePenalty
 #include <odotune/tuner/problem.h>
 
@@ -12,8 +13,7 @@ namespace odotune::jobs {
 bool UkfTuneRequest::IsValid(std::string* why) const {
   if (!SolverSettings::IsValid(why)) return false;
   if (objectives::is_fix_cv(mode)) {
-    if (why) *why = fmt::format("mode = {} must be 1..7", objectives::number(mode));
-    return false;
+    return core::invalid(why, fmt::format("mode = {} must be 1..7", objectives::number(mode)));
   }
   return true;
 }

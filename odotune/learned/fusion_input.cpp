@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/why.h>
 #include <odotune/objectives/pose_series.h>
 #include <odotune/objectives/track_samples.h>
 #include <odotune/tracks/body_velocity.h>
@@ -325,23 +326,20 @@ FusionInput slice_fusion_input(const FusionInput& in, std::size_t first, std::si
 }
 
 bool FusionInputOptions::IsValid(std::string* why) const {
-  auto bad = [why](const std::string& msg) {
-    if (why) *why = msg;
-    return false;
-  };
   if (!(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= kMaxRateHz))
-    return bad(fmt::format("rate_hz = {} must be in (0, {}] Hz", rate_hz, kMaxRateHz));
+    return core::invalid(why, fmt::format("rate_hz = {} must be in (0, {}] Hz", rate_hz, kMaxRateHz));
   std::string inner;
   if (!(std::isfinite(ext_from_gt_hz) && ext_from_gt_hz >= 0.0 && ext_from_gt_hz <= 100.0))
-    return bad(fmt::format("ext_from_gt_hz = {} must be in [0, 100] Hz (0: the track's v_ext)",
-                           ext_from_gt_hz));
-  if (geometry && !geometry->IsValid(&inner)) return bad("geometry: " + inner);
-  if (!twist.IsValid(&inner)) return bad("twist: " + inner);
+    return core::invalid(why, fmt::format("ext_from_gt_hz = {} must be in [0, 100] Hz (0: the track's v_ext)",
+                                          ext_from_gt_hz));
+  if (geometry && !geometry->IsValid(&inner)) return core::invalid(why, "geometry: " + inner);
+  if (!twist.IsValid(&inner)) return core::invalid(why, "twist: " + inner);
   if (!(std::isfinite(default_ext_var_v) && default_ext_var_v > 0.0))
-    return bad(fmt::format("default_ext_var_v = {} must be a finite number > 0 [(m/s)^2]", default_ext_var_v));
+    return core::invalid(why, fmt::format("default_ext_var_v = {} must be a finite number > 0 [(m/s)^2]",
+                                          default_ext_var_v));
   if (!(std::isfinite(default_ext_var_w) && default_ext_var_w > 0.0))
-    return bad(fmt::format("default_ext_var_w = {} must be a finite number > 0 [(rad/s)^2]",
-                           default_ext_var_w));
+    return core::invalid(why, fmt::format("default_ext_var_w = {} must be a finite number > 0 [(rad/s)^2]",
+                                          default_ext_var_w));
   return true;
 }
 

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/why.h>
+
 namespace odotune::learned {
 namespace {
 
@@ -109,34 +111,26 @@ void collect_and_retrain(const FusionInput& in, std::size_t k, const OdometryMea
 }  // namespace
 
 bool RetrainOptions::IsValid(std::string* why) const {
-  auto fail = [why](std::string m) {
-    if (why) *why = std::move(m);
-    return false;
-  };
   if (!enabled) return true;
   if (samples_per_retrain < 20)
-    return fail(fmt::format("samples_per_retrain = {}: expected >= 20", samples_per_retrain));
+    return core::invalid(why, fmt::format("samples_per_retrain = {}: expected >= 20", samples_per_retrain));
   for (double x : {max_filter_var_v, max_filter_var_w, max_odometry_var_v, max_odometry_var_w})
     if (!positive_finite(x))
-      return fail(fmt::format("retraining thresholds must be finite and > 0, got {}", x));
+      return core::invalid(why, fmt::format("retraining thresholds must be finite and > 0, got {}", x));
   return training.IsValid(why);
 }
 
 bool LearnedFusionOptions::IsValid(std::string* why) const {
-  auto fail = [why](std::string m) {
-    if (why) *why = std::move(m);
-    return false;
-  };
   if (!positive_finite(static_var_v) || !positive_finite(static_var_w))
-    return fail(fmt::format("static_var_v = {}, static_var_w = {}: expected finite values > 0", static_var_v,
-                            static_var_w));
+    return core::invalid(why, fmt::format("static_var_v = {}, static_var_w = {}: expected finite values > 0",
+                                          static_var_v, static_var_w));
   std::string inner;
-  if (detector && !detector->IsValid(&inner)) return fail("slip detector: " + inner);
-  if (!ukf.IsValid(&inner)) return fail("ukf: " + inner);
-  if (!noise.IsValid(&inner)) return fail("noise: " + inner);
+  if (detector && !detector->IsValid(&inner)) return core::invalid(why, "slip detector: " + inner);
+  if (!ukf.IsValid(&inner)) return core::invalid(why, "ukf: " + inner);
+  if (!noise.IsValid(&inner)) return core::invalid(why, "noise: " + inner);
   if (retrain.enabled && odometry != Odometry::learned)
-    return fail("retraining needs the learned odometry (odometry = learned)");
-  if (!retrain.IsValid(&inner)) return fail("retrain: " + inner);
+    return core::invalid(why, "retraining needs the learned odometry (odometry = learned)");
+  if (!retrain.IsValid(&inner)) return core::invalid(why, "retrain: " + inner);
   return true;
 }
 

@@ -29,6 +29,8 @@
 #include <string>
 #include <utility>
 
+#include <odotune/core/why.h>
+
 namespace odotune::learned {
 
 enum class OutputActivation { linear, relu };
@@ -179,23 +181,23 @@ struct LstmNet {
 
   // Finite weights and standardisation, sd > 0, 1 ≤ window ≤ kMaxWindow.
   bool IsValid(std::string* why) const {
-    auto fail = [why](std::string msg) {
-      if (why) *why = std::move(msg);
-      return false;
-    };
     if (window < 1 || window > kMaxWindow)
-      return fail("window = " + std::to_string(window) + ": expected 1.." + std::to_string(kMaxWindow));
+      return core::invalid(why, "window = " + std::to_string(window) + ": expected 1.." +
+                                    std::to_string(kMaxWindow));
     for (int n = 0; n < kWeights; ++n)
-      if (!std::isfinite(weights[n])) return fail("weights[" + std::to_string(n) + "] is not finite");
+      if (!std::isfinite(weights[n]))
+        return core::invalid(why, "weights[" + std::to_string(n) + "] is not finite");
     for (int k = 0; k < I; ++k) {
-      if (!std::isfinite(input_mean[k])) return fail("input_mean[" + std::to_string(k) + "] is not finite");
+      if (!std::isfinite(input_mean[k]))
+        return core::invalid(why, "input_mean[" + std::to_string(k) + "] is not finite");
       if (!(input_sd[k] > 0.0) || !std::isfinite(input_sd[k]))
-        return fail("input_sd[" + std::to_string(k) + "] = " + lstm_detail::number_text(input_sd[k]) +
-                    ": expected a finite value > 0");
+        return core::invalid(why, "input_sd[" + std::to_string(k) + "] = " +
+                                      lstm_detail::number_text(input_sd[k]) + ": expected a finite value > 0");
     }
-    if (!std::isfinite(output_mean)) return fail("output_mean is not finite");
+    if (!std::isfinite(output_mean)) return core::invalid(why, "output_mean is not finite");
     if (!(output_sd > 0.0) || !std::isfinite(output_sd))
-      return fail("output_sd = " + lstm_detail::number_text(output_sd) + ": expected a finite value > 0");
+      return core::invalid(why, "output_sd = " + lstm_detail::number_text(output_sd) +
+                                    ": expected a finite value > 0");
     return true;
   }
 };

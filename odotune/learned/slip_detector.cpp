@@ -8,6 +8,8 @@
 #include <fmt/format.h>
 
 #include <odotune/core/enum_names.h>
+#include <odotune/core/robust_stats.h>
+#include <odotune/core/why.h>
 
 namespace odotune::learned {
 namespace {
@@ -65,45 +67,39 @@ SlipDrive available_slip_drive(const std::vector<const FusionInput*>& tracks) {
 
 bool SlipDetectorModel::IsValid(std::string* why) const {
   std::string inner;
-  auto fail = [why](std::string m) {
-    if (why) *why = std::move(m);
-    return false;
-  };
-  if (!v_net.IsValid(&inner)) return fail("v_net: " + inner);
-  if (!w_net.IsValid(&inner)) return fail("w_net: " + inner);
+  if (!v_net.IsValid(&inner)) return core::invalid(why, "v_net: " + inner);
+  if (!w_net.IsValid(&inner)) return core::invalid(why, "w_net: " + inner);
   if (!positive_finite(floor_var_v) || !positive_finite(floor_var_w))
-    return fail(fmt::format("floor_var_v = {}, floor_var_w = {}: expected finite values > 0", floor_var_v,
-                            floor_var_w));
+    return core::invalid(why, fmt::format("floor_var_v = {}, floor_var_w = {}: expected finite values > 0",
+                                          floor_var_v, floor_var_w));
   if (previous_lag < 1 || previous_lag > v_net.window)
-    return fail(fmt::format("previous_lag = {}: expected 1..{}", previous_lag, v_net.window));
+    return core::invalid(why, fmt::format("previous_lag = {}: expected 1..{}", previous_lag, v_net.window));
   return true;
 }
 
 bool SlipTrainingOptions::IsValid(std::string* why) const {
   if (!training.IsValid(why)) return false;
-  auto fail = [why](std::string m) {
-    if (why) *why = std::move(m);
-    return false;
-  };
   if (!(train_fraction > 0.0 && train_fraction < 1.0))
-    return fail(fmt::format("train_fraction = {}: expected a value in (0, 1)", train_fraction));
+    return core::invalid(why, fmt::format("train_fraction = {}: expected a value in (0, 1)", train_fraction));
   if (target_window < 1 || target_window % 2 == 0)
-    return fail(fmt::format("target_window = {}: expected an odd number of steps >= 1", target_window));
+    return core::invalid(why, fmt::format("target_window = {}: expected an odd number of steps >= 1",
+                                          target_window));
   if (!positive_finite(floor_var_v) || !positive_finite(floor_var_w))
-    return fail("floor_var_v/_w: expected finite values > 0");
-  if (stride < 1) return fail(fmt::format("stride = {}: expected >= 1", stride));
+    return core::invalid(why, "floor_var_v/_w: expected finite values > 0");
+  if (stride < 1) return core::invalid(why, fmt::format("stride = {}: expected >= 1", stride));
   if (!(floor_quantile >= 0.0 && floor_quantile < 1.0))
-    return fail(fmt::format("floor_quantile = {}: expected a value in [0, 1)", floor_quantile));
+    return core::invalid(why, fmt::format("floor_quantile = {}: expected a value in [0, 1)", floor_quantile));
   if (!(weight_decay >= 0.0) || !std::isfinite(weight_decay))
-    return fail(fmt::format("weight_decay = {}: expected a finite value >= 0", weight_decay));
-  if (feedback_rounds < 0) return fail(fmt::format("feedback_rounds = {}: expected >= 0", feedback_rounds));
+    return core::invalid(why, fmt::format("weight_decay = {}: expected a finite value >= 0", weight_decay));
+  if (feedback_rounds < 0)
+    return core::invalid(why, fmt::format("feedback_rounds = {}: expected >= 0", feedback_rounds));
   if (!(flag_quantile > 0.0 && flag_quantile < 1.0))
-    return fail(fmt::format("flag_quantile = {}: expected a value in (0, 1)", flag_quantile));
+    return core::invalid(why, fmt::format("flag_quantile = {}: expected a value in (0, 1)", flag_quantile));
   if (validation_chunk < 0 || patience < 1)
-    return fail(fmt::format("validation_chunk = {}, patience = {}: expected >= 0 and >= 1", validation_chunk,
-                            patience));
+    return core::invalid(why, fmt::format("validation_chunk = {}, patience = {}: expected >= 0 and >= 1",
+                                          validation_chunk, patience));
   if (previous_lag < 1 || previous_lag > 20)
-    return fail(fmt::format("previous_lag = {}: expected 1..20 steps", previous_lag));
+    return core::invalid(why, fmt::format("previous_lag = {}: expected 1..20 steps", previous_lag));
   return true;
 }
 
@@ -182,8 +178,7 @@ std::array<double, 2> variance_floors(const PerTrack& targets, const SlipTrainin
           if (std::isfinite(v)) all.push_back(v);
       if (all.empty()) continue;
       const auto q = static_cast<std::size_t>(options.floor_quantile * static_cast<double>(all.size() - 1));
-      std::nth_element(all.begin(), all.begin() + static_cast<long>(q), all.end());
-      floors[d] = std::max(floors[d], all[q]);
+      floors[d] = std::max(floors[d], core::order_statistic(std::move(all), q));
     }
   }
   return floors;
@@ -342,8 +337,7 @@ void set_flag_thresholds(const std::vector<const FusionInput*>& tracks, double q
   for (int d = 0; d < 2; ++d) {
     if (all[d].empty()) continue;
     const auto q = static_cast<std::size_t>(quantile * static_cast<double>(all[d].size() - 1));
-    std::nth_element(all[d].begin(), all[d].begin() + static_cast<long>(q), all[d].end());
-    (d == 0 ? model.flag_var_v : model.flag_var_w) = all[d][q];
+    (d == 0 ? model.flag_var_v : model.flag_var_w) = core::order_statistic(std::move(all[d]), q);
   }
 }
 

@@ -7,17 +7,15 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/why.h>
+
 namespace odotune::learned {
 
 bool UkfSensorNoise::IsValid(std::string* why) const {
-  auto bad = [why](const std::string& msg) {
-    if (why) *why = msg;
-    return false;
-  };
   if (!(std::isfinite(gyro_var) && gyro_var > 0.0))
-    return bad(fmt::format("gyro_var = {} must be a finite number > 0 [(rad/s)^2]", gyro_var));
+    return core::invalid(why, fmt::format("gyro_var = {} must be a finite number > 0 [(rad/s)^2]", gyro_var));
   if (!(std::isfinite(ext_var_scale) && ext_var_scale > 0.0))
-    return bad(fmt::format("ext_var_scale = {} must be a finite number > 0", ext_var_scale));
+    return core::invalid(why, fmt::format("ext_var_scale = {} must be a finite number > 0", ext_var_scale));
   return true;
 }
 

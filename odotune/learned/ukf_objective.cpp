@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/why.h>
 #include <odotune/objectives/ekf_objective.h>  // kDivergencePenalty
 
 namespace odotune::learned {
@@ -26,20 +27,16 @@ enum UkfParam : std::size_t {
 bool UkfSettings::IsValid(std::string* why) const {
   std::string inner;
   if (!params.IsValid(&inner)) {
-    if (why) *why = "UkfParams: " + inner;
-    return false;
+    return core::invalid(why, "UkfParams: " + inner);
   }
   if (!noise.IsValid(&inner)) {
-    if (why) *why = "UkfSensorNoise: " + inner;
-    return false;
+    return core::invalid(why, "UkfSensorNoise: " + inner);
   }
   if (!(std::isfinite(odo_var_v) && odo_var_v > 0.0)) {
-    if (why) *why = fmt::format("odo_var_v = {} must be a finite number > 0 [(m/s)^2]", odo_var_v);
-    return false;
+    return core::invalid(why, fmt::format("odo_var_v = {} must be a finite number > 0 [(m/s)^2]", odo_var_v));
   }
   if (!(std::isfinite(odo_var_w) && odo_var_w > 0.0)) {
-    if (why) *why = fmt::format("odo_var_w = {} must be a finite number > 0 [(rad/s)^2]", odo_var_w);
-    return false;
+    return core::invalid(why, fmt::format("odo_var_w = {} must be a finite number > 0 [(rad/s)^2]", odo_var_w));
   }
   return true;
 }

@@ -5,6 +5,8 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/why.h>
+
 namespace odotune::objectives {
 
 using filters::Divergence;
@@ -13,12 +15,10 @@ using filters::Sym3;
 
 bool FixCvOptions::IsValid(std::string* why) const {
   if (folds < 2) {
-    if (why) *why = fmt::format("folds = {}: at least 2 (one held out, the rest applied)", folds);
-    return false;
+    return core::invalid(why, fmt::format("folds = {}: at least 2 (one held out, the rest applied)", folds));
   }
   if (!(std::isfinite(block_s) && block_s > 0.0)) {
-    if (why) *why = fmt::format("block_s = {}: a finite number of seconds > 0", block_s);
-    return false;
+    return core::invalid(why, fmt::format("block_s = {}: a finite number of seconds > 0", block_s));
   }
   return true;
 }

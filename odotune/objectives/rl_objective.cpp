@@ -102,14 +102,12 @@ bool apply_rl_factors(const rlnode::RlParams& params, std::span<const std::strin
   std::array<double, 3> ukf_factors = {1.0, 1.0, 1.0};
   for (std::size_t i = 0; i < names.size() && i < factors.size(); ++i) {
     if (!(factors[i] > 0.0 && std::isfinite(factors[i]))) {
-      if (why) *why = fmt::format("{} = {}: expected a positive factor", names[i], factors[i]);
-      return false;
+      return core::invalid(why, fmt::format("{} = {}: expected a positive factor", names[i], factors[i]));
     }
     const auto ukf = std::find(kUkfFactorNames.begin(), kUkfFactorNames.end(), names[i]);
     if (ukf != kUkfFactorNames.end()) {
       if (params.filter != filters::rl::RlFilterType::ukf) {
-        if (why) *why = fmt::format("'{}' is ukf_node's, and this file runs ekf_node", names[i]);
-        return false;
+        return core::invalid(why, fmt::format("'{}' is ukf_node's, and this file runs ekf_node", names[i]));
       }
       ukf_factors[static_cast<std::size_t>(ukf - kUkfFactorNames.begin())] = factors[i];
       continue;
@@ -124,13 +122,11 @@ bool apply_rl_factors(const rlnode::RlParams& params, std::span<const std::strin
       found = true;
     }
     if (!found) {
-      if (why) *why = fmt::format("'{}' is not a parameter of this file's filter", names[i]);
-      return false;
+      return core::invalid(why, fmt::format("'{}' is not a parameter of this file's filter", names[i]));
     }
   }
   if (names.size() != factors.size()) {
-    if (why) *why = fmt::format("{} names for {} factors", names.size(), factors.size());
-    return false;
+    return core::invalid(why, fmt::format("{} names for {} factors", names.size(), factors.size()));
   }
   s->ukf = scaled_ukf_constants(base.ukf, ukf_factors[0], ukf_factors[1], ukf_factors[2]);
   return true;

@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include <odotune/core/robust_stats.h>
 #include <odotune/results/gnuplot.h>
 
 namespace odotune::results {
@@ -178,8 +179,7 @@ std::string boxplot_outliers(std::vector<double> v, double x) {
 // maximum (a line for one value) and a line at the median.
 std::string small_box(std::vector<double> v, double x, double width) {
   std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  const double median = n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+  const double median = core::sorted_median(v);
   return num(x) + " " + num(median) + " " + num(x - width / 2) + " " + num(x + width / 2) + " " +
          num(v.front()) + " " + num(v.back()) + "\n";
 }
@@ -312,7 +312,7 @@ ConvergenceBand resample_convergence(const std::vector<std::vector<ConvergencePo
     std::sort(at.begin(), at.end());
     const std::size_t n = at.size();
     band.evaluations.push_back(e);
-    band.median_m.push_back(n % 2 == 1 ? at[n / 2] : 0.5 * (at[n / 2 - 1] + at[n / 2]));
+    band.median_m.push_back(core::sorted_median(at));
     band.min_m.push_back(at.front());
     band.max_m.push_back(at.back());
     band.runs.push_back(static_cast<int>(n));

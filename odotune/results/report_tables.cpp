@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/robust_stats.h>
+
 namespace odotune::results {
 
 namespace {
@@ -188,11 +190,7 @@ std::string to_markdown(const TextTable& t) {
 }
 
 namespace {
-double median_of(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n == 0 ? kNaN : n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+double median_of(std::vector<double> v) { return core::median(std::move(v)); }
 }  // namespace
 
 std::vector<SeedSpreadRow> seed_spread(const std::vector<RunRecord>& runs, const std::string& model) {

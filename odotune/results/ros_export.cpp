@@ -1,4 +1,3 @@
-#include <odotune/core/atomic_file.h>
 #include <odotune/results/ros_export.h>
 
 #include <fmt/format.h>
@@ -8,6 +7,9 @@
 #include <cmath>
 #include <stdexcept>
 #include <system_error>
+
+#include <odotune/core/atomic_file.h>
+#include <odotune/core/why.h>
 
 namespace odotune::results {
 
@@ -57,26 +59,24 @@ bool finite_pos(double v) { return std::isfinite(v) && v > 0.0; }
 }  // namespace
 
 bool RosExportInput::IsValid(std::string* why) const {
-  auto fail = [why](std::string msg) {
-    if (why) *why = std::move(msg);
-    return false;
-  };
   if (!valid_node_name(node_name))
-    return fail(fmt::format("node_name '{}' is not a ROS node name (letters, digits, '_', '/')",
-                            one_line(node_name)));
+    return core::invalid(why, fmt::format("node_name '{}' is not a ROS node name (letters, digits, '_', '/')",
+                                          one_line(node_name)));
   if (!finite_nonneg(process_var_x_m2_per_s))
-    return fail(fmt::format("process_var_x_m2_per_s = {} must be finite and >= 0", process_var_x_m2_per_s));
+    return core::invalid(why, fmt::format("process_var_x_m2_per_s = {} must be finite and >= 0",
+                                          process_var_x_m2_per_s));
   if (!finite_nonneg(process_var_y_m2_per_s))
-    return fail(fmt::format("process_var_y_m2_per_s = {} must be finite and >= 0", process_var_y_m2_per_s));
+    return core::invalid(why, fmt::format("process_var_y_m2_per_s = {} must be finite and >= 0",
+                                          process_var_y_m2_per_s));
   if (!finite_nonneg(process_var_yaw_rad2_per_s))
-    return fail(fmt::format("process_var_yaw_rad2_per_s = {} must be finite and >= 0",
-                            process_var_yaw_rad2_per_s));
+    return core::invalid(why, fmt::format("process_var_yaw_rad2_per_s = {} must be finite and >= 0",
+                                          process_var_yaw_rad2_per_s));
   if (!finite_pos(fix_var_x_m2))
-    return fail(fmt::format("fix_var_x_m2 = {} must be finite and > 0", fix_var_x_m2));
+    return core::invalid(why, fmt::format("fix_var_x_m2 = {} must be finite and > 0", fix_var_x_m2));
   if (!finite_pos(fix_var_y_m2))
-    return fail(fmt::format("fix_var_y_m2 = {} must be finite and > 0", fix_var_y_m2));
+    return core::invalid(why, fmt::format("fix_var_y_m2 = {} must be finite and > 0", fix_var_y_m2));
   if (!finite_pos(frequency_hz))
-    return fail(fmt::format("frequency_hz = {} must be finite and > 0", frequency_hz));
+    return core::invalid(why, fmt::format("frequency_hz = {} must be finite and > 0", frequency_hz));
   return true;
 }
 

@@ -9,6 +9,8 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/why.h>
+
 namespace odotune::sim {
 
 namespace {
@@ -175,11 +177,10 @@ std::string unknown_param_message(const EffectInfo& e, std::string_view param) {
 
 bool check_cross(const Effects& e, std::string* why) {
   if (e.slip_zone && !(e.slip_zone->x0 < e.slip_zone->x1 && e.slip_zone->y0 < e.slip_zone->y1)) {
-    if (why)
-      *why = fmt::format("slip_zone box is empty (x0 = {}, x1 = {}, y0 = {}, y1 = {}); expected "
-                         "x0 < x1 and y0 < y1",
-                         e.slip_zone->x0, e.slip_zone->x1, e.slip_zone->y0, e.slip_zone->y1);
-    return false;
+    return core::invalid(why,
+                         fmt::format("slip_zone box is empty (x0 = {}, x1 = {}, y0 = {}, y1 = {}); expected "
+                                     "x0 < x1 and y0 < y1",
+                                     e.slip_zone->x0, e.slip_zone->x1, e.slip_zone->y0, e.slip_zone->y1));
   }
   return true;
 }
@@ -226,11 +227,9 @@ std::string closest_name(std::string_view word, const std::vector<std::string_vi
 bool check_param(const EffectInfo& effect, const EffectParamInfo& param, double value, std::string* why) {
   const bool low_ok = param.min_exclusive ? value > param.min : value >= param.min;
   if (std::isfinite(value) && low_ok && value <= param.max) return true;
-  if (why)
-    *why = fmt::format("{}.{} = {} is out of range {}{}, {}]{}", effect.name, param.name, value,
-                       param.min_exclusive ? "(" : "[", param.min, param.max,
-                       param.unit == "1" ? "" : fmt::format(" {}", param.unit));
-  return false;
+  return core::invalid(why, fmt::format("{}.{} = {} is out of range {}{}, {}]{}", effect.name, param.name,
+                                        value, param.min_exclusive ? "(" : "[", param.min, param.max,
+                                        param.unit == "1" ? "" : fmt::format(" {}", param.unit)));
 }
 
 EffectSpec parse_effect_spec(std::string_view text) {

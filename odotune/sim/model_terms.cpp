@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/why.h>
+
 namespace odotune::sim {
 
 namespace {
@@ -151,22 +153,19 @@ TermBasis parse_basis(TermTarget t, std::string_view name) {
 }
 
 bool validate_terms(const std::vector<ModelTerm>& terms, std::string* why) {
-  auto fail = [why](std::string msg) {
-    if (why) *why = std::move(msg);
-    return false;
-  };
   if (terms.size() > kMaxModelTerms)
-    return fail(fmt::format("{} terms; expected at most {}", terms.size(), kMaxModelTerms));
+    return core::invalid(why, fmt::format("{} terms; expected at most {}", terms.size(), kMaxModelTerms));
   for (std::size_t i = 0; i < terms.size(); ++i) {
     const ModelTerm& m = terms[i];
     const std::string name = term_name(m.target, m.basis, true);
     if (!std::isfinite(m.coef))
-      return fail(fmt::format("term {} ({} on {}): coef = {}; expected a finite number", i + 1, name,
-                              target_name(m.target), m.coef));
+      return core::invalid(why, fmt::format("term {} ({} on {}): coef = {}; expected a finite number", i + 1,
+                                            name, target_name(m.target), m.coef));
     for (std::size_t j = 0; j < i; ++j)
       if (terms[j].target == m.target && terms[j].basis == m.basis)
-        return fail(fmt::format("term {} ({} on {}) is given twice (also term {}); expected each term once",
-                                i + 1, name, target_name(m.target), j + 1));
+        return core::invalid(
+            why, fmt::format("term {} ({} on {}) is given twice (also term {}); expected each term once", i + 1,
+                             name, target_name(m.target), j + 1));
   }
   return true;
 }

@@ -16,6 +16,8 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
+#include <odotune/core/robust_stats.h>
+#include <odotune/core/why.h>
 #include <odotune/sim/effects.h>
 #include <odotune/sim/simulator.h>
 
@@ -345,14 +347,8 @@ class SensorBuilder {
   // 1 / median period, the period snapped to whole steps; `fallback_hz` (also
   // snapped) with fewer than 2 samples.
   double rate_hz(const std::vector<double>& t, double fallback_hz) const {
-    double period = 1.0 / fallback_hz;
-    if (t.size() >= 2) {
-      std::vector<double> d(t.size() - 1);
-      for (std::size_t i = 1; i < t.size(); ++i) d[i - 1] = t[i] - t[i - 1];
-      const auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
-      std::nth_element(d.begin(), mid, d.end());
-      period = *mid;
-    }
+    const double period = t.size() >= 2 ? core::median_period_s(t, core::MedianRule::upper_middle)
+                                        : 1.0 / fallback_hz;
     const double steps = std::max(1.0, std::round(period * sps_));
     return sps_ / steps;
   }
@@ -367,9 +363,7 @@ class SensorBuilder {
     for (double x : track_.col(c))
       if (std::isfinite(x) && x >= 0.0) v.push_back(x);
     if (v.empty()) return fallback;
-    const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-    std::nth_element(v.begin(), mid, v.end());
-    return std::sqrt(*mid);
+    return std::sqrt(core::median(std::move(v), core::MedianRule::upper_middle));
   }
 
   SensorParams build() const {
@@ -429,24 +423,22 @@ class SensorBuilder {
 }  // namespace
 
 bool ScenarioFromTrackOptions::IsValid(std::string* why) const {
-  auto fail = [why](std::string msg) {
-    if (why) *why = std::move(msg);
-    return false;
-  };
   if (!(std::isfinite(knot_rate_hz) && knot_rate_hz > 0.0 && knot_rate_hz <= 1000.0))
-    return fail(fmt::format("knot_rate_hz = {}; expected a rate in (0, 1000] Hz", knot_rate_hz));
+    return core::invalid(why, fmt::format("knot_rate_hz = {}; expected a rate in (0, 1000] Hz", knot_rate_hz));
   if (!(std::isfinite(half_window_s) && half_window_s > 0.0))
-    return fail(fmt::format("half_window_s = {}; expected a number > 0 [s]", half_window_s));
+    return core::invalid(why, fmt::format("half_window_s = {}; expected a number > 0 [s]", half_window_s));
   if (!(std::isfinite(fixes_half_window_s) && fixes_half_window_s > 0.0))
-    return fail(fmt::format("fixes_half_window_s = {}; expected a number > 0 [s]", fixes_half_window_s));
-  if (min_fit_points < 4) return fail(fmt::format("min_fit_points = {}; expected at least 4", min_fit_points));
+    return core::invalid(why, fmt::format("fixes_half_window_s = {}; expected a number > 0 [s]",
+                                          fixes_half_window_s));
+  if (min_fit_points < 4)
+    return core::invalid(why, fmt::format("min_fit_points = {}; expected at least 4", min_fit_points));
   if (!(std::isfinite(min_speed_m_s) && min_speed_m_s >= 0.0))
-    return fail(fmt::format("min_speed_m_s = {}; expected a number >= 0 [m/s]", min_speed_m_s));
+    return core::invalid(why, fmt::format("min_speed_m_s = {}; expected a number >= 0 [m/s]", min_speed_m_s));
   const double inv = 1.0 / step_s;
   if (!(std::isfinite(step_s) && step_s > 0.0 && step_s <= 0.1 && inv <= 1e7 &&
         std::abs(inv - std::round(inv)) <= 1e-9 * std::round(inv)))
-    return fail(fmt::format("step_s = {}; expected a step in (0, 0.1] s whose inverse is a whole number",
-                            step_s));
+    return core::invalid(
+        why, fmt::format("step_s = {}; expected a step in (0, 0.1] s whose inverse is a whole number", step_s));
   return true;
 }
 

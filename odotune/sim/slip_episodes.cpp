@@ -10,6 +10,8 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/why.h>
+
 namespace odotune::sim {
 
 namespace {
@@ -104,52 +106,50 @@ std::string_view wheel_name(SlipEpisode::Wheel wheel) {
 }
 
 bool check_slip_episode(const SlipEpisode& e, std::string* field, std::string* why) {
-  auto fail = [&](const char* f, std::string msg) {
+  // The field at fault (for the caller's file:line) and the reason.
+  auto invalid_field = [&](const char* f, std::string msg) {
     if (field) *field = f;
-    if (why) *why = std::move(msg);
-    return false;
+    return core::invalid(why, std::move(msg));
   };
   if (!valid_kind(e.kind))
-    return fail("kind", fmt::format("kind = {}; expected spin or hold", static_cast<int>(e.kind)));
+    return invalid_field("kind", fmt::format("kind = {}; expected spin or hold", static_cast<int>(e.kind)));
   if (!valid_wheel(e.wheel))
-    return fail("wheel", fmt::format("wheel = {}; expected left or right", static_cast<int>(e.wheel)));
+    return invalid_field("wheel", fmt::format("wheel = {}; expected left or right", static_cast<int>(e.wheel)));
   if (!(std::isfinite(e.t0_s) && e.t0_s >= 0.0))
-    return fail("t0_s", fmt::format("t0_s = {}; expected a start time >= 0 s", e.t0_s));
+    return invalid_field("t0_s", fmt::format("t0_s = {}; expected a start time >= 0 s", e.t0_s));
   if (!(std::isfinite(e.t1_s) && e.t1_s > e.t0_s))
-    return fail("t1_s", fmt::format("t1_s = {}; expected an end time > t0_s = {} s", e.t1_s, e.t0_s));
+    return invalid_field("t1_s", fmt::format("t1_s = {}; expected an end time > t0_s = {} s", e.t1_s, e.t0_s));
   if (!(std::isfinite(e.s) && e.s > 0.0 && e.s <= kMaxStrength))
-    return fail("s", fmt::format("s = {}; expected a strength in (0, {}]", e.s, kMaxStrength));
+    return invalid_field("s", fmt::format("s = {}; expected a strength in (0, {}]", e.s, kMaxStrength));
   if (!(std::isfinite(e.ramp_s) && e.ramp_s > 0.0))
-    return fail("ramp_s", fmt::format("ramp_s = {}; expected a ramp duration > 0 s (0 would make the "
-                                      "wheel's rate jump)",
-                                      e.ramp_s));
+    return invalid_field("ramp_s", fmt::format("ramp_s = {}; expected a ramp duration > 0 s (0 would make the "
+                                               "wheel's rate jump)",
+                                               e.ramp_s));
   if (!(2.0 * e.ramp_s <= e.t1_s - e.t0_s))
-    return fail("ramp_s", fmt::format("ramp_s = {}: the two ramps do not fit in [t0_s, t1_s] = [{}, {}] s; "
-                                      "expected 2*ramp_s <= t1_s - t0_s = {} s",
-                                      e.ramp_s, e.t0_s, e.t1_s, e.t1_s - e.t0_s));
+    return invalid_field("ramp_s",
+                         fmt::format("ramp_s = {}: the two ramps do not fit in [t0_s, t1_s] = [{}, {}] s; "
+                                     "expected 2*ramp_s <= t1_s - t0_s = {} s",
+                                     e.ramp_s, e.t0_s, e.t1_s, e.t1_s - e.t0_s));
   if (e.kind == SlipEpisode::Kind::hold && !(std::isfinite(e.brake_nm) && e.brake_nm >= 0.0))
-    return fail("brake_nm", fmt::format("brake_nm = {}; expected a braking torque >= 0 N*m (0: "
-                                        "2*robot.coulomb_friction_nm)",
-                                        e.brake_nm));
+    return invalid_field("brake_nm", fmt::format("brake_nm = {}; expected a braking torque >= 0 N*m (0: "
+                                                 "2*robot.coulomb_friction_nm)",
+                                                 e.brake_nm));
   if (e.kind == SlipEpisode::Kind::spin && e.brake_nm != 0.0)
-    return fail("brake_nm", fmt::format("brake_nm = {} on a spin episode; expected 0 (brake_nm applies "
-                                        "to hold episodes only)",
-                                        e.brake_nm));
+    return invalid_field("brake_nm",
+                         fmt::format("brake_nm = {} on a spin episode; expected 0 (brake_nm applies "
+                                     "to hold episodes only)",
+                                     e.brake_nm));
   return true;
 }
 
 bool validate_slip_episodes(const std::vector<SlipEpisode>& episodes, std::string* why) {
-  auto fail = [why](std::string msg) {
-    if (why) *why = std::move(msg);
-    return false;
-  };
   if (episodes.size() > kMaxSlipEpisodes)
-    return fail(fmt::format("slip_episodes: {} episodes; expected at most {}", episodes.size(),
-                            kMaxSlipEpisodes));
+    return core::invalid(why, fmt::format("slip_episodes: {} episodes; expected at most {}", episodes.size(),
+                                          kMaxSlipEpisodes));
   for (std::size_t i = 0; i < episodes.size(); ++i) {
     std::string field, msg;
     if (!check_slip_episode(episodes[i], &field, &msg))
-      return fail(fmt::format("slip_episodes[{}]: {}", i + 1, msg));
+      return core::invalid(why, fmt::format("slip_episodes[{}]: {}", i + 1, msg));
   }
   // Per wheel, in order of start: an episode starting before the latest end
   // so far overlaps the episode owning that end.
@@ -167,11 +167,12 @@ bool validate_slip_episodes(const std::vector<SlipEpisode>& episodes, std::strin
         const std::size_t a = std::max(i, owner), b = std::min(i, owner);
         const SlipEpisode& ea = episodes[a];
         const SlipEpisode& eb = episodes[b];
-        return fail(fmt::format(
-            "slip_episodes[{}] ([{}, {}] s) overlaps slip_episodes[{}]{} ([{}, {}] s) on the "
-            "{} wheel; expected episodes on the same wheel not to overlap in time",
-            a + 1, ea.t0_s, ea.t1_s, b + 1, eb.line > 0 ? fmt::format(" (line {})", eb.line) : std::string(),
-            eb.t0_s, eb.t1_s, wheel_name(wheel)));
+        return core::invalid(
+            why, fmt::format("slip_episodes[{}] ([{}, {}] s) overlaps slip_episodes[{}]{} ([{}, {}] s) on the "
+                             "{} wheel; expected episodes on the same wheel not to overlap in time",
+                             a + 1, ea.t0_s, ea.t1_s, b + 1,
+                             eb.line > 0 ? fmt::format(" (line {})", eb.line) : std::string(), eb.t0_s, eb.t1_s,
+                             wheel_name(wheel)));
       }
       if (!have || e.t1_s > episodes[owner].t1_s) owner = i;
       have = true;

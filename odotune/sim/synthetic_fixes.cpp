@@ -6,18 +6,17 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/why.h>
 #include <odotune/sim/normal_rng.h>
 
 namespace odotune::sim {
 
 bool SyntheticFixOptions::IsValid(std::string* why) const {
   if (!(std::isfinite(rate_hz) && rate_hz > 0.0)) {
-    if (why) *why = fmt::format("rate_hz = {}: expected a finite value > 0", rate_hz);
-    return false;
+    return core::invalid(why, fmt::format("rate_hz = {}: expected a finite value > 0", rate_hz));
   }
   if (!(std::isfinite(sigma_m) && sigma_m >= 0.0)) {
-    if (why) *why = fmt::format("sigma_m = {}: expected a finite value >= 0", sigma_m);
-    return false;
+    return core::invalid(why, fmt::format("sigma_m = {}: expected a finite value >= 0", sigma_m));
   }
   return true;
 }

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include <odotune/core/failure.h>
+#include <odotune/core/why.h>
 #include <odotune/diagnose/diag_input.h>
 #include <odotune/diagnose/diagnosis.h>
 #include <odotune/diagnose/recordings.h>
@@ -108,16 +109,14 @@ std::string_view to_string(MarginBucket b) {
 }
 
 bool DiagnosisBenchmarkOptions::IsValid(std::string* why) const {
-  auto bad = [why](const std::string& text) {
-    if (why) *why = text;
-    return false;
-  };
-  if (cases < 1 || cases > 100000) return bad(fmt::format("cases = {} must be in 1..100000", cases));
-  if (first < 0 || first > 100000000) return bad(fmt::format("first = {} must be in 0..100000000", first));
-  if (threads < 0) return bad(fmt::format("threads = {} must be >= 0", threads));
+  if (cases < 1 || cases > 100000)
+    return core::invalid(why, fmt::format("cases = {} must be in 1..100000", cases));
+  if (first < 0 || first > 100000000)
+    return core::invalid(why, fmt::format("first = {} must be in 0..100000000", first));
+  if (threads < 0) return core::invalid(why, fmt::format("threads = {} must be >= 0", threads));
   std::string w;
-  if (!draw.IsValid(&w)) return bad(w);
-  if (!materiality.IsValid(&w)) return bad("materiality: " + w);
+  if (!draw.IsValid(&w)) return core::invalid(why, w);
+  if (!materiality.IsValid(&w)) return core::invalid(why, "materiality: " + w);
   return true;
 }
 

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include <odotune/core/counter_rng.h>
+#include <odotune/core/why.h>
 #include <odotune/sim/effects.h>
 #include <odotune/sim/motion_profile.h>
 #include <odotune/sim/simulator.h>
@@ -264,22 +265,20 @@ std::string_view to_string(BenchReference r) {
 }
 
 bool CaseDrawOptions::IsValid(std::string* why) const {
-  auto bad = [why](const std::string& text) {
-    if (why) *why = text;
-    return false;
-  };
   if (!(min_minutes >= 0.2 && min_minutes <= 60.0))
-    return bad(fmt::format("min_minutes = {} must be in [0.2, 60]", min_minutes));
+    return core::invalid(why, fmt::format("min_minutes = {} must be in [0.2, 60]", min_minutes));
   if (!(max_minutes >= min_minutes && max_minutes <= 60.0))
-    return bad(fmt::format("max_minutes = {} must be in [min_minutes = {}, 60]", max_minutes, min_minutes));
+    return core::invalid(why, fmt::format("max_minutes = {} must be in [min_minutes = {}, 60]", max_minutes,
+                                          min_minutes));
   if (!(null_share >= 0.0 && null_share <= 1.0))
-    return bad(fmt::format("null_share = {} must be in [0, 1]", null_share));
+    return core::invalid(why, fmt::format("null_share = {} must be in [0, 1]", null_share));
   if (!(two_share >= 0.0 && two_share <= 1.0 - null_share))
-    return bad(fmt::format("two_share = {} must be in [0, 1 - null_share = {}]", two_share, 1.0 - null_share));
+    return core::invalid(why, fmt::format("two_share = {} must be in [0, 1 - null_share = {}]", two_share,
+                                          1.0 - null_share));
   if (!(max_rate_hz >= 10.0 && max_rate_hz <= 1000.0))
-    return bad(fmt::format("max_rate_hz = {} must be in [10, 1000]", max_rate_hz));
+    return core::invalid(why, fmt::format("max_rate_hz = {} must be in [10, 1000]", max_rate_hz));
   if (!(multi_share >= 0.0 && multi_share <= 1.0))
-    return bad(fmt::format("multi_share = {} must be in [0, 1]", multi_share));
+    return core::invalid(why, fmt::format("multi_share = {} must be in [0, 1]", multi_share));
   return true;
 }
 

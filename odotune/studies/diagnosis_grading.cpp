@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/robust_stats.h>
 #include <odotune/sim/effects.h>
 
 namespace odotune::studies {
@@ -72,14 +73,9 @@ double param_tolerance(const TrueEffect& e, std::string_view param, double wheel
 std::vector<std::pair<double, double>> reference_gaps(const std::vector<double>& ref_t_s) {
   std::vector<std::pair<double, double>> gaps;
   if (ref_t_s.size() < 3) return gaps;
-  std::vector<double> dt(ref_t_s.size() - 1);
-  for (std::size_t i = 0; i + 1 < ref_t_s.size(); ++i) dt[i] = ref_t_s[i + 1] - ref_t_s[i];
-  std::vector<double> sorted = dt;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
-                   sorted.end());
-  const double limit = 2.0 * sorted[sorted.size() / 2];
-  for (std::size_t i = 0; i < dt.size(); ++i)
-    if (dt[i] > limit) gaps.emplace_back(ref_t_s[i], ref_t_s[i + 1]);
+  const double limit = 2.0 * core::median_period_s(ref_t_s, core::MedianRule::upper_middle);
+  for (std::size_t i = 0; i + 1 < ref_t_s.size(); ++i)
+    if (ref_t_s[i + 1] - ref_t_s[i] > limit) gaps.emplace_back(ref_t_s[i], ref_t_s[i + 1]);
   return gaps;
 }
 

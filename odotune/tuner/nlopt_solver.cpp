@@ -1,5 +1,4 @@
 #include <odotune/tuner/nlopt_solver.h>
-#include <odotune/tuner/solver_run.h>
 
 // The C API is used on purpose: the adapter needs full control over what
 // crosses NLopt's C frames (its callback is noexcept and catches everything)
@@ -16,6 +15,9 @@
 #include <memory>
 #include <sstream>
 #include <utility>
+
+#include <odotune/core/why.h>
+#include <odotune/tuner/solver_run.h>
 
 namespace odotune::tuner {
 namespace {
@@ -153,24 +155,22 @@ bool nlopt_is_global(std::string_view name) {
 }
 
 bool NloptOptions::IsValid(std::string* why) const {
-  auto fail = [why](const std::string& message) {
-    if (why != nullptr) *why = "nlopt: " + message;
-    return false;
-  };
   if (find_algorithm(algorithm) == nullptr) {
     std::string list;
     for (const std::string& n : nlopt_algorithm_names()) list += (list.empty() ? "" : ", ") + n;
-    return fail("unknown algorithm '" + algorithm + "'; expected one of: " + list);
+    return core::invalid(why, "nlopt: unknown algorithm '" + algorithm + "'; expected one of: " + list);
   }
   if (max_evaluations < 1)
-    return fail("max_evaluations = " + std::to_string(max_evaluations) + ", expected >= 1");
+    return core::invalid(why,
+                         "nlopt: max_evaluations = " + std::to_string(max_evaluations) + ", expected >= 1");
   if (!(std::isfinite(xtol_rel) && xtol_rel >= 0))
-    return fail("xtol_rel = " + str(xtol_rel) + ", expected a finite value >= 0");
+    return core::invalid(why, "nlopt: xtol_rel = " + str(xtol_rel) + ", expected a finite value >= 0");
   if (x0) {
-    if (x0->empty()) return fail("x0 is empty, expected one value per dimension");
+    if (x0->empty()) return core::invalid(why, "nlopt: x0 is empty, expected one value per dimension");
     for (std::size_t i = 0; i < x0->size(); ++i)
       if (!std::isfinite((*x0)[i]))
-        return fail("x0[" + std::to_string(i) + "] = " + str((*x0)[i]) + ", expected a finite value");
+        return core::invalid(why, "nlopt: x0[" + std::to_string(i) + "] = " + str((*x0)[i]) +
+                                      ", expected a finite value");
   }
   return true;
 }

@@ -49,6 +49,8 @@
 #include <type_traits>
 #include <vector>
 
+#include <odotune/core/why.h>
+
 namespace odotune::tuner {
 
 // The search box [lower, upper] (per-dimension, units of the problem's
@@ -82,8 +84,7 @@ inline bool Bounds::IsValid(std::string* why) const {
     msg << "lower[" << i << "] = " << lower[i] << ", upper[" << i << "] = " << upper[i]
         << "; expected finite values with lower < upper";
   }
-  if (why != nullptr) *why = msg.str();
-  return false;
+  return core::invalid(why, msg.str());
 }
 
 inline bool Bounds::Contains(std::span<const double> x) const {

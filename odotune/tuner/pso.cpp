@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <odotune/core/counter_rng.h>
+#include <odotune/core/why.h>
 #include <odotune/tuner/solver_run.h>
 
 namespace odotune::tuner {
@@ -145,23 +146,22 @@ int update_bests(Swarm& s, int n, int t) {
 }  // namespace
 
 bool PsoOptions::IsValid(std::string* why) const {
-  auto fail = [why](const std::string& message) {
-    if (why != nullptr) *why = "pso: " + message;
-    return false;
-  };
-  if (particles < 1) return fail("particles = " + std::to_string(particles) + ", expected >= 1");
-  if (iterations < 0) return fail("iterations = " + std::to_string(iterations) + ", expected >= 0");
+  if (particles < 1)
+    return core::invalid(why, "pso: particles = " + std::to_string(particles) + ", expected >= 1");
+  if (iterations < 0)
+    return core::invalid(why, "pso: iterations = " + std::to_string(iterations) + ", expected >= 0");
   if (!(std::isfinite(inertia) && inertia >= 0 && inertia < 1))
-    return fail("inertia = " + str(inertia) + ", expected a value in [0, 1)");
+    return core::invalid(why, "pso: inertia = " + str(inertia) + ", expected a value in [0, 1)");
   if (!(std::isfinite(cognitive) && cognitive >= 0))
-    return fail("cognitive = " + str(cognitive) + ", expected a finite value >= 0");
+    return core::invalid(why, "pso: cognitive = " + str(cognitive) + ", expected a finite value >= 0");
   if (!(std::isfinite(social) && social >= 0))
-    return fail("social = " + str(social) + ", expected a finite value >= 0");
+    return core::invalid(why, "pso: social = " + str(social) + ", expected a finite value >= 0");
   if (!(initial_velocity_fraction >= 0 && initial_velocity_fraction <= 1))
-    return fail("initial_velocity_fraction = " + str(initial_velocity_fraction) +
-                ", expected a value in [0, 1]");
+    return core::invalid(why, "pso: initial_velocity_fraction = " + str(initial_velocity_fraction) +
+                                  ", expected a value in [0, 1]");
   if (!(max_velocity_fraction > 0 && max_velocity_fraction <= 1))
-    return fail("max_velocity_fraction = " + str(max_velocity_fraction) + ", expected a value in (0, 1]");
+    return core::invalid(why, "pso: max_velocity_fraction = " + str(max_velocity_fraction) +
+                                  ", expected a value in (0, 1]");
   return true;
 }
 

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <odotune/objectives/rl_bag_scores.h>
 #include <odotune/objectives/rl_objective.h>
 #include <odotune/objectives/rl_protocols.h>
 #include <odotune/rlnode/gps_alignment.h>
@@ -130,4 +131,57 @@ TEST(RlProtocols, WindowsFromOneFusedRunScoreAsTheirOwnReplays) {
   EXPECT_EQ(got.mae_m, want.mae_m);
   EXPECT_EQ(got.maxe_m, want.maxe_m);
   EXPECT_TRUE(got.finite);
+}
+
+// The eval's one call (odotune/objectives/rl_bag_scores.h): its protocols are
+// score_protocols' on [from, until) (30 s of fixes at 2 Hz, every 5th of them),
+// its simulated outages start at `from` (without it, after the warm-up) and end
+// by `until`, its held-out folds cover the span, every fix is placed under the
+// run's transform, and trajectories are kept only when asked (the scores the
+// same either way).
+TEST(RlProtocols, BagScoresAreTheProtocolsOnTheAskedSpan) {
+  ProtocolDrive d;
+  rlnode::ReplaySettings s = rlnode::settings_of(d.rec.params);
+  s.process_noise *= 3.0;
+  objectives::RlBagEvalOptions o;
+  o.until_ns = d.t0() + 70 * kSecond;
+  o.from_ns = d.t0() + 40 * kSecond;
+  o.outage_s = {8.0};
+  o.outage_every_s = 6.0;
+  const objectives::RlBagScores a = objectives::score_rl_bag(d.rec, s, o);
+  ASSERT_TRUE(a.protocols && a.heldout && a.outages);
+  const objectives::RlProtocolScores want = objectives::score_protocols(d.rec, s,
+                                                                        {*o.from_ns, *o.from_ns, o.until_ns});
+  EXPECT_EQ(a.protocols->outage.fixes, 60);
+  EXPECT_EQ(a.protocols->every_fifth.fixes, 12);
+  EXPECT_EQ(a.protocols->outage.rmse_m, want.outage.rmse_m);
+  EXPECT_EQ(a.protocols->every_fifth.rmse_m, want.every_fifth.rmse_m);
+  EXPECT_EQ(a.outage_windows, 4u);  // starting at 40, 46, 52 and 58 s
+  EXPECT_EQ(a.outages->fixes, 4 * 16);
+  EXPECT_GE(a.heldout->fixes, 138);
+  EXPECT_LE(a.heldout->fixes, 140);
+  ASSERT_EQ(a.fixes.size(), d.rec.fixes.size());
+  for (std::size_t i = 0; i < a.fixes.size(); ++i) {
+    EXPECT_EQ(a.fixes[i].stamp_ns, d.rec.fixes[i].stamp_ns);
+    EXPECT_EQ(a.fixes[i].odom, rlnode::fix_in_odom(d.rec.fixes[i], a.run.gps_transform));
+  }
+  EXPECT_TRUE(a.run.trajectory.empty());
+  EXPECT_TRUE(a.outage_trajectory.empty());
+
+  o.keep_trajectory = true;
+  const objectives::RlBagScores b = objectives::score_rl_bag(d.rec, s, o);
+  ASSERT_FALSE(b.outage_trajectory.empty());
+  EXPECT_FALSE(b.run.trajectory.empty());
+  // The same ticks to `until`; after `from` the outage run has no GPS.
+  ASSERT_EQ(b.outage_trajectory.size(), b.run.trajectory.size());
+  EXPECT_LE(b.outage_trajectory.back().time_ns, o.until_ns);
+  EXPECT_NE(b.outage_trajectory.back().state, b.run.trajectory.back().state);
+  EXPECT_EQ(b.protocols->outage.rmse_m, a.protocols->outage.rmse_m);
+  EXPECT_EQ(b.outages->rmse_m, a.outages->rmse_m);
+  EXPECT_EQ(b.heldout->rmse_m, a.heldout->rmse_m);
+
+  o.from_ns.reset();
+  const objectives::RlBagScores c = objectives::score_rl_bag(d.rec, s, o);
+  EXPECT_FALSE(c.protocols.has_value());
+  EXPECT_EQ(c.outage_windows, 6u);  // starting 30 s after the first fix: 30, 36, …, 60 s
 }

@@ -19,6 +19,7 @@
 #include <odotune/bags/bag.h>
 #include <odotune/rlnode/gps_alignment.h>
 #include <odotune/rlnode/params.h>
+#include <odotune/rlnode/prepared_recording.h>
 #include <odotune/rlnode/recording.h>
 #include <odotune/rlnode/replay.h>
 
@@ -465,6 +466,41 @@ TEST(RlReplay, GpsHeadingFitFindsTheRotation) {
   double worst = 0.0;
   for (const ScoredFix& s : out.scored) worst = std::max(worst, (s.predicted - s.measured).head<2>().norm());
   EXPECT_LT(worst, 0.1);
+}
+
+// prepare_recording fits navsat's rotation with the node's default noise and
+// initial covariance, not the file's (the noise a tune changes must not move
+// it), and replays with it; without a fit, a bag whose fixes reach navsat
+// without an IMU heading is refused, naming the flag.
+TEST(RlReplay, PreparedRecordingFitsTheHeadingWithTheDefaultNoise) {
+  TempDir dir("rl-prepared");
+  std::string text = odotune::testing_support::kRlGpsParams;
+  const std::string ones = "[1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0]";
+  text.insert(text.find("    odom0:"),
+              "    process_noise_covariance: " + ones + "\n    initial_estimate_covariance: " + ones + "\n");
+  const RlParams p = read_rl_params(write_file(dir.path() / "p.yaml", text));
+  const std::filesystem::path bag = odotune::testing_support::rl_gps_bag(dir.path(), 0.7);
+  const PreparedRecording prepared = prepare_recording(bag, p, {}, 30.0);
+  ASSERT_TRUE(prepared.alignment.has_value());
+  const Recording rec = load_recording(bag, p);
+  ReplaySettings defaults = settings_of(p);
+  defaults.process_noise = default_process_noise();
+  defaults.initial_cov = default_initial_estimate_covariance();
+  const GpsAlignment want = fit_gps_alignment(rec, defaults, 30.0);
+  const GpsAlignment files = fit_gps_alignment(rec, settings_of(p), 30.0);
+  ASSERT_NE(files.transform.rotation_rad, want.transform.rotation_rad);  // else the test could not tell
+  EXPECT_EQ(prepared.alignment->transform.rotation_rad, want.transform.rotation_rad);
+  EXPECT_EQ(prepared.alignment->rms_m, want.rms_m);
+  EXPECT_TRUE(prepared.rec.gps_transform.fixed);
+  EXPECT_EQ(prepared.rec.gps_transform.rotation_rad, want.transform.rotation_rad);
+  EXPECT_EQ(prepared.rec.gps_transform.odom_origin, want.transform.odom_origin);
+  try {
+    prepare_recording(bag, p, {});
+    FAIL() << "expected a refusal";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--gps-heading-fit"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+  }
 }
 
 // The node drops a message stamped before its topic's previous one (not only
