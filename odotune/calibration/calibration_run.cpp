@@ -10,6 +10,7 @@
 
 #include <odotune/calibration/batch_calibration.h>
 #include <odotune/calibration/dead_reckoning.h>
+#include <odotune/core/enum_names.h>
 #include <odotune/core/why.h>
 #include <odotune/filters/diff_drive.h>
 #include <odotune/objectives/pose_series.h>
@@ -304,14 +305,10 @@ bool parse_calibration_method(std::string_view text, CalibrationMethod* out) {
     if (out) *out = CalibrationMethod::batch_pose;
     return true;
   }
-  for (CalibrationMethod m : {CalibrationMethod::adaptive_pf, CalibrationMethod::pf, CalibrationMethod::dkf,
-                              CalibrationMethod::online_pose, CalibrationMethod::batch_pose,
-                              CalibrationMethod::batch_velocity, CalibrationMethod::none})
-    if (text == to_string(m)) {
-      if (out) *out = m;
-      return true;
-    }
-  return false;
+  CalibrationMethod m{};
+  if (!core::parse_by_name(text, kAllCalibrationMethods, &m)) return false;
+  if (out) *out = m;
+  return true;
 }
 
 filters::PfCalibratorParams effective_pf_params(const CalibrationOptions& options) {

@@ -17,6 +17,7 @@
 // tracks at once.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -32,6 +33,10 @@
 namespace odotune::calibration {
 
 enum class CalibrationMethod { adaptive_pf, pf, dkf, online_pose, batch_pose, batch_velocity, none };
+inline constexpr std::array<CalibrationMethod, 7> kAllCalibrationMethods = {
+    CalibrationMethod::adaptive_pf, CalibrationMethod::pf,         CalibrationMethod::dkf,
+    CalibrationMethod::online_pose, CalibrationMethod::batch_pose, CalibrationMethod::batch_velocity,
+    CalibrationMethod::none};
 // "adaptive-pf", "pf", "dkf", "online-pose", "batch-pose", "batch-velocity",
 // "none".
 std::string_view to_string(CalibrationMethod m);

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/enum_names.h>
 #include <odotune/core/robust_stats.h>
 #include <odotune/core/why.h>
 
@@ -52,12 +53,7 @@ std::string_view to_string(OnlinePoseStart s) {
 }
 
 bool parse_online_pose_start(std::string_view text, OnlinePoseStart* out) {
-  for (OnlinePoseStart s : {OnlinePoseStart::fixes, OnlinePoseStart::known})
-    if (text == to_string(s)) {
-      *out = s;
-      return true;
-    }
-  return false;
+  return core::parse_by_name(text, kAllOnlinePoseStarts, out);
 }
 
 bool OnlinePoseOptions::IsValid(std::string* why) const {

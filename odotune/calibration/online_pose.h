@@ -4,6 +4,7 @@
 // track starts at its known pose or from its fixes.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -17,6 +18,8 @@ namespace odotune::calibration {
 // How each track's pose starts: acquired from the fixes (nothing assumed),
 // or known (the track's first ground-truth pose, e.g. a docking station).
 enum class OnlinePoseStart { fixes, known };
+inline constexpr std::array<OnlinePoseStart, 2> kAllOnlinePoseStarts = {OnlinePoseStart::fixes,
+                                                                        OnlinePoseStart::known};
 // "fixes", "known".
 std::string_view to_string(OnlinePoseStart s);
 bool parse_online_pose_start(std::string_view text, OnlinePoseStart* out);

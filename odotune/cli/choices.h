@@ -1,80 +1,107 @@
-// Flags whose values are an enum's names: each value is checked against the
-// names the enum's to_string gives (so --help lists them and CLI11 refuses
-// any other with the valid names) and stored as the enum, parsed once here.
+// Flags whose value is one of a type's names: an enum's, or another value
+// type's with a to_string (objectives::TunedModel). The names are those
+// to_string gives, over the type's list of values (its kAll… array), so
+// --help shows them as the flag's type ("TEXT:{diagonal,blocks}") and any
+// other value is refused in one line naming the flag, the value and the
+// valid names:
+//
+//   odotune: --space 'block': expected diagonal or blocks (see --help)
+//
+// The value is parsed here, once: what the command puts in its request is
+// the type, never the text.
 #pragma once
 
-#include <initializer_list>
+#include <iterator>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <odotune/core/enum_names.h>
 
 namespace odotune::cli {
 
-template <class E>
-std::vector<std::pair<std::string, E>> enum_names(std::initializer_list<E> values) {
-  std::vector<std::pair<std::string, E>> names;
-  for (E v : values) names.emplace_back(std::string(to_string(v)), v);  // to_string found by ADL
-  return names;
+// A parse that takes more than the names, e.g. an alias
+// (calibration::parse_calibration_method's "batch").
+template <class T>
+using ParseName = bool (*)(std::string_view, T*);
+
+// The type --help shows for a choice: "TEXT:{a,b,c}".
+template <class T>
+std::string choice_type_name(const std::vector<T>& values) {
+  std::string names;
+  for (const T& v : values) names += (names.empty() ? "" : ",") + std::string(to_string(v));
+  return "TEXT:{" + names + "}";
+}
+
+// `text` as a value of `values` (by `parse` when given); throws CLI11's
+// ValidationError with the one line above otherwise. For an option function
+// that needs more than the value (cmd_calibrate.cpp's --method).
+template <class T>
+T parse_choice(const std::string& flag, const std::string& text, const std::vector<T>& values,
+               ParseName<T> parse = nullptr) {
+  T value = values.front();
+  if (parse ? parse(text, &value) : core::parse_by_name(text, values, &value)) return value;
+  throw CLI::ValidationError(fmt::format("{} '{}': expected {}", flag, text, core::names_or(values)));
 }
 
 namespace choices_detail {
-
-template <class E>
-E lookup(const std::vector<std::pair<std::string, E>>& names, const std::string& text) {
-  for (const auto& [name, value] : names)
-    if (name == text) return value;
-  return names.front().second;  // not reached: IsMember checked the name
-}
-
-template <class E>
-std::vector<std::string> keys(const std::vector<std::pair<std::string, E>>& names) {
-  std::vector<std::string> k;
-  for (const auto& n : names) k.push_back(n.first);
-  return k;
-}
-
-template <class E>
-void store(E& out, E value) {
-  out = value;
-}
-template <class E>
-void store(std::optional<E>& out, E value) {
-  out = value;
-}
-
+template <class Values>
+using ValueOf = std::decay_t<decltype(*std::begin(std::declval<const Values&>()))>;
 }  // namespace choices_detail
 
-// `out` is E or std::optional<E>.
-template <class Out, class E>
-CLI::Option* add_enum_option(CLI::App* app, const std::string& flag, Out& out, std::initializer_list<E> values,
-                             const std::string& help) {
-  const auto names = enum_names(values);
+// The flag's value, parsed, handed to `set` (called once with a T).
+template <class Values, class Set>
+CLI::Option* add_choice_option(CLI::App* app, const std::string& flag, Set set, const Values& values,
+                               const std::string& help,
+                               ParseName<choices_detail::ValueOf<Values>> parse = nullptr) {
+  using T = choices_detail::ValueOf<Values>;
+  std::vector<T> all(std::begin(values), std::end(values));
+  const std::string type = choice_type_name(all);
   return app
       ->add_option_function<std::string>(
           flag,
-          [&out, names](const std::string& s) { choices_detail::store(out, choices_detail::lookup(names, s)); },
+          [flag, set = std::move(set), all = std::move(all), parse](const std::string& text) {
+            set(parse_choice(flag, text, all, parse));
+          },
           help)
-      ->check(CLI::IsMember(choices_detail::keys(names)));
+      ->type_name(type);
+}
+
+// The same into `out`, a T or a std::optional<T> (not given: left as it is).
+template <class Out, class Values>
+CLI::Option* add_enum_option(CLI::App* app, const std::string& flag, Out& out, const Values& values,
+                             const std::string& help,
+                             ParseName<choices_detail::ValueOf<Values>> parse = nullptr) {
+  return add_choice_option(
+      app, flag, [&out](const choices_detail::ValueOf<Values>& v) { out = v; }, values, help, parse);
+}
+template <class Out, class E>
+CLI::Option* add_enum_option(CLI::App* app, const std::string& flag, Out& out, std::initializer_list<E> values,
+                             const std::string& help) {
+  return add_enum_option(app, flag, out, std::vector<E>(values), help);
 }
 
 // A comma-separated list of names into a vector.
 template <class E>
 CLI::Option* add_enum_list_option(CLI::App* app, const std::string& flag, std::vector<E>& out,
                                   std::initializer_list<E> values, const std::string& help) {
-  const auto names = enum_names(values);
+  std::vector<E> all(values);
+  const std::string type = choice_type_name(all);
   return app
       ->add_option_function<std::vector<std::string>>(
           flag,
-          [&out, names](const std::vector<std::string>& v) {
+          [&out, flag, all](const std::vector<std::string>& v) {
             out.clear();
-            for (const std::string& s : v) out.push_back(choices_detail::lookup(names, s));
+            for (const std::string& s : v) out.push_back(parse_choice<E>(flag, s, all));
           },
           help)
       ->delimiter(',')
-      ->check(CLI::IsMember(choices_detail::keys(names)));
+      ->type_name(type);
 }
 
 }  // namespace odotune::cli

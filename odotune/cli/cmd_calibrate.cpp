@@ -42,26 +42,31 @@ void print_apply(const jobs::CalibrateRequest& a) {
 
 // The method and the particle filter's settings.
 void add_method_options(CLI::App* sub, jobs::CalibrateRequest& req) {
-  sub->add_option("--method", req.method,
-                  "adaptive-pf | pf | dkf | online-pose | batch-pose (alias batch) | batch-velocity | none "
-                  "(default adaptive-pf; twist and command tracks: batch)");
-  add_enum_option(sub, "--input", req.input,
-                  {tracks::OdometryInput::wheels, tracks::OdometryInput::twist,
-                   tracks::OdometryInput::commands},
+  const std::vector<calibration::CalibrationMethod> methods(calibration::kAllCalibrationMethods.begin(),
+                                                            calibration::kAllCalibrationMethods.end());
+  sub->add_option_function<std::string>(
+         "--method",
+         [&req, methods](const std::string& text) {
+           req.method = parse_choice("--method", text, methods, calibration::parse_calibration_method);
+           req.method_spelling = text;  // "batch" stays "batch" in the outputs
+         },
+         "the calibration method; batch is batch-pose's alias (default adaptive-pf; twist and command tracks: batch)")
+      ->type_name(choice_type_name(methods));
+  add_enum_option(sub, "--input", req.input, tracks::kAllOdometryInputs,
                   "the odometry to calibrate: wheels (radii and base), twist (a measured v, w: scales) or "
                   "commands (scales and a delay); default: each track's own (docs/track-format.md)");
-  sub->add_option("--resampler", req.resampler,
-                  "PF resampling: multinomial | stratified | systematic | residual "
-                  "(default systematic)");
-  sub->add_option("--policy", req.policy, "PF resampling policy: every | neff | max (default neff)");
+  add_enum_option(sub, "--resampler", req.resampler, filters::kAllResamplers,
+                  "PF resampling scheme (default systematic)");
+  add_enum_option(sub, "--policy", req.policy, filters::kAllResamplePolicies,
+                  "PF resampling policy (default neff)");
   sub->add_option("--seed", req.seed, "PF random seed (same seed ⇒ same estimates)");
   sub->add_option("--particles", req.particles,
                   "PF particles (adaptive-pf: the initial count; default 5000, adaptive 8000)")
       ->check(CLI::PositiveNumber);
-  sub->add_option("--pf-evolution", req.pf_evolution,
+  add_enum_option(sub, "--pf-evolution", req.pf_evolution, filters::kAllPfEvolutions,
                   "PF parameter evolution: evidence (default: a walk scaled to the "
                   "posterior spread, whose memory grows until a fast-forgetting twin "
-                  "predicts better, a change) | paper (§III's fixed or eq. 11 walk)");
+                  "predicts better, a change) or paper (§III's fixed or eq. 11 walk)");
   sub->add_option("--pf-memory", req.pf_memory_s,
                   "PF evidence evolution: the memory after a detected change [s] "
                   "(default 10)")
@@ -99,8 +104,8 @@ void add_fit_options(CLI::App* sub, jobs::CalibrateRequest& req) {
   sub->add_flag("--fit-start-heading", req.fit_start_heading,
                 "batch-pose: fit each segment's start heading too (ground truth; with fixes the whole start "
                 "pose is always fitted)");
-  sub->add_option("--start", req.start,
-                  "online-pose: each run's start pose: fixes (default: acquired from the first fixes) | known "
+  add_enum_option(sub, "--start", req.start, calibration::kAllOnlinePoseStarts,
+                  "online-pose: each run's start pose: fixes (default: acquired from the first fixes) or known "
                   "(the run's first ground-truth pose)");
   sub->add_option("--fix-sigma-m", req.fix_sigma_m,
                   "online-pose: the fixes' sd [m] where a track gives no aps_var_x/aps_var_y")

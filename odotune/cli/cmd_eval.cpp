@@ -10,6 +10,26 @@
 #include <odotune/jobs/rl_job.h>
 
 namespace odotune::cli {
+namespace {
+
+// The robot_localization flags given (by their help groups, rl_output.h)
+// where they do not apply: without --rl-params, a track's on a bag and a
+// bag's on tracks; each refused by name. `rl_on_tracks`: --rl-params with
+// --track and no --bag.
+void check_eval_flags(const CLI::App& sub, bool rl, bool rl_on_tracks) {
+  for (const CLI::Option* opt : given_options(sub)) {
+    const std::string& name = opt->get_name();
+    const std::string& group = opt->get_group();
+    if (group == kRlTrackGroup && !rl_on_tracks)
+      throw core::Failure(fmt::format("eval: {} applies to --rl-params with --track only", name));
+    if (!rl && (group == kRlGroup || group == kRlBagGroup))
+      throw core::Failure(fmt::format("eval: {} applies to --rl-params only", name));
+    if (rl_on_tracks && (group == kRlBagGroup || name == "--config"))
+      throw core::Failure(fmt::format("eval: {} applies to --rl-params with --bag, not with --track", name));
+  }
+}
+
+}  // namespace
 
 void register_eval(CLI::App& app) {
   auto req = std::make_shared<jobs::EvalRequest>();
@@ -40,28 +60,35 @@ void register_eval(CLI::App& app) {
   auto rl = std::make_shared<jobs::RlEvalRequest>();
   add_rl_source_options(sub, rl->src);
   sub->add_option("--until", rl->until_s, "--rl-params: use the recording before this many seconds")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->group(kRlBagGroup);
   sub->add_option("--from", rl->from_s,
                   "--rl-params: score from this many seconds on: a GPS outage from there, and every 5th fix "
                   "held out from there")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::NonNegativeNumber)
+      ->group(kRlBagGroup);
   sub->add_option("--noise-from", rl->noise_from,
                   "--rl-params: take process_noise_covariance from this robot_localization file instead")
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingFile)
+      ->group(kRlGroup);
   auto keys_only = std::make_shared<bool>(false);
   sub->add_flag("--keys", *keys_only,
                 "--rl-params: list what the replay makes of each key of the file (reproduced, no effect, not "
-                "read, approximated) and stop; no bag needed");
-  sub->add_option("--fixes-out", rl->fixes_out, "--rl-params: write the GPS fixes in the odom frame (t x y)");
+                "read, approximated) and stop; no bag needed")
+      ->group(kRlGroup);
+  sub->add_option("--fixes-out", rl->fixes_out, "--rl-params: write the GPS fixes in the odom frame (t x y)")
+      ->group(kRlBagGroup);
   sub->add_option("--outages", rl->outages_s,
                   "--rl-params: also simulate GPS outages of these lengths [s] (comma-separated), one of each "
                   "starting every --outage-every seconds from --from (or 30 s after the first fix), the GPS "
                   "fused before each; prints their RMSE")
       ->delimiter(',')
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->group(kRlGroup);
   sub->add_option("--outage-every", rl->outage_every_s,
                   "--rl-params: with --outages, their stride [s] (default 10)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->group(kRlGroup);
   auto track_src = std::make_shared<jobs::RlTrackSource>();
   add_rl_track_options(sub, *track_src);
   sub->callback([req, rl, track_src, sub, keys_only] {
@@ -71,25 +98,9 @@ void register_eval(CLI::App& app) {
       print_rl_keys(jobs::read_rl_file(rl->src));
       return;
     }
-    if (rl->src.params_file.empty()) {
-      for (const char* flag :
-           {"--bag", "--node", "--filter", "--tf", "--gps-topic", "--gps-heading-fit", "--until", "--from",
-            "--noise-from", "--fixes-out", "--outages", "--outage-every"}) {
-        if (sub->count(flag) > 0)
-          throw core::Failure(fmt::format("eval: {} applies to --rl-params only", flag));
-      }
-    }
-    for (const char* flag : kRlTrackFlags) {
-      if (sub->count(flag) > 0 && (rl->src.params_file.empty() || req->tracks.empty()))
-        throw core::Failure(fmt::format("eval: {} applies to --rl-params with --track only", flag));
-    }
-    if (!rl->src.params_file.empty() && rl->src.bag.empty() && !req->tracks.empty()) {
-      for (const char* flag :
-           {"--tf", "--gps-topic", "--gps-heading-fit", "--until", "--from", "--fixes-out", "--config"}) {
-        if (sub->count(flag) > 0)
-          throw core::Failure(fmt::format("eval: {} applies to --rl-params with --bag, not with --track",
-                                          flag));
-      }
+    const bool rl_on_tracks = !rl->src.params_file.empty() && rl->src.bag.empty() && !req->tracks.empty();
+    check_eval_flags(*sub, !rl->src.params_file.empty(), rl_on_tracks);
+    if (rl_on_tracks) {
       jobs::RlTrackEvalRequest t;
       t.src = *track_src;
       t.src.params_file = rl->src.params_file;

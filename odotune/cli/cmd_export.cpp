@@ -2,6 +2,7 @@
 // robot_localization configuration (odotune/jobs/export_job.h selects and writes).
 #include <fmt/format.h>
 
+#include <odotune/cli/choices.h>
 #include <odotune/cli/commands.h>
 #include <odotune/jobs/export_job.h>
 
@@ -27,10 +28,14 @@ void register_export(CLI::App& app) {
       "parameter file with the tuned values; its runs must be of one fitness (--select mode=8|10|11) and\n"
       "the lowest tuning fitness wins, since their scores are on data the tune never saw.");
   sub->add_option("store", req->store, "results store written by odotune grid")->required();
-  sub->add_option("--select", req->select, "key=value filters, comma-separated or repeated")->delimiter(',');
-  sub->add_option("--format", req->format, "odotune | robot_localization")
-      ->required()
-      ->check(CLI::IsMember({"odotune", "robot_localization"}));
+  sub->add_option_function<std::vector<std::string>>(
+         "--select",
+         [req](const std::vector<std::string>& items) { req->select = jobs::parse_run_filters(items); },
+         "key=value filters, comma-separated or repeated; keys: model, track, mode, seed, heldout")
+      ->delimiter(',');
+  add_enum_option(sub, "--format", req->format, jobs::kAllExportFormats,
+                  "odotune's own configuration file, or robot_localization's parameter file")
+      ->required();
   sub->add_option("--out", req->out, "file to write (atomically)")->required();
   sub->add_option("--track", req->track_files,
                   "track file to use instead of the experiment's (if its files have moved)");
@@ -41,7 +46,7 @@ void register_export(CLI::App& app) {
   sub->callback([req] {
     const jobs::ExportOutcome o = jobs::run_export(*req);
     fmt::print("exported run {} ({}; best of {} matching run{}) as {} to {}\n", o.run_key, o.scores, o.matching,
-               o.matching == 1 ? "" : "s", req->format, req->out);
+               o.matching == 1 ? "" : "s", jobs::to_string(req->format), req->out);
   });
 }
 

@@ -4,11 +4,13 @@
 #include <array>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <fmt/format.h>
 
 #include <odotune/bags/bag.h>
+#include <odotune/cli/choices.h>
 #include <odotune/cli/commands.h>
 #include <odotune/core/failure.h>
 #include <odotune/jobs/import_job.h>
@@ -17,6 +19,11 @@
 namespace odotune::cli {
 
 namespace {
+
+// --stamps: which time a bag's message is placed at.
+enum class BagStamps { header, receive };
+constexpr std::array<BagStamps, 2> kAllBagStamps = {BagStamps::header, BagStamps::receive};
+std::string_view to_string(BagStamps s) { return s == BagStamps::receive ? "receive" : "header"; }
 
 struct Dataset {
   jobs::ImportDataset id;
@@ -52,7 +59,6 @@ void register_import_rosbag(CLI::App& imp) {
   auto req = std::make_shared<jobs::ImportRequest>();
   req->dataset = jobs::ImportDataset::rosbag;
   auto list = std::make_shared<bool>(false);
-  auto stamps = std::make_shared<std::string>("header");
   auto rpy = std::make_shared<std::vector<double>>();
   auto radius = std::make_shared<double>(0.0);
   auto base = std::make_shared<double>(0.0);
@@ -84,9 +90,9 @@ void register_import_rosbag(CLI::App& imp) {
                   "/tf_static when the bag has it, else none)")
       ->delimiter(',')
       ->expected(3);
-  sub->add_option("--stamps", *stamps,
-                  "header: the messages' header stamps (default); receive: the times the bag recorded them")
-      ->check(CLI::IsMember({"header", "receive"}));
+  add_choice_option(
+      sub, "--stamps", [req](BagStamps s) { req->rosbag.receive_time_stamps = s == BagStamps::receive; },
+      kAllBagStamps, "header: the messages' header stamps (default); receive: the times the bag recorded them");
   sub->add_option("--left-joint", req->rosbag.left_joint, "JointState odometry: the left wheel's joint name");
   sub->add_option("--right-joint", req->rosbag.right_joint,
                   "JointState odometry: the right wheel's joint name");
@@ -101,7 +107,7 @@ void register_import_rosbag(CLI::App& imp) {
               "      --imu-rpy -1.5707963,0,1.5707963 -o husky.csv\n"
               "Every conversion (topics, frames, the fixes' local origin, stamps) is written into the track's "
               "source.* metadata and printed.");
-  sub->callback([req, list, stamps, rpy, radius, base] {
+  sub->callback([req, list, rpy, radius, base] {
     if (*list) {
       fmt::print("{}:\n", req->input);
       for (const std::string& line : tracks::describe_bag_topics(req->input)) fmt::print("{}\n", line);
@@ -110,7 +116,6 @@ void register_import_rosbag(CLI::App& imp) {
     if (req->output.empty())
       throw core::Failure("import rosbag: no output file given (-o TRACK.csv, or --list)");
     if (!rpy->empty()) req->rosbag.imu_rpy_rad = std::array<double, 3>{(*rpy)[0], (*rpy)[1], (*rpy)[2]};
-    req->rosbag.receive_time_stamps = *stamps == "receive";
     if (*radius > 0.0) req->rosbag.wheel_radius_m = *radius;
     if (*base > 0.0) req->rosbag.wheel_base_m = *base;
     const jobs::ImportOutcome o = jobs::run_import(*req);

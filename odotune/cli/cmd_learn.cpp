@@ -54,9 +54,7 @@ void add_train_options(CLI::App* t, studies::LearnTrainRequest& r) {
                 "training (default 0)")
       ->check(CLI::NonNegativeNumber);
   t->add_option("--rate-hz", r.rate_hz, "network rate [Hz] (paper: 10)")->default_val(r.rate_hz);
-  add_enum_option(t, "--input", r.input,
-                  {tracks::OdometryInput::wheels, tracks::OdometryInput::twist,
-                   tracks::OdometryInput::commands},
+  add_enum_option(t, "--input", r.input, tracks::kAllOdometryInputs,
                   "the odometry the nets read: wheels, twist (a measured v, w) or commands (default: each "
                   "track's own, docs/track-format.md)");
   add_enum_option(t, "--target", r.target,

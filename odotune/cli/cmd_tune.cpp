@@ -2,13 +2,14 @@
 // settings, or the velocity-fusion UKF's noise, on one or more tracks (odotune/jobs/tune_command.h runs it and writes the
 // files; odotune/cli/tune_output.h prints the result).
 #include <algorithm>
+#include <array>
 #include <cstdio>
-#include <map>
-#include <set>
-
-#include <fmt/format.h>
+#include <string_view>
 #include <variant>
 
+#include <fmt/format.h>
+
+#include <odotune/cli/choices.h>
 #include <odotune/cli/commands.h>
 #include <odotune/cli/output.h>
 #include <odotune/cli/progress.h>
@@ -21,13 +22,17 @@
 namespace odotune::cli {
 namespace {
 
-// The --rl-params choices as given, turned into their kinds in one place.
-struct RlChoices {
-  std::string fitness = "both", space = "diagonal", format = "ros2";
-  std::string grid;  // "none" or levels in decades, comma-separated
-  bool no_input_covariances = false, allow_worse_heldout = false, ukf_constants = false;
-  jobs::RlTrackSource track;  // --rl-params with --track: its options
-};
+// The help group of the flags of the tunes on tracks (EKF models,
+// calibrators, UKF), which `tune --rl-params` refuses by name; the
+// robot_localization flags are in rl_output.h's groups, the flags every tune
+// takes in CLI11's default group (--track too: the tunes on tracks and
+// --rl-params with --track take it).
+constexpr const char* kTrackTuneGroup = "EKF, calibrator and UKF tunes (--track)";
+
+// --format: the form of the robot_localization file --config-out writes.
+enum class ParamsForm { ros2, ros1 };
+constexpr std::array<ParamsForm, 2> kAllParamsForms = {ParamsForm::ros2, ParamsForm::ros1};
+std::string_view to_string(ParamsForm f) { return f == ParamsForm::ros1 ? "ros1" : "ros2"; }
 
 // --grid: "none" (no grid stage) or levels in decades, "-2,0,2".
 std::vector<double> parse_grid_levels(const std::string& text) {
@@ -42,95 +47,53 @@ std::vector<double> parse_grid_levels(const std::string& text) {
       levels.push_back(std::stod(item, &used));
       if (used != item.size()) throw std::invalid_argument(item);
     } catch (const std::exception&) {
-      throw core::Failure(
-          fmt::format("tune: --grid {}: expected none or decades separated by commas, e.g. -2,0,2", text));
+      throw CLI::ValidationError(
+          fmt::format("--grid {}: expected none or decades separated by commas, e.g. -2,0,2", text));
     }
     at = comma + 1;
   }
   return levels;
 }
 
-// tune --rl-params: the EKF-model flags do not apply and are refused by name.
-void run_rl_tune_command(const jobs::TuneCommandRequest& req, jobs::RlTuneRequest r, const RlChoices& c,
-                         const CLI::App& sub) {
-  static const std::set<std::string> kApplies = {"--rl-params",
-                                                 "--bag",
-                                                 "--node",
-                                                 "--filter",
-                                                 "--tf",
-                                                 "--gps-topic",
-                                                 "--gps-heading-fit",
-                                                 "--until",
-                                                 "--from",
-                                                 "--end",
-                                                 "--starts",
-                                                 "--starts-out",
-                                                 "--outage-every",
-                                                 "--grid",
-                                                 "--refine",
-                                                 "--prior",
-                                                 "--allow-worse-heldout",
-                                                 "--subtract-fix-variance",
-                                                 "--fitness",
-                                                 "--space",
-                                                 "--no-input-covariances",
-                                                 "--ukf-constants",
-                                                 "--outage",
-                                                 "--format",
-                                                 "--solver",
-                                                 "--seed",
-                                                 "--particles",
-                                                 "--iterations",
-                                                 "--evals",
-                                                 "--json",
-                                                 "--config-out",
-                                                 "--config-out-ros1",
-                                                 "--cv-folds",
-                                                 "--cv-block",
-                                                 "--threads"};
-  // With --track instead of --bag: the track's inputs, not the bag's frames, topics or span.
-  static const std::set<std::string> kBagOnly = {"--bag",   "--tf",   "--gps-topic", "--gps-heading-fit",
-                                                 "--until", "--from", "--end"};
-  const bool on_tracks = r.src.bag.empty() && !req.tracks.empty();
+// The flags of `tune --rl-params` as given, checked against what the run
+// applies to by their help groups (a flag of the tunes on tracks, a bag's
+// flag on tracks or a track's on a bag is refused by name), and the command
+// line they make, in the order the flags were registered: the tuned file's
+// header quotes it.
+std::string rl_tune_command_line(const CLI::App& sub, bool on_tracks) {
   std::string command = "odotune tune";
-  for (const CLI::Option* opt : sub.get_options()) {
-    if (opt->count() == 0) continue;
+  for (const CLI::Option* opt : given_options(sub)) {
     const std::string& name = opt->get_name();
-    const bool track_flag = name == "--track" || std::find(std::begin(kRlTrackFlags), std::end(kRlTrackFlags),
-                                                           name) != std::end(kRlTrackFlags);
-    if (on_tracks ? (kBagOnly.count(name) > 0) : track_flag) {
+    const std::string& group = opt->get_group();
+    if (group == kTrackTuneGroup)
+      throw core::Failure(fmt::format("tune: {} does not apply to --rl-params (robot_localization's EKF)",
+                                      name));
+    if (on_tracks ? group == kRlBagGroup : (group == kRlTrackGroup || name == "--track"))
       throw core::Failure(fmt::format("tune: {} does not apply to --rl-params with {}", name,
                                       on_tracks ? "--track" : "--bag"));
-    }
-    if (kApplies.count(name) == 0 && !track_flag) {
-      throw core::Failure(fmt::format("tune: {} does not apply to --rl-params (robot_localization's EKF)",
-                                      opt->get_name()));
-    }
-    command += " " + opt->get_name();
+    command += " " + name;
     if (opt->get_expected_min() == 0) continue;  // a flag: its name says it
     for (const std::string& v : opt->results()) command += " " + v;
   }
+  return command;
+}
+
+// tune --rl-params, on the bag (--bag) or on tracks (--track).
+void run_rl_tune_command(const jobs::TuneCommandRequest& req, jobs::RlTuneRequest r,
+                         const jobs::RlTrackSource& track_src, const CLI::App& sub) {
+  const bool on_tracks = r.src.bag.empty() && !req.tracks.empty();
+  r.command_line = rl_tune_command_line(sub, on_tracks);
   static_cast<jobs::SolverSettings&>(r) = req;
   r.options.folds = req.fix_cv.folds;
   r.options.block_s = req.fix_cv.block_s;
-  if (!objectives::parse_rl_fitness(c.fitness, &r.options.fitness) ||
-      !objectives::parse_rl_noise_space(c.space, &r.options.space))
-    throw core::Failure(fmt::format("tune: --fitness {} --space {}: not a fitness or space", c.fitness,
-                                    c.space));
-  r.options.input_covariances = !c.no_input_covariances;
-  r.options.ukf_constants = c.ukf_constants;
-  r.options.keep_heldout = !c.allow_worse_heldout;
-  if (!c.grid.empty()) r.search.grid_levels = parse_grid_levels(c.grid);
-  r.ros1_out = c.format == "ros1";
   r.json_out = req.json_out;
   r.config_out = req.config_out;
-  r.command_line = command;
   InterruptGuard interrupt;
   Progress progress("tune", "evaluations");
   r.progress = [&progress](long done, long total) { progress.update(done, total); };
   r.stop = interrupt.flag();
   if (on_tracks) {
-    jobs::RlTrackSource src = c.track;
+    jobs::RlTrackSource src = track_src;
     src.params_file = r.src.params_file;
     src.node_name = r.src.node_name;
     src.filter = r.src.filter;
@@ -167,93 +130,119 @@ void add_solver_option(CLI::App* sub, const std::shared_ptr<jobs::TuneCommandReq
 
 // The calibrators' particle filter and external velocities.
 void add_calibrator_options(CLI::App* sub, jobs::TuneCommandRequest& req) {
-  sub->add_option("--resampler", req.resampler,
-                  "calibrators: multinomial | stratified | systematic | residual (default systematic)");
-  sub->add_option("--policy", req.policy, "calibrators: resampling policy every | neff | max (default neff)");
+  add_enum_option(sub, "--resampler", req.resampler, filters::kAllResamplers,
+                  "calibrators: the resampling scheme (default systematic)")
+      ->group(kTrackTuneGroup);
+  add_enum_option(sub, "--policy", req.policy, filters::kAllResamplePolicies,
+                  "calibrators: the resampling policy (default neff)")
+      ->group(kTrackTuneGroup);
   sub->add_option("--pf-particles", req.pf_particles,
                   "calibrators: N (pf-calib) or initial N (adaptive-pf-calib); default the paper's "
                   "5000 / 8000")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--pf-seed", req.pf_seed, "calibrators: the particle filter's own seed (default 1)");
+      ->check(CLI::PositiveNumber)
+      ->group(kTrackTuneGroup);
+  sub->add_option("--pf-seed", req.pf_seed, "calibrators: the particle filter's own seed (default 1)")
+      ->group(kTrackTuneGroup);
   sub->add_option("--ext-from-gt", req.ext_from_gt_hz,
                   "calibrators: derive the external velocities from the ground truth at this rate [Hz] "
                   "instead of the tracks' v_ext/w_ext")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->group(kTrackTuneGroup);
 }
 
-// robot_localization tuning (--rl-params): the span, fitness, search space and outputs.
-void add_rl_tune_options(CLI::App* sub, jobs::RlTuneRequest& rl, RlChoices& rl_names) {
+// robot_localization tuning (--rl-params): the span (kRlBagGroup: a bag's
+// clock), fitness, search space and outputs (kRlGroup).
+void add_rl_tune_options(CLI::App* sub, jobs::RlTuneRequest& rl) {
   sub->add_option("--until", rl.until_s,
                   "--rl-params: tune on the recording before this many seconds; the rest is scored as held out")
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--fitness", rl_names.fitness,
+      ->check(CLI::PositiveNumber)
+      ->group(kRlBagGroup);
+  add_enum_option(sub, "--fitness", rl.options.fitness, objectives::kAllRlFitnesses,
                   "--rl-params: both (held-out fixes and simulated GPS outages, each relative to the file's "
                   "values; default), outage, heldout-fixes (mode 8 on this filter), or an innovation statistic "
                   "(docs/husky.md, \"Methods tried\"): innovation-nll, nis, whiteness, heldout-nll")
-      ->check([](const std::string& text) {
-        objectives::RlFitness f{};
-        return objectives::parse_rl_fitness(text, &f) ? std::string() : "not a fitness: " + text;
-      });
-  sub->add_option("--space", rl_names.space,
+      ->group(kRlGroup);
+  add_enum_option(sub, "--space", rl.options.space, objectives::kAllRlNoiseSpaces,
                   "--rl-params: search a factor per diagonal entry of the process noise (default) or per block")
-      ->check(CLI::IsMember({"diagonal", "blocks"}));
-  sub->add_flag("--no-input-covariances", rl_names.no_input_covariances,
-                "--rl-params: do not search factors on the inputs' message covariances");
-  sub->add_flag("--ukf-constants", rl_names.ukf_constants,
-                "--rl-params with ukf_node: also search factors on its alpha, 15 + kappa and beta");
+      ->group(kRlGroup);
+  sub->add_flag_callback(
+         "--no-input-covariances", [&rl] { rl.options.input_covariances = false; },
+         "--rl-params: do not search factors on the inputs' message covariances")
+      ->group(kRlGroup);
+  sub->add_flag("--ukf-constants", rl.options.ukf_constants,
+                "--rl-params with ukf_node: also search factors on its alpha, 15 + kappa and beta")
+      ->group(kRlGroup);
   sub->add_option("--from", rl.from_s,
                   "--rl-params: tune on the recording after this many seconds (the bag cut there) and judge "
                   "before it: GPS fused for its first 60 s, then an outage; and every 5th fix held out")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->group(kRlBagGroup);
   sub->add_option("--outage", rl.options.outage_s,
                   "--rl-params: lengths of the simulated GPS outages [s], comma-separated (default 30,60)")
       ->delimiter(',')
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->group(kRlGroup);
   sub->add_option("--outage-every", rl.options.outage_stride_s,
                   "--rl-params: an outage of each length starts every this many seconds (default 10)")
-      ->check(CLI::PositiveNumber);
-  sub->add_flag("--allow-worse-heldout", rl_names.allow_worse_heldout,
-                "--rl-params: let the tune make the held-out-fix error worse than the file's (by default a "
-                "candidate that does scores above the file's own values)");
-  sub->add_flag(
-      "--subtract-fix-variance", rl.options.subtract_fix_variance,
-      "--rl-params: score the held-out fixes and the outages by the error with the fixes' own "
-      "variance taken out, sqrt(RMSE^2 - mean(var_x + var_y)), which estimates the error against "
-      "the true position; for fixes whose variances are their true ones (docs/robot-localization.md)");
+      ->check(CLI::PositiveNumber)
+      ->group(kRlGroup);
+  sub->add_flag_callback(
+         "--allow-worse-heldout", [&rl] { rl.options.keep_heldout = false; },
+         "--rl-params: let the tune make the held-out-fix error worse than the file's (by default a "
+         "candidate that does scores above the file's own values)")
+      ->group(kRlGroup);
+  sub->add_flag("--subtract-fix-variance", rl.options.subtract_fix_variance,
+                "--rl-params: score the held-out fixes and the outages by the error with the fixes' own "
+                "variance taken out, sqrt(RMSE^2 - mean(var_x + var_y)), which estimates the error against "
+                "the true position; for fixes whose variances are their true ones (docs/robot-localization.md)")
+      ->group(kRlGroup);
   sub->add_option("--starts", rl.starts,
                   "--rl-params: refinements from seeds --seed, --seed + 1, …; the lowest tuning fitness is "
                   "written, the spread printed (default 1)")
-      ->check(CLI::Range(1, 1000));
+      ->check(CLI::Range(1, 1000))
+      ->group(kRlGroup);
   sub->add_option(
-      "--starts-out", rl.starts_out,
-      "--rl-params: also write every start's file into this folder as ekf-seed<K>.yaml (ukf-seed<K>.yaml for the UKF)");
-  sub->add_option("--grid", rl_names.grid,
-                  "--rl-params: the first, deterministic stage: each block's factor one of 10^LEVEL, "
-                  "comma-separated decades (default -2,0,2), or none");
+         "--starts-out", rl.starts_out,
+         "--rl-params: also write every start's file into this folder as ekf-seed<K>.yaml (ukf-seed<K>.yaml for the UKF)")
+      ->group(kRlGroup);
+  sub->add_option_function<std::string>(
+         "--grid",
+         [&rl](const std::string& text) {
+           if (!text.empty()) rl.search.grid_levels = parse_grid_levels(text);  // "": the default levels
+         },
+         "--rl-params: the first, deterministic stage: each block's factor one of 10^LEVEL, "
+         "comma-separated decades (default -2,0,2), or none")
+      ->group(kRlGroup);
   sub->add_option("--refine", rl.search.refine_decades,
                   "--rl-params: a seeded refinement of the parameters the grid determined, within this many "
                   "decades of its best (default 0: none, the tune is the same from every seed)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::NonNegativeNumber)
+      ->group(kRlGroup);
   sub->add_option("--prior", rl.options.prior_weight,
                   "--rl-params: weight of a prior toward the file's values, added as weight × mean (log10 "
                   "factor)² (default 0)")
-      ->check(CLI::NonNegativeNumber);
-  sub->add_option("--format", rl_names.format, "--rl-params: --config-out as ros2 (default) or ros1 parameters")
-      ->check(CLI::IsMember({"ros2", "ros1"}));
+      ->check(CLI::NonNegativeNumber)
+      ->group(kRlGroup);
+  add_choice_option(
+      sub, "--format", [&rl](ParamsForm f) { rl.ros1_out = f == ParamsForm::ros1; }, kAllParamsForms,
+      "--rl-params: --config-out as ros2 (default) or ros1 parameters")
+      ->group(kRlGroup);
   sub->add_option("--end", rl.end_s,
                   "--rl-params: ignore the recording after this many seconds (the held-out span ends there)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->group(kRlBagGroup);
   sub->add_option("--config-out-ros1", rl.config_out_ros1,
-                  "--rl-params: also write the ROS 1 form to this file");
+                  "--rl-params: also write the ROS 1 form to this file")
+      ->group(kRlGroup);
 }
 
 // The tune command itself: robot_localization tuning with --rl-params, else
 // the tracks' tune, printed (the best so far after Ctrl-C).
 void run_tune_subcommand(const jobs::TuneCommandRequest& req, const jobs::RlTuneRequest& rl,
-                         const RlChoices& rl_names, int threads, const CLI::App& sub) {
+                         const jobs::RlTrackSource& rl_track, int threads, const CLI::App& sub) {
   apply_threads(threads);
   if (!rl.src.params_file.empty()) {
-    run_rl_tune_command(req, rl, rl_names, sub);
+    run_rl_tune_command(req, rl, rl_track, sub);
     return;
   }
   if (req.tracks.empty()) throw core::Failure("tune: expected --track, or --rl-params with --bag");
@@ -307,13 +296,18 @@ void register_tune(CLI::App& app) {
       "  or on tracks (several tuned together; their ground truth is not used; docs/robot-localization.md):\n"
       "  odotune tune --rl-params user.yaml --track robot1-fixes.csv --track robot2-fixes.csv --config-out tuned.yaml");
   sub->add_option("--track", req->tracks, "track file (repeat for several; fitness = mean over tracks)");
-  sub->add_option("--model", req->model, "rq | alpha | gyro | pf-calib | adaptive-pf-calib | ukf");
+  add_enum_option(sub, "--model", req->model, objectives::kAllTunedModels,
+                  "the EKF noise model (rq, alpha, gyro), a particle-filter calibrator (pf-calib, "
+                  "adaptive-pf-calib) or the fusion UKF (ukf); robot_localization's (rl-ekf, rl-ukf) are tuned "
+                  "with --rl-params (default rq)")
+      ->group(kTrackTuneGroup);
   add_fitness_mode_option(
       sub, [req](objectives::FitnessMode m) { req->mode = m; },
       "EKF/UKF fitness mode (number or name) against ground truth: 1 rmse, 2 mae, 3 maxe, 4 rmse+mae, "
       "5 rmse+maxe, 6 mae+maxe, 7 rmse+mae+maxe (default); EKF without ground truth, cross-validating over the "
       "position fixes: 8 fix-rmse, held-out fix RMSE (the default when a track has no ground truth), 9 fix-nll, "
-      "held-out fix NLL (needs the fixes' variances right)");
+      "held-out fix NLL (needs the fixes' variances right)")
+      ->group(kTrackTuneGroup);
   sub->add_option("--cv-folds", req->fix_cv.folds, "modes 8, 9: folds of the fix cross-validation (default 5)")
       ->check(CLI::Range(2, 100));
   sub->add_option("--cv-block", req->fix_cv.block_s,
@@ -332,14 +326,14 @@ void register_tune(CLI::App& app) {
                   "odotune-pf-config/1, ukf odotune-ukf-config/1)");
   add_calibrator_options(sub, *req);
   auto rl = std::make_shared<jobs::RlTuneRequest>();
-  auto rl_names = std::make_shared<RlChoices>();
+  auto rl_track = std::make_shared<jobs::RlTrackSource>();
   add_rl_source_options(sub, rl->src);
-  add_rl_tune_options(sub, *rl, *rl_names);
-  add_rl_track_options(sub, rl_names->track);
+  add_rl_tune_options(sub, *rl);
+  add_rl_track_options(sub, *rl_track);
   add_threads_option(sub, threads.get());
 
-  sub->callback([req, rl, rl_names, threads, sub] {
-    run_tune_subcommand(*req, *rl, *rl_names, *threads, *sub);
+  sub->callback([req, rl, rl_track, threads, sub] {
+    run_tune_subcommand(*req, *rl, *rl_track, *threads, *sub);
   });
 }
 

@@ -54,30 +54,43 @@ void print_rl_keys(const rlnode::RlParams& p) {
   for (const std::string& n : p.notes) fmt::print("  note: {}\n", n);
 }
 
+std::vector<const CLI::Option*> given_options(const CLI::App& app) {
+  return app.get_options([](const CLI::Option* o) { return o->count() > 0; });
+}
+
 void add_rl_source_options(CLI::App* sub, jobs::RlSource& src) {
   sub->add_option(
          "--rl-params", src.params_file,
          "robot_localization parameter file (ROS 1 or ROS 2 YAML): replay its ekf_node or ukf_node on --bag")
-      ->check(CLI::ExistingFile);
-  sub->add_option("--bag", src.bag, "--rl-params: the robot's bag (ROS 1 .bag, MCAP, rosbag2 .db3 or folder)");
-  sub->add_option("--node", src.node_name, "--rl-params: the filter's section of the file when it has several");
-  add_enum_option(sub, "--filter", src.filter, {filters::rl::RlFilterType::ekf, filters::rl::RlFilterType::ukf},
+      ->check(CLI::ExistingFile)
+      ->group(kRlGroup);
+  sub->add_option("--bag", src.bag, "--rl-params: the robot's bag (ROS 1 .bag, MCAP, rosbag2 .db3 or folder)")
+      ->group(kRlBagGroup);
+  sub->add_option("--node", src.node_name, "--rl-params: the filter's section of the file when it has several")
+      ->group(kRlGroup);
+  add_enum_option(sub, "--filter", src.filter, filters::rl::kAllRlFilterTypes,
                   "--rl-params: ekf_node or ukf_node, for a file that does not say (a section named *ukf*, or "
-                  "ukf_node's alpha, kappa or beta, is the UKF's)");
+                  "ukf_node's alpha, kappa or beta, is the UKF's)")
+      ->group(kRlGroup);
   sub->add_option("--tf", src.tf,
                   "--rl-params: FRAME=x,y,z,roll,pitch,yaw, a sensor frame's pose in base_link (repeat; "
-                  "else /tf_static in the bag)");
-  sub->add_option("--gps-topic", src.gps_topic, "--rl-params: the NavSatFix topic behind navsat's output");
+                  "else /tf_static in the bag)")
+      ->group(kRlBagGroup);
+  sub->add_option("--gps-topic", src.gps_topic, "--rl-params: the NavSatFix topic behind navsat's output")
+      ->group(kRlBagGroup);
   sub->add_option("--navsat-params", src.navsat_params,
                   "--rl-params: navsat_transform_node's parameters from a file of their own")
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingFile)
+      ->group(kRlBagGroup);
   sub->add_option("--remap", src.remap,
                   "--rl-params: FROM=TO, the node's topic FROM read from the bag's TO, as ROS's FROM:=TO "
-                  "(repeat; an input's topic or use_control's cmd_vel)");
+                  "(repeat; an input's topic or use_control's cmd_vel)")
+      ->group(kRlBagGroup);
   sub->add_option("--gps-heading-fit", src.gps_heading_fit_s,
                   "--rl-params: fit navsat's GPS-to-odom rotation on the first SECONDS of fixes (for an IMU "
                   "whose absolute yaw cannot be trusted) instead of taking the IMU's heading")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->group(kRlBagGroup);
 }
 
 void add_rl_track_options(CLI::App* sub, jobs::RlTrackSource& src) {
@@ -85,15 +98,16 @@ void add_rl_track_options(CLI::App* sub, jobs::RlTrackSource& src) {
   sub->add_option("--calibration", src.calibration,
                   "--rl-params with --track: apply this odometry calibration (calibrate --config-out) to every "
                   "track first: wheel radii and base as the track's geometry, or a twist's scales and delay")
-      ->check(CLI::ExistingFile);
-  add_enum_option(sub, "--odometry", o.odometry,
-                  {tracks::OdometryInput::wheels, tracks::OdometryInput::twist,
-                   tracks::OdometryInput::commands},
+      ->check(CLI::ExistingFile)
+      ->group(kRlTrackGroup);
+  add_enum_option(sub, "--odometry", o.odometry, tracks::kAllOdometryInputs,
                   "--rl-params with --track: the track's odometry input (default: its wheels, else its "
-                  "v_cmd/w_cmd as its source.body_velocity says)");
+                  "v_cmd/w_cmd as its source.body_velocity says)")
+      ->group(kRlTrackGroup);
   sub->add_option("--fix-sigma-m", o.fix_sigma_m,
                   "--rl-params with --track: σ [m] of fixes whose track gives no aps_var_x/aps_var_y")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->group(kRlTrackGroup);
   sub->add_option_function<std::vector<double>>(
          "--twist-variance",
          [&o](const std::vector<double>& v) {
@@ -106,11 +120,13 @@ void add_rl_track_options(CLI::App* sub, jobs::RlTrackSource& src) {
          "as the drive controller publishes it (default 0.001,0.03: Clearpath's diff_drive_controller "
          "twist_covariance_diagonal)")
       ->delimiter(',')
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->group(kRlTrackGroup);
   sub->add_option("--gyro-variance", o.gyro_var,
                   "--rl-params with --track: the gyro's yaw-rate variance [(rad/s)²] (default (0.02 °/s)², the "
                   "phidgets_spatial driver's)")
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::PositiveNumber)
+      ->group(kRlTrackGroup);
 }
 
 namespace {

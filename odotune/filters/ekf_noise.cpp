@@ -3,6 +3,7 @@
 #include <cmath>
 #include <string>
 
+#include <odotune/core/enum_names.h>
 #include <odotune/core/why.h>
 
 namespace odotune::filters {
@@ -17,13 +18,7 @@ std::string_view to_string(NoiseModel m) {
 }
 
 bool parse_noise_model(std::string_view text, NoiseModel* out) {
-  for (NoiseModel m : {NoiseModel::rq, NoiseModel::alpha, NoiseModel::gyro}) {
-    if (text == to_string(m)) {
-      *out = m;
-      return true;
-    }
-  }
-  return false;
+  return core::parse_by_name(text, kAllNoiseModels, out);
 }
 
 bool NoiseParams::IsValid(std::string* why) const {

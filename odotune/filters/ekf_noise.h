@@ -13,6 +13,7 @@
 // the reverse of much of the literature; we keep the paper's letters.)
 #pragma once
 
+#include <array>
 #include <string>
 #include <string_view>
 
@@ -21,6 +22,8 @@
 namespace odotune::filters {
 
 enum class NoiseModel { rq, alpha, gyro };
+inline constexpr std::array<NoiseModel, 3> kAllNoiseModels = {NoiseModel::rq, NoiseModel::alpha,
+                                                              NoiseModel::gyro};
 
 std::string_view to_string(NoiseModel m);
 // Parses "rq", "alpha" or "gyro"; returns false on anything else.

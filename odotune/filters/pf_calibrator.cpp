@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include <odotune/core/counter_rng.h>
+#include <odotune/core/enum_names.h>
 #include <odotune/core/why.h>
 #include <odotune/filters/pf_kernels.h>
 
@@ -305,12 +306,7 @@ PfCalibratorParams PfCalibratorParams::adaptive_defaults() {
 std::string_view to_string(PfEvolution e) { return e == PfEvolution::paper ? "paper" : "evidence"; }
 
 bool parse_pf_evolution(std::string_view text, PfEvolution* out) {
-  for (PfEvolution e : {PfEvolution::paper, PfEvolution::evidence})
-    if (text == to_string(e)) {
-      if (out) *out = e;
-      return true;
-    }
-  return false;
+  return core::parse_by_name(text, kAllPfEvolutions, out);
 }
 
 bool PfCalibratorParams::IsValid(std::string* why) const {

@@ -67,6 +67,7 @@
 // gives bit-identical estimates with any thread count.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <string>
@@ -84,6 +85,7 @@ namespace odotune::filters {
 // the paper for robots on which a measurement carries little information
 // (header, "Evolution").
 enum class PfEvolution { paper, evidence };
+inline constexpr std::array<PfEvolution, 2> kAllPfEvolutions = {PfEvolution::paper, PfEvolution::evidence};
 std::string_view to_string(PfEvolution e);
 bool parse_pf_evolution(std::string_view text, PfEvolution* out);
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include <odotune/core/counter_rng.h>
+#include <odotune/core/enum_names.h>
 #include <odotune/filters/pf_kernels.h>
 
 namespace odotune::filters {
@@ -265,25 +266,11 @@ std::string_view to_string(ResamplePolicy p) {
 }
 
 bool parse_resampler(std::string_view text, Resampler* out) {
-  for (const Resampler r :
-       {Resampler::multinomial, Resampler::stratified, Resampler::systematic, Resampler::residual}) {
-    if (text == to_string(r)) {
-      *out = r;
-      return true;
-    }
-  }
-  return false;
+  return core::parse_by_name(text, kAllResamplers, out);
 }
 
 bool parse_resample_policy(std::string_view text, ResamplePolicy* out) {
-  for (const ResamplePolicy p :
-       {ResamplePolicy::every_step, ResamplePolicy::neff, ResamplePolicy::max_weight}) {
-    if (text == to_string(p)) {
-      *out = p;
-      return true;
-    }
-  }
-  return false;
+  return core::parse_by_name(text, kAllResamplePolicies, out);
 }
 
 double effective_sample_size(std::span<const double> normalised_weights) {

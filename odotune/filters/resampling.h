@@ -7,6 +7,7 @@
 // key, so a seeded filter is reproducible whatever the thread count.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -18,6 +19,10 @@ enum class Resampler { multinomial, stratified, systematic, residual };
 // When to resample (§IV.C): every iteration; when N_eff < N_th; when the
 // largest normalised weight falls below a threshold.
 enum class ResamplePolicy { every_step, neff, max_weight };
+inline constexpr std::array<Resampler, 4> kAllResamplers = {Resampler::multinomial, Resampler::stratified,
+                                                            Resampler::systematic, Resampler::residual};
+inline constexpr std::array<ResamplePolicy, 3> kAllResamplePolicies = {
+    ResamplePolicy::every_step, ResamplePolicy::neff, ResamplePolicy::max_weight};
 
 std::string_view to_string(Resampler r);
 std::string_view to_string(ResamplePolicy p);

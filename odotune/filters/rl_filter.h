@@ -3,6 +3,7 @@
 // the interface the node's plumbing (odotune/rlnode/replay.h) drives.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string_view>
@@ -14,6 +15,7 @@
 namespace odotune::filters::rl {
 
 enum class RlFilterType { ekf, ukf };
+inline constexpr std::array<RlFilterType, 2> kAllRlFilterTypes = {RlFilterType::ekf, RlFilterType::ukf};
 std::string_view to_string(RlFilterType t);     // "ekf", "ukf"
 std::string_view display_name(RlFilterType t);  // "EKF", "UKF", for text a user reads
 std::optional<RlFilterType> parse_rl_filter_type(std::string_view name);

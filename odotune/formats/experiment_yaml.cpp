@@ -326,7 +326,13 @@ Experiment parse_experiment(const std::string& text, const std::filesystem::path
     }
   }
   read_seeds(path, root, &e);
-  if (root["solver"]) e.solver = scalar<std::string>(path, root["solver"], "solver");
+  if (const YAML::Node n = root["solver"]) {
+    std::string why;
+    const std::optional<tuner::SolverChoice> solver = tuner::SolverChoice::parse(
+        scalar<std::string>(path, n, "solver"), &why);
+    if (!solver) fail_at(path, n, why);
+    e.solver = *solver;
+  }
   if (const YAML::Node b = root["budget"]) read_budget(path, b, &e);
   if (root["leave_one_out"]) e.leave_one_out = scalar<bool>(path, root["leave_one_out"], "leave_one_out");
   if (e.leave_one_out && e.tracks.size() < 2)

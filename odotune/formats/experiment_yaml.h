@@ -52,6 +52,7 @@
 #include <odotune/objectives/rl_objective.h>
 #include <odotune/objectives/rl_search_options.h>
 #include <odotune/objectives/tuned_model.h>
+#include <odotune/tuner/solver_choice.h>
 
 namespace odotune::formats {
 
@@ -94,7 +95,7 @@ struct Experiment {
   std::vector<objectives::FitnessMode>
       modes;  // empty with rl-ekf/rl-ukf, whose fitnesses are robot_localization.fitness
   std::vector<std::uint64_t> seeds;
-  std::string solver = "pso";
+  tuner::SolverChoice solver;  // pso, or nlopt:NAME (odotune/tuner/solver_choice.h), parsed on reading
   int particles = 50, iterations = 150;
   long evaluations = 0;
   bool leave_one_out = false;

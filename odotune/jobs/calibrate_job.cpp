@@ -61,11 +61,10 @@ std::vector<calibration::CalibrationInput> build_inputs(const CalibrateRequest& 
   // The pose fit needs no external velocity (it fits to the ground truth or
   // the fixes), nor does online-pose (the fixes); nor do none and --apply,
   // which score dead reckoning.
-  calibration::CalibrationMethod method = calibration::CalibrationMethod::none;
-  const bool no_velocity_method = !apply && calibration::parse_calibration_method(a.method_name(), &method) &&
-                                  (method == calibration::CalibrationMethod::batch_pose ||
-                                   method == calibration::CalibrationMethod::online_pose ||
-                                   method == calibration::CalibrationMethod::none);
+  const calibration::CalibrationMethod method = a.method_or_default();
+  const bool no_velocity_method = !apply && (method == calibration::CalibrationMethod::batch_pose ||
+                                             method == calibration::CalibrationMethod::online_pose ||
+                                             method == calibration::CalibrationMethod::none);
   std::vector<calibration::CalibrationInput> inputs;
   for (std::size_t k = 0; k < tracks.size(); ++k) {
     calibration::CalibrationInputOptions o;
@@ -150,8 +149,7 @@ void check_method_flags(const CalibrateRequest& a, calibration::CalibrationMetho
 void make_online_pose_options(const CalibrateRequest& a, const OdometryParams& nominal,
                               calibration::OnlinePoseOptions& o) {
   o.filter.initial = nominal;
-  if (a.start && !calibration::parse_online_pose_start(*a.start, &o.start))
-    throw core::Failure(fmt::format("--start '{}': expected fixes or known", *a.start));
+  if (a.start) o.start = *a.start;
   if (a.fix_sigma_m) {
     if (!(std::isfinite(*a.fix_sigma_m) && *a.fix_sigma_m > 0.0))
       throw core::Failure(fmt::format("--fix-sigma-m {}: expected a finite sd > 0 [m]", *a.fix_sigma_m));
@@ -167,17 +165,10 @@ void make_online_pose_options(const CalibrateRequest& a, const OdometryParams& n
 
 // The particle filter's flags over its defaults.
 void apply_pf_flags(const CalibrateRequest& a, filters::PfCalibratorParams& pf) {
-  // An empty text flag (--resampler "") keeps the default, as not given.
-  const std::string resampler = a.resampler.value_or(""), policy = a.policy.value_or("");
-  const std::string evolution = a.pf_evolution.value_or("");
-  if (!resampler.empty() && !filters::parse_resampler(resampler, &pf.resampler))
-    throw core::Failure(
-        fmt::format("--resampler '{}': expected multinomial, stratified, systematic or residual", resampler));
-  if (!policy.empty() && !filters::parse_resample_policy(policy, &pf.policy))
-    throw core::Failure(fmt::format("--policy '{}': expected every, neff or max", policy));
+  if (a.resampler) pf.resampler = *a.resampler;
+  if (a.policy) pf.policy = *a.policy;
   if (a.particles.value_or(0) > 0) pf.particles = *a.particles;
-  if (!evolution.empty() && !filters::parse_pf_evolution(evolution, &pf.evolution))
-    throw core::Failure(fmt::format("--pf-evolution '{}': expected paper or evidence", evolution));
+  if (a.pf_evolution) pf.evolution = *a.pf_evolution;
   if (a.pf_memory_s.value_or(0.0) > 0.0) {
     pf.evidence.min_memory_s = *a.pf_memory_s;
     pf.evidence.max_memory_s = std::max(pf.evidence.max_memory_s, *a.pf_memory_s);
@@ -192,13 +183,8 @@ formats::CalibrationRunInfo make_options(const CalibrateRequest& a,
   info.track_files = a.tracks;
   info.ext_from_gt_rate_hz = a.ext_from_gt_hz.value_or(0.0);
   calibration::CalibrationOptions& o = info.options;
-  const std::string method = a.method_name();
-  if (!calibration::parse_calibration_method(method, &o.method))
-    throw core::Failure(
-        fmt::format("--method '{}': unknown method, expected adaptive-pf, pf, dkf, online-pose, "
-                    "batch-pose (or batch), batch-velocity or none",
-                    method));
-  check_method_flags(a, o.method, method);
+  o.method = a.method_or_default();
+  check_method_flags(a, o.method, a.method_name());
   o.pose.segment_s = a.segment_s.value_or(0.0);
   o.pose.fit_start_heading = a.fit_start_heading;
   const OdometryParams& nom = inputs.front().nominal;
@@ -244,7 +230,7 @@ formats::CalibrationRunInfo make_options(const CalibrateRequest& a,
     o.convergence_tolerance = tolerance_pct / 100.0;
   }
   std::string why;
-  if (!o.IsValid(&why)) throw core::Failure(fmt::format("--method {}: {}", method, why));
+  if (!o.IsValid(&why)) throw core::Failure(fmt::format("--method {}: {}", a.method_name(), why));
   return info;
 }
 

@@ -37,7 +37,8 @@
 
 namespace odotune::jobs {
 
-// The command's flags as plain values (names as the flags').
+// The command's flags as plain values (names as the flags'), each choice
+// parsed by the caller (odotune/cli/cmd_calibrate.cpp parses the flags once).
 struct CalibrateRequest {
   std::vector<std::string> tracks;  // track files, calibrated in this order (one robot)
   // The calibration's flags: a flag not given is nullopt and takes the default
@@ -45,15 +46,17 @@ struct CalibrateRequest {
   // --pf-memory apply to the PF methods only, --segment to batch-pose,
   // --start, --fix-sigma-m and --pose-memory-m to online-pose, and none
   // of the calibration flags combines with --apply.
-  std::optional<std::string>
-      method;  // adaptive-pf (default) | pf | dkf | online-pose | batch-pose (batch) | batch-velocity | none
+  std::optional<calibration::CalibrationMethod> method;  // default adaptive-pf
+  // The method's name as given ("batch" is batch-pose's alias), which the
+  // outputs' provenance repeats; empty: to_string(method).
+  std::string method_spelling;
   // --input: the odometry to calibrate (odotune/tracks/odometry_input.h); nullopt:
   // each track's own. Twist and command tracks take --method batch only
   // (odotune/jobs/twist_calibrate_job.h).
   std::optional<tracks::OdometryInput> input;
-  std::optional<std::string> resampler;  // PF: multinomial | stratified | systematic (default) | residual
-  std::optional<std::string> policy;     // PF: every | neff (default) | max
-  std::optional<std::uint64_t> seed;     // PF random seed; default 1
+  std::optional<filters::Resampler> resampler;    // PF; default systematic
+  std::optional<filters::ResamplePolicy> policy;  // PF; default neff
+  std::optional<std::uint64_t> seed;              // PF random seed; default 1
   std::optional<int> particles;          // PF particles (adaptive-pf: initial); default 5000 (adaptive 8000)
   int threads = 0;                       // PF threads (0: OpenMP's default); results do not depend on it
   std::optional<double> ext_from_gt_hz;  // derive the external velocities from the ground truth [Hz]
@@ -62,11 +65,11 @@ struct CalibrateRequest {
   std::optional<std::string> init_radius_range;      // "LO,HI" [m], both radii; default nominal ±5 %
   std::optional<std::string> init_wheel_base_range;  // "LO,HI" [m]; default nominal ±15 %
   std::optional<double> tolerance_pct;               // convergence tolerance [%], in (0, 100); default 0.5
-  std::optional<std::string> pf_evolution;           // PF: paper | evidence (default)
-  std::optional<double> pf_memory_s;    // PF evidence evolution: memory after a change [s]; default 10
-  std::optional<double> segment_s;      // batch-pose: segment length [s]; default 0, whole runs
-  bool fit_start_heading = false;       // batch-pose: fit each segment's start heading too
-  std::optional<std::string> start;     // online-pose: fixes (default) | known
+  std::optional<filters::PfEvolution> pf_evolution;  // PF; default evidence
+  std::optional<double> pf_memory_s;  // PF evidence evolution: memory after a change [s]; default 10
+  std::optional<double> segment_s;    // batch-pose: segment length [s]; default 0, whole runs
+  bool fit_start_heading = false;     // batch-pose: fit each segment's start heading too
+  std::optional<calibration::OnlinePoseStart> start;  // online-pose; default fixes
   std::optional<double> fix_sigma_m;    // online-pose: the fixes' sd where a track gives no aps_var [m]
   std::optional<double> pose_memory_m;  // online-pose: memory after a change [m rolled]; default 10
   // Output files ("": not written). calibrate: all four; --apply: json only.
@@ -79,8 +82,13 @@ struct CalibrateRequest {
   // --controller-out and its flags (odotune/jobs/controller_export.h); not with --apply.
   ControllerRequest controller;
 
-  // The method's name, given or the default.
-  std::string method_name() const { return method.value_or("adaptive-pf"); }
+  // The method, given or the default, and its name as given.
+  calibration::CalibrationMethod method_or_default() const {
+    return method.value_or(calibration::CalibrationMethod::adaptive_pf);
+  }
+  std::string method_name() const {
+    return method_spelling.empty() ? std::string(calibration::to_string(method_or_default())) : method_spelling;
+  }
 };
 
 // The calibration itself reports no progress. on_start (when set) gets

@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/enum_names.h>
 #include <odotune/core/failure.h>
 #include <odotune/formats/config_yaml.h>
 #include <odotune/formats/ukf_config_yaml.h>
@@ -24,25 +25,32 @@ namespace odotune::jobs {
 
 namespace {
 
-constexpr std::array<const char*, 5> kKeys = {"model", "track", "mode", "seed", "heldout"};
-const char* const kKeyList = "model, track, mode, seed, heldout";
+// "model, track, mode, seed, heldout", for messages.
+std::string key_list() {
+  std::string out;
+  for (RunKey k : kAllRunKeys) out += (out.empty() ? "" : ", ") + std::string(to_string(k));
+  return out;
+}
 
-bool is_integer_key(const std::string& key) { return key == "mode" || key == "seed"; }
+bool is_integer_key(RunKey key) { return key == RunKey::mode || key == RunKey::seed; }
 
 // A run's value for a selection key, as the user writes it.
-std::string field(const results::RunRecord& r, const std::string& key) {
-  if (key == "model") return r.model;
-  if (key == "track") return r.track;
-  if (key == "mode") return std::to_string(r.mode);
-  if (key == "seed") return std::to_string(r.seed);
-  return r.heldout_track.empty() ? "none" : r.heldout_track;  // heldout
+std::string field(const results::RunRecord& r, RunKey key) {
+  switch (key) {
+    case RunKey::model: return r.model;
+    case RunKey::track: return r.track;
+    case RunKey::mode: return std::to_string(r.mode);
+    case RunKey::seed: return std::to_string(r.seed);
+    case RunKey::heldout: break;
+  }
+  return r.heldout_track.empty() ? "none" : r.heldout_track;
 }
 
 // The distinct values of `key` among `runs`, sorted (numerically for integers).
-std::string values_of(const std::vector<const results::RunRecord*>& runs, const std::string& key) {
+std::string values_of(const std::vector<const results::RunRecord*>& runs, RunKey key) {
   std::vector<std::string> v;
   for (const auto* r : runs) v.push_back(field(*r, key));
-  std::sort(v.begin(), v.end(), [&key](const std::string& a, const std::string& b) {
+  std::sort(v.begin(), v.end(), [key](const std::string& a, const std::string& b) {
     if (is_integer_key(key) && a.size() != b.size()) return a.size() < b.size();
     return a < b;
   });
@@ -96,9 +104,9 @@ std::string join_names(const std::vector<objectives::ReplayInput>& inputs) {
   return out;
 }
 
-std::string alpha_mapping_note(const results::RunRecord& run, const objectives::ProcessNoiseRate& q,
+std::string alpha_mapping_note(filters::NoiseModel model, const objectives::ProcessNoiseRate& q,
                                const std::vector<objectives::ReplayInput>& inputs) {
-  const bool gyro = run.model == "gyro";
+  const bool gyro = model == filters::NoiseModel::gyro;
   return fmt::format(
       "Mapping from odotune's {} model (Kovacs et al. eq. 3-5{}) to robot_localization:\n"
       "  odotune adds R_k = V_k·diag(σl², σr²)·V_kᵀ at every odometry step k, with\n"
@@ -118,7 +126,7 @@ std::string alpha_mapping_note(const results::RunRecord& run, const objectives::
       "  (Alternatively, feed the wheel odometry as a twist input, odom0 vx/vyaw, and put the\n"
       "  wheel noise into that message's twist covariance.)\n"
       "  The fix variances below are the model's fixed σ = 60 mm (alpha/gyro do not tune q).",
-      run.model, gyro ? ", 6-7" : "",
+      filters::to_string(model), gyro ? ", 6-7" : "",
       gyro ? ",\n  α1 = a1 + b1·|ω_z|, α2 = a2 + b2·|ω_z| with the step's |ω_z| (gyro, else odometry)" : "",
       join_names(inputs), q.steps, q.duration_s, q.odometry_rate_hz);
 }
@@ -145,7 +153,7 @@ results::RosExportInput ros_input(const results::Store& store, const results::Ru
       in.frequency_hz = q.odometry_rate_hz;
       for (std::size_t i = 0; i < run.param_names.size() && i < run.params.size(); ++i)
         in.tuned_params.emplace_back(run.param_names[i], run.params[i]);
-      in.mapping_note = alpha_mapping_note(run, q, inputs);
+      in.mapping_note = alpha_mapping_note(noise.model, q, inputs);
     }
   } catch (const std::exception& e) {
     if (dynamic_cast<const core::Failure*>(&e)) throw;
@@ -157,28 +165,51 @@ results::RosExportInput ros_input(const results::Store& store, const results::Ru
 
 }  // namespace
 
+std::string_view to_string(ExportFormat f) {
+  return f == ExportFormat::robot_localization ? "robot_localization" : "odotune";
+}
+
+bool parse_export_format(std::string_view text, ExportFormat* out) {
+  return core::parse_by_name(text, kAllExportFormats, out);
+}
+
+std::string_view to_string(RunKey k) {
+  switch (k) {
+    case RunKey::model: return "model";
+    case RunKey::track: return "track";
+    case RunKey::mode: return "mode";
+    case RunKey::seed: return "seed";
+    case RunKey::heldout: return "heldout";
+  }
+  return "?";
+}
+
+bool parse_run_key(std::string_view text, RunKey* out) { return core::parse_by_name(text, kAllRunKeys, out); }
+
 std::vector<RunFilter> parse_run_filters(const std::vector<std::string>& items) {
   std::vector<RunFilter> filters;
   for (const std::string& item : items) {
     const auto eq = item.find('=');
     if (eq == std::string::npos || eq == 0 || eq + 1 == item.size())
-      throw core::Failure(fmt::format("--select '{}': expected key=value with key one of {}", item, kKeyList));
-    RunFilter f{item.substr(0, eq), item.substr(eq + 1)};
-    if (std::find(kKeys.begin(), kKeys.end(), f.key) == kKeys.end())
-      throw core::Failure(fmt::format("--select '{}': unknown key '{}', expected one of {}", item, f.key,
-                                      kKeyList));
+      throw core::Failure(fmt::format("--select '{}': expected key=value with key one of {}", item,
+                                      key_list()));
+    RunFilter f{RunKey::model, item.substr(eq + 1)};
+    if (!parse_run_key(item.substr(0, eq), &f.key))
+      throw core::Failure(fmt::format("--select '{}': unknown key '{}', expected one of {}", item,
+                                      item.substr(0, eq), key_list()));
     if (is_integer_key(f.key)) {
       std::uint64_t v = 0;
       const char* end = f.value.data() + f.value.size();
       const auto [ptr, ec] = std::from_chars(f.value.data(), end, v);
       if (ec != std::errc() || ptr != end)
-        throw core::Failure(fmt::format("--select '{}': {} must be a non-negative integer", item, f.key));
+        throw core::Failure(fmt::format("--select '{}': {} must be a non-negative integer", item,
+                                        to_string(f.key)));
       f.value = std::to_string(v);
     }
     for (const RunFilter& g : filters)
       if (g.key == f.key && g.value != f.value)
-        throw core::Failure(fmt::format("--select gives {} twice ({} and {}); give it once", f.key, g.value,
-                                        f.value));
+        throw core::Failure(fmt::format("--select gives {} twice ({} and {}); give it once", to_string(f.key),
+                                        g.value, f.value));
     filters.push_back(std::move(f));
   }
   return filters;
@@ -195,8 +226,8 @@ RunSelection select_best_run(const std::vector<results::RunRecord>& all, const s
       if (field(*r, filters[i].key) == filters[i].value) kept.push_back(r);
     if (kept.empty())
       throw core::Failure(fmt::format("--select {}: no run matches{}; {} is one of: {}", filters[i].text(),
-                                      i == 0 ? "" : " (with " + describe(filters, i) + ")", filters[i].key,
-                                      values_of(runs, filters[i].key)));
+                                      i == 0 ? "" : " (with " + describe(filters, i) + ")",
+                                      to_string(filters[i].key), values_of(runs, filters[i].key)));
     runs = std::move(kept);
   }
   std::set<std::string> models;
@@ -205,10 +236,10 @@ RunSelection select_best_run(const std::vector<results::RunRecord>& all, const s
     throw core::Failure(fmt::format(
         "{} runs of {} models ({}); add --select model=… to pick one",
         filters.empty() ? "the store holds" : "--select " + describe(filters, filters.size()) + " matches",
-        models.size(), values_of(runs, "model")));
+        models.size(), values_of(runs, RunKey::model)));
   RunSelection s;
   s.matching = runs.size();
-  if (objectives::is_rl_model_name(*models.begin())) {
+  if (run_model(*runs.front()).is_rl()) {
     // An rl-ekf or rl-ukf run's scores are on data its tune never saw: choosing by them
     // would make them optimistic, so the runs of one fitness are compared by
     // their tuning fitness instead.
@@ -217,7 +248,7 @@ RunSelection select_best_run(const std::vector<results::RunRecord>& all, const s
     if (modes.size() > 1)
       throw core::Failure(fmt::format("{} runs of {} fitnesses (modes {}); add --select mode=… to pick one (8 "
                                       "heldout-fixes, 10 outage, 11 both)",
-                                      *models.begin(), modes.size(), values_of(runs, "mode")));
+                                      *models.begin(), modes.size(), values_of(runs, RunKey::mode)));
     for (const auto* r : runs)
       if (!s.run || r->best_fitness < s.run->best_fitness) s.run = r;
     return s;
@@ -228,33 +259,31 @@ RunSelection select_best_run(const std::vector<results::RunRecord>& all, const s
 }
 
 ExportOutcome run_export(const ExportRequest& request) {
-  if (request.format != "odotune" && request.format != "robot_localization")
-    throw core::Failure(fmt::format("--format '{}': expected odotune or robot_localization", request.format));
-  const std::vector<RunFilter> filters = parse_run_filters(request.select);
+  const std::vector<RunFilter>& filters = request.select;
   const auto store = open_store_for_reading(request.store);
   const std::vector<results::RunRecord> all = store->runs();
   const RunSelection sel = select_best_run(all, filters, request.store);
   const results::RunRecord& run = *sel.run;
   const std::string key = results::run_key(run);
-  if (objectives::is_calibrator_model_name(run.model))
+  const objectives::TunedModel model = run_model(run);
+  if (model.is_calibrator())
     throw core::Failure(
         fmt::format("run {} tuned the {} calibrator's settings, not EKF noise: export writes EKF "
                     "configurations only; write a calibrator's settings with `odotune tune --model {} ... "
                     "--config-out FILE` (odotune-pf-config/1)",
                     key, run.model, run.model));
-  if (objectives::is_ukf_model_name(run.model) && request.format != "odotune")
+  if (model.is_ukf() && request.format != ExportFormat::odotune)
     throw core::Failure(
         fmt::format("run {} tuned the velocity-fusion UKF (model ukf): {} has no mapping for this model; "
                     "export it with --format odotune (odotune-ukf-config/1)",
-                    key, request.format));
+                    key, to_string(request.format)));
   const std::string scores = fmt::format("tuned RMSE {:.2f} mm vs baseline {:.2f} mm on {}",
                                          run.tuned.rmse_m * 1e3, run.baseline.rmse_m * 1e3, run.scored_track());
   const std::string origin = fmt::format("odotune export from {} (experiment {}, {}): run {}", request.store,
                                          store->experiment().name, store->experiment().hash, key);
 
-  objectives::TunedModel model;
-  if (objectives::parse_tuned_model(run.model, &model) && model.is_rl()) {
-    if (request.format != "robot_localization")
+  if (model.is_rl()) {
+    if (request.format != ExportFormat::robot_localization)
       throw core::Failure(
           fmt::format("run {} tuned robot_localization's {} (model {}): it exports as the robot's "
                       "own parameter file only; use --format robot_localization",
@@ -271,11 +300,11 @@ ExportOutcome run_export(const ExportRequest& request) {
   if (request.ros1)
     throw core::Failure(fmt::format("--ros1 applies to rl-ekf and rl-ukf runs only; run {} is of model {}", key,
                                     run.model));
-  if (objectives::is_ukf_model_name(run.model)) {
+  if (model.is_ukf()) {
     formats::UkfConfig cfg = run_ukf_config(run);
     cfg.comment = origin + "\n" + scores + " (the fused pose; baseline: the default UKF noise)";
     formats::write_ukf_config(cfg, request.out);
-  } else if (request.format == "odotune") {
+  } else if (request.format == ExportFormat::odotune) {
     formats::EkfConfig cfg;
     cfg.noise = run_noise(run);
     cfg.model = cfg.noise.model;

@@ -18,25 +18,36 @@
 // this form), which is refused with one line.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <odotune/results/run_record.h>
 
 namespace odotune::jobs {
 
-// One --select filter: a run's `key` (model, track, mode, seed, heldout)
-// must equal `value`.
+// What a --select filter compares: a stored run's model, track (e.g.
+// "all-but-track1"), fitness mode, seed, or held-out track ("none").
+enum class RunKey { model, track, mode, seed, heldout };
+inline constexpr std::array<RunKey, 5> kAllRunKeys = {RunKey::model, RunKey::track, RunKey::mode, RunKey::seed,
+                                                      RunKey::heldout};
+std::string_view to_string(RunKey k);  // "model", "track", "mode", "seed", "heldout"
+bool parse_run_key(std::string_view text, RunKey* out);
+
+// One --select filter: a run's `key` must equal `value`, a stored value as
+// the user writes it (the store's names and numbers are data).
 struct RunFilter {
-  std::string key, value;  // value normalised (integers without leading zeros or '+')
-  std::string text() const { return key + "=" + value; }
+  RunKey key = RunKey::model;
+  std::string value;  // normalised (integers without leading zeros or '+')
+  std::string text() const { return std::string(to_string(key)) + "=" + value; }
 };
 
-// Parses key=value items (each --select item, commas already split). Throws
-// core::Failure (one line naming the item) for a malformed item, an unknown
-// key, a mode or seed that is not a non-negative integer, or one key given
-// twice with different values.
+// Parses key=value items (each --select item, commas already split; the cli
+// calls it on the flag's items). Throws core::Failure (one line naming the
+// item) for a malformed item, an unknown key, a mode or seed that is not a
+// non-negative integer, or one key given twice with different values.
 std::vector<RunFilter> parse_run_filters(const std::vector<std::string>& items);
 
 struct RunSelection {
@@ -52,10 +63,18 @@ struct RunSelection {
 RunSelection select_best_run(const std::vector<results::RunRecord>& runs, const std::vector<RunFilter>& filters,
                              const std::string& store);
 
+// What export writes: odotune's own configuration file (what `eval --config`
+// reads), or a parameter file for robot_localization.
+enum class ExportFormat { odotune, robot_localization };
+inline constexpr std::array<ExportFormat, 2> kAllExportFormats = {ExportFormat::odotune,
+                                                                  ExportFormat::robot_localization};
+std::string_view to_string(ExportFormat f);  // "odotune", "robot_localization"
+bool parse_export_format(std::string_view text, ExportFormat* out);
+
 struct ExportRequest {
-  std::string store;                          // results store written by `odotune grid`
-  std::vector<std::string> select;            // key=value items (parse_run_filters)
-  std::string format;                         // "odotune" | "robot_localization"
+  std::string store;              // results store written by `odotune grid`
+  std::vector<RunFilter> select;  // --select, parsed (parse_run_filters)
+  ExportFormat format = ExportFormat::odotune;
   std::string out;                            // the file to write (atomically)
   std::vector<std::string> track_files;       // take precedence over the experiment's tracks
   std::string node_name = "ekf_filter_node";  // robot_localization: the top-level key
@@ -70,7 +89,7 @@ struct ExportOutcome {
 
 // Opens the store read-only, selects the run and writes `out`: an
 // odotune-ekf-config/1 file (or odotune-ukf-config/1 for a ukf run) for
-// "odotune", a robot_localization parameter file otherwise (which needs the
+// ExportFormat::odotune, a robot_localization parameter file otherwise (which needs the
 // run's tuning tracks, from the experiment or `track_files`, for the
 // odometry rate and, for alpha/gyro, the time-averaged process noise).
 // Throws core::Failure (one line) for a bad selection or store, a

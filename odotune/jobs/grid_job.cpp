@@ -116,7 +116,7 @@ results::RunRecord cell_record(const formats::Experiment& e, const std::vector<P
   r.heldout_track = c.heldout ? tracks[c.score_on].name : "";
   r.mode = stored_mode(c.fitness);
   r.seed = c.seed;
-  r.solver = e.solver;
+  r.solver = e.solver.name();
   return r;
 }
 
@@ -131,14 +131,10 @@ std::vector<std::size_t> pending_cells(const formats::Experiment& e, const std::
 
 namespace {
 
-// The experiment's solver for a cell (its seed), shared by EKF and calibrator
-// cells. Throws std::invalid_argument for a solver that is not one.
+// The experiment's solver for a cell (its seed), shared by every model.
 SolverSettings cell_solver(const formats::Experiment& e, const GridCell& c, const std::atomic<bool>* stop) {
   SolverSettings s;
-  std::string why;
-  const std::optional<tuner::SolverChoice> solver = tuner::SolverChoice::parse(e.solver, &why);
-  if (!solver) throw std::invalid_argument(why);
-  s.solver = *solver;
+  s.solver = e.solver;
   s.seed = c.seed;
   s.particles = e.particles;
   s.iterations = e.iterations;

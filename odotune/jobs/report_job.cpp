@@ -33,10 +33,10 @@ using results::RunRecord;
 // The run of `model` on `track` (per-track, mode `mode`) with the lowest
 // tuned RMSE, or nullptr.
 const RunRecord* best_run(const std::vector<RunRecord>& runs, const std::string& model,
-                          const std::string& track, int mode) {
+                          const std::string& track, objectives::FitnessMode mode) {
   const RunRecord* best = nullptr;
   for (const auto& r : runs)
-    if (!r.is_heldout() && r.model == model && r.track == track && r.mode == mode &&
+    if (!r.is_heldout() && r.model == model && r.track == track && r.mode == objectives::number(mode) &&
         (!best || r.tuned.rmse_m < best->tuned.rmse_m))
       best = &r;
   return best;
@@ -51,12 +51,15 @@ results::TrajectoryPath path_of(const std::string& name, const std::vector<objec
   return p;
 }
 // The store's runs and the names the report is drawn over, read and checked
-// before anything is written; `store` stays open for the whole report.
+// before anything is written; `store` stays open for the whole report. The
+// store keeps each run's model as its name (the report's labels and file
+// names); `kinds` is each of `models` parsed, once, where it is read.
 struct CheckedStore {
   std::unique_ptr<results::Store> store;
   results::ExperimentInfo info;
   std::vector<RunRecord> runs;
   std::vector<std::string> models, tracks, overlay_tracks;
+  std::vector<objectives::TunedModel> kinds;  // of `models`, in their order
 };
 
 // Checks the request (mode, store, track name, output folder) and reads the
@@ -73,6 +76,7 @@ CheckedStore open_checked(const ReportRequest& req) {
   if (s.runs.empty())
     throw core::Failure(fmt::format("{}: no finished runs yet (run odotune grid first)", req.store.string()));
   s.models = results::report_models(s.runs);
+  for (const std::string& m : s.models) s.kinds.push_back(stored_model(m));
   s.tracks = results::report_tracks(s.runs);
   for (const auto& t : s.tracks)
     if (req.trajectory_track.empty() || t == req.trajectory_track) s.overlay_tracks.push_back(t);
@@ -87,15 +91,11 @@ CheckedStore open_checked(const ReportRequest& req) {
   return s;
 }
 
-// Runs of one kind: EKF models (calibrator false, ukf false), the
-// calibrators (calibrator true) or the UKF (ukf true); `model` narrows to one.
-std::vector<RunRecord> runs_of(const std::vector<RunRecord>& from, bool calibrator, const std::string& model,
-                               bool ukf = false) {
+// The runs of the models named in `models`.
+std::vector<RunRecord> runs_of(const std::vector<RunRecord>& from, const std::vector<std::string>& models) {
   std::vector<RunRecord> out_runs;
   for (const auto& r : from)
-    if (objectives::is_calibrator_model_name(r.model) == calibrator &&
-        objectives::is_ukf_model_name(r.model) == ukf && (model.empty() || r.model == model))
-      out_runs.push_back(r);
+    if (std::find(models.begin(), models.end(), r.model) != models.end()) out_runs.push_back(r);
   return out_runs;
 }
 
@@ -119,11 +119,11 @@ struct ReportInput {
 ReportInput split_runs(const ReportRequest& req, const CheckedStore& s) {
   ReportInput in{req, s, {}, {}, {}, {}, {}};
   for (const auto& r : s.runs) (r.is_heldout() ? in.held : in.own).push_back(r);
-  for (const auto& m : s.models)
-    (objectives::is_calibrator_model_name(m) ? in.calibrator_models
-     : objectives::is_ukf_model_name(m)      ? in.ukf_models
-                                             : in.ekf_models)
-        .push_back(m);
+  for (std::size_t k = 0; k < s.models.size(); ++k)
+    (s.kinds[k].is_calibrator() ? in.calibrator_models
+     : s.kinds[k].is_ukf()      ? in.ukf_models
+                                : in.ekf_models)
+        .push_back(s.models[k]);
   return in;
 }
 
@@ -216,7 +216,7 @@ void write_boxplots(const ReportInput& in, ReportWriter& w, results::HtmlPage& p
 // (c) Table 1, one table per calibrator model and the UKF's table.
 void write_rmse_tables(const ReportInput& in, ReportWriter& w, results::HtmlPage& page) {
   const std::vector<RunRecord>& runs = in.s.runs;
-  const results::RmseTable t1 = results::rmse_table(runs_of(runs, false, ""));
+  const results::RmseTable t1 = results::rmse_table(runs_of(runs, in.ekf_models));
   if (!t1.rows.empty()) {
     const results::TextTable tt = results::text_table(t1);
     w.text("table1.csv", "report table", results::to_csv(t1));
@@ -231,7 +231,7 @@ void write_rmse_tables(const ReportInput& in, ReportWriter& w, results::HtmlPage
   // One table per calibrator model: each has its own baseline (its kind's
   // default settings), so they do not share an "original" column.
   for (const auto& model : in.calibrator_models) {
-    const results::RmseTable tc = results::rmse_table(runs_of(runs, true, model));
+    const results::RmseTable tc = results::rmse_table(runs_of(runs, {model}));
     if (tc.rows.empty()) continue;
     const results::TextTable tt = results::text_table(tc);
     const std::string stem = "table1_" + file_safe(model);
@@ -241,12 +241,12 @@ void write_rmse_tables(const ReportInput& in, ReportWriter& w, results::HtmlPage
     page.paragraph(
         fmt::format("Dead-reckoning position RMSE of the odometry calibrated online by {}: original = the "
                     "paper's default settings, {} = the tuned settings ({}). Also as {}.csv and {}.md.",
-                    model, model, seeds_phrase(runs_of(in.own, true, model)), stem, stem));
+                    model, model, seeds_phrase(runs_of(in.own, {model})), stem, stem));
     page.table(tt);
   }
   // The UKF's table: its own baseline (the default UKF noise).
   for (const auto& model : in.ukf_models) {
-    const results::RmseTable tu = results::rmse_table(runs_of(runs, false, model, true));
+    const results::RmseTable tu = results::rmse_table(runs_of(runs, {model}));
     if (tu.rows.empty()) continue;
     const results::TextTable tt = results::text_table(tu);
     const std::string stem = "table1_" + file_safe(model);
@@ -256,7 +256,7 @@ void write_rmse_tables(const ReportInput& in, ReportWriter& w, results::HtmlPage
     page.paragraph(
         fmt::format("Position RMSE of the pose integrated from the fusion UKF's (V, W): original = the default "
                     "UKF noise, {} = the tuned noise ({}). Also as {}.csv and {}.md.",
-                    model, seeds_phrase(runs_of(in.own, false, model, true)), stem, stem));
+                    model, seeds_phrase(runs_of(in.own, {model})), stem, stem));
     page.table(tt);
   }
 }
@@ -287,23 +287,27 @@ void write_generalisation(const ReportInput& in, ReportWriter& w, results::HtmlP
 }
 
 // The fitness mode of the trajectories and convergence curves: the requested
-// one, or the last mode with runs (with a note) when it has none.
-int shown_mode(const ReportInput& in, std::vector<std::string>& notes) {
-  int mode = objectives::number(in.req.mode);
-  const auto modes = results::report_modes(in.own);
-  if (!modes.empty() && std::find(modes.begin(), modes.end(), mode) == modes.end()) {
-    notes.push_back(fmt::format("mode {} has no runs; trajectories and convergence use mode {}", mode,
-                                modes.back()));
-    mode = modes.back();
-  }
-  return mode;
+// one, or the last mode with runs (with a note) when it has none. The store
+// keeps modes as their numbers (results/run_record.h), read back here.
+objectives::FitnessMode shown_mode(const ReportInput& in, std::vector<std::string>& notes) {
+  const objectives::FitnessMode asked = in.req.mode;
+  const std::vector<int> modes = results::report_modes(in.own);
+  if (modes.empty() || std::find(modes.begin(), modes.end(), objectives::number(asked)) != modes.end())
+    return asked;
+  const std::optional<objectives::FitnessMode> last = objectives::fitness_mode_of_number(modes.back());
+  if (!last)
+    throw core::Failure(fmt::format("{}: mode {} of its runs is not a fitness mode, expected {}",
+                                    in.req.store.string(), modes.back(), objectives::fitness_mode_choices()));
+  notes.push_back(fmt::format("mode {} has no runs; trajectories and convergence use mode {}",
+                              objectives::number(asked), objectives::number(*last)));
+  return *last;
 }
 
 // One track's trajectory overlay: the reference (ground truth, or the
 // position fixes when there is none), the baseline EKF and each EKF model's
 // best run in `mode`.
 results::HtmlFigure trajectory_figure(const ReportInput& in, ReportWriter& w, const std::string& name,
-                                      const tracks::Track& track, int mode) {
+                                      const tracks::Track& track, objectives::FitnessMode mode) {
   const std::vector<RunRecord>& runs = in.s.runs;
   objectives::ReplayInput rin;
   try {
@@ -323,9 +327,10 @@ results::HtmlFigure trajectory_figure(const ReportInput& in, ReportWriter& w, co
     paths.push_back(path_of("baseline EKF", objectives::ekf_trajectory(rin, objectives::baseline_noise())));
     for (const auto& model : in.ekf_models)
       if (const RunRecord* r = best_run(runs, model, name, mode))
-        paths.push_back(path_of(fmt::format("{} tuned (mode {})", model, mode),
+        paths.push_back(path_of(fmt::format("{} tuned (mode {})", model, objectives::number(mode)),
                                 objectives::ekf_trajectory(rin, run_noise(*r))));
-    const std::string title = fmt::format("{}: position fixes, baseline and tuned EKF (mode {})", name, mode);
+    const std::string title = fmt::format("{}: position fixes, baseline and tuned EKF (mode {})", name,
+                                          objectives::number(mode));
     return w.figure("trajectories_" + file_safe(name), title,
                     [&](const fs::path& stem) { results::trajectories(stem, title, paths); });
   }
@@ -346,15 +351,16 @@ results::HtmlFigure trajectory_figure(const ReportInput& in, ReportWriter& w, co
                                         got.outcome.metrics.rmse_m * 1e3),
                             got.trajectory));
   }
-  const std::string title = fmt::format("{}: ground truth, baseline and tuned EKF (mode {})", name, mode);
+  const std::string title = fmt::format("{}: ground truth, baseline and tuned EKF (mode {})", name,
+                                        objectives::number(mode));
   return w.figure("trajectories_" + file_safe(name), title,
                   [&](const fs::path& stem) { results::trajectories(stem, title, paths); });
 }
 
 // (d) Figure 5: trajectory overlays of the EKF models in `mode`.
 void write_trajectories(const ReportInput& in, ReportWriter& w, results::HtmlPage& page,
-                        std::vector<std::string>& notes, int mode) {
-  page.heading(fmt::format("Trajectories (Figure 5), fitness mode {}", mode));
+                        std::vector<std::string>& notes, objectives::FitnessMode mode) {
+  page.heading(fmt::format("Trajectories (Figure 5), fitness mode {}", objectives::number(mode)));
   if (!in.calibrator_models.empty())
     notes.push_back(
         fmt::format("trajectory overlays replay the EKF: the calibrator models ({}) are left out of them",
@@ -386,21 +392,26 @@ void write_trajectories(const ReportInput& in, ReportWriter& w, results::HtmlPag
 
 // (e) Convergence curves: the EKF models' fitness (metres) and the
 // calibrators' score (dimensionless) in separate figures.
-void write_convergence(const ReportInput& in, ReportWriter& w, results::HtmlPage& page, int mode) {
-  page.heading(fmt::format("Convergence, fitness mode {}", mode));
+void write_convergence(const ReportInput& in, ReportWriter& w, results::HtmlPage& page,
+                       objectives::FitnessMode mode) {
+  page.heading(fmt::format("Convergence, fitness mode {}", objectives::number(mode)));
+  const auto is_calibrator = [&in](const std::string& model) {
+    return std::find(in.calibrator_models.begin(), in.calibrator_models.end(), model) !=
+           in.calibrator_models.end();
+  };
   page.paragraph("Best fitness so far against evaluations: median over seeds as a line, min–max as a band.");
   for (bool calibrator : {false, true}) {
     std::vector<results::HtmlFigure> row;
     for (const auto& name : in.s.tracks) {
       std::map<std::string, std::vector<std::vector<results::ConvergencePoint>>> series;
       for (const auto& r : in.own)
-        if (objectives::is_calibrator_model_name(r.model) == calibrator && r.track == name &&
-            (calibrator || r.mode == mode) && !r.convergence.empty())
+        if (is_calibrator(r.model) == calibrator && r.track == name &&
+            (calibrator || r.mode == objectives::number(mode)) && !r.convergence.empty())
           series[r.model].push_back(r.convergence);
       if (series.empty()) continue;
-      const std::string title = calibrator
-                                    ? fmt::format("{}: best calibration score vs evaluations", name)
-                                    : fmt::format("{}: best fitness (mode {}) vs evaluations", name, mode);
+      const std::string title = calibrator ? fmt::format("{}: best calibration score vs evaluations", name)
+                                           : fmt::format("{}: best fitness (mode {}) vs evaluations", name,
+                                                         objectives::number(mode));
       const std::string stem = (calibrator ? "convergence_calibration_" : "convergence_") + file_safe(name);
       row.push_back(w.figure(stem, title, [&](const fs::path& p) { results::convergence(p, title, series); }));
     }
@@ -415,8 +426,7 @@ void write_convergence(const ReportInput& in, ReportWriter& w, results::HtmlPage
 
 ReportOutcome write_report(const ReportRequest& req) {
   const CheckedStore s = open_checked(req);
-  if (std::find_if(s.models.begin(), s.models.end(),
-                   [](const std::string& m) { return objectives::is_rl_model_name(m); }) != s.models.end())
+  if (std::any_of(s.kinds.begin(), s.kinds.end(), [](const objectives::TunedModel& m) { return m.is_rl(); }))
     return write_rl_report(req, s.info, s.runs);  // rl-ekf and rl-ukf stand alone in an experiment
 
   const ReportInput in = split_runs(req, s);
@@ -434,7 +444,7 @@ ReportOutcome write_report(const ReportRequest& req) {
   write_boxplots(in, w, page);
   write_rmse_tables(in, w, page);
   write_generalisation(in, w, page, out.notes);
-  const int mode = shown_mode(in, out.notes);
+  const objectives::FitnessMode mode = shown_mode(in, out.notes);
   write_trajectories(in, w, page, out.notes, mode);
   write_convergence(in, w, page, mode);
   out.files = w.finish(page, out.notes);

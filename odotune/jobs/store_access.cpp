@@ -39,6 +39,22 @@ std::map<std::string, tracks::Track> experiment_tracks(const results::Experiment
   return out;
 }
 
+objectives::TunedModel run_model(const results::RunRecord& run) {
+  objectives::TunedModel m;
+  if (!objectives::parse_tuned_model(run.model, &m))
+    throw core::Failure(fmt::format("run {}: unknown model '{}', expected {}", results::run_key(run), run.model,
+                                    objectives::tuned_model_names()));
+  return m;
+}
+
+objectives::TunedModel stored_model(const std::string& name) {
+  objectives::TunedModel m;
+  if (!objectives::parse_tuned_model(name, &m))
+    throw core::Failure(fmt::format("the store's model '{}' is unknown, expected {}", name,
+                                    objectives::tuned_model_names()));
+  return m;
+}
+
 double run_param(const results::RunRecord& run, const std::string& name) {
   for (std::size_t i = 0; i < run.param_names.size() && i < run.params.size(); ++i)
     if (run.param_names[i] == name) return run.params[i];
@@ -46,16 +62,18 @@ double run_param(const results::RunRecord& run, const std::string& name) {
 }
 
 filters::NoiseParams run_noise(const results::RunRecord& run) {
-  filters::NoiseModel model;
-  if (objectives::is_calibrator_model_name(run.model))
+  const objectives::TunedModel model = run_model(run);
+  if (model.is_calibrator())
     throw core::Failure(fmt::format("run {}: model {} tuned a calibrator's settings, not EKF noise",
                                     results::run_key(run), run.model));
-  if (objectives::is_ukf_model_name(run.model))
+  if (model.is_ukf())
     throw core::Failure(fmt::format("run {}: model {} tuned the velocity-fusion UKF's noise, not EKF noise",
                                     results::run_key(run), run.model));
-  if (!filters::parse_noise_model(run.model, &model))
-    throw core::Failure(fmt::format("run {}: unknown model '{}'", results::run_key(run), run.model));
-  const objectives::ParamSpace space = objectives::ParamSpace::for_model(model);
+  if (!model.is_ekf())
+    throw core::Failure(
+        fmt::format("run {}: model {} tuned robot_localization's filter, not odotune's EKF noise",
+                    results::run_key(run), run.model));
+  const objectives::ParamSpace space = objectives::ParamSpace::for_model(model.noise());
   std::vector<double> physical(space.dim());
   for (std::size_t i = 0; i < space.dim(); ++i) physical[i] = run_param(run, space.params()[i].name);
   filters::NoiseParams noise = space.to_noise(physical);
@@ -66,7 +84,7 @@ filters::NoiseParams run_noise(const results::RunRecord& run) {
 }
 
 formats::UkfConfig run_ukf_config(const results::RunRecord& run) {
-  if (!objectives::is_ukf_model_name(run.model))
+  if (!run_model(run).is_ukf())
     throw core::Failure(fmt::format("run {}: model {} is not the fusion UKF", results::run_key(run),
                                     run.model));
   const objectives::BoxSpace space = learned::ukf_space();

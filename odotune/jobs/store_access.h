@@ -12,6 +12,7 @@
 
 #include <odotune/filters/ekf_noise.h>
 #include <odotune/formats/ukf_config_yaml.h>
+#include <odotune/objectives/tuned_model.h>
 #include <odotune/results/run_record.h>
 #include <odotune/results/store.h>
 #include <odotune/tracks/track.h>
@@ -29,6 +30,13 @@ std::unique_ptr<results::Store> open_store_for_reading(const std::filesystem::pa
 // bad is a Failure line. Returns an empty map when nothing can be found.
 std::map<std::string, tracks::Track> experiment_tracks(const results::ExperimentInfo& info,
                                                        const std::vector<std::string>& extra_files);
+
+// The model of a stored run, and a model name of the store: the store keeps
+// the names `grid` wrote (data, results/run_record.h), parsed here where a
+// command reads them back, so that no command compares them as text. Throw
+// core::Failure (naming the run) for a name that is no model.
+objectives::TunedModel run_model(const results::RunRecord& run);
+objectives::TunedModel stored_model(const std::string& name);
 
 // A stored run's physical parameter `name` (e.g. "r1_mm2"). Throws
 // core::Failure naming the run when it has no such parameter.

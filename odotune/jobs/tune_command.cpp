@@ -21,7 +21,8 @@ namespace odotune::jobs {
 namespace {
 
 // Options that belong to one kind of model only, by flag, and whether given.
-void check_options(const TuneCommandRequest& r, const objectives::TunedModel& model) {
+void check_options(const TuneCommandRequest& r) {
+  const objectives::TunedModel& model = r.model;
   const std::vector<std::pair<const char*, bool>> ekf_only = {{"--mode", r.mode.has_value()}};
   const std::vector<std::pair<const char*, bool>> calibrator_only = {
       {"--resampler", r.resampler.has_value()},
@@ -31,9 +32,10 @@ void check_options(const TuneCommandRequest& r, const objectives::TunedModel& mo
       {"--ext-from-gt", r.ext_from_gt_hz.has_value()}};
   for (const auto& [opt, given] : model.is_calibrator() ? ekf_only : calibrator_only)
     if (given)
-      throw core::Failure(fmt::format(
-          "{} applies to {} models only, not to --model {}", opt,
-          model.is_calibrator() ? "the EKF and UKF (rq, alpha, gyro, ukf)" : "the calibrator", r.model));
+      throw core::Failure(fmt::format("{} applies to {} models only, not to --model {}", opt,
+                                      model.is_calibrator() ? "the EKF and UKF (rq, alpha, gyro, ukf)"
+                                                            : "the calibrator",
+                                      objectives::to_string(model)));
 }
 
 // `prepare(track)` for each loaded track, its std::invalid_argument a Failure.
@@ -123,8 +125,9 @@ TuneCommandOutcome ekf_tune(const TuneCommandRequest& r, filters::NoiseModel mod
     formats::EkfConfig cfg;
     cfg.model = req.model;
     cfg.noise = out.noise;
-    cfg.comment = fmt::format("tuned by odotune tune: model {}, mode {}, solver {}, seed {}", r.model,
-                              objectives::number(req.mode), req.solver.name(), req.seed);
+    cfg.comment = fmt::format("tuned by odotune tune: model {}, mode {}, solver {}, seed {}",
+                              objectives::to_string(r.model), objectives::number(req.mode), req.solver.name(),
+                              req.seed);
     formats::write_ekf_config(cfg, r.config_out);
   }
   return result;
@@ -134,11 +137,8 @@ TuneCommandOutcome calibration_tune(const TuneCommandRequest& r, objectives::Cal
   CalibrationTuneRequest req = with_solver<CalibrationTuneRequest>(r);
   req.model = model;
   // Flags not given keep CalibrationTuneRequest's defaults.
-  if (r.resampler && !filters::parse_resampler(*r.resampler, &req.resampler))
-    throw core::Failure(fmt::format(
-        "--resampler '{}': expected multinomial, stratified, systematic or residual", *r.resampler));
-  if (r.policy && !filters::parse_resample_policy(*r.policy, &req.policy))
-    throw core::Failure(fmt::format("--policy '{}': expected every, neff or max", *r.policy));
+  if (r.resampler) req.resampler = *r.resampler;
+  if (r.policy) req.policy = *r.policy;
   req.pf_particles = r.pf_particles;
   if (r.pf_seed) req.pf_seed = *r.pf_seed;
   std::string why;
@@ -173,7 +173,8 @@ TuneCommandOutcome calibration_tune(const TuneCommandRequest& r, objectives::Cal
     cfg.comment = fmt::format(
         "tuned by odotune tune: model {}, solver {}, seed {}, calibrator seed {}; score {:.6g} "
         "(paper's defaults {:.6g})",
-        r.model, req.solver.name(), req.seed, req.pf_seed, out.tuned_score, out.baseline_score);
+        objectives::to_string(r.model), req.solver.name(), req.seed, req.pf_seed, out.tuned_score,
+        out.baseline_score);
     formats::write_pf_config(cfg, r.config_out);
   }
   return result;
@@ -209,16 +210,14 @@ TuneCommandOutcome ukf_tune(const TuneCommandRequest& r) {
 }  // namespace
 
 TuneCommandOutcome run_tune_command(const TuneCommandRequest& request) {
-  objectives::TunedModel model;
-  if (!objectives::parse_tuned_model(request.model, &model))
-    throw core::Failure(fmt::format("--model '{}': unknown model, expected {}", request.model,
-                                    objectives::tuned_model_names()));
+  const objectives::TunedModel& model = request.model;
   if (model.is_rl())
     throw core::Failure(
         fmt::format("--model {}: robot_localization's filters are tuned from their parameter file and "
                     "bag: odotune tune --rl-params FILE --bag BAG{}",
-                    request.model, model.rl_filter() == filters::rl::RlFilterType::ukf ? " --filter ukf" : ""));
-  check_options(request, model);
+                    objectives::to_string(model),
+                    model.rl_filter() == filters::rl::RlFilterType::ukf ? " --filter ukf" : ""));
+  check_options(request);
   if (model.is_calibrator()) return calibration_tune(request, model.calib());
   if (model.is_ukf()) return ukf_tune(request);
   return ekf_tune(request, model.noise());

@@ -18,6 +18,7 @@
 #include <odotune/jobs/calibration_tune_job.h>
 #include <odotune/jobs/tune_job.h>
 #include <odotune/jobs/ukf_tune_job.h>
+#include <odotune/objectives/tuned_model.h>
 
 namespace odotune::jobs {
 
@@ -25,10 +26,13 @@ namespace odotune::jobs {
 using TuneCommandOutcome = std::variant<TuneOutcome, CalibrationTuneOutcome, UkfTuneOutcome>;
 
 // The solver settings (with `progress` and `stop`, which the tune passes on)
-// and the rest of the command's options.
+// and the rest of the command's options, each choice parsed by the caller
+// (odotune/cli/cmd_tune.cpp parses the flags once).
 struct TuneCommandRequest : SolverSettings {
   std::vector<std::string> tracks;  // track files; the fitness is the mean over them
-  std::string model = "rq";         // one of tuned_model_names()
+  // rl-ekf and rl-ukf are refused (they are tuned from their parameter file
+  // and bag: rl_job.h).
+  objectives::TunedModel model = objectives::TunedModel::ekf(filters::NoiseModel::rq);
   // EKF: any fitness mode; UKF: 1..7. Not given: the default (7), or 8 for
   // an EKF tune on a track without ground truth.
   std::optional<objectives::FitnessMode> mode;
@@ -36,12 +40,12 @@ struct TuneCommandRequest : SolverSettings {
   // Calibrators only: the calibrator's fixed parts (calibration_tune_job.h);
   // given for another model, a Failure names the flag (as --mode for a
   // calibrator).
-  std::optional<std::string> resampler;  // not given: systematic
-  std::optional<std::string> policy;     // not given: neff
-  std::optional<int> pf_particles;       // not given: the paper's 5000 / 8000
-  std::optional<std::uint64_t> pf_seed;  // not given: 1
-  std::optional<double> ext_from_gt_hz;  // [Hz]; not given: the tracks' own v_ext/w_ext
-  std::string json_out, config_out;      // files to write; empty: none
+  std::optional<filters::Resampler> resampler;    // not given: systematic
+  std::optional<filters::ResamplePolicy> policy;  // not given: neff
+  std::optional<int> pf_particles;                // not given: the paper's 5000 / 8000
+  std::optional<std::uint64_t> pf_seed;           // not given: 1
+  std::optional<double> ext_from_gt_hz;           // [Hz]; not given: the tracks' own v_ext/w_ext
+  std::string json_out, config_out;               // files to write; empty: none
   // Called with the result when the tune has ended (finished or stopped),
   // before the files are written: where the command prints it.
   std::function<void(const TuneCommandOutcome&)> report;
@@ -51,8 +55,8 @@ struct TuneCommandRequest : SolverSettings {
 // tune, calls `report`, then writes --json and --config-out (in that order).
 // A raised `stop` ends the tune early with the best found so far, which is
 // reported and written as a finished tune's (the caller tells the user).
-// Throws core::Failure (one line) for an unknown model, an option of
-// another model, invalid settings, an unusable track or a solver failure
+// Throws core::Failure (one line) for an rl-ekf or rl-ukf model, an option
+// of another model, invalid settings, an unusable track or a solver failure
 // (nothing is reported or written then), and for a file that cannot be
 // written (after `report`; --json's failure leaves --config-out unwritten).
 TuneCommandOutcome run_tune_command(const TuneCommandRequest& request);

@@ -48,10 +48,8 @@ std::string score_line(const std::string& name, const std::array<calibration::Tw
 
 // The calibration flags a body-velocity fit does not take, refused by name.
 void refuse_wheel_flags(const CalibrateRequest& a, tracks::OdometryInput input) {
-  calibration::CalibrationMethod m{};
   const std::string method = a.method_name();
-  if (!a.method || !calibration::parse_calibration_method(method, &m) ||
-      m != calibration::CalibrationMethod::batch_pose)
+  if (!a.method || *a.method != calibration::CalibrationMethod::batch_pose)
     throw core::Failure(fmt::format(
         "--method {}: {} tracks are calibrated by --method batch (scales{} fitted to the "
         "ground truth or fixes); the online methods need wheel odometry",

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <odotune/core/enum_names.h>
 #include <odotune/core/why.h>
 #include <odotune/objectives/rl_innovations.h>
 
@@ -36,24 +37,11 @@ constexpr double kDiverged = 1e9;
 }  // namespace
 
 bool parse_rl_fitness(std::string_view text, RlFitness* out) {
-  for (RlFitness f : {RlFitness::heldout_fixes, RlFitness::outage, RlFitness::both, RlFitness::innovation_nll,
-                      RlFitness::nis, RlFitness::whiteness, RlFitness::heldout_nll}) {
-    if (text == to_string(f)) {
-      *out = f;
-      return true;
-    }
-  }
-  return false;
+  return core::parse_by_name(text, kAllRlFitnesses, out);
 }
 
 bool parse_rl_noise_space(std::string_view text, RlNoiseSpace* out) {
-  for (RlNoiseSpace sp : {RlNoiseSpace::diagonal, RlNoiseSpace::blocks}) {
-    if (text == to_string(sp)) {
-      *out = sp;
-      return true;
-    }
-  }
-  return false;
+  return core::parse_by_name(text, kAllRlNoiseSpaces, out);
 }
 
 int stored_mode(RlFitness f) {

@@ -48,6 +48,9 @@ namespace odotune::objectives {
 // statistics of odotune/objectives/rl_innovations.h (innovation-nll, nis, whiteness:
 // of the fused fixes over the span; heldout-nll: of the held-out folds).
 enum class RlFitness { heldout_fixes, outage, both, innovation_nll, nis, whiteness, heldout_nll };
+inline constexpr std::array<RlFitness, 7> kAllRlFitnesses = {
+    RlFitness::heldout_fixes, RlFitness::outage,    RlFitness::both,       RlFitness::innovation_nll,
+    RlFitness::nis,           RlFitness::whiteness, RlFitness::heldout_nll};
 // "heldout-fixes", "outage", "both", "innovation-nll", "nis", "whiteness", "heldout-nll"
 std::string_view to_string(RlFitness f);
 bool parse_rl_fitness(std::string_view text, RlFitness* out);  // false (out untouched) for other text
@@ -60,6 +63,7 @@ int stored_mode(RlFitness f);
 std::optional<RlFitness> rl_fitness_of_mode(int mode);
 
 enum class RlNoiseSpace { diagonal, blocks };
+inline constexpr std::array<RlNoiseSpace, 2> kAllRlNoiseSpaces = {RlNoiseSpace::diagonal, RlNoiseSpace::blocks};
 std::string_view to_string(RlNoiseSpace s);  // "diagonal", "blocks"
 bool parse_rl_noise_space(std::string_view text, RlNoiseSpace* out);
 

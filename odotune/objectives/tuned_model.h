@@ -12,6 +12,7 @@
 // store (report, export), so the names are spelt in one place.
 #pragma once
 
+#include <array>
 #include <string>
 #include <string_view>
 #include <variant>
@@ -49,17 +50,24 @@ struct TunedModel {
   bool operator==(const TunedModel&) const = default;
 };
 
+// Every model, in the order of their names below (--model's choices).
+inline constexpr std::array<TunedModel, 8> kAllTunedModels = {
+    TunedModel{filters::NoiseModel::rq},
+    TunedModel{filters::NoiseModel::alpha},
+    TunedModel{filters::NoiseModel::gyro},
+    TunedModel{CalibratorModel::pf},
+    TunedModel{CalibratorModel::adaptive_pf},
+    TunedModel{FusionUkfModel{}},
+    TunedModel{RlModel{filters::rl::RlFilterType::ekf}},
+    TunedModel{RlModel{filters::rl::RlFilterType::ukf}}};
+
 // "rq", "alpha", "gyro", "pf-calib", "adaptive-pf-calib", "ukf", "rl-ekf", "rl-ukf".
 std::string to_string(const TunedModel& m);
-// Parses the names above; false (and *out untouched) for anything else.
+// Parses the names above (a stored run's model, an experiment's models:
+// entry; --model is parsed by the cli from the same names); false (and
+// *out untouched) for anything else.
 bool parse_tuned_model(std::string_view text, TunedModel* out);
-// True for "pf-calib" and "adaptive-pf-calib" (e.g. a stored run's model).
-bool is_calibrator_model_name(std::string_view text);
-// True for "ukf".
-bool is_ukf_model_name(std::string_view text);
-// True for "rl-ekf" and "rl-ukf".
-bool is_rl_model_name(std::string_view text);
 // "rq, alpha, gyro, pf-calib, adaptive-pf-calib, ukf, rl-ekf or rl-ukf", for error messages.
-const char* tuned_model_names();
+std::string tuned_model_names();
 
 }  // namespace odotune::objectives

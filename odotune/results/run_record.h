@@ -26,14 +26,17 @@ struct ParamRange {
   bool determined = true;
 };
 
+// A stored run is data: its model and solver are kept as their names and its
+// fitness mode as its number, as the store's columns hold them; a command that
+// reads them back parses them there (odotune/jobs/store_access.h, run_model).
 struct RunRecord {
   // The cell: model × track × mode × seed (× held-out track for leave-one-out).
-  std::string model;          // "rq" | "alpha" | "gyro"
+  std::string model;          // objectives::to_string(TunedModel): "rq", "alpha", …, "rl-ekf"
   std::string track;          // track name (tuned on; "all-but-X" for leave-one-out)
   std::string heldout_track;  // empty unless leave-one-track-out
-  int mode = 7;               // fitness mode 1..9 (8, 9: scored on held-out fixes)
+  int mode = 7;  // fitness mode 1..9 (8, 9: scored on held-out fixes); rl-ekf/rl-ukf: objectives::stored_mode
   std::uint64_t seed = 0;
-  std::string solver = "pso";
+  std::string solver = "pso";  // tuner::SolverChoice::name()
   // The result.
   std::vector<std::string> param_names;
   std::vector<double> params;  // physical values (units as in ParamSpace)

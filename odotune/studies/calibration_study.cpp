@@ -345,6 +345,8 @@ ResamplingStudy run_resampling_study(const sim::Scenario& scenario, const StudyO
 
 // ---------------------------------------------------------------- Table II
 
+std::string_view to_string(StudyTrack t) { return t == StudyTrack::step ? "step" : "constant"; }
+
 std::vector<calibration::CalibrationMethod> table2_methods() {
   using M = calibration::CalibrationMethod;
   return {M::adaptive_pf, M::dkf, M::batch_velocity, M::none};
@@ -357,7 +359,7 @@ namespace {
 void set_up_rows(CalibrationStudy& out, const sim::Scenario& constant, const StudyOptions& options) {
   for (int r = 0; r < options.runs; ++r) out.draws.push_back(mc_draw(options, constant, r));
   const auto methods = table2_methods();
-  for (const char* track : {"constant", "step"})
+  for (StudyTrack track : kAllStudyTracks)
     for (calibration::CalibrationMethod m : methods) {
       MethodRow row;
       row.track = track;
@@ -377,7 +379,7 @@ void run_table2_task(CalibrationStudy& out, const std::vector<PreparedRun>& runs
                      long row_count, long k) {
   const auto run = static_cast<std::size_t>(k / row_count);
   MethodRow& row = out.rows[static_cast<std::size_t>(k % row_count)];
-  const bool is_step = row.track == "step";
+  const bool is_step = row.track == StudyTrack::step;
   const calibration::CalibrationInput& in = is_step ? runs[run].step : runs[run].constant;
   calibration::CalibrationOptions o;
   o.method = row.method;
@@ -461,7 +463,7 @@ CalibrationStudy run_calibration_study(const sim::Scenario& constant, const sim:
   if (!changes.empty()) out.step_time_s = changes.front();
   out.track_duration_s = runs.front().constant.t.back() - runs.front().constant.t.front();
   for (MethodRow& row : out.rows)
-    row.has_step = row.track == "step" && !runs.front().step.truth->change_times().empty();
+    row.has_step = row.track == StudyTrack::step && !runs.front().step.truth->change_times().empty();
 
   // The adaptive PF (the slowest) first in each run.
   parallel_tasks(tasks, out.threads_used, &done, total, progress,

@@ -24,10 +24,12 @@
 // measured while the other threads run their own tasks.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <limits>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <odotune/calibration/calibration_input.h>
@@ -171,8 +173,14 @@ struct MethodRunResult {
   double ms_per_iteration = 0.0;  // timing
 };
 
+// Table II's two simulated tracks: constant wheel geometry, and a step
+// change of it (the step scenario).
+enum class StudyTrack { constant, step };
+inline constexpr std::array<StudyTrack, 2> kAllStudyTracks = {StudyTrack::constant, StudyTrack::step};
+std::string_view to_string(StudyTrack t);  // "constant", "step"
+
 struct MethodRow {
-  std::string track;  // "constant" or "step"
+  StudyTrack track = StudyTrack::constant;
   calibration::CalibrationMethod method = calibration::CalibrationMethod::none;
   std::vector<MethodRunResult> runs;  // index = Monte-Carlo run
   MeanSd err_rr_m, err_rl_m, err_d_m, pose_rmse_m, heading_rmse_rad, convergence_s, reached_s, reconvergence_s,

@@ -1,6 +1,7 @@
 #include <odotune/studies/study_runs.h>
 
 #include <stdexcept>
+#include <string_view>
 #include <thread>
 
 #include <fmt/format.h>
@@ -16,6 +17,10 @@ namespace odotune::studies {
 
 namespace {
 namespace fs = std::filesystem;
+
+// The two Monte-Carlo studies that share StudyRequest.
+enum class Study { resampling, calibration };
+std::string_view to_string(Study s) { return s == Study::resampling ? "resampling" : "calibration"; }
 
 sim::Scenario read_scenario(const std::string& path) {
   try {
@@ -46,17 +51,17 @@ void prepare(const StudyRequest& r) {
 }
 
 // The command line that regenerates the outputs (defaults left out).
-std::string command_line(const std::string& which, const StudyRequest& r) {
+std::string command_line(Study which, const StudyRequest& r) {
   const StudyOptions defaults;
-  std::string c = "odotune study " + which + " --out " + r.out;
+  std::string c = fmt::format("odotune study {} --out {}", to_string(which), r.out);
   if (r.options.runs != defaults.runs) c += fmt::format(" --runs {}", r.options.runs);
   if (r.options.seed != defaults.seed) c += fmt::format(" --seed {}", r.options.seed);
-  if (which == "resampling" && r.options.pf_particles != defaults.pf_particles)
+  if (which == Study::resampling && r.options.pf_particles != defaults.pf_particles)
     c += fmt::format(" --particles {}", r.options.pf_particles);
-  if (which == "calibration" && r.options.adaptive_initial_particles != 0)
+  if (which == Study::calibration && r.options.adaptive_initial_particles != 0)
     c += fmt::format(" --particles {}", r.options.adaptive_initial_particles);
   if (r.scenario != default_scenario(r.source_dir, kStudyScenarioFile)) c += " --scenario " + r.scenario;
-  if (which == "calibration" && r.step_scenario != default_scenario(r.source_dir, kStudyStepScenarioFile))
+  if (which == Study::calibration && r.step_scenario != default_scenario(r.source_dir, kStudyStepScenarioFile))
     c += " --step-scenario " + r.step_scenario;
   return c;
 }
@@ -89,7 +94,7 @@ std::string display_path(const std::string& source_dir, const std::string& path)
   return !rel.empty() && *rel.begin() != ".." ? rel.string() : path;
 }
 
-StudyContext context(const std::string& which, const StudyRequest& r) {
+StudyContext context(Study which, const StudyRequest& r) {
   StudyContext c;
   c.command = command_line(which, r);
   c.scenario_file = display_path(r.source_dir, r.scenario);
@@ -124,7 +129,7 @@ StudyRun run_resampling_to_folder(const StudyRequest& r, const StudyHooks& hooks
     throw core::Failure(e.what());
   }
   show_tables(hooks, results::to_markdown(table1_text(s)));
-  return {write_resampling_outputs(s, context("resampling", r), r.out), s.wall_s};
+  return {write_resampling_outputs(s, context(Study::resampling, r), r.out), s.wall_s};
 }
 
 StudyRun run_calibration_to_folder(const StudyRequest& r, const StudyHooks& hooks) {
@@ -138,7 +143,7 @@ StudyRun run_calibration_to_folder(const StudyRequest& r, const StudyHooks& hook
     throw core::Failure(e.what());
   }
   show_tables(hooks, results::to_markdown(table2_text(s)));
-  return {write_calibration_outputs(s, context("calibration", r), r.out), s.wall_s};
+  return {write_calibration_outputs(s, context(Study::calibration, r), r.out), s.wall_s};
 }
 
 StudyRun run_learned_to_folder(const LearnedStudyRequest& r, const StudyHooks& hooks) {

@@ -194,7 +194,7 @@ std::string table2_csv(const CalibrationStudy& s) {
       return defined ? std::to_string(m.n) : std::string();
     };
     const bool re = r.online && r.has_step;
-    out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", r.track,
+    out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", to_string(r.track),
                        calibration::to_string(r.method), r.runs.size(), pair_csv(r.err_rr_m),
                        pair_csv(r.err_rl_m), pair_csv(r.err_d_m), pair_csv(r.pose_rmse_m),
                        pair_csv(r.heading_rmse_rad), pair_csv(r.convergence_s),
@@ -213,7 +213,7 @@ std::string table2_runs_csv(const CalibrationStudy& s) {
     for (std::size_t r = 0; r < row.runs.size(); ++r) {
       const MethodRunResult& x = row.runs[r];
       const McDraw& d = s.draws.at(r);
-      out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", row.track,
+      out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", to_string(row.track),
                          calibration::to_string(row.method), r, d.seed, csv_number(d.truth_scale_l),
                          csv_number(d.truth_scale_r), csv_number(x.err_rr_m), csv_number(x.err_rl_m),
                          csv_number(x.err_d_m), csv_number(x.pose_rmse_m), csv_number(x.heading_rmse_rad),
@@ -231,8 +231,9 @@ results::TextTable table2_text(const CalibrationStudy& s) {
   t.numeric = {false, false, true, true, true, true, true, true, true, true};
   for (const MethodRow& r : s.rows) {
     const std::size_t n = r.runs.size();
-    t.rows.push_back({r.track, std::string(calibration::to_string(r.method)), mean_sd_text(r.err_rr_m),
-                      mean_sd_text(r.err_rl_m), mean_sd_text(r.pose_rmse_m), mean_sd_text(r.heading_rmse_rad),
+    t.rows.push_back({std::string(to_string(r.track)), std::string(calibration::to_string(r.method)),
+                      mean_sd_text(r.err_rr_m), mean_sd_text(r.err_rl_m), mean_sd_text(r.pose_rmse_m),
+                      mean_sd_text(r.heading_rmse_rad),
                       r.method == calibration::CalibrationMethod::none ? "–" : mean_sd_text(r.ms_per_iteration),
                       r.online ? count_text(r.convergence_s, n) : "–",
                       r.online && r.has_step ? count_text(r.reconvergence_s, n) : "–",
@@ -252,9 +253,10 @@ results::TextTable table2_convergence_text(const CalibrationStudy& s) {
     if (!r.online) continue;
     const std::size_t n = r.runs.size();
     const bool re = r.has_step;
-    t.rows.push_back({r.track, std::string(calibration::to_string(r.method)), count_text(r.reached_s, n),
-                      count_text(r.convergence_s, n), re ? count_text(r.rereached_s, n) : "–",
-                      re ? count_text(r.reconvergence_s, n) : "–", mean_sd_text(r.err_d_m)});
+    t.rows.push_back({std::string(to_string(r.track)), std::string(calibration::to_string(r.method)),
+                      count_text(r.reached_s, n), count_text(r.convergence_s, n),
+                      re ? count_text(r.rereached_s, n) : "–", re ? count_text(r.reconvergence_s, n) : "–",
+                      mean_sd_text(r.err_d_m)});
   }
   return t;
 }

@@ -18,7 +18,7 @@ std::string_view to_string(OdometryInput s) {
 }
 
 bool parse_odometry_input(std::string_view text, OdometryInput* out) {
-  return core::parse_by_name(text, {OdometryInput::wheels, OdometryInput::twist, OdometryInput::commands}, out);
+  return core::parse_by_name(text, kAllOdometryInputs, out);
 }
 
 namespace {

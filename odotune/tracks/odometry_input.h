@@ -6,6 +6,7 @@
 // and dynamics, a measured twist does not.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string_view>
 
@@ -14,6 +15,8 @@
 namespace odotune::tracks {
 
 enum class OdometryInput { wheels, twist, commands };
+inline constexpr std::array<OdometryInput, 3> kAllOdometryInputs = {OdometryInput::wheels, OdometryInput::twist,
+                                                                    OdometryInput::commands};
 std::string_view to_string(OdometryInput s);  // "wheels", "twist", "commands"
 bool parse_odometry_input(std::string_view text, OdometryInput* out);
 
