@@ -21,7 +21,7 @@ enum BatchParam : int { kRadiusRight = 0, kRadiusLeft = 1, kWheelBase = 2, kBatc
 constexpr double kHuberScale = 3.0;
 // Lower bound of every parameter as a fraction of its initial value: keeps
 // D (and the radii) away from 0 without ever binding a plausible fit.
-constexpr double kLowerBoundFraction = 1e-2;
+constexpr double kBatchLowerBoundFraction = 1e-2;
 
 // Whitened velocity residuals of one calibration sample (header comment).
 struct VelocityResidual {
@@ -75,7 +75,7 @@ BatchCalibrationSummary batch_calibrate(const std::vector<const CalibrationInput
         names.empty() ? "(none)" : names));
   }
   for (int i = 0; i < kBatchParams; ++i)
-    problem.SetParameterLowerBound(theta, i, kLowerBoundFraction * theta[i]);
+    problem.SetParameterLowerBound(theta, i, kBatchLowerBoundFraction * theta[i]);
 
   const ceres::Solver::Options so = core::deterministic_solver_options(100, core::FitTolerance::calibration);
   ceres::Solver::Summary summary;

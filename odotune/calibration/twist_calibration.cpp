@@ -22,11 +22,16 @@ namespace odotune::calibration {
 namespace {
 
 enum ScaleParam : int { kScaleV = 0, kScaleW = 1, kScaleParams = 2 };
-enum StartParam : int { kStartX = 0, kStartY = 1, kStartHeading = 2, kStartParams = 3 };
+enum TwistStartParam : int {
+  kTwistStartX = 0,
+  kTwistStartY = 1,
+  kTwistStartHeading = 2,
+  kTwistStartParams = 3
+};
 
-constexpr double kLowerBoundFraction = 1e-2;  // scales ≥ 1 % (positivity only)
-constexpr std::size_t kMinFixesPerSegment = 3;
-constexpr int kHeadingGrid = 16;
+constexpr double kTwistLowerBoundFraction = 1e-2;  // scales ≥ 1 % (positivity only)
+constexpr std::size_t kTwistMinFixesPerSegment = 3;
+constexpr int kTwistHeadingGrid = 16;
 constexpr double kMaxGtGapS = 0.5;  // a longer gap in the ground truth ends a segment [s]
 
 // A reference position reached after `step` steps of its segment (0: at the start).
@@ -36,13 +41,13 @@ struct Ref {
   double theta_rad = 0.0;  // ground truth's heading (fixes: unused)
 };
 
-struct Segment {
+struct TwistSegment {
   const tracks::BodyVelocityIntegral* body = nullptr;
   double t0 = 0.0;
   std::vector<double> t;       // step ends [s]
   std::vector<double> dv, dw;  // ∫v [m], ∫w [rad] over each step at the current delay, unscaled
   std::vector<Ref> refs;
-  std::array<double, kStartParams> start{};
+  std::array<double, kTwistStartParams> start{};
   bool fixes = false;  // start pose fitted (fixes) or the ground truth's
 
   void set_delay(double delay_s) {
@@ -60,13 +65,13 @@ struct Segment {
 
 // Dead reckoning of one segment: parameter blocks the scales and the start
 // pose; residuals (x − x_ref, y − y_ref) per reference [m].
-struct SegmentDeadReckoning {
-  const Segment* seg;
+struct TwistSegmentDeadReckoning {
+  const TwistSegment* seg;
   template <typename T>
   bool operator()(T const* const* p, T* res) const {
     const T* s = p[0];
     const T* st = p[1];
-    T x = st[kStartX], y = st[kStartY], h = st[kStartHeading];
+    T x = st[kTwistStartX], y = st[kTwistStartY], h = st[kTwistStartHeading];
     std::size_t r = 0;
     for (std::size_t k = 0;; ++k) {
       for (; r < seg->refs.size() && seg->refs[r].step == k; ++r) {
@@ -94,11 +99,13 @@ struct SegmentDeadReckoning {
   }
 };
 
-[[noreturn]] void fail(const std::string& what) { throw std::invalid_argument("twist calibration: " + what); }
+[[noreturn]] void fail_twist(const std::string& what) {
+  throw std::invalid_argument("twist calibration: " + what);
+}
 
 // Step ends from t0 to the last reference: every reference time, and
 // enough points between for steps of at most step_s.
-void add_steps(Segment& seg, const std::vector<double>& ref_t, double step_s) {
+void add_steps(TwistSegment& seg, const std::vector<double>& ref_t, double step_s) {
   double prev = seg.t0;
   for (std::size_t i = 0; i < ref_t.size(); ++i) {
     if (ref_t[i] <= prev) {
@@ -119,8 +126,9 @@ struct GtRow {
 };
 
 // Ground-truth segments inside the body velocities' span (header comment).
-void ground_truth_segments(const tracks::Track& track, const tracks::BodyVelocityIntegral& body,
-                           double segment_s, const TwistCalibrationOptions& o, std::vector<Segment>* out) {
+void twist_ground_truth_segments(const tracks::Track& track, const tracks::BodyVelocityIntegral& body,
+                                 double segment_s, const TwistCalibrationOptions& o,
+                                 std::vector<TwistSegment>* out) {
   std::vector<GtRow> gt;
   const double t_lo = body.t().front(), t_hi = body.t().back();
   for (std::size_t i = 0; i < track.size(); ++i) {
@@ -133,7 +141,7 @@ void ground_truth_segments(const tracks::Track& track, const tracks::BodyVelocit
   }
   std::size_t a = 0;
   while (a + 1 < gt.size()) {
-    Segment seg;
+    TwistSegment seg;
     seg.body = &body;
     seg.t0 = gt[a].t;
     seg.start = {gt[a].x, gt[a].y, gt[a].theta};
@@ -158,9 +166,9 @@ void ground_truth_segments(const tracks::Track& track, const tracks::BodyVelocit
 }
 
 // Fix segments: groups of fixes spanning segment_s (0: all), each of at
-// least kMinFixesPerSegment fixes (a short tail joins the group before).
-void fix_segments(const tracks::Track& track, const tracks::BodyVelocityIntegral& body, double segment_s,
-                  const TwistCalibrationOptions& o, std::vector<Segment>* out) {
+// least kTwistMinFixesPerSegment fixes (a short tail joins the group before).
+void twist_fix_segments(const tracks::Track& track, const tracks::BodyVelocityIntegral& body, double segment_s,
+                        const TwistCalibrationOptions& o, std::vector<TwistSegment>* out) {
   std::vector<GtRow> fixes;
   for (std::size_t i = 0; i < track.size(); ++i) {
     const double t = track.t()[i];
@@ -171,9 +179,9 @@ void fix_segments(const tracks::Track& track, const tracks::BodyVelocityIntegral
   }
   std::vector<double> fix_t;
   for (const GtRow& f : fixes) fix_t.push_back(f.t);
-  for (const auto& [first, last] : fix_groups(fix_t, segment_s, kMinFixesPerSegment)) {
-    if (last - first + 1 < kMinFixesPerSegment) continue;
-    Segment seg;
+  for (const auto& [first, last] : fix_groups(fix_t, segment_s, kTwistMinFixesPerSegment)) {
+    if (last - first + 1 < kTwistMinFixesPerSegment) continue;
+    TwistSegment seg;
     seg.body = &body;
     seg.fixes = true;
     seg.t0 = fixes[first].t;
@@ -193,43 +201,43 @@ struct Runs {
   long ground_truth_runs = 0, fix_runs = 0;
 };
 
-std::vector<Segment> build_segments(const std::vector<const tracks::Track*>& tracks, Runs& runs,
-                                    double segment_s, const TwistCalibrationOptions& o) {
-  std::vector<Segment> segs;
+std::vector<TwistSegment> twist_build_segments(const std::vector<const tracks::Track*>& tracks, Runs& runs,
+                                               double segment_s, const TwistCalibrationOptions& o) {
+  std::vector<TwistSegment> segs;
   runs.ground_truth_runs = runs.fix_runs = 0;
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     const tracks::Track& track = *tracks[i];
     const tracks::BodyVelocityIntegral& body = runs.bodies[i];
     const std::size_t before = segs.size();
     if (track.has_gt()) {
-      ground_truth_segments(track, body, segment_s, o, &segs);
+      twist_ground_truth_segments(track, body, segment_s, o, &segs);
       ++runs.ground_truth_runs;
     } else {
-      fix_segments(track, body, segment_s, o, &segs);
+      twist_fix_segments(track, body, segment_s, o, &segs);
       ++runs.fix_runs;
     }
     if (segs.size() == before)
-      fail(fmt::format(
+      fail_twist(fmt::format(
           "track '{}' has no reference to fit dead reckoning to: expected ground truth (gt_x, gt_y, "
           "gt_theta) or at least {} position fixes (aps_x, aps_y) within its v_cmd/w_cmd rows",
-          track.name(), kMinFixesPerSegment));
+          track.name(), kTwistMinFixesPerSegment));
   }
   return segs;
 }
 
-void set_delay(std::vector<Segment>& segs, double delay_s, const double* scales) {
-  for (Segment& seg : segs) {
+void set_delay(std::vector<TwistSegment>& segs, double delay_s, const double* scales) {
+  for (TwistSegment& seg : segs) {
     seg.set_delay(delay_s);
     if (!seg.fixes) continue;
-    // The best of kHeadingGrid start headings under the current scales.
+    // The best of kTwistHeadingGrid start headings under the current scales.
     double best = 0.0, best_cost = std::numeric_limits<double>::infinity();
-    std::array<double, kStartParams> st = seg.start;
-    for (int i = 0; i < kHeadingGrid; ++i) {
-      st[kStartHeading] = 2.0 * std::numbers::pi * i / kHeadingGrid - std::numbers::pi;
-      const double c = SegmentDeadReckoning{&seg}.sum_squares(scales, st.data());
-      if (c < best_cost) best_cost = c, best = st[kStartHeading];
+    std::array<double, kTwistStartParams> st = seg.start;
+    for (int i = 0; i < kTwistHeadingGrid; ++i) {
+      st[kTwistStartHeading] = 2.0 * std::numbers::pi * i / kTwistHeadingGrid - std::numbers::pi;
+      const double c = TwistSegmentDeadReckoning{&seg}.sum_squares(scales, st.data());
+      if (c < best_cost) best_cost = c, best = st[kTwistStartHeading];
     }
-    seg.start[kStartHeading] = best;
+    seg.start[kTwistStartHeading] = best;
   }
 }
 
@@ -240,24 +248,25 @@ struct Fit {
 };
 
 // Fits the scales (in place) and the fix segments' start poses.
-Fit solve(std::vector<Segment>& segs, double* scales, const TwistCalibrationOptions& o, bool covariance) {
+Fit twist_solve(std::vector<TwistSegment>& segs, double* scales, const TwistCalibrationOptions& o,
+                bool covariance) {
   ceres::Problem problem;
   ceres::LossFunction* loss = new ceres::HuberLoss(o.loss_scale_m);  // shared; the problem deletes it
   long points = 0, free_start = 0;
-  for (Segment& seg : segs) {
-    auto* cost = new ceres::DynamicAutoDiffCostFunction<SegmentDeadReckoning, 5>(
-        new SegmentDeadReckoning{&seg});
+  for (TwistSegment& seg : segs) {
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<TwistSegmentDeadReckoning, 5>(
+        new TwistSegmentDeadReckoning{&seg});
     cost->AddParameterBlock(kScaleParams);
-    cost->AddParameterBlock(kStartParams);
+    cost->AddParameterBlock(kTwistStartParams);
     cost->SetNumResiduals(static_cast<int>(2 * seg.refs.size()));
     problem.AddResidualBlock(cost, loss, scales, seg.start.data());
     points += static_cast<long>(seg.refs.size());
     if (seg.fixes)
-      free_start += kStartParams;
+      free_start += kTwistStartParams;
     else
       problem.SetParameterBlockConstant(seg.start.data());
   }
-  for (int i = 0; i < kScaleParams; ++i) problem.SetParameterLowerBound(scales, i, kLowerBoundFraction);
+  for (int i = 0; i < kScaleParams; ++i) problem.SetParameterLowerBound(scales, i, kTwistLowerBoundFraction);
   Fit fit;
   ceres::Solve(core::deterministic_solver_options(o.max_iterations, core::FitTolerance::calibration), &problem,
                &fit.summary);
@@ -271,21 +280,22 @@ Fit solve(std::vector<Segment>& segs, double* scales, const TwistCalibrationOpti
   return fit;
 }
 
-double rmse(const std::vector<Segment>& segs, const double* scales, long points) {
+double twist_rmse(const std::vector<TwistSegment>& segs, const double* scales, long points) {
   double s = 0.0;
-  for (const Segment& seg : segs) s += SegmentDeadReckoning{&seg}.sum_squares(scales, seg.start.data());
+  for (const TwistSegment& seg : segs)
+    s += TwistSegmentDeadReckoning{&seg}.sum_squares(scales, seg.start.data());
   return points > 0 ? std::sqrt(s / static_cast<double>(points)) : 0.0;
 }
 
 // The delay of least cost on the warm-start segments (header comment); the
 // scales stay at the best point's fit.
-double search_delay(std::vector<Segment>& warm, double* scales, const TwistCalibrationOptions& o) {
+double search_delay(std::vector<TwistSegment>& warm, double* scales, const TwistCalibrationOptions& o) {
   double best = 0.0, best_cost = std::numeric_limits<double>::infinity();
   std::array<double, kScaleParams> best_scales{scales[0], scales[1]};
   auto try_delay = [&](double d) {
     std::array<double, kScaleParams> s{1.0, 1.0};
     set_delay(warm, d, s.data());
-    const Fit f = solve(warm, s.data(), o, false);
+    const Fit f = twist_solve(warm, s.data(), o, false);
     if (f.cost < best_cost) best_cost = f.cost, best = d, best_scales = s;
   };
   const auto coarse = static_cast<int>(std::floor(o.max_delay_s / o.delay_step_s + 1e-9));
@@ -308,15 +318,16 @@ TwistScore score_twist(const tracks::Track& track, const filters::TwistCorrectio
   TwistScore out;
   out.pose_rmse_m = out.heading_rmse_rad = std::nan("");
   if (body.size() < 2) return out;
-  std::vector<Segment> segs;
+  std::vector<TwistSegment> segs;
   TwistCalibrationOptions o;
   o.reference_step_s = 1e-9;  // every ground-truth row
-  ground_truth_segments(track, body, 0.0, o, &segs);
+  twist_ground_truth_segments(track, body, 0.0, o, &segs);
   if (segs.empty()) return out;
   // One dead reckoning from the first pose, on across gaps in the ground truth.
-  double x = segs[0].start[kStartX], y = segs[0].start[kStartY], h = segs[0].start[kStartHeading];
+  double x = segs[0].start[kTwistStartX], y = segs[0].start[kTwistStartY],
+         h = segs[0].start[kTwistStartHeading];
   double t_prev = segs[0].t0, sum_xy = 0.0, sum_th = 0.0;
-  for (const Segment& seg : segs)
+  for (const TwistSegment& seg : segs)
     for (const Ref& r : seg.refs) {
       const double t_ref = seg.t[r.step - 1];  // a ground-truth reference follows at least one step
       const auto n = static_cast<int>(std::ceil((t_ref - t_prev) / o.step_s - 1e-9));
@@ -366,46 +377,46 @@ bool TwistCalibrationOptions::IsValid(std::string* why) const {
 TwistCalibrationSummary calibrate_twist(const std::vector<const tracks::Track*>& tracks,
                                         tracks::OdometryInput input, const TwistCalibrationOptions& options) {
   std::string why;
-  if (!options.IsValid(&why)) fail(why);
+  if (!options.IsValid(&why)) fail_twist(why);
   if (input == tracks::OdometryInput::wheels)
-    fail("wheel odometry is calibrated by its geometry (pose_calibration.h)");
-  if (tracks.empty()) fail("no track given");
+    fail_twist("wheel odometry is calibrated by its geometry (pose_calibration.h)");
+  if (tracks.empty()) fail_twist("no track given");
   Runs runs;
   runs.bodies.reserve(tracks.size());
   for (const tracks::Track* t : tracks) {
-    if (t == nullptr) fail("null track");
+    if (t == nullptr) fail_twist("null track");
     runs.bodies.emplace_back(*t);
     if (runs.bodies.back().size() < 2)
-      fail(fmt::format("track '{}': fewer than two v_cmd/w_cmd rows", t->name()));
+      fail_twist(fmt::format("track '{}': fewer than two v_cmd/w_cmd rows", t->name()));
   }
   TwistCalibrationSummary out;
   out.input = input;
   std::array<double, kScaleParams> scales{1.0, 1.0};
   const bool delay = options.fit_delay && input == tracks::OdometryInput::commands;
   if (delay) {
-    std::vector<Segment> warm = build_segments(tracks, runs, options.warm_start_segment_s, options);
+    std::vector<TwistSegment> warm = twist_build_segments(tracks, runs, options.warm_start_segment_s, options);
     out.params.delay_s = search_delay(warm, scales.data(), options);
   }
-  std::vector<Segment> segs = build_segments(tracks, runs, options.segment_s, options);
-  for (const Segment& s : segs) out.reference_points += static_cast<long>(s.refs.size());
+  std::vector<TwistSegment> segs = twist_build_segments(tracks, runs, options.segment_s, options);
+  for (const TwistSegment& s : segs) out.reference_points += static_cast<long>(s.refs.size());
   out.segments = static_cast<long>(segs.size());
   out.ground_truth_runs = runs.ground_truth_runs;
   out.fix_runs = runs.fix_runs;
   const std::array<double, kScaleParams> identity{1.0, 1.0};
   set_delay(segs, 0.0, identity.data());
-  out.initial_rmse_m = rmse(segs, identity.data(), out.reference_points);
+  out.initial_rmse_m = twist_rmse(segs, identity.data(), out.reference_points);
   if (!delay && options.segment_s != options.warm_start_segment_s) {  // warm start, as the wheel fit
-    std::vector<Segment> warm = build_segments(tracks, runs, options.warm_start_segment_s, options);
+    std::vector<TwistSegment> warm = twist_build_segments(tracks, runs, options.warm_start_segment_s, options);
     set_delay(warm, 0.0, scales.data());
-    solve(warm, scales.data(), options, false);
+    twist_solve(warm, scales.data(), options, false);
   }
   set_delay(segs, out.params.delay_s, scales.data());
-  const Fit fit = solve(segs, scales.data(), options, true);
+  const Fit fit = twist_solve(segs, scales.data(), options, true);
   out.params.scale_v = scales[kScaleV];
   out.params.scale_w = scales[kScaleW];
   out.sd_scale_v = fit.sd[kScaleV];
   out.sd_scale_w = fit.sd[kScaleW];
-  out.final_rmse_m = rmse(segs, scales.data(), out.reference_points);
+  out.final_rmse_m = twist_rmse(segs, scales.data(), out.reference_points);
   out.converged = fit.summary.termination_type == ceres::CONVERGENCE;
   out.termination = fit.summary.message;
   std::string refs;

@@ -15,7 +15,7 @@ namespace odotune::formats {
 
 namespace {
 
-constexpr const char* kFormat = "odotune-calibration/1";
+constexpr const char* kCalibrationFormat = "odotune-calibration/1";
 
 struct Key {
   const char* name;
@@ -91,7 +91,7 @@ void read_twist_keys(const std::filesystem::path& path, const YAML::Node& root, 
 }  // namespace
 
 CalibrationFile read_calibration_file(const std::filesystem::path& path) {
-  const YAML::Node root = load_format_file(path, "calibration file", kFormat,
+  const YAML::Node root = load_format_file(path, "calibration file", kCalibrationFormat,
                                            fmt::format("a mapping with {}", expected_keys()));
   CalibrationFile file;
   if (const YAML::Node odometry = root["odometry"]) {
@@ -128,7 +128,7 @@ std::string format_calibration_file(const CalibrationFile& file) {
     std::istringstream lines(file.comment);
     for (std::string line; std::getline(lines, line);) out << "# " << line << "\n";
   }
-  out << "format: " << kFormat << "\n";
+  out << "format: " << kCalibrationFormat << "\n";
   if (file.odometry != tracks::OdometryInput::wheels) {
     out << "odometry: " << tracks::to_string(file.odometry) << "\n";
     for (const TwistKey& k : kTwistKeys)

@@ -15,7 +15,7 @@
 namespace odotune::formats {
 
 namespace {
-constexpr const char* kFormat = "odotune-ekf-config/1";
+constexpr const char* kConfigFormat = "odotune-ekf-config/1";
 
 }  // namespace
 
@@ -28,7 +28,7 @@ void write_file_atomically(const std::filesystem::path& path, const std::string&
 }
 
 EkfConfig read_ekf_config(const std::filesystem::path& path) {
-  const YAML::Node root = load_format_file(path, "configuration file", kFormat,
+  const YAML::Node root = load_format_file(path, "configuration file", kConfigFormat,
                                            "a mapping with format, model and params");
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>("");
@@ -75,7 +75,7 @@ void write_ekf_config(const EkfConfig& config, const std::filesystem::path& path
     std::istringstream lines(config.comment);
     for (std::string line; std::getline(lines, line);) out << "# " << line << "\n";
   }
-  out << "format: " << kFormat << "\n";
+  out << "format: " << kConfigFormat << "\n";
   out << "model: " << filters::to_string(config.model) << "\n";
   out << "params:\n";
   for (std::size_t i = 0; i < space.dim(); ++i) {

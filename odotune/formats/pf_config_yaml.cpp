@@ -17,7 +17,7 @@ namespace odotune::formats {
 
 namespace {
 
-constexpr const char* kFormat = "odotune-pf-config/1";
+constexpr const char* kPfConfigFormat = "odotune-pf-config/1";
 
 std::string text_of(const std::filesystem::path& path, const YAML::Node& node, const char* key) {
   if (!node.IsScalar()) fail_at(path, node, fmt::format("'{}' must be a single word", key));
@@ -37,7 +37,7 @@ filters::PfCalibratorParams apply_pf_config(const PfConfig& c, const filters::Pf
 
 PfConfig read_pf_config(const std::filesystem::path& path) {
   const YAML::Node root = load_format_file(
-      path, "PF configuration file", kFormat,
+      path, "PF configuration file", kPfConfigFormat,
       "a mapping with format, method, resampler, policy, particles and params");
   static const std::set<std::string> known = {"format", "method", "resampler", "policy", "particles", "params"};
   for (const auto& kv : root) {
@@ -87,7 +87,7 @@ void write_pf_config(const PfConfig& config, const std::filesystem::path& path) 
   if (!config.comment.empty()) {
     write_comment_lines(out, config.comment);
   }
-  out << "format: " << kFormat << "\n";
+  out << "format: " << kPfConfigFormat << "\n";
   out << "method: " << calibration::to_string(config.method) << "  # pf | adaptive-pf\n";
   out << "resampler: " << filters::to_string(config.resampler)
       << "  # multinomial | stratified | systematic | residual\n";

@@ -16,7 +16,7 @@ namespace odotune::formats {
 
 namespace {
 
-constexpr const char* kFormat = "odotune-ukf-config/1";
+constexpr const char* kUkfConfigFormat = "odotune-ukf-config/1";
 
 // The explanation block every written file carries.
 constexpr const char* kExplanation =
@@ -52,7 +52,7 @@ learned::UkfSettings apply_ukf_config(const UkfConfig& config, const learned::Uk
 }
 
 UkfConfig read_ukf_config(const std::filesystem::path& path) {
-  const YAML::Node root = load_format_file(path, "UKF configuration file", kFormat,
+  const YAML::Node root = load_format_file(path, "UKF configuration file", kUkfConfigFormat,
                                            "a mapping with format, rate_hz and params");
   static const std::set<std::string> known = {"format", "rate_hz", "params"};
   for (const auto& kv : root) {
@@ -88,7 +88,7 @@ void write_ukf_config(const UkfConfig& config, const std::filesystem::path& path
     out << "#\n";
   }
   write_comment_lines(out, kExplanation);
-  out << "format: " << kFormat << "\n";
+  out << "format: " << kUkfConfigFormat << "\n";
   out << fmt::format("rate_hz: {:.17g}  # fusion rate [Hz]; the variances below are per step at it\n",
                      config.rate_hz);
   write_params_block(out, space, config.params);

@@ -11,7 +11,7 @@ namespace {
 
 using filters::OdometryParams;
 
-std::string pct(double estimate, double truth) {
+std::string percent_of(double estimate, double truth) {
   return fmt::format("{:+.3f} %", 100.0 * (estimate - truth) / truth);
 }
 
@@ -19,7 +19,8 @@ std::string param_line(const char* name, double estimate, const std::optional<Od
                        double OdometryParams::*field) {
   if (!truth) return fmt::format("    {:<3} {:.5f} m   (truth unknown)", name, estimate);
   const double t = (*truth).*field;
-  return fmt::format("    {:<3} {:.5f} m   true {:.5f} m   error {}", name, estimate, t, pct(estimate, t));
+  return fmt::format("    {:<3} {:.5f} m   true {:.5f} m   error {}", name, estimate, t,
+                     percent_of(estimate, t));
 }
 
 std::string rmse_line(const char* what, double calibrated, double nominal, const char* unit) {

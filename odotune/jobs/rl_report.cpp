@@ -40,7 +40,7 @@ std::map<std::pair<std::string, int>, const RunRecord*> best_runs(const std::vec
   return best;
 }
 
-results::TrajectoryPath path_of(std::string name, const std::vector<rlnode::TrajectoryPoint>& t) {
+results::TrajectoryPath report_path_of(std::string name, const std::vector<rlnode::TrajectoryPoint>& t) {
   results::TrajectoryPath p{std::move(name), {}, {}};
   for (const rlnode::TrajectoryPoint& q : t) {
     p.xs_m.push_back(q.state[filters::rl::kX]);
@@ -79,9 +79,9 @@ void trajectory_figures(const formats::Experiment& e, const std::vector<RunRecor
       held.ys_m.push_back(f.measured.y());
     }
     paths.push_back(std::move(held));
-    paths.push_back(path_of(fmt::format("the file's values ({})",
-                                        rmse_text(2, objectives::score_of(std::span(&b, 1)).rmse_m)),
-                            b.trajectory));
+    paths.push_back(report_path_of(fmt::format("the file's values ({})",
+                                               rmse_text(2, objectives::score_of(std::span(&b, 1)).rmse_m)),
+                                   b.trajectory));
     for (const auto& [key, r] : best) {
       if (key.first != name) continue;
       rlnode::ReplaySettings s = base;
@@ -89,9 +89,9 @@ void trajectory_figures(const formats::Experiment& e, const std::vector<RunRecor
       if (!objectives::apply_rl_factors(rec.params, r->param_names, r->params, &s, &why))
         throw core::Failure(fmt::format("run {}: {}", results::run_key(*r), why));
       const rlnode::ReplayOutput t = objectives::outage_run(rec, s, from, end, true);
-      paths.push_back(path_of(fmt::format("tuned, {} seed {} ({})", fitness_name(r->mode), r->seed,
-                                          rmse_text(2, objectives::score_of(std::span(&t, 1)).rmse_m)),
-                              t.trajectory));
+      paths.push_back(report_path_of(fmt::format("tuned, {} seed {} ({})", fitness_name(r->mode), r->seed,
+                                                 rmse_text(2, objectives::score_of(std::span(&t, 1)).rmse_m)),
+                                     t.trajectory));
     }
     const std::string title = fmt::format(
         "{}: GPS fused until {} s only; robot_localization's {}, the file's and tuned values", name, x.until_s,

@@ -62,7 +62,7 @@ std::vector<RlTrackRow> score_rl_tracks(const RlTracksLoaded& loaded, const rlno
 
 namespace {
 
-nlohmann::json json_of(const objectives::TruthScore& s) {
+nlohmann::json track_json_of(const objectives::TruthScore& s) {
   return {{"rmse_m", s.rmse_m},
           {"mae_m", s.mae_m},
           {"max_m", s.max_m},
@@ -70,11 +70,11 @@ nlohmann::json json_of(const objectives::TruthScore& s) {
           {"finite", s.finite}};
 }
 
-nlohmann::json json_of(const objectives::FixScore& s) {
+nlohmann::json track_json_of(const objectives::FixScore& s) {
   return {{"rmse_m", s.rmse_m}, {"fixes", s.fixes}, {"finite", s.finite}};
 }
 
-nlohmann::json json_of(const RlTrackRow& r) {
+nlohmann::json track_json_of(const RlTrackRow& r) {
   return {
       {"track", r.track.string()},
       {"odometry", tracks::to_string(r.odometry)},
@@ -83,8 +83,9 @@ nlohmann::json json_of(const RlTrackRow& r) {
                                         ? nlohmann::json(r.initial_heading_error_rad)
                                         : nlohmann::json()},
       {"duration_s", r.duration_s},
-      {"truth", {{"run", json_of(r.scores.run)}, {"outages", json_of(r.scores.outages)}}},
-      {"fixes", {{"heldout", json_of(r.scores.heldout_fixes)}, {"outages", json_of(r.scores.outage_fixes)}}},
+      {"truth", {{"run", track_json_of(r.scores.run)}, {"outages", track_json_of(r.scores.outages)}}},
+      {"fixes",
+       {{"heldout", track_json_of(r.scores.heldout_fixes)}, {"outages", track_json_of(r.scores.outage_fixes)}}},
       {"outage_windows", r.scores.windows},
       {"processed", r.scores.processed},
       {"rejected", r.scores.rejected}};
@@ -133,10 +134,10 @@ RlTrackEvalOutcome run_rl_track_eval(const RlTrackEvalRequest& request) {
   if (!request.json_out.empty()) {
     nlohmann::json j = {
         {"params_file", o.params_file.string()},
-        {"truth", {{"run", json_of(o.run)}, {"outages", json_of(o.outages)}}},
-        {"fixes", {{"heldout", json_of(o.heldout_fixes)}, {"outages", json_of(o.outage_fixes)}}},
+        {"truth", {{"run", track_json_of(o.run)}, {"outages", track_json_of(o.outages)}}},
+        {"fixes", {{"heldout", track_json_of(o.heldout_fixes)}, {"outages", track_json_of(o.outage_fixes)}}},
         {"tracks", nlohmann::json::array()}};
-    for (const RlTrackRow& r : o.rows) j["tracks"].push_back(json_of(r));
+    for (const RlTrackRow& r : o.rows) j["tracks"].push_back(track_json_of(r));
     core::write_atomically(request.json_out, "JSON", j.dump(2) + "\n");
   }
   return o;

@@ -66,15 +66,15 @@ std::pair<std::string, std::string> determined_lists(const RlTuneOutcome& o, con
   return {yes, no};
 }
 
-nlohmann::json json_of(const objectives::FixScore& s) {
+nlohmann::json tune_json_of(const objectives::FixScore& s) {
   return {{"rmse_m", s.rmse_m}, {"fixes", s.fixes}, {"finite", s.finite}};
 }
 
-nlohmann::json json_of(const RlProtocolScores& p) {
-  return {{"outage", json_of(p.outage)}, {"every_fifth_fix", json_of(p.every_fifth)}};
+nlohmann::json tune_json_of(const RlProtocolScores& p) {
+  return {{"outage", tune_json_of(p.outage)}, {"every_fifth_fix", tune_json_of(p.every_fifth)}};
 }
 
-nlohmann::json json_of(const RlTuneOutcome& o, const RlStartOutcome& st) {
+nlohmann::json tune_json_of(const RlTuneOutcome& o, const RlStartOutcome& st) {
   nlohmann::json params = nlohmann::json::object();
   for (std::size_t i = 0; i < o.param_names.size(); ++i) {
     nlohmann::json p = {{"factor", st.factors[i]}};
@@ -90,8 +90,8 @@ nlohmann::json json_of(const RlTuneOutcome& o, const RlStartOutcome& st) {
       {"evaluations", st.evaluations},
       {"seconds", st.seconds},
       {"parameters", params},
-      {"tuning_span", {{"heldout_fixes", json_of(st.heldout)}, {"outage", json_of(st.outage)}}}};
-  if (st.judged) j["judged"] = json_of(*st.judged);
+      {"tuning_span", {{"heldout_fixes", tune_json_of(st.heldout)}, {"outage", tune_json_of(st.outage)}}}};
+  if (st.judged) j["judged"] = tune_json_of(*st.judged);
   return j;
 }
 
@@ -148,7 +148,7 @@ std::string rl_tune_header(const RlTuneRequest& r, const RlTuneOutcome& o, std::
 
 void write_rl_tune_json(const std::filesystem::path& path, const RlTuneRequest& r, const RlTuneOutcome& o) {
   nlohmann::json starts = nlohmann::json::array();
-  for (const RlStartOutcome& st : o.starts) starts.push_back(json_of(o, st));
+  for (const RlStartOutcome& st : o.starts) starts.push_back(tune_json_of(o, st));
   const RlStartOutcome& w = o.starts[o.written];
   nlohmann::json factors = nlohmann::json::object();
   for (std::size_t i = 0; i < o.param_names.size(); ++i) factors[o.param_names[i]] = o.factors[i];
@@ -172,17 +172,19 @@ void write_rl_tune_json(const std::filesystem::path& path, const RlTuneRequest& 
       {"termination", o.summary.termination_text()},
       {"seconds", o.summary.seconds},
       {"factors", factors},
-      {"parameters", json_of(o, w)["parameters"]},
+      {"parameters", tune_json_of(o, w)["parameters"]},
       {"baseline_fitness", o.baseline_fitness},
       {"tuned_fitness", o.tuned_fitness},
       {"starts", starts},
       {"tuning_span",
-       {{"baseline", {{"heldout_fixes", json_of(o.baseline_heldout)}, {"outage", json_of(o.baseline_outage)}}},
-        {"tuned", {{"heldout_fixes", json_of(o.tuned_heldout)}, {"outage", json_of(o.tuned_outage)}}}}}};
+       {{"baseline",
+         {{"heldout_fixes", tune_json_of(o.baseline_heldout)}, {"outage", tune_json_of(o.baseline_outage)}}},
+        {"tuned",
+         {{"heldout_fixes", tune_json_of(o.tuned_heldout)}, {"outage", tune_json_of(o.tuned_outage)}}}}}};
   if (o.baseline_judged && o.tuned_judged) {
     j["held_out"] = {{"span_s", {o.judged_from_s, o.judged_until_s}},
-                     {"baseline", json_of(*o.baseline_judged)},
-                     {"tuned", json_of(*o.tuned_judged)}};
+                     {"baseline", tune_json_of(*o.baseline_judged)},
+                     {"tuned", tune_json_of(*o.tuned_judged)}};
   }
   std::vector<double> diag(o.tuned.process_noise.diagonal().data(),
                            o.tuned.process_noise.diagonal().data() + 15);

@@ -87,7 +87,7 @@ tracks::OdometryInput input_of(const CalibrateRequest& a, const std::vector<trac
   }
 }
 
-std::vector<const tracks::Track*> pointers(const std::vector<tracks::Track>& tracks) {
+std::vector<const tracks::Track*> twist_pointers(const std::vector<tracks::Track>& tracks) {
   std::vector<const tracks::Track*> p;
   for (const tracks::Track& t : tracks) p.push_back(&t);
   return p;
@@ -117,7 +117,7 @@ CalibrateOutcome run_twist_calibrate(const CalibrateRequest& a, const std::vecto
   o.segment_s = a.segment_s.value_or(o.segment_s);
   CalibrateOutcome out;
   try {
-    out.twist = calibration::calibrate_twist(pointers(tracks), input, o);
+    out.twist = calibration::calibrate_twist(twist_pointers(tracks), input, o);
   } catch (const std::invalid_argument& e) {
     throw core::Failure(fmt::format("calibrate: {}", e.what()));
   }

@@ -10,7 +10,7 @@
 namespace odotune::learned {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kMetricNaN = std::numeric_limits<double>::quiet_NaN();
 
 bool usable(double a, double b) { return std::isfinite(a) && std::isfinite(b); }
 
@@ -35,22 +35,22 @@ SeriesErrors series_errors(const std::vector<double>& est, const std::vector<dou
       ++n_nees;
     }
   }
-  if (r.samples == 0) return {kNaN, kNaN, kNaN, kNaN, 0};
+  if (r.samples == 0) return {kMetricNaN, kMetricNaN, kMetricNaN, kMetricNaN, 0};
   const auto n = static_cast<double>(r.samples);
   r.mae = sum_abs / n;
   r.rmse = std::sqrt(sum_sq / n);
   const double ss_tot = sum_t2 - sum_t * sum_t / n;  // Σ (y − ȳ)²
-  r.r2 = ss_tot > 0 ? 1.0 - sum_sq / ss_tot : kNaN;
-  r.nees = n_nees > 0 ? sum_nees / static_cast<double>(n_nees) : kNaN;
+  r.r2 = ss_tot > 0 ? 1.0 - sum_sq / ss_tot : kMetricNaN;
+  r.nees = n_nees > 0 ? sum_nees / static_cast<double>(n_nees) : kMetricNaN;
   return r;
 }
 
 PoseTrack dead_reckon(const FusionInput& in, const std::vector<double>& v, const std::vector<double>& w) {
   PoseTrack p;
   const std::size_t n = in.size();
-  p.x.assign(n, kNaN);
-  p.y.assign(n, kNaN);
-  p.theta.assign(n, kNaN);
+  p.x.assign(n, kMetricNaN);
+  p.y.assign(n, kMetricNaN);
+  p.theta.assign(n, kMetricNaN);
   if (n == 0) return p;
   filters::PlanarPose pose;
   if (in.has_gt && std::isfinite(in.gt_x[0]) && std::isfinite(in.gt_theta[0]))
@@ -67,7 +67,7 @@ PoseTrack dead_reckon(const FusionInput& in, const std::vector<double>& v, const
   return p;
 }
 
-double PoseErrorSum::rmse() const { return n > 0 ? std::sqrt(sum_sq / static_cast<double>(n)) : kNaN; }
+double PoseErrorSum::rmse() const { return n > 0 ? std::sqrt(sum_sq / static_cast<double>(n)) : kMetricNaN; }
 
 PoseErrorSum dead_reckoning_errors(const FusionInput& in, const std::vector<double>& v,
                                    const std::vector<double>& w, double window_s, std::size_t first,
@@ -107,7 +107,7 @@ OdometryErrors odometry_errors(const FusionInput& in, const std::vector<double>&
   r.w = series_errors(w, in.w_true, var_w);
 
   PoseTrack own;
-  r.xy_rmse_10s = r.xy_rmse_60s = kNaN;
+  r.xy_rmse_10s = r.xy_rmse_60s = kMetricNaN;
   if (pose == nullptr) {
     own = dead_reckon(in, v, w);
     pose = &own;
@@ -136,14 +136,15 @@ OdometryErrors odometry_errors(const FusionInput& in, const std::vector<double>&
   if (n > 0) {
     const auto nd = static_cast<double>(n);
     const double ss_tot = (sxx - sx * sx / nd) + (syy - sy * sy / nd);
-    r.xy = {sum_abs / nd, std::sqrt(sum_sq / nd), ss_tot > 0 ? 1.0 - sum_sq / ss_tot : kNaN, kNaN, n};
-    r.theta = {th_abs / nd, std::sqrt(th_sq / nd), kNaN, kNaN, n};
+    r.xy = {sum_abs / nd, std::sqrt(sum_sq / nd), ss_tot > 0 ? 1.0 - sum_sq / ss_tot : kMetricNaN, kMetricNaN,
+            n};
+    r.theta = {th_abs / nd, std::sqrt(th_sq / nd), kMetricNaN, kMetricNaN, n};
   } else {
-    r.xy = r.theta = {kNaN, kNaN, kNaN, kNaN, 0};
+    r.xy = r.theta = {kMetricNaN, kMetricNaN, kMetricNaN, kMetricNaN, 0};
   }
 
   // Joint NEES of (V, W) with the full covariance (paper eq. 10).
-  r.nees_vw = kNaN;
+  r.nees_vw = kMetricNaN;
   if (!var_v.empty() && !var_w.empty()) {
     double sum = 0;
     std::size_t m = 0;

@@ -27,25 +27,30 @@ struct Unit {
   std::string name;
 };
 
-[[noreturn]] void fail(const std::string& what) { throw std::invalid_argument("correction nets: " + what); }
+[[noreturn]] void fail_selection(const std::string& what) {
+  throw std::invalid_argument("correction nets: " + what);
+}
 
 void check_tracks(const std::vector<const FusionInput*>& tracks) {
-  if (tracks.empty()) fail("no tracks given");
+  if (tracks.empty()) fail_selection("no tracks given");
   const FusionInput& a = *tracks.front();
   for (const FusionInput* in : tracks) {
     if (!in->has_gt)
-      fail(fmt::format("track '{}': no ground truth (gt_x, gt_y, gt_theta): expected it to learn odometry from",
-                       in->track_name));
+      fail_selection(
+          fmt::format("track '{}': no ground truth (gt_x, gt_y, gt_theta): expected it to learn odometry from",
+                      in->track_name));
     if (in->input != a.input)
-      fail(fmt::format("track '{}' gives {} odometry, track '{}' {}: expected one kind", in->track_name,
-                       tracks::to_string(in->input), a.track_name, tracks::to_string(a.input)));
+      fail_selection(fmt::format("track '{}' gives {} odometry, track '{}' {}: expected one kind",
+                                 in->track_name, tracks::to_string(in->input), a.track_name,
+                                 tracks::to_string(a.input)));
     if (std::abs(in->dt_s - a.dt_s) > 1e-12)
-      fail(fmt::format("track '{}': step {} s differs from the first track's {} s", in->track_name, in->dt_s,
-                       a.dt_s));
+      fail_selection(fmt::format("track '{}': step {} s differs from the first track's {} s", in->track_name,
+                                 in->dt_s, a.dt_s));
     if (a.input == tracks::OdometryInput::wheels &&
         std::abs(in->ticks_per_rev - a.ticks_per_rev) > 1e-9 * a.ticks_per_rev)
-      fail(fmt::format("track '{}': ticks_per_rev = {} differs from the first track's {}: expected one robot",
-                       in->track_name, in->ticks_per_rev, a.ticks_per_rev));
+      fail_selection(
+          fmt::format("track '{}': ticks_per_rev = {} differs from the first track's {}: expected one robot",
+                      in->track_name, in->ticks_per_rev, a.ticks_per_rev));
   }
 }
 
@@ -246,9 +251,10 @@ CandidateResult cross_validate(const std::vector<const FusionInput*>& tracks, co
     const auto train = windows_of(tracks, units, rest, s, gyro);
     const auto held = windows_of(tracks, units, fold, s, gyro);
     if (train[0].size() < kMinWindows || held[0].size() < 1)
-      fail(fmt::format("a fold holding {} trains on {} windows and is judged on {}: expected at least {} and 1 "
-                       "(longer recordings, or --validation blocks with shorter blocks)",
-                       units[fold.front()].name, train[0].size(), held[0].size(), kMinWindows));
+      fail_selection(
+          fmt::format("a fold holding {} trains on {} windows and is judged on {}: expected at least {} and 1 "
+                      "(longer recordings, or --validation blocks with shorter blocks)",
+                      units[fold.front()].name, train[0].size(), held[0].size(), kMinWindows));
     LearnedOdometryModel m = fresh_model(s, *tracks.front(), gyro);
     LstmTrainingOptions tv = t, tw = t;
     tw.seed += 1000;  // a different initialisation for the W net
@@ -319,15 +325,15 @@ LearnedOdometryModel train_correction_odometry(const std::vector<const FusionInp
                                                const SelectionOptions& options, SelectionSummary* summary,
                                                const SelectionProgress& progress) {
   std::string why;
-  if (!options.IsValid(&why)) fail(why);
+  if (!options.IsValid(&why)) fail_selection(why);
   check_tracks(tracks);
   const auto start = std::chrono::steady_clock::now();
   const std::vector<Unit> units = make_units(tracks, options);
   if (units.size() < 2)
-    fail(fmt::format("{} unit to validate on: expected at least 2 ({})", units.size(),
-                     options.validation == LearnedValidation::recordings
-                         ? "give two recordings or more, or --validation blocks"
-                         : "a recording longer than two blocks, or shorter blocks"));
+    fail_selection(fmt::format("{} unit to validate on: expected at least 2 ({})", units.size(),
+                               options.validation == LearnedValidation::recordings
+                                   ? "give two recordings or more, or --validation blocks"
+                                   : "a recording longer than two blocks, or shorter blocks"));
   const std::size_t n_folds = std::min<std::size_t>(units.size(), static_cast<std::size_t>(options.max_folds));
   std::vector<std::vector<std::size_t>> folds(n_folds);
   for (std::size_t u = 0; u < units.size(); ++u) folds[u % n_folds].push_back(u);
@@ -387,7 +393,7 @@ LearnedOdometryModel train_correction_odometry(const std::vector<const FusionInp
   if (progress) progress(total, total);
   s.train_windows = train[0].size();
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (!model.IsValid(&why)) fail("the trained model is unusable: " + why);
+  if (!model.IsValid(&why)) fail_selection("the trained model is unusable: " + why);
   if (summary) *summary = std::move(s);
   return model;
 }

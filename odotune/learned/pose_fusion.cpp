@@ -12,7 +12,7 @@
 namespace odotune::learned {
 namespace {
 
-[[noreturn]] void fail(const FusionInput& in, const std::string& what) {
+[[noreturn]] void fail_pose_fusion(const FusionInput& in, const std::string& what) {
   throw std::invalid_argument(fmt::format("track '{}': {}", in.track_name, what));
 }
 
@@ -35,7 +35,7 @@ void start_state(const FusionInput& in, const PoseFusionOptions& o, filters::Pos
   p->initial_cov(filters::kPtheta, filters::kPtheta) = std::numbers::pi * std::numbers::pi;
 }
 
-void record(const filters::PoseVelocityUkf& f, std::size_t k, PoseFusionTrace& t) {
+void record_pose(const filters::PoseVelocityUkf& f, std::size_t k, PoseFusionTrace& t) {
   const filters::PoseVelocity& s = f.state();
   t.x[k] = s(filters::kPx);
   t.y[k] = s(filters::kPy);
@@ -61,16 +61,17 @@ bool PoseFusionOptions::IsValid(std::string* why) const {
 PoseFusionTrace replay_pose_fusion(const FusionInput& in, const std::vector<OdometryMeasurement>& odo,
                                    const PoseFusionOptions& options) {
   std::string why;
-  if (!options.IsValid(&why)) fail(in, "pose fusion options: " + why);
+  if (!options.IsValid(&why)) fail_pose_fusion(in, "pose fusion options: " + why);
   if (odo.size() != in.size())
-    fail(in, fmt::format("{} odometry measurements for {} steps", odo.size(), in.size()));
-  if (!in.has_fixes) fail(in, "no position fixes (aps_x, aps_y) to fuse");
+    fail_pose_fusion(in, fmt::format("{} odometry measurements for {} steps", odo.size(), in.size()));
+  if (!in.has_fixes) fail_pose_fusion(in, "no position fixes (aps_x, aps_y) to fuse");
   const double default_var = options.fix_sigma_m * options.fix_sigma_m;
   for (std::size_t k = 0; k < in.size(); ++k)
     if (std::isfinite(in.fix_x[k]) && !(in.fix_var_x[k] > 0.0 && in.fix_var_y[k] > 0.0) && !(default_var > 0.0))
-      fail(in, fmt::format("the fix at {} s has no variances (aps_var_x, aps_var_y): expected them, or a fix σ "
-                           "(--fix-sigma-m)",
-                           in.t[k]));
+      fail_pose_fusion(
+          in, fmt::format("the fix at {} s has no variances (aps_var_x, aps_var_y): expected them, or a fix σ "
+                          "(--fix-sigma-m)",
+                          in.t[k]));
   filters::PoseUkfParams p = options.ukf;
   start_state(in, options, &p);
   filters::PoseVelocityUkf f(p);
@@ -78,7 +79,7 @@ PoseFusionTrace replay_pose_fusion(const FusionInput& in, const std::vector<Odom
   const std::size_t n = in.size();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (auto* v : {&t.x, &t.y, &t.theta, &t.v, &t.w}) v->assign(n, nan);
-  if (n > 0) record(f, 0, t);
+  if (n > 0) record_pose(f, 0, t);
   for (std::size_t k = 1; k < n && f.healthy(); ++k) {
     f.predict(in.dt_s);
     f.update_velocity(odo[k].v_m_s, odo[k].w_rad_s, Eigen::Vector2d(odo[k].var_v, odo[k].var_w).asDiagonal());
@@ -96,7 +97,7 @@ PoseFusionTrace replay_pose_fusion(const FusionInput& in, const std::vector<Odom
                             .asDiagonal());
       ++t.fixes;
     }
-    if (f.healthy()) record(f, k, t);
+    if (f.healthy()) record_pose(f, k, t);
   }
   t.healthy = f.healthy();
   return t;

@@ -14,16 +14,16 @@
 namespace odotune::learned {
 namespace {
 
-constexpr int kFeatures = SlipNet::kInputs;
-static_assert(kFeatures == 5, "slip features: P_r, P_l, Δct_r, Δct_l, previous variance");
+constexpr int kSlipFeatures = SlipNet::kInputs;
+static_assert(kSlipFeatures == 5, "slip features: P_r, P_l, Δct_r, Δct_l, previous variance");
 
-bool finite_all(std::initializer_list<double> xs) {
+bool finite_features(std::initializer_list<double> xs) {
   for (double x : xs)
     if (!std::isfinite(x)) return false;
   return true;
 }
 
-bool positive_finite(double x) { return x > 0.0 && std::isfinite(x); }
+bool positive_finite_value(double x) { return x > 0.0 && std::isfinite(x); }
 
 // The drive channels of step k (SlipFeature), NaN where the step has none.
 std::array<double, 2> drive_at(const FusionInput& in, std::size_t k, SlipDrive d) {
@@ -69,7 +69,7 @@ bool SlipDetectorModel::IsValid(std::string* why) const {
   std::string inner;
   if (!v_net.IsValid(&inner)) return core::invalid(why, "v_net: " + inner);
   if (!w_net.IsValid(&inner)) return core::invalid(why, "w_net: " + inner);
-  if (!positive_finite(floor_var_v) || !positive_finite(floor_var_w))
+  if (!positive_finite_value(floor_var_v) || !positive_finite_value(floor_var_w))
     return core::invalid(why, fmt::format("floor_var_v = {}, floor_var_w = {}: expected finite values > 0",
                                           floor_var_v, floor_var_w));
   if (previous_lag < 1 || previous_lag > v_net.window)
@@ -84,7 +84,7 @@ bool SlipTrainingOptions::IsValid(std::string* why) const {
   if (target_window < 1 || target_window % 2 == 0)
     return core::invalid(why, fmt::format("target_window = {}: expected an odd number of steps >= 1",
                                           target_window));
-  if (!positive_finite(floor_var_v) || !positive_finite(floor_var_w))
+  if (!positive_finite_value(floor_var_v) || !positive_finite_value(floor_var_w))
     return core::invalid(why, "floor_var_v/_w: expected finite values > 0");
   if (stride < 1) return core::invalid(why, fmt::format("stride = {}: expected >= 1", stride));
   if (!(floor_quantile >= 0.0 && floor_quantile < 1.0))
@@ -114,7 +114,7 @@ std::array<std::vector<double>, 2> slip_target_variances(const FusionInput& in, 
   for (int d = 0; d < 2; ++d) {
     std::vector<double> e2(n, std::nan(""));
     for (std::size_t k = 1; k < n; ++k)
-      if (finite_all({(*est[d])[k], (*truth[d])[k]})) {
+      if (finite_features({(*est[d])[k], (*truth[d])[k]})) {
         const double e = (*est[d])[k] - (*truth[d])[k];
         e2[k] = e * e;
       }
@@ -191,23 +191,23 @@ SequenceSet track_windows(const FusionInput& in, const std::vector<double>& targ
                           const SlipTrainingOptions& options) {
   const SlipDrive drive = options.drive;
   const auto W = static_cast<std::size_t>(window);
-  std::vector<double> rows(W * kFeatures);
+  std::vector<double> rows(W * kSlipFeatures);
   SequenceSet all;
   all.window = window;
-  all.inputs = kFeatures;
+  all.inputs = kSlipFeatures;
   std::size_t taken = 0;
   for (std::size_t k = W + lag; k < in.size(); ++k) {
     bool ok = std::isfinite(target[k]);
     for (std::size_t j = k + 1 - W; ok && j <= k; ++j) {
       const auto d = drive_at(in, j, drive), o = odometry_at(in, j);
-      ok = finite_all({d[0], d[1], o[0], o[1], prev[j - lag]});
+      ok = finite_features({d[0], d[1], o[0], o[1], prev[j - lag]});
     }
     if (!ok) continue;
     if (taken++ % static_cast<std::size_t>(options.stride) != 0) continue;
     for (std::size_t r = 0; r < W; ++r) {
       const std::size_t j = k + 1 - W + r;
       const auto d = drive_at(in, j, drive), o = odometry_at(in, j);
-      double* row = &rows[r * kFeatures];
+      double* row = &rows[r * kSlipFeatures];
       row[kSlipPowerR] = d[0];
       row[kSlipPowerL] = d[1];
       row[kSlipDticksR] = o[0];
@@ -227,7 +227,7 @@ void build_windows(const std::vector<const FusionInput*>& tracks, const PerTrack
   for (int d = 0; d < 2; ++d) {
     (*train)[d] = (*val)[d] = SequenceSet{};
     (*train)[d].window = (*val)[d].window = window;
-    (*train)[d].inputs = (*val)[d].inputs = kFeatures;
+    (*train)[d].inputs = (*val)[d].inputs = kSlipFeatures;
   }
   for (std::size_t i = 0; i < tracks.size(); ++i) {
     const FusionInput& in = *tracks[i];
@@ -293,7 +293,7 @@ LstmTrainingSummary fit_slip_net(SlipNet& net, const SequenceSet& t, const Seque
 // scale, so the refits start from the first fit's function exactly.
 void reset_previous_input(SlipDetectorModel& model, const std::array<SequenceSet, 2>& train) {
   for (auto [net, set] : {std::pair{&model.v_net, &train[0]}, std::pair{&model.w_net, &train[1]}}) {
-    using L = LstmLayout<kFeatures, SlipNet::kHidden>;
+    using L = LstmLayout<kSlipFeatures, SlipNet::kHidden>;
     for (int n = 0; n < L::kGates; ++n)
       net->weights[static_cast<std::size_t>(L::kKernel + kSlipPrevious * L::kGates + n)] = 0.0;
     double sum = 0.0, sum2 = 0.0;
@@ -411,8 +411,8 @@ SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tra
 
 SlipDetectorStepper::SlipDetectorStepper(const SlipDetectorModel* model)
     : model_(model),
-      v_rows_(static_cast<std::size_t>(model->v_net.window) * kFeatures, 0.0),
-      w_rows_(static_cast<std::size_t>(model->w_net.window) * kFeatures, 0.0),
+      v_rows_(static_cast<std::size_t>(model->v_net.window) * kSlipFeatures, 0.0),
+      w_rows_(static_cast<std::size_t>(model->w_net.window) * kSlipFeatures, 0.0),
       previous_{model->floor_var_v, model->floor_var_w},
       history_(static_cast<std::size_t>(model->previous_lag), std::array<double, 2>{0.0, 0.0}) {}
 
@@ -423,8 +423,8 @@ std::array<double, 2> SlipDetectorStepper::step(const FusionInput& in, std::size
   if (std::isfinite(d[1])) last_drive_[1] = d[1];
   const auto o = odometry_at(in, k);
   auto push = [&](std::vector<double>& rows, double previous) {
-    std::copy(rows.begin() + kFeatures, rows.end(), rows.begin());
-    double* last = &rows[rows.size() - kFeatures];
+    std::copy(rows.begin() + kSlipFeatures, rows.end(), rows.begin());
+    double* last = &rows[rows.size() - kSlipFeatures];
     last[kSlipPowerR] = last_drive_[0];
     last[kSlipPowerL] = last_drive_[1];
     last[kSlipDticksR] = o[0];

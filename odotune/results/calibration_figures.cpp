@@ -19,11 +19,13 @@ constexpr int kPaletteSize = static_cast<int>(sizeof(kPalette) / sizeof(kPalette
 constexpr const char* kTruthColour = "#000000";
 constexpr const char* kMarkerColour = "#808080";
 
-std::string num(double v) { return gnuplot_number(v); }
+std::string num_calibration(double v) { return gnuplot_number(v); }
 
-std::string q(const std::string& s) { return gnuplot_quote(s); }
+std::string q_calibration(const std::string& s) { return gnuplot_quote(s); }
 
-[[noreturn]] void bad(const std::string& what) { throw std::invalid_argument("calibration figure: " + what); }
+[[noreturn]] void bad_calibration(const std::string& what) {
+  throw std::invalid_argument("calibration figure: " + what);
+}
 
 bool finite_point(const EstimateSeries& s, std::size_t i) {
   return std::isfinite(s.t_s[i]) && std::isfinite(s.value_m[i]);
@@ -33,22 +35,23 @@ void validate_panel(const std::vector<EstimateSeries>& panel, const char* which)
   bool any = false;
   for (const EstimateSeries& s : panel) {
     if (s.value_m.size() != s.t_s.size())
-      bad("series '" + s.name + "' has " + std::to_string(s.t_s.size()) + " t_s values but " +
-          std::to_string(s.value_m.size()) + " value_m values");
+      bad_calibration("series '" + s.name + "' has " + std::to_string(s.t_s.size()) + " t_s values but " +
+                      std::to_string(s.value_m.size()) + " value_m values");
     if (!s.sd_m.empty() && s.sd_m.size() != s.t_s.size())
-      bad("series '" + s.name + "' has " + std::to_string(s.t_s.size()) + " t_s values but " +
-          std::to_string(s.sd_m.size()) + " sd_m values (expected the same or none)");
+      bad_calibration("series '" + s.name + "' has " + std::to_string(s.t_s.size()) + " t_s values but " +
+                      std::to_string(s.sd_m.size()) + " sd_m values (expected the same or none)");
     for (std::size_t i = 0; i < s.t_s.size() && !any; ++i) any = finite_point(s, i);
   }
-  if (!any) bad(std::string("the ") + which + " panel has no finite point");
+  if (!any) bad_calibration(std::string("the ") + which + " panel has no finite point");
 }
 
-void validate(const CalibrationFigureData& d) {
-  if (d.radii.empty()) bad("no radius series");
+void validate_calibration(const CalibrationFigureData& d) {
+  if (d.radii.empty()) bad_calibration("no radius series");
   validate_panel(d.radii, "wheel radius");
   if (!d.wheel_base.empty()) validate_panel(d.wheel_base, "wheel base");
   for (std::size_t i = 0; i < d.markers.size(); ++i)
-    if (!std::isfinite(d.markers[i].t_s)) bad("markers[" + std::to_string(i) + "] time is not finite");
+    if (!std::isfinite(d.markers[i].t_s))
+      bad_calibration("markers[" + std::to_string(i) + "] time is not finite");
 }
 
 // "t v" rows; a blank line where a point is not finite (breaks the line).
@@ -62,7 +65,7 @@ std::string line_rows(const EstimateSeries& s) {
       continue;
     }
     gap = false;
-    out += num(s.t_s[i]) + " " + num(s.value_m[i]) + "\n";
+    out += num_calibration(s.t_s[i]) + " " + num_calibration(s.value_m[i]) + "\n";
   }
   return out;
 }
@@ -72,7 +75,8 @@ std::string band_rows(const EstimateSeries& s) {
   std::string out;
   for (std::size_t i = 0; i < s.sd_m.size(); ++i) {
     if (!finite_point(s, i) || !std::isfinite(s.sd_m[i])) continue;
-    out += num(s.t_s[i]) + " " + num(s.value_m[i] - s.sd_m[i]) + " " + num(s.value_m[i] + s.sd_m[i]) + "\n";
+    out += num_calibration(s.t_s[i]) + " " + num_calibration(s.value_m[i] - s.sd_m[i]) + " " +
+           num_calibration(s.value_m[i] + s.sd_m[i]) + "\n";
   }
   return out;
 }
@@ -112,7 +116,7 @@ std::string panel_plot(const std::vector<EstimateSeries>& panel, const std::stri
     }
     lines += (lines.empty() ? "" : ", \\\n     ") +
              ("'" + base + ".dat' using 1:2 with " + (s.truth ? "steps dt 2 lw 2" : "lines lw 1.8") +
-              " lc rgb '" + colour + "' title " + q(s.name));
+              " lc rgb '" + colour + "' title " + q_calibration(s.name));
   }
   std::string plot = "plot ";
   if (!bands.empty()) plot += bands + ", \\\n     ";
@@ -122,7 +126,7 @@ std::string panel_plot(const std::vector<EstimateSeries>& panel, const std::stri
 }  // namespace
 
 void calibration_estimates_figure(const fs::path& stem, const CalibrationFigureData& d) {
-  validate(d);
+  validate_calibration(d);
   double t_min = INFINITY, t_max = -INFINITY;
   for (const auto* panel : {&d.radii, &d.wheel_base})
     for (const EstimateSeries& s : *panel)
@@ -138,24 +142,24 @@ void calibration_estimates_figure(const fs::path& stem, const CalibrationFigureD
   const std::string bottom = two_panels ? panel_plot(d.wheel_base, "d", files, &next_colour, &any_band) : "";
 
   std::string body;
-  body += "set multiplot title " + q(d.title + (any_band ? " (shaded: estimate ± 1 sd)" : "")) +
+  body += "set multiplot title " + q_calibration(d.title + (any_band ? " (shaded: estimate ± 1 sd)" : "")) +
           " font ',13'\n";
   body += "set grid lc rgb '#e0e0e0'\n";
-  body += "set xrange [" + num(t_min) + ":" + num(t_max) + "]\n";
+  body += "set xrange [" + num_calibration(t_min) + ":" + num_calibration(t_max) + "]\n";
   body += "set key outside right top Left reverse\n";
   body += "set lmargin at screen 0.10\nset rmargin at screen 0.76\n";
   body += "set format y '%.4g'\n";
   body += "set offsets 0, 0, graph 0.05, graph 0.05\n";  // lines at the extremes stay off the border
   for (const auto& m : d.markers) {
     if (m.t_s < t_min || m.t_s > t_max) continue;
-    body += "set arrow from first " + num(m.t_s) + ", graph 0 to first " + num(m.t_s) +
+    body += "set arrow from first " + num_calibration(m.t_s) + ", graph 0 to first " + num_calibration(m.t_s) +
             ", graph 1 nohead back lw 1 dt 3 lc rgb '" + kMarkerColour + "'\n";
   }
   int tag = 1;
   for (const auto& m : d.markers) {
     if (m.t_s < t_min || m.t_s > t_max || m.label.empty()) continue;
-    body += "set label " + std::to_string(tag++) + " " + q(m.label) + " at first " + num(m.t_s) +
-            ", graph 1 left offset 0.4,-1 front tc rgb '#505050' font ',9'\n";
+    body += "set label " + std::to_string(tag++) + " " + q_calibration(m.label) + " at first " +
+            num_calibration(m.t_s) + ", graph 1 left offset 0.4,-1 front tc rgb '#505050' font ',9'\n";
   }
   // Upper panel: the radii (x tic labels only on the lowest panel).
   body += "set tmargin at screen 0.91\n";
@@ -164,13 +168,13 @@ void calibration_estimates_figure(const fs::path& stem, const CalibrationFigureD
   if (two_panels) {
     body += "set format x ''\nunset xlabel\n";
   } else {
-    body += "set xlabel " + q(d.time_label) + "\n";
+    body += "set xlabel " + q_calibration(d.time_label) + "\n";
   }
   body += top + "\n";
   if (two_panels) {
     body += "unset label\n";
     body += "set tmargin at screen 0.38\nset bmargin at screen 0.10\n";
-    body += "set format x '%g'\nset xlabel " + q(d.time_label) + "\n";
+    body += "set format x '%g'\nset xlabel " + q_calibration(d.time_label) + "\n";
     body += "set ylabel 'wheel base [m]'\n";
     body += bottom + "\n";
   }

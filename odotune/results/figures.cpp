@@ -21,7 +21,7 @@ constexpr std::size_t kNumSeriesColours = sizeof(kSeriesColours) / sizeof(kSerie
 
 const char* series_colour(std::size_t i) { return kSeriesColours[i % kNumSeriesColours]; }
 
-std::string num(double v) { return gnuplot_number(v); }
+std::string num_figure(double v) { return gnuplot_number(v); }
 
 // One decimal, without a "-0.0".
 std::string one_decimal(double v) {
@@ -32,7 +32,7 @@ std::string one_decimal(double v) {
   return s;
 }
 
-std::string q(const std::string& s) { return gnuplot_quote(s); }
+std::string q_figure(const std::string& s) { return gnuplot_quote(s); }
 
 // `set xtics (...)`/`set ytics (...)` list for categorical positions 0..n-1
 // (or `first`, `first+1`, …).
@@ -40,7 +40,7 @@ std::string category_tics(const std::vector<std::string>& names, int first) {
   std::string s = "(";
   for (std::size_t i = 0; i < names.size(); ++i) {
     if (i > 0) s += ", ";
-    s += q(names[i]) + " " + std::to_string(first + static_cast<int>(i));
+    s += q_figure(names[i]) + " " + std::to_string(first + static_cast<int>(i));
   }
   return s + ")";
 }
@@ -85,7 +85,7 @@ void heatmap(const fs::path& stem, const std::string& title, const std::vector<s
         missing += xy + " \"n/a\"\n";
         continue;
       }
-      cells += xy + " " + num(v) + "\n";
+      cells += xy + " " + num_figure(v) + "\n";
       (std::abs(v) > 0.6 * range ? light_labels : dark_labels) += xy + " \"" + one_decimal(v) + "\"\n";
     }
   }
@@ -97,16 +97,16 @@ void heatmap(const fs::path& stem, const std::string& title, const std::vector<s
   const int ncols = static_cast<int>(columns.size());
 
   std::string body;
-  body += "set title " + q(title) + " font ',13'\n";
+  body += "set title " + q_figure(title) + " font ',13'\n";
   body += "set xlabel 'track'\nset ylabel 'fitness mode'\n";
   body += "set cblabel 'improvement [%]'\n";
-  body += "set xrange [-0.5:" + num(ncols - 0.5) + "]\nset yrange [6.5:-0.5]\n";
+  body += "set xrange [-0.5:" + num_figure(ncols - 0.5) + "]\nset yrange [6.5:-0.5]\n";
   body += "set xtics " + category_tics(columns, 0) + " scale 0" + (longest > 8 ? " rotate by 30 right" : "") +
           "\n";
   body += "set ytics " + category_tics(mode_names, 0) + " scale 0\n";
   body += "set palette defined (-1 '#b2182b', -0.5 '#ef8a62', 0 '#f7f7f7', 0.5 '#67a9cf', "
           "1 '#2166ac')\n";
-  body += "set cbrange [" + num(-range) + ":" + num(range) + "]\nset colorbox\n";
+  body += "set cbrange [" + num_figure(-range) + ":" + num_figure(range) + "]\nset colorbox\n";
   body += "unset key\nset border 0\nset style fill solid 1.0 noborder\n";
   std::string plot = "plot ";
   auto add = [&plot](const std::string& clause) {
@@ -168,7 +168,7 @@ std::string boxplot_outliers(std::vector<double> v, double x) {
   for (double d : v) {
     if (d >= q1 - 1.5 * iqr && d <= q3 + 1.5 * iqr) continue;
     if (std::abs(d - last) <= 1e-6) continue;
-    out += num(x) + " " + num(d) + "\n";
+    out += num_figure(x) + " " + num_figure(d) + "\n";
     last = d;
   }
   return out;
@@ -180,8 +180,8 @@ std::string boxplot_outliers(std::vector<double> v, double x) {
 std::string small_box(std::vector<double> v, double x, double width) {
   std::sort(v.begin(), v.end());
   const double median = core::sorted_median(v);
-  return num(x) + " " + num(median) + " " + num(x - width / 2) + " " + num(x + width / 2) + " " +
-         num(v.front()) + " " + num(v.back()) + "\n";
+  return num_figure(x) + " " + num_figure(median) + " " + num_figure(x - width / 2) + " " +
+         num_figure(x + width / 2) + " " + num_figure(v.front()) + " " + num_figure(v.back()) + "\n";
 }
 
 // Every value as "x y", in the given order, spread evenly across 60 % of the
@@ -191,7 +191,7 @@ std::string value_points(const std::vector<double>& v, double x, double width) {
   const auto n = static_cast<double>(v.size());
   for (std::size_t i = 0; i < v.size(); ++i) {
     const double dx = v.size() == 1 ? 0.0 : 0.6 * width * ((static_cast<double>(i) + 0.5) / n - 0.5);
-    out += num(x + dx) + " " + num(v[i]) + "\n";
+    out += num_figure(x + dx) + " " + num_figure(v[i]) + "\n";
   }
   return out;
 }
@@ -232,14 +232,14 @@ void boxplots(const fs::path& stem, const std::string& title,
       const double x = static_cast<double>(g + 1) - 0.4 + slot * (static_cast<double>(m) + 0.5);
       const std::string colour = m < 3 ? metric_colours[m] : series_colour(m);
       const std::string colours = " lc rgb '" + colour + "' fc rgb '" + colour + "' ";
-      const std::string key = metric_in_legend[m] ? std::string("notitle") : "title " + q(metrics[m]);
+      const std::string key = metric_in_legend[m] ? std::string("notitle") : "title " + q_figure(metrics[m]);
       metric_in_legend[m] = true;
       const bool few = values.size() < kMinBoxplotValues;
       if (!few) {
         std::string content;
-        for (double v : values) content += num(v) + "\n";
+        for (double v : values) content += num_figure(v) + "\n";
         files.emplace_back("box_" + id + ".dat", content);
-        plot += ", \\\n     'box_" + id + ".dat' using (" + num(x) + "):1:(" + num(slot * 0.8) +
+        plot += ", \\\n     'box_" + id + ".dat' using (" + num_figure(x) + "):1:(" + num_figure(slot * 0.8) +
                 ") with boxplot" + colours + key;
       } else {
         files.emplace_back("small_" + id + ".dat", small_box(values, x, slot * 0.8));
@@ -268,9 +268,9 @@ void boxplots(const fs::path& stem, const std::string& title,
   if (files.empty()) throw std::invalid_argument("boxplots: no finite values to plot");
 
   std::string body;
-  body += "set title " + q(title) + " font ',13'\n";
-  body += "set xlabel " + q(options.group_label) + "\nset ylabel 'improvement [%]'\n";
-  body += "set xrange [0.5:" + num(static_cast<double>(models.size()) + 0.5) + "]\n";
+  body += "set title " + q_figure(title) + " font ',13'\n";
+  body += "set xlabel " + q_figure(options.group_label) + "\nset ylabel 'improvement [%]'\n";
+  body += "set xrange [0.5:" + num_figure(static_cast<double>(models.size()) + 0.5) + "]\n";
   body += "set xtics " + category_tics(models, 1) + " scale 0\n";
   body += "set grid ytics lc rgb '#e0e0e0'\n";
   body += "set style fill solid 0.35 border\n";
@@ -334,10 +334,11 @@ void convergence(const fs::path& stem, const std::string& title,
     for (std::size_t i = 0; i < band.evaluations.size(); ++i) {
       const std::string e = std::to_string(band.evaluations[i]) + " ";
       if (i > 0) {
-        content += e + num(band.median_m[i - 1]) + " " + num(band.min_m[i - 1]) + " " + num(band.max_m[i - 1]) +
-                   "\n";
+        content += e + num_figure(band.median_m[i - 1]) + " " + num_figure(band.min_m[i - 1]) + " " +
+                   num_figure(band.max_m[i - 1]) + "\n";
       }
-      content += e + num(band.median_m[i]) + " " + num(band.min_m[i]) + " " + num(band.max_m[i]) + "\n";
+      content += e + num_figure(band.median_m[i]) + " " + num_figure(band.min_m[i]) + " " +
+                 num_figure(band.max_m[i]) + "\n";
     }
     std::size_t nruns = 0;
     for (const auto& r : runs) nruns += r.empty() ? 0 : 1;
@@ -346,15 +347,15 @@ void convergence(const fs::path& stem, const std::string& title,
     const std::string colour = series_colour(k);
     if (k > 0) plot += ", \\\n     ";
     plot += "'" + file + "' using 1:3:4 with filledcurves lc rgb '" + colour + "' title " +
-            q(name + " min–max (" + std::to_string(nruns) + (nruns == 1 ? " run)" : " runs)")) +
+            q_figure(name + " min–max (" + std::to_string(nruns) + (nruns == 1 ? " run)" : " runs)")) +
             ", \\\n     '" + file + "' using 1:2 with lines lw 2 lc rgb '" + colour + "' title " +
-            q(name + " median");
+            q_figure(name + " median");
     ++k;
   }
   if (files.empty()) throw std::invalid_argument("convergence: no series has a point");
 
   std::string body;
-  body += "set title " + q(title) + " font ',13'\n";
+  body += "set title " + q_figure(title) + " font ',13'\n";
   body += "set xlabel 'evaluations'\nset ylabel 'best fitness [m]'\n";
   body += "set grid lc rgb '#e0e0e0'\n";
   body += "set style fill transparent solid 0.25 noborder\n";
@@ -421,7 +422,7 @@ void trajectories(const fs::path& stem, const std::string& title, const std::vec
         continue;
       }
       gap = false;
-      content += num(p.xs_m[j]) + " " + num(p.ys_m[j]) + "\n";
+      content += num_figure(p.xs_m[j]) + " " + num_figure(p.ys_m[j]) + "\n";
       x_min = std::min(x_min, p.xs_m[j]);
       x_max = std::max(x_max, p.xs_m[j]);
       y_min = std::min(y_min, p.ys_m[j]);
@@ -435,7 +436,7 @@ void trajectories(const fs::path& stem, const std::string& title, const std::vec
     const std::string colour = i == 0 ? "#000000" : series_colour(i - 1);
     if (plot != "plot ") plot += ", \\\n     ";
     plot += "'" + file + "' using 1:2 with lines lw " + (i == 0 ? "2.5" : "1.5") + " lc rgb '" + colour +
-            "' title " + q(p.name);
+            "' title " + q_figure(p.name);
   }
   if (drawn == 0) throw std::invalid_argument("trajectories: no finite point in any path");
 
@@ -452,14 +453,17 @@ void trajectories(const fs::path& stem, const std::string& title, const std::vec
   const int width = kLeftPx + f.width_px + key_px;
   const int height = std::max(kTopPx + f.height_px + kBottomPx,
                               kTopPx + kKeyRowPx * static_cast<int>(drawn) + 30);
-  const auto at_x = [width](int px) { return num(static_cast<double>(px) / width); };
-  const auto at_y = [height](int px_from_top) { return num(1.0 - static_cast<double>(px_from_top) / height); };
+  const auto at_x = [width](int px) { return num_figure(static_cast<double>(px) / width); };
+  const auto at_y = [height](int px_from_top) {
+    return num_figure(1.0 - static_cast<double>(px_from_top) / height);
+  };
 
   std::string body;
-  body += "set label 1 " + q(title) + " at screen 0.5, screen " + at_y(kTopPx / 2) + " center font ',13'\n";
+  body += "set label 1 " + q_figure(title) + " at screen 0.5, screen " + at_y(kTopPx / 2) +
+          " center font ',13'\n";
   body += "set xlabel 'x [m]'\nset ylabel 'y [m]'\n";
-  body += "set xrange [" + num(f.x0) + ":" + num(f.x1) + "]\nset yrange [" + num(f.y0) + ":" + num(f.y1) +
-          "]\n";
+  body += "set xrange [" + num_figure(f.x0) + ":" + num_figure(f.x1) + "]\nset yrange [" + num_figure(f.y0) +
+          ":" + num_figure(f.y1) + "]\n";
   body += "set lmargin at screen " + at_x(kLeftPx) + "\nset rmargin at screen " + at_x(kLeftPx + f.width_px) +
           "\n";
   body += "set tmargin at screen " + at_y(kTopPx) + "\nset bmargin at screen " + at_y(kTopPx + f.height_px) +

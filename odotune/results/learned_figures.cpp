@@ -14,10 +14,12 @@ namespace {
 
 constexpr const char* kShadeColour = "#d9d9d9";  // slip episodes, behind the curves
 
-std::string num(double v) { return gnuplot_number(v); }
-std::string q(const std::string& s) { return gnuplot_quote(s); }
+std::string num_learned(double v) { return gnuplot_number(v); }
+std::string q_learned(const std::string& s) { return gnuplot_quote(s); }
 
-[[noreturn]] void bad(const std::string& what) { throw std::invalid_argument("learned figure: " + what); }
+[[noreturn]] void bad_learned(const std::string& what) {
+  throw std::invalid_argument("learned figure: " + what);
+}
 
 bool plottable(double y, bool log_y) { return std::isfinite(y) && (!log_y || y > 0.0); }
 
@@ -32,7 +34,7 @@ std::string rows_of(const std::vector<double>& x, const std::vector<double>& y, 
       continue;
     }
     gap = false;
-    rows += num(x[j]) + " " + num(y[j]) + "\n";
+    rows += num_learned(x[j]) + " " + num_learned(y[j]) + "\n";
   }
   return rows;
 }
@@ -42,19 +44,19 @@ std::string rows_of(const std::vector<double>& x, const std::vector<double>& y, 
 namespace {
 
 // Checks the panels, shades and markers (std::invalid_argument naming the
-// bad one) and returns the time range the plottable points span (widened by
+// bad_learned one) and returns the time range the plottable points span (widened by
 // ±0.5 s when empty).
 std::pair<double, double> checked_time_range(const std::vector<ShadedPanel>& panels,
                                              const std::vector<TimeShade>& shades,
                                              const std::vector<TimeMarker>& markers) {
-  if (panels.empty()) bad("time panels: no panel");
+  if (panels.empty()) bad_learned("time panels: no panel");
   double t_min = INFINITY, t_max = -INFINITY;
   for (const ShadedPanel& p : panels) {
     bool any = false;
     for (const PanelLine& l : p.lines) {
       if (l.t_s.size() != l.y.size())
-        bad("panel '" + p.ylabel + "', line '" + l.name + "' has " + std::to_string(l.t_s.size()) +
-            " times but " + std::to_string(l.y.size()) + " values");
+        bad_learned("panel '" + p.ylabel + "', line '" + l.name + "' has " + std::to_string(l.t_s.size()) +
+                    " times but " + std::to_string(l.y.size()) + " values");
       for (std::size_t i = 0; i < l.t_s.size(); ++i)
         if (std::isfinite(l.t_s[i]) && plottable(l.y[i], p.log_y)) {
           any = true;
@@ -62,13 +64,14 @@ std::pair<double, double> checked_time_range(const std::vector<ShadedPanel>& pan
           t_max = std::max(t_max, l.t_s[i]);
         }
     }
-    if (!any) bad("panel '" + p.ylabel + "' has no plottable point");
+    if (!any) bad_learned("panel '" + p.ylabel + "' has no plottable point");
   }
   for (const TimeShade& s : shades)
     if (!std::isfinite(s.t0_s) || !std::isfinite(s.t1_s) || !(s.t1_s > s.t0_s))
-      bad("a shaded interval [" + num(s.t0_s) + ", " + num(s.t1_s) + "] is not finite with t1 > t0");
+      bad_learned("a shaded interval [" + num_learned(s.t0_s) + ", " + num_learned(s.t1_s) +
+                  "] is not finite with t1 > t0");
   for (const TimeMarker& m : markers)
-    if (!std::isfinite(m.t_s)) bad("a marker time is not finite");
+    if (!std::isfinite(m.t_s)) bad_learned("a marker time is not finite");
   if (t_max <= t_min) t_min -= 0.5, t_max += 0.5;
   return {t_min, t_max};
 }
@@ -83,11 +86,11 @@ std::string panel_script(const std::vector<ShadedPanel>& panels, std::size_t p,
   std::string body;
   const ShadedPanel& panel = panels[p];
   const auto [top, bottom] = stacked_panel_span(p, panels.size());
-  body += "set tmargin at screen " + num(top) + "\nset bmargin at screen " + num(bottom) + "\n";
-  body += "set ylabel " + q(panel.ylabel) + "\n";
+  body += "set tmargin at screen " + num_learned(top) + "\nset bmargin at screen " + num_learned(bottom) + "\n";
+  body += "set ylabel " + q_learned(panel.ylabel) + "\n";
   body += panel.log_y ? "set logscale y\nset format y '%.0e'\n" : "unset logscale y\nset format y '%.3g'\n";
   body += std::isfinite(panel.y_min) && (!panel.log_y || panel.y_min > 0.0)
-              ? "set yrange [" + num(panel.y_min) + ":*]\n"
+              ? "set yrange [" + num_learned(panel.y_min) + ":*]\n"
               : "set yrange [*:*]\n";
   if (p + 1 == panels.size())
     body += "set format x '%g'\nset xlabel 'time [s]'\n";
@@ -104,11 +107,11 @@ std::string panel_script(const std::vector<ShadedPanel>& panels, std::size_t p,
     files.emplace_back(file, std::move(rows));
     plot += (plot.empty() ? "plot " : ", \\\n     ") +
             ("'" + file + "' using 1:2 with " + (l.dashed ? "steps dt 2" : "lines") + " lw " +
-             (l.thin ? "1" : "1.8") + " lc rgb '" + series_colour(l.colour) + "' title " + q(l.name));
+             (l.thin ? "1" : "1.8") + " lc rgb '" + series_colour(l.colour) + "' title " + q_learned(l.name));
   }
   if (p == 0 && !shades.empty() && !shade_label.empty())
     plot += ", \\\n     keyentry with boxes fs solid 1.0 noborder fc rgb '" + std::string(kShadeColour) +
-            "' title " + q(shade_label);
+            "' title " + q_learned(shade_label);
   body += plot + "\n";
   return body;
 }
@@ -121,18 +124,18 @@ void shaded_time_panels(const fs::path& stem, const std::string& title, const st
   const auto [t_min, t_max] = checked_time_range(panels, shades, markers);
 
   std::vector<std::pair<std::string, std::string>> files;
-  std::string body = "reset\nset multiplot title " + q(title) + " font ',13'\n";
+  std::string body = "reset\nset multiplot title " + q_learned(title) + " font ',13'\n";
   body += "set grid lc rgb '#e0e0e0'\n";
-  body += "set xrange [" + num(t_min) + ":" + num(t_max) + "]\n";
+  body += "set xrange [" + num_learned(t_min) + ":" + num_learned(t_max) + "]\n";
   body += "set key outside right top Left reverse\n";
   body += "set lmargin at screen 0.10\nset rmargin at screen 0.74\n";
   int object = 1;
   for (const TimeShade& s : shades)
-    body += "set object " + std::to_string(object++) + " rect from first " + num(s.t0_s) +
-            ", graph 0 to first " + num(s.t1_s) + ", graph 1 behind fc rgb '" + kShadeColour +
+    body += "set object " + std::to_string(object++) + " rect from first " + num_learned(s.t0_s) +
+            ", graph 0 to first " + num_learned(s.t1_s) + ", graph 1 behind fc rgb '" + kShadeColour +
             "' fs solid 1.0 noborder\n";
   for (const TimeMarker& m : markers)
-    body += "set arrow from first " + num(m.t_s) + ", graph 0 to first " + num(m.t_s) +
+    body += "set arrow from first " + num_learned(m.t_s) + ", graph 0 to first " + num_learned(m.t_s) +
             ", graph 1 nohead back lw 1 dt 3 lc rgb '#606060'\n";
   for (std::size_t p = 0; p < panels.size(); ++p)
     body += panel_script(panels, p, shades, shade_label, markers, files);
@@ -141,22 +144,22 @@ void shaded_time_panels(const fs::path& stem, const std::string& title, const st
 }
 
 void path_panels(const fs::path& stem, const std::string& title, const std::vector<PathPanel>& panels) {
-  if (panels.empty()) bad("path panels: no panel");
+  if (panels.empty()) bad_learned("path panels: no panel");
   for (const PathPanel& p : panels) {
     bool any = false;
     for (const PathLine& l : p.lines) {
       if (l.x_m.size() != l.y_m.size())
-        bad("path panel '" + p.title + "', line '" + l.name + "' has " + std::to_string(l.x_m.size()) +
-            " x values but " + std::to_string(l.y_m.size()) + " y values");
+        bad_learned("path panel '" + p.title + "', line '" + l.name + "' has " + std::to_string(l.x_m.size()) +
+                    " x values but " + std::to_string(l.y_m.size()) + " y values");
       for (std::size_t i = 0; i < l.x_m.size(); ++i)
         any = any || (std::isfinite(l.x_m[i]) && std::isfinite(l.y_m[i]));
     }
-    if (!any) bad("path panel '" + p.title + "' has no finite point");
+    if (!any) bad_learned("path panel '" + p.title + "' has no finite point");
   }
 
   const std::size_t n = panels.size();
   std::vector<std::pair<std::string, std::string>> files;
-  std::string body = "reset\nset multiplot title " + q(title) + " font ',13'\n";
+  std::string body = "reset\nset multiplot title " + q_learned(title) + " font ',13'\n";
   body += "set grid lc rgb '#e0e0e0'\n";
   body += "set size ratio -1\n";  // equal scales on x and y
   body += "set key below Left reverse\n";
@@ -166,9 +169,10 @@ void path_panels(const fs::path& stem, const std::string& title, const std::vect
   for (std::size_t p = 0; p < n; ++p) {
     const PathPanel& panel = panels[p];
     const double left = kLeft + static_cast<double>(p) * (w + kGap);
-    body += "set lmargin at screen " + num(left + 0.04) + "\nset rmargin at screen " + num(left + w) + "\n";
+    body += "set lmargin at screen " + num_learned(left + 0.04) + "\nset rmargin at screen " +
+            num_learned(left + w) + "\n";
     body += "set tmargin at screen 0.88\nset bmargin at screen 0.22\n";
-    body += "set title " + q(panel.title) + "\n";
+    body += "set title " + q_learned(panel.title) + "\n";
     std::string plot;
     for (std::size_t i = 0; i < panel.lines.size(); ++i) {
       const PathLine& l = panel.lines[i];
@@ -178,7 +182,7 @@ void path_panels(const fs::path& stem, const std::string& title, const std::vect
       files.emplace_back(file, std::move(rows));
       plot += (plot.empty() ? "plot " : ", \\\n     ") +
               ("'" + file + "' using 1:2 with lines lw 1.6 " + (l.dashed ? "dt 2 " : "") + "lc rgb '" +
-               series_colour(l.colour) + "' title " + q(l.name));
+               series_colour(l.colour) + "' title " + q_learned(l.name));
     }
     // The start: the first finite point of the first line.
     for (const PathLine& l : panel.lines) {
@@ -186,7 +190,7 @@ void path_panels(const fs::path& stem, const std::string& title, const std::vect
       for (std::size_t i = 0; i < l.x_m.size(); ++i)
         if (std::isfinite(l.x_m[i]) && std::isfinite(l.y_m[i])) {
           const std::string file = "p" + std::to_string(p) + "start.dat";
-          files.emplace_back(file, num(l.x_m[i]) + " " + num(l.y_m[i]) + "\n");
+          files.emplace_back(file, num_learned(l.x_m[i]) + " " + num_learned(l.y_m[i]) + "\n");
           plot += ", \\\n     '" + file + "' using 1:2 with points pt 7 ps 1.2 lc rgb '#000000' title 'start'";
           found = true;
           break;

@@ -15,9 +15,9 @@ namespace odotune::results {
 namespace {
 
 using json = nlohmann::json;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kModelNaN = std::numeric_limits<double>::quiet_NaN();
 
-json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+json num_model(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 // Field access with one-line errors "FILE: PATH: what; expected …".
 class Reader {
@@ -38,7 +38,7 @@ class Reader {
 
   double number(const json& obj, const std::string& path, const char* key, bool positive, bool nullable) const {
     const json& v = field(obj, path, key);
-    if (nullable && v.is_null()) return kNaN;
+    if (nullable && v.is_null()) return kModelNaN;
     if (!v.is_number())
       fail(join(path, key), fmt::format("{} is not a number; expected {}", short_dump(v),
                                         nullable ? "a number or null" : "a number"));
@@ -87,8 +87,8 @@ class Reader {
 json training_json(const ModelTrainingRecord& t) {
   const auto net = [](const NetTrainingRecord& n) {
     return json{{"iterations", n.iterations},
-                {"train_mae", num(n.train_mae)},
-                {"validation_mae", num(n.validation_mae)}};
+                {"train_mae", num_model(n.train_mae)},
+                {"validation_mae", num_model(n.validation_mae)}};
   };
   return {{"train_windows", t.train_windows},
           {"validation_windows", t.validation_windows},
