@@ -134,7 +134,7 @@ void attach_term_model(Diagnosis& d, const DiagInput& in, const DiagInput& scori
   const TermModel& tm = d.term_search.model;
   if (!located) {
     Finding f;
-    f.effect = "unexplained";
+    f.kind = Unexplained{};
     f.segments.push_back({in.ref_t_s.front(), in.ref_t_s.back(), 0.0, 0});
     f.train = {tm.train.before_pos_rmse_m, tm.train.after_pos_rmse_m};
     f.heldout = {tm.heldout.before_pos_rmse_m, tm.heldout.after_pos_rmse_m};
@@ -218,7 +218,7 @@ Finding wheel_finding(const ReplayContext& c, const Diagnosis& d, const EffectSe
                       const std::vector<ParamSlot>& layout, const SelectedEffect& se, const ReplayResult& fin,
                       const ReplayResult& fin_s, const DiagnoseOptions& o) {
   Finding f;
-  f.effect = std::string(effect_name(se.effect));
+  f.kind = se.effect;
   add_wheel_params(f, se, wheel, layout, d.selection, o);
   EffectSet without = wheel;
   without.disable(se.effect);
@@ -226,7 +226,7 @@ Finding wheel_finding(const ReplayContext& c, const Diagnosis& d, const EffectSe
   f.train = scores(wo_s, fin_s, d.train_windows);
   f.heldout = scores(wo_s, fin_s, d.heldout_windows);
   f.explains = se.explains;
-  for (Effect r : se.rivals) f.rivals.emplace_back(effect_name(r));
+  f.rivals = se.rivals;
   f.evidence = d.selection.folds_are_recordings
                    ? "model selection: cross-validated by leaving one recording out, fitted with Ceres"
                    : "model selection: cross-validated over time blocks, fitted with Ceres";
@@ -284,7 +284,7 @@ void add_gyro_findings(Diagnosis& d, const ReplayContext& c, const EffectSet& wh
   for (const auto& [effect, v] : checks) {
     if (!v->departs()) continue;
     Finding f;
-    f.effect = std::string(effect_name(effect));
+    f.kind = effect;
     const std::string name = effect == Effect::gyro_bias ? "b" : "s";
     f.params.push_back({name, v->value});
     f.stderrs.push_back({name, v->std_error});
@@ -308,11 +308,12 @@ void add_gyro_findings(Diagnosis& d, const ReplayContext& c, const EffectSet& wh
     const double floor_g = materiality_floor_m(in.ref_sigma_m, f.heldout.before_pos_rmse_m,
                                                o.select.materiality);
     if (!is_material(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m, floor_g)) {
-      d.immaterial.push_back(fmt::format(
-          "{} {} = {:.3g}: removes {:.3g} mm of held-out position error, "
-          "floor {:.3g} mm",
-          f.effect, name, v->value,
-          1e3 * removed_error_m(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m), 1e3 * floor_g));
+      d.immaterial.push_back(
+          {.effect = effect,
+           .line = fmt::format("{} {} = {:.3g}: removes {:.3g} mm of held-out position error, floor {:.3g} mm",
+                               f.name(), name, v->value,
+                               1e3 * removed_error_m(f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m),
+                               1e3 * floor_g)});
       continue;
     }
     f.segments.push_back({in.ref_t_s.front(), in.ref_t_s.back(), 0.0, 0});
@@ -341,7 +342,7 @@ std::optional<Finding> located_unexplained(const Diagnosis& d, const DiagInput& 
                         std::max(o.unexplained_min_sigmas * in.ref_sigma_m, d.floor_m);
   if (share >= o.unexplained_min_share && ins.rmse_m >= o.unexplained_min_sigmas * in.ref_sigma_m && material) {
     Finding f;
-    f.effect = "unexplained";
+    f.kind = Unexplained{};
     f.segments = la.segments, f.regions = la.regions, f.conditions = la.phrase;
     // Share of the baseline's squared error that remains inside the segments.
     f.explains = base.pos_rmse_m > 0.0 ? share * sq(fin.pos_rmse_m / base.pos_rmse_m) : 0.0;
@@ -377,12 +378,13 @@ double Finding::param(std::string_view name) const {
 }
 
 bool Finding::is_wheel_effect() const {
-  return effect != "unexplained" && effect != "gyro_bias" && effect != "gyro_scale";
+  const Effect* e = std::get_if<Effect>(&kind);
+  return e != nullptr && !is_gyro_effect(*e);
 }
 
 std::string Finding::spec() const {
-  if (effect == "unexplained") return "";
-  std::string s = effect;
+  if (is_unexplained()) return "";
+  std::string s(name());
   for (std::size_t i = 0; i < params.size(); ++i)
     s += fmt::format("{}{}={}", i == 0 ? ':' : ',', params[i].name, params[i].value);
   return s;

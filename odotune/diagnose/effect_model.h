@@ -103,6 +103,9 @@ Effect effect_from_name(std::string_view name);
 // with its absence (select.h).
 inline bool noop_differs_from_absence(Effect e) { return e == Effect::actuator_lag; }
 
+// gyro_bias or gyro_scale: an effect of the gyro, not of the wheel odometry.
+inline bool is_gyro_effect(Effect e) { return e == Effect::gyro_bias || e == Effect::gyro_scale; }
+
 // Which effects are active and their parameter values.
 class EffectSet {
  public:

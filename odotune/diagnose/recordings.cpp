@@ -128,11 +128,11 @@ void confirm_on_heldout(Diagnosis& d, EffectSet& wheel, const std::vector<DiagIn
     for (Finding& f : d.findings) {
       if (!f.is_wheel_effect()) continue;
       EffectSet without = wheel;
-      without.disable(effect_from_name(f.effect));
+      without.disable(f.effect());
       const HeldoutTest t = heldout_test(replay_each(heldout, without, ws), with, nominal, heldout, ws, o);
       f.heldout = t.error, f.heldout_test = t;
       if (drop && !t.material) {
-        dropped.push_back(effect_from_name(f.effect));
+        dropped.push_back(f.effect());
         d.not_confirmed.push_back(fmt::format(
             "{}: fits the fitted recordings; on the held-out recordings it removes less than their floor "
             "({:.1f} → {:.1f} mm, floor {:.1f} mm; {})",
@@ -141,9 +141,7 @@ void confirm_on_heldout(Diagnosis& d, EffectSet& wheel, const std::vector<DiagIn
       }
     }
     for (Effect e : dropped) wheel.disable(e), d.model.disable(e);
-    std::erase_if(d.findings, [&](const Finding& f) {
-      return f.is_wheel_effect() && !wheel.on(effect_from_name(f.effect));
-    });
+    std::erase_if(d.findings, [&](const Finding& f) { return f.is_wheel_effect() && !wheel.on(f.effect()); });
     return !dropped.empty();
   };
   if (test_each(true)) test_each(false);
@@ -206,6 +204,7 @@ void evaluate_recording(const DiagInput& in, const RecordingEval& e, RecordingRe
 // out.consistency.
 void add_refit_agreement(PooledDiagnosis& out, const EffectSet& wheel) {
   const auto& names = out.recordings.front().refit;
+  const std::vector<ParamSlot> layout = param_layout(wheel);  // the refits' names are among its slots
   for (std::size_t i = 0; i < names.size(); ++i) {
     std::vector<double> v;
     std::string list;
@@ -218,8 +217,9 @@ void add_refit_agreement(PooledDiagnosis& out, const EffectSet& wheel) {
       }
     if (v.size() < 2) continue;
     const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
-    const double pooled = wheel.get(effect_from_name(names[i].name.substr(0, names[i].name.find('.'))),
-                                    short_name(names[i].name));
+    const auto slot = std::find_if(layout.begin(), layout.end(),
+                                   [&](const ParamSlot& p) { return p.name == names[i].name; });
+    const double pooled = wheel.params(slot->effect)[static_cast<std::size_t>(slot->index)];
     const double noop_dist = std::abs(pooled - (short_name(names[i].name).rfind("scale", 0) == 0 ? 1.0 : 0.0));
     // Holds when the recordings agree within half the effect's size (or within 4 standard errors).
     const bool holds = (*hi - *lo) <= std::max(0.5 * noop_dist, 4.0 * se);

@@ -247,8 +247,8 @@ void search_moves(Search& z, const SelectOptions& o, const std::vector<Effect>& 
 void add_rivals(Selection& sel, const Search& z) {
   for (SelectedEffect& e : sel.effects)
     for (const SearchRecord& r : sel.records)
-      if (r.phase == "forward" && r.accepted && r.candidate == effect_name(e.effect))
-        for (const std::string& name : r.rivals) e.rivals.push_back(effect_from_name(name));
+      if (r.phase == "forward" && r.accepted && r.effects == std::vector<Effect>{e.effect})
+        e.rivals.insert(e.rivals.end(), r.rivals.begin(), r.rivals.end());
   // Look-alikes that predict as well: rivals of the chosen ones among them.
   for (SelectedEffect& e : sel.effects) {
     if (std::find(std::begin(kLagLookAlikes), std::end(kLagLookAlikes), e.effect) == std::end(kLagLookAlikes))

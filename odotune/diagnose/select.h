@@ -69,11 +69,12 @@ struct SelectOptions {
 
 // One evaluation of the search, in the order made.
 struct SearchRecord {
-  int step = 0;           // forward step (1, 2, ...), backward round, 0 for the baseline
-  std::string phase;      // "baseline", "forward", "backward", "pair", "swap", "look-alike"
-  std::string candidate;  // effect added (forward) or removed (backward); "" for the baseline
-  std::string set;        // the evaluated set (structure; discrete parameters shown)
-  double cv_score = 0.0;  // pooled held-out normalised MSE per sample (NaN: failed)
+  int step = 0;                 // forward step (1, 2, ...), backward round, 0 for the baseline
+  std::string phase;            // "baseline", "forward", "backward", "pair", "swap", "look-alike"
+  std::string candidate;        // effect added (forward) or removed (backward); "" for the baseline
+  std::vector<Effect> effects;  // forward: the effect added; pair: the two added; backward: the one removed
+  std::string set;              // the evaluated set (structure; discrete parameters shown)
+  double cv_score = 0.0;        // pooled held-out normalised MSE per sample (NaN: failed)
   double cv_pos_rmse_m = 0.0, cv_heading_rmse_rad = 0.0;  // pooled held-out (heading NaN without)
   double rel_improvement = 0.0;  // forward: (cur - cand)/cur; backward: (without - with)/without
   double gain = 0.0;             // the same difference, absolute
@@ -90,7 +91,7 @@ struct SearchRecord {
   std::string reason;     // why accepted or rejected
   // Accepted forward step: the other candidates of the step that the winner
   // does not beat by the size and paired-test rules, i.e. confounded alternatives.
-  std::vector<std::string> rivals;
+  std::vector<Effect> rivals;
   double time_s = 0.0;
 };
 

@@ -225,6 +225,7 @@ bool pair_step(Search& z, int step, const std::vector<Effect>& cands) {
     Cand cd{pr, with_effect(with_effect(z.s, pr.first), pr.second), {}, {}};
     cd.rec.step = step, cd.rec.phase = "pair";
     cd.rec.candidate = fmt::format("{}+{}", effect_name(pr.first), effect_name(pr.second));
+    cd.rec.effects = {pr.first, pr.second};
     cd.rec.set = cd.st.to_string();
     sets.push_back(cd.st);
     tried.push_back(std::move(cd));
@@ -329,6 +330,7 @@ bool backward_round(Search& z, int round) {
     Drop d{e, z.s, {}, {}, {}, false};
     d.st.disable(e);
     d.rec.step = round, d.rec.phase = "backward", d.rec.candidate = effect_name(e);
+    d.rec.effects = {e};
     d.rec.set = d.st.to_string();
     sets.push_back(d.st);
     drops.push_back(std::move(d));

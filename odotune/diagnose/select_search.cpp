@@ -256,6 +256,7 @@ std::vector<Cand> candidates(Search& z, int step, const std::vector<Effect>& can
     const auto t0 = Clock::now();
     Cand cd{e, with_effect(z.s, e), {}, {}};
     cd.rec.step = step, cd.rec.phase = "forward", cd.rec.candidate = effect_name(e);
+    cd.rec.effects = {e};
     cd.rec.set = cd.st.to_string();
     if (e == Effect::radius_step) {
       z.step_t = profile_step_time(z.cv, z.s, z.cur_full.fitted, z.step_t, z.o);
@@ -359,7 +360,7 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
       // Confounded alternatives: candidates the winner does not beat by the size and paired-test rules.
       for (Cand& cd : tried)
         if (cd.cv.ok && &cd != best && !verdict(z.cv.compare(cd.cv, best->cv, z.o.alpha), -1.0, z.o).empty())
-          best->rec.rivals.push_back(std::string(effect_name(cd.e)));
+          best->rec.rivals.push_back(cd.e);
       z.s = best->st;
       z.chosen.push_back(best->e);
       z.cur_cv = std::move(best->cv);
