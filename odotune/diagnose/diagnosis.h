@@ -128,8 +128,13 @@ struct ImmaterialEffect {
   std::string line;  // "spec: why", as the JSON and the summary list it
 };
 
+// Wall-clock seconds of diagnose()'s steps, each what its name says.
 struct DiagnosisTiming {
-  double total_s = 0.0, sensors_s = 0.0, select_s = 0.0, locate_s = 0.0;
+  double total_s = 0.0;    // the whole diagnose() call
+  double sensors_s = 0.0;  // check_sensors
+  double select_s = 0.0;   // selection_input and select_effects
+  double locate_s =
+      0.0;               // the location only: every locate() call (the residuals, each wheel finding's `where`)
   double terms_s = 0.0;  // the term search (term_search.h)
 };
 

@@ -135,7 +135,6 @@ struct Selection {
 // effects and a note. Its windows are make_windows(in, selection_window_s(in,
 // options)) (= Selection::window_s): callers that index them (train_windows,
 // heldout_windows) must use that length, not options.fit.window_s.
-Selection select_effects(const DiagInput& in, const SelectOptions& options = {});
 
 // The input the selection searches and scores on ("Data" above): `in` with
 // its reference thinned to about select_ref_rate_hz and denoised
@@ -147,6 +146,12 @@ struct SelectionInput {
   double correlated = 1.0;  // kept samples per smoothing span (CrossValidator)
 };
 SelectionInput selection_input(const DiagInput& in, const SelectOptions& options);
+
+// The selection on `in` searched and scored on `si` = selection_input(in,
+// options), built once by the caller (diagnose() scores its findings on it too).
+Selection select_effects(const DiagInput& in, const SelectionInput& si, const SelectOptions& options);
+// The same, building selection_input(in, options) itself.
+Selection select_effects(const DiagInput& in, const SelectOptions& options = {});
 
 // The window length select_effects uses on `in` (header comment, "Windows").
 double selection_window_s(const DiagInput& in, const SelectOptions& options);

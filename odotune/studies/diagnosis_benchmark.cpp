@@ -71,7 +71,10 @@ Confusion empty_confusion() {
 // Row: a true effect's index, or kNumEffects for none; column: kind_index or kNone.
 void count(Confusion& c, std::size_t row, std::size_t col) { ++c.counts[row][col]; }
 
-void add(Rate& rate, bool pass) { ++rate.cases, rate.passed += pass ? 1 : 0; }
+void add(Rate& rate, bool pass) {
+  ++rate.cases;
+  rate.passed += pass ? 1 : 0;
+}
 
 // Counts case r in its category of `rates`, and in its margin bucket.
 void count_rates(CategoryRates& rates, const CaseResult& r) {
@@ -211,7 +214,8 @@ CaseResult run_single_case(const DiagnosisBenchmarkOptions& o, DiagnosisCase c) 
 // build_diag_input throws.
 void recording_inputs(const DiagnosisCase& c, const std::vector<tracks::Track>& tracks, bool fixes_only,
                       std::vector<diagnose::DiagInput>& fit, std::vector<diagnose::DiagInput>& held) {
-  fit.clear(), held.clear();
+  fit.clear();
+  held.clear();
   for (std::size_t k = 0; k < tracks.size(); ++k)
     (c.recordings[k].heldout ? held : fit)
         .push_back(diagnose::build_diag_input(fixes_only ? without_ground_truth(tracks[k]) : tracks[k]));
@@ -308,7 +312,10 @@ DiagnosisBenchmark run_diagnosis_benchmark(const DiagnosisBenchmarkOptions& o,
       b.cases[static_cast<std::size_t>(k)] = run_benchmark_case(o, o.first + k);
     } catch (const std::invalid_argument& e) {
 #pragma omp critical(odotune_diag_bench)
-      if (failure.empty()) failure = e.what(), invalid = true;
+      if (failure.empty()) {
+        failure = e.what();
+        invalid = true;
+      }
     } catch (const std::exception& e) {
 #pragma omp critical(odotune_diag_bench)
       if (failure.empty()) failure = e.what();
@@ -339,7 +346,8 @@ BenchmarkSummary summarise(const std::vector<CaseResult>& cases) {
   for (const CaseResult& r : cases) {
     const CaseGrade& g = r.grade;
     count_rates(r.c.multi() ? s.multi_recording : s.single_recording, r);
-    ++s.all.cases, s.all.passed += g.pass ? 1 : 0;
+    ++s.all.cases;
+    s.all.passed += g.pass ? 1 : 0;
     s.refused += g.refused ? 1 : 0;
     if (!g.pass) {
       if (g.refused) ++s.failures["refused"];
@@ -388,7 +396,9 @@ BenchmarkSummary summarise(const std::vector<CaseResult>& cases) {
   }
   for (const auto& [name, errors] : param_errors) {
     ParamStats p;
-    p.name = name, p.n = static_cast<int>(errors.size()), p.within = param_within[name];
+    p.name = name;
+    p.n = static_cast<int>(errors.size());
+    p.within = param_within[name];
     if (!errors.empty()) {
       p.median_abs = abs_quantile(errors, 0.5);
       p.p90_abs = abs_quantile(errors, 0.9);

@@ -182,7 +182,8 @@ CaseRecording draw_recording(const DiagnosisCase& c, const DriveScale& scale, in
   sc.name = fmt::format("bench_case_{}_r{}", c.index, k);
   sc.seed = rec.seed;
   sim::MotionParams& m = sc.motion;
-  m.start_x_m = rng.uniform(-5.0, 5.0), m.start_y_m = rng.uniform(-5.0, 5.0);
+  m.start_x_m = rng.uniform(-5.0, 5.0);
+  m.start_y_m = rng.uniform(-5.0, 5.0);
   m.start_theta_rad = rng.uniform(-3.14159, 3.14159);
   const Drive drive = draw_drive(rng, scale);
   rec.drive = drive.family;
@@ -234,7 +235,8 @@ void set_sensors(DiagnosisCase& c) {
 // Draws the `count` recordings of multi-recording case c; its drive and
 // duration_s then describe them together.
 void add_recordings(DiagnosisCase& c, const DriveScale& scale, int count, const CaseDrawOptions& o) {
-  c.drive.clear(), c.duration_s = 0.0;
+  c.drive.clear();
+  c.duration_s = 0.0;
   for (int k = 1; k <= count; ++k) {
     c.recordings.push_back(draw_recording(c, scale, k, count, o));
     c.drive += (k > 1 ? " + " : "") + c.recordings.back().drive;
@@ -328,7 +330,8 @@ double draw_robot(CaseRng& rng, DiagnosisCase& c) {
   sim::MotionParams& m = c.scenario.motion;
   m.max_accel_m_s2 = rng.uniform(0.3, 1.0);
   m.max_angular_accel_rad_s2 = rng.uniform(1.0, 3.0);
-  m.start_x_m = rng.uniform(-5.0, 5.0), m.start_y_m = rng.uniform(-5.0, 5.0);
+  m.start_x_m = rng.uniform(-5.0, 5.0);
+  m.start_y_m = rng.uniform(-5.0, 5.0);
   m.start_theta_rad = rng.uniform(-3.14159, 3.14159);
   return z;
 }
@@ -341,7 +344,8 @@ DriveScale draw_drive_of(CaseRng& rng, DiagnosisCase& c, double z, const CaseDra
   scale.speed_m_s = 0.3 * std::pow(5.0, z) * rng.uniform(0.8, 1.2);
   scale.geometry_m = 1.0 * std::pow(3.0, z) * rng.uniform(0.8, 1.2);
   scale.spin_rate_deg_s = rng.uniform(60.0, 150.0);
-  c.speed_m_s = scale.speed_m_s, c.geometry_m = scale.geometry_m;
+  c.speed_m_s = scale.speed_m_s;
+  c.geometry_m = scale.geometry_m;
   const Drive drive = draw_drive(rng, scale);
   c.drive = drive.family;
   c.duration_s = 60.0 * rng.uniform(o.min_minutes, o.max_minutes);
@@ -410,7 +414,8 @@ DiagnosisCase draw_case(std::uint64_t seed, int index, const CaseDrawOptions& o)
   if (!o.IsValid(&why)) throw std::invalid_argument("diagnosis benchmark: " + why);
   CaseRng rng(seed, kDrawStream);
   DiagnosisCase c;
-  c.index = index, c.seed = seed;
+  c.index = index;
+  c.seed = seed;
   c.scenario.name = fmt::format("bench_case_{}", index);
   c.scenario.seed = seed;
   const double z = draw_robot(rng, c);
@@ -437,7 +442,10 @@ tracks::TrackData keep_rows(const tracks::TrackData& d, const std::vector<bool>&
     out.t.push_back(d.t[i]);
     for (int k = 0; k < tracks::kNumCols; ++k)
       if (!d.cols[k].empty()) out.cols[k].push_back(d.cols[k][i]);
-    if (!d.ticks_l.empty()) out.ticks_l.push_back(d.ticks_l[i]), out.ticks_r.push_back(d.ticks_r[i]);
+    if (!d.ticks_l.empty()) {
+      out.ticks_l.push_back(d.ticks_l[i]);
+      out.ticks_r.push_back(d.ticks_r[i]);
+    }
   }
   for (auto& col : out.cols)
     if (std::all_of(col.begin(), col.end(), [](double v) { return std::isnan(v); })) col.clear();
@@ -518,7 +526,10 @@ CaseTrack shape_track(const DiagnosisCase& c, const sim::Scenario& sc,
       }
     }
   }
-  if (c.odometry == BenchOdometry::wheel_rates) d.ticks_l.clear(), d.ticks_r.clear();
+  if (c.odometry == BenchOdometry::wheel_rates) {
+    d.ticks_l.clear();
+    d.ticks_r.clear();
+  }
   tracks::TrackData shaped = keep_rows(d, non_empty_rows(d));
   tracks::TrackMeta& meta = shaped.meta;
   if (shaped.col(tracks::Col::gt_x).empty()) erase_meta(meta, "sim.gt_");

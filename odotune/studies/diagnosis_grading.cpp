@@ -145,7 +145,8 @@ void grade_naming(CaseGrade& g, const std::vector<EffectTruth>& truth, const dia
     if (e == nullptr || (!contains(g.expected, *e) && !contains(g.tolerated, *e))) g.extra.push_back(f);
   }
   g.named_ok = g.missed.empty() && g.extra.empty();
-  g.heldout_before_m = d.heldout.before_pos_rmse_m, g.heldout_after_m = d.heldout.after_pos_rmse_m;
+  g.heldout_before_m = d.heldout.before_pos_rmse_m;
+  g.heldout_after_m = d.heldout.after_pos_rmse_m;
   for (Effect e : g.missed) join(g.why, fmt::format("missed {}", diagnose::effect_name(e)));
   for (const FindingKind& e : g.extra) join(g.why, fmt::format("named {}", diagnose::to_string(e)));
 }

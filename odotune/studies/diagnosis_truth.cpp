@@ -147,7 +147,10 @@ void judge_on_all_windows(const TrackJudge& j, EffectTruth& t) {
     const double g = wo.windows[k].pos_rmse_m * wo.windows[k].pos_rmse_m -
                      wi.windows[k].pos_rmse_m * wi.windows[k].pos_rmse_m;
     const double gain = g * static_cast<double>(wo.windows[k].n_ref);
-    if (gain > top_gain) top_gain = gain, top = k;
+    if (gain > top_gain) {
+      top_gain = gain;
+      top = k;
+    }
   }
   for (std::size_t k = 0; k < wo.windows.size(); ++k)
     if (k != top) rest.push_back(wo.windows[k].window);
@@ -155,7 +158,8 @@ void judge_on_all_windows(const TrackJudge& j, EffectTruth& t) {
   double before = kNaN, after = kNaN, floor = kNaN;
   if (!rest.empty()) {
     const Pooled b = pooled(wo, rest), a = pooled(wi, rest), n0 = pooled(j.all, rest);
-    before = b.pos_m, after = a.pos_m;
+    before = b.pos_m;
+    after = a.pos_m;
     floor = diagnose::materiality_floor_m(j.in.ref_sigma_m, n0.pos_m, j.materiality);
     rest_material = diagnose::is_material(before, after, floor) ||
                     (j.heading && heading_material(diagnose::removed_error_m(b.heading_rad, a.heading_rad),
@@ -165,8 +169,11 @@ void judge_on_all_windows(const TrackJudge& j, EffectTruth& t) {
   if (!rest_material) {
     t.detectable = false;  // seen in one window at most
   } else if (!t.detectable) {
-    t.detectable = true, t.on_all_windows = true;
-    t.before_m = before, t.after_m = after, t.gain_m = diagnose::removed_error_m(before, after),
+    t.detectable = true;
+    t.on_all_windows = true;
+    t.before_m = before;
+    t.after_m = after;
+    t.gain_m = diagnose::removed_error_m(before, after);
     t.floor_m = floor;
   }
 }
@@ -215,7 +222,8 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
   const DiagInput& scoring = si.stride > 1 ? si.input : in;
   const diagnose::ReplayResult all = diagnose::replay(scoring, EffectSet{}, out.window_s);
   const std::vector<int> held = heldout_tail(all, so.heldout_fraction);
-  out.windows = static_cast<int>(all.windows.size()), out.heldout_windows = static_cast<int>(held.size());
+  out.windows = static_cast<int>(all.windows.size());
+  out.heldout_windows = static_cast<int>(held.size());
   for (const TrueEffect& e : truth) {
     EffectTruth t;
     t.effect = e;
@@ -270,7 +278,8 @@ Detectability assess_recordings_detectability(const std::vector<DiagInput>& fit,
   out.heldout_windows = out.windows;
   out.ref_sigma_m = sigmas.empty() ? heldout.front().ref_sigma_m : sigmas.pos_rmse_m();
   const Pooled nominal = pooled(nominal_sums), all_true = replay_all(wheel_set(truth));
-  out.nominal_heldout_m = nominal.pos_m, out.true_heldout_m = all_true.pos_m;
+  out.nominal_heldout_m = nominal.pos_m;
+  out.true_heldout_m = all_true.pos_m;
   out.floor_m = diagnose::materiality_floor_m(out.ref_sigma_m, nominal.pos_m, materiality);
   const bool heading = heldout.front().has_ref_heading();
   const double sigma_rad = sigmas.heading_rmse_rad();
@@ -280,7 +289,9 @@ Detectability assess_recordings_detectability(const std::vector<DiagInput>& fit,
     if (t.gyro) continue;
     const Pooled without = replay_all(wheel_set(truth, t.effect.effect));
     t.on_all_windows = false;
-    t.before_m = without.pos_m, t.after_m = all_true.pos_m, t.floor_m = out.floor_m;
+    t.before_m = without.pos_m;
+    t.after_m = all_true.pos_m;
+    t.floor_m = out.floor_m;
     t.gain_m = diagnose::removed_error_m(t.before_m, t.after_m);
     t.heading_gain_rad = heading ? diagnose::removed_error_m(without.heading_rad, all_true.heading_rad) : kNaN;
     t.heading_floor_rad = heading_floor_rad;
