@@ -78,7 +78,10 @@ int denoised_reference(const DiagInput& in, double rate_hz, double half_s, doubl
     }
   }
   out = in;
-  out.ref_t_s.clear(), out.ref_x_m.clear(), out.ref_y_m.clear(), out.ref_theta_rad.clear();
+  out.ref_t_s.clear();
+  out.ref_x_m.clear();
+  out.ref_y_m.clear();
+  out.ref_theta_rad.clear();
   std::vector<double> fp, fh;
   std::size_t lo = 0, hi = 0, hlo = 0, hhi = 0;
   for (std::size_t k = 0; k < t.size(); k += static_cast<std::size_t>(stride)) {
@@ -235,8 +238,11 @@ void CrossValidator::predict(const EffectSet& set, const std::vector<int>& which
                                 fit_anchoring(*in_, fit_));
   for (int wi : which) {
     const Window& w = windows_[static_cast<std::size_t>(wi)];
-    for (std::size_t g = w.ref_begin; g < w.ref_end; ++g)
-      p.x_m[g] = r.pred_x_m[g], p.y_m[g] = r.pred_y_m[g], p.theta_rad[g] = r.pred_theta_rad[g];
+    for (std::size_t g = w.ref_begin; g < w.ref_end; ++g) {
+      p.x_m[g] = r.pred_x_m[g];
+      p.y_m[g] = r.pred_y_m[g];
+      p.theta_rad[g] = r.pred_theta_rad[g];
+    }
   }
 }
 
@@ -249,7 +255,8 @@ void CrossValidator::finish(SetEval& e) const {
       const double dx = e.pred.x_m[g] - in.ref_x_m[g], dy = e.pred.y_m[g] - in.ref_y_m[g];
       const double dh = heading_ ? e.pred.theta_rad[g] - in.ref_theta_rad[g] : 0.0;
       e.window_sse[w] += (dx * dx + dy * dy) * ism_ * ism_ * in.ref_weight(g) + dh * dh * ish_ * ish_;
-      sp += dx * dx + dy * dy, sh += dh * dh;
+      sp += dx * dx + dy * dy;
+      sh += dh * dh;
     }
   for (double s : e.window_sse) all += s;
   const auto n = static_cast<double>(n_samples_);
@@ -357,7 +364,10 @@ CrossValidator::Replayed CrossValidator::replayed(const SetEval& cv) {
     p.add(replay(model_for(set), pack(set), *in_, windows_, test_[f]));
   }
   Replayed out;
-  if (!p.empty()) out.pos_rmse_m = p.pos_rmse_m(), out.heading_rmse_rad = p.heading_rmse_rad();
+  if (!p.empty()) {
+    out.pos_rmse_m = p.pos_rmse_m();
+    out.heading_rmse_rad = p.heading_rmse_rad();
+  }
   return out;
 }
 

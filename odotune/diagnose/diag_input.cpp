@@ -84,7 +84,10 @@ void fill_wheel_angles(const tracks::Track& track, DiagInput& in) {
     std::int64_t l0 = 0, r0 = 0;
     for (std::size_t i = 0; i < t.size(); ++i) {
       if (tl[i] == tracks::kNoTick || tr[i] == tracks::kNoTick) continue;
-      if (in.odo_t_s.empty()) l0 = tl[i], r0 = tr[i];
+      if (in.odo_t_s.empty()) {
+        l0 = tl[i];
+        r0 = tr[i];
+      }
       in.odo_t_s.push_back(t[i]);
       in.phi_l_rad.push_back(static_cast<double>(tl[i] - l0) * per_tick);
       in.phi_r_rad.push_back(static_cast<double>(tr[i] - r0) * per_tick);
@@ -99,7 +102,8 @@ void fill_wheel_angles(const tracks::Track& track, DiagInput& in) {
         pl += 0.5 * (ol + wl) * h;
         pr += 0.5 * (orr + wr) * h;
       }
-      ol = wl, orr = wr;
+      ol = wl;
+      orr = wr;
       in.odo_t_s.push_back(t[i]);
       in.phi_l_rad.push_back(pl);
       in.phi_r_rad.push_back(pr);
@@ -302,7 +306,9 @@ void assemble_reference(RefSource gt, RefSource fixes, DiagInput& in) {
   in.ref_sigma_m = in.reference == ReferenceKind::gt ? sigma_gt : sigma_fix;
   in.ref_sigma_rad = std::nan("");
   if (fixes.t.empty()) {
-    in.ref_t_s = std::move(gt.t), in.ref_x_m = std::move(gt.x), in.ref_y_m = std::move(gt.y);
+    in.ref_t_s = std::move(gt.t);
+    in.ref_x_m = std::move(gt.x);
+    in.ref_y_m = std::move(gt.y);
     if (gt.heading) {
       in.ref_theta_rad = std::move(gt.theta);
       in.ref_sigma_rad = std::max(std::isnan(gt.sigma_rad) ? 0.0 : gt.sigma_rad, kMinSigmaRad);
@@ -310,7 +316,9 @@ void assemble_reference(RefSource gt, RefSource fixes, DiagInput& in) {
     return;
   }
   if (gt.t.empty()) {
-    in.ref_t_s = std::move(fixes.t), in.ref_x_m = std::move(fixes.x), in.ref_y_m = std::move(fixes.y);
+    in.ref_t_s = std::move(fixes.t);
+    in.ref_x_m = std::move(fixes.x);
+    in.ref_y_m = std::move(fixes.y);
     return;
   }
   // Mixed: positions of both sources in time order, each weighted by its own

@@ -48,6 +48,7 @@
 
 #include <odotune/diagnose/diag_input.h>
 #include <odotune/diagnose/effect_model.h>
+#include <odotune/diagnose/finding_kind.h>
 #include <odotune/diagnose/gyro_fixes_check.h>
 #include <odotune/diagnose/locate.h>
 #include <odotune/diagnose/paired_test.h>
@@ -95,7 +96,7 @@ struct HeldoutTest {
 };
 
 struct Finding {
-  std::string effect;                 // physics-effects.md name, or "unexplained"
+  FindingKind kind;                   // an effect of physics-effects.md, or Unexplained
   std::vector<NamedValue> params;     // the spec's parameter names, table order
   std::vector<NamedValue> stderrs;    // same names
   std::vector<std::string> discrete;  // parameters found by a profile search
@@ -104,20 +105,36 @@ struct Finding {
   std::string conditions;             // where.conditions
   double explains = 0.0;
   BeforeAfter train, heldout;
-  std::vector<std::string> rivals;          // confounded alternatives the data could not rule out
+  std::vector<Effect> rivals;               // confounded alternatives the data could not rule out
   std::string evidence;                     // how it was found, one phrase
   std::optional<TermModel> model;           // unexplained only: terms that reproduce it (term_search.h)
   std::optional<HeldoutTest> heldout_test;  // wheel effects, with held-out recordings (recordings.h)
 
   double param(std::string_view name) const;  // NaN when absent
+  bool is(Effect e) const { return kind == FindingKind{e}; }
+  bool is_unexplained() const { return std::holds_alternative<Unexplained>(kind); }
   // A wheel-odometry effect: neither a gyro effect nor `unexplained`.
   bool is_wheel_effect() const;
+  // The effect of a finding that is not `unexplained` (throws std::bad_variant_access for it).
+  Effect effect() const { return std::get<Effect>(kind); }
+  std::string_view name() const { return to_string(kind); }  // the spec's "effect"
   // The simulator's command-line form, "lateral_skid:k=0.021" ("" for unexplained).
   std::string spec() const;
 };
 
+// A gyro effect that was significant but fell below its materiality floor.
+struct ImmaterialEffect {
+  Effect effect = Effect::gyro_bias;
+  std::string line;  // "spec: why", as the JSON and the summary list it
+};
+
+// Wall-clock seconds of diagnose()'s steps, each what its name says.
 struct DiagnosisTiming {
-  double total_s = 0.0, sensors_s = 0.0, select_s = 0.0, locate_s = 0.0;
+  double total_s = 0.0;    // the whole diagnose() call
+  double sensors_s = 0.0;  // check_sensors
+  double select_s = 0.0;   // selection_input and select_effects
+  double locate_s =
+      0.0;               // the location only: every locate() call (the residuals, each wheel finding's `where`)
   double terms_s = 0.0;  // the term search (term_search.h)
 };
 
@@ -151,7 +168,7 @@ struct Diagnosis {
   // error of the final split, and the gyro effects that were significant but
   // fell below their floor, one line each ("spec: why").
   double floor_m = 0.0;
-  std::vector<std::string> immaterial;
+  std::vector<ImmaterialEffect> immaterial;
   // Located growth that would have been `unexplained` but that no term of the
   // term search reproduces on held-out windows (file comment), one line each.
   std::vector<std::string> not_reproduced;

@@ -14,13 +14,13 @@ namespace {
 using namespace odotune::diagnose;
 
 // The effect's name in words: "lateral_skid" -> "lateral skid".
-std::string words(const std::string& effect) {
-  std::string s = effect;
+std::string words(std::string_view effect) {
+  std::string s(effect);
   std::replace(s.begin(), s.end(), '_', ' ');
   return s;
 }
 
-std::string unit_of(const std::string& effect, const std::string& param) {
+std::string unit_of(std::string_view effect, const std::string& param) {
   const sim::EffectInfo* e = sim::find_effect(effect);
   if (!e) return "";
   const sim::EffectParamInfo* p = sim::find_param(*e, param);
@@ -56,28 +56,27 @@ std::string spans(const std::vector<TimeSegment>& segs, std::size_t max_shown = 
 // wheel_base_error divides w by its scale, time_offset dt < 0 means the
 // motion shows up |dt| after the odometry's stamp.
 std::string velocity_terms(const Finding& f, const std::string& src) {
-  const std::string& e = f.effect;
-  if (e == "radius_error") {
+  if (f.is(Effect::radius_error)) {
     const double g = 0.5 * (f.param("scale_l") + f.param("scale_r"));
     return fmt::format("speed and turn-rate gain {:.4f}: the robot moves {:.2f} % {} than the {} says", g,
                        100.0 * std::abs(g - 1.0), g >= 1.0 ? "more" : "less", src);
   }
-  if (e == "wheel_base_error")
+  if (f.is(Effect::wheel_base_error))
     return fmt::format("turn-rate gain {:.4f}: the robot turns {:.2f} % {} than the {} says",
                        1.0 / f.param("scale"), 100.0 * std::abs(1.0 / f.param("scale") - 1.0),
                        f.param("scale") <= 1.0 ? "more" : "less", src);
-  if (e == "time_offset") {
+  if (f.is(Effect::time_offset)) {
     const double dt = f.param("dt");
     return dt <= 0.0 ? fmt::format("motion lags the {} by {:.3f} s", src, -dt)
                      : fmt::format("the {} lags the motion by {:.3f} s", src, dt);
   }
-  if (e == "actuator_lag")
+  if (f.is(Effect::actuator_lag))
     return fmt::format("motion follows the {} through a first-order lag of {:.3f} s", src, f.param("tau"));
-  if (e == "odometry_bias")
+  if (f.is(Effect::odometry_bias))
     return fmt::format(
         "the {} reads {:+.4f} m/s and {:+.4f} rad/s at rest: a robot standing still seems to move", src,
         f.param("b_v"), f.param("b_w"));
-  if (e == "speed_radius")
+  if (f.is(Effect::speed_radius))
     return fmt::format("speed gain grows with speed: 1 + {:.3g}·u² (u the wheel rim speed, m/s)", f.param("c"));
   return "";
 }
@@ -89,7 +88,7 @@ std::string finding_size(const Finding& f) {
   for (std::size_t i = 0; i < f.params.size(); ++i) {
     const double err = i < f.stderrs.size() ? f.stderrs[i].value : std::nan("");
     s += fmt::format("{}{} = {}{}", i == 0 ? "" : ", ", f.params[i].name, plus_minus(f.params[i].value, err),
-                     unit_of(f.effect, f.params[i].name));
+                     unit_of(f.name(), f.params[i].name));
   }
   return s;
 }
@@ -102,7 +101,7 @@ std::string headline(const Diagnosis& d) {
   std::vector<const Finding*> effects;
   const Finding* unexplained = nullptr;
   for (const Finding& f : d.findings) {
-    if (f.effect == "unexplained") {
+    if (f.is_unexplained()) {
       unexplained = &f;
     } else {
       effects.push_back(&f);
@@ -113,7 +112,7 @@ std::string headline(const Diagnosis& d) {
     std::string what;
     for (std::size_t i = 0; i < effects.size(); ++i) {
       const char* sep = i == 0 ? "" : (i + 1 == effects.size() ? " and " : ", ");
-      what += fmt::format("{}{} ({})", sep, words(effects[i]->effect), finding_size(*effects[i]));
+      what += fmt::format("{}{} ({})", sep, words(effects[i]->name()), finding_size(*effects[i]));
     }
     // Held-out proof: the chosen wheel model against the nominal one when a
     // wheel effect was found, else the (gyro) finding's own replay.
@@ -169,7 +168,7 @@ void add_model_lines(const TermModel& m, std::vector<std::string>& lines) {
 // when and why.
 void add_finding_lines(const Diagnosis& d, std::size_t i, std::vector<std::string>& lines) {
   const Finding& f = d.findings[i];
-  std::string line = fmt::format("  {}. {}", i + 1, f.effect);
+  std::string line = fmt::format("  {}. {}", i + 1, f.name());
   if (!f.params.empty()) line += " " + finding_size(f);
   line += fmt::format(" — explains {:.{}f} %; held-out {} → {}", 100.0 * f.explains, f.explains < 0.01 ? 2 : 0,
                       metres(f.heldout.before_pos_rmse_m), metres(f.heldout.after_pos_rmse_m));
@@ -187,7 +186,7 @@ void add_finding_lines(const Diagnosis& d, std::size_t i, std::vector<std::strin
   if (f.model) add_model_lines(*f.model, lines);
   if (!f.rivals.empty()) {
     std::string r;
-    for (const std::string& name : f.rivals) r += (r.empty() ? "" : ", ") + name;
+    for (Effect e : f.rivals) r += (r.empty() ? "" : ", ") + std::string(effect_name(e));
     lines.push_back("     the data cannot rule out: " + r);
   }
   lines.push_back("     evidence: " + f.evidence);
@@ -211,7 +210,7 @@ std::vector<std::string> diagnosis_summary(const Diagnosis& d) {
   std::vector<std::string> lines;
   lines.push_back(headline(d));
   for (std::size_t i = 0; i < d.findings.size(); ++i) add_finding_lines(d, i, lines);
-  for (const std::string& s : d.immaterial) lines.push_back("not a finding (immaterial): " + s);
+  for (const ImmaterialEffect& s : d.immaterial) lines.push_back("not a finding (immaterial): " + s.line);
   for (const std::string& s : d.not_reproduced) lines.push_back("not a finding (not reproduced): " + s);
   for (const std::string& s : d.not_confirmed) lines.push_back("not a finding (not confirmed): " + s);
   for (const std::string& s : d.sensor_notes) lines.push_back("sensor check: " + s);

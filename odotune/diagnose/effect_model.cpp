@@ -116,6 +116,25 @@ Effect effect_from_name(std::string_view name) {
   throw std::invalid_argument(fmt::format("unknown effect '{}'; valid effects: {}", name, sim::effect_names()));
 }
 
+std::string_view effect_description(Effect e) {
+  switch (e) {
+    case Effect::radius_error: return "everywhere the wheels roll: travel off by a constant ratio per wheel";
+    case Effect::wheel_base_error: return "whenever the robot turns: heading change off by a constant ratio";
+    case Effect::radius_step: return "after the step time: a wheel's effective radius changed";
+    case Effect::speed_radius: return "growing with wheel speed: faster wheels travel further per turn";
+    case Effect::lateral_skid: return "in turns taken at speed: the body slides outward, growing with |v*w|";
+    case Effect::longitudinal_slip: return "while accelerating or braking: the wheels slip";
+    case Effect::slip_zone: return "inside one region of the floor: the wheels slip there";
+    case Effect::gyro_bias: return "at all times, also at rest: the gyro's heading drifts at a constant rate";
+    case Effect::gyro_scale: return "while turning: the gyro's heading error grows with the turn rate";
+    case Effect::actuator_lag: return "when the commands change: the body follows them late";
+    case Effect::time_offset: return "when the velocities change: the odometry's time stamps are shifted";
+    case Effect::odometry_bias:
+      return "at all times, also at rest: the odometry reads its body velocities with a constant offset";
+  }
+  return "";
+}
+
 EffectSet EffectSet::parse(const std::vector<std::string>& specs) {
   EffectSet set;
   for (const auto& text : specs) {

@@ -95,6 +95,10 @@ inline constexpr int kNumEffects = 12;
 std::string_view effect_name(Effect e);
 // Throws std::invalid_argument naming valid effects for an unknown name.
 Effect effect_from_name(std::string_view name);
+// What e does, in words ("whenever the robot turns: heading change off by a
+// constant ratio"): a finding's `conditions` when the residuals single out none
+// (diagnosis.h).
+std::string_view effect_description(Effect e);
 
 // True when e at its no-op values is another model than e switched off:
 // actuator_lag, whose presence replays the commands instead of the wheels
@@ -102,6 +106,9 @@ Effect effect_from_name(std::string_view name);
 // selection's the own-parameters rule compares such an effect with its own no-op, not only
 // with its absence (select.h).
 inline bool noop_differs_from_absence(Effect e) { return e == Effect::actuator_lag; }
+
+// gyro_bias or gyro_scale: an effect of the gyro, not of the wheel odometry.
+inline bool is_gyro_effect(Effect e) { return e == Effect::gyro_bias || e == Effect::gyro_scale; }
 
 // Which effects are active and their parameter values.
 class EffectSet {
@@ -233,7 +240,8 @@ class Stepper {
       const double t0 = d_.t_s[k0] - m_.options().lag_lead_in_s;
       while (k > 0 && d_.t_s[k - 1] >= t0) --k;
       cmd(k, cl_, cr_);
-      yl_ = cl_, yr_ = cr_;
+      yl_ = cl_;
+      yr_ = cr_;
       for (; k < k0; ++k) lag_step(k);
     } else {
       read_travel(k0, sl_, sr_);
@@ -253,8 +261,10 @@ class Stepper {
     } else {
       T sl1, sr1;
       read_travel(k + 1, sl1, sr1);
-      dl = sl1 - sl_, dr = sr1 - sr_;
-      sl_ = sl1, sr_ = sr1;
+      dl = sl1 - sl_;
+      dr = sr1 - sr_;
+      sl_ = sl1;
+      sr_ = sr1;
     }
     if (i_.ob_v >= 0) {  // odometry_bias: the recorded rim speeds read b_v -+ b_w*D/2 too
       const T half_turn = p_[i_.ob_w] * (0.5 * d_.wheel_base_m);
@@ -306,14 +316,16 @@ class Stepper {
   // Commanded nominal rim speeds at node k (+ dt).
   void cmd(std::size_t k, T& cl, T& cr) {
     if (i_.dt < 0) {
-      cl = T(d_.u_l_mps[k]), cr = T(d_.u_r_mps[k]);
+      cl = T(d_.u_l_mps[k]);
+      cr = T(d_.u_r_mps[k]);
       return;
     }
     const T tq = d_.t_s[k] + p_[i_.dt];
     const std::size_t n = d_.t_s.size();
     if (scalar(tq) <= d_.t_s.front() || scalar(tq) >= d_.t_s.back()) {
       const std::size_t e = scalar(tq) <= d_.t_s.front() ? 0 : n - 1;
-      cl = T(d_.u_l_mps[e]), cr = T(d_.u_r_mps[e]);
+      cl = T(d_.u_l_mps[e]);
+      cr = T(d_.u_r_mps[e]);
       return;
     }
     const std::size_t j = cell(scalar(tq));
@@ -333,20 +345,23 @@ class Stepper {
     const T ramp = 1.0 - tau * (1.0 - e) / h;
     yl_ = e * yl_ + (1.0 - e) * cl_ + (cl1 - cl_) * ramp;
     yr_ = e * yr_ + (1.0 - e) * cr_ + (cr1 - cr_) * ramp;
-    cl_ = cl1, cr_ = cr1;
+    cl_ = cl1;
+    cr_ = cr1;
   }
 
   // Cumulative nominal rim travel as true at node k: S(t_k + dt).
   void read_travel(std::size_t k, T& sl, T& sr) {
     if (i_.dt < 0) {
-      sl = T(d_.s_l_m[k]), sr = T(d_.s_r_m[k]);
+      sl = T(d_.s_l_m[k]);
+      sr = T(d_.s_r_m[k]);
       return;
     }
     const T tq = d_.t_s[k] + p_[i_.dt];
     const std::size_t n = d_.t_s.size();
     if (scalar(tq) <= d_.t_s.front() || scalar(tq) >= d_.t_s.back()) {
       const std::size_t e = scalar(tq) <= d_.t_s.front() ? 0 : n - 1;
-      sl = T(d_.s_l_m[e]), sr = T(d_.s_r_m[e]);
+      sl = T(d_.s_l_m[e]);
+      sr = T(d_.s_r_m[e]);
       return;
     }
     const std::size_t j = cell(scalar(tq));

@@ -262,8 +262,12 @@ SetScore score(const ReplayResult& before, const ReplayResult& after) {
 double spread(const ReplayResult& r, const Window& w) {
   double mx = 0, my = 0;
   const auto n = static_cast<double>(w.ref_end - w.ref_begin);
-  for (std::size_t g = w.ref_begin; g < w.ref_end; ++g) mx += r.pred_x_m[g], my += r.pred_y_m[g];
-  mx /= n, my /= n;
+  for (std::size_t g = w.ref_begin; g < w.ref_end; ++g) {
+    mx += r.pred_x_m[g];
+    my += r.pred_y_m[g];
+  }
+  mx /= n;
+  my /= n;
   double s = 0;
   for (std::size_t g = w.ref_begin; g < w.ref_end; ++g)
     s += (r.pred_x_m[g] - mx) * (r.pred_x_m[g] - mx) + (r.pred_y_m[g] - my) * (r.pred_y_m[g] - my);

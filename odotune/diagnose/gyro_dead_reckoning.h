@@ -47,7 +47,11 @@ void gyro_replay(const GyroDrSeries& d, const Window& w, const std::vector<doubl
   const T inv_s = 1.0 / gp.s;
   T x = anchor.x, y = anchor.y, th = anchor.th;
   std::size_t r = w.ref_begin;
-  while (r < w.ref_end && ref_t[r] <= d.t[k0]) px[r - w.ref_begin] = x, py[r - w.ref_begin] = y, ++r;
+  while (r < w.ref_end && ref_t[r] <= d.t[k0]) {
+    px[r - w.ref_begin] = x;
+    py[r - w.ref_begin] = y;
+    ++r;
+  }
   for (std::size_t k = k0; k < w.node_end && r < w.ref_end; ++k) {
     // Heading at node k+1 in closed form (no accumulated rounding).
     const T th1 = anchor.th + (d.g[k + 1] - g0 - gp.b * (d.t[k + 1] - t0)) * inv_s;
@@ -62,9 +66,14 @@ void gyro_replay(const GyroDrSeries& d, const Window& w, const std::vector<doubl
       py[r - w.ref_begin] = y + f * (y1 - y);
       ++r;
     }
-    x = x1, y = y1, th = th1;
+    x = x1;
+    y = y1;
+    th = th1;
   }
-  for (; r < w.ref_end; ++r) px[r - w.ref_begin] = x, py[r - w.ref_begin] = y;
+  for (; r < w.ref_end; ++r) {
+    px[r - w.ref_begin] = x;
+    py[r - w.ref_begin] = y;
+  }
 }
 
 // `a` composed with the rigid motion (rotation phi about the origin, then a

@@ -126,7 +126,8 @@ struct Aligned {
 Aligned replay_aligned(const Context& c, const Window& w, const GyroParams<double>& gp) {
   Aligned a;
   const std::size_t n = w.ref_end - w.ref_begin;
-  a.px.resize(n), a.py.resize(n);
+  a.px.resize(n);
+  a.py.resize(n);
   a.anchor = {c.in->ref_x_m[w.ref_begin], c.in->ref_y_m[w.ref_begin], 0.0};
   gyro_replay(c.series, w, c.in->ref_t_s, gp, a.anchor, a.px.data(), a.py.data());
   a.anchor = align_rigid(a.anchor, a.px, a.py, *c.in, w);
@@ -263,7 +264,9 @@ HeldoutComparison compare(const Context& c, const std::vector<int>& held, const 
     const Window& w = c.windows[static_cast<std::size_t>(wi)];
     const Aligned a = replay_aligned(c, w, ref), b = replay_aligned(c, w, alt);
     const std::size_t n = a.px.size();
-    sum_ref += a.sse, sum_alt += b.sse, n_all += n;
+    sum_ref += a.sse;
+    sum_alt += b.sse;
+    n_all += n;
     double dd = 0, sse_ref = a.sse, sse_alt = b.sse, terms = 2.0 * static_cast<double>(n);
     for (std::size_t i = 0; i < n; ++i) {
       const double dx = (b.px[i] - a.px[i]) * c.inv_sigma, dy = (b.py[i] - a.py[i]) * c.inv_sigma;
@@ -273,7 +276,10 @@ HeldoutComparison compare(const Context& c, const std::vector<int>& held, const 
       if (r.window != wi) continue;
       const double er = (r.mean_radps - ref.b) / r.sigma_radps, ea = (r.mean_radps - alt.b) / r.sigma_radps;
       const double dr = (alt.b - ref.b) / r.sigma_radps;
-      sse_ref += er * er, sse_alt += ea * ea, dd += dr * dr, terms += 1.0;
+      sse_ref += er * er;
+      sse_alt += ea * ea;
+      dd += dr * dr;
+      terms += 1.0;
     }
     ++h.windows;
     if (!(dd >= o.min_informative)) continue;
@@ -301,7 +307,8 @@ double pooled_rmse(const Context& c, const std::vector<int>& which, const GyroPa
   std::size_t n = 0;
   for (int wi : which) {
     const Aligned a = replay_aligned(c, c.windows[static_cast<std::size_t>(wi)], gp);
-    sse += a.sse, n += a.px.size();
+    sse += a.sse;
+    n += a.px.size();
   }
   return n ? std::sqrt(sse / static_cast<double>(n)) / c.inv_sigma : kNaN;
 }
@@ -335,8 +342,14 @@ std::string prepare(const DiagInput& in, const GyroFixesOptions& o, Context& c,
   c.loss = o.loss;
   c.loss_scale = o.loss_scale;
   for (const ParamSlot& p : param_layout(EffectSet().enable(Effect::gyro_scale).enable(Effect::gyro_bias))) {
-    if (p.effect == Effect::gyro_scale) c.s_lo = p.lower, c.s_hi = p.upper;
-    if (p.effect == Effect::gyro_bias) c.b_lo = p.lower, c.b_hi = p.upper;
+    if (p.effect == Effect::gyro_scale) {
+      c.s_lo = p.lower;
+      c.s_hi = p.upper;
+    }
+    if (p.effect == Effect::gyro_bias) {
+      c.b_lo = p.lower;
+      c.b_hi = p.upper;
+    }
   }
   try {  // the nominal distance: the model without effects (both odometry kinds)
     const EffectModel nominal(in, EffectSet(), o.model);
@@ -361,7 +374,9 @@ std::string prepare(const DiagInput& in, const GyroFixesOptions& o, Context& c,
     if (last.t_end_s - last.t_begin_s < 0.5 * o.window_s) {
       c.windows.pop_back();
       Window& prev = c.windows.back();
-      prev.t_end_s = last.t_end_s, prev.node_end = last.node_end, prev.ref_end = last.ref_end;
+      prev.t_end_s = last.t_end_s;
+      prev.node_end = last.node_end;
+      prev.ref_end = last.ref_end;
     }
   }
   return "";
@@ -381,7 +396,10 @@ std::vector<int> select_windows(const Context& c, const GyroFixesOptions& o, std
     const Aligned a = replay_aligned(c, w, {1.0, 0.0, 1.0});
     const double n = static_cast<double>(a.px.size());
     double mx = 0, my = 0, sp = 0;
-    for (std::size_t i = 0; i < a.px.size(); ++i) mx += a.px[i] / n, my += a.py[i] / n;
+    for (std::size_t i = 0; i < a.px.size(); ++i) {
+      mx += a.px[i] / n;
+      my += a.py[i] / n;
+    }
     for (std::size_t i = 0; i < a.px.size(); ++i) sp += std::pow(a.px[i] - mx, 2) + std::pow(a.py[i] - my, 2);
     if (std::sqrt(sp / n) < o.min_spread_sigmas / c.inv_sigma) {
       skipped.push_back(w.index);
@@ -409,7 +427,8 @@ std::vector<Standstill> standstill_runs(const Context& c, const GyroFixesOptions
     std::size_t e = k;
     while (e < still_interval.size() && still_interval[e]) ++e;
     Standstill r;
-    r.t0_s = t[k] + o.standstill_trim_s, r.t1_s = t[e] - o.standstill_trim_s;
+    r.t0_s = t[k] + o.standstill_trim_s;
+    r.t1_s = t[e] - o.standstill_trim_s;
     k = e;
     const double dur = r.t1_s - r.t0_s, g0 = gi.within(r.t0_s), g1 = gi.within(r.t1_s);
     if (!(dur >= o.min_standstill_s) || !std::isfinite(g0) || !std::isfinite(g1)) continue;
@@ -420,7 +439,10 @@ std::vector<Standstill> standstill_runs(const Context& c, const GyroFixesOptions
     for (int wi : used) {
       const Window& w = c.windows[static_cast<std::size_t>(wi)];
       const double d = mid < w.t_begin_s ? w.t_begin_s - mid : mid >= w.t_end_s ? mid - w.t_end_s : 0.0;
-      if (d < best) best = d, r.window = wi;
+      if (d < best) {
+        best = d;
+        r.window = wi;
+      }
     }
     runs.push_back(r);
   }
@@ -434,8 +456,10 @@ double mean_abs_rate(const Context& c, const std::vector<int>& used, const GyroP
   double sum = 0;
   std::size_t n = 0;
   for (std::size_t i = 0; i < c.in->gyro_t_s.size(); ++i)
-    if (c.in->gyro_t_s[i] >= t0 && c.in->gyro_t_s[i] <= t1)
-      sum += std::abs(corrected_gyro_rate(c.in->gyro_z_radps[i], gp.b, gp.s)), ++n;
+    if (c.in->gyro_t_s[i] >= t0 && c.in->gyro_t_s[i] <= t1) {
+      sum += std::abs(corrected_gyro_rate(c.in->gyro_z_radps[i], gp.b, gp.s));
+      ++n;
+    }
   return n ? sum / static_cast<double>(n) : kNaN;
 }
 
@@ -613,8 +637,10 @@ GyroFixesCheck check_gyro_with_fixes(const DiagInput& in, const GyroFixesOptions
   GyroFixesCheck out;
   out.window_s = o.window_s;
   GyroCheck& g = out.gyro;
-  g.scale.name = "gyro_scale.s", g.scale.noop = 1.0;
-  g.bias.name = "gyro_bias.b", g.bias.noop = 0.0;
+  g.scale.name = "gyro_scale.s";
+  g.scale.noop = 1.0;
+  g.bias.name = "gyro_bias.b";
+  g.bias.noop = 0.0;
   const auto finish = [&](std::string reason) {
     g.unavailable_reason = std::move(reason);
     out.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

@@ -29,7 +29,8 @@ DiagInput gyro_heading_input(const DiagInput& in, double bias_radps, double scal
     const double gz = interp_held(in.gyro_t_s, in.gyro_z_radps, t[i]);  // held outside
     g.w_radps[i] = corrected_gyro_rate(gz, bias_radps, scale);
   }
-  g.cmd_v_mps.clear(), g.cmd_w_radps.clear();
+  g.cmd_v_mps.clear();
+  g.cmd_w_radps.clear();
   return g;
 }
 

@@ -39,11 +39,17 @@ double spearman(const std::vector<double>& a, const std::vector<double>& b) {
   const std::vector<double> ra = ranks(a), rb = ranks(b);
   const double n = static_cast<double>(a.size());
   double ma = 0, mb = 0;
-  for (std::size_t i = 0; i < ra.size(); ++i) ma += ra[i], mb += rb[i];
-  ma /= n, mb /= n;
+  for (std::size_t i = 0; i < ra.size(); ++i) {
+    ma += ra[i];
+    mb += rb[i];
+  }
+  ma /= n;
+  mb /= n;
   double sab = 0, saa = 0, sbb = 0;
   for (std::size_t i = 0; i < ra.size(); ++i) {
-    sab += (ra[i] - ma) * (rb[i] - mb), saa += (ra[i] - ma) * (ra[i] - ma), sbb += (rb[i] - mb) * (rb[i] - mb);
+    sab += (ra[i] - ma) * (rb[i] - mb);
+    saa += (ra[i] - ma) * (ra[i] - ma);
+    sbb += (rb[i] - mb) * (rb[i] - mb);
   }
   return (saa > 0 && sbb > 0) ? sab / std::sqrt(saa * sbb) : 0.0;
 }
@@ -70,7 +76,10 @@ Youden best_threshold(const std::vector<double>& c, const std::vector<std::uint8
     }
     const double j = static_cast<double>(f_beyond) / static_cast<double>(nf) -
                      static_cast<double>(u_beyond) / static_cast<double>(nu);
-    if (j > best.j) best.j = j, best.threshold = thr;
+    if (j > best.j) {
+      best.j = j;
+      best.threshold = thr;
+    }
   }
   return best;
 }
@@ -147,7 +156,8 @@ Growth growth(const ResidualSeries& s, double span) {
   for (std::size_t i = 0; i < n; ++i) {
     if (!std::isfinite(used[i])) continue;
     const double f = used[i] / ref;
-    g.dx[i] *= f, g.dy[i] *= f;
+    g.dx[i] *= f;
+    g.dy[i] *= f;
     if (heading) g.dth[i] *= f;
   }
   return g;
@@ -192,8 +202,10 @@ std::vector<MapRegion> regions(const ResidualSeries& s, const Location& loc, con
   if (rows.empty() || loc.flagged_count == 0) return {};
   double x0 = s.x_m[rows[0]], x1 = x0, y0 = s.y_m[rows[0]], y1 = y0;
   for (std::size_t i : rows) {
-    x0 = std::min(x0, s.x_m[i]), x1 = std::max(x1, s.x_m[i]);
-    y0 = std::min(y0, s.y_m[i]), y1 = std::max(y1, s.y_m[i]);
+    x0 = std::min(x0, s.x_m[i]);
+    x1 = std::max(x1, s.x_m[i]);
+    y0 = std::min(y0, s.y_m[i]);
+    y1 = std::max(y1, s.y_m[i]);
   }
   const double cell = std::max({o.cell_m, (x1 - x0) / o.max_cells_per_axis, (y1 - y0) / o.max_cells_per_axis});
   const int nx = static_cast<int>(std::floor((x1 - x0) / cell)) + 1;
@@ -215,7 +227,10 @@ std::vector<MapRegion> regions(const ResidualSeries& s, const Location& loc, con
   int visited = 0, n_hot = 0;
   for (std::size_t c = 0; c < count.size(); ++c) {
     if (count[c] > 0) ++visited;
-    if (count[c] >= o.min_cell_samples && flag[c] >= need * count[c]) hot[c] = 1, ++n_hot;
+    if (count[c] >= o.min_cell_samples && flag[c] >= need * count[c]) {
+      hot[c] = 1;
+      ++n_hot;
+    }
   }
   if (n_hot == 0 || n_hot > o.region_max_cover * visited) return {};
   // 8-connected components of hot cells -> boxes.
@@ -231,19 +246,29 @@ std::vector<MapRegion> regions(const ResidualSeries& s, const Location& loc, con
       const std::size_t c = stack.back();
       stack.pop_back();
       const int cx = static_cast<int>(c) % nx, cy = static_cast<int>(c) / nx;
-      cx0 = std::min(cx0, cx), cx1 = std::max(cx1, cx), cy0 = std::min(cy0, cy), cy1 = std::max(cy1, cy);
-      ++r.cells, r.samples += count[c], r.flagged += flag[c];
+      cx0 = std::min(cx0, cx);
+      cx1 = std::max(cx1, cx);
+      cy0 = std::min(cy0, cy);
+      cy1 = std::max(cy1, cy);
+      ++r.cells;
+      r.samples += count[c];
+      r.flagged += flag[c];
       for (int ddy = -1; ddy <= 1; ++ddy) {
         for (int ddx = -1; ddx <= 1; ++ddx) {
           const int ex = cx + ddx, ey = cy + ddy;
           if (ex < 0 || ey < 0 || ex >= nx || ey >= ny) continue;
           const std::size_t e = static_cast<std::size_t>(ey * nx + ex);
-          if (hot[e] && !seen[e]) seen[e] = 1, stack.push_back(e);
+          if (hot[e] && !seen[e]) {
+            seen[e] = 1;
+            stack.push_back(e);
+          }
         }
       }
     }
-    r.x0_m = x0 + cx0 * cell, r.x1_m = x0 + (cx1 + 1) * cell;
-    r.y0_m = y0 + cy0 * cell, r.y1_m = y0 + (cy1 + 1) * cell;
+    r.x0_m = x0 + cx0 * cell;
+    r.x1_m = x0 + (cx1 + 1) * cell;
+    r.y0_m = y0 + cy0 * cell;
+    r.y1_m = y0 + (cy1 + 1) * cell;
     out.push_back(r);
   }
   std::sort(out.begin(), out.end(),
@@ -258,7 +283,10 @@ void rank_conditions(const ResidualSeries& s, Location& loc, const LocateOptions
   if (rows.size() < 3) return;
   std::vector<double> z(rows.size());
   std::vector<std::uint8_t> flag(rows.size());
-  for (std::size_t k = 0; k < rows.size(); ++k) z[k] = loc.z[rows[k]], flag[k] = loc.flagged[rows[k]];
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    z[k] = loc.z[rows[k]];
+    flag[k] = loc.flagged[rows[k]];
+  }
   std::array<std::vector<double>, kNumConditions> values;
   for (int c = 0; c < kNumConditions; ++c) {
     values[static_cast<std::size_t>(c)].resize(rows.size());
@@ -270,7 +298,8 @@ void rank_conditions(const ResidualSeries& s, Location& loc, const LocateOptions
     r.rho = spearman(values[static_cast<std::size_t>(c)], z);
     r.above = r.rho >= 0;
     const Youden y = best_threshold(values[static_cast<std::size_t>(c)], flag, r.above);
-    r.threshold = y.threshold, r.youden_j = y.j;
+    r.threshold = y.threshold;
+    r.youden_j = y.j;
     loc.conditions.push_back(r);
   }
   std::stable_sort(loc.conditions.begin(), loc.conditions.end(),
@@ -300,7 +329,10 @@ void rank_conditions(const ResidualSeries& s, Location& loc, const LocateOptions
     std::vector<double> v2(sub.size());
     for (std::size_t k = 0; k < sub.size(); ++k) v2[k] = values[static_cast<std::size_t>(r.condition)][sub[k]];
     const Youden y = best_threshold(v2, f2, r.above);
-    if (y.j >= o.min_youden_j && y.j > best2.j) best2 = y, second = &r;
+    if (y.j >= o.min_youden_j && y.j > best2.j) {
+      best2 = y;
+      second = &r;
+    }
   }
   std::vector<ConditionPart> parts{{first.condition, first.above, first.threshold}};
   if (second != nullptr) {
@@ -448,7 +480,10 @@ Location locate(const ResidualSeries& s, double sigma_m, const LocateOptions& o)
     double z = std::hypot(g.dx[i], g.dy[i]) / loc.sigma_growth_mps;
     if (heading) z = std::max(z, std::abs(g.dth[i]) / loc.sigma_growth_radps);
     loc.z[i] = z;
-    if (z > o.threshold_sigma) loc.flagged[i] = 1, ++loc.exceedances;
+    if (z > o.threshold_sigma) {
+      loc.flagged[i] = 1;
+      ++loc.exceedances;
+    }
   }
   loc.segments = segments(s, loc, o);
   // Only exceedances inside kept segments stay flagged.

@@ -14,7 +14,7 @@ constexpr double kLagZ = 4.0;
 const Finding* carried_by(const Diagnosis& d, std::initializer_list<Effect> effects) {
   for (const Finding& f : d.findings)
     for (Effect e : effects)
-      if (f.effect == effect_name(e)) return &f;
+      if (f.is(e)) return &f;
   return nullptr;
 }
 
@@ -22,11 +22,11 @@ const Finding* carried_by(const Diagnosis& d, std::initializer_list<Effect> effe
 // record that tried it, else that it was not a candidate here.
 std::string why_not(const Diagnosis& d, Effect e) {
   const std::string name(effect_name(e));
-  for (const std::string& s : d.immaterial)
-    if (s.rfind(name, 0) == 0) return fmt::format("{} was significant but immaterial ({})", name, s);
+  for (const ImmaterialEffect& s : d.immaterial)
+    if (s.effect == e) return fmt::format("{} was significant but immaterial ({})", name, s.line);
   const auto& recs = d.selection.records;
   for (auto it = recs.rbegin(); it != recs.rend(); ++it) {
-    if (it->candidate != name || it->phase != "forward") continue;
+    if (it->phase != "forward" || it->effects != std::vector<Effect>{e}) continue;
     if (it->reason.rfind("not the best", 0) == 0)
       for (const SearchRecord& r : recs)  // the step's best, and why it was rejected or accepted
         if (r.phase == "forward" && r.step == it->step && r.reason.rfind("best candidate", 0) == 0)
@@ -45,7 +45,7 @@ void ratio_line(const Diagnosis& d, const Verdict& v, const char* what, std::ini
   if (!v.departs()) return;
   const std::string head = fmt::format("{} {:.3f} (z = {:.1f})", what, v.value, v.z);
   if (const Finding* f = carried_by(d, carriers)) {
-    out.push_back(fmt::format("{}: carried by {}", head, f->effect));
+    out.push_back(fmt::format("{}: carried by {}", head, f->name()));
     return;
   }
   out.push_back(fmt::format("{} is not a finding: {}", head, why_not(d, main)));
@@ -56,7 +56,7 @@ void lag_line(const Diagnosis& d, const LagEstimate& l, const char* what,
   if (!l.available || !(std::abs(l.lag_s) > kLagZ * l.std_error_s)) return;
   const std::string head = fmt::format("{} {:.3f} ± {:.3f} s", what, l.lag_s, l.std_error_s);
   if (const Finding* f = carried_by(d, carriers)) {
-    out.push_back(fmt::format("{}: carried by {}", head, f->effect));
+    out.push_back(fmt::format("{}: carried by {}", head, f->name()));
     return;
   }
   out.push_back(fmt::format("{} is not a finding: {}", head, why_not(d, main)));

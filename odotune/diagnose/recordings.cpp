@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -34,16 +35,23 @@ std::string short_name(const std::string& slot) { return slot.substr(slot.find('
 // A term model found on the fitted recordings (the unexplained finding's
 // `model`), replayed on the held-out recordings: proven only when it lowers
 // their pooled error by their materiality floor; else said so.
-void prove_terms_elsewhere(Diagnosis& d, const EffectSet& wheel, const std::vector<DiagInput>& heldout,
-                           const DiagnoseOptions& o, std::vector<std::string>& consistency) {
-  for (Finding& f : d.findings) {
+struct TermsElsewhere {
+  std::vector<Finding> findings;         // with each term model's other_recordings and proven
+  std::vector<std::string> consistency;  // one line per term model
+};
+
+TermsElsewhere prove_terms_elsewhere(std::vector<Finding> findings, const EffectSet& wheel, double ws,
+                                     const std::vector<DiagInput>& heldout, const DiagnoseOptions& o) {
+  TermsElsewhere out;
+  for (Finding& f : findings) {
     if (!f.model) continue;
     std::vector<sim::ModelTerm> terms;
     for (const FoundTerm& t : f.model->terms) terms.push_back(t.term);
     PooledError before, after, sigma;
     for (const DiagInput& in : heldout) {
-      const TermScore t = replay_terms(in, wheel, terms, d.window_s, o.terms);
-      before.add(t.before_pos_rmse_m, 0.0, t.samples), after.add(t.after_pos_rmse_m, 0.0, t.samples);
+      const TermScore t = replay_terms(in, wheel, terms, ws, o.terms);
+      before.add(t.before_pos_rmse_m, 0.0, t.samples);
+      after.add(t.after_pos_rmse_m, 0.0, t.samples);
       sigma.add(in.ref_sigma_m, 0.0, t.samples);
     }
     if (before.empty()) continue;
@@ -52,11 +60,13 @@ void prove_terms_elsewhere(Diagnosis& d, const EffectSet& wheel, const std::vect
                                              o.select.materiality);
     f.model->other_recordings = pooled;
     f.model->proven = is_material(pooled.before_pos_rmse_m, pooled.after_pos_rmse_m, floor);
-    consistency.push_back(
+    out.consistency.push_back(
         fmt::format("the terms {} {} on the held-out recordings: {:.1f} → {:.1f} mm (floor {:.1f} mm)",
                     f.model->formula, f.model->proven ? "hold" : "fit the fitted recordings only, not proven",
                     1e3 * pooled.before_pos_rmse_m, 1e3 * pooled.after_pos_rmse_m, 1e3 * floor));
   }
+  out.findings = std::move(findings);
+  return out;
 }
 
 // The windows of `after` against `before` on one recording, for the paired
@@ -115,38 +125,48 @@ HeldoutTest heldout_test(const std::vector<ReplayResult>& before, const std::vec
 }
 
 // Held-out recordings confirm each wheel finding (recordings.h): those they
-// do not are dropped from the findings and from `wheel` and listed in
-// d.not_confirmed; every kept finding's `heldout` numbers and test are then
-// against the reduced model.
-void confirm_on_heldout(Diagnosis& d, EffectSet& wheel, const std::vector<DiagInput>& heldout,
-                        const DiagnoseOptions& o) {
+// do not are dropped from the findings, the wheel model and the chosen model
+// and listed in not_confirmed; every kept finding's `heldout` numbers and
+// test are then against the reduced model.
+struct Confirmed {
+  std::vector<Finding> findings;
+  EffectSet wheel, model;  // the pooled wheel model and chosen model, reduced
+  std::vector<std::string> not_confirmed;
+};
+
+Confirmed confirm_on_heldout(const Diagnosis& d, const std::vector<DiagInput>& heldout,
+                             const DiagnoseOptions& o) {
+  Confirmed c{.findings = d.findings, .wheel = wheel_model(d), .model = d.model, .not_confirmed = {}};
   const double ws = d.window_s;
   const std::vector<ReplayResult> nominal = replay_each(heldout, EffectSet(), ws);
   const auto test_each = [&](bool drop) {
-    const std::vector<ReplayResult> with = replay_each(heldout, wheel, ws);
+    const std::vector<ReplayResult> with = replay_each(heldout, c.wheel, ws);
     std::vector<Effect> dropped;
-    for (Finding& f : d.findings) {
+    for (Finding& f : c.findings) {
       if (!f.is_wheel_effect()) continue;
-      EffectSet without = wheel;
-      without.disable(effect_from_name(f.effect));
+      EffectSet without = c.wheel;
+      without.disable(f.effect());
       const HeldoutTest t = heldout_test(replay_each(heldout, without, ws), with, nominal, heldout, ws, o);
-      f.heldout = t.error, f.heldout_test = t;
+      f.heldout = t.error;
+      f.heldout_test = t;
       if (drop && !t.material) {
-        dropped.push_back(effect_from_name(f.effect));
-        d.not_confirmed.push_back(fmt::format(
+        dropped.push_back(f.effect());
+        c.not_confirmed.push_back(fmt::format(
             "{}: fits the fitted recordings; on the held-out recordings it removes less than their floor "
             "({:.1f} → {:.1f} mm, floor {:.1f} mm; {})",
             f.spec(), 1e3 * t.error.before_pos_rmse_m, 1e3 * t.error.after_pos_rmse_m, 1e3 * t.floor_m,
             describe(t)));
       }
     }
-    for (Effect e : dropped) wheel.disable(e), d.model.disable(e);
-    std::erase_if(d.findings, [&](const Finding& f) {
-      return f.is_wheel_effect() && !wheel.on(effect_from_name(f.effect));
-    });
+    for (Effect e : dropped) {
+      c.wheel.disable(e);
+      c.model.disable(e);
+    }
+    std::erase_if(c.findings, [&](const Finding& f) { return f.is_wheel_effect() && !c.wheel.on(f.effect()); });
     return !dropped.empty();
   };
   if (test_each(true)) test_each(false);
+  return c;
 }
 
 // The options of the pooled diagnosis: the selection leaves one recording out
@@ -172,45 +192,61 @@ struct RecordingEval {
   const FitOptions& fo;
 };
 
-// One recording: its sensor check, nominal vs the pooled model (`nominal`,
-// `modelled`; `replayed` set once both exist) and the refit alone (on its
-// selection input, as the pooled final fit, from the pooled values). A
-// failure goes to r.note.
-void evaluate_recording(const DiagInput& in, const RecordingEval& e, RecordingResult& r, ReplayResult& nominal,
-                        ReplayResult& modelled, char& replayed) {
+// One recording evaluated: its result, and its replays with the nominal and
+// the pooled model when both could be made.
+struct EvaluatedRecording {
+  RecordingResult result;
+  bool replayed = false;
+  ReplayResult nominal, modelled;
+};
+
+// One recording: its sensor check, nominal vs the pooled model and the refit
+// alone (on its selection input, as the pooled final fit, from the pooled
+// values), into `r` (which names the recording). A failure goes to its note.
+EvaluatedRecording evaluate_recording(const DiagInput& in, const RecordingEval& e, RecordingResult r) {
+  EvaluatedRecording out;
   try {
     const OdometryCheck oc = check_sensors(in, e.o.sensors).odometry;
     if (oc.available) {
-      r.speed_ratio = oc.speed_ratio.value, r.yaw_ratio = oc.yaw_ratio.value;
+      r.speed_ratio = oc.speed_ratio.value;
+      r.yaw_ratio = oc.yaw_ratio.value;
       // odo(t) ≈ ref(t − lag): the motion shows up -lag after the odometry.
       const LagEstimate& lag = oc.command_delay.available ? oc.command_delay : oc.odometry_late;
       if (lag.available) r.motion_late_s = oc.command_delay.available ? lag.lag_s : -lag.lag_s;
     }
-    nominal = replay(in, EffectSet(), e.ws), modelled = replay(in, e.wheel, e.ws);
-    replayed = 1;
-    r.error = {nominal.pos_rmse_m, modelled.pos_rmse_m};
-    r.floor_m = materiality_floor_m(in.ref_sigma_m, nominal.pos_rmse_m, e.o.select.materiality);
-    r.helped = is_material(nominal.pos_rmse_m, modelled.pos_rmse_m, r.floor_m);
+    out.nominal = replay(in, EffectSet(), e.ws);
+    out.modelled = replay(in, e.wheel, e.ws);
+    out.replayed = true;
+    r.error = {out.nominal.pos_rmse_m, out.modelled.pos_rmse_m};
+    r.floor_m = materiality_floor_m(in.ref_sigma_m, out.nominal.pos_rmse_m, e.o.select.materiality);
+    r.helped = is_material(out.nominal.pos_rmse_m, out.modelled.pos_rmse_m, r.floor_m);
     if (!e.wheel.empty()) {
       // From the pooled values: a parameter started at its no-op bound can stay there.
       const FitSummary f = fit_effects(selection_input(in, e.so).input, e.wheel, {}, {}, e.fo);
       for (const FitParam& p : f.params)
-        if (p.fitted) r.refit.push_back({p.name, p.value}), r.refit_stderr.push_back({p.name, p.std_error});
+        if (p.fitted) {
+          r.refit.push_back({p.name, p.value});
+          r.refit_stderr.push_back({p.name, p.std_error});
+        }
     }
   } catch (const std::exception& ex) {
     r.note = ex.what();
   }
+  out.result = std::move(r);
+  return out;
 }
 
-// Per refitted parameter: whether the recordings' refits agree, as a line of
-// out.consistency.
-void add_refit_agreement(PooledDiagnosis& out, const EffectSet& wheel) {
-  const auto& names = out.recordings.front().refit;
+// Per refitted parameter: whether the recordings' refits agree, one line each.
+std::vector<std::string> refit_agreement(const std::vector<RecordingResult>& recordings,
+                                         const EffectSet& wheel) {
+  std::vector<std::string> lines;
+  const auto& names = recordings.front().refit;
+  const std::vector<ParamSlot> layout = param_layout(wheel);  // the refits' names are among its slots
   for (std::size_t i = 0; i < names.size(); ++i) {
     std::vector<double> v;
     std::string list;
     double se = 0.0;
-    for (const RecordingResult& r : out.recordings)
+    for (const RecordingResult& r : recordings)
       if (i < r.refit.size()) {
         v.push_back(r.refit[i].value);
         se = std::max(se, r.refit_stderr[i].value);
@@ -218,32 +254,84 @@ void add_refit_agreement(PooledDiagnosis& out, const EffectSet& wheel) {
       }
     if (v.size() < 2) continue;
     const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
-    const double pooled = wheel.get(effect_from_name(names[i].name.substr(0, names[i].name.find('.'))),
-                                    short_name(names[i].name));
+    const auto slot = std::find_if(layout.begin(), layout.end(),
+                                   [&](const ParamSlot& p) { return p.name == names[i].name; });
+    const double pooled = wheel.params(slot->effect)[static_cast<std::size_t>(slot->index)];
     const double noop_dist = std::abs(pooled - (short_name(names[i].name).rfind("scale", 0) == 0 ? 1.0 : 0.0));
     // Holds when the recordings agree within half the effect's size (or within 4 standard errors).
     const bool holds = (*hi - *lo) <= std::max(0.5 * noop_dist, 4.0 * se);
-    out.consistency.push_back(fmt::format(
-        "{}: {} alone on each recording ({}), pooled {:.5g}: {}", names[i].name, holds ? "agrees" : "differs",
-        list, pooled, holds ? "holds across recordings" : "does not hold across recordings"));
+    lines.push_back(fmt::format("{}: {} alone on each recording ({}), pooled {:.5g}: {}", names[i].name,
+                                holds ? "agrees" : "differs", list, pooled,
+                                holds ? "holds across recordings" : "does not hold across recordings"));
   }
+  return lines;
 }
 
 // What holds across recordings: each recording's error with the pooled
-// model, then whether the refits agree.
-void add_consistency(PooledDiagnosis& out, const EffectSet& wheel) {
-  for (const RecordingResult& r : out.recordings) {
+// model, then whether the refits agree; one line each.
+std::vector<std::string> consistency(const std::vector<RecordingResult>& recordings, const EffectSet& wheel) {
+  std::vector<std::string> lines;
+  for (const RecordingResult& r : recordings) {
     if (!r.note.empty()) {
-      out.consistency.push_back(fmt::format("{}: not evaluated ({})", r.track, r.note));
+      lines.push_back(fmt::format("{}: not evaluated ({})", r.track, r.note));
       continue;
     }
     if (wheel.empty()) continue;
-    out.consistency.push_back(fmt::format(
+    lines.push_back(fmt::format(
         "{} ({}): the pooled model {} its position error {:.1f} → {:.1f} mm (floor {:.1f} mm)", r.track,
         r.heldout ? "held out" : "fitted", r.helped ? "cuts" : "does not materially change",
         1e3 * r.error.before_pos_rmse_m, 1e3 * r.error.after_pos_rmse_m, 1e3 * r.floor_m));
   }
-  if (!wheel.empty() && !out.recordings.empty()) add_refit_agreement(out, wheel);
+  if (!wheel.empty() && !recordings.empty()) {
+    std::vector<std::string> agree = refit_agreement(recordings, wheel);
+    lines.insert(lines.end(), agree.begin(), agree.end());
+  }
+  return lines;
+}
+
+// Per recording (fit recordings first): nominal vs the pooled model, and the
+// refit alone, recordings in parallel. shifts: the fit recordings' pooled
+// time offsets.
+std::vector<EvaluatedRecording> evaluate_recordings(const std::vector<DiagInput>& all, std::size_t n_fit,
+                                                    const std::vector<double>& shifts, const EffectSet& wheel,
+                                                    double ws, const DiagnoseOptions& o) {
+  FitOptions fo = o.select.fit;
+  fo.window_s = ws;
+  SelectOptions so = o.select;
+  so.fit.window_s = ws;
+  so.min_window_samples = 0.0;  // the pooled windows' length, not one of its own
+  const RecordingEval eval{wheel, ws, o, so, fo};
+  std::vector<EvaluatedRecording> out(all.size());
+#pragma omp parallel for schedule(dynamic, 1) if (all.size() > 1)
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    const DiagInput& in = all[k];
+    RecordingResult r;
+    r.track = in.track_name;
+    r.heldout = k >= n_fit;
+    r.duration_s = in.odo_t_s.back() - in.odo_t_s.front();
+    r.ref_samples = in.ref_t_s.size();
+    r.ref_sigma_m = in.ref_sigma_m;
+    r.pooled_time_offset_s = k < shifts.size() ? shifts[k] : std::nan("");
+    out[k] = evaluate_recording(in, eval, std::move(r));
+  }
+  return out;
+}
+
+// The held-out recordings' test of the pooled model against the nominal one
+// (file comment), over those whose replays could be made; nullopt for none.
+std::optional<HeldoutTest> prove_on_heldout(const std::vector<DiagInput>& all, std::size_t n_fit,
+                                            const std::vector<EvaluatedRecording>& evaluated, double ws,
+                                            const DiagnoseOptions& o) {
+  std::vector<ReplayResult> held_nominal, held_model;
+  std::vector<DiagInput> replayed_heldout;
+  for (std::size_t k = n_fit; k < all.size(); ++k)
+    if (evaluated[k].replayed) {
+      held_nominal.push_back(evaluated[k].nominal);
+      held_model.push_back(evaluated[k].modelled);
+      replayed_heldout.push_back(all[k]);
+    }
+  if (replayed_heldout.empty()) return std::nullopt;
+  return heldout_test(held_nominal, held_model, held_nominal, replayed_heldout, ws, o);
 }
 
 }  // namespace
@@ -282,12 +370,18 @@ DiagInput concatenate(const std::vector<DiagInput>& parts, double gap_s, std::ve
   double sigma = a.ref_sigma_m;  // the pooled sigma: that of the recording with the most samples
   std::size_t most = 0;
   for (const DiagInput& p : parts)
-    if (p.ref_t_s.size() > most) most = p.ref_t_s.size(), sigma = p.ref_sigma_m;
+    if (p.ref_t_s.size() > most) {
+      most = p.ref_t_s.size();
+      sigma = p.ref_sigma_m;
+    }
   DiagInput c;
   c.track_name = a.track_name;
   for (std::size_t k = 1; k < parts.size(); ++k) c.track_name += " + " + parts[k].track_name;
-  c.radius_l_m = a.radius_l_m, c.radius_r_m = a.radius_r_m, c.wheel_base_m = a.wheel_base_m;
-  c.odometry = a.odometry, c.velocity_source = a.velocity_source;
+  c.radius_l_m = a.radius_l_m;
+  c.radius_r_m = a.radius_r_m;
+  c.wheel_base_m = a.wheel_base_m;
+  c.odometry = a.odometry;
+  c.velocity_source = a.velocity_source;
   c.reference = a.reference;
   c.ref_sigma_m = sigma;
   c.ref_sigma_rad = a.ref_sigma_rad;
@@ -305,7 +399,8 @@ DiagInput concatenate(const std::vector<DiagInput>& parts, double gap_s, std::ve
                    r0 = k == 0 ? 0.0 : phi_r - p.phi_r_rad.front();
       append_shifted(c.phi_l_rad, p.phi_l_rad, l0);
       append_shifted(c.phi_r_rad, p.phi_r_rad, r0);
-      phi_l = c.phi_l_rad.back(), phi_r = c.phi_r_rad.back();
+      phi_l = c.phi_l_rad.back();
+      phi_r = c.phi_r_rad.back();
     }
     c.v_mps.insert(c.v_mps.end(), p.v_mps.begin(), p.v_mps.end());
     c.w_radps.insert(c.w_radps.end(), p.w_radps.begin(), p.w_radps.end());
@@ -321,7 +416,8 @@ DiagInput concatenate(const std::vector<DiagInput>& parts, double gap_s, std::ve
       const double scale = (sigma / p.ref_sigma_m) * (sigma / p.ref_sigma_m);
       for (std::size_t i = 0; i < p.ref_t_s.size(); ++i) c.ref_w.push_back(scale * p.ref_weight(i));
     }
-    c.ref_gt_samples += p.ref_gt_samples, c.ref_fix_samples += p.ref_fix_samples;
+    c.ref_gt_samples += p.ref_gt_samples;
+    c.ref_fix_samples += p.ref_fix_samples;
     end = std::max(c.odo_t_s.back(), c.ref_t_s.empty() ? c.odo_t_s.back() : c.ref_t_s.back());
   }
   return c;
@@ -340,61 +436,45 @@ PooledDiagnosis diagnose_recordings(const std::vector<DiagInput>& fit, const std
   std::vector<DiagInput> all = fit;
   all.insert(all.end(), heldout.begin(), heldout.end());
   check_one_robot(all);
-  PooledDiagnosis out;
   std::vector<double> shifts;
-  out.input = pool_recordings(fit, &shifts);
-  out.pooled = diagnose(out.input, pooled_options(o, fit, shifts));
-  Diagnosis& d = out.pooled;
-  EffectSet wheel = wheel_model(d);
+  DiagInput input = pool_recordings(fit, &shifts);
+  Diagnosis d = diagnose(input, pooled_options(o, fit, shifts));
   const double ws = d.window_s;
-  out.heldout_recordings = !heldout.empty();
-  if (out.heldout_recordings) {
-    confirm_on_heldout(d, wheel, heldout, o);
-    if (!d.not_confirmed.empty()) {  // the fitted recordings' error with the model as reported
-      const ReplayResult fin = replay(out.input, wheel, ws);
-      d.final_pos_rmse_m = fin.pos_rmse_m, d.final_heading_rmse_rad = fin.heading_rmse_rad;
-    }
+  const bool with_heldout = !heldout.empty();
+  Confirmed confirmed =
+      with_heldout
+          ? confirm_on_heldout(d, heldout, o)
+          : Confirmed{.findings = d.findings, .wheel = wheel_model(d), .model = d.model, .not_confirmed = {}};
+  const EffectSet& wheel = confirmed.wheel;
+  std::vector<EvaluatedRecording> evaluated = evaluate_recordings(all, fit.size(), shifts, wheel, ws, o);
+  std::optional<HeldoutTest> test;
+  TermsElsewhere terms{.findings = std::move(confirmed.findings), .consistency = {}};
+  if (with_heldout) {
+    test = prove_on_heldout(all, fit.size(), evaluated, ws, o);
+    terms = prove_terms_elsewhere(std::move(terms.findings), wheel, ws, heldout, o);
   }
+  std::vector<RecordingResult> recordings;
+  for (EvaluatedRecording& e : evaluated) recordings.push_back(std::move(e.result));
+  std::vector<std::string> lines = std::move(terms.consistency);
+  for (std::string& line : consistency(recordings, wheel)) lines.push_back(std::move(line));
 
-  // Per recording: nominal vs the pooled model, and the refit alone,
-  // recordings in parallel.
-  FitOptions fo = o.select.fit;
-  fo.window_s = ws;
-  SelectOptions so = o.select;
-  so.fit.window_s = ws;
-  so.min_window_samples = 0.0;  // the pooled windows' length, not one of its own
-  const RecordingEval eval{wheel, ws, o, so, fo};
-  out.recordings.resize(all.size());
-  std::vector<ReplayResult> nominal(all.size()), modelled(all.size());
-  std::vector<char> replayed(all.size(), 0);
-#pragma omp parallel for schedule(dynamic, 1) if (all.size() > 1)
-  for (std::size_t k = 0; k < all.size(); ++k) {
-    const DiagInput& in = all[k];
-    RecordingResult& r = out.recordings[k];
-    r.track = in.track_name;
-    r.heldout = k >= fit.size();
-    r.duration_s = in.odo_t_s.back() - in.odo_t_s.front();
-    r.ref_samples = in.ref_t_s.size();
-    r.ref_sigma_m = in.ref_sigma_m;
-    r.pooled_time_offset_s = k < shifts.size() ? shifts[k] : std::nan("");
-    evaluate_recording(in, eval, r, nominal[k], modelled[k], replayed[k]);
+  // The pooled diagnosis as the held-out recordings leave it (file comment).
+  if (with_heldout &&
+      !confirmed.not_confirmed.empty()) {  // the fitted recordings' error with the model as reported
+    const ReplayResult fin = replay(input, wheel, ws);
+    d.final_pos_rmse_m = fin.pos_rmse_m;
+    d.final_heading_rmse_rad = fin.heading_rmse_rad;
   }
-  // Held-out recordings prove the pooled model (file comment).
-  if (out.heldout_recordings) {
-    std::vector<ReplayResult> held_nominal, held_model;
-    std::vector<DiagInput> replayed_heldout;
-    for (std::size_t k = fit.size(); k < all.size(); ++k)
-      if (replayed[k])
-        held_nominal.push_back(nominal[k]), held_model.push_back(modelled[k]),
-            replayed_heldout.push_back(all[k]);
-    if (!replayed_heldout.empty()) {
-      out.heldout_test = heldout_test(held_nominal, held_model, held_nominal, replayed_heldout, ws, o);
-      d.heldout = out.heldout_test.error;
-    }
-    prove_terms_elsewhere(d, wheel, heldout, o, out.consistency);
-  }
-  add_consistency(out, wheel);
-  return out;
+  if (test) d.heldout = test->error;
+  d.findings = std::move(terms.findings);
+  d.model = std::move(confirmed.model);
+  d.not_confirmed = std::move(confirmed.not_confirmed);
+  return {.input = std::move(input),
+          .pooled = std::move(d),
+          .heldout_recordings = with_heldout,
+          .heldout_test = test.value_or(HeldoutTest{}),
+          .recordings = std::move(recordings),
+          .consistency = std::move(lines)};
 }
 
 }  // namespace odotune::diagnose

@@ -43,7 +43,9 @@ NominalKinematics nominal_kinematics(const DiagInput& in, const std::vector<doub
       h[i] = h[i - 1] + 0.5 * (in.w_radps[i] + in.w_radps[i - 1]) * dt;
     }
   }
-  k.v_mps.resize(t_s.size()), k.w_radps.resize(t_s.size()), k.accel_mps2.resize(t_s.size());
+  k.v_mps.resize(t_s.size());
+  k.w_radps.resize(t_s.size());
+  k.accel_mps2.resize(t_s.size());
   for (std::size_t i = 0; i < t_s.size(); ++i) {
     k.v_mps[i] = rate(t, s, t_s[i], o.rate_half_s);
     k.w_radps[i] = rate(t, h, t_s[i], o.rate_half_s);
@@ -76,7 +78,9 @@ ResidualSeries residual_series(const DiagInput& in, const std::vector<Window>& w
     }
   }
   const NominalKinematics k = nominal_kinematics(in, s.t_s, o);
-  s.v_mps = k.v_mps, s.w_radps = k.w_radps, s.accel_mps2 = k.accel_mps2;
+  s.v_mps = k.v_mps;
+  s.w_radps = k.w_radps;
+  s.accel_mps2 = k.accel_mps2;
   return s;
 }
 

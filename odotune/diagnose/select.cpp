@@ -91,7 +91,8 @@ bool covers(const std::vector<std::vector<double>>& acting, const std::vector<in
 // The windows of a split of n: phase < 0, the last n_held held out; else
 // n_held spread evenly, the pattern rotated by `phase` windows.
 void split_at(int phase, int n, int n_held, std::vector<int>& train, std::vector<int>& held) {
-  train.clear(), held.clear();
+  train.clear();
+  held.clear();
   for (int w = 0; w < n; ++w) {
     const long r = (w + std::max(phase, 0)) % n;
     const bool h = phase < 0 ? w >= n - n_held : (r + 1) * n_held / n > r * n_held / n;
@@ -134,7 +135,9 @@ void fit_final(const DiagInput& raw, const DiagInput& fit_in, const std::vector<
     FitSummary f = fit_effects(fit_in, start, tr, ho, fo_final);
     if (!f.rank_deficient || sel.final_fit.params.empty()) {
       sel.final_fit = std::move(f);
-      sel.train_windows = tr, sel.heldout_windows = ho, sel.split = "interleaved";
+      sel.train_windows = tr;
+      sel.heldout_windows = ho;
+      sel.split = "interleaved";
     }
   }
 }
@@ -211,7 +214,10 @@ void start_from_nominal(Search& z, const DiagInput& in_full, const SelectOptions
   sel.floor_m = z.floor_m;
   sel.floor_rad = z.floor_rad;
   SearchRecord rb;
-  rb.phase = "baseline", rb.set = "none", rb.bic = z.cur_full.bic, rb.accepted = true;
+  rb.phase = "baseline";
+  rb.set = "none";
+  rb.bic = z.cur_full.bic;
+  rb.accepted = true;
   rb.reason = "nominal model";
   fill(rb, z.cur_cv);
   rb.time_s = since(t0);
@@ -247,8 +253,8 @@ void search_moves(Search& z, const SelectOptions& o, const std::vector<Effect>& 
 void add_rivals(Selection& sel, const Search& z) {
   for (SelectedEffect& e : sel.effects)
     for (const SearchRecord& r : sel.records)
-      if (r.phase == "forward" && r.accepted && r.candidate == effect_name(e.effect))
-        for (const std::string& name : r.rivals) e.rivals.push_back(effect_from_name(name));
+      if (r.phase == "forward" && r.accepted && r.effects == std::vector<Effect>{e.effect})
+        e.rivals.insert(e.rivals.end(), r.rivals.begin(), r.rivals.end());
   // Look-alikes that predict as well: rivals of the chosen ones among them.
   for (SelectedEffect& e : sel.effects) {
     if (std::find(std::begin(kLagLookAlikes), std::end(kLagLookAlikes), e.effect) == std::end(kLagLookAlikes))
@@ -350,7 +356,8 @@ SelectionInput selection_input(const DiagInput& in, const SelectOptions& o) {
     for (std::size_t i = 0; same && i < wt.size(); ++i)
       same = std::abs(wt[i].t_begin_s - wf[i].t_begin_s) < 1e-9;
     if (same) {
-      si.stride = stride, si.correlated = correlated;
+      si.stride = stride;
+      si.correlated = correlated;
       return si;
     }
   }
@@ -358,7 +365,16 @@ SelectionInput selection_input(const DiagInput& in, const SelectOptions& o) {
   return si;
 }
 
-Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
+Selection select_effects(const DiagInput& in, const SelectOptions& o) {
+  std::string why;
+  if (!o.IsValid(&why)) throw std::invalid_argument("select options: " + why);
+  // Fewer than 3 windows: the selection stops before it reads the selection input.
+  const bool searched = make_windows(in, selection_window_s(in, o)).size() >= 3;
+  return select_effects(
+      in, searched ? selection_input(in, o) : SelectionInput{.input = in, .stride = 1, .correlated = 1.0}, o);
+}
+
+Selection select_effects(const DiagInput& in_full, const SelectionInput& si, const SelectOptions& o_in) {
   std::string why;
   if (!o_in.IsValid(&why)) throw std::invalid_argument("select options: " + why);
   const auto t_start = Clock::now();
@@ -378,14 +394,23 @@ Selection select_effects(const DiagInput& in_full, const SelectOptions& o_in) {
     return sel;
   }
 
-  const SelectionInput si = selection_input(in_full, o_in);
   const DiagInput* in = &si.input;
   sel.ref_stride = si.stride;
   CrossValidator cv(*in, o.fit, o.folds, si.correlated, o.recording_starts_s);
   sel.folds = cv.num_folds();
   sel.folds_are_recordings = cv.folds_are_recordings();
-  Search z{cv, o, sel, EffectSet(), {}, {}, {}, kNaN, 0.0, 0.0, false, {}};
-  z.heading = in->has_ref_heading();
+  Search z{.cv = cv,
+           .o = o,
+           .sel = sel,
+           .s = EffectSet(),
+           .chosen = {},
+           .cur_cv = {},
+           .cur_full = {},
+           .step_t = kNaN,
+           .floor_m = 0.0,
+           .floor_rad = 0.0,
+           .heading = in->has_ref_heading(),
+           .look_alikes = {}};
 
   start_from_nominal(z, in_full, o);
   search_moves(z, o, candidate_list(in_full, o));

@@ -69,11 +69,12 @@ struct SelectOptions {
 
 // One evaluation of the search, in the order made.
 struct SearchRecord {
-  int step = 0;           // forward step (1, 2, ...), backward round, 0 for the baseline
-  std::string phase;      // "baseline", "forward", "backward", "pair", "swap", "look-alike"
-  std::string candidate;  // effect added (forward) or removed (backward); "" for the baseline
-  std::string set;        // the evaluated set (structure; discrete parameters shown)
-  double cv_score = 0.0;  // pooled held-out normalised MSE per sample (NaN: failed)
+  int step = 0;                 // forward step (1, 2, ...), backward round, 0 for the baseline
+  std::string phase;            // "baseline", "forward", "backward", "pair", "swap", "look-alike"
+  std::string candidate;        // effect added (forward) or removed (backward); "" for the baseline
+  std::vector<Effect> effects;  // forward: the effect added; pair: the two added; backward: the one removed
+  std::string set;              // the evaluated set (structure; discrete parameters shown)
+  double cv_score = 0.0;        // pooled held-out normalised MSE per sample (NaN: failed)
   double cv_pos_rmse_m = 0.0, cv_heading_rmse_rad = 0.0;  // pooled held-out (heading NaN without)
   double rel_improvement = 0.0;  // forward: (cur - cand)/cur; backward: (without - with)/without
   double gain = 0.0;             // the same difference, absolute
@@ -90,7 +91,7 @@ struct SearchRecord {
   std::string reason;     // why accepted or rejected
   // Accepted forward step: the other candidates of the step that the winner
   // does not beat by the size and paired-test rules, i.e. confounded alternatives.
-  std::vector<std::string> rivals;
+  std::vector<Effect> rivals;
   double time_s = 0.0;
 };
 
@@ -134,7 +135,6 @@ struct Selection {
 // effects and a note. Its windows are make_windows(in, selection_window_s(in,
 // options)) (= Selection::window_s): callers that index them (train_windows,
 // heldout_windows) must use that length, not options.fit.window_s.
-Selection select_effects(const DiagInput& in, const SelectOptions& options = {});
 
 // The input the selection searches and scores on ("Data" above): `in` with
 // its reference thinned to about select_ref_rate_hz and denoised
@@ -146,6 +146,12 @@ struct SelectionInput {
   double correlated = 1.0;  // kept samples per smoothing span (CrossValidator)
 };
 SelectionInput selection_input(const DiagInput& in, const SelectOptions& options);
+
+// The selection on `in` searched and scored on `si` = selection_input(in,
+// options), built once by the caller (diagnose() scores its findings on it too).
+Selection select_effects(const DiagInput& in, const SelectionInput& si, const SelectOptions& options);
+// The same, building selection_input(in, options) itself.
+Selection select_effects(const DiagInput& in, const SelectOptions& options = {});
 
 // The window length select_effects uses on `in` (header comment, "Windows").
 double selection_window_s(const DiagInput& in, const SelectOptions& options);

@@ -22,7 +22,9 @@ void prefer_radius_error(Search& z, int step) {
   st.disable(Effect::odometry_bias);
   st.enable(Effect::radius_error);
   SearchRecord rec;
-  rec.step = step, rec.phase = "swap", rec.candidate = "radius_error for odometry_bias";
+  rec.step = step;
+  rec.phase = "swap";
+  rec.candidate = "radius_error for odometry_bias";
   rec.set = st.to_string();
   SetEval cv = z.cv.cross_validate_all({st}, z.cur_cv.folds, z.o.cv_max_iterations).front();
   fill(rec, cv);
@@ -77,7 +79,8 @@ std::vector<SwapCand> swap_candidates(const Search& z, int step, const std::vect
       SwapCand cd{c, out, z.s, {}};
       for (Effect e : out) cd.st.disable(e);
       cd.st = with_effect(cd.st, c);
-      cd.rec.step = step, cd.rec.phase = "swap";
+      cd.rec.step = step;
+      cd.rec.phase = "swap";
       cd.rec.candidate = fmt::format("{} for {}+{}", effect_name(c), effect_name(out[0]), effect_name(out[1]));
       cd.rec.set = cd.st.to_string();
       tried.push_back(std::move(cd));
@@ -223,8 +226,10 @@ bool pair_step(Search& z, int step, const std::vector<Effect>& cands) {
   for (const auto& pr : kConditionPairs) {
     if (!usable(pr.first) || !usable(pr.second)) continue;
     Cand cd{pr, with_effect(with_effect(z.s, pr.first), pr.second), {}, {}};
-    cd.rec.step = step, cd.rec.phase = "pair";
+    cd.rec.step = step;
+    cd.rec.phase = "pair";
     cd.rec.candidate = fmt::format("{}+{}", effect_name(pr.first), effect_name(pr.second));
+    cd.rec.effects = {pr.first, pr.second};
     cd.rec.set = cd.st.to_string();
     sets.push_back(cd.st);
     tried.push_back(std::move(cd));
@@ -329,6 +334,7 @@ bool backward_round(Search& z, int round) {
     Drop d{e, z.s, {}, {}, {}, false};
     d.st.disable(e);
     d.rec.step = round, d.rec.phase = "backward", d.rec.candidate = effect_name(e);
+    d.rec.effects = {e};
     d.rec.set = d.st.to_string();
     sets.push_back(d.st);
     drops.push_back(std::move(d));
@@ -391,7 +397,9 @@ bool look_alike_step(Search& z, int step) {
     for (Effect e : a) alt.st = with_effect(alt.st, e);
     std::string names;
     for (Effect e : a) names += (names.empty() ? "" : "+") + std::string(effect_name(e));
-    alt.rec.step = step, alt.rec.phase = "look-alike", alt.rec.candidate = names;
+    alt.rec.step = step;
+    alt.rec.phase = "look-alike";
+    alt.rec.candidate = names;
     alt.rec.set = alt.st.to_string();
     alts.push_back(std::move(alt));
   }

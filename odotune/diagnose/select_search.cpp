@@ -73,9 +73,14 @@ void fill(SearchRecord& r, const SetEval& e) {
   r.cv_heading_rmse_rad = e.ok ? e.heading_rmse_rad : kNaN;
 }
 void fill(SearchRecord& r, const PairedComparison& p) {
-  r.rel_improvement = p.rel, r.gain = p.gain;
-  r.windows_changed = p.changed, r.windows_improved = p.improved;
-  r.p_rank = p.p_rank, r.p_t = p.p_t, r.p_param = p.p_param, r.significant = p.significant;
+  r.rel_improvement = p.rel;
+  r.gain = p.gain;
+  r.windows_changed = p.changed;
+  r.windows_improved = p.improved;
+  r.p_rank = p.p_rank;
+  r.p_t = p.p_t;
+  r.p_param = p.p_param;
+  r.significant = p.significant;
 }
 
 namespace {
@@ -150,7 +155,10 @@ struct StepProfile {
   double best_t() const {
     double bt = kNaN, bc = kInf;
     for (const auto& [t, v] : seen)
-      if (v.first < bc) bc = v.first, bt = t;
+      if (v.first < bc) {
+        bc = v.first;
+        bt = t;
+      }
     return bt;
   }
 };
@@ -256,6 +264,7 @@ std::vector<Cand> candidates(Search& z, int step, const std::vector<Effect>& can
     const auto t0 = Clock::now();
     Cand cd{e, with_effect(z.s, e), {}, {}};
     cd.rec.step = step, cd.rec.phase = "forward", cd.rec.candidate = effect_name(e);
+    cd.rec.effects = {e};
     cd.rec.set = cd.st.to_string();
     if (e == Effect::radius_step) {
       z.step_t = profile_step_time(z.cv, z.s, z.cur_full.fitted, z.step_t, z.o);
@@ -283,7 +292,10 @@ void cross_validate_candidates(Search& z, std::vector<Cand>& tried, std::vector<
   std::vector<EffectSet> sets;
   std::vector<std::size_t> which;
   for (std::size_t i = 0; i < tried.size(); ++i)
-    if (tried[i].rec.reason.empty()) sets.push_back(tried[i].st), which.push_back(i);
+    if (tried[i].rec.reason.empty()) {
+      sets.push_back(tried[i].st);
+      which.push_back(i);
+    }
   const auto t_batch = Clock::now();
   std::vector<SetEval> evals = z.cv.cross_validate_all(sets, z.cur_cv.folds, z.o.cv_max_iterations);
   const double share = sets.empty() ? 0.0 : since(t_batch) / static_cast<double>(sets.size());
@@ -359,7 +371,7 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
       // Confounded alternatives: candidates the winner does not beat by the size and paired-test rules.
       for (Cand& cd : tried)
         if (cd.cv.ok && &cd != best && !verdict(z.cv.compare(cd.cv, best->cv, z.o.alpha), -1.0, z.o).empty())
-          best->rec.rivals.push_back(std::string(effect_name(cd.e)));
+          best->rec.rivals.push_back(cd.e);
       z.s = best->st;
       z.chosen.push_back(best->e);
       z.cur_cv = std::move(best->cv);

@@ -94,7 +94,9 @@ struct OdoSignal {
       x += (sb - sa) * std::cos(mid);
       y += (sb - sa) * std::sin(mid);
       psi += hb - ha;
-      ta = tb, sa = sb, ha = hb;
+      ta = tb;
+      sa = sb;
+      ha = hb;
     }
     return std::hypot(x, y);
   }
@@ -134,7 +136,9 @@ struct Rows {
   // Appends a row for bin [t0, t1]; linked when t0 is the previous row's t1.
   void add(double t0, double t1, double xk, double yk, double var, double uk = kNaN) {
     linked.push_back(!x.empty() && t0 == last_t1_ ? 1 : 0);
-    x.push_back(xk), y.push_back(yk), var_extra.push_back(var);
+    x.push_back(xk);
+    y.push_back(yk);
+    var_extra.push_back(var);
     if (!std::isnan(uk)) u.push_back(uk);
     last_t1_ = t1;
   }
@@ -164,9 +168,13 @@ void huber_irls(RobustFit& f, const SensorCheckOptions& o) {
   for (int it = 0; it < o.max_irls_iterations; ++it) {
     double sxx = 0, sxu = 0, suu = 0, sxy = 0, suy = 0;
     for (std::size_t k = 0; k < n; ++k) {
-      sxx += w[k] * f.xw[k] * f.xw[k], sxy += w[k] * f.xw[k] * f.yw[k];
-      if (two)
-        sxu += w[k] * f.xw[k] * f.uw[k], suu += w[k] * f.uw[k] * f.uw[k], suy += w[k] * f.uw[k] * f.yw[k];
+      sxx += w[k] * f.xw[k] * f.xw[k];
+      sxy += w[k] * f.xw[k] * f.yw[k];
+      if (two) {
+        sxu += w[k] * f.xw[k] * f.uw[k];
+        suu += w[k] * f.uw[k] * f.uw[k];
+        suy += w[k] * f.uw[k] * f.yw[k];
+      }
     }
     double na = 0, nb = 0;
     if (two) {
@@ -180,14 +188,16 @@ void huber_irls(RobustFit& f, const SensorCheckOptions& o) {
     }
     const bool converged = it > 0 && std::abs(na - a) <= 1e-12 * (1.0 + std::abs(na)) &&
                            std::abs(nb - b) <= 1e-12 * (1.0 + std::abs(nb));
-    a = na, b = nb;
+    a = na;
+    b = nb;
     for (std::size_t k = 0; k < n; ++k) f.res[k] = f.yw[k] - a * f.xw[k] - (two ? b * f.uw[k] : 0.0);
     if (converged) break;
     const double c = o.huber_k * std::max(core::robust_sigma(f.res), 1e-300);
     for (std::size_t k = 0; k < n; ++k) w[k] = std::abs(f.res[k]) <= c ? 1.0 : c / std::abs(f.res[k]);
   }
   f.ok = std::isfinite(a) && std::isfinite(b);
-  f.a = a, f.b = b;
+  f.a = a;
+  f.b = b;
 }
 
 RobustFit gls_huber_fit(const Rows& r, const SensorCheckOptions& o) {
@@ -196,7 +206,9 @@ RobustFit gls_huber_fit(const Rows& r, const SensorCheckOptions& o) {
   const bool two = !r.u.empty();
   if (n < 3) return f;
   // Whitened columns: solve L·z = v with L the Cholesky factor of Σ.
-  f.xw.resize(n), f.yw.resize(n), f.uw.resize(two ? n : 0);
+  f.xw.resize(n);
+  f.yw.resize(n);
+  f.uw.resize(two ? n : 0);
   double prev_l = 0.0;
   for (std::size_t k = 0; k < n; ++k) {
     const double diag = 2.0 * r.level_var + r.var_extra[k];
@@ -279,8 +291,10 @@ void finish_verdict(Verdict& v, double floor, const SensorCheckOptions& o) {
 
 GyroCheck check_gyro(const DiagInput& in, const ReferenceBins& rb, const SensorCheckOptions& o) {
   GyroCheck g;
-  g.scale.name = "gyro_scale.s", g.scale.noop = 1.0;
-  g.bias.name = "gyro_bias.b", g.bias.noop = 0.0;
+  g.scale.name = "gyro_scale.s";
+  g.scale.noop = 1.0;
+  g.bias.name = "gyro_bias.b";
+  g.bias.noop = 0.0;
   if (in.gyro_t_s.size() < 3) return g.unavailable_reason = "no gyro", g;
   if (!rb.heading) return g.unavailable_reason = "no reference heading (position fixes only)", g;
   const Cumulative gyro = Cumulative::of_rates(in.gyro_t_s, in.gyro_z_radps);
@@ -330,7 +344,13 @@ GyroCheck check_gyro(const DiagInput& in, const ReferenceBins& rb, const SensorC
 double pearson(const std::vector<double>& a, const std::vector<double>& b,
                const std::vector<std::size_t>& idx) {
   double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
-  for (std::size_t i : idx) sa += a[i], sb += b[i], saa += a[i] * a[i], sbb += b[i] * b[i], sab += a[i] * b[i];
+  for (std::size_t i : idx) {
+    sa += a[i];
+    sb += b[i];
+    saa += a[i] * a[i];
+    sbb += b[i] * b[i];
+    sab += a[i] * b[i];
+  }
   const double n = static_cast<double>(idx.size());
   const double va = saa - sa * sa / n, vb = sbb - sb * sb / n, cab = sab - sa * sb / n;
   if (!(va > 0) || !(vb > 0)) return kNaN;
@@ -361,7 +381,8 @@ Peak peak(const LagCurves& c, const std::vector<double>& rv, const std::vector<d
   }
   Peak p;
   if (best == K) return p;
-  p.corr = rho[best], p.lag = c.shifts[best];
+  p.corr = rho[best];
+  p.lag = c.shifts[best];
   p.edge = best == 0 || best + 1 == K;
   if (p.edge) return p;
   const double a = rho[best - 1], b = rho[best], d = rho[best + 1];
@@ -385,7 +406,8 @@ LagEstimate estimate_lag(const OdoSignal& sig, const ReferenceBins& rb, double s
   std::vector<double> rv, rw;
   for (std::size_t i = 0; i < rb.t0_s.size(); ++i) {
     if (rb.t0_s[i] - o.max_lag_s < sig.dist.front_t() || rb.t1_s[i] + o.max_lag_s > sig.dist.back_t()) continue;
-    rows.push_back(i), rv.push_back(rb.v_mps[i]);
+    rows.push_back(i);
+    rv.push_back(rb.v_mps[i]);
     if (rb.heading) rw.push_back(rb.w_radps[i]);
   }
   if (rows.size() < static_cast<std::size_t>(kMinBins)) return out;
@@ -399,7 +421,9 @@ LagEstimate estimate_lag(const OdoSignal& sig, const ReferenceBins& rb, double s
     }
   }
   const Peak p = peak(c, rv, rw, iota_idx(rows.size()));
-  out.lag_s = p.lag, out.peak_correlation = p.corr, out.at_edge = p.edge;
+  out.lag_s = p.lag;
+  out.peak_correlation = p.corr;
+  out.at_edge = p.edge;
   if (!std::isfinite(out.lag_s)) return out;
   out.available = true;
   std::vector<double> lags;
@@ -425,7 +449,8 @@ std::string odometry_signal(const DiagInput& in, OdoSignal& odo) {
     std::vector<double> dist(in.odo_t_s.size()), head(in.odo_t_s.size());
     for (std::size_t i = 0; i < in.odo_t_s.size(); ++i) {
       const double l = in.radius_l_m * in.phi_l_rad[i], r = in.radius_r_m * in.phi_r_rad[i];
-      dist[i] = 0.5 * (l + r), head[i] = (r - l) / in.wheel_base_m;
+      dist[i] = 0.5 * (l + r);
+      head[i] = (r - l) / in.wheel_base_m;
     }
     odo = {Cumulative::of_values(in.odo_t_s, std::move(dist)),
            Cumulative::of_values(in.odo_t_s, std::move(head))};
@@ -464,7 +489,8 @@ RatioRows ratio_rows(const DiagInput& in, const OdoSignal& odo, const ReferenceB
     const double ds = rb.heading ? odo.dist.at(t1) - odo.dist.at(t0) : odo.chord(t0, t1);
     q.rv.add(t0, t1, ds, rb.v_mps[i] * dt, var_s);
     q.width.push_back(dt);
-    q.mean_abs_v += std::abs(ds) / dt, q.mean_width += dt;
+    q.mean_abs_v += std::abs(ds) / dt;
+    q.mean_width += dt;
     if (rb.heading) {
       const double dh = odo.head.at(t1) - odo.head.at(t0);
       q.rw.add(t0, t1, dh, rb.w_radps[i] * dt, var_h);
@@ -512,8 +538,10 @@ void set_lags(OdometryCheck& oc, const DiagInput& in, const OdoSignal& odo, cons
 
 OdometryCheck check_odometry(const DiagInput& in, const ReferenceBins& rb, const SensorCheckOptions& o) {
   OdometryCheck oc;
-  oc.speed_ratio.name = "speed_ratio", oc.speed_ratio.noop = 1.0;
-  oc.yaw_ratio.name = "yaw_ratio", oc.yaw_ratio.noop = 1.0;
+  oc.speed_ratio.name = "speed_ratio";
+  oc.speed_ratio.noop = 1.0;
+  oc.yaw_ratio.name = "yaw_ratio";
+  oc.yaw_ratio.noop = 1.0;
   OdoSignal odo;
   if (std::string why = odometry_signal(in, odo); !why.empty()) return oc.unavailable_reason = why, oc;
   RatioRows q = ratio_rows(in, odo, rb);
@@ -521,7 +549,9 @@ OdometryCheck check_odometry(const DiagInput& in, const ReferenceBins& rb, const
   if (oc.bins < kMinBins)
     return oc.unavailable_reason = "too few reference bins within the odometry's span", oc;
   const double nb = static_cast<double>(oc.bins);
-  q.mean_abs_v /= nb, q.mean_abs_w /= nb, q.mean_width /= nb;
+  q.mean_abs_v /= nb;
+  q.mean_abs_w /= nb;
+  q.mean_width /= nb;
   oc.residual_sigma_mps = fit_ratio(q.rv, oc.speed_ratio, q.mean_abs_v, o.min_drift_m, o.seed + 2, q, rb, o);
   if (rb.heading) fit_ratio(q.rw, oc.yaw_ratio, q.mean_abs_w, o.min_drift_rad, o.seed + 3, q, rb, o);
   oc.available = std::isfinite(oc.speed_ratio.value);

@@ -62,8 +62,12 @@ void build_columns(Problem& p, int harmonics) {
     const BodyStep<double> b = stepper.step(k, at);
     sim::TermState& x = st[k];
     const double gl = b.ds - 0.5 * b.dth * p.base_eff_m, gr = b.ds + 0.5 * b.dth * p.base_eff_m;
-    x.v_l = gl / h, x.v_r = gr / h, x.v = b.ds / h, x.w = b.dth / h;
-    x.a_l = s.a_l_mps2[k], x.a_r = s.a_r_mps2[k];
+    x.v_l = gl / h;
+    x.v_r = gr / h;
+    x.v = b.ds / h;
+    x.w = b.dth / h;
+    x.a_l = s.a_l_mps2[k];
+    x.a_r = s.a_r_mps2[k];
     if (angles) {
       x.phi_l = 0.5 * (in.phi_l_rad[k] + in.phi_l_rad[k + 1]);
       x.phi_r = 0.5 * (in.phi_r_rad[k] + in.phi_r_rad[k + 1]);
@@ -71,7 +75,8 @@ void build_columns(Problem& p, int harmonics) {
       x.phi_l = 0.5 * (s.s_l_m[k] + s.s_l_m[k + 1]) / in.radius_l_m;
       x.phi_r = 0.5 * (s.s_r_m[k] + s.s_r_m[k + 1]) / in.radius_r_m;
     }
-    x.x = interp_held(in.ref_t_s, in.ref_x_m, tm), x.y = interp_held(in.ref_t_s, in.ref_y_m, tm);
+    x.x = interp_held(in.ref_t_s, in.ref_x_m, tm);
+    x.y = interp_held(in.ref_t_s, in.ref_y_m, tm);
     x.t = tm - s.t_s.front();
   }
   for (TermTarget t : {TermTarget::v_l, TermTarget::v_r}) {
@@ -156,7 +161,8 @@ Eigen::VectorXd window_residuals(const Problem& p, const Window& w, const Correc
     if (corr.l[k] != 0.0 || corr.r[k] != 0.0) {
       const double gl = b.ds - 0.5 * b.dth * p.base_eff_m + h * corr.l[k];
       const double gr = b.ds + 0.5 * b.dth * p.base_eff_m + h * corr.r[k];
-      b.ds = 0.5 * (gl + gr), b.dth = (gr - gl) / p.base_eff_m;
+      b.ds = 0.5 * (gl + gr);
+      b.dth = (gr - gl) / p.base_eff_m;
       if (p.skid) b.dy = -p.skid_k * b.ds * b.dth / h;
     }
     advance(pose, b);
@@ -173,8 +179,12 @@ Eigen::VectorXd window_residuals(const Problem& p, const Window& w, const Correc
   Eigen::VectorXd res(static_cast<Eigen::Index>(m) * per);
   for (int it = 0;; ++it) {
     double cx = 0.0, cy = 0.0;
-    for (const Pose<double>& q : pred) cx += q.x, cy += q.y;
-    cx /= static_cast<double>(m), cy /= static_cast<double>(m);
+    for (const Pose<double>& q : pred) {
+      cx += q.x;
+      cy += q.y;
+    }
+    cx /= static_cast<double>(m);
+    cy /= static_cast<double>(m);
     Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
     Eigen::Vector3d g = Eigen::Vector3d::Zero();
     for (std::size_t i = 0; i < m; ++i) {
@@ -388,9 +398,15 @@ Linearised linearise(const Problem& p, const std::vector<int>& train, const Eige
     const Eigen::MatrixXd Js = J[w] * scale.asDiagonal();
     Normal& f = fold[w * static_cast<std::size_t>(K) / train.size()];
     f.G += Js.transpose() * Js, f.b += Js.transpose() * r_train[w];
-    f.e += r_train[w].squaredNorm(), f.n += r_train[w].size();
+    f.e += r_train[w].squaredNorm();
+    f.n += r_train[w].size();
   }
-  for (const Normal& f : fold) total.G += f.G, total.b += f.b, total.e += f.e, total.n += f.n;
+  for (const Normal& f : fold) {
+    total.G += f.G;
+    total.b += f.b;
+    total.e += f.e;
+    total.n += f.n;
+  }
   return {std::move(scale), std::move(fold), std::move(total)};
 }
 
@@ -412,7 +428,10 @@ std::vector<int> forward_select(const Problem& p, const Linearised& lin, const T
       std::vector<int> T = S;
       T.push_back(j);
       const double cv = cv_score(fold, total, T);
-      if (best < 0 || cv < best_cv) best = j, best_cv = cv;
+      if (best < 0 || cv < best_cv) {
+        best = j;
+        best_cv = cv;
+      }
     }
     if (best < 0) break;
     // A term on one wheel needs evidence that the wheels differ: it must beat
@@ -422,7 +441,10 @@ std::vector<int> forward_select(const Problem& p, const Linearised& lin, const T
       std::vector<int> T = S;
       T.push_back(pair);
       const double pair_cv = cv_score(fold, total, T);
-      if (!(best_cv <= pair_cv * (1.0 - o.min_rel_cv_gain))) best = pair, best_cv = pair_cv;
+      if (!(best_cv <= pair_cv * (1.0 - o.min_rel_cv_gain))) {
+        best = pair;
+        best_cv = pair_cv;
+      }
     }
     const bool accept = best_cv <= current * (1.0 - o.min_rel_cv_gain);
     steps.push_back({step, label(p.cols[static_cast<std::size_t>(best)]), best_cv, accept});
@@ -474,7 +496,10 @@ SupportFit fit_support(const Problem& p, const std::vector<int>& train, const st
 Eigen::MatrixXd coefficient_covariance(const SupportFit& fit, std::size_t support_size, std::size_t n_train) {
   double sse = 0.0;
   long n_res = 0;
-  for (const Eigen::VectorXd& rw : fit.r) sse += rw.squaredNorm(), n_res += rw.size();
+  for (const Eigen::VectorXd& rw : fit.r) {
+    sse += rw.squaredNorm();
+    n_res += rw.size();
+  }
   const double dof = static_cast<double>(n_res) - static_cast<double>(support_size) -
                      3.0 * static_cast<double>(n_train);
   const double s2 = dof > 0.0 ? sse / dof : std::nan("");

@@ -35,11 +35,16 @@ Rigid align(const std::vector<Pose<double>>& pred, const DiagInput& in, const Wi
   double px = 0, py = 0, qx = 0, qy = 0, sw = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const double wi = in.ref_weight(w.ref_begin + i);
-    px += wi * pred[i].x, py += wi * pred[i].y;
-    qx += wi * in.ref_x_m[w.ref_begin + i], qy += wi * in.ref_y_m[w.ref_begin + i];
+    px += wi * pred[i].x;
+    py += wi * pred[i].y;
+    qx += wi * in.ref_x_m[w.ref_begin + i];
+    qy += wi * in.ref_y_m[w.ref_begin + i];
     sw += wi;
   }
-  px /= sw, py /= sw, qx /= sw, qy /= sw;
+  px /= sw;
+  py /= sw;
+  qx /= sw;
+  qy /= sw;
   double c = 0, s = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const double wi = in.ref_weight(w.ref_begin + i);
@@ -237,7 +242,9 @@ ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
       const std::size_t g = w.ref_begin + r;
       const double dx = pred[r].x - in.ref_x_m[g], dy = pred[r].y - in.ref_y_m[g];
       sp += dx * dx + dy * dy;
-      res.pred_x_m[g] = pred[r].x, res.pred_y_m[g] = pred[r].y, res.pred_theta_rad[g] = pred[r].th;
+      res.pred_x_m[g] = pred[r].x;
+      res.pred_y_m[g] = pred[r].y;
+      res.pred_theta_rad[g] = pred[r].th;
       if (heading) {
         const double dh = pred[r].th - in.ref_theta_rad[g];
         sh += dh * dh;
@@ -246,7 +253,9 @@ ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
     const auto n = static_cast<double>(pred.size());
     e.pos_rmse_m = std::sqrt(sp / n);
     if (heading) e.heading_rmse_rad = std::sqrt(sh / n);
-    sum_p += sp, sum_h += sh, n_all += pred.size();
+    sum_p += sp;
+    sum_h += sh;
+    n_all += pred.size();
     res.windows.push_back(e);
   }
   const auto nd = static_cast<double>(std::max<std::size_t>(n_all, 1));

@@ -149,7 +149,9 @@ struct PooledError {
   // n samples of RMSEs pos and heading.
   void add(double pos, double heading, std::size_t samples) {
     const auto k = static_cast<double>(samples);
-    sp += k * pos * pos, sh += k * heading * heading, n += k;
+    sp += k * pos * pos;
+    sh += k * heading * heading;
+    n += k;
   }
   void add(const WindowError& w) { add(w.pos_rmse_m, w.heading_rmse_rad, w.n_ref); }
   void add(const ReplayResult& r) {

@@ -124,8 +124,10 @@ Increments increments(const DiagInput& in, const std::vector<Window>& windows,
             !inc.empty() && last_g == p};
       if (heading && std::isfinite(pred_theta_rad[g]) && std::isfinite(pred_theta_rad[p]))
         k.h = (pred_theta_rad[g] - in.ref_theta_rad[g]) - (pred_theta_rad[p] - in.ref_theta_rad[p]);
-      r.xmin = std::min(r.xmin, k.x), r.xmax = std::max(r.xmax, k.x);
-      r.ymin = std::min(r.ymin, k.y), r.ymax = std::max(r.ymax, k.y);
+      r.xmin = std::min(r.xmin, k.x);
+      r.xmax = std::max(r.xmax, k.x);
+      r.ymin = std::min(r.ymin, k.y);
+      r.ymax = std::max(r.ymax, k.y);
       inc.push_back(k);
       last_g = g;
     }
@@ -153,7 +155,8 @@ struct ZoneGrid {
     for (const Inc& k : inc) {
       const bool in_r = k.cx >= r.x0 && k.cx <= r.x1 && k.cy >= r.y0 && k.cy <= r.y1;
       if (in_r) {
-        a += k.a - bg_a * k.len, h += k.h - bg_h * k.len;
+        a += k.a - bg_a * k.len;
+        h += k.h - bg_h * k.len;
         if (!(prev_in && k.cont)) ++passes;
       }
       prev_in = in_r;
@@ -174,11 +177,13 @@ ZoneGrid zone_grid(Increments incs, double cell_m) {
   ZoneGrid z;
   z.inc = std::move(incs.inc);
   const double xmin = incs.xmin, xmax = incs.xmax, ymin = incs.ymin, ymax = incs.ymax;
-  z.xmin = xmin, z.ymin = ymin;
+  z.xmin = xmin;
+  z.ymin = ymin;
   const double cell = std::max({cell_m, (xmax - xmin) / 400.0, (ymax - ymin) / 400.0});
   z.cell = cell;
   const int nx = static_cast<int>((xmax - xmin) / cell) + 1, ny = static_cast<int>((ymax - ymin) / cell) + 1;
-  z.nx = nx, z.ny = ny;
+  z.nx = nx;
+  z.ny = ny;
   for (Inc& k : z.inc) {
     k.cx = std::min(nx - 1, static_cast<int>((k.x - xmin) / cell));
     k.cy = std::min(ny - 1, static_cast<int>((k.y - ymin) / cell));
@@ -187,7 +192,9 @@ ZoneGrid zone_grid(Increments incs, double cell_m) {
   std::vector<double> ca(static_cast<std::size_t>(nx * ny), 0.0), ch(ca), cl(ca);
   for (const Inc& k : z.inc) {
     const auto i = static_cast<std::size_t>(k.cy * nx + k.cx);
-    ca[i] += k.a, ch[i] += k.h, cl[i] += k.len;
+    ca[i] += k.a;
+    ch[i] += k.h;
+    cl[i] += k.len;
   }
   std::vector<double> ra, rh;
   for (std::size_t i = 0; i < cl.size(); ++i)
@@ -195,7 +202,9 @@ ZoneGrid zone_grid(Increments incs, double cell_m) {
   // The background: the median cell (0 without cells).
   z.bg_a = ra.empty() ? 0.0 : core::median(std::move(ra), core::MedianRule::upper_middle);
   z.bg_h = rh.empty() ? 0.0 : core::median(std::move(rh), core::MedianRule::upper_middle);
-  z.ca = std::move(ca), z.ch = std::move(ch), z.cl = std::move(cl);
+  z.ca = std::move(ca);
+  z.ch = std::move(ch);
+  z.cl = std::move(cl);
   return z;
 }
 
@@ -240,10 +249,14 @@ void grow_rect(const ZoneGrid& z, Rect& r, double& sc) {
       const Rect& q = tries[t];
       if (q.x0 < 0 || q.y0 < 0 || q.x1 >= z.nx || q.y1 >= z.ny) continue;
       const double v = z.score(q);
-      if (v > bs) bs = v, bi = t;
+      if (v > bs) {
+        bs = v;
+        bi = t;
+      }
     }
     if (bi < 0 || std::sqrt(bs) < std::sqrt(sc) + 1.0) break;
-    r = tries[bi], sc = bs;
+    r = tries[bi];
+    sc = bs;
   }
 }
 
@@ -290,7 +303,9 @@ std::vector<ZoneBox> zone_candidates_at(const DiagInput& in, const std::vector<W
   Increments incs = increments(in, windows, pred_x_m, pred_y_m, pred_theta_rad, heading);
   if (incs.inc.empty() || max_boxes <= 0) return {};
   ZoneGrid z = zone_grid(std::move(incs), cell_m);
-  z.heading = heading, z.sm2 = sm2, z.sh2 = sh2;
+  z.heading = heading;
+  z.sm2 = sm2;
+  z.sh2 = sh2;
   if (exhaustive_cells > 0) return exhaustive_boxes(z, exhaustive_cells, max_boxes, min_score);
   return grown_boxes(z, max_boxes, min_score);
 }
@@ -328,7 +343,8 @@ double inside_centre(const DiagInput& in, const std::vector<Window>& windows, co
       if (in.ref_x_m[g] >= b.x0_m && in.ref_x_m[g] <= b.x1_m && in.ref_y_m[g] >= b.y0_m &&
           in.ref_y_m[g] <= b.y1_m) {
         const double u = axis == 0 ? in.ref_x_m[g] : in.ref_y_m[g];
-        lo = std::min(lo, u), hi = std::max(hi, u);
+        lo = std::min(lo, u);
+        hi = std::max(hi, u);
       }
   return lo <= hi ? 0.5 * (lo + hi) : kNaN;
 }
@@ -382,7 +398,10 @@ struct BoxTrial {
       const FitSummary f = cv.screen(start_from(st, warm), Effect::slip_zone, near, o.max_iterations);
       double base = 0.0;
       for (int w : f.fitted_windows) base += settled[static_cast<std::size_t>(w)];
-      if (std::isfinite(f.final_cost)) cost = f.final_cost - base, fitted = f.effects;
+      if (std::isfinite(f.final_cost)) {
+        cost = f.final_cost - base;
+        fitted = f.effects;
+      }
     } catch (const std::exception&) {
     }
     return st;
@@ -437,7 +456,11 @@ void refine_box(const BoxTrial& try_box, const ZoneSearchOptions& o, BoxState& s
         for (std::size_t i = 0; i < qs.size() && taken == qs.size(); ++i)
           if (costs[i] < st.best_cost - 1e-6 * std::abs(st.best_cost)) taken = i;
         if (taken == qs.size()) break;
-        st.best_cost = costs[taken], st.best = sets[taken], st.bb = qs[taken], st.warm = fits[taken], moved = 1;
+        st.best_cost = costs[taken];
+        st.best = sets[taken];
+        st.bb = qs[taken];
+        st.warm = fits[taken];
+        moved = 1;
         left.erase(left.begin(), left.begin() + static_cast<long>(taken) + 1);
       }
     }
@@ -474,7 +497,8 @@ void open_flat_edges(const BoxTrial& try_box, const ZoneSearchOptions& o, BoxSta
       sets[2] = try_box(qs[2], st.warm, costs[2], fits[2]);
     for (int i = 0; i < 3; ++i)
       if (costs[i] <= ref_cost + kFlatCost) {
-        st.best = sets[i], bb = qs[i];
+        st.best = sets[i];
+        bb = qs[i];
         break;
       }
   }
@@ -508,8 +532,12 @@ EffectSet choose_zone_box(CrossValidator& cv, const EffectSet& s, const SetEval&
 #pragma omp parallel for schedule(dynamic, 1) if (boxes.size() > 1)
     for (std::size_t i = 0; i < boxes.size(); ++i) sets[i] = try_box(boxes[i], start, costs[i], fits[i]);
     for (std::size_t i = 0; i < boxes.size(); ++i)
-      if (costs[i] < st.best_cost)
-        st.best_cost = costs[i], st.best = sets[i], best_fit = fits[i], st.bb = boxes[i];
+      if (costs[i] < st.best_cost) {
+        st.best_cost = costs[i];
+        st.best = sets[i];
+        best_fit = fits[i];
+        st.bb = boxes[i];
+      }
   }
   if (st.best.empty()) return st.best;
   if (std::max(best_fit.get(Effect::slip_zone, "s_l"), best_fit.get(Effect::slip_zone, "s_r")) < kMinZoneSlip &&

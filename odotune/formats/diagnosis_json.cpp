@@ -187,20 +187,32 @@ json term_search_log(const TermSearchResult& r) {
           {"reason", r.reason}};
 }
 
+json effect_names(const std::vector<diagnose::Effect>& effects) {
+  json out = json::array();
+  for (diagnose::Effect e : effects) out.push_back(diagnose::effect_name(e));
+  return out;
+}
+
+json immaterial_lines(const std::vector<ImmaterialEffect>& immaterial) {
+  json out = json::array();
+  for (const ImmaterialEffect& i : immaterial) out.push_back(i.line);
+  return out;
+}
+
 }  // namespace
 
 json diagnosis_json(const Diagnosis& d) {
   json findings = json::array();
   for (const Finding& f : d.findings) {
     findings.push_back(
-        {{"effect", f.effect},
+        {{"effect", diagnose::to_string(f.kind)},
          {"params", named(f.params)},
          {"stderr", named(f.stderrs)},
          {"where",
           {{"segments", segments(f.segments)}, {"conditions", f.conditions}, {"regions", regions(f.regions)}}},
          {"explains", number(f.explains)},
          {"fit", {{"train", before_after(f.train)}, {"heldout", before_after(f.heldout)}}},
-         {"rivals", f.rivals},
+         {"rivals", effect_names(f.rivals)},
          {"discrete", f.discrete},
          {"evidence", f.evidence}});
     if (f.model) findings.back()["model"] = term_model(*f.model);
@@ -214,7 +226,7 @@ json diagnosis_json(const Diagnosis& d) {
           {"reference", d.reference == ReferenceKind::gt ? "gt" : "aps"},
           {"reference_samples",
            {{"gt", d.ref_gt_samples}, {"aps", d.ref_fix_samples}, {"heading", d.ref_heading}}},
-          {"materiality", {{"floor_m", number(d.floor_m)}, {"immaterial", d.immaterial},
+          {"materiality", {{"floor_m", number(d.floor_m)}, {"immaterial", immaterial_lines(d.immaterial)},
                            {"not_reproduced", d.not_reproduced}, {"not_confirmed", d.not_confirmed}}},
           {"sensor_checks_reconciled", d.sensor_notes},
           {"replay", {{"window_s", d.window_s}}},

@@ -151,24 +151,24 @@ std::optional<formats::ControllerGeometry> diagnosis_controller_geometry(
                                        fmt::join(heldout_files, ", ")));
   std::vector<std::string> used, others;
   for (const diagnose::Finding& f : d.findings) {
-    if (f.effect == "radius_error") {
+    if (f.is(diagnose::Effect::radius_error)) {
       g.calibrated.wheel_radius_left_m *= f.param("scale_l");
       g.calibrated.wheel_radius_right_m *= f.param("scale_r");
-    } else if (f.effect == "wheel_base_error") {
+    } else if (f.is(diagnose::Effect::wheel_base_error)) {
       g.calibrated.wheel_base_m *= f.param("scale");
     } else {
-      others.push_back(f.effect);
+      others.emplace_back(f.name());
       continue;
     }
-    used.push_back(f.effect);
-    g.provenance.push_back(fmt::format("{}: {} (explains {:.0f} % of the nominal error)", f.effect,
+    used.emplace_back(f.name());
+    g.provenance.push_back(fmt::format("{}: {} (explains {:.0f} % of the nominal error)", f.name(),
                                        diagnose::finding_size(f), 100.0 * f.explains));
     if (has_numbers(f.heldout))
       g.heldout.push_back(fmt::format("held-out position error without → with {}: {:.4f} m → {:.4f} m ({})",
-                                      f.effect, f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m,
+                                      f.name(), f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m,
                                       pct(f.heldout)));
     if (f.heldout_test)
-      g.heldout.push_back(fmt::format("{} on the held-out recordings: {}{}", f.effect,
+      g.heldout.push_back(fmt::format("{} on the held-out recordings: {}{}", f.name(),
                                       describe(*f.heldout_test),
                                       f.heldout_test->proven ? ", proven" : ", not proven"));
   }

@@ -27,7 +27,10 @@ std::string corrected_scenario_yaml(const tracks::Track& track, const std::strin
   std::vector<std::string> specs;
   std::string names;
   for (const diagnose::Finding& f : d.findings)
-    if (!f.spec().empty()) specs.push_back(f.spec()), names += (names.empty() ? "" : ", ") + f.effect;
+    if (!f.spec().empty()) {
+      specs.push_back(f.spec());
+      names += (names.empty() ? "" : ", ") + std::string(f.name());
+    }
   // Terms outside physics-effects.md (an unexplained finding's model): the
   // simulator replays them (odotune/sim/model_terms.h).
   std::vector<sim::ModelTerm> terms;
@@ -107,7 +110,8 @@ DiagnoseOutcome run_diagnose(const DiagnoseRequest& a) {
       (out.several ? formats::pooled_diagnosis_json(out.pooled) : formats::diagnosis_json(d)).dump(2) + "\n";
   if (!a.report.empty()) {
     std::string finding;  // the effects' names (the titles have room for no more)
-    for (const diagnose::Finding& f : d.findings) finding += (finding.empty() ? "" : ", ") + f.effect;
+    for (const diagnose::Finding& f : d.findings)
+      finding += (finding.empty() ? "" : ", ") + std::string(f.name());
     try {
       results::write_diagnosis_report(a.report, diagnosis_figure_data(in, d, finding), out.summary, json_text);
     } catch (const std::exception& e) {

@@ -26,8 +26,12 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-bool contains(const std::vector<std::string>& v, const std::string& s) {
-  return std::find(v.begin(), v.end(), s) != v.end();
+using diagnose::Effect;
+using diagnose::FindingKind;
+
+template <class T>
+bool contains(const std::vector<T>& v, const T& x) {
+  return std::find(v.begin(), v.end(), x) != v.end();
 }
 
 // |values| at the nearest rank of quantile q (values non-empty).
@@ -38,26 +42,39 @@ double abs_quantile(std::vector<double> values, double q) {
   return values[std::clamp<std::size_t>(k, 1, values.size()) - 1];
 }
 
+// Rows: the effects in table order, then "none"; columns: the finding kinds
+// (the effects, then unexplained, in kind_index order), then "none".
+constexpr std::size_t kNumKinds = diagnose::kNumEffects + 1;
+std::size_t kind_index(const FindingKind& k) {
+  const Effect* e = std::get_if<Effect>(&k);
+  return e != nullptr ? static_cast<std::size_t>(*e) : static_cast<std::size_t>(diagnose::kNumEffects);
+}
+FindingKind kind_at(std::size_t i) {
+  if (i < static_cast<std::size_t>(diagnose::kNumEffects)) return static_cast<Effect>(i);
+  return diagnose::Unexplained{};
+}
+constexpr std::size_t kNone = kNumKinds;  // the "none" column; row kNumEffects is the "none" row
+
 Confusion empty_confusion() {
   Confusion c;
-  for (const sim::EffectInfo& e : sim::effect_table()) {
-    c.rows.emplace_back(e.name);
-    c.cols.emplace_back(e.name);
+  for (std::size_t i = 0; i < kNumKinds; ++i) {
+    const FindingKind k = kind_at(i);
+    if (std::holds_alternative<Effect>(k)) c.rows.emplace_back(diagnose::to_string(k));
+    c.cols.emplace_back(diagnose::to_string(k));
   }
   c.rows.emplace_back("none");
-  c.cols.emplace_back("unexplained");
   c.cols.emplace_back("none");
   c.counts.assign(c.rows.size(), std::vector<int>(c.cols.size(), 0));
   return c;
 }
 
-void count(Confusion& c, const std::string& row, const std::string& col) {
-  const auto r = std::find(c.rows.begin(), c.rows.end(), row) - c.rows.begin();
-  const auto k = std::find(c.cols.begin(), c.cols.end(), col) - c.cols.begin();
-  if (r < static_cast<long>(c.rows.size()) && k < static_cast<long>(c.cols.size())) ++c.counts[r][k];
-}
+// Row: a true effect's index, or kNumEffects for none; column: kind_index or kNone.
+void count(Confusion& c, std::size_t row, std::size_t col) { ++c.counts[row][col]; }
 
-void add(Rate& rate, bool pass) { ++rate.cases, rate.passed += pass ? 1 : 0; }
+void add(Rate& rate, bool pass) {
+  ++rate.cases;
+  rate.passed += pass ? 1 : 0;
+}
 
 // Counts case r in its category of `rates`, and in its margin bucket.
 void count_rates(CategoryRates& rates, const CaseResult& r) {
@@ -132,7 +149,10 @@ Detectability not_judged(const std::vector<TrueEffect>& effects, const std::stri
 
 void add_findings(CaseResult& r, const diagnose::Diagnosis& d) {
   for (const diagnose::Finding& f : d.findings)
-    r.findings.push_back({f.effect, f.spec(), f.heldout.before_pos_rmse_m, f.heldout.after_pos_rmse_m});
+    r.findings.push_back({.kind = f.kind,
+                          .spec = f.spec(),
+                          .heldout_before_m = f.heldout.before_pos_rmse_m,
+                          .heldout_after_m = f.heldout.after_pos_rmse_m});
 }
 
 // A single-recording case (the header's file comment).
@@ -194,7 +214,8 @@ CaseResult run_single_case(const DiagnosisBenchmarkOptions& o, DiagnosisCase c) 
 // build_diag_input throws.
 void recording_inputs(const DiagnosisCase& c, const std::vector<tracks::Track>& tracks, bool fixes_only,
                       std::vector<diagnose::DiagInput>& fit, std::vector<diagnose::DiagInput>& held) {
-  fit.clear(), held.clear();
+  fit.clear();
+  held.clear();
   for (std::size_t k = 0; k < tracks.size(); ++k)
     (c.recordings[k].heldout ? held : fit)
         .push_back(diagnose::build_diag_input(fixes_only ? without_ground_truth(tracks[k]) : tracks[k]));
@@ -291,7 +312,10 @@ DiagnosisBenchmark run_diagnosis_benchmark(const DiagnosisBenchmarkOptions& o,
       b.cases[static_cast<std::size_t>(k)] = run_benchmark_case(o, o.first + k);
     } catch (const std::invalid_argument& e) {
 #pragma omp critical(odotune_diag_bench)
-      if (failure.empty()) failure = e.what(), invalid = true;
+      if (failure.empty()) {
+        failure = e.what();
+        invalid = true;
+      }
     } catch (const std::exception& e) {
 #pragma omp critical(odotune_diag_bench)
       if (failure.empty()) failure = e.what();
@@ -315,14 +339,15 @@ DiagnosisBenchmark run_diagnosis_benchmark(const DiagnosisBenchmarkOptions& o,
 BenchmarkSummary summarise(const std::vector<CaseResult>& cases) {
   BenchmarkSummary s;
   s.confusion = empty_confusion();
-  std::map<std::string, EffectScore> scores;
+  std::map<std::size_t, EffectScore> scores;  // by kind_index
   std::map<std::string, std::vector<double>> param_errors;
   std::map<std::string, int> param_within;
   std::vector<double> times;
   for (const CaseResult& r : cases) {
     const CaseGrade& g = r.grade;
     count_rates(r.c.multi() ? s.multi_recording : s.single_recording, r);
-    ++s.all.cases, s.all.passed += g.pass ? 1 : 0;
+    ++s.all.cases;
+    s.all.passed += g.pass ? 1 : 0;
     s.refused += g.refused ? 1 : 0;
     if (!g.pass) {
       if (g.refused) ++s.failures["refused"];
@@ -333,47 +358,47 @@ BenchmarkSummary summarise(const std::vector<CaseResult>& cases) {
     }
 
     // Confusion matrix.
-    for (const std::string& e : g.expected)
-      if (contains(g.found, e)) count(s.confusion, e, e);
-    for (const std::string& e : g.missed) {
-      if (g.extra.empty()) count(s.confusion, e, "none");
-      for (const std::string& x : g.extra) count(s.confusion, e, x);
+    const std::size_t none_row = diagnose::kNumEffects;
+    for (Effect e : g.expected)
+      if (contains(g.found, FindingKind{e})) count(s.confusion, kind_index(e), kind_index(e));
+    for (Effect e : g.missed) {
+      if (g.extra.empty()) count(s.confusion, kind_index(e), kNone);
+      for (const FindingKind& x : g.extra) count(s.confusion, kind_index(e), kind_index(x));
     }
     if (g.missed.empty())
-      for (const std::string& x : g.extra) count(s.confusion, "none", x);
-    if (g.expected.empty() && g.extra.empty()) count(s.confusion, "none", "none");
+      for (const FindingKind& x : g.extra) count(s.confusion, none_row, kind_index(x));
+    if (g.expected.empty() && g.extra.empty()) count(s.confusion, none_row, kNone);
 
     // Per-effect scores.
-    for (const std::string& e : g.expected) {
-      EffectScore& sc = scores[e];
+    for (Effect e : g.expected) {
+      EffectScore& sc = scores[kind_index(e)];
       ++sc.expected;
-      sc.named_expected += contains(g.found, e) ? 1 : 0;
+      sc.named_expected += contains(g.found, FindingKind{e}) ? 1 : 0;
       sc.right += g.pass ? 1 : 0;
     }
-    for (const std::string& f : g.found)
-      if (!contains(g.tolerated, f)) ++scores[f].named;
+    for (const FindingKind& f : g.found) {
+      const Effect* e = std::get_if<Effect>(&f);
+      if (e == nullptr || !contains(g.tolerated, *e)) ++scores[kind_index(f)].named;
+    }
 
     for (const ParamCheck& p : g.params) {
       if (!p.graded) continue;
-      const std::string name = p.effect + "." + p.param;
+      const std::string name = fmt::format("{}.{}", diagnose::effect_name(p.effect), p.param);
       if (std::isfinite(p.normalised)) param_errors[name].push_back(p.normalised);
       param_within[name] += p.ok ? 1 : 0;
     }
     times.push_back(r.total_s());
     s.diagnose_mean_s += r.diagnose_s;
   }
-  std::vector<std::string> order;
-  for (const sim::EffectInfo& e : sim::effect_table()) order.emplace_back(e.name);
-  order.emplace_back("unexplained");
-  for (const std::string& e : order) {
-    auto it = scores.find(e);
-    if (it == scores.end()) continue;
-    it->second.effect = e;
-    s.effects.push_back(it->second);
+  for (auto& [index, score] : scores) {  // kind_index order: table order, then unexplained
+    score.effect = kind_at(index);
+    s.effects.push_back(score);
   }
   for (const auto& [name, errors] : param_errors) {
     ParamStats p;
-    p.name = name, p.n = static_cast<int>(errors.size()), p.within = param_within[name];
+    p.name = name;
+    p.n = static_cast<int>(errors.size());
+    p.within = param_within[name];
     if (!errors.empty()) {
       p.median_abs = abs_quantile(errors, 0.5);
       p.p90_abs = abs_quantile(errors, 0.9);

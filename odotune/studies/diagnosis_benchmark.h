@@ -43,6 +43,7 @@
 #include <string_view>
 #include <vector>
 
+#include <odotune/diagnose/finding_kind.h>
 #include <odotune/diagnose/materiality.h>
 #include <odotune/studies/diagnosis_cases.h>
 #include <odotune/studies/diagnosis_grading.h>
@@ -69,8 +70,8 @@ struct DiagnosisBenchmarkOptions {
 };
 
 struct CaseFinding {
-  std::string effect;  // or "unexplained"
-  std::string spec;    // odotune/sim/effects.h form ("" for unexplained)
+  diagnose::FindingKind kind;
+  std::string spec;  // odotune/sim/effects.h form ("" for unexplained)
   double heldout_before_m = std::numeric_limits<double>::quiet_NaN();
   double heldout_after_m = std::numeric_limits<double>::quiet_NaN();
 };
@@ -94,7 +95,7 @@ struct Rate {
 };
 
 struct EffectScore {
-  std::string effect;
+  diagnose::FindingKind effect;
   int expected = 0;        // cases where it is detectable
   int named_expected = 0;  // ... and named (recall numerator)
   int right = 0;           // ... and the case passed
@@ -110,7 +111,7 @@ struct ParamStats {
 };
 
 // Rows: the 12 effects then "none" (no detectable effect); columns: the 12
-// effects, "unexplained", then "none" (nothing wrong named). Per case: each
+// effects, `unexplained`, then "none" (nothing wrong named). Per case: each
 // expected effect that is named counts (e, e); each missed one (e, x) for
 // every extra finding x, or (e, none) when there is none; extra findings
 // with nothing missed count (none, x); a case with nothing expected and

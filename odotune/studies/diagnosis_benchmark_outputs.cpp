@@ -32,6 +32,12 @@ std::string joined(const std::vector<std::string>& v, const char* sep = "; ") {
   return out;
 }
 
+std::vector<std::string> names(const std::vector<diagnose::Effect>& effects) {
+  std::vector<std::string> out;
+  for (diagnose::Effect e : effects) out.emplace_back(diagnose::effect_name(e));
+  return out;
+}
+
 std::string percent(double share) {
   return std::isfinite(share) ? fmt::format("{:.1f} %", 100.0 * share) : "n/a";
 }
@@ -166,14 +172,16 @@ std::string cases_csv(const DiagnosisBenchmark& b) {
     std::vector<std::string> gains, found, perr;
     for (const EffectTruth& t : r.truth.effects)
       gains.push_back(
-          fmt::format("{}: {} / {}{}{}", t.effect.name, g(t.gain_m), g(t.floor_m),
+          fmt::format("{}: {} / {}{}{}", t.effect.name(), g(t.gain_m), g(t.floor_m),
                       std::isfinite(t.heading_floor_rad)
                           ? fmt::format(" heading {} / {} rad", g(t.heading_gain_rad), g(t.heading_floor_rad))
                           : "",
                       t.on_all_windows ? " (all windows)" : ""));
-    for (const CaseFinding& f : r.findings) found.push_back(f.spec.empty() ? f.effect : f.spec);
+    for (const CaseFinding& f : r.findings)
+      found.push_back(f.spec.empty() ? std::string(diagnose::to_string(f.kind)) : f.spec);
     for (const ParamCheck& p : r.grade.params)
-      if (p.graded) perr.push_back(fmt::format("{}.{}={}", p.effect, p.param, g(p.normalised)));
+      if (p.graded)
+        perr.push_back(fmt::format("{}.{}={}", diagnose::effect_name(p.effect), p.param, g(p.normalised)));
     const std::vector<std::string> row = {std::to_string(c.index),
                                           std::to_string(c.seed),
                                           std::string(to_string(r.grade.category)),
@@ -198,8 +206,8 @@ std::string cases_csv(const DiagnosisBenchmark& b) {
                                           g(c.fix_sigma_m),
                                           g(r.truth.ref_sigma_m),
                                           c.effects_text(),
-                                          joined(r.grade.expected),
-                                          joined(r.grade.tolerated),
+                                          joined(names(r.grade.expected)),
+                                          joined(names(r.grade.tolerated)),
                                           joined(gains),
                                           g(r.truth.nominal_heldout_m),
                                           found.empty() ? "none" : joined(found),
@@ -254,8 +262,8 @@ std::string failures_and_effects_sections(const BenchmarkSummary& s) {
         "i.e. true but undetectable, namings left out); right: the case passed.\n\n"
         "| effect | detectable in | recall | precision | right |\n|---|---|---|---|---|\n";
   for (const EffectScore& e : s.effects)
-    md += fmt::format("| {} | {} | {} | {} | {} |\n", e.effect, e.expected, percent(e.recall()),
-                      percent(e.precision()),
+    md += fmt::format("| {} | {} | {} | {} | {} |\n", diagnose::to_string(e.effect), e.expected,
+                      percent(e.recall()), percent(e.precision()),
                       e.expected > 0 ? percent(static_cast<double>(e.right) / e.expected) : "n/a");
   return md;
 }
@@ -342,7 +350,8 @@ std::string failed_cases_section(const DiagnosisBenchmark& b) {
   for (const CaseResult& r : b.cases) {
     if (r.grade.pass) continue;
     std::vector<std::string> found;
-    for (const CaseFinding& f : r.findings) found.push_back(f.spec.empty() ? f.effect : f.spec);
+    for (const CaseFinding& f : r.findings)
+      found.push_back(f.spec.empty() ? std::string(diagnose::to_string(f.kind)) : f.spec);
     std::string why = r.grade.why;
     std::replace(why.begin(), why.end(), '|', '/');
     md += fmt::format("| {} | {} | {} | {} | {} | {} |\n", r.c.index, to_string(r.grade.category),

@@ -4,7 +4,7 @@
 //                  noise, reference shape, true effects, detectability (gain
 //                  and floor per effect), findings, verdict and why, timing;
 //   confusion.csv  true (detectable) effect × named effect (Confusion in
-//                  diagnosis_benchmark.h), with "none" and "unexplained";
+//                  diagnosis_benchmark.h), with "none" and `unexplained`;
 //   confusion.png  and .svg: the same as a heat map (gnuplot, odotune/results/gnuplot.h),
 //                  each row coloured by its share of the row's cases;
 //   summary.md     rates per category against the aims (docs/diagnosis/benchmark.md), failures by

@@ -19,6 +19,8 @@ namespace odotune::studies {
 
 namespace {
 
+using diagnose::Effect;
+
 // Counter-RNG streams (odotune/core/counter_rng.h); any fixed, distinct values do.
 constexpr std::uint64_t kCaseStream = 0x6469616763617365ULL;   // "diagcase"
 constexpr std::uint64_t kDrawStream = 0x64726177ULL;           // "draw"
@@ -39,11 +41,12 @@ std::vector<T> at_most(const std::vector<T>& values, double cap) {
   return out.empty() ? std::vector<T>{values.front()} : out;
 }
 
-TrueEffect make_effect(const std::string& name, std::vector<std::pair<std::string, double>> given) {
-  const sim::EffectInfo* info = sim::find_effect(name);
-  if (info == nullptr) throw std::invalid_argument("unknown effect " + name);
+TrueEffect make_effect(Effect effect, std::vector<std::pair<std::string, double>> given) {
+  const sim::EffectInfo* info = sim::find_effect(diagnose::effect_name(effect));
+  if (info == nullptr)
+    throw std::invalid_argument(fmt::format("unknown effect {}", diagnose::effect_name(effect)));
   TrueEffect e;
-  e.name = name;
+  e.effect = effect;
   for (const sim::EffectParamInfo& p : info->params) {
     double v = p.default_value;
     for (const auto& [n, value] : given)
@@ -82,68 +85,65 @@ std::vector<std::pair<std::string, double>> zone_box(CaseRng& rng, const Diagnos
   return {{"x0", p.x_m[i] - hx}, {"x1", p.x_m[i] + hx}, {"y0", p.y_m[i] - hy}, {"y1", p.y_m[i] + hy}};
 }
 
-// The effect `name` with its size drawn (ranges: "barely detectable" to
+// The effect `effect` with its size drawn (ranges: "barely detectable" to
 // "large"; docs/diagnosis/benchmark.md lists them).
-TrueEffect draw_effect(CaseRng& rng, const std::string& name, const DiagnosisCase& c, double lap_s) {
+TrueEffect draw_effect(CaseRng& rng, Effect effect, const DiagnosisCase& c, double lap_s) {
   const double u = c.speed_m_s, g = c.geometry_m;
   const double rim_max = 1.2 * u + c.scenario.robot.wheel_base_m;  // rough upper rim speed [m/s]
-  if (name == "radius_error") {
+  if (effect == Effect::radius_error) {
     const auto [l, r] = scale_pair(rng, 2e-4, 2e-2);
-    return make_effect(name, {{"scale_l", l}, {"scale_r", r}});
+    return make_effect(effect, {{"scale_l", l}, {"scale_r", r}});
   }
-  if (name == "wheel_base_error")
-    return make_effect(name, {{"scale", 1.0 + rng.sign() * rng.log_uniform(1e-3, 5e-2)}});
-  if (name == "radius_step") {
+  if (effect == Effect::wheel_base_error)
+    return make_effect(effect, {{"scale", 1.0 + rng.sign() * rng.log_uniform(1e-3, 5e-2)}});
+  if (effect == Effect::radius_step) {
     const double t = rng.uniform(0.3, 0.8) * c.duration_s;
     const auto [l, r] = scale_pair(rng, 1e-3, 3e-2);
-    return make_effect(name, {{"t", std::round(t * 10.0) / 10.0}, {"scale_l", l}, {"scale_r", r}});
+    return make_effect(effect, {{"t", std::round(t * 10.0) / 10.0}, {"scale_l", l}, {"scale_r", r}});
   }
-  if (name == "speed_radius") {
+  if (effect == Effect::speed_radius) {
     const double cc = rng.sign() * rng.log_uniform(3e-4, 3e-2) / (rim_max * rim_max);
-    return make_effect(name, {{"c", std::clamp(cc, -0.1, 0.1)}});
+    return make_effect(effect, {{"c", std::clamp(cc, -0.1, 0.1)}});
   }
-  if (name == "lateral_skid") return make_effect(name, {{"k", rng.log_uniform(0.005, 0.2)}});
-  if (name == "longitudinal_slip") {
+  if (effect == Effect::lateral_skid) return make_effect(effect, {{"k", rng.log_uniform(0.005, 0.2)}});
+  if (effect == Effect::longitudinal_slip) {
     const double k = rng.log_uniform(2e-3, 0.1) / c.scenario.motion.max_accel_m_s2;
-    return make_effect(name, {{"k", std::min(k, 10.0)}});
+    return make_effect(effect, {{"k", std::min(k, 10.0)}});
   }
-  if (name == "slip_zone") {
+  if (effect == Effect::slip_zone) {
     auto box = zone_box(rng, c, lap_s);
     const double s = rng.log_uniform(0.01, 0.3);
     const double s_r = rng.chance(1.0 / 3.0) ? s : std::min(0.9, s * rng.uniform(0.7, 1.3));
     box.emplace_back("s_l", s);
     box.emplace_back("s_r", s_r);
-    return make_effect(name, box);
+    return make_effect(effect, box);
   }
-  if (name == "gyro_bias") return make_effect(name, {{"b", rng.sign() * rng.log_uniform(1e-4, 1e-2)}});
-  if (name == "gyro_scale") return make_effect(name, {{"s", 1.0 + rng.sign() * rng.log_uniform(3e-4, 3e-2)}});
-  if (name == "actuator_lag") return make_effect(name, {{"tau", rng.log_uniform(0.01, 0.5)}});
-  if (name == "time_offset") return make_effect(name, {{"dt", rng.sign() * rng.log_uniform(0.002, 0.3)}});
-  if (name == "odometry_bias") {
+  if (effect == Effect::gyro_bias)
+    return make_effect(effect, {{"b", rng.sign() * rng.log_uniform(1e-4, 1e-2)}});
+  if (effect == Effect::gyro_scale)
+    return make_effect(effect, {{"s", 1.0 + rng.sign() * rng.log_uniform(3e-4, 3e-2)}});
+  if (effect == Effect::actuator_lag) return make_effect(effect, {{"tau", rng.log_uniform(0.01, 0.5)}});
+  if (effect == Effect::time_offset)
+    return make_effect(effect, {{"dt", rng.sign() * rng.log_uniform(0.002, 0.3)}});
+  if (effect == Effect::odometry_bias) {
     const double kind = rng.uniform();
     const double b_v = kind < 2.0 / 3.0 ? rng.sign() * rng.log_uniform(5e-4, 5e-2) * u : 0.0;
     const double b_w = kind >= 1.0 / 3.0 ? rng.sign() * rng.log_uniform(5e-4, 5e-2) * u / g : 0.0;
-    return make_effect(name, {{"b_v", b_v}, {"b_w", b_w}});
+    return make_effect(effect, {{"b_v", b_v}, {"b_w", b_w}});
   }
-  throw std::invalid_argument("draw_effect: unknown effect " + name);
-}
-
-std::size_t table_position(const std::string& name) {
-  const auto& t = sim::effect_table();
-  return static_cast<std::size_t>(
-      std::find_if(t.begin(), t.end(), [&](const sim::EffectInfo& e) { return e.name == name; }) - t.begin());
+  throw std::invalid_argument(fmt::format("draw_effect: no draw for effect {}", diagnose::effect_name(effect)));
 }
 
 // Effects the case can have (file comment), in table order; a
 // multi-recording case has neither slip_zone nor radius_step.
-std::vector<std::string> eligible_effects(const DiagnosisCase& c, bool multi) {
-  std::vector<std::string> out;
-  for (const sim::EffectInfo& e : sim::effect_table()) {
-    const std::string n(e.name);
-    if ((n == "gyro_bias" || n == "gyro_scale") && c.gyro_rate_hz <= 0.0) continue;
-    if (n == "actuator_lag" && c.odometry != BenchOdometry::commands) continue;
-    if (multi && (n == "slip_zone" || n == "radius_step")) continue;
-    out.push_back(n);
+std::vector<Effect> eligible_effects(const DiagnosisCase& c, bool multi) {
+  std::vector<Effect> out;
+  for (int i = 0; i < diagnose::kNumEffects; ++i) {
+    const auto e = static_cast<Effect>(i);
+    if (diagnose::is_gyro_effect(e) && c.gyro_rate_hz <= 0.0) continue;
+    if (e == Effect::actuator_lag && c.odometry != BenchOdometry::commands) continue;
+    if (multi && (e == Effect::slip_zone || e == Effect::radius_step)) continue;
+    out.push_back(e);
   }
   return out;
 }
@@ -182,7 +182,8 @@ CaseRecording draw_recording(const DiagnosisCase& c, const DriveScale& scale, in
   sc.name = fmt::format("bench_case_{}_r{}", c.index, k);
   sc.seed = rec.seed;
   sim::MotionParams& m = sc.motion;
-  m.start_x_m = rng.uniform(-5.0, 5.0), m.start_y_m = rng.uniform(-5.0, 5.0);
+  m.start_x_m = rng.uniform(-5.0, 5.0);
+  m.start_y_m = rng.uniform(-5.0, 5.0);
   m.start_theta_rad = rng.uniform(-3.14159, 3.14159);
   const Drive drive = draw_drive(rng, scale);
   rec.drive = drive.family;
@@ -234,7 +235,8 @@ void set_sensors(DiagnosisCase& c) {
 // Draws the `count` recordings of multi-recording case c; its drive and
 // duration_s then describe them together.
 void add_recordings(DiagnosisCase& c, const DriveScale& scale, int count, const CaseDrawOptions& o) {
-  c.drive.clear(), c.duration_s = 0.0;
+  c.drive.clear();
+  c.duration_s = 0.0;
   for (int k = 1; k <= count; ++k) {
     c.recordings.push_back(draw_recording(c, scale, k, count, o));
     c.drive += (k > 1 ? " + " : "") + c.recordings.back().drive;
@@ -289,7 +291,7 @@ double TrueEffect::param(std::string_view n) const {
 }
 
 std::string TrueEffect::spec() const {
-  sim::EffectSpec s{name, params};
+  sim::EffectSpec s{std::string(name()), params};
   return sim::format_effect(s);
 }
 
@@ -328,7 +330,8 @@ double draw_robot(CaseRng& rng, DiagnosisCase& c) {
   sim::MotionParams& m = c.scenario.motion;
   m.max_accel_m_s2 = rng.uniform(0.3, 1.0);
   m.max_angular_accel_rad_s2 = rng.uniform(1.0, 3.0);
-  m.start_x_m = rng.uniform(-5.0, 5.0), m.start_y_m = rng.uniform(-5.0, 5.0);
+  m.start_x_m = rng.uniform(-5.0, 5.0);
+  m.start_y_m = rng.uniform(-5.0, 5.0);
   m.start_theta_rad = rng.uniform(-3.14159, 3.14159);
   return z;
 }
@@ -341,7 +344,8 @@ DriveScale draw_drive_of(CaseRng& rng, DiagnosisCase& c, double z, const CaseDra
   scale.speed_m_s = 0.3 * std::pow(5.0, z) * rng.uniform(0.8, 1.2);
   scale.geometry_m = 1.0 * std::pow(3.0, z) * rng.uniform(0.8, 1.2);
   scale.spin_rate_deg_s = rng.uniform(60.0, 150.0);
-  c.speed_m_s = scale.speed_m_s, c.geometry_m = scale.geometry_m;
+  c.speed_m_s = scale.speed_m_s;
+  c.geometry_m = scale.geometry_m;
   const Drive drive = draw_drive(rng, scale);
   c.drive = drive.family;
   c.duration_s = 60.0 * rng.uniform(o.min_minutes, o.max_minutes);
@@ -389,19 +393,18 @@ void draw_sensors(CaseRng& rng, DiagnosisCase& c, const CaseDrawOptions& o) {
 void draw_effects(CaseRng& rng, DiagnosisCase& c, bool multi, double lap_s, const CaseDrawOptions& o) {
   const double count_draw = rng.uniform();
   const int count = count_draw < o.null_share ? 0 : count_draw < o.null_share + o.two_share ? 2 : 1;
-  std::vector<std::string> pool = eligible_effects(c, multi);
+  std::vector<Effect> pool = eligible_effects(c, multi);
   for (int k = 0; k < count; ++k) {
     const std::size_t at = static_cast<std::size_t>(rng.index(static_cast<int>(pool.size())));
-    const std::string name = pool[at];
+    const Effect effect = pool[at];
     pool.erase(pool.begin() + static_cast<std::ptrdiff_t>(at));
-    c.effects.push_back(draw_effect(rng, name, c, lap_s));
+    c.effects.push_back(draw_effect(rng, effect, c, lap_s));
   }
   // Table order, as sim.effects and the diagnosis list them.
-  std::sort(c.effects.begin(), c.effects.end(), [](const TrueEffect& a, const TrueEffect& b) {
-    return table_position(a.name) < table_position(b.name);
-  });
+  std::sort(c.effects.begin(), c.effects.end(),
+            [](const TrueEffect& a, const TrueEffect& b) { return a.effect < b.effect; });
   for (const TrueEffect& e : c.effects)
-    sim::apply_effect(c.scenario.effects, sim::EffectSpec{e.name, e.params});
+    sim::apply_effect(c.scenario.effects, sim::EffectSpec{std::string(e.name()), e.params});
 }
 
 }  // namespace
@@ -411,7 +414,8 @@ DiagnosisCase draw_case(std::uint64_t seed, int index, const CaseDrawOptions& o)
   if (!o.IsValid(&why)) throw std::invalid_argument("diagnosis benchmark: " + why);
   CaseRng rng(seed, kDrawStream);
   DiagnosisCase c;
-  c.index = index, c.seed = seed;
+  c.index = index;
+  c.seed = seed;
   c.scenario.name = fmt::format("bench_case_{}", index);
   c.scenario.seed = seed;
   const double z = draw_robot(rng, c);
@@ -438,7 +442,10 @@ tracks::TrackData keep_rows(const tracks::TrackData& d, const std::vector<bool>&
     out.t.push_back(d.t[i]);
     for (int k = 0; k < tracks::kNumCols; ++k)
       if (!d.cols[k].empty()) out.cols[k].push_back(d.cols[k][i]);
-    if (!d.ticks_l.empty()) out.ticks_l.push_back(d.ticks_l[i]), out.ticks_r.push_back(d.ticks_r[i]);
+    if (!d.ticks_l.empty()) {
+      out.ticks_l.push_back(d.ticks_l[i]);
+      out.ticks_r.push_back(d.ticks_r[i]);
+    }
   }
   for (auto& col : out.cols)
     if (std::all_of(col.begin(), col.end(), [](double v) { return std::isnan(v); })) col.clear();
@@ -519,7 +526,10 @@ CaseTrack shape_track(const DiagnosisCase& c, const sim::Scenario& sc,
       }
     }
   }
-  if (c.odometry == BenchOdometry::wheel_rates) d.ticks_l.clear(), d.ticks_r.clear();
+  if (c.odometry == BenchOdometry::wheel_rates) {
+    d.ticks_l.clear();
+    d.ticks_r.clear();
+  }
   tracks::TrackData shaped = keep_rows(d, non_empty_rows(d));
   tracks::TrackMeta& meta = shaped.meta;
   if (shaped.col(tracks::Col::gt_x).empty()) erase_meta(meta, "sim.gt_");

@@ -66,6 +66,7 @@
 #include <utility>
 #include <vector>
 
+#include <odotune/diagnose/effect_model.h>
 #include <odotune/sim/scenario.h>
 #include <odotune/tracks/track.h>
 
@@ -89,10 +90,11 @@ struct CaseDrawOptions {
 
 // A simulated effect with every parameter of physics-effects.md, table order.
 struct TrueEffect {
-  std::string name;
+  diagnose::Effect effect = diagnose::Effect::radius_error;
   std::vector<std::pair<std::string, double>> params;
   double param(std::string_view name) const;  // NaN when absent
-  std::string spec() const;                   // "lateral_skid:k=0.021" (odotune/sim/effects.h form)
+  std::string_view name() const { return diagnose::effect_name(effect); }
+  std::string spec() const;  // "lateral_skid:k=0.021" (odotune/sim/effects.h form)
 };
 
 // One recording of a multi-recording case (file comment).

@@ -13,20 +13,22 @@ namespace odotune::studies {
 
 namespace {
 
-bool contains(const std::vector<std::string>& v, const std::string& s) {
-  return std::find(v.begin(), v.end(), s) != v.end();
+using diagnose::Effect;
+using diagnose::FindingKind;
+
+template <class T, class U>
+bool contains(const std::vector<T>& v, const U& x) {
+  return std::find(v.begin(), v.end(), T{x}) != v.end();
 }
 
-bool is_gyro(const std::string& name) { return name == "gyro_bias" || name == "gyro_scale"; }
-
-bool is_box_edge(const std::string& effect, std::string_view p) {
-  return effect == "slip_zone" && (p == "x0" || p == "x1" || p == "y0" || p == "y1");
+bool is_box_edge(Effect effect, std::string_view p) {
+  return effect == Effect::slip_zone && (p == "x0" || p == "x1" || p == "y0" || p == "y1");
 }
 
 double departure(const TrueEffect& e, std::string_view param) {
-  const sim::EffectInfo* info = sim::find_effect(e.name);
+  const sim::EffectInfo* info = sim::find_effect(e.name());
   const sim::EffectParamInfo* p = info ? sim::find_param(*info, param) : nullptr;
-  if (p == nullptr) throw std::invalid_argument(fmt::format("{} has no parameter {}", e.name, param));
+  if (p == nullptr) throw std::invalid_argument(fmt::format("{} has no parameter {}", e.name(), param));
   return std::abs(e.param(param) - p->default_value);
 }
 
@@ -56,13 +58,13 @@ CaseCategory case_category(const std::vector<EffectTruth>& truth) {
 }
 
 double param_tolerance(const TrueEffect& e, std::string_view param, double wheel_base_m) {
-  if (e.name == "radius_step" && param == "t") return 5.0;
-  if (is_box_edge(e.name, param))
+  if (e.effect == Effect::radius_step && param == "t") return 5.0;
+  if (is_box_edge(e.effect, param))
     throw std::invalid_argument("param_tolerance: slip_zone's box is graded by box_coverage");
   if (param == "scale_l" || param == "scale_r")
     return 0.25 * std::max(departure(e, "scale_l"), departure(e, "scale_r"));
-  if (e.name == "slip_zone") return 0.25 * std::max(departure(e, "s_l"), departure(e, "s_r"));
-  if (e.name == "odometry_bias") {
+  if (e.effect == Effect::slip_zone) return 0.25 * std::max(departure(e, "s_l"), departure(e, "s_r"));
+  if (e.effect == Effect::odometry_bias) {
     const double half = 0.5 * wheel_base_m;
     const double rim = std::max(departure(e, "b_v"), departure(e, "b_w") * half);
     return param == "b_w" ? 0.25 * rim / half : 0.25 * rim;
@@ -133,17 +135,20 @@ namespace {
 // detectable), found, missed and named extra; why a naming fails.
 void grade_naming(CaseGrade& g, const std::vector<EffectTruth>& truth, const diagnose::Diagnosis& d) {
   g.category = case_category(truth);
-  for (const EffectTruth& t : truth) (t.detectable ? g.expected : g.tolerated).push_back(t.effect.name);
+  for (const EffectTruth& t : truth) (t.detectable ? g.expected : g.tolerated).push_back(t.effect.effect);
   for (const diagnose::Finding& f : d.findings)
-    if (!contains(g.found, f.effect)) g.found.push_back(f.effect);
-  for (const std::string& e : g.expected)
+    if (!contains(g.found, f.kind)) g.found.push_back(f.kind);
+  for (Effect e : g.expected)
     if (!contains(g.found, e)) g.missed.push_back(e);
-  for (const std::string& f : g.found)
-    if (!contains(g.expected, f) && !contains(g.tolerated, f)) g.extra.push_back(f);
+  for (const FindingKind& f : g.found) {
+    const Effect* e = std::get_if<Effect>(&f);
+    if (e == nullptr || (!contains(g.expected, *e) && !contains(g.tolerated, *e))) g.extra.push_back(f);
+  }
   g.named_ok = g.missed.empty() && g.extra.empty();
-  g.heldout_before_m = d.heldout.before_pos_rmse_m, g.heldout_after_m = d.heldout.after_pos_rmse_m;
-  for (const std::string& e : g.missed) join(g.why, "missed " + e);
-  for (const std::string& e : g.extra) join(g.why, "named " + e);
+  g.heldout_before_m = d.heldout.before_pos_rmse_m;
+  g.heldout_after_m = d.heldout.after_pos_rmse_m;
+  for (Effect e : g.missed) join(g.why, fmt::format("missed {}", diagnose::effect_name(e)));
+  for (const FindingKind& e : g.extra) join(g.why, fmt::format("named {}", diagnose::to_string(e)));
 }
 
 // The found slip_zone box against the true one: the larger of the share of
@@ -152,7 +157,8 @@ ParamCheck box_check(const EffectTruth& t, const diagnose::Finding& f, const Tru
   const BoxCoverage c = box_coverage(t.effect, f.param("x0"), f.param("x1"), f.param("y0"), f.param("y1"),
                                      path);
   ParamCheck p;
-  p.effect = "slip_zone", p.param = "box";
+  p.effect = Effect::slip_zone;
+  p.param = "box";
   p.truth = 0.0, p.found = std::max(1.0 - c.covered, c.extra), p.tolerance = 0.25;
   p.normalised = p.found;
   p.ok = c.samples > 0 && p.found <= 0.25;
@@ -168,8 +174,11 @@ void grade_params(CaseGrade& g, const EffectTruth& t, const diagnose::Finding& f
                   const TruePath& path) {
   for (const auto& [name, value] : t.effect.params) {
     ParamCheck p;
-    p.effect = t.effect.name, p.param = name, p.truth = value, p.found = f.param(name);
-    if (is_box_edge(t.effect.name, name)) {
+    p.effect = t.effect.effect;
+    p.param = name;
+    p.truth = value;
+    p.found = f.param(name);
+    if (is_box_edge(t.effect.effect, name)) {
       p.graded = false;
       p.ok = std::isfinite(p.found);
       p.normalised = (p.found - p.truth) / (t.effect.param(name[0] == 'x' ? "x1" : "y1") -
@@ -179,7 +188,7 @@ void grade_params(CaseGrade& g, const EffectTruth& t, const diagnose::Finding& f
     }
     p.tolerance = param_tolerance(t.effect, name, wheel_base_m);
     double miss = p.found - p.truth;
-    if (t.effect.name == "radius_step" && name == "t") {
+    if (t.effect.effect == Effect::radius_step && name == "t") {
       for (const auto& [a, b] : path.ref_gaps_s)
         if (p.truth > a && p.truth < b) miss = p.found < a ? p.found - a : p.found > b ? p.found - b : 0.0;
       // Counted in driving time: standstills between the two do not count.
@@ -189,12 +198,12 @@ void grade_params(CaseGrade& g, const EffectTruth& t, const diagnose::Finding& f
     p.normalised = p.tolerance > 0.0 ? 0.25 * miss / p.tolerance : std::nan("");
     p.ok = std::isfinite(p.found) && std::abs(miss) <= p.tolerance;
     if (!p.ok)
-      join(g.why, fmt::format("{}.{} = {:.6g}, truth {:.6g} ± {:.3g}", p.effect, p.param, p.found, p.truth,
-                              p.tolerance));
+      join(g.why, fmt::format("{}.{} = {:.6g}, truth {:.6g} ± {:.3g}", diagnose::effect_name(p.effect), p.param,
+                              p.found, p.truth, p.tolerance));
     g.params_ok = g.params_ok && p.ok;
     g.params.push_back(p);
   }
-  if (t.effect.name == "slip_zone") {
+  if (t.effect.effect == Effect::slip_zone) {
     const ParamCheck p = box_check(t, f, path, g);
     g.params_ok = g.params_ok && p.ok;
     g.params.push_back(p);
@@ -213,12 +222,13 @@ CaseGrade grade_case(const std::vector<EffectTruth>& truth, const diagnose::Diag
   for (const EffectTruth& t : truth) {
     if (!t.detectable) continue;
     const auto f = std::find_if(d.findings.begin(), d.findings.end(),
-                                [&](const diagnose::Finding& x) { return x.effect == t.effect.name; });
+                                [&](const diagnose::Finding& x) { return x.is(t.effect.effect); });
     if (f == d.findings.end()) continue;  // missed: reported above
-    wheel_expected = wheel_expected || !is_gyro(t.effect.name);
-    if (is_gyro(t.effect.name) && !(f->heldout.after_pos_rmse_m < f->heldout.before_pos_rmse_m)) {
+    const bool gyro = diagnose::is_gyro_effect(t.effect.effect);
+    wheel_expected = wheel_expected || !gyro;
+    if (gyro && !(f->heldout.after_pos_rmse_m < f->heldout.before_pos_rmse_m)) {
       g.heldout_ok = false;
-      join(g.why, fmt::format("{} held-out {:.4g} -> {:.4g} m not improved", t.effect.name,
+      join(g.why, fmt::format("{} held-out {:.4g} -> {:.4g} m not improved", t.effect.name(),
                               f->heldout.before_pos_rmse_m, f->heldout.after_pos_rmse_m));
     }
     grade_params(g, t, *f, wheel_base_m, path);
@@ -236,7 +246,7 @@ CaseGrade grade_refusal(const std::vector<EffectTruth>& truth, const std::string
   CaseGrade g;
   g.category = case_category(truth);
   g.refused = true;
-  for (const EffectTruth& t : truth) (t.detectable ? g.expected : g.tolerated).push_back(t.effect.name);
+  for (const EffectTruth& t : truth) (t.detectable ? g.expected : g.tolerated).push_back(t.effect.effect);
   g.missed = g.expected;
   g.why = "refused: " + message;
   return g;

@@ -62,7 +62,8 @@ enum class CaseCategory { null_case, undetectable, single, two };
 std::string_view to_string(CaseCategory c);  // "null", "undetectable", "single", "two"
 
 struct ParamCheck {
-  std::string effect, param;
+  diagnose::Effect effect = diagnose::Effect::radius_error;
+  std::string param;
   double truth = std::numeric_limits<double>::quiet_NaN();
   double found = std::numeric_limits<double>::quiet_NaN();
   double tolerance = std::numeric_limits<double>::quiet_NaN();   // absolute
@@ -98,8 +99,9 @@ struct CaseGrade {
   CaseCategory category = CaseCategory::null_case;
   bool pass = false;
   bool refused = false;
-  std::vector<std::string> expected, tolerated, found, missed, extra;
-  std::vector<ParamCheck> params;  // expected effects only
+  std::vector<diagnose::Effect> expected, tolerated, missed;  // true effects
+  std::vector<diagnose::FindingKind> found, extra;            // named by the diagnosis
+  std::vector<ParamCheck> params;                             // expected effects only
   bool named_ok = false, params_ok = false, heldout_ok = false;
   double heldout_before_m = std::numeric_limits<double>::quiet_NaN();  // Diagnosis::heldout
   double heldout_after_m = std::numeric_limits<double>::quiet_NaN();

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include <odotune/diagnose/effect_model.h>
@@ -23,15 +24,13 @@ using diagnose::DiagInput;
 using diagnose::Effect;
 using diagnose::EffectSet;
 
-bool is_gyro(const std::string& name) { return name == "gyro_bias" || name == "gyro_scale"; }
-
 bool is_noop(const TrueEffect& e) {
-  const sim::EffectInfo* info = sim::find_effect(e.name);
+  const sim::EffectInfo* info = sim::find_effect(e.name());
   for (const auto& [name, v] : e.params) {
     const sim::EffectParamInfo* p = info ? sim::find_param(*info, name) : nullptr;
     // radius_step.t and the slip_zone box have no no-op value of their own.
-    const bool position = (e.name == "radius_step" && name == "t") ||
-                          (e.name == "slip_zone" &&
+    const bool position = (e.effect == Effect::radius_step && name == "t") ||
+                          (e.effect == Effect::slip_zone &&
                            (name == "x0" || name == "x1" || name == "y0" || name == "y1"));
     if (p && !position && v != p->default_value) return false;
   }
@@ -54,13 +53,13 @@ Pooled pooled(const diagnose::ReplayResult& r, const std::vector<int>& which) {
   return pooled(p);
 }
 
-EffectSet wheel_set(const std::vector<TrueEffect>& truth, const std::string& without) {
+// The true wheel effects, but `without` (none when unset).
+EffectSet wheel_set(const std::vector<TrueEffect>& truth, std::optional<Effect> without = std::nullopt) {
   EffectSet set;
   for (const TrueEffect& e : truth) {
-    if (is_gyro(e.name) || e.name == without) continue;
-    const Effect id = diagnose::effect_from_name(e.name);
-    set.enable(id);
-    for (const auto& [name, v] : e.params) set.set(id, name, v);
+    if (diagnose::is_gyro_effect(e.effect) || e.effect == without) continue;
+    set.enable(e.effect);
+    for (const auto& [name, v] : e.params) set.set(e.effect, name, v);
   }
   return set;
 }
@@ -117,14 +116,14 @@ GyroTruth gyro_truth(const TrackJudge& j) {
   GyroTruth g;
   g.gyro = !j.in.gyro_t_s.empty();
   for (const TrueEffect& e : j.truth) {
-    if (e.name == "gyro_bias") g.bias = e.param("b");
-    if (e.name == "gyro_scale") g.scale = e.param("s");
+    if (e.effect == Effect::gyro_bias) g.bias = e.param("b");
+    if (e.effect == Effect::gyro_scale) g.scale = e.param("s");
   }
   for (const TrueEffect& e : j.truth)
-    if (e.name == "lateral_skid")
+    if (e.effect == Effect::lateral_skid)
       g.body.enable(Effect::lateral_skid).set(Effect::lateral_skid, "k", e.param("k"));
   const bool any_gyro = std::any_of(j.truth.begin(), j.truth.end(),
-                                    [](const TrueEffect& e) { return is_gyro(e.name); });
+                                    [](const TrueEffect& e) { return diagnose::is_gyro_effect(e.effect); });
   if (g.gyro && any_gyro) {
     g.floor_m = diagnose::materiality_floor_m(
         j.in.ref_sigma_m, j.heldout_rmse(diagnose::gyro_heading_input(j.scoring, 0.0, 1.0), g.body),
@@ -138,8 +137,9 @@ GyroTruth gyro_truth(const TrackJudge& j) {
 // window but the one where it gains most (header comment: one window cannot
 // both fit it and prove it), whether or not the held-out tail shows it.
 void judge_on_all_windows(const TrackJudge& j, EffectTruth& t) {
-  const diagnose::ReplayResult wo = diagnose::replay(j.scoring, wheel_set(j.truth, t.effect.name), j.window_s);
-  const diagnose::ReplayResult wi = diagnose::replay(j.scoring, wheel_set(j.truth, ""), j.window_s);
+  const diagnose::ReplayResult wo = diagnose::replay(j.scoring, wheel_set(j.truth, t.effect.effect),
+                                                     j.window_s);
+  const diagnose::ReplayResult wi = diagnose::replay(j.scoring, wheel_set(j.truth), j.window_s);
   std::vector<int> rest;
   std::size_t top = 0;
   double top_gain = -1.0;
@@ -147,7 +147,10 @@ void judge_on_all_windows(const TrackJudge& j, EffectTruth& t) {
     const double g = wo.windows[k].pos_rmse_m * wo.windows[k].pos_rmse_m -
                      wi.windows[k].pos_rmse_m * wi.windows[k].pos_rmse_m;
     const double gain = g * static_cast<double>(wo.windows[k].n_ref);
-    if (gain > top_gain) top_gain = gain, top = k;
+    if (gain > top_gain) {
+      top_gain = gain;
+      top = k;
+    }
   }
   for (std::size_t k = 0; k < wo.windows.size(); ++k)
     if (k != top) rest.push_back(wo.windows[k].window);
@@ -155,7 +158,8 @@ void judge_on_all_windows(const TrackJudge& j, EffectTruth& t) {
   double before = kNaN, after = kNaN, floor = kNaN;
   if (!rest.empty()) {
     const Pooled b = pooled(wo, rest), a = pooled(wi, rest), n0 = pooled(j.all, rest);
-    before = b.pos_m, after = a.pos_m;
+    before = b.pos_m;
+    after = a.pos_m;
     floor = diagnose::materiality_floor_m(j.in.ref_sigma_m, n0.pos_m, j.materiality);
     rest_material = diagnose::is_material(before, after, floor) ||
                     (j.heading && heading_material(diagnose::removed_error_m(b.heading_rad, a.heading_rad),
@@ -165,8 +169,11 @@ void judge_on_all_windows(const TrackJudge& j, EffectTruth& t) {
   if (!rest_material) {
     t.detectable = false;  // seen in one window at most
   } else if (!t.detectable) {
-    t.detectable = true, t.on_all_windows = true;
-    t.before_m = before, t.after_m = after, t.gain_m = diagnose::removed_error_m(before, after),
+    t.detectable = true;
+    t.on_all_windows = true;
+    t.before_m = before;
+    t.after_m = after;
+    t.gain_m = diagnose::removed_error_m(before, after);
     t.floor_m = floor;
   }
 }
@@ -175,13 +182,13 @@ void judge_on_all_windows(const TrackJudge& j, EffectTruth& t) {
 void judge_effect(const TrackJudge& j, const GyroTruth& g, const Detectability& out, EffectTruth& t) {
   if (t.gyro) {
     if (!g.gyro) return;
-    const bool b = t.effect.name == "gyro_bias";
+    const bool b = t.effect.effect == Effect::gyro_bias;
     t.before_m = j.heldout_rmse(diagnose::gyro_heading_input(j.scoring, b ? 0.0 : g.bias, b ? g.scale : 1.0),
                                 g.body);
     t.after_m = g.after_m;
     t.floor_m = g.floor_m;
   } else {
-    const diagnose::ReplayResult without = diagnose::replay(j.scoring, wheel_set(j.truth, t.effect.name),
+    const diagnose::ReplayResult without = diagnose::replay(j.scoring, wheel_set(j.truth, t.effect.effect),
                                                             j.window_s, j.held);
     t.before_m = without.pos_rmse_m;
     t.after_m = out.true_heldout_m;
@@ -194,7 +201,7 @@ void judge_effect(const TrackJudge& j, const GyroTruth& g, const Detectability& 
   t.gain_m = diagnose::removed_error_m(t.before_m, t.after_m);
   t.detectable = !is_noop(t.effect) && (diagnose::is_material(t.before_m, t.after_m, t.floor_m) ||
                                         heading_material(t.heading_gain_rad, t.heading_floor_rad));
-  if (!is_noop(t.effect) && (t.effect.name == "slip_zone" || t.effect.name == "radius_step"))
+  if (!is_noop(t.effect) && (t.effect.effect == Effect::slip_zone || t.effect.effect == Effect::radius_step))
     judge_on_all_windows(j, t);
 }
 
@@ -215,11 +222,12 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
   const DiagInput& scoring = si.stride > 1 ? si.input : in;
   const diagnose::ReplayResult all = diagnose::replay(scoring, EffectSet{}, out.window_s);
   const std::vector<int> held = heldout_tail(all, so.heldout_fraction);
-  out.windows = static_cast<int>(all.windows.size()), out.heldout_windows = static_cast<int>(held.size());
+  out.windows = static_cast<int>(all.windows.size());
+  out.heldout_windows = static_cast<int>(held.size());
   for (const TrueEffect& e : truth) {
     EffectTruth t;
     t.effect = e;
-    t.gyro = is_gyro(e.name);
+    t.gyro = diagnose::is_gyro_effect(e.effect);
     out.effects.push_back(t);
   }
   if (held.empty()) return out;
@@ -227,12 +235,12 @@ Detectability assess_detectability(const DiagInput& in, const std::vector<TrueEf
 
   // Wheel-odometry effects.
   out.nominal_heldout_m = j.heldout_rmse(scoring, EffectSet{});
-  out.true_heldout_m = j.heldout_rmse(scoring, wheel_set(truth, ""));
+  out.true_heldout_m = j.heldout_rmse(scoring, wheel_set(truth));
   out.floor_m = diagnose::materiality_floor_m(in.ref_sigma_m, out.nominal_heldout_m, materiality);
   // With a reference heading, the materiality rule also accepts a material heading gain.
   j.heading = in.has_ref_heading();
   if (j.heading) {
-    j.true_heading_rad = diagnose::replay(scoring, wheel_set(truth, ""), out.window_s, held).heading_rmse_rad;
+    j.true_heading_rad = diagnose::replay(scoring, wheel_set(truth), out.window_s, held).heading_rmse_rad;
     j.heading_floor_rad = diagnose::materiality_floor_m(
         in.ref_sigma_rad, diagnose::replay(scoring, EffectSet{}, out.window_s, held).heading_rmse_rad,
         materiality);
@@ -269,8 +277,9 @@ Detectability assess_recordings_detectability(const std::vector<DiagInput>& fit,
   }
   out.heldout_windows = out.windows;
   out.ref_sigma_m = sigmas.empty() ? heldout.front().ref_sigma_m : sigmas.pos_rmse_m();
-  const Pooled nominal = pooled(nominal_sums), all_true = replay_all(wheel_set(truth, ""));
-  out.nominal_heldout_m = nominal.pos_m, out.true_heldout_m = all_true.pos_m;
+  const Pooled nominal = pooled(nominal_sums), all_true = replay_all(wheel_set(truth));
+  out.nominal_heldout_m = nominal.pos_m;
+  out.true_heldout_m = all_true.pos_m;
   out.floor_m = diagnose::materiality_floor_m(out.ref_sigma_m, nominal.pos_m, materiality);
   const bool heading = heldout.front().has_ref_heading();
   const double sigma_rad = sigmas.heading_rmse_rad();
@@ -278,9 +287,11 @@ Detectability assess_recordings_detectability(const std::vector<DiagInput>& fit,
       heading ? diagnose::materiality_floor_m(sigma_rad, nominal.heading_rad, materiality) : kNaN;
   for (EffectTruth& t : out.effects) {
     if (t.gyro) continue;
-    const Pooled without = replay_all(wheel_set(truth, t.effect.name));
+    const Pooled without = replay_all(wheel_set(truth, t.effect.effect));
     t.on_all_windows = false;
-    t.before_m = without.pos_m, t.after_m = all_true.pos_m, t.floor_m = out.floor_m;
+    t.before_m = without.pos_m;
+    t.after_m = all_true.pos_m;
+    t.floor_m = out.floor_m;
     t.gain_m = diagnose::removed_error_m(t.before_m, t.after_m);
     t.heading_gain_rad = heading ? diagnose::removed_error_m(without.heading_rad, all_true.heading_rad) : kNaN;
     t.heading_floor_rad = heading_floor_rad;

@@ -73,7 +73,7 @@ std::vector<TrueEffect> truth_of(const ConcealedCase& c) {
   std::vector<TrueEffect> out;
   for (const concealed::ExpectedFinding& e : c.expected) {
     TrueEffect t;
-    t.name = std::string(e.effect);
+    t.effect = effect_from_name(e.effect);
     for (const concealed::ExpectedParam& p : e.params) t.params.emplace_back(std::string(p.name), p.value);
     out.push_back(std::move(t));
   }
@@ -85,26 +85,28 @@ std::vector<TrueEffect> truth_of(const ConcealedCase& c) {
 // may be named or not; every material one must be named, nothing else.
 Verdict judge(const ConcealedCase& c, const Diagnosis& d, const Detectability& truth, const DiagInput& in) {
   Verdict v;
-  for (const Finding& f : d.findings) v.found.insert(f.effect);
+  for (const Finding& f : d.findings) v.found.insert(std::string(f.name()));
   std::set<std::string> tolerated;
   // Borderline: a true gain within kBorderline floors is near what noise lets
   // a fit recover; either verdict is accepted there.
   constexpr double kBorderline = 1.5;
   for (const EffectTruth& t : truth.effects)
-    (t.detectable && t.gain_m >= kBorderline * t.floor_m ? v.expected : tolerated).insert(t.effect.name);
+    (t.detectable && t.gain_m >= kBorderline * t.floor_m ? v.expected : tolerated)
+        .insert(std::string(t.effect.name()));
   v.named_right = true;
   for (const std::string& e : v.expected) v.named_right = v.named_right && v.found.count(e) > 0;
   for (const std::string& e : v.found)
     v.named_right = v.named_right && (v.expected.count(e) || tolerated.count(e));
   for (const EffectTruth& t : truth.effects)
-    if (tolerated.count(t.effect.name))
-      v.detail += t.effect.name + " true gain " + std::to_string(1e3 * t.gain_m) + " mm vs floor " +
-                  std::to_string(1e3 * t.floor_m) + " mm: not or barely material (tolerated); ";
+    if (tolerated.count(std::string(t.effect.name())))
+      v.detail += std::string(t.effect.name()) + " true gain " + std::to_string(1e3 * t.gain_m) +
+                  " mm vs floor " + std::to_string(1e3 * t.floor_m) +
+                  " mm: not or barely material (tolerated); ";
   for (const concealed::ExpectedFinding& e : c.expected) {
     if (!v.expected.count(std::string(e.effect))) continue;
     const Finding* f = nullptr;
     for (const Finding& g : d.findings)
-      if (g.effect == e.effect) f = &g;
+      if (g.name() == e.effect) f = &g;
     if (!f) continue;
     for (const concealed::ExpectedParam& p : e.params) {
       if (e.effect == "slip_zone" && p.name.size() == 2 && (p.name[0] == 'x' || p.name[0] == 'y')) continue;
@@ -119,7 +121,7 @@ Verdict judge(const ConcealedCase& c, const Diagnosis& d, const Detectability& t
       // an edge the robot never crosses is not determined by the data. The
       // path: the reference positions (ground truth with its noise).
       TrueEffect t;
-      t.name = "slip_zone";
+      t.effect = Effect::slip_zone;
       for (const concealed::ExpectedParam& p : e.params) t.params.emplace_back(std::string(p.name), p.value);
       const studies::BoxCoverage b = studies::box_coverage(t, f->param("x0"), f->param("x1"), f->param("y0"),
                                                            f->param("y1"),

@@ -37,13 +37,13 @@ DiagInput simulated(const SimTrackOptions& o) { return build_diag_input(simulate
 
 const Finding* finding(const Diagnosis& d, std::string_view effect) {
   for (const Finding& f : d.findings)
-    if (f.effect == effect) return &f;
+    if (f.name() == effect) return &f;
   return nullptr;
 }
 
 std::string names(const Diagnosis& d) {
   std::string s;
-  for (const Finding& f : d.findings) s += f.effect + " ";
+  for (const Finding& f : d.findings) s += std::string(f.name()) + " ";
   return s;
 }
 
@@ -108,7 +108,7 @@ TEST(Diagnose, LateralSkidIsNamedLocatedInTurnsAndProvedOnHeldOutWindows) {
   const Diagnosis d = diagnose(simulated(options(85, 150.0, {"lateral_skid:k=0.04"})));
   ASSERT_EQ(d.findings.size(), 1u) << names(d);
   const Finding& f = d.findings.front();
-  EXPECT_EQ(f.effect, "lateral_skid");
+  EXPECT_TRUE(f.is(Effect::lateral_skid)) << f.name();
   ASSERT_EQ(f.params.size(), 1u);
   EXPECT_EQ(f.params[0].name, "k");
   EXPECT_NEAR(f.param("k"), 0.04, 0.25 * 0.04);
@@ -163,7 +163,7 @@ TEST(Diagnose, OdometryBiasIsNamedWithItsOffsets) {
   const Diagnosis d = diagnose(simulated(options(89, 150.0, {"odometry_bias:b_v=0.004,b_w=-0.003"})));
   ASSERT_EQ(d.findings.size(), 1u) << names(d);
   const Finding& f = d.findings.front();
-  ASSERT_EQ(f.effect, "odometry_bias");
+  ASSERT_TRUE(f.is(Effect::odometry_bias)) << f.name();
   ASSERT_EQ(f.params.size(), 2u);
   ASSERT_EQ(f.stderrs.size(), 2u);
   for (const auto& [name, truth] : {std::pair<std::string, double>{"b_v", b_v}, {"b_w", b_w}}) {

@@ -14,6 +14,7 @@
 
 #include <odotune/diagnose/diag_input.h>
 #include <odotune/diagnose/effect_model.h>
+#include <odotune/diagnose/finding_kind.h>
 #include <odotune/diagnose/window_replay.h>
 #include <odotune/sim/effects.h>
 
@@ -43,6 +44,9 @@ TEST(EffectModel, NamesAndLayoutComeFromTheEffectTable) {
   EXPECT_EQ(effect_name(Effect::lateral_skid), "lateral_skid");
   EXPECT_EQ(effect_name(Effect::time_offset), "time_offset");
   EXPECT_THROW(effect_from_name("lateral_skd"), std::invalid_argument);
+
+  EXPECT_TRUE(is_gyro_effect(Effect::gyro_bias));
+  EXPECT_FALSE(is_gyro_effect(Effect::odometry_bias));
 
   const EffectSet set = EffectSet::parse({"time_offset:dt=0.02", "radius_error:scale_r=1.01",
                                           "slip_zone:x0=1,x1=2,"
@@ -83,6 +87,20 @@ TEST(EffectModel, NamesAndLayoutComeFromTheEffectTable) {
                std::invalid_argument);
   EXPECT_THROW(EffectSet().set(Effect::lateral_skid, "k", 0.1), std::invalid_argument);
   EXPECT_THROW(EffectSet::parse({"radius_error:scale=1"}), std::invalid_argument);
+}
+
+// A finding's kind is written and read in one place: every effect and
+// `unexplained` go through to_string and back, anything else is refused.
+TEST(EffectModel, FindingKindNamesRoundTrip) {
+  for (int i = 0; i < kNumEffects; ++i) {
+    const FindingKind k = static_cast<Effect>(i);
+    EXPECT_EQ(to_string(k), effect_name(static_cast<Effect>(i)));
+    EXPECT_EQ(finding_kind_from_name(to_string(k)), k);
+  }
+  EXPECT_EQ(to_string(FindingKind{Unexplained{}}), "unexplained");
+  EXPECT_EQ(finding_kind_from_name("unexplained"), FindingKind{Unexplained{}});
+  EXPECT_NE(finding_kind_from_name("unexplained"), FindingKind{Effect::radius_error});
+  EXPECT_THROW(finding_kind_from_name("Unexplained"), std::invalid_argument);
 }
 
 TEST(EffectModel, GyroCorrectionInvertsTheGyroEffects) {

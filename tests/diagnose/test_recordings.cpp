@@ -74,7 +74,7 @@ TEST(Recordings, FittedOnTwoProvenOnAThird) {
   EXPECT_TRUE(p.recordings[2].heldout);
   ASSERT_FALSE(p.pooled.findings.empty()) << p.pooled.note;
   const Finding& f = p.pooled.findings.front();
-  EXPECT_EQ(f.effect, "radius_error");
+  EXPECT_TRUE(f.is(Effect::radius_error)) << f.name();
   EXPECT_NEAR(f.param("scale_l"), 0.99, 0.0025);
   // The pooled held-out numbers are the third recording's, which the fit never saw.
   EXPECT_DOUBLE_EQ(p.pooled.heldout.before_pos_rmse_m, p.recordings[2].error.before_pos_rmse_m);
@@ -143,7 +143,7 @@ TEST(Recordings, FoldsAreTheRecordingsWhenTheirStartsAreGiven) {
 TEST(Recordings, AnEffectOfOneRecordingOnlyIsNotChosenPooled) {
   const PooledDiagnosis p = diagnose_recordings({recording(1641, 150, 0.97), recording(1642, 80, 1.0)}, {});
   EXPECT_TRUE(p.pooled.selection.folds_are_recordings);
-  for (const Finding& f : p.pooled.findings) EXPECT_EQ(f.effect, "unexplained") << f.spec();
+  for (const Finding& f : p.pooled.findings) EXPECT_TRUE(f.is_unexplained()) << f.spec();
 }
 
 TEST(Recordings, AChangedRobotDoesNotHoldAcrossRecordings) {
@@ -164,7 +164,7 @@ TEST(Recordings, AChangedRobotDoesNotHoldAcrossRecordings) {
 TEST(Recordings, HeldOutRecordingConfirmsWhatItShares) {
   const PooledDiagnosis p = diagnose_recordings({recording(1651, 100, 0.99)}, {recording(1652, 100, 0.99)});
   ASSERT_EQ(p.pooled.findings.size(), 1u) << p.pooled.note;
-  EXPECT_EQ(p.pooled.findings.front().effect, "radius_error");
+  EXPECT_TRUE(p.pooled.findings.front().is(Effect::radius_error));
   EXPECT_TRUE(p.pooled.findings.front().heldout_test->material);
   EXPECT_TRUE(p.heldout_test.proven);
   EXPECT_TRUE(p.recordings[1].helped);

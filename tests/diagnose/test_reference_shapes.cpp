@@ -189,7 +189,7 @@ TEST(ReferenceShapes, KnownStartPlusFixesIsDiagnosed) {
                                       [](std::size_t i, double) { return i > 0; });
   const Diagnosis d = diagnose(build_diag_input(tr));
   ASSERT_FALSE(d.findings.empty()) << d.note;
-  EXPECT_EQ(d.findings.front().effect, "radius_error");
+  EXPECT_TRUE(d.findings.front().is(Effect::radius_error));
   EXPECT_LT(d.heldout.after_pos_rmse_m, d.heldout.before_pos_rmse_m);
 }
 

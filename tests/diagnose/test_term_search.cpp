@@ -129,7 +129,7 @@ TEST(TermSearch, DiagnoseReportsTheTermsOnAnUnexplainedFinding) {
   ASSERT_TRUE(d.term_search.found) << d.term_search.reason;
   const Finding* u = nullptr;
   for (const Finding& f : d.findings)
-    if (f.effect == "unexplained") u = &f;
+    if (f.is_unexplained()) u = &f;
   ASSERT_NE(u, nullptr);
   ASSERT_TRUE(u->model.has_value());
   const FoundTerm* sn = term(*u->model, TermBasis::sin_1);

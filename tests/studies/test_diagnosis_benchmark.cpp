@@ -107,18 +107,18 @@ TEST(DiagnosisCases, DrawsRespectWhatEachEffectNeeds) {
     EXPECT_TRUE(sim::validate_scenario(c.scenario, &why)) << why;
     EXPECT_EQ(sim::active_effects(c.scenario.effects).size(), c.effects.size());
     for (const TrueEffect& e : c.effects) {
-      effects.insert(e.name);
-      if (e.name == "gyro_bias" || e.name == "gyro_scale") {
+      effects.insert(std::string(e.name()));
+      if (e.effect == diagnose::Effect::gyro_bias || e.effect == diagnose::Effect::gyro_scale) {
         EXPECT_GT(c.gyro_rate_hz, 0.0);
       }
-      if (e.name == "actuator_lag") {
+      if (e.effect == diagnose::Effect::actuator_lag) {
         EXPECT_EQ(c.odometry, BenchOdometry::commands);
       }
-      if (e.name == "radius_step") {
+      if (e.effect == diagnose::Effect::radius_step) {
         EXPECT_GE(e.param("t"), 0.29 * c.duration_s);
         EXPECT_LE(e.param("t"), 0.81 * c.duration_s);
       }
-      if (e.name == "slip_zone") {
+      if (e.effect == diagnose::Effect::slip_zone) {
         // The commanded path crosses the box on its first lap at least.
         const PathSamples p = commanded_path(c.scenario.motion, 0.1);
         int inside = 0;
@@ -201,22 +201,32 @@ TEST(DiagnosisCases, TracksHaveTheirReferenceShape) {
 
 TrueEffect effect(const std::string& name, std::vector<std::pair<std::string, double>> params) {
   TrueEffect e;
-  e.name = name, e.params = std::move(params);
+  e.effect = diagnose::effect_from_name(name);
+  e.params = std::move(params);
   return e;
+}
+
+// The names of graded effects or findings, to compare with a list of names.
+template <class T>
+std::vector<std::string> names(const std::vector<T>& v) {
+  std::vector<std::string> out;
+  for (const T& x : v) out.emplace_back(diagnose::to_string(diagnose::FindingKind{x}));
+  return out;
 }
 
 EffectTruth truth_of(TrueEffect e, bool detectable) {
   EffectTruth t;
   t.effect = std::move(e);
   t.detectable = detectable;
-  t.gyro = t.effect.name == "gyro_bias" || t.effect.name == "gyro_scale";
+  t.gyro = diagnose::is_gyro_effect(t.effect.effect);
   return t;
 }
 
 diagnose::Finding finding(const std::string& name, std::vector<diagnose::NamedValue> params,
                           double before = 0.2, double after = 0.1) {
   diagnose::Finding f;
-  f.effect = name, f.params = std::move(params);
+  f.kind = diagnose::finding_kind_from_name(name);
+  f.params = std::move(params);
   f.heldout = {before, after};
   return f;
 }
@@ -256,7 +266,7 @@ TEST(DiagnosisGrading, ExtraFindingFailsUnexplainedIncluded) {
     const CaseGrade g = grade_case(
         truth, diagnosis({finding("wheel_base_error", {{"scale", 1.021}}), finding(extra, {})}), 0.4, kNoPath);
     EXPECT_FALSE(g.pass) << extra;
-    EXPECT_EQ(g.extra, std::vector<std::string>{extra});
+    EXPECT_EQ(names(g.extra), std::vector<std::string>{extra});
     EXPECT_TRUE(g.params_ok);
   }
 }
@@ -267,7 +277,7 @@ TEST(DiagnosisGrading, NullCaseWithAnyFindingFailsAndWithoutPasses) {
   EXPECT_TRUE(clean.pass);
   const CaseGrade noisy = grade_case({}, diagnosis({finding("unexplained", {})}), 0.4, kNoPath);
   EXPECT_FALSE(noisy.pass);
-  EXPECT_EQ(noisy.extra, std::vector<std::string>{"unexplained"});
+  EXPECT_EQ(names(noisy.extra), std::vector<std::string>{"unexplained"});
 }
 
 TEST(DiagnosisGrading, UndetectableEffectsAreTolerated) {
@@ -284,7 +294,7 @@ TEST(DiagnosisGrading, UndetectableEffectsAreTolerated) {
           .pass);
   const CaseGrade missed = grade_case(truth, diagnosis({finding("gyro_bias", {{"b", 1e-4}})}), 0.4, kNoPath);
   EXPECT_FALSE(missed.pass);
-  EXPECT_EQ(missed.missed, std::vector<std::string>{"time_offset"});
+  EXPECT_EQ(names(missed.missed), std::vector<std::string>{"time_offset"});
   const std::vector<EffectTruth> none_detectable = {truth_of(effect("gyro_bias", {{"b", 1e-4}}), false)};
   EXPECT_EQ(case_category(none_detectable), CaseCategory::undetectable);
 }
@@ -381,7 +391,7 @@ TEST(DiagnosisGrading, RefusalFailsWithItsMessage) {
   const CaseGrade g = grade_refusal(truth, "track 'x': 1 ground-truth sample(s)");
   EXPECT_FALSE(g.pass);
   EXPECT_TRUE(g.refused);
-  EXPECT_EQ(g.missed, std::vector<std::string>{"lateral_skid"});
+  EXPECT_EQ(names(g.missed), std::vector<std::string>{"lateral_skid"});
   EXPECT_NE(g.why.find("1 ground-truth sample"), std::string::npos);
 }
 
@@ -431,8 +441,9 @@ TEST(DiagnosisBenchmarkSummary, CountsConfusionRecallAndPrecision) {
   for (const auto& row : c.counts)
     for (int v : row) total += v;
   EXPECT_EQ(total, 6);
-  const auto skid_score = std::find_if(s.effects.begin(), s.effects.end(),
-                                       [](const EffectScore& e) { return e.effect == "lateral_skid"; });
+  const auto skid_score = std::find_if(s.effects.begin(), s.effects.end(), [](const EffectScore& e) {
+    return e.effect == diagnose::FindingKind{diagnose::Effect::lateral_skid};
+  });
   ASSERT_NE(skid_score, s.effects.end());
   EXPECT_EQ(skid_score->expected, 3);
   EXPECT_NEAR(skid_score->recall(), 2.0 / 3.0, 1e-12);
@@ -516,7 +527,7 @@ void expect_right(std::uint64_t seed, int index, const std::vector<std::string>&
   o.draw.multi_share = 0.0;  // the single-recording case it was (the draws do not depend on the share)
   const CaseResult c = run_benchmark_case(o, index);
   SCOPED_TRACE("seed " + std::to_string(seed) + " case " + std::to_string(index));
-  EXPECT_EQ(c.grade.expected, expected);
+  EXPECT_EQ(names(c.grade.expected), expected);
   if (expected.empty()) {
     EXPECT_EQ(c.grade.category, CaseCategory::null_case);
     EXPECT_TRUE(c.findings.empty());
@@ -721,8 +732,8 @@ TEST(DiagnosisMultiCases, OneRobotSameEffectsOwnDrives) {
     EXPECT_EQ(seeds.size(), n);
     EXPECT_EQ(starts.size(), n);
     for (const TrueEffect& e : c.effects) {
-      EXPECT_NE(e.name, "slip_zone");
-      EXPECT_NE(e.name, "radius_step");
+      EXPECT_NE(e.effect, diagnose::Effect::slip_zone);
+      EXPECT_NE(e.effect, diagnose::Effect::radius_step);
     }
   }
   EXPECT_EQ(counts, (std::set<std::size_t>{2, 3, 4}));
@@ -808,7 +819,7 @@ TEST(DiagnosisMultiCases, TruthOfALargeEffectIsDetectableAndOfNoneNot) {
   const TrueEffect base = effect("wheel_base_error", {{"scale", 1.05}});
   c.effects = {base};
   for (CaseRecording& r : c.recordings)
-    sim::apply_effect(r.scenario.effects, sim::EffectSpec{base.name, base.params});
+    sim::apply_effect(r.scenario.effects, sim::EffectSpec{std::string(base.name()), base.params});
   fit.clear(), held.clear();
   multi_inputs(c, fit, held);
   const Detectability large = assess_recordings_detectability(fit, held, c.effects);
@@ -835,7 +846,7 @@ std::string run_text(const DiagnosisBenchmark& b) {
          (r.grade.pass ? "pass" : "fail") + "|" + std::to_string(r.track_rows);
     for (const CaseFinding& f : r.findings) s += "|" + f.spec + fmt::format("{}", f.heldout_after_m);
     for (const EffectTruth& t : r.truth.effects)
-      s += fmt::format("|{}:{}:{}", t.effect.name, t.gain_m, t.floor_m);
+      s += fmt::format("|{}:{}:{}", t.effect.name(), t.gain_m, t.floor_m);
     s += fmt::format("|{}|{}\n", r.grade.heldout_before_m, r.grade.heldout_after_m);
   }
   return s;
