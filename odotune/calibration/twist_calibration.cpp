@@ -170,6 +170,7 @@ void fix_segments(const tracks::Track& track, const tracks::BodyVelocityIntegral
     fixes.push_back({t, track.col(tracks::Col::aps_x)[i], track.col(tracks::Col::aps_y)[i], 0.0});
   }
   std::vector<double> fix_t;
+  fix_t.reserve(fixes.size());
   for (const GtRow& f : fixes) fix_t.push_back(f.t);
   for (const auto& [first, last] : fix_groups(fix_t, segment_s, kMinFixesPerSegment)) {
     if (last - first + 1 < kMinFixesPerSegment) continue;
