@@ -10,6 +10,8 @@
 # (odotune/<module>/), tests/ or bench/; any other entry (for example a
 # dependency built with FetchContent) is skipped. Project headers are checked through the
 # files that include them (HeaderFilterRegex in .clang-tidy).
+# TIDY_DIRS (default "odotune tests bench") names the top folders whose units run,
+# e.g. TIDY_DIRS=odotune for the library and CLI sources only (CI).
 # clang-tidy runs under `nice -n 19`, as many at a time as nproc says (set TIDY_JOBS to
 # change that). The exit status is non-zero if there is any finding (.clang-tidy has
 # WarningsAsErrors: '*') or if a file cannot be parsed.
@@ -19,7 +21,7 @@ set -euo pipefail
 
 script="$(cd "$(dirname "$0")" && pwd)/$(basename "$0")"
 root="$(cd "$(dirname "$script")/.." && pwd)"
-usage() { sed -n '2,18p' "$script" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,19p' "$script" | sed 's/^# \{0,1\}//'; }
 
 case "${1:-}" in
   -h | --help) usage; exit 0 ;;
@@ -77,10 +79,10 @@ fi
 dbdir="$(mktemp -d)"
 log="$(mktemp)"
 trap 'rm -rf "$log" "$dbdir"' EXIT
-units="$(python3 - "$root" "$db" "$dbdir" "${files[@]}" <<'EOF'
+units="$(TIDY_DIRS="${TIDY_DIRS:-odotune tests bench}" python3 - "$root" "$db" "$dbdir" "${files[@]}" <<'EOF'
 import json, os, re, sys
 root, db, dbdir, wanted = os.path.realpath(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[4:]
-modules = {"odotune", "tests", "bench"}
+modules = set(os.environ["TIDY_DIRS"].split())
 entries = []
 for e in json.load(open(db)):
     unity = e["file"] if os.path.isabs(e["file"]) else os.path.join(e["directory"], e["file"])

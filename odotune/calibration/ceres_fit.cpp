@@ -38,19 +38,20 @@ bool full_rank(ceres::Problem& problem, double* theta, int n) {
 
 std::vector<double> scaled_standard_errors(ceres::Problem& problem, double* theta, int n, double final_cost,
                                            double dof) {
-  std::vector<double> out(static_cast<std::size_t>(n), std::nan(""));
+  const auto m = static_cast<std::size_t>(n);
+  std::vector<double> out(m, std::nan(""));
   if (!(dof > 0.0) || !full_rank(problem, theta, n)) return out;
   ceres::Covariance::Options co;
   co.algorithm_type = ceres::DENSE_SVD;
   co.num_threads = 1;
   ceres::Covariance cov(co);
   const std::vector<std::pair<const double*, const double*>> blocks = {{theta, theta}};
-  std::vector<double> c(static_cast<std::size_t>(n * n));
+  std::vector<double> c(m * m);
   if (!cov.Compute(blocks, &problem) || !cov.GetCovarianceBlock(theta, theta, c.data())) return out;
   const double s2 = 2.0 * final_cost / dof;
-  for (int i = 0; i < n; ++i) {
-    const double v = c[static_cast<std::size_t>(i * n + i)];
-    if (v > 0.0) out[static_cast<std::size_t>(i)] = std::sqrt(v * s2);
+  for (std::size_t i = 0; i < m; ++i) {
+    const double v = c[i * m + i];
+    if (v > 0.0) out[i] = std::sqrt(v * s2);
   }
   return out;
 }

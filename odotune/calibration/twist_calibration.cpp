@@ -178,6 +178,7 @@ void twist_fix_segments(const tracks::Track& track, const tracks::BodyVelocityIn
     fixes.push_back({t, track.col(tracks::Col::aps_x)[i], track.col(tracks::Col::aps_y)[i], 0.0});
   }
   std::vector<double> fix_t;
+  fix_t.reserve(fixes.size());
   for (const GtRow& f : fixes) fix_t.push_back(f.t);
   for (const auto& [first, last] : fix_groups(fix_t, segment_s, kTwistMinFixesPerSegment)) {
     if (last - first + 1 < kTwistMinFixesPerSegment) continue;

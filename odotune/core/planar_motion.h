@@ -81,7 +81,7 @@ RigidMotion2d fit_rigid_2d(std::size_t n, Px&& px, Py&& py, Qx&& qx, Qy&& qy) {
     mx += px(i), my += py(i);
     fx += qx(i), fy += qy(i);
   }
-  const double nn = static_cast<double>(n);
+  const auto nn = static_cast<double>(n);
   mx /= nn, my /= nn, fx /= nn, fy /= nn;
   double c = 0, s = 0;
   RigidMotion2d m;

@@ -48,7 +48,7 @@ Ekf::Ekf(const EkfParams& params)
 
 StateCov Ekf::predict(WheelTravel u, double abs_yaw_rate_rad_s) {
   const MotionStep step = diff_drive_step(x_, u, wheel_base_m_);
-  const StateCov R = process_noise(noise_, u, abs_yaw_rate_rad_s, step.V);
+  StateCov R = process_noise(noise_, u, abs_yaw_rate_rad_s, step.V);  // not const: returned by move
   x_ = step.next;
   P_ = step.F * P_ * step.F.transpose() + R;
   return R;

@@ -300,10 +300,10 @@ ODOTUNE_RL_INLINE void model_terms(const T* x, double dt, T* v) {
                        {sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr},
                        {-sp, cp * sr, cp * cr}};
   int k = 0;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) {
-      v[k++] = rot[i][j] * dt;
-      v[k++] = 0.5 * rot[i][j] * dt * dt;
+  for (const auto& row : rot) {
+    for (const T& r : row) {
+      v[k++] = r * dt;
+      v[k++] = 0.5 * r * dt * dt;
     }
   }
   const T dts = splat<T>(dt);
@@ -337,7 +337,8 @@ ODOTUNE_RL_INLINE void model_terms(const T* x, double dt, T* v) {
 template <int R, int Stride, class T, int... Ts>
 ODOTUNE_RL_INLINE T add_row_terms(T acc, const T* v, const T* m, std::integer_sequence<int, Ts...>) {
   constexpr int first = kRows.start[R];
-  ((acc = acc + v[kRows.terms[first + Ts]] * m[kAt[kRows.terms[first + Ts]].col * Stride]), ...);
+  ((acc = acc + v[kRows.terms[first + Ts]] * m[std::ptrdiff_t{kAt[kRows.terms[first + Ts]].col} * Stride]),
+   ...);
   return acc;
 }
 template <int R, int Stride, class T>
@@ -452,7 +453,7 @@ ODOTUNE_RL_INLINE void joseph(T* P, int n_, const int* idx, const T* PHt, const 
     for (int i = 0; i < kN; ++i) {
       T s = K[i] * PHt[m * kN + idx[0]];
       for (int a = 1; a < n; ++a) s = s + K[a * kN + i] * PHt[m * kN + idx[a]];
-      T t = K[i] * R[m * n];
+      T t = K[i] * R[std::ptrdiff_t{m} * n];
       for (int a = 1; a < n; ++a) t = t + K[a * kN + i] * R[m * n + a];
       W[m * kN + i] = (PHt[m * kN + i] - s) - t;
     }

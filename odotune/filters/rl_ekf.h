@@ -183,7 +183,8 @@ class RlEkfLanes {
   bool initialized_ = false;
   std::int64_t last_time_ns_ = 0;
   std::array<Lanes, kStateSize> x_;
-  std::array<Lanes, kStateSize * kStateSize> P_, Q_;  // column-major, lane l of entry (i, j) at [j·15 + i][l]
+  // Column-major, lane l of entry (i, j) at [j·15 + i][l].
+  std::array<Lanes, std::size_t{kStateSize} * std::size_t{kStateSize}> P_, Q_;
   std::int64_t __attribute__((vector_size(kLanes * sizeof(double)))) dynamic_q_;  // all bits set where dynamic
 };
 

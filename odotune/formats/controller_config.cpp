@@ -71,7 +71,7 @@ std::vector<std::string> geometry_lines(const ControllerGeometry& g, const Contr
   lines.insert(lines.end(), g.provenance.begin(), g.provenance.end());
   lines.insert(lines.end(), g.heldout.begin(), g.heldout.end());
   const OdometryParams &c = g.calibrated, &n = g.nominal;
-  lines.push_back("");
+  lines.emplace_back("");
   lines.push_back(fmt::format("calibrated geometry: R_L = {} m, R_R = {} m, D = {} m",
                               metres(c.wheel_radius_left_m), metres(c.wheel_radius_right_m),
                               metres(c.wheel_base_m)));
@@ -108,13 +108,14 @@ std::vector<std::string> ros_lines(const ControllerGeometry& g, const Controller
                               to_string(other)));
   for (const Param& p : params_of(g, other))
     lines.push_back(fmt::format("  {}: {}  ({})", p.name, p.value, p.meaning));
-  lines.push_back(ros2 ? "Merge these keys into your controller's ros__parameters; left_wheel_names, "
-                         "right_wheel_names and the rest stay yours."
-                       : "Merge these keys into your controller's parameters; left_wheel, right_wheel and the "
-                         "rest stay yours.");
+  lines.emplace_back(
+      ros2 ? "Merge these keys into your controller's ros__parameters; left_wheel_names, "
+             "right_wheel_names and the rest stay yours."
+           : "Merge these keys into your controller's parameters; left_wheel, right_wheel and the "
+             "rest stay yours.");
   if (!ros2)
-    lines.push_back("Do not also set wheel_radius_multiplier: when present it replaces both left and right "
-                    "multipliers.");
+    lines.emplace_back("Do not also set wheel_radius_multiplier: when present it replaces both left and right "
+                       "multipliers.");
   return lines;
 }
 
@@ -147,15 +148,15 @@ std::string gazebo_text(const ControllerGeometry& g, const ControllerOptions& o)
   const OdometryParams& c = g.calibrated;
   const double r_mean = mean_radius(c), diff = c.wheel_radius_right_m - c.wheel_radius_left_m;
   std::vector<std::string> lines = geometry_lines(g, o);
-  lines.push_back("");
-  lines.push_back("Gazebo's DiffDrive has ONE wheel_radius for both wheels (gz-sim src/systems/diff_drive/"
-                  "DiffDrive.cc, no multipliers):");
+  lines.emplace_back("");
+  lines.emplace_back("Gazebo's DiffDrive has ONE wheel_radius for both wheels (gz-sim src/systems/diff_drive/"
+                     "DiffDrive.cc, no multipliers):");
   lines.push_back(
       fmt::format("the calibrated left/right difference R_R - R_L = {:+.7f} m ({:+.3f} % of the mean "
                   "radius) cannot be represented here;",
                   diff, 100.0 * diff / r_mean));
-  lines.push_back("wheel_radius is the mean (R_L + R_R) / 2, wheel_separation is D.");
-  lines.push_back("Keep your <left_joint>, <right_joint> and other elements; replace these two.");
+  lines.emplace_back("wheel_radius is the mean (R_L + R_R) / 2, wheel_separation is D.");
+  lines.emplace_back("Keep your <left_joint>, <right_joint> and other elements; replace these two.");
   std::string out;
   for (const std::string& l : lines) out += l.empty() ? "\n" : "<!-- " + xml_comment_text(l) + " -->\n";
   out += "<plugin filename=\"gz-sim-diff-drive-system\" name=\"gz::sim::systems::DiffDrive\">\n";

@@ -121,7 +121,7 @@ class Parser {
       const YAML::Node k = it->first;
       const YAML::Node v = it->second;
       if (!k.IsScalar()) fail(k, fmt::format("{}: expected a plain key", path.empty() ? "top level" : path));
-      const std::string key = k.Scalar();
+      const std::string& key = k.Scalar();
       bool ok = false;
       for (auto a : allowed) ok = ok || a == key;
       if (!ok) {
@@ -175,6 +175,7 @@ class Parser {
 
   void read_fields(const YAML::Node& node, const std::string& path, const std::vector<Field>& fields) {
     std::vector<std::string_view> keys;
+    keys.reserve(fields.size());
     for (const auto& f : fields) keys.push_back(f.key);
     for_each_key(node, path, keys, [&](const std::string& key, const YAML::Node& k, const YAML::Node& v) {
       for (const auto& f : fields) {
@@ -338,7 +339,7 @@ class Parser {
             }
             sim::Segment s;
             s.line = static_cast<int>(line_of(kn));
-            const std::string sp = ip + "." + kind;
+            const std::string sp = fmt::format("{}.{}", ip, kind);
             if (!v.IsMap())
               fail(value_or_key(v, kn),
                    fmt::format("{}: expected a map of parameters, got {}", sp, kind_of(v)));
@@ -478,7 +479,7 @@ class Parser {
       for_each_key(item, ip, {"kind", "wheel", "t0_s", "t1_s", "s", "ramp_s", "brake_nm"},
                    [&](const std::string& f, const YAML::Node& k, const YAML::Node& v) {
                      at[f].reset(value_or_key(v, k));
-                     const std::string what = ip + "." + f;
+                     const std::string what = fmt::format("{}.{}", ip, f);
                      if (f == "kind")
                        e.kind = read_choice(v, k, what, {"spin", "hold"}) == "spin"
                                     ? sim::SlipEpisode::Kind::spin
@@ -504,7 +505,8 @@ class Parser {
                                  "brake_nm optional)",
                                  ip, required));
       std::string field, why;
-      if (!sim::check_slip_episode(e, &field, &why)) fail(at.count(field) ? at[field] : item, ip + "." + why);
+      if (!sim::check_slip_episode(e, &field, &why))
+        fail(at.count(field) ? at[field] : item, fmt::format("{}.{}", ip, why));
       out.push_back(e);
     }
   }

@@ -65,9 +65,18 @@ class WindowCache final : public ceres::EvaluationCallback {
     have_jacobians_ = evaluate_jacobians;
   }
 
+  // Whether the cache holds the point `parameters`, bit for bit (an equal value
+  // with other bits, -0.0 for 0.0, only costs a re-evaluation).
+  bool holds(const double* parameters) const {
+    if (!have_point_) return false;
+    // clang-format off
+    return std::memcmp(parameters, point_.data(), sizeof(double) * K) == 0;  // NOLINT(bugprone-suspicious-memory-comparison): the bits are the key
+    // clang-format on
+  }
+
   // All residuals at `parameters` (non-finite where an evaluation failed).
   const std::vector<double>& residuals_at(const double* parameters) {
-    if (!have_point_ || std::memcmp(parameters, point_.data(), sizeof(double) * K) != 0) {
+    if (!holds(parameters)) {
       const double* saved = params_;
       params_ = parameters;
       PrepareForEvaluation(false, true);
@@ -81,8 +90,7 @@ class WindowCache final : public ceres::EvaluationCallback {
   // Window w's residual (and Jacobian row) at `parameters`: from the cache
   // when it holds that point, else evaluated directly.
   bool Evaluate(std::size_t w, const double* parameters, double* residual, double* row) const {
-    const bool cached = have_point_ && (row == nullptr || have_jacobians_) &&
-                        std::memcmp(parameters, point_.data(), sizeof(double) * K) == 0;
+    const bool cached = (row == nullptr || have_jacobians_) && holds(parameters);
     if (!cached) {
       double* jac[1] = {row};
       return inner_[w]->Evaluate(&parameters, residual, row != nullptr ? jac : nullptr);

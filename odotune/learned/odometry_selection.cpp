@@ -274,6 +274,7 @@ CandidateResult cross_validate(const std::vector<const FusionInput*>& tracks, co
 
 int median_iterations(const std::vector<FoldMeasures>& folds, bool v) {
   std::vector<double> its;
+  its.reserve(folds.size());
   for (const FoldMeasures& f : folds) its.push_back(v ? f.v_iteration : f.w_iteration);
   return std::max(1, static_cast<int>(std::lround(core::median(its))));
 }

@@ -294,8 +294,8 @@ LstmTrainingSummary fit_slip_net(SlipNet& net, const SequenceSet& t, const Seque
 void reset_previous_input(SlipDetectorModel& model, const std::array<SequenceSet, 2>& train) {
   for (auto [net, set] : {std::pair{&model.v_net, &train[0]}, std::pair{&model.w_net, &train[1]}}) {
     using L = LstmLayout<kSlipFeatures, SlipNet::kHidden>;
-    for (int n = 0; n < L::kGates; ++n)
-      net->weights[static_cast<std::size_t>(L::kKernel + kSlipPrevious * L::kGates + n)] = 0.0;
+    constexpr std::size_t first = L::kKernel + kSlipPrevious * L::kGates;
+    for (std::size_t n = 0; n < L::kGates; ++n) net->weights[first + n] = 0.0;
     double sum = 0.0, sum2 = 0.0;
     for (double y : set->y) sum += y, sum2 += y * y;
     const double m = sum / static_cast<double>(set->size());

@@ -8,6 +8,7 @@ namespace odotune::objectives {
 
 std::vector<int> ground_truth_mode_numbers() {
   std::vector<int> out;
+  out.reserve(kGroundTruthModes.size());
   for (FitnessMode m : kGroundTruthModes) out.push_back(number(m));
   return out;
 }

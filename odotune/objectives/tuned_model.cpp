@@ -9,6 +9,10 @@ template <class... F>
 struct Overloaded : F... {
   using F::operator()...;
 };
+// Needed by clang 14 (clang-tidy parses with it), which lacks C++20's
+// deduction for aggregates; GCC deduces the same without it.
+template <class... F>
+Overloaded(F...) -> Overloaded<F...>;
 }  // namespace
 
 std::string to_string(const TunedModel& m) {

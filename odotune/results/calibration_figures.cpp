@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
@@ -127,7 +128,7 @@ std::string panel_plot(const std::vector<EstimateSeries>& panel, const std::stri
 
 void calibration_estimates_figure(const fs::path& stem, const CalibrationFigureData& d) {
   validate_calibration(d);
-  double t_min = INFINITY, t_max = -INFINITY;
+  double t_min = std::numeric_limits<double>::infinity(), t_max = -std::numeric_limits<double>::infinity();
   for (const auto* panel : {&d.radii, &d.wheel_base})
     for (const EstimateSeries& s : *panel)
       for (std::size_t i = 0; i < s.t_s.size(); ++i)

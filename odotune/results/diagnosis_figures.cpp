@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
@@ -136,7 +137,7 @@ std::string with_finding(const std::string& finding) { return finding.empty() ? 
 // ---------------------------------------------------------------- figure 1
 
 void residual_time(const fs::path& stem, const DiagnosisFigureData& d) {
-  double t_min = INFINITY, t_max = -INFINITY;
+  double t_min = std::numeric_limits<double>::infinity(), t_max = -std::numeric_limits<double>::infinity();
   for (double t : d.t_s)
     if (std::isfinite(t)) t_min = std::min(t_min, t), t_max = std::max(t_max, t);
   if (t_max <= t_min) t_min -= 0.5, t_max += 0.5;
@@ -271,7 +272,8 @@ void residual_condition(const fs::path& stem, const DiagnosisFigureData& d) {
 // ---------------------------------------------------------------- figure 3
 
 void map_figure(const fs::path& stem, const DiagnosisFigureData& d) {
-  double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+  double x0 = std::numeric_limits<double>::infinity(), x1 = -std::numeric_limits<double>::infinity(),
+         y0 = std::numeric_limits<double>::infinity(), y1 = -std::numeric_limits<double>::infinity();
   auto extend = [&](double x, double y) {
     x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
   };

@@ -1,6 +1,6 @@
 #include <odotune/results/diagnosis_report.h>
 
-#include <stdlib.h>  // mkdtemp
+#include <stdlib.h>  // NOLINT(modernize-deprecated-headers): mkdtemp is POSIX, declared by stdlib.h
 
 #include <cerrno>
 #include <cstring>

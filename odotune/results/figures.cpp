@@ -91,6 +91,7 @@ void heatmap(const fs::path& stem, const std::string& title, const std::vector<s
   }
 
   std::vector<std::string> mode_names;
+  mode_names.reserve(objectives::kGroundTruthModes.size());
   for (objectives::FitnessMode m : objectives::kGroundTruthModes) mode_names.push_back(heatmap_mode_label(m));
   std::size_t longest = 0;
   for (const auto& c : columns) longest = std::max(longest, c.size());
@@ -214,6 +215,7 @@ void boxplots(const fs::path& stem, const std::string& title,
   const char* const metric_colours[] = {"#0072B2", "#E69F00", "#009E73"};
 
   std::vector<std::string> models;
+  models.reserve(data.size());
   for (const auto& [model, by_metric] : data) models.push_back(model);
   if (models.empty()) throw std::invalid_argument("boxplots: no models");
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
@@ -50,7 +51,7 @@ std::pair<double, double> checked_time_range(const std::vector<ShadedPanel>& pan
                                              const std::vector<TimeShade>& shades,
                                              const std::vector<TimeMarker>& markers) {
   if (panels.empty()) bad_learned("time panels: no panel");
-  double t_min = INFINITY, t_max = -INFINITY;
+  double t_min = std::numeric_limits<double>::infinity(), t_max = -std::numeric_limits<double>::infinity();
   for (const ShadedPanel& p : panels) {
     bool any = false;
     for (const PanelLine& l : p.lines) {

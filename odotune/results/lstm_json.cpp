@@ -80,7 +80,7 @@ learned::LstmNet<I, H> lstm_from_json(const nlohmann::json& j) {
   } else if (act == "relu") {
     net.activation = learned::OutputActivation::relu;
   } else {
-    bad_lstm("activation", fmt::format("expected \"linear\" or \"relu\", got {}", act.dump()));
+    bad_lstm("activation", fmt::format(R"(expected "linear" or "relu", got {})", act.dump()));
   }
   net.window = integer(field(j, "window"), "window");
   if (net.window < 1 || net.window > net.kMaxWindow)

@@ -119,9 +119,7 @@ struct LineOut {
 std::array<std::string, kRlCovSize> q_cells(const RosExportInput& in,
                                             std::array<std::size_t, kRlStateSize>& width) {
   std::array<double, kRlCovSize> q{};
-  for (int i = 0; i < kRlStateSize; ++i)
-    q[static_cast<std::size_t>(i * kRlStateSize + i)] =
-        kRlDefaultProcessNoiseDiagonal[static_cast<std::size_t>(i)];
+  for (std::size_t i = 0; i < kRlStateSize; ++i) q[i * kRlStateSize + i] = kRlDefaultProcessNoiseDiagonal[i];
   q[kRlX * kRlStateSize + kRlX] = in.process_var_x_m2_per_s;
   q[kRlY * kRlStateSize + kRlY] = in.process_var_y_m2_per_s;
   q[kRlYaw * kRlStateSize + kRlYaw] = in.process_var_yaw_rad2_per_s;
@@ -225,7 +223,7 @@ void write_parameters(const LineOut& line, const RosExportInput& in,
   for (int i = 0; i < kRlStateSize; ++i) {
     std::string row = "      ";
     for (int j = 0; j < kRlStateSize; ++j) {
-      const std::string& c = cells[static_cast<std::size_t>(i * kRlStateSize + j)];
+      const std::string& c = cells[static_cast<std::size_t>(i) * kRlStateSize + static_cast<std::size_t>(j)];
       const bool last = (i == kRlStateSize - 1 && j == kRlStateSize - 1);
       std::string cell = c + (last ? "]" : ",");
       if (j + 1 < kRlStateSize) cell.resize(width[static_cast<std::size_t>(j)] + 2, ' ');

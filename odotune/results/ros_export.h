@@ -112,7 +112,8 @@ struct RosExportParsed {
 
   // Element (row, col), 0-based.
   double at(int row, int col) const {
-    return process_noise_covariance[static_cast<std::size_t>(row * kRlStateSize + col)];
+    return process_noise_covariance[static_cast<std::size_t>(row) * kRlStateSize +
+                                    static_cast<std::size_t>(col)];
   }
 };
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
@@ -103,7 +104,7 @@ std::string time_marker_labels(const std::vector<TimeMarker>& markers) {
 void time_panels(const fs::path& stem, const std::string& title, const std::vector<TimePanel>& panels,
                  const std::vector<TimeMarker>& markers) {
   if (panels.empty()) bad_study("time panels: no panel");
-  double t_min = INFINITY, t_max = -INFINITY;
+  double t_min = std::numeric_limits<double>::infinity(), t_max = -std::numeric_limits<double>::infinity();
   for (const TimePanel& p : panels) {
     bool any = false;
     for (const PanelLine& l : p.lines) {

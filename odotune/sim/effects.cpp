@@ -161,6 +161,7 @@ std::size_t edit_distance(std::string_view a, std::string_view b) {
 
 std::string unknown_effect_message(std::string_view name) {
   std::vector<std::string_view> names;
+  names.reserve(kTable.size());
   for (const auto& e : kTable) names.push_back(e.name);
   const std::string guess = closest_name(name, names);
   return fmt::format("unknown effect '{}'{}; valid effects: {}", name,

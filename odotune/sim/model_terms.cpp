@@ -74,6 +74,7 @@ std::string number(double v) { return fmt::format("{:.3g}", v); }
 const std::vector<TermBasis>& all_term_bases() {
   static const std::vector<TermBasis> all = [] {
     std::vector<TermBasis> v;
+    v.reserve(kNumTermBases);
     for (int i = 0; i < kNumTermBases; ++i) v.push_back(static_cast<TermBasis>(i));
     return v;
   }();

@@ -250,7 +250,8 @@ double solve_speed_radius(double u, double c) {
   return z;
 }
 
-// Commands that make the robot with effects `fx` drive `m` (header comment).
+// Commands that make the robot with effects `fx` drive `m` (docs/simulator.md,
+// "Re-driving a track", "Commands").
 std::vector<VelocityKnot> invert_effects(const Motion& m, const RobotParams& r, const Effects& fx) {
   const std::size_t n = m.t.size();
   const double D = r.wheel_base_m, D_true = D * (fx.wheel_base_error ? fx.wheel_base_error->scale : 1.0);
@@ -328,7 +329,7 @@ RobotParams robot_of(const tracks::Track& track) {
   return r;
 }
 
-// Sensor rates and noise (header comment).
+// Sensor rates and noise (docs/simulator.md, "Re-driving a track", "Sensors").
 class SensorBuilder {
  public:
   SensorBuilder(const tracks::Track& track, double step_s) : track_(track), sps_(std::round(1.0 / step_s)) {}

@@ -391,7 +391,7 @@ std::pair<double, double> ground_speeds(const Scenario& sc, const Physics& ph, c
                (1.0 - 0.5 * (s.sl_l.spin + w1.sl_l.spin));
   double g_r = 0.5 * (u0_r + u1_r) * (1.0 - s_long_r) * (1.0 - s_zone_r) *
                (1.0 - 0.5 * (s.sl_r.spin + w1.sl_r.spin));
-  if (!sc.terms.empty()) {  // model terms (header comment, step 5a); none: every bit as before
+  if (!sc.terms.empty()) {  // model terms (docs/simulator.md, step 5a); none: every bit as before
     const TermState ts{g_l,
                        g_r,
                        (u1_l - u0_l) / h,
@@ -484,7 +484,7 @@ void integrate(const Scenario& sc, const MotionProfile& profile, const RowGrid& 
   }
 }
 
-// odometry_bias (header comment, "Sensors"): the wheel-rate offsets whose
+// odometry_bias (docs/simulator.md, "Sensors"): the wheel-rate offsets whose
 // NOMINAL forward kinematics are (b_v, b_w), added to the reported rates
 // and, times the measurement time, to the counted rotation. Only when the
 // effect is on, so tracks without it keep their bits.

@@ -338,7 +338,8 @@ TEST(CalibrationObjective, ThePapersSettingsScoreBetterThanAnAbsurdRandomWalk) {
   EXPECT_LT(f_paper, f_absurd);
   // The absurd walk also leaves the final radii further from the truth.
   const auto final_error = [&](const std::vector<double>& v) {
-    const TrackCalibrationScore& t = obj.run(s.to_box(v)).tracks.at(0);
+    const CalibrationResult r = obj.run(s.to_box(v));
+    const TrackCalibrationScore& t = r.tracks.at(0);
     return std::abs(t.final_params.wheel_radius_left_m - t.truth_final->wheel_radius_left_m) +
            std::abs(t.final_params.wheel_radius_right_m - t.truth_final->wheel_radius_right_m);
   };

@@ -130,7 +130,7 @@ TEST(ProcessNoiseRate, RqIsRTimesTheOdometryRateAsRosInputFromRq) {
   // Irregular sampling: steps alternate 10 ms and 30 ms, i.e. 50 steps/s on average.
   ReplayInput in = straight_line("irregular", 0.0, 0.01, 0.01, 301, 0.02);
   for (std::size_t k = 0; k < in.rows.size(); ++k)
-    in.rows[k].t_s = 0.02 * static_cast<double>(k / 2 * 2) + (k % 2 ? 0.01 : 0.0);
+    in.rows[k].t_s = 0.02 * static_cast<double>(k - k % 2) + (k % 2 ? 0.01 : 0.0);
   // rows at 0, 0.01, 0.04, 0.05, 0.08, …: from the first to the last step, 300 steps over 5.99 s.
   const double span_s = in.rows.back().t_s - in.rows.front().t_s;
   filters::NoiseParams p;
