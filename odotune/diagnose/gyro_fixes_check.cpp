@@ -176,7 +176,7 @@ std::array<double, 3> model_standard_errors(ceres::Problem& problem, const std::
   const Eigen::VectorXd inv = d.array().rsqrt();
   const Eigen::MatrixXd scaled = inv.asDiagonal() * jtj * inv.asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(scaled);
-  const Eigen::VectorXd ev = es.eigenvalues();
+  const Eigen::VectorXd& ev = es.eigenvalues();
   if (!(ev.minCoeff() > 1e-10 * ev.maxCoeff())) return se;
   const Eigen::MatrixXd cov_scaled = es.eigenvectors() * ev.cwiseInverse().asDiagonal() *
                                      es.eigenvectors().transpose();

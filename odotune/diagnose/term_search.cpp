@@ -219,6 +219,7 @@ std::vector<Eigen::VectorXd> all_residuals(const Problem& p, const std::vector<i
                                            const Eigen::VectorXd& c, bool free = true) {
   const Corrections corr = corrections(p, c);
   std::vector<Eigen::VectorXd> out;
+  out.reserve(which.size());
   for (int w : which) out.push_back(window_residuals(p, p.windows[static_cast<std::size_t>(w)], corr, free));
   return out;
 }
@@ -239,6 +240,7 @@ std::vector<Eigen::MatrixXd> jacobians(const Problem& p, const std::vector<int>&
                                        const Eigen::VectorXd& c, const std::vector<Eigen::VectorXd>& r0,
                                        const std::vector<int>& cols, double rel_step) {
   std::vector<Eigen::MatrixXd> J;
+  J.reserve(r0.size());
   for (const Eigen::VectorXd& r : r0) J.emplace_back(r.size(), static_cast<Eigen::Index>(cols.size()));
   for (std::size_t q = 0; q < cols.size(); ++q) {
     Eigen::VectorXd cp = c;

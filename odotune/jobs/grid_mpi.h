@@ -40,7 +40,7 @@ bool mpi_built();
 class MpiSession {
  public:
   MpiSession();
-  ~MpiSession();
+  ~MpiSession();  // NOLINT(performance-trivially-destructible): MPI_Finalize in an MPI build
   MpiSession(const MpiSession&) = delete;
   MpiSession& operator=(const MpiSession&) = delete;
 

@@ -280,8 +280,8 @@ void write_generalisation(const ReportInput& in, ReportWriter& w, results::HtmlP
     page.paragraph("Per-track tuning overfits: the held-out column is what a configuration tuned on the "
                    "other tracks achieves on this one. Means over all modes and seeds.");
   } else {
-    notes.push_back("no leave-one-track-out runs: set leave_one_out: true in the experiment for the "
-                    "generalisation table and held-out heatmaps");
+    notes.emplace_back("no leave-one-track-out runs: set leave_one_out: true in the experiment for the "
+                       "generalisation table and held-out heatmaps");
     page.paragraph("This experiment has no leave-one-track-out runs (leave_one_out: false).");
   }
 }

@@ -38,8 +38,8 @@ class ReportWriter {
     } catch (const std::exception& ex) {
       throw core::Failure(fmt::format("{}: cannot draw the figure: {}", stem.string(), ex.what()));
     }
-    files.push_back(stem.string() + ".png");
-    files.push_back(stem.string() + ".svg");
+    files.emplace_back(stem.string() + ".png");
+    files.emplace_back(stem.string() + ".svg");
     return {caption, svg_of(stem.string() + ".svg"), name + ".png", ""};
   }
   // Writes `content` atomically; throws Failure with one line.

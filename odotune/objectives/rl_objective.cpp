@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 #include <tuple>
+#include <utility>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -229,6 +230,7 @@ std::vector<FixScore> replay_score_batch(const rlnode::Recording& rec,
     for (std::size_t k = 0; k < outs.size(); ++k) sums[k].add(outs[k]);
   }
   std::vector<FixScore> out;
+  out.reserve(sums.size());
   for (const ScoreSum& s : sums) out.push_back(s.done());
   return out;
 }
@@ -297,6 +299,7 @@ std::vector<FixScore> OutageReplays::score_batch(std::span<const rlnode::ReplayS
     }
   }
   std::vector<FixScore> out;
+  out.reserve(sums.size());
   for (const ScoreSum& s : sums) out.push_back(s.done());
   return out;
 }
@@ -350,9 +353,9 @@ RlObjective::RlObjective(const rlnode::Recording& rec, const rlnode::ReplaySetti
                          const RlTuneOptions& options)
     : RlObjective(std::vector<const rlnode::Recording*>{&rec}, base, options) {}
 
-RlObjective::RlObjective(std::span<const rlnode::Recording* const> recs, const rlnode::ReplaySettings& base,
+RlObjective::RlObjective(std::span<const rlnode::Recording* const> recs, rlnode::ReplaySettings base,
                          const RlTuneOptions& options)
-    : base_(base), options_(options) {
+    : base_(std::move(base)), options_(options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("rl tune: " + why);
   if (recs.empty()) throw std::invalid_argument("rl tune: no recording");

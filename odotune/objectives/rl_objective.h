@@ -192,7 +192,7 @@ class RlObjective {
   // fixes pooled over all of them (pooled()). The innovation statistics take
   // one recording only (std::invalid_argument otherwise). The recordings
   // must outlive the objective.
-  RlObjective(std::span<const rlnode::Recording* const> recs, const rlnode::ReplaySettings& base,
+  RlObjective(std::span<const rlnode::Recording* const> recs, rlnode::ReplaySettings base,
               const RlTuneOptions& options);
 
   // data_fitness(x) plus the prior.

@@ -120,11 +120,9 @@ RunRows read_run(const fs::path& path) {
       num[i] = *v;
     }
     std::int64_t cnt[2];
-    for (int i = 0; i < 2; ++i) {
-      const auto c = tick_count(f[static_cast<std::size_t>(4 + i)]);
-      if (!c)
-        r.fail(fmt::format("{} {} is not a whole tick count", kNames[4 + i],
-                           quote(f[static_cast<std::size_t>(4 + i)])));
+    for (std::size_t i = 0; i < 2; ++i) {
+      const auto c = tick_count(f[4 + i]);
+      if (!c) r.fail(fmt::format("{} {} is not a whole tick count", kNames[4 + i], quote(f[4 + i])));
       cnt[i] = *c;
     }
     if (!out.t.empty() && !(num[0] > out.t.back()))

@@ -17,7 +17,7 @@
 
 namespace odotune::tracks::import_text {
 
-inline constexpr std::size_t kMaxLineBytes = 64 * 1024;
+inline constexpr std::size_t kMaxLineBytes = std::size_t{64} * 1024;
 
 // True when path names an existing regular file (no exception).
 bool is_file(const std::filesystem::path& path);

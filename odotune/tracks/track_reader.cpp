@@ -147,7 +147,7 @@ constexpr std::size_t kMaxColumns = 256;
 class LineReader {
  public:
   enum class Status { kLine, kEof, kTooLong };
-  explicit LineReader(std::istream& in) : sb_(in.rdbuf()), buf_(64 * 1024) {}
+  explicit LineReader(std::istream& in) : sb_(in.rdbuf()), buf_(std::size_t{64} * 1024) {}
 
   Status next(std::string& line) {
     line.clear();

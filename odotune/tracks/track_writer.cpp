@@ -119,7 +119,7 @@ void format_track(const Track& track, std::ostream& out) {
       if (!std::isnan((*col)[i])) fmt::format_to(it, "{}", (*col)[i]);
     }
     buf.push_back('\n');
-    if (buf.size() >= 64 * 1024) flush();
+    if (buf.size() >= std::size_t{64} * 1024) flush();
   }
   flush();
 }
