@@ -168,8 +168,7 @@ Residuals located_residuals(const ReplayContext& c, const ModelScores& m, const 
 // the step search's fine step).
 void add_wheel_params(Finding& f, const SelectedEffect& se, const EffectSet& wheel,
                       const std::vector<ParamSlot>& layout, const Selection& sel, const DiagnoseOptions& o) {
-  for (std::size_t k = 0; k < layout.size(); ++k) {
-    const ParamSlot& slot = layout[k];
+  for (const ParamSlot& slot : layout) {
     if (slot.effect != se.effect) continue;
     const std::string name = param_short_name(slot.name);
     f.params.push_back({name, wheel.params(se.effect)[static_cast<std::size_t>(slot.index)]});

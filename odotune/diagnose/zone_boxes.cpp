@@ -191,7 +191,8 @@ ZoneGrid zone_grid(Increments incs, double cell_m) {
   // Background growth per metre: median over cells with some travel.
   std::vector<double> ca(static_cast<std::size_t>(nx * ny), 0.0), ch(ca), cl(ca);
   for (const Inc& k : z.inc) {
-    const auto i = static_cast<std::size_t>(k.cy * nx + k.cx);
+    const auto i = static_cast<std::size_t>(k.cy) * static_cast<std::size_t>(nx) +
+                   static_cast<std::size_t>(k.cx);
     ca[i] += k.a;
     ch[i] += k.h;
     cl[i] += k.len;
@@ -216,11 +217,15 @@ std::vector<ZoneBox> exhaustive_boxes(const ZoneGrid& z, int exhaustive_cells, i
   // Cells with travel, as 2D prefix counts: a box without any is skipped
   // unscored (a large drive's area is mostly empty).
   std::vector<int> pre(static_cast<std::size_t>((nx + 1) * (ny + 1)), 0);
-  const auto P = [&](int x, int y) -> int& { return pre[static_cast<std::size_t>(y * (nx + 1) + x)]; };
+  const auto P = [&](int x, int y) -> int& {
+    return pre[static_cast<std::size_t>(y) * static_cast<std::size_t>(nx + 1) + static_cast<std::size_t>(x)];
+  };
   for (int y = 0; y < ny; ++y)
     for (int x = 0; x < nx; ++x)
-      P(x + 1, y + 1) = P(x, y + 1) + P(x + 1, y) - P(x, y) +
-                        (z.cl[static_cast<std::size_t>(y * nx + x)] > 0.0);
+      P(x + 1, y + 1) =
+          P(x, y + 1) + P(x + 1, y) - P(x, y) +
+          (z.cl[static_cast<std::size_t>(y) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(x)] >
+           0.0);
   std::vector<ZoneBox> all;
   for (int y0 = 0; y0 < ny; ++y0)
     for (int x0 = 0; x0 < nx; ++x0)
@@ -274,7 +279,7 @@ std::vector<ZoneBox> grown_boxes(const ZoneGrid& z, int max_boxes, double min_sc
   std::vector<Rect> found;
   std::vector<ZoneBox> out;
   for (std::size_t si = 0; si < seeds.size() && static_cast<int>(out.size()) < max_boxes &&
-                           si < static_cast<std::size_t>(10 * max_boxes);
+                           si < 10 * static_cast<std::size_t>(max_boxes);
        ++si) {
     const int cx = seeds[si].second % nx, cy = seeds[si].second / nx;
     const bool covered = std::any_of(found.begin(), found.end(), [&](const Rect& r) {

@@ -97,9 +97,9 @@ std::vector<std::string> calibration_summary_lines(
                              &OdometryParams::wheel_radius_left_m));
     out.push_back(param_line("D", s.final_params.wheel_base_m, s.truth_final, &OdometryParams::wheel_base_m));
     if (!inputs[k].truth)
-      out.push_back("    convergence   unknown (the track has no truth: no sim.effects metadata)");
+      out.emplace_back("    convergence   unknown (the track has no truth: no sim.effects metadata)");
     else if (calibration::is_offline(r.method))
-      out.push_back("    convergence   n/a (an offline fit of the whole track)");
+      out.emplace_back("    convergence   n/a (an offline fit of the whole track)");
     else if (s.convergence_time_s)
       out.push_back(
           fmt::format("    convergence   {:.2f} s (both radii within {:g} % of the truth from then on)",

@@ -49,6 +49,7 @@ std::string field(const results::RunRecord& r, RunKey key) {
 // The distinct values of `key` among `runs`, sorted (numerically for integers).
 std::string values_of(const std::vector<const results::RunRecord*>& runs, RunKey key) {
   std::vector<std::string> v;
+  v.reserve(runs.size());
   for (const auto* r : runs) v.push_back(field(*r, key));
   std::sort(v.begin(), v.end(), [key](const std::string& a, const std::string& b) {
     if (is_integer_key(key) && a.size() != b.size()) return a.size() < b.size();
@@ -219,6 +220,7 @@ RunSelection select_best_run(const std::vector<results::RunRecord>& all, const s
                              const std::string& store) {
   if (all.empty()) throw core::Failure(fmt::format("{}: the store holds no finished runs yet", store));
   std::vector<const results::RunRecord*> runs;
+  runs.reserve(all.size());
   for (const auto& r : all) runs.push_back(&r);
   for (std::size_t i = 0; i < filters.size(); ++i) {
     std::vector<const results::RunRecord*> kept;

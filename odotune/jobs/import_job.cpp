@@ -26,8 +26,8 @@ tracks::Track import_track(const ImportRequest& r) {
 
 std::string column_list(const tracks::Track& track) {
   std::vector<std::string_view> names = {"t"};
-  if (!track.ticks_l().empty()) names.push_back("ticks_l");
-  if (!track.ticks_r().empty()) names.push_back("ticks_r");
+  if (!track.ticks_l().empty()) names.emplace_back("ticks_l");
+  if (!track.ticks_r().empty()) names.emplace_back("ticks_r");
   for (int c = 0; c < tracks::kNumCols; ++c)
     if (track.has(static_cast<tracks::Col>(c)))
       names.push_back(tracks::column_name(static_cast<tracks::Col>(c)));

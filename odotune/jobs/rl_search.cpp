@@ -61,7 +61,11 @@ struct Profiled {
 
 void profile_and_reset(const objectives::RlObjective& objective, const objectives::RlSearchOptions& options,
                        const SolverSettings& settings, Profiled& r) {
-  const auto [lo, hi] = objective.bounds();
+  // Named, not a structured binding: the lambda below captures them, which
+  // clang (and so clang-tidy) before 16 cannot compile.
+  const auto box = objective.bounds();
+  const std::vector<double>& lo = box.first;
+  const std::vector<double>& hi = box.second;
   const std::size_t n = lo.size();
   const DataFitness data{&objective};
   std::vector<std::vector<double>> points;

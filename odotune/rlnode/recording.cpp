@@ -45,7 +45,7 @@ struct TopicPlan {
 
 // The topic the node's subscription to `topic` reads, under --remap.
 std::string resolved(const RecordingOptions& options, const std::string& topic) {
-  const std::string t = detail::with_slash(topic);
+  std::string t = detail::with_slash(topic);
   for (const auto& [from, to] : options.remap) {
     if (detail::with_slash(from) == t) return detail::with_slash(to);
   }
@@ -56,7 +56,7 @@ std::string resolved(const RecordingOptions& options, const std::string& topic) 
 std::string command_topic(const bags::BagInfo& info, const RlParams& params, const RecordingOptions& options,
                           const std::map<std::string, std::string>& types) {
   if (!params.control.enabled) return "";
-  const std::string topic = resolved(options, params.control.topic);
+  std::string topic = resolved(options, params.control.topic);
   const std::string_view want = params.control.stamped ? "geometry_msgs/TwistStamped" : "geometry_msgs/Twist";
   const auto it = types.find(topic);
   if (it == types.end()) {

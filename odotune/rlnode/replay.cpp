@@ -194,7 +194,7 @@ class Scheduler {
       push(q.again ? Event::reprocess : Event::process, q.input, t);
       clock_.process(q.stamp_ns);
       if (!rec_.params.smooth_lagged_data) continue;
-      measurements_.push_back({q.input, q.stamp_ns});
+      measurements_.emplace_back(q.input, q.stamp_ns);
       // saveFilterState, once per time stamp.
       if (queue_.empty() || queue_.top().stamp_ns != clock_.last_ns) {
         push(Event::save, -1, t);
@@ -327,7 +327,7 @@ double threshold_of(const ReplaySettings& s, const Input& in) {
 Eigen::Vector3d take_adjust(NodeState& n, int i) {
   for (auto it = n.adjust.begin(); it != n.adjust.end(); ++it) {
     if (it->first != i) continue;
-    const Eigen::Vector3d a = it->second;
+    Eigen::Vector3d a = it->second;
     n.adjust.erase(it);
     return a;
   }

@@ -77,7 +77,7 @@ namespace {
 std::array<double, 36> diagonal6(double a, double b, double c, double d, double e, double f) {
   std::array<double, 36> m{};
   const double v[6] = {a, b, c, d, e, f};
-  for (int i = 0; i < 6; ++i) m[i * 7] = v[i];
+  for (std::size_t i = 0; i < 6; ++i) m[i * 7] = v[i];
   return m;
 }
 

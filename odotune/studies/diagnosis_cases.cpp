@@ -41,7 +41,7 @@ std::vector<T> at_most(const std::vector<T>& values, double cap) {
   return out.empty() ? std::vector<T>{values.front()} : out;
 }
 
-TrueEffect make_effect(Effect effect, std::vector<std::pair<std::string, double>> given) {
+TrueEffect make_effect(Effect effect, const std::vector<std::pair<std::string, double>>& given) {
   const sim::EffectInfo* info = sim::find_effect(diagnose::effect_name(effect));
   if (info == nullptr)
     throw std::invalid_argument(fmt::format("unknown effect {}", diagnose::effect_name(effect)));

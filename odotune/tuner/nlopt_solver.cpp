@@ -135,7 +135,7 @@ double objective(unsigned n, const double* x, double* grad, void* data) noexcept
     }
   }
   // NLopt gets +inf for non-finite values (NaN would corrupt comparisons).
-  return std::isfinite(f) ? f : kInf;
+  return std::isfinite(f) ? f : kInf;  // NOLINT(bugprone-narrowing-conversions): false positive on +inf
 }
 
 }  // namespace

@@ -26,7 +26,9 @@ enum Stream : std::uint64_t { kInitPosition = 0, kInitVelocity = 1, kR1 = 2, kR2
 
 // Non-finite values become +inf so that a plain `<` never prefers them and
 // NaN never poisons a comparison.
-double sanitize(double f) { return std::isfinite(f) ? f : kInf; }
+double sanitize(double f) {
+  return std::isfinite(f) ? f : kInf;  // NOLINT(bugprone-narrowing-conversions): false positive on +inf
+}
 
 // The swarm's state, row-major [particle][dimension], and its best.
 struct Swarm {
