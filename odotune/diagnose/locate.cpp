@@ -214,7 +214,7 @@ std::vector<MapRegion> regions(const ResidualSeries& s, const Location& loc, con
   auto cell_of = [&](std::size_t i) {
     const int cx = std::min(nx - 1, static_cast<int>((s.x_m[i] - x0) / cell));
     const int cy = std::min(ny - 1, static_cast<int>((s.y_m[i] - y0) / cell));
-    return static_cast<std::size_t>(cy * nx + cx);
+    return static_cast<std::size_t>(cy) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(cx);
   };
   for (std::size_t i : rows) {
     const std::size_t c = cell_of(i);
@@ -257,7 +257,8 @@ std::vector<MapRegion> regions(const ResidualSeries& s, const Location& loc, con
         for (int ddx = -1; ddx <= 1; ++ddx) {
           const int ex = cx + ddx, ey = cy + ddy;
           if (ex < 0 || ey < 0 || ex >= nx || ey >= ny) continue;
-          const std::size_t e = static_cast<std::size_t>(ey * nx + ex);
+          const std::size_t e = static_cast<std::size_t>(ey) * static_cast<std::size_t>(nx) +
+                                static_cast<std::size_t>(ex);
           if (hot[e] && !seen[e]) {
             seen[e] = 1;
             stack.push_back(e);

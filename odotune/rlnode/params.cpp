@@ -856,7 +856,7 @@ bool read_control_limits(const Reader& r, const Keys& keys, RlParams& p) {
     r.note(keys.find(name)->key, fmt::format("{} has {} entries, not 6: robot_localization takes every gain as "
                                              "1.0, and so does the replay",
                                              name, v->size()));
-    return ones;
+    return ones;  // NOLINT(performance-no-automatic-move): captured by reference, a copy is meant
   };
   const auto accel = limits("acceleration_limits", ones);
   if (!accel) return false;
@@ -1192,6 +1192,7 @@ void edit_section(const Text& t, const Keys& keys, const std::vector<Change>& ch
     }
   }
   if (added.empty()) return;
+  // NOLINTNEXTLINE(modernize-loop-convert): clang 14 cannot compile libstdc++ 12's views::reverse
   for (auto it = keys.order.rbegin(); it != keys.order.rend(); ++it) {
     if (removed.count(it->first)) continue;
     const std::size_t at = t.line_end(value_span(t, it->second).second);
