@@ -46,12 +46,7 @@ bool PoseUkfParams::IsValid(std::string* why) const {
                                 std::pair{"q_xy_m2_s", q_xy_m2_s}})
     if (!(std::isfinite(q) && q >= 0.0))
       return core::invalid(why, describe_pv(name, q, "a finite number >= 0"));
-  if (!(std::isfinite(alpha) && alpha > 0.0 && alpha <= 1.0))
-    return core::invalid(why, describe_pv("alpha", alpha, "in (0, 1]"));
-  if (!(std::isfinite(beta) && beta >= 0.0))
-    return core::invalid(why, describe_pv("beta", beta, "a finite number >= 0"));
-  if (!(std::isfinite(kappa) && static_cast<double>(kPvN) + kappa > 0.0))
-    return core::invalid(why, describe_pv("kappa", kappa, "finite with n + kappa > 0 (n = 5)"));
+  if (!unscented::parameters_valid<kPvN>(alpha, beta, kappa, why)) return false;
   if (!initial_state.allFinite()) return core::invalid(why, "initial_state must be finite");
   if (!is_spd_pv<kPvN>(initial_cov))
     return core::invalid(why, "initial_cov must be symmetric positive definite");

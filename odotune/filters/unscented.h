@@ -8,9 +8,30 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
 #include <cstddef>
+#include <sstream>
+#include <string>
+
+#include <odotune/core/why.h>
 
 namespace odotune::filters::unscented {
+
+// The transform's parameters as the weights below need them: α in (0, 1],
+// β ≥ 0, n + κ > 0. False with "alpha = 2 must be in (0, 1]" in *why.
+template <int N>
+bool parameters_valid(double alpha, double beta, double kappa, std::string* why) {
+  const auto out_of_range = [why](const char* name, double x, const std::string& expected) {
+    std::ostringstream os;
+    os << name << " = " << x << " must be " << expected;
+    return core::invalid(why, os.str());
+  };
+  if (!(std::isfinite(alpha) && alpha > 0.0 && alpha <= 1.0)) return out_of_range("alpha", alpha, "in (0, 1]");
+  if (!(std::isfinite(beta) && beta >= 0.0)) return out_of_range("beta", beta, "a finite number >= 0");
+  if (!(std::isfinite(kappa) && static_cast<double>(N) + kappa > 0.0))
+    return out_of_range("kappa", kappa, "finite with n + kappa > 0 (n = " + std::to_string(N) + ")");
+  return true;
+}
 
 template <int N>
 struct SigmaWeights {

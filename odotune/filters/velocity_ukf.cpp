@@ -43,12 +43,7 @@ bool UkfParams::IsValid(std::string* why) const {
     return core::invalid(why, describe("q_v_m2_s3", q_v_m2_s3, "a finite number >= 0 [(m/s)^2/s]"));
   if (!(std::isfinite(q_w_rad2_s3) && q_w_rad2_s3 >= 0.0))
     return core::invalid(why, describe("q_w_rad2_s3", q_w_rad2_s3, "a finite number >= 0 [(rad/s)^2/s]"));
-  if (!(std::isfinite(alpha) && alpha > 0.0 && alpha <= 1.0))
-    return core::invalid(why, describe("alpha", alpha, "in (0, 1]"));
-  if (!(std::isfinite(beta) && beta >= 0.0))
-    return core::invalid(why, describe("beta", beta, "a finite number >= 0"));
-  if (!(std::isfinite(kappa) && static_cast<double>(kN) + kappa > 0.0))
-    return core::invalid(why, describe("kappa", kappa, "finite with n + kappa > 0 (n = 2)"));
+  if (!unscented::parameters_valid<kN>(alpha, beta, kappa, why)) return false;
   if (!initial_state.allFinite()) return core::invalid(why, "initial_state must be finite");
   if (!is_spd(initial_cov)) return core::invalid(why, "initial_cov must be symmetric positive definite");
   return true;
