@@ -21,7 +21,8 @@ std::pair<RlProtocolScores, std::vector<rlnode::TrajectoryPoint>> protocol_runs(
   rlnode::ReplayOutput a = outage_run(rec, s, span.outage_from_ns, span.end_ns, trajectory);
   const rlnode::ReplayOutput b = rlnode::replay(
       rec, rlnode::make_schedule(rec, every_fifth_roles(rec, span.fifth_from_ns, span.end_ns), span.end_ns), s);
-  return {{score_of(std::span(&a, 1)), score_of(std::span(&b, 1))}, a.trajectory};
+  const RlProtocolScores scores{score_of(std::span(&a, 1)), score_of(std::span(&b, 1))};
+  return {scores, std::move(a.trajectory)};
 }
 
 }  // namespace
