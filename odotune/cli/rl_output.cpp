@@ -159,12 +159,14 @@ void print_rl_track_eval(const jobs::RlTrackEvalOutcome& o) {
     fmt::print("  against ground truth: every fix fused RMSE {}; through {} simulated fix outages RMSE {}\n",
                truth_text(s.run), s.windows, truth_text(s.outages));
     fmt::print("  against the fixes: held-out fixes (5 folds of 1 s blocks) RMSE {}; outages RMSE {}\n",
-               metres(s.heldout_fixes), metres(s.outage_fixes));
+               metres(s.heldout_fixes), s.windows > 0 ? metres(s.outage_fixes) : "n/a");
   }
   if (o.rows.size() > 1) {
+    std::size_t windows = 0;
+    for (const auto& r : o.rows) windows += r.scores.windows;
     fmt::print("all {} tracks: ground truth, fixes fused {}, outages {}; held-out fixes {}, outages {}\n",
                o.rows.size(), truth_text(o.run), truth_text(o.outages), metres(o.heldout_fixes),
-               metres(o.outage_fixes));
+               windows > 0 ? metres(o.outage_fixes) : "n/a");
   }
 }
 
@@ -191,8 +193,10 @@ void print_rl_eval(const jobs::RlEvalOutcome& o) {
     fmt::print("  after --from: GPS outage RMSE {}; every 5th fix held out: RMSE {}\n",
                metres(o.protocols->outage), metres(o.protocols->every_fifth));
   }
-  if (o.outages)
-    fmt::print("  simulated GPS outages ({} windows): RMSE {}\n", o.outage_windows, metres(*o.outages));
+  if (o.outages) {
+    fmt::print("  simulated GPS outages ({} windows): RMSE {}\n", o.outage_windows,
+               o.outage_windows > 0 ? metres(*o.outages) : "n/a");
+  }
   print_notes(o.notes, o.alignment);
 }
 

@@ -418,7 +418,18 @@ RlObjective::RlObjective(std::span<const rlnode::Recording* const> recs, rlnode:
   base_parts_ = parts(base_);
   base_parts_.heldout = heldout_score(base_);
   base_parts_.outage = outage_score(base_);
-  const bool heldout_used = heldout_needed() || options.fitness == RlFitness::heldout_nll;
+  check_base_scores(rec);
+}
+
+void RlObjective::check_base_scores(const rlnode::Recording& rec) const {
+  const std::string no_fix_scored = fmt::format(
+      "{}: no fix is scored before the tuning span ends (outages of {} s after {} s of GPS); "
+      "expected a longer span or shorter outages",
+      recs_.size() > 1 ? fmt::format("all {} recordings", recs_.size()) : rec.bag.string(),
+      fmt::join(options_.outage_s, ", "), options_.warmup_s);
+  // Without a window the outage score is empty, not diverged.
+  if (outage_needed() && window_count() == 0) throw std::invalid_argument(no_fix_scored);
+  const bool heldout_used = heldout_needed() || options_.fitness == RlFitness::heldout_nll;
   for (const auto& [used, score, what] : {std::tuple{heldout_used, &base_parts_.heldout, "held-out fixes"},
                                           std::tuple{outage_needed(), &base_parts_.outage, "outages"}}) {
     if (used && std::isnan(score->rmse_m)) {
@@ -432,16 +443,12 @@ RlObjective::RlObjective(std::span<const rlnode::Recording* const> recs, rlnode:
     }
   }
   if ((heldout_used && !(base_parts_.heldout.rmse_m > 0.0)) ||
-      (outage_needed() && !(base_parts_.outage.rmse_m > 0.0))) {
-    throw std::invalid_argument(
-        fmt::format("{}: no fix is scored before the tuning span ends (outages of {} s after {} s of GPS); "
-                    "expected a longer span or shorter outages",
-                    rec.bag.string(), fmt::join(options.outage_s, ", "), options.warmup_s));
-  }
+      (outage_needed() && !(base_parts_.outage.rmse_m > 0.0)))
+    throw std::invalid_argument(no_fix_scored);
   // With the fixes' variance taken out, each part used must keep some error to score.
   for (const FixScore* s :
        {heldout_used ? &base_parts_.heldout : nullptr, outage_needed() ? &base_parts_.outage : nullptr}) {
-    if (s == nullptr || !options.subtract_fix_variance || error_m(*s) > 0.0) continue;
+    if (s == nullptr || !options_.subtract_fix_variance || error_m(*s) > 0.0) continue;
     throw std::invalid_argument(fmt::format(
         "{}: the fixes' variances (mean var_x + var_y {:.4g} m²) exceed the file's squared error at them "
         "({:.4g} m²); expected variances that describe the fixes, or a tune without --subtract-fix-variance",

@@ -249,6 +249,9 @@ class RlObjective {
   Parts base_parts_;
   std::unique_ptr<std::atomic<long>> diverged_ = std::make_unique<std::atomic<long>>(0);
 
+  // Refuses, in one line, base scores there is nothing to tune from: no
+  // outage window, a file whose own filter diverges, no fix scored.
+  void check_base_scores(const rlnode::Recording& rec) const;
   bool heldout_needed() const;
   bool outage_needed() const;
   bool statistic_kind() const;
