@@ -22,14 +22,17 @@ using odotune::testing_support::TempDir;
 
 namespace {
 
+// Two drives of a_s and b_s seconds. The tunes take shorter ones, each
+// evaluation replaying every track: 45 s leaves one outage window of 10 s
+// after the 30 s of GPS before the first.
 struct Drive {
   TempDir dir{"cli-rl-track"};
   std::string params = (dir.path() / "user.yaml").string();
   std::string a = (dir.path() / "a.csv").string(), b = (dir.path() / "b.csv").string();
-  Drive() {
+  explicit Drive(double a_s = 60.0, double b_s = 50.0) {
     std::ofstream(params) << odotune::testing_support::kRlTeamFile << odotune::testing_support::kRlGyroInput;
-    odotune::tracks::write_track(odotune::testing_support::synthetic_track(11), a);
-    odotune::tracks::write_track(odotune::testing_support::synthetic_track(12, 50.0), b);
+    odotune::tracks::write_track(odotune::testing_support::synthetic_track(11, a_s), a);
+    odotune::tracks::write_track(odotune::testing_support::synthetic_track(12, b_s), b);
   }
 };
 
@@ -59,7 +62,7 @@ TEST(CliRlTrack, EvalScoresAgainstGroundTruthAndWritesThePathOnTheTracksClock) {
 }
 
 TEST(CliRlTrack, TunedFileReplaysToTheReportedFigures) {
-  Drive d;
+  const Drive d(45.0, 42.0);
   const auto out = d.dir.path() / "tuned.yaml";
   const auto r = run_cli("tune --rl-params " + d.params + " --track " + d.a + " --track " + d.b + kShort +
                          " --space blocks --no-input-covariances --grid=-1,1 --config-out " + out.string());
@@ -95,8 +98,24 @@ TEST(CliRlTrack, RefusesWhatDoesNotApplyInOneLine) {
             std::string::npos);
 }
 
+// 30 s leave no outage window after the 30 s of GPS before the first: eval
+// says n/a and tune refuses for that reason, neither calls the file's filter
+// diverged.
+TEST(CliRlTrack, ADriveTooShortForAnOutageIsNotCalledDiverged) {
+  const Drive d(30.0);
+  const auto e = run_cli("eval --rl-params " + d.params + " --track " + d.a +
+                         " --fix-sigma-m 0.06 --outages 10 --outage-every 5");
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_NE(e.out.find("outages RMSE n/a"), std::string::npos) << e.out;
+  EXPECT_EQ(e.out.find("diverged"), std::string::npos) << e.out;
+  const auto t = run_cli("tune --rl-params " + d.params + " --track " + d.a + kShort + " --grid=0");
+  EXPECT_NE(t.exit_code, 0);
+  EXPECT_NE(t.err.find("no fix is scored before the tuning span ends"), std::string::npos) << t.err;
+  EXPECT_EQ(std::count(t.err.begin(), t.err.end(), '\n'), 1) << t.err;
+}
+
 TEST(CliRlTrack, ATuneWithTheFixesVarianceTakenOutSaysSoInTheFile) {
-  Drive d;
+  const Drive d(45.0);
   const auto out = d.dir.path() / "tuned.yaml", json_file = d.dir.path() / "tune.json";
   const auto r = run_cli(
       "tune --rl-params " + d.params + " --track " + d.a + kShort +
