@@ -78,6 +78,16 @@ std::string rl_tune_command_line(const CLI::App& sub, bool on_tracks) {
   return command;
 }
 
+// Without --rl-params every robot_localization flag (by its help group,
+// rl_output.h) is refused by name, as eval does.
+void check_track_tune_flags(const CLI::App& sub) {
+  for (const CLI::Option* opt : given_options(sub)) {
+    const std::string& group = opt->get_group();
+    if (group == kRlGroup || group == kRlBagGroup || group == kRlTrackGroup)
+      throw core::Failure(fmt::format("tune: {} applies to --rl-params only", opt->get_name()));
+  }
+}
+
 // tune --rl-params, on the bag (--bag) or on tracks (--track).
 void run_rl_tune_command(const jobs::TuneCommandRequest& req, jobs::RlTuneRequest r,
                          const jobs::RlTrackSource& track_src, const CLI::App& sub) {
@@ -246,6 +256,7 @@ void run_tune_subcommand(const jobs::TuneCommandRequest& req, const jobs::RlTune
     return;
   }
   if (req.tracks.empty()) throw core::Failure("tune: expected --track, or --rl-params with --bag");
+  check_track_tune_flags(sub);
   jobs::TuneCommandRequest r = req;
   InterruptGuard interrupt;  // Ctrl-C stops the tune: the best so far is printed and written
   Progress progress("tune", "evaluations");
