@@ -175,6 +175,33 @@ Pose<double> reference_pose_at(const DiagInput& in, double t_s) {
           interp_held(in.ref_t_s, in.ref_theta_rad, t_s)};
 }
 
+namespace {
+
+// The free anchor of window w: the start pose that best aligns the replay
+// with the reference (rigidly, align()); `pred` is left as the replay from it.
+// Dead reckoning commutes with a rigid motion of its start, except
+// slip_zone's inside test: moved poses are exact without slip_zone, and with
+// it the replay is redone from the moved anchor (3 rounds).
+Pose<double> free_anchor_of(const EffectModel& model, const std::vector<double>& params, const DiagInput& in,
+                            const Window& w, std::vector<Pose<double>>& pred) {
+  const bool heading = in.has_ref_heading();
+  Pose<double> a = heading ? reference_pose_at(in, w.t_begin_s)
+                           : Pose<double>{in.ref_x_m[w.ref_begin], in.ref_y_m[w.ref_begin], 0.0};
+  const bool zone = model.structure().on(Effect::slip_zone);
+  replay_window(model, params.data(), w, a, in.ref_t_s, pred.data());
+  for (int it = 0; it < (zone ? 3 : 1); ++it) {
+    const Rigid m = align(pred, in, w, heading);
+    a = m.apply(a);
+    if (zone)
+      replay_window(model, params.data(), w, a, in.ref_t_s, pred.data());
+    else
+      for (Pose<double>& q : pred) q = m.apply(q);
+  }
+  return a;
+}
+
+}  // namespace
+
 ReplayResult replay(const EffectModel& model, const std::vector<double>& params, const DiagInput& in,
                     const std::vector<Window>& windows, const std::vector<int>& which,
                     const std::vector<Pose<double>>* anchors) {
@@ -218,25 +245,16 @@ ReplayResult replay(const EffectModel& model, const std::vector<double>& params,
     } else if (anchors) {
       a = (*anchors)[i];
     } else {
-      a = heading ? reference_pose_at(in, w.t_begin_s)
-                  : Pose<double>{in.ref_x_m[w.ref_begin], in.ref_y_m[w.ref_begin], 0.0};
-      // Dead reckoning commutes with a rigid motion of its start, except
-      // slip_zone's inside test: moved poses are exact without slip_zone,
-      // and with it the replay is redone from the moved anchor (3 rounds).
-      const bool zone = model.structure().on(Effect::slip_zone);
-      replay_window(model, params.data(), w, a, in.ref_t_s, pred.data());
-      for (int it = 0; it < (zone ? 3 : 1); ++it) {
-        const Rigid m = align(pred, in, w, heading);
-        a = m.apply(a);
-        if (zone)
-          replay_window(model, params.data(), w, a, in.ref_t_s, pred.data());
-        else
-          for (Pose<double>& q : pred) q = m.apply(q);
-      }
+      a = free_anchor_of(model, params, in, w, pred);
     }
     if (!free_anchor || anchors) replay_window(model, params.data(), w, a, in.ref_t_s, pred.data());
     res.anchors.push_back(a);
-    WindowError e{w.index, w.t_begin_s, w.t_end_s, pred.size(), 0.0, heading ? 0.0 : nan};
+    WindowError e{.window = w.index,
+                  .t_begin_s = w.t_begin_s,
+                  .t_end_s = w.t_end_s,
+                  .n_ref = pred.size(),
+                  .pos_rmse_m = 0.0,
+                  .heading_rmse_rad = heading ? 0.0 : nan};
     double sp = 0.0, sh = 0.0;
     for (std::size_t r = 0; r < pred.size(); ++r) {
       const std::size_t g = w.ref_begin + r;
