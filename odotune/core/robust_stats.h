@@ -1,6 +1,7 @@
 // Robust location and scale, written once for every module: the median (also
 // of sampling periods and of sorted data), order statistics, and the median
-// absolute deviation (MAD), also as a normal σ.
+// absolute deviation (MAD), also as a normal σ and as the σ of white noise on a
+// smooth signal.
 #pragma once
 
 #include <algorithm>
@@ -67,5 +68,14 @@ inline double mad(std::vector<double> v, MedianRule rule = MedianRule::mean_of_m
 // 1.4826·MAD: σ of a normal sample, robust to outliers (Hampel 1974). NaN when
 // empty.
 inline double robust_sigma(const std::vector<double>& v) { return 1.4826 * mad(v); }
+
+// Robust σ of white noise on a sampled signal from its second differences (a
+// smooth signal cancels; each difference has variance 6σ²): robust_sigma / √6.
+// 0 when there are fewer than three samples.
+inline double second_difference_sigma(const std::vector<double>& v) {
+  std::vector<double> d2;
+  for (std::size_t k = 1; k + 1 < v.size(); ++k) d2.push_back(v[k + 1] - 2.0 * v[k] + v[k - 1]);
+  return d2.empty() ? 0.0 : robust_sigma(d2) / std::sqrt(6.0);
+}
 
 }  // namespace odotune::core

@@ -10,13 +10,14 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
+#include <odotune/core/non_finite.h>
 #include <odotune/core/robust_stats.h>
 #include <odotune/diagnose/paired_test.h>
 
 namespace odotune::diagnose {
 
 namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using core::kNaN;
 
 // Local quadratic least-squares fit of (t, v) over [lo, hi) evaluated at tc,
 // and its noise factor sqrt(e0' (X'X)^-1 e0) for white noise; the value at

@@ -17,6 +17,7 @@
 #include <fmt/format.h>
 
 #include <odotune/core/ceres_options.h>
+#include <odotune/core/non_finite.h>
 #include <odotune/core/robust_stats.h>
 #include <odotune/core/why.h>
 #include <odotune/diagnose/gyro_dead_reckoning.h>
@@ -28,7 +29,7 @@
 namespace odotune::diagnose {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using core::kNaN;
 constexpr std::size_t kMinFixes = 3;  // scored fixes a free-anchor window needs
 constexpr int kMinWindows = 3;        // used windows the check needs (>= 2 train + 1 held out)
 constexpr double kDistanceScaleLo = 0.5, kDistanceScaleHi = 1.5;
@@ -73,9 +74,9 @@ struct Context {
 };
 
 // Cost of one window: parameter blocks {s, b, q} and the anchor {x0, y0, theta0}.
-class WindowCost {
+class GyroWindowCost {
  public:
-  WindowCost(const Context* c, const Window& w) : c_(c), w_(w) {}
+  GyroWindowCost(const Context* c, const Window& w) : c_(c), w_(w) {}
   int num_residuals() const { return static_cast<int>(2 * (w_.ref_end - w_.ref_begin)); }
 
   template <typename T>
@@ -194,9 +195,9 @@ Solution solve(const Context& c, const std::vector<int>& which, const Solution& 
   ceres::Problem problem;
   for (std::size_t i = 0; i < which.size(); ++i) {
     const Window& w = c.windows[static_cast<std::size_t>(which[i])];
-    auto* functor = new WindowCost(&c, w);
+    auto* functor = new GyroWindowCost(&c, w);
     const int m = functor->num_residuals();
-    auto* cost = new ceres::AutoDiffCostFunction<WindowCost, ceres::DYNAMIC, 3, 3>(functor, m);
+    auto* cost = new ceres::AutoDiffCostFunction<GyroWindowCost, ceres::DYNAMIC, 3, 3>(functor, m);
     problem.AddResidualBlock(cost, nullptr, sol.gyro.data(), sol.anchors[i].data());
   }
   for (const Standstill& r : c.still) {
@@ -245,12 +246,6 @@ void check_times(std::string_view track, std::string_view what, const std::vecto
     for (std::size_t i = 0; i < col->size(); ++i)
       if (!std::isfinite((*col)[i])) fail(fmt::format("{}[{}] is not finite (expected a number)", name, i));
   }
-}
-
-double second_difference_sigma(const std::vector<double>& v) {
-  std::vector<double> d2;
-  for (std::size_t k = 1; k + 1 < v.size(); ++k) d2.push_back(v[k + 1] - 2.0 * v[k] + v[k - 1]);
-  return d2.empty() ? 0.0 : core::robust_sigma(d2) / std::sqrt(6.0);
 }
 
 // Held-out comparison of `alt` against `ref` (header comment).
@@ -500,7 +495,7 @@ double gyro_noise_and_standstill(const DiagInput& in, const GyroFixesOptions& o,
                                  const std::vector<bool>& still_interval, const std::vector<int>& used,
                                  GyroFixesCheck& out) {
   GyroCheck& g = out.gyro;
-  g.noise_sigma_radps = second_difference_sigma(in.gyro_z_radps);
+  g.noise_sigma_radps = core::second_difference_sigma(in.gyro_z_radps);
   const double dt_gyro = core::median_period_s(in.gyro_t_s);
   if (o.use_standstill && in.odometry == OdometryKind::wheel_angles)
     c.still = standstill_runs(c, o, still_interval, used, g.noise_sigma_radps, dt_gyro);

@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/non_finite.h>
 #include <odotune/core/robust_stats.h>
 #include <odotune/core/why.h>
 #include <odotune/diagnose/option_rules.h>
@@ -17,7 +18,7 @@
 namespace odotune::diagnose {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using core::kNaN;
 
 // Average ranks (ties share their mean rank).
 std::vector<double> ranks(const std::vector<double>& v) {

@@ -11,14 +11,15 @@
 #include <string>
 #include <vector>
 
+#include <odotune/core/non_finite.h>
 #include <odotune/diagnose/cross_validate.h>
 #include <odotune/diagnose/select.h>
 
 namespace odotune::diagnose::select_detail {
 
 using Clock = std::chrono::steady_clock;
-inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-inline constexpr double kInf = std::numeric_limits<double>::infinity();
+using core::kNaN;
+using core::kInf;
 
 // The look-alikes of commanded velocities (diagnosis-design.md "Model selection", "Look-alikes"): each
 // makes the motion trail the command.

@@ -1,5 +1,6 @@
 #include <odotune/diagnose/sensor_checks.h>
 
+#include <odotune/core/non_finite.h>
 #include <odotune/core/robust_stats.h>
 #include <odotune/diagnose/option_rules.h>
 #include <odotune/diagnose/series_interp.h>
@@ -18,7 +19,7 @@
 namespace odotune::diagnose {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using core::kNaN;
 constexpr int kMinBins = 10;  // fewer bins: a check is not attempted
 
 bool finite_positive(double x) { return std::isfinite(x) && x > 0.0; }
@@ -62,7 +63,7 @@ void check_series(std::string_view track, std::string_view what, const std::vect
   }
 }
 
-void check_input(const DiagInput& in) {
+void check_sensor_input(const DiagInput& in) {
   check_series(in.track_name, "reference", in.ref_t_s,
                {{"ref_x_m", &in.ref_x_m}, {"ref_y_m", &in.ref_y_m}, {"ref_theta_rad", &in.ref_theta_rad}}, 2);
   check_series(in.track_name, "odometry", in.odo_t_s,
@@ -253,14 +254,6 @@ double rate_residual_sigma(const Rows& r, const std::vector<double>& width, cons
   return core::robust_sigma(res);
 }
 
-// Robust σ of white noise on a sampled signal from its second differences
-// (a smooth signal cancels): 1.4826·MAD / √6.
-double second_difference_sigma(const std::vector<double>& v) {
-  std::vector<double> d2;
-  for (std::size_t k = 1; k + 1 < v.size(); ++k) d2.push_back(v[k + 1] - 2.0 * v[k] + v[k - 1]);
-  return d2.empty() ? 0.0 : core::robust_sigma(d2) / std::sqrt(6.0);
-}
-
 double sample_sd(const std::vector<double>& v) {
   if (v.size() < 2) return kNaN;
   double m = 0;
@@ -298,7 +291,7 @@ GyroCheck check_gyro(const DiagInput& in, const ReferenceBins& rb, const SensorC
   if (in.gyro_t_s.size() < 3) return g.unavailable_reason = "no gyro", g;
   if (!rb.heading) return g.unavailable_reason = "no reference heading (position fixes only)", g;
   const Cumulative gyro = Cumulative::of_rates(in.gyro_t_s, in.gyro_z_radps);
-  g.noise_sigma_radps = second_difference_sigma(in.gyro_z_radps);
+  g.noise_sigma_radps = core::second_difference_sigma(in.gyro_z_radps);
   const double dt_gyro = median_step(in.gyro_t_s);
   Rows rows;  // Δθ_ref = α·Δψ_gyro + β·width
   rows.level_var = rb.heading_noise_rad * rb.heading_noise_rad;
@@ -591,7 +584,7 @@ ReferenceBins reference_bins(const DiagInput& in, const SensorCheckOptions& o, d
                              double t_end_s) {
   std::string why;
   if (!o.IsValid(&why)) throw std::invalid_argument("sensor check options: " + why);
-  check_input(in);
+  check_sensor_input(in);
   ReferenceBins rb;
   rb.heading = in.reference == ReferenceKind::gt && in.ref_theta_rad.size() == in.ref_t_s.size();
   const double width = rb.heading ? o.bin_s : std::max(o.bin_s, o.aps_min_bin_s);
@@ -624,11 +617,11 @@ ReferenceBins reference_bins(const DiagInput& in, const SensorCheckOptions& o, d
   }
   // Noise of the reference levels (see the header).
   if (rb.heading) {
-    rb.heading_noise_rad = second_difference_sigma(in.ref_theta_rad);
+    rb.heading_noise_rad = core::second_difference_sigma(in.ref_theta_rad);
     rb.position_noise_m = in.ref_sigma_m > 0
                               ? in.ref_sigma_m
-                              : std::sqrt(0.5 * (std::pow(second_difference_sigma(in.ref_x_m), 2) +
-                                                 std::pow(second_difference_sigma(in.ref_y_m), 2)));
+                              : std::sqrt(0.5 * (std::pow(core::second_difference_sigma(in.ref_x_m), 2) +
+                                                 std::pow(core::second_difference_sigma(in.ref_y_m), 2)));
   } else {
     rb.position_noise_m = std::max(in.ref_sigma_m, 0.0);
   }

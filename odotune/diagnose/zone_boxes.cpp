@@ -9,14 +9,15 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/non_finite.h>
 #include <odotune/core/robust_stats.h>
 
 namespace odotune::diagnose {
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using core::kInf;
+using core::kNaN;
 // A found box whose fitted slips both stay below this is not refined (a box
 // from noise is not worth the fits) unless its fit cost fell by kRefineCost
 // or more: a box larger than the patch dilutes the slip (slips 0.013/0.014

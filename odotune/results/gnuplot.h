@@ -46,6 +46,13 @@ void render_png_svg(const std::filesystem::path& stem,
                     std::vector<std::pair<std::string, std::string>> data_files, const std::string& body,
                     int width_px, int height_px);
 
+// Appends the two files render_png_svg writes for `stem`, STEM.png and
+// STEM.svg, to `files` (a study's list of what it wrote).
+inline void append_png_svg(const std::filesystem::path& stem, std::vector<std::filesystem::path>* files) {
+  files->push_back(std::filesystem::path(stem.string() + ".png"));
+  files->push_back(std::filesystem::path(stem.string() + ".svg"));
+}
+
 // True when a `gnuplot` executable is found on PATH.
 bool gnuplot_available();
 

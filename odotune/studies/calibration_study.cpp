@@ -11,6 +11,8 @@
 #include <fmt/format.h>
 
 #include <odotune/core/counter_rng.h>
+#include <odotune/core/non_finite.h>
+#include <odotune/core/stopwatch.h>
 #include <odotune/core/why.h>
 #include <odotune/filters/pf_calibrator.h>
 #include <odotune/sim/simulator.h>
@@ -19,7 +21,9 @@ namespace odotune::studies {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using core::seconds_since;
+
+using core::kNaN;
 
 // Counter-RNG streams of the per-run draws (odotune/core/counter_rng.h); any fixed,
 // distinct values do.
@@ -31,10 +35,6 @@ double uniform_in(double lo, double hi, std::uint64_t seed, std::uint64_t dim, s
 }
 
 int threads_for(const StudyOptions& o) { return o.threads > 0 ? o.threads : omp_get_max_threads(); }
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // A simulated run prepared for calibration.
 struct PreparedRun {

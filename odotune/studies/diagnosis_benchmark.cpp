@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include <odotune/core/failure.h>
+#include <odotune/core/stopwatch.h>
 #include <odotune/core/why.h>
 #include <odotune/diagnose/diag_input.h>
 #include <odotune/diagnose/diagnosis.h>
@@ -23,8 +24,9 @@ namespace odotune::studies {
 
 namespace {
 
+using core::seconds_since;
+
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 using diagnose::Effect;
 using diagnose::FindingKind;

@@ -6,6 +6,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include <odotune/core/non_finite.h>
 #include <odotune/diagnose/effect_model.h>
 #include <odotune/diagnose/gyro_heading_input.h>
 #include <odotune/diagnose/recordings.h>
@@ -18,7 +19,7 @@ namespace odotune::studies {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using core::kNaN;
 
 using diagnose::DiagInput;
 using diagnose::Effect;

@@ -23,10 +23,6 @@ namespace {
 
 using results::LearnedModelFile;
 
-void report(const LearnProgress& progress, long done, long total) {
-  if (progress) progress(done, total);
-}
-
 std::string per_step_csv(const learned::FusionInput& in, const learned::OdometrySeries& lstm,
                          const learned::OdometrySeries& kin, const learned::PoseTrack& pl,
                          const learned::PoseTrack& pk) {
@@ -150,7 +146,7 @@ std::pair<std::size_t, std::size_t> scored_span(const LearnEvalRequest& r, const
   return {first, end};
 }
 
-learned::OdometrySeries slice_series(const learned::OdometrySeries& s, std::size_t first, std::size_t end) {
+learned::OdometrySeries slice_odometry(const learned::OdometrySeries& s, std::size_t first, std::size_t end) {
   const auto cut = [&](const std::vector<double>& v) {
     return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(first),
                                v.begin() + static_cast<std::ptrdiff_t>(end));
@@ -275,7 +271,7 @@ LearnEvalOutcome run_learn_eval(const LearnEvalRequest& r) {
   const auto [first, end] = scored_span(r, tracks.front());
   const learned::OdometrySeries lstm_full = learned::run_learned_odometry(tracks.front(), m.odometry);
   const learned::FusionInput in = learned::slice_fusion_input(tracks.front(), first, end);
-  const learned::OdometrySeries lstm = slice_series(lstm_full, first, end),
+  const learned::OdometrySeries lstm = slice_odometry(lstm_full, first, end),
                                 kin = learned::kinematic_odometry(in);
   const learned::PoseTrack pl = learned::dead_reckon(in, lstm.v, lstm.w),
                            pk = learned::dead_reckon(in, kin.v, kin.w);
@@ -450,15 +446,15 @@ LearnRetrainOutcome run_learn_retrain(const LearnRetrainRequest& r, const LearnP
         r.track, in.track_name));
 
   learned::LearnedFusionOptions o = retrain_fusion_options(r, m, detector);
-  report(progress, 0, 2);
+  report_progress(progress, 0, 2);
   learned::LearnedFusionResult with, without;
   try {
     o.retrain.enabled = true;
     with = learned::run_learned_fusion(in, &m.odometry, o);
-    report(progress, 1, 2);
+    report_progress(progress, 1, 2);
     o.retrain.enabled = false;
     without = learned::run_learned_fusion(in, &m.odometry, o);
-    report(progress, 2, 2);
+    report_progress(progress, 2, 2);
   } catch (const std::invalid_argument& e) {
     throw core::Failure(fmt::format("learn retrain: {}", e.what()));
   }

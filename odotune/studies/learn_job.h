@@ -34,6 +34,10 @@ namespace odotune::studies {
 
 // Progress of a job in steps (nets trained, fusion runs).
 using LearnProgress = std::function<void(long done, long total)>;
+// Calls `progress` when set.
+inline void report_progress(const LearnProgress& progress, long done, long total) {
+  if (progress) progress(done, total);
+}
 
 // ---------------------------------------------------------------- shared pieces
 

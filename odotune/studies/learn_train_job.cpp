@@ -18,10 +18,6 @@ namespace {
 
 using results::LearnedModelFile;
 
-void report(const LearnProgress& progress, long done, long total) {
-  if (progress) progress(done, total);
-}
-
 learned::LearnedValidation validation_for(const LearnTrainRequest& r) {
   if (r.validation) return *r.validation;
   if (r.target == learned::LearnedTarget::velocity) return learned::LearnedValidation::chronological;
@@ -166,9 +162,9 @@ LearnTrainOutcome run_learn_train(const LearnTrainRequest& r, const LearnProgres
   LearnedModelFile file;
   if (r.target == learned::LearnedTarget::velocity) {
     const long total = slips.empty() ? 1 : 2;
-    report(progress, 0, total);
+    report_progress(progress, 0, total);
     train_paper_nets(r, tracks, validation, file, out);
-    report(progress, 1, total);
+    report_progress(progress, 1, total);
   } else {
     train_correction_nets(r, tracks, validation, progress, file, out);
   }

@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/non_finite.h>
+#include <odotune/core/stopwatch.h>
 #include <odotune/core/why.h>
 #include <odotune/sim/motion_profile.h>
 #include <odotune/sim/random_slip.h>
@@ -18,13 +20,11 @@ namespace odotune::studies {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using core::seconds_since;
+
+using core::kNaN;
 // 5 simulations, the extra slip drives, 2 trainings, 1 + 3 + 3 evaluations.
 long stage_count(const LearnedStudyOptions& o) { return 14 + (o.slip_drives - 1); }
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 struct Stage {
   const LearnedStudyProgress& progress;

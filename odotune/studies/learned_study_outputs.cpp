@@ -7,6 +7,8 @@
 #include <fmt/format.h>
 
 #include <odotune/core/atomic_file.h>
+#include <odotune/core/non_finite.h>
+#include <odotune/results/gnuplot.h>
 #include <odotune/results/learned_figures.h>
 #include <odotune/results/learned_model_json.h>
 #include <odotune/sim/slip_episodes.h>
@@ -16,7 +18,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using core::kNaN;
 
 // ---------------------------------------------------------------- metric blocks
 
@@ -183,15 +185,13 @@ std::vector<double> moving_mean(const std::vector<double>& e, std::size_t half) 
     double sum = 0.0;
     int n = 0;
     for (std::size_t j = k > half ? k - half : 0; j <= std::min(e.size() - 1, k + half); ++j)
-      if (std::isfinite(e[j])) sum += e[j], ++n;
+      if (std::isfinite(e[j])) {
+        sum += e[j];
+        ++n;
+      }
     if (n > 0) out[k] = sum / n;
   }
   return out;
-}
-
-void add_figure(const fs::path& stem, std::vector<fs::path>* files) {
-  files->push_back(fs::path(stem.string() + ".png"));
-  files->push_back(fs::path(stem.string() + ".svg"));
 }
 
 void slip_variance_figure(const LearnedStudy& s, const fs::path& stem) {
@@ -471,13 +471,13 @@ std::vector<fs::path> write_learned_outputs(const LearnedStudy& s, const Learned
 
   fs::path stem = dir / "fig_slip_variance";
   slip_variance_figure(s, stem);
-  add_figure(stem, &files);
+  results::append_png_svg(stem, &files);
   stem = dir / "fig_retraining_error";
   retraining_error_figure(s, stem);
-  add_figure(stem, &files);
+  results::append_png_svg(stem, &files);
   stem = dir / "fig_paths";
   paths_figure(s, stem);
-  add_figure(stem, &files);
+  results::append_png_svg(stem, &files);
   return files;
 }
 

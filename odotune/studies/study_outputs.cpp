@@ -8,6 +8,7 @@
 
 #include <odotune/core/atomic_file.h>
 #include <odotune/results/calibration_figures.h>
+#include <odotune/results/gnuplot.h>
 
 namespace odotune::studies {
 namespace fs = std::filesystem;
@@ -57,11 +58,6 @@ void write_text(const fs::path& p, std::string_view what, const std::string& tex
                 std::vector<fs::path>* files) {
   core::write_atomically(p, what, text);
   files->push_back(p);
-}
-
-void add_figure(const fs::path& stem, std::vector<fs::path>* files) {
-  files->push_back(fs::path(stem.string() + ".png"));
-  files->push_back(fs::path(stem.string() + ".svg"));
 }
 
 // Normalises mean and sd of every cell by the largest finite mean.
@@ -191,7 +187,7 @@ std::vector<fs::path> write_resampling_outputs(const ResamplingStudy& s, const S
                         fmt::format("Resampling (Fig. 3/4 analogue), {} runs, N = {}: mean ± sd / largest mean",
                                     s.options.runs, s.options.pf_particles),
                         bars.groups, bars.series, bars.panels);
-  add_figure(stem, &files);
+  results::append_png_svg(stem, &files);
   return files;
 }
 
@@ -209,17 +205,17 @@ std::vector<fs::path> write_calibration_outputs(const CalibrationStudy& s, const
                        {particle_panel("N, step track [-]", s.pf_step),
                         particle_panel("N, constant track [-]", s.pf_constant)},
                        markers);
-  add_figure(stem, &files);
+  results::append_png_svg(stem, &files);
   stem = dir / "fig6a_radii_constant";
   results::time_panels(stem,
                        fmt::format("Adaptive-PF radii, {} with random true radii (Fig. 6a analogue)", runs),
                        radius_panels(s.pf_constant), {});
-  add_figure(stem, &files);
+  results::append_png_svg(stem, &files);
   stem = dir / "fig6b_radii_step";
   results::time_panels(stem,
                        fmt::format("Adaptive-PF radii under changing conditions, {} (Fig. 6b analogue)", runs),
                        radius_panels(s.pf_step), markers);
-  add_figure(stem, &files);
+  results::append_png_svg(stem, &files);
   for (const bool step : {true, false}) {
     const auto& pf = step ? s.pf_step : s.pf_constant;
     const auto& dkf = step ? s.dkf_step : s.dkf_constant;
@@ -230,7 +226,7 @@ std::vector<fs::path> write_calibration_outputs(const CalibrationStudy& s, const
         fmt::format("DKF vs adaptive PF, {} track, run 0 (Fig. 8 analogue)", step ? "step" : "constant"));
     if (step && std::isfinite(s.step_time_s)) d.markers.push_back({s.step_time_s, "radius step"});
     results::calibration_estimates_figure(stem, d);
-    add_figure(stem, &files);
+    results::append_png_svg(stem, &files);
   }
   return files;
 }
