@@ -139,7 +139,7 @@ TEST(CliRl, UkfTuneWritesAUkfFileThatReplaysToItsFigures) {
   const auto out = dir.path() / "ukf.yaml";
   const auto r = run_cli(
       "tune " + kSource +
-      " --filter ukf --until 50 --fitness heldout-fixes --space blocks --no-input-covariances "
+      " --filter ukf --until 30 --fitness heldout-fixes --space blocks --no-input-covariances "
       "--ukf-constants --grid=-1,1 --refine 0 --seed 3 --config-out " +
       out.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -153,7 +153,7 @@ TEST(CliRl, UkfTuneWritesAUkfFileThatReplaysToItsFigures) {
   const std::string source =
       " --bag " + kBags +
       "/ros2/test1.mcap --tf imu_link=0,-0.3,0.52,1.5707963267948966,0,-1.5707963267948966 "
-      "--gps-heading-fit 60 --from 50";
+      "--gps-heading-fit 60 --from 30";
   const auto e = run_cli("eval --rl-params " + out.string() + source);
   ASSERT_EQ(e.exit_code, 0) << e.err;
   EXPECT_NE(e.out.find("robot_localization UKF"), std::string::npos) << e.out;
