@@ -16,6 +16,12 @@ std::string metres(const objectives::FixScore& s) {
   return s.finite ? fmt::format("{:.3f} m ({} fixes)", s.rmse_m, s.fixes) : "diverged";
 }
 
+// The outages' score, or "n/a" when no outage window fits the recording
+// (an empty score is not a divergence).
+std::string outage_metres(const objectives::FixScore& s, std::size_t windows) {
+  return windows > 0 ? metres(s) : "n/a";
+}
+
 // A table cell: "0.245 m", or "diverged".
 std::string column(const objectives::FixScore& s) {
   return s.finite ? fmt::format("{:.3f} m", s.rmse_m) : "diverged";
@@ -159,14 +165,14 @@ void print_rl_track_eval(const jobs::RlTrackEvalOutcome& o) {
     fmt::print("  against ground truth: every fix fused RMSE {}; through {} simulated fix outages RMSE {}\n",
                truth_text(s.run), s.windows, truth_text(s.outages));
     fmt::print("  against the fixes: held-out fixes (5 folds of 1 s blocks) RMSE {}; outages RMSE {}\n",
-               metres(s.heldout_fixes), s.windows > 0 ? metres(s.outage_fixes) : "n/a");
+               metres(s.heldout_fixes), outage_metres(s.outage_fixes, s.windows));
   }
   if (o.rows.size() > 1) {
     std::size_t windows = 0;
     for (const auto& r : o.rows) windows += r.scores.windows;
     fmt::print("all {} tracks: ground truth, fixes fused {}, outages {}; held-out fixes {}, outages {}\n",
                o.rows.size(), truth_text(o.run), truth_text(o.outages), metres(o.heldout_fixes),
-               windows > 0 ? metres(o.outage_fixes) : "n/a");
+               outage_metres(o.outage_fixes, windows));
   }
 }
 
@@ -195,7 +201,7 @@ void print_rl_eval(const jobs::RlEvalOutcome& o) {
   }
   if (o.outages) {
     fmt::print("  simulated GPS outages ({} windows): RMSE {}\n", o.outage_windows,
-               o.outage_windows > 0 ? metres(*o.outages) : "n/a");
+               outage_metres(*o.outages, o.outage_windows));
   }
   print_notes(o.notes, o.alignment);
 }

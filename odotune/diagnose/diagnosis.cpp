@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/stopwatch.h>
 #include <odotune/diagnose/gyro_heading_input.h>
 #include <odotune/diagnose/materiality.h>
 #include <odotune/diagnose/option_rules.h>
@@ -21,7 +22,7 @@ namespace odotune::diagnose {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+using core::seconds_since;
 
 double sq(double v) { return v * v; }
 

@@ -1,6 +1,7 @@
 #include <odotune/diagnose/fit.h>
 
 #include <odotune/core/ceres_options.h>
+#include <odotune/core/stopwatch.h>
 #include <odotune/core/why.h>
 
 #include <algorithm>
@@ -617,7 +618,7 @@ FitSummary fit_effects(const EffectModel& model, const DiagInput& in, const Effe
       out.anchors.push_back({anchor_values[i], anchor_values[i + 1], anchor_values[i + 2]});
 
   score_fit(model, in, windows, train, held, train_before, init, fitted, mode, options, out);
-  out.solve_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  out.solve_time_s = core::seconds_since(t_start);
   return out;
 }
 

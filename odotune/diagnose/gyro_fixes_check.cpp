@@ -19,6 +19,7 @@
 #include <odotune/core/ceres_options.h>
 #include <odotune/core/non_finite.h>
 #include <odotune/core/robust_stats.h>
+#include <odotune/core/stopwatch.h>
 #include <odotune/core/why.h>
 #include <odotune/diagnose/gyro_dead_reckoning.h>
 #include <odotune/diagnose/option_rules.h>
@@ -638,7 +639,7 @@ GyroFixesCheck check_gyro_with_fixes(const DiagInput& in, const GyroFixesOptions
   g.bias.noop = 0.0;
   const auto finish = [&](std::string reason) {
     g.unavailable_reason = std::move(reason);
-    out.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    out.time_s = core::seconds_since(t_start);
     return out;
   };
 
@@ -665,7 +666,7 @@ GyroFixesCheck check_gyro_with_fixes(const DiagInput& in, const GyroFixesOptions
   set_standard_errors(c, used, all, o, out);
   heldout_proof(c, used, start_anchor, o, out);
   judge_verdicts(o, dt_gyro, out);
-  out.time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  out.time_s = core::seconds_since(t_start);
   return out;
 }
 

@@ -220,7 +220,7 @@ void start_from_nominal(Search& z, const DiagInput& in_full, const SelectOptions
   rb.accepted = true;
   rb.reason = "nominal model";
   fill(rb, z.cur_cv);
-  rb.time_s = since(t0);
+  rb.time_s = seconds_since(t0);
   sel.records.push_back(rb);
 }
 
@@ -390,7 +390,7 @@ Selection select_effects(const DiagInput& in_full, const SelectionInput& si, con
   sel.baseline_heading_rmse_rad = base.heading_rmse_rad;
   if (n_win < 3) {
     sel.note = fmt::format("{} window(s) of {} s: too few to cross-validate (need 3)", n_win, o.fit.window_s);
-    sel.timing.total_s = since(t_start);
+    sel.timing.total_s = seconds_since(t_start);
     return sel;
   }
 
@@ -416,15 +416,15 @@ Selection select_effects(const DiagInput& in_full, const SelectionInput& si, con
   search_moves(z, o, candidate_list(in_full, o));
   sel.final_cv_score = z.cur_cv.score;
   sel.structure = z.s;
-  sel.timing.search_s = since(t_start);
+  sel.timing.search_s = seconds_since(t_start);
   sel.timing.fits = cv.fits();
   if (!z.chosen.empty()) {
     const auto t0 = Clock::now();
     final_model(in_full, *in, windows_full, o, z.chosen, z.cur_full.fitted, sel);
-    sel.timing.final_s = since(t0);
+    sel.timing.final_s = seconds_since(t0);
   }
   add_rivals(sel, z);
-  sel.timing.total_s = since(t_start);
+  sel.timing.total_s = seconds_since(t_start);
   return sel;
 }
 

@@ -50,7 +50,7 @@ void prefer_radius_error(Search& z, int step) {
       }
     }
   }
-  rec.time_s = since(t0);
+  rec.time_s = seconds_since(t0);
   z.sel.records.push_back(std::move(rec));
 }
 
@@ -101,7 +101,7 @@ std::size_t screen_swaps(Search& z, std::vector<SwapCand>& tried, std::vector<Se
     const auto k = static_cast<std::size_t>(i);
     fulls[k] = z.cv.fit_all(tried[k].st, z.cur_full.fitted, z.o.cv_max_iterations);
   }
-  const double share = since(t0) / static_cast<double>(tried.size());
+  const double share = seconds_since(t0) / static_cast<double>(tried.size());
   std::size_t best = tried.size();
   for (std::size_t i = 0; i < tried.size(); ++i) {
     tried[i].rec.time_s = share;
@@ -128,7 +128,7 @@ std::string swap_objection(Search& z, SwapCand& b, const SetEval& full, SetEval&
   } else {
     const auto t1 = Clock::now();
     cv = z.cv.cross_validate_all({b.st}, z.cur_cv.folds, z.o.cv_max_iterations).front();
-    b.rec.time_s += since(t1);
+    b.rec.time_s += seconds_since(t1);
     fill(b.rec, cv);
     if (!cv.ok) no = "fit failed: " + cv.error;
   }
@@ -237,7 +237,7 @@ bool pair_step(Search& z, int step, const std::vector<Effect>& cands) {
   // All pairs' (pair, fold) fits in one parallel batch, as a forward step's.
   const auto t_batch = Clock::now();
   std::vector<SetEval> evals = z.cv.cross_validate_all(sets, z.cur_cv.folds, z.o.cv_max_iterations);
-  const double share = sets.empty() ? 0.0 : since(t_batch) / static_cast<double>(sets.size());
+  const double share = sets.empty() ? 0.0 : seconds_since(t_batch) / static_cast<double>(sets.size());
   for (std::size_t i = 0; i < tried.size(); ++i) {
     Cand& cd = tried[i];
     cd.cv = std::move(evals[i]);
@@ -259,7 +259,7 @@ bool pair_step(Search& z, int step, const std::vector<Effect>& cands) {
     const auto t0 = Clock::now();
     SetEval full;
     const std::string no = judge(z, best->st, best->cv, {best->p.first, best->p.second}, best->rec, full);
-    best->rec.time_s += since(t0);
+    best->rec.time_s += seconds_since(t0);
     if (no.empty()) {
       accepted = best->rec.accepted = true;
       best->rec.reason = "best pair; improves CV significantly and materially, BIC agrees, both effects matter";
@@ -349,7 +349,7 @@ bool backward_round(Search& z, int round) {
     d.cv = std::move(evals[static_cast<std::size_t>(i)]);
     if (d.cv.ok) d.full = z.cv.fit_all(d.st, z.cur_full.fitted, z.o.cv_max_iterations);
   }
-  const double share = drops.empty() ? 0.0 : since(t0) / static_cast<double>(drops.size());
+  const double share = drops.empty() ? 0.0 : seconds_since(t0) / static_cast<double>(drops.size());
   for (Drop& d : drops) {
     fill(d.rec, d.cv);
     if (d.cv.ok && d.full.ok)
@@ -407,7 +407,7 @@ bool look_alike_step(Search& z, int step) {
   for (const Alt& a : alts) sets.push_back(a.st);
   const auto t0 = Clock::now();
   std::vector<SetEval> evals = z.cv.cross_validate_all(sets, z.cur_cv.folds, z.o.cv_max_iterations);
-  const double share = since(t0) / static_cast<double>(std::max<std::size_t>(alts.size(), 1));
+  const double share = seconds_since(t0) / static_cast<double>(std::max<std::size_t>(alts.size(), 1));
   // An alternative predicts alike when the chosen effects do not beat it by
   // the size and paired-test rules; of those, the one with the fewest effects (then the
   // best CV) replaces them when it has fewer.

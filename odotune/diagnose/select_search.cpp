@@ -14,8 +14,6 @@
 
 namespace odotune::diagnose::select_detail {
 
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
 EffectSet with_effect(const EffectSet& s, Effect e) {
   EffectSet out = s;
   out.enable(e);
@@ -278,7 +276,7 @@ std::vector<Cand> candidates(Search& z, int step, const std::vector<Effect>& can
                                z.o.profile_max_iterations});
       if (cd.st.empty()) cd.rec.reason = "no candidate box";
     }
-    t_cand.push_back(since(t0));
+    t_cand.push_back(seconds_since(t0));
     if (e == Effect::radius_step || e == Effect::slip_zone) z.sel.timing.discrete_s += t_cand.back();
     tried.push_back(std::move(cd));
   }
@@ -298,7 +296,7 @@ void cross_validate_candidates(Search& z, std::vector<Cand>& tried, std::vector<
     }
   const auto t_batch = Clock::now();
   std::vector<SetEval> evals = z.cv.cross_validate_all(sets, z.cur_cv.folds, z.o.cv_max_iterations);
-  const double share = sets.empty() ? 0.0 : since(t_batch) / static_cast<double>(sets.size());
+  const double share = sets.empty() ? 0.0 : seconds_since(t_batch) / static_cast<double>(sets.size());
   for (std::size_t j = 0; j < which.size(); ++j) {
     Cand& cd = tried[which[j]];
     cd.rec.set = cd.st.to_string();
@@ -362,7 +360,7 @@ bool forward_step(Search& z, int step, const std::vector<Effect>& cands) {
     const auto t0 = Clock::now();
     SetEval full;
     const std::string no = judge(z, best->st, best->cv, {best->e}, best->rec, full);
-    best->rec.time_s += since(t0);
+    best->rec.time_s += seconds_since(t0);
     const std::string label = rank == 0 ? "best candidate"
                                         : fmt::format("best candidate that passes (rank {})", rank + 1);
     if (no.empty()) {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <odotune/core/non_finite.h>
+#include <odotune/core/stopwatch.h>
 #include <odotune/diagnose/cross_validate.h>
 #include <odotune/diagnose/select.h>
 
@@ -26,8 +27,7 @@ using core::kInf;
 inline constexpr Effect kLagLookAlikes[] = {Effect::time_offset, Effect::actuator_lag,
                                             Effect::longitudinal_slip};
 
-// Seconds since t0.
-double since(Clock::time_point t0);
+using core::seconds_since;
 // s with e switched on (its no-op values when it was off).
 EffectSet with_effect(const EffectSet& s, Effect e);
 

@@ -12,6 +12,7 @@
 
 #include <odotune/core/atomic_file.h>
 #include <odotune/core/failure.h>
+#include <odotune/results/gnuplot.h>
 #include <odotune/results/report_html.h>
 #include <odotune/results/run_record.h>
 
@@ -38,8 +39,7 @@ class ReportWriter {
     } catch (const std::exception& ex) {
       throw core::Failure(fmt::format("{}: cannot draw the figure: {}", stem.string(), ex.what()));
     }
-    files.emplace_back(stem.string() + ".png");
-    files.emplace_back(stem.string() + ".svg");
+    results::append_png_svg(stem, &files);
     return {caption, svg_of(stem.string() + ".svg"), name + ".png", ""};
   }
   // Writes `content` atomically; throws Failure with one line.

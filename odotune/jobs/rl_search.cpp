@@ -7,15 +7,14 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/stopwatch.h>
 #include <odotune/core/why.h>
 #include <odotune/tuner/evaluate.h>
 
 namespace odotune::jobs {
 namespace {
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
+using core::seconds_since;
 
 // The block (0 position … 4 acceleration) of each parameter of the space, or
 // −1 for a parameter on an input's covariance.

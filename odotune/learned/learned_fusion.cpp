@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include <odotune/core/stopwatch.h>
 #include <odotune/core/why.h>
 
 namespace odotune::learned {
@@ -97,7 +98,7 @@ void collect_and_retrain(const FusionInput& in, std::size_t k, const OdometryMea
   OdometryNet v_net = current.v_net, w_net = current.w_net;
   ev.v = v_net.retrain(v_samples, ro.training);
   ev.w = w_net.retrain(w_samples, ro.training);
-  ev.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ev.seconds = core::seconds_since(start);
   // A refit that failed keeps the previous nets (the robot keeps running).
   if (ev.v.usable) current.v_net = v_net;
   if (ev.w.usable) current.w_net = w_net;

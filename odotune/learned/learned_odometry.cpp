@@ -10,6 +10,7 @@
 
 #include <odotune/core/counter_rng.h>
 #include <odotune/core/enum_names.h>
+#include <odotune/core/stopwatch.h>
 #include <odotune/core/why.h>
 
 namespace odotune::learned {
@@ -339,7 +340,7 @@ LearnedOdometryModel train_learned_odometry(const std::vector<const FusionInput*
   });
   s.v_kinematic_mae = kin[0];
   s.w_kinematic_mae = kin[1];
-  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  s.seconds = core::seconds_since(start);
   s.train_windows = ws.v_train.size();
   s.validation_windows = ws.v_val.size();
   model.v_validation_mae = std::isfinite(s.v.validation_mae) ? s.v.validation_mae : s.v.train_mae;

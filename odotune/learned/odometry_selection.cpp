@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include <odotune/core/robust_stats.h>
+#include <odotune/core/stopwatch.h>
 #include <odotune/core/why.h>
 #include <odotune/learned/odometry_metrics.h>
 
@@ -393,7 +394,7 @@ LearnedOdometryModel train_correction_odometry(const std::vector<const FusionInp
   model.w_kinematic_mae = wk_sum / folds_n;
   if (progress) progress(total, total);
   s.train_windows = train[0].size();
-  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  s.seconds = core::seconds_since(start);
   if (!model.IsValid(&why)) fail_selection("the trained model is unusable: " + why);
   if (summary) *summary = std::move(s);
   return model;

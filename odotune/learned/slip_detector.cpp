@@ -9,6 +9,7 @@
 
 #include <odotune/core/enum_names.h>
 #include <odotune/core/robust_stats.h>
+#include <odotune/core/stopwatch.h>
 #include <odotune/core/why.h>
 
 namespace odotune::learned {
@@ -400,7 +401,7 @@ SlipDetectorModel train_slip_detector(const std::vector<const FusionInput*>& tra
     s.w = fit_slip_net(model.w_net, train[1], val[1], w_opts, false, &s.w_curve, options);
   }
   set_flag_thresholds(tracks, options.flag_quantile, model);
-  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  s.seconds = core::seconds_since(start);
   s.train_windows = train[0].size();
   s.validation_windows = val[0].size();
   if (!model.IsValid(&why))

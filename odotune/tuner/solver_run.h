@@ -12,6 +12,7 @@
 #include <string>
 #include <utility>
 
+#include <odotune/core/stopwatch.h>
 #include <odotune/tuner/problem.h>
 #include <odotune/tuner/summary.h>
 
@@ -59,7 +60,7 @@ class SolverRun {
   Summary finish(Termination termination, std::string message = {}) {
     summary.termination = termination;
     summary.message = std::move(message);
-    summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+    summary.seconds = core::seconds_since(t0_);
     return summary;
   }
 
